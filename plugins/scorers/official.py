@@ -1,0 +1,35 @@
+"""The ``official`` scorer: POVBench's clamped normalized L2, blind spot included.
+
+Beside the official ``l2`` it records the strict variant (``l2_strict``: a GT behind or outside
+the scored frame counts as sqrt 2), whether the GT is in the scored frame, and for multi-point
+answers the closest point's error (``l2_closest``); the centroid's error is the one reported.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from povagent import hookimpl
+from povagent.answers import ParsedAnswer
+from povagent.dataset.instances import Instance
+from povagent.interfaces import Scorer
+from povagent.scoring.official import UNANSWERED, closest_point_l2, score_point, scoring_frame
+
+
+class OfficialScorer(Scorer):
+    """Clamped normalized L2 in the selected frame (A/B) or the observer view (C)."""
+
+    def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
+        if not answer.answered:
+            return UNANSWERED.as_dict()
+        frame = scoring_frame(instance, answer.selected_image)
+        result = score_point(instance, frame, answer.x, answer.y).as_dict()
+        if answer.points and len(answer.points) > 1 and frame is not None:
+            result["l2_closest"] = closest_point_l2(instance, frame, answer.points)
+        return result
+
+
+@hookimpl
+def register_scorers(register) -> None:
+    """Contribute the official scorer."""
+    register("official", OfficialScorer, description="POVBench normalized L2 (official), with strict variant")

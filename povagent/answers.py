@@ -1,0 +1,108 @@
+"""What a parser reads out of a model's answer, and what it was asked for.
+
+Pure value types shared by strategies (which declare the :class:`AnswerSpec` they ask for),
+parsers (which return a :class:`ParsedAnswer`) and scorers (which read it). No parsing here.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class ParseStatus(StrEnum):
+    """How a parse went.
+
+    ``ok`` and ``repaired`` are answers; ``out_of_range`` is an answer too (the paper keeps
+    parseable out-of-range coordinates and clamps them when scoring); ``unparseable`` is a
+    non-response.
+    """
+
+    OK = "ok"
+    REPAIRED = "repaired"
+    OUT_OF_RANGE = "out_of_range"
+    UNPARSEABLE = "unparseable"
+
+    @property
+    def answered(self) -> bool:
+        """True unless nothing could be read."""
+        return self is not ParseStatus.UNPARSEABLE
+
+
+class AnswerSpec(BaseModel):
+    """What the strategy asked the model to answer.
+
+    ``schema`` is the JSON Schema of the requested answer (``{selected_image, x, y}`` for A/B,
+    ``{x, y}`` for C); ``n_frames`` is the number of images shown (1 for C); pixels are on
+    ``[0, width-1] x [0, height-1]``.
+    """
+
+    model_config = ConfigDict(frozen=True)
+
+    json_schema: dict[str, Any] = Field(alias="schema")
+    width: int = 512
+    height: int = 512
+    n_frames: int = 1
+    asks_frame: bool = True
+
+    @property
+    def required_keys(self) -> tuple[str, ...]:
+        """Keys the requested JSON object must carry."""
+        return tuple(self.json_schema.get("required", ()))
+
+
+class ParsedAnswer(BaseModel):
+    """A typed parse of one raw answer.
+
+    Coordinates are pixels in the requested frame size (after any repair). ``selected_image``
+    is the 0-based index of the chosen frame (A/B), ``None`` for C or when missing. ``points``
+    holds every point for multi-point formats (the prediction is then their centroid, and
+    ``closest_point`` may be filled by a scorer-aware consumer). ``span`` is the raw text the
+    answer came from; ``repair`` says how it was changed (e.g. ``"rescaled 0-1000 -> pixels"``).
+    """
+
+    status: ParseStatus
+    reason: str = ""
+    selected_image: int | None = None
+    x: float | None = None
+    y: float | None = None
+    points: list[tuple[float, float]] | None = None
+    span: str | None = None
+    repair: str | None = None
+
+    @property
+    def answered(self) -> bool:
+        """True when the parse yields a point."""
+        return self.status.answered and self.x is not None and self.y is not None
+
+
+def unparseable(reason: str, span: str | None = None) -> ParsedAnswer:
+    """A non-response with its reason."""
+    return ParsedAnswer(status=ParseStatus.UNPARSEABLE, reason=reason, span=span)
+
+
+def frame_answer_schema(n_frames: int, width: int, height: int) -> dict[str, Any]:
+    """JSON Schema of the A/B answer ``{"selected_image", "x", "y"}``."""
+    return {
+        "type": "object",
+        "required": ["selected_image", "x", "y"],
+        "properties": {
+            "selected_image": {"type": "integer", "minimum": 0, "maximum": max(n_frames - 1, 0)},
+            "x": {"type": "number", "minimum": 0, "maximum": width - 1},
+            "y": {"type": "number", "minimum": 0, "maximum": height - 1},
+        },
+    }
+
+
+def point_answer_schema(width: int, height: int) -> dict[str, Any]:
+    """JSON Schema of the C answer ``{"x", "y"}``."""
+    return {
+        "type": "object",
+        "required": ["x", "y"],
+        "properties": {
+            "x": {"type": "number", "minimum": 0, "maximum": width - 1},
+            "y": {"type": "number", "minimum": 0, "maximum": height - 1},
+        },
+    }

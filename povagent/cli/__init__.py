@@ -1,0 +1,49 @@
+"""The ``povagent`` command line: a thin typer app; every command calls a library function.
+
+Commands live in submodules by area (one job each) and attach themselves to :data:`app`;
+importing them here keeps ``povagent --help`` complete while heavy libraries (litellm, trimesh)
+are imported only inside the commands that need them.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+import typer
+
+app = typer.Typer(
+    name="povagent",
+    help="Contextual observer grounding: evaluate VLMs on POVBench, generate datasets, report.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+#: Submodules that add commands to ``app`` (each owns its commands).
+COMMAND_MODULES = (
+    "povagent.cli.dataset",    # validate, score
+    "povagent.cli.pipeline",   # run, sweep, plugins
+    "povagent.cli.prompting",  # show-prompt, parse, rescore
+    "povagent.cli.generate",   # generate
+    "povagent.cli.reporting",  # report, export, compare
+    "povagent.cli.quickstart", # quickstart
+)
+
+for _name in COMMAND_MODULES:
+    try:
+        importlib.import_module(_name)
+    except ModuleNotFoundError as _exc:  # a command module not written yet
+        if _exc.name != _name:
+            raise
+
+
+def main() -> None:
+    """Console-script entry point: user-facing errors print a message, not a traceback."""
+    from povagent.errors import PovagentError
+
+    try:
+        app()
+    except PovagentError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        sys.exit(2)

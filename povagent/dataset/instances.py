@@ -1,0 +1,74 @@
+"""Evaluation instances: one per (pair, valid direction, condition).
+
+An instance knows everything a strategy, a backend and a scorer need and nothing about files
+beyond the frame paths: the sentence, the frames it shows (A/B: every exploration frame in log
+order; C: the observer view), the ground-truth 3D point, and the observer and anchor objects
+(for visual markers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from povagent.dataset.models import Condition, Direction, SceneObject
+from povagent.geometry.camera import Camera
+
+
+@dataclass(frozen=True)
+class Frame:
+    """An image an instance shows, with the camera it was taken from.
+
+    ``image_path`` is the key predictions use to name a frame (relative to the house folder);
+    ``file`` is where it is on disk.
+    """
+
+    index: int
+    image_path: str
+    file: Path
+    camera: Camera
+
+
+@dataclass(frozen=True)
+class Instance:
+    """One evaluation instance; ``id`` is ``house/pair/direction/condition``."""
+
+    house_id: str
+    pair_id: str
+    direction: Direction
+    condition: Condition
+    sentence: str
+    frames: tuple[Frame, ...]
+    target: tuple[float, float, float]
+    observer_object: SceneObject
+    anchor_object: SceneObject
+    observer_camera: Camera
+
+    @property
+    def id(self) -> str:
+        """Stable id ``house/pair/direction/condition``."""
+        return instance_id(self.house_id, self.pair_id, self.direction, self.condition)
+
+    @property
+    def frame_size(self) -> tuple[int, int]:
+        """``(width, height)`` of the frames shown (all frames of an instance share it)."""
+        cam = self.frames[0].camera if self.frames else self.observer_camera
+        return (cam.width, cam.height)
+
+    def frame_by_path(self, image_path: str) -> Frame | None:
+        """The shown frame whose ``image_path`` matches (also tolerating a leading ``./``)."""
+        want = image_path.removeprefix("./")
+        for f in self.frames:
+            if f.image_path.removeprefix("./") == want:
+                return f
+        return None
+
+
+def instance_id(house_id: str, pair_id: str, direction: str, condition: str) -> str:
+    """``house/pair/direction/condition`` with enum values as plain strings."""
+    return f"{house_id}/{pair_id}/{str(direction)}/{str(condition)}"
+
+
+def row_key(instance_id_: str, run: int) -> str:
+    """The key of one (instance, run): ``<instance id>#<run>``."""
+    return f"{instance_id_}#{run}"

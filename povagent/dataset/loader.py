@@ -1,0 +1,295 @@
+"""Loading a dataset in the POVBench release layout into typed houses and instances.
+
+Loading never crashes on one bad house or pair: it records a :class:`Problem` and goes on
+(``strict=True`` raises instead). Thorough checks of every file and image are the job of
+:mod:`povagent.dataset.validate`; here we only parse what a run needs.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+from pydantic import TypeAdapter, ValidationError
+
+from povagent.dataset.instances import Frame, Instance, instance_id
+from povagent.dataset.models import (
+    CONDITIONS,
+    Condition,
+    DatasetMeta,
+    Direction,
+    ExplorationRecord,
+    PairEntry,
+)
+from povagent.dataset.problems import Problem, problems_from_validation_error
+from povagent.errors import DatasetError
+from povagent.geometry.camera import Camera
+from povagent.geometry.ground_truth import AnchorBox, target_point
+
+_VISIBLE = TypeAdapter(dict[str, list[str]])
+
+EXPLORATION_LOG = "exploration_log.json"
+VISIBLE_OBJECTS = "per_image_visible_objects.json"
+
+
+@dataclass
+class House:
+    """One house: its pairs, exploration frames and per-frame visible objects."""
+
+    house_id: str
+    folder: Path
+    pairs: dict[str, PairEntry]
+    exploration: list[ExplorationRecord]
+    visible_objects: dict[str, list[str]]
+    frame_size: tuple[int, int] = (512, 512)
+
+    @cached_property
+    def frames(self) -> tuple[Frame, ...]:
+        """Exploration frames in log order, shared by every A/B instance of the house."""
+        w, h = self.frame_size
+        return tuple(
+            Frame(
+                index=i,
+                image_path=rec.image_path,
+                file=self.folder / rec.image_path,
+                camera=Camera.from_pose(rec.camera.cam_pos, rec.camera.cam_yaw, rec.camera.cam_horizon, rec.camera.fov, w, h),
+            )
+            for i, rec in enumerate(self.exploration)
+        )
+
+    def observer_frame(self, pair: PairEntry) -> Frame:
+        """The observer view of a pair (condition C)."""
+        return Frame(0, pair.rgb_path, resolve_image(self.folder, pair.rgb_path), observer_camera(pair))
+
+
+def observer_camera(pair: PairEntry) -> Camera:
+    """The observer camera of a pair."""
+    c = pair.camera
+    return Camera.from_pose(c.cam_pos, c.cam_yaw, c.cam_horizon, c.fov, c.screen_width, c.screen_height)
+
+
+def resolve_image(house_folder: Path, rel: str) -> Path:
+    """An image path of the release, relative to the house folder (or, failing that, the root)."""
+    p = house_folder / rel
+    if p.exists():
+        return p
+    alt = house_folder.parent.parent / rel
+    return alt if alt.exists() else p
+
+
+def anchor_box(pair: PairEntry) -> AnchorBox:
+    """The anchor's AABB as the GT rules use it."""
+    box = pair.object_landmark.raw_metadata.axisAlignedBoundingBox
+    top = max(c[1] for c in box.cornerPoints)
+    return AnchorBox((box.center.x, box.center.z), (box.size.x / 2.0, box.size.z / 2.0), top)
+
+
+def ground_truth_point(pair: PairEntry, direction: Direction) -> np.ndarray:
+    """The surface-corrected 3D GT point of one (pair, direction), as the official scorer has it."""
+    judgement = pair.stage3.get(direction)
+    return target_point(
+        str(direction),
+        anchor_box(pair),
+        pair.object_landmark.object_type,
+        np.array(pair.object_landmark.position.as_tuple()),
+        np.array(pair.camera.cam_pos),
+        judgement.verdict if judgement else None,
+        judgement.surface if judgement else None,
+        np.array(pair.placements[direction].position.as_tuple()),
+    )
+
+
+@dataclass
+class Dataset:
+    """A loaded dataset: houses by id, plus the problems met while loading."""
+
+    root: Path
+    meta: DatasetMeta | None
+    houses: dict[str, House]
+    problems: list[Problem] = field(default_factory=list)
+
+    def instances(
+        self,
+        conditions: Iterable[Condition | str] | None = None,
+        directions: Iterable[Direction | str] | None = None,
+        houses: Iterable[str] | None = None,
+    ) -> list[Instance]:
+        """Every instance, grouped by house (so a run reads each house's frames together)."""
+        conds = [Condition(c) for c in conditions] if conditions else list(CONDITIONS)
+        dirs = {Direction(d) for d in directions} if directions else None
+        keep = set(houses) if houses else None
+        out: list[Instance] = []
+        for house in self.houses.values():
+            if keep is not None and house.house_id not in keep:
+                continue
+            for pair in house.pairs.values():
+                obs_cam = observer_camera(pair)
+                for direction in pair.valid_directions():
+                    if dirs is not None and direction not in dirs:
+                        continue
+                    target = tuple(float(v) for v in ground_truth_point(pair, direction))
+                    for cond in conds:
+                        out.append(self._instance(house, pair, direction, cond, target, obs_cam))
+        return out
+
+    def _instance(self, house: House, pair: PairEntry, direction: Direction, cond: Condition, target, obs_cam) -> Instance:
+        if cond is Condition.GIVEN:
+            sentence = pair.stage6[direction].type_c
+            frames: tuple[Frame, ...] = (house.observer_frame(pair),)
+        else:
+            s5 = pair.stage5[direction]
+            sentence = s5.type_a if cond is Condition.INFERRED else s5.type_b
+            frames = house.frames
+        return Instance(
+            house_id=house.house_id,
+            pair_id=pair.pair_id,
+            direction=direction,
+            condition=cond,
+            sentence=sentence,
+            frames=frames,
+            target=target,
+            observer_object=pair.object_observer,
+            anchor_object=pair.object_landmark,
+            observer_camera=obs_cam,
+        )
+
+    @cached_property
+    def _index(self) -> dict[str, Instance]:
+        return {i.id: i for i in self.instances()}
+
+    def instance(self, id_: str) -> Instance | None:
+        """The instance with id ``house/pair/direction/condition``, or ``None``."""
+        return self._index.get(id_)
+
+    def instance_for(self, house_id: str, pair_id: str | int, direction: str, condition: str) -> Instance | None:
+        """The instance for an official prediction row's fields, or ``None``."""
+        return self._index.get(instance_id(house_id, str(pair_id), direction.lower(), condition.lower()))
+
+
+def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:
+    rel = _rel(path, root)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        problems.append(Problem(rel, "$", "file is missing"))
+        return None
+    except OSError as exc:
+        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
+        return None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
+        return None
+
+
+def _rel(path: Path, root: Path) -> str:
+    try:
+        return str(path.relative_to(root))
+    except ValueError:
+        return str(path)
+
+
+def house_folders(root: Path) -> list[Path]:
+    """House folders under ``root/artifacts`` in sorted order."""
+    art = root / "artifacts"
+    if not art.is_dir():
+        return []
+    return sorted(p for p in art.iterdir() if p.is_dir())
+
+
+def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tuple[int, int] = (512, 512)) -> House | None:
+    """Load one house; bad pairs are reported and skipped, an unusable house returns ``None``."""
+    house_id = folder.name
+    before = len(problems)
+    raw_pairs = _read_json(folder / f"{house_id}.json", root, problems)
+    raw_log = _read_json(folder / EXPLORATION_LOG, root, problems)
+    if raw_pairs is None or raw_log is None:
+        return None
+    pairs_file = _rel(folder / f"{house_id}.json", root)
+    log_file = _rel(folder / EXPLORATION_LOG, root)
+    if not isinstance(raw_pairs, list):
+        problems.append(Problem(pairs_file, "$", f"must be a list of pair entries (got {type(raw_pairs).__name__})"))
+        return None
+    if not isinstance(raw_log, list):
+        problems.append(Problem(log_file, "$", f"must be a list of frame records (got {type(raw_log).__name__})"))
+        return None
+    pairs: dict[str, PairEntry] = {}
+    for i, raw in enumerate(raw_pairs):
+        try:
+            pair = PairEntry.model_validate(raw)
+        except ValidationError as exc:
+            problems.extend(problems_from_validation_error(pairs_file, exc, (i,)))
+            continue
+        missing = [d for d in pair.valid_directions() if d not in pair.stage5 or d not in pair.stage6]
+        if missing:
+            names = ", ".join(str(d) for d in missing)
+            problems.append(Problem(pairs_file, f"$[{i}]", f"direction(s) {names} have a placement but no sentence in stage5/stage6"))
+            continue
+        if pair.pair_id in pairs:
+            problems.append(Problem(pairs_file, f"$[{i}].pair_id", f"pair_id {pair.pair_id!r} appears twice in this house"))
+            continue
+        pairs[pair.pair_id] = pair
+    exploration: list[ExplorationRecord] = []
+    log_ok = True
+    for i, raw in enumerate(raw_log):
+        try:
+            exploration.append(ExplorationRecord.model_validate(raw))
+        except ValidationError as exc:
+            problems.extend(problems_from_validation_error(log_file, exc, (i,)))
+            log_ok = False
+    if not log_ok:
+        # A/B frame indices would shift if a record were dropped: the house cannot be scored.
+        return None
+    visible: dict[str, list[str]] = {}
+    vis_path = folder / VISIBLE_OBJECTS
+    if vis_path.exists():
+        raw_vis = _read_json(vis_path, root, problems)
+        if raw_vis is not None:
+            try:
+                visible = _VISIBLE.validate_python(raw_vis)
+            except ValidationError as exc:
+                problems.extend(problems_from_validation_error(_rel(vis_path, root), exc))
+    if not pairs and len(problems) > before:
+        return None
+    return House(house_id, folder, pairs, exploration, visible, frame_size)
+
+
+def load_dataset(root: str | Path, *, strict: bool = False, frame_size: tuple[int, int] = (512, 512)) -> Dataset:
+    """Load a dataset folder in the release layout.
+
+    Problems (a malformed house file, a bad pair) are collected in ``Dataset.problems`` and the
+    affected house or pair is skipped. With ``strict=True`` any problem raises
+    :class:`DatasetError` listing them all.
+    """
+    root = Path(root)
+    if not root.is_dir():
+        raise DatasetError(f"{root}: dataset folder not found (expected the POVBench release layout: meta.json, artifacts/<house>/...)")
+    problems: list[Problem] = []
+    meta: DatasetMeta | None = None
+    if (root / "meta.json").exists():
+        raw_meta = _read_json(root / "meta.json", root, problems)
+        if raw_meta is not None:
+            try:
+                meta = DatasetMeta.model_validate(raw_meta)
+            except ValidationError as exc:
+                problems.extend(problems_from_validation_error("meta.json", exc))
+    folders = house_folders(root)
+    if not folders:
+        raise DatasetError(f"{root}: no house folders under {root / 'artifacts'} (is this a POVBench dataset?)")
+    houses: dict[str, House] = {}
+    for folder in folders:
+        house = load_house(folder, root, problems, frame_size)
+        if house is not None:
+            houses[house.house_id] = house
+    if strict and problems:
+        listing = "\n".join(f"  - {p}" for p in problems)
+        raise DatasetError(f"{root}: {len(problems)} problem(s) found (loading is --strict):\n{listing}")
+    if not houses:
+        listing = "\n".join(f"  - {p}" for p in problems[:20])
+        raise DatasetError(f"{root}: no usable house; problems:\n{listing}")
+    return Dataset(root, meta, houses, problems)

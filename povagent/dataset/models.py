@@ -1,0 +1,222 @@
+"""Pydantic models of the POVBench release layout.
+
+Strict where a mistake would silently corrupt scores (an unknown direction, a camera without a
+position, a bounding box without its corner points); tolerant where the real release varies
+(sentences as strings or as objects holding ``sentence``, ids as numbers or strings, and extra
+keys anywhere, which are kept and ignored). The JSON Schemas shipped in ``povagent/schemas`` are
+generated from these models (``python -m povagent.dataset.schema``).
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated, Any
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, field_validator
+
+
+class Direction(StrEnum):
+    """The four spatial relations of POVBench."""
+
+    RIGHT = "right"
+    LEFT = "left"
+    FRONT = "front"
+    UP = "up"
+
+
+class Condition(StrEnum):
+    """How explicitly the sentence grounds the observer (the paper's A, B and C)."""
+
+    INFERRED = "a"
+    STATED = "b"
+    GIVEN = "c"
+
+    @property
+    def label(self) -> str:
+        """The paper's name: Inferred, Stated or Given."""
+        return {"a": "Inferred", "b": "Stated", "c": "Given"}[self.value]
+
+    @property
+    def uses_exploration_frames(self) -> bool:
+        """A and B show the exploration frames; C shows the one observer view."""
+        return self is not Condition.GIVEN
+
+
+DIRECTIONS: tuple[Direction, ...] = (Direction.RIGHT, Direction.LEFT, Direction.FRONT, Direction.UP)
+CONDITIONS: tuple[Condition, ...] = (Condition.INFERRED, Condition.STATED, Condition.GIVEN)
+
+
+def _as_sentence(value: Any) -> Any:
+    """The release stores a sentence as a string or as ``{"sentence": ..., ...}``."""
+    if isinstance(value, dict) and "sentence" in value:
+        return value["sentence"]
+    return value
+
+
+def _as_str_id(value: Any) -> Any:
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int):
+        return str(value)
+    return value
+
+
+Sentence = Annotated[
+    str,
+    BeforeValidator(_as_sentence),
+    Field(min_length=1),
+    WithJsonSchema(
+        {
+            "anyOf": [
+                {"type": "string", "minLength": 1},
+                {
+                    "type": "object",
+                    "required": ["sentence"],
+                    "properties": {"sentence": {"type": "string", "minLength": 1}},
+                },
+            ]
+        }
+    ),
+]
+Identifier = Annotated[
+    str,
+    BeforeValidator(_as_str_id),
+    Field(min_length=1),
+    WithJsonSchema({"anyOf": [{"type": "string", "minLength": 1}, {"type": "integer"}]}),
+]
+Float3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+
+
+class _Record(BaseModel):
+    """Base of every release record: extra keys are kept and ignored, never rejected."""
+
+    model_config = ConfigDict(extra="allow", populate_by_name=True)
+
+
+class Vec3(_Record):
+    """A 3D point ``{x, y, z}`` in metres (Unity world: y up)."""
+
+    x: float
+    y: float
+    z: float
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        """``(x, y, z)``."""
+        return (self.x, self.y, self.z)
+
+
+class AxisAlignedBoundingBox(_Record):
+    """An object's world-space box as AI2-THOR reports it."""
+
+    center: Vec3
+    size: Vec3
+    cornerPoints: Annotated[list[Float3], Field(min_length=8, max_length=8)]
+
+
+class RawMetadata(_Record):
+    """The part of AI2-THOR's object metadata the benchmark keeps."""
+
+    objectType: str = Field(min_length=1)
+    position: Vec3 | None = None
+    axisAlignedBoundingBox: AxisAlignedBoundingBox
+
+
+class SceneObject(_Record):
+    """An observer or anchor (landmark) object."""
+
+    objectId: Identifier
+    assetId: str | None = None
+    position: Vec3
+    raw_metadata: RawMetadata
+
+    @property
+    def object_type(self) -> str:
+        """The AI2-THOR objectType (e.g. ``Bed``)."""
+        return self.raw_metadata.objectType
+
+
+class ObserverCamera(_Record):
+    """The observer camera of a pair: the view rendered for condition C."""
+
+    cam_pos: Float3
+    cam_yaw: float
+    cam_horizon: float
+    fov: float = Field(default=100.0, gt=0, lt=180)
+    screen_width: int = Field(default=512, gt=0)
+    screen_height: int = Field(default=512, gt=0)
+
+
+class SurfaceJudgement(_Record):
+    """Stage 3: is a target plausible in this direction, and on which surface."""
+
+    verdict: str
+    surface: str | None = None
+
+
+class InferredStatedSentences(_Record):
+    """Stage 5: the A (Inferred) and B (Stated) sentences of one direction."""
+
+    type_a: Sentence
+    type_b: Sentence
+
+
+class GivenSentence(_Record):
+    """Stage 6: the C (Given) sentence of one direction."""
+
+    type_c: Sentence
+
+
+class Placement(_Record):
+    """The raw 3D target point of one direction."""
+
+    position: Vec3
+
+
+class PairEntry(_Record):
+    """One (observer, anchor) pair of a house file, with its valid directions."""
+
+    pair_id: Identifier
+    landmark_type: str = Field(min_length=1)
+    object_landmark: SceneObject
+    object_observer: SceneObject
+    camera: ObserverCamera
+    rgb_path: str = Field(min_length=1)
+    stage3: dict[Direction, SurfaceJudgement] = Field(default_factory=dict)
+    stage5: dict[Direction, InferredStatedSentences]
+    stage6: dict[Direction, GivenSentence]
+    placements: dict[Direction, Placement]
+
+    @field_validator("placements")
+    @classmethod
+    def _at_least_one_direction(cls, v: dict[Direction, Placement]) -> dict[Direction, Placement]:
+        if not v:
+            raise ValueError("a pair needs at least one direction in placements")
+        return v
+
+    def valid_directions(self) -> list[Direction]:
+        """Directions with a placement, in the canonical order right, left, front, up."""
+        return [d for d in DIRECTIONS if d in self.placements]
+
+
+class ExplorationCamera(_Record):
+    """The pose of one exploration frame (no size: frames take the dataset's frame size)."""
+
+    cam_pos: Float3
+    cam_yaw: float
+    cam_horizon: float
+    fov: float = Field(default=100.0, gt=0, lt=180)
+
+
+class ExplorationRecord(_Record):
+    """One exploration frame: where it is, how it was taken, what it shows."""
+
+    image_path: str = Field(min_length=1)
+    camera: ExplorationCamera
+    object_in_frame_hits: list[Identifier] = Field(default_factory=list)
+
+
+class DatasetMeta(_Record):
+    """``meta.json``: free-form metadata. The release does not document it; every field is optional."""
+
+    version: str | None = None
+    seed: int | None = None

@@ -1,0 +1,47 @@
+"""The exceptions a user may see.
+
+Each carries a message that says what went wrong and what to do. Anything else raised inside
+povagent is a bug and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+
+class PovagentError(Exception):
+    """Base class of every error povagent reports to a user without a traceback."""
+
+
+class DatasetError(PovagentError):
+    """A dataset folder or file is missing or malformed (the message names file and field)."""
+
+
+class ConfigError(PovagentError):
+    """A pipeline or sweep YAML is malformed (the message names file, line and field)."""
+
+
+class PluginError(PovagentError):
+    """A plugin failed to load, is unknown, or registers a name another plugin already owns."""
+
+
+class PredictionsError(PovagentError):
+    """A predictions or results file cannot be read."""
+
+
+class BackendError(PovagentError):
+    """A model backend failed permanently (after retries, or on a non-transient error)."""
+
+
+class GroundingError(PovagentError):
+    """Base class of the errors :class:`povagent.agent.GroundingAgent` raises to robot apps."""
+
+
+class NoAnswerError(GroundingError):
+    """The model gave no answer: every attempt failed or timed out."""
+
+
+class UnparseableAnswerError(GroundingError):
+    """The model answered, but no point could be read from its answer."""
+
+
+class BadInputError(GroundingError):
+    """The agent's input is unusable: no frames, an unreadable image, a wrong camera."""

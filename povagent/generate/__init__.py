@@ -1,0 +1,1 @@
+"""Offline POVBench-format dataset generation."""

@@ -1,0 +1,143 @@
+"""The AI2-THOR (Unity) pinhole camera: left-handed world, y up, degrees.
+
+Yaw turns about +y, positive horizon tilts the view down, and ``fov`` is the vertical field of
+view (equal to the horizontal one for the square 512x512 frames of POVBench). Everything here is
+pure and vectorized: points are arrays of shape ``(..., 3)``.
+
+Camera axes for yaw ``y`` and horizon ``h``::
+
+    right   = ( cos y,        0,      -sin y)
+    forward = ( sin y cos h, -sin h,   cos y cos h)
+    up      = ( sin y sin h,  cos h,   cos y sin h)
+
+A world point ``p`` has camera coordinates ``(d.right, d.up, d.forward)`` with ``d = p - pos``
+and projects to ``u = f xc/zc + W/2``, ``v = H/2 - f yc/zc`` pixels, ``f = (H/2)/tan(fov/2)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+#: Depth at or below which a point counts as behind the camera (as the official scorer does).
+BEHIND_EPSILON = 1e-6
+
+
+@dataclass(frozen=True)
+class Projection:
+    """Where world points land in a camera.
+
+    ``normalized`` is ``(..., 2)`` in image fractions (u/W, v/H), unclamped; ``depth`` is the
+    distance along the optical axis; ``in_front`` is ``depth > 1e-6``; ``in_frame`` adds
+    ``0 <= u/W <= 1`` and ``0 <= v/H <= 1``.
+    """
+
+    normalized: np.ndarray
+    depth: np.ndarray
+    in_front: np.ndarray
+    in_frame: np.ndarray
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole camera posed like AI2-THOR's: position, yaw, horizon, vertical fov, size."""
+
+    position: tuple[float, float, float]
+    yaw: float
+    horizon: float
+    fov: float = 100.0
+    width: int = 512
+    height: int = 512
+
+    @classmethod
+    def from_pose(
+        cls,
+        position: Sequence[float],
+        yaw: float,
+        horizon: float,
+        fov: float = 100.0,
+        width: int = 512,
+        height: int = 512,
+    ) -> "Camera":
+        """Build a camera from any 3-sequence position (list, tuple, array)."""
+        x, y, z = (float(v) for v in position)
+        return cls((x, y, z), float(yaw), float(horizon), float(fov), int(width), int(height))
+
+    # -- frame --------------------------------------------------------------------------------
+    @property
+    def focal_px(self) -> float:
+        """Focal length in pixels from the vertical field of view."""
+        return (self.height / 2.0) / np.tan(np.radians(self.fov) / 2.0)
+
+    def axes(self) -> np.ndarray:
+        """Rows ``right, up, forward`` as a (3, 3) world-to-camera rotation."""
+        y, h = np.radians(self.yaw), np.radians(self.horizon)
+        sy, cy, sh, ch = np.sin(y), np.cos(y), np.sin(h), np.cos(h)
+        return np.array(
+            [
+                [cy, 0.0, -sy],
+                [sy * sh, ch, cy * sh],
+                [sy * ch, -sh, cy * ch],
+            ]
+        )
+
+    def to_camera(self, points: np.ndarray) -> np.ndarray:
+        """World points ``(..., 3)`` to camera coordinates ``(xc, yc, zc)`` (right, up, forward)."""
+        d = np.asarray(points, dtype=float) - np.asarray(self.position)
+        return d @ self.axes().T
+
+    # -- projection ---------------------------------------------------------------------------
+    def project(self, points: np.ndarray) -> Projection:
+        """Project world points; points behind the camera get NaN coordinates."""
+        c = self.to_camera(points)
+        depth = c[..., 2]
+        in_front = depth > BEHIND_EPSILON
+        f = self.focal_px
+        with np.errstate(divide="ignore", invalid="ignore"):
+            safe = np.where(in_front, depth, np.nan)
+            u = (f * c[..., 0] / safe + self.width / 2.0) / self.width
+            v = (self.height / 2.0 - f * c[..., 1] / safe) / self.height
+        normalized = np.stack([u, v], axis=-1)
+        with np.errstate(invalid="ignore"):
+            in_frame = in_front & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
+        return Projection(normalized, depth, in_front, in_frame)
+
+    def project_pixels(self, points: np.ndarray) -> np.ndarray:
+        """Project world points to pixel coordinates ``(..., 2)`` (NaN behind the camera)."""
+        n = self.project(points).normalized
+        return n * np.array([self.width, self.height], dtype=float)
+
+    # -- back-projection ----------------------------------------------------------------------
+    def ray(self, pixels: np.ndarray) -> np.ndarray:
+        """Unit world-space ray directions ``(..., 3)`` through pixel coordinates ``(..., 2)``."""
+        p = np.asarray(pixels, dtype=float)
+        f = self.focal_px
+        xc = (p[..., 0] - self.width / 2.0) / f
+        yc = (self.height / 2.0 - p[..., 1]) / f
+        cam = np.stack([xc, yc, np.ones_like(xc)], axis=-1)
+        world = cam @ self.axes()
+        return world / np.linalg.norm(world, axis=-1, keepdims=True)
+
+    def point_at_depth(self, pixels: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
+        """World point at optical-axis ``depth`` (metres along forward) under each pixel."""
+        p = np.asarray(pixels, dtype=float)
+        f = self.focal_px
+        z = np.asarray(depth, dtype=float)
+        xc = (p[..., 0] - self.width / 2.0) / f * z
+        yc = (self.height / 2.0 - p[..., 1]) / f * z
+        cam = np.stack([xc, yc, np.broadcast_to(z, xc.shape)], axis=-1)
+        return cam @ self.axes() + np.asarray(self.position)
+
+    def point_on_plane(self, pixels: np.ndarray, plane_y: float = 0.0) -> np.ndarray:
+        """Where each pixel's ray meets the horizontal plane ``y = plane_y``.
+
+        Rays parallel to the plane or meeting it behind the camera give NaN.
+        """
+        dirs = self.ray(pixels)
+        origin = np.asarray(self.position)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (plane_y - origin[1]) / dirs[..., 1]
+        t = np.where(np.isfinite(t) & (t > 0), t, np.nan)
+        return origin + dirs * t[..., None]

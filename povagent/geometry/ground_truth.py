@@ -1,0 +1,134 @@
+"""Ground-truth target points: the surface-corrected placement rules of the official scorer.
+
+Directions live in the xz plane and are defined from the observer facing the anchor:
+``fwd`` points from the observer camera to the anchor (y zeroed), ``right = up x fwd``,
+``left = -right``, ``front = -fwd`` (towards the observer). The target is a 0.4 m cube, hence
+the 0.2 m offsets. Only a direction whose surface verdict is ``"appropriate"`` is corrected;
+any other verdict keeps the raw ``placements[dir].position`` of the release.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Anchors with a flat top where a left/right target may stand on the anchor itself.
+FLAT_TOPPED_ANCHORS = frozenset(
+    {"Bed", "CounterTop", "Desk", "Desktop", "DiningTable", "Dresser", "SideTable"}
+)
+
+#: Half the 0.4 m target cube.
+TARGET_HALF_SIZE = 0.2
+
+#: Distance used by the boundary rule when a direction has no xz component at all.
+DEGENERATE_BOUNDARY_DISTANCE = 0.3
+
+#: How a surface phrase names an anchor type, when the CamelCase split is not enough.
+ANCHOR_KEYWORDS: dict[str, tuple[str, ...]] = {
+    "Sofa": ("sofa", "couch"),
+    "Fridge": ("fridge", "refrigerator"),
+    "ArmChair": ("armchair", "arm chair"),
+    "CoffeeTable": ("coffee table",),
+    "DiningTable": ("dining table",),
+    "SideTable": ("side table",),
+    "CounterTop": ("counter", "countertop"),
+    "WashingMachine": ("washing machine",),
+}
+
+
+def anchor_keywords(object_type: str) -> tuple[str, ...]:
+    """Lower-case words by which a surface phrase can name ``object_type``."""
+    if object_type in ANCHOR_KEYWORDS:
+        return ANCHOR_KEYWORDS[object_type]
+    return (" ".join(w.lower() for w in re.findall(r"[A-Z][a-z]*|[a-z]+|\d+", object_type)),)
+
+
+def surface_names_anchor(surface: str, anchor_type: str) -> bool:
+    """True when the lower-cased surface phrase mentions the anchor type by keyword."""
+    text = surface.lower()
+    return any(k in text for k in anchor_keywords(anchor_type))
+
+
+@dataclass(frozen=True)
+class AnchorBox:
+    """The anchor's axis-aligned box as the scorer uses it: xz centre, xz half sizes, top y."""
+
+    center_xz: tuple[float, float]
+    half_xz: tuple[float, float]
+    top: float
+
+
+def direction_vectors(anchor_position: np.ndarray, observer_position: np.ndarray) -> dict[str, np.ndarray]:
+    """Unit xz vectors (as 3-vectors, y = 0) of right/left/front from the observer's view.
+
+    ``fwd = normalize(anchor - observer)`` with y zeroed; ``right = world_up x fwd`` (in this
+    left-handed frame that is ``(fwd_z, 0, -fwd_x)``); ``front = -fwd``.
+    """
+    d = np.asarray(anchor_position, dtype=float) - np.asarray(observer_position, dtype=float)
+    d = np.array([d[0], 0.0, d[2]])
+    n = np.linalg.norm(d)
+    fwd = d / n if n > 0 else np.array([0.0, 0.0, 1.0])
+    right = np.cross(np.array([0.0, 1.0, 0.0]), fwd)
+    return {"right": right, "left": -right, "front": -fwd}
+
+
+def boundary_point(box: AnchorBox, direction: np.ndarray) -> np.ndarray:
+    """Where the ray from the box's xz centre along ``direction`` leaves the box (x, z)."""
+    dx, dz = float(direction[0]), float(direction[2])
+    hx, hz = box.half_xz
+    ts = []
+    if abs(dx) > 1e-12:
+        ts.append(hx / abs(dx))
+    if abs(dz) > 1e-12:
+        ts.append(hz / abs(dz))
+    t = min(ts) if ts else DEGENERATE_BOUNDARY_DISTANCE
+    cx, cz = box.center_xz
+    return np.array([cx + t * dx, cz + t * dz])
+
+
+def surface_height(surface: str | None, box: AnchorBox) -> float:
+    """``0`` for a floor surface, otherwise the anchor's top.
+
+    When the surface names another object the release has no box for it, so the anchor's top
+    stands in for it, exactly as the official scorer does.
+    """
+    if surface is not None and "floor" in surface.lower():
+        return 0.0
+    return box.top
+
+
+def target_point(
+    direction: str,
+    box: AnchorBox,
+    anchor_type: str,
+    anchor_position: np.ndarray,
+    observer_position: np.ndarray,
+    verdict: str | None,
+    surface: str | None,
+    raw_placement: np.ndarray,
+) -> np.ndarray:
+    """The 3D ground-truth point for one (pair, direction).
+
+    ``observer_position`` is the observer camera's position (``camera.cam_pos``).
+    """
+    if verdict != "appropriate":
+        return np.asarray(raw_placement, dtype=float)
+    cx, cz = box.center_xz
+    if direction == "up":
+        return np.array([cx, box.top + TARGET_HALF_SIZE, cz])
+    d = direction_vectors(anchor_position, observer_position)[direction]
+    on_anchor = (
+        direction in ("left", "right")
+        and anchor_type in FLAT_TOPPED_ANCHORS
+        and surface is not None
+        and surface_names_anchor(surface, anchor_type)
+    )
+    if on_anchor:
+        return np.array(
+            [cx + TARGET_HALF_SIZE * d[0], box.top + TARGET_HALF_SIZE, cz + TARGET_HALF_SIZE * d[2]]
+        )
+    bx, bz = boundary_point(box, d)
+    y = surface_height(surface, box) + TARGET_HALF_SIZE
+    return np.array([bx + TARGET_HALF_SIZE * d[0], y, bz + TARGET_HALF_SIZE * d[2]])

@@ -1,0 +1,176 @@
+"""The run-wide image store: each image read and encoded once, shared by every request.
+
+Images are named by the SHA-256 of their encoded bytes. A file is read once (its path is
+memoized); a derived image (a frame with markers drawn on it) is made once per (source hash,
+recipe key). Encoded bytes and base64 data URLs are kept in an LRU bounded by bytes; an evicted
+entry is rebuilt from its recipe (the file, or the derivation) on next use, which the counters
+record, so a benchmark can check "one encode per distinct image" when memory suffices.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import io
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from PIL import Image
+
+#: Default memory bound for encoded bytes plus data URLs.
+DEFAULT_MAX_BYTES = 256 * 1024 * 1024
+
+
+@dataclass(frozen=True)
+class StoredImage:
+    """What the store knows about one image without holding its bytes."""
+
+    image_hash: str
+    width: int
+    height: int
+    media_type: str
+
+
+@dataclass
+class ImageStoreStats:
+    """Counters: file reads, PNG encodes (derived images), base64 encodes, rebuilds after eviction."""
+
+    file_reads: int = 0
+    png_encodes: int = 0
+    base64_encodes: int = 0
+    rebuilds: int = 0
+
+
+class ImageStore:
+    """Content-addressed images for one run or sweep (thread-safe)."""
+
+    def __init__(self, max_bytes: int = DEFAULT_MAX_BYTES) -> None:
+        self.max_bytes = max_bytes
+        self.stats = ImageStoreStats()
+        self._lock = threading.RLock()
+        self._by_path: dict[Path, StoredImage] = {}
+        self._by_hash: dict[str, StoredImage] = {}
+        self._recipes: dict[str, Callable[[], bytes]] = {}
+        self._derived: dict[tuple[str, str], str] = {}
+        self._cache: OrderedDict[tuple[str, str], bytes | str] = OrderedDict()
+        self._cached_bytes = 0
+
+    # -- adding -------------------------------------------------------------------------------
+    def add_file(self, path: str | Path) -> StoredImage:
+        """Register an image file (read once per run); returns its hash and size."""
+        p = Path(path)
+        with self._lock:
+            known = self._by_path.get(p)
+            if known is not None:
+                return known
+            data = self._read_file(p)
+            with Image.open(io.BytesIO(data)) as im:
+                size, fmt = im.size, (im.format or "PNG")
+            info = self._remember(data, size, f"image/{fmt.lower()}", lambda p=p: self._read_file(p))
+            self._by_path[p] = info
+            return info
+
+    def add_pil(self, image: Image.Image) -> StoredImage:
+        """Register an in-memory image (encoded once as PNG)."""
+        data = self._encode_png(image)
+        return self._remember(data, image.size, "image/png", lambda d=data: d)
+
+    def derive(self, source_hash: str, recipe_key: str, draw: Callable[[Image.Image], Image.Image]) -> StoredImage:
+        """The image made by ``draw`` from ``source_hash``, made once per ``recipe_key``.
+
+        ``recipe_key`` must identify the drawing completely (e.g. marker positions and style);
+        it is what makes a second request for the same derivation free.
+        """
+        with self._lock:
+            known = self._derived.get((source_hash, recipe_key))
+            if known is not None:
+                return self._by_hash[known]
+
+            def build() -> bytes:
+                with self.open(source_hash) as src:
+                    return self._encode_png(draw(src.convert("RGB")))
+
+            data = build()
+            with Image.open(io.BytesIO(data)) as im:
+                size = im.size
+            info = self._remember(data, size, "image/png", build)
+            self._derived[(source_hash, recipe_key)] = info.image_hash
+            return info
+
+    # -- reading ------------------------------------------------------------------------------
+    def info(self, image_hash: str) -> StoredImage:
+        """Size and media type of a stored image."""
+        return self._by_hash[image_hash]
+
+    def __contains__(self, image_hash: object) -> bool:
+        return image_hash in self._by_hash
+
+    def bytes(self, image_hash: str) -> bytes:
+        """The encoded bytes of an image."""
+        with self._lock:
+            hit = self._cache_get((image_hash, "bytes"))
+            if hit is not None:
+                return hit  # type: ignore[return-value]
+            self.stats.rebuilds += 1
+            data = self._recipes[image_hash]()
+            self._cache_put((image_hash, "bytes"), data)
+            return data
+
+    def data_url(self, image_hash: str) -> str:
+        """``data:<media type>;base64,...`` for the image, encoded once while it stays cached."""
+        with self._lock:
+            hit = self._cache_get((image_hash, "url"))
+            if hit is not None:
+                return hit  # type: ignore[return-value]
+            info = self._by_hash[image_hash]
+            url = f"data:{info.media_type};base64," + base64.b64encode(self.bytes(image_hash)).decode("ascii")
+            self.stats.base64_encodes += 1
+            self._cache_put((image_hash, "url"), url)
+            return url
+
+    def open(self, image_hash: str) -> Image.Image:
+        """A decoded PIL image (a new object: callers may draw on it)."""
+        im = Image.open(io.BytesIO(self.bytes(image_hash)))
+        im.load()
+        return im
+
+    # -- internals ----------------------------------------------------------------------------
+    def _read_file(self, path: Path) -> bytes:
+        self.stats.file_reads += 1
+        return path.read_bytes()
+
+    def _encode_png(self, image: Image.Image) -> bytes:
+        buf = io.BytesIO()
+        # compress_level 1: several times faster than the default, a little larger
+        image.save(buf, format="PNG", compress_level=1)
+        self.stats.png_encodes += 1
+        return buf.getvalue()
+
+    def _remember(self, data: bytes, size: tuple[int, int], media_type: str, recipe: Callable[[], bytes]) -> StoredImage:
+        h = hashlib.sha256(data).hexdigest()
+        with self._lock:
+            known = self._by_hash.get(h)
+            if known is not None:
+                return known
+            info = StoredImage(h, size[0], size[1], media_type)
+            self._by_hash[h] = info
+            self._recipes[h] = recipe
+            self._cache_put((h, "bytes"), data)
+            return info
+
+    def _cache_get(self, key: tuple[str, str]) -> bytes | str | None:
+        value = self._cache.get(key)
+        if value is not None:
+            self._cache.move_to_end(key)
+        return value
+
+    def _cache_put(self, key: tuple[str, str], value: bytes | str) -> None:
+        self._cache[key] = value
+        self._cache.move_to_end(key)
+        self._cached_bytes += len(value)
+        while self._cached_bytes > self.max_bytes and len(self._cache) > 1:
+            _, old = self._cache.popitem(last=False)
+            self._cached_bytes -= len(old)

@@ -1,0 +1,97 @@
+"""The base classes a plugin implements: backends, strategies, parsers, scorers.
+
+A plugin registers a *factory* (usually one of these subclasses) under a name through the
+``register_*`` hooks in :mod:`povagent.hookspecs`; the runner calls ``factory(**options)`` with
+the options from the pipeline YAML. Everything here is abstract: no file, network or clock.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
+
+from povagent.answers import AnswerSpec, ParsedAnswer
+from povagent.exchange import Request, Response
+
+if TYPE_CHECKING:
+    from povagent.dataset.instances import Instance
+    from povagent.dataset.loader import Dataset
+    from povagent.images import ImageStore
+
+#: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
+Ask = Callable[[Request], Awaitable[Response]]
+
+
+class TransientBackendError(Exception):
+    """A failure worth retrying: timeout, dropped connection, 429, 5xx.
+
+    ``retry_after`` (seconds) is honoured by the runner when the server sent one.
+    """
+
+    def __init__(self, message: str, *, retry_after: float | None = None, status: int | None = None) -> None:
+        super().__init__(message)
+        self.retry_after = retry_after
+        self.status = status
+
+
+class PermanentBackendError(Exception):
+    """A failure not worth retrying: bad request, authentication, unknown model (4xx)."""
+
+    def __init__(self, message: str, *, status: int | None = None) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class Backend(abc.ABC):
+    """A model (or an offline baseline) that answers requests.
+
+    Subclasses take their YAML options as keyword arguments. ``identity()`` must describe
+    everything that changes answers (it is part of the cache key) and nothing secret.
+    """
+
+    #: Whether answers may be cached (offline baselines that are instant can say False).
+    cacheable: ClassVar[bool] = True
+
+    @abc.abstractmethod
+    def identity(self) -> Mapping[str, Any]:
+        """JSON-able identity: model name and answer-changing options; never API keys."""
+
+    @abc.abstractmethod
+    async def complete(self, request: Request, images: "ImageStore") -> Response:
+        """Answer one request. Raise TransientBackendError / PermanentBackendError on failure."""
+
+    async def aclose(self) -> None:  # noqa: B027 - optional hook
+        """Release connections; called once when the run ends."""
+
+
+class Strategy(abc.ABC):
+    """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
+
+    @abc.abstractmethod
+    def build(self, instance: "Instance", images: "ImageStore") -> Request:
+        """The (first) request for an instance."""
+
+    async def solve(self, instance: "Instance", ask: Ask, images: "ImageStore") -> list[tuple[Request, Response]]:
+        """Talk to the model and return every exchange, the final answer last.
+
+        The default is single-turn: build one request and ask once. Multi-turn strategies
+        (self-checking, tool use) override this and may call ``ask`` several times.
+        """
+        request = self.build(instance, images)
+        return [(request, await ask(request))]
+
+
+class Parser(abc.ABC):
+    """Reads a point (and a frame) out of a model's raw answer. Must never raise on bad text."""
+
+    @abc.abstractmethod
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """A typed parse of ``text`` given what was asked (``spec``)."""
+
+
+class Scorer(abc.ABC):
+    """Scores one parsed answer against the ground truth."""
+
+    @abc.abstractmethod
+    def score(self, instance: "Instance", answer: ParsedAnswer, dataset: "Dataset") -> dict[str, Any]:
+        """JSON-able scores for one row (e.g. ``{"answered": True, "l2": 0.12, ...}``)."""

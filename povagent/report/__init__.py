@@ -1,0 +1,1 @@
+"""Reports: the paper's tables, statistics and the HTML report."""

@@ -1,0 +1,1 @@
+"""The official POVBench metric and the summaries built on it (pure functions)."""

@@ -1,0 +1,123 @@
+"""The official metric: clamped normalized L2 between the predicted pixel and the projected GT.
+
+A/B answers are scored in the frame the model selected (its exploration camera), C answers in
+the observer camera. A GT point behind the camera (depth <= 1e-6) is placed at the image centre
+(0.5, 0.5) and counted out of frame: this reproduces the official scorer exactly, blind spot
+included (see :func:`strict_l2` for the variant that closes it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from povagent.dataset.instances import Frame, Instance
+from povagent.geometry.camera import Camera
+
+#: The largest clamped error: the diagonal of the unit square.
+MAX_L2 = math.sqrt(2.0)
+
+
+@dataclass(frozen=True)
+class GroundTruthInFrame:
+    """The GT as the official scorer sees it in one camera."""
+
+    u: float
+    v: float
+    in_frame: bool
+    behind: bool
+
+
+def project_ground_truth(target: tuple[float, float, float] | np.ndarray, camera: Camera) -> GroundTruthInFrame:
+    """Project the 3D GT into a camera; behind the camera -> (0.5, 0.5), out of frame."""
+    p = camera.project(np.asarray(target, dtype=float))
+    if not bool(p.in_front):
+        return GroundTruthInFrame(0.5, 0.5, False, True)
+    u, v = (float(c) for c in p.normalized)
+    return GroundTruthInFrame(u, v, bool(p.in_frame), False)
+
+
+def _clamp01(v: float) -> float:
+    return min(1.0, max(0.0, v))
+
+
+def normalized_l2(x: float, y: float, width: int, height: int, gt_u: float, gt_v: float) -> float:
+    """sqrt((x/W - gu)^2 + (y/H - gv)^2) with both points clamped to [0, 1]."""
+    px, py = _clamp01(x / width), _clamp01(y / height)
+    gx, gy = _clamp01(gt_u), _clamp01(gt_v)
+    return math.hypot(px - gx, py - gy)
+
+
+def strict_l2(x: float, y: float, width: int, height: int, gt: GroundTruthInFrame) -> float:
+    """The strict variant: a GT behind the camera or outside the frame counts as a miss (sqrt 2)."""
+    if not gt.in_frame:
+        return MAX_L2
+    return normalized_l2(x, y, width, height, gt.u, gt.v)
+
+
+@dataclass(frozen=True)
+class OfficialScore:
+    """The official score of one row; ``l2`` is ``None`` for a non-response."""
+
+    answered: bool
+    l2: float | None
+    l2_strict: float | None
+    gt_in_frame: bool | None
+    gt_behind: bool | None
+    gt_u: float | None
+    gt_v: float | None
+    reason: str = ""
+
+    def as_dict(self) -> dict[str, object]:
+        """JSON-able form, as stored in a row's ``scores``."""
+        return {
+            "answered": self.answered,
+            "l2": self.l2,
+            "l2_strict": self.l2_strict,
+            "gt_in_frame": self.gt_in_frame,
+            "gt_behind": self.gt_behind,
+            "gt_u": self.gt_u,
+            "gt_v": self.gt_v,
+            "reason": self.reason,
+        }
+
+
+UNANSWERED = OfficialScore(False, None, None, None, None, None, None, "no answer")
+
+
+def scoring_frame(instance: Instance, selected_image: int | None = None, image_path: str | None = None) -> Frame | None:
+    """The frame an answer is scored in: C -> the observer view; A/B -> the selected frame.
+
+    The selected frame is named by index or by ``image_path``; an unknown or missing one gives
+    ``None`` (the row is then unanswered, as officially).
+    """
+    if not instance.condition.uses_exploration_frames:
+        return instance.frames[0]
+    if image_path is not None:
+        return instance.frame_by_path(image_path)
+    if selected_image is not None and 0 <= selected_image < len(instance.frames):
+        return instance.frames[selected_image]
+    return None
+
+
+def score_point(instance: Instance, frame: Frame | None, x: float | None, y: float | None) -> OfficialScore:
+    """Score one predicted pixel ``(x, y)`` in ``frame`` against the instance's GT."""
+    if x is None or y is None or not (math.isfinite(x) and math.isfinite(y)):
+        return UNANSWERED
+    if frame is None:
+        return OfficialScore(False, None, None, None, None, None, None, "missing or unknown selected frame")
+    cam = frame.camera
+    gt = project_ground_truth(instance.target, cam)
+    l2 = normalized_l2(x, y, cam.width, cam.height, gt.u, gt.v)
+    return OfficialScore(True, l2, strict_l2(x, y, cam.width, cam.height, gt), gt.in_frame, gt.behind, gt.u, gt.v)
+
+
+def closest_point_l2(instance: Instance, frame: Frame, points: list[tuple[float, float]]) -> float | None:
+    """For multi-point answers: the error of the point closest to the GT (kept beside the centroid's)."""
+    if not points:
+        return None
+    cam = frame.camera
+    gt = project_ground_truth(instance.target, cam)
+    return min(normalized_l2(px, py, cam.width, cam.height, gt.u, gt.v) for px, py in points)
