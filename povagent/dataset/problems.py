@@ -32,7 +32,7 @@ def json_path(loc: Iterable[Any]) -> str:
         if isinstance(part, int):
             out += f"[{part}]"
         elif part == "[key]":
-            out += "(key)"
+            continue  # pydantic marks a bad dict key by appending "[key]" after it
         else:
             out += f".{part}"
     return out
@@ -54,7 +54,7 @@ def problems_from_validation_error(file: str, err: ValidationError, prefix: tupl
         if kind == "missing":
             msg = f"required field '{field}' is missing"
         elif loc and loc[-1] == "[key]":
-            msg = f"invalid key {e.get('input')!r}: {e['msg']}"
+            msg = f"unknown key {e.get('input')!r}: {e['msg'][0].lower() + e['msg'][1:]}"
         elif kind in ("too_short", "too_long") and isinstance(e.get("input"), list):
             msg = f"'{field}' has {len(e['input'])} items: {e['msg']}"
         else:

@@ -1,0 +1,172 @@
+"""``povagent validate``: check every file and every referenced image of a dataset.
+
+Reports *every* problem (file, JSON path, a plain sentence); never stops at the first. Files
+are checked against the shipped JSON Schemas with ``jsonschema``; then what a schema cannot
+say: sentences for every direction with a placement, unique pair ids, images that exist,
+decode and have the camera's size, visible-object keys that name real frames.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Iterable
+
+from jsonschema import ValidationError as SchemaError
+from PIL import Image, UnidentifiedImageError
+
+from povagent.dataset.loader import EXPLORATION_LOG, VISIBLE_OBJECTS, house_folders
+from povagent.dataset.models import DIRECTIONS
+from povagent.dataset.problems import Problem, json_path
+from povagent.dataset.schema import validator
+
+_DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
+
+
+def describe_schema_error(err: SchemaError) -> str:
+    """A plain sentence for one jsonschema error."""
+    field = err.path[-1] if err.path else None
+    kind = err.validator
+    if kind == "required":
+        missing = err.message.split("'")[1] if "'" in err.message else err.message
+        return f"required field '{missing}' is missing"
+    if kind == "propertyNames" or "propertyNames" in err.schema_path:
+        return f"unknown direction {err.instance!r} (allowed: {_DIRECTION_NAMES})"
+    if kind == "type":
+        want = err.validator_value if isinstance(err.validator_value, str) else "/".join(err.validator_value)
+        return f"'{field}' must be of type {want} (got {json.dumps(err.instance)[:60]})"
+    if kind in ("minItems", "maxItems"):
+        return f"'{field}' has {len(err.instance)} items; expected {'at least' if kind == 'minItems' else 'at most'} {err.validator_value}"
+    if kind in ("exclusiveMinimum", "exclusiveMaximum", "minimum", "maximum", "minLength"):
+        return f"'{field}' is out of range: {err.message}"
+    if kind == "anyOf":
+        return f"'{field}' has an unexpected form (got {json.dumps(err.instance)[:60]})"
+    return err.message
+
+
+def _schema_problems(file: str, name: str, data: Any) -> list[Problem]:
+    out = []
+    for err in validator(name).iter_errors(data):
+        # propertyNames errors point at the object; name the bad key in the path too
+        path = list(err.absolute_path)
+        if "propertyNames" in err.schema_path or err.validator == "propertyNames":
+            path.append(err.instance)
+        out.append(Problem(file, json_path(path), describe_schema_error(err)))
+    # errors from one anyOf branch come out once; keep a stable order for readers
+    return sorted(out, key=lambda p: (p.json_path, p.message))
+
+
+def _load_json(path: Path, rel: str, problems: list[Problem]) -> Any:
+    if not path.exists():
+        problems.append(Problem(rel, "$", "file is missing"))
+        return None
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        problems.append(Problem(rel, "$", "is not UTF-8 text"))
+    except json.JSONDecodeError as exc:
+        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
+    return None
+
+
+def check_image(path: Path, rel: str, where: str, size: tuple[int, int] | None, problems: list[Problem]) -> None:
+    """The image exists, decodes, and (when known) has the camera's size."""
+    if not path.exists():
+        problems.append(Problem(rel, where, f"image {path.name!r} does not exist"))
+        return
+    try:
+        with Image.open(path) as im:
+            im.load()
+            actual = im.size
+    except (UnidentifiedImageError, OSError, SyntaxError) as exc:
+        problems.append(Problem(rel, where, f"image {path.name!r} cannot be decoded ({exc.__class__.__name__})"))
+        return
+    if size is not None and tuple(actual) != tuple(size):
+        problems.append(
+            Problem(rel, where, f"image {path.name!r} is {actual[0]}x{actual[1]} but its camera is {size[0]}x{size[1]}")
+        )
+
+
+def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
+    """Every problem of one house folder."""
+    problems: list[Problem] = []
+    house_id = folder.name
+    rel_house = folder.relative_to(root)
+    pairs_rel = str(rel_house / f"{house_id}.json")
+    log_rel = str(rel_house / EXPLORATION_LOG)
+    vis_rel = str(rel_house / VISIBLE_OBJECTS)
+
+    pairs = _load_json(folder / f"{house_id}.json", pairs_rel, problems)
+    if pairs is not None:
+        problems.extend(_schema_problems(pairs_rel, "pair_file", pairs))
+        if isinstance(pairs, list):
+            problems.extend(_pair_checks(pairs, folder, pairs_rel))
+
+    log = _load_json(folder / EXPLORATION_LOG, log_rel, problems)
+    frame_paths: set[str] = set()
+    if log is not None:
+        problems.extend(_schema_problems(log_rel, "exploration_log", log))
+        if isinstance(log, list):
+            for i, rec in enumerate(log):
+                if isinstance(rec, dict) and isinstance(rec.get("image_path"), str):
+                    frame_paths.add(rec["image_path"])
+                    check_image(folder / rec["image_path"], log_rel, f"$[{i}].image_path", frame_size, problems)
+
+    vis = _load_json(folder / VISIBLE_OBJECTS, vis_rel, problems)
+    if vis is not None:
+        problems.extend(_schema_problems(vis_rel, "per_image_visible_objects", vis))
+        if isinstance(vis, dict) and log is not None:
+            for key in vis:
+                if key not in frame_paths and not (folder / key).exists():
+                    problems.append(Problem(vis_rel, json_path([key]), f"names image {key!r}, which is neither in the exploration log nor on disk"))
+    return problems
+
+
+def _pair_checks(pairs: list[Any], folder: Path, rel: str) -> Iterable[Problem]:
+    seen: dict[str, int] = {}
+    for i, pair in enumerate(pairs):
+        if not isinstance(pair, dict):
+            continue
+        pid = pair.get("pair_id")
+        if pid is not None:
+            if str(pid) in seen:
+                yield Problem(rel, f"$[{i}].pair_id", f"pair_id {pid!r} repeats the one at $[{seen[str(pid)]}]")
+            seen.setdefault(str(pid), i)
+        placements = pair.get("placements") if isinstance(pair.get("placements"), dict) else {}
+        for stage in ("stage5", "stage6"):
+            sentences = pair.get(stage) if isinstance(pair.get(stage), dict) else {}
+            for d in placements:
+                if d in [str(x) for x in DIRECTIONS] and d not in sentences:
+                    yield Problem(rel, f"$[{i}].{stage}", f"direction '{d}' has a placement but no sentence in {stage}")
+        cam = pair.get("camera") if isinstance(pair.get("camera"), dict) else None
+        rgb = pair.get("rgb_path")
+        if isinstance(rgb, str):
+            size = None
+            if cam is not None:
+                w, h = cam.get("screen_width", 512), cam.get("screen_height", 512)
+                if isinstance(w, int) and isinstance(h, int):
+                    size = (w, h)
+            path = folder / rgb
+            if not path.exists() and (folder.parent.parent / rgb).exists():
+                path = folder.parent.parent / rgb
+            probs: list[Problem] = []
+            check_image(path, rel, f"$[{i}].rgb_path", size, probs)
+            yield from probs
+
+
+def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
+    """Every problem in a dataset folder (empty list: the dataset is valid)."""
+    root = Path(root)
+    if not root.is_dir():
+        return [Problem(str(root), "$", "dataset folder not found")]
+    problems: list[Problem] = []
+    if (root / "meta.json").exists():
+        meta = _load_json(root / "meta.json", "meta.json", problems)
+        if meta is not None:
+            problems.extend(_schema_problems("meta.json", "meta", meta))
+    folders = house_folders(root)
+    if not folders:
+        problems.append(Problem("artifacts", "$", "no house folders (expected artifacts/<house_id>/)"))
+    for folder in folders:
+        problems.extend(validate_house(folder, root, frame_size))
+    return problems

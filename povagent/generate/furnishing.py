@@ -1,0 +1,584 @@
+"""Furniture placement: which of the 31 categories go in which room, and where.
+
+What it is for: turn a floor plan into a furnished house following ProcTHOR's habits (its
+placement annotations say which room types hold which objects) and the rules a person would
+expect: sofas, beds, dressers and counters against walls; a TV on a stand facing the sofa with
+a coffee table between them; chairs drawn up to the dining table or desk; lamps, microwaves and
+faucets standing on their receptacles; towel holders on bathroom walls; doorways kept clear.
+Sizes are the real ProcTHOR asset sizes. What it must not do: build meshes or render.
+
+Every random choice comes from the ``numpy.random.Generator`` passed in, in a fixed order, so a
+seed gives the same house every time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from povagent.generate.assets import AssetSpec, asset_database, choose_asset, room_frequency
+from povagent.generate.floorplan import FloorPlan, Opening, Rect, Room
+from povagent.generate.scene import PlacedObject, object_id_for
+
+#: Doorway objects: a frame around the opening, as thick as the wall plus its trim.
+DOOR_FRAME_TRIM = 0.06
+#: Floor kept clear in front of each doorway, on both sides (m).
+DOOR_CLEARANCE = 1.0
+
+
+@dataclass(frozen=True)
+class WallSide:
+    """One wall of a room, seen from inside: where its surface is and which way it faces."""
+
+    name: str
+    axis: str  # "z": wall runs along x at z = line; "x": runs along z at x = line
+    line: float
+    start: float
+    end: float
+    yaw: int  # yaw of an object whose back is against this wall
+
+    @property
+    def length(self) -> float:
+        """Usable length along the wall."""
+        return self.end - self.start
+
+    def footprint(self, t: float, width: float, depth: float, gap: float = 0.0) -> Rect:
+        """Footprint of an object centred at ``t`` along the wall, ``gap`` off its surface."""
+        if self.axis == "z":
+            z0 = self.line + gap if self.yaw == 0 else self.line - gap - depth
+            return Rect(t - width / 2, z0, t + width / 2, z0 + depth)
+        x0 = self.line + gap if self.yaw == 90 else self.line - gap - depth
+        return Rect(x0, t - width / 2, x0 + depth, t + width / 2)
+
+    def along(self, rect: Rect) -> tuple[float, float]:
+        """The interval a footprint covers along this wall."""
+        return (rect.x0, rect.x1) if self.axis == "z" else (rect.z0, rect.z1)
+
+
+OPPOSITE = {"south": "north", "north": "south", "west": "east", "east": "west"}
+
+
+def wall_sides(room: Room) -> dict[str, WallSide]:
+    """The four inner wall surfaces of a room."""
+    r = room.interior
+    return {
+        "south": WallSide("south", "z", r.z0, r.x0, r.x1, 0),
+        "north": WallSide("north", "z", r.z1, r.x0, r.x1, 180),
+        "west": WallSide("west", "x", r.x0, r.z0, r.z1, 90),
+        "east": WallSide("east", "x", r.x1, r.z0, r.z1, 270),
+    }
+
+
+def _front_rect(body: Rect, yaw: int, depth: float) -> Rect:
+    """The strip of floor ``depth`` deep in front of a footprint facing ``yaw``."""
+    if yaw == 0:
+        return Rect(body.x0, body.z1, body.x1, body.z1 + depth)
+    if yaw == 180:
+        return Rect(body.x0, body.z0 - depth, body.x1, body.z0)
+    if yaw == 90:
+        return Rect(body.x1, body.z0, body.x1 + depth, body.z1)
+    return Rect(body.x0 - depth, body.z0, body.x0, body.z1)
+
+
+@dataclass
+class RoomLayout:
+    """The furnishing state of one room: what is placed, what floor is taken or kept free."""
+
+    room: Room
+    plan: FloorPlan
+    rng: np.random.Generator
+    objects: list[PlacedObject] = field(default_factory=list)
+    bodies: list[tuple[Rect, float]] = field(default_factory=list)  # footprint, top
+    access: list[Rect] = field(default_factory=list)
+    keep_clear: list[Rect] = field(default_factory=list)
+    top_use: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for o in self.plan.openings:
+            if self.room.room_id not in o.rooms:
+                continue
+            self.keep_clear.append(_door_zone(o, self.room))
+
+    # -- queries ----------------------------------------------------------------------------
+    def sides(self) -> dict[str, WallSide]:
+        """This room's walls."""
+        return wall_sides(self.room)
+
+    def side_has_door(self, side: WallSide) -> bool:
+        """True when a doorway opens in this wall."""
+        for o in self.plan.openings:
+            if self.room.room_id in o.rooms and o.axis == side.axis and abs(o.line - side.line) < 0.06:
+                return True
+        return False
+
+    def free(self, body: Rect, front: Rect | None = None, top: float = 9.0, floor_from: float = 0.0) -> bool:
+        """True when a footprint (and its access strip) fits the room without collisions."""
+        if not self.room.interior.contains(body.x0, body.z0, -1e-6) or not self.room.interior.contains(
+            body.x1, body.z1, -1e-6
+        ):
+            return False
+        for other, other_top in self.bodies:
+            if floor_from < other_top and body.overlaps(other):
+                return False
+        if floor_from > 0.0:
+            # wall-mounted: only tall things below it and doorways matter
+            return not any(body.overlaps(z) for z in self.keep_clear)
+        if any(body.overlaps(z) for z in self.keep_clear) or any(body.overlaps(a) for a in self.access):
+            return False
+        if front is not None:
+            if any(front.overlaps(b) for b, _ in self.bodies) or any(front.overlaps(z) for z in self.keep_clear):
+                return False
+        return True
+
+    # -- placing ----------------------------------------------------------------------------
+    def add(self, obj: PlacedObject, access_depth: float = 0.0) -> PlacedObject:
+        """Record a placed object and the floor it takes (and keeps free in front of it)."""
+        self.objects.append(obj)
+        if obj.support in ("floor", "wall"):
+            self.bodies.append((obj.rect, obj.top if obj.support == "floor" else obj.top))
+            if access_depth > 0:
+                self.access.append(_front_rect(obj.rect, obj.yaw, access_depth))
+        return obj
+
+    def make(
+        self,
+        object_type: str,
+        asset: AssetSpec,
+        center: tuple[float, float, float],
+        yaw: int,
+        support: str = "floor",
+        local_size: tuple[float, float, float] | None = None,
+        flags: tuple[str, ...] = (),
+    ) -> PlacedObject:
+        """A PlacedObject with a rounded centre, a style drawn from the room's generator."""
+        c = tuple(round(float(v), 4) for v in center)
+        size = local_size or asset.size
+        return PlacedObject(
+            object_id=object_id_for(object_type, c),  # type: ignore[arg-type]
+            object_type=object_type,
+            asset_id=asset.asset_id,
+            center=c,  # type: ignore[arg-type]
+            local_size=tuple(round(float(v), 4) for v in size),  # type: ignore[arg-type]
+            yaw=yaw % 360,
+            room_id=self.room.room_id,
+            support=support,
+            style=int(self.rng.integers(0, 1_000_000)),
+            flags=flags,
+        )
+
+    def against_wall(
+        self,
+        object_type: str,
+        *,
+        fits: Callable[[AssetSpec], bool] | None = None,
+        prefer: str = "any",
+        sides: list[str] | None = None,
+        avoid_door_walls: bool = False,
+        access_depth: float = 0.5,
+        asset: AssetSpec | None = None,
+        near: float | None = None,
+        largest: bool = False,
+        local_size: tuple[float, float, float] | None = None,
+    ) -> PlacedObject | None:
+        """Place an object with its back to a wall; None when nothing fits.
+
+        ``prefer`` is ``"center"`` (middle of the wall), ``"corner"`` (an end) or ``"any"``;
+        ``near`` asks for the spot closest to that coordinate along the wall.
+        """
+        if asset is None:
+            candidates = [a for a in asset_database()[object_type] if fits is None or fits(a)]
+            if not candidates:
+                return None
+            if largest:
+                candidates.sort(key=lambda a: (-a.width, a.asset_id))
+            else:
+                candidates = [candidates[int(self.rng.integers(len(candidates)))]]
+        else:
+            candidates = [asset]
+        names = sides or ["south", "north", "west", "east"]
+        all_sides = self.sides()
+        order = [all_sides[n] for n in names]
+        order = [order[i] for i in self.rng.permutation(len(order))]
+        if avoid_door_walls:
+            order.sort(key=lambda s: self.side_has_door(s))
+        for spec in candidates:
+            w, h, d = local_size or spec.size
+            for side in order:
+                ts = np.arange(side.start + w / 2, side.end - w / 2 + 1e-6, 0.05)
+                valid = [
+                    float(t)
+                    for t in ts
+                    if self.free(
+                        side.footprint(float(t), w, d),
+                        _front_rect(side.footprint(float(t), w, d), side.yaw, access_depth) if access_depth else None,
+                    )
+                ]
+                if not valid:
+                    continue
+                t = self._pick(valid, side, prefer, near)
+                body = side.footprint(t, w, d)
+                cx, cz = body.center
+                obj = self.make(object_type, spec, (cx, h / 2, cz), side.yaw, local_size=local_size)
+                return self.add(obj, access_depth)
+        return None
+
+    def _pick(self, valid: list[float], side: WallSide, prefer: str, near: float | None) -> float:
+        arr = np.asarray(valid)
+        if near is not None:
+            return float(arr[np.argmin(np.abs(arr - near))])
+        if prefer == "center":
+            mid = (side.start + side.end) / 2 + float(self.rng.uniform(-0.4, 0.4))
+            return float(arr[np.argmin(np.abs(arr - mid))])
+        if prefer == "corner":
+            ends = np.minimum(np.abs(arr - side.start), np.abs(arr - side.end))
+            best = np.flatnonzero(ends <= ends.min() + 1e-6)
+            return float(arr[best[int(self.rng.integers(len(best)))]])
+        return float(arr[int(self.rng.integers(len(arr)))])
+
+    def free_standing(
+        self, object_type: str, asset: AssetSpec, x: float, z: float, yaw: int, flags: tuple[str, ...] = ()
+    ) -> PlacedObject | None:
+        """Place an object at (x, z) facing ``yaw`` if the floor there is free."""
+        w, h, d = asset.size
+        sx, sz = (d, w) if yaw % 180 == 90 else (w, d)
+        body = Rect(x - sx / 2, z - sz / 2, x + sx / 2, z + sz / 2)
+        if not self.free(body):
+            return None
+        return self.add(self.make(object_type, asset, (x, h / 2, z), yaw, flags=flags))
+
+    def on_top(
+        self,
+        receptacle: PlacedObject,
+        object_type: str,
+        *,
+        fits: Callable[[AssetSpec], bool] | None = None,
+        asset: AssetSpec | None = None,
+        near: float | None = None,
+        back_gap: float = 0.03,
+        sink_into: float = 0.0,
+    ) -> PlacedObject | None:
+        """Stand an object on a receptacle's top, back to the receptacle's back, facing its way."""
+        spec = asset or choose_asset(
+            object_type,
+            self.rng,
+            lambda a: (fits is None or fits(a)) and a.depth <= receptacle.local_size[2] - back_gap
+            and a.width <= receptacle.local_size[0] - 0.04,
+        )
+        if spec is None:
+            return None
+        w, h, d = spec.size
+        rw, _, rd = receptacle.local_size
+        used = self.top_use.setdefault(receptacle.object_id, [])
+        ts = np.arange(-rw / 2 + w / 2 + 0.02, rw / 2 - w / 2 - 0.02 + 1e-6, 0.05)
+        valid = [float(t) for t in ts if all(t + w / 2 + 0.05 <= s or t - w / 2 - 0.05 >= e for s, e in used)]
+        if not valid:
+            return None
+        arr = np.asarray(valid)
+        t = float(arr[np.argmin(np.abs(arr - near))]) if near is not None else float(arr[int(self.rng.integers(len(arr)))])
+        used.append((t - w / 2, t + w / 2))
+        # local offset: along the receptacle's width, pushed to its back
+        local = np.array([t, 0.0, -rd / 2 + back_gap + d / 2])
+        yaw = np.radians(receptacle.yaw)
+        rot = np.array([[np.cos(yaw), 0, np.sin(yaw)], [0, 1, 0], [-np.sin(yaw), 0, np.cos(yaw)]])
+        world = rot @ local
+        cx, cz = receptacle.center[0] + world[0], receptacle.center[2] + world[2]
+        cy = receptacle.top - sink_into + h / 2
+        obj = self.make(object_type, spec, (cx, cy, cz), receptacle.yaw, support=receptacle.object_id)
+        return self.add(obj)
+
+    def on_wall(self, object_type: str, height: float, near: float | None = None, side_name: str | None = None) -> PlacedObject | None:
+        """Hang a wall object (towel holders) with its centre at ``height``."""
+        spec = choose_asset(object_type, self.rng)
+        if spec is None:
+            return None
+        w, h, d = spec.size
+        names = [side_name] if side_name else ["south", "north", "west", "east"]
+        sides = [self.sides()[n] for n in names]
+        sides = [sides[i] for i in self.rng.permutation(len(sides))]
+        for side in sides:
+            ts = np.arange(side.start + w / 2 + 0.1, side.end - w / 2 - 0.1 + 1e-6, 0.05)
+            # the towel hanging below reaches about 0.45 m down: keep that free of furniture
+            valid = [float(t) for t in ts if self.free(side.footprint(float(t), w + 0.1, 0.3), floor_from=height - 0.5)]
+            if not valid:
+                continue
+            t = self._pick(valid, side, "any", near)
+            body = side.footprint(t, w, d)
+            cx, cz = body.center
+            obj = self.make(object_type, spec, (cx, height, cz), side.yaw, support="wall")
+            self.objects.append(obj)
+            self.bodies.append((side.footprint(t, w + 0.1, 0.3), height + h / 2))
+            return obj
+        return None
+
+
+def _door_zone(o: Opening, room: Room) -> Rect:
+    """Floor in front of a doorway, inside ``room``, that furniture must leave free."""
+    cx, cz = room.rect.center
+    if o.axis == "x":
+        inward = 1.0 if cx > o.line else -1.0
+        x0, x1 = sorted((o.line, o.line + inward * DOOR_CLEARANCE))
+        return Rect(x0, o.start - 0.15, x1, o.end + 0.15)
+    inward = 1.0 if cz > o.line else -1.0
+    z0, z1 = sorted((o.line, o.line + inward * DOOR_CLEARANCE))
+    return Rect(o.start - 0.15, z0, o.end + 0.15, z1)
+
+
+def doorway_object(o: Opening, index: int) -> PlacedObject:
+    """The Doorway object of an opening: its frame, as wide as the opening plus the jambs."""
+    cx, cz = o.center
+    spec = next((a for a in asset_database()["Doorway"] if a.asset_id == o.asset_id), None)
+    depth = 0.1 + 2 * 0.02
+    size = (round(o.width + 2 * DOOR_FRAME_TRIM, 4), round(2.1 + DOOR_FRAME_TRIM, 4), depth)
+    yaw = 0 if o.axis == "z" else 90
+    center = (round(cx, 4), round(size[1] / 2, 4), round(cz, 4))
+    return PlacedObject(
+        object_id=object_id_for("Doorway", center),
+        object_type="Doorway",
+        asset_id=spec.asset_id if spec else o.asset_id,
+        center=center,
+        local_size=size,
+        yaw=yaw,
+        room_id=o.rooms[0],
+        support="wall",
+        style=index,
+        flags=("entrance",) if o.is_entrance else (),
+    )
+
+
+# -- recipes ------------------------------------------------------------------------------------
+def _maybe(rng: np.random.Generator, p: float) -> bool:
+    return bool(rng.random() < p)
+
+
+def _living_room(L: RoomLayout) -> None:
+    rng = L.rng
+    sofa = L.against_wall("Sofa", prefer="center", avoid_door_walls=True, access_depth=1.4,
+                          fits=lambda a: a.width <= 2.6 and a.depth <= 1.1)
+    if sofa is not None:
+        side_of = {0: "south", 180: "north", 90: "west", 270: "east"}[sofa.yaw]
+        along = sofa.center[0] if sofa.yaw in (0, 180) else sofa.center[2]
+        # the TV stands on a low dresser on the opposite wall, facing the sofa
+        stand = L.against_wall("Dresser", sides=[OPPOSITE[side_of]], near=along, access_depth=0.8,
+                               fits=lambda a: a.height <= 0.85 and a.width >= 1.0 and a.depth <= 0.6)
+        if stand is not None:
+            L.on_top(stand, "Television", near=0.0, fits=lambda a: a.height <= 0.95 and a.depth <= 0.45)
+        _coffee_table(L, sofa)
+        _beside(L, sofa, "SideTable", lamp_p=0.6)
+        if _maybe(rng, 0.6):
+            _beside(L, sofa, "FloorLamp", lamp_p=0.0)
+    if _maybe(rng, 0.5):
+        L.against_wall("ShelvingUnit", access_depth=0.6, fits=lambda a: a.depth <= 0.5)
+    if _maybe(rng, 0.25):
+        _dining_set(L)
+    for kind, p in (("HousePlant", 0.6), ("GarbageCan", 0.4), ("Safe", 0.1)):
+        if _maybe(rng, p):
+            L.against_wall(kind, prefer="corner", access_depth=0.0)
+
+
+def _coffee_table(L: RoomLayout, sofa: PlacedObject) -> None:
+    spec = choose_asset("CoffeeTable", L.rng, lambda a: a.width <= sofa.local_size[0] and a.depth <= 0.8)
+    if spec is None:
+        return
+    gap = 0.4
+    f = sofa.front
+    dist = sofa.local_size[2] / 2 + gap + spec.depth / 2
+    table = L.free_standing("CoffeeTable", spec, sofa.center[0] + f[0] * dist, sofa.center[2] + f[2] * dist, sofa.yaw)
+    if table is None or not _maybe(L.rng, 0.6):
+        return
+    # an armchair at one end of the coffee table, turned towards it
+    chair = choose_asset("ArmChair", L.rng, lambda a: a.width <= 1.1)
+    if chair is None:
+        return
+    side = np.array([f[2], 0.0, -f[0]]) * (1 if _maybe(L.rng, 0.5) else -1)
+    dist = spec.width / 2 + 0.35 + chair.depth / 2
+    yaw = int(round(np.degrees(np.arctan2(-side[0], -side[2])))) % 360
+    L.free_standing("ArmChair", chair, table.center[0] + side[0] * dist, table.center[2] + side[2] * dist, yaw)
+
+
+def _beside(L: RoomLayout, anchor: PlacedObject, object_type: str, lamp_p: float) -> PlacedObject | None:
+    """Stand an object against the same wall as ``anchor``, just past one of its ends."""
+    spec = choose_asset(object_type, L.rng, lambda a: a.depth <= 0.7 and a.width <= 0.8)
+    if spec is None:
+        return None
+    side_name = {0: "south", 180: "north", 90: "west", 270: "east"}[anchor.yaw]
+    along = anchor.center[0] if anchor.yaw in (0, 180) else anchor.center[2]
+    half = anchor.local_size[0] / 2 + spec.width / 2 + 0.05
+    ends = [along - half, along + half]
+    if _maybe(L.rng, 0.5):
+        ends.reverse()
+    for t in ends:
+        side = L.sides()[side_name]
+        body = side.footprint(t, spec.width, spec.depth)
+        if L.free(body):
+            cx, cz = body.center
+            obj = L.add(L.make(object_type, spec, (cx, spec.height / 2, cz), side.yaw))
+            if lamp_p and _maybe(L.rng, lamp_p):
+                L.on_top(obj, "DeskLamp", near=0.0, fits=lambda a: a.height <= 0.6)
+            return obj
+    return None
+
+
+def _dining_set(L: RoomLayout) -> None:
+    """A dining table in open floor with chairs drawn up to it, facing it."""
+    rng = L.rng
+    spec = choose_asset("DiningTable", rng, lambda a: a.width <= 1.8 and a.depth <= 1.1 and a.height <= 0.85)
+    chair = choose_asset("Chair", rng, lambda a: a.height <= 1.05 and a.depth <= 0.6)
+    if spec is None or chair is None:
+        return
+    r = L.room.interior
+    margin = chair.depth + 0.3
+    xs = np.arange(r.x0 + spec.width / 2 + margin, r.x1 - spec.width / 2 - margin + 1e-6, 0.25)
+    zs = np.arange(r.z0 + spec.depth / 2 + margin, r.z1 - spec.depth / 2 - margin + 1e-6, 0.25)
+    cx, cz = r.center
+    spots = sorted(
+        ((float(x), float(z)) for x in xs for z in zs),
+        key=lambda p: (p[0] - cx) ** 2 + (p[1] - cz) ** 2,
+    )
+    for x, z in spots:
+        reserve = Rect(x - spec.width / 2 - margin, z - spec.depth / 2 - margin,
+                       x + spec.width / 2 + margin, z + spec.depth / 2 + margin)
+        if not L.free(reserve):
+            continue
+        table = L.free_standing("DiningTable", spec, x, z, 0)
+        if table is None:
+            continue
+        seats = [(0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0)]
+        n = int(rng.integers(2, 5))
+        for dx, dz in seats[:n]:
+            reach = (spec.depth if dz else spec.width) / 2 + chair.depth / 2 + 0.05
+            yaw = int(round(np.degrees(np.arctan2(-dx, -dz)))) % 360
+            L.free_standing("Chair", chair, x + dx * reach, z + dz * reach, yaw)
+        return
+
+
+def _kitchen(L: RoomLayout) -> None:
+    rng = L.rng
+    counter = L.against_wall("CounterTop", largest=True, avoid_door_walls=True, prefer="corner",
+                             access_depth=0.9, fits=lambda a: a.asset_id.startswith("Countertop_I") and a.width >= 1.2)
+    if counter is not None:
+        sink = L.on_top(counter, "Sink", near=0.0, back_gap=0.08, sink_into=0.12,
+                        fits=lambda a: a.height <= 0.25 and a.depth <= 0.5)
+        if sink is not None:
+            c_along = _along(counter, sink)
+            L.on_top(counter, "Faucet", near=c_along, back_gap=0.0, fits=lambda a: a.height <= 0.4 and a.depth <= 0.12)
+            L.top_use[counter.object_id].pop()  # the faucet sits behind the sink, not beside it
+        for kind, p in (("Microwave", 0.8), ("Toaster", 0.7), ("CoffeeMachine", 0.6)):
+            if _maybe(rng, p):
+                L.on_top(counter, kind)
+        side_name = {0: "south", 180: "north", 90: "west", 270: "east"}[counter.yaw]
+        along = counter.center[0] if counter.yaw in (0, 180) else counter.center[2]
+        fridge = L.against_wall("Fridge", sides=[side_name], near=along, access_depth=0.9,
+                                fits=lambda a: a.width <= 1.0)
+        if fridge is None:
+            L.against_wall("Fridge", prefer="corner", access_depth=0.9, fits=lambda a: a.width <= 1.0)
+    else:
+        L.against_wall("Fridge", prefer="corner", access_depth=0.9, fits=lambda a: a.width <= 1.0)
+    _dining_set(L)
+    if counter is not None and _maybe(rng, 0.25):
+        spec = choose_asset("Stool", rng)
+        if spec is not None:
+            f = counter.front
+            dist = counter.local_size[2] / 2 + spec.depth / 2 + 0.1
+            L.free_standing("Stool", spec, counter.center[0] + f[0] * dist, counter.center[2] + f[2] * dist,
+                            counter.yaw + 180)
+    for kind, p in (("GarbageCan", 0.7), ("HousePlant", 0.3), ("ShelvingUnit", 0.2)):
+        if _maybe(rng, p):
+            L.against_wall(kind, prefer="corner", access_depth=0.0 if kind != "ShelvingUnit" else 0.6,
+                           fits=lambda a: a.depth <= 0.5)
+
+
+def _along(receptacle: PlacedObject, item: PlacedObject) -> float:
+    """Local x (along the width) of ``item`` on ``receptacle``."""
+    dx = item.center[0] - receptacle.center[0]
+    dz = item.center[2] - receptacle.center[2]
+    y = np.radians(receptacle.yaw)
+    return float(dx * np.cos(y) - dz * np.sin(y))
+
+
+def _bedroom(L: RoomLayout) -> None:
+    rng = L.rng
+    bed = L.against_wall("Bed", prefer="center", avoid_door_walls=True, access_depth=0.7,
+                         fits=lambda a: 0.6 <= a.height <= 1.3 and a.depth <= 2.3 and a.width <= 2.0)
+    if bed is not None:
+        first = _beside(L, bed, "SideTable", lamp_p=0.6)
+        if first is not None and _maybe(rng, 0.5):
+            _beside(L, bed, "SideTable", lamp_p=0.3)
+    if _maybe(rng, 0.7):
+        dresser = L.against_wall("Dresser", access_depth=0.7, fits=lambda a: a.depth <= 0.6)
+        if dresser is not None and _maybe(rng, 0.25):
+            L.on_top(dresser, "Television", near=0.0, fits=lambda a: a.height <= 0.9 and a.depth <= 0.45)
+    if _maybe(rng, 0.5):
+        desk = L.against_wall("Desk", access_depth=0.9, fits=lambda a: a.height <= 0.85 and a.depth <= 0.8 and a.width <= 1.6)
+        if desk is not None:
+            chair = choose_asset("Chair", rng, lambda a: a.height <= 1.05 and a.depth <= 0.6)
+            if chair is not None:
+                f = desk.front
+                dist = desk.local_size[2] / 2 + chair.depth / 2 + 0.05
+                L.free_standing("Chair", chair, desk.center[0] + f[0] * dist, desk.center[2] + f[2] * dist, desk.yaw + 180)
+            if _maybe(rng, 0.5):
+                L.on_top(desk, "Desktop", near=0.0)
+            if _maybe(rng, 0.4):
+                L.on_top(desk, "DeskLamp", fits=lambda a: a.height <= 0.6)
+    for kind, p, access in (("ArmChair", 0.3, 0.6), ("FloorLamp", 0.3, 0.0), ("GarbageCan", 0.5, 0.0),
+                            ("HousePlant", 0.4, 0.0), ("Safe", 0.15, 0.5), ("ShelvingUnit", 0.2, 0.6)):
+        if _maybe(rng, p):
+            L.against_wall(kind, prefer="corner", access_depth=access, fits=lambda a: a.depth <= 0.9 and a.width <= 1.2)
+
+
+def _bathroom(L: RoomLayout) -> None:
+    rng = L.rng
+    L.against_wall("Toilet", avoid_door_walls=True, access_depth=0.6)
+    sink = L.against_wall("Sink", access_depth=0.6, fits=lambda a: a.height >= 0.8)
+    if sink is not None:
+        L.on_top(sink, "Faucet", near=0.0, back_gap=0.0, sink_into=0.0, fits=lambda a: a.height <= 0.35 and a.depth <= 0.2)
+        if _maybe(rng, 0.7):
+            side_name = {0: "south", 180: "north", 90: "west", 270: "east"}[sink.yaw]
+            along = sink.center[0] if sink.yaw in (0, 180) else sink.center[2]
+            L.on_wall("HandTowelHolder", 1.05, near=along + sink.local_size[0] / 2 + 0.25, side_name=side_name)
+    if _maybe(rng, 0.75):
+        L.on_wall("TowelHolder", 1.25)
+    if _maybe(rng, 0.4):
+        washer = L.against_wall("WashingMachine", access_depth=0.7)
+        if washer is not None and _maybe(rng, 0.6):
+            _beside(L, washer, "ClothesDryer", lamp_p=0.0)
+    for kind, p in (("GarbageCan", 0.6), ("HousePlant", 0.2)):
+        if _maybe(rng, p):
+            L.against_wall(kind, prefer="corner", access_depth=0.0)
+
+
+RECIPES: dict[str, Callable[[RoomLayout], None]] = {
+    "LivingRoom": _living_room,
+    "Kitchen": _kitchen,
+    "Bedroom": _bedroom,
+    "Bathroom": _bathroom,
+}
+
+
+def furnish(plan: FloorPlan, rng: np.random.Generator) -> tuple[PlacedObject, ...]:
+    """All objects of a house: doorways first, then each room's furniture, rooms in id order."""
+    objects: list[PlacedObject] = [doorway_object(o, i) for i, o in enumerate(plan.openings)]
+    for room in plan.rooms:
+        layout = RoomLayout(room, plan, rng)
+        RECIPES[room.room_type](layout)
+        objects.extend(layout.objects)
+    # objectIds come from positions; two objects never share one, but make sure of it
+    seen: dict[str, int] = {}
+    unique = []
+    for o in objects:
+        n = seen.get(o.object_id, 0)
+        seen[o.object_id] = n + 1
+        unique.append(o if n == 0 else _renamed(o, f"{o.object_id}|{n}"))
+    return tuple(unique)
+
+
+def _renamed(o: PlacedObject, object_id: str) -> PlacedObject:
+    from dataclasses import replace
+
+    return replace(o, object_id=object_id)
+
+
+def room_types_holding(object_type: str) -> list[str]:
+    """Room types where ProcTHOR puts ``object_type`` (for documentation and tests)."""
+    return [rt for rt in ("Kitchen", "LivingRoom", "Bedroom", "Bathroom") if room_frequency(object_type, rt) > 0]

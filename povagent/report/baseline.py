@@ -1,0 +1,80 @@
+"""The center baseline, computed by the report for the instances a sweep evaluated.
+
+The paper does not report it, yet a constant guess at the image centre is the bar every model
+must clear, so every report shows it. Policy ("center, first frame"): answer the pixel
+``(W/2, H/2)``; for A/B select frame 0 (the first exploration frame), for C the observer view.
+It is scored with the official metric (:func:`povagent.scoring.official.score_point`), blind
+spot included, exactly like a model's answer.
+
+The same per-instance score fills a non-response in the "counting non-responses" variant: an
+unanswered instance counts as if the model had guessed the centre.
+
+This module computes scores only; it does not read run folders or write anything.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from povagent.dataset.instances import Instance
+from povagent.report.collect import Observation
+from povagent.scoring.official import OfficialScore, score_point
+
+#: The label of the computed baseline in tables and plots.
+CENTER_SYSTEM = "Center baseline (computed)"
+
+#: Documented policy, shown in the report's notes.
+CENTER_POLICY = (
+    "answers the image centre (W/2, H/2); for Inferred/Stated it selects the first exploration "
+    "frame (index 0), for Given the observer view; scored with the official metric"
+)
+
+
+def center_score(instance: Instance) -> OfficialScore:
+    """The official score of the center guess on one instance (frame 0 for A/B)."""
+    frame = instance.frames[0] if instance.frames else None
+    w, h = instance.frame_size
+    return score_point(instance, frame, w / 2.0, h / 2.0)
+
+
+def center_observations(instances: Iterable[Instance], system: str = CENTER_SYSTEM) -> list[Observation]:
+    """The center baseline as observations (run 0), ready to sit beside the models' rows."""
+    out: list[Observation] = []
+    for inst in instances:
+        s = center_score(inst)
+        w, h = inst.frame_size
+        frame = inst.frames[0] if inst.frames else None
+        out.append(
+            Observation(
+                system=system,
+                run_name="center",
+                run=0,
+                instance_id=inst.id,
+                house_id=inst.house_id,
+                pair_id=inst.pair_id,
+                direction=str(inst.direction),
+                condition=str(inst.condition),
+                status="answered",
+                parse_status="ok",
+                answered=s.answered,
+                l2=s.l2,
+                l2_strict=s.l2_strict,
+                gt_in_frame=s.gt_in_frame,
+                gt_behind=s.gt_behind,
+                gt_u=s.gt_u,
+                gt_v=s.gt_v,
+                selected_image=0 if inst.condition.uses_exploration_frames else None,
+                image_path=frame.image_path if frame is not None else None,
+                x=w / 2.0,
+                y=h / 2.0,
+                sentence=inst.sentence,
+                raw=None,
+            )
+        )
+    return out
+
+
+def is_center_system(axes: dict[str, str], label: str) -> bool:
+    """True when a sweep cell already is a center baseline (its backend or model says so)."""
+    names = [label, axes.get("backend", ""), axes.get("model", ""), axes.get("strategy", "")]
+    return any("center" in n.lower() or "centre" in n.lower() for n in names)

@@ -1,0 +1,295 @@
+"""Loading run and sweep folders into one tidy table of observations (one per result row).
+
+A run folder holds ``config.yaml`` and ``results.jsonl``; a sweep folder holds one run folder
+per cell and ``sweep.json`` (the cell index, with each cell's axis values). Every row becomes an
+:class:`Observation` labelled with its *system*: the values of the axes that vary across the
+collected runs (model, strategy, parser, ...), without the condition and the run index, which
+the tables break down and average over.
+
+This module only reads: it never rescores a row (the official numbers are the row's
+``scores["official"]`` as the scorer wrote them) and never writes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import yaml
+
+from povagent.errors import PredictionsError
+from povagent.results import ResultRow, read_rows
+
+RESULTS_FILE = "results.jsonl"
+CONFIG_FILE = "config.yaml"
+SWEEP_INDEX = "sweep.json"
+
+#: Sweep axes that are not part of a system's identity: tables break these down or average them.
+NON_SYSTEM_AXES = frozenset({"run", "runs", "condition", "conditions", "condition_set", "conditions_set", "seed"})
+
+#: Axis order used to build a system label (the most telling first).
+AXIS_ORDER = ("model", "backend", "strategy", "parser")
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One result row as the report sees it."""
+
+    system: str
+    run_name: str
+    run: int
+    instance_id: str
+    house_id: str
+    pair_id: str
+    direction: str
+    condition: str
+    status: str
+    parse_status: str | None
+    answered: bool
+    l2: float | None
+    l2_strict: float | None
+    gt_in_frame: bool | None
+    gt_behind: bool | None
+    gt_u: float | None
+    gt_v: float | None
+    selected_image: int | None
+    image_path: str | None
+    x: float | None
+    y: float | None
+    sentence: str
+    raw: str | None
+    parse_reason: str = ""
+
+
+@dataclass
+class RunInfo:
+    """One run folder: its resolved config, its axis values and its rows."""
+
+    folder: Path
+    name: str
+    config: dict[str, Any]
+    axes: dict[str, str]
+    rows: list[ResultRow]
+    system: str = ""
+
+    @property
+    def dataset_path(self) -> Path | None:
+        """The dataset the run was evaluated on, as its config names it (``None`` if unknown)."""
+        ds = self.config.get("dataset")
+        raw = ds.get("path") or ds.get("root") if isinstance(ds, dict) else ds
+        if not raw:
+            return None
+        p = Path(str(raw)).expanduser()
+        if not p.is_absolute() and not p.exists():
+            p = (self.folder / p).resolve()
+        return p
+
+
+@dataclass
+class Collection:
+    """Everything a report reads: the runs, their observations, and the systems in order."""
+
+    source: Path
+    runs: list[RunInfo]
+    observations: list[Observation] = field(default_factory=list)
+
+    @property
+    def systems(self) -> list[str]:
+        """System labels in the order their first run appears."""
+        seen: dict[str, None] = {}
+        for r in self.runs:
+            seen.setdefault(r.system, None)
+        return list(seen)
+
+    def dataset_paths(self) -> list[Path]:
+        """Distinct dataset folders named by the runs' configs."""
+        out: dict[Path, None] = {}
+        for r in self.runs:
+            if r.dataset_path is not None:
+                out.setdefault(r.dataset_path, None)
+        return list(out)
+
+    def system_axes(self, system: str) -> dict[str, str]:
+        """The axis values of a system (from its first run)."""
+        for r in self.runs:
+            if r.system == system:
+                return r.axes
+        return {}
+
+
+def _read_config(folder: Path) -> dict[str, Any]:
+    path = folder / CONFIG_FILE
+    if not path.exists():
+        return {}
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except yaml.YAMLError as exc:
+        raise PredictionsError(f"{path}: not valid YAML ({exc})") from exc
+    return data if isinstance(data, dict) else {}
+
+
+def _name_of(section: Any) -> str:
+    if isinstance(section, str):
+        return section
+    if isinstance(section, dict):
+        return str(section.get("name") or "")
+    return ""
+
+
+def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]:
+    """Model, backend, strategy and parser of a run, from its config (falling back to its rows)."""
+    backend = config.get("backend")
+    model = ""
+    if isinstance(backend, dict):
+        opts = backend.get("options") or {}
+        model = str(opts.get("model") or backend.get("model") or "") if isinstance(opts, dict) else ""
+    first = rows[0] if rows else None
+    axes = {
+        "backend": _name_of(backend) or (first.backend if first else ""),
+        "model": model,
+        "strategy": _name_of(config.get("strategy")) or (first.strategy if first else ""),
+        "parser": _name_of(config.get("parser")) or (first.parser if first else ""),
+    }
+    if not axes["model"]:
+        axes["model"] = axes["backend"]
+    return {k: v for k, v in axes.items() if v}
+
+
+def _cells_of_index(index: Any) -> list[dict[str, Any]]:
+    cells = index.get("cells") if isinstance(index, dict) else index
+    return [c for c in cells if isinstance(c, dict)] if isinstance(cells, list) else []
+
+
+def _cell_folder(cell: dict[str, Any]) -> str | None:
+    for key in ("folder", "dir", "directory", "path", "name", "run_dir"):
+        if isinstance(cell.get(key), str):
+            return cell[key]
+    return None
+
+
+def _cell_axes(cell: dict[str, Any]) -> dict[str, str]:
+    for key in ("axes", "values", "params", "axis_values"):
+        if isinstance(cell.get(key), dict):
+            return {str(k): _axis_text(v) for k, v in cell[key].items()}
+    skip = {"folder", "dir", "directory", "path", "name", "run_dir", "status", "summary"}
+    return {str(k): _axis_text(v) for k, v in cell.items() if k not in skip and not isinstance(v, (dict, list))}
+
+
+def _axis_text(value: Any) -> str:
+    if isinstance(value, dict):
+        return str(value.get("name") or value.get("model") or json.dumps(value, sort_keys=True))
+    if isinstance(value, (list, tuple)):
+        return "+".join(str(v) for v in value)
+    return str(value)
+
+
+def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None) -> RunInfo:
+    results = folder / RESULTS_FILE
+    if not results.exists():
+        raise PredictionsError(f"{folder}: no {RESULTS_FILE} (is this a run folder?)")
+    rows = read_rows(results)
+    config = _read_config(folder)
+    axes = config_axes(config, rows)
+    for k, v in (extra_axes or {}).items():
+        axes.setdefault(k, v)
+        if k in ("model", "strategy", "parser", "backend"):
+            axes[k] = v
+    return RunInfo(folder, name, config, axes, rows)
+
+
+def find_runs(path: str | Path) -> list[RunInfo]:
+    """The runs under ``path``: a run folder, or a sweep folder (by its index, or by scanning)."""
+    root = Path(path)
+    if not root.exists():
+        raise PredictionsError(f"{root}: no such run or sweep folder")
+    if (root / RESULTS_FILE).exists():
+        return [_load_run(root, root.name)]
+    runs: list[RunInfo] = []
+    index_path = root / SWEEP_INDEX
+    if index_path.exists():
+        try:
+            index = json.loads(index_path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as exc:
+            raise PredictionsError(f"{index_path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc
+        for i, cell in enumerate(_cells_of_index(index)):
+            sub = _cell_folder(cell)
+            if sub is None:
+                raise PredictionsError(f"{index_path}: cells[{i}] names no folder (expected a 'folder' field)")
+            folder = root / sub
+            if (folder / RESULTS_FILE).exists():
+                runs.append(_load_run(folder, sub, _cell_axes(cell)))
+    if not runs:
+        for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+            if (folder / RESULTS_FILE).exists():
+                runs.append(_load_run(folder, folder.name))
+    if not runs:
+        raise PredictionsError(f"{root}: neither a run folder ({RESULTS_FILE}) nor a sweep folder with run folders")
+    return runs
+
+
+def assign_systems(runs: list[RunInfo]) -> None:
+    """Label each run with its system: the values of the identity axes that vary across runs."""
+    keys: dict[str, None] = {}
+    for r in runs:
+        for k in r.axes:
+            if k not in NON_SYSTEM_AXES:
+                keys.setdefault(k, None)
+    varying = [k for k in keys if len({r.axes.get(k, "") for r in runs}) > 1]
+    ordered = [k for k in AXIS_ORDER if k in varying] + [k for k in varying if k not in AXIS_ORDER]
+    if "model" in ordered and "backend" in ordered:
+        # the model already names the backend in almost every sweep; keep one unless both matter
+        pairs = {(r.axes.get("model"), r.axes.get("backend")) for r in runs}
+        if len(pairs) == len({p[0] for p in pairs}):
+            ordered.remove("backend")
+    for r in runs:
+        if ordered:
+            r.system = " · ".join(r.axes.get(k, "?") for k in ordered)
+        else:
+            r.system = r.axes.get("model") or r.axes.get("backend") or r.name
+
+
+def observation_of(row: ResultRow, system: str, run_name: str) -> Observation:
+    """The report's view of one row (official scores as stored, never recomputed)."""
+    off = row.scores.get("official") or {}
+    answered = bool(off.get("answered")) and off.get("l2") is not None
+    return Observation(
+        system=system,
+        run_name=run_name,
+        run=row.run,
+        instance_id=row.instance_id,
+        house_id=row.house_id,
+        pair_id=row.pair_id,
+        direction=str(row.direction),
+        condition=str(row.condition),
+        status=str(row.status),
+        parse_status=str(row.parse.status) if row.parse is not None else None,
+        answered=answered,
+        l2=float(off["l2"]) if answered else None,
+        l2_strict=float(off["l2_strict"]) if answered and off.get("l2_strict") is not None else None,
+        gt_in_frame=off.get("gt_in_frame"),
+        gt_behind=off.get("gt_behind"),
+        gt_u=off.get("gt_u"),
+        gt_v=off.get("gt_v"),
+        selected_image=row.prediction.selected_image,
+        image_path=row.prediction.image_path,
+        x=row.prediction.x,
+        y=row.prediction.y,
+        sentence=row.sentence,
+        raw=row.raw_response,
+        parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
+    )
+
+
+def collect(paths: str | Path | Iterable[str | Path]) -> Collection:
+    """Load one or more run/sweep folders into a :class:`Collection`."""
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    paths = [Path(p) for p in paths]
+    runs: list[RunInfo] = []
+    for p in paths:
+        runs.extend(find_runs(p))
+    assign_systems(runs)
+    obs = [observation_of(row, r.system, r.name) for r in runs for row in r.rows]
+    return Collection(paths[0], runs, obs)

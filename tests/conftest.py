@@ -1,0 +1,24 @@
+"""Shared fixtures: the hand-made release-layout fixture."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+MINI = FIXTURES / "povbench_mini"
+
+
+@pytest.fixture(scope="session")
+def mini_root() -> Path:
+    """The hand-made dataset: two good houses and one broken house (train_house_00002)."""
+    return MINI
+
+
+@pytest.fixture(scope="session")
+def mini_dataset(mini_root):
+    """The hand-made dataset, loaded (the broken house is reported and skipped)."""
+    from povagent.dataset import load_dataset
+
+    return load_dataset(mini_root)
