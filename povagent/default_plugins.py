@@ -7,8 +7,24 @@ implements ``register_*`` hooks. Keep one module per line, grouped by kind.
 DEFAULT_PLUGINS: tuple[str, ...] = (
     # scorers
     "povagent_plugins.scorers.official",
+    "povagent_plugins.scorers.success",
     # parsers
+    "povagent_plugins.parsers.json_answer",
+    "povagent_plugins.parsers.cot",
+    "povagent_plugins.parsers.rescale",
+    "povagent_plugins.parsers.qwen",
+    "povagent_plugins.parsers.gemini",
+    "povagent_plugins.parsers.molmo",
+    "povagent_plugins.parsers.robopoint",
+    "povagent_plugins.parsers.internvl",
     # strategies
+    "povagent_plugins.strategies.basic",
+    "povagent_plugins.strategies.cot",
+    "povagent_plugins.strategies.markers",
     # backends
+    "povagent_plugins.backends.litellm_backend",
+    "povagent_plugins.backends.baselines",
+    "povagent_plugins.backends.replay",
     # model profiles
+    "povagent_plugins.backends.profiles",
 )

@@ -40,7 +40,16 @@ class NoAnswerError(GroundingError):
 
 
 class UnparseableAnswerError(GroundingError):
-    """The model answered, but no point could be read from its answer."""
+    """The model answered, but no point could be read from its answer.
+
+    ``raw_answer`` is the model's text and ``parsed`` the typed parse (a
+    :class:`povagent.answers.ParsedAnswer`), so a robot app can log it or ask again.
+    """
+
+    def __init__(self, message: str, raw_answer: str | None = None, parsed: object | None = None) -> None:
+        super().__init__(message)
+        self.raw_answer = raw_answer
+        self.parsed = parsed
 
 
 class BadInputError(GroundingError):

@@ -70,14 +70,16 @@ class GenerationParams:
 class Request:
     """What a strategy asks a backend.
 
-    ``instance`` is context for offline baselines (the oracle reads the GT from it); it is not
-    sent to models and not part of the cache key.
+    ``instance`` is context for offline baselines (the oracle reads the GT from it) and ``run``
+    the repeat index (seeded baselines and replay read it); neither is sent to models nor part
+    of :meth:`fingerprint` (the runner adds the run index to the cache key itself).
     """
 
     messages: tuple[Message, ...]
     answer: AnswerSpec
     generation: GenerationParams = field(default_factory=GenerationParams)
     instance: "Instance | None" = field(default=None, compare=False)
+    run: int = field(default=0, compare=False)
 
     def fingerprint(self) -> dict[str, Any]:
         """JSON-able description of everything that determines the answer (images by hash)."""

@@ -61,7 +61,9 @@ class ImageStore:
     # -- adding -------------------------------------------------------------------------------
     def add_file(self, path: str | Path) -> StoredImage:
         """Register an image file (read once per run); returns its hash and size."""
-        p = Path(path)
+        # Frames are shared Path objects: skip re-parsing a Path (pathlib parsing dominated
+        # the per-request cost when 30 frames are looked up per instance).
+        p = path if isinstance(path, Path) else Path(path)
         with self._lock:
             known = self._by_path.get(p)
             if known is not None:

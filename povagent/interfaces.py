@@ -71,6 +71,14 @@ class Strategy(abc.ABC):
     def build(self, instance: "Instance", images: "ImageStore") -> Request:
         """The (first) request for an instance."""
 
+    def answer_spec(self, instance: "Instance") -> AnswerSpec | None:
+        """What the strategy asks ``instance`` to answer, without building a request.
+
+        Used to re-parse finished runs offline (``povagent rescore``). Returning ``None``
+        (the default) makes callers build the full request instead, which reads the images.
+        """
+        return None
+
     async def solve(self, instance: "Instance", ask: Ask, images: "ImageStore") -> list[tuple[Request, Response]]:
         """Talk to the model and return every exchange, the final answer last.
 

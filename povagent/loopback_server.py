@@ -25,7 +25,7 @@ import json
 import socket
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any, Callable, Iterable
 
@@ -181,7 +181,7 @@ class LoopbackServer:
 
     def __init__(
         self,
-        reply: str | ReplyFn = '{"x": 0, "y": 0}',
+        reply: Outcome | ReplyFn = '{"x": 0, "y": 0}',
         *,
         port: int = 0,
         model: str = "loopback",
@@ -195,7 +195,7 @@ class LoopbackServer:
         self.record = record
         self.requests: list[RecordedRequest] = []
         self.request_count = 0
-        self._script: collections.deque[Outcome] = collections.deque()
+        self._script: collections.deque[Outcome | ReplyFn] = collections.deque()
         self._lock = threading.Lock()
         self._stopping = threading.Event()
         self._server: _Server | None = None
@@ -245,11 +245,14 @@ class LoopbackServer:
         return f"http://127.0.0.1:{self.port}/v1"
 
     # -- scripting ----------------------------------------------------------------------------
-    def script(self, *outcomes: Outcome | Iterable[Outcome]) -> None:
-        """Queue outcomes for the next requests, in order (then ``reply`` answers again)."""
+    def script(self, *outcomes: Outcome | ReplyFn | Iterable[Outcome | ReplyFn]) -> None:
+        """Queue outcomes for the next requests, in order (then ``reply`` answers again).
+
+        An item may be a callable like ``reply`` (it answers that one request).
+        """
         with self._lock:
             for o in outcomes:
-                if isinstance(o, (str, Reply, Fault)):
+                if isinstance(o, (str, Reply, Fault)) or callable(o):
                     self._script.append(o)
                 else:
                     self._script.extend(o)
@@ -259,9 +262,8 @@ class LoopbackServer:
             self.request_count += 1
             if self.record:
                 self.requests.append(recorded)
-            if self._script:
-                return self._script.popleft()
-        return self.reply(recorded) if callable(self.reply) else self.reply
+            chosen = self._script.popleft() if self._script else self.reply
+        return chosen(recorded) if callable(chosen) else chosen
 
     def _completion(self, body: dict[str, Any], reply: Reply) -> dict[str, Any]:
         with self._lock:

@@ -162,6 +162,11 @@ class FloorPlan:
         x, y, z = (float(v) for v in point)
         return self.room_at(x, z) is not None and 0.0 <= y <= WALL_HEIGHT
 
+    def point_in_wall(self, point: np.ndarray) -> bool:
+        """True when a 3D point lies inside a wall slab (lintels over doorways included)."""
+        x, y, z = (float(v) for v in point)
+        return any(s.rect.contains(x, z) and s.y0 <= y <= s.y1 for s in self.slabs)
+
     def cube_hits_wall(self, center: np.ndarray, half: float) -> bool:
         """True when an axis-aligned cube (centre, half size) penetrates a wall slab."""
         x, y, z = (float(v) for v in center)

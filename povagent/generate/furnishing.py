@@ -113,8 +113,15 @@ class RoomLayout:
                 return True
         return False
 
-    def free(self, body: Rect, front: Rect | None = None, top: float = 9.0, floor_from: float = 0.0) -> bool:
-        """True when a footprint (and its access strip) fits the room without collisions."""
+    def free(
+        self, body: Rect, front: Rect | None = None, floor_from: float = 0.0, respect_access: bool = True
+    ) -> bool:
+        """True when a footprint (and its access strip) fits the room without collisions.
+
+        ``floor_from`` > 0 checks a wall-mounted object: only furniture taller than that height
+        collides with it. ``respect_access=False`` lets an object stand in the strip another
+        keeps free in front of it (the coffee table in front of the sofa, a chair at a desk).
+        """
         if not self.room.interior.contains(body.x0, body.z0, -1e-6) or not self.room.interior.contains(
             body.x1, body.z1, -1e-6
         ):
@@ -125,7 +132,9 @@ class RoomLayout:
         if floor_from > 0.0:
             # wall-mounted: only tall things below it and doorways matter
             return not any(body.overlaps(z) for z in self.keep_clear)
-        if any(body.overlaps(z) for z in self.keep_clear) or any(body.overlaps(a) for a in self.access):
+        if any(body.overlaps(z) for z in self.keep_clear):
+            return False
+        if respect_access and any(body.overlaps(a) for a in self.access):
             return False
         if front is not None:
             if any(front.overlaps(b) for b, _ in self.bodies) or any(front.overlaps(z) for z in self.keep_clear):
@@ -244,7 +253,7 @@ class RoomLayout:
         w, h, d = asset.size
         sx, sz = (d, w) if yaw % 180 == 90 else (w, d)
         body = Rect(x - sx / 2, z - sz / 2, x + sx / 2, z + sz / 2)
-        if not self.free(body):
+        if not self.free(body, respect_access=False):
             return None
         return self.add(self.make(object_type, asset, (x, h / 2, z), yaw, flags=flags))
 
@@ -356,6 +365,9 @@ def _living_room(L: RoomLayout) -> None:
     rng = L.rng
     sofa = L.against_wall("Sofa", prefer="center", avoid_door_walls=True, access_depth=1.4,
                           fits=lambda a: a.width <= 2.6 and a.depth <= 1.1)
+    if sofa is None:  # a room cut up by doorways: the smallest sofa, less floor kept in front
+        sofa = L.against_wall("Sofa", access_depth=0.9, largest=False,
+                              fits=lambda a: a.width <= 2.0 and a.depth <= 1.0)
     if sofa is not None:
         side_of = {0: "south", 180: "north", 90: "west", 270: "east"}[sofa.yaw]
         along = sofa.center[0] if sofa.yaw in (0, 180) else sofa.center[2]
@@ -521,7 +533,7 @@ def _bedroom(L: RoomLayout) -> None:
                 L.on_top(desk, "Desktop", near=0.0)
             if _maybe(rng, 0.4):
                 L.on_top(desk, "DeskLamp", fits=lambda a: a.height <= 0.6)
-    for kind, p, access in (("ArmChair", 0.3, 0.6), ("FloorLamp", 0.3, 0.0), ("GarbageCan", 0.5, 0.0),
+    for kind, p, access in (("ArmChair", 0.3, 0.6), ("GarbageCan", 0.5, 0.0),
                             ("HousePlant", 0.4, 0.0), ("Safe", 0.15, 0.5), ("ShelvingUnit", 0.2, 0.6)):
         if _maybe(rng, p):
             L.against_wall(kind, prefer="corner", access_depth=access, fits=lambda a: a.depth <= 0.9 and a.width <= 1.2)
@@ -532,7 +544,8 @@ def _bathroom(L: RoomLayout) -> None:
     L.against_wall("Toilet", avoid_door_walls=True, access_depth=0.6)
     sink = L.against_wall("Sink", access_depth=0.6, fits=lambda a: a.height >= 0.8)
     if sink is not None:
-        L.on_top(sink, "Faucet", near=0.0, back_gap=0.0, sink_into=0.0, fits=lambda a: a.height <= 0.35 and a.depth <= 0.2)
+        # the faucet stands on the basin's rim at 0.85 m, below the backsplash's top
+        L.on_top(sink, "Faucet", near=0.0, back_gap=0.03, sink_into=sink.local_size[1] - 0.85, fits=lambda a: a.height <= 0.35 and a.depth <= 0.2)
         if _maybe(rng, 0.7):
             side_name = {0: "south", 180: "north", 90: "west", 270: "east"}[sink.yaw]
             along = sink.center[0] if sink.yaw in (0, 180) else sink.center[2]
@@ -580,5 +593,5 @@ def _renamed(o: PlacedObject, object_id: str) -> PlacedObject:
 
 
 def room_types_holding(object_type: str) -> list[str]:
-    """Room types where ProcTHOR puts ``object_type`` (for documentation and tests)."""
+    """Room types where ProcTHOR's placement annotations put ``object_type``."""
     return [rt for rt in ("Kitchen", "LivingRoom", "Bedroom", "Bathroom") if room_frequency(object_type, rt) > 0]

@@ -141,8 +141,9 @@ def _name_of(section: Any) -> str:
 def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]:
     """Model, backend, strategy and parser of a run, from its config (falling back to its rows)."""
     backend = config.get("backend")
-    model = ""
-    if isinstance(backend, dict):
+    # a pipeline names either a model profile (top-level ``model:``) or a backend with options
+    model = str(config["model"]) if isinstance(config.get("model"), str) else ""
+    if not model and isinstance(backend, dict):
         opts = backend.get("options") or {}
         model = str(opts.get("model") or backend.get("model") or "") if isinstance(opts, dict) else ""
     first = rows[0] if rows else None
@@ -162,11 +163,10 @@ def _cells_of_index(index: Any) -> list[dict[str, Any]]:
     return [c for c in cells if isinstance(c, dict)] if isinstance(cells, list) else []
 
 
-def _cell_folder(cell: dict[str, Any]) -> str | None:
-    for key in ("folder", "dir", "directory", "path", "name", "run_dir"):
-        if isinstance(cell.get(key), str):
-            return cell[key]
-    return None
+def _cell_folders(cell: dict[str, Any]) -> list[str]:
+    """Where a cell's run folder may be, most specific first (a name under the sweep folder,
+    then a recorded path, which may be relative to wherever the sweep was started)."""
+    return [cell[k] for k in ("folder", "dir", "directory", "name", "path", "run_dir") if isinstance(cell.get(k), str)]
 
 
 def _cell_axes(cell: dict[str, Any]) -> dict[str, str]:
@@ -192,10 +192,10 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None)
     rows = read_rows(results)
     config = _read_config(folder)
     axes = config_axes(config, rows)
+    # the run's own config names model, strategy and parser best (sweep labels are slugs);
+    # the index adds the axes a config cannot say, such as a named override
     for k, v in (extra_axes or {}).items():
         axes.setdefault(k, v)
-        if k in ("model", "strategy", "parser", "backend"):
-            axes[k] = v
     return RunInfo(folder, name, config, axes, rows)
 
 
@@ -214,12 +214,13 @@ def find_runs(path: str | Path) -> list[RunInfo]:
         except json.JSONDecodeError as exc:
             raise PredictionsError(f"{index_path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc
         for i, cell in enumerate(_cells_of_index(index)):
-            sub = _cell_folder(cell)
-            if sub is None:
-                raise PredictionsError(f"{index_path}: cells[{i}] names no folder (expected a 'folder' field)")
-            folder = root / sub
-            if (folder / RESULTS_FILE).exists():
-                runs.append(_load_run(folder, sub, _cell_axes(cell)))
+            names = _cell_folders(cell)
+            if not names:
+                raise PredictionsError(f"{index_path}: cells[{i}] names no folder (expected 'name' or 'run_dir')")
+            found = [root / n for n in names if (root / n / RESULTS_FILE).exists()]
+            found += [Path(n) for n in names if Path(n).is_absolute() and (Path(n) / RESULTS_FILE).exists()]
+            if found:  # a cell not run yet has no results: nothing to report for it
+                runs.append(_load_run(found[0], found[0].name, _cell_axes(cell)))
     if not runs:
         for folder in sorted(p for p in root.iterdir() if p.is_dir()):
             if (folder / RESULTS_FILE).exists():

@@ -1,0 +1,106 @@
+"""Benchmark of the dataset generator: frame cost, quickstart time, paper-size estimate, directions.
+
+Run: ``python benchmarks/bench_generate.py [--full]``. Prints, from measurements in this run:
+seconds per rendered 512x512 frame on one core (wall and CPU), frames/s, the time of the
+3-house quickstart set with ``--jobs 2``, the 47-house time with ``--jobs 2`` (estimated from
+the quickstart's per-house cost, or measured with ``--full``), and the share of pairs per
+direction against the paper's (front 97%, up 66%, left 62%, right 58%; 2.8 directions a pair).
+Budgets: 0.25 s/frame, 30 s quickstart, 900 s for 47 houses.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+PAPER_SHARES = {"front": 0.97, "up": 0.66, "left": 0.62, "right": 0.58}
+PAPER_DIRECTIONS_PER_PAIR = 2.8
+PAPER_INSTANCES_PER_CONDITION = 813
+
+
+def bench_frames(n: int = 20) -> tuple[float, float, float]:
+    """(wall s/frame, CPU s/frame, PNG s/frame) over ``n`` exploration frames of one house."""
+    from povagent.generate.exploration import plan_tour
+    from povagent.generate.pipeline import build_house
+    from povagent.generate.writer import write_png
+
+    built = build_house(0, 0)
+    cams = plan_tour(built.house, built.renderer, n)
+    built.renderer.render(cams[0])  # warm the ray grid
+    wall, cpu = time.perf_counter(), time.process_time()
+    frames = [built.renderer.render(c) for c in cams]
+    wall, cpu = (time.perf_counter() - wall) / len(cams), (time.process_time() - cpu) / len(cams)
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        for k, f in enumerate(frames):
+            write_png(Path(tmp) / f"{k}.png", f.rgb)
+        png = (time.perf_counter() - t) / len(frames)
+    return wall, cpu, png
+
+
+def bench_dataset(houses: int, jobs: int) -> tuple[float, object]:
+    """Wall seconds to generate ``houses`` houses with ``jobs`` workers, and the report."""
+    from povagent.generate import generate_dataset
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t = time.perf_counter()
+        report = generate_dataset(Path(tmp), houses=houses, seed=0, jobs=jobs, progress=False)
+        return time.perf_counter() - t, report
+
+
+def print_directions(report) -> None:
+    """Direction shares of pairs against the paper's."""
+    shares = report.direction_shares()
+    print(f"  pairs {report.pairs}, instances per condition {report.instances_per_condition}")
+    for d in ("front", "up", "left", "right"):
+        print(f"  {d:>5}: {100 * shares[d]:5.1f}% of pairs   (paper {100 * PAPER_SHARES[d]:.0f}%)")
+    per_pair = report.instances_per_condition / max(report.pairs, 1)
+    print(f"  directions per pair: {per_pair:.2f}   (paper {PAPER_DIRECTIONS_PER_PAIR})")
+
+
+def main() -> None:
+    """Run the measurements and print them."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--full", action="store_true", help="measure 47 houses with --jobs 2 (minutes)")
+    parser.add_argument("--sample", type=int, default=12, help="houses for the direction statistics")
+    args = parser.parse_args()
+    print(f"cores: {os.cpu_count()}, load average: {os.getloadavg()[0]:.2f}")
+
+    wall, cpu, png = bench_frames()
+    print("\nrendering (512x512, one core, shadows on)")
+    print(f"  {wall:.3f} s/frame wall, {cpu:.3f} s/frame CPU  -> {1 / wall:.1f} frames/s")
+    print(f"  budget 0.25 s/frame: ratio {wall / 0.25:.2f}; PNG encoding adds {png:.3f} s/frame")
+
+    quick, report = bench_dataset(3, 2)
+    print("\nquickstart set: 3 houses, --jobs 2")
+    print(f"  {quick:.1f} s for {report.renders} frames  -> budget 30 s: ratio {quick / 30:.2f}")
+
+    one, one_report = bench_dataset(2, 1)
+    per_house = one / 2
+    estimate = per_house * 47 / 2
+    print("\npaper size: 47 houses, --jobs 2")
+    print(f"  one core: {per_house:.1f} s per house ({one_report.renders / 2:.0f} frames)")
+    print(f"  estimate 47 houses on 2 cores: {estimate:.0f} s  -> budget 900 s: ratio {estimate / 900:.2f}")
+    if args.full:
+        full, full_report = bench_dataset(47, 2)
+        print(f"  measured 47 houses on 2 cores: {full:.0f} s  -> budget 900 s: ratio {full / 900:.2f}")
+        print(
+            f"  instances per condition: {full_report.instances_per_condition} (paper {PAPER_INSTANCES_PER_CONDITION})"
+        )
+        sample_report = full_report
+    else:
+        _, sample_report = bench_dataset(args.sample, 2)
+
+    print(f"\ndirections ({len(sample_report.houses)} houses)")
+    print_directions(sample_report)
+    rooms = np.array([h.rooms for h in sample_report.houses])
+    print(f"  rooms per house: mean {rooms.mean():.1f}, range {rooms.min()}-{rooms.max()}")
+
+
+if __name__ == "__main__":
+    main()

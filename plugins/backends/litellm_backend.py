@@ -1,0 +1,335 @@
+"""The ``litellm`` backend: any model litellm can reach, named by one string in the YAML.
+
+``model`` is a litellm model string (``openai/gpt-5.4``, ``gemini/gemini-2.5-flash``,
+``hosted_vllm/Qwen/Qwen3-VL-8B-Instruct`` with ``api_base``) or a model profile name
+(``gemini-robotics-er``). API keys come from the environment only: ``api_key_env`` names the
+variable, read at call time and never stored in the identity, logs or rows; without it litellm
+reads the provider's usual variable (``OPENAI_API_KEY``, ``GEMINI_API_KEY``).
+
+Retries: the runner retries :class:`TransientBackendError`, so direct calls run with litellm's
+own retries off (``num_retries=0``). With ``router`` (a litellm Router ``model_list``: several
+deployments of one model, e.g. vLLM replicas) the Router balances, rate-limits and retries
+across deployments itself; a failure that outlives the Router's retries is raised as
+:class:`PermanentBackendError` so the runner never stacks a second retry loop on top
+(``retries_inside`` is True on such a backend).
+
+litellm is imported on the first request, never when this module is imported.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import time
+from typing import Any, ClassVar, Mapping
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from povagent import hookimpl
+from povagent.errors import ConfigError
+from povagent.exchange import Request, Response, Usage
+from povagent.images import ImageStore
+from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
+from povagent.llm_import import import_litellm
+from povagent.profiles import ModelProfile, resolve_profile
+from povagent_plugins.backends.litellm_errors import map_litellm_error
+from povagent_plugins.backends.openai_messages import openai_messages
+
+#: Router constructor settings a pipeline may set (litellm.Router keyword arguments).
+ROUTER_SETTINGS = frozenset(
+    {
+        "num_retries",
+        "timeout",
+        "routing_strategy",
+        "routing_strategy_args",
+        "allowed_fails",
+        "cooldown_time",
+        "disable_cooldowns",
+        "retry_after",
+        "retry_policy",
+        "enable_pre_call_checks",
+        "default_max_parallel_requests",
+    }
+)
+#: Router retries when the pipeline does not say (then the Router, not the runner, retries).
+DEFAULT_ROUTER_RETRIES = 3
+#: Extra time over the request timeout (times attempts) before a call is abandoned: a guard
+#: against a client that never returns, not a timeout anyone should hit.
+HARD_DEADLINE_SLACK_S = 30.0
+
+_KEY_MESSAGE = (
+    "API keys are never read from YAML (it gets committed); export the key and name the "
+    "variable instead: api_key_env: MY_KEY_VAR"
+)
+
+
+def _reject_literal_key(where: str, params: Mapping[str, Any]) -> None:
+    key = params.get("api_key")
+    # litellm's own "os.environ/NAME" form is a reference to the environment, not a key
+    if key is not None and not (isinstance(key, str) and key.startswith("os.environ/")):
+        raise ValueError(f"{where}: api_key given literally. {_KEY_MESSAGE}")
+
+
+class LiteLLMOptions(BaseModel):
+    """The ``backend.options`` of the litellm backend (unknown keys are errors)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    model: str | None = Field(None, min_length=1)
+    api_base: str | None = None
+    api_key_env: str | None = Field(None, min_length=1)
+    temperature: float | None = Field(None, ge=0)
+    max_tokens: int | None = Field(None, gt=0)
+    timeout: float = Field(120.0, gt=0)
+    extra: dict[str, Any] = Field(default_factory=dict)
+    router: list[dict[str, Any]] | None = Field(None, min_length=1)
+    router_settings: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("extra")
+    @classmethod
+    def _extra_has_no_key(cls, value: dict[str, Any]) -> dict[str, Any]:
+        _reject_literal_key("extra", value)
+        for name in ("num_retries", "max_retries"):
+            if name in value:
+                raise ValueError(f"extra: {name} is set by povagent (the runner or the Router retries)")
+        return value
+
+    @field_validator("router")
+    @classmethod
+    def _deployments_are_sound(cls, value: list[dict[str, Any]] | None) -> list[dict[str, Any]] | None:
+        for i, dep in enumerate(value or []):
+            params = dep.get("litellm_params") if isinstance(dep, Mapping) else None
+            if not isinstance(params, Mapping) or not params.get("model"):
+                raise ValueError(f"router[{i}]: needs litellm_params with a model (litellm Router model_list form)")
+            _reject_literal_key(f"router[{i}].litellm_params", params)
+        return value
+
+    @field_validator("router_settings")
+    @classmethod
+    def _known_router_settings(cls, value: dict[str, Any]) -> dict[str, Any]:
+        unknown = sorted(set(value) - ROUTER_SETTINGS)
+        if unknown:
+            raise ValueError(f"unknown router_settings {unknown}; known: {sorted(ROUTER_SETTINGS)}")
+        return value
+
+
+def _options_error(exc: ValidationError) -> ConfigError:
+    lines = []
+    for e in exc.errors():
+        field = ".".join(str(p) for p in e["loc"]) or "options"
+        msg = e["msg"].removeprefix("Value error, ")
+        if e["type"] == "extra_forbidden":
+            msg = f"unknown option (known: {sorted(LiteLLMOptions.model_fields)})"
+            if e["loc"] and e["loc"][0] == "api_key":
+                msg = _KEY_MESSAGE
+        lines.append(f"backend 'litellm': option '{field}': {msg}")
+    return ConfigError("; ".join(lines))
+
+
+def _jsonable(value: Any) -> Any:
+    """``value`` made JSON-able (non-JSON leaves become their repr) for the identity."""
+    return json.loads(json.dumps(value, sort_keys=True, default=repr))
+
+
+class LiteLLMBackend(Backend):
+    """Calls a model through litellm (one deployment, or a Router over several)."""
+
+    cacheable: ClassVar[bool] = True
+
+    def __init__(self, **options: Any) -> None:
+        if options.get("api_key") is not None:
+            raise ConfigError(f"backend 'litellm': option 'api_key': {_KEY_MESSAGE}")
+        profile = self._profile_for(options.get("model"))
+        if profile is not None:
+            options = self._with_profile_defaults(profile, options)
+        try:
+            opts = LiteLLMOptions.model_validate(options)
+        except ValidationError as exc:
+            raise _options_error(exc) from None
+        if opts.model is None and opts.router is None:
+            raise ConfigError("backend 'litellm': option 'model': required (a litellm model string or a profile name)")
+        if profile is not None and profile.needs_api_base and opts.api_base is None and opts.router is None:
+            raise ConfigError(
+                f"backend 'litellm': model {profile.name!r} is self-hosted ({profile.litellm_model}): "
+                "set api_base (e.g. http://localhost:8000/v1) or a router of deployments"
+            )
+        self.profile: ModelProfile | None = profile
+        self.options = opts
+        self.model = opts.model or self._group_of(opts.router or [])
+        self.retries_inside = opts.router is not None
+        #: attempts the Router makes after the first (the runner widens its timeout by them)
+        self.inner_retries = int(opts.router_settings.get("num_retries", DEFAULT_ROUTER_RETRIES)) if self.retries_inside else 0
+        self._router: Any = None
+
+    # -- configuration ------------------------------------------------------------------------
+    @staticmethod
+    def _profile_for(model: Any) -> ModelProfile | None:
+        # litellm strings carry a provider prefix; bare names may be profiles
+        if not isinstance(model, str) or "/" in model:
+            return None
+        return resolve_profile(model)
+
+    @staticmethod
+    def _with_profile_defaults(profile: ModelProfile, options: dict[str, Any]) -> dict[str, Any]:
+        merged = {**profile.backend_options, **options, "model": profile.litellm_model}
+        extra = {**profile.backend_options.get("extra", {}), **options.get("extra", {})}
+        if extra:
+            merged["extra"] = extra
+        return merged
+
+    @staticmethod
+    def _group_of(router: list[dict[str, Any]]) -> str:
+        names = {d.get("model_name") for d in router if d.get("model_name")}
+        return names.pop() if len(names) == 1 else "povagent-router"
+
+    def identity(self) -> Mapping[str, Any]:
+        """Model, endpoint and answer-changing options; never a key or the key's value."""
+        o = self.options
+        ident: dict[str, Any] = {
+            "backend": "litellm",
+            "model": self.model,
+            "api_base": o.api_base,
+            "temperature": o.temperature,
+            "max_tokens": o.max_tokens,
+            "extra": _jsonable(o.extra),
+        }
+        if o.router is not None:
+            # replicas of one model answer alike: the identity names the models, not the hosts
+            ident["router_models"] = sorted({d["litellm_params"]["model"] for d in o.router})
+        return ident
+
+    def _api_key(self) -> str | None:
+        name = self.options.api_key_env
+        if name is None:
+            return None
+        value = os.environ.get(name)
+        if not value:
+            raise PermanentBackendError(
+                f"environment variable {name} (api_key_env of backend 'litellm') is not set: export the API key"
+            )
+        return value
+
+    def generation_kwargs(self, request: Request) -> dict[str, Any]:
+        """Generation parameters sent: the strategy's, overridden by this backend's options."""
+        params = request.generation.as_dict()
+        o = self.options
+        if o.temperature is not None:
+            params["temperature"] = o.temperature
+        if o.max_tokens is not None:
+            params["max_tokens"] = o.max_tokens
+        params.update(o.extra)
+        return params
+
+    # -- calling ------------------------------------------------------------------------------
+    async def complete(self, request: Request, images: ImageStore) -> Response:
+        """Send ``request`` (images as data URLs, in order); raise Transient/Permanent errors."""
+        litellm = import_litellm()
+        kwargs = {"messages": openai_messages(request, images), **self.generation_kwargs(request)}
+        key: str | None = None
+        attempts = 1
+        started = time.perf_counter()
+        try:
+            if self.options.router is not None:
+                router = self._get_router(litellm)
+                attempts += int(router.num_retries or 0)
+                call = router.acompletion(model=self.model, timeout=self.options.timeout, **kwargs)
+            else:
+                key = self._api_key()
+                call = litellm.acompletion(
+                    model=self.model,
+                    api_base=self.options.api_base,
+                    api_key=key,
+                    timeout=self.options.timeout,
+                    num_retries=0,  # the runner retries; litellm must not retry underneath it
+                    max_retries=0,
+                    **kwargs,
+                )
+            async with asyncio.timeout(self.options.timeout * attempts + HARD_DEADLINE_SLACK_S):
+                response = await call
+        except TimeoutError as exc:
+            if self.retries_inside:
+                raise PermanentBackendError("no answer within the hard deadline after Router retries") from exc
+            raise TransientBackendError(f"no answer within {self.options.timeout:g} s (hard deadline)") from exc
+        except (PermanentBackendError, TransientBackendError):
+            raise
+        except Exception as exc:
+            mapped = map_litellm_error(litellm, exc, secrets=self._secrets(key), retried_inside=self.retries_inside)
+            if mapped is exc:
+                raise
+            raise mapped from exc
+        latency = time.perf_counter() - started
+        return Response(
+            text=_text_of(response),
+            usage=_usage_of(litellm, response),
+            latency_s=latency,
+            model=getattr(response, "model", None),
+        )
+
+    def _secrets(self, key: str | None) -> tuple[str, ...]:
+        names = [self.options.api_key_env] + [
+            d["litellm_params"].get("api_key_env") for d in (self.options.router or [])
+        ]
+        values = [os.environ.get(n, "") for n in names if n]
+        return tuple(v for v in [key, *values] if v)
+
+    def _get_router(self, litellm: Any) -> Any:
+        # built on first use: litellm is imported lazily, and keys are read from the environment
+        # only now
+        if self._router is None:
+            settings = {
+                "num_retries": DEFAULT_ROUTER_RETRIES,
+                "timeout": self.options.timeout,
+                **self.options.router_settings,
+            }
+            self._router = litellm.Router(model_list=self._deployments(), **settings)
+        return self._router
+
+    def _deployments(self) -> list[dict[str, Any]]:
+        out = []
+        for dep in self.options.router or []:
+            params = dict(dep["litellm_params"])
+            env = params.pop("api_key_env", None)
+            if env:
+                value = os.environ.get(env)
+                if not value:
+                    raise PermanentBackendError(f"environment variable {env} (router api_key_env) is not set")
+                params["api_key"] = value
+            out.append({**dep, "model_name": self.model, "litellm_params": params})
+        return out
+
+    async def aclose(self) -> None:
+        """Drop the Router (its clients are litellm's shared, cached ones)."""
+        self._router = None
+
+
+def _text_of(response: Any) -> str:
+    try:
+        content = response.choices[0].message.content
+    except (AttributeError, IndexError, TypeError):
+        return ""
+    return content if isinstance(content, str) else ("" if content is None else str(content))
+
+
+def _usage_of(litellm: Any, response: Any) -> Usage:
+    usage = getattr(response, "usage", None)
+    cost: float | None
+    try:
+        cost = float(litellm.completion_cost(completion_response=response))
+    except Exception:  # unknown models (self-hosted, test servers) have no price: not an error
+        cost = None
+    return Usage(
+        prompt_tokens=getattr(usage, "prompt_tokens", None),
+        completion_tokens=getattr(usage, "completion_tokens", None),
+        cost_usd=cost,
+    )
+
+
+@hookimpl
+def register_backends(register) -> None:
+    """Contribute the litellm backend."""
+    register(
+        "litellm",
+        LiteLLMBackend,
+        description="Any litellm model string or model profile; a Router over several deployments",
+    )

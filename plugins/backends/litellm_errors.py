@@ -1,0 +1,137 @@
+"""litellm's exceptions as povagent's two kinds: worth retrying, or not.
+
+Transient (the runner retries): 429 rate limits (with the server's ``Retry-After``), timeouts,
+dropped connections, 5xx. Permanent (recorded, never retried): bad request, authentication,
+permission, unknown model, context window exceeded and any other 4xx. Exceptions that are
+neither litellm's nor the HTTP client's are bugs and are left alone (they keep their
+traceback). Messages are scrubbed of the API key.
+"""
+
+from __future__ import annotations
+
+import email.utils
+import time
+from types import ModuleType
+from typing import Any, Mapping
+
+from povagent.interfaces import PermanentBackendError, TransientBackendError
+
+#: HTTP statuses that a later attempt may get past.
+TRANSIENT_STATUSES = frozenset({408, 409, 425, 429, 500, 502, 503, 504, 529})
+
+
+def retry_after_seconds(headers: Mapping[str, Any] | None, now: float | None = None) -> float | None:
+    """Seconds to wait from ``Retry-After`` (seconds or an HTTP date) or ``retry-after-ms``."""
+    if not headers:
+        return None
+    lower = {str(k).lower(): v for k, v in dict(headers).items()}
+    ms = lower.get("retry-after-ms")
+    if ms is not None:
+        try:
+            return max(0.0, float(ms) / 1000.0)
+        except (TypeError, ValueError):
+            pass
+    value = lower.get("retry-after")
+    if value is None:
+        return None
+    try:
+        return max(0.0, float(value))
+    except (TypeError, ValueError):
+        pass
+    try:
+        when = email.utils.parsedate_to_datetime(str(value))
+    except (TypeError, ValueError, IndexError):
+        return None
+    return max(0.0, when.timestamp() - (time.time() if now is None else now))
+
+
+def _response_headers(exc: BaseException) -> Mapping[str, Any] | None:
+    # litellm copies the provider's headers to litellm_response_headers; the exception's own
+    # `response` is often a stand-in without them
+    for source in (
+        getattr(exc, "litellm_response_headers", None),
+        getattr(exc, "headers", None),
+        getattr(getattr(exc, "response", None), "headers", None),
+    ):
+        if source:
+            return source
+    return None
+
+
+def _status(exc: BaseException) -> int | None:
+    status = getattr(exc, "status_code", None)
+    try:
+        return int(status) if status is not None else None
+    except (TypeError, ValueError):
+        return None
+
+
+#: Shorter "secrets" are placeholders (local servers take any key); masking them would mangle text.
+MIN_SECRET_LENGTH = 6
+
+
+def scrub(message: str, secrets: tuple[str, ...]) -> str:
+    """``message`` with every secret (of at least 6 characters) replaced by ``***``."""
+    for s in secrets:
+        if s and len(s) >= MIN_SECRET_LENGTH:
+            message = message.replace(s, "***")
+    return message
+
+
+def map_litellm_error(
+    litellm: ModuleType, exc: BaseException, *, secrets: tuple[str, ...] = (), retried_inside: bool = False
+) -> BaseException:
+    """The povagent error for a litellm failure (or ``exc`` itself when it is not one).
+
+    ``retried_inside`` says litellm's Router already spent its retries: the failure is then
+    returned as permanent so no second retry loop stacks on the Router's.
+    """
+    import httpx
+    import openai
+
+    msg = scrub(str(exc) or type(exc).__name__, secrets)
+    status = _status(exc)
+    if isinstance(exc, litellm.RateLimitError):
+        transient = TransientBackendError(
+            msg, retry_after=retry_after_seconds(_response_headers(exc)), status=429
+        )
+    elif isinstance(exc, (litellm.Timeout, openai.APITimeoutError, httpx.TimeoutException)):
+        transient = TransientBackendError(msg, status=status or 408)
+    elif isinstance(
+        exc,
+        (
+            litellm.APIConnectionError,
+            litellm.InternalServerError,
+            litellm.ServiceUnavailableError,
+            litellm.BadGatewayError,
+            openai.APIConnectionError,
+            httpx.TransportError,
+        ),
+    ):
+        transient = TransientBackendError(msg, status=status)
+    elif isinstance(
+        exc,
+        (
+            litellm.BadRequestError,  # includes ContextWindowExceededError, ContentPolicyViolationError
+            litellm.AuthenticationError,
+            litellm.NotFoundError,
+            litellm.PermissionDeniedError,
+            litellm.UnprocessableEntityError,
+        ),
+    ):
+        return PermanentBackendError(msg, status=status)
+    elif isinstance(exc, (openai.APIError, litellm.APIError)) or _is_router_error(exc):
+        if status in TRANSIENT_STATUSES or (status is None and _is_router_error(exc)):
+            transient = TransientBackendError(msg, retry_after=retry_after_seconds(_response_headers(exc)), status=status)
+        else:
+            return PermanentBackendError(msg, status=status)
+    else:
+        return exc
+    if retried_inside:
+        return PermanentBackendError(f"{msg} (after litellm Router retries)", status=transient.status)
+    return transient
+
+
+def _is_router_error(exc: BaseException) -> bool:
+    # "No deployments available": every deployment is cooling down or over its rate limit
+    return type(exc).__name__ in {"RouterRateLimitError", "RouterRateLimitErrorBasic"}

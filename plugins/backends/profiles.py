@@ -1,0 +1,134 @@
+"""Model profiles of the models the POVBench paper evaluated (``model: <name>`` in YAML).
+
+Each profile gives the litellm model string, the parser that reads the family's answers, the
+key's environment variable and the quirks seen in the paper. Self-hosted models (vLLM) need
+``api_base`` in the pipeline. MolmoPoint-8B is not here: it answers with special tokens only
+its own processor decodes, which no text parser can read.
+"""
+
+from __future__ import annotations
+
+from povagent import hookimpl
+from povagent.dataset.models import Condition
+from povagent.profiles import ModelProfile
+
+_VLLM_NOTE = (
+    "Self-hosted: serve with vLLM's OpenAI-compatible server started with "
+    "--limit-mm-per-prompt image=30 (A/B show up to 30 images) and set api_base "
+    "(e.g. http://host:8000/v1); use the litellm backend's router option to spread a sweep "
+    "over several replicas."
+)
+
+PAPER_PROFILES: tuple[ModelProfile, ...] = (
+    ModelProfile(
+        name="gpt-5.4",
+        paper_name="GPT-5.4",
+        litellm_model="openai/gpt-5.4",
+        default_parser="json",
+        api_key_env="OPENAI_API_KEY",
+        # reasoning models reject sampling parameters such as temperature: drop them rather
+        # than fail every request of a sweep that sets one
+        backend_options={"extra": {"drop_params": True}},
+        notes=(
+            "Reasoning model: temperature is not supported (dropped); reasoning tokens count "
+            "against max_tokens, so CoT strategies need a larger budget. Best on Given (0.189)."
+        ),
+    ),
+    ModelProfile(
+        name="gemini-2.5-flash",
+        paper_name="Gemini-2.5-Flash",
+        litellm_model="gemini/gemini-2.5-flash",
+        # the paper's prompt asks for the JSON answer and the model follows it (~96% answered)
+        default_parser="json",
+        api_key_env="GEMINI_API_KEY",
+        notes=(
+            "Thinking model: thinking tokens share the output budget, so a 256-token limit can "
+            "cut the answer off; raise max_tokens or pass extra: {reasoning_effort: disable}. "
+            "Unprompted, Gemini writes [{\"point\": [y, x]}] on 0-1000: keep the JSON prompt."
+        ),
+    ),
+    ModelProfile(
+        name="gemini-robotics-er",
+        paper_name="Gemini-Robotics-ER",
+        litellm_model="gemini/gemini-robotics-er-1.6-preview",
+        # the paper reports out-of-range coordinates: Gemini's native 0-1000 convention leaks
+        # into the pixel answer, which the rescale parser maps back to pixels
+        default_parser="rescale-1000",
+        api_key_env="GEMINI_API_KEY",
+        notes="Produces out-of-range (0-1000) coordinates across conditions; preview model name may change.",
+    ),
+    ModelProfile(
+        name="gemma-4",
+        paper_name="Gemma-4",
+        litellm_model="gemini/gemma-4-26b-a4b-it",
+        default_parser="json",
+        api_key_env="GEMINI_API_KEY",
+        notes="Served through the Gemini API. Answered only ~40% parseably in A/B (99% in C).",
+    ),
+    ModelProfile(
+        name="qwen3-vl-8b",
+        paper_name="Qwen3-VL-8B (vLLM)",
+        litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
+        default_parser="json",
+        needs_api_base=True,
+        notes=_VLLM_NOTE + " Follows the pixel JSON format when asked (100% answered).",
+    ),
+    ModelProfile(
+        name="qwen3-vl-32b",
+        paper_name="Qwen3-VL-32B (vLLM)",
+        litellm_model="hosted_vllm/Qwen/Qwen3-VL-32B-Instruct",
+        # answers on 0-1000 when asked for 0-511 (21% of Inferred x out of frame)
+        default_parser="rescale-1000",
+        needs_api_base=True,
+        notes=_VLLM_NOTE + " Often answers on Qwen's native 0-1000 scale instead of pixels.",
+    ),
+    ModelProfile(
+        name="internvl3-38b",
+        paper_name="InternVL3-38B",
+        litellm_model="hosted_vllm/OpenGVLab/InternVL3-38B",
+        default_parser="json",
+        needs_api_base=True,
+        notes=_VLLM_NOTE + " The paper ran it 8-bit quantized. Unprompted it writes <box>[[x1,y1,x2,y2]]</box> on 0-1000.",
+    ),
+    ModelProfile(
+        name="molmo",
+        paper_name=None,
+        litellm_model="hosted_vllm/allenai/Molmo-7B-D-0924",
+        default_parser="molmo",
+        needs_api_base=True,
+        notes=(
+            _VLLM_NOTE + " Writes <point x=\"..\" y=\"..\"> in percent (Molmo v1) or "
+            "<points coords=...> on 0-1000 (Molmo2). The paper's MolmoPoint-8B emits special "
+            "tokens instead of text and cannot be run through a text parser."
+        ),
+    ),
+    ModelProfile(
+        name="robopoint",
+        paper_name="RoboPoint",
+        litellm_model="hosted_vllm/wentao-yuan/robopoint-v1-vicuna-v1.5-13b",
+        default_parser="robopoint",
+        needs_api_base=True,
+        conditions=(Condition.GIVEN,),
+        notes=(
+            "Given (C) only: no valid answers with several images. Answers a list of points "
+            "[(x, y), ...] as image fractions; the centroid is scored. Needs an "
+            "OpenAI-compatible server in front of the LLaVA-based model."
+        ),
+    ),
+    ModelProfile(
+        name="llama-3.2-vision",
+        paper_name="Llama-3.2-Vision",
+        litellm_model="hosted_vllm/meta-llama/Llama-3.2-11B-Vision-Instruct",
+        default_parser="json",
+        needs_api_base=True,
+        conditions=(Condition.GIVEN,),
+        notes=_VLLM_NOTE + " Given (C) only: one image per prompt.",
+    ),
+)
+
+
+@hookimpl
+def register_model_profiles(register) -> None:
+    """Contribute the paper's model profiles."""
+    for profile in PAPER_PROFILES:
+        register(profile.name, profile, description=f"{profile.litellm_model} (parser {profile.default_parser})")

@@ -1,0 +1,98 @@
+"""The ``json`` parser: the answer format the paper's prompts ask for, read as the official code does.
+
+Official behaviour: take every ``{...}`` object in the text; prefer the last one that has the
+requested keys and is in range, else the last one with the keys (this catches self-corrections
+after chain-of-thought). On top of that it reads what real outputs contain (see
+:mod:`povagent.answer_text`): markdown fences, prose around the JSON, numbers as strings,
+trailing commas, single quotes, unicode minus.
+
+For A/B, when no object carries ``selected_image`` but one carries ``x`` and ``y``, that point is
+returned with the frame named in the text (``Image k``) or none: status ``out_of_range`` with the
+reason, which the scorer counts as unanswered when the frame is missing. Never raises.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from povagent import hookimpl
+from povagent.answer_text import JsonObject, coerce_index, coerce_number, find_objects, get_key, mentioned_image
+from povagent.answer_validation import judge
+from povagent.answers import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.interfaces import Parser
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """An object that holds a point: its raw numbers as written and where it came from."""
+
+    x: float
+    y: float
+    selected_image: int | None
+    has_frame_key: bool
+    source: JsonObject
+
+
+def read_candidate(obj: JsonObject) -> Candidate | None:
+    """The point an object holds (numeric ``x`` and ``y``), or ``None``."""
+    has_x, x = get_key(obj.value, "x")
+    has_y, y = get_key(obj.value, "y")
+    if not (has_x and has_y):
+        return None
+    fx, fy = coerce_number(x), coerce_number(y)
+    if fx is None or fy is None:
+        return None
+    has_frame, frame = get_key(obj.value, "selected_image")
+    return Candidate(fx, fy, coerce_index(frame) if has_frame else None, has_frame, obj)
+
+
+def candidates(text: str, spec: AnswerSpec) -> tuple[list[Candidate], bool]:
+    """Objects with the requested keys, in text order; the flag says whether they lack the
+    frame key (A/B objects with only ``x`` and ``y``, used when nothing better exists)."""
+    read = [c for c in (read_candidate(o) for o in find_objects(text)) if c is not None]
+    if not spec.asks_frame:
+        return read, False
+    full = [c for c in read if c.has_frame_key]
+    return (full, False) if full else (read, True)
+
+
+def judge_candidate(cand: Candidate, spec: AnswerSpec, text: str, frame_from_text: bool) -> ParsedAnswer:
+    """The typed parse of one candidate (frame from the text when the object has none)."""
+    frame = cand.selected_image
+    note = ""
+    if spec.asks_frame and frame_from_text:
+        frame = mentioned_image(text)
+        note = "no selected_image key" + (f"; frame taken from the text (Image {frame})" if frame is not None else "")
+    return judge(spec, cand.x, cand.y, frame, span=cand.source.span, note=note)
+
+
+def choose(text: str, spec: AnswerSpec) -> tuple[Candidate | None, ParsedAnswer]:
+    """The official choice: the last candidate in range, else the last candidate."""
+    if not text or not text.strip():
+        return None, unparseable("empty answer")
+    found, frame_from_text = candidates(text, spec)
+    if not found:
+        objects = find_objects(text)
+        keys = ", ".join(spec.required_keys)
+        if not objects:
+            return None, unparseable("no JSON object in the answer")
+        return None, unparseable(f"no JSON object with numeric {keys}", objects[-1].span)
+    judged = [(c, judge_candidate(c, spec, text, frame_from_text)) for c in found]
+    for cand, parsed in reversed(judged):
+        if parsed.status is ParseStatus.OK:
+            return cand, parsed
+    return judged[-1]
+
+
+class JsonAnswerParser(Parser):
+    """The official JSON reading, tolerant of real-world formatting."""
+
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """Parse ``text`` (see the module docstring); never raises."""
+        return choose(text or "", spec)[1]
+
+
+@hookimpl
+def register_parsers(register) -> None:
+    """Contribute the json parser."""
+    register("json", JsonAnswerParser, description="Requested JSON answer, official choice (last in range, else last); tolerant")

@@ -1,0 +1,57 @@
+"""What every native-format parser shares: points in a model's own format, else the asked JSON.
+
+A native parser implements :meth:`NativeParser.read`, returning the points it found (already
+converted to pixels of the requested size by the format's documented convention), the frame
+they name if the format carries one, and the span they came from. Converting by a documented
+convention is not a guess: such answers are ``ok`` (``repaired`` is for ``rescale-1000``).
+Several points are scored at their centroid, all kept in ``points``. For A/B without an index in
+the format, the frame is the one the text names (``selected_image: k`` or ``Image k``), else none
+(then unanswered, as officially). When the text holds no native point at all, the model may have
+followed the prompt: the ``json`` parser reads it, and the reason says so. Never raises.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+
+from povagent.answer_text import mentioned_image
+from povagent.answer_validation import judge_points
+from povagent.answers import AnswerSpec, ParsedAnswer
+from povagent.interfaces import Parser
+from povagent_plugins.parsers.json_answer import JsonAnswerParser
+
+
+@dataclass
+class NativeReading:
+    """Points (pixels) read in a native format, the 0-based frame they name, the raw span."""
+
+    points: list[tuple[float, float]] = field(default_factory=list)
+    selected_image: int | None = None
+    span: str | None = None
+    note: str = ""
+
+
+class NativeParser(Parser):
+    """Base of the native-format parsers; subclasses set ``format_name`` and implement ``read``."""
+
+    format_name = "native"
+
+    @abc.abstractmethod
+    def read(self, text: str, spec: AnswerSpec) -> NativeReading | None:
+        """Points in this format, converted to pixels of ``spec``; ``None`` when there are none."""
+
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """Native points if any (centroid, frame), else the asked JSON; never raises."""
+        text = text or ""
+        reading = self.read(text, spec) if text.strip() else None
+        if reading is None or not reading.points:
+            parsed = JsonAnswerParser().parse(text, spec)
+            if not text.strip():
+                return parsed
+            note = f"nothing in the {self.format_name} format; read the asked JSON"
+            return parsed.model_copy(update={"reason": f"{note}; {parsed.reason}" if parsed.reason else note})
+        frame = reading.selected_image
+        if spec.asks_frame and frame is None:
+            frame = mentioned_image(text)
+        return judge_points(spec, reading.points, frame, span=reading.span, note=reading.note)

@@ -1,0 +1,67 @@
+"""The ``basic`` strategy: the paper's basic prompt, single-turn, 256 new tokens.
+
+The example to copy for a new strategy: choose the prompt text (:meth:`BasicStrategy.prompt_text`),
+choose the images (:meth:`BasicStrategy.images_for`), and let :mod:`.layout` assemble the
+message and the answer schema. It must not call the model itself (the runner does, through
+:meth:`povagent.interfaces.Strategy.solve`).
+"""
+
+from __future__ import annotations
+
+from povagent import hookimpl
+from povagent.answers import AnswerSpec
+from povagent.dataset.instances import Instance
+from povagent.exchange import GenerationParams, Request
+from povagent.images import ImageStore
+from povagent.interfaces import Strategy
+from povagent.prompts import frame_values, render
+from povagent_plugins.strategies.layout import answer_spec, prompt_message, shown_images
+
+
+class BasicStrategy(Strategy):
+    """Basic prompt (Inferred/Stated with labelled frames; Given with the observer view).
+
+    Options: ``max_tokens`` (default 256, as released), ``temperature`` (default: the backend's).
+    """
+
+    default_max_tokens = 256
+
+    def __init__(self, max_tokens: int | None = None, temperature: float | None = None) -> None:
+        max_tokens = self.default_max_tokens if max_tokens is None else max_tokens
+        if not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1:
+            raise ValueError(f"strategy option max_tokens must be a positive integer, got {max_tokens!r}")
+        if temperature is not None and (not isinstance(temperature, (int, float)) or temperature < 0):
+            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+        self.generation = GenerationParams(
+            max_tokens=max_tokens, temperature=None if temperature is None else float(temperature)
+        )
+
+    def prompt_text(self, instance: Instance) -> str:
+        """The filled prompt text for ``instance``."""
+        width, height = instance.frame_size
+        if instance.condition.uses_exploration_frames:
+            values = frame_values(width, height, len(instance.frames))
+            return render("basic_frames", sentence=instance.sentence, **values)
+        return render("basic_given", sentence=instance.sentence, **frame_values(width, height))
+
+    def images_for(self, instance: Instance, images: ImageStore) -> list[str]:
+        """Hashes of the images shown, in order (the frames as they are)."""
+        return shown_images(instance, images)
+
+    def answer_spec(self, instance: Instance) -> AnswerSpec:
+        """What this strategy asks for, without building the request (``povagent rescore`` uses
+        it to re-parse a finished run without touching an image)."""
+        return answer_spec(instance)
+
+    def build(self, instance: Instance, images: ImageStore) -> Request:
+        """One user message (images first, then the prompt) asking for the paper's JSON answer."""
+        message = prompt_message(instance, self.images_for(instance, images), self.prompt_text(instance))
+        return Request(
+            messages=(message,), answer=self.answer_spec(instance), generation=self.generation, instance=instance
+        )
+
+
+@hookimpl
+def register_strategies(register) -> None:
+    """Contribute the basic strategy."""
+    register("basic", BasicStrategy, description="The paper's basic prompt (A/B with labelled frames, C with the observer view)")

@@ -1,0 +1,144 @@
+"""Commands that run pipelines: ``run``, ``sweep`` and ``plugins``.
+
+Thin wrappers: each reads its YAML with :mod:`povagent.config`, calls :mod:`povagent.runner` or
+:mod:`povagent.sweep`, and prints a short rich table.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+from povagent.cli import app
+
+
+def _summary_table(summary: dict[str, Any], title: str) -> None:
+    from povagent.cli.dataset import render_summary
+
+    render_summary(summary, title=title)
+
+
+@app.command("run")
+def run_command(
+    pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config for its keys)."),
+    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
+    limit: Optional[int] = typer.Option(None, "--limit", help="Run only the first N instances."),
+    retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+    as_json: bool = typer.Option(False, "--json", help="Print summary.json instead of a table."),
+) -> None:
+    """Run one pipeline (resuming from its run folder: only missing keys are run)."""
+    from povagent.config import load_pipeline
+    from povagent.progress import make_progress
+    from povagent.runner import run_pipeline
+
+    overrides: dict[str, Any] = {}
+    if output is not None:
+        overrides["output"] = str(output)
+    if limit is not None:
+        overrides["instances"] = {"limit": limit}
+    config = load_pipeline(pipeline, overrides=overrides)
+    try:
+        result = run_pipeline(config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_errors=retry_errors)
+    except KeyboardInterrupt:
+        typer.echo(f"interrupted: rows written so far are kept in {config.output}; run the same command to resume", err=True)
+        raise typer.Exit(130)
+    if as_json:
+        typer.echo(json.dumps(result.summary, indent=2, default=str))
+        return
+    rows = result.summary["rows"]
+    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]
+    typer.echo(
+        f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
+        f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
+        f"{result.stats.cache_hits} cache hits, {result.stats.retries} retries, {result.stats.wall_s:.1f} s"
+    )
+
+
+@app.command("sweep")
+def sweep_command(
+    sweep: Path = typer.Argument(..., help="Sweep YAML: a base pipeline, axes and named overrides."),
+    dry_run: bool = typer.Option(False, "--dry-run", help="Print the cells, requests still to make and a token estimate; call nothing."),
+    retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+) -> None:
+    """Run every cell of a sweep (one folder per cell plus sweep.json), sharing one cache."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from povagent.sweep import dry_run as plan, expand_sweep, run_sweep
+
+    console = Console()
+    if dry_run:
+        sweep_cfg, cells = expand_sweep(sweep)
+        table = Table(title=f"{sweep} -> {sweep_cfg.output} ({len(cells)} cells)")
+        for col in ("cell", "keys", "done", "requests to make", "~prompt tokens", "<= completion tokens"):
+            table.add_column(col, justify="left" if col == "cell" else "right")
+        totals = [0, 0, 0, 0, 0]
+        for c in plan(cells):
+            vals = [c.n_total, c.n_done, c.requests, c.prompt_tokens, c.max_completion_tokens]
+            totals = [a + b for a, b in zip(totals, vals)]
+            table.add_row(c.name, *(f"{v:,}" for v in vals))
+        table.add_row("[bold]total", *(f"[bold]{v:,}" for v in totals))
+        console.print(table)
+        return
+
+    def done(cell: Any, res: Any) -> None:
+        o = res.summary["overall"]
+        l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
+        rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
+        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+
+    try:
+        result = run_sweep(sweep, quiet=quiet, retry_errors=retry_errors, on_cell_done=done)
+    except KeyboardInterrupt:
+        typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
+        raise typer.Exit(130)
+    table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
+    for col in ("cell", "mean L2", "resp. rate", "answered / total"):
+        table.add_column(col, justify="left" if col == "cell" else "right")
+    for cell in result.cells:
+        s = result.results[cell.name].summary
+        o = s["overall"]
+        table.add_row(
+            cell.name,
+            "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
+            "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
+            f"{o['n']} / {s['rows']['total']}",
+        )
+    console.print(table)
+
+
+@app.command("plugins")
+def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
+    """List every backend, strategy, parser, scorer and model profile, with where it came from."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from povagent.plugins import KINDS, build_plugin_host
+
+    host = build_plugin_host(strict=False)
+    kinds = (*KINDS, "profile")
+    if as_json:
+        out = {
+            k: [{"name": e.name, "source": e.source, "description": e.description} for e in host.entries(k)] for k in kinds
+        }
+        out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]  # type: ignore[assignment]
+        typer.echo(json.dumps(out, indent=2))
+    else:
+        console = Console()
+        table = Table(title="povagent plugins")
+        for col in ("kind", "name", "from", "description"):
+            table.add_column(col)
+        for k in kinds:
+            for e in host.entries(k):
+                table.add_row(k, e.name, e.source, e.description)
+        console.print(table)
+        for f in host.failures:
+            console.print(f"[red]failed:[/] {f}", highlight=False)
+    if host.failures:
+        sys.exit(1)

@@ -1,0 +1,78 @@
+"""Commands ``report``, ``export`` and ``compare``: thin wrappers over :mod:`povagent.report`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from povagent.cli import app
+
+
+@app.command("report")
+def report_command(
+    source: Path = typer.Argument(..., help="A run folder (results.jsonl) or a sweep folder (sweep.json + run folders)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Report folder (default: SOURCE/report)."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, if not the one in the runs' config.yaml."),
+    bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI (0: no CIs)."),
+    gallery_limit: Optional[int] = typer.Option(None, "--gallery-limit", min=0, help="At most this many gallery rows per system (default: all of the first run)."),
+    no_gallery: bool = typer.Option(False, "--no-gallery", help="Skip the gallery images."),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads drawing gallery images."),
+) -> None:
+    """Write the paper's tables (Markdown, CSV, LaTeX), plots and a self-contained HTML report."""
+    from povagent.report.build import write_report
+    from povagent.report.tables import to_markdown
+
+    result = write_report(
+        source, out, dataset, n_boot=bootstrap, gallery_limit=gallery_limit, gallery=not no_gallery, workers=workers
+    )
+    if result.dataset_note:
+        typer.echo(f"warning: no center baseline, counting-non-responses variant or gallery images: {result.dataset_note}", err=True)
+    typer.echo(to_markdown(result.tables[0]))
+    g = result.gallery
+    if g is not None:
+        typer.echo(f"gallery: {g.entries} predictions, {g.drawn} images drawn, {g.cached} reused, {g.without_image} without a frame")
+    typer.echo(f"tables: {result.out / 'tables'}  (tables.md, tables.tex)")
+    typer.echo(f"report: {result.page}  ({result.timings['total']:.1f} s)")
+
+
+@app.command("export")
+def export_command(
+    run_dir: Path = typer.Argument(..., help="A run folder (results.jsonl)."),
+    format: str = typer.Option("official", "--format", help="Output format; only 'official' (POVBench's prediction rows)."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json; a folder of run_<k>.json with several runs)."),
+    run: Optional[int] = typer.Option(None, "--run", help="Export only this run index."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images (default: from config.yaml)."),
+) -> None:
+    """Write a run's predictions in the official row format (check them with the official code)."""
+    from povagent.errors import PredictionsError
+    from povagent.report.export import export_run
+
+    if format != "official":
+        raise PredictionsError(f"--format {format!r}: unknown export format (supported: official)")
+    for path in export_run(run_dir, out, run, dataset):
+        typer.echo(f"wrote {path}")
+
+
+@app.command("compare")
+def compare_command(
+    run_a: Path = typer.Argument(..., help="Run folder A (the reference)."),
+    run_b: Path = typer.Argument(..., help="Run folder B."),
+    top: int = typer.Option(15, "--top", min=0, help="How many most-changed instances to list."),
+    out: Optional[Path] = typer.Option(None, "--out", help="Also write compare.html (with both runs' drawings) to this folder."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder for the HTML images (default: from config.yaml)."),
+    bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI."),
+) -> None:
+    """Per-instance differences between two runs: paired statistics and the instances that changed most."""
+    from povagent.report.analysis import load_collection_dataset
+    from povagent.report.collect import collect
+    from povagent.report.compare import compare_runs, print_comparison, write_comparison_html
+
+    cmp = compare_runs(run_a, run_b, n_boot=bootstrap)
+    print_comparison(cmp, top)
+    if out is not None:
+        ds, note = load_collection_dataset(collect(run_a), dataset)
+        if ds is None:
+            typer.echo(f"warning: no frames in the HTML: {note}", err=True)
+        typer.echo(f"compare: {write_comparison_html(cmp, out, ds)}")

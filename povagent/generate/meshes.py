@@ -1,0 +1,598 @@
+"""Triangle meshes of the house: composite furniture per category, walls, floors, ceilings.
+
+What it is for: give every object a recognizable shape built from parts (a bed has legs, a
+frame, a mattress, a duvet, pillows and a headboard; a chair has legs, a seat and a back) that
+fills the object's real ProcTHOR box, with per-category colours and a material per part that
+the renderer shades (wood grain, fabric, metal, gloss, glowing lamp shades, tiles). What it must
+not do: cast rays, shade pixels, or place objects.
+
+Every part is built in the object's local frame (x across, y up from the floor of the object,
+z towards its front), then turned by the object's yaw and moved to its box. Parts flagged as
+decoration (the towel on a holder) belong to no object in the instance mask.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from povagent.generate.floorplan import WALL_HEIGHT, FloorPlan
+from povagent.generate.scene import House, PlacedObject
+
+# Materials the renderer knows how to shade.
+PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING = range(10)
+
+_BOX_FACES = np.array(
+    [
+        [0, 2, 1], [0, 3, 2],  # bottom (y0)
+        [4, 5, 6], [4, 6, 7],  # top (y1)
+        [0, 1, 5], [0, 5, 4],  # z0
+        [3, 7, 6], [3, 6, 2],  # z1
+        [0, 4, 7], [0, 7, 3],  # x0
+        [1, 2, 6], [1, 6, 5],  # x1
+    ]
+)  # fmt: skip
+
+
+def _rgb(hex_color: str) -> tuple[float, float, float]:
+    h = hex_color.lstrip("#")
+    return (int(h[0:2], 16) / 255.0, int(h[2:4], 16) / 255.0, int(h[4:6], 16) / 255.0)
+
+
+@dataclass
+class MeshParts:
+    """Triangles with a colour, a material, an owner and a room per face."""
+
+    vertices: list[np.ndarray] = field(default_factory=list)
+    faces: list[np.ndarray] = field(default_factory=list)
+    colors: list[np.ndarray] = field(default_factory=list)
+    materials: list[np.ndarray] = field(default_factory=list)
+    owners: list[np.ndarray] = field(default_factory=list)
+    rooms: list[np.ndarray] = field(default_factory=list)
+    count: int = 0
+
+    def add(self, vertices: np.ndarray, faces: np.ndarray, color, material: int, owner: int, room: int) -> None:
+        """Append a triangle set; ``owner`` is the instance id (0: structure or decoration),
+        ``room`` the room whose light falls on it."""
+        self.vertices.append(np.asarray(vertices, dtype=float))
+        self.faces.append(np.asarray(faces, dtype=np.int64) + self.count)
+        n = len(faces)
+        self.colors.append(np.tile(np.asarray(color, dtype=np.float32), (n, 1)))
+        self.materials.append(np.full(n, material, dtype=np.int8))
+        self.owners.append(np.full(n, owner, dtype=np.int32))
+        self.rooms.append(np.full(n, room, dtype=np.int32))
+        self.count += len(vertices)
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(vertices, faces, face colours, materials, owners, rooms) as flat arrays."""
+        return (
+            np.concatenate(self.vertices),
+            np.concatenate(self.faces),
+            np.concatenate(self.colors),
+            np.concatenate(self.materials),
+            np.concatenate(self.owners),
+            np.concatenate(self.rooms),
+        )
+
+
+def box_vertices(lo, hi) -> np.ndarray:
+    """The 8 corners of the box [lo, hi] in the order ``_BOX_FACES`` expects."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    return np.array(
+        [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1],
+         [x0, y1, z0], [x1, y1, z0], [x1, y1, z1], [x0, y1, z1]]
+    )  # fmt: skip
+
+
+def _cylinder(center, radius_a: float, radius_b: float, y0: float, y1: float, axis: str = "y", sections: int = 14):
+    """A closed prism approximating a cylinder (elliptic when the radii differ)."""
+    ang = np.linspace(0, 2 * np.pi, sections, endpoint=False)
+    a, b = radius_a * np.cos(ang), radius_b * np.sin(ang)
+    ring0 = np.stack([a, np.full(sections, y0), b], axis=1)
+    ring1 = np.stack([a, np.full(sections, y1), b], axis=1)
+    verts = np.concatenate([ring0, ring1, [[0, y0, 0], [0, y1, 0]]])
+    if axis == "z":  # the prism's axis along z: swap y and z, y0/y1 are then z extents
+        verts = verts[:, [0, 2, 1]]
+    verts = verts + np.asarray(center, dtype=float)
+    i = np.arange(sections)
+    j = (i + 1) % sections
+    side = np.concatenate([np.stack([i, j, j + sections], 1), np.stack([i, j + sections, i + sections], 1)])
+    caps = np.concatenate(
+        [np.stack([np.full(sections, 2 * sections), j, i], 1), np.stack([np.full(sections, 2 * sections + 1), i + sections, j + sections], 1)]
+    )
+    return verts, np.concatenate([side, caps])
+
+
+def _blob(center, radii, subdivisions: int = 1):
+    """A squashed icosphere (foliage, cushions seen from far)."""
+    t = (1.0 + 5 ** 0.5) / 2.0
+    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
+                  [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], dtype=float)  # fmt: skip
+    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2],
+                  [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11],
+                  [6, 2, 10], [8, 6, 7], [9, 8, 1]])  # fmt: skip
+    for _ in range(subdivisions):
+        verts = list(v)
+        cache: dict[tuple[int, int], int] = {}
+
+        def mid(a: int, b: int) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                verts.append((verts[a] + verts[b]) / 2)
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        nf = []
+        for a, b, c in f:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            nf += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        v, f = np.array(verts), np.array(nf)
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    return v * np.asarray(radii) + np.asarray(center), f
+
+
+class Parts:
+    """Collects one object's parts in its local frame."""
+
+    def __init__(self) -> None:
+        self.items: list[tuple[np.ndarray, np.ndarray, tuple, int, bool]] = []
+
+    def box(self, x0, y0, z0, x1, y1, z1, color, material=PLAIN, decor=False) -> None:
+        """An axis-aligned box part."""
+        self.items.append((box_vertices((x0, y0, z0), (x1, y1, z1)), _BOX_FACES, color, material, decor))
+
+    def cyl(self, x, z, r, y0, y1, color, material=PLAIN, rb=None, sections=14) -> None:
+        """A vertical cylinder part centred at (x, z)."""
+        v, f = _cylinder((x, 0, z), r, r if rb is None else rb, y0, y1, "y", sections)
+        self.items.append((v, f, color, material, False))
+
+    def disc_z(self, x, y, r, z0, z1, color, material=PLAIN) -> None:
+        """A cylinder whose axis runs front to back (round doors, dials)."""
+        v, f = _cylinder((x, y, 0), r, r, z0, z1, "z", 16)
+        self.items.append((v, f, color, material, False))
+
+    def blob(self, center, radii, color, material=FABRIC) -> None:
+        """A squashed sphere part."""
+        v, f = _blob(center, radii)
+        self.items.append((v, f, color, material, False))
+
+
+# -- palettes -----------------------------------------------------------------------------------
+WOODS = [_rgb(c) for c in ("#8b5a2b", "#a0703c", "#6b4423", "#c49a6c", "#3e2a1c", "#d2b48c")]
+FABRICS = [_rgb(c) for c in ("#7a8791", "#3b4d6b", "#b8a88a", "#5f7a55", "#8a3b3b", "#4a4a4a", "#c7b9a5", "#2f5d62")]
+BEDDING = [_rgb(c) for c in ("#e8e4da", "#9db4c8", "#d9b8a0", "#b5c7a3", "#c9c0d8", "#f0e6c8")]
+WHITE, OFFWHITE, BLACK = _rgb("#f2f2f0"), _rgb("#e6e1d6"), _rgb("#1b1b1d")
+STEEL, DARK_STEEL, GLASS = _rgb("#b8bcc0"), _rgb("#54585c"), _rgb("#18222c")
+LAMP_LIGHT = _rgb("#fff1c8")
+
+
+def _pick(rng: np.random.Generator, palette):
+    return palette[int(rng.integers(len(palette)))]
+
+
+# -- furniture builders: (parts, w, h, d, rng, obj) ---------------------------------------------
+def _bed(P: Parts, w, h, d, rng, obj):
+    wood, sheet = _pick(rng, WOODS), _pick(rng, BEDDING)
+    top = min(0.58, h * 0.62)
+    hb = 0.07
+    for x in (-w / 2 + 0.03, w / 2 - 0.09):
+        P.box(x, 0, d / 2 - 0.1, x + 0.06, 0.1, d / 2 - 0.04, wood, WOOD)
+    P.box(-w / 2, 0.1, -d / 2 + hb, w / 2, top - 0.22, d / 2, wood, WOOD)
+    P.box(-w / 2 + 0.03, top - 0.22, -d / 2 + hb + 0.02, w / 2 - 0.03, top - 0.04, d / 2 - 0.03, WHITE, FABRIC)
+    P.box(-w / 2 + 0.01, top - 0.3, -d / 2 + hb + 0.55, w / 2 - 0.01, top, d / 2 - 0.01, sheet, FABRIC)
+    n = 2 if w > 1.2 else 1
+    pw = (w - 0.2) / n
+    for i in range(n):
+        x0 = -w / 2 + 0.1 + i * pw
+        P.box(x0 + 0.03, top - 0.04, -d / 2 + hb + 0.08, x0 + pw - 0.03, top + 0.1, -d / 2 + hb + 0.45, OFFWHITE, FABRIC)
+    P.box(-w / 2, 0, -d / 2, w / 2, h, -d / 2 + hb, wood, WOOD)
+
+
+def _sofa(P: Parts, w, h, d, rng, obj, seats=None):
+    cloth = _pick(rng, FABRICS)
+    dark = tuple(c * 0.8 for c in cloth)
+    arm = min(0.18, w * 0.15)
+    seat_h = min(0.45, h * 0.5)
+    back = min(0.22, d * 0.25)
+    for x in (-w / 2 + 0.05, w / 2 - 0.1):
+        for z in (-d / 2 + 0.05, d / 2 - 0.1):
+            P.box(x, 0, z, x + 0.05, 0.08, z + 0.05, _pick(rng, WOODS), WOOD)
+    P.box(-w / 2 + arm, 0.08, -d / 2 + back, w / 2 - arm, seat_h - 0.1, d / 2 - 0.01, dark, FABRIC)
+    n = seats or (3 if w > 2.0 else 2 if w > 1.3 else 1)
+    cw = (w - 2 * arm) / n
+    for i in range(n):
+        x0 = -w / 2 + arm + i * cw
+        P.box(x0 + 0.01, seat_h - 0.1, -d / 2 + back, x0 + cw - 0.01, seat_h, d / 2, cloth, FABRIC)
+        P.box(x0 + 0.02, seat_h, -d / 2 + back, x0 + cw - 0.02, h - 0.08, -d / 2 + back + 0.14, cloth, FABRIC)
+    P.box(-w / 2, 0.08, -d / 2, w / 2, h, -d / 2 + back, dark, FABRIC)
+    for x0 in (-w / 2, w / 2 - arm):
+        P.box(x0, 0.08, -d / 2 + back, x0 + arm, min(h, seat_h + 0.2), d / 2, dark, FABRIC)
+
+
+def _armchair(P, w, h, d, rng, obj):
+    _sofa(P, w, h, d, rng, obj, seats=1)
+
+
+def _legs(P: Parts, w, d, y1, color, material, inset=0.04, t=0.045):
+    for x in (-w / 2 + inset, w / 2 - inset - t):
+        for z in (-d / 2 + inset, d / 2 - inset - t):
+            P.box(x, 0, z, x + t, y1, z + t, color, material)
+
+
+def _chair(P, w, h, d, rng, obj):
+    wood = _pick(rng, WOODS)
+    seat = min(0.47, h * 0.5)
+    _legs(P, w, d, seat - 0.04, wood, WOOD, inset=0.03)
+    cushion = _pick(rng, FABRICS) if rng.random() < 0.5 else wood
+    P.box(-w / 2, seat - 0.04, -d / 2, w / 2, seat, d / 2, cushion, FABRIC if cushion != wood else WOOD)
+    for x in (-w / 2 + 0.03, w / 2 - 0.07):
+        P.box(x, seat, -d / 2 + 0.02, x + 0.04, h, -d / 2 + 0.06, wood, WOOD)
+    P.box(-w / 2 + 0.03, h - 0.25, -d / 2 + 0.02, w / 2 - 0.03, h - 0.02, -d / 2 + 0.06, wood, WOOD)
+    P.box(-w / 2 + 0.03, seat + 0.12, -d / 2 + 0.025, w / 2 - 0.03, seat + 0.17, -d / 2 + 0.055, wood, WOOD)
+
+
+def _stool(P, w, h, d, rng, obj):
+    wood = _pick(rng, WOODS)
+    _legs(P, w * 0.8, d * 0.8, h - 0.04, _pick(rng, [wood, BLACK, STEEL]), WOOD, inset=0.02, t=0.035)
+    P.cyl(0, 0, min(w, d) / 2, h - 0.05, h, _pick(rng, [wood] + FABRICS[:3]), FABRIC)
+    P.box(-w * 0.35, 0.22, -0.015, w * 0.35, 0.25, 0.015, wood, WOOD)
+
+
+def _table(P, w, h, d, rng, obj, shelf=False, color=None):
+    wood = color or _pick(rng, WOODS)
+    P.box(-w / 2, h - 0.045, -d / 2, w / 2, h, d / 2, wood, WOOD)
+    _legs(P, w, d, h - 0.045, tuple(c * 0.85 for c in wood), WOOD, inset=0.05, t=0.06)
+    P.box(-w / 2 + 0.05, h - 0.12, -d / 2 + 0.05, w / 2 - 0.05, h - 0.045, -d / 2 + 0.07, wood, WOOD)
+    P.box(-w / 2 + 0.05, h - 0.12, d / 2 - 0.07, w / 2 - 0.05, h - 0.045, d / 2 - 0.05, wood, WOOD)
+    if shelf:
+        P.box(-w / 2 + 0.05, 0.1, -d / 2 + 0.05, w / 2 - 0.05, 0.13, d / 2 - 0.05, wood, WOOD)
+
+
+def _coffee_table(P, w, h, d, rng, obj):
+    _table(P, w, h, d, rng, obj, shelf=rng.random() < 0.5)
+
+
+def _dining_table(P, w, h, d, rng, obj):
+    _table(P, w, h, d, rng, obj)
+
+
+def _cabinet(P, w, h, d, rng, obj, rows: int, body=None, cols: int = 1, top=None):
+    body = body or _pick(rng, WOODS + [WHITE, OFFWHITE, _rgb("#5d6d7e")])
+    front = tuple(min(1.0, c * 1.08) for c in body)
+    knob = _pick(rng, [STEEL, BLACK, _rgb("#b08d57")])
+    P.box(-w / 2 + 0.01, 0.0, -d / 2, w / 2 - 0.01, h - 0.03, d / 2 - 0.02, tuple(c * 0.8 for c in body), WOOD)
+    P.box(-w / 2, h - 0.03, -d / 2, w / 2, h, d / 2, top or body, WOOD)
+    rh = (h - 0.1) / rows
+    cw = (w - 0.04) / cols
+    for r in range(rows):
+        for c in range(cols):
+            x0, y0 = -w / 2 + 0.02 + c * cw, 0.06 + r * rh
+            P.box(x0 + 0.008, y0 + 0.008, d / 2 - 0.02, x0 + cw - 0.008, y0 + rh - 0.008, d / 2 - 0.006, front, WOOD)
+            kx = x0 + cw / 2
+            P.box(kx - 0.05, y0 + rh * 0.7, d / 2 - 0.006, kx + 0.05, y0 + rh * 0.7 + 0.02, d / 2, knob, METAL)
+
+
+def _dresser(P, w, h, d, rng, obj):
+    _cabinet(P, w, h, d, rng, obj, rows=max(2, min(4, int(h / 0.22))), cols=2 if w > 1.0 else 1)
+
+
+def _side_table(P, w, h, d, rng, obj):
+    if rng.random() < 0.5:
+        _cabinet(P, w, h, d, rng, obj, rows=2)
+    else:
+        _table(P, w, h, d, rng, obj, shelf=True)
+
+
+def _desk(P, w, h, d, rng, obj):
+    wood = _pick(rng, WOODS + [WHITE])
+    P.box(-w / 2, h - 0.04, -d / 2, w / 2, h, d / 2, wood, WOOD)
+    pw = min(0.4, w * 0.35)
+    _cabinet_like = tuple(c * 0.9 for c in wood)
+    P.box(w / 2 - pw, 0, -d / 2 + 0.02, w / 2 - 0.01, h - 0.04, d / 2 - 0.03, _cabinet_like, WOOD)
+    for r in range(3):
+        y0 = 0.05 + r * (h - 0.1) / 3
+        P.box(w / 2 - pw + 0.02, y0 + 0.01, d / 2 - 0.03, w / 2 - 0.03, y0 + (h - 0.1) / 3 - 0.01, d / 2 - 0.012, wood, WOOD)
+        P.box(w / 2 - pw / 2 - 0.04, y0 + 0.12, d / 2 - 0.012, w / 2 - pw / 2 + 0.04, y0 + 0.14, d / 2, STEEL, METAL)
+    P.box(-w / 2 + 0.01, 0, -d / 2 + 0.02, -w / 2 + 0.05, h - 0.04, d / 2 - 0.03, _cabinet_like, WOOD)
+    P.box(-w / 2 + 0.05, h * 0.4, -d / 2 + 0.02, w / 2 - pw, h - 0.04, -d / 2 + 0.04, _cabinet_like, WOOD)
+
+
+def _shelving(P, w, h, d, rng, obj):
+    wood = _pick(rng, WOODS + [WHITE, BLACK])
+    t = 0.03
+    P.box(-w / 2, 0, -d / 2, -w / 2 + t, h, d / 2, wood, WOOD)
+    P.box(w / 2 - t, 0, -d / 2, w / 2, h, d / 2, wood, WOOD)
+    P.box(-w / 2 + t, 0, -d / 2, w / 2 - t, h, -d / 2 + 0.015, tuple(c * 0.75 for c in wood), WOOD)
+    n = max(2, int(h / 0.38))
+    for i in range(n + 1):
+        y = i * (h - t) / n
+        P.box(-w / 2 + t, y, -d / 2 + 0.015, w / 2 - t, y + t, d / 2, wood, WOOD)
+        if i == n:
+            break
+        x = -w / 2 + t + 0.02
+        while x < w / 2 - t - 0.1:
+            bw = float(rng.uniform(0.025, 0.05))
+            bh = float(rng.uniform(0.16, min(0.3, (h - t) / n - 0.04)))
+            if rng.random() < 0.8:
+                P.box(x, y + t, -d / 2 + 0.03, x + bw, y + t + bh, d / 2 - 0.04, _pick(rng, FABRICS + BEDDING[:2]), PLAIN)
+            x += bw + 0.004
+            if rng.random() < 0.08:
+                x += 0.15
+
+
+def _counter(P, w, h, d, rng, obj):
+    body = _pick(rng, [WHITE, OFFWHITE, _rgb("#5d6d7e"), _rgb("#7a5c3e"), _rgb("#3f5e4a")])
+    stone = _pick(rng, [_rgb("#d9d6cf"), _rgb("#2b2b2b"), _rgb("#bfb5a3"), _rgb("#eeeeea")])
+    P.box(-w / 2, 0, -d / 2, w / 2, 0.1, d / 2 - 0.08, BLACK, PLAIN)
+    P.box(-w / 2, 0.1, -d / 2, w / 2, h - 0.04, d / 2 - 0.04, tuple(c * 0.8 for c in body), WOOD)
+    P.box(-w / 2, h - 0.04, -d / 2, w / 2, h, d / 2, stone, FABRIC)
+    n = max(1, int(round(w / 0.6)))
+    cw = w / n
+    for i in range(n):
+        x0 = -w / 2 + i * cw
+        P.box(x0 + 0.006, 0.11, d / 2 - 0.04, x0 + cw - 0.006, h - 0.2, d / 2 - 0.025, body, WOOD)
+        P.box(x0 + 0.006, h - 0.19, d / 2 - 0.04, x0 + cw - 0.006, h - 0.05, d / 2 - 0.025, body, WOOD)
+        P.box(x0 + cw / 2 - 0.06, h - 0.13, d / 2 - 0.025, x0 + cw / 2 + 0.06, h - 0.11, d / 2 - 0.01, STEEL, METAL)
+
+
+def _sink(P, w, h, d, rng, obj):
+    if h < 0.5:  # a kitchen sink set into the counter: only its rim and basin show
+        P.box(-w / 2, h - 0.05, -d / 2, w / 2, h - 0.02, d / 2, STEEL, METAL)
+        P.box(-w / 2 + 0.05, h - 0.02, -d / 2 + 0.05, w / 2 - 0.05, h - 0.015, d / 2 - 0.05, DARK_STEEL, METAL)
+        P.box(-w / 2 + 0.06, h - 0.015, -d / 2 + 0.06, w / 2 - 0.06, h - 0.012, d / 2 - 0.06, _rgb("#3a3d40"), METAL)
+        return
+    body = _pick(rng, [WHITE, _rgb("#6b4f3a"), _rgb("#5d6d7e"), OFFWHITE])
+    top = 0.85
+    P.box(-w / 2 + 0.02, 0.08, -d / 2, w / 2 - 0.02, top - 0.06, d / 2 - 0.02, body, WOOD)
+    P.box(-w / 2 + 0.02, 0, -d / 2, w / 2 - 0.02, 0.08, d / 2 - 0.06, BLACK, PLAIN)
+    for x0 in (-w / 2 + 0.03, 0.005):
+        P.box(x0, 0.1, d / 2 - 0.02, x0 + w / 2 - 0.035, top - 0.08, d / 2 - 0.005, tuple(min(1, c * 1.08) for c in body), WOOD)
+    P.box(-w / 2, top - 0.06, -d / 2, w / 2, top, d / 2, WHITE, GLOSS)
+    P.box(-w / 2 + 0.08, top, -d / 2 + 0.12, w / 2 - 0.08, top + 0.004, d / 2 - 0.08, _rgb("#c8ccd0"), GLOSS)
+    P.box(-w / 2, top, -d / 2, w / 2, h, -d / 2 + 0.03, WHITE, GLOSS)
+
+
+def _faucet(P, w, h, d, rng, obj):
+    col = _pick(rng, [STEEL, _rgb("#d4d7da"), BLACK])
+    r = min(w, d) * 0.18
+    P.cyl(0, -d / 2 + r + 0.01, r * 1.4, 0, 0.02, col, METAL)
+    P.cyl(0, -d / 2 + r + 0.01, r, 0, h, col, METAL)
+    P.box(-r, h - 2 * r, -d / 2 + 0.01, r, h, d / 2, col, METAL)
+    P.box(w / 2 - 0.05, 0.02, -d / 2 + 0.01, w / 2, 0.07, -d / 2 + 0.04, col, METAL)
+
+
+def _fridge(P, w, h, d, rng, obj):
+    col = _pick(rng, [WHITE, STEEL, _rgb("#2e2e30"), _rgb("#d8d2c4")])
+    P.box(-w / 2, 0.03, -d / 2, w / 2, h, d / 2 - 0.04, col, METAL)
+    P.box(-w / 2 + 0.05, 0, -d / 2, w / 2 - 0.05, 0.03, d / 2 - 0.08, BLACK, PLAIN)
+    split = h * 0.66
+    P.box(-w / 2 + 0.005, 0.03, d / 2 - 0.04, w / 2 - 0.005, split - 0.008, d / 2 - 0.02, col, METAL)
+    P.box(-w / 2 + 0.005, split + 0.008, d / 2 - 0.04, w / 2 - 0.005, h - 0.005, d / 2 - 0.02, col, METAL)
+    hx = w / 2 - 0.08
+    P.box(hx, split - 0.55, d / 2 - 0.02, hx + 0.03, split - 0.1, d / 2, DARK_STEEL, METAL)
+    P.box(hx, split + 0.08, d / 2 - 0.02, hx + 0.03, split + 0.35, d / 2, DARK_STEEL, METAL)
+
+
+def _microwave(P, w, h, d, rng, obj):
+    col = _pick(rng, [WHITE, STEEL, BLACK, DARK_STEEL])
+    P.box(-w / 2, 0.01, -d / 2, w / 2, h, d / 2 - 0.01, col, METAL)
+    P.box(-w / 2 + 0.03, 0.04, d / 2 - 0.01, w / 2 * 0.3, h - 0.04, d / 2, GLASS, GLOSS)
+    P.box(w / 2 * 0.38, 0.04, d / 2 - 0.01, w / 2 - 0.03, h - 0.04, d / 2, BLACK, PLAIN)
+    for i in range(3):
+        y = h - 0.1 - i * 0.06
+        P.box(w / 2 * 0.45, y, d / 2 - 0.005, w / 2 - 0.06, y + 0.03, d / 2 + 0.0, DARK_STEEL, METAL)
+    P.box(-w / 2 + 0.04, 0, -d / 2 + 0.04, w / 2 - 0.04, 0.01, d / 2 - 0.05, BLACK, PLAIN)
+
+
+def _toaster(P, w, h, d, rng, obj):
+    col = _pick(rng, [STEEL, _rgb("#c0392b"), WHITE, BLACK, _rgb("#e8d8b0")])
+    P.box(-w / 2, 0.01, -d / 2, w / 2, h - 0.006, d / 2, col, METAL)
+    for x in (-w / 4 - 0.015, w / 4 - 0.015):
+        P.box(x, h - 0.006, -d / 2 + 0.05, x + 0.03, h, d / 2 - 0.05, BLACK, PLAIN)
+    P.box(w / 2 - 0.005, h * 0.5, -0.02, w / 2 + 0.0, h * 0.6, 0.02, BLACK, PLAIN)
+    P.box(-w / 2 + 0.02, 0, -d / 2 + 0.02, w / 2 - 0.02, 0.01, d / 2 - 0.02, BLACK, PLAIN)
+
+
+def _coffee_machine(P, w, h, d, rng, obj):
+    col = _pick(rng, [BLACK, STEEL, _rgb("#8b1e1e"), WHITE])
+    P.box(-w / 2, 0, -d / 2, w / 2, 0.05, d / 2, col, METAL)
+    P.box(-w / 2, 0.05, -d / 2, w / 2, h, -d / 2 + d * 0.45, col, METAL)
+    P.box(-w / 2, h - 0.1, -d / 2 + d * 0.45, w / 2, h, d / 2, col, METAL)
+    P.cyl(0, d * 0.2, min(w, d) * 0.2, 0.05, h * 0.5, GLASS, GLOSS)
+    P.box(-w / 2 + 0.03, h - 0.08, d / 2 - 0.005, w / 2 - 0.03, h - 0.03, d / 2, DARK_STEEL, GLOSS)
+
+
+def _screen(P, w, h, d, rng, stand_h: float, frame=BLACK):
+    P.box(-w * 0.2, 0, -d / 2, w * 0.2, 0.025, d / 2, frame, METAL)
+    P.box(-0.03, 0.025, -0.02, 0.03, stand_h + 0.05, 0.02, frame, METAL)
+    P.box(-w / 2, stand_h, -0.03, w / 2, h, 0.02, frame, METAL)
+    P.box(-w / 2 + 0.02, stand_h + 0.02, 0.02, w / 2 - 0.02, h - 0.02, 0.03, GLASS, GLOSS)
+
+
+def _television(P, w, h, d, rng, obj):
+    _screen(P, w, h, min(d, 0.3), rng, stand_h=min(0.1, h * 0.15))
+
+
+def _desktop(P, w, h, d, rng, obj):
+    mw = w * 0.7
+    P.box(-mw * 0.2, 0, -d / 2, mw * 0.2, 0.02, -d / 2 + 0.12, BLACK, METAL)
+    P.box(-0.025, 0.02, -d / 2 + 0.04, 0.025, 0.14, -d / 2 + 0.07, BLACK, METAL)
+    P.box(-mw / 2, 0.12, -d / 2 + 0.07, mw / 2, h, -d / 2 + 0.1, BLACK, METAL)
+    P.box(-mw / 2 + 0.015, 0.135, -d / 2 + 0.1, mw / 2 - 0.015, h - 0.015, -d / 2 + 0.105, _rgb("#24425e"), GLOSS)
+    P.box(-w / 2, 0, d / 2 - 0.12, w * 0.1, 0.02, d / 2 - 0.01, DARK_STEEL, PLAIN)
+    P.box(w * 0.2, 0, d / 2 - 0.1, w * 0.3, 0.02, d / 2 - 0.03, DARK_STEEL, PLAIN)
+
+
+def _lamp_shade(P, r, y0, y1, rng):
+    P.cyl(0, 0, r, y0, y1, _pick(rng, [LAMP_LIGHT, _rgb("#f6e7d2"), _rgb("#fbf5e6")]), EMISSIVE, sections=16)
+
+
+def _desk_lamp(P, w, h, d, rng, obj):
+    col = _pick(rng, [BLACK, STEEL, _rgb("#b08d57"), WHITE])
+    r = min(w, d) / 2
+    P.cyl(0, 0, r * 0.55, 0, 0.03, col, METAL)
+    P.cyl(0, 0, 0.012, 0.03, h * 0.6, col, METAL)
+    _lamp_shade(P, r, h * 0.55, h, rng)
+
+
+def _floor_lamp(P, w, h, d, rng, obj):
+    col = _pick(rng, [BLACK, STEEL, _rgb("#b08d57")])
+    r = min(w, d) / 2
+    P.cyl(0, 0, r * 0.6, 0, 0.03, col, METAL)
+    P.cyl(0, 0, 0.015, 0.03, h - 0.3, col, METAL)
+    _lamp_shade(P, r, h - 0.35, h, rng)
+
+
+def _garbage_can(P, w, h, d, rng, obj):
+    col = _pick(rng, [STEEL, BLACK, WHITE, _rgb("#4d7c4a"), _rgb("#7a8791")])
+    P.cyl(0, 0, w / 2 * 0.92, 0, h - 0.03, col, METAL, rb=d / 2 * 0.92)
+    P.cyl(0, 0, w / 2, h - 0.03, h, tuple(c * 0.7 for c in col), METAL, rb=d / 2)
+
+
+def _house_plant(P, w, h, d, rng, obj):
+    pot = _pick(rng, [_rgb("#b5651d"), WHITE, _rgb("#3d3d3d"), _rgb("#9c8b76")])
+    green = _pick(rng, [_rgb("#3f7d3a"), _rgb("#2e6b30"), _rgb("#5a8f3e"), _rgb("#4b7f52")])
+    ph = h * 0.35
+    r = min(w, d) / 2
+    P.cyl(0, 0, r * 0.55, 0, ph, pot, PLAIN)
+    P.cyl(0, 0, r * 0.5, ph - 0.02, ph, _rgb("#3b2a1d"), PLAIN)
+    fh = h - ph
+    P.blob((0, ph + fh * 0.5, 0), (r, fh / 2, r), green, FABRIC)
+    P.blob((r * 0.3, ph + fh * 0.62, -r * 0.2), (r * 0.62, fh * 0.38, r * 0.62), tuple(min(1, c * 1.2) for c in green), FABRIC)
+
+
+def _safe(P, w, h, d, rng, obj):
+    col = _pick(rng, [_rgb("#3a3f44"), _rgb("#2b2b2b"), _rgb("#6b6e70")])
+    P.box(-w / 2, 0, -d / 2, w / 2, h, d / 2 - 0.02, col, METAL)
+    P.box(-w / 2 + 0.03, 0.03, d / 2 - 0.02, w / 2 - 0.03, h - 0.03, d / 2 - 0.01, tuple(c * 1.2 for c in col), METAL)
+    P.disc_z(0, h / 2, min(w, h) * 0.12, d / 2 - 0.01, d / 2, STEEL, METAL)
+
+
+def _toilet(P, w, h, d, rng, obj):
+    P.box(-w * 0.22, 0, -d / 2 + 0.2, w * 0.22, 0.3, d / 2 - 0.2, WHITE, GLOSS)
+    P.cyl(0, d * 0.08, w / 2 - 0.02, 0.22, 0.39, WHITE, GLOSS, rb=d * 0.3)
+    P.cyl(0, d * 0.08, w / 2, 0.39, 0.42, OFFWHITE, GLOSS, rb=d * 0.32)
+    P.box(-w / 2, 0.38, -d / 2, w / 2, h - 0.03, -d / 2 + 0.2, WHITE, GLOSS)
+    P.box(-w / 2 - 0.0, h - 0.03, -d / 2, w / 2, h, -d / 2 + 0.21, OFFWHITE, GLOSS)
+
+
+def _towel(P, w, rng, drop: float):
+    towel = _pick(rng, BEDDING + [_rgb("#7fb3d5"), _rgb("#f5b7b1")])
+    P.box(-w / 2 + 0.05, -drop, 0.0, w / 2 - 0.05, 0.0, 0.03, towel, FABRIC, decor=True)
+
+
+def _towel_holder(P, w, h, d, rng, obj):
+    P.box(-w / 2, 0, -d / 2, -w / 2 + 0.03, h, d / 2, STEEL, METAL)
+    P.box(w / 2 - 0.03, 0, -d / 2, w / 2, h, d / 2, STEEL, METAL)
+    P.box(-w / 2, h * 0.3, d / 2 - 0.03, w / 2, h * 0.7, d / 2, STEEL, METAL)
+    if rng.random() < 0.9:
+        _towel(P, w, rng, 0.45)
+
+
+def _hand_towel_holder(P, w, h, d, rng, obj):
+    P.box(-0.02, h - 0.04, -d / 2, 0.02, h, d / 2, STEEL, METAL)
+    P.box(-w / 2, h - 0.04, d / 2 - 0.02, w / 2, h, d / 2, STEEL, METAL)
+    P.box(-w / 2, h * 0.2, d / 2 - 0.02, -w / 2 + 0.015, h, d / 2, STEEL, METAL)
+    P.box(w / 2 - 0.015, h * 0.2, d / 2 - 0.02, w / 2, h, d / 2, STEEL, METAL)
+    towel = _pick(rng, BEDDING)
+    P.box(-w / 2 + 0.02, h * 0.2 - 0.12, d / 2 - 0.035, w / 2 - 0.02, h - 0.04, d / 2 - 0.02, towel, FABRIC, decor=True)
+
+
+def _washer(P, w, h, d, rng, obj, door=GLASS):
+    col = _pick(rng, [WHITE, OFFWHITE, _rgb("#cfd3d6")])
+    P.box(-w / 2, 0.02, -d / 2, w / 2, h, d / 2 - 0.01, col, METAL)
+    P.box(-w / 2 + 0.04, 0, -d / 2 + 0.04, w / 2 - 0.04, 0.02, d / 2 - 0.05, BLACK, PLAIN)
+    P.box(-w / 2 + 0.02, h - 0.15, d / 2 - 0.01, w / 2 - 0.02, h - 0.02, d / 2, _rgb("#d5d8dc"), METAL)
+    P.box(w / 2 - 0.15, h - 0.12, d / 2 - 0.005, w / 2 - 0.06, h - 0.05, d / 2 + 0.0, DARK_STEEL, METAL)
+    r = min(w, h) * 0.3
+    P.disc_z(0, (h - 0.15) * 0.52, r, d / 2 - 0.01, d / 2, DARK_STEEL, METAL)
+    P.disc_z(0, (h - 0.15) * 0.52, r * 0.78, d / 2 - 0.008, d / 2 + 0.0, door, GLOSS)
+
+
+def _dryer(P, w, h, d, rng, obj):
+    _washer(P, w, h, d, rng, obj, door=_rgb("#5b6770"))
+
+
+def _doorway(P, w, h, d, rng, obj):
+    trim = 0.06
+    col = _pick(rng, [WHITE, OFFWHITE, _rgb("#7a5230")]) if "entrance" not in obj.flags else _rgb("#f4f1ea")
+    P.box(-w / 2, 0, -d / 2, -w / 2 + trim, h, d / 2, col, WOOD)
+    P.box(w / 2 - trim, 0, -d / 2, w / 2, h, d / 2, col, WOOD)
+    P.box(-w / 2 + trim, h - trim, -d / 2, w / 2 - trim, h, d / 2, col, WOOD)
+    if "entrance" in obj.flags:
+        door = _pick(rng, WOODS[:3] + [_rgb("#2c3e50"), _rgb("#7b241c")])
+        P.box(-w / 2 + trim, 0, -0.02, w / 2 - trim, h - trim, 0.02, door, WOOD)
+        for z in (0.02, -0.045):
+            P.box(w / 2 - trim - 0.12, 1.0, z, w / 2 - trim - 0.08, 1.05, z + 0.025, STEEL, METAL)
+
+
+BUILDERS: dict[str, Callable] = {
+    "ArmChair": _armchair, "Bed": _bed, "Chair": _chair, "ClothesDryer": _dryer,
+    "CoffeeMachine": _coffee_machine, "CoffeeTable": _coffee_table, "CounterTop": _counter,
+    "Desk": _desk, "DeskLamp": _desk_lamp, "Desktop": _desktop, "DiningTable": _dining_table,
+    "Doorway": _doorway, "Dresser": _dresser, "Faucet": _faucet, "FloorLamp": _floor_lamp,
+    "Fridge": _fridge, "GarbageCan": _garbage_can, "HandTowelHolder": _hand_towel_holder,
+    "HousePlant": _house_plant, "Microwave": _microwave, "Safe": _safe, "ShelvingUnit": _shelving,
+    "SideTable": _side_table, "Sink": _sink, "Sofa": _sofa, "Stool": _stool,
+    "Television": _television, "Toaster": _toaster, "Toilet": _toilet,
+    "TowelHolder": _towel_holder, "WashingMachine": _washer,
+}  # fmt: skip
+
+
+def object_parts(obj: PlacedObject) -> Parts:
+    """The parts of one object in its local frame."""
+    P = Parts()
+    w, h, d = obj.local_size
+    BUILDERS[obj.object_type](P, w, h, d, np.random.default_rng(obj.style), obj)
+    return P
+
+
+def add_object(mesh: MeshParts, obj: PlacedObject, instance: int) -> None:
+    """Append an object's parts, turned by its yaw and moved to its box, owned by ``instance``."""
+    y = np.radians(obj.yaw)
+    # local +z turns into (sin y, 0, cos y), local +x into (cos y, 0, -sin y)
+    rot = np.array([[np.cos(y), 0.0, np.sin(y)], [0.0, 1.0, 0.0], [-np.sin(y), 0.0, np.cos(y)]])
+    base = np.array([obj.center[0], obj.bottom, obj.center[2]])
+    for verts, faces, color, material, decor in object_parts(obj).items:
+        mesh.add(verts @ rot.T + base, faces, color, material, 0 if decor else instance, obj.room_id)
+
+
+# -- structure ----------------------------------------------------------------------------------
+WALL_PAINTS = [_rgb(c) for c in ("#e9e4d8", "#d6dde3", "#e8dcc8", "#cfd8c7", "#e3d3d3", "#f0ede5", "#c9d3dc", "#ddd5c2")]
+FLOOR_WOODS = [_rgb(c) for c in ("#a57a52", "#8d6241", "#c19a6b", "#7b5a3c", "#b08968")]
+FLOOR_TILES = [_rgb(c) for c in ("#d8d4cc", "#bfc5c9", "#e6e0d4", "#9ea7ad", "#cfc6b8")]
+
+
+def add_structure(mesh: MeshParts, plan: FloorPlan, rng: np.random.Generator) -> dict[int, tuple]:
+    """Floors, ceilings and wall slabs of every room; returns each room's wall paint."""
+    paints: dict[int, tuple] = {}
+    for room in plan.rooms:
+        paints[room.room_id] = _pick(rng, WALL_PAINTS)
+        r = room.rect
+        tiled = room.room_type in ("Kitchen", "Bathroom")
+        floor = _pick(rng, FLOOR_TILES if tiled else FLOOR_WOODS)
+        quad = np.array([[r.x0, 0, r.z0], [r.x1, 0, r.z0], [r.x1, 0, r.z1], [r.x0, 0, r.z1]], dtype=float)
+        tris = np.array([[0, 1, 2], [0, 2, 3]])
+        mesh.add(quad, tris, floor, FLOOR_TILE if tiled else FLOOR_WOOD, 0, room.room_id)
+        mesh.add(quad + [0, WALL_HEIGHT, 0], tris, (0.96, 0.96, 0.95), CEILING, 0, room.room_id)
+    for slab in plan.slabs:
+        r = slab.rect
+        mesh.add(box_vertices((r.x0, slab.y0, r.z0), (r.x1, slab.y1, r.z1)), _BOX_FACES, paints[slab.room_id], WALL, 0, slab.room_id)
+        if slab.y0 == 0.0:
+            # a baseboard along the foot of the wall, 1 cm proud of it
+            t = 0.01
+            lo = (r.x0 - t, 0.0, r.z0 - t)
+            hi = (r.x1 + t, 0.08, r.z1 + t)
+            mesh.add(box_vertices(lo, hi), _BOX_FACES, (0.93, 0.92, 0.9), PLAIN, 0, slab.room_id)
+    return paints
+
+
+def house_mesh(house: House, rng: np.random.Generator) -> MeshParts:
+    """The whole house: structure (owner 0), then object k with owner k + 1."""
+    mesh = MeshParts()
+    add_structure(mesh, house.plan, rng)
+    for k, obj in enumerate(house.objects):
+        add_object(mesh, obj, k + 1)
+    return mesh

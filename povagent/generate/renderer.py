@@ -1,0 +1,229 @@
+"""CPU ray-cast renderer: RGB, depth and instance mask of a house from an AI2-THOR camera.
+
+What it is for: render the exploration frames and observer views (512x512, vertical fov 100)
+with one primary ray per pixel through embree (``embreex``, the engine behind trimesh's
+``ray_pyembree``, called directly for hit distances and occlusion queries), then shade every
+pixel with numpy at once: a point light under each room's ceiling with hard shadows (a second
+embree pass), a camera fill light, highlights on metal and gloss, procedural textures (wood
+grain, planks, tiles, fabric) and glowing lamp shades. The depth map is the optical-axis depth
+AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. What it must not do: decide where
+cameras go or what is visible (exploration and pairs read the mask).
+
+Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
+30 ms on one core and the occlusion-only shadow rays in about 20 ms, leaving ~50 ms for numpy
+shading: ~0.11 s a frame in all (``benchmarks/bench_generate.py`` measures it). trimesh's
+pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
+rasterizer could match embree on primary visibility but would still need a ray caster for the
+shadows, so one engine does both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+
+from povagent.generate.floorplan import WALL_HEIGHT
+from povagent.generate.meshes import (
+    CEILING, EMISSIVE, FABRIC, FLOOR_TILE, FLOOR_WOOD, GLOSS, METAL, WALL, WOOD, MeshParts,
+)  # fmt: skip
+from povagent.generate.scene import House
+from povagent.geometry.camera import Camera
+
+BACKGROUND = np.array([0.55, 0.6, 0.65], dtype=np.float32)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One rendered view: ``rgb`` (H, W, 3) uint8, ``depth`` (H, W) float32 metres along the
+    optical axis (inf where no surface), ``instance`` (H, W) uint16: 0 for walls, floors,
+    ceilings and decoration, k + 1 for ``house.objects[k]``."""
+
+    camera: Camera
+    rgb: np.ndarray
+    depth: np.ndarray
+    instance: np.ndarray
+
+    def pixel_counts(self) -> dict[int, int]:
+        """Pixels per object index (``house.objects`` index), for objects that show at all."""
+        counts = np.bincount(self.instance.ravel().astype(np.int64))
+        return {k - 1: int(n) for k, n in enumerate(counts) if k > 0 and n > 0}
+
+
+def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.EmbreeScene:
+    """An embree scene of the triangles (float32: millimetre-exact over a house)."""
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene=scene, vertices=vertices.astype(np.float32), indices=faces.astype(np.int32))
+    return scene
+
+
+def _hash2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
+    v = np.sin(a * 12.9898 + b * 78.233) * 43758.5453
+    return v - np.floor(v)
+
+
+class Renderer:
+    """Renders one house; build it once per house and call :meth:`render` per camera."""
+
+    def __init__(self, house: House, mesh: MeshParts, shadows: bool = True) -> None:
+        vertices, faces, colors, materials, owners, rooms = mesh.arrays()
+        self.house = house
+        self.shadows = shadows
+        self.face_count = len(faces)
+        self._scene = _embree_scene(vertices, faces)
+        # lamp shades glow and let their light through: the shadow scene leaves them out
+        opaque = materials != EMISSIVE
+        self._shadow_scene = _embree_scene(vertices, faces[opaque])
+        v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
+        n = np.cross(v1 - v0, v2 - v0)
+        norm = np.linalg.norm(n, axis=1, keepdims=True)
+        normals = n / np.where(norm > 0, norm, 1.0)
+        lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
+        # one row per face, gathered once per frame: normal, colour, the light of its room
+        self._faces = np.concatenate([normals, colors, lights[rooms]], axis=1).astype(np.float32)
+        self._materials = materials
+        self._owners = owners.astype(np.uint16)
+        self._grids: dict[tuple[int, int, float], np.ndarray] = {}
+
+    def _directions(self, camera: Camera) -> np.ndarray:
+        """Unit world rays through the pixel centres, float32 (``Camera.ray``, precomputed).
+
+        The camera-space directions depend only on the image size and fov, so they are built
+        once; turning them by the camera's axes is one small matrix product per frame.
+        """
+        key = (camera.width, camera.height, camera.fov)
+        if key not in self._grids:
+            u, v = np.meshgrid(np.arange(camera.width) + 0.5, np.arange(camera.height) + 0.5)
+            pixels = np.stack([u.ravel(), v.ravel()], axis=1)
+            at_origin = Camera((0.0, 0.0, 0.0), 0.0, 0.0, camera.fov, camera.width, camera.height)
+            # with yaw 0 and horizon 0 the axes are the identity: world rays are camera rays
+            self._grids[key] = at_origin.ray(pixels).astype(np.float32)
+        g, ax = self._grids[key], camera.axes().astype(np.float32)
+        # written out rather than ``g @ ax``: BLAS threads cost more than they save here
+        return g[:, 0:1] * ax[0] + g[:, 1:2] * ax[1] + g[:, 2:3] * ax[2]
+
+    def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First triangle hit by each (unit) ray and the distance to it (-1 and inf: no hit)."""
+        out = self._scene.run(
+            np.ascontiguousarray(origins, dtype=np.float32),
+            np.ascontiguousarray(directions, dtype=np.float32),
+            output=1,
+        )
+        tri = out["primID"].astype(np.int64)
+        t = np.where(tri >= 0, out["tfar"], np.inf)
+        return tri, t
+
+    def render(self, camera: Camera) -> Frame:
+        """Render RGB, depth and instance mask for ``camera``."""
+        W, H = camera.width, camera.height
+        dirs = self._directions(camera)
+        origin = np.asarray(camera.position, dtype=np.float32)
+        origins = np.broadcast_to(origin, dirs.shape)
+        tri, t = self.cast(origins, dirs)
+        hit = tri >= 0
+        # optical-axis depth: the ray length times the cosine to the forward axis (= zc)
+        cos_forward = self._grids[(W, H, camera.fov)][:, 2]
+        depth = (t * cos_forward).astype(np.float32)  # inf where nothing was hit
+
+        if hit.all():  # the usual case indoors: no gathers needed
+            rgb = self._shade(tri, dirs, origin + dirs * t[:, None])
+            instance = self._owners[tri]
+        else:
+            rgb = np.empty((len(tri), 3), dtype=np.float32)
+            rgb[:] = BACKGROUND
+            instance = np.zeros(len(tri), dtype=np.uint16)
+            idx = np.flatnonzero(hit)
+            if len(idx):
+                d = dirs[idx]
+                rgb[idx] = self._shade(tri[idx], d, origin + d * t[idx, None])
+                instance[idx] = self._owners[tri[idx]]
+        rgb *= 255.0
+        rgb += 0.5
+        np.clip(rgb, 0, 255, out=rgb)
+        rgb8 = rgb.astype(np.uint8).reshape(H, W, 3)
+        return Frame(camera, rgb8, depth.reshape(H, W), instance.reshape(H, W))
+
+    def instance_mask(self, camera: Camera) -> np.ndarray:
+        """Only the instance mask (no shading): a cheap probe of what a camera would see."""
+        dirs = self._directions(camera)
+        origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), dirs.shape)
+        tri, _ = self.cast(origins, dirs)
+        owners = np.where(tri >= 0, self._owners[np.where(tri >= 0, tri, 0)], 0)
+        return owners.reshape(camera.height, camera.width)
+
+    # -- shading ----------------------------------------------------------------------------
+    def _shade(self, tri: np.ndarray, d: np.ndarray, p: np.ndarray) -> np.ndarray:
+        face = self._faces[tri]
+        n, base, light = face[:, 0:3], face[:, 3:6], face[:, 6:9]
+        facing = np.einsum("ij,ij->i", n, d)
+        n *= np.where(facing > 0, -1.0, 1.0).astype(np.float32)[:, None]  # face the viewer
+        fill = np.abs(facing)
+        mat = self._materials[tri]
+        base *= self._texture(mat, n, p)[:, None]
+
+        to_light = light - p
+        dist = np.sqrt(np.einsum("ij,ij->i", to_light, to_light))
+        L = to_light / dist[:, None]
+        lambert = np.einsum("ij,ij->i", n, L)
+        diffuse = np.maximum(lambert, 0.0) / (1.0 + 0.06 * dist * dist)
+        if self.shadows:
+            # only points the light can reach at all need a shadow ray
+            probe = np.flatnonzero((lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING))
+            if len(probe):
+                blocked = self._shadow_scene.run(
+                    np.ascontiguousarray(p[probe] + n[probe] * 2e-3),
+                    np.ascontiguousarray(L[probe]),
+                    dists=(dist[probe] - 0.05).astype(np.float32),
+                    query="OCCLUDED",
+                )
+                diffuse[probe[blocked >= 0]] *= 0.15
+        shade = 0.30 + 0.85 * diffuse + 0.22 * fill
+        ceiling = mat == CEILING
+        shade[ceiling] = 0.62 + 0.25 * fill[ceiling]
+        glow = mat == EMISSIVE
+        shade[glow] = 0.95 + 0.05 * fill[glow]
+        color = base * shade[:, None]
+
+        shiny = np.flatnonzero((mat == METAL) | (mat == GLOSS))
+        if len(shiny):
+            half = L[shiny] - d[shiny]
+            half /= np.sqrt(np.einsum("ij,ij->i", half, half))[:, None]
+            spec = np.clip(np.einsum("ij,ij->i", n[shiny], half), 0, 1) ** 40
+            color[shiny] += (0.45 * spec)[:, None]
+        return color
+
+    def _texture(self, mat: np.ndarray, n: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """A brightness factor per pixel from the material's procedural pattern."""
+        out = np.ones(len(mat), dtype=np.float32)
+        ax = np.abs(n)
+        # in-plane coordinates (a, b) of each hit, from its dominant normal axis
+        a = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 0], np.where(ax[:, 0] >= ax[:, 2], p[:, 2], p[:, 0]))
+        b = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 2], p[:, 1])
+
+        m = mat == WOOD
+        if m.any():
+            out[m] = 0.94 + 0.06 * np.sin(a[m] * 30.0 + 2.0 * np.sin(b[m] * 5.0 + a[m] * 2.0))
+        m = mat == FABRIC
+        if m.any():
+            out[m] = 0.93 + 0.07 * _hash2(np.floor(a[m] * 160), np.floor(b[m] * 160))
+        m = mat == WALL
+        if m.any():
+            out[m] = 0.97 + 0.03 * _hash2(np.floor(a[m] * 90), np.floor(b[m] * 90))
+        m = mat == FLOOR_WOOD
+        if m.any():
+            x, z = p[m, 0], p[m, 2]
+            plank = np.floor(x / 0.18)
+            tint = 0.84 + 0.22 * _hash2(plank, plank * 0.37 + 1.0)
+            shift = _hash2(plank, 7.0) * 1.4
+            seam = ((x / 0.18) % 1.0 < 0.05) | (((z + shift) / 1.4) % 1.0 < 0.012)
+            grain = 0.97 + 0.03 * np.sin(z * 25.0 + 1.5 * np.sin(x * 20.0 + plank))
+            out[m] = np.where(seam, 0.55, tint * grain)
+        m = mat == FLOOR_TILE
+        if m.any():
+            x, z = p[m, 0] / 0.4, p[m, 2] / 0.4
+            grout = (x % 1.0 < 0.035) | (z % 1.0 < 0.035)
+            out[m] = np.where(grout, 0.72, 0.95 + 0.08 * _hash2(np.floor(x), np.floor(z)))
+        return out

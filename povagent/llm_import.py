@@ -1,0 +1,32 @@
+"""The one way povagent imports litellm: lazily, offline-safe, quiet.
+
+``import litellm`` costs seconds and, unless told otherwise, fetches a model cost map from the
+network and loads stray ``.env`` files. Everything that needs litellm calls
+:func:`import_litellm` at the moment it needs it, so ``povagent --help``, offline baselines and
+replays never import it. This module must stay tiny and must not import litellm at import time.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from types import ModuleType
+
+
+@functools.cache
+def import_litellm() -> ModuleType:
+    """Import and return litellm, set up for closed networks and clean logs.
+
+    Before the first import: ``LITELLM_LOCAL_MODEL_COST_MAP=True`` (use the cost map bundled
+    with the package instead of downloading one) and ``LITELLM_MODE=PRODUCTION`` (do not load
+    ``.env`` files). Both are defaults: a value the user exported wins.
+    """
+    os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+    os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
+    import litellm
+
+    # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
+    litellm.suppress_debug_info = True
+    # anonymous usage telemetry would be a network call we never asked for
+    litellm.telemetry = False
+    return litellm

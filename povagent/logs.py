@@ -1,0 +1,196 @@
+"""Structured run logs: JSON lines in the run folder, a readable rendering on the console.
+
+Each run gets its own structlog logger (no global configuration is touched, so runs and cells
+in one process do not fight over it). Every event passes :class:`Redactor` first: values of
+keys named like a secret, ``sk-...`` keys, ``Bearer ...`` tokens and the current values of
+``*_API_KEY`` (and ``*_TOKEN``/``*_SECRET``) environment variables never reach a file or a
+terminal. The same redaction guards error messages stored in result rows.
+
+This module formats and writes log events; it must not decide what to log.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+import threading
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Callable, Mapping, TextIO
+
+import structlog
+
+REDACTED = "[REDACTED]"
+
+#: Keys whose string values are secrets. Counts stay (``prompt_tokens`` is a number).
+_SECRET_KEY = re.compile(r"(key|token|secret|authorization|password|passwd|cookie|credential)", re.IGNORECASE)
+#: Keys that match the pattern above but never hold a secret.
+_NOT_SECRET = frozenset({"row", "key_count", "cache_key", "request_hash", "config_hash"})
+_SECRET_TEXT = [
+    re.compile(r"sk-[A-Za-z0-9_\-]{8,}"),
+    re.compile(r"(?i)bearer\s+[A-Za-z0-9._~+/=\-]{8,}"),
+    re.compile(r"AIza[0-9A-Za-z_\-]{20,}"),  # Google API keys
+]
+_SECRET_ENV = re.compile(r".*(_API_KEY|_TOKEN|_SECRET|_ACCESS_KEY)$|^API_KEY$", re.IGNORECASE)
+
+LEVELS = {"debug": 10, "info": 20, "warning": 30, "error": 40, "critical": 50}
+
+
+class Redactor:
+    """Removes secrets from strings and nested structures.
+
+    Environment secrets are read when the redactor is made (a run makes one at start), so a
+    key exported later is not known; pass ``extra_secrets`` for values from elsewhere.
+    """
+
+    def __init__(self, extra_secrets: tuple[str, ...] = ()) -> None:
+        secrets = {v for k, v in os.environ.items() if _SECRET_ENV.match(k) and len(v) >= 6}
+        secrets.update(s for s in extra_secrets if s and len(s) >= 6)
+        patterns = list(_SECRET_TEXT)
+        if secrets:
+            # Longest first so a key containing another is removed whole.
+            patterns.append(re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True))))
+        self._patterns = patterns
+
+    def text(self, value: str) -> str:
+        """``value`` with every secret-looking substring replaced."""
+        for p in self._patterns:
+            if p.search(value):
+                value = p.sub(REDACTED, value)
+        return value
+
+    def value(self, value: Any, key: str | None = None) -> Any:
+        """Redact a value found under ``key`` (recursing into mappings and lists)."""
+        if key is not None and key not in _NOT_SECRET and _SECRET_KEY.search(key) and not _is_count(value):
+            return REDACTED
+        if isinstance(value, str):
+            return self.text(value)
+        if isinstance(value, Mapping):
+            return {k: self.value(v, str(k)) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
+            return [self.value(v) for v in value]
+        return value
+
+    def __call__(self, logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
+        """structlog processor."""
+        return {k: self.value(v, k) for k, v in event.items()}
+
+
+def _is_count(value: Any) -> bool:
+    return value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)) or isinstance(value, bool)
+
+
+def _default(obj: Any) -> Any:
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, BaseException):
+        return f"{type(obj).__name__}: {obj}"
+    return repr(obj)
+
+
+class _Sinks:
+    """The final processor: JSON line to the file, rendered line to the console; drops the event."""
+
+    def __init__(self, file: TextIO | None, console: Callable[[], TextIO] | None, console_level: int) -> None:
+        self.file = file
+        self.console = console
+        self.console_level = console_level
+        self._lock = threading.Lock()
+        self._render = structlog.dev.ConsoleRenderer(colors=bool(console is not None and console().isatty()))
+
+    def __call__(self, logger: Any, method: str, event: dict[str, Any]) -> Any:
+        level = event.get("level", method)
+        with self._lock:
+            if self.file is not None:
+                self.file.write(json.dumps(event, default=_default, separators=(",", ":")) + "\n")
+            if self.console is not None and LEVELS.get(level, 20) >= self.console_level:
+                stream = self.console()
+                stream.write(self._render(logger, method, dict(event)) + "\n")
+                stream.flush()
+        raise structlog.DropEvent
+
+    def flush(self) -> None:
+        """Flush the file sink."""
+        with self._lock:
+            if self.file is not None:
+                self.file.flush()
+
+
+def _add_level(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
+    event["level"] = "warning" if method == "warn" else method
+    return event
+
+
+def _timestamp(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
+    event["ts"] = datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+    return event
+
+
+class RunLog:
+    """A run's logger: ``log = RunLog(path); log.info("request", latency_s=...)``; ``close()`` at end."""
+
+    def __init__(
+        self,
+        path: str | Path | None,
+        *,
+        console: bool | Callable[[], TextIO] = False,
+        console_level: str = "warning",
+        redactor: Redactor | None = None,
+        **context: Any,
+    ) -> None:
+        self.path = Path(path) if path is not None else None
+        self._file: TextIO | None = None
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            # line-buffered is too slow for one event per request; flushed on close and
+            # every few events by the runner, fsync not needed (results.jsonl is the record).
+            self._file = open(self.path, "a", encoding="utf-8")
+        self.redactor = redactor or Redactor()
+        stream = (_stderr if console is True else console) or None
+        self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))
+        self.logger = structlog.wrap_logger(
+            None,
+            processors=[_add_level, _timestamp, self.redactor, self._sinks],
+            context_class=dict,
+            cache_logger_on_first_use=True,
+        ).bind(**context)
+
+    def bind(self, **context: Any) -> Any:
+        """A bound logger carrying ``context`` on every event."""
+        return self.logger.bind(**context)
+
+    def debug(self, event: str, **kw: Any) -> None:
+        """Log at debug level."""
+        self.logger.debug(event, **kw)
+
+    def info(self, event: str, **kw: Any) -> None:
+        """Log at info level."""
+        self.logger.info(event, **kw)
+
+    def warning(self, event: str, **kw: Any) -> None:
+        """Log at warning level."""
+        self.logger.warning(event, **kw)
+
+    def error(self, event: str, **kw: Any) -> None:
+        """Log at error level."""
+        self.logger.error(event, **kw)
+
+    def flush(self) -> None:
+        """Push buffered lines to the file."""
+        self._sinks.flush()
+
+    def close(self) -> None:
+        """Flush and close the file."""
+        self._sinks.flush()
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+            self._sinks.file = None
+
+
+def _stderr() -> TextIO:
+    # Looked up at each write: a live progress display swaps sys.stderr to keep lines above it.
+    return sys.stderr
+

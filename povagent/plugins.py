@@ -1,0 +1,382 @@
+"""The plugin host: loads plugins, owns the names they register, and calls lifecycle hooks.
+
+Plugins come from three places, loaded the same way (pluggy's public API only):
+
+1. the built-ins listed in :data:`povagent.default_plugins.DEFAULT_PLUGINS`;
+2. the entry-point group ``povagent`` of installed distributions;
+3. modules named under ``plugins:`` in a pipeline YAML (a dotted module name, or a path to a
+   ``.py`` file).
+
+Contribution hooks (``register_backends`` ...) are called once per plugin with a ``register``
+callback the host owns, so every name resolves to exactly one plugin and a duplicate is a
+:class:`~povagent.errors.PluginError` naming both. A plugin that fails to import is reported by
+name with its error. Lifecycle hooks go through :class:`LifecycleHooks`, a typed facade that
+never lets an observer's exception end a run.
+
+This module must not import any plugin by name except through ``DEFAULT_PLUGINS``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+import importlib.metadata
+import importlib.util
+import sys
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any, Callable, Iterable, Literal, Mapping, Sequence
+
+import pluggy
+
+from povagent import hookspecs
+from povagent.errors import PluginError
+
+#: The kinds of things plugins contribute through a factory, and the hook for each.
+Kind = Literal["backend", "strategy", "parser", "scorer"]
+KIND_HOOKS: dict[str, str] = {
+    "backend": "register_backends",
+    "strategy": "register_strategies",
+    "parser": "register_parsers",
+    "scorer": "register_scorers",
+}
+KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
+PROFILE_HOOK = "register_model_profiles"
+
+#: The entry-point group third-party distributions declare their plugins under.
+ENTRY_POINT_GROUP = "povagent"
+
+
+@dataclass(frozen=True)
+class PluginEntry:
+    """One registered thing: its kind, name, factory (or profile object) and where it came from."""
+
+    kind: str
+    name: str
+    factory: Any
+    description: str
+    source: str
+
+
+@dataclass(frozen=True)
+class LoadFailure:
+    """A plugin that could not be loaded, by name, with its error."""
+
+    plugin: str
+    origin: str
+    error: str
+    traceback: str
+
+    def __str__(self) -> str:
+        return f"plugin {self.plugin!r} ({self.origin}) failed to load: {self.error}"
+
+
+def did_you_mean(name: str, candidates: Iterable[str]) -> str:
+    """`` (did you mean 'x'?)`` for the closest candidate, or ``""`` when none is close."""
+    close = difflib.get_close_matches(name, list(candidates), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+class LifecycleHooks:
+    """Typed facade over the lifecycle hooks: the runner calls these, never ``pm.hook.*``.
+
+    Each implementation is called on its own so that one observer raising neither stops the
+    run nor silences the other observers; the error goes to ``on_error``.
+    """
+
+    def __init__(self, pm: pluggy.PluginManager, on_error: Callable[[str, str, BaseException], None] | None = None) -> None:
+        self._pm = pm
+        self.on_error = on_error or _print_hook_error
+
+    def _call(self, hook_name: str, kwargs: dict[str, Any]) -> None:
+        caller = getattr(self._pm.hook, hook_name)
+        # pluggy calls the last registered first; keep that order.
+        for impl in reversed(caller.get_hookimpls()):
+            try:
+                impl.function(**{a: kwargs[a] for a in impl.argnames})
+            except Exception as exc:  # an observer must never end a run
+                self.on_error(hook_name, impl.plugin_name, exc)
+
+    @property
+    def active(self) -> bool:
+        """True when any plugin observes the run (lets the runner skip building arguments)."""
+        return any(
+            getattr(self._pm.hook, h).get_hookimpls()
+            for h in ("povagent_run_start", "povagent_instance_done", "povagent_run_end")
+        )
+
+    def run_start(self, run_dir: str, config: Mapping[str, Any], n_pending: int, n_total: int) -> None:
+        """Fire ``povagent_run_start``."""
+        self._call("povagent_run_start", {"run_dir": run_dir, "config": config, "n_pending": n_pending, "n_total": n_total})
+
+    def instance_done(self, run_dir: str, row: Any) -> None:
+        """Fire ``povagent_instance_done`` (after the row is durable)."""
+        if self._pm.hook.povagent_instance_done.get_hookimpls():
+            self._call("povagent_instance_done", {"run_dir": run_dir, "row": row})
+
+    def run_end(self, run_dir: str, summary: Mapping[str, Any]) -> None:
+        """Fire ``povagent_run_end``."""
+        self._call("povagent_run_end", {"run_dir": run_dir, "summary": summary})
+
+
+def _print_hook_error(hook: str, plugin: str, exc: BaseException) -> None:
+    print(f"warning: plugin {plugin!r} raised in {hook}: {type(exc).__name__}: {exc}", file=sys.stderr)
+
+
+class PluginHost:
+    """The loaded plugins and everything they registered.
+
+    Build one with :func:`get_plugin_host` (cached) or :func:`build_plugin_host` (fresh).
+    ``strict=False`` keeps going past plugins that fail to load (``povagent plugins`` lists
+    them); a strict host raises :class:`PluginError` instead.
+    """
+
+    def __init__(self, pm: pluggy.PluginManager, sources: dict[str, str], failures: list[LoadFailure]) -> None:
+        self.pm = pm
+        self._sources = sources  # pluggy plugin name -> human-readable origin
+        self.failures = failures
+        self.hooks = LifecycleHooks(pm)
+        self._registry: dict[str, dict[str, PluginEntry]] | None = None
+
+    # -- registration -------------------------------------------------------------------------
+    def _collect(self) -> dict[str, dict[str, PluginEntry]]:
+        if self._registry is not None:
+            return self._registry
+        registry: dict[str, dict[str, PluginEntry]] = {k: {} for k in (*KINDS, "profile")}
+        for kind, hook_name in (*KIND_HOOKS.items(), ("profile", PROFILE_HOOK)):
+            table = registry[kind]
+            caller = getattr(self.pm.hook, hook_name)
+            for impl in reversed(caller.get_hookimpls()):
+                source = self.source_of(impl.plugin_name)
+
+                def register(name: str, factory: Any, description: str = "", *, _kind=kind, _table=table, _source=source) -> None:
+                    if not isinstance(name, str) or not name:
+                        raise PluginError(f"{_source}: registered a {_kind} with an invalid name {name!r}")
+                    known = _table.get(name)
+                    if known is not None:
+                        raise PluginError(
+                            f"{_kind} name {name!r} is registered twice: by {known.source} and by {_source}; "
+                            f"uninstall or rename one of them"
+                        )
+                    _table[name] = PluginEntry(_kind, name, factory, description or _first_line(factory), _source)
+
+                try:
+                    impl.function(**{a: register for a in impl.argnames})
+                except PluginError:
+                    raise
+                except Exception as exc:
+                    raise PluginError(f"{source}: {hook_name} raised {type(exc).__name__}: {exc}") from exc
+        self._registry = registry
+        return registry
+
+    def source_of(self, plugin_name: str) -> str:
+        """Where a pluggy plugin came from, e.g. ``built-in povagent_plugins.scorers.official``."""
+        return self._sources.get(plugin_name, f"plugin {plugin_name}")
+
+    def add_plugin(self, plugin: object, name: str | None = None, source: str | None = None) -> str:
+        """Register a plugin object (a module or any object with hook implementations).
+
+        Used for throwaway plugins in tests; names are collected again on next use.
+        """
+        try:
+            registered = self.pm.register(plugin, name=name)
+            self.pm.check_pending()
+        except pluggy.PluginValidationError as exc:
+            if name and self.pm.get_plugin(name) is plugin:
+                self.pm.unregister(name=name)
+            raise PluginError(f"plugin {name or plugin!r} is invalid: {exc}") from exc
+        if registered is None:  # already registered: harmless
+            registered = self.pm.get_name(plugin) or ""
+        self._sources[registered] = source or f"plugin {registered}"
+        self._registry = None
+        return registered
+
+    def remove_plugin(self, name: str) -> None:
+        """Unregister a plugin added with :meth:`add_plugin`."""
+        if self.pm.get_plugin(name) is not None:
+            self.pm.unregister(name=name)
+        self._sources.pop(name, None)
+        self._registry = None
+
+    # -- lookup -------------------------------------------------------------------------------
+    def names(self, kind: str) -> list[str]:
+        """Sorted names registered for ``kind`` (``backend``, ``strategy``, ``parser``, ``scorer``, ``profile``)."""
+        return sorted(self._table(kind))
+
+    def entries(self, kind: str) -> list[PluginEntry]:
+        """Every entry of ``kind``, sorted by name."""
+        table = self._table(kind)
+        return [table[n] for n in sorted(table)]
+
+    def entry(self, kind: str, name: str) -> PluginEntry:
+        """The entry for ``name``; unknown names raise :class:`PluginError` with a suggestion."""
+        table = self._table(kind)
+        found = table.get(name)
+        if found is None:
+            raise PluginError(unknown_name_message(kind, name, table))
+        return found
+
+    def create(self, kind: str, name: str, options: Mapping[str, Any] | None = None) -> Any:
+        """Instantiate ``name`` of ``kind`` with its YAML options (``factory(**options)``)."""
+        entry = self.entry(kind, name)
+        try:
+            return entry.factory(**dict(options or {}))
+        except PluginError:
+            raise
+        except (TypeError, ValueError) as exc:
+            # Wrong or invalid options: a user error worth a clear message, not a traceback.
+            raise PluginError(f"{kind} {name!r} ({entry.source}) rejected its options {dict(options or {})!r}: {exc}") from exc
+
+    def profile(self, name: str) -> Any:
+        """The model profile registered as ``name`` (see ``register_model_profiles``)."""
+        return self.entry("profile", name).factory
+
+    def profiles(self) -> dict[str, Any]:
+        """Every model profile by name."""
+        return {n: e.factory for n, e in sorted(self._table("profile").items())}
+
+    def _table(self, kind: str) -> dict[str, PluginEntry]:
+        registry = self._collect()
+        if kind not in registry:
+            raise ValueError(f"unknown plugin kind {kind!r}; expected one of {', '.join(registry)}")
+        return registry[kind]
+
+
+def unknown_name_message(kind: str, name: str, known: Iterable[str]) -> str:
+    """``unknown strategy 'spatial_cot' (did you mean 'spatial-cot'?); known: ...``."""
+    known = sorted(known)
+    listing = ", ".join(known) if known else "none registered"
+    return f"unknown {kind} {name!r}{did_you_mean(name, known)}; known {kind} names: {listing}"
+
+
+def _first_line(obj: Any) -> str:
+    doc = getattr(obj, "__doc__", None) or ""
+    return doc.strip().splitlines()[0] if doc.strip() else ""
+
+
+# -- loading ------------------------------------------------------------------------------------
+def _import_module_or_file(spec: str) -> ModuleType:
+    """Import a dotted module name, or a ``.py`` file path (relative to the working directory)."""
+    if spec.endswith(".py") or "/" in spec or "\\" in spec:
+        path = Path(spec).expanduser().resolve()
+        if not path.is_file():
+            raise FileNotFoundError(f"no such plugin file: {path}")
+        mod_name = f"povagent_local_plugin_{path.stem}_{abs(hash(str(path))) & 0xFFFFFF:x}"
+        if mod_name in sys.modules:
+            return sys.modules[mod_name]
+        module_spec = importlib.util.spec_from_file_location(mod_name, path)
+        assert module_spec is not None and module_spec.loader is not None
+        module = importlib.util.module_from_spec(module_spec)
+        sys.modules[mod_name] = module
+        try:
+            module_spec.loader.exec_module(module)
+        except BaseException:
+            sys.modules.pop(mod_name, None)
+            raise
+        return module
+    return importlib.import_module(spec)
+
+
+def _failure(plugin: str, origin: str, exc: BaseException) -> LoadFailure:
+    return LoadFailure(plugin, origin, f"{type(exc).__name__}: {exc}", "".join(traceback.format_exception(exc)))
+
+
+def build_plugin_host(
+    extra_modules: Sequence[str] = (),
+    *,
+    strict: bool = True,
+    entry_points: bool = True,
+    default_plugins: Sequence[str] | None = None,
+) -> PluginHost:
+    """A fresh host with the built-ins, the entry-point plugins and ``extra_modules`` loaded.
+
+    A module that fails to import (or carries hook implementations with no spec) raises
+    :class:`PluginError` naming it, unless ``strict=False``, which records it in
+    ``host.failures`` and goes on.
+    """
+    from povagent.default_plugins import DEFAULT_PLUGINS
+
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    sources: dict[str, str] = {}
+    failures: list[LoadFailure] = []
+
+    def register(name: str, module: object, source: str) -> None:
+        if pm.has_plugin(name) or pm.is_registered(module):
+            return  # loading twice is harmless
+        try:
+            pm.register(module, name=name)
+        except (pluggy.PluginValidationError, ValueError) as exc:
+            failures.append(_failure(name, source, exc))
+            return
+        sources[name] = source
+
+    for mod in DEFAULT_PLUGINS if default_plugins is None else default_plugins:
+        try:
+            register(mod, _import_module_or_file(mod), f"built-in {mod}")
+        except Exception as exc:
+            failures.append(_failure(mod, "built-in", exc))
+
+    if entry_points:
+        for ep in sorted(importlib.metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+            dist = getattr(ep, "dist", None)
+            dist_label = f"{dist.metadata['Name']} {dist.version}" if dist is not None else "unknown distribution"
+            origin = f"entry point {ep.name} = {ep.value} from {dist_label}"
+            try:
+                obj = ep.load()
+            except Exception as exc:
+                failures.append(_failure(ep.name, origin, exc))
+                continue
+            register(f"entrypoint:{ep.name}", obj, origin)
+
+    for mod in extra_modules:
+        try:
+            register(mod, _import_module_or_file(mod), f"config plugin {mod}")
+        except Exception as exc:
+            failures.append(_failure(mod, "listed under plugins: in the config", exc))
+
+    # Hook implementations with no spec (a typo like register_backend) are caught here.
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        plugin_name = pm.get_name(exc.plugin) or str(exc.plugin)
+        failures.append(_failure(plugin_name, sources.get(plugin_name, "plugin"), exc))
+        pm.unregister(exc.plugin)
+
+    if strict and failures:
+        raise PluginError("\n".join(str(f) for f in failures))
+    return PluginHost(pm, sources, failures)
+
+
+_HOSTS: dict[tuple[str, ...], PluginHost] = {}
+#: A host that replaces every cached one (set by the ``povagent_host`` test fixture).
+_OVERRIDE: PluginHost | None = None
+
+
+def get_plugin_host(extra_modules: Sequence[str] = ()) -> PluginHost:
+    """The process-wide host for these extra modules (built once, then cached).
+
+    Raises :class:`PluginError` if any plugin fails to load.
+    """
+    if _OVERRIDE is not None:
+        for mod in extra_modules:
+            if not _OVERRIDE.pm.has_plugin(mod):
+                try:
+                    _OVERRIDE.add_plugin(_import_module_or_file(mod), name=mod, source=f"config plugin {mod}")
+                except PluginError:
+                    raise
+                except Exception as exc:
+                    raise PluginError(str(_failure(mod, "listed under plugins: in the config", exc))) from exc
+        return _OVERRIDE
+    key = tuple(extra_modules)
+    host = _HOSTS.get(key)
+    if host is None:
+        host = _HOSTS[key] = build_plugin_host(key)
+    return host
+
+
+def clear_plugin_host_cache() -> None:
+    """Forget cached hosts (after installing a plugin in the same process)."""
+    _HOSTS.clear()

@@ -1,0 +1,77 @@
+"""Model profiles: short names for models with the defaults that make them work.
+
+A profile ties a name a user writes in YAML (``model: gemini-robotics-er``) to a litellm model
+string, the parser that reads that model family's answers, default strategy and backend
+options, and the quirks a user should know (answers on 0-1000, a thinking budget that eats the
+answer, conditions it cannot do). Plugins contribute profiles through the
+``register_model_profiles`` hook; :func:`resolve_profile` looks one up.
+
+This module only describes models: it never imports litellm and never calls a model.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from povagent.dataset.models import CONDITIONS, Condition
+
+
+class ModelProfile(BaseModel):
+    """What povagent knows about one model.
+
+    ``litellm_model`` is the model string litellm takes (``provider/name``); ``default_parser``
+    is the parser name used when the pipeline names none; ``strategy_options`` and
+    ``backend_options`` are defaults the pipeline's own options override; ``needs_api_base``
+    says the model is self-hosted (vLLM) and the pipeline must give ``api_base``;
+    ``api_key_env`` names the environment variable that usually holds the key (the key itself
+    is never stored); ``conditions`` are those the model can answer; ``notes`` the quirks.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    name: str = Field(min_length=1)
+    litellm_model: str = Field(min_length=1)
+    default_parser: str = "json"
+    strategy_options: dict[str, Any] = Field(default_factory=dict)
+    backend_options: dict[str, Any] = Field(default_factory=dict)
+    needs_api_base: bool = False
+    api_key_env: str | None = None
+    conditions: tuple[Condition, ...] = CONDITIONS
+    paper_name: str | None = None
+    notes: str = ""
+
+    @field_validator("backend_options")
+    @classmethod
+    def _no_secrets(cls, value: dict[str, Any]) -> dict[str, Any]:
+        if "api_key" in value:
+            raise ValueError("a profile must not carry an api_key; name the variable in api_key_env")
+        return value
+
+    def supports(self, condition: Condition | str) -> bool:
+        """Whether the model can answer instances of ``condition``."""
+        return Condition(condition) in self.conditions
+
+
+def resolve_profile(name: str, host: Any = None) -> ModelProfile | None:
+    """The profile registered under ``name``, or ``None`` when there is none.
+
+    Looks the name up through the plugin host (``host.profile(name)``; the process-wide host
+    when ``host`` is None), so profiles from third-party plugins count too.
+    """
+    from povagent.errors import PluginError
+
+    if host is None:
+        from povagent.plugins import get_plugin_host
+
+        host = get_plugin_host()
+    try:
+        found = host.profile(name)
+    except PluginError:  # the host's "unknown profile" error
+        return None
+    if found is None or isinstance(found, ModelProfile):
+        return found
+    if isinstance(found, Mapping):
+        return ModelProfile.model_validate(found)
+    return ModelProfile.model_validate(found, from_attributes=True)

@@ -1,0 +1,219 @@
+"""The numbers of a report: per system, overall and broken down by condition and direction.
+
+Takes a :class:`~povagent.report.collect.Collection` (and, when it can be loaded, the dataset
+the runs used) and computes every statistic the tables, plots and JSON summary show: official
+means with CIs, response rates, the strict and counting-non-responses variants, frame-selection
+accuracy, the computed center baseline, and paired comparisons between systems.
+
+It never changes an official number: those come from the rows' stored official scores.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass, field
+from itertools import combinations
+from pathlib import Path
+from typing import Any
+
+from povagent.dataset.models import CONDITIONS, DIRECTIONS
+from povagent.report.baseline import (
+    CENTER_POLICY,
+    CENTER_SYSTEM,
+    center_observations,
+    center_score,
+    is_baseline_system,
+    is_center_system,
+)
+from povagent.report.collect import Collection, Observation
+from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
+
+#: Above this many systems, paired comparisons are against the first system only.
+MAX_ALL_PAIRS = 6
+
+
+@dataclass
+class SystemStats:
+    """One system's numbers."""
+
+    system: str
+    axes: dict[str, str]
+    reference: bool
+    overall: CellStats
+    by_condition: dict[str, CellStats]
+    by_direction: dict[str, CellStats]
+    by_condition_direction: dict[str, CellStats]
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        return {
+            "system": self.system,
+            "axes": self.axes,
+            "reference": self.reference,
+            "overall": self.overall.as_dict(),
+            "per_condition": {k: v.as_dict() for k, v in self.by_condition.items()},
+            "per_direction": {k: v.as_dict() for k, v in self.by_direction.items()},
+            "per_condition_direction": {k: v.as_dict() for k, v in self.by_condition_direction.items()},
+        }
+
+
+@dataclass
+class Analysis:
+    """Everything computed for one report."""
+
+    source: Path
+    systems: list[SystemStats]
+    comparisons: list[PairedComparison]
+    observations: list[Observation]
+    conditions: list[str]
+    directions: list[str]
+    center_fill: dict[str, float] | None
+    dataset_path: Path | None
+    notes: list[str] = field(default_factory=list)
+
+    def system(self, name: str) -> SystemStats:
+        """The stats of one system by label."""
+        for s in self.systems:
+            if s.system == name:
+                return s
+        raise KeyError(name)
+
+    @property
+    def model_systems(self) -> list[SystemStats]:
+        """Systems that are not a reference baseline."""
+        return [s for s in self.systems if not s.reference]
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able summary of the whole analysis (observations excluded)."""
+        return {
+            "source": str(self.source),
+            "dataset": str(self.dataset_path) if self.dataset_path else None,
+            "conditions": self.conditions,
+            "directions": self.directions,
+            "systems": [s.as_dict() for s in self.systems],
+            "paired_comparisons": [c.as_dict() for c in self.comparisons],
+            "notes": self.notes,
+        }
+
+
+def load_collection_dataset(collection: Collection, override: str | Path | None = None):
+    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load."""
+    from povagent.dataset.loader import load_dataset
+    from povagent.errors import DatasetError
+
+    paths = [Path(override)] if override else collection.dataset_paths()
+    if not paths:
+        return None, "no dataset path in the runs' config.yaml (pass --dataset)"
+    try:
+        return load_dataset(paths[0]), None
+    except DatasetError as exc:
+        return None, f"dataset not loadable: {exc}"
+
+
+def _stats_for(obs: list[Observation], fill, n_boot: int, seed: int, conditions, directions) -> tuple:
+    by_c: dict[str, list[Observation]] = defaultdict(list)
+    by_d: dict[str, list[Observation]] = defaultdict(list)
+    by_cd: dict[str, list[Observation]] = defaultdict(list)
+    for o in obs:
+        by_c[o.condition].append(o)
+        by_d[o.direction].append(o)
+        by_cd[f"{o.condition}/{o.direction}"].append(o)
+    overall = cell_stats(obs, fill, n_boot, seed)
+    per_c = {c: cell_stats(by_c[c], fill, n_boot, seed) for c in conditions if by_c.get(c)}
+    per_d = {d: cell_stats(by_d[d], fill, n_boot, seed) for d in directions if by_d.get(d)}
+    per_cd = {
+        f"{c}/{d}": cell_stats(by_cd[f"{c}/{d}"], fill, n_boot, seed)
+        for c in conditions
+        for d in directions
+        if by_cd.get(f"{c}/{d}")
+    }
+    return overall, per_c, per_d, per_cd
+
+
+def analyze(
+    collection: Collection,
+    dataset: Any = None,
+    dataset_note: str | None = None,
+    n_boot: int = DEFAULT_BOOT,
+    seed: int = 0,
+) -> Analysis:
+    """Compute every number of a report (``dataset`` enables the center baseline and the
+    counting-non-responses variant; without it they are left out with a note)."""
+    notes: list[str] = []
+    obs = list(collection.observations)
+    present_c = {o.condition for o in obs}
+    present_d = {o.direction for o in obs}
+    conditions = [str(c) for c in CONDITIONS if str(c) in present_c] + sorted(present_c - {str(c) for c in CONDITIONS})
+    directions = [str(d) for d in DIRECTIONS if str(d) in present_d] + sorted(present_d - {str(d) for d in DIRECTIONS})
+
+    systems = collection.systems
+    center_cells = [s for s in systems if is_center_system(collection.system_axes(s), s)]
+    fill: dict[str, float] | None = None
+    if dataset is not None:
+        ids = sorted({o.instance_id for o in obs})
+        instances = [dataset.instance(i) for i in ids]
+        missing = [i for i, inst in zip(ids, instances) if inst is None]
+        instances = [inst for inst in instances if inst is not None]
+        if missing:
+            notes.append(f"{len(missing)} instance(s) of the runs are not in the dataset (e.g. {missing[0]}): no center score for them")
+        fill = {}
+        for inst in instances:
+            s = center_score(inst)
+            if s.l2 is not None:
+                fill[inst.id] = s.l2
+        if not center_cells:
+            obs = obs + center_observations(instances)
+            notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_POLICY}.")
+        notes.append(
+            "'Counting non-responses' scores an unanswered instance as the center guess "
+            "(same policy as the center baseline) instead of dropping it."
+        )
+    else:
+        notes.append(
+            "Center baseline and the counting-non-responses variant need the dataset: "
+            + (dataset_note or "not available")
+            + "."
+        )
+
+    by_system: dict[str, list[Observation]] = defaultdict(list)
+    for o in obs:
+        by_system[o.system].append(o)
+    ordered = [s for s in systems if s in by_system] + [s for s in by_system if s not in systems]
+    stats: list[SystemStats] = []
+    for name in ordered:
+        reference = name == CENTER_SYSTEM or is_baseline_system(collection.system_axes(name), name)
+        overall, per_c, per_d, per_cd = _stats_for(by_system[name], fill, n_boot, seed, conditions, directions)
+        stats.append(SystemStats(name, collection.system_axes(name), reference, overall, per_c, per_d, per_cd))
+
+    comparisons: list[PairedComparison] = []
+    models = [s.system for s in stats if not s.reference]
+    refs = [s.system for s in stats if s.reference]
+    pairs = list(combinations(models, 2)) if len(models) <= MAX_ALL_PAIRS else [(models[0], m) for m in models[1:]]
+    for a, b in pairs:
+        comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], "official", fill, n_boot, seed))
+        if fill is not None:
+            comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], "counted", fill, n_boot, seed))
+    # models against the center baseline (the computed one, or the sweep's center cell)
+    centers = [s for s in refs if s == CENTER_SYSTEM or s in center_cells]
+    for ref in centers[:1]:
+        for m in models:
+            comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], "official", fill, n_boot, seed))
+    notes.append(
+        "Means are over answered instances (official), averaged over runs; brackets are 95% "
+        "percentile bootstrap CIs resampling instances."
+    )
+    notes.append(
+        "Strict: a GT behind the selected frame's camera or outside it counts as a miss (sqrt 2); "
+        "the official metric puts a behind-camera GT at the image centre."
+    )
+    return Analysis(
+        source=collection.source,
+        systems=stats,
+        comparisons=comparisons,
+        observations=obs,
+        conditions=conditions,
+        directions=directions,
+        center_fill=fill,
+        dataset_path=getattr(dataset, "root", None),
+        notes=notes,
+    )

@@ -1,0 +1,141 @@
+"""Writing a report folder for a run or a sweep: tables, plots, summary and the HTML page.
+
+Layout of ``--out``::
+
+    report.html            the page (tables, plots, gallery); open it from disk
+    images/<sha256>.jpg    gallery drawings (+ ``.t.jpg`` thumbnails), named by hash
+    tables/<name>.md|.csv|.tex, tables.md, tables.tex
+    plots/<name>.svg
+    summary.json           every number of the report, with CIs
+
+This module wires the steps together; each step lives in its own module.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from povagent.report.analysis import Analysis, analyze, load_collection_dataset
+from povagent.report.baseline import CENTER_SYSTEM
+from povagent.report.collect import collect
+from povagent.report.figures import report_figures
+from povagent.report.gallery import GalleryStats, build_gallery
+from povagent.report.html import figures_section, notes_section, render_page, tables_section
+from povagent.report.paper_tables import paper_tables
+from povagent.report.statistics import DEFAULT_BOOT
+from povagent.report.tables import Table, to_csv, to_latex, to_markdown
+
+REPORT_PAGE = "report.html"
+
+
+@dataclass
+class ReportResult:
+    """What a report wrote and how long each step took."""
+
+    out: Path
+    page: Path
+    tables: list[Table]
+    analysis: Analysis
+    gallery: GalleryStats | None
+    dataset_note: str | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+def write_tables(tables: list[Table], out: Path) -> dict[str, list[tuple[str, str]]]:
+    """Each table as Markdown, CSV and LaTeX under ``out/tables``, plus combined files;
+    returns the per-table download links relative to ``out``."""
+    tdir = out / "tables"
+    tdir.mkdir(parents=True, exist_ok=True)
+    links: dict[str, list[tuple[str, str]]] = {}
+    for t in tables:
+        for ext, text in (("md", to_markdown(t)), ("csv", to_csv(t)), ("tex", to_latex(t))):
+            (tdir / f"{t.key}.{ext}").write_text(text, encoding="utf-8")
+        links[t.key] = [(name, f"tables/{t.key}.{ext}") for name, ext in (("Markdown", "md"), ("CSV", "csv"), ("LaTeX", "tex"))]
+    (out / "tables.md").write_text("\n".join(to_markdown(t) for t in tables), encoding="utf-8")
+    (out / "tables.tex").write_text("\n".join(to_latex(t) for t in tables), encoding="utf-8")
+    return links
+
+
+def _frame_size_lookup(dataset: Any):
+    if dataset is None:
+        return None
+
+    def size(instance_id: str) -> tuple[int, int]:
+        inst = dataset.instance(instance_id)
+        return inst.frame_size if inst is not None else (512, 512)
+
+    return size
+
+
+def write_report(
+    source: str | Path,
+    out: str | Path | None = None,
+    dataset_path: str | Path | None = None,
+    n_boot: int = DEFAULT_BOOT,
+    gallery_limit: int | None = None,
+    gallery: bool = True,
+    workers: int | None = None,
+    seed: int = 0,
+) -> ReportResult:
+    """Write the full report of a run or sweep folder (default ``out``: ``<source>/report``)."""
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    source = Path(source)
+    out = Path(out) if out is not None else source / "report"
+    out.mkdir(parents=True, exist_ok=True)
+    collection = collect(source)
+    dataset, note = load_collection_dataset(collection, dataset_path)
+    timings["load"] = time.perf_counter() - t0
+
+    t = time.perf_counter()
+    analysis = analyze(collection, dataset, note, n_boot=n_boot, seed=seed)
+    tables = paper_tables(analysis)
+    timings["statistics"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    links = write_tables(tables, out)
+    figures = report_figures(analysis, _frame_size_lookup(dataset))
+    pdir = out / "plots"
+    pdir.mkdir(exist_ok=True)
+    for name, (_, svg) in figures.items():
+        (pdir / f"{name}.svg").write_text(svg, encoding="utf-8")
+    timings["tables_plots"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    gallery_data = None
+    gstats = None
+    if gallery:
+        shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
+        entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
+        gallery_data = {"systems": shown, "entries": entries, "images_dir": "images"}
+        if dataset is None:
+            analysis.notes.append("Gallery images need the dataset's frames: " + (note or "dataset not available") + ".")
+    timings["gallery"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures)
+    n_rows = sum(len(r.rows) for r in collection.runs)
+    subtitle = f"{source} · {len(collection.runs)} run folder(s) · {len(analysis.model_systems)} system(s) · {n_rows} rows"
+    if analysis.dataset_path:
+        subtitle += f" · dataset {analysis.dataset_path}"
+    page_html = render_page(
+        f"povagent report: {source.name}",
+        subtitle,
+        body,
+        gallery_data,
+        nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")],
+    )
+    page = out / REPORT_PAGE
+    page.write_text(page_html, encoding="utf-8")
+    timings["html"] = time.perf_counter() - t
+    timings["total"] = time.perf_counter() - t0
+    summary = analysis.as_dict() | {
+        "gallery": None if gstats is None else gstats.__dict__,
+        "timings_s": {k: round(v, 3) for k, v in timings.items()},
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False), encoding="utf-8")
+    return ReportResult(out, page, tables, analysis, gstats, note, timings)

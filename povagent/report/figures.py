@@ -1,0 +1,74 @@
+"""The report's figures, drawn from an analysis: error by condition, by direction, by
+condition x direction, predicted vs GT scatter, and the error distribution.
+
+Chooses what to plot; :mod:`povagent.report.plots` draws it. Returns SVG strings by name;
+writing them is the caller's job.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Callable
+
+from povagent.report.analysis import Analysis
+from povagent.report.paper_tables import condition_label
+
+#: Scatter plots are drawn for at most this many systems (the first ones).
+MAX_SCATTER_SYSTEMS = 6
+
+
+def _safe_name(text: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in text).strip("_").lower()[:60] or "system"
+
+
+def report_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | None = None) -> dict[str, tuple[str, str]]:
+    """Figures by file stem: ``(caption, svg)``. ``frame_size(instance_id)`` gives (W, H) for
+    the scatter's pixel-to-fraction conversion (512 x 512 when unknown)."""
+    from povagent.report.plots import grouped_bars, histogram, scatter
+
+    size = frame_size or (lambda _id: (512, 512))
+    figs: dict[str, tuple[str, str]] = {}
+    series = [(s.system, [getattr(s.by_condition.get(c), "official", None) for c in a.conditions], s.reference) for s in a.systems]
+    figs["error_by_condition"] = (
+        "Mean normalized L2 by condition (answered instances; whiskers: 95% bootstrap CI).",
+        grouped_bars("Error by condition", [condition_label(c) for c in a.conditions], series),
+    )
+    series = [(s.system, [getattr(s.by_direction.get(d), "official", None) for d in a.directions], s.reference) for s in a.systems]
+    figs["error_by_direction"] = (
+        "Mean normalized L2 by direction, pooled over conditions.",
+        grouped_bars("Error by direction", [d.capitalize() for d in a.directions], series),
+    )
+    keys = [(c, d) for c in a.conditions for d in a.directions]
+    series = [(s.system, [getattr(s.by_condition_direction.get(f"{c}/{d}"), "official", None) for c, d in keys], s.reference) for s in a.systems]
+    figs["error_by_condition_direction"] = (
+        "Mean normalized L2 by condition (I, S, G) and direction.",
+        grouped_bars("Error by condition x direction", [f"{condition_label(c)[0]}-{d}" for c, d in keys], series, width=max(820, 70 * len(keys))),
+    )
+    by_sys: dict[str, list] = defaultdict(list)
+    for o in a.observations:
+        if o.answered and o.gt_u is not None and o.gt_v is not None and o.x is not None and o.y is not None:
+            by_sys[o.system].append(o)
+    cond_index = {c: i for i, c in enumerate(a.conditions)}
+    names = [condition_label(c) for c in a.conditions]
+    for s in [s for s in a.systems if not s.reference][:MAX_SCATTER_SYSTEMS]:
+        pts_x, pts_y = [], []
+        for o in by_sys.get(s.system, []):
+            w, h = size(o.instance_id)
+            k = cond_index.get(o.condition, 0)
+            pts_x.append((o.gt_u, o.x / w, k))
+            pts_y.append((o.gt_v, o.y / h, k))
+        stem = _safe_name(s.system)
+        figs[f"scatter_x_{stem}"] = (
+            f"{s.system}: predicted vs GT x (fractions of the frame; the dashed line is a perfect answer).",
+            scatter(f"{s.system}: x", pts_x, names, "GT x / W", "predicted x / W"),
+        )
+        figs[f"scatter_y_{stem}"] = (
+            f"{s.system}: predicted vs GT y.",
+            scatter(f"{s.system}: y", pts_y, names, "GT y / H", "predicted y / H"),
+        )
+    hist = [(s.system, [o.l2 for o in by_sys.get(s.system, []) if o.l2 is not None], s.reference) for s in a.systems]
+    figs["error_distribution"] = (
+        "Distribution of the normalized L2 of answered instances (share per bin; all runs).",
+        histogram("Error distribution", hist),
+    )
+    return figs

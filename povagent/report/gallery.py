@@ -1,0 +1,250 @@
+"""The gallery: each prediction drawn on the frame it was scored in, saved as small JPEGs.
+
+For every shown row: the frame the model selected (A/B) or the observer view (C), with the GT
+point (green ring) and the predicted point (red cross) drawn on it. A GT behind the camera is
+drawn as a dashed ring at the image centre (where the official metric puts it); a GT in front of
+the camera but outside the frame as an arrow at the border. Two files per drawing: a 256 px
+thumbnail for the grid and the full-size frame for the viewer.
+
+Files are named by a SHA-256 of what was drawn (the source image's bytes plus the markers), so
+the HTML references images by hash, a re-run finds its images already made and skips them,
+and two rows with the same drawing share one file. Nothing is inlined as base64.
+
+This module draws and writes images only; it never scores (markers use the stored official
+scores where they exist).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+from PIL import Image, ImageDraw
+
+from povagent.report.collect import Observation
+from povagent.scoring.official import project_ground_truth, scoring_frame
+
+IMAGES_DIR = "images"
+THUMB_SIZE = 256
+#: Bumped when the drawing changes, so cached images are redrawn.
+RECIPE_VERSION = 2
+#: Raw answers longer than this are cut in the page data (the full text stays in results.jsonl).
+MAX_RAW_CHARS = 4000
+
+GT_COLOUR = (0, 200, 83)
+PRED_COLOUR = (255, 45, 45)
+
+
+@dataclass(frozen=True)
+class Drawing:
+    """What one gallery image shows: a source frame plus markers, in pixels of that frame."""
+
+    source: Path
+    gt: tuple[float, float] | None
+    gt_state: str  # "in", "out" (in front, outside the frame), "behind"
+    pred: tuple[float, float] | None
+
+    def recipe(self) -> dict[str, Any]:
+        """The drawing's parameters (hashed with the source's bytes to name the files)."""
+        r = lambda p: None if p is None else [round(p[0], 2), round(p[1], 2)]  # noqa: E731
+        return {"v": RECIPE_VERSION, "gt": r(self.gt), "state": self.gt_state, "pred": r(self.pred)}
+
+
+@dataclass
+class GalleryStats:
+    """How the gallery images were obtained."""
+
+    entries: int = 0
+    drawn: int = 0
+    cached: int = 0
+    without_image: int = 0
+    seconds: float = 0.0
+
+
+@dataclass
+class _SourceHashes:
+    """SHA-256 of each source frame, computed once per file."""
+
+    known: dict[Path, str] = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def of(self, path: Path) -> str:
+        with self.lock:
+            h = self.known.get(path)
+        if h is None:
+            h = hashlib.sha256(path.read_bytes()).hexdigest()
+            with self.lock:
+                self.known[path] = h
+        return h
+
+
+def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
+    """The drawing of one row, or ``None`` when no frame was selected (or it is unknown)."""
+    frame = scoring_frame(instance, observation.selected_image, observation.image_path)
+    if frame is None:
+        return None
+    cam = frame.camera
+    w, h = cam.width, cam.height
+    gt = project_ground_truth(instance.target, cam)
+    if gt.behind:
+        gt_px, state = (w / 2.0, h / 2.0), "behind"
+    else:
+        gt_px, state = (gt.u * w, gt.v * h), ("in" if gt.in_frame else "out")
+    pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
+    return Drawing(Path(frame.file), gt_px, state, pred)
+
+
+def _ring(d: ImageDraw.ImageDraw, x: float, y: float, r: float, col, width: int, dashed: bool = False) -> None:
+    if not dashed:
+        d.ellipse([x - r, y - r, x + r, y + r], outline=col, width=width)
+        return
+    for k in range(0, 360, 30):
+        d.arc([x - r, y - r, x + r, y + r], k, k + 18, fill=col, width=width)
+
+
+def render(drawing: Drawing) -> Image.Image:
+    """The frame with its markers drawn (full size, RGB)."""
+    with Image.open(drawing.source) as src:
+        im = src.convert("RGB")
+    w, h = im.size
+    scale = max(1.0, w / 512.0)
+    d = ImageDraw.Draw(im)
+    lw = max(2, int(round(3 * scale)))
+    if drawing.gt is not None:
+        gx, gy = drawing.gt
+        if drawing.gt_state == "out":
+            # an arrow from inside the frame towards the off-frame GT, at the border
+            bx, by = min(w - 1.0, max(0.0, gx)), min(h - 1.0, max(0.0, gy))
+            cx, cy = w / 2.0, h / 2.0
+            vx, vy = bx - cx, by - cy
+            n = max(1e-6, (vx * vx + vy * vy) ** 0.5)
+            tail = (bx - vx / n * 40 * scale, by - vy / n * 40 * scale)
+            d.line([tail, (bx, by)], fill=GT_COLOUR, width=lw + 1)
+            _ring(d, bx, by, 9 * scale, GT_COLOUR, lw)
+        else:
+            r = 16 * scale
+            dashed = drawing.gt_state == "behind"
+            # a white halo under the green keeps the ring visible on green or dark frames
+            _ring(d, gx, gy, r + 1, (255, 255, 255), lw + 3, dashed)
+            _ring(d, gx, gy, r, GT_COLOUR, lw + 1, dashed)
+            d.ellipse([gx - 3 * scale, gy - 3 * scale, gx + 3 * scale, gy + 3 * scale], fill=GT_COLOUR)
+    if drawing.pred is not None:
+        px, py = min(w - 1.0, max(0.0, drawing.pred[0])), min(h - 1.0, max(0.0, drawing.pred[1]))
+        a = 11 * scale
+        for col, width in (((0, 0, 0), lw + 3), (PRED_COLOUR, lw)):
+            d.line([(px - a, py - a), (px + a, py + a)], fill=col, width=width)
+            d.line([(px - a, py + a), (px + a, py - a)], fill=col, width=width)
+    return im
+
+
+def image_key(drawing: Drawing, hashes: _SourceHashes) -> str:
+    """The SHA-256 naming a drawing's files (source bytes + markers)."""
+    payload = hashes.of(drawing.source) + json.dumps(drawing.recipe(), sort_keys=True)
+    return hashlib.sha256(payload.encode()).hexdigest()
+
+
+def image_files(images_dir: Path, key: str) -> tuple[Path, Path]:
+    """``(full, thumbnail)`` paths of a drawing."""
+    return images_dir / f"{key}.jpg", images_dir / f"{key}.t.jpg"
+
+
+def write_drawing(drawing: Drawing, images_dir: Path, key: str) -> bool:
+    """Render and save one drawing unless its files exist; True if it was drawn now."""
+    full, thumb = image_files(images_dir, key)
+    if full.exists() and thumb.exists():
+        return False
+    im = render(drawing)
+    tmp = full.with_name(full.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
+    im.save(tmp, "JPEG", quality=85)
+    tmp.replace(full)
+    f = max(1, im.width // THUMB_SIZE)
+    small = im.reduce(f) if f > 1 else im
+    tmp = thumb.with_name(thumb.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
+    small.save(tmp, "JPEG", quality=80)
+    tmp.replace(thumb)
+    return True
+
+
+def select_rows(observations: Iterable[Observation], systems: list[str], limit_per_system: int | None) -> list[Observation]:
+    """The rows the gallery shows: each system's first run, in instance order, capped."""
+    by_sys: dict[str, list[Observation]] = {s: [] for s in systems}
+    for o in observations:
+        if o.system in by_sys:
+            by_sys[o.system].append(o)
+    out: list[Observation] = []
+    for s in systems:
+        rows = by_sys[s]
+        if not rows:
+            continue
+        first = min(o.run for o in rows)
+        keep = sorted((o for o in rows if o.run == first), key=lambda o: o.instance_id)
+        out.extend(keep[:limit_per_system] if limit_per_system is not None else keep)
+    return out
+
+
+def build_gallery(
+    observations: Iterable[Observation],
+    systems: list[str],
+    dataset: Any,
+    out_dir: str | Path,
+    limit_per_system: int | None = None,
+    workers: int | None = None,
+) -> tuple[list[dict[str, Any]], GalleryStats]:
+    """Draw the gallery images under ``out_dir/images`` and return the page's entry records."""
+    import time
+
+    t0 = time.perf_counter()
+    images_dir = Path(out_dir) / IMAGES_DIR
+    images_dir.mkdir(parents=True, exist_ok=True)
+    rows = select_rows(observations, systems, limit_per_system)
+    sys_index = {s: i for i, s in enumerate(systems)}
+    stats = GalleryStats(entries=len(rows))
+    hashes = _SourceHashes()
+    jobs: dict[str, Drawing] = {}
+    entries: list[dict[str, Any]] = []
+    for o in rows:
+        inst = dataset.instance(o.instance_id) if dataset is not None else None
+        drawing = drawing_for(o, inst) if inst is not None else None
+        key = None
+        if drawing is not None and drawing.source.exists():
+            key = image_key(drawing, hashes)
+            jobs.setdefault(key, drawing)
+        else:
+            stats.without_image += 1
+        raw = o.raw or ""
+        entries.append(
+            {
+                "s": sys_index[o.system],
+                "id": o.instance_id,
+                "c": o.condition,
+                "d": o.direction,
+                "r": o.run,
+                "t": o.sentence,
+                "a": raw[:MAX_RAW_CHARS] + ("…" if len(raw) > MAX_RAW_CHARS else ""),
+                "st": o.status,
+                "ps": o.parse_status,
+                "pr": o.parse_reason[:300],
+                "e": None if o.l2 is None else round(o.l2, 4),
+                "es": None if o.l2_strict is None else round(o.l2_strict, 4),
+                "f": o.gt_in_frame,
+                "b": o.gt_behind,
+                "k": o.selected_image,
+                "x": o.x,
+                "y": o.y,
+                "img": key,
+            }
+        )
+    n_workers = workers or min(4, os.cpu_count() or 1)
+    # Pillow releases the GIL while decoding and encoding, so threads overlap the heavy parts
+    with ThreadPoolExecutor(max_workers=n_workers) as pool:
+        results = list(pool.map(lambda kv: write_drawing(kv[1], images_dir, kv[0]), jobs.items()))
+    stats.drawn = sum(results)
+    stats.cached = len(results) - stats.drawn
+    stats.seconds = time.perf_counter() - t0
+    return entries, stats

@@ -1,0 +1,95 @@
+"""The self-contained HTML page: tables, inline SVG plots and the filterable gallery.
+
+One file plus its ``images/`` folder; it opens from disk with no server and no CDN (all CSS
+and JS are inline, from ``assets/report.html``). The gallery's data is JSON in the page and
+names images by hash (``images/<sha256>.t.jpg``): no base64 image data, so a 2,439-instance
+report stays a few megabytes and renders one page of cards at a time.
+
+Only markup: the numbers, figures and images are made elsewhere and passed in.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+from datetime import datetime, timezone
+from importlib.resources import files
+from typing import Any, Iterable
+
+from povagent.report.tables import Table, to_html
+
+TEMPLATE = "report.html"
+
+
+def template() -> str:
+    """The page template shipped with the package."""
+    return files("povagent.report").joinpath("assets", TEMPLATE).read_text(encoding="utf-8")
+
+
+def script_json(data: Any) -> str:
+    """JSON safe inside ``<script type="application/json">`` (no ``</script>`` break-out)."""
+    text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    return text.replace("</", "<\\/").replace("<!--", "<\\!--")
+
+
+def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str, str]]] | None = None) -> str:
+    """The tables, each followed by links to its Markdown/CSV/LaTeX files."""
+    parts = ['<section id="tables"><h2>Tables</h2>']
+    for t in tables:
+        parts.append(to_html(t))
+        links = (downloads or {}).get(t.key)
+        if links:
+            parts.append('<div class="downloads">' + " · ".join(f'<a href="{html.escape(href)}">{html.escape(name)}</a>' for name, href in links) + "</div>")
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def figures_section(figures: dict[str, tuple[str, str]]) -> str:
+    """The plots as inline SVG with captions; scatter plots side by side."""
+    parts = ['<section id="plots"><h2>Plots</h2>']
+    scatters = {k: v for k, v in figures.items() if k.startswith("scatter_")}
+    for name, (caption, svg) in figures.items():
+        if name in scatters:
+            continue
+        parts.append(f'<figure id="fig-{html.escape(name)}">{svg}<figcaption>{html.escape(caption)}</figcaption></figure>')
+    if scatters:
+        parts.append('<h3>Predicted vs ground truth</h3><div class="plots-row">')
+        for name, (caption, svg) in scatters.items():
+            parts.append(f'<figure id="fig-{html.escape(name)}">{svg}<figcaption>{html.escape(caption)}</figcaption></figure>')
+        parts.append("</div>")
+    parts.append("</section>")
+    return "".join(parts)
+
+
+def notes_section(notes: Iterable[str], title: str = "How to read this report") -> str:
+    """A bulleted list of notes (protocol, computed baselines, caveats)."""
+    items = "".join(f"<li>{html.escape(n)}</li>" for n in notes)
+    return f'<section id="notes"><h2>{html.escape(title)}</h2><ul class="notes">{items}</ul></section>'
+
+
+def render_page(
+    title: str,
+    subtitle: str,
+    body: str,
+    gallery: dict[str, Any] | None,
+    nav: list[tuple[str, str]] | None = None,
+    sort_extra: str = "",
+) -> str:
+    """The whole page: ``gallery`` is ``{"systems": [...], "entries": [...], ...}`` or ``None``."""
+    nav = list(nav or [])
+    if gallery is not None:
+        nav.append(("#gallery-section", "Gallery"))
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    page = template()
+    fields = {
+        "{{TITLE}}": html.escape(title),
+        "{{SUBTITLE}}": html.escape(subtitle) + f" · generated {stamp}",
+        "{{NAV}}": "".join(f'<a href="{html.escape(h)}">{html.escape(n)}</a>' for h, n in nav),
+        "{{BODY}}": body,
+        "{{GALLERY_HIDDEN}}": "" if gallery is not None else "hidden",
+        "{{SORT_EXTRA}}": sort_extra,
+        "{{GALLERY_JSON}}": script_json(gallery or {"entries": [], "systems": []}),
+    }
+    # one pass, so text inserted for one placeholder is never read as another placeholder
+    return re.sub(r"\{\{[A-Z_]+\}\}", lambda m: fields.get(m.group(0), m.group(0)), page)

@@ -1,0 +1,200 @@
+"""The paper's tables, built from an :class:`~povagent.report.analysis.Analysis`.
+
+- ``main``: mean normalized L2 per system and condition (the paper's Table "main results");
+- ``ablation``: strategy x condition with the response rate (only when strategies vary);
+- ``per_direction`` and ``per_condition_direction``: errors by direction;
+- ``response_rates``: answered / total per condition;
+- ``metric_variants``: the official mean beside counting-non-responses, strict, and
+  frame-selection accuracy (GT inside the selected frame);
+- ``paired``: paired comparisons (mean difference with CI, Wilcoxon and sign tests).
+
+Only table assembly: numbers come from the analysis, text from :mod:`povagent.report.tables`.
+"""
+
+from __future__ import annotations
+
+from povagent.dataset.models import Condition
+from povagent.report.analysis import Analysis
+from povagent.report.statistics import CellStats, Estimate
+from povagent.report.tables import Cell, Column, Row, Table
+
+
+def condition_label(c: str) -> str:
+    """The paper's name of a condition code (``a`` -> Inferred); unknown codes pass through."""
+    try:
+        return Condition(c).label
+    except ValueError:
+        return c
+
+
+def _cell(e: Estimate | None) -> Cell:
+    if e is None:
+        return Cell(None)
+    return Cell(e.value, e.lo, e.hi)
+
+
+def _get(stats: dict[str, CellStats], key: str) -> CellStats | None:
+    return stats.get(key)
+
+
+PROTOCOL = (
+    "Mean normalized L2 (lower is better) over answered instances, averaged over runs; "
+    "95% bootstrap CIs in brackets. The best model per column is in bold; the center "
+    "baseline is shown for reference."
+)
+
+
+def main_table(a: Analysis) -> Table:
+    """Systems x conditions, official mean L2."""
+    t = Table("main", "Main results", PROTOCOL, "Model", [Column(condition_label(c)) for c in a.conditions])
+    for s in a.systems:
+        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions], s.reference))
+    return t
+
+
+def _strategy_varies(a: Analysis) -> bool:
+    return len({s.axes.get("strategy", "") for s in a.model_systems}) > 1
+
+
+def ablation_table(a: Analysis) -> Table | None:
+    """Strategy x condition with the response rate, when the sweep varies the strategy."""
+    if not _strategy_varies(a):
+        return None
+    models = {s.axes.get("model", "") for s in a.model_systems}
+    one_model = len(models) == 1
+    cols = [Column(condition_label(c)) for c in a.conditions] + [Column("Resp.", "rate", "higher")]
+    caption = PROTOCOL + " Resp. is the response rate (answered / total) over all conditions."
+    title = "Ablation" + (f" ({next(iter(models))})" if one_model and next(iter(models)) else "")
+    t = Table("ablation", title, caption, "Strategy" if one_model else "System", cols)
+    for s in a.systems:
+        label = s.axes.get("strategy", s.system) if one_model and not s.reference else s.system
+        cells = [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions]
+        cells.append(_cell(s.overall.response_rate))
+        t.rows.append(Row(label, cells, s.reference))
+    return t
+
+
+def direction_table(a: Analysis) -> Table:
+    """Systems x directions (pooled over conditions), official mean L2."""
+    t = Table("per_direction", "Error by direction", PROTOCOL + " Pooled over conditions.", "Model", [Column(d.capitalize()) for d in a.directions])
+    for s in a.systems:
+        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_direction, d), "official", None)) for d in a.directions], s.reference))
+    return t
+
+
+def condition_direction_table(a: Analysis) -> Table:
+    """Systems x (condition, direction), official mean L2 (no CIs: the table is wide)."""
+    keys = [(c, d) for c in a.conditions for d in a.directions]
+    cols = [Column(f"{condition_label(c)[0]}-{d}") for c, d in keys]
+    t = Table(
+        "per_condition_direction",
+        "Error by condition and direction",
+        "Mean normalized L2 over answered instances (I = Inferred, S = Stated, G = Given); CIs in the CSV.",
+        "Model",
+        cols,
+        show_ci=False,
+    )
+    for s in a.systems:
+        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_condition_direction, f"{c}/{d}"), "official", None)) for c, d in keys], s.reference))
+    return t
+
+
+def response_table(a: Analysis) -> Table:
+    """Systems x conditions, response rate, plus all conditions."""
+    cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] + [Column("All", "rate", "higher")]
+    t = Table("response_rates", "Response rates", "Answered / total instances, averaged over runs; 95% bootstrap CIs.", "Model", cols)
+    for s in a.systems:
+        cells = [_cell(getattr(_get(s.by_condition, c), "response_rate", None)) for c in a.conditions]
+        cells.append(_cell(s.overall.response_rate))
+        t.rows.append(Row(s.system, cells, s.reference))
+    return t
+
+
+def metric_variants_table(a: Analysis) -> Table:
+    """Per system and condition: official beside counting non-responses, strict, frame selection."""
+    cols = [
+        Column("Official", "l2", None),
+        Column("Counting non-resp.", "l2", None),
+        Column("Strict", "l2", None),
+        Column("GT in selected frame", "rate", None),
+        Column("GT behind camera", "rate", None),
+        Column("Resp.", "rate", None),
+    ]
+    caption = (
+        "Official: mean L2 over answered instances (the benchmark's number, unchanged). "
+        "Counting non-resp.: an unanswered instance scores as the center guess. "
+        "Strict: a GT behind the selected frame's camera or outside the frame counts as a miss "
+        "(sqrt 2 = 1.414) instead of being placed at the image centre. GT in selected frame: "
+        "share of answered instances whose GT projects inside the scored frame (for Inferred/"
+        "Stated, the frame-selection accuracy). GT behind camera: share scored by the blind spot. "
+        "Rows mix conditions, so nothing is bolded."
+    )
+    t = Table("metric_variants", "Official metric and its variants", caption, "Model / condition", cols)
+    for s in a.systems:
+        for c in a.conditions:
+            cs = s.by_condition.get(c)
+            if cs is None:
+                continue
+            t.rows.append(
+                Row(
+                    f"{s.system} / {condition_label(c)}",
+                    [_cell(cs.official), _cell(cs.counted), _cell(cs.strict), _cell(cs.in_frame), _cell(cs.behind), _cell(cs.response_rate)],
+                    s.reference,
+                )
+            )
+    return t
+
+
+def paired_table(a: Analysis) -> Table | None:
+    """Paired comparisons: B - A on shared instances with CI and tests."""
+    if not a.comparisons:
+        return None
+    cols = [
+        Column("n", "count", None),
+        Column("Mean A", "l2", None),
+        Column("Mean B", "l2", None),
+        Column("B - A", "signed", None),
+        Column("B better", "count", None),
+        Column("A better", "count", None),
+        Column("Wilcoxon p", "p", None),
+        Column("Sign p", "p", None),
+    ]
+    caption = (
+        "Paired comparison on the instances both systems answered (per-instance errors averaged "
+        "over runs). B - A < 0 means B is better; 95% bootstrap CI of the mean difference; "
+        "two-sided Wilcoxon signed-rank and exact sign tests (ties dropped). 'counted' scores "
+        "non-responses as the center guess."
+    )
+    t = Table("paired", "Paired comparisons", caption, "B vs A (metric)", cols)
+    for c in a.comparisons:
+        t.rows.append(
+            Row(
+                f"{c.b} vs {c.a} ({c.metric})",
+                [
+                    Cell(c.n_pairs),
+                    Cell(c.mean_a),
+                    Cell(c.mean_b),
+                    Cell(c.diff.value, c.diff.lo, c.diff.hi),
+                    Cell(c.b_better),
+                    Cell(c.a_better),
+                    Cell(c.wilcoxon_p),
+                    Cell(c.sign_p),
+                ],
+            )
+        )
+    return t
+
+
+def paper_tables(a: Analysis) -> list[Table]:
+    """Every table of a report, in reading order."""
+    tables = [main_table(a), ablation_table(a), direction_table(a), condition_direction_table(a), response_table(a), metric_variants_table(a), paired_table(a)]
+    return [t for t in tables if t is not None]
+
+
+def system_row(t: Table, system: str) -> Row:
+    """The row of a system in a table (for tests and callers that pick one number)."""
+    for r in t.rows:
+        if r.label == system:
+            return r
+    raise KeyError(system)
+

@@ -1,0 +1,200 @@
+"""The report's plots as inline SVG strings: grouped bars with CIs, scatter, histogram.
+
+SVG rather than PNG: it is sharp at any zoom, a few kilobytes, needs no plotting library and
+sits inside the HTML (and in ``plots/*.svg`` for a paper). Every function is pure: data in,
+an ``<svg>`` string out; nothing is written here.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Sequence
+
+from povagent.report.statistics import Estimate
+
+#: Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
+REFERENCE_COLOUR = "#9a9a9a"
+FONT = 'font-family="system-ui, -apple-system, Segoe UI, Helvetica, Arial, sans-serif"'
+
+
+def colour(i: int) -> str:
+    """The i-th series colour."""
+    return PALETTE[i % len(PALETTE)]
+
+
+def _e(text: str) -> str:
+    return html.escape(text, quote=True)
+
+
+def _nice_max(v: float) -> float:
+    if v <= 0:
+        return 1.0
+    exp = 10 ** math.floor(math.log10(v))
+    for m in (1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 8, 10):
+        if m * exp >= v:
+            return m * exp
+    return 10 * exp
+
+
+def _legend(names: Sequence[str], colours: Sequence[str], x: float, y: float, width: float) -> tuple[list[str], float]:
+    out, cx, cy = [], x, y
+    for name, col in zip(names, colours):
+        w = 18 + 6.5 * len(name) + 14
+        if cx + w > x + width and cx > x:
+            cx, cy = x, cy + 16
+        out.append(f'<rect x="{cx:.1f}" y="{cy - 9:.1f}" width="12" height="10" fill="{col}"/>')
+        out.append(f'<text x="{cx + 16:.1f}" y="{cy:.1f}" font-size="11">{_e(name)}</text>')
+        cx += w
+    return out, cy + 14
+
+
+def grouped_bars(
+    title: str,
+    groups: Sequence[str],
+    series: Sequence[tuple[str, Sequence[Estimate | None], bool]],
+    y_label: str = "mean normalized L2",
+    width: int = 820,
+    height: int = 340,
+) -> str:
+    """Bars per group and series, with CI whiskers; a series is ``(name, estimates, reference)``."""
+    colours = [REFERENCE_COLOUR if ref else colour(i) for i, (_, _, ref) in enumerate(series)]
+    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
+    left, right, bottom = 60, 16, 46
+    plot_h = height - top - bottom
+    vals = [e.hi if e and e.hi is not None else (e.value if e and e.value is not None else 0.0) for _, ests, _ in series for e in ests]
+    y_max = _nice_max(max(vals, default=0.0) * 1.05)
+    plot_w = width - left - right
+    gw = plot_w / max(1, len(groups))
+    bw = min(28.0, gw * 0.8 / max(1, len(series)))
+
+    def y(v: float) -> float:
+        return top + plot_h * (1 - v / y_max)
+
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
+    out += legend
+    for k in range(6):
+        v = y_max * k / 5
+        out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(v):.1f}" y2="{y(v):.1f}" stroke="#e5e5e5"/>')
+        out.append(f'<text x="{left - 6}" y="{y(v) + 4:.1f}" font-size="10" text-anchor="end">{v:.2f}</text>')
+    out.append(f'<text transform="translate(14,{top + plot_h / 2:.0f}) rotate(-90)" font-size="11" text-anchor="middle">{_e(y_label)}</text>')
+    for g, name in enumerate(groups):
+        gx = left + g * gw + (gw - bw * len(series)) / 2
+        for s, (sname, ests, _) in enumerate(series):
+            e = ests[g] if g < len(ests) else None
+            if e is None or e.value is None:
+                continue
+            x = gx + s * bw
+            out.append(
+                f'<rect x="{x:.1f}" y="{y(e.value):.1f}" width="{bw - 2:.1f}" height="{max(0.0, y(0) - y(e.value)):.1f}" fill="{colours[s]}">'
+                f"<title>{_e(sname)} / {_e(name)}: {e.value:.3f}"
+                + (f" [{e.lo:.3f}, {e.hi:.3f}]" if e.lo is not None and e.hi is not None else "")
+                + "</title></rect>"
+            )
+            if e.lo is not None and e.hi is not None:
+                cx = x + (bw - 2) / 2
+                out.append(f'<path d="M{cx:.1f} {y(e.lo):.1f}V{y(e.hi):.1f}M{cx - 3:.1f} {y(e.lo):.1f}h6M{cx - 3:.1f} {y(e.hi):.1f}h6" stroke="#222" stroke-width="1" fill="none"/>')
+        out.append(f'<text x="{left + g * gw + gw / 2:.1f}" y="{height - bottom + 16}" font-size="11" text-anchor="middle">{_e(name)}</text>')
+    out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
+    out.append("</svg>")
+    return "".join(out)
+
+
+def scatter(
+    title: str,
+    points: Sequence[tuple[float, float, int]],
+    category_names: Sequence[str],
+    x_label: str,
+    y_label: str,
+    size: int = 300,
+) -> str:
+    """Predicted (y axis) against GT (x axis) on [0, 1], with the diagonal; points are
+    ``(gt, predicted, category index)``."""
+    pad_l, pad_b, pad_t = 44, 40, 44
+    plot = size - pad_l - 12
+    height = plot + pad_t + pad_b
+    names = list(category_names)
+    legend, _ = _legend(names, [colour(i) for i in range(len(names))], pad_l, 34, plot)
+
+    def px(v: float) -> float:
+        return pad_l + plot * min(1.0, max(0.0, v))
+
+    def py(v: float) -> float:
+        return pad_t + plot * (1 - min(1.0, max(0.0, v)))
+
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {size} {height}" width="{size}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out.append(f'<text x="{pad_l}" y="18" font-size="13" font-weight="600">{_e(title)}</text>')
+    out += legend
+    out.append(f'<rect x="{pad_l}" y="{pad_t}" width="{plot}" height="{plot}" fill="none" stroke="#999"/>')
+    out.append(f'<line x1="{px(0)}" y1="{py(0)}" x2="{px(1)}" y2="{py(1)}" stroke="#bbb" stroke-dasharray="4 3"/>')
+    for k in (0, 0.5, 1):
+        out.append(f'<text x="{px(k):.1f}" y="{pad_t + plot + 14}" font-size="10" text-anchor="middle">{k:g}</text>')
+        out.append(f'<text x="{pad_l - 5}" y="{py(k) + 4:.1f}" font-size="10" text-anchor="end">{k:g}</text>')
+    out.append(f'<text x="{pad_l + plot / 2:.0f}" y="{height - 8}" font-size="11" text-anchor="middle">{_e(x_label)}</text>')
+    out.append(f'<text transform="translate(12,{pad_t + plot / 2:.0f}) rotate(-90)" font-size="11" text-anchor="middle">{_e(y_label)}</text>')
+    # one <path> per category: thousands of points stay a few hundred kilobytes at most
+    by_cat: dict[int, list[str]] = {}
+    for g, p, cat in points:
+        if not (math.isfinite(g) and math.isfinite(p)):
+            continue
+        by_cat.setdefault(cat, []).append(f"M{px(g):.1f} {py(p):.1f}h0")
+    for cat, segs in by_cat.items():
+        out.append(f'<path d="{"".join(segs)}" stroke="{colour(cat)}" stroke-opacity="0.55" stroke-width="3.2" stroke-linecap="round" fill="none"/>')
+    out.append("</svg>")
+    return "".join(out)
+
+
+def histogram(
+    title: str,
+    series: Sequence[tuple[str, Sequence[float], bool]],
+    lo: float = 0.0,
+    hi: float = math.sqrt(2.0),
+    bins: int = 28,
+    width: int = 820,
+    height: int = 300,
+    x_label: str = "normalized L2",
+) -> str:
+    """Step outlines of each series' distribution (share of its values per bin)."""
+    colours = [REFERENCE_COLOUR if ref else colour(i) for i, (_, _, ref) in enumerate(series)]
+    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
+    left, right, bottom = 60, 16, 40
+    plot_h, plot_w = height - top - bottom, width - left - right
+    shares: list[list[float]] = []
+    for _, values, _ in series:
+        counts = [0] * bins
+        vals = [v for v in values if v is not None and math.isfinite(v)]
+        for v in vals:
+            k = int((min(hi, max(lo, v)) - lo) / (hi - lo) * bins)
+            counts[min(bins - 1, k)] += 1
+        n = max(1, len(vals))
+        shares.append([c / n for c in counts])
+    y_max = _nice_max(max((s for row in shares for s in row), default=0.0) * 1.05)
+
+    def x(v: float) -> float:
+        return left + plot_w * (v - lo) / (hi - lo)
+
+    def y(v: float) -> float:
+        return top + plot_h * (1 - v / y_max)
+
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
+    out += legend
+    for k in range(6):
+        v = y_max * k / 5
+        out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(v):.1f}" y2="{y(v):.1f}" stroke="#e5e5e5"/>')
+        out.append(f'<text x="{left - 6}" y="{y(v) + 4:.1f}" font-size="10" text-anchor="end">{100 * v:.0f}%</text>')
+    for t in (0, 0.25, 0.5, 0.75, 1.0, 1.25, hi):
+        out.append(f'<text x="{x(t):.1f}" y="{height - bottom + 14}" font-size="10" text-anchor="middle">{t:.2f}</text>')
+    out.append(f'<text x="{left + plot_w / 2:.0f}" y="{height - 6}" font-size="11" text-anchor="middle">{_e(x_label)}</text>')
+    step = (hi - lo) / bins
+    for s, row in enumerate(shares):
+        d = f"M{x(lo):.1f} {y(0):.1f}"
+        for k, share in enumerate(row):
+            d += f"V{y(share):.1f}H{x(lo + (k + 1) * step):.1f}"
+        d += f"V{y(0):.1f}"
+        out.append(f'<path d="{d}" fill="none" stroke="{colours[s]}" stroke-width="1.8"><title>{_e(series[s][0])}</title></path>')
+    out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
+    out.append("</svg>")
+    return "".join(out)

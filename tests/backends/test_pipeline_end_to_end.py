@@ -1,0 +1,164 @@
+"""Backends through the whole pipeline (config -> runner -> parser -> scorer -> rows).
+
+A sweep over center, random, oracle and a litellm model served by a loopback server runs end
+to end on the hand-made dataset; the oracle's error is ~0; transient faults injected at the
+server are retried by the runner and answered, while 400 and 401 are recorded as infra errors
+without a retry; the Router over two servers carries a whole run.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from povagent.config import load_pipeline
+from povagent.loopback_server import Fault, LoopbackServer, RecordedRequest, Reply
+from povagent.results import read_rows
+from povagent.runner import run_pipeline
+from povagent.sweep import run_sweep
+
+pytestmark = pytest.mark.timeout(90)
+
+N_INSTANCES = 18  # the fixture's two good houses
+
+
+AB_ANSWER = 'Looking at the frames... {"selected_image": 1, "x": 300, "y": 280}'
+C_ANSWER = '{"x": 200, "y": 310}'
+
+
+def answer_for(request: RecordedRequest) -> str:
+    """A plausible model answer in the asked format (A/B show several images, C one)."""
+    images = [p for p in request.user_parts() if p.get("type") == "image_url"]
+    return AB_ANSWER if len(images) > 1 else C_ANSWER
+
+
+@pytest.fixture
+def model_server():
+    with LoopbackServer(reply=answer_for, max_lifetime_s=80) as server:
+        yield server
+
+
+def litellm_backend(*servers: LoopbackServer, **options) -> dict:
+    if len(servers) == 1:
+        opts = {"model": "openai/loopback-vlm", "api_base": servers[0].url, "api_key_env": "POVAGENT_TEST_KEY"}
+    else:
+        opts = {
+            "model": "loopback-vlm",
+            "router": [
+                {"litellm_params": {"model": "openai/loopback-vlm", "api_base": s.url, "api_key_env": "POVAGENT_TEST_KEY"}}
+                for s in servers
+            ],
+        }
+    return {"name": "litellm", "options": {**opts, **options}}
+
+
+def write_yaml(path: Path, doc: dict) -> Path:
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def pipeline(tmp_path: Path, mini_root: Path, backend, **extra) -> dict:
+    return {
+        "dataset": str(mini_root),
+        "backend": backend,
+        "strategy": "basic",
+        "parser": "json",
+        "concurrency": 4,
+        "retry": {"attempts": 3, "initial_wait": 0.0, "max_wait": 0.0},
+        "timeout": 20,
+        "cache": False,
+        "output": str(tmp_path / "run"),
+        **extra,
+    }
+
+
+def run_yaml(tmp_path: Path, doc: dict):
+    return run_pipeline(load_pipeline(write_yaml(tmp_path / "pipeline.yaml", doc)))
+
+
+# -- the sweep -----------------------------------------------------------------------------------
+def test_sweep_over_baselines_and_a_served_model_runs_end_to_end(tmp_path, mini_root, model_server, api_key):
+    base = pipeline(tmp_path, mini_root, "center", cache=True)
+    del base["output"]
+    sweep = {
+        "base": base,
+        "output": str(tmp_path / "sweep"),
+        "axes": {"backend": ["center", "random", "oracle", litellm_backend(model_server)]},
+    }
+    result = run_sweep(write_yaml(tmp_path / "sweep.yaml", sweep), quiet=True)
+    summaries = {name: r.summary for name, r in result.results.items()}
+    assert len(summaries) == 4
+    for name, summary in summaries.items():
+        assert summary["complete"], name
+        assert summary["rows"]["answered"] == N_INSTANCES, name
+    by_backend = {s["pipeline"]["backend"]: s["overall"]["mean_l2"] for s in summaries.values()}
+    assert by_backend["oracle"] < 1e-3
+    assert by_backend["oracle"] < min(by_backend["center"], by_backend["random"], by_backend["litellm"])
+    assert model_server.request_count == N_INSTANCES
+    index = json.loads((tmp_path / "sweep" / "sweep.json").read_text())
+    assert index  # the sweep index is written
+
+
+def test_served_model_rows_record_raw_answers_tokens_and_prediction(tmp_path, mini_root, model_server, api_key):
+    run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server)))
+    rows = read_rows(tmp_path / "run" / "results.jsonl")
+    ab = [r for r in rows if r.condition in ("a", "b")]
+    c = [r for r in rows if r.condition == "c"]
+    assert ab and all(r.raw_response == AB_ANSWER for r in ab)
+    assert c and all(r.raw_response == C_ANSWER for r in c)
+    assert all(r.prediction.selected_image == 1 and (r.prediction.x, r.prediction.y) == (300, 280) for r in ab)
+    assert all(r.prompt_tokens == 10 and r.completion_tokens == 5 for r in rows)
+
+
+def test_oracle_error_is_zero_through_the_runner(tmp_path, mini_root):
+    result = run_yaml(tmp_path, pipeline(tmp_path, mini_root, "oracle"))
+    assert result.summary["overall"]["response_rate"] == 1.0
+    assert result.summary["overall"]["mean_l2"] < 1e-3
+
+
+# -- faults through the runner -------------------------------------------------------------------
+def test_transient_faults_are_retried_by_the_runner_and_answered(tmp_path, mini_root, model_server, api_key):
+    # concurrency 1: the script is consumed in order, two faults per key for the first keys
+    model_server.script(
+        Fault(429, retry_after=0), Fault(500), answer_for,  # key 1: rate limit, server error, answer
+        Fault(drop=True), Reply("late", delay_s=10),  # key 2: dropped connection, timeout, answer
+    )
+    doc = pipeline(tmp_path, mini_root, litellm_backend(model_server, timeout=0.5), concurrency=1)
+    result = run_yaml(tmp_path, doc)
+    rows = read_rows(tmp_path / "run" / "results.jsonl")
+    assert result.summary["rows"]["answered"] == N_INSTANCES
+    assert sum(r.retries for r in rows) == 4
+    assert model_server.request_count == N_INSTANCES + 4
+
+
+@pytest.mark.parametrize(("status", "error_type"), [(400, "bad_request"), (401, "auth")])
+def test_client_errors_are_recorded_not_retried(status, error_type, tmp_path, mini_root, model_server, api_key):
+    model_server.reply = Fault(status, message=f"injected {status}")
+    doc = pipeline(tmp_path, mini_root, litellm_backend(model_server), instances={"limit": 3})
+    run_yaml(tmp_path, doc)
+    rows = read_rows(tmp_path / "run" / "results.jsonl")
+    assert len(rows) == 3
+    assert all(r.status == "infra_error" and r.error_type == error_type and r.retries == 0 for r in rows)
+    assert all(f"injected {status}" in (r.error_message or "") for r in rows)
+    assert model_server.request_count == 3
+
+
+def test_the_key_never_reaches_rows_or_logs(tmp_path, mini_root, model_server, api_key):
+    model_server.reply = Fault(401, message=f"Incorrect API key provided: {api_key}")
+    run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server), instances={"limit": 2}))
+    for name in ("results.jsonl", "log.jsonl", "summary.json", "config.yaml"):
+        path = tmp_path / "run" / name
+        if path.exists():
+            assert api_key not in path.read_text(), name
+
+
+# -- the Router over two servers -----------------------------------------------------------------
+def test_router_over_two_servers_carries_a_whole_run(tmp_path, mini_root, model_server, api_key):
+    with LoopbackServer(reply=answer_for, max_lifetime_s=80) as second:
+        result = run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server, second)))
+    assert result.summary["rows"]["answered"] == N_INSTANCES
+    assert model_server.request_count > 0 and second.request_count > 0
+    assert model_server.request_count + second.request_count == N_INSTANCES

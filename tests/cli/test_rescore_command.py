@@ -1,0 +1,92 @@
+"""``povagent rescore``: re-parse and re-score a finished run offline with another parser."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import yaml
+from typer.testing import CliRunner
+
+from povagent.cli import app
+from povagent.results import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, read_rows
+
+runner = CliRunner()
+
+#: (instance, raw answer): Qwen-style answers on 0-1000 although pixels were asked.
+ANSWERS = [
+    ("train_house_00000/0/right/a", '{"selected_image": 1, "x": 734, "y": 402}'),
+    ("train_house_00000/0/right/c", '{"x": 300, "y": 200}'),
+    ("train_house_00000/0/left/a", "I cannot tell."),
+]
+
+
+def finished_run(tmp_path: Path, mini_root: Path) -> Path:
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "config.yaml").write_text(yaml.safe_dump({
+        "dataset": {"path": str(mini_root)},
+        "backend": {"name": "center", "options": {}},
+        "strategy": {"name": "basic", "options": {}},
+        "parser": {"name": "json", "options": {}},
+        "scorers": [{"name": "official", "options": {}}],
+        "output": str(run),
+    }))
+    with ResultsWriter(run / "results.jsonl") as w:
+        for inst_id, raw in ANSWERS:
+            house, pair, direction, cond = inst_id.split("/")
+            w.write(ResultRow(key=f"{inst_id}#0", instance_id=inst_id, house_id=house, pair_id=pair, direction=direction,
+                              condition=cond, status=RowStatus.ANSWERED, parser="json",
+                              exchanges=[ExchangeRecord(request_hash="h", raw=raw)]))
+        w.write(ResultRow(key="train_house_00000/0/left/b#0", instance_id="train_house_00000/0/left/b", house_id="train_house_00000",
+                          pair_id="0", direction="left", condition="b", status=RowStatus.INFRA_ERROR, error_type="Timeout"))
+    return run
+
+
+def test_rescore_repairs_rows_and_writes_a_new_folder(tmp_path, mini_root):
+    run = finished_run(tmp_path, mini_root)
+    before = (run / "results.jsonl").read_bytes()
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
+    assert result.exit_code == 0, result.output
+    rows = {r.instance_id: r for r in read_rows(run / "rescored-rescale-1000" / "results.jsonl")}
+    repaired = rows["train_house_00000/0/right/a"]
+    assert repaired.parse.status == "repaired" and repaired.parser == "rescale-1000"
+    assert (repaired.prediction.x, repaired.prediction.selected_image) == (734 / 1000 * 512, 1)
+    assert repaired.prediction.image_path == "exploration_images/frame_001.png"
+    assert repaired.scores["official"]["answered"] is True
+    assert rows["train_house_00000/0/right/c"].parse.status == "ok"  # in range: never "repaired"
+    assert rows["train_house_00000/0/left/a"].status == RowStatus.PARSE_ERROR
+    assert rows["train_house_00000/0/left/b"].status == RowStatus.INFRA_ERROR
+    assert (run / "results.jsonl").read_bytes() == before
+
+
+def test_rescore_writes_and_prints_the_summary(tmp_path, mini_root):
+    run = finished_run(tmp_path, mini_root)
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
+    printed = json.loads(result.stdout)
+    saved = json.loads((run / "rescored-rescale-1000" / "summary.json").read_text())
+    assert printed == saved
+    assert saved["overall"]["n"] == 2 and saved["overall"]["n_total"] == 4
+    assert saved["repaired"] == 1 and saved["parser"] == "rescale-1000"
+    config = yaml.safe_load((run / "rescored-rescale-1000" / "config.yaml").read_text())
+    assert config["parser"]["name"] == "rescale-1000"
+
+
+def test_rescore_with_the_same_parser_reproduces_the_parse(tmp_path, mini_root):
+    run = finished_run(tmp_path, mini_root)
+    assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
+    row = {r.instance_id: r for r in read_rows(run / "rescored-json" / "results.jsonl")}["train_house_00000/0/right/a"]
+    assert row.parse.status == "out_of_range" and row.prediction.x == 734
+
+
+def test_rescore_of_a_folder_without_results_is_a_clear_error(tmp_path):
+    result = runner.invoke(app, ["rescore", str(tmp_path), "--parser", "json"])
+    assert result.exception is not None and "results.jsonl" in str(result.exception)
+
+
+def test_rescore_reads_a_config_resolved_from_a_model_profile(tmp_path, mini_root):
+    run = finished_run(tmp_path, mini_root)
+    config = yaml.safe_load((run / "config.yaml").read_text())
+    config["model"] = "qwen3-vl-32b"  # a resolved config keeps the profile name beside its backend
+    (run / "config.yaml").write_text(yaml.safe_dump(config))
+    assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0

@@ -1,0 +1,69 @@
+"""``povagent show-prompt``: the exact messages for one instance, images saved."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+from PIL import Image
+from typer.testing import CliRunner
+
+from povagent.cli import app
+from povagent.errors import DatasetError
+
+runner = CliRunner()
+INSTANCE = "train_house_00000/0/right/a"
+
+
+def pipeline(tmp_path: Path, mini_root: Path, strategy: str) -> Path:
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(yaml.safe_dump({
+        "dataset": {"path": str(mini_root)},
+        "backend": {"name": "center"},
+        "strategy": {"name": strategy},
+        "output": str(tmp_path / "run"),
+    }))
+    return path
+
+
+def show(tmp_path, mini_root, strategy, instance=INSTANCE):
+    out = tmp_path / "shown"
+    result = runner.invoke(app, ["show-prompt", str(pipeline(tmp_path, mini_root, strategy)), "--instance", instance, "--out", str(out)])
+    return result, out
+
+
+def test_prints_labels_images_with_hashes_then_the_prompt(tmp_path, mini_root):
+    result, _ = show(tmp_path, mini_root, "basic")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0] == "--- message 1 (user) ---"
+    assert lines[1] == "Image 0:"
+    assert lines[2].startswith("[image: Image 0 sha256:") and "512x512" in lines[2]
+    assert lines[3] == "Image 1:"
+    prompt_start = lines.index("You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of a home.")
+    assert lines[prompt_start + 1].startswith("The 3 images above (labeled Image 0 through Image 2)")
+    assert '"max_tokens": 256' in result.stdout and "--- answer schema:" in result.stdout
+
+
+def test_the_printed_text_is_the_strategy_prompt_verbatim(tmp_path, mini_root, mini_dataset):
+    from povagent_plugins.strategies.cot import SpatialCotStrategy
+
+    result, _ = show(tmp_path, mini_root, "spatial-cot")
+    assert SpatialCotStrategy().prompt_text(mini_dataset.instance(INSTANCE)) in result.stdout
+
+
+def test_marked_frames_are_saved_and_flagged(tmp_path, mini_root):
+    result, out = show(tmp_path, mini_root, "oa-plot")
+    assert result.exit_code == 0, result.output
+    saved = sorted(out.glob("*.png"))
+    marked = [p for p in saved if "_marked_" in p.name]
+    assert len(saved) == 3 and marked
+    assert "[image marked: Image 0" in result.stdout
+    with Image.open(marked[0]) as im:
+        assert (0, 0, 255) in {c for _, c in im.convert("RGB").getcolors(1 << 20)}
+
+
+def test_an_unknown_instance_suggests_a_near_id(tmp_path, mini_root):
+    result, _ = show(tmp_path, mini_root, "basic", instance="train_house_00000/0/rigth/a")
+    assert isinstance(result.exception, DatasetError)
+    assert "train_house_00000/0/right/a" in str(result.exception)

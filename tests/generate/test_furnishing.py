@@ -1,0 +1,71 @@
+"""Furniture goes where ProcTHOR puts it, with ProcTHOR's sizes, and never into a doorway."""
+
+from __future__ import annotations
+
+import pytest
+
+from povagent.generate.assets import asset_database
+from povagent.generate.floorplan import generate_floorplan
+from povagent.generate.furnishing import furnish, room_types_holding
+from povagent.generate.pipeline import house_generators
+from povagent.generate.scene import House
+
+#: ProcTHOR places these on other objects, so its room annotations count them nowhere.
+ON_RECEPTACLES = {"Television", "Sink", "Doorway"}
+
+
+@pytest.fixture(scope="module")
+def houses() -> list[House]:
+    out = []
+    for index in range(8):
+        rngs = house_generators(5, index)
+        plan = generate_floorplan(rngs["plan"])
+        out.append(House(f"h{index}", plan, furnish(plan, rngs["furnish"])))
+    return out
+
+
+def test_every_object_stands_in_a_room_type_procthor_puts_it_in(houses):
+    for house in houses:
+        for o in house.objects:
+            if o.object_type in ON_RECEPTACLES:
+                continue
+            assert house.plan.rooms[o.room_id].room_type in room_types_holding(o.object_type), o.object_id
+
+
+def test_floor_furniture_footprints_do_not_overlap(houses):
+    for house in houses:
+        floor = [o for o in house.objects if o.support == "floor"]
+        for i, a in enumerate(floor):
+            for b in floor[i + 1 :]:
+                assert not a.rect.overlaps(b.rect, tolerance=0.01), (a.object_id, b.object_id)
+
+
+def test_objects_keep_their_procthor_asset_size(houses):
+    sizes = {a.asset_id: a.size for specs in asset_database().values() for a in specs}
+    for house in houses:
+        for o in house.objects:
+            if o.object_type in ("CounterTop", "Doorway"):
+                continue
+            assert tuple(round(v, 4) for v in o.local_size) == sizes[o.asset_id], o.object_id
+
+
+def test_a_tv_faces_the_sofa_across_the_room(houses):
+    seen = 0
+    for house in houses:
+        sofas = [o for o in house.objects if o.object_type == "Sofa"]
+        tvs = [o for o in house.objects if o.object_type == "Television" and o.room_id == (sofas[0].room_id if sofas else -1)]
+        for tv in tvs:
+            assert (tv.yaw - sofas[0].yaw) % 360 == 180
+            seen += 1
+    assert seen > 0
+
+
+def test_objects_on_receptacles_rest_on_their_top(houses):
+    for house in houses:
+        for o in house.objects:
+            if o.support in ("floor", "wall"):
+                continue
+            holder = house.by_id(o.support)
+            assert holder.rect.inflate(0.01).contains(*[o.center[0], o.center[2]])
+            # centres are rounded to 0.1 mm; sinks sit down into their counter
+            assert holder.top - 0.25 <= o.bottom <= holder.top + 1e-3

@@ -1,0 +1,30 @@
+"""An oracle that points at the projected ground truth scores ~0 on a generated set."""
+
+from __future__ import annotations
+
+from povagent.dataset.loader import load_dataset
+from povagent.scoring.official import project_ground_truth, score_point
+
+
+def test_the_ground_truth_is_in_frame_in_every_observer_view(tiny_dataset):
+    for inst in load_dataset(tiny_dataset.root).instances(conditions=["c"]):
+        assert project_ground_truth(inst.target, inst.observer_camera).in_frame, inst.id
+
+
+def test_every_inferred_instance_has_an_exploration_frame_showing_the_ground_truth(tiny_dataset):
+    for inst in load_dataset(tiny_dataset.root).instances(conditions=["a"]):
+        assert any(project_ground_truth(inst.target, f.camera).in_frame for f in inst.frames), inst.id
+
+
+def test_scoring_the_projected_ground_truth_pixel_gives_zero(tiny_dataset):
+    dataset = load_dataset(tiny_dataset.root)
+    errors = []
+    for inst in dataset.instances():
+        frames = inst.frames
+        if inst.condition.uses_exploration_frames:
+            frames = tuple(f for f in frames if project_ground_truth(inst.target, f.camera).in_frame)
+        best = frames[0]
+        gt = project_ground_truth(inst.target, best.camera)
+        score = score_point(inst, best, gt.u * best.camera.width, gt.v * best.camera.height)
+        errors.append(score.l2)
+    assert errors and max(errors) < 1e-9

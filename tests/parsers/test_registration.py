@@ -1,0 +1,79 @@
+"""The built-in parsers and strategies register like any plugin, under the documented names."""
+
+from __future__ import annotations
+
+import importlib
+from functools import cache
+
+import pluggy
+import pytest
+
+from povagent import hookspecs
+from povagent.default_plugins import DEFAULT_PLUGINS
+from povagent.interfaces import Parser, Strategy
+
+PARSERS = {"json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "internvl"}
+STRATEGIES = {"basic", "cot", "spatial-cot", "o-plot", "oa-plot"}
+
+
+@cache
+def registered(hook: str) -> dict:
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    for name in DEFAULT_PLUGINS:
+        if name.startswith(("povagent_plugins.parsers.", "povagent_plugins.strategies.")):
+            pm.register(importlib.import_module(name), name=name)
+    pm.check_pending()
+    found: dict = {}
+
+    def register(name, factory, description=""):
+        assert name not in found, f"{name} registered twice"
+        assert description, f"{name} has no description"
+        found[name] = factory
+
+    getattr(pm.hook, hook)(register=register)
+    return found
+
+
+def test_every_built_in_parser_is_registered():
+    parsers = registered("register_parsers")
+    assert set(parsers) == PARSERS
+    assert all(isinstance(factory(), Parser) for factory in parsers.values())
+
+
+def test_every_built_in_strategy_is_registered():
+    strategies = registered("register_strategies")
+    assert set(strategies) == STRATEGIES
+    assert all(isinstance(factory(), Strategy) for factory in strategies.values())
+
+
+@pytest.mark.parametrize("name", sorted(PARSERS))
+@pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}'])
+def test_no_parser_raises_on_hostile_text(name, text):
+    from povagent.answers import AnswerSpec, frame_answer_schema
+
+    spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
+    parsed = registered("register_parsers")[name]().parse(text, spec)
+    assert parsed.status is not None
+
+
+ANSWER_ALPHABET = '{}[]()<>"\':,.-\u2212 \n0123456789xyselctd_imagpontbx=/`'
+
+
+@pytest.mark.parametrize("name", sorted(PARSERS))
+def test_no_parser_raises_on_generated_text(name):
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from povagent.answers import AnswerSpec, frame_answer_schema
+
+    spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
+    parser = registered("register_parsers")[name]()
+
+    @settings(max_examples=150, deadline=None, database=None)
+    @given(st.text(alphabet=ANSWER_ALPHABET, max_size=120))
+    def check(text):
+        parsed = parser.parse(text, spec)
+        assert parsed.answered == (parsed.x is not None and parsed.status != "unparseable")
+
+    check()

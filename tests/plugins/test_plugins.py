@@ -1,0 +1,205 @@
+"""The plugin host: discovery, name ownership, errors, and the lifecycle facade."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import textwrap
+
+import pytest
+from typer.testing import CliRunner
+
+from povagent import hookimpl, hookspecs
+from povagent.errors import PluginError
+from povagent.plugins import KIND_HOOKS, build_plugin_host, get_plugin_host
+
+
+class _Scorer:
+    def __init__(self, **options):
+        self.options = options
+
+
+def _scorer_plugin(name: str):
+    class Plugin:
+        @hookimpl
+        def register_scorers(self, register):
+            register(name, _Scorer, description="a throwaway scorer")
+
+    return Plugin()
+
+
+def _write_dist(root, dist: str, module: str, body: str, ep_name: str | None = None) -> None:
+    """A minimal installed distribution: a module plus ``<dist>.dist-info`` with an entry point."""
+    (root / f"{module}.py").write_text(textwrap.dedent(body))
+    info = root / f"{dist}-1.0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {dist}\nVersion: 1.0\n")
+    (info / "entry_points.txt").write_text(f"[povagent]\n{ep_name or dist} = {module}\n")
+
+
+PLUGIN_BODY = """
+from povagent import hookimpl
+
+class Scorer:
+    def score(self, instance, answer, dataset):
+        return {{}}
+
+@hookimpl
+def register_scorers(register):
+    register("{name}", Scorer, description="from a third-party plugin")
+"""
+
+
+def test_builtins_are_registered_with_their_module_as_source():
+    host = build_plugin_host()
+    entry = host.entry("scorer", "official")
+    assert entry.source == "built-in povagent_plugins.scorers.official"
+    assert entry.description
+
+
+def test_every_default_plugin_loads_without_failure():
+    assert build_plugin_host(strict=False).failures == []
+
+
+def test_throwaway_plugin_is_registered_and_created(povagent_host):
+    povagent_host.add_plugin(_scorer_plugin("tmp-scorer"), name="tmp")
+    try:
+        scorer = povagent_host.create("scorer", "tmp-scorer", {"alpha": 1})
+        assert isinstance(scorer, _Scorer) and scorer.options == {"alpha": 1}
+        assert get_plugin_host() is povagent_host
+    finally:
+        povagent_host.remove_plugin("tmp")
+    assert "tmp-scorer" not in povagent_host.names("scorer")
+
+
+def test_duplicate_name_is_an_error_naming_both_plugins(povagent_host):
+    povagent_host.add_plugin(_scorer_plugin("official"), name="impostor", source="plugin impostor")
+    try:
+        with pytest.raises(PluginError) as err:
+            povagent_host.names("scorer")
+        message = str(err.value)
+        assert "'official'" in message
+        assert "built-in povagent_plugins.scorers.official" in message and "plugin impostor" in message
+    finally:
+        povagent_host.remove_plugin("impostor")
+
+
+def test_unknown_name_suggests_the_nearest(povagent_host):
+    with pytest.raises(PluginError, match=r"unknown scorer 'oficial' \(did you mean 'official'\?\)"):
+        povagent_host.create("scorer", "oficial", {})
+
+
+def test_bad_options_name_the_plugin_and_its_source(povagent_host):
+    with pytest.raises(PluginError, match=r"scorer 'official' \(built-in povagent_plugins.scorers.official\) rejected its options"):
+        povagent_host.create("scorer", "official", {"no_such_option": 1})
+
+
+def test_entry_point_plugin_is_found(tmp_path, monkeypatch):
+    _write_dist(tmp_path, "povagent-demo", "povagent_demo_plugin", PLUGIN_BODY.format(name="demo-scorer"))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    host = build_plugin_host()
+    entry = host.entry("scorer", "demo-scorer")
+    assert "entry point povagent-demo = povagent_demo_plugin from povagent-demo 1.0" == entry.source
+
+
+def test_entry_point_that_fails_to_import_is_reported_by_name(tmp_path, monkeypatch):
+    _write_dist(tmp_path, "povagent-broken", "povagent_broken_plugin", "import no_such_module_here\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(PluginError, match=r"plugin 'povagent-broken' .*failed to load: ModuleNotFoundError: No module named 'no_such_module_here'"):
+        build_plugin_host()
+    lenient = build_plugin_host(strict=False)
+    assert [f.plugin for f in lenient.failures] == ["povagent-broken"]
+
+
+def test_config_listed_plugin_file_is_loaded(tmp_path):
+    path = tmp_path / "my_plugin.py"
+    path.write_text(textwrap.dedent(PLUGIN_BODY.format(name="file-scorer")))
+    host = build_plugin_host([str(path)])
+    assert host.entry("scorer", "file-scorer").source == f"config plugin {path}"
+
+
+def test_config_listed_dotted_module_is_loaded(tmp_path, monkeypatch):
+    (tmp_path / "povagent_dotted_demo.py").write_text(textwrap.dedent(PLUGIN_BODY.format(name="dotted-scorer")))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    host = build_plugin_host(["povagent_dotted_demo"])
+    assert host.entry("scorer", "dotted-scorer").source == "config plugin povagent_dotted_demo"
+
+
+def test_loading_the_same_module_twice_is_harmless(tmp_path):
+    path = tmp_path / "twice.py"
+    path.write_text(textwrap.dedent(PLUGIN_BODY.format(name="twice-scorer")))
+    host = build_plugin_host([str(path), str(path)])
+    assert host.names("scorer").count("twice-scorer") == 1
+
+
+def test_hook_implementation_without_spec_is_reported(tmp_path):
+    path = tmp_path / "typo_plugin.py"
+    path.write_text("from povagent import hookimpl\n\n@hookimpl\ndef register_scorer(register):\n    pass\n")
+    with pytest.raises(PluginError, match=r"typo_plugin.py.*register_scorer"):
+        build_plugin_host([str(path)])
+
+
+def test_register_hook_raising_is_reported_with_its_plugin(povagent_host):
+    class Broken:
+        @hookimpl
+        def register_parsers(self, register):
+            raise RuntimeError("boom")
+
+    povagent_host.add_plugin(Broken(), name="broken-parsers", source="plugin broken-parsers")
+    try:
+        with pytest.raises(PluginError, match=r"plugin broken-parsers: register_parsers raised RuntimeError: boom"):
+            povagent_host.names("parser")
+    finally:
+        povagent_host.remove_plugin("broken-parsers")
+
+
+def test_lifecycle_observer_that_raises_does_not_silence_others(povagent_host):
+    seen, errors = [], []
+
+    class Good:
+        @hookimpl
+        def povagent_run_end(self, run_dir, summary):
+            seen.append((run_dir, dict(summary)))
+
+    class Bad:
+        @hookimpl
+        def povagent_run_end(self, run_dir, summary):
+            raise ValueError("observer bug")
+
+    povagent_host.add_plugin(Good(), name="good")
+    povagent_host.add_plugin(Bad(), name="bad")
+    povagent_host.hooks.on_error = lambda hook, plugin, exc: errors.append((hook, plugin, str(exc)))
+    try:
+        povagent_host.hooks.run_end("runs/x", {"n": 1})
+    finally:
+        povagent_host.remove_plugin("good")
+        povagent_host.remove_plugin("bad")
+    assert seen == [("runs/x", {"n": 1})]
+    assert errors == [("povagent_run_end", "bad", "observer bug")]
+
+
+def test_every_hookspec_is_documented_and_reachable_through_the_host():
+    specs = [n for n, f in inspect.getmembers(hookspecs, inspect.isfunction) if hasattr(f, "povagent_spec")]
+    assert specs, "no hookspecs found"
+    lifecycle = {"povagent_run_start": "run_start", "povagent_instance_done": "instance_done", "povagent_run_end": "run_end"}
+    from povagent.plugins import PROFILE_HOOK, LifecycleHooks
+
+    for name in specs:
+        assert inspect.getdoc(getattr(hookspecs, name)), f"{name} has no docstring"
+        if name in lifecycle:
+            facade = getattr(LifecycleHooks, lifecycle[name])
+            spec_params = list(inspect.signature(getattr(hookspecs, name)).parameters)
+            assert list(inspect.signature(facade).parameters)[1:] == spec_params
+        else:
+            assert name in KIND_HOOKS.values() or name == PROFILE_HOOK
+
+
+def test_plugins_command_lists_every_kind_with_its_source():
+    from povagent.cli import app
+
+    result = CliRunner().invoke(app, ["plugins", "--json"])
+    assert result.exit_code == 0, result.output
+    listing = json.loads(result.output)
+    assert {"backend", "strategy", "parser", "scorer", "profile", "failures"} <= set(listing)
+    official = [e for e in listing["scorer"] if e["name"] == "official"]
+    assert official and official[0]["source"] == "built-in povagent_plugins.scorers.official"

@@ -1,0 +1,115 @@
+"""The HTML report, opened in headless Chromium: tables, plots and gallery images render.
+
+Chromium is required (CI installs Debian's ``chromium``): without it these tests fail with
+a message saying so, they do not skip.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from povagent.report.build import write_report
+
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--hide-scrollbars",
+]
+
+
+def chromium() -> str:
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    pytest.fail("Chromium is not installed: `apt-get install -y chromium` (the HTML report test needs a real browser)")
+
+
+def browse(page, tmp_path, *args: str) -> subprocess.CompletedProcess:
+    cmd = [chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", *args, page.as_uri()]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
+
+
+@pytest.fixture(scope="module")
+def report(sweep_dir, tmp_path_factory):
+    return write_report(sweep_dir, tmp_path_factory.mktemp("report") / "out", n_boot=200)
+
+
+@pytest.fixture(scope="module")
+def dom(report, tmp_path_factory):
+    done = browse(report.page, tmp_path_factory.mktemp("browser"), "--dump-dom")
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def body_attr(dom: str, name: str) -> int:
+    m = re.search(rf'<body[^>]*\b{name}="(\d+)"', dom)
+    assert m, f"body has no {name}"
+    return int(m.group(1))
+
+
+def test_tables_render_with_a_row_per_system_and_the_center_baseline(dom):
+    main = re.search(r'<table class="results" id="table-main".*?</table>', dom, re.S).group(0)
+    for label in ("mock-a · basic", "mock-a · cot", "mock-b · basic", "mock-b · cot", "Center baseline (computed)"):
+        assert f'<th scope="row">{label}</th>' in main
+    assert '<span class="best">' in main
+
+
+def test_plots_render_as_inline_svg(dom):
+    for fig in ("error_by_condition", "error_by_direction", "error_by_condition_direction", "error_distribution"):
+        assert re.search(rf'<figure id="fig-{fig}"><svg', dom)
+    assert 'id="fig-scatter_x_' in dom
+
+
+def test_gallery_cards_render_and_their_images_load_in_the_browser(dom, report):
+    assert body_attr(dom, "data-gallery-count") == report.gallery.entries
+    assert body_attr(dom, "data-gallery-rendered") > 0
+    assert body_attr(dom, "data-images-loaded") >= 1  # counted by onload with naturalWidth > 0
+    assert body_attr(dom, "data-images-failed") == 0
+    assert re.search(r'<div class="card" data-i="\d+"><div class="imgs"><img alt="[^"]+" src="images/[0-9a-f]{64}\.t\.jpg">', dom)
+
+
+def test_screenshot_shows_a_rendered_page_not_a_blank_one(report, tmp_path):
+    shot = tmp_path / "shot.png"
+    done = browse(report.page, tmp_path, f"--screenshot={shot}", "--window-size=1400,2000")
+    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    pixels = np.asarray(Image.open(shot).convert("L"), dtype=float)
+    assert pixels.std() > 20  # text, rules and bars: far from a uniform page
+    assert (pixels < 80).mean() > 0.005  # dark text is present
+
+
+def test_gallery_references_images_by_hash_and_inlines_no_image_data(report):
+    html = report.page.read_text(encoding="utf-8")
+    assert "data:image" not in html and "base64" not in html
+    data = json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
+    keys = {e["img"] for e in data["entries"] if e["img"]}
+    assert keys
+    for k in keys:
+        assert re.fullmatch(r"[0-9a-f]{64}", k)
+        assert (report.out / "images" / f"{k}.jpg").stat().st_size > 0
+        assert Image.open(report.out / "images" / f"{k}.t.jpg").size == (256, 256)
+
+
+def test_rerunning_the_report_reuses_every_gallery_image(report, sweep_dir):
+    again = write_report(sweep_dir, report.out, n_boot=0)
+    assert again.gallery.drawn == 0
+    assert again.gallery.cached == report.gallery.drawn + report.gallery.cached
+
+
+def test_report_writes_tables_in_markdown_csv_and_latex(report):
+    for key in ("main", "ablation", "per_direction", "response_rates", "metric_variants", "paired"):
+        for ext in ("md", "csv", "tex"):
+            assert (report.out / "tables" / f"{key}.{ext}").stat().st_size > 0
+    assert "\\toprule" in (report.out / "tables.tex").read_text()

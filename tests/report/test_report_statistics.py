@@ -1,0 +1,88 @@
+"""Means over runs, bootstrap CIs and paired comparisons (povagent/report/statistics.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import binomtest
+
+from povagent.report.collect import Observation
+from povagent.report.statistics import bootstrap_mean_ci, cell_stats, paired_comparison, sign_test_p
+
+
+def obs(instance: str, l2: float | None, run: int = 0, system: str = "s", in_frame: bool = True) -> Observation:
+    answered = l2 is not None
+    return Observation(
+        system=system, run_name="r", run=run, instance_id=instance, house_id="h", pair_id="0", direction="left",
+        condition="a", status="answered" if answered else "parse_error", parse_status="ok" if answered else "unparseable",
+        answered=answered, l2=l2, l2_strict=l2, gt_in_frame=in_frame if answered else None, gt_behind=False if answered else None,
+        gt_u=0.5, gt_v=0.5, selected_image=0, image_path=None, x=1.0, y=1.0, sentence="", raw=None,
+    )
+
+
+def test_bootstrap_ci_covers_the_true_mean_in_about_95_percent_of_seeds():
+    true_mean, hits, trials = 0.3, 0, 300
+    for seed in range(trials):
+        rng = np.random.default_rng(seed)
+        sample = rng.exponential(true_mean, size=120)  # skewed, like L2 errors
+        est = bootstrap_mean_ci(sample, n_boot=600, seed=seed + 10_000)
+        hits += est.lo <= true_mean <= est.hi
+    assert 0.91 <= hits / trials <= 0.985
+
+
+def test_ci_narrows_as_instances_grow():
+    rng = np.random.default_rng(0)
+    small = bootstrap_mean_ci(rng.normal(0, 1, 50), n_boot=500)
+    large = bootstrap_mean_ci(rng.normal(0, 1, 5000), n_boot=500)
+    assert (large.hi - large.lo) < (small.hi - small.lo) / 5
+
+
+def test_mean_over_runs_is_the_mean_of_each_runs_answered_mean():
+    rows = [obs("i1", 0.1, 0), obs("i2", 0.3, 0), obs("i1", 0.5, 1), obs("i2", None, 1)]
+    s = cell_stats(rows, n_boot=0)
+    assert s.official.value == pytest.approx(((0.1 + 0.3) / 2 + 0.5) / 2)
+    assert s.response_rate.value == pytest.approx((1.0 + 0.5) / 2)
+
+
+def test_counting_non_responses_scores_an_unanswered_instance_as_the_center_guess():
+    rows = [obs("i1", 0.1), obs("i2", None)]
+    s = cell_stats(rows, fill={"i1": 0.9, "i2": 0.7}, n_boot=0)
+    assert s.official.value == pytest.approx(0.1)
+    assert s.counted.value == pytest.approx((0.1 + 0.7) / 2)
+
+
+def test_counting_non_responses_is_absent_without_the_center_scores():
+    assert cell_stats([obs("i1", 0.1), obs("i2", None)], n_boot=0).counted.value is None
+
+
+def test_gt_in_selected_frame_is_a_share_of_answered_rows():
+    rows = [obs("i1", 0.1, in_frame=True), obs("i2", 0.2, in_frame=False), obs("i3", None)]
+    assert cell_stats(rows, n_boot=0).in_frame.value == pytest.approx(0.5)
+
+
+def test_paired_comparison_detects_a_consistent_improvement():
+    rng = np.random.default_rng(3)
+    a = rng.uniform(0.2, 0.6, 80)
+    b = a - 0.05 + rng.normal(0, 0.02, 80)
+    c = paired_comparison("A", [obs(f"i{k}", v, system="A") for k, v in enumerate(a)], "B", [obs(f"i{k}", v, system="B") for k, v in enumerate(b)], n_boot=500)
+    assert c.n_pairs == 80
+    assert c.diff.hi < 0 and c.diff.value == pytest.approx(float(np.mean(b - a)))
+    assert c.wilcoxon_p < 1e-6 and c.sign_p < 1e-6
+
+
+def test_paired_comparison_uses_only_instances_both_answered():
+    a = [obs("i1", 0.2, system="A"), obs("i2", 0.4, system="A"), obs("i3", None, system="A")]
+    b = [obs("i1", 0.1, system="B"), obs("i2", None, system="B"), obs("i3", 0.3, system="B")]
+    c = paired_comparison("A", a, "B", b, n_boot=100)
+    assert c.n_pairs == 1 and c.diff.value == pytest.approx(-0.1)
+
+
+def test_identical_systems_tie_everywhere_and_have_no_test():
+    a = [obs(f"i{k}", 0.1 * k, system="A") for k in range(5)]
+    c = paired_comparison("A", a, "B", a, n_boot=100)
+    assert c.ties == 5 and c.diff.value == 0 and c.wilcoxon_p is None and c.sign_p is None
+
+
+@pytest.mark.parametrize("pos,neg", [(0, 1), (3, 9), (10, 10), (40, 17)])
+def test_sign_test_is_the_exact_two_sided_binomial_test(pos, neg):
+    assert sign_test_p(pos, neg) == pytest.approx(binomtest(pos, pos + neg, 0.5).pvalue, rel=1e-9)

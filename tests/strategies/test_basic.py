@@ -1,0 +1,92 @@
+"""The basic strategy and the paper's message layout (plugins/strategies/basic.py, layout.py)."""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from povagent.dataset.models import Condition
+from povagent.exchange import ImagePart, Response, TextPart
+from povagent.images import ImageStore
+from povagent_plugins.strategies.basic import BasicStrategy
+
+
+def test_each_frame_is_preceded_by_its_image_label(make_instance, facing_z):
+    inst = make_instance([facing_z(), facing_z(90), facing_z(180)])
+    request = BasicStrategy().build(inst, ImageStore())
+    (message,) = request.messages
+    parts = message.parts
+    assert message.role == "user"
+    assert [p.text for p in parts[0:6:2]] == ["Image 0:", "Image 1:", "Image 2:"]
+    assert all(isinstance(p, ImagePart) for p in parts[1:6:2])
+    assert isinstance(parts[-1], TextPart) and parts[-1].text.startswith("You are the intelligent brain system")
+    assert len(parts) == 7
+
+
+def test_given_shows_the_observer_view_then_the_prompt(make_instance, facing_z):
+    inst = make_instance([facing_z()], condition=Condition.GIVEN)
+    parts = BasicStrategy().build(inst, ImageStore()).messages[0].parts
+    assert isinstance(parts[0], ImagePart)
+    assert isinstance(parts[1], TextPart) and "The image provided shows the target scene" in parts[1].text
+    assert len(parts) == 2
+
+
+def test_images_are_referenced_by_the_hash_of_their_file(make_instance, facing_z):
+    inst = make_instance([facing_z(), facing_z(90)])
+    store = ImageStore()
+    request = BasicStrategy().build(inst, store)
+    assert request.image_hashes() == [store.add_file(f.file).image_hash for f in inst.frames]
+
+
+def test_frames_answer_schema_asks_for_a_frame_among_those_shown(make_instance, facing_z):
+    inst = make_instance([facing_z(), facing_z(90), facing_z(180)])
+    spec = BasicStrategy().build(inst, ImageStore()).answer
+    assert spec.asks_frame and spec.n_frames == 3 and (spec.width, spec.height) == (512, 512)
+    assert spec.required_keys == ("selected_image", "x", "y")
+    assert spec.json_schema["properties"]["selected_image"]["maximum"] == 2
+    assert spec.json_schema["properties"]["x"]["maximum"] == 511
+
+
+def test_given_answer_schema_asks_for_a_point_only(make_instance, facing_z):
+    spec = BasicStrategy().build(make_instance([facing_z()], condition=Condition.GIVEN), ImageStore()).answer
+    assert not spec.asks_frame and spec.required_keys == ("x", "y")
+
+
+def test_answer_spec_without_building_matches_the_request(make_instance, facing_z):
+    inst = make_instance([facing_z(), facing_z(90)])
+    strategy = BasicStrategy()
+    assert strategy.answer_spec(inst) == strategy.build(inst, ImageStore()).answer
+
+
+def test_basic_asks_for_256_new_tokens_by_default(make_instance, facing_z):
+    request = BasicStrategy().build(make_instance([facing_z()]), ImageStore())
+    assert request.generation.max_tokens == 256 and request.generation.temperature is None
+
+
+def test_generation_options_are_configurable(make_instance, facing_z):
+    request = BasicStrategy(max_tokens=64, temperature=0).build(make_instance([facing_z()]), ImageStore())
+    assert request.generation.as_dict() == {"max_tokens": 64, "temperature": 0.0}
+
+
+@pytest.mark.parametrize("options", [{"max_tokens": 0}, {"max_tokens": "many"}, {"temperature": -1}])
+def test_bad_generation_options_are_rejected_with_the_option_named(options):
+    with pytest.raises(ValueError, match=next(iter(options))):
+        BasicStrategy(**options)
+
+
+def test_the_built_in_strategy_is_single_turn(make_instance, facing_z):
+    inst = make_instance([facing_z()])
+    asked = []
+
+    async def ask(request):
+        asked.append(request)
+        return Response(text='{"selected_image": 0, "x": 1, "y": 2}')
+
+    exchanges = asyncio.run(BasicStrategy().solve(inst, ask, ImageStore()))
+    assert len(asked) == 1 and len(exchanges) == 1 and exchanges[0][1].text.startswith("{")
+
+
+def test_the_request_hash_is_stable_across_stores(make_instance, facing_z):
+    inst = make_instance([facing_z(), facing_z(90)])
+    assert BasicStrategy().build(inst, ImageStore()).content_hash() == BasicStrategy().build(inst, ImageStore()).content_hash()

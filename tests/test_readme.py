@@ -1,0 +1,30 @@
+"""The README's Quickstart holds exactly two commands, and CI runs the test one verbatim."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def quickstart_commands() -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    section = text.split("## Quickstart", 1)[1].split("\n## ", 1)[0]
+    blocks = re.findall(r"```(?:bash|sh)\n(.*?)```", section, flags=re.S)
+    return [line.strip() for block in blocks for line in block.strip().splitlines() if line.strip()]
+
+
+def test_quickstart_has_exactly_two_commands():
+    assert len(quickstart_commands()) == 2
+
+
+def test_ci_runs_the_readme_test_command_verbatim():
+    test_command = quickstart_commands()[1]
+    assert "pytest" in test_command
+    assert test_command in (ROOT / ".ci" / "run").read_text()
+
+
+def test_the_main_command_installs_and_runs_the_quickstart():
+    main = quickstart_commands()[0]
+    assert "pip install" in main and "povagent quickstart" in main
