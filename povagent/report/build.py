@@ -119,7 +119,11 @@ def write_report(
     t = time.perf_counter()
     body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures)
     n_rows = sum(len(r.rows) for r in collection.runs)
-    subtitle = f"{source} · {len(collection.runs)} run folder(s) · {len(analysis.model_systems)} system(s) · {n_rows} rows"
+    n_models = len(analysis.model_systems)
+    subtitle = (
+        f"{source} · {len(collection.runs)} run folder(s) · {n_models} model(s), "
+        f"{len(analysis.systems) - n_models} baseline(s) · {n_rows} rows"
+    )
     if analysis.dataset_path:
         subtitle += f" · dataset {analysis.dataset_path}"
     page_html = render_page(

@@ -15,13 +15,27 @@ from povagent.report.statistics import Estimate
 
 #: Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
-REFERENCE_COLOUR = "#9a9a9a"
+#: Greys for baselines (center, random, oracle): set apart from models, told apart from each other.
+REFERENCE_COLOURS = ("#9a9a9a", "#5f5f5f", "#c8c8c8", "#3a3a3a")
 FONT = 'font-family="system-ui, -apple-system, Segoe UI, Helvetica, Arial, sans-serif"'
 
 
 def colour(i: int) -> str:
     """The i-th series colour."""
     return PALETTE[i % len(PALETTE)]
+
+
+def series_colours(series: Sequence[tuple]) -> list[str]:
+    """A colour per ``(name, values, is_reference)`` series: palette for models, greys for baselines."""
+    out, models, refs = [], 0, 0
+    for _, _, ref in series:
+        if ref:
+            out.append(REFERENCE_COLOURS[refs % len(REFERENCE_COLOURS)])
+            refs += 1
+        else:
+            out.append(colour(models))
+            models += 1
+    return out
 
 
 def _e(text: str) -> str:
@@ -59,7 +73,7 @@ def grouped_bars(
     height: int = 340,
 ) -> str:
     """Bars per group and series, with CI whiskers; a series is ``(name, estimates, reference)``."""
-    colours = [REFERENCE_COLOUR if ref else colour(i) for i, (_, _, ref) in enumerate(series)]
+    colours = series_colours(series)
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
     left, right, bottom = 60, 16, 46
     plot_h = height - top - bottom
@@ -157,7 +171,7 @@ def histogram(
     x_label: str = "normalized L2",
 ) -> str:
     """Step outlines of each series' distribution (share of its values per bin)."""
-    colours = [REFERENCE_COLOUR if ref else colour(i) for i, (_, _, ref) in enumerate(series)]
+    colours = series_colours(series)
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
     left, right, bottom = 60, 16, 40
     plot_h, plot_w = height - top - bottom, width - left - right

@@ -45,20 +45,22 @@ def test_targets_come_from_the_pool_of_their_surface(tiny_dataset):
                 assert placement["surface_pool"] == "Floor"
 
 
-class FrontOnlyJudge:
-    """A throwaway judge: only 'front', always on the floor (stands in for a VLM judge)."""
+class FrontAndUpJudge:
+    """A throwaway judge: only front (on the floor) and up (on the anchor); stands in for a VLM."""
 
     def judge(self, request: JudgeRequest) -> SurfaceVerdict:
         assert request.image is not None and request.image.shape == (512, 512, 3)
         if request.direction == "front":
             return SurfaceVerdict("appropriate", "on the floor")
+        if request.direction == "up":
+            return SurfaceVerdict("appropriate", "on the anchor")
         return SurfaceVerdict("inappropriate", None)
 
 
 def test_a_plugged_in_judge_decides_which_directions_exist(tiny_dataset):
-    assert isinstance(FrontOnlyJudge(), SurfaceJudge) and isinstance(PhysicalRulesJudge(), SurfaceJudge)
+    assert isinstance(FrontAndUpJudge(), SurfaceJudge) and isinstance(PhysicalRulesJudge(), SurfaceJudge)
     house, renderer = tiny_dataset.built.house, tiny_dataset.built.renderer
     counts = [renderer.render(c).pixel_counts() for c in plan_tour(house, renderer, 4)]
-    pairs = build_pairs(house, renderer, counts, FrontOnlyJudge(), np.random.default_rng(0), max_pairs=2)
+    pairs = build_pairs(house, renderer, counts, FrontAndUpJudge(), np.random.default_rng(0), max_pairs=2)
     assert pairs
-    assert all([q.direction for q in p.queries] == ["front"] for p in pairs)
+    assert all([q.direction for q in p.queries] == ["front", "up"] for p in pairs)
