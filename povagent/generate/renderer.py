@@ -22,8 +22,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from embreex import rtcore_scene
-from embreex.mesh_construction import TriangleMesh
+from povagent.errors import PovagentError
+
+try:
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+except ImportError as _exc:  # embreex ships wheels for x86-64 only
+    raise PovagentError(
+        "the dataset renderer needs embreex (Embree ray tracing), which has wheels for x86-64 only: "
+        "`pip install embreex` where it is available, or generate datasets on an x86-64 machine "
+        f"({_exc})"
+    ) from _exc
 
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.meshes import (
