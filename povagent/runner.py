@@ -354,12 +354,11 @@ class PipelineRun:
         backend = self.components.backend
         cache = self._cache if getattr(backend, "cacheable", True) else None
         identity = self._identity
-        stamp_run = "run" in Request.__dataclass_fields__
 
         async def ask(request: Request) -> Response:
-            if stamp_run and request.run != run:  # type: ignore[attr-defined]
+            if request.run != run:
                 # Offline baselines seed by run index; the cache key adds the run separately.
-                request = dataclasses.replace(request, run=run)  # type: ignore[call-arg]
+                request = dataclasses.replace(request, run=run)
             request_hash = request.content_hash()
             key = cache_key(identity, request_hash, run) if cache is not None else None
             response = cache.get(key) if key is not None else None  # type: ignore[union-attr]

@@ -42,7 +42,7 @@ FRAME_POLICIES: tuple[str, ...] = ("first", "random", "cycle")
 def request_run(request: Request) -> int:
     """The run index a request belongs to (0 when the request does not say)."""
     # Request carries the run for offline baselines when the runner sets it (see the report)
-    run = getattr(request, "run", 0)
+    run = request.run
     return run if isinstance(run, int) else 0
 
 
