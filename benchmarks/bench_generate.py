@@ -21,6 +21,7 @@ import numpy as np
 PAPER_SHARES = {"front": 0.97, "up": 0.66, "left": 0.62, "right": 0.58}
 PAPER_DIRECTIONS_PER_PAIR = 2.8
 PAPER_INSTANCES_PER_CONDITION = 813
+PAPER_PAIRS = 288
 
 
 def bench_frames(n: int = 20) -> tuple[float, float, float]:
@@ -54,11 +55,21 @@ def bench_dataset(houses: int, jobs: int) -> tuple[float, object]:
 
 
 def print_directions(report) -> None:
-    """Direction shares of pairs against the paper's."""
-    shares = report.direction_shares()
-    print(f"  pairs {report.pairs}, instances per condition {report.instances_per_condition}")
+    """Instances per direction and their shares of pairs, against the paper's."""
+    shares, counts = report.direction_shares(), report.direction_counts()
+    houses = len(report.houses)
+    per_house = report.instances_per_condition / max(houses, 1)
+    print(f"  pairs {report.pairs} ({report.pairs / max(houses, 1):.1f} per house; paper {PAPER_PAIRS / 47:.1f})")
+    print(
+        f"  instances per condition {report.instances_per_condition} ({per_house:.1f} per house, "
+        f"{47 * per_house:.0f} for 47 houses; "
+        f"paper {PAPER_INSTANCES_PER_CONDITION / 47:.1f} and {PAPER_INSTANCES_PER_CONDITION})"
+    )
     for d in ("front", "up", "left", "right"):
-        print(f"  {d:>5}: {100 * shares[d]:5.1f}% of pairs   (paper {100 * PAPER_SHARES[d]:.0f}%)")
+        print(
+            f"  {d:>5}: {counts[d]:4d} instances = {100 * shares[d]:5.1f}% of pairs   "
+            f"(paper {100 * PAPER_SHARES[d]:.0f}%, {PAPER_SHARES[d] * PAPER_PAIRS:.0f} instances)"
+        )
     per_pair = report.instances_per_condition / max(report.pairs, 1)
     print(f"  directions per pair: {per_pair:.2f}   (paper {PAPER_DIRECTIONS_PER_PAIR})")
 

@@ -20,12 +20,23 @@ def generate_command(
     with_render: bool = typer.Option(
         False, "--with-render", help="Also write depth maps and instance masks under each house's _render/."
     ),
+    judge: str | None = typer.Option(
+        None, "--judge", help="Surface judge as module:Name (a VLM judge, say); default: the physical rules."
+    ),
 ) -> None:
     """Generate houses, render their exploration frames and observer views, write the queries."""
     from povagent.generate import generate_dataset
+    from povagent.generate.judge import load_judge
 
     report = generate_dataset(
-        out, houses=houses, seed=seed, frames=frames, jobs=jobs, progress=sys.stdout.isatty(), with_render=with_render
+        out,
+        houses=houses,
+        seed=seed,
+        frames=frames,
+        jobs=jobs,
+        progress=sys.stdout.isatty(),
+        with_render=with_render,
+        judge=load_judge(judge) if judge else None,
     )
     shares = ", ".join(f"{d} {100 * s:.0f}%" for d, s in report.direction_shares().items())
     typer.echo(

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Callable
 
 from povagent.errors import DatasetError
+from povagent.generate.judge import PhysicalRulesJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary, generate_house
 from povagent.generate.writer import write_json
 
@@ -83,13 +84,17 @@ def generate_dataset(
     jobs: int = 1,
     progress: bool | ProgressCallback = True,
     with_render: bool = False,
+    judge: SurfaceJudge | None = None,
 ) -> GenerationReport:
     """Generate ``houses`` houses in the POVBench release layout under ``out``.
 
     ``progress``: True shows a rich progress bar when stdout is a terminal, a callable is
     called as ``progress(summary, done, total)`` after each house, False is silent.
     ``with_render`` also writes depth maps and instance masks under each house's ``_render/``.
-    The files depend only on (houses, seed, frames, with_render), never on ``jobs``. ``out``
+    ``judge`` decides stage 3 (default: :class:`~povagent.generate.judge.PhysicalRulesJudge`);
+    a pair keeps only if the judge allows ``pairs.MIN_DIRECTIONS`` (2) of its directions; with
+    ``jobs > 1`` the judge must pickle, since each worker process gets a copy.
+    The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``. ``out``
     must be empty, new, or a dataset this generator wrote (which is then replaced whole);
     anything else raises :class:`~povagent.errors.DatasetError`.
     """
@@ -101,13 +106,15 @@ def generate_dataset(
     try:
         if jobs <= 1 or houses <= 1:
             for index in range(houses):
-                summary = generate_house(out, seed, index, frames, with_render)
+                summary = generate_house(out, seed, index, frames, with_render, judge)
                 report.houses.append(summary)
                 callback(summary, len(report.houses), houses)
         else:
             context = multiprocessing.get_context("spawn")
             with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-                futures = [pool.submit(generate_house, out, seed, i, frames, with_render) for i in range(houses)]
+                futures = [
+                    pool.submit(generate_house, out, seed, i, frames, with_render, judge) for i in range(houses)
+                ]
                 for future in as_completed(futures):
                     summary = future.result()
                     report.houses.append(summary)
@@ -125,7 +132,7 @@ def generate_dataset(
                 "frames": frames,
                 "houses": houses,
                 "camera": {"exploration_height": 0.9, "exploration_horizon": 30, "observer_height": 1.55, "fov": 100},
-                "judge": "physical-rules",
+                "judge": judge_name(judge or PhysicalRulesJudge()),
             },
             "counts": report.counts(),
         },

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.generate.floorplan import GRID, Rect
+from povagent.generate.furnishing import DOOR_FRAME_TRIM
+from povagent.generate.meshes import JAMB_OVERLAP
 from povagent.generate.renderer import Renderer
 from povagent.generate.scene import House
 from povagent.geometry.camera import Camera
@@ -46,10 +48,11 @@ def _blockers(house: House) -> list[Rect]:
     for o in house.objects:
         if o.object_type == "Doorway":
             r = o.rect
+            t = DOOR_FRAME_TRIM + JAMB_OVERLAP
             if r.width > r.depth:  # jambs at both ends of the opening
-                out += [Rect(r.x0, r.z0, r.x0 + 0.06, r.z1), Rect(r.x1 - 0.06, r.z0, r.x1, r.z1)]
+                out += [Rect(r.x0, r.z0, r.x0 + t, r.z1), Rect(r.x1 - t, r.z0, r.x1, r.z1)]
             else:
-                out += [Rect(r.x0, r.z0, r.x1, r.z0 + 0.06), Rect(r.x0, r.z1 - 0.06, r.x1, r.z1)]
+                out += [Rect(r.x0, r.z0, r.x1, r.z0 + t), Rect(r.x0, r.z1 - t, r.x1, r.z1)]
         elif o.support == "floor":
             out.append(o.rect)
     return out

@@ -433,36 +433,62 @@ def _beside(L: RoomLayout, anchor: PlacedObject, object_type: str, lamp_p: float
 
 
 def _dining_set(L: RoomLayout) -> None:
-    """A dining table in open floor with chairs drawn up to it, facing it."""
+    """A dining table in open floor with 2 to 4 chairs drawn up to it, facing it.
+
+    Tables are tried in a seeded order, each along and across the room, at the free spot
+    nearest the room's centre; the floor reserved around it is what its chairs need (a chair's
+    depth and room to pull it out on the sides that get one, a narrow passage elsewhere).
+    """
     rng = L.rng
-    spec = choose_asset("DiningTable", rng, lambda a: a.width <= 1.8 and a.depth <= 1.1 and a.height <= 0.85)
     chair = choose_asset("Chair", rng, lambda a: a.height <= 1.05 and a.depth <= 0.6)
-    if spec is None or chair is None:
+    tables = [a for a in asset_database()["DiningTable"] if a.width <= 1.8 and a.depth <= 1.1 and a.height <= 0.85]
+    if chair is None or not tables:
         return
+    n = int(rng.integers(2, 5))
     r = L.room.interior
-    margin = chair.depth + 0.3
-    xs = np.arange(r.x0 + spec.width / 2 + margin, r.x1 - spec.width / 2 - margin + 1e-6, 0.25)
-    zs = np.arange(r.z0 + spec.depth / 2 + margin, r.z1 - spec.depth / 2 - margin + 1e-6, 0.25)
     cx, cz = r.center
-    spots = sorted(
-        ((float(x), float(z)) for x in xs for z in zs),
-        key=lambda p: (p[0] - cx) ** 2 + (p[1] - cz) ** 2,
-    )
-    for x, z in spots:
-        reserve = Rect(x - spec.width / 2 - margin, z - spec.depth / 2 - margin,
-                       x + spec.width / 2 + margin, z + spec.depth / 2 + margin)
-        if not L.free(reserve):
-            continue
-        table = L.free_standing("DiningTable", spec, x, z, 0)
-        if table is None:
-            continue
-        seats = [(0.0, 1.0), (0.0, -1.0), (1.0, 0.0), (-1.0, 0.0)]
-        n = int(rng.integers(2, 5))
-        for dx, dz in seats[:n]:
-            reach = (spec.depth if dz else spec.width) / 2 + chair.depth / 2 + 0.05
-            yaw = int(round(np.degrees(np.arctan2(-dx, -dz)))) % 360
-            L.free_standing("Chair", chair, x + dx * reach, z + dz * reach, yaw)
+    for k in rng.permutation(len(tables)):
+        spec = tables[int(k)]
+        for yaw in ((0, 90) if rng.random() < 0.5 else (90, 0)):
+            sx, sz = (spec.width, spec.depth) if yaw == 0 else (spec.depth, spec.width)
+            # chairs go on the long sides first, then at the ends
+            long_sides = [(0.0, 1.0), (0.0, -1.0)] if sx >= sz else [(1.0, 0.0), (-1.0, 0.0)]
+            ends = [(1.0, 0.0), (-1.0, 0.0)] if sx >= sz else [(0.0, 1.0), (0.0, -1.0)]
+            seats = (long_sides + ends)[:n]
+            pull = chair.depth + 0.15
+            grow = {s: (pull if s in seats else 0.3) for s in long_sides + ends}
+            x0m, x1m, z0m, z1m = grow[(-1.0, 0.0)], grow[(1.0, 0.0)], grow[(0.0, -1.0)], grow[(0.0, 1.0)]
+            xs = np.arange(r.x0 + sx / 2 + x0m, r.x1 - sx / 2 - x1m + 1e-6, 0.25)
+            zs = np.arange(r.z0 + sz / 2 + z0m, r.z1 - sz / 2 - z1m + 1e-6, 0.25)
+            spots = sorted(
+                ((float(x), float(z)) for x in xs for z in zs),
+                key=lambda q: (q[0] - cx) ** 2 + (q[1] - cz) ** 2,
+            )
+            for x, z in spots:
+                reserve = Rect(x - sx / 2 - x0m, z - sz / 2 - z0m, x + sx / 2 + x1m, z + sz / 2 + z1m)
+                if not L.free(reserve):
+                    continue
+                table = L.free_standing("DiningTable", spec, x, z, yaw)
+                if table is None:
+                    continue
+                for dx, dz in seats:
+                    reach = (sz if dz else sx) / 2 + chair.depth / 2 + 0.05
+                    chair_yaw = int(round(np.degrees(np.arctan2(-dx, -dz)))) % 360
+                    L.free_standing("Chair", chair, x + dx * reach, z + dz * reach, chair_yaw)
+                return
+    # a room too narrow for chairs all round (a galley kitchen): the table's long side goes
+    # against a wall and the chairs stand along its open side
+    table = L.against_wall("DiningTable", access_depth=chair.depth + 0.15, avoid_door_walls=True,
+                           fits=lambda a: a.width <= 1.8 and a.depth <= 1.1 and a.height <= 0.85)
+    if table is None:
         return
+    f, w = table.front, table.local_size[0]
+    across = np.array([f[2], 0.0, -f[0]])
+    reach = table.local_size[2] / 2 + chair.depth / 2 + 0.05
+    offsets = (-w / 4, w / 4) if w >= 2.2 * chair.width else (0.0,)
+    for t in offsets[: max(1, n - 1)]:
+        x, z = table.center[0] + f[0] * reach + across[0] * t, table.center[2] + f[2] * reach + across[2] * t
+        L.free_standing("Chair", chair, x, z, table.yaw + 180)
 
 
 def _kitchen(L: RoomLayout) -> None:

@@ -22,12 +22,14 @@ a person judging the photo would), not for the scorer's 0.4 m cube, which only s
 
 from __future__ import annotations
 
+import importlib
 import re
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from povagent.errors import PluginError
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.scene import House, PlacedObject
 from povagent.geometry.camera import Camera
@@ -51,9 +53,8 @@ _NOT_REALLY_FLAT = frozenset({"Desktop"})
 
 #: How surfaces are named in stage-3 phrases (the scorer's keyword match reads these).
 SURFACE_NOUNS = {
+    "ArmChair": "armchair",
     "CounterTop": "countertop",
-    "ShelvingUnit": "shelf",
-    "Television": "TV stand",
 }
 
 
@@ -119,8 +120,34 @@ def ground_truth(anchor: PlacedObject, camera: Camera, direction: str, verdict: 
     )  # fmt: skip
 
 
+def load_judge(spec: str) -> SurfaceJudge:
+    """The judge named by ``module:Name`` (a :class:`SurfaceJudge` class, built without
+    arguments, or an instance), for ``povagent generate --judge``.
+
+    Raises :class:`~povagent.errors.PluginError` when it cannot be imported or is no judge.
+    """
+    module_name, _, attribute = spec.partition(":")
+    if not module_name or not attribute:
+        raise PluginError(f"judge {spec!r}: give it as module:Name (e.g. my_judges:VlmJudge)")
+    try:
+        target = getattr(importlib.import_module(module_name), attribute)
+    except (ImportError, AttributeError) as exc:
+        raise PluginError(f"judge {spec!r} cannot be loaded: {exc}") from exc
+    judge = target() if isinstance(target, type) else target
+    if not isinstance(judge, SurfaceJudge):
+        raise PluginError(f"judge {spec!r} has no judge(request) method: it is not a SurfaceJudge")
+    return judge
+
+
+def judge_name(judge: SurfaceJudge) -> str:
+    """How ``meta.json`` names a judge: its ``name`` attribute, else its class name."""
+    return str(getattr(judge, "name", type(judge).__name__))
+
+
 class PhysicalRulesJudge:
     """The deterministic judge: support, free space and clearance rules from the geometry."""
+
+    name = "physical-rules"
 
     def judge(self, request: JudgeRequest) -> SurfaceVerdict:
         """Try the plausible surfaces in order and return the first that holds a target."""
@@ -175,7 +202,9 @@ class PhysicalRulesJudge:
             return "in a wall"
         lo, hi = centre - (h - 0.02), centre + (h - 0.02)
         for other in house.objects:
-            if other is support or other.object_type == "Doorway":
+            # the spot lies off the anchor's box by construction; an axis-aligned test cube
+            # only grazes its corner when the direction is oblique, which blocks nothing
+            if other is support or other is anchor or other.object_type == "Doorway":
                 continue
             if other.box_overlaps(lo, hi):
                 return f"blocked by {other.object_type}"

@@ -19,6 +19,7 @@ from typing import Callable
 import numpy as np
 
 from povagent.generate.floorplan import WALL_HEIGHT, FloorPlan
+from povagent.generate.furnishing import DOOR_FRAME_TRIM
 from povagent.generate.scene import House, PlacedObject
 
 # Materials the renderer knows how to shade.
@@ -170,6 +171,10 @@ LAMP_LIGHT = _rgb("#fff1c8")
 
 def _pick(rng: np.random.Generator, palette):
     return palette[int(rng.integers(len(palette)))]
+
+
+#: How far the frame reaches into the opening, past the wall's cut face.
+JAMB_OVERLAP = 0.015
 
 
 # -- furniture builders: (parts, w, h, d, rng, obj) ---------------------------------------------
@@ -516,7 +521,9 @@ def _dryer(P, w, h, d, rng, obj):
 
 
 def _doorway(P, w, h, d, rng, obj):
-    trim = 0.06
+    # the jambs and the head reach JAMB_OVERLAP into the opening: flush with the wall's cut
+    # faces they would z-fight with them (a speckled frame) and let the baseboard ends poke out
+    trim = DOOR_FRAME_TRIM + JAMB_OVERLAP
     col = _pick(rng, [WHITE, OFFWHITE, _rgb("#7a5230")]) if "entrance" not in obj.flags else _rgb("#f4f1ea")
     P.box(-w / 2, 0, -d / 2, -w / 2 + trim, h, d / 2, col, WOOD)
     P.box(w / 2 - trim, 0, -d / 2, w / 2, h, d / 2, col, WOOD)

@@ -96,6 +96,9 @@ class Renderer:
         self._materials = materials
         self._owners = owners.astype(np.uint16)
         self._grids: dict[tuple[int, int, float], np.ndarray] = {}
+        # each object's own triangles, for its unoccluded silhouette (scenes built on demand)
+        self._vertices, self._object_faces = vertices, faces
+        self._object_scenes: dict[int, rtcore_scene.EmbreeScene | None] = {}
 
     def _directions(self, camera: Camera) -> np.ndarray:
         """Unit world rays through the pixel centres, float32 (``Camera.ray``, precomputed).
@@ -124,6 +127,11 @@ class Renderer:
         tri = out["primID"].astype(np.int64)
         t = np.where(tri >= 0, out["tfar"], np.inf)
         return tri, t
+
+    def first_hit(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Instance id (0: structure or nothing) and distance of each ray's first hit."""
+        tri, t = self.cast(origins, directions)
+        return np.where(tri >= 0, self._owners[np.where(tri >= 0, tri, 0)], 0), t
 
     def render(self, camera: Camera) -> Frame:
         """Render RGB, depth and instance mask for ``camera``."""
@@ -162,6 +170,24 @@ class Renderer:
         tri, _ = self.cast(origins, dirs)
         owners = np.where(tri >= 0, self._owners[np.where(tri >= 0, tri, 0)], 0)
         return owners.reshape(camera.height, camera.width)
+
+    def silhouette(self, camera: Camera, index: int) -> np.ndarray:
+        """Where ``house.objects[index]`` would show if nothing else were in the house: a
+        (H, W) bool mask, the object's unoccluded projected area within the frame.
+
+        Compared with the instance mask it says how much of an object is hidden (by a wall, a
+        door jamb, other furniture), whatever the object's shape.
+        """
+        if index not in self._object_scenes:
+            mine = self._object_faces[self._owners == index + 1]
+            self._object_scenes[index] = _embree_scene(self._vertices, mine) if len(mine) else None
+        scene = self._object_scenes[index]
+        if scene is None:
+            return np.zeros((camera.height, camera.width), dtype=bool)
+        dirs = self._directions(camera)
+        origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), dirs.shape)
+        tri = scene.run(np.ascontiguousarray(origins), np.ascontiguousarray(dirs))
+        return (np.asarray(tri) >= 0).reshape(camera.height, camera.width)
 
     # -- shading ----------------------------------------------------------------------------
     def _shade(self, tri: np.ndarray, d: np.ndarray, p: np.ndarray) -> np.ndarray:

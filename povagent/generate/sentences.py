@@ -165,6 +165,7 @@ ACTIVITIES: dict[str, tuple[tuple[str, str], ...]] = {
 
 #: Sentence frames: the activity clause, the sighting verb, the target and the relation.
 _FRAMES = (
+    "While {act}, I {verb} the {target} {rel}.",  # the paper's own examples
     "While I was {act}, I {verb} the {target} {rel}.",
     "When I was {act}, I {verb} the {target} {rel}.",
     "I was {act} when I {verb} the {target} {rel}.",
@@ -191,7 +192,7 @@ def target_pool(surface: str, anchor: PlacedObject, house: House) -> tuple[str, 
     """(pool name, candidates) for a surface phrase: floor, the anchor itself, or its receptacle."""
     if "floor" in surface:
         return "Floor", TARGET_POOLS["Floor"]  # type: ignore[return-value]
-    if surface_names_anchor(surface, anchor.object_type) and anchor.object_type in TARGET_POOLS:
+    if anchor.object_type in TARGET_POOLS and _names(surface, anchor.object_type):
         return anchor.object_type, TARGET_POOLS[anchor.object_type]  # type: ignore[return-value]
     if anchor.support not in ("floor", "wall"):
         holder = house.by_id(anchor.support).object_type
@@ -200,12 +201,24 @@ def target_pool(surface: str, anchor: PlacedObject, house: House) -> tuple[str, 
     return "Floor", TARGET_POOLS["Floor"]  # type: ignore[return-value]
 
 
+def _names(surface: str, object_type: str) -> bool:
+    """True when a surface phrase names ``object_type``: by the scorer's keywords or by any of
+    the type's names (a judge may say "on the bookshelf" for a ShelvingUnit)."""
+    text = surface.lower()
+    return surface_names_anchor(text, object_type) or any(
+        re.search(rf"\b{re.escape(n.lower())}\b", text) for n in OBJECT_NAMES.get(object_type, ())
+    )
+
+
 def anchor_phrase(house: House, anchor: PlacedObject, rng: np.random.Generator) -> str | None:
     """How to name the anchor so that only it fits; None when no name would be unambiguous.
 
     A type unique in the house is named plainly; a type unique within its room type is named
-    with the room ("the side table in the bedroom").
+    with the room ("the side table in the bedroom"). A doorway belongs to two rooms, so it is
+    named by them ("the doorway between the kitchen and the living room"), or as the front door.
     """
+    if anchor.object_type == "Doorway":
+        return _doorway_phrase(house, anchor, rng)
     name = _choice(rng, OBJECT_NAMES[anchor.object_type])
     if house.count_of_type(anchor.object_type) == 1:
         return name
@@ -217,6 +230,30 @@ def anchor_phrase(house: House, anchor: PlacedObject, rng: np.random.Generator) 
     if len(same) == 1:
         return f"{name} in the {ROOM_WORDS[room_type]}"
     return None
+
+
+#: Names of the house's entrance (a Doorway with a door in it).
+ENTRANCE_NAMES = ("front door", "entrance")
+
+
+def _doorway_phrase(house: House, anchor: PlacedObject, rng: np.random.Generator) -> str | None:
+    """A doorway named by where it is: the front door, or the two room types it joins (None
+    when another doorway joins the same two room types)."""
+    if "entrance" in anchor.flags:
+        return _choice(rng, ENTRANCE_NAMES)
+
+    def joined(o) -> tuple[str, ...]:
+        return tuple(sorted(house.plan.rooms[r].room_type for r in o.rooms if r is not None))
+
+    opening = min(
+        (o for o in house.plan.openings if not o.is_entrance),
+        key=lambda o: abs(o.center[0] - anchor.center[0]) + abs(o.center[1] - anchor.center[2]),
+    )
+    types = joined(opening)
+    if len(set(types)) < 2 or sum(joined(o) == types for o in house.plan.openings) != 1:
+        return None
+    first, second = (ROOM_WORDS[t] for t in (types if rng.random() < 0.5 else types[::-1]))
+    return f"doorway between the {first} and the {second}"
 
 
 def relation_phrase(direction: str, anchor_type: str, anchor_name: str, on_anchor: bool) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from povagent.generate.assets import asset_database
@@ -69,3 +70,17 @@ def test_objects_on_receptacles_rest_on_their_top(houses):
             assert holder.rect.inflate(0.01).contains(*[o.center[0], o.center[2]])
             # centres are rounded to 0.1 mm; sinks sit down into their counter
             assert holder.top - 0.25 <= o.bottom <= holder.top + 1e-3
+
+
+def test_chairs_are_drawn_up_to_the_dining_table_facing_it(houses):
+    tables = 0
+    for house in houses:
+        chairs = [o for o in house.objects if o.object_type == "Chair"]
+        for table in (o for o in house.objects if o.object_type == "DiningTable"):
+            at_table = [c for c in chairs if table.rect.inflate(0.1).overlaps(c.rect.inflate(0.1))]
+            assert at_table, table.object_id
+            for chair in at_table:
+                to_table = np.array([table.center[0] - chair.center[0], 0.0, table.center[2] - chair.center[2]])
+                assert float(np.dot(chair.front, to_table / np.linalg.norm(to_table))) > 0.7, chair.object_id
+            tables += 1
+    assert tables >= len(houses) // 2  # most houses have a dining table, as ProcTHOR's do
