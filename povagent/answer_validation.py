@@ -6,7 +6,9 @@ the strategy's answer schema with ``jsonschema`` and returns the typed :class:`P
 * ``ok``: valid against the schema (``repaired`` instead when the caller changed the numbers);
 * ``out_of_range``: a point was read but the schema rejects it: a coordinate outside
   ``[0, W-1] x [0, H-1]`` (still an answer: the scorer clamps), or for A/B a selected frame that
-  is missing or not among the frames shown (the official scorer then counts it unanswered).
+  is missing or not among the frames shown (the official scorer then counts it unanswered);
+* ``unparseable``: a coordinate that is not a finite number (``1e999`` read as infinity): no
+  point can be scored from it, and it could not be written as JSON.
 
 Validators are compiled once per distinct schema and cached (by object identity, falling back
 to the schema's canonical JSON), so the hot path never recompiles. Pure: no I/O.
@@ -15,6 +17,7 @@ to the schema's canonical JSON), so the hot path never recompiles. Pure: no I/O.
 from __future__ import annotations
 
 import json
+import math
 import threading
 from typing import Any, Sequence
 
@@ -82,6 +85,9 @@ def judge(
     ``selected_image`` is ignored for a point-only spec (C). ``repair`` (how the numbers were
     changed) turns a valid answer's status into ``repaired``. ``note`` is prefixed to the reason.
     """
+    if not (math.isfinite(x) and math.isfinite(y)):
+        reason = "; ".join(r for r in (note, f"coordinate not a finite number (x={x!r}, y={y!r})") if r)
+        return unparseable(reason, span)
     answer: dict[str, Any] = {"x": x, "y": y}
     if spec.asks_frame and selected_image is not None:
         answer["selected_image"] = selected_image
@@ -111,15 +117,22 @@ def judge_points(
     *,
     span: str | None = None,
     note: str = "",
+    repair: str | None = None,
 ) -> ParsedAnswer:
     """The parse of one or more points (pixels): the centroid is the prediction, every point is
-    kept in ``points`` (so a scorer can also report the closest one)."""
+    kept in ``points`` (so a scorer can also report the closest one). ``repair`` as for :func:`judge`."""
+    finite = [p for p in points if math.isfinite(p[0]) and math.isfinite(p[1])]
+    if len(finite) < len(points):
+        dropped = f"{len(points) - len(finite)} point(s) with a non-finite coordinate ignored"
+        note = f"{note}; {dropped}" if note else dropped
+        points = finite
     if not points:
         return unparseable(note or "no point in the answer", span)
     cx = sum(p[0] for p in points) / len(points)
     cy = sum(p[1] for p in points) / len(points)
-    note = note or (f"centroid of {len(points)} points" if len(points) > 1 else "")
-    return judge(spec, cx, cy, selected_image, span=span, points=points, note=note)
+    if len(points) > 1:
+        note = "; ".join(r for r in (note, f"centroid of {len(points)} points") if r)
+    return judge(spec, cx, cy, selected_image, span=span, points=points, note=note, repair=repair)
 
 
 def relative_to_pixels(value: float, full_scale: float, size: int) -> float:

@@ -58,10 +58,11 @@ class ParsedAnswer(BaseModel):
 
     Coordinates are pixels in the requested frame size (after any repair). ``selected_image``
     is the 0-based index of the chosen frame (A/B), ``None`` for C or when missing. ``points``
-    holds every point for multi-point formats (the prediction is then their centroid, and
-    ``closest_point`` may be filled by a scorer-aware consumer). ``span`` is the raw text the
-    answer came from; ``repair`` says how it was changed (e.g. ``"rescaled 0-1000 -> pixels"``).
-    """
+    holds every point for multi-point formats (the prediction is then their centroid; the
+    official scorer also reports the error of the closest one). ``span`` is the raw text the
+    answer came from; ``repair`` says how it was changed (``"rescaled 0-1000 -> pixels"``, or
+    ``"selected_image 3 taken from the text"`` when the frame was read from prose, not from the
+    answer's JSON: an answer the official parser would not accept)."""
 
     status: ParseStatus
     reason: str = ""

@@ -22,7 +22,7 @@ from povagent.answers import AnswerSpec, ParsedAnswer
 from povagent.config import PipelineConfig, read_yaml, validation_message
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import Dataset, load_dataset
-from povagent.errors import ConfigError, PredictionsError
+from povagent.errors import ConfigError, DatasetError, PredictionsError
 from povagent.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
@@ -124,6 +124,12 @@ def rescore_run(
     strategy = host.create("strategy", config.strategy.name, config.strategy.options)
     scorers = {s.name: host.create("scorer", s.name, s.options) for s in config.scorers}
     root = Path(dataset_root) if dataset_root is not None else config.dataset.root
+    if dataset_root is None and not root.is_absolute() and not root.exists():
+        # relative paths in a pipeline are relative to the directory the run was started from
+        raise DatasetError(
+            f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
+            f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
+        )
     dataset = load_dataset(root)
     images = ImageStore()
     warnings: list[str] = []

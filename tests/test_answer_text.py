@@ -38,8 +38,15 @@ def test_a_prose_apostrophe_does_not_derail_the_scan():
         ('{\u201cx\u201d: 1}', {"x": 1}),
         ('{"x": +3, "ok": True, "n": None}', {"x": 3, "ok": True, "n": None}),
         ('{"label": "robot\'s chair", "x": 1,}', {"label": "robot's chair", "x": 1}),
+        ("{'label': 'robot's chair', 'x': 1}", {"label": "robot's chair", "x": 1}),
+        ('{"x": 120, // centre of the rug\n "y": 340}', {"x": 120, "y": 340}),
+        ('{/* pixels */ "x": 1, "url": "http://example.org",}', {"x": 1, "url": "http://example.org"}),
+        ('{"x": 10., "y": 20.}', {"x": 10, "y": 20}),
     ],
-    ids=["trailing-comma", "single-quotes", "bare-keys", "unicode-minus", "curly-quotes", "python-literals", "apostrophe-in-string"],
+    ids=[
+        "trailing-comma", "single-quotes", "bare-keys", "unicode-minus", "curly-quotes", "python-literals",
+        "apostrophe-in-string", "apostrophe-in-single-quoted-string", "line-comment", "block-comment", "trailing-dot",
+    ],
 )
 def test_lenient_json_reads_common_deviations(text, value):
     assert lenient_json(text) == value

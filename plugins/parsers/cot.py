@@ -10,7 +10,7 @@ it is the model's conclusion. When the last line holds no usable object it falls
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.answer_text import final_line_start
+from povagent.answer_text import final_line_start, find_objects
 from povagent.answers import AnswerSpec, ParsedAnswer
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.json_answer import candidates, choose, judge_candidate
@@ -22,15 +22,15 @@ class CotParser(Parser):
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """Parse ``text`` (see the module docstring); never raises."""
         text = text or ""
-        if text.strip():
-            tail = final_line_start(text)
-            found, frame_from_text = candidates(text, spec)
-            final = [c for c in found if c.source.end > tail]
-            if final:
-                return judge_candidate(final[-1], spec, text, frame_from_text)
-        parsed = choose(text, spec)[1]
         if not text.strip():
-            return parsed
+            return choose(text, spec)[1]
+        objects = find_objects(text)
+        tail = final_line_start(text)
+        found, frame_from_text = candidates(text, spec, objects)
+        final = [c for c in found if c.source.end > tail]
+        if final:
+            return judge_candidate(final[-1], spec, text, frame_from_text)
+        parsed = choose(text, spec, objects)[1]
         note = "no JSON answer on the last line; read the whole text"
         return parsed.model_copy(update={"reason": f"{note}; {parsed.reason}" if parsed.reason else note})
 

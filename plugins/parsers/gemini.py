@@ -14,7 +14,6 @@ from povagent.answers import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 
-
 class GeminiParser(NativeParser):
     """Gemini ``point: [y, x]`` / ``box_2d`` on 0-1000."""
 

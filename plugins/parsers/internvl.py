@@ -14,7 +14,9 @@ from povagent.answer_validation import relative_to_pixels
 from povagent.answers import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
-_BOX_TAG = re.compile(r"<box>(.*?)</box>", re.IGNORECASE | re.DOTALL)
+#: A box tag; its content never holds ``<``, which keeps the scan linear on a text full of
+#: unclosed ``<box>`` tags (a lazy ``.*?`` would rescan to the end from each one).
+_BOX_TAG = re.compile(r"<box>([^<]*)</box>", re.IGNORECASE)
 _BOX = re.compile(rf"\[\s*({NUMBER})\s*,\s*({NUMBER})\s*,\s*({NUMBER})\s*,\s*({NUMBER})\s*\]")
 
 

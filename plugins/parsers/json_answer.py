@@ -6,9 +6,11 @@ after chain-of-thought). On top of that it reads what real outputs contain (see
 :mod:`povagent.answer_text`): markdown fences, prose around the JSON, numbers as strings,
 trailing commas, single quotes, unicode minus.
 
-For A/B, when no object carries ``selected_image`` but one carries ``x`` and ``y``, that point is
-returned with the frame named in the text (``Image k``) or none: status ``out_of_range`` with the
-reason, which the scorer counts as unanswered when the frame is missing. Never raises.
+For A/B, when no object carries ``selected_image`` but one carries ``x`` and ``y``, the official
+reading has no answer. This parser returns that point with the frame the text names
+(``selected_image: k`` or the last ``Image k``) as a *repair* (status ``repaired``, ``repair``
+saying so, so that reports can tell it from an answer the official parser would accept), or with
+no frame (status ``out_of_range``, which the scorer counts as unanswered). Never raises.
 """
 
 from __future__ import annotations
@@ -46,40 +48,53 @@ def read_candidate(obj: JsonObject) -> Candidate | None:
     return Candidate(fx, fy, coerce_index(frame) if has_frame else None, has_frame, obj)
 
 
-def candidates(text: str, spec: AnswerSpec) -> tuple[list[Candidate], bool]:
+def candidates(text: str, spec: AnswerSpec, objects: list[JsonObject] | None = None) -> tuple[list[Candidate], bool]:
     """Objects with the requested keys, in text order; the flag says whether they lack the
-    frame key (A/B objects with only ``x`` and ``y``, used when nothing better exists)."""
-    read = [c for c in (read_candidate(o) for o in find_objects(text)) if c is not None]
+    frame key (A/B objects with only ``x`` and ``y``, used when nothing better exists).
+    ``objects`` is ``find_objects(text)`` when the caller already has it."""
+    objects = find_objects(text) if objects is None else objects
+    read = [c for c in (read_candidate(o) for o in objects) if c is not None]
     if not spec.asks_frame:
         return read, False
     full = [c for c in read if c.has_frame_key]
     return (full, False) if full else (read, True)
 
 
+def frame_from_text_repair(frame: int) -> str:
+    """The ``repair`` of an answer whose frame was read from its prose, not from its JSON."""
+    return f"selected_image {frame} taken from the text"
+
+
 def judge_candidate(cand: Candidate, spec: AnswerSpec, text: str, frame_from_text: bool) -> ParsedAnswer:
-    """The typed parse of one candidate (frame from the text when the object has none)."""
+    """The typed parse of one candidate (frame from the text, as a repair, when the object has none)."""
     frame = cand.selected_image
-    note = ""
+    note, repair = "", None
     if spec.asks_frame and frame_from_text:
         frame = mentioned_image(text)
-        note = "no selected_image key" + (f"; frame taken from the text (Image {frame})" if frame is not None else "")
-    return judge(spec, cand.x, cand.y, frame, span=cand.source.span, note=note)
+        if frame is None:
+            note = "no selected_image key, and the text names no frame"
+        else:
+            note, repair = "no selected_image key", frame_from_text_repair(frame)
+    elif spec.asks_frame and frame is None:
+        note = f"selected_image {get_key(cand.source.value, 'selected_image')[1]!r} is not a frame index"
+    return judge(spec, cand.x, cand.y, frame, span=cand.source.span, note=note, repair=repair)
 
 
-def choose(text: str, spec: AnswerSpec) -> tuple[Candidate | None, ParsedAnswer]:
-    """The official choice: the last candidate in range, else the last candidate."""
+def choose(text: str, spec: AnswerSpec, objects: list[JsonObject] | None = None) -> tuple[Candidate | None, ParsedAnswer]:
+    """The official choice: the last candidate in range, else the last candidate.
+    ``objects`` is ``find_objects(text)`` when the caller already has it."""
     if not text or not text.strip():
         return None, unparseable("empty answer")
-    found, frame_from_text = candidates(text, spec)
+    objects = find_objects(text) if objects is None else objects
+    found, frame_from_text = candidates(text, spec, objects)
     if not found:
-        objects = find_objects(text)
         keys = ", ".join(spec.required_keys)
         if not objects:
-            return None, unparseable("no JSON object in the answer")
+            return None, unparseable("no readable JSON object in the answer")
         return None, unparseable(f"no JSON object with numeric {keys}", objects[-1].span)
     judged = [(c, judge_candidate(c, spec, text, frame_from_text)) for c in found]
     for cand, parsed in reversed(judged):
-        if parsed.status is ParseStatus.OK:
+        if parsed.status in (ParseStatus.OK, ParseStatus.REPAIRED):  # valid against the schema
             return cand, parsed
     return judged[-1]
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answer_text import coerce_number
+from povagent.answer_text import coerce_number, index_from_digits
 from povagent.answer_validation import relative_to_pixels
 from povagent.answers import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
@@ -53,9 +53,10 @@ def coords_points(coords: str, spec: AnswerSpec) -> tuple[int | None, list[tuple
     """Molmo2 ``coords``: the first group's 0-based image index and its points (0-1000)."""
     for group in _GROUP_SPLIT.split(coords):
         tokens = group.split()
-        if len(tokens) < 4 or not tokens[0].isdigit():
+        number = index_from_digits(tokens[0]) if len(tokens) >= 4 else None
+        if number is None:
             continue
-        image = int(tokens[0]) - 1
+        image = number - 1
         points = [
             (relative_to_pixels(float(m.group(2)), 1000, spec.width), relative_to_pixels(float(m.group(3)), 1000, spec.height))
             for m in _TRIPLE.finditer(" ".join(tokens[1:]))

@@ -5,8 +5,9 @@ converted to pixels of the requested size by the format's documented convention)
 they name if the format carries one, and the span they came from. Converting by a documented
 convention is not a guess: such answers are ``ok`` (``repaired`` is for ``rescale-1000``).
 Several points are scored at their centroid, all kept in ``points``. For A/B without an index in
-the format, the frame is the one the text names (``selected_image: k`` or ``Image k``), else none
-(then unanswered, as officially). When the text holds no native point at all, the model may have
+the format, the frame is the one the text names (``selected_image: k`` or ``Image k``): a guess
+from prose, so the answer is ``repaired`` and ``repair`` says so; else none (then unanswered, as
+officially). When the text holds no native point at all, the model may have
 followed the prompt: the ``json`` parser reads it, and the reason says so. Never raises.
 """
 
@@ -19,7 +20,7 @@ from povagent.answer_text import mentioned_image
 from povagent.answer_validation import judge_points
 from povagent.answers import AnswerSpec, ParsedAnswer
 from povagent.interfaces import Parser
-from povagent_plugins.parsers.json_answer import JsonAnswerParser
+from povagent_plugins.parsers.json_answer import JsonAnswerParser, frame_from_text_repair
 
 
 @dataclass
@@ -51,7 +52,8 @@ class NativeParser(Parser):
                 return parsed
             note = f"nothing in the {self.format_name} format; read the asked JSON"
             return parsed.model_copy(update={"reason": f"{note}; {parsed.reason}" if parsed.reason else note})
-        frame = reading.selected_image
+        frame, repair = reading.selected_image, None
         if spec.asks_frame and frame is None:
             frame = mentioned_image(text)
-        return judge_points(spec, reading.points, frame, span=reading.span, note=reading.note)
+            repair = frame_from_text_repair(frame) if frame is not None else None
+        return judge_points(spec, reading.points, frame, span=reading.span, note=reading.note, repair=repair)

@@ -20,7 +20,6 @@ from povagent_plugins.parsers.native import NativeParser, NativeReading
 _LOOSE_POINT = re.compile(rf"point_2d\W*\[\s*({NUMBER})\s*,\s*({NUMBER})\s*\]")
 
 
-
 class QwenParser(NativeParser):
     """Qwen3-VL ``point_2d`` / ``bbox_2d`` on 0-1000."""
 

@@ -15,8 +15,11 @@ Decision rule, first match wins:
    (``x > W-1+m`` or ``y > H-1+m``, ``m = max(2, 0.02*W)`` resp. ``H``: about 10 px at 512),
    and both ``x`` and ``y`` lie in ``[0, 1000]`` -> ``x/1000*W, y/1000*H``.
 3. **0-1000, declared.** The text says it uses a 0-1000 scale (``0-1000``, ``0 to 1000``,
-   ``normalized to 1000``, ``/1000``, ``per mille``) and both values lie in ``[0, 1000]``
-   -> rescaled as in 2, even when in range.
+   ``[0, 1000]``, ``normalized to 1000``, ``per mille``, ``thousandths``), not negated just
+   before (``not``, ``n't``, ``no``, ``instead of``, ``rather than``, ``unlike`` in the 30
+   characters before it), and both values lie in ``[0, 1000]`` -> rescaled as in 2, even when
+   in range. A fraction such as ``300/1000`` is *not* a declaration: reasoning writes such
+   ratios about the scene, and reading one as a scale would change an honest pixel answer.
 4. Otherwise the answer is left exactly as ``json`` reads it: an honest in-range pixel answer
    is never changed, and an answer out of range that fits no rule stays ``out_of_range``.
 
@@ -28,7 +31,13 @@ Known ambiguous cases (documented, tested):
   off by a little, not as 0-1000 (it stays ``out_of_range``; the scorer clamps it);
 * a pixel answer for a bigger assumed image (e.g. 0-1023) with values ``<= 1000`` is rescaled
   as 0-1000 (within 2.4% of the right answer); values above 1000 are left out of range;
-* negative values are never repaired.
+* negative values are never repaired;
+* the object judged is the one the official reading chooses (last in range, else last) before
+  any rescaling: in an answer with an intermediate 0-1000 object that happens to be in pixel
+  range and a final one past it, the intermediate one is taken, as the official parser does;
+* a declaration anywhere in the text counts, also one about a different number in the
+  reasoning ("the lamp is at 0-1000 coordinates (200, 300)") when the final answer is an
+  in-range pixel answer: rare, and a model that says it thinks in 0-1000 usually answers so.
 """
 
 from __future__ import annotations
@@ -43,9 +52,22 @@ from povagent_plugins.parsers.json_answer import choose
 
 #: Text declaring the 0-1000 convention.
 DECLARED_1000 = re.compile(
-    r"\b0\s*(?:-|–|~|to)\s*1000\b|normali[sz]ed\s+(?:to|on|in)\s+(?:a\s+|the\s+)?(?:\[?0\s*,\s*)?1000\b|/\s*1000\b|per[\s-]?mille",
+    r"\b0\s*(?:-|–|~|to)\s*1000\b|\[\s*0\s*,\s*1000\s*\]"
+    r"|normali[sz]ed\s+(?:to|on|in)\s+(?:a\s+|the\s+)?(?:\[?0\s*,\s*)?1000\b|per[\s-]?mille|thousandths",
     re.IGNORECASE,
 )
+#: A negation just before a declaration ("pixels, not 0-1000"): then it declares nothing.
+_NEGATION = re.compile(r"\b(?:not|no|never|instead\s+of|rather\s+than|unlike)\b|n't\b", re.IGNORECASE)
+_NEGATION_WINDOW = 30
+
+
+def declares_1000(text: str) -> bool:
+    """True when ``text`` says it uses the 0-1000 convention (and does not negate it)."""
+    for m in DECLARED_1000.finditer(text):
+        if not _NEGATION.search(text[max(0, m.start() - _NEGATION_WINDOW) : m.start()]):
+            return True
+    return False
+
 
 FRACTIONS = "rescaled 0-1 fractions -> pixels"
 THOUSANDTHS = "rescaled 0-1000 -> pixels"
@@ -64,7 +86,7 @@ def convention(x: float, y: float, spec: AnswerSpec, text: str) -> tuple[str | N
     in_1000 = 0 <= x <= 1000 and 0 <= y <= 1000
     if in_1000 and (x > w - 1 + overshoot_margin(w) or y > h - 1 + overshoot_margin(h)):
         return THOUSANDTHS, f"x={x:g}, y={y:g} overshoot [0, {w - 1}] x [0, {h - 1}] but fit 0-1000"
-    if in_1000 and DECLARED_1000.search(text):
+    if in_1000 and declares_1000(text):
         return THOUSANDTHS, "the answer declares a 0-1000 scale"
     return None, ""
 
@@ -84,6 +106,8 @@ class Rescale1000Parser(Parser):
         scale = 1.0 if repair == FRACTIONS else 1000.0
         x = relative_to_pixels(cand.x, scale, spec.width)
         y = relative_to_pixels(cand.y, scale, spec.height)
+        if parsed.repair:  # the frame was already read from the text: keep saying so
+            repair = f"{parsed.repair}; {repair}"
         return judge(spec, x, y, parsed.selected_image, span=parsed.span, repair=repair, note=why)
 
 

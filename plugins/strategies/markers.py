@@ -10,6 +10,10 @@ anchor. Positions come from the dataset's 3D metadata projected into each frame'
   drawn only when some of it lies inside. (With corners behind the camera the rectangle covers
   only the visible corners: an approximation, the same one a renderer's 2D box makes.)
 
+There is no occlusion test: the release carries no depth maps, so a marker is drawn where its
+point projects even when a wall stands between it and the camera (the observer object may be
+in the next room).
+
 Marker style (options, with defaults): ``observer_color`` ``"red"``, ``anchor_color`` ``"blue"``
 (any Pillow colour name, ``#rrggbb`` or an ``[r, g, b]`` list), ``radius`` 10 px (circle),
 ``line_width`` 3 px (circle outline and box), ``observer_filled`` false (true: a solid dot).

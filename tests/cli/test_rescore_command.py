@@ -90,3 +90,33 @@ def test_rescore_reads_a_config_resolved_from_a_model_profile(tmp_path, mini_roo
     config["model"] = "qwen3-vl-32b"  # a resolved config keeps the profile name beside its backend
     (run / "config.yaml").write_text(yaml.safe_dump(config))
     assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
+
+
+def test_a_relative_dataset_path_not_found_here_says_where_to_run_from(tmp_path, mini_root, monkeypatch):
+    from povagent.errors import DatasetError
+
+    run = finished_run(tmp_path, mini_root)
+    config = yaml.safe_load((run / "config.yaml").read_text())
+    config["dataset"]["path"] = "tests/fixtures/povbench_mini"  # as written by a run made from the repo root
+    (run / "config.yaml").write_text(yaml.safe_dump(config))
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "json"])
+    assert isinstance(result.exception, DatasetError)
+    assert "relative path 'tests/fixtures/povbench_mini'" in str(result.exception) and "--dataset" in str(result.exception)
+    ok = runner.invoke(app, ["rescore", str(run), "--parser", "json", "--dataset", str(mini_root), "--json"])
+    assert ok.exit_code == 0, ok.output
+
+
+def test_rescore_makes_no_model_call(tmp_path, mini_root, monkeypatch):
+    from povagent.plugins import PluginHost
+
+    create = PluginHost.create
+
+    def create_but_no_backend(self, kind, name, options=None):
+        assert kind != "backend", "rescore created a backend"
+        return create(self, kind, name, options)
+
+    monkeypatch.setattr(PluginHost, "create", create_but_no_backend)
+    run = finished_run(tmp_path, mini_root)
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
+    assert result.exit_code == 0, result.output

@@ -38,6 +38,13 @@ def test_corpus_is_large_and_covers_every_family():
     assert len({c["id"] for c in CORPUS}) == len(CORPUS)
 
 
+def test_every_family_has_answers_and_non_answers():
+    for family in {c["parser"] for c in CORPUS}:
+        statuses = {c["expect"]["status"] for c in CORPUS if c["parser"] == family}
+        assert {"ok", "unparseable"} <= statuses, family
+        assert statuses & {"out_of_range", "repaired"}, family
+
+
 @pytest.mark.parametrize("case", CORPUS, ids=[c["id"] for c in CORPUS])
 def test_parse_matches_expected(case, host):
     parsed = host.create("parser", case["parser"], {}).parse(case["text"], spec_for(case))

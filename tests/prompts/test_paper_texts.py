@@ -2,8 +2,11 @@
 
 The expected texts below were transcribed by hand from the appendix "Evaluation Prompts"
 (N = 30 frames, 512x512, the sentence below), independently of the template files, following
-the LaTeX-to-text rules of ``prompts/README.md``. When the paper's ``.tex`` is beside the clone
-(``../shared/seed/``), the texts are also derived from it by those rules and compared.
+the LaTeX-to-text rules of ``prompts/README.md``. They are also derived mechanically, by those
+rules, from ``paper_prompts.tex`` (the appendix's LaTeX copied verbatim) and compared, so a
+drift in either the hand transcription or the templates fails. When the paper's ``.tex`` is
+beside the clone (``../shared/seed/``), every prompt box of the copy must be byte-identical
+to the paper's.
 """
 
 from __future__ import annotations
@@ -136,8 +139,17 @@ def test_a_dollar_sign_in_the_sentence_is_kept_verbatim():
     assert 'Sentence: "I left $5 and $width next to the lamp."' in BasicStrategy().prompt_text(stub)
 
 
-# -- against the .tex itself, when it is beside the clone ------------------------------------------
+# -- against the paper's LaTeX ----------------------------------------------------------------------
+#: The appendix "Evaluation Prompts", copied verbatim from the paper's .tex (always present).
+PROMPTS_TEX = Path(__file__).resolve().parent / "paper_prompts.tex"
+#: The paper itself, when the clone sits beside the shared seed folder.
 TEX = Path(__file__).resolve().parents[3] / "shared" / "seed" / "contextual-observer-grounding.tex"
+HEADINGS = {
+    "basic-frames": "\\paragraph{Basic prompt (Inferred / Stated).}",
+    "basic-given": "\\paragraph{Basic prompt (Given).}",
+    "cot": "\\paragraph{CoT prompt (Inferred / Stated).}",
+    "spatial-step4": "\\paragraph{Spatial-CoT prompt (Inferred / Stated).}",
+}
 
 
 def _box_after(tex: str, heading: str) -> str:
@@ -205,24 +217,31 @@ def fill(text: str, n: int = 30, w: int = 512, h: int = 512) -> str:
     return text
 
 
-needs_tex = pytest.mark.skipif(not TEX.is_file(), reason=f"the paper's .tex is not beside the clone ({TEX})")
-
-
-@needs_tex
 @pytest.mark.parametrize(
-    "heading, expected",
-    [
-        ("\\paragraph{Basic prompt (Inferred / Stated).}", BASIC_FRAMES),
-        ("\\paragraph{Basic prompt (Given).}", BASIC_GIVEN),
-        ("\\paragraph{CoT prompt (Inferred / Stated).}", COT_FRAMES),
-    ],
-    ids=["basic-frames", "basic-given", "cot"],
+    "box, expected",
+    [("basic-frames", BASIC_FRAMES), ("basic-given", BASIC_GIVEN), ("cot", COT_FRAMES)],
 )
-def test_transcription_matches_the_tex(heading, expected):
-    assert fill(latex_to_text(_box_after(TEX.read_text(encoding="utf-8"), heading))) == expected
+def test_transcription_matches_the_papers_latex(box, expected):
+    tex = PROMPTS_TEX.read_text(encoding="utf-8")
+    assert fill(latex_to_text(_box_after(tex, HEADINGS[box]))) == expected
 
 
-@needs_tex
-def test_spatial_step4_matches_the_tex():
-    box = _box_after(TEX.read_text(encoding="utf-8"), "\\paragraph{Spatial-CoT prompt (Inferred / Stated).}")
-    assert latex_to_text(box) == SPATIAL_STEP4
+def test_spatial_step4_matches_the_papers_latex():
+    tex = PROMPTS_TEX.read_text(encoding="utf-8")
+    assert latex_to_text(_box_after(tex, HEADINGS["spatial-step4"])) == SPATIAL_STEP4
+
+
+def test_the_spatial_cot_box_replaces_exactly_the_cot_step4():
+    """The paper: S-CoT is "identical to the CoT prompt above, except that Step 4 is replaced"."""
+    tex = PROMPTS_TEX.read_text(encoding="utf-8")
+    cot = latex_to_text(_box_after(tex, HEADINGS["cot"]))
+    assert fill(cot).count(COT_STEP4) == 1
+
+
+@pytest.mark.skipif(not TEX.is_file(), reason=f"the paper's .tex is not beside the clone ({TEX})")
+@pytest.mark.parametrize("box", sorted(HEADINGS))
+def test_the_latex_copy_is_the_papers_verbatim(box):
+    copy, paper = PROMPTS_TEX.read_text(encoding="utf-8"), TEX.read_text(encoding="utf-8")
+    assert _box_after(copy, HEADINGS[box]) == _box_after(paper, HEADINGS[box])
+    intro = "Placeholders (\\textit{N} images, the task \\textit{sentence}, and image size $W\\times H$) are filled at runtime."
+    assert intro in copy and intro in paper

@@ -10,6 +10,8 @@ Cameras (see conftest): at the origin, yaw 0, horizon 0, fov 90 -> f = 512/2 = 2
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from povagent.images import ImageStore
@@ -129,3 +131,57 @@ def test_marked_frames_keep_the_frame_size(make_instance, facing_z):
 def test_bad_marker_options_are_rejected_with_the_option_named(options):
     with pytest.raises(ValueError, match=next(iter(options))):
         ObserverAnchorPlotStrategy(**options)
+
+
+# -- on the shipped fixture (tests/fixtures/povbench_mini), projected by hand ------------------------
+def test_fixture_anchor_box_in_a_level_frame_is_the_hand_projected_rectangle(mini_dataset):
+    """House 0, pair 0, frame 0: camera at (0, 1.5, 0), yaw 0, horizon 0, fov 90 -> f = 256,
+    u = 256 + 256 x/z, v = 256 - 256 (y - 1.5)/z. Bed corners x = +-1, y = 0 or 0.6, z = 2 or 4:
+    u spans 256 -+ 128 (z = 2); v spans 256 + 256*0.9/4 = 313.6 (top far) .. 256 + 256*1.5/2 = 448.
+    The floor lamp (observer) at z = -0.5 is behind the camera: no circle."""
+    inst = mini_dataset.instance("train_house_00000/0/right/a")
+    markers = frame_markers(inst, inst.frames[0], with_anchor=True)
+    assert markers.observer is None
+    assert markers.anchor_box == pytest.approx((128.0, 313.6, 384.0, 448.0))
+
+
+def test_fixture_frame_looking_away_gets_no_marker(mini_dataset):
+    """Frame 1 looks along -z (yaw 180): the bed is behind it, and the lamp projects below the
+    frame (v = 256 + 256*0.7/0.5 = 614.4 > 511)."""
+    inst = mini_dataset.instance("train_house_00000/0/right/a")
+    assert frame_markers(inst, inst.frames[1], with_anchor=True).empty
+
+
+def test_fixture_anchor_box_in_a_tilted_frame_is_the_hand_projected_rectangle(mini_dataset):
+    """Frame 2: camera at (0, 0.9, 0), yaw 0, horizon 30 (looking down), fov 100. With
+    d = corner - camera: zc = 0.866 dz - 0.5 dy, yc = 0.866 dy + 0.5 dz, f = 256 / tan 50deg.
+    The nearest corners, (+-1, 0.6, 2), are the widest: u = 256 -+ f/zc; the top edge is at
+    (y 0.6, z 4), the bottom edge at (y 0, z 2)."""
+    f = 256 / math.tan(math.radians(50))
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+
+    def uv(x, y, z):
+        dy = y - 0.9
+        zc, yc = c * z - s * dy, c * dy + s * z
+        return 256 + f * x / zc, 256 - f * yc / zc
+
+    (x0, _), (x1, _), (_, y0), (_, y1) = uv(-1, 0.6, 2), uv(1, 0.6, 2), uv(0, 0.6, 4), uv(0, 0.0, 2)
+    inst = mini_dataset.instance("train_house_00000/0/right/a")
+    assert frame_markers(inst, inst.frames[2], with_anchor=True).anchor_box == pytest.approx((x0, y0, x1, y1))
+    assert (x0, y0, x1, y1) == pytest.approx((141.86, 152.57, 370.14, 234.29), abs=0.01)
+
+
+def test_fixture_observer_in_front_is_drawn_at_the_hand_projected_pixel(mini_dataset):
+    """House 1, pair 7, frame 1: camera at (5, 0.9, 5), yaw 225, horizon 30, fov 100; the sofa
+    (observer) at (-0.3, 1.0, -0.3): d = (-5.3, 0.1, -5.3) lies straight ahead in x (xc = 0,
+    u = 256); zc = 5.3 sqrt2 cos30 - 0.1 sin30, yc = 5.3 sqrt2 sin30 + 0.1 cos30, v = 256 - f yc/zc."""
+    f = 256 / math.tan(math.radians(50))
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    zc = 5.3 * math.sqrt(2) * c - 0.1 * s
+    yc = 5.3 * math.sqrt(2) * s + 0.1 * c
+    inst = mini_dataset.instance("train_house_00001/7/left/a")
+    markers = frame_markers(inst, inst.frames[1], with_anchor=False)
+    assert markers.observer == pytest.approx((256.0, 256 - f * yc / zc))
+    assert markers.observer[1] == pytest.approx(128.13, abs=0.01)
+    im = marked_image(ObserverPlotStrategy(radius=10, line_width=3), inst, index=1)[2]
+    assert im.getpixel((256 + 9, 128)) == RED and im.getpixel((256, 128)) != RED
