@@ -10,8 +10,9 @@ It never changes an official number: those come from the rows' stored official s
 
 from __future__ import annotations
 
+import hashlib
 from collections import defaultdict
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
 from typing import Any
@@ -110,6 +111,63 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
         return None, f"dataset not loadable: {exc}"
 
 
+def _answers_signature(obs: list[Observation]) -> str:
+    """A digest of what a system answered, row by row (equal digests: the same answers)."""
+    rows = sorted(
+        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.selected_image, o.x, o.y) for o in obs
+    )
+    return hashlib.sha256(repr(rows).encode()).hexdigest()
+
+
+def merge_identical_baselines(
+    ordered: list[str], by_system: dict[str, list[Observation]], axes_of: dict[str, dict[str, str]], reference: set[str]
+) -> tuple[list[str], list[str]]:
+    """Show a baseline once when a sweep crossed it with axes it ignores.
+
+    A sweep over ``backend: [model, center]`` x ``strategy: [basic, cot]`` makes ``center ·
+    basic`` and ``center · cot``: the center guess ignores the prompt, so the two cells hold the
+    same answers. Reference systems with identical answers on every row are merged into one,
+    labelled by the axis values they share (``center``). Updates ``by_system``, ``axes_of`` and
+    ``reference`` in place; returns the new system order and a note per merge. Models are never
+    merged: two strategies that happen to agree are still two rows of an ablation.
+    """
+    groups: dict[str, list[str]] = {}
+    for name in ordered:
+        if name in reference:
+            groups.setdefault(_answers_signature(by_system[name]), []).append(name)
+    notes: list[str] = []
+    rename: dict[str, str] = {}
+    shared_axes: dict[str, dict[str, str]] = {}
+    used = set(by_system)
+    for names in groups.values():
+        if len(names) < 2:
+            continue
+        shared = {k: v for k, v in axes_of[names[0]].items() if all(axes_of[n].get(k) == v for n in names[1:])}
+        label = shared.get("model") or shared.get("backend") or names[0]
+        if label in used and label not in names:
+            label = names[0]
+        used.add(label)
+        rename[names[0]] = label
+        shared_axes[label] = shared
+        for n in names[1:]:
+            rename[n] = ""
+        notes.append(f"{', '.join(names)} answered identically on every row: shown once as '{label}'.")
+    if not rename:
+        return ordered, notes
+    out: list[str] = []
+    for name in ordered:
+        new = rename.get(name, name)
+        if not new:
+            by_system.pop(name, None)
+            continue
+        if new != name:
+            by_system[new] = [replace(o, system=new) for o in by_system.pop(name)]
+            axes_of[new] = shared_axes[new]
+            reference.add(new)
+        out.append(new)
+    return out, notes
+
+
 def _stats_for(obs: list[Observation], fill, n_boot: int, seed: int, conditions, directions) -> tuple:
     by_c: dict[str, list[Observation]] = defaultdict(list)
     by_d: dict[str, list[Observation]] = defaultdict(list)
@@ -179,11 +237,15 @@ def analyze(
     for o in obs:
         by_system[o.system].append(o)
     ordered = [s for s in systems if s in by_system] + [s for s in by_system if s not in systems]
+    axes_of = {name: dict(collection.system_axes(name)) for name in ordered}
+    reference_set = {n for n in ordered if n == CENTER_SYSTEM or is_baseline_system(axes_of[n], n)}
+    ordered, merge_notes = merge_identical_baselines(ordered, by_system, axes_of, reference_set)
+    notes.extend(merge_notes)
+    obs = [o for name in ordered for o in by_system[name]]
     stats: list[SystemStats] = []
     for name in ordered:
-        reference = name == CENTER_SYSTEM or is_baseline_system(collection.system_axes(name), name)
         overall, per_c, per_d, per_cd = _stats_for(by_system[name], fill, n_boot, seed, conditions, directions)
-        stats.append(SystemStats(name, collection.system_axes(name), reference, overall, per_c, per_d, per_cd))
+        stats.append(SystemStats(name, axes_of[name], name in reference_set, overall, per_c, per_d, per_cd))
 
     comparisons: list[PairedComparison] = []
     models = [s.system for s in stats if not s.reference]
@@ -194,7 +256,7 @@ def analyze(
         if fill is not None:
             comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], "counted", fill, n_boot, seed))
     # models against the center baseline (the computed one, or the sweep's center cell)
-    centers = [s for s in refs if s == CENTER_SYSTEM or s in center_cells]
+    centers = [s for s in refs if s == CENTER_SYSTEM or is_center_system(axes_of[s], s)]
     for ref in centers[:1]:
         for m in models:
             comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], "official", fill, n_boot, seed))

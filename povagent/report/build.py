@@ -4,6 +4,7 @@ Layout of ``--out``::
 
     report.html            the page (tables, plots, gallery); open it from disk
     images/<sha256>.jpg    gallery drawings (+ ``.t.jpg`` thumbnails), named by hash
+    answers/<sha256>.js    raw answers, loaded by the page when a card is opened
     tables/<name>.md|.csv|.tex, tables.md, tables.tex
     plots/<name>.svg
     summary.json           every number of the report, with CIs
@@ -23,7 +24,7 @@ from povagent.report.analysis import Analysis, analyze, load_collection_dataset
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
-from povagent.report.gallery import GalleryStats, build_gallery
+from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
 from povagent.report.html import figures_section, notes_section, render_page, tables_section
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
@@ -111,7 +112,8 @@ def write_report(
     if gallery:
         shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
         entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
-        gallery_data = {"systems": shown, "entries": entries, "images_dir": "images"}
+        answers = write_answer_chunks(entries, out)
+        gallery_data = {"systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers}
         if dataset is None:
             analysis.notes.append("Gallery images need the dataset's frames: " + (note or "dataset not available") + ".")
     timings["gallery"] = time.perf_counter() - t

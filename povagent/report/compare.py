@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from povagent.errors import PredictionsError
 from povagent.report.collect import Collection, Observation, collect
 from povagent.report.statistics import DEFAULT_BOOT, PairedComparison, paired_comparison
 
@@ -101,6 +102,13 @@ def compare_runs(run_a: str | Path, run_b: str | Path, n_boot: int = DEFAULT_BOO
     """Compare two run folders on the instances they share."""
     pa, pb = Path(run_a), Path(run_b)
     ca, cb = collect(pa), collect(pb)
+    for path, c in ((pa, ca), (pb, cb)):
+        if len(c.systems) > 1:
+            # averaging one instance over different models would compare nothing real
+            raise PredictionsError(
+                f"{path}: holds {len(c.systems)} systems ({', '.join(c.systems[:4])}); compare two run folders "
+                f"(e.g. {path}/<cell>), or a sweep whose cells differ only by run or condition"
+            )
     na, nb = run_label(pa, ca), run_label(pb, cb)
     if na == nb:
         na, nb = f"A: {na}", f"B: {nb}"
@@ -170,7 +178,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     side, sorted by |B - A| (filterable like the report's gallery)."""
     import json
 
-    from povagent.report.gallery import build_gallery
+    from povagent.report.gallery import ANSWERS_DIR, build_gallery, write_answer_chunks
     from povagent.report.html import render_page
     from povagent.report.paper_tables import condition_label
     from povagent.report.tables import Cell, Column, Row, Table, to_html
@@ -181,6 +189,8 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     eb, _ = build_gallery(cmp.b_obs, [cmp.b_name], dataset, out)
     by_b = {e["id"]: e for e in eb}
     deltas = {d.instance_id: d for d in cmp.deltas}
+    # repeats per side: the cards' headline is the mean over them (what the delta compares)
+    n_repeats = max(len({o.run for o in cmp.a_obs}), len({o.run for o in cmp.b_obs}), 1)
     entries = []
     for e in ea:
         b = by_b.get(e["id"])
@@ -196,12 +206,16 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
                 "a_b": b["a"],
                 "ps_b": b["ps"],
                 "k_b": b["k"],
+                "ma": None if d is None or d.a is None else round(d.a, 4),
+                "mb": None if d is None or d.b is None else round(d.b, 4),
+                "nr": n_repeats,
                 "dl": None if d is None or d.delta is None else round(d.delta, 4),
             }
         )
     entries.sort(key=lambda e: -abs(e["dl"]) if e["dl"] is not None else 0.0)
     if top:
         entries = entries[:top]
+    answers = write_answer_chunks(entries, out, keys=("a", "a_b"))
     cols = [Column("n", "count", None), Column("Mean A", "l2", None), Column("Mean B", "l2", None), Column("B - A", "signed", None),
             Column("B better", "count", None), Column("A better", "count", None), Column("Wilcoxon p", "p", None), Column("Sign p", "p", None)]
     table = Table("compare", "Paired comparison", f"A = {cmp.a_name}; B = {cmp.b_name}. Official L2 on instances both answered (averaged over runs); B - A < 0 means B is better; 95% bootstrap CI.", "Subset", cols)
@@ -210,9 +224,17 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     body = '<section id="tables"><h2>Summary</h2>' + to_html(table) + "</section>"
     page = render_page(
         f"povagent compare: {cmp.b_name} vs {cmp.a_name}",
-        f"{len(cmp.deltas)} shared instances; cards show A (left) and B (right), sorted by |B - A|",
+        f"{len(cmp.deltas)} shared instances; cards show A (left) and B (right), sorted by |B - A| "
+        "(errors averaged over each run's repeats; drawings of the first repeat)",
         body,
-        {"systems": [f"{cmp.a_name} | {cmp.b_name}"], "entries": entries, "images_dir": "images", "default_sort": "delta-desc"},
+        {
+            "systems": [f"{cmp.a_name} | {cmp.b_name}"],
+            "entries": entries,
+            "images_dir": "images",
+            "answers_dir": ANSWERS_DIR,
+            "answers": answers,
+            "default_sort": "delta-desc",
+        },
         nav=[("#tables", "Summary")],
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )

@@ -10,6 +10,11 @@ Files are named by a SHA-256 of what was drawn (the source image's bytes plus th
 the HTML references images by hash, a re-run finds its images already made and skips them,
 and two rows with the same drawing share one file. Nothing is inlined as base64.
 
+Raw answers (a chain-of-thought answer runs to thousands of characters) are kept out of the
+page too: :func:`write_answer_chunks` moves them into small ``answers/<sha256>.js`` files that
+the page loads with a ``<script>`` tag (which works from ``file://``, unlike ``fetch``) only
+when a card is opened, so the page stays small whatever the models wrote.
+
 This module draws and writes images only; it never scores (markers use the stored official
 scores where they exist).
 """
@@ -31,11 +36,14 @@ from povagent.report.collect import Observation
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"
+ANSWERS_DIR = "answers"
+#: Entries per answers file: one file is loaded when any of its cards is opened.
+ANSWER_CHUNK = 200
 THUMB_SIZE = 256
 #: Bumped when the drawing changes, so cached images are redrawn.
 RECIPE_VERSION = 2
-#: Raw answers longer than this are cut in the page data (the full text stays in results.jsonl).
-MAX_RAW_CHARS = 4000
+#: Raw answers longer than this are cut in the answers files (the full text stays in results.jsonl).
+MAX_RAW_CHARS = 8000
 
 GT_COLOUR = (0, 200, 83)
 PRED_COLOUR = (255, 45, 45)
@@ -248,3 +256,33 @@ def build_gallery(
     stats.cached = len(results) - stats.drawn
     stats.seconds = time.perf_counter() - t0
     return entries, stats
+
+
+def write_answer_chunks(
+    entries: list[dict[str, Any]], out_dir: str | Path, keys: tuple[str, ...] = ("a",), chunk: int = ANSWER_CHUNK
+) -> list[str]:
+    """Move the raw-answer fields ``keys`` of ``entries`` into ``answers/<sha256>.js`` files.
+
+    Each entry gets ``"ac": [file index, position]``; the page's data lists the files (by hash)
+    and loads one when a card of it is opened. A file is JavaScript calling
+    ``povAnswers(name, [{key: text, ...}, ...])``. Returns the file names (hashes), in order.
+    """
+    folder = Path(out_dir) / ANSWERS_DIR
+    folder.mkdir(parents=True, exist_ok=True)
+    names: list[str] = []
+    for start in range(0, len(entries), chunk):
+        part = entries[start : start + chunk]
+        texts = [{k: e.pop(k) for k in keys if e.get(k)} for e in part]
+        body = json.dumps(texts, ensure_ascii=False, separators=(",", ":"))
+        name = hashlib.sha256(body.encode()).hexdigest()
+        path = folder / f"{name}.js"
+        if not path.exists():
+            # the name is a hash of the content, so an existing file already holds exactly this
+            script = "povAnswers(" + json.dumps(name) + "," + body.replace("</", "<\\/") + ");\n"
+            tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+            tmp.write_text(script, encoding="utf-8")
+            tmp.replace(path)
+        for j, e in enumerate(part):
+            e["ac"] = [len(names), j]
+        names.append(name)
+    return names

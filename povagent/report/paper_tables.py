@@ -39,8 +39,9 @@ def _get(stats: dict[str, CellStats], key: str) -> CellStats | None:
 
 PROTOCOL = (
     "Mean normalized L2 (lower is better) over answered instances, averaged over runs; "
-    "95% bootstrap CIs in brackets. The best model per column is in bold; the center "
-    "baseline is shown for reference."
+    "95% bootstrap CIs in brackets. The best model per column is in bold; baselines "
+    "(center, random, oracle) are shown in italics below the models for reference and are "
+    "never bolded."
 )
 
 
@@ -101,8 +102,14 @@ def condition_direction_table(a: Analysis) -> Table:
 
 def response_table(a: Analysis) -> Table:
     """Systems x conditions, response rate, plus all conditions."""
-    cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] + [Column("All", "rate", "higher")]
-    t = Table("response_rates", "Response rates", "Answered / total instances, averaged over runs; 95% bootstrap CIs.", "Model", cols)
+    cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] + [Column("Overall", "rate", "higher")]
+    caption = (
+        "Answered / total instances (a response is a parseable coordinate; unparseable answers and "
+        "API failures are non-responses), averaged over runs; 95% bootstrap CIs. Overall pools "
+        "every instance, which equals the paper's average over conditions when, as in POVBench, "
+        "each condition has the same instances."
+    )
+    t = Table("response_rates", "Response rates", caption, "Model", cols)
     for s in a.systems:
         cells = [_cell(getattr(_get(s.by_condition, c), "response_rate", None)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))

@@ -184,7 +184,8 @@ def histogram(
             counts[min(bins - 1, k)] += 1
         n = max(1, len(vals))
         shares.append([c / n for c in counts])
-    y_max = _nice_max(max((s for row in shares for s in row), default=0.0) * 1.05)
+    # shares never exceed 100%: an axis up to 120% would only waste height
+    y_max = min(1.0, _nice_max(max((s for row in shares for s in row), default=0.0) * 1.05))
 
     def x(v: float) -> float:
         return left + plot_w * (v - lo) / (hi - lo)

@@ -129,3 +129,13 @@ def sweep_with_center(tmp_path_factory, mini_dataset) -> Path:
     """A sweep whose second cell is a center-baseline backend."""
     cells = [{"model": "mock-a", "seed": 1}, {"model": "center", "seed": 2, "noise": 0.0}]
     return write_sweep(tmp_path_factory.mktemp("sweep_center") / "sweep", mini_dataset, cells)
+
+
+@pytest.fixture
+def make_sweep(tmp_path, mini_dataset):
+    """Write a sweep of simulated cells (see :func:`write_sweep`) under ``tmp_path``."""
+
+    def make(cells: list[dict], name: str = "sweep") -> Path:
+        return write_sweep(tmp_path / name, mini_dataset, cells)
+
+    return make

@@ -48,3 +48,25 @@ def test_compare_html_shows_both_runs_drawings_side_by_side(sweep_dir, tmp_path,
     assert '"img_b":"' in page and '"dl":' in page
     for key in set(re.findall(r'"img(?:_b)?":"([0-9a-f]{64})"', page)):
         assert (tmp_path / "images" / f"{key}.t.jpg").exists()
+
+
+def test_compare_cards_show_the_run_averaged_errors_the_delta_is_made_of(run_dir, sweep_dir, tmp_path, mini_dataset):
+    import json
+
+    cmp = compare_runs(run_dir, sweep_dir / "cell_02", n_boot=0)  # A has two runs, B one
+    page = write_comparison_html(cmp, tmp_path, mini_dataset).read_text()
+    data = json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', page, re.S).group(1))
+    deltas = {d.instance_id: d for d in cmp.deltas}
+    assert data["entries"]
+    for e in data["entries"]:
+        d = deltas[e["id"]]
+        assert e["nr"] == 2
+        assert e["ma"] == (None if d.a is None else round(d.a, 4)) and e["mb"] == (None if d.b is None else round(d.b, 4))
+        assert "a" not in e and "a_b" not in e  # raw answers are in answers/*.js
+
+
+def test_comparing_a_sweep_of_several_systems_asks_for_run_folders(sweep_dir, run_dir):
+    from povagent.errors import PredictionsError
+
+    with pytest.raises(PredictionsError, match="holds 4 systems"):
+        compare_runs(sweep_dir, run_dir, n_boot=0)

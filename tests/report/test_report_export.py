@@ -57,3 +57,31 @@ def test_exported_predictions_score_exactly_like_the_run(run_dir, tmp_path, mini
 def test_exporting_a_sweep_folder_asks_for_one_run_folder(sweep_dir, tmp_path):
     with pytest.raises(PredictionsError, match="one run folder at a time"):
         export_run(sweep_dir, tmp_path / "x.json")
+
+
+def test_exported_predictions_replayed_through_the_runner_score_exactly_like_the_run(run_dir, tmp_path, mini_root):
+    import yaml
+
+    from povagent.config import load_pipeline
+    from povagent.runner import run_pipeline
+
+    (path,) = export_run(run_dir, tmp_path / "p.json", run=0)
+    doc = {
+        "dataset": str(mini_root),
+        "backend": {"name": "replay", "options": {"path": str(path)}},
+        "strategy": "basic",
+        "parser": "json",
+        "scorers": ["official"],
+        "cache": False,
+        "output": str(tmp_path / "replayed"),
+    }
+    (tmp_path / "pipeline.yaml").write_text(yaml.safe_dump(doc))
+    result = run_pipeline(load_pipeline(tmp_path / "pipeline.yaml"))
+    original = {r.instance_id: r.scores["official"] for r in read_rows(run_dir / "results.jsonl") if r.run == 0}
+    replayed = {r.instance_id: r.scores.get("official") or {} for r in read_rows(result.run_dir / "results.jsonl")}
+    assert set(replayed) == set(original)
+    for iid, off in original.items():
+        again = replayed[iid]
+        assert bool(again.get("answered")) == bool(off["answered"]), iid
+        if off["answered"]:
+            assert again["l2"] == pytest.approx(off["l2"], abs=1e-9), iid

@@ -37,9 +37,28 @@ def chromium() -> str:
     pytest.fail("Chromium is not installed: `apt-get install -y chromium` (the HTML report test needs a real browser)")
 
 
-def browse(page, tmp_path, *args: str) -> subprocess.CompletedProcess:
-    cmd = [chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", *args, page.as_uri()]
+def browse(page, tmp_path, *args: str, state: str = "") -> subprocess.CompletedProcess:
+    """Open ``page`` (with an optional gallery state, e.g. ``cond=c&open=0``) in headless Chromium."""
+    url = page.as_uri() + (f"#{state}" if state else "")
+    cmd = [chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", *args, url]
     return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
+
+
+def dump(page, tmp_path, state: str = "") -> str:
+    done = browse(page, tmp_path, "--dump-dom", state=state)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def gallery_data(report) -> dict:
+    html = report.page.read_text(encoding="utf-8")
+    return json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
+
+
+def cards(dom: str) -> list[dict[str, str]]:
+    """The rendered gallery cards' data attributes."""
+    grid = dom.split('<div id="gallery">', 1)[1].split("<script", 1)[0]  # not the script's own text
+    return [dict(re.findall(r'data-(\w+)="([^"]*)"', m)) for m in re.findall(r'<div class="card" ([^>]*)>', grid)]
 
 
 @pytest.fixture(scope="module")
@@ -49,9 +68,7 @@ def report(sweep_dir, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def dom(report, tmp_path_factory):
-    done = browse(report.page, tmp_path_factory.mktemp("browser"), "--dump-dom")
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout
+    return dump(report.page, tmp_path_factory.mktemp("browser"))
 
 
 def body_attr(dom: str, name: str) -> int:
@@ -78,7 +95,8 @@ def test_gallery_cards_render_and_their_images_load_in_the_browser(dom, report):
     assert body_attr(dom, "data-gallery-rendered") > 0
     assert body_attr(dom, "data-images-loaded") >= 1  # counted by onload with naturalWidth > 0
     assert body_attr(dom, "data-images-failed") == 0
-    assert re.search(r'<div class="card" data-i="\d+"><div class="imgs"><img alt="[^"]+" src="images/[0-9a-f]{64}\.t\.jpg">', dom)
+    assert body_attr(dom, "data-render-ms") >= 0  # set last: the page script ran to its end
+    assert re.search(r'<div class="card" data-i="\d+"[^>]*><div class="imgs"><img alt="[^"]+" src="images/[0-9a-f]{64}\.t\.jpg">', dom)
 
 
 def test_screenshot_shows_a_rendered_page_not_a_blank_one(report, tmp_path):
@@ -93,7 +111,7 @@ def test_screenshot_shows_a_rendered_page_not_a_blank_one(report, tmp_path):
 def test_gallery_references_images_by_hash_and_inlines_no_image_data(report):
     html = report.page.read_text(encoding="utf-8")
     assert "data:image" not in html and "base64" not in html
-    data = json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
+    data = gallery_data(report)
     keys = {e["img"] for e in data["entries"] if e["img"]}
     assert keys
     for k in keys:
@@ -113,3 +131,69 @@ def test_report_writes_tables_in_markdown_csv_and_latex(report):
         for ext in ("md", "csv", "tex"):
             assert (report.out / "tables" / f"{key}.{ext}").stat().st_size > 0
     assert "\\toprule" in (report.out / "tables.tex").read_text()
+
+
+def test_raw_answers_live_in_hashed_files_outside_the_page(report):
+    html = report.page.read_text(encoding="utf-8")
+    assert "Thinking about the observer" not in html  # every answered row of the fixture says it
+    data = gallery_data(report)
+    assert all("a" not in e and len(e["ac"]) == 2 for e in data["entries"])
+    for name in data["answers"]:
+        text = (report.out / "answers" / f"{name}.js").read_text(encoding="utf-8")
+        assert re.fullmatch(r"[0-9a-f]{64}", name) and text.startswith(f'povAnswers("{name}",')
+
+
+def test_filters_from_the_url_show_exactly_the_matching_predictions(report, tmp_path):
+    entries = gallery_data(report)["entries"]
+    dom = dump(report.page, tmp_path, "cond=c&sys=1")
+    expected = [e for e in entries if e["c"] == "c" and e["s"] == 1]
+    assert 0 < len(expected) < len(entries)
+    assert body_attr(dom, "data-gallery-shown") == len(expected)
+    shown = cards(dom)
+    assert len(shown) == len(expected) and all(c["c"] == "c" and c["s"] == "1" for c in shown)
+
+
+def test_parse_status_filter_keeps_only_unanswered_predictions(report, tmp_path):
+    entries = gallery_data(report)["entries"]
+    dom = dump(report.page, tmp_path, "status=unanswered")
+    unanswered = [e for e in entries if e["e"] is None]
+    assert unanswered and body_attr(dom, "data-gallery-shown") == len(unanswered)
+    assert {c["answered"] for c in cards(dom)} == {"0"}
+
+
+def test_error_filter_and_worst_first_sort(report, tmp_path):
+    entries = gallery_data(report)["entries"]
+    dom = dump(report.page, tmp_path, "min=0.1&sort=err-desc")
+    kept = sorted((e for e in entries if e["e"] is not None and e["e"] >= 0.1), key=lambda e: -e["e"])
+    assert body_attr(dom, "data-gallery-shown") == len(kept)
+    first = re.search(r'<div class="card" [^>]*>.*?<div class="id">([^<]*) · run', dom, re.S).group(1)
+    assert first == kept[0]["id"]
+
+
+def test_opening_a_card_shows_the_full_frame_and_the_raw_answer(report, tmp_path, sweep_dir):
+    entries = gallery_data(report)["entries"]
+    dom = dump(report.page, tmp_path, "status=answered&cond=a&open=0")
+    viewed = re.search(r'<body[^>]*data-viewer="([^"]+)"', dom).group(1)
+    assert any(e["id"] == viewed and e["c"] == "a" for e in entries)
+    assert re.search(r'<body[^>]*data-viewer-image="loaded"', dom)
+    raw = re.search(r'<pre class="raw">(.*?)</pre>', dom, re.S).group(1)
+    assert "Thinking about the observer." in raw and '"selected_image"' in raw.replace("&quot;", '"')
+
+
+def test_screenshot_of_an_opened_card_shows_the_frame_with_both_markers(report, tmp_path):
+    shot = tmp_path / "viewer.png"
+    done = browse(report.page, tmp_path, f"--screenshot={shot}", "--window-size=1300,900", state="status=answered&cond=c&open=0")
+    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    px = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
+    r, g, b = px[..., 0], px[..., 1], px[..., 2]
+    # the overlay dims the page, so saturated marker colours can only come from the drawn frame
+    green = (g > 150) & (r < 90) & (b < 140)
+    red = (r > 200) & (g < 90) & (b < 90)
+    assert green.sum() > 150, "no ground-truth ring visible"
+    assert red.sum() > 60, "no predicted cross visible"
+
+
+def test_page_loads_nothing_from_the_network(report):
+    html = report.page.read_text(encoding="utf-8")
+    assert not re.search(r'(?:src|href)\s*=\s*["\']?(?:https?:)?//', html, re.I)
+    assert "@import" not in html and "url(http" not in html

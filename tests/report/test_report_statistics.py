@@ -86,3 +86,23 @@ def test_identical_systems_tie_everywhere_and_have_no_test():
 @pytest.mark.parametrize("pos,neg", [(0, 1), (3, 9), (10, 10), (40, 17)])
 def test_sign_test_is_the_exact_two_sided_binomial_test(pos, neg):
     assert sign_test_p(pos, neg) == pytest.approx(binomtest(pos, pos + neg, 0.5).pvalue, rel=1e-9)
+
+
+def test_ci_of_a_multi_run_mean_with_non_responses_covers_the_true_mean_in_about_95_percent_of_seeds():
+    # what a report's cells are: instances of varying difficulty, three runs that agree on the
+    # hard ones (errors scattered around the instance's difficulty), 20% non-responses; the true
+    # answered mean is the mean difficulty. (Resampling rows instead of instances covers far
+    # less often: the runs of one instance are not independent evidence.)
+    true_mean, hits, trials, n_inst, runs = 0.3, 0, 200, 120, 3
+    for seed in range(trials):
+        rng = np.random.default_rng(seed)
+        difficulty = rng.gamma(4.0, true_mean / 4.0, n_inst)
+        rows = []
+        for i, d in enumerate(difficulty):
+            for r in range(runs):
+                answered = rng.random() < 0.8
+                l2 = float(d * rng.lognormal(-0.02, 0.2)) if answered else None  # mean-preserving noise
+                rows.append(obs(f"i{i}", l2, run=r))
+        est = cell_stats(rows, n_boot=400, seed=seed).official
+        hits += est.lo <= true_mean <= est.hi
+    assert 0.90 <= hits / trials <= 0.985

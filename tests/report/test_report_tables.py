@@ -126,3 +126,44 @@ def test_a_sweep_with_its_own_center_cell_gets_no_computed_baseline(sweep_with_c
     labels = [(s.system, s.reference) for s in a.systems]
     assert (CENTER_SYSTEM, True) not in labels
     assert ("center", True) in labels and ("mock-a", False) in labels
+
+
+def test_a_baseline_crossed_with_strategies_it_ignores_is_shown_once(make_sweep):
+    cells = [
+        {"model": "mock-a", "strategy": "basic", "seed": 1},
+        {"model": "mock-a", "strategy": "cot", "seed": 1},  # same answers, but a model: kept apart
+        {"model": "center", "strategy": "basic", "seed": 2, "noise": 0.0},
+        {"model": "center", "strategy": "cot", "seed": 2, "noise": 0.0},
+    ]
+    a = analysis_of(make_sweep(cells), n_boot=0)
+    assert [(s.system, s.reference) for s in a.systems] == [("mock-a · basic", False), ("mock-a · cot", False), ("center", True)]
+    assert any("shown once as 'center'" in n for n in a.notes)
+    assert {o.system for o in a.observations} == {"mock-a · basic", "mock-a · cot", "center"}
+    # the merged baseline is the center the models are compared with
+    assert {c.a for c in a.comparisons if c.b == "mock-a · cot"} >= {"center"}
+
+
+def test_main_table_equals_the_mean_of_povagent_score_over_each_runs_official_export(run_dir, mini_dataset, tmp_path):
+    from povagent.report.export import export_run
+    from povagent.scoring.predictions import score_predictions
+
+    a = analysis_of(run_dir, n_boot=0)
+    files = export_run(run_dir, tmp_path / "p.json")
+    scored = [score_predictions(f, mini_dataset)[0] for f in files]
+    assert len(scored) == 2
+    main = system_row(main_table(a), "mock-a")
+    for j, c in enumerate(a.conditions):
+        assert main.cells[j].value == pytest.approx(sum(s["per_condition"][c]["mean_l2"] for s in scored) / 2, abs=1e-12)
+    resp = system_row(response_table(a), "mock-a")
+    assert resp.cells[-1].value == pytest.approx(sum(s["overall"]["response_rate"] for s in scored) / 2, abs=1e-12)
+
+
+def test_bold_marks_the_best_model_per_column_of_a_real_sweep_never_a_baseline(sweep_dir):
+    from povagent.report.tables import best_rows, format_value
+
+    t = main_table(analysis_of(sweep_dir, n_boot=0))
+    best = best_rows(t)
+    for j, col in enumerate(t.columns):
+        shown = {i: float(format_value(r.cells[j].value, col.kind)) for i, r in enumerate(t.rows) if not r.reference and r.cells[j].value is not None}
+        assert best[j] == {i for i, v in shown.items() if v == min(shown.values())}
+        assert not any(t.rows[i].reference for i in best[j])
