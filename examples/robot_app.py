@@ -82,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.pipeline:
             agent = GroundingAgent.from_pipeline(args.pipeline, plane=floor, timeout_s=args.timeout)
         elif args.model:
-            agent = GroundingAgent("litellm", backend_options={"model": args.model}, plane=floor, timeout_s=args.timeout)
+            agent = GroundingAgent(model=args.model, plane=floor, timeout_s=args.timeout)  # a profile or litellm string
         else:
             agent = GroundingAgent("center", plane=floor, timeout_s=args.timeout)  # offline baseline
     except PovagentError as exc:  # a bad pipeline file, an unknown plugin name, a missing option

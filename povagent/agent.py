@@ -236,7 +236,11 @@ class GroundingAgent:
     """Locate a sentence's target in a robot's frames with any povagent pipeline.
 
     Build it from keyword arguments (plugin names with options, or ready objects) or from a
-    pipeline YAML with :meth:`from_pipeline`. ``timeout_s`` bounds each call, every retry
+    pipeline YAML with :meth:`from_pipeline`. ``model=`` is the short form of the litellm
+    backend, as ``model:`` is in a pipeline: a model profile (``"gpt-5.4"``, whose default
+    parser then applies) or any litellm model string; ``backend_options`` add to it (e.g.
+    ``api_base`` for a vLLM server). Without a model or backend the agent runs the offline
+    ``center`` baseline. ``timeout_s`` bounds each call, every retry
     included. ``plane`` is the floor a pixel is back-projected onto when no depth image is
     given (default: AI2-THOR's ``y = 0``; a ROS robot passes ``Plane(normal=(0, 0, 1))``).
     The agent holds a backend (with its connections): use it as a context manager, or call
@@ -245,8 +249,9 @@ class GroundingAgent:
 
     def __init__(
         self,
-        backend: str | Backend = "center",
+        backend: str | Backend | None = None,
         *,
+        model: str | None = None,
         strategy: str | Strategy = "basic",
         parser: str | Parser | None = None,
         backend_options: Mapping[str, Any] | None = None,
@@ -262,6 +267,14 @@ class GroundingAgent:
     ) -> None:
         if timeout_s <= 0:
             raise ValueError(f"timeout_s must be positive, got {timeout_s}")
+        if model is not None:
+            if backend not in (None, "litellm"):
+                raise ValueError(f"give model= (a litellm model or profile) or backend=, not both (got backend={backend!r})")
+            if backend_options and backend_options.get("model") not in (None, model):
+                raise ValueError(f"model={model!r} and backend_options['model']={backend_options['model']!r} disagree")
+            backend, backend_options = "litellm", {**(backend_options or {}), "model": model}
+        elif backend is None:
+            backend = "center"
         host = None
         if isinstance(backend, str) or isinstance(strategy, str) or not isinstance(parser, Parser):
             from povagent.plugins import get_plugin_host

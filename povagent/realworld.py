@@ -54,9 +54,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
-from povagent.errors import DatasetError
+from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
 from povagent.letterbox import BENCHMARK_SIZE, Letterbox
+
+#: Built-in scorers that project a 3D target, which a real-world set does not have.
+NEEDS_3D_GROUND_TRUTH = frozenset({"official"})
 
 #: The file that makes a folder a real-world set.
 INDEX_FILE = "realworld.json"
@@ -316,6 +319,19 @@ class RealWorldDataset:
     def instance(self, id_: str) -> RealWorldInstance | None:
         """The instance with id ``house/scenario/direction/condition``."""
         return self._by_id.get(id_)
+
+    def check_scorers(self, names: Iterable[str]) -> None:
+        """Refuse scorers that need 3D ground truth (the runner asks before any request).
+
+        The marks are 2D: the ``official`` metric would project a NaN target, which its rules
+        place at the image centre, and score a centre guess a perfect 0.
+        """
+        needs_3d = sorted(set(names) & NEEDS_3D_GROUND_TRUTH)
+        if needs_3d:
+            raise ConfigError(
+                f"{self.root}: scorer {', '.join(needs_3d)} needs 3D ground truth, and a real-world set's is "
+                "marked by hand in 2D: use scorers: [success]"
+            )
 
 
 def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> RealWorldDataset:

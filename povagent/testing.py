@@ -9,6 +9,10 @@ Fixtures:
   (a queued exception is raised instead), and records every request it was sent.
 * ``tiny_dataset``: a builder writing a synthetic dataset in the release layout under the
   test's ``tmp_path`` (see :func:`write_release`).
+* ``loopback_server``: a running :class:`~povagent.loopback_server.LoopbackServer` (an
+  OpenAI-compatible server on 127.0.0.1 that records requests and injects faults) answering a
+  valid A/B answer; point a litellm backend at ``loopback_server.url``. It stops when the test
+  ends, or after 60 s whatever happens.
 
 :func:`write_release` is also what the runner benchmarks use for a full-size synthetic set.
 This module must not be imported by the library itself.
@@ -232,3 +236,12 @@ def tiny_dataset(tmp_path: Path) -> Any:
         return write_release(tmp_path / f"dataset_{next(counter)}", **kwargs)
 
     return make
+
+
+@pytest.fixture
+def loopback_server() -> Iterator[Any]:
+    """A loopback OpenAI-compatible server answering ``{"selected_image": 0, "x": 10, "y": 20}``."""
+    from povagent.loopback_server import LoopbackServer
+
+    with LoopbackServer(reply='{"selected_image": 0, "x": 10, "y": 20}', max_lifetime_s=60) as server:
+        yield server

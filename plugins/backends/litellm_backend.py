@@ -4,7 +4,9 @@
 ``hosted_vllm/Qwen/Qwen3-VL-8B-Instruct`` with ``api_base``) or a model profile name
 (``gemini-robotics-er``). API keys come from the environment only: ``api_key_env`` names the
 variable, read at call time and never stored in the identity, logs or rows; without it litellm
-reads the provider's usual variable (``OPENAI_API_KEY``, ``GEMINI_API_KEY``).
+reads the provider's usual variable (``OPENAI_API_KEY``, ``GEMINI_API_KEY``). A profile's
+backend options are defaults under the pipeline's, and a request of a condition the profile
+cannot answer (RoboPoint: Given only) is refused as permanent without a call.
 
 Retries: the runner retries :class:`TransientBackendError`, so direct calls run with litellm's
 own retries off (``num_retries=0``). With ``router`` (a litellm Router ``model_list``: several
@@ -13,7 +15,9 @@ across deployments itself; a failure that outlives the Router's retries is raise
 :class:`PermanentBackendError` so the runner never stacks a second retry loop on top
 (``retries_inside`` is True on such a backend).
 
-litellm is imported on the first request, never when this module is imported.
+litellm is imported on the first request, never when this module is imported, and in a worker
+thread: the import takes seconds, and the event loop (with every timeout running on it) must
+keep going meanwhile. The import counts against the first request's own time.
 """
 
 from __future__ import annotations
@@ -22,9 +26,10 @@ import asyncio
 import json
 import os
 import time
+from types import ModuleType
 from typing import Any, ClassVar, Mapping
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent import hookimpl
 from povagent.errors import ConfigError
@@ -64,11 +69,21 @@ _KEY_MESSAGE = (
 )
 
 
+#: Request headers that carry a credential (a key passed as a header is still a key in YAML).
+_CREDENTIAL_HEADERS = frozenset({"authorization", "api-key", "x-api-key", "x-goog-api-key", "proxy-authorization"})
+
+
 def _reject_literal_key(where: str, params: Mapping[str, Any]) -> None:
     key = params.get("api_key")
     # litellm's own "os.environ/NAME" form is a reference to the environment, not a key
     if key is not None and not (isinstance(key, str) and key.startswith("os.environ/")):
         raise ValueError(f"{where}: api_key given literally. {_KEY_MESSAGE}")
+    for name in ("extra_headers", "headers"):
+        headers = params.get(name)
+        if isinstance(headers, Mapping):
+            secret = sorted(h for h in headers if str(h).lower() in _CREDENTIAL_HEADERS)
+            if secret:
+                raise ValueError(f"{where}: {name} carries a credential ({', '.join(secret)}). {_KEY_MESSAGE}")
 
 
 class LiteLLMOptions(BaseModel):
@@ -112,6 +127,12 @@ class LiteLLMOptions(BaseModel):
         if unknown:
             raise ValueError(f"unknown router_settings {unknown}; known: {sorted(ROUTER_SETTINGS)}")
         return value
+
+    @model_validator(mode="after")
+    def _router_settings_need_a_router(self) -> "LiteLLMOptions":
+        if self.router_settings and self.router is None:
+            raise ValueError("router_settings apply to a router: give router (the deployments) too, or drop them")
+        return self
 
 
 def _options_error(exc: ValidationError) -> ConfigError:
@@ -222,9 +243,21 @@ class LiteLLMBackend(Backend):
         return params
 
     # -- calling ------------------------------------------------------------------------------
+    def _check_condition(self, request: Request) -> None:
+        # a profile that cannot answer a condition (RoboPoint: Given only) is refused before
+        # any paid call, with the reason, instead of failing slowly or answering nonsense
+        profile, instance = self.profile, request.instance
+        if profile is not None and instance is not None and not profile.supports(instance.condition):
+            allowed = ", ".join(f"{c.label} ({c.value})" for c in profile.conditions)
+            raise PermanentBackendError(
+                f"model profile {profile.name!r} answers {allowed} only, not {instance.condition.label} "
+                f"({instance.condition.value}); restrict instances.conditions for this model"
+            )
+
     async def complete(self, request: Request, images: ImageStore) -> Response:
         """Send ``request`` (images as data URLs, in order); raise Transient/Permanent errors."""
-        litellm = import_litellm()
+        self._check_condition(request)
+        litellm = _LITELLM or await _import_litellm_off_loop()
         kwargs = {"messages": openai_messages(request, images), **self.generation_kwargs(request)}
         key: str | None = None
         attempts = 1
@@ -301,6 +334,17 @@ class LiteLLMBackend(Backend):
     async def aclose(self) -> None:
         """Drop the Router (its clients are litellm's shared, cached ones)."""
         self._router = None
+
+
+#: litellm, once imported (a module global: the import is process-wide anyway).
+_LITELLM: ModuleType | None = None
+
+
+async def _import_litellm_off_loop() -> ModuleType:
+    """Import litellm in a worker thread (seconds, the first time) so the event loop keeps running."""
+    global _LITELLM
+    _LITELLM = await asyncio.to_thread(import_litellm)
+    return _LITELLM
 
 
 def _text_of(response: Any) -> str:

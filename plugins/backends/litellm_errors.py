@@ -10,6 +10,7 @@ traceback). Messages are scrubbed of the API key.
 from __future__ import annotations
 
 import email.utils
+import re
 import time
 from types import ModuleType
 from typing import Any, Mapping
@@ -66,6 +67,16 @@ def _status(exc: BaseException) -> int | None:
         return None
 
 
+#: How providers say no key was given. litellm reports it as a 500 (OpenAI's "Missing
+#: credentials") or a connection error (Gemini): retrying cannot fix it, so it is permanent.
+_MISSING_KEY = re.compile(
+    r"missing (?:\w+ )?(?:api[ _]?key|credentials)|api_key client option must be set|no api[ _]?key (?:provided|found|set)",
+    re.IGNORECASE,
+)
+
+#: litellm pastes its own traceback into some messages; rows and logs keep the text before it.
+_TRACEBACK = "Traceback (most recent call last)"
+
 #: Shorter "secrets" are placeholders (local servers take any key); masking them would mangle text.
 MIN_SECRET_LENGTH = 6
 
@@ -90,7 +101,12 @@ def map_litellm_error(
     import openai
 
     msg = scrub(str(exc) or type(exc).__name__, secrets)
+    msg = msg.split(_TRACEBACK, 1)[0].rstrip() or msg
     status = _status(exc)
+    if _MISSING_KEY.search(msg) and isinstance(exc, (litellm.APIError, openai.APIError)):
+        return PermanentBackendError(
+            f"no API key: {msg} (export the provider's key variable, or name yours with api_key_env)", status=401
+        )
     if isinstance(exc, litellm.RateLimitError):
         transient = TransientBackendError(
             msg, retry_after=retry_after_seconds(_response_headers(exc)), status=429

@@ -5,6 +5,9 @@ from __future__ import annotations
 import asyncio
 import base64
 import io
+import os
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -226,6 +229,52 @@ def test_alocate_times_out_too(model_agent, server):
         return time.monotonic() - started
 
     assert asyncio.run(main()) < 2.0
+
+
+def test_model_keyword_takes_a_profile_and_brings_its_parser(server):
+    # qwen3-vl-32b is served by vLLM (api_base) and answers on 0-1000: its profile's parser rescales
+    server.script('{"selected_image": 0, "x": 500, "y": 750}')
+    with GroundingAgent(model="qwen3-vl-32b", backend_options={"api_base": server.url}, retry=FAST_RETRY, timeout_s=20) as agent:
+        loc = agent.locate("x", wide_frames(1))
+    assert server.requests[0].body["model"] == "Qwen/Qwen3-VL-32B-Instruct"
+    assert loc.status is ParseStatus.REPAIRED and loc.square_point == (256.0, 384.0)
+    assert loc.pixel == pytest.approx((640.0, 680.0))  # (256 / 0.4, (384 - 112) / 0.4)
+
+
+def test_model_and_another_backend_together_are_refused():
+    with pytest.raises(ValueError, match="model= .* or backend=, not both"):
+        GroundingAgent("center", model="gpt-5.4")
+
+
+def test_the_timeout_holds_while_litellm_is_imported_for_the_first_call():
+    # a fresh interpreter: the first call imports litellm (seconds); the call still ends on time
+    code = """
+import asyncio, sys, time
+import numpy as np
+from povagent.agent import GroundingAgent
+from povagent.errors import NoAnswerError
+assert "litellm" not in sys.modules
+frames = [np.zeros((72, 128, 3), np.uint8)]
+agent = GroundingAgent(model="openai/x", backend_options={"api_base": "http://127.0.0.1:9/v1"}, timeout_s=0.5)
+async def main():
+    started = time.monotonic()
+    try:
+        await agent.alocate("x", frames)
+    except NoAnswerError:
+        return time.monotonic() - started
+print(round(asyncio.run(main()), 2))
+started = time.monotonic()
+try:
+    agent.locate("x", frames)
+except NoAnswerError:
+    print(round(time.monotonic() - started, 2))
+"""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("LITELLM_")}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60)
+    assert done.returncode == 0, done.stderr
+    alocate_s, locate_s = (float(v) for v in done.stdout.split())
+    # budget 0.5 s; importing litellm alone takes 3 s or more here
+    assert alocate_s < 1.5 and locate_s < 1.5
 
 
 # -- bad input ------------------------------------------------------------------------------------

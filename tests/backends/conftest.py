@@ -3,8 +3,6 @@ strategies lay them out ("Image i:" text part before each image), and loopback s
 
 from __future__ import annotations
 
-from typing import Iterator
-
 import pytest
 from PIL import Image
 
@@ -57,10 +55,9 @@ def make_request(store):
 
 
 @pytest.fixture
-def loopback() -> Iterator[LoopbackServer]:
-    """A loopback OpenAI-compatible server answering a valid A/B answer (stops itself in 60 s)."""
-    with LoopbackServer(reply='{"selected_image": 0, "x": 10, "y": 20}', max_lifetime_s=60) as server:
-        yield server
+def loopback(loopback_server) -> LoopbackServer:
+    """The ``povagent.testing`` loopback server (a valid A/B answer; stops itself in 60 s)."""
+    return loopback_server
 
 
 @pytest.fixture

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import subprocess
+import sys
 
 import pytest
 
@@ -179,3 +182,63 @@ def test_self_hosted_profile_with_api_base_is_accepted():
 
 def test_direct_calls_leave_retries_to_the_runner():
     assert LiteLLMBackend(model="openai/gpt-4o").retries_inside is False
+
+
+def test_router_settings_without_a_router_are_a_config_error():
+    with pytest.raises(ConfigError, match="router_settings apply to a router"):
+        LiteLLMBackend(model="openai/gpt-4o", router_settings={"num_retries": 2})
+
+
+def test_a_profile_refuses_a_condition_it_cannot_answer_before_calling(make_request, store, mini_dataset):
+    a = mini_dataset.instances(conditions=["a"])[0]
+    c = mini_dataset.instances(conditions=["c"])[0]
+    backend = LiteLLMBackend(model="robopoint", api_base="http://127.0.0.1:9/v1", extra={"mock_response": "[(0.5, 0.5)]"})
+    with pytest.raises(PermanentBackendError, match=r"'robopoint' answers Given \(c\) only, not Inferred \(a\)"):
+        run(backend.complete(make_request(3, instance=a), store))
+    assert run(backend.complete(make_request(1, instance=c), store)).text == "[(0.5, 0.5)]"
+
+
+def test_litellm_is_imported_off_the_event_loop():
+    # in a fresh interpreter: while the first request imports litellm (seconds), the loop ticks
+    code = """
+import asyncio, sys, time
+from povagent_plugins.backends.litellm_backend import LiteLLMBackend
+from povagent.exchange import GenerationParams, Message, Request
+from povagent.answers import AnswerSpec, point_answer_schema
+assert "litellm" not in sys.modules
+backend = LiteLLMBackend(model="openai/gpt-4o", extra={"mock_response": "ok"})
+request = Request(messages=(Message.text("user", "hi"),), answer=AnswerSpec(schema=point_answer_schema(512, 512)),
+                  generation=GenerationParams(max_tokens=8))
+async def main():
+    ticks = 0
+    async def tick():
+        nonlocal ticks
+        while True:
+            await asyncio.sleep(0.05)
+            ticks += 1
+    ticker = asyncio.create_task(tick())
+    started = time.perf_counter()
+    text = (await backend.complete(request, None)).text
+    ticker.cancel()
+    print(text, ticks, time.perf_counter() - started)
+asyncio.run(main())
+"""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("LITELLM_")}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=50)
+    assert done.returncode == 0, done.stderr
+    text, ticks, elapsed = done.stdout.split()
+    assert text == "ok"
+    # the import took most of `elapsed`; a blocked loop would have ticked at most once
+    assert int(ticks) >= 0.3 * float(elapsed) / 0.05
+
+
+@pytest.mark.parametrize("where", ["extra", "router"])
+def test_a_credential_header_in_the_yaml_is_refused(where):
+    headers = {"extra_headers": {"Authorization": "Bearer sk-live-123"}}
+    options = (
+        {"model": "openai/gpt-4o", "extra": headers}
+        if where == "extra"
+        else {"router": [{"litellm_params": {"model": "openai/m", **headers}}]}
+    )
+    with pytest.raises(ConfigError, match="carries a credential \\(Authorization\\).*api_key_env"):
+        LiteLLMBackend(**options)

@@ -81,3 +81,26 @@ def test_foreign_exceptions_are_left_alone():
 def test_scrub_masks_keys_but_not_short_placeholders():
     assert scrub("key sk-abcdef1234 rejected", ("sk-abcdef1234",)) == "key *** rejected"
     assert scrub("index x", ("x",)) == "index x"
+
+
+@pytest.mark.parametrize(
+    "exc",
+    [
+        # what litellm 1.103 raises for a call without a key: a 500, a connection error, a 401
+        litellm.InternalServerError(message="OpenAIException - Missing credentials. Please pass an `api_key`", llm_provider="openai", model="m"),
+        litellm.APIConnectionError(message="Missing Gemini API key. Set the GEMINI_API_KEY or GOOGLE_API_KEY environment variable.\nTraceback (most recent call last):\n  File x", llm_provider="gemini", model="m"),
+        litellm.AuthenticationError(message="Missing Anthropic API Key - A call is being made to anthropic but no key is set", llm_provider="anthropic", model="m"),
+    ],
+    ids=["openai", "gemini", "anthropic"],
+)
+def test_a_missing_api_key_is_permanent_and_says_so(exc):
+    mapped = map_litellm_error(litellm, exc)
+    assert isinstance(mapped, PermanentBackendError) and mapped.status == 401
+    assert str(mapped).startswith("no API key:") and "api_key_env" in str(mapped)
+    assert "Traceback" not in str(mapped)
+
+
+def test_litellms_pasted_traceback_is_cut_from_messages():
+    exc = litellm.APIConnectionError(message="Connection reset\nTraceback (most recent call last):\n  File x", llm_provider="openai", model="m")
+    mapped = map_litellm_error(litellm, exc)
+    assert isinstance(mapped, TransientBackendError) and "Traceback" not in str(mapped) and "Connection reset" in str(mapped)

@@ -8,7 +8,9 @@ without a retry; the Router over two servers carries a whole run.
 
 from __future__ import annotations
 
+import base64
 import json
+import time
 from pathlib import Path
 
 import pytest
@@ -162,3 +164,119 @@ def test_router_over_two_servers_carries_a_whole_run(tmp_path, mini_root, model_
     assert result.summary["rows"]["answered"] == N_INSTANCES
     assert model_server.request_count > 0 and second.request_count > 0
     assert model_server.request_count + second.request_count == N_INSTANCES
+
+
+# -- what a full pipeline sends --------------------------------------------------------------------
+def test_a_full_pipeline_sends_30_labelled_frames_in_order_with_the_prompt_and_parameters(tmp_path, tiny_dataset, model_server, api_key):
+    root = tiny_dataset(houses=1, pairs=1, pair_directions=1, frames=30)
+    backend = litellm_backend(model_server, temperature=0.2, extra={"top_p": 0.9, "seed": 3})
+    run_yaml(tmp_path, pipeline(tmp_path, root, backend, instances={"conditions": ["a"]}))
+    assert model_server.request_count == 1
+    request = model_server.requests[0]
+    parts = request.user_parts()
+    assert len(parts) == 2 * 30 + 1
+    frames = sorted((root / "artifacts" / "train_house_00000" / "exploration_images").glob("*.png"))
+    for i, frame in enumerate(frames):
+        assert parts[2 * i] == {"type": "text", "text": f"Image {i}:"}
+        url = parts[2 * i + 1]["image_url"]["url"]
+        assert url.startswith("data:image/png;base64,")
+        assert base64.b64decode(url.split(",", 1)[1]) == frame.read_bytes(), f"image {i} is not frame_{i:03d}"
+    prompt = parts[-1]["text"]
+    assert "The 30 images above (labeled Image 0 through Image 29)" in prompt
+    assert 'Sentence: "While reading, I left the book right of the bed."' in prompt
+    assert '{"selected_image": <integer 0-29>, "x": <integer 0-511>, "y": <integer 0-511>}' in prompt
+    body = request.body
+    assert body["model"] == "loopback-vlm"
+    assert (body["max_tokens"], body["temperature"], body["top_p"], body["seed"]) == (256, 0.2, 0.9, 3)
+
+
+def test_the_runner_waits_for_the_servers_retry_after(tmp_path, mini_root, model_server, api_key):
+    model_server.script(Fault(429, retry_after=1))
+    run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server), instances={"limit": 1}))
+    first, second = model_server.requests
+    assert second.received_at - first.received_at >= 0.95  # the backoff alone would be 0 s here
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.status == "answered" and row.retries == 1
+
+
+def test_the_key_never_reaches_any_file_of_the_run_or_its_cache(tmp_path, mini_root, model_server, api_key):
+    model_server.script(answer_for, answer_for)  # two answers (cached), then refusals quoting the key
+    model_server.reply = Fault(401, message=f"Incorrect API key provided: {api_key}")
+    run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server), cache=True, instances={"limit": 4}))
+    files = [p for p in (tmp_path / "run").rglob("*") if p.is_file()]
+    assert any(p.name.startswith("cache") for p in files)
+    for path in files:
+        assert api_key.encode() not in path.read_bytes(), path.name
+
+
+# -- model profiles through the runner -------------------------------------------------------------
+def test_a_profile_named_in_the_backend_options_brings_its_parser(tmp_path, mini_root):
+    # qwen3-vl-32b answers on 0-1000: its profile's rescale-1000 parser maps the answer to pixels
+    with LoopbackServer(reply='{"selected_image": 1, "x": 900, "y": 800}', max_lifetime_s=60) as server:
+        backend = {"name": "litellm", "options": {"model": "qwen3-vl-32b", "api_base": server.url}}
+        doc = pipeline(tmp_path, mini_root, backend, instances={"conditions": ["a"], "limit": 1})
+        del doc["parser"]  # the profile's default
+        result = run_yaml(tmp_path, doc)
+        assert server.requests[0].body["model"] == "Qwen/Qwen3-VL-32B-Instruct"  # hosted_vllm/ prefix stripped
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.parser == "rescale-1000" and row.status == "answered"
+    assert (row.prediction.x, row.prediction.y) == (460.8, 409.6)
+    assert result.summary["pipeline"]["parser"] == "rescale-1000"
+
+
+def test_a_given_only_profile_refuses_frames_without_calling_the_model(tmp_path, mini_root):
+    with LoopbackServer(reply='[(0.5, 0.5)]', max_lifetime_s=60) as server:
+        backend = {"name": "litellm", "options": {"model": "robopoint", "api_base": server.url}}
+        doc = pipeline(tmp_path, mini_root, backend, instances={"conditions": ["a", "c"], "directions": ["right"]})
+        del doc["parser"]  # the profile's default: robopoint
+        run_yaml(tmp_path, doc)
+        calls = server.request_count
+    rows = read_rows(tmp_path / "run" / "results.jsonl")
+    a_rows = [r for r in rows if r.condition == "a"]
+    c_rows = [r for r in rows if r.condition == "c"]
+    assert a_rows and all(r.status == "infra_error" and "Given (c) only" in r.error_message for r in a_rows)
+    assert c_rows and all(r.status == "answered" for r in c_rows)
+    assert calls == len(c_rows)
+
+
+# -- the Router and the runner's retries never stack ------------------------------------------------
+def test_a_router_failure_is_final_the_runner_does_not_retry_it(tmp_path, mini_root, model_server, api_key):
+    with LoopbackServer(reply=Fault(500), max_lifetime_s=80) as second:
+        model_server.reply = Fault(500)
+        backend = litellm_backend(model_server, second, router_settings={"num_retries": 1, "retry_after": 0})
+        run_yaml(tmp_path, pipeline(tmp_path, mini_root, backend, instances={"limit": 2}))
+        calls = model_server.request_count + second.request_count
+    rows = read_rows(tmp_path / "run" / "results.jsonl")
+    assert all(r.status == "infra_error" and r.retries == 0 for r in rows)
+    assert calls == 2 * 2  # per key: the Router's first attempt and its one retry; no runner retry on top
+
+
+def test_a_runner_timeout_on_a_router_is_final_too(tmp_path, mini_root, model_server, api_key):
+    with LoopbackServer(reply=Reply("late", delay_s=10), max_lifetime_s=80) as second:
+        model_server.reply = Reply("late", delay_s=10)
+        backend = litellm_backend(model_server, second, router_settings={"num_retries": 0})
+        started = time.monotonic()
+        run_yaml(tmp_path, pipeline(tmp_path, mini_root, backend, timeout=0.5, instances={"limit": 1}))
+        assert time.monotonic() - started < 8
+        calls = model_server.request_count + second.request_count
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.status == "infra_error" and row.error_type == "timeout" and row.retries == 0
+    assert calls == 1
+
+
+# -- replay -------------------------------------------------------------------------------------------
+def test_replaying_a_run_or_its_official_export_reproduces_its_predictions(tmp_path, mini_root):
+    from povagent.report.export import export_run
+
+    first = run_yaml(tmp_path, pipeline(tmp_path, mini_root, {"name": "random", "options": {"seed": 5}}))
+    original = {r.key: r for r in read_rows(tmp_path / "run" / "results.jsonl")}
+    (official,) = export_run(tmp_path / "run", tmp_path / "official.json")
+    for name, path in (("from_run", tmp_path / "run"), ("from_official", official)):
+        doc = pipeline(tmp_path, mini_root, {"name": "replay", "options": {"path": str(path)}}, output=str(tmp_path / name))
+        write_yaml(tmp_path / f"{name}.yaml", doc)
+        result = run_pipeline(load_pipeline(tmp_path / f"{name}.yaml"))
+        replayed = {r.key: r for r in read_rows(tmp_path / name / "results.jsonl")}
+        assert replayed.keys() == original.keys(), name
+        for key, row in replayed.items():
+            assert row.prediction == original[key].prediction, (name, key)
+        assert result.summary["overall"]["mean_l2"] == pytest.approx(first.summary["overall"]["mean_l2"]), name

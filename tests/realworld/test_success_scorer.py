@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import asyncio
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from povagent.answers import ParsedAnswer, ParseStatus, unparseable
 from povagent.config import ConfigSource, pipeline_from_source
+from povagent.errors import ConfigError
 from povagent.realworld import load_realworld, success_breakdown
 from povagent.loopback_server import LoopbackServer
 from povagent.results import iter_rows
@@ -133,3 +136,26 @@ def test_the_runner_runs_a_real_world_set_and_rows_carry_success(tmp_path, monke
     }
     table = success_breakdown({"condition": r.condition, "direction": r.direction, **r.scores["success"]} for r in rows)
     assert table["overall"]["success_rate"] == 0.5 and table["per_condition"]["c"]["success_rate"] == 0.5
+
+
+def test_the_official_metric_on_a_real_world_set_is_refused_before_any_request(tmp_path, demo):
+    # its 2D marks leave the 3D target NaN, which the official rules would score a centre guess 0
+    config = pipeline_from_source(ConfigSource("<test>", {
+        "dataset": {"path": str(DEMO)}, "backend": "center", "scorers": ["official"], "output": str(tmp_path / "run"),
+    }, {}))
+    with pytest.raises(ConfigError, match=r"official needs 3D ground truth.*scorers: \[success\]"):
+        asyncio.run(PipelineRun(config, dataset=demo).run())
+    assert not (tmp_path / "run" / "results.jsonl").exists()
+
+
+def test_povagent_run_runs_the_demo_pipeline_and_prints_success_rates(tmp_path):
+    # from the repository root, as the README says (the pipeline names its set relative to it)
+    done = subprocess.run(
+        [sys.executable, "-m", "povagent.cli", "run", "examples/realworld_demo/pipeline.yaml", "-o", str(tmp_path / "run"), "-q"],
+        capture_output=True, text=True, cwd=DEMO.parents[1], timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "success rate (unanswered = failure)" in done.stdout
+    assert "mean L2" not in done.stdout  # no official table of zeros beside it
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["success"]["overall"]["n_total"] == 6 and summary["rows"]["answered"] == 6
