@@ -5,6 +5,7 @@ default)::
 
     plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names or .py paths)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
+                                         # strict: true stops at a bad house (default: report, skip)
     instances:                           # which instances to run (default: all)
       conditions: [a, b, c]              # a/inferred, b/stated, c/given
       directions: [right, left, front, up]
@@ -46,6 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from povagent.dataset.models import Condition, Direction
 from povagent.errors import ConfigError, PluginError
+from povagent.logs import Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
 
 Loc = tuple[Any, ...]
@@ -72,6 +74,8 @@ class DatasetSpec(_Strict):
 
     path: Path | None = None
     generate: GenerateSpec | None = None
+    #: Stop at the first bad house or pair instead of reporting it and going on.
+    strict: bool = False
 
     @model_validator(mode="before")
     @classmethod
@@ -442,13 +446,19 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
 
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
     """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
-    when no parser is given, the profile's default parser (``json`` otherwise)."""
+    when no parser is given, the profile's default parser (``json`` otherwise). A profile named
+    as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
+    its parser and strategy defaults the same way."""
     backend, parser, strategy = config.backend, config.parser, config.strategy
+    profile = None
     if config.model is not None:
         profile = host.profile(config.model)
         # The litellm backend resolves a profile name given as its model (and applies the
         # profile's backend options itself).
         backend = ComponentSpec(name=getattr(profile, "backend", None) or "litellm", options={"model": config.model})
+    elif backend is not None and backend.name == "litellm" and backend.options.get("model") in host.names("profile"):
+        profile = host.profile(backend.options["model"])
+    if profile is not None:
         if parser is None:
             default = getattr(profile, "default_parser", None) or getattr(profile, "parser", None)
             if isinstance(default, str):
@@ -524,9 +534,13 @@ def load_pipeline(path: str | Path, *, overrides: Mapping[str, Any] | None = Non
     return pipeline_from_source(read_yaml(path), overrides=overrides, host=host)
 
 
-def dump_pipeline(config: PipelineConfig) -> str:
-    """The resolved pipeline as YAML (what a run folder's ``config.yaml`` holds)."""
-    return yaml.safe_dump(config.resolved_dict(), sort_keys=False)
+def dump_pipeline(config: PipelineConfig, redactor: Redactor | None = None) -> str:
+    """The resolved pipeline as YAML (what a run folder's ``config.yaml`` holds).
+
+    Secrets are redacted (secret-named options, key-shaped strings, the values of ``*_API_KEY``
+    variables): a run folder is shared and committed, a secret must never reach it.
+    """
+    return yaml.safe_dump((redactor or Redactor()).value(config.resolved_dict()), sort_keys=False)
 
 
 # -- sweeps -------------------------------------------------------------------------------------

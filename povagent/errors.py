@@ -27,6 +27,10 @@ class PredictionsError(PovagentError):
     """A predictions or results file cannot be read."""
 
 
+class ResultsError(PovagentError):
+    """A run's results file cannot be written (a full disk, a lost mount); rows already written stay."""
+
+
 class BackendError(PovagentError):
     """A model backend failed permanently (after retries, or on a non-transient error)."""
 

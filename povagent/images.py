@@ -1,10 +1,12 @@
 """The run-wide image store: each image read and encoded once, shared by every request.
 
 Images are named by the SHA-256 of their encoded bytes. A file is read once (its path is
-memoized); a derived image (a frame with markers drawn on it) is made once per (source hash,
-recipe key). Encoded bytes and base64 data URLs are kept in an LRU bounded by bytes; an evicted
+memoized; the runner reads files in a worker thread ahead of the strategy); a derived image (a
+frame with markers drawn on it) is made once per (source hash, recipe key). Encoded bytes and base64 data URLs are kept in an LRU bounded by bytes; an evicted
 entry is rebuilt from its recipe (the file, or the derivation) on next use, which the counters
 record, so a benchmark can check "one encode per distinct image" when memory suffices.
+In-memory images (:meth:`ImageStore.add_pil`) have nothing to be rebuilt from: their bytes stay
+for the store's lifetime.
 """
 
 from __future__ import annotations
@@ -60,20 +62,29 @@ class ImageStore:
 
     # -- adding -------------------------------------------------------------------------------
     def add_file(self, path: str | Path) -> StoredImage:
-        """Register an image file (read once per run); returns its hash and size."""
+        """Register an image file (read once per run); returns its hash and size.
+
+        Safe to call from a worker thread (the runner reads a house's frames off the event
+        loop): the file is read and hashed outside the store's lock, so a slow disk never
+        blocks another caller.
+        """
         # Frames are shared Path objects: skip re-parsing a Path (pathlib parsing dominated
         # the per-request cost when 30 frames are looked up per instance).
         p = path if isinstance(path, Path) else Path(path)
+        known = self._by_path.get(p)
+        if known is not None:
+            return known
+        data = self._read_file(p)
+        with Image.open(io.BytesIO(data)) as im:
+            size, fmt = im.size, (im.format or "PNG")
+        info = self._remember(data, size, f"image/{fmt.lower()}", lambda p=p: self._read_file(p))
         with self._lock:
-            known = self._by_path.get(p)
-            if known is not None:
-                return known
-            data = self._read_file(p)
-            with Image.open(io.BytesIO(data)) as im:
-                size, fmt = im.size, (im.format or "PNG")
-            info = self._remember(data, size, f"image/{fmt.lower()}", lambda p=p: self._read_file(p))
-            self._by_path[p] = info
-            return info
+            # Another thread may have registered the same path meanwhile: one entry either way.
+            return self._by_path.setdefault(p, info)
+
+    def knows_file(self, path: Path) -> bool:
+        """Whether ``path`` was already read (then :meth:`add_file` is a dictionary lookup)."""
+        return path in self._by_path
 
     def add_pil(self, image: Image.Image) -> StoredImage:
         """Register an in-memory image (encoded once as PNG)."""
@@ -110,6 +121,11 @@ class ImageStore:
     def __contains__(self, image_hash: object) -> bool:
         return image_hash in self._by_hash
 
+    @property
+    def distinct(self) -> int:
+        """The number of distinct images (by content) the store has seen."""
+        return len(self._by_hash)
+
     def bytes(self, image_hash: str) -> bytes:
         """The encoded bytes of an image."""
         with self._lock:
@@ -141,8 +157,10 @@ class ImageStore:
 
     # -- internals ----------------------------------------------------------------------------
     def _read_file(self, path: Path) -> bytes:
-        self.stats.file_reads += 1
-        return path.read_bytes()
+        data = path.read_bytes()
+        with self._lock:
+            self.stats.file_reads += 1
+        return data
 
     def _encode_png(self, image: Image.Image) -> bytes:
         buf = io.BytesIO()

@@ -11,6 +11,7 @@ This module formats and writes log events; it must not decide what to log.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import re
@@ -30,7 +31,7 @@ _SECRET_KEY = re.compile(r"(key|token|secret|authorization|password|passwd|cooki
 _NOT_SECRET = frozenset({"row", "key_count", "cache_key", "request_hash", "config_hash"})
 _SECRET_TEXT = [
     re.compile(r"sk-[A-Za-z0-9_\-]{8,}"),
-    re.compile(r"(?i)bearer\s+[A-Za-z0-9._~+/=\-]{8,}"),
+    re.compile(r"(?i:bearer)\s+[A-Za-z0-9._~+/=\-]{8,}"),
     re.compile(r"AIza[0-9A-Za-z_\-]{20,}"),  # Google API keys
 ]
 _SECRET_ENV = re.compile(r".*(_API_KEY|_TOKEN|_SECRET|_ACCESS_KEY)$|^API_KEY$", re.IGNORECASE)
@@ -53,17 +54,22 @@ class Redactor:
             # Longest first so a key containing another is removed whole.
             patterns.append(re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True))))
         self._patterns = patterns
+        # One search decides the common case (nothing to redact); it runs on every logged string.
+        self._any = re.compile("|".join(f"(?:{p.pattern})" for p in patterns))
 
     def text(self, value: str) -> str:
         """``value`` with every secret-looking substring replaced."""
+        if not self._any.search(value):
+            return value
         for p in self._patterns:
-            if p.search(value):
-                value = p.sub(REDACTED, value)
+            value = p.sub(REDACTED, value)
         return value
 
     def value(self, value: Any, key: str | None = None) -> Any:
         """Redact a value found under ``key`` (recursing into mappings and lists)."""
-        if key is not None and key not in _NOT_SECRET and _SECRET_KEY.search(key) and not _is_count(value):
+        if value is None or isinstance(value, (int, float)):
+            return value  # counts, sizes and flags are never secrets (``prompt_tokens`` stays)
+        if key is not None and _secret_key(key):
             return REDACTED
         if isinstance(value, str):
             return self.text(value)
@@ -78,8 +84,10 @@ class Redactor:
         return {k: self.value(v, k) for k, v in event.items()}
 
 
-def _is_count(value: Any) -> bool:
-    return value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)) or isinstance(value, bool)
+@functools.lru_cache(maxsize=1024)
+def _secret_key(key: str) -> bool:
+    # ``api_key_env: OPENAI_API_KEY`` names a variable; its value is not the secret.
+    return key not in _NOT_SECRET and not key.lower().endswith("_env") and bool(_SECRET_KEY.search(key))
 
 
 def _default(obj: Any) -> Any:
@@ -144,8 +152,8 @@ class RunLog:
         self._file: TextIO | None = None
         if self.path is not None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            # line-buffered is too slow for one event per request; flushed on close and
-            # every few events by the runner, fsync not needed (results.jsonl is the record).
+            # line-buffered is too slow for one event per request; flushed on close and by the
+            # runner before each batch of rows; no fsync (results.jsonl is the record).
             self._file = open(self.path, "a", encoding="utf-8")
         self.redactor = redactor or Redactor()
         stream = (_stderr if console is True else console) or None

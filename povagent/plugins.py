@@ -227,7 +227,12 @@ class PluginHost:
             raise
         except (TypeError, ValueError) as exc:
             # Wrong or invalid options: a user error worth a clear message, not a traceback.
-            raise PluginError(f"{kind} {name!r} ({entry.source}) rejected its options {dict(options or {})!r}: {exc}") from exc
+            # The message reaches the terminal: a secret passed as an option must not.
+            from povagent.logs import Redactor
+
+            redactor = Redactor()
+            shown = redactor.value(dict(options or {}))
+            raise PluginError(redactor.text(f"{kind} {name!r} ({entry.source}) rejected its options {shown!r}: {exc}")) from None
 
     def profile(self, name: str) -> Any:
         """The model profile registered as ``name`` (see ``register_model_profiles``)."""

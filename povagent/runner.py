@@ -19,6 +19,7 @@ and :mod:`povagent.cli.pipeline`).
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import dataclasses
 import os
 import random
@@ -27,7 +28,7 @@ import traceback
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterable, Iterator, Mapping
 
 from tenacity import AsyncRetrying, retry_if_exception, stop_after_attempt
 
@@ -36,7 +37,7 @@ from povagent.cache import ResponseCache, cache_key, identity_json
 from povagent.config import PipelineConfig, dump_pipeline
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.loader import Dataset, load_dataset
-from povagent.errors import ConfigError
+from povagent.errors import ConfigError, ResultsError
 from povagent.exchange import Request, Response
 from povagent.images import ImageStore
 from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy, TransientBackendError
@@ -157,7 +158,39 @@ def prepare_dataset(config: PipelineConfig) -> Dataset:
 
     if is_realworld(spec.root):
         return load_realworld(spec.root)
-    return load_dataset(spec.root)
+    return load_dataset(spec.root, strict=spec.strict)
+
+
+# -- the run folder ------------------------------------------------------------------------------
+LOCK = ".lock"
+
+
+@contextlib.contextmanager
+def folder_lock(run_dir: Path) -> Iterator[None]:
+    """Hold an exclusive lock on a run folder: two processes appending to one ``results.jsonl``
+    would each run the keys the other is running, and write them twice.
+
+    An advisory ``flock`` on ``<run_dir>/.lock``; the kernel drops it when the process dies,
+    even by SIGKILL, so a killed run never leaves its folder locked. Where ``fcntl`` does not
+    exist (Windows) the folder is not locked.
+    """
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield
+        return
+    fh = open(run_dir / LOCK, "a")
+    try:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(
+                f"{run_dir}: another povagent process is running a pipeline into this folder; "
+                f"wait for it to finish (then run again to resume) or choose another output folder"
+            ) from None
+        yield
+    finally:
+        fh.close()  # closing releases the lock
 
 
 # -- durable rows --------------------------------------------------------------------------------
@@ -170,9 +203,12 @@ class RowJournal(ResultsWriter):
     ``on_durable(row)`` called for each, which is where progress and observers hear of it.
     """
 
-    def __init__(self, path: str | Path, on_durable: Callable[[ResultRow], None]) -> None:
+    def __init__(
+        self, path: str | Path, on_durable: Callable[[ResultRow], None], before_batch: Callable[[], None] | None = None
+    ) -> None:
         super().__init__(path)
         self._on_durable = on_durable
+        self._before_batch = before_batch
         self._queue: list[tuple[str, ResultRow]] = []
         self._committer: asyncio.Task[None] | None = None
         self.error: BaseException | None = None
@@ -193,8 +229,15 @@ class RowJournal(ResultsWriter):
             await asyncio.sleep(0)
             batch, self._queue = self._queue, []
             try:
+                if self._before_batch is not None:
+                    self._before_batch()
                 await asyncio.to_thread(self._write, "".join(line for line, _ in batch))
-            except BaseException as exc:  # a full disk ends the run; the rows are not reported
+            except Exception as exc:  # a full disk ends the run; the rows are not reported
+                # Kept here and raised to the workers by submit()/drain(); the task itself ends
+                # quietly (re-raising would leave an exception nobody retrieves).
+                self.error = exc
+                return
+            except BaseException as exc:  # cancelled mid-write: the batch's fate is unknown
                 self.error = exc
                 raise
             for _, row in batch:
@@ -313,6 +356,9 @@ class PipelineRun:
         self.stats = RunStats()
         self.config_hash = config.config_hash()
         self._redactor = Redactor()
+        self._digests: dict[str, RowDigest] = {}
+        self._reads: dict[Path, asyncio.Future[Any]] = {}
+        self._frames_read: dict[int, tuple[Any, ...]] = {}
 
     # -- setup ---------------------------------------------------------------------------------
     def _check_folder(self, keys: set[str]) -> set[str]:
@@ -327,11 +373,16 @@ class PipelineRun:
                     f"{self.config_hash}: backend, strategy, parser or scorers differ); choose another output folder"
                 )
             done.add(row.key)
+            if row.key in keys:
+                # Read once here; the summary is kept from these and never re-parses the file.
+                self._digests[row.key] = digest(row)
             if row.status is RowStatus.INFRA_ERROR:
                 errored.add(row.key)
         if self.retry_errors and errored:
             self._drop_rows(results, errored)
             done -= errored
+            for key in errored:
+                self._digests.pop(key, None)
         return done
 
     def _drop_rows(self, results: Path, keys: set[str]) -> None:
@@ -442,7 +493,8 @@ class PipelineRun:
         """One model call, retried on transient failures only (never on a 4xx).
 
         The first attempt runs bare (the common case pays nothing for retries); after a
-        transient failure, tenacity drives the remaining attempts.
+        transient failure, tenacity drives the remaining attempts. A backend that retries
+        inside (litellm's Router) gets one attempt: its failure, our timeout included, is final.
         """
         policy = self.config.retry
         attempts = 1
@@ -450,7 +502,7 @@ class PipelineRun:
             try:
                 response = await self._attempt(request)
             except Exception as first:
-                if policy.attempts == 1 or not is_transient(first):
+                if policy.attempts == 1 or not is_transient(first) or getattr(self.components.backend, "retries_inside", False):
                     raise
                 wait_s = self._wait_s(first, 1)
                 self._log_retry(row_id, first, 1, wait_s)
@@ -481,6 +533,33 @@ class PipelineRun:
         self.stats.retries += attempts - 1
         return response
 
+    async def _read_frames(self, instance: Instance) -> None:
+        """Read the instance's new frames into the image store in a worker thread, once each.
+
+        Strategies read images synchronously; a new house's 30 frames read on the event loop
+        would stall every request in flight. Here the frames not yet in the store are read in
+        one thread call (however many workers need them at once), and the strategy then finds
+        them in the store. A file that cannot be read is left for the strategy to meet (and
+        report) itself.
+        """
+        frames = instance.frames
+        if self._frames_read.get(id(frames)) is frames:
+            return  # A/B instances of a house share one frames tuple: checked once, not per key
+        images = self.images
+        reads = self._reads
+        new = [f.file for f in frames if f.file not in reads and not images.knows_file(f.file)]
+        if new:
+            task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
+            for path in new:
+                reads[path] = task
+            task.add_done_callback(lambda _t, paths=new: [reads.pop(p, None) for p in paths])
+        waits = {reads[f.file] for f in frames if f.file in reads}
+        if waits:
+            await asyncio.gather(*waits)
+        if all(images.knows_file(f.file) for f in frames):
+            # Holding the tuple keeps its id from being reused while the entry lives.
+            self._frames_read[id(frames)] = frames
+
     async def _solve(self, instance: Instance, run: int) -> ResultRow:
         """Everything for one key, ending in its row (never raises for plugin or API failures)."""
         comps = self.components
@@ -494,6 +573,7 @@ class PipelineRun:
         prediction = Prediction()
         error_type = error_message = None
         try:
+            await self._read_frames(instance)
             turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
             request, response = turns[-1]
             parse = self._parse(comps.parser, response.text, request, key)
@@ -559,6 +639,7 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
+        self._digests[row.key] = digest(row)
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
@@ -574,6 +655,21 @@ class PipelineRun:
         if self._observed:
             self.host.hooks.instance_done(str(self.run_dir), row)
 
+    def _report_dataset_problems(self) -> None:
+        """Say which houses or pairs loading skipped (file, JSON path, sentence): never silently."""
+        problems = list(getattr(self.dataset, "problems", ()) or ())
+        for p in problems:
+            if hasattr(p, "file"):
+                self._log.warning("dataset_problem", file=p.file, path=p.json_path, problem=p.message)
+            else:
+                self._log.warning("dataset_problem", problem=str(p))
+        if problems:
+            self._log.warning(
+                "dataset_problems",
+                count=len(problems),
+                hint="the houses or pairs named above were skipped; `povagent validate` lists every problem, --strict stops instead",
+            )
+
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
         """Run every pending key; write the run folder; return the summary."""
@@ -584,14 +680,25 @@ class PipelineRun:
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
+        check_scorers = getattr(self.dataset, "check_scorers", None)  # a real-world set has no 3D GT
+        if check_scorers is not None:
+            check_scorers([s.name for s in config.scorers])
         runs = config.run_indices
         wanted = {row_key(i.id, r) for i in instances for r in runs}
+        # Plugins check their options first: a rejected option (a literal API key, say) fails
+        # before anything is written to the run folder.
+        self.components = create_components(config, self.host)
         self.run_dir.mkdir(parents=True, exist_ok=True)
+        with folder_lock(self.run_dir):
+            return await self._run_in_folder(instances, runs, wanted, t_start)
+
+    async def _run_in_folder(self, instances: list[Instance], runs: list[int], wanted: set[str], t_start: float) -> RunResult:
+        """The run proper, with the run folder locked against a second process."""
+        config = self.config
         done = self._check_folder(wanted) & wanted
         pending = [(inst, r) for inst in instances for r in runs if row_key(inst.id, r) not in done]
-        (self.run_dir / CONFIG).write_text(dump_pipeline(config), encoding="utf-8")
+        (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
 
-        self.components = create_components(config, self.host)
         self._identity = identity_json(self.components.backend.identity())
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]
         self._limit = asyncio.Semaphore(config.concurrency)
@@ -600,7 +707,10 @@ class PipelineRun:
         if self._cache is None and cache_path is not None and getattr(self.components.backend, "cacheable", True):
             self._cache = ResponseCache(cache_path)
         self._log = RunLog(self.run_dir / LOG, console=self.console_log, redactor=self._redactor, run=str(self.run_dir))
-        self._journal = RowJournal(self.run_dir / RESULTS, self._reported)
+        # The log is pushed to the OS before each batch of rows is written: after a kill, every
+        # durable row has its request events in log.jsonl.
+        self._journal = RowJournal(self.run_dir / RESULTS, self._reported, before_batch=self._log.flush)
+        self._report_dataset_problems()
 
         self._log.info("run_start", n_total=len(wanted), n_pending=len(pending), config_hash=self.config_hash,
                        backend=self._names[0], strategy=self._names[1], parser=self._names[2])
@@ -619,10 +729,21 @@ class PipelineRun:
                     # (offline baselines): rows become durable as they finish, not at the end.
                     await self._journal.backpressure()
 
-            async with asyncio.TaskGroup() as group:
-                for _ in range(min(config.concurrency, len(pending))):
-                    group.create_task(worker())
-            await self._journal.drain()
+            try:
+                async with asyncio.TaskGroup() as group:
+                    for _ in range(min(config.concurrency, len(pending))):
+                        group.create_task(worker())
+                await self._journal.drain()
+            except BaseException as exc:
+                failed = self._journal.error
+                if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
+                    raise ResultsError(
+                        f"{self.run_dir / RESULTS}: cannot write rows ({type(failed).__name__}: {failed}); the rows "
+                        f"already written are kept: fix that and run the same command again to resume"
+                    ) from failed
+                if isinstance(exc, BaseExceptionGroup) and len(exc.exceptions) == 1:
+                    raise exc.exceptions[0]  # one worker's bug: its own traceback, not a group's
+                raise
             interrupted = False
         finally:
             self.progress.stop()
@@ -642,7 +763,7 @@ class PipelineRun:
 
     def write_summary(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """Write ``summary.json``: official breakdown over the selected keys, plus run stats."""
-        summary = summarize_run(self.run_dir / RESULTS, {row_key(i.id, r) for i in instances for r in runs})
+        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         summary["pipeline"] = {
             "backend": self._names[0],
             "strategy": self._names[1],
@@ -653,13 +774,18 @@ class PipelineRun:
         summary["complete"] = summary["rows"]["missing"] == 0
         summary["interrupted"] = interrupted
         summary["session"] = self.stats.as_dict()
-        summary["images"] = {**dataclasses.asdict(self.images.stats), "distinct": _distinct_images(self.images)}
+        summary["images"] = {**dataclasses.asdict(self.images.stats), "distinct": self.images.distinct}
         _write_json(self.run_dir / SUMMARY, summary)
         return summary
 
 
-def _distinct_images(images: ImageStore) -> int:
-    return len(getattr(images, "_by_hash", ()))
+def _read_files(images: ImageStore, paths: list[Path]) -> None:
+    """Add image files to the store (in a worker thread); unreadable ones are skipped here."""
+    for path in paths:
+        try:
+            images.add_file(path)
+        except Exception:  # the strategy meets the same error and the row records it
+            pass
 
 
 def _prediction(instance: Instance, parse: ParsedAnswer) -> Prediction:
@@ -684,31 +810,64 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
     )
 
 
-def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:
-    """Breakdown (overall / per condition / per direction) of a results file, per run too.
+@dataclass(frozen=True, slots=True)
+class RowDigest:
+    """The few fields of a row that ``summary.json`` needs.
 
-    ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
+    The runner keeps one per key (rows of earlier sessions read once at resume, its own rows as
+    they become durable), so writing the summary never parses ``results.jsonl`` again.
     """
-    by_key: dict[str, ResultRow] = {}
-    for row in iter_rows(results):
-        if keys is None or row.key in keys:
-            by_key[row.key] = row
-    rows = list(by_key.values())
-    scored = [scored_row(r) for r in rows]
+
+    key: str
+    run: int
+    status: str
+    scored: ScoredRow
+    has_success: bool
+    success: Any
+    prompt_tokens: int | None
+    completion_tokens: int | None
+    cost_usd: float | None
+    retries: int
+
+
+def digest(row: ResultRow) -> RowDigest:
+    """The summary fields of one row."""
+    success = row.scores.get("success")
+    return RowDigest(
+        key=row.key,
+        run=row.run,
+        status=RowStatus(row.status).value,
+        scored=scored_row(row),
+        has_success=success is not None,
+        success=(success or {}).get("success"),
+        prompt_tokens=row.prompt_tokens,
+        completion_tokens=row.completion_tokens,
+        cost_usd=row.cost_usd,
+        retries=row.retries,
+    )
+
+
+def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None) -> dict[str, Any]:
+    """Breakdown (overall / per condition / per direction, per run too) of row digests.
+
+    ``keys`` is the run's selection (``rows`` then counts missing keys); digests of other keys
+    are left out.
+    """
+    rows = [d for d in digests if keys is None or d.key in keys]
+    scored = [d.scored for d in rows]
     out = breakdown(scored)
-    if any("success" in r.scores for r in rows):
+    if any(d.has_success for d in rows):
         from povagent.realworld import success_breakdown
 
         out["success"] = success_breakdown(
-            {"condition": r.condition, "direction": r.direction, "success": (r.scores.get("success") or {}).get("success")}
-            for r in rows
+            {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success} for d in rows
         )
-    per_run: dict[str, list[ScoredRow]] = {}
-    for r, s in zip(rows, scored):
-        per_run.setdefault(str(r.run), []).append(s)
-    out["per_run"] = {k: summarize(v) for k, v in sorted(per_run.items(), key=lambda kv: int(kv[0]))}
-    statuses = Counter(r.status.value for r in rows)
-    costs = [r.cost_usd for r in rows if r.cost_usd is not None]
+    per_run: dict[int, list[ScoredRow]] = {}
+    for d in rows:
+        per_run.setdefault(d.run, []).append(d.scored)
+    out["per_run"] = {str(k): summarize(v) for k, v in sorted(per_run.items())}
+    statuses = Counter(d.status for d in rows)
+    costs = [d.cost_usd for d in rows if d.cost_usd is not None]
     out["rows"] = {
         "total": len(keys) if keys is not None else len(rows),
         "done": len(rows),
@@ -716,12 +875,25 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
         **{s.value: statuses.get(s.value, 0) for s in RowStatus},
     }
     out["usage"] = {
-        "prompt_tokens": sum(r.prompt_tokens or 0 for r in rows),
-        "completion_tokens": sum(r.completion_tokens or 0 for r in rows),
+        "prompt_tokens": sum(d.prompt_tokens or 0 for d in rows),
+        "completion_tokens": sum(d.completion_tokens or 0 for d in rows),
         "cost_usd": sum(costs) if costs else None,
-        "retries": sum(r.retries for r in rows),
+        "retries": sum(d.retries for d in rows),
     }
     return out
+
+
+def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:
+    """Breakdown (overall / per condition / per direction) of a results file, per run too.
+
+    ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
+    When a key repeats, its last row counts.
+    """
+    by_key: dict[str, RowDigest] = {}
+    for row in iter_rows(results):
+        if keys is None or row.key in keys:
+            by_key[row.key] = digest(row)
+    return summarize_digests(by_key.values(), keys)
 
 
 def _write_json(path: Path, data: Mapping[str, Any]) -> None:
@@ -755,13 +927,14 @@ def pending_keys(config: PipelineConfig, dataset: Dataset) -> tuple[int, int, li
     return len(wanted), len(done), pending
 
 
-def ensure_dataset(config: PipelineConfig, loaded: dict[Path, Dataset] | None = None) -> Dataset:
-    """The config's dataset, loaded once per folder when ``loaded`` is shared (sweeps)."""
-    root = Path(config.dataset.root).resolve()
-    if loaded is not None and root in loaded:
-        return loaded[root]
+def ensure_dataset(config: PipelineConfig, loaded: dict[Any, Dataset] | None = None) -> Dataset:
+    """The config's dataset, loaded once per folder (and strictness) when ``loaded`` is shared
+    (sweeps)."""
+    key = (Path(config.dataset.root).resolve(), config.dataset.strict)
+    if loaded is not None and key in loaded:
+        return loaded[key]
     ds = prepare_dataset(config)
     if loaded is not None:
-        loaded[root] = ds
+        loaded[key] = ds
     return ds
 

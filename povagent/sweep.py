@@ -125,8 +125,12 @@ def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost
         raise ConfigError("unknown plugin name(s):\n" + "\n".join(problems))
 
 
-def expand_sweep(path: str | Path, *, host: PluginHost | None = None) -> tuple[SweepConfig, list[Cell]]:
-    """Read a sweep YAML and expand it into validated cells (no request is made)."""
+def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bool = False) -> tuple[SweepConfig, list[Cell]]:
+    """Read a sweep YAML and expand it into validated cells (no request is made).
+
+    ``strict`` makes every cell stop at a bad house or pair of its dataset instead of
+    reporting it and going on.
+    """
     sweep, source, base = load_sweep(path)
     if not isinstance(base.data, dict):
         raise ConfigError(f"{base.file}: the base pipeline must be a YAML mapping")
@@ -149,6 +153,8 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None) -> tuple[S
         overrides["cache"] = cache
         cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines)
         config = pipeline_from_source(cell_source, overrides=overrides, host=host)
+        if strict:
+            config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
         cells.append(Cell(name, {axis: label for (axis, _), (label, _) in zip(axes, combo)}, config))
     return sweep, cells
 
@@ -160,7 +166,7 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
     images at ~1 token per 28x28 pixels; completions at the strategy's ``max_tokens`` (an upper
     bound). Multi-turn strategies may make more requests than keys.
     """
-    datasets: dict[Path, Dataset] = {}
+    datasets: dict[Any, Dataset] = {}
     images = ImageStore()
     out: list[DryRunCell] = []
     for cell in cells:
@@ -208,10 +214,14 @@ def run_sweep(
     *,
     quiet: bool = False,
     retry_errors: bool = False,
+    strict: bool = False,
     on_cell_done: Callable[[Cell, RunResult], None] | None = None,
 ) -> SweepResult:
-    """Run every cell of a sweep in turn, sharing one response cache and one image store."""
-    sweep, cells = expand_sweep(path)
+    """Run every cell of a sweep in turn, sharing one response cache and one image store.
+
+    ``strict``: stop at a bad house or pair of a dataset (default: report it and go on).
+    """
+    sweep, cells = expand_sweep(path, strict=strict)
     for cell in cells:
         # Every cell's plugin options are checked before the first request of the first cell.
         create_components(cell.config, get_plugin_host(cell.config.plugins))
@@ -224,7 +234,7 @@ def run_sweep(
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
         cache = ResponseCache(first.cache_path()) if first.cache_path() is not None else None  # type: ignore[arg-type]
-        datasets: dict[Path, Dataset] = {}
+        datasets: dict[Any, Dataset] = {}
         try:
             for cell in cells:
                 status[cell.name] = {"status": "running"}

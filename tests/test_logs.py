@@ -39,3 +39,7 @@ def test_secret_never_reaches_the_log_file(tmp_path, monkeypatch):
     log.error("request_failed", error="401: invalid key zz-secret-value-999", options={"api_key": "zz-secret-value-999"})
     log.close()
     assert "zz-secret-value-999" not in (tmp_path / "log.jsonl").read_text()
+
+
+def test_a_key_naming_an_environment_variable_is_kept():
+    assert Redactor().value({"api_key_env": "OPENAI_API_KEY"}) == {"api_key_env": "OPENAI_API_KEY"}

@@ -26,3 +26,19 @@ def test_quiet_flag_wins_on_a_tty(monkeypatch):
     monkeypatch.setattr("sys.stderr", Tty())
     assert isinstance(make_progress("run", quiet=True), QuietProgress)
     assert isinstance(make_progress("run"), RichProgress)
+
+
+def test_live_bar_shows_done_total_and_error_counts(monkeypatch):
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    screen = Tty()
+    monkeypatch.setattr("sys.stderr", screen)
+    progress = make_progress("run")
+    progress.start(3, 1)  # one key already done (resumed)
+    progress.advance("answered")
+    progress.advance("parse_error")
+    progress.stop()
+    shown = screen.getvalue()
+    assert "3/3" in shown and "parse_error=1" in shown and "answered=" not in shown

@@ -67,12 +67,15 @@ def score_command(
     predictions: Path = typer.Option(..., "--predictions", help="Official predictions (file, {metadata, predictions}, or folder) or our results.jsonl / run folder."),
     dataset: Path = typer.Option(..., "--dataset", help="Dataset folder in the release layout."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
 ) -> None:
     """Score predictions with the official metric (mean L2 over answered, response rate beside it)."""
     from povagent.dataset.loader import load_dataset
     from povagent.scoring.predictions import score_predictions
 
-    ds = load_dataset(dataset)
+    ds = load_dataset(dataset, strict=strict)
+    for p in ds.problems:
+        typer.echo(f"warning: dataset problem, skipped: {p}", err=True)
     summary, warnings = score_predictions(predictions, ds)
     for w in warnings[:20]:
         typer.echo(f"warning: {w}", err=True)

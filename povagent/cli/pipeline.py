@@ -19,7 +19,36 @@ from povagent.cli import app
 def _summary_table(summary: dict[str, Any], title: str) -> None:
     from povagent.cli.dataset import render_summary
 
-    render_summary(summary, title=title)
+    if "success" in summary:  # a real-world set: success rates, as the paper reports them
+        _success_table(summary["success"], title)
+    if "official" in summary.get("pipeline", {}).get("scorers", ["official"]):
+        render_summary(summary, title=title)
+
+
+def _rate(cell: dict[str, Any]) -> str:
+    rate = cell["success_rate"]
+    return "-" if rate is None else f"{100 * rate:.1f}%"
+
+
+def _success_table(success: dict[str, Any], title: str) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    from povagent.dataset.models import Condition
+
+    table = Table(title=f"{title}: success rate (unanswered = failure)")
+    for col in ("slice", "success rate", "hits / total"):
+        table.add_column(col, justify="left" if col == "slice" else "right")
+
+    def add(name: str, cell: dict[str, Any]) -> None:
+        table.add_row(name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}")
+
+    add("overall", success["overall"])
+    for c, cell in success["per_condition"].items():
+        add(f"{Condition(c).label} ({c.upper()})", cell)
+    for d, cell in success["per_direction"].items():
+        add(d, cell)
+    Console().print(table)
 
 
 @app.command("run")
@@ -30,6 +59,7 @@ def run_command(
     retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
     as_json: bool = typer.Option(False, "--json", help="Print summary.json instead of a table."),
+    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
 ) -> None:
     """Run one pipeline (resuming from its run folder: only missing keys are run)."""
     from povagent.config import load_pipeline
@@ -42,6 +72,8 @@ def run_command(
     if limit is not None:
         overrides["instances"] = {"limit": limit}
     config = load_pipeline(pipeline, overrides=overrides)
+    if strict:
+        config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
     try:
         result = run_pipeline(config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_errors=retry_errors)
     except KeyboardInterrupt:
@@ -65,6 +97,7 @@ def sweep_command(
     dry_run: bool = typer.Option(False, "--dry-run", help="Print the cells, requests still to make and a token estimate; call nothing."),
     retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of a dataset (default: report it, skip it, go on)."),
 ) -> None:
     """Run every cell of a sweep (one folder per cell plus sweep.json), sharing one cache."""
     from rich.console import Console
@@ -74,7 +107,7 @@ def sweep_command(
 
     console = Console()
     if dry_run:
-        sweep_cfg, cells = expand_sweep(sweep)
+        sweep_cfg, cells = expand_sweep(sweep, strict=strict)
         table = Table(title=f"{sweep} -> {sweep_cfg.output} ({len(cells)} cells)")
         for col in ("cell", "keys", "done", "requests to make", "~prompt tokens", "<= completion tokens"):
             table.add_column(col, justify="left" if col == "cell" else "right")
@@ -91,15 +124,17 @@ def sweep_command(
         o = res.summary["overall"]
         l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
         rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
-        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+        hits = f", success rate {_rate(res.summary['success']['overall'])}" if "success" in res.summary else ""
+        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}{hits}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
 
     try:
-        result = run_sweep(sweep, quiet=quiet, retry_errors=retry_errors, on_cell_done=done)
+        result = run_sweep(sweep, quiet=quiet, retry_errors=retry_errors, strict=strict, on_cell_done=done)
     except KeyboardInterrupt:
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
         raise typer.Exit(130)
     table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
-    for col in ("cell", "mean L2", "resp. rate", "answered / total"):
+    with_success = any("success" in result.results[c.name].summary for c in result.cells)  # real-world sets
+    for col in ("cell", "mean L2", "resp. rate", "answered / total") + (("success rate",) if with_success else ()):
         table.add_column(col, justify="left" if col == "cell" else "right")
     for cell in result.cells:
         s = result.results[cell.name].summary
@@ -109,6 +144,7 @@ def sweep_command(
             "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
             "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
             f"{o['n']} / {s['rows']['total']}",
+            *((_rate(s["success"]["overall"]) if "success" in s else "-",) if with_success else ()),
         )
     console.print(table)
 

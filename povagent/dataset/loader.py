@@ -111,6 +111,9 @@ class Dataset:
     meta: DatasetMeta | None
     houses: dict[str, House]
     problems: list[Problem] = field(default_factory=list)
+    # Instances are immutable: each is built once (GT point, observer view) and reused by every
+    # selection (a sweep selects from one loaded dataset once per cell).
+    _built: dict[tuple[str, str, Direction, Condition], Instance] = field(default_factory=dict, init=False, repr=False)
 
     def instances(
         self,
@@ -123,17 +126,25 @@ class Dataset:
         dirs = {Direction(d) for d in directions} if directions else None
         keep = set(houses) if houses else None
         out: list[Instance] = []
+        built = self._built
         for house in self.houses.values():
             if keep is not None and house.house_id not in keep:
                 continue
             for pair in house.pairs.values():
-                obs_cam = observer_camera(pair)
+                obs_cam = None
                 for direction in pair.valid_directions():
                     if dirs is not None and direction not in dirs:
                         continue
-                    target = tuple(float(v) for v in ground_truth_point(pair, direction))
+                    target = None
                     for cond in conds:
-                        out.append(self._instance(house, pair, direction, cond, target, obs_cam))
+                        key = (house.house_id, pair.pair_id, direction, cond)
+                        inst = built.get(key)
+                        if inst is None:
+                            if target is None:
+                                obs_cam = obs_cam or observer_camera(pair)
+                                target = tuple(float(v) for v in ground_truth_point(pair, direction))
+                            inst = built[key] = self._instance(house, pair, direction, cond, target, obs_cam)
+                        out.append(inst)
         return out
 
     def _instance(self, house: House, pair: PairEntry, direction: Direction, cond: Condition, target, obs_cam) -> Instance:

@@ -21,6 +21,7 @@ from povagent.dataset.problems import Problem, json_path
 from povagent.dataset.schema import validator
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
+_JSON_NAMES = {"array": "list", "object": "object (a mapping of keys to values)"}
 
 
 def describe_schema_error(err: SchemaError) -> str:
@@ -34,11 +35,18 @@ def describe_schema_error(err: SchemaError) -> str:
         return f"unknown direction {err.instance!r} (allowed: {_DIRECTION_NAMES})"
     if kind == "type":
         want = err.validator_value if isinstance(err.validator_value, str) else "/".join(err.validator_value)
-        return f"'{field}' must be of type {want} (got {json.dumps(err.instance)[:60]})"
+        got = json.dumps(err.instance)[:60]
+        if field is None:
+            return f"the file must hold a JSON {_JSON_NAMES.get(want, want)} (got {got})"
+        if isinstance(field, int):
+            return f"item {field} must be a JSON {_JSON_NAMES.get(want, want)} (got {got})"
+        return f"'{field}' must be of type {want} (got {got})"
     if kind in ("minItems", "maxItems"):
         return f"'{field}' has {len(err.instance)} items; expected {'at least' if kind == 'minItems' else 'at most'} {err.validator_value}"
     if kind in ("exclusiveMinimum", "exclusiveMaximum", "minimum", "maximum", "minLength"):
         return f"'{field}' is out of range: {err.message}"
+    if kind == "anyOf" and any("sentence" in (sub.get("properties") or {}) for sub in err.validator_value):
+        return f"'{field}' must be a non-empty sentence: a string or an object with 'sentence' (got {json.dumps(err.instance)[:60]})"
     if kind == "anyOf":
         return f"'{field}' has an unexpected form (got {json.dumps(err.instance)[:60]})"
     return err.message

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import BEHIND_EPSILON, Camera
 
 #: The largest clamped error: the diagonal of the unit square.
 MAX_L2 = math.sqrt(2.0)
@@ -32,11 +32,10 @@ class GroundTruthInFrame:
 
 def project_ground_truth(target: tuple[float, float, float] | np.ndarray, camera: Camera) -> GroundTruthInFrame:
     """Project the 3D GT into a camera; behind the camera -> (0.5, 0.5), out of frame."""
-    p = camera.project(np.asarray(target, dtype=float))
-    if not bool(p.in_front):
+    u, v, depth = camera.project_point(target)
+    if not depth > BEHIND_EPSILON:
         return GroundTruthInFrame(0.5, 0.5, False, True)
-    u, v = (float(c) for c in p.normalized)
-    return GroundTruthInFrame(u, v, bool(p.in_frame), False)
+    return GroundTruthInFrame(u, v, 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0, False)
 
 
 def _clamp01(v: float) -> float:

@@ -116,7 +116,7 @@ def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
     p = Path(path)
     if p.is_dir() and (p / "results.jsonl").exists():
         p = p / "results.jsonl"
-    if p.is_file() and p.suffix == ".jsonl":
+    if p.is_file() and p.suffix == ".jsonl" and _holds_result_rows(p):
         rows = read_rows(p)
         if not rows:
             raise PredictionsError(f"{p}: no complete result rows")
@@ -126,6 +126,22 @@ def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
     from povagent.official_format import read_official_predictions
 
     return "official", read_official_predictions(p)
+
+
+def _holds_result_rows(path: Path) -> bool:
+    """Whether a JSON-lines file holds our result rows (``key`` and ``status``), not official rows."""
+    import json
+
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            if not line.strip():
+                continue
+            try:
+                first = json.loads(line)
+            except json.JSONDecodeError:
+                return True  # let the results reader report what it can read
+            return isinstance(first, dict) and "key" in first and "status" in first
+    return True
 
 
 def score_predictions(path: str | Path, dataset: Dataset) -> tuple[dict[str, Any], list[str]]:

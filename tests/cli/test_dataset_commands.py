@@ -83,3 +83,30 @@ def test_score_of_a_malformed_file_is_a_clear_message_not_a_traceback(mini_root,
     assert proc.returncode != 0
     assert "Traceback" not in proc.stderr
     assert "bad.json" in proc.stderr
+
+
+def test_score_reads_an_official_json_lines_file(mini_root, tmp_path):
+    path = tmp_path / "preds.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in official_rows()))
+    result = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["overall"]["n_total"] == 3
+
+
+def test_score_warns_about_the_houses_it_skipped(mini_root, tmp_path):
+    path = tmp_path / "preds.json"
+    path.write_text(json.dumps(official_rows()))
+    result = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--json"])
+    assert result.exit_code == 0, result.output
+    assert "warning: dataset problem, skipped: artifacts/train_house_00002/" in result.stderr
+    strict = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--strict"])
+    assert strict.exit_code != 0 and "train_house_00002" in str(strict.exception)
+
+
+def test_validate_names_a_file_of_the_wrong_shape_plainly(mini_root, tmp_path):
+    root = tmp_path / "ds"
+    shutil.copytree(mini_root, root, ignore=shutil.ignore_patterns("train_house_00002"))
+    (root / "artifacts/train_house_00001/exploration_log.json").write_text('{"frames": []}')
+    result = runner.invoke(app, ["validate", str(root)])
+    assert result.exit_code == 1
+    assert "artifacts/train_house_00001/exploration_log.json: the file must hold a JSON list" in result.stdout

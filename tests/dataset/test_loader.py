@@ -105,3 +105,9 @@ def test_extra_keys_are_kept_and_ignored(mini_root, tmp_path):
     ds = load_dataset(root)
     assert "7" in ds.houses["train_house_00001"].pairs
     assert not [p for p in ds.problems if "00001" in p.file]
+
+
+def test_instances_are_built_once_and_shared_by_every_selection(mini_dataset):
+    everything = {i.id: i for i in mini_dataset.instances()}
+    some = mini_dataset.instances(conditions=["c"], directions=["left"])
+    assert some and all(everything[i.id] is i for i in some)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -92,3 +93,16 @@ def test_axes_are_orthonormal():
     cam = Camera.from_pose([0, 1, 0], yaw=123, horizon=-17)
     r = cam.axes()
     assert np.allclose(r @ r.T, np.eye(3))
+
+
+@settings(max_examples=300, deadline=None)
+@given(yaws, horizons, fovs, coords, coords, coords)
+def test_single_point_projection_agrees_with_the_vectorized_one(yaw, horizon, fov, x, y, z):
+    cam = Camera.from_pose([0.3, 1.1, -0.7], yaw, horizon, fov, 512, 384)
+    u, v, depth = cam.project_point((x, y, z))
+    p = cam.project(np.array([x, y, z]))
+    assert depth == pytest.approx(float(p.depth), abs=1e-9)
+    if p.in_front:
+        assert (u, v) == (pytest.approx(float(p.normalized[0]), abs=1e-9), pytest.approx(float(p.normalized[1]), abs=1e-9))
+    else:
+        assert math.isnan(u) and math.isnan(v)

@@ -72,7 +72,7 @@ def test_right_is_world_up_cross_forward():
     assert np.allclose(dirs["front"], [0, 0, -1])
 
 
-def test_boundary_of_a_zero_direction_uses_the_fallback_distance():
+def test_boundary_of_a_zero_direction_stays_at_the_box_centre():
     assert np.allclose(boundary_point(BED, np.zeros(3)), [0.0, 3.0])
 
 

@@ -203,3 +203,9 @@ def test_plugins_command_lists_every_kind_with_its_source():
     assert {"backend", "strategy", "parser", "scorer", "profile", "failures"} <= set(listing)
     official = [e for e in listing["scorer"] if e["name"] == "official"]
     assert official and official[0]["source"] == "built-in povagent_plugins.scorers.official"
+
+
+def test_rejected_options_never_show_a_secret(povagent_host):
+    with pytest.raises(PluginError) as err:
+        povagent_host.create("scorer", "official", {"api_key": "sk-proj-ABCDEF1234567890"})
+    assert "ABCDEF1234567890" not in str(err.value) and "'api_key': '[REDACTED]'" in str(err.value)

@@ -4,7 +4,8 @@ Kept independent of the built-in plugins so runner tests specify the runner alon
 in-process and by the kill-and-resume subprocess alike.
 
 * backend ``test-center``: answers the image centre (frame 0 for A/B); options ``delay_s``
-  (sleep per request) and ``cacheable``; counts calls in ``CALLS``.
+  (sleep per request), ``cacheable``, ``reply`` (a fixed answer) and ``encode`` (base64 every
+  image shown, as a real backend does); counts calls in ``CALLS``.
 * backend ``test-flaky``: fails per a script of status codes, then answers like test-center.
 * strategy ``test-point``: one user message with the instance's frames and its sentence.
 * parser ``test-json``: ``{"selected_image", "x", "y"}`` or ``{"x", "y"}``; anything else is unparseable.
@@ -33,16 +34,20 @@ def center_reply(request: Request) -> str:
 class CenterBackend(Backend):
     """Answers the centre of the image (frame 0 for A/B)."""
 
-    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None) -> None:
+    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False) -> None:
         self.delay_s = delay_s
         self.cacheable = cacheable  # type: ignore[misc]
         self.reply = reply
+        self.encode = encode
 
     def identity(self) -> dict[str, Any]:
         return {"backend": "test-center", "reply": self.reply}
 
     async def complete(self, request: Request, images: Any) -> Response:
         CALLS["count"] += 1
+        if self.encode:  # as a real backend does: every image it is shown, as a data URL
+            for h in request.image_hashes():
+                images.data_url(h)
         if self.delay_s:
             await asyncio.sleep(self.delay_s)
         text = self.reply if self.reply is not None else center_reply(request)

@@ -18,6 +18,17 @@ def _lines(path):
     return path.read_text().splitlines() if path.exists() else []
 
 
+def _records(path):
+    """Complete JSON lines (a line the kill cut short is left out)."""
+    out = []
+    for line in _lines(path):
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            pass
+    return out
+
+
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
 def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path):
     runs = 8
@@ -38,6 +49,10 @@ def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline
     assert proc.returncode == -signal.SIGKILL
     written_before = len(_lines(results))
     assert 20 <= written_before < 12 * runs, "the kill must land mid-run"
+    # Every row that survived the kill has its request event in the log too.
+    durable = {e["key"] for e in _records(results)}
+    logged = {e["row"] for e in _records(tmp_path / "run" / "log.jsonl") if e["event"] == "request"}
+    assert durable <= logged
 
     done = subprocess.run([sys.executable, "-c", CLI, "run", str(path), "--quiet", "--json"], env=env,
                           capture_output=True, text=True, timeout=120)

@@ -296,3 +296,146 @@ def test_request_event_per_call_in_the_log(write_pipeline):
     requests = [e for e in events if e["event"] == "request"]
     assert len(requests) == 2
     assert {"latency_s", "prompt_tokens", "completion_tokens", "cost_usd", "retries", "cached"} <= set(requests[0])
+
+
+def test_each_distinct_image_is_read_and_encoded_once_per_run(write_pipeline, small_release):
+    from povagent.dataset import load_dataset
+    from povagent.images import ImageStore
+
+    distinct = {f.file for inst in load_dataset(small_release).instances() for f in inst.frames}
+    images = ImageStore()
+    result = run(write_pipeline(backend={"name": "test-center", "options": {"encode": True}}, runs=2), images=images)
+    assert result.stats.requests == 2 * N_KEYS
+    assert images.stats.file_reads == len(distinct) and images.stats.base64_encodes == len(distinct)
+    assert images.stats.rebuilds == 0 and result.summary["images"]["distinct"] == len(distinct)
+
+
+def test_summary_after_resume_covers_the_rows_of_both_sessions(write_pipeline):
+    from povagent.runner import summarize_run
+
+    run(write_pipeline(instances={"limit": 5}))
+    result = run(write_pipeline())
+    fresh = summarize_run(result.run_dir / "results.jsonl")
+    assert result.summary["rows"]["done"] == N_KEYS and result.summary["rows"]["missing"] == 0
+    for part in ("overall", "per_condition", "per_direction", "per_run", "usage"):
+        assert result.summary[part] == fresh[part], part
+
+
+def test_a_bad_house_is_logged_by_file_and_skipped(write_pipeline, mini_root):
+    result = run(write_pipeline(dataset={"path": str(mini_root)}))
+    events = [json.loads(line) for line in (result.run_dir / "log.jsonl").read_text().splitlines()]
+    problems = [e for e in events if e["event"] == "dataset_problem"]
+    assert problems and all(e["file"].startswith("artifacts/train_house_00002/") for e in problems)
+    assert all(e["level"] == "warning" and e["path"] and e["problem"] for e in problems)
+    assert {r.house_id for r in rows_of(result)} == {"train_house_00000", "train_house_00001"}
+
+
+def test_strict_dataset_stops_before_any_request(write_pipeline, mini_root, offline_plugin, tmp_path):
+    from povagent.errors import DatasetError
+
+    with pytest.raises(DatasetError, match=r"train_house_00002"):
+        run(write_pipeline(dataset={"path": str(mini_root), "strict": True}))
+    assert offline_plugin.CALLS["count"] == 0 and not (tmp_path / "run").exists()
+
+
+def test_rejected_backend_options_write_nothing_to_the_run_folder(write_pipeline, tmp_path):
+    from povagent.errors import PluginError
+
+    with pytest.raises(PluginError, match=r"rejected its options"):
+        run(write_pipeline(backend={"name": "test-center", "options": {"no_such_option": 1}}))
+    assert not (tmp_path / "run").exists()
+
+
+def test_secret_options_are_redacted_in_the_run_folder_config(write_pipeline, povagent_host, offline_plugin, monkeypatch):
+    monkeypatch.setenv("DEMO_API_KEY", "plain-secret-value-42")
+
+    class Keyed(offline_plugin.CenterBackend):
+        def __init__(self, auth_token=None, endpoint=None, api_key_env=None, **kw):
+            super().__init__(**kw)
+
+    class Plugin:
+        @hookimpl
+        def register_backends(self, register):
+            register("keyed", Keyed)
+
+    povagent_host.add_plugin(Plugin(), name="keyed")
+    try:
+        options = {"auth_token": "tok-0123456789", "endpoint": "https://x/?k=plain-secret-value-42", "api_key_env": "DEMO_API_KEY"}
+        result = run(write_pipeline(backend={"name": "keyed", "options": options}, instances={"limit": 1}))
+    finally:
+        povagent_host.remove_plugin("keyed")
+    import yaml
+
+    saved = yaml.safe_load((result.run_dir / "config.yaml").read_text())["backend"]["options"]
+    assert saved == {"auth_token": "[REDACTED]", "endpoint": "https://x/?k=[REDACTED]", "api_key_env": "DEMO_API_KEY"}
+
+
+def test_image_files_are_read_off_the_event_loop(write_pipeline, monkeypatch):
+    import threading
+
+    from povagent.images import ImageStore
+
+    readers = []
+    original = ImageStore._read_file
+
+    def spy(self, path):
+        readers.append(threading.current_thread() is threading.main_thread())
+        return original(self, path)
+
+    monkeypatch.setattr(ImageStore, "_read_file", spy)
+    run(write_pipeline(runs=2))
+    assert readers and not any(readers)
+
+
+def test_a_missing_frame_is_an_infra_error_row_naming_the_file(write_pipeline, small_release, tmp_path):
+    import shutil
+
+    release = tmp_path / "release"
+    shutil.copytree(small_release, release)
+    frame = sorted(release.glob("artifacts/*/exploration_images/*.png"))[0]
+    frame.unlink()
+    rows = rows_of(run(write_pipeline(dataset={"path": str(release)}, instances={"conditions": ["a"]})))
+    broken = [r for r in rows if r.house_id == frame.parts[-3]]
+    assert broken and all(r.status == "infra_error" and frame.name in r.error_message for r in broken)
+    assert all(r.status == "answered" for r in rows if r.house_id != frame.parts[-3])
+
+
+def test_a_results_file_that_cannot_be_written_stops_the_run_with_a_clear_error(write_pipeline, monkeypatch, caplog):
+    import errno
+    import gc
+
+    from povagent.errors import ResultsError
+    from povagent.results import ResultsWriter
+
+    written = []
+    original = ResultsWriter.write_lines
+
+    def fill_up(self, text):
+        if written:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        written.append(text)
+        original(self, text)
+
+    monkeypatch.setattr(ResultsWriter, "write_lines", fill_up)
+    path = write_pipeline(backend={"name": "test-center", "options": {"delay_s": 0.01}}, concurrency=1)
+    with pytest.raises(ResultsError, match=r"results.jsonl: cannot write rows \(OSError: .*No space left on device\).*resume"):
+        run(path)
+    kept = (path.parent / "run" / "results.jsonl").read_text().splitlines()
+    assert len(kept) == len(written[0].splitlines()) >= 1
+    summary = json.loads((path.parent / "run" / "summary.json").read_text())
+    assert summary["interrupted"] is True and summary["rows"]["done"] == len(kept)
+    gc.collect()
+    assert not [r for r in caplog.records if "never retrieved" in r.getMessage()]
+
+
+def test_a_second_process_on_the_same_run_folder_is_refused(write_pipeline, tmp_path, offline_plugin):
+    import fcntl
+
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    with open(run_dir / ".lock", "a") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)  # as a running `povagent run` holds it
+        with pytest.raises(ConfigError, match=r"another povagent process is running a pipeline into this folder"):
+            run(write_pipeline())
+    assert offline_plugin.CALLS["count"] == 0 and not (run_dir / "results.jsonl").exists()
+    assert run(write_pipeline()).summary["complete"]  # released: the folder is usable again
