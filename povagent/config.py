@@ -5,6 +5,7 @@ default)::
 
     plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names or .py paths)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
+                                         # (generate also takes judge: NAME or {name, options})
                                          # strict: true stops at a bad house (default: report, skip)
     instances:                           # which instances to run (default: all)
       conditions: [a, b, c]              # a/inferred, b/stated, c/given
@@ -60,13 +61,31 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
+class ComponentSpec(_Strict):
+    """A plugin by name with its options (a bare string is the name with no options)."""
+
+    name: str = Field(min_length=1)
+    options: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _bare_name(cls, value: Any) -> Any:
+        return {"name": value} if isinstance(value, str) else value
+
+
 class GenerateSpec(_Strict):
-    """Generate a synthetic dataset (once) into ``out``."""
+    """Generate a synthetic dataset (once) into ``out``.
+
+    ``judge`` is the surface judge by its registered name (``register_judges``), with options:
+    ``judge: physical-rules`` (the default) or ``judge: {name: vlm, options: {...}}``; the
+    pipeline's ``plugins:`` are loaded first, so a judge plugin listed there can be named.
+    """
 
     houses: int = Field(3, ge=1)
     seed: int = 0
     frames: int = Field(30, ge=1)
     out: Path
+    judge: ComponentSpec = Field(default_factory=lambda: ComponentSpec(name="physical-rules"))
 
 
 class DatasetSpec(_Strict):
@@ -124,18 +143,6 @@ class InstanceFilter(_Strict):
         if isinstance(value, list):
             return [v.lower() if isinstance(v, str) else v for v in value]
         return value
-
-
-class ComponentSpec(_Strict):
-    """A plugin by name with its options (a bare string is the name with no options)."""
-
-    name: str = Field(min_length=1)
-    options: dict[str, Any] = Field(default_factory=dict)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _bare_name(cls, value: Any) -> Any:
-        return {"name": value} if isinstance(value, str) else value
 
 
 class RetryPolicy(_Strict):
@@ -440,6 +447,9 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
     for i, scorer in enumerate(config.scorers):
         check("scorer", scorer.name, ("scorers", i))
+    if config.dataset.generate is not None:
+        loc = ("dataset", "generate", "judge")
+        check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
     if problems:
         raise ConfigError("unknown plugin name(s):\n" + "\n".join(problems))
 

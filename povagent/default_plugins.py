@@ -27,4 +27,6 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.backends.replay",
     # model profiles
     "povagent_plugins.backends.profiles",
+    # surface judges (the dataset generator's stage 3)
+    "povagent_plugins.judges.physical_rules",
 )

@@ -78,6 +78,39 @@ def register_model_profiles(register: Register) -> None:
     """
 
 
+# -- contribution hooks: dataset generation ---------------------------------------------------
+@hookspec
+def register_judges(register: Register) -> None:
+    """Contribute surface judges: stage 3 of the paper's pipeline, for ``povagent generate``.
+
+    Called once per plugin, when the plugin host first collects registered names (like the
+    other ``register_*`` hooks; ``povagent generate``, a pipeline with ``dataset: {generate:
+    ...}`` and ``povagent plugins`` all do). For each judge call
+    ``register(name, factory, description="...")``. ``factory(**options)`` returns a
+    :class:`povagent.generate.judge.SurfaceJudge`: any object with a method
+    ``judge(request: JudgeRequest) -> SurfaceVerdict``. ``options`` are the
+    ``--judge-option KEY=VALUE`` pairs of ``povagent generate`` or the pipeline YAML's
+    ``dataset.generate.judge.options``; a factory that rejects them raises ``TypeError`` or
+    ``ValueError``. The built-in ``physical-rules`` judge is the default.
+
+    What a judge decides: for one (observer, anchor) pair and one direction (``right``,
+    ``left``, ``front``, ``up``), whether a small target object (a book, a mug, boots) can
+    physically stand there, ``SurfaceVerdict.verdict`` ``"appropriate"`` or
+    ``"inappropriate"``, and on what, ``SurfaceVerdict.surface`` (``"on the floor"``,
+    ``"on the bed"``): the surface picks the target pool and the ground-truth height. The
+    request carries the house model, both objects, the observer camera and the observer view's
+    RGB image (``request.image``, 512 x 512 x 3), so a rules judge reads geometry and a VLM
+    judge looks at the picture. The generator then checks the ground-truth point against walls
+    and the house boundary, and keeps a pair only if at least two of its directions survive.
+
+    The same request must get the same verdict (a VLM judge: temperature 0 and a response
+    cache), or one seed no longer gives one dataset. With ``--jobs`` > 1 every worker process
+    loads the plugins again and calls the factory itself, so a judge need not pickle; the
+    factory, not the module, should import heavy libraries, since every povagent command loads
+    every plugin module.
+    """
+
+
 # -- lifecycle hooks ---------------------------------------------------------------------------
 @hookspec
 def povagent_run_start(run_dir: str, config: Mapping[str, Any], n_pending: int, n_total: int) -> None:

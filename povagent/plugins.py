@@ -35,12 +35,13 @@ from povagent import hookspecs
 from povagent.errors import PluginError
 
 #: The kinds of things plugins contribute through a factory, and the hook for each.
-Kind = Literal["backend", "strategy", "parser", "scorer"]
+Kind = Literal["backend", "strategy", "parser", "scorer", "judge"]
 KIND_HOOKS: dict[str, str] = {
     "backend": "register_backends",
     "strategy": "register_strategies",
     "parser": "register_parsers",
     "scorer": "register_scorers",
+    "judge": "register_judges",
 }
 KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
@@ -202,7 +203,8 @@ class PluginHost:
 
     # -- lookup -------------------------------------------------------------------------------
     def names(self, kind: str) -> list[str]:
-        """Sorted names registered for ``kind`` (``backend``, ``strategy``, ``parser``, ``scorer``, ``profile``)."""
+        """Sorted names registered for ``kind`` (``backend``, ``strategy``, ``parser``, ``scorer``,
+        ``judge``, ``profile``)."""
         return sorted(self._table(kind))
 
     def entries(self, kind: str) -> list[PluginEntry]:

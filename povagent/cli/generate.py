@@ -4,10 +4,30 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 import typer
 
 from povagent.cli import app
+
+
+def judge_options(pairs: list[str]) -> dict[str, Any]:
+    """``["model=gpt-5.4", "temperature=0"]`` -> ``{"model": "gpt-5.4", "temperature": 0}``.
+
+    Values are read as YAML scalars, as the same options would be in a pipeline file.
+    """
+    import yaml
+
+    options: dict[str, Any] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip():
+            raise typer.BadParameter(f"{pair!r}: give it as KEY=VALUE", param_hint="--judge-option")
+        try:
+            options[key.strip()] = yaml.safe_load(value) if value.strip() else ""
+        except yaml.YAMLError:
+            options[key.strip()] = value
+    return options
 
 
 @app.command("generate")
@@ -20,24 +40,42 @@ def generate_command(
     with_render: bool = typer.Option(
         False, "--with-render", help="Also write depth maps and instance masks under each house's _render/."
     ),
-    judge: str | None = typer.Option(
-        None, "--judge", help="Surface judge as module:Name (a VLM judge, say); default: the physical rules."
+    judge: str = typer.Option(
+        "physical-rules", "--judge", help="Surface judge, by the name a plugin registered (see `povagent plugins`)."
+    ),
+    judge_option: list[str] = typer.Option(
+        [], "--judge-option", metavar="KEY=VALUE", help="An option for the judge's factory (repeatable)."
+    ),
+    plugin: list[str] = typer.Option(
+        [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable)."
     ),
 ) -> None:
     """Generate houses, render their exploration frames and observer views, write the queries."""
+    from povagent.errors import PluginError
     from povagent.generate import generate_dataset
-    from povagent.generate.judge import load_judge
 
-    report = generate_dataset(
-        out,
-        houses=houses,
-        seed=seed,
-        frames=frames,
-        jobs=jobs,
-        progress=sys.stdout.isatty(),
-        with_render=with_render,
-        judge=load_judge(judge) if judge else None,
-    )
+    options = judge_options(judge_option)
+    try:
+        report = generate_dataset(
+            out,
+            houses=houses,
+            seed=seed,
+            frames=frames,
+            jobs=jobs,
+            progress=sys.stdout.isatty(),
+            with_render=with_render,
+            judge=judge,
+            judge_options=options,
+            plugins=plugin,
+        )
+    except PluginError as exc:
+        if ":" in judge and f"unknown judge {judge!r}" in str(exc):
+            # The form the command took before judges were plugins: point at the plugin way.
+            raise PluginError(
+                f"{exc}\n--judge takes a registered name: register the judge with a register_judges hook "
+                f"and load its module with --plugin {judge.partition(':')[0]}"
+            ) from None
+        raise
     shares = ", ".join(f"{d} {100 * s:.0f}%" for d, s in report.direction_shares().items())
     typer.echo(
         f"{out}: {len(report.houses)} houses, {report.pairs} pairs, "

@@ -16,12 +16,13 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, Mapping, Sequence
 
 from povagent.errors import DatasetError
-from povagent.generate.judge import PhysicalRulesJudge, SurfaceJudge, judge_name
+from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary, generate_house
 from povagent.generate.writer import write_json
+from povagent.logs import Redactor
 
 GENERATOR_VERSION = "1"
 DIRECTIONS = ("right", "left", "front", "up")
@@ -84,21 +85,39 @@ def generate_dataset(
     jobs: int = 1,
     progress: bool | ProgressCallback = True,
     with_render: bool = False,
-    judge: SurfaceJudge | None = None,
+    judge: str | SurfaceJudge = DEFAULT_JUDGE,
+    judge_options: Mapping[str, Any] | None = None,
+    plugins: Sequence[str] = (),
 ) -> GenerationReport:
     """Generate ``houses`` houses in the POVBench release layout under ``out``.
 
     ``progress``: True shows a rich progress bar when stdout is a terminal, a callable is
     called as ``progress(summary, done, total)`` after each house, False is silent.
     ``with_render`` also writes depth maps and instance masks under each house's ``_render/``.
-    ``judge`` decides stage 3 (default: :class:`~povagent.generate.judge.PhysicalRulesJudge`);
-    a pair keeps only if the judge allows ``pairs.MIN_DIRECTIONS`` (2) of its directions; with
-    ``jobs > 1`` the judge must pickle, since each worker process gets a copy.
+    ``judge`` decides stage 3: the name of a registered judge (``register_judges``; default
+    ``physical-rules``), made with ``judge_options``, with the plugin modules ``plugins``
+    (dotted names or ``.py`` paths, as a pipeline's ``plugins:``) loaded first; or a
+    :class:`~povagent.generate.judge.SurfaceJudge` object, which must pickle when ``jobs > 1``.
+    A pair keeps only if the judge allows ``pairs.MIN_DIRECTIONS`` (2) of its directions.
+    ``meta.json`` records the judge's name (and its options, secrets redacted, when given).
+    The judge is made before anything is written, so an unknown name or bad options raise
+    :class:`~povagent.errors.PluginError` with ``out`` untouched.
     The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``. ``out``
     must be empty, new, or a dataset this generator wrote (which is then replaced whole);
     anything else raises :class:`~povagent.errors.DatasetError`.
     """
     out = Path(out)
+    if isinstance(judge, str):
+        registered = RegisteredJudge(judge, judge_options, plugins)
+        registered.resolve()  # an unknown name or bad options fail here, before any work
+        judge = registered
+    elif judge_options:
+        raise ValueError("judge_options apply to a judge given by its registered name, not to a judge object")
+    elif not isinstance(judge, SurfaceJudge):
+        raise TypeError(f"judge must be a registered judge name or a SurfaceJudge, not {type(judge).__name__}")
+    judge_record: dict[str, Any] = {"judge": judge_name(judge)}
+    if judge_options:
+        judge_record["judge_options"] = Redactor().value(dict(judge_options))
     _prepare(out)
     start = time.perf_counter()
     report = GenerationReport(out=out, seed=seed)
@@ -132,7 +151,7 @@ def generate_dataset(
                 "frames": frames,
                 "houses": houses,
                 "camera": {"exploration_height": 0.9, "exploration_horizon": 30, "observer_height": 1.55, "fov": 100},
-                "judge": judge_name(judge or PhysicalRulesJudge()),
+                **judge_record,
             },
             "counts": report.counts(),
         },

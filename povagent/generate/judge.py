@@ -3,8 +3,11 @@
 What it is for: stage 3 of the paper's pipeline. The paper asks a VLM, per (pair, direction),
 whether a 0.4 m target can physically stand there and on what ("on the floor", "on the bed");
 here a :class:`SurfaceJudge` protocol takes that place so a VLM judge can be plugged in, and
-:class:`PhysicalRulesJudge` answers deterministically from the house geometry. What it must not
-do: compute the official ground truth itself (``povagent.geometry.ground_truth.target_point``
+:class:`PhysicalRulesJudge` answers deterministically from the house geometry. Judges are
+plugins: each is registered by name through the ``register_judges`` hook (the rules judge as
+``physical-rules``, by the built-in ``povagent_plugins.judges.physical_rules``), and
+:func:`create_judge` / :class:`RegisteredJudge` make one by that name. What it must not do:
+compute the official ground truth itself (``povagent.geometry.ground_truth.target_point``
 does) or validate against walls for the dataset (``pairs`` does that after judging).
 
 The physical rules, for the surface the target would really stand on:
@@ -22,10 +25,9 @@ a person judging the photo would), not for the scorer's 0.4 m cube, which only s
 
 from __future__ import annotations
 
-import importlib
 import re
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -34,6 +36,10 @@ from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.scene import House, PlacedObject
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import FLAT_TOPPED_ANCHORS, AnchorBox, target_point
+from povagent.plugins import PluginHost, get_plugin_host
+
+#: The judge the generator uses when none is named (registered by the built-in plugin).
+DEFAULT_JUDGE = "physical-rules"
 
 #: Half the size of the object checked for room at a spot: pool objects are about 0.3 m.
 TARGET_FOOTPRINT_HALF = 0.15
@@ -120,27 +126,57 @@ def ground_truth(anchor: PlacedObject, camera: Camera, direction: str, verdict: 
     )  # fmt: skip
 
 
-def load_judge(spec: str) -> SurfaceJudge:
-    """The judge named by ``module:Name`` (a :class:`SurfaceJudge` class, built without
-    arguments, or an instance), for ``povagent generate --judge``.
+def create_judge(name: str, options: Mapping[str, Any] | None = None, host: PluginHost | None = None) -> SurfaceJudge:
+    """The judge registered as ``name`` (``register_judges``), made with ``options``.
 
-    Raises :class:`~povagent.errors.PluginError` when it cannot be imported or is no judge.
+    ``host`` defaults to the process-wide plugin host. An unknown name raises
+    :class:`~povagent.errors.PluginError` with the nearest registered name; so does a factory
+    that returns something without a ``judge(request)`` method.
     """
-    module_name, _, attribute = spec.partition(":")
-    if not module_name or not attribute:
-        raise PluginError(f"judge {spec!r}: give it as module:Name (e.g. my_judges:VlmJudge)")
-    try:
-        target = getattr(importlib.import_module(module_name), attribute)
-    except (ImportError, AttributeError) as exc:
-        raise PluginError(f"judge {spec!r} cannot be loaded: {exc}") from exc
-    judge = target() if isinstance(target, type) else target
-    if not isinstance(judge, SurfaceJudge):
-        raise PluginError(f"judge {spec!r} has no judge(request) method: it is not a SurfaceJudge")
-    return judge
+    host = host if host is not None else get_plugin_host()
+    made = host.create("judge", name, options)
+    if not isinstance(made, SurfaceJudge):
+        source = host.entry("judge", name).source
+        raise PluginError(
+            f"judge {name!r} ({source}) made a {type(made).__name__}, which has no judge(request) method: "
+            f"its factory must return a SurfaceJudge"
+        )
+    return made
+
+
+class RegisteredJudge:
+    """A registered judge by name: made through the plugin host in the process that uses it.
+
+    ``generate_dataset`` hands this to its worker processes instead of a judge object: each
+    worker loads ``plugins`` (and the built-in and entry-point plugins) itself and makes its
+    own judge, so a judge need not pickle (a VLM judge's HTTP client, a judge defined in a
+    ``.py`` plugin file) and is made once per process.
+    """
+
+    def __init__(self, name: str, options: Mapping[str, Any] | None = None, plugins: Sequence[str] = ()) -> None:
+        self.name = name
+        self.options = dict(options or {})
+        self.plugins = tuple(plugins)
+        self._judge: SurfaceJudge | None = None
+
+    def resolve(self) -> SurfaceJudge:
+        """The judge itself, made on first use (raises :class:`~povagent.errors.PluginError`)."""
+        if self._judge is None:
+            self._judge = create_judge(self.name, self.options, get_plugin_host(self.plugins))
+        return self._judge
+
+    def judge(self, request: JudgeRequest) -> SurfaceVerdict:
+        """The registered judge's verdict."""
+        return self.resolve().judge(request)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # The made judge stays in its process; the receiving process makes its own.
+        return {**self.__dict__, "_judge": None}
 
 
 def judge_name(judge: SurfaceJudge) -> str:
-    """How ``meta.json`` names a judge: its ``name`` attribute, else its class name."""
+    """How ``meta.json`` names a judge object passed without a registered name: its ``name``
+    attribute, else its class name."""
     return str(getattr(judge, "name", type(judge).__name__))
 
 

@@ -16,33 +16,61 @@ def test_the_generate_command_writes_a_valid_dataset(tmp_path):
     assert validate_dataset(tmp_path) == []
 
 
-def test_a_judge_named_on_the_command_line_decides_the_directions(tmp_path, monkeypatch):
+JUDGE_PLUGIN = """
+from povagent import hookimpl
+from povagent.generate import SurfaceVerdict
+
+class FrontAndUp:
+    def __init__(self, up_surface="on the anchor"):
+        self.up_surface = up_surface
+
+    def judge(self, request):
+        if request.direction == "front":
+            return SurfaceVerdict("appropriate", "on the floor")
+        if request.direction == "up":
+            return SurfaceVerdict("appropriate", self.up_surface)
+        return SurfaceVerdict("inappropriate", None)
+
+@hookimpl
+def register_judges(register):
+    register("front-and-up", FrontAndUp, description="front and up only (a test judge)")
+"""
+
+
+def test_a_judge_registered_by_a_plugin_module_decides_the_directions(tmp_path):
     import json
 
-    (tmp_path / "my_judges.py").write_text(
-        "from povagent.generate import SurfaceVerdict\n"
-        "class FrontAndUp:\n"
-        "    name = 'front-and-up'\n"
-        "    def judge(self, request):\n"
-        "        if request.direction == 'front':\n"
-        "            return SurfaceVerdict('appropriate', 'on the floor')\n"
-        "        if request.direction == 'up':\n"
-        "            return SurfaceVerdict('appropriate', 'on the anchor')\n"
-        "        return SurfaceVerdict('inappropriate', None)\n"
-    )
-    monkeypatch.syspath_prepend(str(tmp_path))
+    plugin = tmp_path / "my_judges.py"
+    plugin.write_text(JUDGE_PLUGIN)
     out = tmp_path / "data"
     args = ["generate", "--out", str(out), "--houses", "1", "--seed", "3", "--frames", "2"]
-    args += ["--judge", "my_judges:FrontAndUp"]
+    args += ["--plugin", str(plugin), "--judge", "front-and-up", "--judge-option", "up_surface=on the top"]
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
-    assert json.loads((out / "meta.json").read_text())["generator"]["judge"] == "front-and-up"
+    generator = json.loads((out / "meta.json").read_text())["generator"]
+    assert generator["judge"] == "front-and-up" and generator["judge_options"] == {"up_surface": "on the top"}
     entries = json.loads((out / "artifacts/train_house_00000/train_house_00000.json").read_text())
     assert entries and all(set(e["placements"]) == {"front", "up"} for e in entries)
 
 
-def test_a_judge_that_cannot_be_loaded_is_reported_by_name(tmp_path):
+def test_an_unknown_judge_name_suggests_the_nearest_before_writing_anything(tmp_path):
     from povagent.errors import PluginError
 
-    result = CliRunner().invoke(app, ["generate", "--out", str(tmp_path), "--judge", "no_such_module:Judge"])
-    assert isinstance(result.exception, PluginError) and "no_such_module:Judge" in str(result.exception)
+    out = tmp_path / "data"
+    result = CliRunner().invoke(app, ["generate", "--out", str(out), "--judge", "physical-rule"])
+    assert isinstance(result.exception, PluginError)
+    assert "unknown judge 'physical-rule' (did you mean 'physical-rules'?)" in str(result.exception)
+    assert not out.exists()
+
+
+def test_a_judge_given_as_module_colon_name_is_pointed_at_the_plugin_option(tmp_path):
+    from povagent.errors import PluginError
+
+    result = CliRunner().invoke(app, ["generate", "--out", str(tmp_path), "--judge", "my_judges:FrontAndUp"])
+    assert isinstance(result.exception, PluginError)
+    assert "unknown judge 'my_judges:FrontAndUp'" in str(result.exception) and "--plugin my_judges" in str(result.exception)
+
+
+def test_a_judge_option_without_a_value_is_refused():
+    result = CliRunner().invoke(app, ["generate", "--out", "unused", "--judge-option", "model"])
+    assert result.exit_code == 2 and "KEY=VALUE" in result.output

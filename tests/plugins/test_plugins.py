@@ -200,9 +200,18 @@ def test_plugins_command_lists_every_kind_with_its_source():
     result = CliRunner().invoke(app, ["plugins", "--json"])
     assert result.exit_code == 0, result.output
     listing = json.loads(result.output)
-    assert {"backend", "strategy", "parser", "scorer", "profile", "failures"} <= set(listing)
+    assert {"backend", "strategy", "parser", "scorer", "judge", "profile", "failures"} <= set(listing)
     official = [e for e in listing["scorer"] if e["name"] == "official"]
     assert official and official[0]["source"] == "built-in povagent_plugins.scorers.official"
+    rules = [e for e in listing["judge"] if e["name"] == "physical-rules"]
+    assert rules and rules[0]["source"] == "built-in povagent_plugins.judges.physical_rules"
+
+
+def test_every_contribution_hook_has_a_builtin_plugin_using_it():
+    from povagent.plugins import KINDS
+
+    host = build_plugin_host()
+    assert {kind: bool(host.names(kind)) for kind in (*KINDS, "profile")} == dict.fromkeys((*KINDS, "profile"), True)
 
 
 def test_rejected_options_never_show_a_secret(povagent_host):

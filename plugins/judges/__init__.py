@@ -1,0 +1,1 @@
+"""Built-in surface judges for the dataset generator (plugins)."""
