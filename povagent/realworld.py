@@ -426,14 +426,21 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
     """Success rates as the paper reports them: successes / all instances (unanswered = failure).
 
     ``rows`` are dicts with ``condition``, ``direction`` and ``success`` (a bool; missing or
-    ``None`` counts as a failure). Returns ``overall``, ``per_condition`` and ``per_direction``,
-    each ``{n_total, n_success, success_rate}``.
+    ``None`` counts as a failure), and optionally ``answered`` (the success scorer's, or the
+    report's reading of a row). Returns ``overall``, ``per_condition`` and ``per_direction``,
+    each ``{n_total, n_success, success_rate}``, plus ``{n_answered, response_rate}`` when the
+    rows say whether they were answered.
     """
     rows = list(rows)
+    with_answered = any("answered" in r for r in rows)
 
     def cell(sub: list[Mapping[str, Any]]) -> dict[str, Any]:
         hits = sum(1 for r in sub if r.get("success") is True)
-        return {"n_total": len(sub), "n_success": hits, "success_rate": hits / len(sub) if sub else None}
+        out = {"n_total": len(sub), "n_success": hits, "success_rate": hits / len(sub) if sub else None}
+        if with_answered:
+            answered = sum(1 for r in sub if r.get("answered") is True)
+            out |= {"n_answered": answered, "response_rate": answered / len(sub) if sub else None}
+        return out
 
     out: dict[str, Any] = {"overall": cell(rows), "per_condition": {}, "per_direction": {}}
     for c in CONDITIONS:
@@ -445,6 +452,24 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
         if sub:
             out["per_direction"][d.value] = cell(sub)
     return out
+
+
+def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:
+    """:func:`success_breakdown` of a run folder's rows, with response rates, read as
+    ``povagent report`` reads them (the success scorer's ``answered`` and ``success`` per row;
+    a row it did not score, such as a parse or infra error, is an unanswered failure).
+    ``None`` when the run is not scored by ``success``.
+    """
+    from povagent.report.collect import collect
+
+    collection = collect(run_dir)
+    if not any(r.scorer == "success" for r in collection.runs):
+        return None
+    return success_breakdown(
+        {"condition": o.condition, "direction": o.direction, "success": o.success, "answered": o.answered}
+        for o in collection.observations
+        if o.scorer == "success"
+    )
 
 
 __all__ = [
@@ -459,6 +484,7 @@ __all__ = [
     "is_realworld",
     "load_realworld",
     "read_realworld",
+    "run_success_breakdown",
     "success_breakdown",
     "unknown_object",
     "unposed_square_camera",

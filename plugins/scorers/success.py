@@ -16,7 +16,9 @@ in the observer view (C):
 A row without a usable answer (unparseable, or no frame selected in A/B) is a failure, as the
 paper counts it. Scores: ``answered``, ``success``, ``frame_has_gt`` (the selected frame carries
 a mark), ``pixel`` (in the original frame), ``distance_px`` and ``distance_norm`` (to the nearest
-point mark, in pixels and in diagonals; ``None`` without point marks).
+point mark, in pixels and in diagonals; ``None`` without point marks), and ``hit_radius_px``
+(the radius, in original pixels, of a point mark without its own ``radius_px`` in the scored
+frame: what a report draws around such a mark).
 """
 
 from __future__ import annotations
@@ -72,7 +74,7 @@ class SuccessScorer(Scorer):
                 "release-layout instance: score it with 'official'"
             )
         failure = {"answered": False, "success": False, "frame_has_gt": None, "pixel": None,
-                   "distance_px": None, "distance_norm": None}
+                   "distance_px": None, "distance_norm": None, "hit_radius_px": None}
         if not answer.answered:
             return failure
         if instance.condition.uses_exploration_frames:
@@ -100,13 +102,18 @@ class SuccessScorer(Scorer):
             "pixel": [px, py],
             "distance_px": nearest,
             "distance_norm": None if nearest is None else nearest / diagonal,
+            "hit_radius_px": self._radius(None, diagonal),
         }
+
+    def _radius(self, mark: Mark | None, diagonal: float) -> float:
+        """The hit radius of a point mark: its own, else the scorer's ``radius_px``, else
+        ``radius`` times the frame diagonal."""
+        return (mark.radius_px if mark is not None else None) or self.radius_px or self.radius * diagonal
 
     def _judge(self, mark: Mark, x: float, y: float, diagonal: float) -> tuple[bool, float | None]:
         if mark.point is not None:
             distance = math.hypot(x - mark.point[0], y - mark.point[1])
-            radius = mark.radius_px or self.radius_px or self.radius * diagonal
-            return distance <= radius, distance
+            return distance <= self._radius(mark, diagonal), distance
         if mark.box is not None:
             x0, y0, x1, y1 = mark.box
             return (x0 <= x <= x1 and y0 <= y <= y1), None

@@ -16,17 +16,35 @@ import typer
 from povagent.cli import app
 
 
-def _summary_table(summary: dict[str, Any], title: str) -> None:
+def _summary_table(summary: dict[str, Any], title: str, run_dir: Path) -> None:
     from povagent.cli.dataset import render_summary
 
-    if "success" in summary:  # a real-world set: success rates, as the paper reports them
-        _success_table(summary["success"], title)
+    success = _success_summary(summary, run_dir)
+    if success is not None:  # a real-world set: success rates, as the paper reports them
+        _success_table(success, title)
     if "official" in summary.get("pipeline", {}).get("scorers", ["official"]):
         render_summary(summary, title=title)
 
 
-def _rate(cell: dict[str, Any]) -> str:
-    rate = cell["success_rate"]
+def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] | None:
+    """A real-world run's success breakdown with response rates (``None`` for other runs).
+
+    Read from the run's rows as ``povagent report`` reads them, because the official columns
+    of ``summary.json`` say nothing about a set without official ground truth; the runner's
+    own breakdown is kept when the folder holds rows of keys outside this run's selection.
+    """
+    if "success" not in summary:
+        return None
+    from povagent.realworld import run_success_breakdown
+
+    full = run_success_breakdown(run_dir)
+    if full is None or full["overall"]["n_total"] != summary["success"]["overall"]["n_total"]:
+        return summary["success"]
+    return full
+
+
+def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
+    rate = cell.get(key)
     return "-" if rate is None else f"{100 * rate:.1f}%"
 
 
@@ -37,11 +55,12 @@ def _success_table(success: dict[str, Any], title: str) -> None:
     from povagent.dataset.models import Condition
 
     table = Table(title=f"{title}: success rate (unanswered = failure)")
-    for col in ("slice", "success rate", "hits / total"):
+    for col in ("slice", "success rate", "hits / total", "resp. rate", "answered / total"):
         table.add_column(col, justify="left" if col == "slice" else "right")
 
     def add(name: str, cell: dict[str, Any]) -> None:
-        table.add_row(name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}")
+        answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
+        table.add_row(name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered)
 
     add("overall", success["overall"])
     for c, cell in success["per_condition"].items():
@@ -83,7 +102,7 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         return
     rows = result.summary["rows"]
-    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]
+    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
     typer.echo(
         f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
         f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
@@ -121,11 +140,18 @@ def sweep_command(
         return
 
     def done(cell: Any, res: Any) -> None:
+        success = _success_summary(res.summary, res.run_dir)
+        if success is not None:  # a real-world set: no official error to show
+            o = success["overall"]
+            console.print(
+                f"[bold]{cell.name}[/]: success rate {_rate(o)}, response rate {_rate(o, 'response_rate')}, "
+                f"{res.stats.requests} requests, {res.stats.cache_hits} cache hits"
+            )
+            return
         o = res.summary["overall"]
         l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
         rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
-        hits = f", success rate {_rate(res.summary['success']['overall'])}" if "success" in res.summary else ""
-        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}{hits}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
 
     try:
         result = run_sweep(sweep, quiet=quiet, retry_errors=retry_errors, strict=strict, on_cell_done=done)
@@ -133,18 +159,27 @@ def sweep_command(
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
         raise typer.Exit(130)
     table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
-    with_success = any("success" in result.results[c.name].summary for c in result.cells)  # real-world sets
+    successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in result.cells}
+    with_success = any(v is not None for v in successes.values())  # real-world sets
     for col in ("cell", "mean L2", "resp. rate", "answered / total") + (("success rate",) if with_success else ()):
         table.add_column(col, justify="left" if col == "cell" else "right")
     for cell in result.cells:
         s = result.results[cell.name].summary
+        success = successes[cell.name]
+        if success is not None:
+            # response and answered as the success scorer judged them: the official columns
+            # of the summary count every row of a set without official GT as unanswered
+            o = success["overall"]
+            answered = "-" if o.get("n_answered") is None else f"{o['n_answered']} / {o['n_total']}"
+            table.add_row(cell.name, "-", _rate(o, "response_rate"), answered, _rate(o))
+            continue
         o = s["overall"]
         table.add_row(
             cell.name,
             "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
             "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
             f"{o['n']} / {s['rows']['total']}",
-            *((_rate(s["success"]["overall"]) if "success" in s else "-",) if with_success else ()),
+            *(("-",) if with_success else ()),
         )
     console.print(table)
 

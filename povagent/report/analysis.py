@@ -3,9 +3,10 @@
 Takes a :class:`~povagent.report.collect.Collection` (and, when it can be loaded, the dataset
 the runs used) and computes every statistic the tables, plots and JSON summary show: official
 means with CIs, response rates, the strict and counting-non-responses variants, frame-selection
-accuracy, the computed center baseline, and paired comparisons between systems.
+accuracy, the computed center baseline, and paired comparisons between systems. Runs on a
+real-world set (scored by ``success``) get success rates instead, with the same machinery.
 
-It never changes an official number: those come from the rows' stored official scores.
+It never changes a run's number: those come from the rows' stored scores.
 """
 
 from __future__ import annotations
@@ -20,9 +21,11 @@ from typing import Any
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
     CENTER_POLICY,
+    CENTER_SUCCESS_POLICY,
     CENTER_SYSTEM,
     center_observations,
     center_score,
+    center_success_observations,
     is_baseline_system,
     is_center_system,
 )
@@ -71,6 +74,18 @@ class Analysis:
     center_fill: dict[str, float] | None
     dataset_path: Path | None
     notes: list[str] = field(default_factory=list)
+    #: The scorers whose numbers the rows carry (``official``, ``success``), in that order.
+    scorers: list[str] = field(default_factory=lambda: ["official"])
+
+    @property
+    def has_official(self) -> bool:
+        """True when some rows carry official scores (a POVBench-format set)."""
+        return "official" in self.scorers
+
+    @property
+    def has_success(self) -> bool:
+        """True when some rows carry success scores (a real-world set)."""
+        return "success" in self.scorers
 
     def system(self, name: str) -> SystemStats:
         """The stats of one system by label."""
@@ -89,6 +104,7 @@ class Analysis:
         return {
             "source": str(self.source),
             "dataset": str(self.dataset_path) if self.dataset_path else None,
+            "scorers": self.scorers,
             "conditions": self.conditions,
             "directions": self.directions,
             "systems": [s.as_dict() for s in self.systems],
@@ -98,14 +114,21 @@ class Analysis:
 
 
 def load_collection_dataset(collection: Collection, override: str | Path | None = None):
-    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load."""
+    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load.
+
+    A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
+    gallery draws on, as the runner loads them.
+    """
     from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError
+    from povagent.realworld import is_realworld, load_realworld
 
     paths = [Path(override)] if override else collection.dataset_paths()
     if not paths:
         return None, "no dataset path in the runs' config.yaml (pass --dataset)"
     try:
+        if is_realworld(paths[0]):
+            return load_realworld(paths[0]), None
         return load_dataset(paths[0]), None
     except DatasetError as exc:
         return None, f"dataset not loadable: {exc}"
@@ -114,7 +137,8 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
 def _answers_signature(obs: list[Observation]) -> str:
     """A digest of what a system answered, row by row (equal digests: the same answers)."""
     rows = sorted(
-        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.selected_image, o.x, o.y) for o in obs
+        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y)
+        for o in obs
     )
     return hashlib.sha256(repr(rows).encode()).hexdigest()
 
@@ -206,6 +230,7 @@ def analyze(
 
     systems = collection.systems
     center_cells = [s for s in systems if is_center_system(collection.system_axes(s), s)]
+    scorers = [name for name in ("official", "success") if any(o.scorer == name for o in obs)] or ["official"]
     fill: dict[str, float] | None = None
     if dataset is not None:
         ids = sorted({o.instance_id for o in obs})
@@ -214,18 +239,25 @@ def analyze(
         instances = [inst for inst in instances if inst is not None]
         if missing:
             notes.append(f"{len(missing)} instance(s) of the runs are not in the dataset (e.g. {missing[0]}): no center score for them")
-        fill = {}
-        for inst in instances:
-            s = center_score(inst)
-            if s.l2 is not None:
-                fill[inst.id] = s.l2
-        if not center_cells:
-            obs = obs + center_observations(instances)
-            notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_POLICY}.")
-        notes.append(
-            "'Counting non-responses' scores an unanswered instance as the center guess "
-            "(same policy as the center baseline) instead of dropping it."
-        )
+        if _is_realworld(dataset):
+            # hand-marked 2D ground truth: no official score, so no center fill either
+            if not center_cells and "success" in scorers:
+                scorer, options_note = _success_scorer(collection)
+                obs = obs + center_success_observations(instances, scorer)
+                notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_SUCCESS_POLICY}{options_note}.")
+        else:
+            fill = {}
+            for inst in instances:
+                s = center_score(inst)
+                if s.l2 is not None:
+                    fill[inst.id] = s.l2
+            if not center_cells:
+                obs = obs + center_observations(instances)
+                notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_POLICY}.")
+            notes.append(
+                "'Counting non-responses' scores an unanswered instance as the center guess "
+                "(same policy as the center baseline) instead of dropping it."
+            )
     else:
         notes.append(
             "Center baseline and the counting-non-responses variant need the dataset: "
@@ -251,23 +283,39 @@ def analyze(
     models = [s.system for s in stats if not s.reference]
     refs = [s.system for s in stats if s.reference]
     pairs = list(combinations(models, 2)) if len(models) <= MAX_ALL_PAIRS else [(models[0], m) for m in models[1:]]
+    metrics: list[str] = []
+    if "official" in scorers:
+        metrics += ["official"] + (["counted"] if fill is not None else [])
+    if "success" in scorers:
+        metrics.append("success")
     for a, b in pairs:
-        comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], "official", fill, n_boot, seed))
-        if fill is not None:
-            comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], "counted", fill, n_boot, seed))
+        for metric in metrics:
+            comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], metric, fill, n_boot, seed))
     # models against the center baseline (the computed one, or the sweep's center cell)
     centers = [s for s in refs if s == CENTER_SYSTEM or is_center_system(axes_of[s], s)]
     for ref in centers[:1]:
         for m in models:
-            comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], "official", fill, n_boot, seed))
-    notes.append(
-        "Means are over answered instances (official), averaged over runs; brackets are 95% "
-        "percentile bootstrap CIs resampling instances."
-    )
-    notes.append(
-        "Strict: a GT behind the selected frame's camera or outside it counts as a miss (sqrt 2); "
-        "the official metric puts a behind-camera GT at the image centre."
-    )
+            for metric in [x for x in metrics if x != "counted"]:
+                comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], metric, fill, n_boot, seed))
+    if "official" in scorers:
+        notes.append(
+            "Means are over answered instances (official), averaged over runs; brackets are 95% "
+            "percentile bootstrap CIs resampling instances."
+        )
+        notes.append(
+            "Strict: a GT behind the selected frame's camera or outside it counts as a miss (sqrt 2); "
+            "the official metric puts a behind-camera GT at the image centre."
+        )
+    if "success" in scorers:
+        notes.append(
+            "Success rate (real-world set, hand-marked ground truth): hits / all instances, an "
+            "unanswered instance counting as a failure, as the paper scores real houses. A hit is an "
+            "answer within a marked point's radius, or inside a marked box or region, in the frame "
+            "the model selected (Inferred, Stated) or the observer view (Given), as the success "
+            "scorer recorded it in results.jsonl. Averaged over runs; brackets are 95% percentile "
+            "bootstrap CIs resampling instances. This set has no 3D ground truth, so no official "
+            "error is reported for it."
+        )
     return Analysis(
         source=collection.source,
         systems=stats,
@@ -278,4 +326,32 @@ def analyze(
         center_fill=fill,
         dataset_path=getattr(dataset, "root", None),
         notes=notes,
+        scorers=scorers,
     )
+
+
+def _is_realworld(dataset: Any) -> bool:
+    from povagent.realworld import RealWorldDataset
+
+    return isinstance(dataset, RealWorldDataset)
+
+
+def _success_scorer(collection: Collection) -> tuple[Any, str]:
+    """The ``success`` scorer as the runs configured it (through the plugin host, like a run),
+    and a note when the runs disagree on its options (the first run's are used)."""
+    from povagent.plugins import build_plugin_host
+
+    options: list[dict[str, Any]] = []
+    for r in collection.runs:
+        for spec in r.config.get("scorers") or []:
+            if isinstance(spec, dict) and spec.get("name") == "success":
+                options.append(dict(spec.get("options") or {}))
+            elif spec == "success":
+                options.append({})
+    chosen = options[0] if options else {}
+    note = ""
+    if any(o != chosen for o in options[1:]):
+        note = f" (the runs score with different success options; the baseline uses the first run's, {chosen})"
+    elif chosen:
+        note = f" (options {chosen})"
+    return build_plugin_host(strict=False).create("scorer", "success", chosen), note

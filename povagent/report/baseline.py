@@ -9,13 +9,18 @@ spot included, exactly like a model's answer.
 The same per-instance score fills a non-response in the "counting non-responses" variant: an
 unanswered instance counts as if the model had guessed the centre.
 
+On a real-world set (hand-marked 2D ground truth, no 3D target) the same guess is judged by the
+runs' ``success`` scorer instead (:func:`center_success_observations`): the official metric
+would place the missing target at the image centre and call the centre guess perfect.
+
 This module computes scores only; it does not read run folders or write anything.
 """
 
 from __future__ import annotations
 
-from typing import Iterable
+from typing import Any, Iterable
 
+from povagent.answers import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Instance
 from povagent.report.collect import Observation
 from povagent.scoring.official import OfficialScore, score_point
@@ -69,6 +74,57 @@ def center_observations(instances: Iterable[Instance], system: str = CENTER_SYST
                 y=h / 2.0,
                 sentence=inst.sentence,
                 raw=None,
+            )
+        )
+    return out
+
+
+#: The policy on a real-world set, shown in the report's notes.
+CENTER_SUCCESS_POLICY = (
+    "answers the image centre (W/2, H/2) of the letterboxed frame; for Inferred/Stated it selects "
+    "the first exploration frame (index 0), for Given the observer view; judged by the runs' "
+    "success scorer"
+)
+
+
+def center_success_observations(instances: Iterable[Instance], scorer: Any, system: str = CENTER_SYSTEM) -> list[Observation]:
+    """The center baseline on a real-world set: the same guess, hit or miss by ``scorer``
+    (the ``success`` scorer, built with the runs' options), as observations (run 0)."""
+    out: list[Observation] = []
+    for inst in instances:
+        w, h = inst.frame_size
+        k = 0 if inst.condition.uses_exploration_frames else None
+        s = scorer.score(inst, ParsedAnswer(status=ParseStatus.OK, selected_image=k, x=w / 2.0, y=h / 2.0))
+        frame = inst.frames[0] if inst.frames else None
+        out.append(
+            Observation(
+                system=system,
+                run_name="center",
+                run=0,
+                instance_id=inst.id,
+                house_id=inst.house_id,
+                pair_id=inst.pair_id,
+                direction=str(inst.direction),
+                condition=str(inst.condition),
+                status="answered",
+                parse_status="ok",
+                answered=bool(s["answered"]),
+                l2=None,
+                l2_strict=None,
+                gt_in_frame=s["frame_has_gt"],
+                gt_behind=None,
+                gt_u=None,
+                gt_v=None,
+                selected_image=k,
+                image_path=frame.image_path if frame is not None else None,
+                x=w / 2.0,
+                y=h / 2.0,
+                sentence=inst.sentence,
+                raw=None,
+                scorer="success",
+                success=bool(s["success"]),
+                distance_norm=s.get("distance_norm"),
+                hit_radius_px=s.get("hit_radius_px"),
             )
         )
     return out

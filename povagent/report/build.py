@@ -25,7 +25,7 @@ from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
-from povagent.report.html import figures_section, notes_section, render_page, tables_section
+from povagent.report.html import OFFICIAL_LEGEND, SUCCESS_LEGEND, figures_section, notes_section, render_page, tables_section
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
@@ -122,18 +122,22 @@ def write_report(
     body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures)
     n_rows = sum(len(r.rows) for r in collection.runs)
     n_models = len(analysis.model_systems)
+    legend = "<br>".join(
+        text for text, shown in ((OFFICIAL_LEGEND, analysis.has_official), (SUCCESS_LEGEND, analysis.has_success)) if shown
+    )
     subtitle = (
         f"{source} · {len(collection.runs)} run folder(s) · {n_models} model(s), "
         f"{len(analysis.systems) - n_models} baseline(s) · {n_rows} rows"
     )
     if analysis.dataset_path:
-        subtitle += f" · dataset {analysis.dataset_path}"
+        subtitle += f" · {'real-world set' if not analysis.has_official else 'dataset'} {analysis.dataset_path}"
     page_html = render_page(
         f"povagent report: {source.name}",
         subtitle,
         body,
         gallery_data,
         nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")],
+        legend=legend,
     )
     page = out / REPORT_PAGE
     page.write_text(page_html, encoding="utf-8")

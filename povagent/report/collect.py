@@ -6,8 +6,13 @@ per cell and ``sweep.json`` (the cell index, with each cell's axis values). Ever
 collected runs (model, strategy, parser, ...), without the condition and the run index, which
 the tables break down and average over.
 
-This module only reads: it never rescores a row (the official numbers are the row's
-``scores["official"]`` as the scorer wrote them) and never writes.
+A run is scored by the ``official`` metric (POVBench-format sets) or, for a real-world set
+with hand-marked ground truth (:mod:`povagent.realworld`), by the ``success`` scorer; each
+observation says which (``scorer``) and carries that scorer's numbers: official rows their
+error, success rows their hit or miss.
+
+This module only reads: it never rescores a row (the numbers are the row's ``scores`` as the
+scorers wrote them) and never writes.
 """
 
 from __future__ import annotations
@@ -31,6 +36,9 @@ NON_SYSTEM_AXES = frozenset({"run", "runs", "condition", "conditions", "conditio
 
 #: Axis order used to build a system label (the most telling first).
 AXIS_ORDER = ("model", "backend", "strategy", "parser")
+
+#: The scorers a report reads, in order of preference when a run names several.
+REPORTED_SCORERS = ("official", "success")
 
 
 @dataclass(frozen=True)
@@ -61,6 +69,14 @@ class Observation:
     sentence: str
     raw: str | None
     parse_reason: str = ""
+    #: Which scorer's numbers the row carries: ``official``, ``success`` or ``""`` (neither).
+    scorer: str = "official"
+    #: ``success`` rows: the answer is within a mark (a failure when unanswered); else ``None``.
+    success: bool | None = None
+    #: ``success`` rows: distance to the nearest point mark, in frame diagonals (``None``: no point mark).
+    distance_norm: float | None = None
+    #: ``success`` rows: the hit radius of point marks without their own, in original pixels.
+    hit_radius_px: float | None = None
 
 
 @dataclass
@@ -73,6 +89,11 @@ class RunInfo:
     axes: dict[str, str]
     rows: list[ResultRow]
     system: str = ""
+
+    @property
+    def scorer(self) -> str:
+        """The scorer whose numbers the report reads for this run (see :func:`run_scorer`)."""
+        return run_scorer(self.config, self.rows)
 
     @property
     def dataset_path(self) -> Path | None:
@@ -117,6 +138,22 @@ class Collection:
             if r.system == system:
                 return r.axes
         return {}
+
+
+def run_scorer(config: dict[str, Any], rows: list[ResultRow]) -> str:
+    """``official`` or ``success``: what the run's config asked for, else what its rows carry.
+
+    Read from the config first because a row that failed before scoring (an infra error) has
+    no scores, yet still counts: as a non-response, and for ``success`` as a failure.
+    """
+    named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
+    for name in REPORTED_SCORERS:
+        if name in named:
+            return name
+    for name in REPORTED_SCORERS:
+        if any(name in row.scores for row in rows):
+            return name
+    return "official" if not named else ""
 
 
 def _read_config(folder: Path) -> dict[str, Any]:
@@ -251,10 +288,24 @@ def assign_systems(runs: list[RunInfo]) -> None:
             r.system = r.axes.get("model") or r.axes.get("backend") or r.name
 
 
-def observation_of(row: ResultRow, system: str, run_name: str) -> Observation:
-    """The report's view of one row (official scores as stored, never recomputed)."""
+def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official") -> Observation:
+    """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
+
+    ``official``: answered when the official scorer answered it, with its error. ``success``:
+    answered when the success scorer answered it, and a hit only when it said so (a row it
+    did not score, such as an infra error, is a failure, as the paper counts it).
+    """
     off = row.scores.get("official") or {}
-    answered = bool(off.get("answered")) and off.get("l2") is not None
+    suc = row.scores.get("success") or {}
+    if scorer == "success":
+        answered = row.status == "answered" and bool(suc.get("answered"))
+        success: bool | None = answered and suc.get("success") is True
+        in_frame = suc.get("frame_has_gt") if answered else None
+    else:
+        answered = bool(off.get("answered")) and off.get("l2") is not None
+        success = None
+        in_frame = off.get("gt_in_frame")
+    with_l2 = scorer == "official" and answered
     return Observation(
         system=system,
         run_name=run_name,
@@ -267,9 +318,9 @@ def observation_of(row: ResultRow, system: str, run_name: str) -> Observation:
         status=str(row.status),
         parse_status=str(row.parse.status) if row.parse is not None else None,
         answered=answered,
-        l2=float(off["l2"]) if answered else None,
-        l2_strict=float(off["l2_strict"]) if answered and off.get("l2_strict") is not None else None,
-        gt_in_frame=off.get("gt_in_frame"),
+        l2=float(off["l2"]) if with_l2 else None,
+        l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
+        gt_in_frame=in_frame,
         gt_behind=off.get("gt_behind"),
         gt_u=off.get("gt_u"),
         gt_v=off.get("gt_v"),
@@ -280,6 +331,10 @@ def observation_of(row: ResultRow, system: str, run_name: str) -> Observation:
         sentence=row.sentence,
         raw=row.raw_response,
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
+        scorer=scorer,
+        success=success,
+        distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
+        hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
     )
 
 
@@ -292,5 +347,5 @@ def collect(paths: str | Path | Iterable[str | Path]) -> Collection:
     for p in paths:
         runs.extend(find_runs(p))
     assign_systems(runs)
-    obs = [observation_of(row, r.system, r.name) for r in runs for row in r.rows]
+    obs = [observation_of(row, r.system, r.name, r.scorer) for r in runs for row in r.rows]
     return Collection(paths[0], runs, obs)

@@ -1,5 +1,6 @@
 """The report's figures, drawn from an analysis: error by condition, by direction, by
-condition x direction, predicted vs GT scatter, and the error distribution.
+condition x direction, predicted vs GT scatter, and the error distribution; for a real-world
+set (scored by success), success rate by condition and by direction.
 
 Chooses what to plot; :mod:`povagent.report.plots` draws it. Returns SVG strings by name;
 writing them is the caller's job.
@@ -24,6 +25,32 @@ def _safe_name(text: str) -> str:
 def report_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | None = None) -> dict[str, tuple[str, str]]:
     """Figures by file stem: ``(caption, svg)``. ``frame_size(instance_id)`` gives (W, H) for
     the scatter's pixel-to-fraction conversion (512 x 512 when unknown)."""
+    figs: dict[str, tuple[str, str]] = {}
+    if a.has_official:
+        figs |= _official_figures(a, frame_size)
+    if a.has_success:
+        figs |= _success_figures(a)
+    return figs
+
+
+def _success_figures(a: Analysis) -> dict[str, tuple[str, str]]:
+    from povagent.report.plots import grouped_bars
+
+    figs: dict[str, tuple[str, str]] = {}
+    series = [(s.system, [getattr(s.by_condition.get(c), "success", None) for c in a.conditions], s.reference) for s in a.systems]
+    figs["success_by_condition"] = (
+        "Success rate by condition (unanswered = failure; whiskers: 95% bootstrap CI).",
+        grouped_bars("Success rate by condition", [condition_label(c) for c in a.conditions], series, y_label="success rate"),
+    )
+    series = [(s.system, [getattr(s.by_direction.get(d), "success", None) for d in a.directions], s.reference) for s in a.systems]
+    figs["success_by_direction"] = (
+        "Success rate by direction, pooled over conditions.",
+        grouped_bars("Success rate by direction", [d.capitalize() for d in a.directions], series, y_label="success rate"),
+    )
+    return figs
+
+
+def _official_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | None) -> dict[str, tuple[str, str]]:
     from povagent.report.plots import grouped_bars, histogram, scatter
 
     size = frame_size or (lambda _id: (512, 512))

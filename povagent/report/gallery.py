@@ -15,8 +15,8 @@ page too: :func:`write_answer_chunks` moves them into small ``answers/<sha256>.j
 the page loads with a ``<script>`` tag (which works from ``file://``, unlike ``fetch``) only
 when a card is opened, so the page stays small whatever the models wrote.
 
-This module draws and writes images only; it never scores (markers use the stored official
-scores where they exist).
+This module draws and writes images only; it never scores (markers use the stored scores where
+they exist: the official projection, or the success scorer's hit radius).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from typing import Any, Iterable
 
 from PIL import Image, ImageDraw
 
+from povagent.realworld import RealWorldInstance
 from povagent.report.collect import Observation
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
@@ -55,13 +56,26 @@ class Drawing:
 
     source: Path
     gt: tuple[float, float] | None
-    gt_state: str  # "in", "out" (in front, outside the frame), "behind"
+    gt_state: str  # "in", "out" (in front, outside the frame), "behind"; real-world: "marked", "unmarked"
     pred: tuple[float, float] | None
+    #: Hand-made marks (real-world sets): ``("point", (x, y), radius or None)``,
+    #: ``("box", (x0, y0, x1, y1))`` or ``("region", ((x, y), ...))``, in this frame's pixels.
+    marks: tuple[tuple[Any, ...], ...] = ()
 
     def recipe(self) -> dict[str, Any]:
         """The drawing's parameters (hashed with the source's bytes to name the files)."""
         r = lambda p: None if p is None else [round(p[0], 2), round(p[1], 2)]  # noqa: E731
-        return {"v": RECIPE_VERSION, "gt": r(self.gt), "state": self.gt_state, "pred": r(self.pred)}
+        out = {"v": RECIPE_VERSION, "gt": r(self.gt), "state": self.gt_state, "pred": r(self.pred)}
+        if self.marks:  # only then: official drawings keep their names (and their cached files)
+            out["marks"] = _rounded(self.marks)
+        return out
+
+
+def _rounded(value: Any) -> Any:
+    """Nested tuples of numbers as lists rounded to 0.01 px (a stable hash input)."""
+    if isinstance(value, (tuple, list)):
+        return [_rounded(v) for v in value]
+    return round(value, 2) if isinstance(value, float) else value
 
 
 @dataclass
@@ -97,6 +111,8 @@ def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
     frame = scoring_frame(instance, observation.selected_image, observation.image_path)
     if frame is None:
         return None
+    if isinstance(instance, RealWorldInstance):
+        return _marked_drawing(observation, instance, frame)
     cam = frame.camera
     w, h = cam.width, cam.height
     gt = project_ground_truth(instance.target, cam)
@@ -106,6 +122,55 @@ def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
         gt_px, state = (gt.u * w, gt.v * h), ("in" if gt.in_frame else "out")
     pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
     return Drawing(Path(frame.file), gt_px, state, pred)
+
+
+def _marked_drawing(observation: Observation, instance: RealWorldInstance, frame: Any) -> Drawing:
+    """A real-world row: the letterboxed frame with the marks made in its original."""
+    box = instance.letterboxes[frame.index]
+    to_square = lambda p: tuple(float(v) for v in box.to_square(p))  # noqa: E731
+    scale = sum(box.scale) / 2.0  # the letterbox keeps the aspect ratio: both axes scale alike
+    shapes: list[tuple[Any, ...]] = []
+    for mark in instance.marks_in(frame.image_path):
+        if mark.point is not None:
+            radius = mark.radius_px or observation.hit_radius_px
+            shapes.append(("point", to_square(mark.point), None if radius is None else radius * scale))
+        elif mark.box is not None:
+            x0, y0, x1, y1 = mark.box
+            shapes.append(("box", to_square((x0, y0)) + to_square((x1, y1))))
+        else:
+            shapes.append(("region", tuple(to_square(p) for p in mark.region or [])))
+    pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
+    return Drawing(Path(frame.file), None, "marked" if shapes else "unmarked", pred, tuple(shapes))
+
+
+def _draw_marks(im: Image.Image, marks: tuple[tuple[Any, ...], ...], scale: float, lw: int) -> Image.Image:
+    """Marks as a light green fill (the hit zone) under a green outline with a white halo."""
+    fill = Image.new("RGBA", im.size, (0, 0, 0, 0))
+    f = ImageDraw.Draw(fill)
+    zone = GT_COLOUR + (70,)
+    for shape in marks:
+        if shape[0] == "point" and shape[2] is not None:
+            (x, y), r = shape[1], shape[2]
+            f.ellipse([x - r, y - r, x + r, y + r], fill=zone)
+        elif shape[0] == "box":
+            f.rectangle(list(shape[1]), fill=zone)
+        elif shape[0] == "region":
+            f.polygon(list(shape[1]), fill=zone)
+    im = Image.alpha_composite(im.convert("RGBA"), fill).convert("RGB")
+    d = ImageDraw.Draw(im)
+    for shape in marks:
+        for col, width in (((255, 255, 255), lw + 3), (GT_COLOUR, lw)):
+            if shape[0] == "point":
+                (x, y), r = shape[1], (shape[2] if shape[2] is not None else 16 * scale)
+                _ring(d, x, y, r, col, width)
+            elif shape[0] == "box":
+                d.rectangle(list(shape[1]), outline=col, width=width)
+            else:
+                d.line(list(shape[1]) + [shape[1][0]], fill=col, width=width, joint="curve")
+        if shape[0] == "point":
+            x, y = shape[1]
+            d.ellipse([x - 3 * scale, y - 3 * scale, x + 3 * scale, y + 3 * scale], fill=GT_COLOUR)
+    return im
 
 
 def _ring(d: ImageDraw.ImageDraw, x: float, y: float, r: float, col, width: int, dashed: bool = False) -> None:
@@ -122,8 +187,10 @@ def render(drawing: Drawing) -> Image.Image:
         im = src.convert("RGB")
     w, h = im.size
     scale = max(1.0, w / 512.0)
-    d = ImageDraw.Draw(im)
     lw = max(2, int(round(3 * scale)))
+    if drawing.marks:
+        im = _draw_marks(im, drawing.marks, scale, lw)
+    d = ImageDraw.Draw(im)
     if drawing.gt is not None:
         gx, gy = drawing.gt
         if drawing.gt_state == "out":
@@ -246,7 +313,13 @@ def build_gallery(
                 "x": o.x,
                 "y": o.y,
                 "img": key,
+                "an": o.answered,
             }
+            | (
+                {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
+                if o.scorer == "success"
+                else {}
+            )
         )
     n_workers = workers or min(4, os.cpu_count() or 1)
     # Pillow releases the GIL while decoding and encoding, so threads overlap the heavy parts

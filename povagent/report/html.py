@@ -21,6 +21,23 @@ from povagent.report.tables import Table, to_html
 
 TEMPLATE = "report.html"
 
+#: How to read a gallery drawing (markup), for official-metric rows.
+OFFICIAL_LEGEND = (
+    "Each image is the frame the answer was scored in: the model's selected frame (Inferred, Stated) or the observer view (Given).\n"
+    '<span class="g">Green ring</span>: ground truth (a dashed ring at the centre when the GT is behind the camera: the official '
+    "metric scores it there; an arrow at the border when it is outside the frame).\n"
+    '<span class="p">Red cross</span>: the predicted point. Click a card for the full-size frame and the raw answer.'
+)
+
+#: The same for a real-world set's rows (hand-marked ground truth, hit or miss).
+SUCCESS_LEGEND = (
+    "Each image is the letterboxed frame the model saw and selected (Inferred, Stated) or the observer view (Given).\n"
+    '<span class="g">Green</span>: the ground truth marked in that frame: a point with its hit radius, a box or a region '
+    "(none drawn when the selected frame carries no mark).\n"
+    '<span class="p">Red cross</span>: the predicted point. <b>Hit</b>: the answer is within a mark; <b>miss</b> otherwise, '
+    "and always when unanswered. Click a card for the full-size frame and the raw answer."
+)
+
 
 def template() -> str:
     """The page template shipped with the package."""
@@ -75,8 +92,10 @@ def render_page(
     gallery: dict[str, Any] | None,
     nav: list[tuple[str, str]] | None = None,
     sort_extra: str = "",
+    legend: str = OFFICIAL_LEGEND,
 ) -> str:
-    """The whole page: ``gallery`` is ``{"systems": [...], "entries": [...], ...}`` or ``None``."""
+    """The whole page: ``gallery`` is ``{"systems": [...], "entries": [...], ...}`` or ``None``;
+    ``legend`` (markup) says how to read its drawings."""
     nav = list(nav or [])
     if gallery is not None:
         nav.append(("#gallery-section", "Gallery"))
@@ -88,6 +107,7 @@ def render_page(
         "{{NAV}}": "".join(f'<a href="{html.escape(h)}">{html.escape(n)}</a>' for h, n in nav),
         "{{BODY}}": body,
         "{{GALLERY_HIDDEN}}": "" if gallery is not None else "hidden",
+        "{{LEGEND}}": legend,
         "{{SORT_EXTRA}}": sort_extra,
         "{{GALLERY_JSON}}": script_json(gallery or {"entries": [], "systems": []}),
     }

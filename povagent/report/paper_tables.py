@@ -8,6 +8,11 @@
   frame-selection accuracy (GT inside the selected frame);
 - ``paired``: paired comparisons (mean difference with CI, Wilcoxon and sign tests).
 
+A real-world set (hand-marked ground truth, scored by ``success``) has no official error: its
+report has ``success`` (success rate per system and condition, with the response rate) and
+``success_by_direction`` instead, beside ``response_rates`` and ``paired``; the official
+tables are left out for a collection that carries no official score.
+
 Only table assembly: numbers come from the analysis, text from :mod:`povagent.report.tables`.
 """
 
@@ -152,6 +157,43 @@ def metric_variants_table(a: Analysis) -> Table:
     return t
 
 
+SUCCESS_PROTOCOL = (
+    "Success rate (higher is better): hits / all instances, an unanswered instance counting as a "
+    "failure (the paper's protocol for real houses); a hit is an answer within a marked point's "
+    "radius or inside a marked box or region. Averaged over runs; 95% bootstrap CIs in brackets. "
+    "The best model per column is in bold; baselines are shown in italics below the models."
+)
+
+
+def success_table(a: Analysis) -> Table:
+    """Systems x conditions (and all conditions), success rate, with the response rate."""
+    several = len(a.conditions) > 1
+    overall = "Overall" if several or not a.conditions else condition_label(a.conditions[0])
+    cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] if several else []
+    cols += [Column(overall, "rate", "higher"), Column("Resp.", "rate", "higher")]
+    caption = SUCCESS_PROTOCOL + (" Overall pools every instance." if several else "") + " Resp. is the response rate (answered / total)."
+    t = Table("success", "Success rate", caption, "Model", cols)
+    for s in a.systems:
+        cells = [_cell(getattr(_get(s.by_condition, c), "success", None)) for c in a.conditions] if several else []
+        cells += [_cell(s.overall.success), _cell(s.overall.response_rate)]
+        t.rows.append(Row(s.system, cells, s.reference))
+    return t
+
+
+def success_direction_table(a: Analysis) -> Table:
+    """Systems x directions (pooled over conditions), success rate."""
+    t = Table(
+        "success_by_direction",
+        "Success rate by direction",
+        SUCCESS_PROTOCOL + " Pooled over conditions.",
+        "Model",
+        [Column(d.capitalize(), "rate", "higher") for d in a.directions],
+    )
+    for s in a.systems:
+        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_direction, d), "success", None)) for d in a.directions], s.reference))
+    return t
+
+
 def paired_table(a: Analysis) -> Table | None:
     """Paired comparisons: B - A on shared instances with CI and tests."""
     if not a.comparisons:
@@ -170,7 +212,8 @@ def paired_table(a: Analysis) -> Table | None:
         "Paired comparison on the instances both systems answered (per-instance errors averaged "
         "over runs). B - A < 0 means B is better; 95% bootstrap CI of the mean difference; "
         "two-sided Wilcoxon signed-rank and exact sign tests (ties dropped). 'counted' scores "
-        "non-responses as the center guess."
+        "non-responses as the center guess. 'success' compares per-instance hit rates over every "
+        "instance (unanswered = miss): there B - A > 0 means B is better."
     )
     t = Table("paired", "Paired comparisons", caption, "B vs A (metric)", cols)
     for c in a.comparisons:
@@ -193,8 +236,17 @@ def paired_table(a: Analysis) -> Table | None:
 
 
 def paper_tables(a: Analysis) -> list[Table]:
-    """Every table of a report, in reading order."""
-    tables = [main_table(a), ablation_table(a), direction_table(a), condition_direction_table(a), response_table(a), metric_variants_table(a), paired_table(a)]
+    """Every table of a report, in reading order: the official tables for a POVBench-format
+    set, the success tables for a real-world set (both when a collection mixes them)."""
+    tables: list[Table | None] = []
+    if a.has_official:
+        tables += [main_table(a), ablation_table(a), direction_table(a), condition_direction_table(a)]
+    if a.has_success:
+        tables += [success_table(a), success_direction_table(a)]
+    tables.append(response_table(a))
+    if a.has_official:
+        tables.append(metric_variants_table(a))
+    tables.append(paired_table(a))
     return [t for t in tables if t is not None]
 
 

@@ -2,14 +2,16 @@
 
 Every mean in a report has the form "for each run, a ratio of sums over instances; then the
 mean over runs": the official error is sum(l2 over answered) / #answered, the response rate is
-#answered / #rows, the share of GT in the selected frame is #in-frame / #answered. A single run's
-value is therefore exactly the official scorer's. Confidence intervals are percentile bootstrap
+#answered / #rows, the share of GT in the selected frame is #in-frame / #answered, and on a real-world set the success
+rate is #hits / #rows (an unanswered row is a failure, as the paper counts it). A single run's
+value is therefore exactly the scorer's. Confidence intervals are percentile bootstrap
 intervals that resample *instances* (all runs of an instance move together, so run-to-run
 agreement on an instance is not mistaken for independent evidence).
 
 Paired comparisons of two systems use the instances both answered (per-instance errors averaged
 over runs): the mean difference with a bootstrap CI, the Wilcoxon signed-rank test and the exact
-sign test.
+sign test. On success (per-instance hit rate over runs) every instance counts, answered or not,
+and higher is better.
 
 Pure numerics: nothing here reads files or knows about tables.
 """
@@ -70,6 +72,7 @@ class InstanceMatrix:
     l2_strict: np.ndarray
     in_frame: np.ndarray
     fill: np.ndarray
+    success: np.ndarray
 
     @property
     def n_instances(self) -> int:
@@ -90,16 +93,21 @@ def instance_matrix(observations: Iterable[Observation], fill: Mapping[str, floa
     l2 = np.full(shape, np.nan)
     strict = np.full(shape, np.nan)
     in_frame = np.full(shape, np.nan)
+    success = np.full(shape, np.nan)
     for o in obs:
         i, r = ii[o.instance_id], ri[o.run]
         present[i, r] = True
-        if o.answered and o.l2 is not None:
+        if o.success is not None:
+            success[i, r] = 1.0 if o.success else 0.0
+        # an official row is answered with its error; a success row has no error to carry
+        if o.answered and (o.l2 is not None or o.scorer == "success"):
             answered[i, r] = True
-            l2[i, r] = o.l2
+            l2[i, r] = o.l2 if o.l2 is not None else np.nan
             strict[i, r] = o.l2_strict if o.l2_strict is not None else np.nan
-            in_frame[i, r] = 1.0 if o.gt_in_frame else 0.0
+            if o.gt_in_frame is not None:
+                in_frame[i, r] = 1.0 if o.gt_in_frame else 0.0
     fill_arr = np.array([fill.get(k, np.nan) if fill else np.nan for k in ids], dtype=float)
-    return InstanceMatrix(ids, runs, present, answered, l2, strict, in_frame, fill_arr)
+    return InstanceMatrix(ids, runs, present, answered, l2, strict, in_frame, fill_arr, success)
 
 
 def _ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -184,12 +192,14 @@ class CellStats:
     counted: Estimate
     in_frame: Estimate
     behind: Estimate
+    success: Estimate = EMPTY
 
     def as_dict(self) -> dict[str, object]:
         """JSON-able form."""
         return {
             "n_instances": self.n_instances,
             "n_runs": self.n_runs,
+            "success_rate": self.success.as_dict(),
             "official_mean_l2": self.official.as_dict(),
             "response_rate": self.response_rate.as_dict(),
             "strict_mean_l2": self.strict.as_dict(),
@@ -206,8 +216,10 @@ def cell_stats(
     seed: int = 0,
 ) -> CellStats:
     """Official mean (answered only), response rate, strict mean, counting-non-responses mean
-    (needs ``fill``), share of answered rows with the GT in the scored frame, and share with
-    the GT behind the scored camera, each a mean over runs with a bootstrap CI."""
+    (needs ``fill``), share of answered rows with the GT in the scored frame (on a real-world
+    set: the selected frame carries a mark), share with the GT behind the scored camera, and
+    the success rate (hits / all rows, real-world sets), each a mean over runs with a
+    bootstrap CI; a statistic the rows do not carry is ``None``."""
     obs = list(observations)
     m = instance_matrix(obs, fill)
     behind = np.full(m.present.shape, np.nan)
@@ -219,11 +231,12 @@ def cell_stats(
     ans = m.answered.astype(float)
     present = m.present.astype(float)
     metrics = [
-        (m.l2, ans),
+        (m.l2, ans * np.isfinite(m.l2)),  # success rows are answered without an error
         (ans, present),
         (m.l2_strict, ans * np.isfinite(m.l2_strict)),
-        (m.in_frame, ans),
+        (m.in_frame, ans * np.isfinite(m.in_frame)),
         (behind, np.isfinite(behind).astype(float)),
+        (m.success, (m.present & np.isfinite(m.success)).astype(float)),
     ]
     with_counted = False
     if fill is not None and m.n_instances:
@@ -238,9 +251,10 @@ def cell_stats(
         official=est[0],
         response_rate=est[1],
         strict=est[2],
-        counted=est[5] if with_counted else EMPTY,
+        counted=est[6] if with_counted else EMPTY,
         in_frame=est[3],
         behind=est[4],
+        success=est[5],
     )
 
 
@@ -282,11 +296,14 @@ class PairedComparison:
 def per_instance_error(
     observations: Iterable[Observation], metric: str = "official", fill: Mapping[str, float] | None = None
 ) -> dict[str, float]:
-    """Each instance's error averaged over runs: ``official`` (answered runs only; an instance
-    never answered is absent), ``strict``, or ``counted`` (non-responses scored by ``fill``)."""
+    """Each instance's score averaged over runs: the error ``official`` (answered runs only; an
+    instance never answered is absent), ``strict``, or ``counted`` (non-responses scored by
+    ``fill``); or ``success``, the hit rate over every run (real-world sets; higher is better)."""
     sums: dict[str, list[float]] = defaultdict(list)
     for o in observations:
-        if metric == "counted":
+        if metric == "success":
+            v = None if o.success is None else float(o.success)
+        elif metric == "counted":
             v = o.l2 if o.answered else (fill or {}).get(o.instance_id)
         elif metric == "strict":
             v = o.l2_strict if o.answered else None
@@ -295,6 +312,10 @@ def per_instance_error(
         if v is not None and math.isfinite(v):
             sums[o.instance_id].append(float(v))
     return {k: sum(v) / len(v) for k, v in sums.items() if v}
+
+
+#: Metrics of :func:`per_instance_error` where a larger value is the better one.
+HIGHER_IS_BETTER = frozenset({"success"})
 
 
 def sign_test_p(n_pos: int, n_neg: int) -> float | None:
@@ -319,7 +340,8 @@ def paired_comparison(
     seed: int = 0,
 ) -> PairedComparison:
     """Compare B with A on the same instances: mean difference (B - A) with CI, Wilcoxon
-    signed-rank and exact sign tests."""
+    signed-rank and exact sign tests. ``b_better`` counts instances where B's value is the
+    better one: lower for errors, higher for ``success``."""
     ea = per_instance_error(a_obs, metric, fill)
     eb = per_instance_error(b_obs, metric, fill)
     common = sorted(set(ea) & set(eb))
@@ -336,6 +358,7 @@ def paired_comparison(
             wil = float(wilcoxon(nz).pvalue)
         except ValueError:
             wil = None
+    b_wins = nz > 0 if metric in HIGHER_IS_BETTER else nz < 0
     return PairedComparison(
         a=a_label,
         b=b_label,
@@ -346,7 +369,7 @@ def paired_comparison(
         diff=bootstrap_mean_ci(d, n_boot=n_boot, seed=seed) if d.size else EMPTY,
         wilcoxon_p=wil,
         sign_p=sign_test_p(int((nz < 0).sum()), int((nz > 0).sum())),
-        b_better=int((nz < 0).sum()),
-        a_better=int((nz > 0).sum()),
+        b_better=int(b_wins.sum()),
+        a_better=int(nz.size - b_wins.sum()),
         ties=int(d.size - nz.size),
     )

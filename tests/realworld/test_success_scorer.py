@@ -90,6 +90,7 @@ def test_unparseable_and_frameless_answers_are_failures(demo):
     inst = demo.instance("house_1/kitchen/right/a")
     assert SuccessScorer().score(inst, unparseable("no json")) == {
         "answered": False, "success": False, "frame_has_gt": None, "pixel": None, "distance_px": None, "distance_norm": None,
+        "hit_radius_px": None,
     }
     assert not SuccessScorer().score(inst, answer(*square(540, 310), frame=None))["answered"]
 

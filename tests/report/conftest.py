@@ -139,3 +139,76 @@ def make_sweep(tmp_path, mini_dataset):
         return write_sweep(tmp_path / name, mini_dataset, cells)
 
     return make
+
+
+# -- a real-world set (hand-marked GT, scored by success) ------------------------------------------
+REALWORLD_DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
+
+#: What the replayed "model" does on each demo command, per run: hit the mark, miss it in the
+#: marked frame, point at the mark's spot in a frame without a mark, or give no answer.
+#: Run 0: 3 hits, 5 answered; run 1: 4 hits, 5 answered (success 7/12, response 10/12).
+REALWORLD_PLAN = {
+    "house_1/kitchen/right/a": ("hit", "hit"),
+    "house_1/kitchen/right/b": ("miss", "hit"),
+    "house_1/kitchen/right/c": ("hit", "miss"),
+    "house_1/bedroom/up/a": ("wrong_frame", "hit"),
+    "house_1/bedroom/up/c": ("none", "hit"),
+    "house_1/study/front/a": ("hit", "none"),
+}
+
+
+def realworld_predictions(dataset, plan: dict[str, tuple[str, ...]]) -> list[dict]:
+    """Official-format prediction rows (one per instance and run, in run order) acting out
+    ``plan``; points are placed on the marks through each frame's letterbox."""
+    rows: list[list[dict]] = []
+    for inst in dataset.instances():
+        mark = inst.marks[0]
+        k = next(i for i, f in enumerate(inst.frames) if f.image_path == mark.frame)
+        if mark.point is not None:
+            spot = mark.point
+        elif mark.box is not None:
+            spot = ((mark.box[0] + mark.box[2]) / 2, (mark.box[1] + mark.box[3]) / 2)
+        else:
+            xs, ys = zip(*mark.region)
+            spot = (sum(xs) / len(xs), sum(ys) / len(ys))
+        for run, what in enumerate(plan[inst.id]):
+            row = {"house_id": inst.house_id, "pair_id": inst.pair_id, "direction": str(inst.direction), "type": str(inst.condition)}
+            if what != "none":
+                frame = (0 if k else 1) if what == "wrong_frame" else k
+                x, y = (float(v) for v in inst.letterboxes[frame].to_square(spot))
+                if what == "miss":
+                    x, y = (5.0 if x > 256 else 506.0), (5.0 if y > 256 else 506.0)  # the far corner
+                row |= {"predicted_x": round(x, 2), "predicted_y": round(y, 2), "predicted_image": inst.frames[frame].image_path}
+            while len(rows) <= run:
+                rows.append([])
+            rows[run].append(row)
+    # the replay backend gives run r the r-th row of an instance
+    return [row for run_rows in rows for row in run_rows]
+
+
+@pytest.fixture(scope="session")
+def realworld_sweep(tmp_path_factory) -> Path:
+    """A real sweep on the demo real-world set, two runs per cell: the center baseline and a
+    "model" replaying :data:`REALWORLD_PLAN`; rows written and scored by the real runner."""
+    from povagent.realworld import load_realworld
+    from povagent.sweep import run_sweep
+
+    base = tmp_path_factory.mktemp("realworld_sweep")
+    dataset = load_realworld(REALWORLD_DEMO, cache_dir=base / "letterboxed")
+    (base / "answers.json").write_text(json.dumps(realworld_predictions(dataset, REALWORLD_PLAN)), encoding="utf-8")
+    (base / "pipeline.yaml").write_text(yaml.safe_dump({
+        "dataset": {"path": str(REALWORLD_DEMO)},
+        "backend": "center",
+        "strategy": "basic",
+        "parser": "json",
+        "scorers": ["success"],
+        "runs": 2,
+        "output": str(base / "unused"),
+    }))
+    (base / "sweep.yaml").write_text(yaml.safe_dump({
+        "base": "pipeline.yaml",
+        "output": str(base / "sweep"),
+        "axes": {"backend": ["center", {"name": "replay", "options": {"path": str(base / "answers.json")}}]},
+    }))
+    run_sweep(base / "sweep.yaml", quiet=True)
+    return base / "sweep"
