@@ -11,7 +11,12 @@ the strategy's answer schema with ``jsonschema`` and returns the typed :class:`P
   point can be scored from it, and it could not be written as JSON.
 
 Validators are compiled once per distinct schema and cached (by object identity, falling back
-to the schema's canonical JSON), so the hot path never recompiles. Pure: no I/O.
+to the schema's canonical JSON), so the hot path never recompiles. For the usual answer schemas
+(an object of required numbers and integers with inclusive bounds, as
+:func:`povagent.answers.frame_answer_schema` makes) a compiled pre-check recognises a valid
+answer without walking jsonschema's keyword machinery; anything it cannot vouch for (an error,
+a float where an integer is asked, a schema of another shape) goes to ``jsonschema``, which
+stays the authority for every error and its message. Pure: no I/O.
 """
 
 from __future__ import annotations
@@ -19,38 +24,121 @@ from __future__ import annotations
 import json
 import math
 import threading
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 from jsonschema import Draft202012Validator
 from jsonschema.protocols import Validator
 
 from povagent.answers import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 
-_by_id: dict[int, tuple[dict[str, Any], Validator]] = {}
-_by_text: dict[str, Validator] = {}
+#: A pre-check: ``answer -> True`` when the answer is certainly valid against its schema
+#: (``False`` means "ask jsonschema", not "invalid").
+PreCheck = Callable[[dict[str, Any]], bool]
+
+_by_id: dict[int, tuple[dict[str, Any], Validator, PreCheck | None]] = {}
+_by_text: dict[str, tuple[Validator, PreCheck | None]] = {}
 _lock = threading.Lock()
 _MAX_CACHED = 1024
+
+#: Keywords that never make an instance invalid (annotations).
+_ANNOTATIONS = frozenset({"title", "description", "$comment", "examples", "default"})
+
+
+def _bound(value: Any) -> bool:
+    return type(value) in (int, float) and math.isfinite(value)
+
+
+def compile_precheck(schema: dict[str, Any]) -> PreCheck | None:
+    """A fast check that recognises answers valid against ``schema``, or ``None`` when the
+    schema is not of the shape it understands.
+
+    Understood: ``{"type": "object", "required": [...], "properties": {name: {"type":
+    "number" | "integer", "minimum": m, "maximum": M}}}`` (each keyword optional, annotations
+    allowed). The check answers ``True`` only when every required key is present and every
+    present property is an ``int`` (or, for ``number``, a ``float``; never a ``bool``) inside
+    its inclusive bounds: exactly the cases in which jsonschema reports no error. Anything
+    else answers ``False`` and the caller asks jsonschema (which then words the errors).
+    """
+    if not isinstance(schema, dict) or set(schema) - {"type", "required", "properties"} - _ANNOTATIONS:
+        return None
+    if schema.get("type", "object") != "object":
+        return None
+    required = schema.get("required", [])
+    properties = schema.get("properties", {})
+    if not isinstance(required, list) or not all(isinstance(k, str) for k in required):
+        return None
+    if not isinstance(properties, dict):
+        return None
+    checks: list[tuple[str, tuple[type, ...], float | None, float | None]] = []
+    for name, sub in properties.items():
+        if not isinstance(name, str) or not isinstance(sub, dict) or set(sub) - {"type", "minimum", "maximum"} - _ANNOTATIONS:
+            return None
+        kind = sub.get("type")
+        if kind == "number":
+            types: tuple[type, ...] = (int, float)
+        elif kind == "integer":
+            types = (int,)  # an integral float is valid too, but rare: jsonschema decides it
+        else:
+            return None
+        lo, hi = sub.get("minimum"), sub.get("maximum")
+        if (lo is not None and not _bound(lo)) or (hi is not None and not _bound(hi)):
+            return None
+        checks.append((name, types, lo, hi))
+    required_keys = tuple(required)
+    frozen = tuple(checks)
+
+    def precheck(answer: dict[str, Any]) -> bool:
+        for key in required_keys:
+            if key not in answer:
+                return False
+        for name, types, lo, hi in frozen:
+            if name in answer:
+                value = answer[name]
+                if type(value) not in types:  # exact types: bool (an int subclass) is never a number
+                    return False
+                # ``not (lo <= value)`` also sends NaN to jsonschema
+                if (lo is not None and not lo <= value) or (hi is not None and not value <= hi):
+                    return False
+        return True
+
+    return precheck
+
+
+def _compiled(schema: dict[str, Any]) -> tuple[Validator, PreCheck | None]:
+    """The validator and pre-check of ``schema`` (compiled on first use, then cached)."""
+    hit = _by_id.get(id(schema))
+    if hit is not None and hit[0] is schema:
+        return hit[1], hit[2]
+    text = json.dumps(schema, sort_keys=True, separators=(",", ":"))
+    with _lock:
+        entry = _by_text.get(text)
+        if entry is None:
+            Draft202012Validator.check_schema(schema)
+            entry = (Draft202012Validator(schema), compile_precheck(schema))
+            if len(_by_text) >= _MAX_CACHED:
+                _by_text.clear()
+            _by_text[text] = entry
+        if len(_by_id) >= _MAX_CACHED:
+            _by_id.clear()
+        # Holding the schema keeps its id from being reused while the entry lives.
+        _by_id[id(schema)] = (schema, *entry)
+    return entry
 
 
 def validator_for(schema: dict[str, Any]) -> Validator:
     """The compiled validator of ``schema`` (compiled on first use, then cached)."""
-    hit = _by_id.get(id(schema))
-    if hit is not None and hit[0] is schema:
-        return hit[1]
-    text = json.dumps(schema, sort_keys=True, separators=(",", ":"))
-    with _lock:
-        validator = _by_text.get(text)
-        if validator is None:
-            Draft202012Validator.check_schema(schema)
-            validator = Draft202012Validator(schema)
-            if len(_by_text) >= _MAX_CACHED:
-                _by_text.clear()
-            _by_text[text] = validator
-        if len(_by_id) >= _MAX_CACHED:
-            _by_id.clear()
-        # Holding the schema keeps its id from being reused while the entry lives.
-        _by_id[id(schema)] = (schema, validator)
-    return validator
+    return _compiled(schema)[0]
+
+
+def schema_errors(schema: dict[str, Any], answer: dict[str, Any]) -> list[Any]:
+    """jsonschema's errors for ``answer``, sorted by path then keyword (empty when valid).
+
+    The pre-check answers the common valid case; jsonschema is asked otherwise.
+    """
+    validator, precheck = _compiled(schema)
+    if precheck is not None and precheck(answer):
+        return []
+    return sorted(validator.iter_errors(answer), key=lambda e: (list(e.path), e.validator))
 
 
 def _describe(error: Any, answer: dict[str, Any]) -> str:
@@ -91,7 +179,7 @@ def judge(
     answer: dict[str, Any] = {"x": x, "y": y}
     if spec.asks_frame and selected_image is not None:
         answer["selected_image"] = selected_image
-    errors = sorted(validator_for(spec.json_schema).iter_errors(answer), key=lambda e: (list(e.path), e.validator))
+    errors = schema_errors(spec.json_schema, answer)
     reasons = [_describe(e, answer) for e in errors]
     if errors:
         status = ParseStatus.OUT_OF_RANGE

@@ -153,7 +153,10 @@ def prepare_dataset(config: PipelineConfig) -> Dataset:
         if not (g.out / "artifacts").is_dir():
             from povagent.generate import generate_dataset  # heavy (trimesh): only when asked
 
-            generate_dataset(g.out, houses=g.houses, seed=g.seed, frames=g.frames)
+            generate_dataset(
+                g.out, houses=g.houses, seed=g.seed, frames=g.frames,
+                judge=g.judge.name, judge_options=g.judge.options, plugins=config.plugins,
+            )  # fmt: skip
     from povagent.realworld import is_realworld, load_realworld
 
     if is_realworld(spec.root):
@@ -201,14 +204,17 @@ class RowJournal(ResultsWriter):
     key while the row is being made durable. Queued rows are written and fsynced together,
     in a worker thread (the event loop keeps serving requests meanwhile); only then is
     ``on_durable(row)`` called for each, which is where progress and observers hear of it.
+    ``before_write()``, when given, runs in that thread before each batch is written (the
+    runner pushes its log to the OS and stores queued answers in the response cache there); if
+    it raises, the batch is not written and the run stops as for a failed write.
     """
 
     def __init__(
-        self, path: str | Path, on_durable: Callable[[ResultRow], None], before_batch: Callable[[], None] | None = None
+        self, path: str | Path, on_durable: Callable[[ResultRow], None], before_write: Callable[[], None] | None = None
     ) -> None:
         super().__init__(path)
         self._on_durable = on_durable
-        self._before_batch = before_batch
+        self._before_write = before_write
         self._queue: list[tuple[str, ResultRow]] = []
         self._committer: asyncio.Task[None] | None = None
         self.error: BaseException | None = None
@@ -229,8 +235,6 @@ class RowJournal(ResultsWriter):
             await asyncio.sleep(0)
             batch, self._queue = self._queue, []
             try:
-                if self._before_batch is not None:
-                    self._before_batch()
                 await asyncio.to_thread(self._write, "".join(line for line, _ in batch))
             except Exception as exc:  # a full disk ends the run; the rows are not reported
                 # Kept here and raised to the workers by submit()/drain(); the task itself ends
@@ -265,6 +269,8 @@ class RowJournal(ResultsWriter):
         self.close()
 
     def _write(self, text: str) -> None:
+        if self._before_write is not None:
+            self._before_write()
         t0 = time.perf_counter()
         self.write_lines(text)
         self.fsyncs += 1
@@ -359,6 +365,7 @@ class PipelineRun:
         self._digests: dict[str, RowDigest] = {}
         self._reads: dict[Path, asyncio.Future[Any]] = {}
         self._frames_read: dict[int, tuple[Any, ...]] = {}
+        self._frames_waits: dict[int, tuple[tuple[Any, ...], set[asyncio.Future[Any]]]] = {}
 
     # -- setup ---------------------------------------------------------------------------------
     def _check_folder(self, keys: set[str]) -> set[str]:
@@ -418,7 +425,9 @@ class PipelineRun:
             else:
                 response = await self._call_backend(request, row_id)
                 if key is not None:
-                    cache.put(key, response)  # type: ignore[union-attr]
+                    # Queued, not written here: the journal's thread stores queued answers before
+                    # each batch of rows, so the row holding this answer is durable only after it.
+                    cache.put_deferred(key, response)  # type: ignore[union-attr]
             usage = response.usage
             # model_construct: every field is built here with the right type; validating
             # again per request cost ~0.1 ms an instance.
@@ -543,22 +552,34 @@ class PipelineRun:
         report) itself.
         """
         frames = instance.frames
-        if self._frames_read.get(id(frames)) is frames:
+        frames_id = id(frames)
+        if self._frames_read.get(frames_id) is frames:
             return  # A/B instances of a house share one frames tuple: checked once, not per key
         images = self.images
-        reads = self._reads
-        new = [f.file for f in frames if f.file not in reads and not images.knows_file(f.file)]
-        if new:
-            task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
-            for path in new:
-                reads[path] = task
-            task.add_done_callback(lambda _t, paths=new: [reads.pop(p, None) for p in paths])
-        waits = {reads[f.file] for f in frames if f.file in reads}
+        # The other keys of a house arrive while its frames are being read: they wait for the
+        # reads the first one found, without looking at every frame again.
+        known = self._frames_waits.get(frames_id)
+        if known is not None and known[0] is frames and not all(w.done() for w in known[1]):
+            waits = known[1]
+        else:
+            reads = self._reads
+            new = [f.file for f in frames if f.file not in reads and not images.knows_file(f.file)]
+            if new:
+                task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
+                for path in new:
+                    reads[path] = task
+                task.add_done_callback(lambda _t, paths=new: [reads.pop(p, None) for p in paths])
+            waits = {reads[f.file] for f in frames if f.file in reads}
+            if waits:
+                # Holding the tuple keeps its id from being reused while the entry lives.
+                self._frames_waits[frames_id] = (frames, waits)
         if waits:
             await asyncio.gather(*waits)
+            if self._frames_read.get(frames_id) is frames:
+                return  # another key of the house checked them meanwhile
         if all(images.knows_file(f.file) for f in frames):
-            # Holding the tuple keeps its id from being reused while the entry lives.
-            self._frames_read[id(frames)] = frames
+            self._frames_read[frames_id] = frames
+            self._frames_waits.pop(frames_id, None)
 
     async def _solve(self, instance: Instance, run: int) -> ResultRow:
         """Everything for one key, ending in its row (never raises for plugin or API failures)."""
@@ -637,6 +658,24 @@ class PipelineRun:
             self._log.error("scorer_exception", row=key, scorer=name, error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
             return {"error": f"{type(exc).__name__}: {exc}"}
 
+    def _before_rows(self) -> None:
+        """Runs in the journal's thread before each batch of rows is written."""
+        self._log.flush()
+        self._flush_cache()
+
+    def _flush_cache(self) -> None:
+        """Store the answers queued in the response cache. The cache only saves calls: when it
+        cannot be written, the answers are dropped from it with a warning and the run goes on."""
+        cache = self._cache
+        if cache is None or not cache.pending:
+            return
+        try:
+            cache.flush()
+        except Exception as exc:
+            dropped = cache.discard_pending()
+            self._log.warning("cache_write_failed", path=str(cache.path), answers_not_cached=dropped,
+                              error=self._redactor.text(f"{type(exc).__name__}: {exc}"))
+
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
         self._digests[row.key] = digest(row)
@@ -707,9 +746,10 @@ class PipelineRun:
         if self._cache is None and cache_path is not None and getattr(self.components.backend, "cacheable", True):
             self._cache = ResponseCache(cache_path)
         self._log = RunLog(self.run_dir / LOG, console=self.console_log, redactor=self._redactor, run=str(self.run_dir))
-        # The log is pushed to the OS before each batch of rows is written: after a kill, every
-        # durable row has its request events in log.jsonl.
-        self._journal = RowJournal(self.run_dir / RESULTS, self._reported, before_batch=self._log.flush)
+        # Before each batch of rows is written (in the journal's thread, off the event loop) the
+        # log is pushed to the OS and queued answers are stored in the cache: after a kill, every
+        # durable row has its request events in log.jsonl and its answers in the cache.
+        self._journal = RowJournal(self.run_dir / RESULTS, self._reported, before_write=self._before_rows)
         self._report_dataset_problems()
 
         self._log.info("run_start", n_total=len(wanted), n_pending=len(pending), config_hash=self.config_hash,
@@ -749,6 +789,7 @@ class PipelineRun:
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
             await self._journal.aclose()
+            self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
             summary = self.write_summary(instances, runs, interrupted)
             self._log.info("run_end", interrupted=interrupted, **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})

@@ -65,3 +65,72 @@ def test_no_points_is_unparseable():
 @pytest.mark.parametrize("value, scale, pixels", [(500, 1000, 256.0), (1000, 1000, 511.0), (50, 100, 256.0), (0.25, 1, 128.0), (1200, 1000, 614.4)])
 def test_relative_coordinates_map_to_pixels(value, scale, pixels):
     assert relative_to_pixels(value, scale, 512) == pytest.approx(pixels)
+
+
+# -- the pre-check in front of jsonschema: same results, same messages ---------------------------
+import itertools  # noqa: E402
+import math  # noqa: E402
+
+from jsonschema import Draft202012Validator  # noqa: E402
+
+from povagent import answer_validation  # noqa: E402
+from povagent.answer_validation import compile_precheck, schema_errors  # noqa: E402
+
+_SCHEMAS = [frame_answer_schema(30, 512, 512), point_answer_schema(512, 512), frame_answer_schema(1, 640, 480)]
+_VALUES = [-1, -0.5, 0, 0.0, 3, 3.0, 3.5, 29, 30, 479, 511, 511.0, 511.5, 512, 639, 640, 1e9, math.nan, math.inf, True, False, None, "3"]
+
+
+def _answers():
+    for x, y in itertools.product(_VALUES, [0, 511.5, 512, math.nan, True]):
+        yield {"x": x, "y": y}
+        for frame in (0, 29, 30, -1, 3.0, 2.5, True, None, "1"):
+            yield {"x": x, "y": y, "selected_image": frame}
+    yield {}
+    yield {"selected_image": 0}
+
+
+def _jsonschema_only(schema, answer):
+    errors = sorted(Draft202012Validator(schema).iter_errors(answer), key=lambda e: (list(e.path), e.validator))
+    return [(list(e.path), e.validator, e.message) for e in errors]
+
+
+@pytest.mark.parametrize("schema", _SCHEMAS, ids=["frames-30", "point", "frames-1-640x480"])
+def test_the_precheck_never_passes_an_answer_jsonschema_rejects(schema):
+    precheck = compile_precheck(schema)
+    assert precheck is not None
+    passed = 0
+    for answer in _answers():
+        expected = _jsonschema_only(schema, answer)
+        if precheck(answer):
+            passed += 1
+            assert expected == [], answer
+        assert [(list(e.path), e.validator, e.message) for e in schema_errors(schema, answer)] == expected, answer
+    assert passed > 10  # the common valid answers do take the fast path
+
+
+@pytest.mark.parametrize("schema", [
+    {"type": "object", "properties": {"x": {"type": "number", "exclusiveMinimum": 0}}},
+    {"type": "object", "properties": {"x": {"type": ["number", "null"]}}},
+    {"type": "object", "properties": {"x": {"type": "number"}}, "additionalProperties": False},
+    {"type": "object", "properties": {"x": {"type": "number", "multipleOf": 2}}},
+    {"type": "object", "properties": {"x": {"type": "number", "minimum": -math.inf}}},
+    {"type": "array"},
+    {"anyOf": [{"type": "object"}]},
+])
+def test_schemas_of_another_shape_are_left_to_jsonschema(schema):
+    assert compile_precheck(schema) is None
+    judged = judge(AnswerSpec(schema=schema, asks_frame=False), 3, 4)
+    assert judged.status is (ParseStatus.OK if not _jsonschema_only(schema, {"x": 3, "y": 4}) else ParseStatus.OUT_OF_RANGE)
+
+
+def test_judge_gives_the_same_parse_with_and_without_the_precheck(monkeypatch):
+    specs = [FRAMES, GIVEN, AnswerSpec(schema=frame_answer_schema(1, 640, 480), width=640, height=480, n_frames=1)]
+    cases = [(x, y, frame, repair) for x in (-1, 0, 10.5, 511, 512, 639.5) for y in (0, 511.5, 512)
+             for frame in (None, 0, 3, 30) for repair in (None, "rescaled 0-1000 -> pixels")]
+    fast = [judge(spec, x, y, frame, repair=repair, note="n") for spec in specs for x, y, frame, repair in cases]
+    monkeypatch.setattr(answer_validation, "compile_precheck", lambda schema: None)
+    monkeypatch.setattr(answer_validation, "_by_id", {})
+    monkeypatch.setattr(answer_validation, "_by_text", {})
+    slow = [judge(spec, x, y, frame, repair=repair, note="n") for spec in specs for x, y, frame, repair in cases]
+    assert [p.model_dump() for p in fast] == [p.model_dump() for p in slow]
+    assert {p.status for p in fast} == {ParseStatus.OK, ParseStatus.REPAIRED, ParseStatus.OUT_OF_RANGE}

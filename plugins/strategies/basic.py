@@ -8,14 +8,40 @@ message and the answer schema. It must not call the model itself (the runner doe
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 from povagent import hookimpl
 from povagent.answers import AnswerSpec
 from povagent.dataset.instances import Instance
 from povagent.exchange import GenerationParams, Request
 from povagent.images import ImageStore
 from povagent.interfaces import Strategy
-from povagent.prompts import frame_values, render
+from povagent.prompts import frame_values, load_template, render
 from povagent_plugins.strategies.layout import answer_spec, prompt_message, shown_images
+
+
+#: Stands for the sentence while a template is filled once per frame size and count.
+_SENTENCE = "\x00povagent-sentence\x00"
+
+
+@lru_cache(maxsize=256, typed=True)
+def _template_pieces(name: str, width: int, height: int, n_images: int | None) -> tuple[str, ...] | None:
+    """Template ``name`` filled with the frame values, split where the sentence goes
+    (``None`` if the template could hold the stand-in itself)."""
+    if _SENTENCE in load_template(name):
+        return None
+    return tuple(render(name, sentence=_SENTENCE, **frame_values(width, height, n_images)).split(_SENTENCE))
+
+
+def fill_sentence(name: str, sentence: str, width: int, height: int, n_images: int | None = None) -> str:
+    """``render(name, sentence=sentence, **frame_values(width, height, n_images))``, with the
+    template filled once per (template, frame size, frame count): only the sentence is joined in
+    per instance. The same text: a placeholder is replaced in one pass, so the sentence is
+    inserted as is wherever ``$sentence`` stands."""
+    pieces = _template_pieces(name, width, height, n_images)
+    if pieces is None:
+        return render(name, sentence=sentence, **frame_values(width, height, n_images))
+    return str(sentence).join(pieces)
 
 
 class BasicStrategy(Strategy):
@@ -40,9 +66,8 @@ class BasicStrategy(Strategy):
         """The filled prompt text for ``instance``."""
         width, height = instance.frame_size
         if instance.condition.uses_exploration_frames:
-            values = frame_values(width, height, len(instance.frames))
-            return render("basic_frames", sentence=instance.sentence, **values)
-        return render("basic_given", sentence=instance.sentence, **frame_values(width, height))
+            return fill_sentence("basic_frames", instance.sentence, width, height, len(instance.frames))
+        return fill_sentence("basic_given", instance.sentence, width, height)
 
     def images_for(self, instance: Instance, images: ImageStore) -> list[str]:
         """Hashes of the images shown, in order (the frames as they are)."""

@@ -4,10 +4,17 @@ A/B: one user message holding, for each frame i, the text ``Image i:`` followed 
 then the prompt text ("The N images above ... Each image is preceded by its label"). C: the
 observer view, then the prompt text. Also the :class:`AnswerSpec` each condition asks for.
 Pure message assembly: no drawing, no model calls. Third-party strategies may reuse it.
+
+Built once, shared after (all are immutable; a message is the same value either way): the image
+parts of a frame set (the A/B instances of a house show the same frames), the labels of each
+frame count, and the :class:`AnswerSpec` of each (condition kind, frame count, frame size).
+The answer spec's ``json_schema`` dict is therefore shared: read it, never change it.
 """
 
 from __future__ import annotations
 
+import threading
+from functools import lru_cache
 from typing import Sequence
 
 from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema
@@ -26,25 +33,61 @@ def shown_images(instance: Instance, images: ImageStore) -> list[str]:
     return [images.add_file(frame.file).image_hash for frame in instance.frames]
 
 
+@lru_cache(maxsize=64)
+def _frame_labels(n: int) -> tuple[tuple[TextPart, str], ...]:
+    """For each of ``n`` frames: the label part shown before it and the image part's label."""
+    return tuple((TextPart(frame_label(i)), f"Image {i}") for i in range(n))
+
+
+#: Image parts by (labelled?, image hashes): the A/B instances of a house share their frames.
+_IMAGE_PARTS_MAX = 256
+_image_parts: dict[tuple[bool, tuple[str, ...]], tuple[Part, ...]] = {}
+_image_parts_lock = threading.Lock()
+
+
+def image_parts(image_hashes: Sequence[str], labelled: bool) -> tuple[Part, ...]:
+    """The parts showing ``image_hashes``: each preceded by its ``Image i:`` label when
+    ``labelled`` (A/B), else as ``observer view`` images (C). Built once per frame set."""
+    key = (labelled, tuple(image_hashes))
+    parts = _image_parts.get(key)
+    if parts is not None:
+        return parts
+    if labelled:
+        built: list[Part] = []
+        for (label_part, label), image_hash in zip(_frame_labels(len(key[1])), key[1]):
+            built.append(label_part)
+            built.append(ImagePart(image_hash, label=label))
+        parts = tuple(built)
+    else:
+        parts = tuple(ImagePart(h, label="observer view") for h in key[1])
+    with _image_parts_lock:
+        if len(_image_parts) >= _IMAGE_PARTS_MAX:
+            _image_parts.clear()  # a frame set per house: a run goes through them in order
+        _image_parts[key] = parts
+    return parts
+
+
 def prompt_message(instance: Instance, image_hashes: Sequence[str], prompt_text: str) -> Message:
     """The user message: labelled frames (A/B) or the observer view (C), then the prompt text."""
-    parts: list[Part] = []
-    if instance.condition.uses_exploration_frames:
-        for i, image_hash in enumerate(image_hashes):
-            parts.append(TextPart(frame_label(i)))
-            parts.append(ImagePart(image_hash, label=f"Image {i}"))
+    parts = image_parts(image_hashes, instance.condition.uses_exploration_frames)
+    return Message("user", (*parts, TextPart(prompt_text)))
+
+
+@lru_cache(maxsize=256, typed=True)  # typed: a float size must not reuse an int size's schema
+def _answer_spec(asks_frame: bool, n_frames: int, width: int, height: int) -> AnswerSpec:
+    if asks_frame:
+        schema = frame_answer_schema(n_frames, width, height)
     else:
-        parts.extend(ImagePart(h, label="observer view") for h in image_hashes)
-    parts.append(TextPart(prompt_text))
-    return Message("user", tuple(parts))
+        schema = point_answer_schema(width, height)
+    return AnswerSpec(schema=schema, width=width, height=height, n_frames=n_frames, asks_frame=asks_frame)
 
 
 def answer_spec(instance: Instance) -> AnswerSpec:
-    """What the paper's prompts ask for: ``{selected_image, x, y}`` (A/B) or ``{x, y}`` (C)."""
+    """What the paper's prompts ask for: ``{selected_image, x, y}`` (A/B) or ``{x, y}`` (C).
+
+    One shared (frozen) spec per condition kind, frame count and frame size.
+    """
     width, height = instance.frame_size
     if instance.condition.uses_exploration_frames:
-        n = len(instance.frames)
-        return AnswerSpec(
-            schema=frame_answer_schema(n, width, height), width=width, height=height, n_frames=n, asks_frame=True
-        )
-    return AnswerSpec(schema=point_answer_schema(width, height), width=width, height=height, n_frames=1, asks_frame=False)
+        return _answer_spec(True, len(instance.frames), width, height)
+    return _answer_spec(False, 1, width, height)

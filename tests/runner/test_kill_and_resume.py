@@ -11,6 +11,8 @@ import time
 
 import pytest
 
+from povagent.cache import ResponseCache, cache_key, identity_json
+
 CLI = "from povagent.cli import main; main()"
 
 
@@ -53,6 +55,12 @@ def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline
     durable = {e["key"] for e in _records(results)}
     logged = {e["row"] for e in _records(tmp_path / "run" / "log.jsonl") if e["event"] == "request"}
     assert durable <= logged
+    # ... and its answer in the response cache (written off the event loop, before the row).
+    identity = identity_json({"backend": "test-center", "reply": None})
+    with ResponseCache(tmp_path / "run" / "cache.sqlite") as cache:
+        for row in _records(results):
+            hit = cache.get(cache_key(identity, row["exchanges"][0]["request_hash"], row["run"]))
+            assert hit is not None and hit.text == row["exchanges"][0]["raw"], row["key"]
 
     done = subprocess.run([sys.executable, "-c", CLI, "run", str(path), "--quiet", "--json"], env=env,
                           capture_output=True, text=True, timeout=120)

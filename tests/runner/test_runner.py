@@ -439,3 +439,57 @@ def test_a_second_process_on_the_same_run_folder_is_refused(write_pipeline, tmp_
             run(write_pipeline())
     assert offline_plugin.CALLS["count"] == 0 and not (run_dir / "results.jsonl").exists()
     assert run(write_pipeline()).summary["complete"]  # released: the folder is usable again
+
+
+def test_answers_are_cached_off_the_event_loop_before_their_rows_are_durable(write_pipeline, monkeypatch, tmp_path):
+    import threading
+
+    from povagent.cache import ResponseCache, cache_key, identity_json
+    from povagent.results import ResultsWriter
+
+    stored: set[str] = set()
+    on_loop = []
+    insert, write_lines = ResponseCache._insert, ResultsWriter.write_lines
+
+    def spy_insert(self, records):
+        on_loop.append(threading.current_thread() is threading.main_thread())
+        insert(self, records)
+        stored.update(r[0] for r in records)
+
+    identity = identity_json({"backend": "test-center", "reply": None})
+    uncached_rows = []
+
+    def spy_write(self, text):
+        for line in text.splitlines():
+            row = json.loads(line)
+            if cache_key(identity, row["exchanges"][0]["request_hash"], row["run"]) not in stored:
+                uncached_rows.append(row["key"])
+        write_lines(self, text)
+
+    monkeypatch.setattr(ResponseCache, "_insert", spy_insert)
+    monkeypatch.setattr(ResultsWriter, "write_lines", spy_write)
+    cache = str(tmp_path / "c.sqlite")
+    result = run(write_pipeline(cache=cache, runs=2, backend={"name": "test-center", "options": {"delay_s": 0.005}}))
+    assert result.stats.requests == 2 * N_KEYS and len(stored) == 2 * N_KEYS
+    assert on_loop and not any(on_loop) and uncached_rows == []
+
+
+def test_a_cache_that_cannot_be_written_costs_calls_not_the_run(write_pipeline, offline_plugin, monkeypatch, tmp_path):
+    import sqlite3
+
+    from povagent.cache import ResponseCache
+
+    def broken(self, records):
+        raise sqlite3.OperationalError("disk I/O error")
+
+    cache = str(tmp_path / "c.sqlite")
+    with monkeypatch.context() as m:
+        m.setattr(ResponseCache, "_insert", broken)
+        result = run(write_pipeline(cache=cache))
+    assert result.summary["complete"] and result.summary["rows"]["answered"] == N_KEYS
+    events = [json.loads(line) for line in (result.run_dir / "log.jsonl").read_text().splitlines()]
+    failed = [e for e in events if e["event"] == "cache_write_failed"]
+    assert failed and all(e["level"] == "warning" and "disk I/O error" in e["error"] for e in failed)
+    assert sum(e["answers_not_cached"] for e in failed) == N_KEYS
+    again = run(write_pipeline(cache=cache, output=str(tmp_path / "again")))
+    assert again.stats.cache_hits == 0 and offline_plugin.CALLS["count"] == 2 * N_KEYS

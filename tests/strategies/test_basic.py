@@ -90,3 +90,73 @@ def test_the_built_in_strategy_is_single_turn(make_instance, facing_z):
 def test_the_request_hash_is_stable_across_stores(make_instance, facing_z):
     inst = make_instance([facing_z(), facing_z(90)])
     assert BasicStrategy().build(inst, ImageStore()).content_hash() == BasicStrategy().build(inst, ImageStore()).content_hash()
+
+
+# -- messages and prompts built once per frame set / template, the same values -------------------
+from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema  # noqa: E402
+from povagent.exchange import Message, Request  # noqa: E402
+from povagent.prompts import frame_values, render  # noqa: E402
+from povagent_plugins.strategies.basic import fill_sentence  # noqa: E402
+from povagent_plugins.strategies.layout import answer_spec, prompt_message  # noqa: E402
+
+
+def _message_part_by_part(instance, hashes, text):
+    """The layout as first written: every part built afresh."""
+    parts = []
+    if instance.condition.uses_exploration_frames:
+        for i, h in enumerate(hashes):
+            parts.append(TextPart(f"Image {i}:"))
+            parts.append(ImagePart(h, label=f"Image {i}"))
+    else:
+        parts.extend(ImagePart(h, label="observer view") for h in hashes)
+    parts.append(TextPart(text))
+    return Message("user", tuple(parts))
+
+
+@pytest.mark.parametrize("condition", [Condition.INFERRED, Condition.STATED, Condition.GIVEN])
+def test_shared_message_parts_give_the_same_message(make_instance, facing_z, condition):
+    inst = make_instance([facing_z(), facing_z(90), facing_z(180)], condition=condition)
+    for hashes in (["a" * 64, "b" * 64, "c" * 64], ["c" * 64, "b" * 64, "a" * 64], ["a" * 64], ["a" * 64, "b" * 64, "c" * 64]):
+        for text in ("first prompt", "second prompt"):
+            assert prompt_message(inst, hashes, text) == _message_part_by_part(inst, hashes, text)
+
+
+@pytest.mark.parametrize("condition", [Condition.INFERRED, Condition.GIVEN])
+def test_built_requests_hash_as_when_built_part_by_part(make_instance, facing_z, condition):
+    inst = make_instance([facing_z(), facing_z(90)], condition=condition)
+    store = ImageStore()
+    strategy = BasicStrategy()
+    built = strategy.build(inst, store)
+    hashes = [store.add_file(f.file).image_hash for f in inst.frames]
+    width, height = inst.frame_size
+    if condition.uses_exploration_frames:
+        text = render("basic_frames", sentence=inst.sentence, **frame_values(width, height, len(inst.frames)))
+        spec = AnswerSpec(schema=frame_answer_schema(len(inst.frames), width, height), width=width, height=height,
+                          n_frames=len(inst.frames), asks_frame=True)
+    else:
+        text = render("basic_given", sentence=inst.sentence, **frame_values(width, height))
+        spec = AnswerSpec(schema=point_answer_schema(width, height), width=width, height=height, n_frames=1, asks_frame=False)
+    reference = Request(messages=(_message_part_by_part(inst, hashes, text),), answer=spec, generation=strategy.generation)
+    assert built == reference and built.content_hash() == reference.content_hash()
+    assert strategy.build(inst, store) == built  # and again, from the shared parts
+
+
+@pytest.mark.parametrize("sentence", [
+    "I saw it left of the desk.", "costs $5 or ${width}", "$sentence and ${sentence}", "$$ twice $$", "ünïcödé — ∈ ×",
+    "a\x00povagent-sentence\x00b", "",
+])
+@pytest.mark.parametrize("name, n_images", [("basic_frames", 30), ("basic_frames", 1), ("basic_given", None)])
+def test_prompt_filled_once_per_size_is_the_rendered_template(sentence, name, n_images):
+    for width, height in ((512, 512), (640, 480)):
+        expected = render(name, sentence=sentence, **frame_values(width, height, n_images))
+        assert fill_sentence(name, sentence, width, height, n_images) == expected
+
+
+def test_answer_specs_are_shared_and_equal_to_fresh_ones(make_instance, facing_z):
+    a = make_instance([facing_z(), facing_z(90)])
+    b = make_instance([facing_z(45), facing_z(135)], condition=Condition.STATED)
+    c = make_instance([facing_z()], condition=Condition.GIVEN)
+    assert answer_spec(a) is answer_spec(b)
+    assert answer_spec(a) == AnswerSpec(schema=frame_answer_schema(2, 512, 512), n_frames=2, asks_frame=True)
+    assert answer_spec(c) == AnswerSpec(schema=point_answer_schema(512, 512), n_frames=1, asks_frame=False)
+    assert answer_spec(make_instance([facing_z()] * 3)).n_frames == 3
