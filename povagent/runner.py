@@ -865,6 +865,7 @@ class RowDigest:
     scored: ScoredRow
     has_success: bool
     success: Any
+    answered: bool
     prompt_tokens: int | None
     completion_tokens: int | None
     cost_usd: float | None
@@ -881,6 +882,8 @@ def digest(row: ResultRow) -> RowDigest:
         scored=scored_row(row),
         has_success=success is not None,
         success=(success or {}).get("success"),
+        # a row the runner never scored (parse or infra error) is unanswered
+        answered=(success or {}).get("answered") is True,
         prompt_tokens=row.prompt_tokens,
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
@@ -901,7 +904,8 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
         from povagent.realworld import success_breakdown
 
         out["success"] = success_breakdown(
-            {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success} for d in rows
+            {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
+            for d in rows
         )
     per_run: dict[int, list[ScoredRow]] = {}
     for d in rows:

@@ -186,7 +186,7 @@ def sweep_command(
 
 @app.command("plugins")
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
-    """List every backend, strategy, parser, scorer and model profile, with where it came from."""
+    """List every backend, strategy, parser, scorer, judge and model profile, with where it came from."""
     from rich.console import Console
     from rich.table import Table
 

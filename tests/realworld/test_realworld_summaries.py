@@ -113,3 +113,11 @@ def test_success_breakdown_reports_response_rates_only_when_rows_say_so():
             {"condition": "a", "direction": "up", "success": False, "answered": False}]
     assert success_breakdown(rows)["overall"] == {"n_total": 2, "n_success": 1, "success_rate": 0.5, "n_answered": 1, "response_rate": 0.5}
     assert "response_rate" not in success_breakdown([{k: v for k, v in r.items() if k != "answered"} for r in rows])["overall"]
+
+
+def test_summary_json_of_a_real_world_run_carries_success_and_response_rate(setup, sweep_output):
+    summary = json.loads((setup / "sweep" / "replay" / "summary.json").read_text(encoding="utf-8"))
+    overall = summary["success"]["overall"]
+    assert (overall["n_success"], overall["n_answered"], overall["n_total"]) == (3, 5, 6)
+    assert overall["response_rate"] == pytest.approx(5 / 6)
+    assert summary["success"]["per_condition"]["b"]["response_rate"] == 0.0
