@@ -42,38 +42,40 @@ def center_score(instance: Instance) -> OfficialScore:
     return score_point(instance, frame, w / 2.0, h / 2.0)
 
 
+def _center_guess(inst: Instance, system: str, **scores: Any) -> Observation:
+    """The center guess on one instance as an observation (run 0); ``scores`` are its numbers."""
+    w, h = inst.frame_size
+    frame = inst.frames[0] if inst.frames else None
+    return Observation(
+        system=system,
+        run_name="center",
+        run=0,
+        instance_id=inst.id,
+        house_id=inst.house_id,
+        pair_id=inst.pair_id,
+        direction=str(inst.direction),
+        condition=str(inst.condition),
+        status="answered",
+        parse_status="ok",
+        selected_image=0 if inst.condition.uses_exploration_frames else None,
+        image_path=frame.image_path if frame is not None else None,
+        x=w / 2.0,
+        y=h / 2.0,
+        sentence=inst.sentence,
+        raw=None,
+        **scores,
+    )
+
+
 def center_observations(instances: Iterable[Instance], system: str = CENTER_SYSTEM) -> list[Observation]:
     """The center baseline as observations (run 0), ready to sit beside the models' rows."""
     out: list[Observation] = []
     for inst in instances:
         s = center_score(inst)
-        w, h = inst.frame_size
-        frame = inst.frames[0] if inst.frames else None
         out.append(
-            Observation(
-                system=system,
-                run_name="center",
-                run=0,
-                instance_id=inst.id,
-                house_id=inst.house_id,
-                pair_id=inst.pair_id,
-                direction=str(inst.direction),
-                condition=str(inst.condition),
-                status="answered",
-                parse_status="ok",
-                answered=s.answered,
-                l2=s.l2,
-                l2_strict=s.l2_strict,
-                gt_in_frame=s.gt_in_frame,
-                gt_behind=s.gt_behind,
-                gt_u=s.gt_u,
-                gt_v=s.gt_v,
-                selected_image=0 if inst.condition.uses_exploration_frames else None,
-                image_path=frame.image_path if frame is not None else None,
-                x=w / 2.0,
-                y=h / 2.0,
-                sentence=inst.sentence,
-                raw=None,
+            _center_guess(
+                inst, system, answered=s.answered, l2=s.l2, l2_strict=s.l2_strict, gt_in_frame=s.gt_in_frame,
+                gt_behind=s.gt_behind, gt_u=s.gt_u, gt_v=s.gt_v,
             )
         )
     return out
@@ -95,36 +97,11 @@ def center_success_observations(instances: Iterable[Instance], scorer: Any, syst
         w, h = inst.frame_size
         k = 0 if inst.condition.uses_exploration_frames else None
         s = scorer.score(inst, ParsedAnswer(status=ParseStatus.OK, selected_image=k, x=w / 2.0, y=h / 2.0))
-        frame = inst.frames[0] if inst.frames else None
         out.append(
-            Observation(
-                system=system,
-                run_name="center",
-                run=0,
-                instance_id=inst.id,
-                house_id=inst.house_id,
-                pair_id=inst.pair_id,
-                direction=str(inst.direction),
-                condition=str(inst.condition),
-                status="answered",
-                parse_status="ok",
-                answered=bool(s["answered"]),
-                l2=None,
-                l2_strict=None,
-                gt_in_frame=s["frame_has_gt"],
-                gt_behind=None,
-                gt_u=None,
-                gt_v=None,
-                selected_image=k,
-                image_path=frame.image_path if frame is not None else None,
-                x=w / 2.0,
-                y=h / 2.0,
-                sentence=inst.sentence,
-                raw=None,
-                scorer="success",
-                success=bool(s["success"]),
-                distance_norm=s.get("distance_norm"),
-                hit_radius_px=s.get("hit_radius_px"),
+            _center_guess(
+                inst, system, answered=bool(s["answered"]), l2=None, l2_strict=None, gt_in_frame=s["frame_has_gt"],
+                gt_behind=None, gt_u=None, gt_v=None, scorer="success", success=bool(s["success"]),
+                distance_norm=s.get("distance_norm"), hit_radius_px=s.get("hit_radius_px"),
             )
         )
     return out
