@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import typer
 
@@ -29,12 +29,21 @@ def validate_command(
     typer.echo(f"{dataset_dir}: valid")
 
 
+def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
+    """The rows of a breakdown table, labelled: overall, each condition, each direction."""
+    from povagent.dataset.models import Condition
+
+    yield "overall", breakdown["overall"]
+    for c, cell in breakdown["per_condition"].items():
+        yield f"{Condition(c).label} ({c.upper()})", cell
+    yield from breakdown["per_direction"].items()
+
+
 def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table."""
     from rich.console import Console
     from rich.table import Table
 
-    from povagent.dataset.models import Condition
     from povagent.scoring.predictions import format_number
 
     table = Table(title=title)
@@ -54,11 +63,8 @@ def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> N
             f"{cell['n']} / {cell['n_total']}",
         )
 
-    add("overall", summary["overall"])
-    for c, cell in summary["per_condition"].items():
-        add(f"{Condition(c).label} ({c.upper()})", cell)
-    for d, cell in summary["per_direction"].items():
-        add(d, cell)
+    for name, cell in breakdown_slices(summary):
+        add(name, cell)
     Console().print(table)
 
 

@@ -52,7 +52,7 @@ def _success_table(success: dict[str, Any], title: str) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from povagent.dataset.models import Condition
+    from povagent.cli.dataset import breakdown_slices
 
     table = Table(title=f"{title}: success rate (unanswered = failure)")
     for col in ("slice", "success rate", "hits / total", "resp. rate", "answered / total"):
@@ -62,11 +62,8 @@ def _success_table(success: dict[str, Any], title: str) -> None:
         answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
         table.add_row(name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered)
 
-    add("overall", success["overall"])
-    for c, cell in success["per_condition"].items():
-        add(f"{Condition(c).label} ({c.upper()})", cell)
-    for d, cell in success["per_direction"].items():
-        add(d, cell)
+    for name, cell in breakdown_slices(success):
+        add(name, cell)
     Console().print(table)
 
 
