@@ -3,7 +3,7 @@
 Target: our code takes at most 10% of the time per request; the rest is litellm's own (its
 request building, the OpenAI client, httpx, the event loop).
 
-The loopback server runs in a subprocess (``python -m povagent.loopback_server``) so the
+The loopback server runs in a subprocess (``python -m povagent.testing.loopback_server``) so the
 measured process holds only the client. At concurrency 32 the script measures:
 
 * requests/s through ``LiteLLMBackend.complete`` and through bare ``litellm.acompletion``
@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 
 from PIL import Image
 
-from povagent.answers import AnswerSpec, frame_answer_schema
-from povagent.exchange import GenerationParams, ImagePart, Message, Request, TextPart
-from povagent.images import ImageStore
-from povagent.llm_import import import_litellm
+from povagent.answers.spec import AnswerSpec, frame_answer_schema
+from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
+from povagent.exchange.images import ImageStore
+from povagent.engine.llm_import import import_litellm
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
 from povagent_plugins.backends.openai_messages import openai_messages
 
@@ -60,7 +60,7 @@ def make_request(store: ImageStore, n_images: int, size: int) -> Request:
 def start_server() -> tuple[subprocess.Popen, str]:
     """The loopback server in a subprocess; returns the process and its base URL."""
     proc = subprocess.Popen(
-        [sys.executable, "-m", "povagent.loopback_server", "--lifetime", "900"],
+        [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "900"],
         stdout=subprocess.PIPE,
         text=True,
     )

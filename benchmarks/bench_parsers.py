@@ -14,8 +14,8 @@ from pathlib import Path
 import yaml
 from jsonschema import Draft202012Validator
 
-from povagent.answer_validation import validator_for
-from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema
+from povagent.answers.validation import validator_for
+from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
 from povagent.plugins import build_plugin_host
 
 CORPUS = yaml.safe_load((Path(__file__).resolve().parents[1] / "tests" / "parsers" / "corpus.yaml").read_text(encoding="utf-8"))

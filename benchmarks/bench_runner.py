@@ -49,7 +49,7 @@ SCENARIOS = ("overhead", "throughput", "throughput-steady", "throughput-encoding
 
 def make_plugin() -> Any:
     from povagent import hookimpl
-    from povagent.exchange import Response, Usage
+    from povagent.exchange.messages import Response, Usage
     from povagent.interfaces import Backend
 
     def center(request: Any) -> str:
@@ -112,11 +112,11 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
     """Run one scenario in this process and return its figures."""
     if name == "reference":
         return reference(STEADY_REPEATS * 2439)
-    from povagent.config import PipelineConfig, resolve_components
+    from povagent.config.pipeline import PipelineConfig, resolve_components
     from povagent.dataset.loader import load_dataset
-    from povagent.images import ImageStore
+    from povagent.exchange.images import ImageStore
     from povagent.plugins import get_plugin_host
-    from povagent.runner import PipelineRun
+    from povagent.run.runner import PipelineRun
 
     host = get_plugin_host()
     host.add_plugin(make_plugin(), name="bench")
@@ -226,7 +226,7 @@ def main() -> None:
     data = args.data or tmp / "povbench"
     try:
         if not (data / "artifacts").is_dir():
-            from povagent.testing import write_release
+            from povagent.testing.pytest_plugin import write_release
 
             t0 = time.perf_counter()
             write_release(data, noise_rows=NOISE_ROWS, **FULL)

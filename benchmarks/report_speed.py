@@ -33,13 +33,13 @@ from pathlib import Path
 
 import yaml
 
-from povagent.answers import ParsedAnswer, ParseStatus
+from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
 from povagent.dataset.loader import load_dataset
 from povagent.report.analysis import analyze
 from povagent.report.build import write_report
 from povagent.report.collect import Collection, Observation
-from povagent.results import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
+from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
 from povagent.scoring.official import score_point
 
 

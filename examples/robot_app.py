@@ -26,7 +26,7 @@ from PIL import Image, ImageDraw
 
 from povagent.agent import GroundingAgent
 from povagent.errors import BadInputError, GroundingError, NoAnswerError, PovagentError, UnparseableAnswerError
-from povagent.goals import PinholeCamera, Plane
+from povagent.geometry.goals import PinholeCamera, Plane
 
 WIDTH, HEIGHT = 1280, 720
 CAMERA_HEIGHT_M = 1.0

@@ -70,11 +70,11 @@ class VlmJudge:
     async def _ask(self, request) -> str:
         from PIL import Image
 
-        from povagent.answers import AnswerSpec
-        from povagent.cache import ResponseCache, cache_key
-        from povagent.exchange import GenerationParams, ImagePart, Message, Request, TextPart
+        from povagent.answers.spec import AnswerSpec
+        from povagent.engine.cache import ResponseCache, cache_key
+        from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
         from povagent.generate.judge import surface_noun
-        from povagent.images import ImageStore
+        from povagent.exchange.images import ImageStore
         from povagent.plugins import get_plugin_host
 
         images = ImageStore()

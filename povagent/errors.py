@@ -36,7 +36,7 @@ class BackendError(PovagentError):
 
 
 class GroundingError(PovagentError):
-    """Base class of the errors :class:`povagent.agent.GroundingAgent` raises to robot apps."""
+    """Base class of the errors :class:`povagent.agent.grounding_agent.GroundingAgent` raises to robot apps."""
 
 
 class NoAnswerError(GroundingError):
@@ -47,7 +47,7 @@ class UnparseableAnswerError(GroundingError):
     """The model answered, but no point could be read from its answer.
 
     ``raw_answer`` is the model's text and ``parsed`` the typed parse (a
-    :class:`povagent.answers.ParsedAnswer`), so a robot app can log it or ask again.
+    :class:`povagent.answers.spec.ParsedAnswer`), so a robot app can log it or ask again.
     """
 
     def __init__(self, message: str, raw_answer: str | None = None, parsed: object | None = None) -> None:

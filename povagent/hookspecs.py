@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import pluggy
 
 if TYPE_CHECKING:
-    from povagent.results import ResultRow
+    from povagent.results.rows import ResultRow
 
 PROJECT = "povagent"
 hookspec = pluggy.HookspecMarker(PROJECT)
@@ -74,7 +74,7 @@ def register_model_profiles(register: Register) -> None:
     """Contribute model profiles: short names for models with their defaults.
 
     Called once at plugin load; ``register(name, profile)`` where ``profile`` is a
-    :class:`povagent.profiles.ModelProfile` (litellm model string, default parser, quirks).
+    :class:`povagent.config.profiles.ModelProfile` (litellm model string, default parser, quirks).
     """
 
 

@@ -10,13 +10,13 @@ from __future__ import annotations
 import abc
 from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
 
-from povagent.answers import AnswerSpec, ParsedAnswer
-from povagent.exchange import Request, Response
+from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.exchange.messages import Request, Response
 
 if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
     from povagent.dataset.loader import Dataset
-    from povagent.images import ImageStore
+    from povagent.exchange.images import ImageStore
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]

@@ -6,6 +6,9 @@ from pathlib import Path
 
 import pytest
 
+# Our own fixtures for plugin authors are opt-in (no pytest11 entry point): we opt in here.
+pytest_plugins = ["povagent.testing.pytest_plugin"]
+
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 MINI = FIXTURES / "povbench_mini"
 

@@ -33,11 +33,11 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from povagent import hookimpl
 from povagent.errors import ConfigError
-from povagent.exchange import Request, Response, Usage
-from povagent.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
+from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
-from povagent.llm_import import import_litellm
-from povagent.profiles import ModelProfile, resolve_profile
+from povagent.engine.llm_import import import_litellm
+from povagent.config.profiles import ModelProfile, resolve_profile
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
 

@@ -1,4 +1,4 @@
-"""Our :class:`~povagent.exchange.Request` as OpenAI chat messages (the form litellm takes).
+"""Our :class:`~povagent.exchange.messages.Request` as OpenAI chat messages (the form litellm takes).
 
 Parts keep their order: a text part becomes ``{"type": "text"}``, an image part becomes
 ``{"type": "image_url", "image_url": {"url": <data URL>}}`` with the data URL from the run's
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from povagent.exchange import ImagePart, Message, Request, TextPart
-from povagent.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Request, TextPart
+from povagent.exchange.images import ImageStore
 
 
 def openai_content(message: Message, images: ImageStore) -> str | list[dict[str, Any]]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.models import Condition
-from povagent.profiles import ModelProfile
+from povagent.config.profiles import ModelProfile
 
 _VLLM_NOTE = (
     "Self-hosted: serve with vLLM's OpenAI-compatible server started with "

@@ -5,7 +5,7 @@
 * a run folder (holding ``results.jsonl``) or a ``results.jsonl`` file: each request is
   answered with the recorded raw answer of the same (instance, run), so a run can be re-parsed
   and re-scored with another parser or scorer without calling a model;
-* an official predictions file or folder (see :mod:`povagent.official_format`): the answer is
+* an official predictions file or folder (see :mod:`povagent.results.official_format`): the answer is
   JSON synthesized from ``predicted_x``/``predicted_y`` and, for A/B, the index of the frame
   whose ``image_path`` is ``predicted_image``. A row without a point answers nothing (an empty
   text: a non-response, as in the official scoring), a row whose frame is missing or unknown
@@ -27,11 +27,11 @@ from typing import Any, ClassVar, Mapping
 from povagent import hookimpl
 from povagent.dataset.instances import row_key
 from povagent.errors import PredictionsError
-from povagent.exchange import Request, Response, Usage
-from povagent.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
+from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError
-from povagent.official_format import OfficialPrediction, read_official_predictions
-from povagent.results import ResultRow, iter_rows
+from povagent.results.official_format import OfficialPrediction, read_official_predictions
+from povagent.results.rows import ResultRow, iter_rows
 from povagent_plugins.backends.baselines import request_run
 
 RESULTS_FILE = "results.jsonl"

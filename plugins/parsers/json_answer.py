@@ -3,7 +3,7 @@
 Official behaviour: take every ``{...}`` object in the text; prefer the last one that has the
 requested keys and is in range, else the last one with the keys (this catches self-corrections
 after chain-of-thought). On top of that it reads what real outputs contain (see
-:mod:`povagent.answer_text`): markdown fences, prose around the JSON, numbers as strings,
+:mod:`povagent.answers.text`): markdown fences, prose around the JSON, numbers as strings,
 trailing commas, single quotes, unicode minus.
 
 For A/B, when no object carries ``selected_image`` but one carries ``x`` and ``y``, the official
@@ -18,9 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from povagent import hookimpl
-from povagent.answer_text import JsonObject, coerce_index, coerce_number, find_objects, get_key, mentioned_image
-from povagent.answer_validation import judge
-from povagent.answers import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.answers.text import JsonObject, coerce_index, coerce_number, find_objects, get_key, mentioned_image
+from povagent.answers.validation import judge
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 
 

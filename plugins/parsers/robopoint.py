@@ -10,9 +10,9 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answer_text import NUMBER, normalize_minus
-from povagent.answer_validation import relative_to_pixels
-from povagent.answers import AnswerSpec
+from povagent.answers.text import NUMBER, normalize_minus
+from povagent.answers.validation import relative_to_pixels
+from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 _TUPLE = re.compile(rf"\(\s*({NUMBER})\s*,\s*({NUMBER})\s*\)")

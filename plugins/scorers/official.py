@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers import ParsedAnswer
+from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.official import UNANSWERED, closest_point_l2, score_point, scoring_frame

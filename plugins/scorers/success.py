@@ -1,6 +1,6 @@
 """The ``success`` scorer: a hit or a miss against hand-marked ground truth, as the paper scores real houses.
 
-For instances of a real-world set (:mod:`povagent.realworld`). The answer (a pixel in the
+For instances of a real-world set (:mod:`povagent.dataset.realworld`). The answer (a pixel in the
 512x512 letterboxed frame the model saw) is mapped back to the original frame through the exact
 letterbox transform, then compared with the marks made in the frame the model selected (A/B) or
 in the observer view (C):
@@ -27,10 +27,10 @@ import math
 from typing import Any, Sequence
 
 from povagent import hookimpl
-from povagent.answers import ParsedAnswer
+from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent.realworld import Mark, RealWorldInstance
+from povagent.dataset.realworld import Mark, RealWorldInstance
 
 #: The default hit radius, as a fraction of the original frame's diagonal.
 DEFAULT_RADIUS = 0.1

@@ -11,12 +11,12 @@ from __future__ import annotations
 from functools import lru_cache
 
 from povagent import hookimpl
-from povagent.answers import AnswerSpec
+from povagent.answers.spec import AnswerSpec
 from povagent.dataset.instances import Instance
-from povagent.exchange import GenerationParams, Request
-from povagent.images import ImageStore
+from povagent.exchange.messages import GenerationParams, Request
+from povagent.exchange.images import ImageStore
 from povagent.interfaces import Strategy
-from povagent.prompts import frame_values, load_template, render
+from povagent.exchange.prompts import frame_values, load_template, render
 from povagent_plugins.strategies.layout import answer_spec, prompt_message, shown_images
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.instances import Instance
-from povagent.prompts import frame_values, load_template, render
+from povagent.exchange.prompts import frame_values, load_template, render
 from povagent_plugins.strategies.basic import BasicStrategy
 
 

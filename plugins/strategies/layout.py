@@ -17,10 +17,10 @@ import threading
 from functools import lru_cache
 from typing import Sequence
 
-from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema
+from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
 from povagent.dataset.instances import Instance
-from povagent.exchange import ImagePart, Message, Part, TextPart
-from povagent.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Part, TextPart
+from povagent.exchange.images import ImageStore
 
 
 def frame_label(index: int) -> str:

@@ -37,7 +37,7 @@ from PIL import Image, ImageColor, ImageDraw
 from povagent import hookimpl
 from povagent.dataset.instances import Frame, Instance
 from povagent.geometry.camera import Camera
-from povagent.images import ImageStore
+from povagent.exchange.images import ImageStore
 from povagent_plugins.strategies.basic import BasicStrategy
 
 RGB = tuple[int, int, int]

@@ -1,7 +1,7 @@
 """Commands that run pipelines: ``run``, ``sweep`` and ``plugins``.
 
-Thin wrappers: each reads its YAML with :mod:`povagent.config`, calls :mod:`povagent.runner` or
-:mod:`povagent.sweep`, and prints a short rich table.
+Thin wrappers: each reads its YAML with :mod:`povagent.config.pipeline`, calls :mod:`povagent.run.runner` or
+:mod:`povagent.run.sweep`, and prints a short rich table.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] |
     """
     if "success" not in summary:
         return None
-    from povagent.realworld import run_success_breakdown
+    from povagent.dataset.realworld import run_success_breakdown
 
     full = run_success_breakdown(run_dir)
     if full is None or full["overall"]["n_total"] != summary["success"]["overall"]["n_total"]:
@@ -69,7 +69,7 @@ def _success_table(success: dict[str, Any], title: str) -> None:
 
 @app.command("run")
 def run_command(
-    pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config for its keys)."),
+    pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config.pipeline for its keys)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Run only the first N instances."),
     retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
@@ -78,9 +78,9 @@ def run_command(
     strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
 ) -> None:
     """Run one pipeline (resuming from its run folder: only missing keys are run)."""
-    from povagent.config import load_pipeline
-    from povagent.progress import make_progress
-    from povagent.runner import run_pipeline
+    from povagent.config.pipeline import load_pipeline
+    from povagent.run.progress import make_progress
+    from povagent.run.runner import run_pipeline
 
     overrides: dict[str, Any] = {}
     if output is not None:
@@ -119,7 +119,7 @@ def sweep_command(
     from rich.console import Console
     from rich.table import Table
 
-    from povagent.sweep import dry_run as plan, expand_sweep, run_sweep
+    from povagent.run.sweep import dry_run as plan, expand_sweep, run_sweep
 
     console = Console()
     if dry_run:

@@ -25,12 +25,12 @@ def show_prompt_command(
     out: Optional[Path] = typer.Option(None, "--out", help="Folder for the images shown (default: ./show-prompt/<instance>)."),
 ) -> None:
     """Print the exact messages a strategy builds for one instance and save the images it shows."""
-    from povagent.config import load_pipeline
+    from povagent.config.pipeline import load_pipeline
     from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError, PluginError
-    from povagent.images import ImageStore
+    from povagent.exchange.images import ImageStore
     from povagent.plugins import get_plugin_host, did_you_mean
-    from povagent.prompt_preview import preview_request
+    from povagent.exchange.preview import preview_request
 
     config = load_pipeline(pipeline)
     dataset = load_dataset(config.dataset.root)
@@ -62,7 +62,7 @@ def parse_command(
     plugin: list[str] = typer.Option([], "--plugin", help="Extra plugin module to load (repeatable)."),
 ) -> None:
     """Read one raw model answer on stdin and print its typed parse as JSON (pixels)."""
-    from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema
+    from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
     from povagent.dataset.models import Condition
     from povagent.errors import ConfigError
     from povagent.plugins import get_plugin_host
@@ -100,7 +100,7 @@ def rescore_command(
 ) -> None:
     """Re-parse and re-score a finished run offline (no model call) into RUN_DIR/rescored-<parser>/."""
     from povagent.cli.dataset import render_summary
-    from povagent.rescore import rescore_run
+    from povagent.run.rescore import rescore_run
 
     result = rescore_run(run_dir, parser, dataset_root=dataset)
     for w in result.warnings[:20]:

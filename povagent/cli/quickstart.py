@@ -20,7 +20,7 @@ def quickstart_command(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """The main job, offline: generate ~3 houses, run center/random/oracle on A, B and C, report."""
-    from povagent.quickstart import run_quickstart
+    from povagent.run.quickstart import run_quickstart
 
     result = run_quickstart(out, dataset, houses=houses, seed=seed, jobs=jobs, quiet=quiet, say=typer.echo)
     typer.echo("")

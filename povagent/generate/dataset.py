@@ -22,7 +22,7 @@ from povagent.errors import DatasetError
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary, generate_house
 from povagent.generate.writer import write_json
-from povagent.logs import Redactor
+from povagent.run.logs import Redactor
 
 GENERATOR_VERSION = "1"
 DIRECTIONS = ("right", "left", "front", "up")

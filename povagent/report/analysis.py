@@ -121,7 +121,7 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
     """
     from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError
-    from povagent.realworld import is_realworld, load_realworld
+    from povagent.dataset.realworld import is_realworld, load_realworld
 
     paths = [Path(override)] if override else collection.dataset_paths()
     if not paths:
@@ -331,7 +331,7 @@ def analyze(
 
 
 def _is_realworld(dataset: Any) -> bool:
-    from povagent.realworld import RealWorldDataset
+    from povagent.dataset.realworld import RealWorldDataset
 
     return isinstance(dataset, RealWorldDataset)
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from typing import Any, Iterable
 
-from povagent.answers import ParsedAnswer, ParseStatus
+from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Instance
 from povagent.report.collect import Observation
 from povagent.scoring.official import OfficialScore, score_point

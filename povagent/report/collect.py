@@ -7,7 +7,7 @@ collected runs (model, strategy, parser, ...), without the condition and the run
 the tables break down and average over.
 
 A run is scored by the ``official`` metric (POVBench-format sets) or, for a real-world set
-with hand-marked ground truth (:mod:`povagent.realworld`), by the ``success`` scorer; each
+with hand-marked ground truth (:mod:`povagent.dataset.realworld`), by the ``success`` scorer; each
 observation says which (``scorer``) and carries that scorer's numbers: official rows their
 error, success rows their hit or miss.
 
@@ -25,7 +25,7 @@ from typing import Any, Iterable
 import yaml
 
 from povagent.errors import PredictionsError
-from povagent.results import ResultRow, read_rows
+from povagent.results.rows import ResultRow, read_rows
 
 RESULTS_FILE = "results.jsonl"
 CONFIG_FILE = "config.yaml"

@@ -1,7 +1,7 @@
 """Exporting a run's predictions in the official row format (``povagent export``).
 
 The exported file can be scored with the official evaluation code, and read back by
-``povagent score`` (through :func:`povagent.official_format.read_official_predictions`).
+``povagent score`` (through :func:`povagent.results.official_format.read_official_predictions`).
 One file per run index: the official format has no run field, and the paper averages runs
 scored separately.
 
@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from povagent import __version__
-from povagent.official_format import OfficialPrediction, write_official_predictions
-from povagent.results import ResultRow, RowStatus
+from povagent.results.official_format import OfficialPrediction, write_official_predictions
+from povagent.results.rows import ResultRow, RowStatus
 
 OFFICIAL_FILE = "official_predictions.json"
 

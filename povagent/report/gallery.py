@@ -32,7 +32,7 @@ from typing import Any, Iterable
 
 from PIL import Image, ImageDraw
 
-from povagent.realworld import RealWorldInstance
+from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.collect import Observation
 from povagent.scoring.official import project_ground_truth, scoring_frame
 

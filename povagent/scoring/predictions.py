@@ -23,7 +23,7 @@ from povagent.scoring.official import (
     score_point,
     scoring_frame,
 )
-from povagent.scoring.summary import ScoredRow, breakdown
+from povagent.scoring.breakdown import ScoredRow, breakdown
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,7 @@ def score_official_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Sco
     """Score official prediction rows; returns scored rows and warnings (unknown instances).
 
     ``rows`` are objects with the official fields as attributes (see
-    :func:`povagent.official_format.read_official_predictions`).
+    :func:`povagent.results.official_format.read_official_predictions`).
     """
     scored: list[ScoredPrediction] = []
     warnings: list[str] = []
@@ -111,7 +111,7 @@ def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
 
     Returns ``("results", rows)`` or ``("official", rows)``.
     """
-    from povagent.results import read_rows
+    from povagent.results.rows import read_rows
 
     p = Path(path)
     if p.is_dir() and (p / "results.jsonl").exists():
@@ -123,7 +123,7 @@ def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
         return "results", rows
     if not p.exists():
         raise PredictionsError(f"{p}: predictions file or folder not found")
-    from povagent.official_format import read_official_predictions
+    from povagent.results.official_format import read_official_predictions
 
     return "official", read_official_predictions(p)
 

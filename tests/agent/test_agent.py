@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.agent import GroundingAgent, Localization, RetrySettings
-from povagent.answers import ParseStatus
+from povagent.agent.grounding_agent import GroundingAgent, Localization, RetrySettings
+from povagent.answers.spec import ParseStatus
 from povagent.dataset.models import Condition
 from povagent.errors import BadInputError, ConfigError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.camera import Camera
-from povagent.goals import PinholeCamera
-from povagent.loopback_server import Fault, LoopbackServer, Reply
+from povagent.geometry.goals import PinholeCamera
+from povagent.testing.loopback_server import Fault, LoopbackServer, Reply
 
 FAST_RETRY = RetrySettings(attempts=3, initial_wait=0.01, max_wait=0.05)
 KEY_ENV = "POVAGENT_AGENT_TEST_KEY"
@@ -251,7 +251,7 @@ def test_the_timeout_holds_while_litellm_is_imported_for_the_first_call():
     code = """
 import asyncio, sys, time
 import numpy as np
-from povagent.agent import GroundingAgent
+from povagent.agent.grounding_agent import GroundingAgent
 from povagent.errors import NoAnswerError
 assert "litellm" not in sys.modules
 frames = [np.zeros((72, 128, 3), np.uint8)]

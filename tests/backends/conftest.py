@@ -6,10 +6,10 @@ from __future__ import annotations
 import pytest
 from PIL import Image
 
-from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema
-from povagent.exchange import GenerationParams, ImagePart, Message, Request, TextPart
-from povagent.images import ImageStore
-from povagent.loopback_server import LoopbackServer
+from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
+from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
+from povagent.exchange.images import ImageStore
+from povagent.testing.loopback_server import LoopbackServer
 
 
 @pytest.fixture
@@ -56,7 +56,7 @@ def make_request(store):
 
 @pytest.fixture
 def loopback(loopback_server) -> LoopbackServer:
-    """The ``povagent.testing`` loopback server (a valid A/B answer; stops itself in 60 s)."""
+    """The ``povagent.testing.pytest_plugin`` loopback server (a valid A/B answer; stops itself in 60 s)."""
     return loopback_server
 
 

@@ -10,7 +10,7 @@ import json
 import pytest
 
 from povagent.errors import ConfigError
-from povagent.images import ImageStore
+from povagent.exchange.images import ImageStore
 from povagent.interfaces import PermanentBackendError
 from povagent.plugins import get_plugin_host
 from povagent_plugins.backends.baselines import CenterBaseline, OracleBaseline, RandomBaseline, instance_ordinal

@@ -11,9 +11,9 @@ import sys
 import pytest
 
 from povagent.errors import ConfigError
-from povagent.exchange import GenerationParams
+from povagent.exchange.messages import GenerationParams
 from povagent.interfaces import PermanentBackendError, TransientBackendError
-from povagent.llm_import import import_litellm
+from povagent.engine.llm_import import import_litellm
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
 
 pytestmark = pytest.mark.timeout(60)
@@ -203,8 +203,8 @@ def test_litellm_is_imported_off_the_event_loop():
     code = """
 import asyncio, sys, time
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
-from povagent.exchange import GenerationParams, Message, Request
-from povagent.answers import AnswerSpec, point_answer_schema
+from povagent.exchange.messages import GenerationParams, Message, Request
+from povagent.answers.spec import AnswerSpec, point_answer_schema
 assert "litellm" not in sys.modules
 backend = LiteLLMBackend(model="openai/gpt-4o", extra={"mock_response": "ok"})
 request = Request(messages=(Message.text("user", "hi"),), answer=AnswerSpec(schema=point_answer_schema(512, 512)),

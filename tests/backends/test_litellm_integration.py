@@ -14,9 +14,9 @@ import time
 
 import pytest
 
-from povagent.exchange import GenerationParams, ImagePart
+from povagent.exchange.messages import GenerationParams, ImagePart
 from povagent.interfaces import PermanentBackendError, TransientBackendError
-from povagent.loopback_server import Fault, LoopbackServer, Reply
+from povagent.testing.loopback_server import Fault, LoopbackServer, Reply
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
 
 pytestmark = pytest.mark.timeout(30)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from PIL import Image
 
-from povagent.answers import AnswerSpec, point_answer_schema
-from povagent.exchange import ImagePart, Message, Request, TextPart
+from povagent.answers.spec import AnswerSpec, point_answer_schema
+from povagent.exchange.messages import ImagePart, Message, Request, TextPart
 from povagent_plugins.backends.openai_messages import openai_messages
 
 

@@ -16,11 +16,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.config import load_pipeline
-from povagent.loopback_server import Fault, LoopbackServer, RecordedRequest, Reply
-from povagent.results import read_rows
-from povagent.runner import run_pipeline
-from povagent.sweep import run_sweep
+from povagent.config.pipeline import load_pipeline
+from povagent.testing.loopback_server import Fault, LoopbackServer, RecordedRequest, Reply
+from povagent.results.rows import read_rows
+from povagent.run.runner import run_pipeline
+from povagent.run.sweep import run_sweep
 
 pytestmark = pytest.mark.timeout(90)
 

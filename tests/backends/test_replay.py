@@ -9,10 +9,10 @@ import json
 import pytest
 
 from povagent.errors import PredictionsError
-from povagent.images import ImageStore
+from povagent.exchange.images import ImageStore
 from povagent.interfaces import PermanentBackendError
 from povagent.plugins import get_plugin_host
-from povagent.results import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
+from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
 from povagent_plugins.backends.replay import ReplayBackend
 from povagent_plugins.strategies.basic import BasicStrategy
 

@@ -9,7 +9,7 @@ import yaml
 from typer.testing import CliRunner
 
 from povagent.cli import app
-from povagent.results import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, read_rows
+from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, read_rows
 
 runner = CliRunner()
 

@@ -6,7 +6,7 @@ import textwrap
 
 import pytest
 
-from povagent.config import load_pipeline, parse_yaml
+from povagent.config.pipeline import load_pipeline, parse_yaml
 from povagent.errors import ConfigError
 
 GOOD = """\

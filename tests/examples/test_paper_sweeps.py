@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from povagent.plugins import get_plugin_host
-from povagent.runner import create_components
-from povagent.sweep import expand_sweep
+from povagent.run.runner import create_components
+from povagent.run.sweep import expand_sweep
 
 SWEEPS = Path(__file__).resolve().parents[2] / "examples" / "sweeps"
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
-from povagent.loopback_server import LoopbackServer
+from povagent.testing.loopback_server import LoopbackServer
 
 REPO = Path(__file__).resolve().parents[2]
 PACKAGE = REPO / "examples" / "plugin_package"
@@ -103,7 +103,7 @@ def test_a_sweep_runs_the_grid_strategy_beside_basic(installed, tmp_path):
         )
         proc = run_python(
             "import json, sys\n"
-            "from povagent.sweep import run_sweep\n"
+            "from povagent.run.sweep import run_sweep\n"
             f"r = run_sweep({str(sweep)!r}, quiet=True)\n"
             "print(json.dumps({c.name: r.results[c.name].summary['rows'] for c in r.cells}))",
             installed,

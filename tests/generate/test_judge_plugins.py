@@ -156,8 +156,8 @@ def _pipeline(tmp_path: Path, judge: str) -> Path:
 
 
 def test_a_pipeline_names_a_judge_its_plugins_register_and_the_dataset_is_generated_with_it(tmp_path):
-    from povagent.config import load_pipeline
-    from povagent.runner import prepare_dataset
+    from povagent.config.pipeline import load_pipeline
+    from povagent.run.runner import prepare_dataset
 
     config = load_pipeline(_pipeline(tmp_path, "front-and-up"))
     assert config.dataset.generate.judge.name == "front-and-up"
@@ -168,7 +168,7 @@ def test_a_pipeline_names_a_judge_its_plugins_register_and_the_dataset_is_genera
 
 
 def test_a_typo_in_a_pipelines_judge_fails_before_any_work_with_line_and_nearest_name(tmp_path):
-    from povagent.config import load_pipeline
+    from povagent.config.pipeline import load_pipeline
 
     path = _pipeline(tmp_path, "{name: front-and-upp, options: {}}")
     with pytest.raises(ConfigError) as err:
@@ -181,7 +181,7 @@ def test_the_judge_defaults_are_one_name_everywhere():
     from typer.main import get_command
 
     from povagent.cli import app
-    from povagent.config import GenerateSpec
+    from povagent.config.pipeline import GenerateSpec
 
     assert GenerateSpec(out="x").judge.name == DEFAULT_JUDGE
     generate = get_command(app).commands["generate"]

@@ -35,8 +35,8 @@ def test_scoring_the_projected_ground_truth_pixel_gives_zero(tiny_dataset):
 def test_the_oracle_backend_run_as_a_pipeline_scores_zero_on_a_generated_set(tiny_dataset, tmp_path):
     import yaml
 
-    from povagent.config import load_pipeline
-    from povagent.runner import run_pipeline
+    from povagent.config.pipeline import load_pipeline
+    from povagent.run.runner import run_pipeline
 
     doc = {
         "dataset": str(tiny_dataset.root),

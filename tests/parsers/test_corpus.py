@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.answers import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
+from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
 from povagent.plugins import build_plugin_host
 
 CORPUS = yaml.safe_load((Path(__file__).parent / "corpus.yaml").read_text(encoding="utf-8"))

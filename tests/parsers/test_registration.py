@@ -50,7 +50,7 @@ def test_every_built_in_strategy_is_registered():
 @pytest.mark.parametrize("name", sorted(PARSERS))
 @pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}'])
 def test_no_parser_raises_on_hostile_text(name, text):
-    from povagent.answers import AnswerSpec, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parsed = registered("register_parsers")[name]().parse(text, spec)
@@ -65,7 +65,7 @@ def test_no_parser_raises_on_generated_text(name):
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
-    from povagent.answers import AnswerSpec, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parser = registered("register_parsers")[name]()

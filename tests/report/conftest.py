@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.answers import ParsedAnswer, ParseStatus
+from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
-from povagent.results import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
+from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
 from povagent.scoring.official import project_ground_truth
 from povagent_plugins.scorers.official import OfficialScorer
 
@@ -190,8 +190,8 @@ def realworld_predictions(dataset, plan: dict[str, tuple[str, ...]]) -> list[dic
 def realworld_sweep(tmp_path_factory) -> Path:
     """A real sweep on the demo real-world set, two runs per cell: the center baseline and a
     "model" replaying :data:`REALWORLD_PLAN`; rows written and scored by the real runner."""
-    from povagent.realworld import load_realworld
-    from povagent.sweep import run_sweep
+    from povagent.dataset.realworld import load_realworld
+    from povagent.run.sweep import run_sweep
 
     base = tmp_path_factory.mktemp("realworld_sweep")
     dataset = load_realworld(REALWORLD_DEMO, cache_dir=base / "letterboxed")

@@ -9,7 +9,7 @@ import pytest
 
 from povagent.errors import PredictionsError
 from povagent.report.collect import collect
-from povagent.results import read_rows
+from povagent.results.rows import read_rows
 
 
 def test_run_folder_yields_one_observation_per_row(run_dir):

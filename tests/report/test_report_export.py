@@ -7,11 +7,11 @@ import json
 import pytest
 
 from povagent.errors import PredictionsError
-from povagent.official_format import read_official_predictions
+from povagent.results.official_format import read_official_predictions
 from povagent.report.export import export_run
-from povagent.results import read_rows
+from povagent.results.rows import read_rows
 from povagent.scoring.predictions import score_predictions
-from povagent.scoring.summary import ScoredRow, breakdown
+from povagent.scoring.breakdown import ScoredRow, breakdown
 
 
 def test_export_writes_one_official_file_per_run_index(run_dir, tmp_path):
@@ -62,8 +62,8 @@ def test_exporting_a_sweep_folder_asks_for_one_run_folder(sweep_dir, tmp_path):
 def test_exported_predictions_replayed_through_the_runner_score_exactly_like_the_run(run_dir, tmp_path, mini_root):
     import yaml
 
-    from povagent.config import load_pipeline
-    from povagent.runner import run_pipeline
+    from povagent.config.pipeline import load_pipeline
+    from povagent.run.runner import run_pipeline
 
     (path,) = export_run(run_dir, tmp_path / "p.json", run=0)
     doc = {

@@ -1,4 +1,4 @@
-"""The report reads exactly what the real sweep runner writes (povagent.sweep + baselines)."""
+"""The report reads exactly what the real sweep runner writes (povagent.run.sweep + baselines)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from povagent.report.paper_tables import main_table, system_row
 
 @pytest.fixture(scope="module")
 def real_sweep(tmp_path_factory, mini_root):
-    from povagent.sweep import run_sweep
+    from povagent.run.sweep import run_sweep
 
     base = tmp_path_factory.mktemp("real_sweep")
     (base / "pipeline.yaml").write_text(yaml.safe_dump({

@@ -22,13 +22,13 @@ from PIL import Image
 
 from test_report_html import body_attr, browse, cards, dump, gallery_data  # the Chromium helpers
 
-from povagent.realworld import load_realworld
+from povagent.dataset.realworld import load_realworld
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.build import write_report
 from povagent.report.collect import Observation
 from povagent.report.gallery import GT_COLOUR, PRED_COLOUR, drawing_for, render
 from povagent.report.paper_tables import success_table, system_row
-from povagent.results import iter_rows
+from povagent.results.rows import iter_rows
 
 REALWORLD_DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
 

@@ -13,8 +13,8 @@ from povagent.report.baseline import CENTER_SYSTEM, center_score
 from povagent.report.collect import collect
 from povagent.report.paper_tables import main_table, paper_tables, response_table, system_row
 from povagent.report.tables import Cell, Column, Row, Table, to_csv, to_html, to_latex, to_markdown
-from povagent.results import read_rows
-from povagent.scoring.summary import ScoredRow, breakdown
+from povagent.results.rows import read_rows
+from povagent.scoring.breakdown import ScoredRow, breakdown
 
 
 def analysis_of(path, n_boot=200):
@@ -24,7 +24,7 @@ def analysis_of(path, n_boot=200):
 
 
 def scorer_per_run(run_dir):
-    """The official summary (povagent.scoring.summary) of each run index of a run folder."""
+    """The official summary (povagent.scoring.breakdown) of each run index of a run folder."""
     by_run = defaultdict(list)
     for r in read_rows(run_dir / "results.jsonl"):
         off = r.scores["official"]

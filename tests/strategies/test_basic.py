@@ -7,8 +7,8 @@ import asyncio
 import pytest
 
 from povagent.dataset.models import Condition
-from povagent.exchange import ImagePart, Response, TextPart
-from povagent.images import ImageStore
+from povagent.exchange.messages import ImagePart, Response, TextPart
+from povagent.exchange.images import ImageStore
 from povagent_plugins.strategies.basic import BasicStrategy
 
 
@@ -93,9 +93,9 @@ def test_the_request_hash_is_stable_across_stores(make_instance, facing_z):
 
 
 # -- messages and prompts built once per frame set / template, the same values -------------------
-from povagent.answers import AnswerSpec, frame_answer_schema, point_answer_schema  # noqa: E402
-from povagent.exchange import Message, Request  # noqa: E402
-from povagent.prompts import frame_values, render  # noqa: E402
+from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema  # noqa: E402
+from povagent.exchange.messages import Message, Request  # noqa: E402
+from povagent.exchange.prompts import frame_values, render  # noqa: E402
 from povagent_plugins.strategies.basic import fill_sentence  # noqa: E402
 from povagent_plugins.strategies.layout import answer_spec, prompt_message  # noqa: E402
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from povagent.dataset.models import Condition
-from povagent.images import ImageStore
-from povagent.prompts import load_template
+from povagent.exchange.images import ImageStore
+from povagent.exchange.prompts import load_template
 from povagent_plugins.strategies.basic import BasicStrategy
 from povagent_plugins.strategies.cot import CotStrategy, SpatialCotStrategy
 

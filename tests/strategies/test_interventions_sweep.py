@@ -8,7 +8,7 @@ import yaml
 from typer.testing import CliRunner
 
 from povagent.cli import app
-from povagent.results import read_rows
+from povagent.results.rows import read_rows
 
 INTERVENTIONS = ["basic", "o-plot", "oa-plot", "cot", "spatial-cot"]
 

@@ -14,7 +14,7 @@ import math
 
 import pytest
 
-from povagent.images import ImageStore
+from povagent.exchange.images import ImageStore
 from povagent_plugins.strategies.markers import (
     ObserverAnchorPlotStrategy,
     ObserverPlotStrategy,

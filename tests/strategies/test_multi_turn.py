@@ -12,11 +12,11 @@ from dataclasses import replace
 import yaml
 
 from povagent import hookimpl
-from povagent.answers import ParseStatus
-from povagent.config import load_pipeline
-from povagent.exchange import Message
-from povagent.runner import run_pipeline
-from povagent.results import read_rows
+from povagent.answers.spec import ParseStatus
+from povagent.config.pipeline import load_pipeline
+from povagent.exchange.messages import Message
+from povagent.run.runner import run_pipeline
+from povagent.results.rows import read_rows
 from povagent_plugins.parsers.json_answer import JsonAnswerParser
 from povagent_plugins.strategies.basic import BasicStrategy
 

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from povagent.testing import write_release
+from povagent.testing.pytest_plugin import write_release
 
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "runner" / "offline_plugin.py")
+OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
 
 
 @pytest.fixture(scope="session")

@@ -10,9 +10,9 @@ import pytest
 import yaml
 
 from povagent.errors import ConfigError
-from povagent.sweep import dry_run, expand_sweep, run_sweep
+from povagent.run.sweep import dry_run, expand_sweep, run_sweep
 
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "runner" / "offline_plugin.py")
+OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
 
 PER_CONDITION = 4
 

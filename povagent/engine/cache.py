@@ -1,0 +1,212 @@
+"""The response cache: content-addressed, on disk, shared by every run and cell that points at it.
+
+The key is the SHA-256 of the backend's identity (model and answer-changing options, never a
+secret), the request's content hash (messages with image *hashes*, generation parameters) and
+the run index, so re-running a finished sweep makes no model call while repeats stay
+independent samples. Only successful responses are stored: an error is never cached.
+
+One SQLite file in WAL mode: several processes may read and write it at once, a crash loses at
+most the last uncommitted answers, and a corrupt or foreign file is reported, not trusted.
+:meth:`ResponseCache.put` stores at once; :meth:`ResponseCache.put_deferred` queues (visible to
+:meth:`ResponseCache.get` at once) for :meth:`ResponseCache.flush`, which writes the queue in one
+transaction on its own connection, so a caller can keep writes off its event loop: the runner
+flushes from its row-writing thread before each batch of rows, so an answer is stored before
+the row that holds it is durable. Reads use a connection of their own (WAL readers never wait
+for a writer). This module must not decide *whether* to cache (the runner does, from
+``Backend.cacheable``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sqlite3
+import threading
+import time
+from pathlib import Path
+from typing import Any, Mapping
+
+from povagent.errors import PovagentError
+from povagent.exchange.messages import Response, Usage
+
+SCHEMA_VERSION = 1
+
+
+def identity_json(backend_identity: Mapping[str, Any]) -> str:
+    """Canonical JSON of a backend identity (compute once per run, reuse per request)."""
+    return json.dumps(backend_identity, sort_keys=True, separators=(",", ":"), default=str)
+
+
+def cache_key(backend_identity: Mapping[str, Any] | str, request_hash: str, run: int) -> str:
+    """The cache key of one model call (hex SHA-256).
+
+    ``backend_identity`` is the backend's identity, or its :func:`identity_json` computed once.
+    """
+    blob = backend_identity if isinstance(backend_identity, str) else identity_json(backend_identity)
+    h = hashlib.sha256()
+    h.update(f"povagent-cache-v{SCHEMA_VERSION}\x00".encode())
+    h.update(blob.encode())
+    h.update(f"\x00{request_hash}\x00{run}".encode())
+    return h.hexdigest()
+
+
+class CacheError(PovagentError):
+    """The cache file cannot be used (not a povagent cache, or corrupt)."""
+
+
+class ResponseCache:
+    """Responses by key in one SQLite file (thread-safe; safe across processes via WAL)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.hits = 0
+        self.misses = 0
+        self.writes = 0
+        self._lock = threading.Lock()  # the read connection
+        self._write_lock = threading.Lock()  # the write connection
+        self._pending_lock = threading.Lock()
+        #: Responses queued by put_deferred(), by key: (key, text, usage, model, latency_s, created),
+        #: the usage as read (serialized when written, off the caller's loop).
+        self._pending: dict[str, tuple[str, str, Usage, str | None, float, float]] = {}
+        self._db: sqlite3.Connection | None = None
+        self._wdb: sqlite3.Connection | None = None
+        try:
+            self._wdb = self._connect()
+            self._wdb.execute("PRAGMA journal_mode=WAL")
+            self._wdb.execute(
+                "CREATE TABLE IF NOT EXISTS responses ("
+                " key TEXT PRIMARY KEY, text TEXT NOT NULL, usage TEXT NOT NULL,"
+                " model TEXT, latency_s REAL NOT NULL, created REAL NOT NULL)"
+            )
+            self._db = self._connect()
+            self._db.execute("SELECT 1 FROM responses LIMIT 1").fetchall()
+        except sqlite3.DatabaseError as exc:
+            for db in (self._db, self._wdb):
+                if db is not None:
+                    db.close()
+            raise CacheError(f"{self.path}: cannot be used as a response cache ({exc}); delete it or choose another cache path") from None
+
+    def _connect(self) -> sqlite3.Connection:
+        db = sqlite3.connect(self.path, check_same_thread=False, timeout=30.0, isolation_level=None)
+        # NORMAL in WAL: a power cut may lose the last answers, never corrupt the file;
+        # a lost answer just costs one more call.
+        db.execute("PRAGMA synchronous=NORMAL")
+        return db
+
+    def get(self, key: str) -> Response | None:
+        """The cached response for ``key`` (marked ``cached=True``), or ``None``.
+
+        A response queued by :meth:`put_deferred` and not yet flushed is found too.
+        """
+        pending = self._pending.get(key)
+        if pending is not None:
+            self.hits += 1
+            _, text, u, model, latency, _ = pending
+            return Response(text=text, usage=Usage(u.prompt_tokens, u.completion_tokens, u.cost_usd), latency_s=latency, model=model, cached=True)
+        with self._lock:
+            row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]
+        if row is None:
+            self.misses += 1
+            return None
+        self.hits += 1
+        text, usage, model, latency = row
+        u = json.loads(usage)
+        return Response(
+            text=text,
+            usage=Usage(u.get("prompt_tokens"), u.get("completion_tokens"), u.get("cost_usd")),
+            latency_s=latency,
+            model=model,
+            cached=True,
+        )
+
+    @staticmethod
+    def _record(key: str, response: Response) -> tuple[str, str, Usage, str | None, float, float]:
+        u = response.usage
+        return (key, response.text, Usage(u.prompt_tokens, u.completion_tokens, u.cost_usd), response.model, response.latency_s, time.time())
+
+    def _insert(self, records: list[tuple[str, str, Usage, str | None, float, float]]) -> None:
+        """Write ``records`` in one transaction."""
+        rows = [
+            (key, text, json.dumps({"prompt_tokens": u.prompt_tokens, "completion_tokens": u.completion_tokens, "cost_usd": u.cost_usd}),
+             model, latency, created)
+            for key, text, u, model, latency, created in records
+        ]
+        with self._write_lock:
+            db = self._wdb
+            assert db is not None, "cache closed"
+            db.execute("BEGIN")
+            try:
+                db.executemany(
+                    "INSERT OR REPLACE INTO responses (key, text, usage, model, latency_s, created) VALUES (?, ?, ?, ?, ?, ?)",
+                    rows,
+                )
+            except BaseException:
+                db.execute("ROLLBACK")
+                raise
+            db.execute("COMMIT")
+            self.writes += len(records)
+
+    def put(self, key: str, response: Response) -> None:
+        """Store a successful response now (the caller never passes an error)."""
+        self._insert([self._record(key, response)])
+
+    def put_deferred(self, key: str, response: Response) -> None:
+        """Queue a successful response (the caller never passes an error) for :meth:`flush`.
+
+        :meth:`get` finds it at once; it is on disk after the next :meth:`flush` (or
+        :meth:`close`). The response's fields are read now.
+        """
+        record = self._record(key, response)
+        with self._pending_lock:
+            self._pending[key] = record
+
+    @property
+    def pending(self) -> int:
+        """How many queued responses are not yet written."""
+        return len(self._pending)
+
+    def flush(self) -> int:
+        """Write the queued responses in one transaction (safe from any thread); returns how
+        many. A response stays visible to :meth:`get` until it is written; if writing fails,
+        the error is raised and the responses stay queued."""
+        with self._pending_lock:
+            batch = list(self._pending.values())
+        if not batch:
+            return 0
+        self._insert(batch)
+        with self._pending_lock:
+            for record in batch:
+                if self._pending.get(record[0]) is record:
+                    del self._pending[record[0]]
+        return len(batch)
+
+    def discard_pending(self) -> int:
+        """Drop the queued responses without writing them (after a failed :meth:`flush`)."""
+        with self._pending_lock:
+            n = len(self._pending)
+            self._pending.clear()
+        return n
+
+    def __len__(self) -> int:
+        self.flush()
+        with self._lock:
+            return int(self._db.execute("SELECT COUNT(*) FROM responses").fetchone()[0])  # type: ignore[union-attr]
+
+    def close(self) -> None:
+        """Write what is queued, then close the database."""
+        try:
+            self.flush()
+        finally:
+            with self._write_lock:
+                if self._wdb is not None:
+                    self._wdb.close()
+            with self._lock:
+                if self._db is not None:
+                    self._db.close()
+
+    def __enter__(self) -> "ResponseCache":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,5 @@
+"""What a model is shown: requests and responses (``messages``), the run-wide image store
+(``images``), prompt templates (``prompts``) and a request rendered for a person (``preview``).
+
+Nothing here calls a model: sending a request is :mod:`povagent.engine`'s job.
+"""

@@ -1,0 +1,131 @@
+"""One exchange with a model: the request a strategy builds and the response a backend returns.
+
+Requests carry images by reference (content hash), never as bytes: the backend asks the run's
+:class:`povagent.exchange.images.ImageStore` for the encoded bytes, and the cache key hashes the
+references, so identical requests share one key whatever their images weigh.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
+
+from povagent.answers.spec import AnswerSpec
+
+if TYPE_CHECKING:
+    from povagent.dataset.instances import Instance
+
+
+@dataclass(frozen=True)
+class TextPart:
+    """A piece of text in a message."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class ImagePart:
+    """An image in a message, by content hash (see :class:`povagent.exchange.images.ImageStore`)."""
+
+    image_hash: str
+    label: str = ""
+
+
+Part = TextPart | ImagePart
+
+
+@dataclass(frozen=True)
+class Message:
+    """A chat message: a role and an ordered list of parts."""
+
+    role: Literal["system", "user", "assistant"]
+    parts: tuple[Part, ...]
+
+    @classmethod
+    def text(cls, role: Literal["system", "user", "assistant"], text: str) -> "Message":
+        """A message holding one text part."""
+        return cls(role, (TextPart(text),))
+
+
+@dataclass(frozen=True)
+class GenerationParams:
+    """Sampling settings a strategy asks for (backends may add their own options)."""
+
+    max_tokens: int = 256
+    temperature: float | None = None
+    extra: tuple[tuple[str, Any], ...] = ()
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain dict, ``None`` values dropped."""
+        d: dict[str, Any] = {"max_tokens": self.max_tokens}
+        if self.temperature is not None:
+            d["temperature"] = self.temperature
+        d.update(dict(self.extra))
+        return d
+
+
+@dataclass(frozen=True)
+class Request:
+    """What a strategy asks a backend.
+
+    ``instance`` is context for offline baselines (the oracle reads the GT from it) and ``run``
+    the repeat index (seeded baselines and replay read it); neither is sent to models nor part
+    of :meth:`fingerprint` (the runner adds the run index to the cache key itself).
+    """
+
+    messages: tuple[Message, ...]
+    answer: AnswerSpec
+    generation: GenerationParams = field(default_factory=GenerationParams)
+    instance: "Instance | None" = field(default=None, compare=False)
+    run: int = field(default=0, compare=False)
+
+    def fingerprint(self) -> dict[str, Any]:
+        """JSON-able description of everything that determines the answer (images by hash)."""
+        return {
+            "messages": [
+                {
+                    "role": m.role,
+                    "parts": [
+                        {"text": p.text} if isinstance(p, TextPart) else {"image": p.image_hash}
+                        for p in m.parts
+                    ],
+                }
+                for m in self.messages
+            ],
+            "generation": self.generation.as_dict(),
+        }
+
+    def content_hash(self) -> str:
+        """SHA-256 of :meth:`fingerprint` (stable across runs and machines)."""
+        blob = json.dumps(self.fingerprint(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode()).hexdigest()
+
+    def image_hashes(self) -> list[str]:
+        """Hashes of every image in the request, in order."""
+        return [p.image_hash for m in self.messages for p in m.parts if isinstance(p, ImagePart)]
+
+
+@dataclass
+class Usage:
+    """Token counts and cost of one model call (``None`` where the provider does not say)."""
+
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    cost_usd: float | None = None
+
+
+@dataclass
+class Response:
+    """What a backend returns: the raw text and what it cost.
+
+    ``retries`` and ``cached`` are filled in by the runner.
+    """
+
+    text: str
+    usage: Usage = field(default_factory=Usage)
+    latency_s: float = 0.0
+    model: str | None = None
+    retries: int = 0
+    cached: bool = False

@@ -1,0 +1,176 @@
+"""The result row: one (instance, run), as written to ``results.jsonl``.
+
+A row holds everything needed to re-parse, re-score and report without calling a model again:
+the raw answer(s), the parse, the scores, and the cost. Never image bytes: only hashes.
+Rows are appended one JSON line each; a line cut short by a crash is skipped on read (and the
+key is then run again on resume).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from datetime import datetime, timezone
+from enum import StrEnum
+from pathlib import Path
+from typing import Any, Iterator
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from povagent.answers.spec import ParsedAnswer
+
+
+class RowStatus(StrEnum):
+    """Outcome of one row: ``answered``, ``parse_error`` (model answered, no point read) or
+    ``infra_error`` (no answer: retries exhausted or a permanent API error)."""
+
+    ANSWERED = "answered"
+    PARSE_ERROR = "parse_error"
+    INFRA_ERROR = "infra_error"
+
+
+class ExchangeRecord(BaseModel):
+    """One model call of a row (multi-turn strategies have several)."""
+
+    request_hash: str
+    image_hashes: list[str] = Field(default_factory=list)
+    raw: str | None = None
+    latency_s: float = 0.0
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    cost_usd: float | None = None
+    retries: int = 0
+    cached: bool = False
+
+
+class Prediction(BaseModel):
+    """The prediction as scored: pixels in the frame named by ``image_path`` (A/B)."""
+
+    selected_image: int | None = None
+    image_path: str | None = None
+    x: float | None = None
+    y: float | None = None
+
+
+class ResultRow(BaseModel):
+    """One (instance, run)."""
+
+    model_config = ConfigDict(extra="allow")
+
+    key: str
+    instance_id: str
+    house_id: str
+    pair_id: str
+    direction: str
+    condition: str
+    run: int = 0
+    sentence: str = ""
+    backend: str = ""
+    strategy: str = ""
+    parser: str = ""
+    config_hash: str = ""
+    status: RowStatus
+    exchanges: list[ExchangeRecord] = Field(default_factory=list)
+    parse: ParsedAnswer | None = None
+    prediction: Prediction = Field(default_factory=Prediction)
+    scores: dict[str, dict[str, Any]] = Field(default_factory=dict)
+    error_type: str | None = None
+    error_message: str | None = None
+    latency_s: float = 0.0
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    cost_usd: float | None = None
+    retries: int = 0
+    started_at: str | None = None
+    finished_at: str | None = None
+
+    @property
+    def raw_response(self) -> str | None:
+        """The final raw answer (the last exchange's)."""
+        return self.exchanges[-1].raw if self.exchanges else None
+
+
+def utc_now() -> str:
+    """ISO-8601 UTC timestamp with milliseconds."""
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+
+
+class ResultsWriter:
+    """Appends rows to a JSONL file, flushing and fsyncing each, so a crash loses nothing written."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._repair_tail()
+        self._fh = open(self.path, "a", encoding="utf-8")
+
+    def _repair_tail(self) -> None:
+        # A kill mid-write leaves a last line without its newline: cut it so the next append
+        # starts on a fresh line (its key is simply run again).
+        if not self.path.exists() or self.path.stat().st_size == 0:
+            return
+        with open(self.path, "rb+") as fh:
+            fh.seek(0, os.SEEK_END)
+            size = fh.tell()
+            fh.seek(max(0, size - 1))
+            if fh.read(1) == b"\n":
+                return
+            data = self.path.read_bytes()
+            cut = data.rfind(b"\n") + 1
+            fh.truncate(cut)
+
+    def write(self, row: ResultRow) -> None:
+        """Append one row durably."""
+        self.write_lines(row.model_dump_json(exclude_none=False) + "\n")
+
+    def write_lines(self, text: str) -> None:
+        """Append already-serialized rows (each ending in a newline), then fsync once.
+
+        The group commit of the runner: rows finished together share one fsync.
+        """
+        self._fh.write(text)
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+
+    def close(self) -> None:
+        """Close the file."""
+        self._fh.close()
+
+    def __enter__(self) -> "ResultsWriter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def iter_rows(path: str | Path) -> Iterator[ResultRow]:
+    """Rows of a results file; a truncated or malformed line is skipped."""
+    p = Path(path)
+    if not p.exists():
+        return
+    with open(p, encoding="utf-8") as fh:
+        for line in fh:
+            if not line.endswith("\n"):
+                continue
+            try:
+                yield ResultRow.model_validate_json(line)
+            except ValidationError:
+                continue
+
+
+def read_rows(path: str | Path) -> list[ResultRow]:
+    """All complete rows of a results file; when a key repeats, the last row wins."""
+    by_key: dict[str, ResultRow] = {}
+    for row in iter_rows(path):
+        by_key[row.key] = row
+    return list(by_key.values())
+
+
+def done_keys(path: str | Path) -> set[str]:
+    """Keys already finished in a results file (for resume)."""
+    return {row.key for row in iter_rows(path)}
+
+
+def dumps_row(row: ResultRow) -> str:
+    """A row as one JSON line (no newline)."""
+    return json.dumps(row.model_dump(mode="json"), separators=(",", ":"))

@@ -1,0 +1,157 @@
+"""Re-parse and re-score a finished run offline, with another parser: no model is called.
+
+Every row keeps its raw answer(s), so a run can be read again: for each row of
+``RUN_DIR/results.jsonl`` the final raw answer is parsed with the named parser against the
+answer schema the run's strategy asked for (rebuilt from the strategy, without images when it
+offers ``answer_spec(instance)``), scored with the run's scorers, and written to
+``RUN_DIR/rescored-<parser>/`` (``results.jsonl``, ``summary.json``, ``config.yaml``). The
+original run is never modified. Rows without an answer (infrastructure errors) are kept as is.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.config.pipeline import PipelineConfig, read_yaml, validation_message
+from povagent.dataset.instances import Instance
+from povagent.dataset.loader import Dataset, load_dataset
+from povagent.errors import ConfigError, DatasetError, PredictionsError
+from povagent.exchange.images import ImageStore
+from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
+from povagent.scoring.official import scoring_frame
+from povagent.scoring.breakdown import ScoredRow, breakdown
+
+
+@dataclass
+class RescoreResult:
+    """Where the rescored run went, its summary, and rows that could not be rescored."""
+
+    out_dir: Path
+    summary: dict[str, Any]
+    warnings: list[str] = field(default_factory=list)
+
+
+def read_run_config(run_dir: Path) -> PipelineConfig:
+    """The pipeline a run was made with (``RUN_DIR/config.yaml``), validated."""
+    source = read_yaml(run_dir / "config.yaml")
+    if not isinstance(source.data, dict):
+        raise ConfigError(f"{source.file}: a pipeline must be a YAML mapping (key: value)")
+    data = dict(source.data)
+    if data.get("model") is not None and data.get("backend") is not None:
+        # a resolved config keeps the profile name beside the backend it resolved to
+        data["model"] = None
+    try:
+        return PipelineConfig.model_validate(data)
+    except Exception as exc:  # pydantic ValidationError: name file and line
+        from pydantic import ValidationError
+
+        if isinstance(exc, ValidationError):
+            raise ConfigError(f"invalid pipeline:\n{validation_message(exc, PipelineConfig, source)}") from None
+        raise
+
+
+def answer_spec_for(strategy: Any, instance: Instance, images: ImageStore) -> AnswerSpec:
+    """What ``strategy`` asked for ``instance``: its ``answer_spec(instance)`` when it has one,
+    else the answer of the request it builds (which may read the frames, never a model)."""
+    cheap = getattr(strategy, "answer_spec", None)
+    if callable(cheap):
+        spec = cheap(instance)
+        if isinstance(spec, AnswerSpec):
+            return spec
+    return strategy.build(instance, images).answer
+
+
+def prediction_of(instance: Instance, parsed: ParsedAnswer) -> Prediction:
+    """The prediction as scored: pixels, and for A/B the selected frame's ``image_path``."""
+    frame = scoring_frame(instance, parsed.selected_image) if parsed.answered else None
+    image_path = frame.image_path if frame is not None and instance.condition.uses_exploration_frames else None
+    return Prediction(selected_image=parsed.selected_image, image_path=image_path, x=parsed.x, y=parsed.y)
+
+
+def rescore_row(
+    row: ResultRow, instance: Instance, spec: AnswerSpec, parser: Any, parser_name: str, scorers: dict[str, Any], dataset: Dataset
+) -> ResultRow:
+    """``row`` re-parsed from its final raw answer and re-scored (infra errors kept as they are)."""
+    raw = row.raw_response
+    if row.status is RowStatus.INFRA_ERROR or raw is None:
+        return row.model_copy(update={"parser": parser_name})
+    parsed = parser.parse(raw, spec)
+    scores = {name: scorer.score(instance, parsed, dataset) for name, scorer in scorers.items()}
+    return row.model_copy(
+        update={
+            "parser": parser_name,
+            "parse": parsed,
+            "status": RowStatus.ANSWERED if parsed.answered else RowStatus.PARSE_ERROR,
+            "prediction": prediction_of(instance, parsed),
+            "scores": scores,
+        }
+    )
+
+
+def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict[str, Any]:
+    """The official breakdown of rescored rows (from ``scores[scorer_name]``), with parse counts."""
+    scored = []
+    for row in rows:
+        s = row.scores.get(scorer_name, {})
+        scored.append(
+            ScoredRow(row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"))
+        )
+    summary = breakdown(scored)
+    summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
+    summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
+    return summary
+
+
+def rescore_run(
+    run_dir: str | Path, parser_name: str, *, dataset_root: str | Path | None = None, host: PluginHost | None = None
+) -> RescoreResult:
+    """Re-parse every row of a finished run with ``parser_name`` and re-score it (offline)."""
+    run = Path(run_dir)
+    results = run / "results.jsonl"
+    if not results.is_file():
+        raise PredictionsError(f"{results}: not found (is {run} a run folder?)")
+    config = read_run_config(run)
+    host = host or get_plugin_host(config.plugins)
+    parser = host.create("parser", parser_name, {})
+    strategy = host.create("strategy", config.strategy.name, config.strategy.options)
+    scorers = {s.name: host.create("scorer", s.name, s.options) for s in config.scorers}
+    root = Path(dataset_root) if dataset_root is not None else config.dataset.root
+    if dataset_root is None and not root.is_absolute() and not root.exists():
+        # relative paths in a pipeline are relative to the directory the run was started from
+        raise DatasetError(
+            f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
+            f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
+        )
+    dataset = load_dataset(root)
+    images = ImageStore()
+    warnings: list[str] = []
+    out_dir = run / f"rescored-{parser_name}"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    out_file = out_dir / "results.jsonl"
+    out_file.unlink(missing_ok=True)
+    rows_out: list[ResultRow] = []
+    with ResultsWriter(out_file) as writer:
+        for row in read_rows(results):
+            instance = dataset.instance(row.instance_id)
+            if instance is None:
+                warnings.append(f"{row.key}: instance {row.instance_id} is not in the dataset {root}; row left out")
+                continue
+            spec = answer_spec_for(strategy, instance, images)
+            new = rescore_row(row, instance, spec, parser, parser_name, scorers, dataset)
+            writer.write(new)
+            rows_out.append(new)
+    scorer_name = "official" if "official" in scorers else next(iter(scorers), "official")
+    summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **summarize_rows(rows_out, scorer_name)}
+    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    rescored_config = config.resolved_dict()
+    rescored_config["parser"] = {"name": parser_name, "options": {}}
+    (out_dir / "config.yaml").write_text(yaml.safe_dump(rescored_config, sort_keys=False), encoding="utf-8")
+    return RescoreResult(out_dir, summary, warnings)

@@ -1,0 +1,269 @@
+"""Sweeps: one base pipeline expanded over axes into cells, run with one cache and one image store.
+
+A sweep YAML (see :class:`povagent.config.pipeline.SweepConfig`) names a base pipeline, axes
+(``model``, ``backend``, ``strategy``, ``parser``, ``conditions``, ``runs``) and optional named
+overrides. Their cartesian product gives the cells; each cell is an ordinary pipeline whose
+output is ``<sweep output>/<cell name>`` and whose cache is the sweep's. ``sweep.json`` in the
+sweep folder indexes the cells (axes, folder, status, overall score) and is rewritten after
+each cell, so an interrupted sweep resumes cell by cell and key by key.
+
+A dry run prints the cells, the requests still to make (finished keys subtracted) and a rough
+token estimate, without calling any model. This module must not render tables.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from povagent.engine.cache import ResponseCache
+from povagent.config.pipeline import (
+    REPLACED_WHOLE,
+    ConfigSource,
+    PipelineConfig,
+    SweepConfig,
+    deep_merge,
+    load_sweep,
+    pipeline_from_source,
+)
+from povagent.dataset.loader import Dataset
+from povagent.errors import ConfigError
+from povagent.exchange.images import ImageStore
+from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.run.progress import make_progress
+from povagent.run.runner import PipelineRun, RunResult, create_components, ensure_dataset, pending_keys
+
+SWEEP_INDEX = "sweep.json"
+
+#: Rough prompt tokens per 512x512 image (ViT patches of 28 px); dry-run estimates only.
+TOKENS_PER_IMAGE_PIXEL = 1.0 / (28 * 28)
+
+
+@dataclass
+class Cell:
+    """One point of the sweep: its name, the axis values that made it, and its pipeline."""
+
+    name: str
+    axes: dict[str, str]
+    config: PipelineConfig
+
+
+@dataclass
+class DryRunCell:
+    """What a cell still has to do."""
+
+    name: str
+    n_total: int
+    n_done: int
+    requests: int
+    prompt_tokens: int
+    max_completion_tokens: int
+
+
+@dataclass
+class SweepResult:
+    """What :func:`run_sweep` returns."""
+
+    output: Path
+    cells: list[Cell]
+    results: dict[str, RunResult] = field(default_factory=dict)
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-") or "x"
+
+
+def _spec_label(spec: Any) -> str:
+    model = spec.options.get("model") if isinstance(spec.options, dict) else None
+    return _slug(f"{spec.name}-{model}" if isinstance(model, str) else spec.name)
+
+
+def _axis_values(sweep: SweepConfig) -> list[tuple[str, list[tuple[str, dict[str, Any]]]]]:
+    """Each axis as ``(axis, [(label, partial pipeline), ...])`` in a fixed order."""
+    a = sweep.axes
+    axes: list[tuple[str, list[tuple[str, dict[str, Any]]]]] = []
+    if a.model:
+        axes.append(("model", [(_slug(m), {"model": m, "backend": None}) for m in a.model]))
+    if a.backend:
+        axes.append(("backend", [(_spec_label(s), {"backend": s.model_dump(), "model": None}) for s in a.backend]))
+    if a.strategy:
+        axes.append(("strategy", [(_spec_label(s), {"strategy": s.model_dump()}) for s in a.strategy]))
+    if a.parser:
+        axes.append(("parser", [(_spec_label(s), {"parser": s.model_dump()}) for s in a.parser]))
+    if a.conditions:
+        axes.append(("conditions", [(c.value, {"instances": {"conditions": [c.value]}}) for c in a.conditions]))
+    if a.runs:
+        axes.append(("runs", [(f"run{r}", {"runs": [r]}) for r in a.runs]))
+    if sweep.overrides:
+        axes.append(("override", [(_slug(name), part) for name, part in sweep.overrides.items()]))
+    for axis, values in axes:
+        labels = [label for label, _ in values]
+        if len(set(labels)) != len(labels):
+            # Same plugin twice with other options: number them so folders stay distinct.
+            axes[axes.index((axis, values))] = (axis, [(f"{label}-{i}", part) for i, (label, part) in enumerate(values)])
+    return axes
+
+
+def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost) -> None:
+    problems = []
+    checks = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
+              ("strategy", "strategy", sweep.axes.strategy or []), ("parser", "parser", sweep.axes.parser or [])]
+    for axis, kind, values in checks:
+        known = host.names(kind)
+        for i, v in enumerate(values):
+            name = v if isinstance(v, str) else v.name
+            if name not in known:
+                problems.append(f"{source.where(('axes', axis, i))}: axes.{axis}[{i}]: {unknown_name_message(kind, name, known)}")
+    if problems:
+        raise ConfigError("unknown plugin name(s):\n" + "\n".join(problems))
+
+
+def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bool = False) -> tuple[SweepConfig, list[Cell]]:
+    """Read a sweep YAML and expand it into validated cells (no request is made).
+
+    ``strict`` makes every cell stop at a bad house or pair of its dataset instead of
+    reporting it and going on.
+    """
+    sweep, source, base = load_sweep(path)
+    if not isinstance(base.data, dict):
+        raise ConfigError(f"{base.file}: the base pipeline must be a YAML mapping")
+    plugins = base.data.get("plugins") or []
+    if host is None:
+        try:
+            host = get_plugin_host(plugins if isinstance(plugins, list) else [])
+        except Exception as exc:
+            raise ConfigError(f"{base.where(('plugins',))}: {exc}") from None
+    _check_axis_names(sweep, source, host)
+    cache = {"enabled": sweep.cache.enabled, "path": str(sweep.cache.path or sweep.output / "cache.sqlite")}
+    axes = _axis_values(sweep)
+    cells: list[Cell] = []
+    for combo in itertools.product(*[values for _, values in axes]) if axes else [()]:
+        name = "__".join(label for label, _ in combo) or "base"
+        overrides: dict[str, Any] = {}
+        for _, part in combo:
+            overrides = deep_merge(overrides, part, REPLACED_WHOLE)
+        overrides["output"] = str(sweep.output / name)
+        overrides["cache"] = cache
+        cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines)
+        config = pipeline_from_source(cell_source, overrides=overrides, host=host)
+        if strict:
+            config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
+        cells.append(Cell(name, {axis: label for (axis, _), (label, _) in zip(axes, combo)}, config))
+    return sweep, cells
+
+
+def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRunCell]:
+    """Requests still to make per cell (finished keys subtracted) and a rough token estimate.
+
+    Tokens are estimated from a few built requests per cell: text at ~4 characters a token,
+    images at ~1 token per 28x28 pixels; completions at the strategy's ``max_tokens`` (an upper
+    bound). Multi-turn strategies may make more requests than keys.
+    """
+    datasets: dict[Any, Dataset] = {}
+    images = ImageStore()
+    out: list[DryRunCell] = []
+    for cell in cells:
+        h = host or get_plugin_host(cell.config.plugins)
+        ds = ensure_dataset(cell.config, datasets)
+        total, done, pending = pending_keys(cell.config, ds)
+        strategy = h.create("strategy", cell.config.strategy.name, cell.config.strategy.options)
+        samples = _one_per_condition([inst for inst, _ in pending])
+        prompt_per, completion_per = 0.0, 0
+        for inst in samples:
+            request = strategy.build(inst, images)
+            text = sum(len(p.text) for m in request.messages for p in m.parts if hasattr(p, "text"))
+            pixels = sum(images.info(hh).width * images.info(hh).height for hh in request.image_hashes())
+            prompt_per += text / 4 + pixels * TOKENS_PER_IMAGE_PIXEL
+            completion_per = max(completion_per, request.generation.max_tokens)
+        prompt_per = prompt_per / len(samples) if samples else 0.0
+        out.append(DryRunCell(cell.name, total, done, len(pending), math.ceil(prompt_per * len(pending)), completion_per * len(pending)))
+    return out
+
+
+def _one_per_condition(instances: list[Any]) -> list[Any]:
+    seen: dict[str, Any] = {}
+    for inst in instances:
+        seen.setdefault(str(inst.condition), inst)
+    return list(seen.values())
+
+
+def _write_index(output: Path, sweep_file: str, cells: list[Cell], status: dict[str, dict[str, Any]]) -> None:
+    index = {
+        "sweep": sweep_file,
+        "output": str(output),
+        "cells": [
+            {"name": c.name, "axes": c.axes, "run_dir": str(c.config.output), "config_hash": c.config.config_hash(), **status.get(c.name, {"status": "pending"})}
+            for c in cells
+        ],
+    }
+    output.mkdir(parents=True, exist_ok=True)
+    tmp = output / (SWEEP_INDEX + ".tmp")
+    tmp.write_text(json.dumps(index, indent=2, default=str) + "\n", encoding="utf-8")
+    os.replace(tmp, output / SWEEP_INDEX)
+
+
+def run_sweep(
+    path: str | Path,
+    *,
+    quiet: bool = False,
+    retry_errors: bool = False,
+    strict: bool = False,
+    on_cell_done: Callable[[Cell, RunResult], None] | None = None,
+) -> SweepResult:
+    """Run every cell of a sweep in turn, sharing one response cache and one image store.
+
+    ``strict``: stop at a bad house or pair of a dataset (default: report it and go on).
+    """
+    sweep, cells = expand_sweep(path, strict=strict)
+    for cell in cells:
+        # Every cell's plugin options are checked before the first request of the first cell.
+        create_components(cell.config, get_plugin_host(cell.config.plugins))
+    output = Path(sweep.output)
+    result = SweepResult(output, cells)
+    status: dict[str, dict[str, Any]] = {}
+    _write_index(output, str(path), cells, status)
+
+    async def run_cells() -> None:
+        first = cells[0].config
+        images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
+        cache = ResponseCache(first.cache_path()) if first.cache_path() is not None else None  # type: ignore[arg-type]
+        datasets: dict[Any, Dataset] = {}
+        try:
+            for cell in cells:
+                status[cell.name] = {"status": "running"}
+                _write_index(output, str(path), cells, status)
+                try:
+                    run = PipelineRun(
+                        cell.config,
+                        dataset=ensure_dataset(cell.config, datasets),
+                        images=images,
+                        cache=cache,
+                        progress=make_progress(cell.name, quiet=quiet),
+                        retry_errors=retry_errors,
+                    )
+                    res = await run.run()
+                except BaseException:
+                    status[cell.name] = {"status": "interrupted"}
+                    raise
+                result.results[cell.name] = res
+                status[cell.name] = {
+                    "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
+                    "rows": res.summary["rows"],
+                    "overall": res.summary["overall"],
+                }
+                if on_cell_done is not None:
+                    on_cell_done(cell, res)
+        finally:
+            _write_index(output, str(path), cells, status)
+            if cache is not None:
+                cache.close()
+
+    asyncio.run(run_cells())
+    return result

@@ -1,0 +1,85 @@
+"""The run-wide image store: each image read and encoded once, content-addressed, bounded in memory."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import io
+
+from PIL import Image, ImageDraw
+
+from povagent.exchange.images import ImageStore
+
+
+def png(path, colour, size=(16, 16)):
+    Image.new("RGB", size, colour).save(path, format="PNG")
+    return path
+
+
+def test_a_file_is_read_once_however_often_it_is_added(tmp_path):
+    store = ImageStore()
+    path = png(tmp_path / "a.png", (255, 0, 0))
+    first = store.add_file(path)
+    again = store.add_file(str(path))
+    assert again == first and store.stats.file_reads == 1
+
+
+def test_an_image_is_named_by_the_hash_of_its_bytes(tmp_path):
+    path = png(tmp_path / "a.png", (0, 255, 0), size=(20, 10))
+    info = ImageStore().add_file(path)
+    assert info.image_hash == hashlib.sha256(path.read_bytes()).hexdigest()
+    assert (info.width, info.height, info.media_type) == (20, 10, "image/png")
+
+
+def test_identical_files_at_two_paths_are_one_image(tmp_path):
+    store = ImageStore()
+    a = png(tmp_path / "a.png", (1, 2, 3))
+    b = tmp_path / "copy.png"
+    b.write_bytes(a.read_bytes())
+    assert store.add_file(a).image_hash == store.add_file(b).image_hash
+    store.data_url(store.add_file(a).image_hash)
+    store.data_url(store.add_file(b).image_hash)
+    assert store.stats.base64_encodes == 1
+
+
+def test_data_url_is_encoded_once_and_carries_the_file_bytes(tmp_path):
+    store = ImageStore()
+    path = png(tmp_path / "a.png", (9, 9, 9))
+    h = store.add_file(path).image_hash
+    url = store.data_url(h)
+    assert store.data_url(h) is url and store.stats.base64_encodes == 1
+    prefix = "data:image/png;base64,"
+    assert url.startswith(prefix) and base64.b64decode(url[len(prefix):]) == path.read_bytes()
+
+
+def test_the_memory_bound_evicts_and_an_evicted_image_is_rebuilt_from_its_file(tmp_path):
+    paths = [png(tmp_path / f"{i}.png", (i * 40, 0, 0), size=(64, 64)) for i in range(4)]
+    one = len(paths[0].read_bytes())
+    store = ImageStore(max_bytes=2 * one + one // 2)  # room for two images' bytes
+    hashes = [store.add_file(p).image_hash for p in paths]
+    assert store._cached_bytes <= store.max_bytes
+    assert store.stats.file_reads == 4 and store.stats.rebuilds == 0
+    assert store.bytes(hashes[0]) == paths[0].read_bytes()  # evicted: read again
+    assert store.stats.rebuilds == 1 and store.stats.file_reads == 5
+    assert store._cached_bytes <= store.max_bytes
+
+
+def test_a_derived_image_is_drawn_once_per_recipe(tmp_path):
+    store = ImageStore()
+    src = store.add_file(png(tmp_path / "a.png", (200, 200, 200), size=(32, 32))).image_hash
+    calls = []
+
+    def dot_at(cx, cy):
+        def draw(im):
+            calls.append((cx, cy))
+            ImageDraw.Draw(im).ellipse((cx - 3, cy - 3, cx + 3, cy + 3), fill=(255, 0, 0))
+            return im
+
+        return draw
+
+    first = store.derive(src, "dot@15,15", dot_at(15, 15))
+    assert store.derive(src, "dot@15,15", dot_at(15, 15)) == first and calls == [(15, 15)]
+    other = store.derive(src, "dot@5,5", dot_at(5, 5))
+    assert other.image_hash != first.image_hash and calls == [(15, 15), (5, 5)]
+    with Image.open(io.BytesIO(store.bytes(first.image_hash))) as im:
+        assert im.convert("RGB").getpixel((15, 15)) == (255, 0, 0)

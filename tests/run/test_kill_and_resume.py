@@ -1,0 +1,71 @@
+"""A run killed with SIGKILL mid-run resumes with every key exactly once."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from povagent.engine.cache import ResponseCache, cache_key, identity_json
+
+CLI = "from povagent.cli import main; main()"
+
+
+def _lines(path):
+    return path.read_text().splitlines() if path.exists() else []
+
+
+def _records(path):
+    """Complete JSON lines (a line the kill cut short is left out)."""
+    out = []
+    for line in _lines(path):
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError:
+            pass
+    return out
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
+def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path):
+    runs = 8
+    path = write_pipeline(backend={"name": "test-center", "options": {"delay_s": 0.02}}, runs=runs, concurrency=4)
+    results = tmp_path / "run" / "results.jsonl"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    proc = subprocess.Popen([sys.executable, "-c", CLI, "run", str(path), "--quiet"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 60
+        while len(_lines(results)) < 20:
+            assert proc.poll() is None, proc.stderr.read().decode()
+            assert time.monotonic() < deadline, "no rows written in time"
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)
+    finally:
+        proc.wait(timeout=30)
+    assert proc.returncode == -signal.SIGKILL
+    written_before = len(_lines(results))
+    assert 20 <= written_before < 12 * runs, "the kill must land mid-run"
+    # Every row that survived the kill has its request event in the log too.
+    durable = {e["key"] for e in _records(results)}
+    logged = {e["row"] for e in _records(tmp_path / "run" / "log.jsonl") if e["event"] == "request"}
+    assert durable <= logged
+    # ... and its answer in the response cache (written off the event loop, before the row).
+    identity = identity_json({"backend": "test-center", "reply": None})
+    with ResponseCache(tmp_path / "run" / "cache.sqlite") as cache:
+        for row in _records(results):
+            hit = cache.get(cache_key(identity, row["exchanges"][0]["request_hash"], row["run"]))
+            assert hit is not None and hit.text == row["exchanges"][0]["raw"], row["key"]
+
+    done = subprocess.run([sys.executable, "-c", CLI, "run", str(path), "--quiet", "--json"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    keys = [json.loads(line)["key"] for line in _lines(results)]
+    assert len(keys) == len(set(keys)) == 12 * runs
+    summary = json.loads(done.stdout)
+    assert summary["complete"] is True and summary["rows"]["answered"] == 12 * runs
