@@ -23,23 +23,30 @@ Ask = Callable[[Request], Awaitable[Response]]
 
 
 class TransientBackendError(Exception):
-    """A failure worth retrying: timeout, dropped connection, 429, 5xx.
+    """A failure worth retrying: timeout, dropped connection, 429, 5xx, an empty answer.
 
-    ``retry_after`` (seconds) is honoured by the runner when the server sent one.
+    ``retry_after`` (seconds) is honoured when the server sent one. ``kind`` optionally names
+    the failure for the row's ``error_type`` (``"connection"``, ``"timeout"``,
+    ``"empty_response"``); without it the kind follows ``status``.
     """
 
-    def __init__(self, message: str, *, retry_after: float | None = None, status: int | None = None) -> None:
+    def __init__(
+        self, message: str, *, retry_after: float | None = None, status: int | None = None, kind: str | None = None
+    ) -> None:
         super().__init__(message)
         self.retry_after = retry_after
         self.status = status
+        self.kind = kind
 
 
 class PermanentBackendError(Exception):
-    """A failure not worth retrying: bad request, authentication, unknown model (4xx)."""
+    """A failure not worth retrying: bad request, authentication, unknown model (4xx), a
+    missing API key. ``kind`` optionally names it (``"missing_key"``)."""
 
-    def __init__(self, message: str, *, status: int | None = None) -> None:
+    def __init__(self, message: str, *, status: int | None = None, kind: str | None = None) -> None:
         super().__init__(message)
         self.status = status
+        self.kind = kind
 
 
 class Backend(abc.ABC):
@@ -59,6 +66,13 @@ class Backend(abc.ABC):
     @abc.abstractmethod
     async def complete(self, request: Request, images: "ImageStore") -> Response:
         """Answer one request. Raise TransientBackendError / PermanentBackendError on failure."""
+
+    async def start(self) -> None:  # noqa: B027 - optional hook
+        """Get ready before the first request (import a client library, open a pool).
+
+        Called once by the runner and the agent before any request's timeout starts, so a
+        slow import never counts against the first requests' time. The default does nothing.
+        """
 
     async def aclose(self) -> None:  # noqa: B027 - optional hook
         """Release connections; called once when the run ends."""

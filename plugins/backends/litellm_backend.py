@@ -15,9 +15,9 @@ across deployments itself; a failure that outlives the Router's retries is raise
 :class:`PermanentBackendError` so the runner never stacks a second retry loop on top
 (``retries_inside`` is True on such a backend).
 
-litellm is imported on the first request, never when this module is imported, and in a worker
-thread: the import takes seconds, and the event loop (with every timeout running on it) must
-keep going meanwhile. The import counts against the first request's own time.
+litellm is imported in :meth:`LiteLLMBackend.start` (the runner and the agent call it before any
+request's timeout starts), never when this module is imported, and in a worker thread: the
+import takes seconds, and the event loop must keep going meanwhile.
 """
 
 from __future__ import annotations
@@ -227,7 +227,8 @@ class LiteLLMBackend(Backend):
         value = os.environ.get(name)
         if not value:
             raise PermanentBackendError(
-                f"environment variable {name} (api_key_env of backend 'litellm') is not set: export the API key"
+                f"environment variable {name} (api_key_env of backend 'litellm') is not set: export the API key",
+                kind="missing_key",
             )
         return value
 
@@ -283,11 +284,13 @@ class LiteLLMBackend(Backend):
         except TimeoutError as exc:
             if self.retries_inside:
                 raise PermanentBackendError("no answer within the hard deadline after Router retries") from exc
-            raise TransientBackendError(f"no answer within {self.options.timeout:g} s (hard deadline)") from exc
+            raise TransientBackendError(f"no answer within {self.options.timeout:g} s (hard deadline)", kind="timeout") from exc
         except (PermanentBackendError, TransientBackendError):
             raise
         except Exception as exc:
-            mapped = map_litellm_error(litellm, exc, secrets=self._secrets(key), retried_inside=self.retries_inside)
+            mapped = map_litellm_error(
+                litellm, exc, secrets=self._secrets(key), retried_inside=self.retries_inside, url=self._endpoint()
+            )
             if mapped is exc:
                 raise
             raise mapped from exc
@@ -298,6 +301,16 @@ class LiteLLMBackend(Backend):
             latency_s=latency,
             model=getattr(response, "model", None),
         )
+
+    def _endpoint(self) -> str:
+        """Where requests go, for messages: ``api_base``, the Router's deployments, or the
+        provider's own endpoint (named by the model string)."""
+        if self.options.api_base:
+            return self.options.api_base
+        if self.options.router:
+            bases = sorted({str(d["litellm_params"].get("api_base") or d["litellm_params"]["model"]) for d in self.options.router})
+            return ", ".join(bases)
+        return f"the provider's endpoint for {self.model}"
 
     def _secrets(self, key: str | None) -> tuple[str, ...]:
         names = [self.options.api_key_env] + [
@@ -326,10 +339,18 @@ class LiteLLMBackend(Backend):
             if env:
                 value = os.environ.get(env)
                 if not value:
-                    raise PermanentBackendError(f"environment variable {env} (router api_key_env) is not set")
+                    raise PermanentBackendError(f"environment variable {env} (router api_key_env) is not set", kind="missing_key")
                 params["api_key"] = value
             out.append({**dep, "model_name": self.model, "litellm_params": params})
         return out
+
+    async def start(self) -> None:
+        """Import litellm (seconds, the first time) in a worker thread before any request's
+        timeout starts; a missing API key is found here, before the run fans out."""
+        if _LITELLM is None:
+            await _import_litellm_off_loop()
+        if self.options.router is None:
+            self._api_key()
 
     async def aclose(self) -> None:
         """Drop the Router (its clients are litellm's shared, cached ones)."""
@@ -348,11 +369,19 @@ async def _import_litellm_off_loop() -> ModuleType:
 
 
 def _text_of(response: Any) -> str:
+    """The answer's text. No choice at all, or a choice whose content is null, is no answer:
+    a transient failure (retried, never cached), not an empty answer kept forever."""
     try:
-        content = response.choices[0].message.content
+        choices = response.choices
+        content = choices[0].message.content
     except (AttributeError, IndexError, TypeError):
-        return ""
-    return content if isinstance(content, str) else ("" if content is None else str(content))
+        raise TransientBackendError("the server answered with no choices (empty response)", kind="empty_response") from None
+    if content is None:
+        reason = getattr(choices[0], "finish_reason", None)
+        raise TransientBackendError(
+            f"the server answered with null content (finish_reason {reason!r})", kind="empty_response"
+        )
+    return content if isinstance(content, str) else str(content)
 
 
 def _usage_of(litellm: Any, response: Any) -> Usage:

@@ -90,12 +90,19 @@ def scrub(message: str, secrets: tuple[str, ...]) -> str:
 
 
 def map_litellm_error(
-    litellm: ModuleType, exc: BaseException, *, secrets: tuple[str, ...] = (), retried_inside: bool = False
+    litellm: ModuleType,
+    exc: BaseException,
+    *,
+    secrets: tuple[str, ...] = (),
+    retried_inside: bool = False,
+    url: str | None = None,
 ) -> BaseException:
     """The povagent error for a litellm failure (or ``exc`` itself when it is not one).
 
     ``retried_inside`` says litellm's Router already spent its retries: the failure is then
-    returned as permanent so no second retry loop stacks on the Router's.
+    returned as permanent so no second retry loop stacks on the Router's. ``url`` names the
+    endpoint in connection failures (a refused or dropped connection is ``connection``, not a
+    server error, whatever status litellm gives it).
     """
     import httpx
     import openai
@@ -107,24 +114,24 @@ def map_litellm_error(
         return PermanentBackendError(
             f"no API key: {msg} (export the provider's key variable, or name yours with api_key_env)", status=401
         )
-    if isinstance(exc, litellm.RateLimitError):
+    refused = _connection_failure(exc, openai, httpx)
+    if refused is not None and not isinstance(exc, (litellm.Timeout, openai.APITimeoutError, httpx.TimeoutException)):
+        # litellm reports a refused or dropped connection as a 500: it is no server's answer
+        where = f"cannot reach {url}" if url else "cannot reach the server"
+        cause = scrub(refused, secrets)
+        cause = cause.split(_TRACEBACK, 1)[0].rstrip() or cause
+        transient = TransientBackendError(f"{where}: {cause}", kind="connection")
+    elif isinstance(exc, litellm.RateLimitError):
         transient = TransientBackendError(
             msg, retry_after=retry_after_seconds(_response_headers(exc)), status=429
         )
     elif isinstance(exc, (litellm.Timeout, openai.APITimeoutError, httpx.TimeoutException)):
-        transient = TransientBackendError(msg, status=status or 408)
-    elif isinstance(
-        exc,
-        (
-            litellm.APIConnectionError,
-            litellm.InternalServerError,
-            litellm.ServiceUnavailableError,
-            litellm.BadGatewayError,
-            openai.APIConnectionError,
-            httpx.TransportError,
-        ),
-    ):
+        transient = TransientBackendError(msg, status=status or 408, kind="timeout")
+    elif isinstance(exc, (litellm.InternalServerError, litellm.ServiceUnavailableError, litellm.BadGatewayError)):
         transient = TransientBackendError(msg, status=status)
+    elif isinstance(exc, (litellm.APIConnectionError, openai.APIConnectionError, httpx.TransportError)):
+        where = f"cannot reach {url}: " if url else ""
+        transient = TransientBackendError(f"{where}{msg}", kind="connection")
     elif isinstance(
         exc,
         (
@@ -144,10 +151,26 @@ def map_litellm_error(
     else:
         return exc
     if retried_inside:
-        return PermanentBackendError(f"{msg} (after litellm Router retries)", status=transient.status)
+        return PermanentBackendError(f"{msg} (after litellm Router retries)", status=transient.status, kind=transient.kind)
     return transient
 
 
 def _is_router_error(exc: BaseException) -> bool:
     # "No deployments available": every deployment is cooling down or over its rate limit
     return type(exc).__name__ in {"RouterRateLimitError", "RouterRateLimitErrorBasic"}
+
+
+def _connection_failure(exc: BaseException, openai: ModuleType, httpx: ModuleType) -> str | None:
+    """The deepest cause's message when ``exc`` was caused by a refused, reset or dropped
+    connection (anywhere in its chain), else ``None``."""
+    found: str | None = None
+    seen: set[int] = set()
+    link: BaseException | None = exc
+    while link is not None and id(link) not in seen:
+        seen.add(id(link))
+        if isinstance(link, (openai.APIConnectionError, httpx.TransportError, ConnectionError)) and not isinstance(
+            link, (openai.APITimeoutError, httpx.TimeoutException)
+        ):
+            found = str(link) or type(link).__name__
+        link = link.__cause__ or link.__context__
+    return found

@@ -51,6 +51,8 @@ from povagent.exchange.messages import Request, Response
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project
 from povagent.exchange.images import ImageStore
+from povagent.engine.request_path import RequestPath
+from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
 from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 from povagent.geometry.letterbox import DEFAULT_PAD_COLOR, Letterbox, pixel_index
 from povagent.dataset.realworld import unknown_object, unposed_square_camera
@@ -111,62 +113,40 @@ class Localization(BaseModel):
 
 # -- the ask seam ---------------------------------------------------------------------------------
 #: Builds the ``ask`` a strategy calls, given the backend, the call's image store and the
-#: monotonic deadline of the whole call. Swapping in the runner's retry/cache wrapper is one
-#: line: pass ``ask_factory=`` (or change :func:`default_ask_factory`).
+#: monotonic deadline of the whole call. The default sends through the engine's one request
+#: path (:class:`~povagent.engine.request_path.RequestPath`), as the runner does; a robot app
+#: may pass its own (``ask_factory=``) to add logging or a cache.
 AskFactory = Callable[[Backend, ImageStore, float], Ask]
 
-
-@dataclass(frozen=True)
-class RetrySettings:
-    """Attempts in all (first included) and exponential backoff between them (seconds)."""
-
-    attempts: int = 3
-    initial_wait: float = 0.5
-    max_wait: float = 8.0
-    attempt_timeout_s: float | None = None
+#: The agent's retry defaults: a robot waits for its answer, so fewer, shorter waits than a run.
+AGENT_RETRY = RetryPolicy(attempts=3, initial_wait=0.5, max_wait=8.0)
 
 
-def default_ask_factory(retry: RetrySettings) -> AskFactory:
-    """An ``ask`` that retries transient backend failures until ``retry.attempts`` or the deadline.
+def default_ask_factory(retry: RetryPolicy, attempt_timeout_s: float | None = None) -> AskFactory:
+    """An ``ask`` that sends through :class:`~povagent.engine.request_path.RequestPath`.
 
-    Failures are classified as the runner classifies them (:func:`povagent.run.runner.is_transient`:
-    timeouts, dropped connections, 429 and 5xx are retried; a server's Retry-After is honoured).
-    A permanent failure, or the last transient one, becomes :class:`NoAnswerError`. Each
-    attempt is cut at the time left before the deadline (or at ``attempt_timeout_s``).
+    Failures are classified, retried and timed exactly as in a run (timeouts, dropped
+    connections, 429 and 5xx are retried; a server's Retry-After is honoured, capped; backoff
+    has jitter); every attempt and wait is also cut at the call's deadline. A request that gets
+    no answer becomes :class:`NoAnswerError`, its cause chained. ``attempt_timeout_s`` bounds
+    one attempt (default: the time left before the deadline).
     """
-    from povagent.run.runner import is_transient  # the runner's rule, so agent and runs agree
 
     def factory(backend: Backend, images: ImageStore, deadline: float) -> Ask:
+        timeout = attempt_timeout_s if attempt_timeout_s is not None else max(0.001, deadline - time.monotonic())
+        path = RequestPath(backend, images, policy=retry, timeout_s=timeout)
+
         async def ask(request: Request) -> Response:
-            last: BaseException | None = None
-            attempts = 0
-            while attempts < retry.attempts:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    break
-                budget = left if retry.attempt_timeout_s is None else min(left, retry.attempt_timeout_s)
-                attempts += 1
-                try:
-                    started = time.perf_counter()
-                    async with asyncio.timeout(budget):
-                        response = await backend.complete(request, images)
-                    if not response.latency_s:
-                        response.latency_s = time.perf_counter() - started
-                    response.retries = attempts - 1
-                    return response
-                except Exception as exc:
-                    if not is_transient(exc):
-                        if isinstance(exc, (PermanentBackendError, BackendError)):
-                            raise NoAnswerError(f"the model refused the request: {exc}") from exc
-                        raise  # not an API failure: a bug in the backend, keep its traceback
-                    last = exc
-                    wait = getattr(exc, "retry_after", None)
-                    if not isinstance(wait, (int, float)) or wait < 0:
-                        wait = min(retry.max_wait, retry.initial_wait * (2 ** (attempts - 1)))
-                    if attempts < retry.attempts:
-                        await asyncio.sleep(max(0.0, min(float(wait), deadline - time.monotonic())))
-            detail = f"; last error: {type(last).__name__}: {last}" if last is not None else ""
-            raise NoAnswerError(f"no answer after {attempts} attempt(s) within the deadline{detail}")
+            try:
+                return await path.send(request, label="agent", deadline=deadline)
+            except InfraFailure as exc:
+                if exc.error_type == "backend_exception":
+                    raise NoAnswerError(f"the backend failed (a bug in it, not the model): {exc.message}") from exc.__cause__
+                if not is_transient(exc.__cause__ or exc):
+                    raise NoAnswerError(f"the model refused the request ({exc.error_type}): {exc.message}") from exc
+                raise NoAnswerError(
+                    f"no answer after {exc.attempts} attempt(s) within the deadline; last error ({exc.error_type}): {exc.message}"
+                ) from exc
 
         return ask
 
@@ -259,7 +239,8 @@ class GroundingAgent:
         parser_options: Mapping[str, Any] | None = None,
         plugins: Sequence[str] = (),
         timeout_s: float = DEFAULT_TIMEOUT_S,
-        retry: RetrySettings | None = None,
+        retry: RetryPolicy | None = None,
+        attempt_timeout_s: float | None = None,
         plane: Plane = FLOOR,
         depth_kind: Literal["z", "range"] = "z",
         pad_color: tuple[int, int, int] = DEFAULT_PAD_COLOR,
@@ -288,11 +269,12 @@ class GroundingAgent:
             parser = getattr(profile, "default_parser", None) or "json"
         self.parser: Parser = parser if isinstance(parser, Parser) else host.create("parser", parser, parser_options)
         self.timeout_s = float(timeout_s)
-        self.retry = retry or RetrySettings()
+        self.retry = retry or AGENT_RETRY
         self.plane = plane
         self.depth_kind = depth_kind
         self.pad_color = pad_color
-        self._ask_factory = ask_factory or default_ask_factory(self.retry)
+        self._ask_factory = ask_factory or default_ask_factory(self.retry, attempt_timeout_s)
+        self._started = False
         self._loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: threading.Thread | None = None
         self._lock = threading.Lock()
@@ -328,7 +310,7 @@ class GroundingAgent:
             parser_options=config.parser.options,
             plugins=tuple(config.plugins),
             timeout_s=config.timeout,
-            retry=RetrySettings(config.retry.attempts, config.retry.initial_wait, config.retry.max_wait),
+            retry=config.retry,
         )
         kwargs.update(overrides)
         return cls(**kwargs)
@@ -384,6 +366,14 @@ class GroundingAgent:
         deadline = started + budget
         try:
             async with asyncio.timeout(budget):
+                if not self._started:
+                    # the backend's client library loads once (litellm: seconds), inside the
+                    # budget: a locate call never outlives its timeout
+                    try:
+                        await self.backend.start()
+                    except (TransientBackendError, PermanentBackendError) as exc:
+                        raise NoAnswerError(f"the backend cannot start: {exc}") from exc
+                    self._started = True
                 prepared = await asyncio.to_thread(self._prepare, sentence, frames, observer_view, cameras, depths)
                 try:
                     exchanges = await self._solve(prepared, deadline)
@@ -526,7 +516,7 @@ class GroundingAgent:
             )
         if instance.condition.uses_exploration_frames:
             k = parsed.selected_image
-            if k is None or not 0 <= k < len(instance.frames):
+            if k is None or instance.selected_frame(k) is None:
                 named = "no frame" if k is None else f"frame {k}"
                 raise _unparseable(
                     f"the answer names {named}, but there are frames 0..{len(instance.frames) - 1}: {_clip(text)}",
@@ -621,7 +611,7 @@ __all__ = [
     "Localization",
     "PinholeCamera",
     "Plane",
-    "RetrySettings",
+    "AGENT_RETRY",
     "default_ask_factory",
     "load_frame",
 ]

@@ -35,7 +35,7 @@ def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] |
     """
     if "success" not in summary:
         return None
-    from povagent.dataset.realworld import run_success_breakdown
+    from povagent.report.collect import run_success_breakdown
 
     full = run_success_breakdown(run_dir)
     if full is None or full["overall"]["n_total"] != summary["success"]["overall"]["n_total"]:
@@ -72,7 +72,9 @@ def run_command(
     pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config.pipeline for its keys)."),
     output: Optional[Path] = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
     limit: Optional[int] = typer.Option(None, "--limit", help="Run only the first N instances."),
-    retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
+    keep_errors: bool = typer.Option(
+        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
     as_json: bool = typer.Option(False, "--json", help="Print summary.json instead of a table."),
     strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
@@ -91,13 +93,15 @@ def run_command(
     if strict:
         config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
     try:
-        result = run_pipeline(config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_errors=retry_errors)
+        result = run_pipeline(
+            config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_failed=not keep_errors
+        )
     except KeyboardInterrupt:
         typer.echo(f"interrupted: rows written so far are kept in {config.output}; run the same command to resume", err=True)
         raise typer.Exit(130)
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
-        return
+        raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
     _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
     typer.echo(
@@ -105,13 +109,33 @@ def run_command(
         f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
         f"{result.stats.cache_hits} cache hits, {result.stats.retries} retries, {result.stats.wall_s:.1f} s"
     )
+    _say_what_next(result, f"povagent run {pipeline}")
+    raise typer.Exit(result.exit_code)
+
+
+def _say_what_next(result: Any, command: str) -> None:
+    """After a run that left keys without an answer: how many, why, and what to run next."""
+    if result.stopped is not None:
+        typer.echo(f"stopped early: {result.stopped}", err=True)
+    failed, missing = result.n_failed, result.n_missing
+    if failed or missing:
+        parts = [f"{failed} key(s) failed (infra_error)"] if failed else []
+        if missing:
+            parts.append(f"{missing} key(s) not tried")
+        typer.echo(
+            f"{', '.join(parts)}: see {result.run_dir / 'log.jsonl'}; fix the cause, then run `{command}` again "
+            "(failed keys are tried again, answered ones are kept)",
+            err=True,
+        )
 
 
 @app.command("sweep")
 def sweep_command(
     sweep: Path = typer.Argument(..., help="Sweep YAML: a base pipeline, axes and named overrides."),
     dry_run: bool = typer.Option(False, "--dry-run", help="Print the cells, requests still to make and a token estimate; call nothing."),
-    retry_errors: bool = typer.Option(False, "--retry-errors", help="Run again the keys that ended in infra_error."),
+    keep_errors: bool = typer.Option(
+        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
     strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of a dataset (default: report it, skip it, go on)."),
 ) -> None:
@@ -151,7 +175,7 @@ def sweep_command(
         console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
 
     try:
-        result = run_sweep(sweep, quiet=quiet, retry_errors=retry_errors, strict=strict, on_cell_done=done)
+        result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
     except KeyboardInterrupt:
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
         raise typer.Exit(130)
@@ -179,6 +203,13 @@ def sweep_command(
             *(("-",) if with_success else ()),
         )
     console.print(table)
+    codes = [result.results[c.name].exit_code for c in result.cells]
+    for cell in result.cells:
+        res = result.results[cell.name]
+        if res.exit_code:
+            typer.echo(f"cell {cell.name}:", err=True)
+            _say_what_next(res, f"povagent sweep {sweep}")
+    raise typer.Exit(max(codes, default=0))
 
 
 @app.command("plugins")

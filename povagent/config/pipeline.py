@@ -23,6 +23,7 @@ default)::
     concurrency: 16                      # requests in flight
     retry: {attempts: 5, initial_wait: 1.0, max_wait: 60.0}
     timeout: 120                         # seconds per request
+    stop_after_failures: 10              # consecutive infra_error rows that stop the run (0: never)
     cache: true                          # true (default: <output>/cache.sqlite), false, or a path
     images: {max_mb: 256}                # memory bound of the run's image store
     output: runs/my-run
@@ -47,6 +48,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.dataset.models import Condition, Direction
+from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
 from povagent.run.logs import Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
@@ -145,13 +147,8 @@ class InstanceFilter(_Strict):
         return value
 
 
-class RetryPolicy(_Strict):
-    """Retries on transient failures: ``attempts`` in all (first try included), exponential
-    backoff from ``initial_wait`` to ``max_wait`` seconds; a server's Retry-After wins."""
-
-    attempts: int = Field(5, ge=1)
-    initial_wait: float = Field(1.0, ge=0)
-    max_wait: float = Field(60.0, ge=0)
+#: Longest per-request timeout a pipeline may set (seconds): one day.
+MAX_TIMEOUT_S = 86400.0
 
 
 class CacheSpec(_Strict):
@@ -190,7 +187,10 @@ class PipelineConfig(_Strict):
     runs: int | list[int] = 1
     concurrency: int = Field(16, ge=1)
     retry: RetryPolicy = Field(default_factory=RetryPolicy)
-    timeout: float = Field(120.0, gt=0)
+    #: seconds one request may take (finite: no config may make a run wait forever)
+    timeout: float = Field(120.0, gt=0, le=MAX_TIMEOUT_S, allow_inf_nan=False)
+    #: consecutive infra_error rows that stop the run (a circuit breaker); 0 never stops
+    stop_after_failures: int = Field(10, ge=0)
     cache: CacheSpec = Field(default_factory=CacheSpec)
     images: ImagesSpec = Field(default_factory=ImagesSpec)
     output: Path

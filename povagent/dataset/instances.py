@@ -55,6 +55,17 @@ class Instance:
         cam = self.frames[0].camera if self.frames else self.observer_camera
         return (cam.width, cam.height)
 
+    def selected_frame(self, selected_image: int | None) -> Frame | None:
+        """The frame an answer's ``selected_image`` names, or ``None`` when it names none.
+
+        The one rule for a valid frame index: ``0 <= k < len(frames)``. A negative index is
+        invalid (never Python's "from the end"), as is ``None``; the official scorer leaves such
+        a row unanswered.
+        """
+        if selected_image is None or not 0 <= selected_image < len(self.frames):
+            return None
+        return self.frames[selected_image]
+
     def frame_by_path(self, image_path: str) -> Frame | None:
         """The shown frame whose ``image_path`` matches (also tolerating a leading ``./``)."""
         want = image_path.removeprefix("./")

@@ -176,6 +176,9 @@ class Dataset:
         """The instance with id ``house/pair/direction/condition``, or ``None``."""
         return self._index.get(id_)
 
+    def check_scorers(self, names: Iterable[str]) -> None:
+        """Every scorer can score a release-layout set (its ground truth is 3D): no-op."""
+
     def instance_for(self, house_id: str, pair_id: str | int, direction: str, condition: str) -> Instance | None:
         """The instance for an official prediction row's fields, or ``None``."""
         return self._index.get(instance_id(house_id, str(pair_id), direction.lower(), condition.lower()))

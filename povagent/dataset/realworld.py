@@ -53,6 +53,7 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.dataset.instances import Frame, Instance
+from povagent.dataset.problems import Problem
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
@@ -297,7 +298,7 @@ class RealWorldDataset:
     spec: RealWorldSet
     cache_dir: Path
     houses: dict[str, RealWorldHouse]
-    problems: list[Any] = field(default_factory=list)
+    problems: list[Problem] = field(default_factory=list)
     _instances: list[RealWorldInstance] = field(default_factory=list, repr=False)
     _by_id: dict[str, RealWorldInstance] = field(default_factory=dict, repr=False)
 
@@ -454,24 +455,6 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
     return out
 
 
-def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:
-    """:func:`success_breakdown` of a run folder's rows, with response rates, read as
-    ``povagent report`` reads them (the success scorer's ``answered`` and ``success`` per row;
-    a row it did not score, such as a parse or infra error, is an unanswered failure).
-    ``None`` when the run is not scored by ``success``.
-    """
-    from povagent.report.collect import collect
-
-    collection = collect(run_dir)
-    if not any(r.scorer == "success" for r in collection.runs):
-        return None
-    return success_breakdown(
-        {"condition": o.condition, "direction": o.direction, "success": o.success, "answered": o.answered}
-        for o in collection.observations
-        if o.scorer == "success"
-    )
-
-
 __all__ = [
     "Command",
     "INDEX_FILE",
@@ -484,7 +467,6 @@ __all__ = [
     "is_realworld",
     "load_realworld",
     "read_realworld",
-    "run_success_breakdown",
     "success_breakdown",
     "unknown_object",
     "unposed_square_camera",

@@ -349,3 +349,21 @@ def collect(paths: str | Path | Iterable[str | Path]) -> Collection:
     assign_systems(runs)
     obs = [observation_of(row, r.system, r.name, r.scorer) for r in runs for row in r.rows]
     return Collection(paths[0], runs, obs)
+
+
+def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:
+    """:func:`success_breakdown` of a run folder's rows, with response rates, read as
+    ``povagent report`` reads them (the success scorer's ``answered`` and ``success`` per row;
+    a row it did not score, such as a parse or infra error, is an unanswered failure).
+    ``None`` when the run is not scored by ``success``.
+    """
+    from povagent.dataset.realworld import success_breakdown
+
+    collection = collect(run_dir)
+    if not any(r.scorer == "success" for r in collection.runs):
+        return None
+    return success_breakdown(
+        {"condition": o.condition, "direction": o.direction, "success": o.success, "answered": o.answered}
+        for o in collection.observations
+        if o.scorer == "success"
+    )

@@ -31,9 +31,8 @@ def official_row(row: ResultRow, instance: Any = None) -> OfficialPrediction:
     answered = row.status == RowStatus.ANSWERED and row.prediction.x is not None and row.prediction.y is not None
     image = row.prediction.image_path
     if image is None and uses_frames and instance is not None and row.prediction.selected_image is not None:
-        k = row.prediction.selected_image
-        if 0 <= k < len(instance.frames):
-            image = instance.frames[k].image_path
+        frame = instance.selected_frame(row.prediction.selected_image)
+        image = frame.image_path if frame is not None else None
     points = None
     if row.parse is not None and row.parse.points:
         points = [(float(x), float(y)) for x, y in row.parse.points]

@@ -1,281 +1,70 @@
 """Running a pipeline: every (instance, run) once, concurrently, durably, resumably.
 
-For each pending key the strategy builds the request(s), the backend answers through the
-response cache, with tenacity retries on transient failures only and a per-request timeout,
-the parser reads the answer, and the scorers score it. Every key ends as exactly one row in
-``results.jsonl``: ``answered`` (scored), ``parse_error`` (the model answered, nothing could be
-read) or ``infra_error`` (no answer: retries exhausted, a permanent API error, or a plugin
-failure); errors are never scored as answers.
+For each pending key the strategy builds the request(s), which reach the backend through the
+one request path (:class:`~povagent.engine.request_path.RequestPath`: response cache, concurrency
+limit, timeout, retries on transient failures only); the parser reads the answer and the scorers
+score it. Every key ends as exactly one row in ``results.jsonl``: ``answered`` (scored),
+``parse_error`` (the model answered, nothing could be read) or ``infra_error`` (no answer:
+retries exhausted, a permanent API error, or a plugin failure); errors are never scored.
 
-Rows are appended and fsynced as keys finish (rows finishing in the same event-loop tick share
-one fsync, and none is reported done before it is durable), so a run killed at any moment
-resumes by running only the keys missing from the file.
+Rows become durable through the :class:`~povagent.run.journal.RowJournal` as keys finish, so a
+run killed at any moment resumes by running only the keys missing from the file; keys whose row
+is ``infra_error`` are attempted again by default (:func:`~povagent.run.pending.plan_keys`).
+
+Failing fast: the first pending key runs alone; when it fails in a way no other key can get
+past (no API key, authentication, unknown model, an unreachable server) the run stops there
+instead of failing every key. During the run, ``stop_after_failures`` consecutive
+``infra_error`` rows trip a circuit breaker and stop it too. A stopped run's remaining keys
+stay pending: fix the cause and run the same command again.
 
 The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl`` and
-``summary.json``. This module must not parse YAML or print tables (see :mod:`povagent.config.pipeline`
+``summary.json``. This module must not parse YAML or print tables (see :mod:`povagent.config`
 and :mod:`povagent.cli.pipeline`).
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import dataclasses
-import os
-import random
 import time
 import traceback
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Mapping
-
-from tenacity import AsyncRetrying, retry_if_exception, stop_after_attempt
+from typing import Any, Callable
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
-from povagent.engine.cache import ResponseCache, cache_key, identity_json
 from povagent.config.pipeline import PipelineConfig, dump_pipeline
 from povagent.dataset.instances import Instance, row_key
-from povagent.dataset.loader import Dataset, load_dataset
+from povagent.dataset.protocol import EvaluationSet
+from povagent.engine.cache import ResponseCache
+from povagent.engine.request_path import RequestPath, SemaphoreLimiter
+from povagent.engine.retry import InfraFailure, error_type_of
 from povagent.errors import ConfigError, ResultsError
-from povagent.exchange.messages import Request, Response
 from povagent.exchange.images import ImageStore
-from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy, TransientBackendError
-from povagent.run.logs import Redactor, RunLog
+from povagent.exchange.messages import Request, Response
+from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
+from povagent.run.folder_lock import folder_lock
+from povagent.run.journal import RowJournal, drop_rows
+from povagent.run.logs import Redactor, RunLog
+from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
-from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus, iter_rows, utc_now
-from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
+from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
-RESULTS = "results.jsonl"
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
 CONFIG = "config.yaml"
 
-#: Longest Retry-After honoured (a server asking for an hour is treated as asking for this).
-MAX_RETRY_AFTER_S = 600.0
+#: Exit codes of ``povagent run`` and ``sweep`` (documented in the README's reliability section).
+EXIT_OK = 0  # every key has an answered or parse-error row
+EXIT_FAILED_KEYS = 3  # the run ended, but some keys are infra_error rows (run again to retry them)
+EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys were left untried
 
-#: File-system errors that no retry will fix.
-_PERMANENT_OS_ERRORS = (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError)
-
-
-# -- retry classification ----------------------------------------------------------------------
-def is_transient(exc: BaseException) -> bool:
-    """Whether a failure is worth retrying: timeouts, connection errors, 429 and 5xx.
-
-    Never a 4xx such as a bad request or an authentication error. Exceptions from libraries
-    that carry an HTTP ``status_code``/``status`` are classified by it.
-    """
-    if isinstance(exc, TransientBackendError):
-        return True
-    if isinstance(exc, PermanentBackendError):
-        return False
-    if isinstance(exc, (TimeoutError, asyncio.TimeoutError, ConnectionError)):
-        return True
-    if isinstance(exc, _PERMANENT_OS_ERRORS):
-        return False
-    if isinstance(exc, OSError):
-        return True
-    status = _status_of(exc)
-    if status is not None:
-        return status in (408, 425, 429) or status >= 500
-    return False
-
-
-def _status_of(exc: BaseException) -> int | None:
-    for attr in ("status", "status_code"):
-        value = getattr(exc, attr, None)
-        if isinstance(value, int) and not isinstance(value, bool):
-            return value
-    return None
-
-
-def error_type_of(exc: BaseException) -> str:
-    """A short typed name for a failure, as stored in an ``infra_error`` row's ``error_type``."""
-    if isinstance(exc, (TimeoutError, asyncio.TimeoutError)):
-        return "timeout"
-    status = _status_of(exc)
-    if status == 429:
-        return "rate_limited"
-    if status is not None and status >= 500:
-        return "server_error"
-    if status in (401, 403):
-        return "auth"
-    if status == 400:
-        return "bad_request"
-    if status == 404:
-        return "not_found"
-    if isinstance(exc, TransientBackendError):
-        return "transient"
-    if isinstance(exc, PermanentBackendError):
-        return "permanent"
-    if isinstance(exc, ConnectionError) or (isinstance(exc, OSError) and not isinstance(exc, _PERMANENT_OS_ERRORS)):
-        return "connection"
-    return "backend_exception"
-
-
-class InfraFailure(Exception):
-    """No answer for a key: the last error after retries, typed, with the attempts made."""
-
-    def __init__(self, error_type: str, message: str, attempts: int) -> None:
-        super().__init__(message)
-        self.error_type = error_type
-        self.message = message
-        self.attempts = attempts
-
-
-# -- instances ----------------------------------------------------------------------------------
-def select_instances(dataset: Dataset, config: PipelineConfig) -> list[Instance]:
-    """The instances a pipeline covers, in dataset order (grouped by house).
-
-    Filter by conditions, directions and houses; then ``sample`` N with ``seed`` (kept in
-    dataset order so each house's frames are read together); then keep the first ``limit``.
-    """
-    f = config.instances
-    if f.houses:
-        unknown = sorted(set(f.houses) - set(dataset.houses))
-        if unknown:
-            raise ConfigError(f"instances.houses: unknown house id(s) {', '.join(unknown)} in {dataset.root}")
-    chosen = dataset.instances(f.conditions, f.directions, f.houses)
-    if f.sample is not None and f.sample < len(chosen):
-        keep = sorted(random.Random(f.seed).sample(range(len(chosen)), f.sample))
-        chosen = [chosen[i] for i in keep]
-    if f.limit is not None:
-        chosen = chosen[: f.limit]
-    return chosen
-
-
-def prepare_dataset(config: PipelineConfig) -> Dataset:
-    """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty."""
-    spec = config.dataset
-    if spec.generate is not None:
-        g = spec.generate
-        if not (g.out / "artifacts").is_dir():
-            from povagent.generate import generate_dataset  # heavy (trimesh): only when asked
-
-            generate_dataset(
-                g.out, houses=g.houses, seed=g.seed, frames=g.frames,
-                judge=g.judge.name, judge_options=g.judge.options, plugins=config.plugins,
-            )  # fmt: skip
-    from povagent.dataset.realworld import is_realworld, load_realworld
-
-    if is_realworld(spec.root):
-        return load_realworld(spec.root)
-    return load_dataset(spec.root, strict=spec.strict)
-
-
-# -- the run folder ------------------------------------------------------------------------------
-LOCK = ".lock"
-
-
-@contextlib.contextmanager
-def folder_lock(run_dir: Path) -> Iterator[None]:
-    """Hold an exclusive lock on a run folder: two processes appending to one ``results.jsonl``
-    would each run the keys the other is running, and write them twice.
-
-    An advisory ``flock`` on ``<run_dir>/.lock``; the kernel drops it when the process dies,
-    even by SIGKILL, so a killed run never leaves its folder locked. Where ``fcntl`` does not
-    exist (Windows) the folder is not locked.
-    """
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - not POSIX
-        yield
-        return
-    fh = open(run_dir / LOCK, "a")
-    try:
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise ConfigError(
-                f"{run_dir}: another povagent process is running a pipeline into this folder; "
-                f"wait for it to finish (then run again to resume) or choose another output folder"
-            ) from None
-        yield
-    finally:
-        fh.close()  # closing releases the lock
-
-
-# -- durable rows --------------------------------------------------------------------------------
-class RowJournal(ResultsWriter):
-    """``results.jsonl`` with group commit.
-
-    :meth:`submit` queues a finished row and returns at once, so a worker moves on to its next
-    key while the row is being made durable. Queued rows are written and fsynced together,
-    in a worker thread (the event loop keeps serving requests meanwhile); only then is
-    ``on_durable(row)`` called for each, which is where progress and observers hear of it.
-    ``before_write()``, when given, runs in that thread before each batch is written (the
-    runner pushes its log to the OS and stores queued answers in the response cache there); if
-    it raises, the batch is not written and the run stops as for a failed write.
-    """
-
-    def __init__(
-        self, path: str | Path, on_durable: Callable[[ResultRow], None], before_write: Callable[[], None] | None = None
-    ) -> None:
-        super().__init__(path)
-        self._on_durable = on_durable
-        self._before_write = before_write
-        self._queue: list[tuple[str, ResultRow]] = []
-        self._committer: asyncio.Task[None] | None = None
-        self.error: BaseException | None = None
-        self.fsyncs = 0
-        self.fsync_s = 0.0
-
-    def submit(self, row: ResultRow) -> None:
-        """Queue a finished row for the next batch (raises if an earlier batch failed)."""
-        if self.error is not None:
-            raise self.error
-        self._queue.append((row.model_dump_json() + "\n", row))
-        if self._committer is None or self._committer.done():
-            self._committer = asyncio.get_running_loop().create_task(self._commit_loop())
-
-    async def _commit_loop(self) -> None:
-        while self._queue and self.error is None:
-            # Yield once so rows finishing in this same tick join the batch.
-            await asyncio.sleep(0)
-            batch, self._queue = self._queue, []
-            try:
-                await asyncio.to_thread(self._write, "".join(line for line, _ in batch))
-            except Exception as exc:  # a full disk ends the run; the rows are not reported
-                # Kept here and raised to the workers by submit()/drain(); the task itself ends
-                # quietly (re-raising would leave an exception nobody retrieves).
-                self.error = exc
-                return
-            except BaseException as exc:  # cancelled mid-write: the batch's fate is unknown
-                self.error = exc
-                raise
-            for _, row in batch:
-                self._on_durable(row)
-
-    async def backpressure(self, max_queued: int = 256) -> None:
-        """Yield to the event loop; wait for the committer while too many rows are queued."""
-        await asyncio.sleep(0)
-        while len(self._queue) >= max_queued and self._committer is not None and not self._committer.done():
-            await asyncio.shield(self._committer)
-
-    async def drain(self) -> None:
-        """Wait until every submitted row is durable; re-raise a write failure."""
-        while self._committer is not None and not self._committer.done():
-            await asyncio.shield(self._committer)
-        if self.error is not None:
-            raise self.error
-
-    async def aclose(self) -> None:
-        """Make what was submitted durable (also after a cancellation), then close the file."""
-        try:
-            await self.drain()
-        except BaseException:  # already reported by the run; closing must still happen
-            pass
-        self.close()
-
-    def _write(self, text: str) -> None:
-        if self._before_write is not None:
-            self._before_write()
-        t0 = time.perf_counter()
-        self.write_lines(text)
-        self.fsyncs += 1
-        self.fsync_s += time.perf_counter() - t0
-
+#: Failure kinds of the first key that stop a run before it fans out: no other key can get
+#: past them until the user changes something.
+FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection"})
 
 # -- the run -------------------------------------------------------------------------------------
 @dataclass
@@ -311,6 +100,25 @@ class RunResult:
     n_total: int
     n_pending: int
     interrupted: bool = False
+    #: why the run stopped before every pending key was tried (fail fast, circuit breaker)
+    stopped: str | None = None
+
+    @property
+    def n_failed(self) -> int:
+        """Keys whose row is ``infra_error``."""
+        return int(self.summary.get("rows", {}).get(RowStatus.INFRA_ERROR.value, 0))
+
+    @property
+    def n_missing(self) -> int:
+        """Keys with no row at all (a stopped or interrupted run)."""
+        return int(self.summary.get("rows", {}).get("missing", 0))
+
+    @property
+    def exit_code(self) -> int:
+        """:data:`EXIT_OK`, :data:`EXIT_FAILED_KEYS` or :data:`EXIT_STOPPED` (see there)."""
+        if self.stopped is not None or self.n_missing:
+            return EXIT_STOPPED
+        return EXIT_FAILED_KEYS if self.n_failed else EXIT_OK
 
 
 @dataclass
@@ -334,6 +142,21 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     )
 
 
+class StopRun(Exception):
+    """Raised inside the run to stop fanning out (fail fast, circuit breaker)."""
+
+
+def backend_label(backend: Backend) -> str:
+    """``model at URL`` (or the backend's name) for messages about an unreachable backend."""
+    try:
+        ident = dict(backend.identity())
+    except Exception:  # identity is for the cache; a message must not fail on it
+        ident = {}
+    model = ident.get("model") or ident.get("backend") or type(backend).__name__
+    base = ident.get("api_base")
+    return f"model {model} at {base}" if base else f"model {model}"
+
+
 class PipelineRun:
     """One pipeline run into its folder. Use :func:`run_pipeline` unless embedding."""
 
@@ -342,12 +165,12 @@ class PipelineRun:
         config: PipelineConfig,
         *,
         host: PluginHost | None = None,
-        dataset: Dataset | None = None,
+        dataset: EvaluationSet | None = None,
         images: ImageStore | None = None,
         cache: ResponseCache | None = None,
         progress: RunProgress | None = None,
         console_log: bool = False,
-        retry_errors: bool = False,
+        retry_failed: bool = True,
     ) -> None:
         self.config = config
         self.host = host or get_plugin_host(config.plugins)
@@ -357,7 +180,7 @@ class PipelineRun:
         self._own_cache = cache is None
         self.progress = progress or QuietProgress()
         self.console_log = console_log
-        self.retry_errors = retry_errors
+        self.retry_failed = retry_failed
         self.run_dir = Path(config.output)
         self.stats = RunStats()
         self.config_hash = config.config_hash()
@@ -366,74 +189,24 @@ class PipelineRun:
         self._reads: dict[Path, asyncio.Future[Any]] = {}
         self._frames_read: dict[int, tuple[Any, ...]] = {}
         self._frames_waits: dict[int, tuple[tuple[Any, ...], set[asyncio.Future[Any]]]] = {}
-
-    # -- setup ---------------------------------------------------------------------------------
-    def _check_folder(self, keys: set[str]) -> set[str]:
-        """Keys already done in the run folder; refuse a folder made by another pipeline."""
-        results = self.run_dir / RESULTS
-        done: set[str] = set()
-        errored: set[str] = set()
-        for row in iter_rows(results):
-            if row.config_hash and row.config_hash != self.config_hash:
-                raise ConfigError(
-                    f"{self.run_dir}: holds rows of a different pipeline (config hash {row.config_hash}, this one "
-                    f"{self.config_hash}: backend, strategy, parser or scorers differ); choose another output folder"
-                )
-            done.add(row.key)
-            if row.key in keys:
-                # Read once here; the summary is kept from these and never re-parses the file.
-                self._digests[row.key] = digest(row)
-            if row.status is RowStatus.INFRA_ERROR:
-                errored.add(row.key)
-        if self.retry_errors and errored:
-            self._drop_rows(results, errored)
-            done -= errored
-            for key in errored:
-                self._digests.pop(key, None)
-        return done
-
-    def _drop_rows(self, results: Path, keys: set[str]) -> None:
-        # Rewrite without the failed rows (atomically) so the retried rows are not duplicates.
-        tmp = results.with_suffix(".jsonl.tmp")
-        with open(results, encoding="utf-8") as src, open(tmp, "w", encoding="utf-8") as dst:
-            for line in src:
-                if not line.endswith("\n"):
-                    continue
-                key_start = line.find('"key":"')
-                key = line[key_start + 7 : line.find('"', key_start + 7)] if key_start >= 0 else None
-                if key not in keys:
-                    dst.write(line)
-            dst.flush()
-            os.fsync(dst.fileno())
-        os.replace(tmp, results)
+        self._failures_in_a_row = 0
+        self._stopped: str | None = None
 
     # -- one key -------------------------------------------------------------------------------
     def _make_ask(self, run: int, exchanges: list[ExchangeRecord], row_id: str) -> Callable[[Request], Any]:
-        backend = self.components.backend
-        cache = self._cache if getattr(backend, "cacheable", True) else None
-        identity = self._identity
+        path = self._path
 
         async def ask(request: Request) -> Response:
             if request.run != run:
-                # Offline baselines seed by run index; the cache key adds the run separately.
+                # Offline baselines seed by run index; the cache key adds the run too.
                 request = dataclasses.replace(request, run=run)
-            request_hash = request.content_hash()
-            key = cache_key(identity, request_hash, run) if cache is not None else None
-            response = cache.get(key) if key is not None else None  # type: ignore[union-attr]
-            if response is not None:
-                self.stats.cache_hits += 1
-            else:
-                response = await self._call_backend(request, row_id)
-                if key is not None:
-                    # Queued, not written here: the journal's thread stores queued answers before
-                    # each batch of rows, so the row holding this answer is durable only after it.
-                    cache.put_deferred(key, response)  # type: ignore[union-attr]
+            response = await path.send(request, label=row_id)
             usage = response.usage
             # model_construct: every field is built here with the right type; validating
             # again per request cost ~0.1 ms an instance.
             exchanges.append(
                 ExchangeRecord.model_construct(
-                    request_hash=request_hash,
+                    request_hash=request.content_hash(),
                     image_hashes=request.image_hashes(),
                     raw=response.text,
                     latency_s=response.latency_s,
@@ -458,36 +231,6 @@ class PipelineRun:
 
         return ask
 
-    @property
-    def _attempt_timeout(self) -> float:
-        """The per-request timeout; a backend that retries inside (litellm's Router) gets room
-        for its own attempts, so our timeout never cuts its retries short."""
-        backend = self.components.backend
-        if getattr(backend, "retries_inside", False):
-            return self.config.timeout * (1 + int(getattr(backend, "inner_retries", 3)))
-        return self.config.timeout
-
-    async def _attempt(self, request: Request) -> Response:
-        """One call to the backend: limited by the semaphore, cut by the timeout."""
-        self.stats.requests += 1
-        async with self._limit:
-            t0 = time.perf_counter()
-            async with asyncio.timeout(self._attempt_timeout):
-                response = await self.components.backend.complete(request, self.images)
-        if not response.latency_s:
-            response.latency_s = time.perf_counter() - t0
-        return response
-
-    def _wait_s(self, exc: BaseException | None, failed_attempts: int) -> float:
-        """Seconds to wait after ``failed_attempts`` failures: Retry-After when the server sent
-        one, else exponential backoff with jitter scaled to ``initial_wait``."""
-        retry_after = getattr(exc, "retry_after", None)
-        if isinstance(retry_after, (int, float)) and not isinstance(retry_after, bool) and retry_after >= 0:
-            return min(float(retry_after), MAX_RETRY_AFTER_S)
-        policy = self.config.retry
-        backoff = policy.initial_wait * 2 ** (failed_attempts - 1) + random.uniform(0, policy.initial_wait)
-        return min(backoff, policy.max_wait)
-
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
         self._log.info(
             "retry",
@@ -498,49 +241,8 @@ class PipelineRun:
             wait_s=round(wait_s, 3),
         )
 
-    async def _call_backend(self, request: Request, row_id: str) -> Response:
-        """One model call, retried on transient failures only (never on a 4xx).
-
-        The first attempt runs bare (the common case pays nothing for retries); after a
-        transient failure, tenacity drives the remaining attempts. A backend that retries
-        inside (litellm's Router) gets one attempt: its failure, our timeout included, is final.
-        """
-        policy = self.config.retry
-        attempts = 1
-        try:
-            try:
-                response = await self._attempt(request)
-            except Exception as first:
-                if policy.attempts == 1 or not is_transient(first) or getattr(self.components.backend, "retries_inside", False):
-                    raise
-                wait_s = self._wait_s(first, 1)
-                self._log_retry(row_id, first, 1, wait_s)
-                await asyncio.sleep(wait_s)
-
-                def before_sleep(state: Any) -> None:
-                    self._log_retry(row_id, state.outcome.exception(), state.attempt_number + 1, state.upcoming_sleep)
-
-                async for attempt in AsyncRetrying(
-                    stop=stop_after_attempt(policy.attempts - 1),
-                    wait=lambda state: self._wait_s(state.outcome.exception(), state.attempt_number + 1),
-                    retry=retry_if_exception(is_transient),
-                    before_sleep=before_sleep,
-                    reraise=True,
-                ):
-                    with attempt:
-                        attempts += 1
-                        response = await self._attempt(request)
-        except Exception as exc:
-            self.stats.retries += attempts - 1
-            kind = error_type_of(exc)
-            message = self._redactor.text(f"{type(exc).__name__}: {exc}" + (f" (after {attempts} attempts)" if attempts > 1 else ""))
-            if kind == "backend_exception":
-                # Not an API failure: a bug in the backend plugin; keep its traceback in the log.
-                self._log.error("backend_exception", row=row_id, error=message, traceback=self._redactor.text(traceback.format_exc()))
-            raise InfraFailure(kind, message, attempts) from exc
-        response.retries = attempts - 1
-        self.stats.retries += attempts - 1
-        return response
+    def _log_bug(self, row_id: str, message: str, trace: str) -> None:
+        self._log.error("backend_exception", row=row_id, error=message, traceback=trace)
 
     async def _read_frames(self, instance: Instance) -> None:
         """Read the instance's new frames into the image store in a worker thread, once each.
@@ -593,6 +295,7 @@ class PipelineRun:
         scores: dict[str, dict[str, Any]] = {}
         prediction = Prediction()
         error_type = error_message = None
+        failed_retries = 0  # retries of a request that never got an answer (no exchange holds them)
         try:
             await self._read_frames(instance)
             turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
@@ -607,6 +310,7 @@ class PipelineRun:
                 status = RowStatus.PARSE_ERROR
         except InfraFailure as exc:
             status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
+            failed_retries = exc.retries
         except Exception as exc:  # a strategy bug or unreadable image must not end the run
             status, error_type = RowStatus.INFRA_ERROR, "strategy_error"
             error_message = self._redactor.text(f"{type(exc).__name__}: {exc}")
@@ -614,7 +318,7 @@ class PipelineRun:
         prompt = sum(e.prompt_tokens for e in exchanges if e.prompt_tokens is not None) if exchanges else None
         completion = sum(e.completion_tokens for e in exchanges if e.completion_tokens is not None) if exchanges else None
         costs = [e.cost_usd for e in exchanges if e.cost_usd is not None]
-        retries = sum(e.retries for e in exchanges)
+        retries = sum(e.retries for e in exchanges) + failed_retries
         return ResultRow.model_construct(
             key=key,
             instance_id=iid,
@@ -696,18 +400,36 @@ class PipelineRun:
 
     def _report_dataset_problems(self) -> None:
         """Say which houses or pairs loading skipped (file, JSON path, sentence): never silently."""
-        problems = list(getattr(self.dataset, "problems", ()) or ())
+        problems = self.dataset.problems  # type: ignore[union-attr]
         for p in problems:
-            if hasattr(p, "file"):
-                self._log.warning("dataset_problem", file=p.file, path=p.json_path, problem=p.message)
-            else:
-                self._log.warning("dataset_problem", problem=str(p))
+            self._log.warning("dataset_problem", file=p.file, path=p.json_path, problem=p.message)
         if problems:
             self._log.warning(
                 "dataset_problems",
                 count=len(problems),
                 hint="the houses or pairs named above were skipped; `povagent validate` lists every problem, --strict stops instead",
             )
+
+    def _after_row(self, row: ResultRow, first: bool) -> None:
+        """Fail fast on the first key and keep the circuit breaker's count (raises StopRun)."""
+        if row.status is not RowStatus.INFRA_ERROR:
+            self._failures_in_a_row = 0
+            return
+        self._failures_in_a_row += 1
+        where = backend_label(self.components.backend)
+        if first and row.error_type in FAIL_FAST_KINDS:
+            self._stopped = (
+                f"the first request failed ({row.error_type}: {row.error_message}); {where}: nothing else was sent. "
+                "Fix the key, the model name or the server, then run the same command again to resume"
+            )
+            raise StopRun(self._stopped)
+        limit = self.config.stop_after_failures
+        if limit and self._failures_in_a_row >= limit:
+            self._stopped = (
+                f"{self._failures_in_a_row} keys in a row failed (last: {row.error_type}: {row.error_message}); "
+                f"{where}: stopped instead of retrying every key. Fix the cause, then run the same command again to resume"
+            )
+            raise StopRun(self._stopped)
 
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
@@ -719,33 +441,39 @@ class PipelineRun:
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
-        check_scorers = getattr(self.dataset, "check_scorers", None)  # a real-world set has no 3D GT
-        if check_scorers is not None:
-            check_scorers([s.name for s in config.scorers])
-        runs = config.run_indices
-        wanted = {row_key(i.id, r) for i in instances for r in runs}
+        self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before anything is written to the run folder.
         self.components = create_components(config, self.host)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         with folder_lock(self.run_dir):
-            return await self._run_in_folder(instances, runs, wanted, t_start)
+            return await self._run_in_folder(instances, t_start)
 
-    async def _run_in_folder(self, instances: list[Instance], runs: list[int], wanted: set[str], t_start: float) -> RunResult:
+    async def _run_in_folder(self, instances: list[Instance], t_start: float) -> RunResult:
         """The run proper, with the run folder locked against a second process."""
         config = self.config
-        done = self._check_folder(wanted) & wanted
-        pending = [(inst, r) for inst in instances for r in runs if row_key(inst.id, r) not in done]
+        runs = config.run_indices
+        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed)
+        retried = plan.failed if self.retry_failed else set()
+        if retried:
+            # the failed rows go before their keys run again, so a retried key has one row
+            drop_rows(self.run_dir / RESULTS, retried)
+        self._digests = plan.digests
+        pending, wanted = plan.pending, plan.wanted
         (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
 
-        self._identity = identity_json(self.components.backend.identity())
+        backend = self.components.backend
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]
-        self._limit = asyncio.Semaphore(config.concurrency)
         self._observed = bool(self.host.hooks.active)
         cache_path = config.cache_path()
-        if self._cache is None and cache_path is not None and getattr(self.components.backend, "cacheable", True):
+        if self._cache is None and cache_path is not None and getattr(backend, "cacheable", True):
             self._cache = ResponseCache(cache_path)
         self._log = RunLog(self.run_dir / LOG, console=self.console_log, redactor=self._redactor, run=str(self.run_dir))
+        self._path = RequestPath(
+            backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
+            limiter=SemaphoreLimiter(config.concurrency), redact=self._redactor.text,
+            on_retry=self._log_retry, on_bug=self._log_bug,
+        )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the
         # log is pushed to the OS and queued answers are stored in the cache: after a kill, every
         # durable row has its request events in log.jsonl and its answers in the cache.
@@ -753,37 +481,18 @@ class PipelineRun:
         self._report_dataset_problems()
 
         self._log.info("run_start", n_total=len(wanted), n_pending=len(pending), config_hash=self.config_hash,
-                       backend=self._names[0], strategy=self._names[1], parser=self._names[2])
+                       backend=self._names[0], strategy=self._names[1], parser=self._names[2],
+                       retried_failed_keys=len(retried))
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
         interrupted = True
         try:
-            work = iter(pending)
-
-            async def worker() -> None:
-                # Workers pull keys in dataset order: bounded memory, and a house's frames
-                # stay hot in the image store while its keys are in flight.
-                for instance, run in work:
-                    self._journal.submit(await self._solve(instance, run))
-                    # Let the committer run even when the backend answers without suspending
-                    # (offline baselines): rows become durable as they finish, not at the end.
-                    await self._journal.backpressure()
-
-            try:
-                async with asyncio.TaskGroup() as group:
-                    for _ in range(min(config.concurrency, len(pending))):
-                        group.create_task(worker())
-                await self._journal.drain()
-            except BaseException as exc:
-                failed = self._journal.error
-                if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
-                    raise ResultsError(
-                        f"{self.run_dir / RESULTS}: cannot write rows ({type(failed).__name__}: {failed}); the rows "
-                        f"already written are kept: fix that and run the same command again to resume"
-                    ) from failed
-                if isinstance(exc, BaseExceptionGroup) and len(exc.exceptions) == 1:
-                    raise exc.exceptions[0]  # one worker's bug: its own traceback, not a group's
-                raise
+            if pending:
+                # Client libraries load before any request's clock starts (litellm: seconds).
+                await backend.start()
+            await self._fan_out(pending)
+            interrupted = False
+        except StopRun:
             interrupted = False
         finally:
             self.progress.stop()
@@ -791,16 +500,63 @@ class PipelineRun:
             await self._journal.aclose()
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
+            self.stats.requests, self.stats.cache_hits, self.stats.retries = (
+                self._path.stats.requests, self._path.stats.cache_hits, self._path.stats.retries,
+            )  # fmt: skip
+            if self._stopped:
+                self._log.error("run_stopped", reason=self._stopped)
             summary = self.write_summary(instances, runs, interrupted)
-            self._log.info("run_end", interrupted=interrupted, **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
+            self._log.info("run_end", interrupted=interrupted, stopped=self._stopped,
+                           **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
             self.host.hooks.run_end(str(self.run_dir), summary)
             self._log.close()
             try:
-                await self.components.backend.aclose()
+                await backend.aclose()
             finally:
                 if self._own_cache and self._cache is not None:
                     self._cache.close()
-        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted)
+        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped)
+
+    async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
+        """Run ``pending``: the first key alone (fail fast), then the rest with ``concurrency``
+        workers pulling keys in order (bounded memory; a house's frames stay hot)."""
+        if not pending:
+            return
+        first, rest = pending[0], iter(pending[1:])
+        row = await self._solve(*first)
+        self._journal.submit(row)
+        await self._journal.drain()
+        self._after_row(row, first=True)
+
+        async def worker() -> None:
+            for instance, run in rest:
+                row = await self._solve(instance, run)
+                self._journal.submit(row)
+                self._after_row(row, first=False)
+                # Let the committer run even when the backend answers without suspending
+                # (offline baselines): rows become durable as they finish, not at the end.
+                await self._journal.backpressure()
+
+        try:
+            async with asyncio.TaskGroup() as group:
+                for _ in range(min(self.config.concurrency, len(pending) - 1)):
+                    group.create_task(worker())
+            await self._journal.drain()
+        except BaseException as exc:
+            failed = self._journal.error
+            if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
+                raise ResultsError(
+                    f"{self.run_dir / RESULTS}: cannot write rows ({type(failed).__name__}: {failed}); the rows "
+                    f"already written are kept: fix that and run the same command again to resume"
+                ) from failed
+            if isinstance(exc, BaseExceptionGroup):
+                stop = exc.subgroup(StopRun)
+                if stop is not None and stop.exceptions:
+                    await self._journal.drain()  # rows finished before the stop are kept
+                    raise StopRun(self._stopped) from None
+                if len(exc.exceptions) == 1:
+                    raise exc.exceptions[0]  # one worker's bug: its own traceback, not a group's
+            raise
 
     def write_summary(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """Write ``summary.json``: official breakdown over the selected keys, plus run stats."""
@@ -814,9 +570,10 @@ class PipelineRun:
         }
         summary["complete"] = summary["rows"]["missing"] == 0
         summary["interrupted"] = interrupted
+        summary["stopped"] = self._stopped
         summary["session"] = self.stats.as_dict()
         summary["images"] = {**dataclasses.asdict(self.images.stats), "distinct": self.images.distinct}
-        _write_json(self.run_dir / SUMMARY, summary)
+        write_json(self.run_dir / SUMMARY, summary)
         return summary
 
 
@@ -830,123 +587,10 @@ def _read_files(images: ImageStore, paths: list[Path]) -> None:
 
 
 def _prediction(instance: Instance, parse: ParsedAnswer) -> Prediction:
-    image_path = None
     sel = parse.selected_image
-    if instance.condition.uses_exploration_frames and sel is not None and 0 <= sel < len(instance.frames):
-        image_path = instance.frames[sel].image_path
+    frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
+    image_path = frame.image_path if frame is not None else None
     return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y)
-
-
-def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
-    """The fields a summary needs, from a row's official score (non-answers count as such)."""
-    score = row.scores.get(scorer) or {}
-    answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
-    return ScoredRow(
-        condition=row.condition,
-        direction=row.direction,
-        answered=answered,
-        l2=score.get("l2") if answered else None,
-        gt_in_frame=score.get("gt_in_frame") if answered else None,
-        l2_strict=score.get("l2_strict") if answered else None,
-    )
-
-
-@dataclass(frozen=True, slots=True)
-class RowDigest:
-    """The few fields of a row that ``summary.json`` needs.
-
-    The runner keeps one per key (rows of earlier sessions read once at resume, its own rows as
-    they become durable), so writing the summary never parses ``results.jsonl`` again.
-    """
-
-    key: str
-    run: int
-    status: str
-    scored: ScoredRow
-    has_success: bool
-    success: Any
-    answered: bool
-    prompt_tokens: int | None
-    completion_tokens: int | None
-    cost_usd: float | None
-    retries: int
-
-
-def digest(row: ResultRow) -> RowDigest:
-    """The summary fields of one row."""
-    success = row.scores.get("success")
-    return RowDigest(
-        key=row.key,
-        run=row.run,
-        status=RowStatus(row.status).value,
-        scored=scored_row(row),
-        has_success=success is not None,
-        success=(success or {}).get("success"),
-        # a row the runner never scored (parse or infra error) is unanswered
-        answered=(success or {}).get("answered") is True,
-        prompt_tokens=row.prompt_tokens,
-        completion_tokens=row.completion_tokens,
-        cost_usd=row.cost_usd,
-        retries=row.retries,
-    )
-
-
-def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None) -> dict[str, Any]:
-    """Breakdown (overall / per condition / per direction, per run too) of row digests.
-
-    ``keys`` is the run's selection (``rows`` then counts missing keys); digests of other keys
-    are left out.
-    """
-    rows = [d for d in digests if keys is None or d.key in keys]
-    scored = [d.scored for d in rows]
-    out = breakdown(scored)
-    if any(d.has_success for d in rows):
-        from povagent.dataset.realworld import success_breakdown
-
-        out["success"] = success_breakdown(
-            {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
-            for d in rows
-        )
-    per_run: dict[int, list[ScoredRow]] = {}
-    for d in rows:
-        per_run.setdefault(d.run, []).append(d.scored)
-    out["per_run"] = {str(k): summarize(v) for k, v in sorted(per_run.items())}
-    statuses = Counter(d.status for d in rows)
-    costs = [d.cost_usd for d in rows if d.cost_usd is not None]
-    out["rows"] = {
-        "total": len(keys) if keys is not None else len(rows),
-        "done": len(rows),
-        "missing": (len(keys) - len(rows)) if keys is not None else 0,
-        **{s.value: statuses.get(s.value, 0) for s in RowStatus},
-    }
-    out["usage"] = {
-        "prompt_tokens": sum(d.prompt_tokens or 0 for d in rows),
-        "completion_tokens": sum(d.completion_tokens or 0 for d in rows),
-        "cost_usd": sum(costs) if costs else None,
-        "retries": sum(d.retries for d in rows),
-    }
-    return out
-
-
-def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:
-    """Breakdown (overall / per condition / per direction) of a results file, per run too.
-
-    ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
-    When a key repeats, its last row counts.
-    """
-    by_key: dict[str, RowDigest] = {}
-    for row in iter_rows(results):
-        if keys is None or row.key in keys:
-            by_key[row.key] = digest(row)
-    return summarize_digests(by_key.values(), keys)
-
-
-def _write_json(path: Path, data: Mapping[str, Any]) -> None:
-    import json
-
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
 
 
 async def run_pipeline_async(config: PipelineConfig, **kwargs: Any) -> RunResult:
@@ -957,29 +601,3 @@ async def run_pipeline_async(config: PipelineConfig, **kwargs: Any) -> RunResult
 def run_pipeline(config: PipelineConfig, **kwargs: Any) -> RunResult:
     """Run a pipeline to completion (resuming from its folder); see :class:`PipelineRun`."""
     return asyncio.run(run_pipeline_async(config, **kwargs))
-
-
-def pending_keys(config: PipelineConfig, dataset: Dataset) -> tuple[int, int, list[tuple[Instance, int]]]:
-    """``(n_total, n_done, pending)`` for a pipeline, without running anything (dry runs)."""
-    instances = select_instances(dataset, config)
-    runs = config.run_indices
-    wanted = {row_key(i.id, r) for i in instances for r in runs}
-    done: set[str] = set()
-    for row in iter_rows(Path(config.output) / RESULTS):
-        if row.key in wanted:
-            done.add(row.key)
-    pending = [(i, r) for i in instances for r in runs if row_key(i.id, r) not in done]
-    return len(wanted), len(done), pending
-
-
-def ensure_dataset(config: PipelineConfig, loaded: dict[Any, Dataset] | None = None) -> Dataset:
-    """The config's dataset, loaded once per folder (and strictness) when ``loaded`` is shared
-    (sweeps)."""
-    key = (Path(config.dataset.root).resolve(), config.dataset.strict)
-    if loaded is not None and key in loaded:
-        return loaded[key]
-    ds = prepare_dataset(config)
-    if loaded is not None:
-        loaded[key] = ds
-    return ds
-

@@ -38,7 +38,8 @@ from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.run.progress import make_progress
-from povagent.run.runner import PipelineRun, RunResult, create_components, ensure_dataset, pending_keys
+from povagent.run.pending import ensure_dataset, pending_keys
+from povagent.run.runner import PipelineRun, RunResult, create_components
 
 SWEEP_INDEX = "sweep.json"
 
@@ -213,7 +214,7 @@ def run_sweep(
     path: str | Path,
     *,
     quiet: bool = False,
-    retry_errors: bool = False,
+    retry_failed: bool = True,
     strict: bool = False,
     on_cell_done: Callable[[Cell, RunResult], None] | None = None,
 ) -> SweepResult:
@@ -246,7 +247,7 @@ def run_sweep(
                         images=images,
                         cache=cache,
                         progress=make_progress(cell.name, quiet=quiet),
-                        retry_errors=retry_errors,
+                        retry_failed=retry_failed,
                     )
                     res = await run.run()
                 except BaseException:

@@ -96,9 +96,7 @@ def scoring_frame(instance: Instance, selected_image: int | None = None, image_p
         return instance.frames[0]
     if image_path is not None:
         return instance.frame_by_path(image_path)
-    if selected_image is not None and 0 <= selected_image < len(instance.frames):
-        return instance.frames[selected_image]
-    return None
+    return instance.selected_frame(selected_image)
 
 
 def score_point(instance: Instance, frame: Frame | None, x: float | None, y: float | None) -> OfficialScore:

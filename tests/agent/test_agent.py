@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.agent.grounding_agent import GroundingAgent, Localization, RetrySettings
+from povagent.agent.grounding_agent import GroundingAgent, Localization
+from povagent.engine.retry import RetryPolicy
 from povagent.answers.spec import ParseStatus
 from povagent.dataset.models import Condition
 from povagent.errors import BadInputError, ConfigError, NoAnswerError, UnparseableAnswerError
@@ -22,7 +23,7 @@ from povagent.geometry.camera import Camera
 from povagent.geometry.goals import PinholeCamera
 from povagent.testing.loopback_server import Fault, LoopbackServer, Reply
 
-FAST_RETRY = RetrySettings(attempts=3, initial_wait=0.01, max_wait=0.05)
+FAST_RETRY = RetryPolicy(attempts=3, initial_wait=0.01, max_wait=0.05)
 KEY_ENV = "POVAGENT_AGENT_TEST_KEY"
 
 

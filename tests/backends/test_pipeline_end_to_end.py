@@ -136,16 +136,40 @@ def test_transient_faults_are_retried_by_the_runner_and_answered(tmp_path, mini_
     assert model_server.request_count == N_INSTANCES + 4
 
 
-@pytest.mark.parametrize(("status", "error_type"), [(400, "bad_request"), (401, "auth")])
-def test_client_errors_are_recorded_not_retried(status, error_type, tmp_path, mini_root, model_server, api_key):
-    model_server.reply = Fault(status, message=f"injected {status}")
+def test_a_bad_request_is_recorded_per_key_and_not_retried(tmp_path, mini_root, model_server, api_key):
+    model_server.reply = Fault(400, message="injected 400")
     doc = pipeline(tmp_path, mini_root, litellm_backend(model_server), instances={"limit": 3})
-    run_yaml(tmp_path, doc)
+    result = run_yaml(tmp_path, doc)
     rows = read_rows(tmp_path / "run" / "results.jsonl")
-    assert len(rows) == 3
-    assert all(r.status == "infra_error" and r.error_type == error_type and r.retries == 0 for r in rows)
-    assert all(f"injected {status}" in (r.error_message or "") for r in rows)
-    assert model_server.request_count == 3
+    assert len(rows) == 3  # a 400 may be one instance's fault (its images, its length): the run goes on
+    assert all(r.status == "infra_error" and r.error_type == "bad_request" and r.retries == 0 for r in rows)
+    assert all("injected 400" in (r.error_message or "") for r in rows)
+    assert model_server.request_count == 3 and result.exit_code == 3
+
+
+def test_an_auth_failure_stops_the_run_at_the_first_request_naming_model_and_server(tmp_path, mini_root, model_server, api_key):
+    model_server.reply = Fault(401, message="injected 401")
+    doc = pipeline(tmp_path, mini_root, litellm_backend(model_server), instances={"limit": 3})
+    result = run_yaml(tmp_path, doc)
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.status == "infra_error" and row.error_type == "auth" and row.retries == 0
+    assert model_server.request_count == 1 and result.exit_code == 4
+    assert model_server.url in result.stopped and "auth" in result.stopped
+
+
+def test_an_unreachable_server_is_a_connection_failure_naming_its_url(tmp_path, mini_root, api_key):
+    import socket
+
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    url = f"http://127.0.0.1:{port}/v1"
+    backend = {"name": "litellm", "options": {"model": "openai/test-model", "api_base": url, "api_key_env": "POVAGENT_TEST_KEY"}}
+    doc = pipeline(tmp_path, mini_root, backend, instances={"limit": 3}, retry={"attempts": 2, "initial_wait": 0.0, "max_wait": 0.0})
+    result = run_yaml(tmp_path, doc)
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.error_type == "connection" and url in (row.error_message or "") and row.retries == 1
+    assert result.stopped is not None and url in result.stopped and result.exit_code == 4
 
 
 def test_the_key_never_reaches_rows_or_logs(tmp_path, mini_root, model_server, api_key):

@@ -17,7 +17,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.dataset.realworld import run_success_breakdown, success_breakdown
+from povagent.dataset.realworld import success_breakdown
+from povagent.report.collect import run_success_breakdown
 from povagent.results.rows import iter_rows
 
 DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"

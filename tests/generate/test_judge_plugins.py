@@ -157,7 +157,7 @@ def _pipeline(tmp_path: Path, judge: str) -> Path:
 
 def test_a_pipeline_names_a_judge_its_plugins_register_and_the_dataset_is_generated_with_it(tmp_path):
     from povagent.config.pipeline import load_pipeline
-    from povagent.run.runner import prepare_dataset
+    from povagent.run.pending import prepare_dataset
 
     config = load_pipeline(_pipeline(tmp_path, "front-and-up"))
     assert config.dataset.generate.judge.name == "front-and-up"

@@ -58,7 +58,7 @@ class FlakyBackend(CenterBackend):
     """Fails with the scripted statuses in order (shared across instances), then answers.
 
     ``script`` items: an HTTP status (429 carries ``retry_after``), ``"timeout"`` (sleeps past
-    any timeout), or ``"connection"``.
+    any timeout), ``"connection"``, ``"crash"`` (a plugin bug) or ``"ok"`` (answer this one).
     """
 
     SCRIPT: list[Any] = []
@@ -73,6 +73,8 @@ class FlakyBackend(CenterBackend):
         if FlakyBackend.SCRIPT:
             CALLS["count"] += 1
             step = FlakyBackend.SCRIPT.pop(0)
+            if step == "ok":
+                return await super().complete(request, images)
             if step == "timeout":
                 await asyncio.sleep(60)
             if step == "connection":

@@ -14,7 +14,8 @@ from povagent.config.pipeline import load_pipeline
 from povagent.errors import ConfigError
 from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent.results.rows import read_rows
-from povagent.run.runner import error_type_of, is_transient, run_pipeline
+from povagent.engine.retry import error_type_of, is_transient
+from povagent.run.runner import run_pipeline
 
 N_KEYS = 12  # 4 (pair, direction)s x 3 conditions in the small release
 
@@ -226,15 +227,83 @@ def test_resume_into_a_folder_of_another_pipeline_is_refused(write_pipeline):
         run(write_pipeline(backend={"name": "test-center", "options": {"reply": "other"}}))
 
 
-def test_retry_errors_reruns_infra_rows_without_duplicates(write_pipeline, offline_plugin):
+def test_a_resumed_run_tries_failed_keys_again_without_duplicates(write_pipeline, offline_plugin):
     path = write_pipeline(backend="test-flaky", instances={"limit": 3}, concurrency=1)
-    offline_plugin.FlakyBackend.SCRIPT[:] = [401, 401]
+    offline_plugin.FlakyBackend.SCRIPT[:] = ["ok", 400, 400]
     first = run(path)
     assert Counter(r.status for r in rows_of(first)) == {"infra_error": 2, "answered": 1}
-    second = run(path, retry_errors=True)
+    assert first.exit_code == 3 and first.n_failed == 2
+    second = run(path)  # the same command again, nothing else: the failed keys run again
     rows = [json.loads(line) for line in (second.run_dir / "results.jsonl").read_text().splitlines()]
     assert len(rows) == len({r["key"] for r in rows}) == 3
-    assert {r["status"] for r in rows} == {"answered"} and second.n_pending == 2
+    assert {r["status"] for r in rows} == {"answered"} and second.n_pending == 2 and second.exit_code == 0
+
+
+def test_keep_errors_leaves_failed_keys_as_they_are(write_pipeline, offline_plugin):
+    path = write_pipeline(backend="test-flaky", instances={"limit": 3}, concurrency=1)
+    offline_plugin.FlakyBackend.SCRIPT[:] = ["ok", 400, 400]
+    run(path)
+    calls = offline_plugin.CALLS["count"]
+    kept = run(path, retry_failed=False)
+    assert offline_plugin.CALLS["count"] == calls and kept.n_pending == 0
+    assert Counter(r.status for r in rows_of(kept)) == {"infra_error": 2, "answered": 1} and kept.exit_code == 3
+
+
+def test_parse_errors_are_answers_and_are_not_run_again(write_pipeline, offline_plugin):
+    path = write_pipeline(backend={"name": "test-center", "options": {"reply": "no point here"}}, instances={"limit": 2})
+    first = run(path)
+    assert {r.status for r in rows_of(first)} == {"parse_error"} and first.exit_code == 0
+    calls = offline_plugin.CALLS["count"]
+    assert run(path).n_pending == 0 and offline_plugin.CALLS["count"] == calls
+
+
+@pytest.mark.parametrize("failure", [401, 404, "connection"])
+def test_the_first_key_failing_for_good_stops_the_run_before_it_fans_out(write_pipeline, offline_plugin, failure):
+    path = write_pipeline(backend="test-flaky", retry={"attempts": 2, "initial_wait": 0.0, "max_wait": 0.0})
+    tries = 2 if failure == "connection" else 1  # a transient failure is retried before it counts
+    offline_plugin.FlakyBackend.SCRIPT[:] = [failure] * tries
+    result = run(path)
+    assert result.stopped is not None and "nothing else was sent" in result.stopped
+    assert "test-center" in result.stopped  # the model is named
+    assert len(rows_of(result)) == 1 and result.n_missing == N_KEYS - 1 and result.exit_code == 4
+    assert offline_plugin.CALLS["count"] == tries
+    resumed = run(path)  # fixed: the same command finishes the run, no duplicate row
+    keys = [r.key for r in rows_of(resumed)]
+    assert len(keys) == len(set(keys)) == N_KEYS and resumed.exit_code == 0
+
+
+def test_a_first_key_failing_for_a_passing_reason_does_not_stop_the_run(write_pipeline, offline_plugin):
+    path = write_pipeline(backend="test-flaky", retry={"attempts": 1})
+    offline_plugin.FlakyBackend.SCRIPT[:] = [503]
+    result = run(path)
+    assert result.stopped is None and result.n_failed == 1 and result.n_missing == 0 and result.exit_code == 3
+
+
+def test_failures_in_a_row_trip_the_circuit_breaker(write_pipeline, offline_plugin):
+    path = write_pipeline(backend="test-flaky", concurrency=1, stop_after_failures=3, retry={"attempts": 1})
+    offline_plugin.FlakyBackend.SCRIPT[:] = ["ok", 503, "ok", 503, 503, 503, 503, 503]
+    result = run(path)
+    statuses = [r.status for r in rows_of(result)]
+    # an answer resets the count: the breaker trips at the third failure in a row, not the fourth overall
+    assert statuses == ["answered", "infra_error", "answered", "infra_error", "infra_error", "infra_error"]
+    assert result.stopped is not None and "3 keys in a row failed" in result.stopped and result.exit_code == 4
+    assert result.n_missing == N_KEYS - 6
+
+
+def test_no_circuit_breaker_when_stop_after_failures_is_zero(write_pipeline, offline_plugin):
+    path = write_pipeline(backend="test-flaky", concurrency=1, stop_after_failures=0, retry={"attempts": 1})
+    offline_plugin.FlakyBackend.SCRIPT[:] = ["ok"] + [503] * (N_KEYS - 1)
+    result = run(path)
+    assert result.stopped is None and result.n_failed == N_KEYS - 1 and result.exit_code == 3
+
+
+def test_an_infra_error_row_counts_the_retries_it_spent(write_pipeline, offline_plugin):
+    path = write_pipeline(backend="test-flaky", instances={"limit": 2}, concurrency=1,
+                          retry={"attempts": 3, "initial_wait": 0.0, "max_wait": 0.0})  # fmt: skip
+    offline_plugin.FlakyBackend.SCRIPT[:] = ["ok", 503, 503, 503]
+    result = run(path)
+    failed = [r for r in rows_of(result) if r.status == "infra_error"]
+    assert [r.retries for r in failed] == [2] and result.summary["usage"]["retries"] == 2
 
 
 def test_lifecycle_hooks_observe_the_run(write_pipeline, povagent_host):
@@ -280,7 +349,7 @@ def test_observer_that_raises_does_not_stop_the_run(write_pipeline, povagent_hos
 
 def test_sample_is_seeded_and_kept_in_dataset_order(write_pipeline, small_release):
     from povagent.dataset import load_dataset
-    from povagent.run.runner import select_instances
+    from povagent.run.pending import select_instances
 
     ds = load_dataset(small_release)
     a = select_instances(ds, load_pipeline(write_pipeline(instances={"sample": 5, "seed": 3})))
@@ -311,7 +380,7 @@ def test_each_distinct_image_is_read_and_encoded_once_per_run(write_pipeline, sm
 
 
 def test_summary_after_resume_covers_the_rows_of_both_sessions(write_pipeline):
-    from povagent.run.runner import summarize_run
+    from povagent.run.summary import summarize_run
 
     run(write_pipeline(instances={"limit": 5}))
     result = run(write_pipeline())
