@@ -34,12 +34,17 @@ __all__ = ["Fault", "Reply", "RecordedRequest", "LoopbackServer"]
 
 @dataclass(frozen=True)
 class Reply:
-    """A successful answer: the assistant's text, after ``delay_s``, with token counts."""
+    """A successful answer: the assistant's text, after ``delay_s``, with token counts.
 
-    text: str
+    ``text=None`` sends ``content: null``; ``no_choices=True`` sends an empty ``choices`` list
+    (both seen from real servers under load, and neither is an answer).
+    """
+
+    text: str | None
     delay_s: float = 0.0
     prompt_tokens: int = 10
     completion_tokens: int = 5
+    no_choices: bool = False
 
 
 @dataclass(frozen=True)
@@ -273,9 +278,9 @@ class LoopbackServer:
             "object": "chat.completion",
             "created": int(time.time()),
             "model": body.get("model", self.model),
-            "choices": [
-                {"index": 0, "message": {"role": "assistant", "content": reply.text}, "finish_reason": "stop"}
-            ],
+            "choices": []
+            if reply.no_choices
+            else [{"index": 0, "message": {"role": "assistant", "content": reply.text}, "finish_reason": "stop"}],
             "usage": {
                 "prompt_tokens": reply.prompt_tokens,
                 "completion_tokens": reply.completion_tokens,

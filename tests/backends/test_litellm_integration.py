@@ -188,3 +188,19 @@ def test_router_identity_names_models_not_hosts(loopback, second_loopback):
     ident = router(loopback, second_loopback).identity()
     assert ident["router_models"] == ["openai/loopback-model"]
     assert loopback.url not in str(ident)
+
+
+# -- answers that are no answers ---------------------------------------------------------------
+@pytest.mark.parametrize("reply", [Reply(None), Reply("", no_choices=True)], ids=["null-content", "no-choices"])
+def test_an_empty_response_is_transient_not_an_empty_answer(reply, make_request, store, loopback, api_key):
+    loopback.script(reply)
+    with pytest.raises(TransientBackendError) as info:
+        run(direct(loopback).complete(make_request(1), store))
+    assert info.value.kind == "empty_response"
+
+
+def test_start_imports_litellm_and_finds_a_missing_key(monkeypatch, loopback):
+    monkeypatch.delenv("POVAGENT_TEST_KEY", raising=False)
+    with pytest.raises(PermanentBackendError, match="POVAGENT_TEST_KEY") as info:
+        run(direct(loopback).start())
+    assert info.value.kind == "missing_key" and loopback.request_count == 0

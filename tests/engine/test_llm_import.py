@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -49,33 +48,19 @@ def test_loading_every_builtin_plugin_does_not_import_litellm():
     assert done.returncode == 0, done.stderr
 
 
-def test_help_is_fast():
-    script = Path(sys.executable).with_name("povagent")
-    cmd = [str(script), "--help"] if script.exists() else [sys.executable, "-c", "from povagent.cli import main; main()", "--help"]
-    started = time.perf_counter()
-    done = subprocess.run(cmd, capture_output=True, text=True, env=CLEAN_ENV, timeout=50)
-    elapsed = time.perf_counter() - started
-    assert done.returncode == 0, done.stderr
-    # importing litellm alone takes 3-5 s here; help must stay well under that
-    assert elapsed < 2.5, f"povagent --help took {elapsed:.2f} s"
-
-
-def test_import_litellm_sets_offline_defaults_first():
+def test_help_loads_no_heavy_library():
+    """``povagent --help`` stays fast by what it imports, not by a wall-clock bound (the machine
+    is shared): litellm alone takes seconds, scipy and the renderer's libraries a second more."""
     code = (
-        "import os\n"
-        "from povagent.engine.llm_import import import_litellm\n"
-        "litellm = import_litellm()\n"
-        "assert os.environ['LITELLM_LOCAL_MODEL_COST_MAP'] == 'True'\n"
-        "assert os.environ['LITELLM_MODE'] == 'PRODUCTION'\n"
-        "assert litellm.suppress_debug_info is True\n"
-        "assert import_litellm() is litellm\n"
+        "import sys\n"
+        "from povagent.cli import main\n"
+        "sys.argv = ['povagent', '--help']\n"
+        "try:\n"
+        "    main()\n"
+        "except SystemExit as exit:\n"
+        "    assert exit.code in (0, None), exit.code\n"
+        "heavy = sorted(m for m in ('litellm', 'openai', 'scipy', 'trimesh', 'embreex', 'matplotlib', 'huggingface_hub') if m in sys.modules)\n"
+        "assert not heavy, heavy\n"
     )
     done = _python(code)
     assert done.returncode == 0, done.stderr
-
-
-def test_user_exported_litellm_settings_win():
-    env = {**CLEAN_ENV, "LITELLM_MODE": "DEV"}
-    code = "import os\nfrom povagent.engine.llm_import import import_litellm\nimport_litellm()\nprint(os.environ['LITELLM_MODE'])"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=50)
-    assert done.stdout.strip() == "DEV", done.stderr
