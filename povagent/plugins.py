@@ -382,8 +382,3 @@ def get_plugin_host(extra_modules: Sequence[str] = ()) -> PluginHost:
     if host is None:
         host = _HOSTS[key] = build_plugin_host(key)
     return host
-
-
-def clear_plugin_host_cache() -> None:
-    """Forget cached hosts (after installing a plugin in the same process)."""
-    _HOSTS.clear()

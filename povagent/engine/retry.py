@@ -153,13 +153,3 @@ class InfraFailure(Exception):
     def retries(self) -> int:
         """Attempts after the first."""
         return max(0, self.attempts - 1)
-
-    @property
-    def permanent(self) -> bool:
-        """Whether no later run can succeed without the user changing something (a key, a
-        model name, a request the server refuses): the kinds a run stops early for."""
-        return self.error_type in PERMANENT_KINDS
-
-
-#: Failure kinds that mean "fix the configuration", not "try again later".
-PERMANENT_KINDS = frozenset({"auth", "not_found", "bad_request", "permanent", "missing_key"})

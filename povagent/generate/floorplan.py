@@ -59,11 +59,6 @@ class Rect:
         return self.z1 - self.z0
 
     @property
-    def area(self) -> float:
-        """Area in m^2."""
-        return self.width * self.depth
-
-    @property
     def center(self) -> tuple[float, float]:
         """Centre (x, z)."""
         return ((self.x0 + self.x1) / 2.0, (self.z0 + self.z1) / 2.0)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
+import trimesh.creation
 
 from povagent.generate.floorplan import WALL_HEIGHT, FloorPlan
 from povagent.generate.furnishing import DOOR_FRAME_TRIM
@@ -24,18 +25,6 @@ from povagent.generate.scene import House, PlacedObject
 
 # Materials the renderer knows how to shade.
 PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING = range(10)
-
-_BOX_FACES = np.array(
-    [
-        [0, 2, 1], [0, 3, 2],  # bottom (y0)
-        [4, 5, 6], [4, 6, 7],  # top (y1)
-        [0, 1, 5], [0, 5, 4],  # z0
-        [3, 7, 6], [3, 6, 2],  # z1
-        [0, 4, 7], [0, 7, 3],  # x0
-        [1, 2, 6], [1, 6, 5],  # x1
-    ]
-)  # fmt: skip
-
 
 def _rgb(hex_color: str) -> tuple[float, float, float]:
     h = hex_color.lstrip("#")
@@ -78,60 +67,29 @@ class MeshParts:
         )
 
 
-def box_vertices(lo, hi) -> np.ndarray:
-    """The 8 corners of the box [lo, hi] in the order ``_BOX_FACES`` expects."""
-    (x0, y0, z0), (x1, y1, z1) = lo, hi
-    return np.array(
-        [[x0, y0, z0], [x1, y0, z0], [x1, y0, z1], [x0, y0, z1],
-         [x0, y1, z0], [x1, y1, z0], [x1, y1, z1], [x0, y1, z1]]
-    )  # fmt: skip
+def box_mesh(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """The axis-aligned box [lo, hi]: 8 vertices and 12 outward-facing triangles."""
+    box = trimesh.creation.box(bounds=np.array([lo, hi], dtype=float))
+    return np.asarray(box.vertices), np.asarray(box.faces)
 
 
 def _cylinder(center, radius_a: float, radius_b: float, y0: float, y1: float, axis: str = "y", sections: int = 14):
-    """A closed prism approximating a cylinder (elliptic when the radii differ)."""
-    ang = np.linspace(0, 2 * np.pi, sections, endpoint=False)
-    a, b = radius_a * np.cos(ang), radius_b * np.sin(ang)
-    ring0 = np.stack([a, np.full(sections, y0), b], axis=1)
-    ring1 = np.stack([a, np.full(sections, y1), b], axis=1)
-    verts = np.concatenate([ring0, ring1, [[0, y0, 0], [0, y1, 0]]])
-    if axis == "z":  # the prism's axis along z: swap y and z, y0/y1 are then z extents
-        verts = verts[:, [0, 2, 1]]
-    verts = verts + np.asarray(center, dtype=float)
-    i = np.arange(sections)
-    j = (i + 1) % sections
-    side = np.concatenate([np.stack([i, j, j + sections], 1), np.stack([i, j + sections, i + sections], 1)])
-    caps = np.concatenate(
-        [np.stack([np.full(sections, 2 * sections), j, i], 1), np.stack([np.full(sections, 2 * sections + 1), i + sections, j + sections], 1)]
-    )
-    return verts, np.concatenate([side, caps])
+    """A closed prism approximating a cylinder (elliptic when the radii differ), its axis along
+    y (from ``y0`` to ``y1``) or, with ``axis="z"``, along z (``y0``/``y1`` are then z extents)."""
+    prism = trimesh.creation.cylinder(radius=1.0, height=y1 - y0, sections=sections)
+    verts = np.asarray(prism.vertices) * (radius_a, radius_b, 1.0)  # trimesh's axis is z
+    verts[:, 2] += (y0 + y1) / 2.0
+    faces = np.asarray(prism.faces)
+    if axis == "y":
+        # our y is trimesh's z: swapping two axes mirrors the mesh, so the faces turn to stay outward
+        verts, faces = verts[:, [0, 2, 1]], faces[:, ::-1]
+    return verts + np.asarray(center, dtype=float), faces
 
 
 def _blob(center, radii, subdivisions: int = 1):
     """A squashed icosphere (foliage, cushions seen from far)."""
-    t = (1.0 + 5 ** 0.5) / 2.0
-    v = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t],
-                  [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], dtype=float)  # fmt: skip
-    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2],
-                  [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11],
-                  [6, 2, 10], [8, 6, 7], [9, 8, 1]])  # fmt: skip
-    for _ in range(subdivisions):
-        verts = list(v)
-        cache: dict[tuple[int, int], int] = {}
-
-        def mid(a: int, b: int) -> int:
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                verts.append((verts[a] + verts[b]) / 2)
-                cache[key] = len(verts) - 1
-            return cache[key]
-
-        nf = []
-        for a, b, c in f:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            nf += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-        v, f = np.array(verts), np.array(nf)
-    v = v / np.linalg.norm(v, axis=1, keepdims=True)
-    return v * np.asarray(radii) + np.asarray(center), f
+    sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    return np.asarray(sphere.vertices) * np.asarray(radii) + np.asarray(center), np.asarray(sphere.faces)
 
 
 class Parts:
@@ -142,7 +100,7 @@ class Parts:
 
     def box(self, x0, y0, z0, x1, y1, z1, color, material=PLAIN, decor=False) -> None:
         """An axis-aligned box part."""
-        self.items.append((box_vertices((x0, y0, z0), (x1, y1, z1)), _BOX_FACES, color, material, decor))
+        self.items.append((*box_mesh((x0, y0, z0), (x1, y1, z1)), color, material, decor))
 
     def cyl(self, x, z, r, y0, y1, color, material=PLAIN, rb=None, sections=14) -> None:
         """A vertical cylinder part centred at (x, z)."""
@@ -586,13 +544,13 @@ def add_structure(mesh: MeshParts, plan: FloorPlan, rng: np.random.Generator) ->
         mesh.add(quad + [0, WALL_HEIGHT, 0], tris, (0.96, 0.96, 0.95), CEILING, 0, room.room_id)
     for slab in plan.slabs:
         r = slab.rect
-        mesh.add(box_vertices((r.x0, slab.y0, r.z0), (r.x1, slab.y1, r.z1)), _BOX_FACES, paints[slab.room_id], WALL, 0, slab.room_id)
+        mesh.add(*box_mesh((r.x0, slab.y0, r.z0), (r.x1, slab.y1, r.z1)), paints[slab.room_id], WALL, 0, slab.room_id)
         if slab.y0 == 0.0:
             # a baseboard along the foot of the wall, 1 cm proud of it
             t = 0.01
             lo = (r.x0 - t, 0.0, r.z0 - t)
             hi = (r.x1 + t, 0.08, r.z1 + t)
-            mesh.add(box_vertices(lo, hi), _BOX_FACES, (0.93, 0.92, 0.9), PLAIN, 0, slab.room_id)
+            mesh.add(*box_mesh(lo, hi), (0.93, 0.92, 0.9), PLAIN, 0, slab.room_id)
     return paints
 
 

@@ -8,7 +8,6 @@ key is then run again on resume).
 
 from __future__ import annotations
 
-import json
 import os
 from datetime import datetime, timezone
 from enum import StrEnum
@@ -164,13 +163,3 @@ def read_rows(path: str | Path) -> list[ResultRow]:
     for row in iter_rows(path):
         by_key[row.key] = row
     return list(by_key.values())
-
-
-def done_keys(path: str | Path) -> set[str]:
-    """Keys already finished in a results file (for resume)."""
-    return {row.key for row in iter_rows(path)}
-
-
-def dumps_row(row: ResultRow) -> str:
-    """A row as one JSON line (no newline)."""
-    return json.dumps(row.model_dump(mode="json"), separators=(",", ":"))
