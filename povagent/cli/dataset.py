@@ -34,19 +34,27 @@ def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str,
     from povagent.dataset.models import Condition
 
     yield "overall", breakdown["overall"]
+    known = {str(c) for c in Condition}
     for c, cell in breakdown["per_condition"].items():
-        yield f"{Condition(c).label} ({c.upper()})", cell
+        # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
+        yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
     yield from breakdown["per_direction"].items()
 
 
 def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> None:
-    """Print a summary (overall / per condition / per direction) as a rich table."""
+    """Print a summary (overall / per condition / per direction) as a rich table.
+
+    Several runs: the rows are the mean of per-run means (the paper's numbers), said in the
+    caption, and a last row gives the pooled overall mean, labelled ``pooled``.
+    """
     from rich.console import Console
     from rich.table import Table
 
     from povagent.scoring.predictions import format_number
 
-    table = Table(title=title)
+    runs = summary.get("runs") or []
+    caption = f"mean of per-run means over {len(runs)} runs (the paper's aggregation); n / total summed over runs" if len(runs) > 1 else None
+    table = Table(title=title, caption=caption)
     for col in ("slice", "mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total"):
         table.add_column(col, justify="right" if col != "slice" else "left")
 
@@ -65,17 +73,47 @@ def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> N
 
     for name, cell in breakdown_slices(summary):
         add(name, cell)
+    if "pooled" in summary:
+        add(f"overall, pooled ({len(runs)} runs in one mean)", summary["pooled"]["overall"])
     Console().print(table)
+
+
+#: The keys of a breakdown that ``score --json`` prints.
+SCORE_JSON_KEYS = (
+    "overall",
+    "per_condition",
+    "per_direction",
+    "per_condition_direction",
+    "aggregation",
+    "runs",
+    "per_run",
+    "pooled",
+    "run_folders",
+)
+
+
+def _score_json(summary: dict[str, Any]) -> dict[str, Any]:
+    if "models" in summary:
+        return {"models": {m: _score_json(s) for m, s in summary["models"].items()}}
+    return {k: summary[k] for k in SCORE_JSON_KEYS if k in summary}
 
 
 @app.command("score")
 def score_command(
-    predictions: Path = typer.Option(..., "--predictions", help="Official predictions (file, {metadata, predictions}, or folder) or our results.jsonl / run folder."),
+    predictions: Path = typer.Option(
+        ...,
+        "--predictions",
+        help="Official predictions (file, {metadata, predictions}, run folder, or a root of <model>_<run> run folders) or our results.jsonl / run folder.",
+    ),
     dataset: Path = typer.Option(..., "--dataset", help="Dataset folder in the release layout."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
     strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
 ) -> None:
-    """Score predictions with the official metric (mean L2 over answered, response rate beside it)."""
+    """Score predictions with the official metric (mean L2 over answered, response rate beside it).
+
+    Counted exactly as the official scorer counts; several runs are averaged per run (the
+    paper's number), the pooled mean shown beside it, labelled.
+    """
     from povagent.dataset.loader import load_dataset
     from povagent.scoring.predictions import score_predictions
 
@@ -88,7 +126,9 @@ def score_command(
     if len(warnings) > 20:
         typer.echo(f"warning: ... and {len(warnings) - 20} more", err=True)
     if as_json:
-        out = {k: summary[k] for k in ("overall", "per_condition", "per_direction", "per_condition_direction")}
-        typer.echo(json.dumps(out, indent=2))
+        typer.echo(json.dumps(_score_json(summary), indent=2))
+    elif "models" in summary:
+        for model, model_summary in summary["models"].items():
+            render_summary(model_summary, title=f"POVBench scores: {model}")
     else:
         render_summary(summary)

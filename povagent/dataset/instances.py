@@ -67,9 +67,10 @@ class Instance:
         return self.frames[selected_image]
 
     def frame_by_path(self, image_path: str) -> Frame | None:
-        """The shown frame whose ``image_path`` matches (also tolerating a leading ``./``)."""
+        """The shown frame whose ``image_path`` matches (also tolerating a leading ``./``); when
+        the exploration log repeats a path, the last record wins, as officially."""
         want = image_path.removeprefix("./")
-        for f in self.frames:
+        for f in reversed(self.frames):
             if f.image_path.removeprefix("./") == want:
                 return f
         return None

@@ -61,6 +61,12 @@ class House:
             for i, rec in enumerate(self.exploration)
         )
 
+    @cached_property
+    def frames_by_path(self) -> dict[str, Frame]:
+        """Exploration frames by ``image_path``; when a path repeats in the log, the last record
+        wins, as in the official scorer (``povagent validate`` reports the repeat)."""
+        return {f.image_path: f for f in self.frames}
+
     def observer_frame(self, pair: PairEntry) -> Frame:
         """The observer view of a pair (condition C)."""
         return Frame(0, pair.rgb_path, resolve_image(self.folder, pair.rgb_path), observer_camera(pair))
@@ -88,13 +94,19 @@ def anchor_box(pair: PairEntry) -> AnchorBox:
     return AnchorBox((box.center.x, box.center.z), (box.size.x / 2.0, box.size.z / 2.0), top)
 
 
-def ground_truth_point(pair: PairEntry, direction: Direction) -> np.ndarray:
+def anchor_type(pair: PairEntry) -> str:
+    """The anchor's type for the surface rules: the pair's ``landmark_type``, as the official
+    scorer reads it (the anchor's ``raw_metadata.objectType`` only when that is empty)."""
+    return pair.landmark_type or pair.object_landmark.object_type
+
+
+def ground_truth_point(pair: PairEntry, direction: Direction | str) -> np.ndarray:
     """The surface-corrected 3D GT point of one (pair, direction), as the official scorer has it."""
     judgement = pair.stage3.get(direction)
     return target_point(
         str(direction),
         anchor_box(pair),
-        pair.object_landmark.object_type,
+        anchor_type(pair),
         np.array(pair.object_landmark.position.as_tuple()),
         np.array(pair.camera.cam_pos),
         judgement.verdict if judgement else None,
@@ -245,8 +257,11 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
             problems.append(Problem(pairs_file, f"$[{i}]", f"direction(s) {names} have a placement but no sentence in stage5/stage6"))
             continue
         if pair.pair_id in pairs:
-            problems.append(Problem(pairs_file, f"$[{i}].pair_id", f"pair_id {pair.pair_id!r} appears twice in this house"))
-            continue
+            # the official scorer indexes pairs by id, so the later entry replaces the earlier
+            problems.append(
+                Problem(pairs_file, f"$[{i}].pair_id", f"pair_id {pair.pair_id!r} appears twice in this house; the last entry is used, as officially")
+            )
+            del pairs[pair.pair_id]  # keep file order for the replacing entry
         pairs[pair.pair_id] = pair
     exploration: list[ExplorationRecord] = []
     log_ok = True

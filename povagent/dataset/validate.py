@@ -115,10 +115,17 @@ def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512,
     if log is not None:
         problems.extend(_schema_problems(log_rel, "exploration_log", log))
         if isinstance(log, list):
+            first_at: dict[str, int] = {}
             for i, rec in enumerate(log):
                 if isinstance(rec, dict) and isinstance(rec.get("image_path"), str):
-                    frame_paths.add(rec["image_path"])
-                    check_image(folder / rec["image_path"], log_rel, f"$[{i}].image_path", frame_size, problems)
+                    path = rec["image_path"]
+                    if path in first_at:
+                        problems.append(
+                            Problem(log_rel, f"$[{i}].image_path", f"image_path {path!r} repeats the one at $[{first_at[path]}]; scoring uses this last record's camera, as officially")
+                        )
+                    first_at.setdefault(path, i)
+                    frame_paths.add(path)
+                    check_image(folder / path, log_rel, f"$[{i}].image_path", frame_size, problems)
 
     vis = _load_json(folder / VISIBLE_OBJECTS, vis_rel, problems)
     if vis is not None:
@@ -138,7 +145,7 @@ def _pair_checks(pairs: list[Any], folder: Path, rel: str) -> Iterable[Problem]:
         pid = pair.get("pair_id")
         if pid is not None:
             if str(pid) in seen:
-                yield Problem(rel, f"$[{i}].pair_id", f"pair_id {pid!r} repeats the one at $[{seen[str(pid)]}]")
+                yield Problem(rel, f"$[{i}].pair_id", f"pair_id {pid!r} repeats the one at $[{seen[str(pid)]}]; scoring uses this last entry, as officially")
             seen.setdefault(str(pid), i)
         placements = pair.get("placements") if isinstance(pair.get("placements"), dict) else {}
         for stage in ("stage5", "stage6"):

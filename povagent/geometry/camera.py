@@ -1,8 +1,10 @@
 """The AI2-THOR (Unity) pinhole camera: left-handed world, y up, degrees.
 
-Yaw turns about +y, positive horizon tilts the view down, and ``fov`` is the vertical field of
-view (equal to the horizontal one for the square 512x512 frames of POVBench). Everything here is
-pure and vectorized: points are arrays of shape ``(..., 3)``.
+Yaw turns about +y, positive horizon tilts the view down, and ``fov`` sets the focal length from
+the frame's *width*, as the official scorer computes it (``f = (W/2)/tan(fov/2)``, used for both
+axes: square pixels). For the square 512x512 frames of POVBench it is both the horizontal and the
+vertical field of view; for a non-square frame it is the horizontal one. Everything here is pure
+and vectorized: points are arrays of shape ``(..., 3)``.
 
 Camera axes for yaw ``y`` and horizon ``h``::
 
@@ -11,7 +13,7 @@ Camera axes for yaw ``y`` and horizon ``h``::
     up      = ( sin y sin h,  cos h,   cos y sin h)
 
 A world point ``p`` has camera coordinates ``(d.right, d.up, d.forward)`` with ``d = p - pos``
-and projects to ``u = f xc/zc + W/2``, ``v = H/2 - f yc/zc`` pixels, ``f = (H/2)/tan(fov/2)``.
+and projects to ``u = f xc/zc + W/2``, ``v = H/2 - f yc/zc`` pixels, ``f = (W/2)/tan(fov/2)``.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ class Projection:
 
 @dataclass(frozen=True)
 class Camera:
-    """A pinhole camera posed like AI2-THOR's: position, yaw, horizon, vertical fov, size."""
+    """A pinhole camera posed like AI2-THOR's: position, yaw, horizon, fov (across the width), size."""
 
     position: tuple[float, float, float]
     yaw: float
@@ -69,8 +71,8 @@ class Camera:
     # -- frame --------------------------------------------------------------------------------
     @property
     def focal_px(self) -> float:
-        """Focal length in pixels from the vertical field of view."""
-        return (self.height / 2.0) / np.tan(np.radians(self.fov) / 2.0)
+        """Focal length in pixels: ``(W/2)/tan(fov/2)``, the width's field of view (as officially)."""
+        return (self.width / 2.0) / np.tan(np.radians(self.fov) / 2.0)
 
     def axes(self) -> np.ndarray:
         """Rows ``right, up, forward`` as a (3, 3) world-to-camera rotation."""
@@ -121,7 +123,7 @@ class Camera:
         zc = sy * ch * dx - sh * dy + cy * ch * dz
         if not zc > BEHIND_EPSILON:
             return (math.nan, math.nan, zc)
-        f = (self.height / 2.0) / math.tan(math.radians(self.fov) / 2.0)
+        f = (self.width / 2.0) / math.tan(math.radians(self.fov) / 2.0)
         return ((f * xc / zc + self.width / 2.0) / self.width, (self.height / 2.0 - f * yc / zc) / self.height, zc)
 
     def project_pixels(self, points: np.ndarray) -> np.ndarray:

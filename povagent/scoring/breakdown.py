@@ -3,6 +3,18 @@
 The official numbers: mean normalized L2 over answered instances only; response rate =
 answered / total; share of answered rows whose GT lies in the scored frame. Broken down overall,
 per condition, per direction and per condition x direction.
+
+Several runs are aggregated as the paper aggregates them (the official ``run_all_eval.py``):
+each run is summarized on its own, and a cell's number is the plain mean of the runs' numbers
+(a run with nothing answered in the cell is left out of its mean). That is the default
+everywhere a breakdown is shown. Pooling every row of every run into one mean weighs runs by
+how many rows they answered and is *not* the paper's number: it stays available under the key
+``pooled``, labelled so.
+
+Conditions and directions are grouped by the label the rows carry, unknown labels included
+(after the paper's, sorted), as the official scorer groups by the raw ``type``/``direction``.
+
+Pure arithmetic: nothing here reads files or knows about tables.
 """
 
 from __future__ import annotations
@@ -14,22 +26,42 @@ from typing import Any, Iterable
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 
+#: The value of a breakdown's ``aggregation`` key: how its top-level cells combine runs.
+PER_RUN_MEAN = "mean of per-run means"
+#: The ``aggregation`` of a ``pooled`` breakdown: every row of every run in one mean.
+POOLED = "pooled"
+
+#: The cell fields that are per-run numbers, averaged over runs in a multi-run breakdown.
+AVERAGED_FIELDS = ("response_rate", "mean_l2", "std_l2", "pct_in_frame", "mean_l2_strict")
+#: The slice groups of a breakdown (each a mapping of label -> cell).
+SLICE_GROUPS = ("per_condition", "per_direction", "per_condition_direction")
+
 
 @dataclass(frozen=True)
 class ScoredRow:
-    """The few fields a summary needs from a row."""
+    """The few fields a summary needs from a row; ``run`` is the run index it belongs to.
 
-    condition: str
-    direction: str
+    ``condition`` and ``direction`` are group labels as the rows carry them (``None``: the row
+    counts in ``overall`` only).
+    """
+
+    condition: str | None
+    direction: str | None
     answered: bool
     l2: float | None
     gt_in_frame: bool | None
     l2_strict: float | None = None
+    run: int = 0
 
 
 def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
-    """One cell: ``n`` (answered), ``n_total``, ``response_rate``, ``mean_l2``, ``std_l2``
-    (population std), ``pct_in_frame`` (percent of answered), ``mean_l2_strict``."""
+    """One cell of one run (or of pooled rows): ``n`` (answered), ``n_total``,
+    ``response_rate``, ``mean_l2``, ``std_l2`` (population std), ``pct_in_frame`` (percent of
+    answered), ``mean_l2_strict``.
+
+    A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
+    the official mean is.
+    """
     rows = list(rows)
     answered = [r for r in rows if r.answered and r.l2 is not None]
     n, total = len(answered), len(rows)
@@ -49,23 +81,92 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     }
 
 
-def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
-    """``overall``, ``per_condition``, ``per_direction`` and ``per_condition_direction``."""
+def _ordered(labels: Iterable[str], canonical: Iterable[str]) -> list[str]:
+    """The paper's labels in the paper's order, then any other label, sorted."""
+    present = set(labels)
+    known = [c for c in canonical if c in present]
+    return known + sorted(present - set(known), key=str)
+
+
+def pooled_breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
+    """Every row in one summary per slice, whatever its run (one run's breakdown, or the
+    ``pooled`` variant of several)."""
     rows = list(rows)
     by_c: dict[str, list[ScoredRow]] = defaultdict(list)
     by_d: dict[str, list[ScoredRow]] = defaultdict(list)
-    by_cd: dict[str, list[ScoredRow]] = defaultdict(list)
+    by_cd: dict[tuple[str, str], list[ScoredRow]] = defaultdict(list)
     for r in rows:
-        by_c[r.condition].append(r)
-        by_d[r.direction].append(r)
-        by_cd[f"{r.condition}/{r.direction}"].append(r)
-    c_order = [str(c) for c in CONDITIONS]
-    d_order = [str(d) for d in DIRECTIONS]
+        # a row without a condition (or direction) counts overall only, as officially
+        if r.condition is not None:
+            by_c[r.condition].append(r)
+        if r.direction is not None:
+            by_d[r.direction].append(r)
+        if r.condition is not None and r.direction is not None:
+            by_cd[(r.condition, r.direction)].append(r)
+    c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
+    d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
     return {
         "overall": summarize(rows),
-        "per_condition": {c: summarize(by_c[c]) for c in c_order if c in by_c},
-        "per_direction": {d: summarize(by_d[d]) for d in d_order if d in by_d},
+        "per_condition": {c: summarize(by_c[c]) for c in c_order},
+        "per_direction": {d: summarize(by_d[d]) for d in d_order},
         "per_condition_direction": {
-            f"{c}/{d}": summarize(by_cd[f"{c}/{d}"]) for c in c_order for d in d_order if f"{c}/{d}" in by_cd
+            f"{c}/{d}": summarize(by_cd[(c, d)]) for c in c_order for d in d_order if (c, d) in by_cd
         },
     }
+
+
+def _mean(values: list[float]) -> float | None:
+    return sum(values) / len(values) if values else None
+
+
+def mean_over_runs(cells: list[dict[str, Any]]) -> dict[str, Any]:
+    """One cell from the same cell of several runs, as ``run_all_eval.py`` combines runs.
+
+    Each of :data:`AVERAGED_FIELDS` is the plain mean of the runs' values, a run whose value is
+    ``None`` (nothing answered, or no row, in this cell) left out; ``std_l2`` is thus the mean
+    within-run spread. ``n`` and ``n_total`` are summed over runs; ``n_runs`` counts the runs
+    with a row in the cell and ``run_mean_l2`` lists each run's mean.
+    """
+    out: dict[str, Any] = {
+        "n": sum(c["n"] for c in cells),
+        "n_total": sum(c["n_total"] for c in cells),
+    }
+    for key in AVERAGED_FIELDS:
+        out[key] = _mean([c[key] for c in cells if c.get(key) is not None])
+    out["n_runs"] = sum(1 for c in cells if c["n_total"])
+    out["run_mean_l2"] = [c["mean_l2"] for c in cells]
+    return out
+
+
+def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
+    """``overall``, ``per_condition``, ``per_direction`` and ``per_condition_direction``.
+
+    With rows of one run, each cell summarizes that run. With several runs, each cell is the
+    mean over runs of the run's own cell (:func:`mean_over_runs`, the paper's number), and the
+    breakdown adds ``pooled`` (every row in one mean, labelled ``aggregation: "pooled"``) and
+    ``per_run`` (each run's overall cell). ``aggregation`` and ``runs`` say which it is.
+    """
+    rows = list(rows)
+    by_run: dict[int, list[ScoredRow]] = defaultdict(list)
+    for r in rows:
+        by_run[r.run].append(r)
+    runs = sorted(by_run)
+    if len(runs) <= 1:
+        out = pooled_breakdown(rows)
+        out["aggregation"] = PER_RUN_MEAN if runs else POOLED
+        out["runs"] = runs
+        return out
+    per_run = {run: pooled_breakdown(by_run[run]) for run in runs}
+    pooled = pooled_breakdown(rows)
+    empty = summarize([])
+    out: dict[str, Any] = {"overall": mean_over_runs([b["overall"] for b in per_run.values()])}
+    for group in SLICE_GROUPS:
+        # the pooled breakdown holds every label of every run, in order
+        out[group] = {
+            label: mean_over_runs([b[group].get(label, empty) for b in per_run.values()]) for label in pooled[group]
+        }
+    out["aggregation"] = PER_RUN_MEAN
+    out["runs"] = runs
+    out["pooled"] = {**pooled, "aggregation": POOLED}
+    out["per_run"] = {str(run): b["overall"] for run, b in per_run.items()}
+    return out

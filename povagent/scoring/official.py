@@ -4,6 +4,10 @@ A/B answers are scored in the frame the model selected (its exploration camera),
 the observer camera. A GT point behind the camera (depth <= 1e-6) is placed at the image centre
 (0.5, 0.5) and counted out of frame: this reproduces the official scorer exactly, blind spot
 included (see :func:`strict_l2` for the variant that closes it).
+
+Coordinates are read as the official scorer reads them: an infinite one is clamped to the image
+edge like any other out-of-frame value; a NaN one is kept, and its error is NaN (the official
+mean then is NaN too). ``None`` is no answer.
 """
 
 from __future__ import annotations
@@ -39,7 +43,8 @@ def project_ground_truth(target: tuple[float, float, float] | np.ndarray, camera
 
 
 def _clamp01(v: float) -> float:
-    return min(1.0, max(0.0, v))
+    # NaN passes through, as numpy's clip lets it (min/max would silently turn it into 0)
+    return v if v != v else min(1.0, max(0.0, v))
 
 
 def normalized_l2(x: float, y: float, width: int, height: int, gt_u: float, gt_v: float) -> float:
@@ -100,8 +105,12 @@ def scoring_frame(instance: Instance, selected_image: int | None = None, image_p
 
 
 def score_point(instance: Instance, frame: Frame | None, x: float | None, y: float | None) -> OfficialScore:
-    """Score one predicted pixel ``(x, y)`` in ``frame`` against the instance's GT."""
-    if x is None or y is None or not (math.isfinite(x) and math.isfinite(y)):
+    """Score one predicted pixel ``(x, y)`` in ``frame`` against the instance's GT.
+
+    ``None`` is unanswered; an infinite coordinate is clamped to the edge and a NaN one gives a
+    NaN error, as officially.
+    """
+    if x is None or y is None:
         return UNANSWERED
     if frame is None:
         return OfficialScore(False, None, None, None, None, None, None, "missing or unknown selected frame")

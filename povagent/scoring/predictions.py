@@ -1,115 +1,390 @@
 """Scoring prediction files against a dataset: official rows or our own results rows.
 
-``povagent score`` and the reports use this. Official rows (see POVBENCH.md) are scored as the
-official scorer does: ``parse_error`` or a missing/unknown ``predicted_image`` (A/B) makes a row
-unanswered; several ``predicted_points`` are scored by their centroid (the closest point's
-error is kept beside it). Our results rows are re-scored from their stored prediction.
+``povagent score`` and the reports use this. Official rows (see POVBENCH.md) are read by
+:func:`povagent.results.official_format.read_official_run` and counted exactly as the official
+scorer (``evaluation/eval_results.py``) counts them:
+
+- every row counts in ``n_total``; a row is answered only when it has ``predicted_x`` and
+  ``predicted_y``, names a pair of the dataset, and a placement for its direction; an A/B row
+  also needs a ``predicted_image`` that is a path of the house's exploration log (when the log
+  repeats a path, its last record). ``parse_error`` is not looked at;
+- rows are grouped by their ``type`` and ``direction`` exactly as written: ``"A"`` is its own
+  group, and every type other than ``"c"`` is scored as an A/B answer in its selected frame;
+  ``"Front"`` names no placement and is counted unanswered;
+- A/B pixels are divided by the metadata's ``screen_width``/``screen_height`` (512 when
+  absent), also used for the selected frame's projection; C pixels by the observer camera's
+  size, the metadata's when the camera has none;
+- an infinite coordinate is clamped to the edge; a NaN one gives a NaN error;
+- several ``predicted_points``: each is clamped, the centroid is scored, the closest point's
+  error is kept beside it.
+
+Each odd case is reported in a warning naming the rows. Several runs (an official prediction
+root with one folder per run, files declaring ``metadata.run``, or our rows) are aggregated
+by :func:`povagent.scoring.breakdown.breakdown`: the mean of per-run means, the paper's way.
+Our results rows are re-scored from their stored prediction.
 """
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass
+import re
+from collections import defaultdict
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
 
-from povagent.dataset.loader import Dataset
-from povagent.dataset.models import Condition
+from povagent.dataset.loader import Dataset, ground_truth_point, observer_camera
+from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
+from povagent.geometry.camera import Camera
+from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
+from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
+    MAX_L2,
     UNANSWERED,
     OfficialScore,
-    closest_point_l2,
+    normalized_l2,
+    project_ground_truth,
     score_point,
     scoring_frame,
 )
-from povagent.scoring.breakdown import ScoredRow, breakdown
+
+#: The fields the official scorer reads from every row (a row without one of them stops it).
+REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
+
+#: Why the official scorer leaves a row unanswered, in the order it checks (its status names).
+NO_PREDICTION = "no_prediction"
+ENTRY_NOT_FOUND = "entry_not_found"
+PLACEMENT_NOT_FOUND = "placement_not_found"
+NO_SELECTED_IMAGE = "no_selected_image"
+IMAGE_NOT_IN_LOG = "image_not_in_log"
+#: Not an official status: a coordinate the official scorer cannot divide (it would stop).
+NOT_A_NUMBER = "coordinate_not_a_number"
+
+#: An official run folder's name: optional ``POVBench_`` prefix, the model, ``_<run>``.
+RUN_FOLDER_NAME = re.compile(r"^(.*)_(\d+)$")
+#: Run folders whose name ends so are comparisons, not runs (skipped as officially).
+SKIPPED_RUN_FOLDER_SUFFIX = "_vs"
 
 
 @dataclass(frozen=True)
 class ScoredPrediction:
-    """One prediction with its official score (``instance_id`` is ``None`` if not in the dataset)."""
+    """One prediction with its official score.
+
+    ``condition`` and ``direction`` are the row's group labels as written (``None`` when the
+    row has none: it then counts overall only); ``instance_id`` names what the row answers.
+    """
 
     instance_id: str | None
-    condition: str
-    direction: str
+    condition: str | None
+    direction: str | None
     run: int
     score: OfficialScore
     l2_closest: float | None = None
 
 
-def _centroid(points: list[list[float]] | list[tuple[float, float]]) -> tuple[float, float]:
-    xs = [float(p[0]) for p in points]
-    ys = [float(p[1]) for p in points]
-    return sum(xs) / len(xs), sum(ys) / len(ys)
+# -- official rows ----------------------------------------------------------------------------
 
 
-def score_official_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
-    """Score official prediction rows; returns scored rows and warnings (unknown instances).
+def group_label(value: Any) -> str | None:
+    """A row's ``type`` or ``direction`` as the official summary keys it: a string as written,
+    another scalar as JSON writes a key (``1`` -> ``"1"``), ``None`` for no group."""
+    if value is None or isinstance(value, str):
+        return value
+    return json.dumps(value)
 
-    ``rows`` are objects with the official fields as attributes (see
-    :func:`povagent.results.official_format.read_official_predictions`).
+
+def _is_number(v: Any) -> bool:
+    # bool is a number to the official scorer (True / 512 is 1/512)
+    return isinstance(v, (int, float))
+
+
+def _pair_key(pair_id: Any) -> str | None:
+    """The dataset key of a row's pair id: the loader stores integer ids as strings."""
+    if isinstance(pair_id, bool):
+        return None
+    if isinstance(pair_id, int):
+        return str(pair_id)
+    return pair_id if isinstance(pair_id, str) else None
+
+
+def _unanswered(status: str) -> OfficialScore:
+    return OfficialScore(False, None, None, None, None, None, None, status)
+
+
+def _points_score(points: list[Any], camera: Camera, gt: Any) -> tuple[float, float]:
+    """Centroid error and closest-point error of several points, each clamped first."""
+    w, h = camera.width, camera.height
+    norm = [(_clip(float(p[0]) / w), _clip(float(p[1]) / h)) for p in points]
+    errors = [math.hypot(u - gt.u, v - gt.v) for u, v in norm]
+    cu = sum(u for u, _ in norm) / len(norm)
+    cv = sum(v for _, v in norm) / len(norm)
+    return math.hypot(cu - gt.u, cv - gt.v), min(errors)
+
+
+def _clip(v: float) -> float:
+    return v if v != v else min(1.0, max(0.0, v))
+
+
+@dataclass
+class _Notes:
+    """Odd rows met while scoring, for the warnings (row references per kind)."""
+
+    unknown: list[str]
+    odd_type: dict[str, list[str]]
+    odd_direction: dict[str, list[str]]
+    nan: list[str]
+    infinite: list[str]
+    not_number: list[str]
+    skipped: list[str]
+
+    @classmethod
+    def empty(cls) -> "_Notes":
+        return cls([], defaultdict(list), defaultdict(list), [], [], [], [])
+
+
+def _listing(refs: list[str], limit: int = 5) -> str:
+    shown = ", ".join(refs[:limit])
+    return shown + (f" and {len(refs) - limit} more" if len(refs) > limit else "")
+
+
+def _warnings_of(notes: _Notes) -> list[str]:
+    out: list[str] = []
+    if notes.skipped:
+        out.append(
+            f"{len(notes.skipped)} row(s) skipped: not an object with {', '.join(REQUIRED_FIELDS)} "
+            f"(the official scorer stops at such a row): {_listing(notes.skipped)}"
+        )
+    if notes.unknown:
+        out.append(
+            f"{len(notes.unknown)} row(s) name a house, pair or placement the dataset does not have; "
+            f"counted in the total as unanswered, as officially: {_listing(notes.unknown)}"
+        )
+    for label, refs in notes.odd_type.items():
+        how = "scored in the observer view" if label == "c" else "scored as an A/B answer in its selected frame"
+        out.append(
+            f"{len(refs)} row(s) with type {label!r}, not one of 'a', 'b', 'c': counted as their own "
+            f"condition {label!r} and {how}, as officially (nothing is normalised): {_listing(refs)}"
+        )
+    for label, refs in notes.odd_direction.items():
+        out.append(
+            f"{len(refs)} row(s) with direction {label!r}, not one of right, left, front, up: counted as their "
+            f"own direction {label!r}, unanswered unless the pair has a placement of that exact name, as "
+            f"officially: {_listing(refs)}"
+        )
+    if notes.infinite:
+        out.append(f"{len(notes.infinite)} row(s) with an infinite coordinate: clamped to the image edge, as officially: {_listing(notes.infinite)}")
+    if notes.nan:
+        out.append(
+            f"{len(notes.nan)} row(s) with a NaN coordinate: scored with a NaN error, so every mean over them "
+            f"is NaN, as the official scorer records it: {_listing(notes.nan)}"
+        )
+    if notes.not_number:
+        out.append(
+            f"{len(notes.not_number)} row(s) with a coordinate that is not a number: counted unanswered (the "
+            f"official scorer cannot divide it and stops): {_listing(notes.not_number)}"
+        )
+    return out
+
+
+def _hashable(v: Any) -> bool:
+    try:
+        hash(v)
+    except TypeError:
+        return False
+    return True
+
+
+def score_official_row(
+    row: Mapping[str, Any], dataset: Dataset, screen: tuple[float, float] = (512.0, 512.0), run: int = 0, ref: str = "", notes: _Notes | None = None
+) -> ScoredPrediction:
+    """Score one official row (a mapping as written) the way the official scorer does.
+
+    ``screen`` is the metadata's ``(screen_width, screen_height)``; ``ref`` names the row in
+    warnings collected in ``notes``.
     """
+    notes = notes if notes is not None else _Notes.empty()
+    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
+    c_label, d_label = group_label(cond), group_label(direction)
+    iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
+    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+        notes.odd_type[c_label].append(ref or iid)
+    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+        notes.odd_direction[d_label].append(ref or iid)
+
+    def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
+        return ScoredPrediction(iid, c_label, d_label, run, score, closest)
+
+    house = dataset.houses.get(house_id) if isinstance(house_id, str) else None
+    pair = house.pairs.get(_pair_key(pair_id)) if house is not None else None  # type: ignore[arg-type]
+    placement = pair.placements.get(direction) if pair is not None and _hashable(direction) else None
+    if placement is None:
+        notes.unknown.append(f"{ref} ({iid})" if ref else iid)
+
+    x, y = row.get("predicted_x"), row.get("predicted_y")
+    if x is None or y is None:
+        return result(_unanswered(NO_PREDICTION))
+    if pair is None:
+        return result(_unanswered(ENTRY_NOT_FOUND))
+    if placement is None:
+        return result(_unanswered(PLACEMENT_NOT_FOUND))
+    sw, sh = screen
+    if cond == "c":
+        cam = observer_camera(pair)
+        # the observer camera's own size wins; the metadata's only fills in a missing one
+        given = pair.camera.model_fields_set
+        camera = replace(
+            cam,
+            width=cam.width if "screen_width" in given else sw,
+            height=cam.height if "screen_height" in given else sh,
+        )
+    else:
+        image = row.get("predicted_image")
+        if not image:
+            return result(_unanswered(NO_SELECTED_IMAGE))
+        frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]
+        if frame is None:
+            return result(_unanswered(IMAGE_NOT_IN_LOG))
+        # the selected frame is projected at the metadata's size, as officially
+        camera = replace(frame.camera, width=sw, height=sh)
+    if not (_is_number(x) and _is_number(y)):
+        notes.not_number.append(ref or iid)
+        return result(_unanswered(NOT_A_NUMBER))
+    x, y = float(x), float(y)
+    if math.isnan(x) or math.isnan(y):
+        notes.nan.append(ref or iid)
+    elif math.isinf(x) or math.isinf(y):
+        notes.infinite.append(ref or iid)
+    gt = project_ground_truth(tuple(float(v) for v in ground_truth_point(pair, direction)), camera)
+    l2 = normalized_l2(x, y, camera.width, camera.height, gt.u, gt.v)
+    closest = None
+    points = row.get("predicted_points")
+    if points:
+        try:
+            l2, closest = _points_score(list(points), camera, gt)
+        except (TypeError, ValueError, IndexError, ZeroDivisionError):
+            notes.not_number.append(f"{ref or iid} (predicted_points)")
+    strict = l2 if gt.in_frame else MAX_L2
+    return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok"), closest)
+
+
+def score_official_rows(
+    rows: Iterable[Any], dataset: Dataset, screen: tuple[float, float] = (512.0, 512.0), run: int = 0
+) -> tuple[list[ScoredPrediction], list[str]]:
+    """Score official rows (mappings as written, or :class:`RawPrediction`); returns the scored
+    rows (every row that has the official fields, answered or not) and the warnings."""
+    notes = _Notes.empty()
     scored: list[ScoredPrediction] = []
-    warnings: list[str] = []
-    for row in rows:
-        cond = str(row.type).lower()
-        direction = str(row.direction).lower()
-        inst = dataset.instance_for(row.house_id, row.pair_id, direction, cond)
-        if inst is None:
-            warnings.append(f"no instance {row.house_id}/{row.pair_id}/{direction}/{cond} in the dataset")
+    for i, item in enumerate(rows):
+        data, ref = (item.data, item.where) if isinstance(item, RawPrediction) else (item, f"row {i}")
+        if not isinstance(data, Mapping) or any(k not in data for k in REQUIRED_FIELDS):
+            notes.skipped.append(ref)
             continue
-        run = int(getattr(row, "run", 0) or 0)
-        x, y = row.predicted_x, row.predicted_y
-        points = getattr(row, "predicted_points", None) or None
-        if points:
-            x, y = _centroid(points)
-        if row.parse_error or x is None or y is None:
-            scored.append(ScoredPrediction(inst.id, cond, direction, run, UNANSWERED))
+        if not (_hashable(data["type"]) and _hashable(data["direction"])):
+            notes.skipped.append(ref)
             continue
-        frame = scoring_frame(inst, image_path=row.predicted_image) if inst.condition is not Condition.GIVEN else inst.frames[0]
-        if inst.condition is not Condition.GIVEN and row.predicted_image is None:
-            frame = None
-        score = score_point(inst, frame, float(x), float(y))
-        closest = None
-        if points and len(points) > 1 and frame is not None:
-            closest = closest_point_l2(inst, frame, [(float(p[0]), float(p[1])) for p in points])
-        scored.append(ScoredPrediction(inst.id, cond, direction, run, score, closest))
-    return scored, warnings
+        scored.append(score_official_row(data, dataset, screen, run, ref, notes))
+    return scored, _warnings_of(notes)
+
+
+def score_official_run(run: OfficialRun, dataset: Dataset, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
+    """Score what :func:`read_official_run` read, at its metadata's screen size.
+
+    Files that declare distinct ``metadata.run`` values (``povagent export`` writes one file
+    per run) are scored as those runs; otherwise every row belongs to ``run_index``.
+    """
+    screen = run.screen_size()
+    declared = {r.run for r in run.rows}
+    warnings = list(run.warnings)
+    if len(declared) > 1 and None not in declared:
+        warnings.append(
+            f"the files declare runs {sorted(declared)} (metadata.run): scored as separate runs and "
+            "averaged per run (the official loader, given this folder, would pool them as one run)"
+        )
+        scored: list[ScoredPrediction] = []
+        for k in sorted(declared):  # type: ignore[type-var]
+            s, w = score_official_rows([r for r in run.rows if r.run == k], dataset, screen, k)
+            scored += s
+            warnings += w
+        return scored, warnings
+    scored, w = score_official_rows(run.rows, dataset, screen, run_index)
+    return scored, warnings + w
+
+
+# -- our results rows -------------------------------------------------------------------------
 
 
 def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
-    """Re-score our own results rows from their stored predictions."""
+    """Re-score our own results rows from their stored predictions; a row whose instance is not
+    in the dataset counts as unanswered (as officially), with a warning."""
     scored: list[ScoredPrediction] = []
-    warnings: list[str] = []
+    unknown: list[str] = []
     for row in rows:
         inst = dataset.instance(row.instance_id)
         if inst is None:
-            warnings.append(f"no instance {row.instance_id} in the dataset")
+            unknown.append(row.key)
+            scored.append(ScoredPrediction(row.instance_id, str(row.condition), str(row.direction), row.run, _unanswered(ENTRY_NOT_FOUND)))
             continue
         p = row.prediction
         answered = row.status == "answered" and p.x is not None and p.y is not None
         if not answered:
-            scored.append(ScoredPrediction(inst.id, row.condition, row.direction, row.run, UNANSWERED))
+            scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED))
             continue
         frame = scoring_frame(inst, p.selected_image, p.image_path)
         score = score_point(inst, frame, float(p.x), float(p.y))
-        scored.append(ScoredPrediction(inst.id, row.condition, row.direction, row.run, score))
+        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score))
+    warnings = []
+    if unknown:
+        warnings.append(
+            f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
+            f"unanswered, as officially: {_listing(unknown)}"
+        )
     return scored, warnings
 
 
+# -- summaries ----------------------------------------------------------------------------------
+
+
 def summary_of(scored: Iterable[ScoredPrediction]) -> dict[str, Any]:
-    """The official breakdown (overall, per condition, per direction, condition x direction)."""
+    """The breakdown (overall, per condition, per direction, condition x direction); several
+    runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``."""
     return breakdown(
-        ScoredRow(s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict)
+        ScoredRow(s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run)  # type: ignore[arg-type]
         for s in scored
     )
 
 
-def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
+def run_folder_label(name: str) -> tuple[str, str]:
+    """``(model, run)`` of an official run folder's name, as ``run_all_eval.py`` reads it:
+    ``POVBench_gemini25_0`` -> ``("gemini25", "0")``; no ``_<digits>`` suffix -> run ``"-"``."""
+    short = re.sub(r"^POVBench_", "", name)
+    m = RUN_FOLDER_NAME.match(short)
+    return (m.group(1), m.group(2)) if m else (short, "-")
+
+
+def _has_official_predictions(folder: Path) -> bool:
+    return any(p.name not in NOT_PREDICTIONS for p in folder.glob("predictions*.json"))
+
+
+def run_folders(root: Path) -> list[Path]:
+    """The run folders of a prediction root, as ``run_all_eval.py`` finds them (sorted; a folder
+    ending in ``_vs`` is skipped) plus folders holding our ``results.jsonl``."""
+    if not root.is_dir():
+        return []
+    return sorted(
+        d
+        for d in root.iterdir()
+        if d.is_dir()
+        and not d.name.endswith(SKIPPED_RUN_FOLDER_SUFFIX)
+        and (_has_official_predictions(d) or (d / "results.jsonl").exists())
+    )
+
+
+def load_predictions(path: str | Path) -> tuple[str, Any]:
     """Read a predictions path: our ``results.jsonl`` (or a run folder) or official rows.
 
-    Returns ``("results", rows)`` or ``("official", rows)``.
+    Returns ``("results", rows)`` or ``("official", OfficialRun)``.
     """
     from povagent.results.rows import read_rows
 
@@ -123,15 +398,11 @@ def load_predictions(path: str | Path) -> tuple[str, list[Any]]:
         return "results", rows
     if not p.exists():
         raise PredictionsError(f"{p}: predictions file or folder not found")
-    from povagent.results.official_format import read_official_predictions
-
-    return "official", read_official_predictions(p)
+    return "official", read_official_run(p)
 
 
 def _holds_result_rows(path: Path) -> bool:
     """Whether a JSON-lines file holds our result rows (``key`` and ``status``), not official rows."""
-    import json
-
     with open(path, encoding="utf-8", errors="replace") as fh:
         for line in fh:
             if not line.strip():
@@ -144,14 +415,49 @@ def _holds_result_rows(path: Path) -> bool:
     return True
 
 
+def _score_one(path: Path, dataset: Dataset, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
+    kind, loaded = load_predictions(path)
+    if kind == "results":
+        scored, warnings = score_result_rows(loaded, dataset)
+        return scored, warnings
+    return score_official_run(loaded, dataset, run_index)
+
+
 def score_predictions(path: str | Path, dataset: Dataset) -> tuple[dict[str, Any], list[str]]:
-    """Score a predictions path against ``dataset``: the summary and any warnings."""
-    kind, rows = load_predictions(path)
-    scorer = score_result_rows if kind == "results" else score_official_rows
-    scored, warnings = scorer(rows, dataset)
-    if not scored:
-        raise PredictionsError(f"{path}: none of the predictions matches an instance of the dataset")
-    return summary_of(scored), warnings
+    """Score a predictions path against ``dataset``: the summary and any warnings.
+
+    ``path`` is a predictions file, an official run folder, our run folder or results file, or
+    a prediction root holding one folder per run (``<model>_<run>``, as ``run_all_eval.py``
+    reads it). Several runs give the mean of per-run means (the paper's number) with the pooled
+    numbers under ``pooled``; a root with several models gives ``{"models": {model: summary}}``.
+    """
+    p = Path(path)
+    own_files = p.is_dir() and not (p / "results.jsonl").exists() and any(f.name not in NOT_PREDICTIONS for f in p.glob("*.json"))
+    folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() and not own_files else []
+    if not folders:
+        scored, warnings = _score_one(p, dataset)
+        if not scored:
+            raise PredictionsError(f"{path}: no prediction rows to score")
+        return summary_of(scored), warnings
+    by_model: dict[str, list[Path]] = defaultdict(list)
+    for folder in folders:
+        by_model[run_folder_label(folder.name)[0]].append(folder)
+    warnings: list[str] = []
+    models: dict[str, dict[str, Any]] = {}
+    for model, runs in by_model.items():
+        scored = []
+        run_ids: dict[tuple[int, int], int] = {}
+        for k, folder in enumerate(runs):
+            s, w = _score_one(folder, dataset)
+            # an official run folder is one run; our run folder may hold several (its rows' run)
+            scored += [replace(x, run=run_ids.setdefault((k, x.run), len(run_ids))) for x in s]
+            warnings += [f"{folder.name}: {m}" for m in w]
+        summary = summary_of(scored)
+        summary["run_folders"] = [f.name for f in runs]
+        models[model] = summary
+    if len(models) == 1:
+        return next(iter(models.values())), warnings
+    return {"models": models}, warnings
 
 
 def format_number(v: float | None, digits: int = 3) -> str:

@@ -75,7 +75,7 @@ def test_score_reads_a_folder_of_prediction_files(mini_root, tmp_path):
 
 def test_score_of_a_malformed_file_is_a_clear_message_not_a_traceback(mini_root, tmp_path):
     path = tmp_path / "bad.json"
-    path.write_text('[{"house_id": "train_house_00000", "pair_id": 0, "direction": "sideways", "type": "c"}]')
+    path.write_text('[{"house_id": "train_house_00000", "pair_id": 0, "direction": "left", ')
     proc = subprocess.run(
         [sys.executable, "-c", "from povagent.cli import main; main()", "score", "--predictions", str(path), "--dataset", str(mini_root)],
         capture_output=True, text=True, timeout=120,
@@ -83,6 +83,17 @@ def test_score_of_a_malformed_file_is_a_clear_message_not_a_traceback(mini_root,
     assert proc.returncode != 0
     assert "Traceback" not in proc.stderr
     assert "bad.json" in proc.stderr
+
+
+def test_score_counts_an_unknown_direction_as_unanswered_and_names_the_row(mini_root, tmp_path):
+    path = tmp_path / "odd.json"
+    path.write_text('[{"house_id": "train_house_00000", "pair_id": 0, "direction": "sideways", "type": "c", "predicted_x": 1, "predicted_y": 1}]')
+    result = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["overall"]["n_total"] == 1 and out["overall"]["n"] == 0
+    assert out["per_direction"]["sideways"]["n_total"] == 1
+    assert "odd.json: row 0" in result.stderr and "'sideways'" in result.stderr
 
 
 def test_score_reads_an_official_json_lines_file(mini_root, tmp_path):

@@ -96,3 +96,26 @@ def test_surface_keyword_match(surface, anchor, expected):
 
 def test_camelcase_types_split_into_words():
     assert anchor_keywords("ShelvingUnit") == ("shelving unit",)
+
+
+def test_a_direction_component_below_1e_minus_6_is_ignored_by_the_boundary_rule_as_officially():
+    # a box with no x extent: dx = 5e-7 would give t = hx/dx = 0 if it counted; officially t = hz/dz
+    flat = AnchorBox(center_xz=(0.0, 3.0), half_xz=(0.0, 1.0), top=0.6)
+    d = np.array([5e-7, 0.0, 1.0])
+    assert np.allclose(boundary_point(flat, d), [5e-7, 4.0], atol=1e-12)
+
+
+def test_an_anchor_straight_below_the_observer_gives_zero_directions_as_officially():
+    # the official scorer leaves a vector of length <= 1e-6 unnormalized: no direction at all,
+    # so the front target stays at the box centre (boundary distance 0.3 along a zero vector)
+    dirs = direction_vectors(np.array([0.0, 0.3, 3.0]), np.array([0.0, 1.5, 3.0]))
+    assert np.allclose(dirs["front"], 0.0) and np.allclose(dirs["right"], 0.0)
+    over = np.array([0.0, 1.5, 3.0])
+    target = target_point("front", BED, "Bed", BED_POS, over, "appropriate", "on the floor", np.zeros(3))
+    assert np.allclose(target, [0.0, 0.2, 3.0])
+
+
+def test_types_outside_the_table_split_at_capitals_only_as_officially():
+    assert anchor_keywords("TVStand") == ("t v stand",)
+    assert anchor_keywords("tvStand") == ("stand",)
+    assert anchor_keywords("Chair") == ("chair",) and anchor_keywords("Sink") == ("sink",)

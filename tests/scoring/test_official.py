@@ -9,7 +9,6 @@ sit at (0, 1.5, 0), yaw 0, horizon 0, fov 90, so f/W = 0.5 and a camera-space po
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import pytest
 from hypothesis import given
@@ -89,8 +88,8 @@ def test_clamping_bounds_the_error_by_sqrt2(x, y, gu, gv):
 
 
 def row(house, pair, direction, cond, x, y, image=None, parse_error=False, points=None):
-    return SimpleNamespace(house_id=house, pair_id=pair, direction=direction, type=cond, predicted_x=x,
-                           predicted_y=y, predicted_image=image, parse_error=parse_error, predicted_points=points)
+    return dict(house_id=house, pair_id=pair, direction=direction, type=cond, predicted_x=x,
+                predicted_y=y, predicted_image=image, parse_error=parse_error, predicted_points=points)
 
 
 def test_summary_on_the_fixture_equals_hand_computed_means(mini_dataset):
@@ -131,5 +130,6 @@ def test_multi_point_answers_keep_the_closest_point_error(mini_dataset):
 
 
 def test_rows_for_unknown_instances_are_warned_about(mini_dataset):
-    _, warnings = score_official_rows([row("nohouse", 1, "up", "c", 1, 1)], mini_dataset)
+    scored, warnings = score_official_rows([row("nohouse", 1, "up", "c", 1, 1)], mini_dataset)
     assert warnings and "nohouse/1/up/c" in warnings[0]
+    assert len(scored) == 1 and not scored[0].score.answered
