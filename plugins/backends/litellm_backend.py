@@ -36,7 +36,7 @@ from povagent.errors import ConfigError
 from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
-from povagent.engine.llm_import import import_litellm
+from povagent.engine.llm_import import import_litellm, warm_up_litellm
 from povagent.config.profiles import ModelProfile, resolve_profile
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
@@ -349,6 +349,7 @@ class LiteLLMBackend(Backend):
         timeout starts; a missing API key is found here, before the run fans out."""
         if _LITELLM is None:
             await _import_litellm_off_loop()
+        await asyncio.to_thread(warm_up_litellm, self.model)
         if self.options.router is None:
             self._api_key()
 

@@ -30,3 +30,18 @@ def import_litellm() -> ModuleType:
     # anonymous usage telemetry would be a network call we never asked for
     litellm.telemetry = False
     return litellm
+
+
+@functools.cache
+def warm_up_litellm(model: str) -> None:
+    """Load what litellm loads lazily on its first request (about 460 modules of the OpenAI
+    client and litellm's own: seconds on a busy machine), so that cost never counts against
+    the first request's timeout. Makes no network call: the OpenAI client is only built and
+    the completion is litellm's ``mock_response``. Runs once per model string and process.
+    """
+    litellm = import_litellm()
+    import openai
+
+    client = openai.AsyncOpenAI(api_key="warm-up", base_url="http://127.0.0.1:9/v1")
+    _ = client.chat.completions  # the resources module tree loads on first access
+    litellm.completion(model=model, messages=[{"role": "user", "content": "warm-up"}], mock_response="ok")
