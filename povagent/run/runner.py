@@ -146,8 +146,11 @@ def select_instances(dataset: Dataset, config: PipelineConfig) -> list[Instance]
 
 
 def prepare_dataset(config: PipelineConfig) -> Dataset:
-    """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty."""
-    spec = config.dataset
+    """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty, or
+    fetching it first for a ``hub:`` spec (which then names the local copy)."""
+    from povagent.dataset.hub import resolve_hub_dataset
+
+    spec = resolve_hub_dataset(config).dataset
     if spec.generate is not None:
         g = spec.generate
         if not (g.out / "artifacts").is_dir():
@@ -975,7 +978,9 @@ def pending_keys(config: PipelineConfig, dataset: Dataset) -> tuple[int, int, li
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, Dataset] | None = None) -> Dataset:
     """The config's dataset, loaded once per folder (and strictness) when ``loaded`` is shared
     (sweeps)."""
-    key = (Path(config.dataset.root).resolve(), config.dataset.strict)
+    from povagent.dataset.hub import resolve_hub_dataset
+
+    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict)
     if loaded is not None and key in loaded:
         return loaded[key]
     ds = prepare_dataset(config)

@@ -1,0 +1,44 @@
+"""A pipeline naming ``dataset: {hub: ...}`` runs on the release fetched from a loopback Hub."""
+
+from __future__ import annotations
+
+import pytest
+import yaml
+
+from povagent.config.pipeline import load_pipeline
+from povagent.results.rows import read_rows
+from povagent.run.runner import run_pipeline
+from povagent.testing.hub_server import HubServer
+
+
+@pytest.fixture
+def hub(small_release, monkeypatch, tmp_path):
+    """The small synthetic release served as owl-owl/POVBench; the cache lives in tmp_path."""
+    monkeypatch.delenv("HF_HUB_OFFLINE", raising=False)
+    monkeypatch.delenv("HF_HUB_CACHE", raising=False)
+    monkeypatch.setenv("HF_HOME", str(tmp_path / "hf"))
+    with HubServer(small_release, max_lifetime_s=60) as server:
+        monkeypatch.setenv("HF_ENDPOINT", server.url)
+        yield server
+
+
+def test_a_given_only_run_fetches_no_frame_and_records_the_commit(write_pipeline, hub, tmp_path):
+    path = write_pipeline(dataset={"hub": "owl-owl/POVBench"}, instances={"conditions": ["c"]})
+    result = run_pipeline(load_pipeline(path))
+    rows = read_rows(result.run_dir / "results.jsonl")
+    assert rows and {r.condition for r in rows} == {"c"} and all(r.status == "answered" for r in rows)
+    assert not any("exploration_images/" in f for f in hub.fetched_files())
+    recorded = yaml.safe_load((result.run_dir / "config.yaml").read_text())["dataset"]
+    assert recorded["hub"] == "owl-owl/POVBench" and recorded["revision"] == hub.commit
+    assert recorded["path"].startswith(str(tmp_path / "hf" / "hub"))
+
+
+def test_a_run_resumes_offline_from_its_config_yaml(write_pipeline, hub, monkeypatch):
+    path = write_pipeline(dataset={"hub": "owl-owl/POVBench"}, instances={"conditions": ["a"], "limit": 2})
+    first = run_pipeline(load_pipeline(path))
+    hub.stop()
+    monkeypatch.setenv("HF_HUB_OFFLINE", "1")
+    config = load_pipeline(first.run_dir / "config.yaml")
+    config.instances.limit = 4
+    again = run_pipeline(config)
+    assert again.n_pending == 2 and len(read_rows(again.run_dir / "results.jsonl")) == 4
