@@ -18,7 +18,8 @@ reads when it is first imported: set it before that, e.g. in a subprocess). Ever
 recorded (method and path), so a test can check which files were fetched.
 
 Bounded like :class:`povagent.testing.loopback_server.LoopbackServer`: loopback only, stops by
-itself after ``max_lifetime_s``, files are read into memory once at start.
+itself after ``max_lifetime_s``; a folder's files are hashed once at start and read from disk
+when asked for.
 """
 
 from __future__ import annotations
@@ -170,21 +171,23 @@ class _Handler(BaseHTTPRequestHandler):
         commit = self._commit(revision)
         if commit is None:
             return
-        data = owner.files.get(path)
-        if data is None:
+        if path not in owner.files:
             self._error(404, "Entry not found", "EntryNotFound", {"X-Repo-Commit": commit})
             return
-        etag = f'"{git_blob_id(data)}"'
-        status, body, extra = 200, data, {}
+        data = owner.read(path) if method == "GET" else b""
+        size = owner._sizes[path]
+        etag = f'"{owner._oids[path]}"'
+        status, length, extra = 200, size, {}
+        first, last = 0, size - 1
         rng = re.fullmatch(r"bytes=(\d+)-(\d*)", self.headers.get("Range", ""))
         if rng:
             first = int(rng[1])
-            last = int(rng[2]) if rng[2] else len(data) - 1
-            body = data[first : last + 1]
-            status, extra = 206, {"Content-Range": f"bytes {first}-{first + len(body) - 1}/{len(data)}"}
+            last = min(int(rng[2]), size - 1) if rng[2] else size - 1
+            length = max(0, last - first + 1)
+            status, extra = 206, {"Content-Range": f"bytes {first}-{first + length - 1}/{size}"}
         self.send_response(status)
         self.send_header("Content-Type", "application/octet-stream")
-        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Content-Length", str(length))
         self.send_header("ETag", etag)
         self.send_header("X-Repo-Commit", commit)
         self.send_header("Accept-Ranges", "bytes")
@@ -192,7 +195,7 @@ class _Handler(BaseHTTPRequestHandler):
             self.send_header(k, v)
         self.end_headers()
         if method == "GET":
-            self.wfile.write(body)
+            self.wfile.write(data[first : first + length])
 
     # -- sending ----------------------------------------------------------------------------
     def _json(self, payload: Any, headers: Mapping[str, str] | None = None) -> None:
@@ -231,7 +234,8 @@ class _Server(ThreadingHTTPServer):
 class HubServer:
     """Serve ``folder`` as the Hub repository ``repo_id`` on 127.0.0.1, in a background thread.
 
-    ``files`` may be given instead of ``folder`` (a mapping of repository path to bytes).
+    ``files`` may be given instead of ``folder`` (a mapping of repository path to bytes). The
+    folder's contents are taken as they are at start (its commit hash depends on them).
     ``revisions`` are the branch or tag names that resolve to the one commit (its hash, derived
     from the files, resolves too). ``page_size`` is the tree listing's page length (the Hub's is
     1000). ``repo_type`` is ``dataset`` or ``model``. The server stops itself after
@@ -256,12 +260,13 @@ class HubServer:
             raise ValueError(f"repo_type {repo_type!r}: only 'dataset' and 'model' are served")
         self.repo_id = repo_id
         self.kind = repo_type + "s"
-        self.files: dict[str, bytes] = dict(files) if files is not None else _read_folder(Path(folder))  # type: ignore[arg-type]
+        # a folder's files are read when asked for (a full-size release is hundreds of MiB)
+        self.files: dict[str, bytes | Path] = dict(files) if files is not None else _list_folder(Path(folder))  # type: ignore[arg-type]
         self.paths = sorted(self.files)
+        self._oids = {p: git_blob_id(self.read(p)) for p in self.paths}
+        self._sizes = {p: len(b) if isinstance(b, bytes) else b.stat().st_size for p, b in self.files.items()}
         self.revisions = tuple(revisions)
-        self.commit = hashlib.sha1(
-            b"".join(p.encode() + b"\0" + git_blob_id(self.files[p]).encode() for p in self.paths)
-        ).hexdigest()
+        self.commit = hashlib.sha1(b"".join(p.encode() + b"\0" + self._oids[p].encode() for p in self.paths)).hexdigest()
         self.page_size = max(1, page_size)
         self.port = port
         self.max_lifetime_s = max_lifetime_s
@@ -326,6 +331,11 @@ class HubServer:
         with self._lock:
             self.requests.append(request)
 
+    def read(self, path: str) -> bytes:
+        """The bytes of a repository file (``KeyError`` if there is none)."""
+        source = self.files[path]
+        return source if isinstance(source, bytes) else source.read_bytes()
+
     def fetched_files(self) -> list[str]:
         """Repository paths whose bytes were sent (``GET`` on a ``resolve`` URL), in order."""
         out = []
@@ -351,16 +361,15 @@ class HubServer:
                 if recursive or i == 1:
                     folders.add(prefix + "/".join(parts[:i]))
             if recursive or len(parts) == 1:
-                data = self.files[p]
-                files.append({"type": "file", "oid": git_blob_id(data), "size": len(data), "path": p})
+                files.append({"type": "file", "oid": self._oids[p], "size": self._sizes[p], "path": p})
         dirs = [{"type": "directory", "oid": hashlib.sha1(d.encode()).hexdigest(), "path": d} for d in sorted(folders)]
         return sorted(dirs + files, key=lambda e: e["path"])
 
 
-def _read_folder(folder: Path) -> dict[str, bytes]:
+def _list_folder(folder: Path) -> dict[str, Path]:
     if not folder.is_dir():
         raise FileNotFoundError(f"{folder}: not a folder")
-    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+    return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
 def main(argv: list[str] | None = None) -> None:
