@@ -274,7 +274,13 @@ def _user_error(
                 f"fetch it once with network access: {fetch}"
             )
         cause = exc.__cause__ or exc.__context__
-        reason = f"{type(cause).__name__}: {cause}" if cause is not None else str(exc).splitlines()[0]
+        detail = str(cause if cause is not None else exc).strip().splitlines()
+        reason = f"{type(cause).__name__}: {detail[0] if detail else ''}" if cause is not None else (detail[0] if detail else "")
+        if isinstance(cause, HfHubHTTPError):
+            return DatasetError(
+                f"{where}: the Hub at {endpoint} answered with an error ({reason}) and no complete copy is in the "
+                f"cache {cache}; try again later, or run where the release is cached"
+            )
         return DatasetError(
             f"{where}: cannot reach the Hub at {endpoint} ({reason}) and no complete copy is in the cache {cache}; "
             "check the network connection (and HF_ENDPOINT), or run where the release is cached"

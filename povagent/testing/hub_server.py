@@ -92,6 +92,9 @@ class _Handler(BaseHTTPRequestHandler):
         raw_path = split.path
         query = parse_qs(split.query)
         owner._record(HubRequest(method, unquote(raw_path), query, time.monotonic()))
+        if owner.fail_status is not None:
+            self._error(owner.fail_status, "injected failure", None)
+            return
         m = _API.match(raw_path)
         if m and method == "GET":
             if not self._repo_ok(m["kind"], unquote(m["repo"])):
@@ -152,7 +155,11 @@ class _Handler(BaseHTTPRequestHandler):
             return
         recursive = query.get("recursive", ["false"])[0].lower() == "true"
         entries = owner.tree_entries(under, recursive)
-        start = int(query.get("cursor", ["0"])[0])
+        cursor = query.get("cursor", ["0"])[0]
+        if not cursor.isdigit():
+            self._error(400, f"Invalid cursor: {cursor}", None)
+            return
+        start = int(cursor)
         page = entries[start : start + owner.page_size]
         headers = {}
         if start + owner.page_size < len(entries):
@@ -238,7 +245,8 @@ class HubServer:
     folder's contents are taken as they are at start (its commit hash depends on them).
     ``revisions`` are the branch or tag names that resolve to the one commit (its hash, derived
     from the files, resolves too). ``page_size`` is the tree listing's page length (the Hub's is
-    1000). ``repo_type`` is ``dataset`` or ``model``. The server stops itself after
+    1000). ``repo_type`` is ``dataset`` or ``model``. Set :attr:`fail_status` to answer every
+    request with that status (a Hub outage). The server stops itself after
     ``max_lifetime_s`` seconds; use it as a context manager.
     """
 
@@ -268,6 +276,8 @@ class HubServer:
         self.revisions = tuple(revisions)
         self.commit = hashlib.sha1(b"".join(p.encode() + b"\0" + self._oids[p].encode() for p in self.paths)).hexdigest()
         self.page_size = max(1, page_size)
+        #: When set, every request is answered with this HTTP status (a Hub outage: 500, 503...).
+        self.fail_status: int | None = None
         self.port = port
         self.max_lifetime_s = max_lifetime_s
         self.requests: list[HubRequest] = []

@@ -161,6 +161,20 @@ def test_network_failure_without_a_cache_is_a_clear_error(hub):
     assert "Connect" in msg  # the cause, as the client saw it
 
 
+def test_a_hub_outage_without_a_cache_is_a_clear_error(hub):
+    hub.fail_status = 503
+    with pytest.raises(DatasetError) as err:
+        download_release(progress=False)
+    msg = str(err.value)
+    assert "owl-owl/POVBench @ main: the Hub at" in msg and "503 Service Unavailable" in msg and "\n" not in msg
+
+
+def test_a_hub_outage_with_a_complete_cache_uses_the_cache(hub):
+    online = download_release(progress=False)
+    hub.fail_status = 500
+    assert download_release(progress=False).root == online.root
+
+
 def test_network_failure_with_a_complete_cache_uses_the_cache(hub):
     online = download_release(progress=False)
     hub.stop()
