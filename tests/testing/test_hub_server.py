@@ -141,3 +141,15 @@ def test_exactly_one_source_of_files():
         HubServer()
     with pytest.raises(ValueError):
         HubServer("x", files=FILES)
+
+
+def test_an_injected_outage_answers_every_request_with_its_status(server):
+    server.fail_status = 503
+    assert fetch(f"{server.url}/api/datasets/owl-owl/POVBench/revision/main")[0] == 503
+    assert fetch(f"{server.url}/datasets/owl-owl/POVBench/resolve/main/meta.json", "HEAD")[0] == 503
+    server.fail_status = None
+    assert fetch(f"{server.url}/api/datasets/owl-owl/POVBench/revision/main")[0] == 200
+
+
+def test_a_malformed_cursor_is_a_bad_request(server):
+    assert fetch(f"{server.url}/api/datasets/owl-owl/POVBench/tree/main?cursor=x")[0] == 400
