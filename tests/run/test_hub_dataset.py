@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 import yaml
 
@@ -9,6 +11,8 @@ from povagent.config.pipeline import load_pipeline
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
 from povagent.testing.hub_server import HubServer
+
+OFFLINE_PLUGIN = str(Path(__file__).resolve().parent / "offline_plugin.py")
 
 
 @pytest.fixture
@@ -42,3 +46,20 @@ def test_a_run_resumes_offline_from_its_config_yaml(write_pipeline, hub, monkeyp
     config.instances.limit = 4
     again = run_pipeline(config)
     assert again.n_pending == 2 and len(read_rows(again.run_dir / "results.jsonl")) == 4
+
+
+def test_every_sweep_cell_runs_on_the_fetched_release_and_records_it(hub, tmp_path, offline_plugin):
+    from povagent.run.sweep import run_sweep
+
+    base = {
+        "plugins": [OFFLINE_PLUGIN], "dataset": {"hub": "owl-owl/POVBench"}, "backend": {"name": "test-center"},
+        "strategy": "test-point", "parser": "test-json", "concurrency": 4, "output": "ignored-by-sweeps",
+    }  # fmt: skip
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text(f"base: base.yaml\noutput: {tmp_path / 'sweep'}\naxes:\n  conditions: [c, a]\n")
+    result = run_sweep(sweep, quiet=True)
+    for cell in result.cells:
+        recorded = yaml.safe_load((cell.config.output / "config.yaml").read_text())["dataset"]
+        assert recorded["revision"] == hub.commit and recorded["path"].startswith(str(tmp_path / "hf"))
+        assert read_rows(cell.config.output / "results.jsonl")
