@@ -28,6 +28,7 @@ COMMAND_MODULES = (
     "povagent.cli.generate",   # generate
     "povagent.cli.reporting",  # report, export, compare
     "povagent.cli.quickstart", # quickstart
+    "povagent.cli.download",   # download
 )
 
 for _name in COMMAND_MODULES:

@@ -32,7 +32,9 @@ def show_prompt_command(
     from povagent.plugins import get_plugin_host, did_you_mean
     from povagent.exchange.preview import preview_request
 
-    config = load_pipeline(pipeline)
+    from povagent.dataset.hub import resolve_hub_dataset
+
+    config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
     dataset = load_dataset(config.dataset.root)
     inst = dataset.instance(instance)
     if inst is None:

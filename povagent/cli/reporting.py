@@ -39,18 +39,28 @@ def report_command(
 
 @app.command("export")
 def export_command(
-    run_dir: Path = typer.Argument(..., help="A run folder (results.jsonl)."),
-    format: str = typer.Option("official", "--format", help="Output format; only 'official' (POVBench's prediction rows)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json; a folder of run_<k>.json with several runs)."),
+    run_dir: Path = typer.Argument(..., help="A run folder (results.jsonl); for long-csv also a sweep folder."),
+    format: str = typer.Option(
+        "official", "--format",
+        help="'official': POVBench's prediction rows (one file per run index). 'long-csv': the official "
+        "aggregate_runs.py's all_runs_long.csv, one line per model, run (numbered from 1) and item.",
+    ),
+    out: Optional[Path] = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json, a folder of run_<k>.json with several runs; RUN_DIR/all_runs_long.csv for long-csv)."),
     run: Optional[int] = typer.Option(None, "--run", help="Export only this run index."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images (default: from config.yaml)."),
+    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images and the long CSV's ground truth (default: from config.yaml)."),
+    model: Optional[str] = typer.Option(None, "--model", help="long-csv: the model label of a run folder's lines (default: its model)."),
 ) -> None:
-    """Write a run's predictions in the official row format (check them with the official code)."""
+    """Write a run's predictions in the official row format, or the official long CSV."""
     from povagent.errors import PredictionsError
-    from povagent.report.export import export_run
+    from povagent.report.export import export_long_csv, export_run
 
+    if format == "long-csv":
+        typer.echo(f"wrote {export_long_csv(run_dir, out, dataset_path=dataset, model=model, run=run)}")
+        return
     if format != "official":
-        raise PredictionsError(f"--format {format!r}: unknown export format (supported: official)")
+        raise PredictionsError(f"--format {format!r}: unknown export format (supported: official, long-csv)")
+    if model is not None:
+        raise PredictionsError("--model labels the long CSV's lines; use it with --format long-csv")
     for path in export_run(run_dir, out, run, dataset):
         typer.echo(f"wrote {path}")
 

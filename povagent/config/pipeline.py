@@ -5,6 +5,8 @@ default)::
 
     plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names or .py paths)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
+                                         # or {hub: owl-owl/POVBench, revision: main} (the release,
+                                         # fetched into the Hugging Face cache)
                                          # (generate also takes judge: NAME or {name, options})
                                          # strict: true stops at a bad house (default: report, skip)
     instances:                           # which instances to run (default: all)
@@ -91,10 +93,17 @@ class GenerateSpec(_Strict):
 
 
 class DatasetSpec(_Strict):
-    """Where the instances come from: an existing release-layout folder, or a generator spec."""
+    """Where the instances come from: an existing release-layout folder, a generator spec, or
+    a dataset repository on the Hugging Face Hub (``hub``, at ``revision``)."""
 
     path: Path | None = None
     generate: GenerateSpec | None = None
+    #: A Hub dataset repository (``owl-owl/POVBench``), fetched into the Hugging Face cache
+    #: (see :mod:`povagent.dataset.hub`). A run fills in ``path`` (the local copy) and pins
+    #: ``revision`` to the commit it used, in the run folder's ``config.yaml``.
+    hub: str | None = None
+    #: Branch, tag or commit of ``hub`` (default: ``main``).
+    revision: str | None = Field(None, min_length=1)
     #: Stop at the first bad house or pair instead of reporting it and going on.
     strict: bool = False
 
@@ -103,16 +112,40 @@ class DatasetSpec(_Strict):
     def _bare_path(cls, value: Any) -> Any:
         return {"path": value} if isinstance(value, str) else value
 
+    @field_validator("hub")
+    @classmethod
+    def _repo_id(cls, value: str | None) -> str | None:
+        if value is not None and not re.fullmatch(r"[\w.-]+/[\w.-]+", value):
+            raise ValueError(f"{value!r} is not a Hub repository id: give owner/name (e.g. owl-owl/POVBench)")
+        return value
+
     @model_validator(mode="after")
     def _exactly_one(self) -> "DatasetSpec":
+        if self.revision is not None and self.hub is None:
+            raise ValueError("dataset.revision needs dataset.hub (the Hub repository it is a revision of)")
+        if self.hub is not None:
+            # a path beside hub is the local copy a run resolved it to (see config.yaml)
+            if self.generate is not None:
+                raise ValueError("give exactly one of dataset.path, dataset.generate or dataset.hub")
+            return self
         if (self.path is None) == (self.generate is None):
-            raise ValueError("give exactly one of dataset.path or dataset.generate")
+            raise ValueError("give exactly one of dataset.path, dataset.generate or dataset.hub")
         return self
 
     @property
     def root(self) -> Path:
-        """The dataset folder (the generator's ``out`` for generated datasets)."""
-        return self.path if self.path is not None else self.generate.out  # type: ignore[union-attr]
+        """The dataset folder (the generator's ``out`` for generated datasets; the fetched
+        release for ``hub``, once :func:`povagent.dataset.hub.resolve_hub_dataset` ran)."""
+        if self.path is not None:
+            return self.path
+        if self.generate is not None:
+            return self.generate.out
+        from povagent.errors import DatasetError
+
+        raise DatasetError(
+            f"dataset.hub {self.hub}: not fetched yet (call povagent.dataset.hub.resolve_hub_dataset on the "
+            f"pipeline first, or fetch it with `povagent download {self.hub}` and give dataset.path)"
+        )
 
 
 _CONDITION_NAMES = {"inferred": "a", "stated": "b", "given": "c"}

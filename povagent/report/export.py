@@ -10,11 +10,17 @@ when unanswered), ``predicted_image`` the selected frame's ``image_path`` (A/B),
 true unless the row was answered, ``predicted_points`` from the parse, ``candidate_images`` the
 frames shown (A/B, read from the dataset when it can be loaded).
 
-Reading and writing files only: no scoring here.
+``--format long-csv`` writes instead the official ``aggregate_runs.py``'s long table
+(``all_runs_long.csv``): one line per model, run and item, the same columns in the same order,
+values written as that script writes them, so analysis notebooks built on it read ours. Its
+numbers are the official scorer's per-item record (:mod:`povagent.scoring.evaluations`).
+
+Reading and writing files; the numbers come from :mod:`povagent.scoring`.
 """
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -23,6 +29,25 @@ from povagent.results.official_format import OfficialPrediction, write_official_
 from povagent.results.rows import ResultRow, RowStatus
 
 OFFICIAL_FILE = "official_predictions.json"
+LONG_CSV_FILE = "all_runs_long.csv"
+
+#: The columns of the official long CSV, in its order (notebooks index them by name).
+LONG_CSV_COLUMNS: tuple[str, ...] = (
+    "model", "run_id", "eval_dir",
+    "pair_id", "house_id", "direction", "type",
+    "sentence",
+    "status", "parse_error",
+    "predicted_x", "predicted_y",
+    "predicted_x_norm", "predicted_y_norm",
+    "gt_x", "gt_y", "gt_in_frame",
+    "error_x", "error_y", "error_l2",
+    "error_l2_min", "error_l2_mean", "n_points",
+    "predicted_image", "camera_image",
+    "raw_response",
+)  # fmt: skip
+
+#: Columns the official script writes empty when the value is falsy (not only when missing).
+_EMPTY_WHEN_FALSY = frozenset({"parse_error", "predicted_image", "camera_image"})
 
 
 def official_row(row: ResultRow, instance: Any = None) -> OfficialPrediction:
@@ -101,3 +126,122 @@ def raise_many(path: str | Path, n: int) -> None:
     from povagent.errors import PredictionsError
 
     raise PredictionsError(f"{path}: holds {n} run folders; export one run folder at a time (e.g. {path}/<cell>)")
+
+
+# -- the long CSV ---------------------------------------------------------------------------------
+def long_csv_line(record: dict[str, Any], model: str, run_id: int, eval_dir: str, raw_response: str) -> dict[str, Any]:
+    """One line of the long CSV from an item's official evaluation record.
+
+    A value the record lacks (or holds as ``None``) is written empty; ``parse_error``,
+    ``predicted_image`` and ``camera_image`` are also empty when falsy, as officially. Other
+    values are written as Python prints them (``0.1234...``, ``True``), as the ``csv`` module does.
+    """
+    given = {"model": model, "run_id": run_id, "eval_dir": eval_dir, "raw_response": raw_response}
+    line: dict[str, Any] = {}
+    for column in LONG_CSV_COLUMNS:
+        value = given[column] if column in given else record.get(column)
+        if value is None or (column in _EMPTY_WHEN_FALSY and not value):
+            value = ""
+        line[column] = value
+    return line
+
+
+def _item_order(dataset: Any) -> dict[tuple[str, str], int]:
+    """Pairs in release order (houses sorted, pairs in file order), as the official runner visits them."""
+    order: dict[tuple[str, str], int] = {}
+    for house_id in sorted(dataset.houses):
+        for pair_id in dataset.houses[house_id].pairs:
+            order[(house_id, pair_id)] = len(order)
+    return order
+
+
+def long_csv_lines(rows: Iterable[ResultRow], dataset: Any, model: str, eval_dir: str) -> list[dict[str, Any]]:
+    """The long CSV's lines for one run folder's rows: by run, then item in release order.
+
+    ``run_id`` counts from 1, as the official runs are numbered (our run index 0 is run 1).
+    """
+    from povagent.scoring.evaluations import official_evaluation, raw_response
+
+    order = _item_order(dataset)
+    unknown = len(order)
+
+    def key(r: ResultRow) -> tuple[Any, ...]:
+        # within a pair the official runner goes direction by direction (sorted), then a, b, c
+        return (r.run, order.get((r.house_id, r.pair_id), unknown), r.house_id, r.pair_id, r.direction, str(r.condition))
+
+    return [
+        long_csv_line(official_evaluation(r, dataset), model, r.run + 1, eval_dir, raw_response(r))
+        for r in sorted(rows, key=key)
+    ]
+
+
+def write_long_csv(path: str | Path, lines: Iterable[dict[str, Any]]) -> Path:
+    """Write lines under the official header (UTF-8, the ``csv`` module's default dialect)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=list(LONG_CSV_COLUMNS))
+        writer.writeheader()
+        writer.writerows(lines)
+    return path
+
+
+def export_long_csv(
+    source: str | Path,
+    out: str | Path | None = None,
+    *,
+    dataset_path: str | Path | None = None,
+    model: str | None = None,
+    run: int | None = None,
+) -> Path:
+    """Write ``all_runs_long.csv`` for a run folder or a sweep folder (every cell); returns its path.
+
+    ``model`` labels a single run folder's lines (default: its system label, as reports name
+    it: the model, or the sweep axes that vary); ``run`` keeps one run index. The dataset is
+    the runs' own (``dataset_path`` overrides it): the official record needs the ground truth.
+    ``out`` defaults to ``<source>/all_runs_long.csv``.
+    """
+    from povagent.errors import PredictionsError
+    from povagent.report.collect import collect
+
+    collection = collect(source)
+    if not collection.runs:
+        raise PredictionsError(f"{source}: no run folder (results.jsonl) found")
+    if model is not None and len(collection.runs) > 1:
+        raise PredictionsError(
+            f"{source}: --model labels one run folder, and this holds {len(collection.runs)}; their lines are "
+            "labelled by the sweep axes that vary (export a single cell to choose its label)"
+        )
+    datasets: dict[Path | None, Any] = {}
+    lines: list[dict[str, Any]] = []
+    for info in collection.runs:
+        where = Path(dataset_path) if dataset_path is not None else info.dataset_path
+        if where not in datasets:
+            datasets[where] = _release_dataset(where, info.folder)
+        rows = [r for r in info.rows if run is None or r.run == run]
+        label = model if model is not None else info.system or info.axes.get("model") or info.name
+        lines += long_csv_lines(rows, datasets[where], label, str(info.folder))
+    if not lines:
+        raise PredictionsError(f"{source}: no result rows{'' if run is None else f' for run {run}'} to export")
+    # the official script orders runs by model label, then run number
+    lines.sort(key=lambda line: (line["model"], line["run_id"]))
+    return write_long_csv(Path(out) if out is not None else Path(source) / LONG_CSV_FILE, lines)
+
+
+def _release_dataset(path: Path | None, run_folder: Path) -> Any:
+    """The release-layout dataset a run used, loaded; a clear error when it cannot be."""
+    from povagent.dataset.loader import load_dataset
+    from povagent.dataset.realworld import is_realworld
+    from povagent.errors import DatasetError, PredictionsError
+
+    if path is None:
+        raise PredictionsError(f"{run_folder}: its config.yaml names no dataset folder; pass --dataset (the release it ran on)")
+    if is_realworld(path):
+        raise PredictionsError(
+            f"{run_folder}: ran on a real-world set ({path}); the long CSV holds the official scorer's "
+            "numbers, which need a POVBench release (its 3D ground truth)"
+        )
+    try:
+        return load_dataset(path)
+    except DatasetError as exc:
+        raise PredictionsError(f"{run_folder}: its dataset cannot be loaded for the ground truth ({exc}); pass --dataset") from exc

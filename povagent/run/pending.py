@@ -120,8 +120,11 @@ def plan_keys(
 
 
 def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
-    """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty."""
-    spec = config.dataset
+    """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty, or
+    fetching it first for a ``hub:`` spec (which then names the local copy)."""
+    from povagent.dataset.hub import resolve_hub_dataset
+
+    spec = resolve_hub_dataset(config).dataset
     if spec.generate is not None:
         g = spec.generate
         if not (g.out / "artifacts").is_dir():
@@ -142,7 +145,9 @@ def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:
     """The config's dataset, loaded once per folder (and strictness) when ``loaded`` is shared
     (sweeps)."""
-    key = (Path(config.dataset.root).resolve(), config.dataset.strict)
+    from povagent.dataset.hub import resolve_hub_dataset
+
+    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict)
     if loaded is not None and key in loaded:
         return loaded[key]
     ds = prepare_dataset(config)

@@ -6,4 +6,7 @@
   ``-p povagent.testing.pytest_plugin``.
 * :mod:`povagent.testing.loopback_server`: an OpenAI-compatible chat server on 127.0.0.1
   (``python -m povagent.testing.loopback_server --help``).
+* :mod:`povagent.testing.hub_server`: a Hugging Face Hub file server on 127.0.0.1 serving a
+  folder as a dataset repository, for ``snapshot_download`` and ``povagent download``
+  (``python -m povagent.testing.hub_server FOLDER``).
 """

@@ -1,0 +1,125 @@
+"""The official scorer's record of one item, for a result row (what ``eval_results.json`` holds).
+
+The official evaluation writes, per prediction, a record: its ``status`` (``ok`` or why it was
+not scored: ``no_prediction``, ``entry_not_found``, ``placement_not_found``,
+``no_selected_image``, ``image_not_in_log``), the GT projected into the scored frame (clamped
+to [0, 1], ``gt_in_frame``), the prediction normalized and clamped, the signed errors and the
+L2; for multi-point answers the closest point's and the centroid's errors (the centroid's is
+the L2). :func:`official_evaluation` builds that record from one of our rows, so the long CSV
+(:mod:`povagent.report.export`) carries the numbers the official tools would.
+
+The prediction is taken as the official runner would have recorded the same answer:
+``parse_error`` is ``None`` when a point was read, ``"failed to parse JSON"`` when none was,
+the error message when the request failed; an A/B answer with a point but no usable frame
+keeps its point and has no selected image. Pure: rows and a loaded dataset in, a dict out.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from povagent.results.rows import ResultRow, RowStatus
+from povagent.scoring.official import project_ground_truth
+
+#: What the official runner records as ``parse_error`` when an answer has no readable point.
+OFFICIAL_PARSE_FAILURE = "failed to parse JSON"
+
+
+def clip_unit(v: float) -> float:
+    """Clamp to [0, 1] as the official scorer does: NaN stays NaN (its mean then is NaN)."""
+    return v if math.isnan(v) else min(1.0, max(0.0, v))
+
+
+def raw_response(row: ResultRow) -> str:
+    """The model's last raw answer in a row (``""`` when the request failed)."""
+    for exchange in reversed(row.exchanges):
+        if exchange.raw is not None:
+            return exchange.raw
+    return ""
+
+
+def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, float | None, str | None, str | None, list[tuple[float, float]] | None]:
+    """``(x, y, parse_error, predicted_image, points)`` as the official runner records them."""
+    uses_frames = str(row.condition) != "c"
+    p = row.prediction
+    if row.status == RowStatus.ANSWERED and p.x is not None and p.y is not None:
+        image = p.image_path
+        if image is None and uses_frames and instance is not None and p.selected_image is not None:
+            if 0 <= p.selected_image < len(instance.frames):
+                image = instance.frames[p.selected_image].image_path
+        points = [(float(a), float(b)) for a, b in row.parse.points] if row.parse is not None and row.parse.points else None
+        return float(p.x), float(p.y), None, image if uses_frames else None, points
+    if row.status == RowStatus.INFRA_ERROR:
+        return None, None, row.error_message or row.error_type or "request failed", None, None
+    parse = row.parse
+    if uses_frames and parse is not None and parse.x is not None and parse.y is not None:
+        # a point was read, but its frame index names no frame: officially a parsed answer
+        # whose predicted_image is missing
+        return float(parse.x), float(parse.y), None, None, None
+    return None, None, OFFICIAL_PARSE_FAILURE, None, None
+
+
+def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
+    """The official evaluation record of one row against a loaded release-layout dataset.
+
+    Keys present only when the official record has them (``gt_x`` ... ``error_l2`` once the item
+    is scored, ``n_points``/``error_l2_min``/``error_l2_mean`` for multi-point answers,
+    ``predicted_image``/``camera_image`` once known), so an absent value stays absent.
+    """
+    instance = dataset.instance(row.instance_id)
+    x, y, parse_error, image, points = _official_prediction(row, instance)
+    record: dict[str, Any] = {
+        "pair_id": row.pair_id,
+        "house_id": row.house_id,
+        "direction": row.direction,
+        "type": str(row.condition),
+        "sentence": row.sentence,
+        "predicted_x": x,
+        "predicted_y": y,
+        "parse_error": parse_error,
+    }
+    # the official checks, in its order: the first that fails names the status
+    if x is None or y is None:
+        return record | {"status": "no_prediction"}
+    house = dataset.houses.get(row.house_id)
+    if house is None or row.pair_id not in house.pairs:
+        return record | {"status": "entry_not_found"}
+    if instance is None:
+        return record | {"status": "placement_not_found"}
+    if instance.condition.uses_exploration_frames:
+        if not image:
+            return record | {"status": "no_selected_image"}
+        record["predicted_image"] = image
+        frame = instance.frame_by_path(image)
+        if frame is None:
+            return record | {"status": "image_not_in_log"}
+        record["camera_image"] = image
+    else:
+        frame = instance.frames[0]
+        record["camera_image"] = frame.image_path  # the pair's rgb_path
+    cam = frame.camera
+    gt = project_ground_truth(instance.target, cam)
+    gx, gy = clip_unit(gt.u), clip_unit(gt.v)
+    px, py = clip_unit(x / cam.width), clip_unit(y / cam.height)
+    ex, ey = px - gx, py - gy
+    record |= {
+        "gt_x": gx,
+        "gt_y": gy,
+        "gt_in_frame": gt.in_frame,
+        "predicted_x_norm": px,
+        "predicted_y_norm": py,
+        "error_x": ex,
+        "error_y": ey,
+        # sqrt of the sum, not hypot: the two can differ in the last bit, and the CSV is compared as text
+        "error_l2": math.sqrt(ex * ex + ey * ey),
+        "status": "ok",
+    }
+    if points:
+        normalized = [(clip_unit(a / cam.width), clip_unit(b / cam.height)) for a, b in points]
+        cx = sum(a for a, _ in normalized) / len(normalized)
+        cy = sum(b for _, b in normalized) / len(normalized)
+        record["n_points"] = len(normalized)
+        record["error_l2_min"] = min(math.hypot(a - gx, b - gy) for a, b in normalized)
+        record["error_l2_mean"] = record["error_l2"] = math.hypot(cx - gx, cy - gy)
+    return record

@@ -1,0 +1,406 @@
+"""A Hugging Face Hub file server on 127.0.0.1 for tests and plugin authors.
+
+It serves one folder as a dataset repository at one commit, speaking the part of the Hub's
+HTTP API that :func:`huggingface_hub.snapshot_download` uses:
+
+* ``GET /api/datasets/<repo>/revision/<rev>``: the repository's info (``sha``, ``siblings``);
+* ``GET /api/datasets/<repo>/tree/<rev>?recursive=...``: the file listing, in pages linked
+  by a ``Link: <...>; rel="next"`` header as the Hub pages them;
+* ``HEAD`` and ``GET /datasets/<repo>/resolve/<rev>/<path>``: a file, with the headers the
+  client checks (``ETag``, ``X-Repo-Commit``, ``Content-Length``) and byte ranges.
+
+Errors carry the Hub's ``X-Error-Code`` header (``RepoNotFound``, ``RevisionNotFound``,
+``EntryNotFound``), which is how the client tells them apart. A revision is a branch or tag
+name from ``revisions`` (default ``main``) or the commit hash itself.
+
+Point a client at it with ``endpoint=server.url`` (or ``HF_ENDPOINT``, which huggingface_hub
+reads when it is first imported: set it before that, e.g. in a subprocess). Every request is
+recorded (method and path), so a test can check which files were fetched.
+
+Bounded like :class:`povagent.testing.loopback_server.LoopbackServer`: loopback only, stops by
+itself after ``max_lifetime_s``; a folder's files are hashed once at start and read from disk
+when asked for.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import re
+import socket
+import threading
+import time
+from dataclasses import dataclass
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+from urllib.parse import parse_qs, quote, unquote, urlsplit
+
+__all__ = ["HubRequest", "HubServer"]
+
+
+@dataclass(frozen=True)
+class HubRequest:
+    """One request the server received: method, path (decoded, without the query) and query."""
+
+    method: str
+    path: str
+    query: dict[str, list[str]]
+    received_at: float
+
+
+def git_blob_id(data: bytes) -> str:
+    """The git object id of a file's bytes: the Hub's ``oid`` and ``ETag`` of a non-LFS file."""
+    return hashlib.sha1(b"blob %d\0" % len(data) + data).hexdigest()
+
+
+_API = re.compile(r"^/api/(?P<kind>datasets|models)/(?P<repo>[^/]+/[^/]+)/(?P<what>revision|tree)/(?P<rest>.+)$")
+_RESOLVE = re.compile(r"^/(?P<prefix>datasets/)?(?P<repo>[^/]+/[^/]+)/resolve/(?P<rev>[^/]+)/(?P<path>.+)$")
+
+
+class _Handler(BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.1"
+    server: "_Server"
+
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
+        """Silence the stdlib's per-request stderr log."""
+
+    def setup(self) -> None:
+        """Track the connection, so :meth:`HubServer.stop` can cut kept-alive ones too."""
+        super().setup()
+        self.server.owner._connections.add(self.connection)
+
+    def finish(self) -> None:
+        """Forget the connection once the client is done with it."""
+        self.server.owner._connections.discard(self.connection)
+        super().finish()
+
+    def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
+        """File metadata (``resolve`` URLs only)."""
+        self._route("HEAD")
+
+    def do_GET(self) -> None:  # noqa: N802 - stdlib name
+        """Repository info, tree listing or file bytes."""
+        self._route("GET")
+
+    # -- routing --------------------------------------------------------------------------
+    def _route(self, method: str) -> None:
+        owner = self.server.owner
+        split = urlsplit(self.path)
+        # the client quotes the revision (and paths); match on raw segments, decode each
+        raw_path = split.path
+        query = parse_qs(split.query)
+        owner._record(HubRequest(method, unquote(raw_path), query, time.monotonic()))
+        if owner.fail_status is not None:
+            self._error(owner.fail_status, "injected failure", None)
+            return
+        m = _API.match(raw_path)
+        if m and method == "GET":
+            if not self._repo_ok(m["kind"], unquote(m["repo"])):
+                return
+            if m["what"] == "revision":
+                self._repo_info(unquote(m["rest"]))
+            else:
+                rev, _, sub = m["rest"].partition("/")
+                self._tree(unquote(rev), unquote(sub), query)
+            return
+        m = _RESOLVE.match(raw_path)
+        if m:
+            kind = "datasets" if m["prefix"] else "models"
+            if not self._repo_ok(kind, unquote(m["repo"])):
+                return
+            self._file(method, unquote(m["rev"]), unquote(m["path"]))
+            return
+        self._error(404, "Sorry, we can't find the page you are looking for.", None)
+
+    def _repo_ok(self, kind: str, repo: str) -> bool:
+        owner = self.server.owner
+        if kind != owner.kind or repo != owner.repo_id:
+            self._error(404, "Repository not found", "RepoNotFound")
+            return False
+        return True
+
+    def _commit(self, revision: str) -> str | None:
+        owner = self.server.owner
+        if revision == owner.commit or revision in owner.revisions:
+            return owner.commit
+        self._error(404, f"Invalid rev id: {revision}", "RevisionNotFound")
+        return None
+
+    # -- endpoints --------------------------------------------------------------------------
+    def _repo_info(self, revision: str) -> None:
+        owner = self.server.owner
+        commit = self._commit(revision)
+        if commit is None:
+            return
+        self._json(
+            {
+                "_id": commit[:24],
+                "id": owner.repo_id,
+                "author": owner.repo_id.split("/")[0],
+                "sha": commit,
+                "private": False,
+                "gated": False,
+                "disabled": False,
+                "lastModified": "2026-01-01T00:00:00.000Z",
+                "tags": [],
+                "siblings": [{"rfilename": p} for p in owner.paths],
+            }
+        )
+
+    def _tree(self, revision: str, under: str, query: Mapping[str, list[str]]) -> None:
+        owner = self.server.owner
+        if self._commit(revision) is None:
+            return
+        recursive = query.get("recursive", ["false"])[0].lower() == "true"
+        entries = owner.tree_entries(under, recursive)
+        cursor = query.get("cursor", ["0"])[0]
+        if not cursor.isdigit():
+            self._error(400, f"Invalid cursor: {cursor}", None)
+            return
+        start = int(cursor)
+        page = entries[start : start + owner.page_size]
+        headers = {}
+        if start + owner.page_size < len(entries):
+            # the Hub pages long listings with a cursor carried in a Link header
+            rev = quote(revision, safe="")
+            sub = "/" + quote(under, safe="") if under else ""
+            nxt = (
+                f"{owner.url}/api/{owner.kind}/{owner.repo_id}/tree/{rev}{sub}"
+                f"?recursive={str(recursive).lower()}&expand=false&cursor={start + owner.page_size}"
+            )
+            headers["Link"] = f'<{nxt}>; rel="next"'
+        self._json(page, headers)
+
+    def _file(self, method: str, revision: str, path: str) -> None:
+        owner = self.server.owner
+        commit = self._commit(revision)
+        if commit is None:
+            return
+        if path not in owner.files:
+            self._error(404, "Entry not found", "EntryNotFound", {"X-Repo-Commit": commit})
+            return
+        data = owner.read(path) if method == "GET" else b""
+        size = owner._sizes[path]
+        etag = f'"{owner._oids[path]}"'
+        status, length, extra = 200, size, {}
+        first, last = 0, size - 1
+        rng = re.fullmatch(r"bytes=(\d+)-(\d*)", self.headers.get("Range", ""))
+        if rng:
+            first = int(rng[1])
+            last = min(int(rng[2]), size - 1) if rng[2] else size - 1
+            length = max(0, last - first + 1)
+            status, extra = 206, {"Content-Range": f"bytes {first}-{first + length - 1}/{size}"}
+        self.send_response(status)
+        self.send_header("Content-Type", "application/octet-stream")
+        self.send_header("Content-Length", str(length))
+        self.send_header("ETag", etag)
+        self.send_header("X-Repo-Commit", commit)
+        self.send_header("Accept-Ranges", "bytes")
+        for k, v in extra.items():
+            self.send_header(k, v)
+        self.end_headers()
+        if method == "GET":
+            self.wfile.write(data[first : first + length])
+
+    # -- sending ----------------------------------------------------------------------------
+    def _json(self, payload: Any, headers: Mapping[str, str] | None = None) -> None:
+        data = json.dumps(payload).encode()
+        self.send_response(200)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(data)))
+        for k, v in (headers or {}).items():
+            self.send_header(k, v)
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(data)
+
+    def _error(self, status: int, message: str, code: str | None, headers: Mapping[str, str] | None = None) -> None:
+        data = json.dumps({"error": message}).encode()
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(data)))
+        if code is not None:
+            self.send_header("X-Error-Code", code)
+            self.send_header("X-Error-Message", message)
+        for k, v in (headers or {}).items():
+            self.send_header(k, v)
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(data)
+
+
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+    block_on_close = False
+    request_queue_size = 64
+    owner: "HubServer"
+
+
+class HubServer:
+    """Serve ``folder`` as the Hub repository ``repo_id`` on 127.0.0.1, in a background thread.
+
+    ``files`` may be given instead of ``folder`` (a mapping of repository path to bytes). The
+    folder's contents are taken as they are at start (its commit hash depends on them).
+    ``revisions`` are the branch or tag names that resolve to the one commit (its hash, derived
+    from the files, resolves too). ``page_size`` is the tree listing's page length (the Hub's is
+    1000). ``repo_type`` is ``dataset`` or ``model``. Set :attr:`fail_status` to answer every
+    request with that status (a Hub outage). The server stops itself after
+    ``max_lifetime_s`` seconds; use it as a context manager.
+    """
+
+    def __init__(
+        self,
+        folder: str | Path | None = None,
+        *,
+        repo_id: str = "owl-owl/POVBench",
+        files: Mapping[str, bytes] | None = None,
+        revisions: Iterable[str] = ("main",),
+        repo_type: str = "dataset",
+        page_size: int = 1000,
+        port: int = 0,
+        max_lifetime_s: float = 120.0,
+    ) -> None:
+        if (folder is None) == (files is None):
+            raise ValueError("give exactly one of folder or files")
+        if repo_type not in ("dataset", "model"):
+            raise ValueError(f"repo_type {repo_type!r}: only 'dataset' and 'model' are served")
+        self.repo_id = repo_id
+        self.kind = repo_type + "s"
+        # a folder's files are read when asked for (a full-size release is hundreds of MiB)
+        self.files: dict[str, bytes | Path] = dict(files) if files is not None else _list_folder(Path(folder))  # type: ignore[arg-type]
+        self.paths = sorted(self.files)
+        self._oids = {p: git_blob_id(self.read(p)) for p in self.paths}
+        self._sizes = {p: len(b) if isinstance(b, bytes) else b.stat().st_size for p, b in self.files.items()}
+        self.revisions = tuple(revisions)
+        self.commit = hashlib.sha1(b"".join(p.encode() + b"\0" + self._oids[p].encode() for p in self.paths)).hexdigest()
+        self.page_size = max(1, page_size)
+        #: When set, every request is answered with this HTTP status (a Hub outage: 500, 503...).
+        self.fail_status: int | None = None
+        self.port = port
+        self.max_lifetime_s = max_lifetime_s
+        self.requests: list[HubRequest] = []
+        self._lock = threading.Lock()
+        self._server: _Server | None = None
+        self._thread: threading.Thread | None = None
+        self._timer: threading.Timer | None = None
+        self._connections: set[socket.socket] = set()
+
+    # -- lifecycle ----------------------------------------------------------------------------
+    def start(self) -> "HubServer":
+        """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
+        if self._server is not None:
+            return self
+        server = _Server(("127.0.0.1", self.port), _Handler)
+        server.owner = self
+        self._server = server
+        self.port = server.server_address[1]
+        self._thread = threading.Thread(
+            target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True, name=f"hub-server-{self.port}"
+        )
+        self._thread.start()
+        self._timer = threading.Timer(self.max_lifetime_s, self.stop)
+        self._timer.daemon = True
+        self._timer.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop serving: close the listening socket and every open connection (a later request
+        is refused, as on a network failure). Safe to call twice."""
+        server, self._server = self._server, None
+        if self._timer is not None and self._timer is not threading.current_thread():
+            self._timer.cancel()
+        if server is None:
+            return
+        server.shutdown()
+        server.server_close()
+        # a client's pooled keep-alive connection would otherwise still be served: a stopped
+        # server must look like a network failure to every client
+        for conn in list(self._connections):
+            try:
+                conn.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=5)
+
+    def __enter__(self) -> "HubServer":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    @property
+    def url(self) -> str:
+        """The endpoint clients use (``HF_ENDPOINT`` / ``endpoint=``): ``http://127.0.0.1:<port>``."""
+        return f"http://127.0.0.1:{self.port}"
+
+    # -- what was asked ------------------------------------------------------------------------
+    def _record(self, request: HubRequest) -> None:
+        with self._lock:
+            self.requests.append(request)
+
+    def read(self, path: str) -> bytes:
+        """The bytes of a repository file (``KeyError`` if there is none)."""
+        source = self.files[path]
+        return source if isinstance(source, bytes) else source.read_bytes()
+
+    def fetched_files(self) -> list[str]:
+        """Repository paths whose bytes were sent (``GET`` on a ``resolve`` URL), in order."""
+        out = []
+        with self._lock:
+            requests = list(self.requests)
+        for r in requests:
+            m = _RESOLVE.match(r.path)
+            if r.method == "GET" and m:
+                out.append(m["path"])
+        return out
+
+    def tree_entries(self, under: str = "", recursive: bool = True) -> list[dict[str, Any]]:
+        """The tree listing under a folder, as the Hub's ``tree`` endpoint returns it."""
+        prefix = under.strip("/") + "/" if under.strip("/") else ""
+        folders: set[str] = set()
+        files: list[dict[str, Any]] = []
+        for p in self.paths:
+            if not p.startswith(prefix):
+                continue
+            rest = p[len(prefix) :]
+            parts = rest.split("/")
+            for i in range(1, len(parts)):
+                if recursive or i == 1:
+                    folders.add(prefix + "/".join(parts[:i]))
+            if recursive or len(parts) == 1:
+                files.append({"type": "file", "oid": self._oids[p], "size": self._sizes[p], "path": p})
+        dirs = [{"type": "directory", "oid": hashlib.sha1(d.encode()).hexdigest(), "path": d} for d in sorted(folders)]
+        return sorted(dirs + files, key=lambda e: e["path"])
+
+
+def _list_folder(folder: Path) -> dict[str, Path]:
+    if not folder.is_dir():
+        raise FileNotFoundError(f"{folder}: not a folder")
+    return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Serve a folder as a Hub dataset repository until interrupted
+    (``python -m povagent.testing.hub_server FOLDER``)."""
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    ap.add_argument("folder", type=Path)
+    ap.add_argument("--repo", default="owl-owl/POVBench")
+    ap.add_argument("--port", type=int, default=0)
+    ap.add_argument("--lifetime", type=float, default=3600.0, help="stop after this many seconds")
+    args = ap.parse_args(argv)
+    server = HubServer(args.folder, repo_id=args.repo, port=args.port, max_lifetime_s=args.lifetime).start()
+    print(f"HF_ENDPOINT={server.url}  ({args.repo} at {server.commit})", flush=True)
+    try:
+        while server._server is not None:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()
+
+
+if __name__ == "__main__":
+    main()
