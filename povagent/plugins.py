@@ -30,6 +30,7 @@ from types import ModuleType
 from typing import Any, Callable, Iterable, Literal, Mapping, Sequence
 
 import pluggy
+import structlog
 
 from povagent import hookspecs
 from povagent.errors import PluginError
@@ -89,7 +90,7 @@ class LifecycleHooks:
 
     def __init__(self, pm: pluggy.PluginManager, on_error: Callable[[str, str, BaseException], None] | None = None) -> None:
         self._pm = pm
-        self.on_error = on_error or _print_hook_error
+        self.on_error = on_error or _log_hook_error
 
     def _call(self, hook_name: str, kwargs: dict[str, Any]) -> None:
         caller = getattr(self._pm.hook, hook_name)
@@ -122,8 +123,16 @@ class LifecycleHooks:
         self._call("povagent_run_end", {"run_dir": run_dir, "summary": summary})
 
 
-def _print_hook_error(hook: str, plugin: str, exc: BaseException) -> None:
-    print(f"warning: plugin {plugin!r} raised in {hook}: {type(exc).__name__}: {exc}", file=sys.stderr)
+#: Where plugin problems are reported outside a run (a run's own log also records them): a
+#: structlog logger on stderr, so ``--json`` output on stdout stays clean.
+_LOG = structlog.wrap_logger(
+    structlog.PrintLogger(sys.stderr),
+    processors=[structlog.processors.add_log_level, structlog.dev.ConsoleRenderer(colors=False)],
+)
+
+
+def _log_hook_error(hook: str, plugin: str, exc: BaseException) -> None:
+    _LOG.warning("plugin_hook_error", plugin=plugin, hook=hook, error=f"{type(exc).__name__}: {exc}")
 
 
 class PluginHost:

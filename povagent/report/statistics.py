@@ -323,10 +323,9 @@ def sign_test_p(n_pos: int, n_neg: int) -> float | None:
     n = n_pos + n_neg
     if n == 0:
         return None
-    k = min(n_pos, n_neg)
-    # log-space binomial sums stay exact enough for n in the tens of thousands
-    logs = [math.lgamma(n + 1) - math.lgamma(i + 1) - math.lgamma(n - i + 1) - n * math.log(2) for i in range(k + 1)]
-    return min(1.0, 2.0 * sum(math.exp(v) for v in logs))
+    from scipy.stats import binomtest  # scipy is heavy: only when a comparison is made
+
+    return float(binomtest(n_pos, n, 0.5, alternative="two-sided").pvalue)
 
 
 def paired_comparison(

@@ -45,9 +45,9 @@ def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, f
     p = row.prediction
     if row.status == RowStatus.ANSWERED and p.x is not None and p.y is not None:
         image = p.image_path
-        if image is None and uses_frames and instance is not None and p.selected_image is not None:
-            if 0 <= p.selected_image < len(instance.frames):
-                image = instance.frames[p.selected_image].image_path
+        if image is None and uses_frames and instance is not None:
+            frame = instance.selected_frame(p.selected_image)
+            image = frame.image_path if frame is not None else None
         points = [(float(a), float(b)) for a, b in row.parse.points] if row.parse is not None and row.parse.points else None
         return float(p.x), float(p.y), None, image if uses_frames else None, points
     if row.status == RowStatus.INFRA_ERROR:

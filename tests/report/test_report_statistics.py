@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import binomtest
 
 from povagent.report.collect import Observation
 from povagent.report.statistics import bootstrap_mean_ci, cell_stats, paired_comparison, sign_test_p
@@ -83,9 +82,22 @@ def test_identical_systems_tie_everywhere_and_have_no_test():
     assert c.ties == 5 and c.diff.value == 0 and c.wilcoxon_p is None and c.sign_p is None
 
 
-@pytest.mark.parametrize("pos,neg", [(0, 1), (3, 9), (10, 10), (40, 17)])
-def test_sign_test_is_the_exact_two_sided_binomial_test(pos, neg):
-    assert sign_test_p(pos, neg) == pytest.approx(binomtest(pos, pos + neg, 0.5).pvalue, rel=1e-9)
+@pytest.mark.parametrize(
+    ("pos", "neg", "p"),
+    [
+        (0, 1, 1.0),  # one instance can show nothing
+        (5, 0, 2 / 32),  # all five one way: 2 * (1/2)^5
+        (0, 5, 2 / 32),  # two-sided: the same the other way
+        (3, 3, 1.0),
+        (1, 5, 2 * 7 / 64),  # P(<= 1 of 6) = (1 + 6) / 64, doubled
+    ],
+)
+def test_sign_test_is_the_exact_two_sided_binomial_test(pos, neg, p):
+    assert sign_test_p(pos, neg) == pytest.approx(p, rel=1e-12)
+
+
+def test_sign_test_has_no_p_value_without_a_difference():
+    assert sign_test_p(0, 0) is None
 
 
 def test_ci_of_a_multi_run_mean_with_non_responses_covers_the_true_mean_in_about_95_percent_of_seeds():
