@@ -123,16 +123,15 @@ class LifecycleHooks:
         self._call("povagent_run_end", {"run_dir": run_dir, "summary": summary})
 
 
-#: Where plugin problems are reported outside a run (a run's own log also records them): a
-#: structlog logger on stderr, so ``--json`` output on stdout stays clean.
-_LOG = structlog.wrap_logger(
-    structlog.PrintLogger(sys.stderr),
-    processors=[structlog.processors.add_log_level, structlog.dev.ConsoleRenderer(colors=False)],
-)
-
-
 def _log_hook_error(hook: str, plugin: str, exc: BaseException) -> None:
-    _LOG.warning("plugin_hook_error", plugin=plugin, hook=hook, error=f"{type(exc).__name__}: {exc}")
+    """Report a plugin that raised in a lifecycle hook through structlog, on stderr (looked up
+    now, not at import), so ``--json`` output on stdout stays clean. A run's own log records
+    the failure too."""
+    log = structlog.wrap_logger(
+        structlog.PrintLogger(sys.stderr),
+        processors=[structlog.processors.add_log_level, structlog.dev.ConsoleRenderer(colors=False)],
+    )
+    log.warning("plugin_hook_error", plugin=plugin, hook=hook, error=f"{type(exc).__name__}: {exc}")
 
 
 class PluginHost:

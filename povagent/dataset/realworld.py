@@ -47,7 +47,7 @@ import tempfile
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -57,6 +57,7 @@ from povagent.dataset.problems import Problem
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
+from povagent.scoring.breakdown import slices
 from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
 
 #: Built-in scorers that project a 3D target, which a real-world set does not have.
@@ -429,7 +430,7 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
     ``rows`` are dicts with ``condition``, ``direction`` and ``success`` (a bool; missing or
     ``None`` counts as a failure), and optionally ``answered`` (the success scorer's, or the
     report's reading of a row). Returns ``overall``, ``per_condition`` and ``per_direction``,
-    each ``{n_total, n_success, success_rate}``, plus ``{n_answered, response_rate}`` when the
+    each ``{n_total, n_success, success_rate}`` (and ``per_condition_direction``), plus ``{n_answered, response_rate}`` when the
     rows say whether they were answered.
     """
     rows = list(rows)
@@ -443,16 +444,10 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
             out |= {"n_answered": answered, "response_rate": answered / len(sub) if sub else None}
         return out
 
-    out: dict[str, Any] = {"overall": cell(rows), "per_condition": {}, "per_direction": {}}
-    for c in CONDITIONS:
-        sub = [r for r in rows if str(r.get("condition")) == c.value]
-        if sub:
-            out["per_condition"][c.value] = cell(sub)
-    for d in DIRECTIONS:
-        sub = [r for r in rows if str(r.get("direction")) == d.value]
-        if sub:
-            out["per_direction"][d.value] = cell(sub)
-    return out
+    def label(key: str) -> Callable[[Mapping[str, Any]], str | None]:
+        return lambda r: None if r.get(key) is None else str(r.get(key))
+
+    return slices(rows, cell, condition=label("condition"), direction=label("direction"))
 
 
 __all__ = [

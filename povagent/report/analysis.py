@@ -32,7 +32,7 @@ from povagent.report.baseline import (
 )
 from povagent.report.collect import Collection, Observation
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
-from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown
+from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 
 #: Above this many systems, paired comparisons are against the first system only.
 MAX_ALL_PAIRS = 6
@@ -226,23 +226,18 @@ def merge_identical_baselines(
 
 
 def _stats_for(obs: list[Observation], fill, n_boot: int, seed: int, conditions, directions) -> tuple:
-    by_c: dict[str, list[Observation]] = defaultdict(list)
-    by_d: dict[str, list[Observation]] = defaultdict(list)
-    by_cd: dict[str, list[Observation]] = defaultdict(list)
-    for o in obs:
-        by_c[o.condition].append(o)
-        by_d[o.direction].append(o)
-        by_cd[f"{o.condition}/{o.direction}"].append(o)
-    overall = cell_stats(obs, fill, n_boot, seed)
-    per_c = {c: cell_stats(by_c[c], fill, n_boot, seed) for c in conditions if by_c.get(c)}
-    per_d = {d: cell_stats(by_d[d], fill, n_boot, seed) for d in directions if by_d.get(d)}
-    per_cd = {
-        f"{c}/{d}": cell_stats(by_cd[f"{c}/{d}"], fill, n_boot, seed)
-        for c in conditions
-        for d in directions
-        if by_cd.get(f"{c}/{d}")
-    }
-    return overall, per_c, per_d, per_cd
+    """``(overall, per condition, per direction, per condition x direction)`` cells of one
+    system, through the one breakdown (:func:`povagent.scoring.breakdown.slices`), kept to the
+    report's conditions and directions."""
+    b = slices(obs, lambda sub: cell_stats(sub, fill, n_boot, seed))
+    per_cd = {f"{c}/{d}": b["per_condition_direction"][f"{c}/{d}"]
+              for c in conditions for d in directions if f"{c}/{d}" in b["per_condition_direction"]}  # fmt: skip
+    return (
+        b["overall"],
+        {c: b["per_condition"][c] for c in conditions if c in b["per_condition"]},
+        {d: b["per_direction"][d] for d in directions if d in b["per_direction"]},
+        per_cd,
+    )
 
 
 def analyze(

@@ -22,9 +22,13 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Any, Iterable
+from operator import attrgetter
+from typing import Any, Callable, Iterable, TypeVar
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
+
+T = TypeVar("T")
+C = TypeVar("C")
 
 #: The value of a breakdown's ``aggregation`` key: how its top-level cells combine runs.
 PER_RUN_MEAN = "mean of per-run means"
@@ -88,31 +92,47 @@ def _ordered(labels: Iterable[str], canonical: Iterable[str]) -> list[str]:
     return known + sorted(present - set(known), key=str)
 
 
-def pooled_breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
-    """Every row in one summary per slice, whatever its run (one run's breakdown, or the
-    ``pooled`` variant of several)."""
+def slices(
+    rows: Iterable[T],
+    cell: Callable[[list[T]], C],
+    condition: Callable[[T], str | None] = attrgetter("condition"),
+    direction: Callable[[T], str | None] = attrgetter("direction"),
+) -> dict[str, Any]:
+    """The one breakdown: ``cell`` of all rows (``overall``), of each condition, each direction
+    and each condition x direction. Every summary povagent shows (official means, success rates,
+    a report's bootstrapped cells) is this grouping with its own ``cell``.
+
+    A row without a condition (or direction) counts overall only, as officially. Labels come in
+    the paper's order, then any other label, sorted; only labels with rows appear.
+    """
     rows = list(rows)
-    by_c: dict[str, list[ScoredRow]] = defaultdict(list)
-    by_d: dict[str, list[ScoredRow]] = defaultdict(list)
-    by_cd: dict[tuple[str, str], list[ScoredRow]] = defaultdict(list)
+    by_c: dict[str, list[T]] = defaultdict(list)
+    by_d: dict[str, list[T]] = defaultdict(list)
+    by_cd: dict[tuple[str, str], list[T]] = defaultdict(list)
     for r in rows:
-        # a row without a condition (or direction) counts overall only, as officially
-        if r.condition is not None:
-            by_c[r.condition].append(r)
-        if r.direction is not None:
-            by_d[r.direction].append(r)
-        if r.condition is not None and r.direction is not None:
-            by_cd[(r.condition, r.direction)].append(r)
+        c, d = condition(r), direction(r)
+        if c is not None:
+            by_c[c].append(r)
+        if d is not None:
+            by_d[d].append(r)
+        if c is not None and d is not None:
+            by_cd[(c, d)].append(r)
     c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
     d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
     return {
-        "overall": summarize(rows),
-        "per_condition": {c: summarize(by_c[c]) for c in c_order},
-        "per_direction": {d: summarize(by_d[d]) for d in d_order},
+        "overall": cell(rows),
+        "per_condition": {c: cell(by_c[c]) for c in c_order},
+        "per_direction": {d: cell(by_d[d]) for d in d_order},
         "per_condition_direction": {
-            f"{c}/{d}": summarize(by_cd[(c, d)]) for c in c_order for d in d_order if (c, d) in by_cd
+            f"{c}/{d}": cell(by_cd[(c, d)]) for c in c_order for d in d_order if (c, d) in by_cd
         },
     }
+
+
+def pooled_breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
+    """Every row in one summary per slice, whatever its run (one run's breakdown, or the
+    ``pooled`` variant of several)."""
+    return slices(rows, summarize)
 
 
 def _mean(values: list[float]) -> float | None:
