@@ -343,10 +343,11 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
 def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False) -> Collection:
     """Load one or more run/sweep folders into a :class:`Collection`.
 
-    Rows the paper's protocol does not cover (an intervention on Given:
+    Rows the paper's protocol does not cover (a model under an intervention on Given:
     :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
-    counts them in ``outside_protocol_rows``.
+    counts them in ``outside_protocol_rows``. Baselines never read the prompt: theirs stay.
     """
+    from povagent.report.baseline import is_baseline_system
     from povagent.report.protocol import outside_paper_protocol
 
     if isinstance(paths, (str, Path)):
@@ -359,8 +360,9 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     obs: list[Observation] = []
     left_out = 0
     for r in runs:
+        screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         for row in r.rows:
-            if not outside_protocol and outside_paper_protocol(row.strategy, str(row.condition)):
+            if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
             obs.append(observation_of(row, r.system, r.name, r.scorer))

@@ -4,12 +4,9 @@
 from __future__ import annotations
 
 import pytest
-import yaml
 
-from povagent.config.pipeline import load_pipeline
 from povagent.report.collect import collect
 from povagent.report.protocol import outside_paper_protocol, paper_conditions
-from povagent.run.runner import run_pipeline
 
 
 @pytest.mark.parametrize("strategy", ["o-plot", "oa-plot", "cot", "spatial-cot"])
@@ -23,28 +20,22 @@ def test_the_basic_strategy_and_unknown_strategies_cover_every_condition():
     assert not outside_paper_protocol("someone-elses-strategy", "c")
 
 
-def run(tmp_path, mini_root, strategy):
-    path = tmp_path / f"{strategy}.yaml"
-    path.write_text(yaml.safe_dump({
-        "dataset": str(mini_root),
-        "backend": "center",
-        "strategy": strategy,
-        "instances": {"conditions": ["a", "c"], "houses": ["train_house_00000"]},
-        "output": str(tmp_path / strategy),
-    }))
-    run_pipeline(load_pipeline(path))
-    return tmp_path / strategy
-
-
-def test_given_rows_of_an_intervention_are_left_out_of_the_report_by_default(tmp_path, mini_root):
-    folder = run(tmp_path, mini_root, "cot")
+def test_given_rows_of_an_intervention_are_left_out_of_the_report_by_default(mini_dataset, make_sweep):
+    folder = make_sweep([{"model": "mock-a", "strategy": "cot"}], name="cot")
     default = collect(folder)
-    assert {o.condition for o in default.observations} == {"a"}
-    assert default.outside_protocol_rows == 4  # house 0: one pair, four directions on C
+    n_given = len(mini_dataset.instances(conditions=["c"]))
+    assert {o.condition for o in default.observations} == {"a", "b"}
+    assert default.outside_protocol_rows == n_given
     kept = collect(folder, outside_protocol=True)
-    assert {o.condition for o in kept.observations} == {"a", "c"} and kept.outside_protocol_rows == 0
+    assert {o.condition for o in kept.observations} == {"a", "b", "c"} and kept.outside_protocol_rows == 0
 
 
-def test_given_rows_of_the_basic_strategy_stay(tmp_path, mini_root):
-    collection = collect(run(tmp_path, mini_root, "basic"))
-    assert {o.condition for o in collection.observations} == {"a", "c"} and collection.outside_protocol_rows == 0
+def test_given_rows_of_the_basic_strategy_stay(make_sweep):
+    collection = collect(make_sweep([{"model": "mock-a", "strategy": "basic"}], name="basic"))
+    assert {o.condition for o in collection.observations} == {"a", "b", "c"} and collection.outside_protocol_rows == 0
+
+
+def test_a_baseline_under_an_intervention_keeps_its_given_rows(make_sweep):
+    """A baseline never reads the prompt: its rows are the same under any strategy."""
+    collection = collect(make_sweep([{"model": "center", "strategy": "cot"}], name="center"))
+    assert "c" in {o.condition for o in collection.observations}
