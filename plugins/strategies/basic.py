@@ -126,7 +126,8 @@ class BasicStrategy(Strategy):
             name = self.prompts.frames
             if name is None:
                 raise ValueError(
-                    f"prompts {self.prompts.name!r} has no {instance.condition.label} prompt ({self.prompts.source})"
+                    f"prompts {self.prompts.name!r} are for Given (c) only, not {instance.condition.label} "
+                    f"({instance.condition.value}): {self.prompts.source}; restrict instances.conditions"
                 )
             return fill_sentence(name, instance.sentence, width, height, len(self.shown_frames(instance)))
         assert self.prompts.given is not None  # every family has a Given prompt

@@ -260,7 +260,7 @@ def test_the_robopoint_prompt_is_the_runners_and_sent_without_a_label(mini_datas
 
 
 def test_the_robopoint_prompts_have_no_inferred_or_stated_text(mini_dataset):
-    with pytest.raises(ValueError, match="robopoint.*no Inferred prompt"):
+    with pytest.raises(ValueError, match=r"robopoint.*Given \(c\) only, not Inferred"):
         BasicStrategy(prompts="robopoint").prompt_text(mini_dataset.instance("train_house_00000/0/left/a"))
 
 
