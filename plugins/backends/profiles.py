@@ -2,11 +2,23 @@
 
 Each profile gives the litellm model string, the parser that reads the family's answers, the
 key's environment variable and the quirks seen in the paper. Self-hosted models (vLLM) need
-``api_base`` in the pipeline. MolmoPoint-8B is not here: it answers with special tokens only
-its own processor decodes, which no text parser can read.
+``api_base`` in the pipeline.
+
+``strategy_options`` carry what the authors' runner (``mimo-owl/povbench-eval``,
+``evaluation/run_vlm_eval.py`` and the ablation scripts) sent each family, under the pipeline's
+own strategy options (which win):
+
+* generation: GPT ``max_completion_tokens`` 256 in every script (litellm sends ``max_tokens``
+  as that for GPT-5); vLLM-served models ``max_tokens`` 256 and temperature 0; Gemini and Gemma
+  no limit and no temperature (a 256 cap cuts off thinking models); models the runner ran
+  locally with Transformers keep the strategy's own budget (256; CoT and S-CoT 1,024), with
+  greedy decoding (temperature 0) where the runner asked for it (``do_sample=False``);
+* prompts: MolmoPoint-8B and RoboPoint get the runner's own prompts for them (``prompts``).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 from povagent import hookimpl
 from povagent.dataset.models import Condition
@@ -19,6 +31,13 @@ _VLLM_NOTE = (
     "over several replicas."
 )
 
+#: The runner's generation settings per family (see the module docstring).
+GPT_GENERATION: dict[str, Any] = {"max_tokens": 256}
+VLLM_GENERATION: dict[str, Any] = {"max_tokens": 256, "temperature": 0.0}
+GEMINI_GENERATION: dict[str, Any] = {"max_tokens": None}
+#: Transformers with ``do_sample=False``: greedy; the budget is the strategy's (256 / 1,024).
+GREEDY_LOCAL_GENERATION: dict[str, Any] = {"temperature": 0.0}
+
 PAPER_PROFILES: tuple[ModelProfile, ...] = (
     ModelProfile(
         name="gpt-5.4",
@@ -29,9 +48,11 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         # reasoning models reject sampling parameters such as temperature: drop them rather
         # than fail every request of a sweep that sets one
         backend_options={"extra": {"drop_params": True}},
+        strategy_options=GPT_GENERATION,
         notes=(
             "Reasoning model: temperature is not supported (dropped); reasoning tokens count "
-            "against max_tokens, so CoT strategies need a larger budget. Best on Given (0.189)."
+            "against the 256-token cap the runner set in every script (CoT included): raise "
+            "max_tokens in the strategy options to give CoT room. Best on Given (0.189)."
         ),
     ),
     ModelProfile(
@@ -41,9 +62,10 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         # the paper's prompt asks for the JSON answer and the model follows it (~96% answered)
         default_parser="json",
         api_key_env="GEMINI_API_KEY",
+        strategy_options=GEMINI_GENERATION,
         notes=(
-            "Thinking model: thinking tokens share the output budget, so a 256-token limit can "
-            "cut the answer off; raise max_tokens or pass extra: {reasoning_effort: disable}. "
+            "Thinking model: thinking tokens share the output budget, so no limit is sent (as "
+            "the runner); a max_tokens of 256 would cut the answer off. "
             "Unprompted, Gemini writes [{\"point\": [y, x]}] on 0-1000: keep the JSON prompt."
         ),
     ),
@@ -55,6 +77,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         # into the pixel answer, which the rescale parser maps back to pixels
         default_parser="rescale-1000",
         api_key_env="GEMINI_API_KEY",
+        strategy_options=GEMINI_GENERATION,
         notes="Produces out-of-range (0-1000) coordinates across conditions; preview model name may change.",
     ),
     ModelProfile(
@@ -63,6 +86,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         litellm_model="gemini/gemma-4-26b-a4b-it",
         default_parser="json",
         api_key_env="GEMINI_API_KEY",
+        strategy_options=GEMINI_GENERATION,
         notes="Served through the Gemini API. Answered only ~40% parseably in A/B (99% in C).",
     ),
     ModelProfile(
@@ -71,7 +95,20 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
         default_parser="json",
         needs_api_base=True,
+        strategy_options=VLLM_GENERATION,
         notes=_VLLM_NOTE + " Follows the pixel JSON format when asked (100% answered).",
+    ),
+    ModelProfile(
+        name="qwen3-vl-8b-transformers",
+        paper_name="Qwen3-VL-8B (Transformer)",
+        litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
+        default_parser="json",
+        needs_api_base=True,
+        notes=(
+            _VLLM_NOTE + " The generation settings of the authors' Transformers run (the ablation "
+            "table's Qwen3-VL-8B): the strategy's budget (256; CoT and S-CoT 1,024) and the "
+            "checkpoint's own sampling; the same weights behind an OpenAI-compatible server."
+        ),
     ),
     ModelProfile(
         name="qwen3-vl-32b",
@@ -80,6 +117,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         # answers on 0-1000 when asked for 0-511 (21% of Inferred x out of frame)
         default_parser="rescale-1000",
         needs_api_base=True,
+        strategy_options=VLLM_GENERATION,
         notes=_VLLM_NOTE + " Often answers on Qwen's native 0-1000 scale instead of pixels.",
     ),
     ModelProfile(
@@ -88,6 +126,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         litellm_model="hosted_vllm/OpenGVLab/InternVL3-38B",
         default_parser="json",
         needs_api_base=True,
+        strategy_options=GREEDY_LOCAL_GENERATION,
         notes=_VLLM_NOTE + " The paper ran it 8-bit quantized. Unprompted it writes <box>[[x1,y1,x2,y2]]</box> on 0-1000.",
     ),
     ModelProfile(
@@ -99,7 +138,22 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         notes=(
             _VLLM_NOTE + " Writes <point x=\"..\" y=\"..\"> in percent (Molmo v1) or "
             "<points coords=...> on 0-1000 (Molmo2). The paper's MolmoPoint-8B emits special "
-            "tokens instead of text and cannot be run through a text parser."
+            "tokens instead of text: see the molmopoint-8b profile."
+        ),
+    ),
+    ModelProfile(
+        name="molmopoint-8b",
+        paper_name="MolmoPoint-8B",
+        litellm_model="hosted_vllm/allenai/MolmoPoint-8B",
+        default_parser="molmo",
+        needs_api_base=True,
+        strategy_options={"prompts": "molmopoint"},
+        notes=(
+            "The runner's MolmoPoint prompts (task text unchanged, \"Point to the center of the "
+            "target object.\"), basic strategy only. The authors decoded its point tokens with the "
+            "model's own processor (extract_image_points); behind an OpenAI-compatible server "
+            "only answers written as <points ...> text can be read (molmo parser): see "
+            "docs/backends.md."
         ),
     ),
     ModelProfile(
@@ -109,6 +163,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         default_parser="robopoint",
         needs_api_base=True,
         conditions=(Condition.GIVEN,),
+        strategy_options={"prompts": "robopoint", **GREEDY_LOCAL_GENERATION},
         notes=(
             "Given (C) only: no valid answers with several images. Answers a list of points "
             "[(x, y), ...] as image fractions; the centroid is scored. Needs an "
@@ -122,6 +177,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         default_parser="json",
         needs_api_base=True,
         conditions=(Condition.GIVEN,),
+        strategy_options=GREEDY_LOCAL_GENERATION,
         notes=_VLLM_NOTE + " Given (C) only: one image per prompt.",
     ),
 )

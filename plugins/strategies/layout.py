@@ -1,8 +1,9 @@
 """The paper's message layout, shared by the built-in strategies.
 
 A/B: one user message holding, for each frame i, the text ``Image i:`` followed by the image,
-then the prompt text ("The N images above ... Each image is preceded by its label"). C: the
-observer view, then the prompt text. Also the :class:`AnswerSpec` each condition asks for.
+then the prompt text ("The N images above ... Each image is preceded by its label"). C: the text
+``Image:``, the observer view, then the prompt text (the authors' runner labels its one image
+too). Also the :class:`AnswerSpec` each condition asks for.
 Pure message assembly: no drawing, no model calls. Third-party strategies may reuse it.
 
 Built once, shared after (all are immutable; a message is the same value either way): the image
@@ -18,7 +19,7 @@ from functools import lru_cache
 from typing import Sequence
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
-from povagent.dataset.instances import Instance
+from povagent.dataset.instances import Frame, Instance
 from povagent.exchange.messages import ImagePart, Message, Part, TextPart
 from povagent.exchange.images import ImageStore
 
@@ -28,9 +29,10 @@ def frame_label(index: int) -> str:
     return f"Image {index}:"
 
 
-def shown_images(instance: Instance, images: ImageStore) -> list[str]:
-    """Hashes of the instance's frames, added to the run's image store (each file read once)."""
-    return [images.add_file(frame.file).image_hash for frame in instance.frames]
+def shown_images(instance: Instance, images: ImageStore, frames: Sequence[Frame] | None = None) -> list[str]:
+    """Hashes of ``frames`` (default: all the instance's), added to the run's image store (each
+    file read once)."""
+    return [images.add_file(frame.file).image_hash for frame in (instance.frames if frames is None else frames)]
 
 
 @lru_cache(maxsize=64)
@@ -39,27 +41,32 @@ def _frame_labels(n: int) -> tuple[tuple[TextPart, str], ...]:
     return tuple((TextPart(frame_label(i)), f"Image {i}") for i in range(n))
 
 
-#: Image parts by (labelled?, image hashes): the A/B instances of a house share their frames.
+#: The text part the authors' runner sends before the observer view (C).
+GIVEN_LABEL = "Image:"
+
+#: Image parts by (labelled?, C label, image hashes): the A/B instances of a house share their frames.
 _IMAGE_PARTS_MAX = 256
-_image_parts: dict[tuple[bool, tuple[str, ...]], tuple[Part, ...]] = {}
+_image_parts: dict[tuple[bool, str | None, tuple[str, ...]], tuple[Part, ...]] = {}
 _image_parts_lock = threading.Lock()
 
 
-def image_parts(image_hashes: Sequence[str], labelled: bool) -> tuple[Part, ...]:
+def image_parts(image_hashes: Sequence[str], labelled: bool, given_label: str | None = GIVEN_LABEL) -> tuple[Part, ...]:
     """The parts showing ``image_hashes``: each preceded by its ``Image i:`` label when
-    ``labelled`` (A/B), else as ``observer view`` images (C). Built once per frame set."""
-    key = (labelled, tuple(image_hashes))
+    ``labelled`` (A/B), else as ``observer view`` images (C), preceded by the text part
+    ``given_label`` unless it is ``None``. Built once per frame set."""
+    key = (labelled, None if labelled else given_label, tuple(image_hashes))
     parts = _image_parts.get(key)
     if parts is not None:
         return parts
     if labelled:
         built: list[Part] = []
-        for (label_part, label), image_hash in zip(_frame_labels(len(key[1])), key[1]):
+        for (label_part, label), image_hash in zip(_frame_labels(len(key[2])), key[2]):
             built.append(label_part)
             built.append(ImagePart(image_hash, label=label))
         parts = tuple(built)
     else:
-        parts = tuple(ImagePart(h, label="observer view") for h in key[1])
+        views = tuple(ImagePart(h, label="observer view") for h in key[2])
+        parts = views if given_label is None else (TextPart(given_label), *views)
     with _image_parts_lock:
         if len(_image_parts) >= _IMAGE_PARTS_MAX:
             _image_parts.clear()  # a frame set per house: a run goes through them in order
@@ -67,9 +74,11 @@ def image_parts(image_hashes: Sequence[str], labelled: bool) -> tuple[Part, ...]
     return parts
 
 
-def prompt_message(instance: Instance, image_hashes: Sequence[str], prompt_text: str) -> Message:
-    """The user message: labelled frames (A/B) or the observer view (C), then the prompt text."""
-    parts = image_parts(image_hashes, instance.condition.uses_exploration_frames)
+def prompt_message(
+    instance: Instance, image_hashes: Sequence[str], prompt_text: str, given_label: str | None = GIVEN_LABEL
+) -> Message:
+    """The user message: labelled frames (A/B) or the labelled observer view (C), then the prompt text."""
+    parts = image_parts(image_hashes, instance.condition.uses_exploration_frames, given_label)
     return Message("user", (*parts, TextPart(prompt_text)))
 
 
@@ -82,12 +91,13 @@ def _answer_spec(asks_frame: bool, n_frames: int, width: int, height: int) -> An
     return AnswerSpec(schema=schema, width=width, height=height, n_frames=n_frames, asks_frame=asks_frame)
 
 
-def answer_spec(instance: Instance) -> AnswerSpec:
+def answer_spec(instance: Instance, n_frames: int | None = None) -> AnswerSpec:
     """What the paper's prompts ask for: ``{selected_image, x, y}`` (A/B) or ``{x, y}`` (C).
 
-    One shared (frozen) spec per condition kind, frame count and frame size.
+    ``n_frames`` is the number of frames shown (default: all of the instance's). One shared
+    (frozen) spec per condition kind, frame count and frame size.
     """
     width, height = instance.frame_size
     if instance.condition.uses_exploration_frames:
-        return _answer_spec(True, len(instance.frames), width, height)
+        return _answer_spec(True, len(instance.frames) if n_frames is None else n_frames, width, height)
     return _answer_spec(False, 1, width, height)

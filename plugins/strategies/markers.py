@@ -1,220 +1,244 @@
-"""The ``o-plot`` and ``oa-plot`` strategies: the basic prompt over frames with visual markers.
+"""The ``o-plot`` and ``oa-plot`` strategies: the basic prompt over frames with visual markers,
+drawn as the authors' ablation scripts drew them (``run_vlm_eval_ab1.py``, ``ab2.py``).
 
-O-Plot draws a circle at the observer object's position; O&A-Plot also draws a box around the
-anchor. Positions come from the dataset's 3D metadata projected into each frame's own camera:
+Rules, per exploration frame (positions projected into that frame's own camera):
 
-* observer: ``observer_object.position``, drawn only when it is in front of the camera and
-  inside the frame;
-* anchor: the 8 corner points of its axis-aligned bounding box; the box drawn is the 2D bounding
-  rectangle of the projected corners that are in front of the camera, clipped to the frame, and
-  drawn only when some of it lies inside. (With corners behind the camera the rectangle covers
-  only the visible corners: an approximation, the same one a renderer's 2D box makes.)
+* observer (both strategies): a filled red disc with a 2 px white outline, radius
+  ``max(8, int(min(w, h) * 0.022))`` (11 px at 512), centred on the observer object's
+  ``raw_metadata.position`` (its box centre when the release gives no position), the projected
+  pixel truncated with ``int()``. Drawn only when the observer is in the frame's
+  ``object_in_frame_hits`` (the renderer saw it) and in front of the camera; a centre projected
+  just outside the frame still draws the part of the disc that falls inside.
+* anchor (O&A-Plot only), drawn after the disc (over it): when the anchor is in the frame's hits,
+  the 3 px blue rectangle spanning its box corners that lie in front of the camera (each
+  truncated), clipped to ``[0, w-1] x [0, h-1]``, drawn only when it keeps a positive width and
+  height. An anchor without corner points gets a 3 px blue circle of radius
+  ``max(15, int(min(w, h) * 0.04))`` (20 px at 512) at its position, only when that lies inside
+  the frame.
 
-There is no occlusion test: the release carries no depth maps, so a marker is drawn where its
-point projects even when a wall stands between it and the camera (the observer object may be
-in the next room).
-
-Marker style (options, with defaults): ``observer_color`` ``"red"``, ``anchor_color`` ``"blue"``
-(any Pillow colour name, ``#rrggbb`` or an ``[r, g, b]`` list), ``radius`` 10 px (circle),
-``line_width`` 3 px (circle outline and box), ``observer_filled`` false (true: a solid dot).
-Sizes are in pixels of the frame as the camera describes it.
+The prompt tells the model what the marks mean (the runner's note, inserted after the sentence
+on image labels; not with ``prompts: appendix``, whose text the paper prints without it). The
+authors showed the first 30 frames. They ran neither strategy on Given: the observer view carries
+no ``object_in_frame_hits``, so a C instance is sent unmarked with the basic Given prompt,
+outside the paper's protocol.
 
 Marked frames are derived images of the run's image store, keyed by the source hash plus a
-recipe key holding the style and the projected positions, so each is drawn and encoded once.
-A frame where nothing is visible is shown unchanged (same hash, nothing re-encoded). This module
-must not change the prompt text: that is the basic prompt, as in the paper.
+recipe key holding the marker positions, so each is drawn and encoded once. A frame with nothing
+to draw is shown unchanged (same hash, nothing re-encoded).
 """
 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import asdict, dataclass
-from typing import Any, Sequence
+from typing import Sequence
 
-import numpy as np
-from PIL import Image, ImageColor, ImageDraw
+from PIL import Image, ImageDraw
 
 from povagent import hookimpl
 from povagent.dataset.instances import Frame, Instance
-from povagent.geometry.camera import Camera
+from povagent.dataset.models import Condition, SceneObject
 from povagent.exchange.images import ImageStore
-from povagent_plugins.strategies.basic import BasicStrategy
+from povagent.exchange.prompts import load_template
+from povagent.geometry.camera import Camera
+from povagent_plugins.strategies.basic import ABLATION_MAX_FRAMES, BasicStrategy
 
 RGB = tuple[int, int, int]
+RED: RGB = (255, 0, 0)
+WHITE: RGB = (255, 255, 255)
+BLUE: RGB = (0, 0, 255)
+#: Outline widths in pixels: the disc's white rim, the anchor's rectangle (or circle).
+DISC_OUTLINE_WIDTH = 2
+ANCHOR_LINE_WIDTH = 3
+#: Bump when the drawing changes, so derived images cached under the old look are not reused.
+DRAWING_VERSION = "runner-ab1-ab2"
+
+#: The sentence after which the runner inserts its note on the marks.
+NOTE_AFTER = "Each image is preceded by its label"
 
 
-def parse_color(value: Any, option: str) -> RGB:
-    """An RGB triple from a colour name, ``#rrggbb`` or a 3-list; ``ValueError`` names the option."""
-    if isinstance(value, str):
-        try:
-            rgb = ImageColor.getrgb(value)
-        except ValueError:
-            raise ValueError(f"strategy option {option}: unknown colour {value!r}") from None
-        return (int(rgb[0]), int(rgb[1]), int(rgb[2]))
-    if isinstance(value, (list, tuple)) and len(value) == 3 and all(isinstance(c, int) and 0 <= c <= 255 for c in value):
-        return (int(value[0]), int(value[1]), int(value[2]))
-    raise ValueError(f"strategy option {option}: expected a colour name, '#rrggbb' or [r, g, b], got {value!r}")
+def disc_radius(width: int, height: int) -> int:
+    """The observer disc's radius: ``max(8, int(min(w, h) * 0.022))``."""
+    return max(8, int(min(width, height) * 0.022))
 
 
-@dataclass(frozen=True)
-class MarkerStyle:
-    """How markers look (see the module docstring for the options)."""
+def anchor_circle_radius(width: int, height: int) -> int:
+    """The fallback anchor circle's radius: ``max(15, int(min(w, h) * 0.04))``."""
+    return max(15, int(min(width, height) * 0.04))
 
-    observer_color: RGB = (255, 0, 0)
-    anchor_color: RGB = (0, 0, 255)
-    radius: float = 10.0
-    line_width: int = 3
-    observer_filled: bool = False
+
+def object_point(obj: SceneObject) -> tuple[float, float, float] | None:
+    """Where a marker points at an object: ``raw_metadata.position``, else its box centre."""
+    raw = obj.raw_metadata
+    if raw.position is not None:
+        return raw.position.as_tuple()
+    box = getattr(raw, "axisAlignedBoundingBox", None)
+    return box.center.as_tuple() if box is not None and box.center is not None else None
+
+
+def projected_pixel(camera: Camera, point: Sequence[float]) -> tuple[float, float] | None:
+    """``point`` in pixels of ``camera`` (unclamped), or ``None`` when it is not in front of it."""
+    nu, nv, _ = camera.project_point(point)
+    if math.isnan(nu) or math.isnan(nv):
+        return None
+    # width and height are powers of two on the release, so u/W*W gives u back exactly
+    return (nu * camera.width, nv * camera.height)
+
+
+def truncated_pixel(camera: Camera, point: Sequence[float]) -> tuple[int, int] | None:
+    """The projected pixel truncated toward zero with ``int()`` (as the runner's markers)."""
+    p = projected_pixel(camera, point)
+    return None if p is None else (int(p[0]), int(p[1]))
+
+
+def anchor_box(camera: Camera, corners: Sequence[Sequence[float]]) -> tuple[int, int, int, int] | None:
+    """The rectangle over the box corners in front of the camera, clipped to the frame, or
+    ``None`` when no corner is in front or nothing of positive size is left."""
+    pixels = [p for p in (truncated_pixel(camera, c) for c in corners) if p is not None]
+    if not pixels:
+        return None
+    us, vs = [p[0] for p in pixels], [p[1] for p in pixels]
+    x0, y0 = max(0, min(us)), max(0, min(vs))
+    x1, y1 = min(camera.width - 1, max(us)), min(camera.height - 1, max(vs))
+    return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else None
 
 
 @dataclass(frozen=True)
 class FrameMarkers:
-    """Where markers go in one frame, in pixels: the observer point and the anchor rectangle
-    ``(x0, y0, x1, y1)``; ``None`` where nothing is visible."""
+    """What is drawn on one frame, in pixels: the observer disc's centre, the anchor rectangle
+    ``(x0, y0, x1, y1)`` or, for an anchor without corners, the anchor circle's centre."""
 
-    observer: tuple[float, float] | None = None
-    anchor_box: tuple[float, float, float, float] | None = None
+    observer: tuple[int, int] | None = None
+    anchor_box: tuple[int, int, int, int] | None = None
+    anchor_circle: tuple[int, int] | None = None
 
     @property
     def empty(self) -> bool:
         """True when nothing is drawn in this frame."""
-        return self.observer is None and self.anchor_box is None
+        return self.observer is None and self.anchor_box is None and self.anchor_circle is None
 
 
-def observer_point(camera: Camera, position: Sequence[float]) -> tuple[float, float] | None:
-    """The observer position in pixels, or ``None`` when behind the camera or outside the frame."""
-    p = camera.project(np.asarray(position, dtype=float))
-    if not bool(p.in_frame):
-        return None
-    u, v = (float(c) for c in p.normalized)
-    return (u * camera.width, v * camera.height)
-
-
-def anchor_rectangle(camera: Camera, corners: Sequence[Sequence[float]]) -> tuple[float, float, float, float] | None:
-    """The clipped 2D bounding rectangle of the box corners in front of the camera, or ``None``."""
-    p = camera.project(np.asarray(corners, dtype=float))
-    front = p.normalized[p.in_front] * np.array([camera.width, camera.height], dtype=float)
-    if len(front) == 0:
-        return None
-    x0, y0 = front.min(axis=0)
-    x1, y1 = front.max(axis=0)
-    max_x, max_y = camera.width - 1, camera.height - 1
-    if x1 < 0 or y1 < 0 or x0 > max_x or y0 > max_y:
-        return None
-    return (
-        float(min(max(x0, 0.0), max_x)),
-        float(min(max(y0, 0.0), max_y)),
-        float(min(max(x1, 0.0), max_x)),
-        float(min(max(y1, 0.0), max_y)),
-    )
+def _anchor_markers(camera: Camera, anchor: SceneObject) -> tuple[tuple[int, int, int, int] | None, tuple[int, int] | None]:
+    box = getattr(anchor.raw_metadata, "axisAlignedBoundingBox", None)
+    corners = getattr(box, "cornerPoints", None) if box is not None else None
+    if corners:
+        return anchor_box(camera, corners), None
+    point = object_point(anchor)
+    pixel = projected_pixel(camera, point) if point is not None else None
+    if pixel is None or not (0 <= pixel[0] <= camera.width - 1 and 0 <= pixel[1] <= camera.height - 1):
+        return None, None
+    return None, (int(pixel[0]), int(pixel[1]))
 
 
 def frame_markers(instance: Instance, frame: Frame, with_anchor: bool) -> FrameMarkers:
-    """The markers of one frame: the observer point, plus the anchor box when ``with_anchor``."""
-    observer = observer_point(frame.camera, instance.observer_object.position.as_tuple())
-    box = None
-    if with_anchor:
-        box = anchor_rectangle(frame.camera, instance.anchor_object.raw_metadata.axisAlignedBoundingBox.cornerPoints)
-    return FrameMarkers(observer, box)
+    """The markers of one frame: the observer disc, plus the anchor's when ``with_anchor``."""
+    hits = frame.in_frame_hits
+    observer = None
+    if instance.observer_object.objectId in hits:
+        point = object_point(instance.observer_object)
+        observer = truncated_pixel(frame.camera, point) if point is not None else None
+    box = circle = None
+    if with_anchor and instance.anchor_object.objectId in hits:
+        box, circle = _anchor_markers(frame.camera, instance.anchor_object)
+    return FrameMarkers(observer, box, circle)
 
 
-def draw_markers(image: Image.Image, markers: FrameMarkers, style: MarkerStyle, frame_size: tuple[int, int]) -> Image.Image:
-    """A copy of ``image`` with ``markers`` drawn (positions given for ``frame_size``, scaled to the image)."""
+def draw_markers(image: Image.Image, markers: FrameMarkers, frame_size: tuple[int, int]) -> Image.Image:
+    """A copy of ``image`` with ``markers`` drawn: the observer disc first, the anchor over it."""
     out = image.convert("RGB").copy()
-    sx, sy = out.width / frame_size[0], out.height / frame_size[1]
     draw = ImageDraw.Draw(out)
-    width = max(1, round(style.line_width * sx))
-    if markers.anchor_box is not None:
-        x0, y0, x1, y1 = markers.anchor_box
-        draw.rectangle([x0 * sx, y0 * sy, x1 * sx, y1 * sy], outline=style.anchor_color, width=width)
     if markers.observer is not None:
-        u, v = markers.observer[0] * sx, markers.observer[1] * sy
-        r = style.radius * sx
-        fill = style.observer_color if style.observer_filled else None
-        draw.ellipse([u - r, v - r, u + r, v + r], outline=style.observer_color, fill=fill, width=width)
+        u, v = markers.observer
+        r = disc_radius(*frame_size)
+        draw.ellipse([u - r, v - r, u + r, v + r], fill=RED, outline=WHITE, width=DISC_OUTLINE_WIDTH)
+    if markers.anchor_box is not None:
+        draw.rectangle(list(markers.anchor_box), outline=BLUE, width=ANCHOR_LINE_WIDTH)
+    elif markers.anchor_circle is not None:
+        u, v = markers.anchor_circle
+        r = anchor_circle_radius(*frame_size)
+        draw.ellipse([u - r, v - r, u + r, v + r], outline=BLUE, width=ANCHOR_LINE_WIDTH)
     return out
 
 
-def recipe_key(kind: str, style: MarkerStyle, markers: FrameMarkers, frame_size: tuple[int, int]) -> str:
-    """Everything that determines a marked frame besides its source: kind, style, positions."""
-
-    def rounded(values: Sequence[float] | None) -> list[float] | None:
-        return None if values is None else [round(float(v), 3) for v in values]
-
+def recipe_key(kind: str, markers: FrameMarkers, frame_size: tuple[int, int]) -> str:
+    """Everything that determines a marked frame besides its source: kind, drawing, positions."""
     return json.dumps(
-        {
-            "kind": kind,
-            "style": asdict(style),
-            "frame_size": list(frame_size),
-            "observer": rounded(markers.observer),
-            "anchor_box": rounded(markers.anchor_box),
-        },
+        {"kind": kind, "drawing": DRAWING_VERSION, "frame_size": list(frame_size), **asdict(markers)},
         sort_keys=True,
         separators=(",", ":"),
     )
 
 
-class ObserverPlotStrategy(BasicStrategy):
-    """O-Plot: the basic prompt; a circle at the observer object's position on every frame."""
+def with_marker_note(prompt: str, note: str) -> str:
+    """``prompt`` with ``note`` on its own line after the line on image labels (the runner's place)."""
+    at = prompt.find(NOTE_AFTER)
+    if at < 0:
+        raise ValueError(f"the prompt has no line {NOTE_AFTER!r} to put the marker note after")
+    end = prompt.index("\n", at) + 1
+    return prompt[:end] + note + "\n" + prompt[end:]
 
-    #: Whether the anchor box is drawn too (O&A-Plot).
+
+class ObserverPlotStrategy(BasicStrategy):
+    """O-Plot: the basic prompt and its note; a red disc on the observer object, first 30 frames."""
+
+    #: Whether the anchor is marked too (O&A-Plot).
     with_anchor = False
     kind = "o-plot"
+    #: The template holding the note on the marks.
+    note_template = "o_plot_note"
+    default_max_frames = ABLATION_MAX_FRAMES
+    paper_conditions = (Condition.INFERRED, Condition.STATED)
 
-    def __init__(
-        self,
-        max_tokens: int | None = None,
-        temperature: float | None = None,
-        observer_color: Any = "red",
-        anchor_color: Any = "blue",
-        radius: float = 10.0,
-        line_width: int = 3,
-        observer_filled: bool = False,
-    ) -> None:
-        super().__init__(max_tokens=max_tokens, temperature=temperature)
-        if not isinstance(radius, (int, float)) or isinstance(radius, bool) or radius <= 0:
-            raise ValueError(f"strategy option radius must be a positive number of pixels, got {radius!r}")
-        if not isinstance(line_width, int) or isinstance(line_width, bool) or line_width < 1:
-            raise ValueError(f"strategy option line_width must be a positive integer, got {line_width!r}")
-        self.style = MarkerStyle(
-            observer_color=parse_color(observer_color, "observer_color"),
-            anchor_color=parse_color(anchor_color, "anchor_color"),
-            radius=float(radius),
-            line_width=line_width,
-            observer_filled=bool(observer_filled),
-        )
+    def _check_prompts(self) -> None:
+        if not self.prompts.has_interventions:
+            raise ValueError(
+                f"strategy option prompts: {self.prompts.name!r} has no {self.kind} prompt "
+                "(the authors ran the marker ablations with their standard prompt only); use runner or appendix"
+            )
+
+    def prompt_text(self, instance: Instance) -> str:
+        """The basic prompt with the runner's note on the marks (A/B, ``prompts: runner``)."""
+        text = super().prompt_text(instance)
+        if instance.condition.uses_exploration_frames and self.prompts.marker_notes:
+            text = with_marker_note(text, load_template(self.note_template))
+        return text
 
     def images_for(self, instance: Instance, images: ImageStore) -> list[str]:
-        """The frames with markers drawn (derived once per source and recipe)."""
+        """The frames shown, with markers drawn (derived once per source and recipe)."""
         hashes = []
-        for frame in instance.frames:
+        for frame in self.shown_frames(instance):
             source = images.add_file(frame.file).image_hash
             markers = frame_markers(instance, frame, self.with_anchor)
             if markers.empty:
                 hashes.append(source)
                 continue
             size = (frame.camera.width, frame.camera.height)
-            key = recipe_key(self.kind, self.style, markers, size)
             derived = images.derive(
-                source, key, lambda im, m=markers, s=size: draw_markers(im, m, self.style, s)
+                source, recipe_key(self.kind, markers, size), lambda im, m=markers, s=size: draw_markers(im, m, s)
             )
             hashes.append(derived.image_hash)
         return hashes
 
 
 class ObserverAnchorPlotStrategy(ObserverPlotStrategy):
-    """O&A-Plot: O-Plot plus a box around the anchor object."""
+    """O&A-Plot: O-Plot plus a blue box around the anchor object, and the note on both marks."""
 
     with_anchor = True
     kind = "oa-plot"
+    note_template = "oa_plot_note"
 
 
 @hookimpl
 def register_strategies(register) -> None:
     """Contribute the O-Plot and O&A-Plot strategies."""
-    register("o-plot", ObserverPlotStrategy, description="Basic prompt; red circle at the observer object on each frame")
+    register(
+        "o-plot",
+        ObserverPlotStrategy,
+        description="Basic prompt with the runner's note; red disc on the observer object (first 30 frames; A/B only in the paper)",
+    )
     register(
         "oa-plot",
         ObserverAnchorPlotStrategy,
-        description="Basic prompt; red circle at the observer object and blue box around the anchor on each frame",
+        description="O-Plot plus a blue box around the anchor and the note on both marks (first 30 frames; A/B only in the paper)",
     )

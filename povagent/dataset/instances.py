@@ -1,8 +1,9 @@
 """Evaluation instances: one per (pair, valid direction, condition).
 
 An instance knows everything a strategy, a backend and a scorer need and nothing about files
-beyond the frame paths: the sentence, the frames it shows (A/B: every exploration frame in log
-order; C: the observer view), the ground-truth 3D point, and the observer and anchor objects
+beyond the frame paths: the sentence, the frames it shows (A/B: the exploration frames in the
+official order, every PNG of ``exploration_images/`` sorted by file name, depth maps left out;
+C: the observer view), the ground-truth 3D point, and the observer and anchor objects
 (for visual markers).
 """
 
@@ -20,13 +21,15 @@ class Frame:
     """An image an instance shows, with the camera it was taken from.
 
     ``image_path`` is the key predictions use to name a frame (relative to the house folder);
-    ``file`` is where it is on disk.
+    ``file`` is where it is on disk; ``in_frame_hits`` the objectIds the renderer saw in it
+    (the exploration log's ``object_in_frame_hits``; empty for an observer view).
     """
 
     index: int
     image_path: str
     file: Path
     camera: Camera
+    in_frame_hits: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)

@@ -46,20 +46,30 @@ class House:
     exploration: list[ExplorationRecord]
     visible_objects: dict[str, list[str]]
     frame_size: tuple[int, int] = (512, 512)
+    #: The exploration frames' paths in the official order (``None``: the log's, by that rule).
+    frame_paths: tuple[str, ...] | None = None
 
     @cached_property
     def frames(self) -> tuple[Frame, ...]:
-        """Exploration frames in log order, shared by every A/B instance of the house."""
+        """Exploration frames in the official order (:func:`official_frame_paths`), shared by
+        every A/B instance of the house; each takes its camera and hits from its log record
+        (the last record of a path, when the log repeats one)."""
         w, h = self.frame_size
-        return tuple(
-            Frame(
-                index=i,
-                image_path=rec.image_path,
-                file=self.folder / rec.image_path,
-                camera=Camera.from_pose(rec.camera.cam_pos, rec.camera.cam_yaw, rec.camera.cam_horizon, rec.camera.fov, w, h),
+        records = log_records(self.exploration)
+        paths = self.frame_paths if self.frame_paths is not None else official_frame_paths(None, self.exploration)
+        frames = []
+        for i, path in enumerate(p for p in paths if p in records):
+            rec = records[path]
+            frames.append(
+                Frame(
+                    index=i,
+                    image_path=path,
+                    file=self.folder / path,
+                    camera=Camera.from_pose(rec.camera.cam_pos, rec.camera.cam_yaw, rec.camera.cam_horizon, rec.camera.fov, w, h),
+                    in_frame_hits=frozenset(rec.object_in_frame_hits),
+                )
             )
-            for i, rec in enumerate(self.exploration)
-        )
+        return tuple(frames)
 
     @cached_property
     def frames_by_path(self) -> dict[str, Frame]:
@@ -70,6 +80,32 @@ class House:
     def observer_frame(self, pair: PairEntry) -> Frame:
         """The observer view of a pair (condition C)."""
         return Frame(0, pair.rgb_path, resolve_image(self.folder, pair.rgb_path), observer_camera(pair))
+
+
+#: The folder of a house's exploration frames; a file whose name contains ``depth`` is a depth map.
+EXPLORATION_IMAGES = "exploration_images"
+DEPTH_MARK = "depth"
+
+
+def log_records(exploration: list[ExplorationRecord]) -> dict[str, ExplorationRecord]:
+    """Log records by image path (a leading ``./`` dropped); a repeated path: the last record wins."""
+    return {rec.image_path.removeprefix("./"): rec for rec in exploration}
+
+
+def official_frame_paths(house_folder: Path | None, exploration: list[ExplorationRecord]) -> tuple[str, ...]:
+    """The frames the official runner shows, in its order: every ``*.png`` in
+    ``exploration_images/`` whose name does not contain ``depth``, sorted by file name, as
+    ``exploration_images/<name>``. Frame ``k`` of a prediction is the k-th of this list.
+
+    When the folder holds no such file (or ``house_folder`` is ``None``), the log's image paths
+    under the same rule (a dataset shipped without its frames can still be scored)."""
+    folder = house_folder / EXPLORATION_IMAGES if house_folder is not None else None
+    if folder is not None and folder.is_dir():
+        names = sorted(p.name for p in folder.glob("*.png") if DEPTH_MARK not in p.name)
+        if names:
+            return tuple(f"{EXPLORATION_IMAGES}/{name}" for name in names)
+    paths = {rec.image_path.removeprefix("./") for rec in exploration}
+    return tuple(sorted(p for p in paths if p.endswith(".png") and DEPTH_MARK not in Path(p).name))
 
 
 def observer_camera(pair: PairEntry) -> Camera:
@@ -283,9 +319,17 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
                 visible = _VISIBLE.validate_python(raw_vis)
             except ValidationError as exc:
                 problems.extend(problems_from_validation_error(_rel(vis_path, root), exc))
+    frame_paths = official_frame_paths(folder, exploration)
+    unlogged = [p for p in frame_paths if p not in log_records(exploration)]
+    if unlogged:
+        # the official runner shows these frames too: without their cameras the house's frame
+        # indices and scores cannot be reproduced
+        shown = ", ".join(unlogged[:5]) + (" ..." if len(unlogged) > 5 else "")
+        problems.append(Problem(log_file, "$", f"no record for {len(unlogged)} frame(s) of {EXPLORATION_IMAGES}/: {shown}"))
+        return None
     if not pairs and len(problems) > before:
         return None
-    return House(house_id, folder, pairs, exploration, visible, frame_size)
+    return House(house_id, folder, pairs, exploration, visible, frame_size, frame_paths)
 
 
 def load_dataset(root: str | Path, *, strict: bool = False, frame_size: tuple[int, int] = (512, 512)) -> Dataset:

@@ -51,15 +51,18 @@ class Message:
 
 @dataclass(frozen=True)
 class GenerationParams:
-    """Sampling settings a strategy asks for (backends may add their own options)."""
+    """Sampling settings a strategy asks for (backends may add their own options).
 
-    max_tokens: int = 256
+    ``max_tokens`` ``None`` sends no limit (the authors' runner set none for Gemini and Gemma).
+    """
+
+    max_tokens: int | None = 256
     temperature: float | None = None
     extra: tuple[tuple[str, Any], ...] = ()
 
     def as_dict(self) -> dict[str, Any]:
         """Plain dict, ``None`` values dropped."""
-        d: dict[str, Any] = {"max_tokens": self.max_tokens}
+        d: dict[str, Any] = {} if self.max_tokens is None else {"max_tokens": self.max_tokens}
         if self.temperature is not None:
             d["temperature"] = self.temperature
         d.update(dict(self.extra))

@@ -115,6 +115,8 @@ class Collection:
     source: Path
     runs: list[RunInfo]
     observations: list[Observation] = field(default_factory=list)
+    #: Rows left out as outside the paper's protocol (see :func:`collect`).
+    outside_protocol_rows: int = 0
 
     @property
     def systems(self) -> list[str]:
@@ -338,8 +340,16 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
     )
 
 
-def collect(paths: str | Path | Iterable[str | Path]) -> Collection:
-    """Load one or more run/sweep folders into a :class:`Collection`."""
+def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False) -> Collection:
+    """Load one or more run/sweep folders into a :class:`Collection`.
+
+    Rows the paper's protocol does not cover (a model under an intervention on Given:
+    :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
+    counts them in ``outside_protocol_rows``. Baselines never read the prompt: theirs stay.
+    """
+    from povagent.report.baseline import is_baseline_system
+    from povagent.report.protocol import outside_paper_protocol
+
     if isinstance(paths, (str, Path)):
         paths = [paths]
     paths = [Path(p) for p in paths]
@@ -347,8 +357,16 @@ def collect(paths: str | Path | Iterable[str | Path]) -> Collection:
     for p in paths:
         runs.extend(find_runs(p))
     assign_systems(runs)
-    obs = [observation_of(row, r.system, r.name, r.scorer) for r in runs for row in r.rows]
-    return Collection(paths[0], runs, obs)
+    obs: list[Observation] = []
+    left_out = 0
+    for r in runs:
+        screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
+        for row in r.rows:
+            if screened and outside_paper_protocol(row.strategy, str(row.condition)):
+                left_out += 1
+                continue
+            obs.append(observation_of(row, r.system, r.name, r.scorer))
+    return Collection(paths[0], runs, obs, outside_protocol_rows=left_out)
 
 
 def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:

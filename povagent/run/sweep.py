@@ -182,7 +182,8 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
             text = sum(len(p.text) for m in request.messages for p in m.parts if hasattr(p, "text"))
             pixels = sum(images.info(hh).width * images.info(hh).height for hh in request.image_hashes())
             prompt_per += text / 4 + pixels * TOKENS_PER_IMAGE_PIXEL
-            completion_per = max(completion_per, request.generation.max_tokens)
+            # no limit (None): the estimate counts none, so it is a lower bound for that cell
+            completion_per = max(completion_per, request.generation.max_tokens or 0)
         prompt_per = prompt_per / len(samples) if samples else 0.0
         out.append(DryRunCell(cell.name, total, done, len(pending), math.ceil(prompt_per * len(pending)), completion_per * len(pending)))
     return out

@@ -53,3 +53,72 @@ def test_robopoint_answers_given_only():
 
 def test_every_profile_documents_its_quirks():
     assert all(p.notes for p in PAPER_PROFILES)
+
+
+# -- what the authors' runner sent each family (run_vlm_eval.py and the ablation scripts) -------------
+RUNNER_GENERATION = {
+    "gpt-5.4": {"max_tokens": 256},  # max_completion_tokens=256 in every script, CoT included
+    "qwen3-vl-8b": {"max_tokens": 256, "temperature": 0.0},  # vLLM: max_tokens=256, temperature=0.0
+    "qwen3-vl-32b": {"max_tokens": 256, "temperature": 0.0},
+    "gemini-2.5-flash": {"max_tokens": None},  # generate_content without a config: no limit
+    "gemini-robotics-er": {"max_tokens": None},
+    "gemma-4": {"max_tokens": None},
+    "qwen3-vl-8b-transformers": {},  # Transformers: max_new_tokens 256, 1024 for ab3/ab4 (the strategies')
+    "internvl3-38b": {"temperature": 0.0},  # Transformers chat, do_sample=False
+    "llama-3.2-vision": {"temperature": 0.0},  # do_sample=False
+    "robopoint": {"temperature": 0.0},  # do_sample=False
+    "molmopoint-8b": {},  # max_new_tokens 256, the checkpoint's sampling
+}
+
+
+@pytest.mark.parametrize("name", sorted(RUNNER_GENERATION))
+def test_profiles_carry_the_runners_generation_settings(name):
+    options = get_plugin_host().profile(name).strategy_options
+    assert {k: options[k] for k in ("max_tokens", "temperature") if k in options} == RUNNER_GENERATION[name]
+
+
+@pytest.mark.parametrize(
+    "name, strategy, max_tokens",
+    [("gpt-5.4", "cot", 256), ("gemini-2.5-flash", "basic", None), ("qwen3-vl-8b-transformers", "spatial-cot", 1024),
+     ("qwen3-vl-8b-transformers", "basic", 256), ("qwen3-vl-8b", "cot", 256)],
+)
+def test_a_profiles_budget_wins_over_the_strategys_default_and_the_pipelines_over_both(tmp_path, mini_root, name, strategy, max_tokens):
+    import yaml
+
+    from povagent.config.pipeline import load_pipeline
+
+    path = tmp_path / "p.yaml"
+    doc = {"dataset": {"path": str(mini_root)}, "model": name, "strategy": strategy, "output": str(tmp_path / "o")}
+    path.write_text(yaml.safe_dump(doc))
+    config = load_pipeline(path)
+    built = get_plugin_host().create("strategy", config.strategy.name, config.strategy.options)
+    assert built.generation.max_tokens == max_tokens
+    path.write_text(yaml.safe_dump({**doc, "strategy": {"name": strategy, "options": {"max_tokens": 2048}}}))
+    config = load_pipeline(path)
+    assert get_plugin_host().create("strategy", config.strategy.name, config.strategy.options).generation.max_tokens == 2048
+
+
+@pytest.mark.parametrize("profile", PAPER_PROFILES, ids=lambda p: p.name)
+def test_strategy_options_are_valid_for_the_basic_strategy(profile):
+    get_plugin_host().create("strategy", "basic", profile.strategy_options)
+
+
+def test_model_specific_prompts_come_with_their_profiles():
+    profiles = get_plugin_host().profiles()
+    assert profiles["molmopoint-8b"].strategy_options["prompts"] == "molmopoint"
+    assert profiles["robopoint"].strategy_options["prompts"] == "robopoint"
+    assert all("prompts" not in p.strategy_options for n, p in profiles.items() if n not in ("molmopoint-8b", "robopoint"))
+
+
+def test_molmopoint_points_map_to_a_frame_and_pixels_through_the_molmo_parser(mini_dataset):
+    """``<points coords="2 1 500 250">``: image 2 counted from 1 -> frame 1; x, y on 0-1000."""
+    host = get_plugin_host()
+    profile = host.profile("molmopoint-8b")
+    strategy = host.create("strategy", "basic", profile.strategy_options)
+    parser = host.create("parser", profile.default_parser)
+    inst = mini_dataset.instance("train_house_00000/0/left/a")
+    spec = strategy.answer_spec(inst)
+    parsed = parser.parse('<points coords="2 1 500 250">the mug</points>', spec)
+    assert (parsed.selected_image, parsed.x, parsed.y) == (1, pytest.approx(256.0), pytest.approx(128.0))
+    given = parser.parse('<point x="25.0" y="50.0" alt="mug">mug</point>', strategy.answer_spec(mini_dataset.instance("train_house_00000/0/left/c")))
+    assert (given.x, given.y) == (pytest.approx(128.0), pytest.approx(256.0))

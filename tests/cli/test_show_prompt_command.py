@@ -41,8 +41,41 @@ def test_prints_labels_images_with_hashes_then_the_prompt(tmp_path, mini_root):
     assert lines[2].startswith("[image: Image 0 sha256:") and "512x512" in lines[2]
     assert lines[3] == "Image 1:"
     prompt_start = lines.index("You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of a home.")
-    assert lines[prompt_start + 1].startswith("The 3 images above (labeled Image 0 through Image 2)")
+    assert lines[prompt_start + 1] == ""  # the runner's paragraphs: a blank line between them
+    assert lines[prompt_start + 2].startswith("The 3 images above (labeled Image 0 through Image 2)")
+    assert "describing where they last saw it.Your mission" in result.stdout  # the runner's text, typo kept
     assert '"max_tokens": 256' in result.stdout and "--- answer schema:" in result.stdout
+
+
+def test_given_shows_the_image_label_before_the_observer_view(tmp_path, mini_root):
+    result, _ = show(tmp_path, mini_root, "basic", instance="train_house_00000/0/right/c")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[1] == "Image:" and lines[2].startswith("[image: observer view sha256:")
+    assert lines[3] == "You are the intelligent brain system of a home-assistance robot."
+
+
+def test_the_marker_note_is_shown_with_the_marked_frames(tmp_path, mini_root):
+    result, _ = show(tmp_path, mini_root, "o-plot")
+    assert result.exit_code == 0, result.output
+    assert ('etc.).\nIn some images, a red circle marks the observer\'s furniture (the object they were working '
+            'with at the moment they saw the target object). \n\nSentence: "') in result.stdout
+
+
+def test_a_model_profile_brings_its_prompts_and_generation_settings(tmp_path, mini_root):
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(yaml.safe_dump({
+        "dataset": {"path": str(mini_root)},
+        "model": "molmopoint-8b",
+        "strategy": "basic",
+        "output": str(tmp_path / "run"),
+    }))
+    result = runner.invoke(app, ["show-prompt", str(path), "--instance", INSTANCE, "--out", str(tmp_path / "shown")])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.rstrip().splitlines()[-3] == "Point to the center of the target object."
+    path.write_text(path.read_text().replace("molmopoint-8b", "gemini-2.5-flash"))
+    result = runner.invoke(app, ["show-prompt", str(path), "--instance", INSTANCE, "--out", str(tmp_path / "shown")])
+    assert "--- generation: {}" in result.stdout  # no token limit: the runner set none for Gemini
 
 
 def test_the_printed_text_is_the_strategy_prompt_verbatim(tmp_path, mini_root, mini_dataset):

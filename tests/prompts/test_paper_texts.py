@@ -1,4 +1,7 @@
-"""The prompts sent are the paper's appendix prompts, word for word.
+"""The ``appendix`` prompt variant (``prompts: appendix``) is the paper's appendix, word for word.
+
+The default prompts are the authors' runner's (``test_runner_texts.py``); the appendix is a typeset
+summary of them, kept as a named variant to compare with.
 
 The expected texts below were transcribed by hand from the appendix "Evaluation Prompts"
 (N = 30 frames, 512x512, the sentence below), independently of the template files, following
@@ -98,36 +101,36 @@ INFERRED, GIVEN = _Stub(Condition.INFERRED), _Stub(Condition.GIVEN)
 
 
 def test_basic_frames_prompt_is_the_papers():
-    assert BasicStrategy().prompt_text(INFERRED) == BASIC_FRAMES
+    assert BasicStrategy(prompts="appendix").prompt_text(INFERRED) == BASIC_FRAMES
 
 
 def test_stated_uses_the_same_prompt_as_inferred():
-    assert BasicStrategy().prompt_text(_Stub(Condition.STATED)) == BASIC_FRAMES
+    assert BasicStrategy(prompts="appendix").prompt_text(_Stub(Condition.STATED)) == BASIC_FRAMES
 
 
 def test_basic_given_prompt_is_the_papers():
-    assert BasicStrategy().prompt_text(GIVEN) == BASIC_GIVEN
+    assert BasicStrategy(prompts="appendix").prompt_text(GIVEN) == BASIC_GIVEN
 
 
 def test_cot_prompt_is_the_papers():
-    assert CotStrategy().prompt_text(INFERRED) == COT_FRAMES
+    assert CotStrategy(prompts="appendix").prompt_text(INFERRED) == COT_FRAMES
 
 
 def test_spatial_cot_prompt_is_cot_with_step4_replaced():
     assert COT_STEP4 in COT_FRAMES and SPATIAL_COT_FRAMES != COT_FRAMES
-    assert SpatialCotStrategy().prompt_text(INFERRED) == SPATIAL_COT_FRAMES
+    assert SpatialCotStrategy(prompts="appendix").prompt_text(INFERRED) == SPATIAL_COT_FRAMES
 
 
 @pytest.mark.parametrize("strategy", [ObserverPlotStrategy, ObserverAnchorPlotStrategy])
 def test_marker_strategies_use_the_basic_prompt_text(strategy):
-    assert strategy().prompt_text(INFERRED) == BASIC_FRAMES
-    assert strategy().prompt_text(GIVEN) == BASIC_GIVEN
+    assert strategy(prompts="appendix").prompt_text(INFERRED) == BASIC_FRAMES
+    assert strategy(prompts="appendix").prompt_text(GIVEN) == BASIC_GIVEN
 
 
 def test_placeholders_follow_the_frame_count_and_size():
     stub = _Stub(Condition.INFERRED, n_frames=12)
     stub.frame_size = (640, 480)
-    text = BasicStrategy().prompt_text(stub)
+    text = BasicStrategy(prompts="appendix").prompt_text(stub)
     assert "The 12 images above (labeled Image 0 through Image 11)" in text
     assert "(x \u2208 [0,639]); y-axis points down (y \u2208 [0,479]); image size 640\u00d7480 pixels." in text
     assert text.endswith('{"selected_image": <integer 0-11>, "x": <integer 0-639>, "y": <integer 0-479>}')
@@ -136,7 +139,7 @@ def test_placeholders_follow_the_frame_count_and_size():
 def test_a_dollar_sign_in_the_sentence_is_kept_verbatim():
     stub = _Stub(Condition.GIVEN)
     stub.sentence = "I left $5 and $width next to the lamp."
-    assert 'Sentence: "I left $5 and $width next to the lamp."' in BasicStrategy().prompt_text(stub)
+    assert 'Sentence: "I left $5 and $width next to the lamp."' in BasicStrategy(prompts="appendix").prompt_text(stub)
 
 
 # -- against the paper's LaTeX ----------------------------------------------------------------------

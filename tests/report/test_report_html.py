@@ -145,12 +145,13 @@ def test_raw_answers_live_in_hashed_files_outside_the_page(report):
 
 def test_filters_from_the_url_show_exactly_the_matching_predictions(report, tmp_path):
     entries = gallery_data(report)["entries"]
-    dom = dump(report.page, tmp_path, "cond=c&sys=1")
-    expected = [e for e in entries if e["c"] == "c" and e["s"] == 1]
+    # system 0 (mock-a · basic): CoT's Given rows are outside the paper's protocol, left out
+    dom = dump(report.page, tmp_path, "cond=c&sys=0")
+    expected = [e for e in entries if e["c"] == "c" and e["s"] == 0]
     assert 0 < len(expected) < len(entries)
     assert body_attr(dom, "data-gallery-shown") == len(expected)
     shown = cards(dom)
-    assert len(shown) == len(expected) and all(c["c"] == "c" and c["s"] == "1" for c in shown)
+    assert len(shown) == len(expected) and all(c["c"] == "c" and c["s"] == "0" for c in shown)
 
 
 def test_parse_status_filter_keeps_only_unanswered_predictions(report, tmp_path):

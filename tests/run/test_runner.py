@@ -456,13 +456,16 @@ def test_image_files_are_read_off_the_event_loop(write_pipeline, monkeypatch):
     assert readers and not any(readers)
 
 
-def test_a_missing_frame_is_an_infra_error_row_naming_the_file(write_pipeline, small_release, tmp_path):
+def test_an_unreadable_frame_is_an_infra_error_row_naming_the_file(write_pipeline, small_release, tmp_path):
     import shutil
 
     release = tmp_path / "release"
     shutil.copytree(small_release, release)
     frame = sorted(release.glob("artifacts/*/exploration_images/*.png"))[0]
+    # a folder in the frame's place: listed as a frame, unreadable as one (a deleted frame is
+    # simply not shown: the official frame list is the folder's PNGs)
     frame.unlink()
+    frame.mkdir()
     rows = rows_of(run(write_pipeline(dataset={"path": str(release)}, instances={"conditions": ["a"]})))
     broken = [r for r in rows if r.house_id == frame.parts[-3]]
     assert broken and all(r.status == "infra_error" and frame.name in r.error_message for r in broken)

@@ -24,12 +24,32 @@ def test_each_frame_is_preceded_by_its_image_label(make_instance, facing_z):
     assert len(parts) == 7
 
 
-def test_given_shows_the_observer_view_then_the_prompt(make_instance, facing_z):
+def test_given_shows_the_label_image_then_the_observer_view_then_the_prompt(make_instance, facing_z):
     inst = make_instance([facing_z()], condition=Condition.GIVEN)
     parts = BasicStrategy().build(inst, ImageStore()).messages[0].parts
-    assert isinstance(parts[0], ImagePart)
-    assert isinstance(parts[1], TextPart) and "The image provided shows the target scene" in parts[1].text
-    assert len(parts) == 2
+    assert isinstance(parts[0], TextPart) and parts[0].text == "Image:"  # the runner's label
+    assert isinstance(parts[1], ImagePart)
+    assert isinstance(parts[2], TextPart) and "The image provided shows the target scene" in parts[2].text
+    assert len(parts) == 3
+
+
+def test_basic_shows_every_frame_and_asks_for_one_of_them(make_instance, facing_z):
+    inst = make_instance([facing_z()] * 33)
+    request = BasicStrategy().build(inst, ImageStore())
+    assert len(request.image_hashes()) == 33 and request.answer.n_frames == 33
+
+
+def test_max_frames_keeps_the_first_frames_and_the_answer_spec_follows(make_instance, facing_z):
+    inst = make_instance([facing_z(yaw) for yaw in range(0, 350, 10)])  # 35 frames
+    store = ImageStore()
+    request = BasicStrategy(max_frames=30).build(inst, store)
+    assert request.image_hashes() == [store.add_file(f.file).image_hash for f in inst.frames[:30]]
+    assert request.answer.n_frames == 30 and request.answer.json_schema["properties"]["selected_image"]["maximum"] == 29
+
+
+def test_no_token_limit_sends_no_max_tokens(make_instance, facing_z):
+    request = BasicStrategy(max_tokens=None).build(make_instance([facing_z()]), ImageStore())
+    assert request.generation.max_tokens is None and "max_tokens" not in request.generation.as_dict()
 
 
 def test_images_are_referenced_by_the_hash_of_their_file(make_instance, facing_z):
@@ -69,7 +89,9 @@ def test_generation_options_are_configurable(make_instance, facing_z):
     assert request.generation.as_dict() == {"max_tokens": 64, "temperature": 0.0}
 
 
-@pytest.mark.parametrize("options", [{"max_tokens": 0}, {"max_tokens": "many"}, {"temperature": -1}])
+@pytest.mark.parametrize(
+    "options", [{"max_tokens": 0}, {"max_tokens": "many"}, {"temperature": -1}, {"max_frames": 0}, {"prompts": "papers"}]
+)
 def test_bad_generation_options_are_rejected_with_the_option_named(options):
     with pytest.raises(ValueError, match=next(iter(options))):
         BasicStrategy(**options)
@@ -108,6 +130,7 @@ def _message_part_by_part(instance, hashes, text):
             parts.append(TextPart(f"Image {i}:"))
             parts.append(ImagePart(h, label=f"Image {i}"))
     else:
+        parts.append(TextPart("Image:"))
         parts.extend(ImagePart(h, label="observer view") for h in hashes)
     parts.append(TextPart(text))
     return Message("user", tuple(parts))

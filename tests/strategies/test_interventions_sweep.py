@@ -40,3 +40,23 @@ def test_every_intervention_runs_in_a_sweep_over_the_fixture(tmp_path, mini_root
 
     # the marker strategies show marked frames; CoT and S-CoT show the frames as they are
     assert shown("oa-plot") != shown("basic") and shown("cot") == shown("basic")
+
+
+def test_the_paper_ablation_sweep_sends_what_the_ablation_scripts_sent():
+    """examples/sweeps/paper_ablation.yaml: every cell shows the first 30 frames (ab0 .. ab4),
+    Basic / O-Plot / O&A-Plot 256 new tokens, CoT / S-CoT 1,024 (the Transformers run)."""
+    from pathlib import Path
+
+    from povagent.plugins import get_plugin_host
+    from povagent.run.sweep import expand_sweep
+
+    sweep = Path(__file__).resolve().parents[2] / "examples" / "sweeps" / "paper_ablation.yaml"
+    _, cells = expand_sweep(sweep)
+    host = get_plugin_host()
+    budgets = {}
+    for cell in cells:
+        strategy = host.create("strategy", cell.config.strategy.name, cell.config.strategy.options)
+        assert strategy.max_frames == 30, cell.name
+        assert strategy.prompts.name == "runner"
+        budgets[cell.config.strategy.name] = strategy.generation.max_tokens
+    assert budgets == {"basic": 256, "o-plot": 256, "oa-plot": 256, "cot": 1024, "spatial-cot": 1024}
