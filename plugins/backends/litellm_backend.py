@@ -349,7 +349,9 @@ class LiteLLMBackend(Backend):
         timeout starts; a missing API key is found here, before the run fans out."""
         if _LITELLM is None:
             await _import_litellm_off_loop()
-        await asyncio.to_thread(warm_up_litellm, self.model)
+        # a Router's group name is no litellm model string: warm up with a deployment's
+        first = self.options.router[0]["litellm_params"]["model"] if self.options.router else self.model
+        await asyncio.to_thread(warm_up_litellm, first)
         if self.options.router is None:
             self._api_key()
 
