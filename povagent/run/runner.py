@@ -303,9 +303,10 @@ class PipelineRun:
             parse = self._parse(comps.parser, response.text, request, key)
             if parse.answered:
                 status = RowStatus.ANSWERED
-                prediction = _prediction(instance, parse)
+                shown = as_shown(instance, request)
+                prediction = _prediction(shown, parse)
                 for name, scorer in comps.scorers.items():
-                    scores[name] = self._score(name, scorer, instance, parse, key)
+                    scores[name] = self._score(name, scorer, shown, parse, key)
             else:
                 status = RowStatus.PARSE_ERROR
         except InfraFailure as exc:
@@ -584,6 +585,16 @@ def _read_files(images: ImageStore, paths: list[Path]) -> None:
             images.add_file(path)
         except Exception:  # the strategy meets the same error and the row records it
             pass
+
+
+def as_shown(instance: Instance, request: Request) -> Instance:
+    """The instance as the model saw it: a strategy that shows the first N frames (the ablation
+    scripts show 30) is scored against those N, so an answer naming a frame it never showed is
+    no frame at all (the official runner maps the index back through the frames it sent)."""
+    n = request.answer.n_frames
+    if request.answer.asks_frame and 0 < n < len(instance.frames):
+        return dataclasses.replace(instance, frames=instance.frames[:n])
+    return instance
 
 
 def _prediction(instance: Instance, parse: ParsedAnswer) -> Prediction:

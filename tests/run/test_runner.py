@@ -565,3 +565,19 @@ def test_a_cache_that_cannot_be_written_costs_calls_not_the_run(write_pipeline, 
     assert sum(e["answers_not_cached"] for e in failed) == N_KEYS
     again = run(write_pipeline(cache=cache, output=str(tmp_path / "again")))
     assert again.stats.cache_hits == 0 and offline_plugin.CALLS["count"] == 2 * N_KEYS
+
+
+@pytest.mark.parametrize(("frame", "scored"), [(1, True), (2, False)])
+def test_a_frame_the_strategy_did_not_show_is_no_frame(write_pipeline, frame, scored):
+    # basic shows only the first 2 of the house's 3 frames: an answer naming the third names a
+    # frame the model never saw, which the official runner cannot map back to an image
+    reply = json.dumps({"selected_image": frame, "x": 100, "y": 100})
+    path = write_pipeline(
+        strategy={"name": "basic", "options": {"max_frames": 2}},
+        backend={"name": "test-center", "options": {"reply": reply}},
+        instances={"conditions": ["a"], "limit": 1},
+    )
+    (row,) = rows_of(run(path))
+    assert row.status == "answered" and row.parse.selected_image == frame
+    assert (row.prediction.image_path is not None) is scored
+    assert row.scores["official"]["answered"] is scored
