@@ -12,7 +12,7 @@ from povagent import hookspecs
 from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
-PARSERS = {"json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "internvl"}
+PARSERS = {"official", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl"}
 STRATEGIES = {"basic", "cot", "spatial-cot", "o-plot", "oa-plot"}
 
 
