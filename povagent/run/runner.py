@@ -44,6 +44,7 @@ from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, 
 from povagent.run.logs import Redactor, RunLog
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.run.progress import QuietProgress, RunProgress
+from povagent.results.official_reading import official_counterpart, official_parse_breakdown, officially_read, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus, iter_rows, utc_now
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 
@@ -321,16 +322,24 @@ class Components:
     strategy: Strategy
     parser: Parser
     scorers: dict[str, Scorer]
+    #: The parser giving the official reading kept beside a lenient ``parser``'s, and its name
+    #: (``None`` when ``parser`` reads officially itself).
+    official_parser: Parser | None = None
+    official_parser_name: str | None = None
 
 
 def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     """Instantiate the backend, strategy, parser and scorers named in ``config``."""
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
+    parser = host.create("parser", config.parser.name, config.parser.options)
+    counterpart = official_counterpart(parser)
     return Components(
         backend=host.create("backend", config.backend.name, config.backend.options),
         strategy=host.create("strategy", config.strategy.name, config.strategy.options),
-        parser=host.create("parser", config.parser.name, config.parser.options),
+        parser=parser,
         scorers={s.name: host.create("scorer", s.name, s.options) for s in config.scorers},
+        official_parser=host.create("parser", counterpart, {}) if counterpart else None,
+        official_parser_name=counterpart,
     )
 
 
@@ -592,6 +601,7 @@ class PipelineRun:
         parse: ParsedAnswer | None = None
         scores: dict[str, dict[str, Any]] = {}
         prediction = Prediction()
+        official_reading = None
         error_type = error_message = None
         try:
             await self._read_frames(instance)
@@ -605,6 +615,11 @@ class PipelineRun:
                     scores[name] = self._score(name, scorer, instance, parse, key)
             else:
                 status = RowStatus.PARSE_ERROR
+            if comps.official_parser is not None:  # a lenient parser: keep the official reading beside
+                official_reading = read_officially(
+                    comps.official_parser, comps.official_parser_name or "", response.text, request.answer, parse, scores,
+                    lambda p: {n: self._score(n, s, instance, p, key) for n, s in comps.scorers.items()},
+                )
         except InfraFailure as exc:
             status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
         except Exception as exc:  # a strategy bug or unreadable image must not end the run
@@ -642,6 +657,7 @@ class PipelineRun:
             retries=retries,
             started_at=started,
             finished_at=utc_now(),
+            official_reading=official_reading,
         )
 
     def _parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:
@@ -870,6 +886,9 @@ class RowDigest:
     completion_tokens: int | None
     cost_usd: float | None
     retries: int
+    #: The official reading's fields, for a row parsed leniently (``None``: no separate reading).
+    official: ScoredRow | None = None
+    official_parser: str | None = None
 
 
 def digest(row: ResultRow) -> RowDigest:
@@ -888,6 +907,8 @@ def digest(row: ResultRow) -> RowDigest:
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
+        official=scored_row(officially_read(row)) if row.official_reading is not None else None,
+        official_parser=row.official_reading.parser if row.official_reading is not None else None,
     )
 
 
@@ -900,6 +921,13 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
     rows = [d for d in digests if keys is None or d.key in keys]
     scored = [d.scored for d in rows]
     out = breakdown(scored)
+    official_parser = next((d.official_parser for d in rows if d.official_parser), None)
+    if official_parser is not None:  # parsed leniently: the paper-comparable reading beside it
+        out["official_parse"] = official_parse_breakdown(
+            [d.official if d.official is not None else d.scored for d in rows],
+            official_parser,
+            sum(1 for d in rows if d.official is None and d.status != RowStatus.INFRA_ERROR.value),
+        )
     if any(d.has_success for d in rows):
         from povagent.dataset.realworld import success_breakdown
 
