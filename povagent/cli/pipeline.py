@@ -100,6 +100,15 @@ def run_command(
         return
     rows = result.summary["rows"]
     _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
+    if "official" in result.summary.get("pipeline", {}).get("scorers", ["official"]):
+        from povagent.cli.official_beside import parser_reads_officially, render_official_beside
+
+        render_official_beside(
+            result.summary,
+            config.parser.name,  # type: ignore[union-attr]
+            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]
+            run_dir=result.run_dir,
+        )
     typer.echo(
         f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
         f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
