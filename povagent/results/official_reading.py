@@ -82,21 +82,48 @@ def read_officially(
     return OfficialReading(parser=name, parse=official, scores=score(official))
 
 
+#: Built-in parsers that read answers as the official runner does.
+OFFICIAL_PARSERS = frozenset({OFFICIAL_PARSER, "robopoint-official"})
+
+
 def officially_read(row: Any) -> Any:
-    """``row`` as its official reading scores it: itself when it holds no separate reading."""
-    from povagent.results.rows import RowStatus
+    """``row`` as its official reading scores it: itself when it holds no separate reading.
+
+    The prediction is the official parse's point and frame index (the frame is found again by
+    that index when the row is scored)."""
+    from povagent.results.rows import Prediction, RowStatus
 
     reading = row.official_reading
     if reading is None:
         return row
+    parse = reading.parse
     return row.model_copy(
         update={
             "parser": reading.parser,
-            "parse": reading.parse,
+            "parse": parse,
             "scores": reading.scores,
-            "status": RowStatus.ANSWERED if reading.parse.answered else RowStatus.PARSE_ERROR,
+            "status": RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR,
+            "prediction": Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction(),
             "official_reading": None,
         }
+    )
+
+
+def official_rows(rows: Iterable[Any]) -> tuple[list[Any], str | None]:
+    """Rows as their official readings score them, and a warning naming how many answered rows
+    were parsed leniently without recording one (those are kept as parsed: repaired numbers)."""
+    out, unread = [], []
+    for row in rows:
+        if row.official_reading is None and row.parser not in OFFICIAL_PARSERS and row.parse is not None:
+            unread.append(row.key)
+        out.append(officially_read(row))
+    if not unread:
+        return out, None
+    parsers = sorted({r.parser for r in out if r.key in set(unread)})
+    return out, (
+        f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (written before "
+        f"readings were recorded) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
+        f"run povagent rescore RUN --parser official"
     )
 
 

@@ -79,9 +79,13 @@ def score_official_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Sco
 
 
 def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
-    """Re-score our own results rows from their stored predictions."""
+    """Re-score our own results rows from their stored predictions, each as the official runner
+    reads its answer (a row parsed leniently by its recorded official reading)."""
+    from povagent.results.official_reading import official_rows
+
     scored: list[ScoredPrediction] = []
-    warnings: list[str] = []
+    rows, unread = official_rows(rows)
+    warnings: list[str] = [unread] if unread else []
     for row in rows:
         inst = dataset.instance(row.instance_id)
         if inst is None:
