@@ -109,22 +109,27 @@ def officially_read(row: Any) -> Any:
     )
 
 
-def official_rows(rows: Iterable[Any]) -> tuple[list[Any], str | None]:
-    """Rows as their official readings score them, and a warning naming how many answered rows
-    were parsed leniently without recording one (those are kept as parsed: repaired numbers)."""
+def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:
+    """Rows as their official readings score them, and warnings: how many answered rows were
+    parsed leniently without recording a reading (those are kept as parsed: repaired numbers),
+    and which rows hold a NaN coordinate."""
     out, unread = [], []
     for row in rows:
         if row.official_reading is None and row.parser not in OFFICIAL_PARSERS and row.parse is not None:
             unread.append(row.key)
         out.append(officially_read(row))
-    if not unread:
-        return out, None
-    parsers = sorted({r.parser for r in out if r.key in set(unread)})
-    return out, (
-        f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (written before "
-        f"readings were recorded) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
-        f"run povagent rescore RUN --parser official"
-    )
+    warnings = []
+    if unread:
+        parsers = sorted({r.parser for r in out if r.key in set(unread)})
+        warnings.append(
+            f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (written before "
+            f"readings were recorded) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
+            f"run povagent rescore RUN --parser official"
+        )
+    nan_note = nan_warning(nan_rows(out))
+    if nan_note:
+        warnings.append(nan_note)
+    return out, warnings
 
 
 def official_parse_breakdown(scored: Sequence[Any], parser: str, without_reading: int) -> dict[str, Any]:
@@ -155,6 +160,6 @@ def nan_warning(keys: Sequence[str]) -> str | None:
     shown = ", ".join(keys[:10]) + (f" and {len(keys) - 10} more" if len(keys) > 10 else "")
     return (
         f"{len(keys)} row(s) answered with a NaN coordinate, as the official runner records them: {shown}. "
-        "The official scorer counts them answered with a NaN error, so its mean of any slice holding "
-        "them is NaN; povagent's summary shows the scorer's own reading of these rows"
+        "The official scorer counts them answered with a NaN error, which makes its mean of any slice "
+        "holding them NaN"
     )

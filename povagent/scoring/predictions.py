@@ -84,8 +84,7 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
     from povagent.results.official_reading import official_rows
 
     scored: list[ScoredPrediction] = []
-    rows, unread = official_rows(rows)
-    warnings: list[str] = [unread] if unread else []
+    rows, warnings = official_rows(rows)
     for row in rows:
         inst = dataset.instance(row.instance_id)
         if inst is None:

@@ -61,3 +61,14 @@ def test_rows_without_a_reading_are_scored_as_parsed_with_a_warning(tmp_path, mi
     summary, err = score(run / "rescored-json", mini_root)
     assert summary["overall"]["n"] == 2
     assert "carry no official reading" in err and "rescore RUN --parser official" in err
+
+
+def test_score_names_rows_with_a_nan_coordinate(tmp_path, mini_root):
+    run = lenient_run(tmp_path, mini_root)
+    lines = (run / "results.jsonl").read_text().splitlines()
+    nan_row = json.loads(lines[1])
+    nan_row["exchanges"][0]["raw"] = '{"x": NaN, "y": 100}'
+    (run / "results.jsonl").write_text("\n".join([lines[0], json.dumps(nan_row)]) + "\n")
+    assert runner.invoke(app, ["rescore", str(run), "--json"]).exit_code == 0
+    _, err = score(run / "rescored-official", mini_root)
+    assert "NaN coordinate" in err and "train_house_00000/0/left/c#0" in err
