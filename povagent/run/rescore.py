@@ -138,7 +138,7 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
         )
     summary = breakdown(scored)
     readings = [r.official_reading.parser for r in rows if r.official_reading is not None]
-    if readings:  # parsed leniently: the paper-comparable reading beside
+    if readings and scorer_name == "official":  # parsed leniently: the paper-comparable reading beside
         from povagent.run.runner import scored_row
 
         summary["official_parse"] = official_parse_breakdown(

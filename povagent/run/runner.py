@@ -922,7 +922,9 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
     scored = [d.scored for d in rows]
     out = breakdown(scored)
     official_parser = next((d.official_parser for d in rows if d.official_parser), None)
-    if official_parser is not None:  # parsed leniently: the paper-comparable reading beside it
+    # parsed leniently: the paper-comparable reading beside it (official metric only: a
+    # real-world set's success scorer has no official numbers to compare)
+    if official_parser is not None and not any(d.has_success for d in rows):
         out["official_parse"] = official_parse_breakdown(
             [d.official if d.official is not None else d.scored for d in rows],
             official_parser,
