@@ -70,3 +70,14 @@ def test_a_nan_coordinate_is_stored_as_recorded(write_pipeline):
                                  instances={"conditions": ["a"], "limit": 1}))
     (row,) = rows
     assert row.parse.x != row.parse.x and row.parse.y == 200  # NaN read back from results.jsonl
+
+
+def test_rows_without_a_reading_are_counted_not_mixed_in(write_pipeline):
+    from povagent.run.runner import digest, summarize_digests
+
+    result, rows = run(write_pipeline(backend=reply(TRAILING_COMMA), parser="json"))
+    older = [r.model_copy(update={"official_reading": None}) for r in rows[:3]]  # as written before readings
+    summary = summarize_digests([digest(r) for r in older + rows[3:]])
+    official = summary["official_parse"]
+    assert official["rows_without_reading"] == 3
+    assert official["overall"]["n_total"] == N_KEYS
