@@ -50,7 +50,7 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
     table = Table(
         title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
         caption=(
-            f"{official['rows_without_reading']} answered row(s) carry no official reading: incomplete; "
+            f"{official['rows_without_reading']} row(s) with an answer carry no official reading and are left out: incomplete; "
             "run povagent rescore RUN --parser official"
             if official.get("rows_without_reading")
             else None

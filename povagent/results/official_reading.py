@@ -134,9 +134,9 @@ def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:
 
 def official_parse_breakdown(scored: Sequence[Any], parser: str, without_reading: int) -> dict[str, Any]:
     """The ``official_parse`` section of a summary: the official reading's breakdown (one
-    :class:`~povagent.scoring.breakdown.ScoredRow` per row, aggregated as the main breakdown
-    is), the parser that gave it, and how many answered rows lack a reading (then the section
-    is incomplete and says so)."""
+    :class:`~povagent.scoring.breakdown.ScoredRow` per row that has a reading or no answer at
+    all, aggregated as the main breakdown is), the parser that gave it, and how many rows with
+    an answer lack a reading: those are left out, so the section is then incomplete and says so."""
     from povagent.scoring.breakdown import breakdown
 
     return {"parser": parser, "rows_without_reading": without_reading, **breakdown(scored)}

@@ -142,7 +142,8 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
         from povagent.run.runner import scored_row
 
         summary["official_parse"] = official_parse_breakdown(
-            [scored_row(officially_read(r), scorer_name) if r.official_reading is not None else s for r, s in zip(rows, scored)],
+            [scored_row(officially_read(r), scorer_name) if r.official_reading is not None else s
+             for r, s in zip(rows, scored) if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR],
             readings[0],
             sum(1 for r in rows if r.official_reading is None and r.status is not RowStatus.INFRA_ERROR),
         )

@@ -925,10 +925,13 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
     # parsed leniently: the paper-comparable reading beside it (official metric only: a
     # real-world set's success scorer has no official numbers to compare)
     if official_parser is not None and not any(d.has_success for d in rows):
+        # a row with an answer but no reading (written before readings were recorded) is left
+        # out and counted, never counted with its repaired parse
+        unread = [d for d in rows if d.official is None and d.status != RowStatus.INFRA_ERROR.value]
         out["official_parse"] = official_parse_breakdown(
-            [d.official if d.official is not None else d.scored for d in rows],
+            [d.official if d.official is not None else d.scored for d in rows if d.official is not None or d.status == RowStatus.INFRA_ERROR.value],
             official_parser,
-            sum(1 for d in rows if d.official is None and d.status != RowStatus.INFRA_ERROR.value),
+            len(unread),
         )
     if any(d.has_success for d in rows):
         from povagent.dataset.realworld import success_breakdown
