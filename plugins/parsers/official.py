@@ -168,7 +168,8 @@ def parse_official(text: str, spec: AnswerSpec) -> ParsedAnswer:
 class OfficialParser(Parser):
     """The official runner's reading of the asked JSON answer, nothing repaired."""
 
-    #: Numbers read by this parser compare with the paper's (see :func:`official_reading`).
+    #: Numbers read by this parser compare with the paper's (see
+    #: :func:`povagent.results.official_reading.official_counterpart`).
     reproduces_official = True
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:

@@ -100,6 +100,10 @@ def run_command(
         return
     rows = result.summary["rows"]
     _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
+    if result.summary.get("nan_coordinate_rows"):
+        from povagent.results.official_reading import nan_warning
+
+        typer.echo(f"warning: {nan_warning(result.summary['nan_coordinate_rows'])}", err=True)
     if "official" in result.summary.get("pipeline", {}).get("scorers", ["official"]):
         from povagent.cli.official_beside import parser_reads_officially, render_official_beside
 

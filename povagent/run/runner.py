@@ -44,7 +44,13 @@ from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, 
 from povagent.run.logs import Redactor, RunLog
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.run.progress import QuietProgress, RunProgress
-from povagent.results.official_reading import official_counterpart, official_parse_breakdown, officially_read, read_officially
+from povagent.results.official_reading import (
+    nan_rows,
+    official_counterpart,
+    official_parse_breakdown,
+    officially_read,
+    read_officially,
+)
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus, iter_rows, utc_now
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 
@@ -889,11 +895,14 @@ class RowDigest:
     #: The official reading's fields, for a row parsed leniently (``None``: no separate reading).
     official: ScoredRow | None = None
     official_parser: str | None = None
+    #: The row's (official) parse holds a NaN coordinate: the official mean holding it is NaN.
+    nan_coordinate: bool = False
 
 
 def digest(row: ResultRow) -> RowDigest:
     """The summary fields of one row."""
     success = row.scores.get("success")
+    official_view = officially_read(row)  # the row itself when it holds no separate reading
     return RowDigest(
         key=row.key,
         run=row.run,
@@ -907,8 +916,9 @@ def digest(row: ResultRow) -> RowDigest:
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
-        official=scored_row(officially_read(row)) if row.official_reading is not None else None,
+        official=scored_row(official_view) if row.official_reading is not None else None,
         official_parser=row.official_reading.parser if row.official_reading is not None else None,
+        nan_coordinate=bool(nan_rows([official_view])),
     )
 
 
@@ -940,6 +950,9 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
             {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
             for d in rows
         )
+    nan_keys = [d.key for d in rows if d.nan_coordinate]
+    if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
+        out["nan_coordinate_rows"] = nan_keys
     per_run: dict[int, list[ScoredRow]] = {}
     for d in rows:
         per_run.setdefault(d.run, []).append(d.scored)

@@ -57,3 +57,23 @@ def test_a_sweep_table_shows_the_official_parse_of_lenient_cells(tmp_path, mini_
     assert rows["json"].count("100.0%") == 2  # repaired and official, both shown
     assert rows["official"].split("│")[5].strip() == "="  # reads officially itself
     assert "json: mean L2" in result.stdout and "official parse: mean L2" in result.stdout
+
+
+def test_run_warns_about_rows_with_a_nan_coordinate(tmp_path, mini_root):
+    from pathlib import Path
+
+    offline = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
+    pipeline = tmp_path / "nan.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "plugins": [offline],
+        "dataset": {"path": str(mini_root)},
+        "instances": {"conditions": ["c"], "limit": 1},
+        "backend": {"name": "test-center", "options": {"reply": '{"x": NaN, "y": 100}'}},
+        "strategy": "basic",
+        "parser": "official",
+        "scorers": ["official"],
+        "output": str(tmp_path / "run-nan"),
+    }))
+    result = runner.invoke(app, ["run", str(pipeline), "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert "NaN coordinate" in result.stderr and "/c#0" in result.stderr

@@ -82,3 +82,10 @@ def test_rows_without_a_reading_are_counted_not_mixed_in(write_pipeline):
     assert official["rows_without_reading"] == 3
     assert official["overall"]["n_total"] == N_KEYS - 3  # left out, never scored with their repaired parse
     assert official["overall"]["response_rate"] == 0.0
+
+
+def test_a_nan_coordinate_row_is_named_in_the_summary(write_pipeline):
+    result, _ = run(write_pipeline(backend=reply('{"selected_image": 1, "x": NaN, "y": 200}'), parser="json",
+                                   instances={"conditions": ["a"], "limit": 2}))
+    summary = json.loads((result.run_dir / "summary.json").read_text())
+    assert len(summary["nan_coordinate_rows"]) == 2  # json refuses NaN; the official reading keeps it
