@@ -9,6 +9,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
     # parsers
+    "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
     "povagent_plugins.parsers.cot",
     "povagent_plugins.parsers.rescale",

@@ -43,7 +43,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="gpt-5.4",
         paper_name="GPT-5.4",
         litellm_model="openai/gpt-5.4",
-        default_parser="json",
+        default_parser="official",
         api_key_env="OPENAI_API_KEY",
         # reasoning models reject sampling parameters such as temperature: drop them rather
         # than fail every request of a sweep that sets one
@@ -60,7 +60,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         paper_name="Gemini-2.5-Flash",
         litellm_model="gemini/gemini-2.5-flash",
         # the paper's prompt asks for the JSON answer and the model follows it (~96% answered)
-        default_parser="json",
+        default_parser="official",
         api_key_env="GEMINI_API_KEY",
         strategy_options=GEMINI_GENERATION,
         notes=(
@@ -73,9 +73,9 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="gemini-robotics-er",
         paper_name="Gemini-Robotics-ER",
         litellm_model="gemini/gemini-robotics-er-1.6-preview",
-        # the paper reports out-of-range coordinates: Gemini's native 0-1000 convention leaks
-        # into the pixel answer, which the rescale parser maps back to pixels
-        default_parser="rescale-1000",
+        # the paper reports out-of-range coordinates (Gemini's native 0-1000 convention leaks
+        # into the pixel answer) and scores them clamped: parser rescale-1000 is the repair
+        default_parser="official",
         api_key_env="GEMINI_API_KEY",
         strategy_options=GEMINI_GENERATION,
         notes="Produces out-of-range (0-1000) coordinates across conditions; preview model name may change.",
@@ -84,7 +84,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="gemma-4",
         paper_name="Gemma-4",
         litellm_model="gemini/gemma-4-26b-a4b-it",
-        default_parser="json",
+        default_parser="official",
         api_key_env="GEMINI_API_KEY",
         strategy_options=GEMINI_GENERATION,
         notes="Served through the Gemini API. Answered only ~40% parseably in A/B (99% in C).",
@@ -93,7 +93,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="qwen3-vl-8b",
         paper_name="Qwen3-VL-8B (vLLM)",
         litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
-        default_parser="json",
+        default_parser="official",
         needs_api_base=True,
         strategy_options=VLLM_GENERATION,
         notes=_VLLM_NOTE + " Follows the pixel JSON format when asked (100% answered).",
@@ -114,8 +114,9 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="qwen3-vl-32b",
         paper_name="Qwen3-VL-32B (vLLM)",
         litellm_model="hosted_vllm/Qwen/Qwen3-VL-32B-Instruct",
-        # answers on 0-1000 when asked for 0-511 (21% of Inferred x out of frame)
-        default_parser="rescale-1000",
+        # answers on 0-1000 when asked for 0-511 (21% of Inferred x out of frame); the paper
+        # scores them clamped: parser rescale-1000 is the repair
+        default_parser="official",
         needs_api_base=True,
         strategy_options=VLLM_GENERATION,
         notes=_VLLM_NOTE + " Often answers on Qwen's native 0-1000 scale instead of pixels.",
@@ -124,7 +125,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="internvl3-38b",
         paper_name="InternVL3-38B",
         litellm_model="hosted_vllm/OpenGVLab/InternVL3-38B",
-        default_parser="json",
+        default_parser="official",
         needs_api_base=True,
         strategy_options=GREEDY_LOCAL_GENERATION,
         notes=_VLLM_NOTE + " The paper ran it 8-bit quantized. Unprompted it writes <box>[[x1,y1,x2,y2]]</box> on 0-1000.",
@@ -160,7 +161,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="robopoint",
         paper_name="RoboPoint",
         litellm_model="hosted_vllm/wentao-yuan/robopoint-v1-vicuna-v1.5-13b",
-        default_parser="robopoint",
+        default_parser="robopoint-official",
         needs_api_base=True,
         conditions=(Condition.GIVEN,),
         strategy_options={"prompts": "robopoint", **GREEDY_LOCAL_GENERATION},
@@ -174,7 +175,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="llama-3.2-vision",
         paper_name="Llama-3.2-Vision",
         litellm_model="hosted_vllm/meta-llama/Llama-3.2-11B-Vision-Instruct",
-        default_parser="json",
+        default_parser="official",
         needs_api_base=True,
         conditions=(Condition.GIVEN,),
         strategy_options=GREEDY_LOCAL_GENERATION,

@@ -1,10 +1,15 @@
 """The ``json`` parser: the answer format the paper's prompts ask for, read as the official code does.
 
-Official behaviour: take every ``{...}`` object in the text; prefer the last one that has the
-requested keys and is in range, else the last one with the keys (this catches self-corrections
-after chain-of-thought). On top of that it reads what real outputs contain (see
-:mod:`povagent.answers.text`): markdown fences, prose around the JSON, numbers as strings,
-trailing commas, single quotes, unicode minus.
+The choice is the official one: among the objects with the requested keys, the last whose
+``x`` and ``y`` lie in ``[0, W-1] x [0, H-1]``, else the last (this catches self-corrections after
+chain-of-thought); the frame is then the chosen object's, and when it is missing or no frame
+index the row has no frame (unanswered, as officially), never an earlier object's. The reading
+is lenient, which the official runner's is not (see the ``official`` parser for the exact one):
+it also reads objects nested in others, trailing commas, single quotes, comments, bare keys,
+case-insensitive keys, numbers as strings with ``px``, a unicode minus, and frames written
+``"Image 3"``; it refuses booleans and non-finite numbers as coordinates (see
+:mod:`povagent.answers.text`). Numbers parsed with it are repairs: report them beside the
+official parse's.
 
 For A/B, when no object carries ``selected_image`` but one carries ``x`` and ``y``, the official
 reading has no answer. This parser returns that point with the frame the text names
@@ -20,7 +25,7 @@ from dataclasses import dataclass
 from povagent import hookimpl
 from povagent.answers.text import JsonObject, coerce_index, coerce_number, find_objects, get_key, mentioned_image
 from povagent.answers.validation import judge
-from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent.interfaces import Parser
 
 
@@ -81,8 +86,9 @@ def judge_candidate(cand: Candidate, spec: AnswerSpec, text: str, frame_from_tex
 
 
 def choose(text: str, spec: AnswerSpec, objects: list[JsonObject] | None = None) -> tuple[Candidate | None, ParsedAnswer]:
-    """The official choice: the last candidate in range, else the last candidate.
-    ``objects`` is ``find_objects(text)`` when the caller already has it."""
+    """The official choice over the candidates read: the last whose point is in range, else the
+    last; its frame is judged as it is. ``objects`` is ``find_objects(text)`` when the caller
+    already has it."""
     if not text or not text.strip():
         return None, unparseable("empty answer")
     objects = find_objects(text) if objects is None else objects
@@ -92,11 +98,16 @@ def choose(text: str, spec: AnswerSpec, objects: list[JsonObject] | None = None)
         if not objects:
             return None, unparseable("no readable JSON object in the answer")
         return None, unparseable(f"no JSON object with numeric {keys}", objects[-1].span)
-    judged = [(c, judge_candidate(c, spec, text, frame_from_text)) for c in found]
-    for cand, parsed in reversed(judged):
-        if parsed.status in (ParseStatus.OK, ParseStatus.REPAIRED):  # valid against the schema
-            return cand, parsed
-    return judged[-1]
+    # As officially, only the point decides: a chosen object whose frame is missing, not an
+    # index or not among the frames shown leaves the row without a frame (unanswered); it never
+    # sends the choice back to an earlier object.
+    chosen = next((c for c in reversed(found) if point_in_frame(c, spec)), found[-1])
+    return chosen, judge_candidate(chosen, spec, text, frame_from_text)
+
+
+def point_in_frame(cand: Candidate, spec: AnswerSpec) -> bool:
+    """Whether a candidate's point lies in ``[0, W-1] x [0, H-1]`` (the official preference)."""
+    return 0 <= cand.x <= spec.width - 1 and 0 <= cand.y <= spec.height - 1
 
 
 class JsonAnswerParser(Parser):
@@ -110,4 +121,4 @@ class JsonAnswerParser(Parser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute the json parser."""
-    register("json", JsonAnswerParser, description="Requested JSON answer, official choice (last in range, else last); tolerant")
+    register("json", JsonAnswerParser, description="Requested JSON answer, lenient reading (repairs), official choice (last in range, else last)")

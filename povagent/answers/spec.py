@@ -62,7 +62,11 @@ class ParsedAnswer(BaseModel):
     official scorer also reports the error of the closest one). ``span`` is the raw text the
     answer came from; ``repair`` says how it was changed (``"rescaled 0-1000 -> pixels"``, or
     ``"selected_image 3 taken from the text"`` when the frame was read from prose, not from the
-    answer's JSON: an answer the official parser would not accept)."""
+    answer's JSON: an answer the official parser would not accept). An infinite or NaN
+    coordinate (kept by the ``official`` parser, as the official runner records it) is written
+    to JSON as ``Infinity``/``NaN``, never turned into ``null``, so a stored row reads back as parsed."""
+
+    model_config = ConfigDict(ser_json_inf_nan="constants")
 
     status: ParseStatus
     reason: str = ""

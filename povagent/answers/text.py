@@ -176,9 +176,13 @@ def coerce_number(value: Any) -> float | None:
     ``"212px"``); ``None`` for anything else (booleans, NaN, lists, words)."""
     if isinstance(value, bool):
         return None
-    if isinstance(value, (int, float)):
-        f = float(value)
-        return f if math.isfinite(f) else None
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, int):
+        try:
+            return float(value)
+        except OverflowError:  # an integer past a float's range (a 400-digit literal): no finite number
+            return None
     if isinstance(value, str):
         s = normalize_minus(value.strip())
         if s.lower().endswith("px"):

@@ -104,6 +104,19 @@ def run_command(
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
     _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
+    if result.summary.get("nan_coordinate_rows"):
+        from povagent.results.official_reading import nan_warning
+
+        typer.echo(f"warning: {nan_warning(result.summary['nan_coordinate_rows'])}", err=True)
+    if "official" in result.summary.get("pipeline", {}).get("scorers", ["official"]):
+        from povagent.cli.official_beside import parser_reads_officially, render_official_beside
+
+        render_official_beside(
+            result.summary,
+            config.parser.name,  # type: ignore[union-attr]
+            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]
+            run_dir=result.run_dir,
+        )
     typer.echo(
         f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
         f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
@@ -172,7 +185,12 @@ def sweep_command(
         o = res.summary["overall"]
         l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
         rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
-        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+        official = res.summary.get("official_parse")
+        beside = "" if official is None else (
+            f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
+            f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
+        )
+        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
 
     try:
         result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
@@ -182,7 +200,10 @@ def sweep_command(
     table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in result.cells}
     with_success = any(v is not None for v in successes.values())  # real-world sets
-    for col in ("cell", "mean L2", "resp. rate", "answered / total") + (("success rate",) if with_success else ()):
+    # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
+    with_official = any("official_parse" in result.results[c.name].summary for c in result.cells)
+    official_cols = ("official parse L2", "official parse resp.") if with_official else ()
+    for col in ("cell", "mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ()):
         table.add_column(col, justify="left" if col == "cell" else "right")
     for cell in result.cells:
         s = result.results[cell.name].summary
@@ -192,7 +213,7 @@ def sweep_command(
             # of the summary count every row of a set without official GT as unanswered
             o = success["overall"]
             answered = "-" if o.get("n_answered") is None else f"{o['n_answered']} / {o['n_total']}"
-            table.add_row(cell.name, "-", _rate(o, "response_rate"), answered, _rate(o))
+            table.add_row(cell.name, "-", _rate(o, "response_rate"), answered, *(("-", "-") if with_official else ()), _rate(o))
             continue
         o = s["overall"]
         table.add_row(
@@ -200,6 +221,7 @@ def sweep_command(
             "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
             "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
             f"{o['n']} / {s['rows']['total']}",
+            *(_official_cells(s) if with_official else ()),
             *(("-",) if with_success else ()),
         )
     console.print(table)
@@ -210,6 +232,22 @@ def sweep_command(
             typer.echo(f"cell {cell.name}:", err=True)
             _say_what_next(res, f"povagent sweep {sweep}")
     raise typer.Exit(max(codes, default=0))
+
+
+def _official_l2(cell: dict[str, Any]) -> str:
+    return "-" if cell.get("mean_l2") is None else f"{cell['mean_l2']:.3f}"
+
+
+def _official_cells(summary: dict[str, Any]) -> tuple[str, str]:
+    """A sweep cell's official-parse columns: its numbers, ``=`` when the cell reads officially
+    itself, ``?`` when a lenient cell recorded no official reading."""
+    from povagent.results.official_reading import OFFICIAL_PARSERS
+
+    official = summary.get("official_parse")
+    if official is not None:
+        return _official_l2(official["overall"]), _rate(official["overall"], "response_rate")
+    mark = "=" if summary.get("pipeline", {}).get("parser") in OFFICIAL_PARSERS else "?"
+    return mark, mark
 
 
 @app.command("plugins")

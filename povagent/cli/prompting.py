@@ -56,7 +56,7 @@ def show_prompt_command(
 
 @app.command("parse")
 def parse_command(
-    parser: str = typer.Option("json", "--parser", help="Parser name (see `povagent plugins`)."),
+    parser: str = typer.Option("official", "--parser", help="Parser name (see `povagent plugins`); default: the official runner's reading."),
     width: int = typer.Option(512, "--width", min=1, help="Frame width asked for, in pixels."),
     height: int = typer.Option(512, "--height", min=1, help="Frame height asked for, in pixels."),
     condition: str = typer.Option("a", "--condition", help="a (Inferred), b (Stated) or c (Given)."),
@@ -96,12 +96,17 @@ def parse_command(
 @app.command("rescore")
 def rescore_command(
     run_dir: Path = typer.Argument(..., help="A finished run folder (config.yaml + results.jsonl)."),
-    parser: str = typer.Option(..., "--parser", help="Parser to re-read every raw answer with."),
+    parser: str = typer.Option("official", "--parser", help="Parser to re-read every raw answer with (default: official, paper-comparable)."),
     dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder (default: the run config's)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
-    """Re-parse and re-score a finished run offline (no model call) into RUN_DIR/rescored-<parser>/."""
+    """Re-parse and re-score a finished run offline (no model call) into RUN_DIR/rescored-<parser>/.
+
+    The default parser, ``official``, turns any run into paper-comparable numbers; with a
+    lenient parser the official parse's numbers are printed beside the repaired ones.
+    """
     from povagent.cli.dataset import render_summary
+    from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
 
     result = rescore_run(run_dir, parser, dataset_root=dataset)
@@ -111,5 +116,6 @@ def rescore_command(
         typer.echo(json.dumps(result.summary, indent=2))
     else:
         render_summary(result.summary, title=f"{run_dir} re-parsed with {parser}")
+        render_official_beside(result.summary, parser, reads_officially="official_parse" not in result.summary, run_dir=run_dir)
         typer.echo(f"parse status: {json.dumps(result.summary['parse_status'])}; repaired: {result.summary['repaired']}")
     typer.echo(f"written to {result.out_dir}", err=True)

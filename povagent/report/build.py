@@ -25,6 +25,7 @@ from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
+from povagent.report.official_beside import official_beside_table
 from povagent.report.html import OFFICIAL_LEGEND, SUCCESS_LEGEND, figures_section, notes_section, render_page, tables_section
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
@@ -95,6 +96,9 @@ def write_report(
     t = time.perf_counter()
     analysis = analyze(collection, dataset, note, n_boot=n_boot, seed=seed)
     tables = paper_tables(analysis)
+    beside = official_beside_table(collection)
+    if beside is not None:  # repaired numbers never stand alone: the official parse beside them
+        tables.append(beside)
     timings["statistics"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -17,6 +17,7 @@ from typing import Any, Iterator
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
+from povagent.results.official_reading import OfficialReading
 
 
 class RowStatus(StrEnum):
@@ -45,6 +46,9 @@ class ExchangeRecord(BaseModel):
 class Prediction(BaseModel):
     """The prediction as scored: pixels in the frame named by ``image_path`` (A/B)."""
 
+    # an infinite or NaN coordinate (recorded as the official runner records it) stays one on disk
+    model_config = ConfigDict(ser_json_inf_nan="constants")
+
     selected_image: int | None = None
     image_path: str | None = None
     x: float | None = None
@@ -54,7 +58,8 @@ class Prediction(BaseModel):
 class ResultRow(BaseModel):
     """One (instance, run)."""
 
-    model_config = ConfigDict(extra="allow")
+    # NaN and infinity (an official parse's coordinate, a NaN error) stay themselves on disk
+    model_config = ConfigDict(extra="allow", ser_json_inf_nan="constants")
 
     key: str
     instance_id: str
@@ -82,6 +87,9 @@ class ResultRow(BaseModel):
     retries: int = 0
     started_at: str | None = None
     finished_at: str | None = None
+    #: How the official runner reads the final answer, when the row's parser is a lenient one
+    #: (see :mod:`povagent.results.official_reading`); ``None`` when the parser reads officially.
+    official_reading: OfficialReading | None = None
 
     @property
     def raw_response(self) -> str | None:

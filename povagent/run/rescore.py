@@ -6,6 +6,12 @@ answer schema the run's strategy asked for (rebuilt from the strategy, without i
 offers ``answer_spec(instance)``), scored with the run's scorers, and written to
 ``RUN_DIR/rescored-<parser>/`` (``results.jsonl``, ``summary.json``, ``config.yaml``). The
 original run is never modified. Rows without an answer (infrastructure errors) are kept as is.
+
+The parser defaults to ``official``: ``rescore RUN`` turns any run into paper-comparable numbers.
+With a lenient parser each row also gets its official reading (see
+:mod:`povagent.results.official_reading`) and the summary its ``official_parse`` beside. Rows
+whose official reading holds a NaN coordinate are named in a warning (the official mean of any
+slice holding one is NaN).
 """
 
 from __future__ import annotations
@@ -25,6 +31,15 @@ from povagent.dataset.loader import Dataset, load_dataset
 from povagent.errors import ConfigError, DatasetError, PredictionsError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.official_reading import (
+    OFFICIAL_PARSER,
+    nan_rows,
+    nan_warning,
+    official_counterpart,
+    official_parse_breakdown,
+    officially_read,
+    read_officially,
+)
 from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
 from povagent.scoring.official import scoring_frame
 from povagent.scoring.breakdown import ScoredRow, breakdown
@@ -77,14 +92,30 @@ def prediction_of(instance: Instance, parsed: ParsedAnswer) -> Prediction:
 
 
 def rescore_row(
-    row: ResultRow, instance: Instance, spec: AnswerSpec, parser: Any, parser_name: str, scorers: dict[str, Any], dataset: Dataset
+    row: ResultRow,
+    instance: Instance,
+    spec: AnswerSpec,
+    parser: Any,
+    parser_name: str,
+    scorers: dict[str, Any],
+    dataset: Dataset,
+    official: tuple[Any, str] | None = None,
 ) -> ResultRow:
-    """``row`` re-parsed from its final raw answer and re-scored (infra errors kept as they are)."""
+    """``row`` re-parsed from its final raw answer and re-scored (infra errors kept as they are).
+
+    ``official`` is ``(parser, name)`` of the official reading to keep beside a lenient
+    ``parser``'s (``None``: ``parser`` reads officially, the row keeps no second reading).
+    """
     raw = row.raw_response
     if row.status is RowStatus.INFRA_ERROR or raw is None:
-        return row.model_copy(update={"parser": parser_name})
+        return row.model_copy(update={"parser": parser_name, "official_reading": None})
+
+    def score(parsed: ParsedAnswer) -> dict[str, dict[str, Any]]:
+        return {name: scorer.score(instance, parsed, dataset) for name, scorer in scorers.items()}
+
     parsed = parser.parse(raw, spec)
-    scores = {name: scorer.score(instance, parsed, dataset) for name, scorer in scorers.items()}
+    scores = score(parsed)
+    reading = read_officially(official[0], official[1], raw, spec, parsed, scores, score) if official else None
     return row.model_copy(
         update={
             "parser": parser_name,
@@ -92,6 +123,7 @@ def rescore_row(
             "status": RowStatus.ANSWERED if parsed.answered else RowStatus.PARSE_ERROR,
             "prediction": prediction_of(instance, parsed),
             "scores": scores,
+            "official_reading": reading,
         }
     )
 
@@ -105,15 +137,30 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
             ScoredRow(row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"), row.run)
         )
     summary = breakdown(scored)
+    readings = [r.official_reading.parser for r in rows if r.official_reading is not None]
+    if readings and scorer_name == "official":  # parsed leniently: the paper-comparable reading beside
+        from povagent.run.runner import scored_row
+
+        summary["official_parse"] = official_parse_breakdown(
+            [scored_row(officially_read(r), scorer_name) if r.official_reading is not None else s
+             for r, s in zip(rows, scored) if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR],
+            readings[0],
+            sum(1 for r in rows if r.official_reading is None and r.status is not RowStatus.INFRA_ERROR),
+        )
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
     summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
     return summary
 
 
 def rescore_run(
-    run_dir: str | Path, parser_name: str, *, dataset_root: str | Path | None = None, host: PluginHost | None = None
+    run_dir: str | Path,
+    parser_name: str = OFFICIAL_PARSER,
+    *,
+    dataset_root: str | Path | None = None,
+    host: PluginHost | None = None,
 ) -> RescoreResult:
-    """Re-parse every row of a finished run with ``parser_name`` and re-score it (offline)."""
+    """Re-parse every row of a finished run with ``parser_name`` (default: the official reading)
+    and re-score it (offline)."""
     run = Path(run_dir)
     results = run / "results.jsonl"
     if not results.is_file():
@@ -121,6 +168,8 @@ def rescore_run(
     config = read_run_config(run)
     host = host or get_plugin_host(config.plugins)
     parser = host.create("parser", parser_name, {})
+    counterpart = official_counterpart(parser)
+    official = (host.create("parser", counterpart, {}), counterpart) if counterpart else None
     strategy = host.create("strategy", config.strategy.name, config.strategy.options)
     scorers = {s.name: host.create("scorer", s.name, s.options) for s in config.scorers}
     root = Path(dataset_root) if dataset_root is not None else config.dataset.root
@@ -145,9 +194,12 @@ def rescore_run(
                 warnings.append(f"{row.key}: instance {row.instance_id} is not in the dataset {root}; row left out")
                 continue
             spec = answer_spec_for(strategy, instance, images)
-            new = rescore_row(row, instance, spec, parser, parser_name, scorers, dataset)
+            new = rescore_row(row, instance, spec, parser, parser_name, scorers, dataset, official)
             writer.write(new)
             rows_out.append(new)
+    nan_note = nan_warning(nan_rows(officially_read(r) for r in rows_out))
+    if nan_note:
+        warnings.append(nan_note)
     scorer_name = "official" if "official" in scorers else next(iter(scorers), "official")
     summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **summarize_rows(rows_out, scorer_name)}
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")

@@ -51,6 +51,7 @@ from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
+from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -129,16 +130,24 @@ class Components:
     strategy: Strategy
     parser: Parser
     scorers: dict[str, Scorer]
+    #: The parser giving the official reading kept beside a lenient ``parser``'s, and its name
+    #: (``None`` when ``parser`` reads officially itself).
+    official_parser: Parser | None = None
+    official_parser_name: str | None = None
 
 
 def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     """Instantiate the backend, strategy, parser and scorers named in ``config``."""
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
+    parser = host.create("parser", config.parser.name, config.parser.options)
+    counterpart = official_counterpart(parser)
     return Components(
         backend=host.create("backend", config.backend.name, config.backend.options),
         strategy=host.create("strategy", config.strategy.name, config.strategy.options),
-        parser=host.create("parser", config.parser.name, config.parser.options),
+        parser=parser,
         scorers={s.name: host.create("scorer", s.name, s.options) for s in config.scorers},
+        official_parser=host.create("parser", counterpart, {}) if counterpart else None,
+        official_parser_name=counterpart,
     )
 
 
@@ -294,6 +303,7 @@ class PipelineRun:
         parse: ParsedAnswer | None = None
         scores: dict[str, dict[str, Any]] = {}
         prediction = Prediction()
+        official_reading = None
         error_type = error_message = None
         failed_retries = 0  # retries of a request that never got an answer (no exchange holds them)
         try:
@@ -301,14 +311,19 @@ class PipelineRun:
             turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
             request, response = turns[-1]
             parse = self._parse(comps.parser, response.text, request, key)
+            shown = as_shown(instance, request)
             if parse.answered:
                 status = RowStatus.ANSWERED
-                shown = as_shown(instance, request)
                 prediction = _prediction(shown, parse)
                 for name, scorer in comps.scorers.items():
                     scores[name] = self._score(name, scorer, shown, parse, key)
             else:
                 status = RowStatus.PARSE_ERROR
+            if comps.official_parser is not None:  # a lenient parser: keep the official reading beside
+                official_reading = read_officially(
+                    comps.official_parser, comps.official_parser_name or "", response.text, request.answer, parse, scores,
+                    lambda p: {n: self._score(n, s, shown, p, key) for n, s in comps.scorers.items()},
+                )
         except InfraFailure as exc:
             status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
             failed_retries = exc.retries
@@ -347,6 +362,7 @@ class PipelineRun:
             retries=retries,
             started_at=started,
             finished_at=utc_now(),
+            official_reading=official_reading,
         )
 
     def _parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:

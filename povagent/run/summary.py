@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 
@@ -52,11 +53,17 @@ class RowDigest:
     completion_tokens: int | None
     cost_usd: float | None
     retries: int
+    #: The official reading's fields, for a row parsed leniently (``None``: no separate reading).
+    official: ScoredRow | None = None
+    official_parser: str | None = None
+    #: The row's (official) parse holds a NaN coordinate: the official mean holding it is NaN.
+    nan_coordinate: bool = False
 
 
 def digest(row: ResultRow) -> RowDigest:
     """The summary fields of one row."""
     success = row.scores.get("success")
+    official_view = officially_read(row)  # the row itself when it holds no separate reading
     return RowDigest(
         key=row.key,
         run=row.run,
@@ -70,6 +77,9 @@ def digest(row: ResultRow) -> RowDigest:
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
+        official=scored_row(official_view) if row.official_reading is not None else None,
+        official_parser=row.official_reading.parser if row.official_reading is not None else None,
+        nan_coordinate=bool(nan_rows([official_view])),
     )
 
 
@@ -82,6 +92,19 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
     rows = [d for d in digests if keys is None or d.key in keys]
     scored = [d.scored for d in rows]
     out = breakdown(scored)
+    official_parser = next((d.official_parser for d in rows if d.official_parser), None)
+    # parsed leniently: the paper-comparable reading beside it (official metric only: a
+    # real-world set's success scorer has no official numbers to compare)
+    if official_parser is not None and not any(d.has_success for d in rows):
+        # a row with an answer but no reading (written before readings were recorded) is left
+        # out and counted, never counted with its repaired parse
+        unread = [d for d in rows if d.official is None and d.status != RowStatus.INFRA_ERROR.value]
+        out["official_parse"] = official_parse_breakdown(
+            [d.official if d.official is not None else d.scored for d in rows
+             if d.official is not None or d.status == RowStatus.INFRA_ERROR.value],
+            official_parser,
+            len(unread),
+        )  # fmt: skip
     if any(d.has_success for d in rows):
         from povagent.dataset.realworld import success_breakdown
 
@@ -89,6 +112,9 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
             {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
             for d in rows
         )
+    nan_keys = [d.key for d in rows if d.nan_coordinate]
+    if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
+        out["nan_coordinate_rows"] = nan_keys
     per_run: dict[int, list[ScoredRow]] = {}
     for d in rows:
         per_run.setdefault(d.run, []).append(d.scored)

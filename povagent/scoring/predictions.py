@@ -316,10 +316,14 @@ def score_official_run(run: OfficialRun, dataset: Dataset, run_index: int = 0) -
 
 
 def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
-    """Re-score our own results rows from their stored predictions; a row whose instance is not
-    in the dataset counts as unanswered (as officially), with a warning."""
+    """Re-score our own results rows from their stored predictions, each as the official runner
+    reads its answer (a row parsed leniently by its recorded official reading); a row whose
+    instance is not in the dataset counts as unanswered (as officially), with a warning."""
+    from povagent.results.official_reading import official_rows
+
     scored: list[ScoredPrediction] = []
     unknown: list[str] = []
+    rows, warnings = official_rows(rows)
     for row in rows:
         inst = dataset.instance(row.instance_id)
         if inst is None:
@@ -334,7 +338,6 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
         frame = scoring_frame(inst, p.selected_image, p.image_path)
         score = score_point(inst, frame, float(p.x), float(p.y))
         scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score))
-    warnings = []
     if unknown:
         warnings.append(
             f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "

@@ -233,11 +233,19 @@ def test_alocate_times_out_too(model_agent, server):
 
 
 def test_model_keyword_takes_a_profile_and_brings_its_parser(server):
-    # qwen3-vl-32b is served by vLLM (api_base) and answers on 0-1000: its profile's parser rescales
-    server.script('{"selected_image": 0, "x": 500, "y": 750}')
+    # qwen3-vl-32b is served by vLLM (api_base); its profile reads answers officially
+    server.script('{"selected_image": 0, "x": 500, "y": 300}')
     with GroundingAgent(model="qwen3-vl-32b", backend_options={"api_base": server.url}, retry=FAST_RETRY, timeout_s=20) as agent:
         loc = agent.locate("x", wide_frames(1))
     assert server.requests[0].body["model"] == "Qwen/Qwen3-VL-32B-Instruct"
+    assert loc.status is ParseStatus.OK and loc.square_point == (500.0, 300.0)
+
+
+def test_a_repair_parser_given_with_a_profile_rescales_0_1000_answers(server):
+    # the model answers on 0-1000: a robot wants the repair, the profile's official reading would clamp it
+    server.script('{"selected_image": 0, "x": 500, "y": 750}')
+    with GroundingAgent(model="qwen3-vl-32b", parser="rescale-1000", backend_options={"api_base": server.url}, retry=FAST_RETRY, timeout_s=20) as agent:
+        loc = agent.locate("x", wide_frames(1))
     assert loc.status is ParseStatus.REPAIRED and loc.square_point == (256.0, 384.0)
     assert loc.pixel == pytest.approx((640.0, 680.0))  # (256 / 0.4, (384 - 112) / 0.4)
 

@@ -162,7 +162,7 @@ def test_model_is_required():
 def test_profile_name_resolves_to_its_litellm_model():
     backend = LiteLLMBackend(model="gemini-robotics-er")
     assert backend.model == "gemini/gemini-robotics-er-1.6-preview"
-    assert backend.profile is not None and backend.profile.default_parser == "rescale-1000"
+    assert backend.profile is not None and backend.profile.default_parser == "official"
 
 
 def test_profile_backend_defaults_apply_under_the_users_options():

@@ -36,10 +36,10 @@ def test_backend_options_are_valid_litellm_backend_options(profile):
     LiteLLMOptions.model_validate({"model": profile.litellm_model, **profile.backend_options})
 
 
-def test_models_answering_on_0_1000_default_to_the_rescale_parser():
-    profiles = get_plugin_host().profiles()
-    assert profiles["gemini-robotics-er"].default_parser == "rescale-1000"
-    assert profiles["qwen3-vl-32b"].default_parser == "rescale-1000"
+def test_paper_models_default_to_the_official_reading():
+    # paper-comparable by default; repairs (rescale-1000 for 0-1000 answers, json) are opt-in
+    paper = [p for p in PAPER_PROFILES if p.paper_name is not None]
+    assert {p.name: p.default_parser for p in paper if p.default_parser != "official"} == {"robopoint": "robopoint-official"}
 
 
 def test_vllm_models_need_an_api_base():
@@ -48,7 +48,7 @@ def test_vllm_models_need_an_api_base():
 
 def test_robopoint_answers_given_only():
     robopoint = get_plugin_host().profile("robopoint")
-    assert robopoint.conditions == (Condition.GIVEN,) and robopoint.default_parser == "robopoint"
+    assert robopoint.conditions == (Condition.GIVEN,) and robopoint.default_parser == "robopoint-official"
 
 
 def test_every_profile_documents_its_quirks():

@@ -235,7 +235,8 @@ def test_the_key_never_reaches_any_file_of_the_run_or_its_cache(tmp_path, mini_r
 
 # -- model profiles through the runner -------------------------------------------------------------
 def test_a_profile_named_in_the_backend_options_brings_its_parser(tmp_path, mini_root):
-    # qwen3-vl-32b answers on 0-1000: its profile's rescale-1000 parser maps the answer to pixels
+    # qwen3-vl-32b answers on 0-1000: its profile's official parser keeps the answer as the
+    # paper scores it (out of range, clamped by the scorer); rescale-1000 is the opt-in repair
     with LoopbackServer(reply='{"selected_image": 1, "x": 900, "y": 800}', max_lifetime_s=60) as server:
         backend = {"name": "litellm", "options": {"model": "qwen3-vl-32b", "api_base": server.url}}
         doc = pipeline(tmp_path, mini_root, backend, instances={"conditions": ["a"], "limit": 1})
@@ -243,16 +244,16 @@ def test_a_profile_named_in_the_backend_options_brings_its_parser(tmp_path, mini
         result = run_yaml(tmp_path, doc)
         assert server.requests[0].body["model"] == "Qwen/Qwen3-VL-32B-Instruct"  # hosted_vllm/ prefix stripped
     (row,) = read_rows(tmp_path / "run" / "results.jsonl")
-    assert row.parser == "rescale-1000" and row.status == "answered"
-    assert (row.prediction.x, row.prediction.y) == (460.8, 409.6)
-    assert result.summary["pipeline"]["parser"] == "rescale-1000"
+    assert row.parser == "official" and row.status == "answered"
+    assert (row.prediction.x, row.prediction.y) == (900, 800)
+    assert result.summary["pipeline"]["parser"] == "official"
 
 
 def test_a_given_only_profile_refuses_frames_without_calling_the_model(tmp_path, mini_root):
     with LoopbackServer(reply='[(0.5, 0.5)]', max_lifetime_s=60) as server:
         backend = {"name": "litellm", "options": {"model": "robopoint", "api_base": server.url}}
         doc = pipeline(tmp_path, mini_root, backend, instances={"conditions": ["a", "c"], "directions": ["right"]})
-        del doc["parser"]  # the profile's default: robopoint
+        del doc["parser"]  # the profile's default: robopoint-official
         run_yaml(tmp_path, doc)
         calls = server.request_count
     rows = read_rows(tmp_path / "run" / "results.jsonl")

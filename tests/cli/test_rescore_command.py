@@ -120,3 +120,71 @@ def test_rescore_makes_no_model_call(tmp_path, mini_root, monkeypatch):
     run = finished_run(tmp_path, mini_root)
     result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
     assert result.exit_code == 0, result.output
+
+
+# -- the official reading: the default, and beside every lenient one -------------------------------
+#: Answers the official runner reads otherwise than json: a trailing comma (unanswered), a
+#: self-correction ending in a null frame (unanswered), and a NaN coordinate (kept as NaN).
+LENIENT_ANSWERS = [
+    ("train_house_00000/0/right/a", '{"selected_image": 1, "x": 100, "y": 200,}'),
+    ("train_house_00000/0/left/a", '{"selected_image": 1, "x": 50, "y": 60} Actually: {"selected_image": null, "x": 70, "y": 80}'),
+    ("train_house_00000/0/right/c", '{"x": 300, "y": 200}'),
+    ("train_house_00000/0/left/c", '{"x": NaN, "y": 200}'),
+]
+
+
+def run_with(tmp_path: Path, mini_root: Path, answers) -> Path:
+    run = finished_run(tmp_path, mini_root)
+    with ResultsWriter(run / "results.jsonl") as w:
+        for inst_id, raw in answers:
+            house, pair, direction, cond = inst_id.split("/")
+            w.write(ResultRow(key=f"{inst_id}#0", instance_id=inst_id, house_id=house, pair_id=pair, direction=direction,
+                              condition=cond, status=RowStatus.ANSWERED, parser="json",
+                              exchanges=[ExchangeRecord(request_hash="h", raw=raw)]))
+    return run
+
+
+def test_rescore_defaults_to_the_official_reading(tmp_path, mini_root):
+    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+    result = runner.invoke(app, ["rescore", str(run), "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads((run / "rescored-official" / "summary.json").read_text())
+    assert summary["parser"] == "official" and "official_parse" not in summary
+    rows = {r.instance_id: r for r in read_rows(run / "rescored-official" / "results.jsonl")}
+    assert rows["train_house_00000/0/right/a"].status == RowStatus.PARSE_ERROR  # trailing comma
+    assert rows["train_house_00000/0/left/a"].status == RowStatus.PARSE_ERROR  # the chosen frame is null
+    assert all(r.official_reading is None for r in rows.values())
+
+
+def test_a_lenient_rescore_keeps_the_official_reading_beside(tmp_path, mini_root):
+    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads((run / "rescored-json" / "summary.json").read_text())
+    official = summary["official_parse"]
+    assert official["parser"] == "official" and official["rows_without_reading"] == 0
+    # json answers 2 of 6 rows in A (trailing comma repaired; the null frame leaves no frame), official 0
+    assert summary["per_condition"]["a"]["n"] == 1 and official["per_condition"]["a"]["n"] == 0
+    rows = {r.instance_id: r for r in read_rows(run / "rescored-json" / "results.jsonl")}
+    assert rows["train_house_00000/0/right/a"].official_reading.parse.status == "unparseable"
+    assert rows["train_house_00000/0/right/c"].official_reading.scores == rows["train_house_00000/0/right/c"].scores
+
+
+def test_the_console_shows_the_official_parse_beside_a_lenient_one(tmp_path, mini_root):
+    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+    result = runner.invoke(app, ["rescore", str(run), "--parser", "json"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "Official parse beside 'json' (repaired)" in result.stdout
+    assert "L2 official (official)" in result.stdout and "resp. official" in result.stdout
+    official = runner.invoke(app, ["rescore", str(run)])
+    assert "Official parse beside" not in official.stdout
+
+
+def test_rows_with_a_nan_coordinate_are_named_in_a_warning(tmp_path, mini_root):
+    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+    result = runner.invoke(app, ["rescore", str(run)])
+    assert result.exit_code == 0, result.output
+    assert "NaN coordinate" in result.stderr and "train_house_00000/0/left/c#0" in result.stderr
+    rows = {r.instance_id: r for r in read_rows(run / "rescored-official" / "results.jsonl")}
+    nan_row = rows["train_house_00000/0/left/c"]
+    assert nan_row.parse.x != nan_row.parse.x  # recorded as NaN, as the official runner records it

@@ -12,7 +12,7 @@ from povagent import hookspecs
 from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
-PARSERS = {"json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "internvl"}
+PARSERS = {"official", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl"}
 STRATEGIES = {"basic", "cot", "spatial-cot", "o-plot", "oa-plot"}
 
 
@@ -48,7 +48,7 @@ def test_every_built_in_strategy_is_registered():
 
 
 @pytest.mark.parametrize("name", sorted(PARSERS))
-@pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}'])
+@pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}', '{"selected_image": 1, "x": 1%s, "y": 1}' % ("0" * 400)])
 def test_no_parser_raises_on_hostile_text(name, text):
     from povagent.answers.spec import AnswerSpec, frame_answer_schema
 

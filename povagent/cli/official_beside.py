@@ -1,0 +1,65 @@
+"""The console table that keeps paper numbers in sight when a run was parsed leniently.
+
+A lenient parser (``json``, ``rescale-1000`` ...) repairs answers the official runner leaves
+unanswered or reads otherwise; its mean and response rate are not the paper's. Wherever the CLI
+prints such a run's scores (after ``run``, ``rescore``, ``score`` on a run folder) this table
+follows, putting the official parse's response rate and mean beside the repaired ones per slice,
+both labelled. It reads the summary's ``official_parse`` section (see
+:mod:`povagent.results.official_reading`); a lenient run without one (rows written before
+readings were recorded) gets a note saying how to obtain the official numbers.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def parser_reads_officially(name: str, options: dict[str, Any] | None = None, plugins: tuple[str, ...] = ()) -> bool:
+    """Whether the parser ``name`` reads answers as the official runner does."""
+    from povagent.plugins import get_plugin_host
+    from povagent.results.official_reading import official_counterpart
+
+    return official_counterpart(get_plugin_host(plugins).create("parser", name, options or {})) is None
+
+
+def render_official_beside(summary: dict[str, Any], parser: str, *, reads_officially: bool, run_dir: Any = None) -> None:
+    """Print the official parse's response rate and mean beside the repaired ones (per slice), or
+    the note saying how to get them; nothing when ``parser`` reads officially."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from povagent.cli.dataset import breakdown_slices
+    from povagent.scoring.predictions import format_number
+
+    console = Console()
+    if reads_officially:
+        return
+    official = summary.get("official_parse")
+    if official is None:
+        where = run_dir if run_dir is not None else "RUN"
+        console.print(
+            f"[yellow]note:[/] parser {parser!r} repairs answers, so these numbers are not the paper's; "
+            f"for the official reading run: povagent rescore {where} --parser official"
+        )
+        return
+
+    def rate(cell: dict[str, Any]) -> str:
+        rr = cell.get("response_rate")
+        return "-" if rr is None else f"{100 * rr:.1f}%"
+
+    table = Table(
+        title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
+        caption=(
+            f"{official['rows_without_reading']} row(s) with an answer carry no official reading and are left out: incomplete; "
+            "run povagent rescore RUN --parser official"
+            if official.get("rows_without_reading")
+            else None
+        ),
+    )
+    for col in ("slice", f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official['parser']} (official)", f"resp. {official['parser']}"):
+        table.add_column(col, justify="left" if col == "slice" else "right")
+    lenient_cells = dict(breakdown_slices(summary))
+    for name, cell in breakdown_slices(official):
+        mine = lenient_cells.get(name, {})
+        table.add_row(name, format_number(mine.get("mean_l2")), rate(mine), format_number(cell.get("mean_l2")), rate(cell))
+    console.print(table)

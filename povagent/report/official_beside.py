@@ -1,0 +1,69 @@
+"""The report table that keeps paper numbers beside repaired ones: systems parsed leniently.
+
+A system whose runs were parsed with a lenient parser (``json``, ``rescale-1000`` ...) reports
+repaired numbers in the main tables. This table puts, per condition, its mean error and response
+rate beside those of the official parse of the same answers (recorded in each row, see
+:mod:`povagent.results.official_reading`), both labelled, so that nobody compares a repaired
+number with the paper by accident. Runs are aggregated as the main breakdown aggregates them.
+Systems parsed officially are not listed; the table is absent when there is none to list.
+"""
+
+from __future__ import annotations
+
+from povagent.dataset.models import Condition
+from povagent.report.collect import Collection
+from povagent.report.tables import Cell, Column, Row, Table
+from povagent.results.official_reading import OFFICIAL_PARSERS, officially_read
+
+KEY = "official_parse_beside"
+
+
+def _lenient(run) -> bool:
+    return any(r.official_reading is not None or (r.parse is not None and r.parser not in OFFICIAL_PARSERS) for r in run.rows)
+
+
+def official_beside_table(collection: Collection) -> Table | None:
+    """Per lenient system and condition: mean L2 and response rate, repaired and official."""
+    from povagent.run.runner import scored_row
+    from povagent.scoring.breakdown import breakdown
+
+    by_system: dict[str, list] = {}
+    for run in collection.runs:
+        if run.scorer == "official" and _lenient(run):
+            by_system.setdefault(run.system, []).extend(run.rows)
+    if not by_system:
+        return None
+    conditions = [c for c in (str(c) for c in Condition) if any(r.condition == c for rows in by_system.values() for r in rows)]
+    columns = []
+    for c in conditions:
+        label = Condition(c).label
+        columns += [
+            Column(f"{label} L2 repaired"),
+            Column(f"{label} resp. repaired", "rate", "higher"),
+            Column(f"{label} L2 official"),
+            Column(f"{label} resp. official", "rate", "higher"),
+        ]
+    table = Table(
+        KEY,
+        "Official parse beside the repaired numbers",
+        "Systems parsed with a lenient parser (repairs such as trailing commas, single quotes, "
+        "0-1000 rescaling): their numbers beside those of the official runner's reading of the same "
+        "answers, which is the one to compare with the paper. A system whose rows carry no recorded "
+        "official reading shows -- on the official side: rescore its runs with --parser official.",
+        "System (parser)",
+        columns,
+        show_ci=False,
+    )
+    for system, rows in by_system.items():
+        parsers = sorted({r.parser for r in rows if r.parser})
+        repaired = breakdown([scored_row(r) for r in rows])["per_condition"]
+        unread = any(r.official_reading is None and r.parse is not None and r.parser not in OFFICIAL_PARSERS for r in rows)
+        # rows written before readings were recorded: the official side is unknown, not zero
+        official = {} if unread else breakdown([scored_row(officially_read(r)) for r in rows])["per_condition"]
+        cells = []
+        for c in conditions:
+            mine, theirs = repaired.get(c, {}), official.get(c, {})
+            cells += [Cell(mine.get("mean_l2")), Cell(mine.get("response_rate")), Cell(theirs.get("mean_l2")), Cell(theirs.get("response_rate"))]
+        label = f"{system} ({', '.join(parsers)}{'; no official reading recorded: rescore with --parser official' if unread else ''})"
+        table.rows.append(Row(label, cells))
+    return table

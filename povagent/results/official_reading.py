@@ -1,0 +1,165 @@
+"""The official reading of an answer, kept beside a lenient parser's: paper numbers stay in sight.
+
+A lenient parser (``json``, ``rescale-1000``, ``cot``, the native formats) repairs answers the
+official runner leaves unanswered or reads differently, so its numbers are not the paper's. A row
+parsed with one therefore also records how the official runner reads the same answer
+(:class:`OfficialReading`: that parse and its scores), and every summary of such rows carries the
+official reading's response rate and mean beside the repaired ones (``official_parse``).
+
+Why at run time, in the row: the runner already holds the answer, the asked schema, the instance
+and the scorers, and the official parse costs tens of microseconds (when it reads the same point
+as the lenient parser, its scores are the lenient ones, not recomputed). Summaries, reports and
+``povagent score`` then read it without the dataset or the strategy, a resumed run keeps every
+earlier row's reading, and ``povagent rescore`` writes a fresh one for each row it re-parses.
+Rows written before readings were recorded carry none: summaries count them
+(``rows_without_reading``) rather than mix repaired numbers in; ``povagent rescore RUN --parser
+official`` gives such a run its official numbers offline.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable, Iterable, Sequence
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
+
+#: The parser that reads the asked JSON answer as the official runner does.
+OFFICIAL_PARSER = "official"
+
+
+class OfficialReading(BaseModel):
+    """How the official runner reads a row's final answer: the parser, its parse, its scores."""
+
+    model_config = ConfigDict(ser_json_inf_nan="constants")
+
+    parser: str
+    parse: ParsedAnswer
+    scores: dict[str, dict[str, Any]] = Field(default_factory=dict)
+
+
+def official_counterpart(parser: Any) -> str | None:
+    """The name of the parser giving the official reading of what ``parser`` reads, or ``None``
+    when ``parser`` itself reads as the official runner does (``reproduces_official``).
+
+    A parser names its counterpart in ``official_reading`` (RoboPoint's is
+    ``robopoint-official``); any other parser, a third-party one too, has ``official``.
+    """
+    if getattr(parser, "reproduces_official", False):
+        return None
+    return getattr(parser, "official_reading", OFFICIAL_PARSER)
+
+
+def scores_alike(a: ParsedAnswer, b: ParsedAnswer) -> bool:
+    """Whether two parses give the same scores (same answer, frame, point and points)."""
+    return (a.answered, a.selected_image, a.x, a.y, a.points) == (b.answered, b.selected_image, b.x, b.y, b.points)
+
+
+def read_officially(
+    official_parser: Any,
+    name: str,
+    text: str,
+    spec: AnswerSpec,
+    parse: ParsedAnswer | None,
+    scores: dict[str, dict[str, Any]],
+    score: Callable[[ParsedAnswer], dict[str, dict[str, Any]]],
+) -> OfficialReading:
+    """The official reading of ``text``, beside the lenient ``parse`` and its ``scores``.
+
+    ``score(parsed)`` scores a parse with the run's scorers; it is only called when the official
+    parse answers differently from the lenient one. An unanswered official parse has no scores,
+    as the runner leaves a parse error unscored. Never raises.
+    """
+    try:
+        official = official_parser.parse(text, spec)
+    except Exception as exc:  # parsers must not raise; if one does, its reading is no answer
+        official = unparseable(f"parser raised {type(exc).__name__}: {exc}")
+    if not official.answered:
+        return OfficialReading(parser=name, parse=official)
+    if parse is not None and scores_alike(official, parse):
+        return OfficialReading(parser=name, parse=official, scores=scores)
+    return OfficialReading(parser=name, parse=official, scores=score(official))
+
+
+#: Built-in parsers that read answers as the official runner does.
+OFFICIAL_PARSERS = frozenset({OFFICIAL_PARSER, "robopoint-official"})
+
+
+def officially_read(row: Any) -> Any:
+    """``row`` as its official reading scores it: itself when it holds no separate reading.
+
+    The prediction is the official parse's point and frame index (the frame is found again by
+    that index when the row is scored)."""
+    from povagent.results.rows import Prediction, RowStatus
+
+    reading = row.official_reading
+    if reading is None:
+        return row
+    parse = reading.parse
+    return row.model_copy(
+        update={
+            "parser": reading.parser,
+            "parse": parse,
+            "scores": reading.scores,
+            "status": RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR,
+            "prediction": Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction(),
+            "official_reading": None,
+        }
+    )
+
+
+def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:
+    """Rows as their official readings score them, and warnings: how many answered rows were
+    parsed leniently without recording a reading (those are kept as parsed: repaired numbers),
+    and which rows hold a NaN coordinate."""
+    out, unread = [], []
+    for row in rows:
+        if row.official_reading is None and row.parser not in OFFICIAL_PARSERS and row.parse is not None:
+            unread.append(row.key)
+        out.append(officially_read(row))
+    warnings = []
+    if unread:
+        parsers = sorted({r.parser for r in out if r.key in set(unread)})
+        warnings.append(
+            f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (written before "
+            f"readings were recorded) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
+            f"run povagent rescore RUN --parser official"
+        )
+    nan_note = nan_warning(nan_rows(out))
+    if nan_note:
+        warnings.append(nan_note)
+    return out, warnings
+
+
+def official_parse_breakdown(scored: Sequence[Any], parser: str, without_reading: int) -> dict[str, Any]:
+    """The ``official_parse`` section of a summary: the official reading's breakdown (one
+    :class:`~povagent.scoring.breakdown.ScoredRow` per row that has a reading or no answer at
+    all, aggregated as the main breakdown is), the parser that gave it, and how many rows with
+    an answer lack a reading: those are left out, so the section is then incomplete and says so."""
+    from povagent.scoring.breakdown import breakdown
+
+    return {"parser": parser, "rows_without_reading": without_reading, **breakdown(scored)}
+
+
+def nan_rows(rows: Iterable[Any]) -> list[str]:
+    """Keys of rows whose (official) parse holds a NaN coordinate: the official scorer counts
+    such a row answered with a NaN error, which makes every mean holding it NaN."""
+    found = []
+    for row in rows:
+        parse = row.parse
+        if parse is not None and any(v is not None and isinstance(v, float) and math.isnan(v) for v in (parse.x, parse.y)):
+            found.append(row.key)
+    return found
+
+
+def nan_warning(keys: Sequence[str]) -> str | None:
+    """The warning naming rows with a NaN coordinate, or ``None`` when there are none."""
+    if not keys:
+        return None
+    shown = ", ".join(keys[:10]) + (f" and {len(keys) - 10} more" if len(keys) > 10 else "")
+    return (
+        f"{len(keys)} row(s) answered with a NaN coordinate, as the official runner records them: {shown}. "
+        "The official scorer counts them answered with a NaN error, which makes its mean of any slice "
+        "holding them NaN"
+    )

@@ -1,0 +1,79 @@
+"""After ``povagent run``, a run parsed leniently shows the official parse's numbers beside its own."""
+
+from __future__ import annotations
+
+import yaml
+from typer.testing import CliRunner
+
+from povagent.cli import app
+
+runner = CliRunner()
+
+
+def run_cli(tmp_path, mini_root, parser: str):
+    pipeline = tmp_path / f"{parser}.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "dataset": {"path": str(mini_root)},
+        "instances": {"conditions": ["a", "c"]},
+        "backend": {"name": "center", "options": {"frame_policy": "first"}},
+        "strategy": "basic",
+        "parser": parser,
+        "scorers": ["official"],
+        "output": str(tmp_path / f"run-{parser}"),
+    }))
+    result = runner.invoke(app, ["run", str(pipeline), "--quiet"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    return result.stdout
+
+
+def test_a_lenient_run_prints_the_official_parse_beside(tmp_path, mini_root):
+    out = run_cli(tmp_path, mini_root, "json")
+    assert "Official parse beside 'json' (repaired)" in out
+    assert "L2 official (official)" in out and "resp. official" in out
+
+
+def test_an_official_run_prints_no_second_table(tmp_path, mini_root):
+    out = run_cli(tmp_path, mini_root, "official")
+    assert "Official parse beside" not in out and "note:" not in out
+
+
+def test_a_sweep_table_shows_the_official_parse_of_lenient_cells(tmp_path, mini_root):
+    base = tmp_path / "base.yaml"
+    base.write_text(yaml.safe_dump({
+        "dataset": {"path": str(mini_root)},
+        "instances": {"conditions": ["c"]},
+        "backend": {"name": "center", "options": {"frame_policy": "first"}},
+        "strategy": "basic",
+        "parser": "json",
+        "scorers": ["official"],
+        "output": str(tmp_path / "unused"),
+    }))
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text(yaml.safe_dump({"base": "base.yaml", "output": str(tmp_path / "sweep"), "axes": {"parser": ["json", "official"]}}))
+    result = runner.invoke(app, ["sweep", str(sweep), "--quiet"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "official parse L2" in result.stdout and "official parse resp." in result.stdout
+    rows = {line.split("│")[1].strip(): line for line in result.stdout.splitlines() if line.startswith("│")}
+    assert rows["json"].count("100.0%") == 2  # repaired and official, both shown
+    assert rows["official"].split("│")[5].strip() == "="  # reads officially itself
+    assert "json: mean L2" in result.stdout and "official parse: mean L2" in result.stdout
+
+
+def test_run_warns_about_rows_with_a_nan_coordinate(tmp_path, mini_root):
+    from pathlib import Path
+
+    offline = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
+    pipeline = tmp_path / "nan.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "plugins": [offline],
+        "dataset": {"path": str(mini_root)},
+        "instances": {"conditions": ["c"], "limit": 1},
+        "backend": {"name": "test-center", "options": {"reply": '{"x": NaN, "y": 100}'}},
+        "strategy": "basic",
+        "parser": "official",
+        "scorers": ["official"],
+        "output": str(tmp_path / "run-nan"),
+    }))
+    result = runner.invoke(app, ["run", str(pipeline), "--quiet"])
+    assert result.exit_code == 0, result.output
+    assert "NaN coordinate" in result.stderr and "/c#0" in result.stderr
