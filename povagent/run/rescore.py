@@ -139,7 +139,7 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
     summary = breakdown(scored)
     readings = [r.official_reading.parser for r in rows if r.official_reading is not None]
     if readings and scorer_name == "official":  # parsed leniently: the paper-comparable reading beside
-        from povagent.run.runner import scored_row
+        from povagent.run.summary import scored_row
 
         summary["official_parse"] = official_parse_breakdown(
             [scored_row(officially_read(r), scorer_name) if r.official_reading is not None else s
