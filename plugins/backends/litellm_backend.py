@@ -38,6 +38,7 @@ from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.engine.llm_import import import_litellm
 from povagent.config.profiles import ModelProfile, resolve_profile
+from povagent.run.logs import Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
 
@@ -69,11 +70,31 @@ _KEY_MESSAGE = (
 )
 
 
+_KEY_ENV_MESSAGE = (
+    "wants the name of an environment variable that holds the key (letters, digits and _, not "
+    "starting with a digit, e.g. OPENAI_API_KEY), not the key itself; the value given is not such "
+    "a name and is not shown (it may be a key). Export the key (export MY_KEY=...) and write "
+    "api_key_env: MY_KEY"
+)
+
+
+def _check_key_env(value: Any) -> Any:
+    """Refuse an ``api_key_env`` that cannot be a variable name, without repeating the value."""
+    if value is not None and not (isinstance(value, str) and Redactor().plausible_variable_name(value)):
+        raise ValueError(_KEY_ENV_MESSAGE)
+    return value
+
+
 #: Request headers that carry a credential (a key passed as a header is still a key in YAML).
 _CREDENTIAL_HEADERS = frozenset({"authorization", "api-key", "x-api-key", "x-goog-api-key", "proxy-authorization"})
 
 
 def _reject_literal_key(where: str, params: Mapping[str, Any]) -> None:
+    if "api_key_env" in params:
+        try:
+            _check_key_env(params["api_key_env"])
+        except ValueError as exc:
+            raise ValueError(f"{where}.api_key_env: {exc}") from None
     key = params.get("api_key")
     # litellm's own "os.environ/NAME" form is a reference to the environment, not a key
     if key is not None and not (isinstance(key, str) and key.startswith("os.environ/")):
@@ -93,13 +114,18 @@ class LiteLLMOptions(BaseModel):
 
     model: str | None = Field(None, min_length=1)
     api_base: str | None = None
-    api_key_env: str | None = Field(None, min_length=1)
+    api_key_env: str | None = None
     temperature: float | None = Field(None, ge=0)
     max_tokens: int | None = Field(None, gt=0)
     timeout: float = Field(120.0, gt=0)
     extra: dict[str, Any] = Field(default_factory=dict)
     router: list[dict[str, Any]] | None = Field(None, min_length=1)
     router_settings: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("api_key_env", mode="before")
+    @classmethod
+    def _a_variable_name(cls, value: Any) -> Any:
+        return _check_key_env(value)
 
     @field_validator("extra")
     @classmethod
