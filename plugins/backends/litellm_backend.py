@@ -37,7 +37,8 @@ from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.engine.llm_import import import_litellm
-from povagent.config.profiles import ModelProfile, resolve_profile
+from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
+from povagent.plugins import get_plugin_host, unknown_name_message
 from povagent.run.logs import Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
@@ -215,7 +216,13 @@ class LiteLLMBackend(Backend):
         # litellm strings carry a provider prefix; bare names may be profiles
         if not isinstance(model, str) or "/" in model:
             return None
-        return resolve_profile(model)
+        profile = resolve_profile(model)
+        if profile is None:
+            # a near miss of a profile is a typo, refused as under model: (not sent to litellm)
+            known = get_plugin_host().names("profile")
+            if near_profile(model, known) is not None:
+                raise ConfigError(f"backend 'litellm': option 'model': {unknown_name_message('profile', model[:80], known)}")
+        return profile
 
     @staticmethod
     def _with_profile_defaults(profile: ModelProfile, options: dict[str, Any]) -> dict[str, Any]:
