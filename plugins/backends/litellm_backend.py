@@ -39,7 +39,7 @@ from povagent.interfaces import Backend, PermanentBackendError, TransientBackend
 from povagent.engine.llm_import import import_litellm
 from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
 from povagent.plugins import get_plugin_host, unknown_name_message
-from povagent.run.logs import Redactor
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
 
@@ -71,18 +71,10 @@ _KEY_MESSAGE = (
 )
 
 
-_KEY_ENV_MESSAGE = (
-    "wants the name of an environment variable that holds the key (letters, digits and _, not "
-    "starting with a digit, e.g. OPENAI_API_KEY), not the key itself; the value given is not such "
-    "a name and is not shown (it may be a key). Export the key (export MY_KEY=...) and write "
-    "api_key_env: MY_KEY"
-)
-
-
 def _check_key_env(value: Any) -> Any:
     """Refuse an ``api_key_env`` that cannot be a variable name, without repeating the value."""
     if value is not None and not (isinstance(value, str) and Redactor().plausible_variable_name(value)):
-        raise ValueError(_KEY_ENV_MESSAGE)
+        raise ValueError(ENV_NAME_WANTED)
     return value
 
 

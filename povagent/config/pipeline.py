@@ -56,7 +56,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from povagent.config.profiles import near_profile
 from povagent.dataset.models import Condition, Direction
 from povagent.errors import ConfigError, PluginError
-from povagent.run.logs import Redactor
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
 
 Loc = tuple[Any, ...]
@@ -610,6 +610,7 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     if config.backend is not None:
         check("backend", config.backend.name, ("backend", "name") if ("backend", "name") in source.lines else ("backend",))
         check_profile_option(config.backend, host, source, prefix, problems)
+        check_env_options(config.backend.options, ("backend", "options"), source, prefix, problems)
     check("strategy", config.strategy.name, ("strategy", "name") if ("strategy", "name") in source.lines else ("strategy",))
     if config.parser is not None:
         check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
@@ -619,7 +620,25 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
     if problems:
-        raise ConfigError("unknown plugin name(s):\n" + "\n".join(problems))
+        raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
+
+
+def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """Every ``*_env`` option (``api_key_env``, also inside router deployments) must name an
+    environment variable; a key pasted there is refused at its line and never repeated."""
+    redactor = Redactor()
+    stack: list[tuple[Loc, Any]] = [(loc, options)]
+    while stack:
+        here, value = stack.pop()
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                if isinstance(k, str) and k.lower().endswith("_env") and v is not None:
+                    if not (isinstance(v, str) and redactor.plausible_variable_name(v)):
+                        problems.append(f"{source.where(prefix + here + (k,))}: {_dotted(here + (k,))}: {ENV_NAME_WANTED}")
+                else:
+                    stack.append((here + (k,), v))
+        elif isinstance(value, list):
+            stack.extend((here + (i,), v) for i, v in enumerate(value))
 
 
 def check_profile_option(backend: ComponentSpec, host: PluginHost, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:

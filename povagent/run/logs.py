@@ -40,6 +40,13 @@ _SECRET_TEXT = [
 ]
 #: What a plausible environment variable name looks like (``OPENAI_API_KEY``, ``my_key_2``).
 ENV_VAR_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: What a ``*_env`` field wants, for messages refusing a value (which they never repeat).
+ENV_NAME_WANTED = (
+    "wants the name of an environment variable that holds the key (letters, digits and _, not "
+    "starting with a digit, e.g. OPENAI_API_KEY), not the key itself; the value given is not such "
+    "a name and is not shown (it may be a key). Export the key (export MY_KEY=...) and write "
+    "api_key_env: MY_KEY"
+)
 #: Longer "names" are refused too: a variable name is a word, a key is a long random string.
 MAX_VARIABLE_NAME = 64
 _SECRET_ENV = re.compile(r".*(_API_KEY|_TOKEN|_SECRET|_ACCESS_KEY)$|^API_KEY$", re.IGNORECASE)
