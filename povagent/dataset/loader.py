@@ -317,7 +317,7 @@ def _with_sound_files(
             problems.append(Problem(log_file, where, problem))
             usable = False
     for pair_id, pair in list(house.pairs.items()):
-        where = f"$[{_raw_index(raw_pairs, 'pair_id', pair_id, 0)}].rgb_path"
+        where = f"$[{_raw_index(raw_pairs, 'pair_id', pair_id, -1)}].rgb_path"
         try:
             path = observer_view_path(real_root, house.folder, pair.rgb_path)
         except OutsideDatasetError as exc:
@@ -333,8 +333,11 @@ def _with_sound_files(
 
 
 def _raw_index(raw: list[Any], key: str, value: str, default: int) -> int:
-    """The index of the last raw entry whose ``key`` is ``value`` (the entry a loaded record
-    came from; ids compare as strings, as the models read them)."""
+    """The index of the raw entry a loaded record came from: ``default`` when that entry's
+    ``key`` is ``value``, else the last such entry (ids compare as strings, as the models read
+    them; a repeated pair id keeps its last entry)."""
+    if 0 <= default < len(raw) and isinstance(raw[default], dict) and str(raw[default].get(key)) == value:
+        return default
     for i in range(len(raw) - 1, -1, -1):
         entry = raw[i]
         if isinstance(entry, dict) and str(entry.get(key)) == value:

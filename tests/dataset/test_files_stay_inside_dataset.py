@@ -150,3 +150,20 @@ def test_a_symlink_inside_the_dataset_to_another_file_of_it_is_allowed(dataset_c
     os.symlink("frame_001.png", frames / "frame_000.png")
     ds = load_dataset(dataset_copy)
     assert HOUSE in ds.houses and not ds.problems
+
+
+def test_a_real_world_set_refuses_a_frame_symlinked_out_of_its_folder(tmp_path, outside_png, opened_files):
+    from pathlib import Path
+
+    from povagent.dataset.realworld import load_realworld
+
+    demo = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
+    root = tmp_path / "rw"
+    shutil.copytree(demo, root)
+    frame = sorted(p for p in root.rglob("*") if p.suffix.lower() in (".png", ".jpg", ".jpeg"))[0]
+    frame.unlink()
+    os.symlink(outside_png, frame)
+    opened_files.clear()
+    with pytest.raises(DatasetError, match="outside the set's folder"):
+        load_realworld(root, cache_dir=tmp_path / "cache")
+    assert str(outside_png) not in opened_files
