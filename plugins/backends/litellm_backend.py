@@ -37,7 +37,9 @@ from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.engine.llm_import import import_litellm, warm_up_litellm
-from povagent.config.profiles import ModelProfile, resolve_profile
+from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
+from povagent.plugins import get_plugin_host, unknown_name_message
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error
 from povagent_plugins.backends.openai_messages import openai_messages
 
@@ -69,11 +71,23 @@ _KEY_MESSAGE = (
 )
 
 
+def _check_key_env(value: Any) -> Any:
+    """Refuse an ``api_key_env`` that cannot be a variable name, without repeating the value."""
+    if value is not None and not (isinstance(value, str) and Redactor().plausible_variable_name(value)):
+        raise ValueError(ENV_NAME_WANTED)
+    return value
+
+
 #: Request headers that carry a credential (a key passed as a header is still a key in YAML).
 _CREDENTIAL_HEADERS = frozenset({"authorization", "api-key", "x-api-key", "x-goog-api-key", "proxy-authorization"})
 
 
 def _reject_literal_key(where: str, params: Mapping[str, Any]) -> None:
+    if "api_key_env" in params:
+        try:
+            _check_key_env(params["api_key_env"])
+        except ValueError as exc:
+            raise ValueError(f"{where}.api_key_env: {exc}") from None
     key = params.get("api_key")
     # litellm's own "os.environ/NAME" form is a reference to the environment, not a key
     if key is not None and not (isinstance(key, str) and key.startswith("os.environ/")):
@@ -93,13 +107,18 @@ class LiteLLMOptions(BaseModel):
 
     model: str | None = Field(None, min_length=1)
     api_base: str | None = None
-    api_key_env: str | None = Field(None, min_length=1)
+    api_key_env: str | None = None
     temperature: float | None = Field(None, ge=0)
     max_tokens: int | None = Field(None, gt=0)
     timeout: float = Field(120.0, gt=0)
     extra: dict[str, Any] = Field(default_factory=dict)
     router: list[dict[str, Any]] | None = Field(None, min_length=1)
     router_settings: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("api_key_env", mode="before")
+    @classmethod
+    def _a_variable_name(cls, value: Any) -> Any:
+        return _check_key_env(value)
 
     @field_validator("extra")
     @classmethod
@@ -189,7 +208,13 @@ class LiteLLMBackend(Backend):
         # litellm strings carry a provider prefix; bare names may be profiles
         if not isinstance(model, str) or "/" in model:
             return None
-        return resolve_profile(model)
+        profile = resolve_profile(model)
+        if profile is None:
+            # a near miss of a profile is a typo, refused as under model: (not sent to litellm)
+            known = get_plugin_host().names("profile")
+            if near_profile(model, known) is not None:
+                raise ConfigError(f"backend 'litellm': option 'model': {unknown_name_message('profile', model[:80], known)}")
+        return profile
 
     @staticmethod
     def _with_profile_defaults(profile: ModelProfile, options: dict[str, Any]) -> dict[str, Any]:

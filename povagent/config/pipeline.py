@@ -33,6 +33,13 @@ default)::
 Relative paths are relative to the working directory. A typo in a key or a plugin name fails
 before any request, naming the file, the line and the nearest valid name.
 
+A config is untrusted input too, and what it may ask for is bounded: the file's size
+(:data:`MAX_CONFIG_BYTES`), its nesting (:data:`MAX_NESTING`), what its aliases expand to
+(:data:`MAX_VALUES`, so a "billion laughs" is refused before anything expands it), repeats
+(:data:`MAX_RUNS`), retries and waits (finite, at most :data:`MAX_WAIT_S`), the request timeout
+and concurrency. A key given twice is an error, not "last one wins"; text that is not UTF-8 is
+refused; values quoted back in messages are cut short.
+
 This module reads and checks configs; it must not run anything (see :mod:`povagent.run.runner`).
 """
 
@@ -49,20 +56,60 @@ from typing import Any, Iterable, Mapping, Union, get_args, get_origin
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from povagent.config.profiles import near_profile
 from povagent.dataset.models import Condition, Direction
 from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
-from povagent.run.logs import Redactor
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
 
 Loc = tuple[Any, ...]
 
+#: Largest config file read (a pipeline is a few hundred bytes; a sweep with routers a few KiB).
+MAX_CONFIG_BYTES = 1024 * 1024
+#: Deepest nesting of mappings and lists (a pipeline needs about 6).
+MAX_NESTING = 64
+#: Most values a document may hold once its aliases are expanded.
+MAX_VALUES = 50_000
+#: Most repeats a pipeline may ask for (``runs: N`` or a list of N indices); the paper uses 3.
+MAX_RUNS = 100
+#: Longest retry wait and request timeout, in seconds.
+MAX_WAIT_S = 3600.0
+#: Most attempts per request, and most requests in flight.
+MAX_ATTEMPTS = 100
+MAX_CONCURRENCY = 1024
+#: Longest user value quoted back in a message.
+_SHOWN = 80
+
+
+def shown(value: Any) -> str:
+    """``repr(value)``, cut to a readable length (a hostile config may hold megabytes)."""
+    text = repr(value) if not isinstance(value, str) else repr(value if len(value) <= _SHOWN else value[:_SHOWN] + "...")
+    return text if len(text) <= _SHOWN + 10 else text[:_SHOWN] + "..."
+
+
+def _cut(name: str) -> str:
+    """A user-written name cut for messages and name suggestions (difflib is quadratic)."""
+    return name if len(name) <= _SHOWN else name[:_SHOWN] + "..."
+
 
 # -- models -------------------------------------------------------------------------------------
 class _Strict(BaseModel):
-    """Unknown keys are errors (a typo must never be silently ignored)."""
+    """Unknown keys are errors (a typo must never be silently ignored); numbers are finite
+    (``.inf`` is a wait that never ends)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+def _a_folder_path(value: Path) -> Path:
+    """``value`` may become a folder: neither it nor any existing parent is a file."""
+    for p in (value, *value.parents):
+        if p.exists():
+            if not p.is_dir():
+                where = "names" if p == value else f"is under {p}, which is"
+                raise ValueError(f"{where} an existing file, not a folder: choose a folder path for the run's files")
+            break
+    return value
 
 
 class ComponentSpec(_Strict):
@@ -180,8 +227,6 @@ class InstanceFilter(_Strict):
         return value
 
 
-#: Longest per-request timeout a pipeline may set (seconds): one day.
-MAX_TIMEOUT_S = 86400.0
 
 
 class CacheSpec(_Strict):
@@ -197,6 +242,13 @@ class CacheSpec(_Strict):
             return {"enabled": value}
         if isinstance(value, str):
             return {"path": value}
+        return value
+
+    @field_validator("path")
+    @classmethod
+    def _a_file(cls, value: Path | None) -> Path | None:
+        if value is not None and value.is_dir():
+            raise ValueError("names a folder; the cache is one file (e.g. runs/cache.sqlite)")
         return value
 
 
@@ -218,10 +270,10 @@ class PipelineConfig(_Strict):
     parser: ComponentSpec | None = None
     scorers: list[ComponentSpec] = Field(default_factory=lambda: [ComponentSpec(name="official")])
     runs: int | list[int] = 1
-    concurrency: int = Field(16, ge=1)
+    concurrency: int = Field(16, ge=1, le=MAX_CONCURRENCY)
     retry: RetryPolicy = Field(default_factory=RetryPolicy)
-    #: seconds one request may take (finite: no config may make a run wait forever)
-    timeout: float = Field(120.0, gt=0, le=MAX_TIMEOUT_S, allow_inf_nan=False)
+    #: seconds one request may take (finite and bounded: no config may make a run wait forever)
+    timeout: float = Field(120.0, gt=0, le=MAX_WAIT_S, allow_inf_nan=False)
     #: consecutive infra_error rows that stop the run (a circuit breaker); 0 never stops
     stop_after_failures: int = Field(10, ge=0)
     cache: CacheSpec = Field(default_factory=CacheSpec)
@@ -233,10 +285,19 @@ class PipelineConfig(_Strict):
     def _runs(cls, value: int | list[int]) -> int | list[int]:
         if isinstance(value, int) and value < 1:
             raise ValueError("runs must be at least 1")
+        if isinstance(value, int) and value > MAX_RUNS:
+            raise ValueError(f"at most {MAX_RUNS} repeats (got {value}); the paper averages 3")
         if isinstance(value, list):
             if not value or any(r < 0 for r in value) or len(set(value)) != len(value):
                 raise ValueError("a list of runs must hold distinct run indices >= 0")
+            if len(value) > MAX_RUNS:
+                raise ValueError(f"at most {MAX_RUNS} run indices (got {len(value)})")
         return value
+
+    @field_validator("output")
+    @classmethod
+    def _output_is_a_folder(cls, value: Path) -> Path:
+        return _a_folder_path(value)
 
     @model_validator(mode="after")
     def _one_backend(self) -> "PipelineConfig":
@@ -292,6 +353,8 @@ class SweepAxes(_Strict):
     def _run_indices(cls, value: list[int] | None) -> list[int] | None:
         if value is not None and any(r < 0 for r in value):
             raise ValueError("run indices must be >= 0")
+        if value is not None and len(value) > MAX_RUNS:
+            raise ValueError(f"at most {MAX_RUNS} run indices (got {len(value)})")
         return value
 
 
@@ -318,6 +381,11 @@ class SweepConfig(_Strict):
     overrides: dict[str, dict[str, Any]] = Field(default_factory=dict)
     cache: CacheSpec = Field(default_factory=CacheSpec)
 
+    @field_validator("output")
+    @classmethod
+    def _output_is_a_folder(cls, value: Path) -> Path:
+        return _a_folder_path(value)
+
 
 # -- YAML with line numbers ---------------------------------------------------------------------
 @dataclass
@@ -343,48 +411,145 @@ class ConfigSource:
         return f"{self.file}, line {line}" if line else self.file
 
 
-def _record_lines(node: yaml.Node, loc: Loc, lines: dict[Loc, int]) -> None:
+def _record_lines(file: str, node: yaml.Node, loc: Loc, lines: dict[Loc, int], seen: set[int] | None = None) -> None:
+    """Record the line of every key and list item; a key twice in one mapping is an error.
+
+    A node reached again through an alias is not walked again: its lines are known from where
+    it was written, and walking every alias path is what a "billion laughs" exploits.
+    """
+    seen = set() if seen is None else seen
+    if id(node) in seen:
+        return
+    seen.add(id(node))
     if isinstance(node, yaml.MappingNode):
+        first: dict[str, int] = {}
         for key_node, value_node in node.value:
             key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
-            if key is None:
-                continue
-            lines[loc + (key,)] = key_node.start_mark.line + 1
-            _record_lines(value_node, loc + (key,), lines)
+            if key is None or key_node.tag == "tag:yaml.org,2002:merge":
+                continue  # "<<: *base" merges keys: an explicit key beside it overrides, as YAML says
+            line = key_node.start_mark.line + 1
+            if key in first:
+                section = _dotted(loc) if loc else "the top level"
+                raise ConfigError(
+                    f"{file}, line {line}: key {shown(key)} appears twice in {section} (first at line {first[key]}); "
+                    "keep one (YAML would silently use the last)"
+                )
+            first[key] = line
+            lines[loc + (key,)] = line
+            _record_lines(file, value_node, loc + (key,), lines, seen)
     elif isinstance(node, yaml.SequenceNode):
         for i, item in enumerate(node.value):
             lines[loc + (i,)] = item.start_mark.line + 1
-            _record_lines(item, loc + (i,), lines)
+            _record_lines(file, item, loc + (i,), lines, seen)
+
+
+def _check_shape(text: str, file: str) -> None:
+    """Refuse, from the event stream and before anything is built, a document nested deeper than
+    :data:`MAX_NESTING` or whose aliases expand it beyond :data:`MAX_VALUES` values (also an
+    alias inside its own anchor). Parse errors propagate as :class:`yaml.YAMLError`."""
+    loader = yaml.SafeLoader(text)
+    try:
+        sizes: dict[str, int] = {}  # anchor -> values it expands to
+        open_frames: list[list[Any]] = []  # [anchor, values so far] per open mapping or list
+        total = 0
+        while loader.check_event():
+            event = loader.get_event()
+            line = event.start_mark.line + 1 if event.start_mark is not None else None
+            where = f"{file}, line {line}" if line else file
+            added = 0
+            if isinstance(event, yaml.AliasEvent):
+                if any(frame[0] == event.anchor for frame in open_frames):
+                    raise ConfigError(f"{where}: alias *{_cut(event.anchor)} refers to its own anchor (a recursive alias)")
+                added = sizes.get(event.anchor, 1)
+            elif isinstance(event, yaml.ScalarEvent):
+                added = 1
+                if event.anchor:
+                    sizes[event.anchor] = 1
+            elif isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                if len(open_frames) >= MAX_NESTING:
+                    raise ConfigError(f"{where}: nested more than {MAX_NESTING} levels deep; a config needs a handful")
+                open_frames.append([event.anchor, 1])
+                total += 1
+                continue
+            elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                anchor, count = open_frames.pop()
+                if anchor:
+                    sizes[anchor] = count
+                if open_frames:
+                    open_frames[-1][1] += count
+                continue
+            else:
+                continue
+            if open_frames:
+                open_frames[-1][1] += added
+            total += added
+            if total > MAX_VALUES:
+                raise ConfigError(
+                    f"{where}: aliases (*name) expand this document to more than {MAX_VALUES:,} values; "
+                    "a config needs far fewer (is an anchor repeated inside another on purpose?)"
+                )
+    finally:
+        loader.dispose()
+
+
+def _yaml_error(exc: yaml.YAMLError, text: str, file: str) -> ConfigError:
+    """A parse error as a one-line message with the line."""
+    if isinstance(exc, yaml.reader.ReaderError):
+        line = text.count("\n", 0, exc.position) + 1
+        return ConfigError(f"{file}, line {line}: not valid YAML: control character #x{exc.character:04x} (a config is plain text)")
+    mark = getattr(exc, "problem_mark", None)
+    where = f"{file}, line {mark.line + 1}" if mark is not None else file
+    problem = getattr(exc, "problem", None) or str(exc)
+    return ConfigError(f"{where}: not valid YAML: {_cut(problem)}")
 
 
 def parse_yaml(text: str, file: str) -> ConfigSource:
-    """Parse YAML with the safe loader, keeping the line of every key; errors name the line."""
+    """Parse YAML with the safe loader, keeping the line of every key; errors name the line.
+
+    The document is bounded before it is built (size, nesting, alias expansion) and a key
+    given twice in one mapping is an error.
+    """
+    if len(text) > MAX_CONFIG_BYTES:
+        raise ConfigError(f"{file}: {len(text) / 1048576:.1f} MiB of text; a config is at most {MAX_CONFIG_BYTES // 1048576} MiB")
+    try:
+        _check_shape(text, file)
+    except yaml.YAMLError as exc:
+        raise _yaml_error(exc, text, file) from None
     loader = yaml.SafeLoader(text)
     try:
         node = loader.get_single_node()
+        lines: dict[Loc, int] = {}
+        if node is not None:
+            # before construction: building a mapping folds "<<" merges into it
+            _record_lines(file, node, (), lines)
         data = loader.construct_document(node) if node is not None else None
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{file}, line {mark.line + 1}" if mark is not None else file
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(f"{where}: not valid YAML: {problem}") from None
+        raise _yaml_error(exc, text, file) from None
     finally:
         loader.dispose()
-    lines: dict[Loc, int] = {}
-    if node is not None:
-        _record_lines(node, (), lines)
     return ConfigSource(file, data, lines)
 
 
 def read_yaml(path: str | Path) -> ConfigSource:
-    """Read and parse a YAML file (a missing file is a :class:`ConfigError`)."""
+    """Read and parse a YAML file (a missing, oversized or non-UTF-8 file is a :class:`ConfigError`)."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        if p.is_dir():
+            raise ConfigError(f"{p}: is a folder, not a YAML file")
+        size = p.stat().st_size
+        if size > MAX_CONFIG_BYTES:
+            raise ConfigError(
+                f"{p}: {size / 1048576:.1f} MiB; a config is at most {MAX_CONFIG_BYTES // 1048576} MiB (is this the right file?)"
+            )
+        raw = p.read_bytes()
     except FileNotFoundError:
         raise ConfigError(f"{p}: file not found") from None
     except OSError as exc:
         raise ConfigError(f"{p}: cannot be read: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{p}: not UTF-8 text (byte {exc.start} is 0x{raw[exc.start]:02x}); a config is a YAML text file saved as UTF-8") from None
     return parse_yaml(text, str(p))
 
 
@@ -421,7 +586,7 @@ def _clean_loc(loc: Loc) -> Loc:
 def _dotted(loc: Loc) -> str:
     out = ""
     for p in loc:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+        out += f"[{p}]" if isinstance(p, int) else (f".{_cut(str(p))}" if out else _cut(str(p)))
     return out or "(top level)"
 
 
@@ -439,7 +604,7 @@ def validation_message(exc: ValidationError, model: type[BaseModel], source: Con
             allowed = list(parent.model_fields) if parent else []
             bad = loc[-1]
             section = _dotted(loc[:-1]) if loc[:-1] else "the top level"
-            out.append(f"{where}: unknown key {bad!r} in {section}{did_you_mean(str(bad), allowed)}; allowed: {', '.join(allowed)}")
+            out.append(f"{where}: unknown key {shown(bad)} in {section}{did_you_mean(_cut(str(bad)), allowed)}; allowed: {', '.join(allowed)}")
         elif err["type"] == "missing":
             out.append(f"{where}: {_dotted(loc)}: required key is missing")
         else:
@@ -447,7 +612,7 @@ def validation_message(exc: ValidationError, model: type[BaseModel], source: Con
             if err["type"] == "enum":
                 expected = err.get("ctx", {}).get("expected", "")
                 choices = _QUOTED.findall(expected)
-                msg = f"{err['input']!r} is not one of {expected}{did_you_mean(str(err['input']), choices)}"
+                msg = f"{shown(err['input'])} is not one of {expected}{did_you_mean(_cut(str(err['input'])), choices)}"
             out.append(f"{where}: {_dotted(loc)}: {msg}")
     return "\n".join(out)
 
@@ -469,12 +634,14 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     def check(kind: str, name: str, loc: Loc) -> None:
         known = host.names(kind)
         if name not in known:
-            problems.append(f"{source.where(prefix + loc)}: {_dotted(loc)}: {unknown_name_message(kind, name, known)}")
+            problems.append(f"{source.where(prefix + loc)}: {_dotted(loc)}: {unknown_name_message(kind, _cut(name), known)}")
 
     if config.model is not None:
         check("profile", config.model, ("model",))
     if config.backend is not None:
         check("backend", config.backend.name, ("backend", "name") if ("backend", "name") in source.lines else ("backend",))
+        check_profile_option(config.backend, host, source, prefix, problems)
+        check_env_options(config.backend.options, ("backend", "options"), source, prefix, problems)
     check("strategy", config.strategy.name, ("strategy", "name") if ("strategy", "name") in source.lines else ("strategy",))
     if config.parser is not None:
         check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
@@ -484,7 +651,37 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
     if problems:
-        raise ConfigError("unknown plugin name(s):\n" + "\n".join(problems))
+        raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
+
+
+def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """Every ``*_env`` option (``api_key_env``, also inside router deployments) must name an
+    environment variable; a key pasted there is refused at its line and never repeated."""
+    redactor = Redactor()
+    stack: list[tuple[Loc, Any]] = [(loc, options)]
+    while stack:
+        here, value = stack.pop()
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                if isinstance(k, str) and k.lower().endswith("_env") and v is not None:
+                    if not (isinstance(v, str) and redactor.plausible_variable_name(v)):
+                        problems.append(f"{source.where(prefix + here + (k,))}: {_dotted(here + (k,))}: {ENV_NAME_WANTED}")
+                else:
+                    stack.append((here + (k,), v))
+        elif isinstance(value, list):
+            stack.extend((here + (i,), v) for i, v in enumerate(value))
+
+
+def check_profile_option(backend: ComponentSpec, host: PluginHost, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """A near miss of a model profile as the litellm backend's ``model`` option gets the same
+    "did you mean" as under ``model:`` (a bare name far from every profile is a litellm model)."""
+    model = backend.options.get("model")
+    if backend.name != "litellm" or not isinstance(model, str):
+        return
+    known = host.names("profile")
+    if near_profile(model, known) is not None:
+        loc = ("backend", "options", "model")
+        problems.append(f"{source.where(prefix + loc)}: {_dotted(loc)}: {unknown_name_message('profile', _cut(model), known)}")
 
 
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:

@@ -11,7 +11,9 @@ This module only describes models: it never imports litellm and never calls a mo
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+import difflib
+import re
+from typing import Any, Iterable, Mapping
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
@@ -52,6 +54,29 @@ class ModelProfile(BaseModel):
     def supports(self, condition: Condition | str) -> bool:
         """Whether the model can answer instances of ``condition``."""
         return Condition(condition) in self.conditions
+
+
+def near_profile(name: str, known: Iterable[str]) -> str | None:
+    """The profile a bare model name (no ``provider/``) is a near miss of, or ``None``.
+
+    Where a model string may be either a profile or a litellm model (the litellm backend's
+    ``model`` option), an unknown bare name is a typo only when it is this close to a profile:
+    the same after dropping case and ``-_.`` (``qwen3-vl8b``), or at least 90% alike
+    (``gemini-robotic-er``). ``gpt-5`` or ``gpt-4o`` stay litellm model strings.
+    """
+    names = list(known)
+    if "/" in name or name in names:
+        return None
+    flat = _flat(name)
+    for candidate in names:
+        if _flat(candidate) == flat:
+            return candidate
+    close = difflib.get_close_matches(name[:200], names, n=1, cutoff=0.9)
+    return close[0] if close else None
+
+
+def _flat(name: str) -> str:
+    return re.sub(r"[-_.\s]", "", name.lower())
 
 
 def resolve_profile(name: str, host: Any = None) -> ModelProfile | None:

@@ -1,8 +1,10 @@
 """Loading a dataset in the POVBench release layout into typed houses and instances.
 
 Loading never crashes on one bad house or pair: it records a :class:`Problem` and goes on
-(``strict=True`` raises instead). Thorough checks of every file and image are the job of
-:mod:`povagent.dataset.validate`; here we only parse what a run needs.
+(``strict=True`` raises instead). A dataset is untrusted: no file outside the dataset folder is
+ever opened (a house naming one is refused), no number may be NaN or infinite, and every image
+a run would send is checked once here (complete, of its camera's size) rather than failing
+mid-run. Thorough checks of every file are the job of :mod:`povagent.dataset.validate`.
 """
 
 from __future__ import annotations
@@ -23,8 +25,11 @@ from povagent.dataset.models import (
     DatasetMeta,
     Direction,
     ExplorationRecord,
+    RELEASE_FILE,
     PairEntry,
 )
+from povagent.dataset.image_files import image_problem
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
 from povagent.dataset.problems import Problem, problems_from_validation_error
 from povagent.errors import DatasetError
 from povagent.geometry.camera import Camera
@@ -115,12 +120,13 @@ def observer_camera(pair: PairEntry) -> Camera:
 
 
 def resolve_image(house_folder: Path, rel: str) -> Path:
-    """An image path of the release, relative to the house folder (or, failing that, the root)."""
-    p = house_folder / rel
-    if p.exists():
-        return p
-    alt = house_folder.parent.parent / rel
-    return alt if alt.exists() else p
+    """An image path of the release, relative to the house folder (or, failing that, the root);
+    a path leading outside the dataset is a :class:`DatasetError` (loading refuses such houses)."""
+    root = house_folder.parent.parent
+    try:
+        return observer_view_path(dataset_root(root), house_folder, rel)
+    except OutsideDatasetError as exc:
+        raise DatasetError(f"{house_folder / rel}: {exc}") from None
 
 
 def anchor_box(pair: PairEntry) -> AnchorBox:
@@ -234,10 +240,16 @@ class Dataset:
 
 def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:
     rel = _rel(path, root)
+    if (path.exists() or path.is_symlink()) and not is_inside(dataset_root(root), path):
+        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
+        return None
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         problems.append(Problem(rel, "$", "file is missing"))
+        return None
+    except UnicodeDecodeError as exc:
+        problems.append(Problem(rel, "$", f"is not UTF-8 text (byte {exc.start})"))
         return None
     except OSError as exc:
         problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
@@ -246,7 +258,9 @@ def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-        return None
+    except RecursionError:
+        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
+    return None
 
 
 def _rel(path: Path, root: Path) -> str:
@@ -264,8 +278,14 @@ def house_folders(root: Path) -> list[Path]:
     return sorted(p for p in art.iterdir() if p.is_dir())
 
 
-def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tuple[int, int] = (512, 512)) -> House | None:
-    """Load one house; bad pairs are reported and skipped, an unusable house returns ``None``."""
+def load_house(
+    folder: Path, root: Path, problems: list[Problem], frame_size: tuple[int, int] = (512, 512), check_images: bool = True
+) -> House | None:
+    """Load one house; bad pairs are reported and skipped, an unusable house returns ``None``.
+
+    ``check_images=False`` skips the image checks (not the rule that every file stays inside
+    the dataset): for readers that only draw, and say so on a bad image themselves.
+    """
     house_id = folder.name
     before = len(problems)
     raw_pairs = _read_json(folder / f"{house_id}.json", root, problems)
@@ -283,7 +303,7 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
     pairs: dict[str, PairEntry] = {}
     for i, raw in enumerate(raw_pairs):
         try:
-            pair = PairEntry.model_validate(raw)
+            pair = PairEntry.model_validate(raw, context=RELEASE_FILE)
         except ValidationError as exc:
             problems.extend(problems_from_validation_error(pairs_file, exc, (i,)))
             continue
@@ -303,7 +323,7 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
     log_ok = True
     for i, raw in enumerate(raw_log):
         try:
-            exploration.append(ExplorationRecord.model_validate(raw))
+            exploration.append(ExplorationRecord.model_validate(raw, context=RELEASE_FILE))
         except ValidationError as exc:
             problems.extend(problems_from_validation_error(log_file, exc, (i,)))
             log_ok = False
@@ -316,7 +336,7 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
         raw_vis = _read_json(vis_path, root, problems)
         if raw_vis is not None:
             try:
-                visible = _VISIBLE.validate_python(raw_vis)
+                visible = _VISIBLE.validate_python(raw_vis, context=RELEASE_FILE)
             except ValidationError as exc:
                 problems.extend(problems_from_validation_error(_rel(vis_path, root), exc))
     frame_paths = official_frame_paths(folder, exploration)
@@ -329,15 +349,74 @@ def load_house(folder: Path, root: Path, problems: list[Problem], frame_size: tu
         return None
     if not pairs and len(problems) > before:
         return None
-    return House(house_id, folder, pairs, exploration, visible, frame_size, frame_paths)
+    house = House(house_id, folder, pairs, exploration, visible, frame_size, frame_paths)
+    return _with_sound_files(house, raw_pairs, raw_log, root, problems, check_images)
 
 
-def load_dataset(root: str | Path, *, strict: bool = False, frame_size: tuple[int, int] = (512, 512)) -> Dataset:
+def _with_sound_files(
+    house: House, raw_pairs: list[Any], raw_log: list[Any], root: Path, problems: list[Problem], check_images: bool
+) -> House | None:
+    """``house`` if every file it names stays inside the dataset and its frames are sound
+    images; pairs with a bad observer view are dropped. Each problem names file and field.
+
+    A path leading out of the dataset refuses the whole house (its files are untrusted); a bad
+    exploration frame too (dropping it would shift the A/B frame indices predictions use).
+    """
+    real_root = dataset_root(root)
+    log_file = _rel(house.folder / EXPLORATION_LOG, root)
+    pairs_file = _rel(house.folder / f"{house.house_id}.json", root)
+    usable = True
+    for i, rec in enumerate(house.exploration):
+        where = f"$[{_raw_index(raw_log, 'image_path', rec.image_path, i)}].image_path"
+        try:
+            path = confined(real_root, house.folder, rec.image_path)
+        except OutsideDatasetError as exc:
+            problems.append(Problem(log_file, where, str(exc)))
+            usable = False
+            continue
+        problem = image_problem(path, rec.image_path, house.frame_size) if check_images else None
+        if problem is not None:
+            problems.append(Problem(log_file, where, problem))
+            usable = False
+    for pair_id, pair in list(house.pairs.items()):
+        where = f"$[{_raw_index(raw_pairs, 'pair_id', pair_id, -1)}].rgb_path"
+        try:
+            path = observer_view_path(real_root, house.folder, pair.rgb_path)
+        except OutsideDatasetError as exc:
+            problems.append(Problem(pairs_file, where, str(exc)))
+            usable = False
+            continue
+        size = (pair.camera.screen_width, pair.camera.screen_height)
+        problem = image_problem(path, pair.rgb_path, size) if check_images else None
+        if problem is not None:
+            problems.append(Problem(pairs_file, where, problem + "; the pair is skipped"))
+            del house.pairs[pair_id]
+    return house if usable and house.pairs else None
+
+
+def _raw_index(raw: list[Any], key: str, value: str, default: int) -> int:
+    """The index of the raw entry a loaded record came from: ``default`` when that entry's
+    ``key`` is ``value``, else the last such entry (ids compare as strings, as the models read
+    them; a repeated pair id keeps its last entry)."""
+    if 0 <= default < len(raw) and isinstance(raw[default], dict) and str(raw[default].get(key)) == value:
+        return default
+    for i in range(len(raw) - 1, -1, -1):
+        entry = raw[i]
+        if isinstance(entry, dict) and str(entry.get(key)) == value:
+            return i
+    return default
+
+
+def load_dataset(
+    root: str | Path, *, strict: bool = False, frame_size: tuple[int, int] = (512, 512), check_images: bool = True
+) -> Dataset:
     """Load a dataset folder in the release layout.
 
-    Problems (a malformed house file, a bad pair) are collected in ``Dataset.problems`` and the
-    affected house or pair is skipped. With ``strict=True`` any problem raises
-    :class:`DatasetError` listing them all.
+    Problems (a malformed house file, a bad pair, a path leading outside the dataset, a
+    truncated or wrongly sized image) are collected in ``Dataset.problems`` and the affected
+    house or pair is skipped. With ``strict=True`` any problem raises :class:`DatasetError`
+    listing them all. ``check_images=False`` skips the image checks (each image is read once
+    per process for them); paths are always kept inside the dataset.
     """
     root = Path(root)
     if not root.is_dir():
@@ -348,7 +427,7 @@ def load_dataset(root: str | Path, *, strict: bool = False, frame_size: tuple[in
         raw_meta = _read_json(root / "meta.json", root, problems)
         if raw_meta is not None:
             try:
-                meta = DatasetMeta.model_validate(raw_meta)
+                meta = DatasetMeta.model_validate(raw_meta, context=RELEASE_FILE)
             except ValidationError as exc:
                 problems.extend(problems_from_validation_error("meta.json", exc))
     folders = house_folders(root)
@@ -356,7 +435,7 @@ def load_dataset(root: str | Path, *, strict: bool = False, frame_size: tuple[in
         raise DatasetError(f"{root}: no house folders under {root / 'artifacts'} (is this a POVBench dataset?)")
     houses: dict[str, House] = {}
     for folder in folders:
-        house = load_house(folder, root, problems, frame_size)
+        house = load_house(folder, root, problems, frame_size, check_images)
         if house is not None:
             houses[house.house_id] = house
     if strict and problems:

@@ -3,7 +3,10 @@
 Strict where a mistake would silently corrupt scores (an unknown direction, a camera without a
 position, a bounding box without its corner points); tolerant where the real release varies
 (sentences as strings or as objects holding ``sentence``, ids as numbers or strings, and extra
-keys anywhere, which are kept and ignored). The JSON Schemas shipped in ``povagent/schemas`` are
+keys anywhere, which are kept and ignored). No number read from a release file may be NaN or
+infinite, extra keys included (validate with ``context=RELEASE_FILE``): Python's ``json`` reads
+them, and a NaN position silently corrupts the ground truth. Records built in code may hold NaN
+on purpose (a real-world set's unmeasured objects). The JSON Schemas shipped in ``povagent/schemas`` are
 generated from these models (``python -m povagent.dataset.schema``).
 """
 
@@ -12,7 +15,10 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, WithJsonSchema, field_validator, model_validator
+from pydantic_core import PydanticCustomError
+
+from povagent.dataset.problems import non_finite_numbers
 
 
 class Direction(StrEnum):
@@ -41,6 +47,9 @@ class Condition(StrEnum):
         """A and B show the exploration frames; C shows the one observer view."""
         return self is not Condition.GIVEN
 
+
+#: The largest image side a camera may declare (POVBench renders 512x512).
+MAX_SCREEN_SIDE = 16384
 
 DIRECTIONS: tuple[Direction, ...] = (Direction.RIGHT, Direction.LEFT, Direction.FRONT, Direction.UP)
 CONDITIONS: tuple[Condition, ...] = (Condition.INFERRED, Condition.STATED, Condition.GIVEN)
@@ -87,10 +96,24 @@ Identifier = Annotated[
 Float3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
+#: Validation context for data read from a release file: every number must be finite.
+RELEASE_FILE: dict[str, Any] = {"release_file": True}
+
+
 class _Record(BaseModel):
     """Base of every release record: extra keys are kept and ignored, never rejected."""
 
     model_config = ConfigDict(extra="allow", populate_by_name=True)
+
+    @model_validator(mode="after")
+    def _finite_in_release_files(self, info: ValidationInfo) -> "_Record":
+        # Each record checks its own numbers (fields, lists of them, extra keys); nested records
+        # check theirs, so the reported path is exact.
+        if isinstance(info.context, dict) and info.context.get("release_file"):
+            own = {**self.__dict__, **(self.model_extra or {})}
+            for loc, value in non_finite_numbers(own):
+                raise PydanticCustomError("non_finite", "not a finite number", {"at": list(loc), "value": value})
+        return self
 
 
 class Vec3(_Record):
@@ -142,8 +165,8 @@ class ObserverCamera(_Record):
     cam_yaw: float
     cam_horizon: float
     fov: float = Field(default=100.0, gt=0, lt=180)
-    screen_width: int = Field(default=512, gt=0)
-    screen_height: int = Field(default=512, gt=0)
+    screen_width: int = Field(default=512, gt=0, le=MAX_SCREEN_SIDE)
+    screen_height: int = Field(default=512, gt=0, le=MAX_SCREEN_SIDE)
 
 
 class SurfaceJudgement(_Record):

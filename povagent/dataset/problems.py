@@ -6,8 +6,9 @@ reports every problem). Converts pydantic and jsonschema errors into readable se
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any, Iterable, Iterator
 
 from pydantic import ValidationError
 
@@ -38,6 +39,35 @@ def json_path(loc: Iterable[Any]) -> str:
     return out
 
 
+def non_finite_numbers(data: Any, prefix: tuple[Any, ...] = ()) -> Iterator[tuple[tuple[Any, ...], float]]:
+    """``(location, value)`` of every NaN or infinity in parsed JSON, in document order.
+
+    Python's ``json`` reads ``NaN``, ``Infinity`` and overflowing literals (``1e999``) as
+    floats; no release field may hold one. Walks without recursion: a hostile file may nest
+    deeply.
+    """
+    stack: list[tuple[tuple[Any, ...], Any]] = [(prefix, data)]
+    while stack:
+        loc, value = stack.pop()
+        if isinstance(value, float):
+            if not math.isfinite(value):
+                yield loc, value
+        elif isinstance(value, dict):
+            stack.extend((loc + (k,), v) for k, v in reversed(list(value.items())))
+        elif isinstance(value, list):
+            stack.extend((loc + (i,), v) for i, v in reversed(list(enumerate(value))))
+
+
+def non_finite_message(value: float) -> str:
+    """The sentence for a non-finite number."""
+    return f"is {value!r}, not a finite number (NaN and Infinity are not positions, angles or sizes)"
+
+
+def non_finite_problems(file: str, data: Any, prefix: tuple[Any, ...] = ()) -> list[Problem]:
+    """One :class:`Problem` per NaN or infinity in ``data``."""
+    return [Problem(file, json_path(loc), non_finite_message(v)) for loc, v in non_finite_numbers(data, prefix)]
+
+
 _FRIENDLY = {
     "missing": "required field '{field}' is missing",
     "enum": "{msg}",
@@ -49,12 +79,16 @@ def problems_from_validation_error(file: str, err: ValidationError, prefix: tupl
     out: list[Problem] = []
     for e in err.errors(include_url=False):
         loc = prefix + tuple(e["loc"])
-        field = str(loc[-1]) if loc else ""
         kind = e["type"]
+        if kind == "non_finite":  # raised by a record for one of its numbers
+            loc = loc + tuple(e["ctx"]["at"])
+        field = str(loc[-1]) if loc else ""
         if kind == "missing":
             msg = f"required field '{field}' is missing"
         elif loc and loc[-1] == "[key]":
             msg = f"unknown key {e.get('input')!r}: {e['msg'][0].lower() + e['msg'][1:]}"
+        elif kind == "non_finite":
+            msg = f"'{field}' {non_finite_message(e['ctx']['value'])}"
         elif kind in ("too_short", "too_long") and isinstance(e.get("input"), list):
             msg = f"'{field}' has {len(e['input'])} items: {e['msg']}"
         else:

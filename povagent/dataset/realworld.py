@@ -55,6 +55,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.problems import Problem
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
+from povagent.dataset.paths import dataset_root, is_inside
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
 from povagent.scoring.breakdown import slices
@@ -256,6 +257,8 @@ def _image_problem(root: Path, rel: str, where: str) -> list[str]:
     path = root / rel
     if Path(rel).is_absolute() or ".." in Path(rel).parts:
         return [f"{where}: {rel!r} must be a path inside the set's folder"]
+    if not is_inside(dataset_root(root), path):  # a symlink leading out: never opened
+        return [f"{where}: {rel!r} leads outside the set's folder (a symlink); not opened"]
     try:
         with Image.open(path) as im:
             im.verify()

@@ -2,8 +2,11 @@
 
 Reports *every* problem (file, JSON path, a plain sentence); never stops at the first. Files
 are checked against the shipped JSON Schemas with ``jsonschema``; then what a schema cannot
-say: sentences for every direction with a placement, unique pair ids, images that exist,
-decode and have the camera's size, visible-object keys that name real frames.
+say: sentences for every direction with a placement, unique pair ids, numbers that are finite
+(no NaN or Infinity anywhere), every named file inside the dataset folder (an absolute path, a
+``../`` that climbs out or a symlink leading out is reported and never opened), images that
+exist, are complete, decode and have the camera's size, visible-object keys that name real
+frames.
 """
 
 from __future__ import annotations
@@ -13,11 +16,12 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from jsonschema import ValidationError as SchemaError
-from PIL import Image, UnidentifiedImageError
 
+from povagent.dataset.image_files import image_problem
 from povagent.dataset.loader import EXPLORATION_LOG, VISIBLE_OBJECTS, house_folders
 from povagent.dataset.models import DIRECTIONS
-from povagent.dataset.problems import Problem, json_path
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
+from povagent.dataset.problems import Problem, json_path, non_finite_problems
 from povagent.dataset.schema import validator
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
@@ -64,53 +68,56 @@ def _schema_problems(file: str, name: str, data: Any) -> list[Problem]:
     return sorted(out, key=lambda p: (p.json_path, p.message))
 
 
-def _load_json(path: Path, rel: str, problems: list[Problem]) -> Any:
-    if not path.exists():
+def _load_json(path: Path, rel: str, problems: list[Problem], real_root: Path) -> Any:
+    if not path.exists() and not path.is_symlink():
         problems.append(Problem(rel, "$", "file is missing"))
         return None
+    if not is_inside(real_root, path):
+        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
+        return None
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(path.read_text(encoding="utf-8"))
     except UnicodeDecodeError:
         problems.append(Problem(rel, "$", "is not UTF-8 text"))
+        return None
     except json.JSONDecodeError as exc:
         problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-    return None
+        return None
+    except RecursionError:
+        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
+        return None
+    except OSError as exc:
+        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
+        return None
+    problems.extend(non_finite_problems(rel, data))
+    return data
 
 
-def check_image(path: Path, rel: str, where: str, size: tuple[int, int] | None, problems: list[Problem]) -> None:
-    """The image exists, decodes, and (when known) has the camera's size."""
-    if not path.exists():
-        problems.append(Problem(rel, where, f"image {path.name!r} does not exist"))
-        return
-    try:
-        with Image.open(path) as im:
-            im.load()
-            actual = im.size
-    except (UnidentifiedImageError, OSError, SyntaxError) as exc:
-        problems.append(Problem(rel, where, f"image {path.name!r} cannot be decoded ({exc.__class__.__name__})"))
-        return
-    if size is not None and tuple(actual) != tuple(size):
-        problems.append(
-            Problem(rel, where, f"image {path.name!r} is {actual[0]}x{actual[1]} but its camera is {size[0]}x{size[1]}")
-        )
+def check_image(path: Path, name: str, rel: str, where: str, size: tuple[int, int] | None, problems: list[Problem]) -> None:
+    """The image ``name`` at ``path`` exists, is complete, decodes fully, and (when known) has
+    the camera's size; a problem is recorded against file ``rel`` at JSON path ``where``."""
+    problem = image_problem(path, name, size, decode=True)
+    if problem is not None:
+        problems.append(Problem(rel, where, problem))
 
 
 def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
     """Every problem of one house folder."""
     problems: list[Problem] = []
+    real_root = dataset_root(root)
     house_id = folder.name
     rel_house = folder.relative_to(root)
     pairs_rel = str(rel_house / f"{house_id}.json")
     log_rel = str(rel_house / EXPLORATION_LOG)
     vis_rel = str(rel_house / VISIBLE_OBJECTS)
 
-    pairs = _load_json(folder / f"{house_id}.json", pairs_rel, problems)
+    pairs = _load_json(folder / f"{house_id}.json", pairs_rel, problems, real_root)
     if pairs is not None:
         problems.extend(_schema_problems(pairs_rel, "pair_file", pairs))
         if isinstance(pairs, list):
-            problems.extend(_pair_checks(pairs, folder, pairs_rel))
+            problems.extend(_pair_checks(pairs, folder, pairs_rel, real_root))
 
-    log = _load_json(folder / EXPLORATION_LOG, log_rel, problems)
+    log = _load_json(folder / EXPLORATION_LOG, log_rel, problems, real_root)
     frame_paths: set[str] = set()
     if log is not None:
         problems.extend(_schema_problems(log_rel, "exploration_log", log))
@@ -118,26 +125,40 @@ def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512,
             first_at: dict[str, int] = {}
             for i, rec in enumerate(log):
                 if isinstance(rec, dict) and isinstance(rec.get("image_path"), str):
-                    path = rec["image_path"]
-                    if path in first_at:
+                    where = f"$[{i}].image_path"
+                    rel = rec["image_path"]
+                    if rel in first_at:
                         problems.append(
-                            Problem(log_rel, f"$[{i}].image_path", f"image_path {path!r} repeats the one at $[{first_at[path]}]; scoring uses this last record's camera, as officially")
+                            Problem(log_rel, where, f"image_path {rel!r} repeats the one at $[{first_at[rel]}]; scoring uses this last record's camera, as officially")
                         )
-                    first_at.setdefault(path, i)
-                    frame_paths.add(path)
-                    check_image(folder / path, log_rel, f"$[{i}].image_path", frame_size, problems)
+                    first_at.setdefault(rel, i)
+                    frame_paths.add(rel)
+                    try:
+                        path = confined(real_root, folder, rel)
+                    except OutsideDatasetError as exc:
+                        problems.append(Problem(log_rel, where, str(exc)))
+                        continue
+                    check_image(path, rel, log_rel, where, frame_size, problems)
 
-    vis = _load_json(folder / VISIBLE_OBJECTS, vis_rel, problems)
+    vis = _load_json(folder / VISIBLE_OBJECTS, vis_rel, problems, real_root)
     if vis is not None:
         problems.extend(_schema_problems(vis_rel, "per_image_visible_objects", vis))
         if isinstance(vis, dict) and log is not None:
             for key in vis:
-                if key not in frame_paths and not (folder / key).exists():
+                if key not in frame_paths and not _exists_inside(real_root, folder, key):
                     problems.append(Problem(vis_rel, json_path([key]), f"names image {key!r}, which is neither in the exploration log nor on disk"))
     return problems
 
 
-def _pair_checks(pairs: list[Any], folder: Path, rel: str) -> Iterable[Problem]:
+def _exists_inside(real_root: Path, folder: Path, rel: str) -> bool:
+    # A key naming a file outside the dataset is not probed, only reported as absent.
+    try:
+        return confined(real_root, folder, rel).exists()
+    except OutsideDatasetError:
+        return False
+
+
+def _pair_checks(pairs: list[Any], folder: Path, rel: str, real_root: Path) -> Iterable[Problem]:
     seen: dict[str, int] = {}
     for i, pair in enumerate(pairs):
         if not isinstance(pair, dict):
@@ -161,11 +182,13 @@ def _pair_checks(pairs: list[Any], folder: Path, rel: str) -> Iterable[Problem]:
                 w, h = cam.get("screen_width", 512), cam.get("screen_height", 512)
                 if isinstance(w, int) and isinstance(h, int):
                     size = (w, h)
-            path = folder / rgb
-            if not path.exists() and (folder.parent.parent / rgb).exists():
-                path = folder.parent.parent / rgb
+            try:
+                path = observer_view_path(real_root, folder, rgb)
+            except OutsideDatasetError as exc:
+                yield Problem(rel, f"$[{i}].rgb_path", str(exc))
+                continue
             probs: list[Problem] = []
-            check_image(path, rel, f"$[{i}].rgb_path", size, probs)
+            check_image(path, rgb, rel, f"$[{i}].rgb_path", size, probs)
             yield from probs
 
 
@@ -176,7 +199,7 @@ def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512))
         return [Problem(str(root), "$", "dataset folder not found")]
     problems: list[Problem] = []
     if (root / "meta.json").exists():
-        meta = _load_json(root / "meta.json", "meta.json", problems)
+        meta = _load_json(root / "meta.json", "meta.json", problems, dataset_root(root))
         if meta is not None:
             problems.extend(_schema_problems("meta.json", "meta", meta))
     folders = house_folders(root)

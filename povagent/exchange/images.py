@@ -7,6 +7,10 @@ entry is rebuilt from its recipe (the file, or the derivation) on next use, whic
 record, so a benchmark can check "one encode per distinct image" when memory suffices.
 In-memory images (:meth:`ImageStore.add_pil`) have nothing to be rebuilt from: their bytes stay
 for the store's lifetime.
+
+A file that is not a sound image (truncated, corrupt, not an image) is refused when added, with
+an error naming the file: the bytes are checked as they are read (a PNG's chunks and checksums,
+other formats decoded), once per file, never when a request is built.
 """
 
 from __future__ import annotations
@@ -20,7 +24,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from PIL import Image
+from PIL import Image, UnidentifiedImageError
+
+from povagent.dataset.image_files import ImageFileError, check_image_bytes
+from povagent.errors import DatasetError
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
@@ -56,6 +63,8 @@ class ImageStore:
         self._by_path: dict[Path, StoredImage] = {}
         self._by_hash: dict[str, StoredImage] = {}
         self._recipes: dict[str, Callable[[], bytes]] = {}
+        #: The file an image was first read from (named in decode errors).
+        self._sources: dict[str, str] = {}
         self._derived: dict[tuple[str, str], str] = {}
         self._cache: OrderedDict[tuple[str, str], bytes | str] = OrderedDict()
         self._cached_bytes = 0
@@ -75,9 +84,13 @@ class ImageStore:
         if known is not None:
             return known
         data = self._read_file(p)
-        with Image.open(io.BytesIO(data)) as im:
-            size, fmt = im.size, (im.format or "PNG")
-        info = self._remember(data, size, f"image/{fmt.lower()}", lambda p=p: self._read_file(p))
+        try:
+            facts = check_image_bytes(data)
+        except ImageFileError as exc:
+            raise DatasetError(f"{p}: image {exc}") from None
+        info = self._remember(data, facts.size, facts.media_type, lambda p=p: self._read_file(p))
+        with self._lock:
+            self._sources.setdefault(info.image_hash, str(p))
         with self._lock:
             # Another thread may have registered the same path meanwhile: one entry either way.
             return self._by_path.setdefault(p, info)
@@ -150,9 +163,16 @@ class ImageStore:
             return url
 
     def open(self, image_hash: str) -> Image.Image:
-        """A decoded PIL image (a new object: callers may draw on it)."""
-        im = Image.open(io.BytesIO(self.bytes(image_hash)))
-        im.load()
+        """A decoded PIL image (a new object: callers may draw on it); an image that does not
+        decode is a :class:`DatasetError` naming its file."""
+        try:
+            im = Image.open(io.BytesIO(self.bytes(image_hash)))
+            im.load()
+        except (OSError, SyntaxError, ValueError, EOFError) as exc:
+            source = self._sources.get(image_hash, f"image {image_hash[:12]}")
+            # Pillow's own message names the in-memory buffer (<_io.BytesIO ...>), not the file
+            reason = "not an image" if isinstance(exc, UnidentifiedImageError) else f"{type(exc).__name__}: {str(exc)[:200]}"
+            raise DatasetError(f"{source}: image cannot be decoded ({reason})") from None
         return im
 
     # -- internals ----------------------------------------------------------------------------

@@ -202,6 +202,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
             | {
                 "s": 0,
                 "img_b": b["img"],
+                "ie_b": b.get("ie"),
                 "e_b": b["e"],
                 "a_b": b["a"],
                 "ps_b": b["ps"],

@@ -15,6 +15,10 @@ page too: :func:`write_answer_chunks` moves them into small ``answers/<sha256>.j
 the page loads with a ``<script>`` tag (which works from ``file://``, unlike ``fetch``) only
 when a card is opened, so the page stays small whatever the models wrote.
 
+A source image that cannot be read or decoded (truncated, corrupt, not an image) never stops
+the report: its card says "image not drawn" with the file and the reason (``ie`` in the entry),
+and every other card is drawn as usual.
+
 This module draws and writes images only; it never scores (markers use the stored scores where
 they exist: the official projection, or the success scorer's hit radius).
 """
@@ -30,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.collect import Observation
@@ -86,6 +90,8 @@ class GalleryStats:
     drawn: int = 0
     cached: int = 0
     without_image: int = 0
+    #: Drawings whose source image could not be read or decoded (their cards say so).
+    bad_images: int = 0
     seconds: float = 0.0
 
 
@@ -229,12 +235,34 @@ def image_files(images_dir: Path, key: str) -> tuple[Path, Path]:
     return images_dir / f"{key}.jpg", images_dir / f"{key}.t.jpg"
 
 
+#: What reading or decoding a bad source image raises (Pillow: OSError for truncated or
+#: unidentified files, SyntaxError/ValueError/EOFError from some decoders, the bomb error).
+IMAGE_ERRORS = (OSError, SyntaxError, ValueError, EOFError, Image.DecompressionBombError)
+
+
+def image_error(source: Path, exc: BaseException, root: Path | None = None) -> str:
+    """The sentence a card shows for a source image that could not be drawn (file named)."""
+    try:
+        name = str(source.relative_to(root)) if root is not None else str(source)
+    except ValueError:
+        name = str(source)
+    if isinstance(exc, UnidentifiedImageError):
+        reason = "not an image file"  # Pillow's own text names a buffer, not the file
+    elif isinstance(exc, FileNotFoundError):
+        reason = "file not found"
+    elif "truncated" in str(exc):
+        reason = "the file is truncated"
+    else:
+        reason = f"{type(exc).__name__}: {str(exc)[:200]}"
+    return f"{name}: {reason}"
+
+
 def write_drawing(drawing: Drawing, images_dir: Path, key: str) -> bool:
     """Render and save one drawing unless its files exist; True if it was drawn now."""
     full, thumb = image_files(images_dir, key)
     if full.exists() and thumb.exists():
         return False
-    im = render(drawing)
+    im = render(drawing)  # may raise IMAGE_ERRORS: nothing is written then
     tmp = full.with_name(full.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
     im.save(tmp, "JPEG", quality=85)
     tmp.replace(full)
@@ -281,15 +309,21 @@ def build_gallery(
     sys_index = {s: i for i, s in enumerate(systems)}
     stats = GalleryStats(entries=len(rows))
     hashes = _SourceHashes()
+    root = Path(dataset.root) if dataset is not None and getattr(dataset, "root", None) is not None else None
     jobs: dict[str, Drawing] = {}
     entries: list[dict[str, Any]] = []
+    unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
         inst = dataset.instance(o.instance_id) if dataset is not None else None
         drawing = drawing_for(o, inst) if inst is not None else None
         key = None
         if drawing is not None and drawing.source.exists():
-            key = image_key(drawing, hashes)
-            jobs.setdefault(key, drawing)
+            try:
+                key = image_key(drawing, hashes)
+                jobs.setdefault(key, drawing)
+            except OSError as exc:  # the source cannot even be read
+                key = "unreadable:" + str(drawing.source)
+                unreadable[key] = image_error(drawing.source, exc, root)
         else:
             stats.without_image += 1
         raw = o.raw or ""
@@ -322,11 +356,25 @@ def build_gallery(
             )
         )
     n_workers = workers or min(4, os.cpu_count() or 1)
+
+    def draw(job: tuple[str, Drawing]) -> bool | None:
+        key, drawing = job
+        try:
+            return write_drawing(drawing, images_dir, key)
+        except IMAGE_ERRORS as exc:
+            unreadable[key] = image_error(drawing.source, exc, root)
+            return None
+
     # Pillow releases the GIL while decoding and encoding, so threads overlap the heavy parts
     with ThreadPoolExecutor(max_workers=n_workers) as pool:
-        results = list(pool.map(lambda kv: write_drawing(kv[1], images_dir, kv[0]), jobs.items()))
-    stats.drawn = sum(results)
-    stats.cached = len(results) - stats.drawn
+        results = list(pool.map(draw, jobs.items()))
+    stats.drawn = sum(1 for r in results if r is True)
+    stats.cached = sum(1 for r in results if r is False)
+    stats.bad_images = len(unreadable)
+    for entry in entries:
+        why = unreadable.get(entry["img"]) if entry["img"] is not None else None
+        if why is not None:
+            entry["img"], entry["ie"] = None, why
     stats.seconds = time.perf_counter() - t0
     return entries, stats
 

@@ -160,11 +160,15 @@ def read_predictions_file(file: str | Path) -> list[OfficialPrediction]:
                 numbered.append((len(numbered), json.loads(line)))
             except json.JSONDecodeError as exc:
                 raise PredictionsError(f"{file}: line {n + 1}: invalid JSON ({exc.msg})") from None
+            except RecursionError:
+                raise PredictionsError(f"{file}: line {n + 1}: JSON nested too deeply") from None
         return _parse_rows(numbered, file, "")
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise PredictionsError(f"{file}: invalid JSON at line {exc.lineno} column {exc.colno} ({exc.msg})") from None
+    except RecursionError:
+        raise PredictionsError(f"{file}: JSON nested too deeply to be a predictions file") from None
     raw_rows, prefix = _rows_of(doc, file)
     return _parse_rows(enumerate(raw_rows), file, prefix)
 
@@ -174,7 +178,7 @@ def read_predictions_metadata(file: str | Path) -> dict[str, Any]:
     file = Path(file)
     try:
         doc = json.loads(file.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise PredictionsError(f"{file}: cannot read predictions metadata ({exc})") from None
     meta = doc.get("metadata") if isinstance(doc, Mapping) else None
     return dict(meta) if isinstance(meta, Mapping) else {}
@@ -212,7 +216,7 @@ def looks_like_official_predictions(file: str | Path) -> bool:
     """
     try:
         doc = json.loads(Path(file).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
         return False
     if isinstance(doc, Mapping):
         return "predictions" in doc

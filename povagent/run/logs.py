@@ -2,9 +2,11 @@
 
 Each run gets its own structlog logger (no global configuration is touched, so runs and cells
 in one process do not fight over it). Every event passes :class:`Redactor` first: values of
-keys named like a secret, ``sk-...`` keys, ``Bearer ...`` tokens and the current values of
-``*_API_KEY`` (and ``*_TOKEN``/``*_SECRET``) environment variables never reach a file or a
-terminal. The same redaction guards error messages stored in result rows.
+keys named like a secret, ``sk-...`` keys, ``Bearer ...`` tokens, credentials inside URLs
+(``http://user:password@host``), a key pasted into a ``*_env`` field where a variable's name
+belongs, and the current values of ``*_API_KEY`` (and ``*_TOKEN``/``*_SECRET``) environment
+variables never reach a file or a terminal. The same redaction guards error messages stored in
+result rows and the resolved ``config.yaml``.
 
 This module formats and writes log events; it must not decide what to log.
 """
@@ -33,7 +35,20 @@ _SECRET_TEXT = [
     re.compile(r"sk-[A-Za-z0-9_\-]{8,}"),
     re.compile(r"(?i:bearer)\s+[A-Za-z0-9._~+/=\-]{8,}"),
     re.compile(r"AIza[0-9A-Za-z_\-]{20,}"),  # Google API keys
+    # The user-info part of a URL (``scheme://user:password@host``): scheme and host stay.
+    re.compile(r"(?<=://)[^\s/?#@]+(?=@)"),
 ]
+#: What a plausible environment variable name looks like (``OPENAI_API_KEY``, ``my_key_2``).
+ENV_VAR_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+#: What a ``*_env`` field wants, for messages refusing a value (which they never repeat).
+ENV_NAME_WANTED = (
+    "wants the name of an environment variable that holds the key (letters, digits and _, not "
+    "starting with a digit, e.g. OPENAI_API_KEY), not the key itself; the value given is not such "
+    "a name and is not shown (it may be a key). Export the key (export MY_KEY=...) and write "
+    "api_key_env: MY_KEY"
+)
+#: Longer "names" are refused too: a variable name is a word, a key is a long random string.
+MAX_VARIABLE_NAME = 64
 _SECRET_ENV = re.compile(r".*(_API_KEY|_TOKEN|_SECRET|_ACCESS_KEY)$|^API_KEY$", re.IGNORECASE)
 
 LEVELS = {"debug": 10, "info": 20, "warning": 30, "error": 40, "critical": 50}
@@ -71,6 +86,8 @@ class Redactor:
             return value  # counts, sizes and flags are never secrets (``prompt_tokens`` stays)
         if key is not None and _secret_key(key):
             return REDACTED
+        if key is not None and isinstance(value, str) and _names_a_variable(key) and not self.plausible_variable_name(value):
+            return REDACTED  # not a variable's name: most likely the key itself, pasted
         if isinstance(value, str):
             return self.text(value)
         if isinstance(value, Mapping):
@@ -78,6 +95,12 @@ class Redactor:
         if isinstance(value, (list, tuple)):
             return [self.value(v) for v in value]
         return value
+
+    def plausible_variable_name(self, value: str) -> bool:
+        """Whether ``value`` can be the *name* of an environment variable (``OPENAI_API_KEY``)
+        rather than a secret: name characters only, and nothing a secret pattern or a current
+        secret's value matches (``AIza...`` keys are made of name characters too)."""
+        return bool(ENV_VAR_NAME.match(value)) and len(value) <= MAX_VARIABLE_NAME and self.text(value) == value
 
     def __call__(self, logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
         """structlog processor."""
@@ -88,6 +111,11 @@ class Redactor:
 def _secret_key(key: str) -> bool:
     # ``api_key_env: OPENAI_API_KEY`` names a variable; its value is not the secret.
     return key not in _NOT_SECRET and not key.lower().endswith("_env") and bool(_SECRET_KEY.search(key))
+
+
+def _names_a_variable(key: str) -> bool:
+    # ``api_key_env``, ``token_env``: fields whose value is the name of an environment variable
+    return key.lower().endswith("_env")
 
 
 def _default(obj: Any) -> Any:

@@ -29,10 +29,10 @@ def test_the_good_houses_have_no_problem(problems):
         ("train_house_00002.json", "$[1]", "required field 'camera' is missing"),
         ("train_house_00002.json", "$[2].object_landmark.raw_metadata.axisAlignedBoundingBox", "'cornerPoints' is missing"),
         ("train_house_00002.json", "$[3].stage5", "direction 'left' has a placement but no sentence"),
-        ("train_house_00002.json", "$[3].rgb_path", "'missing.png' does not exist"),
+        ("train_house_00002.json", "$[3].rgb_path", "'img_from_observer/missing.png' does not exist"),
         ("exploration_log.json", "$[1].image_path", "is 256x256 but its camera is 512x512"),
         ("exploration_log.json", "$[2].image_path", "cannot be decoded"),
-        ("exploration_log.json", "$[3].image_path", "'frame_003.png' does not exist"),
+        ("exploration_log.json", "$[3].image_path", "'exploration_images/frame_003.png' does not exist"),
         ("per_image_visible_objects.json", "$", "is not valid JSON"),
     ],
 )

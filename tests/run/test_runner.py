@@ -456,7 +456,9 @@ def test_image_files_are_read_off_the_event_loop(write_pipeline, monkeypatch):
     assert readers and not any(readers)
 
 
-def test_an_unreadable_frame_is_an_infra_error_row_naming_the_file(write_pipeline, small_release, tmp_path):
+def test_an_unreadable_frame_is_found_at_load_naming_the_file_and_the_run_goes_on(write_pipeline, small_release, tmp_path):
+    # Images are checked when the dataset loads (issue 14): the house is reported and skipped
+    # before any request, instead of turning into failed rows mid-run.
     import shutil
 
     release = tmp_path / "release"
@@ -466,10 +468,12 @@ def test_an_unreadable_frame_is_an_infra_error_row_naming_the_file(write_pipelin
     # simply not shown: the official frame list is the folder's PNGs)
     frame.unlink()
     frame.mkdir()
-    rows = rows_of(run(write_pipeline(dataset={"path": str(release)}, instances={"conditions": ["a"]})))
-    broken = [r for r in rows if r.house_id == frame.parts[-3]]
-    assert broken and all(r.status == "infra_error" and frame.name in r.error_message for r in broken)
-    assert all(r.status == "answered" for r in rows if r.house_id != frame.parts[-3])
+    result = run(write_pipeline(dataset={"path": str(release)}, instances={"conditions": ["a"]}))
+    rows = rows_of(result)
+    assert rows and not [r for r in rows if r.house_id == frame.parts[-3]]
+    assert all(r.status == "answered" for r in rows)
+    events = [json.loads(line) for line in (result.run_dir / "log.jsonl").read_text().splitlines()]
+    assert [e for e in events if e["event"] == "dataset_problem" and frame.name in e["problem"]]
 
 
 def test_a_results_file_that_cannot_be_written_stops_the_run_with_a_clear_error(write_pipeline, monkeypatch, caplog):
