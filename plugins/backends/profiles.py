@@ -102,7 +102,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         name="qwen3-vl-8b-transformers",
         paper_name="Qwen3-VL-8B (Transformer)",
         litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
-        default_parser="json",
+        default_parser="official",
         needs_api_base=True,
         notes=(
             _VLLM_NOTE + " The generation settings of the authors' Transformers run (the ablation "

@@ -117,7 +117,7 @@ def score_command(
     from povagent.dataset.loader import load_dataset
     from povagent.scoring.predictions import score_predictions
 
-    ds = load_dataset(dataset, strict=strict)
+    ds = load_dataset(dataset, strict=strict, check_images=False)  # scoring needs the ground truth, not the pixels
     for p in ds.problems:
         typer.echo(f"warning: dataset problem, skipped: {p}", err=True)
     summary, warnings = score_predictions(predictions, ds)

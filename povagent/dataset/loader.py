@@ -339,7 +339,16 @@ def load_house(
                 visible = _VISIBLE.validate_python(raw_vis, context=RELEASE_FILE)
             except ValidationError as exc:
                 problems.extend(problems_from_validation_error(_rel(vis_path, root), exc))
+    if not pairs and len(problems) > before:
+        return None
     frame_paths = official_frame_paths(folder, exploration)
+    # every file the house names must stay inside the dataset: checked before anything else
+    # about its frames, so an escape is reported as such
+    sound = _with_sound_files(
+        House(house_id, folder, pairs, exploration, visible, frame_size, frame_paths), raw_pairs, raw_log, root, problems, check_images
+    )
+    if sound is None:
+        return None
     unlogged = [p for p in frame_paths if p not in log_records(exploration)]
     if unlogged:
         # the official runner shows these frames too: without their cameras the house's frame
@@ -347,10 +356,7 @@ def load_house(
         shown = ", ".join(unlogged[:5]) + (" ..." if len(unlogged) > 5 else "")
         problems.append(Problem(log_file, "$", f"no record for {len(unlogged)} frame(s) of {EXPLORATION_IMAGES}/: {shown}"))
         return None
-    if not pairs and len(problems) > before:
-        return None
-    house = House(house_id, folder, pairs, exploration, visible, frame_size, frame_paths)
-    return _with_sound_files(house, raw_pairs, raw_log, root, problems, check_images)
+    return sound
 
 
 def _with_sound_files(
@@ -366,6 +372,10 @@ def _with_sound_files(
     log_file = _rel(house.folder / EXPLORATION_LOG, root)
     pairs_file = _rel(house.folder / f"{house.house_id}.json", root)
     usable = True
+    # frames not shipped at all (a Given-only download has no exploration_images/) are not
+    # checked: the house still serves its Given instances
+    shipped = (house.folder / EXPLORATION_IMAGES).is_dir()
+    shown = set(house.frame_paths or ()) if shipped else set()
     for i, rec in enumerate(house.exploration):
         where = f"$[{_raw_index(raw_log, 'image_path', rec.image_path, i)}].image_path"
         try:
@@ -374,7 +384,9 @@ def _with_sound_files(
             problems.append(Problem(log_file, where, str(exc)))
             usable = False
             continue
-        problem = image_problem(path, rec.image_path, house.frame_size) if check_images else None
+        # only frames that are shown are images to check: a record whose file is not on disk is
+        # never shown (the official frame list is the folder's PNGs), so it is no problem
+        problem = image_problem(path, rec.image_path, house.frame_size) if check_images and rec.image_path in shown else None
         if problem is not None:
             problems.append(Problem(log_file, where, problem))
             usable = False

@@ -31,8 +31,22 @@ def shown(value: str) -> str:
 
 
 def dataset_root(root: Path) -> Path:
-    """The real location of a dataset folder (symlinks resolved): what paths are checked against."""
-    return root.resolve()
+    """The real location of a dataset folder (symlinks resolved): what paths are checked against.
+
+    A release fetched from the Hub lives in a snapshot of the Hugging Face cache, whose files
+    are symlinks into the same repository's ``blobs/``
+    (``<cache>/datasets--owl-owl--POVBench/snapshots/<commit>/...`` -> ``../../blobs/<sha>``):
+    for a folder inside such a snapshot, the repository's cache folder is the boundary, so the
+    snapshot's own blobs are inside and anything else still is not.
+    """
+    real = root.resolve()
+    for parent in (real, *real.parents):
+        if parent.parent.name == "snapshots" and parent.parent.parent.name.startswith("datasets--"):
+            repo = parent.parent.parent
+            if (repo / "blobs").is_dir():
+                return repo
+            break
+    return real
 
 
 def is_inside(real_root: Path, path: Path) -> bool:

@@ -242,6 +242,6 @@ def _release_dataset(path: Path | None, run_folder: Path) -> Any:
             "numbers, which need a POVBench release (its 3D ground truth)"
         )
     try:
-        return load_dataset(path)
+        return load_dataset(path, check_images=False)  # the ground truth only
     except DatasetError as exc:
         raise PredictionsError(f"{run_folder}: its dataset cannot be loaded for the ground truth ({exc}); pass --dataset") from exc

@@ -368,7 +368,7 @@ def read_official_run(path: str | Path) -> OfficialRun:
         for f in files:
             try:
                 doc = _load_json(f)
-            except (OSError, UnicodeDecodeError, ValueError) as exc:
+            except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
                 warnings.append(f"{f}: unreadable, skipped ({type(exc).__name__}: {exc})")
                 continue
             read.append(f)
@@ -386,6 +386,8 @@ def read_official_run(path: str | Path) -> OfficialRun:
         return OfficialRun([RawPrediction(r, p, i) for i, r in enumerate(_jsonl_objects(p))], {}, [p], warnings)
     try:
         doc = _load_json(p)
+    except RecursionError:
+        raise PredictionsError(f"{p}: JSON nested too deeply to be a predictions file") from None
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise PredictionsError(f"{p}: cannot read predictions ({type(exc).__name__}: {exc})") from None
     found, run = _rows_in(doc, p, warnings)
@@ -407,4 +409,6 @@ def _jsonl_objects(file: Path) -> list[Any]:
             out.append(json.loads(line))
         except json.JSONDecodeError as exc:
             raise PredictionsError(f"{file}: line {n + 1}: invalid JSON ({exc.msg})") from None
+        except RecursionError:
+            raise PredictionsError(f"{file}: line {n + 1}: JSON nested too deeply") from None
     return out

@@ -179,7 +179,7 @@ def rescore_run(
             f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
-    dataset = load_dataset(root)
+    dataset = load_dataset(root, check_images=False)  # answers are re-read, not re-sent
     images = ImageStore()
     warnings: list[str] = []
     out_dir = run / f"rescored-{parser_name}"

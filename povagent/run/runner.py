@@ -433,7 +433,7 @@ class PipelineRun:
             self._failures_in_a_row = 0
             return
         self._failures_in_a_row += 1
-        where = backend_label(self.components.backend)
+        where = self._redactor.text(backend_label(self.components.backend))  # URL credentials never shown
         if first and row.error_type in FAIL_FAST_KINDS:
             self._stopped = (
                 f"the first request failed ({row.error_type}: {row.error_message}); {where}: nothing else was sent. "

@@ -412,7 +412,7 @@ def _holds_result_rows(path: Path) -> bool:
                 continue
             try:
                 first = json.loads(line)
-            except json.JSONDecodeError:
+            except (json.JSONDecodeError, RecursionError):
                 return True  # let the results reader report what it can read
             return isinstance(first, dict) and "key" in first and "status" in first
     return True

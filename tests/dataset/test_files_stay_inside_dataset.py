@@ -137,8 +137,12 @@ def test_a_house_file_that_is_a_symlink_out_of_the_dataset_is_not_read(dataset_c
 
 
 def test_a_path_that_climbs_but_stays_inside_the_dataset_is_allowed(dataset_copy, editor):
-    # The rule is "resolves inside the dataset folder", not "never contains ..".
-    escape_frame(editor, f"../{HOUSE}/exploration_images/frame_000.png")
+    # The rule is "resolves inside the dataset folder", not "never contains ..". (An exploration
+    # frame's image_path must also match its file's listed name, as officially: an observer view
+    # has no such second rule, so it shows the confinement rule alone.)
+    rgb = editor.root / "artifacts" / HOUSE / "img_from_observer"
+    first = sorted(p.name for p in rgb.iterdir())[0]
+    escape_observer_view(editor, f"../{HOUSE}/img_from_observer/{first}")
     ds = load_dataset(dataset_copy)
     assert HOUSE in ds.houses and not ds.problems
     assert not validate_dataset(dataset_copy)
