@@ -40,6 +40,7 @@ from povagent.dataset.loader import Dataset, load_dataset
 from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.images import ImageStore
+from povagent.exchange.transport import open_image_transport
 from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy, TransientBackendError
 from povagent.run.logs import Redactor, RunLog
 from povagent.plugins import PluginHost, get_plugin_host
@@ -727,8 +728,11 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        self.components.backend.check_image_transport(config.images.transport)
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        with folder_lock(self.run_dir):
+        with folder_lock(self.run_dir), open_image_transport(
+            config.images, self.images, dataset_root=config.dataset.root, output=self.run_dir
+        ):
             return await self._run_in_folder(instances, runs, wanted, t_start)
 
     async def _run_in_folder(self, instances: list[Instance], runs: list[int], wanted: set[str], t_start: float) -> RunResult:
