@@ -156,3 +156,18 @@ def test_a_hosted_provider_is_refused_references_before_the_run_folder_is_touche
         run_pipeline(load_pipeline(config))
     assert not (tmp_path / "run").exists()
     assert model_server.request_count == 0
+
+
+def test_a_sweep_refuses_references_for_a_hosted_cell_before_any_cell_runs(tmp_path, mini_root, api_key):
+    from povagent.run.sweep import run_sweep
+
+    sweep = {
+        "base": {"dataset": str(mini_root), "backend": "center", "images": {"transport": "file"}, "cache": False},
+        "output": str(tmp_path / "sweep"),
+        "axes": {"backend": ["center", {"name": "litellm", "options": {"model": "gemini/gemini-2.5-flash"}}]},
+    }
+    path = tmp_path / "sweep.yaml"
+    path.write_text(yaml.safe_dump(sweep, sort_keys=False))
+    with pytest.raises(ConfigError, match="gemini/gemini-2.5-flash"):
+        run_sweep(path, quiet=True)
+    assert not list((tmp_path / "sweep").glob("*/results.jsonl"))  # not even the center cell ran
