@@ -103,7 +103,8 @@ class AdaptiveConcurrency:
     ``maximum``: the ceiling (the pipeline's ``concurrency``) and, unless ``initial`` says
     otherwise, the starting limit. ``decrease``: the factor applied on a 429 (0 < decrease < 1).
     ``increase``: slots gained per ``limit`` answered requests. ``log``: where
-    ``concurrency_limit`` events go. ``classify``: which exceptions are 429s.
+    ``concurrency_limit`` events go. ``classify``: which exceptions are 429s. Counters for a
+    summary: ``rate_limited`` (429s seen), ``decreases`` and ``increases`` (limit changes).
 
     Use from one event loop::
 
