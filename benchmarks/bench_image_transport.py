@@ -21,7 +21,9 @@ flight:
 
 Modes alternate in a rotating order for ``--rounds`` rounds; each round's requests/s and the
 ratios within that round are printed, then their medians against the goals (inline/litellm
-alone >= 1.0x, file/inline >= 5x).
+alone >= 1.0x, file/inline >= 5x). CPU per request (client, and the server's from /proc) is
+printed too: on a machine shared with other work, requests/s measure the share of the CPU the
+scheduler gave each side as much as the work, while CPU per request measures the work alone.
 """
 
 from __future__ import annotations
@@ -80,6 +82,12 @@ def start_server(media_root: Path, digests: Path) -> tuple[subprocess.Popen, str
         proc.kill()
         raise SystemExit(f"loopback server did not start (printed {url!r})")
     return proc, url
+
+
+def process_cpu_s(pid: int) -> float:
+    """User + system CPU seconds of a process so far (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def stop_server(proc: subprocess.Popen) -> dict:
@@ -144,6 +152,9 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
               f"{args.rounds} rounds")
         names = list(modes)
         rates: dict[str, list[float]] = {n: [] for n in names}
+        # CPU per request, client (this process) and server: unlike requests/s, it does not depend
+        # on how much of the shared machine the other processes take meanwhile
+        cpu: dict[str, list[tuple[float, float]]] = {n: [] for n in names}
         header = "".join(f"{n:>15}" for n in names)
         print(f"{'round':>5}{header}   (requests/s)   inline/litellm  file/inline")
         for r in range(args.rounds):
@@ -151,10 +162,14 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
             for name in order:
                 one, transport = modes[name]
                 await asyncio.sleep(args.settle)  # litellm's background logging of the last run drains
+                c0, s0 = time.process_time(), process_cpu_s(proc.pid)
                 with _attached(store, transport):
                     wall = await drive(args.requests, args.concurrency, one)
+                    await asyncio.sleep(args.settle)  # litellm's logging of these requests is theirs
+                c1, s1 = time.process_time(), process_cpu_s(proc.pid)
                 sent_images += args.requests * N_FRAMES
                 rates[name].append(args.requests / wall)
+                cpu[name].append((1000 * (c1 - c0) / args.requests, 1000 * (s1 - s0) / args.requests))
             row = "".join(f"{rates[n][-1]:>15.1f}" for n in names)
             print(f"{r:>5}{row}   {'':>12}   {rates['inline'][-1] / rates['litellm alone'][-1]:>12.2f}x"
                   f"  {rates['file'][-1] / rates['inline'][-1]:>9.1f}x")
@@ -167,7 +182,14 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
     print()
     med = {n: statistics.median(v) for n, v in rates.items()}
     for n in names:
-        print(f"median {n:>14}: {med[n]:7.1f} requests/s")
+        client = statistics.median(c for c, _ in cpu[n])
+        server_ms = statistics.median(s for _, s in cpu[n])
+        print(f"median {n:>14}: {med[n]:7.1f} requests/s | CPU per request: client {client:6.1f} ms, "
+              f"server {server_ms:6.1f} ms, both {client + server_ms:6.1f} ms")
+    both = {n: statistics.median(c + s for c, s in cpu[n]) for n in names}
+    print(f"CPU per request, inline / file (client + server): {both['inline'] / both['file']:.1f}x; "
+          f"litellm alone / inline (client only): "
+          f"{statistics.median(c for c, _ in cpu['litellm alone']) / statistics.median(c for c, _ in cpu['inline']):.2f}x")
     ratio_inline = statistics.median(i / a for i, a in zip(rates["inline"], rates["litellm alone"]))
     ratio_file = statistics.median(f / i for f, i in zip(rates["file"], rates["inline"]))
     print(f"inline / litellm alone (median of per-round ratios): {ratio_inline:.2f}x  goal >= 1.0x: "

@@ -287,7 +287,7 @@ class LiteLLMBackend(Backend):
 
     def _messages(self, request: Request, images: ImageStore) -> list[dict[str, Any]]:
         """The request in OpenAI form; images by the store's transport (references only where allowed)."""
-        transport = images.transport
+        transport = images.transport if images is not None else None  # a text-only request may come without a store
         if transport is not None and transport.name != "inline" and self._deployments_refusing_references():
             # an embedding that skipped check_image_transport: fail clearly, never send a
             # reference a hosted provider cannot fetch
