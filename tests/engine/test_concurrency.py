@@ -362,6 +362,7 @@ def test_is_rate_limited_reads_status_or_status_code():
     assert not is_rate_limited(ValueError("429 in the text is not a status"))
 
 
+@pytest.mark.timeout(90)  # the first litellm import takes seconds, more on a loaded machine
 def test_litellm_rate_limit_errors_count_as_429():
     from povagent.engine.llm_import import import_litellm
 
