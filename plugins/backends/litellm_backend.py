@@ -315,8 +315,9 @@ class LiteLLMBackend(Backend):
     async def complete(self, request: Request, images: ImageStore) -> Response:
         """Send ``request`` (images in order, by the store's transport); raise Transient/Permanent errors."""
         self._check_condition(request)
-        litellm = _LITELLM or await _import_litellm_off_loop()
+        # messages first: a request that cannot be sent fails before the (slow) first import
         kwargs = {"messages": self._messages(request, images), **self.generation_kwargs(request)}
+        litellm = _LITELLM or await _import_litellm_off_loop()
         key: str | None = None
         attempts = 1
         started = time.perf_counter()
