@@ -9,8 +9,9 @@ else:
 * a published file must lie inside one of the roots it was given (the dataset, the folder of
   derived images) once symlinks are resolved, when published and again when served: a
   symlink out of the dataset, or a file swapped for one later, is refused;
-* it is bounded: at most ``max_connections`` connections are served at once (more are told
-  503), each socket times out, and it stops with the run (a context manager).
+* it is bounded: at most ``max_connections`` requests are served at once (more are told
+  503) and four times as many connections are kept open (more are closed at once), each
+  socket times out after 30 s idle, and it stops with the run (a context manager).
 
 It binds the address the user chose (``bind``), and hands out URLs under ``public_url`` (how
 the model server reaches it; by default ``http://<bind>``). It only reads files; it never
@@ -137,6 +138,28 @@ class _Server(ThreadingHTTPServer):
     request_queue_size = 128
     owner: "StaticImageServer"
 
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """One thread per connection, up to the bound; beyond it the connection is closed at once."""
+        owner = self.owner
+        with owner._lock:
+            if owner._open_connections >= owner.max_open_connections:
+                full = True
+            else:
+                full = False
+                owner._open_connections += 1
+        if full:
+            self.shutdown_request(request)
+            return
+        super().process_request(request, client_address)
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        """Serve one connection; count it closed afterwards."""
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            with self.owner._lock:
+                self.owner._open_connections -= 1
+
 
 class StaticImageServer:
     """Published image files, read-only over HTTP at ``bind``; see the module docstring.
@@ -160,6 +183,9 @@ class StaticImageServer:
         self.host, self.port = parse_bind(bind)
         self._public_url = public_url.rstrip("/") if public_url else None
         self._connections = threading.BoundedSemaphore(max_connections)
+        #: open (kept-alive) connections allowed, each holding a thread for at most its timeout
+        self.max_open_connections = 4 * max_connections
+        self._open_connections = 0
         self._published: dict[str, tuple[Path, str]] = {}
         self._lock = threading.Lock()
         self._server: _Server | None = None

@@ -11,6 +11,7 @@ import hashlib
 import http.client
 import os
 import socket
+import time
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -216,3 +217,24 @@ def test_served_roots_are_resolved_so_a_symlinked_dataset_folder_works(tmp_path,
     with StaticImageServer([alias], bind="127.0.0.1:0") as s:
         url = s.publish(alias / "artifacts" / "house" / "frame_000.png", sha(PNG))
         assert get(url)[:2] == (200, PNG)
+
+
+def test_connections_beyond_the_open_bound_are_closed_at_once(dataset):
+    with StaticImageServer([dataset], bind="127.0.0.1:0", max_connections=1) as s:
+        url = s.publish(dataset / "artifacts" / "house" / "frame_000.png", sha(PNG))
+        idle = [socket.create_connection(("127.0.0.1", s.port), timeout=5) for _ in range(s.max_open_connections)]
+        try:
+            deadline = time.monotonic() + 5
+            while s._open_connections < s.max_open_connections and time.monotonic() < deadline:
+                time.sleep(0.01)
+            extra = socket.create_connection(("127.0.0.1", s.port), timeout=5)
+            extra.sendall(f"GET /{sha(PNG)}.png HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+            assert extra.recv(100) == b""  # closed without an answer
+            extra.close()
+        finally:
+            for c in idle:
+                c.close()
+        deadline = time.monotonic() + 5
+        while s._open_connections and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert get(url)[:2] == (200, PNG)  # room again once they closed
