@@ -77,6 +77,14 @@ class Backend(abc.ABC):
     async def aclose(self) -> None:  # noqa: B027 - optional hook
         """Release connections; called once when the run ends."""
 
+    def check_image_transport(self, transport: str) -> None:  # noqa: B027 - optional hook
+        """Raise :class:`povagent.errors.ConfigError` if this backend cannot send images by
+        ``transport`` (``"inline"``, ``"file"`` or ``"http"``, see
+        :mod:`povagent.exchange.transport`); called before a run starts. The default accepts
+        all: a backend that sends images takes their URLs from ``ImageStore.url``, which follows
+        the transport, and one that sends none (an offline baseline) is not concerned.
+        """
+
 
 class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""

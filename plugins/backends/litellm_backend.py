@@ -15,6 +15,12 @@ across deployments itself; a failure that outlives the Router's retries is raise
 :class:`PermanentBackendError` so the runner never stacks a second retry loop on top
 (``retries_inside`` is True on such a backend).
 
+Images travel inline (base64 data URLs) unless the pipeline sends them by reference
+(``images: {transport: file | http}``): then only an OpenAI-compatible server named by
+``api_base`` (``openai/...`` or ``hosted_vllm/...``, e.g. vLLM) receives ``file://`` or
+``http://`` URLs; a hosted provider's own endpoint cannot fetch this machine's files, so
+:meth:`LiteLLMBackend.check_image_transport` refuses the run before it starts.
+
 litellm is imported in :meth:`LiteLLMBackend.start` (the runner and the agent call it before any
 request's timeout starts), never when this module is imported, and in a worker thread: the
 import takes seconds, and the event loop must keep going meanwhile.
@@ -35,6 +41,7 @@ from povagent import hookimpl
 from povagent.errors import ConfigError
 from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
+from povagent.exchange.transport import ImageReferenceError
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.engine.llm_import import import_litellm, warm_up_litellm
 from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
@@ -59,6 +66,9 @@ ROUTER_SETTINGS = frozenset(
         "default_max_parallel_requests",
     }
 )
+#: litellm providers that send an OpenAI-style request to the ``api_base`` given, image URLs
+#: untouched: the server there fetches ``file://``/``http://`` references itself.
+REFERENCE_PROVIDERS = frozenset({"openai", "hosted_vllm"})
 #: Router retries when the pipeline does not say (then the Router, not the runner, retries).
 DEFAULT_ROUTER_RETRIES = 3
 #: Extra time over the request timeout (times attempts) before a call is abandoned: a guard
@@ -268,6 +278,54 @@ class LiteLLMBackend(Backend):
         params.update(o.extra)
         return params
 
+    # -- image transport ----------------------------------------------------------------------
+    def _deployments_refusing_references(self) -> list[str]:
+        """The model strings (with why) that cannot be sent ``file://``/``http://`` image URLs."""
+        o = self.options
+        deployments = (
+            [(d["litellm_params"]["model"], d["litellm_params"].get("api_base")) for d in o.router]
+            if o.router is not None
+            else [(self.model, o.api_base)]
+        )
+        refused = []
+        for model, api_base in deployments:
+            provider = str(model).split("/", 1)[0] if "/" in str(model) else None
+            if provider not in REFERENCE_PROVIDERS:
+                refused.append(f"{model} (provider {provider or 'inferred by litellm'}: not an OpenAI-compatible server)")
+            elif not api_base:
+                refused.append(f"{model} (no api_base: the provider's own endpoint)")
+        return refused
+
+    def check_image_transport(self, transport: str) -> None:
+        """Refuse ``file``/``http`` unless every deployment is an OpenAI-compatible server at an
+        ``api_base`` (``openai/...`` or ``hosted_vllm/...``): a hosted provider cannot read this
+        machine's files or reach its static server."""
+        if transport == "inline":
+            return
+        refused = self._deployments_refusing_references()
+        if refused:
+            raise ConfigError(
+                f"images: transport {transport} sends image references (URLs) the model server must fetch itself, "
+                f"which only an OpenAI-compatible server at an api_base can (model openai/... or hosted_vllm/... "
+                f"with api_base, e.g. vLLM); refused for {'; '.join(refused)}. Use images: {{transport: inline}} "
+                f"for hosted providers."
+            )
+
+    def _messages(self, request: Request, images: ImageStore) -> list[dict[str, Any]]:
+        """The request in OpenAI form; images by the store's transport (references only where allowed)."""
+        transport = images.transport if images is not None else None  # a text-only request may come without a store
+        if transport is not None and transport.name != "inline" and self._deployments_refusing_references():
+            # an embedding that skipped check_image_transport: fail clearly, never send a
+            # reference a hosted provider cannot fetch
+            raise PermanentBackendError(
+                f"image transport {transport.name} needs an OpenAI-compatible server at an api_base; "
+                f"{self.model} is not one (use inline)"
+            )
+        try:
+            return openai_messages(request, images)
+        except ImageReferenceError as exc:  # a frame outside the served folders: no retry fixes it
+            raise PermanentBackendError(f"image cannot be sent by reference: {exc}") from None
+
     # -- calling ------------------------------------------------------------------------------
     def _check_condition(self, request: Request) -> None:
         # a profile that cannot answer a condition (RoboPoint: Given only) is refused before
@@ -281,10 +339,11 @@ class LiteLLMBackend(Backend):
             )
 
     async def complete(self, request: Request, images: ImageStore) -> Response:
-        """Send ``request`` (images as data URLs, in order); raise Transient/Permanent errors."""
+        """Send ``request`` (images in order, by the store's transport); raise Transient/Permanent errors."""
         self._check_condition(request)
+        # messages first: a request that cannot be sent fails before the (slow) first import
+        kwargs = {"messages": self._messages(request, images), **self.generation_kwargs(request)}
         litellm = _LITELLM or await _import_litellm_off_loop()
-        kwargs = {"messages": openai_messages(request, images), **self.generation_kwargs(request)}
         key: str | None = None
         attempts = 1
         started = time.perf_counter()

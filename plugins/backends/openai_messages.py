@@ -1,8 +1,10 @@
 """Our :class:`~povagent.exchange.messages.Request` as OpenAI chat messages (the form litellm takes).
 
 Parts keep their order: a text part becomes ``{"type": "text"}``, an image part becomes
-``{"type": "image_url", "image_url": {"url": <data URL>}}`` with the data URL from the run's
-image store (encoded once per image per run). The strategy lays out the "Image i:" labels as
+``{"type": "image_url", "image_url": {"url": <URL>}}`` with the URL from the run's image store:
+a data URL (encoded once per image per run) by default, or a ``file://``/``http://`` reference
+when the pipeline sends images by reference (``images: {transport: file | http}``, see
+:mod:`povagent.exchange.transport`). The strategy lays out the "Image i:" labels as
 text parts before each image; nothing is added or reordered here. Pure apart from reading the
 image store; never calls a model.
 """
@@ -28,7 +30,7 @@ def openai_content(message: Message, images: ImageStore) -> str | list[dict[str,
         if isinstance(part, TextPart):
             parts.append({"type": "text", "text": part.text})
         elif isinstance(part, ImagePart):
-            parts.append({"type": "image_url", "image_url": {"url": images.data_url(part.image_hash)}})
+            parts.append({"type": "image_url", "image_url": {"url": images.url(part.image_hash)}})
         else:  # a new part type must be taught here, not silently dropped
             raise TypeError(f"cannot send message part of type {type(part).__name__}")
     return parts

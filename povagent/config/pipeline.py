@@ -27,7 +27,9 @@ default)::
     timeout: 120                         # seconds per request
     stop_after_failures: 10              # consecutive infra_error rows that stop the run (0: never)
     cache: true                          # true (default: <output>/cache.sqlite), false, or a path
-    images: {max_mb: 256}                # memory bound of the run's image store
+    images: {max_mb: 256}                # memory bound of the run's image store; how images travel:
+                                         # transport: inline (base64, default) | file | http
+                                         # (http: bind: 127.0.0.1:8765, public_url: http://host:8765)
     output: runs/my-run
 
 Relative paths are relative to the working directory. A typo in a key or a plugin name fails
@@ -51,7 +53,7 @@ import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Union, get_args, get_origin
+from typing import Any, Iterable, Literal, Mapping, Union, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -60,6 +62,8 @@ from povagent.config.profiles import near_profile
 from povagent.dataset.models import Condition, Direction
 from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
+from povagent.exchange.image_server import parse_bind
+from povagent.exchange.transport import DEFAULT_CACHE_DIR
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
 
@@ -253,9 +257,58 @@ class CacheSpec(_Strict):
 
 
 class ImagesSpec(_Strict):
-    """The run's image store."""
+    """The run's image store, and how images travel to the model.
+
+    ``transport``: ``inline`` (default; base64 data URLs inside the request, as every provider
+    takes), ``file`` (``file://`` URLs of the dataset's own files, for a model server on this
+    machine, e.g. vLLM with ``--allowed-local-media-path``) or ``http`` (URLs of a read-only
+    static server this run starts at ``bind``; ``public_url`` is how the model server reaches
+    it, by default ``http://<bind>``). ``cache_dir``: where images without a file of their own
+    (frames with markers drawn) are written for ``file``/``http``; default
+    ``<output>/image-cache``. Requests, the cache and rows name images by hash whatever the
+    transport, so changing it never changes results or resuming.
+    """
 
     max_mb: int = Field(256, ge=1)
+    transport: Literal["inline", "file", "http"] = "inline"
+    bind: str | None = None
+    public_url: str | None = None
+    cache_dir: Path | None = None
+
+    @field_validator("bind")
+    @classmethod
+    def _bind_is_host_port(cls, value: str | None) -> str | None:
+        if value is not None:
+            parse_bind(value)  # a ValueError names what is wrong
+        return value
+
+    @field_validator("public_url")
+    @classmethod
+    def _public_url_is_http(cls, value: str | None) -> str | None:
+        if value is not None and not re.match(r"^https?://[^/\s]+", value):
+            raise ValueError(f"public_url {value!r} must be an http:// or https:// URL with a host, e.g. http://gpu-box:8765")
+        return value
+
+    @model_validator(mode="after")
+    def _options_fit_the_transport(self) -> "ImagesSpec":
+        if self.transport != "http" and (self.bind is not None or self.public_url is not None):
+            raise ValueError(f"bind and public_url apply to transport: http (transport is {self.transport})")
+        if self.transport == "inline" and self.cache_dir is not None:
+            raise ValueError("cache_dir applies to transport: file or http (inline sends images inside requests)")
+        if self.transport == "http":
+            if self.bind is None:
+                raise ValueError("transport: http needs bind: host:port to serve images at, e.g. bind: 127.0.0.1:8765")
+            host, _ = parse_bind(self.bind)
+            if host in ("0.0.0.0", "::", "*") and self.public_url is None:
+                raise ValueError(
+                    f"bind {self.bind} listens on every interface: give public_url, the address the model server "
+                    f"reaches this machine at (e.g. http://my-host:{parse_bind(self.bind)[1]})"
+                )
+        return self
+
+    def cache_folder(self, output: Path) -> Path:
+        """Where derived images are written for ``file``/``http`` transport."""
+        return self.cache_dir if self.cache_dir is not None else Path(output) / DEFAULT_CACHE_DIR
 
 
 class PipelineConfig(_Strict):

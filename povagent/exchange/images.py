@@ -22,12 +22,15 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.image_files import ImageFileError, check_image_bytes
 from povagent.errors import DatasetError
+
+if TYPE_CHECKING:
+    from povagent.exchange.transport import ImageTransport
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
@@ -68,6 +71,11 @@ class ImageStore:
         self._derived: dict[tuple[str, str], str] = {}
         self._cache: OrderedDict[tuple[str, str], bytes | str] = OrderedDict()
         self._cached_bytes = 0
+        # the file each file-backed image was first read from (what file:// and http:// refer to)
+        self._files: dict[str, Path] = {}
+        #: How :meth:`url` sends images (see :mod:`povagent.exchange.transport`); ``None``:
+        #: inline data URLs. The runner sets it for the length of a run.
+        self.transport: ImageTransport | None = None
 
     # -- adding -------------------------------------------------------------------------------
     def add_file(self, path: str | Path) -> StoredImage:
@@ -92,6 +100,7 @@ class ImageStore:
         with self._lock:
             self._sources.setdefault(info.image_hash, str(p))
         with self._lock:
+            self._files.setdefault(info.image_hash, p)
             # Another thread may have registered the same path meanwhile: one entry either way.
             return self._by_path.setdefault(p, info)
 
@@ -161,6 +170,15 @@ class ImageStore:
             self.stats.base64_encodes += 1
             self._cache_put((image_hash, "url"), url)
             return url
+
+    def url(self, image_hash: str) -> str:
+        """The URL a model is sent for the image: by :attr:`transport`, else its data URL."""
+        transport = self.transport
+        return self.data_url(image_hash) if transport is None else transport.url(self, image_hash)
+
+    def source_file(self, image_hash: str) -> Path | None:
+        """The file the image was read from, or ``None`` for a derived or in-memory image."""
+        return self._files.get(image_hash)
 
     def open(self, image_hash: str) -> Image.Image:
         """A decoded PIL image (a new object: callers may draw on it); an image that does not

@@ -20,6 +20,10 @@ class RunProgress(Protocol):
     def advance(self, status: str) -> None:
         """One key finished with this row status."""
 
+    def concurrency(self, limit: int, maximum: int) -> None:
+        """The requests allowed in flight changed: ``limit`` of ``maximum`` (adaptive
+        concurrency lowers it after 429s and raises it again as requests succeed)."""
+
     def stop(self) -> None:
         """The run ended (also on interruption)."""
 
@@ -29,6 +33,7 @@ class QuietProgress:
 
     def __init__(self) -> None:
         self.counts: dict[str, int] = {}
+        self.limit: int | None = None
 
     def start(self, total: int, done: int) -> None:
         """Nothing to show."""
@@ -36,6 +41,10 @@ class QuietProgress:
     def advance(self, status: str) -> None:
         """Count the status."""
         self.counts[status] = self.counts.get(status, 0) + 1
+
+    def concurrency(self, limit: int, maximum: int) -> None:
+        """Remember the current limit."""
+        self.limit = limit
 
     def stop(self) -> None:
         """Nothing to close."""
@@ -68,6 +77,7 @@ class RichProgress:
             TextColumn("ETA"),
             TimeRemainingColumn(),
             TextColumn("{task.fields[errors]}"),
+            TextColumn("{task.fields[limit]}"),
             console=Console(file=sys.stderr),
             refresh_per_second=4,
             transient=False,
@@ -81,7 +91,7 @@ class RichProgress:
         import time
 
         self._started_at = time.monotonic()
-        self._task = self._progress.add_task(self.label, total=total, completed=done, rate="", errors="")
+        self._task = self._progress.add_task(self.label, total=total, completed=done, rate="", errors="", limit="")
         self._progress.start()
 
     def advance(self, status: str) -> None:
@@ -93,6 +103,12 @@ class RichProgress:
         elapsed = max(time.monotonic() - self._started_at, 1e-9)
         errors = " ".join(f"[red]{k}={v}" for k, v in sorted(self.counts.items()) if k != "answered")
         self._progress.update(self._task, advance=1, rate=f"{self._finished_now / elapsed:.1f}/s", errors=errors)
+
+    def concurrency(self, limit: int, maximum: int) -> None:
+        """Show the in-flight limit while rate limits hold it below ``concurrency``."""
+        if self._task is not None:
+            shown = "" if limit >= maximum else f"[yellow]in flight <= {limit}/{maximum} (429s)"
+            self._progress.update(self._task, limit=shown)
 
     def stop(self) -> None:
         """Stop redrawing (the last state stays on screen)."""

@@ -38,11 +38,13 @@ from povagent.config.pipeline import PipelineConfig, dump_pipeline
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
-from povagent.engine.request_path import RequestPath, SemaphoreLimiter
+from povagent.engine.concurrency import AdaptiveConcurrency
+from povagent.engine.request_path import RequestPath
 from povagent.engine.retry import InfraFailure, error_type_of
 from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
+from povagent.exchange.transport import open_image_transport
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
@@ -149,6 +151,18 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
         official_parser=host.create("parser", counterpart, {}) if counterpart else None,
         official_parser_name=counterpart,
     )
+
+
+class _LimitEvents:
+    """Where the adaptive limiter reports a change: the run's log and the progress bar."""
+
+    def __init__(self, log: RunLog, progress: RunProgress) -> None:
+        self._log, self._progress = log, progress
+
+    def info(self, event: str, **fields: Any) -> None:
+        self._log.info(event, **fields)
+        if "limit" in fields and "maximum" in fields:
+            self._progress.concurrency(int(fields["limit"]), int(fields["maximum"]))
 
 
 class StopRun(Exception):
@@ -462,8 +476,11 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        self.components.backend.check_image_transport(config.images.transport)
         self.run_dir.mkdir(parents=True, exist_ok=True)
-        with folder_lock(self.run_dir):
+        with folder_lock(self.run_dir), open_image_transport(
+            config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
+        ):
             return await self._run_in_folder(instances, t_start)
 
     async def _run_in_folder(self, instances: list[Instance], t_start: float) -> RunResult:
@@ -488,7 +505,8 @@ class PipelineRun:
         self._log = RunLog(self.run_dir / LOG, console=self.console_log, redactor=self._redactor, run=str(self.run_dir))
         self._path = RequestPath(
             backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
-            limiter=SemaphoreLimiter(config.concurrency), redact=self._redactor.text,
+            limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
+            redact=self._redactor.text,
             on_retry=self._log_retry, on_bug=self._log_bug,
         )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the

@@ -225,8 +225,10 @@ def run_sweep(
     """
     sweep, cells = expand_sweep(path, strict=strict)
     for cell in cells:
-        # Every cell's plugin options are checked before the first request of the first cell.
-        create_components(cell.config, get_plugin_host(cell.config.plugins))
+        # Every cell's plugin options (and image transport) are checked before the first
+        # request of the first cell.
+        backend = create_components(cell.config, get_plugin_host(cell.config.plugins)).backend
+        backend.check_image_transport(cell.config.images.transport)
     output = Path(sweep.output)
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}

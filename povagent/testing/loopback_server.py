@@ -5,6 +5,13 @@ It answers ``POST /v1/chat/completions`` with scripted replies, records every re
 injects faults: an HTTP status (429 with ``Retry-After``, 500, 400, 401...), a delay, or a
 dropped connection (the socket closed without a response).
 
+With ``fetch_images=True`` it also does what a vLLM server does with image URLs: it decodes
+``data:`` URLs, opens ``file://`` URLs (only under ``local_media_root``, like vLLM's
+``--allowed-local-media-path``) and downloads ``http://`` URLs (from 127.0.0.1 only), and
+records each image's SHA-256 and, unless ``keep_image_bytes=False``, its bytes
+(:attr:`RecordedRequest.images`). An image it cannot fetch, or one ``image_check`` rejects,
+is answered 400, as a model server would.
+
 It is bounded so a forgotten server can never hang a test run: it listens on loopback only,
 stops by itself after ``max_lifetime_s``, and every delay is cut short when it stops. It holds
 no state beyond one server: nothing here is global, and it never touches the network beyond
@@ -20,16 +27,26 @@ Use it as a context manager::
 from __future__ import annotations
 
 import argparse
+import base64
+import binascii
 import collections
+import hashlib
 import json
 import socket
 import threading
 import time
-from dataclasses import dataclass
+import urllib.error
+import urllib.parse
+import urllib.request
+from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
 from typing import Any, Callable, Iterable
 
-__all__ = ["Fault", "Reply", "RecordedRequest", "LoopbackServer"]
+__all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
+
+#: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
+_LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
 
 
 @dataclass(frozen=True)
@@ -63,14 +80,43 @@ class Fault:
     message: str = "injected fault"
 
 
+@dataclass(frozen=True)
+class FetchedImage:
+    """One image a request carried or referred to, as the server got it.
+
+    ``scheme``: ``data``, ``file`` or ``http``; ``sha256`` and ``size`` of the bytes; ``data``
+    the bytes themselves unless the server was told not to keep them.
+    """
+
+    scheme: str
+    sha256: str
+    size: int
+    data: bytes | None = None
+
+
+class ImageFetchError(Exception):
+    """An image URL the server could not (or would not) fetch."""
+
+
 @dataclass
 class RecordedRequest:
-    """One request the server received: path, headers (lower-case names), JSON body, time."""
+    """One request the server received: path, headers (lower-case names), JSON body, time,
+    and (with ``fetch_images``) every image it carried or referred to, in order."""
 
     path: str
     headers: dict[str, str]
     body: dict[str, Any]
     received_at: float
+    images: list[FetchedImage] = field(default_factory=list)
+
+    def image_urls(self) -> list[str]:
+        """The URL of every image part of the user messages, in order."""
+        urls = []
+        for part in self.user_parts():
+            if part.get("type") == "image_url":
+                ref = part.get("image_url")
+                urls.append(ref.get("url", "") if isinstance(ref, dict) else str(ref))
+        return urls
 
     def user_parts(self) -> list[dict[str, Any]]:
         """Content parts of every user message in order (a string content is one text part)."""
@@ -120,6 +166,16 @@ class _Handler(BaseHTTPRequestHandler):
             return
         owner = self.server.owner
         recorded = RecordedRequest(self.path, {k.lower(): v for k, v in self.headers.items()}, body, time.monotonic())
+        if owner.fetch_images:
+            try:
+                recorded.images = [owner._fetch(i, url) for i, url in enumerate(recorded.image_urls())]
+            except ImageFetchError as exc:
+                with owner._lock:
+                    owner.image_failures += 1
+                    if owner.record:
+                        owner.requests.append(recorded)
+                self._send_json(400, _error_body(str(exc), "invalid_request_error"))
+                return
         outcome = owner._record_and_choose(recorded)
         delay = outcome.delay_s if isinstance(outcome, (Reply, Fault)) else 0.0
         if delay > 0 and owner._stopping.wait(delay):
@@ -192,14 +248,25 @@ class LoopbackServer:
         model: str = "loopback",
         max_lifetime_s: float = 120.0,
         record: bool = True,
+        fetch_images: bool = False,
+        local_media_root: str | Path | None = None,
+        keep_image_bytes: bool = True,
+        image_check: Callable[[FetchedImage], str | None] | None = None,
     ) -> None:
         self.reply = reply
         self.port = port
         self.model = model
         self.max_lifetime_s = max_lifetime_s
         self.record = record
+        self.fetch_images = fetch_images
+        self.local_media_root = Path(local_media_root).resolve() if local_media_root is not None else None
+        self.keep_image_bytes = keep_image_bytes
+        self.image_check = image_check
         self.requests: list[RecordedRequest] = []
         self.request_count = 0
+        #: images fetched and accepted, and requests refused because an image was not
+        self.images_fetched = 0
+        self.image_failures = 0
         self._script: collections.deque[Outcome | ReplyFn] = collections.deque()
         self._lock = threading.Lock()
         self._stopping = threading.Event()
@@ -262,6 +329,72 @@ class LoopbackServer:
                 else:
                     self._script.extend(o)
 
+    # -- images -------------------------------------------------------------------------------
+    def _fetch(self, index: int, url: str) -> FetchedImage:
+        """The bytes behind one image URL, checked; an :class:`ImageFetchError` says why not."""
+        scheme = url.split(":", 1)[0].lower() if ":" in url else ""
+        try:
+            if scheme == "data":
+                data = self._decode_data_url(url)
+            elif scheme == "file":
+                data = self._read_file_url(url)
+            elif scheme in ("http", "https"):
+                data = self._download(url)
+                scheme = "http"
+            else:
+                raise ImageFetchError(f"unsupported image URL scheme {scheme!r}")
+        except ImageFetchError as exc:
+            raise ImageFetchError(f"image {index}: {exc}") from None
+        image = FetchedImage(scheme, hashlib.sha256(data).hexdigest(), len(data), data if self.keep_image_bytes else None)
+        if self.image_check is not None:
+            problem = self.image_check(image)
+            if problem:
+                raise ImageFetchError(f"image {index}: {problem}")
+        with self._lock:
+            self.images_fetched += 1
+        return image
+
+    @staticmethod
+    def _decode_data_url(url: str) -> bytes:
+        header, sep, payload = url.partition(",")
+        if not sep or not header.endswith(";base64"):
+            raise ImageFetchError("data URL is not base64")
+        try:
+            return base64.b64decode(payload, validate=True)
+        except (binascii.Error, ValueError) as exc:
+            raise ImageFetchError(f"bad base64 in data URL: {exc}") from None
+
+    def _read_file_url(self, url: str) -> bytes:
+        # as vLLM: file URLs only when a local media root is allowed, and only beneath it
+        root = self.local_media_root
+        if root is None:
+            raise ImageFetchError("file:// URLs are not allowed (no local_media_root)")
+        parsed = urllib.parse.urlparse(url)
+        if parsed.netloc not in ("", "localhost"):
+            raise ImageFetchError(f"file URL names a host ({parsed.netloc})")
+        path = Path(urllib.request.url2pathname(parsed.path))
+        try:
+            real = path.resolve(strict=True)
+        except (OSError, RuntimeError) as exc:
+            raise ImageFetchError(f"cannot open {path}: {exc}") from None
+        if not real.is_relative_to(root):
+            raise ImageFetchError(f"{path} is outside the allowed local media path {root}")
+        try:
+            return real.read_bytes()
+        except OSError as exc:
+            raise ImageFetchError(f"cannot read {path}: {exc}") from None
+
+    @staticmethod
+    def _download(url: str) -> bytes:
+        host = urllib.parse.urlparse(url).hostname or ""
+        if host not in _LOOPBACK_HOSTS:
+            raise ImageFetchError(f"{url}: only 127.0.0.1 is fetched from (host {host!r})")
+        try:
+            with urllib.request.urlopen(url, timeout=10) as response:  # noqa: S310 - loopback only
+                return response.read()
+        except (urllib.error.URLError, OSError) as exc:
+            raise ImageFetchError(f"cannot download {url}: {exc}") from None
+
     def _record_and_choose(self, recorded: RecordedRequest) -> Outcome:
         with self._lock:
             self.request_count += 1
@@ -295,8 +428,23 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--port", type=int, default=0)
     ap.add_argument("--reply", default='{"selected_image": 0, "x": 256, "y": 256}')
     ap.add_argument("--lifetime", type=float, default=3600.0, help="stop after this many seconds")
+    ap.add_argument("--fetch-images", action="store_true", help="decode, open or download every image URL")
+    ap.add_argument("--local-media-root", default=None, help="file:// URLs are read only beneath this folder")
+    ap.add_argument("--expect-sha256", default=None,
+                    help="a file of SHA-256 digests, one a line: any other image is answered 400")
     args = ap.parse_args(argv)
-    server = LoopbackServer(reply=args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False).start()
+    check = None
+    if args.expect_sha256:
+        expected = set(Path(args.expect_sha256).read_text().split())
+
+        def check(image: FetchedImage) -> str | None:
+            return None if image.sha256 in expected else f"unexpected image (sha256 {image.sha256[:16]}...)"
+
+    server = LoopbackServer(
+        reply=args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
+        fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
+        keep_image_bytes=False, image_check=check,
+    ).start()  # fmt: skip
     print(server.url, flush=True)
     try:
         while not server._stopping.wait(0.5):
@@ -305,6 +453,9 @@ def main(argv: list[str] | None = None) -> None:
         pass
     finally:
         server.stop()
+        if server.fetch_images:
+            print(json.dumps({"requests": server.request_count, "images_fetched": server.images_fetched,
+                              "image_failures": server.image_failures}), flush=True)
 
 
 if __name__ == "__main__":

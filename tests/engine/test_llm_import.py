@@ -64,3 +64,26 @@ def test_help_loads_no_heavy_library():
     )
     done = _python(code)
     assert done.returncode == 0, done.stderr
+
+
+def test_user_exported_litellm_settings_win():
+    env = {**CLEAN_ENV, "LITELLM_MODE": "DEV"}
+    code = "import os\nfrom povagent.engine.llm_import import import_litellm\nimport_litellm()\nprint(os.environ['LITELLM_MODE'])"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=50)
+    assert done.stdout.strip() == "DEV", done.stderr
+
+
+def test_base64_truncation_for_logging_stays_on():
+    # off, every litellm logging callback would be handed whole images (see import_litellm);
+    # a user with no callbacks may still export MAX_BASE64_LENGTH_FOR_LOGGING=0 themselves
+    code = (
+        "import os\n"
+        "from povagent.engine.llm_import import import_litellm\n"
+        "import_litellm()\n"
+        "from litellm.litellm_core_utils import logging_utils\n"
+        "assert 'MAX_BASE64_LENGTH_FOR_LOGGING' not in os.environ\n"
+        "print(logging_utils.MAX_BASE64_LENGTH_FOR_LOGGING)\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout.split()[-1]) > 0

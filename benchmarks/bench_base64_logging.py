@@ -1,0 +1,157 @@
+"""What litellm's base64 truncation for logging costs, and what turning it off would expose.
+
+    python benchmarks/bench_base64_logging.py [--requests 64] [--rounds 3] [--model hosted_vllm/bench-model]
+
+litellm reads ``MAX_BASE64_LENGTH_FOR_LOGGING`` once, at import (``litellm/constants.py``,
+default 64). After every successful call it copies the messages and replaces each data URL's
+base64 longer than that by a size placeholder (``truncate_base64_in_messages_async``, a regex
+pass over the whole payload, in a worker thread above 256 K characters); the copy becomes the
+``messages`` of the standard logging payload that every litellm callback receives. ``0`` skips
+the pass, and the payload then holds the messages as sent: whole images.
+
+Each round runs two child processes (litellm must be imported afresh for each setting),
+default and ``0``, in alternating order, against one loopback server (a subprocess): 30 inline
+frames of 512x512 per request through ``LiteLLMBackend.complete``. Each child reports its
+process CPU per request (client side only) and requests/s, and, with a litellm callback
+registered, whether the logging payload it received held any whole image. Prints per-round
+figures, the median CPU saving, and the exposure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def child(args: argparse.Namespace) -> None:
+    """One measurement in this process (litellm imported here, under the inherited setting)."""
+    sys.path.insert(0, str(HERE))
+    from bench_image_transport import the_request
+
+    from povagent.engine.llm_import import import_litellm
+    from povagent.exchange.images import ImageStore
+    from povagent_plugins.backends.litellm_backend import LiteLLMBackend
+
+    litellm = import_litellm()
+    from litellm.integrations.custom_logger import CustomLogger
+
+    longest = {"data_url": 0}
+
+    class Watch(CustomLogger):
+        """Measures the longest data URL a logging callback is handed."""
+
+        async def async_log_success_event(self, kwargs, response_obj, start_time, end_time):
+            payload = kwargs.get("standard_logging_object") or {}
+            text = json.dumps(payload.get("messages"), default=str)
+            start = 0
+            while (i := text.find("data:image", start)) >= 0:
+                end = text.find('"', i)
+                longest["data_url"] = max(longest["data_url"], end - i)
+                start = end
+
+    frames = sorted((Path(args.workdir) / "povbench").glob("artifacts/*/exploration_images/*.png"))
+    store = ImageStore()
+    request = the_request(store, frames)
+    os.environ.setdefault("BENCH_KEY", "bench-key")
+    backend = LiteLLMBackend(model=args.model, api_base=args.url, api_key_env="BENCH_KEY", timeout=120)
+
+    async def run() -> tuple[float, float]:
+        for _ in range(2):
+            await backend.complete(request, store)
+        sem = asyncio.Semaphore(args.concurrency)
+
+        async def one() -> None:
+            async with sem:
+                await backend.complete(request, store)
+
+        cpu0, t0 = time.process_time(), time.perf_counter()
+        await asyncio.gather(*(one() for _ in range(args.requests)))
+        wall = time.perf_counter() - t0
+        await asyncio.sleep(1.0)  # litellm's logging of the last calls finishes (and is counted)
+        return wall, time.process_time() - cpu0
+
+    wall, cpu = asyncio.run(run())
+    # a second, short pass with a callback registered: what a callback would be handed
+    litellm.callbacks = [Watch()]
+
+    async def watched() -> None:
+        await backend.complete(request, store)
+        await asyncio.sleep(1.0)
+
+    asyncio.run(watched())
+    print(json.dumps({"rps": args.requests / wall, "cpu_ms": 1000 * cpu / args.requests,
+                      "longest_logged_data_url": longest["data_url"]}))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--requests", type=int, default=64)
+    ap.add_argument("--concurrency", type=int, default=16)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--model", default="hosted_vllm/bench-model")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--url", help=argparse.SUPPRESS)
+    ap.add_argument("--workdir", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        child(args)
+        return
+
+    sys.path.insert(0, str(HERE))
+    from bench_image_transport import thirty_frames
+
+    with tempfile.TemporaryDirectory(prefix="povagent-b64log-") as tmp:
+        workdir = Path(tmp)
+        thirty_frames(workdir / "povbench")
+        # a plain server: this measures the client, whose work does not depend on what the server checks
+        server = subprocess.Popen([sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "1800"],
+                                  stdout=subprocess.PIPE, text=True)
+        url = server.stdout.readline().strip()  # type: ignore[union-attr]
+        settings = {"default (64)": None, "off (0)": "0"}
+        results: dict[str, list[dict]] = {k: [] for k in settings}
+        try:
+            print(f"{args.requests} inline 30-frame requests per child, concurrency {args.concurrency}, model {args.model}")
+            print(f"{'round':>5} {'setting':>13} {'req/s':>7} {'client CPU ms/req':>18} {'longest data URL a callback got':>32}")
+            for r in range(args.rounds):
+                order = list(settings) if r % 2 == 0 else list(settings)[::-1]
+                for name in order:
+                    env = dict(os.environ)
+                    env.pop("MAX_BASE64_LENGTH_FOR_LOGGING", None)
+                    if settings[name] is not None:
+                        env["MAX_BASE64_LENGTH_FOR_LOGGING"] = settings[name]
+                    out = subprocess.run(
+                        [sys.executable, __file__, "--child", "--url", url, "--workdir", str(workdir),
+                         "--requests", str(args.requests), "--concurrency", str(args.concurrency), "--model", args.model],
+                        env=env, capture_output=True, text=True, check=True,
+                    )  # fmt: skip
+                    doc = json.loads(out.stdout.strip().splitlines()[-1])
+                    results[name].append(doc)
+                    print(f"{r:>5} {name:>13} {doc['rps']:>7.1f} {doc['cpu_ms']:>18.1f} {doc['longest_logged_data_url']:>32,}")
+        finally:
+            server.terminate()
+            server.wait(10)
+    on, off = results["default (64)"], results["off (0)"]
+    cpu_on = statistics.median(d["cpu_ms"] for d in on)
+    cpu_off = statistics.median(d["cpu_ms"] for d in off)
+    print()
+    print(f"median client CPU per request: default {cpu_on:.1f} ms, off {cpu_off:.1f} ms "
+          f"(saving {100 * (cpu_on - cpu_off) / cpu_on:.1f}%)")
+    print(f"median requests/s: default {statistics.median(d['rps'] for d in on):.1f}, "
+          f"off {statistics.median(d['rps'] for d in off):.1f}")
+    exposed = max(d["longest_logged_data_url"] for d in off)
+    print(f"longest data URL handed to a litellm callback: default {max(d['longest_logged_data_url'] for d in on):,} "
+          f"characters, off {exposed:,} characters ({'whole images' if exposed > 10_000 else 'truncated'})")
+
+
+if __name__ == "__main__":
+    main()
