@@ -399,7 +399,10 @@ def _with_sound_files(
             usable = False
             continue
         size = (pair.camera.screen_width, pair.camera.screen_height)
-        problem = image_problem(path, pair.rgb_path, size) if check_images else None
+        # observer views not shipped at all (an A/B-only download) are not checked: the pair
+        # still serves its Inferred and Stated instances
+        views_shipped = path.parent.is_dir()
+        problem = image_problem(path, pair.rgb_path, size) if check_images and views_shipped else None
         if problem is not None:
             problems.append(Problem(pairs_file, where, problem + "; the pair is skipped"))
             del house.pairs[pair_id]
