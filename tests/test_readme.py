@@ -28,3 +28,19 @@ def test_ci_runs_the_readme_test_command_verbatim():
 def test_the_main_command_installs_and_runs_the_quickstart():
     main = quickstart_commands()[0]
     assert "pip install" in main and "povagent quickstart" in main
+
+
+def what_is_where() -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    section = text.split("## What is where", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"^\| `([^`]+)/` \|", section, flags=re.M)
+
+
+def test_what_is_where_names_every_package_of_the_core():
+    packages = sorted(f"povagent/{p.name}" for p in (ROOT / "povagent").iterdir() if (p / "__init__.py").is_file())
+    listed = set(what_is_where())
+    assert [p for p in packages if p not in listed] == []
+
+
+def test_what_is_where_names_only_folders_that_exist():
+    assert [f for f in what_is_where() if not (ROOT / f).is_dir()] == []
