@@ -30,9 +30,9 @@ FALLBACK_RANGE = 2.5
 #: A box edge this close to the image border (px) was cut by the border: it bounds nothing.
 CLIPPED_EDGE_PX = 1.5
 #: Pointing noise (px) the box fit assumes; it only sets how much the priors weigh.
-BOX_EDGE_SIGMA_PX = 6.0
+BOX_EDGE_SIGMA_PX = 4.0
 #: How far (log scale) an object's height and footprint may stray from their priors.
-SIZE_PRIOR_SIGMA = 0.5
+SIZE_PRIOR_SIGMA = 1.0
 
 
 @dataclass(frozen=True)
@@ -197,14 +197,13 @@ def fit_box(
     def residuals(x: np.ndarray) -> np.ndarray:
         corners = x[:3] + signs * np.exp(x[3:])  # (8, 3)
         local = np.einsum("vij,vkj->vki", rotations, corners[None, :, :] - positions[:, None, :])  # (V, 8, 3)
-        depth = local[..., 2]
-        safe = np.where(depth > MIN_DEPTH, depth, 1.0)
-        u = focal * local[..., 0] / safe + half_w
-        v = half_h - focal * local[..., 1] / safe
+        # a corner reaching behind the camera projects as if just in front of it: far outside
+        # the image, so the fit is pushed back rather than rewarded for leaving the view
+        depth = np.maximum(local[..., 2], MIN_DEPTH)
+        u = focal * local[..., 0] / depth + half_w
+        v = half_h - focal * local[..., 1] / depth
         boxes = np.stack([u.min(axis=1), v.min(axis=1), u.max(axis=1), v.max(axis=1)], axis=1)  # (V, 4)
         edge = (boxes[view_idx, side_idx] - measured) / BOX_EDGE_SIGMA_PX
-        behind = np.any(depth <= MIN_DEPTH, axis=1)[view_idx]
-        edge = np.where(behind, 10.0, edge)
         extra = np.concatenate([(x[:3] - c0) / centre_sigma, [(x[4] - log_prior_h) / SIZE_PRIOR_SIGMA, (x[3] + x[5] - log_prior_area) / SIZE_PRIOR_SIGMA]])
         return np.concatenate([edge, extra])
 
