@@ -54,6 +54,8 @@ from povagent_plugins.strategies.layout import answer_spec, image_parts, shown_i
 READ, SURFACE, LOCATE = "read", "surface", "locate"
 #: ``Request.question["kind"]`` of the final turn (worked out by the solver, never sent).
 FINAL = "final"
+#: The key of the final answer's JSON holding the 3D target (A/B).
+TARGET_3D = "target_3d"
 #: What the final turn's text says after the answer's JSON.
 ACCOUNT_HEADER = "geometric solver (answer worked out from the answers above, not asked):"
 #: Words a model may use for a direction, mapped to the benchmark's four.
@@ -349,7 +351,7 @@ class GeometricStrategy(Strategy):
         target = place_target(direction, anchor_box, anchor, observer_at, surface)
         choice = choose_frame(target, cameras)
         account.step(f"target: ({_xyz(target)}); frame {choice.index} ({choice.placement})")
-        return turns + [self._final(instance, (choice.index, choice.pixel), account)]
+        return turns + [self._final(instance, (choice.index, choice.pixel), account, target)]
 
     def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[Camera], account: Account) -> AnchorEstimate:
         """The anchor's box: centre located from the sightings, extent fitted to the outlines."""
@@ -367,8 +369,14 @@ class GeometricStrategy(Strategy):
             account.fallback(f"no usable anchor box edge: the {anchor}'s usual size stands in")
         return AnchorEstimate(box.centre, box.half)
 
-    def _final(self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account) -> tuple[Request, Response]:
-        """The worked-out answer as the last turn (``by_strategy``): JSON, then the account."""
+    def _final(
+        self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account, target: Sequence[float] | None = None
+    ) -> tuple[Request, Response]:
+        """The worked-out answer as the last turn (``by_strategy``): JSON, then the account.
+
+        With a 3D target (A/B: in the world frame of the frames' cameras) the JSON also holds
+        ``"target_3d": [x, y, z]``, which parsers ignore and the GroundingAgent returns as its goal.
+        """
         width, height = instance.frame_size
         if answer is None:
             answer = (0, (width / 2.0, height / 2.0))
@@ -376,6 +384,8 @@ class GeometricStrategy(Strategy):
         frame, (x, y) = answer
         doc: dict[str, Any] = {"selected_image": frame} if instance.condition.uses_exploration_frames else {}
         doc |= {"x": round(float(x), 2), "y": round(float(y), 2)}
+        if target is not None:
+            doc[TARGET_3D] = [round(float(v), 4) for v in target]
         text = json.dumps(doc) + "\n" + account.text()
         request = Request(
             (Message("user", (TextPart("(worked out by the geometric strategy; not sent to a model)"),)),),

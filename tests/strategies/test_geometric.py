@@ -25,6 +25,7 @@ def pipeline(tmp_path, root, backend, conditions=None, name="run", only=None):
         "parser": "json",
         "concurrency": 2,
         "output": str(tmp_path / name),
+        "timeout": 300,  # a loaded machine: litellm's first import alone can take tens of seconds
     }
     if conditions:
         doc["instances"] = {"conditions": conditions}
