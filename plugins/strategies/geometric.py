@@ -220,10 +220,16 @@ _DETECTIONS_SCHEMA = _schema(
 class GeometricStrategy(Strategy):
     """Ask the model to read the sentence and point; solve the geometry exactly.
 
+    It reads the frames' cameras (``uses_frame_cameras``): the GroundingAgent then gives it the
+    robot's own cameras, and returns the solved 3D target as the goal.
+
     Options: ``max_tokens`` per sub-question (default 512), ``temperature`` (default: the
     backend's), ``min_ray_angle_deg`` (rays spanning less than this are not triangulated;
     default 4).
     """
+
+    #: The solver triangulates with the frames' cameras (see the GroundingAgent).
+    uses_frame_cameras = True
 
     def __init__(self, max_tokens: int = 512, temperature: float | None = None, min_ray_angle_deg: float = MIN_RAY_ANGLE_DEG) -> None:
         if not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1:
@@ -394,7 +400,8 @@ class GeometricStrategy(Strategy):
             instance=instance,
             question={"kind": FINAL},
         )
-        return request, Response(text=text, model="geometric solver", by_strategy=True)
+        solved = tuple(float(v) for v in target) if target is not None else None
+        return request, Response(text=text, model="geometric solver", by_strategy=True, solved_point=solved)  # type: ignore[arg-type]
 
 
 def _direction_words(direction: str) -> str:

@@ -127,6 +127,8 @@ class Response:
     ``retries`` and ``cached`` are filled in by the runner. ``by_strategy`` marks an answer a
     multi-turn strategy worked out itself from the model's earlier answers (no model call): the
     runner records it as the row's last exchange, so the row holds the answer it scored.
+    ``solved_point`` is the 3D target such a strategy worked out (in the world frame of the
+    frames' cameras), which the GroundingAgent returns as its goal.
     """
 
     text: str
@@ -136,3 +138,4 @@ class Response:
     retries: int = 0
     cached: bool = False
     by_strategy: bool = False
+    solved_point: tuple[float, float, float] | None = None
