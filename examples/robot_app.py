@@ -70,6 +70,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--model", help="a litellm model string or profile name, e.g. openai/gpt-5.4")
     ap.add_argument("--sentence", default="While I was cooking, I left my phone to the right of the kettle.")
     ap.add_argument("--timeout", type=float, default=60.0, help="seconds for the whole call, retries included")
+    ap.add_argument(
+        "--strategy",
+        default="basic",
+        help="how the model is asked: 'basic', or 'geometric' (the model reads the sentence and points, the "
+        "geometry is solved; with cameras in AI2-THOR's convention, povagent.geometry.camera.Camera, the goal is "
+        "the solved 3D target itself, method 'geometry')",
+    )
     args = ap.parse_args(argv)
 
     # The robot's memory of its tour: frames and where its camera was for each.
@@ -82,9 +89,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.pipeline:
             agent = GroundingAgent.from_pipeline(args.pipeline, plane=floor, timeout_s=args.timeout)
         elif args.model:
-            agent = GroundingAgent(model=args.model, plane=floor, timeout_s=args.timeout)  # a profile or litellm string
+            agent = GroundingAgent(model=args.model, strategy=args.strategy, plane=floor, timeout_s=args.timeout)  # a profile or litellm string
         else:
-            agent = GroundingAgent("center", plane=floor, timeout_s=args.timeout)  # offline baseline
+            agent = GroundingAgent("center", strategy=args.strategy, plane=floor, timeout_s=args.timeout)  # offline baseline
     except PovagentError as exc:  # a bad pipeline file, an unknown plugin name, a missing option
         print(f"error: {exc}", file=sys.stderr)
         return 1

@@ -22,10 +22,12 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
     "povagent_plugins.strategies.markers",
+    "povagent_plugins.strategies.geometric",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.baselines",
     "povagent_plugins.backends.replay",
+    "povagent_plugins.backends.simulated",
     # model profiles
     "povagent_plugins.backends.profiles",
     # surface judges (the dataset generator's stage 3)

@@ -475,7 +475,7 @@ class GroundingAgent:
                 file.write_bytes(images.bytes(stored.image_hash))
                 boxes.append(box)
                 name = "observer_view.png" if condition is Condition.GIVEN else file.name
-                instance_frames.append(Frame(i, name, file, square_camera))
+                instance_frames.append(Frame(i, name, file, _shown_camera(self.strategy, cams[i], im.size, square_camera)))
         except BaseException:
             folder.cleanup()
             raise
@@ -532,7 +532,10 @@ class GroundingAgent:
         width, height = box.original
         goal, goal_error = None, None
         camera = prepared.cameras[k]
-        if camera is not None:
+        solved = _solved_goal(response, camera, pixel)
+        if solved is not None:  # a strategy that solved the geometry gives the goal itself
+            goal = solved
+        elif camera is not None:
             try:
                 goal = back_project(camera, pixel, depth=prepared.depths[k], plane=self.plane, depth_kind=self.depth_kind)
             except GoalUnavailable as exc:
@@ -561,6 +564,24 @@ class GroundingAgent:
             goal=goal,
             goal_error=goal_error,
         )
+
+
+def _shown_camera(strategy: Strategy, camera: Any, size: tuple[int, int], unposed: Camera) -> Camera:
+    """The camera an instance frame carries: the robot's own (AI2-THOR convention) for a
+    strategy that reads frame cameras (``uses_frame_cameras``, the geometric solver) when the
+    frame is square (the letterbox then only scales it); otherwise the unposed square one."""
+    if getattr(strategy, "uses_frame_cameras", False) and isinstance(camera, Camera) and size[0] == size[1]:
+        return Camera.from_pose(camera.position, camera.yaw, camera.horizon, camera.fov, unposed.width, unposed.height)
+    return unposed
+
+
+def _solved_goal(response: Response, camera: Any, pixel: tuple[float, float]) -> Goal3D | None:
+    """The 3D target a strategy worked out itself (``Response.solved_point``), or ``None``."""
+    point = response.solved_point
+    if point is None or not isinstance(camera, Camera):
+        return None
+    distance = float(np.linalg.norm(np.asarray(point, dtype=float) - np.asarray(camera.position)))
+    return Goal3D(point=tuple(float(v) for v in point), method="geometry", distance=distance, pixel=pixel)
 
 
 def _aligned(values: Any, n: int, name: str, types: tuple[type, ...]) -> list[Any]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, Mapping
 
 from povagent.answers.spec import AnswerSpec
 
@@ -74,8 +74,11 @@ class Request:
     """What a strategy asks a backend.
 
     ``instance`` is context for offline baselines (the oracle reads the GT from it) and ``run``
-    the repeat index (seeded baselines and replay read it); neither is sent to models nor part
-    of :meth:`fingerprint` (the runner adds the run index to the cache key itself).
+    the repeat index (seeded baselines and replay read it). ``question`` is a machine-readable
+    description of a strategy's sub-question (``{"kind": "locate", "object": "Sofa", ...}``):
+    model backends ignore it, the ``simulated`` backend answers from it. None of the three is
+    sent to models nor part of :meth:`fingerprint` (the runner adds the run index to the cache
+    key itself).
     """
 
     messages: tuple[Message, ...]
@@ -83,6 +86,7 @@ class Request:
     generation: GenerationParams = field(default_factory=GenerationParams)
     instance: "Instance | None" = field(default=None, compare=False)
     run: int = field(default=0, compare=False)
+    question: Mapping[str, Any] | None = field(default=None, compare=False)
 
     def fingerprint(self) -> dict[str, Any]:
         """JSON-able description of everything that determines the answer (images by hash)."""
@@ -123,7 +127,11 @@ class Usage:
 class Response:
     """What a backend returns: the raw text and what it cost.
 
-    ``retries`` and ``cached`` are filled in by the runner.
+    ``retries`` and ``cached`` are filled in by the runner. ``by_strategy`` marks an answer a
+    multi-turn strategy worked out itself from the model's earlier answers (no model call): the
+    runner records it as the row's last exchange, so the row holds the answer it scored.
+    ``solved_point`` is the 3D target such a strategy worked out (in the world frame of the
+    frames' cameras), which the GroundingAgent returns as its goal.
     """
 
     text: str
@@ -132,3 +140,5 @@ class Response:
     model: str | None = None
     retries: int = 0
     cached: bool = False
+    by_strategy: bool = False
+    solved_point: tuple[float, float, float] | None = None

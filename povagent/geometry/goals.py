@@ -204,12 +204,13 @@ FLOOR = Plane()
 class Goal3D:
     """A 3D goal in the camera's world frame.
 
-    ``method`` says how it was found (``"depth"`` or ``"plane"``); ``distance`` is how far it is
+    ``method`` says how it was found (``"depth"``, ``"plane"``, or ``"geometry"``: worked out by
+    a strategy that solves the geometry itself, such as ``geometric``); ``distance`` is how far it is
     from the camera centre along the ray (metres); ``pixel`` is the pixel it came from.
     """
 
     point: tuple[float, float, float]
-    method: Literal["depth", "plane"]
+    method: Literal["depth", "plane", "geometry"]
     distance: float
     pixel: tuple[float, float]
 

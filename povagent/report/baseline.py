@@ -114,7 +114,8 @@ def is_center_system(axes: dict[str, str], label: str) -> bool:
 
 
 #: Backends that are baselines, not models: shown as reference rows, never bolded as "best".
-BASELINE_BACKENDS = frozenset({"center", "random", "oracle"})
+#: ``simulated`` is a perception simulation (it answers from the records): not a model either.
+BASELINE_BACKENDS = frozenset({"center", "random", "oracle", "simulated"})
 
 
 def is_baseline_system(axes: dict[str, str], label: str) -> bool:

@@ -192,9 +192,20 @@ def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]
         "strategy": _name_of(config.get("strategy")) or (first.strategy if first else ""),
         "parser": _name_of(config.get("parser")) or (first.parser if first else ""),
     }
+    if axes["backend"] == "simulated":  # a perception simulation is never labelled as a model
+        axes["model"] = simulation_label(backend.get("options") if isinstance(backend, dict) else None)
     if not axes["model"]:
         axes["model"] = axes["backend"]
     return {k: v for k, v in axes.items() if v}
+
+
+def simulation_label(options: Any) -> str:
+    """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
+    its noise options that are set, so a reader never mistakes it for a model."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "simulation (" + (", ".join(parts) or "no noise") + ")"
 
 
 def _cells_of_index(index: Any) -> list[dict[str, Any]]:

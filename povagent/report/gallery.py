@@ -37,6 +37,7 @@ from typing import Any, Iterable
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from povagent.dataset.realworld import RealWorldInstance
+from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
@@ -326,6 +327,7 @@ def build_gallery(
                 unreadable[key] = image_error(drawing.source, exc, root)
         else:
             stats.without_image += 1
+        from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
         raw = o.raw or ""
         entries.append(
             {
@@ -348,6 +350,7 @@ def build_gallery(
                 "y": o.y,
                 "img": key,
                 "an": o.answered,
+                "be": from_above,
             }
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}

@@ -324,6 +324,8 @@ class PipelineRun:
             await self._read_frames(instance)
             turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
             request, response = turns[-1]
+            if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
+                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), raw=response.text))
             parse = self._parse(comps.parser, response.text, request, key)
             shown = as_shown(instance, request)
             if parse.answered:

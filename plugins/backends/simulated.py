@@ -1,0 +1,282 @@
+"""The ``simulated`` backend: a perception simulator, not a model.
+
+It answers the ``geometric`` strategy's sub-questions (``Request.question``) from the dataset's
+own records, with noise as strong as asked, so the solver can be studied offline:
+
+* ``read``: the observer's furniture (``objectType`` of ``object_observer``), the anchor
+  (``landmark_type``) and the direction of the instance. In condition A (Inferred), with
+  probability ``wrong_furniture_rate`` the observer is another furniture type of the same house
+  (one its records hold a box for, so it can be pointed at).
+* ``surface``: the kind of ``stage3[dir].surface`` (floor, the anchor itself, another object);
+  with probability ``wrong_surface_rate`` one of the two others.
+* ``locate``: for every shown frame whose record lists the object as seen
+  (``object_in_frame_hits``; the observer view always looks at its anchor) and where the centre
+  of its box projects inside the image, the projected centre and the 2D box around the projected
+  box, each coordinate with Gaussian noise of ``pixel_sigma`` pixels; each such frame is missed
+  with probability ``miss_rate``.
+
+Answers are deterministic per (``seed``, instance, run, sub-question): the order requests
+arrive in changes nothing. A request without a question it knows (any free-form prompt) is
+refused with a permanent error: the simulator never pretends to be a model. Its answers say
+``model: "simulation"`` and the reports label it a simulation.
+
+The records are read from the house folder the instance's frames are in (the release layout's
+``artifacts/<house>/``), or from the ``dataset`` option's folder.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import threading
+from pathlib import Path
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+from povagent import hookimpl
+from povagent.dataset.instances import Instance
+from povagent.dataset.loader import House, load_house
+from povagent.dataset.models import PairEntry, SceneObject
+from povagent.errors import ConfigError
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
+from povagent.geometry.camera import Camera
+from povagent.geometry.placement import SURFACE_KINDS, surface_kind
+from povagent.interfaces import Backend, PermanentBackendError
+
+#: The label every answer carries in ``Response.model``.
+SIMULATION_LABEL = "simulation"
+#: Points per box edge sampled to outline a box that is partly behind the camera.
+EDGE_SAMPLES = 16
+#: Nearest depth (m) at which a box point still shows.
+NEAR_PLANE = 0.05
+
+
+def _rate(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) <= 1.0:
+        raise ConfigError(f"backend 'simulated': option '{name}' must be a number in [0, 1], got {value!r}")
+    return float(value)
+
+
+def seeded_generator(*parts: object) -> np.random.Generator:
+    """A generator seeded from ``parts`` (stable across processes and Python hash seeds)."""
+    digest = hashlib.sha256("|".join(str(p) for p in parts).encode()).digest()
+    return np.random.default_rng(int.from_bytes(digest[:8], "big"))
+
+
+def box_outline(camera: Camera, obj: SceneObject) -> tuple[float, float, float, float] | None:
+    """The 2D box (pixels, clipped to the image) around an object's projected box, from the
+    part in front of the camera; ``None`` when none of it is in front or in the image."""
+    corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
+    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
+    points = []
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        for b0 in (lo[others[0]], hi[others[0]]):
+            for b1 in (lo[others[1]], hi[others[1]]):
+                p = np.empty((EDGE_SAMPLES, 3))
+                p[:, axis] = lo[axis] + t * (hi[axis] - lo[axis])
+                p[:, others[0]], p[:, others[1]] = b0, b1
+                points.append(p)
+    pts = np.concatenate(points)
+    depth = camera.to_camera(pts)[:, 2]
+    pts = pts[depth > NEAR_PLANE]
+    if not len(pts):
+        return None
+    px = camera.project_pixels(pts)
+    w, h = camera.width - 1.0, camera.height - 1.0
+    x0, y0 = np.clip(px[:, 0].min(), 0, w), np.clip(px[:, 1].min(), 0, h)
+    x1, y1 = np.clip(px[:, 0].max(), 0, w), np.clip(px[:, 1].max(), 0, h)
+    if x1 - x0 < 1.0 or y1 - y0 < 1.0:
+        return None
+    return (float(x0), float(y0), float(x1), float(y1))
+
+
+def _centre(obj: SceneObject) -> tuple[float, float, float]:
+    return obj.raw_metadata.axisAlignedBoundingBox.center.as_tuple()
+
+
+class SimulatedPerception(Backend):
+    """Answers the geometric strategy's sub-questions from the records, with noise.
+
+    Options: ``pixel_sigma`` (px, >= 0), ``miss_rate``, ``wrong_furniture_rate`` (condition A
+    only), ``wrong_surface_rate`` (each in [0, 1]), ``seed``, ``dataset`` (the dataset folder,
+    when the frames are not inside the release layout).
+    """
+
+    cacheable: ClassVar[bool] = False
+
+    def __init__(
+        self,
+        pixel_sigma: float = 0.0,
+        miss_rate: float = 0.0,
+        wrong_furniture_rate: float = 0.0,
+        wrong_surface_rate: float = 0.0,
+        seed: int = 0,
+        dataset: str | None = None,
+    ) -> None:
+        if isinstance(pixel_sigma, bool) or not isinstance(pixel_sigma, (int, float)) or not pixel_sigma >= 0:
+            raise ConfigError(f"backend 'simulated': option 'pixel_sigma' must be a number >= 0 (pixels), got {pixel_sigma!r}")
+        if isinstance(seed, bool) or not isinstance(seed, int):
+            raise ConfigError(f"backend 'simulated': option 'seed' must be an integer, got {seed!r}")
+        self.pixel_sigma = float(pixel_sigma)
+        self.miss_rate = _rate("miss_rate", miss_rate)
+        self.wrong_furniture_rate = _rate("wrong_furniture_rate", wrong_furniture_rate)
+        self.wrong_surface_rate = _rate("wrong_surface_rate", wrong_surface_rate)
+        self.seed = seed
+        self.dataset = Path(dataset).expanduser() if dataset else None
+        self._houses: dict[Path, House] = {}
+        self._lock = threading.Lock()
+
+    def identity(self) -> Mapping[str, Any]:
+        """Name, ``simulation: True`` and every noise option."""
+        return {
+            "backend": "simulated",
+            "simulation": True,
+            "pixel_sigma": self.pixel_sigma,
+            "miss_rate": self.miss_rate,
+            "wrong_furniture_rate": self.wrong_furniture_rate,
+            "wrong_surface_rate": self.wrong_surface_rate,
+            "seed": self.seed,
+        }
+
+    # -- records ------------------------------------------------------------------------------
+    def house_of(self, instance: Instance) -> House:
+        """The house records of ``instance`` (read once per house folder)."""
+        folder = self._house_folder(instance)
+        with self._lock:
+            house = self._houses.get(folder)
+        if house is None:
+            problems: list = []
+            house = load_house(folder, folder.parent.parent, problems)
+            if house is None:
+                listing = "; ".join(str(p) for p in problems[:3])
+                raise PermanentBackendError(f"simulated backend: cannot read the records of {folder}: {listing}")
+            with self._lock:
+                self._houses[folder] = house
+        return house
+
+    def _house_folder(self, instance: Instance) -> Path:
+        if self.dataset is not None:
+            folder = self.dataset / "artifacts" / instance.house_id
+            if folder.is_dir():
+                return folder
+            raise PermanentBackendError(f"simulated backend: option 'dataset': {folder} is not a house folder")
+        for frame in instance.frames:
+            for parent in Path(frame.file).parents:
+                if parent.name == instance.house_id and (parent / f"{instance.house_id}.json").is_file():
+                    return parent
+        raise PermanentBackendError(
+            f"simulated backend: the frames of {instance.id} are not inside a release-layout house folder; "
+            "set the backend option 'dataset' to the dataset folder"
+        )
+
+    # -- answering ----------------------------------------------------------------------------
+    async def complete(self, request: Request, images: ImageStore) -> Response:
+        """Answer one sub-question; refuse anything else."""
+        question = request.question
+        kind = question.get("kind") if isinstance(question, Mapping) else None
+        handler = {"read": self._read, "surface": self._surface, "locate": self._locate}.get(str(kind))
+        if handler is None:
+            raise PermanentBackendError(
+                "the simulated backend is a perception simulation, not a model: it answers only the 'geometric' "
+                f"strategy's sub-questions (Request.question kind read, surface or locate), and this request carries "
+                f"{'no question' if question is None else f'question kind {kind!r}'}; use strategy: geometric"
+            )
+        instance = request.instance
+        if instance is None:
+            raise PermanentBackendError("the simulated backend needs request.instance (it answers from the records)")
+        house = self.house_of(instance)
+        pair = house.pairs.get(instance.pair_id)
+        if pair is None:
+            raise PermanentBackendError(f"simulated backend: no pair {instance.pair_id!r} in the records of {instance.house_id}")
+        rng = seeded_generator(self.seed, instance.id, request.run, json.dumps(dict(question), sort_keys=True, default=str))
+        answer = handler(question, instance, house, pair, rng)
+        return Response(text=json.dumps(answer), usage=Usage(0, 0, 0.0), latency_s=0.0, model=SIMULATION_LABEL)
+
+    def _read(self, question: Mapping[str, Any], instance: Instance, house: House, pair: PairEntry, rng: np.random.Generator) -> dict[str, Any]:
+        answer: dict[str, Any] = {}
+        asks = question.get("asks") or ("observer", "anchor", "direction")
+        if "observer" in asks:
+            observer = pair.object_observer.object_type
+            wrong = rng.random() < self.wrong_furniture_rate
+            if wrong and str(instance.condition) == "a":
+                others = sorted({o.object_type for o in house_objects(house)} - {observer, pair.landmark_type})
+                if others:
+                    observer = others[int(rng.integers(len(others)))]
+            answer["observer"] = observer
+        if "anchor" in asks:
+            answer["anchor"] = pair.object_landmark.object_type
+        if "direction" in asks:
+            answer["direction"] = str(instance.direction)
+        return answer
+
+    def _surface(self, question: Mapping[str, Any], instance: Instance, house: House, pair: PairEntry, rng: np.random.Generator) -> dict[str, Any]:
+        judgement = pair.stage3.get(instance.direction)
+        kind = surface_kind(judgement.surface if judgement else None, pair.object_landmark.object_type)
+        if rng.random() < self.wrong_surface_rate:
+            others = [k for k in SURFACE_KINDS if k != kind]
+            kind = others[int(rng.integers(len(others)))]
+        return {"surface": kind}
+
+    def _locate(self, question: Mapping[str, Any], instance: Instance, house: House, pair: PairEntry, rng: np.random.Generator) -> dict[str, Any]:
+        obj = pointed_object(str(question.get("object", "")), str(question.get("role", "")), house, pair)
+        if obj is None:
+            return {"detections": []}
+        given = not instance.condition.uses_exploration_frames
+        detections = []
+        for index, frame in enumerate(instance.frames):
+            seen_by_record = given or (index < len(house.exploration) and obj.objectId in house.exploration[index].object_in_frame_hits)
+            miss = rng.random() < self.miss_rate  # drawn for every frame: noise does not shift with visibility
+            noise = rng.normal(0.0, self.pixel_sigma, size=6) if self.pixel_sigma > 0 else np.zeros(6)
+            if not seen_by_record or miss:
+                continue
+            cam = frame.camera
+            u, v, depth = cam.project_point(_centre(obj))
+            if not (depth > NEAR_PLANE and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0):
+                continue
+            box = box_outline(cam, obj)
+            w, h = cam.width - 1.0, cam.height - 1.0
+            x = float(np.clip(u * cam.width + noise[0], 0, w))
+            y = float(np.clip(v * cam.height + noise[1], 0, h))
+            entry: dict[str, Any] = {"image": index, "x": round(x, 1), "y": round(y, 1)}
+            if box is not None:
+                x0, x1 = sorted(float(np.clip(box[k] + noise[2 + k], 0, w)) for k in (0, 2))
+                y0, y1 = sorted(float(np.clip(box[k] + noise[2 + k], 0, h)) for k in (1, 3))
+                entry["box"] = [round(x0, 1), round(y0, 1), round(x1, 1), round(y1, 1)]
+            detections.append(entry)
+        return {"detections": detections}
+
+
+def house_objects(house: House) -> list[SceneObject]:
+    """Every object the house's records hold a box for (observers and anchors), by objectId."""
+    objects: dict[str, SceneObject] = {}
+    for pair in house.pairs.values():
+        for obj in (pair.object_observer, pair.object_landmark):
+            objects.setdefault(str(obj.objectId), obj)
+    return [objects[k] for k in sorted(objects)]
+
+
+def pointed_object(object_type: str, role: str, house: House, pair: PairEntry) -> SceneObject | None:
+    """The object a locate question means: the pair's observer or anchor when the type and role
+    match, else the house's first recorded object of that type (a wrongly read furniture)."""
+    if role == "observer" and object_type == pair.object_observer.object_type:
+        return pair.object_observer
+    if role == "anchor" and object_type == pair.object_landmark.object_type:
+        return pair.object_landmark
+    for obj in (pair.object_observer, pair.object_landmark, *house_objects(house)):
+        if obj.object_type == object_type:
+            return obj
+    return None
+
+
+@hookimpl
+def register_backends(register) -> None:
+    """Contribute the perception simulator."""
+    register(
+        "simulated",
+        SimulatedPerception,
+        description="A perception SIMULATION (not a model): answers the geometric strategy's sub-questions from the records, with noise",
+    )

@@ -1,0 +1,429 @@
+"""The ``geometric`` strategy: the model perceives, geometry reasons (multi-turn).
+
+The paper finds that spelling out the observer-relative reasoning helps, and that models still
+fail at the geometry. Here the model is asked only what it is good at, each as an ordinary
+request with an answer schema, and the geometry is done exactly:
+
+1. *read* the sentence: which furniture the speaker was at (A: inferred from the activity; B:
+   stated, still read), the anchor, and the direction;
+2. *surface*: what the target rests on (the floor, the anchor, or another object);
+3. *locate* the anchor, then (A/B) the observer's furniture: in every frame where the model
+   sees it, its centre pixel and bounding box.
+
+With the frames' cameras (the release's ``exploration_log.json``; a robot's own poses) the
+anchor and the observer are triangulated (one view: a ray against the type's usual centre
+height, :mod:`povagent.geometry.triangulation`), the anchor's box is fitted to its outlines,
+the target is placed by the benchmark's own rules (:mod:`povagent.geometry.placement`), and
+the frame showing it best is chosen. Condition C (the observer view, no pose) is solved in the
+image plane from the anchor's box (:mod:`povagent.geometry.given_view`).
+
+Each request carries ``Request.question``, a machine-readable form of the sub-question that
+model backends ignore and the ``simulated`` backend answers. The final answer is worked out,
+not asked: it is returned as the last turn with ``by_strategy`` set, its text the answer's JSON
+followed by the solver's account of every step, fallbacks included (a step the model fails
+falls back, and the account says how). This module must not score or read dataset records.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
+from povagent.dataset.instances import Instance
+from povagent.dataset.models import DIRECTIONS
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import GenerationParams, Message, Request, Response, TextPart
+from povagent.exchange.prompts import frame_values, render
+from povagent.geometry.camera import Camera
+from povagent.geometry.given_view import solve_given_view
+from povagent.geometry.ground_truth import anchor_keywords
+from povagent.geometry.placement import SURFACE_KINDS, AnchorEstimate, choose_frame, place_target
+from povagent.geometry.size_priors import size_prior
+from povagent.geometry.triangulation import MIN_RAY_ANGLE_DEG, Outline, Sighting, fit_box, locate
+from povagent.interfaces import Ask, Strategy
+from povagent_plugins.strategies.layout import answer_spec, image_parts, shown_images
+
+#: The ``kind`` of each sub-question (``Request.question["kind"]``).
+READ, SURFACE, LOCATE = "read", "surface", "locate"
+#: ``Request.question["kind"]`` of the final turn (worked out by the solver, never sent).
+FINAL = "final"
+#: The key of the final answer's JSON holding the 3D target (A/B).
+TARGET_3D = "target_3d"
+#: What the final turn's text says after the answer's JSON.
+ACCOUNT_HEADER = "geometric solver (answer worked out from the answers above, not asked):"
+#: Words a model may use for a direction, mapped to the benchmark's four.
+DIRECTION_WORDS = {"right": "right", "left": "left", "front": "front", "in front": "front", "up": "up", "above": "up", "on top": "up", "top": "up"}
+#: Held to the triangulated centre within this (m) when fitting the anchor's box; the height
+#: prior's centre is looser.
+TRIANGULATED_CENTRE_SIGMA = 0.05
+PRIOR_CENTRE_SIGMA = 0.5
+
+
+def object_words(object_type: str) -> str:
+    """How prompts name a type: ``SideTable`` -> ``side table`` (the ground-truth keywords)."""
+    return anchor_keywords(object_type)[0]
+
+
+def known_types() -> tuple[str, ...]:
+    """The paper's 31 observer/anchor categories (the types the read question offers)."""
+    from povagent.generate.assets import OBSERVER_ANCHOR_CATEGORIES
+
+    return OBSERVER_ANCHOR_CATEGORIES
+
+
+def normalize_type(value: Any) -> str | None:
+    """A model's furniture name as a known type (``"side table"`` -> ``SideTable``); any other
+    non-empty name is kept as written (it is still pointed at; its size is a generic prior)."""
+    if not isinstance(value, str) or not value.strip():
+        return None
+    squashed = re.sub(r"[^a-z]", "", value.lower())
+    for t in known_types():
+        if squashed == t.lower() or any(squashed == re.sub(r"[^a-z]", "", k) for k in anchor_keywords(t)):
+            return t
+    return value.strip()
+
+
+def normalize_direction(value: Any) -> str | None:
+    """A model's direction as one of ``right``, ``left``, ``front``, ``up`` (``None`` if none)."""
+    if not isinstance(value, str):
+        return None
+    text = value.strip().lower()
+    if text in DIRECTION_WORDS:
+        return DIRECTION_WORDS[text]
+    for word, direction in DIRECTION_WORDS.items():
+        if re.search(rf"\b{word}\b", text):
+            return direction
+    return None
+
+
+def json_object(text: str | None) -> dict[str, Any] | None:
+    """The first JSON object in a model's answer (fenced or not, prose around it allowed)."""
+    if not text:
+        return None
+    decoder = json.JSONDecoder()
+    for match in re.finditer(r"\{", text):
+        try:
+            value, _ = decoder.raw_decode(text, match.start())
+        except json.JSONDecodeError:
+            continue
+        if isinstance(value, dict):
+            return value
+    return None
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One sighting the model reported: frame index, centre pixel, and box (if it gave one)."""
+
+    frame: int
+    pixel: tuple[float, float]
+    box: tuple[float, float, float, float] | None
+
+
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool):
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def parse_detections(answer: dict[str, Any] | None, n_frames: int, width: int, height: int) -> tuple[list[Detection], int]:
+    """The usable detections of a locate answer and how many entries were dropped (a frame
+    index out of range, no point and no box, a frame named twice). Pixels are clamped into
+    the image; a box's corners are put in order."""
+    raw = answer.get("detections") if isinstance(answer, dict) else None
+    if not isinstance(raw, list):
+        return [], 0
+    out: list[Detection] = []
+    seen: set[int] = set()
+    dropped = 0
+    for entry in raw:
+        frame = _number(entry.get("image")) if isinstance(entry, dict) else None
+        if frame is None or int(frame) != frame or not 0 <= int(frame) < n_frames or int(frame) in seen:
+            dropped += 1
+            continue
+        box = None
+        coords = entry.get("box")
+        if isinstance(coords, list) and len(coords) == 4 and all(_number(c) is not None for c in coords):
+            x0, y0, x1, y1 = (float(c) for c in coords)
+            box = (
+                _clamp(min(x0, x1), width), _clamp(min(y0, y1), height), _clamp(max(x0, x1), width), _clamp(max(y0, y1), height)
+            )
+        x, y = _number(entry.get("x")), _number(entry.get("y"))
+        if x is None or y is None:
+            if box is None:
+                dropped += 1
+                continue
+            x, y = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
+        seen.add(int(frame))
+        out.append(Detection(int(frame), (_clamp(x, width), _clamp(y, height)), box))
+    return out, dropped
+
+
+def _clamp(v: float, size: int) -> float:
+    return min(max(float(v), 0.0), size - 1.0)
+
+
+@dataclass
+class Account:
+    """What the solver did, step by step, and where it fell back (written into the row)."""
+
+    steps: list[str] = field(default_factory=list)
+    fallbacks: list[str] = field(default_factory=list)
+
+    def step(self, text: str) -> None:
+        """Record a step that went as planned."""
+        self.steps.append(text)
+
+    def fallback(self, text: str) -> None:
+        """Record a step the model's answer could not serve, and what stood in for it."""
+        self.fallbacks.append(text)
+
+    def text(self) -> str:
+        """The account as the lines after the answer's JSON."""
+        lines = [ACCOUNT_HEADER] + [f"- {s}" for s in self.steps]
+        lines += [f"fallback: {f}" for f in self.fallbacks] or ["fallbacks: none"]
+        return "\n".join(lines)
+
+
+def _schema(properties: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "object", "required": list(properties), "properties": properties}
+
+
+_DETECTIONS_SCHEMA = _schema(
+    {
+        "detections": {
+            "type": "array",
+            "items": _schema(
+                {
+                    "image": {"type": "integer", "minimum": 0},
+                    "x": {"type": "number"},
+                    "y": {"type": "number"},
+                    "box": {"type": "array", "items": {"type": "number"}, "minItems": 4, "maxItems": 4},
+                }
+            ),
+        }
+    }
+)
+
+
+class GeometricStrategy(Strategy):
+    """Ask the model to read the sentence and point; solve the geometry exactly.
+
+    It reads the frames' cameras (``uses_frame_cameras``): the GroundingAgent then gives it the
+    robot's own cameras, and returns the solved 3D target as the goal.
+
+    Options: ``max_tokens`` per sub-question (default 512), ``temperature`` (default: the
+    backend's), ``min_ray_angle_deg`` (rays spanning less than this are not triangulated;
+    default 4).
+    """
+
+    #: The solver triangulates with the frames' cameras (see the GroundingAgent).
+    uses_frame_cameras = True
+
+    def __init__(self, max_tokens: int = 512, temperature: float | None = None, min_ray_angle_deg: float = MIN_RAY_ANGLE_DEG) -> None:
+        if not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1:
+            raise ValueError(f"strategy option max_tokens must be a positive integer, got {max_tokens!r}")
+        if temperature is not None and (not isinstance(temperature, (int, float)) or temperature < 0):
+            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+        if not isinstance(min_ray_angle_deg, (int, float)) or not 0 <= min_ray_angle_deg < 90:
+            raise ValueError(f"strategy option min_ray_angle_deg must be a number in [0, 90), got {min_ray_angle_deg!r}")
+        self.generation = GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
+        self.min_ray_angle_deg = float(min_ray_angle_deg)
+
+    # -- requests -----------------------------------------------------------------------------
+    def answer_spec(self, instance: Instance) -> AnswerSpec:
+        """The final answer's spec: the paper's ``{selected_image, x, y}`` (A/B) or ``{x, y}`` (C)."""
+        return answer_spec(instance)
+
+    def _text_request(self, instance: Instance, text: str, schema: dict[str, Any], question: dict[str, Any]) -> Request:
+        width, height = instance.frame_size
+        spec = AnswerSpec(schema=schema, width=width, height=height, n_frames=1, asks_frame=False)
+        return Request((Message("user", (TextPart(text),)),), spec, self.generation, instance=instance, question=question)
+
+    def read_request(self, instance: Instance) -> Request:
+        """Sub-question 1: observer (A/B), anchor and direction, read from the sentence."""
+        types = ", ".join(known_types())
+        directions = {"type": "string", "enum": [str(d) for d in DIRECTIONS]}
+        if instance.condition.uses_exploration_frames:
+            text = render("geometric_read_frames", sentence=instance.sentence, types=types)
+            props = {"observer": {"type": "string"}, "anchor": {"type": "string"}, "direction": directions}
+        else:
+            text = render("geometric_read_given", sentence=instance.sentence, types=types)
+            props = {"anchor": {"type": "string"}, "direction": directions}
+        return self._text_request(instance, text, _schema(props), {"kind": READ, "asks": list(props)})
+
+    def surface_request(self, instance: Instance, anchor: str, direction: str) -> Request:
+        """Sub-question 2: what the target rests on."""
+        text = render("geometric_surface", sentence=instance.sentence, anchor=object_words(anchor), direction=_direction_words(direction))
+        schema = _schema({"surface": {"type": "string", "enum": list(SURFACE_KINDS)}})
+        return self._text_request(instance, text, schema, {"kind": SURFACE, "anchor": anchor, "direction": direction})
+
+    def locate_request(self, instance: Instance, images: ImageStore, object_type: str, role: str) -> Request:
+        """Sub-question 3: the object's centre and box in every shown frame where it is seen."""
+        width, height = instance.frame_size
+        hashes = shown_images(instance, images)
+        frames = instance.condition.uses_exploration_frames
+        if frames:
+            text = render("geometric_locate_frames", object=object_words(object_type), **frame_values(width, height, len(hashes)))
+        else:
+            text = render("geometric_locate_given", object=object_words(object_type), **frame_values(width, height))
+        message = Message("user", (*image_parts(hashes, frames), TextPart(text)))
+        spec = AnswerSpec(schema=_DETECTIONS_SCHEMA, width=width, height=height, n_frames=len(hashes), asks_frame=False)
+        question = {"kind": LOCATE, "object": object_type, "role": role, "frames": len(hashes)}
+        return Request((message,), spec, self.generation, instance=instance, question=question)
+
+    def build(self, instance: Instance, images: ImageStore) -> Request:
+        """The first request: reading the sentence (the rest depend on its answer)."""
+        return self.read_request(instance)
+
+    # -- the conversation ---------------------------------------------------------------------
+    async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
+        """Ask the sub-questions, solve the geometry, and return every turn, the answer last."""
+        turns: list[tuple[Request, Response]] = []
+        account = Account()
+
+        async def exchange(request: Request) -> dict[str, Any] | None:
+            response = await ask(request)
+            turns.append((request, response))
+            return json_object(response.text)
+
+        read = await exchange(self.read_request(instance))
+        anchor = normalize_type(read.get("anchor")) if read else None
+        direction = normalize_direction(read.get("direction")) if read else None
+        observer = normalize_type(read.get("observer")) if read and instance.condition.uses_exploration_frames else None
+        if anchor is None:
+            account.fallback("the anchor could not be read from the answer: no geometry is possible")
+            return turns + [self._final(instance, None, account)]
+        if direction is None:
+            direction = "front"
+            account.fallback("the direction could not be read from the answer: took 'front'")
+        account.step(f"read: anchor {anchor}, direction {direction}" + (f", observer {observer}" if observer else ""))
+
+        answer = await exchange(self.surface_request(instance, anchor, direction))
+        surface = answer.get("surface") if answer else None
+        surface = surface.strip().lower() if isinstance(surface, str) else None
+        if surface not in SURFACE_KINDS:
+            surface = "anchor" if direction == "up" else "floor"
+            account.fallback(f"the surface could not be read from the answer: took '{surface}'")
+        else:
+            account.step(f"surface: {surface}")
+
+        width, height = instance.frame_size
+        n = len(instance.frames)
+        anchor_seen, dropped = parse_detections(await exchange(self.locate_request(instance, images, anchor, "anchor")), n, width, height)
+        if dropped:
+            account.fallback(f"{dropped} anchor detection(s) unusable (frame out of range or repeated, or no point): left out")
+        if not anchor_seen:
+            account.fallback("the anchor was not found in any frame: no geometry is possible")
+            return turns + [self._final(instance, None, account)]
+
+        if not instance.condition.uses_exploration_frames:
+            first = anchor_seen[0]
+            sol = solve_given_view(direction, anchor, size_prior(anchor), first.pixel, first.box, surface, width, height, instance.frames[0].camera.fov)
+            how = "tilt fitted to the anchor's box" if sol.fitted else "no usable box: tilt guessed from the pointed centre"
+            (account.step if sol.fitted else account.fallback)(f"observer view: {how} ({sol.tilt_deg:.1f} deg)")
+            account.step(f"target: pixel ({sol.pixel[0]:.1f}, {sol.pixel[1]:.1f})" + ("" if sol.in_frame else ", outside the image: clamped"))
+            return turns + [self._final(instance, (None, sol.pixel), account)]
+
+        cameras = [f.camera for f in instance.frames]
+        anchor_box = self._anchor_box(anchor, anchor_seen, cameras, account)
+        observer_at = None
+        if observer is None:
+            account.fallback("the observer's furniture could not be read from the answer")
+        else:
+            seen, dropped = parse_detections(await exchange(self.locate_request(instance, images, observer, "observer")), n, width, height)
+            if dropped:
+                account.fallback(f"{dropped} observer detection(s) unusable: left out")
+            estimate = locate([Sighting(cameras[d.frame], d.pixel) for d in seen], size_prior(observer).centre_height, self.min_ray_angle_deg)
+            if estimate is None:
+                account.fallback(f"the {observer} was not found in any frame")
+            else:
+                observer_at = np.asarray(estimate.point)
+                account.step(f"observer: {_how_located(estimate)} at ({_xyz(observer_at)})")
+        if observer_at is None:
+            observer_at = np.mean([cameras[d.frame].position for d in anchor_seen], axis=0)
+            account.fallback("observer placed at the mean position of the cameras that saw the anchor")
+        target = place_target(direction, anchor_box, anchor, observer_at, surface)
+        choice = choose_frame(target, cameras)
+        account.step(f"target: ({_xyz(target)}); frame {choice.index} ({choice.placement})")
+        return turns + [self._final(instance, (choice.index, choice.pixel), account, target)]
+
+    def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[Camera], account: Account) -> AnchorEstimate:
+        """The anchor's box: centre located from the sightings, extent fitted to the outlines."""
+        prior = size_prior(anchor)
+        estimate = locate([Sighting(cameras[d.frame], d.pixel) for d in seen], prior.centre_height, self.min_ray_angle_deg)
+        assert estimate is not None  # seen is not empty
+        outlines = [Outline(cameras[d.frame], d.box) for d in seen if d.box is not None]
+        sigma = TRIANGULATED_CENTRE_SIGMA if estimate.method == "triangulated" else PRIOR_CENTRE_SIGMA
+        prior_half = (prior.size[0] / 2.0, prior.half_height, prior.size[2] / 2.0)
+        box = fit_box(estimate.point, outlines, prior_half, sigma)
+        account.step(f"anchor: {_how_located(estimate)} at ({_xyz(estimate.point)})")
+        if box.edges_used:
+            account.step(f"anchor box: {box.edges_used} box edges, half sizes ({_xyz(box.half)})")
+        else:
+            account.fallback(f"no usable anchor box edge: the {anchor}'s usual size stands in")
+        return AnchorEstimate(box.centre, box.half)
+
+    def _final(
+        self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account, target: Sequence[float] | None = None
+    ) -> tuple[Request, Response]:
+        """The worked-out answer as the last turn (``by_strategy``): JSON, then the account.
+
+        With a 3D target (A/B: in the world frame of the frames' cameras) the JSON also holds
+        ``"target_3d": [x, y, z]``, which parsers ignore and the GroundingAgent returns as its goal.
+        """
+        width, height = instance.frame_size
+        if answer is None:
+            answer = (0, (width / 2.0, height / 2.0))
+            account.fallback("answered the image centre" + (" of frame 0" if instance.condition.uses_exploration_frames else ""))
+        frame, (x, y) = answer
+        doc: dict[str, Any] = {"selected_image": frame} if instance.condition.uses_exploration_frames else {}
+        doc |= {"x": round(float(x), 2), "y": round(float(y), 2)}
+        if target is not None:
+            doc[TARGET_3D] = [round(float(v), 4) for v in target]
+        text = json.dumps(doc) + "\n" + account.text()
+        request = Request(
+            (Message("user", (TextPart("(worked out by the geometric strategy; not sent to a model)"),)),),
+            answer_spec(instance),
+            self.generation,
+            instance=instance,
+            question={"kind": FINAL},
+        )
+        solved = tuple(float(v) for v in target) if target is not None else None
+        return request, Response(text=text, model="geometric solver", by_strategy=True, solved_point=solved)  # type: ignore[arg-type]
+
+
+def _direction_words(direction: str) -> str:
+    return {"right": "to the right", "left": "to the left", "front": "in front", "up": "on top"}.get(direction, direction)
+
+
+def _how_located(estimate) -> str:
+    views = f"seen in {estimate.views} frame{'s' if estimate.views != 1 else ''}"
+    if estimate.method == "triangulated":
+        return f"{views}, triangulated (rays {estimate.spread_deg:.0f} deg apart)"
+    return f"{views}, ray(s) met at its type's usual centre height"
+
+
+def _xyz(p: Sequence[float]) -> str:
+    return ", ".join(f"{float(v):.2f}" for v in p)
+
+
+@hookimpl
+def register_strategies(register) -> None:
+    """Contribute the geometric strategy."""
+    register(
+        "geometric",
+        GeometricStrategy,
+        description="Multi-turn: the model reads the sentence and points; the observer-relative geometry is solved exactly",
+    )
