@@ -185,6 +185,7 @@ ANSWERS: dict[str, str] = {
     "script tag and control characters": '</script><script>alert(1)</script>\x00\x1b[31m {"selected_image": 0, "x": 1, "y": 2}',
     "wrong types": '{"selected_image": [0], "x": {"v": 1}, "y": null}',
     "empty": "",
+    "a lone surrogate": '{"selected_image": 0, "x": 1, "y": 2} \ud800',
 }
 
 
@@ -214,6 +215,27 @@ def test_a_hostile_answer_is_a_row_and_the_report_is_written(tmp_path, dataset, 
     code, text = invoke("report", tmp_path / "run", "--out", tmp_path / "report", "--bootstrap", "0")
     assert code == 0 and (tmp_path / "report" / "report.html").exists(), text[-3000:]
     assert "<script>alert(1)</script>" not in (tmp_path / "report" / "report.html").read_text()
+
+
+def test_a_server_that_answers_nothing_fails_the_keys_and_writes_nothing_wrong(tmp_path, dataset, answer_server, monkeypatch):
+    # content null / no choices: not an (empty) answer to keep, a failure to retry and record
+    from povagent.testing.loopback_server import Reply
+
+    monkeypatch.setenv("POVAGENT_TEST_KEY", "sk-test-secret-123")
+    answer_server.reply = Reply(None)
+    pipeline = tmp_path / "pipeline.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "dataset": str(dataset),
+        "instances": {"houses": [TARGET], "conditions": ["a", "c"]},
+        "backend": {"name": "litellm", "options": {"model": "openai/hostile", "api_base": answer_server.url, "api_key_env": "POVAGENT_TEST_KEY"}},
+        "retry": {"attempts": 2, "initial_wait": 0.0, "max_wait": 0.0},
+        "output": str(tmp_path / "run"),
+    }))
+    code, text = invoke("run", pipeline, "--quiet")
+    assert code == 3, text[-3000:]  # keys failed: the documented exit code
+    rows = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 4 and {r["error_type"] for r in rows} == {"empty_response"}
+    assert "run `povagent run" in text or "again" in text
 
 
 #: name -> an official predictions file's text

@@ -90,10 +90,11 @@ def test_an_answer_nested_a_few_levels_is_still_read():
     ids=["unclosed-box-tags", "deep-nesting", "many-empty-objects", "long-digit-run"],
 )
 def test_hostile_text_is_parsed_in_linear_time(parsers, name, text):
-    start = time.perf_counter()
+    # CPU time of this process, not wall time: other processes on a loaded machine do not count
+    start = time.process_time()
     parsed = parsers[name].parse(text, FRAMES)
     assert parsed.status is ParseStatus.UNPARSEABLE
-    assert time.perf_counter() - start < 1.0  # quadratic behaviour took 5-35 s here
+    assert time.process_time() - start < 1.0  # quadratic behaviour took 5-35 s here
 
 
 @pytest.mark.parametrize(
@@ -102,6 +103,6 @@ def test_hostile_text_is_parsed_in_linear_time(parsers, name, text):
     ids=["unclosed-single-quotes", "unclosed-block-comments", "line-comment-markers"],
 )
 def test_lenient_reading_of_a_long_object_is_linear(text):
-    start = time.perf_counter()
+    start = time.process_time()  # this process's CPU time: immune to a loaded machine
     assert answer_text.lenient_json(text) is None
-    assert time.perf_counter() - start < 0.5
+    assert time.process_time() - start < 0.5

@@ -50,11 +50,16 @@ def test_every_built_in_strategy_is_registered():
 @pytest.mark.parametrize("name", sorted(PARSERS))
 @pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}', '{"selected_image": 1, "x": 1%s, "y": 1}' % ("0" * 400)])
 def test_no_parser_raises_on_hostile_text(name, text):
-    from povagent.answers.spec import AnswerSpec, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parsed = registered("register_parsers")[name]().parse(text, spec)
-    assert parsed.status is not None
+    # none of these texts holds a usable point: whatever the parser makes of it, it is typed,
+    # never a valid answer, and a non-answer says why
+    assert isinstance(parsed, ParsedAnswer) and isinstance(parsed.status, ParseStatus)
+    assert parsed.status not in (ParseStatus.OK, ParseStatus.REPAIRED), parsed
+    if not parsed.answered:
+        assert parsed.reason and parsed.x is None and parsed.y is None
 
 
 ANSWER_ALPHABET = '{}[]()<>"\':,.-\u2212 \n0123456789xyselctd_imagpontbx=/`'
@@ -65,7 +70,7 @@ def test_no_parser_raises_on_generated_text(name):
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
-    from povagent.answers.spec import AnswerSpec, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parser = registered("register_parsers")[name]()
