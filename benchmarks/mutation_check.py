@@ -211,17 +211,24 @@ def _skip_out_of_scope(session: Path, module: RuleModule) -> int:
 
 
 def _changed_line(diff: str) -> tuple[int, str, str]:
-    """The first changed line of a unified diff: (line number, before, after), stripped."""
+    """The first changed line of a unified diff: (its line number, before, after), stripped."""
     before = after = ""
     line_no = 0
+    old_line = 0
     for line in diff.splitlines():
         hunk = re.match(r"@@ -(\d+)", line)
-        if hunk and not line_no:
-            line_no = int(hunk.group(1))
-        elif line.startswith("-") and not line.startswith("---") and not before:
-            before = line[1:].strip()
-        elif line.startswith("+") and not line.startswith("+++") and not after:
-            after = line[1:].strip()
+        if hunk:
+            old_line = int(hunk.group(1))
+        elif line.startswith(("---", "+++")):
+            continue
+        elif line.startswith("-"):
+            if not before:
+                before, line_no = line[1:].strip(), old_line
+            old_line += 1
+        elif line.startswith("+"):
+            after = after or line[1:].strip()
+        else:
+            old_line += 1
     return line_no, before, after
 
 

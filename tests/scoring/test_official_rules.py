@@ -23,6 +23,7 @@ from povagent.geometry.camera import Camera
 from povagent.scoring.official import (
     MAX_L2,
     GroundTruthInFrame,
+    OfficialScore,
     normalized_l2,
     project_ground_truth,
     score_point,
@@ -69,7 +70,7 @@ def test_gt_in_front_projects_through_the_pinhole():
     assert gt.in_frame and not gt.behind
 
 
-@pytest.mark.parametrize("point", [(0.0, 5.0, 1.0), (0.0, -5.0, 1.0)])
+@pytest.mark.parametrize("point", [(0.0, 1.2, 1.0), (0.0, -1.2, 1.0)])
 def test_gt_above_or_below_the_frame_is_out_of_frame_even_when_u_is_inside(point):
     gt = project_ground_truth(point, FRONT_CAMERA)
     assert 0.0 <= gt.u <= 1.0
@@ -77,11 +78,18 @@ def test_gt_above_or_below_the_frame_is_out_of_frame_even_when_u_is_inside(point
     assert not gt.behind
 
 
-@pytest.mark.parametrize("point", [(5.0, 0.0, 1.0), (-5.0, 0.0, 1.0)])
+@pytest.mark.parametrize("point", [(1.2, 0.0, 1.0), (-1.2, 0.0, 1.0)])
 def test_gt_left_or_right_of_the_frame_is_out_of_frame(point):
     gt = project_ground_truth(point, FRONT_CAMERA)
     assert 0.0 <= gt.v <= 1.0
     assert not gt.in_frame
+
+
+def test_gt_on_the_top_left_corner_is_in_frame():
+    f = FRONT_CAMERA.focal_px
+    gt = project_ground_truth((-256.0 / f, 256.0 / f, 1.0), FRONT_CAMERA)
+    assert (gt.u, gt.v) == (0.0, 0.0)
+    assert gt.in_frame
 
 
 def test_gt_on_the_frame_edge_is_in_frame():
@@ -99,6 +107,15 @@ def test_gt_at_or_behind_the_camera_is_placed_at_the_centre_and_out_of_frame(dep
 def test_gt_just_past_the_behind_threshold_is_projected():
     gt = project_ground_truth((0.0, 0.0, 2e-6), FRONT_CAMERA)
     assert not gt.behind and gt.in_frame
+
+
+def test_a_gt_and_a_score_are_values_that_cannot_be_altered():
+    gt = project_ground_truth((0.0, 0.0, 2.0), FRONT_CAMERA)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        gt.u = 0.0  # type: ignore[misc]
+    score = OfficialScore(True, 0.1, 0.1, True, False, 0.5, 0.5)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        score.l2 = 0.0  # type: ignore[misc]
 
 
 # -- the strict variant -------------------------------------------------------------------------
@@ -191,3 +208,10 @@ def test_the_scorer_gives_an_unparsed_answer_no_score(mini_dataset):
     given = mini_dataset.instance("train_house_00000/0/up/c")
     scores = OfficialScorer().score(given, ParsedAnswer(status=ParseStatus.UNPARSEABLE, reason="no JSON"))
     assert scores["answered"] is False and scores["l2"] is None and scores["gt_in_frame"] is None
+
+
+def test_the_official_scorer_is_registered_under_its_name():
+    from povagent.plugins import build_plugin_host
+
+    scorer = build_plugin_host().create("scorer", "official")
+    assert isinstance(scorer, OfficialScorer)
