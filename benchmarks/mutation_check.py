@@ -62,8 +62,8 @@ RULE_MODULES: tuple[RuleModule, ...] = (
         note="projection only; back-projection (ray, point_at_depth, point_on_plane) serves the generator and agent",
     ),
     RuleModule("povagent/geometry/letterbox.py", ("tests/geometry/test_letterbox.py", "tests/geometry/test_letterbox_rules.py")),
-    RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
-    RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_corpus.py",)),
+    RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
+    RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
     RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry.py", "tests/engine/test_retry_rules.py")),
     RuleModule(
         "povagent/run/pending.py",
