@@ -133,3 +133,16 @@ def test_a_zero_direction_leaves_the_box_at_0_3_m():
     assert DEGENERATE_BOUNDARY_DISTANCE == 0.3
     box = AnchorBox(center_xz=(1.0, 2.0), half_xz=(0.3, 0.7), top=1.0)
     assert np.allclose(boundary_point(box, np.zeros(3)), [1.0, 2.0])
+
+
+def test_directions_of_an_anchor_closer_than_a_metre_are_still_its_direction():
+    d = direction_vectors(np.array([0.3, 0.5, 0.4]), np.array([0.0, 1.5, 0.0]))
+    assert np.allclose(d["front"], [-0.6, 0.0, -0.8])
+
+
+def test_directions_stay_horizontal_unit_vectors_with_the_anchor_straight_above_the_observer():
+    d = direction_vectors(np.array([1.0, 0.5, 2.0]), np.array([1.0, 1.5, 2.0]))
+    for v in d.values():
+        assert np.all(np.isfinite(v))
+        assert v[1] == 0.0
+        assert np.linalg.norm(v) == pytest.approx(1.0)
