@@ -45,6 +45,14 @@ def test_fields_cannot_run_into_each_other():
     assert cache_key(IDENTITY, "ab1", 2) != cache_key(IDENTITY, "ab", 12)
 
 
+def test_the_key_format_is_stable_schema_1():
+    # the key is part of the cache file's format: a change orphans every stored answer, so it
+    # changes only with SCHEMA_VERSION (and then on purpose)
+    blob = identity_json(IDENTITY)
+    expected = hashlib.sha256(b"povagent-cache-v1\x00" + blob.encode() + b"\x00req\x003").hexdigest()
+    assert cache_key(IDENTITY, "req", 3) == expected
+
+
 def test_the_key_is_versioned_by_the_cache_schema():
     # a schema change must orphan old answers, never misread them: the version is hashed in
     blob = identity_json(IDENTITY)
