@@ -146,3 +146,9 @@ def test_directions_stay_horizontal_unit_vectors_with_the_anchor_straight_above_
         assert np.all(np.isfinite(v))
         assert v[1] == 0.0
         assert np.linalg.norm(v) == pytest.approx(1.0)
+
+
+def test_forward_runs_from_the_observer_to_the_anchor_wherever_the_observer_stands():
+    d = direction_vectors(np.array([4.0, 0.0, 5.0]), np.array([1.0, 1.5, 1.0]))
+    assert np.allclose(d["front"], [-0.6, 0.0, -0.8])
+    assert np.allclose(d["right"], [0.8, 0.0, -0.6])

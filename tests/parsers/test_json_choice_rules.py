@@ -48,3 +48,20 @@ def test_text_without_any_object_is_named_as_such():
 def test_given_answers_never_take_a_frame_from_the_text():
     parsed = JsonAnswerParser().parse('Image 2 shows it: {"x": 10, "y": 20}', GIVEN)
     assert parsed.status is ParseStatus.OK and parsed.repair is None and parsed.selected_image is None
+
+
+def test_a_frame_that_is_no_index_is_quoted_in_the_reason():
+    parsed = JsonAnswerParser().parse('{"selected_image": "unsure", "x": 10, "y": 20}', INFERRED)
+    assert parsed.selected_image is None
+    assert "selected_image 'unsure' is not a frame index" in parsed.reason
+
+
+def test_a_given_answer_is_never_blamed_for_a_missing_frame():
+    parsed = JsonAnswerParser().parse('{"x": 10, "y": 20}', GIVEN)
+    assert parsed.status is ParseStatus.OK
+    assert "selected_image" not in parsed.reason
+
+
+def test_the_span_of_a_keyless_answer_is_its_last_object():
+    parsed = JsonAnswerParser().parse('{"a": 1} and then {"b": 2}', GIVEN)
+    assert parsed.span == '{"b": 2}'
