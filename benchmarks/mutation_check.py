@@ -279,7 +279,8 @@ def load_equivalents(path: Path = EQUIVALENT_FILE) -> list[dict]:
 
 def _equivalence(module: RuleModule, mutant: Mutant, equivalents: list[dict]) -> str | None:
     for e in equivalents:
-        if (e["module"], e["operator"], e["line"], e["mutant"]) == (module.path, mutant.operator, mutant.before, mutant.after):
+        same_function = e.get("function", mutant.function) == mutant.function
+        if same_function and (e["module"], e["operator"], e["line"], e["mutant"]) == (module.path, mutant.operator, mutant.before, mutant.after):
             e["_used"] = True
             return str(e["why"])
     return None
