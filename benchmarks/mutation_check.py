@@ -63,7 +63,7 @@ RULE_MODULES: tuple[RuleModule, ...] = (
     ),
     RuleModule("povagent/geometry/letterbox.py", ("tests/geometry/test_letterbox.py", "tests/geometry/test_letterbox_rules.py")),
     RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
-    RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
+    RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_rescale_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
     RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry.py", "tests/engine/test_retry_rules.py")),
     RuleModule(
         "povagent/run/pending.py",

@@ -77,3 +77,10 @@ def test_focal_length_comes_from_the_width_on_a_non_square_frame():
     # f = 320: x/z = 1 lands on the right edge, y/z = 0.5 lands at v = (240 - 160)/480
     u, v, _ = cam.project_point((1.0, 0.5, 1.0))
     assert (u, v) == pytest.approx((1.0, 80.0 / 480.0), abs=1e-12)
+
+
+def test_a_camera_defaults_to_the_benchmark_frame_and_fov():
+    cam = Camera((0.0, 0.0, 0.0), 0.0, 0.0)
+    assert (cam.fov, cam.width, cam.height) == (100.0, 512, 512)
+    posed = Camera.from_pose([0, 0, 0], 0, 0)
+    assert (posed.fov, posed.width, posed.height) == (100.0, 512, 512)
