@@ -8,6 +8,7 @@ reason, in ``benchmarks/mutation_equivalent.toml``; the kill rate is taken over 
 
     .venv/bin/python benchmarks/mutation_check.py                 # every module (~30-45 min)
     .venv/bin/python benchmarks/mutation_check.py --module retry  # modules whose path contains "retry"
+    .venv/bin/python benchmarks/mutation_check.py --recheck       # only the last survivors, after new tests
     .venv/bin/python benchmarks/mutation_check.py --report-only   # re-read the last sessions
 
 It MUTATES FILES IN PLACE (cosmic-ray's way: the editable install and the ``plugins/`` ->
@@ -286,7 +287,19 @@ def _equivalence(module: RuleModule, mutant: Mutant, equivalents: list[dict]) ->
     return None
 
 
-def run_module(module: RuleModule, work_dir: Path, test_prefix: list[str], timeout: float | None) -> float:
+def _forget_survivors(session: Path) -> int:
+    """Drop the results of the session's survivors, so that ``exec`` runs them again."""
+    from cosmic_ray.work_db import WorkDB, WorkResultStorage, use_db
+    from cosmic_ray.work_item import TestOutcome
+
+    with use_db(str(session), WorkDB.Mode.open) as db:
+        survived = [job for job, res in db.results if res.test_outcome == TestOutcome.SURVIVED]
+        with db._session_maker.begin() as sql:  # cosmic-ray has no public call for this
+            sql.query(WorkResultStorage).filter(WorkResultStorage.job_id.in_(survived)).delete()
+    return len(survived)
+
+
+def run_module(module: RuleModule, work_dir: Path, test_prefix: list[str], timeout: float | None, recheck: bool = False) -> float:
     """Baseline, init, filter and execute one module's session; returns the baseline seconds."""
     cfg_path, session = _session_paths(work_dir, module)
     tests = [t for t in module.tests if (ROOT / t).exists()]
@@ -305,8 +318,11 @@ def run_module(module: RuleModule, work_dir: Path, test_prefix: list[str], timeo
     per_mutant = timeout if timeout is not None else max(30.0, 4 * baseline_s)
     cfg_path.write_text(_config(module, shlex.join([*test_prefix, *args]), per_mutant), encoding="utf-8")
     cr = [sys.executable, "-m", "cosmic_ray.cli"]
-    subprocess.run([*cr, "init", "--force", str(cfg_path), str(session)], cwd=ROOT, check=True)
-    _skip_out_of_scope(session, module)
+    if recheck and session.exists():
+        print(f"   rechecking {_forget_survivors(session)} survivors", flush=True)
+    else:
+        subprocess.run([*cr, "init", "--force", str(cfg_path), str(session)], cwd=ROOT, check=True)
+        _skip_out_of_scope(session, module)
     subprocess.run([*cr, "exec", str(cfg_path), str(session)], cwd=ROOT, check=True)
     return baseline_s
 
@@ -365,6 +381,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--work-dir", type=Path, default=Path("/tmp/povagent-mutation"), help="sessions and configs")
     p.add_argument("--timeout", type=float, default=None, help="seconds per mutant (default: max(30, 4 x baseline))")
     p.add_argument("--report-only", action="store_true", help="print the report of the last sessions")
+    p.add_argument("--recheck", action="store_true",
+                   help="run only the last sessions' survivors again (after adding tests; killed mutants stay killed)")
     p.add_argument("--goal", type=float, default=0.90)
     args = p.parse_args(argv)
 
@@ -389,7 +407,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"== {m.path}", flush=True)
             t0 = time.monotonic()
             try:
-                baseline = run_module(m, args.work_dir, prefix, args.timeout)
+                baseline = run_module(m, args.work_dir, prefix, args.timeout, args.recheck)
             except (RuntimeError, subprocess.CalledProcessError) as exc:
                 results.append(ModuleResult(m, error=str(exc)))
                 print(exc, file=sys.stderr)
