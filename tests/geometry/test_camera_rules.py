@@ -55,9 +55,26 @@ def test_positive_horizon_looks_down():
 
 def test_in_frame_needs_u_and_v_inside_and_the_point_in_front():
     cam = Camera.from_pose((0.0, 0.0, 0.0), 0.0, 0.0, fov=90.0)
-    p = cam.project(np.array([[0.0, 0.0, 2.0], [0.0, 5.0, 1.0], [0.0, -5.0, 1.0], [5.0, 0.0, 1.0], [-5.0, 0.0, 1.0], [0.0, 0.0, -2.0]]))
+    # x/z = +-1.2 -> u = 1.1 or -0.1; y/z likewise for v: each just outside one edge
+    p = cam.project(np.array([[0.0, 0.0, 2.0], [0.0, 1.2, 1.0], [0.0, -1.2, 1.0], [1.2, 0.0, 1.0], [-1.2, 0.0, 1.0], [0.0, 0.0, -2.0]]))
     assert p.in_frame.tolist() == [True, False, False, False, False, False]
     assert p.in_front.tolist() == [True, True, True, True, True, False]
+
+
+def test_the_frame_edges_are_in_frame():
+    cam = Camera.from_pose((0.0, 0.0, 0.0), 0.0, 0.0, fov=90.0)
+    e = 256.0 / cam.focal_px
+    p = cam.project(np.array([[-e, e, 1.0], [e, -e, 1.0]]))
+    assert p.normalized.tolist() == [[0.0, 0.0], [1.0, 1.0]]
+    assert p.in_frame.tolist() == [True, True]
+
+
+def test_a_camera_is_a_value_that_cannot_be_moved():
+    import dataclasses
+
+    cam = Camera.from_pose((0.0, 0.0, 0.0), 0.0, 0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cam.yaw = 90.0  # type: ignore[misc]
 
 
 def test_the_behind_threshold_is_1e_6_inclusive():
