@@ -12,7 +12,7 @@ from __future__ import annotations
 import pytest
 
 from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
-from povagent_plugins.parsers.rescale import FRACTIONS, THOUSANDTHS, Rescale1000Parser, overshoot_margin
+from povagent_plugins.parsers.rescale import FRACTIONS, THOUSANDTHS, Rescale1000Parser, declares_1000, overshoot_margin
 
 SMALL = AnswerSpec(schema=point_answer_schema(100, 100), width=100, height=100, asks_frame=False)
 GIVEN = AnswerSpec(schema=point_answer_schema(512, 512), asks_frame=False)
@@ -71,3 +71,23 @@ def test_a_rescaled_frame_from_the_text_keeps_saying_both_repairs():
 
 def test_a_plain_rescale_names_only_the_convention():
     assert parse('{"x": 0.5, "y": 0.25}').repair == FRACTIONS
+
+
+@pytest.mark.parametrize(("x", "y"), [(0, 101.5), (101.5, 0)])
+def test_an_overshoot_with_the_other_value_at_zero_is_still_0_1000(x, y):
+    assert parse(f'{{"x": {x}, "y": {y}}}', SMALL).repair == THOUSANDTHS
+
+
+@pytest.mark.parametrize(("x", "y"), [(-0.5, 101.5), (101.5, -0.5)])
+def test_an_overshoot_with_a_negative_value_is_not_repaired(x, y):
+    assert parse(f'{{"x": {x}, "y": {y}}}', SMALL).repair is None
+
+
+def test_a_negation_up_to_30_characters_before_the_declaration_cancels_it():
+    assert not declares_1000("not" + " " * 27 + "0-1000")  # 'not' starts 30 characters before
+    assert declares_1000("not" + " " * 28 + "0-1000")  # 31: outside the window
+
+
+def test_a_negation_at_the_very_start_of_the_text_counts():
+    assert not declares_1000("not 0-1000")
+    assert declares_1000("0-1000 scale")
