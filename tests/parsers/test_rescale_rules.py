@@ -91,3 +91,9 @@ def test_a_negation_up_to_30_characters_before_the_declaration_cancels_it():
 def test_a_negation_at_the_very_start_of_the_text_counts():
     assert not declares_1000("not 0-1000")
     assert declares_1000("0-1000 scale")
+
+
+@pytest.mark.parametrize(("x", "y"), [(1.5, 0.5), (0.5, 1.5)])
+def test_a_value_past_1_makes_the_answer_pixels_not_fractions(x, y):
+    parsed = parse(f'{{"x": {x}, "y": {y}}}')
+    assert parsed.repair is None and (parsed.x, parsed.y) == (x, y)
