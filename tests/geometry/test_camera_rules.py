@@ -75,6 +75,9 @@ def test_a_camera_is_a_value_that_cannot_be_moved():
     cam = Camera.from_pose((0.0, 0.0, 0.0), 0.0, 0.0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         cam.yaw = 90.0  # type: ignore[misc]
+    projection = cam.project(np.array([[0.0, 0.0, 1.0]]))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        projection.depth = np.zeros(1)  # type: ignore[misc]
 
 
 def test_the_behind_threshold_is_1e_6_inclusive():

@@ -46,8 +46,8 @@ def test_a_complete_file_is_left_byte_for_byte(tmp_path):
     assert path.read_bytes() == data
 
 
-def test_a_new_results_file_and_its_folder_are_created(tmp_path):
-    path = tmp_path / "run" / "results.jsonl"
+def test_a_new_results_file_and_its_folders_are_created(tmp_path):
+    path = tmp_path / "sweep" / "run" / "results.jsonl"
     with ResultsWriter(path) as w:
         w.write(row("a#0"))
     assert path.read_bytes() == line(row("a#0"))
@@ -90,3 +90,13 @@ def test_the_raw_response_is_the_last_exchanges_answer():
     r.exchanges.append(ExchangeRecord(request_hash="r2", raw="final"))
     assert r.raw_response == "final"
     assert row("b#0", raw=None).raw_response is None
+
+
+def test_a_minimal_row_reads_with_neutral_defaults(tmp_path):
+    path = tmp_path / "results.jsonl"
+    path.write_text('{"key": "a#0", "instance_id": "a", "house_id": "h", "pair_id": "0", "direction": "up", '
+                    '"condition": "c", "status": "answered", "exchanges": [{"request_hash": "r"}]}\n', encoding="utf-8")
+    (r,) = iter_rows(path)
+    assert (r.run, r.retries, r.latency_s) == (0, 0, 0.0)
+    (x,) = r.exchanges
+    assert (x.retries, x.latency_s, x.cached) == (0, 0.0, False)
