@@ -78,14 +78,16 @@ def test_the_last_row_of_a_key_decides(config, mini_dataset):
 
 def test_rows_of_keys_outside_the_pipeline_are_ignored(config, mini_dataset):
     instances = select_instances(mini_dataset, config)
-    write(config, row(row_key(instances[0].id, 7), RowStatus.ANSWERED, config))
+    wanted = row_key(instances[1].id, 0)
+    write(config, row(row_key(instances[0].id, 7), RowStatus.ANSWERED, config), row(wanted, RowStatus.ANSWERED, config))
     plan = plan_keys(config, instances)
-    assert not plan.done and len(plan.pending) == plan.n_total
+    assert plan.done == {wanted} and len(plan.pending) == plan.n_total - 1
 
 
-def test_rows_of_another_pipeline_are_refused(config, mini_dataset):
+@pytest.mark.parametrize("other_hash", ["0000000000000000", "ffffffffffffffff"])
+def test_rows_of_another_pipeline_are_refused(config, mini_dataset, other_hash):
     instances = select_instances(mini_dataset, config)
-    write(config, row(row_key(instances[0].id, 0), RowStatus.ANSWERED, config, config_hash="0123456789abcdef"))
+    write(config, row(row_key(instances[0].id, 0), RowStatus.ANSWERED, config, config_hash=other_hash))
     with pytest.raises(ConfigError, match="different pipeline"):
         plan_keys(config, instances)
 
@@ -124,6 +126,8 @@ def test_instances_are_filtered_sampled_then_limited(config, mini_dataset):
     assert select_instances(mini_dataset, sampled) == picked
     whole = config.model_copy(update={"instances": config.instances.model_copy(update={"sample": len(everything)})})
     assert select_instances(mini_dataset, whole) == everything
+    more = config.model_copy(update={"instances": config.instances.model_copy(update={"sample": len(everything) + 5})})
+    assert select_instances(mini_dataset, more) == everything
 
 
 def test_an_unknown_house_is_refused(config, mini_dataset):
