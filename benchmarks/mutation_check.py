@@ -53,19 +53,19 @@ class RuleModule:
 
 
 RULE_MODULES: tuple[RuleModule, ...] = (
-    RuleModule("povagent/scoring/official.py", ("tests/scoring/test_official.py", "tests/scoring/test_official_rules.py")),
+    RuleModule("povagent/scoring/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
     RuleModule("plugins/scorers/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
-    RuleModule("povagent/geometry/ground_truth.py", ("tests/geometry/test_ground_truth.py", "tests/geometry/test_ground_truth_rules.py")),
+    RuleModule("povagent/geometry/ground_truth.py", ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py")),
     RuleModule(
         "povagent/geometry/camera.py",
-        ("tests/geometry/test_camera.py", "tests/geometry/test_camera_rules.py"),
+        ("tests/geometry/test_camera_rules.py", "tests/geometry/test_camera.py"),
         scope=("<module>", "Projection", "Camera", "from_pose", "focal_px", "axes", "to_camera", "project", "project_point", "project_pixels"),
         note="projection only; back-projection (ray, point_at_depth, point_on_plane) serves the generator and agent",
     ),
-    RuleModule("povagent/geometry/letterbox.py", ("tests/geometry/test_letterbox.py", "tests/geometry/test_letterbox_rules.py")),
+    RuleModule("povagent/geometry/letterbox.py", ("tests/geometry/test_letterbox_rules.py", "tests/geometry/test_letterbox.py")),
     RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
     RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_rescale_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
-    RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry.py", "tests/engine/test_retry_rules.py")),
+    RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry_rules.py", "tests/engine/test_retry.py")),
     RuleModule(
         "povagent/run/pending.py",
         ("tests/run/test_resume_rules.py",),
@@ -300,7 +300,10 @@ def _forget_survivors(session: Path) -> int:
 
 
 def run_module(module: RuleModule, work_dir: Path, test_prefix: list[str], timeout: float | None, recheck: bool = False) -> float:
-    """Baseline, init, filter and execute one module's session; returns the baseline seconds."""
+    """Baseline, init, filter and execute one module's session; returns the baseline seconds.
+
+    With ``recheck`` an existing session keeps its results except the survivors, and ``exec``
+    runs those and any mutant an interrupted run left pending."""
     cfg_path, session = _session_paths(work_dir, module)
     tests = [t for t in module.tests if (ROOT / t).exists()]
     if not tests:
