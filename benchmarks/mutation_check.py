@@ -353,6 +353,9 @@ def print_report(results: list[ModuleResult], equivalents: list[dict], goal: flo
     print(f"{'overall':38} {tot['mutants']:7d} {tot['killed']:6d} {tot['timeout']:4d} {tot['incompetent']:6d} "
           f"{tot['equivalent']:5d} {tot['survived']:4d} {overall:9.1%}")
     print("kill rate = (killed + timeouts) / (mutants run - incompetent - listed equivalent); goal", f"{goal:.0%}")
+    for r in results:
+        if r.module.note:
+            print(f"  scope of {r.module.path}: {r.module.note}")
     survivors = [(r.module.path, m) for r in results for m in r.unexplained]
     if survivors:
         print(f"\n{len(survivors)} survivors neither killed nor listed as equivalent:")
