@@ -101,11 +101,12 @@ def test_a_512_square_image_passes_through_unchanged():
     assert box.is_identity and square.tobytes() == image.tobytes()
 
 
-def test_apply_refuses_an_image_of_another_size():
-    with pytest.raises(ValueError, match="letterbox was made for"):
-        Letterbox.for_size(100, 50).apply(Image.new("RGB", (50, 100)))
+@pytest.mark.parametrize("size", [(50, 100), (200, 50), (100, 60)])
+def test_apply_refuses_an_image_of_another_size(size):
+    with pytest.raises(ValueError, match="the letterbox was made for 100x50"):
+        Letterbox.for_size(100, 50).apply(Image.new("RGB", size))
 
 
-@pytest.mark.parametrize(("point", "expected"), [((512.0, 3.2), (511, 3)), ((-4.0, 600.0), (0, 511)), ((10.99, 0.0), (10, 0))])
+@pytest.mark.parametrize(("point", "expected"), [((512.0, 3.2), (511, 3)), ((-4.0, 600.0), (0, 511)), ((3.0, -4.0), (3, 0)), ((10.99, 0.0), (10, 0))])
 def test_pixel_index_floors_and_clamps_to_the_frame(point, expected):
     assert pixel_index(point, 512, 512) == expected
