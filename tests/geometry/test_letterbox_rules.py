@@ -103,8 +103,20 @@ def test_a_512_square_image_passes_through_unchanged():
 
 @pytest.mark.parametrize("size", [(50, 100), (200, 50), (100, 60)])
 def test_apply_refuses_an_image_of_another_size(size):
-    with pytest.raises(ValueError, match="the letterbox was made for 100x50"):
+    with pytest.raises(ValueError, match=f"image is {size[0]}x{size[1]}, the letterbox was made for 100x50"):
         Letterbox.for_size(100, 50).apply(Image.new("RGB", size))
+
+
+def test_the_default_padding_is_black():
+    square, _ = letterbox(Image.new("RGB", (100, 50), (200, 10, 10)))
+    assert square.getpixel((256, 5)) == (0, 0, 0)
+
+
+def test_a_letterbox_is_a_value_that_cannot_be_altered():
+    import dataclasses
+
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Letterbox.for_size(100, 50).offset = (0, 0)  # type: ignore[misc]
 
 
 @pytest.mark.parametrize(("point", "expected"), [((512.0, 3.2), (511, 3)), ((-4.0, 600.0), (0, 511)), ((3.0, -4.0), (3, 0)), ((10.99, 0.0), (10, 0))])
