@@ -6,7 +6,7 @@ mutant the tests still pass on ("survived") is a way to bend the rule that no te
 Survivors judged equivalent (the mutant cannot change any behaviour) are listed, each with its
 reason, in ``benchmarks/mutation_equivalent.toml``; the kill rate is taken over the others.
 
-    .venv/bin/python benchmarks/mutation_check.py                 # every module (~30-45 min)
+    .venv/bin/python benchmarks/mutation_check.py                 # every module (~1 h on 2 shared cores)
     .venv/bin/python benchmarks/mutation_check.py --module retry  # modules whose path contains "retry"
     .venv/bin/python benchmarks/mutation_check.py --recheck       # only the last survivors, after new tests
     .venv/bin/python benchmarks/mutation_check.py --report-only   # re-read the last sessions
@@ -16,6 +16,8 @@ It MUTATES FILES IN PLACE (cosmic-ray's way: the editable install and the ``plug
 meanwhile (a spare git worktree); each file is put back after each mutant, and this script
 restores every rule module from its own snapshot on exit, also on Ctrl-C. Not part of CI or of
 the pytest suite. Exit status 1 when the overall kill rate is below ``--goal`` (90%).
+Modules run one after another: their tests import one another's modules, so two sessions in
+one tree at once could let one module's mutant fail another module's tests.
 """
 
 from __future__ import annotations
