@@ -49,14 +49,18 @@ def test_gt_ring_and_predicted_cross_are_drawn_where_the_metric_puts_them(given)
 
 
 def test_gt_behind_the_selected_camera_is_drawn_at_the_centre_where_the_metric_scores_it(mini_dataset):
-    for inst in mini_dataset.instances(conditions=["a", "b"]):
-        for k, frame in enumerate(inst.frames):
-            if score_point(inst, frame, 0, 0).gt_behind:
-                d = drawing_for(observation(inst, 10.0, 10.0, k), inst)
-                w, h = inst.frame_size
-                assert d.gt_state == "behind" and d.gt == (w / 2, h / 2)
-                return
-    pytest.skip("the fixture has no frame looking away from a target")
+    behind = [
+        (inst, k)
+        for inst in mini_dataset.instances(conditions=["a", "b"])
+        for k, frame in enumerate(inst.frames)
+        if score_point(inst, frame, 0, 0).gt_behind
+    ]
+    # the fixture is built with one (house 0's frame_001, yaw 180): losing it is drift, not a skip
+    assert behind, "tests/fixtures/povbench_mini has no exploration frame looking away from a target"
+    inst, k = behind[0]
+    d = drawing_for(observation(inst, 10.0, 10.0, k), inst)
+    w, h = inst.frame_size
+    assert d.gt_state == "behind" and d.gt == (w / 2, h / 2)
 
 
 def test_no_selected_frame_means_no_drawing(mini_dataset):
