@@ -90,8 +90,6 @@ def test_the_behind_threshold_is_1e_6_inclusive():
     assert np.isnan(p.normalized[0]).all()
 
 
-@pytest.mark.xfail(strict=True, reason="POVBENCH.md: f = (W/2)/tan(fov/2); today's camera takes f from the height "
-                   "(being changed on another branch; remove this mark when it lands)")
 def test_focal_length_comes_from_the_width_on_a_non_square_frame():
     cam = Camera.from_pose((0.0, 0.0, 0.0), 0.0, 0.0, fov=90.0, width=640, height=480)
     # f = 320: x/z = 1 lands on the right edge, y/z = 0.5 lands at v = (240 - 160)/480

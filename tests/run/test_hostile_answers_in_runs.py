@@ -75,8 +75,9 @@ def test_empty_responses_to_the_end_are_an_infra_error_named_so(tmp_path, mini_r
 
 
 def test_the_litellm_import_does_not_count_against_the_first_requests_timeout(tmp_path, mini_root, server):
-    """A fresh interpreter imports litellm for seconds; with a 1 s timeout no key may time out."""
-    path = write(tmp_path, mini_root, server, timeout=1.0, concurrency=4, retry={"attempts": 1},
+    """A fresh interpreter imports litellm and loads its lazy modules for 5-25 s here; with a 3 s
+    timeout and no retry, no key may time out (before, the first requests paid for all of it)."""
+    path = write(tmp_path, mini_root, server, timeout=3.0, concurrency=4, retry={"attempts": 1},
                  instances={"conditions": ["a", "b"], "limit": 6})  # fmt: skip
     code = textwrap.dedent(
         f"""
