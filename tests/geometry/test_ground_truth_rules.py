@@ -140,12 +140,18 @@ def test_directions_of_an_anchor_closer_than_a_metre_are_still_its_direction():
     assert np.allclose(d["front"], [-0.6, 0.0, -0.8])
 
 
-def test_directions_stay_horizontal_unit_vectors_with_the_anchor_straight_above_the_observer():
+def test_directions_are_zero_not_nan_with_the_anchor_straight_below_the_observer():
+    # as officially: a horizontal offset of at most 1e-6 is not normalized (no division by
+    # zero), so every direction is the zero vector and the target sits at the anchor's centre
     d = direction_vectors(np.array([1.0, 0.5, 2.0]), np.array([1.0, 1.5, 2.0]))
     for v in d.values():
-        assert np.all(np.isfinite(v))
-        assert v[1] == 0.0
-        assert np.linalg.norm(v) == pytest.approx(1.0)
+        assert np.all(np.isfinite(v)) and v[1] == 0.0
+        assert np.linalg.norm(v) == 0.0
+
+
+def test_a_tiny_but_real_horizontal_offset_is_still_normalized():
+    d = direction_vectors(np.array([1.0 + 1e-5, 0.5, 2.0]), np.array([1.0, 1.5, 2.0]))
+    assert np.linalg.norm(d["front"]) == pytest.approx(1.0) and np.linalg.norm(d["right"]) == pytest.approx(1.0)
 
 
 def test_forward_runs_from_the_observer_to_the_anchor_wherever_the_observer_stands():
