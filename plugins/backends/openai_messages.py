@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from povagent.exchange.messages import ImagePart, Message, Request, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Request, TextPart
 
 
 def openai_content(message: Message, images: ImageStore) -> str | list[dict[str, Any]]:

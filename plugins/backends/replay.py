@@ -27,8 +27,8 @@ from typing import Any, ClassVar, Mapping
 from povagent import hookimpl
 from povagent.dataset.instances import row_key
 from povagent.errors import PredictionsError
-from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
 from povagent.interfaces import Backend, PermanentBackendError
 from povagent.results.official_format import OfficialPrediction, read_official_predictions
 from povagent.results.rows import ResultRow, iter_rows

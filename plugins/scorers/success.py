@@ -29,8 +29,8 @@ from typing import Any, Sequence
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
-from povagent.interfaces import Scorer
 from povagent.dataset.realworld import Mark, RealWorldInstance
+from povagent.interfaces import Scorer
 
 #: The default hit radius, as a fraction of the original frame's diagonal.
 DEFAULT_RADIUS = 0.1

@@ -46,16 +46,16 @@ from pydantic import BaseModel, ConfigDict
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import Condition, Direction
+from povagent.dataset.realworld import unknown_object, unposed_square_camera
+from povagent.engine.request_path import RequestPath
+from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
 from povagent.errors import BackendError, BadInputError, NoAnswerError, UnparseableAnswerError
+from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project
-from povagent.exchange.images import ImageStore
-from povagent.engine.request_path import RequestPath
-from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
-from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 from povagent.geometry.letterbox import DEFAULT_PAD_COLOR, Letterbox, pixel_index
-from povagent.dataset.realworld import unknown_object, unposed_square_camera
+from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 
 #: What a frame may be: a path, a PIL image, or an ``(H, W)``/``(H, W, 3|4)`` RGB(A) array.
 FrameInput = str | os.PathLike | Image.Image | np.ndarray
@@ -280,7 +280,7 @@ class GroundingAgent:
         self._lock = threading.Lock()
 
     @classmethod
-    def from_pipeline(cls, pipeline: str | os.PathLike | Mapping[str, Any], **overrides: Any) -> "GroundingAgent":
+    def from_pipeline(cls, pipeline: str | os.PathLike | Mapping[str, Any], **overrides: Any) -> GroundingAgent:
         """An agent from a pipeline YAML (a path or an already-parsed mapping).
 
         The same file a benchmark run takes works here: ``plugins``, ``model`` or ``backend``,
@@ -406,13 +406,13 @@ class GroundingAgent:
         await self.backend.aclose()
         self.close()
 
-    def __enter__(self) -> "GroundingAgent":
+    def __enter__(self) -> GroundingAgent:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    async def __aenter__(self) -> "GroundingAgent":
+    async def __aenter__(self) -> GroundingAgent:
         return self
 
     async def __aexit__(self, *exc: object) -> None:

@@ -64,8 +64,8 @@ from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
 from povagent.exchange.image_server import parse_bind
 from povagent.exchange.transport import DEFAULT_CACHE_DIR
-from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 
 Loc = tuple[Any, ...]
 
@@ -171,7 +171,7 @@ class DatasetSpec(_Strict):
         return value
 
     @model_validator(mode="after")
-    def _exactly_one(self) -> "DatasetSpec":
+    def _exactly_one(self) -> DatasetSpec:
         if self.revision is not None and self.hub is None:
             raise ValueError("dataset.revision needs dataset.hub (the Hub repository it is a revision of)")
         if self.hub is not None:
@@ -290,7 +290,7 @@ class ImagesSpec(_Strict):
         return value
 
     @model_validator(mode="after")
-    def _options_fit_the_transport(self) -> "ImagesSpec":
+    def _options_fit_the_transport(self) -> ImagesSpec:
         if self.transport != "http" and (self.bind is not None or self.public_url is not None):
             raise ValueError(f"bind and public_url apply to transport: http (transport is {self.transport})")
         if self.transport == "inline" and self.cache_dir is not None:
@@ -353,7 +353,7 @@ class PipelineConfig(_Strict):
         return _a_folder_path(value)
 
     @model_validator(mode="after")
-    def _one_backend(self) -> "PipelineConfig":
+    def _one_backend(self) -> PipelineConfig:
         if self.model is not None and self.backend is not None:
             raise ValueError("give either model: (a model profile) or backend:, not both")
         if self.model is None and self.backend is None:
@@ -611,7 +611,7 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     found: list[type[BaseModel]] = []
-    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):
+    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):  # noqa: UP007 -- the runtime class of typing.Union objects, not an annotation
         for arg in get_args(annotation):
             found.extend(_models_in(arg))
     return found

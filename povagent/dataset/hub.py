@@ -297,7 +297,7 @@ def _user_error(
     return None
 
 
-def resolve_hub_dataset(config: "PipelineConfig", *, progress: bool = True) -> "PipelineConfig":
+def resolve_hub_dataset(config: PipelineConfig, *, progress: bool = True) -> PipelineConfig:
     """Fetch a pipeline's ``dataset: {hub: ...}`` and point ``dataset.path`` at the release root.
 
     Only the files of the pipeline's ``instances.conditions`` are fetched. The revision is

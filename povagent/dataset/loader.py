@@ -18,17 +18,17 @@ from typing import Any, Iterable
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
+from povagent.dataset.image_files import image_problem
 from povagent.dataset.instances import Frame, Instance, instance_id
 from povagent.dataset.models import (
     CONDITIONS,
+    RELEASE_FILE,
     Condition,
     DatasetMeta,
     Direction,
     ExplorationRecord,
-    RELEASE_FILE,
     PairEntry,
 )
-from povagent.dataset.image_files import image_problem
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
 from povagent.dataset.problems import Problem, problems_from_validation_error
 from povagent.errors import DatasetError

@@ -205,7 +205,7 @@ class ResponseCache:
                 if self._db is not None:
                     self._db.close()
 
-    def __enter__(self) -> "ResponseCache":
+    def __enter__(self) -> ResponseCache:
         return self
 
     def __exit__(self, *exc: object) -> None:

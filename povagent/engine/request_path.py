@@ -37,7 +37,6 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.interfaces import Backend
 
-
 #: Lone UTF-16 surrogates (``"\\ud800"`` in a JSON answer) are not text: UTF-8 cannot hold them.
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 

@@ -73,16 +73,16 @@ class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     # a client that stops sending does not hold a thread for ever
     timeout = 30
-    server: "_Server"
+    server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
+    def log_message(self, format: str, *args: Any) -> None:
         """Silence the stdlib's per-request stderr log."""
 
-    def do_GET(self) -> None:  # noqa: N802 - stdlib name
+    def do_GET(self) -> None:
         """The published file named by the URL's hash, or 404/403."""
         self._serve(body=True)
 
-    def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
+    def do_HEAD(self) -> None:
         """As GET, without the body."""
         self._serve(body=False)
 
@@ -124,19 +124,19 @@ class _Handler(BaseHTTPRequestHandler):
         self.end_headers()
         self.wfile.write(data)
 
-    def do_POST(self) -> None:  # noqa: N802 - stdlib name
+    def do_POST(self) -> None:
         """Read-only: every other method is refused."""
         self.close_connection = True
         self._send_status(405, "read-only")
 
-    do_PUT = do_DELETE = do_PATCH = do_POST  # noqa: N815
+    do_PUT = do_DELETE = do_PATCH = do_POST
 
 
 class _Server(ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 128
-    owner: "StaticImageServer"
+    owner: StaticImageServer
 
     def process_request(self, request: Any, client_address: Any) -> None:
         """One thread per connection, up to the bound; beyond it the connection is closed at once."""
@@ -194,7 +194,7 @@ class StaticImageServer:
         self.refused = 0
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "StaticImageServer":
+    def start(self) -> StaticImageServer:
         """Bind and serve in a daemon thread; returns ``self``. A taken port is an OSError."""
         if self._server is not None:
             return self
@@ -220,7 +220,7 @@ class StaticImageServer:
         if self._thread is not None:
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "StaticImageServer":
+    def __enter__(self) -> StaticImageServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from povagent.dataset.instances import Instance
-from povagent.exchange.messages import ImagePart, Request, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Request, TextPart
 
 
 @dataclass

@@ -146,7 +146,7 @@ class RoomLayout:
         """Record a placed object and the floor it takes (and keeps free in front of it)."""
         self.objects.append(obj)
         if obj.support in ("floor", "wall"):
-            self.bodies.append((obj.rect, obj.top if obj.support == "floor" else obj.top))
+            self.bodies.append((obj.rect, obj.top))
             if access_depth > 0:
                 self.access.append(_front_rect(obj.rect, obj.yaw, access_depth))
         return obj

@@ -63,7 +63,7 @@ class Camera:
         fov: float = 100.0,
         width: int = 512,
         height: int = 512,
-    ) -> "Camera":
+    ) -> Camera:
         """Build a camera from any 3-sequence position (list, tuple, array)."""
         x, y, z = (float(v) for v in position)
         return cls((x, y, z), float(yaw), float(horizon), float(fov), int(width), int(height))

@@ -19,7 +19,7 @@ import os
 import re
 import sys
 import threading
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Callable, Mapping, TextIO
 
@@ -160,7 +160,7 @@ def _add_level(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any
 
 
 def _timestamp(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
-    event["ts"] = datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+    event["ts"] = datetime.now(UTC).isoformat(timespec="milliseconds")
     return event
 
 

@@ -47,13 +47,13 @@ from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
-from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -590,7 +590,7 @@ class PipelineRun:
                     await self._journal.drain()  # rows finished before the stop are kept
                     raise StopRun(self._stopped) from None
                 if len(exc.exceptions) == 1:
-                    raise exc.exceptions[0]  # one worker's bug: its own traceback, not a group's
+                    raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
             raise
 
     def write_summary(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from povagent.engine.cache import ResponseCache
 from povagent.config.pipeline import (
     REPLACED_WHOLE,
     ConfigSource,
@@ -34,11 +33,12 @@ from povagent.config.pipeline import (
     pipeline_from_source,
 )
 from povagent.dataset.loader import Dataset
+from povagent.engine.cache import ResponseCache
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
-from povagent.run.progress import make_progress
 from povagent.run.pending import ensure_dataset, pending_keys
+from povagent.run.progress import make_progress
 from povagent.run.runner import PipelineRun, RunResult, create_components
 
 SWEEP_INDEX = "sweep.json"

@@ -140,7 +140,7 @@ class _Notes:
     skipped: list[str]
 
     @classmethod
-    def empty(cls) -> "_Notes":
+    def empty(cls) -> _Notes:
         return cls([], defaultdict(list), defaultdict(list), [], [], [], [])
 
 

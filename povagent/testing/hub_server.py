@@ -61,9 +61,9 @@ _RESOLVE = re.compile(r"^/(?P<prefix>datasets/)?(?P<repo>[^/]+/[^/]+)/resolve/(?
 
 class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
-    server: "_Server"
+    server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
+    def log_message(self, format: str, *args: Any) -> None:
         """Silence the stdlib's per-request stderr log."""
 
     def setup(self) -> None:
@@ -76,11 +76,11 @@ class _Handler(BaseHTTPRequestHandler):
         self.server.owner._connections.discard(self.connection)
         super().finish()
 
-    def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
+    def do_HEAD(self) -> None:
         """File metadata (``resolve`` URLs only)."""
         self._route("HEAD")
 
-    def do_GET(self) -> None:  # noqa: N802 - stdlib name
+    def do_GET(self) -> None:
         """Repository info, tree listing or file bytes."""
         self._route("GET")
 
@@ -235,7 +235,7 @@ class _Server(ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 64
-    owner: "HubServer"
+    owner: HubServer
 
 
 class HubServer:
@@ -288,7 +288,7 @@ class HubServer:
         self._connections: set[socket.socket] = set()
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "HubServer":
+    def start(self) -> HubServer:
         """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
         if self._server is not None:
             return self
@@ -325,7 +325,7 @@ class HubServer:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "HubServer":
+    def __enter__(self) -> HubServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

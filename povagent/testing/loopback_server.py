@@ -140,19 +140,19 @@ ReplyFn = Callable[[RecordedRequest], Outcome]
 class _Handler(BaseHTTPRequestHandler):
     # keep-alive like a real API server, so clients reuse connections as they would in production
     protocol_version = "HTTP/1.1"
-    server: "_Server"
+    server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
+    def log_message(self, format: str, *args: Any) -> None:
         """Silence the stdlib's per-request stderr log."""
 
-    def do_GET(self) -> None:  # noqa: N802 - stdlib name
+    def do_GET(self) -> None:
         """``/v1/models``: the one model name, for clients that list models first."""
         if self.path.rstrip("/").endswith("/models"):
             self._send_json(200, {"object": "list", "data": [{"id": self.server.owner.model, "object": "model"}]})
         else:
             self._send_json(404, _error_body("not found", "not_found_error"))
 
-    def do_POST(self) -> None:  # noqa: N802 - stdlib name
+    def do_POST(self) -> None:
         """Record the request, then answer with the next scripted outcome."""
         length = int(self.headers.get("Content-Length") or 0)
         raw = self.rfile.read(length) if length else b""
@@ -228,7 +228,7 @@ class _Server(ThreadingHTTPServer):
     block_on_close = False
     # many concurrent clients in benchmarks: the default backlog of 5 refuses connections
     request_queue_size = 256
-    owner: "LoopbackServer"
+    owner: LoopbackServer
 
 
 class LoopbackServer:
@@ -275,7 +275,7 @@ class LoopbackServer:
         self._timer: threading.Timer | None = None
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "LoopbackServer":
+    def start(self) -> LoopbackServer:
         """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
         if self._server is not None:
             return self
@@ -305,7 +305,7 @@ class LoopbackServer:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "LoopbackServer":
+    def __enter__(self) -> LoopbackServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -390,7 +390,7 @@ class LoopbackServer:
         if host not in _LOOPBACK_HOSTS:
             raise ImageFetchError(f"{url}: only 127.0.0.1 is fetched from (host {host!r})")
         try:
-            with urllib.request.urlopen(url, timeout=10) as response:  # noqa: S310 - loopback only
+            with urllib.request.urlopen(url, timeout=10) as response:
                 return response.read()
         except (urllib.error.URLError, OSError) as exc:
             raise ImageFetchError(f"cannot download {url}: {exc}") from None
