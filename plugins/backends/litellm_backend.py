@@ -236,7 +236,7 @@ class LiteLLMBackend(Backend):
 
     @staticmethod
     def _group_of(router: list[dict[str, Any]]) -> str:
-        names = {d.get("model_name") for d in router if d.get("model_name")}
+        names: set[str] = {d["model_name"] for d in router if d.get("model_name")}
         return names.pop() if len(names) == 1 else "povagent-router"
 
     def identity(self) -> Mapping[str, Any]:

@@ -79,7 +79,7 @@ class SuccessScorer(Scorer):
             return failure
         if instance.condition.uses_exploration_frames:
             k = answer.selected_image
-            if instance.selected_frame(k) is None:
+            if k is None or instance.selected_frame(k) is None:
                 return failure  # no frame: unanswered, as the official rules count it
         else:
             k = 0
