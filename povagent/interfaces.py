@@ -15,7 +15,7 @@ from povagent.exchange.messages import Request, Response
 
 if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
-    from povagent.dataset.loader import Dataset
+    from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
@@ -123,5 +123,5 @@ class Scorer(abc.ABC):
     """Scores one parsed answer against the ground truth."""
 
     @abc.abstractmethod
-    def score(self, instance: Instance, answer: ParsedAnswer, dataset: Dataset) -> dict[str, Any]:
+    def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:
         """JSON-able scores for one row (e.g. ``{"answered": True, "l2": 0.12, ...}``)."""

@@ -261,13 +261,25 @@ class GroundingAgent:
             from povagent.plugins import get_plugin_host
 
             host = get_plugin_host(tuple(plugins))
-        self.backend: Backend = backend if isinstance(backend, Backend) else host.create("backend", backend, backend_options)
-        self.strategy: Strategy = strategy if isinstance(strategy, Strategy) else host.create("strategy", strategy, strategy_options)
+        if isinstance(backend, Backend):
+            self.backend: Backend = backend
+        else:
+            assert host is not None  # a name, so the host was built above
+            self.backend = host.create("backend", backend, backend_options)
+        if isinstance(strategy, Strategy):
+            self.strategy: Strategy = strategy
+        else:
+            assert host is not None
+            self.strategy = host.create("strategy", strategy, strategy_options)
         if parser is None:
             # a model profile knows how its family writes points (Qwen 0-1000, Gemini [y, x] ...)
             profile = getattr(self.backend, "profile", None)
             parser = getattr(profile, "default_parser", None) or "json"
-        self.parser: Parser = parser if isinstance(parser, Parser) else host.create("parser", parser, parser_options)
+        if isinstance(parser, Parser):
+            self.parser: Parser = parser
+        else:
+            assert host is not None
+            self.parser = host.create("parser", parser, parser_options)
         self.timeout_s = float(timeout_s)
         self.retry = retry or AGENT_RETRY
         self.plane = plane
@@ -472,7 +484,7 @@ class GroundingAgent:
                 # strategies read frames by file: write the encoded bytes once, so the file
                 # hashes to the image already stored (no second encode)
                 file = Path(folder.name) / f"frame_{i:03d}.png"
-                file.write_bytes(images.bytes(stored.image_hash))
+                file.write_bytes(images.encoded_bytes(stored.image_hash))
                 boxes.append(box)
                 name = "observer_view.png" if condition is Condition.GIVEN else file.name
                 instance_frames.append(Frame(i, name, file, square_camera))

@@ -262,10 +262,10 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as
     host = build_plugin_host(strict=False)
     kinds = (*KINDS, "profile")
     if as_json:
-        out = {
+        out: dict[str, list[dict[str, Any]]] = {
             k: [{"name": e.name, "source": e.source, "description": e.description} for e in host.entries(k)] for k in kinds
         }
-        out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]  # type: ignore[assignment]
+        out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]
         typer.echo(json.dumps(out, indent=2))
     else:
         console = Console()

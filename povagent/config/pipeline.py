@@ -50,6 +50,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -511,9 +512,10 @@ def _check_shape(text: str, file: str) -> None:
             where = f"{file}, line {line}" if line else file
             added = 0
             if isinstance(event, yaml.AliasEvent):
-                if any(frame[0] == event.anchor for frame in open_frames):
-                    raise ConfigError(f"{where}: alias *{_cut(event.anchor)} refers to its own anchor (a recursive alias)")
-                added = sizes.get(event.anchor, 1)
+                anchor = event.anchor or ""  # an alias always names its anchor
+                if any(frame[0] == anchor for frame in open_frames):
+                    raise ConfigError(f"{where}: alias *{_cut(anchor)} refers to its own anchor (a recursive alias)")
+                added = sizes.get(anchor, 1)
             elif isinstance(event, yaml.ScalarEvent):
                 added = 1
                 if event.anchor:
@@ -583,7 +585,7 @@ def parse_yaml(text: str, file: str) -> ConfigSource:
     return ConfigSource(file, data, lines)
 
 
-def read_yaml(path: str | Path) -> ConfigSource:
+def read_yaml(path: str | os.PathLike[str]) -> ConfigSource:
     """Read and parse a YAML file (a missing, oversized or non-UTF-8 file is a :class:`ConfigError`)."""
     p = Path(path)
     try:

@@ -344,7 +344,7 @@ def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> Rea
     root = Path(root)
     spec = read_realworld(root)
     own_tmp = cache_dir is None
-    cache = Path(tempfile.mkdtemp(prefix="povagent-realworld-")) if own_tmp else Path(cache_dir)
+    cache = Path(tempfile.mkdtemp(prefix="povagent-realworld-")) if cache_dir is None else Path(cache_dir)
     cache.mkdir(parents=True, exist_ok=True)
     squares: dict[str, tuple[Path, Letterbox]] = {}
 

@@ -179,7 +179,7 @@ class RequestPath:
 
                 async for attempt in AsyncRetrying(
                     stop=stop_after_attempt(policy.attempts - 1),
-                    wait=lambda state: self._wait(state.outcome.exception(), state.attempt_number + 1, deadline),
+                    wait=lambda state: self._wait(state.outcome.exception() if state.outcome else None, state.attempt_number + 1, deadline),
                     retry=retry_if_exception(lambda exc: is_transient(exc) and not _past(deadline)),
                     before_sleep=before_sleep,
                     reraise=True,

@@ -161,6 +161,12 @@ class _Server(ThreadingHTTPServer):
                 self.owner._open_connections -= 1
 
 
+class _Server6(_Server):
+    """The same server on an IPv6 address."""
+
+    address_family = socket.AF_INET6
+
+
 class StaticImageServer:
     """Published image files, read-only over HTTP at ``bind``; see the module docstring.
 
@@ -198,9 +204,7 @@ class StaticImageServer:
         """Bind and serve in a daemon thread; returns ``self``. A taken port is an OSError."""
         if self._server is not None:
             return self
-        server_class = _Server
-        if ":" in self.host:  # an IPv6 address
-            server_class = type("_Server6", (_Server,), {"address_family": socket.AF_INET6})
+        server_class = _Server6 if ":" in self.host else _Server  # ":": an IPv6 address
         server = server_class((self.host, self.port), _Handler)
         server.owner = self
         self._server = server

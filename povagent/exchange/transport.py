@@ -115,7 +115,7 @@ class _ByReference(ImageTransport):
         fd, tmp = tempfile.mkstemp(dir=self.cache_dir, prefix=f".{image_hash[:16]}-", suffix=".part")
         try:
             with os.fdopen(fd, "wb") as fh:
-                fh.write(images.bytes(image_hash))
+                fh.write(images.encoded_bytes(image_hash))
             os.replace(tmp, target)
         except BaseException:
             with contextlib.suppress(OSError):

@@ -78,7 +78,7 @@ def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.Embre
     return scene
 
 
-def _hash2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _hash2(a: np.ndarray, b: np.ndarray | float) -> np.ndarray:
     """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
     v = np.sin(a * 12.9898 + b * 78.233) * 43758.5453
     return v - np.floor(v)

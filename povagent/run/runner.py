@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import functools
 import time
 import traceback
 from collections import Counter
@@ -70,6 +71,12 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection"})
 
 # -- the run -------------------------------------------------------------------------------------
+def _forget_reads(reads: dict[Any, Any], paths: list[Any], _task: object) -> None:
+    """Done callback of a frame-reading task: its files are no longer being read."""
+    for p in paths:
+        reads.pop(p, None)
+
+
 @dataclass
 class RunStats:
     """What this session did (a resumed run counts only its own calls)."""
@@ -293,7 +300,7 @@ class PipelineRun:
                 task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
                 for path in new:
                     reads[path] = task
-                task.add_done_callback(lambda _t, paths=new: [reads.pop(p, None) for p in paths])
+                task.add_done_callback(functools.partial(_forget_reads, reads, new))
             waits = {reads[f.file] for f in frames if f.file in reads}
             if waits:
                 # Holding the tuple keeps its id from being reused while the entry lives.

@@ -21,10 +21,11 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 from povagent.config.pipeline import (
     REPLACED_WHOLE,
+    ComponentSpec,
     ConfigSource,
     PipelineConfig,
     SweepConfig,
@@ -32,7 +33,7 @@ from povagent.config.pipeline import (
     load_sweep,
     pipeline_from_source,
 )
-from povagent.dataset.loader import Dataset
+from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
@@ -114,7 +115,7 @@ def _axis_values(sweep: SweepConfig) -> list[tuple[str, list[tuple[str, dict[str
 
 def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost) -> None:
     problems = []
-    checks = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
+    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
               ("strategy", "strategy", sweep.axes.strategy or []), ("parser", "parser", sweep.axes.parser or [])]
     for axis, kind, values in checks:
         known = host.names(kind)
@@ -167,7 +168,7 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
     images at ~1 token per 28x28 pixels; completions at the strategy's ``max_tokens`` (an upper
     bound). Multi-turn strategies may make more requests than keys.
     """
-    datasets: dict[Any, Dataset] = {}
+    datasets: dict[Any, EvaluationSet] = {}
     images = ImageStore()
     out: list[DryRunCell] = []
     for cell in cells:
@@ -238,7 +239,7 @@ def run_sweep(
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
         cache = ResponseCache(first.cache_path()) if first.cache_path() is not None else None  # type: ignore[arg-type]
-        datasets: dict[Any, Dataset] = {}
+        datasets: dict[Any, EvaluationSet] = {}
         try:
             for cell in cells:
                 status[cell.name] = {"status": "running"}

@@ -269,7 +269,7 @@ class HubServer:
         self.repo_id = repo_id
         self.kind = repo_type + "s"
         # a folder's files are read when asked for (a full-size release is hundreds of MiB)
-        self.files: dict[str, bytes | Path] = dict(files) if files is not None else _list_folder(Path(folder))  # type: ignore[arg-type]
+        self.files: dict[str, bytes | Path] = dict(files) if files is not None else dict(_list_folder(Path(folder or "")))
         self.paths = sorted(self.files)
         self._oids = {p: git_blob_id(self.read(p)) for p in self.paths}
         self._sizes = {p: len(b) if isinstance(b, bytes) else b.stat().st_size for p, b in self.files.items()}
