@@ -75,7 +75,8 @@ class SuccessScorer(Scorer):
             )
         failure = {"answered": False, "success": False, "frame_has_gt": None, "pixel": None,
                    "distance_px": None, "distance_norm": None, "hit_radius_px": None}
-        if not answer.answered:
+        point = answer.point
+        if point is None:
             return failure
         if instance.condition.uses_exploration_frames:
             k = answer.selected_image
@@ -84,7 +85,7 @@ class SuccessScorer(Scorer):
         else:
             k = 0
         box = instance.letterboxes[k]
-        px, py = (float(v) for v in box.to_original((float(answer.x), float(answer.y))))  # type: ignore[arg-type]
+        px, py = (float(v) for v in box.to_original((float(point[0]), float(point[1]))))
         width, height = box.original
         diagonal = math.hypot(width, height)
         marks = instance.marks_in(instance.frames[k].image_path)

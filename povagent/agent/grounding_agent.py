@@ -520,7 +520,8 @@ class GroundingAgent:
         text = response.text or ""
         parsed: ParsedAnswer = self.parser.parse(text, request.answer)
         instance = prepared.instance
-        if not parsed.answered:
+        point = parsed.point
+        if point is None:
             raise _unparseable(
                 f"no point could be read from the model's answer ({parsed.reason or parsed.status}): {_clip(text)}",
                 text,
@@ -538,7 +539,7 @@ class GroundingAgent:
         else:
             k = 0
         box = prepared.boxes[k]
-        square = (float(parsed.x), float(parsed.y))  # type: ignore[arg-type]
+        square = (float(point[0]), float(point[1]))
         pixel_arr = box.to_original(np.array(square))
         pixel = (float(pixel_arr[0]), float(pixel_arr[1]))
         width, height = box.original

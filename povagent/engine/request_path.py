@@ -151,14 +151,15 @@ class RequestPath:
         owns the cache decides when it is written.
         """
         key = self.cache_key_of(request)
-        if key is not None:
-            cached = self.cache.get(key)  # type: ignore[union-attr]
+        cache = self.cache  # a key exists only with a cache; naming both lets the checker see it
+        if key is not None and cache is not None:
+            cached = cache.get(key)
             if cached is not None:
                 self.stats.cache_hits += 1
                 return cached
         response = await self.call(request, label=label, deadline=deadline)
-        if key is not None:
-            self.cache.put_deferred(key, response)  # type: ignore[union-attr]
+        if key is not None and cache is not None:
+            cache.put_deferred(key, response)
         return response
 
     async def call(self, request: Request, *, label: str = "", deadline: float | None = None) -> Response:

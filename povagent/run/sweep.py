@@ -238,7 +238,8 @@ def run_sweep(
     async def run_cells() -> None:
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
-        cache = ResponseCache(first.cache_path()) if first.cache_path() is not None else None  # type: ignore[arg-type]
+        cache_path = first.cache_path()
+        cache = ResponseCache(cache_path) if cache_path is not None else None
         datasets: dict[Any, EvaluationSet] = {}
         try:
             for cell in cells:
