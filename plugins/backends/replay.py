@@ -102,7 +102,7 @@ class ReplayBackend(Backend):
         return raw
 
     def _official_text(self, request: Request, run: int, key: str) -> str:
-        rows = self._official.get(request.instance.id)  # type: ignore[union-attr]
+        rows = self._official.get(request.instance.id)  # type: ignore[union-attr]  # replayed requests always carry their instance
         if not rows:
             raise PermanentBackendError(f"no recorded answer for {key}")
         if len(rows) == 1:

@@ -103,7 +103,7 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
+    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
 
@@ -113,8 +113,8 @@ def run_command(
 
         render_official_beside(
             result.summary,
-            config.parser.name,  # type: ignore[union-attr]
-            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]
+            config.parser.name,  # type: ignore[union-attr]  # load_pipeline resolved it
+            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]  # load_pipeline resolved it
             run_dir=result.run_dir,
         )
     typer.echo(

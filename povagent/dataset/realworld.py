@@ -362,8 +362,8 @@ def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> Rea
                 shown = [sc.observer_view] if cmd.condition is Condition.GIVEN else list(house.frames)
                 frames, boxes = [], []
                 for i, rel in enumerate(shown):
-                    path, box = square(rel)  # type: ignore[arg-type]
-                    frames.append(Frame(i, rel, path, square_camera))  # type: ignore[arg-type]
+                    path, box = square(rel)  # type: ignore[arg-type]  # validation refuses a GIVEN command without an observer view
+                    frames.append(Frame(i, rel, path, square_camera))  # type: ignore[arg-type]  # as above
                     boxes.append(box)
                 marks = tuple(
                     m if m.frame is not None else m.model_copy(update={"frame": sc.observer_view}) for m in cmd.gt

@@ -438,7 +438,7 @@ class PipelineRun:
 
     def _report_dataset_problems(self) -> None:
         """Say which houses or pairs loading skipped (file, JSON path, sentence): never silently."""
-        problems = self.dataset.problems  # type: ignore[union-attr]
+        problems = self.dataset.problems  # type: ignore[union-attr]  # called after the dataset is loaded
         for p in problems:
             self._log.warning("dataset_problem", file=p.file, path=p.json_path, problem=p.message)
         if problems:
@@ -504,7 +504,7 @@ class PipelineRun:
         (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
 
         backend = self.components.backend
-        self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]
+        self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
         self._observed = bool(self.host.hooks.active)
         cache_path = config.cache_path()
         if self._cache is None and cache_path is not None and getattr(backend, "cacheable", True):

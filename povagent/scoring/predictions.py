@@ -217,7 +217,8 @@ def score_official_row(
         return ScoredPrediction(iid, c_label, d_label, run, score, closest)
 
     house = dataset.houses.get(house_id) if isinstance(house_id, str) else None
-    pair = house.pairs.get(_pair_key(pair_id)) if house is not None else None  # type: ignore[arg-type]
+    pair_key = _pair_key(pair_id)
+    pair = house.pairs.get(pair_key) if house is not None and pair_key is not None else None
     placement = pair.placements.get(direction) if pair is not None and _hashable(direction) else None
     if placement is None:
         notes.unknown.append(f"{ref} ({iid})" if ref else iid)
@@ -244,7 +245,7 @@ def score_official_row(
         image = row.get("predicted_image")
         if not image:
             return result(_unanswered(NO_SELECTED_IMAGE))
-        frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]
+        frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]  # a pair was found, so its house was
         if frame is None:
             return result(_unanswered(IMAGE_NOT_IN_LOG))
         # the selected frame is projected at the metadata's size, as officially
