@@ -75,14 +75,14 @@ class _Handler(BaseHTTPRequestHandler):
     timeout = 30
     server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
 
-    def do_GET(self) -> None:
+    def do_GET(self) -> None:  # noqa: N802 - stdlib name
         """The published file named by the URL's hash, or 404/403."""
         self._serve(body=True)
 
-    def do_HEAD(self) -> None:
+    def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
         """As GET, without the body."""
         self._serve(body=False)
 
@@ -124,12 +124,12 @@ class _Handler(BaseHTTPRequestHandler):
         self.end_headers()
         self.wfile.write(data)
 
-    def do_POST(self) -> None:
+    def do_POST(self) -> None:  # noqa: N802 - stdlib name
         """Read-only: every other method is refused."""
         self.close_connection = True
         self._send_status(405, "read-only")
 
-    do_PUT = do_DELETE = do_PATCH = do_POST
+    do_PUT = do_DELETE = do_PATCH = do_POST  # noqa: N815
 
 
 class _Server(ThreadingHTTPServer):

@@ -63,7 +63,7 @@ class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
 
     def setup(self) -> None:
@@ -76,11 +76,11 @@ class _Handler(BaseHTTPRequestHandler):
         self.server.owner._connections.discard(self.connection)
         super().finish()
 
-    def do_HEAD(self) -> None:
+    def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
         """File metadata (``resolve`` URLs only)."""
         self._route("HEAD")
 
-    def do_GET(self) -> None:
+    def do_GET(self) -> None:  # noqa: N802 - stdlib name
         """Repository info, tree listing or file bytes."""
         self._route("GET")
 

@@ -142,17 +142,17 @@ class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     server: _Server
 
-    def log_message(self, format: str, *args: Any) -> None:
+    def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
 
-    def do_GET(self) -> None:
+    def do_GET(self) -> None:  # noqa: N802 - stdlib name
         """``/v1/models``: the one model name, for clients that list models first."""
         if self.path.rstrip("/").endswith("/models"):
             self._send_json(200, {"object": "list", "data": [{"id": self.server.owner.model, "object": "model"}]})
         else:
             self._send_json(404, _error_body("not found", "not_found_error"))
 
-    def do_POST(self) -> None:
+    def do_POST(self) -> None:  # noqa: N802 - stdlib name
         """Record the request, then answer with the next scripted outcome."""
         length = int(self.headers.get("Content-Length") or 0)
         raw = self.rfile.read(length) if length else b""
@@ -390,7 +390,7 @@ class LoopbackServer:
         if host not in _LOOPBACK_HOSTS:
             raise ImageFetchError(f"{url}: only 127.0.0.1 is fetched from (host {host!r})")
         try:
-            with urllib.request.urlopen(url, timeout=10) as response:
+            with urllib.request.urlopen(url, timeout=10) as response:  # noqa: S310 - loopback only
                 return response.read()
         except (urllib.error.URLError, OSError) as exc:
             raise ImageFetchError(f"cannot download {url}: {exc}") from None
