@@ -7,6 +7,6 @@ clocks live in the runner, the backends and the CLI.
 
 __version__ = "0.1.0"
 
-from povagent.hookspecs import hookimpl  # noqa: E402  (the one decorator plugins need)
+from povagent.hookspecs import hookimpl  # the one decorator plugins need
 
 __all__ = ["__version__", "hookimpl"]

@@ -122,7 +122,7 @@ def povagent_run_start(run_dir: str, config: Mapping[str, Any], n_pending: int, 
 
 
 @hookspec
-def povagent_instance_done(run_dir: str, row: "ResultRow") -> None:
+def povagent_instance_done(run_dir: str, row: ResultRow) -> None:
     """One (instance, run) finished and its row was written (fsynced) to ``results.jsonl``."""
 
 

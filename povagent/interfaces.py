@@ -15,7 +15,7 @@ from povagent.exchange.messages import Request, Response
 
 if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
-    from povagent.dataset.loader import Dataset
+    from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
@@ -64,7 +64,7 @@ class Backend(abc.ABC):
         """JSON-able identity: model name and answer-changing options; never API keys."""
 
     @abc.abstractmethod
-    async def complete(self, request: Request, images: "ImageStore") -> Response:
+    async def complete(self, request: Request, images: ImageStore) -> Response:
         """Answer one request. Raise TransientBackendError / PermanentBackendError on failure."""
 
     async def start(self) -> None:  # noqa: B027 - optional hook
@@ -90,10 +90,10 @@ class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
 
     @abc.abstractmethod
-    def build(self, instance: "Instance", images: "ImageStore") -> Request:
+    def build(self, instance: Instance, images: ImageStore) -> Request:
         """The (first) request for an instance."""
 
-    def answer_spec(self, instance: "Instance") -> AnswerSpec | None:
+    def answer_spec(self, instance: Instance) -> AnswerSpec | None:
         """What the strategy asks ``instance`` to answer, without building a request.
 
         Used to re-parse finished runs offline (``povagent rescore``). Returning ``None``
@@ -101,7 +101,7 @@ class Strategy(abc.ABC):
         """
         return None
 
-    async def solve(self, instance: "Instance", ask: Ask, images: "ImageStore") -> list[tuple[Request, Response]]:
+    async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
         """Talk to the model and return every exchange, the final answer last.
 
         The default is single-turn: build one request and ask once. Multi-turn strategies
@@ -123,5 +123,5 @@ class Scorer(abc.ABC):
     """Scores one parsed answer against the ground truth."""
 
     @abc.abstractmethod
-    def score(self, instance: "Instance", answer: ParsedAnswer, dataset: "Dataset") -> dict[str, Any]:
+    def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:
         """JSON-able scores for one row (e.g. ``{"answered": True, "l2": 0.12, ...}``)."""

@@ -31,8 +31,8 @@ from povagent import hookimpl
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import DIRECTIONS
 from povagent.errors import ConfigError
-from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
 from povagent.interfaces import Backend, PermanentBackendError
 from povagent.scoring.official import project_ground_truth
 

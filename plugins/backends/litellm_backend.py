@@ -38,13 +38,13 @@ from typing import Any, ClassVar, Mapping
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent import hookimpl
+from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
+from povagent.engine.llm_import import import_litellm, warm_up_litellm
 from povagent.errors import ConfigError
-from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.transport import ImageReferenceError
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
-from povagent.engine.llm_import import import_litellm, warm_up_litellm
-from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
 from povagent.plugins import get_plugin_host, unknown_name_message
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error
@@ -158,7 +158,7 @@ class LiteLLMOptions(BaseModel):
         return value
 
     @model_validator(mode="after")
-    def _router_settings_need_a_router(self) -> "LiteLLMOptions":
+    def _router_settings_need_a_router(self) -> LiteLLMOptions:
         if self.router_settings and self.router is None:
             raise ValueError("router_settings apply to a router: give router (the deployments) too, or drop them")
         return self
@@ -236,7 +236,7 @@ class LiteLLMBackend(Backend):
 
     @staticmethod
     def _group_of(router: list[dict[str, Any]]) -> str:
-        names = {d.get("model_name") for d in router if d.get("model_name")}
+        names: set[str] = {d["model_name"] for d in router if d.get("model_name")}
         return names.pop() if len(names) == 1 else "povagent-router"
 
     def identity(self) -> Mapping[str, Any]:

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from povagent.exchange.messages import ImagePart, Message, Request, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Request, TextPart
 
 
 def openai_content(message: Message, images: ImageStore) -> str | list[dict[str, Any]]:
@@ -24,7 +24,7 @@ def openai_content(message: Message, images: ImageStore) -> str | list[dict[str,
     lists there; user turns are always a list of parts (the multi-image form).
     """
     if message.role != "user" and all(isinstance(p, TextPart) for p in message.parts):
-        return "".join(p.text for p in message.parts)  # type: ignore[union-attr]
+        return "".join(p.text for p in message.parts if isinstance(p, TextPart))  # all are (checked above)
     parts: list[dict[str, Any]] = []
     for part in message.parts:
         if isinstance(part, TextPart):

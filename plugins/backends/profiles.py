@@ -21,8 +21,8 @@ from __future__ import annotations
 from typing import Any
 
 from povagent import hookimpl
-from povagent.dataset.models import Condition
 from povagent.config.profiles import ModelProfile
+from povagent.dataset.models import Condition
 
 _VLLM_NOTE = (
     "Self-hosted: serve with vLLM's OpenAI-compatible server started with "

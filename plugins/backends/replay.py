@@ -27,8 +27,8 @@ from typing import Any, ClassVar, Mapping
 from povagent import hookimpl
 from povagent.dataset.instances import row_key
 from povagent.errors import PredictionsError
-from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response, Usage
 from povagent.interfaces import Backend, PermanentBackendError
 from povagent.results.official_format import OfficialPrediction, read_official_predictions
 from povagent.results.rows import ResultRow, iter_rows
@@ -102,7 +102,7 @@ class ReplayBackend(Backend):
         return raw
 
     def _official_text(self, request: Request, run: int, key: str) -> str:
-        rows = self._official.get(request.instance.id)  # type: ignore[union-attr]
+        rows = self._official.get(request.instance.id)  # type: ignore[union-attr]  # replayed requests always carry their instance
         if not rows:
             raise PermanentBackendError(f"no recorded answer for {key}")
         if len(rows) == 1:

@@ -10,8 +10,8 @@ it is the model's conclusion. When the last line holds no usable object it falls
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.answers.text import final_line_start, find_objects
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.answers.text import final_line_start, find_objects
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.json_answer import candidates, choose, judge_candidate
 

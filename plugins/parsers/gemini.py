@@ -8,9 +8,9 @@ key in the same object names the frame.
 from __future__ import annotations
 
 from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
 from povagent.answers.text import coerce_index, coerce_numbers, find_objects, get_key
 from povagent.answers.validation import relative_to_pixels
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
 from povagent.answers.text import NUMBER, normalize_minus
 from povagent.answers.validation import relative_to_pixels
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 #: A box tag; its content never holds ``<``, which keeps the scan linear on a text full of

@@ -23,9 +23,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent.answers.text import JsonObject, coerce_index, coerce_number, find_objects, get_key, mentioned_image
 from povagent.answers.validation import judge
-from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent.interfaces import Parser
 
 

@@ -17,9 +17,9 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
 from povagent.answers.text import coerce_number, index_from_digits
 from povagent.answers.validation import relative_to_pixels
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 _TAG = re.compile(r"<(points?|tracks)\b([^<>]*?)/?>", re.IGNORECASE)

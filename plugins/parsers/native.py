@@ -16,9 +16,9 @@ from __future__ import annotations
 import abc
 from dataclasses import dataclass, field
 
+from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.answers.text import mentioned_image
 from povagent.answers.validation import judge_points
-from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.json_answer import JsonAnswerParser, frame_from_text_repair
 

@@ -39,8 +39,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers.validation import judge
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.answers.validation import judge
 from povagent.interfaces import Parser
 
 #: A brace group with no brace inside it (what the official runner looks for).

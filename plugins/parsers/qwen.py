@@ -11,9 +11,9 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
 from povagent.answers.text import NUMBER, coerce_index, coerce_numbers, find_objects, get_key, normalize_minus
 from povagent.answers.validation import relative_to_pixels
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.native import NativeParser, NativeReading
 
 #: ``point_2d: [x, y]`` outside a readable object (cut-off lists, unquoted keys).

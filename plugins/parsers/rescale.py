@@ -45,8 +45,8 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.validation import judge, relative_to_pixels
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus
+from povagent.answers.validation import judge, relative_to_pixels
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.json_answer import choose
 

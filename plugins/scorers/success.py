@@ -29,8 +29,8 @@ from typing import Any, Sequence
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
-from povagent.interfaces import Scorer
 from povagent.dataset.realworld import Mark, RealWorldInstance
+from povagent.interfaces import Scorer
 
 #: The default hit radius, as a fraction of the original frame's diagonal.
 DEFAULT_RADIUS = 0.1
@@ -75,16 +75,17 @@ class SuccessScorer(Scorer):
             )
         failure = {"answered": False, "success": False, "frame_has_gt": None, "pixel": None,
                    "distance_px": None, "distance_norm": None, "hit_radius_px": None}
-        if not answer.answered:
+        point = answer.point
+        if point is None:
             return failure
         if instance.condition.uses_exploration_frames:
             k = answer.selected_image
-            if instance.selected_frame(k) is None:
+            if k is None or instance.selected_frame(k) is None:
                 return failure  # no frame: unanswered, as the official rules count it
         else:
             k = 0
         box = instance.letterboxes[k]
-        px, py = (float(v) for v in box.to_original((float(answer.x), float(answer.y))))  # type: ignore[arg-type]
+        px, py = (float(v) for v in box.to_original((float(point[0]), float(point[1]))))
         width, height = box.original
         diagonal = math.hypot(width, height)
         marks = instance.marks_in(instance.frames[k].image_path)

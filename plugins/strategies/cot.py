@@ -40,7 +40,9 @@ class CotStrategy(BasicStrategy):
         width, height = instance.frame_size
         values = frame_values(width, height, len(self.shown_frames(instance)))
         step4 = load_template(getattr(self.prompts, self.step4_field))
-        return render(self.prompts.cot_frames, sentence=instance.sentence, step4=step4, **values)
+        template = self.prompts.cot_frames
+        assert template is not None  # _check_prompts refused prompt sets without one
+        return render(template, sentence=instance.sentence, step4=step4, **values)
 
 
 class SpatialCotStrategy(CotStrategy):

@@ -20,8 +20,8 @@ from typing import Sequence
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
 from povagent.dataset.instances import Frame, Instance
-from povagent.exchange.messages import ImagePart, Message, Part, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Part, TextPart
 
 
 def frame_label(index: int) -> str:

@@ -29,6 +29,7 @@ to draw is shown unchanged (same hash, nothing re-encoded).
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import asdict, dataclass
@@ -144,6 +145,11 @@ def frame_markers(instance: Instance, frame: Frame, with_anchor: bool) -> FrameM
     return FrameMarkers(observer, box, circle)
 
 
+def _draw(markers: FrameMarkers, frame_size: tuple[int, int], image: Image.Image) -> Image.Image:
+    # draw_markers with the image last, for functools.partial
+    return draw_markers(image, markers, frame_size)
+
+
 def draw_markers(image: Image.Image, markers: FrameMarkers, frame_size: tuple[int, int]) -> Image.Image:
     """A copy of ``image`` with ``markers`` drawn: the observer disc first, the anchor over it."""
     out = image.convert("RGB").copy()
@@ -215,7 +221,7 @@ class ObserverPlotStrategy(BasicStrategy):
                 continue
             size = (frame.camera.width, frame.camera.height)
             derived = images.derive(
-                source, recipe_key(self.kind, markers, size), lambda im, m=markers, s=size: draw_markers(im, m, s)
+                source, recipe_key(self.kind, markers, size), functools.partial(_draw, markers, size)
             )
             hashes.append(derived.image_hash)
         return hashes

@@ -46,16 +46,16 @@ from pydantic import BaseModel, ConfigDict
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import Condition, Direction
+from povagent.dataset.realworld import unknown_object, unposed_square_camera
+from povagent.engine.request_path import RequestPath
+from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
 from povagent.errors import BackendError, BadInputError, NoAnswerError, UnparseableAnswerError
+from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project
-from povagent.exchange.images import ImageStore
-from povagent.engine.request_path import RequestPath
-from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
-from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 from povagent.geometry.letterbox import DEFAULT_PAD_COLOR, Letterbox, pixel_index
-from povagent.dataset.realworld import unknown_object, unposed_square_camera
+from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 
 #: What a frame may be: a path, a PIL image, or an ``(H, W)``/``(H, W, 3|4)`` RGB(A) array.
 FrameInput = str | os.PathLike | Image.Image | np.ndarray
@@ -261,13 +261,25 @@ class GroundingAgent:
             from povagent.plugins import get_plugin_host
 
             host = get_plugin_host(tuple(plugins))
-        self.backend: Backend = backend if isinstance(backend, Backend) else host.create("backend", backend, backend_options)
-        self.strategy: Strategy = strategy if isinstance(strategy, Strategy) else host.create("strategy", strategy, strategy_options)
+        if isinstance(backend, Backend):
+            self.backend: Backend = backend
+        else:
+            assert host is not None  # a name, so the host was built above
+            self.backend = host.create("backend", backend, backend_options)
+        if isinstance(strategy, Strategy):
+            self.strategy: Strategy = strategy
+        else:
+            assert host is not None
+            self.strategy = host.create("strategy", strategy, strategy_options)
         if parser is None:
             # a model profile knows how its family writes points (Qwen 0-1000, Gemini [y, x] ...)
             profile = getattr(self.backend, "profile", None)
             parser = getattr(profile, "default_parser", None) or "json"
-        self.parser: Parser = parser if isinstance(parser, Parser) else host.create("parser", parser, parser_options)
+        if isinstance(parser, Parser):
+            self.parser: Parser = parser
+        else:
+            assert host is not None
+            self.parser = host.create("parser", parser, parser_options)
         self.timeout_s = float(timeout_s)
         self.retry = retry or AGENT_RETRY
         self.plane = plane
@@ -280,7 +292,7 @@ class GroundingAgent:
         self._lock = threading.Lock()
 
     @classmethod
-    def from_pipeline(cls, pipeline: str | os.PathLike | Mapping[str, Any], **overrides: Any) -> "GroundingAgent":
+    def from_pipeline(cls, pipeline: str | os.PathLike | Mapping[str, Any], **overrides: Any) -> GroundingAgent:
         """An agent from a pipeline YAML (a path or an already-parsed mapping).
 
         The same file a benchmark run takes works here: ``plugins``, ``model`` or ``backend``,
@@ -406,13 +418,13 @@ class GroundingAgent:
         await self.backend.aclose()
         self.close()
 
-    def __enter__(self) -> "GroundingAgent":
+    def __enter__(self) -> GroundingAgent:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    async def __aenter__(self) -> "GroundingAgent":
+    async def __aenter__(self) -> GroundingAgent:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
@@ -472,7 +484,7 @@ class GroundingAgent:
                 # strategies read frames by file: write the encoded bytes once, so the file
                 # hashes to the image already stored (no second encode)
                 file = Path(folder.name) / f"frame_{i:03d}.png"
-                file.write_bytes(images.bytes(stored.image_hash))
+                file.write_bytes(images.encoded_bytes(stored.image_hash))
                 boxes.append(box)
                 name = "observer_view.png" if condition is Condition.GIVEN else file.name
                 instance_frames.append(Frame(i, name, file, _shown_camera(self.strategy, cams[i], im.size, square_camera)))
@@ -508,7 +520,8 @@ class GroundingAgent:
         text = response.text or ""
         parsed: ParsedAnswer = self.parser.parse(text, request.answer)
         instance = prepared.instance
-        if not parsed.answered:
+        point = parsed.point
+        if point is None:
             raise _unparseable(
                 f"no point could be read from the model's answer ({parsed.reason or parsed.status}): {_clip(text)}",
                 text,
@@ -526,7 +539,7 @@ class GroundingAgent:
         else:
             k = 0
         box = prepared.boxes[k]
-        square = (float(parsed.x), float(parsed.y))  # type: ignore[arg-type]
+        square = (float(point[0]), float(point[1]))
         pixel_arr = box.to_original(np.array(square))
         pixel = (float(pixel_arr[0]), float(pixel_arr[1]))
         width, height = box.original

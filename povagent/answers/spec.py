@@ -82,6 +82,13 @@ class ParsedAnswer(BaseModel):
         """True when the parse yields a point."""
         return self.status.answered and self.x is not None and self.y is not None
 
+    @property
+    def point(self) -> tuple[float, float] | None:
+        """``(x, y)`` when the parse yields a point (:attr:`answered`), else ``None``."""
+        if self.status.answered and self.x is not None and self.y is not None:
+            return (self.x, self.y)
+        return None
+
 
 def unparseable(reason: str, span: str | None = None) -> ParsedAnswer:
     """A non-response with its reason."""

@@ -241,6 +241,5 @@ def coerce_numbers(value: Any, n: int) -> list[float] | None:
     if not isinstance(value, (list, tuple)) or len(value) != n:
         return None
     numbers = [coerce_number(v) for v in value]
-    if any(v is None for v in numbers):
-        return None
-    return numbers  # type: ignore[return-value]
+    read = [v for v in numbers if v is not None]
+    return read if len(read) == n else None

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import List, Optional
 
 import typer
 
@@ -13,14 +12,14 @@ from povagent.cli import app
 @app.command("download")
 def download_command(
     repo_id: str = typer.Argument("owl-owl/POVBench", help="Dataset repository on the Hub (default: the POVBench release)."),
-    conditions: Optional[List[str]] = typer.Option(
+    conditions: list[str] | None = typer.Option(
         None, "--conditions", "-c",
         help="Fetch only what these conditions read (a/inferred, b/stated, c/given; repeat or comma-separate). "
         "Given alone skips the exploration frames. Default: the whole release.",
     ),
-    revision: Optional[str] = typer.Option(None, "--revision", help="Branch, tag or commit (default: main)."),
+    revision: str | None = typer.Option(None, "--revision", help="Branch, tag or commit (default: main)."),
     offline: bool = typer.Option(False, "--offline", help="Only read the cache (as HF_HUB_OFFLINE=1 does)."),
-    cache_dir: Optional[Path] = typer.Option(None, "--cache-dir", help="Cache folder (default: the Hugging Face cache, HF_HOME / HF_HUB_CACHE)."),
+    cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache folder (default: the Hugging Face cache, HF_HOME / HF_HUB_CACHE)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
 ) -> None:
     """Fetch the release into the Hugging Face cache and print where its root is.

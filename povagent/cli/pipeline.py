@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -70,8 +70,8 @@ def _success_table(success: dict[str, Any], title: str) -> None:
 @app.command("run")
 def run_command(
     pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config.pipeline for its keys)."),
-    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
-    limit: Optional[int] = typer.Option(None, "--limit", help="Run only the first N instances."),
+    output: Path | None = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
+    limit: int | None = typer.Option(None, "--limit", help="Run only the first N instances."),
     keep_errors: bool = typer.Option(
         False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
     ),
@@ -98,12 +98,12 @@ def run_command(
         )
     except KeyboardInterrupt:
         typer.echo(f"interrupted: rows written so far are kept in {config.output}; run the same command to resume", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]
+    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
 
@@ -113,8 +113,8 @@ def run_command(
 
         render_official_beside(
             result.summary,
-            config.parser.name,  # type: ignore[union-attr]
-            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]
+            config.parser.name,  # type: ignore[union-attr]  # load_pipeline resolved it
+            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]  # load_pipeline resolved it
             run_dir=result.run_dir,
         )
     typer.echo(
@@ -156,7 +156,8 @@ def sweep_command(
     from rich.console import Console
     from rich.table import Table
 
-    from povagent.run.sweep import dry_run as plan, expand_sweep, run_sweep
+    from povagent.run.sweep import dry_run as plan
+    from povagent.run.sweep import expand_sweep, run_sweep
 
     console = Console()
     if dry_run:
@@ -196,7 +197,7 @@ def sweep_command(
         result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
     except KeyboardInterrupt:
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
-        raise typer.Exit(130)
+        raise typer.Exit(130) from None
     table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in result.cells}
     with_success = any(v is not None for v in successes.values())  # real-world sets
@@ -261,10 +262,10 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as
     host = build_plugin_host(strict=False)
     kinds = (*KINDS, "profile")
     if as_json:
-        out = {
+        out: dict[str, list[dict[str, Any]]] = {
             k: [{"name": e.name, "source": e.source, "description": e.description} for e in host.entries(k)] for k in kinds
         }
-        out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]  # type: ignore[assignment]
+        out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]
         typer.echo(json.dumps(out, indent=2))
     else:
         console = Console()

@@ -11,7 +11,6 @@ import json
 import re
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -22,17 +21,16 @@ from povagent.cli import app
 def show_prompt_command(
     pipeline: Path = typer.Argument(..., help="Pipeline YAML (its dataset and strategy are used)."),
     instance: str = typer.Option(..., "--instance", help="Instance id house/pair/direction/condition."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Folder for the images shown (default: ./show-prompt/<instance>)."),
+    out: Path | None = typer.Option(None, "--out", help="Folder for the images shown (default: ./show-prompt/<instance>)."),
 ) -> None:
     """Print the exact messages a strategy builds for one instance and save the images it shows."""
     from povagent.config.pipeline import load_pipeline
+    from povagent.dataset.hub import resolve_hub_dataset
     from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
-    from povagent.plugins import get_plugin_host, did_you_mean
     from povagent.exchange.preview import preview_request
-
-    from povagent.dataset.hub import resolve_hub_dataset
+    from povagent.plugins import did_you_mean, get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
     dataset = load_dataset(config.dataset.root)
@@ -97,7 +95,7 @@ def parse_command(
 def rescore_command(
     run_dir: Path = typer.Argument(..., help="A finished run folder (config.yaml + results.jsonl)."),
     parser: str = typer.Option("official", "--parser", help="Parser to re-read every raw answer with (default: official, paper-comparable)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder (default: the run config's)."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder (default: the run config's)."),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
 ) -> None:
     """Re-parse and re-score a finished run offline (no model call) into RUN_DIR/rescored-<parser>/.

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -13,7 +12,7 @@ from povagent.cli import app
 @app.command("quickstart")
 def quickstart_command(
     out: Path = typer.Option(Path("povagent-quickstart"), "--out", help="Folder for the dataset, the sweep and the report."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Use this dataset instead of generating one."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="Use this dataset instead of generating one."),
     houses: int = typer.Option(3, "--houses", help="Houses to generate."),
     seed: int = typer.Option(0, "--seed", help="Generator seed."),
     jobs: int = typer.Option(2, "--jobs", help="Processes for generation."),

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -13,12 +12,12 @@ from povagent.cli import app
 @app.command("report")
 def report_command(
     source: Path = typer.Argument(..., help="A run folder (results.jsonl) or a sweep folder (sweep.json + run folders)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Report folder (default: SOURCE/report)."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, if not the one in the runs' config.yaml."),
+    out: Path | None = typer.Option(None, "--out", help="Report folder (default: SOURCE/report)."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder, if not the one in the runs' config.yaml."),
     bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI (0: no CIs)."),
-    gallery_limit: Optional[int] = typer.Option(None, "--gallery-limit", min=0, help="At most this many gallery rows per system (default: all of the first run)."),
+    gallery_limit: int | None = typer.Option(None, "--gallery-limit", min=0, help="At most this many gallery rows per system (default: all of the first run)."),
     no_gallery: bool = typer.Option(False, "--no-gallery", help="Skip the gallery images."),
-    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="Threads drawing gallery images."),
+    workers: int | None = typer.Option(None, "--workers", min=1, help="Threads drawing gallery images."),
 ) -> None:
     """Write the paper's tables (Markdown, CSV, LaTeX), plots and a self-contained HTML report."""
     from povagent.report.build import write_report
@@ -45,10 +44,10 @@ def export_command(
         help="'official': POVBench's prediction rows (one file per run index). 'long-csv': the official "
         "aggregate_runs.py's all_runs_long.csv, one line per model, run (numbered from 1) and item.",
     ),
-    out: Optional[Path] = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json, a folder of run_<k>.json with several runs; RUN_DIR/all_runs_long.csv for long-csv)."),
-    run: Optional[int] = typer.Option(None, "--run", help="Export only this run index."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images and the long CSV's ground truth (default: from config.yaml)."),
-    model: Optional[str] = typer.Option(None, "--model", help="long-csv: the model label of a run folder's lines (default: its model)."),
+    out: Path | None = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json, a folder of run_<k>.json with several runs; RUN_DIR/all_runs_long.csv for long-csv)."),
+    run: int | None = typer.Option(None, "--run", help="Export only this run index."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images and the long CSV's ground truth (default: from config.yaml)."),
+    model: str | None = typer.Option(None, "--model", help="long-csv: the model label of a run folder's lines (default: its model)."),
 ) -> None:
     """Write a run's predictions in the official row format, or the official long CSV."""
     from povagent.errors import PredictionsError
@@ -70,8 +69,8 @@ def compare_command(
     run_a: Path = typer.Argument(..., help="Run folder A (the reference)."),
     run_b: Path = typer.Argument(..., help="Run folder B."),
     top: int = typer.Option(15, "--top", min=0, help="How many most-changed instances to list."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Also write compare.html (with both runs' drawings) to this folder."),
-    dataset: Optional[Path] = typer.Option(None, "--dataset", help="Dataset folder for the HTML images (default: from config.yaml)."),
+    out: Path | None = typer.Option(None, "--out", help="Also write compare.html (with both runs' drawings) to this folder."),
+    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder for the HTML images (default: from config.yaml)."),
     bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI."),
 ) -> None:
     """Per-instance differences between two runs: paired statistics and the instances that changed most."""

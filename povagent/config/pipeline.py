@@ -50,6 +50,7 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,8 +65,8 @@ from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
 from povagent.exchange.image_server import parse_bind
 from povagent.exchange.transport import DEFAULT_CACHE_DIR
-from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
 
 Loc = tuple[Any, ...]
 
@@ -171,7 +172,7 @@ class DatasetSpec(_Strict):
         return value
 
     @model_validator(mode="after")
-    def _exactly_one(self) -> "DatasetSpec":
+    def _exactly_one(self) -> DatasetSpec:
         if self.revision is not None and self.hub is None:
             raise ValueError("dataset.revision needs dataset.hub (the Hub repository it is a revision of)")
         if self.hub is not None:
@@ -290,7 +291,7 @@ class ImagesSpec(_Strict):
         return value
 
     @model_validator(mode="after")
-    def _options_fit_the_transport(self) -> "ImagesSpec":
+    def _options_fit_the_transport(self) -> ImagesSpec:
         if self.transport != "http" and (self.bind is not None or self.public_url is not None):
             raise ValueError(f"bind and public_url apply to transport: http (transport is {self.transport})")
         if self.transport == "inline" and self.cache_dir is not None:
@@ -353,7 +354,7 @@ class PipelineConfig(_Strict):
         return _a_folder_path(value)
 
     @model_validator(mode="after")
-    def _one_backend(self) -> "PipelineConfig":
+    def _one_backend(self) -> PipelineConfig:
         if self.model is not None and self.backend is not None:
             raise ValueError("give either model: (a model profile) or backend:, not both")
         if self.model is None and self.backend is None:
@@ -511,9 +512,10 @@ def _check_shape(text: str, file: str) -> None:
             where = f"{file}, line {line}" if line else file
             added = 0
             if isinstance(event, yaml.AliasEvent):
-                if any(frame[0] == event.anchor for frame in open_frames):
-                    raise ConfigError(f"{where}: alias *{_cut(event.anchor)} refers to its own anchor (a recursive alias)")
-                added = sizes.get(event.anchor, 1)
+                anchor = event.anchor or ""  # an alias always names its anchor
+                if any(frame[0] == anchor for frame in open_frames):
+                    raise ConfigError(f"{where}: alias *{_cut(anchor)} refers to its own anchor (a recursive alias)")
+                added = sizes.get(anchor, 1)
             elif isinstance(event, yaml.ScalarEvent):
                 added = 1
                 if event.anchor:
@@ -583,7 +585,7 @@ def parse_yaml(text: str, file: str) -> ConfigSource:
     return ConfigSource(file, data, lines)
 
 
-def read_yaml(path: str | Path) -> ConfigSource:
+def read_yaml(path: str | os.PathLike[str]) -> ConfigSource:
     """Read and parse a YAML file (a missing, oversized or non-UTF-8 file is a :class:`ConfigError`)."""
     p = Path(path)
     try:
@@ -611,7 +613,7 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     found: list[type[BaseModel]] = []
-    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):
+    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):  # noqa: UP007 -- the runtime class of typing.Union objects, not an annotation
         for arg in get_args(annotation):
             found.extend(_models_in(arg))
     return found

@@ -172,7 +172,7 @@ def offline_requested() -> bool:
 def _silent_tqdm() -> Any:
     from tqdm.auto import tqdm
 
-    class SilentTqdm(tqdm):  # type: ignore[misc, valid-type]
+    class SilentTqdm(tqdm):
         """A progress bar that never draws (``progress=False``)."""
 
         def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -288,16 +288,21 @@ def _user_error(
     if isinstance(exc, HfHubHTTPError):
         status = exc.response.status_code if exc.response is not None else "?"
         return DatasetError(f"{where}: the Hub at {endpoint} answered HTTP {status}; try again later ({str(exc).splitlines()[0]})")
+    transfer_error: type[Exception]
     try:  # huggingface_hub's HTTP client; a transfer cut mid-file surfaces as its error
-        from httpx2 import HTTPError as TransferError
+        from httpx2 import HTTPError as Httpx2Error
+
+        transfer_error = Httpx2Error
     except ImportError:  # pragma: no cover - an older huggingface_hub on httpx
-        from httpx import HTTPError as TransferError
-    if isinstance(exc, TransferError):
+        from httpx import HTTPError as HttpxError
+
+        transfer_error = HttpxError
+    if isinstance(exc, transfer_error):
         return DatasetError(f"{where}: the download from {endpoint} failed ({type(exc).__name__}: {exc}); try again")
     return None
 
 
-def resolve_hub_dataset(config: "PipelineConfig", *, progress: bool = True) -> "PipelineConfig":
+def resolve_hub_dataset(config: PipelineConfig, *, progress: bool = True) -> PipelineConfig:
     """Fetch a pipeline's ``dataset: {hub: ...}`` and point ``dataset.path`` at the release root.
 
     Only the files of the pipeline's ``instances.conditions`` are fetched. The revision is

@@ -81,7 +81,7 @@ class Instance:
 
 def instance_id(house_id: str, pair_id: str, direction: str, condition: str) -> str:
     """``house/pair/direction/condition`` with enum values as plain strings."""
-    return f"{house_id}/{pair_id}/{str(direction)}/{str(condition)}"
+    return f"{house_id}/{pair_id}/{direction!s}/{condition!s}"
 
 
 def row_key(instance_id_: str, run: int) -> str:

@@ -13,22 +13,22 @@ import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, cast
 
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
+from povagent.dataset.image_files import image_problem
 from povagent.dataset.instances import Frame, Instance, instance_id
 from povagent.dataset.models import (
     CONDITIONS,
+    RELEASE_FILE,
     Condition,
     DatasetMeta,
     Direction,
     ExplorationRecord,
-    RELEASE_FILE,
     PairEntry,
 )
-from povagent.dataset.image_files import image_problem
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
 from povagent.dataset.problems import Problem, problems_from_validation_error
 from povagent.errors import DatasetError
@@ -144,7 +144,9 @@ def anchor_type(pair: PairEntry) -> str:
 
 def ground_truth_point(pair: PairEntry, direction: Direction | str) -> np.ndarray:
     """The surface-corrected 3D GT point of one (pair, direction), as the official scorer has it."""
-    judgement = pair.stage3.get(direction)
+    # Direction is a str enum: the plain name finds the same entry
+    key = cast(Direction, direction)
+    judgement = pair.stage3.get(key)
     return target_point(
         str(direction),
         anchor_box(pair),
@@ -153,7 +155,7 @@ def ground_truth_point(pair: PairEntry, direction: Direction | str) -> np.ndarra
         np.array(pair.camera.cam_pos),
         judgement.verdict if judgement else None,
         judgement.surface if judgement else None,
-        np.array(pair.placements[direction].position.as_tuple()),
+        np.array(pair.placements[key].position.as_tuple()),
     )
 
 

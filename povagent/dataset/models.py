@@ -106,7 +106,7 @@ class _Record(BaseModel):
     model_config = ConfigDict(extra="allow", populate_by_name=True)
 
     @model_validator(mode="after")
-    def _finite_in_release_files(self, info: ValidationInfo) -> "_Record":
+    def _finite_in_release_files(self, info: ValidationInfo) -> _Record:
         # Each record checks its own numbers (fields, lists of them, extra keys); nested records
         # check theirs, so the reported path is exact.
         if isinstance(info.context, dict) and info.context.get("release_file"):

@@ -21,8 +21,11 @@ class EvaluationSet(Protocol):
     imposes on scorers."""
 
     root: Path
-    houses: Mapping[str, Any]
     problems: list[Problem]
+
+    @property
+    def houses(self) -> Mapping[str, Any]:
+        """The loaded houses by id (read only: a set's own type may be more precise)."""
 
     def instances(
         self,

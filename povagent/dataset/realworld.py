@@ -53,13 +53,13 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.problems import Problem
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.dataset.paths import dataset_root, is_inside
+from povagent.dataset.problems import Problem
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
-from povagent.scoring.breakdown import slices
 from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
+from povagent.scoring.breakdown import slices
 
 #: Built-in scorers that project a 3D target, which a real-world set does not have.
 NEEDS_3D_GROUND_TRUTH = frozenset({"official"})
@@ -87,7 +87,7 @@ class Mark(_Strict):
     region: list[tuple[float, float]] | None = None
 
     @model_validator(mode="after")
-    def _one_shape(self) -> "Mark":
+    def _one_shape(self) -> Mark:
         given = [k for k in ("point", "box", "region") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"a gt mark needs exactly one of point, box or region (got {', '.join(given) or 'none'})")
@@ -344,7 +344,7 @@ def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> Rea
     root = Path(root)
     spec = read_realworld(root)
     own_tmp = cache_dir is None
-    cache = Path(tempfile.mkdtemp(prefix="povagent-realworld-")) if own_tmp else Path(cache_dir)
+    cache = Path(tempfile.mkdtemp(prefix="povagent-realworld-")) if cache_dir is None else Path(cache_dir)
     cache.mkdir(parents=True, exist_ok=True)
     squares: dict[str, tuple[Path, Letterbox]] = {}
 
@@ -362,8 +362,8 @@ def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> Rea
                 shown = [sc.observer_view] if cmd.condition is Condition.GIVEN else list(house.frames)
                 frames, boxes = [], []
                 for i, rel in enumerate(shown):
-                    path, box = square(rel)  # type: ignore[arg-type]
-                    frames.append(Frame(i, rel, path, square_camera))  # type: ignore[arg-type]
+                    path, box = square(rel)  # type: ignore[arg-type]  # validation refuses a GIVEN command without an observer view
+                    frames.append(Frame(i, rel, path, square_camera))  # type: ignore[arg-type]  # as above
                     boxes.append(box)
                 marks = tuple(
                     m if m.frame is not None else m.model_copy(update={"frame": sc.observer_view}) for m in cmd.gt

@@ -8,7 +8,7 @@ uses these schemas with ``jsonschema`` (every error, with its JSON path).
 from __future__ import annotations
 
 import json
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -47,7 +47,7 @@ def schema_text(name: str) -> str:
     return json.dumps(generate_schema(name), indent=2, sort_keys=True) + "\n"
 
 
-@lru_cache(maxsize=None)
+@cache
 def validator(name: str) -> Draft202012Validator:
     """A compiled validator for the shipped schema ``name``."""
     text = resources.files("povagent").joinpath("schemas", f"{name}.schema.json").read_text(encoding="utf-8")

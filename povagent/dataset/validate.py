@@ -32,27 +32,30 @@ def describe_schema_error(err: SchemaError) -> str:
     """A plain sentence for one jsonschema error."""
     field = err.path[-1] if err.path else None
     kind = err.validator
+    # the schema's own value for the failed keyword (typed loosely by jsonschema: any JSON)
+    value: Any = err.validator_value
+    instance: Any = err.instance
     if kind == "required":
         missing = err.message.split("'")[1] if "'" in err.message else err.message
         return f"required field '{missing}' is missing"
     if kind == "propertyNames" or "propertyNames" in err.schema_path:
-        return f"unknown direction {err.instance!r} (allowed: {_DIRECTION_NAMES})"
+        return f"unknown direction {instance!r} (allowed: {_DIRECTION_NAMES})"
     if kind == "type":
-        want = err.validator_value if isinstance(err.validator_value, str) else "/".join(err.validator_value)
-        got = json.dumps(err.instance)[:60]
+        want = value if isinstance(value, str) else "/".join(value)
+        got = json.dumps(instance)[:60]
         if field is None:
             return f"the file must hold a JSON {_JSON_NAMES.get(want, want)} (got {got})"
         if isinstance(field, int):
             return f"item {field} must be a JSON {_JSON_NAMES.get(want, want)} (got {got})"
         return f"'{field}' must be of type {want} (got {got})"
     if kind in ("minItems", "maxItems"):
-        return f"'{field}' has {len(err.instance)} items; expected {'at least' if kind == 'minItems' else 'at most'} {err.validator_value}"
+        return f"'{field}' has {len(instance)} items; expected {'at least' if kind == 'minItems' else 'at most'} {value}"
     if kind in ("exclusiveMinimum", "exclusiveMaximum", "minimum", "maximum", "minLength"):
         return f"'{field}' is out of range: {err.message}"
-    if kind == "anyOf" and any("sentence" in (sub.get("properties") or {}) for sub in err.validator_value):
-        return f"'{field}' must be a non-empty sentence: a string or an object with 'sentence' (got {json.dumps(err.instance)[:60]})"
+    if kind == "anyOf" and any("sentence" in (sub.get("properties") or {}) for sub in value):
+        return f"'{field}' must be a non-empty sentence: a string or an object with 'sentence' (got {json.dumps(instance)[:60]})"
     if kind == "anyOf":
-        return f"'{field}' has an unexpected form (got {json.dumps(err.instance)[:60]})"
+        return f"'{field}' has an unexpected form (got {json.dumps(instance)[:60]})"
     return err.message
 
 
@@ -168,9 +171,13 @@ def _pair_checks(pairs: list[Any], folder: Path, rel: str, real_root: Path) -> I
             if str(pid) in seen:
                 yield Problem(rel, f"$[{i}].pair_id", f"pair_id {pid!r} repeats the one at $[{seen[str(pid)]}]; scoring uses this last entry, as officially")
             seen.setdefault(str(pid), i)
-        placements = pair.get("placements") if isinstance(pair.get("placements"), dict) else {}
+        placements = pair.get("placements")
+        if not isinstance(placements, dict):
+            placements = {}
         for stage in ("stage5", "stage6"):
-            sentences = pair.get(stage) if isinstance(pair.get(stage), dict) else {}
+            sentences = pair.get(stage)
+            if not isinstance(sentences, dict):
+                sentences = {}
             for d in placements:
                 if d in [str(x) for x in DIRECTIONS] and d not in sentences:
                     yield Problem(rel, f"$[{i}].{stage}", f"direction '{d}' has a placement but no sentence in {stage}")

@@ -105,7 +105,7 @@ class ResponseCache:
             _, text, u, model, latency, _ = pending
             return Response(text=text, usage=Usage(u.prompt_tokens, u.completion_tokens, u.cost_usd), latency_s=latency, model=model, cached=True)
         with self._lock:
-            row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]
+            row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]  # None only after close()
         if row is None:
             self.misses += 1
             return None
@@ -191,7 +191,7 @@ class ResponseCache:
     def __len__(self) -> int:
         self.flush()
         with self._lock:
-            return int(self._db.execute("SELECT COUNT(*) FROM responses").fetchone()[0])  # type: ignore[union-attr]
+            return int(self._db.execute("SELECT COUNT(*) FROM responses").fetchone()[0])  # type: ignore[union-attr]  # None only after close()
 
     def close(self) -> None:
         """Write what is queued, then close the database."""
@@ -205,7 +205,7 @@ class ResponseCache:
                 if self._db is not None:
                     self._db.close()
 
-    def __enter__(self) -> "ResponseCache":
+    def __enter__(self) -> ResponseCache:
         return self
 
     def __exit__(self, *exc: object) -> None:

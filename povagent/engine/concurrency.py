@@ -69,12 +69,12 @@ class Slot:
 
     __slots__ = ("_limiter", "_epoch", "_released")
 
-    def __init__(self, limiter: "AdaptiveConcurrency") -> None:
+    def __init__(self, limiter: AdaptiveConcurrency) -> None:
         self._limiter = limiter
         self._epoch = -1
         self._released = False
 
-    async def __aenter__(self) -> "Slot":
+    async def __aenter__(self) -> Slot:
         self._epoch = await self._limiter._acquire()
         return self
 

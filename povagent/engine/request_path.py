@@ -37,7 +37,6 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.interfaces import Backend
 
-
 #: Lone UTF-16 surrogates (``"\\ud800"`` in a JSON answer) are not text: UTF-8 cannot hold them.
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 
@@ -152,14 +151,15 @@ class RequestPath:
         owns the cache decides when it is written.
         """
         key = self.cache_key_of(request)
-        if key is not None:
-            cached = self.cache.get(key)  # type: ignore[union-attr]
+        cache = self.cache  # a key exists only with a cache; naming both lets the checker see it
+        if key is not None and cache is not None:
+            cached = cache.get(key)
             if cached is not None:
                 self.stats.cache_hits += 1
                 return cached
         response = await self.call(request, label=label, deadline=deadline)
-        if key is not None:
-            self.cache.put_deferred(key, response)  # type: ignore[union-attr]
+        if key is not None and cache is not None:
+            cache.put_deferred(key, response)
         return response
 
     async def call(self, request: Request, *, label: str = "", deadline: float | None = None) -> Response:
@@ -180,7 +180,7 @@ class RequestPath:
 
                 async for attempt in AsyncRetrying(
                     stop=stop_after_attempt(policy.attempts - 1),
-                    wait=lambda state: self._wait(state.outcome.exception(), state.attempt_number + 1, deadline),
+                    wait=lambda state: self._wait(state.outcome.exception() if state.outcome else None, state.attempt_number + 1, deadline),
                     retry=retry_if_exception(lambda exc: is_transient(exc) and not _past(deadline)),
                     before_sleep=before_sleep,
                     reraise=True,

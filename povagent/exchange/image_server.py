@@ -73,7 +73,7 @@ class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
     # a client that stops sending does not hold a thread for ever
     timeout = 30
-    server: "_Server"
+    server: _Server
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
@@ -136,7 +136,7 @@ class _Server(ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 128
-    owner: "StaticImageServer"
+    owner: StaticImageServer
 
     def process_request(self, request: Any, client_address: Any) -> None:
         """One thread per connection, up to the bound; beyond it the connection is closed at once."""
@@ -159,6 +159,12 @@ class _Server(ThreadingHTTPServer):
         finally:
             with self.owner._lock:
                 self.owner._open_connections -= 1
+
+
+class _Server6(_Server):
+    """The same server on an IPv6 address."""
+
+    address_family = socket.AF_INET6
 
 
 class StaticImageServer:
@@ -194,13 +200,11 @@ class StaticImageServer:
         self.refused = 0
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "StaticImageServer":
+    def start(self) -> StaticImageServer:
         """Bind and serve in a daemon thread; returns ``self``. A taken port is an OSError."""
         if self._server is not None:
             return self
-        server_class = _Server
-        if ":" in self.host:  # an IPv6 address
-            server_class = type("_Server6", (_Server,), {"address_family": socket.AF_INET6})
+        server_class = _Server6 if ":" in self.host else _Server  # ":": an IPv6 address
         server = server_class((self.host, self.port), _Handler)
         server.owner = self
         self._server = server
@@ -220,7 +224,7 @@ class StaticImageServer:
         if self._thread is not None:
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "StaticImageServer":
+    def __enter__(self) -> StaticImageServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

@@ -16,13 +16,14 @@ other formats decoded), once per file, never when a request is built.
 from __future__ import annotations
 
 import base64
+import functools
 import hashlib
 import io
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, cast
 
 from PIL import Image, UnidentifiedImageError
 
@@ -96,7 +97,7 @@ class ImageStore:
             facts = check_image_bytes(data)
         except ImageFileError as exc:
             raise DatasetError(f"{p}: image {exc}") from None
-        info = self._remember(data, facts.size, facts.media_type, lambda p=p: self._read_file(p))
+        info = self._remember(data, facts.size, facts.media_type, functools.partial(self._read_file, p))
         with self._lock:
             self._sources.setdefault(info.image_hash, str(p))
         with self._lock:
@@ -111,7 +112,7 @@ class ImageStore:
     def add_pil(self, image: Image.Image) -> StoredImage:
         """Register an in-memory image (encoded once as PNG)."""
         data = self._encode_png(image)
-        return self._remember(data, image.size, "image/png", lambda d=data: d)
+        return self._remember(data, image.size, "image/png", functools.partial(bytes, data))
 
     def derive(self, source_hash: str, recipe_key: str, draw: Callable[[Image.Image], Image.Image]) -> StoredImage:
         """The image made by ``draw`` from ``source_hash``, made once per ``recipe_key``.
@@ -148,12 +149,12 @@ class ImageStore:
         """The number of distinct images (by content) the store has seen."""
         return len(self._by_hash)
 
-    def bytes(self, image_hash: str) -> bytes:
+    def encoded_bytes(self, image_hash: str) -> bytes:
         """The encoded bytes of an image."""
         with self._lock:
             hit = self._cache_get((image_hash, "bytes"))
             if hit is not None:
-                return hit  # type: ignore[return-value]
+                return cast(bytes, hit)  # "bytes" entries hold bytes
             self.stats.rebuilds += 1
             data = self._recipes[image_hash]()
             self._cache_put((image_hash, "bytes"), data)
@@ -164,9 +165,9 @@ class ImageStore:
         with self._lock:
             hit = self._cache_get((image_hash, "url"))
             if hit is not None:
-                return hit  # type: ignore[return-value]
+                return cast(str, hit)  # "url" entries hold str
             info = self._by_hash[image_hash]
-            url = f"data:{info.media_type};base64," + base64.b64encode(self.bytes(image_hash)).decode("ascii")
+            url = f"data:{info.media_type};base64," + base64.b64encode(self.encoded_bytes(image_hash)).decode("ascii")
             self.stats.base64_encodes += 1
             self._cache_put((image_hash, "url"), url)
             return url
@@ -184,7 +185,7 @@ class ImageStore:
         """A decoded PIL image (a new object: callers may draw on it); an image that does not
         decode is a :class:`DatasetError` naming its file."""
         try:
-            im = Image.open(io.BytesIO(self.bytes(image_hash)))
+            im = Image.open(io.BytesIO(self.encoded_bytes(image_hash)))
             im.load()
         except (OSError, SyntaxError, ValueError, EOFError) as exc:
             source = self._sources.get(image_hash, f"image {image_hash[:12]}")

@@ -44,7 +44,7 @@ class Message:
     parts: tuple[Part, ...]
 
     @classmethod
-    def text(cls, role: Literal["system", "user", "assistant"], text: str) -> "Message":
+    def text(cls, role: Literal["system", "user", "assistant"], text: str) -> Message:
         """A message holding one text part."""
         return cls(role, (TextPart(text),))
 
@@ -84,7 +84,7 @@ class Request:
     messages: tuple[Message, ...]
     answer: AnswerSpec
     generation: GenerationParams = field(default_factory=GenerationParams)
-    instance: "Instance | None" = field(default=None, compare=False)
+    instance: Instance | None = field(default=None, compare=False)
     run: int = field(default=0, compare=False)
     question: Mapping[str, Any] | None = field(default=None, compare=False)
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from povagent.dataset.instances import Instance
-from povagent.exchange.messages import ImagePart, Request, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Request, TextPart
 
 
 @dataclass
@@ -66,7 +66,7 @@ def preview_request(
             if out_dir is not None:
                 suffix = "marked" if marked else "frame"
                 path = out_dir / f"{len(saved):02d}_{_slug(part.label)}_{suffix}_{part.image_hash[:12]}.png"
-                path.write_bytes(images.bytes(part.image_hash))
+                path.write_bytes(images.encoded_bytes(part.image_hash))
             saved.append(SavedImage(len(saved), part.label, part.image_hash, path, marked))
             note = " marked" if marked else ""
             where = f" -> {path}" if path is not None else ""

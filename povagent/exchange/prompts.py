@@ -10,7 +10,7 @@ and their placeholders.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib.resources import files
 from string import Template
 from typing import Any
@@ -19,7 +19,7 @@ from typing import Any
 TEMPLATE_PACKAGE = "povagent_prompts"
 
 
-@lru_cache(maxsize=None)
+@cache
 def load_template(name: str) -> str:
     """The text of template ``name`` (``"basic_frames"`` or ``"basic_frames.txt"``).
 

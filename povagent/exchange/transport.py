@@ -62,10 +62,10 @@ class ImageTransport(abc.ABC):
     name: ClassVar[TransportName]
 
     @abc.abstractmethod
-    def url(self, images: "ImageStore", image_hash: str) -> str:
+    def url(self, images: ImageStore, image_hash: str) -> str:
         """The URL of one image of ``images`` (raises :class:`ImageReferenceError` when it cannot be sent)."""
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 -- optional hook: most transports hold nothing
         """Release what the transport holds (the static server); called when the run ends."""
 
 
@@ -74,7 +74,7 @@ class InlineTransport(ImageTransport):
 
     name: ClassVar[TransportName] = "inline"
 
-    def url(self, images: "ImageStore", image_hash: str) -> str:
+    def url(self, images: ImageStore, image_hash: str) -> str:
         """The image's data URL (encoded once while the store keeps it)."""
         return images.data_url(image_hash)
 
@@ -88,7 +88,7 @@ class _ByReference(ImageTransport):
         self._lock = threading.Lock()
         self.written = 0
 
-    def url(self, images: "ImageStore", image_hash: str) -> str:
+    def url(self, images: ImageStore, image_hash: str) -> str:
         """The image's URL, made once per hash."""
         known = self._urls.get(image_hash)
         if known is not None:
@@ -104,7 +104,7 @@ class _ByReference(ImageTransport):
     def _url_of(self, path: Path, image_hash: str, media_type: str) -> str:
         """The URL of a file holding the image."""
 
-    def _write(self, images: "ImageStore", image_hash: str) -> Path:
+    def _write(self, images: ImageStore, image_hash: str) -> Path:
         """The derived image's file under ``cache_dir`` (written once; named by its hash)."""
         suffix = _SUFFIXES.get(images.info(image_hash).media_type, ".png")
         target = self.cache_dir / f"{image_hash}{suffix}"
@@ -115,7 +115,7 @@ class _ByReference(ImageTransport):
         fd, tmp = tempfile.mkstemp(dir=self.cache_dir, prefix=f".{image_hash[:16]}-", suffix=".part")
         try:
             with os.fdopen(fd, "wb") as fh:
-                fh.write(images.bytes(image_hash))
+                fh.write(images.encoded_bytes(image_hash))
             os.replace(tmp, target)
         except BaseException:
             with contextlib.suppress(OSError):
@@ -178,7 +178,7 @@ def make_transport(
 
 
 @contextlib.contextmanager
-def image_transport(images: "ImageStore", transport: ImageTransport) -> Iterator[ImageTransport]:
+def image_transport(images: ImageStore, transport: ImageTransport) -> Iterator[ImageTransport]:
     """Send ``images`` by ``transport`` for the duration of the block, then close it."""
     previous = images.transport
     images.transport = transport
@@ -191,7 +191,7 @@ def image_transport(images: "ImageStore", transport: ImageTransport) -> Iterator
 
 @contextlib.contextmanager
 def open_image_transport(
-    spec: "ImagesSpec", images: "ImageStore", *, dataset_root: str | Path, output: str | Path
+    spec: ImagesSpec, images: ImageStore, *, dataset_root: str | Path, output: str | Path
 ) -> Iterator[ImageTransport]:
     """The pipeline's ``images:`` transport, attached to ``images`` for a run; closed after it.
 

@@ -58,6 +58,13 @@ def _blockers(house: House) -> list[Rect]:
     return out
 
 
+def _room_id(house: House, x: float, z: float) -> int:
+    room = house.plan.room_at(x, z)
+    if room is None:  # the grid is cut to the rooms, so every reachable cell lies in one
+        raise ValueError(f"reachable point ({x}, {z}) lies in no room")
+    return room.room_id
+
+
 def reachable_grid(house: House) -> ReachableGrid:
     """Grid cells a robot can stand on and reach from just inside the entrance."""
     fp = house.plan.footprint
@@ -95,7 +102,7 @@ def reachable_grid(house: House) -> ReachableGrid:
                 queue.append((a, b))
     idx = np.argwhere(seen)
     points = np.stack([gx[seen], gz[seen]], axis=1).round(4)
-    rooms = np.array([house.plan.room_at(float(x), float(z)).room_id for x, z in points])
+    rooms = np.array([_room_id(house, float(x), float(z)) for x, z in points])
     start = int(np.flatnonzero((idx[:, 0] == si) & (idx[:, 1] == sj))[0])
     return ReachableGrid(points, rooms, start)
 

@@ -67,14 +67,14 @@ class Rect:
         """True when (x, z) lies inside, shrunk by ``margin`` on every side."""
         return self.x0 + margin <= x <= self.x1 - margin and self.z0 + margin <= z <= self.z1 - margin
 
-    def overlaps(self, other: "Rect", tolerance: float = 1e-6) -> bool:
+    def overlaps(self, other: Rect, tolerance: float = 1e-6) -> bool:
         """True when the interiors overlap by more than ``tolerance``."""
         return (
             min(self.x1, other.x1) - max(self.x0, other.x0) > tolerance
             and min(self.z1, other.z1) - max(self.z0, other.z0) > tolerance
         )
 
-    def inflate(self, margin: float) -> "Rect":
+    def inflate(self, margin: float) -> Rect:
         """The rectangle grown by ``margin`` on every side (shrunk when negative)."""
         return Rect(self.x0 - margin, self.z0 - margin, self.x1 + margin, self.z1 + margin)
 

@@ -146,7 +146,7 @@ class RoomLayout:
         """Record a placed object and the floor it takes (and keeps free in front of it)."""
         self.objects.append(obj)
         if obj.support in ("floor", "wall"):
-            self.bodies.append((obj.rect, obj.top if obj.support == "floor" else obj.top))
+            self.bodies.append((obj.rect, obj.top))
             if access_depth > 0:
                 self.access.append(_front_rect(obj.rect, obj.yaw, access_depth))
         return obj
@@ -162,14 +162,16 @@ class RoomLayout:
         flags: tuple[str, ...] = (),
     ) -> PlacedObject:
         """A PlacedObject with a rounded centre, a style drawn from the room's generator."""
-        c = tuple(round(float(v), 4) for v in center)
+        cx, cy, cz = (round(float(v), 4) for v in center)
+        c = (cx, cy, cz)
         size = local_size or asset.size
+        sx, sy, sz = (round(float(v), 4) for v in size)
         return PlacedObject(
-            object_id=object_id_for(object_type, c),  # type: ignore[arg-type]
+            object_id=object_id_for(object_type, c),
             object_type=object_type,
             asset_id=asset.asset_id,
-            center=c,  # type: ignore[arg-type]
-            local_size=tuple(round(float(v), 4) for v in size),  # type: ignore[arg-type]
+            center=c,
+            local_size=(sx, sy, sz),
             yaw=yaw % 360,
             room_id=self.room.room_id,
             support=support,

@@ -197,7 +197,7 @@ class PhysicalRulesJudge:
             sx, _, sz = anchor.size
             if min(sx, sz) < 0.3:
                 return SurfaceVerdict(INAPPROPRIATE, None, "top too small")
-            options = [(f"on the {surface_noun(anchor.object_type)}", anchor)]
+            options: list[tuple[str, PlacedObject | None]] = [(f"on the {surface_noun(anchor.object_type)}", anchor)]
         else:
             options = []
             on_anchor_ok = (

@@ -340,6 +340,6 @@ def _queries(
         target = pool[int(rng.integers(len(pool)))]
         on_anchor = direction != "up" and surface_names_anchor(verdict.surface, anchor.object_type)
         a, b, c = sentences(observer, anchor.object_type, anchor_name, direction, target, on_anchor, house, rng)
-        position = tuple(round(float(v), 4) for v in point)
-        out.append(DirectionQuery(direction, verdict, target, pool_name, position, a, b, c))  # type: ignore[arg-type]
+        px, py, pz = (round(float(v), 4) for v in point)
+        out.append(DirectionQuery(direction, verdict, target, pool_name, (px, py, pz), a, b, c))
     return out

@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from povagent.errors import PovagentError
 
 try:
@@ -36,7 +37,16 @@ except ImportError as _exc:  # embreex ships wheels for x86-64 only
 
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.meshes import (
-    CEILING, EMISSIVE, FABRIC, FLOOR_TILE, FLOOR_WOOD, GLOSS, METAL, WALL, WOOD, MeshParts,
+    CEILING,
+    EMISSIVE,
+    FABRIC,
+    FLOOR_TILE,
+    FLOOR_WOOD,
+    GLOSS,
+    METAL,
+    WALL,
+    WOOD,
+    MeshParts,
 )  # fmt: skip
 from povagent.generate.scene import House
 from povagent.geometry.camera import Camera
@@ -68,7 +78,7 @@ def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.Embre
     return scene
 
 
-def _hash2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _hash2(a: np.ndarray, b: np.ndarray | float) -> np.ndarray:
     """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
     v = np.sin(a * 12.9898 + b * 78.233) * 43758.5453
     return v - np.floor(v)

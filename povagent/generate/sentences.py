@@ -188,17 +188,17 @@ def word_for(object_type: str) -> str:
     return " ".join(w.lower() for w in re.findall(r"[A-Z][a-z]*", object_type))
 
 
-def target_pool(surface: str, anchor: PlacedObject, house: House) -> tuple[str, str]:
+def target_pool(surface: str, anchor: PlacedObject, house: House) -> tuple[str, tuple[str, ...]]:
     """(pool name, candidates) for a surface phrase: floor, the anchor itself, or its receptacle."""
     if "floor" in surface:
-        return "Floor", TARGET_POOLS["Floor"]  # type: ignore[return-value]
+        return "Floor", TARGET_POOLS["Floor"]
     if anchor.object_type in TARGET_POOLS and _names(surface, anchor.object_type):
-        return anchor.object_type, TARGET_POOLS[anchor.object_type]  # type: ignore[return-value]
+        return anchor.object_type, TARGET_POOLS[anchor.object_type]
     if anchor.support not in ("floor", "wall"):
         holder = house.by_id(anchor.support).object_type
         if holder in TARGET_POOLS:
-            return holder, TARGET_POOLS[holder]  # type: ignore[return-value]
-    return "Floor", TARGET_POOLS["Floor"]  # type: ignore[return-value]
+            return holder, TARGET_POOLS[holder]
+    return "Floor", TARGET_POOLS["Floor"]
 
 
 def _names(surface: str, object_type: str) -> bool:

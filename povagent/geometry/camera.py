@@ -63,7 +63,7 @@ class Camera:
         fov: float = 100.0,
         width: int = 512,
         height: int = 512,
-    ) -> "Camera":
+    ) -> Camera:
         """Build a camera from any 3-sequence position (list, tuple, array)."""
         x, y, z = (float(v) for v in position)
         return cls((x, y, z), float(yaw), float(horizon), float(fov), int(width), int(height))
@@ -107,7 +107,7 @@ class Camera:
             in_frame = in_front & (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
         return Projection(normalized, depth, in_front, in_frame)
 
-    def project_point(self, point: Sequence[float]) -> tuple[float, float, float]:
+    def project_point(self, point: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
         """One world point: ``(u/W, v/H, depth)``, unclamped; ``u/W`` and ``v/H`` are NaN when
         the point is behind the camera (``depth <= 1e-6``).
 

@@ -97,7 +97,7 @@ class PinholeCamera:
         width: int,
         height: int,
         convention: PoseConvention | str = PoseConvention.OPENCV,
-    ) -> "PinholeCamera":
+    ) -> PinholeCamera:
         """Square pixels, principal point at the image centre, ``vertical_fov`` in degrees."""
         if not 0 < vertical_fov < 180:
             raise ValueError(f"vertical_fov must be in (0, 180) degrees, got {vertical_fov}")
@@ -113,7 +113,7 @@ class PinholeCamera:
         width: int,
         height: int,
         convention: PoseConvention | str = PoseConvention.OPENCV,
-    ) -> "PinholeCamera":
+    ) -> PinholeCamera:
         """From a 3x3 intrinsic matrix ``K`` (``fx, fy`` on the diagonal, ``cx, cy`` in the last column)."""
         k = np.asarray(intrinsics, dtype=float)
         if k.shape != (3, 3):
@@ -122,7 +122,7 @@ class PinholeCamera:
                    float(k[1, 2]), int(width), int(height), PoseConvention(convention))
 
     @classmethod
-    def from_camera(cls, camera: Camera, convention: PoseConvention | str = PoseConvention.OPENCV) -> "PinholeCamera":
+    def from_camera(cls, camera: Camera, convention: PoseConvention | str = PoseConvention.OPENCV) -> PinholeCamera:
         """Our AI2-THOR camera as a 4x4 pose (a reflection: Unity's world is left-handed)."""
         convention = PoseConvention(convention)
         right, up, forward = camera.axes()
@@ -189,7 +189,7 @@ class Plane:
             raise ValueError(f"plane normal must be a non-zero 3-vector, got {self.normal!r}")
 
     @classmethod
-    def horizontal(cls, height: float = 0.0, up_axis: Literal["y", "z"] = "y") -> "Plane":
+    def horizontal(cls, height: float = 0.0, up_axis: Literal["y", "z"] = "y") -> Plane:
         """The horizontal plane at ``height`` in a y-up (AI2-THOR) or z-up (ROS) world."""
         if up_axis == "y":
             return cls((0.0, float(height), 0.0), (0.0, 1.0, 0.0))

@@ -47,7 +47,7 @@ class Letterbox:
     size: int = BENCHMARK_SIZE
 
     @classmethod
-    def for_size(cls, width: int, height: int, size: int = BENCHMARK_SIZE) -> "Letterbox":
+    def for_size(cls, width: int, height: int, size: int = BENCHMARK_SIZE) -> Letterbox:
         """The letterbox of a ``width`` x ``height`` frame into a ``size`` square."""
         if width < 1 or height < 1:
             raise ValueError(f"frame size must be positive, got {width}x{height}")

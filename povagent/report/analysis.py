@@ -153,8 +153,8 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
     gallery draws on, as the runner loads them.
     """
     from povagent.dataset.loader import load_dataset
-    from povagent.errors import DatasetError
     from povagent.dataset.realworld import is_realworld, load_realworld
+    from povagent.errors import DatasetError
 
     paths = [Path(override)] if override else collection.dataset_paths()
     if not paths:

@@ -25,8 +25,8 @@ from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
-from povagent.report.official_beside import official_beside_table
 from povagent.report.html import OFFICIAL_LEGEND, SUCCESS_LEGEND, figures_section, notes_section, render_page, tables_section
+from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown

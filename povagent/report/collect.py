@@ -377,7 +377,7 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
                 left_out += 1
                 continue
             obs.append(observation_of(row, r.system, r.name, r.scorer))
-    return Collection(paths[0], runs, obs, outside_protocol_rows=left_out)
+    return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out)
 
 
 def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:

@@ -122,9 +122,9 @@ def compare_runs(run_a: str | Path, run_b: str | Path, n_boot: int = DEFAULT_BOO
     b_obs = [o for o in b_obs if o.instance_id in keep]
     overall = paired_comparison(na, a_obs, nb, b_obs, n_boot=n_boot, seed=seed)
     per_c: dict[str, PairedComparison] = {}
-    for c in sorted({d.condition for d in deltas}):
-        per_c[c] = paired_comparison(
-            na, [o for o in a_obs if o.condition == c], nb, [o for o in b_obs if o.condition == c], n_boot=n_boot, seed=seed
+    for cond in sorted({d.condition for d in deltas}):
+        per_c[cond] = paired_comparison(
+            na, [o for o in a_obs if o.condition == cond], nb, [o for o in b_obs if o.condition == cond], n_boot=n_boot, seed=seed
         )
     return RunComparison(na, nb, a_obs, b_obs, deltas, overall, per_c)
 

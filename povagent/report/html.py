@@ -13,7 +13,7 @@ from __future__ import annotations
 import html
 import json
 import re
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib.resources import files
 from typing import Any, Iterable
 
@@ -99,7 +99,7 @@ def render_page(
     nav = list(nav or [])
     if gallery is not None:
         nav.append(("#gallery-section", "Gallery"))
-    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     page = template()
     fields = {
         "{{TITLE}}": html.escape(title),

@@ -150,8 +150,8 @@ def to_csv(table: Table) -> str:
     for i, row in _ordered_rows(table):
         out: list[object] = [row.label, int(row.reference)]
         for j, _ in enumerate(table.columns):
-            c = row.cells[j]
-            out += [_num(c.value), _num(c.lo), _num(c.hi), int(i in best[j])]
+            cell = row.cells[j]
+            out += [_num(cell.value), _num(cell.lo), _num(cell.hi), int(i in best[j])]
         w.writerow(out)
     return buf.getvalue()
 

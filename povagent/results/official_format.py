@@ -391,8 +391,8 @@ def read_official_run(path: str | Path) -> OfficialRun:
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise PredictionsError(f"{p}: cannot read predictions ({type(exc).__name__}: {exc})") from None
     found, run = _rows_in(doc, p, warnings)
-    meta = doc.get("metadata") if isinstance(doc, Mapping) else None
-    meta = dict(meta) if isinstance(meta, Mapping) else {}
+    declared = doc.get("metadata") if isinstance(doc, Mapping) else None
+    meta = dict(declared) if isinstance(declared, Mapping) else {}
     return OfficialRun([RawPrediction(r, p, i, run) for i, r in enumerate(found)], meta, [p], warnings, p if meta else None)
 
 

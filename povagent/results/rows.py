@@ -9,7 +9,7 @@ key is then run again on resume).
 from __future__ import annotations
 
 import os
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 from typing import Any, Iterator
@@ -99,7 +99,7 @@ class ResultRow(BaseModel):
 
 def utc_now() -> str:
     """ISO-8601 UTC timestamp with milliseconds."""
-    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+    return datetime.now(UTC).isoformat(timespec="milliseconds")
 
 
 class ResultsWriter:
@@ -143,7 +143,7 @@ class ResultsWriter:
         """Close the file."""
         self._fh.close()
 
-    def __enter__(self) -> "ResultsWriter":
+    def __enter__(self) -> ResultsWriter:
         return self
 
     def __exit__(self, *exc: object) -> None:

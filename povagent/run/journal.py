@@ -17,6 +17,7 @@ from typing import Callable
 
 from povagent.results.rows import ResultRow, ResultsWriter
 
+
 class RowJournal(ResultsWriter):
     """``results.jsonl`` with group commit.
 

@@ -19,11 +19,12 @@ import os
 import re
 import sys
 import threading
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Callable, Mapping, TextIO
 
 import structlog
+from structlog.typing import EventDict
 
 REDACTED = "[REDACTED]"
 
@@ -102,7 +103,7 @@ class Redactor:
         secret's value matches (``AIza...`` keys are made of name characters too)."""
         return bool(ENV_VAR_NAME.match(value)) and len(value) <= MAX_VARIABLE_NAME and self.text(value) == value
 
-    def __call__(self, logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
+    def __call__(self, logger: Any, method: str, event: EventDict) -> dict[str, Any]:
         """structlog processor."""
         return {k: self.value(v, k) for k, v in event.items()}
 
@@ -136,7 +137,7 @@ class _Sinks:
         self._lock = threading.Lock()
         self._render = structlog.dev.ConsoleRenderer(colors=bool(console is not None and console().isatty()))
 
-    def __call__(self, logger: Any, method: str, event: dict[str, Any]) -> Any:
+    def __call__(self, logger: Any, method: str, event: EventDict) -> Any:
         level = event.get("level", method)
         with self._lock:
             if self.file is not None:
@@ -154,13 +155,13 @@ class _Sinks:
                 self.file.flush()
 
 
-def _add_level(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
+def _add_level(logger: Any, method: str, event: EventDict) -> EventDict:
     event["level"] = "warning" if method == "warn" else method
     return event
 
 
-def _timestamp(logger: Any, method: str, event: dict[str, Any]) -> dict[str, Any]:
-    event["ts"] = datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+def _timestamp(logger: Any, method: str, event: EventDict) -> EventDict:
+    event["ts"] = datetime.now(UTC).isoformat(timespec="milliseconds")
     return event
 
 

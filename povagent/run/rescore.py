@@ -41,8 +41,8 @@ from povagent.results.official_reading import (
     read_officially,
 )
 from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
-from povagent.scoring.official import scoring_frame
 from povagent.scoring.breakdown import ScoredRow, breakdown
+from povagent.scoring.official import scoring_frame
 
 
 @dataclass

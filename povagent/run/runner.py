@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import functools
 import time
 import traceback
 from collections import Counter
@@ -47,13 +48,13 @@ from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
-from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -70,6 +71,12 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection"})
 
 # -- the run -------------------------------------------------------------------------------------
+def _forget_reads(reads: dict[Any, Any], paths: list[Any], _task: object) -> None:
+    """Done callback of a frame-reading task: its files are no longer being read."""
+    for p in paths:
+        reads.pop(p, None)
+
+
 @dataclass
 class RunStats:
     """What this session did (a resumed run counts only its own calls)."""
@@ -293,7 +300,7 @@ class PipelineRun:
                 task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
                 for path in new:
                     reads[path] = task
-                task.add_done_callback(lambda _t, paths=new: [reads.pop(p, None) for p in paths])
+                task.add_done_callback(functools.partial(_forget_reads, reads, new))
             waits = {reads[f.file] for f in frames if f.file in reads}
             if waits:
                 # Holding the tuple keeps its id from being reused while the entry lives.
@@ -433,7 +440,7 @@ class PipelineRun:
 
     def _report_dataset_problems(self) -> None:
         """Say which houses or pairs loading skipped (file, JSON path, sentence): never silently."""
-        problems = self.dataset.problems  # type: ignore[union-attr]
+        problems = self.dataset.problems  # type: ignore[union-attr]  # called after the dataset is loaded
         for p in problems:
             self._log.warning("dataset_problem", file=p.file, path=p.json_path, problem=p.message)
         if problems:
@@ -499,7 +506,7 @@ class PipelineRun:
         (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
 
         backend = self.components.backend
-        self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]
+        self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
         self._observed = bool(self.host.hooks.active)
         cache_path = config.cache_path()
         if self._cache is None and cache_path is not None and getattr(backend, "cacheable", True):
@@ -592,7 +599,7 @@ class PipelineRun:
                     await self._journal.drain()  # rows finished before the stop are kept
                     raise StopRun(self._stopped) from None
                 if len(exc.exceptions) == 1:
-                    raise exc.exceptions[0]  # one worker's bug: its own traceback, not a group's
+                    raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
             raise
 
     def write_summary(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:

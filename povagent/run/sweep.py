@@ -21,11 +21,11 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
-from povagent.engine.cache import ResponseCache
 from povagent.config.pipeline import (
     REPLACED_WHOLE,
+    ComponentSpec,
     ConfigSource,
     PipelineConfig,
     SweepConfig,
@@ -33,12 +33,13 @@ from povagent.config.pipeline import (
     load_sweep,
     pipeline_from_source,
 )
-from povagent.dataset.loader import Dataset
+from povagent.dataset.protocol import EvaluationSet
+from povagent.engine.cache import ResponseCache
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
-from povagent.run.progress import make_progress
 from povagent.run.pending import ensure_dataset, pending_keys
+from povagent.run.progress import make_progress
 from povagent.run.runner import PipelineRun, RunResult, create_components
 
 SWEEP_INDEX = "sweep.json"
@@ -114,7 +115,7 @@ def _axis_values(sweep: SweepConfig) -> list[tuple[str, list[tuple[str, dict[str
 
 def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost) -> None:
     problems = []
-    checks = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
+    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
               ("strategy", "strategy", sweep.axes.strategy or []), ("parser", "parser", sweep.axes.parser or [])]
     for axis, kind, values in checks:
         known = host.names(kind)
@@ -167,7 +168,7 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
     images at ~1 token per 28x28 pixels; completions at the strategy's ``max_tokens`` (an upper
     bound). Multi-turn strategies may make more requests than keys.
     """
-    datasets: dict[Any, Dataset] = {}
+    datasets: dict[Any, EvaluationSet] = {}
     images = ImageStore()
     out: list[DryRunCell] = []
     for cell in cells:
@@ -237,8 +238,9 @@ def run_sweep(
     async def run_cells() -> None:
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
-        cache = ResponseCache(first.cache_path()) if first.cache_path() is not None else None  # type: ignore[arg-type]
-        datasets: dict[Any, Dataset] = {}
+        cache_path = first.cache_path()
+        cache = ResponseCache(cache_path) if cache_path is not None else None
+        datasets: dict[Any, EvaluationSet] = {}
         try:
             for cell in cells:
                 status[cell.name] = {"status": "running"}

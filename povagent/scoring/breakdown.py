@@ -69,9 +69,12 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     rows = list(rows)
     answered = [r for r in rows if r.answered and r.l2 is not None]
     n, total = len(answered), len(rows)
-    errs = [r.l2 for r in answered]
-    mean = sum(errs) / n if n else None
-    std = math.sqrt(sum((e - mean) ** 2 for e in errs) / n) if n else None
+    errs = [r.l2 for r in answered if r.l2 is not None]
+    mean: float | None = None
+    std: float | None = None
+    if n:
+        mean = sum(errs) / n
+        std = math.sqrt(sum((e - mean) ** 2 for e in errs) / n)
     in_frame = sum(1 for r in answered if r.gt_in_frame)
     strict = [r.l2_strict for r in answered if r.l2_strict is not None]
     return {
@@ -172,10 +175,10 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         by_run[r.run].append(r)
     runs = sorted(by_run)
     if len(runs) <= 1:
-        out = pooled_breakdown(rows)
-        out["aggregation"] = PER_RUN_MEAN if runs else POOLED
-        out["runs"] = runs
-        return out
+        single = pooled_breakdown(rows)
+        single["aggregation"] = PER_RUN_MEAN if runs else POOLED
+        single["runs"] = runs
+        return single
     per_run = {run: pooled_breakdown(by_run[run]) for run in runs}
     pooled = pooled_breakdown(rows)
     empty = summarize([])

@@ -140,7 +140,7 @@ class _Notes:
     skipped: list[str]
 
     @classmethod
-    def empty(cls) -> "_Notes":
+    def empty(cls) -> _Notes:
         return cls([], defaultdict(list), defaultdict(list), [], [], [], [])
 
 
@@ -217,7 +217,8 @@ def score_official_row(
         return ScoredPrediction(iid, c_label, d_label, run, score, closest)
 
     house = dataset.houses.get(house_id) if isinstance(house_id, str) else None
-    pair = house.pairs.get(_pair_key(pair_id)) if house is not None else None  # type: ignore[arg-type]
+    pair_key = _pair_key(pair_id)
+    pair = house.pairs.get(pair_key) if house is not None and pair_key is not None else None
     placement = pair.placements.get(direction) if pair is not None and _hashable(direction) else None
     if placement is None:
         notes.unknown.append(f"{ref} ({iid})" if ref else iid)
@@ -236,14 +237,15 @@ def score_official_row(
         given = pair.camera.model_fields_set
         camera = replace(
             cam,
-            width=cam.width if "screen_width" in given else sw,
-            height=cam.height if "screen_height" in given else sh,
+            # the metadata's size is used as given (a float divides pixels just as well)
+            width=cam.width if "screen_width" in given else sw,  # type: ignore[arg-type]
+            height=cam.height if "screen_height" in given else sh,  # type: ignore[arg-type]
         )
     else:
         image = row.get("predicted_image")
         if not image:
             return result(_unanswered(NO_SELECTED_IMAGE))
-        frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]
+        frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]  # a pair was found, so its house was
         if frame is None:
             return result(_unanswered(IMAGE_NOT_IN_LOG))
         # the selected frame is projected at the metadata's size, as officially
@@ -256,7 +258,8 @@ def score_official_row(
         notes.nan.append(ref or iid)
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
-    gt = project_ground_truth(tuple(float(v) for v in ground_truth_point(pair, direction)), camera)
+    gx, gy, gz = (float(v) for v in ground_truth_point(pair, direction))
+    gt = project_ground_truth((gx, gy, gz), camera)
     l2 = normalized_l2(x, y, camera.width, camera.height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
@@ -296,14 +299,15 @@ def score_official_run(run: OfficialRun, dataset: Dataset, run_index: int = 0) -
     """
     screen = run.screen_size()
     declared = {r.run for r in run.rows}
+    numbered = sorted(r for r in declared if r is not None)
     warnings = list(run.warnings)
     if len(declared) > 1 and None not in declared:
         warnings.append(
-            f"the files declare runs {sorted(declared)} (metadata.run): scored as separate runs and "
+            f"the files declare runs {numbered} (metadata.run): scored as separate runs and "
             "averaged per run (the official loader, given this folder, would pool them as one run)"
         )
         scored: list[ScoredPrediction] = []
-        for k in sorted(declared):  # type: ignore[type-var]
+        for k in numbered:  # every row declares one (checked above)
             s, w = score_official_rows([r for r in run.rows if r.run == k], dataset, screen, k)
             scored += s
             warnings += w
@@ -353,7 +357,7 @@ def summary_of(scored: Iterable[ScoredPrediction]) -> dict[str, Any]:
     """The breakdown (overall, per condition, per direction, condition x direction); several
     runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``."""
     return breakdown(
-        ScoredRow(s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run)  # type: ignore[arg-type]
+        ScoredRow(s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run)
         for s in scored
     )
 
@@ -445,7 +449,7 @@ def score_predictions(path: str | Path, dataset: Dataset) -> tuple[dict[str, Any
     by_model: dict[str, list[Path]] = defaultdict(list)
     for folder in folders:
         by_model[run_folder_label(folder.name)[0]].append(folder)
-    warnings: list[str] = []
+    warnings = []
     models: dict[str, dict[str, Any]] = {}
     for model, runs in by_model.items():
         scored = []

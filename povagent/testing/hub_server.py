@@ -61,7 +61,7 @@ _RESOLVE = re.compile(r"^/(?P<prefix>datasets/)?(?P<repo>[^/]+/[^/]+)/resolve/(?
 
 class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
-    server: "_Server"
+    server: _Server
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
@@ -235,7 +235,7 @@ class _Server(ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 64
-    owner: "HubServer"
+    owner: HubServer
 
 
 class HubServer:
@@ -269,7 +269,7 @@ class HubServer:
         self.repo_id = repo_id
         self.kind = repo_type + "s"
         # a folder's files are read when asked for (a full-size release is hundreds of MiB)
-        self.files: dict[str, bytes | Path] = dict(files) if files is not None else _list_folder(Path(folder))  # type: ignore[arg-type]
+        self.files: dict[str, bytes | Path] = dict(files) if files is not None else dict(_list_folder(Path(folder or "")))
         self.paths = sorted(self.files)
         self._oids = {p: git_blob_id(self.read(p)) for p in self.paths}
         self._sizes = {p: len(b) if isinstance(b, bytes) else b.stat().st_size for p, b in self.files.items()}
@@ -288,7 +288,7 @@ class HubServer:
         self._connections: set[socket.socket] = set()
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "HubServer":
+    def start(self) -> HubServer:
         """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
         if self._server is not None:
             return self
@@ -325,7 +325,7 @@ class HubServer:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "HubServer":
+    def __enter__(self) -> HubServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

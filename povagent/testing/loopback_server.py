@@ -140,7 +140,7 @@ ReplyFn = Callable[[RecordedRequest], Outcome]
 class _Handler(BaseHTTPRequestHandler):
     # keep-alive like a real API server, so clients reuse connections as they would in production
     protocol_version = "HTTP/1.1"
-    server: "_Server"
+    server: _Server
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
@@ -228,7 +228,7 @@ class _Server(ThreadingHTTPServer):
     block_on_close = False
     # many concurrent clients in benchmarks: the default backlog of 5 refuses connections
     request_queue_size = 256
-    owner: "LoopbackServer"
+    owner: LoopbackServer
 
 
 class LoopbackServer:
@@ -275,7 +275,7 @@ class LoopbackServer:
         self._timer: threading.Timer | None = None
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> "LoopbackServer":
+    def start(self) -> LoopbackServer:
         """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
         if self._server is not None:
             return self
@@ -305,7 +305,7 @@ class LoopbackServer:
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 
-    def __enter__(self) -> "LoopbackServer":
+    def __enter__(self) -> LoopbackServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

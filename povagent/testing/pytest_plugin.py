@@ -114,7 +114,8 @@ def write_release(
         folder = root / "artifacts" / house_id
         (folder / "exploration_images").mkdir(parents=True, exist_ok=True)
         (folder / "img_from_observer").mkdir(parents=True, exist_ok=True)
-        log, visible = [], {}
+        log: list[dict[str, Any]] = []
+        visible: dict[str, list[Any]] = {}
         for fi in range(frames):
             rel = f"exploration_images/frame_{fi:03d}.png"
             (folder / rel).write_bytes(tagged_png(base, f"{house_id}/{rel}"))

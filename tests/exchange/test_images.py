@@ -59,7 +59,7 @@ def test_the_memory_bound_evicts_and_an_evicted_image_is_rebuilt_from_its_file(t
     hashes = [store.add_file(p).image_hash for p in paths]
     assert store._cached_bytes <= store.max_bytes
     assert store.stats.file_reads == 4 and store.stats.rebuilds == 0
-    assert store.bytes(hashes[0]) == paths[0].read_bytes()  # evicted: read again
+    assert store.encoded_bytes(hashes[0]) == paths[0].read_bytes()  # evicted: read again
     assert store.stats.rebuilds == 1 and store.stats.file_reads == 5
     assert store._cached_bytes <= store.max_bytes
 
@@ -81,5 +81,5 @@ def test_a_derived_image_is_drawn_once_per_recipe(tmp_path):
     assert store.derive(src, "dot@15,15", dot_at(15, 15)) == first and calls == [(15, 15)]
     other = store.derive(src, "dot@5,5", dot_at(5, 5))
     assert other.image_hash != first.image_hash and calls == [(15, 15), (5, 5)]
-    with Image.open(io.BytesIO(store.bytes(first.image_hash))) as im:
+    with Image.open(io.BytesIO(store.encoded_bytes(first.image_hash))) as im:
         assert im.convert("RGB").getpixel((15, 15)) == (255, 0, 0)
