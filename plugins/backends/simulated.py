@@ -179,7 +179,7 @@ class SimulatedPerception(Backend):
         question = request.question
         kind = question.get("kind") if isinstance(question, Mapping) else None
         handler = {"read": self._read, "surface": self._surface, "locate": self._locate}.get(str(kind))
-        if handler is None:
+        if handler is None or not isinstance(question, Mapping):
             raise PermanentBackendError(
                 "the simulated backend is a perception simulation, not a model: it answers only the 'geometric' "
                 f"strategy's sub-questions (Request.question kind read, surface or locate), and this request carries "

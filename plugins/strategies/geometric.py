@@ -376,7 +376,7 @@ class GeometricStrategy(Strategy):
         return AnchorEstimate(box.centre, box.half)
 
     def _final(
-        self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account, target: Sequence[float] | None = None
+        self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account, target: Sequence[float] | np.ndarray | None = None
     ) -> tuple[Request, Response]:
         """The worked-out answer as the last turn (``by_strategy``): JSON, then the account.
 
@@ -415,7 +415,7 @@ def _how_located(estimate) -> str:
     return f"{views}, ray(s) met at its type's usual centre height"
 
 
-def _xyz(p: Sequence[float]) -> str:
+def _xyz(p: Sequence[float] | np.ndarray) -> str:
     return ", ".join(f"{float(v):.2f}" for v in p)
 
 

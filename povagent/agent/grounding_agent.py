@@ -594,7 +594,8 @@ def _solved_goal(response: Response, camera: Any, pixel: tuple[float, float]) ->
     if point is None or not isinstance(camera, Camera):
         return None
     distance = float(np.linalg.norm(np.asarray(point, dtype=float) - np.asarray(camera.position)))
-    return Goal3D(point=tuple(float(v) for v in point), method="geometry", distance=distance, pixel=pixel)
+    x, y, z = (float(v) for v in point)
+    return Goal3D(point=(x, y, z), method="geometry", distance=distance, pixel=pixel)
 
 
 def _aligned(values: Any, n: int, name: str, types: tuple[type, ...]) -> list[Any]:

@@ -105,6 +105,8 @@ class _Handler(BaseHTTPRequestHandler):
                 owner.refused += 1
                 self._send_status(403, "refused")
                 return
+            # counted before the bytes go out: a client that has read the body sees the count
+            owner.served += 1
             self.send_response(200)
             self.send_header("Content-Type", entry[1])
             self.send_header("Content-Length", str(len(data)))
@@ -112,7 +114,6 @@ class _Handler(BaseHTTPRequestHandler):
             self.end_headers()
             if body:
                 self.wfile.write(data)
-            owner.served += 1
         finally:
             owner._connections.release()
 

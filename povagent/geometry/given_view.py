@@ -82,7 +82,7 @@ def solve_given_view(
     if box is not None:
         # coarse to fine: every 2 degrees, then every 0.25 around the best
         tilts = list(np.arange(TILT_RANGE[0], TILT_RANGE[1] + 1e-9, 2.0))
-        for step in (2.0, 0.25):
+        for _pass in ("every 2 degrees", "every 0.25 around the best"):
             for tilt in tilts:
                 cam = camera(float(tilt))
                 anchor = _anchor_at(cam, centre_px, box, prior)

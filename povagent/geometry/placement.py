@@ -56,7 +56,7 @@ class AnchorEstimate:
         return AnchorBox((cx, cz), (self.half[0], self.half[2]), cy + self.half[1])
 
 
-def place_target(direction: str, anchor: AnchorEstimate, anchor_type: str, observer_position: Sequence[float], surface: str) -> np.ndarray:
+def place_target(direction: str, anchor: AnchorEstimate, anchor_type: str, observer_position: Sequence[float] | np.ndarray, surface: str) -> np.ndarray:
     """The 3D target for ``direction`` from the perceived anchor and observer (``surface`` is one
     of :data:`SURFACE_KINDS`), by the benchmark's ground-truth rules."""
     centre = np.asarray(anchor.centre, dtype=float)
@@ -85,7 +85,7 @@ class FrameChoice:
     placement: str
 
 
-def choose_frame(target: Sequence[float], cameras: Sequence[Camera]) -> FrameChoice:
+def choose_frame(target: Sequence[float] | np.ndarray, cameras: Sequence[Camera]) -> FrameChoice:
     """The frame showing ``target`` best: inside the image first, then in front of the camera,
     then behind it; among equals, the one where it lies nearest the image centre."""
     best: tuple[tuple[int, float], int, float, float] | None = None

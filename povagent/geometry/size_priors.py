@@ -14,7 +14,8 @@ from __future__ import annotations
 import json
 import statistics
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
+from typing import Any
 
 #: Centre height (m) of wall-mounted types (towel holders): ProcTHOR gives no mounting height;
 #: towel rails hang at about hand height.
@@ -75,13 +76,14 @@ def _raw_sizes() -> dict[str, tuple[float, float, float]]:
     raw = json.loads(database_path("asset-database.json").read_text())
     out: dict[str, tuple[float, float, float]] = {}
     for object_type, entries in raw.items():
-        boxes = [e.get("boundingBox") for e in entries if isinstance(e, dict) and isinstance(e.get("boundingBox"), dict)]
+        boxes: list[dict[str, Any]] = [e["boundingBox"] for e in entries if isinstance(e, dict) and isinstance(e.get("boundingBox"), dict)]
         if boxes:
-            out[object_type] = tuple(float(statistics.median(float(b[k]) for b in boxes)) for k in "xyz")  # type: ignore[assignment]
+            x, y, z = (float(statistics.median(float(b[k]) for b in boxes)) for k in "xyz")
+            out[object_type] = (x, y, z)
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def size_prior(object_type: str) -> SizePrior:
     """The prior of ``object_type`` (a generic piece of floor furniture for an unknown type)."""
     from povagent.generate.assets import placement_annotations

@@ -115,10 +115,10 @@ def locate(sightings: Sequence[Sighting], centre_height: float, min_angle_deg: f
     if len(sightings) >= 2 and spread >= min_angle_deg:
         p = closest_point_to_rays(origins, dirs)
         if p is not None and all(s.camera.project_point(p)[2] > MIN_DEPTH for s in sightings):
-            return PointEstimate(tuple(float(v) for v in p), "triangulated", len(sightings), spread)
+            return PointEstimate((float(p[0]), float(p[1]), float(p[2])), "triangulated", len(sightings), spread)
     points = [meet_height(s, centre_height)[0] for s in sightings]
     mean = np.mean(points, axis=0)
-    return PointEstimate(tuple(float(v) for v in mean), "height prior", len(sightings), spread)
+    return PointEstimate((float(mean[0]), float(mean[1]), float(mean[2])), "height prior", len(sightings), spread)
 
 
 def box_corners(centre: np.ndarray, half: np.ndarray) -> np.ndarray:
