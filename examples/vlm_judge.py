@@ -8,7 +8,7 @@ default), so any model and any ``backend.options`` a pipeline takes work here to
     povagent generate --out data/vlm --houses 3 --plugin examples/vlm_judge.py --judge vlm \\
         --judge-option model=gpt-5.4 --judge-option cache=data/vlm-judge.sqlite
 
-or in a pipeline::
+or in a pipeline at the repository's root (a ``.py`` path is read from the YAML file's folder)::
 
     plugins: [examples/vlm_judge.py]
     dataset:

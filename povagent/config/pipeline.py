@@ -3,7 +3,7 @@
 A pipeline YAML (every key but ``dataset``, ``output`` and one of ``backend``/``model`` has a
 default)::
 
-    plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names or .py paths)
+    plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names, or .py paths from this file's folder)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
                                          # or {hub: owl-owl/POVBench, revision: main} (the release,
                                          # fetched into the Hugging Face cache)
@@ -818,9 +818,24 @@ def pipeline_from_source(
         config = PipelineConfig.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(f"invalid pipeline:\n{validation_message(exc, PipelineConfig, source, prefix)}") from None
+    config = _plugin_paths_from_the_yaml_folder(config, source)
     h = _host_for(config.plugins, source, host)
     check_plugin_names(config, h, source, prefix)
     return resolve_components(config, h)
+
+
+def _plugin_paths_from_the_yaml_folder(config: PipelineConfig, source: ConfigSource) -> PipelineConfig:
+    """``plugins:`` entries that are relative ``.py`` paths, resolved from the folder of the
+    YAML file that names them (as a sweep's ``base:`` is), not from the working directory: the
+    same file then loads the same plugin wherever the command runs. Dotted module names and
+    documents that are no file (``<pipeline mapping>``) are left as they are."""
+    yaml_file = Path(source.file)
+    if source.file.startswith("<") or not yaml_file.is_file():
+        return config
+    resolved = [
+        str(yaml_file.parent / p) if p.endswith(".py") and not Path(p).is_absolute() else p for p in config.plugins
+    ]
+    return config if resolved == config.plugins else config.model_copy(update={"plugins": resolved})
 
 
 def load_pipeline(path: str | Path, *, overrides: Mapping[str, Any] | None = None, host: PluginHost | None = None) -> PipelineConfig:

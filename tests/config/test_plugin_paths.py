@@ -1,0 +1,57 @@
+"""A ``.py`` path under ``plugins:`` is read from the YAML file's folder, not the working directory."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import yaml
+
+from povagent.config.pipeline import load_pipeline
+
+PLUGIN = '''
+from povagent import hookimpl
+from povagent.interfaces import Strategy
+
+
+class Shout(Strategy):
+    def build(self, instance, images):
+        raise NotImplementedError
+
+
+@hookimpl
+def register_strategies(register):
+    register("shout-{tag}", Shout, description="a throwaway strategy")
+'''
+
+
+def write(folder: Path, tag: str, mini_root: Path, plugin_entry: str) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "my_plugin.py").write_text(PLUGIN.replace("{tag}", tag))
+    path = folder / "pipeline.yaml"
+    path.write_text(yaml.safe_dump({
+        "plugins": [plugin_entry],
+        "dataset": str(mini_root),
+        "backend": "center",
+        "strategy": f"shout-{tag}",
+        "output": "run",
+    }))
+    return path
+
+
+def test_a_relative_plugin_path_is_read_from_the_yaml_folder(tmp_path, mini_root, monkeypatch):
+    path = write(tmp_path / "project" / "configs", "here", mini_root, "my_plugin.py")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the working directory holds no my_plugin.py
+    config = load_pipeline(path)
+    assert config.strategy.name == "shout-here"
+    assert Path(config.plugins[0]) == path.parent / "my_plugin.py"
+
+
+def test_a_plugin_path_climbing_from_the_yaml_folder_works_too(tmp_path, mini_root, monkeypatch):
+    path = write(tmp_path / "project" / "configs", "up", mini_root, "../plugins/my_plugin.py")
+    (tmp_path / "project" / "plugins").mkdir()
+    os.replace(path.parent / "my_plugin.py", tmp_path / "project" / "plugins" / "my_plugin.py")
+    monkeypatch.chdir(tmp_path)
+    assert load_pipeline(path).strategy.name == "shout-up"
