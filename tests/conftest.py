@@ -25,3 +25,34 @@ def mini_dataset(mini_root):
     from povagent.dataset import load_dataset
 
     return load_dataset(mini_root)
+
+
+@pytest.fixture
+def write_answered_run(mini_root):
+    """``write_answered_run(folder, answers) -> folder``: a finished run folder over the
+    hand-made dataset (center backend, basic strategy, parsed with ``json``, official scorer)
+    whose rows are ``answered`` with the given raw answers, ``answers`` being
+    ``[(instance id, raw text), ...]``: what re-parsing and re-scoring commands read."""
+    import yaml
+
+    from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
+
+    def write(folder: Path, answers) -> Path:
+        folder.mkdir(parents=True)
+        (folder / "config.yaml").write_text(yaml.safe_dump({
+            "dataset": {"path": str(mini_root)},
+            "backend": {"name": "center", "options": {}},
+            "strategy": {"name": "basic", "options": {}},
+            "parser": {"name": "json", "options": {}},
+            "scorers": [{"name": "official", "options": {}}],
+            "output": str(folder),
+        }))  # fmt: skip
+        with ResultsWriter(folder / "results.jsonl") as w:
+            for inst_id, raw in answers:
+                house, pair, direction, cond = inst_id.split("/")
+                w.write(ResultRow(key=f"{inst_id}#0", instance_id=inst_id, house_id=house, pair_id=pair, direction=direction,
+                                  condition=cond, status=RowStatus.ANSWERED, parser="json",
+                                  exchanges=[ExchangeRecord(request_hash="h", raw=raw)]))  # fmt: skip
+        return folder
+
+    return write

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -21,30 +22,18 @@ ANSWERS = [
 ]
 
 
-def finished_run(tmp_path: Path, mini_root: Path) -> Path:
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / "config.yaml").write_text(yaml.safe_dump({
-        "dataset": {"path": str(mini_root)},
-        "backend": {"name": "center", "options": {}},
-        "strategy": {"name": "basic", "options": {}},
-        "parser": {"name": "json", "options": {}},
-        "scorers": [{"name": "official", "options": {}}],
-        "output": str(run),
-    }))
+@pytest.fixture
+def finished_run(tmp_path, write_answered_run) -> Path:
+    """A finished run: the answers above, parsed with json, and one key that failed."""
+    run = write_answered_run(tmp_path / "run", ANSWERS)
     with ResultsWriter(run / "results.jsonl") as w:
-        for inst_id, raw in ANSWERS:
-            house, pair, direction, cond = inst_id.split("/")
-            w.write(ResultRow(key=f"{inst_id}#0", instance_id=inst_id, house_id=house, pair_id=pair, direction=direction,
-                              condition=cond, status=RowStatus.ANSWERED, parser="json",
-                              exchanges=[ExchangeRecord(request_hash="h", raw=raw)]))
         w.write(ResultRow(key="train_house_00000/0/left/b#0", instance_id="train_house_00000/0/left/b", house_id="train_house_00000",
                           pair_id="0", direction="left", condition="b", status=RowStatus.INFRA_ERROR, error_type="Timeout"))
     return run
 
 
-def test_rescore_repairs_rows_and_writes_a_new_folder(tmp_path, mini_root):
-    run = finished_run(tmp_path, mini_root)
+def test_rescore_repairs_rows_and_writes_a_new_folder(tmp_path, mini_root, finished_run):
+    run = finished_run
     before = (run / "results.jsonl").read_bytes()
     result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
     assert result.exit_code == 0, result.output
@@ -60,8 +49,8 @@ def test_rescore_repairs_rows_and_writes_a_new_folder(tmp_path, mini_root):
     assert (run / "results.jsonl").read_bytes() == before
 
 
-def test_rescore_writes_and_prints_the_summary(tmp_path, mini_root):
-    run = finished_run(tmp_path, mini_root)
+def test_rescore_writes_and_prints_the_summary(tmp_path, mini_root, finished_run):
+    run = finished_run
     result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
     printed = json.loads(result.stdout)
     saved = json.loads((run / "rescored-rescale-1000" / "summary.json").read_text())
@@ -72,8 +61,8 @@ def test_rescore_writes_and_prints_the_summary(tmp_path, mini_root):
     assert config["parser"]["name"] == "rescale-1000"
 
 
-def test_rescore_with_the_same_parser_reproduces_the_parse(tmp_path, mini_root):
-    run = finished_run(tmp_path, mini_root)
+def test_rescore_with_the_same_parser_reproduces_the_parse(tmp_path, mini_root, finished_run):
+    run = finished_run
     assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
     row = {r.instance_id: r for r in read_rows(run / "rescored-json" / "results.jsonl")}["train_house_00000/0/right/a"]
     assert row.parse.status == "out_of_range" and row.prediction.x == 734
@@ -84,18 +73,18 @@ def test_rescore_of_a_folder_without_results_is_a_clear_error(tmp_path):
     assert result.exception is not None and "results.jsonl" in str(result.exception)
 
 
-def test_rescore_reads_a_config_resolved_from_a_model_profile(tmp_path, mini_root):
-    run = finished_run(tmp_path, mini_root)
+def test_rescore_reads_a_config_resolved_from_a_model_profile(tmp_path, mini_root, finished_run):
+    run = finished_run
     config = yaml.safe_load((run / "config.yaml").read_text())
     config["model"] = "qwen3-vl-32b"  # a resolved config keeps the profile name beside its backend
     (run / "config.yaml").write_text(yaml.safe_dump(config))
     assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
 
 
-def test_a_relative_dataset_path_not_found_here_says_where_to_run_from(tmp_path, mini_root, monkeypatch):
+def test_a_relative_dataset_path_not_found_here_says_where_to_run_from(tmp_path, mini_root, monkeypatch, finished_run):
     from povagent.errors import DatasetError
 
-    run = finished_run(tmp_path, mini_root)
+    run = finished_run
     config = yaml.safe_load((run / "config.yaml").read_text())
     config["dataset"]["path"] = "tests/fixtures/povbench_mini"  # as written by a run made from the repo root
     (run / "config.yaml").write_text(yaml.safe_dump(config))
@@ -107,7 +96,7 @@ def test_a_relative_dataset_path_not_found_here_says_where_to_run_from(tmp_path,
     assert ok.exit_code == 0, ok.output
 
 
-def test_rescore_makes_no_model_call(tmp_path, mini_root, monkeypatch):
+def test_rescore_makes_no_model_call(tmp_path, mini_root, monkeypatch, finished_run):
     from povagent.plugins import PluginHost
 
     create = PluginHost.create
@@ -117,7 +106,7 @@ def test_rescore_makes_no_model_call(tmp_path, mini_root, monkeypatch):
         return create(self, kind, name, options)
 
     monkeypatch.setattr(PluginHost, "create", create_but_no_backend)
-    run = finished_run(tmp_path, mini_root)
+    run = finished_run
     result = runner.invoke(app, ["rescore", str(run), "--parser", "rescale-1000", "--json"])
     assert result.exit_code == 0, result.output
 
@@ -133,8 +122,17 @@ LENIENT_ANSWERS = [
 ]
 
 
-def run_with(tmp_path: Path, mini_root: Path, answers) -> Path:
-    run = finished_run(tmp_path, mini_root)
+@pytest.fixture
+def run_with(finished_run):
+    """``run_with(answers)``: the finished run with these answers written last (last row wins)."""
+
+    def write(answers) -> Path:
+        return _append(finished_run, answers)
+
+    return write
+
+
+def _append(run: Path, answers) -> Path:
     with ResultsWriter(run / "results.jsonl") as w:
         for inst_id, raw in answers:
             house, pair, direction, cond = inst_id.split("/")
@@ -144,8 +142,8 @@ def run_with(tmp_path: Path, mini_root: Path, answers) -> Path:
     return run
 
 
-def test_rescore_defaults_to_the_official_reading(tmp_path, mini_root):
-    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+def test_rescore_defaults_to_the_official_reading(tmp_path, mini_root, run_with):
+    run = run_with(LENIENT_ANSWERS)
     result = runner.invoke(app, ["rescore", str(run), "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads((run / "rescored-official" / "summary.json").read_text())
@@ -156,8 +154,8 @@ def test_rescore_defaults_to_the_official_reading(tmp_path, mini_root):
     assert all(r.official_reading is None for r in rows.values())
 
 
-def test_a_lenient_rescore_keeps_the_official_reading_beside(tmp_path, mini_root):
-    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+def test_a_lenient_rescore_keeps_the_official_reading_beside(tmp_path, mini_root, run_with):
+    run = run_with(LENIENT_ANSWERS)
     result = runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"])
     assert result.exit_code == 0, result.output
     summary = json.loads((run / "rescored-json" / "summary.json").read_text())
@@ -170,8 +168,8 @@ def test_a_lenient_rescore_keeps_the_official_reading_beside(tmp_path, mini_root
     assert rows["train_house_00000/0/right/c"].official_reading.scores == rows["train_house_00000/0/right/c"].scores
 
 
-def test_the_console_shows_the_official_parse_beside_a_lenient_one(tmp_path, mini_root):
-    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+def test_the_console_shows_the_official_parse_beside_a_lenient_one(tmp_path, mini_root, run_with):
+    run = run_with(LENIENT_ANSWERS)
     result = runner.invoke(app, ["rescore", str(run), "--parser", "json"], env={"COLUMNS": "200"})
     assert result.exit_code == 0, result.output
     assert "Official parse beside 'json' (repaired)" in result.stdout
@@ -180,8 +178,8 @@ def test_the_console_shows_the_official_parse_beside_a_lenient_one(tmp_path, min
     assert "Official parse beside" not in official.stdout
 
 
-def test_rows_with_a_nan_coordinate_are_named_in_a_warning(tmp_path, mini_root):
-    run = run_with(tmp_path, mini_root, LENIENT_ANSWERS)
+def test_rows_with_a_nan_coordinate_are_named_in_a_warning(tmp_path, mini_root, run_with):
+    run = run_with(LENIENT_ANSWERS)
     result = runner.invoke(app, ["rescore", str(run)])
     assert result.exit_code == 0, result.output
     assert "NaN coordinate" in result.stderr and "train_house_00000/0/left/c#0" in result.stderr

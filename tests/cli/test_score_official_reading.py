@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import json
 
-import yaml
+import pytest
 from typer.testing import CliRunner
 
 from povagent.cli import app
-from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
 
 runner = CliRunner()
 
@@ -19,24 +18,10 @@ ANSWERS = [
 ]
 
 
-def lenient_run(tmp_path, mini_root):
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / "config.yaml").write_text(yaml.safe_dump({
-        "dataset": {"path": str(mini_root)},
-        "backend": {"name": "center", "options": {}},
-        "strategy": {"name": "basic", "options": {}},
-        "parser": {"name": "json", "options": {}},
-        "scorers": [{"name": "official", "options": {}}],
-        "output": str(run),
-    }))
-    with ResultsWriter(run / "results.jsonl") as w:
-        for inst_id, raw in ANSWERS:
-            house, pair, direction, cond = inst_id.split("/")
-            w.write(ResultRow(key=f"{inst_id}#0", instance_id=inst_id, house_id=house, pair_id=pair, direction=direction,
-                              condition=cond, status=RowStatus.ANSWERED, parser="json",
-                              exchanges=[ExchangeRecord(request_hash="h", raw=raw)]))
-    return run
+@pytest.fixture
+def lenient_run(tmp_path, write_answered_run):
+    """A run parsed with json whose raw answers the official reading sees differently."""
+    return write_answered_run(tmp_path / "run", ANSWERS)
 
 
 def score(path, mini_root):
@@ -45,15 +30,15 @@ def score(path, mini_root):
     return json.loads(result.stdout), result.stderr
 
 
-def test_score_reads_a_lenient_run_by_its_official_reading(tmp_path, mini_root):
-    run = lenient_run(tmp_path, mini_root)
+def test_score_reads_a_lenient_run_by_its_official_reading(tmp_path, mini_root, lenient_run):
+    run = lenient_run
     assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
     summary, _ = score(run / "rescored-json", mini_root)
     assert summary["overall"]["n"] == 1 and summary["overall"]["n_total"] == 2  # json itself answers 2
 
 
-def test_rows_without_a_reading_are_scored_as_parsed_with_a_warning(tmp_path, mini_root):
-    run = lenient_run(tmp_path, mini_root)
+def test_rows_without_a_reading_are_scored_as_parsed_with_a_warning(tmp_path, mini_root, lenient_run):
+    run = lenient_run
     assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
     rows = (run / "rescored-json" / "results.jsonl").read_text().splitlines()
     stripped = [json.dumps({**json.loads(line), "official_reading": None}) for line in rows]
@@ -63,8 +48,8 @@ def test_rows_without_a_reading_are_scored_as_parsed_with_a_warning(tmp_path, mi
     assert "carry no official reading" in err and "rescore RUN --parser official" in err
 
 
-def test_score_names_rows_with_a_nan_coordinate(tmp_path, mini_root):
-    run = lenient_run(tmp_path, mini_root)
+def test_score_names_rows_with_a_nan_coordinate(tmp_path, mini_root, lenient_run):
+    run = lenient_run
     lines = (run / "results.jsonl").read_text().splitlines()
     nan_row = json.loads(lines[1])
     nan_row["exchanges"][0]["raw"] = '{"x": NaN, "y": 100}'
