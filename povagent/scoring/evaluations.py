@@ -20,15 +20,10 @@ import math
 from typing import Any
 
 from povagent.results.rows import ResultRow, RowStatus
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.official import clamp_unit, points_l2, project_ground_truth
 
 #: What the official runner records as ``parse_error`` when an answer has no readable point.
 OFFICIAL_PARSE_FAILURE = "failed to parse JSON"
-
-
-def clip_unit(v: float) -> float:
-    """Clamp to [0, 1] as the official scorer does: NaN stays NaN (its mean then is NaN)."""
-    return v if math.isnan(v) else min(1.0, max(0.0, v))
 
 
 def raw_response(row: ResultRow) -> str:
@@ -100,8 +95,8 @@ def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
         record["camera_image"] = frame.image_path  # the pair's rgb_path
     cam = frame.camera
     gt = project_ground_truth(instance.target, cam)
-    gx, gy = clip_unit(gt.u), clip_unit(gt.v)
-    px, py = clip_unit(x / cam.width), clip_unit(y / cam.height)
+    gx, gy = clamp_unit(gt.u), clamp_unit(gt.v)
+    px, py = clamp_unit(x / cam.width), clamp_unit(y / cam.height)
     ex, ey = px - gx, py - gy
     record |= {
         "gt_x": gx,
@@ -116,10 +111,8 @@ def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
         "status": "ok",
     }
     if points:
-        normalized = [(clip_unit(a / cam.width), clip_unit(b / cam.height)) for a, b in points]
-        cx = sum(a for a, _ in normalized) / len(normalized)
-        cy = sum(b for _, b in normalized) / len(normalized)
-        record["n_points"] = len(normalized)
-        record["error_l2_min"] = min(math.hypot(a - gx, b - gy) for a, b in normalized)
-        record["error_l2_mean"] = record["error_l2"] = math.hypot(cx - gx, cy - gy)
+        centroid, closest = points_l2(points, cam.width, cam.height, gt.u, gt.v)
+        record["n_points"] = len(points)
+        record["error_l2_min"] = closest
+        record["error_l2_mean"] = record["error_l2"] = centroid
     return record

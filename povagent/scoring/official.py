@@ -42,16 +42,30 @@ def project_ground_truth(target: tuple[float, float, float] | np.ndarray, camera
     return GroundTruthInFrame(u, v, 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0, False)
 
 
-def _clamp01(v: float) -> float:
-    # NaN passes through, as numpy's clip lets it (min/max would silently turn it into 0)
+def clamp_unit(v: float) -> float:
+    """Clamp to [0, 1] as the official scorer does (numpy's clip): NaN stays NaN."""
+    # min/max alone would silently turn NaN into 0
     return v if v != v else min(1.0, max(0.0, v))
 
 
-def normalized_l2(x: float, y: float, width: int, height: int, gt_u: float, gt_v: float) -> float:
+def normalized_l2(x: float, y: float, width: float, height: float, gt_u: float, gt_v: float) -> float:
     """sqrt((x/W - gu)^2 + (y/H - gv)^2) with both points clamped to [0, 1]."""
-    px, py = _clamp01(x / width), _clamp01(y / height)
-    gx, gy = _clamp01(gt_u), _clamp01(gt_v)
+    px, py = clamp_unit(x / width), clamp_unit(y / height)
+    gx, gy = clamp_unit(gt_u), clamp_unit(gt_v)
     return math.hypot(px - gx, py - gy)
+
+
+def points_l2(points: list[tuple[float, float]], width: float, height: float, gt_u: float, gt_v: float) -> tuple[float, float]:
+    """``(centroid error, closest point's error)`` of a multi-point answer, as officially.
+
+    Every point and the GT are clamped to [0, 1] first; the centroid is taken of the clamped
+    points (so a point far off the image weighs no more than one on its edge).
+    """
+    gx, gy = clamp_unit(gt_u), clamp_unit(gt_v)
+    norm = [(clamp_unit(float(a) / width), clamp_unit(float(b) / height)) for a, b in points]
+    cu = sum(u for u, _ in norm) / len(norm)
+    cv = sum(v for _, v in norm) / len(norm)
+    return math.hypot(cu - gx, cv - gy), min(math.hypot(u - gx, v - gy) for u, v in norm)
 
 
 def strict_l2(x: float, y: float, width: int, height: int, gt: GroundTruthInFrame) -> float:
@@ -126,4 +140,4 @@ def closest_point_l2(instance: Instance, frame: Frame, points: list[tuple[float,
         return None
     cam = frame.camera
     gt = project_ground_truth(instance.target, cam)
-    return min(normalized_l2(px, py, cam.width, cam.height, gt.u, gt.v) for px, py in points)
+    return points_l2(points, cam.width, cam.height, gt.u, gt.v)[1]

@@ -37,7 +37,6 @@ from typing import Any, Iterable, Mapping
 from povagent.dataset.loader import Dataset, ground_truth_point, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
-from povagent.geometry.camera import Camera
 from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
@@ -45,6 +44,7 @@ from povagent.scoring.official import (
     UNANSWERED,
     OfficialScore,
     normalized_l2,
+    points_l2,
     project_ground_truth,
     score_point,
     scoring_frame,
@@ -111,20 +111,6 @@ def _pair_key(pair_id: Any) -> str | None:
 
 def _unanswered(status: str) -> OfficialScore:
     return OfficialScore(False, None, None, None, None, None, None, status)
-
-
-def _points_score(points: list[Any], camera: Camera, gt: Any) -> tuple[float, float]:
-    """Centroid error and closest-point error of several points, each clamped first."""
-    w, h = camera.width, camera.height
-    norm = [(_clip(float(p[0]) / w), _clip(float(p[1]) / h)) for p in points]
-    errors = [math.hypot(u - gt.u, v - gt.v) for u, v in norm]
-    cu = sum(u for u, _ in norm) / len(norm)
-    cv = sum(v for _, v in norm) / len(norm)
-    return math.hypot(cu - gt.u, cv - gt.v), min(errors)
-
-
-def _clip(v: float) -> float:
-    return v if v != v else min(1.0, max(0.0, v))
 
 
 @dataclass
@@ -265,7 +251,7 @@ def score_official_row(
     points = row.get("predicted_points")
     if points:
         try:
-            l2, closest = _points_score(list(points), camera, gt)
+            l2, closest = points_l2([(p[0], p[1]) for p in points], camera.width, camera.height, gt.u, gt.v)
         except (TypeError, ValueError, IndexError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
     strict = l2 if gt.in_frame else MAX_L2

@@ -7,7 +7,8 @@ import math
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus
-from povagent.scoring.evaluations import clip_unit, official_evaluation, raw_response
+from povagent.scoring.evaluations import official_evaluation, raw_response
+from povagent.scoring.official import clamp_unit
 
 C_ID = "train_house_00000/0/right/c"
 A_ID = "train_house_00000/0/right/a"
@@ -27,8 +28,8 @@ def answered_c(instance, x: float, y: float) -> ResultRow:
 
 
 def test_clamping_keeps_nan_and_sends_infinities_to_the_edges():
-    assert math.isnan(clip_unit(float("nan")))
-    assert clip_unit(float("inf")) == 1.0 and clip_unit(float("-inf")) == 0.0 and clip_unit(0.25) == 0.25
+    assert math.isnan(clamp_unit(float("nan")))
+    assert clamp_unit(float("inf")) == 1.0 and clamp_unit(float("-inf")) == 0.0 and clamp_unit(0.25) == 0.25
 
 
 def test_a_nan_coordinate_is_scored_and_its_error_is_nan(mini_dataset):

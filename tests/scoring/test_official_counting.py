@@ -154,6 +154,18 @@ def test_several_points_are_clamped_one_by_one_before_the_centroid(mini_dataset)
     assert s.l2_closest == pytest.approx(min(l2(0, 0, LEFT_U, LEFT_V_SQUARE), l2(1, 0, LEFT_U, LEFT_V_SQUARE)), abs=1e-12)
 
 
+def test_several_points_are_scored_against_the_gt_clamped_to_the_frame_as_the_single_point_is(mini_dataset):
+    # a 1024x128 screen stretches v by W/H = 8: the left GT lands at v = 0.5 + 0.5 * 8 * 0.7 / 3 > 1,
+    # out of frame below; the official scorer clamps it to v = 1 before any error, points included
+    gt_v = 0.5 + 0.5 * 8.0 * 0.7 / 3.0
+    assert gt_v > 1.0
+    pts = [[0.0, 0.0], [1024.0, 0.0]]  # u = 0 and u = 1 at v = 0: centroid (0.5, 0)
+    (s,), _ = score_official_rows([row(predicted_points=pts)], mini_dataset, screen=(1024.0, 128.0))
+    assert s.score.gt_in_frame is False
+    assert s.score.l2 == pytest.approx(math.hypot(0.5 - LEFT_U, 0.0 - 1.0), abs=1e-12)
+    assert s.l2_closest == pytest.approx(min(math.hypot(0 - LEFT_U, 1.0), math.hypot(1 - LEFT_U, 1.0)), abs=1e-12)
+
+
 # -- item 8: malformed type and direction -------------------------------------------------------
 
 
