@@ -77,7 +77,7 @@ def last_text(recorded) -> str:
 def test_speaker_view_sends_the_basic_prompt_with_its_reminder_last(pipeline, release, loopback_server, monkeypatch):
     monkeypatch.setenv(KEY_VARIABLE, "sk-test")
     loopback_server.reply = lambda req: '{"selected_image": 0, "x": 10, "y": 20}' if len(req.image_urls()) > 1 else '{"x": 10, "y": 20}'
-    result, rows = run(pipeline("speaker_view_strategy.py", backend=litellm_at(loopback_server), strategy="speaker-view"))
+    _, rows = run(pipeline("speaker_view_strategy.py", backend=litellm_at(loopback_server), strategy="speaker-view"))
     reminder = _import_module_or_file(str(EXAMPLES / "speaker_view_strategy.py")).REMINDER
     basic = BasicStrategy()
     expected = sorted(f"{basic.prompt_text(i)}\n{reminder}" for i in load_dataset(release).instances())
