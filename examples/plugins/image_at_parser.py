@@ -16,7 +16,8 @@ from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparse
 from povagent.interfaces import Parser
 
 POINT = re.compile(r"\(\s*(-?\d+(?:\.\d+)?)\s*,\s*(-?\d+(?:\.\d+)?)\s*\)")
-FRAME = re.compile(r"\bimage\s+(\d+)", re.IGNORECASE)
+# At most 9 digits: int() refuses a digit string of thousands, and a parser must not raise.
+FRAME = re.compile(r"\bimage\s+(\d{1,9})\b", re.IGNORECASE)
 
 
 class ImageAtParser(Parser):
