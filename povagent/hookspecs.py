@@ -2,16 +2,17 @@
 
 Two kinds of hooks:
 
-* **Contribution hooks** ``register_<things>(register)``: called once when plugins load. The
-  plugin calls ``register(name, factory, description=...)`` for each thing it contributes; the
-  core owns the names, so a name registered twice is an error that names both plugins. The
-  return value is ignored.
+* **Contribution hooks** ``register_<things>(register)``: called once per plugin, when the
+  plugin host first looks a name up. The plugin calls ``register(name, factory,
+  description=...)`` for each thing it contributes; the core owns the names, so a name
+  registered twice is an error that names both plugins. The return value is ignored.
 * **Lifecycle hooks** ``povagent_*``: called by the runner as a run progresses, for loggers and
   live dashboards. They observe; their return value is ignored and they must not raise (an
   exception in one is logged and the run goes on).
 
 Implement them with ``@povagent.hookimpl``. No hook here is ``firstresult``: none chooses
-one answer among plugins.
+one answer among plugins. ``docs/plugins.md`` renders every hook below from this module
+(``python -m povagent.plugin_docs``), so a docstring here is the page's text.
 """
 
 from __future__ import annotations
