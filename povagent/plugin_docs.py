@@ -123,6 +123,16 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "span": "The raw text the answer was read from.",
         "repair": "How the text was changed to read it (e.g. `rescaled 0-1000 -> pixels`), else `None`.",
     },
+    "OfficialScore": {
+        "answered": "Whether the row counts as answered officially (a point, and for A/B a frame that was shown).",
+        "l2": "The official normalized L2 (clamped to the frame, blind spot included); `None` when unanswered.",
+        "l2_strict": "The strict variant: a ground truth behind or outside the scored frame counts as sqrt 2.",
+        "gt_in_frame": "Whether the ground truth projects inside the scored frame.",
+        "gt_behind": "Whether the ground truth is behind the scored frame's camera.",
+        "gt_u": "The ground truth across the scored frame, as a fraction of its width (0.5 when behind the camera, as officially).",
+        "gt_v": "The ground truth down the scored frame, as a fraction of its height (0.5 when behind the camera).",
+        "reason": "Why the row is unanswered (e.g. `missing or unknown selected frame`), else empty.",
+    },
 }
 
 
