@@ -139,9 +139,9 @@ def register_judges(register: Register) -> None:
 def povagent_run_start(run_dir: str, config: Mapping[str, Any], n_pending: int, n_total: int) -> None:
     """A pipeline run starts: its folder is locked and resume has been planned, no request made.
 
-    ``run_dir`` is the run folder, ``config`` the resolved pipeline (as a dict, as written to
-    ``config.yaml``), ``n_total`` the number of (instance, run) keys and ``n_pending`` those
-    still to do after resume. Each cell of a sweep is a run of its own.
+    ``run_dir`` is the run folder, ``config`` the resolved pipeline (as a dict: defaults and
+    the model profile filled in), ``n_total`` the number of (instance, run) keys and
+    ``n_pending`` those still to do after resume. Each cell of a sweep is a run of its own.
     """
 
 
