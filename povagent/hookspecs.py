@@ -2,16 +2,17 @@
 
 Two kinds of hooks:
 
-* **Contribution hooks** ``register_<things>(register)``: called once when plugins load. The
-  plugin calls ``register(name, factory, description=...)`` for each thing it contributes; the
-  core owns the names, so a name registered twice is an error that names both plugins. The
-  return value is ignored.
+* **Contribution hooks** ``register_<things>(register)``: called once per plugin, when the
+  plugin host first looks a name up. The plugin calls ``register(name, factory,
+  description=...)`` for each thing it contributes; the core owns the names, so a name
+  registered twice is an error that names both plugins. The return value is ignored.
 * **Lifecycle hooks** ``povagent_*``: called by the runner as a run progresses, for loggers and
   live dashboards. They observe; their return value is ignored and they must not raise (an
   exception in one is logged and the run goes on).
 
 Implement them with ``@povagent.hookimpl``. No hook here is ``firstresult``: none chooses
-one answer among plugins.
+one answer among plugins. ``docs/plugins.md`` renders every hook below from this module
+(``python -m povagent.plugin_docs``), so a docstring here is the page's text.
 """
 
 from __future__ import annotations
@@ -34,47 +35,69 @@ Register = Callable[..., None]
 # -- contribution hooks ------------------------------------------------------------------------
 @hookspec
 def register_backends(register: Register) -> None:
-    """Contribute model backends.
+    """Contribute model backends: what answers a :class:`~povagent.exchange.messages.Request`.
 
-    Called once at plugin load. For each backend call
-    ``register(name, factory, description="...")`` where ``factory(**options)`` returns a
-    :class:`povagent.interfaces.Backend`; ``options`` are the pipeline YAML's ``backend.options``.
+    Called once per plugin, when the plugin host first collects registered names. For each
+    backend call ``register(name, factory, description="...")``. ``factory(**options)``, with
+    ``options`` the pipeline YAML's ``backend.options``, returns a
+    :class:`povagent.interfaces.Backend`; a factory that rejects its options
+    raises ``TypeError`` or ``ValueError`` and the user sees a message naming the backend, its
+    plugin and the options. ``description`` is what ``povagent plugins`` shows (default: the
+    factory's first docstring line). A backend says how it failed by raising
+    :class:`~povagent.interfaces.TransientBackendError` (retried) or
+    :class:`~povagent.interfaces.PermanentBackendError` (recorded at once).
     """
 
 
 @hookspec
 def register_strategies(register: Register) -> None:
-    """Contribute prompt strategies.
+    """Contribute prompt strategies: how a model is asked about one instance.
 
-    Called once at plugin load; ``factory(**options)`` returns a
-    :class:`povagent.interfaces.Strategy`.
+    Called once per plugin, when the plugin host first collects registered names. For each
+    strategy call ``register(name, factory, description="...")``. ``factory(**options)``, with
+    ``options`` the pipeline YAML's ``strategy.options`` (a model profile's
+    ``strategy_options`` first), returns a :class:`povagent.interfaces.Strategy`, whose
+    ``build(instance, images)`` returns the :class:`~povagent.exchange.messages.Request` and
+    whose ``solve(instance, ask, images)`` returns every ``(Request, Response)`` exchange, the
+    answer last. Bad options: raise ``TypeError`` or ``ValueError`` in the factory.
     """
 
 
 @hookspec
 def register_parsers(register: Register) -> None:
-    """Contribute output parsers.
+    """Contribute output parsers: what reads a point out of a model's raw answer.
 
-    Called once at plugin load; ``factory(**options)`` returns a
-    :class:`povagent.interfaces.Parser`.
+    Called once per plugin, when the plugin host first collects registered names. For each
+    parser call ``register(name, factory, description="...")``. ``factory(**options)``, with
+    ``options`` the pipeline YAML's ``parser.options``, returns a
+    :class:`povagent.interfaces.Parser`, whose ``parse(text, spec)`` returns a
+    :class:`~povagent.answers.spec.ParsedAnswer` and never raises: text it cannot read is a
+    parse with status ``unparseable`` and a ``reason``. Every parser but ``official`` is a
+    repair: the official reading is kept beside its parse in each row and summary.
     """
 
 
 @hookspec
 def register_scorers(register: Register) -> None:
-    """Contribute scorers.
+    """Contribute scorers: what judges one parsed answer against the ground truth.
 
-    Called once at plugin load; ``factory(**options)`` returns a
-    :class:`povagent.interfaces.Scorer`.
+    Called once per plugin, when the plugin host first collects registered names. For each
+    scorer call ``register(name, factory, description="...")``. ``factory(**options)``, with
+    ``options`` those of the scorer's entry under the pipeline YAML's ``scorers:``, returns a
+    :class:`povagent.interfaces.Scorer`, whose ``score(instance, answer, dataset)`` returns a
+    JSON-able dict, stored in each answered row as ``scores[name]``; ``summary.json``'s
+    ``scorers`` section averages its number fields and counts its true/false ones.
     """
 
 
 @hookspec
 def register_model_profiles(register: Register) -> None:
-    """Contribute model profiles: short names for models with their defaults.
+    """Contribute model profiles: short names for models with their defaults (``model: NAME``).
 
-    Called once at plugin load; ``register(name, profile)`` where ``profile`` is a
-    :class:`povagent.config.profiles.ModelProfile` (litellm model string, default parser, quirks).
+    Called once per plugin, when the plugin host first collects registered names. For each
+    profile call ``register(name, profile)`` where ``profile`` is a
+    :class:`povagent.config.profiles.ModelProfile` (the litellm model string, the default
+    parser, default backend and strategy options, quirks); ``name`` should be ``profile.name``.
     """
 
 
@@ -114,18 +137,29 @@ def register_judges(register: Register) -> None:
 # -- lifecycle hooks ---------------------------------------------------------------------------
 @hookspec
 def povagent_run_start(run_dir: str, config: Mapping[str, Any], n_pending: int, n_total: int) -> None:
-    """A run starts.
+    """A pipeline run starts: its folder is locked and resume has been planned, no request made.
 
-    ``run_dir`` is the run folder, ``config`` the resolved pipeline (as a dict), ``n_total`` the
-    number of (instance, run) keys and ``n_pending`` those still to do after resume.
+    ``run_dir`` is the run folder, ``config`` the resolved pipeline (as a dict: defaults and
+    the model profile filled in), ``n_total`` the number of (instance, run) keys and
+    ``n_pending`` those still to do after resume. Each cell of a sweep is a run of its own.
     """
 
 
 @hookspec
 def povagent_instance_done(run_dir: str, row: ResultRow) -> None:
-    """One (instance, run) finished and its row was written (fsynced) to ``results.jsonl``."""
+    """One (instance, run) key finished and its row was written (fsynced) to ``results.jsonl``.
+
+    ``row`` is the :class:`~povagent.results.rows.ResultRow` as written: ``status``
+    (``answered``, ``parse_error`` or ``infra_error``), the exchanges with the raw answers, the
+    ``parse``, the ``scores`` and the usage. Called on the run's event loop: return quickly
+    (hand slow work to a thread), since requests wait while it runs.
+    """
 
 
 @hookspec
 def povagent_run_end(run_dir: str, summary: Mapping[str, Any]) -> None:
-    """A run ended (also after an interruption); ``summary`` is what ``summary.json`` holds."""
+    """A pipeline run ended: finished, stopped early (fail fast, circuit breaker) or interrupted.
+
+    ``summary`` is what ``summary.json`` holds (written just before): the breakdowns, the row
+    counts by status, the usage, and ``complete``.
+    """

@@ -826,16 +826,21 @@ def pipeline_from_source(
 
 def _plugin_paths_from_the_yaml_folder(config: PipelineConfig, source: ConfigSource) -> PipelineConfig:
     """``plugins:`` entries that are relative ``.py`` paths, resolved from the folder of the
-    YAML file that names them (as a sweep's ``base:`` is), not from the working directory: the
-    same file then loads the same plugin wherever the command runs. Dotted module names and
-    documents that are no file (``<pipeline mapping>``) are left as they are."""
-    yaml_file = Path(source.file)
-    if source.file.startswith("<") or not yaml_file.is_file():
-        return config
-    resolved = [
-        str(yaml_file.parent / p) if p.endswith(".py") and not Path(p).is_absolute() else p for p in config.plugins
-    ]
+    YAML file that names them (see :func:`plugin_paths_from_the_yaml_folder`)."""
+    resolved = plugin_paths_from_the_yaml_folder(config.plugins, source.file)
     return config if resolved == config.plugins else config.model_copy(update={"plugins": resolved})
+
+
+def plugin_paths_from_the_yaml_folder(plugins: list[str], yaml_file: str) -> list[str]:
+    """``plugins`` with relative ``.py`` paths resolved from the folder of ``yaml_file``, the
+    YAML file that names them (as a sweep's ``base:`` is), not from the working directory: the
+    same file then loads the same plugin wherever the command runs, as a pipeline or as a
+    sweep's base. Dotted module names and documents that are no file (``<pipeline mapping>``)
+    are left as they are."""
+    path = Path(yaml_file)
+    if yaml_file.startswith("<") or not path.is_file():
+        return plugins
+    return [str(path.parent / p) if isinstance(p, str) and p.endswith(".py") and not Path(p).is_absolute() else p for p in plugins]
 
 
 def load_pipeline(path: str | Path, *, overrides: Mapping[str, Any] | None = None, host: PluginHost | None = None) -> PipelineConfig:

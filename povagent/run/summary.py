@@ -58,6 +58,40 @@ class RowDigest:
     official_parser: str | None = None
     #: The row's (official) parse holds a NaN coordinate: the official mean holding it is NaN.
     nan_coordinate: bool = False
+    #: The true/false and number fields of every plugin scorer's scores (``summary.json``'s ``scorers``).
+    plugin_scores: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+
+
+#: Scorers whose fields ``summary.json`` breaks down in sections of their own.
+_OWN_SECTIONS = frozenset({"official", "success"})
+
+
+def plugin_scores(scores: Mapping[str, Any]) -> tuple[tuple[str, tuple[tuple[str, float], ...]], ...]:
+    """For every other scorer of a row, its true/false and number fields (text and lists left out)."""
+    return tuple(
+        (name, tuple((k, v) for k, v in fields.items() if isinstance(v, (bool, int, float))))
+        for name, fields in sorted(scores.items())
+        if name not in _OWN_SECTIONS and isinstance(fields, Mapping)
+    )
+
+
+def plugin_score_summary(rows: Iterable[RowDigest]) -> dict[str, dict[str, dict[str, Any]]]:
+    """``{scorer: {field: ...}}`` over the rows a plugin scorer scored (answered rows): a
+    true/false field as ``{"n", "true", "rate"}``, a number as ``{"n", "mean"}``."""
+    values: dict[str, dict[str, list[float]]] = {}
+    for row in rows:
+        for name, fields in row.plugin_scores:
+            for key, value in fields:
+                values.setdefault(name, {}).setdefault(key, []).append(value)
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for name, by_field in values.items():
+        out[name] = {}
+        for key, vs in by_field.items():
+            if all(isinstance(v, bool) for v in vs):
+                out[name][key] = {"n": len(vs), "true": sum(vs), "rate": sum(vs) / len(vs)}
+            elif not any(isinstance(v, bool) for v in vs):
+                out[name][key] = {"n": len(vs), "mean": sum(vs) / len(vs)}
+    return out
 
 
 def digest(row: ResultRow) -> RowDigest:
@@ -80,6 +114,7 @@ def digest(row: ResultRow) -> RowDigest:
         official=scored_row(official_view) if row.official_reading is not None else None,
         official_parser=row.official_reading.parser if row.official_reading is not None else None,
         nan_coordinate=bool(nan_rows([official_view])),
+        plugin_scores=plugin_scores(row.scores),
     )
 
 
@@ -112,6 +147,9 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
             {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
             for d in rows
         )
+    by_plugin = plugin_score_summary(rows)
+    if by_plugin:  # a plugin scorer's own fields: what its author looks for first
+        out["scorers"] = by_plugin
     nan_keys = [d.key for d in rows if d.nan_coordinate]
     if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
         out["nan_coordinate_rows"] = nan_keys

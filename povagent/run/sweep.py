@@ -32,6 +32,7 @@ from povagent.config.pipeline import (
     deep_merge,
     load_sweep,
     pipeline_from_source,
+    plugin_paths_from_the_yaml_folder,
 )
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
@@ -137,6 +138,12 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
     if not isinstance(base.data, dict):
         raise ConfigError(f"{base.file}: the base pipeline must be a YAML mapping")
     plugins = base.data.get("plugins") or []
+    if isinstance(plugins, list):
+        # a relative .py path is read from the base pipeline's folder, as when it runs alone
+        resolved = plugin_paths_from_the_yaml_folder(plugins, base.file)
+        if resolved != plugins:
+            base = ConfigSource(base.file, {**base.data, "plugins": resolved}, base.lines)
+            plugins = resolved
     if host is None:
         try:
             host = get_plugin_host(plugins if isinstance(plugins, list) else [])

@@ -55,3 +55,17 @@ def test_a_plugin_path_climbing_from_the_yaml_folder_works_too(tmp_path, mini_ro
     os.replace(path.parent / "my_plugin.py", tmp_path / "project" / "plugins" / "my_plugin.py")
     monkeypatch.chdir(tmp_path)
     assert load_pipeline(path).strategy.name == "shout-up"
+
+
+def test_a_sweeps_base_pipeline_reads_its_plugin_path_from_its_own_folder(tmp_path, mini_root, monkeypatch, povagent_host):
+    from povagent.run.sweep import expand_sweep
+
+    base = write(tmp_path / "project" / "configs", "swept", mini_root, "my_plugin.py")
+    sweep = tmp_path / "project" / "sweep.yaml"  # one folder above its base
+    sweep.write_text(yaml.safe_dump({"base": "configs/pipeline.yaml", "output": "runs", "axes": {"backend": ["center", "random"]}}))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    _, cells = expand_sweep(sweep)
+    assert [c.config.strategy.name for c in cells] == ["shout-swept", "shout-swept"]
+    assert {Path(p) for c in cells for p in c.config.plugins} == {base.parent / "my_plugin.py"}

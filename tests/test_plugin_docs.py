@@ -1,0 +1,110 @@
+"""docs/plugins.md and the code it documents cannot drift apart: the page's reference sections
+and example code are generated (``python -m povagent.plugin_docs``), and these tests fail while
+the page is out of date, saying which command brings it back."""
+
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from povagent import hookspecs, plugin_docs
+from povagent.plugin_docs import COMMAND, PluginDocsError, check_page, hookspec_names, main, markdown, render_page
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGE = ROOT / "docs" / "plugins.md"
+EXAMPLES = sorted((ROOT / "examples" / "plugins").glob("*.py"))
+
+
+def test_the_page_is_up_to_date_with_the_code():
+    problem = check_page(PAGE)
+    assert problem is None, problem
+
+
+def test_the_page_generates_every_hook_the_base_classes_and_the_four_data_types():
+    text = PAGE.read_text(encoding="utf-8")
+    for block in ("hooks", "interfaces", *(f"fields {t}" for t in (
+        "povagent.dataset.instances:Instance", "povagent.exchange.messages:Request",
+        "povagent.exchange.messages:Response", "povagent.answers.spec:ParsedAnswer",
+    ))):  # fmt: skip
+        assert f"<!-- generated: {block} -->" in text, block
+    for name in hookspec_names():
+        assert f"### `{name}`" in text and markdown(getattr(hookspecs, name).__doc__.strip().splitlines()[0]) in text
+
+
+def test_every_example_is_shown_on_the_page_exactly_as_its_file():
+    text = PAGE.read_text(encoding="utf-8")
+    assert len(EXAMPLES) == 4
+    for path in EXAMPLES:
+        assert f"```python\n{path.read_text(encoding='utf-8').rstrip()}\n```" in text, path.name
+
+
+def test_everything_an_example_imports_from_povagent_is_named_on_the_page():
+    """A plugin author writes these from the page alone: every povagent module an example
+    imports from, and every name it imports, appears in the page's text."""
+    text = PAGE.read_text(encoding="utf-8")
+    outside_examples = text
+    for path in EXAMPLES:  # the examples' own code does not count as the page saying it
+        outside_examples = outside_examples.replace(path.read_text(encoding="utf-8").rstrip(), "")
+    for path in EXAMPLES:
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("povagent"):
+                assert node.module in outside_examples, f"{path.name}: module {node.module}"
+                for alias in node.names:
+                    assert alias.name in outside_examples, f"{path.name}: {node.module}.{alias.name}"
+
+
+def test_a_changed_hookspec_docstring_makes_the_check_fail_and_name_the_command(monkeypatch):
+    monkeypatch.setattr(hookspecs.register_scorers, "__doc__", "Contribute scorers (reworded).")
+    problem = check_page(PAGE)
+    assert problem is not None and f"run `{COMMAND}`" in problem and "plugins.md is out of date" in problem
+
+
+def test_a_changed_example_makes_the_check_fail(tmp_path):
+    (tmp_path / "docs").mkdir()
+    shutil.copytree(ROOT / "examples" / "plugins", tmp_path / "examples" / "plugins")
+    page = tmp_path / "docs" / "plugins.md"
+    shutil.copy(PAGE, page)
+    assert check_page(page) is None
+    example = tmp_path / "examples" / "plugins" / "within_radius_scorer.py"
+    example.write_text(example.read_text().replace("radius: float = 0.1", "radius: float = 0.2"))
+    assert check_page(page) is not None
+    assert main([str(page), "--check"]) == 1
+    assert main([str(page)]) == 0  # regenerates
+    assert check_page(page) is None and "radius: float = 0.2" in page.read_text()
+
+
+def test_the_command_runs_as_a_module_from_the_repository_root():
+    done = subprocess.run([sys.executable, "-m", "povagent.plugin_docs", "--check"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and "up to date" in done.stdout, done.stderr
+
+
+def test_a_field_without_a_note_is_refused_naming_it(monkeypatch):
+    notes = dict(plugin_docs.FIELD_NOTES["Usage"])
+    del notes["cost_usd"]
+    notes["tokens"] = "a field that no longer exists"
+    monkeypatch.setitem(plugin_docs.FIELD_NOTES, "Usage", notes)
+    with pytest.raises(PluginDocsError, match=r"fields without a note: \['cost_usd'\]; notes for no field: \['tokens'\]"):
+        plugin_docs.render_fields("povagent.exchange.messages:Usage")
+
+
+def test_an_unknown_or_unclosed_block_is_an_error_naming_the_page_and_line(tmp_path):
+    page = tmp_path / "p.md"
+    with pytest.raises(PluginDocsError, match="unknown generated block 'everything'"):
+        render_page("# t\n<!-- generated: everything -->\n<!-- end generated -->\n", page)
+    with pytest.raises(PluginDocsError, match=r"p.md:3: '<!-- generated: hooks -->' has no '<!-- end generated -->'"):
+        render_page("# t\n\n<!-- generated: hooks -->\nold\n", page)
+
+
+def test_rendering_twice_changes_nothing():
+    text = PAGE.read_text(encoding="utf-8")
+    assert render_page(render_page(text, PAGE), PAGE) == text
+
+
+def test_rest_docstrings_become_markdown():
+    doc = "See :class:`~povagent.interfaces.Backend` and :func:`povagent.x.f`, ``code``::\n\n    a = 1\n\nEnd."
+    assert markdown(doc) == "See `Backend` and `povagent.x.f`, `code`:\n\n```\na = 1\n```\n\nEnd."
