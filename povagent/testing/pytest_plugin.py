@@ -1,4 +1,4 @@
-"""pytest plugin for povagent and its plugin authors (loaded through the ``pytest11`` entry point).
+"""pytest plugin for povagent and its plugin authors (loaded only when a conftest opts in).
 
 Fixtures:
 
