@@ -185,7 +185,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    ea, _ = build_gallery(cmp.a_obs, [cmp.a_name], dataset, out)
+    ea, a_stats = build_gallery(cmp.a_obs, [cmp.a_name], dataset, out)
     eb, _ = build_gallery(cmp.b_obs, [cmp.b_name], dataset, out)
     by_b = {e["id"]: e for e in eb}
     deltas = {d.instance_id: d for d in cmp.deltas}
@@ -235,6 +235,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
             "answers_dir": ANSWERS_DIR,
             "answers": answers,
             "default_sort": "delta-desc",
+            "strips": a_stats.strips,  # both runs show the same houses: A's strips serve B's pick too
         },
         nav=[("#tables", "Summary")],
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
