@@ -311,14 +311,12 @@ def assign_systems(runs: list[RunInfo]) -> None:
         if len(pairs) == len({p[0] for p in pairs}):
             ordered.remove("backend")
     for r in runs:
-        keys = ordered
+        named = ordered
         if not _is_baseline_run(r):
             always = [k for k in ("model", "strategy") if r.axes.get(k) and k not in ordered]
-            keys = [k for k in AXIS_ORDER if k in ordered or k in always] + [k for k in ordered if k not in AXIS_ORDER]
-            if "model" in keys and "backend" in keys and "backend" not in ordered:
-                keys.remove("backend")
-        if keys:
-            r.system = LABEL_JOIN.join(r.axes.get(k, "?") for k in keys)
+            named = [k for k in AXIS_ORDER if k in ordered or k in always] + [k for k in ordered if k not in AXIS_ORDER]
+        if named:
+            r.system = LABEL_JOIN.join(r.axes.get(k, "?") for k in named)
         else:
             r.system = r.axes.get("model") or r.axes.get("backend") or r.name
 
