@@ -129,6 +129,7 @@ def write_report(
         gallery_data = {
             "systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers,
             "strips": gstats.strips,
+            "views": gstats.views,
             "strip_tick": OFFICIAL_STRIP_TICK if analysis.has_official else SUCCESS_STRIP_TICK,
         }
         if dataset is None:

@@ -179,7 +179,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     import json
 
     from povagent.report.gallery import ANSWERS_DIR, build_gallery, write_answer_chunks
-    from povagent.report.html import render_page
+    from povagent.report.html import OFFICIAL_LEGEND, render_page
     from povagent.report.paper_tables import condition_label
     from povagent.report.tables import Cell, Column, Row, Table, to_html
 
@@ -235,9 +235,12 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
             "answers_dir": ANSWERS_DIR,
             "answers": answers,
             "default_sort": "delta-desc",
-            "strips": a_stats.strips,  # both runs show the same houses: A's strips serve B's pick too
+            # both runs show the same houses and targets: A's strips serve B's pick too
+            "strips": a_stats.strips,
+            "views": a_stats.views,
         },
         nav=[("#tables", "Summary")],
+        legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
     path = out / "compare.html"

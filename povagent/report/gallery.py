@@ -112,6 +112,10 @@ class GalleryStats:
     #: Frame strips, one per house shown: ``{"k": key, "n": frames, "w": tile w, "h": tile h}``;
     #: an entry's ``fs`` is an index into this list.
     strips: list[dict[str, Any]] = field(default_factory=list)
+    #: Each distinct ``[seen, maybe hidden]`` pair of frame lists (:func:`ground_truth_views`);
+    #: an entry's ``fw`` is an index into it. Every system's card of an instance, and the
+    #: Inferred and Stated cards of one target, share one pair: the page stays small.
+    views: list[list[list[int]]] = field(default_factory=list)
 
 
 @dataclass
@@ -419,6 +423,8 @@ def build_gallery(
     jobs: dict[str, Drawing] = {}
     strip_jobs: dict[str, Strip] = {}
     strip_index: dict[Strip, int] = {}
+    view_index: dict[str, int] = {}
+    view_of: dict[str, int] = {}  # instance id -> index in stats.views (every cell shows the same instance)
     entries: list[dict[str, Any]] = []
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
@@ -447,8 +453,12 @@ def build_gallery(
                     stats.strips.append({"k": key_s, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
                     strip_jobs[key_s] = strip
             if strip in strip_index:
-                seen, hidden = ground_truth_views(inst)
-                strip_fields = {"fs": strip_index[strip], "fv": seen} | ({"fh": hidden} if hidden else {})
+                if o.instance_id not in view_of:
+                    views = list(ground_truth_views(inst))
+                    view_of[o.instance_id] = view_index.setdefault(json.dumps(views), len(stats.views))
+                    if view_of[o.instance_id] == len(stats.views):
+                        stats.views.append(views)
+                strip_fields = {"fs": strip_index[strip], "fw": view_of[o.instance_id]}
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
         raw = o.raw or ""
         entries.append(
@@ -507,7 +517,7 @@ def build_gallery(
     if bad_strips:
         for entry in entries:
             if "fs" in entry and stats.strips[entry["fs"]]["k"] in bad_strips:
-                for k in ("fs", "fv", "fh"):
+                for k in ("fs", "fw"):
                     entry.pop(k, None)
     stats.drawn = sum(1 for r in results if r is True)
     stats.cached = sum(1 for r in results if r is False)

@@ -301,11 +301,13 @@ def histogram(
         d += f"V{y(0):.1f}"
         dash = ' stroke-dasharray="5 3"' if styles[s].reference else ""
         out.append(f'<path d="{d}" fill="none" stroke="{colours[s]}" stroke-width="1.8"{dash}><title>{_e(series[s][0])}</title></path>')
-        # a marker on each non-empty bin's top, placed a little apart per series so that equal
-        # shares (baselines often pile into the same bin) do not hide one another
+        # a marker on every third non-empty bin's top, staggered by series (and a little apart)
+        # so that equal shares (baselines often pile into one bin) do not hide one another,
+        # and a series' peak always carries one
         shift = (s - (len(shares) - 1) / 2) * min(3.0, step / (hi - lo) * plot_w / max(1, len(shares)))
+        peak = max(range(bins), key=lambda k: row[k])
         for k, share in enumerate(row):
-            if share > 0:
+            if share > 0 and ((k + s) % 3 == 0 or k == peak):
                 out.append(marker(styles[s], x(lo + (k + 0.5) * step) + shift, y(share), 3.2))
     out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
     out.append("</svg>")
