@@ -217,6 +217,44 @@ def _strip_of(instance: Any) -> Strip | None:
     return Strip(tuple(Path(f.file) for f in instance.frames), (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
 
 
+@dataclass
+class _StripBook:
+    """The strips and GT-view lists of one gallery, each worked out once per instance (a sweep
+    shows every instance once per cell) and stored once (``stats.strips``, ``stats.views``)."""
+
+    stats: GalleryStats
+    hashes: _SourceHashes
+    jobs: dict[str, Strip] = field(default_factory=dict)
+    by_strip: dict[Strip, int] = field(default_factory=dict)
+    by_views: dict[str, int] = field(default_factory=dict)
+    by_instance: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def fields(self, instance_id: str, instance: Any) -> dict[str, Any]:
+        """An entry's ``{"fs": strip, "fw": views}`` (``{}``: no strip for this card)."""
+        known = self.by_instance.get(instance_id)
+        if known is None:
+            known = self.by_instance[instance_id] = self._work_out(instance)
+        return known
+
+    def _work_out(self, instance: Any) -> dict[str, Any]:
+        strip = _strip_of(instance)
+        if strip is None or not all(p.exists() for p in strip.sources):
+            return {}
+        if strip not in self.by_strip:
+            try:
+                key = strip.key(self.hashes)
+            except OSError:
+                return {}  # a frame cannot be read: no strip (the card says why its image is missing)
+            self.by_strip[strip] = len(self.stats.strips)
+            self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
+            self.jobs[key] = strip
+        views = list(ground_truth_views(instance))
+        index = self.by_views.setdefault(json.dumps(views), len(self.stats.views))
+        if index == len(self.stats.views):
+            self.stats.views.append(views)
+        return {"fs": self.by_strip[strip], "fw": index}
+
+
 def _marked_drawing(observation: Observation, instance: RealWorldInstance, frame: Any) -> Drawing:
     """A real-world row: the letterboxed frame with the marks made in its original."""
     box = instance.letterboxes[frame.index]
@@ -421,10 +459,7 @@ def build_gallery(
     hashes = _SourceHashes()
     root = Path(dataset.root) if dataset is not None and getattr(dataset, "root", None) is not None else None
     jobs: dict[str, Drawing] = {}
-    strip_jobs: dict[str, Strip] = {}
-    strip_index: dict[Strip, int] = {}
-    view_index: dict[str, int] = {}
-    view_of: dict[str, int] = {}  # instance id -> index in stats.views (every cell shows the same instance)
+    strips = _StripBook(stats, hashes)
     entries: list[dict[str, Any]] = []
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
@@ -440,25 +475,7 @@ def build_gallery(
                 unreadable[key] = image_error(drawing.source, exc, root)
         else:
             stats.without_image += 1
-        strip_fields: dict[str, Any] = {}
-        strip = _strip_of(inst) if inst is not None else None
-        if strip is not None and all(p.exists() for p in strip.sources):
-            if strip not in strip_index:
-                try:
-                    key_s = strip.key(hashes)
-                except OSError:
-                    key_s = None  # a frame cannot be read: no strip (the card says why its image is missing)
-                if key_s is not None:
-                    strip_index[strip] = len(stats.strips)
-                    stats.strips.append({"k": key_s, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
-                    strip_jobs[key_s] = strip
-            if strip in strip_index:
-                if o.instance_id not in view_of:
-                    views = list(ground_truth_views(inst))
-                    view_of[o.instance_id] = view_index.setdefault(json.dumps(views), len(stats.views))
-                    if view_of[o.instance_id] == len(stats.views):
-                        stats.views.append(views)
-                strip_fields = {"fs": strip_index[strip], "fw": view_of[o.instance_id]}
+        strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
         raw = o.raw or ""
         entries.append(
@@ -513,7 +530,7 @@ def build_gallery(
 
     with ThreadPoolExecutor(max_workers=n_workers) as pool:
         results = list(pool.map(draw, jobs.items()))
-        list(pool.map(draw_strip, strip_jobs.items()))
+        list(pool.map(draw_strip, strips.jobs.items()))
     if bad_strips:
         for entry in entries:
             if "fs" in entry and stats.strips[entry["fs"]]["k"] in bad_strips:
