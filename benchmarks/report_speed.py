@@ -7,7 +7,7 @@ Three measurements in one run:
    chain-of-thought-length text (~2,500 characters, like the paper's CoT answers). The report
    is written twice: cold (every image drawn) and warm (every image found by hash and
    skipped). Prints times, the cold/warm ratio, per-image cost, and the sizes of the page, the
-   answers files and the images.
+   answers files, the images and the cards' frame strips (one image per house).
 2. Opening the page: headless Chromium loads ``report.html`` from disk; prints the page's own
    time from script start to the first gallery page drawn (``data-render-ms``) and the
    browser's wall time including start-up.
@@ -147,6 +147,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sizes: report.html {page / 1e6:.2f} MB; answers {len(answers)} files, {size_ans / 1e6:.1f} MB "
               f"(loaded one at a time when a card is opened); images {len(images)} files, {size_img / 1e6:.1f} MB "
               f"({size_img / max(1, len(images)) / 1e3:.1f} kB/file)")
+        strips = [p for p in images if p.name.endswith(".s.jpg")]
+        size_strips = sum(p.stat().st_size for p in strips)
+        frames = sum(s["n"] for s in cold.gallery.strips)
+        print(f"frame strips: {len(strips)} houses, {frames} frames, {size_strips / 1e3:.0f} kB "
+              f"({size_strips / max(1, frames):.0f} B/frame, {100 * size_strips / max(1, size_img):.1f}% of the images); "
+              f"{len(cold.gallery.views)} distinct GT-view lists for {n} cards")
         opened = open_in_chromium(tmp / "report" / "report.html", tmp / "chromium-profile")
         if opened is None:
             print("opening: chromium not found, not measured")

@@ -146,6 +146,41 @@ class Analysis:
         }
 
 
+#: How a count of each identity axis reads (singular, plural).
+_AXIS_WORDS = {"model": ("model", "models"), "strategy": ("strategy", "strategies"), "parser": ("parser", "parsers")}
+
+
+def _count(n: int, axis: str) -> str:
+    one, many = _AXIS_WORDS.get(axis, (f"{axis} value", f"{axis} values"))
+    return f"{n} {one if n == 1 else many}"
+
+
+def what_was_compared(a: Analysis) -> str:
+    """The report's header line on what ran: ``1 model x 5 strategies · 1 baseline: center``.
+
+    The models are counted along the axes their labels are made of (model, strategy, then any
+    other axis that varies among them); a full grid reads as a product, anything else as its
+    system count with the distinct values per axis. Baselines are counted and named apart.
+    """
+    models = a.model_systems
+    parts: list[str] = []
+    if models:
+        axes = ["model", "strategy"] + sorted(
+            {k for s in models for k in s.axes if k not in ("model", "strategy", "backend")
+             and len({m.axes.get(k, "") for m in models}) > 1}
+        )
+        counts = {k: len({s.axes.get(k, "") for s in models}) for k in axes if any(s.axes.get(k) for s in models)}
+        product = 1
+        for n in counts.values():
+            product *= n
+        grid = " x ".join(_count(n, k) for k, n in counts.items())
+        parts.append(grid if product == len(models) else f"{len(models)} systems ({grid.replace(' x ', ', ')})")
+    refs = [s.system for s in a.systems if s.reference]
+    if refs:
+        parts.append(f"{len(refs)} baseline{'s' if len(refs) > 1 else ''}: {', '.join(refs)}")
+    return " · ".join(parts) or "no system"
+
+
 def load_collection_dataset(collection: Collection, override: str | Path | None = None):
     """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load.
 

@@ -20,12 +20,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from povagent.report.analysis import Analysis, analyze, load_collection_dataset
+from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
-from povagent.report.html import OFFICIAL_LEGEND, SUCCESS_LEGEND, figures_section, notes_section, render_page, tables_section
+from povagent.report.html import (
+    OFFICIAL_LEGEND,
+    OFFICIAL_STRIP_TICK,
+    SUCCESS_LEGEND,
+    SUCCESS_STRIP_TICK,
+    figures_section,
+    notes_section,
+    render_page,
+    tables_section,
+)
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
@@ -117,7 +126,12 @@ def write_report(
         shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
         entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
         answers = write_answer_chunks(entries, out)
-        gallery_data = {"systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers}
+        gallery_data = {
+            "systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers,
+            "strips": gstats.strips,
+            "views": gstats.views,
+            "strip_tick": OFFICIAL_STRIP_TICK if analysis.has_official else SUCCESS_STRIP_TICK,
+        }
         if dataset is None:
             analysis.notes.append("Gallery images need the dataset's frames: " + (note or "dataset not available") + ".")
     timings["gallery"] = time.perf_counter() - t
@@ -125,13 +139,12 @@ def write_report(
     t = time.perf_counter()
     body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures)
     n_rows = sum(len(r.rows) for r in collection.runs)
-    n_models = len(analysis.model_systems)
     legend = "<br>".join(
         text for text, shown in ((OFFICIAL_LEGEND, analysis.has_official), (SUCCESS_LEGEND, analysis.has_success)) if shown
     )
     subtitle = (
-        f"{source} · {len(collection.runs)} run folder(s) · {n_models} model(s), "
-        f"{len(analysis.systems) - n_models} baseline(s) · {n_rows} rows"
+        f"{source} · {len(collection.runs)} run folder{'s' if len(collection.runs) != 1 else ''} · "
+        f"{what_was_compared(analysis)} · {n_rows} rows"
     )
     if analysis.dataset_path:
         subtitle += f" · {'real-world set' if not analysis.has_official else 'dataset'} {analysis.dataset_path}"

@@ -280,8 +280,24 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     return runs
 
 
+#: Joins a system's axis values in its label (``gpt-4o · s-cot``).
+LABEL_JOIN = " · "
+
+
+def _is_baseline_run(run: RunInfo) -> bool:
+    from povagent.report.baseline import is_baseline_system
+
+    return is_baseline_system(run.axes, run.axes.get("model") or run.axes.get("backend", ""))
+
+
 def assign_systems(runs: list[RunInfo]) -> None:
-    """Label each run with its system: the values of the identity axes that vary across runs."""
+    """Label each run with its system: the values of the identity axes that vary across runs.
+
+    A model's label always names its model and its strategy (``qwen3-vl-8b · cot``), even when
+    one of them is the same in every run: a reader of a strategy sweep's table, plot legend or
+    gallery card should never have to guess which model the strategies ran on. Baselines ignore
+    the prompt, so theirs name only what varies (``center``, ``random``).
+    """
     keys: dict[str, None] = {}
     for r in runs:
         for k in r.axes:
@@ -295,8 +311,12 @@ def assign_systems(runs: list[RunInfo]) -> None:
         if len(pairs) == len({p[0] for p in pairs}):
             ordered.remove("backend")
     for r in runs:
-        if ordered:
-            r.system = " · ".join(r.axes.get(k, "?") for k in ordered)
+        named = ordered
+        if not _is_baseline_run(r):
+            always = [k for k in ("model", "strategy") if r.axes.get(k) and k not in ordered]
+            named = [k for k in AXIS_ORDER if k in ordered or k in always] + [k for k in ordered if k not in AXIS_ORDER]
+        if named:
+            r.system = LABEL_JOIN.join(r.axes.get(k, "?") for k in named)
         else:
             r.system = r.axes.get("model") or r.axes.get("backend") or r.name
 

@@ -179,13 +179,13 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     import json
 
     from povagent.report.gallery import ANSWERS_DIR, build_gallery, write_answer_chunks
-    from povagent.report.html import render_page
+    from povagent.report.html import OFFICIAL_LEGEND, render_page
     from povagent.report.paper_tables import condition_label
     from povagent.report.tables import Cell, Column, Row, Table, to_html
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    ea, _ = build_gallery(cmp.a_obs, [cmp.a_name], dataset, out)
+    ea, a_stats = build_gallery(cmp.a_obs, [cmp.a_name], dataset, out)
     eb, _ = build_gallery(cmp.b_obs, [cmp.b_name], dataset, out)
     by_b = {e["id"]: e for e in eb}
     deltas = {d.instance_id: d for d in cmp.deltas}
@@ -235,8 +235,12 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
             "answers_dir": ANSWERS_DIR,
             "answers": answers,
             "default_sort": "delta-desc",
+            # both runs show the same houses and targets: A's strips serve B's pick too
+            "strips": a_stats.strips,
+            "views": a_stats.views,
         },
         nav=[("#tables", "Summary")],
+        legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
     path = out / "compare.html"

@@ -196,8 +196,9 @@ def export_long_csv(
 ) -> Path:
     """Write ``all_runs_long.csv`` for a run folder or a sweep folder (every cell); returns its path.
 
-    ``model`` labels a single run folder's lines (default: its system label, as reports name
-    it: the model, or the sweep axes that vary); ``run`` keeps one run index. The dataset is
+    ``model`` labels a single run folder's lines (default: its model, as the official script
+    names a model folder; a sweep's cells: their system labels, as reports name them, model and
+    strategy); ``run`` keeps one run index. The dataset is
     the runs' own (``dataset_path`` overrides it): the official record needs the ground truth.
     ``out`` defaults to ``<source>/all_runs_long.csv``.
     """
@@ -219,7 +220,8 @@ def export_long_csv(
         if where not in datasets:
             datasets[where] = _release_dataset(where, info.folder)
         rows = [r for r in info.rows if run is None or r.run == run]
-        label = model if model is not None else info.system or info.axes.get("model") or info.name
+        default = info.system if len(collection.runs) > 1 else info.axes.get("model")
+        label = model if model is not None else default or info.name
         lines += long_csv_lines(rows, datasets[where], label, str(info.folder))
     if not lines:
         raise PredictionsError(f"{source}: no result rows{'' if run is None else f' for run {run}'} to export")

@@ -22,6 +22,12 @@ def _safe_name(text: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in text).strip("_").lower()[:60] or "system"
 
 
+def _baseline_note(a: Analysis, drawn_as: str) -> str:
+    """How the plot sets baselines apart, when it has any (``drawn_as``: "hatched bars")."""
+    refs = [s.system for s in a.systems if s.reference]
+    return f" Baselines ({', '.join(refs)}): {drawn_as} and hollow markers." if refs else ""
+
+
 def report_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | None = None) -> dict[str, tuple[str, str]]:
     """Figures by file stem: ``(caption, svg)``. ``frame_size(instance_id)`` gives (W, H) for
     the scatter's pixel-to-fraction conversion (512 x 512 when unknown)."""
@@ -39,12 +45,12 @@ def _success_figures(a: Analysis) -> dict[str, tuple[str, str]]:
     figs: dict[str, tuple[str, str]] = {}
     series = [(s.system, [getattr(s.by_condition.get(c), "success", None) for c in a.conditions], s.reference) for s in a.systems]
     figs["success_by_condition"] = (
-        "Success rate by condition (unanswered = failure; whiskers: 95% bootstrap CI).",
+        "Success rate by condition (unanswered = failure; whiskers: 95% bootstrap CI)." + _baseline_note(a, "hatched bars"),
         grouped_bars("Success rate by condition", [condition_label(c) for c in a.conditions], series, y_label="success rate"),
     )
     series = [(s.system, [getattr(s.by_direction.get(d), "success", None) for d in a.directions], s.reference) for s in a.systems]
     figs["success_by_direction"] = (
-        "Success rate by direction, pooled over conditions.",
+        "Success rate by direction, pooled over conditions." + _baseline_note(a, "hatched bars"),
         grouped_bars("Success rate by direction", [d.capitalize() for d in a.directions], series, y_label="success rate"),
     )
     return figs
@@ -57,18 +63,18 @@ def _official_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] 
     figs: dict[str, tuple[str, str]] = {}
     series = [(s.system, [getattr(s.by_condition.get(c), "official", None) for c in a.conditions], s.reference) for s in a.systems]
     figs["error_by_condition"] = (
-        "Mean normalized L2 by condition (answered instances; whiskers: 95% bootstrap CI).",
+        "Mean normalized L2 by condition (answered instances; whiskers: 95% bootstrap CI)." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by condition", [condition_label(c) for c in a.conditions], series),
     )
     series = [(s.system, [getattr(s.by_direction.get(d), "official", None) for d in a.directions], s.reference) for s in a.systems]
     figs["error_by_direction"] = (
-        "Mean normalized L2 by direction, pooled over conditions.",
+        "Mean normalized L2 by direction, pooled over conditions." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by direction", [d.capitalize() for d in a.directions], series),
     )
     keys = [(c, d) for c in a.conditions for d in a.directions]
     series = [(s.system, [getattr(s.by_condition_direction.get(f"{c}/{d}"), "official", None) for c, d in keys], s.reference) for s in a.systems]
     figs["error_by_condition_direction"] = (
-        "Mean normalized L2 by condition (I, S, G) and direction.",
+        "Mean normalized L2 by condition (I, S, G) and direction." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by condition x direction", [f"{condition_label(c)[0]}-{d}" for c, d in keys], series, width=max(820, 70 * len(keys))),
     )
     by_sys: dict[str, list] = defaultdict(list)
@@ -95,7 +101,7 @@ def _official_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] 
         )
     hist = [(s.system, [o.l2 for o in by_sys.get(s.system, []) if o.l2 is not None], s.reference) for s in a.systems]
     figs["error_distribution"] = (
-        "Distribution of the normalized L2 of answered instances (share per bin; all runs).",
+        "Distribution of the normalized L2 of answered instances (share per bin; all runs)." + _baseline_note(a, "dashed lines"),
         histogram("Error distribution", hist),
     )
     return figs

@@ -10,6 +10,18 @@ Files are named by a SHA-256 of what was drawn (the source image's bytes plus th
 the HTML references images by hash, a re-run finds its images already made and skips them,
 and two rows with the same drawing share one file. Nothing is inlined as base64.
 
+An Inferred or Stated card also gets a strip of the house's exploration frames (the frames the
+model was shown, in order), with the selected one outlined and the frames that could show the
+target ticked. One small JPEG per house holds every frame side by side (``images/<sha256>.s.jpg``,
+about 1 kB a frame), shared by all of that house's cards; the page crops it per tile. "Could
+show the target" (:func:`ground_truth_views`) starts from the official metric's own test, the GT
+3D point projecting in front of the frame's camera and inside its bounds; that test sees through
+walls, so the exploration log's record of the objects seen in each frame
+(``object_in_frame_hits``, occlusion-aware) splits it: the anchor the target is placed beside
+was seen (ticked), or not (marked "maybe hidden"). The release records objects, never the
+target point itself, so the anchor is the nearest record there is. A real-world set's hand
+marks say it directly: a frame is ticked when it carries a mark.
+
 Raw answers (a chain-of-thought answer runs to thousands of characters) are kept out of the
 page too: :func:`write_answer_chunks` moves them into small ``answers/<sha256>.js`` files that
 the page loads with a ``<script>`` tag (which works from ``file://``, unlike ``fetch``) only
@@ -47,9 +59,12 @@ ANSWERS_DIR = "answers"
 ANSWER_CHUNK = 200
 THUMB_SIZE = 256
 #: Bumped when the drawing changes, so cached images are redrawn.
-RECIPE_VERSION = 2
+RECIPE_VERSION = 3
 #: Raw answers longer than this are cut in the answers files (the full text stays in results.jsonl).
 MAX_RAW_CHARS = 8000
+
+#: Height of one frame in a strip image (the page shows it at 18 to 64 px).
+STRIP_TILE_HEIGHT = 64
 
 GT_COLOUR = (0, 200, 83)
 PRED_COLOUR = (255, 45, 45)
@@ -94,6 +109,13 @@ class GalleryStats:
     #: Drawings whose source image could not be read or decoded (their cards say so).
     bad_images: int = 0
     seconds: float = 0.0
+    #: Frame strips, one per house shown: ``{"k": key, "n": frames, "w": tile w, "h": tile h}``;
+    #: an entry's ``fs`` is an index into this list.
+    strips: list[dict[str, Any]] = field(default_factory=list)
+    #: Each distinct ``[seen, maybe hidden]`` pair of frame lists (:func:`ground_truth_views`);
+    #: an entry's ``fw`` is an index into it. Every system's card of an instance, and the
+    #: Inferred and Stated cards of one target, share one pair: the page stays small.
+    views: list[list[list[int]]] = field(default_factory=list)
 
 
 @dataclass
@@ -129,6 +151,108 @@ def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
         gt_px, state = (gt.u * w, gt.v * h), ("in" if gt.in_frame else "out")
     pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
     return Drawing(Path(frame.file), gt_px, state, pred)
+
+
+def ground_truth_views(instance: Any) -> tuple[list[int], list[int]]:
+    """The exploration frames (indices) that could show an instance's target: ``(seen, maybe_hidden)``.
+
+    POVBench-format: a frame qualifies when the GT 3D point projects in front of its camera and
+    inside its bounds (:func:`povagent.scoring.official.project_ground_truth`, the test behind
+    the metric's "GT in the selected frame", which ignores walls). It is *seen* when the
+    exploration log also records the anchor object in that frame (or records no object at all,
+    so cannot tell), *maybe hidden* when the log lists what the frame saw and the anchor is
+    not among it. A real-world set: the frames that carry a hand-made mark, all seen.
+    """
+    if isinstance(instance, RealWorldInstance):
+        return [f.index for f in instance.frames if instance.marks_in(f.image_path)], []
+    anchor = instance.anchor_object.objectId
+    seen: list[int] = []
+    hidden: list[int] = []
+    for i, f in enumerate(instance.frames):
+        if project_ground_truth(instance.target, f.camera).in_frame:
+            (seen if not f.in_frame_hits or anchor in f.in_frame_hits else hidden).append(i)
+    return seen, hidden
+
+
+@dataclass(frozen=True)
+class Strip:
+    """A house's exploration frames as one row of tiles (the card's frame strip)."""
+
+    sources: tuple[Path, ...]
+    tile: tuple[int, int]
+
+    def key(self, hashes: _SourceHashes) -> str:
+        """The SHA-256 naming the strip's file (every frame's bytes, in order, and the tile size)."""
+        payload = "strip:" + json.dumps([self.tile, [hashes.of(p) for p in self.sources]])
+        return hashlib.sha256(payload.encode()).hexdigest()
+
+
+def strip_file(images_dir: Path, key: str) -> Path:
+    """Where a strip image is written."""
+    return images_dir / f"{key}.s.jpg"
+
+
+def write_strip(strip: Strip, images_dir: Path, key: str) -> bool:
+    """Draw the strip's image unless it exists; True if drawn now (IMAGE_ERRORS if a frame is bad)."""
+    path = strip_file(images_dir, key)
+    if path.exists():
+        return False
+    tw, th = strip.tile
+    sheet = Image.new("RGB", (tw * len(strip.sources), th), (34, 34, 34))
+    for i, source in enumerate(strip.sources):
+        with Image.open(source) as src:
+            src.draft("RGB", (tw, th))  # JPEG sources decode at a fraction of their size
+            sheet.paste(src.convert("RGB").resize((tw, th), Image.Resampling.BILINEAR), (i * tw, 0))
+    tmp = path.with_name(path.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
+    sheet.save(tmp, "JPEG", quality=72)
+    tmp.replace(path)
+    return True
+
+
+def _strip_of(instance: Any) -> Strip | None:
+    """The strip of an instance's exploration frames (``None`` for Given or without frames)."""
+    if not getattr(instance.condition, "uses_exploration_frames", False) or not instance.frames:
+        return None
+    w, h = instance.frame_size
+    return Strip(tuple(Path(f.file) for f in instance.frames), (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
+
+
+@dataclass
+class _StripBook:
+    """The strips and GT-view lists of one gallery, each worked out once per instance (a sweep
+    shows every instance once per cell) and stored once (``stats.strips``, ``stats.views``)."""
+
+    stats: GalleryStats
+    hashes: _SourceHashes
+    jobs: dict[str, Strip] = field(default_factory=dict)
+    by_strip: dict[Strip, int] = field(default_factory=dict)
+    by_views: dict[str, int] = field(default_factory=dict)
+    by_instance: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def fields(self, instance_id: str, instance: Any) -> dict[str, Any]:
+        """An entry's ``{"fs": strip, "fw": views}`` (``{}``: no strip for this card)."""
+        known = self.by_instance.get(instance_id)
+        if known is None:
+            known = self.by_instance[instance_id] = self._work_out(instance)
+        return known
+
+    def _work_out(self, instance: Any) -> dict[str, Any]:
+        strip = _strip_of(instance)
+        if strip is None or not all(p.exists() for p in strip.sources):
+            return {}
+        if strip not in self.by_strip:
+            try:
+                key = strip.key(self.hashes)
+            except OSError:
+                return {}  # a frame cannot be read: no strip (the card says why its image is missing)
+            self.by_strip[strip] = len(self.stats.strips)
+            self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
+            self.jobs[key] = strip
+        views = list(ground_truth_views(instance))
+        index = self.by_views.setdefault(json.dumps(views), len(self.stats.views))
+        if index == len(self.stats.views):
+            self.stats.views.append(views)
+        return {"fs": self.by_strip[strip], "fw": index}
 
 
 def _marked_drawing(observation: Observation, instance: RealWorldInstance, frame: Any) -> Drawing:
@@ -188,6 +312,36 @@ def _ring(d: ImageDraw.ImageDraw, x: float, y: float, r: float, col, width: int,
         d.arc([x - r, y - r, x + r, y + r], k, k + 18, fill=col, width=width)
 
 
+def _off_frame_arrow(d: ImageDraw.ImageDraw, gx: float, gy: float, w: int, h: int, scale: float) -> None:
+    """A thick arrow pointing from inside the frame at a GT beyond its border.
+
+    Drawn to be read on the 256 px thumbnail (half the size of a 512 px frame): a 9 px shaft
+    and a 30 px head, green on a black outline on a white halo, so it shows on light walls
+    and dark floors alike.
+    """
+    margin = 4 * scale
+    bx, by = min(w - margin, max(margin, gx)), min(h - margin, max(margin, gy))
+    vx, vy = gx - w / 2.0, gy - h / 2.0
+    n = max(1e-6, (vx * vx + vy * vy) ** 0.5)
+    ux, uy = vx / n, vy / n
+    head, half, length = 30 * scale, 16 * scale, 90 * scale
+    base = (bx - ux * head, by - uy * head)
+    tail = (bx - ux * length, by - uy * length)
+    tip = (bx, by)
+    wing_a = (base[0] - uy * half, base[1] + ux * half)
+    wing_b = (base[0] + uy * half, base[1] - ux * half)
+    shaft = max(3, int(round(9 * scale)))
+    for col, grow in (((255, 255, 255), 7), ((0, 0, 0), 4), (GT_COLOUR, 0)):
+        g = grow * scale
+        d.line([tail, base], fill=col, width=shaft + int(round(2 * g)))
+        if grow:
+            # the outline of the head: the same triangle pushed out by ``g``
+            d.polygon([(tip[0] + ux * g, tip[1] + uy * g), (wing_a[0] - ux * g / 2 - uy * g, wing_a[1] - uy * g / 2 + ux * g),
+                       (wing_b[0] - ux * g / 2 + uy * g, wing_b[1] - uy * g / 2 - ux * g)], fill=col)
+        else:
+            d.polygon([tip, wing_a, wing_b], fill=col)
+
+
 def render(drawing: Drawing) -> Image.Image:
     """The frame with its markers drawn (full size, RGB)."""
     with Image.open(drawing.source) as src:
@@ -201,14 +355,7 @@ def render(drawing: Drawing) -> Image.Image:
     if drawing.gt is not None:
         gx, gy = drawing.gt
         if drawing.gt_state == "out":
-            # an arrow from inside the frame towards the off-frame GT, at the border
-            bx, by = min(w - 1.0, max(0.0, gx)), min(h - 1.0, max(0.0, gy))
-            cx, cy = w / 2.0, h / 2.0
-            vx, vy = bx - cx, by - cy
-            n = max(1e-6, (vx * vx + vy * vy) ** 0.5)
-            tail = (bx - vx / n * 40 * scale, by - vy / n * 40 * scale)
-            d.line([tail, (bx, by)], fill=GT_COLOUR, width=lw + 1)
-            _ring(d, bx, by, 9 * scale, GT_COLOUR, lw)
+            _off_frame_arrow(d, gx, gy, w, h, scale)
         else:
             r = 16 * scale
             dashed = drawing.gt_state == "behind"
@@ -312,6 +459,7 @@ def build_gallery(
     hashes = _SourceHashes()
     root = Path(dataset.root) if dataset is not None and getattr(dataset, "root", None) is not None else None
     jobs: dict[str, Drawing] = {}
+    strips = _StripBook(stats, hashes)
     entries: list[dict[str, Any]] = []
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
@@ -327,6 +475,7 @@ def build_gallery(
                 unreadable[key] = image_error(drawing.source, exc, root)
         else:
             stats.without_image += 1
+        strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
         raw = o.raw or ""
         entries.append(
@@ -352,6 +501,7 @@ def build_gallery(
                 "an": o.answered,
                 "be": from_above,
             }
+            | strip_fields
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
                 if o.scorer == "success"
@@ -369,8 +519,23 @@ def build_gallery(
             return None
 
     # Pillow releases the GIL while decoding and encoding, so threads overlap the heavy parts
+    bad_strips: set[str] = set()
+
+    def draw_strip(job: tuple[str, Strip]) -> None:
+        key, strip = job
+        try:
+            write_strip(strip, images_dir, key)
+        except IMAGE_ERRORS:
+            bad_strips.add(key)  # a bad frame: the cards go without a strip, never the report
+
     with ThreadPoolExecutor(max_workers=n_workers) as pool:
         results = list(pool.map(draw, jobs.items()))
+        list(pool.map(draw_strip, strips.jobs.items()))
+    if bad_strips:
+        for entry in entries:
+            if "fs" in entry and stats.strips[entry["fs"]]["k"] in bad_strips:
+                for k in ("fs", "fw"):
+                    entry.pop(k, None)
     stats.drawn = sum(1 for r in results if r is True)
     stats.cached = sum(1 for r in results if r is False)
     stats.bad_images = len(unreadable)

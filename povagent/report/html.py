@@ -26,8 +26,15 @@ OFFICIAL_LEGEND = (
     "Each image is the frame the answer was scored in: the model's selected frame (Inferred, Stated) or the observer view (Given).\n"
     '<span class="g">Green ring</span>: ground truth (a dashed ring at the centre when the GT is behind the camera: the official '
     "metric scores it there; an arrow at the border when it is outside the frame).\n"
-    '<span class="p">Red cross</span>: the predicted point. Click a card for the full-size frame and the raw answer.'
+    '<span class="p">Red cross</span>: the predicted point. Click a card for the full-size frame and the raw answer.\n'
+    "Under an Inferred or Stated image, the strip of the house's exploration frames in order: "
+    '<span class="p">red outline</span>, the frame the model selected; <span class="g">&#10003;</span>, a frame that shows the GT '
+    "(it projects in front of the camera and inside the frame, the metric's own test, and the exploration log saw the anchor there); "
+    '<b style="background:#ffc400;padding:0 3px">?</b>, the GT falls within the frame but the anchor was not seen: a wall may hide it.'
 )
+
+#: What a strip's tick means, for official rows (shown in an opened card).
+OFFICIAL_STRIP_TICK = "the GT projects inside that frame, in front of its camera, and the anchor was seen there"
 
 #: The same for a real-world set's rows (hand-marked ground truth, hit or miss).
 SUCCESS_LEGEND = (
@@ -35,8 +42,13 @@ SUCCESS_LEGEND = (
     '<span class="g">Green</span>: the ground truth marked in that frame: a point with its hit radius, a box or a region '
     "(none drawn when the selected frame carries no mark).\n"
     '<span class="p">Red cross</span>: the predicted point. <b>Hit</b>: the answer is within a mark; <b>miss</b> otherwise, '
-    "and always when unanswered. Click a card for the full-size frame and the raw answer."
+    "and always when unanswered. Click a card for the full-size frame and the raw answer.\n"
+    "Under an Inferred or Stated image, the strip of the house's frames in order: "
+    '<span class="p">red outline</span>, the frame the model selected; <span class="g">&#10003;</span>, a frame with a hand-made mark.'
 )
+
+#: What a strip's tick means, for real-world rows.
+SUCCESS_STRIP_TICK = "that frame carries a hand-made mark of the target"
 
 
 def template() -> str:

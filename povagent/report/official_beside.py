@@ -11,6 +11,7 @@ Systems parsed officially are not listed; the table is absent when there is none
 from __future__ import annotations
 
 from povagent.dataset.models import Condition
+from povagent.report.baseline import is_baseline_system
 from povagent.report.collect import Collection
 from povagent.report.tables import Cell, Column, Row, Table
 from povagent.results.official_reading import OFFICIAL_PARSERS, officially_read
@@ -65,5 +66,11 @@ def official_beside_table(collection: Collection) -> Table | None:
             mine, theirs = repaired.get(c, {}), official.get(c, {})
             cells += [Cell(mine.get("mean_l2")), Cell(mine.get("response_rate")), Cell(theirs.get("mean_l2")), Cell(theirs.get("response_rate"))]
         label = f"{system} ({', '.join(parsers)}{'; no official reading recorded: rescore with --parser official' if unread else ''})"
-        table.rows.append(Row(label, cells))
+        axes = next(r.axes for r in collection.runs if r.system == system)
+        table.rows.append(Row(label, cells, reference=is_baseline_system(axes, system)))
+    models = sum(1 for row in table.rows if not row.reference)
+    # bold marks the best model of a column (tables.best_rows): say so only when it happens
+    table.caption += " The best model per column is in bold." if models >= 2 else " Nothing is bolded (bold marks the best of two or more models)."
+    if models < len(table.rows):
+        table.caption += " Baselines are in italics."
     return table

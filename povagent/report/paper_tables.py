@@ -44,15 +44,39 @@ def _get(stats: dict[str, CellStats], key: str) -> CellStats | None:
 
 PROTOCOL = (
     "Mean normalized L2 (lower is better) over answered instances, averaged over runs; "
-    "95% bootstrap CIs in brackets. The best model per column is in bold; baselines "
-    "(center, random, oracle) are shown in italics below the models for reference and are "
-    "never bolded."
+    "95% bootstrap CIs in brackets."
 )
+
+
+def bold_note(a: Analysis) -> str:
+    """What bold and italics mean in a table of this report, for the systems that ran.
+
+    Bold marks the best model per column (:func:`povagent.report.tables.best_rows`), so it needs
+    two models; with one, or with baselines only, the caption says that nothing is bolded
+    rather than promising a best model that is not there.
+    """
+    models = a.model_systems
+    refs = [s.system for s in a.systems if s.reference]
+    if len(models) >= 2:
+        text = "The best model per column is in bold."
+    elif models:
+        text = "One model ran: nothing is bolded."
+    else:
+        text = "Only baselines ran, no model: nothing is bolded (bold marks the best model)."
+    if refs:
+        where = " below the models, for reference, never bolded" if models else ", for reference"
+        text += f" Baselines are in italics{where}: {', '.join(refs)}."
+    return text
+
+
+def row_header(a: Analysis) -> str:
+    """The header of a table's row labels: what a row is."""
+    return "Model · strategy" if a.model_systems else "Baseline"
 
 
 def main_table(a: Analysis) -> Table:
     """Systems x conditions, official mean L2."""
-    t = Table("main", "Main results", PROTOCOL, "Model", [Column(condition_label(c)) for c in a.conditions])
+    t = Table("main", "Main results", f"{PROTOCOL} {bold_note(a)}", row_header(a), [Column(condition_label(c)) for c in a.conditions])
     for s in a.systems:
         t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions], s.reference))
     return t
@@ -69,11 +93,11 @@ def ablation_table(a: Analysis) -> Table | None:
     models = {s.axes.get("model", "") for s in a.model_systems}
     one_model = len(models) == 1
     cols = [Column(condition_label(c)) for c in a.conditions] + [Column("Resp.", "rate", "higher")]
-    caption = PROTOCOL + " Resp. is the response rate (answered / total) over all conditions."
+    caption = f"{PROTOCOL} Resp. is the response rate (answered / total) over all conditions. {bold_note(a)}"
     title = "Ablation" + (f" ({next(iter(models))})" if one_model and next(iter(models)) else "")
-    t = Table("ablation", title, caption, "Strategy" if one_model else "System", cols)
+    t = Table("ablation", title, caption, row_header(a), cols)
     for s in a.systems:
-        label = s.axes.get("strategy", s.system) if one_model and not s.reference else s.system
+        label = s.system  # model and strategy, as in every table (the title alone is easy to miss)
         cells = [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))
         t.rows.append(Row(label, cells, s.reference))
@@ -82,7 +106,7 @@ def ablation_table(a: Analysis) -> Table | None:
 
 def direction_table(a: Analysis) -> Table:
     """Systems x directions (pooled over conditions), official mean L2."""
-    t = Table("per_direction", "Error by direction", PROTOCOL + " Pooled over conditions.", "Model", [Column(d.capitalize()) for d in a.directions])
+    t = Table("per_direction", "Error by direction", f"{PROTOCOL} Pooled over conditions. {bold_note(a)}", row_header(a), [Column(d.capitalize()) for d in a.directions])
     for s in a.systems:
         t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_direction, d), "official", None)) for d in a.directions], s.reference))
     return t
@@ -95,8 +119,8 @@ def condition_direction_table(a: Analysis) -> Table:
     t = Table(
         "per_condition_direction",
         "Error by condition and direction",
-        "Mean normalized L2 over answered instances (I = Inferred, S = Stated, G = Given); CIs in the CSV.",
-        "Model",
+        f"Mean normalized L2 over answered instances (I = Inferred, S = Stated, G = Given); CIs in the CSV. {bold_note(a)}",
+        row_header(a),
         cols,
         show_ci=False,
     )
@@ -112,9 +136,9 @@ def response_table(a: Analysis) -> Table:
         "Answered / total instances (a response is a parseable coordinate; unparseable answers and "
         "API failures are non-responses), averaged over runs; 95% bootstrap CIs. Overall pools "
         "every instance, which equals the paper's average over conditions when, as in POVBench, "
-        "each condition has the same instances."
+        "each condition has the same instances. " + bold_note(a)
     )
-    t = Table("response_rates", "Response rates", caption, "Model", cols)
+    t = Table("response_rates", "Response rates", caption, row_header(a), cols)
     for s in a.systems:
         cells = [_cell(getattr(_get(s.by_condition, c), "response_rate", None)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))
@@ -141,7 +165,7 @@ def metric_variants_table(a: Analysis) -> Table:
         "Stated, the frame-selection accuracy). GT behind camera: share scored by the blind spot. "
         "Rows mix conditions, so nothing is bolded."
     )
-    t = Table("metric_variants", "Official metric and its variants", caption, "Model / condition", cols)
+    t = Table("metric_variants", "Official metric and its variants", caption, row_header(a) + " / condition", cols)
     for s in a.systems:
         for c in a.conditions:
             cs = s.by_condition.get(c)
@@ -160,8 +184,7 @@ def metric_variants_table(a: Analysis) -> Table:
 SUCCESS_PROTOCOL = (
     "Success rate (higher is better): hits / all instances, an unanswered instance counting as a "
     "failure (the paper's protocol for real houses); a hit is an answer within a marked point's "
-    "radius or inside a marked box or region. Averaged over runs; 95% bootstrap CIs in brackets. "
-    "The best model per column is in bold; baselines are shown in italics below the models."
+    "radius or inside a marked box or region. Averaged over runs; 95% bootstrap CIs in brackets."
 )
 
 
@@ -171,8 +194,8 @@ def success_table(a: Analysis) -> Table:
     overall = "Overall" if several or not a.conditions else condition_label(a.conditions[0])
     cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] if several else []
     cols += [Column(overall, "rate", "higher"), Column("Resp.", "rate", "higher")]
-    caption = SUCCESS_PROTOCOL + (" Overall pools every instance." if several else "") + " Resp. is the response rate (answered / total)."
-    t = Table("success", "Success rate", caption, "Model", cols)
+    caption = SUCCESS_PROTOCOL + (" Overall pools every instance." if several else "") + " Resp. is the response rate (answered / total). " + bold_note(a)
+    t = Table("success", "Success rate", caption, row_header(a), cols)
     for s in a.systems:
         cells = [_cell(getattr(_get(s.by_condition, c), "success", None)) for c in a.conditions] if several else []
         cells += [_cell(s.overall.success), _cell(s.overall.response_rate)]
@@ -185,8 +208,8 @@ def success_direction_table(a: Analysis) -> Table:
     t = Table(
         "success_by_direction",
         "Success rate by direction",
-        SUCCESS_PROTOCOL + " Pooled over conditions.",
-        "Model",
+        f"{SUCCESS_PROTOCOL} Pooled over conditions. {bold_note(a)}",
+        row_header(a),
         [Column(d.capitalize(), "rate", "higher") for d in a.directions],
     )
     for s in a.systems:

@@ -7,16 +7,23 @@ an ``<svg>`` string out; nothing is written here.
 
 from __future__ import annotations
 
+import hashlib
 import html
 import math
+from dataclasses import dataclass
 from typing import Sequence
 
 from povagent.report.statistics import Estimate
 
 #: Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
 PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
-#: Greys for baselines (center, random, oracle): set apart from models, told apart from each other.
-REFERENCE_COLOURS = ("#9a9a9a", "#5f5f5f", "#c8c8c8", "#3a3a3a")
+#: Baselines (center, random, oracle, ...): grey, brown, near-black, light grey. Apart from the
+#: models' hues, and apart from each other in lightness too, so a grey print still tells them apart.
+REFERENCE_COLOURS = ("#7a7a7a", "#8c510a", "#1a1a1a", "#bdbdbd")
+#: Marker shapes: models filled, baselines hollow, each series its own shape (a legend entry
+#: and its bars or lines share it, so colour is never the only cue).
+MODEL_MARKERS = ("circle", "square", "triangle", "diamond", "triangle-down", "circle", "square", "triangle")
+REFERENCE_MARKERS = ("diamond", "square", "triangle", "triangle-down")
 FONT = 'font-family="system-ui, -apple-system, Segoe UI, Helvetica, Arial, sans-serif"'
 
 
@@ -25,17 +32,67 @@ def colour(i: int) -> str:
     return PALETTE[i % len(PALETTE)]
 
 
-def series_colours(series: Sequence[tuple]) -> list[str]:
-    """A colour per ``(name, values, is_reference)`` series: palette for models, greys for baselines."""
+@dataclass(frozen=True)
+class SeriesStyle:
+    """How one series is drawn: colour, marker shape, and whether it is a baseline (hollow
+    markers, hatched bars, dashed lines)."""
+
+    colour: str
+    marker: str
+    reference: bool
+
+
+def series_styles(series: Sequence[tuple]) -> list[SeriesStyle]:
+    """A style per ``(name, values, is_reference)`` series: palette hues and filled markers for
+    models; baseline colours, hollow markers and hatching for baselines."""
     out, models, refs = [], 0, 0
     for _, _, ref in series:
         if ref:
-            out.append(REFERENCE_COLOURS[refs % len(REFERENCE_COLOURS)])
+            k = refs % len(REFERENCE_COLOURS)
+            out.append(SeriesStyle(REFERENCE_COLOURS[k], REFERENCE_MARKERS[k], True))
             refs += 1
         else:
-            out.append(colour(models))
+            out.append(SeriesStyle(colour(models), MODEL_MARKERS[models % len(MODEL_MARKERS)], False))
             models += 1
     return out
+
+
+def series_colours(series: Sequence[tuple]) -> list[str]:
+    """A colour per ``(name, values, is_reference)`` series (see :func:`series_styles`)."""
+    return [st.colour for st in series_styles(series)]
+
+
+def marker(style: SeriesStyle, x: float, y: float, r: float = 4.5) -> str:
+    """The series' marker centred at ``(x, y)``: filled for a model, hollow for a baseline."""
+    fill = "#fff" if style.reference else style.colour
+    paint = f'fill="{fill}" stroke="{style.colour}" stroke-width="1.6"'
+    if style.marker == "square":
+        return f'<rect class="marker" x="{x - r:.1f}" y="{y - r:.1f}" width="{2 * r:.1f}" height="{2 * r:.1f}" {paint}/>'
+    if style.marker == "triangle":
+        return f'<path class="marker" d="M{x:.1f} {y - r * 1.15:.1f}L{x + r:.1f} {y + r * 0.85:.1f}H{x - r:.1f}Z" {paint}/>'
+    if style.marker == "triangle-down":
+        return f'<path class="marker" d="M{x:.1f} {y + r * 1.15:.1f}L{x + r:.1f} {y - r * 0.85:.1f}H{x - r:.1f}Z" {paint}/>'
+    if style.marker == "diamond":
+        q = r * 1.25
+        return f'<path class="marker" d="M{x:.1f} {y - q:.1f}L{x + q:.1f} {y:.1f}L{x:.1f} {y + q:.1f}L{x - q:.1f} {y:.1f}Z" {paint}/>'
+    return f'<circle class="marker" cx="{x:.1f}" cy="{y:.1f}" r="{r:.1f}" {paint}/>'
+
+
+def _hatch_defs(styles: Sequence[SeriesStyle], uid: str) -> str:
+    """SVG patterns hatching baseline bars in their colour (a model's bar is solid)."""
+    parts = []
+    for i, st in enumerate(styles):
+        if st.reference:
+            angle = (45, -45, 0, 90)[i % 4]
+            parts.append(
+                f'<pattern id="{uid}-h{i}" width="6" height="6" patternUnits="userSpaceOnUse" patternTransform="rotate({angle})">'
+                f'<rect width="6" height="6" fill="#fff"/><rect width="3" height="6" fill="{st.colour}"/></pattern>'
+            )
+    return "<defs>" + "".join(parts) + "</defs>" if parts else ""
+
+
+def _bar_fill(st: SeriesStyle, i: int, uid: str) -> str:
+    return f'fill="url(#{uid}-h{i})" stroke="{st.colour}" stroke-width="1"' if st.reference else f'fill="{st.colour}"'
 
 
 def _e(text: str) -> str:
@@ -52,16 +109,41 @@ def _nice_max(v: float) -> float:
     return 10 * exp
 
 
-def _legend(names: Sequence[str], colours: Sequence[str], x: float, y: float, width: float) -> tuple[list[str], float]:
+def _legend(
+    names: Sequence[str], colours: Sequence[str], x: float, y: float, width: float, styles: Sequence[SeriesStyle] | None = None
+) -> tuple[list[str], float]:
+    """Legend entries: a swatch (with the series' marker when ``styles`` are given) and the name."""
     out, cx, cy = [], x, y
-    for name, col in zip(names, colours):
-        w = 18 + 6.5 * len(name) + 14
+    for i, (name, col) in enumerate(zip(names, colours)):
+        w = 24 + 6.5 * len(name) + 14
         if cx + w > x + width and cx > x:
-            cx, cy = x, cy + 16
-        out.append(f'<rect x="{cx:.1f}" y="{cy - 9:.1f}" width="12" height="10" fill="{col}"/>')
-        out.append(f'<text x="{cx + 16:.1f}" y="{cy:.1f}" font-size="11">{_e(name)}</text>')
+            cx, cy = x, cy + 17
+        if styles is not None:
+            st = styles[i]
+            out.append(f'<g class="legend-entry" data-series="{_e(name)}" data-marker="{st.marker}" data-colour="{st.colour}">')
+            out.append(f'<line x1="{cx:.1f}" x2="{cx + 18:.1f}" y1="{cy - 4:.1f}" y2="{cy - 4:.1f}" stroke="{col}" stroke-width="2"'
+                       + (' stroke-dasharray="4 2"' if st.reference else "") + "/>")
+            out.append(marker(st, cx + 9, cy - 4, 4.0))
+            out.append(f'<text x="{cx + 22:.1f}" y="{cy:.1f}" font-size="11">{_e(name)}</text></g>')
+        else:
+            out.append(f'<rect x="{cx:.1f}" y="{cy - 9:.1f}" width="12" height="10" fill="{col}"/>')
+            out.append(f'<text x="{cx + 16:.1f}" y="{cy:.1f}" font-size="11">{_e(name)}</text>')
         cx += w
     return out, cy + 14
+
+
+def _fitted_text(text: str, x: float, y: float, max_width: float, font_size: float) -> str:
+    """A bold title squeezed to ``max_width`` when its estimated width exceeds it: a long
+    system name (``qwen3-vl-8b-transformers · spatial-cot: x``) stays whole instead of being
+    cut at the plot's edge."""
+    estimate = 0.6 * font_size * len(text)
+    fit = f' textLength="{max_width - x:.0f}" lengthAdjust="spacingAndGlyphs"' if estimate > max_width - x else ""
+    return f'<text x="{x}" y="{y}" font-size="{font_size}" font-weight="600"{fit}>{_e(text)}</text>'
+
+
+def _uid(title: str, names: Sequence[str]) -> str:
+    """An id prefix for a plot's patterns: several plots share one page, so ids must differ."""
+    return "p" + hashlib.sha256((title + "|" + "|".join(names)).encode()).hexdigest()[:8]
 
 
 def grouped_bars(
@@ -73,8 +155,11 @@ def grouped_bars(
     height: int = 340,
 ) -> str:
     """Bars per group and series, with CI whiskers; a series is ``(name, estimates, reference)``."""
-    colours = series_colours(series)
-    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
+    styles = series_styles(series)
+    colours = [st.colour for st in styles]
+    uid = _uid(title, [s[0] for s in series])
+    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
+    top += 6  # room for a marker on the tallest bar
     left, right, bottom = 60, 16, 46
     plot_h = height - top - bottom
     vals = [e.hi if e and e.hi is not None else (e.value if e and e.value is not None else 0.0) for _, ests, _ in series for e in ests]
@@ -87,6 +172,7 @@ def grouped_bars(
         return top + plot_h * (1 - v / y_max)
 
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out.append(_hatch_defs(styles, uid))
     out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
     out += legend
     for k in range(6):
@@ -102,14 +188,16 @@ def grouped_bars(
                 continue
             x = gx + s * bw
             out.append(
-                f'<rect x="{x:.1f}" y="{y(e.value):.1f}" width="{bw - 2:.1f}" height="{max(0.0, y(0) - y(e.value)):.1f}" fill="{colours[s]}">'
+                f'<rect x="{x:.1f}" y="{y(e.value):.1f}" width="{bw - 2:.1f}" height="{max(0.0, y(0) - y(e.value)):.1f}" {_bar_fill(styles[s], s, uid)}>'
                 f"<title>{_e(sname)} / {_e(name)}: {e.value:.3f}"
                 + (f" [{e.lo:.3f}, {e.hi:.3f}]" if e.lo is not None and e.hi is not None else "")
                 + "</title></rect>"
             )
+            cx = x + (bw - 2) / 2
             if e.lo is not None and e.hi is not None:
-                cx = x + (bw - 2) / 2
                 out.append(f'<path d="M{cx:.1f} {y(e.lo):.1f}V{y(e.hi):.1f}M{cx - 3:.1f} {y(e.lo):.1f}h6M{cx - 3:.1f} {y(e.hi):.1f}h6" stroke="#222" stroke-width="1" fill="none"/>')
+            # the marker sits on the bar's top: a bar of height 0 (the oracle) is still seen
+            out.append(marker(styles[s], cx, y(e.value), min(4.5, max(2.5, (bw - 2) / 2.4))))
         out.append(f'<text x="{left + g * gw + gw / 2:.1f}" y="{height - bottom + 16}" font-size="11" text-anchor="middle">{_e(name)}</text>')
     out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
     out.append("</svg>")
@@ -139,7 +227,7 @@ def scatter(
         return pad_t + plot * (1 - min(1.0, max(0.0, v)))
 
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {size} {height}" width="{size}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
-    out.append(f'<text x="{pad_l}" y="18" font-size="13" font-weight="600">{_e(title)}</text>')
+    out.append(_fitted_text(title, 8, 18, size - 12, 13))
     out += legend
     out.append(f'<rect x="{pad_l}" y="{pad_t}" width="{plot}" height="{plot}" fill="none" stroke="#999"/>')
     out.append(f'<line x1="{px(0)}" y1="{py(0)}" x2="{px(1)}" y2="{py(1)}" stroke="#bbb" stroke-dasharray="4 3"/>')
@@ -171,8 +259,10 @@ def histogram(
     x_label: str = "normalized L2",
 ) -> str:
     """Step outlines of each series' distribution (share of its values per bin)."""
-    colours = series_colours(series)
-    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80)
+    styles = series_styles(series)
+    colours = [st.colour for st in styles]
+    legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
+    top += 6
     left, right, bottom = 60, 16, 40
     plot_h, plot_w = height - top - bottom, width - left - right
     shares: list[list[float]] = []
@@ -209,7 +299,16 @@ def histogram(
         for k, share in enumerate(row):
             d += f"V{y(share):.1f}H{x(lo + (k + 1) * step):.1f}"
         d += f"V{y(0):.1f}"
-        out.append(f'<path d="{d}" fill="none" stroke="{colours[s]}" stroke-width="1.8"><title>{_e(series[s][0])}</title></path>')
+        dash = ' stroke-dasharray="5 3"' if styles[s].reference else ""
+        out.append(f'<path d="{d}" fill="none" stroke="{colours[s]}" stroke-width="1.8"{dash}><title>{_e(series[s][0])}</title></path>')
+        # a marker on every third non-empty bin's top, staggered by series (and a little apart)
+        # so that equal shares (baselines often pile into one bin) do not hide one another,
+        # and a series' peak always carries one
+        shift = (s - (len(shares) - 1) / 2) * min(3.0, step / (hi - lo) * plot_w / max(1, len(shares)))
+        peak = max(range(bins), key=lambda k: row[k])
+        for k, share in enumerate(row):
+            if share > 0 and ((k + s) % 3 == 0 or k == peak):
+                out.append(marker(styles[s], x(lo + (k + 0.5) * step) + shift, y(share), 3.2))
     out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
     out.append("</svg>")
     return "".join(out)

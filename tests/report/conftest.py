@@ -131,6 +131,12 @@ def sweep_with_center(tmp_path_factory, mini_dataset) -> Path:
     return write_sweep(tmp_path_factory.mktemp("sweep_center") / "sweep", mini_dataset, cells)
 
 
+@pytest.fixture(scope="session")
+def sweep_writer():
+    """:func:`write_sweep` itself, for fixtures of any scope (a module's report built once)."""
+    return write_sweep
+
+
 @pytest.fixture
 def make_sweep(tmp_path, mini_dataset):
     """Write a sweep of simulated cells (see :func:`write_sweep`) under ``tmp_path``."""

@@ -15,7 +15,7 @@ runner = CliRunner()
 def test_report_command_writes_the_page_and_prints_the_main_table(run_dir, tmp_path):
     result = runner.invoke(app, ["report", str(run_dir), "--out", str(tmp_path / "r"), "--bootstrap", "50"])
     assert result.exit_code == 0, result.output
-    assert "| mock-a |" in result.output and "Center baseline (computed)" in result.output
+    assert "| mock-a · basic |" in result.output and "Center baseline (computed)" in result.output
     assert (tmp_path / "r" / "report.html").exists() and (tmp_path / "r" / "tables" / "main.tex").exists()
 
 

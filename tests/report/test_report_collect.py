@@ -16,7 +16,7 @@ def test_run_folder_yields_one_observation_per_row(run_dir):
     c = collect(run_dir)
     rows = read_rows(run_dir / "results.jsonl")
     assert len(c.observations) == len(rows) == 36
-    assert c.systems == ["mock-a"]
+    assert c.systems == ["mock-a · basic"]  # a model is always named with its strategy
 
 
 def test_observation_keeps_the_stored_official_score(run_dir):

@@ -60,14 +60,14 @@ def scorer_rates(run_dir: Path, condition: str | None = None) -> tuple[float, fl
 def test_success_table_equals_the_success_scorers_rows_per_system_and_condition(report, realworld_sweep):
     table = success_table(report.analysis)
     assert [c.name for c in table.columns] == ["Inferred", "Stated", "Given", "Overall", "Resp."]
-    for system, folder in (("replay", "replay"), ("center", "center")):
+    for system, folder in (("replay · basic", "replay"), ("center", "center")):
         row = system_row(table, system)
         for j, condition in enumerate(["a", "b", "c"]):
             assert row.cells[j].value == pytest.approx(scorer_rates(realworld_sweep / folder, condition)[0])
         success, response = scorer_rates(realworld_sweep / folder)
         assert row.cells[3].value == pytest.approx(success) and row.cells[4].value == pytest.approx(response)
     # the plan: run 0 hits 3 of 6 and answers 5, run 1 hits 4 and answers 5
-    replay = system_row(table, "replay")
+    replay = system_row(table, "replay · basic")
     assert replay.cells[3].value == pytest.approx(7 / 12) and replay.cells[4].value == pytest.approx(10 / 12)
     assert replay.cells[3].lo <= 7 / 12 <= replay.cells[3].hi
     assert system_row(table, "center").reference
@@ -84,9 +84,9 @@ def test_official_tables_and_plots_are_left_out_for_a_set_without_official_groun
 
 def test_success_tables_are_written_in_markdown_csv_and_latex(report):
     md = (report.out / "tables" / "success.md").read_text()
-    assert re.search(r"\| replay \| .* \| 58\.3% \[[\d.]+, [\d.]+\] \| 83\.3% \[[\d.]+, [\d.]+\] \|", md)
+    assert re.search(r"\| replay · basic \| .* \| 58\.3% \[[\d.]+, [\d.]+\] \| 83\.3% \[[\d.]+, [\d.]+\] \|", md)
     csv = (report.out / "tables" / "success.csv").read_text()
-    assert re.search(r"^replay,0,.*,0\.58333333333333\d*,", csv, re.M)  # full precision
+    assert re.search(r"^replay · basic,0,.*,0\.58333333333333\d*,", csv, re.M)  # full precision
     tex = (report.out / "tables" / "success.tex").read_text()
     assert "\\toprule" in tex and "58.3\\%" in tex
 
@@ -94,14 +94,14 @@ def test_success_tables_are_written_in_markdown_csv_and_latex(report):
 def test_summary_json_carries_success_rates_with_cis(report):
     summary = json.loads((report.out / "summary.json").read_text())
     assert summary["scorers"] == ["success"]
-    replay = next(s for s in summary["systems"] if s["system"] == "replay")
+    replay = next(s for s in summary["systems"] if s["system"] == "replay · basic")
     assert replay["overall"]["success_rate"]["value"] == pytest.approx(7 / 12)
     assert replay["overall"]["official_mean_l2"]["value"] is None
 
 
 def test_paired_comparison_on_hit_rates_counts_the_better_system_by_higher_success(report):
     [cmp] = report.analysis.comparisons
-    assert (cmp.a, cmp.b, cmp.metric) == ("center", "replay", "success")
+    assert (cmp.a, cmp.b, cmp.metric) == ("center", "replay · basic", "success")
     assert cmp.diff.value == pytest.approx(7 / 12) and cmp.b_better > 0 and cmp.a_better == 0
 
 
@@ -165,7 +165,7 @@ def dom(report, tmp_path_factory):
 
 def test_the_page_shows_the_success_table_in_the_browser(dom):
     table = re.search(r'<table class="results" id="table-success".*?</table>', dom, re.S).group(0)
-    assert '<th scope="row">replay</th><td>66.7%' in table and '<th scope="row">center</th>' in table
+    assert '<th scope="row">replay · basic</th><td>66.7%' in table and '<th scope="row">center</th>' in table
     assert 'id="table-main"' not in dom and 'id="fig-success_by_condition"><svg' in dom
 
 

@@ -34,7 +34,7 @@ def scorer_per_run(run_dir):
 
 def test_main_table_numbers_equal_the_scorers_mean_over_runs(run_dir):
     a = analysis_of(run_dir)
-    row = system_row(main_table(a), "mock-a")
+    row = system_row(main_table(a), "mock-a · basic")
     runs = scorer_per_run(run_dir)
     assert len(runs) == 2
     for j, c in enumerate(a.conditions):
@@ -44,7 +44,7 @@ def test_main_table_numbers_equal_the_scorers_mean_over_runs(run_dir):
 
 def test_response_rate_table_equals_the_scorers(run_dir):
     a = analysis_of(run_dir)
-    row = system_row(response_table(a), "mock-a")
+    row = system_row(response_table(a), "mock-a · basic")
     runs = scorer_per_run(run_dir)
     for j, c in enumerate(a.conditions):
         assert row.cells[j].value == pytest.approx(sum(b["per_condition"][c]["response_rate"] for b in runs) / 2, abs=1e-12)
@@ -53,14 +53,14 @@ def test_response_rate_table_equals_the_scorers(run_dir):
 
 def test_strict_mean_and_frame_accuracy_equal_the_scorers(run_dir):
     a = analysis_of(run_dir)
-    s = a.system("mock-a").overall
+    s = a.system("mock-a · basic").overall
     runs = scorer_per_run(run_dir)
     assert s.strict.value == pytest.approx(sum(b["overall"]["mean_l2_strict"] for b in runs) / 2, abs=1e-12)
     assert 100 * s.in_frame.value == pytest.approx(sum(b["overall"]["pct_in_frame"] for b in runs) / 2, abs=1e-9)
 
 
 def test_every_mean_has_a_ci_around_it(run_dir):
-    for cell in system_row(main_table(analysis_of(run_dir)), "mock-a").cells:
+    for cell in system_row(main_table(analysis_of(run_dir)), "mock-a · basic").cells:
         assert cell.lo <= cell.value <= cell.hi
 
 
@@ -125,7 +125,7 @@ def test_a_sweep_with_its_own_center_cell_gets_no_computed_baseline(sweep_with_c
     a = analysis_of(sweep_with_center)
     labels = [(s.system, s.reference) for s in a.systems]
     assert (CENTER_SYSTEM, True) not in labels
-    assert ("center", True) in labels and ("mock-a", False) in labels
+    assert ("center", True) in labels and ("mock-a · basic", False) in labels
 
 
 def test_a_baseline_crossed_with_strategies_it_ignores_is_shown_once(make_sweep):
@@ -151,10 +151,10 @@ def test_main_table_equals_the_mean_of_povagent_score_over_each_runs_official_ex
     files = export_run(run_dir, tmp_path / "p.json")
     scored = [score_predictions(f, mini_dataset)[0] for f in files]
     assert len(scored) == 2
-    main = system_row(main_table(a), "mock-a")
+    main = system_row(main_table(a), "mock-a · basic")
     for j, c in enumerate(a.conditions):
         assert main.cells[j].value == pytest.approx(sum(s["per_condition"][c]["mean_l2"] for s in scored) / 2, abs=1e-12)
-    resp = system_row(response_table(a), "mock-a")
+    resp = system_row(response_table(a), "mock-a · basic")
     assert resp.cells[-1].value == pytest.approx(sum(s["overall"]["response_rate"] for s in scored) / 2, abs=1e-12)
 
 
