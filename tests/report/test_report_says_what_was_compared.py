@@ -10,6 +10,7 @@ gallery cards and their frame strips, the filters in the page address; and scree
 from __future__ import annotations
 
 import re
+from pathlib import Path
 import urllib.parse
 
 import numpy as np
@@ -26,7 +27,8 @@ from povagent.scoring.official import project_ground_truth
 STRATEGIES = ("basic", "o-plot", "oa-plot", "cot", "spatial-cot")
 #: The quickstart link the README shows (proposed in the README text of this change): the random
 #: baseline's Inferred answers, worst first, the first one opened.
-README_LINK_STATE = "system=random&cond=a&sort=err-desc&open=0"
+# the example link the README's Quickstart gives, read from the README so the two cannot drift
+README_LINK_STATE = re.search(r"`report\.html#([^`]+)`", (Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8")).group(1)
 WINDOW = "--window-size=1300,900"
 
 
