@@ -13,11 +13,15 @@ from povagent.cli import app
 
 @app.command("validate")
 def validate_command(
-    dataset_dir: Path = typer.Argument(..., help="Dataset folder in the POVBench release layout."),
-    width: int = typer.Option(512, help="Expected exploration frame width."),
-    height: int = typer.Option(512, help="Expected exploration frame height."),
+    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR", help="Dataset folder in the POVBench release layout."),
+    width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width every exploration frame must have."),
+    height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height every exploration frame must have."),
 ) -> None:
-    """Check every file and image of a dataset; list every problem; exit 1 if any."""
+    """Check every file and image of a dataset; list every problem.
+
+    Each problem names the file, the JSON path and what is wrong with it. Exit code 1 when
+    there is any.
+    """
     from povagent.dataset.validate import validate_dataset
 
     problems = validate_dataset(dataset_dir, (width, height))
@@ -103,16 +107,21 @@ def score_command(
     predictions: Path = typer.Option(
         ...,
         "--predictions",
-        help="Official predictions (file, {metadata, predictions}, run folder, or a root of <model>_<run> run folders) or our results.jsonl / run folder.",
+        metavar="PATH",
+        help="The predictions: an official prediction file (a list of rows or {metadata, predictions}), "
+        "a folder of them, a folder of <model>_<run> folders, or a povagent run folder or results.jsonl.",
     ),
-    dataset: Path = typer.Option(..., "--dataset", help="Dataset folder in the release layout."),
-    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
+    dataset: Path = typer.Option(..., "--dataset", metavar="FOLDER", help="Dataset folder in the POVBench release layout."),
+    as_json: bool = typer.Option(False, "--json", help="Print the scores as JSON instead of tables."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Score predictions with the official metric (mean L2 over answered, response rate beside it).
+    """Score predictions with the official metric.
 
-    Counted exactly as the official scorer counts; several runs are averaged per run (the
-    paper's number), the pooled mean shown beside it, labelled.
+    The mean L2 error over answered instances, with the response rate beside it, counted
+    exactly as the official scorer counts. Several runs are averaged per run (the paper's
+    number), the pooled mean shown beside it, labelled.
     """
     from povagent.dataset.loader import load_dataset
     from povagent.scoring.predictions import score_predictions

@@ -69,17 +69,33 @@ def _success_table(success: dict[str, Any], title: str) -> None:
 
 @app.command("run")
 def run_command(
-    pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config.pipeline for its keys)."),
-    output: Path | None = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
-    limit: int | None = typer.Option(None, "--limit", help="Run only the first N instances."),
-    keep_errors: bool = typer.Option(
-        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    pipeline: Path = typer.Argument(
+        ...,
+        metavar="PIPELINE",
+        help="The pipeline YAML file: dataset, model backend, strategy, parser, scorers and run folder "
+        "(the keys are listed under 'Pipelines' in the README).",
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
-    as_json: bool = typer.Option(False, "--json", help="Print summary.json instead of a table."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
+    output: Path | None = typer.Option(
+        None, "--output", "-o", metavar="FOLDER", help="Run folder to write to, instead of the YAML's output: key."
+    ),
+    limit: int | None = typer.Option(None, "--limit", min=1, metavar="N", help="Run only the first N instances."),
+    keep_errors: bool = typer.Option(
+        False,
+        "--keep-errors/--retry-errors",
+        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
+        "rows as they are, or try them again.",
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bar."),
+    as_json: bool = typer.Option(False, "--json", help="Print the run summary as JSON instead of tables."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Run one pipeline (resuming from its run folder: only missing keys are run)."""
+    """Run one pipeline and print its scores.
+
+    A run resumes from its run folder: only the keys without a row are sent to the model.
+    Exit code 0: every key answered or unparseable; 3: some keys failed; 4: stopped early.
+    """
     from povagent.config.pipeline import load_pipeline
     from povagent.run.progress import make_progress
     from povagent.run.runner import run_pipeline
@@ -144,15 +160,31 @@ def _say_what_next(result: Any, command: str) -> None:
 
 @app.command("sweep")
 def sweep_command(
-    sweep: Path = typer.Argument(..., help="Sweep YAML: a base pipeline, axes and named overrides."),
-    dry_run: bool = typer.Option(False, "--dry-run", help="Print the cells, requests still to make and a token estimate; call nothing."),
-    keep_errors: bool = typer.Option(
-        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    sweep: Path = typer.Argument(
+        ...,
+        metavar="SWEEP",
+        help="The sweep YAML file: a base pipeline, the axes to vary (models, strategies, conditions...) "
+        "and named overrides.",
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of a dataset (default: report it, skip it, go on)."),
+    dry_run: bool = typer.Option(
+        False, "--dry-run", help="Only print the cells, the requests still to make and a token estimate; call no model."
+    ),
+    keep_errors: bool = typer.Option(
+        False,
+        "--keep-errors/--retry-errors",
+        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
+        "rows as they are, or try them again.",
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bars."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of a dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Run every cell of a sweep (one folder per cell plus sweep.json), sharing one cache."""
+    """Run every cell of a sweep: a grid of pipelines.
+
+    Each cell gets its own run folder, sweep.json lists them, and all cells share one response
+    cache, so running the same sweep again makes no new model calls.
+    """
     from rich.console import Console
     from rich.table import Table
 
@@ -252,8 +284,12 @@ def _official_cells(summary: dict[str, Any]) -> tuple[str, str]:
 
 
 @app.command("plugins")
-def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
-    """List every backend, strategy, parser, scorer, judge and model profile, with where it came from."""
+def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
+    """List every plugin a YAML file can name, and where it came from.
+
+    Every backend, strategy, parser, scorer, surface judge and model profile, with the package
+    or file that registered it; plugins that failed to load are listed after them (exit code 1).
+    """
     from rich.console import Console
     from rich.table import Table
 
