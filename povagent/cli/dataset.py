@@ -52,20 +52,18 @@ def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> N
     caption, and a last row gives the pooled overall mean, labelled ``pooled``.
     """
     from rich.console import Console
-    from rich.table import Table
 
+    from povagent.cli.console_width import fitted_table
     from povagent.scoring.predictions import format_number
 
     runs = summary.get("runs") or []
     caption = f"mean of per-run means over {len(runs)} runs (the paper's aggregation); n / total summed over runs" if len(runs) > 1 else None
-    table = Table(title=title, caption=caption)
-    for col in ("slice", "mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total"):
-        table.add_column(col, justify="right" if col != "slice" else "left")
+    rows: list[list[str]] = []
 
     def add(name: str, cell: dict[str, Any]) -> None:
         rr = cell["response_rate"]
         pif = cell["pct_in_frame"]
-        table.add_row(
+        rows.append([
             name,
             format_number(cell["mean_l2"]),
             format_number(cell["std_l2"]),
@@ -73,13 +71,14 @@ def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> N
             "-" if pif is None else f"{pif:.1f}%",
             format_number(cell.get("mean_l2_strict")),
             f"{cell['n']} / {cell['n_total']}",
-        )
+        ])  # fmt: skip
 
     for name, cell in breakdown_slices(summary):
         add(name, cell)
     if "pooled" in summary:
         add(f"overall, pooled ({len(runs)} runs in one mean)", summary["pooled"]["overall"])
-    Console().print(table)
+    columns = [("slice", "label")] + [(h, "number") for h in ("mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total")]
+    Console().print(fitted_table(columns, rows, title=title, caption=caption))
 
 
 #: The keys of a breakdown that ``score --json`` prints.

@@ -1,0 +1,107 @@
+"""Keeping the CLI's tables readable in a narrow terminal (80 columns and less).
+
+Rich fits a table to the console by wrapping cells word by word and, when a word is still too
+long, cutting its end off with an ellipsis. That is right for descriptions and wrong for the
+two things a user scans a table for: a label (a slice, a sweep cell) cut to ``center__o-pl…``
+names nothing, and a path loses its end, which is the part that says which run it is. This
+module holds the few rules the commands share: labels are folded, never cut; a path too long
+for its place keeps its beginning and its end, with an ellipsis in the middle.
+It must not print anything itself.
+"""
+
+from __future__ import annotations
+
+import shutil
+from typing import Any
+
+#: What stands for the cut-out middle of a shortened path.
+ELLIPSIS = "…"
+
+
+def middle_ellipsis(text: str, width: int) -> str:
+    """``text`` if it fits in ``width`` characters, else its start and end around ``…``.
+
+    The end gets the larger share: of a path, the last folders name the run or the file.
+    """
+    if len(text) <= width:
+        return text
+    if width <= len(ELLIPSIS):
+        return ELLIPSIS[:width]
+    keep = width - len(ELLIPSIS)
+    head = keep // 3
+    return text[:head] + ELLIPSIS + text[len(text) - (keep - head):]
+
+
+def terminal_width() -> int:
+    """The width to fit console output to: ``COLUMNS``, else the terminal's, else 80."""
+    return shutil.get_terminal_size((80, 24)).columns
+
+
+#: How a column's cells behave when the table is too wide: ``label`` (slice, cell and plugin
+#: names: wrap at spaces, fold a long word, never cut), ``number`` (kept whole on one line;
+#: its header goes on two lines when that saves room), ``text`` (descriptions: wrap at spaces).
+COLUMN_KINDS = ("label", "number", "text")
+
+
+def fitted_table(
+    columns: list[tuple[str, str]],
+    rows: list[list[str]],
+    *,
+    title: str | None = None,
+    caption: str | None = None,
+    width: int | None = None,
+) -> Any:
+    """A rich table of ``rows`` under ``columns`` (``(header, kind)``, kind from :data:`COLUMN_KINDS`)
+    for a console ``width`` wide (default: the terminal's).
+
+    Rich narrows a table by shrinking its widest columns, numbers included, and then cuts
+    words; here only labels and text give up room: when the natural table is too wide, number
+    headers go on two lines, and labels and text wrap.
+    """
+    from rich.table import Table
+
+    width = terminal_width() if width is None else width
+    for header, kind in columns:
+        if kind not in COLUMN_KINDS:
+            raise ValueError(f"column {header!r}: kind {kind!r} is not one of {COLUMN_KINDS}")
+    plain_rows = [[_plain(c) for c in row] for row in rows]
+
+    def longest(i: int) -> int:
+        return max((len(r[i]) for r in plain_rows if i < len(r)), default=0)
+
+    natural = sum(max(len(h), longest(i)) for i, (h, _) in enumerate(columns)) + 3 * len(columns) + 1
+    squeeze = natural > width
+    table = Table(title=title, caption=caption)
+    for header, kind in columns:
+        if kind == "number":
+            table.add_column(_two_lines(header) if squeeze else header, justify="right", no_wrap=True)
+        elif kind == "label":
+            table.add_column(header, overflow="fold")
+        else:
+            table.add_column(header)
+    for row in rows:
+        table.add_row(*row)
+    return table
+
+
+def _two_lines(header: str) -> str:
+    """``header`` broken at the space nearest its middle (unchanged without a space)."""
+    spaces = [i for i, ch in enumerate(header) if ch == " "]
+    if not spaces:
+        return header
+    cut = min(spaces, key=lambda i: abs(len(header) - 2 * i))
+    return header[:cut] + "\n" + header[cut + 1 :]
+
+
+def _plain(cell: str) -> str:
+    """A cell's visible text (rich markup such as ``[bold]`` takes no room)."""
+    from rich.text import Text
+
+    return Text.from_markup(cell).plain
+
+
+def path_in_line(path: object, rest: str = "", width: int | None = None) -> str:
+    """``path`` followed by ``rest`` (`` (center / basic / json)``), the path shortened in its
+    middle so that the line fits ``width`` (default: the terminal's); never below 24 characters."""
+    width = terminal_width() if width is None else width
+    return middle_ellipsis(str(path), max(24, width - len(rest))) + rest
