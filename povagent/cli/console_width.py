@@ -1,41 +1,28 @@
 """Keeping the CLI's tables readable in a narrow terminal (80 columns and less).
 
-Rich fits a table to the console by wrapping cells word by word and, when a word is still too
-long, cutting its end off with an ellipsis. That is right for descriptions and wrong for the
-two things a user scans a table for: a label (a slice, a sweep cell) cut to ``center__o-pl…``
-names nothing, and a path loses its end, which is the part that says which run it is. This
-module holds the few rules the commands share: labels are folded, never cut; a path too long
-for its place keeps its beginning and its end, with an ellipsis in the middle.
-It must not print anything itself.
+Rich fits a table to the console by shrinking its widest columns and, when a word is still
+too long, cutting its end off with an ellipsis. That is right for descriptions and wrong for
+what a user scans a table for: a label (a slice, a sweep cell) cut to ``center__o-pl…`` names
+nothing, a number cut to ``1800 / …`` is not a number, and a path loses its end, which is the
+part that says which run it is. The commands build their tables here: numbers and labels stay
+whole, headers and descriptions give up the room, and a path in a title is shortened in its
+middle (:mod:`povagent.run.narrow_console`). Nothing here prints.
 """
 
 from __future__ import annotations
 
-import shutil
 from typing import Any
 
-#: What stands for the cut-out middle of a shortened path.
-ELLIPSIS = "…"
+from povagent.run.narrow_console import middle_ellipsis
+
+__all__ = ["console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
 
 
-def middle_ellipsis(text: str, width: int) -> str:
-    """``text`` if it fits in ``width`` characters, else its start and end around ``…``.
+def console_width() -> int:
+    """The width rich prints to: ``COLUMNS``, else the terminal's, else 80."""
+    from rich.console import Console
 
-    The end gets the larger share: of a path, the last folders name the run or the file.
-    """
-    if len(text) <= width:
-        return text
-    if width <= len(ELLIPSIS):
-        return ELLIPSIS[:width]
-    keep = width - len(ELLIPSIS)
-    head = keep // 3
-    return text[:head] + ELLIPSIS + text[len(text) - (keep - head):]
-
-
-def terminal_width() -> int:
-    """The width to fit console output to: ``COLUMNS``, else the terminal's, else 80."""
-    return shutil.get_terminal_size((80, 24)).columns
-
+    return Console().width
 
 #: How a column's cells behave when the table is too wide: ``label`` (slice, cell and plugin
 #: names: wrap at spaces, fold a long word, never cut), ``number`` (kept whole on one line;
@@ -60,7 +47,7 @@ def fitted_table(
     """
     from rich.table import Table
 
-    width = terminal_width() if width is None else width
+    width = console_width() if width is None else width
     for header, kind in columns:
         if kind not in COLUMN_KINDS:
             raise ValueError(f"column {header!r}: kind {kind!r} is not one of {COLUMN_KINDS}")
@@ -103,5 +90,5 @@ def _plain(cell: str) -> str:
 def path_in_line(path: object, rest: str = "", width: int | None = None) -> str:
     """``path`` followed by ``rest`` (`` (center / basic / json)``), the path shortened in its
     middle so that the line fits ``width`` (default: the terminal's); never below 24 characters."""
-    width = terminal_width() if width is None else width
+    width = console_width() if width is None else width
     return middle_ellipsis(str(path), max(24, width - len(rest))) + rest

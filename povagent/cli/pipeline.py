@@ -298,7 +298,7 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
     from rich.table import Table
     from rich.text import Text
 
-    from povagent.cli.console_width import middle_ellipsis
+    from povagent.run.narrow_console import middle_ellipsis
 
     name_width = max((len(e.name) for es in entries.values() for e in es), default=4)
     name_width = min(name_width, max(12, width // 3))
