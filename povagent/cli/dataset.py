@@ -26,11 +26,26 @@ def validate_command(
 
     problems = validate_dataset(dataset_dir, (width, height))
     for p in problems:
-        typer.echo(str(p))
+        typer.echo(_fit_to_terminal(str(p)))
     if problems:
         typer.echo(f"{len(problems)} problem(s) in {dataset_dir}", err=True)
         raise typer.Exit(1)
     typer.echo(f"{dataset_dir}: valid")
+
+
+def _fit_to_terminal(line: str) -> str:
+    """``line`` wrapped to the terminal's width, continuation lines indented, when stdout is a
+    terminal; unchanged when it is a pipe or a file, where one problem a line is what grep and
+    scripts read."""
+    import shutil
+    import sys
+    import textwrap
+
+    if not sys.stdout.isatty():
+        return line
+    width = shutil.get_terminal_size((80, 24)).columns
+    # a JSON path or file name longer than the line is left whole: the terminal breaks it
+    return textwrap.fill(line, width, subsequent_indent="    ", break_long_words=False, break_on_hyphens=False)
 
 
 def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
