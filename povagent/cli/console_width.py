@@ -34,7 +34,7 @@ def fitted_table(
     columns: list[tuple[str, str]],
     rows: list[list[str]],
     *,
-    title: str | None = None,
+    title: str | tuple[object, str] | None = None,
     caption: str | None = None,
     width: int | None = None,
 ) -> Any:
@@ -43,7 +43,8 @@ def fitted_table(
 
     Rich narrows a table by shrinking its widest columns, numbers included, and then cuts
     words; here only labels and text give up room: when the natural table is too wide, number
-    headers go on two lines, and labels and text wrap.
+    headers go on two lines, and labels and text wrap. A ``title`` given as ``(path, rest)`` is
+    the path followed by ``rest``, the path shortened in its middle to the table's width.
     """
     from rich.table import Table
 
@@ -53,15 +54,20 @@ def fitted_table(
             raise ValueError(f"column {header!r}: kind {kind!r} is not one of {COLUMN_KINDS}")
     plain_rows = [[_plain(c) for c in row] for row in rows]
 
-    def longest(i: int) -> int:
-        return max((len(r[i]) for r in plain_rows if i < len(r)), default=0)
+    def table_width(headers: list[str]) -> int:
+        # each column: its widest line, one space of padding either side, one border
+        cells = [max([len(x) for x in h.split("\n")] + [len(r[i]) for r in plain_rows if i < len(r)]) for i, h in enumerate(headers)]
+        return sum(cells) + 3 * len(headers) + 1
 
-    natural = sum(max(len(h), longest(i)) for i, (h, _) in enumerate(columns)) + 3 * len(columns) + 1
-    squeeze = natural > width
+    headers = [h for h, _ in columns]
+    if table_width(headers) > width:
+        headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
+    if isinstance(title, tuple):
+        title = path_in_line(title[0], title[1], width=min(width, table_width(headers)))
     table = Table(title=title, caption=caption)
-    for header, kind in columns:
+    for header, (_, kind) in zip(headers, columns):
         if kind == "number":
-            table.add_column(_two_lines(header) if squeeze else header, justify="right", no_wrap=True)
+            table.add_column(header, justify="right", no_wrap=True)
         elif kind == "label":
             table.add_column(header, overflow="fold")
         else:

@@ -60,8 +60,10 @@ def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str,
     yield from breakdown["per_direction"].items()
 
 
-def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> None:
+def render_summary(summary: dict[str, Any], title: str | tuple[Any, str] = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table.
+
+    ``title`` may be ``(path, rest)``: the path is then shortened in its middle to fit.
 
     Several runs: the rows are the mean of per-run means (the paper's numbers), said in the
     caption, and a last row gives the pooled overall mean, labelled ``pooled``.
@@ -123,7 +125,8 @@ def score_command(
         "--predictions",
         metavar="PATH",
         help="The predictions: an official prediction file (a list of rows or {metadata, predictions}), "
-        "a folder of them, a folder of <model>_<run> folders, or a povagent run folder or results.jsonl.",
+        "a folder of them, a folder of MODEL_RUN folders (as the authors' runner names them), or a povagent "
+        "run folder or results.jsonl.",
     ),
     dataset: Path = typer.Option(..., "--dataset", metavar="FOLDER", help="Dataset folder in the POVBench release layout."),
     as_json: bool = typer.Option(False, "--json", help="Print the scores as JSON instead of tables."),
