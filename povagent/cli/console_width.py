@@ -11,11 +11,20 @@ middle (:mod:`povagent.run.narrow_console`). Nothing here prints.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 from povagent.run.narrow_console import middle_ellipsis
 
-__all__ = ["console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
+__all__ = ["PathTitle", "console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
+
+
+class PathTitle(NamedTuple):
+    """A table title naming a folder or file: ``before``, the path, ``after``; the path is the
+    part shortened (in its middle) when the title is wider than its table."""
+
+    path: object
+    after: str = ""
+    before: str = ""
 
 
 def console_width() -> int:
@@ -34,7 +43,7 @@ def fitted_table(
     columns: list[tuple[str, str]],
     rows: list[list[str]],
     *,
-    title: str | tuple[object, str] | None = None,
+    title: str | PathTitle | None = None,
     caption: str | None = None,
     width: int | None = None,
 ) -> Any:
@@ -43,8 +52,8 @@ def fitted_table(
 
     Rich narrows a table by shrinking its widest columns, numbers included, and then cuts
     words; here only labels and text give up room: when the natural table is too wide, number
-    headers go on two lines, and labels and text wrap. A ``title`` given as ``(path, rest)`` is
-    the path followed by ``rest``, the path shortened in its middle to the table's width.
+    headers go on two lines, and labels and text wrap. A :class:`PathTitle` is fitted to the
+    table's width by shortening its path in the middle.
     """
     from rich.table import Table
 
@@ -62,8 +71,9 @@ def fitted_table(
     headers = [h for h, _ in columns]
     if table_width(headers) > width:
         headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
-    if isinstance(title, tuple):
-        title = path_in_line(title[0], title[1], width=min(width, table_width(headers)))
+    if isinstance(title, PathTitle):
+        room = min(width, table_width(headers)) - len(title.before)
+        title = title.before + path_in_line(title.path, title.after, width=room)
     table = Table(title=title, caption=caption)
     for header, (_, kind) in zip(headers, columns):
         if kind == "number":

@@ -9,6 +9,7 @@ from typing import Any, Iterator
 import typer
 
 from povagent.cli import app
+from povagent.cli.console_width import PathTitle
 
 
 @app.command("validate")
@@ -60,10 +61,10 @@ def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str,
     yield from breakdown["per_direction"].items()
 
 
-def render_summary(summary: dict[str, Any], title: str | tuple[Any, str] = "POVBench scores") -> None:
+def render_summary(summary: dict[str, Any], title: str | PathTitle = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table.
 
-    ``title`` may be ``(path, rest)``: the path is then shortened in its middle to fit.
+    A :class:`~povagent.cli.console_width.PathTitle` has its path shortened to fit.
 
     Several runs: the rows are the mean of per-run means (the paper's numbers), said in the
     caption, and a last row gives the pooled overall mean, labelled ``pooled``.

@@ -14,10 +14,11 @@ from typing import Any
 import typer
 
 from povagent.cli import app
+from povagent.cli.console_width import PathTitle
 
 
-def _summary_table(summary: dict[str, Any], title: tuple[Path, str], run_dir: Path) -> None:
-    """The run's score tables under ``title``: (run folder, what ran), the folder shortened to fit."""
+def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> None:
+    """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
 
     success = _success_summary(summary, run_dir)
@@ -49,7 +50,7 @@ def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
     return "-" if rate is None else f"{100 * rate:.1f}%"
 
 
-def _success_table(success: dict[str, Any], title: tuple[Path, str]) -> None:
+def _success_table(success: dict[str, Any], title: PathTitle) -> None:
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
@@ -60,7 +61,7 @@ def _success_table(success: dict[str, Any], title: tuple[Path, str]) -> None:
         answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
         rows.append([name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered])
     columns = [("slice", "label")] + [(h, "number") for h in ("success rate", "hits / total", "resp. rate", "answered / total")]
-    Console().print(fitted_table(columns, rows, title=(title[0], f"{title[1]}: success rate (unanswered = failure)")))
+    Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}: success rate (unanswered = failure)")))
 
 
 @app.command("run")
@@ -115,7 +116,7 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    title = (config.output, f" ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    title = PathTitle(config.output, f" ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
@@ -203,7 +204,7 @@ def sweep_command(
             rows.append([c.name, *(f"{v:,}" for v in vals)])
         rows.append(["[bold]total", *(f"[bold]{v:,}" for v in totals)])
         columns = [("cell", "label")] + [(h, "number") for h in ("keys", "done", "requests to make", "~prompt tokens", "<= completion tokens")]
-        console.print(fitted_table(columns, rows, title=(sweep_cfg.output, f" ({len(cells)} cells, dry run)")))
+        console.print(fitted_table(columns, rows, title=PathTitle(sweep_cfg.output, f" ({len(cells)} cells)", before=f"dry run of {sweep.name}: ")))
         return
 
     def done(cell: Any, res: Any) -> None:
@@ -256,7 +257,7 @@ def sweep_command(
             *(_official_cells(s) if with_official else ()),
             *(("-",) if with_success else ()),
         ])  # fmt: skip
-    title = (result.output / "sweep.json", f" ({len(result.cells)} cells)")
+    title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
     codes = [result.results[c.name].exit_code for c in result.cells]
     for cell in result.cells:

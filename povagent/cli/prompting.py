@@ -179,6 +179,7 @@ def rescore_command(
     numbers comparable with the paper; with a lenient parser the official parse's numbers are
     printed beside the repaired ones.
     """
+    from povagent.cli.console_width import PathTitle
     from povagent.cli.dataset import render_summary
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
@@ -189,7 +190,7 @@ def rescore_command(
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2))
     else:
-        render_summary(result.summary, title=f"{run_dir} re-parsed with {parser}")
+        render_summary(result.summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
         render_official_beside(result.summary, parser, reads_officially="official_parse" not in result.summary, run_dir=run_dir)
         typer.echo(f"parse status: {json.dumps(result.summary['parse_status'])}; repaired: {result.summary['repaired']}")
     typer.echo(f"written to {result.out_dir}", err=True)

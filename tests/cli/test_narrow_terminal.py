@@ -81,6 +81,21 @@ def test_the_sweep_dry_run_names_every_cell_in_full(tmp_path, mini_root):
     assert "…" in result.stdout and "ablation-of-every-strategy" in result.stdout
 
 
+def test_the_sweep_table_fits_and_names_every_cell_in_full(tmp_path, mini_root):
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "center"}))
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump({
+        "base": "base.yaml",
+        "output": str(tmp_path / "a-rather-long-folder-name-for-the-sweep" / "strategies"),
+        "axes": {"strategy": ["basic", "spatial-cot"], "backend": ["center", "random"]},
+    }))  # fmt: skip
+    result = runner.invoke(app, ["sweep", str(tmp_path / "sweep.yaml"), "--quiet"], env=NARROW)
+    assert result.exit_code == 0, result.output
+    table = result.stdout.split("sweep sweep.yaml (4 cells) -> ", 1)[1]
+    assert widest(table) <= 80, table
+    assert row_of(table, "center__spatial-cot")[1:] == ["0.208", "100.0%", "18 / 18", "0.208", "100.0%"]
+    assert row_of(table, "random__basic")[3] == "18 / 18"
+
+
 def test_plugins_fit_80_columns_with_every_name_and_description():
     listing = json.loads(runner.invoke(app, ["plugins", "--json"]).stdout)
     result = runner.invoke(app, ["plugins"], env=NARROW)
