@@ -20,7 +20,8 @@ __all__ = ["PathTitle", "console_width", "fitted_table", "middle_ellipsis", "pat
 
 class PathTitle(NamedTuple):
     """A table title naming a folder or file: ``before``, the path, ``after``; the path is the
-    part shortened (in its middle) when the title is wider than its table."""
+    part shortened (in its middle) when the title's first line is wider than its table.
+    ``after`` may go on with more lines (a line break in it), each short enough to fit."""
 
     path: object
     after: str = ""
@@ -73,7 +74,8 @@ def fitted_table(
         headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
     if isinstance(title, PathTitle):
         room = min(width, table_width(headers)) - len(title.before)
-        title = title.before + path_in_line(title.path, title.after, width=room)
+        first, sep, more = title.after.partition("\n")
+        title = title.before + path_in_line(title.path, first, width=room) + sep + more
     table = Table(title=title, caption=caption)
     for header, (_, kind) in zip(headers, columns):
         if kind == "number":

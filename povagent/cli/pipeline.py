@@ -61,7 +61,7 @@ def _success_table(success: dict[str, Any], title: PathTitle) -> None:
         answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
         rows.append([name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered])
     columns = [("slice", "label")] + [(h, "number") for h in ("success rate", "hits / total", "resp. rate", "answered / total")]
-    Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}: success rate (unanswered = failure)")))
+    Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}\nsuccess rate (unanswered = failure)")))
 
 
 @app.command("run")

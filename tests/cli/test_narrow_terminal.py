@@ -7,6 +7,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -53,6 +54,21 @@ def test_the_run_summary_fits_and_keeps_labels_and_numbers_whole(center_run):
     # the run folder in the title is shortened in its middle: its last folder is still there
     title = shown.splitlines()[0].strip()
     assert title.endswith("/run (center / basic / json)") and len(title) <= 80
+
+
+def test_a_real_world_run_prints_its_success_table_in_80_columns(tmp_path, monkeypatch):
+    """The success table of a set without official ground truth, its long run folder
+    shortened in the title's first line (examples/realworld_demo, run from the repository)."""
+    monkeypatch.chdir(Path(__file__).resolve().parents[2])
+    out = tmp_path / "a-rather-long-folder-name" / "for-the-real-world-demo" / "run"
+    result = runner.invoke(app, ["run", "examples/realworld_demo/pipeline.yaml", "-o", str(out), "-q"], env=NARROW)
+    assert result.exit_code == 0, result.output
+    shown = result.stdout
+    assert widest(shown) <= 80, shown
+    first, second = (line.strip() for line in shown.splitlines()[:2])
+    assert first.endswith("for-the-real-world-demo/run (center / basic / json)") and "…" in first
+    assert second == "success rate (unanswered = failure)"
+    assert row_of(shown, "overall")[1:] == ["0.0%", "0 / 6", "100.0%", "6 / 6"]
 
 
 def test_score_tables_fit_80_columns(center_run, mini_root):
