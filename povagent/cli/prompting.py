@@ -119,7 +119,7 @@ def parse_command(
     width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width of the frame the question was about."),
     height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height of the frame the question was about."),
     condition: str = typer.Option(
-        "a", "--condition", metavar="CONDITION", help="a (Inferred), b (Stated) or c (Given): A and B answers name a frame."
+        "a", "--condition", metavar="CONDITION", help="a (Inferred), b (Stated) or c (Given), or those names: A and B answers name a frame."
     ),
     frames: int = typer.Option(30, "--frames", min=1, metavar="N", help="Number of exploration frames shown (conditions a and b)."),
     plugin: list[str] = typer.Option(
