@@ -18,6 +18,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    # click's plain help: typer's rich panels print a type column beside every option, flags
+    # included (`--strict <bool>`, even `--help <bool>`), and keep a docstring's line breaks
+    rich_markup_mode=None,
 )
 
 #: Submodules that add commands to ``app`` (each owns its commands).

@@ -9,24 +9,44 @@ from typing import Any, Iterator
 import typer
 
 from povagent.cli import app
+from povagent.cli.console_width import PathTitle
 
 
 @app.command("validate")
 def validate_command(
-    dataset_dir: Path = typer.Argument(..., help="Dataset folder in the POVBench release layout."),
-    width: int = typer.Option(512, help="Expected exploration frame width."),
-    height: int = typer.Option(512, help="Expected exploration frame height."),
+    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR", help="Dataset folder in the POVBench release layout."),
+    width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width every exploration frame must have."),
+    height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height every exploration frame must have."),
 ) -> None:
-    """Check every file and image of a dataset; list every problem; exit 1 if any."""
+    """Check every file and image of a dataset; list every problem.
+
+    Each problem names the file, the JSON path and what is wrong with it. Exit code 1 when
+    there is any.
+    """
     from povagent.dataset.validate import validate_dataset
 
     problems = validate_dataset(dataset_dir, (width, height))
     for p in problems:
-        typer.echo(str(p))
+        typer.echo(_fit_to_terminal(str(p)))
     if problems:
         typer.echo(f"{len(problems)} problem(s) in {dataset_dir}", err=True)
         raise typer.Exit(1)
     typer.echo(f"{dataset_dir}: valid")
+
+
+def _fit_to_terminal(line: str) -> str:
+    """``line`` wrapped to the terminal's width, continuation lines indented, when stdout is a
+    terminal; unchanged when it is a pipe or a file, where one problem a line is what grep and
+    scripts read."""
+    import shutil
+    import sys
+    import textwrap
+
+    if not sys.stdout.isatty():
+        return line
+    width = shutil.get_terminal_size((80, 24)).columns
+    # a JSON path or file name longer than the line is left whole: the terminal breaks it
+    return textwrap.fill(line, width, subsequent_indent="    ", break_long_words=False, break_on_hyphens=False)
 
 
 def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
@@ -41,27 +61,27 @@ def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str,
     yield from breakdown["per_direction"].items()
 
 
-def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> None:
+def render_summary(summary: dict[str, Any], title: str | PathTitle = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table.
+
+    A :class:`~povagent.cli.console_width.PathTitle` has its path shortened to fit.
 
     Several runs: the rows are the mean of per-run means (the paper's numbers), said in the
     caption, and a last row gives the pooled overall mean, labelled ``pooled``.
     """
     from rich.console import Console
-    from rich.table import Table
 
+    from povagent.cli.console_width import fitted_table
     from povagent.scoring.predictions import format_number
 
     runs = summary.get("runs") or []
     caption = f"mean of per-run means over {len(runs)} runs (the paper's aggregation); n / total summed over runs" if len(runs) > 1 else None
-    table = Table(title=title, caption=caption)
-    for col in ("slice", "mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total"):
-        table.add_column(col, justify="right" if col != "slice" else "left")
+    rows: list[list[str]] = []
 
     def add(name: str, cell: dict[str, Any]) -> None:
         rr = cell["response_rate"]
         pif = cell["pct_in_frame"]
-        table.add_row(
+        rows.append([
             name,
             format_number(cell["mean_l2"]),
             format_number(cell["std_l2"]),
@@ -69,13 +89,14 @@ def render_summary(summary: dict[str, Any], title: str = "POVBench scores") -> N
             "-" if pif is None else f"{pif:.1f}%",
             format_number(cell.get("mean_l2_strict")),
             f"{cell['n']} / {cell['n_total']}",
-        )
+        ])  # fmt: skip
 
     for name, cell in breakdown_slices(summary):
         add(name, cell)
     if "pooled" in summary:
         add(f"overall, pooled ({len(runs)} runs in one mean)", summary["pooled"]["overall"])
-    Console().print(table)
+    columns = [("slice", "label")] + [(h, "number") for h in ("mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total")]
+    Console().print(fitted_table(columns, rows, title=title, caption=caption))
 
 
 #: The keys of a breakdown that ``score --json`` prints.
@@ -103,16 +124,22 @@ def score_command(
     predictions: Path = typer.Option(
         ...,
         "--predictions",
-        help="Official predictions (file, {metadata, predictions}, run folder, or a root of <model>_<run> run folders) or our results.jsonl / run folder.",
+        metavar="PATH",
+        help="The predictions: an official prediction file (a list of rows or {metadata, predictions}), "
+        "a folder of them, a folder of MODEL_RUN folders (as the authors' runner names them), or a povagent "
+        "run folder or results.jsonl.",
     ),
-    dataset: Path = typer.Option(..., "--dataset", help="Dataset folder in the release layout."),
-    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
+    dataset: Path = typer.Option(..., "--dataset", metavar="FOLDER", help="Dataset folder in the POVBench release layout."),
+    as_json: bool = typer.Option(False, "--json", help="Print the scores as JSON instead of tables."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Score predictions with the official metric (mean L2 over answered, response rate beside it).
+    """Score predictions with the official metric.
 
-    Counted exactly as the official scorer counts; several runs are averaged per run (the
-    paper's number), the pooled mean shown beside it, labelled.
+    The mean L2 error over answered instances, with the response rate beside it, counted
+    exactly as the official scorer counts. Several runs are averaged per run (the paper's
+    number), the pooled mean shown beside it, labelled.
     """
     from povagent.dataset.loader import load_dataset
     from povagent.scoring.predictions import score_predictions

@@ -11,22 +11,27 @@ from povagent.cli import app
 
 @app.command("download")
 def download_command(
-    repo_id: str = typer.Argument("owl-owl/POVBench", help="Dataset repository on the Hub (default: the POVBench release)."),
+    repo_id: str = typer.Argument(
+        "owl-owl/POVBench", metavar="REPO", help="Dataset repository on the Hugging Face Hub (default: the POVBench release)."
+    ),
     conditions: list[str] | None = typer.Option(
-        None, "--conditions", "-c",
+        None, "--conditions", "-c", metavar="CONDITION",
         help="Fetch only what these conditions read (a/inferred, b/stated, c/given; repeat or comma-separate). "
         "Given alone skips the exploration frames. Default: the whole release.",
     ),
-    revision: str | None = typer.Option(None, "--revision", help="Branch, tag or commit (default: main)."),
-    offline: bool = typer.Option(False, "--offline", help="Only read the cache (as HF_HUB_OFFLINE=1 does)."),
-    cache_dir: Path | None = typer.Option(None, "--cache-dir", help="Cache folder (default: the Hugging Face cache, HF_HOME / HF_HUB_CACHE)."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    revision: str | None = typer.Option(None, "--revision", metavar="REV", help="Branch, tag or commit (default: main)."),
+    offline: bool = typer.Option(False, "--offline", help="Only read the cache, download nothing (as HF_HUB_OFFLINE=1 does)."),
+    cache_dir: Path | None = typer.Option(
+        None, "--cache-dir", metavar="FOLDER", help="Cache folder (default: the Hugging Face cache, HF_HOME / HF_HUB_CACHE)."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show progress bars."),
 ) -> None:
-    """Fetch the release into the Hugging Face cache and print where its root is.
+    """Download the POVBench release and print its folder.
 
-    Use the printed folder as ``dataset: {path: ...}``, or name the repository in a pipeline
-    (``dataset: {hub: owl-owl/POVBench}``) and let ``run`` fetch it. Set ``HF_ENDPOINT`` for a
-    mirror; with ``HF_HUB_OFFLINE=1`` (or ``--offline``) only the cache is read.
+    The release goes into the Hugging Face cache. Use the printed folder as
+    'dataset: {path: ...}' in a pipeline, or name the repository there
+    ('dataset: {hub: owl-owl/POVBench}') and let run fetch it. Set HF_ENDPOINT for a mirror;
+    with HF_HUB_OFFLINE=1 (or --offline) only the cache is read.
     """
     from povagent.dataset.hub import download_release, release_size
 

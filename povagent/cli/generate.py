@@ -32,16 +32,21 @@ def judge_options(pairs: list[str]) -> dict[str, Any]:
 
 @app.command("generate")
 def generate_command(
-    out: Path = typer.Option(..., "--out", help="Folder to write the dataset to (release layout)."),
-    houses: int = typer.Option(3, "--houses", min=1, help="Number of houses."),
-    seed: int = typer.Option(0, "--seed", help="Seed: the same seed gives byte-identical files."),
-    frames: int = typer.Option(30, "--frames", min=1, help="Exploration frames per house (at most; the paper uses 30)."),
-    jobs: int = typer.Option(1, "--jobs", min=1, help="Worker processes (the output does not depend on it)."),
+    out: Path = typer.Option(..., "--out", metavar="FOLDER", help="Folder to write the dataset to (POVBench release layout)."),
+    houses: int = typer.Option(3, "--houses", min=1, metavar="N", help="Number of houses."),
+    seed: int = typer.Option(0, "--seed", metavar="N", help="Random seed: the same seed writes byte-identical files."),
+    frames: int = typer.Option(
+        30, "--frames", min=1, metavar="N", help="Exploration frames per house, at most (the paper uses 30)."
+    ),
+    jobs: int = typer.Option(
+        1, "--jobs", min=1, metavar="N", help="Worker processes (the files written do not depend on it)."
+    ),
     with_render: bool = typer.Option(
-        False, "--with-render", help="Also write depth maps and instance masks under each house's _render/."
+        False, "--with-render", help="Also write depth maps and instance masks under each house's _render/ folder."
     ),
     judge: str = typer.Option(
-        "physical-rules", "--judge", help="Surface judge, by the name a plugin registered (see `povagent plugins`)."
+        "physical-rules", "--judge", metavar="NAME",
+        help="Surface judge deciding where objects may stand (names: povagent plugins).",
     ),
     judge_option: list[str] = typer.Option(
         [], "--judge-option", metavar="KEY=VALUE", help="An option for the judge's factory (repeatable)."
@@ -50,7 +55,11 @@ def generate_command(
         [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable)."
     ),
 ) -> None:
-    """Generate houses, render their exploration frames and observer views, write the queries."""
+    """Generate a POVBench-format dataset of procedural houses.
+
+    Builds the houses, renders their exploration frames and observer views, and writes the
+    queries of all three conditions.
+    """
     from povagent.errors import PluginError
     from povagent.generate import generate_dataset
 

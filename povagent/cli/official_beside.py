@@ -26,8 +26,8 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
     """Print the official parse's response rate and mean beside the repaired ones (per slice), or
     the note saying how to get them; nothing when ``parser`` reads officially."""
     from rich.console import Console
-    from rich.table import Table
 
+    from povagent.cli.console_width import fitted_table
     from povagent.cli.dataset import breakdown_slices
     from povagent.scoring.predictions import format_number
 
@@ -47,7 +47,15 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
         rr = cell.get("response_rate")
         return "-" if rr is None else f"{100 * rr:.1f}%"
 
-    table = Table(
+    lenient_cells = dict(breakdown_slices(summary))
+    rows = []
+    for name, cell in breakdown_slices(official):
+        mine = lenient_cells.get(name, {})
+        rows.append([name, format_number(mine.get("mean_l2")), rate(mine), format_number(cell.get("mean_l2")), rate(cell)])
+    headers = (f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official['parser']} (official)", f"resp. {official['parser']}")
+    console.print(fitted_table(
+        [("slice", "label")] + [(h, "number") for h in headers],
+        rows,
         title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
         caption=(
             f"{official['rows_without_reading']} row(s) with an answer carry no official reading and are left out: incomplete; "
@@ -55,11 +63,4 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
             if official.get("rows_without_reading")
             else None
         ),
-    )
-    for col in ("slice", f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official['parser']} (official)", f"resp. {official['parser']}"):
-        table.add_column(col, justify="left" if col == "slice" else "right")
-    lenient_cells = dict(breakdown_slices(summary))
-    for name, cell in breakdown_slices(official):
-        mine = lenient_cells.get(name, {})
-        table.add_row(name, format_number(mine.get("mean_l2")), rate(mine), format_number(cell.get("mean_l2")), rate(cell))
-    console.print(table)
+    ))  # fmt: skip

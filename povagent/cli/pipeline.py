@@ -14,9 +14,11 @@ from typing import Any
 import typer
 
 from povagent.cli import app
+from povagent.cli.console_width import PathTitle
 
 
-def _summary_table(summary: dict[str, Any], title: str, run_dir: Path) -> None:
+def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> None:
+    """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
 
     success = _success_summary(summary, run_dir)
@@ -48,38 +50,49 @@ def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
     return "-" if rate is None else f"{100 * rate:.1f}%"
 
 
-def _success_table(success: dict[str, Any], title: str) -> None:
+def _success_table(success: dict[str, Any], title: PathTitle) -> None:
     from rich.console import Console
-    from rich.table import Table
 
+    from povagent.cli.console_width import fitted_table
     from povagent.cli.dataset import breakdown_slices
 
-    table = Table(title=f"{title}: success rate (unanswered = failure)")
-    for col in ("slice", "success rate", "hits / total", "resp. rate", "answered / total"):
-        table.add_column(col, justify="left" if col == "slice" else "right")
-
-    def add(name: str, cell: dict[str, Any]) -> None:
-        answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
-        table.add_row(name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered)
-
+    rows = []
     for name, cell in breakdown_slices(success):
-        add(name, cell)
-    Console().print(table)
+        answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
+        rows.append([name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered])
+    columns = [("slice", "label")] + [(h, "number") for h in ("success rate", "hits / total", "resp. rate", "answered / total")]
+    Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}\nsuccess rate (unanswered = failure)")))
 
 
 @app.command("run")
 def run_command(
-    pipeline: Path = typer.Argument(..., help="Pipeline YAML (see povagent.config.pipeline for its keys)."),
-    output: Path | None = typer.Option(None, "--output", "-o", help="Run folder (overrides output: in the YAML)."),
-    limit: int | None = typer.Option(None, "--limit", help="Run only the first N instances."),
-    keep_errors: bool = typer.Option(
-        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    pipeline: Path = typer.Argument(
+        ...,
+        metavar="PIPELINE",
+        help="The pipeline YAML file: dataset, model backend, strategy, parser, scorers and run folder "
+        "(the keys are listed under 'Pipelines' in the README).",
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
-    as_json: bool = typer.Option(False, "--json", help="Print summary.json instead of a table."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of the dataset (default: report it, skip it, go on)."),
+    output: Path | None = typer.Option(
+        None, "--output", "-o", metavar="FOLDER", help="Run folder to write to, instead of the YAML's output: key."
+    ),
+    limit: int | None = typer.Option(None, "--limit", min=1, metavar="N", help="Run only the first N instances."),
+    keep_errors: bool = typer.Option(
+        False,
+        "--keep-errors/--retry-errors",
+        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
+        "rows as they are, or try them again.",
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bar."),
+    as_json: bool = typer.Option(False, "--json", help="Print the run summary as JSON instead of tables."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Run one pipeline (resuming from its run folder: only missing keys are run)."""
+    """Run one pipeline and print its scores.
+
+    A run resumes from its run folder: only the keys without a row are sent to the model.
+    Exit code 0: every key answered or unparseable; 3: some keys failed; 4: stopped early.
+    """
     from povagent.config.pipeline import load_pipeline
     from povagent.run.progress import make_progress
     from povagent.run.runner import run_pipeline
@@ -103,7 +116,8 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    _summary_table(result.summary, f"{config.output} ({config.backend.name} / {config.strategy.name} / {config.parser.name})", result.run_dir)  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    title = PathTitle(config.output, f" ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    _summary_table(result.summary, title, result.run_dir)
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
 
@@ -117,10 +131,14 @@ def run_command(
             reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]  # load_pipeline resolved it
             run_dir=result.run_dir,
         )
+    # two short lines rather than one that an 80-column terminal breaks mid-phrase
     typer.echo(
         f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
-        f"{rows['infra_error']} infra errors; this session {result.stats.requests} requests, "
-        f"{result.stats.cache_hits} cache hits, {result.stats.retries} retries, {result.stats.wall_s:.1f} s"
+        f"{rows['infra_error']} infra errors"
+    )
+    typer.echo(
+        f"this session: {result.stats.requests} requests, {result.stats.cache_hits} cache hits, "
+        f"{result.stats.retries} retries, {result.stats.wall_s:.1f} s"
     )
     _say_what_next(result, f"povagent run {pipeline}")
     raise typer.Exit(result.exit_code)
@@ -144,34 +162,49 @@ def _say_what_next(result: Any, command: str) -> None:
 
 @app.command("sweep")
 def sweep_command(
-    sweep: Path = typer.Argument(..., help="Sweep YAML: a base pipeline, axes and named overrides."),
-    dry_run: bool = typer.Option(False, "--dry-run", help="Print the cells, requests still to make and a token estimate; call nothing."),
-    keep_errors: bool = typer.Option(
-        False, "--keep-errors", help="Keep the rows of keys that failed (infra_error) instead of trying them again."
+    sweep: Path = typer.Argument(
+        ...,
+        metavar="SWEEP",
+        help="The sweep YAML file: a base pipeline, the axes to vary (models, strategies, conditions...) "
+        "and named overrides.",
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
-    strict: bool = typer.Option(False, "--strict", help="Stop at a bad house or pair of a dataset (default: report it, skip it, go on)."),
+    dry_run: bool = typer.Option(
+        False, "--dry-run", help="Only print the cells, the requests still to make and a token estimate; call no model."
+    ),
+    keep_errors: bool = typer.Option(
+        False,
+        "--keep-errors/--retry-errors",
+        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
+        "rows as they are, or try them again.",
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bars."),
+    strict: bool = typer.Option(
+        False, "--strict", help="Stop at the first bad house or pair of a dataset (default: report it, skip it, go on)."
+    ),
 ) -> None:
-    """Run every cell of a sweep (one folder per cell plus sweep.json), sharing one cache."""
-    from rich.console import Console
-    from rich.table import Table
+    """Run every cell of a sweep: a grid of pipelines.
 
+    Each cell gets its own run folder, sweep.json lists them, and all cells share one response
+    cache, so running the same sweep again makes no new model calls.
+    """
+    from rich.console import Console
+
+    from povagent.cli.console_width import fitted_table
     from povagent.run.sweep import dry_run as plan
     from povagent.run.sweep import expand_sweep, run_sweep
 
     console = Console()
     if dry_run:
         sweep_cfg, cells = expand_sweep(sweep, strict=strict)
-        table = Table(title=f"{sweep} -> {sweep_cfg.output} ({len(cells)} cells)")
-        for col in ("cell", "keys", "done", "requests to make", "~prompt tokens", "<= completion tokens"):
-            table.add_column(col, justify="left" if col == "cell" else "right")
+        rows: list[list[str]] = []
         totals = [0, 0, 0, 0, 0]
         for c in plan(cells):
             vals = [c.n_total, c.n_done, c.requests, c.prompt_tokens, c.max_completion_tokens]
             totals = [a + b for a, b in zip(totals, vals)]
-            table.add_row(c.name, *(f"{v:,}" for v in vals))
-        table.add_row("[bold]total", *(f"[bold]{v:,}" for v in totals))
-        console.print(table)
+            rows.append([c.name, *(f"{v:,}" for v in vals)])
+        rows.append(["[bold]total", *(f"[bold]{v:,}" for v in totals)])
+        columns = [("cell", "label")] + [(h, "number") for h in ("keys", "done", "requests to make", "~prompt tokens", "<= completion tokens")]
+        console.print(fitted_table(columns, rows, title=PathTitle(sweep_cfg.output, f" ({len(cells)} cells)", before=f"dry run of {sweep.name}: ")))
         return
 
     def done(cell: Any, res: Any) -> None:
@@ -198,14 +231,13 @@ def sweep_command(
     except KeyboardInterrupt:
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
         raise typer.Exit(130) from None
-    table = Table(title=f"sweep {sweep} ({len(result.cells)} cells) -> {result.output / 'sweep.json'}")
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in result.cells}
     with_success = any(v is not None for v in successes.values())  # real-world sets
     # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
     with_official = any("official_parse" in result.results[c.name].summary for c in result.cells)
     official_cols = ("official parse L2", "official parse resp.") if with_official else ()
-    for col in ("cell", "mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ()):
-        table.add_column(col, justify="left" if col == "cell" else "right")
+    headers = ("mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ())
+    rows = []
     for cell in result.cells:
         s = result.results[cell.name].summary
         success = successes[cell.name]
@@ -214,18 +246,19 @@ def sweep_command(
             # of the summary count every row of a set without official GT as unanswered
             o = success["overall"]
             answered = "-" if o.get("n_answered") is None else f"{o['n_answered']} / {o['n_total']}"
-            table.add_row(cell.name, "-", _rate(o, "response_rate"), answered, *(("-", "-") if with_official else ()), _rate(o))
+            rows.append([cell.name, "-", _rate(o, "response_rate"), answered, *(("-", "-") if with_official else ()), _rate(o)])
             continue
         o = s["overall"]
-        table.add_row(
+        rows.append([
             cell.name,
             "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
             "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
             f"{o['n']} / {s['rows']['total']}",
             *(_official_cells(s) if with_official else ()),
             *(("-",) if with_success else ()),
-        )
-    console.print(table)
+        ])  # fmt: skip
+    title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
+    console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
     codes = [result.results[c.name].exit_code for c in result.cells]
     for cell in result.cells:
         res = result.results[cell.name]
@@ -251,11 +284,47 @@ def _official_cells(summary: dict[str, Any]) -> tuple[str, str]:
     return mark, mark
 
 
-@app.command("plugins")
-def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as JSON.")) -> None:
-    """List every backend, strategy, parser, scorer, judge and model profile, with where it came from."""
-    from rich.console import Console
+#: The heading of each kind in ``povagent plugins``.
+KIND_HEADINGS = {"profile": "model profiles", "strategy": "strategies"}
+
+
+def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
+    """The plugins, a section per kind: name, then description with "from <source>" under it.
+
+    Three columns (kind, name, source) beside a description leave it a dozen characters in
+    80 columns; here the description gets all but the name's width, and a source too long for
+    it (a deep .py path) keeps its start and its end.
+    """
     from rich.table import Table
+    from rich.text import Text
+
+    from povagent.run.narrow_console import middle_ellipsis
+
+    name_width = max((len(e.name) for es in entries.values() for e in es), default=4)
+    name_width = min(name_width, max(12, width // 3))
+    room = max(20, width - name_width - 7)  # borders and padding of a two-column table
+    table = Table(title="povagent plugins", show_header=False)
+    table.add_column("name", overflow="fold", width=name_width)
+    table.add_column("description", overflow="fold")
+    for i, (kind, kind_entries) in enumerate(entries.items()):
+        if i:
+            table.add_section()
+        table.add_row(Text(KIND_HEADINGS.get(kind, f"{kind}s"), style="bold"), "")
+        for e in kind_entries:
+            text = Text(e.description or "(no description)")
+            text.append("\nfrom " + middle_ellipsis(e.source, room - len("from ")), style="dim")
+            table.add_row(Text(e.name), text)
+    return table
+
+
+@app.command("plugins")
+def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
+    """List every plugin a YAML file can name, and where it came from.
+
+    Every backend, strategy, parser, scorer, surface judge and model profile, with the package
+    or file that registered it; plugins that failed to load are listed after them (exit code 1).
+    """
+    from rich.console import Console
 
     from povagent.plugins import KINDS, build_plugin_host
 
@@ -269,13 +338,7 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print as
         typer.echo(json.dumps(out, indent=2))
     else:
         console = Console()
-        table = Table(title="povagent plugins")
-        for col in ("kind", "name", "from", "description"):
-            table.add_column(col)
-        for k in kinds:
-            for e in host.entries(k):
-                table.add_row(k, e.name, e.source, e.description)
-        console.print(table)
+        console.print(_plugins_table({k: host.entries(k) for k in kinds}, console.width))
         for f in host.failures:
             console.print(f"[red]failed:[/] {f}", highlight=False)
     if host.failures:

@@ -16,28 +16,86 @@ import typer
 
 from povagent.cli import app
 
+#: How an instance id is written, and one from the release, for help and error messages.
+INSTANCE_ID_FORMAT = "HOUSE/PAIR/DIRECTION/CONDITION"
+INSTANCE_ID_EXAMPLE = "train_house_00000/0/right/a"
+
+
+def unknown_instance_message(instance: str, known: list[str], where: object) -> str:
+    """Why ``instance`` names no instance of the dataset at ``where``, how ids are written,
+    a near id if one is close, and a few real ids to copy (from the same house when it exists)."""
+    from povagent.dataset.models import Condition, Direction
+    from povagent.plugins import did_you_mean
+
+    lines = [f"no instance {instance!r} in {where}{did_you_mean(instance, known)}"]
+    parts = instance.split("/")
+    houses = {k.split("/")[0] for k in known}
+    directions = [str(d) for d in Direction]
+    conditions = [str(c) for c in Condition]
+    if len(parts) != 4:
+        lines.append(f"an instance id has four parts separated by '/' (this one has {len(parts)})")
+    elif parts[0] not in houses:
+        lines.append(f"no house {parts[0]!r} in the dataset ({len(houses)} houses)")
+    elif parts[2] not in directions:
+        lines.append(f"direction {parts[2]!r} is not one of {', '.join(directions)}")
+    elif parts[3] not in conditions:
+        lines.append(f"condition {parts[3]!r} is not one of a (Inferred), b (Stated), c (Given)")
+    else:
+        lines.append(f"house {parts[0]!r} has no pair {parts[1]!r} with direction {parts[2]!r} and condition {parts[3]!r}")
+    lines.append(f"an instance id is {INSTANCE_ID_FORMAT}, e.g. {INSTANCE_ID_EXAMPLE}")
+    same_house = [k for k in known if k.split("/")[0] == parts[0]]
+    examples = _spread(same_house or known, 3)
+    if examples:
+        lines.append("ids in this dataset" + (f" for house {parts[0]}" if same_house else "") + ":")
+        lines.extend(f"  {k}" for k in examples)
+    return "\n".join(lines)
+
+
+def _spread(ids: list[str], n: int) -> list[str]:
+    """Up to ``n`` of ``ids``, each from another house and pair where there are enough."""
+    picked: list[str] = []
+    seen: set[tuple[str, ...]] = set()
+    for k in ids:
+        house_pair = tuple(k.split("/")[:2])
+        if house_pair not in seen:
+            seen.add(house_pair)
+            picked.append(k)
+    picked += [k for k in ids if k not in picked]
+    return picked[:n]
+
 
 @app.command("show-prompt")
 def show_prompt_command(
-    pipeline: Path = typer.Argument(..., help="Pipeline YAML (its dataset and strategy are used)."),
-    instance: str = typer.Option(..., "--instance", help="Instance id house/pair/direction/condition."),
-    out: Path | None = typer.Option(None, "--out", help="Folder for the images shown (default: ./show-prompt/<instance>)."),
+    pipeline: Path = typer.Argument(..., metavar="PIPELINE", help="The pipeline YAML file whose dataset and strategy are used."),
+    instance: str = typer.Option(
+        ...,
+        "--instance",
+        metavar="ID",
+        help=f"The instance to show, as {INSTANCE_ID_FORMAT}, e.g. {INSTANCE_ID_EXAMPLE} "
+        "(condition a: Inferred, b: Stated, c: Given).",
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", metavar="FOLDER", help="Folder to save the images in (default: ./show-prompt/ID, slashes as _)."
+    ),
 ) -> None:
-    """Print the exact messages a strategy builds for one instance and save the images it shows."""
+    """Print the exact messages a strategy sends for one instance.
+
+    The text, the image labels and the generation settings are printed as the model receives
+    them; the images (markers drawn) are saved to a folder.
+    """
     from povagent.config.pipeline import load_pipeline
     from povagent.dataset.hub import resolve_hub_dataset
     from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
     from povagent.exchange.preview import preview_request
-    from povagent.plugins import did_you_mean, get_plugin_host
+    from povagent.plugins import get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
     dataset = load_dataset(config.dataset.root)
     inst = dataset.instance(instance)
     if inst is None:
-        known = [i.id for i in dataset.instances()]
-        raise DatasetError(f"no instance {instance!r} in {config.dataset.root}{did_you_mean(instance, known)}")
+        raise DatasetError(unknown_instance_message(instance, [i.id for i in dataset.instances()], config.dataset.root))
     host = get_plugin_host(config.plugins)
     strategy = host.create("strategy", config.strategy.name, config.strategy.options)
     images = ImageStore()
@@ -54,14 +112,25 @@ def show_prompt_command(
 
 @app.command("parse")
 def parse_command(
-    parser: str = typer.Option("official", "--parser", help="Parser name (see `povagent plugins`); default: the official runner's reading."),
-    width: int = typer.Option(512, "--width", min=1, help="Frame width asked for, in pixels."),
-    height: int = typer.Option(512, "--height", min=1, help="Frame height asked for, in pixels."),
-    condition: str = typer.Option("a", "--condition", help="a (Inferred), b (Stated) or c (Given)."),
-    frames: int = typer.Option(30, "--frames", min=1, help="Number of frames shown (A/B)."),
-    plugin: list[str] = typer.Option([], "--plugin", help="Extra plugin module to load (repeatable)."),
+    parser: str = typer.Option(
+        "official", "--parser", metavar="NAME", help="Parser to read the answer with (names: povagent plugins); "
+        "official reads it as the authors' runner does."
+    ),
+    width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width of the frame the question was about."),
+    height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height of the frame the question was about."),
+    condition: str = typer.Option(
+        "a", "--condition", metavar="CONDITION", help="a (Inferred), b (Stated) or c (Given), or those names: A and B answers name a frame."
+    ),
+    frames: int = typer.Option(30, "--frames", min=1, metavar="N", help="Number of exploration frames shown (conditions a and b)."),
+    plugin: list[str] = typer.Option(
+        [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable)."
+    ),
 ) -> None:
-    """Read one raw model answer on stdin and print its typed parse as JSON (pixels)."""
+    """Parse one raw model answer (read from stdin) into JSON.
+
+    The JSON holds the parse status, the frame chosen and the point in pixels, and says
+    whether the parser had to repair the answer.
+    """
     from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
     from povagent.dataset.models import Condition
     from povagent.errors import ConfigError
@@ -93,16 +162,24 @@ def parse_command(
 
 @app.command("rescore")
 def rescore_command(
-    run_dir: Path = typer.Argument(..., help="A finished run folder (config.yaml + results.jsonl)."),
-    parser: str = typer.Option("official", "--parser", help="Parser to re-read every raw answer with (default: official, paper-comparable)."),
-    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder (default: the run config's)."),
-    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON."),
+    run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="A finished run folder (with config.yaml and results.jsonl)."),
+    parser: str = typer.Option(
+        "official", "--parser", metavar="NAME", help="Parser to read every raw answer again with (names: povagent plugins); "
+        "official gives numbers comparable with the paper."
+    ),
+    dataset: Path | None = typer.Option(
+        None, "--dataset", metavar="FOLDER", help="Dataset folder, if not the one named in the run's config.yaml."
+    ),
+    as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON instead of tables."),
 ) -> None:
-    """Re-parse and re-score a finished run offline (no model call) into RUN_DIR/rescored-<parser>/.
+    """Score a finished run again with another parser, offline.
 
-    The default parser, ``official``, turns any run into paper-comparable numbers; with a
-    lenient parser the official parse's numbers are printed beside the repaired ones.
+    No model is called: the raw answers in the run folder are read again and the result is
+    written to RUN_DIR/rescored-PARSER/. The default parser, official, turns any run into
+    numbers comparable with the paper; with a lenient parser the official parse's numbers are
+    printed beside the repaired ones.
     """
+    from povagent.cli.console_width import PathTitle
     from povagent.cli.dataset import render_summary
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
@@ -113,7 +190,7 @@ def rescore_command(
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2))
     else:
-        render_summary(result.summary, title=f"{run_dir} re-parsed with {parser}")
+        render_summary(result.summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
         render_official_beside(result.summary, parser, reads_officially="official_parse" not in result.summary, run_dir=run_dir)
         typer.echo(f"parse status: {json.dumps(result.summary['parse_status'])}; repaired: {result.summary['repaired']}")
     typer.echo(f"written to {result.out_dir}", err=True)

@@ -11,14 +11,22 @@ from povagent.cli import app
 
 @app.command("quickstart")
 def quickstart_command(
-    out: Path = typer.Option(Path("povagent-quickstart"), "--out", help="Folder for the dataset, the sweep and the report."),
-    dataset: Path | None = typer.Option(None, "--dataset", help="Use this dataset instead of generating one."),
-    houses: int = typer.Option(3, "--houses", help="Houses to generate."),
-    seed: int = typer.Option(0, "--seed", help="Generator seed."),
-    jobs: int = typer.Option(2, "--jobs", help="Processes for generation."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bars."),
+    out: Path = typer.Option(
+        Path("povagent-quickstart"), "--out", metavar="FOLDER", help="Folder for the dataset, the sweep and the report."
+    ),
+    dataset: Path | None = typer.Option(
+        None, "--dataset", metavar="FOLDER", help="Use this dataset folder instead of generating one."
+    ),
+    houses: int = typer.Option(3, "--houses", min=1, metavar="N", help="Houses to generate."),
+    seed: int = typer.Option(0, "--seed", metavar="N", help="Random seed of the generator."),
+    jobs: int = typer.Option(2, "--jobs", min=1, metavar="N", help="Worker processes generating the houses."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show progress bars."),
 ) -> None:
-    """The main job, offline: generate ~3 houses, run center/random/oracle on A, B and C, report."""
+    """Try everything offline: generate, run the baselines, report.
+
+    Generates about three houses, runs the center, random and oracle baselines on conditions
+    A, B and C, and writes the report. Running it again resumes: no work is repeated.
+    """
     from povagent.run.quickstart import run_quickstart
 
     result = run_quickstart(out, dataset, houses=houses, seed=seed, jobs=jobs, quiet=quiet, say=typer.echo)

@@ -11,15 +11,30 @@ from povagent.cli import app
 
 @app.command("report")
 def report_command(
-    source: Path = typer.Argument(..., help="A run folder (results.jsonl) or a sweep folder (sweep.json + run folders)."),
-    out: Path | None = typer.Option(None, "--out", help="Report folder (default: SOURCE/report)."),
-    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder, if not the one in the runs' config.yaml."),
-    bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI (0: no CIs)."),
-    gallery_limit: int | None = typer.Option(None, "--gallery-limit", min=0, help="At most this many gallery rows per system (default: all of the first run)."),
-    no_gallery: bool = typer.Option(False, "--no-gallery", help="Skip the gallery images."),
-    workers: int | None = typer.Option(None, "--workers", min=1, help="Threads drawing gallery images."),
+    source: Path = typer.Argument(
+        ..., metavar="SOURCE", help="A run folder (with results.jsonl) or a sweep folder (with sweep.json and its run folders)."
+    ),
+    out: Path | None = typer.Option(None, "--out", metavar="FOLDER", help="Folder to write the report to (default: SOURCE/report)."),
+    dataset: Path | None = typer.Option(
+        None, "--dataset", metavar="FOLDER", help="Dataset folder, if not the one named in the runs' config.yaml."
+    ),
+    bootstrap: int = typer.Option(
+        2000, "--bootstrap", min=0, metavar="N", help="Bootstrap resamples per confidence interval (0: no intervals)."
+    ),
+    gallery_limit: int | None = typer.Option(
+        None, "--gallery-limit", min=0, metavar="N",
+        help="At most N gallery rows per system (default: every instance of the first run).",
+    ),
+    no_gallery: bool = typer.Option(False, "--no-gallery", help="Draw no gallery images (faster)."),
+    workers: int | None = typer.Option(
+        None, "--workers", min=1, metavar="N", help="Threads drawing gallery images (default: one per core, at most 4)."
+    ),
 ) -> None:
-    """Write the paper's tables (Markdown, CSV, LaTeX), plots and a self-contained HTML report."""
+    """Write the paper's tables, plots and an HTML report.
+
+    Tables in Markdown, CSV and LaTeX, plots, and one self-contained HTML page with a
+    gallery of the predictions drawn on their frames.
+    """
     from povagent.report.build import write_report
     from povagent.report.tables import to_markdown
 
@@ -38,18 +53,33 @@ def report_command(
 
 @app.command("export")
 def export_command(
-    run_dir: Path = typer.Argument(..., help="A run folder (results.jsonl); for long-csv also a sweep folder."),
-    format: str = typer.Option(
-        "official", "--format",
-        help="'official': POVBench's prediction rows (one file per run index). 'long-csv': the official "
-        "aggregate_runs.py's all_runs_long.csv, one line per model, run (numbered from 1) and item.",
+    run_dir: Path = typer.Argument(
+        ..., metavar="RUN_DIR", help="A run folder (with results.jsonl); for long-csv also a sweep folder."
     ),
-    out: Path | None = typer.Option(None, "--out", help="Output file (default: RUN_DIR/official_predictions.json, a folder of run_<k>.json with several runs; RUN_DIR/all_runs_long.csv for long-csv)."),
-    run: int | None = typer.Option(None, "--run", help="Export only this run index."),
-    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder, for candidate_images and the long CSV's ground truth (default: from config.yaml)."),
-    model: str | None = typer.Option(None, "--model", help="long-csv: the model label of a run folder's lines (default: its model)."),
+    format: str = typer.Option(
+        "official", "--format", metavar="FORMAT",
+        help="official: POVBench's prediction rows (one file per run index). long-csv: the all_runs_long.csv "
+        "of the authors' aggregate_runs.py, one line per model, run (numbered from 1) and item.",
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", metavar="PATH",
+        help="Where to write (default: RUN_DIR/official_predictions.json, or a folder of run_K.json files "
+        "when there are several runs; RUN_DIR/all_runs_long.csv for long-csv).",
+    ),
+    run: int | None = typer.Option(None, "--run", metavar="K", help="Export only run K."),
+    dataset: Path | None = typer.Option(
+        None, "--dataset", metavar="FOLDER",
+        help="Dataset folder, for candidate_images and the long CSV's ground truth (default: the one in config.yaml).",
+    ),
+    model: str | None = typer.Option(
+        None, "--model", metavar="LABEL", help="long-csv only: the model label of a run folder's lines (default: its model)."
+    ),
 ) -> None:
-    """Write a run's predictions in the official row format, or the official long CSV."""
+    """Write a run's predictions in the official formats.
+
+    Official prediction rows, or the long CSV. The official rows are what the authors' evaluation code reads; the long CSV is the one
+    their aggregate_runs.py writes, so existing analysis notebooks keep working.
+    """
     from povagent.errors import PredictionsError
     from povagent.report.export import export_long_csv, export_run
 
@@ -66,14 +96,22 @@ def export_command(
 
 @app.command("compare")
 def compare_command(
-    run_a: Path = typer.Argument(..., help="Run folder A (the reference)."),
-    run_b: Path = typer.Argument(..., help="Run folder B."),
-    top: int = typer.Option(15, "--top", min=0, help="How many most-changed instances to list."),
-    out: Path | None = typer.Option(None, "--out", help="Also write compare.html (with both runs' drawings) to this folder."),
-    dataset: Path | None = typer.Option(None, "--dataset", help="Dataset folder for the HTML images (default: from config.yaml)."),
-    bootstrap: int = typer.Option(2000, "--bootstrap", min=0, help="Bootstrap resamples per CI."),
+    run_a: Path = typer.Argument(..., metavar="RUN_A", help="Run folder A, the reference."),
+    run_b: Path = typer.Argument(..., metavar="RUN_B", help="Run folder B, compared with A."),
+    top: int = typer.Option(15, "--top", min=0, metavar="N", help="How many of the most changed instances to list."),
+    out: Path | None = typer.Option(
+        None, "--out", metavar="FOLDER", help="Also write compare.html, with both runs' predictions drawn, to this folder."
+    ),
+    dataset: Path | None = typer.Option(
+        None, "--dataset", metavar="FOLDER", help="Dataset folder for the HTML's images (default: the one in config.yaml)."
+    ),
+    bootstrap: int = typer.Option(2000, "--bootstrap", min=0, metavar="N", help="Bootstrap resamples per confidence interval."),
 ) -> None:
-    """Per-instance differences between two runs: paired statistics and the instances that changed most."""
+    """Compare two runs instance by instance.
+
+    Paired statistics over the instances both runs answered, and the instances whose error
+    changed most.
+    """
     from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
     from povagent.report.compare import compare_runs, print_comparison, write_comparison_html

@@ -50,6 +50,11 @@ class QuietProgress:
         """Nothing to close."""
 
 
+#: Below this console width the bar drops its percentage and elapsed time, narrows, and
+#: shortens its label, so that counts, rate and ETA stay on one 80-column line.
+WIDE_CONSOLE = 110
+
+
 class RichProgress:
     """A rich progress bar with error counts in the description."""
 
@@ -59,29 +64,33 @@ class RichProgress:
             BarColumn,
             MofNCompleteColumn,
             Progress,
+            ProgressColumn,
             TaskProgressColumn,
             TextColumn,
             TimeElapsedColumn,
             TimeRemainingColumn,
         )
+        from rich.table import Column
 
-        self.label = label
+        from povagent.run.narrow_console import middle_ellipsis
+
+        console = Console(file=sys.stderr)
+        wide = console.width >= WIDE_CONSOLE
+        self.label = middle_ellipsis(label, 40 if wide else 20)
         self.counts: dict[str, int] = {}
-        self._progress = Progress(
+        columns: list[ProgressColumn] = [
             TextColumn("[bold]{task.description}"),
-            BarColumn(),
+            BarColumn(bar_width=40 if wide else 12),
             MofNCompleteColumn(),
-            TaskProgressColumn(),
+            *([TaskProgressColumn()] if wide else []),
             TextColumn("{task.fields[rate]}"),
-            TimeElapsedColumn(),
+            *([TimeElapsedColumn()] if wide else []),
             TextColumn("ETA"),
             TimeRemainingColumn(),
-            TextColumn("{task.fields[errors]}"),
-            TextColumn("{task.fields[limit]}"),
-            console=Console(file=sys.stderr),
-            refresh_per_second=4,
-            transient=False,
-        )
+            # error counts and the rate-limit note wrap under each other rather than being cut
+            TextColumn("{task.fields[errors]} {task.fields[limit]}", table_column=Column(no_wrap=False, overflow="fold")),
+        ]
+        self._progress = Progress(*columns, console=console, refresh_per_second=4, transient=False)
         self._task: Any = None
         self._started_at = 0.0
         self._finished_now = 0

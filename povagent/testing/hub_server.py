@@ -382,16 +382,49 @@ def _list_folder(folder: Path) -> dict[str, Path]:
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
+def argument_parser() -> argparse.ArgumentParser:
+    """The options of ``python -m povagent.testing.hub_server``, each explained."""
+    from povagent.testing.server_command import port_number
+
+    ap = argparse.ArgumentParser(
+        prog="python -m povagent.testing.hub_server",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Serve a folder as a Hugging Face Hub dataset repository on 127.0.0.1, so\n"
+        "that povagent download and huggingface_hub fetch it without the network. The\n"
+        "first line it prints is the HF_ENDPOINT to export; it serves until Ctrl-C or\n"
+        "--lifetime.",
+        epilog="example:\n"
+        "  python -m povagent.testing.hub_server data/povbench --port 8001\n"
+        "  HF_ENDPOINT=http://127.0.0.1:8001 povagent download     (in another shell)",
+    )
+    ap.add_argument("folder", type=Path, metavar="FOLDER", help="the folder to serve (e.g. a dataset in the release layout)")
+    ap.add_argument("--repo", default="owl-owl/POVBench", metavar="OWNER/NAME",
+                    help="the dataset repository name clients ask for (default: %(default)s)")
+    ap.add_argument("--port", type=port_number, default=0, metavar="N",
+                    help="port on 127.0.0.1 to listen on (default: 0, any free port)")
+    ap.add_argument("--lifetime", type=float, default=3600.0, metavar="SECONDS",
+                    help="stop after this many seconds (default: %(default).0f)")
+    return ap
+
+
 def main(argv: list[str] | None = None) -> None:
     """Serve a folder as a Hub dataset repository until interrupted
-    (``python -m povagent.testing.hub_server FOLDER``)."""
-    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    ap.add_argument("folder", type=Path)
-    ap.add_argument("--repo", default="owl-owl/POVBench")
-    ap.add_argument("--port", type=int, default=0)
-    ap.add_argument("--lifetime", type=float, default=3600.0, help="stop after this many seconds")
+    (``python -m povagent.testing.hub_server FOLDER``).
+
+    A missing folder, bad options and a port that cannot be bound end with a one-line message
+    and exit code 2, never a traceback.
+    """
+    from povagent.testing.server_command import bind_failure
+
+    ap = argument_parser()
     args = ap.parse_args(argv)
-    server = HubServer(args.folder, repo_id=args.repo, port=args.port, max_lifetime_s=args.lifetime).start()
+    if not args.folder.is_dir():
+        ap.error(f"{args.folder}: not a folder")
+    server = HubServer(args.folder, repo_id=args.repo, port=args.port, max_lifetime_s=args.lifetime)
+    try:
+        server.start()
+    except OSError as exc:
+        ap.exit(2, f"{ap.prog}: error: {bind_failure(args.port, exc)}\n")
     print(f"HF_ENDPOINT={server.url}  ({args.repo} at {server.commit})", flush=True)
     try:
         while server._server is not None:

@@ -422,29 +422,76 @@ class LoopbackServer:
         }
 
 
+#: What the command-line server answers by default: a valid answer for conditions A and B.
+DEFAULT_REPLY = '{"selected_image": 0, "x": 256, "y": 256}'
+
+
+def argument_parser() -> argparse.ArgumentParser:
+    """The options of ``python -m povagent.testing.loopback_server``, each explained."""
+    from povagent.testing.server_command import port_number
+
+    ap = argparse.ArgumentParser(
+        prog="python -m povagent.testing.loopback_server",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="An OpenAI-compatible chat server on 127.0.0.1 that answers every request\n"
+        "with one fixed reply: try a pipeline or a backend without a model. The first\n"
+        "line it prints is its URL, the api_base to give a litellm backend; it serves\n"
+        "until Ctrl-C or --lifetime.",
+        epilog="example:\n"
+        "  python -m povagent.testing.loopback_server --port 8000 \\\n"
+        "      --reply '{\"x\": 1, \"y\": 2}'\n"
+        "  and in the pipeline: backend: {name: litellm, options: {model: openai/any,\n"
+        "    api_base: http://127.0.0.1:8000/v1, api_key_env: SOME_VAR}}  (any value)",
+    )
+    ap.add_argument("--port", type=port_number, default=0, metavar="N",
+                    help="port on 127.0.0.1 to listen on (default: 0, any free port)")
+    ap.add_argument("--reply", default=DEFAULT_REPLY, metavar="TEXT",
+                    help="the assistant's text in every answer (default: %(default)s)")
+    ap.add_argument("--lifetime", type=float, default=3600.0, metavar="SECONDS",
+                    help="stop after this many seconds (default: %(default).0f)")
+    ap.add_argument("--fetch-images", action="store_true",
+                    help="decode, open or download every image URL of a request, as a vLLM server does, "
+                    "and answer 400 when one cannot be read")
+    ap.add_argument("--local-media-root", default=None, metavar="FOLDER",
+                    help="with --fetch-images: file:// image URLs are read only beneath this folder "
+                    "(default: none is read)")
+    ap.add_argument("--expect-sha256", default=None, metavar="FILE",
+                    help="a file of SHA-256 digests, one a line: a request with any other image is "
+                    "answered 400 (implies --fetch-images)")
+    return ap
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Serve a fixed reply until interrupted (``python -m povagent.testing.loopback_server``)."""
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--port", type=int, default=0)
-    ap.add_argument("--reply", default='{"selected_image": 0, "x": 256, "y": 256}')
-    ap.add_argument("--lifetime", type=float, default=3600.0, help="stop after this many seconds")
-    ap.add_argument("--fetch-images", action="store_true", help="decode, open or download every image URL")
-    ap.add_argument("--local-media-root", default=None, help="file:// URLs are read only beneath this folder")
-    ap.add_argument("--expect-sha256", default=None,
-                    help="a file of SHA-256 digests, one a line: any other image is answered 400")
+    """Serve a fixed reply until interrupted (``python -m povagent.testing.loopback_server``).
+
+    Bad options and a port that cannot be bound end with a one-line message and exit code 2,
+    never a traceback.
+    """
+    from povagent.testing.server_command import bind_failure
+
+    ap = argument_parser()
     args = ap.parse_args(argv)
     check = None
     if args.expect_sha256:
-        expected = set(Path(args.expect_sha256).read_text().split())
+        try:
+            expected = set(Path(args.expect_sha256).read_text().split())
+        except (OSError, UnicodeDecodeError) as exc:
+            ap.error(f"--expect-sha256 {args.expect_sha256}: cannot read it ({exc})")
 
         def check(image: FetchedImage) -> str | None:
             return None if image.sha256 in expected else f"unexpected image (sha256 {image.sha256[:16]}...)"
 
+    if args.local_media_root is not None and not Path(args.local_media_root).is_dir():
+        ap.error(f"--local-media-root {args.local_media_root}: not a folder")
     server = LoopbackServer(
         reply=args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
         fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
         keep_image_bytes=False, image_check=check,
-    ).start()  # fmt: skip
+    )  # fmt: skip
+    try:
+        server.start()
+    except OSError as exc:
+        ap.exit(2, f"{ap.prog}: error: {bind_failure(args.port, exc)}\n")
     print(server.url, flush=True)
     try:
         while not server._stopping.wait(0.5):

@@ -100,3 +100,39 @@ def test_an_unknown_instance_suggests_a_near_id(tmp_path, mini_root):
     result, _ = show(tmp_path, mini_root, "basic", instance="train_house_00000/0/rigth/a")
     assert isinstance(result.exception, DatasetError)
     assert "train_house_00000/0/right/a" in str(result.exception)
+
+
+def test_an_unknown_instance_shows_the_id_format_and_real_ids(tmp_path, mini_root, mini_dataset):
+    result, _ = show(tmp_path, mini_root, "basic", instance="x")
+    assert isinstance(result.exception, DatasetError)
+    message = str(result.exception)
+    assert "no instance 'x'" in message and "four parts separated by '/'" in message
+    assert "HOUSE/PAIR/DIRECTION/CONDITION, e.g. train_house_00000/0/right/a" in message
+    shown = [line.strip() for line in message.splitlines() if line.startswith("  ")]
+    assert 1 <= len(shown) <= 3 and all(mini_dataset.instance(i) is not None for i in shown)
+    assert len({i.split("/")[0] for i in shown}) == 2  # the examples spread over the houses
+
+
+def test_an_unknown_instance_names_the_part_that_is_wrong(tmp_path, mini_root):
+    cases = {
+        "train_house_00009/0/right/a": "no house 'train_house_00009' in the dataset",
+        "train_house_00000/0/rigth/a": "direction 'rigth' is not one of right, left, front, up",
+        "train_house_00000/0/right/d": "condition 'd' is not one of a (Inferred), b (Stated), c (Given)",
+        "train_house_00000/7/right/a": "house 'train_house_00000' has no pair '7'",
+    }
+    for instance, why in cases.items():
+        result, _ = show(tmp_path, mini_root, "basic", instance=instance)
+        assert why in str(result.exception), (instance, str(result.exception))
+
+
+def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path, mini_root):
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", "povagent.cli", "show-prompt", str(pipeline(tmp_path, mini_root, "basic")), "--instance", "train_house_00000/0/rigth/a"],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
+    assert "ids in this dataset for house train_house_00000:" in done.stderr
