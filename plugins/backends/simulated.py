@@ -41,8 +41,9 @@ from povagent.dataset.models import PairEntry, SceneObject
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import ViewCamera
 from povagent.geometry.placement import SURFACE_KINDS, surface_kind
+from povagent.geometry.triangulation import optical_depth
 from povagent.interfaces import Backend, PermanentBackendError
 
 #: The label every answer carries in ``Response.model``.
@@ -65,11 +66,17 @@ def seeded_generator(*parts: object) -> np.random.Generator:
     return np.random.default_rng(int.from_bytes(digest[:8], "big"))
 
 
-def box_outline(camera: Camera, obj: SceneObject) -> tuple[float, float, float, float] | None:
+def box_outline(camera: ViewCamera, obj: SceneObject) -> tuple[float, float, float, float] | None:
     """The 2D box (pixels, clipped to the image) around an object's projected box, from the
     part in front of the camera; ``None`` when none of it is in front or in the image."""
     corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    return outline(camera, corners.min(axis=0), corners.max(axis=0))
+
+
+def outline(camera: ViewCamera, lo: np.ndarray, hi: np.ndarray) -> tuple[float, float, float, float] | None:
+    """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``
+    (its edges sampled, so a box partly behind the camera is outlined by the part in front)."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
     points = []
     for axis in range(3):
@@ -81,7 +88,7 @@ def box_outline(camera: Camera, obj: SceneObject) -> tuple[float, float, float, 
                 p[:, others[0]], p[:, others[1]] = b0, b1
                 points.append(p)
     pts = np.concatenate(points)
-    depth = camera.to_camera(pts)[:, 2]
+    depth = optical_depth(camera, pts)
     pts = pts[depth > NEAR_PLANE]
     if not len(pts):
         return None
