@@ -401,7 +401,7 @@ def camera_problem(camera: GoalCamera) -> str | None:
         rot = pose[:3, :3]
         if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-4) or not np.allclose(pose[3], (0.0, 0.0, 0.0, 1.0)):
             return "the camera-to-world pose is not a rigid motion (its 3x3 part is not orthonormal: scaled, sheared, or world-to-camera?)"
-        numbers = (camera.fx, camera.fy, camera.cx, camera.cy)
+        numbers: tuple[float, ...] = (camera.fx, camera.fy, camera.cx, camera.cy)
     else:
         numbers = (*camera.position, camera.yaw, camera.horizon, camera.fov)
         if np.all(np.isfinite(numbers)) and not 0 < camera.fov < 180:
