@@ -192,3 +192,40 @@ def test_the_geometric_strategy_needs_every_frames_camera(scene):
     instance, _ = scene
     with pytest.raises(BadInputError, match=r"cameras\[1\]: the geometric strategy triangulates with every frame's camera"):
         agent_call(scene, [instance.frames[0].camera, None])
+
+
+# -- the observer view (C) ------------------------------------------------------------------------
+def given_scene(generated_release):
+    dataset = load_dataset(generated_release)
+    instance = next(i for i in dataset.instances(conditions=["c"]) if str(i.direction) != "up")
+    pair = dataset.houses[instance.house_id].pairs[instance.pair_id]
+    return instance, pair
+
+
+def test_an_observer_view_needs_no_camera_and_its_pixel_is_the_answer(generated_release):
+    instance, pair = given_scene(generated_release)
+    view = instance.frames[0]
+    backend = SimulatedScene(
+        {instance.anchor_object.object_type: box_of(instance.anchor_object)}, [view.camera],
+        anchor=instance.anchor_object.object_type, direction=str(instance.direction),
+        surface=surface_kind(pair.stage3[instance.direction].surface, pair.landmark_type),
+    )
+    with GroundingAgent(backend=backend, strategy="geometric", parser="json") as agent:
+        found = agent.locate(instance.sentence, observer_view=view.file)
+    assert found.goal is None and "fallbacks: none" in found.raw_answer
+    u, v, _ = view.camera.project_point(instance.target)
+    assert np.hypot(found.pixel[0] - u * 512, found.pixel[1] - v * 512) < 0.1 * 512  # near the truth in the image
+
+
+def test_an_observer_views_robot_camera_lends_its_field_of_view_and_makes_a_floor_goal(generated_release):
+    instance, _ = given_scene(generated_release)
+    view = instance.frames[0]
+    camera = PinholeCamera(map_pose(view.camera, "opencv"), *view.camera.intrinsics, 512, 512)
+    backend = SimulatedScene(
+        {instance.anchor_object.object_type: map_box(*box_of(instance.anchor_object))}, [camera],
+        anchor=instance.anchor_object.object_type, direction=str(instance.direction), surface="floor",
+    )
+    with GroundingAgent(backend=backend, strategy="geometric", parser="json", plane=MAP_FLOOR) as agent:
+        found = agent.locate(instance.sentence, observer_view=view.file, cameras=camera)
+    assert found.goal is not None and found.goal.method == "plane"  # no pose in C: the pixel is back-projected
+    assert found.goal.point[2] == pytest.approx(MAP_FLOOR.point[2])
