@@ -22,6 +22,11 @@ refused with a permanent error: the simulator never pretends to be a model. Its 
 
 The records are read from the house folder the instance's frames are in (the release layout's
 ``artifacts/<house>/``), or from the ``dataset`` option's folder.
+
+:class:`SimulatedScene` is the same simulator for a scene given in code rather than a dataset:
+object boxes in a robot's world, seen through the robot's own cameras (any convention, any frame
+size), answering in the letterboxed square the GroundingAgent shows; it lets a robot app (and
+``examples/robot_app.py``) run the geometric agent end to end offline.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ import hashlib
 import json
 import threading
 from pathlib import Path
-from typing import Any, ClassVar, Mapping
+from typing import Any, ClassVar, Mapping, Sequence
 
 import numpy as np
 
@@ -41,8 +46,10 @@ from povagent.dataset.models import PairEntry, SceneObject
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import ViewCamera
+from povagent.geometry.letterbox import Letterbox
 from povagent.geometry.placement import SURFACE_KINDS, surface_kind
+from povagent.geometry.triangulation import optical_depth
 from povagent.interfaces import Backend, PermanentBackendError
 
 #: The label every answer carries in ``Response.model``.
@@ -65,11 +72,17 @@ def seeded_generator(*parts: object) -> np.random.Generator:
     return np.random.default_rng(int.from_bytes(digest[:8], "big"))
 
 
-def box_outline(camera: Camera, obj: SceneObject) -> tuple[float, float, float, float] | None:
+def box_outline(camera: ViewCamera, obj: SceneObject) -> tuple[float, float, float, float] | None:
     """The 2D box (pixels, clipped to the image) around an object's projected box, from the
     part in front of the camera; ``None`` when none of it is in front or in the image."""
     corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
-    lo, hi = corners.min(axis=0), corners.max(axis=0)
+    return outline(camera, corners.min(axis=0), corners.max(axis=0))
+
+
+def outline(camera: ViewCamera, lo: np.ndarray, hi: np.ndarray) -> tuple[float, float, float, float] | None:
+    """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``
+    (its edges sampled, so a box partly behind the camera is outlined by the part in front)."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
     points = []
     for axis in range(3):
@@ -81,7 +94,7 @@ def box_outline(camera: Camera, obj: SceneObject) -> tuple[float, float, float, 
                 p[:, others[0]], p[:, others[1]] = b0, b1
                 points.append(p)
     pts = np.concatenate(points)
-    depth = camera.to_camera(pts)[:, 2]
+    depth = optical_depth(camera, pts)
     pts = pts[depth > NEAR_PLANE]
     if not len(pts):
         return None
@@ -270,6 +283,93 @@ def pointed_object(object_type: str, role: str, house: House, pair: PairEntry) -
         if obj.object_type == object_type:
             return obj
     return None
+
+
+class SimulatedScene(Backend):
+    """The perception simulator for one known scene seen through a robot's cameras.
+
+    ``objects`` maps an object type to its axis-aligned box ``(low corner, high corner)`` in the
+    robot's world; ``cameras`` are the cameras of the frames the agent is given (in order; any
+    :class:`~povagent.geometry.camera.ViewCamera`: a ``PinholeCamera`` in any convention or an
+    AI2-THOR ``Camera``). The read and surface sub-questions get ``anchor``, ``direction``,
+    ``observer`` and ``surface`` as given; a locate question gets, for every frame whose image
+    shows the object's centre (no occlusion is simulated), the projected centre and the box
+    around the projected box, mapped into the letterboxed square the agent shows the model, with
+    Gaussian noise of ``pixel_sigma`` (square pixels). Deterministic per ``seed`` and question;
+    any other prompt is refused, as by :class:`SimulatedPerception`.
+    """
+
+    cacheable: ClassVar[bool] = False
+
+    def __init__(
+        self,
+        objects: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+        cameras: Sequence[ViewCamera],
+        *,
+        anchor: str,
+        direction: str,
+        surface: str,
+        observer: str | None = None,
+        pixel_sigma: float = 0.0,
+        seed: int = 0,
+    ) -> None:
+        if surface not in SURFACE_KINDS:
+            raise ValueError(f"surface must be one of {', '.join(SURFACE_KINDS)}, got {surface!r}")
+        if not pixel_sigma >= 0:
+            raise ValueError(f"pixel_sigma must be >= 0 (pixels), got {pixel_sigma!r}")
+        self.objects = {k: (np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)) for k, (lo, hi) in objects.items()}
+        self.cameras = list(cameras)
+        self.read = {"observer": observer, "anchor": anchor, "direction": direction}
+        self.surface = surface
+        self.pixel_sigma = float(pixel_sigma)
+        self.seed = int(seed)
+
+    def identity(self) -> Mapping[str, Any]:
+        """Name, ``simulation: True``, the noise and the seed."""
+        return {"backend": "simulated-scene", "simulation": True, "pixel_sigma": self.pixel_sigma, "seed": self.seed}
+
+    async def complete(self, request: Request, images: ImageStore) -> Response:
+        """Answer one sub-question about the scene; refuse anything else."""
+        question = request.question if isinstance(request.question, Mapping) else {}
+        kind = question.get("kind")
+        if kind == "read":
+            asks = question.get("asks") or tuple(self.read)
+            answer: dict[str, Any] = {k: v for k, v in self.read.items() if k in asks and v is not None}
+        elif kind == "surface":
+            answer = {"surface": self.surface}
+        elif kind == "locate":
+            rng = seeded_generator(self.seed, request.run, json.dumps(dict(question), sort_keys=True, default=str))
+            answer = {"detections": self._detections(str(question.get("object", "")), rng)}
+        else:
+            raise PermanentBackendError(
+                "the simulated scene is a perception simulation, not a model: it answers only the 'geometric' "
+                f"strategy's sub-questions, and this request carries {'no question' if not question else f'question kind {kind!r}'}"
+            )
+        return Response(text=json.dumps(answer), usage=Usage(0, 0, 0.0), latency_s=0.0, model=SIMULATION_LABEL)
+
+    def _detections(self, object_type: str, rng: np.random.Generator) -> list[dict[str, Any]]:
+        box3d = self.objects.get(object_type)
+        found: list[dict[str, Any]] = []
+        for index, cam in enumerate(self.cameras):
+            noise = rng.normal(0.0, self.pixel_sigma, size=6) if self.pixel_sigma > 0 else np.zeros(6)
+            if box3d is None:
+                continue
+            lo, hi = box3d
+            u, v, depth = cam.project_point((lo + hi) / 2.0)
+            if not (depth > NEAR_PLANE and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0):
+                continue
+            square = Letterbox.for_size(cam.width, cam.height)
+            last = square.size - 1.0
+            x, y = square.to_square(np.array([u * cam.width, v * cam.height])) + noise[:2]
+            entry: dict[str, Any] = {"image": index, "x": round(float(np.clip(x, 0, last)), 2), "y": round(float(np.clip(y, 0, last)), 2)}
+            box = outline(cam, lo, hi)
+            if box is not None:
+                corners = square.to_square(np.array([box[:2], box[2:]])).ravel() + noise[2:]
+                x0, x1 = sorted(float(np.clip(corners[k], 0, last)) for k in (0, 2))
+                y0, y1 = sorted(float(np.clip(corners[k], 0, last)) for k in (1, 3))
+                entry["box"] = [round(x0, 2), round(y0, 2), round(x1, 2), round(y1, 2)]
+            found.append(entry)
+        return found
 
 
 @hookimpl

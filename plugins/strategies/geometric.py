@@ -41,7 +41,7 @@ from povagent.dataset.models import DIRECTIONS
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, Message, Request, Response, TextPart
 from povagent.exchange.prompts import frame_values, render
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import ViewCamera
 from povagent.geometry.given_view import solve_given_view
 from povagent.geometry.ground_truth import anchor_keywords
 from povagent.geometry.placement import SURFACE_KINDS, AnchorEstimate, choose_frame, place_target
@@ -220,16 +220,14 @@ _DETECTIONS_SCHEMA = _schema(
 class GeometricStrategy(Strategy):
     """Ask the model to read the sentence and point; solve the geometry exactly.
 
-    It reads the frames' cameras (``uses_frame_cameras``): the GroundingAgent then gives it the
-    robot's own cameras, and returns the solved 3D target as the goal.
+    In a run it reads the frames' cameras (the release's ``exploration_log.json``); the
+    GroundingAgent calls :meth:`solve_posed` with the robot's own cameras brought into the
+    benchmark's world instead, and returns the solved 3D target as the goal.
 
     Options: ``max_tokens`` per sub-question (default 512), ``temperature`` (default: the
     backend's), ``min_ray_angle_deg`` (rays spanning less than this are not triangulated;
     default 4).
     """
-
-    #: The solver triangulates with the frames' cameras (see the GroundingAgent).
-    uses_frame_cameras = True
 
     def __init__(self, max_tokens: int = 512, temperature: float | None = None, min_ray_angle_deg: float = MIN_RAY_ANGLE_DEG) -> None:
         if not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1:
@@ -289,7 +287,19 @@ class GeometricStrategy(Strategy):
 
     # -- the conversation ---------------------------------------------------------------------
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
-        """Ask the sub-questions, solve the geometry, and return every turn, the answer last."""
+        """Ask the sub-questions, solve the geometry with the frames' cameras, and return every
+        turn, the answer last."""
+        return await self.solve_posed(instance, ask, images, [f.camera for f in instance.frames])
+
+    async def solve_posed(self, instance: Instance, ask: Ask, images: ImageStore, cameras: Sequence[ViewCamera]) -> list[tuple[Request, Response]]:
+        """:meth:`solve` with ``cameras`` (one per shown frame, describing the shown image, in
+        the benchmark's world: y up, floor at ``y = 0``, left-handed) in place of the frames'.
+
+        The target of A/B comes back in that world (``Response.solved_point``); C uses only the
+        camera's field of view (the observer view has no pose).
+        """
+        if len(cameras) != len(instance.frames):
+            raise ValueError(f"solve_posed: {len(cameras)} cameras for {len(instance.frames)} frames")
         turns: list[tuple[Request, Response]] = []
         account = Account()
 
@@ -330,13 +340,12 @@ class GeometricStrategy(Strategy):
 
         if not instance.condition.uses_exploration_frames:
             first = anchor_seen[0]
-            sol = solve_given_view(direction, anchor, size_prior(anchor), first.pixel, first.box, surface, width, height, instance.frames[0].camera.fov)
+            sol = solve_given_view(direction, anchor, size_prior(anchor), first.pixel, first.box, surface, width, height, cameras[0].fov)
             how = "tilt fitted to the anchor's box" if sol.fitted else "no usable box: tilt guessed from the pointed centre"
             (account.step if sol.fitted else account.fallback)(f"observer view: {how} ({sol.tilt_deg:.1f} deg)")
             account.step(f"target: pixel ({sol.pixel[0]:.1f}, {sol.pixel[1]:.1f})" + ("" if sol.in_frame else ", outside the image: clamped"))
             return turns + [self._final(instance, (None, sol.pixel), account)]
 
-        cameras = [f.camera for f in instance.frames]
         anchor_box = self._anchor_box(anchor, anchor_seen, cameras, account)
         observer_at = None
         if observer is None:
@@ -352,14 +361,14 @@ class GeometricStrategy(Strategy):
                 observer_at = np.asarray(estimate.point)
                 account.step(f"observer: {_how_located(estimate)} at ({_xyz(observer_at)})")
         if observer_at is None:
-            observer_at = np.mean([cameras[d.frame].position for d in anchor_seen], axis=0)
+            observer_at = np.mean([np.asarray(cameras[d.frame].position, dtype=float) for d in anchor_seen], axis=0)
             account.fallback("observer placed at the mean position of the cameras that saw the anchor")
         target = place_target(direction, anchor_box, anchor, observer_at, surface)
         choice = choose_frame(target, cameras)
         account.step(f"target: ({_xyz(target)}); frame {choice.index} ({choice.placement})")
         return turns + [self._final(instance, (choice.index, choice.pixel), account, target)]
 
-    def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[Camera], account: Account) -> AnchorEstimate:
+    def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[ViewCamera], account: Account) -> AnchorEstimate:
         """The anchor's box: centre located from the sightings, extent fitted to the outlines."""
         prior = size_prior(anchor)
         estimate = locate([Sighting(cameras[d.frame], d.pixel) for d in seen], prior.centre_height, self.min_ray_angle_deg)

@@ -15,6 +15,14 @@ an ``observer_view`` is); the strategy talks to the backend through an ``ask`` f
 retries transient failures within a deadline; the parser reads the final answer; the pixel is
 mapped back through the exact letterbox transform and, with a camera, back-projected.
 
+A strategy that solves the geometry itself (:class:`PosedSolver`: ``geometric``) is given the
+robot's cameras instead of being told nothing about them: each camera (AI2-THOR's ``Camera`` or
+a ``PinholeCamera`` in any convention, any intrinsics and frame size) is brought into the
+benchmark's world (:class:`~povagent.geometry.solver_world.SolverWorld`: y up, the floor plane
+``plane`` at ``y = 0``) and onto the letterboxed square the model sees
+(:meth:`~povagent.geometry.goals.PinholeCamera.letterboxed`); the 3D target it solves is mapped
+back into the robot's world and returned as the goal.
+
 What a robot app can catch (all :class:`~povagent.errors.GroundingError`):
 :class:`~povagent.errors.BadInputError` (no frames, an unreadable image, cameras or depth
 images that do not match the frames), :class:`~povagent.errors.NoAnswerError` (every attempt
@@ -37,7 +45,7 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Literal, Mapping, Sequence
+from typing import Any, Callable, Literal, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 from PIL import Image, UnidentifiedImageError
@@ -52,9 +60,10 @@ from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
 from povagent.errors import BackendError, BadInputError, NoAnswerError, UnparseableAnswerError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
-from povagent.geometry.camera import Camera
-from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project
+from povagent.geometry.camera import Camera, ViewCamera
+from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project, camera_problem
 from povagent.geometry.letterbox import DEFAULT_PAD_COLOR, Letterbox, pixel_index
+from povagent.geometry.solver_world import SolverWorld
 from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 
 #: What a frame may be: a path, a PIL image, or an ``(H, W)``/``(H, W, 3|4)`` RGB(A) array.
@@ -199,9 +208,27 @@ def _array_to_image(a: np.ndarray, what: str) -> Image.Image:
     return Image.fromarray(np.ascontiguousarray(data)).convert("RGB")
 
 
+@runtime_checkable
+class PosedSolver(Protocol):
+    """A strategy that solves the geometry with the shown frames' cameras (``geometric``).
+
+    ``solve_posed`` is :meth:`~povagent.interfaces.Strategy.solve` with one camera per shown
+    image, describing that (letterboxed, square) image in the benchmark's world: y up, the floor
+    at ``y = 0``, left-handed. A 3D target it works out (``Response.solved_point``) is in that
+    world; the agent maps it back into the robot's.
+    """
+
+    async def solve_posed(
+        self, instance: Instance, ask: Ask, images: ImageStore, cameras: Sequence[ViewCamera]
+    ) -> list[tuple[Request, Response]]:
+        """Every exchange, the final answer last."""
+        ...
+
+
 @dataclass
 class _Prepared:
-    """One call's inputs, ready for the strategy."""
+    """One call's inputs, ready for the strategy (``solver_cameras`` and ``world`` only for a
+    :class:`PosedSolver`)."""
 
     instance: Instance
     images: ImageStore
@@ -209,6 +236,8 @@ class _Prepared:
     cameras: list[GoalCamera | None]
     depths: list[np.ndarray | None]
     folder: tempfile.TemporaryDirectory
+    solver_cameras: list[ViewCamera] | None = None
+    world: SolverWorld | None = None
 
 
 # -- the agent ------------------------------------------------------------------------------------
@@ -221,8 +250,9 @@ class GroundingAgent:
     parser then applies) or any litellm model string; ``backend_options`` add to it (e.g.
     ``api_base`` for a vLLM server). Without a model or backend the agent runs the offline
     ``center`` baseline. ``timeout_s`` bounds each call, every retry
-    included. ``plane`` is the floor a pixel is back-projected onto when no depth image is
-    given (default: AI2-THOR's ``y = 0``; a ROS robot passes ``Plane(normal=(0, 0, 1))``).
+    included. ``plane`` is the floor (normal pointing up) a pixel is back-projected onto when
+    no depth image is given, and the floor the ``geometric`` solver stands objects on (default:
+    AI2-THOR's ``y = 0``; a ROS robot passes ``Plane.horizontal(0.0, up_axis="z")``).
     The agent holds a backend (with its connections): use it as a context manager, or call
     :meth:`close` / :meth:`aclose`.
     """
@@ -465,7 +495,12 @@ class GroundingAgent:
         cams = _aligned(cameras, len(shown), "cameras", (Camera, PinholeCamera))
         deps = _aligned(depths, len(shown), "depths", (np.ndarray,))
         for i, (im, cam) in enumerate(zip(shown, cams)):
-            if cam is not None and (cam.width, cam.height) != im.size:
+            if cam is None:
+                continue
+            problem = camera_problem(cam)
+            if problem is not None:
+                raise BadInputError(f"cameras[{i}]: {problem}")
+            if (cam.width, cam.height) != im.size:
                 raise BadInputError(
                     f"cameras[{i}] describes a {cam.width}x{cam.height} image but the frame is "
                     f"{im.size[0]}x{im.size[1]}: give the camera of the original frame"
@@ -487,10 +522,19 @@ class GroundingAgent:
                 file.write_bytes(images.encoded_bytes(stored.image_hash))
                 boxes.append(box)
                 name = "observer_view.png" if condition is Condition.GIVEN else file.name
-                instance_frames.append(Frame(i, name, file, _shown_camera(self.strategy, cams[i], im.size, square_camera)))
+                # the frame's own camera is the unposed square one: only a PosedSolver is
+                # told the robot's cameras (below), in the world it reasons in
+                instance_frames.append(Frame(i, name, file, square_camera))
         except BaseException:
             folder.cleanup()
             raise
+        solver_cameras, world = None, None
+        if isinstance(self.strategy, PosedSolver):
+            try:
+                solver_cameras, world = _solver_cameras(cams, boxes, self.plane, condition, square_camera)
+            except BaseException:
+                folder.cleanup()
+                raise
         instance = Instance(
             house_id=AGENT_HOUSE_ID,
             pair_id=AGENT_PAIR_ID,
@@ -503,12 +547,15 @@ class GroundingAgent:
             anchor_object=unknown_object("Anchor"),
             observer_camera=square_camera,
         )
-        return _Prepared(instance, images, boxes, cams, deps, folder)
+        return _Prepared(instance, images, boxes, cams, deps, folder, solver_cameras, world)
 
     async def _solve(self, prepared: _Prepared, deadline: float) -> list[tuple[Request, Response]]:
         ask = self._ask_factory(self.backend, prepared.images, deadline)
         try:
-            exchanges = await self.strategy.solve(prepared.instance, ask, prepared.images)
+            if prepared.solver_cameras is not None and isinstance(self.strategy, PosedSolver):
+                exchanges = await self.strategy.solve_posed(prepared.instance, ask, prepared.images, prepared.solver_cameras)
+            else:
+                exchanges = await self.strategy.solve(prepared.instance, ask, prepared.images)
         except (TransientBackendError, PermanentBackendError, BackendError) as exc:
             raise NoAnswerError(f"the model gave no answer: {type(exc).__name__}: {exc}") from exc
         if not exchanges:
@@ -545,7 +592,7 @@ class GroundingAgent:
         width, height = box.original
         goal, goal_error = None, None
         camera = prepared.cameras[k]
-        solved = _solved_goal(response, camera, pixel)
+        solved = _solved_goal(response, camera, prepared.world, pixel)
         if solved is not None:  # a strategy that solved the geometry gives the goal itself
             goal = solved
         elif camera is not None:
@@ -579,22 +626,50 @@ class GroundingAgent:
         )
 
 
-def _shown_camera(strategy: Strategy, camera: Any, size: tuple[int, int], unposed: Camera) -> Camera:
-    """The camera an instance frame carries: the robot's own (AI2-THOR convention) for a
-    strategy that reads frame cameras (``uses_frame_cameras``, the geometric solver) when the
-    frame is square (the letterbox then only scales it); otherwise the unposed square one."""
-    if getattr(strategy, "uses_frame_cameras", False) and isinstance(camera, Camera) and size[0] == size[1]:
-        return Camera.from_pose(camera.position, camera.yaw, camera.horizon, camera.fov, unposed.width, unposed.height)
-    return unposed
+def _solver_cameras(
+    cameras: Sequence[GoalCamera | None], boxes: Sequence[Letterbox], floor: Plane, condition: Condition, unposed: Camera
+) -> tuple[list[ViewCamera], SolverWorld | None]:
+    """The robot's cameras as a :class:`PosedSolver` needs them: in the benchmark's world, on
+    the letterboxed squares shown, and the world map they were brought in with.
+
+    A/B triangulate with every frame's camera, so each frame needs one. C (the observer view)
+    has no pose: without a camera the unposed square one stands in (only its field of view is
+    read).
+    """
+    pinholes = [c if isinstance(c, PinholeCamera) or c is None else PinholeCamera.from_camera(c) for c in cameras]
+    if condition.uses_exploration_frames:
+        missing = [i for i, c in enumerate(pinholes) if c is None]
+        if missing:
+            raise BadInputError(
+                f"cameras[{missing[0]}]: the geometric strategy triangulates with every frame's camera; "
+                f"give one for each of the {len(pinholes)} frame(s) (or use another strategy)"
+            )
+    posed = [(i, c) for i, c in enumerate(pinholes) if c is not None]
+    if not posed:
+        return [unposed], None
+    handed = {c.right_handed for _, c in posed}
+    if len(handed) > 1:
+        right = next(i for i, c in posed if c.right_handed)
+        left = next(i for i, c in posed if not c.right_handed)
+        raise BadInputError(
+            f"cameras[{right}] is posed in a right-handed world but cameras[{left}] in a left-handed one "
+            "(AI2-THOR's Camera is left-handed): give every camera in the same world"
+        )
+    world = SolverWorld.for_floor(floor, right_handed=handed.pop())
+    solver: list[ViewCamera] = []
+    for c, box in zip(pinholes, boxes):
+        solver.append(unposed if c is None else c.moved(world.rotation, world.origin).letterboxed(box))
+    return solver, world
 
 
-def _solved_goal(response: Response, camera: Any, pixel: tuple[float, float]) -> Goal3D | None:
-    """The 3D target a strategy worked out itself (``Response.solved_point``), or ``None``."""
+def _solved_goal(response: Response, camera: GoalCamera | None, world: SolverWorld | None, pixel: tuple[float, float]) -> Goal3D | None:
+    """The 3D target a strategy worked out itself (``Response.solved_point``, in the solver's
+    world), back in the robot's world; ``None`` when there is none."""
     point = response.solved_point
-    if point is None or not isinstance(camera, Camera):
+    if point is None or camera is None or world is None:
         return None
-    distance = float(np.linalg.norm(np.asarray(point, dtype=float) - np.asarray(camera.position)))
-    x, y, z = (float(v) for v in point)
+    x, y, z = (float(v) for v in world.to_world(np.asarray(point, dtype=float)))
+    distance = float(np.linalg.norm(np.array([x, y, z]) - np.asarray(camera.position, dtype=float)))
     return Goal3D(point=(x, y, z), method="geometry", distance=distance, pixel=pixel)
 
 
@@ -645,6 +720,7 @@ __all__ = [
     "GroundingAgent",
     "Localization",
     "PinholeCamera",
+    "PosedSolver",
     "Plane",
     "AGENT_RETRY",
     "default_ask_factory",

@@ -14,13 +14,16 @@ Camera axes for yaw ``y`` and horizon ``h``::
 
 A world point ``p`` has camera coordinates ``(d.right, d.up, d.forward)`` with ``d = p - pos``
 and projects to ``u = f xc/zc + W/2``, ``v = H/2 - f yc/zc`` pixels, ``f = (W/2)/tan(fov/2)``.
+
+:class:`ViewCamera` is what the geometric solver asks of a frame's camera; :class:`Camera` and
+the robot's :class:`~povagent.geometry.goals.PinholeCamera` both are one.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 
@@ -41,6 +44,63 @@ class Projection:
     depth: np.ndarray
     in_front: np.ndarray
     in_frame: np.ndarray
+
+
+class ViewCamera(Protocol):
+    """What the geometric solver needs of a frame's camera (:class:`Camera`, or a robot's
+    :class:`~povagent.geometry.goals.PinholeCamera` brought into the benchmark's world).
+
+    Pixels are continuous coordinates of a ``width`` x ``height`` image; ``content_box`` is the
+    part of it showing the scene (all of it, or a letterbox's content: its border is the edge
+    of the view, not of an object).
+    """
+
+    @property
+    def position(self) -> Sequence[float] | np.ndarray:
+        """Camera centre in world coordinates."""
+        ...
+
+    @property
+    def width(self) -> int:
+        """Image width (px)."""
+        ...
+
+    @property
+    def height(self) -> int:
+        """Image height (px)."""
+        ...
+
+    @property
+    def fov(self) -> float:
+        """Horizontal field of view (degrees) across the width."""
+        ...
+
+    @property
+    def intrinsics(self) -> tuple[float, float, float, float]:
+        """``(fx, fy, cx, cy)`` in pixels: ``u = fx x/z + cx``, ``v = fy y/z + cy`` on the
+        optical axes of :meth:`optical_axes`."""
+        ...
+
+    @property
+    def content_box(self) -> tuple[float, float, float, float]:
+        """``(left, top, right, bottom)`` of the image content (pixels)."""
+        ...
+
+    def optical_axes(self) -> np.ndarray:
+        """Rows ``right, down, forward`` (OpenCV's optical axes) as a (3, 3) world-to-camera rotation."""
+        ...
+
+    def ray(self, pixels: np.ndarray) -> np.ndarray:
+        """Unit world directions ``(..., 3)`` through pixel coordinates ``(..., 2)``."""
+        ...
+
+    def project_point(self, point: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
+        """One world point: ``(u/W, v/H, depth)``; NaN fractions behind the camera."""
+        ...
+
+    def project_pixels(self, points: np.ndarray) -> np.ndarray:
+        """World points ``(..., 3)`` to pixel coordinates ``(..., 2)`` (NaN behind the camera)."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -85,6 +145,23 @@ class Camera:
                 [sy * ch, -sh, cy * ch],
             ]
         )
+
+    def optical_axes(self) -> np.ndarray:
+        """Rows ``right, down, forward``: :meth:`axes` with ``up`` turned to ``down``."""
+        axes = self.axes()
+        axes[1] = -axes[1]
+        return axes
+
+    @property
+    def intrinsics(self) -> tuple[float, float, float, float]:
+        """``(f, f, W/2, H/2)``: square pixels, the principal point at the image centre."""
+        f = float(self.focal_px)
+        return (f, f, self.width / 2.0, self.height / 2.0)
+
+    @property
+    def content_box(self) -> tuple[float, float, float, float]:
+        """The whole image: ``(0, 0, W, H)``."""
+        return (0.0, 0.0, float(self.width), float(self.height))
 
     def to_camera(self, points: np.ndarray) -> np.ndarray:
         """World points ``(..., 3)`` to camera coordinates ``(xc, yc, zc)`` (right, up, forward)."""

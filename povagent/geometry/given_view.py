@@ -25,6 +25,23 @@ from povagent.geometry.triangulation import CLIPPED_EDGE_PX, projected_box
 EYE_HEIGHT = 1.55
 #: Tilts (degrees, positive looks down) the virtual camera may take.
 TILT_RANGE = (-10.0, 70.0)
+#: How much the box's centre weighs against the pointed centre: it averages two edges, each as
+#: noisy as a pointed coordinate, so it is half as noisy (inverse-variance weighting).
+BOX_CENTRE_WEIGHT = 2.0
+
+
+def anchor_centre(centre_px: tuple[float, float], box: tuple[float, float, float, float] | None) -> tuple[float, float]:
+    """The anchor's centre pixel from both answers: the pointed centre and, given a box, the
+    box's centre, weighted :data:`BOX_CENTRE_WEIGHT` to 1 (the pointed centre alone without a box).
+
+    With no pose to triangulate from, one view's pointing noise goes straight into the
+    anchor's place; the box is a second, independent reading of the same centre.
+    """
+    if box is None:
+        return centre_px
+    w = BOX_CENTRE_WEIGHT
+    bx, by = (box[0] + box[2]) / 2.0, (box[1] + box[3]) / 2.0
+    return ((centre_px[0] + w * bx) / (1.0 + w), (centre_px[1] + w * by) / (1.0 + w))
 
 
 @dataclass(frozen=True)
@@ -73,7 +90,9 @@ def solve_given_view(
     height: int = 512,
     fov: float = 100.0,
 ) -> GivenViewSolution:
-    """The target's pixel in the observer view from the anchor's pointed centre and box."""
+    """The target's pixel in the observer view from the anchor's pointed centre and box (the
+    anchor's centre is read from both, :func:`anchor_centre`)."""
+    centre_px = anchor_centre(centre_px, box)
 
     def camera(tilt: float) -> Camera:
         return Camera((0.0, EYE_HEIGHT, 0.0), 0.0, tilt, fov, width, height)

@@ -13,7 +13,8 @@ Two camera descriptions are accepted:
   of view, or ``fx, fy, cx, cy``), in one of two axis conventions, ``convention=``:
 
   - ``"opencv"`` (ROS optical frames, COLMAP): camera x right, y down, z forward;
-  - ``"opengl"`` (Blender, ARKit, NeRF): camera x right, y up, looking along -z.
+  - ``"opengl"`` (Blender, ARKit, NeRF): camera x right, y up, looking along -z;
+  - ``"ros"`` (a ROS ``camera_link`` / body frame): camera x forward, y left, z up.
 
   The pose's columns are the world directions of the camera axes and its position; the world
   frame is whatever the pose is expressed in (ROS ``map``/``odom``: z up), and the goal comes
@@ -30,13 +31,15 @@ Pure: numbers in, numbers out; no files, no clock.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Literal, Sequence
 
 import numpy as np
 
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import BEHIND_EPSILON, Camera
+from povagent.geometry.letterbox import Letterbox
 
 
 class PoseConvention(StrEnum):
@@ -46,12 +49,16 @@ class PoseConvention(StrEnum):
     OPENCV = "opencv"
     #: x right, y up, z backward (the camera looks along -z)
     OPENGL = "opengl"
+    #: x forward, y left, z up (ROS body frames such as ``camera_link``; REP 103)
+    ROS = "ros"
 
 
-#: Camera axes (right, down, forward) expressed in each convention's camera frame.
+#: Columns: the OpenCV axes (right, down, forward) in each convention's camera frame. Every
+#: convention is right-handed, so the pose's handedness is the world's.
 _TO_OPENCV = {
     PoseConvention.OPENCV: np.diag([1.0, 1.0, 1.0]),
     PoseConvention.OPENGL: np.diag([1.0, -1.0, -1.0]),
+    PoseConvention.ROS: np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]),
 }
 
 
@@ -62,7 +69,9 @@ class PinholeCamera:
     ``fx, fy`` are focal lengths and ``cx, cy`` the principal point, in pixels of a
     ``width`` x ``height`` image, on the continuous convention (the centre of a
     ``W`` x ``H`` image is ``(W/2, H/2)``; OpenCV calibrations put it at
-    ``((W-1)/2, (H-1)/2)`` on pixel-index coordinates: add 0.5 to convert).
+    ``((W-1)/2, (H-1)/2)`` on pixel-index coordinates: add 0.5 to convert). ``content``, when
+    set, is the part of the image showing the scene (a letterboxed frame's content,
+    :meth:`letterboxed`); by default all of it.
     """
 
     camera_to_world: np.ndarray = field(repr=False)
@@ -73,6 +82,7 @@ class PinholeCamera:
     width: int
     height: int
     convention: PoseConvention = PoseConvention.OPENCV
+    content: tuple[float, float, float, float] | None = None
 
     def __post_init__(self) -> None:
         pose = np.asarray(self.camera_to_world, dtype=float)
@@ -84,6 +94,8 @@ class PinholeCamera:
         # orthonormal columns (a rotation, or a reflection for left-handed worlds such as Unity's)
         if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-4):
             raise ValueError("camera_to_world's 3x3 part is not orthonormal (is it world-to-camera, or scaled?)")
+        if not np.all(np.isfinite([self.fx, self.fy, self.cx, self.cy])):
+            raise ValueError("intrinsics hold NaN or infinite values")
         if self.fx <= 0 or self.fy <= 0 or self.width < 1 or self.height < 1:
             raise ValueError("focal lengths and image size must be positive")
         object.__setattr__(self, "camera_to_world", pose)
@@ -128,7 +140,7 @@ class PinholeCamera:
         right, up, forward = camera.axes()
         opencv_axes = np.stack([right, -up, forward], axis=1)  # columns: x right, y down, z forward
         pose = np.eye(4)
-        pose[:3, :3] = opencv_axes @ _TO_OPENCV[convention]
+        pose[:3, :3] = opencv_axes @ _TO_OPENCV[convention].T  # the inverse of a rotation
         pose[:3, 3] = camera.position
         # our camera's fov spans the width (as the official scorer has it): take its focal length
         f = float(camera.focal_px)
@@ -138,6 +150,54 @@ class PinholeCamera:
     def position(self) -> np.ndarray:
         """Camera centre in world coordinates."""
         return self.camera_to_world[:3, 3]
+
+    @property
+    def fov(self) -> float:
+        """Horizontal field of view (degrees) across the width, as :class:`Camera`'s."""
+        return float(np.degrees(2.0 * np.arctan2(self.width / 2.0, self.fx)))
+
+    @property
+    def intrinsics(self) -> tuple[float, float, float, float]:
+        """``(fx, fy, cx, cy)`` in pixels."""
+        return (float(self.fx), float(self.fy), float(self.cx), float(self.cy))
+
+    @property
+    def content_box(self) -> tuple[float, float, float, float]:
+        """``(left, top, right, bottom)`` of the image content (the whole image unless letterboxed)."""
+        return self.content if self.content is not None else (0.0, 0.0, float(self.width), float(self.height))
+
+    @property
+    def right_handed(self) -> bool:
+        """Whether the pose's world is right-handed (ROS, OpenCV, OpenGL) rather than left-handed (Unity)."""
+        return bool(np.linalg.det(self._opencv_to_world()) > 0)
+
+    def optical_axes(self) -> np.ndarray:
+        """Rows ``right, down, forward`` (in world coordinates) as a (3, 3) world-to-camera map."""
+        return self._opencv_to_world().T
+
+    def letterboxed(self, box: Letterbox) -> PinholeCamera:
+        """The same camera describing the letterboxed square ``box`` makes of its frame.
+
+        The letterbox scales and shifts pixels per axis, so the intrinsics follow exactly:
+        ``fx' = fx sx``, ``cx' = ox + cx sx`` (likewise for y); ``content`` is the frame's place
+        in the square.
+        """
+        if box.original != (self.width, self.height):
+            raise ValueError(f"the letterbox was made for {box.original[0]}x{box.original[1]}, the camera is {self.width}x{self.height}")
+        sx, sy = box.scale
+        ox, oy = box.offset
+        left, top, right, bottom = box.content_box()
+        return PinholeCamera(self.camera_to_world, self.fx * sx, self.fy * sy, ox + self.cx * sx, oy + self.cy * sy, box.size, box.size,
+                             self.convention, (float(left), float(top), float(right), float(bottom)))
+
+    def moved(self, rotation: np.ndarray, origin: Sequence[float] | np.ndarray) -> PinholeCamera:
+        """The same camera in another world frame, ``p' = rotation (p - origin)`` (``rotation``
+        orthonormal; a reflection changes the world's handedness)."""
+        r = np.asarray(rotation, dtype=float)
+        pose = np.eye(4)
+        pose[:3, :3] = r @ self.camera_to_world[:3, :3]
+        pose[:3, 3] = r @ (self.position - np.asarray(origin, dtype=float))
+        return PinholeCamera(pose, self.fx, self.fy, self.cx, self.cy, self.width, self.height, self.convention, self.content)
 
     def _opencv_to_world(self) -> np.ndarray:
         # world directions of the OpenCV axes (right, down, forward) as columns
@@ -158,8 +218,17 @@ class PinholeCamera:
         """World points ``(..., 3)`` to pixel coordinates ``(..., 2)`` (NaN behind the camera)."""
         d = np.asarray(points, dtype=float) - self.position
         cam = d @ self._opencv_to_world()
-        z = np.where(cam[..., 2] > 1e-6, cam[..., 2], np.nan)
+        z = np.where(cam[..., 2] > BEHIND_EPSILON, cam[..., 2], np.nan)
         return np.stack([self.fx * cam[..., 0] / z + self.cx, self.fy * cam[..., 1] / z + self.cy], axis=-1)
+
+    def project_point(self, point: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
+        """One world point: ``(u/W, v/H, depth)`` (depth along the optical axis); the fractions
+        are NaN when the point is behind the camera (``depth <= 1e-6``), as :class:`Camera`'s."""
+        cam = (np.asarray(point, dtype=float) - self.position) @ self._opencv_to_world()
+        z = float(cam[2])
+        if not z > BEHIND_EPSILON:
+            return (math.nan, math.nan, z)
+        return ((self.fx * cam[0] / z + self.cx) / self.width, (self.fy * cam[1] / z + self.cy) / self.height, z)
 
     def _opencv_directions(self, pixels: np.ndarray) -> np.ndarray:
         p = np.asarray(pixels, dtype=float)
@@ -314,3 +383,33 @@ def back_project(
 
 def _tuple3(p: np.ndarray) -> tuple[float, float, float]:
     return (float(p[0]), float(p[1]), float(p[2]))
+
+
+def camera_problem(camera: GoalCamera) -> str | None:
+    """What makes ``camera`` unusable (NaN or infinite numbers, a pose that is not a rigid
+    motion, a non-positive size or focal length), or ``None`` when it is fine.
+
+    :class:`PinholeCamera` checks itself when built; its pose is a numpy array, which the
+    caller may still change in place afterwards, so a consumer checks again before use.
+    """
+    if isinstance(camera, PinholeCamera):
+        pose = np.asarray(camera.camera_to_world, dtype=float)
+        if pose.shape != (4, 4):
+            return f"the camera-to-world pose must be 4x4, got shape {pose.shape}"
+        if not np.all(np.isfinite(pose)):
+            return "the camera-to-world pose holds NaN or infinite values"
+        rot = pose[:3, :3]
+        if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-4) or not np.allclose(pose[3], (0.0, 0.0, 0.0, 1.0)):
+            return "the camera-to-world pose is not a rigid motion (its 3x3 part is not orthonormal: scaled, sheared, or world-to-camera?)"
+        numbers: tuple[float, ...] = (camera.fx, camera.fy, camera.cx, camera.cy)
+    else:
+        numbers = (*camera.position, camera.yaw, camera.horizon, camera.fov)
+        if np.all(np.isfinite(numbers)) and not 0 < camera.fov < 180:
+            return f"fov must be in (0, 180) degrees, got {camera.fov}"
+    if not np.all(np.isfinite(np.asarray(numbers, dtype=float))):
+        return "the camera holds NaN or infinite values"
+    if isinstance(camera, PinholeCamera) and (camera.fx <= 0 or camera.fy <= 0):
+        return f"focal lengths must be positive, got fx={camera.fx}, fy={camera.fy}"
+    if camera.width < 1 or camera.height < 1:
+        return f"the image size must be positive, got {camera.width}x{camera.height}"
+    return None

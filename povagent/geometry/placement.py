@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import ViewCamera
 from povagent.geometry.ground_truth import AnchorBox, anchor_keywords, surface_names_anchor, target_point
 
 #: The surfaces a target may rest on, as the solver asks: the floor, the anchor itself, or some
@@ -85,19 +85,21 @@ class FrameChoice:
     placement: str
 
 
-def choose_frame(target: Sequence[float] | np.ndarray, cameras: Sequence[Camera]) -> FrameChoice:
-    """The frame showing ``target`` best: inside the image first, then in front of the camera,
-    then behind it; among equals, the one where it lies nearest the image centre."""
+def choose_frame(target: Sequence[float] | np.ndarray, cameras: Sequence[ViewCamera]) -> FrameChoice:
+    """The frame showing ``target`` best: inside the image (its content: not on a letterbox's
+    padding) first, then in front of the camera, then behind it; among equals, the one where it
+    lies nearest the image centre."""
     best: tuple[tuple[int, float], int, float, float] | None = None
     for i, cam in enumerate(cameras):
         u, v, depth = cam.project_point(target)
         if depth > 1e-6:
-            inside = 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+            left, top, right, bottom = cam.content_box
+            inside = left / cam.width <= u <= right / cam.width and top / cam.height <= v <= bottom / cam.height
             key = (0 if inside else 1, (u - 0.5) ** 2 + (v - 0.5) ** 2)
         else:
             # behind: prefer the camera whose view direction is closest to the target's
             d = np.asarray(target, dtype=float) - np.asarray(cam.position)
-            fwd = cam.axes()[2]
+            fwd = cam.optical_axes()[2]
             key = (2, -float(d @ fwd) / max(1e-9, float(np.linalg.norm(d))))
             u = v = 0.5
         if best is None or key < best[0]:
@@ -106,7 +108,8 @@ def choose_frame(target: Sequence[float] | np.ndarray, cameras: Sequence[Camera]
         raise ValueError("choose_frame needs at least one camera")
     (tier, _), i, u, v = best
     cam = cameras[i]
-    x = min(max(u * cam.width, 0.0), cam.width - 1.0)
-    y = min(max(v * cam.height, 0.0), cam.height - 1.0)
+    left, top, right, bottom = cam.content_box
+    x = min(max(u * cam.width, left), right - 1.0)
+    y = min(max(v * cam.height, top), bottom - 1.0)
     placement = ("in frame", "in front, outside the frame", "behind every camera")[tier]
     return FrameChoice(i, (x, y), placement)

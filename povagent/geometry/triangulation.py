@@ -6,7 +6,9 @@ release records every exploration camera). Two or more views with enough angle b
 rays fix the point (least squares over the rays); one view, or views whose rays are nearly
 parallel, fix it by where the ray meets the height the object's centre usually has (see
 :mod:`povagent.geometry.size_priors`). Outlines (2D boxes) then give the object's extent.
-Pure numpy and scipy over :class:`~povagent.geometry.camera.Camera`: no files, no model.
+Pure numpy and scipy over any :class:`~povagent.geometry.camera.ViewCamera` (the release's
+AI2-THOR cameras, or a robot's pinhole cameras brought into the benchmark's world, y up with the
+floor at ``y = 0``): no files, no model.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
-from povagent.geometry.camera import Camera
+from povagent.geometry.camera import ViewCamera
 
 #: Smallest angle (degrees) between two views' rays for a triangulation to be trusted: below
 #: it the rays are nearly parallel and the depth along them is mostly pointing noise.
@@ -39,7 +41,7 @@ SIZE_PRIOR_SIGMA = 1.0
 class Sighting:
     """One view of an object: the frame's camera and the pixel pointed at (its centre)."""
 
-    camera: Camera
+    camera: ViewCamera
     pixel: tuple[float, float]
 
 
@@ -47,7 +49,7 @@ class Sighting:
 class Outline:
     """One view of an object's extent: the camera and the 2D box ``(x0, y0, x1, y1)`` in pixels."""
 
-    camera: Camera
+    camera: ViewCamera
     box: tuple[float, float, float, float]
 
 
@@ -95,10 +97,15 @@ def meet_height(sighting: Sighting, height: float) -> tuple[np.ndarray, bool]:
     meets it (parallel, or meeting it behind the camera) is cut at :data:`FALLBACK_RANGE`."""
     cam = sighting.camera
     pixel = np.asarray(sighting.pixel, dtype=float)
-    p = cam.point_on_plane(pixel, plane_y=height)
+    direction = cam.ray(pixel)
+    origin = np.asarray(cam.position, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (height - origin[1]) / direction[..., 1]
+    t = np.where(np.isfinite(t) & (t > 0), t, np.nan)
+    p = origin + direction * t[..., None]
     if np.all(np.isfinite(p)):
         return p, True
-    return np.asarray(cam.position) + FALLBACK_RANGE * cam.ray(pixel), False
+    return origin + FALLBACK_RANGE * direction, False
 
 
 def locate(sightings: Sequence[Sighting], centre_height: float, min_angle_deg: float = MIN_RAY_ANGLE_DEG) -> PointEstimate | None:
@@ -127,10 +134,15 @@ def box_corners(centre: np.ndarray, half: np.ndarray) -> np.ndarray:
     return np.asarray(centre, dtype=float) + signs * np.asarray(half, dtype=float)
 
 
-def projected_box(camera: Camera, centre: np.ndarray, half: np.ndarray) -> tuple[float, float, float, float] | None:
+def optical_depth(camera: ViewCamera, points: np.ndarray) -> np.ndarray:
+    """Depth ``(...)`` of world points ``(..., 3)`` along the camera's optical axis (m)."""
+    return ((np.asarray(points, dtype=float) - np.asarray(camera.position, dtype=float)) @ camera.optical_axes().T)[..., 2]
+
+
+def projected_box(camera: ViewCamera, centre: np.ndarray, half: np.ndarray) -> tuple[float, float, float, float] | None:
     """The 2D box (pixels, unclipped) around a 3D box's corners; ``None`` if a corner is behind."""
     corners = box_corners(centre, half)
-    depth = camera.to_camera(corners)[:, 2]
+    depth = optical_depth(camera, corners)
     if np.any(depth <= MIN_DEPTH):
         return None
     px = camera.project_pixels(corners)
@@ -163,7 +175,8 @@ def fit_box(
     Unknowns: the centre (starting at ``centre``, held to it within ``centre_sigma`` metres)
     and the half sizes (held to ``prior_half``'s height and footprint area within
     :data:`SIZE_PRIOR_SIGMA` in log scale, orientation free). Box edges cut by the image
-    border bound nothing and are left out. Without a usable edge the prior size is returned.
+    border (of the image content: a letterbox's padding is no object's edge) bound nothing and
+    are left out. Without a usable edge the prior size is returned.
     """
     from scipy.optimize import least_squares
 
@@ -173,22 +186,21 @@ def fit_box(
     sides: list[int] = []
     values: list[float] = []
     for i, o in enumerate(outlines):
-        last = (o.camera.width - 1.0, o.camera.height - 1.0)
+        left, top, right, bottom = o.camera.content_box
+        first, last = (left, top), (right - 1.0, bottom - 1.0)
         for k in range(4):
             v = float(o.box[k])
-            upper = last[k % 2]
-            if CLIPPED_EDGE_PX < v < upper - CLIPPED_EDGE_PX:
+            lower, upper = first[k % 2], last[k % 2]
+            if lower + CLIPPED_EDGE_PX < v < upper - CLIPPED_EDGE_PX:
                 views.append(i)
                 sides.append(k)
                 values.append(v)
     if not values:
         return BoxEstimate(tuple(float(v) for v in c0), tuple(float(v) for v in prior), 0)  # type: ignore[arg-type]
     cams = [o.camera for o in outlines]
-    rotations = np.stack([c.axes() for c in cams])  # (V, 3, 3): rows right, up, forward
+    rotations = np.stack([c.optical_axes() for c in cams])  # (V, 3, 3): rows right, down, forward
     positions = np.array([c.position for c in cams], dtype=float)
-    focal = np.array([c.focal_px for c in cams])[:, None]
-    half_w = np.array([c.width / 2.0 for c in cams])[:, None]
-    half_h = np.array([c.height / 2.0 for c in cams])[:, None]
+    fx, fy, cx, cy = (np.array(v, dtype=float)[:, None] for v in zip(*(c.intrinsics for c in cams)))
     view_idx, side_idx, measured = np.array(views), np.array(sides), np.array(values)
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
     log_prior_h = math.log(prior[1])
@@ -200,8 +212,8 @@ def fit_box(
         # a corner reaching behind the camera projects as if just in front of it: far outside
         # the image, so the fit is pushed back rather than rewarded for leaving the view
         depth = np.maximum(local[..., 2], MIN_DEPTH)
-        u = focal * local[..., 0] / depth + half_w
-        v = half_h - focal * local[..., 1] / depth
+        u = fx * local[..., 0] / depth + cx
+        v = fy * local[..., 1] / depth + cy
         boxes = np.stack([u.min(axis=1), v.min(axis=1), u.max(axis=1), v.max(axis=1)], axis=1)  # (V, 4)
         edge = (boxes[view_idx, side_idx] - measured) / BOX_EDGE_SIGMA_PX
         extra = np.concatenate([(x[:3] - c0) / centre_sigma, [(x[4] - log_prior_h) / SIZE_PRIOR_SIGMA, (x[3] + x[5] - log_prior_area) / SIZE_PRIOR_SIGMA]])

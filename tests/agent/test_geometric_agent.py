@@ -11,23 +11,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
-import pytest
 
 from povagent.agent import GroundingAgent
 from povagent.dataset.loader import load_dataset
 from povagent.geometry.placement import surface_kind
 from povagent_plugins.backends.simulated import box_outline
-
-
-@pytest.fixture(scope="session")
-def generated_release(tmp_path_factory):
-    """Two generated houses (the same folder the geometry tests use, made once a session)."""
-    from povagent.generate import generate_dataset
-
-    root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
-    if not (root / "meta.json").exists():
-        generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
-    return root
 
 
 def perfect_detections(instance, house, obj) -> str:

@@ -1,28 +1,42 @@
-"""examples/robot_app.py runs offline and prints a frame, a pixel and a 3D goal."""
+"""examples/robot_app.py runs the geometric solver end to end offline and prints a 3D goal
+in the robot's map that matches the benchmark's ground truth."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 SCRIPT = Path(__file__).resolve().parents[2] / "examples" / "robot_app.py"
+#: Simulated exact perception: the goal is the ground truth within the box fit's error (m).
+GOAL_TOLERANCE = 0.05
 
 
-def test_robot_app_prints_frame_pixel_and_3d_goal_offline(tmp_path):
-    proc = subprocess.run([sys.executable, str(SCRIPT)], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+def point(text: str) -> np.ndarray:
+    x, y, z = re.match(r"\s*\(([-\d.]+), ([-\d.]+), ([-\d.]+)\) m in the map frame", text).groups()
+    return np.array([float(x), float(y), float(z)])
+
+
+def test_robot_app_solves_a_generated_house_offline_and_says_it_is_a_simulation(tmp_path):
+    proc = subprocess.run([sys.executable, str(SCRIPT)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    lines = dict(line.split(":", 1) for line in proc.stdout.splitlines() if ":" in line)
-    assert lines["frame"].strip().startswith("0 of 3 (1280x720)")
-    assert lines["pixel"].strip().startswith("(640.0, 360.0)")
-    # camera 1 m high, tilted 25 degrees down, heading +x: the centre ray meets the floor 1/tan(25) ahead
-    assert lines["3D goal"].strip().startswith("(2.14, 0.00, 0.00) m in the map frame")
+    lines = dict(line.split(":", 1) for line in proc.stdout.splitlines() if ":" in line and not line.startswith(" "))
+    assert lines["perception"].strip().startswith("SIMULATION")
+    assert re.match(r"\s*\d+ of 12 \(640x480\)", lines["frame"])
+    assert "(geometry)" in lines["3D goal"]  # solved, not a pixel back-projected onto the floor
+    goal, truth = point(lines["3D goal"]), point(lines["truth"])
+    assert np.linalg.norm(goal - truth) < GOAL_TOLERANCE
+    assert abs(goal[2] - truth[2]) < GOAL_TOLERANCE  # the map is z-up: height comes back in z
+    assert "fallbacks: none" in proc.stdout
 
 
-def test_robot_app_reports_a_bad_pipeline_file(tmp_path):
+def test_robot_app_reports_a_missing_dataset(tmp_path):
     proc = subprocess.run(
-        [sys.executable, str(SCRIPT), "--pipeline", str(tmp_path / "missing.yaml")],
+        [sys.executable, str(SCRIPT), "--dataset", str(tmp_path / "missing")],
         capture_output=True, text=True, timeout=120, cwd=tmp_path,
     )
     assert proc.returncode == 1
-    assert proc.stderr.startswith("error:") and "missing.yaml: file not found" in proc.stderr
+    assert proc.stderr.startswith("error:") and "missing" in proc.stderr
