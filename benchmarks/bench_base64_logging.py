@@ -1,4 +1,4 @@
-"""What litellm's base64 truncation for logging costs, and what turning it off would expose.
+"""What litellm's base64 truncation for logging costs, what povagent saves, and what a callback sees.
 
     python benchmarks/bench_base64_logging.py [--requests 64] [--rounds 3] [--model hosted_vllm/bench-model]
 
@@ -9,12 +9,22 @@ pass over the whole payload, in a worker thread above 256 K characters); the cop
 ``messages`` of the standard logging payload that every litellm callback receives. ``0`` skips
 the pass, and the payload then holds the messages as sent: whole images.
 
-Each round runs two child processes (litellm must be imported afresh for each setting),
-default and ``0``, in alternating order, against one loopback server (a subprocess): 30 inline
-frames of 512x512 per request through ``LiteLLMBackend.complete``. Each child reports its
-process CPU per request (client side only) and requests/s, and, with a litellm callback
-registered, whether the logging payload it received held any whole image. Prints per-round
-figures, the median CPU saving, and the exposure.
+povagent skips the pass for its own calls while nothing can read the payload
+(``povagent/engine/llm_logging.py``), and leaves it to litellm as soon as a callback is
+registered. Three settings, each in its own child process (litellm must be imported afresh
+for each), in rotating order, against one loopback server (a subprocess), 30 inline frames of
+512x512 per request through ``LiteLLMBackend.complete``:
+
+* ``litellm truncates``: ``MAX_BASE64_LENGTH_FOR_LOGGING=64`` exported (litellm's default
+  value; a user's own setting is respected, so povagent skips nothing): the cost as before;
+* ``povagent``: nothing exported, povagent's default;
+* ``off (0)``: ``0`` exported, truncation off for everyone (the unsafe setting, for reference).
+
+Each child reports its process CPU per request (client side only) and requests/s with no
+callback registered, then registers a litellm callback and sends one more request: the longest
+data URL that callback was handed in the standard logging payload (a few dozen characters when
+truncated, ~250 K for a whole image). Prints per-round figures, the median CPU saving, and
+what a callback sees.
 """
 
 from __future__ import annotations
@@ -66,6 +76,7 @@ def child(args: argparse.Namespace) -> None:
     backend = LiteLLMBackend(model=args.model, api_base=args.url, api_key_env="BENCH_KEY", timeout=120)
 
     async def run() -> tuple[float, float]:
+        await backend.start()
         for _ in range(2):
             await backend.complete(request, store)
         sem = asyncio.Semaphore(args.concurrency)
@@ -117,14 +128,14 @@ def main() -> None:
         server = subprocess.Popen([sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "1800"],
                                   stdout=subprocess.PIPE, text=True)
         url = server.stdout.readline().strip()  # type: ignore[union-attr]
-        settings = {"default (64)": None, "off (0)": "0"}
+        settings = {"litellm truncates": "64", "povagent": None, "off (0)": "0"}
+        names = list(settings)
         results: dict[str, list[dict]] = {k: [] for k in settings}
         try:
             print(f"{args.requests} inline 30-frame requests per child, concurrency {args.concurrency}, model {args.model}")
-            print(f"{'round':>5} {'setting':>13} {'req/s':>7} {'client CPU ms/req':>18} {'longest data URL a callback got':>32}")
+            print(f"{'round':>5} {'setting':>17} {'req/s':>7} {'client CPU ms/req':>18} {'longest data URL a callback got':>32}")
             for r in range(args.rounds):
-                order = list(settings) if r % 2 == 0 else list(settings)[::-1]
-                for name in order:
+                for name in names[r % len(names):] + names[: r % len(names)]:
                     env = dict(os.environ)
                     env.pop("MAX_BASE64_LENGTH_FOR_LOGGING", None)
                     if settings[name] is not None:
@@ -136,22 +147,21 @@ def main() -> None:
                     )  # fmt: skip
                     doc = json.loads(out.stdout.strip().splitlines()[-1])
                     results[name].append(doc)
-                    print(f"{r:>5} {name:>13} {doc['rps']:>7.1f} {doc['cpu_ms']:>18.1f} {doc['longest_logged_data_url']:>32,}")
+                    print(f"{r:>5} {name:>17} {doc['rps']:>7.1f} {doc['cpu_ms']:>18.1f} {doc['longest_logged_data_url']:>32,}", flush=True)
         finally:
             server.terminate()
             server.wait(10)
-    on, off = results["default (64)"], results["off (0)"]
-    cpu_on = statistics.median(d["cpu_ms"] for d in on)
-    cpu_off = statistics.median(d["cpu_ms"] for d in off)
+    before = statistics.median(d["cpu_ms"] for d in results["litellm truncates"])
     print()
-    print(f"median client CPU per request: default {cpu_on:.1f} ms, off {cpu_off:.1f} ms "
-          f"(saving {100 * (cpu_on - cpu_off) / cpu_on:.1f}%)")
-    print(f"median requests/s: default {statistics.median(d['rps'] for d in on):.1f}, "
-          f"off {statistics.median(d['rps'] for d in off):.1f}")
-    exposed = max(d["longest_logged_data_url"] for d in off)
-    print(f"longest data URL handed to a litellm callback: default {max(d['longest_logged_data_url'] for d in on):,} "
-          f"characters, off {exposed:,} characters ({'whole images' if exposed > 10_000 else 'truncated'})")
-
+    for name in names:
+        cpu = statistics.median(d["cpu_ms"] for d in results[name])
+        longest = max(d["longest_logged_data_url"] for d in results[name])
+        print(f"{name:>17}: median client CPU {cpu:6.1f} ms/request ({100 * (before - cpu) / before:+5.1f}% saved), "
+              f"median {statistics.median(d['rps'] for d in results[name]):5.1f} requests/s; a registered callback got "
+              f"data URLs of up to {longest:,} characters ({'whole images' if longest > 10_000 else 'truncated'})")
+    # per round, povagent against litellm's truncation: the same round ran both on the same machine
+    per_round = [1 - p["cpu_ms"] / t["cpu_ms"] for p, t in zip(results["povagent"], results["litellm truncates"])]
+    print(f"povagent's saving of client CPU per request, median of per-round ratios: {100 * statistics.median(per_round):.1f}%")
 
 if __name__ == "__main__":
     main()

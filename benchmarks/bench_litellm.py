@@ -180,7 +180,7 @@ async def main_async(args: argparse.Namespace) -> None:
         print(f"{'povagent backend':24}{n / wall_b:>10.1f}{1000 * cpu_b / n:>12.2f}")
         print()
         print(f"our code per request:            {1000 * ours_excl_cost:8.3f} ms  (messages, params, key, text, usage)")
-        print(f"completion_cost (called by us):  {1000 * cost:8.3f} ms")
+        print(f"completion_cost (called by us):  {1000 * cost:8.3f} ms  (0 when litellm priced the response itself)")
         print(f"litellm's own per request (CPU): {1000 * litellm_own:8.3f} ms")
         share = ours_excl_cost / (ours + litellm_own)
         share_with_cost = ours / (ours + litellm_own)

@@ -21,13 +21,9 @@ def import_litellm() -> ModuleType:
     with the package instead of downloading one) and ``LITELLM_MODE=PRODUCTION`` (do not load
     ``.env`` files). Both are defaults: a value the user exported wins.
 
-    ``MAX_BASE64_LENGTH_FOR_LOGGING`` (also read at import) is left alone on purpose. Turning
-    litellm's truncation of base64 for logging off (``0``) saves ~30% of the client's CPU per
-    inline 30-frame request (``benchmarks/bench_base64_logging.py``), but then the standard
-    logging payload every litellm callback receives carries whole images (250 K characters
-    each) instead of size placeholders. A user with no litellm callbacks may export ``0``
-    themselves; sending frames by reference (``images: {transport: file | http}``) removes
-    the cost for everyone, as there is no base64 left to shorten.
+    ``MAX_BASE64_LENGTH_FOR_LOGGING`` (also read at import) is left alone: litellm's truncation
+    of base64 for logging is skipped per call instead, for povagent's calls only and only while
+    nothing can read litellm's logging payload (:mod:`povagent.engine.llm_logging`).
     """
     os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
     os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
