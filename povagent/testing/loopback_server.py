@@ -32,7 +32,9 @@ import binascii
 import collections
 import hashlib
 import json
+import os
 import socket
+import stat
 import threading
 import time
 import urllib.error
@@ -135,6 +137,18 @@ class RecordedRequest:
 #: What a scripted step or the reply callable may produce.
 Outcome = str | Reply | Fault
 ReplyFn = Callable[[RecordedRequest], Outcome]
+
+
+def _opened_path(fd: int, path: Path) -> Path | None:
+    """The real path of the file open as ``fd``: the kernel's answer where ``/proc`` has it
+    (Linux), else ``path`` resolved; ``None`` when neither can say."""
+    try:
+        return Path(os.readlink(f"/proc/self/fd/{fd}"))
+    except OSError:
+        try:
+            return path.resolve(strict=True)
+        except (OSError, RuntimeError):
+            return None
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -373,16 +387,25 @@ class LoopbackServer:
         if parsed.netloc not in ("", "localhost"):
             raise ImageFetchError(f"file URL names a host ({parsed.netloc})")
         path = Path(urllib.request.url2pathname(parsed.path))
+        # open first, then ask the kernel which file was opened (symlinks resolved): one
+        # readlink instead of a component-by-component realpath walk, and no window between
+        # the check and the read; O_NONBLOCK so a FIFO planted in the folder cannot stall us
         try:
-            real = path.resolve(strict=True)
-        except (OSError, RuntimeError) as exc:
+            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        except OSError as exc:
             raise ImageFetchError(f"cannot open {path}: {exc}") from None
-        if not real.is_relative_to(root):
-            raise ImageFetchError(f"{path} is outside the allowed local media path {root}")
         try:
-            return real.read_bytes()
+            real = _opened_path(fd, path)
+            if real is None or not real.is_relative_to(root):
+                raise ImageFetchError(f"{path} is outside the allowed local media path {root}")
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise ImageFetchError(f"{path} is not a regular file")
+            with os.fdopen(os.dup(fd), "rb") as f:
+                return f.read()
         except OSError as exc:
             raise ImageFetchError(f"cannot read {path}: {exc}") from None
+        finally:
+            os.close(fd)
 
     @staticmethod
     def _download(url: str) -> bytes:

@@ -93,6 +93,35 @@ def test_a_symlink_out_of_the_media_root_is_answered_400(media, tmp_path):
     assert status == 400
 
 
+def test_a_symlink_that_stays_beneath_the_media_root_is_read_as_a_hub_cache_snapshot_is(media):
+    blobs = media / "blobs"
+    blobs.mkdir()
+    (blobs / "0123abcd").write_bytes(PNG_B)
+    (media / "snapshot.png").symlink_to(blobs / "0123abcd")
+    with LoopbackServer(fetch_images=True, local_media_root=media) as server:
+        status, _ = post_images(server, [(media / "snapshot.png").as_uri()])
+    assert status == 200 and server.requests[0].images[0].data == PNG_B
+
+
+def test_dot_dot_out_of_the_media_root_is_answered_400(media, tmp_path):
+    (tmp_path / "secret.png").write_bytes(b"secret")
+    with LoopbackServer(fetch_images=True, local_media_root=media) as server:
+        status, doc = post_images(server, [f"file://{media}/../secret.png"])
+    assert status == 400 and "outside" in doc["error"]["message"]
+
+
+def test_a_fifo_or_a_folder_is_refused_at_once_never_waited_on(media):
+    import os
+
+    os.mkfifo(media / "pipe.png")
+    (media / "folder.png").mkdir()
+    with LoopbackServer(fetch_images=True, local_media_root=media) as server:
+        fifo_status, fifo_doc = post_images(server, [(media / "pipe.png").as_uri()])
+        dir_status, dir_doc = post_images(server, [(media / "folder.png").as_uri()])
+    assert fifo_status == 400 and "not a regular file" in fifo_doc["error"]["message"]
+    assert dir_status == 400 and "folder.png" in dir_doc["error"]["message"]
+
+
 def test_http_urls_are_downloaded_from_the_static_server(media):
     with StaticImageServer([media]) as images, LoopbackServer(fetch_images=True) as server:
         url = images.publish(media / "a.png", sha(PNG_A))
