@@ -56,3 +56,15 @@ def write_answered_run(mini_root):
         return folder
 
     return write
+
+
+@pytest.fixture(scope="session")
+def generated_release(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two generated houses with 12 exploration frames each, in the release layout (real files,
+    made once a session): the geometry, solver, simulator, agent and bird's-eye tests share it."""
+    from povagent.generate import generate_dataset
+
+    root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
+    if not (root / "meta.json").exists():
+        generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
+    return root

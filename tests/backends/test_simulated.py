@@ -28,16 +28,6 @@ def mini(mini_root):
     return load_dataset(mini_root)
 
 
-@pytest.fixture(scope="session")
-def generated_release(tmp_path_factory):
-    """Two generated houses (the same folder the geometry tests use, made once a session)."""
-    from povagent.generate import generate_dataset
-
-    root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
-    if not (root / "meta.json").exists():
-        generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
-    return root
-
 
 def answer(backend, request) -> dict:
     response = asyncio.run(backend.complete(request, ImageStore()))

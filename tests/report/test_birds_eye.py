@@ -26,16 +26,6 @@ from test_report_html import browse, dump, gallery_data
 SVG = "{http://www.w3.org/2000/svg}"
 
 
-@pytest.fixture(scope="session")
-def generated_release(tmp_path_factory):
-    """Two generated houses (the same folder the geometry tests use, made once a session)."""
-    from povagent.generate import generate_dataset
-
-    root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
-    if not (root / "meta.json").exists():
-        generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
-    return root
-
 
 def page_transform(scene):
     """The transform the drawing used, rebuilt from the same points."""
