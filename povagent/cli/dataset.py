@@ -10,6 +10,7 @@ import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
+from povagent.cli.options import strict_option
 
 
 @app.command("validate")
@@ -131,9 +132,7 @@ def score_command(
     ),
     dataset: Path = typer.Option(..., "--dataset", metavar="FOLDER", help="Dataset folder in the POVBench release layout."),
     as_json: bool = typer.Option(False, "--json", help="Print the scores as JSON instead of tables."),
-    strict: bool = typer.Option(
-        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
-    ),
+    strict: bool = strict_option(),
 ) -> None:
     """Score predictions with the official metric.
 

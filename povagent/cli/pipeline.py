@@ -15,6 +15,7 @@ import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
+from povagent.cli.options import keep_errors_option, strict_option
 
 
 def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> None:
@@ -76,17 +77,10 @@ def run_command(
         None, "--output", "-o", metavar="FOLDER", help="Run folder to write to, instead of the YAML's output: key."
     ),
     limit: int | None = typer.Option(None, "--limit", min=1, metavar="N", help="Run only the first N instances."),
-    keep_errors: bool = typer.Option(
-        False,
-        "--keep-errors/--retry-errors",
-        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
-        "rows as they are, or try them again.",
-    ),
+    keep_errors: bool = keep_errors_option(),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bar."),
     as_json: bool = typer.Option(False, "--json", help="Print the run summary as JSON instead of tables."),
-    strict: bool = typer.Option(
-        False, "--strict", help="Stop at the first bad house or pair of the dataset (default: report it, skip it, go on)."
-    ),
+    strict: bool = strict_option(),
 ) -> None:
     """Run one pipeline and print its scores.
 
@@ -171,16 +165,9 @@ def sweep_command(
     dry_run: bool = typer.Option(
         False, "--dry-run", help="Only print the cells, the requests still to make and a token estimate; call no model."
     ),
-    keep_errors: bool = typer.Option(
-        False,
-        "--keep-errors/--retry-errors",
-        help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
-        "rows as they are, or try them again.",
-    ),
+    keep_errors: bool = keep_errors_option(),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bars."),
-    strict: bool = typer.Option(
-        False, "--strict", help="Stop at the first bad house or pair of a dataset (default: report it, skip it, go on)."
-    ),
+    strict: bool = strict_option(),
 ) -> None:
     """Run every cell of a sweep: a grid of pipelines.
 
