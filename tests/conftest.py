@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -67,4 +68,19 @@ def generated_release(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
     if not (root / "meta.json").exists():
         generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
+    return root
+
+
+#: The hand-made fixture's houses without a planted problem.
+GOOD_HOUSES = ("train_house_00000", "train_house_00001")
+
+
+@pytest.fixture
+def dataset_copy(tmp_path, mini_root) -> Path:
+    """A writable copy of the fixture's two good houses (no problem at all) under ``tmp_path/ds``."""
+    root = tmp_path / "ds"
+    (root / "artifacts").mkdir(parents=True)
+    shutil.copy(mini_root / "meta.json", root / "meta.json")
+    for house in GOOD_HOUSES:
+        shutil.copytree(mini_root / "artifacts" / house, root / "artifacts" / house)
     return root

@@ -31,7 +31,6 @@ from povagent.testing.loopback_server import LoopbackServer
 
 pytestmark = pytest.mark.timeout(120)
 
-GOOD_HOUSES = ("train_house_00000", "train_house_00001")
 TARGET = "train_house_00001"  # the house each dataset case damages
 #: Instances of the untouched house train_house_00000 (1 pair, 4 directions, 3 conditions).
 GOOD_HOUSE_INSTANCES = 12
@@ -50,13 +49,8 @@ def invoke(*args: str) -> tuple[int, str]:
 
 
 @pytest.fixture
-def dataset(tmp_path, mini_root) -> Path:
-    root = tmp_path / "ds"
-    (root / "artifacts").mkdir(parents=True)
-    shutil.copy(mini_root / "meta.json", root / "meta.json")
-    for house in GOOD_HOUSES:
-        shutil.copytree(mini_root / "artifacts" / house, root / "artifacts" / house)
-    return root
+def dataset(dataset_copy) -> Path:
+    return dataset_copy
 
 
 def house(root: Path, name: str | None = None) -> Path:

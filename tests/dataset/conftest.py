@@ -1,18 +1,15 @@
-"""Fixtures for hostile-dataset tests: a writable copy of the good fixture houses, helpers to
-edit their JSON, and a record of every file the process opens (Python's audit hooks), so a test
+"""Fixtures for hostile-dataset tests: helpers to
+edit a dataset copy's JSON (``dataset_copy`` is in tests/conftest.py), and a record of every file the process opens (Python's audit hooks), so a test
 can show that a file outside the dataset was never read."""
 
 from __future__ import annotations
 
 import json
-import shutil
 import sys
 from pathlib import Path
 from typing import Any, Callable
 
 import pytest
-
-GOOD_HOUSES = ("train_house_00000", "train_house_00001")
 
 _opened: list[str] | None = None
 _hooked = False
@@ -36,16 +33,6 @@ def opened_files() -> Any:
     finally:
         _opened = None
 
-
-@pytest.fixture
-def dataset_copy(tmp_path, mini_root) -> Path:
-    """A writable copy of the fixture's two good houses (no problem at all) under ``tmp_path/ds``."""
-    root = tmp_path / "ds"
-    (root / "artifacts").mkdir(parents=True)
-    shutil.copy(mini_root / "meta.json", root / "meta.json")
-    for house in GOOD_HOUSES:
-        shutil.copytree(mini_root / "artifacts" / house, root / "artifacts" / house)
-    return root
 
 
 class DatasetEditor:
