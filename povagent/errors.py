@@ -31,6 +31,10 @@ class ResultsError(PovagentError):
     """A run's results file cannot be written (a full disk, a lost mount); rows already written stay."""
 
 
+class ClusterError(PovagentError):
+    """The cluster cannot be used: Dask is not installed, a bad ``--cluster`` value, no scheduler."""
+
+
 class BackendError(PovagentError):
     """A model backend failed permanently (after retries, or on a non-transient error)."""
 
