@@ -1,0 +1,115 @@
+"""A real Dask cluster on 127.0.0.1: ``dask scheduler`` and ``dask worker`` processes.
+
+The fixture starts the processes with the venv's own ``dask`` command, waits until the scheduler
+sees every worker, and stops them by their pids in ``finally``. Workers run without a nanny, so a
+worker killed with SIGKILL stays dead (the scheduler must move its tasks to the other worker).
+Every process has a bounded lifetime (``--idle-timeout`` and ``--lifetime``), so nothing outlives a
+crashed test session by long.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+#: Longest a test cluster may live, in case a test session dies without its teardown.
+LIFETIME = "600s"
+
+
+@dataclass
+class RealCluster:
+    """A running scheduler and its workers, with their processes."""
+
+    address: str
+    scheduler: subprocess.Popen[bytes]
+    workers: list[subprocess.Popen[bytes]] = field(default_factory=list)
+    logs: Path | None = None
+
+    def kill_worker(self, index: int = 0) -> int:
+        """SIGKILL worker ``index``; return its pid."""
+        proc = self.workers[index]
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+        return proc.pid
+
+
+def _dask_command() -> list[str]:
+    """The ``dask`` console script of the running interpreter's environment."""
+    script = Path(sys.executable).with_name("dask")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "dask"]
+
+
+def _wait_for_workers(address: str, count: int, deadline: float) -> None:
+    from distributed import Client
+
+    with Client(address, timeout=30) as client:
+        client.wait_for_workers(count, timeout=max(1.0, deadline - time.monotonic()))
+
+
+def start_cluster(tmp: Path, workers: int = 2, worker_env: dict[str, str] | None = None) -> RealCluster:
+    """Start ``dask scheduler`` and ``workers`` x ``dask worker`` on 127.0.0.1 (no nanny)."""
+    pytest.importorskip("distributed", reason="the cluster tests need the test extra (distributed)")
+    tmp.mkdir(parents=True, exist_ok=True)
+    scheduler_file = tmp / "scheduler.json"
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    log = open(tmp / "scheduler.log", "wb")  # noqa: SIM115 - closed with the process
+    scheduler = subprocess.Popen(
+        [*_dask_command(), "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+         "--scheduler-file", str(scheduler_file), "--idle-timeout", LIFETIME],
+        stdout=log, stderr=subprocess.STDOUT, env=env,
+    )
+    deadline = time.monotonic() + 60
+    while not scheduler_file.exists() or not scheduler_file.read_text().strip():
+        if scheduler.poll() is not None or time.monotonic() > deadline:
+            scheduler.kill()
+            raise RuntimeError(f"dask scheduler did not start: {(tmp / 'scheduler.log').read_text()[-2000:]}")
+        time.sleep(0.1)
+    address = json.loads(scheduler_file.read_text())["address"]
+    cluster = RealCluster(address, scheduler, logs=tmp)
+    try:
+        for i in range(workers):
+            wlog = open(tmp / f"worker{i}.log", "wb")  # noqa: SIM115 - closed with the process
+            cluster.workers.append(subprocess.Popen(
+                [*_dask_command(), "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                 "--host", "127.0.0.1", "--name", f"w{i}", "--lifetime", LIFETIME, "--death-timeout", "60",
+                 "--local-directory", str(tmp / f"w{i}")],
+                stdout=wlog, stderr=subprocess.STDOUT, env={**env, **(worker_env or {})},
+            ))
+        _wait_for_workers(address, workers, time.monotonic() + 90)
+    except BaseException:
+        stop_cluster(cluster)
+        raise
+    return cluster
+
+
+def stop_cluster(cluster: RealCluster) -> None:
+    """Stop every process of ``cluster`` by its pid (SIGTERM, then SIGKILL after 10 s)."""
+    procs = [*cluster.workers, cluster.scheduler]
+    for proc in procs:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+    for proc in procs:
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=10)
+
+
+@pytest.fixture
+def dask_cluster(tmp_path: Path) -> Iterator[RealCluster]:
+    """A scheduler and two single-threaded workers on 127.0.0.1, stopped after the test."""
+    cluster = start_cluster(tmp_path / "cluster", workers=2)
+    try:
+        yield cluster
+    finally:
+        stop_cluster(cluster)
