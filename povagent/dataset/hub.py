@@ -38,7 +38,7 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable
+from typing import TYPE_CHECKING, Iterable
 
 from povagent.dataset.hub_checks import COMMIT_ID, HubValueError, check_revision, shown
 from povagent.dataset.hub_limits import DownloadLimits

@@ -354,7 +354,7 @@ def run_parallel(work: Callable[[T], None], items: list[T], budget: Budget, work
                 return
             try:
                 work(item)
-            except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            except BaseException as exc:
                 if not errors:
                     errors.append(exc)
                 budget.stop.set()
@@ -383,7 +383,7 @@ def with_deadline(fn: Callable[[], T], budget: Budget) -> T:
     def run() -> None:
         try:
             result.append(fn())
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+        except BaseException as exc:
             errors.append(exc)
 
     thread = threading.Thread(target=run, daemon=True, name="hub-download")
@@ -477,12 +477,11 @@ def fetch_snapshot(
 
     Runs in the calling thread; :func:`with_deadline` bounds it.
     """
+    import httpx2
     from huggingface_hub import HfApi, hf_hub_url
+    from huggingface_hub.errors import HfHubHTTPError, RevisionNotFoundError
     from huggingface_hub.utils import build_hf_headers, filter_repo_objects
     from tqdm.auto import tqdm
-
-    import httpx2
-    from huggingface_hub.errors import HfHubHTTPError, RevisionNotFoundError
 
     api = HfApi(endpoint=endpoint)
     try:  # as snapshot_download does: without the metadata, a complete cached copy may serve
