@@ -297,11 +297,11 @@ def fetch_blob(
     try:
         budget.check()
         with get_session().stream("GET", url, headers=headers, follow_redirects=True, timeout=budget.timeout()) as response:
-            hf_raise_for_status(response)
             first = response.history[0] if response.history else response
-            said_commit = first.headers.get("X-Repo-Commit")
+            said_commit = first.headers.get("X-Repo-Commit")  # checked on an error answer too
             if said_commit is not None and check_commit_id(said_commit, f"X-Repo-Commit of {shown(f.path)}") != writer.commit:
                 raise HubValueError(f"X-Repo-Commit of {shown(f.path)}", said_commit, f"differs from the commit {writer.commit}")
+            hf_raise_for_status(response)
             said_etag = first.headers.get("X-Linked-Etag") or first.headers.get("ETag")
             if said_etag is not None:
                 etag = _normalize_etag(said_etag)
@@ -309,7 +309,7 @@ def fetch_blob(
                     raise HubValueError(f"ETag of {shown(f.path)}", etag, f"differs from the tree listing's {f.blob}")
             length = response.headers.get("Content-Length")
             if length is not None and length.isdigit() and int(length) > f.size:
-                raise DatasetError(f"{f.path}: the server announced {int(length)} bytes, the tree listing {f.size}")
+                raise DatasetError(f"{f.path}: the server announced {int(length)} bytes, more than the tree listing's {f.size}")
             hasher = hashlib.sha256() if f.sha256 else _git_blob_hasher(f.size)
             received = 0
             with open(tmp, "xb") as out:
@@ -333,6 +333,10 @@ def fetch_blob(
         os.replace(tmp, blob)
         _confined(blob, os.path.join(writer.storage, "blobs"), f"blob {shown(f.blob)}")
         budget.count(files=1, size=received)
+    except Exception as exc:
+        if budget.remaining() <= 0 and not isinstance(exc, DeadlinePassed):  # a read timed out at the deadline
+            raise DeadlinePassed("deadline passed") from exc
+        raise
     finally:
         if os.path.lexists(tmp):
             os.unlink(tmp)
@@ -491,6 +495,8 @@ def fetch_snapshot(
     except RevisionNotFoundError:
         raise
     except (httpx2.ConnectError, httpx2.TimeoutException, HfHubHTTPError) as exc:
+        if budget.remaining() <= 0:
+            raise DeadlinePassed("deadline passed") from exc
         raise MetadataUnavailable(exc) from exc
     chosen = [files[p] for p in filter_repo_objects(items=sorted(files), allow_patterns=allow, ignore_patterns=ignore)]
     check_caps(chosen, budget.limits)
