@@ -115,9 +115,9 @@ def test_an_etag_holding_a_path_writes_no_pth_file(entry, tmp_path, mini_root, s
     etag = os.path.relpath(target, storage(tmp_path) / "blobs")  # what huggingface_hub joins to blobs/
     server = HubServer(mini_root, lies=HubLies(etag=etag, served={"meta.json": b"import os; os.system('touch PWNED')\n"}))
     done, before = attack(entry, tmp_path, server)
+    assert_nothing_outside(tmp_path, before, entry)
     assert_refused(done, "ETag", etag[:40])
     assert not target.exists()
-    assert_nothing_outside(tmp_path, before, entry)
 
 
 @pytest.mark.parametrize("entry,absolute", [("download", False), ("download", True), ("pipeline", False)])
@@ -125,20 +125,20 @@ def test_a_repository_sha_holding_a_path_is_refused(entry, absolute, tmp_path, m
     target = site / "evil"
     sha = str(target) if absolute else os.path.relpath(target, storage(tmp_path) / "trees")
     done, before = attack(entry, tmp_path, HubServer(mini_root, lies=HubLies(sha=sha)))
+    assert_nothing_outside(tmp_path, before, entry)
     assert_refused(done, "commit id", sha[:40])
     assert not (site / "evil.json").exists()
-    assert_nothing_outside(tmp_path, before, entry)
 
 
 @pytest.mark.parametrize("entry,absolute", [("download", False), ("download", True), ("pipeline", True)])
 def test_an_x_repo_commit_holding_a_path_is_refused(entry, absolute, tmp_path, mini_root, site):
     # huggingface_hub records a missing file under .no_exist/<X-Repo-Commit>/<file>
     lie = str(site) if absolute else os.path.relpath(site, storage(tmp_path) / ".no_exist")
-    lies = HubLies(repo_commit=lie, missing={"meta.json"})
+    lies = HubLies(repo_commit=lie, missing=set(release_files(mini_root)))  # every file answers 404
     done, before = attack(entry, tmp_path, HubServer(mini_root, lies=lies))
+    assert_nothing_outside(tmp_path, before, entry)
     assert_refused(done, "X-Repo-Commit", lie[:40])
     assert not (site / "meta.json").exists()
-    assert_nothing_outside(tmp_path, before, entry)
 
 
 @pytest.mark.parametrize(
@@ -154,8 +154,8 @@ def test_an_x_repo_commit_holding_a_path_is_refused(entry, absolute, tmp_path, m
 def test_a_listed_file_name_that_leaves_the_snapshot_is_one_line(entry, name, tmp_path, mini_root, site):
     server = HubServer(files=release_files(mini_root, {name: b"import this\n"}))
     done, before = attack(entry, tmp_path, server)
-    assert_refused(done, "file name in the tree listing", repr(name)[1:-1][:40])
     assert_nothing_outside(tmp_path, before, entry)
+    assert_refused(done, "file name in the tree listing", repr(name)[1:-1][:40])
 
 
 @pytest.mark.parametrize("entry", ENTRIES)
@@ -163,11 +163,11 @@ def test_a_revision_that_climbs_out_of_refs_is_refused_before_any_request(entry,
     revision = os.path.relpath(site / "evil.pth", storage(tmp_path) / "refs")
     server = HubServer(mini_root, lies=HubLies(any_revision=True))
     done, before = attack(entry, tmp_path, server, revision=revision)
+    assert_nothing_outside(tmp_path, before, entry)
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert revision[:40] in done.stderr and "revision" in done.stderr
     assert not server.requests  # refused before the Hub is asked anything
     assert not (site / "evil.pth").exists()
-    assert_nothing_outside(tmp_path, before, entry)
 
 
 # -- bytes that differ from the tree listing -----------------------------------------------------
