@@ -95,6 +95,8 @@ class Budget:
     fetched_files: int = 0
     fetched_bytes: int = 0
     lock: threading.Lock = field(default_factory=threading.Lock)
+    #: Files being written (``*.incomplete``), removed by :meth:`abandon` at the deadline.
+    unfinished: set[str] = field(default_factory=set)
 
     @property
     def deadline(self) -> float:
@@ -114,6 +116,37 @@ class Budget:
         if self.stop.is_set() or time.monotonic() >= self.deadline:
             self.stop.set()
             raise DeadlinePassed("deadline passed")
+
+    def create_unfinished(self, path: str) -> Any:
+        """Open a new ``*.incomplete`` file for writing, unless the download was stopped.
+
+        Created and recorded under the lock :meth:`abandon` takes, so no such file appears
+        after the download was given up.
+        """
+        with self.lock:
+            self.check()
+            handle = open(path, "xb")  # noqa: SIM115 - the caller closes it
+            self.unfinished.add(path)
+            return handle
+
+    def finish(self, path: str) -> None:
+        """Forget an ``*.incomplete`` file (renamed into place, or removed), removing it if still there."""
+        with self.lock:
+            self.unfinished.discard(path)
+            if os.path.lexists(path):
+                os.unlink(path)
+
+    def abandon(self) -> None:
+        """Stop the download and remove every file still being written (from the caller's thread,
+        at the deadline: a worker stuck in a read may outlive the process)."""
+        with self.lock:
+            self.stop.set()
+            for path in self.unfinished:
+                try:
+                    os.unlink(path)
+                except OSError:
+                    pass
+            self.unfinished.clear()
 
     def count(self, files: int = 0, size: int = 0) -> None:
         """Add to what was fetched (for the messages)."""
@@ -312,7 +345,7 @@ def fetch_blob(
                 raise DatasetError(f"{f.path}: the server announced {int(length)} bytes, more than the tree listing's {f.size}")
             hasher = hashlib.sha256() if f.sha256 else _git_blob_hasher(f.size)
             received = 0
-            with open(tmp, "xb") as out:
+            with budget.create_unfinished(tmp) as out:
                 for chunk in response.iter_bytes(CHUNK):
                     budget.check()
                     received += len(chunk)
@@ -329,8 +362,9 @@ def fetch_blob(
             raise DatasetError(f"{f.path}: the bytes' {kind} {digest[:16]}... differs from the tree listing's {(f.sha256 or f.blob_id)[:16]}...")
         # readable as the folder's files are (not mkstemp's 0600): other users of a shared cache read it
         os.chmod(tmp, stat.S_IMODE(os.stat(os.path.dirname(tmp)).st_mode) & 0o666)
-        budget.check()  # a download stopped at the deadline keeps nothing it had not finished
-        os.replace(tmp, blob)
+        with budget.lock:  # a download given up at the deadline keeps nothing it had not finished
+            budget.check()
+            os.replace(tmp, blob)
         _confined(blob, os.path.join(writer.storage, "blobs"), f"blob {shown(f.blob)}")
         budget.count(files=1, size=received)
     except Exception as exc:
@@ -338,8 +372,7 @@ def fetch_blob(
             raise DeadlinePassed("deadline passed") from exc
         raise
     finally:
-        if os.path.lexists(tmp):
-            os.unlink(tmp)
+        budget.finish(tmp)
     writer.link(f)
 
 
@@ -377,9 +410,10 @@ def run_parallel(work: Callable[[T], None], items: list[T], budget: Budget, work
 def with_deadline(fn: Callable[[], T], budget: Budget) -> T:
     """``fn()`` in a daemon thread, given up on at the budget's deadline.
 
-    At the deadline (or on Ctrl-C) the budget's stop flag is set, so the threads write nothing
-    more: a blob is only named once its bytes are complete and checked, and the flag is checked
-    just before. Raises :class:`DeadlinePassed` at the deadline.
+    At the deadline (or on Ctrl-C) the budget is abandoned: its stop flag is set and the files
+    still being written are removed, so the threads (left to end on their own) write nothing
+    more that anyone trusts: a blob is only named once its bytes are complete and checked, under
+    the lock that abandoning takes. Raises :class:`DeadlinePassed` at the deadline.
     """
     result: list[T] = []
     errors: list[BaseException] = []
@@ -395,11 +429,10 @@ def with_deadline(fn: Callable[[], T], budget: Budget) -> T:
     try:
         thread.join(budget.remaining() + 0.05)
     except KeyboardInterrupt:
-        budget.stop.set()
+        budget.abandon()
         raise
     if thread.is_alive():
-        budget.stop.set()
-        thread.join(1.0)  # let a worker between two checks see the flag
+        budget.abandon()
         raise DeadlinePassed("deadline passed")
     if errors:
         raise errors[0]
