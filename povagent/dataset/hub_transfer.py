@@ -517,7 +517,7 @@ def fetch_snapshot(
     import httpx2
     from huggingface_hub import HfApi, hf_hub_url
     from huggingface_hub.errors import HfHubHTTPError, RevisionNotFoundError
-    from huggingface_hub.utils import build_hf_headers, filter_repo_objects
+    from huggingface_hub.utils import OfflineModeIsEnabled, build_hf_headers, filter_repo_objects
     from tqdm.auto import tqdm
 
     api = HfApi(endpoint=endpoint)
@@ -527,7 +527,7 @@ def fetch_snapshot(
         files = tree_listing(api, repo_id, commit, storage, budget)
     except RevisionNotFoundError:
         raise
-    except (httpx2.ConnectError, httpx2.TimeoutException, HfHubHTTPError) as exc:
+    except (httpx2.ConnectError, httpx2.TimeoutException, OfflineModeIsEnabled, HfHubHTTPError) as exc:
         if budget.remaining() <= 0:
             raise DeadlinePassed("deadline passed") from exc
         raise MetadataUnavailable(exc) from exc
