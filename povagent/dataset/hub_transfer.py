@@ -319,7 +319,6 @@ def fetch_blob(
     get the blob's name; headers that name a commit or an ETag must agree with it.
     """
     from huggingface_hub import get_session
-    from huggingface_hub.utils import hf_raise_for_status
 
     blob = writer.blob(f)
     if os.path.isfile(blob) and os.path.getsize(blob) == f.size:
@@ -334,7 +333,12 @@ def fetch_blob(
             said_commit = first.headers.get("X-Repo-Commit")  # checked on an error answer too
             if said_commit is not None and check_commit_id(said_commit, f"X-Repo-Commit of {shown(f.path)}") != writer.commit:
                 raise HubValueError(f"X-Repo-Commit of {shown(f.path)}", said_commit, f"differs from the commit {writer.commit}")
-            hf_raise_for_status(response)
+            if response.status_code != 200:  # the body is not read: its size is the server's choice
+                reason = response.headers.get("X-Error-Message") or response.reason_phrase
+                raise DatasetError(
+                    f"{shown(f.path)}, a file of the tree listing, was answered with HTTP {response.status_code} "
+                    f"({shown(reason)}); try again later"
+                )
             said_etag = first.headers.get("X-Linked-Etag") or first.headers.get("ETag")
             if said_etag is not None:
                 etag = _normalize_etag(said_etag)
