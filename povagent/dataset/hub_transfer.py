@@ -97,6 +97,8 @@ class Budget:
     lock: threading.Lock = field(default_factory=threading.Lock)
     #: Files being written (``*.incomplete``), removed by :meth:`abandon` at the deadline.
     unfinished: set[str] = field(default_factory=set)
+    #: Called by :meth:`abandon` (e.g. to end a progress bar's line before the error is printed).
+    on_abandon: list[Callable[[], Any]] = field(default_factory=list)
 
     @property
     def deadline(self) -> float:
@@ -147,6 +149,8 @@ class Budget:
                 except OSError:
                     pass
             self.unfinished.clear()
+        for call in self.on_abandon:
+            call()
 
     def count(self, files: int = 0, size: int = 0) -> None:
         """Add to what was fetched (for the messages)."""
@@ -551,6 +555,12 @@ def fetch_snapshot(
         with lock:
             bar.update(n)
 
+    def end_bar() -> None:
+        with lock:
+            bar.close()
+
+    budget.on_abandon.append(end_bar)  # at the deadline, the bar's line ends before the error
+
     def one(f: ListedFile) -> None:
         url = hf_hub_url(repo_id, f.path, repo_type="dataset", revision=commit, endpoint=endpoint)
         fetch_blob(f, writer, url=url, headers=dict(headers), budget=budget, progress=advance)
@@ -558,7 +568,7 @@ def fetch_snapshot(
     try:
         run_parallel(one, missing, budget)
     finally:
-        bar.close()
+        end_bar()
     for f in chosen:  # after writing: every file is in place, inside the cache, of the listed size
         if not writer.has(f):
             raise DatasetError(f"{shown(f.path)}: not in the snapshot after the download (or not of the listed size)")
