@@ -6,7 +6,8 @@ default)::
     plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names, or .py paths from this file's folder)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
                                          # or {hub: owl-owl/POVBench, revision: main} (the release,
-                                         # fetched into the Hugging Face cache)
+                                         # fetched into the Hugging Face cache; bounded by
+                                         # download: {deadline_s: 3600, max_file_mib: 64, max_total_mib: 4096})
                                          # (generate also takes judge: NAME or {name, options})
                                          # strict: true stops at a bad house (default: report, skip)
     instances:                           # which instances to run (default: all)
@@ -60,6 +61,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.config.profiles import near_profile
+from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
 from povagent.engine.retry import RetryPolicy
 from povagent.errors import ConfigError, PluginError
@@ -156,6 +158,9 @@ class DatasetSpec(_Strict):
     hub: str | None = None
     #: Branch, tag or commit of ``hub`` (default: ``main``).
     revision: str | None = Field(None, min_length=1)
+    #: Bounds of fetching ``hub``: ``{deadline_s, max_file_mib, max_total_mib}`` (see
+    #: :mod:`povagent.dataset.hub_limits` for the defaults).
+    download: DownloadLimits | None = None
     #: Stop at the first bad house or pair instead of reporting it and going on.
     strict: bool = False
 
@@ -175,6 +180,15 @@ class DatasetSpec(_Strict):
     def _exactly_one(self) -> DatasetSpec:
         if self.revision is not None and self.hub is None:
             raise ValueError("dataset.revision needs dataset.hub (the Hub repository it is a revision of)")
+        if self.download is not None and self.hub is None:
+            raise ValueError("dataset.download needs dataset.hub (it bounds fetching that repository)")
+        if self.revision is not None:
+            from povagent.dataset.hub_checks import HubValueError, check_revision
+
+            try:
+                check_revision(self.revision, "dataset.revision")
+            except HubValueError as exc:
+                raise ValueError(str(exc)) from None
         if self.hub is not None:
             # a path beside hub is the local copy a run resolved it to (see config.yaml)
             if self.generate is not None:

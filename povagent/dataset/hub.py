@@ -1,9 +1,14 @@
 """The POVBench release from the Hugging Face Hub: ``dataset: {hub: ...}`` and ``povagent download``.
 
-The release is the dataset repository ``owl-owl/POVBench``. It is fetched with
-:func:`huggingface_hub.snapshot_download` into the standard Hugging Face cache (``HF_HOME``,
-``HF_HUB_CACHE``), so every tool that reads that cache shares one copy, a second fetch only
-checks the revision, and a machine without network reads it offline (``HF_HUB_OFFLINE=1``).
+The release is the dataset repository ``owl-owl/POVBench``. It is fetched into the standard
+Hugging Face cache (``HF_HOME``, ``HF_HUB_CACHE``), in huggingface_hub's own layout, so every
+tool that reads that cache shares one copy, a second fetch only checks the revision, and a
+machine without network reads it offline (``HF_HUB_OFFLINE=1``, through
+:func:`huggingface_hub.snapshot_download`). The fetch itself is
+:mod:`povagent.dataset.hub_transfer`'s: huggingface_hub would build cache paths from what the
+server answers without checking it, so povagent checks every value a server sends
+(:mod:`povagent.dataset.hub_checks`), the revision asked for, every path written, and the bytes
+against the tree listing, within the bounds of :class:`~povagent.dataset.hub_limits.DownloadLimits`.
 
 Only what the chosen conditions read is fetched (``allow_patterns``): a Given-only run does not
 download the exploration frames (most of the release's 516 MiB). Every condition needs
@@ -16,7 +21,8 @@ itself, or one folder below it if the repository nests the release).
 
 Failures are :class:`~povagent.errors.DatasetError` naming the repository and the revision:
 a revision or repository that does not exist, no network and no cached copy, offline with an
-incomplete cache.
+incomplete cache, a value from the server that fails its check (named, quoted, cut short), a
+file whose size or hash differs from the tree listing, a cap or the deadline passed.
 
 huggingface_hub reads ``HF_ENDPOINT``, ``HF_HOME``/``HF_HUB_CACHE`` and ``HF_HUB_OFFLINE`` once,
 when it is first imported (litellm may import it long before a download). This module reads them
@@ -29,10 +35,14 @@ This module fetches and locates files; loading them is :mod:`povagent.dataset.lo
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable
+from typing import TYPE_CHECKING, Iterable
 
+from povagent.dataset.hub_checks import COMMIT_ID, HubValueError, check_revision, shown
+from povagent.dataset.hub_limits import DownloadLimits
+from povagent.dataset.hub_transfer import inside
 from povagent.dataset.models import CONDITIONS, Condition
 from povagent.errors import DatasetError
 
@@ -169,19 +179,6 @@ def offline_requested() -> bool:
     return _env_true("HF_HUB_OFFLINE") or _env_true("TRANSFORMERS_OFFLINE")
 
 
-def _silent_tqdm() -> Any:
-    from tqdm.auto import tqdm
-
-    class SilentTqdm(tqdm):
-        """A progress bar that never draws (``progress=False``)."""
-
-        def __init__(self, *args: Any, **kwargs: Any) -> None:
-            kwargs["disable"] = True
-            super().__init__(*args, **kwargs)
-
-    return SilentTqdm
-
-
 def download_release(
     repo_id: str = RELEASE_REPO,
     *,
@@ -191,22 +188,36 @@ def download_release(
     endpoint: str | None = None,
     offline: bool | None = None,
     progress: bool = True,
+    limits: DownloadLimits | None = None,
 ) -> HubRelease:
     """Fetch the release (or the part ``conditions`` need) into the Hugging Face cache.
 
     ``revision`` is a branch, tag or commit (default: ``main``). ``endpoint`` defaults to
     ``HF_ENDPOINT``, ``cache_dir`` to ``HF_HUB_CACHE`` or ``HF_HOME/hub``, ``offline`` to
     ``HF_HUB_OFFLINE``, each as set at this call (then to huggingface_hub's defaults); offline,
-    only the cache is read. ``progress`` shows huggingface_hub's progress bars. Returns where
-    the release is; a failure is a :class:`DatasetError` naming the repository and revision.
+    only the cache is read. ``progress`` shows a progress bar. ``limits`` bound the download
+    (default: :class:`DownloadLimits`'s). Nothing the server says is trusted: see
+    :mod:`povagent.dataset.hub_transfer`. Returns where the release is; a failure is a
+    :class:`DatasetError` naming the repository and revision.
     """
-    from huggingface_hub import constants, snapshot_download
+    from huggingface_hub import constants
+
+    from povagent.dataset.hub_transfer import Budget, DeadlinePassed, MetadataUnavailable, fetch_snapshot, with_deadline
 
     asked = revision or constants.DEFAULT_REVISION
+    check_repo_id(repo_id)
+    try:
+        check_revision(asked)
+    except HubValueError as exc:
+        raise DatasetError(f"{repo_id} @ {shown(asked)}: {exc}; give a branch, tag or commit of the repository") from None
+    limits = limits or DownloadLimits()
     endpoint = endpoint or os.environ.get("HF_ENDPOINT") or None
-    cache_dir = cache_dir if cache_dir is not None else cache_dir_requested()
     if endpoint:
         endpoint = endpoint.rstrip("/")
+    hub_url = endpoint or constants.ENDPOINT
+    cache_dir = cache_dir if cache_dir is not None else cache_dir_requested()
+    cache = str(Path(cache_dir if cache_dir is not None else constants.HF_HUB_CACHE).expanduser().resolve())
+    storage = os.path.join(cache, "datasets--" + repo_id.replace("/", "--"))
     offline = offline_requested() if offline is None else offline
     chosen = parse_conditions(conditions)
     allow, ignore = release_patterns(chosen)
@@ -214,25 +225,74 @@ def download_release(
     fetch = f"povagent download {repo_id}" + (f" --revision {revision}" if revision else "")
     if allow is not None:
         fetch += " --conditions " + ",".join(c.value for c in chosen)
+    budget = Budget(limits)
     try:
-        snapshot = snapshot_download(
-            repo_id,
-            repo_type="dataset",
-            revision=asked,
-            cache_dir=cache_dir,
-            endpoint=endpoint,
-            local_files_only=offline,
-            allow_patterns=allow,
-            ignore_patterns=ignore,
-            tqdm_class=None if progress else _silent_tqdm(),
-        )
+        if offline:
+            snapshot = _from_cache(repo_id, asked, cache, allow, ignore, None)
+        else:
+            try:
+                snapshot = with_deadline(
+                    lambda: fetch_snapshot(
+                        repo_id, asked, storage=storage, endpoint=endpoint, allow=allow, ignore=ignore, budget=budget,
+                        progress=progress,
+                    ),
+                    budget,
+                )  # fmt: skip
+            except MetadataUnavailable as unavailable:
+                snapshot = _from_cache(repo_id, asked, cache, allow, ignore, unavailable.cause)
+    except HubValueError as exc:
+        raise DatasetError(
+            f"{where}: refused what the Hub at {hub_url} sent: {exc}; nothing was written from it "
+            "(is HF_ENDPOINT a Hugging Face Hub?)"
+        ) from None
+    except DeadlinePassed:
+        raise DatasetError(
+            f"{where}: the download from {hub_url} did not finish within {limits.deadline_s:g} s (--deadline, "
+            f"dataset.download.deadline_s); {budget.fetched_files} files ({budget.fetched_bytes / 2**20:.1f} MiB) "
+            "were fetched and checked, nothing unfinished was kept; run it again to go on"
+        ) from None
+    except DatasetError as exc:
+        raise DatasetError(f"{where}: from the Hub at {hub_url}: {exc}") from None
     except Exception as exc:
-        error = _user_error(exc, where, repo_id, endpoint or constants.ENDPOINT, cache_dir or constants.HF_HUB_CACHE, offline, fetch)
+        error = _user_error(exc, where, repo_id, hub_url, cache, offline, fetch)
         if error is None:
             raise  # not a download failure a user can act on: a bug, keep its traceback
         raise error from exc
     path = Path(snapshot)
-    return HubRelease(repo_id, asked, path.name, path, find_release_root(path, where))
+    commit = path.name
+    if not COMMIT_ID.fullmatch(commit) or not inside(path, storage):
+        raise DatasetError(f"{where}: the cached snapshot {shown(str(path), 120)} is not a commit folder of {storage}")
+    return HubRelease(repo_id, asked, commit, path, find_release_root(path, where))
+
+
+def check_repo_id(repo_id: str) -> str:
+    """``repo_id`` if it is ``owner/name`` (letters, digits, ``_.-``; no ``..`` or ``--``), the
+    form huggingface_hub turns into the cache folder ``datasets--owner--name``."""
+    if not re.fullmatch(r"[\w.-]{1,96}/[\w.-]{1,96}", repo_id) or ".." in repo_id or "--" in repo_id:
+        raise DatasetError(f"{shown(repo_id)} is not a Hub repository id: give owner/name (e.g. {RELEASE_REPO})")
+    return repo_id
+
+
+def _from_cache(
+    repo_id: str, revision: str, cache: str, allow: list[str] | None, ignore: list[str] | None, api_error: Exception | None
+) -> str:
+    """The cached snapshot of ``revision`` (huggingface_hub's offline reader), complete for the
+    patterns; ``api_error`` is why the Hub was not asked (``None``: offline mode)."""
+    from huggingface_hub import snapshot_download
+    from huggingface_hub.errors import GatedRepoError, HfHubHTTPError, LocalEntryNotFoundError, RepositoryNotFoundError
+
+    try:
+        return snapshot_download(
+            repo_id, repo_type="dataset", revision=revision, cache_dir=cache, local_files_only=True,
+            allow_patterns=allow, ignore_patterns=ignore,
+        )  # fmt: skip
+    except LocalEntryNotFoundError:
+        if api_error is None:
+            raise
+        unauthorized = isinstance(api_error, HfHubHTTPError) and api_error.response is not None and api_error.response.status_code == 401
+        if isinstance(api_error, (RepositoryNotFoundError, GatedRepoError)) or unauthorized:
+            raise api_error from None
+        raise LocalEntryNotFoundError(f"Got: {type(api_error).__name__}: {api_error}") from api_error
 
 
 def _user_error(
@@ -314,6 +374,8 @@ def resolve_hub_dataset(config: PipelineConfig, *, progress: bool = True) -> Pip
     spec = config.dataset
     if spec.hub is None:
         return config
-    release = download_release(spec.hub, revision=spec.revision, conditions=config.instances.conditions, progress=progress)
+    release = download_release(
+        spec.hub, revision=spec.revision, conditions=config.instances.conditions, progress=progress, limits=spec.download
+    )
     config.dataset = spec.model_copy(update={"path": release.root, "revision": release.commit})
     return config

@@ -17,6 +17,17 @@ Point a client at it with ``endpoint=server.url`` (or ``HF_ENDPOINT``, which hug
 reads when it is first imported: set it before that, e.g. in a subprocess). Every request is
 recorded (method and path), so a test can check which files were fetched.
 
+Files matching ``lfs_patterns`` are served as the Hub serves LFS files: listed with
+``lfs: {oid: <sha256>, size, pointerSize}`` (their ``oid`` is the git id of the LFS pointer) and
+answered with ``X-Linked-Etag: <sha256>`` and ``X-Linked-Size``.
+
+A test can make it hostile through :attr:`HubServer.lies` (a :class:`HubLies`): a repository
+``sha``, an ``ETag`` or an ``X-Repo-Commit`` holding paths, bytes that differ from the tree
+listing (longer, or the same length with other bytes), listed files that answer 404, any
+revision accepted, a file transfer that stalls. A repository file name may itself be hostile
+(``files={"../x.pth": ...}``): it is listed as given. Nothing of that is reachable from the
+command line, which serves a folder honestly.
+
 Bounded like :class:`povagent.testing.loopback_server.LoopbackServer`: loopback only, stops by
 itself after ``max_lifetime_s``; a folder's files are hashed once at start and read from disk
 when asked for.
@@ -25,19 +36,20 @@ when asked for.
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import hashlib
 import json
 import re
 import socket
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 from urllib.parse import parse_qs, quote, unquote, urlsplit
 
-__all__ = ["HubRequest", "HubServer"]
+__all__ = ["HubLies", "HubRequest", "HubServer"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +60,35 @@ class HubRequest:
     path: str
     query: dict[str, list[str]]
     received_at: float
+
+
+@dataclass
+class HubLies:
+    """What a hostile Hub answers instead of the truth (every field off by default).
+
+    For tests of a client's distrust: each field is one lie a mirror or a hostile
+    ``HF_ENDPOINT`` could tell.
+    """
+
+    #: The repository ``sha`` that ``revision`` answers (the server then accepts it as a revision).
+    sha: str | None = None
+    #: The ``ETag`` of every ``resolve`` answer (an LFS file's ``X-Linked-Etag`` too).
+    etag: str | None = None
+    #: The ``X-Repo-Commit`` of every ``resolve`` answer, a 404 included.
+    repo_commit: str | None = None
+    #: Bytes served for a repository path instead of its own (the listing still describes its own).
+    served: dict[str, bytes] = field(default_factory=dict)
+    #: Listed paths whose ``resolve`` answers 404 ``EntryNotFound``.
+    missing: set[str] = field(default_factory=set)
+    #: Every revision resolves (to the commit), whatever it is.
+    any_revision: bool = False
+    #: Seconds a file's ``GET`` stalls after its headers and half its body (a server that hangs).
+    stall_s: float = 0.0
+
+
+def lfs_pointer(data: bytes) -> bytes:
+    """The git LFS pointer file of ``data`` (what git stores, and what the listing's ``oid`` hashes)."""
+    return f"version https://git-lfs.github.com/spec/v1\noid sha256:{hashlib.sha256(data).hexdigest()}\nsize {len(data)}\n".encode()
 
 
 def git_blob_id(data: bytes) -> str:
@@ -123,8 +164,9 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _commit(self, revision: str) -> str | None:
         owner = self.server.owner
-        if revision == owner.commit or revision in owner.revisions:
-            return owner.commit
+        lies = owner.lies
+        if revision in (owner.commit, lies.sha) or revision in owner.revisions or lies.any_revision:
+            return lies.sha or owner.commit
         self._error(404, f"Invalid rev id: {revision}", "RevisionNotFound")
         return None
 
@@ -139,7 +181,7 @@ class _Handler(BaseHTTPRequestHandler):
                 "_id": commit[:24],
                 "id": owner.repo_id,
                 "author": owner.repo_id.split("/")[0],
-                "sha": commit,
+                "sha": commit,  # the lie, if the server tells one
                 "private": False,
                 "gated": False,
                 "disabled": False,
@@ -178,12 +220,19 @@ class _Handler(BaseHTTPRequestHandler):
         commit = self._commit(revision)
         if commit is None:
             return
-        if path not in owner.files:
-            self._error(404, "Entry not found", "EntryNotFound", {"X-Repo-Commit": commit})
+        lies = owner.lies
+        said_commit = lies.repo_commit or commit
+        if path not in owner.files or path in lies.missing:
+            self._error(404, "Entry not found", "EntryNotFound", {"X-Repo-Commit": said_commit})
             return
-        data = owner.read(path) if method == "GET" else b""
-        size = owner._sizes[path]
-        etag = f'"{owner._oids[path]}"'
+        data = lies.served.get(path) if path in lies.served else None
+        if data is None:
+            data = owner.read(path) if method == "GET" else b""
+            size = owner._sizes[path]
+        else:
+            size = len(data)
+        sha256 = owner._lfs.get(path)
+        etag = f'"{lies.etag or (sha256 or owner._oids[path])}"'
         status, length, extra = 200, size, {}
         first, last = 0, size - 1
         rng = re.fullmatch(r"bytes=(\d+)-(\d*)", self.headers.get("Range", ""))
@@ -196,13 +245,26 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Content-Type", "application/octet-stream")
         self.send_header("Content-Length", str(length))
         self.send_header("ETag", etag)
-        self.send_header("X-Repo-Commit", commit)
+        if sha256 is not None:  # an LFS file: the Hub names its blob by the linked sha256
+            self.send_header("X-Linked-Etag", f'"{lies.etag or sha256}"')
+            self.send_header("X-Linked-Size", str(size))
+        self.send_header("X-Repo-Commit", said_commit)
         self.send_header("Accept-Ranges", "bytes")
         for k, v in extra.items():
             self.send_header(k, v)
         self.end_headers()
         if method == "GET":
-            self.wfile.write(data[first : first + length])
+            body = data[first : first + length]
+            if lies.stall_s > 0:
+                half = len(body) // 2
+                self.wfile.write(body[:half])
+                self.wfile.flush()
+                owner._stopping.wait(lies.stall_s)  # a stop() ends the stall at once
+                body = body[half:]
+            try:
+                self.wfile.write(body)
+            except OSError:  # the client gave up during a stall
+                pass
 
     # -- sending ----------------------------------------------------------------------------
     def _json(self, payload: Any, headers: Mapping[str, str] | None = None) -> None:
@@ -261,6 +323,8 @@ class HubServer:
         page_size: int = 1000,
         port: int = 0,
         max_lifetime_s: float = 120.0,
+        lfs_patterns: Iterable[str] = (),
+        lies: HubLies | None = None,
     ) -> None:
         if (folder is None) == (files is None):
             raise ValueError("give exactly one of folder or files")
@@ -273,11 +337,23 @@ class HubServer:
         self.paths = sorted(self.files)
         self._oids = {p: git_blob_id(self.read(p)) for p in self.paths}
         self._sizes = {p: len(b) if isinstance(b, bytes) else b.stat().st_size for p, b in self.files.items()}
+        patterns = tuple(lfs_patterns)
+        #: sha256 of each file served as an LFS file.
+        self._lfs = {
+            p: hashlib.sha256(self.read(p)).hexdigest() for p in self.paths if any(fnmatch.fnmatch(p, pat) for pat in patterns)
+        }
+        self._pointer_sizes: dict[str, int] = {}
+        for p in self._lfs:  # git holds the pointer; the listing's oid is the pointer's
+            pointer = lfs_pointer(self.read(p))
+            self._oids[p], self._pointer_sizes[p] = git_blob_id(pointer), len(pointer)
         self.revisions = tuple(revisions)
         self.commit = hashlib.sha1(b"".join(p.encode() + b"\0" + self._oids[p].encode() for p in self.paths)).hexdigest()
         self.page_size = max(1, page_size)
         #: When set, every request is answered with this HTTP status (a Hub outage: 500, 503...).
         self.fail_status: int | None = None
+        #: What the server lies about (nothing by default); may be changed while it serves.
+        self.lies = lies or HubLies()
+        self._stopping = threading.Event()
         self.port = port
         self.max_lifetime_s = max_lifetime_s
         self.requests: list[HubRequest] = []
@@ -294,6 +370,7 @@ class HubServer:
             return self
         server = _Server(("127.0.0.1", self.port), _Handler)
         server.owner = self
+        self._stopping.clear()
         self._server = server
         self.port = server.server_address[1]
         self._thread = threading.Thread(
@@ -309,6 +386,7 @@ class HubServer:
         """Stop serving: close the listening socket and every open connection (a later request
         is refused, as on a network failure). Safe to call twice."""
         server, self._server = self._server, None
+        self._stopping.set()
         if self._timer is not None and self._timer is not threading.current_thread():
             self._timer.cancel()
         if server is None:
@@ -371,7 +449,10 @@ class HubServer:
                 if recursive or i == 1:
                     folders.add(prefix + "/".join(parts[:i]))
             if recursive or len(parts) == 1:
-                files.append({"type": "file", "oid": self._oids[p], "size": self._sizes[p], "path": p})
+                entry: dict[str, Any] = {"type": "file", "oid": self._oids[p], "size": self._sizes[p], "path": p}
+                if p in self._lfs:
+                    entry["lfs"] = {"oid": self._lfs[p], "size": self._sizes[p], "pointerSize": self._pointer_sizes[p]}
+                files.append(entry)
         dirs = [{"type": "directory", "oid": hashlib.sha1(d.encode()).hexdigest(), "path": d} for d in sorted(folders)]
         return sorted(dirs + files, key=lambda e: e["path"])
 

@@ -53,3 +53,29 @@ def test_a_resolved_hub_dataset_round_trips_through_config_yaml(tmp_path):
     (tmp_path / "config.yaml").write_text(dumped)
     again = load_pipeline(tmp_path / "config.yaml")
     assert again.dataset == config.dataset and str(again.dataset.root) == "/data/snap"
+
+
+def test_download_bounds_are_keys_of_a_hub_dataset(tmp_path):
+    config = pipeline(tmp_path, "dataset: {hub: owl-owl/POVBench, download: {deadline_s: 60, max_file_mib: 8}}\n")
+    limits = config.dataset.download
+    assert limits.deadline_s == 60 and limits.max_file_bytes == 8 * 2**20 and limits.max_total_mib == 4096
+
+
+@pytest.mark.parametrize(
+    "download,match",
+    [("{deadline_s: 0}", "greater than 0"), ("{max_total_mib: -1}", "greater than 0"), ("{deadline: 5}", "deadline")],
+)
+def test_download_bounds_out_of_range_or_misspelled_are_refused(tmp_path, download, match):
+    with pytest.raises(ConfigError, match=match):
+        pipeline(tmp_path, f"dataset: {{hub: owl-owl/POVBench, download: {download}}}\n")
+
+
+def test_download_bounds_without_a_hub_are_refused(tmp_path):
+    with pytest.raises(ConfigError, match="dataset.download needs dataset.hub"):
+        pipeline(tmp_path, "dataset: {path: data/povbench, download: {deadline_s: 5}}\n")
+
+
+@pytest.mark.parametrize("revision", ["../../../venv/site-packages/evil.pth", "/abs", "a//b", ".hidden"])
+def test_a_revision_that_could_leave_the_cache_is_refused_when_the_config_is_read(tmp_path, revision):
+    with pytest.raises(ConfigError, match="dataset.revision"):
+        pipeline(tmp_path, f"dataset: {{hub: owl-owl/POVBench, revision: '{revision}'}}\n")

@@ -232,3 +232,13 @@ def test_a_pipeline_without_hub_is_left_alone(tmp_path, mini_root):
     config = PipelineConfig.model_validate({"dataset": {"path": str(mini_root)}, "backend": "center", "output": str(tmp_path)})
     before = config.model_dump()
     assert resolve_hub_dataset(config).model_dump() == before
+
+
+def test_a_listed_file_the_server_will_not_send_is_named(hub):
+    from povagent.testing.hub_server import HubLies
+
+    hub.lies = HubLies(missing={"meta.json"})
+    with pytest.raises(DatasetError) as err:
+        download_release(progress=False)
+    msg = str(err.value)
+    assert msg.startswith("owl-owl/POVBench @ main:") and "'meta.json'" in msg and "HTTP 404" in msg and "\n" not in msg

@@ -153,3 +153,56 @@ def test_an_injected_outage_answers_every_request_with_its_status(server):
 
 def test_a_malformed_cursor_is_a_bad_request(server):
     assert fetch(f"{server.url}/api/datasets/owl-owl/POVBench/tree/main?cursor=x")[0] == 400
+
+
+def test_lfs_files_are_listed_and_answered_as_the_hub_does():
+    import hashlib
+
+    from povagent.testing.hub_server import lfs_pointer
+
+    frame = "artifacts/h0/exploration_images/frame_000.png"
+    with HubServer(files=FILES, lfs_patterns=["*.png"], max_lifetime_s=30) as s:
+        _, _, body = fetch(f"{s.url}/api/datasets/owl-owl/POVBench/tree/main?recursive=true")
+        entry = next(e for e in json.loads(body) if e["path"] == frame)
+        _, headers, _ = fetch(f"{s.url}/datasets/owl-owl/POVBench/resolve/main/{frame}", method="HEAD")
+    sha256 = hashlib.sha256(FILES[frame]).hexdigest()
+    assert entry["lfs"] == {"oid": sha256, "size": len(FILES[frame]), "pointerSize": len(lfs_pointer(FILES[frame]))}
+    assert entry["oid"] == git_blob_id(lfs_pointer(FILES[frame]))  # git holds the pointer
+    assert headers["X-Linked-Etag"] == f'"{sha256}"' and headers["X-Linked-Size"] == str(len(FILES[frame]))
+
+
+def test_lies_change_what_the_server_says_and_nothing_else():
+    from povagent.testing.hub_server import HubLies
+
+    lies = HubLies(sha="../x", etag="../e", repo_commit="/abs", served={"meta.json": b"other"}, missing={"artifacts/h0/h0.json"})
+    with HubServer(files=FILES, lies=lies, max_lifetime_s=30) as s:
+        _, _, info = fetch(f"{s.url}/api/datasets/owl-owl/POVBench/revision/main")
+        status, headers, body = fetch(f"{s.url}/datasets/owl-owl/POVBench/resolve/main/meta.json")
+        missing, missing_headers, _ = fetch(f"{s.url}/datasets/owl-owl/POVBench/resolve/main/artifacts/h0/h0.json")
+        _, _, tree = fetch(f"{s.url}/api/datasets/owl-owl/POVBench/tree/main?recursive=true")
+    assert json.loads(info)["sha"] == "../x"
+    assert status == 200 and body == b"other" and headers["ETag"] == '"../e"' and headers["X-Repo-Commit"] == "/abs"
+    assert missing == 404 and missing_headers["X-Repo-Commit"] == "/abs"
+    listed = {e["path"]: e for e in json.loads(tree) if e["type"] == "file"}
+    assert listed["meta.json"]["size"] == len(FILES["meta.json"])  # the listing still tells the truth
+
+
+def test_stopping_the_server_ends_a_stalled_transfer_at_once():
+    import threading
+
+    from povagent.testing.hub_server import HubLies
+
+    s = HubServer(files=FILES, lies=HubLies(stall_s=60), max_lifetime_s=90).start()
+    def read() -> None:
+        try:
+            fetch(f"{s.url}/datasets/owl-owl/POVBench/resolve/main/meta.json")
+        except OSError:  # the body is cut when the server stops: what a client of a dead server sees
+            pass
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    time.sleep(0.5)
+    start = time.monotonic()
+    s.stop()
+    reader.join(10)
+    assert not reader.is_alive() and time.monotonic() - start < 5
