@@ -304,6 +304,15 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
     return table
 
 
+def _profile_fields(entry: Any) -> dict[str, Any]:
+    """A model profile's litellm model and default parser (for ``plugins --json``); nothing
+    for other kinds, or for a plugin's profile object without those fields."""
+    if entry.kind != "profile":
+        return {}
+    fields = {"model": getattr(entry.factory, "litellm_model", None), "parser": getattr(entry.factory, "default_parser", None)}
+    return {k: v for k, v in fields.items() if isinstance(v, str)}
+
+
 @app.command("plugins")
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
     """List every plugin a YAML file can name, and where it came from.
@@ -319,7 +328,8 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     kinds = (*KINDS, "profile")
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
-            k: [{"name": e.name, "source": e.source, "description": e.description} for e in host.entries(k)] for k in kinds
+            k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in host.entries(k)]
+            for k in kinds
         }
         out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]
         typer.echo(json.dumps(out, indent=2))
