@@ -46,6 +46,16 @@ def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] |
     return full
 
 
+def _what_ran(summary: dict[str, Any], backend: str) -> str:
+    """The backend and the model that answered, from ``summary.json``: ``litellm gpt-5.4 =
+    openai/gpt-5.4``; a baseline is its own model (``center``)."""
+    from povagent.results.rows import model_label
+
+    pipeline = summary.get("pipeline", {})
+    model = model_label(str(pipeline.get("model") or ""), pipeline.get("profile"))
+    return backend if model in ("", backend) else f"{backend} {model}"
+
+
 def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
     rate = cell.get(key)
     return "-" if rate is None else f"{100 * rate:.1f}%"
@@ -110,7 +120,7 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    title = PathTitle(config.output, f" ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
@@ -199,8 +209,9 @@ def sweep_command(
         if success is not None:  # a real-world set: no official error to show
             o = success["overall"]
             console.print(
-                f"[bold]{cell.name}[/]: success rate {_rate(o)}, response rate {_rate(o, 'response_rate')}, "
-                f"{res.stats.requests} requests, {res.stats.cache_hits} cache hits"
+                f"[bold]{cell.name}[/] ({_what_ran(res.summary, cell.config.backend.name)}): success rate {_rate(o)}, "
+                f"response rate {_rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
+                highlight=False,
             )
             return
         o = res.summary["overall"]
@@ -211,7 +222,12 @@ def sweep_command(
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
             f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
         )
-        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+        model = _what_ran(res.summary, cell.config.backend.name)
+        console.print(
+            f"[bold]{cell.name}[/] ({model}): mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
+            f"{res.stats.cache_hits} cache hits",
+            highlight=False,
+        )
 
     try:
         result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
