@@ -9,9 +9,13 @@ the L2). :func:`official_evaluation` builds that record from one of our rows, so
 (:mod:`povagent.report.export`) carries the numbers the official tools would.
 
 The prediction is taken as the official runner would have recorded the same answer:
-``parse_error`` is ``None`` when a point was read, ``"failed to parse JSON"`` when none was,
-the error message when the request failed; an A/B answer with a point but no usable frame
-keeps its point and has no selected image. Pure: rows and a loaded dataset in, a dict out.
+``parse_error`` is ``None`` when a point was read, ``"failed to parse JSON"`` when none was
+(``"failed to parse points"`` for a RoboPoint answer, read by a ``robopoint`` parser), the
+error message when the request failed; an A/B answer with a point but no usable frame keeps its
+point and has no selected image. A multi-point answer (RoboPoint) records its *first* point as
+``predicted_x``/``predicted_y``, as the runner did: the normalized prediction and ``error_x``/
+``error_y`` are that point's, and only ``error_l2`` is the centroid's. Pure: rows and a loaded
+dataset in, a dict out.
 """
 
 from __future__ import annotations
@@ -24,6 +28,10 @@ from povagent.scoring.official import clamp_unit, points_l2, project_ground_trut
 
 #: What the official runner records as ``parse_error`` when an answer has no readable point.
 OFFICIAL_PARSE_FAILURE = "failed to parse JSON"
+#: ... and when a RoboPoint answer has no ``(x, y)`` tuple.
+OFFICIAL_POINTS_FAILURE = "failed to parse points"
+#: Parsers of RoboPoint's point lists (their failures are recorded as the runner's RoboPoint path did).
+POINT_LIST_PARSERS = frozenset({"robopoint", "robopoint-official"})
 
 
 def raw_response(row: ResultRow) -> str:
@@ -44,7 +52,10 @@ def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, f
             frame = instance.selected_frame(p.selected_image)
             image = frame.image_path if frame is not None else None
         points = [(float(a), float(b)) for a, b in row.parse.points] if row.parse is not None and row.parse.points else None
-        return float(p.x), float(p.y), None, image if uses_frames else None, points
+        # the runner recorded a point list's first point as the prediction (the centroid only
+        # enters error_l2)
+        x, y = points[0] if points else (float(p.x), float(p.y))
+        return x, y, None, image if uses_frames else None, points
     if row.status == RowStatus.INFRA_ERROR:
         return None, None, row.error_message or row.error_type or "request failed", None, None
     parse = row.parse
@@ -52,7 +63,8 @@ def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, f
         # a point was read, but its frame index names no frame: officially a parsed answer
         # whose predicted_image is missing
         return float(parse.x), float(parse.y), None, None, None
-    return None, None, OFFICIAL_PARSE_FAILURE, None, None
+    failure = OFFICIAL_POINTS_FAILURE if row.parser in POINT_LIST_PARSERS else OFFICIAL_PARSE_FAILURE
+    return None, None, failure, None, None
 
 
 def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
