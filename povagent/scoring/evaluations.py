@@ -42,6 +42,20 @@ def raw_response(row: ResultRow) -> str:
     return ""
 
 
+def official_parse_error(row: ResultRow) -> str | None:
+    """The ``parse_error`` the official runner would have recorded for this row's answer:
+    ``None`` when it read a point (a point whose frame names no image included), the request's
+    error when it failed, else its parse failure text."""
+    if row.status == RowStatus.INFRA_ERROR:
+        return row.error_message or row.error_type or "request failed"
+    if row.status == RowStatus.ANSWERED and row.prediction.x is not None and row.prediction.y is not None:
+        return None
+    parse = row.parse
+    if str(row.condition) != "c" and parse is not None and parse.x is not None and parse.y is not None:
+        return None
+    return OFFICIAL_POINTS_FAILURE if row.parser in POINT_LIST_PARSERS else OFFICIAL_PARSE_FAILURE
+
+
 def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, float | None, str | None, str | None, list[tuple[float, float]] | None]:
     """``(x, y, parse_error, predicted_image, points)`` as the official runner records them."""
     uses_frames = str(row.condition) != "c"
@@ -56,15 +70,12 @@ def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, f
         # enters error_l2)
         x, y = points[0] if points else (float(p.x), float(p.y))
         return x, y, None, image if uses_frames else None, points
-    if row.status == RowStatus.INFRA_ERROR:
-        return None, None, row.error_message or row.error_type or "request failed", None, None
     parse = row.parse
-    if uses_frames and parse is not None and parse.x is not None and parse.y is not None:
+    if row.status != RowStatus.INFRA_ERROR and uses_frames and parse is not None and parse.x is not None and parse.y is not None:
         # a point was read, but its frame index names no frame: officially a parsed answer
         # whose predicted_image is missing
         return float(parse.x), float(parse.y), None, None, None
-    failure = OFFICIAL_POINTS_FAILURE if row.parser in POINT_LIST_PARSERS else OFFICIAL_PARSE_FAILURE
-    return None, None, failure, None, None
+    return None, None, official_parse_error(row), None, None
 
 
 def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
