@@ -162,9 +162,10 @@ def score_command(
     for p in ds.problems:
         how = "skipped for povagent's own rows" if release is not None else "skipped"
         typer.echo(f"warning: dataset problem, {how}: {p}", err=True)
+    summary, warnings = score_predictions(predictions, ds, release)
+    # the release's own (its exploration logs are read as predictions name their houses)
     for w in release.warnings if release is not None else []:
         typer.echo(f"warning: {w}", err=True)
-    summary, warnings = score_predictions(predictions, ds, release)
     summary["counting"] = counting
     for w in warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
