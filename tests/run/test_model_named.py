@@ -7,6 +7,7 @@ Rows written before rows named the model stay readable and take it from the conf
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -18,7 +19,7 @@ from povagent.report.collect import collect
 from povagent.results.rows import ResultRow, model_label, read_rows
 from povagent.testing.loopback_server import LoopbackServer
 
-pytestmark = pytest.mark.timeout(120)
+pytestmark = pytest.mark.timeout(300)  # litellm imports in seconds, much longer on a busy machine
 
 PROFILE = "qwen3-vl-8b"
 LITELLM_MODEL = "hosted_vllm/Qwen/Qwen3-VL-8B-Instruct"
@@ -43,11 +44,13 @@ def pipeline(tmp_path: Path, mini_root: Path, backend: dict, name: str = "run") 
     }
 
 
-@pytest.fixture
-def profile_run(tmp_path, mini_root):
+@pytest.fixture(scope="module")
+def profile_run(tmp_path_factory, mini_root):
     """A 3-instance run of the ``qwen3-vl-8b`` profile against a loopback server: (run folder,
-    the ``run`` command's output)."""
-    with LoopbackServer(reply='{"selected_image": 0, "x": 100, "y": 120}', max_lifetime_s=100) as server:
+    the ``run`` command's output). One run for the module (litellm's import is slow); the
+    report test works on a copy."""
+    tmp_path = tmp_path_factory.mktemp("profile")
+    with LoopbackServer(reply='{"selected_image": 0, "x": 100, "y": 120}', max_lifetime_s=280) as server:
         backend = {"name": "litellm", "options": {"model": PROFILE, "api_base": server.url}}
         doc = write_yaml(tmp_path / "p.yaml", pipeline(tmp_path, mini_root, backend))
         result = CliRunner().invoke(app, ["run", str(doc), "--quiet"], env={"COLUMNS": "200"})
@@ -74,7 +77,7 @@ def test_the_summary_names_the_model(profile_run):
 
 
 def test_a_plain_litellm_string_is_named_as_written(tmp_path, mini_root):
-    with LoopbackServer(reply='{"selected_image": 0, "x": 100, "y": 120}', max_lifetime_s=100) as server:
+    with LoopbackServer(reply='{"selected_image": 0, "x": 100, "y": 120}', max_lifetime_s=280) as server:
         backend = {"name": "litellm", "options": {"model": "openai/loopback-vlm", "api_base": server.url, "api_key_env": "POVAGENT_TEST_KEY"}}
         doc = write_yaml(tmp_path / "p.yaml", pipeline(tmp_path, mini_root, backend))
         result = CliRunner().invoke(app, ["run", str(doc), "--quiet"], env={"COLUMNS": "200", "POVAGENT_TEST_KEY": "x"})
@@ -116,10 +119,11 @@ def test_a_row_without_a_model_field_is_read(tmp_path):
     assert (row.model, row.profile, row.backend) == ("", None, "litellm")
 
 
-def test_the_report_names_the_model_the_rows_name(profile_run):
+def test_the_report_names_the_model_the_rows_name(profile_run, tmp_path):
     """The config is not the source when rows name the model: a config without the model
     option still gives the profile's label, and rows without it fall back to the config."""
-    folder, _ = profile_run
+    folder = tmp_path / "run"
+    shutil.copytree(profile_run[0], folder)
     config = yaml.safe_load((folder / "config.yaml").read_text())
     config["backend"]["options"] = {}
     (folder / "config.yaml").write_text(yaml.safe_dump(config))
