@@ -38,7 +38,7 @@ def pipeline(tmp_path: Path, mini_root: Path, backend: dict, name: str = "run") 
         "strategy": "basic",
         "parser": "official",
         "retry": {"attempts": 1, "initial_wait": 0.0, "max_wait": 0.0},
-        "timeout": 20,
+        "timeout": 120,  # the first request waits for litellm's import
         "cache": False,
         "output": str(tmp_path / name),
     }
