@@ -160,8 +160,9 @@ def score_command(
     ds = load_dataset(dataset, strict=strict, check_images=False)  # scoring needs the ground truth, not the pixels
     release = read_release(dataset) if counting == "official" else None
     for p in ds.problems:
-        how = "skipped for povagent's own rows" if release is not None else "skipped"
-        typer.echo(f"warning: dataset problem, {how}: {p}", err=True)
+        # under official counting the official rows still see such a pair as the official scorer does
+        how = " by povagent's loader (official rows are counted against the release as officially)" if release is not None else ""
+        typer.echo(f"warning: dataset problem, skipped{how}: {p}", err=True)
     summary, warnings = score_predictions(predictions, ds, release)
     # the release's own (its exploration logs are read as predictions name their houses)
     for w in release.warnings if release is not None else []:

@@ -56,6 +56,12 @@ def _what_ran(summary: dict[str, Any], backend: str) -> str:
     return backend if model in ("", backend) else f"{backend} {model}"
 
 
+def _cell_title(name: str, summary: dict[str, Any], backend: str) -> str:
+    """A sweep cell's name with the model that answered (left out when the name is it)."""
+    what = _what_ran(summary, backend)
+    return f"[bold]{name}[/]" if what == name else f"[bold]{name}[/] ({what})"
+
+
 def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
     rate = cell.get(key)
     return "-" if rate is None else f"{100 * rate:.1f}%"
@@ -209,7 +215,7 @@ def sweep_command(
         if success is not None:  # a real-world set: no official error to show
             o = success["overall"]
             console.print(
-                f"[bold]{cell.name}[/] ({_what_ran(res.summary, cell.config.backend.name)}): success rate {_rate(o)}, "
+                f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: success rate {_rate(o)}, "
                 f"response rate {_rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
                 highlight=False,
             )
@@ -222,9 +228,8 @@ def sweep_command(
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
             f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
         )
-        model = _what_ran(res.summary, cell.config.backend.name)
         console.print(
-            f"[bold]{cell.name}[/] ({model}): mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
+            f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
             f"{res.stats.cache_hits} cache hits",
             highlight=False,
         )
