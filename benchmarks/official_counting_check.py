@@ -18,8 +18,12 @@ What it does:
 3. scores the root and one run folder with ``povagent score --json`` and compares every
    number with a reference computed here from the rules alone (raw JSON, plain floats; no
    povagent code), as the official ``eval_results.py`` and ``run_all_eval.py`` define them:
-   per run, mean L2 over answered rows, response rate over every row, GT-in-frame share,
-   grouped by the raw type and direction; over runs, the plain mean of the runs' values.
+   per run, mean L2 over answered rows, response rate over every row, GT-in-frame share, the
+   mean absolute signed errors (``mean_abs_x``/``mean_abs_y``), grouped by the raw type and
+   direction, and the rows with a ``parse_error``; over runs, the plain mean of the runs'
+   values (``n_parse_error`` summed). The root also holds a stray ``config.json`` (ignored, as
+   ``run_all_eval.py`` reads folders only), and rows whose pair id differs from the file's in
+   type only (``7`` for ``"7"``: no pair, officially).
 
 Run: ``python benchmarks/official_counting_check.py [WORKDIR]``; prints the largest absolute
 difference and exits 1 above 1e-9. ``tests/scoring/test_official_counting_check.py`` runs it.
@@ -145,7 +149,7 @@ def ground_truth(entry: dict, direction: str):
 
 def evaluate_row(row: dict, index: dict, logs: dict, sw: float, sh: float) -> dict:
     """status, error, in-frame flag of one row, by the official rules."""
-    out = {"type": row["type"], "direction": row["direction"], "ok": False}
+    out = {"type": row["type"], "direction": row["direction"], "ok": False, "pe": bool(row.get("parse_error"))}
     x, y = row.get("predicted_x"), row.get("predicted_y")
     entry = index.get((row["house_id"], row["pair_id"]))
     if x is None or y is None or entry is None or not entry.get("placements", {}).get(row["direction"]):
@@ -163,7 +167,9 @@ def evaluate_row(row: dict, index: dict, logs: dict, sw: float, sh: float) -> di
     us = [min(1, max(0, p[0] / w)) for p in pts]
     vs = [min(1, max(0, p[1] / h)) for p in pts]
     err = math.hypot(sum(us) / len(us) - gu, sum(vs) / len(vs) - gv)
-    return {**out, "ok": True, "l2": err, "in": inside}
+    # the signed errors are predicted_x/y's (a point list's first point), not the centroid's
+    ex, ey = min(1, max(0, x / w)) - gu, min(1, max(0, y / h)) - gv
+    return {**out, "ok": True, "l2": err, "in": inside, "ex": ex, "ey": ey}
 
 
 def read_folder(folder: Path) -> tuple[list, dict]:
@@ -197,9 +203,11 @@ def run_summary(folder: Path, index: dict, logs: dict) -> dict:
             "response_rate": len(ok) / len(group),
             "mean_l2": sum(e["l2"] for e in ok) / len(ok) if ok else None,
             "pct_in_frame": 100 * sum(e["in"] for e in ok) / len(ok) if ok else None,
+            "mean_abs_x": sum(abs(e["ex"]) for e in ok) / len(ok) if ok else None,
+            "mean_abs_y": sum(abs(e["ey"]) for e in ok) / len(ok) if ok else None,
         }
 
-    out = {"overall": cell(evals), "per_condition": {}, "per_direction": {}}
+    out = {"overall": cell(evals), "per_condition": {}, "per_direction": {}, "n_parse_error": sum(e["pe"] for e in evals)}
     for key, field in (("per_condition", "type"), ("per_direction", "direction")):
         for label in {e[field] for e in evals}:
             out[key][label] = cell([e for e in evals if e[field] == label])
@@ -212,14 +220,15 @@ def mean_of_runs(cells: list) -> dict:
         return sum(vals) / len(vals) if vals else None
 
     return {"n": sum(c["n"] for c in cells), "n_total": sum(c["n_total"] for c in cells),
-            "response_rate": avg("response_rate"), "mean_l2": avg("mean_l2"), "pct_in_frame": avg("pct_in_frame")}
+            "response_rate": avg("response_rate"), "mean_l2": avg("mean_l2"), "pct_in_frame": avg("pct_in_frame"),
+            "mean_abs_x": avg("mean_abs_x"), "mean_abs_y": avg("mean_abs_y")}
 
 
 def reference(root: Path, dataset: Path) -> dict:
     """The paper's aggregation over the run folders of ``root`` (one model)."""
     index, logs = load_index(dataset)
     runs = [run_summary(d, index, logs) for d in sorted(root.iterdir()) if d.is_dir()]
-    out = {"overall": mean_of_runs([r["overall"] for r in runs])}
+    out = {"overall": mean_of_runs([r["overall"] for r in runs]), "n_parse_error": sum(r["n_parse_error"] for r in runs)}
     for key in ("per_condition", "per_direction"):
         labels = set().union(*(r[key] for r in runs))
         out[key] = {k: mean_of_runs([r[key][k] for r in runs if k in r[key]]) for k in labels}
@@ -259,6 +268,8 @@ def make_runs(root: Path, dataset: Path, seed: int = 7) -> None:
             ("train_house_09999", 0, "left", "b", "exploration_images/frame_000.png"),  # no such house
             ("train_house_00000", 0, "left", "a", "exploration_images/frame_999.png"),  # not in the log
             ("train_house_00000", 0, "left", "b", ""),  # no selected frame
+            ("train_house_00001", 7, "left", "c", None),  # the file writes "7": no such pair officially
+            ("train_house_00000", "0", "left", "a", "exploration_images/frame_000.png"),  # the file writes 0
         ]
         for house, pair, direction, t, image in odd:
             rows.append({"house_id": house, "pair_id": pair, "direction": direction, "type": t,
@@ -279,6 +290,7 @@ def make_runs(root: Path, dataset: Path, seed: int = 7) -> None:
         (folder / "notes.jsonl").write_text(json.dumps(rows[0]) + "\n")  # not *.json: ignored
         (folder / "broken.json").write_text('{"predictions": [')  # unreadable: skipped
         (folder / "a_config.json").write_text(json.dumps({"temperature": 0}))  # no predictions: none read
+    (root / "config.json").write_text(json.dumps({"temperature": 0}))  # beside the run folders: ignored
 
 
 # -- the comparison -------------------------------------------------------------------------------
@@ -295,6 +307,8 @@ def povagent_score(predictions: Path, dataset: Path) -> dict:
 def max_difference(ours: dict, ref: dict) -> float:
     """Largest absolute difference over every reference number (inf when a cell or a
     ``None`` differs)."""
+    if ours.get("n_parse_error") != ref["n_parse_error"]:
+        return math.inf
     worst = 0.0
     cells = [(ours["overall"], ref["overall"])]
     for key in ("per_condition", "per_direction"):

@@ -132,6 +132,8 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "gt_u": "The ground truth across the scored frame, as a fraction of its width (0.5 when behind the camera, as officially).",
         "gt_v": "The ground truth down the scored frame, as a fraction of its height (0.5 when behind the camera).",
         "reason": "Why the row is unanswered (e.g. `missing or unknown selected frame`), else empty.",
+        "error_x": "The official signed error `clamp(x/W) - clamp(gt_u)` of the recorded point (a point list's first), which `mean_abs_x` averages; `None` when unanswered.",
+        "error_y": "The official signed error `clamp(y/H) - clamp(gt_v)` of the recorded point, which `mean_abs_y` averages; `None` when unanswered.",
     },
 }
 

@@ -23,7 +23,8 @@ class OfficialScorer(Scorer):
         if not answer.answered:
             return UNANSWERED.as_dict()
         frame = scoring_frame(instance, answer.selected_image)
-        result = score_point(instance, frame, answer.x, answer.y).as_dict()
+        first = answer.points[0] if answer.points else None
+        result = score_point(instance, frame, answer.x, answer.y, first).as_dict()
         if answer.points and len(answer.points) > 1 and frame is not None:
             result["l2_closest"] = closest_point_l2(instance, frame, answer.points)
         return result

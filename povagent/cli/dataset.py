@@ -111,6 +111,8 @@ SCORE_JSON_KEYS = (
     "per_run",
     "pooled",
     "run_folders",
+    "n_parse_error",
+    "counting",
 )
 
 
@@ -133,6 +135,14 @@ def score_command(
     dataset: Path = typer.Option(..., "--dataset", metavar="FOLDER", help="Dataset folder in the POVBench release layout."),
     as_json: bool = typer.Option(False, "--json", help="Print the scores as JSON instead of tables."),
     strict: bool = strict_option(),
+    counting: str = typer.Option(
+        "official",
+        "--counting",
+        metavar="official|povagent",
+        help="official (default): official prediction rows are counted exactly as the official scorer counts them "
+        "(pair ids as written, log paths as written, every pair it can read); povagent: against the pairs and frames "
+        "povagent's loader accepts (see docs/official.md).",
+    ),
 ) -> None:
     """Score predictions with the official metric.
 
@@ -141,12 +151,23 @@ def score_command(
     number), the pooled mean shown beside it, labelled.
     """
     from povagent.dataset.loader import load_dataset
+    from povagent.scoring.official_release import read_release
     from povagent.scoring.predictions import score_predictions
 
+    if counting not in ("official", "povagent"):
+        typer.echo(f"error: --counting must be official or povagent (got {counting!r})", err=True)
+        raise typer.Exit(2)
     ds = load_dataset(dataset, strict=strict, check_images=False)  # scoring needs the ground truth, not the pixels
+    release = read_release(dataset) if counting == "official" else None
     for p in ds.problems:
-        typer.echo(f"warning: dataset problem, skipped: {p}", err=True)
-    summary, warnings = score_predictions(predictions, ds)
+        # under official counting the official rows still see such a pair as the official scorer does
+        how = " by povagent's loader (official rows are counted against the release as officially)" if release is not None else ""
+        typer.echo(f"warning: dataset problem, skipped{how}: {p}", err=True)
+    summary, warnings = score_predictions(predictions, ds, release)
+    # the release's own (its exploration logs are read as predictions name their houses)
+    for w in release.warnings if release is not None else []:
+        typer.echo(f"warning: {w}", err=True)
+    summary["counting"] = counting
     for w in warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
     if len(warnings) > 20:

@@ -46,6 +46,22 @@ def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] |
     return full
 
 
+def _what_ran(summary: dict[str, Any], backend: str) -> str:
+    """The backend and the model that answered, from ``summary.json``: ``litellm gpt-5.4 =
+    openai/gpt-5.4``; a baseline is its own model (``center``)."""
+    from povagent.results.rows import model_label
+
+    pipeline = summary.get("pipeline", {})
+    model = model_label(str(pipeline.get("model") or ""), pipeline.get("profile"))
+    return backend if model in ("", backend) else f"{backend} {model}"
+
+
+def _cell_title(name: str, summary: dict[str, Any], backend: str) -> str:
+    """A sweep cell's name with the model that answered (left out when the name is it)."""
+    what = _what_ran(summary, backend)
+    return f"[bold]{name}[/]" if what == name else f"[bold]{name}[/] ({what})"
+
+
 def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
     rate = cell.get(key)
     return "-" if rate is None else f"{100 * rate:.1f}%"
@@ -110,7 +126,7 @@ def run_command(
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
-    title = PathTitle(config.output, f" ({config.backend.name} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
     if result.summary.get("nan_coordinate_rows"):
         from povagent.results.official_reading import nan_warning
@@ -199,8 +215,9 @@ def sweep_command(
         if success is not None:  # a real-world set: no official error to show
             o = success["overall"]
             console.print(
-                f"[bold]{cell.name}[/]: success rate {_rate(o)}, response rate {_rate(o, 'response_rate')}, "
-                f"{res.stats.requests} requests, {res.stats.cache_hits} cache hits"
+                f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: success rate {_rate(o)}, "
+                f"response rate {_rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
+                highlight=False,
             )
             return
         o = res.summary["overall"]
@@ -211,7 +228,11 @@ def sweep_command(
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
             f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
         )
-        console.print(f"[bold]{cell.name}[/]: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits")
+        console.print(
+            f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
+            f"{res.stats.cache_hits} cache hits",
+            highlight=False,
+        )
 
     try:
         result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
@@ -304,6 +325,15 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
     return table
 
 
+def _profile_fields(entry: Any) -> dict[str, Any]:
+    """A model profile's litellm model and default parser (for ``plugins --json``); nothing
+    for other kinds, or for a plugin's profile object without those fields."""
+    if entry.kind != "profile":
+        return {}
+    fields = {"model": getattr(entry.factory, "litellm_model", None), "parser": getattr(entry.factory, "default_parser", None)}
+    return {k: v for k, v in fields.items() if isinstance(v, str)}
+
+
 @app.command("plugins")
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
     """List every plugin a YAML file can name, and where it came from.
@@ -319,7 +349,8 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     kinds = (*KINDS, "profile")
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
-            k: [{"name": e.name, "source": e.source, "description": e.description} for e in host.entries(k)] for k in kinds
+            k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in host.entries(k)]
+            for k in kinds
         }
         out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]
         typer.echo(json.dumps(out, indent=2))

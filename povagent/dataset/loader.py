@@ -138,7 +138,9 @@ def anchor_box(pair: PairEntry) -> AnchorBox:
 
 def anchor_type(pair: PairEntry) -> str:
     """The anchor's type for the surface rules: the pair's ``landmark_type``, as the official
-    scorer reads it (the anchor's ``raw_metadata.objectType`` only when that is empty)."""
+    scorer reads it, with no fallback there. The ``raw_metadata.objectType`` stand-in for an
+    empty one is povagent's own: the loader refuses a pair without ``landmark_type``, and
+    ``povagent score`` (official counting) scores such a pair with the empty type, as officially."""
     return pair.landmark_type or pair.object_landmark.object_type
 
 

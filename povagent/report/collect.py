@@ -178,14 +178,19 @@ def _name_of(section: Any) -> str:
 
 
 def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]:
-    """Model, backend, strategy and parser of a run, from its config (falling back to its rows)."""
+    """Model, backend, strategy and parser of a run, from its config (falling back to its rows).
+
+    The model is the one the rows name when they do (its profile's name, else the model
+    string: what answered); rows written before rows named it take it from the config."""
     backend = config.get("backend")
+    first = rows[0] if rows else None
     # a pipeline names either a model profile (top-level ``model:``) or a backend with options
-    model = str(config["model"]) if isinstance(config.get("model"), str) else ""
+    model = (first.profile or first.model) if first is not None else ""
+    if not model:
+        model = str(config["model"]) if isinstance(config.get("model"), str) else ""
     if not model and isinstance(backend, dict):
         opts = backend.get("options") or {}
         model = str(opts.get("model") or backend.get("model") or "") if isinstance(opts, dict) else ""
-    first = rows[0] if rows else None
     axes = {
         "backend": _name_of(backend) or (first.backend if first else ""),
         "model": model,

@@ -70,6 +70,12 @@ class ResultRow(BaseModel):
     run: int = 0
     sentence: str = ""
     backend: str = ""
+    #: The model that answered: the litellm model string (or router group) a ``litellm`` row
+    #: called, the backend's own name for a baseline (``center``); ``""`` in rows written
+    #: before rows named it (read from the run's config instead).
+    model: str = ""
+    #: The model profile the model was named by (``gpt-5.4``), or ``None``.
+    profile: str | None = None
     strategy: str = ""
     parser: str = ""
     config_hash: str = ""
@@ -95,6 +101,14 @@ class ResultRow(BaseModel):
     def raw_response(self) -> str | None:
         """The final raw answer (the last exchange's)."""
         return self.exchanges[-1].raw if self.exchanges else None
+
+
+def model_label(model: str, profile: str | None = None) -> str:
+    """How a console or summary names the model that answered: ``gpt-5.4 = openai/gpt-5.4``
+    for a profile, else the model string (``openai/gpt-5.4``, ``center``)."""
+    if profile and profile != model:
+        return f"{profile} = {model}" if model else profile
+    return model
 
 
 def utc_now() -> str:

@@ -130,11 +130,16 @@ def rescore_row(
 
 def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict[str, Any]:
     """The official breakdown of rescored rows (from ``scores[scorer_name]``), with parse counts."""
+    from povagent.scoring.evaluations import official_parse_error
+
     scored = []
     for row in rows:
         s = row.scores.get(scorer_name, {})
         scored.append(
-            ScoredRow(row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"), row.run)
+            ScoredRow(
+                row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"), row.run,
+                s.get("error_x"), s.get("error_y"), official_parse_error(row) is not None,
+            )
         )
     summary = breakdown(scored)
     readings = [r.official_reading.parser for r in rows if r.official_reading is not None]

@@ -49,7 +49,7 @@ from povagent.exchange.transport import open_image_transport
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
-from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
+from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
@@ -185,6 +185,19 @@ def backend_label(backend: Backend) -> str:
     model = ident.get("model") or ident.get("backend") or type(backend).__name__
     base = ident.get("api_base")
     return f"model {model} at {base}" if base else f"model {model}"
+
+
+def answering_model(backend: Backend) -> tuple[str, str | None]:
+    """``(model, profile)`` of a backend, as rows and ``summary.json`` name it: the model string
+    its identity names (litellm: the string sent, e.g. ``openai/gpt-5.4``), else the backend's
+    own name (``center``, ``replay``); the profile's name when it was named by one."""
+    try:
+        ident = dict(backend.identity())
+    except Exception:  # identity is for the cache; naming the model must not fail on it
+        ident = {}
+    model = ident.get("model") or ident.get("backend") or type(backend).__name__
+    profile = getattr(getattr(backend, "profile", None), "name", None)
+    return str(model), profile if isinstance(profile, str) else None
 
 
 class PipelineRun:
@@ -368,6 +381,8 @@ class PipelineRun:
             run=run,
             sentence=instance.sentence,
             backend=self._names[0],
+            model=self._model[0],
+            profile=self._model[1],
             strategy=self._names[1],
             parser=self._names[2],
             config_hash=self.config_hash,
@@ -507,6 +522,7 @@ class PipelineRun:
 
         backend = self.components.backend
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
+        self._model = answering_model(backend)
         self._observed = bool(self.host.hooks.active)
         cache_path = config.cache_path()
         if self._cache is None and cache_path is not None and getattr(backend, "cacheable", True):
@@ -525,7 +541,7 @@ class PipelineRun:
         self._report_dataset_problems()
 
         self._log.info("run_start", n_total=len(wanted), n_pending=len(pending), config_hash=self.config_hash,
-                       backend=self._names[0], strategy=self._names[1], parser=self._names[2],
+                       backend=self._names[0], model=model_label(*self._model), strategy=self._names[1], parser=self._names[2],
                        retried_failed_keys=len(retried))
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
@@ -607,6 +623,8 @@ class PipelineRun:
         summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         summary["pipeline"] = {
             "backend": self._names[0],
+            "model": self._model[0],
+            "profile": self._model[1],
             "strategy": self._names[1],
             "parser": self._names[2],
             "scorers": list(self.components.scorers),

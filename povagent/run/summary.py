@@ -21,6 +21,8 @@ from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
     """The fields a summary needs, from a row's official score (non-answers count as such)."""
+    from povagent.scoring.evaluations import official_parse_error
+
     score = row.scores.get(scorer) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     return ScoredRow(
@@ -31,6 +33,9 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
         gt_in_frame=score.get("gt_in_frame") if answered else None,
         l2_strict=score.get("l2_strict") if answered else None,
         run=row.run,
+        error_x=score.get("error_x") if answered else None,
+        error_y=score.get("error_y") if answered else None,
+        parse_error=official_parse_error(row) is not None,
     )
 
 

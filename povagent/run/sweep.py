@@ -41,7 +41,7 @@ from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.run.pending import ensure_dataset, pending_keys
 from povagent.run.progress import make_progress
-from povagent.run.runner import PipelineRun, RunResult, create_components
+from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
 
 SWEEP_INDEX = "sweep.json"
 
@@ -204,15 +204,21 @@ def _one_per_condition(instances: list[Any]) -> list[Any]:
     return list(seen.values())
 
 
-def _write_index(output: Path, sweep_file: str, cells: list[Cell], status: dict[str, dict[str, Any]]) -> None:
+def _write_index(
+    output: Path, sweep_file: str, cells: list[Cell], status: dict[str, dict[str, Any]], models: dict[str, tuple[str, str | None]]
+) -> None:
+    """Write ``sweep.json``: every cell with its axes, folder, model (and profile) and status."""
     index = {
         "sweep": sweep_file,
         "output": str(output),
         "cells": [
-            {"name": c.name, "axes": c.axes, "run_dir": str(c.config.output), "config_hash": c.config.config_hash(), **status.get(c.name, {"status": "pending"})}
+            {
+                "name": c.name, "axes": c.axes, "run_dir": str(c.config.output), "config_hash": c.config.config_hash(),
+                "model": models[c.name][0], "profile": models[c.name][1], **status.get(c.name, {"status": "pending"}),
+            }
             for c in cells
         ],
-    }
+    }  # fmt: skip
     output.mkdir(parents=True, exist_ok=True)
     tmp = output / (SWEEP_INDEX + ".tmp")
     tmp.write_text(json.dumps(index, indent=2, default=str) + "\n", encoding="utf-8")
@@ -232,15 +238,17 @@ def run_sweep(
     ``strict``: stop at a bad house or pair of a dataset (default: report it and go on).
     """
     sweep, cells = expand_sweep(path, strict=strict)
+    models: dict[str, tuple[str, str | None]] = {}
     for cell in cells:
         # Every cell's plugin options (and image transport) are checked before the first
         # request of the first cell.
         backend = create_components(cell.config, get_plugin_host(cell.config.plugins)).backend
         backend.check_image_transport(cell.config.images.transport)
+        models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
-    _write_index(output, str(path), cells, status)
+    _write_index(output, str(path), cells, status, models)
 
     async def run_cells() -> None:
         first = cells[0].config
@@ -251,7 +259,7 @@ def run_sweep(
         try:
             for cell in cells:
                 status[cell.name] = {"status": "running"}
-                _write_index(output, str(path), cells, status)
+                _write_index(output, str(path), cells, status, models)
                 try:
                     run = PipelineRun(
                         cell.config,
@@ -268,13 +276,14 @@ def run_sweep(
                 result.results[cell.name] = res
                 status[cell.name] = {
                     "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
+
                     "rows": res.summary["rows"],
                     "overall": res.summary["overall"],
                 }
                 if on_cell_done is not None:
                     on_cell_done(cell, res)
         finally:
-            _write_index(output, str(path), cells, status)
+            _write_index(output, str(path), cells, status, models)
             if cache is not None:
                 cache.close()
 

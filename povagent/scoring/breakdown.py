@@ -36,7 +36,7 @@ PER_RUN_MEAN = "mean of per-run means"
 POOLED = "pooled"
 
 #: The cell fields that are per-run numbers, averaged over runs in a multi-run breakdown.
-AVERAGED_FIELDS = ("response_rate", "mean_l2", "std_l2", "pct_in_frame", "mean_l2_strict")
+AVERAGED_FIELDS = ("response_rate", "mean_l2", "std_l2", "pct_in_frame", "mean_l2_strict", "mean_abs_x", "mean_abs_y")
 #: The slice groups of a breakdown (each a mapping of label -> cell).
 SLICE_GROUPS = ("per_condition", "per_direction", "per_condition_direction")
 
@@ -56,12 +56,19 @@ class ScoredRow:
     gt_in_frame: bool | None
     l2_strict: float | None = None
     run: int = 0
+    #: The official signed errors of an answered row (``None``: not recorded, e.g. older rows).
+    error_x: float | None = None
+    error_y: float | None = None
+    #: The row carries a ``parse_error`` as the official runner would have written one.
+    parse_error: bool = False
 
 
 def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     """One cell of one run (or of pooled rows): ``n`` (answered), ``n_total``,
     ``response_rate``, ``mean_l2``, ``std_l2`` (population std), ``pct_in_frame`` (percent of
-    answered), ``mean_l2_strict``.
+    answered), ``mean_l2_strict``, the official ``mean_abs_x``/``mean_abs_y`` (mean absolute
+    signed error over answered rows that record one) and ``n_parse_error`` (rows with a
+    ``parse_error``, answered or not, as the official summary counts them).
 
     A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
     the official mean is.
@@ -77,6 +84,8 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         std = math.sqrt(sum((e - mean) ** 2 for e in errs) / n)
     in_frame = sum(1 for r in answered if r.gt_in_frame)
     strict = [r.l2_strict for r in answered if r.l2_strict is not None]
+    abs_x = [abs(r.error_x) for r in answered if r.error_x is not None]
+    abs_y = [abs(r.error_y) for r in answered if r.error_y is not None]
     return {
         "n": n,
         "n_total": total,
@@ -85,6 +94,9 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         "std_l2": std,
         "pct_in_frame": 100.0 * in_frame / n if n else None,
         "mean_l2_strict": sum(strict) / len(strict) if strict else None,
+        "mean_abs_x": sum(abs_x) / len(abs_x) if abs_x else None,
+        "mean_abs_y": sum(abs_y) / len(abs_y) if abs_y else None,
+        "n_parse_error": sum(1 for r in rows if r.parse_error),
     }
 
 
@@ -153,6 +165,7 @@ def mean_over_runs(cells: list[dict[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {
         "n": sum(c["n"] for c in cells),
         "n_total": sum(c["n_total"] for c in cells),
+        "n_parse_error": sum(c.get("n_parse_error", 0) for c in cells),
     }
     for key in AVERAGED_FIELDS:
         out[key] = _mean([c[key] for c in cells if c.get(key) is not None])
@@ -168,6 +181,8 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     mean over runs of the run's own cell (:func:`mean_over_runs`, the paper's number), and the
     breakdown adds ``pooled`` (every row in one mean, labelled ``aggregation: "pooled"``) and
     ``per_run`` (each run's overall cell). ``aggregation`` and ``runs`` say which it is.
+    ``n_parse_error`` (top level, as in the official summary) counts rows with a parse error,
+    over every run.
     """
     rows = list(rows)
     by_run: dict[int, list[ScoredRow]] = defaultdict(list)
@@ -178,6 +193,7 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         single = pooled_breakdown(rows)
         single["aggregation"] = PER_RUN_MEAN if runs else POOLED
         single["runs"] = runs
+        single["n_parse_error"] = single["overall"]["n_parse_error"]
         return single
     per_run = {run: pooled_breakdown(by_run[run]) for run in runs}
     pooled = pooled_breakdown(rows)
@@ -192,4 +208,5 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     out["runs"] = runs
     out["pooled"] = {**pooled, "aggregation": POOLED}
     out["per_run"] = {str(run): b["overall"] for run, b in per_run.items()}
+    out["n_parse_error"] = out["overall"]["n_parse_error"]
     return out

@@ -9,9 +9,13 @@ the L2). :func:`official_evaluation` builds that record from one of our rows, so
 (:mod:`povagent.report.export`) carries the numbers the official tools would.
 
 The prediction is taken as the official runner would have recorded the same answer:
-``parse_error`` is ``None`` when a point was read, ``"failed to parse JSON"`` when none was,
-the error message when the request failed; an A/B answer with a point but no usable frame
-keeps its point and has no selected image. Pure: rows and a loaded dataset in, a dict out.
+``parse_error`` is ``None`` when a point was read, ``"failed to parse JSON"`` when none was
+(``"failed to parse points"`` for a RoboPoint answer, read by a ``robopoint`` parser), the
+error message when the request failed; an A/B answer with a point but no usable frame keeps its
+point and has no selected image. A multi-point answer (RoboPoint) records its *first* point as
+``predicted_x``/``predicted_y``, as the runner did: the normalized prediction and ``error_x``/
+``error_y`` are that point's, and only ``error_l2`` is the centroid's. Pure: rows and a loaded
+dataset in, a dict out.
 """
 
 from __future__ import annotations
@@ -24,6 +28,10 @@ from povagent.scoring.official import clamp_unit, points_l2, project_ground_trut
 
 #: What the official runner records as ``parse_error`` when an answer has no readable point.
 OFFICIAL_PARSE_FAILURE = "failed to parse JSON"
+#: ... and when a RoboPoint answer has no ``(x, y)`` tuple.
+OFFICIAL_POINTS_FAILURE = "failed to parse points"
+#: Parsers of RoboPoint's point lists (their failures are recorded as the runner's RoboPoint path did).
+POINT_LIST_PARSERS = frozenset({"robopoint", "robopoint-official"})
 
 
 def raw_response(row: ResultRow) -> str:
@@ -32,6 +40,20 @@ def raw_response(row: ResultRow) -> str:
         if exchange.raw is not None:
             return exchange.raw
     return ""
+
+
+def official_parse_error(row: ResultRow) -> str | None:
+    """The ``parse_error`` the official runner would have recorded for this row's answer:
+    ``None`` when it read a point (a point whose frame names no image included), the request's
+    error when it failed, else its parse failure text."""
+    if row.status == RowStatus.INFRA_ERROR:
+        return row.error_message or row.error_type or "request failed"
+    if row.status == RowStatus.ANSWERED and row.prediction.x is not None and row.prediction.y is not None:
+        return None
+    parse = row.parse
+    if str(row.condition) != "c" and parse is not None and parse.x is not None and parse.y is not None:
+        return None
+    return OFFICIAL_POINTS_FAILURE if row.parser in POINT_LIST_PARSERS else OFFICIAL_PARSE_FAILURE
 
 
 def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, float | None, str | None, str | None, list[tuple[float, float]] | None]:
@@ -44,15 +66,16 @@ def _official_prediction(row: ResultRow, instance: Any) -> tuple[float | None, f
             frame = instance.selected_frame(p.selected_image)
             image = frame.image_path if frame is not None else None
         points = [(float(a), float(b)) for a, b in row.parse.points] if row.parse is not None and row.parse.points else None
-        return float(p.x), float(p.y), None, image if uses_frames else None, points
-    if row.status == RowStatus.INFRA_ERROR:
-        return None, None, row.error_message or row.error_type or "request failed", None, None
+        # the runner recorded a point list's first point as the prediction (the centroid only
+        # enters error_l2)
+        x, y = points[0] if points else (float(p.x), float(p.y))
+        return x, y, None, image if uses_frames else None, points
     parse = row.parse
-    if uses_frames and parse is not None and parse.x is not None and parse.y is not None:
+    if row.status != RowStatus.INFRA_ERROR and uses_frames and parse is not None and parse.x is not None and parse.y is not None:
         # a point was read, but its frame index names no frame: officially a parsed answer
         # whose predicted_image is missing
         return float(parse.x), float(parse.y), None, None, None
-    return None, None, OFFICIAL_PARSE_FAILURE, None, None
+    return None, None, official_parse_error(row), None, None
 
 
 def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:

@@ -68,6 +68,12 @@ def points_l2(points: list[tuple[float, float]], width: float, height: float, gt
     return math.hypot(cu - gx, cv - gy), min(math.hypot(u - gx, v - gy) for u, v in norm)
 
 
+def signed_errors(x: float, y: float, width: float, height: float, gt_u: float, gt_v: float) -> tuple[float, float]:
+    """``(error_x, error_y)`` as the official scorer records them: the clamped normalized
+    prediction minus the clamped GT."""
+    return clamp_unit(x / width) - clamp_unit(gt_u), clamp_unit(y / height) - clamp_unit(gt_v)
+
+
 def strict_l2(x: float, y: float, width: int, height: int, gt: GroundTruthInFrame) -> float:
     """The strict variant: a GT behind the camera or outside the frame counts as a miss (sqrt 2)."""
     if not gt.in_frame:
@@ -87,6 +93,11 @@ class OfficialScore:
     gt_u: float | None
     gt_v: float | None
     reason: str = ""
+    #: The signed errors ``clamp(x/W) - clamp(gt_u)`` and ``clamp(y/H) - clamp(gt_v)`` of the
+    #: recorded point (a point list's first point, as the official runner recorded it): what
+    #: the official ``mean_abs_x``/``mean_abs_y`` average.
+    error_x: float | None = None
+    error_y: float | None = None
 
     def as_dict(self) -> dict[str, object]:
         """JSON-able form, as stored in a row's ``scores``."""
@@ -99,6 +110,8 @@ class OfficialScore:
             "gt_u": self.gt_u,
             "gt_v": self.gt_v,
             "reason": self.reason,
+            "error_x": self.error_x,
+            "error_y": self.error_y,
         }
 
 
@@ -118,11 +131,15 @@ def scoring_frame(instance: Instance, selected_image: int | None = None, image_p
     return instance.selected_frame(selected_image)
 
 
-def score_point(instance: Instance, frame: Frame | None, x: float | None, y: float | None) -> OfficialScore:
+def score_point(
+    instance: Instance, frame: Frame | None, x: float | None, y: float | None, recorded: tuple[float, float] | None = None
+) -> OfficialScore:
     """Score one predicted pixel ``(x, y)`` in ``frame`` against the instance's GT.
 
     ``None`` is unanswered; an infinite coordinate is clamped to the edge and a NaN one gives a
-    NaN error, as officially.
+    NaN error, as officially. ``recorded`` is the point the official runner would have written
+    as ``predicted_x``/``predicted_y`` when it is not ``(x, y)`` (a point list's first point):
+    the signed errors are that point's.
     """
     if x is None or y is None:
         return UNANSWERED
@@ -131,7 +148,8 @@ def score_point(instance: Instance, frame: Frame | None, x: float | None, y: flo
     cam = frame.camera
     gt = project_ground_truth(instance.target, cam)
     l2 = normalized_l2(x, y, cam.width, cam.height, gt.u, gt.v)
-    return OfficialScore(True, l2, strict_l2(x, y, cam.width, cam.height, gt), gt.in_frame, gt.behind, gt.u, gt.v)
+    ex, ey = signed_errors(*(recorded or (x, y)), cam.width, cam.height, gt.u, gt.v)
+    return OfficialScore(True, l2, strict_l2(x, y, cam.width, cam.height, gt), gt.in_frame, gt.behind, gt.u, gt.v, "", ex, ey)
 
 
 def closest_point_l2(instance: Instance, frame: Frame, points: list[tuple[float, float]]) -> float | None:

@@ -37,6 +37,7 @@ from typing import Any, Iterable, Mapping
 from povagent.dataset.loader import Dataset, ground_truth_point, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
+from povagent.geometry.camera import Camera
 from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
@@ -48,7 +49,9 @@ from povagent.scoring.official import (
     project_ground_truth,
     score_point,
     scoring_frame,
+    signed_errors,
 )
+from povagent.scoring.official_release import CameraRecord, NotScorable, OfficialRelease
 
 #: The fields the official scorer reads from every row (a row without one of them stops it).
 REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
@@ -59,6 +62,7 @@ ENTRY_NOT_FOUND = "entry_not_found"
 PLACEMENT_NOT_FOUND = "placement_not_found"
 NO_SELECTED_IMAGE = "no_selected_image"
 IMAGE_NOT_IN_LOG = "image_not_in_log"
+NO_GT_POSITION = "no_gt_position"
 #: Not an official status: a coordinate the official scorer cannot divide (it would stop).
 NOT_A_NUMBER = "coordinate_not_a_number"
 
@@ -82,6 +86,8 @@ class ScoredPrediction:
     run: int
     score: OfficialScore
     l2_closest: float | None = None
+    #: The row carries a (truthy) ``parse_error``, as the official summary counts them.
+    parse_error: bool = False
 
 
 # -- official rows ----------------------------------------------------------------------------
@@ -200,7 +206,7 @@ def score_official_row(
         notes.odd_direction[d_label].append(ref or iid)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
-        return ScoredPrediction(iid, c_label, d_label, run, score, closest)
+        return ScoredPrediction(iid, c_label, d_label, run, score, closest, bool(row.get("parse_error")))
 
     house = dataset.houses.get(house_id) if isinstance(house_id, str) else None
     pair_key = _pair_key(pair_id)
@@ -255,14 +261,98 @@ def score_official_row(
         except (TypeError, ValueError, IndexError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
     strict = l2 if gt.in_frame else MAX_L2
-    return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok"), closest)
+    # the signed errors are the recorded point's (a point list's first), as officially
+    ex, ey = signed_errors(x, y, camera.width, camera.height, gt.u, gt.v)
+    return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
+
+
+def score_release_row(
+    row: Mapping[str, Any], release: OfficialRelease, screen: tuple[float, float] = (512.0, 512.0), run: int = 0, ref: str = "", notes: _Notes | None = None
+) -> ScoredPrediction:
+    """Score one official row exactly as ``eval_results.py`` counts it, against the release as
+    it indexes it (:mod:`povagent.scoring.official_release`): the pair id as written, the
+    selected frame by its ``image_path`` as written, every field's official default.
+
+    A value the official scorer would stop on is counted unanswered and named in ``notes``.
+    """
+    notes = notes if notes is not None else _Notes.empty()
+    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
+    c_label, d_label = group_label(cond), group_label(direction)
+    iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
+    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+        notes.odd_type[c_label].append(ref or iid)
+    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+        notes.odd_direction[d_label].append(ref or iid)
+
+    def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
+        return ScoredPrediction(iid, c_label, d_label, run, score, closest, bool(row.get("parse_error")))
+
+    x, y = row.get("predicted_x"), row.get("predicted_y")
+    entry = release.entry(house_id, pair_id)
+    placements = entry.get("placements", {}) if entry is not None else None
+    placement = placements.get(direction) if isinstance(placements, Mapping) and _hashable(direction) else None
+    if not placement:
+        notes.unknown.append(f"{ref} ({iid})" if ref else iid)
+    if x is None or y is None:
+        return result(_unanswered(NO_PREDICTION))
+    if entry is None:
+        return result(_unanswered(ENTRY_NOT_FOUND))
+    if not placement:
+        return result(_unanswered(PLACEMENT_NOT_FOUND))
+    try:
+        raw_position = placement.get("position") if isinstance(placement, Mapping) else None
+        if not raw_position:
+            return result(_unanswered(NO_GT_POSITION))
+        target = release.target(entry, direction, raw_position)
+        sw, sh = screen
+        if cond == "c":
+            cam = CameraRecord.read(entry.get("camera", {}), "camera")
+            width, height = (cam.width if cam.width is not None else sw), (cam.height if cam.height is not None else sh)
+        else:
+            image = row.get("predicted_image")
+            if not image:
+                return result(_unanswered(NO_SELECTED_IMAGE))
+            record = release.log(house_id).get(image) if isinstance(house_id, str) and _hashable(image) else None
+            if record is None:
+                return result(_unanswered(IMAGE_NOT_IN_LOG))
+            # the selected frame is projected at the metadata's size, as officially
+            cam, (width, height) = CameraRecord.read(record.get("camera", {}), "camera"), (sw, sh)
+        camera = Camera(cam.position, cam.yaw, cam.horizon, cam.fov, width, height)  # type: ignore[arg-type]  # a size read as written divides as officially
+        gt = project_ground_truth(target, camera)
+    except NotScorable as exc:
+        notes.not_number.append(f"{ref or iid} ({exc})")
+        return result(_unanswered(NOT_A_NUMBER))
+    if not (_is_number(x) and _is_number(y)):
+        notes.not_number.append(ref or iid)
+        return result(_unanswered(NOT_A_NUMBER))
+    x, y = float(x), float(y)
+    if math.isnan(x) or math.isnan(y):
+        notes.nan.append(ref or iid)
+    elif math.isinf(x) or math.isinf(y):
+        notes.infinite.append(ref or iid)
+    l2 = normalized_l2(x, y, width, height, gt.u, gt.v)
+    closest = None
+    points = row.get("predicted_points")
+    if points:
+        try:
+            l2, closest = points_l2([(p[0], p[1]) for p in points], width, height, gt.u, gt.v)
+        except (TypeError, ValueError, IndexError, KeyError, ZeroDivisionError):
+            notes.not_number.append(f"{ref or iid} (predicted_points)")
+    ex, ey = signed_errors(x, y, width, height, gt.u, gt.v)
+    strict = l2 if gt.in_frame else MAX_L2
+    return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
 
 def score_official_rows(
-    rows: Iterable[Any], dataset: Dataset, screen: tuple[float, float] = (512.0, 512.0), run: int = 0
+    rows: Iterable[Any], dataset: Dataset | OfficialRelease, screen: tuple[float, float] = (512.0, 512.0), run: int = 0
 ) -> tuple[list[ScoredPrediction], list[str]]:
     """Score official rows (mappings as written, or :class:`RawPrediction`); returns the scored
-    rows (every row that has the official fields, answered or not) and the warnings."""
+    rows (every row that has the official fields, answered or not) and the warnings.
+
+    Against an :class:`OfficialRelease` each row is counted exactly as officially
+    (:func:`score_release_row`); against a loaded :class:`Dataset`, povagent's own counting
+    (:func:`score_official_row`: only the pairs and frames the loader accepts, ids compared as
+    text, ``./`` dropped from log paths)."""
     notes = _Notes.empty()
     scored: list[ScoredPrediction] = []
     for i, item in enumerate(rows):
@@ -273,11 +363,14 @@ def score_official_rows(
         if not (_hashable(data["type"]) and _hashable(data["direction"])):
             notes.skipped.append(ref)
             continue
-        scored.append(score_official_row(data, dataset, screen, run, ref, notes))
+        if isinstance(dataset, OfficialRelease):
+            scored.append(score_release_row(data, dataset, screen, run, ref, notes))
+        else:
+            scored.append(score_official_row(data, dataset, screen, run, ref, notes))
     return scored, _warnings_of(notes)
 
 
-def score_official_run(run: OfficialRun, dataset: Dataset, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
+def score_official_run(run: OfficialRun, dataset: Dataset | OfficialRelease, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
     """Score what :func:`read_official_run` read, at its metadata's screen size.
 
     Files that declare distinct ``metadata.run`` values (``povagent export`` writes one file
@@ -310,6 +403,7 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
     reads its answer (a row parsed leniently by its recorded official reading); a row whose
     instance is not in the dataset counts as unanswered (as officially), with a warning."""
     from povagent.results.official_reading import official_rows
+    from povagent.scoring.evaluations import official_parse_error
 
     scored: list[ScoredPrediction] = []
     unknown: list[str] = []
@@ -322,12 +416,14 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
             continue
         p = row.prediction
         answered = row.status == "answered" and p.x is not None and p.y is not None
+        parse_error = official_parse_error(row) is not None
         if not answered:
-            scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED))
+            scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED, None, parse_error))
             continue
         frame = scoring_frame(inst, p.selected_image, p.image_path)
-        score = score_point(inst, frame, float(p.x), float(p.y))
-        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score))
+        first = row.parse.points[0] if row.parse is not None and row.parse.points else None
+        score = score_point(inst, frame, float(p.x), float(p.y), first)
+        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, None, parse_error))
     if unknown:
         warnings.append(
             f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
@@ -343,7 +439,10 @@ def summary_of(scored: Iterable[ScoredPrediction]) -> dict[str, Any]:
     """The breakdown (overall, per condition, per direction, condition x direction); several
     runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``."""
     return breakdown(
-        ScoredRow(s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run)
+        ScoredRow(
+            s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run,
+            s.score.error_x, s.score.error_y, s.parse_error,
+        )
         for s in scored
     )
 
@@ -408,27 +507,31 @@ def _holds_result_rows(path: Path) -> bool:
     return True
 
 
-def _score_one(path: Path, dataset: Dataset, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
+def _score_one(path: Path, dataset: Dataset, release: OfficialRelease | None, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
     kind, loaded = load_predictions(path)
     if kind == "results":
         scored, warnings = score_result_rows(loaded, dataset)
         return scored, warnings
-    return score_official_run(loaded, dataset, run_index)
+    return score_official_run(loaded, release if release is not None else dataset, run_index)
 
 
-def score_predictions(path: str | Path, dataset: Dataset) -> tuple[dict[str, Any], list[str]]:
+def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelease | None = None) -> tuple[dict[str, Any], list[str]]:
     """Score a predictions path against ``dataset``: the summary and any warnings.
 
     ``path`` is a predictions file, an official run folder, our run folder or results file, or
     a prediction root holding one folder per run (``<model>_<run>``, as ``run_all_eval.py``
     reads it). Several runs give the mean of per-run means (the paper's number) with the pooled
     numbers under ``pooled``; a root with several models gives ``{"models": {model: summary}}``.
+
+    With ``release`` (:func:`povagent.scoring.official_release.read_release` of the same
+    folder) official rows are counted exactly as the official scorer counts them; without it,
+    against the loaded ``dataset`` (povagent's own counting). Our own rows are scored against
+    ``dataset`` either way.
     """
     p = Path(path)
-    own_files = p.is_dir() and not (p / "results.jsonl").exists() and any(f.name not in NOT_PREDICTIONS for f in p.glob("*.json"))
-    folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() and not own_files else []
+    folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() else []
     if not folders:
-        scored, warnings = _score_one(p, dataset)
+        scored, warnings = _score_one(p, dataset, release)
         if not scored:
             raise PredictionsError(f"{path}: no prediction rows to score")
         return summary_of(scored), warnings
@@ -436,12 +539,17 @@ def score_predictions(path: str | Path, dataset: Dataset) -> tuple[dict[str, Any
     for folder in folders:
         by_model[run_folder_label(folder.name)[0]].append(folder)
     warnings = []
+    # a root holding run folders is read as run_all_eval.py reads it: folders only, so a file
+    # beside them (a config.json, a summary) is no run and is left alone
+    stray = sorted(f.name for f in p.iterdir() if f.is_file() and f.suffix == ".json")
+    if stray:
+        warnings.append(f"{len(stray)} file(s) beside the run folders ignored, as officially (a root holds one folder per run): {_listing(stray)}")
     models: dict[str, dict[str, Any]] = {}
     for model, runs in by_model.items():
         scored = []
         run_ids: dict[tuple[int, int], int] = {}
         for k, folder in enumerate(runs):
-            s, w = _score_one(folder, dataset)
+            s, w = _score_one(folder, dataset, release)
             # an official run folder is one run; our run folder may hold several (its rows' run)
             scored += [replace(x, run=run_ids.setdefault((k, x.run), len(run_ids))) for x in s]
             warnings += [f"{folder.name}: {m}" for m in w]

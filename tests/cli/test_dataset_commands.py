@@ -109,7 +109,10 @@ def test_score_warns_about_the_houses_it_skipped(mini_root, tmp_path):
     path.write_text(json.dumps(official_rows()))
     result = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--json"])
     assert result.exit_code == 0, result.output
-    assert "warning: dataset problem, skipped: artifacts/train_house_00002/" in result.stderr
+    assert "warning: dataset problem, skipped by povagent's loader (official rows are counted against the release" in result.stderr
+    assert "as officially): artifacts/train_house_00002/" in result.stderr
+    own = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--json", "--counting", "povagent"])
+    assert "warning: dataset problem, skipped: artifacts/train_house_00002/" in own.stderr
     strict = runner.invoke(app, ["score", "--predictions", str(path), "--dataset", str(mini_root), "--strict"])
     assert strict.exit_code != 0 and "train_house_00002" in str(strict.exception)
 

@@ -56,7 +56,7 @@ def test_a_sweep_table_shows_the_official_parse_of_lenient_cells(tmp_path, mini_
     rows = {line.split("│")[1].strip(): line for line in result.stdout.splitlines() if line.startswith("│")}
     assert rows["json"].count("100.0%") == 2  # repaired and official, both shown
     assert rows["official"].split("│")[5].strip() == "="  # reads officially itself
-    assert "json: mean L2" in result.stdout and "official parse: mean L2" in result.stdout
+    assert "json (center): mean L2" in result.stdout and "official parse: mean L2" in result.stdout
 
 
 def test_run_warns_about_rows_with_a_nan_coordinate(tmp_path, mini_root):

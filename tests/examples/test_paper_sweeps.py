@@ -25,7 +25,7 @@ def test_main_table_has_a_cell_per_model_condition_and_run():
     _, cells = expand_sweep(SWEEPS / "paper_main_table.yaml")
     assert len(cells) == 7 * 3 * 3
     assert {c.axes["conditions"] for c in cells} == {"a", "b", "c"}
-    assert {c.config.parser.name for c in cells} == {"json"}
+    assert {c.config.parser.name for c in cells} == {"official"}
 
 
 def test_main_table_names_the_papers_models():
@@ -46,7 +46,7 @@ def test_given_only_rows_run_condition_c_with_each_models_parser():
     assert len(cells) == 2 * 3
     assert all(c.config.instances.conditions == ["c"] for c in cells)
     pairs = {(c.config.backend.options["model"], c.config.parser.name) for c in cells}
-    assert pairs == {("robopoint", "robopoint"), ("llama-3.2-vision", "json")}
+    assert pairs == {("robopoint", "robopoint-official"), ("llama-3.2-vision", "official")}
 
 
 def test_ablation_has_the_five_interventions_on_inferred_and_stated():

@@ -43,7 +43,7 @@ def make_row(instance, run: int = 0, **fields) -> ResultRow:
     base = dict(
         key=row_key(instance.id, run), instance_id=instance.id, house_id=instance.house_id, pair_id=instance.pair_id,
         direction=str(instance.direction), condition=str(instance.condition), run=run, sentence=instance.sentence,
-        backend="mock", strategy="basic", parser="json",
+        backend="mock", strategy="basic", parser=fields.pop("parser", "json"),
     )  # fmt: skip
     return ResultRow(**(base | fields))
 
@@ -249,3 +249,31 @@ def test_the_command_writes_the_long_csv(run_dir, tmp_path):
     result = CliRunner().invoke(app, ["export", str(run_dir), "--format", "long-csv", "--out", str(out)])
     assert result.exit_code == 0, result.output
     assert f"wrote {out}" in result.output and len(read_csv(out)) == 36
+
+
+def test_a_point_list_records_its_first_point_as_the_prediction(write_rows, mini_dataset):
+    """The official runner wrote RoboPoint's first point as predicted_x/y (and so the normalized
+    prediction and error_x/y are that point's); only error_l2 is the centroid's."""
+    inst = mini_dataset.instance(C_ID)
+    gt = project_ground_truth(inst.target, inst.frames[0].camera)
+    gx, gy = min(1.0, max(0.0, gt.u)), min(1.0, max(0.0, gt.v))
+    points = [(100.0, 200.0), (300.0, 400.0)]
+    row = answered(inst, 200.0, 300.0, points=points)  # the parse's prediction: the centroid
+    line = export_one(write_rows([row]))
+    assert (line["predicted_x"], line["predicted_y"]) == ("100.0", "200.0")
+    assert (line["predicted_x_norm"], line["predicted_y_norm"]) == (repr(100.0 / 512), repr(200.0 / 512))
+    assert (line["error_x"], line["error_y"]) == (repr(100.0 / 512 - gx), repr(200.0 / 512 - gy))
+    centroid = math.hypot((100.0 + 300.0) / 2 / 512 - gx, (200.0 + 400.0) / 2 / 512 - gy)
+    assert line["error_l2"] == line["error_l2_mean"] == repr(centroid)
+
+
+def test_an_unreadable_robopoint_answer_records_the_runners_points_failure(write_rows, mini_dataset):
+    inst = mini_dataset.instance(C_ID)
+    parse = ParsedAnswer(status=ParseStatus.UNPARSEABLE, reason="no tuple")
+    exchanges = [ExchangeRecord(request_hash="r", raw="somewhere left")]
+    rows = [
+        make_row(inst, status=RowStatus.PARSE_ERROR, parse=parse, exchanges=exchanges, parser=name, run=k)
+        for k, name in enumerate(["robopoint-official", "robopoint", "official"])
+    ]
+    lines = read_csv(export_long_csv(write_rows(rows)))
+    assert [line["parse_error"] for line in lines] == ["failed to parse points", "failed to parse points", "failed to parse JSON"]
