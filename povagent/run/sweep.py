@@ -9,11 +9,18 @@ each cell, so an interrupted sweep resumes cell by cell and key by key.
 
 A dry run prints the cells, the requests still to make (finished keys subtracted) and a rough
 token estimate, without calling any model. This module must not render tables.
+
+On a cluster (``cluster:`` in the YAML, or ``cluster=``) each cell is one task: :func:`run_cell`,
+a plain function of one cell that resumes from the cell's journal under its folder lock, so it
+can be run twice, or again after its worker died, and give the same rows. Only
+:mod:`povagent.cluster` knows the engine; this module hands it those functions, watches the
+cells' journals for progress (:class:`JournalWatch`) and writes ``sweep.json`` itself.
 """
 
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import json
 import math
@@ -35,15 +42,18 @@ from povagent.config.pipeline import (
     plugin_paths_from_the_yaml_folder,
 )
 from povagent.dataset.protocol import EvaluationSet
-from povagent.engine.cache import ResponseCache
+from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
-from povagent.run.pending import ensure_dataset, pending_keys
-from povagent.run.progress import make_progress
+from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, prepare_dataset, select_instances
+from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.runner import PipelineRun, RunResult, create_components
 
 SWEEP_INDEX = "sweep.json"
+#: A cell's own response-cache file on a cluster (see :mod:`povagent.engine.cache`, shards),
+#: folded into the sweep's cache by the client when the cells are done.
+CELL_CACHE_SHARD = "cache-shard.sqlite"
 
 #: Rough prompt tokens per 512x512 image (ViT patches of 28 px); dry-run estimates only.
 TOKENS_PER_IMAGE_PIXEL = 1.0 / (28 * 28)
@@ -77,6 +87,8 @@ class SweepResult:
     output: Path
     cells: list[Cell]
     results: dict[str, RunResult] = field(default_factory=dict)
+    #: cells that raised instead of finishing (on a cluster): name -> the error, in one line
+    failed: dict[str, str] = field(default_factory=dict)
 
 
 def _slug(text: str) -> str:
@@ -226,12 +238,24 @@ def run_sweep(
     retry_failed: bool = True,
     strict: bool = False,
     on_cell_done: Callable[[Cell, RunResult], None] | None = None,
+    cluster: Any = None,
+    progress: RunProgress | None = None,
+    notify: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run every cell of a sweep in turn, sharing one response cache and one image store.
 
     ``strict``: stop at a bad house or pair of a dataset (default: report it and go on).
+
+    ``cluster`` (``local:N``, a scheduler's ``tcp://`` address, or a ``distributed.Client``;
+    default: the YAML's ``cluster:`` key) runs each cell as a task on a Dask cluster instead;
+    ``progress`` then counts the rows of every cell (default: a bar on a terminal), ``notify``
+    hears the dashboard's address and what the storage check found, and a cell that raises is
+    recorded in :attr:`SweepResult.failed` while the others finish. Without a cluster Dask is
+    never imported.
     """
     sweep, cells = expand_sweep(path, strict=strict)
+    if cluster is None:
+        cluster = sweep.cluster
     for cell in cells:
         # Every cell's plugin options (and image transport) are checked before the first
         # request of the first cell.
@@ -241,6 +265,10 @@ def run_sweep(
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status)
+    if cluster is not None:
+        _run_on_cluster(cluster, str(path), result, status, retry_failed=retry_failed, on_cell_done=on_cell_done,
+                        progress=progress or make_progress(f"sweep on {cluster}", quiet=quiet), notify=notify or (lambda _: None))
+        return result
 
     async def run_cells() -> None:
         first = cells[0].config
@@ -280,3 +308,164 @@ def run_sweep(
 
     asyncio.run(run_cells())
     return result
+
+
+# -- on a cluster ---------------------------------------------------------------------------------
+def anchored(config: PipelineConfig) -> PipelineConfig:
+    """``config`` with every path made absolute from here (a worker's working folder is its own)."""
+    data = config.model_dump()
+
+    def absolute(value: Any) -> Any:
+        return None if value is None else Path(value).absolute()
+
+    data["output"] = absolute(data["output"])
+    data["dataset"]["path"] = absolute(data["dataset"]["path"])
+    if data["dataset"].get("generate"):
+        data["dataset"]["generate"]["out"] = absolute(data["dataset"]["generate"]["out"])
+    data["cache"]["path"] = absolute(data["cache"]["path"])
+    data["images"]["cache_dir"] = absolute(data["images"]["cache_dir"])
+    data["plugins"] = [str(Path(p).absolute()) if p.endswith(".py") else p for p in data["plugins"]]
+    return PipelineConfig.model_validate(data)
+
+
+def run_cell(config: PipelineConfig, *, retry_failed: bool = True) -> RunResult:
+    """One sweep cell, start to end or from where its journal stopped: a cluster's unit of work.
+
+    Plain and idempotent: the rows go through the cell's journal under its folder lock, so a
+    second run (a retry after a worker died) appends only the missing keys. New answers go to
+    the cell's own cache shard, the sweep's cache is read beside it (see
+    :mod:`povagent.engine.cache`); the client merges the shards. Nothing is shown: progress is
+    read from the journal by the client.
+    """
+    main = config.cache_path()
+    cache = ResponseCache(Path(config.output) / CELL_CACHE_SHARD, read_also=main) if main is not None else None
+    try:
+        run = PipelineRun(config, dataset=prepare_dataset(config), cache=cache, progress=QuietProgress(), retry_failed=retry_failed)
+        return asyncio.run(run.run())
+    finally:
+        if cache is not None:
+            cache.close()
+
+
+class JournalWatch:
+    """Rows finished in the cells' journals, as the client reads them (progress on a cluster).
+
+    Each cell's ``results.jsonl`` is read from where the last look stopped; only complete lines
+    count, each key once (a journal rewritten to retry failed keys is read again from its start,
+    its kept keys already counted). Cheap: a ``stat`` per cell and the new bytes.
+    """
+
+    def __init__(self) -> None:
+        self._files: dict[Path, list[Any]] = {}  # path -> [inode, offset, wanted keys, counted keys]
+
+    def watch(self, run_dir: Path, wanted: set[str], counted: set[str]) -> None:
+        """Follow ``run_dir``'s journal: ``wanted`` keys count, ``counted`` are counted already."""
+        path = Path(run_dir) / RESULTS
+        self._files[path] = [None, 0, wanted, set(counted)]
+
+    def poll(self) -> list[str]:
+        """The status of each row finished since the last poll."""
+        finished: list[str] = []
+        for path, state in self._files.items():
+            try:
+                st = path.stat()
+            except OSError:
+                continue
+            if st.st_ino != state[0]:
+                state[0], state[1] = st.st_ino, 0
+            if st.st_size <= state[1]:
+                state[1] = min(state[1], st.st_size)
+                continue
+            with open(path, "rb") as fh:
+                fh.seek(state[1])
+                data = fh.read(st.st_size - state[1])
+            end = data.rfind(b"\n")
+            if end < 0:
+                continue
+            state[1] += end + 1
+            for line in data[: end + 1].splitlines():
+                try:
+                    row = json.loads(line)
+                    key, row_status = row["key"], str(row["status"])
+                except (ValueError, KeyError, TypeError):
+                    continue  # not a row: the runner reports such a line itself
+                if key in state[2] and key not in state[3]:
+                    state[3].add(key)
+                    finished.append(row_status)
+        return finished
+
+
+def _run_on_cluster(
+    cluster: Any,
+    sweep_file: str,
+    result: SweepResult,
+    status: dict[str, dict[str, Any]],
+    *,
+    retry_failed: bool,
+    on_cell_done: Callable[[Cell, RunResult], None] | None,
+    progress: RunProgress,
+    notify: Callable[[str], None],
+) -> None:
+    """Every cell as a task on ``cluster``; ``sweep.json``, progress and the cache stay here."""
+    from povagent.cluster.sweep import CellTask, run_cell_tasks  # the one room that knows Dask
+
+    cells, output = result.cells, result.output
+    by_name = {c.name: c for c in cells}
+    watch = JournalWatch()
+    tasks: list[CellTask] = []
+    datasets: dict[Any, EvaluationSet] = {}
+    total = done = 0
+    for cell in cells:
+        config = anchored(cell.config)
+        dataset = ensure_dataset(config, datasets)  # fetched or generated here, once, before any task
+        plan = plan_keys(config, select_instances(dataset, config), retry_failed=retry_failed)
+        watch.watch(config.output, plan.wanted, plan.done)
+        total, done = total + plan.n_total, done + len(plan.done)
+        tasks.append(CellTask(cell.name, functools.partial(run_cell, config, retry_failed=retry_failed), dataset.root))
+    main_cache = cells[0].config.cache_path()
+    _merge_cell_caches(main_cache, cells, notify)  # shards an interrupted sweep left behind
+
+    def ticked() -> None:
+        for row_status in watch.poll():
+            progress.advance(row_status)
+
+    def finished(name: str, res: RunResult | None, error: str | None) -> None:
+        ticked()
+        cell = by_name[name]
+        if res is None:
+            result.failed[name] = error or "failed"
+            status[name] = {"status": "failed", "error": error}
+        else:
+            result.results[name] = res
+            status[name] = {
+                "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
+                "rows": res.summary["rows"],
+                "overall": res.summary["overall"],
+            }
+        _write_index(output, sweep_file, cells, status)
+        if res is not None and on_cell_done is not None:
+            on_cell_done(cell, res)
+
+    for cell in cells:
+        status[cell.name] = {"status": "running"}
+    progress.start(total, done)
+    try:
+        run_cell_tasks(cluster, tasks, output=Path(output).absolute(), on_done=finished, on_tick=ticked, notify=notify)
+    finally:
+        progress.stop()
+        for name, state in status.items():
+            if state.get("status") == "running":
+                status[name] = {"status": "interrupted"}
+        _write_index(output, sweep_file, cells, status)
+        _merge_cell_caches(main_cache, cells, notify)
+
+
+def _merge_cell_caches(main: Path | None, cells: list[Cell], notify: Callable[[str], None]) -> None:
+    """Fold the cells' cache shards into the sweep's cache (no shard: nothing to do)."""
+    shards = [Path(c.config.output) / CELL_CACHE_SHARD for c in cells]
+    if main is None or not any(s.is_file() for s in shards):
+        return
+    with ResponseCache(main) as cache:
+        _, problems = merge_shards(cache, shards)
+    for problem in problems:
+        notify(f"warning: {problem}")
