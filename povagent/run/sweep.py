@@ -26,6 +26,7 @@ import json
 import math
 import os
 import re
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -46,7 +47,7 @@ from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
-from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, prepare_dataset, select_instances
+from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.runner import PipelineRun, RunResult, create_components
 
@@ -328,19 +329,41 @@ def anchored(config: PipelineConfig) -> PipelineConfig:
     return PipelineConfig.model_validate(data)
 
 
-def run_cell(config: PipelineConfig, *, retry_failed: bool = True) -> RunResult:
+#: What the cells of one sweep share in one worker process and thread, as the cells of a sweep
+#: on one machine share it: ``(sweep id, thread) -> (loaded datasets, image store)``. Only the
+#: latest sweep's entry per thread is kept, so a long-lived worker holds one sweep's images.
+_SHARED: dict[tuple[str, int], tuple[dict[Any, EvaluationSet], ImageStore]] = {}
+
+
+def _shared(sweep_id: str, config: PipelineConfig) -> tuple[dict[Any, EvaluationSet], ImageStore]:
+    import threading
+
+    thread = threading.get_ident()
+    key = (sweep_id, thread)
+    if key not in _SHARED:
+        for old in [k for k in _SHARED if k[1] == thread]:
+            del _SHARED[old]
+        _SHARED[key] = ({}, ImageStore(max_bytes=config.images.max_mb * 1024 * 1024))
+    return _SHARED[key]
+
+
+def run_cell(config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str | None = None) -> RunResult:
     """One sweep cell, start to end or from where its journal stopped: a cluster's unit of work.
 
     Plain and idempotent: the rows go through the cell's journal under its folder lock, so a
     second run (a retry after a worker died) appends only the missing keys. New answers go to
     the cell's own cache shard, the sweep's cache is read beside it (see
-    :mod:`povagent.engine.cache`); the client merges the shards. Nothing is shown: progress is
-    read from the journal by the client.
+    :mod:`povagent.engine.cache`); the client merges the shards. Cells given the same
+    ``sweep_id`` in one process share their loaded datasets and image store (as on one
+    machine), so a worker reads a house's frames once per sweep, not once per cell. Nothing is
+    shown: progress is read from the journal by the client.
     """
     main = config.cache_path()
     cache = ResponseCache(Path(config.output) / CELL_CACHE_SHARD, read_also=main) if main is not None else None
+    datasets, images = _shared(sweep_id, config) if sweep_id is not None else ({}, None)
     try:
-        run = PipelineRun(config, dataset=prepare_dataset(config), cache=cache, progress=QuietProgress(), retry_failed=retry_failed)
+        run = PipelineRun(config, dataset=ensure_dataset(config, datasets), images=images, cache=cache,
+                          progress=QuietProgress(), retry_failed=retry_failed)
         return asyncio.run(run.run())
     finally:
         if cache is not None:
@@ -412,6 +435,7 @@ def _run_on_cluster(
     cells, output = result.cells, result.output
     by_name = {c.name: c for c in cells}
     watch = JournalWatch()
+    sweep_id = uuid.uuid4().hex
     tasks: list[CellTask] = []
     datasets: dict[Any, EvaluationSet] = {}
     total = done = 0
@@ -421,7 +445,7 @@ def _run_on_cluster(
         plan = plan_keys(config, select_instances(dataset, config), retry_failed=retry_failed)
         watch.watch(config.output, plan.wanted, plan.done)
         total, done = total + plan.n_total, done + len(plan.done)
-        tasks.append(CellTask(cell.name, functools.partial(run_cell, config, retry_failed=retry_failed), dataset.root))
+        tasks.append(CellTask(cell.name, functools.partial(run_cell, config, retry_failed=retry_failed, sweep_id=sweep_id), dataset.root))
     main_cache = cells[0].config.cache_path()
     _merge_cell_caches(main_cache, cells, notify)  # shards an interrupted sweep left behind
 

@@ -153,7 +153,7 @@ def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(dask_cluster, wri
     assert _summaries(tmp_path / "killed") == _summaries(tmp_path / "here")
 
 
-def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start_dask_cluster, write_sweep, tmp_path) -> None:
+def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start_dask_cluster, shared_dask_cluster, write_sweep, tmp_path) -> None:
     path = write_sweep(tmp_path / "orphan", delay_s=0.04, runs=6, concurrency=1, axes="conditions: [a, b]")
     cluster = start_dask_cluster("first")
     thread, outcome = _start_in_thread(path, cluster.address)
@@ -171,7 +171,7 @@ def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start
     assert {c["status"] for c in index["cells"]} <= {"interrupted", "done"}
     kept = len(_lines(tmp_path / "orphan" / "a" / "results.jsonl"))
     assert kept >= 3
-    again = run_sweep(path, cluster=start_dask_cluster("second").address, progress=QuietProgress())
+    again = run_sweep(path, cluster=shared_dask_cluster.address, progress=QuietProgress())  # another scheduler
     assert not again.failed
     for name in "ab":
         keys = _keys(tmp_path / "orphan" / name)
