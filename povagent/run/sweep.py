@@ -313,20 +313,26 @@ def run_sweep(
 
 # -- on a cluster ---------------------------------------------------------------------------------
 def anchored(config: PipelineConfig) -> PipelineConfig:
-    """``config`` with every path made absolute from here (a worker's working folder is its own)."""
-    data = config.model_dump()
+    """``config`` with every path made absolute from here (a worker's working folder is its own).
 
-    def absolute(value: Any) -> Any:
+    Copied, not validated again: a resolved pipeline holds both its model profile and the
+    backend it resolved to, which a fresh pipeline may not.
+    """
+
+    def absolute(value: Path | None) -> Path | None:
         return None if value is None else Path(value).absolute()
 
-    data["output"] = absolute(data["output"])
-    data["dataset"]["path"] = absolute(data["dataset"]["path"])
-    if data["dataset"].get("generate"):
-        data["dataset"]["generate"]["out"] = absolute(data["dataset"]["generate"]["out"])
-    data["cache"]["path"] = absolute(data["cache"]["path"])
-    data["images"]["cache_dir"] = absolute(data["images"]["cache_dir"])
-    data["plugins"] = [str(Path(p).absolute()) if p.endswith(".py") else p for p in data["plugins"]]
-    return PipelineConfig.model_validate(data)
+    ds = config.dataset
+    dataset = ds.model_copy(update={"path": absolute(ds.path)})
+    if ds.generate is not None:
+        dataset = dataset.model_copy(update={"generate": ds.generate.model_copy(update={"out": absolute(ds.generate.out)})})
+    return config.model_copy(update={
+        "output": absolute(config.output),
+        "dataset": dataset,
+        "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
+        "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
+        "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
+    })  # fmt: skip
 
 
 #: What the cells of one sweep share in one worker process and thread, as the cells of a sweep
@@ -433,6 +439,12 @@ def _run_on_cluster(
     from povagent.cluster.sweep import CellTask, run_cell_tasks  # the one room that knows Dask
 
     cells, output = result.cells, result.output
+    for cell in cells:
+        if cell.config.images.transport == "http":
+            raise ConfigError(
+                f"cell {cell.name}: images.transport: http serves images from one port of one process; on a "
+                "cluster every cell would bind it: use transport: file (storage the model server reads) or inline"
+            )
     by_name = {c.name: c for c in cells}
     watch = JournalWatch()
     sweep_id = uuid.uuid4().hex

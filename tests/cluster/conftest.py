@@ -143,7 +143,8 @@ def write_sweep(tmp_path, cluster_release, povagent_host):
     conditions (three cells) with the offline ``test-center`` backend."""
     import yaml
 
-    def make(output: Path, *, delay_s: float = 0.0, runs: int = 1, concurrency: int = 4, extra: str = "", axes: str = "conditions: [a, b, c]") -> Path:
+    def make(output: Path, *, delay_s: float = 0.0, runs: int = 1, concurrency: int = 4, extra: str = "", axes: str = "conditions: [a, b, c]",
+             base_extra: dict | None = None) -> Path:
         base = {
             "plugins": [OFFLINE_PLUGIN],
             "dataset": {"path": str(cluster_release)},
@@ -153,6 +154,7 @@ def write_sweep(tmp_path, cluster_release, povagent_host):
             "runs": runs,
             "concurrency": concurrency,
             "output": "ignored-by-sweeps",
+            **(base_extra or {}),
         }
         name = Path(output).name
         (tmp_path / f"{name}-base.yaml").write_text(yaml.safe_dump(base))

@@ -89,6 +89,14 @@ def test_a_bad_cluster_key_names_the_sweep_file_and_line(write_sweep, tmp_path) 
         expand_sweep(path)
 
 
+def test_images_served_over_http_are_refused_before_any_cluster_starts(write_sweep, tmp_path) -> None:
+    path = write_sweep(tmp_path / "http", base_extra={"images": {"transport": "http", "bind": "127.0.0.1:0"}})
+    t0 = time.monotonic()
+    with pytest.raises(ConfigError, match=r"cell a: images.transport: http serves images from one port of one process"):
+        run_sweep(path, cluster="local:2", progress=QuietProgress())
+    assert time.monotonic() - t0 < 5  # refused before a LocalCluster could start
+
+
 def test_a_failing_cell_is_reported_and_the_others_finish(shared_dask_cluster, write_sweep, tmp_path) -> None:
     path = write_sweep(tmp_path / "failing")
     held = tmp_path / "failing" / "b"
