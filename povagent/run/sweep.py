@@ -47,6 +47,7 @@ from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.runner import PipelineRun, RunResult, create_components
@@ -497,11 +498,23 @@ def _run_on_cluster(
 
 
 def _merge_cell_caches(main: Path | None, cells: list[Cell], notify: Callable[[str], None]) -> None:
-    """Fold the cells' cache shards into the sweep's cache (no shard: nothing to do)."""
-    shards = [Path(c.config.output) / CELL_CACHE_SHARD for c in cells]
-    if main is None or not any(s.is_file() for s in shards):
+    """Fold the cells' cache shards into the sweep's cache (no shard: nothing to do).
+
+    A shard is merged only under its cell's folder lock: a cell still running somewhere (a
+    worker left behind by a lost scheduler, a cell an interrupted client did not wait for) keeps
+    writing its shard, which is merged by a later run instead.
+    """
+    shards = [(Path(c.config.output), Path(c.config.output) / CELL_CACHE_SHARD) for c in cells]
+    if main is None or not any(shard.is_file() for _, shard in shards):
         return
     with ResponseCache(main) as cache:
-        _, problems = merge_shards(cache, shards)
-    for problem in problems:
-        notify(f"warning: {problem}")
+        for run_dir, shard in shards:
+            if not shard.is_file():
+                continue
+            try:
+                with folder_lock(run_dir):
+                    _, problems = merge_shards(cache, [shard])
+            except ConfigError:
+                continue  # the cell is running elsewhere: its shard is merged by a later run
+            for problem in problems:
+                notify(f"warning: {problem}")
