@@ -184,6 +184,11 @@ def sweep_command(
     keep_errors: bool = keep_errors_option(),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bars."),
     strict: bool = strict_option(),
+    cluster: str | None = typer.Option(
+        None, "--cluster", metavar="local:N|tcp://HOST:PORT",
+        help="Run each cell as a task on Dask: local:N starts N worker processes here, tcp://HOST:PORT "
+        "uses a running scheduler (overrides the YAML's cluster: key; needs pip install 'povagent[cluster]').",
+    ),
 ) -> None:
     """Run every cell of a sweep: a grid of pipelines.
 
@@ -234,19 +239,34 @@ def sweep_command(
             highlight=False,
         )
 
+    if cluster is not None:
+        from povagent.cluster.spec import parse_cluster_spec
+
+        parse_cluster_spec(cluster)  # a malformed value is refused before anything starts
     try:
-        result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done)
+        result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done,
+                           cluster=cluster, notify=lambda message: typer.echo(message, err=True))
     except KeyboardInterrupt:
         typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
         raise typer.Exit(130) from None
-    successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in result.cells}
+    command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "")
+    for name, error in result.failed.items():
+        typer.echo(f"cell {name} failed: {error}", err=True)
+    if result.failed:
+        typer.echo(
+            f"{len(result.failed)} cell(s) failed ({', '.join(result.failed)}): the rows they wrote are kept; fix the cause, "
+            f"then run `{command}` again to resume them",
+            err=True,
+        )
+    finished = [c for c in result.cells if c.name in result.results]
+    successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in finished}
     with_success = any(v is not None for v in successes.values())  # real-world sets
     # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
-    with_official = any("official_parse" in result.results[c.name].summary for c in result.cells)
+    with_official = any("official_parse" in result.results[c.name].summary for c in finished)
     official_cols = ("official parse L2", "official parse resp.") if with_official else ()
     headers = ("mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ())
     rows = []
-    for cell in result.cells:
+    for cell in finished:
         s = result.results[cell.name].summary
         success = successes[cell.name]
         if success is not None:
@@ -267,12 +287,14 @@ def sweep_command(
         ])  # fmt: skip
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
-    codes = [result.results[c.name].exit_code for c in result.cells]
-    for cell in result.cells:
+    from povagent.run.runner import EXIT_STOPPED
+
+    codes = [result.results[c.name].exit_code for c in finished] + [EXIT_STOPPED] * len(result.failed)
+    for cell in finished:
         res = result.results[cell.name]
         if res.exit_code:
             typer.echo(f"cell {cell.name}:", err=True)
-            _say_what_next(res, f"povagent sweep {sweep}")
+            _say_what_next(res, command)
     raise typer.Exit(max(codes, default=0))
 
 

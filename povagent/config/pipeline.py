@@ -60,11 +60,12 @@ from typing import Any, Iterable, Literal, Mapping, Union, get_args, get_origin
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from povagent.cluster.spec import parse_cluster_spec  # pure: no Dask import
 from povagent.config.profiles import near_profile
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
 from povagent.engine.retry import RetryPolicy
-from povagent.errors import ConfigError, PluginError
+from povagent.errors import ClusterError, ConfigError, PluginError
 from povagent.exchange.image_server import parse_bind
 from povagent.exchange.transport import DEFAULT_CACHE_DIR
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
@@ -441,6 +442,8 @@ class SweepConfig(_Strict):
         overrides:                   # named partial pipelines, one more axis (optional)
           short-answers: {strategy: {name: basic, options: {max_tokens: 64}}}
         cache: runs/cache.sqlite     # shared by every cell (default <output>/cache.sqlite)
+        cluster: local:4             # optional: each cell a task on Dask (or tcp://HOST:8786);
+                                     # --cluster overrides it (docs/cluster.md)
     """
 
     base: str | dict[str, Any]
@@ -448,6 +451,17 @@ class SweepConfig(_Strict):
     axes: SweepAxes = Field(default_factory=SweepAxes)
     overrides: dict[str, dict[str, Any]] = Field(default_factory=dict)
     cache: CacheSpec = Field(default_factory=CacheSpec)
+    cluster: str | None = None
+
+    @field_validator("cluster")
+    @classmethod
+    def _cluster_spec(cls, value: str | None) -> str | None:
+        if value is not None:
+            try:
+                parse_cluster_spec(value)
+            except ClusterError as exc:
+                raise ValueError(str(exc).replace("--cluster ", "", 1)) from None
+        return value
 
     @field_validator("output")
     @classmethod

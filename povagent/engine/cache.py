@@ -24,7 +24,7 @@ import sqlite3
 import threading
 import time
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 from povagent.errors import PovagentError
 from povagent.exchange.messages import Response, Usage
@@ -57,8 +57,16 @@ class CacheError(PovagentError):
 class ResponseCache:
     """Responses by key in one SQLite file (thread-safe; safe across processes via WAL)."""
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, read_also: str | Path | None = None) -> None:
+        """Open (or create) the cache at ``path``.
+
+        ``read_also``: another cache file that :meth:`get` consults, read-only, when ``path`` has
+        no answer (a shard reading its sweep's cache). A file that is missing or unusable there
+        is passed over: the cache only saves calls.
+        """
         self.path = Path(path)
+        self._read_also = Path(read_also) if read_also is not None else None
+        self._rdb: sqlite3.Connection | None = None
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.hits = 0
         self.misses = 0
@@ -106,6 +114,8 @@ class ResponseCache:
             return Response(text=text, usage=Usage(u.prompt_tokens, u.completion_tokens, u.cost_usd), latency_s=latency, model=model, cached=True)
         with self._lock:
             row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]  # None only after close()
+            if row is None and self._read_also is not None:
+                row = self._read_other(key)
         if row is None:
             self.misses += 1
             return None
@@ -119,6 +129,21 @@ class ResponseCache:
             model=model,
             cached=True,
         )
+
+    def _read_other(self, key: str) -> Any:
+        """``key``'s row in the ``read_also`` file, or ``None`` (called under the read lock)."""
+        other = self._read_also
+        assert other is not None
+        try:
+            if self._rdb is None:
+                if not other.is_file():
+                    self._read_also = None  # written by the client only after the cells: not now
+                    return None
+                self._rdb = sqlite3.connect(f"{other.resolve().as_uri()}?mode=ro", uri=True, check_same_thread=False, timeout=30.0)
+            return self._rdb.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()
+        except sqlite3.Error:
+            self._read_also = None  # not a cache, or unreadable from here: answers come from the model
+            return None
 
     @staticmethod
     def _record(key: str, response: Response) -> tuple[str, str, Usage, str | None, float, float]:
@@ -204,9 +229,55 @@ class ResponseCache:
             with self._lock:
                 if self._db is not None:
                     self._db.close()
+                if self._rdb is not None:
+                    self._rdb.close()
 
     def __enter__(self) -> ResponseCache:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def merge_shards(cache: ResponseCache, shards: Iterable[Path]) -> tuple[int, list[str]]:
+    """Fold shard files into ``cache`` and delete them: ``(answers added, problems)``.
+
+    An answer already in ``cache`` is kept (keys are content hashes; the rows hold what was
+    used). Each shard is copied in one transaction and deleted only after it committed, so a
+    kill at any moment leaves it to be merged again, harmlessly. A shard that is not a usable
+    cache is left in place and named in ``problems`` (it only held answers, never rows).
+    """
+    added, problems = 0, []
+    cache.flush()
+    for shard in shards:
+        if not shard.is_file():
+            continue
+        with cache._write_lock:
+            db = cache._wdb
+            assert db is not None, "cache closed"
+            try:
+                db.execute("ATTACH DATABASE ? AS shard", (str(shard),))
+            except sqlite3.Error as exc:
+                problems.append(f"{shard}: not merged into {cache.path} ({exc})")
+                continue
+            try:
+                db.execute("BEGIN")
+                before = db.total_changes
+                db.execute(
+                    "INSERT OR IGNORE INTO main.responses (key, text, usage, model, latency_s, created)"
+                    " SELECT key, text, usage, model, latency_s, created FROM shard.responses"
+                )
+                changed = db.total_changes - before
+                db.execute("COMMIT")
+            except sqlite3.Error as exc:
+                if db.in_transaction:
+                    db.execute("ROLLBACK")
+                problems.append(f"{shard}: not merged into {cache.path} ({exc})")
+                continue
+            finally:
+                db.execute("DETACH DATABASE shard")
+        added += changed
+        cache.writes += changed
+        for suffix in ("", "-wal", "-shm"):
+            Path(f"{shard}{suffix}").unlink(missing_ok=True)
+    return added, problems

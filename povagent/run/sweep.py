@@ -9,16 +9,24 @@ each cell, so an interrupted sweep resumes cell by cell and key by key.
 
 A dry run prints the cells, the requests still to make (finished keys subtracted) and a rough
 token estimate, without calling any model. This module must not render tables.
+
+On a cluster (``cluster:`` in the YAML, or ``cluster=``) each cell is one task: :func:`run_cell`,
+a plain function of one cell that resumes from the cell's journal under its folder lock, so it
+can be run twice, or again after its worker died, and give the same rows. Only
+:mod:`povagent.cluster` knows the engine; this module hands it those functions, watches the
+cells' journals for progress (:class:`JournalWatch`) and writes ``sweep.json`` itself.
 """
 
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import json
 import math
 import os
 import re
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -35,15 +43,19 @@ from povagent.config.pipeline import (
     plugin_paths_from_the_yaml_folder,
 )
 from povagent.dataset.protocol import EvaluationSet
-from povagent.engine.cache import ResponseCache
+from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
-from povagent.run.pending import ensure_dataset, pending_keys
-from povagent.run.progress import make_progress
+from povagent.run.folder_lock import folder_lock
+from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
+from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
 
 SWEEP_INDEX = "sweep.json"
+#: A cell's own response-cache file on a cluster (see :mod:`povagent.engine.cache`, shards),
+#: folded into the sweep's cache by the client when the cells are done.
+CELL_CACHE_SHARD = "cache-shard.sqlite"
 
 #: Rough prompt tokens per 512x512 image (ViT patches of 28 px); dry-run estimates only.
 TOKENS_PER_IMAGE_PIXEL = 1.0 / (28 * 28)
@@ -77,6 +89,8 @@ class SweepResult:
     output: Path
     cells: list[Cell]
     results: dict[str, RunResult] = field(default_factory=dict)
+    #: cells that raised instead of finishing (on a cluster): name -> the error, in one line
+    failed: dict[str, str] = field(default_factory=dict)
 
 
 def _slug(text: str) -> str:
@@ -232,13 +246,25 @@ def run_sweep(
     retry_failed: bool = True,
     strict: bool = False,
     on_cell_done: Callable[[Cell, RunResult], None] | None = None,
+    cluster: Any = None,
+    progress: RunProgress | None = None,
+    notify: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run every cell of a sweep in turn, sharing one response cache and one image store.
 
     ``strict``: stop at a bad house or pair of a dataset (default: report it and go on).
+
+    ``cluster`` (``local:N``, a scheduler's ``tcp://`` address, or a ``distributed.Client``;
+    default: the YAML's ``cluster:`` key) runs each cell as a task on a Dask cluster instead;
+    ``progress`` then counts the rows of every cell (default: a bar on a terminal), ``notify``
+    hears the dashboard's address and what the storage check found, and a cell that raises is
+    recorded in :attr:`SweepResult.failed` while the others finish. Without a cluster Dask is
+    never imported.
     """
     sweep, cells = expand_sweep(path, strict=strict)
     models: dict[str, tuple[str, str | None]] = {}
+    if cluster is None:
+        cluster = sweep.cluster
     for cell in cells:
         # Every cell's plugin options (and image transport) are checked before the first
         # request of the first cell.
@@ -249,6 +275,10 @@ def run_sweep(
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status, models)
+    if cluster is not None:
+        _run_on_cluster(cluster, str(path), result, status, models, retry_failed=retry_failed, on_cell_done=on_cell_done,
+                        progress=progress or make_progress(f"sweep on {cluster}", quiet=quiet), notify=notify or (lambda _: None))
+        return result
 
     async def run_cells() -> None:
         first = cells[0].config
@@ -289,3 +319,212 @@ def run_sweep(
 
     asyncio.run(run_cells())
     return result
+
+
+# -- on a cluster ---------------------------------------------------------------------------------
+def anchored(config: PipelineConfig) -> PipelineConfig:
+    """``config`` with every path made absolute from here (a worker's working folder is its own).
+
+    Copied, not validated again: a resolved pipeline holds both its model profile and the
+    backend it resolved to, which a fresh pipeline may not.
+    """
+
+    def absolute(value: Path | None) -> Path | None:
+        return None if value is None else Path(value).absolute()
+
+    ds = config.dataset
+    dataset = ds.model_copy(update={"path": absolute(ds.path)})
+    if ds.generate is not None:
+        dataset = dataset.model_copy(update={"generate": ds.generate.model_copy(update={"out": absolute(ds.generate.out)})})
+    return config.model_copy(update={
+        "output": absolute(config.output),
+        "dataset": dataset,
+        "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
+        "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
+        "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
+    })  # fmt: skip
+
+
+#: What the cells of one sweep share in one worker process and thread, as the cells of a sweep
+#: on one machine share it: ``(sweep id, thread) -> (loaded datasets, image store)``. Only the
+#: latest sweep's entry per thread is kept, so a long-lived worker holds one sweep's images.
+_SHARED: dict[tuple[str, int], tuple[dict[Any, EvaluationSet], ImageStore]] = {}
+
+
+def _shared(sweep_id: str, config: PipelineConfig) -> tuple[dict[Any, EvaluationSet], ImageStore]:
+    import threading
+
+    thread = threading.get_ident()
+    key = (sweep_id, thread)
+    if key not in _SHARED:
+        for old in [k for k in _SHARED if k[1] == thread]:
+            del _SHARED[old]
+        _SHARED[key] = ({}, ImageStore(max_bytes=config.images.max_mb * 1024 * 1024))
+    return _SHARED[key]
+
+
+def run_cell(config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str | None = None) -> RunResult:
+    """One sweep cell, start to end or from where its journal stopped: a cluster's unit of work.
+
+    Plain and idempotent: the rows go through the cell's journal under its folder lock, so a
+    second run (a retry after a worker died) appends only the missing keys. New answers go to
+    the cell's own cache shard, the sweep's cache is read beside it (see
+    :mod:`povagent.engine.cache`); the client merges the shards. Cells given the same
+    ``sweep_id`` in one process share their loaded datasets and image store (as on one
+    machine), so a worker reads a house's frames once per sweep, not once per cell. Nothing is
+    shown: progress is read from the journal by the client.
+    """
+    main = config.cache_path()
+    cache = ResponseCache(Path(config.output) / CELL_CACHE_SHARD, read_also=main) if main is not None else None
+    datasets, images = _shared(sweep_id, config) if sweep_id is not None else ({}, None)
+    try:
+        run = PipelineRun(config, dataset=ensure_dataset(config, datasets), images=images, cache=cache,
+                          progress=QuietProgress(), retry_failed=retry_failed)
+        return asyncio.run(run.run())
+    finally:
+        if cache is not None:
+            cache.close()
+
+
+class JournalWatch:
+    """Rows finished in the cells' journals, as the client reads them (progress on a cluster).
+
+    Each cell's ``results.jsonl`` is read from where the last look stopped; only complete lines
+    count, each key once (a journal rewritten to retry failed keys is read again from its start,
+    its kept keys already counted). Cheap: a ``stat`` per cell and the new bytes.
+    """
+
+    def __init__(self) -> None:
+        self._files: dict[Path, list[Any]] = {}  # path -> [inode, offset, wanted keys, counted keys]
+
+    def watch(self, run_dir: Path, wanted: set[str], counted: set[str]) -> None:
+        """Follow ``run_dir``'s journal: ``wanted`` keys count, ``counted`` are counted already."""
+        path = Path(run_dir) / RESULTS
+        self._files[path] = [None, 0, wanted, set(counted)]
+
+    def poll(self) -> list[str]:
+        """The status of each row finished since the last poll."""
+        finished: list[str] = []
+        for path, state in self._files.items():
+            try:
+                st = path.stat()
+            except OSError:
+                continue
+            if st.st_ino != state[0]:
+                state[0], state[1] = st.st_ino, 0
+            if st.st_size <= state[1]:
+                state[1] = min(state[1], st.st_size)
+                continue
+            with open(path, "rb") as fh:
+                fh.seek(state[1])
+                data = fh.read(st.st_size - state[1])
+            end = data.rfind(b"\n")
+            if end < 0:
+                continue
+            state[1] += end + 1
+            for line in data[: end + 1].splitlines():
+                try:
+                    row = json.loads(line)
+                    key, row_status = row["key"], str(row["status"])
+                except (ValueError, KeyError, TypeError):
+                    continue  # not a row: the runner reports such a line itself
+                if key in state[2] and key not in state[3]:
+                    state[3].add(key)
+                    finished.append(row_status)
+        return finished
+
+
+def _run_on_cluster(
+    cluster: Any,
+    sweep_file: str,
+    result: SweepResult,
+    status: dict[str, dict[str, Any]],
+    models: dict[str, tuple[str, str | None]],
+    *,
+    retry_failed: bool,
+    on_cell_done: Callable[[Cell, RunResult], None] | None,
+    progress: RunProgress,
+    notify: Callable[[str], None],
+) -> None:
+    """Every cell as a task on ``cluster``; ``sweep.json``, progress and the cache stay here."""
+    from povagent.cluster.sweep import CellTask, run_cell_tasks  # the one room that knows Dask
+
+    cells, output = result.cells, result.output
+    for cell in cells:
+        if cell.config.images.transport == "http":
+            raise ConfigError(
+                f"cell {cell.name}: images.transport: http serves images from one port of one process; on a "
+                "cluster every cell would bind it: use transport: file (storage the model server reads) or inline"
+            )
+    by_name = {c.name: c for c in cells}
+    watch = JournalWatch()
+    sweep_id = uuid.uuid4().hex
+    tasks: list[CellTask] = []
+    datasets: dict[Any, EvaluationSet] = {}
+    total = done = 0
+    for cell in cells:
+        config = anchored(cell.config)
+        dataset = ensure_dataset(config, datasets)  # fetched or generated here, once, before any task
+        plan = plan_keys(config, select_instances(dataset, config), retry_failed=retry_failed)
+        watch.watch(config.output, plan.wanted, plan.done)
+        total, done = total + plan.n_total, done + len(plan.done)
+        tasks.append(CellTask(cell.name, functools.partial(run_cell, config, retry_failed=retry_failed, sweep_id=sweep_id), dataset.root))
+    main_cache = cells[0].config.cache_path()
+    _merge_cell_caches(main_cache, cells, notify)  # shards an interrupted sweep left behind
+
+    def ticked() -> None:
+        for row_status in watch.poll():
+            progress.advance(row_status)
+
+    def finished(name: str, res: RunResult | None, error: str | None) -> None:
+        ticked()
+        cell = by_name[name]
+        if res is None:
+            result.failed[name] = error or "failed"
+            status[name] = {"status": "failed", "error": error}
+        else:
+            result.results[name] = res
+            status[name] = {
+                "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
+                "rows": res.summary["rows"],
+                "overall": res.summary["overall"],
+            }
+        _write_index(output, sweep_file, cells, status, models)
+        if res is not None and on_cell_done is not None:
+            on_cell_done(cell, res)
+
+    for cell in cells:
+        status[cell.name] = {"status": "running"}
+    progress.start(total, done)
+    try:
+        run_cell_tasks(cluster, tasks, output=Path(output).absolute(), on_done=finished, on_tick=ticked, notify=notify)
+    finally:
+        progress.stop()
+        for name, state in status.items():
+            if state.get("status") == "running":
+                status[name] = {"status": "interrupted"}
+        _write_index(output, sweep_file, cells, status, models)
+        _merge_cell_caches(main_cache, cells, notify)
+
+
+def _merge_cell_caches(main: Path | None, cells: list[Cell], notify: Callable[[str], None]) -> None:
+    """Fold the cells' cache shards into the sweep's cache (no shard: nothing to do).
+
+    A shard is merged only under its cell's folder lock: a cell still running somewhere (a
+    worker left behind by a lost scheduler, a cell an interrupted client did not wait for) keeps
+    writing its shard, which is merged by a later run instead.
+    """
+    shards = [(Path(c.config.output), Path(c.config.output) / CELL_CACHE_SHARD) for c in cells]
+    if main is None or not any(shard.is_file() for _, shard in shards):
+        return
+    with ResponseCache(main) as cache:
+        for run_dir, shard in shards:
+            if not shard.is_file():
+                continue
+            try:
+                with folder_lock(run_dir):
+                    _, problems = merge_shards(cache, [shard])
+            except ConfigError:
+                continue  # the cell is running elsewhere: its shard is merged by a later run
+            for problem in problems:
+                notify(f"warning: {problem}")

@@ -113,3 +113,70 @@ def dask_cluster(tmp_path: Path) -> Iterator[RealCluster]:
         yield cluster
     finally:
         stop_cluster(cluster)
+
+
+@pytest.fixture(scope="module")
+def shared_dask_cluster(tmp_path_factory) -> Iterator[RealCluster]:
+    """Like ``dask_cluster``, shared by a module's tests that kill nothing (starting one costs seconds)."""
+    cluster = start_cluster(tmp_path_factory.mktemp("shared-cluster"), workers=2)
+    try:
+        yield cluster
+    finally:
+        stop_cluster(cluster)
+
+
+#: The runner tests' offline plugin (backend ``test-center``: cacheable, ``delay_s`` per request).
+OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
+
+
+@pytest.fixture(scope="session")
+def cluster_release(tmp_path_factory) -> Path:
+    """2 houses, 2 pairs, 4 (pair, direction)s, 3 frames: 4 instances per condition."""
+    from povagent.testing.pytest_plugin import write_release
+
+    return write_release(tmp_path_factory.mktemp("cluster-release") / "povbench", houses=2, pairs=2, pair_directions=4, frames=3)
+
+
+@pytest.fixture
+def write_sweep(tmp_path, cluster_release, povagent_host):
+    """``write_sweep(output, delay_s=0, runs=1, concurrency=4, extra="") -> Path``: a sweep over the
+    conditions (three cells) with the offline ``test-center`` backend."""
+    import yaml
+
+    def make(output: Path, *, delay_s: float = 0.0, runs: int = 1, concurrency: int = 4, extra: str = "", axes: str = "conditions: [a, b, c]",
+             base_extra: dict | None = None) -> Path:
+        base = {
+            "plugins": [OFFLINE_PLUGIN],
+            "dataset": {"path": str(cluster_release)},
+            "backend": {"name": "test-center", "options": {"delay_s": delay_s}},
+            "strategy": "test-point",
+            "parser": "test-json",
+            "runs": runs,
+            "concurrency": concurrency,
+            "output": "ignored-by-sweeps",
+            **(base_extra or {}),
+        }
+        name = Path(output).name
+        (tmp_path / f"{name}-base.yaml").write_text(yaml.safe_dump(base))
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(f"base: {name}-base.yaml\noutput: {output}\naxes:\n  {axes}\n{extra}")
+        return path
+
+    return make
+
+
+@pytest.fixture
+def start_dask_cluster(tmp_path) -> Iterator:
+    """``start_dask_cluster(name, workers=2) -> RealCluster``; every cluster started is stopped after the test."""
+    started: list[RealCluster] = []
+
+    def start(name: str, workers: int = 2) -> RealCluster:
+        cluster = start_cluster(tmp_path / name, workers=workers)
+        started.append(cluster)
+        return cluster
+
+    try:
+        yield start
+    finally:
+        for cluster in started:
+            stop_cluster(cluster)
