@@ -240,10 +240,13 @@ def generate_dataset(
     recorded_options = Redactor().value(dict(judge_options)) if judge_options else {}
     options = GenerationOptions(GENERATOR_VERSION, seed, frames, with_render, judge_name(judge), recorded_options)
     if cluster is not None:
-        from povagent.cluster.spec import parse_cluster_spec  # checks the value before anything is written
+        # the value and the extra are checked before anything is written (neither imports Dask)
+        from povagent.cluster.client import require_distributed
+        from povagent.cluster.spec import parse_cluster_spec
 
         if isinstance(cluster, str):
             parse_cluster_spec(cluster)
+        require_distributed()
     start = time.perf_counter()
     kept = _prepare(out, options, houses)
     pending = [i for i in range(houses) if i not in kept]
