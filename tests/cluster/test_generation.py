@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -39,11 +40,19 @@ def one_process(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 
 def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_process, tmp_path) -> None:
     notices: list[str] = []
+    seen: list[tuple[int, int]] = []
     out = tmp_path / "data"
-    report = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=dask_cluster.address, notice=notices.append)
+    report = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, cluster=dask_cluster.address, notice=notices.append,
+                              progress=lambda summary, done, total: seen.append((done, total)))
     assert digests(out) == one_process
     assert report.generated == HOUSES
     assert any(f"all 2 workers see {out}" in n for n in notices), notices
+    # the progress callback counts houses as they finish on the cluster
+    assert seen == [(1, HOUSES), (2, HOUSES)]
+    # the workers' logs keep the structured format (run/logs.py's renderer: level, event, key=value)
+    logs = "".join(p.read_text() for p in dask_cluster.logs.glob("worker*.log"))
+    for index in range(HOUSES):
+        assert re.search(rf"\[info\s*\] house done\s.*index={index} .*seed={SEED}", logs), logs[-2000:]
 
 
 def test_a_worker_killed_mid_house_still_gives_the_same_bytes(dask_cluster, one_process, tmp_path) -> None:
