@@ -43,6 +43,54 @@ def _noop(i: int) -> int:
     return i
 
 
+def _cpu() -> float:
+    return time.process_time()
+
+
+def scheduler_cost(client, n: int, house_cpu: float) -> tuple[float, float]:
+    """CPU seconds per task: this process (client + the LocalCluster's scheduler) and the workers."""
+    client.gather(client.map(_noop, range(50), pure=False))  # warm
+    workers_before = client.run(_cpu)
+    here = time.process_time()
+    t = time.perf_counter()
+    client.gather(client.map(_noop, range(n), pure=False))
+    wall = time.perf_counter() - t
+    scheduler_cpu = (time.process_time() - here) / n
+    workers_after = client.run(_cpu)
+    worker_cpu = sum(workers_after[w] - workers_before[w] for w in workers_after) / n
+    per_task = scheduler_cpu + worker_cpu
+    print(f"scheduler cost per task ({n} no-op tasks, 2 workers): {1000 * scheduler_cpu:.2f} ms CPU client+scheduler, "
+          f"{1000 * worker_cpu:.2f} ms CPU on workers, {1000 * wall / n:.2f} ms wall each; "
+          f"{100 * per_task / house_cpu:.3f}% of a house's {house_cpu:.2f} CPU s (goal < 2%)")
+    return per_task, scheduler_cpu
+
+
+def extend_cost(base: Path, houses: int, seed: int, frames: int, house_cpu: float) -> None:
+    """What extending a dataset costs beyond its new houses: a fixed part and a part per complete house."""
+    from povagent.generate import generate_dataset
+    from povagent.generate.record import complete_houses
+
+    fixed_and_scan = []
+    for _ in range(5):
+        t = time.perf_counter()
+        rep = generate_dataset(base, houses=houses, seed=seed, frames=frames, progress=False)
+        fixed_and_scan.append(time.perf_counter() - t)
+        assert rep.generated == 0
+    scans = []
+    for _ in range(50):
+        t = time.perf_counter()
+        complete_houses(base)
+        scans.append(time.perf_counter() - t)
+    per_house = statistics.median(scans) / houses
+    whole = statistics.median(fixed_and_scan)
+    fixed = whole - 2 * houses * per_house  # generate_dataset reads the records twice: to skip, and for meta.json
+    extra = fixed + 2 * 1000 * per_house
+    print(f"skip check: a re-run over {houses} complete houses takes {whole:.3f} s (median of 5): {fixed:.3f} s fixed "
+          f"(judge and plugins, meta.json) + 2 x {1000 * per_house:.3f} ms per house (median of 50 scans of the records). "
+          f"Scaled to 1,000 houses (not measured on 1,000): {extra:.2f} s, so extending 1,000 -> 1,010 = the 10 new houses "
+          f"({10 * house_cpu:.0f} CPU s over the workers) + {extra:.2f} s (goal < 5 s)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--houses", type=int, default=6)
@@ -50,7 +98,28 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--noop-tasks", type=int, default=2000)
+    parser.add_argument("--only-scheduler", type=float, metavar="HOUSE_CPU_S", default=None,
+                        help="measure only the scheduler's cost per task, against a house of this many CPU seconds")
+    parser.add_argument("--only-extend", type=Path, metavar="DATASET", default=None,
+                        help="measure only the extend overhead, on a dataset this generator made")
+    parser.add_argument("--house-cpu", type=float, default=8.25, help="CPU seconds of a house, for --only-extend's sum")
     args = parser.parse_args()
+    if args.only_extend is not None:
+        from povagent.generate.record import complete_houses
+
+        found = complete_houses(args.only_extend)
+        any_record = next(iter(found.values()))
+        print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}; {len(found)} houses in {args.only_extend}")
+        extend_cost(args.only_extend, len(found), any_record.options["seed"], any_record.options["frames"], args.house_cpu)
+        return
+    if args.only_scheduler is not None:
+        import distributed
+
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=50) as local, \
+                distributed.Client(local) as client:
+            print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
+            scheduler_cost(client, args.noop_tasks, args.only_scheduler)
+        return
 
     import distributed
 
@@ -87,13 +156,7 @@ def main() -> None:
         house_cpu = statistics.median(cpu_per_house)
         house_bytes = sum(p.stat().st_size for p in (tmp / "jobs0" / "artifacts").rglob("*") if p.is_file()) / args.houses
 
-        n = args.noop_tasks
-        client.gather(client.map(_noop, range(50), pure=False))  # warm
-        t = time.perf_counter()
-        client.gather(client.map(_noop, range(n), pure=False))
-        per_task = (time.perf_counter() - t) * 2 / n
-        print(f"scheduler cost per task: {1000 * per_task:.2f} worker-ms ({n} no-op tasks, 2 workers) = "
-              f"{100 * per_task / house_cpu:.3f}% of a house's {house_cpu:.2f} CPU s (goal < 2%)")
+        _, scheduler_cpu = scheduler_cost(client, args.noop_tasks, house_cpu)
         client.close()
         local.close()
 
@@ -118,23 +181,13 @@ def main() -> None:
               f"{time.perf_counter() - t:.1f} s; same bytes: {digests(out) == reference}")
 
         # 4. extend: the per-house cost of finding complete houses, on the real houses of (1)
-        base = tmp / "jobs0"
-        checks = []
-        for _ in range(5):
-            t = time.perf_counter()
-            rep = generate_dataset(base, houses=args.houses, seed=args.seed, frames=args.frames, progress=False)
-            checks.append(time.perf_counter() - t)
-        assert rep.generated == 0
-        per_house = statistics.median(checks) / args.houses
-        print(f"skip check: {1000 * per_house:.2f} ms per complete house (median of 5 over {args.houses} real houses) -> "
-              f"{1000 * per_house:.2f} s for 1,000 houses (scaled, not measured on 1,000); extend 1,000 -> 1,010 = "
-              f"10 houses x {house_cpu:.1f} CPU s / workers + {1000 * per_house:.2f} s (goal < 5 s)")
+        extend_cost(tmp / "jobs0", args.houses, args.seed, args.frames, house_cpu)
 
         # 5. predicted houses/hour
         print(f"per house: {house_cpu:.2f} CPU s, {house_bytes / 1e6:.2f} MB written")
         for workers in (16, 64, 512):
             compute = workers * 3600 / house_cpu
-            scheduler = 3600 / (per_task / 2)  # tasks the scheduler can hand out per hour, one at a time
+            scheduler = 3600 / scheduler_cpu  # tasks one scheduler can hand out per hour at its measured CPU per task
             print(f"  {workers:4d} workers: {min(compute, scheduler):,.0f} houses/hour (workers alone {compute:,.0f}; "
                   f"scheduler bound, no-op tasks through one scheduler {scheduler:,.0f}); output {min(compute, scheduler) * house_bytes / 1e9:.1f} GB/hour")
     finally:

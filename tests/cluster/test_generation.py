@@ -23,6 +23,8 @@ from povagent.errors import ClusterError
 from povagent.generate import generate_dataset
 
 SEED, HOUSES, FRAMES = 21, 2, 1
+#: Two tiny houses take seconds on an idle machine; a shared machine under load can take minutes.
+pytestmark = pytest.mark.timeout(900)
 
 
 def digests(root: Path) -> dict[str, str]:
