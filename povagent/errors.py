@@ -6,6 +6,8 @@ povagent is a bug and keeps its traceback.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 
 class PovagentError(Exception):
     """Base class of every error povagent reports to a user without a traceback."""
@@ -29,6 +31,15 @@ class PredictionsError(PovagentError):
 
 class ResultsError(PovagentError):
     """A run's results file cannot be written (a full disk, a lost mount); rows already written stay."""
+
+
+class GenerationError(PovagentError):
+    """Some houses of a generation failed; the others are on disk. ``failures`` lists
+    (index, seed, error) of each failed house; running the same command again redoes only them."""
+
+    def __init__(self, message: str, failures: Sequence[object] = ()) -> None:
+        super().__init__(message)
+        self.failures = list(failures)
 
 
 class ClusterError(PovagentError):

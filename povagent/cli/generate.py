@@ -54,11 +54,17 @@ def generate_command(
     plugin: list[str] = typer.Option(
         [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable)."
     ),
+    cluster: str | None = typer.Option(
+        None, "--cluster", metavar="local:N|tcp://HOST:PORT",
+        help="Render the houses on a Dask cluster: N local worker processes, or a running scheduler "
+        "(needs pip install 'povagent[cluster]'; the files do not depend on it).",
+    ),
 ) -> None:
     """Generate a POVBench-format dataset of procedural houses.
 
     Builds the houses, renders their exploration frames and observer views, and writes the
-    queries of all three conditions.
+    queries of all three conditions. Run again, it keeps the houses already complete in the
+    folder and makes the missing ones (resume, or more houses with the same options).
     """
     from povagent.errors import PluginError
     from povagent.generate import generate_dataset
@@ -76,6 +82,8 @@ def generate_command(
             judge=judge,
             judge_options=options,
             plugins=plugin,
+            cluster=cluster,
+            notice=lambda message: typer.echo(message, err=True),
         )
     except PluginError as exc:
         if ":" in judge and f"unknown judge {judge!r}" in str(exc):
@@ -87,7 +95,7 @@ def generate_command(
         raise
     shares = ", ".join(f"{d} {100 * s:.0f}%" for d, s in report.direction_shares().items())
     typer.echo(
-        f"{out}: {len(report.houses)} houses, {report.pairs} pairs, "
+        f"{out}: {len(report.houses)} houses ({report.kept} kept, {report.generated} made), {report.pairs} pairs, "
         f"{report.instances_per_condition} instances per condition ({shares} of pairs), "
         f"{report.renders} frames in {report.seconds:.1f} s"
     )

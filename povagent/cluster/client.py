@@ -22,6 +22,10 @@ if TYPE_CHECKING:
 #: How long to wait for a scheduler that does not answer before saying so.
 CONNECT_TIMEOUT_S = 20
 
+#: Dask config key read by povagent's worker tasks: the level of their structured log lines.
+WORKER_LOG_LEVEL = "povagent.worker-log-level"
+LOCAL_WORKER_LOG_LEVEL = "warning"
+
 MISSING_EXTRA = "Dask is not installed: --cluster needs the cluster extra, pip install 'povagent[cluster]'"
 
 
@@ -52,12 +56,16 @@ def cluster_client(cluster: str | ClusterSpec | Any | None) -> Iterator[Client |
     import distributed
 
     if spec.local_workers is not None:
-        dashboard = ":0" if importlib.util.find_spec("bokeh") is not None else None
-        with distributed.LocalCluster(
+        import dask
+
+        # ":0": the scheduler's HTTP server (which serves the dashboard when bokeh is there) on a
+        # free port, never a clash on 8787. Local workers print to the user's terminal: their
+        # structured house logs are kept to warnings and errors there (LOCAL_WORKER_LOG_LEVEL).
+        with dask.config.set({WORKER_LOG_LEVEL: LOCAL_WORKER_LOG_LEVEL}), distributed.LocalCluster(
             n_workers=spec.local_workers,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=dashboard,
+            dashboard_address=":0",
             silence_logs=50,
         ) as local, distributed.Client(local) as client:
             yield client
@@ -73,10 +81,16 @@ def cluster_client(cluster: str | ClusterSpec | Any | None) -> Iterator[Client |
 
 
 def dashboard_link(client: Client) -> str | None:
-    """The Dask dashboard's address, when the scheduler really serves one (it needs bokeh)."""
+    """The Dask dashboard's address, when the scheduler really serves one (it needs bokeh there)."""
     try:
         served = "dashboard" in client.scheduler_info().get("services", {})
+        served = served and bool(client.run_on_scheduler(_has_bokeh))
         link = client.dashboard_link if served else None
     except Exception:  # the scheduler went away or answers oddly: there is nothing to show
         return None
     return str(link) if link else None
+
+
+def _has_bokeh() -> bool:
+    """On the scheduler: whether bokeh (the dashboard's one requirement) is importable there."""
+    return importlib.util.find_spec("bokeh") is not None

@@ -1,26 +1,45 @@
-"""A whole generated dataset: houses in one or more processes, then ``meta.json``.
+"""A whole generated dataset: the houses not yet on disk, in one or more processes, then ``meta.json``.
 
 What it is for: ``generate_dataset``, the library entry point behind ``povagent generate``.
-Houses are independent (each seeded by (seed, index)), so any number of worker processes gives
-the same bytes; workers are started with ``spawn`` so it is safe wherever it runs. What it must
-not do: print anything other than the optional progress bar, or write timings into files.
+Houses are independent (each seeded by (seed, index)) and each becomes complete by one rename
+(``record``), so a generation can be stopped and resumed, extended to more houses, and spread
+over any number of processes (``--jobs``, workers started with ``spawn``) or a Dask cluster
+(``--cluster``, through ``povagent.cluster``, imported only then) with the same bytes.
+``make_house`` and ``make_house_files`` are the plain functions of one house that every engine
+runs. What it must not do: print anything other than the optional progress bar and the notices
+handed to ``notice``, write timings into files, or import Dask.
 """
 
 from __future__ import annotations
 
 import json
 import multiprocessing
-import shutil
+import os
 import sys
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Literal, Mapping, Sequence
 
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, GenerationError
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary, generate_house
+from povagent.generate.record import (
+    ARTIFACTS,
+    PARTIAL,
+    RECORD,
+    GenerationOptions,
+    HouseRecord,
+    clear_partial,
+    complete_houses,
+    house_files,
+    house_folder,
+    read_record,
+    remove_half_written,
+    write_house_atomically,
+)
 from povagent.generate.writer import write_json
 from povagent.run.logs import Redactor
 
@@ -36,6 +55,12 @@ class GenerationReport:
     seed: int
     houses: list[HouseSummary] = field(default_factory=list)
     seconds: float = 0.0
+    #: Houses made by this call (the others were already complete on disk).
+    generated: int = 0
+    #: Houses found complete and kept as they were.
+    kept: int = 0
+    #: CPU seconds the houses made by this call took where they ran (measured, never written).
+    cpu_seconds: float = 0.0
 
     @property
     def pairs(self) -> int:
@@ -75,6 +100,84 @@ class GenerationReport:
 
 
 ProgressCallback = Callable[[HouseSummary, int, int], None]
+#: Where a cluster's workers put houses: "auto" probes once whether they see the output folder.
+Storage = Literal["auto", "shared", "return"]
+#: Command-line flags of the options a dataset records, for the message refusing a mismatch.
+OPTION_FLAGS = {
+    "version": "generator version",
+    "seed": "--seed",
+    "frames": "--frames",
+    "with_render": "--with-render",
+    "judge": "--judge",
+    "judge_options": "--judge-option",
+}
+
+
+@dataclass(frozen=True)
+class HouseFailure:
+    """A house that raised: its index, the dataset seed, and the error (type: message)."""
+
+    index: int
+    seed: int
+    error: str
+
+
+@dataclass
+class HouseOutcome:
+    """What one house task returns: its record, or its failure.
+
+    ``files`` is set when the house came back as bytes (workers that cannot see the output
+    folder); ``kept`` when it was already complete; ``cpu_seconds`` is measured, never written.
+    """
+
+    index: int
+    record: HouseRecord | None = None
+    failure: HouseFailure | None = None
+    files: dict[str, bytes] | None = None
+    kept: bool = False
+    cpu_seconds: float = 0.0
+
+
+def make_house(out: Path, options: GenerationOptions, index: int, judge: SurfaceJudge) -> HouseOutcome:
+    """Make house ``index`` of the dataset in ``out`` unless it is complete; never raises for the house.
+
+    Idempotent: run twice (or twice at once), the house is written once and its bytes are the same.
+    """
+    start = time.process_time()
+    done = read_record(house_folder(out, index))
+    if done is not None:
+        return HouseOutcome(index, record=done, kept=True)
+    try:
+        record = write_house_atomically(
+            Path(out), index, options,
+            lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
+        )  # fmt: skip
+    except Exception as exc:  # the house's own failure: recorded, the other houses go on
+        return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)
+    return HouseOutcome(index, record=record, cpu_seconds=time.process_time() - start)
+
+
+def make_house_files(options: GenerationOptions, index: int, judge: SurfaceJudge) -> HouseOutcome:
+    """Make house ``index`` in a private temporary folder and return its files as bytes.
+
+    For workers that cannot see the output folder: the caller writes the files with
+    ``record.place_house_files``. Never raises for the house.
+    """
+    start = time.process_time()
+    try:
+        with tempfile.TemporaryDirectory(prefix="povagent-house-") as tmp:
+            record = write_house_atomically(
+                Path(tmp), index, options,
+                lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
+            )  # fmt: skip
+            files = house_files(house_folder(Path(tmp), index))
+    except Exception as exc:
+        return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)
+    return HouseOutcome(index, record=record, files=files, cpu_seconds=time.process_time() - start)
+
+
+def _failure(options: GenerationOptions, index: int, exc: BaseException) -> HouseFailure:
+    return HouseFailure(index, options.seed, Redactor().text(f"{type(exc).__name__}: {exc}"))
 
 
 def generate_dataset(
@@ -88,8 +191,11 @@ def generate_dataset(
     judge: str | SurfaceJudge = DEFAULT_JUDGE,
     judge_options: Mapping[str, Any] | None = None,
     plugins: Sequence[str] = (),
+    cluster: Any = None,
+    storage: Storage = "auto",
+    notice: Callable[[str], None] | None = None,
 ) -> GenerationReport:
-    """Generate ``houses`` houses in the POVBench release layout under ``out``.
+    """Generate ``houses`` houses in the POVBench release layout under ``out``, or the missing ones.
 
     ``progress``: True shows a rich progress bar when stdout is a terminal, a callable is
     called as ``progress(summary, done, total)`` after each house, False is silent.
@@ -97,14 +203,30 @@ def generate_dataset(
     ``judge`` decides stage 3: the name of a registered judge (``register_judges``; default
     ``physical-rules``), made with ``judge_options``, with the plugin modules ``plugins``
     (dotted names or ``.py`` paths, as a pipeline's ``plugins:``) loaded first; or a
-    :class:`~povagent.generate.judge.SurfaceJudge` object, which must pickle when ``jobs > 1``.
-    A pair keeps only if the judge allows ``pairs.MIN_DIRECTIONS`` (2) of its directions.
-    ``meta.json`` records the judge's name (and its options, secrets redacted, when given).
+    :class:`~povagent.generate.judge.SurfaceJudge` object, which must pickle when ``jobs > 1``
+    or on a cluster. A pair keeps only if the judge allows ``pairs.MIN_DIRECTIONS`` (2) of its
+    directions. ``meta.json`` records the judge's name (and its options, secrets redacted).
     The judge is made before anything is written, so an unknown name or bad options raise
     :class:`~povagent.errors.PluginError` with ``out`` untouched.
-    The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``. ``out``
-    must be empty, new, or a dataset this generator wrote (which is then replaced whole);
-    anything else raises :class:`~povagent.errors.DatasetError`.
+
+    Resuming and extending: ``out`` must be empty, new, or a dataset this generator wrote. Houses
+    already complete there are kept as they are (bytes and times); half-written ones are redone;
+    asking for more houses makes only the new ones. Options that differ from the ones the houses
+    on disk were made with (seed, frames, with_render, judge and its options) raise
+    :class:`~povagent.errors.DatasetError` naming the option; so does asking for fewer houses than
+    are complete. ``meta.json`` is written last, from the houses on disk.
+
+    Where it runs: ``jobs`` local processes, or with ``cluster`` (``"local:N"``, a scheduler
+    address ``"tcp://HOST:PORT"`` or a ``distributed.Client``) a Dask cluster, which needs the
+    ``cluster`` extra. ``storage`` says how cluster workers hand houses over: ``"shared"`` (they
+    write into ``out``), ``"return"`` (they send the files back and this process writes them) or
+    ``"auto"`` (probe once). ``notice`` receives one-line messages meant for the user (the
+    dashboard's address, what the storage probe found).
+
+    The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``, the
+    cluster or the order houses finish. A house that raises does not stop the others; at the
+    end :class:`~povagent.errors.GenerationError` names every failed house (index, seed, error),
+    ``meta.json`` is not written, and the same call redoes only those houses.
     """
     out = Path(out)
     if isinstance(judge, str):
@@ -115,72 +237,160 @@ def generate_dataset(
         raise ValueError("judge_options apply to a judge given by its registered name, not to a judge object")
     elif not isinstance(judge, SurfaceJudge):
         raise TypeError(f"judge must be a registered judge name or a SurfaceJudge, not {type(judge).__name__}")
-    judge_record: dict[str, Any] = {"judge": judge_name(judge)}
-    if judge_options:
-        judge_record["judge_options"] = Redactor().value(dict(judge_options))
-    _prepare(out)
+    if storage not in ("auto", "shared", "return"):
+        raise ValueError(f"storage must be 'auto', 'shared' or 'return', not {storage!r}")
+    recorded_options = Redactor().value(dict(judge_options)) if judge_options else {}
+    options = GenerationOptions(GENERATOR_VERSION, seed, frames, with_render, judge_name(judge), recorded_options)
+    if cluster is not None:
+        # the value and the extra are checked before anything is written (neither imports Dask)
+        from povagent.cluster.client import require_distributed
+        from povagent.cluster.spec import parse_cluster_spec
+
+        if isinstance(cluster, str):
+            parse_cluster_spec(cluster)
+        require_distributed()
     start = time.perf_counter()
-    report = GenerationReport(out=out, seed=seed)
-    callback, finish = _progress(progress, houses)
-    try:
-        if jobs <= 1 or houses <= 1:
-            for index in range(houses):
-                summary = generate_house(out, seed, index, frames, with_render, judge)
-                report.houses.append(summary)
-                callback(summary, len(report.houses), houses)
-        else:
-            context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-                futures = [
-                    pool.submit(generate_house, out, seed, i, frames, with_render, judge) for i in range(houses)
-                ]
-                for future in as_completed(futures):
-                    summary = future.result()
-                    report.houses.append(summary)
-                    callback(summary, len(report.houses), houses)
-    finally:
-        finish()
-    report.houses.sort(key=lambda h: h.index)
+    kept = _prepare(out, options, houses)
+    pending = [i for i in range(houses) if i not in kept]
+    report = GenerationReport(out=out, seed=seed, kept=len(kept))
+    failures: list[HouseFailure] = []
+    if pending:
+        # The dataset is changing: until meta.json is written again, it is not a finished one.
+        (out / "meta.json").unlink(missing_ok=True)
+        remove_half_written(out, keep=set(kept))
+        callback, finish = _progress(progress, houses, len(kept))
+        done = len(kept)
+
+        def finished(outcome: HouseOutcome) -> None:
+            nonlocal done
+            if outcome.failure is not None:
+                failures.append(outcome.failure)
+                return
+            assert outcome.record is not None
+            done += 1
+            report.generated += 0 if outcome.kept else 1
+            report.cpu_seconds += outcome.cpu_seconds
+            callback(outcome.record.summary, done, houses)
+
+        try:
+            if cluster is not None:
+                from povagent.cluster.generation import generate_on_cluster
+
+                generate_on_cluster(cluster, out, options, pending, judge, finished, storage=storage, notice=notice)
+            else:
+                _generate_here(out, options, pending, judge, jobs, finished)
+        finally:
+            finish()
+        clear_partial(out)
+    if failures:
+        failures.sort(key=lambda f: f.index)
+        raise GenerationError(_failure_message(out, failures, houses), failures)
+    on_disk = complete_houses(out)
+    report.houses = [on_disk[i].summary for i in range(houses)]
+    _write_meta(out, options, judge_options, report)
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _generate_here(
+    out: Path, options: GenerationOptions, pending: list[int], judge: SurfaceJudge, jobs: int,
+    finished: Callable[[HouseOutcome], None],
+) -> None:
+    """Make the ``pending`` houses in this process or in ``jobs`` local worker processes."""
+    if jobs <= 1 or len(pending) <= 1:
+        for index in pending:
+            finished(make_house(out, options, index, judge))
+        return
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        futures = [pool.submit(make_house, out, options, i, judge) for i in pending]
+        for future in as_completed(futures):
+            finished(future.result())
+
+
+def _failure_message(out: Path, failures: list[HouseFailure], houses: int) -> str:
+    shown = "; ".join(f"house {f.index} (seed {f.seed}): {f.error}" for f in failures[:5])
+    more = f"; and {len(failures) - 5} more" if len(failures) > 5 else ""
+    return (
+        f"{len(failures)} of {houses} houses failed: {shown}{more}. The other houses are complete in {out}; "
+        "run the same command again to redo only the failed ones"
+    )
+
+
+def _write_meta(
+    out: Path, options: GenerationOptions, judge_options: Mapping[str, Any] | None, report: GenerationReport
+) -> None:
+    """``meta.json``, last, from the houses on disk; renamed into place so it is never half-written."""
+    judge_record: dict[str, Any] = {"judge": options.judge}
+    if judge_options:
+        judge_record["judge_options"] = dict(options.judge_options)
+    tmp = out / f".meta.json.{os.getpid()}"
     write_json(
-        out / "meta.json",
+        tmp,
         {
             "version": GENERATOR_VERSION,
-            "seed": seed,
+            "seed": options.seed,
             "generator": {
                 "name": "povagent.generate",
-                "frames": frames,
-                "houses": houses,
+                "frames": options.frames,
+                "houses": len(report.houses),
                 "camera": {"exploration_height": 0.9, "exploration_horizon": 30, "observer_height": 1.55, "fov": 100},
                 **judge_record,
             },
             "counts": report.counts(),
         },
     )
-    report.seconds = time.perf_counter() - start
-    return report
+    os.replace(tmp, out / "meta.json")
 
 
-def _prepare(out: Path) -> None:
-    """Make ``out`` ready: empty, or a dataset this generator wrote (its houses are replaced).
+def _prepare(out: Path, options: GenerationOptions, houses: int) -> dict[int, HouseRecord]:
+    """Make ``out`` ready and return the houses already complete in it.
 
-    A folder holding anything else is refused rather than mixed with generated houses.
+    ``out`` must be new, empty, or a dataset this generator wrote (finished: its ``meta.json``
+    says so; or unfinished: only ``artifacts/`` and ``.partial/``, with house records). A folder
+    holding anything else is refused rather than mixed with generated houses; so are houses made
+    with other options, and a request for fewer houses than are complete.
     """
     if out.exists() and any(out.iterdir()):
-        meta = out / "meta.json"
-        ours = False
-        if meta.is_file():
-            try:
-                ours = json.loads(meta.read_text()).get("generator", {}).get("name") == "povagent.generate"
-            except (ValueError, AttributeError):
-                ours = False
-        if not ours:
+        if not _ours(out):
             raise DatasetError(f"{out} is not empty and not a generated dataset: choose an empty or new folder")
-        shutil.rmtree(out / "artifacts", ignore_errors=True)
-        meta.unlink()
+        kept = complete_houses(out)
+        for index, record in sorted(kept.items()):
+            differs = options.difference(record.options)
+            if differs is not None:
+                flag = OPTION_FLAGS.get(differs, differs)
+                raise DatasetError(
+                    f"{out} was generated with {differs} {record.options.get(differs)!r} (house {index}), this run asks "
+                    f"for {options.record()[differs]!r}: give the same {flag} to resume or extend it, or choose a new folder"
+                )
+        beyond = sorted(i for i in kept if i >= houses)
+        if beyond:
+            raise DatasetError(
+                f"{out} already holds {len(kept)} complete houses (up to index {beyond[-1]}); --houses {houses} "
+                f"would leave some out of meta.json: ask for at least {beyond[-1] + 1} houses, or choose a new folder"
+            )
+        return kept
     out.mkdir(parents=True, exist_ok=True)
+    return {}
 
 
-def _progress(progress: bool | ProgressCallback, total: int) -> tuple[ProgressCallback, Callable[[], None]]:
+def _ours(out: Path) -> bool:
+    """Whether ``out`` holds a dataset this generator wrote, finished or not."""
+    meta = out / "meta.json"
+    if meta.is_file():
+        try:
+            return json.loads(meta.read_text()).get("generator", {}).get("name") == "povagent.generate"
+        except (ValueError, AttributeError, OSError):
+            return False
+    names = {p.name for p in out.iterdir() if not p.name.startswith(f"{PARTIAL}-removed-")}
+    if not names <= {ARTIFACTS, PARTIAL}:
+        return False
+    return (out / PARTIAL).is_dir() or bool(complete_houses(out)) or any((out / ARTIFACTS).glob(f"*/{RECORD}"))
+
+
+def _progress(
+    progress: bool | ProgressCallback, total: int, already: int = 0
+) -> tuple[ProgressCallback, Callable[[], None]]:
     """The per-house callback and the closing action for the requested kind of progress."""
     if callable(progress):
         return progress, lambda: None
@@ -189,7 +399,7 @@ def _progress(progress: bool | ProgressCallback, total: int) -> tuple[ProgressCa
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     bar = Progress(TextColumn("generating houses"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
-    task = bar.add_task("houses", total=total)
+    task = bar.add_task("houses", total=total, completed=already)
     bar.start()
 
     def advance(summary: HouseSummary, done: int, total_: int) -> None:

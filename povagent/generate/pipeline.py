@@ -78,14 +78,17 @@ class HouseSummary:
 
 
 def generate_house(
-    out: Path,
+    folder: Path,
     seed: int,
     index: int,
     frames: int = 30,
     with_render: bool = False,
     judge: SurfaceJudge | None = None,
 ) -> HouseSummary:
-    """Generate and write house ``index``; returns its summary."""
+    """Generate house ``index`` and write its files into ``folder``; returns its summary.
+
+    ``folder`` is the house's own folder (``record.write_house_atomically`` hands a staging one).
+    """
     built = build_house(seed, index)
     house, renderer = built.house, built.renderer
     cameras = plan_tour(house, renderer, frames)
@@ -94,7 +97,7 @@ def generate_house(
     rng = built.rngs["pairs"]
     max_pairs = int(rng.integers(PAIRS_PER_HOUSE[0], PAIRS_PER_HOUSE[1] + 1))
     pairs: list[Pair] = build_pairs(house, renderer, counts, judge or PhysicalRulesJudge(), rng, max_pairs)
-    write_house(Path(out), house, shots, pairs, with_render)
+    write_house(Path(folder), house, shots, pairs, with_render)
     directions: dict[str, int] = {}
     for p in pairs:
         for q in p.queries:

@@ -106,10 +106,9 @@ def pair_entry(pair: Pair) -> dict[str, Any]:
 
 
 def write_house(
-    out: Path, house: House, frames: list[Frame], pairs: list[Pair], with_render: bool = False
+    root: Path, house: House, frames: list[Frame], pairs: list[Pair], with_render: bool = False
 ) -> dict[str, int]:
-    """Write one house folder under ``out/artifacts``; returns counts of what was written."""
-    root = out / "artifacts" / house.house_id
+    """Write one house's files into the folder ``root``; returns counts of what was written."""
     log, visible = [], {}
     for k, frame in enumerate(frames):
         rel = f"exploration_images/frame_{k:03d}.png"

@@ -127,7 +127,7 @@ def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
     spec = resolve_hub_dataset(config).dataset
     if spec.generate is not None:
         g = spec.generate
-        if not (g.out / "artifacts").is_dir():
+        if not (g.out / "meta.json").is_file():  # none yet, or an interrupted one: generating resumes it
             from povagent.generate import generate_dataset  # heavy (trimesh): only when asked
 
             generate_dataset(

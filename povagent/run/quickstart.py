@@ -70,7 +70,7 @@ def run_quickstart(
     out = Path(out)
     if dataset is None:
         data = out / "data"
-        if not (data / "artifacts").is_dir():
+        if not (data / "meta.json").is_file():  # none yet, or an interrupted one: generating resumes it
             from povagent.generate import generate_dataset
 
             say(f"generating {houses} houses (seed {seed}, {frames} frames each) into {data} ...")

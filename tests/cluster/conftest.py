@@ -15,9 +15,10 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -55,8 +56,14 @@ def _wait_for_workers(address: str, count: int, deadline: float) -> None:
         client.wait_for_workers(count, timeout=max(1.0, deadline - time.monotonic()))
 
 
-def start_cluster(tmp: Path, workers: int = 2, worker_env: dict[str, str] | None = None) -> RealCluster:
-    """Start ``dask scheduler`` and ``workers`` x ``dask worker`` on 127.0.0.1 (no nanny)."""
+def start_cluster(
+    tmp: Path, workers: int = 2, worker_env: dict[str, str] | None = None, worker_prefix: list[str] | None = None
+) -> RealCluster:
+    """Start ``dask scheduler`` and ``workers`` x ``dask worker`` on 127.0.0.1 (no nanny).
+
+    ``worker_prefix`` goes before each worker's command (it must ``exec`` the command, so the pid
+    stays the worker's): :func:`hidden_folder_prefix` gives workers their own view of the disk.
+    """
     pytest.importorskip("distributed", reason="the cluster tests need the test extra (distributed)")
     tmp.mkdir(parents=True, exist_ok=True)
     scheduler_file = tmp / "scheduler.json"
@@ -79,7 +86,7 @@ def start_cluster(tmp: Path, workers: int = 2, worker_env: dict[str, str] | None
         for i in range(workers):
             wlog = open(tmp / f"worker{i}.log", "wb")  # noqa: SIM115 - closed with the process
             cluster.workers.append(subprocess.Popen(
-                [*_dask_command(), "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                [*(worker_prefix or []), *_dask_command(), "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
                  "--host", "127.0.0.1", "--name", f"w{i}", "--lifetime", LIFETIME, "--death-timeout", "60",
                  "--local-directory", str(tmp / f"w{i}")],
                 stdout=wlog, stderr=subprocess.STDOUT, env={**env, **(worker_env or {})},
@@ -89,6 +96,18 @@ def start_cluster(tmp: Path, workers: int = 2, worker_env: dict[str, str] | None
         stop_cluster(cluster)
         raise
     return cluster
+
+
+def hidden_folder_prefix(folder: Path) -> list[str]:
+    """A worker prefix that runs the worker in its own mount namespace with an empty tmpfs over
+    ``folder``: the worker does not see what this machine writes there (as a worker on another
+    machine would not see a local disk). Skips the test when this kernel refuses user namespaces."""
+    folder.mkdir(parents=True, exist_ok=True)
+    prefix = ["unshare", "--user", "--map-root-user", "--mount", "sh", "-c", 'mount -t tmpfs none "$0" && exec "$@"', str(folder)]
+    check = subprocess.run([*prefix, "true"], capture_output=True, timeout=30)
+    if check.returncode != 0:
+        pytest.skip(f"unshare cannot make a private mount namespace here: {check.stderr.decode()[-200:]}")
+    return prefix
 
 
 def stop_cluster(cluster: RealCluster) -> None:
@@ -166,12 +185,12 @@ def write_sweep(tmp_path, cluster_release, povagent_host):
 
 
 @pytest.fixture
-def start_dask_cluster(tmp_path) -> Iterator:
-    """``start_dask_cluster(name, workers=2) -> RealCluster``; every cluster started is stopped after the test."""
+def cluster_factory(tmp_path: Path) -> Iterator[Callable[..., RealCluster]]:
+    """``cluster_factory(workers=1, worker_prefix=...)`` starts a custom cluster; all are stopped after the test."""
     started: list[RealCluster] = []
 
-    def start(name: str, workers: int = 2) -> RealCluster:
-        cluster = start_cluster(tmp_path / name, workers=workers)
+    def start(**options: Any) -> RealCluster:
+        cluster = start_cluster(tmp_path / f"cluster{len(started)}", **options)
         started.append(cluster)
         return cluster
 
@@ -180,3 +199,16 @@ def start_dask_cluster(tmp_path) -> Iterator:
     finally:
         for cluster in started:
             stop_cluster(cluster)
+
+
+@pytest.fixture
+def hidden_folder() -> Callable[[Path], list[str]]:
+    """:func:`hidden_folder_prefix`, for tests (conftest modules are not imported by name)."""
+    return hidden_folder_prefix
+
+
+@pytest.fixture
+def start_dask_cluster(cluster_factory: Callable[..., RealCluster]) -> Callable[..., RealCluster]:
+    """``start_dask_cluster(name, workers=2) -> RealCluster`` (``cluster_factory`` by another name:
+    the sweep tests name their clusters; every cluster started is stopped after the test)."""
+    return lambda name, workers=2: cluster_factory(workers=workers)

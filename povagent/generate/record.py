@@ -1,0 +1,208 @@
+"""What made a house, and the one way a house becomes complete: renamed into place.
+
+What it is for: a generated dataset grows one house at a time. Each house is written into a
+folder of its own under ``OUT/.partial/`` with a small record of what made it (generator
+version, seed, index, options: ``_generated.json``), then renamed to ``OUT/artifacts/<house>``.
+A house folder under ``artifacts/`` with a readable record is therefore complete, and anything
+under ``.partial/`` is a house some process did not finish (it is removed and redone). The same
+house written twice (a retried task whose first attempt was still running) is harmless: the
+second rename finds the folder in place and its copy, byte-identical, is dropped. The records
+are also how a re-run learns what is on disk: which houses to skip, whether the options asked
+for are the options the dataset was made with, and the counts ``meta.json`` is written from.
+What it must not do: render anything, or record anything that differs between machines, worker
+counts or runs (no times, hosts or pids), so a record is as reproducible as the house.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from povagent.errors import DatasetError
+from povagent.generate.pipeline import HouseSummary, house_id
+from povagent.generate.writer import write_json
+
+#: The record of what made a house, inside its folder (povagent's own files start with ``_``).
+RECORD = "_generated.json"
+#: Where houses are written before they are complete (never inside ``artifacts/``, which the
+#: loader reads).
+PARTIAL = ".partial"
+ARTIFACTS = "artifacts"
+
+
+@dataclass(frozen=True)
+class GenerationOptions:
+    """Everything that decides a house's bytes besides its index (the number of houses does not).
+
+    ``judge_options`` are kept as recorded (secrets redacted), so they can be compared with a
+    record on disk.
+    """
+
+    version: str
+    seed: int
+    frames: int
+    with_render: bool
+    judge: str
+    judge_options: Mapping[str, Any] = field(default_factory=dict)
+
+    def record(self) -> dict[str, Any]:
+        """The options as a record stores them."""
+        return {**asdict(self), "judge_options": dict(self.judge_options)}
+
+    def difference(self, recorded: Mapping[str, Any]) -> str | None:
+        """The first option (by name) whose value in ``recorded`` differs from this one, or None."""
+        mine = json.loads(json.dumps(self.record()))  # the types a record read back has
+        for name in mine:
+            if recorded.get(name) != mine[name]:
+                return name
+        return None
+
+
+@dataclass(frozen=True)
+class HouseRecord:
+    """A complete house: the options that made it and its summary (counts, no timings)."""
+
+    index: int
+    options: dict[str, Any]
+    summary: HouseSummary
+
+    def to_json(self) -> dict[str, Any]:
+        """The record as written to ``_generated.json``."""
+        return {"index": self.index, "options": self.options, "summary": asdict(self.summary)}
+
+
+def house_folder(out: Path, index: int) -> Path:
+    """Where house ``index`` lives once complete."""
+    return Path(out) / ARTIFACTS / house_id(index)
+
+
+def read_record(folder: Path) -> HouseRecord | None:
+    """The record of a house folder, or None when it has none or it cannot be read (not complete)."""
+    try:
+        raw = json.loads((folder / RECORD).read_text(encoding="utf-8"))
+        return HouseRecord(int(raw["index"]), dict(raw["options"]), HouseSummary(**raw["summary"]))
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+
+
+def complete_houses(out: Path) -> dict[int, HouseRecord]:
+    """Every complete house under ``out/artifacts`` by index (folders without a record are not)."""
+    found: dict[int, HouseRecord] = {}
+    art = Path(out) / ARTIFACTS
+    if not art.is_dir():
+        return found
+    for folder in sorted(art.iterdir()):
+        record = read_record(folder) if folder.is_dir() else None
+        if record is not None and folder.name == house_id(record.index):
+            found[record.index] = record
+    return found
+
+
+def clear_partial(out: Path) -> None:
+    """Remove ``.partial/`` (houses nobody will finish), first moving it aside in one rename.
+
+    A task of an earlier, killed client may still be writing there: after the move its staging
+    folder is gone from under it, so it can never rename a house it did not finish into place
+    (``write_house_atomically`` checks that its folder is still the one it made).
+    """
+    out = Path(out)
+    for leftover in sorted(out.glob(f"{PARTIAL}-removed-*")):
+        shutil.rmtree(leftover, ignore_errors=True)
+    partial = out / PARTIAL
+    if partial.exists():
+        aside = out / f"{PARTIAL}-removed-{uuid.uuid4().hex}"
+        try:
+            os.rename(partial, aside)
+        except OSError:
+            return
+        shutil.rmtree(aside, ignore_errors=True)
+
+
+def remove_half_written(out: Path, keep: set[int]) -> None:
+    """Remove what unfinished runs left: ``.partial/`` and house folders with no record.
+
+    Complete houses (``keep``) are never touched.
+    """
+    clear_partial(out)
+    art = Path(out) / ARTIFACTS
+    kept_names = {house_id(i) for i in keep}
+    if art.is_dir():
+        for folder in sorted(art.iterdir()):
+            if folder.name not in kept_names and read_record(folder) is None:
+                shutil.rmtree(folder) if folder.is_dir() else folder.unlink()
+
+
+def write_house_atomically(
+    out: Path, index: int, options: GenerationOptions, write: Callable[[Path], HouseSummary]
+) -> HouseRecord:
+    """Run ``write(folder)`` into a fresh folder under ``.partial/``, add the record, rename it in.
+
+    When another attempt completed the house first, its copy stays and this one is dropped (the
+    bytes are the same by construction). Returns the house's record.
+    """
+    out = Path(out)
+    staging = out / PARTIAL / f"{house_id(index)}.{uuid.uuid4().hex}"
+    staging.mkdir(parents=True)
+    made = staging.stat().st_ino
+    try:
+        summary = write(staging)
+        record = HouseRecord(index, options.record(), summary)
+        write_json(staging / RECORD, record.to_json())
+        return _place(staging, made, house_folder(out, index), record)
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging, ignore_errors=True)
+
+
+def place_house_files(out: Path, index: int, files: Mapping[str, bytes]) -> HouseRecord:
+    """Write a house's files (relative path -> bytes, as a worker sent them) and rename it in.
+
+    The files must include the record; a path leaving the house folder is refused.
+    """
+    out = Path(out)
+    staging = out / PARTIAL / f"{house_id(index)}.{uuid.uuid4().hex}"
+    staging.mkdir(parents=True)
+    made = staging.stat().st_ino
+    try:
+        for rel, data in sorted(files.items()):
+            target = (staging / rel).resolve()
+            if not target.is_relative_to(staging.resolve()):
+                raise DatasetError(f"house {index}: a worker sent a file outside the house folder ({rel!r})")
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(data)
+        record = read_record(staging)
+        if record is None or record.index != index:
+            raise DatasetError(f"house {index}: the files a worker sent have no readable {RECORD}")
+        return _place(staging, made, house_folder(out, index), record)
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging, ignore_errors=True)
+
+
+def house_files(folder: Path) -> dict[str, bytes]:
+    """Every file under a house folder, by path relative to it (what a worker sends back)."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _place(staging: Path, made: int, final: Path, record: HouseRecord) -> HouseRecord:
+    try:
+        still_ours = staging.stat().st_ino == made
+    except OSError:
+        still_ours = False
+    if not still_ours:
+        raise RuntimeError(f"{staging} was removed while the house was written (another run cleared .partial/)")
+    final.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        os.rename(staging, final)  # atomic on one filesystem; fails when ``final`` is a full folder
+    except OSError:
+        done = read_record(final)
+        if done is None:
+            raise
+        return done
+    return record

@@ -1,0 +1,141 @@
+"""Houses made on a real Dask cluster are the houses one process makes, whatever goes wrong.
+
+A scheduler and worker processes run on 127.0.0.1 (``conftest.start_cluster``); houses are tiny
+(two houses, one exploration frame) so the whole file stays within about a minute on an idle
+machine. Every comparison is of the sha256 of every file against a one-process run.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from povagent.errors import ClusterError
+from povagent.generate import generate_dataset
+
+SEED, HOUSES, FRAMES = 21, 2, 1
+#: Two tiny houses take seconds on an idle machine; a shared machine under load can take minutes.
+pytestmark = pytest.mark.timeout(900)
+
+
+def digests(root: Path) -> dict[str, str]:
+    """sha256 of every file under ``root``, by relative path."""
+    return {p.relative_to(root).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def one_process(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    """The reference: the same houses made in this process, one after the other."""
+    out = tmp_path_factory.mktemp("one_process") / "data"
+    generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, jobs=1, progress=False)
+    return digests(out)
+
+
+def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_process, tmp_path) -> None:
+    notices: list[str] = []
+    seen: list[tuple[int, int]] = []
+    out = tmp_path / "data"
+    report = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, cluster=dask_cluster.address, notice=notices.append,
+                              progress=lambda summary, done, total: seen.append((done, total)))
+    assert digests(out) == one_process
+    assert report.generated == HOUSES
+    assert any(f"all 2 workers see {out}" in n for n in notices), notices
+    # the progress callback counts houses as they finish on the cluster
+    assert seen == [(1, HOUSES), (2, HOUSES)]
+    # the workers' logs keep the structured format (run/logs.py's renderer: level, event, key=value)
+    logs = "".join(p.read_text() for p in dask_cluster.logs.glob("worker*.log"))
+    for index in range(HOUSES):
+        assert re.search(rf"\[info\s*\] house done\s.*index={index} .*seed={SEED}", logs), logs[-2000:]
+
+
+def test_a_worker_killed_mid_house_still_gives_the_same_bytes(dask_cluster, one_process, tmp_path) -> None:
+    from distributed import Client
+
+    out = tmp_path / "data"
+    outcome: dict[str, object] = {}
+
+    def generate() -> None:
+        try:
+            outcome["report"] = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=dask_cluster.address)
+        except BaseException as exc:  # handed to the test thread
+            outcome["error"] = exc
+
+    thread = threading.Thread(target=generate)
+    thread.start()
+    killed = None
+    with Client(dask_cluster.address, timeout=30) as watcher:
+        deadline = time.monotonic() + 120
+        while killed is None and time.monotonic() < deadline and thread.is_alive():
+            busy = {w: keys for w, keys in watcher.processing().items() if any("povagent-house" in str(k) for k in keys)}
+            staged = list((out / ".partial").glob("train_house_*")) if (out / ".partial").is_dir() else []
+            if busy and staged:
+                names = {w: info["name"] for w, info in watcher.scheduler_info()["workers"].items()}
+                victim = int(str(names[next(iter(busy))]).removeprefix("w"))  # the fixture names workers w0, w1
+                killed = dask_cluster.kill_worker(victim)
+            time.sleep(0.05)
+    thread.join(timeout=300)
+    assert killed is not None, "no worker was seen rendering a house"
+    assert "error" not in outcome, outcome.get("error")
+    assert digests(out) == one_process
+    assert not (out / ".partial").exists()
+
+
+def test_workers_that_cannot_see_the_folder_send_the_houses_back(cluster_factory, hidden_folder, one_process, tmp_path) -> None:
+    here_only = tmp_path / "here_only"
+    cluster = cluster_factory(workers=1, worker_prefix=hidden_folder(here_only))
+    notices: list[str] = []
+    out = here_only / "data"
+    generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=cluster.address, notice=notices.append)
+    assert any(f"0 of 1 workers see {out}" in n for n in notices), notices
+    assert digests(out) == one_process
+
+
+def test_a_generation_whose_client_is_killed_half_way_resumes_to_the_same_bytes(dask_cluster, one_process, tmp_path) -> None:
+    out = tmp_path / "data"
+    command = [sys.executable, "-c", "from povagent.cli import main; main()", "generate", "--out", str(out),
+               "--houses", str(HOUSES), "--seed", str(SEED), "--frames", str(FRAMES), "--cluster", dask_cluster.address]
+    client = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 180
+        while not list(out.glob("artifacts/*/_generated.json")) and time.monotonic() < deadline and client.poll() is None:
+            time.sleep(0.05)
+        client.send_signal(signal.SIGKILL)
+        client.wait(timeout=30)
+    finally:
+        if client.poll() is None:
+            client.kill()
+    first = sorted(out.glob("artifacts/*/_generated.json"))
+    assert first and not (out / "meta.json").exists(), "the client was not stopped half way"
+    report = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=dask_cluster.address)
+    assert report.kept >= len(first)
+    assert digests(out) == one_process
+
+
+def test_a_scheduler_gone_is_one_clear_line_and_the_same_command_resumes(cluster_factory, one_process, tmp_path) -> None:
+    cluster = cluster_factory(workers=1)
+    out = tmp_path / "data"
+
+    def kill_the_scheduler_mid_house() -> None:
+        deadline = time.monotonic() + 120
+        while not list(out.glob(".partial/train_house_*")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.kill(cluster.scheduler.pid, signal.SIGKILL)
+
+    threading.Thread(target=kill_the_scheduler_mid_house, daemon=True).start()
+    with pytest.raises(ClusterError) as info:
+        generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=cluster.address)
+
+    message = str(info.value)
+    assert "\n" not in message and cluster.address in message and "run the same command again to resume" in message
+    # the files do not depend on the engine, so any engine resumes (here this process, to keep the test short)
+    generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, jobs=1)
+    assert digests(out) == one_process

@@ -1,0 +1,159 @@
+"""A generation can be stopped, resumed and extended: complete houses are kept byte for byte."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from povagent.cli import app
+from povagent.errors import DatasetError, GenerationError
+from povagent.generate import PhysicalRulesJudge, generate_dataset
+
+SEED = 4
+
+
+def files(root: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file's bytes and mtime (ns) under ``root``'s houses."""
+    return {p.relative_to(root).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted((root / "artifacts").rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def one_house(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A finished one-house dataset (one exploration frame), copied by tests that change it."""
+    out = tmp_path_factory.mktemp("one_house") / "data"
+    generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+    return out
+
+
+def copy(src: Path, dst: Path) -> Path:
+    subprocess.run(["cp", "-a", str(src), str(dst)], check=True)  # -a keeps the mtimes
+    return dst
+
+
+def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files_untouched(one_house, tmp_path):
+    out = copy(one_house, tmp_path / "data")
+    before = files(out)
+    report = generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    after = files(out)
+    assert (report.kept, report.generated) == (1, 1)
+    assert {name: after[name] for name in before} == before  # same bytes and mtimes
+    assert any(name.startswith("artifacts/train_house_00001/") for name in after)
+    assert json.loads((out / "meta.json").read_text())["counts"]["houses"] == 2
+
+
+def test_running_the_same_command_again_makes_nothing(one_house, tmp_path):
+    out = copy(one_house, tmp_path / "data")
+    before = files(out)
+    report = generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+    assert (report.kept, report.generated) == (1, 0)
+    assert files(out) == before
+
+
+class OtherJudge(PhysicalRulesJudge):
+    name = "other-rules"
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [({"seed": SEED + 1}, "seed"), ({"frames": 2}, "frames"), ({"with_render": True}, "with_render"), ({"judge": OtherJudge()}, "judge")],
+)
+def test_other_options_over_an_existing_dataset_are_refused_naming_the_option(one_house, tmp_path, change, named):
+    out = copy(one_house, tmp_path / "data")
+    before = files(out)
+    with pytest.raises(DatasetError) as info:
+        generate_dataset(out, progress=False, **{"houses": 2, "seed": SEED, "frames": 1, **change})
+    assert f"was generated with {named} " in str(info.value)
+    assert files(out) == before and (out / "meta.json").exists()
+
+
+def test_fewer_houses_than_are_complete_is_refused(one_house, tmp_path):
+    out = copy(one_house, tmp_path / "data")
+    generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    with pytest.raises(DatasetError, match="ask for at least 2 houses"):
+        generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+
+
+def test_a_half_written_house_is_redone_and_a_complete_one_kept(one_house, tmp_path):
+    out = copy(one_house, tmp_path / "data")
+    kept = files(out)
+    # what a killed run leaves: meta.json not yet rewritten, a staging folder, a house without its record
+    (out / "meta.json").unlink()
+    (out / ".partial/train_house_00001.dead").mkdir(parents=True)
+    (out / ".partial/train_house_00001.dead/exploration_log.json").write_text("[")
+    (out / "artifacts/train_house_00002/exploration_images").mkdir(parents=True)
+    report = generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    assert (report.kept, report.generated) == (1, 1)
+    assert not (out / ".partial").exists() and not (out / "artifacts/train_house_00002").exists()
+    assert {name: files(out)[name] for name in kept} == kept
+    assert json.loads((out / "artifacts/train_house_00001/exploration_log.json").read_text())
+
+
+FAILING_JUDGE = """
+from povagent import hookimpl
+from povagent.generate import PhysicalRulesJudge
+
+class FailsOnHouseOne(PhysicalRulesJudge):
+    def judge(self, request):
+        if request.house.house_id == "train_house_00001":
+            raise RuntimeError("this judge cannot judge house 1")
+        return super().judge(request)
+
+@hookimpl
+def register_judges(register):
+    register("fails-on-house-1", FailsOnHouseOne, description="a test judge that raises on house 1")
+"""
+
+
+def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_non_zero(tmp_path):
+    plugin = tmp_path / "failing_judge.py"
+    plugin.write_text(FAILING_JUDGE)
+    out = tmp_path / "data"
+    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1"]
+    result = CliRunner().invoke(app, args)
+    assert isinstance(result.exception, GenerationError)
+    message = str(result.exception)
+    assert "1 of 3 houses failed: house 1 (seed 4): RuntimeError: this judge cannot judge house 1" in message
+    assert "run the same command again to redo only the failed ones" in message
+    assert [f.index for f in result.exception.failures] == [1]
+    assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00000", "train_house_00002"]
+    assert not (out / "meta.json").exists()
+
+
+def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(tmp_path):
+    plugin = tmp_path / "failing_judge.py"
+    plugin.write_text(FAILING_JUDGE)
+    code = "from povagent.cli import main; main()"
+    args = ["generate", "--out", str(tmp_path / "data"), "--houses", "2", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1"]
+    done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=600)
+    assert done.returncode != 0
+    assert done.stderr.strip().splitlines()[-1].startswith("error: 1 of 2 houses failed: house 1 (seed 4)")
+
+
+def test_generating_without_a_cluster_imports_no_dask(tmp_path):
+    code = (
+        "import sys; from povagent.cli import main; sys.argv = ['povagent', 'generate', '--out', sys.argv[1], '--houses', '1', "
+        "'--frames', '1', '--jobs', '2']\ntry:\n    main()\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in ('dask', 'distributed') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "data")], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+    assert (tmp_path / "data/meta.json").exists()
+
+
+def test_a_cluster_without_the_extra_is_one_line_naming_it_and_writes_nothing(tmp_path):
+    code = (
+        "import sys; sys.modules['distributed'] = None; sys.modules['dask'] = None\n"
+        "from povagent.cli import main; main()"
+    )
+    out = tmp_path / "data"
+    args = ["generate", "--out", str(out), "--houses", "1", "--cluster", "local:2"]
+    done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2
+    assert done.stderr.strip() == "error: Dask is not installed: --cluster needs the cluster extra, pip install 'povagent[cluster]'"
+    assert not out.exists()
