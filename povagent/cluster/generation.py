@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.cluster.client import WORKER_LOG_LEVEL, cluster_client, dashboard_link
+from povagent.cluster.storage import probe_storage
 from povagent.errors import ClusterError
 from povagent.generate.dataset import HouseFailure, HouseOutcome, make_house, make_house_files
 from povagent.generate.judge import SurfaceJudge
@@ -72,14 +73,14 @@ def generate_on_cluster(
         _wait_for_a_worker(client, address)
         mode = storage
         if storage == "auto":
-            seen, total = probe_shared_storage(client, Path(out))
-            mode = "shared" if seen == total else "return"
+            found = probe_storage(client, Path(out) / PARTIAL)
+            mode = "shared" if found.shared else "return"
             if mode == "shared":
-                say(f"storage: all {total} workers see {out}: they write houses straight into it")
+                say(f"storage: all {found.workers} workers read and write {out}: they write houses straight into it")
             else:
                 say(
-                    f"storage: {seen} of {total} workers see {out}: workers send each house's files back "
-                    "and this machine writes them"
+                    f"storage: {len(found.writers)} of {found.workers} workers read and write {out}: workers send "
+                    "each house's files back and this machine writes them"
                 )
         _run_houses(client, address, Path(out), options, pending, judge, count_down, mode)
 
@@ -101,27 +102,6 @@ def _scheduler_watch(address: str, total: int, left: Callable[[], int]) -> Itera
         yield
     except (OSError, TimeoutError, CancelledError):
         raise _scheduler_gone(address, total, left()) from None
-
-
-def probe_shared_storage(client: Any, out: Path) -> tuple[int, int]:
-    """(workers that read this machine's probe file in ``out``, workers asked): written here, read there."""
-    token = uuid.uuid4().hex
-    probe = out / PARTIAL / f"probe-{token}"
-    probe.parent.mkdir(parents=True, exist_ok=True)
-    probe.write_text(token)
-    try:
-        answers = client.run(read_probe, str(probe), token)
-    finally:
-        probe.unlink(missing_ok=True)
-    return sum(1 for ok in answers.values() if ok), len(answers)
-
-
-def read_probe(path: str, token: str) -> bool:
-    """On a worker: whether the probe file is there and holds this run's token."""
-    try:
-        return Path(path).read_text() == token
-    except OSError:
-        return False
 
 
 def run_house(out: Path, options: GenerationOptions, index: int, judge: SurfaceJudge) -> HouseOutcome:

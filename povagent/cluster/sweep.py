@@ -20,9 +20,6 @@ row written so far is in the journals, so the same command resumes.
 
 from __future__ import annotations
 
-import os
-import secrets
-import socket
 import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -30,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.cluster.client import cluster_client, dashboard_link
+from povagent.cluster.storage import probe_storage
 from povagent.errors import ClusterError
 
 #: Automatic re-runs of a cell that raised (worker deaths are counted by the scheduler).
@@ -50,23 +48,6 @@ class CellTask:
     dataset_root: Path
 
 
-def look_at_storage(probe: str, token: str, reads: Sequence[str]) -> dict[str, Any]:
-    """Run on each worker: does it read the client's probe, write beside it, see ``reads``?"""
-    path = Path(probe)
-    try:
-        sees = path.read_text(encoding="utf-8") == token
-    except OSError:
-        sees = False
-    written: str | None = None
-    try:
-        mine = path.with_name(f"{path.name}.{socket.gethostname()}.{os.getpid()}")
-        mine.write_text(token, encoding="utf-8")
-        written = str(mine)
-    except OSError:
-        pass
-    return {"host": socket.gethostname(), "sees": sees, "written": written, "missing": [r for r in reads if not Path(r).exists()]}
-
-
 def check_storage(client: Any, output: Path, datasets: Sequence[Path]) -> str:
     """Check once that every worker reads and writes ``output`` and sees ``datasets``.
 
@@ -75,35 +56,17 @@ def check_storage(client: Any, output: Path, datasets: Sequence[Path]) -> str:
     naming the workers that cannot (the run folder must be on storage every worker sees: NFS,
     Lustre, a shared volume); returns a one-line account of what was found.
     """
-    output.mkdir(parents=True, exist_ok=True)
-    token = secrets.token_hex(16)
-    probe = output / f".povagent-probe-{token[:8]}"
-    probe.write_text(token, encoding="utf-8")
-    reads = sorted({str(d) for d in datasets})
-    try:
-        answers = client.run(look_at_storage, str(probe), token, reads)
-    finally:
-        probe.unlink(missing_ok=True)
-    blind, unseen, missing = [], [], []
-    for worker, answer in sorted(answers.items()):
-        written = answer["written"]
-        if not answer["sees"]:
-            blind.append(f"{worker} ({answer['host']})")
-        elif written is None or Path(written).read_text(encoding="utf-8") != token:
-            unseen.append(f"{worker} ({answer['host']})")
-        if written is not None:
-            Path(written).unlink(missing_ok=True)
-        missing += [f"{worker} ({answer['host']}): {m}" for m in answer["missing"]]
-    hosts = sorted({a["host"] for a in answers.values()})
-    if blind or unseen:
+    found = probe_storage(client, output, datasets)
+    if not found.shared:
+        cannot = found.blind + found.read_only
         raise ClusterError(
-            f"{output}: worker(s) {', '.join(blind + unseen)} cannot "
-            f"{'read' if blind else 'write'} this folder as this machine sees it; a sweep on a cluster "
+            f"{output}: worker(s) {', '.join(cannot)} cannot "
+            f"{'read' if found.blind else 'write'} this folder as this machine sees it; a sweep on a cluster "
             "needs its output folder on storage every worker sees (NFS, Lustre, a shared volume) at the same path"
         )
-    if missing:
-        raise ClusterError(f"dataset folder not found on worker {missing[0]}; every worker must see the dataset at the same path")
-    return f"storage: all {len(answers)} worker(s) on {len(hosts)} host(s) read and write {output}"
+    if found.missing:
+        raise ClusterError(f"dataset folder not found on worker {found.missing[0]}; every worker must see the dataset at the same path")
+    return f"storage: all {found.workers} worker(s) on {found.hosts} host(s) read and write {output}"
 
 
 def run_cell_tasks(

@@ -48,7 +48,7 @@ def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_pr
                               progress=lambda summary, done, total: seen.append((done, total)))
     assert digests(out) == one_process
     assert report.generated == HOUSES
-    assert any(f"all 2 workers see {out}" in n for n in notices), notices
+    assert any(f"all 2 workers read and write {out}" in n for n in notices), notices
     # the progress callback counts houses as they finish on the cluster
     assert seen == [(1, HOUSES), (2, HOUSES)]
     # the workers' logs keep the structured format (run/logs.py's renderer: level, event, key=value)
@@ -95,7 +95,7 @@ def test_workers_that_cannot_see_the_folder_send_the_houses_back(cluster_factory
     notices: list[str] = []
     out = here_only / "data"
     generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=cluster.address, notice=notices.append)
-    assert any(f"0 of 1 workers see {out}" in n for n in notices), notices
+    assert any(f"0 of 1 workers read and write {out}" in n for n in notices), notices
     assert digests(out) == one_process
 
 
