@@ -29,10 +29,10 @@ from povagent.config.pipeline import (
     ConfigSource,
     PipelineConfig,
     SweepConfig,
+    checked_plugins,
     deep_merge,
     load_sweep,
     pipeline_from_source,
-    plugin_paths_from_the_yaml_folder,
 )
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
@@ -139,10 +139,11 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
         raise ConfigError(f"{base.file}: the base pipeline must be a YAML mapping")
     plugins = base.data.get("plugins") or []
     if isinstance(plugins, list):
-        # a relative .py path is read from the base pipeline's folder, as when it runs alone
-        resolved = plugin_paths_from_the_yaml_folder(plugins, base.file)
+        # the rule of povagent.config.plugin_rule, checked before anything is imported: a .py
+        # path is read from the base pipeline's folder, as when it runs alone
+        resolved = checked_plugins(plugins, base)
         if resolved != plugins:
-            base = ConfigSource(base.file, {**base.data, "plugins": resolved}, base.lines)
+            base = ConfigSource(base.file, {**base.data, "plugins": resolved}, base.lines, base.plugin_folder())
             plugins = resolved
     if host is None:
         try:
@@ -160,7 +161,7 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
             overrides = deep_merge(overrides, part, REPLACED_WHOLE)
         overrides["output"] = str(sweep.output / name)
         overrides["cache"] = cache
-        cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines)
+        cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines, base.plugin_folder())
         config = pipeline_from_source(cell_source, overrides=overrides, host=host)
         if strict:
             config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
