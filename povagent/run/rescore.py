@@ -25,11 +25,10 @@ from typing import Any, Sequence
 import yaml
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
-from povagent.config.pipeline import PipelineConfig, read_yaml, validation_message
 from povagent.config.plugin_rule import missing_plugin_message
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import Dataset, load_dataset
-from povagent.errors import ConfigError, DatasetError, PluginError, PredictionsError
+from povagent.errors import DatasetError, PluginError, PredictionsError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import (
@@ -42,6 +41,7 @@ from povagent.results.official_reading import (
     read_officially,
 )
 from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
+from povagent.run.run_folder import read_run_config
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import scoring_frame
 
@@ -53,25 +53,6 @@ class RescoreResult:
     out_dir: Path
     summary: dict[str, Any]
     warnings: list[str] = field(default_factory=list)
-
-
-def read_run_config(run_dir: Path) -> PipelineConfig:
-    """The pipeline a run was made with (``RUN_DIR/config.yaml``), validated."""
-    source = read_yaml(run_dir / "config.yaml")
-    if not isinstance(source.data, dict):
-        raise ConfigError(f"{source.file}: a pipeline must be a YAML mapping (key: value)")
-    data = dict(source.data)
-    if data.get("model") is not None and data.get("backend") is not None:
-        # a resolved config keeps the profile name beside the backend it resolved to
-        data["model"] = None
-    try:
-        return PipelineConfig.model_validate(data)
-    except Exception as exc:  # pydantic ValidationError: name file and line
-        from pydantic import ValidationError
-
-        if isinstance(exc, ValidationError):
-            raise ConfigError(f"invalid pipeline:\n{validation_message(exc, PipelineConfig, source)}") from None
-        raise
 
 
 def answer_spec_for(strategy: Any, instance: Instance, images: ImageStore) -> AnswerSpec:

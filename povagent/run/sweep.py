@@ -41,6 +41,7 @@ from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.run.pending import ensure_dataset, pending_keys
 from povagent.run.progress import make_progress
+from povagent.run.run_folder import claim_folder
 from povagent.run.runner import PipelineRun, RunResult, create_components
 
 SWEEP_INDEX = "sweep.json"
@@ -239,6 +240,7 @@ def run_sweep(
         backend = create_components(cell.config, get_plugin_host(cell.config.plugins)).backend
         backend.check_image_transport(cell.config.images.transport)
     output = Path(sweep.output)
+    claim_folder(output, "sweep")  # someone's folder (or a read-only one) is refused before any write
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status)
