@@ -5,7 +5,6 @@ earlier versions (no marker) still resume."""
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
