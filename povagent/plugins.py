@@ -5,7 +5,9 @@ Plugins come from three places, loaded the same way (pluggy's public API only):
 1. the built-ins listed in :data:`povagent.default_plugins.DEFAULT_PLUGINS`;
 2. the entry-point group ``povagent`` of installed distributions;
 3. modules named under ``plugins:`` in a pipeline YAML (a dotted module name, or a path to a
-   ``.py`` file).
+   ``.py`` file), once :mod:`povagent.config.plugin_rule` has allowed them (a ``.py`` from the
+   YAML's own folder, a dotted name from an installed package), and modules named by
+   ``--plugin`` on the command line.
 
 Contribution hooks (``register_backends`` ...) are called once per plugin with a ``register``
 callback the host owns, so every name resolves to exactly one plugin and a duplicate is a

@@ -84,3 +84,15 @@ def dataset_copy(tmp_path, mini_root) -> Path:
     for house in GOOD_HOUSES:
         shutil.copytree(mini_root / "artifacts" / house, root / "artifacts" / house)
     return root
+
+
+OFFLINE_PLUGIN_SOURCE = Path(__file__).resolve().parent / "run" / "offline_plugin.py"
+
+
+@pytest.fixture
+def offline_plugin_file(tmp_path) -> Path:
+    """``tests/run/offline_plugin.py`` copied into ``tmp_path``: a pipeline YAML written there may
+    name it (a config loads ``.py`` plugins only from its own folder or below)."""
+    path = tmp_path / "offline_plugin.py"
+    shutil.copy(OFFLINE_PLUGIN_SOURCE, path)
+    return path.resolve()

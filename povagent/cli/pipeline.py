@@ -101,11 +101,13 @@ def run_command(
     """Run one pipeline and print its scores.
 
     A run resumes from its run folder: only the keys without a row are sent to the model.
-    Exit code 0: every key answered or unparseable; 3: some keys failed; 4: stopped early.
+    Exit code 0: every key answered or unparseable; 3: some keys failed; 4: stopped early;
+    130: interrupted (Ctrl-C); 143: terminated (SIGTERM), stopped as cleanly as Ctrl-C.
     """
     from povagent.config.pipeline import load_pipeline
     from povagent.run.progress import make_progress
     from povagent.run.runner import run_pipeline
+    from povagent.run.stop_signals import sigterm_as_interrupt
 
     overrides: dict[str, Any] = {}
     if output is not None:
@@ -116,12 +118,17 @@ def run_command(
     if strict:
         config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
     try:
-        result = run_pipeline(
-            config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_failed=not keep_errors
-        )
+        with sigterm_as_interrupt() as stop:  # a scheduler's SIGTERM stops as cleanly as Ctrl-C
+            result = run_pipeline(
+                config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_failed=not keep_errors
+            )
     except KeyboardInterrupt:
-        typer.echo(f"interrupted: rows written so far are kept in {config.output}; run the same command to resume", err=True)
-        raise typer.Exit(130) from None
+        typer.echo(
+            f"{stop.what}: rows written so far are kept in {config.output} (summary.json says interrupted); "
+            f"run `povagent run {pipeline}` again to resume",
+            err=True,
+        )
+        raise typer.Exit(stop.exit_code) from None
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
@@ -198,6 +205,7 @@ def sweep_command(
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
+    from povagent.run.stop_signals import sigterm_as_interrupt
     from povagent.run.sweep import dry_run as plan
     from povagent.run.sweep import expand_sweep, run_sweep
 
@@ -244,11 +252,13 @@ def sweep_command(
 
         parse_cluster_spec(cluster)  # a malformed value is refused before anything starts
     try:
-        result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done,
-                           cluster=cluster, notify=lambda message: typer.echo(message, err=True))
+        with sigterm_as_interrupt() as stop:  # a scheduler's SIGTERM stops as cleanly as Ctrl-C
+            result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done,
+                               cluster=cluster, notify=lambda message: typer.echo(message, err=True))
     except KeyboardInterrupt:
-        typer.echo("interrupted: finished rows are kept; run the same command to resume", err=True)
-        raise typer.Exit(130) from None
+        command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "")
+        typer.echo(f"{stop.what}: finished rows are kept; run `{command}` again to resume", err=True)
+        raise typer.Exit(stop.exit_code) from None
     command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "")
     for name, error in result.failed.items():
         typer.echo(f"cell {name} failed: {error}", err=True)

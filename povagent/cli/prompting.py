@@ -171,6 +171,10 @@ def rescore_command(
         None, "--dataset", metavar="FOLDER", help="Dataset folder, if not the one named in the run's config.yaml."
     ),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON instead of tables."),
+    plugin: list[str] = typer.Option(
+        [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable). "
+        "The plugins a run folder's config.yaml names are never imported: pass the ones the run needs here."
+    ),
 ) -> None:
     """Score a finished run again with another parser, offline.
 
@@ -184,7 +188,7 @@ def rescore_command(
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
 
-    result = rescore_run(run_dir, parser, dataset_root=dataset)
+    result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin)
     for w in result.warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
     if as_json:

@@ -3,7 +3,8 @@
 A pipeline YAML (every key but ``dataset``, ``output`` and one of ``backend``/``model`` has a
 default)::
 
-    plugins: [my_pkg.my_plugin]          # extra plugin modules (dotted names, or .py paths from this file's folder)
+    plugins: [my_pkg.my_plugin]          # extra plugin modules: installed dotted names, or .py paths
+                                         # inside this file's folder (see docs/security.md)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
                                          # or {hub: owl-owl/POVBench, revision: main} (the release,
                                          # fetched into the Hugging Face cache; bounded by
@@ -61,6 +62,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.cluster.spec import parse_cluster_spec  # pure: no Dask import
+from povagent.config.plugin_rule import allowed_plugins
 from povagent.config.profiles import near_profile
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
@@ -477,6 +479,15 @@ class ConfigSource:
     file: str
     data: Any
     lines: dict[Loc, int] = field(default_factory=dict)
+    #: The folder its ``.py`` plugins are read from (default: the file's own folder; a document
+    #: that is no file, ``<pipeline mapping>``, has none).
+    folder: Path | None = None
+
+    def plugin_folder(self) -> Path | None:
+        """The folder this document may load ``.py`` plugins from (see :mod:`povagent.config.plugin_rule`)."""
+        if self.folder is not None:
+            return self.folder
+        return None if self.file.startswith("<") else Path(self.file).parent
 
     def line_of(self, loc: Iterable[Any]) -> int | None:
         """The line of the deepest known prefix of ``loc`` (1-based), if any."""
@@ -846,29 +857,23 @@ def pipeline_from_source(
         config = PipelineConfig.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(f"invalid pipeline:\n{validation_message(exc, PipelineConfig, source, prefix)}") from None
-    config = _plugin_paths_from_the_yaml_folder(config, source)
+    config = config.model_copy(update={"plugins": checked_plugins(config.plugins, source, prefix)})
     h = _host_for(config.plugins, source, host)
     check_plugin_names(config, h, source, prefix)
     return resolve_components(config, h)
 
 
-def _plugin_paths_from_the_yaml_folder(config: PipelineConfig, source: ConfigSource) -> PipelineConfig:
-    """``plugins:`` entries that are relative ``.py`` paths, resolved from the folder of the
-    YAML file that names them (see :func:`plugin_paths_from_the_yaml_folder`)."""
-    resolved = plugin_paths_from_the_yaml_folder(config.plugins, source.file)
-    return config if resolved == config.plugins else config.model_copy(update={"plugins": resolved})
-
-
-def plugin_paths_from_the_yaml_folder(plugins: list[str], yaml_file: str) -> list[str]:
-    """``plugins`` with relative ``.py`` paths resolved from the folder of ``yaml_file``, the
-    YAML file that names them (as a sweep's ``base:`` is), not from the working directory: the
-    same file then loads the same plugin wherever the command runs, as a pipeline or as a
-    sweep's base. Dotted module names and documents that are no file (``<pipeline mapping>``)
-    are left as they are."""
-    path = Path(yaml_file)
-    if yaml_file.startswith("<") or not path.is_file():
+def checked_plugins(plugins: list[str], source: ConfigSource, prefix: Loc = ()) -> list[str]:
+    """``plugins`` as the rule of :mod:`povagent.config.plugin_rule` allows them: ``.py`` paths
+    resolved inside the YAML file's folder (not the working directory, so the same file loads
+    the same plugin wherever the command runs, as a pipeline or as a sweep's base), dotted names
+    only from installed packages. A refused entry is a one-line :class:`ConfigError`; nothing is
+    imported here. A mapping given from Python (``<pipeline mapping>``) is the caller's own code
+    and keeps its entries as they are."""
+    folder = source.plugin_folder()
+    if folder is None or not plugins:
         return plugins
-    return [str(path.parent / p) if isinstance(p, str) and p.endswith(".py") and not Path(p).is_absolute() else p for p in plugins]
+    return allowed_plugins(plugins, folder, [source.where(prefix + ("plugins", i)) for i in range(len(plugins))])
 
 
 def load_pipeline(path: str | Path, *, overrides: Mapping[str, Any] | None = None, host: PluginHost | None = None) -> PipelineConfig:

@@ -26,7 +26,10 @@ def folder_lock(run_dir: Path) -> Iterator[None]:
     except ImportError:  # pragma: no cover - not POSIX
         yield
         return
-    fh = open(run_dir / LOCK, "a")
+    try:
+        fh = open(run_dir / LOCK, "a")
+    except OSError as exc:  # a read-only mount, no permission: the user's to fix, one line
+        raise ConfigError(f"{run_dir}: cannot write the run folder ({exc.strerror or exc}); choose a folder you can write to") from None
     try:
         try:
             fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -20,15 +20,15 @@ import json
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import yaml
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
-from povagent.config.pipeline import PipelineConfig, read_yaml, validation_message
+from povagent.config.plugin_rule import missing_plugin_message
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import Dataset, load_dataset
-from povagent.errors import ConfigError, DatasetError, PredictionsError
+from povagent.errors import DatasetError, PluginError, PredictionsError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import (
@@ -41,6 +41,7 @@ from povagent.results.official_reading import (
     read_officially,
 )
 from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
+from povagent.run.run_folder import read_run_config
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import scoring_frame
 
@@ -52,25 +53,6 @@ class RescoreResult:
     out_dir: Path
     summary: dict[str, Any]
     warnings: list[str] = field(default_factory=list)
-
-
-def read_run_config(run_dir: Path) -> PipelineConfig:
-    """The pipeline a run was made with (``RUN_DIR/config.yaml``), validated."""
-    source = read_yaml(run_dir / "config.yaml")
-    if not isinstance(source.data, dict):
-        raise ConfigError(f"{source.file}: a pipeline must be a YAML mapping (key: value)")
-    data = dict(source.data)
-    if data.get("model") is not None and data.get("backend") is not None:
-        # a resolved config keeps the profile name beside the backend it resolved to
-        data["model"] = None
-    try:
-        return PipelineConfig.model_validate(data)
-    except Exception as exc:  # pydantic ValidationError: name file and line
-        from pydantic import ValidationError
-
-        if isinstance(exc, ValidationError):
-            raise ConfigError(f"invalid pipeline:\n{validation_message(exc, PipelineConfig, source)}") from None
-        raise
 
 
 def answer_spec_for(strategy: Any, instance: Instance, images: ImageStore) -> AnswerSpec:
@@ -163,15 +145,27 @@ def rescore_run(
     *,
     dataset_root: str | Path | None = None,
     host: PluginHost | None = None,
+    plugins: Sequence[str] = (),
 ) -> RescoreResult:
     """Re-parse every row of a finished run with ``parser_name`` (default: the official reading)
-    and re-score it (offline)."""
+    and re-score it (offline).
+
+    A run folder is untrusted: the ``plugins:`` its ``config.yaml`` names are never imported.
+    The plugins come from ``plugins`` (what ``--plugin`` names on the command line); a strategy
+    or scorer of the run that none of them registers is a :class:`PluginError` saying which
+    plugin to pass (see :func:`~povagent.config.plugin_rule.missing_plugin_message`).
+    """
     run = Path(run_dir)
     results = run / "results.jsonl"
     if not results.is_file():
         raise PredictionsError(f"{results}: not found (is {run} a run folder?)")
     config = read_run_config(run)
-    host = host or get_plugin_host(config.plugins)
+    host = host or get_plugin_host(tuple(plugins))
+    # the parser is named on the command line (the host says if it is unknown); the run's
+    # strategy and scorers come from its folder
+    for kind, name in [("strategy", config.strategy.name), *(("scorer", s.name) for s in config.scorers)]:
+        if name not in host.names(kind):
+            raise PluginError(missing_plugin_message("rescore", run, kind, name, config.plugins))
     parser = host.create("parser", parser_name, {})
     counterpart = official_counterpart(parser)
     official = (host.create("parser", counterpart, {}), counterpart) if counterpart else None

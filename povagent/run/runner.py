@@ -17,8 +17,9 @@ instead of failing every key. During the run, ``stop_after_failures`` consecutiv
 ``infra_error`` rows trip a circuit breaker and stop it too. A stopped run's remaining keys
 stay pending: fix the cause and run the same command again.
 
-The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl`` and
-``summary.json``. This module must not parse YAML or print tables (see :mod:`povagent.config`
+The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl``,
+``summary.json`` and the marker that makes it ours (:mod:`povagent.run.run_folder`: a folder
+holding anything else is refused). This module must not parse YAML or print tables (see :mod:`povagent.config`
 and :mod:`povagent.cli.pipeline`).
 """
 
@@ -55,6 +56,7 @@ from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
+from povagent.run.run_folder import claim_folder
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -501,7 +503,8 @@ class PipelineRun:
         # before anything is written to the run folder.
         self.components = create_components(config, self.host)
         self.components.backend.check_image_transport(config.images.transport)
-        self.run_dir.mkdir(parents=True, exist_ok=True)
+        # ours to write, or refused before anything is written (someone's folder, read-only)
+        claim_folder(self.run_dir, "run")
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
         ):

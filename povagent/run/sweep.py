@@ -37,10 +37,10 @@ from povagent.config.pipeline import (
     ConfigSource,
     PipelineConfig,
     SweepConfig,
+    checked_plugins,
     deep_merge,
     load_sweep,
     pipeline_from_source,
-    plugin_paths_from_the_yaml_folder,
 )
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
@@ -50,6 +50,7 @@ from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
+from povagent.run.run_folder import claim_folder
 from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
 
 SWEEP_INDEX = "sweep.json"
@@ -153,10 +154,11 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
         raise ConfigError(f"{base.file}: the base pipeline must be a YAML mapping")
     plugins = base.data.get("plugins") or []
     if isinstance(plugins, list):
-        # a relative .py path is read from the base pipeline's folder, as when it runs alone
-        resolved = plugin_paths_from_the_yaml_folder(plugins, base.file)
+        # the rule of povagent.config.plugin_rule, checked before anything is imported: a .py
+        # path is read from the base pipeline's folder, as when it runs alone
+        resolved = checked_plugins(plugins, base)
         if resolved != plugins:
-            base = ConfigSource(base.file, {**base.data, "plugins": resolved}, base.lines)
+            base = ConfigSource(base.file, {**base.data, "plugins": resolved}, base.lines, base.plugin_folder())
             plugins = resolved
     if host is None:
         try:
@@ -174,7 +176,7 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
             overrides = deep_merge(overrides, part, REPLACED_WHOLE)
         overrides["output"] = str(sweep.output / name)
         overrides["cache"] = cache
-        cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines)
+        cell_source = ConfigSource(f"{base.file} (sweep cell {name})", base.data, base.lines, base.plugin_folder())
         config = pipeline_from_source(cell_source, overrides=overrides, host=host)
         if strict:
             config = config.model_copy(update={"dataset": config.dataset.model_copy(update={"strict": True})})
@@ -272,6 +274,7 @@ def run_sweep(
         backend.check_image_transport(cell.config.images.transport)
         models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
+    claim_folder(output, "sweep")  # someone's folder (or a read-only one) is refused before any write
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status, models)

@@ -141,6 +141,8 @@ CONFIGS: dict[str, tuple[Callable[[str], str | bytes], str]] = {
     "empty file": (lambda good: "", "mapping"),
     "a list, not a mapping": (lambda good: "- dataset: x\n", "mapping"),
     "missing plugin module": (lambda good: good + "plugins: [no_such_module_xyz]\n", "no_such_module_xyz"),
+    "plugin at an absolute path": (lambda good: good + "plugins: [/usr/lib/hostile_plugin.py]\n", "outside the config's folder"),
+    "plugin climbing out with ../": (lambda good: good + "plugins: [../../hostile_plugin.py]\n", "outside the config's folder"),
     "control character": (lambda good: good + "x: \x07\n", "control character"),
 }
 

@@ -59,10 +59,8 @@ def test_a_sweep_table_shows_the_official_parse_of_lenient_cells(tmp_path, mini_
     assert "json (center): mean L2" in result.stdout and "official parse: mean L2" in result.stdout
 
 
-def test_run_warns_about_rows_with_a_nan_coordinate(tmp_path, mini_root):
-    from pathlib import Path
-
-    offline = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
+def test_run_warns_about_rows_with_a_nan_coordinate(tmp_path, mini_root, offline_plugin_file):
+    offline = str(offline_plugin_file)
     pipeline = tmp_path / "nan.yaml"
     pipeline.write_text(yaml.safe_dump({
         "plugins": [offline],

@@ -1,13 +1,16 @@
-"""A ``.py`` path under ``plugins:`` is read from the YAML file's folder, not the working directory."""
+"""A ``.py`` path under ``plugins:`` is read from the YAML file's folder, not the working directory,
+and never from outside it (see also ``test_plugin_rule.py``)."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
+import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
+from povagent.errors import ConfigError
 
 PLUGIN = '''
 from povagent import hookimpl
@@ -49,12 +52,13 @@ def test_a_relative_plugin_path_is_read_from_the_yaml_folder(tmp_path, mini_root
     assert Path(config.plugins[0]) == path.parent / "my_plugin.py"
 
 
-def test_a_plugin_path_climbing_from_the_yaml_folder_works_too(tmp_path, mini_root, monkeypatch):
+def test_a_plugin_path_climbing_out_of_the_yaml_folder_is_refused(tmp_path, mini_root, monkeypatch):
     path = write(tmp_path / "project" / "configs", "up", mini_root, "../plugins/my_plugin.py")
     (tmp_path / "project" / "plugins").mkdir()
     os.replace(path.parent / "my_plugin.py", tmp_path / "project" / "plugins" / "my_plugin.py")
     monkeypatch.chdir(tmp_path)
-    assert load_pipeline(path).strategy.name == "shout-up"
+    with pytest.raises(ConfigError, match=r"line \d+: plugin '../plugins/my_plugin.py' is a path outside the config's folder"):
+        load_pipeline(path)
 
 
 def test_a_sweeps_base_pipeline_reads_its_plugin_path_from_its_own_folder(tmp_path, mini_root, monkeypatch, povagent_host):

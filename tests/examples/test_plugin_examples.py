@@ -6,7 +6,7 @@ and the rows and ``summary.json`` show what the plugin did."""
 from __future__ import annotations
 
 import json
-import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -35,14 +35,16 @@ def release(tiny_dataset) -> Path:
 
 @pytest.fixture
 def pipeline(tmp_path, release, povagent_host):
-    """``pipeline(example_file, **keys) -> Path``: a pipeline YAML in its own folder naming
-    ``examples/plugins/<example_file>`` by a path relative to that folder."""
+    """``pipeline(example_file, **keys) -> Path``: a pipeline YAML in its own folder beside a
+    copy of ``examples/plugins/<example_file>`` (as a user puts a one-file plugin next to
+    their pipeline)."""
 
     def write(example: str, **keys: Any) -> Path:
         folder = tmp_path / "project"
         folder.mkdir(exist_ok=True)
+        shutil.copy(EXAMPLES / example, folder / example)
         data: dict[str, Any] = {
-            "plugins": [os.path.relpath(EXAMPLES / example, folder)],
+            "plugins": [example],
             "dataset": {"path": str(release)},
             "backend": "center",
             "retry": {"attempts": 3, "initial_wait": 0.0, "max_wait": 0.01},

@@ -10,8 +10,6 @@ import yaml
 
 from povagent.testing.pytest_plugin import write_release
 
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parent / "offline_plugin.py")
-
 
 @pytest.fixture(scope="session")
 def small_release(tmp_path_factory) -> Path:
@@ -20,11 +18,12 @@ def small_release(tmp_path_factory) -> Path:
 
 
 @pytest.fixture
-def offline_plugin():
-    """The offline test plugin module, as loaded from its path (shared with subprocesses)."""
+def offline_plugin(offline_plugin_file):
+    """The offline test plugin module, as loaded from its copy beside the test's pipelines
+    (``module.__file__``; shared with subprocesses)."""
     from povagent.plugins import _import_module_or_file
 
-    module = _import_module_or_file(OFFLINE_PLUGIN)
+    module = _import_module_or_file(str(offline_plugin_file))
     module.CALLS["count"] = 0
     module.FlakyBackend.SCRIPT.clear()
     return module
@@ -36,7 +35,7 @@ def write_pipeline(tmp_path, small_release, povagent_host, offline_plugin):
 
     def make(name: str = "pipeline.yaml", **overrides: Any) -> Path:
         data: dict[str, Any] = {
-            "plugins": [OFFLINE_PLUGIN],
+            "plugins": [offline_plugin.__file__],
             "dataset": {"path": str(small_release)},
             "backend": {"name": "test-center"},
             "strategy": "test-point",

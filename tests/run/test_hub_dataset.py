@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 import yaml
 
@@ -11,8 +9,6 @@ from povagent.config.pipeline import load_pipeline
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
 from povagent.testing.hub_server import HubServer
-
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parent / "offline_plugin.py")
 
 
 @pytest.fixture
@@ -42,7 +38,10 @@ def test_a_run_resumes_offline_from_its_config_yaml(write_pipeline, hub, monkeyp
     first = run_pipeline(load_pipeline(path))
     hub.stop()
     monkeypatch.setenv("HF_HUB_OFFLINE", "1")
-    config = load_pipeline(first.run_dir / "config.yaml")
+    # the recorded config, saved beside the pipeline (a run folder's config.yaml loads no plugin)
+    again_yaml = path.parent / "again.yaml"
+    again_yaml.write_text((first.run_dir / "config.yaml").read_text())
+    config = load_pipeline(again_yaml)
     config.instances.limit = 4
     again = run_pipeline(config)
     assert again.n_pending == 2 and len(read_rows(again.run_dir / "results.jsonl")) == 4
@@ -52,7 +51,7 @@ def test_every_sweep_cell_runs_on_the_fetched_release_and_records_it(hub, tmp_pa
     from povagent.run.sweep import run_sweep
 
     base = {
-        "plugins": [OFFLINE_PLUGIN], "dataset": {"hub": "owl-owl/POVBench"}, "backend": {"name": "test-center"},
+        "plugins": [offline_plugin.__file__], "dataset": {"hub": "owl-owl/POVBench"}, "backend": {"name": "test-center"},
         "strategy": "test-point", "parser": "test-json", "concurrency": 4, "output": "ignored-by-sweeps",
     }  # fmt: skip
     (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))

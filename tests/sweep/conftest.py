@@ -1,4 +1,4 @@
-"""Sweep fixtures: the runner tests' offline plugin (by path) and a small synthetic release."""
+"""Sweep fixtures: the runner tests' offline plugin (a copy beside the sweep) and a small synthetic release."""
 
 from __future__ import annotations
 
@@ -8,8 +8,6 @@ import pytest
 
 from povagent.testing.pytest_plugin import write_release
 
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
-
 
 @pytest.fixture(scope="session")
 def sweep_release(tmp_path_factory) -> Path:
@@ -18,11 +16,11 @@ def sweep_release(tmp_path_factory) -> Path:
 
 
 @pytest.fixture
-def offline_plugin(povagent_host):
-    """The offline test plugin module with its call counter reset."""
+def offline_plugin(povagent_host, offline_plugin_file):
+    """The offline test plugin module (copied into the test's folder) with its call counter reset."""
     from povagent.plugins import _import_module_or_file
 
-    module = _import_module_or_file(OFFLINE_PLUGIN)
+    module = _import_module_or_file(str(offline_plugin_file))
     module.CALLS["count"] = 0
     module.FlakyBackend.SCRIPT.clear()
     return module

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import textwrap
-from pathlib import Path
 
 import pytest
 import yaml
@@ -12,15 +11,13 @@ import yaml
 from povagent.errors import ConfigError
 from povagent.run.sweep import dry_run, expand_sweep, run_sweep
 
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
-
 PER_CONDITION = 4
 
 
 @pytest.fixture
 def sweep_file(tmp_path, sweep_release, offline_plugin):
     base = {
-        "plugins": [OFFLINE_PLUGIN],
+        "plugins": [offline_plugin.__file__],
         "dataset": {"path": str(sweep_release)},
         "backend": {"name": "test-center"},
         "strategy": "test-point",

@@ -1,0 +1,110 @@
+"""SIGTERM (what schedulers and ``timeout`` send) stops ``run`` and ``sweep`` as cleanly as Ctrl-C:
+rows kept, the summary marked interrupted, a message saying how to resume, exit code 143; the
+same command then finishes with every key exactly once. Real signals, a real slow model server
+on loopback."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from povagent.testing.loopback_server import LoopbackServer, Reply
+
+pytestmark = pytest.mark.timeout(240)
+
+N_KEYS = 18  # the 6 Given instances of the dataset copy's two houses, 3 runs
+ANSWER = '{"selected_image": 0, "x": 256, "y": 256}'
+
+
+@pytest.fixture
+def slow_server():
+    with LoopbackServer(Reply(ANSWER, delay_s=0.15), max_lifetime_s=220) as server:
+        yield server
+
+
+def pipeline(tmp_path: Path, dataset: Path, server: LoopbackServer, output: Path, **keys: object) -> Path:
+    path = tmp_path / "pipeline.yaml"
+    path.write_text(yaml.safe_dump({
+        "dataset": str(dataset),
+        "instances": {"conditions": ["c"]},  # one frame a request: light on a loaded machine
+        "runs": 3,
+        "backend": {"name": "litellm", "options": {"model": "openai/loopback", "api_base": server.url, "api_key_env": "POVAGENT_TEST_KEY"}},
+        "parser": "official",
+        "concurrency": 3,
+        "retry": {"attempts": 1, "initial_wait": 0.0, "max_wait": 0.0},
+        "cache": False,
+        "output": str(output),
+        **keys,
+    }))
+    return path
+
+
+def keys(results: Path) -> list[str]:
+    return [json.loads(line)["key"] for line in results.read_text().splitlines()]
+
+
+def start(*args: str, cwd: Path) -> subprocess.Popen[str]:
+    env = {**os.environ, "POVAGENT_TEST_KEY": "sk-test-123", "PYTHONUNBUFFERED": "1"}
+    return subprocess.Popen([sys.executable, "-m", "povagent.cli", *args, "--quiet"], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def terminate_after_rows(proc: subprocess.Popen[str], results: Path, rows: int) -> tuple[str, str]:
+    """SIGTERM once ``results`` holds ``rows`` lines; the process's (stdout, stderr)."""
+    deadline = time.monotonic() + 120
+    while not results.exists() or len(results.read_text().splitlines()) < rows:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "no rows in time"
+        time.sleep(0.02)
+    os.kill(proc.pid, signal.SIGTERM)
+    return proc.communicate(timeout=60)
+
+
+def test_sigterm_mid_run_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, slow_server):
+    run = tmp_path / "run"
+    path = pipeline(tmp_path, dataset_copy, slow_server, run)
+    proc = start("run", str(path), cwd=tmp_path)
+    _, err = terminate_after_rows(proc, run / "results.jsonl", 3)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err
+    assert f"terminated (SIGTERM): rows written so far are kept in {run}" in err and f"povagent run {path}` again to resume" in err, err
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["interrupted"] is True and summary["complete"] is False
+    before = keys(run / "results.jsonl")
+    assert 3 <= len(before) < N_KEYS, "the signal must land mid-run"
+    assert summary["rows"]["done"] == len(before)
+
+    proc = start("run", str(path), cwd=tmp_path)
+    _, err = proc.communicate(timeout=180)
+    assert proc.returncode == 0, err
+    after = keys(run / "results.jsonl")
+    assert len(after) == len(set(after)) == N_KEYS and after[: len(before)] == before
+    assert json.loads((run / "summary.json").read_text())["interrupted"] is False
+
+
+def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, slow_server):
+    pipeline(tmp_path, dataset_copy, slow_server, tmp_path / "ignored", runs=1)
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text(yaml.safe_dump({"base": "pipeline.yaml", "output": str(tmp_path / "sw"), "axes": {"parser": ["official", "json"]}}))
+    proc = start("sweep", str(sweep), cwd=tmp_path)
+    _, err = terminate_after_rows(proc, tmp_path / "sw" / "official" / "results.jsonl", 2)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err and f"terminated (SIGTERM): finished rows are kept; run `povagent sweep {sweep}` again" in err, err
+    assert json.loads((tmp_path / "sw" / "official" / "summary.json").read_text())["interrupted"] is True
+    before = keys(tmp_path / "sw" / "official" / "results.jsonl")
+    assert len(before) < N_KEYS // 3  # a cell runs once: 6 keys
+
+    proc = start("sweep", str(sweep), cwd=tmp_path)
+    _, err = proc.communicate(timeout=180)
+    assert proc.returncode == 0, err
+    for cell in ("official", "json"):
+        done = keys(tmp_path / "sw" / cell / "results.jsonl")
+        assert len(done) == len(set(done)) == N_KEYS // 3, cell
