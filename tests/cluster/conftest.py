@@ -144,10 +144,6 @@ def shared_dask_cluster(tmp_path_factory) -> Iterator[RealCluster]:
         stop_cluster(cluster)
 
 
-#: The runner tests' offline plugin (backend ``test-center``: cacheable, ``delay_s`` per request).
-OFFLINE_PLUGIN = str(Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py")
-
-
 @pytest.fixture(scope="session")
 def cluster_release(tmp_path_factory) -> Path:
     """2 houses, 2 pairs, 4 (pair, direction)s, 3 frames: 4 instances per condition."""
@@ -157,7 +153,7 @@ def cluster_release(tmp_path_factory) -> Path:
 
 
 @pytest.fixture
-def write_sweep(tmp_path, cluster_release, povagent_host):
+def write_sweep(tmp_path, cluster_release, povagent_host, offline_plugin_file):
     """``write_sweep(output, delay_s=0, runs=1, concurrency=4, extra="") -> Path``: a sweep over the
     conditions (three cells) with the offline ``test-center`` backend."""
     import yaml
@@ -165,7 +161,7 @@ def write_sweep(tmp_path, cluster_release, povagent_host):
     def make(output: Path, *, delay_s: float = 0.0, runs: int = 1, concurrency: int = 4, extra: str = "", axes: str = "conditions: [a, b, c]",
              base_extra: dict | None = None) -> Path:
         base = {
-            "plugins": [OFFLINE_PLUGIN],
+            "plugins": [str(offline_plugin_file)],  # the runner tests' offline plugin, beside the YAML
             "dataset": {"path": str(cluster_release)},
             "backend": {"name": "test-center", "options": {"delay_s": delay_s}},
             "strategy": "test-point",
