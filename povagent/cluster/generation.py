@@ -176,7 +176,9 @@ def _run_houses(
     while waiting:
         try:
             done, waiting = wait(waiting, timeout=POLL_S, return_when="FIRST_COMPLETED")
-        except TimeoutError:
+        except (TimeoutError, UnboundLocalError):
+            # UnboundLocalError: distributed's sync() can raise it when its loop is interrupted
+            # while a worker dies (dask/distributed#8514); nothing finished this round, look again
             done = set()
         if client.status != "running":
             # the client reconnects on its own for a while; a scheduler that stays away is gone

@@ -135,7 +135,9 @@ def _collect(client: Any, futures: dict[Any, str], on_done: Callable[[str, Any, 
     while pending:
         try:
             done, pending = wait(pending, timeout=POLL_S, return_when="FIRST_COMPLETED")
-        except TimeoutError:
+        except (TimeoutError, UnboundLocalError):
+            # UnboundLocalError: distributed's sync() can raise it when its loop is interrupted
+            # while a worker dies (dask/distributed#8514); nothing finished this round, look again
             done = set()
         except CancelledError:
             _scheduler_gone(client, sorted(futures[f] for f in pending))

@@ -14,6 +14,7 @@ import signal
 import subprocess
 import sys
 import threading
+import traceback
 import time
 from pathlib import Path
 
@@ -66,8 +67,8 @@ def test_a_worker_killed_mid_house_still_gives_the_same_bytes(dask_cluster, one_
     def generate() -> None:
         try:
             outcome["report"] = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster=dask_cluster.address)
-        except BaseException as exc:  # handed to the test thread
-            outcome["error"] = exc
+        except BaseException:  # handed to the test thread, with where it came from
+            outcome["error"] = traceback.format_exc()
 
     thread = threading.Thread(target=generate)
     thread.start()
