@@ -14,8 +14,8 @@ import signal
 import subprocess
 import sys
 import threading
-import traceback
 import time
+import traceback
 from pathlib import Path
 
 import pytest
