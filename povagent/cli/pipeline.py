@@ -290,12 +290,13 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
 
     Three columns (kind, name, source) beside a description leave it a dozen characters in
     80 columns; here the description gets all but the name's width, and a source too long for
-    it (a deep .py path) keeps its start and its end.
+    it (a distribution's entry point, a deep .py path) goes on over several lines, whole,
+    broken between words.
     """
     from rich.table import Table
     from rich.text import Text
 
-    from povagent.run.narrow_console import middle_ellipsis
+    from povagent.cli.console_width import break_between_words
 
     name_width = max((len(e.name) for es in entries.values() for e in es), default=4)
     name_width = min(name_width, max(12, width // 3))
@@ -309,7 +310,7 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
         table.add_row(Text(KIND_HEADINGS.get(kind, f"{kind}s"), style="bold"), "")
         for e in kind_entries:
             text = Text(e.description or "(no description)")
-            text.append("\nfrom " + middle_ellipsis(e.source, room - len("from ")), style="dim")
+            text.append("\n" + break_between_words("from " + e.source, room), style="dim")
             table.add_row(Text(e.name), text)
     return table
 
