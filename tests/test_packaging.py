@@ -59,13 +59,11 @@ def third_party_imports(source: str) -> list[tuple[str, int, bool]]:
 
     def visit(node: ast.AST, soft: bool) -> None:
         for child in ast.iter_child_nodes(node):
-            inner = soft
-            if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                inner = True
-            elif isinstance(child, ast.Try) and catches_import_error(child):
-                inner = True
-            elif isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test):
-                inner = True
+            inner = soft or (
+                isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef))
+                or (isinstance(child, ast.Try) and catches_import_error(child))
+                or (isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test))
+            )
             if isinstance(child, ast.Import):
                 tops = [a.name.split(".")[0] for a in child.names]
             elif isinstance(child, ast.ImportFrom) and child.level == 0 and child.module:
