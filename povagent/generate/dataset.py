@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import os
 import shutil
 import sys
 import time
@@ -77,12 +78,22 @@ class GenerationReport:
 ProgressCallback = Callable[[HouseSummary, int, int], None]
 
 
+def default_jobs(houses: int) -> int:
+    """Worker processes for ``houses`` houses: one per core this process may run on (its CPU
+    affinity, else the machine's count), never more than the houses."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(houses, cores))
+
+
 def generate_dataset(
     out: Path,
     houses: int,
     seed: int,
     frames: int = 30,
-    jobs: int = 1,
+    jobs: int | None = None,
     progress: bool | ProgressCallback = True,
     with_render: bool = False,
     judge: str | SurfaceJudge = DEFAULT_JUDGE,
@@ -102,11 +113,16 @@ def generate_dataset(
     ``meta.json`` records the judge's name (and its options, secrets redacted, when given).
     The judge is made before anything is written, so an unknown name or bad options raise
     :class:`~povagent.errors.PluginError` with ``out`` untouched.
+    ``jobs``: worker processes, one house each at a time; ``None`` (the default) is
+    :func:`default_jobs`: a worker per core this process may use, at most one per house (one
+    when ``judge`` is an object, which need not pickle).
     The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``. ``out``
     must be empty, new, or a dataset this generator wrote (which is then replaced whole);
     anything else raises :class:`~povagent.errors.DatasetError`.
     """
     out = Path(out)
+    if jobs is None:
+        jobs = default_jobs(houses) if isinstance(judge, str) else 1
     if isinstance(judge, str):
         registered = RegisteredJudge(judge, judge_options, plugins)
         registered.resolve()  # an unknown name or bad options fail here, before any work

@@ -166,7 +166,7 @@ def grouped_bars(
     colours = [st.colour for st in styles]
     uid = _uid(title, [s[0] for s in series])
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
-    height += top - LEGEND_ROW_BOTTOM  # each legend row past the first adds height: the plot keeps its own
+    height += round(top - LEGEND_ROW_BOTTOM)  # each legend row past the first adds height: the plot keeps its own
     top += 6  # room for a marker on the tallest bar
     left, right, bottom = 60, 16, 46
     plot_h = height - top - bottom
@@ -270,7 +270,7 @@ def histogram(
     styles = series_styles(series)
     colours = [st.colour for st in styles]
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
-    height += top - LEGEND_ROW_BOTTOM  # each legend row past the first adds height: the plot keeps its own
+    height += round(top - LEGEND_ROW_BOTTOM)  # each legend row past the first adds height: the plot keeps its own
     top += 6
     left, right, bottom = 60, 16, 40
     plot_h, plot_w = height - top - bottom, width - left - right
