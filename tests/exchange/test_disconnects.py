@@ -31,21 +31,22 @@ def post_and(server: LoopbackServer, *, hang_up: bool) -> bytes:
         sock.close()
 
 
-def wait_for_handlers(timeout: float = 10.0) -> None:
-    """Until every request thread of the servers has finished."""
+def wait_for_handlers(before: set[threading.Thread], timeout: float = 10.0) -> None:
+    """Until every request thread started since ``before`` (this test's server's) has finished."""
     end = time.monotonic() + timeout
-    while any("process_request_thread" in t.name for t in threading.enumerate()) and time.monotonic() < end:
+    while time.monotonic() < end and any("process_request_thread" in t.name for t in set(threading.enumerate()) - before):
         time.sleep(0.02)
 
 
 def test_a_client_hanging_up_before_the_answer_prints_nothing(capfd):
+    before = set(threading.enumerate())
     with LoopbackServer(reply=Reply('{"x": 1, "y": 2}', delay_s=0.4), max_lifetime_s=30) as server:
         for _ in range(3):
             post_and(server, hang_up=True)
         while server.request_count < 3:
             time.sleep(0.02)
         time.sleep(0.5)  # the delayed answers are written to the closed connections
-        wait_for_handlers()
+        wait_for_handlers(before)
         assert server.request_count == 3
     err = capfd.readouterr().err
     assert "Exception occurred" not in err and "Traceback" not in err, err
@@ -55,9 +56,10 @@ def test_a_real_error_in_a_handler_is_still_printed(capfd):
     def broken(_request):
         raise RuntimeError("the reply function is broken")
 
+    before = set(threading.enumerate())
     with LoopbackServer(reply=broken, max_lifetime_s=30) as server:
         assert post_and(server, hang_up=False) == b""  # the connection is closed, no answer
-        wait_for_handlers()
+        wait_for_handlers(before)
     err = capfd.readouterr().err
     assert "Exception occurred during processing of request" in err
     assert "RuntimeError: the reply function is broken" in err
