@@ -57,9 +57,11 @@ def register_strategies(register: Register) -> None:
     strategy call ``register(name, factory, description="...")``. ``factory(**options)``, with
     ``options`` the pipeline YAML's ``strategy.options`` (a model profile's
     ``strategy_options`` first), returns a :class:`povagent.interfaces.Strategy`, whose
-    ``build(instance, images)`` returns the :class:`~povagent.exchange.messages.Request` and
+    ``build(instance, images)`` returns the :class:`~povagent.exchange.messages.Request`,
     whose ``solve(instance, ask, images)`` returns every ``(Request, Response)`` exchange, the
-    answer last. Bad options: raise ``TypeError`` or ``ValueError`` in the factory.
+    answer last, and whose ``plan_turns(instance, images)`` lists every turn ``solve`` takes
+    before any model call (:class:`~povagent.interfaces.PlannedTurn`; a multi-turn strategy
+    overrides both). Bad options: raise ``TypeError`` or ``ValueError`` in the factory.
     """
 
 

@@ -8,6 +8,8 @@ the options from the pipeline YAML. Everything here is abstract: no file, networ
 from __future__ import annotations
 
 import abc
+import re
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
@@ -20,6 +22,43 @@ if TYPE_CHECKING:
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
+
+#: How :func:`earlier_answer` writes a placeholder (``what`` empty: the whole answer).
+_PLACEHOLDER = re.compile(r"<<(?:(?P<what>[^<>]*?), read from )?the model's answer to turn (?P<turn>[1-9][0-9]*)>>")
+
+
+def earlier_answer(turn: int, what: str = "") -> str:
+    """The placeholder a planned turn shows where the model's earlier answer will stand.
+
+    ``earlier_answer(1)`` stands for the whole answer to turn 1 (``<<the model's answer to turn
+    1>>``); ``earlier_answer(1, "anchor")`` for a value read from it (``<<anchor, read from the
+    model's answer to turn 1>>``). Dry runs count a whole-answer placeholder as that turn's
+    ``max_tokens``.
+    """
+    if not isinstance(turn, int) or turn < 1:
+        raise ValueError(f"earlier_answer: turn must be a positive integer, got {turn!r}")
+    return f"<<{what}, read from the model's answer to turn {turn}>>" if what else f"<<the model's answer to turn {turn}>>"
+
+
+def whole_answer_placeholders(text: str) -> list[int]:
+    """The turns whose whole answer ``text`` holds a placeholder for (:func:`earlier_answer`
+    without ``what``), in order."""
+    return [int(m.group("turn")) for m in _PLACEHOLDER.finditer(text) if m.group("what") is None]
+
+
+@dataclass(frozen=True)
+class PlannedTurn:
+    """One turn a strategy will take for an instance, known before any model call.
+
+    ``request`` is the request as it will be sent, with :func:`earlier_answer` placeholders
+    where it carries the model's earlier answers (or values read from them). ``sent`` is
+    ``False`` for a turn the strategy works out itself (``Response.by_strategy``), never sent.
+    ``note`` says when the turn is taken if not always (``"asked when turn 1 names an anchor"``).
+    """
+
+    request: Request
+    sent: bool = True
+    note: str = ""
 
 
 class TransientBackendError(Exception):
@@ -105,10 +144,31 @@ class Strategy(abc.ABC):
         """Talk to the model and return every exchange, the final answer last.
 
         The default is single-turn: build one request and ask once. Multi-turn strategies
-        (self-checking, tool use) override this and may call ``ask`` several times.
+        (self-checking, tool use) override this and may call ``ask`` several times; they
+        override :meth:`plan_turns` too, so the turns are known before the run.
         """
         request = self.build(instance, images)
         return [(request, await ask(request))]
+
+    def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
+        """Every turn :meth:`solve` takes for ``instance``, in order, without calling a model.
+
+        ``povagent show-prompt`` prints each planned request and ``sweep --dry-run`` counts
+        requests and tokens per turn from them. A later turn's request holds
+        :func:`earlier_answer` placeholders where the model's earlier answers will stand. A turn
+        taken only sometimes is listed with a ``note`` saying when (dry runs count it: an upper
+        bound). The default is :meth:`build`'s one request; a strategy that overrides
+        :meth:`solve` without this method is reported as having undeclared later turns
+        (:func:`declares_turns`).
+        """
+        return [PlannedTurn(self.build(instance, images))]
+
+
+def declares_turns(strategy: Strategy) -> bool:
+    """Whether ``strategy``'s :meth:`Strategy.plan_turns` describes every turn its
+    :meth:`Strategy.solve` takes: true unless ``solve`` is overridden and ``plan_turns`` is not."""
+    cls = type(strategy)
+    return cls.solve is Strategy.solve or cls.plan_turns is not Strategy.plan_turns
 
 
 class Parser(abc.ABC):

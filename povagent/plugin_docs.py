@@ -82,6 +82,11 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "run": "The repeat index (seeded baselines read it); never sent, not part of the fingerprint.",
         "question": "A machine-readable sub-question of a multi-turn strategy; model backends ignore it.",
     },
+    "PlannedTurn": {
+        "request": "The request as it will be sent, with `earlier_answer(turn)` placeholders where it carries the model's earlier answers.",
+        "sent": "`False` for a turn the strategy works out itself (its final answer): shown, never sent, not counted as a request.",
+        "note": "When the turn is taken if not always (e.g. `asked when turn 1 names an anchor`); empty when always.",
+    },
     "Message": {
         "role": "`system`, `user` or `assistant`.",
         "parts": "`TextPart(text)` and `ImagePart(image_hash, label)` in the order the model sees them.",

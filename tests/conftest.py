@@ -33,16 +33,17 @@ def write_answered_run(mini_root):
     """``write_answered_run(folder, answers) -> folder``: a finished run folder over the
     hand-made dataset (center backend, basic strategy, parsed with ``json``, official scorer)
     whose rows are ``answered`` with the given raw answers, ``answers`` being
-    ``[(instance id, raw text), ...]``: what re-parsing and re-scoring commands read."""
+    ``[(instance id, raw text), ...]``: what re-parsing and re-scoring commands read.
+    ``backend`` (a pipeline's ``backend:`` mapping) names who answered instead of ``center``."""
     import yaml
 
     from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
 
-    def write(folder: Path, answers) -> Path:
+    def write(folder: Path, answers, backend=None) -> Path:
         folder.mkdir(parents=True)
         (folder / "config.yaml").write_text(yaml.safe_dump({
             "dataset": {"path": str(mini_root)},
-            "backend": {"name": "center", "options": {}},
+            "backend": backend or {"name": "center", "options": {}},
             "strategy": {"name": "basic", "options": {}},
             "parser": {"name": "json", "options": {}},
             "scorers": [{"name": "official", "options": {}}],

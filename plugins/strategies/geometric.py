@@ -47,7 +47,7 @@ from povagent.geometry.ground_truth import anchor_keywords
 from povagent.geometry.placement import SURFACE_KINDS, AnchorEstimate, choose_frame, place_target
 from povagent.geometry.size_priors import size_prior
 from povagent.geometry.triangulation import MIN_RAY_ANGLE_DEG, Outline, Sighting, fit_box, locate
-from povagent.interfaces import Ask, Strategy
+from povagent.interfaces import Ask, PlannedTurn, Strategy, earlier_answer
 from povagent_plugins.strategies.layout import answer_spec, image_parts, shown_images
 
 #: The ``kind`` of each sub-question (``Request.question["kind"]``).
@@ -261,21 +261,25 @@ class GeometricStrategy(Strategy):
             props = {"anchor": {"type": "string"}, "direction": directions}
         return self._text_request(instance, text, _schema(props), {"kind": READ, "asks": list(props)})
 
-    def surface_request(self, instance: Instance, anchor: str, direction: str) -> Request:
-        """Sub-question 2: what the target rests on."""
-        text = render("geometric_surface", sentence=instance.sentence, anchor=object_words(anchor), direction=_direction_words(direction))
+    def surface_request(self, instance: Instance, anchor: str, direction: str, *, words: tuple[str, str] | None = None) -> Request:
+        """Sub-question 2: what the target rests on. ``words`` (anchor, direction) replace the
+        words made from ``anchor`` and ``direction`` (the planned turn's placeholders)."""
+        anchor_words, direction_words = words or (object_words(anchor), _direction_words(direction))
+        text = render("geometric_surface", sentence=instance.sentence, anchor=anchor_words, direction=direction_words)
         schema = _schema({"surface": {"type": "string", "enum": list(SURFACE_KINDS)}})
         return self._text_request(instance, text, schema, {"kind": SURFACE, "anchor": anchor, "direction": direction})
 
-    def locate_request(self, instance: Instance, images: ImageStore, object_type: str, role: str) -> Request:
-        """Sub-question 3: the object's centre and box in every shown frame where it is seen."""
+    def locate_request(self, instance: Instance, images: ImageStore, object_type: str, role: str, *, words: str | None = None) -> Request:
+        """Sub-question 3: the object's centre and box in every shown frame where it is seen.
+        ``words`` replace the object's name made from ``object_type`` (a planned turn's placeholder)."""
         width, height = instance.frame_size
         hashes = shown_images(instance, images)
         frames = instance.condition.uses_exploration_frames
+        name = object_words(object_type) if words is None else words
         if frames:
-            text = render("geometric_locate_frames", object=object_words(object_type), **frame_values(width, height, len(hashes)))
+            text = render("geometric_locate_frames", object=name, **frame_values(width, height, len(hashes)))
         else:
-            text = render("geometric_locate_given", object=object_words(object_type), **frame_values(width, height))
+            text = render("geometric_locate_given", object=name, **frame_values(width, height))
         message = Message("user", (*image_parts(hashes, frames), TextPart(text)))
         spec = AnswerSpec(schema=_DETECTIONS_SCHEMA, width=width, height=height, n_frames=len(hashes), asks_frame=False)
         question = {"kind": LOCATE, "object": object_type, "role": role, "frames": len(hashes)}
@@ -284,6 +288,27 @@ class GeometricStrategy(Strategy):
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The first request: reading the sentence (the rest depend on its answer)."""
         return self.read_request(instance)
+
+    def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
+        """The sub-questions in order, with placeholders for what turn 1's answer names, then
+        the worked-out answer (never sent). A step whose earlier answer is unusable is skipped
+        (the notes say when each is asked), so a run may make fewer requests than planned."""
+        anchor, direction = earlier_answer(1, "anchor"), earlier_answer(1, "direction")
+        turns = [
+            PlannedTurn(self.read_request(instance)),
+            PlannedTurn(self.surface_request(instance, anchor, direction, words=(anchor, direction)), note="asked when turn 1 names an anchor"),
+            PlannedTurn(self.locate_request(instance, images, anchor, "anchor", words=anchor), note="asked when turn 1 names an anchor"),
+        ]
+        if instance.condition.uses_exploration_frames:
+            observer = earlier_answer(1, "observer")
+            turns.append(
+                PlannedTurn(
+                    self.locate_request(instance, images, observer, "observer", words=observer),
+                    note="asked when turn 1 names the observer's furniture and turn 3 finds the anchor",
+                )
+            )
+        turns.append(PlannedTurn(self.final_request(instance), sent=False, note="the answer, solved from the earlier answers"))
+        return turns
 
     # -- the conversation ---------------------------------------------------------------------
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
@@ -384,6 +409,16 @@ class GeometricStrategy(Strategy):
             account.fallback(f"no usable anchor box edge: the {anchor}'s usual size stands in")
         return AnchorEstimate(box.centre, box.half)
 
+    def final_request(self, instance: Instance) -> Request:
+        """The final turn's request: it stands for the worked-out answer and is never sent."""
+        return Request(
+            (Message("user", (TextPart("(worked out by the geometric strategy; not sent to a model)"),)),),
+            answer_spec(instance),
+            self.generation,
+            instance=instance,
+            question={"kind": FINAL},
+        )
+
     def _final(
         self, instance: Instance, answer: tuple[int | None, tuple[float, float]] | None, account: Account, target: Sequence[float] | np.ndarray | None = None
     ) -> tuple[Request, Response]:
@@ -402,13 +437,7 @@ class GeometricStrategy(Strategy):
         if target is not None:
             doc[TARGET_3D] = [round(float(v), 4) for v in target]
         text = json.dumps(doc) + "\n" + account.text()
-        request = Request(
-            (Message("user", (TextPart("(worked out by the geometric strategy; not sent to a model)"),)),),
-            answer_spec(instance),
-            self.generation,
-            instance=instance,
-            question={"kind": FINAL},
-        )
+        request = self.final_request(instance)
         solved = tuple(float(v) for v in target) if target is not None else None
         return request, Response(text=text, model="geometric solver", by_strategy=True, solved_point=solved)  # type: ignore[arg-type]
 

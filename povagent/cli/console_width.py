@@ -11,11 +11,17 @@ middle (:mod:`povagent.run.narrow_console`). Nothing here prints.
 
 from __future__ import annotations
 
+import re
 from typing import Any, NamedTuple
 
 from povagent.run.narrow_console import middle_ellipsis
 
-__all__ = ["PathTitle", "console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
+__all__ = ["PathTitle", "break_between_words", "console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
+
+#: Where a name or path may go on to the next line, best first: after a space, ``/`` or ``__``
+#: (between a sweep cell's parts); then after ``.``, ``_``, ``-``, ``=`` or ``:``. A piece is a
+#: word with the separators after it.
+_PIECES = (re.compile(r"(?:(?! |/|__).)+(?: |/|__)*|(?: |/|__)+"), re.compile(r"[^ /._\-=:]+[ /._\-=:]*|[ /._\-=:]+"))
 
 
 class PathTitle(NamedTuple):
@@ -72,21 +78,63 @@ def fitted_table(
     headers = [h for h, _ in columns]
     if table_width(headers) > width:
         headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
+    label_widths: dict[int, int] = {}
+    if table_width(headers) > width:
+        # labels that do not fit go on several lines, broken between words (a cell name's
+        # parts), never inside one as rich's fold would
+        rows = [list(row) for row in rows]
+        for i, (_, kind) in enumerate(columns):
+            if kind != "label":
+                continue
+            own = max([len(x) for x in headers[i].split("\n")] + [len(r[i]) for r in plain_rows if i < len(r)])
+            room = max(width - (table_width(headers) - own), max(len(x) for x in headers[i].split("\n")), 4)
+            for r, plain in zip(rows, plain_rows):
+                if i < len(r) and len(plain[i]) > room and r[i] == plain[i]:  # markup-free: broken as it is
+                    r[i] = break_between_words(r[i], room)
+                    plain[i] = r[i]
+            label_widths[i] = max([len(x) for r in rows if i < len(r) for x in _plain(r[i]).split("\n")] + [len(x) for x in headers[i].split("\n")])
     if isinstance(title, PathTitle):
         room = min(width, table_width(headers)) - len(title.before)
         first, sep, more = title.after.partition("\n")
         title = title.before + path_in_line(title.path, first, width=room) + sep + more
     table = Table(title=title, caption=caption)
-    for header, (_, kind) in zip(headers, columns):
+    for i, (header, (_, kind)) in enumerate(zip(headers, columns)):
         if kind == "number":
             table.add_column(header, justify="right", no_wrap=True)
         elif kind == "label":
-            table.add_column(header, overflow="fold")
+            table.add_column(header, overflow="fold", min_width=label_widths.get(i))
         else:
             table.add_column(header)
     for row in rows:
         table.add_row(*row)
     return table
+
+
+def break_between_words(text: str, room: int) -> str:
+    """``text`` on lines of at most ``room`` characters, broken only after a separator, never
+    inside a word: after a space, ``/`` or ``__`` where that is enough, else also after ``.``,
+    ``_``, ``-``, ``=`` or ``:``; a word longer than ``room`` keeps a line to itself, whole.
+    A space where a line breaks is dropped; any other separator stays at the end of its line,
+    so the lines joined give the text back."""
+    return "\n".join(_pack(text, room, 0))
+
+
+def _pack(text: str, room: int, level: int) -> list[str]:
+    lines: list[str] = []
+    line = ""
+    for piece in _PIECES[level].findall(text):
+        if len(piece.rstrip(" ")) > room and level + 1 < len(_PIECES):
+            if line:
+                lines.append(line.rstrip(" ") or line)
+            *whole, line = _pack(piece, room, level + 1)
+            lines += whole
+        elif line and len(line) + len(piece.rstrip(" ")) > room:
+            lines.append(line.rstrip(" ") or line)
+            line = piece
+        else:
+            line += piece
+    lines.append(line)
+    return lines
 
 
 def _two_lines(header: str) -> str:

@@ -38,8 +38,9 @@ def generate_command(
     frames: int = typer.Option(
         30, "--frames", min=1, metavar="N", help="Exploration frames per house, at most (the paper uses 30)."
     ),
-    jobs: int = typer.Option(
-        1, "--jobs", min=1, metavar="N", help="Worker processes (the files written do not depend on it)."
+    jobs: int | None = typer.Option(
+        None, "--jobs", min=1, metavar="N",
+        help="Worker processes (default: one per core, at most one per house; the files written do not depend on it).",
     ),
     with_render: bool = typer.Option(
         False, "--with-render", help="Also write depth maps and instance masks under each house's _render/ folder."

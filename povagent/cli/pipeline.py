@@ -186,7 +186,7 @@ def sweep_command(
         "and named overrides.",
     ),
     dry_run: bool = typer.Option(
-        False, "--dry-run", help="Only print the cells, the requests still to make and a token estimate; call no model."
+        False, "--dry-run", help="Only print the cells, the requests still to make and a token estimate (per turn for a multi-turn strategy); call no model."
     ),
     keep_errors: bool = keep_errors_option(),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bars."),
@@ -214,13 +214,23 @@ def sweep_command(
         sweep_cfg, cells = expand_sweep(sweep, strict=strict)
         rows: list[list[str]] = []
         totals = [0, 0, 0, 0, 0]
+        notes: list[str] = []
         for c in plan(cells):
             vals = [c.n_total, c.n_done, c.requests, c.prompt_tokens, c.max_completion_tokens]
             totals = [a + b for a, b in zip(totals, vals)]
             rows.append([c.name, *(f"{v:,}" for v in vals)])
+            if len(c.turns) > 1:  # a multi-turn strategy: each turn's requests and tokens under the cell
+                for t in c.turns:
+                    rows.append([f"  turn {t.turn}" + ("*" if t.note else ""), "", "", *(f"{v:,}" for v in (t.requests, t.prompt_tokens, t.max_completion_tokens))])
+                    if t.note and f"turn {t.turn}: {t.note} (counted for every key)" not in notes:
+                        notes.append(f"turn {t.turn}: {t.note} (counted for every key)")
+            if not c.turns_declared:
+                notes.append(f"{c.name}: its strategy overrides solve() without plan_turns(): only the first turn is counted")
         rows.append(["[bold]total", *(f"[bold]{v:,}" for v in totals)])
         columns = [("cell", "label")] + [(h, "number") for h in ("keys", "done", "requests to make", "~prompt tokens", "<= completion tokens")]
         console.print(fitted_table(columns, rows, title=PathTitle(sweep_cfg.output, f" ({len(cells)} cells)", before=f"dry run of {sweep.name}: ")))
+        for note in notes:  # a turn taken only sometimes is counted for every key: an upper bound
+            console.print(f"* {note}", markup=False, highlight=False)
         return
 
     def done(cell: Any, res: Any) -> None:
@@ -333,12 +343,13 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
 
     Three columns (kind, name, source) beside a description leave it a dozen characters in
     80 columns; here the description gets all but the name's width, and a source too long for
-    it (a deep .py path) keeps its start and its end.
+    it (a distribution's entry point, a deep .py path) goes on over several lines, whole,
+    broken between words.
     """
     from rich.table import Table
     from rich.text import Text
 
-    from povagent.run.narrow_console import middle_ellipsis
+    from povagent.cli.console_width import break_between_words
 
     name_width = max((len(e.name) for es in entries.values() for e in es), default=4)
     name_width = min(name_width, max(12, width // 3))
@@ -352,7 +363,7 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
         table.add_row(Text(KIND_HEADINGS.get(kind, f"{kind}s"), style="bold"), "")
         for e in kind_entries:
             text = Text(e.description or "(no description)")
-            text.append("\nfrom " + middle_ellipsis(e.source, room - len("from ")), style="dim")
+            text.append("\n" + break_between_words("from " + e.source, room), style="dim")
             table.add_row(Text(e.name), text)
     return table
 

@@ -1,7 +1,7 @@
 """Commands on prompts and answers: ``show-prompt``, ``parse`` and ``rescore``.
 
-``show-prompt`` shows exactly what a strategy sends for one instance (and saves its images,
-markers drawn); ``parse`` reads one raw answer from stdin with a parser and prints the typed
+``show-prompt`` shows exactly what a strategy sends for one instance, every planned turn (and
+saves its images, markers drawn); ``parse`` reads one raw answer from stdin with a parser and prints the typed
 result as JSON; ``rescore`` re-parses a finished run with another parser, offline.
 """
 
@@ -11,6 +11,7 @@ import json
 import re
 import sys
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -78,10 +79,11 @@ def show_prompt_command(
         None, "--out", metavar="FOLDER", help="Folder to save the images in (default: ./show-prompt/ID, slashes as _)."
     ),
 ) -> None:
-    """Print the exact messages a strategy sends for one instance.
+    """Print every turn a strategy sends for one instance, exactly.
 
     The text, the image labels and the generation settings are printed as the model receives
-    them; the images (markers drawn) are saved to a folder.
+    them; the images (markers drawn) are saved to a folder. A multi-turn strategy's later turns
+    show <<the model's answer to turn N>> where its earlier answer will stand.
     """
     from povagent.config.pipeline import load_pipeline
     from povagent.dataset.hub import resolve_hub_dataset
@@ -89,6 +91,7 @@ def show_prompt_command(
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
     from povagent.exchange.preview import preview_request
+    from povagent.interfaces import declares_turns
     from povagent.plugins import get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
@@ -100,14 +103,32 @@ def show_prompt_command(
     strategy = host.create("strategy", config.strategy.name, config.strategy.options)
     images = ImageStore()
     try:
-        request = strategy.build(inst, images)
+        turns = strategy.plan_turns(inst, images)
     except (OSError, ValueError) as exc:
         raise PluginError(f"strategy {config.strategy.name!r} could not build a request for {instance}: {exc}") from exc
     out_dir = out if out is not None else Path("show-prompt") / re.sub(r"[^A-Za-z0-9_.-]+", "_", instance)
-    preview = preview_request(request, images, inst, out_dir)
-    typer.echo(preview.text)
-    marked = sum(1 for s in preview.images if s.marked)
-    typer.echo(f"--- {len(preview.images)} image(s) saved to {out_dir} ({marked} marked)", err=True)
+    saved: list[Any] = []
+    for number, turn in enumerate(turns, start=1):
+        if len(turns) > 1:
+            typer.echo(turn_heading(number, len(turns), turn))
+        # one turn: its images as before; several: each turn's in its own folder
+        preview = preview_request(turn.request, images, inst, out_dir if len(turns) == 1 else out_dir / f"turn-{number}")
+        typer.echo(preview.text)
+        saved += preview.images
+    if not declares_turns(strategy):
+        typer.echo(
+            f"note: strategy {config.strategy.name!r} overrides solve() without plan_turns(): "
+            "turns after the first are not known before it runs",
+            err=True,
+        )
+    marked = sum(1 for s in saved if s.marked)
+    typer.echo(f"--- {len(saved)} image(s) saved to {out_dir} ({marked} marked)", err=True)
+
+
+def turn_heading(number: int, total: int, turn: Any) -> str:
+    """The line ``show-prompt`` prints above each turn of a multi-turn strategy."""
+    what = "" if turn.sent else ", worked out by the strategy, not sent"
+    return f"=== turn {number} of {total}{what}" + (f" ({turn.note})" if turn.note else "") + " ==="
 
 
 @app.command("parse")

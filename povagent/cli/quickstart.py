@@ -19,7 +19,9 @@ def quickstart_command(
     ),
     houses: int = typer.Option(3, "--houses", min=1, metavar="N", help="Houses to generate."),
     seed: int = typer.Option(0, "--seed", metavar="N", help="Random seed of the generator."),
-    jobs: int = typer.Option(2, "--jobs", min=1, metavar="N", help="Worker processes generating the houses."),
+    jobs: int | None = typer.Option(
+        None, "--jobs", min=1, metavar="N", help="Worker processes generating the houses (default: one per core, at most one per house)."
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show progress bars."),
 ) -> None:
     """Try everything offline: generate, run the baselines, report.

@@ -27,6 +27,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Sequence
 
+from povagent.exchange.disconnects import QuietDisconnects
+
 __all__ = ["ImageReferenceError", "StaticImageServer", "parse_bind"]
 
 _HASHED_NAME = re.compile(r"^/([0-9a-f]{64})\.(png|jpeg|jpg|webp|gif)$")
@@ -133,7 +135,7 @@ class _Handler(BaseHTTPRequestHandler):
     do_PUT = do_DELETE = do_PATCH = do_POST  # noqa: N815
 
 
-class _Server(ThreadingHTTPServer):
+class _Server(QuietDisconnects, ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 128

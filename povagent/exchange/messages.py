@@ -109,6 +109,16 @@ class Request:
         blob = json.dumps(self.fingerprint(), sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()
 
+    def as_text(self) -> str:
+        """The request as a reader sees it: each message's role on a line (``--- user ---``),
+        its text parts verbatim and each image as ``[image: LABEL]`` (hashes in
+        :meth:`image_hashes`, in the same order). Rows keep it as the transcript."""
+        lines: list[str] = []
+        for m in self.messages:
+            lines.append(f"--- {m.role} ---")
+            lines += [p.text if isinstance(p, TextPart) else f"[image: {p.label or 'unlabelled'}]" for p in m.parts]
+        return "\n".join(lines)
+
     def image_hashes(self) -> list[str]:
         """Hashes of every image in the request, in order."""
         return [p.image_hash for m in self.messages for p in m.parts if isinstance(p, ImagePart)]

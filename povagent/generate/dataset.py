@@ -180,12 +180,22 @@ def _failure(options: GenerationOptions, index: int, exc: BaseException) -> Hous
     return HouseFailure(index, options.seed, Redactor().text(f"{type(exc).__name__}: {exc}"))
 
 
+def default_jobs(houses: int) -> int:
+    """Worker processes for ``houses`` houses: one per core this process may run on (its CPU
+    affinity, else the machine's count), never more than the houses."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(houses, cores))
+
+
 def generate_dataset(
     out: Path,
     houses: int,
     seed: int,
     frames: int = 30,
-    jobs: int = 1,
+    jobs: int | None = None,
     progress: bool | ProgressCallback = True,
     with_render: bool = False,
     judge: str | SurfaceJudge = DEFAULT_JUDGE,
@@ -227,8 +237,14 @@ def generate_dataset(
     cluster or the order houses finish. A house that raises does not stop the others; at the
     end :class:`~povagent.errors.GenerationError` names every failed house (index, seed, error),
     ``meta.json`` is not written, and the same call redoes only those houses.
+
+    ``jobs``: worker processes, one house each at a time; ``None`` (the default) is
+    :func:`default_jobs`: a worker per core this process may use, at most one per house (one
+    when ``judge`` is an object, which need not pickle).
     """
     out = Path(out)
+    if jobs is None:
+        jobs = default_jobs(houses) if isinstance(judge, str) else 1
     if isinstance(judge, str):
         registered = RegisteredJudge(judge, judge_options, plugins)
         registered.resolve()  # an unknown name or bad options fail here, before any work

@@ -125,7 +125,7 @@ def write_report(
     if gallery:
         shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
         entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
-        answers = write_answer_chunks(entries, out)
+        answers = write_answer_chunks(entries, out, keys=("a", "tr"))
         gallery_data = {
             "systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers,
             "strips": gstats.strips,

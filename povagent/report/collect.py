@@ -77,6 +77,9 @@ class Observation:
     distance_norm: float | None = None
     #: ``success`` rows: the hit radius of point marks without their own, in original pixels.
     hit_radius_px: float | None = None
+    #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
+    #: (the transcript; rows written before requests were kept have ``None`` requests).
+    turns: tuple[tuple[str | None, str | None], ...] = ()
 
 
 @dataclass
@@ -373,6 +376,7 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         success=success,
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
+        turns=tuple((e.prompt, e.raw) for e in row.exchanges),
     )
 
 

@@ -205,6 +205,8 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
                 "ie_b": b.get("ie"),
                 "e_b": b["e"],
                 "a_b": b["a"],
+                "tr_b": b.get("tr"),
+                "nt_b": b.get("nt"),
                 "ps_b": b["ps"],
                 "k_b": b["k"],
                 "ma": None if d is None or d.a is None else round(d.a, 4),
@@ -216,7 +218,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     entries.sort(key=lambda e: -abs(e["dl"]) if e["dl"] is not None else 0.0)
     if top:
         entries = entries[:top]
-    answers = write_answer_chunks(entries, out, keys=("a", "a_b"))
+    answers = write_answer_chunks(entries, out, keys=("a", "a_b", "tr", "tr_b"))
     cols = [Column("n", "count", None), Column("Mean A", "l2", None), Column("Mean B", "l2", None), Column("B - A", "signed", None),
             Column("B better", "count", None), Column("A better", "count", None), Column("Wilcoxon p", "p", None), Column("Sign p", "p", None)]
     table = Table("compare", "Paired comparison", f"A = {cmp.a_name}; B = {cmp.b_name}. Official L2 on instances both answered (averaged over runs); B - A < 0 means B is better; 95% bootstrap CI.", "Subset", cols)

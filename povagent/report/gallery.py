@@ -25,7 +25,9 @@ marks say it directly: a frame is ticked when it carries a mark.
 Raw answers (a chain-of-thought answer runs to thousands of characters) are kept out of the
 page too: :func:`write_answer_chunks` moves them into small ``answers/<sha256>.js`` files that
 the page loads with a ``<script>`` tag (which works from ``file://``, unlike ``fetch``) only
-when a card is opened, so the page stays small whatever the models wrote.
+when a card is opened, so the page stays small whatever the models wrote. The transcript goes
+there as well: every turn of the row, the request as sent (images named by their labels) and
+the model's raw answer (``tr``; ``nt`` on the page counts the turns).
 
 A source image that cannot be read or decoded (truncated, corrupt, not an image) never stops
 the report: its card says "image not drawn" with the file and the reason (``ie`` in the entry),
@@ -478,6 +480,7 @@ def build_gallery(
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
         raw = o.raw or ""
+        transcript = _transcript(o.turns)
         entries.append(
             {
                 "s": sys_index[o.system],
@@ -501,6 +504,7 @@ def build_gallery(
                 "an": o.answered,
                 "be": from_above,
             }
+            | ({"nt": len(transcript), "tr": transcript} if transcript else {})
             | strip_fields
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
@@ -545,6 +549,20 @@ def build_gallery(
             entry["img"], entry["ie"] = None, why
     stats.seconds = time.perf_counter() - t0
     return entries, stats
+
+
+def _cut(text: str | None) -> str | None:
+    if text is None:
+        return None
+    return text[:MAX_RAW_CHARS] + ("…" if len(text) > MAX_RAW_CHARS else "")
+
+
+def _transcript(turns: tuple[tuple[str | None, str | None], ...]) -> list[list[str | None]]:
+    """The row's turns as ``[[request text, raw answer], ...]`` (each cut at
+    :data:`MAX_RAW_CHARS`); empty when no request was kept (rows from before transcripts)."""
+    if not any(q is not None for q, _ in turns):
+        return []
+    return [[_cut(q), _cut(a)] for q, a in turns]
 
 
 def write_answer_chunks(

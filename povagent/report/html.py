@@ -66,7 +66,8 @@ def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str,
     """The tables, each followed by links to its Markdown/CSV/LaTeX files."""
     parts = ['<section id="tables"><h2>Tables</h2>']
     for t in tables:
-        parts.append(to_html(t))
+        # a table wider than the page scrolls inside its own box, never the whole page
+        parts.append(f'<div class="table-box">{to_html(t)}</div>')
         links = (downloads or {}).get(t.key)
         if links:
             parts.append('<div class="downloads">' + " · ".join(f'<a href="{html.escape(href)}">{html.escape(name)}</a>' for name, href in links) + "</div>")

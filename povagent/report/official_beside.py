@@ -65,9 +65,11 @@ def official_beside_table(collection: Collection) -> Table | None:
         for c in conditions:
             mine, theirs = repaired.get(c, {}), official.get(c, {})
             cells += [Cell(mine.get("mean_l2")), Cell(mine.get("response_rate")), Cell(theirs.get("mean_l2")), Cell(theirs.get("response_rate"))]
-        label = f"{system} ({', '.join(parsers)}{'; no official reading recorded: rescore with --parser official' if unread else ''})"
         axes = next(r.axes for r in collection.runs if r.system == system)
-        table.rows.append(Row(label, cells, reference=is_baseline_system(axes, system)))
+        baseline = is_baseline_system(axes, system)
+        # a baseline writes its answer, it reads no model's text: no parser to name
+        label = system if baseline else f"{system} ({', '.join(parsers)}{'; no official reading recorded: rescore with --parser official' if unread else ''})"
+        table.rows.append(Row(label, cells, reference=baseline))
     models = sum(1 for row in table.rows if not row.reference)
     # bold marks the best model of a column (tables.best_rows): say so only when it happens
     table.caption += " The best model per column is in bold." if models >= 2 else " Nothing is bolded (bold marks the best of two or more models)."

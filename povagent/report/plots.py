@@ -15,15 +15,22 @@ from typing import Sequence
 
 from povagent.report.statistics import Estimate
 
-#: Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
-PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442", "#000000")
+#: Okabe-Ito colours (distinguishable with the common colour-vision deficiencies), black left
+#: out: it would read as the near-black baseline.
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442")
 #: Baselines (center, random, oracle, ...): grey, brown, near-black, light grey. Apart from the
 #: models' hues, and apart from each other in lightness too, so a grey print still tells them apart.
 REFERENCE_COLOURS = ("#7a7a7a", "#8c510a", "#1a1a1a", "#bdbdbd")
-#: Marker shapes: models filled, baselines hollow, each series its own shape (a legend entry
-#: and its bars or lines share it, so colour is never the only cue).
-MODEL_MARKERS = ("circle", "square", "triangle", "diamond", "triangle-down", "circle", "square", "triangle")
+#: Marker shapes: models filled, baselines hollow (a legend entry and its bars or lines share
+#: it, so colour is never the only cue). Model ``i`` is colour ``i mod 7`` with shape ``i mod 5``:
+#: 7 and 5 share no factor, so the first 35 models each get their own pair, and neighbours
+#: differ in both.
+MODEL_MARKERS = ("circle", "square", "triangle", "diamond", "triangle-down")
 REFERENCE_MARKERS = ("diamond", "square", "triangle", "triangle-down")
+#: How many models get a pair of their own (then pairs come round again).
+DISTINCT_MODEL_STYLES = len(PALETTE) * len(MODEL_MARKERS)
+#: Where a one-row legend ends (its rows are 17 px apart).
+LEGEND_ROW_BOTTOM = 38 + 14
 FONT = 'font-family="system-ui, -apple-system, Segoe UI, Helvetica, Arial, sans-serif"'
 
 
@@ -159,6 +166,7 @@ def grouped_bars(
     colours = [st.colour for st in styles]
     uid = _uid(title, [s[0] for s in series])
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
+    height += round(top - LEGEND_ROW_BOTTOM)  # each legend row past the first adds height: the plot keeps its own
     top += 6  # room for a marker on the tallest bar
     left, right, bottom = 60, 16, 46
     plot_h = height - top - bottom
@@ -262,6 +270,7 @@ def histogram(
     styles = series_styles(series)
     colours = [st.colour for st in styles]
     legend, top = _legend([s[0] for s in series], colours, 60, 38, width - 80, styles)
+    height += round(top - LEGEND_ROW_BOTTOM)  # each legend row past the first adds height: the plot keeps its own
     top += 6
     left, right, bottom = 60, 16, 40
     plot_h, plot_w = height - top - bottom, width - left - right

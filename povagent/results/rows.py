@@ -34,6 +34,8 @@ class ExchangeRecord(BaseModel):
 
     request_hash: str
     image_hashes: list[str] = Field(default_factory=list)
+    #: The request as sent (:meth:`povagent.exchange.messages.Request.as_text`): the transcript.
+    prompt: str | None = None
     raw: str | None = None
     latency_s: float = 0.0
     prompt_tokens: int | None = None

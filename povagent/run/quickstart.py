@@ -58,11 +58,14 @@ def run_quickstart(
     houses: int = 3,
     seed: int = 0,
     frames: int = 30,
-    jobs: int = 2,
+    jobs: int | None = None,
     quiet: bool = False,
     say: Callable[[str], None] = print,
 ) -> QuickstartResult:
-    """Generate (if needed), sweep the baselines, report. Safe to run again: it resumes."""
+    """Generate (if needed), sweep the baselines, report. Safe to run again: it resumes.
+
+    ``jobs``: worker processes generating the houses (``None``: one per core, at most one per
+    house; see :func:`povagent.generate.dataset.default_jobs`)."""
     from povagent.report.build import write_report
     from povagent.report.tables import to_markdown
     from povagent.run.sweep import run_sweep

@@ -253,6 +253,7 @@ class PipelineRun:
                 ExchangeRecord.model_construct(
                     request_hash=request.content_hash(),
                     image_hashes=request.image_hashes(),
+                    prompt=request.as_text(),
                     raw=response.text,
                     latency_s=response.latency_s,
                     prompt_tokens=usage.prompt_tokens,
@@ -347,7 +348,7 @@ class PipelineRun:
             turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
             request, response = turns[-1]
             if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
-                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), raw=response.text))
+                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), prompt=request.as_text(), raw=response.text))
             parse = self._parse(comps.parser, response.text, request, key)
             shown = as_shown(instance, request)
             if parse.answered:

@@ -46,6 +46,8 @@ from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, TextPart
+from povagent.interfaces import declares_turns, whole_answer_placeholders
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
@@ -72,8 +74,19 @@ class Cell:
 
 
 @dataclass
+class TurnCount:
+    """What one turn of a cell's strategy still has to do (see :meth:`Strategy.plan_turns`)."""
+
+    turn: int
+    requests: int
+    prompt_tokens: int
+    max_completion_tokens: int
+    note: str = ""
+
+
+@dataclass
 class DryRunCell:
-    """What a cell still has to do."""
+    """What a cell still has to do: totals over the turns, and each sent turn's counts."""
 
     name: str
     n_total: int
@@ -81,6 +94,9 @@ class DryRunCell:
     requests: int
     prompt_tokens: int
     max_completion_tokens: int
+    turns: list[TurnCount] = field(default_factory=list)
+    #: False when the strategy overrides ``solve`` without ``plan_turns``: later turns unknown.
+    turns_declared: bool = True
 
 
 @dataclass
@@ -185,11 +201,14 @@ def expand_sweep(path: str | Path, *, host: PluginHost | None = None, strict: bo
 
 
 def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRunCell]:
-    """Requests still to make per cell (finished keys subtracted) and a rough token estimate.
+    """Requests still to make per cell and per turn (finished keys subtracted) and a rough
+    token estimate, from the turns the strategy plans (:meth:`Strategy.plan_turns`).
 
-    Tokens are estimated from a few built requests per cell: text at ~4 characters a token,
-    images at ~1 token per 28x28 pixels; completions at the strategy's ``max_tokens`` (an upper
-    bound). Multi-turn strategies may make more requests than keys.
+    Tokens are estimated from one instance per condition: text at ~4 characters a token,
+    images at ~1 token per 28x28 pixels, a placeholder for an earlier whole answer at that
+    turn's ``max_tokens``; completions at each turn's ``max_tokens`` (an upper bound). A turn
+    the strategy takes only sometimes is counted for every key (an upper bound too); a turn it
+    works out itself is not a request.
     """
     datasets: dict[Any, EvaluationSet] = {}
     images = ImageStore()
@@ -199,25 +218,43 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
         ds = ensure_dataset(cell.config, datasets)
         total, done, pending = pending_keys(cell.config, ds)
         strategy = h.create("strategy", cell.config.strategy.name, cell.config.strategy.options)
-        samples = _one_per_condition([inst for inst, _ in pending])
-        prompt_per, completion_per = 0.0, 0
-        for inst in samples:
-            request = strategy.build(inst, images)
-            text = sum(len(p.text) for m in request.messages for p in m.parts if hasattr(p, "text"))
-            pixels = sum(images.info(hh).width * images.info(hh).height for hh in request.image_hashes())
-            prompt_per += text / 4 + pixels * TOKENS_PER_IMAGE_PIXEL
-            # no limit (None): the estimate counts none, so it is a lower bound for that cell
-            completion_per = max(completion_per, request.generation.max_tokens or 0)
-        prompt_per = prompt_per / len(samples) if samples else 0.0
-        out.append(DryRunCell(cell.name, total, done, len(pending), math.ceil(prompt_per * len(pending)), completion_per * len(pending)))
+        by_condition: dict[str, list[Any]] = {}
+        for inst, _ in pending:
+            by_condition.setdefault(str(inst.condition), []).append(inst)
+        counts: dict[int, TurnCount] = {}
+        for group in by_condition.values():
+            planned = strategy.plan_turns(group[0], images)
+            budgets = [t.request.generation.max_tokens or 0 for t in planned]
+            for number, turn in enumerate(planned, start=1):
+                if not turn.sent:
+                    continue
+                count = counts.setdefault(number, TurnCount(number, 0, 0, 0, turn.note))
+                count.requests += len(group)
+                count.prompt_tokens += math.ceil(_prompt_tokens(turn.request, images, budgets) * len(group))
+                # no limit (None): the estimate counts none, so it is a lower bound for that turn
+                count.max_completion_tokens += (turn.request.generation.max_tokens or 0) * len(group)
+        turns = [counts[n] for n in sorted(counts)]
+        out.append(
+            DryRunCell(
+                cell.name, total, done, sum(t.requests for t in turns), sum(t.prompt_tokens for t in turns),
+                sum(t.max_completion_tokens for t in turns), turns, declares_turns(strategy),
+            )
+        )
     return out
 
 
-def _one_per_condition(instances: list[Any]) -> list[Any]:
-    seen: dict[str, Any] = {}
-    for inst in instances:
-        seen.setdefault(str(inst.condition), inst)
-    return list(seen.values())
+def _prompt_tokens(request: Request, images: ImageStore, budgets: list[int]) -> float:
+    """Rough prompt tokens of a planned request; a whole-answer placeholder counts as the
+    budget (``max_tokens``) of the turn it stands for."""
+    text = 0.0
+    for m in request.messages:
+        for p in m.parts:
+            if isinstance(p, TextPart):
+                text += len(p.text) / 4
+                for turn in whole_answer_placeholders(p.text):
+                    text += budgets[turn - 1] if turn <= len(budgets) else 0
+    pixels = sum(images.info(h).width * images.info(h).height for h in request.image_hashes())
+    return text + pixels * TOKENS_PER_IMAGE_PIXEL
 
 
 def _write_index(

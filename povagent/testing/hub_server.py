@@ -49,6 +49,8 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 from urllib.parse import parse_qs, quote, unquote, urlsplit
 
+from povagent.exchange.disconnects import QuietDisconnects
+
 __all__ = ["HubLies", "HubRequest", "HubServer"]
 
 
@@ -293,7 +295,7 @@ class _Handler(BaseHTTPRequestHandler):
             self.wfile.write(data)
 
 
-class _Server(ThreadingHTTPServer):
+class _Server(QuietDisconnects, ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     request_queue_size = 64

@@ -45,6 +45,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from povagent.exchange.disconnects import QuietDisconnects
+
 __all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
 
 #: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
@@ -237,7 +239,7 @@ def _error_body(message: str, kind: str) -> dict[str, Any]:
     return {"error": {"message": message, "type": kind, "param": None, "code": None}}
 
 
-class _Server(ThreadingHTTPServer):
+class _Server(QuietDisconnects, ThreadingHTTPServer):
     daemon_threads = True
     block_on_close = False
     # many concurrent clients in benchmarks: the default backlog of 5 refuses connections

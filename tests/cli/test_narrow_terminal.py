@@ -174,3 +174,94 @@ def test_a_path_in_a_title_keeps_its_start_and_end():
     title = path_in_line("/home/someone/experiments/povbench/runs/2026-11-22/gpt-5.4-spatial-cot", " (litellm / cot / json)", width=60)
     assert len(title) == 60
     assert title.startswith("/home/") and title.endswith("gpt-5.4-spatial-cot (litellm / cot / json)")
+
+
+def label_lines(text: str) -> list[tuple[str, list[str]]]:
+    """Each table row's first cell as printed, its lines in order, with the row's other cells
+    (from its first line): a label broken over lines is gathered back."""
+    out: list[tuple[str, list[str]]] = []
+    for line in text.splitlines():
+        if not line.startswith("│"):
+            continue
+        cells = [c.strip() for c in line.split("│")[1:-1]]
+        if any(cells[1:]) or not out:
+            out.append((cells[0], cells[1:]))
+        else:  # a continuation line of the label above
+            out[-1] = (out[-1][0] + "\n" + cells[0], out[-1][1])
+    return out
+
+
+def test_long_cell_names_in_the_dry_run_break_between_words_never_inside_one(tmp_path, mini_root):
+    """Cell names of real sweeps (a dated model, a strategy, a parser) are longer than the
+    room beside five number columns: each goes on over lines, broken after ``__`` or ``-``,
+    and the lines joined give the name back."""
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "center"}))
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump({
+        "base": "base.yaml",
+        "output": str(tmp_path / "out"),
+        "overrides": {"openai-gpt-4o-mini-2024-07-18-with-spatial-cot": {}, "qwen2.5-vl-72b-instruct-awq-official-parse": {}},
+        "axes": {"strategy": ["spatial-cot", "oa-plot"], "conditions": ["a", "c"]},
+    }))  # fmt: skip
+    result = runner.invoke(app, ["sweep", str(tmp_path / "sweep.yaml"), "--dry-run"], env=NARROW)
+    assert result.exit_code == 0, result.output
+    assert widest(result.stdout) <= 80, result.stdout
+    names = [f"{s}__{c}__{o}" for s in ("spatial-cot", "oa-plot") for c in ("a", "c")
+             for o in ("openai-gpt-4o-mini-2024-07-18-with-spatial-cot", "qwen2.5-vl-72b-instruct-awq-official-parse")]  # fmt: skip
+    shown = {label.replace("\n", ""): (label, rest) for label, rest in label_lines(result.stdout)}
+    for name in names:
+        label, rest = shown[name]
+        assert all(c.replace(",", "").isdigit() for c in rest), (name, rest)
+        # every line ends at a separator (or the name's end): no word is cut
+        for line in label.split("\n")[:-1]:
+            assert line[-1] in "_-./", (name, label)
+    assert "…" not in result.stdout.split("\n", 1)[1]
+
+
+def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
+    """An installed distribution (a dist-info with an entry point, on PYTHONPATH) whose
+    entry point and name are long: ``povagent plugins`` shows where it came from in full."""
+    site = tmp_path / "site"
+    package = site / "povagent_contributed_strategies_for_observer_grounding"
+    package.mkdir(parents=True)
+    (package / "__init__.py").write_text("")
+    (package / "perspective_taking.py").write_text(
+        "from povagent import hookimpl\n"
+        "from povagent_plugins.strategies.basic import BasicStrategy\n\n"
+        "@hookimpl\n"
+        "def register_strategies(register):\n"
+        "    register('perspective-taking', BasicStrategy, description='the basic prompt, by a third party')\n"
+    )
+    dist = site / "povagent_contributed_strategies_for_observer_grounding-2.11.4.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: povagent-contributed-strategies-for-observer-grounding\nVersion: 2.11.4\n")
+    (dist / "entry_points.txt").write_text(
+        "[povagent]\nperspective-taking = povagent_contributed_strategies_for_observer_grounding.perspective_taking\n"
+    )
+    env = {**os.environ, **NARROW, "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-m", "povagent.cli", "plugins"], capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert widest(done.stdout) <= 80, done.stdout
+    listing = json.loads(subprocess.run([sys.executable, "-m", "povagent.cli", "plugins", "--json"], capture_output=True, text=True, env=env, timeout=120).stdout)
+    (entry,) = [e for e in listing["strategy"] if e["name"] == "perspective-taking"]
+    assert "povagent-contributed-strategies-for-observer-grounding 2.11.4" in entry["source"]
+    rows = [line.split("│")[1:-1] for line in done.stdout.splitlines() if line.startswith("│")]
+    start = next(i for i, r in enumerate(rows) if r[0].strip() == "perspective-taking")
+    block = []
+    for r in rows[start:]:
+        if r[0].strip() not in ("", "perspective-taking"):
+            break
+        block.append(r[1].strip())
+    assert "…" not in "".join(block)
+    # the source goes on over lines, each ending at a space (dropped) or after a separator:
+    # joined back that way they give the source, so no word was cut
+    lines = [b for b in block if b][1:]  # the description first
+    assert lines[0].startswith("from ")
+    source, at = "from " + entry["source"], 0
+    for line in lines:
+        assert source.startswith(line, at), (line, source[at:])
+        at += len(line)
+        if at < len(source) and source[at] == " ":
+            at += 1  # broken at a space
+        else:  # else only after a separator
+            assert at == len(source) or line[-1] in "_-./=:", line
+    assert at == len(source)

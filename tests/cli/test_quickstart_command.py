@@ -31,3 +31,21 @@ def test_running_the_quickstart_again_makes_no_new_rows(mini_root, tmp_path):
     before = [f.read_bytes() for f in files]
     assert runner.invoke(app, args).exit_code == 0
     assert [f.read_bytes() for f in files] == before
+
+
+def test_the_quickstart_imports_no_model_client(mini_root, tmp_path):
+    """Only offline baselines run: litellm (seconds to import) and its clients stay unimported,
+    in a fresh process as a user runs it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from povagent.cli import main\n"
+        f"sys.argv = ['povagent', 'quickstart', '--out', {str(tmp_path / 'qs')!r}, '--dataset', {str(mini_root)!r}, '--quiet']\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        "print(sorted(m for m in ('litellm', 'openai', 'httpx', 'tiktoken', 'tokenizers') if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout[-500:]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from typer.testing import CliRunner
 
@@ -11,6 +13,9 @@ from povagent.report.collect import collect
 from povagent.report.official_beside import official_beside_table
 
 runner = CliRunner()
+
+#: Who answered: a model (the answers below are a model's, not a baseline's).
+MODEL = {"name": "litellm", "options": {"model": "openai/gpt-4o-mini"}}
 
 #: json answers all three (trailing comma repaired, single quotes read); the official runner one.
 ANSWERS = [
@@ -25,7 +30,7 @@ def run_parsed_with(tmp_path, write_answered_run):
     """``run_parsed_with(parser)``: the answers above, rescored with ``parser``."""
 
     def rescored(parser: str):
-        run = write_answered_run(tmp_path / "raw", ANSWERS)
+        run = write_answered_run(tmp_path / "raw", ANSWERS, backend=MODEL)
         assert runner.invoke(app, ["rescore", str(run), "--parser", parser, "--json"]).exit_code == 0
         return run / f"rescored-{parser}"
 
@@ -52,3 +57,45 @@ def test_the_report_writes_the_table(tmp_path, mini_root, run_parsed_with):
     text = (tmp_path / "report" / "tables" / "official_parse_beside.md").read_text()
     assert "Official parse beside the repaired numbers" in text
     assert any(t.key == "official_parse_beside" for t in result.tables)
+
+
+def test_a_baseline_row_names_no_parser(sweep_with_center):
+    """A baseline writes its own answers: its row is the system's name alone, a model's row
+    names its parser."""
+    table = official_beside_table(collect(sweep_with_center))
+    labels = {row.reference: row.label for row in table.rows}
+    assert labels[True] == "center"
+    assert labels[False].startswith("mock-a") and "(json" in labels[False]
+
+
+def page_widths(page, tmp_path, window: str) -> dict[str, int]:
+    """The document's scroll width, the viewport's width and the official-parse table's width,
+    measured in headless Chromium (window ``window``) on a copy of ``page`` with a measuring
+    script added."""
+    from test_report_html import browse
+
+    copy = page.with_name("measured.html")
+    script = (
+        "<script>window.addEventListener('load', function () {"
+        "var b = document.body, t = document.getElementById('table-official_parse_beside');"
+        "b.setAttribute('data-scroll-width', document.documentElement.scrollWidth);"
+        "b.setAttribute('data-viewport-width', document.documentElement.clientWidth);"
+        "b.setAttribute('data-table-width', Math.round(t.getBoundingClientRect().width));"
+        "});</script>"
+    )
+    copy.write_text(page.read_text(encoding="utf-8").replace("</body>", script + "</body>"), encoding="utf-8")
+    done = browse(copy, tmp_path, "--dump-dom", f"--window-size={window}")
+    assert done.returncode == 0, done.stderr[-2000:]
+    return {k: int(v) for k, v in re.findall(r'data-(scroll-width|viewport-width|table-width)="(\d+)"', done.stdout)}
+
+
+def test_the_table_scrolls_in_its_own_box_and_the_page_does_not(sweep_with_center, tmp_path):
+    """Three conditions make twelve number columns: wider than a laptop's window. The page
+    itself must not scroll sideways (measured in Chromium at 1024 px); the table does, in its box."""
+    result = write_report(sweep_with_center, tmp_path / "report", gallery=False, n_boot=50)
+    widths = page_widths(result.page, tmp_path / "browser", "1024,800")
+    assert 0 < widths["viewport-width"] <= 1024, widths
+    assert widths["table-width"] > widths["viewport-width"], widths  # the table is wider than the window...
+    assert widths["scroll-width"] <= widths["viewport-width"], widths  # ...and the page does not scroll sideways
+    wide = page_widths(result.page, tmp_path / "wide", "1900,800")
+    assert wide["table-width"] <= 1500, wide  # headers and system names wrap: on a wide screen it fits

@@ -7,8 +7,8 @@ import asyncio
 import pytest
 
 from povagent.dataset.models import Condition
-from povagent.exchange.messages import ImagePart, Response, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Response, TextPart
 from povagent_plugins.strategies.basic import BasicStrategy
 
 

@@ -15,8 +15,8 @@ from povagent import hookimpl
 from povagent.answers.spec import ParseStatus
 from povagent.config.pipeline import load_pipeline
 from povagent.exchange.messages import Message
-from povagent.run.runner import run_pipeline
 from povagent.results.rows import read_rows
+from povagent.run.runner import run_pipeline
 from povagent_plugins.parsers.json_answer import JsonAnswerParser
 from povagent_plugins.strategies.basic import BasicStrategy
 
