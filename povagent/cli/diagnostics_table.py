@@ -12,31 +12,32 @@ from typing import Any
 
 from povagent.scoring.diagnosis import STEPS
 
-CONDITION_NAMES = {"a": "A Inferred", "b": "B Stated", "c": "C Given"}
-
-
 def _pct(value: Any) -> str:
     return "-" if not isinstance(value, (int, float)) else f"{100 * value:.1f}%"
 
 
-def diagnostics_rows(diagnostics: dict[str, Any]) -> list[list[str]]:
-    """One row per condition: steps' shares, bias [CI] (n), relation success (n)."""
-    rows = []
-    for cond, cell in sorted((diagnostics.get("per_condition") or {}).items()):
-        steps = cell.get("failure_steps") or {}
-        bias = cell.get("egocentric_bias")
-        ci = cell.get("egocentric_bias_ci")
-        if isinstance(bias, (int, float)):
-            bias_text = f"{bias:.2f}" + (f" [{ci[0]:.2f}, {ci[1]:.2f}]" if ci else "") + f" (n {cell.get('bias_n', 0)})"
-        else:
-            bias_text = "-"
-        rows.append([
-            CONDITION_NAMES.get(cond, cond),
-            *(_pct(steps.get(s)) for s in STEPS),
-            bias_text,
-            f"{_pct(cell.get('relation_success'))} (n {cell.get('relation_n', 0)})",
-        ])  # fmt: skip
-    return rows
+CONDITION_NAMES = {"a": "Inferred (A)", "b": "Stated (B)", "c": "Given (C)"}
+
+
+def diagnostics_rows(diagnostics: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    """``(conditions, rows)``: a row per failure step (share of answered rows), then the
+    egocentric bias, its 95% CI, the answers it counts, and the relation success; a column per
+    condition (a terminal has room for three columns, not for ten)."""
+    cells = sorted((diagnostics.get("per_condition") or {}).items())
+    rows = [[f"step: {s}", *(_pct((c.get("failure_steps") or {}).get(s)) for _, c in cells)] for s in STEPS]
+
+    def bias(c: dict[str, Any]) -> tuple[str, str, str]:
+        value, ci = c.get("egocentric_bias"), c.get("egocentric_bias_ci")
+        if not isinstance(value, (int, float)):
+            return ("-", "-", "-")
+        return (f"{value:.2f}", f"{ci[0]:.2f}-{ci[1]:.2f}" if ci else "-", str(c.get("bias_n", 0)))
+
+    biases = [bias(c) for _, c in cells]
+    rows.append(["egocentric bias", *(b[0] for b in biases)])
+    rows.append(["  95% CI", *(b[1] for b in biases)])
+    rows.append(["  answers counted", *(b[2] for b in biases)])
+    rows.append(["relation success", *(_pct(c.get("relation_success")) for _, c in cells)])
+    return [CONDITION_NAMES.get(k, k) for k, _ in cells], rows
 
 
 def render_diagnostics(summary: dict[str, Any]) -> None:
@@ -48,9 +49,10 @@ def render_diagnostics(summary: dict[str, Any]) -> None:
 
     from povagent.cli.console_width import fitted_table
 
-    columns = [("condition", "label")] + [(s, "number") for s in STEPS] + [("ego. bias [95% CI]", "text"), ("relation success", "text")]
+    conditions, rows = diagnostics_rows(diagnostics)
     Console().print(fitted_table(
-        columns, diagnostics_rows(diagnostics),
-        title="Additions (not in the paper): first failing step, egocentric bias, relation success",
-        caption="shares of answered rows; bias: share nearer the egocentric target where the two differ (not for C); docs/diagnostics.md",
+        [("addition", "label"), *((c, "number") for c in conditions)], rows,
+        title="Additions (not in the paper): why answers fail",
+        caption="steps, relation success: shares of answered rows; egocentric bias: share nearer the egocentric "
+        "target where it differs from the true one (not for C); docs/diagnostics.md",
     ))  # fmt: skip
