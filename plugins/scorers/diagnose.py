@@ -11,33 +11,72 @@ official score. Runs offline on a finished run: ``povagent rescore RUN --scorer 
 
 from __future__ import annotations
 
+import threading
+import weakref
 from typing import Any
 
 import numpy as np
 
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
-from povagent.dataset.instances import Instance
+from povagent.dataset.instances import Frame, Instance
 from povagent.geometry.ground_truth import PlacementCase
-from povagent.geometry.relation_region import valid_placements
+from povagent.geometry.relation_region import RelationRegion, valid_placements
 from povagent.interfaces import Scorer
-from povagent.scoring.diagnosis import diagnose_answer, instance_case
+from povagent.scoring.diagnosis import diagnose_answer, instance_case, relation_region
 from povagent.scoring.official import scoring_frame
+
+#: Per loaded dataset, by ``id`` (a dataset is not hashable; its entry goes when it does): each
+#: instance's record and valid placements.
+_SHARED: dict[int, dict[str, tuple[PlacementCase, np.ndarray]]] = {}
+_LOCK = threading.Lock()
+
+
+#: Per loaded dataset: relation regions by (instance, frame), for the two scorers of one answer.
+_REGIONS: dict[int, dict[tuple[str, str, int], RelationRegion]] = {}
+
+
+def _cache_for(dataset: Any) -> dict[str, tuple[PlacementCase, np.ndarray]]:
+    return _shared_entry(_SHARED, dataset)
+
+
+def _regions_for(dataset: Any) -> dict[tuple[str, str, int], RelationRegion]:
+    return _shared_entry(_REGIONS, dataset)
+
+
+def _shared_entry(table: dict[int, Any], dataset: Any) -> Any:
+    with _LOCK:
+        cache = table.get(id(dataset))
+        if cache is None:
+            cache = {}
+            try:
+                weakref.finalize(dataset, table.pop, id(dataset), None)
+            except TypeError:  # no dataset, or one that cannot be weakly referenced: no shared cache
+                return cache
+            table[id(dataset)] = cache
+        return cache
 
 
 class InstanceRecords:
-    """Each instance's placement record and valid placements, computed once per scorer."""
-
-    def __init__(self) -> None:
-        self._cache: dict[tuple[int, str], tuple[PlacementCase, np.ndarray]] = {}
+    """Each instance's placement record and valid placements, computed once per dataset and
+    shared by the ``diagnose`` and ``relation`` scorers."""
 
     def get(self, instance: Instance, dataset: Any) -> tuple[PlacementCase, np.ndarray]:
         """``(case, valid placements)`` of ``instance``."""
-        key = (id(dataset), instance.id)
-        found = self._cache.get(key)
+        cache = _cache_for(dataset)
+        found = cache.get(instance.id)
         if found is None:
             case = instance_case(instance, dataset)
-            found = self._cache[key] = (case, valid_placements(case))
+            found = cache[instance.id] = (case, valid_placements(case))
+        return found
+
+    def region(self, instance: Instance, frame: Frame, dataset: Any) -> RelationRegion:
+        """The relation region of ``instance`` in ``frame`` (made once: both scorers ask)."""
+        cache = _regions_for(dataset)
+        key = (instance.id, frame.image_path, frame.index)
+        found = cache.get(key)
+        if found is None:
+            found = cache[key] = relation_region(self.get(instance, dataset)[1], frame)
         return found
 
 
@@ -54,8 +93,9 @@ class DiagnoseScorer(Scorer):
         frame = scoring_frame(instance, answer.selected_image)
         if frame is None:
             return {"answered": False}
-        case, placements = self.records.get(instance, dataset)
-        return diagnose_answer(instance, case, placements, frame, float(answer.x), float(answer.y)).as_dict()
+        case, _ = self.records.get(instance, dataset)
+        region = self.records.region(instance, frame, dataset)
+        return diagnose_answer(instance, case, region, frame, float(answer.x), float(answer.y)).as_dict()
 
 
 @hookimpl

@@ -18,7 +18,6 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent.scoring.diagnosis import relation_region
 from povagent.scoring.official import scoring_frame
 from povagent_plugins.scorers.diagnose import InstanceRecords
 
@@ -36,8 +35,7 @@ class RelationScorer(Scorer):
         frame = scoring_frame(instance, answer.selected_image)
         if frame is None:
             return {"answered": False}
-        _, placements = self.records.get(instance, dataset)
-        region = relation_region(placements, frame)
+        region = self.records.region(instance, frame, dataset)
         margin = region.margin(float(answer.x), float(answer.y))
         return {"answered": True, "success": margin is not None and margin <= 0.0, "margin_px": margin, "region_empty": region.empty}
 

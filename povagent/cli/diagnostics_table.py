@@ -12,6 +12,7 @@ from typing import Any
 
 from povagent.scoring.diagnosis import STEPS
 
+
 def _pct(value: Any) -> str:
     return "-" if not isinstance(value, (int, float)) else f"{100 * value:.1f}%"
 

@@ -19,21 +19,38 @@ EDGE_SAMPLES = 16
 NEAR_PLANE = 0.05
 
 
+def _edge_pattern() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For the 12 edges x EDGE_SAMPLES points: which coordinate runs along the edge, its
+    fraction ``t``, and which fixed coordinates sit at the box's high corner."""
+    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
+    along, fraction, at_high = [], [], []
+    for axis in range(3):
+        others = [a for a in range(3) if a != axis]
+        for high0 in (False, True):
+            for high1 in (False, True):
+                for ti in t:
+                    along.append([a == axis for a in range(3)])
+                    fraction.append([ti if a == axis else 0.0 for a in range(3)])
+                    at_high.append([(a == others[0] and high0) or (a == others[1] and high1) for a in range(3)])
+    return np.array(along), np.array(fraction), np.array(at_high)
+
+
+# computed once: every outline samples the same pattern of points on its box's edges
+_ALONG, _T, _AT_HIGH = _edge_pattern()
+_CORNER_AT_HIGH = np.array([[bool(k & 1), bool(k & 2), bool(k & 4)] for k in range(8)])
+
+
 def outline(camera: ViewCamera, lo: np.ndarray, hi: np.ndarray) -> tuple[float, float, float, float] | None:
     """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``
     (its edges sampled, so a box partly behind the camera is outlined by the part in front)."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
-    points = []
-    for axis in range(3):
-        others = [a for a in range(3) if a != axis]
-        for b0 in (lo[others[0]], hi[others[0]]):
-            for b1 in (lo[others[1]], hi[others[1]]):
-                p = np.empty((EDGE_SAMPLES, 3))
-                p[:, axis] = lo[axis] + t * (hi[axis] - lo[axis])
-                p[:, others[0]], p[:, others[1]] = b0, b1
-                points.append(p)
-    pts = np.concatenate(points)
+    corners = np.where(_CORNER_AT_HIGH, hi, lo)
+    if np.all(optical_depth(camera, corners) > NEAR_PLANE):
+        # wholly in front: a projected box's outline is that of its projected corners (the
+        # edges project to straight segments between them), no need to sample the edges
+        pts = corners
+    else:
+        pts = np.where(_ALONG, lo + _T * (hi - lo), np.where(_AT_HIGH, hi, lo))
     depth = optical_depth(camera, pts)
     pts = pts[depth > NEAR_PLANE]
     if not len(pts):

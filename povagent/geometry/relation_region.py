@@ -76,9 +76,10 @@ def _sector(d: np.ndarray) -> list[np.ndarray]:
     return [_rotated(d, k * ANGLE_STEP) for k in range(-n, n + 1)]
 
 
-def _steps(lo: float, hi: float) -> np.ndarray:
+def _steps(lo: float, hi: float) -> list[float]:
+    """``lo`` to ``hi`` in equal steps of at most :data:`DISTANCE_STEP` (both ends included)."""
     n = max(1, int(math.ceil((hi - lo) / DISTANCE_STEP - 1e-9)))
-    return np.linspace(lo, hi, n + 1)
+    return [lo + (hi - lo) * k / n for k in range(n + 1)]
 
 
 def valid_placements(case: PlacementCase) -> np.ndarray:
@@ -89,12 +90,12 @@ def valid_placements(case: PlacementCase) -> np.ndarray:
         return truth[None, :]
     box = case.box
     cx, cz = box.center_xz
+    points: list[tuple[float, float, float]] = [(float(truth[0]), float(truth[1]), float(truth[2]))]
     if case.direction == "up":
         hx, hz = box.half_xz
-        xs, zs = _steps(cx - hx, cx + hx), _steps(cz - hz, cz + hz)
-        gx, gz = np.meshgrid(xs, zs)
-        grid = np.stack([gx.ravel(), np.full(gx.size, box.top + TARGET_HALF_SIZE), gz.ravel()], axis=1)
-        return np.vstack([truth, grid])
+        y = box.top + TARGET_HALF_SIZE
+        points += [(x, y, z) for z in _steps(cz - hz, cz + hz) for x in _steps(cx - hx, cx + hx)]
+        return np.array(points)
     d = direction_vectors(np.asarray(case.anchor_position, dtype=float), np.asarray(case.observer_position, dtype=float)).get(case.direction)
     if d is None or math.hypot(d[0], d[2]) < 1e-6:
         return truth[None, :]
@@ -104,22 +105,18 @@ def valid_placements(case: PlacementCase) -> np.ndarray:
         and case.surface is not None
         and surface_names_anchor(case.surface, case.anchor_type)
     )
-    points = [truth]
     if on_anchor:
         y = box.top + TARGET_HALF_SIZE
         for dd in _sector(d):
             bx, bz = boundary_point(box, dd)
             edge = max(math.hypot(bx - cx, bz - cz), 2 * MIN_ON_TOP_OFFSET)
-            for s in _steps(MIN_ON_TOP_OFFSET, edge):
-                points.append(np.array([cx + s * dd[0], y, cz + s * dd[2]]))
+            points += [(cx + s * dd[0], y, cz + s * dd[2]) for s in _steps(MIN_ON_TOP_OFFSET, edge)]
     else:
         y = surface_height(case.surface, box) + TARGET_HALF_SIZE
         for dd in _sector(d):
             bx, bz = boundary_point(box, dd)
-            for gap in _steps(0.0, MAX_GAP):
-                off = TARGET_HALF_SIZE + gap
-                points.append(np.array([bx + off * dd[0], y, bz + off * dd[2]]))
-    return np.vstack(points)
+            points += [(bx + (TARGET_HALF_SIZE + g) * dd[0], y, bz + (TARGET_HALF_SIZE + g) * dd[2]) for g in _steps(0.0, MAX_GAP)]
+    return np.array(points, dtype=float)
 
 
 @dataclass(frozen=True)

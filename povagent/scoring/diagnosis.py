@@ -134,11 +134,11 @@ def relation_region(placements: np.ndarray, frame: Frame) -> RelationRegion:
     return region_in_frame(placements, frame.camera)
 
 
-def diagnose_answer(instance: Instance, case: PlacementCase, placements: np.ndarray, frame: Frame, x: float, y: float) -> Diagnosis:
+def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationRegion, frame: Frame, x: float, y: float) -> Diagnosis:
     """The diagnosis of the pixel ``(x, y)`` answered in ``frame`` (see the module docstring).
 
-    ``placements`` are the case's valid placements
-    (:func:`~povagent.geometry.relation_region.valid_placements`), computed once per instance.
+    ``region`` is the case's relation region in ``frame`` (:func:`relation_region` of its valid
+    placements, :func:`~povagent.geometry.relation_region.valid_placements`).
     """
     cam = frame.camera
     u, v = clamp_unit(x / cam.width), clamp_unit(y / cam.height)
@@ -155,7 +155,7 @@ def diagnose_answer(instance: Instance, case: PlacementCase, placements: np.ndar
     mirror_apart = math.hypot(mirror[0] - truth[0], mirror[1] - truth[1]) > BIAS_MARGIN
     shows = frame_shows(instance, frame)
     distance = anchor_distance(instance, frame, u, v)
-    inside = relation_region(placements, frame).contains(x, y)
+    inside = region.contains(x, y)
     if shows in ("observer", "neither"):
         step = "frame"
     elif distance > ANCHOR_THRESHOLD:

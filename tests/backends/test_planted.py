@@ -91,7 +91,7 @@ def test_given_has_no_bias_index(all_zero):
 
 
 def test_random_frame_answers_fail_at_the_frame_step(generated_release, tmp_path):
-    summary, rows = planted_run(generated_release, tmp_path / "rf", runs=1, random_frame=1.0)
+    summary, _ = planted_run(generated_release, tmp_path / "rf", runs=1, random_frame=1.0)
     for cond in ("a", "b"):
         # every instance of this set has frames without its anchor, so each answer picks one
         assert summary["diagnostics"]["per_condition"][cond]["failure_steps"]["frame"] == 1.0
