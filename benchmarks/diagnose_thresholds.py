@@ -92,7 +92,40 @@ def main() -> int:
         eligible = [r for r in rows if math.dist(r["egocentric"], [min(1, max(0, g)) for g in r["gt"]]) > margin]
         wrong = sum(1 for r in eligible if r["l2_egocentric"] < r["l2_truth"])
         print(f"{margin:7.2f} {len(eligible):9d} {wrong:12d}")
+    mirror_check(dataset)
     return 0
+
+
+def mirror_check(root: Path) -> None:
+    """How often the relation region of a left/right instance contains the mirrored target, by
+    how far apart the two are in the frame: the observer view, and exploration frames that show
+    the anchor with both targets in front of the camera."""
+    from povagent.dataset.loader import load_dataset, placement_case
+    from povagent.geometry.counterfactual import mirrored_target
+    from povagent.geometry.relation_region import region_in_frame, valid_placements
+    from povagent.scoring.diagnosis import official_uv
+
+    dataset = load_dataset(root, check_images=False)
+    bins = ((0.0, 0.05), (0.05, 0.1), (0.1, 0.2), (0.2, 0.3), (0.3, 2.0))
+    counts: dict[tuple[str, int], list[int]] = {}
+    for inst in dataset.instances(conditions=["a", "c"], directions=["left", "right"]):
+        case = placement_case(dataset.houses[inst.house_id].pairs[inst.pair_id], inst.direction)
+        placements, mirror = valid_placements(case), mirrored_target(case)
+        for frame in inst.frames:
+            if inst.condition == "a" and str(inst.anchor_object.objectId) not in frame.in_frame_hits:
+                continue
+            if frame.camera.project_point(mirror)[2] <= 1e-6 or frame.camera.project_point(inst.target)[2] <= 1e-6:
+                continue
+            truth, m = official_uv(np.asarray(inst.target), frame), official_uv(mirror, frame)
+            k = next(i for i, (lo, hi) in enumerate(bins) if lo <= math.dist(truth, m) < hi)
+            cell = counts.setdefault((str(inst.condition), k), [0, 0])
+            cell[0] += 1
+            cell[1] += region_in_frame(placements, frame.camera).contains(m[0] * frame.camera.width, m[1] * frame.camera.height)
+    print("\nrelation region vs the mirrored target (left/right), by their distance in the frame:")
+    print(f"{'frames':<22} " + " ".join(f"{f'{lo:.2f}-{hi:.2f}':>11}" for lo, hi in bins))
+    for cond, label in (("c", "observer view (C)"), ("a", "exploration (A)")):
+        cells = [counts.get((cond, k), [0, 0]) for k in range(len(bins))]
+        print(f"{label:<22} " + " ".join(f"{f'{c[1]}/{c[0]}':>11}" for c in cells) + "   (contained / frames)")
 
 
 if __name__ == "__main__":

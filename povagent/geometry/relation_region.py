@@ -23,10 +23,12 @@ The ground truth is always one of the samples. Samples are spaced at most about 
 (5 degree steps, 0.1 m gaps), finer than the cube. In a frame, each sample in front of the
 camera becomes a disc of the cube's projected half-size (``f * 0.2 / depth`` pixels) plus
 :data:`PIXEL_TOLERANCE` (4 px); the region is their union, i.e. the image area the cube would
-cover at some valid placement. Sample centres outside the image are clamped to its border, as
-the official metric clamps the ground truth and the answer (an answer is clamped too). A sample behind the camera contributes nothing, so a frame that
-cannot see any valid placement has an empty region (nothing there satisfies the relation); walls
-are not modelled (the release carries no floor plan).
+cover at some valid placement, except that a sample nearer than :data:`DISC_DEPTH_FLOOR`
+(0.5 m) keeps the disc it would have there (a nearer cube fills the frame, and one such disc
+would make the whole image "valid"). A sample behind the camera is left out, so a frame that
+sees no valid placement has an empty region (nothing in it satisfies the relation). Sample centres outside the image are clamped to its
+border, as the official metric clamps the ground truth and the answer (an answer is clamped
+too). Walls are not modelled (the release carries no floor plan).
 
 Pure geometry: no file, no clock.
 """
@@ -61,8 +63,12 @@ DISTANCE_STEP = 0.1
 MIN_ON_TOP_OFFSET = 0.1
 #: Pixels added to each sample's projected cube half-size: pointing slack at far, small regions.
 PIXEL_TOLERANCE = 4.0
-#: Depth (m) below which a sample counts as behind the camera.
+#: Depth (m) at or below which a sample counts as behind the camera.
 NEAR_PLANE = 0.05
+#: A sample nearer than this (m) gets the disc it would have here: a 0.4 m cube at 0.5 m already
+#: spans a third of a 512 px, 100 degree frame (86 px radius), and nearer samples' discs would
+#: cover the whole image.
+DISC_DEPTH_FLOOR = 0.5
 
 
 def _rotated(d: np.ndarray, degrees: float) -> np.ndarray:
@@ -159,7 +165,7 @@ def region_in_frame(placements: np.ndarray, camera: Camera) -> RelationRegion:
     f = camera.focal_px
     u = f * cam[:, 0] / depth + camera.width / 2.0
     v = camera.height / 2.0 - f * cam[:, 1] / depth
-    radii = f * TARGET_HALF_SIZE / depth + PIXEL_TOLERANCE
+    radii = f * TARGET_HALF_SIZE / np.maximum(depth, DISC_DEPTH_FLOOR) + PIXEL_TOLERANCE
     # clamped into the image as the official metric clamps the ground truth (the answer is too)
     centres = np.stack([np.clip(u, 0.0, camera.width), np.clip(v, 0.0, camera.height)], axis=1)
     return RelationRegion(centres, radii, camera.width, camera.height)

@@ -29,9 +29,11 @@ Every counterfactual is projected as the official metric projects the ground tru
 (:func:`~povagent.scoring.official.project_ground_truth`): clamped to [0, 1], and a point behind
 the camera placed at the image centre.
 
-The egocentric-bias vote of an A/B answer: among answers whose egocentric and ground-truth
-targets lie more than :data:`BIAS_MARGIN` apart in the answered frame (``bias_eligible``),
-whether the point is nearer the egocentric one (``nearer_egocentric``). In C the observer view
+The egocentric-bias vote of an A/B answer: among answers that pass the frame and anchor steps
+and whose egocentric and ground-truth targets lie more than :data:`BIAS_MARGIN` apart in the
+answered frame (``bias_eligible``), whether the point is nearer the egocentric one
+(``nearer_egocentric``). An answer in the wrong frame or far from the anchor is a guess about
+neither viewpoint, and would pull the index towards one half. In C the observer view
 *is* the camera, the two targets coincide, and no vote is cast (the index is left out for C).
 """
 
@@ -166,6 +168,8 @@ def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationReg
         step = "placement"
     else:
         step = "correct"
+    # the vote is about the viewpoint: only answers that found the frame and the anchor cast one
+    votes = ego_apart and step not in ("frame", "anchor")
     return Diagnosis(
         step=step,
         frame_shows=shows,
@@ -176,8 +180,8 @@ def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationReg
         egocentric=ego,
         mirrored=mirror,
         anchor_centre=centre,
-        bias_eligible=ego_apart,
-        nearer_egocentric=(l2_ego < l2_truth) if ego_apart else None,
+        bias_eligible=votes,
+        nearer_egocentric=(l2_ego < l2_truth) if votes else None,
         relation=inside,
     )
 

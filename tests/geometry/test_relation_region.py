@@ -11,7 +11,7 @@ from povagent.dataset.loader import load_dataset, placement_case
 from povagent.geometry.camera import Camera
 from povagent.geometry.counterfactual import mirrored_target
 from povagent.geometry.ground_truth import AnchorBox, PlacementCase
-from povagent.geometry.relation_region import MAX_GAP, SECTOR_HALF_ANGLE, region_in_frame, valid_placements
+from povagent.geometry.relation_region import MAX_GAP, NEAR_PLANE, SECTOR_HALF_ANGLE, region_in_frame, valid_placements
 from povagent.scoring.diagnosis import BIAS_MARGIN, official_uv
 
 BOX = AnchorBox(center_xz=(2.0, 0.0), half_xz=(0.5, 0.3), top=1.0)
@@ -85,8 +85,8 @@ def test_the_region_contains_the_ground_truth_of_every_instance_in_every_frame_f
     for inst in generated.instances():
         placements = valid_placements(placement_case(generated.houses[inst.house_id].pairs[inst.pair_id], inst.direction))
         for frame in inst.frames:
-            if frame.camera.project_point(inst.target)[2] <= 0.05:
-                continue  # behind the camera: no region, the official rule puts the GT at the centre
+            if frame.camera.project_point(inst.target)[2] <= NEAR_PLANE:
+                continue  # behind the camera: the region leaves such samples out
             u, v = official_uv(np.asarray(inst.target), frame)
             assert region_in_frame(placements, frame.camera).contains(u * 512, v * 512), (inst.id, frame.index)
             checked += 1
