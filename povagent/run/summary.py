@@ -125,7 +125,7 @@ def digest(row: ResultRow) -> RowDigest:
 
 def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
     """The ``diagnose`` and ``relation`` fields of an answered row (``None`` when neither scored it)."""
-    if row.status is not RowStatus.ANSWERED:
+    if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
         return None
     diagnose = row.scores.get("diagnose")
     relation = row.scores.get("relation")
