@@ -8,6 +8,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
+    "povagent_plugins.scorers.diagnose",
+    "povagent_plugins.scorers.relation",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -28,6 +30,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.backends.baselines",
     "povagent_plugins.backends.replay",
     "povagent_plugins.backends.simulated",
+    "povagent_plugins.backends.planted",
     # model profiles
     "povagent_plugins.backends.profiles",
     # surface judges (the dataset generator's stage 3)

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import threading
 from pathlib import Path
 from typing import Any, ClassVar, Mapping, Sequence
 
@@ -41,23 +40,20 @@ import numpy as np
 
 from povagent import hookimpl
 from povagent.dataset.instances import Instance
-from povagent.dataset.loader import House, load_house
+from povagent.dataset.loader import House
 from povagent.dataset.models import PairEntry, SceneObject
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
+from povagent.geometry.box_outline import NEAR_PLANE, outline
 from povagent.geometry.camera import ViewCamera
 from povagent.geometry.letterbox import Letterbox
 from povagent.geometry.placement import SURFACE_KINDS, surface_kind
-from povagent.geometry.triangulation import optical_depth
 from povagent.interfaces import Backend, PermanentBackendError
+from povagent_plugins.backends.records import HouseRecords
 
 #: The label every answer carries in ``Response.model``.
 SIMULATION_LABEL = "simulation"
-#: Points per box edge sampled to outline a box that is partly behind the camera.
-EDGE_SAMPLES = 16
-#: Nearest depth (m) at which a box point still shows.
-NEAR_PLANE = 0.05
 
 
 def _rate(name: str, value: Any) -> float:
@@ -77,34 +73,6 @@ def box_outline(camera: ViewCamera, obj: SceneObject) -> tuple[float, float, flo
     part in front of the camera; ``None`` when none of it is in front or in the image."""
     corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
     return outline(camera, corners.min(axis=0), corners.max(axis=0))
-
-
-def outline(camera: ViewCamera, lo: np.ndarray, hi: np.ndarray) -> tuple[float, float, float, float] | None:
-    """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``
-    (its edges sampled, so a box partly behind the camera is outlined by the part in front)."""
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
-    points = []
-    for axis in range(3):
-        others = [a for a in range(3) if a != axis]
-        for b0 in (lo[others[0]], hi[others[0]]):
-            for b1 in (lo[others[1]], hi[others[1]]):
-                p = np.empty((EDGE_SAMPLES, 3))
-                p[:, axis] = lo[axis] + t * (hi[axis] - lo[axis])
-                p[:, others[0]], p[:, others[1]] = b0, b1
-                points.append(p)
-    pts = np.concatenate(points)
-    depth = optical_depth(camera, pts)
-    pts = pts[depth > NEAR_PLANE]
-    if not len(pts):
-        return None
-    px = camera.project_pixels(pts)
-    w, h = camera.width - 1.0, camera.height - 1.0
-    x0, y0 = np.clip(px[:, 0].min(), 0, w), np.clip(px[:, 1].min(), 0, h)
-    x1, y1 = np.clip(px[:, 0].max(), 0, w), np.clip(px[:, 1].max(), 0, h)
-    if x1 - x0 < 1.0 or y1 - y0 < 1.0:
-        return None
-    return (float(x0), float(y0), float(x1), float(y1))
 
 
 def _centre(obj: SceneObject) -> tuple[float, float, float]:
@@ -140,8 +108,7 @@ class SimulatedPerception(Backend):
         self.wrong_surface_rate = _rate("wrong_surface_rate", wrong_surface_rate)
         self.seed = seed
         self.dataset = Path(dataset).expanduser() if dataset else None
-        self._houses: dict[Path, House] = {}
-        self._lock = threading.Lock()
+        self._records = HouseRecords("simulated", self.dataset)
 
     def identity(self) -> Mapping[str, Any]:
         """Name, ``simulation: True`` and every noise option."""
@@ -158,33 +125,7 @@ class SimulatedPerception(Backend):
     # -- records ------------------------------------------------------------------------------
     def house_of(self, instance: Instance) -> House:
         """The house records of ``instance`` (read once per house folder)."""
-        folder = self._house_folder(instance)
-        with self._lock:
-            house = self._houses.get(folder)
-        if house is None:
-            problems: list = []
-            house = load_house(folder, folder.parent.parent, problems)
-            if house is None:
-                listing = "; ".join(str(p) for p in problems[:3])
-                raise PermanentBackendError(f"simulated backend: cannot read the records of {folder}: {listing}")
-            with self._lock:
-                self._houses[folder] = house
-        return house
-
-    def _house_folder(self, instance: Instance) -> Path:
-        if self.dataset is not None:
-            folder = self.dataset / "artifacts" / instance.house_id
-            if folder.is_dir():
-                return folder
-            raise PermanentBackendError(f"simulated backend: option 'dataset': {folder} is not a house folder")
-        for frame in instance.frames:
-            for parent in Path(frame.file).parents:
-                if parent.name == instance.house_id and (parent / f"{instance.house_id}.json").is_file():
-                    return parent
-        raise PermanentBackendError(
-            f"simulated backend: the frames of {instance.id} are not inside a release-layout house folder; "
-            "set the backend option 'dataset' to the dataset folder"
-        )
+        return self._records.house_of(instance)
 
     # -- answering ----------------------------------------------------------------------------
     async def complete(self, request: Request, images: ImageStore) -> Response:

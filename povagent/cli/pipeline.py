@@ -21,12 +21,14 @@ from povagent.cli.options import keep_errors_option, strict_option
 def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> None:
     """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
+    from povagent.cli.diagnostics_table import render_diagnostics
 
     success = _success_summary(summary, run_dir)
     if success is not None:  # a real-world set: success rates, as the paper reports them
         _success_table(success, title)
     if "official" in summary.get("pipeline", {}).get("scorers", ["official"]):
         render_summary(summary, title=title)
+    render_diagnostics(summary)  # additions, under the official table
 
 
 def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] | None:

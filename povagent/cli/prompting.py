@@ -191,6 +191,10 @@ def rescore_command(
     dataset: Path | None = typer.Option(
         None, "--dataset", metavar="FOLDER", help="Dataset folder, if not the one named in the run's config.yaml."
     ),
+    scorer: list[str] = typer.Option(
+        [], "--scorer", metavar="NAME", help="A scorer to add to the run's own (repeatable), e.g. --scorer diagnose "
+        "--scorer relation: their figures go to summary.json's diagnostics, beside the official ones."
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print the summary as JSON instead of tables."),
     plugin: list[str] = typer.Option(
         [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable). "
@@ -206,10 +210,11 @@ def rescore_command(
     """
     from povagent.cli.console_width import PathTitle
     from povagent.cli.dataset import render_summary
+    from povagent.cli.diagnostics_table import render_diagnostics
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
 
-    result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin)
+    result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin, extra_scorers=tuple(scorer))
     for w in result.warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
     if as_json:
@@ -217,5 +222,6 @@ def rescore_command(
     else:
         render_summary(result.summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
         render_official_beside(result.summary, parser, reads_officially="official_parse" not in result.summary, run_dir=run_dir)
+        render_diagnostics(result.summary)
         typer.echo(f"parse status: {json.dumps(result.summary['parse_status'])}; repaired: {result.summary['repaired']}")
     typer.echo(f"written to {result.out_dir}", err=True)

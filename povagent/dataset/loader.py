@@ -33,7 +33,7 @@ from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, 
 from povagent.dataset.problems import Problem, problems_from_validation_error
 from povagent.errors import DatasetError
 from povagent.geometry.camera import Camera
-from povagent.geometry.ground_truth import AnchorBox, target_point
+from povagent.geometry.ground_truth import AnchorBox, PlacementCase
 
 _VISIBLE = TypeAdapter(dict[str, list[str]])
 
@@ -144,21 +144,28 @@ def anchor_type(pair: PairEntry) -> str:
     return pair.landmark_type or pair.object_landmark.object_type
 
 
-def ground_truth_point(pair: PairEntry, direction: Direction | str) -> np.ndarray:
-    """The surface-corrected 3D GT point of one (pair, direction), as the official scorer has it."""
+def placement_case(pair: PairEntry, direction: Direction | str) -> PlacementCase:
+    """What the placement rules read for one (pair, direction), as the official scorer reads it."""
     # Direction is a str enum: the plain name finds the same entry
     key = cast(Direction, direction)
     judgement = pair.stage3.get(key)
-    return target_point(
-        str(direction),
-        anchor_box(pair),
-        anchor_type(pair),
-        np.array(pair.object_landmark.position.as_tuple()),
-        np.array(pair.camera.cam_pos),
-        judgement.verdict if judgement else None,
-        judgement.surface if judgement else None,
-        np.array(pair.placements[key].position.as_tuple()),
+    box = pair.object_landmark.raw_metadata.axisAlignedBoundingBox
+    return PlacementCase(
+        direction=str(direction),
+        box=anchor_box(pair),
+        anchor_type=anchor_type(pair),
+        anchor_position=pair.object_landmark.position.as_tuple(),
+        anchor_centre=box.center.as_tuple(),
+        observer_position=tuple(float(v) for v in pair.camera.cam_pos),  # type: ignore[arg-type]
+        verdict=judgement.verdict if judgement else None,
+        surface=judgement.surface if judgement else None,
+        raw_placement=pair.placements[key].position.as_tuple(),
     )
+
+
+def ground_truth_point(pair: PairEntry, direction: Direction | str) -> np.ndarray:
+    """The surface-corrected 3D GT point of one (pair, direction), as the official scorer has it."""
+    return placement_case(pair, direction).target()
 
 
 @dataclass

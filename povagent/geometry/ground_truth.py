@@ -161,3 +161,44 @@ def target_point(
     bx, bz = boundary_point(box, d)
     y = surface_height(surface, box) + TARGET_HALF_SIZE
     return np.array([bx + TARGET_HALF_SIZE * d[0], y, bz + TARGET_HALF_SIZE * d[2]])
+
+
+@dataclass(frozen=True)
+class PlacementCase:
+    """Everything the placement rules read for one (pair, direction): the inputs of
+    :func:`target_point`, kept together so the ground truth and its counterfactuals
+    (:mod:`povagent.geometry.counterfactual`) are computed from the same record.
+
+    ``anchor_centre`` is the anchor's AABB centre (x, y, z); ``observer_position`` the observer
+    camera's position; ``verdict``, ``surface`` and ``raw_placement`` come from the release.
+    """
+
+    direction: str
+    box: AnchorBox
+    anchor_type: str
+    anchor_position: tuple[float, float, float]
+    anchor_centre: tuple[float, float, float]
+    observer_position: tuple[float, float, float]
+    verdict: str | None
+    surface: str | None
+    raw_placement: tuple[float, float, float]
+
+    @property
+    def rules_apply(self) -> bool:
+        """True when the surface-corrected rules place the target (verdict ``appropriate``);
+        otherwise the raw placement stands, for the ground truth and every counterfactual."""
+        return self.verdict == "appropriate"
+
+    def target(self, direction: str | None = None, observer_position: np.ndarray | None = None) -> np.ndarray:
+        """The rules' target for ``direction`` (default: the case's) seen from
+        ``observer_position`` (default: the observer camera): :func:`target_point` itself."""
+        return target_point(
+            direction or self.direction,
+            self.box,
+            self.anchor_type,
+            np.asarray(self.anchor_position, dtype=float),
+            np.asarray(self.observer_position if observer_position is None else observer_position, dtype=float),
+            self.verdict,
+            self.surface,
+            np.asarray(self.raw_placement, dtype=float),
+        )

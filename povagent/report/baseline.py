@@ -114,8 +114,9 @@ def is_center_system(axes: dict[str, str], label: str) -> bool:
 
 
 #: Backends that are baselines, not models: shown as reference rows, never bolded as "best".
-#: ``simulated`` is a perception simulation (it answers from the records): not a model either.
-BASELINE_BACKENDS = frozenset({"center", "random", "oracle", "simulated"})
+#: ``simulated`` is a perception simulation and ``planted`` a behaviour simulation (both answer
+#: from the records): not models either.
+BASELINE_BACKENDS = frozenset({"center", "random", "oracle", "simulated", "planted"})
 
 
 def is_baseline_system(axes: dict[str, str], label: str) -> bool:

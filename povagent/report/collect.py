@@ -202,6 +202,8 @@ def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]
     }
     if axes["backend"] == "simulated":  # a perception simulation is never labelled as a model
         axes["model"] = simulation_label(backend.get("options") if isinstance(backend, dict) else None)
+    if axes["backend"] == "planted":  # nor is a behaviour simulation
+        axes["model"] = planted_label(backend.get("options") if isinstance(backend, dict) else None)
     if not axes["model"]:
         axes["model"] = axes["backend"]
     return {k: v for k, v in axes.items() if v}
@@ -214,6 +216,14 @@ def simulation_label(options: Any) -> str:
     names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
     parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
     return "simulation (" + (", ".join(parts) or "no noise") + ")"
+
+
+def planted_label(options: Any) -> str:
+    """How reports name a ``planted`` backend: ``planted simulation (egocentric 0.4, sigma 5 px)``."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("egocentric", "egocentric {}"), ("mirror", "mirror {}"), ("random_frame", "random frame {}"), ("pixel_sigma", "sigma {} px"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "planted simulation (" + (", ".join(parts) or "ground truth") + ")"
 
 
 def _cells_of_index(index: Any) -> list[dict[str, Any]]:

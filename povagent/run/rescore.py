@@ -42,7 +42,9 @@ from povagent.results.official_reading import (
 )
 from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
 from povagent.run.run_folder import read_run_config
+from povagent.run.summary import diagnosed_row
 from povagent.scoring.breakdown import ScoredRow, breakdown
+from povagent.scoring.diagnostics_breakdown import diagnostics_breakdown
 from povagent.scoring.official import scoring_frame
 
 
@@ -134,6 +136,9 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
             readings[0],
             sum(1 for r in rows if r.official_reading is None and r.status is not RowStatus.INFRA_ERROR),
         )
+    diagnostics = diagnostics_breakdown(d for d in (diagnosed_row(r) for r in rows) if d is not None)
+    if diagnostics is not None:  # an addition, beside the official breakdown
+        summary["diagnostics"] = diagnostics
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
     summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
     return summary
@@ -146,9 +151,12 @@ def rescore_run(
     dataset_root: str | Path | None = None,
     host: PluginHost | None = None,
     plugins: Sequence[str] = (),
+    extra_scorers: Sequence[str] = (),
 ) -> RescoreResult:
     """Re-parse every row of a finished run with ``parser_name`` (default: the official reading)
-    and re-score it (offline).
+    and re-score it (offline) with the run's scorers plus ``extra_scorers`` (names, default
+    options; e.g. ``diagnose`` and ``relation``, whose figures go to the summary's
+    ``diagnostics``).
 
     A run folder is untrusted: the ``plugins:`` its ``config.yaml`` names are never imported.
     The plugins come from ``plugins`` (what ``--plugin`` names on the command line); a strategy
@@ -171,6 +179,9 @@ def rescore_run(
     official = (host.create("parser", counterpart, {}), counterpart) if counterpart else None
     strategy = host.create("strategy", config.strategy.name, config.strategy.options)
     scorers = {s.name: host.create("scorer", s.name, s.options) for s in config.scorers}
+    for name in extra_scorers:
+        if name not in scorers:
+            scorers[name] = host.create("scorer", name, {})
     root = Path(dataset_root) if dataset_root is not None else config.dataset.root
     if dataset_root is None and not root.is_absolute() and not root.exists():
         # relative paths in a pipeline are relative to the directory the run was started from
@@ -204,5 +215,7 @@ def rescore_run(
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     rescored_config = config.resolved_dict()
     rescored_config["parser"] = {"name": parser_name, "options": {}}
+    rescored_config["scorers"] = [*rescored_config.get("scorers", []), *({"name": n, "options": {}} for n in extra_scorers
+                                                                          if n not in {s.name for s in config.scorers})]
     (out_dir / "config.yaml").write_text(yaml.safe_dump(rescored_config, sort_keys=False), encoding="utf-8")
     return RescoreResult(out_dir, summary, warnings)

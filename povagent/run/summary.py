@@ -17,6 +17,7 @@ from typing import Any, Iterable, Mapping
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
+from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -65,6 +66,9 @@ class RowDigest:
     nan_coordinate: bool = False
     #: The true/false and number fields of every plugin scorer's scores (``summary.json``'s ``scorers``).
     plugin_scores: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
+    #: The ``diagnose`` and ``relation`` scores' fields (``summary.json``'s ``diagnostics``);
+    #: ``None`` when neither scored the row.
+    diagnosed: DiagnosedRow | None = None
 
 
 #: Scorers whose fields ``summary.json`` breaks down in sections of their own.
@@ -120,6 +124,33 @@ def digest(row: ResultRow) -> RowDigest:
         official_parser=row.official_reading.parser if row.official_reading is not None else None,
         nan_coordinate=bool(nan_rows([official_view])),
         plugin_scores=plugin_scores(row.scores),
+        diagnosed=diagnosed_row(row),
+    )
+
+
+def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
+    """The ``diagnose`` and ``relation`` fields of an answered row (``None`` when neither scored it)."""
+    if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
+        return None
+    diagnose = row.scores.get("diagnose")
+    relation = row.scores.get("relation")
+    diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None
+    relation = relation if isinstance(relation, Mapping) and relation.get("answered") is True else None
+    if diagnose is None and relation is None:
+        return None
+    official = row.scores.get("official") or {}
+    l2 = official.get("l2") if isinstance(official, Mapping) else None
+    step = diagnose.get("step") if diagnose is not None else None
+    vote = diagnose.get("nearer_egocentric") if diagnose is not None else None
+    hit = relation.get("success") if relation is not None else None
+    return DiagnosedRow(
+        instance_id=row.instance_id,
+        condition=str(row.condition),
+        direction=str(row.direction),
+        l2=float(l2) if isinstance(l2, (int, float)) and not isinstance(l2, bool) else None,
+        step=step if isinstance(step, str) else None,
+        nearer_egocentric=vote if isinstance(vote, bool) else None,
+        relation=hit if isinstance(hit, bool) else None,
     )
 
 
@@ -155,6 +186,9 @@ def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None
     by_plugin = plugin_score_summary(rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
         out["scorers"] = by_plugin
+    diagnostics = diagnostics_breakdown(d.diagnosed for d in rows if d.diagnosed is not None)
+    if diagnostics is not None:  # an addition, beside the official breakdown
+        out["diagnostics"] = diagnostics
     nan_keys = [d.key for d in rows if d.nan_coordinate]
     if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
         out["nan_coordinate_rows"] = nan_keys

@@ -1,0 +1,203 @@
+"""Why an answer failed: the first failing reasoning step, and the relation-consistent hit.
+
+An addition to the official metric (never instead of it), for the ``diagnose`` and ``relation``
+scorers. One answer is walked through the steps the task needs, in order, and stops at the first
+that fails:
+
+1. **frame** (A/B only): the selected frame does not show the anchor, by the release's
+   occlusion-aware record of the objects each frame shows (the exploration log's
+   ``object_in_frame_hits``, matched by the anchor's ``objectId``). The target stands beside the
+   anchor, so a frame without the anchor cannot show where it is. (The issue words it as "shows
+   neither the anchor nor the observer, or shows the anchor only"; read literally, a frame
+   showing the anchor but not the observer fails, and on generated sets most instances have no
+   frame showing both, so a perfect answer would fail this step. ``frame_shows`` keeps the four
+   cases, ``both``, ``anchor``, ``observer``, ``neither``, so a report can use the stricter
+   reading.) In C the observer view always faces the anchor: the step passes.
+2. **anchor**: the point (clamped to the image, as officially) is farther than
+   :data:`ANCHOR_THRESHOLD` (normalized units, the official metric's) from the anchor's
+   box in the image (the part in front of the camera): the model did not find the anchor. Why 0.15: see ``docs/diagnostics.md``
+   (on generated sets every ground truth lies within it; most random answers do not).
+3. **viewpoint**: the point is nearer (official clamped distance) the egocentric or the
+   mirrored target (:mod:`povagent.geometry.counterfactual`) than the ground truth, counting
+   only a counterfactual farther than :data:`BIAS_MARGIN` from the ground truth in this frame.
+   In C the egocentric target is the ground truth itself: only the mirrored one counts.
+4. **placement**: right side, wrong distance: the point is outside the relation region
+   (:mod:`povagent.geometry.relation_region`);
+5. **correct** otherwise.
+
+Every counterfactual is projected as the official metric projects the ground truth
+(:func:`~povagent.scoring.official.project_ground_truth`): clamped to [0, 1], and a point behind
+the camera placed at the image centre.
+
+The egocentric-bias vote of an A/B answer: among answers that pass the frame and anchor steps
+and whose egocentric and ground-truth targets lie more than :data:`BIAS_MARGIN` apart in the
+answered frame (``bias_eligible``), whether the point is nearer the egocentric one
+(``nearer_egocentric``). An answer in the wrong frame or far from the anchor is a guess about
+neither viewpoint, and would pull the index towards one half. In C the observer view
+*is* the camera, the two targets coincide, and no vote is cast (the index is left out for C).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from povagent.dataset.instances import Frame, Instance
+from povagent.geometry.box_outline import outline
+from povagent.geometry.counterfactual import counterfactuals
+from povagent.geometry.ground_truth import PlacementCase
+from povagent.geometry.relation_region import RelationRegion, region_in_frame
+from povagent.scoring.official import clamp_unit, project_ground_truth
+
+#: Normalized distance beyond which a point is "far from the anchor" (see the module docstring).
+ANCHOR_THRESHOLD = 0.15
+#: Two targets closer than this (normalized) in a frame are one target: no bias vote, no viewpoint test.
+BIAS_MARGIN = 0.05
+
+#: The failure steps, in the order they are tested, then success.
+STEPS: tuple[str, ...] = ("frame", "anchor", "viewpoint", "placement", "correct")
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """One answer's diagnosis (see the module docstring for each field's rule)."""
+
+    step: str
+    frame_shows: str
+    anchor_distance: float
+    l2_truth: float
+    l2_egocentric: float
+    l2_mirrored: float
+    egocentric: tuple[float, float]
+    mirrored: tuple[float, float]
+    anchor_centre: tuple[float, float]
+    bias_eligible: bool
+    nearer_egocentric: bool | None
+    relation: bool
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able form, as stored in a row's ``scores["diagnose"]``."""
+        return {
+            "answered": True,
+            "step": self.step,
+            "frame_shows": self.frame_shows,
+            "anchor_distance": self.anchor_distance,
+            "l2_truth": self.l2_truth,
+            "l2_egocentric": self.l2_egocentric,
+            "l2_mirrored": self.l2_mirrored,
+            "egocentric": list(self.egocentric),
+            "mirrored": list(self.mirrored),
+            "anchor_centre": list(self.anchor_centre),
+            "bias_eligible": self.bias_eligible,
+            "nearer_egocentric": self.nearer_egocentric,
+            "relation": self.relation,
+        }
+
+
+def frame_shows(instance: Instance, frame: Frame) -> str:
+    """``both``, ``anchor``, ``observer`` or ``neither`` by the frame's recorded hits; the
+    observer view (C) is ``observer view``."""
+    if not instance.condition.uses_exploration_frames:
+        return "observer view"
+    hits = frame.in_frame_hits
+    anchor = str(instance.anchor_object.objectId) in hits
+    observer = str(instance.observer_object.objectId) in hits
+    return {(True, True): "both", (True, False): "anchor", (False, True): "observer"}.get((anchor, observer), "neither")
+
+
+def official_uv(point: np.ndarray, frame: Frame) -> tuple[float, float]:
+    """A 3D point where the official metric puts it in ``frame``: clamped, behind -> centre."""
+    gt = project_ground_truth(point, frame.camera)
+    return (clamp_unit(gt.u), clamp_unit(gt.v))
+
+
+def anchor_distance(instance: Instance, frame: Frame, u: float, v: float) -> float:
+    """Normalized distance from ``(u, v)`` (clamped fractions) to the 2D box around the part of
+    the anchor in front of the camera (:func:`~povagent.geometry.box_outline.outline`); when no
+    part of it is in the image, to its centre as the official rules project it."""
+    cam = frame.camera
+    box = instance.anchor_object.raw_metadata.axisAlignedBoundingBox
+    corners = np.asarray(box.cornerPoints, dtype=float)
+    seen = outline(cam, corners.min(axis=0), corners.max(axis=0))
+    if seen is None:
+        cu, cv = official_uv(np.asarray(box.center.as_tuple(), dtype=float), frame)
+        return math.hypot(u - cu, v - cv)
+    x0, y0, x1, y1 = seen[0] / cam.width, seen[1] / cam.height, seen[2] / cam.width, seen[3] / cam.height
+    dx = max(x0 - u, 0.0, u - x1)
+    dy = max(y0 - v, 0.0, v - y1)
+    return math.hypot(dx, dy)
+
+
+def relation_region(placements: np.ndarray, frame: Frame) -> RelationRegion:
+    """The relation region of an instance's valid placements in ``frame``."""
+    return region_in_frame(placements, frame.camera)
+
+
+def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationRegion, frame: Frame, x: float, y: float) -> Diagnosis:
+    """The diagnosis of the pixel ``(x, y)`` answered in ``frame`` (see the module docstring).
+
+    ``region`` is the case's relation region in ``frame`` (:func:`relation_region` of its valid
+    placements, :func:`~povagent.geometry.relation_region.valid_placements`).
+    """
+    cam = frame.camera
+    u, v = clamp_unit(x / cam.width), clamp_unit(y / cam.height)
+    targets = counterfactuals(case, cam)
+    truth = official_uv(np.asarray(instance.target, dtype=float), frame)
+    ego = official_uv(targets.egocentric, frame)
+    mirror = official_uv(targets.mirrored, frame)
+    centre = official_uv(targets.anchor_centre, frame)
+    l2_truth = math.hypot(u - truth[0], v - truth[1])
+    l2_ego = math.hypot(u - ego[0], v - ego[1])
+    l2_mirror = math.hypot(u - mirror[0], v - mirror[1])
+    given = not instance.condition.uses_exploration_frames
+    ego_apart = not given and math.hypot(ego[0] - truth[0], ego[1] - truth[1]) > BIAS_MARGIN
+    mirror_apart = math.hypot(mirror[0] - truth[0], mirror[1] - truth[1]) > BIAS_MARGIN
+    shows = frame_shows(instance, frame)
+    distance = anchor_distance(instance, frame, u, v)
+    inside = region.contains(x, y)
+    if shows in ("observer", "neither"):
+        step = "frame"
+    elif distance > ANCHOR_THRESHOLD:
+        step = "anchor"
+    elif (ego_apart and l2_ego < l2_truth) or (mirror_apart and l2_mirror < l2_truth):
+        step = "viewpoint"
+    elif not inside:
+        step = "placement"
+    else:
+        step = "correct"
+    # the vote is about the viewpoint: only answers that found the frame and the anchor cast one
+    votes = ego_apart and step not in ("frame", "anchor")
+    return Diagnosis(
+        step=step,
+        frame_shows=shows,
+        anchor_distance=distance,
+        l2_truth=l2_truth,
+        l2_egocentric=l2_ego,
+        l2_mirrored=l2_mirror,
+        egocentric=ego,
+        mirrored=mirror,
+        anchor_centre=centre,
+        bias_eligible=votes,
+        nearer_egocentric=(l2_ego < l2_truth) if votes else None,
+        relation=inside,
+    )
+
+
+def instance_case(instance: Instance, dataset: Any) -> PlacementCase:
+    """The placement record of ``instance`` from a release-layout ``dataset`` (its houses'
+    pairs); a :class:`ValueError` naming the instance when the set holds none (a real-world
+    set, or no dataset given)."""
+    from povagent.dataset.loader import placement_case
+
+    houses = getattr(dataset, "houses", None)
+    house = houses.get(instance.house_id) if isinstance(houses, Mapping) else None
+    pair = getattr(house, "pairs", {}).get(instance.pair_id) if house is not None else None
+    if pair is None:
+        raise ValueError(
+            f"{instance.id}: diagnostics need the release's placement records (anchor box, stage-3 verdict and surface), "
+            "and the dataset given holds none for this instance (a real-world set, or no dataset)"
+        )
+    return placement_case(pair, instance.direction)
