@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import time
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,6 +21,7 @@ from povagent.dataset.loader import Dataset, house_folders, load_dataset, load_h
 from povagent.dataset.models import CONDITIONS, Condition
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError, PovagentError
+from povagent.train.examples import TrainingExample
 from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
 from povagent.train.facts import NoTeachingFrame, instance_facts
 from povagent.train.rationale import RATIONALES
@@ -178,7 +179,7 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
     dataset = Dataset(root, None, houses, problems)
     strategy = make_strategy(options.rationale)
 
-    def examples():  # type: ignore[no-untyped-def]
+    def examples() -> Iterator[TrainingExample]:
         for hid in shard.houses:
             insts = [i for i in dataset.instances(conditions=_conditions(options), houses=[hid]) if i.id in wanted]
             for ex in house_examples(houses[hid], insts, options.rationale, strategy, options.text_seed, options.exact_answers):

@@ -107,7 +107,10 @@ def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: 
     buffered = 0
     count = 0
     with atomic_file(path) as handle:
-        writer = pq.ParquetWriter(handle, schema, compression="zstd")
+        # no dictionary and no min/max statistics for the image bytes: both would store image
+        # data a second time (a dictionary page before the fallback, statistics per page)
+        small = ["id", "house_id", "pair_id", "direction", "condition", "split", "rationale"]
+        writer = pq.ParquetWriter(handle, schema, compression="zstd", use_dictionary=small, write_statistics=small)
         try:
             for example in examples:
                 row = example_row(example, split, rationale)

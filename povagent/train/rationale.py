@@ -47,7 +47,7 @@ def answer_json(facts: InstanceFacts, exact: bool = False) -> str:
 
 def _words(name: str) -> str:
     """``CoffeeTable`` -> ``coffee table``."""
-    out = []
+    out: list[str] = []
     for ch in name:
         if ch.isupper() and out:
             out.append(" ")

@@ -15,7 +15,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 #: The default bound on one shard's size, as the issue asks (Hub-friendly Parquet files).
 DEFAULT_SHARD_BYTES = 500 * 1024 * 1024
@@ -74,7 +74,7 @@ def plan_shards(examples: Sequence[PlannedExample], max_bytes: int, suffix: str)
 
 
 @contextmanager
-def atomic_file(path: Path, mode: str = "wb") -> Iterator[IO]:  # type: ignore[type-arg]
+def atomic_file(path: Path, mode: str = "wb") -> Iterator[IO[Any]]:
     """Write ``path`` through a temporary file beside it, fsync it, and rename it into place.
 
     On any error the temporary file is removed and ``path`` is left as it was.

@@ -9,6 +9,7 @@ open), where a house's index is the number in its id (``train_house_00042`` -> 4
 from __future__ import annotations
 
 import hashlib
+import itertools
 import math
 import re
 from collections.abc import Sequence
@@ -62,7 +63,7 @@ def parse_split(text: str) -> SplitSpec:
             raise SplitError(f"--split {item!r}: STOP must be greater than START")
         ranges.append((name, a, b))
     ordered = sorted(ranges, key=lambda r: r[1])
-    for (n1, _, b1), (n2, a2, _) in zip(ordered, ordered[1:]):
+    for (n1, _, b1), (n2, a2, _) in itertools.pairwise(ordered):
         if a2 < b1:
             raise SplitError(f"--split: the ranges of {n1} and {n2} overlap: a house would be in two splits")
     return SplitSpec(ranges=tuple(ranges))
