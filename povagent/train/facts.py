@@ -39,6 +39,10 @@ RELATION_WORDS: dict[Direction, str] = {
 DIRECTION_PROBE_M = 0.5
 
 
+#: How many other views of the anchor a rationale names.
+OTHER_VIEWS = 2
+
+
 class NoTeachingFrame(ValueError):
     """No frame of an Inferred/Stated instance shows the anchor with the target inside it."""
 
@@ -81,6 +85,9 @@ class InstanceFacts:
     image_direction: str
     surface: str
     answer_xy: tuple[float, float]
+    #: Other frames that saw the anchor, with its centre's pixel there: ``(frame index, (x, y))``,
+    #: at most :data:`OTHER_VIEWS`, widest baseline first (a second view fixes the anchor's depth).
+    anchor_other_views: tuple[tuple[int, tuple[float, float]], ...] = ()
 
     def answer_pixel(self) -> tuple[int, int]:
         """The answer in whole pixels, inside ``[0, W-1] x [0, H-1]``."""
@@ -212,6 +219,18 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
         towards = image_direction(float(p1[0] - p0[0]), float(p1[1] - p0[1]))
     else:
         towards = "out of view"
+    other_views: tuple[tuple[int, tuple[float, float]], ...] = ()
+    if frame_index is not None:
+        candidates = []
+        for other in instance.frames:
+            if other.index == frame_index or instance.anchor_object.objectId not in other.in_frame_hits:
+                continue
+            pixel = gt_pixel(other.camera, anchor_centre)
+            if pixel is None:
+                continue
+            baseline = math.dist(other.camera.position, camera.position)
+            candidates.append((-baseline, other.index, pixel))
+        other_views = tuple((i, p) for _, i, p in sorted(candidates)[:OTHER_VIEWS])
     observer_visible = instance.observer_object.objectId in frame.in_frame_hits if frame_index is not None else bool(
         observer_xy and 0 <= observer_xy[0] <= w and 0 <= observer_xy[1] <= h
     )
@@ -236,4 +255,5 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
         image_direction=towards,
         surface=surface_phrase(pair, instance.direction),
         answer_xy=answer,
+        anchor_other_views=other_views,
     )

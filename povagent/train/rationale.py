@@ -107,10 +107,14 @@ def _step3(facts: InstanceFacts, rng: random.Random) -> str:
     anc = _words(facts.anchor_type)
     box = facts.anchor_box
     span = f", spanning x {box.x0}-{box.x1} and y {box.y0}-{box.y1}" if box is not None else ""
-    return _pick(rng, (
+    here = _pick(rng, (
         f"The {anc} is centred near {_xy(facts.anchor_xy)}{span}.",
         f"The landmark, the {anc}, sits at about {_xy(facts.anchor_xy)}{span}.",
     ))
+    if not facts.anchor_other_views:
+        return here
+    views = " and ".join(f"Image {i} near {_xy(p)}" for i, p in facts.anchor_other_views)
+    return here + " " + _pick(rng, (f"It is also seen in {views}.", f"The same {anc} appears in {views}."))
 
 
 def _target_sentence(facts: InstanceFacts, rng: random.Random) -> str:

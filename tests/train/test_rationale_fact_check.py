@@ -104,6 +104,12 @@ def test_the_anchor_pixel_stated_is_its_box_centre_projected(examples) -> None:
         step3 = ex.answer.split("Step 3")[1].split("Step 4")[0]
         x, y = (int(v) for v in re.search(r"\((-?\d+), (-?\d+)\)", step3).groups())
         assert (x, y) == (round(pix[0]), round(pix[1])), ex.id
+        # every other view named: the frame saw the anchor, and the pixel is its centre there
+        for j, ox, oy in re.findall(r"Image (\d+) near \((-?\d+), (-?\d+)\)", step3):
+            other = inst.frames[int(j)]
+            assert inst.anchor_object.objectId in other.in_frame_hits, ex.id
+            opix = other.camera.project_pixels(np.array([[box.center.x, box.center.y, box.center.z]]))[0]
+            assert (int(ox), int(oy)) == (round(opix[0]), round(opix[1])), ex.id
 
 
 def test_the_answer_is_the_ground_truth_within_rounding_by_the_official_scorer(examples) -> None:
