@@ -20,7 +20,7 @@ from povagent.train.examples import TrainingExample
 from povagent.train.shards import atomic_file
 
 #: Rows buffered before a row group is written: a handful of 30-frame examples, so memory stays flat.
-ROW_GROUP_BYTES = 64 * 1024 * 1024
+ROW_GROUP_BYTES = 16 * 1024 * 1024
 
 _STRING = {"dtype": "string", "_type": "Value"}
 
