@@ -26,7 +26,9 @@ def export_train_command(
     drop_excluded: bool = typer.Option(False, "--drop-excluded", help="Leave evaluation houses out (listed in the card) instead of stopping."),
     cluster: str = typer.Option(None, "--cluster", metavar="local:N|tcp://HOST:PORT", help="Write shards as Dask tasks (needs pip install 'povagent[cluster]')."),
 ) -> None:
-    """Export a training set: one example per instance and condition, with rationales from geometry.
+    """Export a training set, with rationales from the geometry.
+
+    One example per instance and condition: the benchmark's question, then the answer.
 
     Resumable: the same command finishes a stopped export; other options over it are refused.
     """
