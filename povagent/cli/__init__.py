@@ -32,6 +32,7 @@ COMMAND_MODULES = (
     "povagent.cli.reporting",  # report, export, compare
     "povagent.cli.quickstart", # quickstart
     "povagent.cli.download",   # download
+    "povagent.cli.train",      # export-train
 )
 
 for _name in COMMAND_MODULES:

@@ -381,7 +381,7 @@ def _profile_fields(entry: Any) -> dict[str, Any]:
 
 @app.command("plugins")
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
-    """List every plugin a YAML file can name, and where it came from.
+    """List every plugin a YAML file can name, and its source.
 
     Every backend, strategy, parser, scorer, surface judge and model profile, with the package
     or file that registered it; plugins that failed to load are listed after them (exit code 1).

@@ -1,0 +1,85 @@
+"""The ``messages`` format: JSONL chat examples with image references, and the images beside them.
+
+Each line holds one example in two shapes at once, so either trainer reads the same file:
+``messages`` (TRL's SFT trainer: typed content, ``{"type": "image"}`` placeholders in the
+benchmark's order) with ``images`` (paths relative to the export folder), and
+``conversations`` (LLaMA-Factory's ``sharegpt``: ``from``/``value`` turns, one ``<image>`` token
+per image, in the same order as ``images``). The images are copied once per house under
+``images/<house>/``; every reference resolves inside the export.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from povagent.train.examples import TrainingExample
+from povagent.train.parquet import chat_messages
+from povagent.train.shards import atomic_file
+
+IMAGES_DIR = "images"
+#: LLaMA-Factory's image token in ``sharegpt`` text.
+IMAGE_TOKEN = "<image>"
+
+
+def image_reference(example: TrainingExample, house_path: str) -> str:
+    """Where an image of ``example`` is, relative to the export folder."""
+    return f"{IMAGES_DIR}/{example.house_id}/{house_path}"
+
+
+def sharegpt_turns(example: TrainingExample) -> list[dict[str, str]]:
+    """The example as ``sharegpt`` turns: parts joined by newlines, ``<image>`` for each image."""
+    user = "\n".join(IMAGE_TOKEN if p.image is not None else (p.text or "") for p in example.parts)
+    return [{"from": "human", "value": user}, {"from": "gpt", "value": example.answer}]
+
+
+def example_line(example: TrainingExample, split: str, rationale: str) -> dict[str, Any]:
+    """One JSONL record."""
+    messages = chat_messages(example)
+    for part in messages[0]["content"]:
+        if part["type"] == "image":
+            del part["text"]
+    return {
+        "id": example.id,
+        "house_id": example.house_id,
+        "pair_id": example.pair_id,
+        "direction": example.direction,
+        "condition": example.condition,
+        "split": split,
+        "messages": messages,
+        "images": [image_reference(example, p) for p in example.image_paths],
+        "conversations": sharegpt_turns(example),
+        "answer": example.answer_json,
+        "rationale": rationale,
+        "facts": example.facts_record(),
+    }
+
+
+def copy_images(out: Path, example: TrainingExample) -> None:
+    """Copy ``example``'s images under ``out/images/<house>/`` (once: a complete copy is kept)."""
+    for source, rel in zip(example.image_files, example.image_paths):
+        target = out / image_reference(example, rel)
+        if target.is_file() and target.stat().st_size == source.stat().st_size:
+            continue
+        with atomic_file(target) as handle, open(source, "rb") as src:
+            shutil.copyfileobj(src, handle)
+
+
+def write_jsonl_shard(path: Path, out: Path, examples: Iterable[TrainingExample], split: str, rationale: str) -> int:
+    """Write ``examples`` to the JSONL file ``path`` atomically (images copied first); returns the count."""
+    count = 0
+    with atomic_file(path) as handle:
+        for example in examples:
+            copy_images(out, example)
+            handle.write(json.dumps(example_line(example, split, rationale), ensure_ascii=False).encode() + b"\n")
+            count += 1
+    return count
+
+
+def jsonl_rows(path: Path) -> int:
+    """Lines in a written JSONL shard."""
+    with open(path, "rb") as handle:
+        return sum(1 for _ in handle)

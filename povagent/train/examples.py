@@ -1,0 +1,143 @@
+"""One training example per (instance, condition): the benchmark's request, then the answer.
+
+The question is exactly what the benchmark sends for the instance: the strategy plugin that
+matches the rationale (``none`` -> ``basic``, ``cot`` -> ``cot``, ``s-cot`` -> ``spatial-cot``)
+builds its request, so the labels, the prompt text and the image order are the benchmark's own.
+The answer is the rationale text from :mod:`povagent.train.rationale`, ending in the JSON line.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from povagent.dataset.instances import Instance
+from povagent.dataset.loader import House
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, TextPart
+from povagent.train.facts import InstanceFacts, NoTeachingFrame, instance_facts
+from povagent.train.rationale import rationale_text
+
+#: The strategy whose prompt asks for each kind of rationale.
+STRATEGY_FOR_RATIONALE = {"none": "basic", "cot": "cot", "s-cot": "spatial-cot"}
+
+
+@dataclass(frozen=True)
+class QuestionPart:
+    """A part of the user turn: ``text``, or an image given by its path inside the house folder."""
+
+    text: str | None = None
+    image: str | None = None
+
+
+@dataclass(frozen=True)
+class TrainingExample:
+    """A question (parts in the benchmark's order), the answer text, and where it came from."""
+
+    id: str
+    house_id: str
+    pair_id: str
+    direction: str
+    condition: str
+    parts: tuple[QuestionPart, ...]
+    image_files: tuple[Path, ...]
+    answer: str
+    answer_json: str
+    facts: InstanceFacts
+
+    @property
+    def image_paths(self) -> tuple[str, ...]:
+        """The images' paths relative to the house folder, in the order the question shows them."""
+        return tuple(p.image for p in self.parts if p.image is not None)
+
+    @property
+    def question_text(self) -> str:
+        """The prompt text of the question (the text parts after the last image)."""
+        texts: list[str] = []
+        for part in self.parts:
+            if part.image is not None:
+                texts = []
+            elif part.text is not None:
+                texts.append(part.text)
+        return "\n".join(texts)
+
+    def facts_record(self) -> dict[str, Any]:
+        """The stated facts as plain JSON values (kept in every row, for checking and filtering)."""
+        f = self.facts
+        return {
+            "frame_index": f.frame_index,
+            "frame_path": f.frame_path,
+            "observer_visible": f.observer_visible,
+            "anchor_visible": f.anchor_visible,
+            "anchor_xy": [round(v, 3) for v in f.anchor_xy],
+            "anchor_box": None if f.anchor_box is None else [f.anchor_box.x0, f.anchor_box.y0, f.anchor_box.x1, f.anchor_box.y1],
+            "observer_xy": None if f.observer_xy is None else [round(v, 3) for v in f.observer_xy],
+            "facing": f.facing,
+            "relation": f.relation,
+            "image_direction": f.image_direction,
+            "surface": f.surface,
+            "answer_xy": list(f.answer_xy),
+        }
+
+
+def make_strategy(rationale: str) -> Any:
+    """The built-in strategy whose prompt fits ``rationale``, made through the plugin host."""
+    from povagent.plugins import get_plugin_host
+
+    return get_plugin_host().create("strategy", STRATEGY_FOR_RATIONALE[rationale], {})
+
+
+def house_examples(
+    house: House,
+    instances: list[Instance],
+    rationale: str,
+    strategy: Any,
+    seed: int,
+    exact: bool = False,
+) -> Iterator[TrainingExample | tuple[str, str]]:
+    """Each instance of ``house`` as an example; ``(instance id, reason)`` for one that cannot teach.
+
+    ``strategy`` is :func:`make_strategy`'s; a fresh image store per house keeps memory flat.
+    """
+    images = ImageStore()
+    for inst in instances:
+        pair = house.pairs[inst.pair_id]
+        try:
+            facts = instance_facts(inst, pair)
+        except NoTeachingFrame as exc:
+            yield (inst.id, str(exc).partition(": ")[2])
+            continue
+        request = strategy.build(inst, images)
+        parts: list[QuestionPart] = []
+        files: list[Path] = []
+        for message in request.messages:
+            for part in message.parts:
+                if isinstance(part, TextPart):
+                    parts.append(QuestionPart(text=part.text))
+                elif isinstance(part, ImagePart):
+                    source = images.source_file(part.image_hash)
+                    if source is None:  # a drawn image: the built-in text strategies draw none
+                        raise ValueError(f"{inst.id}: strategy {strategy!r} sent an image that is not a dataset file")
+                    parts.append(QuestionPart(image=source.relative_to(house.folder).as_posix()))
+                    files.append(source)
+        answer = rationale_text(facts, rationale, seed=seed, exact=exact)
+        yield TrainingExample(
+            id=inst.id,
+            house_id=inst.house_id,
+            pair_id=inst.pair_id,
+            direction=inst.direction.value,
+            condition=inst.condition.value,
+            parts=tuple(parts),
+            image_files=tuple(files),
+            answer=answer,
+            answer_json=answer.rsplit("\n", 1)[-1],
+            facts=facts,
+        )
+
+
+def answer_fields(example: TrainingExample) -> dict[str, Any]:
+    """The answer's JSON as a mapping (what the official parser reads from the last line)."""
+    return dict(json.loads(example.answer_json))

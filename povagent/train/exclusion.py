@@ -1,0 +1,114 @@
+"""Evaluation houses never reach a training set.
+
+A house is recognised two ways: by the content of its pair file (a hash of the canonical JSON:
+the objects, their boxes, cameras and sentences; the same house re-rendered or renamed still
+matches), and, for datasets this project generated, by its generator identity (seed, house
+index), which matches a house regenerated under another generator version. The exporter compares
+the houses it would export with every known evaluation set: the release when it is in the local
+Hugging Face cache, and any dataset passed with ``--exclude``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from povagent.dataset.loader import house_folders
+from povagent.train.splits import house_index
+
+#: The release's repository on the Hub (checked in the local cache only: never downloaded here).
+RELEASE_REPO = "owl-owl/POVBench"
+
+
+@dataclass(frozen=True)
+class HouseIdentity:
+    """How a house is recognised: its content hash and, when generated here, (seed, index)."""
+
+    house_id: str
+    content: str
+    generated: tuple[int, int] | None
+
+
+@dataclass
+class EvaluationSets:
+    """The houses of the known evaluation sets, and where each set came from."""
+
+    sources: list[str] = field(default_factory=list)
+    contents: dict[str, str] = field(default_factory=dict)
+    generated: dict[tuple[int, int], str] = field(default_factory=dict)
+
+    def add(self, source: str, identities: Iterable[HouseIdentity]) -> int:
+        """Add a set's houses; returns how many."""
+        self.sources.append(source)
+        n = 0
+        for ident in identities:
+            self.contents.setdefault(ident.content, f"{source}:{ident.house_id}")
+            if ident.generated is not None:
+                self.generated.setdefault(ident.generated, f"{source}:{ident.house_id}")
+            n += 1
+        return n
+
+    def match(self, ident: HouseIdentity) -> str | None:
+        """The evaluation house ``ident`` matches, or ``None``."""
+        hit = self.contents.get(ident.content)
+        if hit is None and ident.generated is not None:
+            hit = self.generated.get(ident.generated)
+        return hit
+
+
+def content_hash(pair_file: Path) -> str:
+    """sha256 of a pair file's canonical JSON (key order and whitespace do not matter)."""
+    data = json.loads(pair_file.read_bytes())
+    canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+    return hashlib.sha256(canonical.encode()).hexdigest()
+
+
+def generator_seed(root: Path) -> int | None:
+    """The seed of a dataset this project generated (``meta.json``), else ``None``."""
+    meta = root / "meta.json"
+    try:
+        data = json.loads(meta.read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or not isinstance(data.get("generator"), dict):
+        return None
+    if data["generator"].get("name") != "povagent.generate" or not isinstance(data.get("seed"), int):
+        return None
+    return int(data["seed"])
+
+
+def dataset_identities(root: Path) -> list[HouseIdentity]:
+    """Every house of the dataset at ``root`` (its ``artifacts/<house>/<house>.json``)."""
+    seed = generator_seed(root)
+    out = []
+    for folder in house_folders(root):
+        pair_file = folder / f"{folder.name}.json"
+        if not pair_file.is_file():
+            continue
+        idx = house_index(folder.name)
+        out.append(HouseIdentity(folder.name, content_hash(pair_file), (seed, idx) if seed is not None and idx is not None else None))
+    return out
+
+
+def cached_release_root() -> Path | None:
+    """The release's newest snapshot in the local Hugging Face cache, if one is there (offline)."""
+    try:
+        from huggingface_hub import scan_cache_dir
+    except ImportError:  # pragma: no cover - huggingface_hub is a dependency
+        return None
+    try:
+        info = scan_cache_dir()
+    except Exception:  # no cache folder, or one huggingface_hub cannot read: nothing to check
+        return None
+    for repo in info.repos:
+        if repo.repo_id == RELEASE_REPO and repo.repo_type == "dataset":
+            revisions = sorted(repo.revisions, key=lambda r: r.last_modified, reverse=True)
+            for rev in revisions:
+                root = Path(rev.snapshot_path)
+                for candidate in (root / "POVBench", root):
+                    if (candidate / "artifacts").is_dir():
+                        return candidate
+    return None

@@ -1,0 +1,311 @@
+"""``export_training_set``: a POVBench-format dataset -> a training set on disk.
+
+The flow: load the dataset (problems reported, bad houses skipped), check no house is an
+evaluation house, assign houses to splits, plan the examples and their shards, then write each
+shard that is not already there (one after another, or as cluster tasks), and last the dataset
+card. ``export.json`` records the options and the plan: the same command resumes, and other
+options over an existing export are refused naming the option that differs.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from povagent.dataset.loader import Dataset, house_folders, load_dataset, load_house
+from povagent.dataset.models import CONDITIONS, Condition
+from povagent.dataset.problems import Problem
+from povagent.errors import DatasetError, PovagentError
+from povagent.train.examples import TrainingExample
+from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
+from povagent.train.facts import NoTeachingFrame, instance_facts
+from povagent.train.rationale import RATIONALES
+from povagent.train.shards import DEFAULT_SHARD_BYTES, PlannedExample, Shard, plan_shards, remove_stale_temporaries
+from povagent.train.splits import DEFAULT_SPLIT, assign_splits, parse_split
+
+FORMATS = ("hf", "messages")
+MANIFEST = "export.json"
+MANIFEST_VERSION = 1
+#: Where each format's shards go, and their suffix.
+FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl")}
+#: Estimated bytes of an example's text (question, rationale, facts) for shard planning.
+TEXT_BYTES = 8 * 1024
+
+
+class ExportError(PovagentError):
+    """An export cannot go on: an evaluation house, options that differ from the export's, ..."""
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """Everything that decides an export's bytes (recorded in ``export.json``)."""
+
+    format: str = "hf"
+    rationale: str = "s-cot"
+    split: str = DEFAULT_SPLIT
+    split_seed: int = 0
+    text_seed: int = 0
+    conditions: tuple[str, ...] = tuple(c.value for c in CONDITIONS)
+    max_shard_bytes: int = DEFAULT_SHARD_BYTES
+    exact_answers: bool = False
+
+    def check(self) -> None:
+        """Refuse values outside what the exporter knows, naming the option."""
+        if self.format not in FORMATS:
+            raise ExportError(f"--format {self.format!r}: one of {', '.join(FORMATS)}")
+        if self.rationale not in RATIONALES:
+            raise ExportError(f"--rationale {self.rationale!r}: one of {', '.join(RATIONALES)}")
+        if self.max_shard_bytes < 1024 * 1024:
+            raise ExportError(f"--max-shard-mb: a shard holds at least 1 MB (got {self.max_shard_bytes} bytes)")
+        for c in self.conditions:
+            if c not in {x.value for x in CONDITIONS}:
+                raise ExportError(f"--conditions {c!r}: one of a, b, c")
+        parse_split(self.split)
+
+
+@dataclass
+class ExportReport:
+    """What an export wrote: examples per split/condition/direction, shards, skips, exclusion."""
+
+    out: Path
+    examples: int = 0
+    shards: list[str] = field(default_factory=list)
+    shards_written: int = 0
+    counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
+    excluded: dict[str, str] = field(default_factory=dict)
+    evaluation_sources: list[str] = field(default_factory=list)
+    houses_by_split: dict[str, list[str]] = field(default_factory=dict)
+    seconds: float = 0.0
+
+
+def _conditions(options: ExportOptions) -> list[Condition]:
+    return [Condition(c) for c in options.conditions]
+
+
+def _plan(dataset: Dataset, splits: dict[str, str | None], options: ExportOptions, report: ExportReport) -> list[PlannedExample]:
+    """Every example to write, in export order (split, house, the loader's instance order)."""
+    planned: list[PlannedExample] = []
+    order = {"train": 0, "validation": 1, "test": 2}
+    houses = sorted((h for h in dataset.houses if splits.get(h) is not None), key=lambda h: (order[splits[h] or "train"], h))
+    for hid in houses:
+        house = dataset.houses[hid]
+        frame_bytes = {f.image_path: f.file.stat().st_size for f in house.frames}
+        for inst in dataset.instances(conditions=_conditions(options), houses=[hid]):
+            try:
+                instance_facts(inst, house.pairs[inst.pair_id])
+            except NoTeachingFrame as exc:
+                report.skipped[inst.id] = str(exc).partition(": ")[2]
+                continue
+            if options.format == "hf":
+                if inst.condition.uses_exploration_frames:
+                    size = sum(frame_bytes.get(f.image_path, 0) for f in inst.frames)
+                else:
+                    size = inst.frames[0].file.stat().st_size
+            else:
+                size = 0
+            planned.append(PlannedExample(inst.id, hid, splits[hid] or "train", size + TEXT_BYTES))
+    return planned
+
+
+def _manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Path) -> dict[str, Any]:
+    return {
+        "version": MANIFEST_VERSION,
+        "tool": "povagent export-train",
+        "dataset": str(dataset_root),
+        "options": {**asdict(options), "conditions": list(options.conditions)},
+        "shards": [{"name": s.name, "split": s.split, "examples": [e.id for e in s.examples]} for s in shards],
+    }
+
+
+def _check_resume(out: Path, manifest: dict[str, Any]) -> None:
+    """Refuse to resume an export made with other options, or from a dataset that changed."""
+    path = out / MANIFEST
+    try:
+        old = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise ExportError(f"{path}: unreadable ({exc}); remove the export folder or choose another --out") from None
+    old_options = old.get("options", {}) if isinstance(old, dict) else {}
+    for key, value in manifest["options"].items():
+        if old_options.get(key) != value:
+            raise ExportError(
+                f"{out} holds an export made with {key}={old_options.get(key)!r}, not {value!r}: "
+                "run with the same options to resume, or choose another --out"
+            )
+    if old.get("shards") != manifest["shards"]:
+        raise ExportError(f"{out}: the dataset's houses changed since this export began; choose another --out")
+
+
+def _prepare_out(out: Path, manifest: dict[str, Any]) -> None:
+    if (out / MANIFEST).exists():
+        _check_resume(out, manifest)
+    elif out.exists() and any(out.iterdir()):
+        raise ExportError(f"{out} is not empty and holds no export of ours: choose an empty or new folder")
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / f".{MANIFEST}.tmp"
+    tmp.write_text(json.dumps(manifest, indent=1) + "\n")
+    tmp.replace(out / MANIFEST)
+
+
+def shard_path(out: Path, fmt: str, shard_name: str) -> Path:
+    """Where a shard of format ``fmt`` is written."""
+    return out / FORMAT_FOLDERS[fmt][0] / shard_name
+
+
+def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOptions) -> int:
+    """Write one shard (a plain function of its inputs: the same bytes wherever it runs).
+
+    Loads only the shard's houses, builds their examples in plan order and writes them
+    atomically; returns the number of examples written.
+    """
+    from povagent.train.chat_jsonl import write_jsonl_shard
+    from povagent.train.examples import house_examples, make_strategy
+    from povagent.train.parquet import write_parquet_shard
+
+    root, target = Path(dataset_root), Path(out)
+    wanted = {e.id for e in shard.examples}
+    problems: list[Problem] = []
+    houses = {}
+    for hid in shard.houses:
+        house = load_house(root / "artifacts" / hid, root, problems, check_images=False)
+        if house is None:
+            raise DatasetError(f"{root / 'artifacts' / hid}: the house could not be loaded for shard {shard.name}")
+        houses[hid] = house
+    dataset = Dataset(root, None, houses, problems)
+    strategy = make_strategy(options.rationale)
+
+    def examples() -> Iterator[TrainingExample]:
+        for hid in shard.houses:
+            insts = [i for i in dataset.instances(conditions=_conditions(options), houses=[hid]) if i.id in wanted]
+            for ex in house_examples(houses[hid], insts, options.rationale, strategy, options.text_seed, options.exact_answers):
+                if isinstance(ex, tuple):
+                    raise DatasetError(f"{ex[0]}: planned for {shard.name} but cannot teach now ({ex[1]})")
+                yield ex
+
+    path = shard_path(target, options.format, shard.name)
+    if options.format == "hf":
+        n = write_parquet_shard(path, examples(), shard.split, options.rationale)
+    else:
+        n = write_jsonl_shard(path, target, examples(), shard.split, options.rationale)
+    if n != len(shard.examples):
+        path.unlink(missing_ok=True)
+        raise DatasetError(f"{shard.name}: planned {len(shard.examples)} examples, wrote {n}")
+    return n
+
+
+def _shard_complete(out: Path, options: ExportOptions, shard: Shard) -> bool:
+    path = shard_path(out, options.format, shard.name)
+    if not path.is_file():
+        return False
+    if options.format == "hf":
+        from povagent.train.parquet import parquet_rows
+
+        try:
+            return parquet_rows(path) == len(shard.examples)
+        except Exception:  # a file that is not Parquet: written again
+            return False
+    from povagent.train.chat_jsonl import jsonl_rows
+
+    return jsonl_rows(path) == len(shard.examples)
+
+
+ShardProgress = Callable[[Shard, int, int], None]
+
+
+def export_training_set(
+    dataset: str | Path,
+    out: str | Path,
+    options: ExportOptions | None = None,
+    exclude: Sequence[str | Path] = (),
+    drop_excluded: bool = False,
+    check_release: bool = True,
+    cluster: Any = None,
+    progress: ShardProgress | None = None,
+) -> ExportReport:
+    """Export ``dataset`` as a training set under ``out`` (see the module docstring).
+
+    ``exclude``: evaluation datasets whose houses must not be exported (by content hash and
+    generator identity); the release is checked too when it is in the local Hugging Face cache
+    (``check_release``). A match is an :class:`ExportError` naming the houses, unless
+    ``drop_excluded`` (then they are left out and listed in the card). ``cluster``: a
+    ``--cluster`` value or a ``distributed.Client`` to write shards as cluster tasks.
+    """
+    options = options or ExportOptions()
+    options.check()
+    start = time.perf_counter()
+    root, target = Path(dataset), Path(out)
+    ds = load_dataset(root, check_images=True)
+    report = ExportReport(out=target)
+    evaluation = EvaluationSets()
+    release = cached_release_root() if check_release else None
+    if release is not None:
+        if release.resolve() == root.resolve():
+            raise ExportError(f"{root} is the POVBench release, an evaluation set: it cannot be a training set")
+        evaluation.add(f"release ({release})", dataset_identities(release))
+    for ex in exclude:
+        ex_root = Path(ex)
+        if not house_folders(ex_root):
+            raise ExportError(f"--exclude {ex_root}: no house folders under {ex_root / 'artifacts'}")
+        evaluation.add(str(ex_root), dataset_identities(ex_root))
+    report.evaluation_sources = list(evaluation.sources)
+    for ident in dataset_identities(root):
+        hit = evaluation.match(ident)
+        if hit is not None and ident.house_id in ds.houses:
+            report.excluded[ident.house_id] = hit
+    if report.excluded and not drop_excluded:
+        shown = ", ".join(f"{h} (= {m})" for h, m in list(report.excluded.items())[:5])
+        more = f" and {len(report.excluded) - 5} more" if len(report.excluded) > 5 else ""
+        raise ExportError(
+            f"{len(report.excluded)} house(s) of {root} are evaluation houses: {shown}{more}; "
+            "a training set never holds them (--drop-excluded leaves them out)"
+        )
+    keep = [h for h in sorted(ds.houses) if h not in report.excluded]
+    splits = assign_splits(keep, parse_split(options.split), options.split_seed)
+    for hid, split in splits.items():
+        if split is not None:
+            report.houses_by_split.setdefault(split, []).append(hid)
+    planned = _plan(ds, splits, options, report)
+    shards = plan_shards(planned, options.max_shard_bytes, FORMAT_FOLDERS[options.format][1])
+    manifest = _manifest(options, shards, root)
+    _prepare_out(target, manifest)
+    remove_stale_temporaries(target)
+    todo = [s for s in shards if not _shard_complete(target, options, s)]
+    done = len(shards) - len(todo)
+    if cluster is None:
+        for shard in todo:
+            write_shard(str(root), str(target), shard, options)
+            done += 1
+            if progress:
+                progress(shard, done, len(shards))
+    else:
+        from povagent.cluster.client import cluster_client
+
+        with cluster_client(cluster) as client:
+            assert client is not None
+            futures = client.map(write_shard, [str(root)] * len(todo), [str(target)] * len(todo), todo, [options] * len(todo), pure=False, retries=2)
+            for shard, future in zip(todo, futures):
+                future.result()
+                done += 1
+                if progress:
+                    progress(shard, done, len(shards))
+    report.shards = [s.name for s in shards]
+    report.shards_written = len(todo)
+    report.examples = len(planned)
+    ids = {e.id: e for e in planned}
+    counts: dict[str, Counter[str]] = {"split": Counter(), "condition": Counter(), "direction": Counter()}
+    for e in ids.values():
+        _house, _pair, direction, condition = e.id.split("/")
+        counts["split"][e.split] += 1
+        counts["condition"][condition] += 1
+        counts["direction"][direction] += 1
+    report.counts = {k: dict(sorted(v.items())) for k, v in counts.items()}
+    from povagent.train.card import write_card
+
+    write_card(target, root, ds, options, report, shards)
+    report.seconds = time.perf_counter() - start
+    return report

@@ -1,0 +1,133 @@
+"""The ``hf`` format: Hugging Face ``datasets`` Parquet shards with the images embedded.
+
+Each row is one example: ``messages`` (the chat turns in TRL's typed-content shape: the user's
+text parts and ``{"type": "image"}`` placeholders in the benchmark's order, then the assistant's
+answer), ``images`` (the ``Image`` feature: PNG bytes and the image's path in the house), the
+benchmark's ``question`` text and ``answer`` JSON, the ``rationale``, the stated ``facts`` (JSON)
+and the instance's fields. The features are written into the Parquet schema's ``huggingface``
+metadata, exactly where ``datasets`` reads them, so ``load_dataset("parquet", ...)`` decodes the
+images without being told. Needs ``pyarrow`` (the ``train`` extra).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from povagent.train.examples import TrainingExample
+from povagent.train.shards import atomic_file
+
+#: Rows buffered before a row group is written: a handful of 30-frame examples, so memory stays flat.
+ROW_GROUP_BYTES = 16 * 1024 * 1024
+
+_STRING = {"dtype": "string", "_type": "Value"}
+
+#: The ``datasets`` features of a row, as ``Features.to_dict()`` writes them.
+FEATURES: dict[str, Any] = {
+    "id": _STRING,
+    "house_id": _STRING,
+    "pair_id": _STRING,
+    "direction": _STRING,
+    "condition": _STRING,
+    "split": _STRING,
+    "messages": {
+        "feature": {"role": _STRING, "content": {"feature": {"type": _STRING, "text": _STRING}, "_type": "List"}},
+        "_type": "List",
+    },
+    "images": {"feature": {"_type": "Image"}, "_type": "List"},
+    "question": _STRING,
+    "answer": _STRING,
+    "rationale": _STRING,
+    "facts": _STRING,
+}
+
+MISSING_PYARROW = "the hf format writes Parquet with pyarrow: pip install 'povagent[train]'"
+
+
+def _pyarrow() -> Any:
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        from povagent.errors import PovagentError
+
+        raise PovagentError(MISSING_PYARROW) from None
+    return pa, pq
+
+
+def arrow_schema() -> Any:
+    """The Arrow schema of a row, with the ``datasets`` features in its metadata."""
+    pa, _ = _pyarrow()
+    text = pa.string()
+    content = pa.list_(pa.struct([("type", text), ("text", text)]))
+    fields = [(name, text) for name in ("id", "house_id", "pair_id", "direction", "condition", "split")]
+    fields += [
+        ("messages", pa.list_(pa.struct([("role", text), ("content", content)]))),
+        ("images", pa.list_(pa.struct([("bytes", pa.binary()), ("path", text)]))),
+    ]
+    fields += [(name, text) for name in ("question", "answer", "rationale", "facts")]
+    meta = {"huggingface": json.dumps({"info": {"features": FEATURES}})}
+    return pa.schema(fields, metadata=meta)
+
+
+def chat_messages(example: TrainingExample) -> list[dict[str, Any]]:
+    """The example as TRL's typed-content turns: text parts and image placeholders in order."""
+    content = [{"type": "image", "text": None} if p.image is not None else {"type": "text", "text": p.text} for p in example.parts]
+    return [
+        {"role": "user", "content": content},
+        {"role": "assistant", "content": [{"type": "text", "text": example.answer}]},
+    ]
+
+
+def example_row(example: TrainingExample, split: str, rationale: str) -> dict[str, Any]:
+    """One Parquet row (images read from their files)."""
+    return {
+        "id": example.id,
+        "house_id": example.house_id,
+        "pair_id": example.pair_id,
+        "direction": example.direction,
+        "condition": example.condition,
+        "split": split,
+        "messages": chat_messages(example),
+        "images": [{"bytes": f.read_bytes(), "path": f"{example.house_id}/{p}"} for f, p in zip(example.image_files, example.image_paths)],
+        "question": example.question_text,
+        "answer": example.answer_json,
+        "rationale": rationale,
+        "facts": json.dumps(example.facts_record(), sort_keys=True),
+    }
+
+
+def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: str, rationale: str) -> int:
+    """Write ``examples`` to the Parquet file ``path`` atomically; returns the row count."""
+    pa, pq = _pyarrow()
+    schema = arrow_schema()
+    rows: list[dict[str, Any]] = []
+    buffered = 0
+    count = 0
+    with atomic_file(path) as handle:
+        # no dictionary and no min/max statistics for the image bytes: both would store image
+        # data a second time (a dictionary page before the fallback, statistics per page)
+        small = ["id", "house_id", "pair_id", "direction", "condition", "split", "rationale"]
+        writer = pq.ParquetWriter(handle, schema, compression="zstd", use_dictionary=small, write_statistics=small)
+        try:
+            for example in examples:
+                row = example_row(example, split, rationale)
+                rows.append(row)
+                buffered += sum(len(i["bytes"]) for i in row["images"]) + len(row["question"]) + len(row["answer"])
+                count += 1
+                if buffered >= ROW_GROUP_BYTES:
+                    writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+                    rows, buffered = [], 0
+            if rows or count == 0:
+                writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+        finally:
+            writer.close()
+    return count
+
+
+def parquet_rows(path: Path) -> int:
+    """Rows in a written Parquet file (from its footer, without reading the data)."""
+    _, pq = _pyarrow()
+    return int(pq.ParquetFile(path).metadata.num_rows)
