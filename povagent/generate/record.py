@@ -147,9 +147,7 @@ def write_house_atomically(
     bytes are the same by construction). Returns the house's record.
     """
     out = Path(out)
-    staging = out / PARTIAL / f"{house_id(index)}.{uuid.uuid4().hex}"
-    staging.mkdir(parents=True)
-    made = staging.stat().st_ino
+    staging, made = _staging(out, index)
     try:
         summary = write(staging)
         record = HouseRecord(index, options.record(), summary)
@@ -166,9 +164,7 @@ def place_house_files(out: Path, index: int, files: Mapping[str, bytes]) -> Hous
     The files must include the record; a path leaving the house folder is refused.
     """
     out = Path(out)
-    staging = out / PARTIAL / f"{house_id(index)}.{uuid.uuid4().hex}"
-    staging.mkdir(parents=True)
-    made = staging.stat().st_ino
+    staging, made = _staging(out, index)
     try:
         for rel, data in sorted(files.items()):
             target = (staging / rel).resolve()
@@ -190,9 +186,25 @@ def house_files(folder: Path) -> dict[str, bytes]:
     return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _place(staging: Path, made: int, final: Path, record: HouseRecord) -> HouseRecord:
+#: The file a staging folder is born with, holding its token: a folder recreated under the same
+#: name (a writer's ``mkdir(parents=True)`` after another run cleared ``.partial/``, even on a
+#: reused inode number) lacks it, so a house missing its first files is never placed.
+STAGING_TOKEN = ".staging"
+
+
+def _staging(out: Path, index: int) -> tuple[Path, str]:
+    """A fresh staging folder for house ``index`` and the token written into it first."""
+    token = uuid.uuid4().hex
+    staging = out / PARTIAL / f"{house_id(index)}.{token}"
+    staging.mkdir(parents=True)
+    (staging / STAGING_TOKEN).write_text(token)
+    return staging, token
+
+
+def _place(staging: Path, made: str, final: Path, record: HouseRecord) -> HouseRecord:
     try:
-        still_ours = staging.stat().st_ino == made
+        still_ours = (staging / STAGING_TOKEN).read_text() == made
+        (staging / STAGING_TOKEN).unlink()
     except OSError:
         still_ours = False
     if not still_ours:

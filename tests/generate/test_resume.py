@@ -157,3 +157,25 @@ def test_a_cluster_without_the_extra_is_one_line_naming_it_and_writes_nothing(tm
     assert done.returncode == 2
     assert done.stderr.strip() == "error: Dask is not installed: --cluster needs the cluster extra, pip install 'povagent[cluster]'"
     assert not out.exists()
+
+
+def test_a_staging_folder_recreated_after_another_run_cleared_it_is_never_placed(tmp_path):
+    """A stale writer (its client killed) goes on writing after a re-run cleared ``.partial/``:
+    its writes recreate the folder (``mkdir(parents=True)``), possibly on the same inode number,
+    without the files it wrote first. That half house must not be renamed into place."""
+    from povagent.generate.pipeline import HouseSummary
+    from povagent.generate.record import GenerationOptions, clear_partial, house_folder, write_house_atomically
+
+    out = tmp_path / "data"
+    options = GenerationOptions(version="test", seed=0, frames=1, with_render=False, judge="physical-rules")
+
+    def stale_write(folder: Path) -> HouseSummary:
+        (folder / "first.png").write_bytes(b"written before the clear")
+        clear_partial(out)  # another run starts and clears what it takes for leftovers
+        (folder / "exploration_images").mkdir(parents=True)  # what write_png does next
+        (folder / "exploration_images" / "frame_000.png").write_bytes(b"written after")
+        return HouseSummary(0, "train_house_00000", 1, 1, 1, 1)
+
+    with pytest.raises(RuntimeError, match="removed while the house was written"):
+        write_house_atomically(out, 0, options, stale_write)
+    assert not house_folder(out, 0).exists()
