@@ -415,6 +415,7 @@ def run_cell(config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str
     shown: progress is read from the journal by the client.
     """
     main = config.cache_path()
+    claim_folder(Path(config.output), "run")  # marked ours before the cache shard is made in it
     cache = ResponseCache(Path(config.output) / CELL_CACHE_SHARD, read_also=main) if main is not None else None
     datasets, images = _shared(sweep_id, config) if sweep_id is not None else ({}, None)
     try:

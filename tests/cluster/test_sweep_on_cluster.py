@@ -17,6 +17,7 @@ from povagent.cli import app
 from povagent.engine.cache import ResponseCache
 from povagent.errors import ClusterError, ConfigError
 from povagent.run.folder_lock import folder_lock
+from povagent.run.run_folder import claim_folder
 from povagent.run.progress import QuietProgress
 from povagent.run.sweep import CELL_CACHE_SHARD, expand_sweep, run_sweep
 
@@ -100,7 +101,8 @@ def test_images_served_over_http_are_refused_before_any_cluster_starts(write_swe
 def test_a_failing_cell_is_reported_and_the_others_finish(shared_dask_cluster, write_sweep, tmp_path) -> None:
     path = write_sweep(tmp_path / "failing")
     held = tmp_path / "failing" / "b"
-    held.mkdir(parents=True)
+    claim_folder(tmp_path / "failing", "sweep")  # the sweep's folders, marked as povagent's own
+    claim_folder(held, "run")
     with folder_lock(held):  # another process runs cell b: its task raises, twice (one retry)
         result = CliRunner().invoke(app, ["sweep", str(path), "--quiet", "--cluster", shared_dask_cluster.address])
     assert result.exit_code == 4, result.output

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import html
 import re
+import shutil
 from pathlib import Path
 
 import pytest
@@ -34,10 +35,11 @@ def two_turn_report(tmp_path_factory):
     root = tmp_path_factory.mktemp("transcript")
     release = write_release(root / "dataset", houses=1, pairs=1, pair_directions=1, frames=3)
     pipeline = root / "pipeline.yaml"
+    shutil.copy(TWO_TURNS, root / TWO_TURNS.name)  # a config loads .py plugins only from its own folder
     with LoopbackServer(reply=answer, max_lifetime_s=120) as server, pytest.MonkeyPatch.context() as mp:
         mp.setenv(KEY_VARIABLE, "sk-test")
         pipeline.write_text(yaml.safe_dump({
-            "plugins": [str(TWO_TURNS)], "dataset": {"path": str(release)}, "strategy": "check-twice", "parser": "official",
+            "plugins": [TWO_TURNS.name], "dataset": {"path": str(release)}, "strategy": "check-twice", "parser": "official",
             "backend": {"name": "litellm", "options": {"model": "openai/loopback-model", "api_base": server.url, "api_key_env": KEY_VARIABLE}},
             "instances": {"conditions": ["c"]}, "retry": {"attempts": 1}, "timeout": 20, "output": str(root / "run"),
         }))  # fmt: skip

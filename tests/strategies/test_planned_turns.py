@@ -5,6 +5,7 @@ and ``sweep --dry-run`` counts each turn's requests, which the loopback server t
 from __future__ import annotations
 
 import re
+import shutil
 from pathlib import Path
 
 import pytest
@@ -32,7 +33,8 @@ def release(tiny_dataset) -> Path:
 
 def write_pipeline(folder: Path, release: Path, backend, **keys) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
-    data = {"plugins": [str(TWO_TURNS)], "dataset": {"path": str(release)}, "backend": backend, "strategy": "check-twice",
+    shutil.copy(TWO_TURNS, folder / TWO_TURNS.name)  # a config loads .py plugins only from its own folder
+    data = {"plugins": [TWO_TURNS.name], "dataset": {"path": str(release)}, "backend": backend, "strategy": "check-twice",
             "parser": "official", "output": str(folder / "run"), **keys}
     path = folder / "pipeline.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False))
