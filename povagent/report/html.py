@@ -56,10 +56,18 @@ def template() -> str:
     return files("povagent.report").joinpath("assets", TEMPLATE).read_text(encoding="utf-8")
 
 
+#: Characters written as JSON ``\\u`` escapes in data embedded in the page: ``<``, ``>`` and ``&``
+#: could open ``</script>``, ``<!--`` or ``<script`` inside a script element (HTML reads those
+#: before JavaScript does); U+2028 and U+2029 end a line in older JavaScript. Each may stand
+#: only inside a JSON string, where its escape decodes to the same character.
+SCRIPT_ESCAPES = str.maketrans({c: f"\\u{ord(c):04x}" for c in "<>&\u2028\u2029"})
+
+
 def script_json(data: Any) -> str:
-    """JSON safe inside ``<script type="application/json">`` (no ``</script>`` break-out)."""
-    text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
-    return text.replace("</", "<\\/").replace("<!--", "<\\!--")
+    """``data`` as JSON that is safe inside a ``<script>`` element and reads back as ``data``:
+    no markup character, whatever text a sentence or a model answer holds (see
+    :data:`SCRIPT_ESCAPES`); both the page's embedded data and the answers files use it."""
+    return json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False).translate(SCRIPT_ESCAPES)
 
 
 def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str, str]]] | None = None) -> str:
