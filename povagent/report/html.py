@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import html
 import json
+import math
 import re
 from datetime import UTC, datetime
 from importlib.resources import files
@@ -66,8 +67,26 @@ SCRIPT_ESCAPES = str.maketrans({c: f"\\u{ord(c):04x}" for c in "<>&\u2028\u2029"
 def script_json(data: Any) -> str:
     """``data`` as JSON that is safe inside a ``<script>`` element and reads back as ``data``:
     no markup character, whatever text a sentence or a model answer holds (see
-    :data:`SCRIPT_ESCAPES`); both the page's embedded data and the answers files use it."""
-    return json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False).translate(SCRIPT_ESCAPES)
+    :data:`SCRIPT_ESCAPES`); both the page's embedded data and the answers files use it.
+
+    A number that is not finite (an official reading's overflowing coordinate) has no JSON
+    form: it is written as its JavaScript name, ``"Infinity"``, ``"-Infinity"`` or ``"NaN"``,
+    which the page's ``Number()`` reads back as the number."""
+    try:
+        text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # a number that is not finite: named (the walk costs only then)
+        text = json.dumps(_finite(data), ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    return text.translate(SCRIPT_ESCAPES)
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
 
 
 def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str, str]]] | None = None) -> str:
