@@ -46,7 +46,7 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
-from povagent.interfaces import Backend, Parser, Scorer, Strategy
+from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
@@ -471,6 +471,21 @@ class PipelineRun:
             )
             raise StopRun(self._stopped)
 
+    async def _start_backend(self, backend: Backend) -> None:
+        """``backend.start()``; a permanent error there (an unset API key variable) stops the run
+        as a failed first request does: one line, nothing sent (raises StopRun)."""
+        try:
+            await backend.start()
+        except PermanentBackendError as exc:
+            where = self._redactor.text(backend_label(backend))
+            kind = f"{exc.kind}: " if exc.kind else ""
+            self._stopped = self._redactor.text(
+                f"the backend cannot start ({kind}{exc}); {where}: nothing was sent. "
+                "Fix the key, the model name or the server, then run the same command again to resume"
+            )
+            self._log.error("backend_start_failed", error=str(exc), kind=exc.kind)
+            raise StopRun(self._stopped) from None
+
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
         """Run every pending key; write the run folder; return the summary."""
@@ -534,7 +549,7 @@ class PipelineRun:
         try:
             if pending:
                 # Client libraries load before any request's clock starts (litellm: seconds).
-                await backend.start()
+                await self._start_backend(backend)
             await self._fan_out(pending)
             interrupted = False
         except StopRun:

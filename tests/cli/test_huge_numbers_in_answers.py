@@ -19,11 +19,11 @@ pytestmark = pytest.mark.timeout(300)
 
 BIG = "9" * 400
 ANSWERS = [
-    ("train_house_00000/0/right/a", '{"selected_image": %s, "x": 10, "y": 10}' % BIG),
-    ("train_house_00000/0/right/b", '{"selected_image": 1, "x": %s, "y": -%s}' % (BIG, BIG)),
-    ("train_house_00000/0/right/c", '{"x": 1e400, "y": %s.5}' % BIG),
-    ("train_house_00000/0/left/a", "Image %s: [(%s, 0.5)]" % (BIG, BIG)),
-    ("train_house_00000/0/left/c", "[(0.%s, 1e400), (0.5, 0.5)]" % BIG),
+    ("train_house_00000/0/right/a", f'{{"selected_image": {BIG}, "x": 10, "y": 10}}'),
+    ("train_house_00000/0/right/b", f'{{"selected_image": 1, "x": {BIG}, "y": -{BIG}}}'),
+    ("train_house_00000/0/right/c", f'{{"x": 1e400, "y": {BIG}.5}}'),
+    ("train_house_00000/0/left/a", f"Image {BIG}: [({BIG}, 0.5)]"),
+    ("train_house_00000/0/left/c", f"[(0.{BIG}, 1e400), (0.5, 0.5)]"),
 ]
 
 

@@ -16,12 +16,11 @@ from pathlib import Path
 
 import pytest
 import yaml
+from test_report_html import body_attr, cards, dump  # the Chromium helpers
 
 from povagent.report.build import write_report
 from povagent.report.html import script_json
 from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
-
-from test_report_html import body_attr, cards, dump  # the Chromium helpers
 
 pytestmark = pytest.mark.timeout(300)
 
