@@ -29,6 +29,7 @@ import contextlib
 import hashlib
 import re
 import socket
+import sys
 import threading
 import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -183,7 +184,10 @@ class _Server(ThreadingHTTPServer):
                 self.owner._idle_since.pop(request, None)
 
     def handle_error(self, request: Any, client_address: Any) -> None:
-        """A client gone mid-answer (or a connection closed to make room) is not a server error."""
+        """A client gone mid-answer (or a connection closed to make room) is not a server error;
+        anything else is a bug and keeps its traceback."""
+        if not isinstance(sys.exc_info()[1], OSError):
+            super().handle_error(request, client_address)
 
 
 class _Server6(_Server):
