@@ -331,13 +331,14 @@ class LoopbackServer:
             return
         server.shutdown()
         server.server_close()
-        # as a server process that exits: kept-alive connections close too, so a client's next
-        # request opens a new connection and is refused (not answered by a lingering thread)
+        # as a server that goes away: kept-alive connections close too, so a client's next
+        # request opens a new connection and is refused (not answered by a lingering thread).
+        # Only the reading side is shut: an answer being written still reaches its client.
         with self._lock:
             connections, self._connections = list(self._connections), set()
         for connection in connections:
             with contextlib.suppress(OSError):
-                connection.shutdown(socket.SHUT_RDWR)
+                connection.shutdown(socket.SHUT_RD)
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 
