@@ -6,6 +6,7 @@ povagent is a bug and keeps its traceback.
 
 from __future__ import annotations
 
+import errno
 from collections.abc import Sequence
 
 
@@ -31,6 +32,19 @@ class PredictionsError(PovagentError):
 
 class ResultsError(PovagentError):
     """A run's results file cannot be written (a full disk, a lost mount); rows already written stay."""
+
+    @classmethod
+    def cannot_write(cls, path: object, exc: BaseException) -> ResultsError:
+        """The one-line stop for a write that failed: ``path`` and why, and how to resume."""
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
+        return cls(
+            f"{path}: cannot write ({why}); the rows already written are kept: free space (or fix "
+            f"the folder) and run the same command again to resume"
+        )
+
+
+#: ``errno`` values of a write that found no room: a full disk, a full quota, a file size limit.
+NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 
 
 class GenerationError(PovagentError):

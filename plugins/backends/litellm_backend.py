@@ -48,7 +48,7 @@ from povagent.exchange.transport import ImageReferenceError
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.plugins import get_plugin_host, unknown_name_message
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
-from povagent_plugins.backends.litellm_errors import map_litellm_error
+from povagent_plugins.backends.litellm_errors import map_litellm_error, unreachable_for_good
 from povagent_plugins.backends.openai_messages import openai_messages
 
 #: Router constructor settings a pipeline may set (litellm.Router keyword arguments).
@@ -212,6 +212,9 @@ class LiteLLMBackend(Backend):
         #: attempts the Router makes after the first (the runner widens its timeout by them)
         self.inner_retries = int(opts.router_settings.get("num_retries", DEFAULT_ROUTER_RETRIES)) if self.retries_inside else 0
         self._router: Any = None
+        #: whether the server has ever answered (with anything): until then a refused connection
+        #: means nothing listens at the address, and is not retried (see :meth:`complete`)
+        self._reached = False
 
     # -- configuration ------------------------------------------------------------------------
     @staticmethod
@@ -381,7 +384,20 @@ class LiteLLMBackend(Backend):
             )
             if mapped is exc:
                 raise
+            if getattr(mapped, "kind", None) != "connection":
+                self._reached = True  # the server answered, if only with an error
+            elif not self._reached and (why := unreachable_for_good(exc)) is not None:
+                # nothing listens there (a wrong port, a server not started): retrying for a
+                # minute cannot help. Once the server has answered, a refusal is a restart and
+                # stays transient (retried within the run's retry policy).
+                raise PermanentBackendError(
+                    f"cannot reach {self._endpoint()} ({why}) before the server ever answered: "
+                    "start the server or fix api_base",
+                    status=getattr(mapped, "status", None),
+                    kind="connection",
+                ) from exc
             raise mapped from exc
+        self._reached = True
         latency = time.perf_counter() - started
         return Response(
             text=_text_of(response),
@@ -427,7 +443,11 @@ class LiteLLMBackend(Backend):
             if env:
                 value = os.environ.get(env)
                 if not value:
-                    raise PermanentBackendError(f"environment variable {env} (router api_key_env) is not set", kind="missing_key")
+                    raise PermanentBackendError(
+                        f"environment variable {env} (api_key_env of router deployment {dep.get('model_name') or params.get('model')}) "
+                        f"is not set: export the API key",
+                        kind="missing_key",
+                    )
                 params["api_key"] = value
             out.append({**dep, "model_name": self.model, "litellm_params": params})
         return out
@@ -436,14 +456,20 @@ class LiteLLMBackend(Backend):
         """Import litellm (seconds, the first time) in a worker thread before any request's
         timeout starts; a missing API key is found here, before the run fans out. litellm's
         base64 truncation for logging is skipped for our calls from here on whenever nothing
-        can read its logging payload (:mod:`povagent.engine.llm_logging`)."""
+        can read its logging payload (:mod:`povagent.engine.llm_logging`).
+
+        An ``api_key_env`` naming an unset variable (the backend's own, or a router
+        deployment's) is a :class:`PermanentBackendError` raised first, before the import: the
+        run stops at once, with nothing sent."""
+        if self.options.router is None:
+            self._api_key()
+        else:
+            self._deployments()
         if _LITELLM is None:
             await _import_litellm_off_loop()
         # a Router's group name is no litellm model string: warm up with a deployment's
         first = self.options.router[0]["litellm_params"]["model"] if self.options.router else self.model
         await asyncio.to_thread(warm_up_litellm, first)
-        if self.options.router is None:
-            self._api_key()
 
     async def aclose(self) -> None:
         """Drop the Router (its clients are litellm's shared, cached ones)."""

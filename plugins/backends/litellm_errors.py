@@ -10,6 +10,7 @@ traceback). Messages are scrubbed of the API key.
 from __future__ import annotations
 
 import email.utils
+import errno
 import re
 import time
 from types import ModuleType
@@ -174,3 +175,21 @@ def _connection_failure(exc: BaseException, openai: ModuleType, httpx: ModuleTyp
             found = str(link) or type(link).__name__
         link = link.__cause__ or link.__context__
     return found
+
+
+
+def unreachable_for_good(exc: BaseException) -> str | None:
+    """Why a connection failure cannot be a passing one, or ``None`` when it may be: a refused
+    connection (``ECONNREFUSED``: nothing listens at the address), or an address the HTTP
+    client will not use at all (a ``ValueError`` before any connection: e.g. credentials in
+    ``api_base`` beside the key's header). A reset, a dropped connection or a timeout may pass."""
+    seen: set[int] = set()
+    link: BaseException | None = exc
+    while link is not None and id(link) not in seen:
+        seen.add(id(link))
+        if isinstance(link, ConnectionRefusedError) or (isinstance(link, OSError) and link.errno == errno.ECONNREFUSED):
+            return "connection refused: nothing listens at that address"
+        if isinstance(link, ValueError) and not isinstance(link, UnicodeError):
+            return f"the HTTP client cannot use that address ({type(link).__name__}: {str(link)[:200]})"
+        link = link.__cause__ or link.__context__
+    return None

@@ -152,9 +152,23 @@ def _describe(error: Any, answer: dict[str, Any]) -> str:
         lo, hi = props.get("minimum"), props.get("maximum")
         value = answer.get(field)
         if lo is not None and hi is not None:
-            return f"{field}={value:g} outside [{lo:g}, {hi:g}]" if isinstance(value, (int, float)) else f"{field}={value!r} invalid"
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                return f"{field}={shown_number(value)} outside [{lo:g}, {hi:g}]"
+            return f"{field}={value!r} invalid"
         return f"{field}: {error.message}"
     return error.message
+
+
+def shown_number(value: float) -> str:
+    """A number of an answer, short enough for a reason: an integer too long to read (a 400-digit
+    frame index; no float holds it, and past 4,300 digits Python will not print it) is named by
+    its length, never converted."""
+    if isinstance(value, int) and abs(value) >= 10**15:
+        magnitude = abs(value)
+        digits = int(math.log10(magnitude)) + 1  # a float's estimate, exact after the correction
+        digits += (magnitude >= 10**digits) - (magnitude < 10 ** (digits - 1))
+        return f"{'a negative ' if value < 0 else 'a '}{digits}-digit integer"
+    return f"{value:g}"
 
 
 def judge(

@@ -45,10 +45,16 @@ for _name in COMMAND_MODULES:
 
 def main() -> None:
     """Console-script entry point: user-facing errors print a message, not a traceback."""
-    from povagent.errors import PovagentError
+    from povagent.errors import NO_ROOM_ERRNOS, PovagentError, ResultsError
 
     try:
         app()
     except PovagentError as exc:
         typer.echo(f"error: {exc}", err=True)
+        sys.exit(2)
+    except OSError as exc:
+        if exc.errno not in NO_ROOM_ERRNOS:
+            raise
+        # a full disk is the user's to fix, wherever the write was (a config copy, a report page)
+        typer.echo(f"error: {ResultsError.cannot_write(exc.filename or 'a file', exc)}", err=True)
         sys.exit(2)

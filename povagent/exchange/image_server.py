@@ -9,9 +9,14 @@ else:
 * a published file must lie inside one of the roots it was given (the dataset, the folder of
   derived images) once symlinks are resolved, when published and again when served: a
   symlink out of the dataset, or a file swapped for one later, is refused;
+* the bytes served are the bytes the URL names: a file whose content changed since it was
+  published (its SHA-256 is no longer the URL's hash) is refused with 409, never served;
 * it is bounded: at most ``max_connections`` requests are served at once (more are told
-  503) and four times as many connections are kept open (more are closed at once), each
-  socket times out after 30 s idle, and it stops with the run (a context manager).
+  503) and four times as many connections are kept open; a connection waiting for a request
+  is idle, and is closed after ``idle_timeout_s`` (5 s), or at once, oldest first, when a new
+  connection needs its place, so idle or slow clients can never lock a real one out (only
+  when every open connection is being served is a new one closed at once); a request being
+  sent times out after 30 s, and the server stops with the run (a context manager).
 
 It binds the address the user chose (``bind``), and hands out URLs under ``public_url`` (how
 the model server reaches it; by default ``http://<bind>``). It only reads files; it never
@@ -20,9 +25,13 @@ writes, lists directories, or follows a URL path to the file system.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import re
 import socket
+import sys
 import threading
+import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Sequence
@@ -73,9 +82,14 @@ def inside(path: Path, roots: Sequence[Path]) -> Path:
 
 class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
-    # a client that stops sending does not hold a thread for ever
+    # a client that stops reading the answer does not hold a thread for ever
     timeout = 30
     server: _Server
+
+    def handle_one_request(self) -> None:
+        """Wait for the next request at most the idle timeout (the connection is idle until served)."""
+        self.connection.settimeout(self.server.owner.idle_timeout_s)
+        super().handle_one_request()
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
@@ -93,9 +107,12 @@ class _Handler(BaseHTTPRequestHandler):
         if not owner._connections.acquire(blocking=False):
             self._send_status(503, "too many connections")
             return
+        owner._mark_busy(self.connection, True)
+        self.connection.settimeout(self.timeout)
         try:
             match = _HASHED_NAME.match(self.path.split("?", 1)[0])
-            entry = owner._published.get(match.group(1)) if match else None
+            named = match.group(1) if match else None
+            entry = owner._published.get(named) if named else None
             if entry is None:
                 owner.refused += 1
                 self._send_status(404, "not published")
@@ -107,6 +124,11 @@ class _Handler(BaseHTTPRequestHandler):
                 owner.refused += 1
                 self._send_status(403, "refused")
                 return
+            if hashlib.sha256(data).hexdigest() != named:
+                # changed since published (swapped inside the dataset): not the image the URL names
+                owner.refused += 1
+                self._send_status(409, "changed since published")
+                return
             # counted before the bytes go out: a client that has read the body sees the count
             owner.served += 1
             self.send_response(200)
@@ -117,6 +139,7 @@ class _Handler(BaseHTTPRequestHandler):
             if body:
                 self.wfile.write(data)
         finally:
+            owner._mark_busy(self.connection, False)
             owner._connections.release()
 
     def _send_status(self, status: int, text: str) -> None:
@@ -142,14 +165,13 @@ class _Server(QuietDisconnects, ThreadingHTTPServer):
     owner: StaticImageServer
 
     def process_request(self, request: Any, client_address: Any) -> None:
-        """One thread per connection, up to the bound; beyond it the connection is closed at once."""
+        """One thread per connection, up to the bound; at the bound the oldest idle connection
+        makes room, and only when none is idle is the new connection closed at once."""
         owner = self.owner
         with owner._lock:
-            if owner._open_connections >= owner.max_open_connections:
-                full = True
-            else:
-                full = False
-                owner._open_connections += 1
+            full = len(owner._idle_since) >= owner.max_open_connections and not owner._close_oldest_idle()
+            if not full:
+                owner._idle_since[request] = time.monotonic()
         if full:
             self.shutdown_request(request)
             return
@@ -161,7 +183,13 @@ class _Server(QuietDisconnects, ThreadingHTTPServer):
             super().process_request_thread(request, client_address)
         finally:
             with self.owner._lock:
-                self.owner._open_connections -= 1
+                self.owner._idle_since.pop(request, None)
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        """A client gone mid-answer (or a connection closed to make room) is not a server error;
+        anything else is a bug and keeps its traceback."""
+        if not isinstance(sys.exc_info()[1], OSError):
+            super().handle_error(request, client_address)
 
 
 class _Server6(_Server):
@@ -185,6 +213,7 @@ class StaticImageServer:
         bind: str = "127.0.0.1:0",
         public_url: str | None = None,
         max_connections: int = 64,
+        idle_timeout_s: float = 5.0,
     ) -> None:
         if not roots:
             raise ValueError("a static image server needs at least one root folder")
@@ -194,7 +223,12 @@ class StaticImageServer:
         self._connections = threading.BoundedSemaphore(max_connections)
         #: open (kept-alive) connections allowed, each holding a thread for at most its timeout
         self.max_open_connections = 4 * max_connections
-        self._open_connections = 0
+        #: how long a connection may wait for its next request before it is closed
+        self.idle_timeout_s = idle_timeout_s
+        #: open connections: since when each is idle (waiting for a request), ``None`` while served
+        self._idle_since: dict[Any, float | None] = {}
+        #: idle connections closed to make room for a new one
+        self.closed_idle = 0
         self._published: dict[str, tuple[Path, str]] = {}
         self._lock = threading.Lock()
         self._server: _Server | None = None
@@ -240,6 +274,28 @@ class StaticImageServer:
             return self._public_url
         host = f"[{self.host}]" if ":" in self.host else self.host
         return f"http://{host}:{self.port}"
+
+    @property
+    def _open_connections(self) -> int:
+        """Connections open now (idle or being served)."""
+        return len(self._idle_since)
+
+    def _mark_busy(self, connection: Any, busy: bool) -> None:
+        with self._lock:
+            if connection in self._idle_since:  # not if closed to make room meanwhile
+                self._idle_since[connection] = None if busy else time.monotonic()
+
+    def _close_oldest_idle(self) -> bool:
+        """Close the connection idle longest (under ``_lock``); ``False`` when none is idle."""
+        idle = [(since, id(c), c) for c, since in self._idle_since.items() if since is not None]
+        if not idle:
+            return False
+        _, _, oldest = min(idle, key=lambda t: (t[0], t[1]))
+        del self._idle_since[oldest]
+        with contextlib.suppress(OSError):  # its thread, blocked reading, sees the end and exits
+            oldest.shutdown(socket.SHUT_RDWR)
+        self.closed_idle += 1
+        return True
 
     # -- publishing ---------------------------------------------------------------------------
     def publish(self, path: str | Path, image_hash: str, media_type: str = "image/png") -> str:

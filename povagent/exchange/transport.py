@@ -22,7 +22,7 @@ from __future__ import annotations
 import abc
 import contextlib
 import os
-import tempfile
+import secrets
 import threading
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar, Iterator, Literal
@@ -111,8 +111,11 @@ class _ByReference(ImageTransport):
         if target.is_file():  # content-addressed: an existing file holds these very bytes
             return target
         self.cache_dir.mkdir(parents=True, exist_ok=True)
-        # written aside and renamed, so a model server never reads a half-written file
-        fd, tmp = tempfile.mkstemp(dir=self.cache_dir, prefix=f".{image_hash[:16]}-", suffix=".part")
+        # written aside and renamed, so a model server never reads a half-written file; made
+        # as an ordinary file is (0666 less the umask: 0644 under umask 022), not mkstemp's
+        # 0600, so a model server running as another user can read what it is sent
+        tmp = str(self.cache_dir / f".{image_hash[:16]}-{os.getpid()}-{secrets.token_hex(6)}.part")
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
         try:
             with os.fdopen(fd, "wb") as fh:
                 fh.write(images.encoded_bytes(image_hash))

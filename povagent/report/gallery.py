@@ -53,6 +53,7 @@ from PIL import Image, ImageDraw, UnidentifiedImageError
 from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
+from povagent.report.html import script_json
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"
@@ -580,12 +581,12 @@ def write_answer_chunks(
     for start in range(0, len(entries), chunk):
         part = entries[start : start + chunk]
         texts = [{k: e.pop(k) for k in keys if e.get(k)} for e in part]
-        body = json.dumps(texts, ensure_ascii=False, separators=(",", ":"))
+        body = script_json(texts)
         name = hashlib.sha256(body.encode()).hexdigest()
         path = folder / f"{name}.js"
         if not path.exists():
             # the name is a hash of the content, so an existing file already holds exactly this
-            script = "povAnswers(" + json.dumps(name) + "," + body.replace("</", "<\\/") + ");\n"
+            script = "povAnswers(" + json.dumps(name) + "," + body + ");\n"
             tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
             tmp.write_text(script, encoding="utf-8")
             tmp.replace(path)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import html
 import json
+import math
 import re
 from datetime import UTC, datetime
 from importlib.resources import files
@@ -56,10 +57,36 @@ def template() -> str:
     return files("povagent.report").joinpath("assets", TEMPLATE).read_text(encoding="utf-8")
 
 
+#: Characters written as JSON ``\\u`` escapes in data embedded in the page: ``<``, ``>`` and ``&``
+#: could open ``</script>``, ``<!--`` or ``<script`` inside a script element (HTML reads those
+#: before JavaScript does); U+2028 and U+2029 end a line in older JavaScript. Each may stand
+#: only inside a JSON string, where its escape decodes to the same character.
+SCRIPT_ESCAPES = str.maketrans({c: f"\\u{ord(c):04x}" for c in "<>&\u2028\u2029"})
+
+
 def script_json(data: Any) -> str:
-    """JSON safe inside ``<script type="application/json">`` (no ``</script>`` break-out)."""
-    text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
-    return text.replace("</", "<\\/").replace("<!--", "<\\!--")
+    """``data`` as JSON that is safe inside a ``<script>`` element and reads back as ``data``:
+    no markup character, whatever text a sentence or a model answer holds (see
+    :data:`SCRIPT_ESCAPES`); both the page's embedded data and the answers files use it.
+
+    A number that is not finite (an official reading's overflowing coordinate) has no JSON
+    form: it is written as its JavaScript name, ``"Infinity"``, ``"-Infinity"`` or ``"NaN"``,
+    which the page's ``Number()`` reads back as the number."""
+    try:
+        text = json.dumps(data, ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # a number that is not finite: named (the walk costs only then)
+        text = json.dumps(_finite(data), ensure_ascii=False, separators=(",", ":"), allow_nan=False)
+    return text.translate(SCRIPT_ESCAPES)
+
+
+def _finite(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value
 
 
 def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str, str]]] | None = None) -> str:

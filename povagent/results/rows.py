@@ -2,8 +2,9 @@
 
 A row holds everything needed to re-parse, re-score and report without calling a model again:
 the raw answer(s), the parse, the scores, and the cost. Never image bytes: only hashes.
-Rows are appended one JSON line each; a line cut short by a crash is skipped on read (and the
-key is then run again on resume).
+Rows are appended one JSON line each; a last line cut short by a crash or a full disk (at any
+byte) is skipped on read (and the key is then run again on resume); a damaged line anywhere else
+is an error naming the file and the line (see :func:`iter_rows`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any, Iterator
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
+from povagent.errors import PredictionsError
 from povagent.results.official_reading import OfficialReading
 
 
@@ -167,18 +169,44 @@ class ResultsWriter:
 
 
 def iter_rows(path: str | Path) -> Iterator[ResultRow]:
-    """Rows of a results file; a truncated or malformed line is skipped."""
+    """Rows of a results file, in file order.
+
+    A last line without its newline is torn (a kill or a full disk cut the write somewhere, even
+    inside a character): it is skipped, and the next writer cuts it. Blank lines are skipped.
+    Any other line that is not a row (a byte that is not UTF-8, text that is not JSON, JSON that
+    is not a row) stops the reading with a :class:`PredictionsError` naming the file and the
+    line: povagent never writes such a line, and a reader cannot know which key it held, so
+    skipping it would silently change a score, or make a resumed run answer that key twice.
+    """
     p = Path(path)
     if not p.exists():
         return
-    with open(p, encoding="utf-8") as fh:
-        for line in fh:
-            if not line.endswith("\n"):
+    with open(p, "rb") as fh:
+        for number, line in enumerate(fh, start=1):
+            if not line.endswith(b"\n"):
+                return  # torn: only the last line can lack its newline
+            if not line.strip():
                 continue
-            try:
-                yield ResultRow.model_validate_json(line)
-            except ValidationError:
-                continue
+            yield _read_line(p, number, line)
+
+
+def _read_line(path: Path, number: int, line: bytes) -> ResultRow:
+    """One complete line of a results file as a row, or a one-line error naming file and line."""
+    try:
+        line.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        problem = f"byte 0x{line[exc.start]:02x} at column {exc.start + 1} is not UTF-8"
+    else:
+        try:
+            return ResultRow.model_validate_json(line)
+        except ValidationError as exc:
+            first = exc.errors(include_url=False)[0]
+            where = ".".join(str(part) for part in first["loc"])
+            problem = f"not a result row ({where + ': ' if where else ''}{first['msg']})"
+    raise PredictionsError(
+        f"{path}: line {number}: {problem}; povagent never writes such a line (a damaged or hand-edited "
+        f"file): move that line out of the file (the other rows stay good) and run the command again"
+    )
 
 
 def read_rows(path: str | Path) -> list[ResultRow]:

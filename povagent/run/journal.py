@@ -87,7 +87,11 @@ class RowJournal(ResultsWriter):
             await self.drain()
         except BaseException:  # already reported by the run; closing must still happen
             pass
-        self.close()
+        try:
+            self.close()
+        except OSError:  # the tail of a batch that failed (a full disk): already in ``error``
+            if self.error is None:
+                raise
 
     def _write(self, text: str) -> None:
         if self._before_write is not None:
@@ -103,16 +107,18 @@ def drop_rows(results: Path, keys: set[str]) -> None:
     or the new one, never half of each); every other complete line is kept byte for byte.
 
     Each line is parsed to read its key: a key is never guessed from the line's text. A torn
-    last line (no newline: a kill mid-write) is dropped, as the writer would cut it anyway.
+    last line (no newline: a kill or a full disk mid-write, cut at any byte) is dropped, as the
+    writer would cut it anyway.
     """
     tmp = results.with_suffix(".jsonl.tmp")
-    with open(results, encoding="utf-8") as src, open(tmp, "w", encoding="utf-8") as dst:
+    # Bytes, not text: a torn tail may end inside a character, and every kept line is copied as is.
+    with open(results, "rb") as src, open(tmp, "wb") as dst:
         for line in src:
-            if not line.endswith("\n"):
+            if not line.endswith(b"\n"):
                 continue
             try:
                 record = json.loads(line)
-            except ValueError:
+            except (ValueError, RecursionError):  # not UTF-8, not JSON: not a row of ``keys``
                 record = None
             key = record.get("key") if isinstance(record, dict) else None
             if key not in keys:

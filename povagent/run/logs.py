@@ -13,6 +13,7 @@ This module formats and writes log events; it must not decide what to log.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -132,6 +133,9 @@ class _Sinks:
 
     def __init__(self, file: TextIO | None, console: Callable[[], TextIO] | None, console_level: int) -> None:
         self.file = file
+        #: the first write to the file that failed (a full disk): no further line goes there, and
+        #: :meth:`flush` raises it, so the runner writes no row whose events are not in the log
+        self.error: OSError | None = None
         self.console = console
         self.console_level = console_level
         self._lock = threading.Lock()
@@ -140,8 +144,11 @@ class _Sinks:
     def __call__(self, logger: Any, method: str, event: EventDict) -> Any:
         level = event.get("level", method)
         with self._lock:
-            if self.file is not None:
-                self.file.write(json.dumps(event, default=_default, separators=(",", ":")) + "\n")
+            if self.file is not None and self.error is None:
+                try:
+                    self.file.write(json.dumps(event, default=_default, separators=(",", ":")) + "\n")
+                except OSError as exc:  # logging must not fail the request that logs
+                    self.error = _named(exc, self.file)
             if self.console is not None and LEVELS.get(level, 20) >= self.console_level:
                 stream = self.console()
                 stream.write(self._render(logger, method, dict(event)) + "\n")
@@ -149,10 +156,22 @@ class _Sinks:
         raise structlog.DropEvent
 
     def flush(self) -> None:
-        """Flush the file sink."""
+        """Flush the file sink; raises the first write failure (an ``OSError`` naming the file)."""
         with self._lock:
-            if self.file is not None:
-                self.file.flush()
+            if self.file is not None and self.error is None:
+                try:
+                    self.file.flush()
+                except OSError as exc:
+                    self.error = _named(exc, self.file)
+            if self.error is not None:
+                raise self.error
+
+
+def _named(exc: OSError, file: TextIO) -> OSError:
+    """``exc`` with the file's name (a failed ``write`` on an open file does not carry it)."""
+    if exc.filename is None and exc.errno is not None:
+        return OSError(exc.errno, exc.strerror, getattr(file, "name", None))
+    return exc
 
 
 def _add_level(logger: Any, method: str, event: EventDict) -> EventDict:
@@ -219,10 +238,13 @@ class RunLog:
         self._sinks.flush()
 
     def close(self) -> None:
-        """Flush and close the file."""
-        self._sinks.flush()
+        """Flush and close the file. A write that failed (a full disk) does not raise here: the
+        runner has already stopped on it (see :meth:`flush`), and closing must still happen."""
+        with contextlib.suppress(OSError):
+            self._sinks.flush()
         if self._file is not None:
-            self._file.close()
+            with contextlib.suppress(OSError):  # the buffer's lines could not be written
+                self._file.close()
             self._file = None
             self._sinks.file = None
 

@@ -47,7 +47,7 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
-from povagent.interfaces import Backend, Parser, Scorer, Strategy
+from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
@@ -489,6 +489,21 @@ class PipelineRun:
             )
             raise StopRun(self._stopped)
 
+    async def _start_backend(self, backend: Backend) -> None:
+        """``backend.start()``; a permanent error there (an unset API key variable) stops the run
+        as a failed first request does: one line, nothing sent (raises StopRun)."""
+        try:
+            await backend.start()
+        except PermanentBackendError as exc:
+            where = self._redactor.text(backend_label(backend))
+            kind = f"{exc.kind}: " if exc.kind else ""
+            self._stopped = self._redactor.text(
+                f"the backend cannot start ({kind}{exc}); {where}: nothing was sent. "
+                "Fix the key, the model name or the server, then run the same command again to resume"
+            )
+            self._log.error("backend_start_failed", error=str(exc), kind=exc.kind)
+            raise StopRun(self._stopped) from None
+
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
         """Run every pending key; write the run folder; return the summary."""
@@ -550,14 +565,18 @@ class PipelineRun:
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
         interrupted = True
+        failing = False
         try:
             if pending:
                 # Client libraries load before any request's clock starts (litellm: seconds).
-                await backend.start()
+                await self._start_backend(backend)
             await self._fan_out(pending)
             interrupted = False
         except StopRun:
             interrupted = False
+        except BaseException:
+            failing = True  # the first failure is the one reported, not the summary's after it
+            raise
         finally:
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
@@ -569,7 +588,13 @@ class PipelineRun:
             )  # fmt: skip
             if self._stopped:
                 self._log.error("run_stopped", reason=self._stopped)
-            summary = self.write_summary(instances, runs, interrupted)
+            summary = self.summarize(instances, runs, interrupted)
+            try:
+                write_json(self.run_dir / SUMMARY, summary)
+            except OSError as exc:  # a full disk: reported below, once the run is closed
+                unwritten: OSError | None = exc
+            else:
+                unwritten = None
             self._log.info("run_end", interrupted=interrupted, stopped=self._stopped,
                            **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
             self.host.hooks.run_end(str(self.run_dir), summary)
@@ -579,6 +604,8 @@ class PipelineRun:
             finally:
                 if self._own_cache and self._cache is not None:
                     self._cache.close()
+            if unwritten is not None and not failing:
+                raise ResultsError.cannot_write(self.run_dir / SUMMARY, unwritten) from unwritten
         return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
@@ -609,10 +636,9 @@ class PipelineRun:
         except BaseException as exc:
             failed = self._journal.error
             if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
-                raise ResultsError(
-                    f"{self.run_dir / RESULTS}: cannot write rows ({type(failed).__name__}: {failed}); the rows "
-                    f"already written are kept: fix that and run the same command again to resume"
-                ) from failed
+                # the file that failed: results.jsonl, or log.jsonl flushed before each batch
+                path = getattr(failed, "filename", None) or self.run_dir / RESULTS
+                raise ResultsError.cannot_write(path, failed) from failed
             if isinstance(exc, BaseExceptionGroup):
                 stop = exc.subgroup(StopRun)
                 if stop is not None and stop.exceptions:
@@ -622,8 +648,8 @@ class PipelineRun:
                     raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
             raise
 
-    def write_summary(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
-        """Write ``summary.json``: official breakdown over the selected keys, plus run stats."""
+    def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
+        """What ``summary.json`` holds: official breakdown over the selected keys, plus run stats."""
         summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         summary["pipeline"] = {
             "backend": self._names[0],
@@ -639,7 +665,6 @@ class PipelineRun:
         summary["stopped"] = self._stopped
         summary["session"] = self.stats.as_dict()
         summary["images"] = {**dataclasses.asdict(self.images.stats), "distinct": self.images.distinct}
-        write_json(self.run_dir / SUMMARY, summary)
         return summary
 
 

@@ -229,5 +229,9 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
 def write_json(path: Path, data: Mapping[str, Any]) -> None:
     """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one)."""
     tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
+    try:
+        tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
+    except OSError:  # a full disk: the old file stays, and no half-written copy beside it
+        tmp.unlink(missing_ok=True)
+        raise
     os.replace(tmp, path)

@@ -30,6 +30,7 @@ import argparse
 import base64
 import binascii
 import collections
+import contextlib
 import hashlib
 import json
 import os
@@ -246,6 +247,18 @@ class _Server(QuietDisconnects, ThreadingHTTPServer):
     request_queue_size = 256
     owner: LoopbackServer
 
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Track each open connection, so :meth:`LoopbackServer.stop` can close it."""
+        with self.owner._lock:
+            self.owner._connections.add(request)
+        super().process_request(request, client_address)
+
+    def shutdown_request(self, request: Any) -> None:
+        """Forget a connection as it closes."""
+        with self.owner._lock:
+            self.owner._connections.discard(request)
+        super().shutdown_request(request)
+
 
 class LoopbackServer:
     """An OpenAI-compatible ``/v1/chat/completions`` server on 127.0.0.1 in a background thread.
@@ -289,6 +302,8 @@ class LoopbackServer:
         self._server: _Server | None = None
         self._thread: threading.Thread | None = None
         self._timer: threading.Timer | None = None
+        #: open client connections (kept alive between requests), closed by :meth:`stop`
+        self._connections: set[socket.socket] = set()
 
     # -- lifecycle ----------------------------------------------------------------------------
     def start(self) -> LoopbackServer:
@@ -318,6 +333,14 @@ class LoopbackServer:
             return
         server.shutdown()
         server.server_close()
+        # as a server that goes away: kept-alive connections close too, so a client's next
+        # request opens a new connection and is refused (not answered by a lingering thread).
+        # Only the reading side is shut: an answer being written still reaches its client.
+        with self._lock:
+            connections, self._connections = list(self._connections), set()
+        for connection in connections:
+            with contextlib.suppress(OSError):
+                connection.shutdown(socket.SHUT_RD)
         if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout=5)
 

@@ -219,22 +219,66 @@ def test_served_roots_are_resolved_so_a_symlinked_dataset_folder_works(tmp_path,
         assert get(url)[:2] == (200, PNG)
 
 
-def test_connections_beyond_the_open_bound_are_closed_at_once(dataset):
-    with StaticImageServer([dataset], bind="127.0.0.1:0", max_connections=1) as s:
+def _wait_until(condition, seconds: float = 10) -> None:
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.01)
+
+
+def test_idle_connections_never_lock_a_real_client_out(dataset):
+    # 300 clients that connect and say nothing (the default bound keeps 256 open): the oldest
+    # idle ones are closed to make room, and a real request is answered at once
+    with StaticImageServer([dataset], bind="127.0.0.1:0") as s:
         url = s.publish(dataset / "artifacts" / "house" / "frame_000.png", sha(PNG))
-        idle = [socket.create_connection(("127.0.0.1", s.port), timeout=5) for _ in range(s.max_open_connections)]
+        idle = []
         try:
-            deadline = time.monotonic() + 5
-            while s._open_connections < s.max_open_connections and time.monotonic() < deadline:
-                time.sleep(0.01)
-            extra = socket.create_connection(("127.0.0.1", s.port), timeout=5)
-            extra.sendall(f"GET /{sha(PNG)}.png HTTP/1.1\r\nHost: x\r\n\r\n".encode())
-            assert extra.recv(100) == b""  # closed without an answer
-            extra.close()
+            for _ in range(300):
+                idle.append(socket.create_connection(("127.0.0.1", s.port), timeout=5))
+            _wait_until(lambda: s._open_connections >= s.max_open_connections)
+            time.sleep(0.2)  # the server has accepted what it accepts
+            assert s._open_connections <= s.max_open_connections
+            t0 = time.monotonic()
+            assert get(url)[:2] == (200, PNG)
+            assert time.monotonic() - t0 < 2
+            assert idle[0].recv(10) == b""  # the oldest idle connection was the one closed
         finally:
             for c in idle:
                 c.close()
-        deadline = time.monotonic() + 5
-        while s._open_connections and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert get(url)[:2] == (200, PNG)  # room again once they closed
+
+
+def test_an_idle_connection_is_closed_after_the_idle_timeout(dataset):
+    with StaticImageServer([dataset], bind="127.0.0.1:0", idle_timeout_s=0.3) as s:
+        s.publish(dataset / "artifacts" / "house" / "frame_000.png", sha(PNG))
+        silent = socket.create_connection(("127.0.0.1", s.port), timeout=5)
+        try:
+            t0 = time.monotonic()
+            assert silent.recv(10) == b""  # closed by the server, long before the 5 s client timeout
+            assert time.monotonic() - t0 < 3
+        finally:
+            silent.close()
+        kept_alive = socket.create_connection(("127.0.0.1", s.port), timeout=5)
+        try:
+            kept_alive.sendall(f"GET /{sha(PNG)}.png HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+            answer = b""
+            while not answer.endswith(PNG):
+                part = kept_alive.recv(65536)
+                assert part, answer
+                answer += part
+            assert answer.startswith(b"HTTP/1.1 200")
+            assert kept_alive.recv(10) == b""  # idle again after its answer: closed too
+            _wait_until(lambda: s._open_connections == 0)
+        finally:
+            kept_alive.close()
+
+
+def test_a_file_changed_since_published_is_refused_not_served(server, dataset):
+    frame = dataset / "artifacts" / "house" / "frame_000.png"
+    url = server.publish(frame, sha(PNG))
+    swapped = b"\x89PNG\r\n\x1a\n" + b"another image " * 50
+    frame.write_bytes(swapped)
+    status, body, _ = get(url)
+    assert status == 409 and swapped not in body
+    assert raw_get(server, f"/{sha(PNG)}.png") == 409
+    frame.write_bytes(PNG)  # the published bytes again: served again
+    assert get(url)[:2] == (200, PNG)

@@ -230,3 +230,51 @@ def test_the_loopback_server_refuses_file_urls_outside_its_media_root(release, f
             with pytest.raises(PermanentBackendError, match="400|outside"):
                 send(backend_for(s), request, store)
         assert s.image_failures == 1 and s.images_fetched == 0
+
+
+@pytest.fixture
+def umask():
+    """``umask(mask)`` sets the process umask for the test; the old one is restored after."""
+    old = os.umask(0o022)
+    os.umask(old)
+    yield os.umask
+    os.umask(old)
+
+
+@pytest.mark.parametrize(("mask", "mode"), [(0o022, 0o644), (0o027, 0o640), (0o002, 0o664)])
+def test_derived_images_are_written_with_the_permissions_of_ordinary_files(frames, tmp_path, umask, mask, mode):
+    store = ImageStore()
+    derived = store.derive(store.add_file(frames[0]).image_hash, "marker", marked).image_hash
+    umask(mask)
+    FileTransport(tmp_path / "cache").url(store, derived)
+    assert (tmp_path / "cache" / f"{derived}.png").stat().st_mode & 0o777 == mode
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="switching to another user needs root")
+def test_a_model_server_running_as_another_user_reads_a_derived_image(frames, tmp_path_factory, umask):
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    store = ImageStore()
+    derived = store.derive(store.add_file(frames[0]).image_hash, "marker", marked).image_hash
+    shared = Path(tempfile.mkdtemp(prefix="povagent-shared-"))  # as a run folder others may read
+    try:
+        shared.chmod(0o755)
+        umask(0o022)
+        url = FileTransport(shared / "cache").url(store, derived)
+        nobody = 65534
+
+        def become_nobody() -> None:
+            os.setgid(nobody)
+            os.setuid(nobody)
+
+        # the system's Python: the virtual environment may not be readable by that user either
+        python = shutil.which("python3", path="/usr/bin:/bin") or sys.executable
+        read = subprocess.run([python, "-I", "-c", "import sys, urllib.request; sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())", url],
+                              capture_output=True, preexec_fn=become_nobody, timeout=30)
+        assert read.returncode == 0, read.stderr.decode()[-500:]
+        assert hashlib.sha256(read.stdout).hexdigest() == derived
+    finally:
+        shutil.rmtree(shared)

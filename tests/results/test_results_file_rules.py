@@ -2,11 +2,15 @@
 
 A kill mid-write leaves a last line without its newline; the next writer cuts it (its key runs
 again) so its own first row starts on a fresh line, and readers skip it meanwhile. A file may
-hold several rows of one key (a re-attempted failure): the last one is the row of that key.
+hold several rows of one key (a re-attempted failure): the last one is the row of that key. A
+malformed line before the last is an error naming it (never a silent skip).
 """
 
 from __future__ import annotations
 
+import pytest
+
+from povagent.errors import PredictionsError
 from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, iter_rows, read_rows
 
 
@@ -62,10 +66,18 @@ def test_rows_are_appended_after_existing_ones(tmp_path):
     assert [r.key for r in iter_rows(path)] == ["a#0", "b#0", "c#0"]
 
 
-def test_readers_skip_a_torn_last_line_and_a_malformed_one(tmp_path):
+def test_readers_skip_a_torn_last_line(tmp_path):
     path = tmp_path / "results.jsonl"
-    path.write_bytes(line(row("a#0")) + b'{"key": "broken"}\n' + b"not json\n" + line(row("b#0")) + line(row("c#0"))[:30])
+    path.write_bytes(line(row("a#0")) + line(row("b#0")) + line(row("c#0"))[:30])
     assert [r.key for r in iter_rows(path)] == ["a#0", "b#0"]
+
+
+def test_readers_stop_at_a_malformed_line_before_the_last(tmp_path):
+    # skipping it would change a score silently; tests/results/test_torn_journal.py has the cases
+    path = tmp_path / "results.jsonl"
+    path.write_bytes(line(row("a#0")) + b"not json\n" + line(row("b#0")))
+    with pytest.raises(PredictionsError, match="line 2: not a result row"):
+        list(iter_rows(path))
 
 
 def test_a_missing_results_file_has_no_rows(tmp_path):
