@@ -43,7 +43,12 @@ for _name in COMMAND_MODULES:
 
 
 def main() -> None:
-    """Console-script entry point: user-facing errors print a message, not a traceback."""
+    """Console-script entry point: user-facing errors print a message, not a traceback.
+
+    After ``run`` and ``sweep`` the process ends without the interpreter's teardown (seconds
+    after litellm): see :mod:`povagent.cli.process_exit`.
+    """
+    from povagent.cli.process_exit import exit_now, fast_exit_allowed
     from povagent.errors import PovagentError
 
     try:
@@ -51,3 +56,7 @@ def main() -> None:
     except PovagentError as exc:
         typer.echo(f"error: {exc}", err=True)
         sys.exit(2)
+    except SystemExit as done:
+        if fast_exit_allowed():
+            exit_now(done.code)
+        raise

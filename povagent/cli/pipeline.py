@@ -106,6 +106,9 @@ def run_command(
     except KeyboardInterrupt:
         typer.echo(f"interrupted: rows written so far are kept in {config.output}; run the same command to resume", err=True)
         raise typer.Exit(130) from None
+    from povagent.cli.process_exit import allow_fast_exit
+
+    allow_fast_exit()  # the run folder is complete and closed (see povagent.cli.process_exit)
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
@@ -246,6 +249,9 @@ def sweep_command(
         ])  # fmt: skip
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
+    from povagent.cli.process_exit import allow_fast_exit
+
+    allow_fast_exit()  # every cell's folder is complete and closed (see povagent.cli.process_exit)
     codes = [result.results[c.name].exit_code for c in result.cells]
     for cell in result.cells:
         res = result.results[cell.name]
