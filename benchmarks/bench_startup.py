@@ -140,7 +140,9 @@ def main() -> None:
     ap.add_argument("--data", type=Path, default=None, help="a dataset made by `povagent generate` (default: generate one house)")
     ap.add_argument("--model", default="openai/bench-model")
     args = ap.parse_args()
-    env = {**os.environ, KEY_ENV: "sk-bench"}
+    # litellm fetches its cost map from the network at import unless told not to: both contenders
+    # use the bundled one (povagent sets this itself; a bare script on a closed network must too)
+    env = {**os.environ, KEY_ENV: "sk-bench", "LITELLM_LOCAL_MODEL_COST_MAP": "True"}
     work = Path(tempfile.mkdtemp(prefix="bench-startup-"))
     try:
         data = args.data
