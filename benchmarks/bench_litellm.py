@@ -34,6 +34,7 @@ import argparse
 import asyncio
 import importlib.metadata
 import os
+import shutil
 import statistics
 import tempfile
 import time
@@ -204,6 +205,7 @@ async def main_async(args: argparse.Namespace) -> None:
         checked = stop_verifying_server(proc)
         print(f"server: {checked.get('requests')} requests, {checked.get('images_fetched')} images checked against the "
               f"dataset's SHA-256s, {checked.get('image_failures')} refused")
+        shutil.rmtree(workdir, ignore_errors=True)
 
 
 def main() -> None:
