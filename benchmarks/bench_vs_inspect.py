@@ -1,8 +1,8 @@
 """povagent's whole run (``inline``) against inspect_ai on one loopback server: requests/s and peak memory.
 
     python benchmarks/bench_vs_inspect.py --inspect-python /path/to/inspect-venv/bin/python
-                                          [--requests 256] [--rounds 4] [--concurrency 32]
-                                          [--memory 64,1024] [--model hosted_vllm/bench-model]
+                                          [--data FOLDER | --houses 7] [--requests 256] [--rounds 4]
+                                          [--concurrency 32] [--memory 64,1024] [--model hosted_vllm/bench-model]
 
 inspect_ai is not a povagent dependency, and cannot share its environment: inspect_ai 0.3.285's
 provider for OpenAI-compatible servers needs openai >= 3.4, litellm 1.103.7 needs openai < 3.
@@ -10,13 +10,15 @@ So inspect_ai runs under its own interpreter (``--inspect-python``: a virtual en
 only ``pip install inspect-ai==0.3.285 openai==3.54.0``); this script, the server and povagent
 run under the project's.
 
-A synthetic release of 8 houses with 30 distinct 512x512 frames each (~190 KB per PNG, like
-the real release) and 1,024 Inferred/Stated instances is written to a temporary folder. Each
-request carries the house's 30 frames inline (base64, ~7.5 MB of JSON), each after its
-"Image i:" label, then the sentence. The loopback OpenAI-compatible server runs in its own
-process and answers at once; each measurement runs in a fresh child process, so its peak RSS
-(``ru_maxrss``) is its own, and is timed from the run's start to its end (the tools' libraries,
-litellm and openai, imported before the clock starts):
+The frames are the release's own kind: a dataset made by ``povagent generate`` (``--data``, or
+``--houses`` houses of 30 frames generated into a temporary folder: 512x512 rendered PNGs,
+~40 Inferred/Stated instances per house). Each request carries its house's 30 frames inline
+(base64, ~7.5 MB of JSON), each after its "Image i:" label, then the sentence. The loopback
+OpenAI-compatible server runs in its own process and answers at once; it decodes every image
+of every request and refuses (400, which fails the run) any whose SHA-256 is not a frame of the
+dataset (``--expect-sha256``), and reports how many it checked. Each measurement runs in a
+fresh child process, so its peak RSS (``ru_maxrss``) is its own, and is timed from the run's
+start to its end (the tools' libraries, litellm and openai, imported before the clock starts):
 
 * ``povagent``: the whole engine, as a user runs it: ``PipelineRun`` over the first N
   instances (the ``basic`` strategy, ``json`` parser, ``official`` scorer, response cache,
@@ -32,7 +34,9 @@ litellm and openai, imported before the clock starts):
 
 Throughput: ``--rounds`` rounds of ``--requests`` requests each, the two tools in alternating
 order; the ratio is taken within each round (the machine is shared: rounds differ by what else
-runs) and the median reported. Memory: one run of each tool at every size in ``--memory``.
+runs) and the median reported, with each tool's client CPU per request (the child's user+system
+time over the run: the figure least moved by other load) and the load average. Memory: one run
+of each tool at every size in ``--memory`` (empty: none).
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ import tempfile
 import time
 from pathlib import Path
 
-HOUSES, PAIRS, PAIR_DIRECTIONS, FRAMES = 8, 128, 512, 30  # 1,024 Inferred/Stated instances
+FRAMES = 30  # per request: a generated house's exploration frames
 
 
 def _peak_rss_mb() -> float:
@@ -66,7 +70,7 @@ def _instances(data: Path, n: int) -> list:
     from povagent.dataset.loader import load_dataset
 
     chosen = [i for i in load_dataset(data).instances() if i.condition.value in ("a", "b")][:n]
-    assert len(chosen) == n, f"the data set has {len(chosen)} Inferred/Stated instances, {n} wanted"
+    assert len(chosen) == n, f"the data set has {len(chosen)} Inferred/Stated instances, {n} wanted: generate more --houses"
     return chosen
 
 
@@ -157,9 +161,9 @@ def run_inspect(samples_file: Path, out: Path, url: str, n: int, concurrency: in
 def child(args: argparse.Namespace) -> None:
     out = Path(tempfile.mkdtemp(prefix=f"bench-{args.child}-", dir=args.workdir))
     if args.child == "povagent":
-        figures = run_povagent(Path(args.data), out, args.url, args.n, args.concurrency, args.model)
+        figures = run_povagent(Path(args.child_data), out, args.url, args.n, args.concurrency, args.model)
     else:
-        figures = run_inspect(Path(args.data), out, args.url, args.n, args.concurrency, args.inspect_images)  # --data: the samples file
+        figures = run_inspect(Path(args.child_data), out, args.url, args.n, args.concurrency, args.inspect_images)  # --child-data: the samples file
     print(json.dumps(figures))
 
 
@@ -168,7 +172,7 @@ def measure(tool: str, n: int, args: argparse.Namespace, data: Path, url: str, w
     if tool == "inspect_ai":
         python, data = args.inspect_python, workdir / "samples.json"
     done = subprocess.run(
-        [python, __file__, "--child", tool, "--n", str(n), "--data", str(data), "--url", url,
+        [python, __file__, "--child", tool, "--n", str(n), "--child-data", str(data), "--url", url,
          "--workdir", str(workdir), "--concurrency", str(args.concurrency), "--model", args.model,
          "--inspect-images", args.inspect_images],
         capture_output=True, text=True,
@@ -183,7 +187,9 @@ def main() -> None:
     ap.add_argument("--requests", type=int, default=256)
     ap.add_argument("--rounds", type=int, default=4)
     ap.add_argument("--concurrency", type=int, default=32)
-    ap.add_argument("--memory", default="64,1024", help="request counts at which peak memory is measured")
+    ap.add_argument("--memory", default="64,1024", help="request counts at which peak memory is measured (empty: none)")
+    ap.add_argument("--data", type=Path, default=None, help="a dataset made by `povagent generate` (default: generate --houses)")
+    ap.add_argument("--houses", type=int, default=7, help="houses to generate when no --data is given")
     ap.add_argument("--model", default="hosted_vllm/bench-model", help="povagent's litellm model string")
     ap.add_argument("--inspect-python", default=sys.executable,
                     help="interpreter of an environment with inspect-ai (and openai >= 3.4) installed")
@@ -191,7 +197,7 @@ def main() -> None:
                     help="how inspect_ai is handed each frame: the PNG's path (read and encoded by inspect) or a ready data URL")
     ap.add_argument("--child", choices=["povagent", "inspect_ai"], help=argparse.SUPPRESS)
     ap.add_argument("--n", type=int, help=argparse.SUPPRESS)
-    ap.add_argument("--data", help=argparse.SUPPRESS)
+    ap.add_argument("--child-data", dest="child_data", help=argparse.SUPPRESS)
     ap.add_argument("--url", help=argparse.SUPPRESS)
     ap.add_argument("--workdir", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -200,26 +206,24 @@ def main() -> None:
         return
     import importlib.metadata
 
-    from povagent.testing.pytest_plugin import write_release
+    from generated_frames import frame_digests, generated_dataset, start_verifying_server, stop_verifying_server
 
     sizes = [int(s) for s in args.memory.split(",") if s]
     with tempfile.TemporaryDirectory(prefix="povagent-vs-inspect-") as tmp:
         workdir = Path(tmp)
-        data = workdir / "povbench"
-        t0 = time.perf_counter()
-        write_release(data, houses=HOUSES, pairs=PAIRS, pair_directions=PAIR_DIRECTIONS, frames=FRAMES, noise_rows=120)
+        data = generated_dataset(args.data, workdir, houses=args.houses)
         write_samples(data, workdir / "samples.json", max([args.requests, *sizes]))
-        print(f"wrote {HOUSES} houses x {FRAMES} frames, {2 * PAIR_DIRECTIONS} Inferred/Stated instances in "
-              f"{time.perf_counter() - t0:.0f} s")
-        server = subprocess.Popen([sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "7200"],
-                                  stdout=subprocess.PIPE, text=True)
-        url = server.stdout.readline().strip()  # type: ignore[union-attr]
+        digests = frame_digests(data, workdir / "frames.sha256")
+        print(f"dataset {data}: {len(digests)} generated PNGs "
+              f"(mean {sum(p.stat().st_size for p in digests.values()) / len(digests) / 1024:.0f} KB)")
+        server, url = start_verifying_server(workdir / "frames.sha256")
         try:
             inspect_version = subprocess.run([args.inspect_python, "-c", "import inspect_ai; print(inspect_ai.__version__)"],
                                              capture_output=True, text=True, check=True).stdout.strip()
             print(f"povagent ({args.model}, litellm {importlib.metadata.version('litellm')}) vs inspect_ai "
                   f"{inspect_version} | {args.requests} requests of {FRAMES} inline frames | "
                   f"concurrency {args.concurrency} | {args.rounds} rounds | inspect_ai handed frames as {args.inspect_images}")
+            print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())} ({os.cpu_count()} CPUs)")
             print(f"{'round':>5} {'povagent req/s':>15} {'inspect req/s':>14} {'ratio':>6}   "
                   f"{'CPU ms/req povagent':>19} {'inspect':>8}")
             rounds = []
@@ -231,9 +235,11 @@ def main() -> None:
                 print(f"{r:>5} {p['rps']:>15.2f} {i['rps']:>14.2f} {p['rps'] / i['rps']:>5.2f}x   "
                       f"{p['cpu_ms']:>19.1f} {i['cpu_ms']:>8.1f}", flush=True)
             memory = {tool: {n: measure(tool, n, args, data, url, workdir) for n in sizes} for tool in ("povagent", "inspect_ai")}
+            print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
         finally:
-            server.terminate()
-            server.wait(10)
+            checked = stop_verifying_server(server)
+            print(f"server: {checked.get('requests')} requests, {checked.get('images_fetched')} images checked against the "
+                  f"dataset's SHA-256s, {checked.get('image_failures')} refused")
     ratios = [p["rps"] / i["rps"] for p, i in rounds]
     print()
     print(f"median requests/s: povagent {statistics.median(p['rps'] for p, _ in rounds):.2f}, "
@@ -243,7 +249,12 @@ def main() -> None:
     print(f"povagent / inspect_ai (median of per-round ratios): {statistics.median(ratios):.2f}x "
           f"(rounds: {', '.join(f'{x:.2f}' for x in ratios)})  goal >= 1.5x: "
           f"{'met' if statistics.median(ratios) >= 1.5 else 'NOT met'}")
+    cpu_ratios = [i["cpu_ms"] / p["cpu_ms"] for p, i in rounds]
+    print(f"inspect_ai / povagent client CPU per request (median of per-round ratios): {statistics.median(cpu_ratios):.2f}x "
+          f"(rounds: {', '.join(f'{x:.2f}' for x in cpu_ratios)})")
     for tool, by_n in memory.items():
+        if not sizes:
+            break
         figures = ", ".join(f"{n} requests {by_n[n]['peak_rss_mb']:.0f} MB" for n in sizes)
         growth = by_n[sizes[-1]]["peak_rss_mb"] / by_n[sizes[0]]["peak_rss_mb"]
         print(f"peak RSS {tool}: {figures} (x{growth:.2f} from {sizes[0]} to {sizes[-1]})")

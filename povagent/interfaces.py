@@ -109,8 +109,18 @@ class Backend(abc.ABC):
     async def start(self) -> None:  # noqa: B027 - optional hook
         """Get ready before the first request (import a client library, open a pool).
 
-        Called once by the runner and the agent before any request's timeout starts, so a
-        slow import never counts against the first requests' time. The default does nothing.
+        Called once by the runner (when its first request misses the response cache) and
+        by the agent, before any request's timeout starts, so a slow import never counts
+        against the first requests' time. The default does nothing.
+        """
+
+    def preload(self) -> None:  # noqa: B027 - optional hook
+        """Start loading client libraries in the background and return at once.
+
+        The runner calls it at its very start when a request will surely be sent (no row in
+        the run folder yet, no response cache to answer from), so a slow import overlaps the
+        loading of the dataset; :meth:`start` still follows, and must wait for what this
+        began. The default does nothing.
         """
 
     async def aclose(self) -> None:  # noqa: B027 - optional hook

@@ -23,7 +23,9 @@ Images travel inline (base64 data URLs) unless the pipeline sends them by refere
 
 litellm is imported in :meth:`LiteLLMBackend.start` (the runner and the agent call it before any
 request's timeout starts), never when this module is imported, and in a worker thread: the
-import takes seconds, and the event loop must keep going meanwhile.
+import takes seconds, and the event loop must keep going meanwhile. A run that will surely send
+a request starts that import earlier, with :meth:`LiteLLMBackend.preload`, while it loads its
+dataset; a run whose every answer is in the response cache never imports litellm.
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
-from povagent.engine.llm_import import import_litellm, warm_up_litellm
+from povagent.engine.llm_import import import_litellm, preload_litellm, warm_up_litellm
 from povagent.engine.llm_logging import povagent_call, skip_truncation_when_unobserved
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
@@ -452,6 +454,15 @@ class LiteLLMBackend(Backend):
             out.append({**dep, "model_name": self.model, "litellm_params": params})
         return out
 
+    def preload(self) -> None:
+        """Import litellm and warm it up in a background thread (see
+        :func:`~povagent.engine.llm_import.preload_litellm`); :meth:`start` waits for it."""
+        preload_litellm(self._warm_up_model())
+
+    def _warm_up_model(self) -> str:
+        # a Router's group name is no litellm model string: warm up with a deployment's
+        return self.options.router[0]["litellm_params"]["model"] if self.options.router else self.model
+
     async def start(self) -> None:
         """Import litellm (seconds, the first time) in a worker thread before any request's
         timeout starts; a missing API key is found here, before the run fans out. litellm's
@@ -467,9 +478,7 @@ class LiteLLMBackend(Backend):
             self._deployments()
         if _LITELLM is None:
             await _import_litellm_off_loop()
-        # a Router's group name is no litellm model string: warm up with a deployment's
-        first = self.options.router[0]["litellm_params"]["model"] if self.options.router else self.model
-        await asyncio.to_thread(warm_up_litellm, first)
+        await asyncio.to_thread(warm_up_litellm, self._warm_up_model())
 
     async def aclose(self) -> None:
         """Drop the Router (its clients are litellm's shared, cached ones)."""

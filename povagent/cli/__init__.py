@@ -44,7 +44,12 @@ for _name in COMMAND_MODULES:
 
 
 def main() -> None:
-    """Console-script entry point: user-facing errors print a message, not a traceback."""
+    """Console-script entry point: user-facing errors print a message, not a traceback.
+
+    After ``run`` and ``sweep`` the process ends without the interpreter's teardown (seconds
+    after litellm): see :mod:`povagent.cli.process_exit`.
+    """
+    from povagent.cli.process_exit import exit_now, fast_exit_allowed
     from povagent.errors import NO_ROOM_ERRNOS, PovagentError, ResultsError
 
     try:
@@ -58,3 +63,7 @@ def main() -> None:
         # a full disk is the user's to fix, wherever the write was (a config copy, a report page)
         typer.echo(f"error: {ResultsError.cannot_write(exc.filename or 'a file', exc)}", err=True)
         sys.exit(2)
+    except SystemExit as done:
+        if fast_exit_allowed():
+            exit_now(done.code)
+        raise

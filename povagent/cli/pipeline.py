@@ -131,6 +131,9 @@ def run_command(
             err=True,
         )
         raise typer.Exit(stop.exit_code) from None
+    from povagent.cli.process_exit import allow_fast_exit
+
+    allow_fast_exit()  # the run folder is complete and closed (see povagent.cli.process_exit)
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
@@ -309,8 +312,10 @@ def sweep_command(
         ])  # fmt: skip
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
+    from povagent.cli.process_exit import allow_fast_exit
     from povagent.run.runner import EXIT_STOPPED
 
+    allow_fast_exit()  # every cell's folder is complete and closed (see povagent.cli.process_exit)
     codes = [result.results[c.name].exit_code for c in finished] + [EXIT_STOPPED] * len(result.failed)
     for cell in finished:
         res = result.results[cell.name]

@@ -1,19 +1,36 @@
-"""The one way povagent imports litellm: lazily, offline-safe, quiet.
+"""The one way povagent imports litellm: lazily, offline-safe, quiet, and early when it pays.
 
 ``import litellm`` costs seconds and, unless told otherwise, fetches a model cost map from the
 network and loads stray ``.env`` files. Everything that needs litellm calls
 :func:`import_litellm` at the moment it needs it, so ``povagent --help``, offline baselines and
 replays never import it. This module must stay tiny and must not import litellm at import time.
+
+A run that will surely send a request calls :func:`preload_litellm` first: litellm is then
+imported (and warmed up) in a background thread while the run loads its dataset and builds
+its first requests. Python's import locks are per module: a thread importing a module another
+thread is importing waits for it, and a cycle between two threads' imports (each holding a
+module the other needs) is broken by handing one of them a half-initialised module. So while
+the background import runs, nothing else may import litellm or what it imports (openai): every
+caller goes through :func:`import_litellm`, which waits for the background thread before it
+touches the import system, and imports litellm itself when the background import failed.
 """
 
 from __future__ import annotations
 
 import functools
 import os
+import threading
 from types import ModuleType
 
+#: litellm, once imported and set up.
+_litellm: ModuleType | None = None
+#: Held while litellm is being imported and set up (by whichever thread does it).
+_import_lock = threading.Lock()
+#: The background import started by :func:`preload_litellm`, if any.
+_preload: threading.Thread | None = None
+_preload_lock = threading.Lock()
 
-@functools.cache
+
 def import_litellm() -> ModuleType:
     """Import and return litellm, set up for closed networks and clean logs.
 
@@ -24,16 +41,54 @@ def import_litellm() -> ModuleType:
     ``MAX_BASE64_LENGTH_FOR_LOGGING`` (also read at import) is left alone: litellm's truncation
     of base64 for logging is skipped per call instead, for povagent's calls only and only while
     nothing can read litellm's logging payload (:mod:`povagent.engine.llm_logging`).
-    """
-    os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
-    os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
-    import litellm
 
-    # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
-    litellm.suppress_debug_info = True
-    # anonymous usage telemetry would be a network call we never asked for
-    litellm.telemetry = False
-    return litellm
+    Safe from any thread: while :func:`preload_litellm`'s thread imports, callers wait for it.
+    """
+    global _litellm
+    if _litellm is not None:
+        return _litellm
+    wait_for_preload()
+    with _import_lock:
+        if _litellm is None:
+            os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
+            os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
+            import litellm
+
+            # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
+            litellm.suppress_debug_info = True
+            # anonymous usage telemetry would be a network call we never asked for
+            litellm.telemetry = False
+            _litellm = litellm
+    return _litellm
+
+
+def preload_litellm(model: str) -> None:
+    """Start importing litellm and warming it up for ``model`` in a daemon thread; return at once.
+
+    Call it only when a request will surely be sent (an import that is not needed costs
+    seconds of CPU). Once per process; a failure in the thread is not reported here: the
+    caller's own :func:`import_litellm` then imports again and raises it.
+    """
+    global _preload
+    with _preload_lock:
+        if _preload is not None or _litellm is not None:
+            return
+        _preload = threading.Thread(target=_preload_quietly, args=(model,), name="povagent-preload-litellm", daemon=True)
+        _preload.start()
+
+
+def wait_for_preload() -> None:
+    """Wait until the background import of :func:`preload_litellm` (if any) has ended."""
+    thread = _preload
+    if thread is not None and thread is not threading.current_thread():
+        thread.join()
+
+
+def _preload_quietly(model: str) -> None:
+    try:
+        _warm_up(model)
+    except Exception:  # the foreground import meets the same failure and reports it
+        pass
 
 
 @functools.cache
@@ -41,8 +96,15 @@ def warm_up_litellm(model: str) -> None:
     """Load what litellm loads lazily on its first request (about 460 modules of the OpenAI
     client and litellm's own: seconds on a busy machine), so that cost never counts against
     the first request's timeout. Makes no network call: the OpenAI client is only built and
-    the completion is litellm's ``mock_response``. Runs once per model string and process.
+    the completion is litellm's ``mock_response``. Runs once per model string and process
+    (after a preload of the same model, at once).
     """
+    wait_for_preload()
+    _warm_up(model)
+
+
+@functools.cache
+def _warm_up(model: str) -> None:
     litellm = import_litellm()
     import openai
 

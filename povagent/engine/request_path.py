@@ -110,6 +110,7 @@ class RequestPath:
         redact: Callable[[str], str] = _identity,
         on_retry: OnRetry | None = None,
         on_bug: OnBug | None = None,
+        start_backend: bool = False,
     ) -> None:
         self.backend = backend
         self.images = images
@@ -122,6 +123,10 @@ class RequestPath:
         self.on_bug = on_bug
         self.stats = PathStats()
         self._identity = identity_json(backend.identity()) if self.cache is not None else ""
+        #: with ``start_backend``, the backend's start, begun by the first request the cache
+        #: cannot answer (a run whose every answer is cached never starts it)
+        self._start: asyncio.Future[None] | None = None
+        self._start_backend = start_backend
 
     @property
     def retries_inside(self) -> bool:
@@ -157,10 +162,22 @@ class RequestPath:
             if cached is not None:
                 self.stats.cache_hits += 1
                 return cached
+        if self._start_backend:
+            await self._started(label)
         response = await self.call(request, label=label, deadline=deadline)
         if key is not None and cache is not None:
             cache.put_deferred(key, response)
         return response
+
+    async def _started(self, label: str) -> None:
+        """Wait for :meth:`Backend.start` (begun once, shared by every caller); a start that
+        fails (a missing API key) fails each request that needed it, without a retry."""
+        if self._start is None:
+            self._start = asyncio.ensure_future(self.backend.start())
+        try:
+            await asyncio.shield(self._start)
+        except Exception as exc:
+            raise self._failure(exc, 1, label) from exc
 
     async def call(self, request: Request, *, label: str = "", deadline: float | None = None) -> Response:
         """One request to the backend, retried on transient failures only (never on a 4xx)."""

@@ -47,7 +47,7 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
-from povagent.interfaces import Backend, Parser, PermanentBackendError, Scorer, Strategy
+from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
@@ -489,42 +489,45 @@ class PipelineRun:
             )
             raise StopRun(self._stopped)
 
-    async def _start_backend(self, backend: Backend) -> None:
-        """``backend.start()``; a permanent error there (an unset API key variable) stops the run
-        as a failed first request does: one line, nothing sent (raises StopRun)."""
-        try:
-            await backend.start()
-        except PermanentBackendError as exc:
-            where = self._redactor.text(backend_label(backend))
-            kind = f"{exc.kind}: " if exc.kind else ""
-            self._stopped = self._redactor.text(
-                f"the backend cannot start ({kind}{exc}); {where}: nothing was sent. "
-                "Fix the key, the model name or the server, then run the same command again to resume"
-            )
-            self._log.error("backend_start_failed", error=str(exc), kind=exc.kind)
-            raise StopRun(self._stopped) from None
-
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
         """Run every pending key; write the run folder; return the summary."""
         t_start = time.perf_counter()
         config = self.config
+        # Plugins check their options first: a rejected option (a literal API key, say) fails
+        # before the dataset is read and before anything is written to the run folder.
+        self.components = create_components(config, self.host)
+        self.components.backend.check_image_transport(config.images.transport)
+        if self._will_send():
+            # a client library (litellm: seconds) loads in the background meanwhile
+            self.components.backend.preload()
         if self.dataset is None:
             self.dataset = prepare_dataset(config)
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
         self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
-        # Plugins check their options first: a rejected option (a literal API key, say) fails
-        # before anything is written to the run folder.
-        self.components = create_components(config, self.host)
-        self.components.backend.check_image_transport(config.images.transport)
         # ours to write, or refused before anything is written (someone's folder, read-only)
         claim_folder(self.run_dir, "run")
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
         ):
             return await self._run_in_folder(instances, t_start)
+
+    def _will_send(self) -> bool:
+        """Whether this run will surely send a request, known before the dataset is read: the
+        run folder has no row yet and no response cache can answer (none, or an empty one).
+        Otherwise the backend starts only when a request misses the cache, so a run whose
+        every answer is cached never loads the client library."""
+        results = self.run_dir / RESULTS
+        if results.exists() and results.stat().st_size:
+            return False
+        if not getattr(self.components.backend, "cacheable", True):
+            return True
+        if self._cache is not None:
+            return False  # a cache handed in (a sweep's shared one) may hold every answer
+        path = self.config.cache_path()
+        return path is None or not path.exists() or path.stat().st_size == 0
 
     async def _run_in_folder(self, instances: list[Instance], t_start: float) -> RunResult:
         """The run proper, with the run folder locked against a second process."""
@@ -551,7 +554,7 @@ class PipelineRun:
             backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
             limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
             redact=self._redactor.text,
-            on_retry=self._log_retry, on_bug=self._log_bug,
+            on_retry=self._log_retry, on_bug=self._log_bug, start_backend=True,
         )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the
         # log is pushed to the OS and queued answers are stored in the cache: after a kill, every
@@ -567,9 +570,8 @@ class PipelineRun:
         interrupted = True
         failing = False
         try:
-            if pending:
-                # Client libraries load before any request's clock starts (litellm: seconds).
-                await self._start_backend(backend)
+            # The backend starts (litellm: an import of seconds) when the first request misses
+            # the response cache, before that request's clock starts (RequestPath).
             await self._fan_out(pending)
             interrupted = False
         except StopRun:

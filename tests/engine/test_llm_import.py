@@ -87,3 +87,32 @@ def test_base64_truncation_for_logging_stays_on():
     done = _python(code)
     assert done.returncode == 0, done.stderr
     assert int(done.stdout.split()[-1]) > 0
+
+
+def test_importing_while_the_background_import_runs_waits_for_it():
+    # preload, then import at once from the main thread and three others (litellm's own
+    # modules included): each waits for the background import, none meets a half-made module
+    code = (
+        "import sys, threading\n"
+        "from povagent.engine.llm_import import import_litellm, preload_litellm, warm_up_litellm\n"
+        "preload_litellm('openai/loopback')\n"
+        "assert [t for t in threading.enumerate() if t.name == 'povagent-preload-litellm']\n"
+        "got, errors = [], []\n"
+        "def use():\n"
+        "    try:\n"
+        "        got.append(import_litellm())\n"
+        "        import openai\n"
+        "        from litellm import acompletion\n"
+        "        warm_up_litellm('openai/loopback')\n"
+        "    except BaseException as exc:\n"
+        "        errors.append(repr(exc))\n"
+        "threads = [threading.Thread(target=use) for _ in range(3)]\n"
+        "for t in threads: t.start()\n"
+        "use()\n"
+        "for t in threads: t.join(60)\n"
+        "assert not errors, errors\n"
+        "assert len(got) == 4 and all(m is sys.modules['litellm'] for m in got), got\n"
+        "assert got[0].suppress_debug_info is True and got[0].telemetry is False\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr[-3000:]
