@@ -24,18 +24,14 @@ CLI = (
     "main()\n"
 )
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-#: Offline backends (an instant one, one that fails as scripted) and a strategy and parser for them.
-OFFLINE_PLUGIN = Path(__file__).resolve().parents[1] / "run" / "offline_plugin.py"
-
-
 @pytest.fixture
-def write_pipeline(tmp_path):
+def write_pipeline(tmp_path, offline_plugin_file):
     """``write_pipeline(**overrides) -> Path``: a pipeline over 12 instances, into ``tmp_path/run``."""
     release = write_release(tmp_path / "povbench", houses=2, pairs=2, pair_directions=4, frames=3)
 
     def make(**overrides):
         doc = {
-            "plugins": [str(OFFLINE_PLUGIN)],
+            "plugins": [str(offline_plugin_file)],  # offline backends, strategy and parser, beside the YAML
             "dataset": {"path": str(release)},
             "backend": {"name": "test-center"},
             "strategy": "test-point",
