@@ -30,11 +30,12 @@ import json
 import math
 import re
 from collections import defaultdict
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
-from povagent.dataset.loader import Dataset, ground_truth_point, observer_camera
+from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
 from povagent.geometry.camera import Camera
@@ -51,7 +52,7 @@ from povagent.scoring.official import (
     scoring_frame,
     signed_errors,
 )
-from povagent.scoring.official_release import CameraRecord, NotScorable, OfficialRelease
+from povagent.scoring.official_release import NO_CAMERA, NotScorable, OfficialRelease
 
 #: The fields the official scorer reads from every row (a row without one of them stops it).
 REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
@@ -250,8 +251,7 @@ def score_official_row(
         notes.nan.append(ref or iid)
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
-    gx, gy, gz = (float(v) for v in ground_truth_point(pair, direction))
-    gt = project_ground_truth((gx, gy, gz), camera)
+    gt = project_ground_truth(dataset.target(house.house_id, pair, direction), camera)  # type: ignore[union-attr]  # a pair was found, so its house was
     l2 = normalized_l2(x, y, camera.width, camera.height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
@@ -306,7 +306,7 @@ def score_release_row(
         target = release.target(entry, direction, raw_position)
         sw, sh = screen
         if cond == "c":
-            cam = CameraRecord.read(entry.get("camera", {}), "camera")
+            cam = release.camera(entry.get("camera", NO_CAMERA), "camera")
             width, height = (cam.width if cam.width is not None else sw), (cam.height if cam.height is not None else sh)
         else:
             image = row.get("predicted_image")
@@ -316,9 +316,9 @@ def score_release_row(
             if record is None:
                 return result(_unanswered(IMAGE_NOT_IN_LOG))
             # the selected frame is projected at the metadata's size, as officially
-            cam, (width, height) = CameraRecord.read(record.get("camera", {}), "camera"), (sw, sh)
+            cam, (width, height) = release.camera(record.get("camera", NO_CAMERA), "camera"), (sw, sh)
         camera = Camera(cam.position, cam.yaw, cam.horizon, cam.fov, width, height)  # type: ignore[arg-type]  # a size read as written divides as officially
-        gt = project_ground_truth(target, camera)
+        gt = release.ground_truth_in(target, camera)
     except NotScorable as exc:
         notes.not_number.append(f"{ref or iid} ({exc})")
         return result(_unanswered(NOT_A_NUMBER))
