@@ -36,7 +36,10 @@ def cpu_of(code: str, pythonpath: Path | None, timeout: float = 3600) -> dict[st
     env = dict(os.environ)
     if pythonpath is not None:
         env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    out = subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True, timeout=timeout).stdout
+    # run outside the repository: ``python -c`` puts the working folder first on the path
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True, timeout=timeout
+    ).stdout
     values = {}
     for line in out.splitlines():
         key, sep, value = line.partition("=")
@@ -51,4 +54,6 @@ def imported_from(pythonpath: Path | None) -> str:
     if pythonpath is not None:
         env["PYTHONPATH"] = str(pythonpath)
     code = "import povagent, os; print(os.path.dirname(povagent.__file__))"
-    return subprocess.run([sys.executable, "-c", code], env=env, check=True, capture_output=True, text=True).stdout.strip()
+    return subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True
+    ).stdout.strip()

@@ -45,17 +45,20 @@ from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,
     OfficialScore,
-    normalized_l2,
+    point_errors,
     points_l2,
     project_ground_truth,
     score_point,
     scoring_frame,
-    signed_errors,
 )
 from povagent.scoring.official_release import NO_CAMERA, NotScorable, OfficialRelease
 
 #: The fields the official scorer reads from every row (a row without one of them stops it).
 REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
+
+#: The condition and direction labels of the paper (any other is counted as its own group).
+CONDITION_LABELS = frozenset(str(c) for c in CONDITIONS)
+DIRECTION_LABELS = frozenset(str(d) for d in DIRECTIONS)
 
 #: Why the official scorer leaves a row unanswered, in the order it checks (its status names).
 NO_PREDICTION = "no_prediction"
@@ -201,9 +204,9 @@ def score_official_row(
     house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
     c_label, d_label = group_label(cond), group_label(direction)
     iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+    if c_label is not None and c_label not in CONDITION_LABELS:
         notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+    if d_label is not None and d_label not in DIRECTION_LABELS:
         notes.odd_direction[d_label].append(ref or iid)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
@@ -252,7 +255,8 @@ def score_official_row(
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
     gt = project_ground_truth(dataset.target(house.house_id, pair, direction), camera)  # type: ignore[union-attr]  # a pair was found, so its house was
-    l2 = normalized_l2(x, y, camera.width, camera.height, gt.u, gt.v)
+    # the signed errors are the recorded point's (a point list's first), as officially
+    l2, ex, ey = point_errors(x, y, camera.width, camera.height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
     if points:
@@ -261,8 +265,6 @@ def score_official_row(
         except (TypeError, ValueError, IndexError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
     strict = l2 if gt.in_frame else MAX_L2
-    # the signed errors are the recorded point's (a point list's first), as officially
-    ex, ey = signed_errors(x, y, camera.width, camera.height, gt.u, gt.v)
     return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
 
@@ -279,9 +281,9 @@ def score_release_row(
     house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
     c_label, d_label = group_label(cond), group_label(direction)
     iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+    if c_label is not None and c_label not in CONDITION_LABELS:
         notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+    if d_label is not None and d_label not in DIRECTION_LABELS:
         notes.odd_direction[d_label].append(ref or iid)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
@@ -330,7 +332,7 @@ def score_release_row(
         notes.nan.append(ref or iid)
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
-    l2 = normalized_l2(x, y, width, height, gt.u, gt.v)
+    l2, ex, ey = point_errors(x, y, width, height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
     if points:
@@ -338,7 +340,6 @@ def score_release_row(
             l2, closest = points_l2([(p[0], p[1]) for p in points], width, height, gt.u, gt.v)
         except (TypeError, ValueError, IndexError, KeyError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
-    ex, ey = signed_errors(x, y, width, height, gt.u, gt.v)
     strict = l2 if gt.in_frame else MAX_L2
     return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
