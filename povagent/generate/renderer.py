@@ -101,8 +101,11 @@ class Renderer:
         norm = np.linalg.norm(n, axis=1, keepdims=True)
         normals = n / np.where(norm > 0, norm, 1.0)
         lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
-        # one row per face, gathered once per frame: normal, colour, the light of its room
-        self._faces = np.concatenate([normals, colors, lights[rooms]], axis=1).astype(np.float32)
+        # per face, gathered per frame (each its own contiguous array: numpy's passes over them
+        # run at full speed): normal, colour, the light of its room
+        self._normals = np.ascontiguousarray(normals, dtype=np.float32)
+        self._colors = np.ascontiguousarray(colors, dtype=np.float32)
+        self._lights = np.ascontiguousarray(lights[rooms], dtype=np.float32)
         self._materials = materials
         self._owners = owners.astype(np.uint16)
         self._grids: dict[tuple[int, int, float], np.ndarray] = {}
@@ -124,8 +127,9 @@ class Renderer:
             # with yaw 0 and horizon 0 the axes are the identity: world rays are camera rays
             self._grids[key] = at_origin.ray(pixels).astype(np.float32)
         g, ax = self._grids[key], camera.axes().astype(np.float32)
-        # written out rather than ``g @ ax``: BLAS threads cost more than they save here
-        return g[:, 0:1] * ax[0] + g[:, 1:2] * ax[1] + g[:, 2:3] * ax[2]
+        # einsum rather than ``g @ ax`` (BLAS threads cost more than they save here) or three
+        # broadcast products (three (N, 3) temporaries): one pass, the same sums in the same order
+        return np.einsum("ij,jk->ik", g, ax)
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """First triangle hit by each (unit) ray and the distance to it (-1 and inf: no hit)."""
@@ -201,30 +205,36 @@ class Renderer:
 
     # -- shading ----------------------------------------------------------------------------
     def _shade(self, tri: np.ndarray, d: np.ndarray, p: np.ndarray) -> np.ndarray:
-        face = self._faces[tri]
-        n, base, light = face[:, 0:3], face[:, 3:6], face[:, 6:9]
+        # np.take makes fresh arrays, changed in place below
+        n, base, L = (np.take(a, tri, axis=0) for a in (self._normals, self._colors, self._lights))
         facing = np.einsum("ij,ij->i", n, d)
-        n *= np.where(facing > 0, -1.0, 1.0).astype(np.float32)[:, None]  # face the viewer
+        n *= np.where(facing > 0, np.float32(-1.0), np.float32(1.0))[:, None]  # face the viewer
         fill = np.abs(facing)
-        mat = self._materials[tri]
+        mat = np.take(self._materials, tri)
         base *= self._texture(mat, n, p)[:, None]
 
-        to_light = light - p
-        dist = np.sqrt(np.einsum("ij,ij->i", to_light, to_light))
-        L = to_light / dist[:, None]
+        L -= p  # the light's position, turned into the unit vector to it in place
+        dist2 = np.einsum("ij,ij->i", L, L)
+        dist = np.sqrt(dist2)
+        L /= dist[:, None]
         lambert = np.einsum("ij,ij->i", n, L)
-        diffuse = np.maximum(lambert, 0.0) / (1.0 + 0.06 * dist * dist)
+        dist2 *= 0.06
+        dist2 += 1.0
+        diffuse = np.maximum(lambert, 0.0)
+        diffuse /= dist2
         if self.shadows:
             # only points the light can reach at all need a shadow ray
-            probe = np.flatnonzero((lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING))
-            if len(probe):
-                blocked = self._shadow_scene.run(
-                    np.ascontiguousarray(p[probe] + n[probe] * 2e-3),
-                    np.ascontiguousarray(L[probe]),
-                    dists=(dist[probe] - 0.05).astype(np.float32),
-                    query="OCCLUDED",
-                )
-                diffuse[probe[blocked >= 0]] *= 0.15
+            probe = (lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING)
+            if probe.any():
+                # every pixel's ray in one batch, no gathers: a pixel that needs no shadow ray
+                # gets a negative length, which embree skips at once
+                start = n * np.float32(2e-3)
+                start += p
+                length = dist - np.float32(0.05)
+                length[~probe] = -1.0
+                blocked = self._shadow_scene.run(start, L, dists=length, query="OCCLUDED") >= 0
+                blocked &= probe
+                diffuse[blocked] *= 0.15
         shade = 0.30 + 0.85 * diffuse + 0.22 * fill
         ceiling = mat == CEILING
         shade[ceiling] = 0.62 + 0.25 * fill[ceiling]
