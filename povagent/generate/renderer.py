@@ -235,12 +235,17 @@ class Renderer:
                 blocked = self._shadow_scene.run(start, L, dists=length, query="OCCLUDED") >= 0
                 blocked &= probe
                 diffuse[blocked] *= 0.15
-        shade = 0.30 + 0.85 * diffuse + 0.22 * fill
+        # 0.30 + 0.85 * diffuse + 0.22 * fill, in place (the same operations in the same order)
+        shade = diffuse
+        shade *= 0.85
+        shade += 0.30
+        shade += 0.22 * fill
         ceiling = mat == CEILING
         shade[ceiling] = 0.62 + 0.25 * fill[ceiling]
         glow = mat == EMISSIVE
         shade[glow] = 0.95 + 0.05 * fill[glow]
-        color = base * shade[:, None]
+        color = base
+        color *= shade[:, None]
 
         shiny = np.flatnonzero((mat == METAL) | (mat == GLOSS))
         if len(shiny):
@@ -255,8 +260,9 @@ class Renderer:
         out = np.ones(len(mat), dtype=np.float32)
         ax = np.abs(n)
         # in-plane coordinates (a, b) of each hit, from its dominant normal axis
-        a = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 0], np.where(ax[:, 0] >= ax[:, 2], p[:, 2], p[:, 0]))
-        b = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 2], p[:, 1])
+        up = ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2])
+        a = np.where(up, p[:, 0], np.where(ax[:, 0] >= ax[:, 2], p[:, 2], p[:, 0]))
+        b = np.where(up, p[:, 2], p[:, 1])
 
         m = mat == WOOD
         if m.any():

@@ -138,7 +138,9 @@ class OfficialRelease:
     #: thousands of rows. Keyed by identity and kept beside the objects it was computed from.
     _targets: dict[tuple[int, int, Any, str], tuple[Any, Any, tuple[float, float, float]]] = field(default_factory=dict, repr=False)
     _cameras: dict[int, tuple[Any, CameraRecord]] = field(default_factory=dict, repr=False)
-    _projections: dict[tuple[tuple[float, float, float], Camera], GroundTruthInFrame] = field(default_factory=dict, repr=False)
+    _projections: dict[tuple[tuple[float, float, float], int, float, float], tuple[CameraRecord, GroundTruthInFrame]] = field(
+        default_factory=dict, repr=False
+    )
 
     def entry(self, house_id: Any, pair_id: Any) -> Mapping[str, Any] | None:
         """The pair entry a prediction names, or ``None`` (ids compared as written)."""
@@ -198,12 +200,16 @@ class OfficialRelease:
         self._cameras[id(raw)] = (raw, record)
         return record
 
-    def ground_truth_in(self, target: tuple[float, float, float], camera: Camera) -> GroundTruthInFrame:
-        """:func:`project_ground_truth` of a target in a camera, projected once per pair of them."""
-        key = (target, camera)
-        gt = self._projections.get(key)
-        if gt is None:
-            gt = self._projections[key] = project_ground_truth(target, camera)
+    def ground_truth_in(self, target: tuple[float, float, float], camera: CameraRecord, width: float, height: float) -> GroundTruthInFrame:
+        """:func:`project_ground_truth` of a target in a camera record (as :meth:`camera` read
+        it) at ``width`` x ``height``, projected once per target, record and size."""
+        key = (target, id(camera), width, height)
+        cached = self._projections.get(key)
+        if cached is not None and cached[0] is camera:
+            return cached[1]
+        # a size read as written divides as officially (a float as well as an int)
+        gt = project_ground_truth(target, Camera(camera.position, camera.yaw, camera.horizon, camera.fov, width, height))  # type: ignore[arg-type]
+        self._projections[key] = (camera, gt)
         return gt
 
     def _target(self, entry: Mapping[str, Any], direction: Any, raw_position: Any) -> tuple[float, float, float]:

@@ -38,7 +38,6 @@ from typing import Any
 from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
-from povagent.geometry.camera import Camera
 from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
@@ -55,6 +54,7 @@ from povagent.scoring.official_release import NO_CAMERA, NotScorable, OfficialRe
 
 #: The fields the official scorer reads from every row (a row without one of them stops it).
 REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
+REQUIRED_KEYS = frozenset(REQUIRED_FIELDS)
 
 #: The condition and direction labels of the paper (any other is counted as its own group).
 CONDITION_LABELS = frozenset(str(c) for c in CONDITIONS)
@@ -319,8 +319,7 @@ def score_release_row(
                 return result(_unanswered(IMAGE_NOT_IN_LOG))
             # the selected frame is projected at the metadata's size, as officially
             cam, (width, height) = release.camera(record.get("camera", NO_CAMERA), "camera"), (sw, sh)
-        camera = Camera(cam.position, cam.yaw, cam.horizon, cam.fov, width, height)  # type: ignore[arg-type]  # a size read as written divides as officially
-        gt = release.ground_truth_in(target, camera)
+        gt = release.ground_truth_in(target, cam, width, height)
     except NotScorable as exc:
         notes.not_number.append(f"{ref or iid} ({exc})")
         return result(_unanswered(NOT_A_NUMBER))
@@ -358,7 +357,7 @@ def score_official_rows(
     scored: list[ScoredPrediction] = []
     for i, item in enumerate(rows):
         data, ref = (item.data, item.where) if isinstance(item, RawPrediction) else (item, f"row {i}")
-        if not isinstance(data, Mapping) or any(k not in data for k in REQUIRED_FIELDS):
+        if not isinstance(data, Mapping) or not data.keys() >= REQUIRED_KEYS:
             notes.skipped.append(ref)
             continue
         if not (_hashable(data["type"]) and _hashable(data["direction"])):
