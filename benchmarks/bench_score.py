@@ -2,7 +2,7 @@
 
 Run: ``python benchmarks/bench_score.py [--dataset FOLDER] [--rows N] [--rounds R] [--baseline REF]``.
 
-Generates a small dataset with ``povagent generate`` (3 houses, unless ``--dataset`` names
+Generates a small dataset as ``povagent generate`` does (3 houses, unless ``--dataset`` names
 one), synthesises ``--rows`` official prediction rows with a seeded generator (every pair and
 direction of the release, the three conditions, a random frame of the house's exploration log,
 random pixels in and around the image, some point lists, some unanswered rows and unknown
@@ -22,7 +22,6 @@ import math
 import os
 import random
 import statistics
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -96,7 +95,9 @@ def main() -> None:
         dataset = args.dataset
         if dataset is None:
             dataset = work / "dataset"
-            subprocess.run([sys.executable, "-m", "povagent", "generate", "--out", str(dataset), "--houses", "3"], check=True)
+            from povagent.generate import generate_dataset
+
+            generate_dataset(dataset, houses=3, seed=0, jobs=1, progress=False)  # what `povagent generate --houses 3` writes
         rows = synthesise_rows(dataset, args.rows)
         predictions = work / "predictions.json"
         predictions.write_text(json.dumps({"metadata": {"screen_width": 512, "screen_height": 512}, "predictions": rows}))
