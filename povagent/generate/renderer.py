@@ -269,7 +269,8 @@ class Renderer:
 
         m = mat == WOOD
         if m.any():
-            out[m] = 0.94 + 0.06 * np.sin(a[m] * 30.0 + 2.0 * np.sin(b[m] * 5.0 + a[m] * 2.0))
+            am = a[m]
+            out[m] = 0.94 + 0.06 * np.sin(am * 30.0 + 2.0 * np.sin(b[m] * 5.0 + am * 2.0))
         m = mat == FABRIC
         if m.any():
             out[m] = 0.93 + 0.07 * _hash2(np.floor(a[m] * 160), np.floor(b[m] * 160))
@@ -279,10 +280,11 @@ class Renderer:
         m = mat == FLOOR_WOOD
         if m.any():
             x, z = p[m, 0], p[m, 2]
-            plank = np.floor(x / 0.18)
+            across = x / 0.18
+            plank = np.floor(across)
             tint = 0.84 + 0.22 * _hash2(plank, plank * 0.37 + 1.0)
             shift = _hash2(plank, 7.0) * 1.4
-            seam = ((x / 0.18) % 1.0 < 0.05) | (((z + shift) / 1.4) % 1.0 < 0.012)
+            seam = (across % 1.0 < 0.05) | (((z + shift) / 1.4) % 1.0 < 0.012)
             grain = 0.97 + 0.03 * np.sin(z * 25.0 + 1.5 * np.sin(x * 20.0 + plank))
             out[m] = np.where(seam, 0.55, tint * grain)
         m = mat == FLOOR_TILE
