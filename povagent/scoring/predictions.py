@@ -184,7 +184,14 @@ def _warnings_of(notes: _Notes) -> list[str]:
     return out
 
 
+def _is_mapping(v: Any) -> bool:
+    # a JSON object is a dict: the abstract-class check only for anything else
+    return type(v) is dict or isinstance(v, Mapping)
+
+
 def _hashable(v: Any) -> bool:
+    if type(v) is str:  # what every row holds: no need to hash it
+        return True
     try:
         hash(v)
     except TypeError:
@@ -292,7 +299,7 @@ def score_release_row(
     x, y = row.get("predicted_x"), row.get("predicted_y")
     entry = release.entry(house_id, pair_id)
     placements = entry.get("placements", {}) if entry is not None else None
-    placement = placements.get(direction) if isinstance(placements, Mapping) and _hashable(direction) else None
+    placement = placements.get(direction) if _is_mapping(placements) and _hashable(direction) else None
     if not placement:
         notes.unknown.append(f"{ref} ({iid})" if ref else iid)
     if x is None or y is None:
@@ -302,7 +309,7 @@ def score_release_row(
     if not placement:
         return result(_unanswered(PLACEMENT_NOT_FOUND))
     try:
-        raw_position = placement.get("position") if isinstance(placement, Mapping) else None
+        raw_position = placement.get("position") if _is_mapping(placement) else None
         if not raw_position:
             return result(_unanswered(NO_GT_POSITION))
         target = release.target(entry, direction, raw_position)
@@ -357,7 +364,7 @@ def score_official_rows(
     scored: list[ScoredPrediction] = []
     for i, item in enumerate(rows):
         data, ref = (item.data, item.where) if isinstance(item, RawPrediction) else (item, f"row {i}")
-        if not isinstance(data, Mapping) or not data.keys() >= REQUIRED_KEYS:
+        if not _is_mapping(data) or not data.keys() >= REQUIRED_KEYS:
             notes.skipped.append(ref)
             continue
         if not (_hashable(data["type"]) and _hashable(data["direction"])):
