@@ -33,7 +33,7 @@ from collections import defaultdict
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
@@ -184,7 +184,7 @@ def _warnings_of(notes: _Notes) -> list[str]:
     return out
 
 
-def _is_mapping(v: Any) -> bool:
+def _is_mapping(v: Any) -> TypeGuard[Mapping[Any, Any]]:
     # a JSON object is a dict: the abstract-class check only for anything else
     return type(v) is dict or isinstance(v, Mapping)
 
