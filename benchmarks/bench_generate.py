@@ -6,12 +6,20 @@ seconds per rendered 512x512 frame on one core (wall and CPU), frames/s, the tim
 the quickstart's per-house cost, or measured with ``--full``), and the share of pairs per
 direction against the paper's (front 97%, up 66%, left 62%, right 58%; 2.8 directions a pair).
 Budgets: 0.25 s/frame, 30 s quickstart, 900 s for 47 houses.
+
+``--compare`` measures only the cost of a house before and after (issue 28, item 5): CPU
+seconds (``time.process_time``: the machine is shared) to generate one house with ``--jobs 1``
+with today's code and with the ``povagent`` package of commit ``--baseline``, each in a fresh
+interpreter (imports not counted), alternating round by round over ``--houses`` seeds; prints
+CPU per house and houses per CPU-second of each, and the ratio.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -22,6 +30,39 @@ PAPER_SHARES = {"front": 0.97, "up": 0.66, "left": 0.62, "right": 0.58}
 PAPER_DIRECTIONS_PER_PAIR = 2.8
 PAPER_INSTANCES_PER_CONDITION = 813
 PAPER_PAIRS = 288
+#: The last commit before the cheaper houses (issue 28, item 5): the "before" of ``--compare``.
+BEFORE = "43eae40"
+
+ONE_HOUSE = """
+import tempfile, time
+from pathlib import Path
+from povagent.generate import generate_dataset
+with tempfile.TemporaryDirectory() as tmp:
+    t = time.process_time()
+    generate_dataset(Path(tmp), houses=1, seed={seed}, jobs=1, progress=False)
+    print("cpu=", time.process_time() - t)
+"""
+
+
+def compare(baseline: str, houses: int) -> None:
+    """CPU per house before (``baseline``) and after, alternating, one house per seed."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from baseline_code import baseline_checkout, cpu_of, imported_from
+
+    with tempfile.TemporaryDirectory() as tmp:
+        old = baseline_checkout(baseline, Path(tmp) / "baseline")
+        print(f"before: {imported_from(old)} (commit {baseline}); after: {imported_from(None)}")
+        cpu: dict[str, list[float]] = {"before": [], "after": []}
+        for seed in range(houses):
+            order = (("before", old), ("after", None)) if seed % 2 == 0 else (("after", None), ("before", old))
+            for label, path in order:
+                cpu[label].append(cpu_of(ONE_HOUSE.format(seed=seed), path)["cpu"])
+            print(f"  house seed {seed}: before {cpu['before'][-1]:.2f} s CPU, after {cpu['after'][-1]:.2f} s CPU, "
+                  f"ratio {cpu['before'][-1] / cpu['after'][-1]:.2f}x")  # fmt: skip
+    b, a = statistics.mean(cpu["before"]), statistics.mean(cpu["after"])
+    print(f"CPU per house: before {b:.2f} s, after {a:.2f} s")
+    print(f"houses per CPU-second: before {1 / b:.3f}, after {1 / a:.3f}: {b / a:.2f}x (goal >= 1.5x)")
+    print(f"load average: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
 
 
 def bench_frames(n: int = 20) -> tuple[float, float, float]:
@@ -79,7 +120,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--full", action="store_true", help="measure 47 houses with --jobs 2 (minutes)")
     parser.add_argument("--sample", type=int, default=12, help="houses for the direction statistics")
+    parser.add_argument("--compare", action="store_true", help="only CPU per house, before and after")
+    parser.add_argument("--baseline", default=BEFORE, help=f"the commit timed as 'before' (default {BEFORE})")
+    parser.add_argument("--houses", type=int, default=4, help="houses (seeds) measured by --compare")
     args = parser.parse_args()
+    if args.compare:
+        compare(args.baseline, args.houses)
+        return
     print(f"cores: {os.cpu_count()}, load average: {os.getloadavg()[0]:.2f}")
 
     wall, cpu, png = bench_frames()

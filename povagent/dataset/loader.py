@@ -179,6 +179,19 @@ class Dataset:
     # Instances are immutable: each is built once (GT point, observer view) and reused by every
     # selection (a sweep selects from one loaded dataset once per cell).
     _built: dict[tuple[str, str, Direction, Condition], Instance] = field(default_factory=dict, init=False, repr=False)
+    # The GT point of each (house, pair, direction), computed once: scoring names the same
+    # instance in thousands of rows.
+    _targets: dict[tuple[str, str, str, str], tuple[float, float, float]] = field(default_factory=dict, init=False, repr=False)
+
+    def target(self, house_id: str, pair: PairEntry, direction: Direction | str) -> tuple[float, float, float]:
+        """The 3D GT point of ``pair`` (of house ``house_id``) in ``direction``
+        (:func:`ground_truth_point`), computed once per dataset."""
+        key = (house_id, pair.pair_id, direction, str(direction))
+        point = self._targets.get(key)
+        if point is None:
+            gx, gy, gz = (float(v) for v in ground_truth_point(pair, direction))
+            point = self._targets[key] = (gx, gy, gz)
+        return point
 
     def instances(
         self,

@@ -43,7 +43,7 @@ from povagent.generate.record import (
 from povagent.generate.writer import write_json
 from povagent.run.logs import Redactor
 
-GENERATOR_VERSION = "1"
+GENERATOR_VERSION = "2"
 DIRECTIONS = ("right", "left", "front", "up")
 
 

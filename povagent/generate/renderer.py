@@ -10,8 +10,11 @@ AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. What it must not do: 
 cameras go or what is visible (exploration and pairs read the mask).
 
 Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
-30 ms on one core and the occlusion-only shadow rays in about 20 ms, leaving ~50 ms for numpy
-shading: ~0.11 s a frame in all (``benchmarks/bench_generate.py`` measures it). trimesh's
+40 ms of CPU and the occlusion-only shadow rays in about 17 ms, leaving ~40 ms for numpy
+shading: ~0.10 s a frame in all (``benchmarks/bench_generate.py`` measures it). embreex casts
+one ray per Embree call whatever the batch, so each pass hands it the whole frame at once (its
+fastest shape: 8x8 tiles or 8k-ray chunks cost ~20% more) and the shading works on contiguous
+float32 arrays, changed in place where the order of operations allows. trimesh's
 pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
 rasterizer could match embree on primary visibility but would still need a ray caster for the
 shadows, so one engine does both.
@@ -101,8 +104,11 @@ class Renderer:
         norm = np.linalg.norm(n, axis=1, keepdims=True)
         normals = n / np.where(norm > 0, norm, 1.0)
         lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
-        # one row per face, gathered once per frame: normal, colour, the light of its room
-        self._faces = np.concatenate([normals, colors, lights[rooms]], axis=1).astype(np.float32)
+        # per face, gathered per frame (each its own contiguous array: numpy's passes over them
+        # run at full speed): normal, colour, the light of its room
+        self._normals = np.ascontiguousarray(normals, dtype=np.float32)
+        self._colors = np.ascontiguousarray(colors, dtype=np.float32)
+        self._lights = np.ascontiguousarray(lights[rooms], dtype=np.float32)
         self._materials = materials
         self._owners = owners.astype(np.uint16)
         self._grids: dict[tuple[int, int, float], np.ndarray] = {}
@@ -124,8 +130,9 @@ class Renderer:
             # with yaw 0 and horizon 0 the axes are the identity: world rays are camera rays
             self._grids[key] = at_origin.ray(pixels).astype(np.float32)
         g, ax = self._grids[key], camera.axes().astype(np.float32)
-        # written out rather than ``g @ ax``: BLAS threads cost more than they save here
-        return g[:, 0:1] * ax[0] + g[:, 1:2] * ax[1] + g[:, 2:3] * ax[2]
+        # einsum rather than ``g @ ax`` (BLAS threads cost more than they save here) or three
+        # broadcast products (three (N, 3) temporaries): one pass, the same sums in the same order
+        return np.einsum("ij,jk->ik", g, ax)
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """First triangle hit by each (unit) ray and the distance to it (-1 and inf: no hit)."""
@@ -201,36 +208,47 @@ class Renderer:
 
     # -- shading ----------------------------------------------------------------------------
     def _shade(self, tri: np.ndarray, d: np.ndarray, p: np.ndarray) -> np.ndarray:
-        face = self._faces[tri]
-        n, base, light = face[:, 0:3], face[:, 3:6], face[:, 6:9]
+        # np.take makes fresh arrays, changed in place below
+        n, base, L = (np.take(a, tri, axis=0) for a in (self._normals, self._colors, self._lights))
         facing = np.einsum("ij,ij->i", n, d)
-        n *= np.where(facing > 0, -1.0, 1.0).astype(np.float32)[:, None]  # face the viewer
+        n *= np.where(facing > 0, np.float32(-1.0), np.float32(1.0))[:, None]  # face the viewer
         fill = np.abs(facing)
-        mat = self._materials[tri]
+        mat = np.take(self._materials, tri)
         base *= self._texture(mat, n, p)[:, None]
 
-        to_light = light - p
-        dist = np.sqrt(np.einsum("ij,ij->i", to_light, to_light))
-        L = to_light / dist[:, None]
+        L -= p  # the light's position, turned into the unit vector to it in place
+        dist2 = np.einsum("ij,ij->i", L, L)
+        dist = np.sqrt(dist2)
+        L /= dist[:, None]
         lambert = np.einsum("ij,ij->i", n, L)
-        diffuse = np.maximum(lambert, 0.0) / (1.0 + 0.06 * dist * dist)
+        dist2 *= 0.06
+        dist2 += 1.0
+        diffuse = np.maximum(lambert, 0.0)
+        diffuse /= dist2
         if self.shadows:
             # only points the light can reach at all need a shadow ray
-            probe = np.flatnonzero((lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING))
-            if len(probe):
-                blocked = self._shadow_scene.run(
-                    np.ascontiguousarray(p[probe] + n[probe] * 2e-3),
-                    np.ascontiguousarray(L[probe]),
-                    dists=(dist[probe] - 0.05).astype(np.float32),
-                    query="OCCLUDED",
-                )
-                diffuse[probe[blocked >= 0]] *= 0.15
-        shade = 0.30 + 0.85 * diffuse + 0.22 * fill
+            probe = (lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING)
+            if probe.any():
+                # every pixel's ray in one batch, no gathers: a pixel that needs no shadow ray
+                # gets a negative length, which embree skips at once
+                start = n * np.float32(2e-3)
+                start += p
+                length = dist - np.float32(0.05)
+                length[~probe] = -1.0
+                blocked = self._shadow_scene.run(start, L, dists=length, query="OCCLUDED") >= 0
+                blocked &= probe
+                diffuse[blocked] *= 0.15
+        # 0.30 + 0.85 * diffuse + 0.22 * fill, in place (the same operations in the same order)
+        shade = diffuse
+        shade *= 0.85
+        shade += 0.30
+        shade += 0.22 * fill
         ceiling = mat == CEILING
         shade[ceiling] = 0.62 + 0.25 * fill[ceiling]
         glow = mat == EMISSIVE
         shade[glow] = 0.95 + 0.05 * fill[glow]
-        color = base * shade[:, None]
+        color = base
+        color *= shade[:, None]
 
         shiny = np.flatnonzero((mat == METAL) | (mat == GLOSS))
         if len(shiny):
@@ -245,12 +263,14 @@ class Renderer:
         out = np.ones(len(mat), dtype=np.float32)
         ax = np.abs(n)
         # in-plane coordinates (a, b) of each hit, from its dominant normal axis
-        a = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 0], np.where(ax[:, 0] >= ax[:, 2], p[:, 2], p[:, 0]))
-        b = np.where(ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2]), p[:, 2], p[:, 1])
+        up = ax[:, 1] >= np.maximum(ax[:, 0], ax[:, 2])
+        a = np.where(up, p[:, 0], np.where(ax[:, 0] >= ax[:, 2], p[:, 2], p[:, 0]))
+        b = np.where(up, p[:, 2], p[:, 1])
 
         m = mat == WOOD
         if m.any():
-            out[m] = 0.94 + 0.06 * np.sin(a[m] * 30.0 + 2.0 * np.sin(b[m] * 5.0 + a[m] * 2.0))
+            am = a[m]
+            out[m] = 0.94 + 0.06 * np.sin(am * 30.0 + 2.0 * np.sin(b[m] * 5.0 + am * 2.0))
         m = mat == FABRIC
         if m.any():
             out[m] = 0.93 + 0.07 * _hash2(np.floor(a[m] * 160), np.floor(b[m] * 160))
@@ -260,10 +280,11 @@ class Renderer:
         m = mat == FLOOR_WOOD
         if m.any():
             x, z = p[m, 0], p[m, 2]
-            plank = np.floor(x / 0.18)
+            across = x / 0.18
+            plank = np.floor(across)
             tint = 0.84 + 0.22 * _hash2(plank, plank * 0.37 + 1.0)
             shift = _hash2(plank, 7.0) * 1.4
-            seam = ((x / 0.18) % 1.0 < 0.05) | (((z + shift) / 1.4) % 1.0 < 0.012)
+            seam = (across % 1.0 < 0.05) | (((z + shift) / 1.4) % 1.0 < 0.012)
             grain = 0.97 + 0.03 * np.sin(z * 25.0 + 1.5 * np.sin(x * 20.0 + plank))
             out[m] = np.where(seam, 0.55, tint * grain)
         m = mat == FLOOR_TILE

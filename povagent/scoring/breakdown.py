@@ -73,19 +73,33 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
     the official mean is.
     """
-    rows = list(rows)
-    answered = [r for r in rows if r.answered and r.l2 is not None]
-    n, total = len(answered), len(rows)
-    errs = [r.l2 for r in answered if r.l2 is not None]
+    # one pass over the rows; each mean is still ``sum()`` of its values in row order
+    errs: list[float] = []
+    strict: list[float] = []
+    abs_x: list[float] = []
+    abs_y: list[float] = []
+    total = in_frame = parse_errors = 0
+    for r in rows:
+        total += 1
+        if r.parse_error:
+            parse_errors += 1
+        if not r.answered or r.l2 is None:
+            continue
+        errs.append(r.l2)
+        if r.gt_in_frame:
+            in_frame += 1
+        if r.l2_strict is not None:
+            strict.append(r.l2_strict)
+        if r.error_x is not None:
+            abs_x.append(abs(r.error_x))
+        if r.error_y is not None:
+            abs_y.append(abs(r.error_y))
+    n = len(errs)
     mean: float | None = None
     std: float | None = None
     if n:
         mean = sum(errs) / n
         std = math.sqrt(sum((e - mean) ** 2 for e in errs) / n)
-    in_frame = sum(1 for r in answered if r.gt_in_frame)
-    strict = [r.l2_strict for r in answered if r.l2_strict is not None]
-    abs_x = [abs(r.error_x) for r in answered if r.error_x is not None]
-    abs_y = [abs(r.error_y) for r in answered if r.error_y is not None]
     return {
         "n": n,
         "n_total": total,
@@ -96,7 +110,7 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         "mean_l2_strict": sum(strict) / len(strict) if strict else None,
         "mean_abs_x": sum(abs_x) / len(abs_x) if abs_x else None,
         "mean_abs_y": sum(abs_y) / len(abs_y) if abs_y else None,
-        "n_parse_error": sum(1 for r in rows if r.parse_error),
+        "n_parse_error": parse_errors,
     }
 
 

@@ -74,6 +74,15 @@ def signed_errors(x: float, y: float, width: float, height: float, gt_u: float, 
     return clamp_unit(x / width) - clamp_unit(gt_u), clamp_unit(y / height) - clamp_unit(gt_v)
 
 
+def point_errors(x: float, y: float, width: float, height: float, gt_u: float, gt_v: float) -> tuple[float, float, float]:
+    """``(normalized_l2, error_x, error_y)`` of one point, each clamp taken once (scoring
+    computes all three for every row): the same numbers as :func:`normalized_l2` and
+    :func:`signed_errors`."""
+    ex = clamp_unit(x / width) - clamp_unit(gt_u)
+    ey = clamp_unit(y / height) - clamp_unit(gt_v)
+    return math.hypot(ex, ey), ex, ey
+
+
 def strict_l2(x: float, y: float, width: int, height: int, gt: GroundTruthInFrame) -> float:
     """The strict variant: a GT behind the camera or outside the frame counts as a miss (sqrt 2)."""
     if not gt.in_frame:

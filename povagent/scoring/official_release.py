@@ -24,18 +24,24 @@ Reading files only; the arithmetic is the geometry's and the metric's.
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
 from povagent.dataset.paths import dataset_root, is_inside
+from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, target_point
+from povagent.scoring.official import GroundTruthInFrame, project_ground_truth
 
 #: The official scorer's defaults for a camera field a record lacks.
 DEFAULT_FOV = 100.0
 DEFAULT_CAM_POS = (0.0, 0.0, 0.0)
+#: A missing ``camera`` object, read as officially (``{}``: every field at its default).
+NO_CAMERA: Mapping[str, Any] = MappingProxyType({})
 
 
 class NotScorable(ValueError):
@@ -128,6 +134,13 @@ class OfficialRelease:
     #: What could not be read, for the score's warnings.
     warnings: list[str] = field(default_factory=list)
     _logs: dict[str, dict[str, Mapping[str, Any]]] = field(default_factory=dict, repr=False)
+    #: Each (entry, direction)'s ground truth, computed once: a run names the same instance in
+    #: thousands of rows. Keyed by identity and kept beside the objects it was computed from.
+    _targets: dict[tuple[int, int, Any, str], tuple[Any, Any, tuple[float, float, float]]] = field(default_factory=dict, repr=False)
+    _cameras: dict[int, tuple[Any, CameraRecord]] = field(default_factory=dict, repr=False)
+    _projections: dict[tuple[tuple[float, float, float], int, float, float], tuple[CameraRecord, GroundTruthInFrame]] = field(
+        default_factory=dict, repr=False
+    )
 
     def entry(self, house_id: Any, pair_id: Any) -> Mapping[str, Any] | None:
         """The pair entry a prediction names, or ``None`` (ids compared as written)."""
@@ -164,7 +177,42 @@ class OfficialRelease:
     def target(self, entry: Mapping[str, Any], direction: Any, raw_position: Any) -> tuple[float, float, float]:
         """The 3D ground truth of one (pair, direction), as the official scorer computes it: the
         surface-corrected point when ``stage3`` judges the direction appropriate, else the raw
-        placement ``raw_position``."""
+        placement ``raw_position``. Computed once per (entry, direction, position)."""
+        # the key holds the direction as a key and as text (1 and True find the same stage3 entry
+        # but name different rules); the value holds the objects, so their ids stay theirs
+        if not _hashable(direction):
+            return self._target(entry, direction, raw_position)
+        key = (id(entry), id(raw_position), direction, str(direction))
+        cached = self._targets.get(key)
+        if cached is not None and cached[0] is entry and cached[1] is raw_position:
+            return cached[2]
+        point = self._target(entry, direction, raw_position)
+        self._targets[key] = (entry, raw_position, point)
+        return point
+
+    def camera(self, raw: Any, what: str) -> CameraRecord:
+        """:meth:`CameraRecord.read` of one of the release's camera objects, read once per
+        object (rows name the same few frames and observer cameras again and again)."""
+        cached = self._cameras.get(id(raw))
+        if cached is not None and cached[0] is raw:
+            return cached[1]
+        record = CameraRecord.read(raw, what)
+        self._cameras[id(raw)] = (raw, record)
+        return record
+
+    def ground_truth_in(self, target: tuple[float, float, float], camera: CameraRecord, width: float, height: float) -> GroundTruthInFrame:
+        """:func:`project_ground_truth` of a target in a camera record (as :meth:`camera` read
+        it) at ``width`` x ``height``, projected once per target, record and size."""
+        key = (target, id(camera), width, height)
+        cached = self._projections.get(key)
+        if cached is not None and cached[0] is camera:
+            return cached[1]
+        # a size read as written divides as officially (a float as well as an int)
+        gt = project_ground_truth(target, Camera(camera.position, camera.yaw, camera.horizon, camera.fov, width, height))  # type: ignore[arg-type]
+        self._projections[key] = (camera, gt)
+        return gt
+
+    def _target(self, entry: Mapping[str, Any], direction: Any, raw_position: Any) -> tuple[float, float, float]:
         raw = point_of(raw_position, "placement.position")
         stage3 = _mapping(entry.get("stage3", {}), "stage3")
         info = stage3.get(direction) if _hashable(direction) else None

@@ -30,31 +30,35 @@ import json
 import math
 import re
 from collections import defaultdict
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, TypeGuard
 
-from povagent.dataset.loader import Dataset, ground_truth_point, observer_camera
+from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.errors import PredictionsError
-from povagent.geometry.camera import Camera
 from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,
     OfficialScore,
-    normalized_l2,
+    point_errors,
     points_l2,
     project_ground_truth,
     score_point,
     scoring_frame,
-    signed_errors,
 )
-from povagent.scoring.official_release import CameraRecord, NotScorable, OfficialRelease
+from povagent.scoring.official_release import NO_CAMERA, NotScorable, OfficialRelease
 
 #: The fields the official scorer reads from every row (a row without one of them stops it).
 REQUIRED_FIELDS = ("house_id", "pair_id", "direction", "type")
+REQUIRED_KEYS = frozenset(REQUIRED_FIELDS)
+
+#: The condition and direction labels of the paper (any other is counted as its own group).
+CONDITION_LABELS = frozenset(str(c) for c in CONDITIONS)
+DIRECTION_LABELS = frozenset(str(d) for d in DIRECTIONS)
 
 #: Why the official scorer leaves a row unanswered, in the order it checks (its status names).
 NO_PREDICTION = "no_prediction"
@@ -180,7 +184,14 @@ def _warnings_of(notes: _Notes) -> list[str]:
     return out
 
 
+def _is_mapping(v: Any) -> TypeGuard[Mapping[Any, Any]]:
+    # a JSON object is a dict: the abstract-class check only for anything else
+    return type(v) is dict or isinstance(v, Mapping)
+
+
 def _hashable(v: Any) -> bool:
+    if type(v) is str:  # what every row holds: no need to hash it
+        return True
     try:
         hash(v)
     except TypeError:
@@ -200,9 +211,9 @@ def score_official_row(
     house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
     c_label, d_label = group_label(cond), group_label(direction)
     iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+    if c_label is not None and c_label not in CONDITION_LABELS:
         notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+    if d_label is not None and d_label not in DIRECTION_LABELS:
         notes.odd_direction[d_label].append(ref or iid)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
@@ -250,9 +261,9 @@ def score_official_row(
         notes.nan.append(ref or iid)
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
-    gx, gy, gz = (float(v) for v in ground_truth_point(pair, direction))
-    gt = project_ground_truth((gx, gy, gz), camera)
-    l2 = normalized_l2(x, y, camera.width, camera.height, gt.u, gt.v)
+    gt = project_ground_truth(dataset.target(house.house_id, pair, direction), camera)  # type: ignore[union-attr]  # a pair was found, so its house was
+    # the signed errors are the recorded point's (a point list's first), as officially
+    l2, ex, ey = point_errors(x, y, camera.width, camera.height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
     if points:
@@ -261,8 +272,6 @@ def score_official_row(
         except (TypeError, ValueError, IndexError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
     strict = l2 if gt.in_frame else MAX_L2
-    # the signed errors are the recorded point's (a point list's first), as officially
-    ex, ey = signed_errors(x, y, camera.width, camera.height, gt.u, gt.v)
     return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
 
@@ -279,9 +288,9 @@ def score_release_row(
     house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
     c_label, d_label = group_label(cond), group_label(direction)
     iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in [str(c) for c in CONDITIONS]:
+    if c_label is not None and c_label not in CONDITION_LABELS:
         notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in [str(d) for d in DIRECTIONS]:
+    if d_label is not None and d_label not in DIRECTION_LABELS:
         notes.odd_direction[d_label].append(ref or iid)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
@@ -290,7 +299,7 @@ def score_release_row(
     x, y = row.get("predicted_x"), row.get("predicted_y")
     entry = release.entry(house_id, pair_id)
     placements = entry.get("placements", {}) if entry is not None else None
-    placement = placements.get(direction) if isinstance(placements, Mapping) and _hashable(direction) else None
+    placement = placements.get(direction) if _is_mapping(placements) and _hashable(direction) else None
     if not placement:
         notes.unknown.append(f"{ref} ({iid})" if ref else iid)
     if x is None or y is None:
@@ -300,13 +309,13 @@ def score_release_row(
     if not placement:
         return result(_unanswered(PLACEMENT_NOT_FOUND))
     try:
-        raw_position = placement.get("position") if isinstance(placement, Mapping) else None
+        raw_position = placement.get("position") if _is_mapping(placement) else None
         if not raw_position:
             return result(_unanswered(NO_GT_POSITION))
         target = release.target(entry, direction, raw_position)
         sw, sh = screen
         if cond == "c":
-            cam = CameraRecord.read(entry.get("camera", {}), "camera")
+            cam = release.camera(entry.get("camera", NO_CAMERA), "camera")
             width, height = (cam.width if cam.width is not None else sw), (cam.height if cam.height is not None else sh)
         else:
             image = row.get("predicted_image")
@@ -316,9 +325,8 @@ def score_release_row(
             if record is None:
                 return result(_unanswered(IMAGE_NOT_IN_LOG))
             # the selected frame is projected at the metadata's size, as officially
-            cam, (width, height) = CameraRecord.read(record.get("camera", {}), "camera"), (sw, sh)
-        camera = Camera(cam.position, cam.yaw, cam.horizon, cam.fov, width, height)  # type: ignore[arg-type]  # a size read as written divides as officially
-        gt = project_ground_truth(target, camera)
+            cam, (width, height) = release.camera(record.get("camera", NO_CAMERA), "camera"), (sw, sh)
+        gt = release.ground_truth_in(target, cam, width, height)
     except NotScorable as exc:
         notes.not_number.append(f"{ref or iid} ({exc})")
         return result(_unanswered(NOT_A_NUMBER))
@@ -330,7 +338,7 @@ def score_release_row(
         notes.nan.append(ref or iid)
     elif math.isinf(x) or math.isinf(y):
         notes.infinite.append(ref or iid)
-    l2 = normalized_l2(x, y, width, height, gt.u, gt.v)
+    l2, ex, ey = point_errors(x, y, width, height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
     if points:
@@ -338,7 +346,6 @@ def score_release_row(
             l2, closest = points_l2([(p[0], p[1]) for p in points], width, height, gt.u, gt.v)
         except (TypeError, ValueError, IndexError, KeyError, ZeroDivisionError):
             notes.not_number.append(f"{ref or iid} (predicted_points)")
-    ex, ey = signed_errors(x, y, width, height, gt.u, gt.v)
     strict = l2 if gt.in_frame else MAX_L2
     return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
@@ -357,7 +364,7 @@ def score_official_rows(
     scored: list[ScoredPrediction] = []
     for i, item in enumerate(rows):
         data, ref = (item.data, item.where) if isinstance(item, RawPrediction) else (item, f"row {i}")
-        if not isinstance(data, Mapping) or any(k not in data for k in REQUIRED_FIELDS):
+        if not _is_mapping(data) or not data.keys() >= REQUIRED_KEYS:
             notes.skipped.append(ref)
             continue
         if not (_hashable(data["type"]) and _hashable(data["direction"])):

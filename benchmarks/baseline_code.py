@@ -1,0 +1,59 @@
+"""The code of an earlier commit, importable beside today's: how a benchmark times "before".
+
+``baseline_checkout(ref)`` writes the ``povagent`` package of commit ``ref`` (``git archive``)
+into a temporary folder and returns that folder; a subprocess run with it first on
+``PYTHONPATH`` imports the old package while the installed plugins and dependencies stay the
+same. ``cpu_of(code, pythonpath)`` runs a snippet in such a subprocess and returns the CPU
+seconds it prints. Benchmarks alternate the two subprocesses round by round, so both see the
+same machine load.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def baseline_checkout(ref: str, into: Path | None = None) -> Path:
+    """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository)."""
+    into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", ref, "povagent"], check=True, capture_output=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+        tar.extractall(into, filter="data")
+    return into
+
+
+def cpu_of(code: str, pythonpath: Path | None, timeout: float = 3600) -> dict[str, float]:
+    """Run ``code`` in a fresh interpreter (``pythonpath`` first on the import path, or today's
+    code when ``None``); ``code`` prints ``key=value`` lines, returned as floats."""
+    env = dict(os.environ)
+    if pythonpath is not None:
+        env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    # run outside the repository: ``python -c`` puts the working folder first on the path
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True, timeout=timeout
+    ).stdout
+    values = {}
+    for line in out.splitlines():
+        key, sep, value = line.partition("=")
+        if sep:
+            values[key.strip()] = float(value)
+    return values
+
+
+def imported_from(pythonpath: Path | None) -> str:
+    """Where ``povagent`` is imported from with ``pythonpath`` (to show the baseline is the old code)."""
+    env = dict(os.environ)
+    if pythonpath is not None:
+        env["PYTHONPATH"] = str(pythonpath)
+    code = "import povagent, os; print(os.path.dirname(povagent.__file__))"
+    return subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True
+    ).stdout.strip()
