@@ -32,16 +32,16 @@ def random_rows(release, n: int, seed: int = 0) -> list[dict]:
     return rows
 
 
-def counting(monkeypatch, module) -> list[int]:
-    """Count the calls of ``module.target_point`` (the real function still runs)."""
+def counting(monkeypatch, module, name: str = "target_point") -> list[int]:
+    """Count the calls of ``module.<name>`` (the real function still runs)."""
     calls = [0]
-    real = module.target_point
+    real = getattr(module, name)
 
     def counted(*args, **kwargs):
         calls[0] += 1
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(module, "target_point", counted)
+    monkeypatch.setattr(module, name, counted)
     return calls
 
 
@@ -61,7 +61,7 @@ def test_official_counting_computes_each_ground_truth_once(monkeypatch, generate
 
 def test_povagent_counting_computes_each_ground_truth_once(monkeypatch, generated_release, rows):
     dataset = load_dataset(generated_release, check_images=False)
-    calls = counting(monkeypatch, loader)
+    calls = counting(monkeypatch, loader, "ground_truth_point")
     scored, _ = score_official_rows(rows, dataset)
     instances = {(r["house_id"], r["pair_id"], r["direction"]) for r in rows}
     assert sum(s.score.answered for s in scored) == len(rows)
