@@ -80,6 +80,15 @@ class InstanceRecords:
         return found
 
 
+def answered_point(instance: Instance, answer: ParsedAnswer) -> tuple[Frame, float, float] | None:
+    """The frame an answer is scored in and its point, or ``None`` when it has no scorable point
+    (unanswered, no coordinates, or an unknown frame): such an answer is ``{"answered": False}``."""
+    if not answer.answered or answer.x is None or answer.y is None:
+        return None
+    frame = scoring_frame(instance, answer.selected_image)
+    return None if frame is None else (frame, float(answer.x), float(answer.y))
+
+
 class DiagnoseScorer(Scorer):
     """First failing step (frame, anchor, viewpoint, placement) and the egocentric-bias vote."""
 
@@ -88,14 +97,13 @@ class DiagnoseScorer(Scorer):
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The diagnosis of one answer (``{"answered": False}`` without a scorable answer)."""
-        if not answer.answered or answer.x is None or answer.y is None:
+        point = answered_point(instance, answer)
+        if point is None:
             return {"answered": False}
-        frame = scoring_frame(instance, answer.selected_image)
-        if frame is None:
-            return {"answered": False}
+        frame, x, y = point
         case, _ = self.records.get(instance, dataset)
         region = self.records.region(instance, frame, dataset)
-        return diagnose_answer(instance, case, region, frame, float(answer.x), float(answer.y)).as_dict()
+        return diagnose_answer(instance, case, region, frame, x, y).as_dict()
 
 
 @hookimpl

@@ -18,8 +18,7 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent.scoring.official import scoring_frame
-from povagent_plugins.scorers.diagnose import InstanceRecords
+from povagent_plugins.scorers.diagnose import InstanceRecords, answered_point
 
 
 class RelationScorer(Scorer):
@@ -30,13 +29,12 @@ class RelationScorer(Scorer):
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """Hit or miss of one answer (``{"answered": False}`` without a scorable answer)."""
-        if not answer.answered or answer.x is None or answer.y is None:
+        point = answered_point(instance, answer)
+        if point is None:
             return {"answered": False}
-        frame = scoring_frame(instance, answer.selected_image)
-        if frame is None:
-            return {"answered": False}
+        frame, x, y = point
         region = self.records.region(instance, frame, dataset)
-        margin = region.margin(float(answer.x), float(answer.y))
+        margin = region.margin(x, y)
         return {"answered": True, "success": margin is not None and margin <= 0.0, "margin_px": margin, "region_empty": region.empty}
 
 

@@ -199,6 +199,20 @@ def _hashable(v: Any) -> bool:
     return True
 
 
+def _row_labels(row: Mapping[str, Any], notes: _Notes, ref: str | None) -> tuple[Any, Any, Any, Any, str | None, str | None, str]:
+    """``(house_id, pair_id, direction, condition, condition label, direction label, instance
+    id)`` of an official row, the first four as written; an odd condition or direction label is
+    noted under ``ref`` (or the id)."""
+    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
+    c_label, d_label = group_label(cond), group_label(direction)
+    iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
+    if c_label is not None and c_label not in CONDITION_LABELS:
+        notes.odd_type[c_label].append(ref or iid)
+    if d_label is not None and d_label not in DIRECTION_LABELS:
+        notes.odd_direction[d_label].append(ref or iid)
+    return house_id, pair_id, direction, cond, c_label, d_label, iid
+
+
 def score_official_row(
     row: Mapping[str, Any], dataset: Dataset, screen: tuple[float, float] = (512.0, 512.0), run: int = 0, ref: str = "", notes: _Notes | None = None
 ) -> ScoredPrediction:
@@ -208,13 +222,7 @@ def score_official_row(
     warnings collected in ``notes``.
     """
     notes = notes if notes is not None else _Notes.empty()
-    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
-    c_label, d_label = group_label(cond), group_label(direction)
-    iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in CONDITION_LABELS:
-        notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in DIRECTION_LABELS:
-        notes.odd_direction[d_label].append(ref or iid)
+    house_id, pair_id, direction, cond, c_label, d_label, iid = _row_labels(row, notes, ref)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
         return ScoredPrediction(iid, c_label, d_label, run, score, closest, bool(row.get("parse_error")))
@@ -285,13 +293,7 @@ def score_release_row(
     A value the official scorer would stop on is counted unanswered and named in ``notes``.
     """
     notes = notes if notes is not None else _Notes.empty()
-    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
-    c_label, d_label = group_label(cond), group_label(direction)
-    iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
-    if c_label is not None and c_label not in CONDITION_LABELS:
-        notes.odd_type[c_label].append(ref or iid)
-    if d_label is not None and d_label not in DIRECTION_LABELS:
-        notes.odd_direction[d_label].append(ref or iid)
+    house_id, pair_id, direction, cond, c_label, d_label, iid = _row_labels(row, notes, ref)
 
     def result(score: OfficialScore, closest: float | None = None) -> ScoredPrediction:
         return ScoredPrediction(iid, c_label, d_label, run, score, closest, bool(row.get("parse_error")))

@@ -43,12 +43,7 @@ def example_line(example: TrainingExample, split: str, rationale: str) -> dict[s
         if part["type"] == "image":
             del part["text"]
     return {
-        "id": example.id,
-        "house_id": example.house_id,
-        "pair_id": example.pair_id,
-        "direction": example.direction,
-        "condition": example.condition,
-        "split": split,
+        **example.identity(split),
         "messages": messages,
         "images": [image_reference(example, p) for p in example.image_paths],
         "conversations": sharegpt_turns(example),

@@ -64,6 +64,17 @@ class TrainingExample:
                 texts.append(part.text)
         return "\n".join(texts)
 
+    def identity(self, split: str) -> dict[str, str]:
+        """The fields naming the example, first in every format's row."""
+        return {
+            "id": self.id,
+            "house_id": self.house_id,
+            "pair_id": self.pair_id,
+            "direction": self.direction,
+            "condition": self.condition,
+            "split": split,
+        }
+
     def facts_record(self) -> dict[str, Any]:
         """The stated facts as plain JSON values (kept in every row, for checking and filtering)."""
         f = self.facts

@@ -84,12 +84,7 @@ def chat_messages(example: TrainingExample) -> list[dict[str, Any]]:
 def example_row(example: TrainingExample, split: str, rationale: str) -> dict[str, Any]:
     """One Parquet row (images read from their files)."""
     return {
-        "id": example.id,
-        "house_id": example.house_id,
-        "pair_id": example.pair_id,
-        "direction": example.direction,
-        "condition": example.condition,
-        "split": split,
+        **example.identity(split),
         "messages": chat_messages(example),
         "images": [{"bytes": f.read_bytes(), "path": f"{example.house_id}/{p}"} for f, p in zip(example.image_files, example.image_paths)],
         "question": example.question_text,
