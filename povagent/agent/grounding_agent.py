@@ -52,11 +52,12 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
+from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import Condition, Direction
 from povagent.dataset.realworld import unknown_object, unposed_square_camera
 from povagent.engine.request_path import RequestPath
-from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
+from povagent.engine.retry import InfraFailure, is_transient
 from povagent.errors import BackendError, BadInputError, NoAnswerError, UnparseableAnswerError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response

@@ -64,12 +64,11 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from povagent.cluster.spec import parse_cluster_spec  # pure: no Dask import
 from povagent.config.plugin_rule import allowed_plugins
 from povagent.config.profiles import near_profile
+from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
-from povagent.engine.retry import RetryPolicy
 from povagent.errors import ClusterError, ConfigError, PluginError
 from povagent.exchange.image_server import parse_bind
-from povagent.exchange.transport import DEFAULT_CACHE_DIR
 from povagent.plugins import PluginHost, did_you_mean, get_plugin_host, unknown_name_message
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
 
@@ -272,6 +271,11 @@ class CacheSpec(_Strict):
         if value is not None and value.is_dir():
             raise ValueError("names a folder; the cache is one file (e.g. runs/cache.sqlite)")
         return value
+
+
+#: Where derived images are written for ``file``/``http`` transport when the pipeline does not
+#: say (under the run folder).
+DEFAULT_CACHE_DIR = "image-cache"
 
 
 class ImagesSpec(_Strict):

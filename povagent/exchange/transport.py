@@ -50,9 +50,6 @@ TransportName = Literal["inline", "file", "http"]
 #: The transports a pipeline may name.
 TRANSPORTS: tuple[TransportName, ...] = ("inline", "file", "http")
 
-#: Where derived images are written when the pipeline does not say (under the run folder).
-DEFAULT_CACHE_DIR = "image-cache"
-
 _SUFFIXES = {"image/png": ".png", "image/jpeg": ".jpeg", "image/webp": ".webp", "image/gif": ".gif"}
 
 

@@ -15,8 +15,8 @@ import pytest
 from PIL import Image
 
 from povagent.agent.grounding_agent import GroundingAgent, Localization
-from povagent.engine.retry import RetryPolicy
 from povagent.answers.spec import ParseStatus
+from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.models import Condition
 from povagent.errors import BadInputError, ConfigError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.camera import Camera
