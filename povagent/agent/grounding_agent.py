@@ -332,7 +332,8 @@ class GroundingAgent:
         :class:`GroundingAgent` (e.g. ``plane=``). Problems are :class:`~povagent.errors.ConfigError`
         naming the file and line.
         """
-        from povagent.config.pipeline import ConfigSource, pipeline_from_source, read_yaml
+        from povagent.config.pipeline import pipeline_from_source
+        from povagent.config.yaml_reader import ConfigSource, read_yaml
 
         if isinstance(pipeline, Mapping):
             source = ConfigSource("<pipeline mapping>", dict(pipeline), {})

@@ -2,7 +2,7 @@
 
 A pipeline's ``retry:`` and the agent's ``retry=`` are both a :class:`RetryPolicy`, bounded so
 that no configuration can make a run wait forever. It is data, read by the pipeline's models
-(:mod:`povagent.config.pipeline`) and applied by the engine: which failures are retried and how
+(:mod:`povagent.config.models`) and applied by the engine: which failures are retried and how
 long each wait is are the engine's rule (:mod:`povagent.engine.retry`). This module must not
 classify failures, sleep, or import the engine.
 """

@@ -31,7 +31,7 @@ from povagent.errors import ConfigError
 from povagent.exchange.image_server import ImageReferenceError, StaticImageServer
 
 if TYPE_CHECKING:
-    from povagent.config.pipeline import ImagesSpec
+    from povagent.config.models import ImagesSpec
     from povagent.exchange.images import ImageStore
 
 __all__ = [

@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.config.pipeline import ImagesSpec, load_pipeline
+from povagent.config.models import ImagesSpec
+from povagent.config.pipeline import load_pipeline
 from povagent.errors import ConfigError
 
 
