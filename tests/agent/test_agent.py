@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.agent.grounding_agent import GroundingAgent, Localization
+from povagent.agent import GroundingAgent, Localization
 from povagent.answers.spec import ParseStatus
 from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.models import Condition
