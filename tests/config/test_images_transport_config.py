@@ -1,4 +1,4 @@
-"""The ``images:`` section's transport options (povagent/config/pipeline.py, ImagesSpec).
+"""The ``images:`` section's transport options (povagent/config/models.py, ImagesSpec).
 
 Bad combinations fail at load time with the file, the line and what to write instead; the
 transport is not part of the pipeline's identity (changing it never makes a folder "another
