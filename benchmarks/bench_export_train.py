@@ -23,7 +23,8 @@ from pathlib import Path
 CHILD = r"""
 import json, resource, sys, time
 from pathlib import Path
-from povagent.train.export import ExportOptions, export_training_set
+from povagent.train.export import export_training_set
+from povagent.train.export_options import ExportOptions
 root, out, fmt, houses = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3], int(sys.argv[4])
 keep = sorted(p.name for p in (root / "artifacts").iterdir())[:houses]
 split = "train=0:%d" % (max(int(h.rsplit("_", 1)[1]) for h in keep) + 1)

@@ -112,7 +112,8 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
     """Run one scenario in this process and return its figures."""
     if name == "reference":
         return reference(STEADY_REPEATS * 2439)
-    from povagent.config.pipeline import PipelineConfig, resolve_components
+    from povagent.config.models import PipelineConfig
+    from povagent.config.plugin_checks import resolve_components
     from povagent.dataset.loader import load_dataset
     from povagent.exchange.images import ImageStore
     from povagent.plugins import get_plugin_host

@@ -76,7 +76,8 @@ def _instances(data: Path, n: int) -> list:
 
 def run_povagent(data: Path, out: Path, url: str, n: int, concurrency: int, model: str) -> dict:
     """One povagent run over the first ``n`` Inferred/Stated instances; its figures."""
-    from povagent.config.pipeline import PipelineConfig, resolve_components
+    from povagent.config.models import PipelineConfig
+    from povagent.config.plugin_checks import resolve_components
     from povagent.dataset.loader import load_dataset
     from povagent.exchange.images import ImageStore
     from povagent.plugins import get_plugin_host

@@ -25,7 +25,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from povagent.config.pipeline import ConfigSource, pipeline_from_source
+from povagent.config.pipeline import pipeline_from_source
+from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.loader import load_dataset
 from povagent.results.rows import iter_rows
 from povagent.run.rescore import rescore_run

@@ -31,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from povagent.config.pipeline import ConfigSource, pipeline_from_source
+from povagent.config.pipeline import pipeline_from_source
+from povagent.config.yaml_reader import ConfigSource
 from povagent.results.rows import iter_rows
 from povagent.run.runner import PipelineRun
 

@@ -68,6 +68,7 @@ RULE_MODULES: tuple[RuleModule, ...] = (
     RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
     RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_rescale_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
     RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry_rules.py", "tests/engine/test_retry.py")),
+    RuleModule("povagent/config/retry_policy.py", ("tests/engine/test_retry_rules.py", "tests/engine/test_retry.py")),
     RuleModule(
         "povagent/run/pending.py",
         ("tests/run/test_resume_rules.py",),

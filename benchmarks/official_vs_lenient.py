@@ -71,7 +71,7 @@ def agreement(host, cases) -> dict[str, tuple[int, int]]:
 def replayed_run(out: Path, cases, houses: int, seed: int) -> list[tuple[str, dict, dict]]:
     """Replay one corpus answer per instance with each lenient parser; returns (parser, summary,
     official summary from rescore)."""
-    from povagent.config.pipeline import PipelineConfig
+    from povagent.config.models import PipelineConfig
     from povagent.dataset.instances import row_key
     from povagent.dataset.loader import load_dataset
     from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus

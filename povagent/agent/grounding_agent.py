@@ -8,20 +8,18 @@ the frame, the pixel in the *original* frame, the normalized point, how the answ
 raw answer, latency and tokens, and, when the frame's camera is given, a 3D goal in the robot's
 world frame (on the floor, or at a depth image's depth; see :mod:`povagent.geometry.goals`).
 
-How one call goes: frames are letterboxed to the benchmark's 512x512 (:mod:`povagent.geometry.letterbox`,
-as the paper does for house-tour videos) and put into a fresh image store; a synthetic
-:class:`~povagent.dataset.instances.Instance` is built (condition A when frames are given, C when
-an ``observer_view`` is); the strategy talks to the backend through an ``ask`` function that
-retries transient failures within a deadline; the parser reads the final answer; the pixel is
-mapped back through the exact letterbox transform and, with a camera, back-projected.
-
-A strategy that solves the geometry itself (:class:`PosedSolver`: ``geometric``) is given the
-robot's cameras instead of being told nothing about them: each camera (AI2-THOR's ``Camera`` or
-a ``PinholeCamera`` in any convention, any intrinsics and frame size) is brought into the
-benchmark's world (:class:`~povagent.geometry.solver_world.SolverWorld`: y up, the floor plane
-``plane`` at ``y = 0``) and onto the letterboxed square the model sees
-(:meth:`~povagent.geometry.goals.PinholeCamera.letterboxed`); the 3D target it solves is mapped
-back into the robot's world and returned as the goal.
+How one call goes, one room each: the inputs are checked (:mod:`~povagent.agent.frame_inputs`);
+frames are letterboxed to the benchmark's 512x512 into a fresh image store and a synthetic
+:class:`~povagent.dataset.instances.Instance` is built around them (condition A when frames are
+given, C when an ``observer_view`` is; :mod:`~povagent.agent.prepared_call`); the strategy
+talks to the backend through an ``ask`` function that retries transient failures within a
+deadline (:mod:`~povagent.agent.ask_factory`); the parser reads the final answer, and the pixel
+is mapped back through the exact letterbox transform and, with a camera, back-projected
+(:mod:`~povagent.agent.localization`). A strategy that solves the geometry itself
+(:class:`~povagent.agent.solver_cameras.PosedSolver`: ``geometric``) is given the robot's
+cameras, brought into the benchmark's world, and its 3D target is mapped back into the robot's
+(:mod:`~povagent.agent.solver_cameras`). This module holds the agent itself: building it,
+its event loop and its timeout, and the order of those steps.
 
 What a robot app can catch (all :class:`~povagent.errors.GroundingError`):
 :class:`~povagent.errors.BadInputError` (no frames, an unreadable image, cameras or depth
@@ -40,204 +38,26 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import os
-import tempfile
 import threading
 import time
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any, Callable, Literal, Mapping, Protocol, Sequence, runtime_checkable
+from typing import Any, Literal, Mapping, Sequence
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
-from pydantic import BaseModel, ConfigDict
 
-from povagent.answers.spec import ParsedAnswer, ParseStatus
-from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import Condition, Direction
-from povagent.dataset.realworld import unknown_object, unposed_square_camera
-from povagent.engine.request_path import RequestPath
-from povagent.engine.retry import InfraFailure, RetryPolicy, is_transient
-from povagent.errors import BackendError, BadInputError, NoAnswerError, UnparseableAnswerError
-from povagent.exchange.images import ImageStore
+from povagent.agent.ask_factory import AGENT_RETRY, AskFactory, default_ask_factory
+from povagent.agent.frame_inputs import FrameInput
+from povagent.agent.localization import Localization, localize
+from povagent.agent.prepared_call import PreparedCall, prepare_call
+from povagent.agent.solver_cameras import PosedSolver
+from povagent.config.retry_policy import RetryPolicy
+from povagent.errors import BackendError, NoAnswerError
 from povagent.exchange.messages import Request, Response
-from povagent.geometry.camera import Camera, ViewCamera
-from povagent.geometry.goals import FLOOR, Goal3D, GoalCamera, GoalUnavailable, PinholeCamera, Plane, back_project, camera_problem
-from povagent.geometry.letterbox import DEFAULT_PAD_COLOR, Letterbox, pixel_index
-from povagent.geometry.solver_world import SolverWorld
-from povagent.interfaces import Ask, Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
-
-#: What a frame may be: a path, a PIL image, or an ``(H, W)``/``(H, W, 3|4)`` RGB(A) array.
-FrameInput = str | os.PathLike | Image.Image | np.ndarray
+from povagent.geometry.goals import FLOOR, GoalCamera, Plane
+from povagent.geometry.letterbox import DEFAULT_PAD_COLOR
+from povagent.interfaces import Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
 
 #: Default wall-clock budget of one ``locate`` call (seconds), every attempt included.
 DEFAULT_TIMEOUT_S = 120.0
-
-#: The id parts of the synthetic instance (the prompts never show them).
-AGENT_HOUSE_ID = "agent"
-AGENT_PAIR_ID = "query"
-
-
-class Localization(BaseModel):
-    """Where the model put the target, in the robot's own frame (and world, given a camera).
-
-    ``frame_index`` is the index of the chosen frame in ``frames`` (A/B), or 0 for the observer
-    view (C). ``pixel`` is a continuous coordinate in that original frame (``(0, 0)`` its
-    top-left corner, ``(W, H)`` its bottom-right; see :mod:`povagent.geometry.letterbox`) and
-    ``pixel_index`` the ``(column, row)`` of the pixel containing it; ``normalized`` is
-    ``pixel / (W, H)``. ``square_point`` is the answer as the model gave it in the letterboxed
-    512x512 image, and ``on_padding`` says it fell on the letterbox border (it was moved to the
-    nearest image edge). ``latency_s`` is the whole call's wall time; ``model_latency_s`` the
-    sum of the model calls'. ``goal`` is the 3D point when a camera was given for the frame.
-    """
-
-    model_config = ConfigDict(frozen=True)
-
-    condition: Condition
-    frame_index: int
-    pixel: tuple[float, float]
-    pixel_index: tuple[int, int]
-    normalized: tuple[float, float]
-    frame_size: tuple[int, int]
-    square_point: tuple[float, float]
-    on_padding: bool
-    status: ParseStatus
-    reason: str = ""
-    repair: str | None = None
-    raw_answer: str
-    latency_s: float
-    model_latency_s: float
-    prompt_tokens: int | None = None
-    completion_tokens: int | None = None
-    cost_usd: float | None = None
-    retries: int = 0
-    exchanges: int = 1
-    goal: Goal3D | None = None
-    goal_error: str | None = None
-
-    @property
-    def point_3d(self) -> tuple[float, float, float] | None:
-        """The 3D goal's coordinates, or ``None`` when none was computed."""
-        return self.goal.point if self.goal is not None else None
-
-
-# -- the ask seam ---------------------------------------------------------------------------------
-#: Builds the ``ask`` a strategy calls, given the backend, the call's image store and the
-#: monotonic deadline of the whole call. The default sends through the engine's one request
-#: path (:class:`~povagent.engine.request_path.RequestPath`), as the runner does; a robot app
-#: may pass its own (``ask_factory=``) to add logging or a cache.
-AskFactory = Callable[[Backend, ImageStore, float], Ask]
-
-#: The agent's retry defaults: a robot waits for its answer, so fewer, shorter waits than a run.
-AGENT_RETRY = RetryPolicy(attempts=3, initial_wait=0.5, max_wait=8.0)
-
-
-def default_ask_factory(retry: RetryPolicy, attempt_timeout_s: float | None = None) -> AskFactory:
-    """An ``ask`` that sends through :class:`~povagent.engine.request_path.RequestPath`.
-
-    Failures are classified, retried and timed exactly as in a run (timeouts, dropped
-    connections, 429 and 5xx are retried; a server's Retry-After is honoured, capped; backoff
-    has jitter); every attempt and wait is also cut at the call's deadline. A request that gets
-    no answer becomes :class:`NoAnswerError`, its cause chained. ``attempt_timeout_s`` bounds
-    one attempt (default: the time left before the deadline).
-    """
-
-    def factory(backend: Backend, images: ImageStore, deadline: float) -> Ask:
-        timeout = attempt_timeout_s if attempt_timeout_s is not None else max(0.001, deadline - time.monotonic())
-        path = RequestPath(backend, images, policy=retry, timeout_s=timeout)
-
-        async def ask(request: Request) -> Response:
-            try:
-                return await path.send(request, label="agent", deadline=deadline)
-            except InfraFailure as exc:
-                if exc.error_type == "backend_exception":
-                    raise NoAnswerError(f"the backend failed (a bug in it, not the model): {exc.message}") from exc.__cause__
-                if not is_transient(exc.__cause__ or exc):
-                    raise NoAnswerError(f"the model refused the request ({exc.error_type}): {exc.message}") from exc
-                raise NoAnswerError(
-                    f"no answer after {exc.attempts} attempt(s) within the deadline; last error ({exc.error_type}): {exc.message}"
-                ) from exc
-
-        return ask
-
-    return factory
-
-
-# -- inputs ---------------------------------------------------------------------------------------
-def load_frame(frame: FrameInput, what: str) -> Image.Image:
-    """A frame as an RGB PIL image; :class:`BadInputError` naming ``what`` when unusable.
-
-    Arrays are taken as RGB (OpenCV's BGR arrays must be converted first): ``uint8``, or floats
-    on ``[0, 1]``; 2D arrays are grey, a 4th channel (alpha) is dropped.
-    """
-    if isinstance(frame, Image.Image):
-        return frame.convert("RGB")
-    if isinstance(frame, np.ndarray):
-        return _array_to_image(frame, what)
-    if isinstance(frame, (str, os.PathLike)):
-        path = Path(frame)
-        try:
-            with Image.open(path) as im:
-                im.load()
-                return im.convert("RGB")
-        except FileNotFoundError:
-            raise BadInputError(f"{what}: no such image file: {path}") from None
-        except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as exc:
-            raise BadInputError(f"{what}: cannot read image {path}: {exc}") from None
-    raise BadInputError(f"{what}: expected a path, a PIL image or a numpy array, got {type(frame).__name__}")
-
-
-def _array_to_image(a: np.ndarray, what: str) -> Image.Image:
-    if a.ndim == 3 and a.shape[2] == 1:
-        a = a[..., 0]
-    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))):
-        raise BadInputError(f"{what}: an image array must be (H, W), (H, W, 3) or (H, W, 4), got shape {a.shape}")
-    if a.shape[0] < 1 or a.shape[1] < 1:
-        raise BadInputError(f"{what}: empty image array of shape {a.shape}")
-    if a.dtype == np.uint8:
-        data = a
-    elif a.dtype == np.bool_:
-        data = a.astype(np.uint8) * 255
-    elif np.issubdtype(a.dtype, np.floating):
-        if not np.isfinite(a).all() or a.min() < 0 or a.max() > 1:
-            raise BadInputError(f"{what}: a float image array must hold values in [0, 1]")
-        data = np.round(a * 255).astype(np.uint8)
-    else:
-        raise BadInputError(f"{what}: image arrays must be uint8 or float in [0, 1], got dtype {a.dtype}")
-    if data.ndim == 3 and data.shape[2] == 4:
-        data = data[..., :3]
-    return Image.fromarray(np.ascontiguousarray(data)).convert("RGB")
-
-
-@runtime_checkable
-class PosedSolver(Protocol):
-    """A strategy that solves the geometry with the shown frames' cameras (``geometric``).
-
-    ``solve_posed`` is :meth:`~povagent.interfaces.Strategy.solve` with one camera per shown
-    image, describing that (letterboxed, square) image in the benchmark's world: y up, the floor
-    at ``y = 0``, left-handed. A 3D target it works out (``Response.solved_point``) is in that
-    world; the agent maps it back into the robot's.
-    """
-
-    async def solve_posed(
-        self, instance: Instance, ask: Ask, images: ImageStore, cameras: Sequence[ViewCamera]
-    ) -> list[tuple[Request, Response]]:
-        """Every exchange, the final answer last."""
-        ...
-
-
-@dataclass
-class _Prepared:
-    """One call's inputs, ready for the strategy (``solver_cameras`` and ``world`` only for a
-    :class:`PosedSolver`)."""
-
-    instance: Instance
-    images: ImageStore
-    boxes: list[Letterbox]
-    cameras: list[GoalCamera | None]
-    depths: list[np.ndarray | None]
-    folder: tempfile.TemporaryDirectory
-    solver_cameras: list[ViewCamera] | None = None
-    world: SolverWorld | None = None
 
 
 # -- the agent ------------------------------------------------------------------------------------
@@ -331,7 +151,8 @@ class GroundingAgent:
         :class:`GroundingAgent` (e.g. ``plane=``). Problems are :class:`~povagent.errors.ConfigError`
         naming the file and line.
         """
-        from povagent.config.pipeline import ConfigSource, pipeline_from_source, read_yaml
+        from povagent.config.pipeline import pipeline_from_source
+        from povagent.config.yaml_reader import ConfigSource, read_yaml
 
         if isinstance(pipeline, Mapping):
             source = ConfigSource("<pipeline mapping>", dict(pipeline), {})
@@ -416,14 +237,17 @@ class GroundingAgent:
                     except (TransientBackendError, PermanentBackendError) as exc:
                         raise NoAnswerError(f"the backend cannot start: {exc}") from exc
                     self._started = True
-                prepared = await asyncio.to_thread(self._prepare, sentence, frames, observer_view, cameras, depths)
+                prepared = await asyncio.to_thread(
+                    prepare_call, sentence, frames, observer_view, cameras, depths,
+                    pad_color=self.pad_color, plane=self.plane, posed=isinstance(self.strategy, PosedSolver),
+                )
                 try:
                     exchanges = await self._solve(prepared, deadline)
                 finally:
                     prepared.folder.cleanup()
         except TimeoutError:
             raise NoAnswerError(f"no answer within {budget:g} s (the agent's timeout_s)") from None
-        return self._localize(prepared, exchanges, time.monotonic() - started)
+        return localize(prepared, exchanges, time.monotonic() - started, self.parser, self.plane, self.depth_kind)
 
     def close(self) -> None:
         """Release the backend's connections and stop the agent's loop thread."""
@@ -471,85 +295,7 @@ class GroundingAgent:
                 self._loop, self._loop_thread = loop, thread
             return self._loop
 
-    def _prepare(
-        self,
-        sentence: Any,
-        frames: Sequence[FrameInput],
-        observer_view: FrameInput | None,
-        cameras: Any,
-        depths: Any,
-    ) -> _Prepared:
-        if not isinstance(sentence, str) or not sentence.strip():
-            raise BadInputError("sentence: give the user's sentence as a non-empty string")
-        if observer_view is not None:
-            condition = Condition.GIVEN
-            shown = [load_frame(observer_view, "observer_view")]
-        else:
-            if isinstance(frames, (str, os.PathLike, Image.Image, np.ndarray)):
-                frames = [frames]  # one frame given bare
-            frames = list(frames or ())
-            if not frames:
-                raise BadInputError("no frames: give at least one frame, or an observer_view")
-            condition = Condition.INFERRED
-            shown = [load_frame(f, f"frames[{i}]") for i, f in enumerate(frames)]
-        cams = _aligned(cameras, len(shown), "cameras", (Camera, PinholeCamera))
-        deps = _aligned(depths, len(shown), "depths", (np.ndarray,))
-        for i, (im, cam) in enumerate(zip(shown, cams)):
-            if cam is None:
-                continue
-            problem = camera_problem(cam)
-            if problem is not None:
-                raise BadInputError(f"cameras[{i}]: {problem}")
-            if (cam.width, cam.height) != im.size:
-                raise BadInputError(
-                    f"cameras[{i}] describes a {cam.width}x{cam.height} image but the frame is "
-                    f"{im.size[0]}x{im.size[1]}: give the camera of the original frame"
-                )
-
-        images = ImageStore()
-        folder = tempfile.TemporaryDirectory(prefix="povagent-agent-")
-        boxes: list[Letterbox] = []
-        instance_frames: list[Frame] = []
-        # The model sees benchmark-like frames; the camera it is told about is the square one.
-        square_camera = unposed_square_camera()
-        try:
-            for i, im in enumerate(shown):
-                box = Letterbox.for_size(im.size[0], im.size[1])
-                stored = images.add_pil(box.apply(im, self.pad_color))
-                # strategies read frames by file: write the encoded bytes once, so the file
-                # hashes to the image already stored (no second encode)
-                file = Path(folder.name) / f"frame_{i:03d}.png"
-                file.write_bytes(images.encoded_bytes(stored.image_hash))
-                boxes.append(box)
-                name = "observer_view.png" if condition is Condition.GIVEN else file.name
-                # the frame's own camera is the unposed square one: only a PosedSolver is
-                # told the robot's cameras (below), in the world it reasons in
-                instance_frames.append(Frame(i, name, file, square_camera))
-        except BaseException:
-            folder.cleanup()
-            raise
-        solver_cameras, world = None, None
-        if isinstance(self.strategy, PosedSolver):
-            try:
-                solver_cameras, world = _solver_cameras(cams, boxes, self.plane, condition, square_camera)
-            except BaseException:
-                folder.cleanup()
-                raise
-        instance = Instance(
-            house_id=AGENT_HOUSE_ID,
-            pair_id=AGENT_PAIR_ID,
-            direction=Direction.FRONT,  # not shown to the model; the sentence carries the relation
-            condition=condition,
-            sentence=sentence.strip(),
-            frames=tuple(instance_frames),
-            target=(float("nan"),) * 3,
-            observer_object=unknown_object("Observer"),
-            anchor_object=unknown_object("Anchor"),
-            observer_camera=square_camera,
-        )
-        return _Prepared(instance, images, boxes, cams, deps, folder, solver_cameras, world)
-
-    async def _solve(self, prepared: _Prepared, deadline: float) -> list[tuple[Request, Response]]:
+    async def _solve(self, prepared: PreparedCall, deadline: float) -> list[tuple[Request, Response]]:
         ask = self._ask_factory(self.backend, prepared.images, deadline)
         try:
             if prepared.solver_cameras is not None and isinstance(self.strategy, PosedSolver):
@@ -562,132 +308,6 @@ class GroundingAgent:
             raise NoAnswerError("the strategy made no request to the model")
         return list(exchanges)
 
-    def _localize(self, prepared: _Prepared, exchanges: list[tuple[Request, Response]], elapsed: float) -> Localization:
-        request, response = exchanges[-1]
-        text = response.text or ""
-        parsed: ParsedAnswer = self.parser.parse(text, request.answer)
-        instance = prepared.instance
-        point = parsed.point
-        if point is None:
-            raise _unparseable(
-                f"no point could be read from the model's answer ({parsed.reason or parsed.status}): {_clip(text)}",
-                text,
-                parsed,
-            )
-        if instance.condition.uses_exploration_frames:
-            k = parsed.selected_image
-            if k is None or instance.selected_frame(k) is None:
-                named = "no frame" if k is None else f"frame {k}"
-                raise _unparseable(
-                    f"the answer names {named}, but there are frames 0..{len(instance.frames) - 1}: {_clip(text)}",
-                    text,
-                    parsed,
-                )
-        else:
-            k = 0
-        box = prepared.boxes[k]
-        square = (float(point[0]), float(point[1]))
-        pixel_arr = box.to_original(np.array(square))
-        pixel = (float(pixel_arr[0]), float(pixel_arr[1]))
-        width, height = box.original
-        goal, goal_error = None, None
-        camera = prepared.cameras[k]
-        solved = _solved_goal(response, camera, prepared.world, pixel)
-        if solved is not None:  # a strategy that solved the geometry gives the goal itself
-            goal = solved
-        elif camera is not None:
-            try:
-                goal = back_project(camera, pixel, depth=prepared.depths[k], plane=self.plane, depth_kind=self.depth_kind)
-            except GoalUnavailable as exc:
-                goal_error = str(exc)
-        usages = [r.usage for _, r in exchanges]
-        return Localization(
-            condition=instance.condition,
-            frame_index=k,
-            pixel=pixel,
-            pixel_index=pixel_index(pixel, width, height),
-            normalized=(pixel[0] / width, pixel[1] / height),
-            frame_size=(width, height),
-            square_point=square,
-            on_padding=box.on_padding(square),
-            status=parsed.status,
-            reason=parsed.reason,
-            repair=parsed.repair,
-            raw_answer=text,
-            latency_s=elapsed,
-            model_latency_s=sum(r.latency_s for _, r in exchanges),
-            prompt_tokens=_total(u.prompt_tokens for u in usages),
-            completion_tokens=_total(u.completion_tokens for u in usages),
-            cost_usd=_total(u.cost_usd for u in usages),
-            retries=sum(r.retries for _, r in exchanges),
-            exchanges=len(exchanges),
-            goal=goal,
-            goal_error=goal_error,
-        )
-
-
-def _solver_cameras(
-    cameras: Sequence[GoalCamera | None], boxes: Sequence[Letterbox], floor: Plane, condition: Condition, unposed: Camera
-) -> tuple[list[ViewCamera], SolverWorld | None]:
-    """The robot's cameras as a :class:`PosedSolver` needs them: in the benchmark's world, on
-    the letterboxed squares shown, and the world map they were brought in with.
-
-    A/B triangulate with every frame's camera, so each frame needs one. C (the observer view)
-    has no pose: without a camera the unposed square one stands in (only its field of view is
-    read).
-    """
-    pinholes = [c if isinstance(c, PinholeCamera) or c is None else PinholeCamera.from_camera(c) for c in cameras]
-    if condition.uses_exploration_frames:
-        missing = [i for i, c in enumerate(pinholes) if c is None]
-        if missing:
-            raise BadInputError(
-                f"cameras[{missing[0]}]: the geometric strategy triangulates with every frame's camera; "
-                f"give one for each of the {len(pinholes)} frame(s) (or use another strategy)"
-            )
-    posed = [(i, c) for i, c in enumerate(pinholes) if c is not None]
-    if not posed:
-        return [unposed], None
-    handed = {c.right_handed for _, c in posed}
-    if len(handed) > 1:
-        right = next(i for i, c in posed if c.right_handed)
-        left = next(i for i, c in posed if not c.right_handed)
-        raise BadInputError(
-            f"cameras[{right}] is posed in a right-handed world but cameras[{left}] in a left-handed one "
-            "(AI2-THOR's Camera is left-handed): give every camera in the same world"
-        )
-    world = SolverWorld.for_floor(floor, right_handed=handed.pop())
-    solver: list[ViewCamera] = []
-    for c, box in zip(pinholes, boxes):
-        solver.append(unposed if c is None else c.moved(world.rotation, world.origin).letterboxed(box))
-    return solver, world
-
-
-def _solved_goal(response: Response, camera: GoalCamera | None, world: SolverWorld | None, pixel: tuple[float, float]) -> Goal3D | None:
-    """The 3D target a strategy worked out itself (``Response.solved_point``, in the solver's
-    world), back in the robot's world; ``None`` when there is none."""
-    point = response.solved_point
-    if point is None or camera is None or world is None:
-        return None
-    x, y, z = (float(v) for v in world.to_world(np.asarray(point, dtype=float)))
-    distance = float(np.linalg.norm(np.array([x, y, z]) - np.asarray(camera.position, dtype=float)))
-    return Goal3D(point=(x, y, z), method="geometry", distance=distance, pixel=pixel)
-
-
-def _aligned(values: Any, n: int, name: str, types: tuple[type, ...]) -> list[Any]:
-    """``values`` as a list of ``n`` entries (``None`` -> all ``None``; one bare value for one image)."""
-    if values is None:
-        return [None] * n
-    if isinstance(values, types):
-        values = [values]
-    values = list(values)
-    if len(values) != n:
-        raise BadInputError(f"{name}: got {len(values)} entries for {n} image(s); give one per image shown (None allowed)")
-    for i, v in enumerate(values):
-        if v is not None and not isinstance(v, types):
-            expected = " or ".join(t.__name__ for t in types)
-            raise BadInputError(f"{name}[{i}]: expected {expected} or None, got {type(v).__name__}")
-    return values
-
 
 async def _cancel_other_tasks() -> None:
     """Cancel every task on the running loop but this one, and wait for them to end."""
@@ -699,31 +319,4 @@ async def _cancel_other_tasks() -> None:
     await asyncio.get_running_loop().shutdown_asyncgens()
 
 
-def _unparseable(message: str, raw_answer: str, parsed: ParsedAnswer) -> UnparseableAnswerError:
-    """The error with the raw answer and its parse attached (a robot app may log or re-ask)."""
-    return UnparseableAnswerError(message, raw_answer, parsed)
-
-
-def _total(values: Any) -> Any:
-    known = [v for v in values if v is not None]
-    return sum(known) if known else None
-
-
-def _clip(text: str, limit: int = 200) -> str:
-    one_line = " ".join(text.split())
-    return repr(one_line if len(one_line) <= limit else one_line[:limit] + "...")
-
-
-__all__ = [
-    "AskFactory",
-    "FrameInput",
-    "GroundingAgent",
-    "Localization",
-    "PinholeCamera",
-    "PosedSolver",
-    "Plane",
-    "AGENT_RETRY",
-    "default_ask_factory",
-    "load_frame",
-]
-
+__all__ = ["DEFAULT_TIMEOUT_S", "GroundingAgent"]

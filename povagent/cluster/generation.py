@@ -27,7 +27,7 @@ from typing import Any
 from povagent.cluster.client import WORKER_LOG_LEVEL, cluster_client, dashboard_link
 from povagent.cluster.storage import probe_storage
 from povagent.errors import ClusterError
-from povagent.generate.dataset import HouseFailure, HouseOutcome, make_house, make_house_files
+from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house, make_house_files
 from povagent.generate.judge import SurfaceJudge
 from povagent.generate.record import PARTIAL, GenerationOptions, place_house_files
 

@@ -47,7 +47,7 @@ from povagent.dataset.models import CONDITIONS, Condition
 from povagent.errors import DatasetError
 
 if TYPE_CHECKING:
-    from povagent.config.pipeline import PipelineConfig
+    from povagent.config.models import PipelineConfig
 
 #: The official release on the Hub.
 RELEASE_REPO = "owl-owl/POVBench"

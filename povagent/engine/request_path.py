@@ -2,7 +2,7 @@
 
 The runner (every key of a pipeline) and the embedded agent (one ``locate`` call) both send
 requests through :class:`RequestPath`, so they share one retry policy type
-(:class:`~povagent.engine.retry.RetryPolicy`), one transient/permanent classification
+(:class:`~povagent.config.retry_policy.RetryPolicy`), one transient/permanent classification
 (:func:`~povagent.engine.retry.is_transient`), one timeout rule (:meth:`RequestPath.attempt_timeout`)
 and, optionally, the response cache.
 
@@ -31,8 +31,9 @@ from typing import Any, AsyncContextManager, Callable, Protocol
 
 from tenacity import AsyncRetrying, retry_if_exception, stop_after_attempt
 
+from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.cache import ResponseCache, cache_key, identity_json
-from povagent.engine.retry import InfraFailure, RetryPolicy, error_type_of, is_transient, wait_before_retry
+from povagent.engine.retry import InfraFailure, error_type_of, is_transient, wait_before_retry
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.interfaces import Backend

@@ -7,6 +7,8 @@ failure nor a file-system one is a bug in a plugin and keeps its traceback. Wait
 server's ``Retry-After`` when it sent one (capped at :data:`MAX_RETRY_AFTER_S`), else an
 exponential backoff with jitter.
 
+The policy's numbers (attempts, waits) are configuration: :class:`~povagent.config.retry_policy.RetryPolicy`.
+
 Pure: no clock, no sleeping, no I/O (the jitter's random source is a parameter).
 """
 
@@ -17,39 +19,17 @@ import math
 import random
 from typing import Callable
 
-from pydantic import BaseModel, ConfigDict, Field
-
+from povagent.config.retry_policy import RetryPolicy
 from povagent.interfaces import PermanentBackendError, TransientBackendError
 
 #: Longest Retry-After honoured (a server asking for an hour is treated as asking for this).
 MAX_RETRY_AFTER_S = 600.0
-
-#: Longest wait a policy may configure between two attempts (seconds): one hour.
-MAX_POLICY_WAIT_S = 3600.0
-
-#: Most attempts a policy may configure for one request.
-MAX_ATTEMPTS = 100
 
 #: File-system errors that no retry will fix.
 _PERMANENT_OS_ERRORS = (FileNotFoundError, PermissionError, IsADirectoryError, NotADirectoryError)
 
 #: HTTP statuses a later attempt may get past.
 _TRANSIENT_STATUSES = frozenset({408, 425, 429})
-
-
-class RetryPolicy(BaseModel):
-    """Retries on transient failures: ``attempts`` in all (first try included), exponential
-    backoff from ``initial_wait`` to ``max_wait`` seconds; a server's Retry-After wins.
-
-    The one retry policy type: a pipeline's ``retry:`` and the agent's ``retry=`` are both
-    this. Every number is finite and bounded, so no configuration can make a run wait forever.
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-    attempts: int = Field(5, ge=1, le=MAX_ATTEMPTS)
-    initial_wait: float = Field(1.0, ge=0, le=MAX_POLICY_WAIT_S)
-    max_wait: float = Field(60.0, ge=0, le=MAX_POLICY_WAIT_S)
 
 
 def status_of(exc: BaseException) -> int | None:

@@ -23,15 +23,12 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, cast
+from typing import Callable, Protocol, cast
 
 from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.image_files import ImageFileError, check_image_bytes
 from povagent.errors import DatasetError
-
-if TYPE_CHECKING:
-    from povagent.exchange.transport import ImageTransport
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
@@ -57,6 +54,21 @@ class ImageStoreStats:
     rebuilds: int = 0
 
 
+class StoreTransport(Protocol):
+    """How images travel, as the store sees it (an :class:`~povagent.exchange.transport.ImageTransport`):
+    a name (``inline``, ``file``, ``http``) and the URL a model is sent for one image. The store
+    names only this, so it never depends on the transports built on top of it."""
+
+    @property
+    def name(self) -> str:
+        """The transport's name, as a pipeline's ``images.transport`` gives it."""
+        ...
+
+    def url(self, images: ImageStore, image_hash: str) -> str:
+        """The URL of one image of ``images``."""
+        ...
+
+
 class ImageStore:
     """Content-addressed images for one run or sweep (thread-safe)."""
 
@@ -76,7 +88,7 @@ class ImageStore:
         self._files: dict[str, Path] = {}
         #: How :meth:`url` sends images (see :mod:`povagent.exchange.transport`); ``None``:
         #: inline data URLs. The runner sets it for the length of a run.
-        self.transport: ImageTransport | None = None
+        self.transport: StoreTransport | None = None
 
     # -- adding -------------------------------------------------------------------------------
     def add_file(self, path: str | Path) -> StoredImage:

@@ -31,7 +31,7 @@ from povagent.errors import ConfigError
 from povagent.exchange.image_server import ImageReferenceError, StaticImageServer
 
 if TYPE_CHECKING:
-    from povagent.config.pipeline import ImagesSpec
+    from povagent.config.models import ImagesSpec
     from povagent.exchange.images import ImageStore
 
 __all__ = [
@@ -49,9 +49,6 @@ __all__ = [
 TransportName = Literal["inline", "file", "http"]
 #: The transports a pipeline may name.
 TRANSPORTS: tuple[TransportName, ...] = ("inline", "file", "http")
-
-#: Where derived images are written when the pipeline does not say (under the run folder).
-DEFAULT_CACHE_DIR = "image-cache"
 
 _SUFFIXES = {"image/png": ".png", "image/jpeg": ".jpeg", "image/webp": ".webp", "image/gif": ".gif"}
 

@@ -10,7 +10,8 @@ Rooms: ``assets`` (ProcTHOR sizes), ``floorplan`` (rooms, walls, doorways), ``fu
 (placement rules), ``scene`` (the shared house model), ``meshes`` (composite furniture),
 ``renderer`` (ray casting: RGB, depth, instance mask), ``exploration`` (reachable grid, tour),
 ``judge`` (pluggable surface judge), ``sentences`` (A/B/C templates), ``pairs`` (pairs, observer
-views, targets), ``writer`` (deterministic files), ``pipeline`` (one house), ``dataset`` (many).
+views, targets), ``writer`` (deterministic files), ``pipeline`` (one house), ``house_task`` (one
+house as a task any engine runs), ``dataset`` (many).
 """
 
 from povagent.generate.dataset import GenerationReport, generate_dataset

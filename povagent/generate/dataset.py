@@ -4,9 +4,9 @@ What it is for: ``generate_dataset``, the library entry point behind ``povagent 
 Houses are independent (each seeded by (seed, index)) and each becomes complete by one rename
 (``record``), so a generation can be stopped and resumed, extended to more houses, and spread
 over any number of processes (``--jobs``, workers started with ``spawn``) or a Dask cluster
-(``--cluster``, through ``povagent.cluster``, imported only then) with the same bytes.
-``make_house`` and ``make_house_files`` are the plain functions of one house that every engine
-runs. What it must not do: print anything other than the optional progress bar and the notices
+(``--cluster``, through ``povagent.cluster``, imported only then) with the same bytes; the
+plain functions of one house that every engine runs are :mod:`povagent.generate.house_task`.
+What it must not do: print anything other than the optional progress bar and the notices
 handed to ``notice``, write timings into files, or import Dask.
 """
 
@@ -16,7 +16,6 @@ import json
 import multiprocessing
 import os
 import sys
-import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -24,8 +23,9 @@ from pathlib import Path
 from typing import Any, Callable, Literal, Mapping, Sequence
 
 from povagent.errors import DatasetError, GenerationError
+from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
-from povagent.generate.pipeline import HouseSummary, generate_house
+from povagent.generate.pipeline import HouseSummary
 from povagent.generate.record import (
     ARTIFACTS,
     PARTIAL,
@@ -34,11 +34,7 @@ from povagent.generate.record import (
     HouseRecord,
     clear_partial,
     complete_houses,
-    house_files,
-    house_folder,
-    read_record,
     remove_half_written,
-    write_house_atomically,
 )
 from povagent.generate.writer import write_json
 from povagent.run.logs import Redactor
@@ -111,73 +107,6 @@ OPTION_FLAGS = {
     "judge": "--judge",
     "judge_options": "--judge-option",
 }
-
-
-@dataclass(frozen=True)
-class HouseFailure:
-    """A house that raised: its index, the dataset seed, and the error (type: message)."""
-
-    index: int
-    seed: int
-    error: str
-
-
-@dataclass
-class HouseOutcome:
-    """What one house task returns: its record, or its failure.
-
-    ``files`` is set when the house came back as bytes (workers that cannot see the output
-    folder); ``kept`` when it was already complete; ``cpu_seconds`` is measured, never written.
-    """
-
-    index: int
-    record: HouseRecord | None = None
-    failure: HouseFailure | None = None
-    files: dict[str, bytes] | None = None
-    kept: bool = False
-    cpu_seconds: float = 0.0
-
-
-def make_house(out: Path, options: GenerationOptions, index: int, judge: SurfaceJudge) -> HouseOutcome:
-    """Make house ``index`` of the dataset in ``out`` unless it is complete; never raises for the house.
-
-    Idempotent: run twice (or twice at once), the house is written once and its bytes are the same.
-    """
-    start = time.process_time()
-    done = read_record(house_folder(out, index))
-    if done is not None:
-        return HouseOutcome(index, record=done, kept=True)
-    try:
-        record = write_house_atomically(
-            Path(out), index, options,
-            lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
-        )  # fmt: skip
-    except Exception as exc:  # the house's own failure: recorded, the other houses go on
-        return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)
-    return HouseOutcome(index, record=record, cpu_seconds=time.process_time() - start)
-
-
-def make_house_files(options: GenerationOptions, index: int, judge: SurfaceJudge) -> HouseOutcome:
-    """Make house ``index`` in a private temporary folder and return its files as bytes.
-
-    For workers that cannot see the output folder: the caller writes the files with
-    ``record.place_house_files``. Never raises for the house.
-    """
-    start = time.process_time()
-    try:
-        with tempfile.TemporaryDirectory(prefix="povagent-house-") as tmp:
-            record = write_house_atomically(
-                Path(tmp), index, options,
-                lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
-            )  # fmt: skip
-            files = house_files(house_folder(Path(tmp), index))
-    except Exception as exc:
-        return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)
-    return HouseOutcome(index, record=record, files=files, cpu_seconds=time.process_time() - start)
-
-
-def _failure(options: GenerationOptions, index: int, exc: BaseException) -> HouseFailure:
-    return HouseFailure(index, options.seed, Redactor().text(f"{type(exc).__name__}: {exc}"))
 
 
 def default_jobs(houses: int) -> int:

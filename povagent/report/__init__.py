@@ -4,6 +4,7 @@ One module per step, in the order a report is made:
 
 - :mod:`~povagent.report.collect`: run and sweep folders -> observations labelled by system;
 - :mod:`~povagent.report.baseline`: the center baseline computed for the same instances;
+- :mod:`~povagent.report.baseline_systems`: which systems are baselines (reference rows, not models);
 - :mod:`~povagent.report.statistics`: means over runs, bootstrap CIs, paired tests;
 - :mod:`~povagent.report.analysis`: every number of a report, per system and breakdown;
 - :mod:`~povagent.report.tables` / :mod:`~povagent.report.paper_tables`: Markdown, CSV, LaTeX;

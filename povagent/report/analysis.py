@@ -27,9 +27,8 @@ from povagent.report.baseline import (
     center_observations,
     center_score,
     center_success_observations,
-    is_baseline_system,
-    is_center_system,
 )
+from povagent.report.baseline_systems import is_baseline_system, is_center_system
 from povagent.report.collect import Collection, Observation
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices

@@ -25,6 +25,7 @@ from typing import Any, Iterable
 import yaml
 
 from povagent.errors import PredictionsError
+from povagent.report.baseline_systems import is_baseline_system
 from povagent.results.rows import ResultRow, read_rows
 
 RESULTS_FILE = "results.jsonl"
@@ -303,8 +304,6 @@ LABEL_JOIN = " · "
 
 
 def _is_baseline_run(run: RunInfo) -> bool:
-    from povagent.report.baseline import is_baseline_system
-
     return is_baseline_system(run.axes, run.axes.get("model") or run.axes.get("backend", ""))
 
 
@@ -397,7 +396,6 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
     counts them in ``outside_protocol_rows``. Baselines never read the prompt: theirs stay.
     """
-    from povagent.report.baseline import is_baseline_system
     from povagent.report.protocol import outside_paper_protocol
 
     if isinstance(paths, (str, Path)):

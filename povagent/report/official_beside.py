@@ -11,7 +11,7 @@ Systems parsed officially are not listed; the table is absent when there is none
 from __future__ import annotations
 
 from povagent.dataset.models import Condition
-from povagent.report.baseline import is_baseline_system
+from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.collect import Collection
 from povagent.report.tables import Cell, Column, Row, Table
 from povagent.results.official_reading import OFFICIAL_PARSERS, officially_read

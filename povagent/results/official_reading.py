@@ -3,7 +3,7 @@
 A lenient parser (``json``, ``rescale-1000``, ``cot``, the native formats) repairs answers the
 official runner leaves unanswered or reads differently, so its numbers are not the paper's. A row
 parsed with one therefore also records how the official runner reads the same answer
-(:class:`OfficialReading`: that parse and its scores), and every summary of such rows carries the
+(:class:`~povagent.results.rows.OfficialReading`: that parse and its scores), and every summary of such rows carries the
 official reading's response rate and mean beside the repaired ones (``official_parse``).
 
 Why at run time, in the row: the runner already holds the answer, the asked schema, the instance
@@ -14,6 +14,9 @@ earlier row's reading, and ``povagent rescore`` writes a fresh one for each row 
 Rows written before readings were recorded carry none: summaries count them
 (``rows_without_reading``) rather than mix repaired numbers in; ``povagent rescore RUN --parser
 official`` gives such a run its official numbers offline.
+
+The reading's record is part of the row format (:class:`~povagent.results.rows.OfficialReading`);
+this module makes and applies it. It never calls a model, reads a run folder or writes a file.
 """
 
 from __future__ import annotations
@@ -21,22 +24,11 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, Iterable, Sequence
 
-from pydantic import BaseModel, ConfigDict, Field
-
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
+from povagent.results.rows import OfficialReading, Prediction, RowStatus
 
 #: The parser that reads the asked JSON answer as the official runner does.
 OFFICIAL_PARSER = "official"
-
-
-class OfficialReading(BaseModel):
-    """How the official runner reads a row's final answer: the parser, its parse, its scores."""
-
-    model_config = ConfigDict(ser_json_inf_nan="constants")
-
-    parser: str
-    parse: ParsedAnswer
-    scores: dict[str, dict[str, Any]] = Field(default_factory=dict)
 
 
 def official_counterpart(parser: Any) -> str | None:
@@ -91,8 +83,6 @@ def officially_read(row: Any) -> Any:
 
     The prediction is the official parse's point and frame index (the frame is found again by
     that index when the row is scored)."""
-    from povagent.results.rows import Prediction, RowStatus
-
     reading = row.official_reading
     if reading is None:
         return row

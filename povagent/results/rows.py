@@ -19,7 +19,6 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
-from povagent.results.official_reading import OfficialReading
 
 
 class RowStatus(StrEnum):
@@ -57,6 +56,17 @@ class Prediction(BaseModel):
     image_path: str | None = None
     x: float | None = None
     y: float | None = None
+
+
+class OfficialReading(BaseModel):
+    """How the official runner reads a row's final answer: the parser, its parse, its scores
+    (made by :func:`povagent.results.official_reading.read_officially`)."""
+
+    model_config = ConfigDict(ser_json_inf_nan="constants")
+
+    parser: str
+    parse: ParsedAnswer
+    scores: dict[str, dict[str, Any]] = Field(default_factory=dict)
 
 
 class ResultRow(BaseModel):

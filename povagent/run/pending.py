@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from povagent.config.pipeline import PipelineConfig
+from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import ConfigError

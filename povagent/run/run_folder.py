@@ -27,7 +27,9 @@ import os
 from pathlib import Path
 from typing import Any, Literal
 
-from povagent.config.pipeline import PipelineConfig, read_yaml, validation_message
+from povagent.config.models import PipelineConfig
+from povagent.config.validation_messages import validation_message
+from povagent.config.yaml_reader import read_yaml
 from povagent.errors import ConfigError
 
 #: The marker file of a folder povagent made, and the format version it holds.

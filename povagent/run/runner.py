@@ -36,7 +36,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
-from povagent.config.pipeline import PipelineConfig, dump_pipeline
+from povagent.config.models import PipelineConfig
+from povagent.config.pipeline import dump_pipeline
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache

@@ -1,6 +1,6 @@
 """Sweeps: one base pipeline expanded over axes into cells, run with one cache and one image store.
 
-A sweep YAML (see :class:`povagent.config.pipeline.SweepConfig`) names a base pipeline, axes
+A sweep YAML (see :class:`povagent.config.models.SweepConfig`) names a base pipeline, axes
 (``model``, ``backend``, ``strategy``, ``parser``, ``conditions``, ``runs``) and optional named
 overrides. Their cartesian product gives the cells; each cell is an ordinary pipeline whose
 output is ``<sweep output>/<cell name>`` and whose cache is the sweep's. ``sweep.json`` in the
@@ -31,17 +31,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from povagent.config.pipeline import (
-    REPLACED_WHOLE,
-    ComponentSpec,
-    ConfigSource,
-    PipelineConfig,
-    SweepConfig,
-    checked_plugins,
-    deep_merge,
-    load_sweep,
-    pipeline_from_source,
-)
+from povagent.config.models import ComponentSpec, PipelineConfig, SweepConfig
+from povagent.config.overrides import REPLACED_WHOLE, deep_merge
+from povagent.config.pipeline import load_sweep, pipeline_from_source
+from povagent.config.plugin_checks import checked_plugins
+from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError

@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from povagent.train.export_options import FORMAT_FOLDERS, ExportOptions, ExportReport
 from povagent.train.parquet import FEATURES
 
 if TYPE_CHECKING:
     from povagent.dataset.loader import Dataset
-    from povagent.train.export import ExportOptions, ExportReport
     from povagent.train.shards import Shard
 
 CARD = "README.md"
@@ -61,8 +61,6 @@ def _table(title: str, counts: dict[str, int]) -> str:
 
 def write_card(out: Path, root: Path, dataset: Dataset, options: ExportOptions, report: ExportReport, shards: Sequence[Shard]) -> None:
     """Write ``README.md`` (and, for ``messages``, ``dataset_info.json``) into ``out``."""
-    from povagent.train.export import FORMAT_FOLDERS
-
     folder, suffix = FORMAT_FOLDERS[options.format]
     splits = sorted({s.split for s in shards}, key=["train", "validation", "test"].index)
     header: dict[str, Any] = {

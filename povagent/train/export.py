@@ -13,75 +13,26 @@ import json
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from povagent.dataset.loader import Dataset, house_folders, load_dataset, load_house
-from povagent.dataset.models import CONDITIONS, Condition
+from povagent.dataset.models import Condition
 from povagent.dataset.problems import Problem
-from povagent.errors import DatasetError, PovagentError
+from povagent.errors import DatasetError
+from povagent.train.card import write_card
 from povagent.train.examples import TrainingExample
 from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
+from povagent.train.export_options import FORMAT_FOLDERS, ExportError, ExportOptions, ExportReport
 from povagent.train.facts import NoTeachingFrame, instance_facts
-from povagent.train.rationale import RATIONALES
-from povagent.train.shards import DEFAULT_SHARD_BYTES, PlannedExample, Shard, plan_shards, remove_stale_temporaries
-from povagent.train.splits import DEFAULT_SPLIT, assign_splits, parse_split
+from povagent.train.shards import PlannedExample, Shard, plan_shards, remove_stale_temporaries
+from povagent.train.splits import assign_splits, parse_split
 
-FORMATS = ("hf", "messages")
 MANIFEST = "export.json"
 MANIFEST_VERSION = 1
-#: Where each format's shards go, and their suffix.
-FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl")}
 #: Estimated bytes of an example's text (question, rationale, facts) for shard planning.
 TEXT_BYTES = 8 * 1024
-
-
-class ExportError(PovagentError):
-    """An export cannot go on: an evaluation house, options that differ from the export's, ..."""
-
-
-@dataclass(frozen=True)
-class ExportOptions:
-    """Everything that decides an export's bytes (recorded in ``export.json``)."""
-
-    format: str = "hf"
-    rationale: str = "s-cot"
-    split: str = DEFAULT_SPLIT
-    split_seed: int = 0
-    text_seed: int = 0
-    conditions: tuple[str, ...] = tuple(c.value for c in CONDITIONS)
-    max_shard_bytes: int = DEFAULT_SHARD_BYTES
-    exact_answers: bool = False
-
-    def check(self) -> None:
-        """Refuse values outside what the exporter knows, naming the option."""
-        if self.format not in FORMATS:
-            raise ExportError(f"--format {self.format!r}: one of {', '.join(FORMATS)}")
-        if self.rationale not in RATIONALES:
-            raise ExportError(f"--rationale {self.rationale!r}: one of {', '.join(RATIONALES)}")
-        if self.max_shard_bytes < 1024 * 1024:
-            raise ExportError(f"--max-shard-mb: a shard holds at least 1 MB (got {self.max_shard_bytes} bytes)")
-        for c in self.conditions:
-            if c not in {x.value for x in CONDITIONS}:
-                raise ExportError(f"--conditions {c!r}: one of a, b, c")
-        parse_split(self.split)
-
-
-@dataclass
-class ExportReport:
-    """What an export wrote: examples per split/condition/direction, shards, skips, exclusion."""
-
-    out: Path
-    examples: int = 0
-    shards: list[str] = field(default_factory=list)
-    shards_written: int = 0
-    counts: dict[str, dict[str, int]] = field(default_factory=dict)
-    skipped: dict[str, str] = field(default_factory=dict)
-    excluded: dict[str, str] = field(default_factory=dict)
-    evaluation_sources: list[str] = field(default_factory=list)
-    houses_by_split: dict[str, list[str]] = field(default_factory=dict)
-    seconds: float = 0.0
 
 
 def _conditions(options: ExportOptions) -> list[Condition]:
@@ -304,8 +255,6 @@ def export_training_set(
         counts["condition"][condition] += 1
         counts["direction"][direction] += 1
     report.counts = {k: dict(sorted(v.items())) for k, v in counts.items()}
-    from povagent.train.card import write_card
-
     write_card(target, root, ds, options, report, shards)
     report.seconds = time.perf_counter() - start
     return report

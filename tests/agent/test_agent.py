@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.agent.grounding_agent import GroundingAgent, Localization
-from povagent.engine.retry import RetryPolicy
+from povagent.agent import GroundingAgent, Localization
 from povagent.answers.spec import ParseStatus
+from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.models import Condition
 from povagent.errors import BadInputError, ConfigError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.camera import Camera

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from povagent.config.pipeline import ConfigSource, pipeline_from_source
+from povagent.config.pipeline import pipeline_from_source
+from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.loader import load_dataset
 from povagent.errors import ConfigError
 from povagent.results.rows import iter_rows

@@ -5,7 +5,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from povagent.train.export import ExportOptions, export_training_set
+from povagent.train.export import export_training_set
+from povagent.train.export_options import ExportOptions
 
 
 def _files(folder: Path) -> dict[str, str]:

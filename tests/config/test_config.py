@@ -6,7 +6,8 @@ import textwrap
 
 import pytest
 
-from povagent.config.pipeline import load_pipeline, parse_yaml
+from povagent.config.pipeline import load_pipeline
+from povagent.config.yaml_reader import parse_yaml
 from povagent.errors import ConfigError
 
 GOOD = """\

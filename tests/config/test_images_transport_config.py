@@ -1,4 +1,4 @@
-"""The ``images:`` section's transport options (povagent/config/pipeline.py, ImagesSpec).
+"""The ``images:`` section's transport options (povagent/config/models.py, ImagesSpec).
 
 Bad combinations fail at load time with the file, the line and what to write instead; the
 transport is not part of the pipeline's identity (changing it never makes a folder "another
@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.config.pipeline import ImagesSpec, load_pipeline
+from povagent.config.models import ImagesSpec
+from povagent.config.pipeline import load_pipeline
 from povagent.errors import ConfigError
 
 

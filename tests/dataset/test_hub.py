@@ -206,7 +206,7 @@ def test_two_releases_in_a_snapshot_are_ambiguous(tmp_path):
 
 # -- pipelines ----------------------------------------------------------------------------------
 def test_a_hub_pipeline_resolves_to_the_local_root_pinned_to_its_commit(hub, tmp_path):
-    from povagent.config.pipeline import PipelineConfig
+    from povagent.config.models import PipelineConfig
 
     config = PipelineConfig.model_validate(
         {"dataset": {"hub": RELEASE_REPO, "revision": "v1.0"}, "instances": {"conditions": ["given"]},
@@ -220,14 +220,14 @@ def test_a_hub_pipeline_resolves_to_the_local_root_pinned_to_its_commit(hub, tmp
 
 
 def test_a_hub_pipeline_not_resolved_yet_has_no_root(tmp_path):
-    from povagent.config.pipeline import DatasetSpec
+    from povagent.config.models import DatasetSpec
 
     with pytest.raises(DatasetError, match="dataset.hub owl-owl/POVBench: not fetched yet"):
         DatasetSpec(hub=RELEASE_REPO).root  # noqa: B018 - the property raises
 
 
 def test_a_pipeline_without_hub_is_left_alone(tmp_path, mini_root):
-    from povagent.config.pipeline import PipelineConfig
+    from povagent.config.models import PipelineConfig
 
     config = PipelineConfig.model_validate({"dataset": {"path": str(mini_root)}, "backend": "center", "output": str(tmp_path)})
     before = config.model_dump()

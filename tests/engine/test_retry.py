@@ -7,10 +7,10 @@ import math
 import pytest
 from pydantic import ValidationError
 
+from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.retry import (
     MAX_RETRY_AFTER_S,
     InfraFailure,
-    RetryPolicy,
     error_type_of,
     is_transient,
     wait_before_retry,

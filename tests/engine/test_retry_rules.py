@@ -12,12 +12,10 @@ import math
 import pytest
 from pydantic import ValidationError
 
+from povagent.config.retry_policy import MAX_ATTEMPTS, MAX_POLICY_WAIT_S, RetryPolicy
 from povagent.engine.retry import (
-    MAX_ATTEMPTS,
-    MAX_POLICY_WAIT_S,
     MAX_RETRY_AFTER_S,
     InfraFailure,
-    RetryPolicy,
     error_type_of,
     retry_after_of,
     wait_before_retry,

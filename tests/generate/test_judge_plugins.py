@@ -181,7 +181,7 @@ def test_the_judge_defaults_are_one_name_everywhere():
     from typer.main import get_command
 
     from povagent.cli import app
-    from povagent.config.pipeline import GenerateSpec
+    from povagent.config.models import GenerateSpec
 
     assert GenerateSpec(out="x").judge.name == DEFAULT_JUDGE
     generate = get_command(app).commands["generate"]

@@ -13,7 +13,8 @@ import yaml
 from typer.testing import CliRunner
 
 from povagent.cli import app
-from povagent.config.pipeline import ConfigSource, pipeline_from_source
+from povagent.config.pipeline import pipeline_from_source
+from povagent.config.yaml_reader import ConfigSource
 from povagent.results.rows import read_rows
 from povagent.run.runner import PipelineRun
 from povagent.testing.loopback_server import LoopbackServer

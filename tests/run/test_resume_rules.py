@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import pytest
 
-from povagent.config.pipeline import PipelineConfig
+from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import row_key
 from povagent.errors import ConfigError
 from povagent.results.rows import ResultRow, ResultsWriter, RowStatus

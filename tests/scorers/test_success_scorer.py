@@ -11,12 +11,13 @@ from pathlib import Path
 import pytest
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus, unparseable
-from povagent.config.pipeline import ConfigSource, pipeline_from_source
-from povagent.errors import ConfigError
+from povagent.config.pipeline import pipeline_from_source
+from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.realworld import load_realworld, success_breakdown
-from povagent.testing.loopback_server import LoopbackServer
+from povagent.errors import ConfigError
 from povagent.results.rows import iter_rows
 from povagent.run.runner import PipelineRun
+from povagent.testing.loopback_server import LoopbackServer
 from povagent_plugins.scorers.success import SuccessScorer, inside_polygon
 
 DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from povagent.dataset.loader import load_dataset
-from povagent.train.export import ExportError, ExportOptions, export_training_set
+from povagent.train.export import export_training_set
+from povagent.train.export_options import ExportError, ExportOptions
 
 datasets = pytest.importorskip("datasets", reason="the export tests load the hf folder with datasets (test extra)")
 

@@ -1,0 +1,139 @@
+"""The plugins a pipeline names: loaded, checked and resolved before any request.
+
+:func:`checked_plugins` applies the plugin rule (:mod:`povagent.config.plugin_rule`) to the
+``plugins:`` list; :func:`plugin_host_for` loads them; :func:`check_plugin_names` makes sure every
+backend, strategy, parser, scorer, judge and model profile named is registered (an error names
+the line and the nearest name), and that every ``*_env`` option names an environment variable
+rather than holding a key; :func:`resolve_components` fills in what a ``model:`` profile implies.
+
+This module must not validate the schema (:mod:`povagent.config.models`), read files, or run
+anything: it only asks the plugin host what is registered.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from povagent.config.models import ComponentSpec, PipelineConfig
+from povagent.config.plugin_rule import allowed_plugins
+from povagent.config.profiles import near_profile
+from povagent.config.quoting import Loc, cut, dotted
+from povagent.config.yaml_reader import ConfigSource
+from povagent.errors import ConfigError, PluginError
+from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.run.logs import ENV_NAME_WANTED, Redactor
+
+
+def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc = ()) -> None:
+    """Every plugin name in ``config`` must be registered; errors name the line and a near name."""
+    problems: list[str] = []
+
+    def check(kind: str, name: str, loc: Loc) -> None:
+        known = host.names(kind)
+        if name not in known:
+            problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: {unknown_name_message(kind, cut(name), known)}")
+
+    if config.model is not None:
+        check("profile", config.model, ("model",))
+    if config.backend is not None:
+        check("backend", config.backend.name, ("backend", "name") if ("backend", "name") in source.lines else ("backend",))
+        check_profile_option(config.backend, host, source, prefix, problems)
+        check_env_options(config.backend.options, ("backend", "options"), source, prefix, problems)
+    check("strategy", config.strategy.name, ("strategy", "name") if ("strategy", "name") in source.lines else ("strategy",))
+    if config.parser is not None:
+        check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
+    for i, scorer in enumerate(config.scorers):
+        check("scorer", scorer.name, ("scorers", i))
+    if config.dataset.generate is not None:
+        loc = ("dataset", "generate", "judge")
+        check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
+    if problems:
+        raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
+
+
+def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """Every ``*_env`` option (``api_key_env``, also inside router deployments) must name an
+    environment variable; a key pasted there is refused at its line and never repeated."""
+    redactor = Redactor()
+    stack: list[tuple[Loc, Any]] = [(loc, options)]
+    while stack:
+        here, value = stack.pop()
+        if isinstance(value, Mapping):
+            for k, v in value.items():
+                if isinstance(k, str) and k.lower().endswith("_env") and v is not None:
+                    if not (isinstance(v, str) and redactor.plausible_variable_name(v)):
+                        problems.append(f"{source.where(prefix + here + (k,))}: {dotted(here + (k,))}: {ENV_NAME_WANTED}")
+                else:
+                    stack.append((here + (k,), v))
+        elif isinstance(value, list):
+            stack.extend((here + (i,), v) for i, v in enumerate(value))
+
+
+def check_profile_option(backend: ComponentSpec, host: PluginHost, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """A near miss of a model profile as the litellm backend's ``model`` option gets the same
+    "did you mean" as under ``model:`` (a bare name far from every profile is a litellm model)."""
+    model = backend.options.get("model")
+    if backend.name != "litellm" or not isinstance(model, str):
+        return
+    known = host.names("profile")
+    if near_profile(model, known) is not None:
+        loc = ("backend", "options", "model")
+        problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: {unknown_name_message('profile', cut(model), known)}")
+
+
+def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
+    """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
+    when no parser is given, the profile's default parser (``json`` otherwise). A profile named
+    as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
+    its parser and strategy defaults the same way."""
+    backend, parser, strategy = config.backend, config.parser, config.strategy
+    profile = None
+    if config.model is not None:
+        profile = host.profile(config.model)
+        # The litellm backend resolves a profile name given as its model (and applies the
+        # profile's backend options itself).
+        backend = ComponentSpec(name=getattr(profile, "backend", None) or "litellm", options={"model": config.model})
+    elif backend is not None and backend.name == "litellm" and backend.options.get("model") in host.names("profile"):
+        profile = host.profile(backend.options["model"])
+    if profile is not None:
+        if parser is None:
+            default = getattr(profile, "default_parser", None) or getattr(profile, "parser", None)
+            if isinstance(default, str):
+                parser = ComponentSpec(name=default)
+        defaults = getattr(profile, "strategy_options", None)
+        if isinstance(defaults, Mapping) and defaults:
+            strategy = strategy.model_copy(update={"options": {**defaults, **strategy.options}})
+    if parser is None:
+        parser = ComponentSpec(name="json")
+    return config.model_copy(update={"backend": backend, "parser": parser, "strategy": strategy})
+
+
+def plugin_host_for(plugins: list[str], source: ConfigSource, host: PluginHost | None) -> PluginHost:
+    """The plugin host with the config's ``plugins`` loaded (into ``host`` when one is given);
+    a plugin that fails to load is a :class:`ConfigError` at the ``plugins:`` line."""
+    try:
+        h = get_plugin_host(plugins) if host is None else host
+        if host is not None:
+            for mod in plugins:  # an explicit host still gets the config's modules
+                if not h.pm.has_plugin(mod):
+                    from povagent.plugins import _import_module_or_file
+
+                    h.add_plugin(_import_module_or_file(mod), name=mod, source=f"config plugin {mod}")
+        return h
+    except PluginError as exc:
+        raise ConfigError(f"{source.where(('plugins',))}: {exc}") from None
+    except Exception as exc:
+        raise ConfigError(f"{source.where(('plugins',))}: plugin failed to load: {type(exc).__name__}: {exc}") from None
+
+
+def checked_plugins(plugins: list[str], source: ConfigSource, prefix: Loc = ()) -> list[str]:
+    """``plugins`` as the rule of :mod:`povagent.config.plugin_rule` allows them: ``.py`` paths
+    resolved inside the YAML file's folder (not the working directory, so the same file loads
+    the same plugin wherever the command runs, as a pipeline or as a sweep's base), dotted names
+    only from installed packages. A refused entry is a one-line :class:`ConfigError`; nothing is
+    imported here. A mapping given from Python (``<pipeline mapping>``) is the caller's own code
+    and keeps its entries as they are."""
+    folder = source.plugin_folder()
+    if folder is None or not plugins:
+        return plugins
+    return allowed_plugins(plugins, folder, [source.where(prefix + ("plugins", i)) for i in range(len(plugins))])

@@ -1,0 +1,70 @@
+"""What a training export is asked for, and what it reports back: plain data, shared by the
+exporter (:mod:`povagent.train.export`) and the dataset card (:mod:`povagent.train.card`).
+
+:class:`ExportOptions` is everything that decides an export's bytes (``export.json`` records
+it, and resuming compares it); :data:`FORMAT_FOLDERS` says where each format's shards go;
+:class:`ExportReport` is what an export wrote; :class:`ExportError` is why it cannot go on.
+This module must not read a dataset or write a file: it only describes and checks values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from povagent.dataset.models import CONDITIONS
+from povagent.errors import PovagentError
+from povagent.train.rationale import RATIONALES
+from povagent.train.shards import DEFAULT_SHARD_BYTES
+from povagent.train.splits import DEFAULT_SPLIT, parse_split
+
+FORMATS = ("hf", "messages")
+#: Where each format's shards go, and their suffix.
+FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl")}
+
+
+class ExportError(PovagentError):
+    """An export cannot go on: an evaluation house, options that differ from the export's, ..."""
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """Everything that decides an export's bytes (recorded in ``export.json``)."""
+
+    format: str = "hf"
+    rationale: str = "s-cot"
+    split: str = DEFAULT_SPLIT
+    split_seed: int = 0
+    text_seed: int = 0
+    conditions: tuple[str, ...] = tuple(c.value for c in CONDITIONS)
+    max_shard_bytes: int = DEFAULT_SHARD_BYTES
+    exact_answers: bool = False
+
+    def check(self) -> None:
+        """Refuse values outside what the exporter knows, naming the option."""
+        if self.format not in FORMATS:
+            raise ExportError(f"--format {self.format!r}: one of {', '.join(FORMATS)}")
+        if self.rationale not in RATIONALES:
+            raise ExportError(f"--rationale {self.rationale!r}: one of {', '.join(RATIONALES)}")
+        if self.max_shard_bytes < 1024 * 1024:
+            raise ExportError(f"--max-shard-mb: a shard holds at least 1 MB (got {self.max_shard_bytes} bytes)")
+        for c in self.conditions:
+            if c not in {x.value for x in CONDITIONS}:
+                raise ExportError(f"--conditions {c!r}: one of a, b, c")
+        parse_split(self.split)
+
+
+@dataclass
+class ExportReport:
+    """What an export wrote: examples per split/condition/direction, shards, skips, exclusion."""
+
+    out: Path
+    examples: int = 0
+    shards: list[str] = field(default_factory=list)
+    shards_written: int = 0
+    counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
+    excluded: dict[str, str] = field(default_factory=dict)
+    evaluation_sources: list[str] = field(default_factory=list)
+    houses_by_split: dict[str, list[str]] = field(default_factory=dict)
+    seconds: float = 0.0
