@@ -36,6 +36,7 @@ import contextlib
 import hashlib
 import json
 import os
+import signal
 import socket
 import stat
 import threading
@@ -526,7 +527,9 @@ def main(argv: list[str] | None = None) -> None:
     """Serve a fixed reply until interrupted (``python -m povagent.testing.loopback_server``).
 
     Bad options and a port that cannot be bound end with a one-line message and exit code 2,
-    never a traceback.
+    never a traceback. SIGINT (Ctrl-C) and SIGTERM both stop it, and it then prints its counts
+    (with ``--fetch-images`` or ``--count-bodies``): a benchmark started in the background
+    inherits SIGINT ignored, which Python would otherwise keep ignoring.
     """
     from povagent.testing.server_command import bind_failure
 
@@ -553,12 +556,16 @@ def main(argv: list[str] | None = None) -> None:
         server.start()
     except OSError as exc:
         ap.exit(2, f"{ap.prog}: error: {bind_failure(args.port, exc)}\n")
+
+    def stop_serving(signum: int, frame: Any) -> None:
+        server._stopping.set()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):  # before the URL: a client may signal at once
+        signal.signal(signum, stop_serving)
     print(server.url, flush=True)
     try:
         while not server._stopping.wait(0.5):
             pass
-    except KeyboardInterrupt:
-        pass
     finally:
         server.stop()
         if server.fetch_images or server.count_bodies:
