@@ -506,6 +506,8 @@ def argument_parser() -> argparse.ArgumentParser:
                     help="port on 127.0.0.1 to listen on (default: 0, any free port)")
     ap.add_argument("--reply", default=DEFAULT_REPLY, metavar="TEXT",
                     help="the assistant's text in every answer (default: %(default)s)")
+    ap.add_argument("--delay", type=float, default=0.0, metavar="SECONDS",
+                    help="wait this long before each answer, as a model takes time to answer (default: 0)")
     ap.add_argument("--lifetime", type=float, default=3600.0, metavar="SECONDS",
                     help="stop after this many seconds (default: %(default).0f)")
     ap.add_argument("--fetch-images", action="store_true",
@@ -548,7 +550,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.local_media_root is not None and not Path(args.local_media_root).is_dir():
         ap.error(f"--local-media-root {args.local_media_root}: not a folder")
     server = LoopbackServer(
-        reply=args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
+        reply=Reply(args.reply, delay_s=args.delay) if args.delay > 0 else args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
         fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
         keep_image_bytes=False, image_check=check, count_bodies=args.count_bodies,
     )  # fmt: skip

@@ -117,3 +117,27 @@ def test_the_loopback_server_stops_on_sigint_or_sigterm_and_prints_its_counts(si
     finally:
         proc.kill()
     assert json.loads(out.strip().splitlines()[-1]) == {"requests": 0, "body_sha256": {}}
+
+
+def test_the_loopback_server_answers_after_its_delay():
+    import json
+    import time
+    import urllib.request
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "povagent.testing.loopback_server", "--port", "0", "--lifetime", "30", "--delay", "0.5",
+         "--reply", "late"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        url = proc.stdout.readline().strip()
+        body = json.dumps({"model": "m", "messages": [{"role": "user", "content": "hi"}]}).encode()
+        request = urllib.request.Request(f"{url}/chat/completions", data=body, headers={"Content-Type": "application/json"})
+        t0 = time.monotonic()
+        with urllib.request.urlopen(request, timeout=30) as response:
+            assert json.load(response)["choices"][0]["message"]["content"] == "late"
+        assert time.monotonic() - t0 >= 0.5
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
