@@ -1,9 +1,11 @@
 """The code of an earlier commit, importable beside today's: how a benchmark times "before".
 
 ``baseline_checkout(ref)`` writes the ``povagent`` package of commit ``ref`` (``git archive``)
-into a temporary folder and returns that folder; a subprocess run with it first on
-``PYTHONPATH`` imports the old package while the installed plugins and dependencies stay the
-same. ``cpu_of(code, pythonpath)`` runs a snippet in such a subprocess and returns the CPU
+into a temporary folder, with the built-in plugins and prompts of that commit beside it under
+their import names (``plugins/`` as ``povagent_plugins``, ``prompts/`` as ``povagent_prompts``),
+and returns that folder; a subprocess run with it first on ``PYTHONPATH`` imports the old code
+(today's plugins may need names the old package lacks) while the installed dependencies stay
+the same. ``cpu_of(code, pythonpath)`` runs a snippet in such a subprocess and returns the CPU
 seconds it prints. Benchmarks alternate the two subprocesses round by round, so both see the
 same machine load.
 """
@@ -24,9 +26,15 @@ REPO = Path(__file__).resolve().parent.parent
 def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository)."""
     into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", ref, "povagent"], check=True, capture_output=True).stdout
+    tree = subprocess.run(["git", "-C", str(REPO), "ls-tree", "--name-only", ref], check=True, capture_output=True,
+                          text=True).stdout.split()  # fmt: skip
+    folders = [f for f in ("povagent", "plugins", "prompts") if f in tree]
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", ref, *folders], check=True, capture_output=True).stdout
     with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
         tar.extractall(into, filter="data")
+    for folder, name in (("plugins", "povagent_plugins"), ("prompts", "povagent_prompts")):
+        if (into / folder).is_dir():
+            (into / folder).rename(into / name)
     return into
 
 
@@ -53,7 +61,7 @@ def imported_from(pythonpath: Path | None) -> str:
     env = dict(os.environ)
     if pythonpath is not None:
         env["PYTHONPATH"] = str(pythonpath)
-    code = "import povagent, os; print(os.path.dirname(povagent.__file__))"
+    code = "import povagent, povagent_plugins, os; print(os.path.dirname(povagent.__file__), os.path.dirname(povagent_plugins.__file__))"
     return subprocess.run(
         [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True
     ).stdout.strip()

@@ -1,11 +1,14 @@
 """A sweep on a Dask LocalCluster of 2 workers against the same sweep on one machine.
 
-    python benchmarks/bench_cluster_sweep.py [--rounds 3] [--latency 0.1] [--cells 12]
+    python benchmarks/bench_cluster_sweep.py [--data FOLDER] [--rounds 3] [--latency 0.1] [--cells 12]
 
-The model is the loopback OpenAI-compatible server (``povagent.testing.loopback_server``)
-answering every request after ``--latency`` seconds, reached through the real ``litellm``
-backend; the data is a synthetic release (``write_release``: 4 houses, 8 pairs, 24 instances
-per condition); the sweep is conditions a/b/c x ``cells / 3`` run indices, each cell at
+The model is the loopback OpenAI-compatible server (``povagent.testing.loopback_server``, in its
+own process, refusing any image that is not one of the dataset's frames) answering every
+request after ``--latency`` seconds, reached through the real ``litellm``
+backend; the data is a dataset made by ``povagent generate`` (``--data``, or 4 houses of 30
+frames generated first: rendered 512x512 PNGs, each request carrying a house's 30 frames
+inline), each cell its first 24 instances of one condition; the sweep is conditions a/b/c x
+``cells / 3`` run indices, each cell at
 ``--concurrency`` (2: the model's latency, not this 2-core machine's CPU, bounds a cell, as it
 does against a real model server), response cache off (every round really asks the server).
 
@@ -34,11 +37,13 @@ import time
 from pathlib import Path
 
 import yaml
+from generated_frames import frame_digests, generated_dataset, start_verifying_server, stop_verifying_server
 
 from povagent.run.progress import QuietProgress
 from povagent.run.sweep import run_sweep
-from povagent.testing.loopback_server import LoopbackServer, Reply
-from povagent.testing.pytest_plugin import write_release
+
+#: Instances of a cell (each cell is one condition).
+INSTANCES_PER_CELL = 24
 
 
 def write_sweep(folder: Path, release: Path, url: str | None, cells: int, output: Path, concurrency: int = 2) -> Path:
@@ -52,6 +57,7 @@ def write_sweep(folder: Path, release: Path, url: str | None, cells: int, output
         "concurrency": concurrency,
         "cache": False,
         "output": "ignored",
+        "instances": {"limit": INSTANCES_PER_CELL},
     }
     if url is None:
         base.update(backend={"name": "center"}, instances={"limit": 1})
@@ -74,6 +80,7 @@ def measure(path: Path, cluster: object | None) -> tuple[float, int]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=None, help="a dataset made by `povagent generate` (default: generate 4 houses)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--latency", type=float, default=0.1, help="seconds the server takes per answer")
     ap.add_argument("--cells", type=int, default=12, help="cells of the sweep (a multiple of 3)")
@@ -85,15 +92,19 @@ def main() -> None:
     os.environ["BENCH_KEY"] = "bench-key"  # the workers inherit it (litellm wants a key)
     tmp = Path(tempfile.mkdtemp(prefix="bench-cluster-sweep-"))
     try:
-        release = write_release(tmp / "release", houses=4, pairs=8, pair_directions=24, frames=3)
-        with LoopbackServer(reply=Reply('{"selected_image": 0, "x": 255, "y": 255}', delay_s=args.latency),
-                            max_lifetime_s=3600, record=False) as server:
+        release = generated_dataset(args.data, tmp, houses=4)
+        frame_digests(release, tmp / "frames.sha256")
+        # the server in its own process (the one-machine sweep shares none of its CPU), checking
+        # every image it receives against the dataset's frames
+        proc, server_url = start_verifying_server(tmp / "frames.sha256", lifetime_s=3600, delay_s=args.latency,
+                                           reply='{"selected_image": 0, "x": 255, "y": 255}')
+        try:
             t0 = time.perf_counter()
             with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                               silence_logs=50) as local, Client(local) as client:
                 started = time.perf_counter() - t0
-                measure(write_sweep(tmp, release, server.url, args.cells, tmp / "warm", args.concurrency), client)
-                print(f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; "
+                measure(write_sweep(tmp, release, server_url, args.cells, tmp / "warm", args.concurrency), client)
+                print(f"python {sys.version.split()[0]}, {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}; data {release}; "
                       f"LocalCluster of 2 workers started in {started:.1f} s; {args.cells} cells, server latency "
                       f"{args.latency:g} s, concurrency {args.concurrency} per cell")
                 print(f"{'round':>5} {'one machine rows/s':>19} {'cluster rows/s':>15} {'ratio':>6} "
@@ -102,7 +113,7 @@ def main() -> None:
                 for r in range(args.rounds):
                     out: dict[str, tuple[float, int]] = {}
                     for mode in (("here", "cluster") if r % 2 == 0 else ("cluster", "here")):
-                        for kind, url in (("rows", server.url), ("trivial", None)):
+                        for kind, url in (("rows", server_url), ("trivial", None)):
                             output = tmp / f"{mode}-{kind}{r}"
                             path = write_sweep(tmp, release, url, args.cells, output, args.concurrency)
                             out[f"{mode}-{kind}"] = measure(path, client if mode == "cluster" else None)
@@ -114,7 +125,12 @@ def main() -> None:
                     print(f"{r:>5} {rate['here']:>19.1f} {rate['cluster']:>15.1f} {ratios[-1]:>5.2f}x "
                           f"{1000 * per['here']:>15.0f} ms {1000 * per['cluster']:>18.0f} ms {1000 * costs[-1]:>14.0f} ms")
                 print(f"{out['here-rows'][1]} rows a sweep; median ratio cluster/one machine {statistics.median(ratios):.2f}x; "
-                      f"median engine cost per cell {1000 * statistics.median(costs):.0f} ms of worker time")
+                      f"median engine cost per cell {1000 * statistics.median(costs):.0f} ms of worker time; "
+                      f"load average {os.getloadavg()[0]:.1f}")
+        finally:
+            checked = stop_verifying_server(proc)
+            print(f"server: {checked.get('requests')} requests, {checked.get('images_fetched')} images checked against the "
+                  f"dataset's SHA-256s, {checked.get('image_failures')} refused")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -1,8 +1,8 @@
 """Benchmark of fetching the release from a Hub: what a Given-only run saves, and the offline reopen.
 
-Run: ``python benchmarks/bench_hub_download.py [--houses 47]``. Writes a synthetic release in the
-real one's shape (30 frames a house, 288/47 pairs a house, PNGs of about the real size, 226 KiB),
-serves it from the loopback Hub (:mod:`povagent.testing.hub_server`) and fetches it with
+Run: ``python benchmarks/bench_hub_download.py [--data FOLDER | --houses 12]``. Serves a dataset
+made by ``povagent generate`` (``--data``, or ``--houses`` houses of 30 frames generated first: the
+release's shape and its kind of rendered PNGs) from the loopback Hub (:mod:`povagent.testing.hub_server`) and fetches it with
 ``povagent download``'s function into a fresh Hugging Face cache: the whole release, then
 Given-only into another cache, then the whole release again offline. Prints files, MiB and
 seconds of each, and the share of bytes a Given-only run fetches.
@@ -23,12 +23,10 @@ import tempfile
 import time
 from pathlib import Path
 
+from generated_frames import generated_dataset
+
 from povagent.dataset.hub import download_release, release_size
 from povagent.testing.hub_server import HubServer
-from povagent.testing.pytest_plugin import write_release
-
-#: Rows of noise per PNG that bring a 512x512 frame to about the release's mean PNG (516 MiB / 2,332).
-NOISE_ROWS = 150
 
 
 def fetch(server: HubServer, cache: Path, **kw) -> tuple[int, float, float]:
@@ -74,22 +72,22 @@ def compare(server: HubServer, tmp: Path, rounds: int) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    ap.add_argument("--houses", type=int, default=12, help="houses (the release has 47)")
+    ap.add_argument("--data", type=Path, default=None, help="a dataset made by `povagent generate` (default: generate --houses)")
+    ap.add_argument("--houses", type=int, default=12, help="houses to generate without --data (the release has 47)")
     ap.add_argument("--rounds", type=int, default=0, help="interleaved rounds against plain snapshot_download (0: none)")
     args = ap.parse_args()
-    pairs = max(1, round(288 * args.houses / 47))
     with tempfile.TemporaryDirectory() as tmp:
-        root = write_release(
-            Path(tmp) / "POVBench", houses=args.houses, pairs=pairs, pair_directions=min(4 * pairs, round(pairs * 813 / 288)),
-            frames=30, noise_rows=NOISE_ROWS,
-        )  # fmt: skip
+        root = generated_dataset(args.data, Path(tmp), houses=args.houses)
+        houses = sorted(p.name for p in (root / "artifacts").iterdir() if p.is_dir())
+        pngs = sorted(root.rglob("*.png"))
+        print(f"dataset {root}: {len(houses)} houses, {len(pngs)} generated PNGs of "
+              f"{sum(p.stat().st_size for p in pngs) / len(pngs) / 1024:.0f} KiB on average")
         with HubServer(root, max_lifetime_s=3600) as server:
             full = fetch(server, Path(tmp) / "cache_full")
             given = fetch(server, Path(tmp) / "cache_given", conditions=["c"])
             if args.rounds:
                 compare(server, Path(tmp), args.rounds)
         offline = fetch(server, Path(tmp) / "cache_full", offline=True)
-    print(f"houses {args.houses}, pairs {pairs}")
     for name, (files, mib, seconds) in (("all conditions", full), ("Given only", given), ("offline reopen", offline)):
         print(f"{name:16s} {files:6d} files {mib:8.1f} MiB {seconds:7.2f} s")
     print(f"Given-only fetches {100 * given[1] / full[1]:.1f}% of the bytes ({100 * given[0] / full[0]:.1f}% of the files)")

@@ -1,15 +1,17 @@
 """Frames by reference: ``file`` vs ``inline``, and ``inline`` vs litellm alone, on one loopback server.
 
-    python benchmarks/bench_image_transport.py [--requests 128] [--concurrency 32] [--rounds 3] [--http]
-                                               [--model hosted_vllm/bench-model]
+    python benchmarks/bench_image_transport.py [--data FOLDER] [--requests 128] [--concurrency 32] [--rounds 3]
+                                               [--http] [--model hosted_vllm/bench-model]
 
-One house of 30 distinct 512x512 PNG frames (~190 KB each, ~7.5 MB of JSON per request
-inline, like the real release) is written to a temporary folder. The loopback server runs in
-a subprocess (``python -m povagent.testing.loopback_server``), with ``--fetch-images``: it
-decodes every data URL, opens every ``file://`` URL (beneath the temporary folder, as vLLM's
-``--allowed-local-media-path``), computes each image's SHA-256 and answers 400 to a request
-holding any image whose digest is not one of the 30 frames'. Every image is therefore verified
-at the server, whatever the transport; the server's own counters are printed at the end.
+The frames are the release's own kind: the 30 frames of the first Inferred instance of a
+dataset made by ``povagent generate`` (``--data``, or one house generated into a temporary
+folder; 512x512 rendered PNGs, ~200 KB each, ~8 MB of JSON per request inline). The loopback
+server runs in a subprocess (``python -m povagent.testing.loopback_server``), with
+``--fetch-images``: it decodes every data URL, opens every ``file://`` URL (beneath the folder
+holding the dataset and the temporary folder, as vLLM's ``--allowed-local-media-path``),
+computes each image's SHA-256 and answers 400 to a request holding any image whose digest is
+not one of the dataset's frames. Every image is therefore verified at the server, whatever the
+transport; the server's own counters are printed at the end.
 
 Modes, each sending the same 30-frame request ``--requests`` times with ``--concurrency`` in
 flight:
@@ -30,7 +32,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import hashlib
 import importlib.metadata
 import json
 import os
@@ -42,38 +43,41 @@ import tempfile
 import time
 from pathlib import Path
 
+from generated_frames import frame_digests, generated_dataset
+
 from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.engine.llm_import import import_litellm
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
 from povagent.exchange.transport import make_transport
-from povagent.testing.pytest_plugin import write_release
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
 from povagent_plugins.backends.openai_messages import openai_messages
 
 N_FRAMES = 30
 
 
-def thirty_frames(root: Path) -> list[Path]:
-    """One house of 30 distinct frames of realistic size."""
-    write_release(root, houses=1, pairs=1, pair_directions=1, frames=N_FRAMES, noise_rows=120)
-    frames = sorted(root.glob("artifacts/*/exploration_images/*.png"))
-    assert len(frames) == N_FRAMES, frames
-    return frames
+def thirty_frames(data: Path) -> tuple[list[Path], str]:
+    """The frames and sentence of the dataset's first Inferred instance (a house's 30 frames)."""
+    from povagent.dataset.loader import load_dataset
+
+    inst = next(i for i in load_dataset(data).instances() if i.condition.value == "a")
+    frames = [f.file for f in inst.frames]
+    assert len(frames) == N_FRAMES, f"{len(frames)} frames: generate houses with --frames {N_FRAMES}"
+    return frames, inst.sentence
 
 
-def the_request(store: ImageStore, frames: list[Path]) -> Request:
+def the_request(store: ImageStore, frames: list[Path], sentence: str) -> Request:
     parts: list = []
     for i, path in enumerate(frames):
         parts += [TextPart(f"Image {i}:"), ImagePart(store.add_file(path).image_hash)]
-    parts.append(TextPart("Sentence: the mug is to the left of the sofa. Answer in JSON."))
+    parts.append(TextPart(f"Sentence: {sentence} Answer in JSON."))
     spec = AnswerSpec(schema=frame_answer_schema(N_FRAMES, 512, 512), n_frames=N_FRAMES, asks_frame=True)
     return Request(messages=(Message("user", tuple(parts)),), answer=spec, generation=GenerationParams(max_tokens=64))
 
 
 def start_server(media_root: Path, digests: Path) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "1800", "--fetch-images",
+        [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "7200", "--fetch-images",
          "--local-media-root", str(media_root), "--expect-sha256", str(digests)],
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
@@ -117,19 +121,22 @@ async def drive(n: int, concurrency: int, one) -> float:
 
 async def main_async(args: argparse.Namespace, workdir: Path) -> None:
     litellm = import_litellm()
-    frames = thirty_frames(workdir / "povbench")
+    data = generated_dataset(args.data, workdir, houses=1).resolve()
+    frames, sentence = thirty_frames(data)
     digests = workdir / "expected.sha256"
-    digests.write_text("\n".join(hashlib.sha256(p.read_bytes()).hexdigest() for p in frames) + "\n")
+    frame_digests(data, digests)
     os.environ.setdefault("BENCH_KEY", "bench-key")
-    proc, url = start_server(workdir, digests)
+    print(f"dataset {data}: {N_FRAMES} generated frames per request, {sum(f.stat().st_size for f in frames) / N_FRAMES / 1024:.0f} "
+          f"KB each | load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())} ({os.cpu_count()} CPUs)")
+    proc, url = start_server(Path(os.path.commonpath([data, workdir.resolve()])), digests)
     sent_images = 0
     try:
         store = ImageStore()
-        request = the_request(store, frames)
+        request = the_request(store, frames, sentence)
         backend = LiteLLMBackend(model=args.model, api_base=url, api_key_env="BENCH_KEY", timeout=120)
         inline_messages = openai_messages(request, store)
         body_mb = len(json.dumps(inline_messages)) / 1e6
-        transports = {name: make_transport(name, dataset_root=workdir / "povbench", cache_dir=workdir / "cache")
+        transports = {name: make_transport(name, dataset_root=data, cache_dir=workdir / "cache")
                       for name in (["file", "http"] if args.http else ["file"])}
 
         async def litellm_alone() -> None:
@@ -183,6 +190,7 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
     finally:
         stats = stop_server(proc)
 
+    print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print()
     med = {n: statistics.median(v) for n, v in rates.items()}
     for n in names:
@@ -223,6 +231,7 @@ class _attached:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", type=Path, default=None, help="a dataset made by `povagent generate` (default: generate one house)")
     ap.add_argument("--requests", type=int, default=128)
     ap.add_argument("--concurrency", type=int, default=32)
     ap.add_argument("--rounds", type=int, default=3)

@@ -1,28 +1,31 @@
-"""Runner benchmarks on a full-size synthetic set (2,439 instances, 30 frames per house).
+"""Runner benchmarks on a full-size generated set (47 houses of 30 frames: ~2,500 instances).
 
     python benchmarks/bench_runner.py [--data DIR] [--keep]
+
+The dataset is one ``povagent generate`` writes (``--data``, or 47 houses of 30 frames, seed 0,
+generated with ``--jobs 2`` into the temporary folder first): the release's own kind of 512x512
+rendered PNGs, so reading, hashing and encoding them costs what the real frames cost.
 
 Scenarios, each in its own process (so peak memory is the scenario's own):
 
 * ``overhead``: an instant offline backend that base64-encodes every image it is shown, as a
   real backend does; the real ``basic`` strategy, ``json`` parser and ``official`` scorer.
   Runner overhead per instance = (run wall time - time to encode every distinct image once)
-  / instances. Target <= 2 ms. Also counts image encodes (target: exactly one per distinct
-  image) and peak RSS (target <= 500 MB).
+  / instances, and the same in CPU time (the figure other load moves least). Target <= 2 ms.
+  Also counts image encodes (target: exactly one per distinct image) and peak RSS (target
+  <= 500 MB).
 * ``throughput``: a simulated backend with a fixed 100 ms latency at concurrency 64; bound
   640 requests/s; target >= 90 % of it. ``throughput-encoding`` repeats it with the backend
   base64-encoding every image it is shown (the strategy reads and hashes them in both).
-  One pass over the set is only 2,439 requests: at most ceil(2439 / 64) = 39 rounds of 100 ms,
-  so even a perfect runner cannot beat 2439 / 3.9 s = 625/s (97.7 % of the bound), and the
+  One pass over the set is only ~2,500 requests: at most ceil(n / 64) rounds of 100 ms, so even
+  a perfect runner cannot beat n / (ceil(n / 64) x 0.1 s) (the round ceiling printed), and the
   run's fixed costs (selecting instances, writing the summary) weigh on a 4 s run.
-  ``throughput-steady`` therefore repeats the set (``runs: 4``, 9,756 requests, 153 rounds) to
-  measure the sustained rate. Each throughput figure is given three ways: end to end (the whole
+  ``throughput-steady`` therefore repeats the set (``runs: 4``) to measure the sustained rate. Each throughput figure is given three ways: end to end (the whole
   ``PipelineRun.run``), in flight (from the ``run_start`` log event to the last answer), and
   the round ceiling for that many requests. Process CPU per request (user + system, all
   threads) says how much of a core the runner needs at the bound, whatever the machine's load.
 
-Images are ~220 KB each (like the real release's 516 MiB / 2,332 PNGs): flat grey plus rows of
-noise, each file made distinct by a tag in its bytes. Prints measured figures and ratios.
+Prints measured figures and ratios, with the load average before and after.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import argparse
 import asyncio
 import json
 import math
+import os
 import resource
 import shutil
 import subprocess
@@ -40,9 +44,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-FULL = {"houses": 47, "pairs": 288, "pair_directions": 813, "frames": 30}
-NOISE_ROWS = 140  # ~220 KB per 512x512 PNG
-STEADY_REPEATS = 4  # throughput-steady: the set 4 times, 9,756 requests
+from generated_frames import generated_dataset, povagent_command
+
+HOUSES = 47  # the paper's release: 47 houses of 30 frames
+STEADY_REPEATS = 4  # throughput-steady: the set 4 times
 SCENARIOS = ("overhead", "throughput", "throughput-steady", "throughput-encoding", "reference")
 
 
@@ -111,7 +116,9 @@ def reference(requests: int, concurrency: int = 64, latency: float = 0.1) -> dic
 def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
     """Run one scenario in this process and return its figures."""
     if name == "reference":
-        return reference(STEADY_REPEATS * 2439)
+        from povagent.dataset.loader import load_dataset
+
+        return reference(STEADY_REPEATS * sum(1 for _ in load_dataset(data).instances()))
     from povagent.config.models import PipelineConfig
     from povagent.config.plugin_checks import resolve_components
     from povagent.dataset.loader import load_dataset
@@ -159,7 +166,7 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         "run_s": run_s,
         "fsyncs": result.stats.fsyncs,
         "fsync_s": result.stats.fsync_s,
-        "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "peak_rss_mb": _peak_rss_mb(),
         "file_reads": images.stats.file_reads,
         "base64_encodes": images.stats.base64_encodes,
         "rebuilds": images.stats.rebuilds,
@@ -170,12 +177,14 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         # The encoding cost alone: read, hash and base64 every distinct image once.
         files = sorted({f.file for inst in dataset.instances() for f in inst.frames})
         fresh = ImageStore()
-        t0 = time.perf_counter()
+        c0, t0 = _cpu_s(), time.perf_counter()
         for f in files:
             fresh.data_url(fresh.add_file(f).image_hash)
         figures["encode_all_s"] = time.perf_counter() - t0
+        figures["encode_all_cpu_s"] = _cpu_s() - c0
         figures["distinct_files"] = len(files)
         figures["overhead_ms_per_instance"] = 1000 * (run_s - figures["encode_all_s"]) / n
+        figures["overhead_cpu_ms_per_instance"] = 1000 * (cpu_s - figures["encode_all_cpu_s"]) / n
         figures["fsync_ms_per_instance"] = 1000 * result.stats.fsync_s / n
     else:
         figures["requests_per_s"] = n / run_s
@@ -186,6 +195,13 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         figures["in_flight_per_s"] = n / in_flight_s
         figures["mean_request_s"] = sum(latencies) / len(latencies)
     return figures
+
+
+def _peak_rss_mb() -> float:
+    """This process's own peak RSS (``VmHWM``): ``ru_maxrss`` would also count the parent's
+    memory, which a child started by fork and exec inherits as its high-water mark."""
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
 
 
 def _cpu_s() -> float:
@@ -224,14 +240,15 @@ def main() -> None:
         return
 
     tmp = Path(tempfile.mkdtemp(prefix="povagent-bench-"))
-    data = args.data or tmp / "povbench"
     try:
-        if not (data / "artifacts").is_dir():
-            from povagent.testing.pytest_plugin import write_release
-
-            t0 = time.perf_counter()
-            write_release(data, noise_rows=NOISE_ROWS, **FULL)
-            print(f"wrote synthetic release in {time.perf_counter() - t0:.1f} s: {data}")
+        if args.data is None:
+            print(f"generating {HOUSES} houses of 30 frames (`povagent generate --jobs 2`, seed 0)...", flush=True)
+            subprocess.run([*povagent_command(), "generate", "--out", str(tmp / "POVBench"), "--houses", str(HOUSES),
+                            "--frames", "30", "--seed", "0", "--jobs", "2"], check=True, stdout=subprocess.DEVNULL)  # fmt: skip
+        data = generated_dataset(args.data, tmp, houses=HOUSES) if args.data else tmp / "POVBench"
+        pngs = sorted(data.rglob("*.png"))
+        print(f"dataset {data}: {len(pngs)} generated PNGs, mean {sum(p.stat().st_size for p in pngs) / len(pngs) / 1024:.0f} KB")
+        print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())} ({os.cpu_count()} CPUs)")
         results = {}
         for name in SCENARIOS:
             proc = subprocess.run(
@@ -246,6 +263,8 @@ def main() -> None:
               f"(target <= 2 ms; ratio to target {o['overhead_ms_per_instance'] / 2:.2f}); "
               f"fsync share {o['fsync_ms_per_instance']:.3f} ms/instance over {o['fsyncs']} fsyncs; "
               f"process CPU {o['cpu_ms_per_request']:.2f} ms/instance (encoding included)")
+        print(f"  in CPU time: run {1000 * o['cpu_ms_per_request'] * o['instances'] / 1e6:.2f} s, encoding every distinct "
+              f"image once {o['encode_all_cpu_s']:.2f} s: runner overhead {o['overhead_cpu_ms_per_instance']:.3f} ms CPU per instance")
         print(f"  image encodes: {o['base64_encodes']} base64 encodes, {o['file_reads']} file reads, "
               f"{o['rebuilds']} rebuilds for {o['distinct_images']} distinct images ({o['distinct_files']} files); "
               f"encodes per distinct image {o['base64_encodes'] / o['distinct_images']:.3f} (target 1)")
@@ -265,6 +284,7 @@ def main() -> None:
               f"{r['requests_per_s']:.0f}/s = {100 * r['requests_per_s'] / r['bound_per_s']:.1f} % of the bound; "
               f"the runner's {STEADY_REPEATS} passes reach {100 * st['requests_per_s'] / r['requests_per_s']:.1f} % of it "
               f"end to end, {100 * st['in_flight_per_s'] / r['requests_per_s']:.1f} % in flight")
+        print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     finally:
         if not args.keep:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -17,7 +17,7 @@ The frames are the release's own kind: a dataset made by ``povagent generate`` (
 OpenAI-compatible server runs in its own process and answers at once; it decodes every image
 of every request and refuses (400, which fails the run) any whose SHA-256 is not a frame of the
 dataset (``--expect-sha256``), and reports how many it checked. Each measurement runs in a
-fresh child process, so its peak RSS (``ru_maxrss``) is its own, and is timed from the run's
+fresh child process, so its peak RSS (``VmHWM``) is its own, and is timed from the run's
 start to its end (the tools' libraries, litellm and openai, imported before the clock starts):
 
 * ``povagent``: the whole engine, as a user runs it: ``PipelineRun`` over the first N
@@ -57,7 +57,10 @@ FRAMES = 30  # per request: a generated house's exploration frames
 
 
 def _peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    """This process's own peak RSS (``VmHWM``): ``ru_maxrss`` would also count the parent's
+    memory, which a child started by fork and exec inherits as its high-water mark."""
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
 
 
 def _cpu_s() -> float:

@@ -46,11 +46,16 @@ def frame_digests(data: Path, path: Path) -> dict[str, Path]:
     return digests
 
 
-def start_verifying_server(digests_file: Path, lifetime_s: float = 7200) -> tuple[subprocess.Popen, str]:
-    """The loopback server in its own process, refusing any image not in ``digests_file``."""
+def start_verifying_server(
+    digests_file: Path, lifetime_s: float = 7200, count_bodies: bool = False, delay_s: float = 0.0, reply: str | None = None
+) -> tuple[subprocess.Popen, str]:
+    """The loopback server in its own process, refusing any image not in ``digests_file``; with
+    ``count_bodies`` it also counts every request body by its SHA-256 (reported on stop); each
+    answer (``reply``, else the server's default) after ``delay_s``."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", str(lifetime_s),
-         "--expect-sha256", str(digests_file)],
+         "--expect-sha256", str(digests_file), *(["--count-bodies"] if count_bodies else []),
+         "--delay", str(delay_s), *(["--reply", reply] if reply is not None else [])],
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
     url = proc.stdout.readline().strip()  # type: ignore[union-attr]
@@ -61,8 +66,13 @@ def start_verifying_server(digests_file: Path, lifetime_s: float = 7200) -> tupl
 
 
 def stop_verifying_server(proc: subprocess.Popen) -> dict:
-    """Stop the server; its count of requests, images checked and images refused."""
+    """Stop the server; its count of requests, images checked and images refused (and, when it
+    counted them, of request bodies by SHA-256)."""
     proc.send_signal(signal.SIGINT)
-    out, _ = proc.communicate(timeout=30)
+    try:
+        out, _ = proc.communicate(timeout=300)  # a loaded machine: it finishes what it holds first
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, _ = proc.communicate()
     lines = [line for line in out.splitlines() if line.startswith("{")]
     return json.loads(lines[-1]) if lines else {}

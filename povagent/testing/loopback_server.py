@@ -10,7 +10,9 @@ With ``fetch_images=True`` it also does what a vLLM server does with image URLs:
 ``--allowed-local-media-path``) and downloads ``http://`` URLs (from 127.0.0.1 only), and
 records each image's SHA-256 and, unless ``keep_image_bytes=False``, its bytes
 (:attr:`RecordedRequest.images`). An image it cannot fetch, or one ``image_check`` rejects,
-is answered 400, as a model server would.
+is answered 400, as a model server would. With ``count_bodies=True`` it counts the SHA-256 of
+every request body as received (:attr:`LoopbackServer.body_digests`), so a benchmark can check
+that two clients sent byte-identical requests.
 
 It is bounded so a forgotten server can never hang a test run: it listens on loopback only,
 stops by itself after ``max_lifetime_s``, and every delay is cut short when it stops. It holds
@@ -34,6 +36,7 @@ import contextlib
 import hashlib
 import json
 import os
+import signal
 import socket
 import stat
 import threading
@@ -182,6 +185,10 @@ class _Handler(BaseHTTPRequestHandler):
             self._send_json(404, _error_body(f"unknown path {self.path}", "not_found_error"))
             return
         owner = self.server.owner
+        if owner.count_bodies:
+            digest = hashlib.sha256(raw).hexdigest()
+            with owner._lock:
+                owner.body_digests[digest] += 1
         recorded = RecordedRequest(self.path, {k.lower(): v for k, v in self.headers.items()}, body, time.monotonic())
         if owner.fetch_images:
             try:
@@ -281,6 +288,7 @@ class LoopbackServer:
         local_media_root: str | Path | None = None,
         keep_image_bytes: bool = True,
         image_check: Callable[[FetchedImage], str | None] | None = None,
+        count_bodies: bool = False,
     ) -> None:
         self.reply = reply
         self.port = port
@@ -291,6 +299,9 @@ class LoopbackServer:
         self.local_media_root = Path(local_media_root).resolve() if local_media_root is not None else None
         self.keep_image_bytes = keep_image_bytes
         self.image_check = image_check
+        self.count_bodies = count_bodies
+        #: with ``count_bodies``: how many requests had each body (by the SHA-256 of its bytes)
+        self.body_digests: collections.Counter[str] = collections.Counter()
         self.requests: list[RecordedRequest] = []
         self.request_count = 0
         #: images fetched and accepted, and requests refused because an image was not
@@ -495,6 +506,8 @@ def argument_parser() -> argparse.ArgumentParser:
                     help="port on 127.0.0.1 to listen on (default: 0, any free port)")
     ap.add_argument("--reply", default=DEFAULT_REPLY, metavar="TEXT",
                     help="the assistant's text in every answer (default: %(default)s)")
+    ap.add_argument("--delay", type=float, default=0.0, metavar="SECONDS",
+                    help="wait this long before each answer, as a model takes time to answer (default: 0)")
     ap.add_argument("--lifetime", type=float, default=3600.0, metavar="SECONDS",
                     help="stop after this many seconds (default: %(default).0f)")
     ap.add_argument("--fetch-images", action="store_true",
@@ -506,6 +519,9 @@ def argument_parser() -> argparse.ArgumentParser:
     ap.add_argument("--expect-sha256", default=None, metavar="FILE",
                     help="a file of SHA-256 digests, one a line: a request with any other image is "
                     "answered 400 (implies --fetch-images)")
+    ap.add_argument("--count-bodies", action="store_true",
+                    help="count the SHA-256 of every request body as received and print the counts on exit "
+                    "(a benchmark's check that two clients sent the same bytes)")
     return ap
 
 
@@ -513,7 +529,9 @@ def main(argv: list[str] | None = None) -> None:
     """Serve a fixed reply until interrupted (``python -m povagent.testing.loopback_server``).
 
     Bad options and a port that cannot be bound end with a one-line message and exit code 2,
-    never a traceback.
+    never a traceback. SIGINT (Ctrl-C) and SIGTERM both stop it, and it then prints its counts
+    (with ``--fetch-images`` or ``--count-bodies``): a benchmark started in the background
+    inherits SIGINT ignored, which Python would otherwise keep ignoring.
     """
     from povagent.testing.server_command import bind_failure
 
@@ -532,25 +550,33 @@ def main(argv: list[str] | None = None) -> None:
     if args.local_media_root is not None and not Path(args.local_media_root).is_dir():
         ap.error(f"--local-media-root {args.local_media_root}: not a folder")
     server = LoopbackServer(
-        reply=args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
+        reply=Reply(args.reply, delay_s=args.delay) if args.delay > 0 else args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
         fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
-        keep_image_bytes=False, image_check=check,
+        keep_image_bytes=False, image_check=check, count_bodies=args.count_bodies,
     )  # fmt: skip
     try:
         server.start()
     except OSError as exc:
         ap.exit(2, f"{ap.prog}: error: {bind_failure(args.port, exc)}\n")
+
+    def stop_serving(signum: int, frame: Any) -> None:
+        server._stopping.set()
+
+    for signum in (signal.SIGINT, signal.SIGTERM):  # before the URL: a client may signal at once
+        signal.signal(signum, stop_serving)
     print(server.url, flush=True)
     try:
         while not server._stopping.wait(0.5):
             pass
-    except KeyboardInterrupt:
-        pass
     finally:
         server.stop()
-        if server.fetch_images:
-            print(json.dumps({"requests": server.request_count, "images_fetched": server.images_fetched,
-                              "image_failures": server.image_failures}), flush=True)
+        if server.fetch_images or server.count_bodies:
+            counts: dict[str, Any] = {"requests": server.request_count}
+            if server.fetch_images:
+                counts |= {"images_fetched": server.images_fetched, "image_failures": server.image_failures}
+            if server.count_bodies:
+                counts["body_sha256"] = dict(server.body_digests)
+            print(json.dumps(counts), flush=True)
 
 
 if __name__ == "__main__":

@@ -5,6 +5,7 @@ port, a folder or a file in one line, exit code 2, never a traceback."""
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -93,6 +94,50 @@ def test_the_loopback_server_still_serves_on_a_free_port():
         request = urllib.request.Request(f"{url}/chat/completions", data=body, headers={"Content-Type": "application/json"})
         with urllib.request.urlopen(request, timeout=30) as response:
             assert json.load(response)["choices"][0]["message"]["content"] == "hello"
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_the_loopback_server_stops_on_sigint_or_sigterm_and_prints_its_counts(signum):
+    """Started with SIGINT ignored, as a background job inherits it: SIGINT still stops it."""
+    import json
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "povagent.testing.loopback_server", "--port", "0", "--lifetime", "30", "--count-bodies"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        assert proc.stdout.readline().startswith("http://127.0.0.1:")
+        proc.send_signal(signum)
+        out, _ = proc.communicate(timeout=20)
+    finally:
+        proc.kill()
+    assert json.loads(out.strip().splitlines()[-1]) == {"requests": 0, "body_sha256": {}}
+
+
+def test_the_loopback_server_answers_after_its_delay():
+    import json
+    import time
+    import urllib.request
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "povagent.testing.loopback_server", "--port", "0", "--lifetime", "30", "--delay", "0.5",
+         "--reply", "late"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert proc.stdout is not None
+        url = proc.stdout.readline().strip()
+        body = json.dumps({"model": "m", "messages": [{"role": "user", "content": "hi"}]}).encode()
+        request = urllib.request.Request(f"{url}/chat/completions", data=body, headers={"Content-Type": "application/json"})
+        t0 = time.monotonic()
+        with urllib.request.urlopen(request, timeout=30) as response:
+            assert json.load(response)["choices"][0]["message"]["content"] == "late"
+        assert time.monotonic() - t0 >= 0.5
     finally:
         proc.terminate()
         proc.wait(timeout=30)

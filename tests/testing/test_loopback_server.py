@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import http.client
 import json
 import threading
@@ -48,6 +49,16 @@ def test_records_every_request_body_and_headers():
     assert [r.body.get("temperature") for r in server.requests] == [None, 0.5]
     assert server.requests[0].headers["authorization"] == "Bearer k"
     assert server.requests[0].user_parts() == [{"type": "text", "text": "hi"}]
+
+
+def test_counts_each_body_by_the_sha256_of_its_bytes():
+    same = json.dumps(BODY).encode()
+    with LoopbackServer(count_bodies=True) as server:
+        post(server)
+        post(server)
+        post(server, {**BODY, "max_tokens": 10})
+    assert server.body_digests[hashlib.sha256(same).hexdigest()] == 2
+    assert sorted(server.body_digests.values()) == [1, 2]
 
 
 def test_reply_callable_sees_the_request():
