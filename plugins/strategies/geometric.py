@@ -385,7 +385,7 @@ class GeometricStrategy(Strategy):
             account.step(f"target: pixel ({sol.pixel[0]:.1f}, {sol.pixel[1]:.1f})" + ("" if sol.in_frame else ", outside the image: clamped"))
             return turns + [self._final(instance, (None, sol.pixel), account)]
 
-        anchor_box = self._anchor_box(anchor, anchor_seen, cameras, account)
+        anchor_box = self.anchor_estimate(anchor, anchor_seen, cameras, account)
         observer_at = None
         if speaker_at is not None:
             observer_at = np.asarray(speaker_at, dtype=float)
@@ -410,8 +410,10 @@ class GeometricStrategy(Strategy):
         account.step(f"target: ({_xyz(target)}); frame {choice.index} ({choice.placement})")
         return turns + [self._final(instance, (choice.index, choice.pixel), account, target)]
 
-    def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[ViewCamera], account: Account) -> AnchorEstimate:
-        """The anchor's box: centre located from the sightings, extent fitted to the outlines."""
+    def anchor_estimate(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[ViewCamera], account: Account | None = None) -> AnchorEstimate:
+        """The anchor's box from its detections (at least one): centre located from the
+        sightings, extent fitted to the outlines; the steps go into ``account`` when given."""
+        account = account or Account()
         prior = size_prior(anchor)
         estimate = locate([Sighting(cameras[d.frame], d.pixel) for d in seen], prior.centre_height, self.min_ray_angle_deg)
         assert estimate is not None  # seen is not empty
