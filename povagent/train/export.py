@@ -33,7 +33,10 @@ from povagent.train.splits import DEFAULT_SPLIT, assign_splits, parse_split
 
 FORMATS = ("hf", "messages")
 MANIFEST = "export.json"
-MANIFEST_VERSION = 1
+#: The version of what an export writes: raised when the same options write other bytes (2: the
+#: rationales state where the speaker stood and the anchor's box in more views), so a resume
+#: never mixes the two in one export.
+MANIFEST_VERSION = 2
 #: Where each format's shards go, and their suffix.
 FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl")}
 #: Estimated bytes of an example's text (question, rationale, facts) for shard planning.
@@ -146,12 +149,19 @@ def _manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Pat
 
 
 def _check_resume(out: Path, manifest: dict[str, Any]) -> None:
-    """Refuse to resume an export made with other options, or from a dataset that changed."""
+    """Refuse to resume an export made by another version, with other options, or from a
+    dataset that changed."""
     path = out / MANIFEST
     try:
         old = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise ExportError(f"{path}: unreadable ({exc}); remove the export folder or choose another --out") from None
+    old_version = old.get("version") if isinstance(old, dict) else None
+    if old_version != MANIFEST_VERSION:
+        raise ExportError(
+            f"{out} holds an export written by another version of export-train (format {old_version!r}, now {MANIFEST_VERSION}): "
+            "its shards would differ from the ones written now; choose another --out"
+        )
     old_options = old.get("options", {}) if isinstance(old, dict) else {}
     for key, value in manifest["options"].items():
         if old_options.get(key) != value:

@@ -159,6 +159,15 @@ def test_other_options_over_an_export_are_refused_naming_the_option(generated_re
     assert again.shards_written == 0
 
 
+def test_an_export_written_by_another_version_is_not_resumed(generated_release: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    export_training_set(generated_release, out, ExportOptions(format="messages"), check_release=False)
+    manifest = json.loads((out / "export.json").read_text())
+    (out / "export.json").write_text(json.dumps({**manifest, "version": manifest["version"] - 1}))
+    with pytest.raises(ExportError, match="another version of export-train"):
+        export_training_set(generated_release, out, ExportOptions(format="messages"), check_release=False)
+
+
 def test_a_folder_that_is_not_an_export_is_refused(generated_release: Path, tmp_path: Path) -> None:
     out = tmp_path / "someone"
     out.mkdir()
