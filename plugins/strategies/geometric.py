@@ -11,7 +11,8 @@ request with an answer schema, and the geometry is done exactly:
    sees it, its centre pixel and bounding box.
 
 With the frames' cameras (the release's ``exploration_log.json``; a robot's own poses) the
-anchor and the observer are triangulated (one view: a ray against the type's usual centre
+anchor and the observer are triangulated (where the speaker stood, when the caller knows it,
+stands in for the observer's furniture, which is then not asked for) (one view: a ray against the type's usual centre
 height, :mod:`povagent.geometry.triangulation`), the anchor's box is fitted to its outlines,
 the target is placed by the benchmark's own rules (:mod:`povagent.geometry.placement`), and
 the frame showing it best is chosen. Condition C (the observer view, no pose) is solved in the
@@ -311,17 +312,30 @@ class GeometricStrategy(Strategy):
         return turns
 
     # -- the conversation ---------------------------------------------------------------------
-    async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
+    async def solve(
+        self, instance: Instance, ask: Ask, images: ImageStore, *, speaker_at: Sequence[float] | np.ndarray | None = None
+    ) -> list[tuple[Request, Response]]:
         """Ask the sub-questions, solve the geometry with the frames' cameras, and return every
-        turn, the answer last."""
-        return await self.solve_posed(instance, ask, images, [f.camera for f in instance.frames])
+        turn, the answer last. ``speaker_at``: see :meth:`solve_posed`."""
+        return await self.solve_posed(instance, ask, images, [f.camera for f in instance.frames], speaker_at=speaker_at)
 
-    async def solve_posed(self, instance: Instance, ask: Ask, images: ImageStore, cameras: Sequence[ViewCamera]) -> list[tuple[Request, Response]]:
+    async def solve_posed(
+        self,
+        instance: Instance,
+        ask: Ask,
+        images: ImageStore,
+        cameras: Sequence[ViewCamera],
+        *,
+        speaker_at: Sequence[float] | np.ndarray | None = None,
+    ) -> list[tuple[Request, Response]]:
         """:meth:`solve` with ``cameras`` (one per shown frame, describing the shown image, in
         the benchmark's world: y up, floor at ``y = 0``, left-handed) in place of the frames'.
 
         The target of A/B comes back in that world (``Response.solved_point``); C uses only the
-        camera's field of view (the observer view has no pose).
+        camera's field of view (the observer view has no pose). ``speaker_at`` (A/B): where the
+        speaker stood, in that world, when it is known (a robot that saw the person; a training
+        rationale that states it): the directions start from there, as the benchmark's start
+        from the observer camera, and the observer's furniture is not asked for.
         """
         if len(cameras) != len(instance.frames):
             raise ValueError(f"solve_posed: {len(cameras)} cameras for {len(instance.frames)} frames")
@@ -371,9 +385,12 @@ class GeometricStrategy(Strategy):
             account.step(f"target: pixel ({sol.pixel[0]:.1f}, {sol.pixel[1]:.1f})" + ("" if sol.in_frame else ", outside the image: clamped"))
             return turns + [self._final(instance, (None, sol.pixel), account)]
 
-        anchor_box = self._anchor_box(anchor, anchor_seen, cameras, account)
+        anchor_box = self.anchor_estimate(anchor, anchor_seen, cameras, account)
         observer_at = None
-        if observer is None:
+        if speaker_at is not None:
+            observer_at = np.asarray(speaker_at, dtype=float)
+            account.step(f"observer: where the speaker stood, given, at ({_xyz(observer_at)})")
+        elif observer is None:
             account.fallback("the observer's furniture could not be read from the answer")
         else:
             seen, dropped = parse_detections(await exchange(self.locate_request(instance, images, observer, "observer")), n, width, height)
@@ -393,8 +410,10 @@ class GeometricStrategy(Strategy):
         account.step(f"target: ({_xyz(target)}); frame {choice.index} ({choice.placement})")
         return turns + [self._final(instance, (choice.index, choice.pixel), account, target)]
 
-    def _anchor_box(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[ViewCamera], account: Account) -> AnchorEstimate:
-        """The anchor's box: centre located from the sightings, extent fitted to the outlines."""
+    def anchor_estimate(self, anchor: str, seen: Sequence[Detection], cameras: Sequence[ViewCamera], account: Account | None = None) -> AnchorEstimate:
+        """The anchor's box from its detections (at least one): centre located from the
+        sightings, extent fitted to the outlines; the steps go into ``account`` when given."""
+        account = account or Account()
         prior = size_prior(anchor)
         estimate = locate([Sighting(cameras[d.frame], d.pixel) for d in seen], prior.centre_height, self.min_ray_angle_deg)
         assert estimate is not None  # seen is not empty

@@ -446,6 +446,31 @@ def _raw_index(raw: list[Any], key: str, value: str, default: int) -> int:
     return default
 
 
+def dataset_house_folders(root: Path) -> list[Path]:
+    """:func:`house_folders` of a dataset folder, or :class:`DatasetError` saying what is missing."""
+    if not root.is_dir():
+        raise DatasetError(f"{root}: dataset folder not found (expected the POVBench release layout: meta.json, artifacts/<house>/...)")
+    folders = house_folders(root)
+    if not folders:
+        raise DatasetError(f"{root}: no house folders under {root / 'artifacts'} (is this a POVBench dataset?)")
+    return folders
+
+
+def read_meta(root: Path, problems: list[Problem]) -> DatasetMeta | None:
+    """The dataset's ``meta.json`` (``None`` when there is none, or it is unusable: then the
+    problems say why)."""
+    if not (root / "meta.json").exists():
+        return None
+    raw_meta = _read_json(root / "meta.json", root, problems)
+    if raw_meta is None:
+        return None
+    try:
+        return DatasetMeta.model_validate(raw_meta, context=RELEASE_FILE)
+    except ValidationError as exc:
+        problems.extend(problems_from_validation_error("meta.json", exc))
+        return None
+
+
 def load_dataset(
     root: str | Path, *, strict: bool = False, frame_size: tuple[int, int] = (512, 512), check_images: bool = True
 ) -> Dataset:
@@ -458,20 +483,9 @@ def load_dataset(
     per process for them); paths are always kept inside the dataset.
     """
     root = Path(root)
-    if not root.is_dir():
-        raise DatasetError(f"{root}: dataset folder not found (expected the POVBench release layout: meta.json, artifacts/<house>/...)")
+    folders = dataset_house_folders(root)
     problems: list[Problem] = []
-    meta: DatasetMeta | None = None
-    if (root / "meta.json").exists():
-        raw_meta = _read_json(root / "meta.json", root, problems)
-        if raw_meta is not None:
-            try:
-                meta = DatasetMeta.model_validate(raw_meta, context=RELEASE_FILE)
-            except ValidationError as exc:
-                problems.extend(problems_from_validation_error("meta.json", exc))
-    folders = house_folders(root)
-    if not folders:
-        raise DatasetError(f"{root}: no house folders under {root / 'artifacts'} (is this a POVBench dataset?)")
+    meta = read_meta(root, problems)
     houses: dict[str, House] = {}
     for folder in folders:
         house = load_house(folder, root, problems, frame_size, check_images)

@@ -1,9 +1,11 @@
 """The 2D box around an axis-aligned 3D box as a camera sees it, also when part of it is behind.
 
-The box's twelve edges are sampled and only the samples in front of the camera (deeper than
-:data:`NEAR_PLANE`) are projected, so a box the camera stands beside or inside is outlined by
-the part it can see. Used by the perception simulator (what a detector would box) and by the
-diagnostics (how far a point is from the anchor).
+The box is cut at the near plane (depth :data:`NEAR_PLANE`): what is left is a convex solid
+whose corners are the box's corners in front of the camera and the points where the box's
+twelve edges cross the near plane. Its outline is the 2D box around those points' projections,
+exactly: a box the camera stands beside or inside is outlined by the part it can see. Used by
+the perception simulator (what a detector would box), by the diagnostics (how far a point is
+from the anchor) and by the training rationales (the anchor's box they state).
 """
 
 from __future__ import annotations
@@ -13,46 +15,31 @@ import numpy as np
 from povagent.geometry.camera import ViewCamera
 from povagent.geometry.triangulation import optical_depth
 
-#: Points per box edge sampled to outline a box that is partly behind the camera.
-EDGE_SAMPLES = 16
 #: Nearest depth (m) at which a box point still shows.
 NEAR_PLANE = 0.05
 
-
-def _edge_pattern() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For the 12 edges x EDGE_SAMPLES points: which coordinate runs along the edge, its
-    fraction ``t``, and which fixed coordinates sit at the box's high corner."""
-    t = np.linspace(0.0, 1.0, EDGE_SAMPLES)
-    along, fraction, at_high = [], [], []
-    for axis in range(3):
-        others = [a for a in range(3) if a != axis]
-        for high0 in (False, True):
-            for high1 in (False, True):
-                for ti in t:
-                    along.append([a == axis for a in range(3)])
-                    fraction.append([ti if a == axis else 0.0 for a in range(3)])
-                    at_high.append([(a == others[0] and high0) or (a == others[1] and high1) for a in range(3)])
-    return np.array(along), np.array(fraction), np.array(at_high)
-
-
-# computed once: every outline samples the same pattern of points on its box's edges
-_ALONG, _T, _AT_HIGH = _edge_pattern()
+#: Corner ``k`` takes the high value on axis ``a`` when bit ``a`` of ``k`` is set.
 _CORNER_AT_HIGH = np.array([[bool(k & 1), bool(k & 2), bool(k & 4)] for k in range(8)])
+#: The twelve edges as pairs of corner indices (corners differing in one bit).
+_EDGES = np.array([(k, k | (1 << axis)) for k in range(8) for axis in range(3) if not k & (1 << axis)])
 
 
 def outline(camera: ViewCamera, lo: np.ndarray, hi: np.ndarray) -> tuple[float, float, float, float] | None:
-    """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``
-    (its edges sampled, so a box partly behind the camera is outlined by the part in front)."""
+    """The 2D box (pixels, clipped to the image) around the projected axis-aligned box ``lo..hi``,
+    from the part deeper than :data:`NEAR_PLANE`; ``None`` when nothing of it is in front or
+    its outline in the image is thinner than a pixel."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     corners = np.where(_CORNER_AT_HIGH, hi, lo)
-    if np.all(optical_depth(camera, corners) > NEAR_PLANE):
-        # wholly in front: a projected box's outline is that of its projected corners (the
-        # edges project to straight segments between them), no need to sample the edges
-        pts = corners
-    else:
-        pts = np.where(_ALONG, lo + _T * (hi - lo), np.where(_AT_HIGH, hi, lo))
-    depth = optical_depth(camera, pts)
-    pts = pts[depth > NEAR_PLANE]
+    depth = optical_depth(camera, corners)
+    front = depth > NEAR_PLANE
+    pts = corners[front]
+    if not front.all():
+        # where an edge crosses the near plane (depth is affine along the edge: exact)
+        a, b = _EDGES[:, 0], _EDGES[:, 1]
+        crossing = front[a] != front[b]
+        a, b = a[crossing], b[crossing]
+        t = (NEAR_PLANE - depth[a]) / (depth[b] - depth[a])
+        pts = np.concatenate([pts, corners[a] + t[:, None] * (corners[b] - corners[a])])
     if not len(pts):
         return None
     px = camera.project_pixels(pts)

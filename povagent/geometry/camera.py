@@ -168,6 +168,23 @@ class Camera:
         d = np.asarray(points, dtype=float) - np.asarray(self.position)
         return d @ self.axes().T
 
+    # -- the floor seen from the camera ---------------------------------------------------------
+    def floor_offset(self, point: Sequence[float] | np.ndarray) -> tuple[float, float]:
+        """Where ``point`` is on the floor plane relative to the camera, in metres: along the
+        camera's right and along its heading (its forward with the horizon's tilt taken out).
+        Heights are ignored: a point 1 m straight below the camera is ``(0, 0)``."""
+        y = math.radians(self.yaw)
+        dx, dz = float(point[0]) - self.position[0], float(point[2]) - self.position[2]
+        return (dx * math.cos(y) - dz * math.sin(y), dx * math.sin(y) + dz * math.cos(y))
+
+    def floor_point(self, right: float, ahead: float, height: float = 0.0) -> np.ndarray:
+        """The world point ``right`` metres to the camera's right and ``ahead`` along its heading,
+        at ``height``: the inverse of :meth:`floor_offset`."""
+        y = math.radians(self.yaw)
+        x = self.position[0] + right * math.cos(y) + ahead * math.sin(y)
+        z = self.position[2] - right * math.sin(y) + ahead * math.cos(y)
+        return np.array([x, height, z])
+
     # -- projection ---------------------------------------------------------------------------
     def project(self, points: np.ndarray) -> Projection:
         """Project world points; points behind the camera get NaN coordinates."""

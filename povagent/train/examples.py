@@ -18,7 +18,7 @@ from povagent.dataset.instances import Instance
 from povagent.dataset.loader import House
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
-from povagent.train.facts import InstanceFacts, NoTeachingFrame, instance_facts
+from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
 
 #: The strategy whose prompt asks for each kind of rationale.
@@ -78,14 +78,23 @@ class TrainingExample:
     def facts_record(self) -> dict[str, Any]:
         """The stated facts as plain JSON values (kept in every row, for checking and filtering)."""
         f = self.facts
+
+        def box(b: PixelBox | None) -> list[int] | None:
+            return None if b is None else [b.x0, b.y0, b.x1, b.y1]
+
         return {
             "frame_index": f.frame_index,
             "frame_path": f.frame_path,
             "observer_visible": f.observer_visible,
             "anchor_visible": f.anchor_visible,
             "anchor_xy": [round(v, 3) for v in f.anchor_xy],
-            "anchor_box": None if f.anchor_box is None else [f.anchor_box.x0, f.anchor_box.y0, f.anchor_box.x1, f.anchor_box.y1],
+            "anchor_box": box(f.anchor_box),
+            "anchor_other_views": [
+                {"frame_index": v.frame_index, "xy": [round(c, 3) for c in v.xy], "box": box(v.box)} for v in f.anchor_other_views
+            ],
             "observer_xy": None if f.observer_xy is None else [round(v, 3) for v in f.observer_xy],
+            "speaker_offset": [round(v, 3) for v in f.speaker_offset],
+            "facing_deg": round(f.facing_deg, 2),
             "facing": f.facing,
             "relation": f.relation,
             "image_direction": f.image_direction,

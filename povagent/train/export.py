@@ -1,10 +1,13 @@
 """``export_training_set``: a POVBench-format dataset -> a training set on disk.
 
-The flow: load the dataset (problems reported, bad houses skipped), check no house is an
-evaluation house, assign houses to splits, plan the examples and their shards, then write each
-shard that is not already there (one after another, or as cluster tasks), and last the dataset
-card. ``export.json`` records the options and the plan: the same command resumes, and other
-options over an existing export are refused naming the option that differs.
+The flow: check no house is an evaluation house, read the houses one at a time (bad houses
+skipped) to plan their examples, assign houses to splits, cut the plan into shards, then write
+each shard that is not already there (one after another, or as cluster tasks), and last the
+dataset card. ``export.json`` records the options and the plan: the same command resumes, and
+other options over an existing export are refused naming the option that differs.
+
+Memory stays flat in the number of houses: no step holds more than one house's records (the
+plan keeps only each example's id and size), and a shard is written from one house at a time.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from povagent.dataset.loader import Dataset, house_folders, load_dataset, load_house
+from povagent.dataset.loader import Dataset, House, dataset_house_folders, house_folders, load_house, read_meta
 from povagent.dataset.models import Condition
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
@@ -30,7 +33,10 @@ from povagent.train.shards import PlannedExample, Shard, plan_shards, remove_sta
 from povagent.train.splits import assign_splits, parse_split
 
 MANIFEST = "export.json"
-MANIFEST_VERSION = 1
+#: The version of what an export writes: raised when the same options write other bytes (2: the
+#: rationales state where the speaker stood and the anchor's box in more views), so a resume
+#: never mixes the two in one export.
+MANIFEST_VERSION = 2
 #: Estimated bytes of an example's text (question, rationale, facts) for shard planning.
 TEXT_BYTES = 8 * 1024
 
@@ -39,29 +45,48 @@ def _conditions(options: ExportOptions) -> list[Condition]:
     return [Condition(c) for c in options.conditions]
 
 
-def _plan(dataset: Dataset, splits: dict[str, str | None], options: ExportOptions, report: ExportReport) -> list[PlannedExample]:
-    """Every example to write, in export order (split, house, the loader's instance order)."""
-    planned: list[PlannedExample] = []
-    order = {"train": 0, "validation": 1, "test": 2}
-    houses = sorted((h for h in dataset.houses if splits.get(h) is not None), key=lambda h: (order[splits[h] or "train"], h))
-    for hid in houses:
-        house = dataset.houses[hid]
-        frame_bytes = {f.image_path: f.file.stat().st_size for f in house.frames}
-        for inst in dataset.instances(conditions=_conditions(options), houses=[hid]):
-            try:
-                instance_facts(inst, house.pairs[inst.pair_id])
-            except NoTeachingFrame as exc:
-                report.skipped[inst.id] = str(exc).partition(": ")[2]
-                continue
-            if options.format == "hf":
-                if inst.condition.uses_exploration_frames:
-                    size = sum(frame_bytes.get(f.image_path, 0) for f in inst.frames)
-                else:
-                    size = inst.frames[0].file.stat().st_size
+def one_house(root: Path, house: House) -> Dataset:
+    """A dataset of ``house`` alone: its instances are built from it and dropped with it."""
+    return Dataset(root, None, {house.house_id: house}, [])
+
+
+def _house_plan(root: Path, house: House, options: ExportOptions, report: ExportReport) -> list[tuple[str, int]]:
+    """``(instance id, estimated bytes)`` of every example of ``house``, in the loader's
+    instance order; an instance that cannot teach goes into ``report.skipped``."""
+    frame_bytes = {f.image_path: f.file.stat().st_size for f in house.frames}
+    out = []
+    for inst in one_house(root, house).instances(conditions=_conditions(options)):
+        try:
+            instance_facts(inst, house.pairs[inst.pair_id])
+        except NoTeachingFrame as exc:
+            report.skipped[inst.id] = str(exc).partition(": ")[2]
+            continue
+        if options.format == "hf":
+            if inst.condition.uses_exploration_frames:
+                size = sum(frame_bytes.get(f.image_path, 0) for f in inst.frames)
             else:
-                size = 0
-            planned.append(PlannedExample(inst.id, hid, splits[hid] or "train", size + TEXT_BYTES))
-    return planned
+                size = inst.frames[0].file.stat().st_size
+        else:
+            size = 0
+        out.append((inst.id, size + TEXT_BYTES))
+    return out
+
+
+def _plan_houses(root: Path, folders: Sequence[Path], options: ExportOptions, report: ExportReport, problems: list[Problem]) -> dict[str, list[tuple[str, int]]]:
+    """:func:`_house_plan` of every house that loads (image checks on), one house read at a time."""
+    by_house = {}
+    for folder in folders:
+        house = load_house(folder, root, problems, check_images=True)
+        if house is not None:
+            by_house[house.house_id] = _house_plan(root, house, options, report)
+    return by_house
+
+
+def _plan(by_house: dict[str, list[tuple[str, int]]], splits: dict[str, str | None]) -> list[PlannedExample]:
+    """Every example to write, in export order (split, house, the loader's instance order)."""
+    order = {"train": 0, "validation": 1, "test": 2}
+    houses = sorted((h for h in by_house if splits.get(h) is not None), key=lambda h: (order[splits[h] or "train"], h))
+    return [PlannedExample(iid, hid, splits[hid] or "train", size) for hid in houses for iid, size in by_house[hid]]
 
 
 def _manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Path) -> dict[str, Any]:
@@ -75,12 +100,19 @@ def _manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Pat
 
 
 def _check_resume(out: Path, manifest: dict[str, Any]) -> None:
-    """Refuse to resume an export made with other options, or from a dataset that changed."""
+    """Refuse to resume an export made by another version, with other options, or from a
+    dataset that changed."""
     path = out / MANIFEST
     try:
         old = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise ExportError(f"{path}: unreadable ({exc}); remove the export folder or choose another --out") from None
+    old_version = old.get("version") if isinstance(old, dict) else None
+    if old_version != MANIFEST_VERSION:
+        raise ExportError(
+            f"{out} holds an export written by another version of export-train (format {old_version!r}, now {MANIFEST_VERSION}): "
+            "its shards would differ from the ones written now; choose another --out"
+        )
     old_options = old.get("options", {}) if isinstance(old, dict) else {}
     for key, value in manifest["options"].items():
         if old_options.get(key) != value:
@@ -120,20 +152,15 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
 
     root, target = Path(dataset_root), Path(out)
     wanted = {e.id for e in shard.examples}
-    problems: list[Problem] = []
-    houses = {}
-    for hid in shard.houses:
-        house = load_house(root / "artifacts" / hid, root, problems, check_images=False)
-        if house is None:
-            raise DatasetError(f"{root / 'artifacts' / hid}: the house could not be loaded for shard {shard.name}")
-        houses[hid] = house
-    dataset = Dataset(root, None, houses, problems)
     strategy = make_strategy(options.rationale)
 
     def examples() -> Iterator[TrainingExample]:
-        for hid in shard.houses:
-            insts = [i for i in dataset.instances(conditions=_conditions(options), houses=[hid]) if i.id in wanted]
-            for ex in house_examples(houses[hid], insts, options.rationale, strategy, options.text_seed, options.exact_answers):
+        for hid in shard.houses:  # one house in memory at a time
+            house = load_house(root / "artifacts" / hid, root, [], check_images=False)
+            if house is None:
+                raise DatasetError(f"{root / 'artifacts' / hid}: the house could not be loaded for shard {shard.name}")
+            insts = [i for i in one_house(root, house).instances(conditions=_conditions(options)) if i.id in wanted]
+            for ex in house_examples(house, insts, options.rationale, strategy, options.text_seed, options.exact_answers):
                 if isinstance(ex, tuple):
                     raise DatasetError(f"{ex[0]}: planned for {shard.name} but cannot teach now ({ex[1]})")
                 yield ex
@@ -190,7 +217,9 @@ def export_training_set(
     options.check()
     start = time.perf_counter()
     root, target = Path(dataset), Path(out)
-    ds = load_dataset(root, check_images=True)
+    folders = dataset_house_folders(root)
+    problems: list[Problem] = []
+    meta = read_meta(root, problems)
     report = ExportReport(out=target)
     evaluation = EvaluationSets()
     release = cached_release_root() if check_release else None
@@ -206,7 +235,8 @@ def export_training_set(
     report.evaluation_sources = list(evaluation.sources)
     for ident in dataset_identities(root):
         hit = evaluation.match(ident)
-        if hit is not None and ident.house_id in ds.houses:
+        # a house that does not load is no house of the export, evaluation house or not
+        if hit is not None and load_house(root / "artifacts" / ident.house_id, root, [], check_images=True) is not None:
             report.excluded[ident.house_id] = hit
     if report.excluded and not drop_excluded:
         shown = ", ".join(f"{h} (= {m})" for h, m in list(report.excluded.items())[:5])
@@ -215,12 +245,15 @@ def export_training_set(
             f"{len(report.excluded)} house(s) of {root} are evaluation houses: {shown}{more}; "
             "a training set never holds them (--drop-excluded leaves them out)"
         )
-    keep = [h for h in sorted(ds.houses) if h not in report.excluded]
-    splits = assign_splits(keep, parse_split(options.split), options.split_seed)
+    by_house = _plan_houses(root, [f for f in folders if f.name not in report.excluded], options, report, problems)
+    if not by_house and not report.excluded:
+        listing = "\n".join(f"  - {p}" for p in problems[:20])
+        raise DatasetError(f"{root}: no usable house; problems:\n{listing}")
+    splits = assign_splits(sorted(by_house), parse_split(options.split), options.split_seed)
     for hid, split in splits.items():
         if split is not None:
             report.houses_by_split.setdefault(split, []).append(hid)
-    planned = _plan(ds, splits, options, report)
+    planned = _plan(by_house, splits)
     shards = plan_shards(planned, options.max_shard_bytes, FORMAT_FOLDERS[options.format][1])
     manifest = _manifest(options, shards, root)
     _prepare_out(target, manifest)
@@ -255,6 +288,6 @@ def export_training_set(
         counts["condition"][condition] += 1
         counts["direction"][direction] += 1
     report.counts = {k: dict(sorted(v.items())) for k, v in counts.items()}
-    write_card(target, root, ds, options, report, shards)
+    write_card(target, root, meta, len(by_house) + len(report.excluded), options, report, shards)
     report.seconds = time.perf_counter() - start
     return report

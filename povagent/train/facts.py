@@ -3,8 +3,9 @@
 Pure functions of an :class:`~povagent.dataset.instances.Instance` and its pair entry: which
 frame shows the target best (and whether the observer's furniture and the anchor are in it), where
 the anchor and the furniture are in that frame, which way the observer faces relative to the
-camera, which way the direction points in the image, and the ground-truth pixel. A rationale
-is text around these facts; the fact-check test recomputes each of them independently.
+camera (and where the speaker stood, which is what the ground truth's directions depend on),
+which way the direction points in the image, and the ground-truth pixel. A rationale is text
+around these facts; the fact-check test recomputes each of them independently.
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import Direction, PairEntry
+from povagent.dataset.models import Direction, PairEntry, SceneObject
+from povagent.geometry.box_outline import outline
 from povagent.geometry.camera import BEHIND_EPSILON, Camera
 from povagent.geometry.ground_truth import direction_vectors
 
@@ -40,7 +42,7 @@ DIRECTION_PROBE_M = 0.5
 
 
 #: How many other views of the anchor a rationale names.
-OTHER_VIEWS = 2
+OTHER_VIEWS = 3
 
 
 class NoTeachingFrame(ValueError):
@@ -58,12 +60,25 @@ class PixelBox:
 
 
 @dataclass(frozen=True)
+class AnchorView:
+    """Another frame that saw the anchor: its index, the anchor's centre pixel and its box there."""
+
+    frame_index: int
+    xy: tuple[float, float]
+    box: PixelBox | None
+
+
+@dataclass(frozen=True)
 class InstanceFacts:
     """Everything a rationale may state about one instance, each computed from the scene.
 
     ``frame_index`` is ``None`` for Given (the observer view is the only image). Pixels are in
     the frame's own pixel grid, origin top-left; ``answer_xy`` is the ground truth's exact pixel
-    (``u * W, v * H``, as the official scorer compares it).
+    (``u * W, v * H``, as the official scorer compares it). ``speaker_offset`` is where the
+    speaker stood (the observer camera's position, which the ground truth's directions start
+    from) in metres to the frame camera's right and along its heading
+    (:meth:`~povagent.geometry.camera.Camera.floor_offset`); ``facing_deg`` is the speaker's
+    heading towards the anchor against the camera's heading, positive to the camera's right.
     """
 
     instance_id: str
@@ -85,9 +100,11 @@ class InstanceFacts:
     image_direction: str
     surface: str
     answer_xy: tuple[float, float]
-    #: Other frames that saw the anchor, with its centre's pixel there: ``(frame index, (x, y))``,
-    #: at most :data:`OTHER_VIEWS`, widest baseline first (a second view fixes the anchor's depth).
-    anchor_other_views: tuple[tuple[int, tuple[float, float]], ...] = ()
+    speaker_offset: tuple[float, float]
+    facing_deg: float
+    #: Other frames that saw the anchor with its centre in view, at most :data:`OTHER_VIEWS`,
+    #: widest baseline first (a second view fixes the anchor's depth, their boxes its extent).
+    anchor_other_views: tuple[AnchorView, ...] = ()
 
     def answer_pixel(self) -> tuple[int, int]:
         """The answer in whole pixels, inside ``[0, W-1] x [0, H-1]``."""
@@ -97,7 +114,8 @@ class InstanceFacts:
 
 
 def gt_pixel(camera: Camera, target: tuple[float, float, float]) -> tuple[float, float] | None:
-    """The ground truth's pixel in ``camera`` when it lies in front of it and inside the image."""
+    """A point's pixel in ``camera`` (the ground truth's, an anchor centre's) when it lies in
+    front of the camera and inside the image."""
     u, v, depth = camera.project_point(target)
     if not depth > BEHIND_EPSILON or not (0.0 <= u <= 1.0 and 0.0 <= v <= 1.0):
         return None
@@ -108,13 +126,15 @@ def teaching_frame(instance: Instance) -> Frame:
     """The frame an Inferred/Stated answer names: the target inside it, the anchor seen in it.
 
     Among frames whose exploration record saw the anchor and where the ground truth projects
-    inside the image, frames that also saw the observer's furniture come first, then the one
-    whose ground truth lies nearest the image centre (ties: the lower index). Raises
-    :class:`NoTeachingFrame` when no frame qualifies.
+    inside the image, frames where the anchor's centre is inside the image too come first (an
+    anchor coordinate off the image teaches nothing a model can point at), then frames that also
+    saw the observer's furniture, then the one whose ground truth lies nearest the image centre
+    (ties: the lower index). Raises :class:`NoTeachingFrame` when no frame qualifies.
     """
     anchor_id = instance.anchor_object.objectId
     observer_id = instance.observer_object.objectId
-    best: tuple[int, float, int] | None = None
+    anchor_centre = instance.anchor_object.raw_metadata.axisAlignedBoundingBox.center.as_tuple()
+    best: tuple[int, int, float, int] | None = None
     for frame in instance.frames:
         if anchor_id not in frame.in_frame_hits:
             continue
@@ -123,26 +143,36 @@ def teaching_frame(instance: Instance) -> Frame:
             continue
         w, h = frame.camera.width, frame.camera.height
         off_centre = math.hypot(pixel[0] / w - 0.5, pixel[1] / h - 0.5)
-        key = (0 if observer_id in frame.in_frame_hits else 1, off_centre, frame.index)
+        anchor_off = 0 if gt_pixel(frame.camera, anchor_centre) is not None else 1
+        key = (anchor_off, 0 if observer_id in frame.in_frame_hits else 1, off_centre, frame.index)
         if best is None or key < best:
             best = key
     if best is None:
         raise NoTeachingFrame(f"{instance.id}: no frame shows the anchor with the target inside it")
-    return instance.frames[best[2]]
+    return instance.frames[best[3]]
 
 
-def facing_relative_to(camera: Camera, observer_xz: np.ndarray, anchor_xz: np.ndarray) -> str:
-    """Which way an observer at ``observer_xz`` facing ``anchor_xz`` looks, seen from ``camera``."""
-    d = anchor_xz - observer_xz
-    yaw = math.radians(camera.yaw)
-    ahead = d[0] * math.sin(yaw) + d[1] * math.cos(yaw)  # along the camera's forward on the floor
-    across = d[0] * math.cos(yaw) - d[1] * math.sin(yaw)  # along the camera's right
-    angle = math.degrees(math.atan2(across, ahead))
+def facing_angle(camera: Camera, observer_xz: np.ndarray, anchor_xz: np.ndarray) -> float:
+    """The heading of an observer at ``observer_xz`` facing ``anchor_xz`` against ``camera``'s
+    heading on the floor, in degrees in ``(-180, 180]``: 0 looks the way the camera looks,
+    positive turns to the camera's right."""
+    o_right, o_ahead = camera.floor_offset((observer_xz[0], 0.0, observer_xz[1]))
+    a_right, a_ahead = camera.floor_offset((anchor_xz[0], 0.0, anchor_xz[1]))
+    return math.degrees(math.atan2(a_right - o_right, a_ahead - o_ahead))
+
+
+def facing_words(angle: float) -> str:
+    """:data:`FACINGS` for a :func:`facing_angle`: within 45 degrees "away", beyond 135 "towards"."""
     if abs(angle) <= 45.0:
         return FACINGS[0]
     if abs(angle) >= 135.0:
         return FACINGS[1]
     return FACINGS[3] if angle > 0 else FACINGS[2]
+
+
+def facing_relative_to(camera: Camera, observer_xz: np.ndarray, anchor_xz: np.ndarray) -> str:
+    """Which way an observer at ``observer_xz`` facing ``anchor_xz`` looks, seen from ``camera``."""
+    return facing_words(facing_angle(camera, observer_xz, anchor_xz))
 
 
 def image_direction(du: float, dv: float) -> str:
@@ -156,16 +186,16 @@ def _column(x: float, width: int) -> str:
     return COLUMNS[min(int(3 * x / width), 2)] if 0 <= x <= width else ("left" if x < 0 else "right")
 
 
-def _clip_box(points: np.ndarray, width: int, height: int) -> PixelBox | None:
-    """The pixel box of projected corner points (NaN where behind), clipped to the image."""
-    finite = points[np.isfinite(points).all(axis=1)]
-    if len(finite) == 0:
+def pixel_box(camera: Camera, obj: SceneObject) -> PixelBox | None:
+    """The object's box as ``camera`` sees it (:func:`~povagent.geometry.box_outline.outline`
+    of its AABB: clipped to the image, the part in front when it reaches behind), to the
+    nearest pixel; ``None`` when none of it shows."""
+    corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
+    box = outline(camera, corners.min(axis=0), corners.max(axis=0))
+    if box is None:
         return None
-    x0, y0 = np.clip(finite.min(axis=0), 0, [width - 1, height - 1])
-    x1, y1 = np.clip(finite.max(axis=0), 0, [width - 1, height - 1])
-    if x1 <= x0 or y1 <= y0:
-        return None
-    return PixelBox(int(math.floor(x0)), int(math.floor(y0)), int(math.ceil(x1)), int(math.ceil(y1)))
+    x0, y0, x1, y1 = (int(round(v)) for v in box)
+    return PixelBox(x0, y0, x1, y1)
 
 
 def _pixel(camera: Camera, point: tuple[float, float, float]) -> tuple[float, float] | None:
@@ -200,14 +230,13 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
     if answer is None:
         raise NoTeachingFrame(f"{instance.id}: the target is outside the observer view")
     box = instance.anchor_object.raw_metadata.axisAlignedBoundingBox
-    corners = camera.project_pixels(np.asarray(box.cornerPoints, dtype=float))
     anchor_centre = (box.center.x, box.center.y, box.center.z)
     anchor_xy = _pixel(camera, anchor_centre) or (w / 2.0, h / 2.0)
     observer_pos = instance.observer_object.position.as_tuple()
     observer_xy = _pixel(camera, observer_pos)
     observer_cam = np.asarray(instance.observer_camera.position, dtype=float)
     anchor_pos = np.asarray(instance.anchor_object.position.as_tuple(), dtype=float)
-    facing = facing_relative_to(camera, observer_cam[[0, 2]], anchor_pos[[0, 2]])
+    facing = facing_angle(camera, observer_cam[[0, 2]], anchor_pos[[0, 2]])
     # which way the direction points in this image: step from the target's resting point
     if instance.direction is Direction.UP:
         step = np.array([0.0, DIRECTION_PROBE_M, 0.0])
@@ -219,7 +248,7 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
         towards = image_direction(float(p1[0] - p0[0]), float(p1[1] - p0[1]))
     else:
         towards = "out of view"
-    other_views: tuple[tuple[int, tuple[float, float]], ...] = ()
+    other_views: tuple[AnchorView, ...] = ()
     if frame_index is not None:
         candidates = []
         for other in instance.frames:
@@ -230,7 +259,10 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
                 continue
             baseline = math.dist(other.camera.position, camera.position)
             candidates.append((-baseline, other.index, pixel))
-        other_views = tuple((i, p) for _, i, p in sorted(candidates)[:OTHER_VIEWS])
+        other_views = tuple(
+            AnchorView(i, p, pixel_box(instance.frames[i].camera, instance.anchor_object))
+            for _, i, p in sorted(candidates)[:OTHER_VIEWS]
+        )
     observer_visible = instance.observer_object.objectId in frame.in_frame_hits if frame_index is not None else bool(
         observer_xy and 0 <= observer_xy[0] <= w and 0 <= observer_xy[1] <= h
     )
@@ -247,10 +279,12 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
         observer_visible=observer_visible,
         anchor_visible=anchor_visible,
         anchor_xy=anchor_xy,
-        anchor_box=_clip_box(corners, w, h),
+        anchor_box=pixel_box(camera, instance.anchor_object),
         observer_xy=observer_xy,
         observer_column=_column(observer_xy[0], w) if observer_xy is not None else None,
-        facing=facing,
+        facing=facing_words(facing),
+        speaker_offset=camera.floor_offset(observer_cam),
+        facing_deg=facing,
         relation=RELATION_WORDS[instance.direction],
         image_direction=towards,
         surface=surface_phrase(pair, instance.direction),

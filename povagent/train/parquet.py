@@ -115,6 +115,10 @@ def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: 
                 if buffered >= ROW_GROUP_BYTES:
                     writer.write_table(pa.Table.from_pylist(rows, schema=schema))
                     rows, buffered = [], 0
+                    # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group
+                    # used and its footprint crept up with every shard: 294 MB peak at 10
+                    # houses, 348 MB at 100; handing them back each row group keeps it flat
+                    pa.default_memory_pool().release_unused()
             if rows or count == 0:
                 writer.write_table(pa.Table.from_pylist(rows, schema=schema))
         finally:

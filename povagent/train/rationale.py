@@ -18,7 +18,7 @@ import random
 from collections.abc import Sequence
 
 from povagent.dataset.models import Direction
-from povagent.train.facts import InstanceFacts
+from povagent.train.facts import InstanceFacts, PixelBox
 
 RATIONALES = ("none", "cot", "s-cot")
 
@@ -87,6 +87,23 @@ def _side(column: str) -> str:
     return "in the centre" if column == "centre" else f"on the {column} side"
 
 
+def stood_phrase(facts: InstanceFacts) -> str:
+    """Where the speaker stood, from the camera: ``stood 0.85 m to the left of the camera and
+    2.10 m ahead of it`` (metres on the floor, to the centimetre)."""
+    right, ahead = (round(v, 2) for v in facts.speaker_offset)
+    side = "right" if right >= 0 else "left"
+    along = "ahead of" if ahead >= 0 else "behind"
+    return f"stood {abs(right):.2f} m to the {side} of the camera and {abs(ahead):.2f} m {along} it"
+
+
+def turned_phrase(facts: InstanceFacts) -> str:
+    """The speaker's heading against the camera's: ``turned 35° to the right of the camera's heading``."""
+    degrees = round(abs(facts.facing_deg))
+    if degrees == 0:
+        return "turned along the camera's heading"
+    return f"turned {degrees}° to the {'right' if facts.facing_deg > 0 else 'left'} of the camera's heading"
+
+
 def _step2(facts: InstanceFacts, rng: random.Random) -> str:
     obs, anc, k = _words(facts.observer_type), _words(facts.anchor_type), facts.frame_index
     if facts.observer_visible and facts.observer_xy is not None and facts.observer_column is not None:
@@ -96,24 +113,32 @@ def _step2(facts: InstanceFacts, rng: random.Random) -> str:
         ))
     else:
         where = f"The {obs} is not inside Image {k}."
-    looks = _pick(rng, (
-        f"Standing at the {obs} and facing the {anc}, the observer looks {facts.facing}.",
-        f"From the {obs}, facing the {anc}, the observer is turned {facts.facing}.",
+    stood = _pick(rng, (
+        f"Working at the {obs}, the speaker {stood_phrase(facts)}.",
+        f"Seen from this camera, the speaker {stood_phrase(facts)}, at the {obs}.",
     ))
-    return f"{where} {looks}"
+    looks = _pick(rng, (
+        f"Facing the {anc} from there, the observer is {turned_phrase(facts)}: looking {facts.facing}.",
+        f"From there the observer faces the {anc}, {turned_phrase(facts)}, so they look {facts.facing}.",
+    ))
+    return f"{where} {stood} {looks}"
+
+
+def _span(box: PixelBox | None) -> str:
+    return f", spanning x {box.x0}-{box.x1} and y {box.y0}-{box.y1}" if box is not None else ""
 
 
 def _step3(facts: InstanceFacts, rng: random.Random) -> str:
     anc = _words(facts.anchor_type)
-    box = facts.anchor_box
-    span = f", spanning x {box.x0}-{box.x1} and y {box.y0}-{box.y1}" if box is not None else ""
+    span = _span(facts.anchor_box)
     here = _pick(rng, (
         f"The {anc} is centred near {_xy(facts.anchor_xy)}{span}.",
         f"The landmark, the {anc}, sits at about {_xy(facts.anchor_xy)}{span}.",
     ))
     if not facts.anchor_other_views:
         return here
-    views = " and ".join(f"Image {i} near {_xy(p)}" for i, p in facts.anchor_other_views)
+    named = [f"Image {v.frame_index} near {_xy(v.xy)}{_span(v.box)}" for v in facts.anchor_other_views]
+    views = named[0] if len(named) == 1 else "; ".join(named[:-1]) + "; and " + named[-1]
     return here + " " + _pick(rng, (f"It is also seen in {views}.", f"The same {anc} appears in {views}."))
 
 

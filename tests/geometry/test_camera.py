@@ -110,3 +110,24 @@ def test_single_point_projection_agrees_with_the_vectorized_one(yaw, horizon, fo
         )
     else:
         assert math.isnan(u) and math.isnan(v)
+
+
+def test_floor_offsets_are_metres_to_the_cameras_right_and_along_its_heading():
+    # yaw 90 looks along +x, so its right is -z; the horizon's tilt does not turn the heading
+    cam = Camera.from_pose([1.0, 0.9, 2.0], yaw=90, horizon=30)
+    assert cam.floor_offset((4.0, 0.0, 2.0)) == pytest.approx((0.0, 3.0))
+    assert cam.floor_offset((1.0, 5.0, 0.5)) == pytest.approx((1.5, 0.0))  # height is ignored
+    assert cam.floor_offset((0.0, 0.0, 3.0)) == pytest.approx((-1.0, -1.0))  # behind, to the left
+
+
+@settings(max_examples=50, deadline=None)
+@given(yaws, horizons, coords, coords)
+def test_a_floor_offset_leads_back_to_its_point_on_the_floor(yaw, horizon, x, z):
+    cam = Camera.from_pose([0.3, 0.9, -1.2], yaw=yaw, horizon=horizon)
+    right, ahead = cam.floor_offset((x, 1.7, z))
+    assert np.allclose(cam.floor_point(right, ahead), [x, 0.0, z], atol=1e-9)
+    # the offset's axes are the camera's right and its forward laid flat
+    r, _, f = cam.axes()
+    flat = np.array([f[0], 0.0, f[2]]) / math.hypot(f[0], f[2])
+    d = np.array([x - 0.3, 0.0, z + 1.2])
+    assert (right, ahead) == pytest.approx((float(d @ r), float(d @ flat)), abs=1e-9)

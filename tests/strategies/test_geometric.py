@@ -5,15 +5,20 @@ fails falling back with the row saying so.
 
 from __future__ import annotations
 
+import asyncio
 import json
 
+import numpy as np
 import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
+from povagent.dataset.loader import load_dataset, placement_case
+from povagent.exchange.images import ImageStore
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
-from povagent_plugins.strategies.geometric import ACCOUNT_HEADER, json_object, normalize_direction, normalize_type, parse_detections
+from povagent_plugins.backends.simulated import SimulatedPerception
+from povagent_plugins.strategies.geometric import ACCOUNT_HEADER, GeometricStrategy, json_object, normalize_direction, normalize_type, parse_detections
 
 
 def pipeline(tmp_path, root, backend, conditions=None, name="run", only=None):
@@ -153,3 +158,35 @@ def test_unusable_detections_are_dropped_and_counted():
         (0, (50.0, 25.0), (0.0, 0.0, 100.0, 50.0)),
         (2, (511.0, 0.0), None),
     ]
+
+
+def _solved(instance, root, speaker_at=None):
+    """The solver's target for ``instance`` with exact perception (the simulated backend, no
+    noise), and the sub-questions it asked."""
+    perception = SimulatedPerception(dataset=str(root))
+    asked = []
+
+    async def ask(request):
+        asked.append(dict(request.question))
+        return await perception.complete(request, ImageStore())
+
+    turns = asyncio.run(GeometricStrategy().solve(instance, ask, ImageStore(), speaker_at=speaker_at))
+    return np.asarray(turns[-1][1].solved_point), asked, turns[-1][1].text
+
+
+def test_where_the_speaker_stood_when_given_starts_the_directions_and_the_furniture_is_not_asked(generated_release):
+    dataset = load_dataset(generated_release)
+    lefts = dataset.instances(conditions=["a"], directions=["left"])[:4]
+    assert lefts
+    for inst in lefts:
+        stood = np.asarray(inst.observer_camera.position)
+        target, asked, account = _solved(inst, generated_release, speaker_at=stood)
+        assert not any(q.get("role") == "observer" for q in asked), inst.id
+        assert "where the speaker stood, given" in account
+        assert np.linalg.norm(target - np.asarray(inst.target)) < 0.02, inst.id
+        # a speaker facing the anchor from the other side has its left where this one has its right
+        anchor = np.asarray(inst.anchor_object.position.as_tuple())
+        across, _, _ = _solved(inst, generated_release, speaker_at=2 * anchor - stood)
+        case = placement_case(dataset.houses[inst.house_id].pairs[inst.pair_id], "left")
+        assert np.linalg.norm(across - case.target(direction="right")) < 0.02, inst.id
+        assert np.linalg.norm(across - np.asarray(inst.target)) > 0.1, inst.id

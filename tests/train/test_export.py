@@ -160,6 +160,15 @@ def test_other_options_over_an_export_are_refused_naming_the_option(generated_re
     assert again.shards_written == 0
 
 
+def test_an_export_written_by_another_version_is_not_resumed(generated_release: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    export_training_set(generated_release, out, ExportOptions(format="messages"), check_release=False)
+    manifest = json.loads((out / "export.json").read_text())
+    (out / "export.json").write_text(json.dumps({**manifest, "version": manifest["version"] - 1}))
+    with pytest.raises(ExportError, match="another version of export-train"):
+        export_training_set(generated_release, out, ExportOptions(format="messages"), check_release=False)
+
+
 def test_a_folder_that_is_not_an_export_is_refused(generated_release: Path, tmp_path: Path) -> None:
     out = tmp_path / "someone"
     out.mkdir()
@@ -192,3 +201,38 @@ def test_a_killed_export_resumes_to_the_same_bytes_without_duplicates(generated_
 
     ids = [i for p in sorted((killed / "data").glob("*.parquet")) for i in pq.read_table(p, columns=["id"])["id"].to_pylist()]
     assert len(ids) == len(set(ids))
+
+
+@pytest.mark.parametrize("fmt", ["hf", "messages"])
+def test_an_export_holds_one_house_in_memory_at_a_time(generated_release: Path, tmp_path: Path, monkeypatch, fmt: str) -> None:
+    # memory flat in the number of houses: whenever the export reads a house, the one it read
+    # before may still be referenced, no other (a dataset of 4 houses: the 2 generated ones and
+    # renamed copies of them)
+    import gc
+    import weakref
+
+    import povagent.dataset.loader as loader
+
+    root = tmp_path / "four"
+    (root / "artifacts").mkdir(parents=True)
+    shutil.copy(generated_release / "meta.json", root / "meta.json")
+    for house in sorted((generated_release / "artifacts").iterdir()):
+        for name in (house.name, house.name.replace("train_house_0000", "train_house_0001")):
+            shutil.copytree(house, root / "artifacts" / name)
+            if name != house.name:
+                (root / "artifacts" / name / f"{house.name}.json").rename(root / "artifacts" / name / f"{name}.json")
+    read: list[weakref.ref] = []
+    most = [0]
+
+    class CountedHouse(loader.House):
+        def __init__(self, *args, **kwargs) -> None:
+            super().__init__(*args, **kwargs)
+            read.append(weakref.ref(self))
+            gc.collect()
+            most[0] = max(most[0], sum(1 for r in read if r() is not None))
+
+    monkeypatch.setattr(loader, "House", CountedHouse)
+    report = export_training_set(root, tmp_path / "out", ExportOptions(format=fmt, split="1,0,0"), check_release=False)
+    assert len(report.houses_by_split["train"]) == 4 and report.examples > 0
+    assert len(read) >= 8  # each house read to plan and again to write
+    assert most[0] <= 2
