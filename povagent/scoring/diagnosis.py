@@ -46,12 +46,12 @@ from typing import Any, Mapping
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.geometry.box_outline import outline
 from povagent.geometry.counterfactual import anchor_centre as counterfactual_anchor_centre
 from povagent.geometry.counterfactual import egocentric_target, mirrored_target
 from povagent.geometry.ground_truth import PlacementCase
 from povagent.geometry.relation_region import RelationRegion, region_in_frame
-from povagent.scoring.official import clamp_unit, project_ground_truth
+from povagent.scoring.official import clamp_unit, official_uv
+from povagent.scoring.perception import ObjectExtent, object_extent
 
 #: Normalized distance beyond which a point is "far from the anchor" (see the module docstring).
 ANCHOR_THRESHOLD = 0.15
@@ -109,43 +109,10 @@ def frame_shows(instance: Instance, frame: Frame) -> str:
     return {(True, True): "both", (True, False): "anchor", (False, True): "observer"}.get((anchor, observer), "neither")
 
 
-def official_uv(point: np.ndarray, frame: Frame) -> tuple[float, float]:
-    """A 3D point where the official metric puts it in ``frame``: clamped, behind -> centre."""
-    gt = project_ground_truth(point, frame.camera)
-    return (clamp_unit(gt.u), clamp_unit(gt.v))
-
-
-@dataclass(frozen=True)
-class AnchorExtent:
-    """Where the anchor is in one frame, as the anchor step measures it: the 2D box (normalized,
-    clipped to the image) around the part of it in front of the camera
-    (:func:`~povagent.geometry.box_outline.outline`), or, when no part of it is in the image,
-    its centre as the official rules project it."""
-
-    box: tuple[float, float, float, float] | None
-    centre: tuple[float, float]
-
-    def distance(self, u: float, v: float) -> float:
-        """Normalized distance from ``(u, v)`` (clamped fractions) to the box (0 inside it), or
-        to the centre when there is no box."""
-        if self.box is None:
-            return math.hypot(u - self.centre[0], v - self.centre[1])
-        x0, y0, x1, y1 = self.box
-        dx = max(x0 - u, 0.0, u - x1)
-        dy = max(y0 - v, 0.0, v - y1)
-        return math.hypot(dx, dy)
-
-
-def anchor_extent(instance: Instance, frame: Frame) -> AnchorExtent:
-    """The anchor of ``instance`` in ``frame`` (see :class:`AnchorExtent`)."""
-    cam = frame.camera
-    box = instance.anchor_object.raw_metadata.axisAlignedBoundingBox
-    corners = np.asarray(box.cornerPoints, dtype=float)
-    seen = outline(cam, corners.min(axis=0), corners.max(axis=0))
-    centre = official_uv(np.asarray(box.center.as_tuple(), dtype=float), frame)
-    if seen is None:
-        return AnchorExtent(None, centre)
-    return AnchorExtent((seen[0] / cam.width, seen[1] / cam.height, seen[2] / cam.width, seen[3] / cam.height), centre)
+def anchor_extent(instance: Instance, frame: Frame) -> ObjectExtent:
+    """Where the anchor of ``instance`` is in ``frame``, as the anchor step measures from it
+    (:func:`~povagent.scoring.perception.object_extent`)."""
+    return object_extent(instance.anchor_object, frame)
 
 
 def anchor_distance(instance: Instance, frame: Frame, u: float, v: float) -> float:
@@ -174,11 +141,11 @@ class TargetView:
     egocentric: tuple[float, float]
     mirrored: tuple[float, float]
     anchor_centre: tuple[float, float]
-    anchor: AnchorExtent
+    anchor: ObjectExtent
     region: RelationRegion
 
 
-def target_view(instance: Instance, case: PlacementCase, frame: Frame, region: RelationRegion, anchor: AnchorExtent | None = None) -> TargetView:
+def target_view(instance: Instance, case: PlacementCase, frame: Frame, region: RelationRegion, anchor: ObjectExtent | None = None) -> TargetView:
     """The :class:`TargetView` of ``instance``'s target in ``frame``; ``region`` is the case's
     relation region in it (:func:`relation_region`), ``anchor`` its :func:`anchor_extent` when
     already known."""
