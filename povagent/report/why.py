@@ -88,7 +88,8 @@ def _steps_table(systems: list[SystemStats]) -> str:
         rows.append(f'<tr data-system="{html.escape(s.system)}"><th scope="row">{html.escape(s.system)}</th>{cells}<td>{n}</td></tr>')
     return (
         '<div class="table-box"><table class="results" id="table-failure_steps"><caption>First failing step over every condition '
-        "(share of diagnosed rows, all runs). Each share links to those answers in the gallery.</caption>"
+        "(share of diagnosed rows, all runs). Each share links to those answers in the gallery, which shows each system's "
+        "first run.</caption>"
         f'<thead><tr><th scope="col">System</th>{head}<th>rows</th></tr></thead><tbody>{"".join(rows)}</tbody></table></div>'
     )
 
