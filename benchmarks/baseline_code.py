@@ -21,12 +21,16 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 
 
-def baseline_checkout(ref: str, into: Path | None = None) -> Path:
-    """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository)."""
+def baseline_checkout(ref: str, into: Path | None = None, with_plugins: bool = False) -> Path:
+    """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository), and
+    with ``with_plugins`` the built-in plugins too, under their import name ``povagent_plugins/``
+    (the repository's ``plugins/`` folder)."""
     into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", ref, "povagent"], check=True, capture_output=True).stdout
-    with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
-        tar.extractall(into, filter="data")
+    folders = [("povagent", "povagent")] + ([("plugins", "povagent_plugins")] if with_plugins else [])
+    for folder, name in folders:
+        archive = subprocess.run(["git", "-C", str(REPO), "archive", f"--prefix={name}/", f"{ref}:{folder}"], check=True, capture_output=True).stdout
+        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+            tar.extractall(into, filter="data")
     return into
 
 
@@ -53,7 +57,7 @@ def imported_from(pythonpath: Path | None) -> str:
     env = dict(os.environ)
     if pythonpath is not None:
         env["PYTHONPATH"] = str(pythonpath)
-    code = "import povagent, os; print(os.path.dirname(povagent.__file__))"
+    code = "import povagent, povagent_plugins, os; print(os.path.dirname(povagent.__file__), os.path.dirname(povagent_plugins.__file__))"
     return subprocess.run(
         [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True
     ).stdout.strip()
