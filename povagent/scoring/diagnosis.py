@@ -115,12 +115,6 @@ def anchor_extent(instance: Instance, frame: Frame) -> ObjectExtent:
     return object_extent(instance.anchor_object, frame)
 
 
-def anchor_distance(instance: Instance, frame: Frame, u: float, v: float) -> float:
-    """Normalized distance from ``(u, v)`` (clamped fractions) to the anchor of ``instance`` in
-    ``frame`` (:func:`anchor_extent`)."""
-    return anchor_extent(instance, frame).distance(u, v)
-
-
 def relation_region(placements: np.ndarray, frame: Frame) -> RelationRegion:
     """The relation region of an instance's valid placements in ``frame``."""
     return region_in_frame(placements, frame.camera)
