@@ -24,7 +24,9 @@ REPO = Path(__file__).resolve().parent.parent
 
 
 def baseline_checkout(ref: str, into: Path | None = None) -> Path:
-    """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository)."""
+    """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository), with
+    the built-in plugins and prompts of that commit under their import names
+    (``povagent_plugins/``, ``povagent_prompts/``) when it had them."""
     into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
     tree = subprocess.run(["git", "-C", str(REPO), "ls-tree", "--name-only", ref], check=True, capture_output=True,
                           text=True).stdout.split()  # fmt: skip

@@ -10,6 +10,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.success",
     "povagent_plugins.scorers.diagnose",
     "povagent_plugins.scorers.relation",
+    "povagent_plugins.scorers.probe",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -25,6 +26,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.cot",
     "povagent_plugins.strategies.markers",
     "povagent_plugins.strategies.geometric",
+    "povagent_plugins.strategies.probes",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.baselines",

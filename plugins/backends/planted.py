@@ -12,6 +12,10 @@ against behaviour whose shares are known:
   show the anchor (any frame when every frame shows it; in C, with one frame, a random pixel);
 * otherwise the ground truth.
 
+A perception probe's question (``Request.question`` kind ``probe``: ``probe-anchor``,
+``probe-observer``) is answered with perfect perception: the probed object's box centre as the
+official metric places a point in the frame asked about, plus the pixel noise.
+
 The behaviour is drawn once per (``seed``, instance, run). Except for ``random_frame`` the frame
 is chosen before the behaviour and without it: among the shown frames whose record lists the
 anchor as seen (``object_in_frame_hits``), the one where the anchor's centre lies nearest the
@@ -24,6 +28,7 @@ folder of the instance's frames, or from the ``dataset`` option's folder.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
@@ -114,12 +119,14 @@ class PlantedBehaviour(Backend):
 
     async def complete(self, request: Request, images: ImageStore) -> Response:
         """One planted answer in the JSON format the request asks for."""
+        instance = request.instance
         if request.question is not None:
+            if request.question.get("kind") == "probe" and instance is not None:
+                return self._probe(request, instance)
             raise PermanentBackendError(
                 "the planted backend is a behaviour simulation, not a model: it answers single-answer strategies "
-                "(basic, cot, spatial-cot, o-plot, oa-plot), not the geometric strategy's sub-questions"
+                "(basic, cot, spatial-cot, o-plot, oa-plot) and the perception probes, not the geometric strategy's sub-questions"
             )
-        instance = request.instance
         if instance is None:
             raise PermanentBackendError("the planted backend needs request.instance (it answers from the records)")
         run = request_run(request)
@@ -148,6 +155,22 @@ class PlantedBehaviour(Backend):
         x = min(max(clamp_unit(gt.u) * spec.width + float(noise[0]), 0.0), spec.width - 1.0)
         y = min(max(clamp_unit(gt.v) * spec.height + float(noise[1]), 0.0), spec.height - 1.0)
         return self._answer(request, index, x, y)
+
+    def _probe(self, request: Request, instance: Instance) -> Response:
+        """A probe (``probe-anchor``, ``probe-observer``): perception is planted perfect, so the
+        point is the object's box centre as the official metric places a point in the frame
+        asked about, plus the pixel noise (nothing else is planted in it)."""
+        question = request.question or {}
+        index = question.get("frame")
+        frame = instance.frames[index] if isinstance(index, int) and 0 <= index < len(instance.frames) else instance.frames[0]
+        obj = instance.anchor_object if question.get("role") == "anchor" else instance.observer_object
+        gt = project_ground_truth(obj.raw_metadata.axisAlignedBoundingBox.center.as_tuple(), frame.camera)
+        rng = seeded_generator(self.seed, "probe", instance.id, request_run(request), question.get("role"))
+        noise = rng.normal(0.0, self.pixel_sigma, size=2) if self.pixel_sigma > 0 else np.zeros(2)
+        spec = request.answer
+        x = min(max(clamp_unit(gt.u) * spec.width + float(noise[0]), 0.0), spec.width - 1.0)
+        y = min(max(clamp_unit(gt.v) * spec.height + float(noise[1]), 0.0), spec.height - 1.0)
+        return Response(text=json.dumps({"x": round(x, 2), "y": round(y, 2)}), usage=Usage(0, 0, 0.0), latency_s=0.0, model=PLANTED_LABEL)
 
     def _answer(self, request: Request, index: int, x: float, y: float) -> Response:
         frame = index if request.answer.asks_frame else None

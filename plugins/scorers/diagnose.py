@@ -23,60 +23,72 @@ from povagent.dataset.instances import Frame, Instance
 from povagent.geometry.ground_truth import PlacementCase
 from povagent.geometry.relation_region import RelationRegion, valid_placements
 from povagent.interfaces import Scorer
-from povagent.scoring.diagnosis import diagnose_answer, instance_case, relation_region
+from povagent.scoring.diagnosis import TargetView, anchor_extent, diagnose_answer, instance_case, relation_region, target_view
 from povagent.scoring.official import scoring_frame
 
-#: Per loaded dataset, by ``id`` (a dataset is not hashable; its entry goes when it does): each
-#: instance's record and valid placements.
-_SHARED: dict[int, dict[str, tuple[PlacementCase, np.ndarray]]] = {}
+#: Per loaded dataset, by ``id`` (a dataset is not hashable; its entry goes when it does): the
+#: geometry of its targets, shared by the ``diagnose`` and ``relation`` scorers (see
+#: :class:`TargetRecords`).
+_SHARED: dict[int, dict[tuple[Any, ...], Any]] = {}
 _LOCK = threading.Lock()
 
 
-#: Per loaded dataset: relation regions by (instance, frame), for the two scorers of one answer.
-_REGIONS: dict[int, dict[tuple[str, str, int], RelationRegion]] = {}
-
-
-def _cache_for(dataset: Any) -> dict[str, tuple[PlacementCase, np.ndarray]]:
-    return _shared_entry(_SHARED, dataset)
-
-
-def _regions_for(dataset: Any) -> dict[tuple[str, str, int], RelationRegion]:
-    return _shared_entry(_REGIONS, dataset)
-
-
-def _shared_entry(table: dict[int, Any], dataset: Any) -> Any:
+def _shared_entry(dataset: Any) -> dict[tuple[Any, ...], Any]:
     with _LOCK:
-        cache = table.get(id(dataset))
+        cache = _SHARED.get(id(dataset))
         if cache is None:
             cache = {}
             try:
-                weakref.finalize(dataset, table.pop, id(dataset), None)
+                weakref.finalize(dataset, _SHARED.pop, id(dataset), None)
             except TypeError:  # no dataset, or one that cannot be weakly referenced: no shared cache
                 return cache
-            table[id(dataset)] = cache
+            _SHARED[id(dataset)] = cache
         return cache
 
 
-class InstanceRecords:
-    """Each instance's placement record and valid placements, computed once per dataset and
-    shared by the ``diagnose`` and ``relation`` scorers."""
+class TargetRecords:
+    """The geometry of a dataset's targets, each piece worked out once per dataset and shared by
+    the ``diagnose`` and ``relation`` scorers.
+
+    A target is a (house, pair, direction): its Inferred, Stated and Given instances share one
+    placement record and its valid placements; what a frame shows of it (its
+    :class:`~povagent.scoring.diagnosis.TargetView`: the targets' image positions, the anchor's
+    box, the relation region) depends only on the camera, and the Inferred and Stated instances
+    (and every run of each) answer in the same exploration frames. The anchor's box in a frame
+    is shared by the pair's four directions.
+    """
 
     def get(self, instance: Instance, dataset: Any) -> tuple[PlacementCase, np.ndarray]:
-        """``(case, valid placements)`` of ``instance``."""
-        cache = _cache_for(dataset)
-        found = cache.get(instance.id)
+        """``(case, valid placements)`` of ``instance``'s target."""
+        cache = _shared_entry(dataset)
+        key = ("case", instance.house_id, instance.pair_id, str(instance.direction))
+        found = cache.get(key)
         if found is None:
             case = instance_case(instance, dataset)
-            found = cache[instance.id] = (case, valid_placements(case))
+            found = cache[key] = (case, valid_placements(case))
         return found
 
     def region(self, instance: Instance, frame: Frame, dataset: Any) -> RelationRegion:
-        """The relation region of ``instance`` in ``frame`` (made once: both scorers ask)."""
-        cache = _regions_for(dataset)
-        key = (instance.id, frame.image_path, frame.index)
+        """The relation region of ``instance``'s target in ``frame``."""
+        cache = _shared_entry(dataset)
+        key = ("region", instance.house_id, instance.pair_id, str(instance.direction), frame.camera)
         found = cache.get(key)
         if found is None:
             found = cache[key] = relation_region(self.get(instance, dataset)[1], frame)
+        return found
+
+    def view(self, instance: Instance, frame: Frame, dataset: Any) -> TargetView:
+        """``instance``'s target seen in ``frame``."""
+        cache = _shared_entry(dataset)
+        key = ("view", instance.house_id, instance.pair_id, str(instance.direction), frame.camera)
+        found = cache.get(key)
+        if found is None:
+            anchor_key = ("anchor", instance.house_id, instance.pair_id, frame.camera)
+            anchor = cache.get(anchor_key)
+            if anchor is None:
+                anchor = cache[anchor_key] = anchor_extent(instance, frame)
+            case = self.get(instance, dataset)[0]
+            found = cache[key] = target_view(instance, case, frame, self.region(instance, frame, dataset), anchor)
         return found
 
 
@@ -93,7 +105,7 @@ class DiagnoseScorer(Scorer):
     """First failing step (frame, anchor, viewpoint, placement) and the egocentric-bias vote."""
 
     def __init__(self) -> None:
-        self.records = InstanceRecords()
+        self.records = TargetRecords()
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The diagnosis of one answer (``{"answered": False}`` without a scorable answer)."""
@@ -101,9 +113,7 @@ class DiagnoseScorer(Scorer):
         if point is None:
             return {"answered": False}
         frame, x, y = point
-        case, _ = self.records.get(instance, dataset)
-        region = self.records.region(instance, frame, dataset)
-        return diagnose_answer(instance, case, region, frame, x, y).as_dict()
+        return diagnose_answer(instance, self.records.view(instance, frame, dataset), frame, x, y).as_dict()
 
 
 @hookimpl

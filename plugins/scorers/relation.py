@@ -18,14 +18,14 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent_plugins.scorers.diagnose import InstanceRecords, answered_point
+from povagent_plugins.scorers.diagnose import TargetRecords, answered_point
 
 
 class RelationScorer(Scorer):
     """Success when the point lies in the relation region of the answered frame."""
 
     def __init__(self) -> None:
-        self.records = InstanceRecords()
+        self.records = TargetRecords()
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """Hit or miss of one answer (``{"answered": False}`` without a scorable answer)."""

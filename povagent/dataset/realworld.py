@@ -62,7 +62,7 @@ from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
 from povagent.scoring.breakdown import slices
 
 #: Built-in scorers that project a 3D target, which a real-world set does not have.
-NEEDS_3D_GROUND_TRUTH = frozenset({"official", "diagnose", "relation"})
+NEEDS_3D_GROUND_TRUTH = frozenset({"official", "diagnose", "relation", "probe-anchor", "probe-observer"})
 
 #: The file that makes a folder a real-world set.
 INDEX_FILE = "realworld.json"

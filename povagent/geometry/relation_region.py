@@ -6,8 +6,8 @@ samples those alternatives with the paper's own rules, widened in two documented
 tests a predicted pixel against their image:
 
 * **left / right / front** beside the anchor: the rule's boundary placement
-  ``b(d') + (0.2 + gap) d'`` (:func:`~povagent.geometry.ground_truth.boundary_point`, the
-  official code path) for every direction ``d'`` within :data:`SECTOR_HALF_ANGLE` (45 degrees)
+  ``b(d') + (0.2 + gap) d'`` (:func:`~povagent.geometry.ground_truth.boundary_points`, the
+  official rule for many directions at once) for every direction ``d'`` within :data:`SECTOR_HALF_ANGLE` (45 degrees)
   of the observer-relative direction ``d`` (the half-plane quadrant a person still calls "to
   the left") and every gap between the cube and the anchor from 0 to :data:`MAX_GAP` (0.5 m:
   "next to", not "somewhere on that side of the room"), at the official height
@@ -45,7 +45,7 @@ from povagent.geometry.ground_truth import (
     FLAT_TOPPED_ANCHORS,
     TARGET_HALF_SIZE,
     PlacementCase,
-    boundary_point,
+    boundary_points,
     direction_vectors,
     surface_height,
     surface_names_anchor,
@@ -71,15 +71,15 @@ NEAR_PLANE = 0.05
 DISC_DEPTH_FLOOR = 0.5
 
 
-def _rotated(d: np.ndarray, degrees: float) -> np.ndarray:
-    a = math.radians(degrees)
-    c, s = math.cos(a), math.sin(a)
-    return np.array([d[0] * c - d[2] * s, 0.0, d[0] * s + d[2] * c])
-
-
-def _sector(d: np.ndarray) -> list[np.ndarray]:
+def _sector(d: np.ndarray) -> np.ndarray:
+    """The directions ``(K, 3)`` within :data:`SECTOR_HALF_ANGLE` of ``d``, every :data:`ANGLE_STEP`
+    degrees (``d`` turned about +y by each angle), from the most clockwise to the most
+    counter-clockwise."""
     n = int(round(SECTOR_HALF_ANGLE / ANGLE_STEP))
-    return [_rotated(d, k * ANGLE_STEP) for k in range(-n, n + 1)]
+    angles = [math.radians(k * ANGLE_STEP) for k in range(-n, n + 1)]
+    c = np.array([math.cos(a) for a in angles])
+    s = np.array([math.sin(a) for a in angles])
+    return np.stack([d[0] * c - d[2] * s, np.zeros_like(c), d[0] * s + d[2] * c], axis=1)
 
 
 def _steps(lo: float, hi: float) -> list[float]:
@@ -111,18 +111,21 @@ def valid_placements(case: PlacementCase) -> np.ndarray:
         and case.surface is not None
         and surface_names_anchor(case.surface, case.anchor_type)
     )
+    sector = _sector(d)
+    bx, bz = boundary_points(box, sector)
     if on_anchor:
         y = box.top + TARGET_HALF_SIZE
-        for dd in _sector(d):
-            bx, bz = boundary_point(box, dd)
-            edge = max(math.hypot(bx - cx, bz - cz), 2 * MIN_ON_TOP_OFFSET)
-            points += [(cx + s * dd[0], y, cz + s * dd[2]) for s in _steps(MIN_ON_TOP_OFFSET, edge)]
-    else:
-        y = surface_height(case.surface, box) + TARGET_HALF_SIZE
-        for dd in _sector(d):
-            bx, bz = boundary_point(box, dd)
-            points += [(bx + (TARGET_HALF_SIZE + g) * dd[0], y, bz + (TARGET_HALF_SIZE + g) * dd[2]) for g in _steps(0.0, MAX_GAP)]
-    return np.array(points, dtype=float)
+        for k, (ddx, ddz) in enumerate(zip(sector[:, 0].tolist(), sector[:, 2].tolist())):
+            edge = max(math.hypot(float(bx[k]) - cx, float(bz[k]) - cz), 2 * MIN_ON_TOP_OFFSET)
+            points += [(cx + s * ddx, y, cz + s * ddz) for s in _steps(MIN_ON_TOP_OFFSET, edge)]
+        return np.array(points, dtype=float)
+    y = surface_height(case.surface, box) + TARGET_HALF_SIZE
+    offsets = np.array([TARGET_HALF_SIZE + g for g in _steps(0.0, MAX_GAP)])
+    # every (direction, gap) in the order of a loop over directions, then gaps
+    xs = (bx[:, None] + offsets[None, :] * sector[:, 0, None]).ravel()
+    zs = (bz[:, None] + offsets[None, :] * sector[:, 2, None]).ravel()
+    beside = np.stack([xs, np.full_like(xs, y), zs], axis=1)
+    return np.concatenate([np.array(points, dtype=float), beside])
 
 
 @dataclass(frozen=True)

@@ -51,6 +51,10 @@ class SystemStats:
     #: The official numbers with every run's rows in one mean (not the paper's aggregation, which
     #: the cells above follow): ``{}`` for a system without official scores.
     pooled: dict[str, Any] = field(default_factory=dict)
+    #: The ``diagnostics`` breakdown of the rows' ``diagnose`` and ``relation`` scores (an
+    #: addition, :func:`~povagent.scoring.diagnostics_breakdown.diagnostics_breakdown`); ``None``
+    #: when no row carries them.
+    diagnostics: dict[str, Any] | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-able form."""
@@ -63,6 +67,7 @@ class SystemStats:
             "per_direction": {k: v.as_dict() for k, v in self.by_direction.items()},
             "per_condition_direction": {k: v.as_dict() for k, v in self.by_condition_direction.items()},
             "pooled": self.pooled,
+            "diagnostics": self.diagnostics,
         }
 
 
@@ -125,6 +130,11 @@ class Analysis:
             if s.system == name:
                 return s
         raise KeyError(name)
+
+    @property
+    def has_diagnostics(self) -> bool:
+        """True when some system's rows carry ``diagnose`` or ``relation`` scores."""
+        return any(s.diagnostics is not None for s in self.systems)
 
     @property
     def model_systems(self) -> list[SystemStats]:
@@ -261,6 +271,19 @@ def merge_identical_baselines(
     return out, notes
 
 
+def system_diagnostics(observations: list[Observation], n_boot: int, seed: int) -> dict[str, Any] | None:
+    """The ``diagnostics`` breakdown of one system's rows, from their stored ``diagnose`` and
+    ``relation`` scores, through the one function ``summary.json`` uses (``None``: none carry them)."""
+    from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
+
+    rows = [
+        DiagnosedRow(o.instance_id, o.condition, o.direction, o.l2, o.fail_step, o.nearer_egocentric, o.relation)
+        for o in observations
+        if o.fail_step is not None or o.relation is not None
+    ]
+    return diagnostics_breakdown(rows, n_boot=n_boot, seed=seed)
+
+
 def _stats_for(obs: list[Observation], fill, n_boot: int, seed: int, conditions, directions) -> tuple:
     """``(overall, per condition, per direction, per condition x direction)`` cells of one
     system, through the one breakdown (:func:`povagent.scoring.breakdown.slices`), kept to the
@@ -342,7 +365,8 @@ def analyze(
     for name in ordered:
         overall, per_c, per_d, per_cd = _stats_for(by_system[name], fill, n_boot, seed, conditions, directions)
         stats.append(
-            SystemStats(name, axes_of[name], name in reference_set, overall, per_c, per_d, per_cd, pooled_official(by_system[name]))
+            SystemStats(name, axes_of[name], name in reference_set, overall, per_c, per_d, per_cd, pooled_official(by_system[name]),
+                        system_diagnostics(by_system[name], n_boot, seed))
         )
 
     comparisons: list[PairedComparison] = []

@@ -26,6 +26,7 @@ from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
 from povagent.report.html import (
+    DIAGNOSIS_LEGEND,
     OFFICIAL_LEGEND,
     OFFICIAL_STRIP_TICK,
     SUCCESS_LEGEND,
@@ -39,6 +40,8 @@ from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
+from povagent.report.why import FIGURE as WHY_FIGURE
+from povagent.report.why import failure_steps_figure, why_section
 
 REPORT_PAGE = "report.html"
 
@@ -115,7 +118,8 @@ def write_report(
     figures = report_figures(analysis, _frame_size_lookup(dataset))
     pdir = out / "plots"
     pdir.mkdir(exist_ok=True)
-    for name, (_, svg) in figures.items():
+    why_figure = failure_steps_figure(analysis)
+    for name, (_, svg) in (figures | ({WHY_FIGURE: why_figure} if why_figure else {})).items():
         (pdir / f"{name}.svg").write_text(svg, encoding="utf-8")
     timings["tables_plots"] = time.perf_counter() - t
 
@@ -137,10 +141,12 @@ def write_report(
     timings["gallery"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures)
+    why = why_section(analysis, why_figure)  # an addition: only when rows carry diagnose/relation scores
+    body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures) + why
     n_rows = sum(len(r.rows) for r in collection.runs)
     legend = "<br>".join(
-        text for text, shown in ((OFFICIAL_LEGEND, analysis.has_official), (SUCCESS_LEGEND, analysis.has_success)) if shown
+        text for text, shown in ((OFFICIAL_LEGEND, analysis.has_official), (SUCCESS_LEGEND, analysis.has_success),
+                                 (DIAGNOSIS_LEGEND, analysis.has_diagnostics)) if shown
     )
     subtitle = (
         f"{source} · {len(collection.runs)} run folder{'s' if len(collection.runs) != 1 else ''} · "
@@ -153,7 +159,7 @@ def write_report(
         subtitle,
         body,
         gallery_data,
-        nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")],
+        nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")] + ([("#why", "Why it fails")] if why else []),
         legend=legend,
     )
     page = out / REPORT_PAGE

@@ -81,6 +81,15 @@ class Observation:
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript; rows written before requests were kept have ``None`` requests).
     turns: tuple[tuple[str | None, str | None], ...] = ()
+    #: The ``diagnose`` scorer's first failing step (``frame`` ... ``correct``; ``None``: not diagnosed).
+    fail_step: str | None = None
+    #: ``diagnose``: the egocentric and mirrored targets in the scored frame (clamped fractions).
+    egocentric_uv: tuple[float, float] | None = None
+    mirrored_uv: tuple[float, float] | None = None
+    #: ``diagnose``: the egocentric-bias vote (``None``: no vote).
+    nearer_egocentric: bool | None = None
+    #: ``relation``: the point lies in the relation region (``None``: not scored).
+    relation: bool | None = None
 
 
 @dataclass
@@ -386,7 +395,31 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
         turns=tuple((e.prompt, e.raw) for e in row.exchanges),
+        **diagnosis_of(row),
     )
+
+
+def _uv(value: Any) -> tuple[float, float] | None:
+    ok = isinstance(value, (list, tuple)) and len(value) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+    return (float(value[0]), float(value[1])) if ok else None
+
+
+def diagnosis_of(row: ResultRow) -> dict[str, Any]:
+    """An answered row's ``diagnose`` and ``relation`` scores as :class:`Observation` fields
+    (read as stored, never recomputed; ``{}`` when neither scored it)."""
+    from povagent.run.summary import diagnosed_row
+
+    diagnosed = diagnosed_row(row)
+    if diagnosed is None:
+        return {}
+    fields = row.scores.get("diagnose") or {}
+    return {
+        "fail_step": diagnosed.step,
+        "egocentric_uv": _uv(fields.get("egocentric")),
+        "mirrored_uv": _uv(fields.get("mirrored")),
+        "nearer_egocentric": diagnosed.nearer_egocentric,
+        "relation": diagnosed.relation,
+    }
 
 
 def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False) -> Collection:

@@ -479,7 +479,8 @@ def build_gallery(
         else:
             stats.without_image += 1
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
-        from_above = birds_eye_for_row(o, inst, dataset, images_dir, scoring_frame(inst, o.selected_image, o.image_path)) if inst is not None else None
+        frame = scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
+        from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame) if inst is not None else None
         raw = o.raw or ""
         transcript = _transcript(o.turns)
         entries.append(
@@ -507,6 +508,7 @@ def build_gallery(
             }
             | ({"nt": len(transcript), "tr": transcript} if transcript else {})
             | strip_fields
+            | diagnosis_fields(o, frame)
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
                 if o.scorer == "success"
@@ -550,6 +552,21 @@ def build_gallery(
             entry["img"], entry["ie"] = None, why
     stats.seconds = time.perf_counter() - t0
     return entries, stats
+
+
+def diagnosis_fields(o: Observation, frame: Any) -> dict[str, Any]:
+    """An entry's diagnosis (rows scored by ``diagnose``): ``fx``, the first failing step (the
+    gallery's step filter), and ``cf``, the egocentric and mirrored targets in the scored frame
+    as ``[eu, ev, mu, mv]`` fractions, drawn over the card when asked; ``ar``, the frame's
+    width / height when not 1 (the page crops a card's image to a square)."""
+    out: dict[str, Any] = {}
+    if o.fail_step is not None:
+        out["fx"] = o.fail_step
+    if o.egocentric_uv is not None and o.mirrored_uv is not None:
+        out["cf"] = [round(v, 4) for v in (*o.egocentric_uv, *o.mirrored_uv)]
+        if frame is not None and frame.camera.width != frame.camera.height:
+            out["ar"] = round(frame.camera.width / frame.camera.height, 4)
+    return out
 
 
 def _cut(text: str | None) -> str | None:

@@ -34,6 +34,15 @@ OFFICIAL_LEGEND = (
     '<b style="background:#ffc400;padding:0 3px">?</b>, the GT falls within the frame but the anchor was not seen: a wall may hide it.'
 )
 
+#: How to read the diagnostics' additions to the gallery (rows scored by ``diagnose``).
+DIAGNOSIS_LEGEND = (
+    "Diagnosed answers (scorers diagnose, relation; an addition): <b>Failure step</b> keeps the answers whose first failing "
+    'step is the one chosen; <b>Egocentric / mirrored: drawn</b> marks the egocentric target (<b style="color:#D55E00">E</b>, '
+    'a ring) and the mirrored target (<b style="color:#7B3294">M</b>, a square) beside the green ground truth, where the '
+    "official metric places them in that frame (clamped to its border, at its centre when behind the camera). See the "
+    "section Why it fails."
+)
+
 #: What a strip's tick means, for official rows (shown in an opened card).
 OFFICIAL_STRIP_TICK = "the GT projects inside that frame, in front of its camera, and the anchor was seen there"
 

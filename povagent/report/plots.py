@@ -321,3 +321,60 @@ def histogram(
     out.append(f'<line x1="{left}" x2="{width - right}" y1="{y(0):.1f}" y2="{y(0):.1f}" stroke="#444"/>')
     out.append("</svg>")
     return "".join(out)
+
+
+@dataclass(frozen=True)
+class StackedBar:
+    """One horizontal bar of :func:`stacked_bars`: its group (a system), its own label (a
+    condition), each part's share, and where clicking each part leads (``None``: nowhere)."""
+
+    group: str
+    label: str
+    shares: dict[str, float | None]
+    links: dict[str, str | None]
+
+
+def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], colours: Sequence[str], width: int = 820) -> str:
+    """Horizontal bars from 0 to 100%, each split into ``parts`` (in that order, each in its
+    colour), grouped under their group's name; every part is a link (``<a href>``) and carries
+    a tooltip with its share."""
+    left, right, bar_h, gap, group_gap = 300, 20, 16, 4, 12
+    legend, top = _legend(list(parts), list(colours), 8, 38, width - 16)
+    top += 6
+    plot_w = width - left - right
+    y = top
+    body: list[str] = []
+    previous = None
+    for bar in bars:
+        if bar.group != previous:
+            if previous is not None:
+                y += group_gap
+            body.append(_fitted_text(bar.group, 8, y + bar_h - 3, left - 50, 12))
+            previous = bar.group
+        body.append(f'<text x="{left - 8}" y="{y + bar_h - 4}" font-size="11" text-anchor="end">{_e(bar.label)}</text>')
+        x = float(left)
+        for part, col in zip(parts, colours):
+            share = bar.shares.get(part)
+            if not share:
+                continue
+            w = plot_w * share
+            tip = f"{bar.group} · {bar.label}: {part} {100 * share:.1f}%"
+            rect = (f'<rect x="{x:.1f}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{col}" data-part="{_e(part)}">'
+                    f"<title>{_e(tip)}</title></rect>")  # fmt: skip
+            if w >= 34:
+                rect += f'<text x="{x + w / 2:.1f}" y="{y + bar_h - 4}" font-size="10" text-anchor="middle" fill="#fff" pointer-events="none">{100 * share:.0f}%</text>'
+            link = bar.links.get(part)
+            body.append(f'<a href="{_e(link)}">{rect}</a>' if link else rect)
+            x += w
+        y += bar_h + gap
+    height = y + 30
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out.append(_fitted_text(title, 8, 18, width - 12, 13))
+    out += legend
+    for k in range(0, 101, 25):
+        gx = left + plot_w * k / 100
+        out.append(f'<line x1="{gx:.1f}" x2="{gx:.1f}" y1="{top - 4}" y2="{y}" stroke="#e5e5e5"/>')
+        out.append(f'<text x="{gx:.1f}" y="{y + 14}" font-size="10" text-anchor="middle">{k}%</text>')
+    out += body
+    out.append("</svg>")
+    return "".join(out)

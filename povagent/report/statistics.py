@@ -21,43 +21,12 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
+from typing import Iterable, Mapping
 
 import numpy as np
 
 from povagent.report.collect import Observation
-
-#: Bootstrap resamples per interval; 2,000 keeps the 2.5/97.5 percentiles stable to ~0.001.
-DEFAULT_BOOT = 2000
-CONFIDENCE = 0.95
-
-
-@dataclass(frozen=True)
-class Estimate:
-    """A mean with its 95% bootstrap CI; ``value`` is ``None`` when nothing was measured."""
-
-    value: float | None
-    lo: float | None = None
-    hi: float | None = None
-    n: int = 0
-
-    def as_dict(self) -> dict[str, float | int | None]:
-        """JSON-able form."""
-        return {"value": self.value, "ci_lo": self.lo, "ci_hi": self.hi, "n": self.n}
-
-
-EMPTY = Estimate(None)
-
-
-def bootstrap_mean_ci(
-    values: Sequence[float] | np.ndarray, n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0
-) -> Estimate:
-    """Mean of ``values`` with a percentile bootstrap CI (resampling the values)."""
-    x = np.asarray(values, dtype=float)
-    x = x[np.isfinite(x)]
-    if x.size == 0:
-        return EMPTY
-    return _ratio_estimate(x[:, None], np.ones((x.size, 1)), n_boot, level, seed)
+from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci
 
 
 @dataclass

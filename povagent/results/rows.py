@@ -178,6 +178,54 @@ class ResultsWriter:
         self.close()
 
 
+class StagedResults:
+    """A results file written whole, for a file that is made in one go (``rescore``'s).
+
+    Rows go to ``<name>.tmp`` beside ``path``, buffered; :meth:`commit` makes them durable with
+    one fsync and moves the file into place (``os.replace``, then an fsync of the folder). A
+    process killed at any moment before the move leaves ``path`` as it was (the previous
+    complete file, or none): never part of the new rows, never a row twice. Leaving the
+    ``with`` block without :meth:`commit` (an exception) removes the temporary file.
+
+    Unlike :class:`ResultsWriter` (the journal of a run that is resumed key by key, where each
+    row must be durable before it is reported), nothing here is reported row by row: the file
+    counts only once it is complete, so one fsync at the end gives the same guarantee.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = self.path.with_name(self.path.name + ".tmp")
+        self._fh = open(self.tmp, "w", encoding="utf-8")  # a leftover of a killed run is truncated
+        self.committed = False
+
+    def write(self, row: ResultRow) -> None:
+        """Append one row to the staged file (durable only at :meth:`commit`)."""
+        self._fh.write(row.model_dump_json(exclude_none=False) + "\n")
+
+    def commit(self) -> None:
+        """Make the staged rows durable and put them in place of ``path`` (atomically)."""
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self._fh.close()
+        os.replace(self.tmp, self.path)
+        self.committed = True
+        folder = os.open(self.path.parent, os.O_RDONLY)
+        try:
+            os.fsync(folder)  # the rename itself survives a power cut
+        finally:
+            os.close(folder)
+
+    def __enter__(self) -> StagedResults:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if not self._fh.closed:
+            self._fh.close()
+        if not self.committed:
+            self.tmp.unlink(missing_ok=True)
+
+
 def iter_rows(path: str | Path) -> Iterator[ResultRow]:
     """Rows of a results file, in file order.
 

@@ -6,6 +6,10 @@ answer schema the run's strategy asked for (rebuilt from the strategy, without i
 offers ``answer_spec(instance)``), scored with the run's scorers, and written to
 ``RUN_DIR/rescored-<parser>/`` (``results.jsonl``, ``summary.json``, ``config.yaml``). The
 original run is never modified. Rows without an answer (infrastructure errors) are kept as is.
+The new rows are staged and replace the folder's ``results.jsonl`` in one move once all are
+rescored (:class:`~povagent.results.rows.StagedResults`: one fsync, not one a row), so a rescore
+killed at any moment leaves the previous complete file or none, never part of the new one; the
+summary is written last.
 
 The parser defaults to ``official``: ``rescore RUN`` turns any run into paper-comparable numbers.
 With a lenient parser each row also gets its official reading (see
@@ -16,7 +20,7 @@ slice holding one is NaN).
 
 from __future__ import annotations
 
-import json
+import os
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,9 +44,9 @@ from povagent.results.official_reading import (
     officially_read,
     read_officially,
 )
-from povagent.results.rows import Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
+from povagent.results.rows import Prediction, ResultRow, RowStatus, StagedResults, read_rows
 from povagent.run.run_folder import read_run_config
-from povagent.run.summary import diagnosed_row
+from povagent.run.summary import diagnosed_row, write_json
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.diagnostics_breakdown import diagnostics_breakdown
 from povagent.scoring.official import scoring_frame
@@ -193,11 +197,11 @@ def rescore_run(
     images = ImageStore()
     warnings: list[str] = []
     out_dir = run / f"rescored-{parser_name}"
-    out_dir.mkdir(parents=True, exist_ok=True)
-    out_file = out_dir / "results.jsonl"
-    out_file.unlink(missing_ok=True)
     rows_out: list[ResultRow] = []
-    with ResultsWriter(out_file) as writer:
+    # The folder is replaced whole: the rows are staged and published in one move only once
+    # every row is rescored, so a rescore killed at any moment leaves the previous complete
+    # folder (or none), never some of the new rows or a row twice (see StagedResults).
+    with StagedResults(out_dir / "results.jsonl") as staged:
         for row in read_rows(results):
             instance = dataset.instance(row.instance_id)
             if instance is None:
@@ -205,17 +209,24 @@ def rescore_run(
                 continue
             spec = answer_spec_for(strategy, instance, images)
             new = rescore_row(row, instance, spec, parser, parser_name, scorers, dataset, official)
-            writer.write(new)
+            staged.write(new)
             rows_out.append(new)
-    nan_note = nan_warning(nan_rows(officially_read(r) for r in rows_out))
-    if nan_note:
-        warnings.append(nan_note)
-    scorer_name = "official" if "official" in scorers else next(iter(scorers), "official")
-    summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **summarize_rows(rows_out, scorer_name)}
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-    rescored_config = config.resolved_dict()
-    rescored_config["parser"] = {"name": parser_name, "options": {}}
-    rescored_config["scorers"] = [*rescored_config.get("scorers", []), *({"name": n, "options": {}} for n in extra_scorers
-                                                                          if n not in {s.name for s in config.scorers})]
-    (out_dir / "config.yaml").write_text(yaml.safe_dump(rescored_config, sort_keys=False), encoding="utf-8")
+        nan_note = nan_warning(nan_rows(officially_read(r) for r in rows_out))
+        if nan_note:
+            warnings.append(nan_note)
+        scorer_name = "official" if "official" in scorers else next(iter(scorers), "official")
+        summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **summarize_rows(rows_out, scorer_name)}
+        rescored_config = config.resolved_dict()
+        rescored_config["parser"] = {"name": parser_name, "options": {}}
+        rescored_config["scorers"] = [*rescored_config.get("scorers", []), *({"name": n, "options": {}} for n in extra_scorers
+                                                                              if n not in {s.name for s in config.scorers})]
+        # an earlier rescore's summary and config must never stand beside these rows: gone
+        # before the rows land; the summary comes last, so a folder with one is complete
+        for name in ("summary.json", "config.yaml"):
+            (out_dir / name).unlink(missing_ok=True)
+        staged.commit()
+    config_tmp = out_dir / "config.yaml.tmp"
+    config_tmp.write_text(yaml.safe_dump(rescored_config, sort_keys=False), encoding="utf-8")
+    os.replace(config_tmp, out_dir / "config.yaml")
+    write_json(out_dir / "summary.json", summary)
     return RescoreResult(out_dir, summary, warnings)

@@ -46,11 +46,12 @@ from typing import Any, Mapping
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.geometry.box_outline import outline
-from povagent.geometry.counterfactual import counterfactuals
+from povagent.geometry.counterfactual import anchor_centre as counterfactual_anchor_centre
+from povagent.geometry.counterfactual import egocentric_target, mirrored_target
 from povagent.geometry.ground_truth import PlacementCase
 from povagent.geometry.relation_region import RelationRegion, region_in_frame
-from povagent.scoring.official import clamp_unit, project_ground_truth
+from povagent.scoring.official import clamp_unit, official_uv
+from povagent.scoring.perception import ObjectExtent, object_extent
 
 #: Normalized distance beyond which a point is "far from the anchor" (see the module docstring).
 ANCHOR_THRESHOLD = 0.15
@@ -108,27 +109,10 @@ def frame_shows(instance: Instance, frame: Frame) -> str:
     return {(True, True): "both", (True, False): "anchor", (False, True): "observer"}.get((anchor, observer), "neither")
 
 
-def official_uv(point: np.ndarray, frame: Frame) -> tuple[float, float]:
-    """A 3D point where the official metric puts it in ``frame``: clamped, behind -> centre."""
-    gt = project_ground_truth(point, frame.camera)
-    return (clamp_unit(gt.u), clamp_unit(gt.v))
-
-
-def anchor_distance(instance: Instance, frame: Frame, u: float, v: float) -> float:
-    """Normalized distance from ``(u, v)`` (clamped fractions) to the 2D box around the part of
-    the anchor in front of the camera (:func:`~povagent.geometry.box_outline.outline`); when no
-    part of it is in the image, to its centre as the official rules project it."""
-    cam = frame.camera
-    box = instance.anchor_object.raw_metadata.axisAlignedBoundingBox
-    corners = np.asarray(box.cornerPoints, dtype=float)
-    seen = outline(cam, corners.min(axis=0), corners.max(axis=0))
-    if seen is None:
-        cu, cv = official_uv(np.asarray(box.center.as_tuple(), dtype=float), frame)
-        return math.hypot(u - cu, v - cv)
-    x0, y0, x1, y1 = seen[0] / cam.width, seen[1] / cam.height, seen[2] / cam.width, seen[3] / cam.height
-    dx = max(x0 - u, 0.0, u - x1)
-    dy = max(y0 - v, 0.0, v - y1)
-    return math.hypot(dx, dy)
+def anchor_extent(instance: Instance, frame: Frame) -> ObjectExtent:
+    """Where the anchor of ``instance`` is in ``frame``, as the anchor step measures from it
+    (:func:`~povagent.scoring.perception.object_extent`)."""
+    return object_extent(instance.anchor_object, frame)
 
 
 def relation_region(placements: np.ndarray, frame: Frame) -> RelationRegion:
@@ -136,19 +120,45 @@ def relation_region(placements: np.ndarray, frame: Frame) -> RelationRegion:
     return region_in_frame(placements, frame.camera)
 
 
-def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationRegion, frame: Frame, x: float, y: float) -> Diagnosis:
-    """The diagnosis of the pixel ``(x, y)`` answered in ``frame`` (see the module docstring).
+@dataclass(frozen=True)
+class TargetView:
+    """One target (the placement record of a (pair, direction)) seen in one frame: everything
+    the diagnosis of an answer in that frame reads that does not depend on the answer. Every
+    answer in that frame shares it (the Inferred and Stated instances of a target show the same
+    frames, and every run of an instance), so it is worked out once per (target, camera).
 
-    ``region`` is the case's relation region in ``frame`` (:func:`relation_region` of its valid
-    placements, :func:`~povagent.geometry.relation_region.valid_placements`).
-    """
+    ``truth``, ``egocentric``, ``mirrored`` and ``anchor_centre`` are the targets as the official
+    metric places them in the frame (:func:`official_uv`); ``anchor`` is where the anchor step
+    measures from; ``region`` is the relation region."""
+
+    truth: tuple[float, float]
+    egocentric: tuple[float, float]
+    mirrored: tuple[float, float]
+    anchor_centre: tuple[float, float]
+    anchor: ObjectExtent
+    region: RelationRegion
+
+
+def target_view(instance: Instance, case: PlacementCase, frame: Frame, region: RelationRegion, anchor: ObjectExtent | None = None) -> TargetView:
+    """The :class:`TargetView` of ``instance``'s target in ``frame``; ``region`` is the case's
+    relation region in it (:func:`relation_region`), ``anchor`` its :func:`anchor_extent` when
+    already known."""
+    return TargetView(
+        truth=official_uv(np.asarray(instance.target, dtype=float), frame),
+        egocentric=official_uv(egocentric_target(case, frame.camera), frame),
+        mirrored=official_uv(mirrored_target(case), frame),
+        anchor_centre=official_uv(counterfactual_anchor_centre(case), frame),
+        anchor=anchor if anchor is not None else anchor_extent(instance, frame),
+        region=region,
+    )
+
+
+def diagnose_answer(instance: Instance, view: TargetView, frame: Frame, x: float, y: float) -> Diagnosis:
+    """The diagnosis of the pixel ``(x, y)`` answered in ``frame`` (see the module docstring);
+    ``view`` is the target seen in that frame (:func:`target_view`)."""
     cam = frame.camera
     u, v = clamp_unit(x / cam.width), clamp_unit(y / cam.height)
-    targets = counterfactuals(case, cam)
-    truth = official_uv(np.asarray(instance.target, dtype=float), frame)
-    ego = official_uv(targets.egocentric, frame)
-    mirror = official_uv(targets.mirrored, frame)
-    centre = official_uv(targets.anchor_centre, frame)
+    truth, ego, mirror = view.truth, view.egocentric, view.mirrored
     l2_truth = math.hypot(u - truth[0], v - truth[1])
     l2_ego = math.hypot(u - ego[0], v - ego[1])
     l2_mirror = math.hypot(u - mirror[0], v - mirror[1])
@@ -156,8 +166,8 @@ def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationReg
     ego_apart = not given and math.hypot(ego[0] - truth[0], ego[1] - truth[1]) > BIAS_MARGIN
     mirror_apart = math.hypot(mirror[0] - truth[0], mirror[1] - truth[1]) > BIAS_MARGIN
     shows = frame_shows(instance, frame)
-    distance = anchor_distance(instance, frame, u, v)
-    inside = region.contains(x, y)
+    distance = view.anchor.distance(u, v)
+    inside = view.region.contains(x, y)
     if shows in ("observer", "neither"):
         step = "frame"
     elif distance > ANCHOR_THRESHOLD:
@@ -179,7 +189,7 @@ def diagnose_answer(instance: Instance, case: PlacementCase, region: RelationReg
         l2_mirrored=l2_mirror,
         egocentric=ego,
         mirrored=mirror,
-        anchor_centre=centre,
+        anchor_centre=view.anchor_centre,
         bias_eligible=votes,
         nearer_egocentric=(l2_ego < l2_truth) if votes else None,
         relation=inside,

@@ -9,7 +9,7 @@ beside the official breakdown, never instead of it. Per condition:
   targets lie more than the margin apart in the answered frame (``bias_n`` of them), the share
   nearer the egocentric one; with several runs, the mean over instances of each instance's share.
   ``egocentric_bias_ci`` is its 95% percentile bootstrap interval, resampling instances
-  (:func:`povagent.report.statistics.bootstrap_mean_ci`). ``None`` for C (Given), where the
+  (:func:`povagent.scoring.bootstrap.bootstrap_mean_ci`). ``None`` for C (Given), where the
   observer view is the camera and the two targets coincide, and wherever no row is eligible;
 * ``relation_success``: the share of answered rows whose point lies in the relation region
   (``relation_n`` of them), and ``per_direction`` the same beside the official mean L2 of those
@@ -44,21 +44,21 @@ def _share(values: list[bool]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
-def _bias(rows: list[DiagnosedRow]) -> tuple[float | None, list[float] | None, int]:
+def _bias(rows: list[DiagnosedRow], n_boot: int | None, seed: int) -> tuple[float | None, list[float] | None, int]:
     votes: dict[str, list[bool]] = {}
     for r in rows:
         if r.nearer_egocentric is not None:
             votes.setdefault(r.instance_id, []).append(r.nearer_egocentric)
     if not votes:
         return None, None, 0
-    from povagent.report.statistics import bootstrap_mean_ci
+    from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 
-    estimate = bootstrap_mean_ci([sum(v) / len(v) for v in votes.values()])
+    estimate = bootstrap_mean_ci([sum(v) / len(v) for v in votes.values()], n_boot=DEFAULT_BOOT if n_boot is None else n_boot, seed=seed)
     ci = None if estimate.lo is None or estimate.hi is None else [estimate.lo, estimate.hi]
     return estimate.value, ci, sum(len(v) for v in votes.values())
 
 
-def _group(rows: list[DiagnosedRow], with_bias: bool) -> dict[str, Any]:
+def _group(rows: list[DiagnosedRow], with_bias: bool, n_boot: int | None, seed: int) -> dict[str, Any]:
     stepped = [r.step for r in rows if r.step is not None]
     related = [r for r in rows if r.relation is not None]
     out: dict[str, Any] = {
@@ -66,7 +66,7 @@ def _group(rows: list[DiagnosedRow], with_bias: bool) -> dict[str, Any]:
         "failure_steps": {s: (stepped.count(s) / len(stepped) if stepped else None) for s in STEPS},
     }
     if with_bias:
-        value, ci, n = _bias(rows)
+        value, ci, n = _bias(rows, n_boot, seed)
         out.update({"egocentric_bias": value, "egocentric_bias_ci": ci, "bias_n": n})
     else:
         out.update({"egocentric_bias": None, "egocentric_bias_ci": None, "bias_n": 0,
@@ -86,13 +86,15 @@ def _group(rows: list[DiagnosedRow], with_bias: bool) -> dict[str, Any]:
     return out
 
 
-def diagnostics_breakdown(rows: Iterable[DiagnosedRow]) -> dict[str, Any] | None:
-    """The ``diagnostics`` section (``None`` when no row carries a diagnose or relation score)."""
+def diagnostics_breakdown(rows: Iterable[DiagnosedRow], n_boot: int | None = None, seed: int = 0) -> dict[str, Any] | None:
+    """The ``diagnostics`` section (``None`` when no row carries a diagnose or relation score);
+    the bias index's interval from ``n_boot`` resamples (default: the reports' 2,000; 0: no
+    interval) drawn with ``seed``."""
     rows = [r for r in rows if r.step is not None or r.relation is not None]
     if not rows:
         return None
     per_condition = {
-        cond: _group([r for r in rows if r.condition == cond], with_bias=cond != "c")
+        cond: _group([r for r in rows if r.condition == cond], cond != "c", n_boot, seed)
         for cond in sorted({r.condition for r in rows})
     }
     return {"label": LABEL, "per_condition": per_condition}

@@ -42,6 +42,14 @@ def project_ground_truth(target: tuple[float, float, float] | np.ndarray, camera
     return GroundTruthInFrame(u, v, 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0, False)
 
 
+def official_uv(point: tuple[float, float, float] | np.ndarray, frame: Frame) -> tuple[float, float]:
+    """A 3D point where the official metric puts the GT in ``frame``: projected, clamped to
+    [0, 1], and a point behind the camera at the image centre (the diagnostics' counterfactual
+    targets and the probes' object centres are placed so)."""
+    gt = project_ground_truth(point, frame.camera)
+    return (clamp_unit(gt.u), clamp_unit(gt.v))
+
+
 def clamp_unit(v: float) -> float:
     """Clamp to [0, 1] as the official scorer does (numpy's clip): NaN stays NaN."""
     # min/max alone would silently turn NaN into 0

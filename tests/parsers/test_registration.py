@@ -13,7 +13,7 @@ from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
 PARSERS = {"official", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl"}
-STRATEGIES = {"basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric"}
+STRATEGIES = {"basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer"}
 
 
 @cache

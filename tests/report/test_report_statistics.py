@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from povagent.report.collect import Observation
-from povagent.report.statistics import bootstrap_mean_ci, cell_stats, paired_comparison, sign_test_p
+from povagent.report.statistics import cell_stats, paired_comparison, sign_test_p
+from povagent.scoring.bootstrap import bootstrap_mean_ci
 
 
 def obs(instance: str, l2: float | None, run: int = 0, system: str = "s", in_frame: bool = True) -> Observation:
@@ -27,6 +28,21 @@ def test_bootstrap_ci_covers_the_true_mean_in_about_95_percent_of_seeds():
         est = bootstrap_mean_ci(sample, n_boot=600, seed=seed + 10_000)
         hits += est.lo <= true_mean <= est.hi
     assert 0.91 <= hits / trials <= 0.985
+
+
+@pytest.mark.parametrize(("n", "n_boot"), [(1, 2000), (2, 2000), (37, 500), (800, 2000), (300, 0)])
+def test_the_mean_interval_is_the_one_every_other_interval_is_drawn_from(n, n_boot):
+    # the same resamples as the count-matrix machinery of every cell (same seed, same draws)
+    from povagent.report.statistics import _ratio_estimate
+
+    x = np.random.default_rng(n).exponential(0.3, size=n)
+    fast = bootstrap_mean_ci(x, n_boot=n_boot, seed=5)
+    general = _ratio_estimate(x[:, None], np.ones((n, 1)), n_boot, 0.95, 5)
+    assert fast.n == general.n and fast.value == pytest.approx(general.value, abs=1e-12)
+    if general.lo is None:
+        assert fast.lo is None and fast.hi is None
+    else:
+        assert fast.lo == pytest.approx(general.lo, abs=1e-12) and fast.hi == pytest.approx(general.hi, abs=1e-12)
 
 
 def test_ci_narrows_as_instances_grow():

@@ -1,0 +1,60 @@
+"""A mean with its percentile bootstrap confidence interval: the one estimate that scoring
+(the egocentric-bias index of :mod:`povagent.scoring.diagnostics_breakdown`) and the reports
+(:mod:`povagent.report.statistics`) share.
+
+Pure numerics at the bottom of the tree: nothing here reads files, and nothing here imports the
+report or the run layers (the run summary and the report both reach down to it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Bootstrap resamples per interval; 2,000 keeps the 2.5/97.5 percentiles stable to ~0.001.
+DEFAULT_BOOT = 2000
+CONFIDENCE = 0.95
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A mean with its 95% bootstrap CI; ``value`` is ``None`` when nothing was measured."""
+
+    value: float | None
+    lo: float | None = None
+    hi: float | None = None
+    n: int = 0
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        """JSON-able form."""
+        return {"value": self.value, "ci_lo": self.lo, "ci_hi": self.hi, "n": self.n}
+
+
+EMPTY = Estimate(None)
+
+
+def bootstrap_mean_ci(
+    values: Sequence[float] | np.ndarray, n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0
+) -> Estimate:
+    """Mean of ``values`` with a percentile bootstrap CI (resampling the values).
+
+    The resamples are those of every other interval of a report
+    (:func:`povagent.report.statistics._resample_counts`' draws, the same seed); a resample's mean
+    is the mean of the values it drew, taken directly rather than through a count matrix (4x less
+    CPU; the same interval as :func:`povagent.report.statistics._ratio_estimate` of the values with
+    unit weights, to rounding)."""
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    n = int(x.size)
+    if n == 0:
+        return EMPTY
+    point = float(x.sum() / n)
+    if n_boot <= 0 or n < 2:
+        return Estimate(point, None, None, n)
+    draws = np.random.default_rng(seed).integers(0, n, size=(n_boot, n))
+    boot = x[draws].sum(axis=1) / n
+    alpha = (1.0 - level) / 2.0
+    lo, hi = np.quantile(boot, [alpha, 1.0 - alpha])
+    return Estimate(point, float(lo), float(hi), n)
