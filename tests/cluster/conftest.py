@@ -111,14 +111,17 @@ def hidden_folder_prefix(folder: Path) -> list[str]:
 
 
 def stop_cluster(cluster: RealCluster) -> None:
-    """Stop every process of ``cluster`` by its pid (SIGTERM, then SIGKILL after 10 s)."""
+    """Stop every process of ``cluster`` by its pid: SIGTERM to all, then SIGKILL to any still
+    running 5 s later (one deadline for all: a worker busy in a house can take its time to
+    close, and the test has nothing left to learn from it)."""
     procs = [*cluster.workers, cluster.scheduler]
     for proc in procs:
         if proc.poll() is None:
             proc.send_signal(signal.SIGTERM)
+    deadline = time.monotonic() + 5
     for proc in procs:
         try:
-            proc.wait(timeout=10)
+            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(timeout=10)
