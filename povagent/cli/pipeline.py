@@ -263,7 +263,7 @@ def sweep_command(
         )
 
     if cluster is not None:
-        from povagent.cluster.spec import parse_cluster_spec
+        from povagent.config.cluster_spec import parse_cluster_spec
 
         parse_cluster_spec(cluster)  # a malformed value is refused before anything starts
     try:

@@ -8,6 +8,6 @@ plain functions and never import dask themselves; without ``--cluster`` nothing 
 
 from __future__ import annotations
 
-from povagent.cluster.spec import ClusterSpec, parse_cluster_spec
+from povagent.config.cluster_spec import ClusterSpec, parse_cluster_spec
 
 __all__ = ["ClusterSpec", "parse_cluster_spec"]

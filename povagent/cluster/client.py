@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
-from povagent.cluster.spec import ClusterSpec, parse_cluster_spec
+from povagent.config.cluster_spec import ClusterSpec, parse_cluster_spec
 from povagent.errors import ClusterError
 
 if TYPE_CHECKING:

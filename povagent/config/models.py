@@ -23,12 +23,12 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from povagent.cluster.spec import parse_cluster_spec  # pure: no Dask import
+from povagent.config.addresses import parse_bind
+from povagent.config.cluster_spec import parse_cluster_spec  # pure: no Dask import
 from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
 from povagent.errors import ClusterError
-from povagent.exchange.image_server import parse_bind
 
 #: Most repeats a pipeline may ask for (``runs: N`` or a list of N indices); the paper uses 3.
 MAX_RUNS = 100

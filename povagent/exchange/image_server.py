@@ -36,9 +36,10 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Any, Sequence
 
+from povagent.config.addresses import parse_bind
 from povagent.exchange.disconnects import QuietDisconnects
 
-__all__ = ["ImageReferenceError", "StaticImageServer", "parse_bind"]
+__all__ = ["ImageReferenceError", "StaticImageServer"]
 
 _HASHED_NAME = re.compile(r"^/([0-9a-f]{64})\.(png|jpeg|jpg|webp|gif)$")
 _EXTENSIONS = {"image/png": "png", "image/jpeg": "jpeg", "image/webp": "webp", "image/gif": "gif"}
@@ -46,21 +47,6 @@ _EXTENSIONS = {"image/png": "png", "image/jpeg": "jpeg", "image/webp": "webp", "
 
 class ImageReferenceError(ValueError):
     """An image cannot be sent by reference (outside the served roots, not a file...)."""
-
-
-def parse_bind(bind: str) -> tuple[str, int]:
-    """``"host:port"`` (``"[::1]:8765"`` for IPv6) as ``(host, port)``; a ValueError says what is wrong."""
-    host, sep, port = bind.rpartition(":")
-    if not sep or not host:
-        raise ValueError(f"bind {bind!r} must be host:port, e.g. 127.0.0.1:8765")
-    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
-    try:
-        number = int(port)
-    except ValueError:
-        raise ValueError(f"bind {bind!r}: port {port!r} is not a number") from None
-    if not 0 <= number <= 65535:
-        raise ValueError(f"bind {bind!r}: port {number} is outside 0-65535")
-    return host, number
 
 
 def inside(path: Path, roots: Sequence[Path]) -> Path:

@@ -189,7 +189,7 @@ def generate_dataset(
     if cluster is not None:
         # the value and the extra are checked before anything is written (neither imports Dask)
         from povagent.cluster.client import require_distributed
-        from povagent.cluster.spec import parse_cluster_spec
+        from povagent.config.cluster_spec import parse_cluster_spec
 
         if isinstance(cluster, str):
             parse_cluster_spec(cluster)

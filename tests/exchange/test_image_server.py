@@ -18,7 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from povagent.exchange.image_server import ImageReferenceError, StaticImageServer, parse_bind
+from povagent.config.addresses import parse_bind
+from povagent.exchange.image_server import ImageReferenceError, StaticImageServer
 
 pytestmark = pytest.mark.timeout(20)
 
@@ -182,9 +183,8 @@ def test_binds_the_address_asked_for(dataset):
 
 
 def test_a_taken_port_is_an_os_error(dataset):
-    with StaticImageServer([dataset], bind="127.0.0.1:0") as first:
-        with pytest.raises(OSError):
-            StaticImageServer([dataset], bind=f"127.0.0.1:{first.port}").start()
+    with StaticImageServer([dataset], bind="127.0.0.1:0") as first, pytest.raises(OSError):
+        StaticImageServer([dataset], bind=f"127.0.0.1:{first.port}").start()
 
 
 @pytest.mark.parametrize(

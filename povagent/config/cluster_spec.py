@@ -1,8 +1,10 @@
 """What ``--cluster`` (or a YAML's ``cluster:`` key) names, read without importing Dask.
 
-Two forms: ``local:N`` starts a Dask ``LocalCluster`` of N worker processes on this machine;
-``tcp://HOST:PORT`` (or ``tls://``) connects to a scheduler that is already running. Parsing is
-pure so a config can be checked, and a bad value refused, before anything starts.
+A configuration value like any other, so it sits with the configuration: checking a config never
+imports :mod:`povagent.cluster`, which only ``--cluster`` loads. Two forms: ``local:N`` starts a
+Dask ``LocalCluster`` of N worker processes on this machine; ``tcp://HOST:PORT`` (or ``tls://``)
+connects to a scheduler that is already running. Parsing is pure so a config can be checked, and
+a bad value refused, before anything starts.
 """
 
 from __future__ import annotations
