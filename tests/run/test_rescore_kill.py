@@ -62,10 +62,8 @@ def stalled(tmp_path, write_answered_run):
     return run, plugin, {name: (out / name).read_bytes() for name in ("results.jsonl", "summary.json", "config.yaml")}
 
 
-@pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
-def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder(stalled, tmp_path):
-    run, plugin, complete = stalled
-    marker = tmp_path / "stalled"
+def killed_when_stalled(run, plugin, marker):
+    """A rescore with the stall scorer, SIGKILLed once it has stalled on its third row (``marker`` written)."""
     proc = rescore(run, "--plugin", str(plugin), "--scorer", "stall", env={**os.environ, "STALL_MARKER": str(marker)})
     try:
         deadline = time.monotonic() + 120
@@ -76,6 +74,13 @@ def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder(stalled, t
         proc.send_signal(signal.SIGKILL)
     finally:
         proc.wait(timeout=30)
+    return proc
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
+def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder(stalled, tmp_path):
+    run, plugin, complete = stalled
+    proc = killed_when_stalled(run, plugin, tmp_path / "stalled")
     assert proc.returncode == -signal.SIGKILL
     out = run / "rescored-official"
     # two rows were rescored when it died: none of them is in the file, the old rows all are
@@ -86,16 +91,7 @@ def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder(stalled, t
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
 def test_the_rescore_after_a_kill_writes_every_key_once(stalled, tmp_path):
     run, plugin, _ = stalled
-    marker = tmp_path / "stalled"
-    proc = rescore(run, "--plugin", str(plugin), "--scorer", "stall", env={**os.environ, "STALL_MARKER": str(marker)})
-    try:
-        deadline = time.monotonic() + 120
-        while not marker.exists():
-            assert proc.poll() is None and time.monotonic() < deadline
-            time.sleep(0.01)
-        proc.send_signal(signal.SIGKILL)
-    finally:
-        proc.wait(timeout=30)
+    killed_when_stalled(run, plugin, tmp_path / "stalled")
     again = rescore(run, env={k: v for k, v in os.environ.items() if k != "STALL_MARKER"})
     assert again.wait(timeout=120) == 0, again.stderr.read().decode()
     out = run / "rescored-official"
