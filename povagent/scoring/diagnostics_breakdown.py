@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Iterable
 
+from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 from povagent.scoring.diagnosis import STEPS
 
 #: What every ``diagnostics`` section says of itself.
@@ -51,8 +52,6 @@ def _bias(rows: list[DiagnosedRow], n_boot: int | None, seed: int) -> tuple[floa
             votes.setdefault(r.instance_id, []).append(r.nearer_egocentric)
     if not votes:
         return None, None, 0
-    from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
-
     estimate = bootstrap_mean_ci([sum(v) / len(v) for v in votes.values()], n_boot=DEFAULT_BOOT if n_boot is None else n_boot, seed=seed)
     ci = None if estimate.lo is None or estimate.hi is None else [estimate.lo, estimate.hi]
     return estimate.value, ci, sum(len(v) for v in votes.values())
