@@ -46,7 +46,7 @@ def _diagnosed(a: Analysis) -> list[SystemStats]:
 
 def _conditions(s: SystemStats) -> list[tuple[str, dict[str, Any]]]:
     cells = (s.diagnostics or {}).get("per_condition") or {}
-    return [(c, cells[c]) for c in ("a", "b", "c") if c in cells] + sorted((c, v) for c, v in cells.items() if c not in "abc")
+    return [(c, cells[c]) for c in ("a", "b", "c") if c in cells] + sorted((c, v) for c, v in cells.items() if c not in ("a", "b", "c"))
 
 
 def failure_steps_figure(a: Analysis) -> tuple[str, str] | None:
