@@ -39,7 +39,7 @@ from povagent.generate.record import (
 from povagent.generate.writer import write_json
 from povagent.run.logs import Redactor
 
-GENERATOR_VERSION = "2"
+GENERATOR_VERSION = "3"
 DIRECTIONS = ("right", "left", "front", "up")
 
 

@@ -75,8 +75,14 @@ class Frame:
 
 
 def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.EmbreeScene:
-    """An embree scene of the triangles (float32: millimetre-exact over a house)."""
-    scene = rtcore_scene.EmbreeScene()
+    """An embree scene of the triangles (float32: millimetre-exact over a house).
+
+    Not embree's robust mode (embreex turns it on by default): its slower arithmetic made
+    ~20% of the ray cost, and over 30 frames of a house the fast mode changed no pixel's
+    object and no hit distance by 1 mm; only a tie between two coincident faces of the same
+    object (a wall and its trim) may go the other way.
+    """
+    scene = rtcore_scene.EmbreeScene(robust=False)
     TriangleMesh(scene=scene, vertices=vertices.astype(np.float32), indices=faces.astype(np.int32))
     return scene
 
