@@ -10,11 +10,13 @@ AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. What it must not do: 
 cameras go or what is visible (exploration and pairs read the mask).
 
 Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
-40 ms of CPU and the occlusion-only shadow rays in about 17 ms, leaving ~40 ms for numpy
-shading: ~0.10 s a frame in all (``benchmarks/bench_generate.py`` measures it). embreex casts
-one ray per Embree call whatever the batch, so each pass hands it the whole frame at once (its
-fastest shape: 8x8 tiles or 8k-ray chunks cost ~20% more) and the shading works on contiguous
-float32 arrays, changed in place where the order of operations allows. trimesh's
+30 ms of CPU and the occlusion-only shadow rays in about 15 ms (in its fast, not robust, mode),
+leaving ~30 ms for numpy shading: ~0.07 s a frame in all (``benchmarks/bench_generate.py``
+measures it). embreex casts one ray per Embree call whatever the batch, so each pass hands it
+the whole frame at once (its fastest shape: 8x8 tiles or 8k-ray chunks cost ~20% more). The
+shading works on float32 arrays of shape (3, N), one contiguous row per coordinate (numpy runs
+several times faster along a row than down the columns of an (N, 3) array), changed in place
+where the order of operations allows; embree reads the rays through their (N, 3) views. trimesh's
 pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
 rasterizer could match embree on primary visibility but would still need a ray caster for the
 shadows, so one engine does both.
@@ -118,8 +120,8 @@ class Renderer:
         norm = np.linalg.norm(n, axis=1, keepdims=True)
         normals = n / np.where(norm > 0, norm, 1.0)
         lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
-        # per face, gathered per frame (each its own contiguous array: numpy's passes over them
-        # run at full speed): normal, colour, the light of its room
+        # per face, gathered per frame (each its own contiguous (3, F) array, so a gather gives
+        # (3, N) rows that numpy's passes run over at full speed): normal, colour, its room's light
         self._normals = np.ascontiguousarray(normals.T, dtype=np.float32)
         self._colors = np.ascontiguousarray(colors.T, dtype=np.float32)
         self._lights = np.ascontiguousarray(lights[rooms].T, dtype=np.float32)
@@ -159,9 +161,7 @@ class Renderer:
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """First triangle hit by each (unit) ray and the distance to it (-1 and inf: no hit)."""
         # float32 views are read as they are (embree's wrapper takes any strides): no copies
-        out = self._scene.run(
-            np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32), output=1
-        )
+        out = self._scene.run(np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32), output=1)
         tri = out["primID"].astype(np.int64)
         t = np.where(tri >= 0, out["tfar"], np.inf)
         return tri, t
