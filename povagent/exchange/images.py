@@ -8,6 +8,15 @@ record, so a benchmark can check "one encode per distinct image" when memory suf
 In-memory images (:meth:`ImageStore.add_pil`) have nothing to be rebuilt from: their bytes stay
 for the store's lifetime.
 
+A run also tells the store when it is done with files (:meth:`ImageStore.hold_files`,
+:meth:`ImageStore.release_files`): a house's frames are held while any of its keys is pending
+and let go after its last one, so the store keeps the houses in flight, not the houses seen.
+Bytes kept long after their last use would sit between the transient request bodies (several
+MB each) and hold the heap open: the LRU bound caps them, a release frees them when they are
+done with. A released image is rebuilt from its file if it is used again (counted in
+``rebuilds``); holds are counted, so runs sharing one store (a sweep's cells) keep each
+other's images.
+
 A file that is not a sound image (truncated, corrupt, not an image) is refused when added, with
 an error naming the file: the bytes are checked as they are read (a PNG's chunks and checksums,
 other formats decoded), once per file, never when a request is built.
@@ -23,7 +32,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Protocol, cast
+from typing import Callable, Iterable, Protocol, cast
 
 from PIL import Image, UnidentifiedImageError
 
@@ -86,6 +95,8 @@ class ImageStore:
         self._cached_bytes = 0
         # the file each file-backed image was first read from (what file:// and http:// refer to)
         self._files: dict[str, Path] = {}
+        #: How many runs hold each file (:meth:`hold_files`); its bytes are dropped at zero.
+        self._holds: dict[Path, int] = {}
         #: How :meth:`url` sends images (see :mod:`povagent.exchange.transport`); ``None``:
         #: inline data URLs. The runner sets it for the length of a run.
         self.transport: StoreTransport | None = None
@@ -121,6 +132,19 @@ class ImageStore:
         """Whether ``path`` was already read (then :meth:`add_file` is a dictionary lookup)."""
         return path in self._by_path
 
+    def has_bytes(self, path: Path) -> bool:
+        """Whether ``path`` was read and its bytes are still held (not released or evicted)."""
+        info = self._by_path.get(path)
+        return info is not None and (info.image_hash, "bytes") in self._cache
+
+    def load_file(self, path: Path) -> StoredImage:
+        """:meth:`add_file`, and the bytes read again if they were let go since: what a worker
+        thread calls so that building a request never reads a file on the event loop."""
+        info = self.add_file(path)
+        if not self.has_bytes(path):
+            self.encoded_bytes(info.image_hash)
+        return info
+
     def add_pil(self, image: Image.Image) -> StoredImage:
         """Register an in-memory image (encoded once as PNG)."""
         data = self._encode_png(image)
@@ -148,6 +172,39 @@ class ImageStore:
             self._derived[(source_hash, recipe_key)] = info.image_hash
             return info
 
+    # -- holding ------------------------------------------------------------------------------
+    def hold_files(self, paths: Iterable[Path]) -> None:
+        """Say that ``paths`` will be used (again): their bytes are kept until released."""
+        with self._lock:
+            for p in paths:
+                self._holds[p] = self._holds.get(p, 0) + 1
+
+    def release_files(self, paths: Iterable[Path]) -> int:
+        """Let go of ``paths`` (one hold each); a file no one holds any more loses its cached
+        bytes and data URL (what is known of it stays: a later use rebuilds them). Returns the
+        bytes dropped. An image whose content another held file shares is kept."""
+        dropped = 0
+        with self._lock:
+            let_go = []
+            for p in paths:
+                n = self._holds.get(p, 0) - 1
+                if n > 0:
+                    self._holds[p] = n
+                else:
+                    self._holds.pop(p, None)
+                    let_go.append(p)
+            held = {self._by_path[q].image_hash for q in self._holds if q in self._by_path}
+            for p in let_go:
+                info = self._by_path.get(p)
+                if info is None or info.image_hash in held:
+                    continue
+                for kind in ("bytes", "url"):
+                    value = self._cache.pop((info.image_hash, kind), None)
+                    if value is not None:
+                        self._cached_bytes -= len(value)
+                        dropped += len(value)
+        return dropped
+
     # -- reading ------------------------------------------------------------------------------
     def info(self, image_hash: str) -> StoredImage:
         """Size and media type of a stored image."""
@@ -155,6 +212,11 @@ class ImageStore:
 
     def __contains__(self, image_hash: object) -> bool:
         return image_hash in self._by_hash
+
+    @property
+    def cached_bytes(self) -> int:
+        """Bytes the store holds now (encoded images and data URLs), at most :attr:`max_bytes`."""
+        return self._cached_bytes
 
     @property
     def distinct(self) -> int:

@@ -312,7 +312,7 @@ class PipelineRun:
             waits = known[1]
         else:
             reads = self._reads
-            new = [f.file for f in frames if f.file not in reads and not images.knows_file(f.file)]
+            new = [f.file for f in frames if f.file not in reads and not images.has_bytes(f.file)]
             if new:
                 task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
                 for path in new:
@@ -616,8 +616,16 @@ class PipelineRun:
         workers pulling keys in order (bounded memory; a house's frames stay hot)."""
         if not pending:
             return
+        houses = _HouseFrames(self.images, pending)
+        try:
+            await self._fan_out_held(pending, houses)
+        finally:
+            houses.release_all()
+
+    async def _fan_out_held(self, pending: list[tuple[Instance, int]], houses: _HouseFrames) -> None:
         first, rest = pending[0], iter(pending[1:])
         row = await self._solve(*first)
+        houses.done(first[0])
         self._journal.submit(row)
         await self._journal.drain()
         self._after_row(row, first=True)
@@ -625,6 +633,7 @@ class PipelineRun:
         async def worker() -> None:
             for instance, run in rest:
                 row = await self._solve(instance, run)
+                houses.done(instance)
                 self._journal.submit(row)
                 self._after_row(row, first=False)
                 # Let the committer run even when the backend answers without suspending
@@ -671,11 +680,41 @@ class PipelineRun:
         return summary
 
 
+class _HouseFrames:
+    """Holds each house's frame files in the image store while any of its pending keys is left,
+    and lets them go after the last one (keys come house by house: the store then keeps the
+    houses in flight, whatever the run's length)."""
+
+    def __init__(self, images: ImageStore, pending: list[tuple[Instance, int]]) -> None:
+        self._images = images
+        self._left: dict[str, int] = {}
+        self._files: dict[str, set[Path]] = {}
+        for instance, _ in pending:
+            self._left[instance.house_id] = self._left.get(instance.house_id, 0) + 1
+            self._files.setdefault(instance.house_id, set()).update(f.file for f in instance.frames)
+        for files in self._files.values():
+            images.hold_files(files)
+
+    def done(self, instance: Instance) -> None:
+        """One key of ``instance``'s house has its row."""
+        house = instance.house_id
+        left = self._left.get(house, 0) - 1
+        self._left[house] = left
+        if left == 0:
+            self._images.release_files(self._files.pop(house))
+
+    def release_all(self) -> None:
+        """Let go of the houses still held (a run that stopped early)."""
+        for files in self._files.values():
+            self._images.release_files(files)
+        self._files.clear()
+
+
 def _read_files(images: ImageStore, paths: list[Path]) -> None:
     """Add image files to the store (in a worker thread); unreadable ones are skipped here."""
     for path in paths:
         try:
-            images.add_file(path)
+            images.load_file(path)
         except Exception:  # the strategy meets the same error and the row records it
             pass
 

@@ -64,6 +64,44 @@ def test_the_memory_bound_evicts_and_an_evicted_image_is_rebuilt_from_its_file(t
     assert store._cached_bytes <= store.max_bytes
 
 
+def test_a_released_file_loses_its_bytes_and_a_later_use_rebuilds_them(tmp_path):
+    store = ImageStore()
+    path = png(tmp_path / "a.png", (10, 20, 30), size=(32, 32))
+    store.hold_files([path])
+    h = store.add_file(path).image_hash
+    url = store.data_url(h)
+    assert store.cached_bytes == len(path.read_bytes()) + len(url)
+    assert store.release_files([path]) == len(path.read_bytes()) + len(url)
+    assert store.cached_bytes == 0 and h in store and store.knows_file(path)
+    assert store.data_url(h) == url  # rebuilt from the file, and counted
+    assert store.stats.rebuilds == 1 and store.stats.file_reads == 2 and store.stats.base64_encodes == 2
+
+
+def test_a_file_held_twice_stays_until_both_holders_release_it(tmp_path):
+    store = ImageStore()
+    path = png(tmp_path / "a.png", (1, 1, 1))
+    store.hold_files([path])
+    store.hold_files([path])
+    h = store.add_file(path).image_hash
+    store.data_url(h)
+    assert store.release_files([path]) == 0 and store.cached_bytes > 0
+    assert store.release_files([path]) > 0 and store.cached_bytes == 0
+    assert store.release_files([path]) == 0  # an extra release is harmless
+
+
+def test_a_released_file_whose_bytes_a_held_file_shares_is_kept(tmp_path):
+    store = ImageStore()
+    a = png(tmp_path / "a.png", (5, 6, 7))
+    b = tmp_path / "b.png"
+    b.write_bytes(a.read_bytes())
+    store.hold_files([a, b])
+    h = store.add_file(a).image_hash
+    assert store.add_file(b).image_hash == h
+    store.data_url(h)
+    assert store.release_files([a]) == 0 and store.cached_bytes > 0  # b still needs the same image
+    assert store.release_files([b]) > 0 and store.cached_bytes == 0
+
+
 def test_a_derived_image_is_drawn_once_per_recipe(tmp_path):
     store = ImageStore()
     src = store.add_file(png(tmp_path / "a.png", (200, 200, 200), size=(32, 32))).image_hash

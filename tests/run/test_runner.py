@@ -359,6 +359,52 @@ def test_sample_is_seeded_and_kept_in_dataset_order(write_pipeline, small_releas
     assert [order.index(i.id) for i in a] == sorted(order.index(i.id) for i in a)
 
 
+def test_the_image_store_keeps_the_houses_in_flight_not_every_house_seen(write_pipeline, small_release):
+    from povagent.dataset import load_dataset
+    from povagent.exchange.images import ImageStore
+
+    instances = load_dataset(small_release).instances()
+    house_of = {f.file: inst.house_id for inst in instances for f in inst.frames}
+    cached_houses: list[set[str]] = []
+
+    class Watched(ImageStore):
+        def data_url(self, image_hash: str) -> str:
+            cached = {self.info(k[0]).image_hash for k in self._cache}
+            cached_houses.append({house_of[p] for p, info in self._by_path.items() if info.image_hash in cached})
+            return super().data_url(image_hash)
+
+    images = Watched()
+    result = run(write_pipeline(backend={"name": "test-center", "options": {"encode": True}}, concurrency=1), images=images)
+    assert result.summary["rows"]["answered"] == N_KEYS
+    assert len({i.house_id for i in instances}) == 2 and {h for c in cached_houses for h in c} == set(house_of.values())
+    # one house at a time: the first house's frames are let go before the second's are read
+    assert max(len(c) for c in cached_houses) == 1
+    assert images.cached_bytes == 0  # and nothing is kept once the run is over
+    assert images.stats.rebuilds == 0 and images.stats.file_reads == len(house_of)
+
+
+def test_a_second_run_on_the_same_store_reads_the_let_go_frames_again_off_the_event_loop(write_pipeline):
+    import threading
+
+    from povagent.exchange.images import ImageStore
+
+    readers: list[str] = []
+
+    class Watched(ImageStore):
+        def _read_file(self, path):
+            readers.append(threading.current_thread().name)
+            return super()._read_file(path)
+
+    images = Watched()
+    backend = {"name": "test-center", "options": {"encode": True}}
+    run(write_pipeline(backend=backend), images=images)
+    first = len(readers)
+    again = run(write_pipeline("again.yaml", backend=backend, output=str(write_pipeline().parent / "again")), images=images)
+    assert again.summary["rows"]["answered"] == N_KEYS
+    assert len(readers) == 2 * first and images.stats.rebuilds == first  # every frame once more, as a rebuild
+    assert threading.main_thread().name not in readers  # never on the event loop's thread
+
+
 def test_request_event_per_call_in_the_log(write_pipeline):
     result = run(write_pipeline(instances={"limit": 2}))
     events = [json.loads(line) for line in (result.run_dir / "log.jsonl").read_text().splitlines()]
