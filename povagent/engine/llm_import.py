@@ -13,13 +13,23 @@ module the other needs) is broken by handing one of them a half-initialised modu
 the background import runs, nothing else may import litellm or what it imports (openai): every
 caller goes through :func:`import_litellm`, which waits for the background thread before it
 touches the import system, and imports litellm itself when the background import failed.
+
+The import and warm-up run with Python's cyclic garbage collector paused: they create about
+a million objects (litellm's and openai's classes, pydantic schemas, the cost map), none of
+them garbage, and each threshold crossed on the way set off a collection that walked all of
+them again, a quarter of the import's CPU. Once loaded they are moved out of the collector's
+sight (``gc.freeze``): module-level objects that live as long as the process, which later
+collections need not walk either. Objects freed by reference counting are freed as usual.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import gc
 import os
 import threading
+from collections.abc import Iterator
 from types import ModuleType
 
 #: litellm, once imported and set up.
@@ -52,7 +62,8 @@ def import_litellm() -> ModuleType:
         if _litellm is None:
             os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
             os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
-            import litellm
+            with collector_paused():
+                import litellm
 
             # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
             litellm.suppress_debug_info = True
@@ -106,11 +117,27 @@ def warm_up_litellm(model: str) -> None:
 @functools.cache
 def _warm_up(model: str) -> None:
     litellm = import_litellm()
-    import openai
+    with collector_paused():
+        import openai
 
-    client = openai.AsyncOpenAI(api_key="warm-up", base_url="http://127.0.0.1:9/v1")
-    _ = client.chat.completions  # the resources module tree loads on first access
+        client = openai.AsyncOpenAI(api_key="warm-up", base_url="http://127.0.0.1:9/v1")
+        _ = client.chat.completions  # the resources module tree loads on first access
+        try:
+            litellm.completion(model=model, messages=[{"role": "user", "content": "warm-up"}], mock_response="ok")
+        except Exception:  # a warm-up only saves time: a model string litellm cannot route fails later, for real
+            pass
+
+
+@contextlib.contextmanager
+def collector_paused() -> Iterator[None]:
+    """Pause the cyclic garbage collector for a bulk load of long-lived objects, then freeze
+    what was loaded (see the module's docstring). The collector's earlier state comes back:
+    a caller that had turned it off keeps it off. Process-wide, so only for loads of seconds."""
+    was_enabled = gc.isenabled()
+    gc.disable()
     try:
-        litellm.completion(model=model, messages=[{"role": "user", "content": "warm-up"}], mock_response="ok")
-    except Exception:  # a warm-up only saves time: a model string litellm cannot route fails later, for real
-        pass
+        yield
+    finally:
+        gc.freeze()
+        if was_enabled:
+            gc.enable()

@@ -116,3 +116,43 @@ def test_importing_while_the_background_import_runs_waits_for_it():
     )
     done = _python(code)
     assert done.returncode == 0, done.stderr[-3000:]
+
+
+def test_litellm_loads_with_the_collector_paused_and_its_objects_frozen():
+    """The import and warm-up create ~1M long-lived objects; collections walking them while they
+    load cost a quarter of the import's CPU. After the load the collector is back on (a
+    collection still frees cycles made later) and litellm's objects are out of its sight."""
+    code = (
+        "import gc\n"
+        "from povagent.engine.llm_import import import_litellm, warm_up_litellm\n"
+        "started = gc.get_stats()[2]['collections']\n"
+        "import_litellm()\n"
+        "warm_up_litellm('openai/some-model')\n"
+        "assert gc.isenabled()\n"
+        "assert gc.get_stats()[2]['collections'] == started, 'a full collection ran during the load'\n"
+        "assert gc.get_freeze_count() > 200_000, gc.get_freeze_count()\n"
+        "class Cycle: pass\n"
+        "c = Cycle(); c.me = c; del c\n"
+        "assert gc.collect() >= 1  # cycles made after the load are still collected\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr
+
+
+def test_a_caller_who_turned_the_collector_off_keeps_it_off():
+    import gc
+
+    from povagent.engine.llm_import import collector_paused
+
+    gc.disable()
+    try:
+        with collector_paused():
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+        gc.enable()
+        with collector_paused():
+            assert not gc.isenabled()
+        assert gc.isenabled()
+    finally:
+        gc.enable()
+        gc.unfreeze()  # this test process's objects go back to the collector's generations
