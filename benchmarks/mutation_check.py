@@ -57,7 +57,11 @@ class RuleModule:
 RULE_MODULES: tuple[RuleModule, ...] = (
     RuleModule("povagent/scoring/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
     RuleModule("plugins/scorers/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
-    RuleModule("povagent/geometry/ground_truth.py", ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py")),
+    RuleModule(
+        "povagent/geometry/ground_truth.py",
+        ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py",
+         "tests/geometry/test_boundary_points.py", "tests/geometry/test_counterfactual_rules.py"),
+    ),
     RuleModule(
         "povagent/geometry/camera.py",
         ("tests/geometry/test_camera_rules.py", "tests/geometry/test_camera.py"),
@@ -81,7 +85,7 @@ RULE_MODULES: tuple[RuleModule, ...] = (
         scope=("drop_rows",),
         note="drop_rows (re-attempting failed keys); the group-commit writer is exercised by tests/run",
     ),
-    RuleModule("povagent/results/rows.py", ("tests/results/test_results_file_rules.py",)),
+    RuleModule("povagent/results/rows.py", ("tests/results/test_results_file_rules.py", "tests/results/test_torn_journal.py")),
     RuleModule(
         "povagent/engine/cache.py",
         ("tests/engine/test_cache_key_rules.py", "tests/engine/test_cache.py"),
