@@ -6,7 +6,7 @@ mutant the tests still pass on ("survived") is a way to bend the rule that no te
 Survivors judged equivalent (the mutant cannot change any behaviour) are listed, each with its
 reason, in ``benchmarks/mutation_equivalent.toml``; the kill rate is taken over the others.
 
-    .venv/bin/python benchmarks/mutation_check.py                 # every module (~1 h on 2 shared cores)
+    .venv/bin/python benchmarks/mutation_check.py                 # every module (~15 min on 2 shared cores)
     .venv/bin/python benchmarks/mutation_check.py --module retry  # modules whose path contains "retry"
     .venv/bin/python benchmarks/mutation_check.py --recheck       # only the last survivors, after new tests
     .venv/bin/python benchmarks/mutation_check.py --report-only   # re-read the last sessions
