@@ -6,7 +6,7 @@ mutant the tests still pass on ("survived") is a way to bend the rule that no te
 Survivors judged equivalent (the mutant cannot change any behaviour) are listed, each with its
 reason, in ``benchmarks/mutation_equivalent.toml``; the kill rate is taken over the others.
 
-    .venv/bin/python benchmarks/mutation_check.py                 # every module (~1 h on 2 shared cores)
+    .venv/bin/python benchmarks/mutation_check.py                 # every module (~15 min on 2 shared cores)
     .venv/bin/python benchmarks/mutation_check.py --module retry  # modules whose path contains "retry"
     .venv/bin/python benchmarks/mutation_check.py --recheck       # only the last survivors, after new tests
     .venv/bin/python benchmarks/mutation_check.py --report-only   # re-read the last sessions
@@ -57,7 +57,11 @@ class RuleModule:
 RULE_MODULES: tuple[RuleModule, ...] = (
     RuleModule("povagent/scoring/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
     RuleModule("plugins/scorers/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
-    RuleModule("povagent/geometry/ground_truth.py", ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py")),
+    RuleModule(
+        "povagent/geometry/ground_truth.py",
+        ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py",
+         "tests/geometry/test_boundary_points.py", "tests/geometry/test_counterfactual_rules.py"),
+    ),
     RuleModule(
         "povagent/geometry/camera.py",
         ("tests/geometry/test_camera_rules.py", "tests/geometry/test_camera.py"),
@@ -81,7 +85,7 @@ RULE_MODULES: tuple[RuleModule, ...] = (
         scope=("drop_rows",),
         note="drop_rows (re-attempting failed keys); the group-commit writer is exercised by tests/run",
     ),
-    RuleModule("povagent/results/rows.py", ("tests/results/test_results_file_rules.py",)),
+    RuleModule("povagent/results/rows.py", ("tests/results/test_results_file_rules.py", "tests/results/test_torn_journal.py")),
     RuleModule(
         "povagent/engine/cache.py",
         ("tests/engine/test_cache_key_rules.py", "tests/engine/test_cache.py"),

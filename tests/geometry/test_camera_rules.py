@@ -102,3 +102,15 @@ def test_a_camera_defaults_to_the_benchmark_frame_and_fov():
     assert (cam.fov, cam.width, cam.height) == (100.0, 512, 512)
     posed = Camera.from_pose([0, 0, 0], 0, 0)
     assert (posed.fov, posed.width, posed.height) == (100.0, 512, 512)
+
+
+def test_the_solver_reads_the_pinhole_as_values_with_the_principal_point_at_the_centre():
+    # ViewCamera's contract: (fx, fy, cx, cy) on the optical axes (right, down, forward) give
+    # project_pixels' pixel; square pixels (f from the width), the content is the whole image
+    cam = Camera.from_pose((0.5, 1.5, -1.0), YAW, HORIZON, fov=90.0, width=640, height=480)
+    assert cam.intrinsics == pytest.approx((320.0, 320.0, 320.0, 240.0), abs=1e-9)
+    assert cam.content_box == (0.0, 0.0, 640.0, 480.0)
+    fx, fy, cx, cy = cam.intrinsics
+    point = np.array([1.0, 0.8, 2.0])
+    x, y, z = cam.optical_axes() @ (point - np.asarray(cam.position))
+    assert (fx * x / z + cx, fy * y / z + cy) == pytest.approx(tuple(cam.project_pixels(point)), abs=1e-9)

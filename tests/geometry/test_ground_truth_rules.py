@@ -15,6 +15,8 @@ lie along z, where a wrong sign shows.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -22,7 +24,9 @@ from povagent.geometry.ground_truth import (
     DEGENERATE_BOUNDARY_DISTANCE,
     FLAT_TOPPED_ANCHORS,
     TARGET_HALF_SIZE,
+    ZERO_LENGTH,
     AnchorBox,
+    PlacementCase,
     boundary_point,
     direction_vectors,
     surface_height,
@@ -154,7 +158,38 @@ def test_a_tiny_but_real_horizontal_offset_is_still_normalized():
     assert np.linalg.norm(d["front"]) == pytest.approx(1.0) and np.linalg.norm(d["right"]) == pytest.approx(1.0)
 
 
+def test_an_offset_or_a_component_of_exactly_1e_6_counts_as_none():
+    # "no longer than 1e-6" is inclusive: the offset is left as it is (not normalized), and the
+    # boundary rule sees no component in the directions, so every target stays at the centre
+    # (0.3 m along a 1e-6 vector), not on a face of the box
+    assert ZERO_LENGTH == 1e-6
+    d = direction_vectors(np.array([1e-6, 0.5, 0.0]), np.array([0.0, 1.5, 0.0]))
+    assert d["front"].tolist() == [-1e-6, 0.0, 0.0]
+    assert d["right"].tolist() == [0.0, 0.0, -1e-6] and d["left"].tolist() == [0.0, 0.0, 1e-6]
+    box = AnchorBox(center_xz=(0.0, 0.0), half_xz=(0.5, 0.4), top=0.7)
+    for v in d.values():
+        assert np.allclose(boundary_point(box, v), [0.0, 0.0], rtol=0.0, atol=1e-6)
+
+
+def test_right_is_divided_by_its_length_as_officially_to_the_bit():
+    # fwd's turn is not always exactly unit long (here hypot gives 1 - 1 ulp): the official
+    # code divides it by its length, and the GT must carry the same bits
+    anchor, observer = np.array([3.3576510391986965, 0.0, -0.6723293209494665]), np.zeros(3)
+    n = math.hypot(anchor[0], anchor[2])
+    fx, fz = anchor[0] / n, anchor[2] / n
+    rn = math.hypot(fz, -fx)
+    assert rn != 1.0
+    assert direction_vectors(anchor, observer)["right"].tolist() == [fz / rn, 0.0, -fx / rn]
+
+
 def test_forward_runs_from_the_observer_to_the_anchor_wherever_the_observer_stands():
     d = direction_vectors(np.array([4.0, 0.0, 5.0]), np.array([1.0, 1.5, 1.0]))
     assert np.allclose(d["front"], [-0.6, 0.0, -0.8])
     assert np.allclose(d["right"], [0.8, 0.0, -0.6])
+
+
+@pytest.mark.parametrize(("verdict", "applies"), [("appropriate", True), ("inappropriate", False), (None, False), ("", False), ("Appropriate", False)])
+def test_a_placement_case_applies_the_rules_only_for_exactly_appropriate(verdict, applies):
+    c = PlacementCase("left", TABLE, "DiningTable", tuple(ANCHOR), (3.0, 0.35, 0.5), tuple(OBSERVER), verdict, "on the floor", tuple(RAW))
+    assert c.rules_apply is applies
+    assert np.array_equal(c.target(), gt("left", "on the floor", verdict=verdict))

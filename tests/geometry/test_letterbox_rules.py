@@ -44,6 +44,7 @@ def test_the_scaled_size_is_rounded_not_truncated():
 
 def test_a_thin_strip_keeps_at_least_one_pixel():
     assert Letterbox.for_size(5000, 1).resized == (512, 1)
+    assert Letterbox.for_size(1, 5000).resized == (1, 512)  # a 1-pixel-wide strip too
 
 
 def test_a_frame_smaller_than_512_is_scaled_up():

@@ -8,6 +8,8 @@ lack the keys are both unanswered, each with a reason saying which.
 
 from __future__ import annotations
 
+import pytest
+
 from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
 from povagent_plugins.parsers.json_answer import JsonAnswerParser
 
@@ -24,6 +26,23 @@ def test_with_no_answer_in_range_the_last_object_with_the_keys_is_taken():
 def test_the_last_object_in_range_wins_over_a_later_one_out_of_range():
     parsed = JsonAnswerParser().parse('{"x": 10, "y": 20} {"x": 30, "y": 40} {"x": 900, "y": 5}', GIVEN)
     assert (parsed.x, parsed.y) == (30.0, 40.0)
+
+
+# The range is [0, W-1] x [0, H-1], edges included (640 x 480 here, so x and y have their own).
+WIDE = AnswerSpec(schema=point_answer_schema(640, 480), width=640, height=480, asks_frame=False)
+
+
+@pytest.mark.parametrize("point", [(0, 0), (639, 479), (0, 479), (639, 0)])
+def test_a_point_on_the_edge_of_the_range_is_in_range(point):
+    parsed = JsonAnswerParser().parse(f'{{"x": {point[0]}, "y": {point[1]}}} {{"x": 900, "y": 900}}', WIDE)
+    assert (parsed.x, parsed.y) == point
+    assert parsed.status is ParseStatus.OK
+
+
+@pytest.mark.parametrize("point", [(-1, 10), (10, -1), (640, 10), (10, 480), (639.5, 10), (10, 479.5)])
+def test_a_point_just_past_the_edge_of_the_range_is_out_of_range(point):
+    parsed = JsonAnswerParser().parse(f'{{"x": 5, "y": 6}} {{"x": {point[0]}, "y": {point[1]}}}', WIDE)
+    assert (parsed.x, parsed.y) == (5.0, 6.0)
 
 
 def test_a_blank_answer_is_called_empty():

@@ -97,3 +97,16 @@ def test_a_negation_at_the_very_start_of_the_text_counts():
 def test_a_value_past_1_makes_the_answer_pixels_not_fractions(x, y):
     parsed = parse(f'{{"x": {x}, "y": {y}}}')
     assert parsed.repair is None and (parsed.x, parsed.y) == (x, y)
+
+
+@pytest.mark.parametrize(("x", "y"), [(1000.0, 50.0), (50.0, 1000.0)])
+def test_an_overshoot_of_exactly_1000_is_still_0_1000(x, y):
+    parsed = parse(f'{{"x": {x}, "y": {y}}}')
+    assert parsed.repair == THOUSANDTHS
+    assert 511.0 in (parsed.x, parsed.y)  # the end of the 0-1000 range lands on the last pixel
+
+
+@pytest.mark.parametrize(("x", "y"), [(1000.5, 50.0), (50.0, 1000.5)])
+def test_a_value_past_1000_is_never_read_as_0_1000(x, y):
+    parsed = parse(f'{{"x": {x}, "y": {y}}}')
+    assert parsed.repair is None and (parsed.x, parsed.y) == (x, y)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from povagent.errors import PredictionsError
-from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, iter_rows, read_rows
+from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus, StagedResults, iter_rows, model_label, read_rows
 
 
 def row(key: str, status: RowStatus = RowStatus.ANSWERED, raw: str | None = "{}") -> ResultRow:
@@ -112,3 +112,55 @@ def test_a_minimal_row_reads_with_neutral_defaults(tmp_path):
     assert (r.run, r.retries, r.latency_s) == (0, 0, 0.0)
     (x,) = r.exchanges
     assert (x.retries, x.latency_s, x.cached) == (0, 0.0, False)
+
+
+# -- a file written whole (rescore's): the previous file until commit, then the new one ----------
+def test_a_staged_file_appears_only_at_commit_in_the_format_of_a_run(tmp_path):
+    path = tmp_path / "rescored" / "run" / "results.jsonl"  # its folders are created
+    rows = [row("a#0"), row("b#0", raw=None)]
+    with StagedResults(path) as staged:
+        for r in rows:
+            staged.write(r)
+        assert not path.exists()
+        staged.commit()
+    with ResultsWriter(tmp_path / "journal.jsonl") as w:
+        for r in rows:
+            w.write(r)
+    # byte for byte what a run writes (null fields included), and nothing left beside it
+    assert path.read_bytes() == (tmp_path / "journal.jsonl").read_bytes() == b"".join(line(r) for r in rows)
+    assert list(path.parent.iterdir()) == [path]
+
+
+def test_a_staged_file_replaces_the_previous_file_whole(tmp_path):
+    path = tmp_path / "results.jsonl"
+    path.write_bytes(line(row("old#0")) + line(row("old#1")))
+    with StagedResults(path) as staged:  # its folder exists already
+        staged.write(row("new#0"))
+        staged.commit()
+    assert [r.key for r in iter_rows(path)] == ["new#0"]
+
+
+def test_leaving_without_commit_keeps_the_previous_file_and_removes_the_staged_one(tmp_path):
+    path = tmp_path / "results.jsonl"
+    path.write_bytes(line(row("old#0")))
+    with pytest.raises(RuntimeError, match="scorer failed"), StagedResults(path) as staged:
+        staged.write(row("new#0"))
+        raise RuntimeError("scorer failed")
+    assert [r.key for r in iter_rows(path)] == ["old#0"]
+    assert list(tmp_path.iterdir()) == [path]
+    assert staged._fh.closed  # no file handle left open either
+
+
+def test_a_staged_file_removed_meanwhile_does_not_hide_the_error_that_ended_the_block(tmp_path):
+    with pytest.raises(RuntimeError, match="scorer failed"), StagedResults(tmp_path / "results.jsonl") as staged:
+        staged.tmp.unlink()
+        raise RuntimeError("scorer failed")
+
+
+# -- how a summary names the model that answered ---------------------------------------------------
+def test_a_model_is_named_by_its_profile_and_its_model_string():
+    assert model_label("openai/gpt-5.4", "gpt-5.4") == "gpt-5.4 = openai/gpt-5.4"
+    assert model_label("anthropic/claude", "sonnet") == "sonnet = anthropic/claude"  # whatever their order
+    assert model_label("gpt-5.4", "gpt-5.4") == "gpt-5.4"  # a profile named as its model: once
+    assert model_label("", "gpt-5.4") == "gpt-5.4"  # a row written before rows named the model
+    assert model_label("center", None) == model_label("center", "") == "center"

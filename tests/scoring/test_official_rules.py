@@ -28,6 +28,7 @@ from povagent.scoring.official import (
     project_ground_truth,
     score_point,
     scoring_frame,
+    signed_errors,
     strict_l2,
 )
 from povagent_plugins.scorers.official import OfficialScorer
@@ -134,6 +135,32 @@ def test_strict_l2_equals_the_official_error_for_a_gt_in_frame():
     assert strict_l2(0.0, 0.0, 640, 480, inside) == normalized_l2(0.0, 0.0, 640, 480, 0.25, 0.75)
 
 
+# -- the signed errors (what the official mean_abs_x / mean_abs_y average) ---------------------
+def test_the_signed_errors_are_the_clamped_prediction_minus_the_clamped_gt():
+    # 640x480: x is divided by W and y by H; the sign says on which side of the GT the point is
+    assert signed_errors(160.0, 360.0, 640, 480, 0.5, 0.5) == pytest.approx((-0.25, 0.25), abs=1e-12)
+    assert signed_errors(480.0, 120.0, 640, 480, 0.25, 0.75) == pytest.approx((0.5, -0.5), abs=1e-12)
+    # both the prediction and the GT are clamped to [0, 1] first
+    assert signed_errors(-50.0, 900.0, 640, 480, 1.4, -0.2) == pytest.approx((-1.0, 1.0), abs=1e-12)
+
+
+def clamped(v):
+    return min(1.0, max(0.0, v))
+
+
+def test_a_score_records_the_signed_errors_of_the_recorded_point(mini_dataset):
+    given = mini_dataset.instance("train_house_00000/0/up/c")
+    frame = given.frames[0]
+    w, h = frame.camera.width, frame.camera.height
+    gt = project_ground_truth(given.target, frame.camera)
+    s = score_point(given, frame, 0.25 * w, 0.75 * h)
+    assert (s.error_x, s.error_y) == pytest.approx((0.25 - clamped(gt.u), 0.75 - clamped(gt.v)), abs=1e-12)
+    # a recorded point other than the scored one (a point list's first point): its errors, the scored point's l2
+    r = score_point(given, frame, 0.25 * w, 0.75 * h, (0.9 * w, 0.1 * h))
+    assert (r.error_x, r.error_y) == pytest.approx((0.9 - clamped(gt.u), 0.1 - clamped(gt.v)), abs=1e-12)
+    assert r.l2 == s.l2
+
+
 # -- which frame, and who is answered -----------------------------------------------------------
 @pytest.fixture
 def inferred(mini_dataset):
@@ -210,6 +237,19 @@ def test_the_scorer_reports_the_centroid_and_keeps_the_closest_point(mini_datase
     scores = OfficialScorer().score(given, answer)
     assert scores["l2"] == pytest.approx(normalized_l2(*centroid, 512, 512, gt.u, gt.v), abs=1e-12)
     assert scores["l2_closest"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_scorer_records_a_point_lists_first_point_as_the_official_runner_does(mini_dataset):
+    # the official runner writes the first point as predicted_x/y: the signed errors are its,
+    # the error l2 the centroid's
+    given = mini_dataset.instance("train_house_00000/0/up/c")
+    gt = project_ground_truth(given.target, given.frames[0].camera)
+    first, last = (100.0, 200.0), (400.0, 50.0)
+    centroid = ((first[0] + last[0]) / 2, (first[1] + last[1]) / 2)
+    scores = OfficialScorer().score(given, ParsedAnswer(status=ParseStatus.OK, x=centroid[0], y=centroid[1], points=[first, last]))
+    expected = (clamped(100.0 / 512) - clamped(gt.u), clamped(200.0 / 512) - clamped(gt.v))
+    assert (scores["error_x"], scores["error_y"]) == pytest.approx(expected, abs=1e-12)
+    assert scores["l2"] == pytest.approx(normalized_l2(*centroid, 512, 512, gt.u, gt.v), abs=1e-12)
 
 
 def test_a_single_point_answer_has_no_closest_point_entry(mini_dataset):
