@@ -50,7 +50,10 @@ def main() -> None:
     after litellm): see :mod:`povagent.cli.process_exit`.
     """
     from povagent.cli.process_exit import exit_now, fast_exit_allowed
+    from povagent.engine.llm_import import freeze_after_loading
     from povagent.errors import NO_ROOM_ERRNOS, PovagentError, ResultsError
+
+    freeze_after_loading()  # this process is povagent's own: litellm's objects may be frozen
 
     try:
         app()

@@ -17,9 +17,13 @@ touches the import system, and imports litellm itself when the background import
 The import and warm-up run with Python's cyclic garbage collector paused: they create about
 a million objects (litellm's and openai's classes, pydantic schemas, the cost map), none of
 them garbage, and each threshold crossed on the way set off a collection that walked all of
-them again, a quarter of the import's CPU. Once loaded they are moved out of the collector's
-sight (``gc.freeze``): module-level objects that live as long as the process, which later
-collections need not walk either. Objects freed by reference counting are freed as usual.
+them again, a quarter of the import's CPU. In povagent's own processes (the console script
+calls :func:`freeze_after_loading`) what is loaded is then moved out of the collector's sight
+(``gc.freeze``): module-level objects that live as long as the process, which the next full
+collection would otherwise walk once more (~0.5 s). A program that embeds povagent (a robot
+app's :class:`~povagent.agent.GroundingAgent`) gets the pause only: a freeze would also take
+in the app's own objects of that moment, and a cycle among them that became garbage later
+would never be collected. Objects freed by reference counting are freed as usual either way.
 """
 
 from __future__ import annotations
@@ -36,6 +40,8 @@ from types import ModuleType
 _litellm: ModuleType | None = None
 #: Held while litellm is being imported and set up (by whichever thread does it).
 _import_lock = threading.Lock()
+#: Freeze what the import loaded (see the module's docstring): povagent's own processes only.
+_freeze_loaded = False
 #: The background import started by :func:`preload_litellm`, if any.
 _preload: threading.Thread | None = None
 _preload_lock = threading.Lock()
@@ -62,7 +68,7 @@ def import_litellm() -> ModuleType:
         if _litellm is None:
             os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
             os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
-            with collector_paused():
+            with collector_paused(freeze=_freeze_loaded):
                 import litellm
 
             # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
@@ -117,7 +123,7 @@ def warm_up_litellm(model: str) -> None:
 @functools.cache
 def _warm_up(model: str) -> None:
     litellm = import_litellm()
-    with collector_paused():
+    with collector_paused(freeze=_freeze_loaded):
         import openai
 
         client = openai.AsyncOpenAI(api_key="warm-up", base_url="http://127.0.0.1:9/v1")
@@ -128,16 +134,25 @@ def _warm_up(model: str) -> None:
             pass
 
 
+def freeze_after_loading() -> None:
+    """Freeze what litellm's import loads (see the module's docstring): for a process that is
+    povagent's own, such as the console script, never for a program that embeds povagent."""
+    global _freeze_loaded
+    _freeze_loaded = True
+
+
 @contextlib.contextmanager
-def collector_paused() -> Iterator[None]:
-    """Pause the cyclic garbage collector for a bulk load of long-lived objects, then freeze
-    what was loaded (see the module's docstring). The collector's earlier state comes back:
-    a caller that had turned it off keeps it off. Process-wide, so only for loads of seconds."""
+def collector_paused(freeze: bool = False) -> Iterator[None]:
+    """Pause the cyclic garbage collector for a bulk load of long-lived objects and, with
+    ``freeze``, move every object tracked at the end out of its sight (``gc.freeze``). The
+    collector's earlier state comes back: a caller that had turned it off keeps it off.
+    Process-wide, so only for loads of seconds."""
     was_enabled = gc.isenabled()
     gc.disable()
     try:
         yield
     finally:
-        gc.freeze()
+        if freeze:
+            gc.freeze()
         if was_enabled:
             gc.enable()

@@ -124,7 +124,8 @@ def test_litellm_loads_with_the_collector_paused_and_its_objects_frozen():
     collection still frees cycles made later) and litellm's objects are out of its sight."""
     code = (
         "import gc\n"
-        "from povagent.engine.llm_import import import_litellm, warm_up_litellm\n"
+        "from povagent.engine.llm_import import freeze_after_loading, import_litellm, warm_up_litellm\n"
+        "freeze_after_loading()  # as the console script does\n"
         "started = gc.get_stats()[2]['collections']\n"
         "import_litellm()\n"
         "warm_up_litellm('openai/some-model')\n"
@@ -139,6 +140,34 @@ def test_litellm_loads_with_the_collector_paused_and_its_objects_frozen():
     assert done.returncode == 0, done.stderr
 
 
+def test_a_program_embedding_povagent_gets_the_pause_but_no_freeze():
+    """A robot app's objects of the moment must not be frozen with litellm's: a cycle among
+    them that became garbage later would never be collected."""
+    code = (
+        "import gc\n"
+        "from povagent.engine.llm_import import import_litellm\n"
+        "started = gc.get_stats()[2]['collections']\n"
+        "import_litellm()\n"
+        "assert gc.isenabled() and gc.get_freeze_count() == 0, gc.get_freeze_count()\n"
+        "assert gc.get_stats()[2]['collections'] == started, 'a full collection ran during the load'\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr
+
+
+def test_the_console_script_freezes_what_litellm_loads():
+    code = (
+        "import gc, sys\n"
+        "from povagent import cli\n"
+        "from povagent.engine import llm_import\n"
+        "sys.argv = ['povagent', '--help']\n"
+        "try:\n    cli.main()\nexcept SystemExit:\n    pass\n"
+        "assert llm_import._freeze_loaded\n"
+    )
+    done = _python(code)
+    assert done.returncode == 0, done.stderr
+
+
 def test_a_caller_who_turned_the_collector_off_keeps_it_off():
     import gc
 
@@ -146,11 +175,11 @@ def test_a_caller_who_turned_the_collector_off_keeps_it_off():
 
     gc.disable()
     try:
-        with collector_paused():
+        with collector_paused(freeze=True):
             assert not gc.isenabled()
         assert not gc.isenabled()
         gc.enable()
-        with collector_paused():
+        with collector_paused(freeze=True):
             assert not gc.isenabled()
         assert gc.isenabled()
     finally:
