@@ -98,7 +98,9 @@ def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, 
     _, err = terminate_after_rows(proc, tmp_path / "sw" / "official" / "results.jsonl", 2)
     assert proc.returncode == 143, err
     assert "Traceback" not in err and f"terminated (SIGTERM): finished rows are kept; run `povagent sweep {sweep}` again" in err, err
-    assert json.loads((tmp_path / "sw" / "official" / "summary.json").read_text())["interrupted"] is True
+    official = tmp_path / "sw" / "official"
+    assert (official / "summary.json").exists(), (err, sorted(p.name for p in official.iterdir()), keys(official / "results.jsonl"))
+    assert json.loads((official / "summary.json").read_text())["interrupted"] is True
     before = keys(tmp_path / "sw" / "official" / "results.jsonl")
     assert len(before) < N_KEYS // 3  # a cell runs once: 6 keys
 
