@@ -141,8 +141,7 @@ class ImageStore:
         """:meth:`add_file`, and the bytes read again if they were let go since: what a worker
         thread calls so that building a request never reads a file on the event loop."""
         info = self.add_file(path)
-        if not self.has_bytes(path):
-            self.encoded_bytes(info.image_hash)
+        self.encoded_bytes(info.image_hash)  # a cache hit unless they were let go
         return info
 
     def add_pil(self, image: Image.Image) -> StoredImage:

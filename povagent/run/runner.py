@@ -616,49 +616,43 @@ class PipelineRun:
         workers pulling keys in order (bounded memory; a house's frames stay hot)."""
         if not pending:
             return
-        houses = _HouseFrames(self.images, pending)
-        try:
-            await self._fan_out_held(pending, houses)
-        finally:
-            houses.release_all()
-
-    async def _fan_out_held(self, pending: list[tuple[Instance, int]], houses: _HouseFrames) -> None:
-        first, rest = pending[0], iter(pending[1:])
-        row = await self._solve(*first)
-        houses.done(first[0])
-        self._journal.submit(row)
-        await self._journal.drain()
-        self._after_row(row, first=True)
-
-        async def worker() -> None:
-            for instance, run in rest:
-                row = await self._solve(instance, run)
-                houses.done(instance)
-                self._journal.submit(row)
-                self._after_row(row, first=False)
-                # Let the committer run even when the backend answers without suspending
-                # (offline baselines): rows become durable as they finish, not at the end.
-                await self._journal.backpressure()
-
-        try:
-            async with asyncio.TaskGroup() as group:
-                for _ in range(min(self.config.concurrency, len(pending) - 1)):
-                    group.create_task(worker())
+        with _HouseFrames(self.images, pending) as houses:
+            first, rest = pending[0], iter(pending[1:])
+            row = await self._solve(*first)
+            houses.done(first[0])
+            self._journal.submit(row)
             await self._journal.drain()
-        except BaseException as exc:
-            failed = self._journal.error
-            if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
-                # the file that failed: results.jsonl, or log.jsonl flushed before each batch
-                path = getattr(failed, "filename", None) or self.run_dir / RESULTS
-                raise ResultsError.cannot_write(path, failed) from failed
-            if isinstance(exc, BaseExceptionGroup):
-                stop = exc.subgroup(StopRun)
-                if stop is not None and stop.exceptions:
-                    await self._journal.drain()  # rows finished before the stop are kept
-                    raise StopRun(self._stopped) from None
-                if len(exc.exceptions) == 1:
-                    raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
-            raise
+            self._after_row(row, first=True)
+
+            async def worker() -> None:
+                for instance, run in rest:
+                    row = await self._solve(instance, run)
+                    houses.done(instance)
+                    self._journal.submit(row)
+                    self._after_row(row, first=False)
+                    # Let the committer run even when the backend answers without suspending
+                    # (offline baselines): rows become durable as they finish, not at the end.
+                    await self._journal.backpressure()
+
+            try:
+                async with asyncio.TaskGroup() as group:
+                    for _ in range(min(self.config.concurrency, len(pending) - 1)):
+                        group.create_task(worker())
+                await self._journal.drain()
+            except BaseException as exc:
+                failed = self._journal.error
+                if failed is not None:  # a full disk, a lost mount: the user's to fix, not a bug
+                    # the file that failed: results.jsonl, or log.jsonl flushed before each batch
+                    path = getattr(failed, "filename", None) or self.run_dir / RESULTS
+                    raise ResultsError.cannot_write(path, failed) from failed
+                if isinstance(exc, BaseExceptionGroup):
+                    stop = exc.subgroup(StopRun)
+                    if stop is not None and stop.exceptions:
+                        await self._journal.drain()  # rows finished before the stop are kept
+                        raise StopRun(self._stopped) from None
+                    if len(exc.exceptions) == 1:
+                        raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
+                raise
 
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds: official breakdown over the selected keys, plus run stats."""
@@ -703,7 +697,10 @@ class _HouseFrames:
         if left == 0:
             self._images.release_files(self._files.pop(house))
 
-    def release_all(self) -> None:
+    def __enter__(self) -> _HouseFrames:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
         """Let go of the houses still held (a run that stopped early)."""
         for files in self._files.values():
             self._images.release_files(files)
