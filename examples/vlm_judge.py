@@ -29,8 +29,8 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from povagent import hookimpl
+from povagent.geometry.directions import spec_of
 
-DIRECTION_PHRASES = {"right": "to the right of", "left": "to the left of", "front": "in front of", "up": "on top of"}
 
 PROMPT = """This photo shows a {anchor}. Imagine a small object, about 30 cm across (a book, a mug, a \
 pair of boots), placed {where} the {anchor}, as seen from this viewpoint. Could it physically stand \
@@ -80,7 +80,7 @@ class VlmJudge:
         images = ImageStore()
         view = images.add_pil(Image.fromarray(request.image))
         anchor = surface_noun(request.anchor.object_type)
-        prompt = PROMPT.format(anchor=anchor, where=DIRECTION_PHRASES[request.direction])
+        prompt = PROMPT.format(anchor=anchor, where=spec_of(request.direction).paper_words)
         question = Request(
             messages=(Message("user", (ImagePart(view.image_hash), TextPart(prompt))),),
             answer=AnswerSpec(schema=ANSWER_SCHEMA, n_frames=1, asks_frame=False),

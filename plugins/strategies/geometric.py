@@ -38,11 +38,11 @@ import numpy as np
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec
 from povagent.dataset.instances import Instance
-from povagent.dataset.models import DIRECTIONS
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, Message, Request, Response, TextPart
 from povagent.exchange.prompts import frame_values, render
 from povagent.geometry.camera import ViewCamera
+from povagent.geometry.directions import DIRECTION_NAMES, DIRECTION_REGISTRY, direction_spec, spec_of
 from povagent.geometry.given_view import solve_given_view
 from povagent.geometry.ground_truth import anchor_keywords
 from povagent.geometry.placement import SURFACE_KINDS, AnchorEstimate, choose_frame, place_target
@@ -59,8 +59,8 @@ FINAL = "final"
 TARGET_3D = "target_3d"
 #: What the final turn's text says after the answer's JSON.
 ACCOUNT_HEADER = "geometric solver (answer worked out from the answers above, not asked):"
-#: Words a model may use for a direction, mapped to the benchmark's four.
-DIRECTION_WORDS = {"right": "right", "left": "left", "front": "front", "in front": "front", "up": "up", "above": "up", "on top": "up", "top": "up"}
+#: Words a model may use for a direction (the registry's names and synonyms), mapped to its name.
+DIRECTION_WORDS = {word: spec.name for spec in DIRECTION_REGISTRY for word in spec.words}
 #: Held to the triangulated centre within this (m) when fitting the anchor's box; the height
 #: prior's centre is looser.
 TRIANGULATED_CENTRE_SIGMA = 0.05
@@ -92,7 +92,7 @@ def normalize_type(value: Any) -> str | None:
 
 
 def normalize_direction(value: Any) -> str | None:
-    """A model's direction as one of ``right``, ``left``, ``front``, ``up`` (``None`` if none)."""
+    """A model's direction as one of the registry's names (``None`` if none)."""
     if not isinstance(value, str):
         return None
     text = value.strip().lower()
@@ -253,12 +253,13 @@ class GeometricStrategy(Strategy):
     def read_request(self, instance: Instance) -> Request:
         """Sub-question 1: observer (A/B), anchor and direction, read from the sentence."""
         types = ", ".join(known_types())
-        directions = {"type": "string", "enum": [str(d) for d in DIRECTIONS]}
+        directions = {"type": "string", "enum": list(DIRECTION_NAMES)}
+        words = {"directions": ", ".join(DIRECTION_NAMES), "direction_choices": "|".join(DIRECTION_NAMES)}
         if instance.condition.uses_exploration_frames:
-            text = render("geometric_read_frames", sentence=instance.sentence, types=types)
+            text = render("geometric_read_frames", sentence=instance.sentence, types=types, **words)
             props = {"observer": {"type": "string"}, "anchor": {"type": "string"}, "direction": directions}
         else:
-            text = render("geometric_read_given", sentence=instance.sentence, types=types)
+            text = render("geometric_read_given", sentence=instance.sentence, types=types, **words)
             props = {"anchor": {"type": "string"}, "direction": directions}
         return self._text_request(instance, text, _schema(props), {"kind": READ, "asks": list(props)})
 
@@ -363,7 +364,7 @@ class GeometricStrategy(Strategy):
         surface = answer.get("surface") if answer else None
         surface = surface.strip().lower() if isinstance(surface, str) else None
         if surface not in SURFACE_KINDS:
-            surface = "anchor" if direction == "up" else "floor"
+            surface = "anchor" if spec_of(direction).vertical else "floor"
             account.fallback(f"the surface could not be read from the answer: took '{surface}'")
         else:
             account.step(f"surface: {surface}")
@@ -462,7 +463,8 @@ class GeometricStrategy(Strategy):
 
 
 def _direction_words(direction: str) -> str:
-    return {"right": "to the right", "left": "to the left", "front": "in front", "up": "on top"}.get(direction, direction)
+    spec = direction_spec(direction)
+    return spec.short_words if spec is not None else direction
 
 
 def _how_located(estimate) -> str:

@@ -133,7 +133,7 @@ def prepare_call(
     instance = Instance(
         house_id=AGENT_HOUSE_ID,
         pair_id=AGENT_PAIR_ID,
-        direction=Direction.FRONT,  # not shown to the model; the sentence carries the relation
+        direction=Direction("front"),  # not shown to the model; the sentence carries the relation
         condition=condition,
         sentence=sentence.strip(),
         frames=tuple(instance_frames),

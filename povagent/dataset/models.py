@@ -19,15 +19,12 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationIn
 from pydantic_core import PydanticCustomError
 
 from povagent.dataset.problems import non_finite_numbers
+from povagent.geometry.directions import DIRECTION_REGISTRY
 
-
-class Direction(StrEnum):
-    """The four spatial relations of POVBench."""
-
-    RIGHT = "right"
-    LEFT = "left"
-    FRONT = "front"
-    UP = "up"
+#: The spatial relations of POVBench, one member per entry of the directions registry
+#: (:mod:`povagent.geometry.directions`, which holds each one's words and rules), in its order.
+Direction = StrEnum("Direction", {spec.name.upper(): spec.name for spec in DIRECTION_REGISTRY}, module=__name__)  # type: ignore[misc]
+Direction.__doc__ = "The spatial relations of POVBench, in the order of the directions registry."
 
 
 class Condition(StrEnum):
@@ -51,7 +48,7 @@ class Condition(StrEnum):
 #: The largest image side a camera may declare (POVBench renders 512x512).
 MAX_SCREEN_SIDE = 16384
 
-DIRECTIONS: tuple[Direction, ...] = (Direction.RIGHT, Direction.LEFT, Direction.FRONT, Direction.UP)
+DIRECTIONS: tuple[Direction, ...] = tuple(Direction)
 CONDITIONS: tuple[Condition, ...] = (Condition.INFERRED, Condition.STATED, Condition.GIVEN)
 
 

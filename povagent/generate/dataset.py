@@ -37,10 +37,16 @@ from povagent.generate.record import (
     remove_half_written,
 )
 from povagent.generate.writer import write_json
+from povagent.geometry.directions import DIRECTION_NAMES
 from povagent.run.logs import Redactor
 
 GENERATOR_VERSION = "3"
-DIRECTIONS = ("right", "left", "front", "up")
+#: The directions registry's :func:`~povagent.geometry.directions.generation_fingerprint` each
+#: generator version was made with: a change to the registry's order, rules or sentence phrases
+#: changes the houses generated, so it comes with a version bump and a new entry here (a test
+#: holds the two together).
+DIRECTIONS_FINGERPRINTS = {"3": "275bb768694f849f"}
+DIRECTIONS = DIRECTION_NAMES
 
 
 @dataclass

@@ -35,7 +35,8 @@ from povagent.errors import PluginError
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.scene import House, PlacedObject
 from povagent.geometry.camera import Camera
-from povagent.geometry.ground_truth import FLAT_TOPPED_ANCHORS, AnchorBox, target_point
+from povagent.geometry.directions import spec_of
+from povagent.geometry.ground_truth import AnchorBox, may_stand_on, target_point
 from povagent.plugins import PluginHost, get_plugin_host
 
 #: The judge the generator uses when none is named (registered by the built-in plugin).
@@ -191,7 +192,7 @@ class PhysicalRulesJudge:
         receptacle = None
         if anchor.support not in ("floor", "wall"):
             receptacle = house.by_id(anchor.support)
-        if request.direction == "up":
+        if spec_of(request.direction).vertical:
             if anchor.object_type not in UP_SURFACES:
                 return SurfaceVerdict(INAPPROPRIATE, None, "no flat top to stand on")
             sx, _, sz = anchor.size
@@ -200,11 +201,7 @@ class PhysicalRulesJudge:
             options: list[tuple[str, PlacedObject | None]] = [(f"on the {surface_noun(anchor.object_type)}", anchor)]
         else:
             options = []
-            on_anchor_ok = (
-                request.direction in ("left", "right")
-                and anchor.object_type in FLAT_TOPPED_ANCHORS
-                and anchor.object_type not in _NOT_REALLY_FLAT
-            )
+            on_anchor_ok = may_stand_on(request.direction, anchor.object_type) and anchor.object_type not in _NOT_REALLY_FLAT
             if on_anchor_ok:
                 options.append((f"on the {surface_noun(anchor.object_type)}", anchor))
             if receptacle is not None:

@@ -21,7 +21,8 @@ from povagent.generate.renderer import Frame, Renderer
 from povagent.generate.scene import House, PlacedObject
 from povagent.generate.sentences import anchor_phrase, sentences, target_pool
 from povagent.geometry.camera import Camera
-from povagent.geometry.ground_truth import boundary_point, surface_names_anchor
+from povagent.geometry.directions import DIRECTION_NAMES
+from povagent.geometry.ground_truth import boundary_point, stands_on_anchor
 
 OBSERVER_HEIGHT = 1.55
 FOV = 100.0
@@ -58,7 +59,8 @@ ANCHOR_WEIGHTS = {"Doorway": 0.3, "TowelHolder": 0.3, "HandTowelHolder": 0.3, "F
 #: How readily a type serves as observer: doorways are passed through more than used, and
 #: trash cans stand in corners with a view of everything (they would be every other observer).
 OBSERVER_WEIGHTS = {"Doorway": 0.3, "GarbageCan": 0.5, "TowelHolder": 0.6, "HandTowelHolder": 0.6}
-DIRECTION_ORDER = ("right", "left", "front", "up")
+#: The order directions are judged in (the registry's): the random draws follow it.
+DIRECTION_ORDER = DIRECTION_NAMES
 #: Valid directions a pair needs to be kept. The paper's pairs average 2.8 of 4; a pair the
 #: judge allows in one direction only is usually an anchor wedged into a corner, which people
 #: rarely pick as a landmark (measured: with 1 the shares of left/right fall to ~48%).
@@ -338,7 +340,7 @@ def _queries(
             continue
         pool_name, pool = target_pool(verdict.surface, anchor, house)
         target = pool[int(rng.integers(len(pool)))]
-        on_anchor = direction != "up" and surface_names_anchor(verdict.surface, anchor.object_type)
+        on_anchor = stands_on_anchor(direction, anchor.object_type, verdict.surface)
         a, b, c = sentences(observer, anchor.object_type, anchor_name, direction, target, on_anchor, house, rng)
         px, py, pz = (round(float(v), 4) for v in point)
         out.append(DirectionQuery(direction, verdict, target, pool_name, (px, py, pz), a, b, c))

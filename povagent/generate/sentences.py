@@ -16,6 +16,7 @@ import re
 import numpy as np
 
 from povagent.generate.scene import House, PlacedObject
+from povagent.geometry.directions import spec_of
 from povagent.geometry.ground_truth import surface_names_anchor
 
 #: The paper's target pools per supporting surface (appendix table), by AI2-THOR type.
@@ -257,14 +258,16 @@ def _doorway_phrase(house: House, anchor: PlacedObject, rng: np.random.Generator
 
 
 def relation_phrase(direction: str, anchor_type: str, anchor_name: str, on_anchor: bool) -> str:
-    """``to the left of the bed``, ``on the left side of the counter``, ``on top of the fridge``."""
-    if direction == "up":
-        return f"on the {anchor_name}" if anchor_type in _SEATS else f"on top of the {anchor_name}"
-    if direction == "front":
-        return f"in front of the {anchor_name}"
-    if on_anchor:
-        return f"on the {direction} side of the {anchor_name}"
-    return f"to the {direction} of the {anchor_name}"
+    """``to the left of the bed``, ``on the left side of the counter``, ``on top of the fridge``:
+    the registry's phrases of ``direction`` (its seat phrase for an anchor one sits on, its
+    on-anchor phrase when the target stands on the anchor)."""
+    spec = spec_of(direction)
+    phrase = spec.sentence_phrase
+    if spec.seat_phrase is not None and anchor_type in _SEATS:
+        phrase = spec.seat_phrase
+    elif on_anchor and spec.on_anchor_phrase is not None:
+        phrase = spec.on_anchor_phrase
+    return phrase.format(anchor=anchor_name)
 
 
 def activity(observer: PlacedObject, house: House, rng: np.random.Generator) -> tuple[str, str]:

@@ -34,10 +34,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.geometry.camera import Camera
+from povagent.geometry.directions import DIRECTION_REGISTRY, direction_spec
 from povagent.geometry.ground_truth import PlacementCase
 
-#: The side each lateral direction is swapped with by a mirror.
-MIRRORED_DIRECTION = {"left": "right", "right": "left"}
+#: The side each lateral direction is swapped with by a mirror (the registry's ``mirror``).
+MIRRORED_DIRECTION = {spec.name: spec.mirror for spec in DIRECTION_REGISTRY if spec.mirror != spec.name}
 
 
 def camera_forward_xz(camera: Camera) -> np.ndarray:
@@ -48,7 +49,8 @@ def camera_forward_xz(camera: Camera) -> np.ndarray:
 
 def egocentric_target(case: PlacementCase, camera: Camera) -> np.ndarray:
     """The rule's target with the directions of ``camera`` (see the module docstring)."""
-    if not case.rules_apply or case.direction == "up":
+    spec = direction_spec(case.direction)
+    if not case.rules_apply or (spec is not None and spec.vertical):
         return case.target()
     stand_in = np.asarray(case.anchor_position, dtype=float) - camera_forward_xz(camera)
     return case.target(observer_position=stand_in)

@@ -2,9 +2,12 @@
 
 Directions live in the xz plane and are defined from the observer facing the anchor:
 ``fwd`` points from the observer camera to the anchor (y zeroed), ``right = up x fwd``,
-``left = -right``, ``front = -fwd`` (towards the observer). The target is a 0.4 m cube, hence
-the 0.2 m offsets. Only a direction whose surface verdict is ``"appropriate"`` is corrected;
-any other verdict keeps the raw ``placements[dir].position`` of the release.
+``left = -right``, ``front = -fwd`` (towards the observer). Which axis and sign each direction
+takes, whether it stands on the anchor's top and whether it may stand on a flat-topped anchor
+come from the directions registry (:mod:`povagent.geometry.directions`); this module applies
+them. The target is a 0.4 m cube, hence the 0.2 m offsets. Only a direction whose surface
+verdict is ``"appropriate"`` is corrected; any other verdict keeps the raw
+``placements[dir].position`` of the release.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
+
+from povagent.geometry.directions import DIRECTION_REGISTRY, Axis, direction_spec
 
 #: Anchors with a flat top where a left/right target may stand on the anchor itself.
 FLAT_TOPPED_ANCHORS = frozenset(
@@ -78,7 +83,7 @@ class AnchorBox:
 
 
 def direction_vectors(anchor_position: np.ndarray, observer_position: np.ndarray) -> dict[str, np.ndarray]:
-    """Unit xz vectors (as 3-vectors, y = 0) of right/left/front from the observer's view.
+    """Unit xz vectors (as 3-vectors, y = 0) of every ``beside`` direction from the observer's view.
 
     ``fwd = normalize(anchor - observer)`` with y zeroed; ``right = world_up x fwd`` (in this
     left-handed frame that is ``(fwd_z, 0, -fwd_x)``); ``front = -fwd``. As officially, a
@@ -96,7 +101,27 @@ def direction_vectors(anchor_position: np.ndarray, observer_position: np.ndarray
     rn = math.hypot(right[0], right[2])
     if rn > ZERO_LENGTH:
         right = right / rn
-    return {"right": right, "left": -right, "front": -fwd}
+    basis = {Axis.SIDE: right, Axis.FORWARD: fwd}
+    return {spec.name: spec.axis[1] * basis[spec.axis[0]] for spec in DIRECTION_REGISTRY if spec.axis is not None}
+
+
+def may_stand_on(direction: str, anchor_type: str) -> bool:
+    """True when a target in ``direction`` may stand on the anchor itself: the direction allows
+    it (left, right) and the anchor is flat-topped."""
+    spec = direction_spec(direction)
+    return spec is not None and spec.may_stand_on_anchor and anchor_type in FLAT_TOPPED_ANCHORS
+
+
+def stands_on_anchor(direction: str, anchor_type: str, surface: str | None) -> bool:
+    """True when the rule puts the target on the anchor's top: always for an ``on_top``
+    direction (up); for one that :func:`may_stand_on` a flat-topped anchor, when the surface
+    judgement names the anchor; never otherwise."""
+    spec = direction_spec(direction)
+    if spec is None:
+        return False
+    if spec.vertical:
+        return True
+    return may_stand_on(direction, anchor_type) and surface is not None and surface_names_anchor(surface, anchor_type)
 
 
 def boundary_point(box: AnchorBox, direction: np.ndarray) -> np.ndarray:
@@ -159,18 +184,13 @@ def target_point(
     if verdict != "appropriate":
         return np.asarray(raw_placement, dtype=float)
     cx, cz = box.center_xz
-    if direction == "up":
+    spec = direction_spec(direction)
+    if spec is not None and spec.vertical:
         return np.array([cx, box.top + TARGET_HALF_SIZE, cz])
     d = direction_vectors(anchor_position, observer_position).get(direction)
     if d is None:
         return np.asarray(raw_placement, dtype=float)
-    on_anchor = (
-        direction in ("left", "right")
-        and anchor_type in FLAT_TOPPED_ANCHORS
-        and surface is not None
-        and surface_names_anchor(surface, anchor_type)
-    )
-    if on_anchor:
+    if stands_on_anchor(direction, anchor_type, surface):
         return np.array(
             [cx + TARGET_HALF_SIZE * d[0], box.top + TARGET_HALF_SIZE, cz + TARGET_HALF_SIZE * d[2]]
         )

@@ -41,14 +41,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.geometry.camera import Camera
+from povagent.geometry.directions import direction_spec
 from povagent.geometry.ground_truth import (
-    FLAT_TOPPED_ANCHORS,
     TARGET_HALF_SIZE,
     PlacementCase,
     boundary_points,
     direction_vectors,
+    stands_on_anchor,
     surface_height,
-    surface_names_anchor,
 )
 
 #: Directions up to this angle (degrees) from the observer-relative one still satisfy the relation.
@@ -97,7 +97,8 @@ def valid_placements(case: PlacementCase) -> np.ndarray:
     box = case.box
     cx, cz = box.center_xz
     points: list[tuple[float, float, float]] = [(float(truth[0]), float(truth[1]), float(truth[2]))]
-    if case.direction == "up":
+    spec = direction_spec(case.direction)
+    if spec is not None and spec.vertical:
         hx, hz = box.half_xz
         y = box.top + TARGET_HALF_SIZE
         points += [(x, y, z) for z in _steps(cz - hz, cz + hz) for x in _steps(cx - hx, cx + hx)]
@@ -105,12 +106,7 @@ def valid_placements(case: PlacementCase) -> np.ndarray:
     d = direction_vectors(np.asarray(case.anchor_position, dtype=float), np.asarray(case.observer_position, dtype=float)).get(case.direction)
     if d is None or math.hypot(d[0], d[2]) < 1e-6:
         return truth[None, :]
-    on_anchor = (
-        case.direction in ("left", "right")
-        and case.anchor_type in FLAT_TOPPED_ANCHORS
-        and case.surface is not None
-        and surface_names_anchor(case.surface, case.anchor_type)
-    )
+    on_anchor = stands_on_anchor(case.direction, case.anchor_type, case.surface)
     sector = _sector(d)
     bx, bz = boundary_points(box, sector)
     if on_anchor:

@@ -18,6 +18,7 @@ from datetime import UTC, datetime
 from importlib.resources import files
 from typing import Any, Iterable
 
+from povagent.geometry.directions import DIRECTION_NAMES
 from povagent.report.tables import Table, to_html
 
 TEMPLATE = "report.html"
@@ -158,6 +159,7 @@ def render_page(
         "{{GALLERY_HIDDEN}}": "" if gallery is not None else "hidden",
         "{{LEGEND}}": legend,
         "{{SORT_EXTRA}}": sort_extra,
+        "{{DIRECTION_OPTIONS}}": "".join(f"<option>{html.escape(name)}</option>" for name in DIRECTION_NAMES),
         "{{GALLERY_JSON}}": script_json(gallery or {"entries": [], "systems": []}),
     }
     # one pass, so text inserted for one placeholder is never read as another placeholder

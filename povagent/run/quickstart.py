@@ -13,6 +13,8 @@ from typing import Callable
 
 import yaml
 
+from povagent.geometry.directions import DIRECTION_NAMES
+
 #: The baselines the quickstart compares (all offline and instant).
 BASELINES = ("center", "random", "oracle")
 
@@ -32,7 +34,7 @@ def write_quickstart_configs(out: Path, dataset: Path, runs: int = 1) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     pipeline = {
         "dataset": {"path": str(dataset.resolve())},
-        "instances": {"conditions": ["a", "b", "c"], "directions": ["right", "left", "front", "up"]},
+        "instances": {"conditions": ["a", "b", "c"], "directions": list(DIRECTION_NAMES)},
         "backend": {"name": "center", "options": {"frame_policy": "first"}},
         "strategy": "basic",
         "parser": "json",

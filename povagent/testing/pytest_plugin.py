@@ -33,9 +33,11 @@ import pytest
 
 from povagent import hookimpl
 from povagent.exchange.messages import Request, Response, Usage
+from povagent.geometry.directions import DIRECTION_NAMES
 from povagent.interfaces import Backend, PermanentBackendError
 
-DIRECTIONS = ("right", "left", "front", "up")
+#: The directions a synthetic pair takes, first ones first (the registry's order).
+DIRECTIONS = DIRECTION_NAMES
 
 
 # -- synthetic release ---------------------------------------------------------------------------

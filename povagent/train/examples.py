@@ -107,7 +107,7 @@ def make_strategy(rationale: str) -> Any:
     """The built-in strategy whose prompt fits ``rationale``, made through the plugin host."""
     from povagent.plugins import get_plugin_host
 
-    return get_plugin_host().create("strategy", STRATEGY_FOR_RATIONALE[rationale], {})
+    return get_plugin_host().strategy(STRATEGY_FOR_RATIONALE[rationale], {})
 
 
 def house_examples(

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import Direction, PairEntry, SceneObject
+from povagent.dataset.models import DIRECTIONS, Direction, PairEntry, SceneObject
 from povagent.geometry.box_outline import outline
 from povagent.geometry.camera import BEHIND_EPSILON, Camera
+from povagent.geometry.directions import spec_of
 from povagent.geometry.ground_truth import direction_vectors
 
 #: How the observer faces relative to the camera, by the angle between the observer's facing
@@ -30,12 +31,7 @@ FACINGS = ("away from the camera", "towards the camera", "towards the image's le
 COLUMNS = ("left", "centre", "right")
 
 #: The relation words of the S-CoT prompt's step 4a, by direction.
-RELATION_WORDS: dict[Direction, str] = {
-    Direction.LEFT: "LEFT",
-    Direction.RIGHT: "RIGHT",
-    Direction.FRONT: "FRONT",
-    Direction.UP: "ON TOP",
-}
+RELATION_WORDS: dict[Direction, str] = {d: spec_of(d).prompt_word for d in DIRECTIONS}
 
 #: Metres moved along a direction to read which way it points in the image.
 DIRECTION_PROBE_M = 0.5
@@ -238,7 +234,7 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
     anchor_pos = np.asarray(instance.anchor_object.position.as_tuple(), dtype=float)
     facing = facing_angle(camera, observer_cam[[0, 2]], anchor_pos[[0, 2]])
     # which way the direction points in this image: step from the target's resting point
-    if instance.direction is Direction.UP:
+    if spec_of(instance.direction).vertical:
         step = np.array([0.0, DIRECTION_PROBE_M, 0.0])
     else:
         step = DIRECTION_PROBE_M * direction_vectors(anchor_pos, observer_cam)[instance.direction.value]

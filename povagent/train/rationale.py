@@ -17,18 +17,14 @@ import json
 import random
 from collections.abc import Sequence
 
-from povagent.dataset.models import Direction
+from povagent.dataset.models import DIRECTIONS, Direction
+from povagent.geometry.directions import spec_of
 from povagent.train.facts import InstanceFacts, PixelBox
 
 RATIONALES = ("none", "cot", "s-cot")
 
-#: The relation as a phrase before the anchor's name.
-RELATION_PHRASES: dict[Direction, str] = {
-    Direction.LEFT: "to the left of",
-    Direction.RIGHT: "to the right of",
-    Direction.FRONT: "in front of",
-    Direction.UP: "on top of",
-}
+#: The relation as a phrase before the anchor's name (the registry's paper wording).
+RELATION_PHRASES: dict[Direction, str] = {d: spec_of(d).paper_words for d in DIRECTIONS}
 
 
 def answer_json(facts: InstanceFacts, exact: bool = False) -> str:
