@@ -36,6 +36,7 @@ import structlog
 
 from povagent import hookspecs
 from povagent.errors import PluginError
+from povagent.interfaces import Backend, Parser, Scorer, Strategy
 
 #: The kinds of things plugins contribute through a factory, and the hook for each.
 Kind = Literal["backend", "strategy", "parser", "scorer", "judge"]
@@ -245,6 +246,43 @@ class PluginHost:
             redactor = Redactor()
             shown = redactor.value(dict(options or {}))
             raise PluginError(redactor.text(f"{kind} {name!r} ({entry.source}) rejected its options {shown!r}: {exc}")) from None
+
+    # -- the typed seam: one method per kind, each returning what the interfaces promise ------
+    def backend(self, name: str, options: Mapping[str, Any] | None = None) -> Backend:
+        """The backend registered as ``name``, made with its YAML ``options``."""
+        made = self.create("backend", name, options)
+        if not isinstance(made, Backend):
+            raise self._not_a("backend", name, made, Backend)
+        return made
+
+    def strategy(self, name: str, options: Mapping[str, Any] | None = None) -> Strategy:
+        """The strategy registered as ``name``, made with its YAML ``options``."""
+        made = self.create("strategy", name, options)
+        if not isinstance(made, Strategy):
+            raise self._not_a("strategy", name, made, Strategy)
+        return made
+
+    def parser(self, name: str, options: Mapping[str, Any] | None = None) -> Parser:
+        """The parser registered as ``name``, made with its YAML ``options``."""
+        made = self.create("parser", name, options)
+        if not isinstance(made, Parser):
+            raise self._not_a("parser", name, made, Parser)
+        return made
+
+    def scorer(self, name: str, options: Mapping[str, Any] | None = None) -> Scorer:
+        """The scorer registered as ``name``, made with its YAML ``options``."""
+        made = self.create("scorer", name, options)
+        if not isinstance(made, Scorer):
+            raise self._not_a("scorer", name, made, Scorer)
+        return made
+
+    def _not_a(self, kind: str, name: str, made: object, expected: type) -> PluginError:
+        """A factory that returns something other than its kind's base class is the plugin's
+        bug, named when it is made rather than met as an AttributeError mid-run."""
+        return PluginError(
+            f"{kind} {name!r} ({self.entry(kind, name).source}) made a {type(made).__name__}, not a "
+            f"{expected.__name__}: its factory must return a povagent.interfaces.{expected.__name__}"
+        )
 
     def profile(self, name: str) -> Any:
         """The model profile registered as ``name`` (see ``register_model_profiles``)."""

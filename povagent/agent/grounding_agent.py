@@ -115,12 +115,12 @@ class GroundingAgent:
             self.backend: Backend = backend
         else:
             assert host is not None  # a name, so the host was built above
-            self.backend = host.create("backend", backend, backend_options)
+            self.backend = host.backend(backend, backend_options)
         if isinstance(strategy, Strategy):
             self.strategy: Strategy = strategy
         else:
             assert host is not None
-            self.strategy = host.create("strategy", strategy, strategy_options)
+            self.strategy = host.strategy(strategy, strategy_options)
         if parser is None:
             # a model profile knows how its family writes points (Qwen 0-1000, Gemini [y, x] ...)
             profile = getattr(self.backend, "profile", None)
@@ -129,7 +129,7 @@ class GroundingAgent:
             self.parser: Parser = parser
         else:
             assert host is not None
-            self.parser = host.create("parser", parser, parser_options)
+            self.parser = host.parser(parser, parser_options)
         self.timeout_s = float(timeout_s)
         self.retry = retry or AGENT_RETRY
         self.plane = plane

@@ -19,7 +19,7 @@ def parser_reads_officially(name: str, options: dict[str, Any] | None = None, pl
     from povagent.plugins import get_plugin_host
     from povagent.results.official_reading import official_counterpart
 
-    return official_counterpart(get_plugin_host(plugins).create("parser", name, options or {})) is None
+    return official_counterpart(get_plugin_host(plugins).parser(name, options or {})) is None
 
 
 def render_official_beside(summary: dict[str, Any], parser: str, *, reads_officially: bool, run_dir: Any = None) -> None:

@@ -100,7 +100,7 @@ def show_prompt_command(
     if inst is None:
         raise DatasetError(unknown_instance_message(instance, [i.id for i in dataset.instances()], config.dataset.root))
     host = get_plugin_host(config.plugins)
-    strategy = host.create("strategy", config.strategy.name, config.strategy.options)
+    strategy = host.strategy(config.strategy.name, config.strategy.options)
     images = ImageStore()
     try:
         turns = strategy.plan_turns(inst, images)
@@ -166,7 +166,7 @@ def parse_command(
         spec = AnswerSpec(schema=frame_answer_schema(frames, width, height), width=width, height=height, n_frames=frames, asks_frame=True)
     else:
         spec = AnswerSpec(schema=point_answer_schema(width, height), width=width, height=height, n_frames=1, asks_frame=False)
-    the_parser = get_plugin_host(tuple(plugin)).create("parser", parser, {})
+    the_parser = get_plugin_host(tuple(plugin)).parser(parser, {})
     parsed = the_parser.parse(sys.stdin.read(), spec)
     out = {
         "status": str(parsed.status),

@@ -446,4 +446,4 @@ def _success_scorer(collection: Collection) -> tuple[Any, str]:
         note = f" (the runs score with different success options; the baseline uses the first run's, {chosen})"
     elif chosen:
         note = f" (options {chosen})"
-    return build_plugin_host(strict=False).create("scorer", "success", chosen), note
+    return build_plugin_host(strict=False).scorer("success", chosen), note

@@ -178,14 +178,14 @@ def rescore_run(
     for kind, name in [("strategy", config.strategy.name), *(("scorer", s.name) for s in config.scorers)]:
         if name not in host.names(kind):
             raise PluginError(missing_plugin_message("rescore", run, kind, name, config.plugins))
-    parser = host.create("parser", parser_name, {})
+    parser = host.parser(parser_name, {})
     counterpart = official_counterpart(parser)
-    official = (host.create("parser", counterpart, {}), counterpart) if counterpart else None
-    strategy = host.create("strategy", config.strategy.name, config.strategy.options)
-    scorers = {s.name: host.create("scorer", s.name, s.options) for s in config.scorers}
+    official = (host.parser(counterpart, {}), counterpart) if counterpart else None
+    strategy = host.strategy(config.strategy.name, config.strategy.options)
+    scorers = {s.name: host.scorer(s.name, s.options) for s in config.scorers}
     for name in extra_scorers:
         if name not in scorers:
-            scorers[name] = host.create("scorer", name, {})
+            scorers[name] = host.scorer(name, {})
     root = Path(dataset_root) if dataset_root is not None else config.dataset.root
     if dataset_root is None and not root.is_absolute() and not root.exists():
         # relative paths in a pipeline are relative to the directory the run was started from

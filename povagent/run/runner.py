@@ -148,17 +148,27 @@ class Components:
     official_parser_name: str | None = None
 
 
+@dataclass(frozen=True)
+class ComponentNames:
+    """The registered names of a run's backend, strategy and parser, as its rows, log and
+    summary name them."""
+
+    backend: str
+    strategy: str
+    parser: str
+
+
 def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     """Instantiate the backend, strategy, parser and scorers named in ``config``."""
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
-    parser = host.create("parser", config.parser.name, config.parser.options)
+    parser = host.parser(config.parser.name, config.parser.options)
     counterpart = official_counterpart(parser)
     return Components(
-        backend=host.create("backend", config.backend.name, config.backend.options),
-        strategy=host.create("strategy", config.strategy.name, config.strategy.options),
+        backend=host.backend(config.backend.name, config.backend.options),
+        strategy=host.strategy(config.strategy.name, config.strategy.options),
         parser=parser,
-        scorers={s.name: host.create("scorer", s.name, s.options) for s in config.scorers},
-        official_parser=host.create("parser", counterpart, {}) if counterpart else None,
+        scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
+        official_parser=host.parser(counterpart) if counterpart else None,
         official_parser_name=counterpart,
     )
 
@@ -384,11 +394,11 @@ class PipelineRun:
             condition=instance.condition.value,
             run=run,
             sentence=instance.sentence,
-            backend=self._names[0],
+            backend=self._names.backend,
             model=self._model[0],
             profile=self._model[1],
-            strategy=self._names[1],
-            parser=self._names[2],
+            strategy=self._names.strategy,
+            parser=self._names.parser,
             config_hash=self.config_hash,
             status=status,
             exchanges=exchanges,
@@ -544,7 +554,8 @@ class PipelineRun:
         (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
 
         backend = self.components.backend
-        self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
+        assert config.backend is not None and config.parser is not None, "resolve_components() first"
+        self._names = ComponentNames(config.backend.name, config.strategy.name, config.parser.name)
         self._model = answering_model(backend)
         self._observed = bool(self.host.hooks.active)
         cache_path = config.cache_path()
@@ -564,7 +575,7 @@ class PipelineRun:
         self._report_dataset_problems()
 
         self._log.info("run_start", n_total=len(wanted), n_pending=len(pending), config_hash=self.config_hash,
-                       backend=self._names[0], model=model_label(*self._model), strategy=self._names[1], parser=self._names[2],
+                       backend=self._names.backend, model=model_label(*self._model), strategy=self._names.strategy, parser=self._names.parser,
                        retried_failed_keys=len(retried))
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
@@ -658,11 +669,11 @@ class PipelineRun:
         """What ``summary.json`` holds: official breakdown over the selected keys, plus run stats."""
         summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         summary["pipeline"] = {
-            "backend": self._names[0],
+            "backend": self._names.backend,
             "model": self._model[0],
             "profile": self._model[1],
-            "strategy": self._names[1],
-            "parser": self._names[2],
+            "strategy": self._names.strategy,
+            "parser": self._names.parser,
             "scorers": list(self.components.scorers),
             "config_hash": self.config_hash,
         }

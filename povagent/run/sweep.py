@@ -211,7 +211,7 @@ def dry_run(cells: list[Cell], *, host: PluginHost | None = None) -> list[DryRun
         h = host or get_plugin_host(cell.config.plugins)
         ds = ensure_dataset(cell.config, datasets)
         total, done, pending = pending_keys(cell.config, ds)
-        strategy = h.create("strategy", cell.config.strategy.name, cell.config.strategy.options)
+        strategy = h.strategy(cell.config.strategy.name, cell.config.strategy.options)
         by_condition: dict[str, list[Any]] = {}
         for inst, _ in pending:
             by_condition.setdefault(str(inst.condition), []).append(inst)
