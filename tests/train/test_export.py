@@ -236,3 +236,13 @@ def test_an_export_holds_one_house_in_memory_at_a_time(generated_release: Path, 
     assert len(report.houses_by_split["train"]) == 4 and report.examples > 0
     assert len(read) >= 8  # each house read to plan and again to write
     assert most[0] <= 2
+
+
+def test_export_json_meets_its_shipped_schema(hf_export) -> None:
+    from importlib import resources
+
+    from jsonschema import Draft202012Validator
+
+    out, _ = hf_export
+    schema = json.loads(resources.files("povagent").joinpath("schemas", "output_export.schema.json").read_text(encoding="utf-8"))
+    assert list(Draft202012Validator(schema).iter_errors(json.loads((out / "export.json").read_text()))) == []

@@ -1,0 +1,139 @@
+"""``summary.json`` as a type: :class:`RunSummary` and the sections it is made of.
+
+The runner (and ``rescore``, and :func:`povagent.run.summary.summarize_run`) build the summary as
+JSON; this module says what that JSON is, so a reader validates it once and reads attributes,
+and ``povagent schema summary`` publishes its JSON Schema. A section that only some runs have
+(a lenient parser's ``official_parse``, a real-world set's ``success``, the diagnostics) is
+``None`` when absent. The breakdown's cells are strict about the fields every cell has and let
+the multi-run fields (``n_runs``, ``run_mean_l2``) through.
+
+Only types: nothing here reads or writes a file.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict
+
+
+class Cell(BaseModel):
+    """One cell of a breakdown (all rows, a condition, a direction, a run): see
+    :func:`povagent.scoring.breakdown.summarize`."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    n: int
+    n_total: int
+    response_rate: float | None
+    mean_l2: float | None
+    std_l2: float | None
+    pct_in_frame: float | None
+    mean_l2_strict: float | None
+    mean_abs_x: float | None
+    mean_abs_y: float | None
+    n_parse_error: int
+    #: With several runs: how many runs the mean is over, and each run's mean.
+    n_runs: int | None = None
+    run_mean_l2: list[float | None] | None = None
+
+
+class PooledBreakdown(BaseModel):
+    """Overall, per condition, per direction and per condition/direction cells of rows in one
+    mean: see :func:`povagent.scoring.breakdown.pooled_breakdown`."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    overall: Cell
+    per_condition: dict[str, Cell]
+    per_direction: dict[str, Cell]
+    per_condition_direction: dict[str, Cell]
+    #: ``mean of per-run means`` (the paper's number) or ``pooled``.
+    aggregation: str
+
+
+class Breakdown(PooledBreakdown):
+    """The breakdown of a run's rows: see :func:`povagent.scoring.breakdown.breakdown`."""
+
+    runs: list[int]
+    n_parse_error: int
+    #: With several runs: every row in one mean, beside the mean of per-run means.
+    pooled: PooledBreakdown | None = None
+    #: With several runs: each run's overall cell, by run index.
+    per_run: dict[str, Cell] | None = None
+
+
+class OfficialParseBreakdown(Breakdown):
+    """The paper-comparable reading beside a lenient parser's (``official_parse``)."""
+
+    parser: str
+    rows_without_reading: int
+
+
+class RowCounts(BaseModel):
+    """How many of the run's keys have a row, and with which status."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    total: int
+    done: int
+    missing: int
+    answered: int
+    parse_error: int
+    infra_error: int
+
+
+class UsageTotals(BaseModel):
+    """Tokens, cost and retries summed over the run's rows (cost ``None``: no row priced)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    prompt_tokens: int
+    completion_tokens: int
+    cost_usd: float | None
+    retries: int
+
+
+class PipelineNames(BaseModel):
+    """What answered and how: the registered names, the model and the config hash."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    backend: str
+    model: str
+    profile: str | None
+    strategy: str
+    parser: str
+    scorers: list[str]
+    config_hash: str
+
+
+class RunSummary(Breakdown):
+    """Everything ``summary.json`` holds.
+
+    The breakdown's fields are the official metric's numbers; ``rows`` and ``usage`` cover the
+    run's keys; ``pipeline``, ``complete``, ``interrupted``, ``stopped``, ``session`` and
+    ``images`` are written by the runner (a summary made from a results file alone has none).
+    """
+
+    official_parse: OfficialParseBreakdown | None = None
+    #: A real-world set's success rates (:func:`povagent.dataset.realworld.success_breakdown`).
+    success: dict[str, Any] | None = None
+    #: Each plugin scorer's true/false and number fields: ``{scorer: {field: {n, true, rate} | {n, mean}}}``.
+    scorers: dict[str, dict[str, dict[str, float]]] | None = None
+    #: Why answers failed (:mod:`povagent.scoring.diagnostics_breakdown`), an addition.
+    diagnostics: dict[str, Any] | None = None
+    #: Keys whose parse holds a NaN coordinate (their official mean is NaN, as officially).
+    nan_coordinate_rows: list[str] | None = None
+    rows: RowCounts
+    usage: UsageTotals
+    pipeline: PipelineNames | None = None
+    #: Every selected key has a row.
+    complete: bool | None = None
+    interrupted: bool | None = None
+    #: What stopped the run early (a signal, a budget), or ``None``.
+    stopped: str | None = None
+    #: This session's request, cache, journal and timing counters (``RunStats``).
+    session: dict[str, Any] | None = None
+    #: The image store's counters.
+    images: dict[str, int] | None = None
