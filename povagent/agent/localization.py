@@ -12,7 +12,7 @@ answer, for the robot app to log or re-ask).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict
@@ -23,6 +23,7 @@ from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.models import Condition
 from povagent.errors import UnparseableAnswerError
 from povagent.exchange.messages import Request, Response
+from povagent.exchange.usage_totals import UsageTotals
 from povagent.geometry.goals import Goal3D, GoalUnavailable, Plane, back_project
 from povagent.geometry.letterbox import pixel_index
 from povagent.interfaces import Parser
@@ -124,7 +125,7 @@ def localize(
             goal = back_project(camera, pixel, depth=prepared.depths[k], plane=plane, depth_kind=depth_kind)
         except GoalUnavailable as exc:
             goal_error = str(exc)
-    usages = [r.usage for _, r in exchanges]
+    spent = UsageTotals.of(r.usage for _, r in exchanges)
     return Localization(
         condition=instance.condition,
         frame_index=k,
@@ -140,9 +141,9 @@ def localize(
         raw_answer=text,
         latency_s=elapsed,
         model_latency_s=sum(r.latency_s for _, r in exchanges),
-        prompt_tokens=_total(u.prompt_tokens for u in usages),
-        completion_tokens=_total(u.completion_tokens for u in usages),
-        cost_usd=_total(u.cost_usd for u in usages),
+        prompt_tokens=spent.prompt_tokens,
+        completion_tokens=spent.completion_tokens,
+        cost_usd=spent.cost_usd,
         retries=sum(r.retries for _, r in exchanges),
         exchanges=len(exchanges),
         goal=goal,
@@ -153,11 +154,6 @@ def localize(
 def _unparseable(message: str, raw_answer: str, parsed: ParsedAnswer) -> UnparseableAnswerError:
     """The error with the raw answer and its parse attached (a robot app may log or re-ask)."""
     return UnparseableAnswerError(message, raw_answer, parsed)
-
-
-def _total(values: Any) -> Any:
-    known = [v for v in values if v is not None]
-    return sum(known) if known else None
 
 
 def _clip(text: str, limit: int = 200) -> str:

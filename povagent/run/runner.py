@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from povagent.answers.spec import ParsedAnswer, ParseStatus
+from povagent.answers.spec import ParsedAnswer
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.dataset.instances import Instance, row_key
@@ -48,9 +48,11 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
+from povagent.exchange.usage_totals import UsageTotals
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
+from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
@@ -58,7 +60,7 @@ from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
-from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
+from povagent.run.summary import summarize_rows, summary_row, write_json
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
@@ -241,7 +243,9 @@ class PipelineRun:
         self.stats = RunStats()
         self.config_hash = config.config_hash()
         self._redactor = Redactor()
-        self._digests: dict[str, RowDigest] = {}
+        self._digests: dict[str, ResultRow] = {}
+        #: what each row written in this session spent (``session`` in summary.json)
+        self._session_spent: list[UsageTotals] = []
         self._reads: dict[Path, asyncio.Future[Any]] = {}
         self._frames_read: dict[int, tuple[Any, ...]] = {}
         self._frames_waits: dict[int, tuple[tuple[Any, ...], set[asyncio.Future[Any]]]] = {}
@@ -381,10 +385,7 @@ class PipelineRun:
             status, error_type = RowStatus.INFRA_ERROR, "strategy_error"
             error_message = self._redactor.text(f"{type(exc).__name__}: {exc}")
             self._log.error("strategy_error", row=key, error=error_message, traceback=self._redactor.text(traceback.format_exc()))
-        prompt = sum(e.prompt_tokens for e in exchanges if e.prompt_tokens is not None) if exchanges else None
-        completion = sum(e.completion_tokens for e in exchanges if e.completion_tokens is not None) if exchanges else None
-        costs = [e.cost_usd for e in exchanges if e.cost_usd is not None]
-        retries = sum(e.retries for e in exchanges) + failed_retries
+        spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
         return ResultRow.model_construct(
             key=key,
             instance_id=iid,
@@ -408,28 +409,26 @@ class PipelineRun:
             error_type=error_type,
             error_message=error_message,
             latency_s=time.perf_counter() - t0,
-            prompt_tokens=prompt,
-            completion_tokens=completion,
-            cost_usd=sum(costs) if costs else None,
-            retries=retries,
+            prompt_tokens=spent.prompt_tokens,
+            completion_tokens=spent.completion_tokens,
+            cost_usd=spent.cost_usd,
+            retries=spent.retries + failed_retries,
             started_at=started,
             finished_at=utc_now(),
             official_reading=official_reading,
         )
 
     def _parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:
-        try:
-            return parser.parse(text, request.answer)
-        except Exception as exc:  # parsers must not raise; if one does, the row is a parse error
-            self._log.error("parser_exception", row=key, error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
-            return ParsedAnswer(status=ParseStatus.UNPARSEABLE, reason=f"parser raised {type(exc).__name__}: {exc}")
+        def logged(exc: BaseException) -> None:
+            self._log.error("parser_exception", row=key, error=error_text(exc), traceback=traceback.format_exc())
+
+        return parse_or_unparseable(parser, text, request.answer, logged)  # a raising parser: a parse error
 
     def _score(self, name: str, scorer: Scorer, instance: Instance, parse: ParsedAnswer, key: str) -> dict[str, Any]:
-        try:
-            return scorer.score(instance, parse, self.dataset)
-        except Exception as exc:
-            self._log.error("scorer_exception", row=key, scorer=name, error=f"{type(exc).__name__}: {exc}", traceback=traceback.format_exc())
-            return {"error": f"{type(exc).__name__}: {exc}"}
+        def logged(exc: BaseException) -> None:
+            self._log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
+
+        return score_or_error(scorer, instance, parse, self.dataset, logged)
 
     def _before_rows(self) -> None:
         """Runs in the journal's thread before each batch of rows is written."""
@@ -451,16 +450,11 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        self._digests[row.key] = digest(row)
+        self._digests[row.key] = summary_row(row)
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
-        if row.prompt_tokens:
-            s.prompt_tokens += row.prompt_tokens
-        if row.completion_tokens:
-            s.completion_tokens += row.completion_tokens
-        if row.cost_usd:
-            s.cost_usd += row.cost_usd
+        self._session_spent.append(UsageTotals.of([row]))
         if row.status is RowStatus.INFRA_ERROR:
             self._log.warning("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
         self.progress.advance(row.status.value)
@@ -667,7 +661,10 @@ class PipelineRun:
 
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds: official breakdown over the selected keys, plus run stats."""
-        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
+        summary = summarize_rows(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
+        spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
+        self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
+        self.stats.cost_usd = spent.cost_usd or 0.0
         summary["pipeline"] = {
             "backend": self._names.backend,
             "model": self._model[0],

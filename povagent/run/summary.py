@@ -1,8 +1,9 @@
-"""Run summaries: ``summary.json``'s breakdown of a run's rows, from compact row digests.
+"""Run summaries: ``summary.json``'s breakdown of a run's rows (:class:`ResultRow`, one per key).
 
-The runner keeps one :class:`RowDigest` per key (rows of earlier sessions read once at resume,
-its own rows as they become durable), so writing the summary never parses ``results.jsonl``
-again; :func:`summarize_run` reads a finished folder for everyone else.
+The runner keeps each key's row without its exchanges (:func:`summary_row`; rows of earlier
+sessions read once at resume, its own rows as they become durable), so writing the summary
+never parses ``results.jsonl`` again; :func:`summarize_run` reads a finished folder for
+everyone else. :mod:`povagent.run.summary_model` says what the summary is.
 """
 
 from __future__ import annotations
@@ -10,10 +11,10 @@ from __future__ import annotations
 import json
 import os
 from collections import Counter
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
@@ -40,37 +41,6 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
     )
 
 
-@dataclass(frozen=True, slots=True)
-class RowDigest:
-    """The few fields of a row that ``summary.json`` needs.
-
-    The runner keeps one per key (rows of earlier sessions read once at resume, its own rows as
-    they become durable), so writing the summary never parses ``results.jsonl`` again.
-    """
-
-    key: str
-    run: int
-    status: str
-    scored: ScoredRow
-    has_success: bool
-    success: Any
-    answered: bool
-    prompt_tokens: int | None
-    completion_tokens: int | None
-    cost_usd: float | None
-    retries: int
-    #: The official reading's fields, for a row parsed leniently (``None``: no separate reading).
-    official: ScoredRow | None = None
-    official_parser: str | None = None
-    #: The row's (official) parse holds a NaN coordinate: the official mean holding it is NaN.
-    nan_coordinate: bool = False
-    #: The true/false and number fields of every plugin scorer's scores (``summary.json``'s ``scorers``).
-    plugin_scores: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
-    #: The ``diagnose`` and ``relation`` scores' fields (``summary.json``'s ``diagnostics``);
-    #: ``None`` when neither scored the row.
-    diagnosed: DiagnosedRow | None = None
-
-
 #: Scorers whose fields ``summary.json`` breaks down in sections of their own.
 _OWN_SECTIONS = frozenset({"official", "success"})
 
@@ -84,12 +54,12 @@ def plugin_scores(scores: Mapping[str, Any]) -> tuple[tuple[str, tuple[tuple[str
     )
 
 
-def plugin_score_summary(rows: Iterable[RowDigest]) -> dict[str, dict[str, dict[str, Any]]]:
+def plugin_score_summary(rows: Iterable[ResultRow]) -> dict[str, dict[str, dict[str, Any]]]:
     """``{scorer: {field: ...}}`` over the rows a plugin scorer scored (answered rows): a
     true/false field as ``{"n", "true", "rate"}``, a number as ``{"n", "mean"}``."""
     values: dict[str, dict[str, list[float]]] = {}
     for row in rows:
-        for name, fields in row.plugin_scores:
+        for name, fields in plugin_scores(row.scores):
             for key, value in fields:
                 values.setdefault(name, {}).setdefault(key, []).append(value)
     out: dict[str, dict[str, dict[str, Any]]] = {}
@@ -103,29 +73,12 @@ def plugin_score_summary(rows: Iterable[RowDigest]) -> dict[str, dict[str, dict[
     return out
 
 
-def digest(row: ResultRow) -> RowDigest:
-    """The summary fields of one row."""
-    success = row.scores.get("success")
-    official_view = officially_read(row)  # the row itself when it holds no separate reading
-    return RowDigest(
-        key=row.key,
-        run=row.run,
-        status=RowStatus(row.status).value,
-        scored=scored_row(row),
-        has_success=success is not None,
-        success=(success or {}).get("success"),
-        # a row the runner never scored (parse or infra error) is unanswered
-        answered=(success or {}).get("answered") is True,
-        prompt_tokens=row.prompt_tokens,
-        completion_tokens=row.completion_tokens,
-        cost_usd=row.cost_usd,
-        retries=row.retries,
-        official=scored_row(official_view) if row.official_reading is not None else None,
-        official_parser=row.official_reading.parser if row.official_reading is not None else None,
-        nan_coordinate=bool(nan_rows([official_view])),
-        plugin_scores=plugin_scores(row.scores),
-        diagnosed=diagnosed_row(row),
-    )
+def summary_row(row: ResultRow) -> ResultRow:
+    """The row as a summary keeps it: without its exchanges (prompts and raw answers, which no
+    summary reads and which are most of a row's size). The runner keeps one per key (rows of
+    earlier sessions read once at resume, its own rows as they become durable), so writing the
+    summary never parses ``results.jsonl`` again."""
+    return row.model_copy(update={"exchanges": []}) if row.exchanges else row
 
 
 def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
@@ -154,61 +107,65 @@ def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
     )
 
 
-def summarize_digests(digests: Iterable[RowDigest], keys: set[str] | None = None) -> dict[str, Any]:
-    """Breakdown (overall / per condition / per direction, per run too) of row digests.
+def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> dict[str, Any]:
+    """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
-    ``keys`` is the run's selection (``rows`` then counts missing keys); digests of other keys
+    ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
     are left out.
     """
-    rows = [d for d in digests if keys is None or d.key in keys]
-    scored = [d.scored for d in rows]
+    rows = [r for r in rows if keys is None or r.key in keys]
+    scored = [scored_row(r) for r in rows]
     out = breakdown(scored)
-    official_parser = next((d.official_parser for d in rows if d.official_parser), None)
+    official_parser = next((r.official_reading.parser for r in rows if r.official_reading is not None), None)
+    with_success = [r for r in rows if r.scores.get("success") is not None]
     # parsed leniently: the paper-comparable reading beside it (official metric only: a
     # real-world set's success scorer has no official numbers to compare)
-    if official_parser is not None and not any(d.has_success for d in rows):
+    if official_parser is not None and not with_success:
         # a row with an answer but no reading (written before readings were recorded) is left
         # out and counted, never counted with its repaired parse
-        unread = [d for d in rows if d.official is None and d.status != RowStatus.INFRA_ERROR.value]
+        unread = [r for r in rows if r.official_reading is None and RowStatus(r.status) is not RowStatus.INFRA_ERROR]
         out["official_parse"] = official_parse_breakdown(
-            [d.official if d.official is not None else d.scored for d in rows
-             if d.official is not None or d.status == RowStatus.INFRA_ERROR.value],
+            [scored_row(officially_read(r)) for r in rows
+             if r.official_reading is not None or RowStatus(r.status) is RowStatus.INFRA_ERROR],
             official_parser,
             len(unread),
         )  # fmt: skip
-    if any(d.has_success for d in rows):
+    if with_success:
         from povagent.dataset.realworld import success_breakdown
 
-        out["success"] = success_breakdown(
-            {"condition": d.scored.condition, "direction": d.scored.direction, "success": d.success, "answered": d.answered}
-            for d in rows
-        )
+        def success_of(row: ResultRow) -> dict[str, Any]:
+            success = row.scores.get("success") or {}
+            # a row the runner never scored (parse or infra error) is unanswered
+            return {"condition": row.condition, "direction": row.direction, "success": success.get("success"),
+                    "answered": success.get("answered") is True}  # fmt: skip
+
+        out["success"] = success_breakdown(success_of(r) for r in rows)
     by_plugin = plugin_score_summary(rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
         out["scorers"] = by_plugin
-    diagnostics = diagnostics_breakdown(d.diagnosed for d in rows if d.diagnosed is not None)
+    diagnostics = diagnostics_breakdown(d for d in (diagnosed_row(r) for r in rows) if d is not None)
     if diagnostics is not None:  # an addition, beside the official breakdown
         out["diagnostics"] = diagnostics
-    nan_keys = [d.key for d in rows if d.nan_coordinate]
+    nan_keys = [r.key for r in rows if nan_rows([officially_read(r)])]
     if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
         out["nan_coordinate_rows"] = nan_keys
     per_run: dict[int, list[ScoredRow]] = {}
-    for d in rows:
-        per_run.setdefault(d.run, []).append(d.scored)
+    for row, one in zip(rows, scored):
+        per_run.setdefault(row.run, []).append(one)
     out["per_run"] = {str(k): summarize(v) for k, v in sorted(per_run.items())}
-    statuses = Counter(d.status for d in rows)
-    costs = [d.cost_usd for d in rows if d.cost_usd is not None]
+    statuses = Counter(RowStatus(r.status).value for r in rows)
     out["rows"] = {
         "total": len(keys) if keys is not None else len(rows),
         "done": len(rows),
         "missing": (len(keys) - len(rows)) if keys is not None else 0,
         **{s.value: statuses.get(s.value, 0) for s in RowStatus},
     }
+    spent = UsageTotals.of(rows, unstated_tokens=0)
     out["usage"] = {
-        "prompt_tokens": sum(d.prompt_tokens or 0 for d in rows),
-        "completion_tokens": sum(d.completion_tokens or 0 for d in rows),
-        "cost_usd": sum(costs) if costs else None,
-        "retries": sum(d.retries for d in rows),
+        "prompt_tokens": spent.prompt_tokens,
+        "completion_tokens": spent.completion_tokens,
+        "cost_usd": spent.cost_usd,
+        "retries": spent.retries,
     }
     return out
 
@@ -219,11 +176,11 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
     ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
     When a key repeats, its last row counts.
     """
-    by_key: dict[str, RowDigest] = {}
+    by_key: dict[str, ResultRow] = {}
     for row in iter_rows(results):
         if keys is None or row.key in keys:
-            by_key[row.key] = digest(row)
-    return summarize_digests(by_key.values(), keys)
+            by_key[row.key] = summary_row(row)
+    return summarize_rows(by_key.values(), keys)
 
 
 def write_json(path: Path, data: Mapping[str, Any]) -> None:

@@ -112,7 +112,7 @@ class RunSummary(Breakdown):
     """Everything ``summary.json`` holds.
 
     The breakdown's fields are the official metric's numbers; ``rows`` and ``usage`` cover the
-    run's keys; ``pipeline``, ``complete``, ``interrupted``, ``stopped``, ``session`` and
+    run's keys (``rescore``'s summary has ``parse_status`` and ``repaired`` instead); ``pipeline``, ``complete``, ``interrupted``, ``stopped``, ``session`` and
     ``images`` are written by the runner (a summary made from a results file alone has none).
     """
 
@@ -125,8 +125,16 @@ class RunSummary(Breakdown):
     diagnostics: dict[str, Any] | None = None
     #: Keys whose parse holds a NaN coordinate (their official mean is NaN, as officially).
     nan_coordinate_rows: list[str] | None = None
-    rows: RowCounts
-    usage: UsageTotals
+    #: The run's keys and what their rows cost (``None`` in ``rescore``'s summary of re-parsed rows).
+    rows: RowCounts | None = None
+    usage: UsageTotals | None = None
+    #: ``rescore``'s: the run re-parsed, the parser, the rows, rows by parse status, and how
+    #: many answers the parser repaired.
+    source_run: str | None = None
+    parser: str | None = None
+    n_rows: int | None = None
+    parse_status: dict[str, int] | None = None
+    repaired: int | None = None
     pipeline: PipelineNames | None = None
     #: Every selected key has a row.
     complete: bool | None = None

@@ -3,6 +3,7 @@ the files a real sweep writes."""
 
 from __future__ import annotations
 
+import ast
 import json
 from importlib import resources
 from pathlib import Path
@@ -12,7 +13,9 @@ import yaml
 from jsonschema import Draft202012Validator
 from typer.testing import CliRunner
 
+import povagent.run.runner as runner_module
 from povagent.cli import app
+from povagent.results.rows import ExchangeRecord, ResultRow
 from povagent.run.output_schemas import OUTPUT_MODELS, output_schema_text
 from povagent.run.summary_model import RunSummary
 from povagent.run.sweep import run_sweep
@@ -96,3 +99,36 @@ def test_the_sweep_index_meets_the_sweep_schema(two_run_sweep):
 def test_a_summary_with_an_unknown_section_fails_its_schema(two_run_sweep):
     data = json.loads(next(two_run_sweep.glob("*/summary.json")).read_text())
     assert list(validator("summary").iter_errors({**data, "surprise": 1}))
+
+
+def _construct_keywords(model: str) -> set[str]:
+    """The keywords of the runner's ``<model>.model_construct(...)`` call."""
+    tree = ast.parse((Path(runner_module.__file__)).read_text(encoding="utf-8"))
+    calls = [
+        node for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "model_construct"
+        and isinstance(node.func.value, ast.Name) and node.func.value.id == model
+    ]  # fmt: skip
+    assert len(calls) == 1, f"expected one {model}.model_construct call in the runner"
+    return {k.arg for k in calls[0].keywords if k.arg is not None}
+
+
+@pytest.mark.parametrize("model", [ResultRow, ExchangeRecord])
+def test_the_runner_builds_a_row_without_validation_only_by_naming_every_field(model):
+    # model_construct skips validation: a field left out would quietly take its default
+    assert _construct_keywords(model.__name__) == set(model.model_fields)
+
+
+def test_every_row_a_sweep_writes_reads_back_to_the_same_json(two_run_sweep):
+    for path in sorted(two_run_sweep.glob("*/results.jsonl")):
+        for line in path.read_text().splitlines():
+            assert ResultRow.model_validate_json(line).model_dump(mode="json") == json.loads(line)
+
+
+def test_a_rescored_summary_meets_the_summary_schema(two_run_sweep):
+    from povagent.run.rescore import rescore_run
+
+    result = rescore_run(two_run_sweep / "center", "official")
+    data = json.loads((result.out_dir / "summary.json").read_text())
+    assert list(validator("summary").iter_errors(data)) == []
+    assert RunSummary.model_validate(data).parse_status is not None

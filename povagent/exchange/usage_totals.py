@@ -1,0 +1,64 @@
+"""What model calls cost, summed: the one aggregator of tokens, cost and retries.
+
+A row sums its exchanges, a summary sums its rows, the agent sums its turns: each through
+:meth:`UsageTotals.of`. A provider may not state tokens or cost, so each field is summed over
+the items that state it; what an all-silent sum is (``None``, or ``0`` where a count is
+expected) is the caller's word, given as ``unstated_tokens`` / ``unstated_cost``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Protocol
+
+
+class Spent(Protocol):
+    """Anything that states tokens and cost: a response's usage, an exchange record, a row."""
+
+    @property
+    def prompt_tokens(self) -> int | None: ...
+
+    @property
+    def completion_tokens(self) -> int | None: ...
+
+    @property
+    def cost_usd(self) -> float | None: ...
+
+
+def _stated_tokens(values: Iterable[int | None]) -> int | None:
+    """The sum of the counts that are stated; ``None`` when none is."""
+    known = [v for v in values if v is not None]
+    return sum(known) if known else None
+
+
+def _stated_cost(values: Iterable[float | None]) -> float | None:
+    """The sum of the costs that are stated (in their order); ``None`` when none is."""
+    known = [v for v in values if v is not None]
+    return sum(known) if known else None
+
+
+@dataclass(frozen=True)
+class UsageTotals:
+    """Tokens and cost summed over some items; retries summed when the items carry them."""
+
+    prompt_tokens: int | None
+    completion_tokens: int | None
+    cost_usd: float | None
+    retries: int = 0
+
+    @classmethod
+    def of(
+        cls, items: Iterable[Spent], *, unstated_tokens: int | None = None, unstated_cost: float | None = None
+    ) -> UsageTotals:
+        """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
+        or ``unstated_cost`` (cost)."""
+        items = list(items)
+        prompt = _stated_tokens(i.prompt_tokens for i in items)
+        completion = _stated_tokens(i.completion_tokens for i in items)
+        cost = _stated_cost(i.cost_usd for i in items)
+        return cls(
+            prompt_tokens=unstated_tokens if prompt is None else prompt,
+            completion_tokens=unstated_tokens if completion is None else completion,
+            cost_usd=unstated_cost if cost is None else cost,
+            retries=sum(int(getattr(i, "retries", 0) or 0) for i in items),
+        )
