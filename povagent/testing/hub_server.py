@@ -41,15 +41,14 @@ import hashlib
 import json
 import re
 import socket
-import threading
 import time
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 from urllib.parse import parse_qs, quote, unquote, urlsplit
 
-from povagent.exchange.disconnects import QuietDisconnects
+from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
 
 __all__ = ["HubLies", "HubRequest", "HubServer"]
 
@@ -108,16 +107,6 @@ class _Handler(BaseHTTPRequestHandler):
 
     def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib signature
         """Silence the stdlib's per-request stderr log."""
-
-    def setup(self) -> None:
-        """Track the connection, so :meth:`HubServer.stop` can cut kept-alive ones too."""
-        super().setup()
-        self.server.owner._connections.add(self.connection)
-
-    def finish(self) -> None:
-        """Forget the connection once the client is done with it."""
-        self.server.owner._connections.discard(self.connection)
-        super().finish()
 
     def do_HEAD(self) -> None:  # noqa: N802 - stdlib name
         """File metadata (``resolve`` URLs only)."""
@@ -295,14 +284,12 @@ class _Handler(BaseHTTPRequestHandler):
             self.wfile.write(data)
 
 
-class _Server(QuietDisconnects, ThreadingHTTPServer):
-    daemon_threads = True
-    block_on_close = False
+class _Server(TrackedHTTPServer):
     request_queue_size = 64
     owner: HubServer
 
 
-class HubServer:
+class HubServer(BackgroundServer):
     """Serve ``folder`` as the Hub repository ``repo_id`` on 127.0.0.1, in a background thread.
 
     ``files`` may be given instead of ``folder`` (a mapping of repository path to bytes). The
@@ -313,6 +300,12 @@ class HubServer:
     request with that status (a Hub outage). The server stops itself after
     ``max_lifetime_s`` seconds; use it as a context manager.
     """
+
+    server_class = _Server
+    handler = _Handler
+    thread_name = "hub-server"
+    # a stopped Hub cuts both ways: a pooled keep-alive connection must look like a network failure
+    cut_connections = socket.SHUT_RDWR
 
     def __init__(
         self,
@@ -332,6 +325,7 @@ class HubServer:
             raise ValueError("give exactly one of folder or files")
         if repo_type not in ("dataset", "model"):
             raise ValueError(f"repo_type {repo_type!r}: only 'dataset' and 'model' are served")
+        super().__init__(port, max_lifetime_s)
         self.repo_id = repo_id
         self.kind = repo_type + "s"
         # a folder's files are read when asked for (a full-size release is hundreds of MiB)
@@ -355,61 +349,7 @@ class HubServer:
         self.fail_status: int | None = None
         #: What the server lies about (nothing by default); may be changed while it serves.
         self.lies = lies or HubLies()
-        self._stopping = threading.Event()
-        self.port = port
-        self.max_lifetime_s = max_lifetime_s
         self.requests: list[HubRequest] = []
-        self._lock = threading.Lock()
-        self._server: _Server | None = None
-        self._thread: threading.Thread | None = None
-        self._timer: threading.Timer | None = None
-        self._connections: set[socket.socket] = set()
-
-    # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> HubServer:
-        """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
-        if self._server is not None:
-            return self
-        server = _Server(("127.0.0.1", self.port), _Handler)
-        server.owner = self
-        self._stopping.clear()
-        self._server = server
-        self.port = server.server_address[1]
-        self._thread = threading.Thread(
-            target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True, name=f"hub-server-{self.port}"
-        )
-        self._thread.start()
-        self._timer = threading.Timer(self.max_lifetime_s, self.stop)
-        self._timer.daemon = True
-        self._timer.start()
-        return self
-
-    def stop(self) -> None:
-        """Stop serving: close the listening socket and every open connection (a later request
-        is refused, as on a network failure). Safe to call twice."""
-        server, self._server = self._server, None
-        self._stopping.set()
-        if self._timer is not None and self._timer is not threading.current_thread():
-            self._timer.cancel()
-        if server is None:
-            return
-        server.shutdown()
-        server.server_close()
-        # a client's pooled keep-alive connection would otherwise still be served: a stopped
-        # server must look like a network failure to every client
-        for conn in list(self._connections):
-            try:
-                conn.shutdown(socket.SHUT_RDWR)
-            except OSError:
-                pass
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5)
-
-    def __enter__(self) -> HubServer:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
 
     @property
     def url(self) -> str:

@@ -32,24 +32,22 @@ import argparse
 import base64
 import binascii
 import collections
-import contextlib
 import hashlib
 import json
 import os
 import signal
 import socket
 import stat
-import threading
 import time
 import urllib.error
 import urllib.parse
 import urllib.request
 from dataclasses import dataclass, field
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
-from povagent.exchange.disconnects import QuietDisconnects
+from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
 
 __all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
 
@@ -247,27 +245,13 @@ def _error_body(message: str, kind: str) -> dict[str, Any]:
     return {"error": {"message": message, "type": kind, "param": None, "code": None}}
 
 
-class _Server(QuietDisconnects, ThreadingHTTPServer):
-    daemon_threads = True
-    block_on_close = False
+class _Server(TrackedHTTPServer):
     # many concurrent clients in benchmarks: the default backlog of 5 refuses connections
     request_queue_size = 256
     owner: LoopbackServer
 
-    def process_request(self, request: Any, client_address: Any) -> None:
-        """Track each open connection, so :meth:`LoopbackServer.stop` can close it."""
-        with self.owner._lock:
-            self.owner._connections.add(request)
-        super().process_request(request, client_address)
 
-    def shutdown_request(self, request: Any) -> None:
-        """Forget a connection as it closes."""
-        with self.owner._lock:
-            self.owner._connections.discard(request)
-        super().shutdown_request(request)
-
-
-class LoopbackServer:
+class LoopbackServer(BackgroundServer):
     """An OpenAI-compatible ``/v1/chat/completions`` server on 127.0.0.1 in a background thread.
 
     ``reply`` answers every request not taken by the script: a fixed text, or a callable given
@@ -275,6 +259,10 @@ class LoopbackServer:
     :meth:`script` queues outcomes used first, one per request, in order. ``port=0`` picks a
     free port. The server stops itself after ``max_lifetime_s`` seconds.
     """
+
+    server_class = _Server
+    handler = _Handler
+    thread_name = "loopback-server"
 
     def __init__(
         self,
@@ -290,10 +278,9 @@ class LoopbackServer:
         image_check: Callable[[FetchedImage], str | None] | None = None,
         count_bodies: bool = False,
     ) -> None:
+        super().__init__(port, max_lifetime_s)
         self.reply = reply
-        self.port = port
         self.model = model
-        self.max_lifetime_s = max_lifetime_s
         self.record = record
         self.fetch_images = fetch_images
         self.local_media_root = Path(local_media_root).resolve() if local_media_root is not None else None
@@ -308,58 +295,6 @@ class LoopbackServer:
         self.images_fetched = 0
         self.image_failures = 0
         self._script: collections.deque[Outcome | ReplyFn] = collections.deque()
-        self._lock = threading.Lock()
-        self._stopping = threading.Event()
-        self._server: _Server | None = None
-        self._thread: threading.Thread | None = None
-        self._timer: threading.Timer | None = None
-        #: open client connections (kept alive between requests), closed by :meth:`stop`
-        self._connections: set[socket.socket] = set()
-
-    # -- lifecycle ----------------------------------------------------------------------------
-    def start(self) -> LoopbackServer:
-        """Bind 127.0.0.1 and serve in a daemon thread; returns ``self``."""
-        if self._server is not None:
-            return self
-        self._stopping.clear()
-        server = _Server(("127.0.0.1", self.port), _Handler)
-        server.owner = self
-        self._server = server
-        self.port = server.server_address[1]
-        self._thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True,
-                                        name=f"loopback-server-{self.port}")
-        self._thread.start()
-        self._timer = threading.Timer(self.max_lifetime_s, self.stop)
-        self._timer.daemon = True
-        self._timer.start()
-        return self
-
-    def stop(self) -> None:
-        """Stop serving, wake every delayed handler, close the socket. Safe to call twice."""
-        self._stopping.set()
-        server, self._server = self._server, None
-        if self._timer is not None and self._timer is not threading.current_thread():
-            self._timer.cancel()
-        if server is None:
-            return
-        server.shutdown()
-        server.server_close()
-        # as a server that goes away: kept-alive connections close too, so a client's next
-        # request opens a new connection and is refused (not answered by a lingering thread).
-        # Only the reading side is shut: an answer being written still reaches its client.
-        with self._lock:
-            connections, self._connections = list(self._connections), set()
-        for connection in connections:
-            with contextlib.suppress(OSError):
-                connection.shutdown(socket.SHUT_RD)
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5)
-
-    def __enter__(self) -> LoopbackServer:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
 
     @property
     def url(self) -> str:
