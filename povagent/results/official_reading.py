@@ -24,7 +24,8 @@ from __future__ import annotations
 import math
 from typing import Any, Callable, Iterable, Sequence
 
-from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
+from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.results.plugin_errors import parse_or_unparseable
 from povagent.results.rows import OfficialReading, Prediction, RowStatus
 
 #: The parser that reads the asked JSON answer as the official runner does.
@@ -63,10 +64,7 @@ def read_officially(
     parse answers differently from the lenient one. An unanswered official parse has no scores,
     as the runner leaves a parse error unscored. Never raises.
     """
-    try:
-        official = official_parser.parse(text, spec)
-    except Exception as exc:  # parsers must not raise; if one does, its reading is no answer
-        official = unparseable(f"parser raised {type(exc).__name__}: {exc}")
+    official = parse_or_unparseable(official_parser, text, spec)  # a raising parser: no answer
     if not official.answered:
         return OfficialReading(parser=name, parse=official)
     if parse is not None and scores_alike(official, parse):

@@ -1,0 +1,48 @@
+"""A plugin's error as row data: a parser that raises gives an unparseable answer, a scorer that
+raises gives ``{"error": ...}`` in the row's scores. Parsers and scorers must not raise; when one
+does during a run, the row records it and the run goes on (a third-party plugin's bug never ends
+a run). The runner and the official reading both go through here, so a row reads the same
+whichever wrote it. (``rescore`` lets such an error stop it instead: it rewrites a finished
+run, and keeps the previous rescore rather than write one with holes.)
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Callable
+
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
+
+if TYPE_CHECKING:
+    from povagent.dataset.instances import Instance
+    from povagent.dataset.protocol import EvaluationSet
+    from povagent.interfaces import Parser, Scorer
+
+#: Told of an exception a plugin raised (to log it with its traceback), before it becomes data.
+OnError = Callable[[BaseException], None]
+
+
+def error_text(exc: BaseException) -> str:
+    """How a row names an exception: ``ValueError: bad box``."""
+    return f"{type(exc).__name__}: {exc}"
+
+
+def parse_or_unparseable(parser: Parser, text: str, spec: AnswerSpec, on_error: OnError | None = None) -> ParsedAnswer:
+    """``parser.parse(text, spec)``; an exception is an unparseable answer saying so."""
+    try:
+        return parser.parse(text, spec)
+    except Exception as exc:  # parsers must not raise; if one does, the answer is no answer
+        if on_error is not None:
+            on_error(exc)
+        return unparseable(f"parser raised {error_text(exc)}")
+
+
+def score_or_error(
+    scorer: Scorer, instance: Instance, parse: ParsedAnswer, dataset: EvaluationSet | None, on_error: OnError | None = None
+) -> dict[str, Any]:
+    """``scorer.score(...)``; an exception is ``{"error": "<type>: <message>"}``."""
+    try:
+        return scorer.score(instance, parse, dataset)
+    except Exception as exc:  # scorers must not raise; if one does, the row says which and why
+        if on_error is not None:
+            on_error(exc)
+        return {"error": error_text(exc)}
