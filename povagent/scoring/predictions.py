@@ -30,7 +30,7 @@ import json
 import math
 import re
 from collections import defaultdict
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeGuard
@@ -43,6 +43,7 @@ from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,
+    GroundTruthInFrame,
     OfficialScore,
     point_errors,
     points_l2,
@@ -261,26 +262,12 @@ def score_official_row(
             return result(_unanswered(IMAGE_NOT_IN_LOG))
         # the selected frame is projected at the metadata's size, as officially
         camera = replace(frame.camera, width=sw, height=sh)
-    if not (_is_number(x) and _is_number(y)):
-        notes.not_number.append(ref or iid)
-        return result(_unanswered(NOT_A_NUMBER))
-    x, y = float(x), float(y)
-    if math.isnan(x) or math.isnan(y):
-        notes.nan.append(ref or iid)
-    elif math.isinf(x) or math.isinf(y):
-        notes.infinite.append(ref or iid)
-    gt = project_ground_truth(dataset.target(house.house_id, pair, direction), camera)  # type: ignore[union-attr]  # a pair was found, so its house was
-    # the signed errors are the recorded point's (a point list's first), as officially
-    l2, ex, ey = point_errors(x, y, camera.width, camera.height, gt.u, gt.v)
-    closest = None
-    points = row.get("predicted_points")
-    if points:
-        try:
-            l2, closest = points_l2([(p[0], p[1]) for p in points], camera.width, camera.height, gt.u, gt.v)
-        except (TypeError, ValueError, IndexError, ZeroDivisionError):
-            notes.not_number.append(f"{ref or iid} (predicted_points)")
-    strict = l2 if gt.in_frame else MAX_L2
-    return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
+    found = house  # a pair was found, so its house was
+
+    def ground_truth() -> GroundTruthInFrame:
+        return project_ground_truth(dataset.target(found.house_id, pair, direction), camera)  # type: ignore[union-attr]
+
+    return _score_recorded_point(row, x, y, ground_truth, camera.width, camera.height, notes, ref or iid, result)
 
 
 def score_release_row(
@@ -332,14 +319,33 @@ def score_release_row(
     except NotScorable as exc:
         notes.not_number.append(f"{ref or iid} ({exc})")
         return result(_unanswered(NOT_A_NUMBER))
+    return _score_recorded_point(row, x, y, lambda: gt, width, height, notes, ref or iid, result)
+
+
+def _score_recorded_point(
+    row: Mapping[str, Any],
+    x: Any,
+    y: Any,
+    ground_truth: Callable[[], GroundTruthInFrame],
+    width: float,
+    height: float,
+    notes: _Notes,
+    name: str,
+    result: Callable[..., ScoredPrediction],
+) -> ScoredPrediction:
+    """The tail both countings share, once the frame and its size are known: a coordinate that
+    is no number is unanswered; NaN and infinite ones are noted and scored as officially; the
+    signed errors are the recorded point's (a point list's first), the L2 a point list's
+    closest. ``ground_truth`` is asked for only when the point is a number."""
     if not (_is_number(x) and _is_number(y)):
-        notes.not_number.append(ref or iid)
+        notes.not_number.append(name)
         return result(_unanswered(NOT_A_NUMBER))
     x, y = float(x), float(y)
     if math.isnan(x) or math.isnan(y):
-        notes.nan.append(ref or iid)
+        notes.nan.append(name)
     elif math.isinf(x) or math.isinf(y):
-        notes.infinite.append(ref or iid)
+        notes.infinite.append(name)
+    gt = ground_truth()
     l2, ex, ey = point_errors(x, y, width, height, gt.u, gt.v)
     closest = None
     points = row.get("predicted_points")
@@ -347,7 +353,7 @@ def score_release_row(
         try:
             l2, closest = points_l2([(p[0], p[1]) for p in points], width, height, gt.u, gt.v)
         except (TypeError, ValueError, IndexError, KeyError, ZeroDivisionError):
-            notes.not_number.append(f"{ref or iid} (predicted_points)")
+            notes.not_number.append(f"{name} (predicted_points)")
     strict = l2 if gt.in_frame else MAX_L2
     return result(OfficialScore(True, l2, strict, gt.in_frame, gt.behind, gt.u, gt.v, "ok", ex, ey), closest)
 
