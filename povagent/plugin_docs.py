@@ -6,6 +6,7 @@ The page is hand-written prose with marked blocks that this module fills in::
     <!-- generated: interfaces -->                  the base classes of povagent/interfaces.py
     <!-- generated: fields povagent.x.y:Class -->    a field table of a dataclass or pydantic model
     <!-- generated: include ../examples/a.py -->    a file's code (path from the page's folder)
+    <!-- generated: parsers -->                     the built-in parsers: what each reads, beside ``official``
     ...whatever is here is replaced...
     <!-- end generated -->
 
@@ -15,7 +16,8 @@ is up to date (the test suite runs it). A field table's meanings are written her
 (:data:`FIELD_NOTES`): a model that gains a field without a note, or loses one that has a note,
 is an error, so the tables stay complete.
 
-Reads modules and one Markdown file; imports no plugin.
+Reads modules and Markdown files (``docs/plugins.md``, and ``docs/official.md`` for its parser
+table); imports only the built-in plugins, for the parser table.
 """
 
 from __future__ import annotations
@@ -338,6 +340,22 @@ def render_include(relative: str, page: Path) -> str:
     return f"```{language}\n{path.read_text(encoding='utf-8').rstrip()}\n```"
 
 
+def render_parsers() -> str:
+    """The built-in parsers' table: what each reads (its ``reads``) and how that compares with
+    the official reading (its ``beside_official``), the official ones first. A parser without
+    the two attributes shows its registration's description."""
+    from povagent.plugins import build_plugin_host
+    from povagent.results.official_reading import official_counterpart
+
+    entries = [e for e in build_plugin_host(strict=False).entries("parser") if e.source.startswith("built-in ")]
+    rows = sorted(((official_counterpart(e.factory()) is not None, e.name, e.factory) for e in entries), key=lambda r: (r[0], r[1]))
+    lines = ["| parser | reads | compared with `official` |", "|---|---|---|"]
+    for _, name, factory in rows:
+        reads = getattr(factory, "reads", "") or _summary(factory)
+        lines.append(f"| `{name}` | {_cell(reads)} | {_cell(getattr(factory, 'beside_official', ''))} |")
+    return "\n".join(lines)
+
+
 def render_block(what: str, page: Path) -> str:
     """The content of one ``<!-- generated: WHAT -->`` block."""
     kind, _, argument = what.strip().partition(" ")
@@ -349,7 +367,9 @@ def render_block(what: str, page: Path) -> str:
         return render_fields(argument.strip())
     if kind == "include" and argument:
         return render_include(argument.strip(), page)
-    raise PluginDocsError(f"{page}: unknown generated block {what!r}; known: hooks, interfaces, fields MODULE:CLASS, include PATH")
+    if kind == "parsers" and not argument:
+        return render_parsers()
+    raise PluginDocsError(f"{page}: unknown generated block {what!r}; known: hooks, interfaces, fields MODULE:CLASS, include PATH, parsers")
 
 
 def render_page(text: str, page: Path) -> str:

@@ -108,3 +108,18 @@ def test_rendering_twice_changes_nothing():
 def test_rest_docstrings_become_markdown():
     doc = "See :class:`~povagent.interfaces.Backend` and :func:`povagent.x.f`, ``code``::\n\n    a = 1\n\nEnd."
     assert markdown(doc) == "See `Backend` and `povagent.x.f`, `code`:\n\n```\na = 1\n```\n\nEnd."
+
+
+def test_the_parser_table_of_docs_official_is_up_to_date_with_the_registrations():
+    problem = check_page(ROOT / "docs" / "official.md")
+    assert problem is None, problem
+
+
+def test_every_built_in_parser_says_what_it_reads_and_how_it_compares_with_official():
+    from povagent.plugins import build_plugin_host
+
+    for entry in build_plugin_host().entries("parser"):
+        if entry.source.startswith("built-in "):
+            assert getattr(entry.factory, "reads", ""), entry.name
+            assert getattr(entry.factory, "beside_official", ""), entry.name
+            assert f"| `{entry.name}` | {entry.factory.reads.replace('|', chr(92) + '|')} |" in plugin_docs.render_parsers()

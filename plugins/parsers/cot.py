@@ -19,6 +19,11 @@ from povagent_plugins.parsers.json_answer import candidates, choose, judge_candi
 class CotParser(Parser):
     """Final-line JSON, falling back to the official JSON reading of the whole text."""
 
+    #: What it reads, and how that compares with the ``official`` reading (the parser tables
+    #: of the docs are generated from these).
+    reads = "`json` over the object on the last line (the CoT prompts' format), else `json` over the whole text"
+    beside_official = 'adds: the final-line answer wins even when out of range'
+
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """Parse ``text`` (see the module docstring); never raises."""
         text = text or ""

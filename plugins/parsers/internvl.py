@@ -23,6 +23,11 @@ _BOX = re.compile(rf"\[\s*({NUMBER})\s*,\s*({NUMBER})\s*,\s*({NUMBER})\s*,\s*({N
 class InternVLParser(NativeParser):
     """InternVL ``<box>`` centres on 0-1000."""
 
+    #: What it reads, and how that compares with the ``official`` reading (the parser tables
+    #: of the docs are generated from these).
+    reads = "InternVL's native format, `<box>[[x1, y1, x2, y2]]</box>` centres on 0-1000, else `json`"
+    beside_official = 'adds: a native format the official runner does not read'
+
     format_name = "InternVL box"
 
     def read(self, text: str, spec: AnswerSpec) -> NativeReading | None:

@@ -69,6 +69,11 @@ def coords_points(coords: str, spec: AnswerSpec) -> tuple[int | None, list[tuple
 class MolmoParser(NativeParser):
     """Molmo v1 percent points and Molmo2 ``coords`` (0-1000, image index from 1)."""
 
+    #: What it reads, and how that compares with the ``official`` reading (the parser tables
+    #: of the docs are generated from these).
+    reads = "Molmo's native format, `<point>`/`<points>` tags, else `json`"
+    beside_official = 'adds: a native format the official runner does not read'
+
     format_name = "Molmo point"
 
     def read(self, text: str, spec: AnswerSpec) -> NativeReading | None:

@@ -14,10 +14,11 @@ followed the prompt: the ``json`` parser reads it, and the reason says so. Never
 from __future__ import annotations
 
 import abc
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
-from povagent.answers.text import mentioned_image
+from povagent.answers.text import coerce_index, coerce_numbers, find_objects, get_key, mentioned_image
 from povagent.answers.validation import judge_points
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.json_answer import JsonAnswerParser, frame_from_text_repair
@@ -31,6 +32,31 @@ class NativeReading:
     selected_image: int | None = None
     span: str | None = None
     note: str = ""
+
+
+def read_point_objects(
+    text: str, point_key: str, box_key: str, to_pixels: Callable[[float, float], tuple[float, float]]
+) -> tuple[NativeReading, list[str]]:
+    """The JSON objects of ``text`` that hold a point (``point_key: [a, b]``) or a box
+    (``box_key: [a1, b1, a2, b2]``, read as its centre ``[a, b]``), as a reading and the spans
+    they came from. ``to_pixels(a, b)`` turns the format's pair into pixels (its order and
+    scale); a ``selected_image`` key in the same object names the frame (the last one wins)."""
+    reading = NativeReading()
+    spans: list[str] = []
+    for obj in find_objects(text):
+        _, point = get_key(obj.value, point_key)
+        _, box = get_key(obj.value, box_key)
+        pair = coerce_numbers(point, 2)
+        if pair is None and (b := coerce_numbers(box, 4)) is not None:
+            pair = [(b[0] + b[2]) / 2, (b[1] + b[3]) / 2]
+        if pair is None:
+            continue
+        reading.points.append(to_pixels(pair[0], pair[1]))
+        spans.append(obj.span)
+        present, frame = get_key(obj.value, "selected_image")
+        if present and coerce_index(frame) is not None:
+            reading.selected_image = coerce_index(frame)
+    return reading, spans
 
 
 class NativeParser(Parser):

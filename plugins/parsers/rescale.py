@@ -94,6 +94,11 @@ def convention(x: float, y: float, spec: AnswerSpec, text: str) -> tuple[str | N
 class Rescale1000Parser(Parser):
     """``json`` plus the repair of 0-1000 and 0-1 answers (see the module docstring)."""
 
+    #: What it reads, and how that compares with the ``official`` reading (the parser tables
+    #: of the docs are generated from these).
+    reads = '`json`, then a documented rule for answers on 0-1000 or in 0-1 fractions'
+    beside_official = 'adds: rescaling to pixels (status `repaired`)'
+
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """Parse ``text``, repairing the scale when the rule says so; never raises."""
         text = text or ""

@@ -78,6 +78,10 @@ class RoboPointParser(NativeParser):
     """RoboPoint ``(x, y)`` tuples; option ``mode``: ``lenient`` (default) or ``official``."""
 
     format_name = "RoboPoint tuple"
+    #: What it reads, and how that compares with the ``official`` reading (the parser tables
+    #: of the docs are generated from these).
+    reads = "tuples with signs, integers as pixels, fractions times W, centroid before clamping, `json` when there is no tuple"
+    beside_official = "adds: these variants, which `robopoint-official` does not read"
 
     def __init__(self, mode: str = "lenient") -> None:
         if mode not in MODES:
@@ -117,6 +121,12 @@ class RoboPointParser(NativeParser):
 
 class OfficialRoboPointParser(RoboPointParser):
     """The ``robopoint`` parser in its official mode (a name a model profile can give)."""
+
+    reads = (
+        "RoboPoint (Given only): every `(x, y)` of unsigned decimals, times (W-1, H-1) whatever the magnitude; "
+        "each point clamped to the frame, then the centroid (closest point kept too)"
+    )
+    beside_official = "the reference for RoboPoint (the paper profile's parser)"
 
     def __init__(self) -> None:
         super().__init__(mode="official")
