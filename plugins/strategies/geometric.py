@@ -59,6 +59,8 @@ FINAL = "final"
 TARGET_3D = "target_3d"
 #: What the final turn's text says after the answer's JSON.
 ACCOUNT_HEADER = "geometric solver (answer worked out from the answers above, not asked):"
+#: The direction taken when the answer names none: the one nearly every pair has (the paper: 97%).
+FALLBACK_DIRECTION = "front"
 #: Words a model may use for a direction (the registry's names and synonyms), mapped to its name.
 DIRECTION_WORDS = {word: spec.name for spec in DIRECTION_REGISTRY for word in spec.words}
 #: Held to the triangulated centre within this (m) when fitting the anchor's box; the height
@@ -356,8 +358,8 @@ class GeometricStrategy(Strategy):
             account.fallback("the anchor could not be read from the answer: no geometry is possible")
             return turns + [self._final(instance, None, account)]
         if direction is None:
-            direction = "front"
-            account.fallback("the direction could not be read from the answer: took 'front'")
+            direction = FALLBACK_DIRECTION
+            account.fallback(f"the direction could not be read from the answer: took '{FALLBACK_DIRECTION}'")
         account.step(f"read: anchor {anchor}, direction {direction}" + (f", observer {observer}" if observer else ""))
 
         answer = await exchange(self.surface_request(instance, anchor, direction))
