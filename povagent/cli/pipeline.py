@@ -26,7 +26,7 @@ def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> 
     success = _success_summary(summary, run_dir)
     if success is not None:  # a real-world set: success rates, as the paper reports them
         _success_table(success, title)
-    if "official" in summary.get("pipeline", {}).get("scorers", ["official"]):
+    if _scored_officially(summary):
         render_summary(summary, title=title)
     render_diagnostics(summary)  # additions, under the official table
 
@@ -48,13 +48,22 @@ def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] |
     return full
 
 
+def _scored_officially(summary: dict[str, Any]) -> bool:
+    """Did the run's scorers include ``official`` (a summary without the pipeline: yes)?"""
+    from povagent.run.summary_model import RunSummary
+
+    pipeline = RunSummary.model_validate(summary).pipeline
+    return pipeline is None or "official" in pipeline.scorers
+
+
 def _what_ran(summary: dict[str, Any], backend: str) -> str:
     """The backend and the model that answered, from ``summary.json``: ``litellm gpt-5.4 =
     openai/gpt-5.4``; a baseline is its own model (``center``)."""
     from povagent.results.rows import model_label
+    from povagent.run.summary_model import RunSummary
 
-    pipeline = summary.get("pipeline", {})
-    model = model_label(str(pipeline.get("model") or ""), pipeline.get("profile"))
+    pipeline = RunSummary.model_validate(summary).pipeline
+    model = model_label(pipeline.model, pipeline.profile) if pipeline is not None else ""
     return backend if model in ("", backend) else f"{backend} {model}"
 
 
@@ -144,7 +153,7 @@ def run_command(
         from povagent.results.official_reading import nan_warning
 
         typer.echo(f"warning: {nan_warning(result.summary['nan_coordinate_rows'])}", err=True)
-    if "official" in result.summary.get("pipeline", {}).get("scorers", ["official"]):
+    if _scored_officially(result.summary):
         from povagent.cli.official_beside import parser_reads_officially, render_official_beside
 
         render_official_beside(

@@ -61,6 +61,7 @@ from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_ins
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.summary import summarize_rows, summary_row, write_json
+from povagent.run.summary_model import RunSummary
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
@@ -118,15 +119,22 @@ class RunResult:
     #: why the run stopped before every pending key was tried (fail fast, circuit breaker)
     stopped: str | None = None
 
+    @functools.cached_property
+    def typed_summary(self) -> RunSummary:
+        """:attr:`summary` read as the :class:`RunSummary` it is (``summary.json``'s type)."""
+        return RunSummary.model_validate(self.summary)
+
     @property
     def n_failed(self) -> int:
         """Keys whose row is ``infra_error``."""
-        return int(self.summary.get("rows", {}).get(RowStatus.INFRA_ERROR.value, 0))
+        rows = self.typed_summary.rows
+        return rows.infra_error if rows is not None else 0
 
     @property
     def n_missing(self) -> int:
         """Keys with no row at all (a stopped or interrupted run)."""
-        return int(self.summary.get("rows", {}).get("missing", 0))
+        rows = self.typed_summary.rows
+        return rows.missing if rows is not None else 0
 
     @property
     def exit_code(self) -> int:
