@@ -88,7 +88,7 @@ def test_a_signal_ends_a_run_whose_litellm_import_never_finishes(tmp_path, mini_
             time.sleep(0.1)  # the run folder exists: start-up is past the dataset, waiting for the import
         time.sleep(1.0)
         proc.send_signal(which)
-        out, err = proc.communicate(timeout=15)
+        _, err = proc.communicate(timeout=15)
     finally:
         if proc.poll() is None:
             proc.kill()
