@@ -12,7 +12,7 @@ Two kinds of hooks:
 
 Implement them with ``@povagent.hookimpl``. No hook here is ``firstresult``: none chooses
 one answer among plugins. ``docs/plugins.md`` renders every hook below from this module
-(``python -m povagent.plugin_docs``), so a docstring here is the page's text.
+(``python tools/plugin_docs.py``), so a docstring here is the page's text.
 """
 
 from __future__ import annotations

@@ -10,13 +10,14 @@ The page is hand-written prose with marked blocks that this module fills in::
     ...whatever is here is replaced...
     <!-- end generated -->
 
-Run ``python -m povagent.plugin_docs`` (from the repository root) after changing a hookspec, a
+Run ``python tools/plugin_docs.py`` (from the repository root) after changing a hookspec, a
 base class, one of those models or an included example; ``--check`` only says whether the page
 is up to date (the test suite runs it). A field table's meanings are written here
 (:data:`FIELD_NOTES`): a model that gains a field without a note, or loses one that has a note,
 is an error, so the tables stay complete.
 
-Reads modules and Markdown files (``docs/plugins.md``, and ``docs/official.md`` for its parser
+A tool of the repository, not of the installed package: it lives outside ``povagent/`` so the
+runtime carries no docs generator. Reads modules and Markdown files (``docs/plugins.md``, and ``docs/official.md`` for its parser
 table); imports only the built-in plugins, for the parser table.
 """
 
@@ -40,7 +41,7 @@ from povagent import hookspecs, interfaces
 DEFAULT_PAGE = Path("docs") / "plugins.md"
 
 #: The command that regenerates the page (named in every "out of date" message).
-COMMAND = "python -m povagent.plugin_docs"
+COMMAND = "python tools/plugin_docs.py"
 
 #: The base classes shown by the ``interfaces`` block, in this order.
 INTERFACES: tuple[type, ...] = (
