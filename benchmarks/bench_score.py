@@ -36,7 +36,7 @@ SCORE = """
 import json, time
 from povagent.dataset.loader import load_dataset
 from povagent.scoring.official_release import read_release
-from povagent.scoring.predictions import score_predictions
+from povagent.results.prediction_files import score_predictions
 ds = load_dataset({dataset!r}, check_images=False)
 release = read_release({dataset!r})
 t = time.process_time()

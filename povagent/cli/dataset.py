@@ -73,7 +73,7 @@ def render_summary(summary: dict[str, Any], title: str | PathTitle = "POVBench s
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
-    from povagent.scoring.predictions import format_number
+    from povagent.cli.numbers import format_number
 
     runs = summary.get("runs") or []
     caption = f"mean of per-run means over {len(runs)} runs (the paper's aggregation); n / total summed over runs" if len(runs) > 1 else None
@@ -151,8 +151,8 @@ def score_command(
     number), the pooled mean shown beside it, labelled.
     """
     from povagent.dataset.loader import load_dataset
+    from povagent.results.prediction_files import score_predictions
     from povagent.scoring.official_release import read_release
-    from povagent.scoring.predictions import score_predictions
 
     if counting not in ("official", "povagent"):
         typer.echo(f"error: --counting must be official or povagent (got {counting!r})", err=True)

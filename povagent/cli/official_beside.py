@@ -29,7 +29,7 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
 
     from povagent.cli.console_width import fitted_table
     from povagent.cli.dataset import breakdown_slices
-    from povagent.scoring.predictions import format_number
+    from povagent.cli.numbers import format_number
 
     console = Console()
     if reads_officially:

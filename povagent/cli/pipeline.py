@@ -73,21 +73,17 @@ def _cell_title(name: str, summary: dict[str, Any], backend: str) -> str:
     return f"[bold]{name}[/]" if what == name else f"[bold]{name}[/] ({what})"
 
 
-def _rate(cell: dict[str, Any], key: str = "success_rate") -> str:
-    rate = cell.get(key)
-    return "-" if rate is None else f"{100 * rate:.1f}%"
-
-
 def _success_table(success: dict[str, Any], title: PathTitle) -> None:
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
     from povagent.cli.dataset import breakdown_slices
+    from povagent.report.sweep_table import rate
 
     rows = []
     for name, cell in breakdown_slices(success):
         answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
-        rows.append([name, _rate(cell), f"{cell['n_success']} / {cell['n_total']}", _rate(cell, "response_rate"), answered])
+        rows.append([name, rate(cell), f"{cell['n_success']} / {cell['n_total']}", rate(cell, "response_rate"), answered])
     columns = [("slice", "label")] + [(h, "number") for h in ("success rate", "hits / total", "resp. rate", "answered / total")]
     Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}\nsuccess rate (unanswered = failure)")))
 
@@ -219,29 +215,15 @@ def sweep_command(
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
+    from povagent.report.sweep_table import dry_run_table, mean_l2, rate, sweep_table
     from povagent.run.stop_signals import sigterm_as_interrupt
-    from povagent.run.sweep import dry_run as plan
     from povagent.run.sweep import expand_sweep, run_sweep
+    from povagent.run.sweep_estimate import dry_run as plan
 
     console = Console()
     if dry_run:
         sweep_cfg, cells = expand_sweep(sweep, strict=strict)
-        rows: list[list[str]] = []
-        totals = [0, 0, 0, 0, 0]
-        notes: list[str] = []
-        for c in plan(cells):
-            vals = [c.n_total, c.n_done, c.requests, c.prompt_tokens, c.max_completion_tokens]
-            totals = [a + b for a, b in zip(totals, vals)]
-            rows.append([c.name, *(f"{v:,}" for v in vals)])
-            if len(c.turns) > 1:  # a multi-turn strategy: each turn's requests and tokens under the cell
-                for t in c.turns:
-                    rows.append([f"  turn {t.turn}" + ("*" if t.note else ""), "", "", *(f"{v:,}" for v in (t.requests, t.prompt_tokens, t.max_completion_tokens))])
-                    if t.note and f"turn {t.turn}: {t.note} (counted for every key)" not in notes:
-                        notes.append(f"turn {t.turn}: {t.note} (counted for every key)")
-            if not c.turns_declared:
-                notes.append(f"{c.name}: its strategy overrides solve() without plan_turns(): only the first turn is counted")
-        rows.append(["[bold]total", *(f"[bold]{v:,}" for v in totals)])
-        columns = [("cell", "label")] + [(h, "number") for h in ("keys", "done", "requests to make", "~prompt tokens", "<= completion tokens")]
+        columns, rows, notes = dry_run_table(plan(cells))
         console.print(fitted_table(columns, rows, title=PathTitle(sweep_cfg.output, f" ({len(cells)} cells)", before=f"dry run of {sweep.name}: ")))
         for note in notes:  # a turn taken only sometimes is counted for every key: an upper bound
             console.print(f"* {note}", markup=False, highlight=False)
@@ -252,8 +234,8 @@ def sweep_command(
         if success is not None:  # a real-world set: no official error to show
             o = success["overall"]
             console.print(
-                f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: success rate {_rate(o)}, "
-                f"response rate {_rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
+                f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: success rate {rate(o)}, "
+                f"response rate {rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
                 highlight=False,
             )
             return
@@ -263,7 +245,7 @@ def sweep_command(
         official = res.summary.get("official_parse")
         beside = "" if official is None else (
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
-            f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
+            f"mean L2 {mean_l2(official['overall'])}, response rate {rate(official['overall'], 'response_rate')})"
         )
         console.print(
             f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
@@ -293,34 +275,11 @@ def sweep_command(
             err=True,
         )
     finished = [c for c in result.cells if c.name in result.results]
+    summaries = {c.name: result.results[c.name].summary for c in finished}
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in finished}
-    with_success = any(v is not None for v in successes.values())  # real-world sets
-    # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
-    with_official = any("official_parse" in result.results[c.name].summary for c in finished)
-    official_cols = ("official parse L2", "official parse resp.") if with_official else ()
-    headers = ("mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ())
-    rows = []
-    for cell in finished:
-        s = result.results[cell.name].summary
-        success = successes[cell.name]
-        if success is not None:
-            # response and answered as the success scorer judged them: the official columns
-            # of the summary count every row of a set without official GT as unanswered
-            o = success["overall"]
-            answered = "-" if o.get("n_answered") is None else f"{o['n_answered']} / {o['n_total']}"
-            rows.append([cell.name, "-", _rate(o, "response_rate"), answered, *(("-", "-") if with_official else ()), _rate(o)])
-            continue
-        o = s["overall"]
-        rows.append([
-            cell.name,
-            "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
-            "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
-            f"{o['n']} / {s['rows']['total']}",
-            *(_official_cells(s) if with_official else ()),
-            *(("-",) if with_success else ()),
-        ])  # fmt: skip
+    columns, rows = sweep_table(summaries, successes)
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
-    console.print(fitted_table([("cell", "label")] + [(h, "number") for h in headers], rows, title=title))
+    console.print(fitted_table(columns, rows, title=title))
     from povagent.cli.process_exit import allow_fast_exit
     from povagent.run.runner import EXIT_STOPPED
 
@@ -332,22 +291,6 @@ def sweep_command(
             typer.echo(f"cell {cell.name}:", err=True)
             _say_what_next(res, command)
     raise typer.Exit(max(codes, default=0))
-
-
-def _official_l2(cell: dict[str, Any]) -> str:
-    return "-" if cell.get("mean_l2") is None else f"{cell['mean_l2']:.3f}"
-
-
-def _official_cells(summary: dict[str, Any]) -> tuple[str, str]:
-    """A sweep cell's official-parse columns: its numbers, ``=`` when the cell reads officially
-    itself, ``?`` when a lenient cell recorded no official reading."""
-    from povagent.results.official_reading import OFFICIAL_PARSERS
-
-    official = summary.get("official_parse")
-    if official is not None:
-        return _official_l2(official["overall"]), _rate(official["overall"], "response_rate")
-    mark = "=" if summary.get("pipeline", {}).get("parser") in OFFICIAL_PARSERS else "?"
-    return mark, mark
 
 
 #: The heading of each kind in ``povagent plugins``.

@@ -29,13 +29,11 @@ import asyncio
 import dataclasses
 import functools
 import time
-import traceback
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
-from povagent.answers.spec import ParsedAnswer
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.dataset.instances import Instance, row_key
@@ -43,23 +41,23 @@ from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
 from povagent.engine.concurrency import AdaptiveConcurrency
 from povagent.engine.request_path import RequestPath
-from povagent.engine.retry import InfraFailure, error_type_of
+from povagent.engine.retry import error_type_of
 from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
-from povagent.exchange.messages import Request, Response
 from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
-from povagent.interfaces import Backend, Parser, Scorer, Strategy
+from povagent.interfaces import Backend
 from povagent.plugins import PluginHost, get_plugin_host
-from povagent.results.official_reading import official_counterpart, read_officially
-from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
-from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
+from povagent.results.rows import ResultRow, RowStatus, model_label
+from povagent.run.components import ComponentNames, create_components
 from povagent.run.folder_lock import folder_lock
+from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
+from povagent.run.solve_key import KeySolver
 from povagent.run.summary import summarize_rows, summary_row, write_json
 from povagent.run.summary_model import RunSummary
 
@@ -77,12 +75,6 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import"})
 
 # -- the run -------------------------------------------------------------------------------------
-def _forget_reads(reads: dict[Any, Any], paths: list[Any], _task: object) -> None:
-    """Done callback of a frame-reading task: its files are no longer being read."""
-    for p in paths:
-        reads.pop(p, None)
-
-
 @dataclass
 class RunStats:
     """What this session did (a resumed run counts only its own calls)."""
@@ -142,45 +134,6 @@ class RunResult:
         if self.stopped is not None or self.n_missing:
             return EXIT_STOPPED
         return EXIT_FAILED_KEYS if self.n_failed else EXIT_OK
-
-
-@dataclass
-class Components:
-    """The plugins a run uses, created once."""
-
-    backend: Backend
-    strategy: Strategy
-    parser: Parser
-    scorers: dict[str, Scorer]
-    #: The parser giving the official reading kept beside a lenient ``parser``'s, and its name
-    #: (``None`` when ``parser`` reads officially itself).
-    official_parser: Parser | None = None
-    official_parser_name: str | None = None
-
-
-@dataclass(frozen=True)
-class ComponentNames:
-    """The registered names of a run's backend, strategy and parser, as its rows, log and
-    summary name them."""
-
-    backend: str
-    strategy: str
-    parser: str
-
-
-def create_components(config: PipelineConfig, host: PluginHost) -> Components:
-    """Instantiate the backend, strategy, parser and scorers named in ``config``."""
-    assert config.backend is not None and config.parser is not None, "resolve_components() first"
-    parser = host.parser(config.parser.name, config.parser.options)
-    counterpart = official_counterpart(parser)
-    return Components(
-        backend=host.backend(config.backend.name, config.backend.options),
-        strategy=host.strategy(config.strategy.name, config.strategy.options),
-        parser=parser,
-        scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
-        official_parser=host.parser(counterpart) if counterpart else None,
-        official_parser_name=counterpart,
-    )
 
 
 class _LimitEvents:
@@ -254,52 +207,11 @@ class PipelineRun:
         self._digests: dict[str, ResultRow] = {}
         #: what each row written in this session spent (``session`` in summary.json)
         self._session_spent: list[UsageTotals] = []
-        self._reads: dict[Path, asyncio.Future[Any]] = {}
-        self._frames_read: dict[int, tuple[Any, ...]] = {}
-        self._frames_waits: dict[int, tuple[tuple[Any, ...], set[asyncio.Future[Any]]]] = {}
+        self._frames = FrameReader(self.images)
         self._failures_in_a_row = 0
         self._stopped: str | None = None
 
     # -- one key -------------------------------------------------------------------------------
-    def _make_ask(self, run: int, exchanges: list[ExchangeRecord], row_id: str) -> Callable[[Request], Any]:
-        path = self._path
-
-        async def ask(request: Request) -> Response:
-            if request.run != run:
-                # Offline baselines seed by run index; the cache key adds the run too.
-                request = dataclasses.replace(request, run=run)
-            response = await path.send(request, label=row_id)
-            usage = response.usage
-            # model_construct: every field is built here with the right type; validating
-            # again per request cost ~0.1 ms an instance.
-            exchanges.append(
-                ExchangeRecord.model_construct(
-                    request_hash=request.content_hash(),
-                    image_hashes=request.image_hashes(),
-                    prompt=request.as_text(),
-                    raw=response.text,
-                    latency_s=response.latency_s,
-                    prompt_tokens=usage.prompt_tokens,
-                    completion_tokens=usage.completion_tokens,
-                    cost_usd=usage.cost_usd,
-                    retries=response.retries,
-                    cached=response.cached,
-                )
-            )
-            self._log.debug(
-                "request",
-                row=row_id,
-                latency_s=round(response.latency_s, 4),
-                prompt_tokens=usage.prompt_tokens,
-                completion_tokens=usage.completion_tokens,
-                cost_usd=usage.cost_usd,
-                retries=response.retries,
-                cached=response.cached,
-            )
-            return response
-
-        return ask
-
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
         self._log.info(
             "retry",
@@ -312,131 +224,6 @@ class PipelineRun:
 
     def _log_bug(self, row_id: str, message: str, trace: str) -> None:
         self._log.error("backend_exception", row=row_id, error=message, traceback=trace)
-
-    async def _read_frames(self, instance: Instance) -> None:
-        """Read the instance's new frames into the image store in a worker thread, once each.
-
-        Strategies read images synchronously; a new house's 30 frames read on the event loop
-        would stall every request in flight. Here the frames not yet in the store are read in
-        one thread call (however many workers need them at once), and the strategy then finds
-        them in the store. A file that cannot be read is left for the strategy to meet (and
-        report) itself.
-        """
-        frames = instance.frames
-        frames_id = id(frames)
-        if self._frames_read.get(frames_id) is frames:
-            return  # A/B instances of a house share one frames tuple: checked once, not per key
-        images = self.images
-        # The other keys of a house arrive while its frames are being read: they wait for the
-        # reads the first one found, without looking at every frame again.
-        known = self._frames_waits.get(frames_id)
-        if known is not None and known[0] is frames and not all(w.done() for w in known[1]):
-            waits = known[1]
-        else:
-            reads = self._reads
-            new = [f.file for f in frames if f.file not in reads and not images.has_bytes(f.file)]
-            if new:
-                task = asyncio.ensure_future(asyncio.to_thread(_read_files, images, new))
-                for path in new:
-                    reads[path] = task
-                task.add_done_callback(functools.partial(_forget_reads, reads, new))
-            waits = {reads[f.file] for f in frames if f.file in reads}
-            if waits:
-                # Holding the tuple keeps its id from being reused while the entry lives.
-                self._frames_waits[frames_id] = (frames, waits)
-        if waits:
-            await asyncio.gather(*waits)
-            if self._frames_read.get(frames_id) is frames:
-                return  # another key of the house checked them meanwhile
-        if all(images.knows_file(f.file) for f in frames):
-            self._frames_read[frames_id] = frames
-            self._frames_waits.pop(frames_id, None)
-
-    async def _solve(self, instance: Instance, run: int) -> ResultRow:
-        """Everything for one key, ending in its row (never raises for plugin or API failures)."""
-        comps = self.components
-        iid = instance.id
-        key = row_key(iid, run)
-        started = utc_now()
-        t0 = time.perf_counter()
-        exchanges: list[ExchangeRecord] = []
-        parse: ParsedAnswer | None = None
-        scores: dict[str, dict[str, Any]] = {}
-        prediction = Prediction()
-        official_reading = None
-        error_type = error_message = None
-        failed_retries = 0  # retries of a request that never got an answer (no exchange holds them)
-        try:
-            await self._read_frames(instance)
-            turns = await comps.strategy.solve(instance, self._make_ask(run, exchanges, key), self.images)
-            request, response = turns[-1]
-            if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
-                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), prompt=request.as_text(), raw=response.text))
-            parse = self._parse(comps.parser, response.text, request, key)
-            shown = as_shown(instance, request)
-            if parse.answered:
-                status = RowStatus.ANSWERED
-                prediction = _prediction(shown, parse)
-                for name, scorer in comps.scorers.items():
-                    scores[name] = self._score(name, scorer, shown, parse, key)
-            else:
-                status = RowStatus.PARSE_ERROR
-            if comps.official_parser is not None:  # a lenient parser: keep the official reading beside
-                official_reading = read_officially(
-                    comps.official_parser, comps.official_parser_name or "", response.text, request.answer, parse, scores,
-                    lambda p: {n: self._score(n, s, shown, p, key) for n, s in comps.scorers.items()},
-                )
-        except InfraFailure as exc:
-            status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
-            failed_retries = exc.retries
-        except Exception as exc:  # a strategy bug or unreadable image must not end the run
-            status, error_type = RowStatus.INFRA_ERROR, "strategy_error"
-            error_message = self._redactor.text(f"{type(exc).__name__}: {exc}")
-            self._log.error("strategy_error", row=key, error=error_message, traceback=self._redactor.text(traceback.format_exc()))
-        spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
-        return ResultRow.model_construct(
-            key=key,
-            instance_id=iid,
-            house_id=instance.house_id,
-            pair_id=instance.pair_id,
-            direction=instance.direction.value,
-            condition=instance.condition.value,
-            run=run,
-            sentence=instance.sentence,
-            backend=self._names.backend,
-            model=self._model[0],
-            profile=self._model[1],
-            strategy=self._names.strategy,
-            parser=self._names.parser,
-            config_hash=self.config_hash,
-            status=status,
-            exchanges=exchanges,
-            parse=parse,
-            prediction=prediction,
-            scores=scores,
-            error_type=error_type,
-            error_message=error_message,
-            latency_s=time.perf_counter() - t0,
-            prompt_tokens=spent.prompt_tokens,
-            completion_tokens=spent.completion_tokens,
-            cost_usd=spent.cost_usd,
-            retries=spent.retries + failed_retries,
-            started_at=started,
-            finished_at=utc_now(),
-            official_reading=official_reading,
-        )
-
-    def _parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:
-        def logged(exc: BaseException) -> None:
-            self._log.error("parser_exception", row=key, error=error_text(exc), traceback=traceback.format_exc())
-
-        return parse_or_unparseable(parser, text, request.answer, logged)  # a raising parser: a parse error
-
-    def _score(self, name: str, scorer: Scorer, instance: Instance, parse: ParsedAnswer, key: str) -> dict[str, Any]:
-        def logged(exc: BaseException) -> None:
-            self._log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
-
-        return score_or_error(scorer, instance, parse, self.dataset, logged)
 
     def _before_rows(self) -> None:
         """Runs in the journal's thread before each batch of rows is written."""
@@ -629,9 +416,13 @@ class PipelineRun:
         workers pulling keys in order (bounded memory; a house's frames stay hot)."""
         if not pending:
             return
-        with _HouseFrames(self.images, pending) as houses:
+        solve = KeySolver(
+            self.components, self._names, self._model, self.config_hash, self._path, self.images, self.dataset,
+            self._log, self._redactor, self._frames.read,
+        ).solve  # fmt: skip
+        with HouseFrames(self.images, pending) as houses:
             first, rest = pending[0], iter(pending[1:])
-            row = await self._solve(*first)
+            row = await solve(*first)
             houses.done(first[0])
             self._journal.submit(row)
             await self._journal.drain()
@@ -639,7 +430,7 @@ class PipelineRun:
 
             async def worker() -> None:
                 for instance, run in rest:
-                    row = await self._solve(instance, run)
+                    row = await solve(instance, run)
                     houses.done(instance)
                     self._journal.submit(row)
                     self._after_row(row, first=False)
@@ -688,65 +479,6 @@ class PipelineRun:
         summary["session"] = self.stats.as_dict()
         summary["images"] = {**dataclasses.asdict(self.images.stats), "distinct": self.images.distinct}
         return summary
-
-
-class _HouseFrames:
-    """Holds each house's frame files in the image store while any of its pending keys is left,
-    and lets them go after the last one (keys come house by house: the store then keeps the
-    houses in flight, whatever the run's length)."""
-
-    def __init__(self, images: ImageStore, pending: list[tuple[Instance, int]]) -> None:
-        self._images = images
-        self._left: dict[str, int] = {}
-        self._files: dict[str, set[Path]] = {}
-        for instance, _ in pending:
-            self._left[instance.house_id] = self._left.get(instance.house_id, 0) + 1
-            self._files.setdefault(instance.house_id, set()).update(f.file for f in instance.frames)
-        for files in self._files.values():
-            images.hold_files(files)
-
-    def done(self, instance: Instance) -> None:
-        """One key of ``instance``'s house has its row."""
-        house = instance.house_id
-        left = self._left.get(house, 0) - 1
-        self._left[house] = left
-        if left == 0:
-            self._images.release_files(self._files.pop(house))
-
-    def __enter__(self) -> _HouseFrames:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        """Let go of the houses still held (a run that stopped early)."""
-        for files in self._files.values():
-            self._images.release_files(files)
-        self._files.clear()
-
-
-def _read_files(images: ImageStore, paths: list[Path]) -> None:
-    """Add image files to the store (in a worker thread); unreadable ones are skipped here."""
-    for path in paths:
-        try:
-            images.load_file(path)
-        except Exception:  # the strategy meets the same error and the row records it
-            pass
-
-
-def as_shown(instance: Instance, request: Request) -> Instance:
-    """The instance as the model saw it: a strategy that shows the first N frames (the ablation
-    scripts show 30) is scored against those N, so an answer naming a frame it never showed is
-    no frame at all (the official runner maps the index back through the frames it sent)."""
-    n = request.answer.n_frames
-    if request.answer.asks_frame and 0 < n < len(instance.frames):
-        return dataclasses.replace(instance, frames=instance.frames[:n])
-    return instance
-
-
-def _prediction(instance: Instance, parse: ParsedAnswer) -> Prediction:
-    sel = parse.selected_image
-    frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
-    image_path = frame.image_path if frame is not None else None
-    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y)
 
 
 async def run_pipeline_async(config: PipelineConfig, **kwargs: Any) -> RunResult:

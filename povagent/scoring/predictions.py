@@ -1,8 +1,9 @@
-"""Scoring prediction files against a dataset: official rows or our own results rows.
+"""Scoring predictions against a dataset: official rows or our own results rows, already read.
 
-``povagent score`` and the reports use this. Official rows (see POVBENCH.md) are read by
-:func:`povagent.results.official_format.read_official_run` and counted exactly as the official
-scorer (``evaluation/eval_results.py``) counts them:
+``povagent score`` and the reports use this; finding and reading the files is
+:mod:`povagent.results.prediction_files`' job, so this room stays pure. Official rows (see
+POVBENCH.md, read by :func:`povagent.results.official_format.read_official_run`) are counted
+exactly as the official scorer (``evaluation/eval_results.py``) counts them:
 
 - every row counts in ``n_total``; a row is answered only when it has ``predicted_x`` and
   ``predicted_y``, names a pair of the dataset, and a placement for its direction; an A/B row
@@ -32,13 +33,11 @@ import re
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any, TypeGuard
 
 from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
-from povagent.errors import PredictionsError
-from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, RawPrediction, read_official_run
+from povagent.results.official_format import OfficialRun, RawPrediction
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.official import (
     MAX_L2,
@@ -141,7 +140,7 @@ class _Notes:
         return cls([], defaultdict(list), defaultdict(list), [], [], [], [])
 
 
-def _listing(refs: list[str], limit: int = 5) -> str:
+def listing(refs: list[str], limit: int = 5) -> str:
     shown = ", ".join(refs[:limit])
     return shown + (f" and {len(refs) - limit} more" if len(refs) > limit else "")
 
@@ -151,36 +150,36 @@ def _warnings_of(notes: _Notes) -> list[str]:
     if notes.skipped:
         out.append(
             f"{len(notes.skipped)} row(s) skipped: not an object with {', '.join(REQUIRED_FIELDS)} "
-            f"(the official scorer stops at such a row): {_listing(notes.skipped)}"
+            f"(the official scorer stops at such a row): {listing(notes.skipped)}"
         )
     if notes.unknown:
         out.append(
             f"{len(notes.unknown)} row(s) name a house, pair or placement the dataset does not have; "
-            f"counted in the total as unanswered, as officially: {_listing(notes.unknown)}"
+            f"counted in the total as unanswered, as officially: {listing(notes.unknown)}"
         )
     for label, refs in notes.odd_type.items():
         how = "scored in the observer view" if label == "c" else "scored as an A/B answer in its selected frame"
         out.append(
             f"{len(refs)} row(s) with type {label!r}, not one of 'a', 'b', 'c': counted as their own "
-            f"condition {label!r} and {how}, as officially (nothing is normalised): {_listing(refs)}"
+            f"condition {label!r} and {how}, as officially (nothing is normalised): {listing(refs)}"
         )
     for label, refs in notes.odd_direction.items():
         out.append(
             f"{len(refs)} row(s) with direction {label!r}, not one of right, left, front, up: counted as their "
             f"own direction {label!r}, unanswered unless the pair has a placement of that exact name, as "
-            f"officially: {_listing(refs)}"
+            f"officially: {listing(refs)}"
         )
     if notes.infinite:
-        out.append(f"{len(notes.infinite)} row(s) with an infinite coordinate: clamped to the image edge, as officially: {_listing(notes.infinite)}")
+        out.append(f"{len(notes.infinite)} row(s) with an infinite coordinate: clamped to the image edge, as officially: {listing(notes.infinite)}")
     if notes.nan:
         out.append(
             f"{len(notes.nan)} row(s) with a NaN coordinate: scored with a NaN error, so every mean over them "
-            f"is NaN, as the official scorer records it: {_listing(notes.nan)}"
+            f"is NaN, as the official scorer records it: {listing(notes.nan)}"
         )
     if notes.not_number:
         out.append(
             f"{len(notes.not_number)} row(s) with a coordinate that is not a number: counted unanswered (the "
-            f"official scorer cannot divide it and stops): {_listing(notes.not_number)}"
+            f"official scorer cannot divide it and stops): {listing(notes.not_number)}"
         )
     return out
 
@@ -442,7 +441,7 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
     if unknown:
         warnings.append(
             f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
-            f"unanswered, as officially: {_listing(unknown)}"
+            f"unanswered, as officially: {listing(unknown)}"
         )
     return scored, warnings
 
@@ -460,124 +459,3 @@ def summary_of(scored: Iterable[ScoredPrediction]) -> dict[str, Any]:
         )
         for s in scored
     )
-
-
-def run_folder_label(name: str) -> tuple[str, str]:
-    """``(model, run)`` of an official run folder's name, as ``run_all_eval.py`` reads it:
-    ``POVBench_gemini25_0`` -> ``("gemini25", "0")``; no ``_<digits>`` suffix -> run ``"-"``."""
-    short = re.sub(r"^POVBench_", "", name)
-    m = RUN_FOLDER_NAME.match(short)
-    return (m.group(1), m.group(2)) if m else (short, "-")
-
-
-def _has_official_predictions(folder: Path) -> bool:
-    return any(p.name not in NOT_PREDICTIONS for p in folder.glob("predictions*.json"))
-
-
-def run_folders(root: Path) -> list[Path]:
-    """The run folders of a prediction root, as ``run_all_eval.py`` finds them (sorted; a folder
-    ending in ``_vs`` is skipped) plus folders holding our ``results.jsonl``."""
-    if not root.is_dir():
-        return []
-    return sorted(
-        d
-        for d in root.iterdir()
-        if d.is_dir()
-        and not d.name.endswith(SKIPPED_RUN_FOLDER_SUFFIX)
-        and (_has_official_predictions(d) or (d / "results.jsonl").exists())
-    )
-
-
-def load_predictions(path: str | Path) -> tuple[str, Any]:
-    """Read a predictions path: our ``results.jsonl`` (or a run folder) or official rows.
-
-    Returns ``("results", rows)`` or ``("official", OfficialRun)``.
-    """
-    from povagent.results.rows import read_rows
-
-    p = Path(path)
-    if p.is_dir() and (p / "results.jsonl").exists():
-        p = p / "results.jsonl"
-    if p.is_file() and p.suffix == ".jsonl" and _holds_result_rows(p):
-        rows = read_rows(p)
-        if not rows:
-            raise PredictionsError(f"{p}: no complete result rows")
-        return "results", rows
-    if not p.exists():
-        raise PredictionsError(f"{p}: predictions file or folder not found")
-    return "official", read_official_run(p)
-
-
-def _holds_result_rows(path: Path) -> bool:
-    """Whether a JSON-lines file holds our result rows (``key`` and ``status``), not official rows."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for line in fh:
-            if not line.strip():
-                continue
-            try:
-                first = json.loads(line)
-            except (json.JSONDecodeError, RecursionError):
-                return True  # let the results reader report what it can read
-            return isinstance(first, dict) and "key" in first and "status" in first
-    return True
-
-
-def _score_one(path: Path, dataset: Dataset, release: OfficialRelease | None, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
-    kind, loaded = load_predictions(path)
-    if kind == "results":
-        scored, warnings = score_result_rows(loaded, dataset)
-        return scored, warnings
-    return score_official_run(loaded, release if release is not None else dataset, run_index)
-
-
-def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelease | None = None) -> tuple[dict[str, Any], list[str]]:
-    """Score a predictions path against ``dataset``: the summary and any warnings.
-
-    ``path`` is a predictions file, an official run folder, our run folder or results file, or
-    a prediction root holding one folder per run (``<model>_<run>``, as ``run_all_eval.py``
-    reads it). Several runs give the mean of per-run means (the paper's number) with the pooled
-    numbers under ``pooled``; a root with several models gives ``{"models": {model: summary}}``.
-
-    With ``release`` (:func:`povagent.scoring.official_release.read_release` of the same
-    folder) official rows are counted exactly as the official scorer counts them; without it,
-    against the loaded ``dataset`` (povagent's own counting). Our own rows are scored against
-    ``dataset`` either way.
-    """
-    p = Path(path)
-    folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() else []
-    if not folders:
-        scored, warnings = _score_one(p, dataset, release)
-        if not scored:
-            raise PredictionsError(f"{path}: no prediction rows to score")
-        return summary_of(scored), warnings
-    by_model: dict[str, list[Path]] = defaultdict(list)
-    for folder in folders:
-        by_model[run_folder_label(folder.name)[0]].append(folder)
-    warnings = []
-    # a root holding run folders is read as run_all_eval.py reads it: folders only, so a file
-    # beside them (a config.json, a summary) is no run and is left alone
-    stray = sorted(f.name for f in p.iterdir() if f.is_file() and f.suffix == ".json")
-    if stray:
-        warnings.append(f"{len(stray)} file(s) beside the run folders ignored, as officially (a root holds one folder per run): {_listing(stray)}")
-    models: dict[str, dict[str, Any]] = {}
-    for model, runs in by_model.items():
-        scored = []
-        run_ids: dict[tuple[int, int], int] = {}
-        for k, folder in enumerate(runs):
-            s, w = _score_one(folder, dataset, release)
-            # an official run folder is one run; our run folder may hold several (its rows' run)
-            scored += [replace(x, run=run_ids.setdefault((k, x.run), len(run_ids))) for x in s]
-            warnings += [f"{folder.name}: {m}" for m in w]
-        summary = summary_of(scored)
-        summary["run_folders"] = [f.name for f in runs]
-        models[model] = summary
-    if len(models) == 1:
-        return next(iter(models.values())), warnings
-    return {"models": models}, warnings
-
-
-def format_number(v: float | None, digits: int = 3) -> str:
-    """A mean for a table: ``-`` when missing."""
-    if v is None or (isinstance(v, float) and math.isnan(v)):
-        return "-"
-    return f"{v:.{digits}f}"

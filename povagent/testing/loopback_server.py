@@ -29,30 +29,23 @@ Use it as a context manager::
 from __future__ import annotations
 
 import argparse
-import base64
-import binascii
 import collections
 import hashlib
 import json
-import os
 import signal
 import socket
-import stat
 import time
-import urllib.error
-import urllib.parse
-import urllib.request
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
+from povagent.testing.image_urls import FetchedImage, ImageFetchError, decode_data_url, download, read_file_url
 
 __all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
 
 #: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
-_LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
 
 
 @dataclass(frozen=True)
@@ -84,24 +77,6 @@ class Fault:
     delay_s: float = 0.0
     drop: bool = False
     message: str = "injected fault"
-
-
-@dataclass(frozen=True)
-class FetchedImage:
-    """One image a request carried or referred to, as the server got it.
-
-    ``scheme``: ``data``, ``file`` or ``http``; ``sha256`` and ``size`` of the bytes; ``data``
-    the bytes themselves unless the server was told not to keep them.
-    """
-
-    scheme: str
-    sha256: str
-    size: int
-    data: bytes | None = None
-
-
-class ImageFetchError(Exception):
-    """An image URL the server could not (or would not) fetch."""
 
 
 @dataclass
@@ -141,18 +116,6 @@ class RecordedRequest:
 #: What a scripted step or the reply callable may produce.
 Outcome = str | Reply | Fault
 ReplyFn = Callable[[RecordedRequest], Outcome]
-
-
-def _opened_path(fd: int, path: Path) -> Path | None:
-    """The real path of the file open as ``fd``: the kernel's answer where ``/proc`` has it
-    (Linux), else ``path`` resolved; ``None`` when neither can say."""
-    try:
-        return Path(os.readlink(f"/proc/self/fd/{fd}"))
-    except OSError:
-        try:
-            return path.resolve(strict=True)
-        except (OSError, RuntimeError):
-            return None
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -320,11 +283,11 @@ class LoopbackServer(BackgroundServer):
         scheme = url.split(":", 1)[0].lower() if ":" in url else ""
         try:
             if scheme == "data":
-                data = self._decode_data_url(url)
+                data = decode_data_url(url)
             elif scheme == "file":
-                data = self._read_file_url(url)
+                data = read_file_url(url, self.local_media_root)
             elif scheme in ("http", "https"):
-                data = self._download(url)
+                data = download(url)
                 scheme = "http"
             else:
                 raise ImageFetchError(f"unsupported image URL scheme {scheme!r}")
@@ -338,56 +301,6 @@ class LoopbackServer(BackgroundServer):
         with self._lock:
             self.images_fetched += 1
         return image
-
-    @staticmethod
-    def _decode_data_url(url: str) -> bytes:
-        header, sep, payload = url.partition(",")
-        if not sep or not header.endswith(";base64"):
-            raise ImageFetchError("data URL is not base64")
-        try:
-            return base64.b64decode(payload, validate=True)
-        except (binascii.Error, ValueError) as exc:
-            raise ImageFetchError(f"bad base64 in data URL: {exc}") from None
-
-    def _read_file_url(self, url: str) -> bytes:
-        # as vLLM: file URLs only when a local media root is allowed, and only beneath it
-        root = self.local_media_root
-        if root is None:
-            raise ImageFetchError("file:// URLs are not allowed (no local_media_root)")
-        parsed = urllib.parse.urlparse(url)
-        if parsed.netloc not in ("", "localhost"):
-            raise ImageFetchError(f"file URL names a host ({parsed.netloc})")
-        path = Path(urllib.request.url2pathname(parsed.path))
-        # open first, then ask the kernel which file was opened (symlinks resolved): one
-        # readlink instead of a component-by-component realpath walk, and no window between
-        # the check and the read; O_NONBLOCK so a FIFO planted in the folder cannot stall us
-        try:
-            fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-        except OSError as exc:
-            raise ImageFetchError(f"cannot open {path}: {exc}") from None
-        try:
-            real = _opened_path(fd, path)
-            if real is None or not real.is_relative_to(root):
-                raise ImageFetchError(f"{path} is outside the allowed local media path {root}")
-            if not stat.S_ISREG(os.fstat(fd).st_mode):
-                raise ImageFetchError(f"{path} is not a regular file")
-            with os.fdopen(os.dup(fd), "rb") as f:
-                return f.read()
-        except OSError as exc:
-            raise ImageFetchError(f"cannot read {path}: {exc}") from None
-        finally:
-            os.close(fd)
-
-    @staticmethod
-    def _download(url: str) -> bytes:
-        host = urllib.parse.urlparse(url).hostname or ""
-        if host not in _LOOPBACK_HOSTS:
-            raise ImageFetchError(f"{url}: only 127.0.0.1 is fetched from (host {host!r})")
-        try:
-            with urllib.request.urlopen(url, timeout=10) as response:  # noqa: S310 - loopback only
-                return response.read()
-        except (urllib.error.URLError, OSError) as exc:
-            raise ImageFetchError(f"cannot download {url}: {exc}") from None
 
     def _record_and_choose(self, recorded: RecordedRequest) -> Outcome:
         with self._lock:

@@ -145,7 +145,7 @@ def test_a_baseline_crossed_with_strategies_it_ignores_is_shown_once(make_sweep)
 
 def test_main_table_equals_the_mean_of_povagent_score_over_each_runs_official_export(run_dir, mini_dataset, tmp_path):
     from povagent.report.export import export_run
-    from povagent.scoring.predictions import score_predictions
+    from povagent.results.prediction_files import score_predictions
 
     a = analysis_of(run_dir, n_boot=0)
     files = export_run(run_dir, tmp_path / "p.json")

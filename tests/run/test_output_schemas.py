@@ -13,7 +13,7 @@ import yaml
 from jsonschema import Draft202012Validator
 from typer.testing import CliRunner
 
-import povagent.run.runner as runner_module
+import povagent.run.solve_key as solve_key_module
 from povagent.cli import app
 from povagent.results.rows import ExchangeRecord, ResultRow
 from povagent.run.output_schemas import OUTPUT_MODELS, output_schema_text
@@ -102,14 +102,14 @@ def test_a_summary_with_an_unknown_section_fails_its_schema(two_run_sweep):
 
 
 def _construct_keywords(model: str) -> set[str]:
-    """The keywords of the runner's ``<model>.model_construct(...)`` call."""
-    tree = ast.parse((Path(runner_module.__file__)).read_text(encoding="utf-8"))
+    """The keywords of the solve step's ``<model>.model_construct(...)`` call."""
+    tree = ast.parse((Path(solve_key_module.__file__)).read_text(encoding="utf-8"))
     calls = [
         node for node in ast.walk(tree)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "model_construct"
         and isinstance(node.func.value, ast.Name) and node.func.value.id == model
     ]  # fmt: skip
-    assert len(calls) == 1, f"expected one {model}.model_construct call in the runner"
+    assert len(calls) == 1, f"expected one {model}.model_construct call in the solve step"
     return {k.arg for k in calls[0].keywords if k.arg is not None}
 
 

@@ -26,7 +26,8 @@ from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, Results
 from povagent.run.summary import summarize_run
 from povagent.scoring.official import project_ground_truth
 from povagent.scoring.official_release import read_release
-from povagent.scoring.predictions import score_official_rows, score_predictions
+from povagent.results.prediction_files import score_predictions
+from povagent.scoring.predictions import score_official_rows
 
 runner = CliRunner()
 H0, H1 = "train_house_00000", "train_house_00001"

@@ -16,7 +16,8 @@ from povagent.cli import app
 from povagent.dataset import load_dataset
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import PlannedTurn, Strategy, declares_turns, earlier_answer, whole_answer_placeholders
-from povagent.run.sweep import dry_run, expand_sweep, run_sweep
+from povagent.run.sweep import expand_sweep, run_sweep
+from povagent.run.sweep_estimate import dry_run
 from povagent_plugins.strategies.basic import BasicStrategy
 from povagent_plugins.strategies.geometric import GeometricStrategy
 

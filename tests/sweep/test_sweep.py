@@ -9,7 +9,8 @@ import pytest
 import yaml
 
 from povagent.errors import ConfigError
-from povagent.run.sweep import dry_run, expand_sweep, run_sweep
+from povagent.run.sweep import expand_sweep, run_sweep
+from povagent.run.sweep_estimate import dry_run
 
 PER_CONDITION = 4
 

@@ -1,0 +1,54 @@
+"""The plugins a run uses, made once from its configuration, and the names its rows give them.
+
+Made through the plugin host's typed seam (:meth:`~povagent.plugins.PluginHost.backend` and the
+others), so each one is the interface's type; the runner, the sweep's dry run and the solve
+step of one key (:mod:`povagent.run.solve_key`) share them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from povagent.config.models import PipelineConfig
+from povagent.interfaces import Backend, Parser, Scorer, Strategy
+from povagent.plugins import PluginHost
+from povagent.results.official_reading import official_counterpart
+
+
+@dataclass
+class Components:
+    """The plugins a run uses, created once."""
+
+    backend: Backend
+    strategy: Strategy
+    parser: Parser
+    scorers: dict[str, Scorer]
+    #: The parser giving the official reading kept beside a lenient ``parser``'s, and its name
+    #: (``None`` when ``parser`` reads officially itself).
+    official_parser: Parser | None = None
+    official_parser_name: str | None = None
+
+
+@dataclass(frozen=True)
+class ComponentNames:
+    """The registered names of a run's backend, strategy and parser, as its rows, log and
+    summary name them."""
+
+    backend: str
+    strategy: str
+    parser: str
+
+
+def create_components(config: PipelineConfig, host: PluginHost) -> Components:
+    """Instantiate the backend, strategy, parser and scorers named in ``config``."""
+    assert config.backend is not None and config.parser is not None, "resolve_components() first"
+    parser = host.parser(config.parser.name, config.parser.options)
+    counterpart = official_counterpart(parser)
+    return Components(
+        backend=host.backend(config.backend.name, config.backend.options),
+        strategy=host.strategy(config.strategy.name, config.strategy.options),
+        parser=parser,
+        scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
+        official_parser=host.parser(counterpart) if counterpart else None,
+        official_parser_name=counterpart,
+    )

@@ -1,0 +1,193 @@
+"""The solve step of one key: ask the model through the strategy, parse, score, read officially,
+and build the key's row.
+
+:class:`KeySolver` holds what that step needs from the run (its components and their names,
+the request path, the image store, the log); :meth:`KeySolver.solve` never raises for a plugin
+or API failure: the row records it (an ``infra_error`` row, a parse error, a scorer's
+``{"error": ...}``). The run around it (planning keys, the fan-out, the journal, the summary)
+is :mod:`povagent.run.runner`'s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any, Awaitable, Callable
+
+from povagent.answers.spec import ParsedAnswer
+from povagent.dataset.instances import Instance, row_key
+from povagent.dataset.protocol import EvaluationSet
+from povagent.engine.request_path import RequestPath
+from povagent.engine.retry import InfraFailure
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import Request, Response
+from povagent.exchange.usage_totals import UsageTotals
+from povagent.interfaces import Parser, Scorer
+from povagent.results.official_reading import read_officially
+from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
+from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
+from povagent.run.components import ComponentNames, Components
+from povagent.run.logs import Redactor, RunLog
+
+
+@dataclass
+class KeySolver:
+    """What solving one key needs from its run."""
+
+    components: Components
+    names: ComponentNames
+    #: ``(model, profile)`` of the backend, as rows name them.
+    model: tuple[str, str | None]
+    config_hash: str
+    path: RequestPath
+    images: ImageStore
+    dataset: EvaluationSet | None
+    log: RunLog
+    redactor: Redactor
+    #: Reads an instance's frames into the image store before its strategy runs.
+    read_frames: Callable[[Instance], Awaitable[None]]
+
+    def make_ask(self, run: int, exchanges: list[ExchangeRecord], row_id: str) -> Callable[[Request], Any]:
+        path = self.path
+
+        async def ask(request: Request) -> Response:
+            if request.run != run:
+                # Offline baselines seed by run index; the cache key adds the run too.
+                request = dataclasses.replace(request, run=run)
+            response = await path.send(request, label=row_id)
+            usage = response.usage
+            # model_construct: every field is built here with the right type; validating
+            # again per request cost ~0.1 ms an instance.
+            exchanges.append(
+                ExchangeRecord.model_construct(
+                    request_hash=request.content_hash(),
+                    image_hashes=request.image_hashes(),
+                    prompt=request.as_text(),
+                    raw=response.text,
+                    latency_s=response.latency_s,
+                    prompt_tokens=usage.prompt_tokens,
+                    completion_tokens=usage.completion_tokens,
+                    cost_usd=usage.cost_usd,
+                    retries=response.retries,
+                    cached=response.cached,
+                )
+            )
+            self.log.debug(
+                "request",
+                row=row_id,
+                latency_s=round(response.latency_s, 4),
+                prompt_tokens=usage.prompt_tokens,
+                completion_tokens=usage.completion_tokens,
+                cost_usd=usage.cost_usd,
+                retries=response.retries,
+                cached=response.cached,
+            )
+            return response
+
+        return ask
+
+    async def solve(self, instance: Instance, run: int) -> ResultRow:
+        """Everything for one key, ending in its row (never raises for plugin or API failures)."""
+        comps = self.components
+        iid = instance.id
+        key = row_key(iid, run)
+        started = utc_now()
+        t0 = time.perf_counter()
+        exchanges: list[ExchangeRecord] = []
+        parse: ParsedAnswer | None = None
+        scores: dict[str, dict[str, Any]] = {}
+        prediction = Prediction()
+        official_reading = None
+        error_type = error_message = None
+        failed_retries = 0  # retries of a request that never got an answer (no exchange holds them)
+        try:
+            await self.read_frames(instance)
+            turns = await comps.strategy.solve(instance, self.make_ask(run, exchanges, key), self.images)
+            request, response = turns[-1]
+            if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
+                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), prompt=request.as_text(), raw=response.text))
+            parse = self.parse(comps.parser, response.text, request, key)
+            shown = as_shown(instance, request)
+            if parse.answered:
+                status = RowStatus.ANSWERED
+                prediction = prediction_of(shown, parse)
+                for name, scorer in comps.scorers.items():
+                    scores[name] = self.score(name, scorer, shown, parse, key)
+            else:
+                status = RowStatus.PARSE_ERROR
+            if comps.official_parser is not None:  # a lenient parser: keep the official reading beside
+                official_reading = read_officially(
+                    comps.official_parser, comps.official_parser_name or "", response.text, request.answer, parse, scores,
+                    lambda p: {n: self.score(n, s, shown, p, key) for n, s in comps.scorers.items()},
+                )
+        except InfraFailure as exc:
+            status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
+            failed_retries = exc.retries
+        except Exception as exc:  # a strategy bug or unreadable image must not end the run
+            status, error_type = RowStatus.INFRA_ERROR, "strategy_error"
+            error_message = self.redactor.text(f"{type(exc).__name__}: {exc}")
+            self.log.error("strategy_error", row=key, error=error_message, traceback=self.redactor.text(traceback.format_exc()))
+        spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
+        return ResultRow.model_construct(
+            key=key,
+            instance_id=iid,
+            house_id=instance.house_id,
+            pair_id=instance.pair_id,
+            direction=instance.direction.value,
+            condition=instance.condition.value,
+            run=run,
+            sentence=instance.sentence,
+            backend=self.names.backend,
+            model=self.model[0],
+            profile=self.model[1],
+            strategy=self.names.strategy,
+            parser=self.names.parser,
+            config_hash=self.config_hash,
+            status=status,
+            exchanges=exchanges,
+            parse=parse,
+            prediction=prediction,
+            scores=scores,
+            error_type=error_type,
+            error_message=error_message,
+            latency_s=time.perf_counter() - t0,
+            prompt_tokens=spent.prompt_tokens,
+            completion_tokens=spent.completion_tokens,
+            cost_usd=spent.cost_usd,
+            retries=spent.retries + failed_retries,
+            started_at=started,
+            finished_at=utc_now(),
+            official_reading=official_reading,
+        )
+
+    def parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:
+        def logged(exc: BaseException) -> None:
+            self.log.error("parser_exception", row=key, error=error_text(exc), traceback=traceback.format_exc())
+
+        return parse_or_unparseable(parser, text, request.answer, logged)  # a raising parser: a parse error
+
+    def score(self, name: str, scorer: Scorer, instance: Instance, parse: ParsedAnswer, key: str) -> dict[str, Any]:
+        def logged(exc: BaseException) -> None:
+            self.log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
+
+        return score_or_error(scorer, instance, parse, self.dataset, logged)
+
+
+def as_shown(instance: Instance, request: Request) -> Instance:
+    """The instance as the model saw it: a strategy that shows the first N frames (the ablation
+    scripts show 30) is scored against those N, so an answer naming a frame it never showed is
+    no frame at all (the official runner maps the index back through the frames it sent)."""
+    n = request.answer.n_frames
+    if request.answer.asks_frame and 0 < n < len(instance.frames):
+        return dataclasses.replace(instance, frames=instance.frames[:n])
+    return instance
+
+
+def prediction_of(instance: Instance, parse: ParsedAnswer) -> Prediction:
+    """What a row records as the prediction: the frame index, its image path (A/B) and the point."""
+    sel = parse.selected_image
+    frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
+    image_path = frame.image_path if frame is not None else None
+    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y)

@@ -1,0 +1,30 @@
+"""The sweep command's tables as rows: the dry run's and the finished cells'."""
+
+from __future__ import annotations
+
+from povagent.report.sweep_table import dry_run_table, official_cells, sweep_table
+from povagent.run.sweep_estimate import DryRunCell, TurnCount
+
+CELL = {"n": 3, "n_total": 4, "mean_l2": 0.25, "response_rate": 0.75}
+
+
+def test_a_multi_turn_cell_lists_each_turn_under_it_and_the_total_sums_the_cells():
+    two_turns = DryRunCell("a", 4, 1, 6, 600, 512, [TurnCount(1, 3, 400, 256), TurnCount(2, 3, 200, 256, note="taken only sometimes")])
+    one_turn = DryRunCell("b", 4, 0, 4, 100, 256)
+    columns, rows, notes = dry_run_table([two_turns, one_turn])
+    assert [r[0] for r in rows] == ["a", "  turn 1", "  turn 2*", "b", "[bold]total"]
+    assert rows[-1][1:] == ["[bold]8", "[bold]1", "[bold]10", "[bold]700", "[bold]768"]
+    assert notes == ["turn 2: taken only sometimes (counted for every key)"]
+    assert len(columns) == len(rows[0])
+
+
+def test_official_parse_columns_appear_once_any_cell_was_parsed_leniently():
+    lenient = {"overall": CELL, "rows": {"total": 4}, "official_parse": {"overall": {"mean_l2": 0.5, "response_rate": 0.5}}}
+    official = {"overall": CELL, "rows": {"total": 4}, "pipeline": {"parser": "official"}}
+    columns, rows = sweep_table({"lenient": lenient, "official": official}, {"lenient": None, "official": None})
+    assert [c[0] for c in columns] == ["cell", "mean L2", "resp. rate", "answered / total", "official parse L2", "official parse resp."]
+    assert rows == [["lenient", "0.250", "75.0%", "3 / 4", "0.500", "50.0%"], ["official", "0.250", "75.0%", "3 / 4", "=", "="]]
+
+
+def test_a_lenient_cell_without_an_official_reading_is_marked_unknown():
+    assert official_cells({"pipeline": {"parser": "json"}}) == ("?", "?")
