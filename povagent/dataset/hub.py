@@ -202,7 +202,8 @@ def download_release(
     """
     from huggingface_hub import constants
 
-    from povagent.dataset.hub_transfer import Budget, DeadlinePassed, MetadataUnavailable, fetch_snapshot, with_deadline
+    from povagent.dataset.hub_budget import Budget, DeadlinePassed, with_deadline
+    from povagent.dataset.hub_transfer import MetadataUnavailable, fetch_snapshot
 
     asked = revision or constants.DEFAULT_REVISION
     check_repo_id(repo_id)

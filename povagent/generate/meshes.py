@@ -13,118 +13,37 @@ decoration (the towel on a holder) belong to no object in the instance mask.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-import trimesh.creation
 
 from povagent.generate.floorplan import WALL_HEIGHT, FloorPlan
 from povagent.generate.furnishing import DOOR_FRAME_TRIM
+from povagent.generate.mesh_parts import (
+    CEILING,
+    EMISSIVE,
+    FABRIC,
+    FLOOR_TILE,
+    FLOOR_WOOD,
+    GLOSS,
+    METAL,
+    PLAIN,
+    WALL,
+    WOOD,
+    MeshParts,
+    Parts,
+    box_mesh,
+    rgb,
+)
 from povagent.generate.scene import House, PlacedObject
 
-# Materials the renderer knows how to shade.
-PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING = range(10)
-
-def _rgb(hex_color: str) -> tuple[float, float, float]:
-    h = hex_color.lstrip("#")
-    return (int(h[0:2], 16) / 255.0, int(h[2:4], 16) / 255.0, int(h[4:6], 16) / 255.0)
-
-
-@dataclass
-class MeshParts:
-    """Triangles with a colour, a material, an owner and a room per face."""
-
-    vertices: list[np.ndarray] = field(default_factory=list)
-    faces: list[np.ndarray] = field(default_factory=list)
-    colors: list[np.ndarray] = field(default_factory=list)
-    materials: list[np.ndarray] = field(default_factory=list)
-    owners: list[np.ndarray] = field(default_factory=list)
-    rooms: list[np.ndarray] = field(default_factory=list)
-    count: int = 0
-
-    def add(self, vertices: np.ndarray, faces: np.ndarray, color, material: int, owner: int, room: int) -> None:
-        """Append a triangle set; ``owner`` is the instance id (0: structure or decoration),
-        ``room`` the room whose light falls on it."""
-        self.vertices.append(np.asarray(vertices, dtype=float))
-        self.faces.append(np.asarray(faces, dtype=np.int64) + self.count)
-        n = len(faces)
-        self.colors.append(np.tile(np.asarray(color, dtype=np.float32), (n, 1)))
-        self.materials.append(np.full(n, material, dtype=np.int8))
-        self.owners.append(np.full(n, owner, dtype=np.int32))
-        self.rooms.append(np.full(n, room, dtype=np.int32))
-        self.count += len(vertices)
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(vertices, faces, face colours, materials, owners, rooms) as flat arrays."""
-        return (
-            np.concatenate(self.vertices),
-            np.concatenate(self.faces),
-            np.concatenate(self.colors),
-            np.concatenate(self.materials),
-            np.concatenate(self.owners),
-            np.concatenate(self.rooms),
-        )
-
-
-def box_mesh(lo, hi) -> tuple[np.ndarray, np.ndarray]:
-    """The axis-aligned box [lo, hi]: 8 vertices and 12 outward-facing triangles."""
-    box = trimesh.creation.box(bounds=np.array([lo, hi], dtype=float))
-    return np.asarray(box.vertices), np.asarray(box.faces)
-
-
-def _cylinder(center, radius_a: float, radius_b: float, y0: float, y1: float, axis: str = "y", sections: int = 14):
-    """A closed prism approximating a cylinder (elliptic when the radii differ), its axis along
-    y (from ``y0`` to ``y1``) or, with ``axis="z"``, along z (``y0``/``y1`` are then z extents)."""
-    prism = trimesh.creation.cylinder(radius=1.0, height=y1 - y0, sections=sections)
-    verts = np.asarray(prism.vertices) * (radius_a, radius_b, 1.0)  # trimesh's axis is z
-    verts[:, 2] += (y0 + y1) / 2.0
-    faces = np.asarray(prism.faces)
-    if axis == "y":
-        # our y is trimesh's z: swapping two axes mirrors the mesh, so the faces turn to stay outward
-        verts, faces = verts[:, [0, 2, 1]], faces[:, ::-1]
-    return verts + np.asarray(center, dtype=float), faces
-
-
-def _blob(center, radii, subdivisions: int = 1):
-    """A squashed icosphere (foliage, cushions seen from far)."""
-    sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    return np.asarray(sphere.vertices) * np.asarray(radii) + np.asarray(center), np.asarray(sphere.faces)
-
-
-class Parts:
-    """Collects one object's parts in its local frame."""
-
-    def __init__(self) -> None:
-        self.items: list[tuple[np.ndarray, np.ndarray, tuple, int, bool]] = []
-
-    def box(self, x0, y0, z0, x1, y1, z1, color, material=PLAIN, decor=False) -> None:
-        """An axis-aligned box part."""
-        self.items.append((*box_mesh((x0, y0, z0), (x1, y1, z1)), color, material, decor))
-
-    def cyl(self, x, z, r, y0, y1, color, material=PLAIN, rb=None, sections=14) -> None:
-        """A vertical cylinder part centred at (x, z)."""
-        v, f = _cylinder((x, 0, z), r, r if rb is None else rb, y0, y1, "y", sections)
-        self.items.append((v, f, color, material, False))
-
-    def disc_z(self, x, y, r, z0, z1, color, material=PLAIN) -> None:
-        """A cylinder whose axis runs front to back (round doors, dials)."""
-        v, f = _cylinder((x, y, 0), r, r, z0, z1, "z", 16)
-        self.items.append((v, f, color, material, False))
-
-    def blob(self, center, radii, color, material=FABRIC) -> None:
-        """A squashed sphere part."""
-        v, f = _blob(center, radii)
-        self.items.append((v, f, color, material, False))
-
-
 # -- palettes -----------------------------------------------------------------------------------
-WOODS = [_rgb(c) for c in ("#8b5a2b", "#a0703c", "#6b4423", "#c49a6c", "#3e2a1c", "#d2b48c")]
-FABRICS = [_rgb(c) for c in ("#7a8791", "#3b4d6b", "#b8a88a", "#5f7a55", "#8a3b3b", "#4a4a4a", "#c7b9a5", "#2f5d62")]
-BEDDING = [_rgb(c) for c in ("#e8e4da", "#9db4c8", "#d9b8a0", "#b5c7a3", "#c9c0d8", "#f0e6c8")]
-WHITE, OFFWHITE, BLACK = _rgb("#f2f2f0"), _rgb("#e6e1d6"), _rgb("#1b1b1d")
-STEEL, DARK_STEEL, GLASS = _rgb("#b8bcc0"), _rgb("#54585c"), _rgb("#18222c")
-LAMP_LIGHT = _rgb("#fff1c8")
+WOODS = [rgb(c) for c in ("#8b5a2b", "#a0703c", "#6b4423", "#c49a6c", "#3e2a1c", "#d2b48c")]
+FABRICS = [rgb(c) for c in ("#7a8791", "#3b4d6b", "#b8a88a", "#5f7a55", "#8a3b3b", "#4a4a4a", "#c7b9a5", "#2f5d62")]
+BEDDING = [rgb(c) for c in ("#e8e4da", "#9db4c8", "#d9b8a0", "#b5c7a3", "#c9c0d8", "#f0e6c8")]
+WHITE, OFFWHITE, BLACK = rgb("#f2f2f0"), rgb("#e6e1d6"), rgb("#1b1b1d")
+STEEL, DARK_STEEL, GLASS = rgb("#b8bcc0"), rgb("#54585c"), rgb("#18222c")
+LAMP_LIGHT = rgb("#fff1c8")
 
 
 def _pick(rng: np.random.Generator, palette):
@@ -222,9 +141,9 @@ def _dining_table(P, w, h, d, rng, obj):
 
 
 def _cabinet(P, w, h, d, rng, obj, rows: int, body=None, cols: int = 1, top=None):
-    body = body or _pick(rng, WOODS + [WHITE, OFFWHITE, _rgb("#5d6d7e")])
+    body = body or _pick(rng, WOODS + [WHITE, OFFWHITE, rgb("#5d6d7e")])
     front = tuple(min(1.0, c * 1.08) for c in body)
-    knob = _pick(rng, [STEEL, BLACK, _rgb("#b08d57")])
+    knob = _pick(rng, [STEEL, BLACK, rgb("#b08d57")])
     P.box(-w / 2 + 0.01, 0.0, -d / 2, w / 2 - 0.01, h - 0.03, d / 2 - 0.02, tuple(c * 0.8 for c in body), WOOD)
     P.box(-w / 2, h - 0.03, -d / 2, w / 2, h, d / 2, top or body, WOOD)
     rh = (h - 0.1) / rows
@@ -286,8 +205,8 @@ def _shelving(P, w, h, d, rng, obj):
 
 
 def _counter(P, w, h, d, rng, obj):
-    body = _pick(rng, [WHITE, OFFWHITE, _rgb("#5d6d7e"), _rgb("#7a5c3e"), _rgb("#3f5e4a")])
-    stone = _pick(rng, [_rgb("#d9d6cf"), _rgb("#2b2b2b"), _rgb("#bfb5a3"), _rgb("#eeeeea")])
+    body = _pick(rng, [WHITE, OFFWHITE, rgb("#5d6d7e"), rgb("#7a5c3e"), rgb("#3f5e4a")])
+    stone = _pick(rng, [rgb("#d9d6cf"), rgb("#2b2b2b"), rgb("#bfb5a3"), rgb("#eeeeea")])
     P.box(-w / 2, 0, -d / 2, w / 2, 0.1, d / 2 - 0.08, BLACK, PLAIN)
     P.box(-w / 2, 0.1, -d / 2, w / 2, h - 0.04, d / 2 - 0.04, tuple(c * 0.8 for c in body), WOOD)
     P.box(-w / 2, h - 0.04, -d / 2, w / 2, h, d / 2, stone, FABRIC)
@@ -304,21 +223,21 @@ def _sink(P, w, h, d, rng, obj):
     if h < 0.5:  # a kitchen sink set into the counter: only its rim and basin show
         P.box(-w / 2, h - 0.05, -d / 2, w / 2, h - 0.02, d / 2, STEEL, METAL)
         P.box(-w / 2 + 0.05, h - 0.02, -d / 2 + 0.05, w / 2 - 0.05, h - 0.015, d / 2 - 0.05, DARK_STEEL, METAL)
-        P.box(-w / 2 + 0.06, h - 0.015, -d / 2 + 0.06, w / 2 - 0.06, h - 0.012, d / 2 - 0.06, _rgb("#3a3d40"), METAL)
+        P.box(-w / 2 + 0.06, h - 0.015, -d / 2 + 0.06, w / 2 - 0.06, h - 0.012, d / 2 - 0.06, rgb("#3a3d40"), METAL)
         return
-    body = _pick(rng, [WHITE, _rgb("#6b4f3a"), _rgb("#5d6d7e"), OFFWHITE])
+    body = _pick(rng, [WHITE, rgb("#6b4f3a"), rgb("#5d6d7e"), OFFWHITE])
     top = 0.85
     P.box(-w / 2 + 0.02, 0.08, -d / 2, w / 2 - 0.02, top - 0.06, d / 2 - 0.02, body, WOOD)
     P.box(-w / 2 + 0.02, 0, -d / 2, w / 2 - 0.02, 0.08, d / 2 - 0.06, BLACK, PLAIN)
     for x0 in (-w / 2 + 0.03, 0.005):
         P.box(x0, 0.1, d / 2 - 0.02, x0 + w / 2 - 0.035, top - 0.08, d / 2 - 0.005, tuple(min(1, c * 1.08) for c in body), WOOD)
     P.box(-w / 2, top - 0.06, -d / 2, w / 2, top, d / 2, WHITE, GLOSS)
-    P.box(-w / 2 + 0.08, top, -d / 2 + 0.12, w / 2 - 0.08, top + 0.004, d / 2 - 0.08, _rgb("#c8ccd0"), GLOSS)
+    P.box(-w / 2 + 0.08, top, -d / 2 + 0.12, w / 2 - 0.08, top + 0.004, d / 2 - 0.08, rgb("#c8ccd0"), GLOSS)
     P.box(-w / 2, top, -d / 2, w / 2, h, -d / 2 + 0.03, WHITE, GLOSS)
 
 
 def _faucet(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, _rgb("#d4d7da"), BLACK])
+    col = _pick(rng, [STEEL, rgb("#d4d7da"), BLACK])
     r = min(w, d) * 0.18
     P.cyl(0, -d / 2 + r + 0.01, r * 1.4, 0, 0.02, col, METAL)
     P.cyl(0, -d / 2 + r + 0.01, r, 0, h, col, METAL)
@@ -327,7 +246,7 @@ def _faucet(P, w, h, d, rng, obj):
 
 
 def _fridge(P, w, h, d, rng, obj):
-    col = _pick(rng, [WHITE, STEEL, _rgb("#2e2e30"), _rgb("#d8d2c4")])
+    col = _pick(rng, [WHITE, STEEL, rgb("#2e2e30"), rgb("#d8d2c4")])
     P.box(-w / 2, 0.03, -d / 2, w / 2, h, d / 2 - 0.04, col, METAL)
     P.box(-w / 2 + 0.05, 0, -d / 2, w / 2 - 0.05, 0.03, d / 2 - 0.08, BLACK, PLAIN)
     split = h * 0.66
@@ -350,7 +269,7 @@ def _microwave(P, w, h, d, rng, obj):
 
 
 def _toaster(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, _rgb("#c0392b"), WHITE, BLACK, _rgb("#e8d8b0")])
+    col = _pick(rng, [STEEL, rgb("#c0392b"), WHITE, BLACK, rgb("#e8d8b0")])
     P.box(-w / 2, 0.01, -d / 2, w / 2, h - 0.006, d / 2, col, METAL)
     for x in (-w / 4 - 0.015, w / 4 - 0.015):
         P.box(x, h - 0.006, -d / 2 + 0.05, x + 0.03, h, d / 2 - 0.05, BLACK, PLAIN)
@@ -359,7 +278,7 @@ def _toaster(P, w, h, d, rng, obj):
 
 
 def _coffee_machine(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, _rgb("#8b1e1e"), WHITE])
+    col = _pick(rng, [BLACK, STEEL, rgb("#8b1e1e"), WHITE])
     P.box(-w / 2, 0, -d / 2, w / 2, 0.05, d / 2, col, METAL)
     P.box(-w / 2, 0.05, -d / 2, w / 2, h, -d / 2 + d * 0.45, col, METAL)
     P.box(-w / 2, h - 0.1, -d / 2 + d * 0.45, w / 2, h, d / 2, col, METAL)
@@ -383,17 +302,17 @@ def _desktop(P, w, h, d, rng, obj):
     P.box(-mw * 0.2, 0, -d / 2, mw * 0.2, 0.02, -d / 2 + 0.12, BLACK, METAL)
     P.box(-0.025, 0.02, -d / 2 + 0.04, 0.025, 0.14, -d / 2 + 0.07, BLACK, METAL)
     P.box(-mw / 2, 0.12, -d / 2 + 0.07, mw / 2, h, -d / 2 + 0.1, BLACK, METAL)
-    P.box(-mw / 2 + 0.015, 0.135, -d / 2 + 0.1, mw / 2 - 0.015, h - 0.015, -d / 2 + 0.105, _rgb("#24425e"), GLOSS)
+    P.box(-mw / 2 + 0.015, 0.135, -d / 2 + 0.1, mw / 2 - 0.015, h - 0.015, -d / 2 + 0.105, rgb("#24425e"), GLOSS)
     P.box(-w / 2, 0, d / 2 - 0.12, w * 0.1, 0.02, d / 2 - 0.01, DARK_STEEL, PLAIN)
     P.box(w * 0.2, 0, d / 2 - 0.1, w * 0.3, 0.02, d / 2 - 0.03, DARK_STEEL, PLAIN)
 
 
 def _lamp_shade(P, r, y0, y1, rng):
-    P.cyl(0, 0, r, y0, y1, _pick(rng, [LAMP_LIGHT, _rgb("#f6e7d2"), _rgb("#fbf5e6")]), EMISSIVE, sections=16)
+    P.cyl(0, 0, r, y0, y1, _pick(rng, [LAMP_LIGHT, rgb("#f6e7d2"), rgb("#fbf5e6")]), EMISSIVE, sections=16)
 
 
 def _desk_lamp(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, _rgb("#b08d57"), WHITE])
+    col = _pick(rng, [BLACK, STEEL, rgb("#b08d57"), WHITE])
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.55, 0, 0.03, col, METAL)
     P.cyl(0, 0, 0.012, 0.03, h * 0.6, col, METAL)
@@ -401,7 +320,7 @@ def _desk_lamp(P, w, h, d, rng, obj):
 
 
 def _floor_lamp(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, _rgb("#b08d57")])
+    col = _pick(rng, [BLACK, STEEL, rgb("#b08d57")])
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.6, 0, 0.03, col, METAL)
     P.cyl(0, 0, 0.015, 0.03, h - 0.3, col, METAL)
@@ -409,25 +328,25 @@ def _floor_lamp(P, w, h, d, rng, obj):
 
 
 def _garbage_can(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, BLACK, WHITE, _rgb("#4d7c4a"), _rgb("#7a8791")])
+    col = _pick(rng, [STEEL, BLACK, WHITE, rgb("#4d7c4a"), rgb("#7a8791")])
     P.cyl(0, 0, w / 2 * 0.92, 0, h - 0.03, col, METAL, rb=d / 2 * 0.92)
     P.cyl(0, 0, w / 2, h - 0.03, h, tuple(c * 0.7 for c in col), METAL, rb=d / 2)
 
 
 def _house_plant(P, w, h, d, rng, obj):
-    pot = _pick(rng, [_rgb("#b5651d"), WHITE, _rgb("#3d3d3d"), _rgb("#9c8b76")])
-    green = _pick(rng, [_rgb("#3f7d3a"), _rgb("#2e6b30"), _rgb("#5a8f3e"), _rgb("#4b7f52")])
+    pot = _pick(rng, [rgb("#b5651d"), WHITE, rgb("#3d3d3d"), rgb("#9c8b76")])
+    green = _pick(rng, [rgb("#3f7d3a"), rgb("#2e6b30"), rgb("#5a8f3e"), rgb("#4b7f52")])
     ph = h * 0.35
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.55, 0, ph, pot, PLAIN)
-    P.cyl(0, 0, r * 0.5, ph - 0.02, ph, _rgb("#3b2a1d"), PLAIN)
+    P.cyl(0, 0, r * 0.5, ph - 0.02, ph, rgb("#3b2a1d"), PLAIN)
     fh = h - ph
     P.blob((0, ph + fh * 0.5, 0), (r, fh / 2, r), green, FABRIC)
     P.blob((r * 0.3, ph + fh * 0.62, -r * 0.2), (r * 0.62, fh * 0.38, r * 0.62), tuple(min(1, c * 1.2) for c in green), FABRIC)
 
 
 def _safe(P, w, h, d, rng, obj):
-    col = _pick(rng, [_rgb("#3a3f44"), _rgb("#2b2b2b"), _rgb("#6b6e70")])
+    col = _pick(rng, [rgb("#3a3f44"), rgb("#2b2b2b"), rgb("#6b6e70")])
     P.box(-w / 2, 0, -d / 2, w / 2, h, d / 2 - 0.02, col, METAL)
     P.box(-w / 2 + 0.03, 0.03, d / 2 - 0.02, w / 2 - 0.03, h - 0.03, d / 2 - 0.01, tuple(c * 1.2 for c in col), METAL)
     P.disc_z(0, h / 2, min(w, h) * 0.12, d / 2 - 0.01, d / 2, STEEL, METAL)
@@ -442,7 +361,7 @@ def _toilet(P, w, h, d, rng, obj):
 
 
 def _towel(P, w, rng, drop: float):
-    towel = _pick(rng, BEDDING + [_rgb("#7fb3d5"), _rgb("#f5b7b1")])
+    towel = _pick(rng, BEDDING + [rgb("#7fb3d5"), rgb("#f5b7b1")])
     P.box(-w / 2 + 0.05, -drop, 0.0, w / 2 - 0.05, 0.0, 0.03, towel, FABRIC, decor=True)
 
 
@@ -464,10 +383,10 @@ def _hand_towel_holder(P, w, h, d, rng, obj):
 
 
 def _washer(P, w, h, d, rng, obj, door=GLASS):
-    col = _pick(rng, [WHITE, OFFWHITE, _rgb("#cfd3d6")])
+    col = _pick(rng, [WHITE, OFFWHITE, rgb("#cfd3d6")])
     P.box(-w / 2, 0.02, -d / 2, w / 2, h, d / 2 - 0.01, col, METAL)
     P.box(-w / 2 + 0.04, 0, -d / 2 + 0.04, w / 2 - 0.04, 0.02, d / 2 - 0.05, BLACK, PLAIN)
-    P.box(-w / 2 + 0.02, h - 0.15, d / 2 - 0.01, w / 2 - 0.02, h - 0.02, d / 2, _rgb("#d5d8dc"), METAL)
+    P.box(-w / 2 + 0.02, h - 0.15, d / 2 - 0.01, w / 2 - 0.02, h - 0.02, d / 2, rgb("#d5d8dc"), METAL)
     P.box(w / 2 - 0.15, h - 0.12, d / 2 - 0.005, w / 2 - 0.06, h - 0.05, d / 2 + 0.0, DARK_STEEL, METAL)
     r = min(w, h) * 0.3
     P.disc_z(0, (h - 0.15) * 0.52, r, d / 2 - 0.01, d / 2, DARK_STEEL, METAL)
@@ -475,19 +394,19 @@ def _washer(P, w, h, d, rng, obj, door=GLASS):
 
 
 def _dryer(P, w, h, d, rng, obj):
-    _washer(P, w, h, d, rng, obj, door=_rgb("#5b6770"))
+    _washer(P, w, h, d, rng, obj, door=rgb("#5b6770"))
 
 
 def _doorway(P, w, h, d, rng, obj):
     # the jambs and the head reach JAMB_OVERLAP into the opening: flush with the wall's cut
     # faces they would z-fight with them (a speckled frame) and let the baseboard ends poke out
     trim = DOOR_FRAME_TRIM + JAMB_OVERLAP
-    col = _pick(rng, [WHITE, OFFWHITE, _rgb("#7a5230")]) if "entrance" not in obj.flags else _rgb("#f4f1ea")
+    col = _pick(rng, [WHITE, OFFWHITE, rgb("#7a5230")]) if "entrance" not in obj.flags else rgb("#f4f1ea")
     P.box(-w / 2, 0, -d / 2, -w / 2 + trim, h, d / 2, col, WOOD)
     P.box(w / 2 - trim, 0, -d / 2, w / 2, h, d / 2, col, WOOD)
     P.box(-w / 2 + trim, h - trim, -d / 2, w / 2 - trim, h, d / 2, col, WOOD)
     if "entrance" in obj.flags:
-        door = _pick(rng, WOODS[:3] + [_rgb("#2c3e50"), _rgb("#7b241c")])
+        door = _pick(rng, WOODS[:3] + [rgb("#2c3e50"), rgb("#7b241c")])
         P.box(-w / 2 + trim, 0, -0.02, w / 2 - trim, h - trim, 0.02, door, WOOD)
         for z in (0.02, -0.045):
             P.box(w / 2 - trim - 0.12, 1.0, z, w / 2 - trim - 0.08, 1.05, z + 0.025, STEEL, METAL)
@@ -525,9 +444,9 @@ def add_object(mesh: MeshParts, obj: PlacedObject, instance: int) -> None:
 
 
 # -- structure ----------------------------------------------------------------------------------
-WALL_PAINTS = [_rgb(c) for c in ("#e9e4d8", "#d6dde3", "#e8dcc8", "#cfd8c7", "#e3d3d3", "#f0ede5", "#c9d3dc", "#ddd5c2")]
-FLOOR_WOODS = [_rgb(c) for c in ("#a57a52", "#8d6241", "#c19a6b", "#7b5a3c", "#b08968")]
-FLOOR_TILES = [_rgb(c) for c in ("#d8d4cc", "#bfc5c9", "#e6e0d4", "#9ea7ad", "#cfc6b8")]
+WALL_PAINTS = [rgb(c) for c in ("#e9e4d8", "#d6dde3", "#e8dcc8", "#cfd8c7", "#e3d3d3", "#f0ede5", "#c9d3dc", "#ddd5c2")]
+FLOOR_WOODS = [rgb(c) for c in ("#a57a52", "#8d6241", "#c19a6b", "#7b5a3c", "#b08968")]
+FLOOR_TILES = [rgb(c) for c in ("#d8d4cc", "#bfc5c9", "#e6e0d4", "#9ea7ad", "#cfc6b8")]
 
 
 def add_structure(mesh: MeshParts, plan: FloorPlan, rng: np.random.Generator) -> dict[int, tuple]:

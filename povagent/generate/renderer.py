@@ -41,7 +41,7 @@ except ImportError as _exc:  # embreex ships wheels for x86-64 only
     ) from _exc
 
 from povagent.generate.floorplan import WALL_HEIGHT
-from povagent.generate.meshes import (
+from povagent.generate.mesh_parts import (
     CEILING,
     EMISSIVE,
     FABRIC,
