@@ -29,6 +29,7 @@ from povagent.geometry.ground_truth import (
     PlacementCase,
     boundary_point,
     direction_vectors,
+    stands_on_anchor,
     surface_height,
     target_point,
 )
@@ -193,3 +194,18 @@ def test_a_placement_case_applies_the_rules_only_for_exactly_appropriate(verdict
     c = PlacementCase("left", TABLE, "DiningTable", tuple(ANCHOR), (3.0, 0.35, 0.5), tuple(OBSERVER), verdict, "on the floor", tuple(RAW))
     assert c.rules_apply is applies
     assert np.array_equal(c.target(), gt("left", "on the floor", verdict=verdict))
+
+
+def test_an_on_top_direction_always_stands_on_the_anchor():
+    # whatever the anchor and the surface said: the registry's "up" is on the anchor's top
+    assert stands_on_anchor("up", "Fridge", None) is True
+
+
+def test_a_direction_outside_the_registry_never_stands_on_the_anchor():
+    assert stands_on_anchor("diagonal", "Bed", "on the bed") is False
+
+
+def test_a_lateral_target_stands_on_a_flat_topped_anchor_the_surface_names():
+    assert stands_on_anchor("left", "Bed", "on the bed") is True
+    assert stands_on_anchor("front", "Bed", "on the bed") is False
+    assert stands_on_anchor("left", "Sofa", "on the sofa") is False
