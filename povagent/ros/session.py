@@ -82,6 +82,11 @@ class GroundingSession:
         self._max_pending = max_pending
         self._lock = threading.RLock()
 
+    @property
+    def calibrated(self) -> bool:
+        """Whether a usable ``CameraInfo`` has arrived (images before it are skipped and counted)."""
+        return self._intrinsics is not None
+
     # -- messages ---------------------------------------------------------------------------
     def problem(self, kind: str, message: str) -> None:
         """Count a malformed message of ``kind`` and report it (``first`` the first time)."""
@@ -248,4 +253,15 @@ class GroundingSession:
         )
 
 
-__all__ = ["DEFAULT_MAX_PENDING", "GroundingSession", "Locate", "ProblemSink"]
+def agent_locate(agent: Any) -> Locate:
+    """The :data:`Locate` of a :class:`~povagent.agent.grounding_agent.GroundingAgent`: the
+    memory's frames, their cameras and (where every frame has one) their depth images."""
+
+    def locate(sentence: str, frames: Sequence[np.ndarray], cameras: Sequence[PinholeCamera], depths: Sequence[np.ndarray | None]) -> Localization:
+        given = list(depths) if any(d is not None for d in depths) else None
+        return agent.locate(sentence, list(frames), cameras=list(cameras), depths=given)  # type: ignore[no-any-return]
+
+    return locate
+
+
+__all__ = ["DEFAULT_MAX_PENDING", "GroundingSession", "Locate", "ProblemSink", "agent_locate"]
