@@ -23,7 +23,7 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.errors import ConfigError
-from povagent.geometry.goals import PinholeCamera
+from povagent.geometry.goals import PinholeCamera, PoseConvention
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
 
 MEMORY_FILE = "memory.json"
@@ -52,7 +52,7 @@ class SavedMemory(BaseModel):
     """``memory.json``: the format version, the rule settings and the frames in memory order."""
 
     model_config = ConfigDict(extra="forbid")
-    format: Literal[1] = FORMAT_VERSION
+    format: Literal[1] = 1
     min_translation: float
     min_rotation: float
     max_frames: int
@@ -76,7 +76,7 @@ def save_memory(memory: KeyframeMemory, folder: str | os.PathLike) -> Path:
         cam = frame.camera
         entries.append(SavedFrame(
             stamp_ns=frame.stamp_ns, frame_id=frame.frame_id, image=image, depth=depth,
-            camera_to_map=np.asarray(cam.camera_to_world).tolist(), convention=str(cam.convention),  # type: ignore[arg-type]
+            camera_to_map=np.asarray(cam.camera_to_world).tolist(), convention=cam.convention.value,
             fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, width=cam.width, height=cam.height,
         ))
     s = memory.settings
@@ -119,7 +119,7 @@ def _load_frame(root: Path, path: Path, i: int, entry: SavedFrame) -> Keyframe:
     where = f"{path}: frames[{i}]"
     try:
         camera = PinholeCamera(np.asarray(entry.camera_to_map, dtype=float), entry.fx, entry.fy, entry.cx, entry.cy,
-                               entry.width, entry.height, entry.convention)
+                               entry.width, entry.height, PoseConvention(entry.convention))
     except ValueError as exc:
         raise ConfigError(f"{where}.camera_to_map: {exc}") from None
     try:

@@ -28,21 +28,25 @@ import queue
 import threading
 from typing import Any
 
-from povagent.ros.extras import require_rclpy, tf2_messages
+from povagent.errors import ConfigError
+from povagent.ros.extras import ROS_EXTRA, prepare_ros_environment, tf2_messages
 from povagent.ros.keyframes import DEFAULT_MAX_FRAMES, DEFAULT_MIN_ROTATION, DEFAULT_MIN_TRANSLATION, MemorySettings
 from povagent.ros.result import CommandResult, CommandStatus
 from povagent.ros.session import GroundingSession, Locate
 from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S
 from povagent.ros.transforms import RigidTransform, TransformProblem
 
-rclpy = require_rclpy("ros-node")
-from geometry_msgs.msg import PointStamped, PoseStamped  # noqa: E402  (after the extra's check)
-from nav_msgs.msg import Odometry  # noqa: E402
-from rclpy.node import Node  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data  # noqa: E402
-from rclpy.time import Time  # noqa: E402
-from sensor_msgs.msg import CameraInfo, CompressedImage, Image  # noqa: E402
-from std_msgs.msg import String  # noqa: E402
+prepare_ros_environment()  # before rclpy's first import
+try:
+    from geometry_msgs.msg import PointStamped, PoseStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rclpy.time import Time
+    from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+    from std_msgs.msg import String
+except ImportError as _missing:
+    raise ConfigError(f"ros-node needs ROS 2's Python packages ({_missing.name} is missing): {ROS_EXTRA}") from None
 
 #: The node's parameters and their defaults.
 DEFAULT_PARAMETERS: dict[str, Any] = {
@@ -65,7 +69,7 @@ DEFAULT_PARAMETERS: dict[str, Any] = {
 }
 
 
-class GroundingNode(Node):  # type: ignore[misc]
+class GroundingNode(Node):
     """``povagent`` as a ROS 2 node (see the module docstring); ``close()`` stops its worker."""
 
     def __init__(self, locate: Locate, *, name: str = "povagent", context: Any = None, parameter_overrides: list[Any] | None = None) -> None:

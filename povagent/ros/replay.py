@@ -62,7 +62,7 @@ def replay_bag(bag: str | os.PathLike, session: GroundingSession, topics: Replay
     try:
         reader = highlevel.AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY))
         reader.open()
-    except Exception as exc:  # noqa: BLE001  rosbags raises many kinds for a bad file; each is the user's to fix
+    except Exception as exc:
         raise ConfigError(f"{path}: cannot open the bag: {type(exc).__name__}: {exc}") from None
     try:
         connections = [c for c in reader.connections if c.topic in takes]
@@ -73,7 +73,7 @@ def replay_bag(bag: str | os.PathLike, session: GroundingSession, topics: Replay
             count += 1
             try:
                 msg = reader.deserialize(raw, connection.msgtype)
-            except Exception as exc:  # noqa: BLE001  a damaged record is one malformed message
+            except Exception as exc:
                 session.problem("deserialize", f"{connection.topic}: {type(exc).__name__}: {exc}")
                 continue
             takes[connection.topic](msg, connection.msgtype)

@@ -245,9 +245,9 @@ class GroundingSession:
             frame_stamp_ns=chosen.stamp_ns,
             frame_id=chosen.frame_id,
             pixel=(float(loc.pixel[0]), float(loc.pixel[1])),
-            goal=goal,  # type: ignore[arg-type]
+            goal=goal,
             goal_method=None if loc.goal is None else loc.goal.method,
-            viewpoint=tuple(float(v) for v in chosen.camera.position),  # type: ignore[arg-type]
+            viewpoint=tuple(float(v) for v in chosen.camera.position),
             latency_s=latency,
             **base,
         )
@@ -259,7 +259,7 @@ def agent_locate(agent: Any) -> Locate:
 
     def locate(sentence: str, frames: Sequence[np.ndarray], cameras: Sequence[PinholeCamera], depths: Sequence[np.ndarray | None]) -> Localization:
         given = list(depths) if any(d is not None for d in depths) else None
-        return agent.locate(sentence, list(frames), cameras=list(cameras), depths=given)  # type: ignore[no-any-return]
+        return agent.locate(sentence, list(frames), cameras=list(cameras), depths=given)
 
     return locate
 

@@ -14,17 +14,21 @@ from typing import Any, Callable
 
 import numpy as np
 
-from povagent.ros.extras import require_rclpy, tf2_messages
+from povagent.errors import ConfigError
+from povagent.ros.extras import ROS_EXTRA, prepare_ros_environment, tf2_messages
 from povagent.ros.house_tour import BASE_FRAME, CAMERA_FRAME, MAP_FRAME, HouseTour
 from povagent.ros.transforms import RigidTransform
 
-require_rclpy("playing a tour")
-from geometry_msgs.msg import TransformStamped  # noqa: E402  (after the extra's check)
-from nav_msgs.msg import Odometry  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
-from rclpy.time import Time  # noqa: E402
-from sensor_msgs.msg import CameraInfo, Image  # noqa: E402
-from std_msgs.msg import String  # noqa: E402
+prepare_ros_environment()  # before rclpy's first import
+try:
+    from geometry_msgs.msg import TransformStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.time import Time
+    from sensor_msgs.msg import CameraInfo, Image
+    from std_msgs.msg import String
+except ImportError as _missing:
+    raise ConfigError(f"playing a tour needs ROS 2's Python packages ({_missing.name} is missing): {ROS_EXTRA}") from None
 
 
 def mount_parameters(tour: HouseTour) -> dict[str, Any]:

@@ -78,7 +78,7 @@ def live(ros_graph, tour, simulated_locate, wait_until):
 
 
 def test_the_node_publishes_the_goal_the_agent_finds_for_the_same_frames_and_cameras(live, tour, simulated_locate, wait_until):
-    node, player, listener = live
+    _, player, listener = live
     player.say(tour.truth.sentence)
     [result] = wait_until(lambda: listener.answers_for(tour.truth.sentence), timeout=60, what="the node's answer")
     assert result["status"] == "ok", result
@@ -89,7 +89,7 @@ def test_the_node_publishes_the_goal_the_agent_finds_for_the_same_frames_and_cam
 
 
 def test_the_goal_topics_carry_the_goal_in_the_map_facing_from_the_keyframe(live, tour, wait_until):
-    node, player, listener = live
+    _, player, listener = live
     sentence = tour.truth.sentence + " (topics)"
     player.say(sentence)
     [result] = wait_until(lambda: listener.answers_for(sentence), timeout=60, what="the node's answer")
@@ -134,7 +134,7 @@ def test_malformed_messages_of_each_kind_leave_the_node_alive_and_answering(live
 
 
 def test_a_command_while_another_is_answered_is_queued_and_said_so(live, tour, wait_until):
-    node, player, listener = live
+    _, player, listener = live
     first, second = tour.truth.sentence + " (1)", tour.truth.sentence + " (2)"
     player.say(first)
     player.say(second)
@@ -147,7 +147,7 @@ def test_a_bag_of_the_same_messages_replays_to_the_same_goal(live, tour, simulat
     from povagent.ros.replay import replay_bag
     from povagent.ros.tour_bag import write_tour_bag
 
-    node, player, listener = live
+    _, player, listener = live
     sentence = tour.truth.sentence + " (bag)"
     player.say(sentence)
     [live_result] = wait_until(lambda: listener.answers_for(sentence), timeout=60, what="the node's answer")
