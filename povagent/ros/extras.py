@@ -43,9 +43,10 @@ def require_rclpy(command: str) -> ModuleType:
     """rclpy, imported after :func:`prepare_ros_environment`; :class:`ConfigError` naming the extra when missing."""
     prepare_ros_environment()
     try:
+        rclpy = importlib.import_module("rclpy")
         for name in ("std_msgs.msg", "sensor_msgs.msg", "geometry_msgs.msg", "nav_msgs.msg"):
             importlib.import_module(name)
-        return importlib.import_module("rclpy")
+        return rclpy
     except ImportError as exc:
         raise ConfigError(f"{command} needs ROS 2's Python packages ({exc.name or exc} is missing): {ROS_EXTRA}") from None
 
