@@ -51,6 +51,8 @@ def ros_node_command(
 
     rclpy = require_rclpy("ros-node")
     agent = _agent(pipeline, model, floor_height, timeout)
+    from rclpy.executors import ExternalShutdownException
+
     from povagent.ros.node import GroundingNode
     from povagent.ros.session import agent_locate
 
@@ -58,8 +60,8 @@ def ros_node_command(
     node = GroundingNode(agent_locate(agent))
     try:
         rclpy.spin(node)
-    except KeyboardInterrupt:
-        pass
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass  # Ctrl-C or SIGTERM: rclpy's signal handler shut the context down
     finally:
         node.close()
         agent.close()
@@ -86,7 +88,11 @@ def ros_replay_command(
     as_json: bool = typer.Option(False, "--json", help="Print the ~/result JSON instead of a table."),
     save_memory: Path = typer.Option(None, "--save-memory", metavar="DIR", help="Write the keyframe memory (frames, poses, intrinsics) to DIR."),
 ) -> None:
-    """Replay a ROS 2 bag through the node's code path and answer one command (needs pip install 'povagent[bags]')."""
+    """Answer one command over a recorded ROS 2 bag.
+
+    The bag goes through the node's own code path (same keyframes, same goal); needs
+    pip install 'povagent[bags]'.
+    """
     from povagent.ros.extras import require_rosbags
 
     require_rosbags("ros-replay")

@@ -96,7 +96,8 @@ class GroundingNode(Node):
         self.goal_pub = self.create_publisher(PointStamped, "~/goal", 10)
         self.goal_pose_pub = self.create_publisher(PoseStamped, "/goal_pose", 10)
         self.result_pub = self.create_publisher(String, "~/result", 10)
-        image_qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE) if p["reliable_images"] else qos_profile_sensor_data
+        # reliable: a queue as deep as a short tour, so a slow answerer loses no image of a recorded playback
+        image_qos = QoSProfile(depth=30, reliability=ReliabilityPolicy.RELIABLE) if p["reliable_images"] else qos_profile_sensor_data
         image_topic = str(p["image_topic"])
         if image_topic.endswith("/compressed"):
             self.create_subscription(CompressedImage, image_topic, self._guarded(self.session.on_compressed_image), image_qos)

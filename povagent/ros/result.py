@@ -39,7 +39,9 @@ class CommandStatus(StrEnum):
 
 class CommandResult(BaseModel):
     """One command's answer. Pixels are continuous coordinates of the chosen keyframe's image;
-    ``goal`` and ``viewpoint`` (the keyframe's camera centre) are in ``map_frame`` (metres); stamps are the keyframe's ``header.stamp``."""
+    ``goal`` and ``viewpoint`` (the keyframe's camera centre) are in ``map_frame`` (metres);
+    ``keyframes`` is the memory's size, ``images`` the images received so far and ``malformed``
+    the malformed messages so far by kind (a robot's health at a glance); stamps are the keyframe's ``header.stamp``."""
 
     model_config = ConfigDict(extra="forbid")
 
@@ -55,6 +57,8 @@ class CommandResult(BaseModel):
     goal_method: str | None = None
     viewpoint: tuple[float, float, float] | None = None
     keyframes: int = 0
+    images: int = 0
+    malformed: dict[str, int] = {}
     queue_position: int | None = None
     latency_s: float = 0.0
 

@@ -218,7 +218,9 @@ class GroundingSession:
         """Answer one command over the memory as it is now (blocking: call it off the executor)."""
         started = time.monotonic()
         frames = self.snapshot()
-        base = {"command": command, "map_frame": self.map_frame, "keyframes": len(frames)}
+        with self._lock:
+            health = {"images": self.images_seen, "malformed": dict(self.problems)}
+        base = {"command": command, "map_frame": self.map_frame, "keyframes": len(frames), **health}
         if not command.strip():
             return CommandResult(status=CommandStatus.EMPTY_COMMAND, reason="the command is empty", **base)
         if not frames:

@@ -79,7 +79,8 @@ class TourPlayer:
     """Publishers for a tour on ``node`` (image, camera_info, odom, tf, command)."""
 
     def __init__(self, node: Any, command_topic: str = "/povagent/command") -> None:
-        reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+        # deep enough for a whole short tour: a reliable writer drops what its history no longer holds
+        reliable = QoSProfile(depth=30, reliability=ReliabilityPolicy.RELIABLE)
         self.node = node
         self.image = node.create_publisher(Image, "/camera/image_raw", reliable)
         self.info = node.create_publisher(CameraInfo, "/camera/camera_info", reliable)
