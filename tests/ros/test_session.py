@@ -158,3 +158,26 @@ def test_a_failed_answer_is_a_typed_status_not_silence(session, error, status):
     session.on_image(image(S))
     result = session.answer("the mug")
     assert result.status == status and str(error) in result.reason
+
+
+def depth_image(ns: int, metres: float) -> SimpleNamespace:
+    values = np.full((H, W), metres, dtype="<f4")
+    return SimpleNamespace(header=header(ns, "cam_optical_frame"), height=H, width=W, encoding="32FC1", step=W * 4, is_bigendian=0, data=values.tobytes())
+
+
+def test_a_depth_image_with_the_images_stamp_makes_the_goal_the_measured_point(session):
+    session.on_camera_info(info())
+    session.on_odometry(odom(S, 2.0))
+    session.on_depth(depth_image(S, 0.5))  # the floor would be 1.41 m along the ray: the depth says 0.5 m
+    session.on_image(image(S))
+    result = session.answer("the mug")
+    assert result.goal_method == "depth"
+    assert np.allclose(result.goal, (2.0 + 0.5 * math.sqrt(0.5), 0.0, 1.0 - 0.5 * math.sqrt(0.5)))
+
+
+def test_a_depth_image_of_another_stamp_is_not_used(session):
+    session.on_camera_info(info())
+    session.on_odometry(odom(S, 2.0))
+    session.on_depth(depth_image(S + 1, 0.5))
+    session.on_image(image(S))
+    assert session.memory.frames[0].depth is None and session.answer("the mug").goal_method == "plane"
