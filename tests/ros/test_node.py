@@ -133,14 +133,59 @@ def test_malformed_messages_of_each_kind_leave_the_node_alive_and_answering(live
     assert result["status"] == "ok" and result["keyframes"] == len(tour.frames)
 
 
-def test_a_command_while_another_is_answered_is_queued_and_said_so(live, tour, wait_until):
-    _, player, listener = live
-    first, second = tour.truth.sentence + " (1)", tour.truth.sentence + " (2)"
+@pytest.fixture
+def held_model(live):
+    """The node's model call held until the test releases it (``release()``), so what happens
+    while a command is being answered can be looked at without racing the answer."""
+    node = live[0]
+    gate = threading.Event()
+    original = node.session.locate
+
+    def held(*args):
+        gate.wait(30)
+        return original(*args)
+
+    node.session.locate = held
+    try:
+        yield gate.set
+    finally:
+        gate.set()
+        node.session.locate = original
+
+
+def test_images_keep_arriving_while_a_command_is_answered(live, tour, held_model, wait_until):
+    from povagent.ros.tour_player import image, odometry
+
+    node, player, listener = live
+    sentence = tour.truth.sentence + " (held)"
+    player.say(sentence)
+    wait_until(node._busy.is_set, what="the worker to start answering")
+    seen = node.session.images_seen
+    frame = tour.frames[-1]
+    later = frame.stamp_ns + 10**8
+    player.odom.publish(odometry(later, frame.map_from_base))
+    player.image.publish(image(frame.rgb, later))
+    wait_until(lambda: node.session.images_seen > seen, what="the image taken while the model call is held")
+    assert node._busy.is_set() and not listener.answers_for(sentence)  # still answering
+    held_model()
+    [result] = wait_until(lambda: listener.answers_for(sentence), timeout=60, what="the held answer")
+    assert result["status"] == "ok"
+
+
+def test_commands_while_one_is_answered_are_queued_up_to_the_bound_then_refused(live, tour, held_model, wait_until):
+    node, player, listener = live
+    first, second, third, fourth = (f"{tour.truth.sentence} (queue {i})" for i in range(4))
     player.say(first)
-    player.say(second)
-    wait_until(lambda: listener.answers_for(first) and listener.answers_for(second), timeout=90, what="both answers")
-    queued = [r for r in listener.results if r["command"] == second and r["status"] == "queued"]
-    assert queued and queued[0]["queue_position"] == 1
+    wait_until(node._busy.is_set, what="the worker to start answering")
+    for sentence in (second, third, fourth):
+        player.say(sentence)
+    statuses = lambda s: [r["status"] for r in listener.results if r["command"] == s]  # noqa: E731
+    wait_until(lambda: statuses(fourth), what="the fourth command's result")
+    assert statuses(fourth) == ["queue_full"]  # max_queue is 2: the second and third wait
+    assert [r["queue_position"] for r in listener.results if r["command"] in (second, third) and r["status"] == "queued"] == [1, 2]
+    held_model()
+    wait_until(lambda: listener.answers_for(second) and listener.answers_for(third), timeout=90, what="the queued answers")
+    assert statuses(second)[-1] == statuses(third)[-1] == "ok" and statuses(fourth) == ["queue_full"]
 
 
 def test_a_bag_of_the_same_messages_replays_to_the_same_goal(live, tour, simulated_locate, tmp_path, wait_until):
