@@ -12,8 +12,12 @@ import pytest
 
 pytest.importorskip("rosbags", reason="the bags extra is not installed (pip install 'povagent[bags]')")
 
+from typer.testing import CliRunner
+
 from povagent.agent import GroundingAgent
+from povagent.cli import app
 from povagent.dataset.loader import load_dataset
+from povagent.errors import ConfigError
 from povagent.geometry.goals import Plane
 from povagent.ros.house_tour import house_tour, well_seen_instance
 from povagent.ros.tour_bag import write_tour_bag
@@ -54,13 +58,13 @@ def test_ros_replay_prints_a_short_table_by_default(tour_bag, tmp_path):
     assert " m in map (plane)" in proc.stdout
 
 
-def test_ros_replay_without_a_model_says_what_to_give(tour_bag, tmp_path):
+def test_ros_replay_without_a_model_says_what_to_give(tour_bag):
     _, bag = tour_bag
-    proc = povagent("ros-replay", str(bag), "--command", "the mug", cwd=tmp_path)
-    assert proc.returncode == 2 and proc.stderr.strip() == "error: give --pipeline P.yaml or --model M (one of them)"
+    result = CliRunner().invoke(app, ["ros-replay", str(bag), "--command", "the mug"])
+    assert isinstance(result.exception, ConfigError) and str(result.exception) == "give --pipeline P.yaml or --model M (one of them)"
 
 
 def test_ros_replay_of_a_missing_bag_is_one_line(tmp_path):
     (tmp_path / "center.yaml").write_text(CENTER)
-    proc = povagent("ros-replay", "nowhere", "--command", "x", "--pipeline", "center.yaml", cwd=tmp_path)
-    assert proc.returncode == 2 and proc.stderr.strip() == "error: nowhere: no such bag"
+    result = CliRunner().invoke(app, ["ros-replay", str(tmp_path / "nowhere"), "--command", "x", "--pipeline", str(tmp_path / "center.yaml")])
+    assert isinstance(result.exception, ConfigError) and str(result.exception) == f"{tmp_path / 'nowhere'}: no such bag"

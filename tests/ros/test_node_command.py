@@ -69,9 +69,9 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
         player_node.destroy_node()
         proc.send_signal(signal.SIGINT)
         try:
-            out, err = proc.communicate(timeout=30)
+            _, err = proc.communicate(timeout=30)
         except subprocess.TimeoutExpired:
             proc.kill()
-            out, err = proc.communicate()
+            _, err = proc.communicate()
     assert proc.returncode == 0, err
     assert "Traceback" not in err
