@@ -77,19 +77,22 @@ class GroundingNode(Node):
         for key, default in DEFAULT_PARAMETERS.items():
             self.declare_parameter(key, default)
         p = {key: self.get_parameter(key).value for key in DEFAULT_PARAMETERS}
+        try:
+            settings = MemorySettings(float(p["min_translation"]), float(p["min_rotation"]), int(p["max_frames"]))
+            mount = RigidTransform.checked(list(p["mount_transform"])[:3], list(p["mount_transform"])[3:], "parameter mount_transform")
+            if float(p["transform_tolerance"]) < 0:
+                raise ValueError(f"transform_tolerance must be >= 0 seconds, got {p['transform_tolerance']}")
+        except (ValueError, TransformProblem) as exc:
+            self.destroy_node()
+            raise ConfigError(f"ros-node parameters: {exc}") from None
         self.session = GroundingSession(
             locate,
             map_frame=str(p["map_frame"]),
-            settings=MemorySettings(float(p["min_translation"]), float(p["min_rotation"]), int(p["max_frames"])),
+            settings=settings,
             tolerance_s=float(p["transform_tolerance"]),
             on_problem=self._log_problem,
         )
         if p["mount_child"]:
-            values = list(p["mount_transform"])
-            try:
-                mount = RigidTransform.checked(values[:3], values[3:], "parameter mount_transform")
-            except TransformProblem as exc:
-                raise ValueError(str(exc)) from None
             self.session.add_static(str(p["mount_parent"]), str(p["mount_child"]), mount)
         self._commands: queue.Queue[str | None] = queue.Queue(maxsize=max(1, int(p["max_queue"])))
         self._busy = threading.Event()
@@ -179,6 +182,11 @@ class GroundingNode(Node):
             self.goal_pub.publish(point)
             self.goal_pose_pub.publish(pose)
         self.result_pub.publish(String(data=result.model_dump_json()))
+
+    @property
+    def answering(self) -> bool:
+        """Whether the worker is answering a command now."""
+        return self._busy.is_set()
 
     def close(self) -> None:
         """Stop the worker (after the command it is answering) and destroy the node."""

@@ -153,20 +153,31 @@ def held_model(live):
         node.session.locate = original
 
 
+def test_bad_parameters_are_one_config_error_naming_them(ros_graph, simulated_locate):
+    from rclpy.parameter import Parameter
+
+    from povagent.errors import ConfigError
+    from povagent.ros.node import GroundingNode
+
+    bad = [Parameter("mount_transform", value=[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])]
+    with pytest.raises(ConfigError, match=r"^ros-node parameters: parameter mount_transform: the rotation quaternion has norm 0"):
+        GroundingNode(simulated_locate, name="bad_node", context=ros_graph.context, parameter_overrides=bad)
+
+
 def test_images_keep_arriving_while_a_command_is_answered(live, tour, held_model, wait_until):
     from povagent.ros.tour_player import image, odometry
 
     node, player, listener = live
     sentence = tour.truth.sentence + " (held)"
     player.say(sentence)
-    wait_until(node._busy.is_set, what="the worker to start answering")
+    wait_until(lambda: node.answering, what="the worker to start answering")
     seen = node.session.images_seen
     frame = tour.frames[-1]
     later = frame.stamp_ns + 10**8
     player.odom.publish(odometry(later, frame.map_from_base))
     player.image.publish(image(frame.rgb, later))
     wait_until(lambda: node.session.images_seen > seen, what="the image taken while the model call is held")
-    assert node._busy.is_set() and not listener.answers_for(sentence)  # still answering
+    assert node.answering and not listener.answers_for(sentence)  # still answering
     held_model()
     [result] = wait_until(lambda: listener.answers_for(sentence), timeout=60, what="the held answer")
     assert result["status"] == "ok"
@@ -176,7 +187,7 @@ def test_commands_while_one_is_answered_are_queued_up_to_the_bound_then_refused(
     node, player, listener = live
     first, second, third, fourth = (f"{tour.truth.sentence} (queue {i})" for i in range(4))
     player.say(first)
-    wait_until(node._busy.is_set, what="the worker to start answering")
+    wait_until(lambda: node.answering, what="the worker to start answering")
     for sentence in (second, third, fourth):
         player.say(sentence)
     statuses = lambda s: [r["status"] for r in listener.results if r["command"] == s]  # noqa: E731
