@@ -73,3 +73,16 @@ def test_a_folder_that_is_not_a_bag_is_one_error_naming_it(tmp_path, simulated_l
     (tmp_path / "notabag" / "metadata.yaml").write_text("rosbag2_bagfile_information: [unclosed")
     with pytest.raises(ConfigError, match="notabag: cannot open the bag"):
         replay_bag(tmp_path / "notabag", GroundingSession(simulated_locate))
+
+
+def test_a_damaged_record_in_a_bag_is_counted_and_the_replay_goes_on(tour, simulated_locate, tmp_path):
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    with Writer(tmp_path / "damaged", version=9) as writer:
+        image = writer.add_connection("/camera/image_raw", "sensor_msgs/msg/Image", typestore=store)
+        writer.write(image, 1, b"\x00\x01\x00\x00\x07")  # a CDR header and then too few bytes for an Image
+    session = GroundingSession(simulated_locate)
+    replay_bag(tmp_path / "damaged", session)
+    assert session.problems["deserialize"] == 1 and session.answer("x").status == "no_keyframes"

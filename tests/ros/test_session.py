@@ -181,3 +181,17 @@ def test_a_depth_image_of_another_stamp_is_not_used(session):
     session.on_depth(depth_image(S + 1, 0.5))
     session.on_image(image(S))
     assert session.memory.frames[0].depth is None and session.answer("the mug").goal_method == "plane"
+
+
+def test_a_compressed_image_takes_the_same_path_as_a_raw_one(session):
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.full((H, W, 3), 200, np.uint8)).save(buf, format="PNG")
+    session.on_camera_info(info())
+    session.on_odometry(odom(S, 2.0))
+    session.on_compressed_image(SimpleNamespace(header=header(S, "cam_optical_frame"), format="png", data=buf.getvalue()))
+    [kept] = session.memory.frames
+    assert kept.rgb.shape == (H, W, 3) and int(kept.rgb.min()) == 200
