@@ -44,6 +44,8 @@ Locate = Callable[[str, Sequence[np.ndarray], Sequence[PinholeCamera], Sequence[
 ProblemSink = Callable[[str, str, bool], None]
 
 DEFAULT_MAX_PENDING = 16
+#: The longest command answered (characters); a longer one is ``bad_input``, not sent to a model.
+MAX_COMMAND_CHARS = 2_000
 
 
 @dataclass
@@ -223,6 +225,9 @@ class GroundingSession:
         base = {"command": command, "map_frame": self.map_frame, "keyframes": len(frames), **health}
         if not command.strip():
             return CommandResult(status=CommandStatus.EMPTY_COMMAND, reason="the command is empty", **base)
+        if len(command) > MAX_COMMAND_CHARS:
+            return CommandResult(status=CommandStatus.BAD_INPUT, reason=f"the command is {len(command):,} characters long (at most {MAX_COMMAND_CHARS:,})",
+                                 **{**base, "command": command[:200] + "..."})
         if not frames:
             return CommandResult(status=CommandStatus.NO_KEYFRAMES, reason="no frame has been kept yet (images, camera_info and transforms are all needed)", **base)
         try:
@@ -266,4 +271,4 @@ def agent_locate(agent: Any) -> Locate:
     return locate
 
 
-__all__ = ["DEFAULT_MAX_PENDING", "GroundingSession", "Locate", "ProblemSink", "agent_locate"]
+__all__ = ["DEFAULT_MAX_PENDING", "MAX_COMMAND_CHARS", "GroundingSession", "Locate", "ProblemSink", "agent_locate"]

@@ -28,6 +28,10 @@ from povagent.ros.transforms import RigidTransform, TransformProblem, interpolat
 DEFAULT_TOLERANCE_S = 0.2
 #: Default span of dynamic samples kept per edge (seconds before the newest).
 DEFAULT_CACHE_S = 30.0
+#: At most this many samples per edge (a 1 kHz transform for 10 s) and this many frames in the
+#: tree: a flood of transforms, or of frame names, must not grow the buffer without bound.
+MAX_SAMPLES_PER_EDGE = 10_000
+MAX_FRAMES = 1_000
 
 
 class PoseUnavailable(ValueError):
@@ -70,6 +74,8 @@ class TransformBuffer:
         if not parent or not child or parent == child:
             raise TransformProblem(f"transform from {parent!r} to {child!r}: frames must be named and differ")
         edge = self._edges.get(child)
+        if edge is None and len(self._edges) >= MAX_FRAMES:
+            raise TransformProblem(f"transform to {child!r}: the tree already holds {MAX_FRAMES} frames")
         if edge is None or edge.parent != parent:
             # tf2's rule: a child has one parent; the newest message says which
             edge = self._edges[child] = _Edge(parent)
@@ -82,7 +88,7 @@ class TransformBuffer:
         else:
             edge.times.insert(at, stamp)
             edge.samples.insert(at, transform)
-        while edge.times and edge.times[-1] - edge.times[0] > self.cache_ns:
+        while edge.times and (edge.times[-1] - edge.times[0] > self.cache_ns or len(edge.times) > MAX_SAMPLES_PER_EDGE):
             edge.times.pop(0)
             edge.samples.popleft()
 
@@ -169,4 +175,4 @@ def add_transforms(buffer: TransformBuffer, transforms: Iterable[tuple[str, str,
         buffer.add(parent, child, stamp, transform, static)
 
 
-__all__ = ["DEFAULT_CACHE_S", "DEFAULT_TOLERANCE_S", "PoseUnavailable", "TransformBuffer", "add_transforms", "stamp_ns"]
+__all__ = ["DEFAULT_CACHE_S", "DEFAULT_TOLERANCE_S", "MAX_FRAMES", "MAX_SAMPLES_PER_EDGE", "PoseUnavailable", "TransformBuffer", "add_transforms", "stamp_ns"]

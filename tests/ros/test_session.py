@@ -195,3 +195,17 @@ def test_a_compressed_image_takes_the_same_path_as_a_raw_one(session):
     session.on_compressed_image(SimpleNamespace(header=header(S, "cam_optical_frame"), format="png", data=buf.getvalue()))
     [kept] = session.memory.frames
     assert kept.rgb.shape == (H, W, 3) and int(kept.rgb.min()) == 200
+
+
+def test_an_overlong_command_is_bad_input_and_never_reaches_the_model(session):
+    from povagent.ros.session import MAX_COMMAND_CHARS
+
+    def must_not_be_called(*args):
+        raise AssertionError("the model was asked")
+
+    session.locate = must_not_be_called
+    session.on_camera_info(info())
+    session.on_odometry(odom(S, 2.0))
+    session.on_image(image(S))
+    result = session.answer("x" * (MAX_COMMAND_CHARS + 1))
+    assert result.status == "bad_input" and len(result.command) < 300

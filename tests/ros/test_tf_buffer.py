@@ -91,3 +91,25 @@ def test_samples_older_than_the_cache_span_are_forgotten():
     with pytest.raises(PoseUnavailable):
         b.lookup("map", "base_link", 2 * S)
     assert np.allclose(b.lookup("map", "base_link", 19 * S)[:3, 3], [19, 0, 0])
+
+
+def test_a_flood_of_samples_keeps_only_the_newest_per_edge():
+    from povagent.ros.tf_buffer import MAX_SAMPLES_PER_EDGE
+
+    b = TransformBuffer(tolerance_s=0.0, cache_s=1e6)
+    for t in range(MAX_SAMPLES_PER_EDGE + 5):
+        b.add("map", "base_link", t, yawed(t, 0, 0))
+    with pytest.raises(PoseUnavailable):
+        b.lookup("map", "base_link", 0)
+    assert np.allclose(b.lookup("map", "base_link", MAX_SAMPLES_PER_EDGE + 4)[:3, 3], [MAX_SAMPLES_PER_EDGE + 4, 0, 0])
+
+
+def test_a_flood_of_frame_names_is_refused_past_the_bound():
+    from povagent.ros.tf_buffer import MAX_FRAMES
+    from povagent.ros.transforms import TransformProblem
+
+    b = TransformBuffer()
+    for i in range(MAX_FRAMES):
+        b.add("map", f"f{i}", 0, yawed(0, 0, 0), static=True)
+    with pytest.raises(TransformProblem, match="already holds"):
+        b.add("map", "one_more", 0, yawed(0, 0, 0), static=True)
