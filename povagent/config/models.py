@@ -401,7 +401,7 @@ class SweepConfig(_Strict):
             try:
                 yaml_cluster_spec(value)
             except ClusterError as exc:
-                raise ValueError(str(exc).replace("--cluster ", "", 1)) from None
+                raise ValueError(str(exc).removeprefix("--cluster ")) from None
         return value
 
     @field_validator("output")
