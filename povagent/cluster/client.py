@@ -67,8 +67,6 @@ def cluster_client(cluster: str | ClusterSpec | Any | None) -> Iterator[Client |
         return
     spec = parse_cluster_spec(cluster) if isinstance(cluster, str) else cluster
     require_distributed()
-    import distributed
-
     if spec.local_workers is not None:
         with _local_cluster(spec.local_workers) as client:
             yield client
@@ -126,8 +124,8 @@ def _connect(address: str, timeout: float) -> Client:
     import distributed
 
     try:
-        kind = asyncio.run(asyncio.wait_for(_identity(address, timeout), timeout))
-    except (TimeoutError, asyncio.TimeoutError):
+        kind = _ask(address, timeout)
+    except TimeoutError:
         raise ClusterError(f"no Dask scheduler answered at {address} within {timeout:g} s: is it the scheduler's address and port?") from None
     except Exception as exc:  # the comm layer's errors vary by scheme, version and peer
         raise ClusterError(f"no Dask scheduler at {address}: {_one_line(exc)}{_scheme_hint(address)}") from None
@@ -137,6 +135,19 @@ def _connect(address: str, timeout: float) -> Client:
         return distributed.Client(address, timeout=timeout)
     except Exception as exc:
         raise ClusterError(f"could not connect to the Dask scheduler at {address}: {_one_line(exc)}") from None
+
+
+def _ask(address: str, timeout: float) -> object:
+    """:func:`_identity` under one deadline, on a loop of its own (in a thread when the caller
+    already runs one: a notebook)."""
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return asyncio.run(asyncio.wait_for(_identity(address, timeout), timeout))
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(1) as pool:
+        return pool.submit(lambda: asyncio.run(asyncio.wait_for(_identity(address, timeout), timeout))).result()
 
 
 async def _identity(address: str, timeout: float) -> object:

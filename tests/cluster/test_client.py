@@ -119,9 +119,8 @@ def test_an_address_that_is_no_scheduler_is_one_line_within_the_wait(peer, tcp_s
     }[peer]()
     monkeypatch.setenv(CONNECT_TIMEOUT_ENV, str(SHORT_S))
     t0 = time.monotonic()
-    with pytest.raises(ClusterError) as info:
-        with cluster_client(address):
-            pytest.fail("a client was made for something that is not a scheduler")
+    with pytest.raises(ClusterError) as info, cluster_client(address):
+        pytest.fail("a client was made for something that is not a scheduler")
     took = time.monotonic() - t0
     message = str(info.value)
     assert "\n" not in message and address in message, message
