@@ -58,7 +58,7 @@ from povagent.run.logs import Redactor, RunLog
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
-from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop
+from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -595,13 +595,15 @@ class PipelineRun:
             if self._stopped:
                 self._log.error("run_stopped", reason=self._stopped)
             summary = self.summarize(instances, runs, interrupted or stop_came)
+            # a stop requested while the summary was computed (plain code: not yet delivered) too
+            summary["interrupted"] = summary["interrupted"] or stop_requested()
             try:
                 write_json(self.run_dir / SUMMARY, summary)
             except OSError as exc:  # a full disk: reported below, once the run is closed
                 unwritten: OSError | None = exc
             else:
                 unwritten = None
-            self._log.info("run_end", interrupted=interrupted or stop_came, stopped=self._stopped,
+            self._log.info("run_end", interrupted=summary["interrupted"], stopped=self._stopped,
                            **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
             self.host.hooks.run_end(str(self.run_dir), summary)
             self._log.close()

@@ -128,3 +128,18 @@ async def finish_through_stop(closing: Awaitable[None]) -> bool:
                 return True
     inner.result()
     return stop_came
+
+
+def stop_requested() -> bool:
+    """Whether the current task has been asked to stop (a cancellation requested, delivered or
+    not yet); False outside a task."""
+    task = asyncio.current_task() if _loop_running() else None
+    return task is not None and task.cancelling() > 0
+
+
+def _loop_running() -> bool:
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return False
+    return True
