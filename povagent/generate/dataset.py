@@ -165,7 +165,9 @@ def generate_dataset(
     The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``, the
     cluster or the order houses finish. A house that raises does not stop the others; at the
     end :class:`~povagent.errors.GenerationError` names every failed house (index, seed, error),
-    ``meta.json`` is not written, and the same call redoes only those houses.
+    ``meta.json`` is not written, and the same call redoes only those houses. An output folder
+    that refuses a write (full, read-only, here or under the workers) raises
+    :class:`~povagent.errors.GenerationError` naming the file and the error; complete houses stay.
 
     ``jobs``: worker processes, one house each at a time; ``None`` (the default) is
     :func:`default_jobs`: a worker per core this process may use, at most one per house (one
