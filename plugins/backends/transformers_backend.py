@@ -145,7 +145,7 @@ class TransformersBackend(Backend):
         self.profile: ModelProfile | None = profile
         self._fingerprint: str | None = None
         self._local: LocalModel | None = None
-        self._queue: BatchQueue[tuple[Conversation, Decoding], Generated] | None = None
+        self._queue: BatchQueue[tuple[Request, ImageStore, Decoding], Generated] | None = None
         self._start_lock: asyncio.Lock | None = None
 
     @staticmethod
@@ -220,13 +220,14 @@ class TransformersBackend(Backend):
         return self._queue.stats if self._queue is not None else None
 
     # -- answering ----------------------------------------------------------------------------
-    def _run_batch(self, items: list[tuple[Conversation, Decoding]]) -> list[Generated]:
-        """One batch (same decoding), in the queue's worker thread."""
+    def _run_batch(self, items: list[tuple[Request, ImageStore, Decoding]]) -> list[Generated]:
+        """One batch (same decoding), in the queue's worker thread: images are decoded here,
+        off the event loop, so requests reach the queue the moment they are sent."""
         local = self._local
         if local is None or local.freed:
             raise PermanentBackendError("the transformers backend was closed", kind="closed")
-        conversations = [c for c, _ in items]
-        decoding = items[0][1]
+        conversations: list[Conversation] = [conversation_of(request, images) for request, images, _ in items]
+        decoding = items[0][2]
         try:
             if reads_points(local.model):
                 return read_points(local, conversations, decoding)
@@ -242,11 +243,10 @@ class TransformersBackend(Backend):
         if self._queue is None:
             await self.start()
         assert self._queue is not None
-        conversation = await asyncio.to_thread(conversation_of, request, images)
         decoding = decoding_of(request, self.options.sampling)
         started = time.perf_counter()
         try:
-            generated = await self._queue.submit((conversation, decoding), group=decoding)
+            generated = await self._queue.submit((request, images, decoding), group=decoding)
         except LocalOutOfMemory as exc:
             raise PermanentBackendError(f"{exc} (lower max_batch or the processor's image size)", kind="out_of_memory") from None
         return Response(

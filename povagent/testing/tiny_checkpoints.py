@@ -34,6 +34,9 @@ _CORPUS = (
     "0 1 2 3 4 5 6 7 8 9 10 100 255 511 left right front behind of the sofa bed table chair mug"
 )
 
+#: Spread of the random weights (see build_qwen2_vl).
+INIT_RANGE = 0.5
+
 #: Special tokens both tokenizers carry (the chat template's and each processor's own).
 _CHAT_TOKENS = ["<|endoftext|>", "<|im_start|>", "<|im_end|>"]
 _QWEN_TOKENS = ["<|vision_start|>", "<|vision_end|>", "<|image_pad|>", "<|video_pad|>"]
@@ -107,6 +110,10 @@ def build_qwen2_vl(folder: Path, *, seed: int = 0, layers: int = 1) -> Path:
             "num_key_value_heads": 1,
             "max_position_embeddings": 4096,
             "rope_scaling": {"type": "mrope", "mrope_section": [2, 3, 3]},
+            # random weights at the usual scale make a model repeat one token whatever it is
+            # shown; a wider spread makes answers depend on the prompt and the images
+            "initializer_range": INIT_RANGE,
+            "bos_token_id": None,
             "tie_word_embeddings": True,
             "eos_token_id": ids["<|im_end|>"],
             "pad_token_id": ids["<|endoftext|>"],
@@ -115,6 +122,7 @@ def build_qwen2_vl(folder: Path, *, seed: int = 0, layers: int = 1) -> Path:
         image_token_id=ids["<|image_pad|>"],
         video_token_id=ids["<|video_pad|>"],
         vision_start_token_id=ids["<|vision_start|>"],
+        initializer_range=INIT_RANGE,
         vision_end_token_id=ids["<|vision_end|>"],
         eos_token_id=ids["<|im_end|>"],
         pad_token_id=ids["<|endoftext|>"],
@@ -150,11 +158,14 @@ def build_idefics3(folder: Path, *, seed: int = 0, layers: int = 1) -> Path:
             "num_attention_heads": 2,
             "num_key_value_heads": 1,
             "max_position_embeddings": 4096,
+            "initializer_range": INIT_RANGE,
+            "bos_token_id": None,
             "eos_token_id": ids["<end_of_utterance>"],
             "pad_token_id": ids["<|endoftext|>"],
         },
         vision_config={"hidden_size": 32, "intermediate_size": 64, "num_hidden_layers": 1, "num_attention_heads": 2, "image_size": image_size, "patch_size": patch},
         scale_factor=scale,
+        initializer_range=INIT_RANGE,
         image_token_id=ids["<image>"],
         pad_token_id=ids["<|endoftext|>"],
     )

@@ -54,7 +54,9 @@ def requests(store: ImageStore, n: int) -> list[Request]:
             stored = store.add_pil(Image.new("RGB", (48, 40), (40 * i % 255, 90 * k, 30)))
             parts += [TextPart(f"Image {k}:"), ImagePart(stored.image_hash)]
         parts.append(TextPart(f"Sentence {i}: the mug is left of the sofa. Output ONLY valid JSON"))
-        out.append(Request((Message("user", tuple(parts)),), AnswerSpec(schema=frame_answer_schema(2), n_images=2), GenerationParams(max_tokens=8)))
+        spec = AnswerSpec(schema=frame_answer_schema(2, 512, 512), n_frames=2, asks_frame=True)
+        messages = (Message.text("system", "You are a robot."), Message("user", tuple(parts)))
+        out.append(Request(messages, spec, GenerationParams(max_tokens=8)))
     return out
 
 
@@ -95,6 +97,7 @@ def test_batched_answers_equal_one_at_a_time_under_greedy_decoding(tiny_qwen):
 
 async def _with_stats(backend: TransformersBackend, batch: list[Request], store: ImageStore) -> tuple[list[str], int]:
     try:
+        await backend.start()  # as the runner does before its requests
         responses = await asyncio.gather(*(backend.complete(r, store) for r in batch))
         return [r.text for r in responses], backend.batch_stats.largest
     finally:
@@ -107,7 +110,8 @@ def test_the_processors_chat_template_sees_the_image_labels_in_order(tiny_idefic
     store = ImageStore()
     (request,) = requests(store, 1)
     conversation = conversation_of(request, store)
-    kinds = [p["type"] if p["type"] == "image" else p["text"][:8] for p in conversation.messages[0]["content"]]
+    assert conversation.messages[0] == {"role": "system", "content": "You are a robot."}
+    kinds = [p["type"] if p["type"] == "image" else p["text"][:8] for p in conversation.messages[1]["content"]]
     assert kinds == ["Image 0:", "image", "Image 1:", "image", "Sentence"] and len(conversation.images) == 2
 
 
@@ -123,13 +127,16 @@ def test_a_sweep_runs_cells_on_a_local_checkpoint(tmp_path, mini_root, tiny_qwen
     assert all(r.stats.requests == 1 for r in result.results.values())
 
 
-def test_the_grounding_agent_locates_with_a_local_checkpoint(tiny_idefics3):
+def test_the_grounding_agent_locates_with_a_local_checkpoint(tiny_pointing):
     from povagent.agent import GroundingAgent
 
     frames = [Image.new("RGB", (64, 48), (200, 10, 10)), Image.new("RGB", (64, 48), (10, 200, 10))]
-    with GroundingAgent("transformers", backend_options={"model": str(tiny_idefics3)}, timeout_s=60) as agent:
+    options = {"model": str(tiny_pointing), "trust_remote_code": True}
+    with GroundingAgent("transformers", backend_options=options, strategy_options={"max_tokens": 4}, timeout_s=60) as agent:
         loc = agent.locate("my mug is left of the sofa", frames)
-    assert loc.raw and loc.status is not None
+    # the pointing checkpoint points into the last image it was shown, half-way down
+    assert loc.frame_index == 1 and loc.status.value == "ok"
+    assert loc.normalized[1] == pytest.approx(0.5, abs=0.02)
 
 
 def test_a_changed_checkpoint_gets_another_identity(tmp_path, tiny_idefics3):
