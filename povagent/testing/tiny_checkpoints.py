@@ -85,6 +85,11 @@ def train_tokenizer(special: list[str], vocab_size: int = 400) -> Any:
     )
 
 
+def _config_extras(**values: Any) -> dict[str, Any]:
+    """Keyword arguments a config stores as attributes beside its declared fields."""
+    return values
+
+
 def _seed(seed: int) -> None:
     import torch
 
@@ -122,11 +127,10 @@ def build_qwen2_vl(folder: Path, *, seed: int = 0, layers: int = 1) -> Path:
         image_token_id=ids["<|image_pad|>"],
         video_token_id=ids["<|video_pad|>"],
         vision_start_token_id=ids["<|vision_start|>"],
-        initializer_range=INIT_RANGE,
         vision_end_token_id=ids["<|vision_end|>"],
-        eos_token_id=ids["<|im_end|>"],
-        pad_token_id=ids["<|endoftext|>"],
         tie_word_embeddings=True,
+        # attributes every PretrainedConfig keeps (the class's typed signature does not list them)
+        **_config_extras(initializer_range=INIT_RANGE, eos_token_id=ids["<|im_end|>"], pad_token_id=ids["<|endoftext|>"]),
     )
     _seed(seed)
     model = Qwen2VLForConditionalGeneration(config).eval()
@@ -165,9 +169,8 @@ def build_idefics3(folder: Path, *, seed: int = 0, layers: int = 1) -> Path:
         },
         vision_config={"hidden_size": 32, "intermediate_size": 64, "num_hidden_layers": 1, "num_attention_heads": 2, "image_size": image_size, "patch_size": patch},
         scale_factor=scale,
-        initializer_range=INIT_RANGE,
         image_token_id=ids["<image>"],
-        pad_token_id=ids["<|endoftext|>"],
+        **_config_extras(initializer_range=INIT_RANGE, pad_token_id=ids["<|endoftext|>"]),
     )
     _seed(seed)
     model = Idefics3ForConditionalGeneration(config).eval()

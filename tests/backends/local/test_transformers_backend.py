@@ -11,11 +11,11 @@ import pytest
 import yaml
 from PIL import Image
 
+from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.config.pipeline import load_pipeline
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
-from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.run.runner import run_pipeline
 from povagent_plugins.backends.transformers_backend import TransformersBackend
 
