@@ -239,36 +239,71 @@ def add_point_reader(folder: Path) -> Path:
     config's ``auto_map``, so only ``trust_remote_code=True`` loads it. Its
     ``extract_image_points(text, token_pooling, subpatch_mapping, image_sizes)`` returns one
     ``[object_id, image_num, x, y]`` point: the last image, at a place derived from the length
-    of the text, so a test knows what to expect without reading tokens.
+    of the text, half-way down, so a test knows what to expect without reading tokens.
     """
-    import importlib.util
-
-    from transformers import Qwen2VLForConditionalGeneration
-
-    (folder / "pointing_model.py").write_text(_POINTING_SOURCE)
-    # the weights are saved again from the subclass: transformers maps a checkpoint's tensor
-    # names by the class it knows, which a remote-code class is not
-    base = Qwen2VLForConditionalGeneration.from_pretrained(folder)
-    spec = importlib.util.spec_from_file_location("povagent_tiny_pointing", folder / "pointing_model.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    pointing = module.PointingQwen2VL(base.config)
-    pointing.load_state_dict(base.state_dict())
-    pointing.generation_config = base.generation_config
-    pointing.save_pretrained(folder)
-    config = json.loads((folder / "config.json").read_text())
-    config["auto_map"] = {
-        "AutoModelForImageTextToText": "pointing_model.PointingQwen2VL",
-        "AutoProcessor": "pointing_model.PointingProcessor",
-    }
-    (folder / "config.json").write_text(json.dumps(config, indent=2))
+    _remote_model(folder, "pointing_model", _POINTING_SOURCE, "PointingQwen2VL")
     for name in ("processor_config.json", "preprocessor_config.json", "tokenizer_config.json"):
         doc = json.loads((folder / name).read_text())
         doc["auto_map"] = {**doc.get("auto_map", {}), "AutoProcessor": "pointing_model.PointingProcessor"}
         doc["processor_class"] = "PointingProcessor"
         (folder / name).write_text(json.dumps(doc, indent=2))
+    config = json.loads((folder / "config.json").read_text())
+    config["auto_map"]["AutoProcessor"] = "pointing_model.PointingProcessor"
+    (folder / "config.json").write_text(json.dumps(config, indent=2))
     return folder
+
+
+def add_memory_limit(folder: Path, max_rows: int) -> Path:
+    """Turn a :func:`build_qwen2_vl` folder into a remote-code checkpoint whose ``generate``
+    runs out of memory (``torch.OutOfMemoryError``, as CUDA raises it) for a batch of more than
+    ``max_rows`` requests: out-of-memory handling is tested on a real model and a real error
+    type, without a device that can run out. ``max_rows`` 0: every request runs out."""
+    _remote_model(folder, "memory_limited_model", _MEMORY_LIMITED_SOURCE, "MemoryLimitedQwen2VL")
+    config = json.loads((folder / "config.json").read_text())
+    config["povagent_test_max_rows"] = max_rows
+    (folder / "config.json").write_text(json.dumps(config, indent=2))
+    return folder
+
+
+def _remote_model(folder: Path, module_name: str, source: str, class_name: str) -> None:
+    """Write ``source`` as ``folder/<module_name>.py`` and make its ``class_name`` (a
+    ``Qwen2VLForConditionalGeneration`` subclass) the folder's model, weights kept."""
+    import importlib.util
+
+    from transformers import Qwen2VLForConditionalGeneration
+
+    (folder / f"{module_name}.py").write_text(source)
+    # the weights are saved again from the subclass: transformers maps a checkpoint's tensor
+    # names by the class it knows, which a remote-code class is not
+    base = Qwen2VLForConditionalGeneration.from_pretrained(folder)
+    spec = importlib.util.spec_from_file_location(f"povagent_tiny_{module_name}", folder / f"{module_name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    model = getattr(module, class_name)(base.config)
+    model.load_state_dict(base.state_dict())
+    model.generation_config = base.generation_config
+    model.save_pretrained(folder)
+    config = json.loads((folder / "config.json").read_text())
+    config["auto_map"] = {**config.get("auto_map", {}), "AutoModelForImageTextToText": f"{module_name}.{class_name}"}
+    (folder / "config.json").write_text(json.dumps(config, indent=2))
+
+
+_MEMORY_LIMITED_SOURCE = '''"""A Qwen2-VL that runs out of memory above a batch size (test checkpoint built by povagent.testing)."""
+
+import torch
+from transformers import Qwen2VLForConditionalGeneration
+
+
+class MemoryLimitedQwen2VL(Qwen2VLForConditionalGeneration):
+    """Raises CUDA's out-of-memory error for batches larger than config.povagent_test_max_rows."""
+
+    def generate(self, *args, **kwargs):
+        rows = kwargs["input_ids"].shape[0]
+        if rows > getattr(self.config, "povagent_test_max_rows", 0):
+            raise torch.OutOfMemoryError(f"CUDA out of memory. Tried to allocate a batch of {rows}")
+        return super().generate(*args, **kwargs)
+'''
 
 
 _POINTING_SOURCE = '''"""A Qwen2-VL that points like MolmoPoint (test checkpoint built by povagent.testing)."""

@@ -45,3 +45,23 @@ def tiny_pointing(tiny_root, tiny_qwen) -> Path:
     folder = tiny_root / "pointing"
     shutil.copytree(tiny_qwen, folder)
     return add_point_reader(folder)
+
+
+@pytest.fixture(scope="session")
+def tiny_fits_two(tiny_root, tiny_qwen) -> Path:
+    """The Qwen2-VL-style checkpoint running out of memory for batches above two requests."""
+    from povagent.testing.tiny_checkpoints import add_memory_limit
+
+    folder = tiny_root / "fits_two"
+    shutil.copytree(tiny_qwen, folder)
+    return add_memory_limit(folder, max_rows=2)
+
+
+@pytest.fixture(scope="session")
+def tiny_fits_none(tiny_root, tiny_qwen) -> Path:
+    """The Qwen2-VL-style checkpoint running out of memory for every request."""
+    from povagent.testing.tiny_checkpoints import add_memory_limit
+
+    folder = tiny_root / "fits_none"
+    shutil.copytree(tiny_qwen, folder)
+    return add_memory_limit(folder, max_rows=0)

@@ -78,11 +78,42 @@ def test_the_runner_evaluates_a_local_checkpoint_like_any_backend(tmp_path, mini
     assert all(r["exchanges"][0]["completion_tokens"] >= 1 and r["exchanges"][0]["prompt_tokens"] > 10 for r in written)
 
 
-def test_a_finished_run_resumes_without_loading_the_model_again(tmp_path, mini_root, tiny_idefics3):
+def test_a_finished_run_resumes_without_loading_the_model_again(tmp_path, mini_root, tiny_idefics3, monkeypatch):
+    from povagent_plugins.backends.local_model import LocalModel
+
+    loads: list[str] = []
+    real_load = LocalModel.load.__func__  # type: ignore[attr-defined]
+    monkeypatch.setattr(LocalModel, "load", classmethod(lambda cls, settings: loads.append(settings.model) or real_load(cls, settings)))
     path = pipeline(tmp_path, mini_root, {"model": str(tiny_idefics3)})
     run_pipeline(load_pipeline(path))
     again = run_pipeline(load_pipeline(path))
     assert again.stats.requests == 0 and len(rows(tmp_path / "run")) == 2
+    assert loads == [str(tiny_idefics3)]  # loaded once, for the first run only
+
+
+def test_a_batch_out_of_memory_is_split_and_every_row_answered(tiny_fits_two):
+    store = ImageStore()
+    batch = requests(store, 5)
+    backend = TransformersBackend(model=str(tiny_fits_two), trust_remote_code=True, max_batch=8)
+
+    async def go() -> tuple[list[str], object]:
+        try:
+            await backend.start()
+            responses = await asyncio.gather(*(backend.complete(r, store) for r in batch))
+            return [r.text for r in responses], backend.batch_stats
+        finally:
+            await backend.aclose()
+
+    texts, stats = asyncio.run(go())
+    assert len(texts) == 5 and stats.splits >= 2 and stats.largest <= 2
+
+
+def test_a_request_that_never_fits_is_a_typed_row_not_retried(tmp_path, mini_root, tiny_fits_none):
+    path = pipeline(tmp_path, mini_root, {"model": str(tiny_fits_none), "trust_remote_code": True}, retry={"attempts": 3, "initial_wait": 0.0, "max_wait": 0.0})
+    run_pipeline(load_pipeline(path))
+    written = rows(tmp_path / "run")
+    assert [r["status"] for r in written] == ["infra_error", "infra_error"]
+    assert all(r["error_type"] == "out_of_memory" and r["retries"] == 0 for r in written)
 
 
 def test_batched_answers_equal_one_at_a_time_under_greedy_decoding(tiny_qwen):
