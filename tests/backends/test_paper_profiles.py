@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from povagent.dataset.models import Condition
@@ -172,3 +174,15 @@ def test_the_transformers_backend_takes_a_profile_as_its_model_with_the_profiles
     assert config.parser.name == "molmo" and config.strategy.options["prompts"] == "molmopoint"
     backend = get_plugin_host().create("backend", "transformers", config.backend.options)
     assert backend.options.trust_remote_code and backend.options.max_batch == 2
+
+
+def test_povagent_plugins_lists_the_in_process_profiles_and_the_backend():
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    listing = json.loads(CliRunner().invoke(app, ["plugins", "--json"]).output)
+    text = json.dumps(listing)
+    assert '"transformers"' in text
+    for name, (checkpoint, _) in IN_PROCESS.items():
+        assert name in text and f"in-process {checkpoint}" in text
