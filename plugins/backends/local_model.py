@@ -151,6 +151,8 @@ class LocalModel:
         if settings.attn_implementation is not None:
             kwargs["attn_implementation"] = settings.attn_implementation
         model = AutoModelForImageTextToText.from_pretrained(settings.model, **kwargs).eval()
+        if settings.device_map is None and torch.cuda.is_available():
+            model = model.to("cuda")  # no placement asked for: the GPU when there is one
         return cls(settings, processor, model)
 
     @property

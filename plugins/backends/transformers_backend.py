@@ -15,7 +15,8 @@ one at a time (tested on the tiny checkpoints).
 
 One model per process: it is loaded once, in a worker thread (the event loop keeps running),
 by :meth:`~TransformersBackend.start`; a second backend on the same checkpoint and settings
-shares it; it is freed when the last backend using it closes. Running out of device memory is
+shares it, one on another checkpoint meanwhile is refused; it is freed when the last backend
+using it closes. Running out of device memory is
 never retried as such: the batch is split and run again, and a single request that still does
 not fit is a permanent failure of kind ``out_of_memory`` (a typed row).
 
@@ -27,8 +28,10 @@ the same folder never reads the old answers from the cache.
 from __future__ import annotations
 
 import asyncio
+import re
 import threading
 import time
+from pathlib import Path
 from typing import Any, ClassVar, Literal, Mapping
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -95,6 +98,25 @@ def _options_error(exc: ValidationError) -> ConfigError:
     return ConfigError("; ".join(lines))
 
 
+#: A Hugging Face id: ``name`` or ``owner/name``.
+_HUB_ID = re.compile(r"^[A-Za-z0-9][\w.-]*(/[\w.-]+)?$")
+
+
+def _check_model_location(model: str) -> None:
+    """Refuse a ``model`` that is neither an existing folder nor shaped like a Hub id (a path
+    with a typo), before anything is loaded, in one line naming the option."""
+    path = Path(model).expanduser()
+    if path.is_dir():
+        return
+    if path.exists():
+        raise ConfigError(f"backend 'transformers': option 'model': {model} is a file; give the checkpoint's folder")
+    if not _HUB_ID.match(model) or model.startswith((".", "~")):
+        raise ConfigError(
+            f"backend 'transformers': option 'model': no folder {model} (give a checkpoint folder, a Hugging Face id "
+            "owner/name, or an in-process model profile)"
+        )
+
+
 class _LoadedModel:
     """The process's one loaded model, shared by the backends that use the same settings."""
 
@@ -104,14 +126,18 @@ class _LoadedModel:
 
     @classmethod
     def acquire(cls, settings: LoadSettings) -> LocalModel:
-        """The loaded model for ``settings``, loading it (and freeing another) if needed."""
+        """The loaded model for ``settings``, loading it if needed; a different checkpoint
+        while another is in use is refused (two 8B models rarely fit one device)."""
         with cls.lock:
             if cls.local is not None and cls.local.settings.key() == settings.key():
                 cls.users += 1
                 return cls.local
-            if cls.local is not None:  # one model per process: the previous one goes first
-                cls.local.free()
-                cls.local = None
+            if cls.local is not None:  # freed when its last user closed: still in use
+                raise PermanentBackendError(
+                    f"another checkpoint ({cls.local.settings.model}) is loaded in this process and in use; "
+                    "one model per process: close its pipeline or agent first, or run this one in another process",
+                    kind="model_busy",
+                )
             cls.local = LocalModel.load(settings)
             cls.users = 1
             return cls.local
@@ -142,6 +168,7 @@ class TransformersBackend(Backend):
             self.options = TransformersOptions.model_validate(options)
         except ValidationError as exc:
             raise _options_error(exc) from None
+        _check_model_location(self.options.model)
         self.profile: ModelProfile | None = profile
         self._fingerprint: str | None = None
         self._local: LocalModel | None = None
@@ -200,6 +227,8 @@ class TransformersBackend(Backend):
                     "hardware first, then pip install 'povagent[local]'",
                     kind="missing_dependency",
                 ) from None
+            except PermanentBackendError:
+                raise
             except (OSError, ValueError) as exc:
                 raise PermanentBackendError(f"cannot load checkpoint {self.options.model}: {exc}", kind="load_failed") from None
             max_batch = 1 if reads_points(self._local.model) else self.options.max_batch

@@ -189,6 +189,12 @@ def test_an_unknown_option_is_one_line_naming_it():
         TransformersBackend(model="some/model", max_btach=4)
 
 
+@pytest.mark.parametrize("model", ["/no/such/checkpoint", "./typo-in-folder", "runs/a/b"])
+def test_a_folder_that_does_not_exist_is_one_line_naming_the_option(model):
+    with pytest.raises(ConfigError, match=r"option 'model': no folder"):
+        TransformersBackend(model=model)
+
+
 def test_a_profile_without_a_checkpoint_is_refused():
     with pytest.raises(ConfigError, match="no checkpoint to run in-process"):
         TransformersBackend(model="gpt-5.4")
@@ -199,3 +205,22 @@ def test_remote_code_is_not_run_unless_asked(tiny_qwen):
     backend = TransformersBackend(model=str(tiny_qwen))
     with pytest.raises(Exception, match="trust_remote_code"):
         asyncio.run(answers(backend, requests(store, 1), store))
+
+
+def test_one_model_per_process_a_second_checkpoint_waits_for_the_first_to_close(tiny_idefics3, tiny_qwen):
+    from povagent.interfaces import PermanentBackendError
+
+    async def go() -> None:
+        first = TransformersBackend(model=str(tiny_idefics3))
+        second = TransformersBackend(model=str(tiny_qwen), trust_remote_code=True)
+        await first.start()
+        try:
+            with pytest.raises(PermanentBackendError, match="one model per process") as refused:
+                await second.start()
+            assert refused.value.kind == "model_busy"
+        finally:
+            await first.aclose()
+        await second.start()  # the first one is freed: the second loads
+        await second.aclose()
+
+    asyncio.run(go())
