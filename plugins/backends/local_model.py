@@ -9,7 +9,7 @@ strategy put them, the ``Image k:`` text parts kept) and generates for several r
 Decoding: a request's temperature decides (0: greedy; above 0: sampling at it); a request
 without one follows ``sampling`` (``greedy``, the default, or ``checkpoint``: the checkpoint's
 own ``generation_config``, as the authors' runner called ``generate``). ``max_tokens`` is
-``max_new_tokens``.
+``max_new_tokens`` (no limit asked: :data:`UNLIMITED_MAX_NEW_TOKENS`).
 
 Models that point with special tokens (MolmoPoint) are read by
 :mod:`povagent_plugins.backends.point_reader`. Everything here is blocking and runs in the
@@ -67,10 +67,16 @@ class Decoding:
         return kwargs
 
 
+#: New tokens when a request sets no limit (``max_tokens: null``): ``generate``'s own default
+#: (a total length of 20, prompt included) would cut every answer to nothing.
+UNLIMITED_MAX_NEW_TOKENS = 4096
+
+
 def decoding_of(request: Request, sampling: Sampling) -> Decoding:
     """The decoding a request asks for (its strategy's budget and temperature)."""
     gen = request.generation
-    return Decoding(max_new_tokens=gen.max_tokens, temperature=gen.temperature, sampling=sampling)
+    budget = gen.max_tokens if gen.max_tokens is not None else UNLIMITED_MAX_NEW_TOKENS
+    return Decoding(max_new_tokens=budget, temperature=gen.temperature, sampling=sampling)
 
 
 @dataclass
