@@ -173,7 +173,7 @@ class TransformersBackend(Backend):
         self._fingerprint: str | None = None
         self._local: LocalModel | None = None
         self._queue: BatchQueue[tuple[Request, ImageStore, Decoding], Generated] | None = None
-        self._start_lock: asyncio.Lock | None = None
+        self._loading: asyncio.Task[None] | None = None
 
     @staticmethod
     def _profile_for(model: Any) -> ModelProfile | None:
@@ -213,32 +213,40 @@ class TransformersBackend(Backend):
 
     # -- lifecycle ----------------------------------------------------------------------------
     async def start(self) -> None:
-        """Load the checkpoint (once per process) in a worker thread."""
-        if self._start_lock is None:
-            self._start_lock = asyncio.Lock()
-        async with self._start_lock:
-            if self._local is not None:
-                return
-            try:
-                self._local = await asyncio.to_thread(_LoadedModel.acquire, self.options.load_settings())
-            except ImportError as exc:
-                raise PermanentBackendError(
-                    f"the transformers backend needs torch and transformers ({exc}): install torch for your "
-                    "hardware first, then pip install 'povagent[local]'",
-                    kind="missing_dependency",
-                ) from None
-            except PermanentBackendError:
-                raise
-            except (OSError, ValueError) as exc:
-                raise PermanentBackendError(f"cannot load checkpoint {self.options.model}: {exc}", kind="load_failed") from None
-            max_batch = 1 if reads_points(self._local.model) else self.options.max_batch
-            self._queue = BatchQueue(self._run_batch, max_batch)
+        """Load the checkpoint (once per process) in a worker thread.
+
+        Every request that arrives while it loads waits on the same load and wakes with the
+        others at once, so the first batch is as full as the later ones. A load that failed
+        fails every later call the same way (a missing file does not appear by retrying), except
+        ``model_busy``: once the other checkpoint is closed, this one loads."""
+        if self._queue is not None:
+            return
+        if self._loading is None or _busy(self._loading):
+            self._loading = asyncio.get_running_loop().create_task(self._load())
+        await asyncio.shield(self._loading)
+
+    async def _load(self) -> None:
+        try:
+            self._local = await asyncio.to_thread(_LoadedModel.acquire, self.options.load_settings())
+        except ImportError as exc:
+            raise PermanentBackendError(
+                f"the transformers backend needs torch and transformers ({exc}): install torch for your "
+                "hardware first, then pip install 'povagent[local]'",
+                kind="missing_dependency",
+            ) from None
+        except PermanentBackendError:
+            raise
+        except (OSError, ValueError) as exc:
+            raise PermanentBackendError(f"cannot load checkpoint {self.options.model}: {exc}", kind="load_failed") from None
+        max_batch = 1 if reads_points(self._local.model) else self.options.max_batch
+        self._queue = BatchQueue(self._run_batch, max_batch)
 
     async def aclose(self) -> None:
         """Stop the queue and let the model go (freed when no other backend uses it)."""
         if self._queue is not None:
             await self._queue.aclose()
             self._queue = None
+        self._loading = None
         if self._local is not None:
             local, self._local = self._local, None
             await asyncio.to_thread(_LoadedModel.release, local)
@@ -284,6 +292,14 @@ class TransformersBackend(Backend):
             latency_s=time.perf_counter() - started,
             model=checkpoint_label(self.options.model, self.fingerprint()),
         )
+
+
+def _busy(loading: asyncio.Task[None]) -> bool:
+    """Whether a finished load was refused because another checkpoint was in use."""
+    if not loading.done() or loading.cancelled():
+        return loading.cancelled()
+    exc = loading.exception()
+    return isinstance(exc, PermanentBackendError) and exc.kind == "model_busy"
 
 
 @hookimpl

@@ -128,7 +128,7 @@ def test_batched_answers_equal_one_at_a_time_under_greedy_decoding(tiny_qwen):
 
 async def _with_stats(backend: TransformersBackend, batch: list[Request], store: ImageStore) -> tuple[list[str], int]:
     try:
-        await backend.start()  # as the runner does before its requests
+        # no start() first: requests that wait for the load wake together into one batch
         responses = await asyncio.gather(*(backend.complete(r, store) for r in batch))
         return [r.text for r in responses], backend.batch_stats.largest
     finally:
