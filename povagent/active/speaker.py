@@ -23,7 +23,7 @@ CANNOT_SAY = "I can't say more."
 #: The largest pair file read (a generated house's is a few tens of KB).
 MAX_PAIR_FILE = 8 * 1024 * 1024
 
-_WHERE = re.compile(r"\b(doing|did|where|sit|sitting|sat|stand|standing|stood|lying|lay|furniture|activity|position|located|place|seat|at which|were you)\b")
+_WHERE = re.compile(r"\b(doing|did|where|sit|sitting|sat|stand|standing|stood|lying|lay|furniture|activity|position|located|place|seat|at which)\b")
 _FACING = re.compile(r"\b(fac\w*|looking|look|toward\w*|direction|orient\w*|heading|front of you)\b")
 
 
