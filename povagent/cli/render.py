@@ -27,7 +27,7 @@ def render_command(
     cam_pos: str = typer.Option(..., "--cam-pos", metavar="X,Y,Z", help="Camera position in metres (y up)."),
     yaw: float = typer.Option(..., "--yaw", metavar="Y", help="Yaw in degrees, as the dataset's cam_yaw (clockwise from above)."),
     horizon: float = typer.Option(..., "--horizon", metavar="H", help="Horizon in degrees, positive looks down."),
-    fov: float = typer.Option(100.0, "--fov", min=1.0, max=179.0, help="Field of view in degrees."),
+    fov: float = typer.Option(100.0, "--fov", min=1.0, max=179.0, metavar="DEGREES", help="Field of view in degrees (1-179)."),
     out: Path = typer.Option(..., "--out", metavar="FILE.png", help="Where to write the PNG."),
 ) -> None:
     """Render one camera of a generated house to a PNG (512x512).
