@@ -207,7 +207,7 @@ class Episode:
         camera = self.image_camera(kind, int(number))
         assert camera is not None, "finish() takes an image that was shown"
         frame = int(number) if kind == "frame" else None
-        self.answer = EpisodeAnswer(image=image, x=x, y=y, via=via, camera=camera, frame=frame)  # type: ignore[arg-type]  # via is one of the two literals
+        self.answer = EpisodeAnswer(image=image, x=x, y=y, via=via, camera=camera, frame=frame)
         self.end = "answered" if via == "answer_tool" else "answered in text (official JSON), not with the answer tool"
 
     def _step(self, turn: int, action: str, args: str, valid: bool, text: str, *, view: ViewRecord | None = None,

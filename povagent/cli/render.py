@@ -17,7 +17,7 @@ def _position(text: str) -> tuple[float, float, float]:
         values = ()
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise typer.BadParameter(f"{text[:60]!r}: give three finite numbers X,Y,Z (metres)", param_hint="--cam-pos")
-    return values  # type: ignore[return-value]  # three floats, checked above
+    return values[0], values[1], values[2]
 
 
 @app.command("render")

@@ -35,5 +35,5 @@ def test_facts_are_read_from_the_house_pair_file(active_dataset):
 
 def test_an_unknown_pair_is_one_line_naming_the_file(active_dataset):
     folder = active_dataset / "artifacts" / "train_house_00000"
-    with pytest.raises(DatasetError, match="train_house_00000.json: no pair nope"):
+    with pytest.raises(DatasetError, match=r"train_house_00000\.json: no pair nope"):
         pair_facts(folder, "train_house_00000", "nope", "front")

@@ -4,7 +4,6 @@ camera of the view answered in; hostile calls and text answers never crash a run
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
