@@ -29,7 +29,6 @@ from povagent.active.episode import DEFAULT_BUDGET, Episode
 from povagent.active.floor import Floor
 from povagent.active.house import house_for
 from povagent.active.pose import Pose
-from povagent.active.record import read_record
 from povagent.active.speaker import pair_facts
 from povagent.active.tools import TOOLS
 from povagent.active.views import VIEWS, ViewStore
@@ -38,6 +37,7 @@ from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Message, Request, Response, TextPart
 from povagent.interfaces import Ask, Parser, PlannedTurn, earlier_answer
+from povagent.results.episode import read_record
 from povagent_plugins.parsers.official import parse_official
 from povagent_plugins.strategies.basic import BasicStrategy, _positive_or_none
 from povagent_plugins.strategies.layout import prompt_message

@@ -18,11 +18,11 @@ from dataclasses import dataclass
 
 from povagent.active.floor import Floor
 from povagent.active.pose import Pose
-from povagent.active.record import EpisodeAnswer, EpisodeCounts, EpisodeRecord, Step, ViewRecord
 from povagent.active.speaker import PairFacts
 from povagent.active.tools import Answer, Ask, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
 from povagent.answers.spec import AnsweredCamera
 from povagent.exchange.messages import ToolCall
+from povagent.results.episode import EpisodeAnswer, EpisodeCounts, EpisodeRecord, Step, ViewRecord
 
 #: The default action budget (``answer`` not counted).
 DEFAULT_BUDGET = 8

@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.active.record import read_record
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import PermanentBackendError
+from povagent.results.episode import read_record
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
 from povagent_plugins.backends.explorers import ExplorerOracle, ExplorerRandom

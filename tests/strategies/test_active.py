@@ -9,11 +9,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.active.record import read_record
 from povagent.active.tools import TOOL_NAMES
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
 from povagent.geometry.camera import Camera
+from povagent.results.episode import read_record
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
 from povagent.scoring.official import normalized_l2, project_ground_truth

@@ -3,7 +3,7 @@
 What it is for: the row of an active instance keeps this record (JSON) as its final answer, so
 everything the report draws (trajectories, actions used) and everything the scorer needs (the
 camera of the image answered in) is in the row, and ``score``/``rescore`` recompute offline.
-The models publish their JSON Schema like every other output. What it must not do: hold image
+``EpisodeRecord.model_json_schema()`` is its JSON Schema. What it must not do: hold image
 bytes (views are named by SHA-256; their PNGs live in the run folder).
 """
 
