@@ -26,8 +26,6 @@ from typing import Any
 
 from povagent import hookimpl
 from povagent.active.episode import DEFAULT_BUDGET, Episode
-from povagent.active.floor import Floor
-from povagent.active.house import house_for
 from povagent.active.pose import Pose
 from povagent.active.speaker import pair_facts
 from povagent.active.tools import TOOLS
@@ -117,6 +115,10 @@ class ActiveStrategy(BasicStrategy):
     # -- the episode ----------------------------------------------------------------------------
     def episode(self, instance: Instance, images: ImageStore) -> Episode:
         """A new episode of ``instance`` (rebuilds the house unless this process has it)."""
+        # the renderer and the generator load here, with the first house (not with the plugin list)
+        from povagent.active.floor import Floor
+        from povagent.active.house import house_for
+
         if not instance.frames:
             raise ValueError(f"{instance.id}: no frames to start from")
         house_dir = instance.frames[0].file.parent.parent

@@ -9,10 +9,7 @@ against the reachable floor (:mod:`.pose`, :mod:`.floor`), the simulated speaker
 with its budget (:mod:`.episode`), its record (:mod:`.record`) and the content-addressed view
 folder (:mod:`.views`). What it must not do: call a model or know the runner; only the
 ``active`` strategy, the explorer backends and the ``render`` command import it.
+
+The package imports nothing itself: the renderer (embree, the generator) loads only when a
+house is rebuilt (``povagent.active.house.render_view``), never when the plugin list is read.
 """
-
-from __future__ import annotations
-
-from povagent.active.house import ActiveHouse, house_for, render_view
-
-__all__ = ["ActiveHouse", "house_for", "render_view"]

@@ -15,13 +15,16 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from povagent.active.floor import Floor
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
 from povagent.active.tools import Answer, Ask, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
 from povagent.answers.spec import AnsweredCamera
 from povagent.exchange.messages import ToolCall
+
+if TYPE_CHECKING:  # the floor needs the generator: loaded with the house, not with this module
+    from povagent.active.floor import Floor
 from povagent.results.episode import EpisodeAnswer, EpisodeCounts, EpisodeRecord, Step, ViewRecord
 
 #: The default action budget (``answer`` not counted).

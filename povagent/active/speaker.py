@@ -16,7 +16,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.errors import DatasetError
-from povagent.generate.sentences import word_for
 
 #: The answer to any question outside the speaker's facts.
 CANNOT_SAY = "I can't say more."
@@ -37,6 +36,8 @@ class PairFacts:
 
     def answer(self, question: str) -> str:
         """The templated answer to ``question`` (lower-cased words decide which fact, if any)."""
+        from povagent.generate.sentences import word_for  # the generator loads with the house anyway
+
         q = question.lower()
         parts = []
         if _WHERE.search(q):

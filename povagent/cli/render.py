@@ -35,7 +35,7 @@ def render_command(
     The camera of an exploration frame or an observer view gives that image byte for byte.
     A dataset this generator version did not make (the public release) is refused.
     """
-    from povagent.active import render_view
+    from povagent.active.house import render_view
     from povagent.geometry.camera import Camera
 
     position = _position(cam_pos)
