@@ -77,3 +77,12 @@ def test_an_explorer_refuses_a_passive_request(generated_release, backend):
     request = BasicStrategy().build(instance, ImageStore())
     with pytest.raises(PermanentBackendError, match="active strategy"):
         asyncio.run(backend.complete(request, ImageStore()))
+
+
+def test_povagent_score_recomputes_an_active_run_offline_in_the_answered_cameras(generated_release, oracle_run):
+    from povagent.scoring.predictions import score_predictions
+
+    folder, rows = oracle_run
+    summary, _ = score_predictions(folder, load_dataset(generated_release))
+    assert summary["overall"]["n"] == len(rows)
+    assert summary["overall"]["mean_l2"] < 0.01
