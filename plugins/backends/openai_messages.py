@@ -58,8 +58,8 @@ def openai_messages(request: Request, images: ImageStore) -> list[dict[str, Any]
 
 #: The most tool calls read from one answer, and the longest arguments text kept: a model's
 #: output is untrusted, and each call read becomes a message sent back.
-MAX_TOOL_CALLS = 256
-MAX_ARGUMENTS_CHARS = 16384
+MAX_TOOL_CALLS = 128
+MAX_ARGUMENTS_CHARS = 4096
 
 
 def tool_calls_of(response: Any) -> tuple[ToolCall, ...]:

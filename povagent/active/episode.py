@@ -29,8 +29,10 @@ from povagent.results.episode import EpisodeAnswer, EpisodeCounts, EpisodeRecord
 
 #: The default action budget (``answer`` not counted).
 DEFAULT_BUDGET = 8
-#: The most characters of a call's arguments a step keeps.
+#: The most characters of a call's arguments a step keeps, and the most steps a record keeps
+#: (the rest are counted in ``steps_dropped``): a record's size is bounded whatever a model sends.
 KEPT_ARGUMENTS = 500
+MAX_RECORDED_STEPS = 256
 
 #: Renders a pose: returns the view PNG's SHA-256 (the caller stores the bytes).
 RenderFn = Callable[[Pose], str]
@@ -83,6 +85,7 @@ class Episode:
         self.counts = EpisodeCounts()
         self.answer: EpisodeAnswer | None = None
         self.end = ""
+        self.steps_dropped = 0
 
     @property
     def done(self) -> bool:
@@ -215,6 +218,9 @@ class Episode:
 
     def _step(self, turn: int, action: str, args: str, valid: bool, text: str, *, view: ViewRecord | None = None,
               blocked: bool = False, counted: bool = True) -> None:  # fmt: skip
+        if len(self.steps) >= MAX_RECORDED_STEPS:
+            self.steps_dropped += 1
+            return
         self.steps.append(
             Step(turn=turn, action=action, arguments=args, valid=valid, observation=text[:300],
                  pose=camera_record(self.pose),
@@ -225,4 +231,4 @@ class Episode:
         """The episode as the row keeps it."""
         return EpisodeRecord(budget=self.budget, shown_frames=len(self.frames), start=camera_record(self.start),
                              steps=self.steps, views=self.views, counts=self.counts, answer=self.answer,
-                             end=self.end or "no answer")  # fmt: skip
+                             end=self.end or "no answer", steps_dropped=self.steps_dropped)  # fmt: skip

@@ -93,6 +93,8 @@ class EpisodeRecord(BaseModel):
     counts: EpisodeCounts = Field(default_factory=EpisodeCounts)
     answer: EpisodeAnswer | None = None
     end: str = ""
+    #: Steps not kept once the record held its maximum (calls refused over the budget, mostly).
+    steps_dropped: int = 0
 
 
 def read_record(text: str | None) -> EpisodeRecord | None:

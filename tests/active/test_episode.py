@@ -76,3 +76,13 @@ def test_the_record_keeps_each_action_its_arguments_as_sent_and_the_view_hash(ma
     ep.handle([ToolCall("c0", "turn", '{"degrees":   30}')], turn=1)
     step = ep.record().steps[0]
     assert (step.action, step.arguments, step.view, step.sha256) == ("turn", '{"degrees":   30}', 1, ep.views[0].sha256)
+
+
+def test_the_record_keeps_a_bounded_number_of_steps_and_counts_the_rest(make_episode):
+    from povagent.active.episode import MAX_RECORDED_STEPS
+
+    ep = make_episode(budget=1)
+    for turn in range(1, 4):
+        ep.handle([call("turn", k, degrees=1) for k in range(128)], turn=turn)
+    record = ep.record()
+    assert len(record.steps) == MAX_RECORDED_STEPS and record.steps_dropped == 3 * 128 - MAX_RECORDED_STEPS
