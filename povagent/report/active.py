@@ -72,7 +72,7 @@ def comparison_rows(collection: Collection, episodes: dict[str, list[Episode]], 
     for active in episodes:
         for other in passive:
             for cond in ["all", *sorted({o.condition for o in by_system[active]})]:
-                pick = (lambda o: True) if cond == "all" else (lambda o, c=cond: o.condition == c)  # type: ignore[misc]
+                pick = (lambda o: True) if cond == "all" else (lambda o, c=cond: o.condition == c)
                 c = paired_comparison(other, [o for o in by_system[other] if pick(o)], active,
                                       [o for o in by_system[active] if pick(o)], n_boot=n_boot, seed=seed)  # fmt: skip
                 if c.n_pairs:
