@@ -11,25 +11,54 @@ must not do: score (the rows' scores are read as they are) or render anything of
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import math
 from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from PIL import Image
 
+from povagent.dataset.instances import Frame
 from povagent.report.collect import Collection, Observation
 from povagent.report.statistics import paired_comparison
 from povagent.results.episode import EpisodeRecord, read_record
 from povagent.scoring.bootstrap import bootstrap_mean_ci
+from povagent.scoring.official import answered_in_camera
 
 #: Episodes drawn per active system, views shown per episode, and the thumbnail side (px).
 TRAJECTORIES_PER_SYSTEM = 6
 VIEWS_PER_EPISODE = 10
 THUMB_PX = 128
 CONDITION_LABELS = {"a": "Inferred (A)", "b": "Stated (B)", "c": "Given (C)"}
+
+
+@dataclass(frozen=True)
+class AnsweredView:
+    """What the gallery draws for an active row: the image answered in when it is a rendered
+    view (its camera, and its PNG in the run folder; ``None`` for an exploration frame, drawn as
+    usual) and the episode's poses (x, z, yaw), start first, for the bird's-eye card."""
+
+    frame: Frame | None
+    path: tuple[tuple[float, float, float], ...]
+
+
+def answered_view(observation: Observation, folders: Mapping[str, Path]) -> AnsweredView | None:
+    """The gallery's view of an active row (``None`` for a passive row)."""
+    record = read_record(observation.raw)
+    if record is None:
+        return None
+    path = tuple((c.x, c.z, c.yaw) for c in [record.start, *(v.camera for v in record.views)])
+    answer = record.answer
+    if answer is None or answer.frame is not None:
+        return AnsweredView(None, path)
+    number = int(answer.image.split()[1])
+    if not 1 <= number <= len(record.views):
+        return AnsweredView(None, path)
+    png = folders.get(observation.run_name, Path()) / "views" / f"{record.views[number - 1].sha256}.png"
+    return AnsweredView(dataclasses.replace(answered_in_camera(answer.camera), file=png), path)
 
 
 @dataclass(frozen=True)

@@ -129,7 +129,8 @@ def write_report(
     gstats = None
     if gallery:
         shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
-        entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
+        folders = {r.name: r.folder for r in collection.runs}  # active rows show their rendered views
+        entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers, folders)
         answers = write_answer_chunks(entries, out, keys=("a", "tr"))
         gallery_data = {
             "systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers,

@@ -23,7 +23,7 @@ def report(generated_release, tmp_path_factory):
             "backend": backend, "strategy": strategy, "parser": parser, "scorers": ["official"],
             "output": str(root / "runs" / name)}))  # fmt: skip
         run_pipeline(load_pipeline(root / f"{name}.yaml"))
-    return write_report(root / "runs", root / "report", n_boot=200, gallery=False)
+    return write_report(root / "runs", root / "report", n_boot=200)
 
 
 def test_each_active_system_is_compared_with_the_passive_run_on_the_same_instances(report):
@@ -43,6 +43,12 @@ def test_trajectories_are_drawn_with_the_views_they_rendered(report):
     assert 'id="active"' in page and page.count('class="active-episode"') == 3
     thumbs = list((report.out / "images" / "active").glob("*.jpg"))
     assert thumbs and all(f"images/active/{t.name}" in page for t in thumbs)
+
+
+def test_the_gallery_card_shows_the_rendered_view_answered_in_and_the_trajectory_from_above(report):
+    svgs = [p.read_text() for p in (report.out / "images").glob("*.svg")]
+    assert sum('id="trajectory"' in s for s in svgs) == 3  # one bird's-eye card per active row
+    assert report.gallery.without_image == 0  # every active row answered in a view has its drawing
 
 
 def _active(report) -> dict:
