@@ -30,6 +30,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.active",
     # backends
     "povagent_plugins.backends.litellm_backend",
+    "povagent_plugins.backends.transformers_backend",
     "povagent_plugins.backends.baselines",
     "povagent_plugins.backends.replay",
     "povagent_plugins.backends.simulated",
