@@ -22,7 +22,7 @@ import sys
 import threading
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Callable, Mapping, TextIO
+from typing import Any, Callable, Mapping, TextIO, cast
 
 import structlog
 from structlog.typing import EventDict
@@ -199,10 +199,12 @@ class RunLog:
         self.path = Path(path) if path is not None else None
         self._file: TextIO | None = None
         if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
+            from povagent.run.confined_write import open_inside
+
             # line-buffered is too slow for one event per request; flushed on close and by the
-            # runner before each batch of rows; no fsync (results.jsonl is the record).
-            self._file = open(self.path, "a", encoding="utf-8")
+            # runner before each batch of rows; no fsync (results.jsonl is the record). Never
+            # through a link planted where the log goes (a resumed run's folder is untrusted).
+            self._file = cast(TextIO, open_inside(self.path.parent, self.path.name, "a"))
         self.redactor = redactor or Redactor()
         stream = (_stderr if console is True else console) or None
         self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))

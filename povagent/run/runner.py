@@ -52,6 +52,7 @@ from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
+from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog
@@ -541,7 +542,7 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         self._digests = plan.digests
         pending, wanted = plan.pending, plan.wanted
-        (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
+        write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser

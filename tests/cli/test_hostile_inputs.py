@@ -251,3 +251,77 @@ def test_a_bad_predictions_file_is_scored_or_refused_with_its_name(tmp_path, dat
     code, output = invoke("score", "--predictions", path, "--dataset", dataset)
     assert code in (0, 2), output
     assert code == 0 or str(path) in output or "predictions.json" in output, output
+
+
+@pytest.fixture(scope="module")
+def finished_run_once(tmp_path_factory, mini_root) -> tuple[Path, Path]:
+    """One finished run of the two good houses (its folder, its pipeline), copied by each case."""
+    base = tmp_path_factory.mktemp("finished")
+    root = base / "ds"
+    (root / "artifacts").mkdir(parents=True)
+    shutil.copy(mini_root / "meta.json", root / "meta.json")
+    for name in ("train_house_00000", TARGET):
+        shutil.copytree(mini_root / "artifacts" / name, root / "artifacts" / name)
+    pipeline = base / "good.yaml"
+    pipeline.write_text(yaml.safe_dump({"dataset": str(root), "backend": "center", "cache": False, "output": str(base / "run")}))
+    code, text = invoke("run", pipeline, "--quiet")
+    assert code == 0, text
+    return base / "run", pipeline
+
+
+def _plant_link(rel: str, to_folder: bool = False) -> Callable[[Path, Path], None]:
+    def plant(run: Path, outside: Path) -> None:
+        (run / rel).parent.mkdir(parents=True, exist_ok=True)
+        (run / rel).unlink(missing_ok=True)  # the file povagent wrote, swapped for a link
+        os.symlink(outside.parent if to_folder else outside, run / rel)
+
+    return plant
+
+
+def _plant_folder(rel: str) -> Callable[[Path, Path], None]:
+    return lambda run, outside: (run / rel).mkdir(parents=True)
+
+
+def _plant_file(rel: str) -> Callable[[Path, Path], None]:
+    return lambda run, outside: (run / rel).write_text("someone's file")
+
+
+#: name -> (command after the run folder, what is planted in the run folder, the entry the one
+#: line names, or None where the writer replaces the link without following it and succeeds)
+RUN_FOLDER_PLANTS: dict[str, tuple[tuple[str, ...], Callable[[Path, Path], None], str | None]] = {
+    "rescored folder linked out": (("rescore",), _plant_link("rescored-official", to_folder=True), "rescored-official"),
+    "rescore's staged rows linked out": (("rescore",), _plant_link("rescored-official/results.jsonl.tmp"), None),
+    "rescore's config linked out": (("rescore",), _plant_link("rescored-official/config.yaml"), None),
+    "rescore's summary staging linked out": (("rescore",), _plant_link("rescored-official/summary.json.tmp"), None),
+    "rescored folder is a file": (("rescore",), _plant_file("rescored-official"), "rescored-official"),
+    "rescore's staged rows are a folder": (("rescore",), _plant_folder("rescored-official/results.jsonl.tmp"), "results.jsonl.tmp"),
+    "resumed run's log linked out": (("run",), _plant_link("log.jsonl"), "log.jsonl"),
+    "resumed run's journal linked out": (("run",), _plant_link("results.jsonl"), "results.jsonl"),
+    "resumed run's summary linked out": (("run",), _plant_link("summary.json"), None),
+    "report folder linked out": (("report", "--bootstrap", "0"), _plant_link("report", to_folder=True), "report"),
+    "report page linked out": (("report", "--bootstrap", "0"), _plant_link("report/report.html"), None),
+    "report summary linked out": (("report", "--bootstrap", "0"), _plant_link("report/summary.json"), None),
+}
+
+
+@pytest.mark.parametrize("command, plant, named", RUN_FOLDER_PLANTS.values(), ids=RUN_FOLDER_PLANTS.keys())
+def test_a_link_planted_in_a_run_folder_never_writes_outside_it(tmp_path, finished_run_once, command, plant, named):
+    source, pipeline = finished_run_once
+    run = tmp_path / "run"
+    shutil.copytree(source, run, symlinks=True)
+    outside = tmp_path / "elsewhere" / "precious.txt"
+    outside.parent.mkdir()
+    outside.write_text("keep me\n")
+    plant(run, outside)
+    if command[0] == "run":  # the same pipeline pointed at the copy resumes it
+        resumed = tmp_path / "pipeline.yaml"
+        resumed.write_text(pipeline.read_text().replace(str(source), str(run)))
+        code, text = invoke("run", resumed, "--quiet")
+    else:
+        code, text = invoke(command[0], run, *command[1:])
+    assert outside.read_text() == "keep me\n" and sorted(p.name for p in outside.parent.iterdir()) == ["precious.txt"], text
+    if named is None:
+        assert code == 0, text[-3000:]
+    else:
+        error = [line for line in text.splitlines() if line.startswith("error:")]
+        assert code == 2 and len(error) == 1 and f"{named}:" in error[0], text[-3000:]

@@ -153,7 +153,7 @@ def test_a_released_frame_rewritten_in_place_is_an_error_naming_it(tmp_path):
 
     from povagent.errors import DatasetError
 
-    store, path, h = _released(tmp_path)
+    store, path, _ = _released(tmp_path)
     png(path, (0, 0, 255), size=(32, 32))
     with pytest.raises(DatasetError, match=r"a\.png: image changed"):
         store.load_file(path)
