@@ -67,9 +67,12 @@ class Redactor:
         secrets = {v for k, v in os.environ.items() if _SECRET_ENV.match(k) and len(v) >= 6}
         secrets.update(s for s in extra_secrets if s and len(s) >= 6)
         patterns = list(_SECRET_TEXT)
+        #: the secret values themselves (no pattern): what :meth:`known` removes from answers
+        self._known: re.Pattern[str] | None = None
         if secrets:
             # Longest first so a key containing another is removed whole.
-            patterns.append(re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True))))
+            self._known = re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True)))
+            patterns.append(self._known)
         self._patterns = patterns
         # One search decides the common case (nothing to redact); it runs on every logged string.
         self._any = re.compile("|".join(f"(?:{p.pattern})" for p in patterns))
@@ -81,6 +84,17 @@ class Redactor:
         for p in self._patterns:
             value = p.sub(REDACTED, value)
         return value
+
+    def known(self, value: str) -> str:
+        """``value`` with every secret value povagent knows replaced, and nothing else touched.
+
+        For what a server sends back in a successful answer (a server echoing the request's
+        ``Authorization`` header): an answer is kept exactly as sent, except for the keys
+        povagent itself holds; the secret-looking patterns of :meth:`text` are for messages.
+        """
+        if self._known is None or not self._known.search(value):
+            return value
+        return self._known.sub(REDACTED, value)
 
     def value(self, value: Any, key: str | None = None) -> Any:
         """Redact a value found under ``key`` (recursing into mappings and lists)."""
@@ -107,6 +121,29 @@ class Redactor:
     def __call__(self, logger: Any, method: str, event: EventDict) -> dict[str, Any]:
         """structlog processor."""
         return {k: self.value(v, k) for k, v in event.items()}
+
+
+def secrets_named_by(config: Any) -> tuple[str, ...]:
+    """The values of the environment variables a resolved config names in its ``*_env`` fields
+    (a backend's ``api_key_env``, each router deployment's): keys povagent sends, whatever the
+    variable is called (``MY_LAB_KEY`` matches no secret-looking name). Unset ones are skipped."""
+    found: list[str] = []
+
+    def walk(node: Any) -> None:
+        if isinstance(node, Mapping):
+            for k, v in node.items():
+                if isinstance(v, str) and _names_a_variable(str(k)) and ENV_VAR_NAME.match(v):
+                    value = os.environ.get(v)
+                    if value:
+                        found.append(value)
+                else:
+                    walk(v)
+        elif isinstance(node, (list, tuple)):
+            for v in node:
+                walk(v)
+
+    walk(config)
+    return tuple(found)
 
 
 @functools.lru_cache(maxsize=1024)

@@ -234,6 +234,41 @@ def test_a_server_that_answers_nothing_fails_the_keys_and_writes_nothing_wrong(t
     assert "run `povagent run" in text or "again" in text
 
 
+def test_a_key_echoed_inside_a_successful_answer_reaches_no_file(tmp_path, dataset, answer_server, monkeypatch):
+    # The variable's name matches no secret-looking pattern: only knowing api_key_env finds it.
+    from povagent.testing.loopback_server import Reply
+
+    key = "lab-key-4f9a8c7e2b1d"
+    monkeypatch.setenv("POVAGENT_ECHO_VAR", key)
+
+    def echo(request):
+        sent = request.headers.get("authorization", "")
+        return Reply('{"selected_image": 0, "x": 256, "y": 256} (you sent ' + sent + ")")
+
+    answer_server.reply = echo
+    pipeline = tmp_path / "pipeline.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "dataset": str(dataset),
+        "instances": {"houses": [TARGET], "conditions": ["a", "c"]},
+        "backend": {"name": "litellm", "options": {"model": "openai/echo", "api_base": answer_server.url, "api_key_env": "POVAGENT_ECHO_VAR"}},
+        "retry": {"attempts": 1, "initial_wait": 0.0, "max_wait": 0.0},
+        "output": str(tmp_path / "run"),
+    }))
+    code, text = invoke("run", pipeline, "--quiet")
+    assert code == 0, text[-3000:]
+    assert answer_server.requests and key in answer_server.requests[-1].headers["authorization"]  # it was sent
+    rows = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 4 and all("[REDACTED]" in r["exchanges"][-1]["raw"] for r in rows)
+    assert all(r["status"] == "answered" for r in rows)  # the answer itself is kept exactly
+    code, _ = invoke("run", pipeline, "--quiet")  # again: every answer now from the cache
+    assert code == 0
+    assert invoke("report", tmp_path / "run", "--bootstrap", "0")[0] == 0
+    assert invoke("rescore", tmp_path / "run")[0] == 0
+    written = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert any(p.name == "cache.sqlite" for p in written) and any(p.name == "report.html" for p in written)
+    assert [str(p) for p in written if key.encode() in p.read_bytes()] == []
+
+
 #: name -> an official predictions file's text
 PREDICTIONS: dict[str, str] = {
     "not JSON": "[{house_id: 1",
