@@ -82,10 +82,20 @@ def _symlinked_log(root: Path) -> None:
     os.symlink(outside, house(root, "exploration_log.json"))
 
 
+def _rgb_path_climbing_through_a_symlinked_folder(root: Path) -> None:
+    # ``deep`` looks one level down but is four: the path resolves back inside the dataset
+    # (to the pair's own view), while as written it climbs out of the dataset folder.
+    target = house(root, "img_from_observer/a/b")
+    target.mkdir(parents=True)
+    os.symlink(target, house(root, "deep"))
+    edit(house(root), lambda d: d[0].update(rgb_path=f"deep/../../../../../artifacts/{TARGET}/img_from_observer/pair_7.png"))
+
+
 #: name -> (damage, file named in the messages, field named or None)
 DATASETS: dict[str, tuple[Callable[[Path], None], str, str | None]] = {
     "absolute image_path": (lambda r: edit(house(r, "exploration_log.json"), lambda d: d[0].update(image_path=str(_outside(r)))), "exploration_log.json", "$[0].image_path"),
     "rgb_path climbing out": (lambda r: edit(house(r), lambda d: d[0].update(rgb_path="../../../secret.png")), f"{TARGET}.json", "$[0].rgb_path"),
+    "rgb_path climbing out through a symlinked folder": (_rgb_path_climbing_through_a_symlinked_folder, f"{TARGET}.json", "$[0].rgb_path"),
     "frame symlinked out": (_symlinked_frame, "exploration_log.json", "$[0].image_path"),
     "log symlinked out": (_symlinked_log, "exploration_log.json", None),
     "NaN camera position": (lambda r: edit(house(r), lambda d: d[0]["camera"]["cam_pos"].__setitem__(0, float("nan"))), f"{TARGET}.json", "$[0].camera.cam_pos[0]"),
