@@ -23,7 +23,8 @@ row). The API, for every writer of povagent (run, rescore, report, summaries, ex
 - :class:`ConfinedFolder` ``(root, rel="")``: ``root`` (followed) then ``rel`` below it (made
   when missing, never followed); ``.sub(rel)``, ``.open_append(name)``, ``.open_update(name)``,
   ``.write_replace(name, data)``, ``.staged(name)`` (write aside, ``commit()`` renames),
-  ``.unlink(name)``, ``.path``; a context manager that closes its descriptor;
+  ``.unlink(name)``, ``.check_plain_file(name)`` (for a file another library opens by path),
+  ``.path``; a context manager that closes its descriptor;
 - :func:`write_inside` ``(root, rel, data)``: one file written whole at ``root/rel``;
 - :func:`open_inside` ``(root, rel, mode)``: ``"a"``/``"ab"`` to append, ``"r+b"`` to update.
 
@@ -186,6 +187,25 @@ class ConfinedFolder:
         with self.staged(name, encoding="utf-8" if isinstance(data, str) else None, unique=unique) as staged:
             staged.file.write(data)
             staged.commit(fsync=fsync)
+
+    def check_plain_file(self, name: str) -> None:
+        """Refuse ``name`` if it is a link, a file with a second name, or not a file (fine when
+        missing): for a file another library opens by its path (SQLite). A check, not a
+        descriptor: it cannot see a swap made after it, so use the openers above where you can."""
+        target = self.path / name
+        try:
+            st = os.stat(name, dir_fd=self._fd, follow_symlinks=False) if self._fd is not None else os.lstat(target)
+        except FileNotFoundError:
+            return
+        if stat.S_ISLNK(st.st_mode):
+            raise _refusal(target, OSError(errno.ELOOP, "symbolic link"), "file")
+        if stat.S_ISDIR(st.st_mode):
+            raise _refusal(target, OSError(errno.EISDIR, "folder"), "file")
+        if st.st_nlink > 1:
+            raise WriteTargetError(
+                f"{target}: has other names (a hard link), so writing it would change a file "
+                "elsewhere; nothing written (replace it with a copy, or choose another folder)"
+            )
 
     def unlink(self, name: str, *, missing_ok: bool = True) -> None:
         """Remove the entry ``name`` (a link itself, never what it points at); a folder is refused."""

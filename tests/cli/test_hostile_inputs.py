@@ -346,6 +346,9 @@ RUN_FOLDER_PLANTS: dict[str, tuple[tuple[str, ...], Callable[[Path, Path], None]
     "report folder linked out": (("report", "--bootstrap", "0"), _plant_link("report", to_folder=True), "report"),
     "report page linked out": (("report", "--bootstrap", "0"), _plant_link("report/report.html"), None),
     "report summary linked out": (("report", "--bootstrap", "0"), _plant_link("report/summary.json"), None),
+    "official export linked out": (("export",), _plant_link("official_predictions.json"), None),
+    "official export's staging linked out": (("export",), _plant_link("official_predictions.json.tmp"), None),
+    "long CSV linked out": (("export", "--format", "long-csv"), _plant_link("all_runs_long.csv"), None),
 }
 
 
