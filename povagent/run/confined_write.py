@@ -223,10 +223,13 @@ class ConfinedFolder:
 
     def rename(self, src: str, dst: str) -> None:
         """Rename ``src`` to ``dst`` inside this folder (``dst`` replaced, never followed)."""
-        if self._fd is not None:
-            os.rename(src, dst, src_dir_fd=self._fd, dst_dir_fd=self._fd)
-        else:
-            os.replace(self.path / src, self.path / dst)
+        try:
+            if self._fd is not None:
+                os.rename(src, dst, src_dir_fd=self._fd, dst_dir_fd=self._fd)
+            else:
+                os.replace(self.path / src, self.path / dst)
+        except OSError as exc:  # a folder standing where the file goes
+            raise _refusal(self.path / dst, exc, "file") from None
 
     def fsync(self) -> None:
         """Make the folder's entries (a rename) durable."""
