@@ -391,9 +391,9 @@ def test_a_second_run_on_the_same_store_reads_the_let_go_frames_again_off_the_ev
     readers: list[str] = []
 
     class Watched(ImageStore):
-        def _read_file(self, path):
+        def _read_file(self, path, size=None):
             readers.append(threading.current_thread().name)
-            return super()._read_file(path)
+            return super()._read_file(path, size)
 
     images = Watched()
     backend = {"name": "test-center", "options": {"encode": True}}
