@@ -141,7 +141,7 @@ def main() -> None:
         "benchmark": "bench_confined_writes",
         "date": date.today().isoformat(),
         "machine": {"cores": os.cpu_count(), "cpu_model": cpu_model(), "load_avg": [round(x, 2) for x in load_after]},
-        "command": "python benchmarks/bench_confined_writes.py " + " ".join(sys.argv[1:]),
+        "command": " ".join(["python benchmarks/bench_confined_writes.py", *sys.argv[1:]]),
         "figures": figures,
     }, indent=2) + "\n", encoding="utf-8")
     print(f"wrote {RESULTS}")
