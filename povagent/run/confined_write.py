@@ -100,8 +100,12 @@ class ConfinedFolder:
             self._fd = os.open(self.path, os.O_RDONLY | _DIRECTORY | _CLOEXEC) if _DIR_FD else None
         except NotADirectoryError as exc:
             raise _refusal(self.path, exc, "folder") from None
-        for part in _parts(rel):
-            self._enter(part, create)
+        try:
+            for part in _parts(rel):
+                self._enter(part, create)
+        except BaseException:
+            self.close()
+            raise
 
     def _enter(self, name: str, create: bool) -> None:
         target = self.path / name
