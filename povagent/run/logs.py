@@ -85,6 +85,11 @@ class Redactor:
             value = p.sub(REDACTED, value)
         return value
 
+    @property
+    def knows_secrets(self) -> bool:
+        """Whether any secret value is known (else :meth:`known` changes nothing)."""
+        return self._known is not None
+
     def known(self, value: str) -> str:
         """``value`` with every secret value povagent knows replaced, and nothing else touched.
 
