@@ -55,7 +55,7 @@ def preamble(budget: int, n_frames: int, given: bool) -> str:
         "go_to_frame, turn, tilt and move returns a new view, numbered View 1, View 2, ... in order. "
         f"You start where frame 0 was taken; {shown}. You have {budget} actions (answer is not counted; "
         "invalid calls count). Finish with answer(image, x, y): image is \"frame k\" or \"view n\", "
-        "x and y are the target's pixel in that image."
+        "x and y are the target's pixel in that image (the JSON above, written instead, answers in a frame)."
     )
 
 
