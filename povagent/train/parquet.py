@@ -16,7 +16,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from povagent.train.examples import TrainingExample
+from povagent.train.examples import TrainingExample, image_bytes
 from povagent.train.shards import atomic_file
 
 #: Rows buffered before a row group is written: a handful of 30-frame examples, so memory stays flat.
@@ -44,6 +44,11 @@ FEATURES: dict[str, Any] = {
 }
 
 MISSING_PYARROW = "the hf format writes Parquet with pyarrow: pip install 'povagent[train]'"
+
+
+def require_pyarrow() -> None:
+    """Raise the one-line error naming the extra when pyarrow cannot be imported."""
+    _pyarrow()
 
 
 def _pyarrow() -> Any:
@@ -86,7 +91,7 @@ def example_row(example: TrainingExample, split: str, rationale: str) -> dict[st
     return {
         **example.identity(split),
         "messages": chat_messages(example),
-        "images": [{"bytes": f.read_bytes(), "path": f"{example.house_id}/{p}"} for f, p in zip(example.image_files, example.image_paths)],
+        "images": [{"bytes": image_bytes(i), "path": i.label} for i in example.images],
         "question": example.question_text,
         "answer": example.answer_json,
         "rationale": rationale,
@@ -94,14 +99,15 @@ def example_row(example: TrainingExample, split: str, rationale: str) -> dict[st
     }
 
 
-def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: str, rationale: str) -> int:
-    """Write ``examples`` to the Parquet file ``path`` atomically; returns the row count."""
+def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: str, rationale: str, inside: Path | None = None) -> int:
+    """Write ``examples`` to the Parquet file ``path`` atomically (only in a folder inside
+    ``inside``); returns the row count."""
     pa, pq = _pyarrow()
     schema = arrow_schema()
     rows: list[dict[str, Any]] = []
     buffered = 0
     count = 0
-    with atomic_file(path) as handle:
+    with atomic_file(path, inside=inside) as handle:
         # no dictionary and no min/max statistics for the image bytes: both would store image
         # data a second time (a dictionary page before the fallback, statistics per page)
         small = ["id", "house_id", "pair_id", "direction", "condition", "split", "rationale"]

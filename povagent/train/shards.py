@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from povagent.errors import PovagentError
+
 #: The default bound on one shard's size, as the issue asks (Hub-friendly Parquet files).
 DEFAULT_SHARD_BYTES = 500 * 1024 * 1024
 
@@ -73,24 +75,55 @@ def plan_shards(examples: Sequence[PlannedExample], max_bytes: int, suffix: str)
     return shards
 
 
+class ExportWriteError(PovagentError):
+    """A file of an export cannot be written (a full disk, a folder that is not ours); the
+    message names the file and why."""
+
+
+def _inside(folder: Path, path: Path) -> None:
+    """Refuse ``path`` unless its folder, every link followed, is inside ``folder``: a link
+    planted in an export folder must not carry a write elsewhere."""
+    if not path.parent.resolve().is_relative_to(folder.resolve()):
+        raise ExportWriteError(f"{path}: its folder leads outside {folder} (a symbolic link?); not written")
+
+
 @contextmanager
-def atomic_file(path: Path, mode: str = "wb") -> Iterator[IO[Any]]:
+def atomic_file(path: Path, mode: str = "wb", inside: Path | None = None) -> Iterator[IO[Any]]:
     """Write ``path`` through a temporary file beside it, fsync it, and rename it into place.
 
-    On any error the temporary file is removed and ``path`` is left as it was.
+    The temporary file is created new (an existing file or link of that name is never opened)
+    and, with ``inside``, only in a folder that resolves inside ``inside``; the rename replaces
+    a link at ``path`` itself, never what it points to. On any error the temporary file is
+    removed and ``path`` is left as it was; a disk error is an :class:`ExportWriteError` naming
+    ``path``.
     """
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}{TMP_MARK}{os.getpid()}")
-    handle = open(tmp, mode)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if inside is not None:
+            _inside(inside, path)
+        tmp.unlink(missing_ok=True)  # a stale one of this process id (a killed run's)
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o644)
+    except OSError as exc:
+        raise ExportWriteError(f"{path}: cannot be written ({exc.strerror or exc})") from None
+    handle = os.fdopen(fd, mode, encoding=None if "b" in mode else "utf-8")
     try:
         yield handle
         handle.flush()
         os.fsync(handle.fileno())
         handle.close()
         os.replace(tmp, path)
-    except BaseException:
-        handle.close()
-        tmp.unlink(missing_ok=True)
+    except BaseException as exc:
+        # closing flushes what is buffered, which fails again on a full disk: the temporary
+        # file is removed whatever closing says, so it never keeps holding the space
+        try:
+            handle.close()
+        except OSError:
+            pass
+        finally:
+            tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError):
+            raise ExportWriteError(f"{path}: cannot be written ({exc.strerror or exc})") from None
         raise
 
 
