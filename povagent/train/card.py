@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from povagent.train.chat_jsonl import IMAGES_DIR
 from povagent.train.export_options import FORMAT_FOLDERS, ExportOptions, ExportReport
 from povagent.train.parquet import FEATURES
 from povagent.train.shards import atomic_file
@@ -75,6 +76,13 @@ def write_card(
     # the loading config: load_dataset(<export folder>) reads these files (for messages, the
     # conversations, never images/ as an image folder)
     header["configs"] = [{"config_name": "default", "data_files": [{"split": s, "path": f"{folder}/{s}-*.{suffix}"} for s in splits]}]
+    if options.format == "messages":
+        # datasets' image-folder loader: the shards are its metadata files, and their
+        # images_file_names become the decoded images column, resolved below messages/
+        header["configs"][0]["metadata_filenames"] = [s.name for s in shards]
+        header["configs"][0]["data_files"] = [
+            {"split": s, "path": [f"{folder}/{s}-*.{suffix}", f"{folder}/{IMAGES_DIR}/**"]} for s in splits
+        ]
     if options.format == "hf":
         header["dataset_info"] = {"features": _features_yaml()}
     meta = dataset_meta.model_dump(mode="json") if dataset_meta is not None else {}

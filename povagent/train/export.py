@@ -123,7 +123,7 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
 
     path = shard_path(target, options.format, shard.name)
     if options.format == "hf":
-        n = write_parquet_shard(path, examples(), shard.split, options.rationale, inside=target)
+        n = write_parquet_shard(path, examples(), shard.split, options.rationale, inside=target, planned_bytes=shard.size)
     elif options.format == "openai":
         n = write_openai_shard(path, target, examples())
     else:

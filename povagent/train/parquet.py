@@ -19,8 +19,15 @@ from typing import Any
 from povagent.train.examples import TrainingExample, image_bytes
 from povagent.train.shards import atomic_file
 
-#: Rows buffered before a row group is written: a handful of 30-frame examples, so memory stays flat.
+#: Rows buffered before a row group is written, at least: a handful of 30-frame examples.
 ROW_GROUP_BYTES = 16 * 1024 * 1024
+#: The most row groups a shard is cut into. A streamed read with ``datasets`` that stops
+#: before the end of a file of many row groups (five or more with datasets 5.2 and pyarrow 26)
+#: leaves the interpreter hanging at exit; files of up to four exit cleanly
+#: (``tests/train/test_export_streaming.py`` checks it in a subprocess). A shard's rows are
+#: cut into at most this many groups, so memory while writing grows with the shard size
+#: (``--max-shard-mb``) divided by this number.
+MAX_ROW_GROUPS = 3
 
 _STRING = {"dtype": "string", "_type": "Value"}
 
@@ -99,9 +106,13 @@ def example_row(example: TrainingExample, split: str, rationale: str) -> dict[st
     }
 
 
-def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: str, rationale: str, inside: Path | None = None) -> int:
+def write_parquet_shard(
+    path: Path, examples: Iterable[TrainingExample], split: str, rationale: str, inside: Path | None = None, planned_bytes: int = 0
+) -> int:
     """Write ``examples`` to the Parquet file ``path`` atomically (only in a folder inside
-    ``inside``); returns the row count."""
+    ``inside``); returns the row count. ``planned_bytes`` (the shard's planned size) sets the
+    row groups' size: at least :data:`ROW_GROUP_BYTES`, and at most :data:`MAX_ROW_GROUPS` of them."""
+    group_bytes = max(ROW_GROUP_BYTES, -(-planned_bytes // MAX_ROW_GROUPS))
     pa, pq = _pyarrow()
     schema = arrow_schema()
     rows: list[dict[str, Any]] = []
@@ -118,7 +129,7 @@ def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: 
                 rows.append(row)
                 buffered += sum(len(i["bytes"]) for i in row["images"]) + len(row["question"]) + len(row["answer"])
                 count += 1
-                if buffered >= ROW_GROUP_BYTES:
+                if buffered >= group_bytes:
                     writer.write_table(pa.Table.from_pylist(rows, schema=schema))
                     rows, buffered = [], 0
                     # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group
