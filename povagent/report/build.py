@@ -14,7 +14,6 @@ This module wires the steps together; each step lives in its own module.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +41,7 @@ from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
 from povagent.report.why import FIGURE as WHY_FIGURE
 from povagent.report.why import failure_steps_figure, why_section
+from povagent.results.summary_json import write_summary_json
 
 REPORT_PAGE = "report.html"
 
@@ -170,5 +170,5 @@ def write_report(
         "gallery": None if gstats is None else gstats.__dict__,
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False), encoding="utf-8")
+    write_summary_json(out / "summary.json", summary)
     return ReportResult(out, page, tables, analysis, gstats, note, timings)

@@ -7,8 +7,6 @@ again; :func:`summarize_run` reads a finished folder for everyone else.
 
 from __future__ import annotations
 
-import json
-import os
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +14,7 @@ from typing import Any, Iterable, Mapping
 
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
+from povagent.results.summary_json import write_summary_json
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 
@@ -228,10 +227,5 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
 
 def write_json(path: Path, data: Mapping[str, Any]) -> None:
     """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one)."""
-    tmp = path.with_suffix(".json.tmp")
-    try:
-        tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
-    except OSError:  # a full disk: the old file stays, and no half-written copy beside it
-        tmp.unlink(missing_ok=True)
-        raise
-    os.replace(tmp, path)
+    # a number that is not finite (a NaN answer's margin) is null: the file is always JSON
+    write_summary_json(path, data, indent=2, default=str)

@@ -24,7 +24,6 @@ import functools
 import itertools
 import json
 import math
-import os
 import re
 import uuid
 from dataclasses import dataclass, field
@@ -43,6 +42,7 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, TextPart
 from povagent.interfaces import declares_turns, whole_answer_placeholders
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.results.summary_json import write_summary_json
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
@@ -267,9 +267,7 @@ def _write_index(
         ],
     }  # fmt: skip
     output.mkdir(parents=True, exist_ok=True)
-    tmp = output / (SWEEP_INDEX + ".tmp")
-    tmp.write_text(json.dumps(index, indent=2, default=str) + "\n", encoding="utf-8")
-    os.replace(tmp, output / SWEEP_INDEX)
+    write_summary_json(output / SWEEP_INDEX, index, indent=2, default=str)
 
 
 def run_sweep(
