@@ -20,7 +20,7 @@ from typing import Any
 from povagent.errors import PredictionsError
 from povagent.report.collect import Collection, Observation, collect
 from povagent.report.statistics import DEFAULT_BOOT, PairedComparison, paired_comparison
-from povagent.results.summary_json import write_summary_json
+from povagent.results.summary_json import summary_json_text
 
 
 @dataclass(frozen=True)
@@ -245,7 +245,9 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
         legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
-    path = out / "compare.html"
-    path.write_text(page, encoding="utf-8")
-    write_summary_json(out / "compare.json", cmp.as_dict())
+    from povagent.run.confined_write import write_inside
+
+    # aside and renamed: a link planted at either name is replaced, never followed
+    path = write_inside(out, "compare.html", page)
+    write_inside(out, "compare.json", summary_json_text(cmp.as_dict()))
     return path

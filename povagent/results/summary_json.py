@@ -4,15 +4,13 @@ Summaries aggregate whatever the rows hold, and a row may hold NaN or an infinit
 answered ``NaN``, a scorer's margin from it). JSON has no such numbers: Python's ``json`` writes
 ``NaN`` (which strict readers refuse) or, with ``allow_nan=False``, raises half-way through a
 report. Every summary file (a run's and a sweep's ``summary.json``, the report's, ``compare.json``)
-goes through :func:`write_summary_json`, which writes those numbers as ``null`` ("no number"),
-atomically. This module never decides what a summary holds; it only writes one.
+is written as :func:`summary_json_text`, which writes those numbers as ``null`` ("no number"). This module never decides what a summary holds; it only writes one.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 from typing import Any
 
@@ -52,14 +50,9 @@ def summary_json_text(data: Any, indent: int | None = 1, default: Any = None) ->
 
 
 def write_summary_json(path: Path, data: Any, indent: int | None = 1, default: Any = None) -> None:
-    """Write ``data`` to ``path`` as :func:`summary_json_text` with a trailing newline, through a
-    temporary file renamed into place (a kill or a full disk leaves the old file or the new one,
-    and no temporary file beside it)."""
-    text = summary_json_text(data, indent, default) + "\n"
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    """Write ``data`` to ``path`` as :func:`summary_json_text` with a trailing newline, aside and
+    renamed into place, never through a link planted at ``path`` (see
+    :mod:`povagent.run.confined_write`)."""
+    from povagent.run.confined_write import write_inside
+
+    write_inside(path.parent, path.name, summary_json_text(data, indent, default) + "\n")

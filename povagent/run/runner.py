@@ -52,9 +52,10 @@ from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
+from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
-from povagent.run.logs import Redactor, RunLog
+from povagent.run.logs import Redactor, RunLog, secrets_named_by
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
@@ -230,7 +231,9 @@ class PipelineRun:
         self.run_dir = Path(config.output)
         self.stats = RunStats()
         self.config_hash = config.config_hash()
-        self._redactor = Redactor()
+        # every key the config names (api_key_env values) is known to the redactor, so it is
+        # removed from whatever the run writes: messages, logs, and answers that echo it
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._digests: dict[str, RowDigest] = {}
         self._reads: dict[Path, asyncio.Future[Any]] = {}
         self._frames_read: dict[int, tuple[Any, ...]] = {}
@@ -498,6 +501,10 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        # the backend's own options too: a profile may name the key's variable (api_key_env)
+        options: Any = getattr(self.components.backend, "options", None)
+        dumped = options.model_dump() if hasattr(options, "model_dump") else options
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()) + secrets_named_by(dumped))
         self.components.backend.check_image_transport(config.images.transport)
         if self._will_send():
             # a client library (litellm: seconds) loads in the background meanwhile
@@ -541,7 +548,7 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         self._digests = plan.digests
         pending, wanted = plan.pending, plan.wanted
-        (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
+        write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
@@ -554,7 +561,7 @@ class PipelineRun:
         self._path = RequestPath(
             backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
             limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
-            redact=self._redactor.text,
+            redact=self._redactor.text, redact_answer=self._redactor.known,
             on_retry=self._log_retry, on_bug=self._log_bug, start_backend=True,
         )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the
