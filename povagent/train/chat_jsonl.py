@@ -79,7 +79,8 @@ def copy_images(out: Path, example: TrainingExample) -> None:
         if target.is_file() and not target.is_symlink():
             continue
         data = image_bytes(image)
-        with atomic_file(target, inside=out) as handle:
+        # unique: two cluster workers may store an image two houses share at the same time
+        with atomic_file(target, inside=out, unique=True) as handle:
             handle.write(data)
 
 
