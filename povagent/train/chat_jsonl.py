@@ -67,7 +67,9 @@ def example_line(example: TrainingExample, split: str, rationale: str) -> dict[s
         "conversations": sharegpt_turns(example),
         "answer": example.answer_json,
         "rationale": rationale,
-        "facts": example.facts_record(),
+        # a JSON string, as in the hf rows: its nullable fields would give the shards different
+        # inferred features, which datasets' loader refuses across metadata files
+        "facts": json.dumps(example.facts_record(), sort_keys=True),
     }
 
 
