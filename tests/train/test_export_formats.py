@@ -33,7 +33,8 @@ def messages_export(generated_release: Path, tmp_path_factory: pytest.TempPathFa
 def test_the_messages_folder_loads_its_conversations_with_datasets_from_any_folder(messages_export, generated_release: Path, tmp_path: Path, monkeypatch) -> None:
     out, report = messages_export
     monkeypatch.chdir(tmp_path)  # not the export folder: the images must resolve anyway
-    loaded = datasets.load_dataset(str(out))
+    # a cache of this test's own: datasets keeps the resolved image paths of a load in its cache
+    loaded = datasets.load_dataset(str(out), cache_dir=str(tmp_path / "hf-cache"))
     assert set(loaded) == {"train", "validation"}
     assert sum(len(split) for split in loaded.values()) == report.examples
     ds = load_dataset(generated_release)

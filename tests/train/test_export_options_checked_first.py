@@ -34,7 +34,7 @@ def test_a_missing_extra_is_said_before_anything_is_written(generated_release: P
     with monkeypatch.context() as m:
         for name in [n for n in sys.modules if n == missing or n.startswith(missing + ".")] + [missing]:
             m.setitem(sys.modules, name, None)  # import raises ImportError, as without the extra
-        with pytest.raises(PovagentError, match="pip install 'povagent\\[(train|cluster)\\]'"):
+        with pytest.raises(PovagentError, match=r"pip install 'povagent\[(train|cluster)\]'"):
             export_training_set(generated_release, out, ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=cluster)
     assert not out.exists()
     # the next try, with another format, is not refused for the first one's options
