@@ -72,7 +72,7 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 
 #: Failure kinds of the first key that stop a run before it fans out: no other key can get
 #: past them until the user changes something.
-FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection"})
+FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import"})
 
 # -- the run -------------------------------------------------------------------------------------
 def _forget_reads(reads: dict[Any, Any], paths: list[Any], _task: object) -> None:
