@@ -115,7 +115,7 @@ def write_parquet_shard(
     group_bytes = max(ROW_GROUP_BYTES, -(-planned_bytes // MAX_ROW_GROUPS))
     pa, pq = _pyarrow()
     schema = arrow_schema()
-    rows: list[dict[str, Any]] = []
+    batches: list[Any] = []
     buffered = 0
     count = 0
     with atomic_file(path, inside=inside) as handle:
@@ -123,21 +123,30 @@ def write_parquet_shard(
         # data a second time (a dictionary page before the fallback, statistics per page)
         small = ["id", "house_id", "pair_id", "direction", "condition", "split", "rationale"]
         writer = pq.ParquetWriter(handle, schema, compression="zstd", use_dictionary=small, write_statistics=small)
+
+        def flush() -> None:
+            # the buffered examples as one row group: a table over the batches (no copy)
+            table = pa.Table.from_batches(batches, schema=schema)
+            writer.write_table(table, row_group_size=max(1, table.num_rows))
+            batches.clear()
+            # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group used and
+            # its footprint crept up with every shard; handing them back keeps it flat
+            pa.default_memory_pool().release_unused()
+
         try:
             for example in examples:
                 row = example_row(example, split, rationale)
-                rows.append(row)
+                # each example becomes Arrow data at once: its Python bytes are not kept
+                # beside the Arrow copy until the row group is written
+                batches.append(pa.RecordBatch.from_pylist([row], schema=schema))
                 buffered += sum(len(i["bytes"]) for i in row["images"]) + len(row["question"]) + len(row["answer"])
+                del row
                 count += 1
                 if buffered >= group_bytes:
-                    writer.write_table(pa.Table.from_pylist(rows, schema=schema))
-                    rows, buffered = [], 0
-                    # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group
-                    # used and its footprint crept up with every shard: 294 MB peak at 10
-                    # houses, 348 MB at 100; handing them back each row group keeps it flat
-                    pa.default_memory_pool().release_unused()
-            if rows or count == 0:
-                writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+                    flush()
+                    buffered = 0
+            if batches or count == 0:
+                flush()
         finally:
             writer.close()
     return count
