@@ -59,6 +59,7 @@ from povagent.run.logs import Redactor, RunLog, secrets_named_by
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
+from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -519,7 +520,7 @@ class PipelineRun:
         claim_folder(self.run_dir, "run")
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
-        ):
+        ), cancelled_on_stop():
             return await self._run_in_folder(instances, t_start)
 
     def _will_send(self) -> bool:
@@ -588,9 +589,11 @@ class PipelineRun:
             failing = True  # the first failure is the one reported, not the summary's after it
             raise
         finally:
+            # A stop (SIGTERM, Ctrl-C) that arrives from here on is held until the run folder is
+            # complete: the journal closed, summary.json written, then it goes on (see below).
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
-            await self._journal.aclose()
+            stop_came = await finish_through_stop(self._journal.aclose())
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
             self.stats.requests, self.stats.cache_hits, self.stats.retries = (
@@ -598,24 +601,30 @@ class PipelineRun:
             )  # fmt: skip
             if self._stopped:
                 self._log.error("run_stopped", reason=self._stopped)
-            summary = self.summarize(instances, runs, interrupted)
+            summary = self.summarize(instances, runs, interrupted or stop_came)
+            # a stop requested while the summary was computed (plain code: not yet delivered) too
+            summary["interrupted"] = summary["interrupted"] or stop_requested()
             try:
                 write_json(self.run_dir / SUMMARY, summary)
             except OSError as exc:  # a full disk: reported below, once the run is closed
                 unwritten: OSError | None = exc
             else:
                 unwritten = None
-            self._log.info("run_end", interrupted=interrupted, stopped=self._stopped,
+            self._log.info("run_end", interrupted=summary["interrupted"], stopped=self._stopped,
                            **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
             self.host.hooks.run_end(str(self.run_dir), summary)
             self._log.close()
             try:
-                await backend.aclose()
+                stop_came = await finish_through_stop(backend.aclose()) or stop_came
             finally:
                 if self._own_cache and self._cache is not None:
                     self._cache.close()
             if unwritten is not None and not failing:
                 raise ResultsError.cannot_write(self.run_dir / SUMMARY, unwritten) from unwritten
+            if stop_came and not interrupted:
+                # every key had finished when the stop came: the folder is complete, and the
+                # stop still ends the command (a sweep must not start its next cell)
+                raise asyncio.CancelledError
         return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:

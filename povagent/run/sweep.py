@@ -49,6 +49,7 @@ from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_key
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.run_folder import claim_folder
 from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
+from povagent.run.stop_signals import cancelled_on_stop
 
 SWEEP_INDEX = "sweep.json"
 #: A cell's own response-cache file on a cluster (see :mod:`povagent.engine.cache`, shards),
@@ -313,6 +314,10 @@ def run_sweep(
         return result
 
     async def run_cells() -> None:
+        with cancelled_on_stop():  # a SIGTERM between cells lands at an await too
+            await run_each_cell()
+
+    async def run_each_cell() -> None:
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
         cache_path = first.cache_path()
