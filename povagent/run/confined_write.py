@@ -100,8 +100,12 @@ class ConfinedFolder:
             self._fd = os.open(self.path, os.O_RDONLY | _DIRECTORY | _CLOEXEC) if _DIR_FD else None
         except NotADirectoryError as exc:
             raise _refusal(self.path, exc, "folder") from None
-        for part in _parts(rel):
-            self._enter(part, create)
+        try:
+            for part in _parts(rel):
+                self._enter(part, create)
+        except BaseException:
+            self.close()
+            raise
 
     def _enter(self, name: str, create: bool) -> None:
         target = self.path / name
@@ -223,10 +227,13 @@ class ConfinedFolder:
 
     def rename(self, src: str, dst: str) -> None:
         """Rename ``src`` to ``dst`` inside this folder (``dst`` replaced, never followed)."""
-        if self._fd is not None:
-            os.rename(src, dst, src_dir_fd=self._fd, dst_dir_fd=self._fd)
-        else:
-            os.replace(self.path / src, self.path / dst)
+        try:
+            if self._fd is not None:
+                os.rename(src, dst, src_dir_fd=self._fd, dst_dir_fd=self._fd)
+            else:
+                os.replace(self.path / src, self.path / dst)
+        except OSError as exc:  # a folder standing where the file goes
+            raise _refusal(self.path / dst, exc, "file") from None
 
     def fsync(self) -> None:
         """Make the folder's entries (a rename) durable."""

@@ -85,6 +85,11 @@ class Redactor:
             value = p.sub(REDACTED, value)
         return value
 
+    @property
+    def knows_secrets(self) -> bool:
+        """Whether any secret value is known (else :meth:`known` changes nothing)."""
+        return self._known is not None
+
     def known(self, value: str) -> str:
         """``value`` with every secret value povagent knows replaced, and nothing else touched.
 
@@ -123,17 +128,25 @@ class Redactor:
         return {k: self.value(v, k) for k, v in event.items()}
 
 
+_LITELLM_ENV_REF = "os.environ/"
+
+
 def secrets_named_by(config: Any) -> tuple[str, ...]:
     """The values of the environment variables a resolved config names in its ``*_env`` fields
-    (a backend's ``api_key_env``, each router deployment's): keys povagent sends, whatever the
-    variable is called (``MY_LAB_KEY`` matches no secret-looking name). Unset ones are skipped."""
+    (a backend's ``api_key_env``, each router deployment's) or by litellm's ``os.environ/NAME``
+    reference: keys povagent sends, whatever the variable is called (``MY_LAB_KEY`` matches no
+    secret-looking name). Unset ones are skipped."""
     found: list[str] = []
 
     def walk(node: Any) -> None:
         if isinstance(node, Mapping):
             for k, v in node.items():
-                if isinstance(v, str) and _names_a_variable(str(k)) and ENV_VAR_NAME.match(v):
-                    value = os.environ.get(v)
+                # ``api_key_env: NAME``, and litellm's own reference ``api_key: os.environ/NAME``
+                name = v if isinstance(v, str) and _names_a_variable(str(k)) else None
+                if isinstance(v, str) and v.startswith(_LITELLM_ENV_REF):
+                    name = v[len(_LITELLM_ENV_REF):]
+                if name is not None and ENV_VAR_NAME.match(name):
+                    value = os.environ.get(name)
                     if value:
                         found.append(value)
                 else:

@@ -43,7 +43,7 @@ from povagent.exchange.messages import Request, TextPart
 from povagent.interfaces import declares_turns, whole_answer_placeholders
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.summary_json import summary_json_text
-from povagent.run.confined_write import write_inside
+from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
@@ -305,6 +305,9 @@ def run_sweep(
         models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
     claim_folder(output, "sweep")  # someone's folder (or a read-only one) is refused before any write
+    for cell in cells:  # a cell's folder planted as a link to elsewhere is refused, not run into
+        if Path(cell.config.output).is_relative_to(output):
+            ConfinedFolder(output, Path(cell.config.output).relative_to(output)).close()
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status, models)

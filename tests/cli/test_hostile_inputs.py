@@ -340,6 +340,8 @@ RUN_FOLDER_PLANTS: dict[str, tuple[tuple[str, ...], Callable[[Path, Path], None]
     "rescore's summary staging linked out": (("rescore",), _plant_link("rescored-official/summary.json.tmp"), None),
     "rescored folder is a file": (("rescore",), _plant_file("rescored-official"), "rescored-official"),
     "rescore's staged rows are a folder": (("rescore",), _plant_folder("rescored-official/results.jsonl.tmp"), "results.jsonl.tmp"),
+    "rescore's rows are a folder": (("rescore",), _plant_folder("rescored-official/results.jsonl"), "results.jsonl"),
+    "rescore's summary is a folder": (("rescore",), _plant_folder("rescored-official/summary.json"), "summary.json"),
     "resumed run's log linked out": (("run",), _plant_link("log.jsonl"), "log.jsonl"),
     "resumed run's journal linked out": (("run",), _plant_link("results.jsonl"), "results.jsonl"),
     "resumed run's summary linked out": (("run",), _plant_link("summary.json"), None),

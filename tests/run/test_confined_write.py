@@ -95,3 +95,12 @@ def test_missing_folders_are_made_and_an_append_adds_to_what_is_there(folder):
 def test_a_path_climbing_out_of_the_folder_is_a_bug_not_a_write(folder):
     with pytest.raises(ValueError, match="climbing"):
         write_inside(folder, "../x.txt", "x")
+
+
+def test_a_refused_walk_leaves_no_descriptor_open(folder, tmp_path):
+    os.symlink(tmp_path, folder / "report")
+    before = len(os.listdir("/proc/self/fd"))
+    for _ in range(20):
+        with pytest.raises(WriteTargetError):
+            ConfinedFolder(folder, "report/images")
+    assert len(os.listdir("/proc/self/fd")) == before

@@ -49,9 +49,11 @@ def test_the_key_a_config_names_by_api_key_env_is_known_whatever_the_variable_is
     from povagent.run.logs import Redactor, secrets_named_by
 
     monkeypatch.setenv("LAB_VAR", "lab-key-0123456789")
-    config = {"backend": {"options": {"api_key_env": "LAB_VAR", "router": [{"litellm_params": {"api_key_env": "UNSET_VAR_XYZ"}}]}}}
+    monkeypatch.setenv("OTHER_VAR", "other-key-987654321")
+    config = {"backend": {"options": {"api_key_env": "LAB_VAR", "router": [
+        {"litellm_params": {"api_key_env": "UNSET_VAR_XYZ"}}, {"litellm_params": {"api_key": "os.environ/OTHER_VAR"}}]}}}
     redactor = Redactor(secrets_named_by(config))
-    assert secrets_named_by(config) == ("lab-key-0123456789",)
+    assert secrets_named_by(config) == ("lab-key-0123456789", "other-key-987654321")
     assert redactor.known("echo: Bearer lab-key-0123456789!") == "echo: Bearer [REDACTED]!"
 
 
