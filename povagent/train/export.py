@@ -1,9 +1,11 @@
 """``export_training_set``: a POVBench-format dataset -> a training set on disk.
 
-The flow: check no house is an evaluation house, read the houses one at a time (bad houses
-skipped) to plan their examples, assign houses to splits, cut the plan into shards, then write
-each shard that is not already there (one after another, or as cluster tasks), and last the
-dataset card. ``export.json`` records the options and the plan: the same command resumes, and
+The flow: check the options and the extras they need (before anything is written), check no
+house is an evaluation house, read the houses one at a time (a house or pair that cannot be used
+is left out and named, with why) to plan their examples, assign houses to splits, cut the plan
+into shards, then hold the export folder (:mod:`povagent.train.export_folder`: checked, locked)
+and write each shard that is not already there (one after another, or as cluster tasks), count
+the shards on disk, and last write the dataset card. ``export.json`` records the options and the plan: the same command resumes, and
 other options over an existing export are refused naming the option that differs.
 
 Memory stays flat in the number of houses: no step holds more than one house's records (the

@@ -27,7 +27,7 @@ def test_a_report_on_a_run_where_relation_met_a_nan_answer_writes_its_summary(ge
         pipeline = tmp_path / "pipeline.yaml"
         pipeline.write_text(yaml.safe_dump({
             "dataset": str(generated_release),
-            "instances": {"houses": [house], "conditions": ["a", "c"]},
+            "instances": {"houses": [house], "conditions": ["a"]},
             "backend": {"name": "litellm", "options": {"model": "openai/nan", "api_base": server.url, "api_key_env": "POVAGENT_TEST_KEY"}},
             "parser": "official",
             "scorers": ["official", "relation"],
