@@ -93,8 +93,6 @@ def test_a_streamed_read_of_an_hf_export_left_early_exits(generated_release: Pat
     # Inferred only: every example holds all 12 frames, so the one shard is large enough to have
     # been cut into many 16 MB row groups
     export_training_set(generated_release, out, ExportOptions(format="hf", conditions=("a",), split="1,0,0"), check_release=False)
-    import pyarrow.parquet as pq
-
     shards = list((out / "data").glob("*.parquet"))
     assert len(shards) == 1 and shards[0].stat().st_size > 80 * 2**20
     try:
