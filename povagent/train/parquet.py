@@ -22,11 +22,12 @@ from povagent.train.shards import atomic_file
 #: Rows buffered before a row group is written, at least: a handful of 30-frame examples.
 ROW_GROUP_BYTES = 16 * 1024 * 1024
 #: The most row groups a shard is cut into. A streamed read with ``datasets`` that stops
-#: before the end of a file of many row groups (five or more with datasets 5.2 and pyarrow 26)
-#: leaves the interpreter hanging at exit; files of up to four exit cleanly
-#: (``tests/train/test_export_streaming.py`` checks it in a subprocess). A shard's rows are
-#: cut into at most this many groups, so memory while writing grows with the shard size
-#: (``--max-shard-mb``) divided by this number.
+#: before the end of a file of many row groups can leave the interpreter hanging at exit
+#: (datasets 5.2, pyarrow 26: a race at shutdown, seen in 3 of 5 runs on a file of six row
+#: groups and in none of 9 on a file of three; one row group would leave no read pending at
+#: all, at the cost of buffering a whole shard). ``tests/train/test_export_formats.py`` reads
+#: a stream left early in a subprocess that must exit. Memory while writing grows with the
+#: shard size (``--max-shard-mb``) divided by this number.
 MAX_ROW_GROUPS = 3
 
 _STRING = {"dtype": "string", "_type": "Value"}
