@@ -14,7 +14,6 @@ This module wires the steps together; each step lives in its own module.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,6 +42,7 @@ from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
 from povagent.report.why import FIGURE as WHY_FIGURE
 from povagent.report.why import failure_steps_figure, why_section
+from povagent.results.summary_json import summary_json_text
 from povagent.run.confined_write import ConfinedFolder, write_inside
 
 REPORT_PAGE = "report.html"
@@ -187,5 +187,5 @@ def write_report(
         **({"active": active_numbers} if active_numbers else {}),
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
-    write_inside(out, "summary.json", json.dumps(summary, indent=1, allow_nan=False))
+    write_inside(out, "summary.json", summary_json_text(summary))
     return ReportResult(out, page, tables, analysis, gstats, note, timings)

@@ -7,7 +7,6 @@ again; :func:`summarize_run` reads a finished folder for everyone else.
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +14,7 @@ from typing import Any, Iterable, Mapping
 
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
+from povagent.results.summary_json import summary_json_text
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 
@@ -226,7 +226,8 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
 
 
 def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) -> None:
-    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one).
+    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one);
+    a number that is not finite (a NaN answer's margin) is ``null``, so the file is always JSON.
 
     Written aside and renamed, never through a link planted at ``path`` or in a folder between
     ``root`` (the folder the user named; default ``path``'s own) and it; a full disk leaves the
@@ -235,4 +236,4 @@ def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) ->
     from povagent.run.confined_write import write_inside
 
     base = root if root is not None else path.parent
-    write_inside(base, path.relative_to(base), json.dumps(data, indent=2, default=str) + "\n")
+    write_inside(base, path.relative_to(base), summary_json_text(data, indent=2, default=str) + "\n")

@@ -42,6 +42,7 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, TextPart
 from povagent.interfaces import declares_turns, whole_answer_placeholders
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.results.summary_json import summary_json_text
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
@@ -267,7 +268,7 @@ def _write_index(
             for c in cells
         ],
     }  # fmt: skip
-    write_inside(output, SWEEP_INDEX, json.dumps(index, indent=2, default=str) + "\n")
+    write_inside(output, SWEEP_INDEX, summary_json_text(index, indent=2, default=str) + "\n")
 
 
 def run_sweep(
