@@ -43,6 +43,12 @@ class ResultsError(PovagentError):
         )
 
 
+class WriteTargetError(PovagentError):
+    """A place povagent writes is a symbolic link, a second name of another file, or the wrong
+    kind of entry (a file where a folder goes, or the reverse): refused, never followed
+    (see :mod:`povagent.run.confined_write`)."""
+
+
 #: ``errno`` values of a write that found no room: a full disk, a full quota, a file size limit.
 NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 

@@ -9,12 +9,18 @@ import typer
 
 from povagent.cli import app
 
+#: Houses and pairs left out named on the console (all of them are in the card).
+SHOWN_LEFT_OUT = 20
+
 
 @app.command("export-train")
 def export_train_command(
     dataset: Path = typer.Argument(..., metavar="DATASET", help="A POVBench-format dataset folder (generated, or the release's POVBench/)."),
     out: Path = typer.Option(..., "--out", metavar="FOLDER", help="Folder to write the training set to (new, empty, or an export to resume)."),
-    fmt: str = typer.Option("hf", "--format", metavar="hf|messages", help="hf: Parquet shards with embedded images; messages: chat JSONL for TRL and LLaMA-Factory."),
+    fmt: str = typer.Option(
+        "hf", "--format", metavar="hf|messages|openai",
+        help="hf: Parquet shards with embedded images; messages: chat JSONL for TRL and LLaMA-Factory; openai: OpenAI fine-tuning JSONL (data URLs).",
+    ),
     rationale: str = typer.Option("s-cot", "--rationale", metavar="none|cot|s-cot", help="The reasoning before the answer, computed from the scene (none: the answer only)."),
     split: str = typer.Option("0.8,0.1,0.1", "--split", metavar="SHARES|RANGES", help="Split by house: shares 0.8,0.1,0.1 or index ranges train=0:800,test=800:1000."),
     split_seed: int = typer.Option(0, "--split-seed", metavar="N", help="Seed of the house order the shares cut."),
@@ -51,10 +57,17 @@ def export_train_command(
             typer.echo(f"\r{done}/{total} shards", err=True, nl=False)
 
     report = export_training_set(dataset, out, options, exclude=exclude, drop_excluded=drop_excluded, cluster=cluster, progress=progress)
+    if sys.stderr.isatty():
+        typer.echo("", err=True)
+    for where, why in list(report.left_out.items())[:SHOWN_LEFT_OUT]:
+        typer.echo(f"left out {where}: {why}", err=True)
+    if len(report.left_out) > SHOWN_LEFT_OUT:
+        typer.echo(f"left out {len(report.left_out) - SHOWN_LEFT_OUT} more house(s)/pair(s): see {Path(out) / 'README.md'}", err=True)
     counts = ", ".join(f"{k} {v:,}" for k, v in report.counts.get("split", {}).items())
     skipped = f"; {len(report.skipped)} instance(s) left out (see README.md)" if report.skipped else ""
+    dropped = f"; {len(report.left_out)} house(s)/pair(s) left out" if report.left_out else ""
     excluded = f"; {len(report.excluded)} evaluation house(s) excluded" if report.excluded else ""
     typer.echo(
         f"{out}: {report.examples:,} examples ({counts}) in {len(report.shards)} shard(s), "
-        f"{report.shards_written} written now{skipped}{excluded} ({report.seconds:.1f} s)"
+        f"{report.shards_written} written now{skipped}{dropped}{excluded} ({report.seconds:.1f} s)"
     )

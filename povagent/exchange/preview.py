@@ -15,6 +15,7 @@ from pathlib import Path
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Request, TextPart
+from povagent.run.confined_write import write_inside
 
 
 @dataclass
@@ -66,11 +67,15 @@ def preview_request(
             if out_dir is not None:
                 suffix = "marked" if marked else "frame"
                 path = out_dir / f"{len(saved):02d}_{_slug(part.label)}_{suffix}_{part.image_hash[:12]}.png"
-                path.write_bytes(images.encoded_bytes(part.image_hash))
+                # aside and renamed: a link left under the name in a reused folder is replaced
+                write_inside(out_dir, path.name, images.encoded_bytes(part.image_hash))
             saved.append(SavedImage(len(saved), part.label, part.image_hash, path, marked))
             note = " marked" if marked else ""
             where = f" -> {path}" if path is not None else ""
             lines.append(f"[image{note}: {part.label or 'unlabelled'} sha256:{part.image_hash} {info.width}x{info.height}{where}]")
+        lines += [f"[tool call {c.id}: {c.name}({c.arguments})]" for c in message.tool_calls]
+    if request.tools:  # the functions offered, as sent (litellm's tools=)
+        lines.append(f"--- tools: {json.dumps([dict(t) for t in request.tools], sort_keys=True, indent=1)}")
     lines.append(f"--- generation: {json.dumps(request.generation.as_dict(), sort_keys=True)}")
     lines.append(f"--- answer schema: {json.dumps(request.answer.json_schema, sort_keys=True)}")
     return PromptPreview("\n".join(lines), saved)

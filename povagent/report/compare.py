@@ -20,6 +20,7 @@ from typing import Any
 from povagent.errors import PredictionsError
 from povagent.report.collect import Collection, Observation, collect
 from povagent.report.statistics import DEFAULT_BOOT, PairedComparison, paired_comparison
+from povagent.results.summary_json import summary_json_text
 
 
 @dataclass(frozen=True)
@@ -176,7 +177,6 @@ def print_comparison(cmp: RunComparison, top: int = 15, console: Any = None) -> 
 def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = None, top: int | None = None) -> Path:
     """``out/compare.html``: the summary table and a gallery of A's and B's drawings side by
     side, sorted by |B - A| (filterable like the report's gallery)."""
-    import json
 
     from povagent.report.gallery import ANSWERS_DIR, build_gallery, write_answer_chunks
     from povagent.report.html import OFFICIAL_LEGEND, render_page
@@ -245,7 +245,9 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
         legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
-    path = out / "compare.html"
-    path.write_text(page, encoding="utf-8")
-    (out / "compare.json").write_text(json.dumps(cmp.as_dict(), indent=1), encoding="utf-8")
+    from povagent.run.confined_write import write_inside
+
+    # aside and renamed: a link planted at either name is replaced, never followed
+    path = write_inside(out, "compare.html", page)
+    write_inside(out, "compare.json", summary_json_text(cmp.as_dict()))
     return path

@@ -40,20 +40,23 @@ they exist: the official projection, or the success scorer's hit radius).
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
 
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from povagent.dataset.realworld import RealWorldInstance
+from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
 from povagent.report.html import script_json
+from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"
@@ -138,9 +141,10 @@ class _SourceHashes:
         return h
 
 
-def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
-    """The drawing of one row, or ``None`` when no frame was selected (or it is unknown)."""
-    frame = scoring_frame(instance, observation.selected_image, observation.image_path)
+def drawing_for(observation: Observation, instance: Any, frame: Any | None = None) -> Drawing | None:
+    """The drawing of one row, or ``None`` when no frame was selected (or it is unknown);
+    ``frame`` is the image answered in when it is no dataset frame (an active-mode view)."""
+    frame = frame if frame is not None else scoring_frame(instance, observation.selected_image, observation.image_path)
     if frame is None:
         return None
     if isinstance(instance, RealWorldInstance):
@@ -206,10 +210,16 @@ def write_strip(strip: Strip, images_dir: Path, key: str) -> bool:
         with Image.open(source) as src:
             src.draft("RGB", (tw, th))  # JPEG sources decode at a fraction of their size
             sheet.paste(src.convert("RGB").resize((tw, th), Image.Resampling.BILINEAR), (i * tw, 0))
-    tmp = path.with_name(path.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    sheet.save(tmp, "JPEG", quality=72)
-    tmp.replace(path)
+    _save_jpeg(sheet, path, 72)
     return True
+
+
+def _save_jpeg(image: Image.Image, path: Path, quality: int) -> None:
+    # Encoded in memory, then written aside and renamed: a link planted at the name (the report
+    # folder may lie in an untrusted run folder) is replaced, never followed.
+    buffer = io.BytesIO()
+    image.save(buffer, "JPEG", quality=quality)
+    write_inside(path.parent, path.name, buffer.getvalue(), unique=True)  # drawn by several threads
 
 
 def _strip_of(instance: Any) -> Strip | None:
@@ -414,14 +424,9 @@ def write_drawing(drawing: Drawing, images_dir: Path, key: str) -> bool:
     if full.exists() and thumb.exists():
         return False
     im = render(drawing)  # may raise IMAGE_ERRORS: nothing is written then
-    tmp = full.with_name(full.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    im.save(tmp, "JPEG", quality=85)
-    tmp.replace(full)
+    _save_jpeg(im, full, 85)
     f = max(1, im.width // THUMB_SIZE)
-    small = im.reduce(f) if f > 1 else im
-    tmp = thumb.with_name(thumb.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    small.save(tmp, "JPEG", quality=80)
-    tmp.replace(thumb)
+    _save_jpeg(im.reduce(f) if f > 1 else im, thumb, 80)
     return True
 
 
@@ -449,8 +454,12 @@ def build_gallery(
     out_dir: str | Path,
     limit_per_system: int | None = None,
     workers: int | None = None,
+    run_folders: Mapping[str, Path] | None = None,
 ) -> tuple[list[dict[str, Any]], GalleryStats]:
-    """Draw the gallery images under ``out_dir/images`` and return the page's entry records."""
+    """Draw the gallery images under ``out_dir/images`` and return the page's entry records.
+
+    ``run_folders`` (run name -> folder) lets an active-mode row show the rendered view it
+    answered in (from the run folder's ``views/``) and its trajectory on the bird's-eye card."""
     import time
 
     t0 = time.perf_counter()
@@ -467,7 +476,9 @@ def build_gallery(
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
         inst = dataset.instance(o.instance_id) if dataset is not None else None
-        drawing = drawing_for(o, inst) if inst is not None else None
+        active = answered_view(o, run_folders) if run_folders is not None and inst is not None else None
+        view = active.frame if active is not None else None
+        drawing = drawing_for(o, inst, view) if inst is not None else None
         key = None
         if drawing is not None and drawing.source.exists():
             try:
@@ -479,8 +490,9 @@ def build_gallery(
         else:
             stats.without_image += 1
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
-        frame = scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
-        from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame) if inst is not None else None
+        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
+        path = active.path if active is not None else ()
+        from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame, path) if inst is not None else None
         raw = o.raw or ""
         transcript = _transcript(o.turns)
         entries.append(
@@ -604,9 +616,7 @@ def write_answer_chunks(
         if not path.exists():
             # the name is a hash of the content, so an existing file already holds exactly this
             script = "povAnswers(" + json.dumps(name) + "," + body + ");\n"
-            tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-            tmp.write_text(script, encoding="utf-8")
-            tmp.replace(path)
+            write_inside(folder, path.name, script)
         for j, e in enumerate(part):
             e["ac"] = [len(names), j]
         names.append(name)

@@ -1,4 +1,5 @@
-"""The plugins a run uses, made once from its configuration, and the names its rows give them.
+"""The plugins a run uses, made once from its configuration, and the names its rows and
+messages give them.
 
 Made through the plugin host's typed seam (:meth:`~povagent.plugins.PluginHost.backend` and the
 others), so each one is the interface's type; the runner, the sweep's dry run and the solve
@@ -52,3 +53,27 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
         official_parser=host.parser(counterpart) if counterpart else None,
         official_parser_name=counterpart,
     )
+
+
+def backend_label(backend: Backend) -> str:
+    """``model at URL`` (or the backend's name) for messages about an unreachable backend."""
+    try:
+        ident = dict(backend.identity())
+    except Exception:  # identity is for the cache; a message must not fail on it
+        ident = {}
+    model = ident.get("model") or ident.get("backend") or type(backend).__name__
+    base = ident.get("api_base")
+    return f"model {model} at {base}" if base else f"model {model}"
+
+
+def answering_model(backend: Backend) -> tuple[str, str | None]:
+    """``(model, profile)`` of a backend, as rows and ``summary.json`` name it: the model string
+    its identity names (litellm: the string sent, e.g. ``openai/gpt-5.4``), else the backend's
+    own name (``center``, ``replay``); the profile's name when it was named by one."""
+    try:
+        ident = dict(backend.identity())
+    except Exception:  # identity is for the cache; naming the model must not fail on it
+        ident = {}
+    model = ident.get("model") or ident.get("backend") or type(backend).__name__
+    profile = getattr(getattr(backend, "profile", None), "name", None)
+    return str(model), profile if isinstance(profile, str) else None

@@ -46,14 +46,14 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
-from povagent.interfaces import Backend
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
-from povagent.run.components import ComponentNames, create_components
+from povagent.run.components import ComponentNames, answering_model, backend_label, create_components
+from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
-from povagent.run.logs import Redactor, RunLog
+from povagent.run.logs import Redactor, RunLog, secrets_named_by
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
@@ -153,30 +153,6 @@ class StopRun(Exception):
     """Raised inside the run to stop fanning out (fail fast, circuit breaker)."""
 
 
-def backend_label(backend: Backend) -> str:
-    """``model at URL`` (or the backend's name) for messages about an unreachable backend."""
-    try:
-        ident = dict(backend.identity())
-    except Exception:  # identity is for the cache; a message must not fail on it
-        ident = {}
-    model = ident.get("model") or ident.get("backend") or type(backend).__name__
-    base = ident.get("api_base")
-    return f"model {model} at {base}" if base else f"model {model}"
-
-
-def answering_model(backend: Backend) -> tuple[str, str | None]:
-    """``(model, profile)`` of a backend, as rows and ``summary.json`` name it: the model string
-    its identity names (litellm: the string sent, e.g. ``openai/gpt-5.4``), else the backend's
-    own name (``center``, ``replay``); the profile's name when it was named by one."""
-    try:
-        ident = dict(backend.identity())
-    except Exception:  # identity is for the cache; naming the model must not fail on it
-        ident = {}
-    model = ident.get("model") or ident.get("backend") or type(backend).__name__
-    profile = getattr(getattr(backend, "profile", None), "name", None)
-    return str(model), profile if isinstance(profile, str) else None
-
-
 class PipelineRun:
     """One pipeline run into its folder. Use :func:`run_pipeline` unless embedding."""
 
@@ -204,7 +180,9 @@ class PipelineRun:
         self.run_dir = Path(config.output)
         self.stats = RunStats()
         self.config_hash = config.config_hash()
-        self._redactor = Redactor()
+        # every key the config names (api_key_env values) is known to the redactor, so it is
+        # removed from whatever the run writes: messages, logs, and answers that echo it
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._digests: dict[str, ResultRow] = {}
         #: what each row written in this session spent (``session`` in summary.json)
         self._session_spent: list[UsageTotals] = []
@@ -298,6 +276,10 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        # the backend's own options too: a profile may name the key's variable (api_key_env)
+        options: Any = getattr(self.components.backend, "options", None)
+        dumped = options.model_dump() if hasattr(options, "model_dump") else options
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()) + secrets_named_by(dumped))
         self.components.backend.check_image_transport(config.images.transport)
         if self._will_send():
             # a client library (litellm: seconds) loads in the background meanwhile
@@ -310,6 +292,7 @@ class PipelineRun:
         self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
         # ours to write, or refused before anything is written (someone's folder, read-only)
         claim_folder(self.run_dir, "run")
+        self.components.strategy.use_run_folder(self.run_dir)
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
         ), cancelled_on_stop():
@@ -341,7 +324,7 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         self._digests = plan.digests
         pending, wanted = plan.pending, plan.wanted
-        (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
+        write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
         assert config.backend is not None and config.parser is not None, "resolve_components() first"
@@ -355,7 +338,7 @@ class PipelineRun:
         self._path = RequestPath(
             backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
             limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
-            redact=self._redactor.text,
+            redact=self._redactor.text, redact_answer=self._redactor.known,
             on_retry=self._log_retry, on_bug=self._log_bug, start_backend=True,
         )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the

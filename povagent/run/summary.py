@@ -8,8 +8,6 @@ everyone else. :mod:`povagent.run.summary_model` says what the summary is.
 
 from __future__ import annotations
 
-import json
-import os
 from collections import Counter
 from pathlib import Path
 from typing import Any, Iterable, Mapping
@@ -17,6 +15,7 @@ from typing import Any, Iterable, Mapping
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
+from povagent.results.summary_json import summary_json_text
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 
@@ -183,12 +182,15 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
     return summarize_rows(by_key.values(), keys)
 
 
-def write_json(path: Path, data: Mapping[str, Any]) -> None:
-    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one)."""
-    tmp = path.with_suffix(".json.tmp")
-    try:
-        tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
-    except OSError:  # a full disk: the old file stays, and no half-written copy beside it
-        tmp.unlink(missing_ok=True)
-        raise
-    os.replace(tmp, path)
+def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) -> None:
+    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one);
+    a number that is not finite (a NaN answer's margin) is ``null``, so the file is always JSON.
+
+    Written aside and renamed, never through a link planted at ``path`` or in a folder between
+    ``root`` (the folder the user named; default ``path``'s own) and it; a full disk leaves the
+    old file and no half-written copy beside it (see :mod:`povagent.run.confined_write`).
+    """
+    from povagent.run.confined_write import write_inside
+
+    base = root if root is not None else path.parent
+    write_inside(base, path.relative_to(base), summary_json_text(data, indent=2, default=str) + "\n")

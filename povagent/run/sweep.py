@@ -23,7 +23,6 @@ from __future__ import annotations
 import asyncio
 import functools
 import json
-import os
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +34,8 @@ from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import get_plugin_host
+from povagent.results.summary_json import summary_json_text
+from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
@@ -74,10 +75,7 @@ def _write_index(
             for c in cells
         ],
     }  # fmt: skip
-    output.mkdir(parents=True, exist_ok=True)
-    tmp = output / (SWEEP_INDEX + ".tmp")
-    tmp.write_text(json.dumps(index, indent=2, default=str) + "\n", encoding="utf-8")
-    os.replace(tmp, output / SWEEP_INDEX)
+    write_inside(output, SWEEP_INDEX, summary_json_text(index, indent=2, default=str) + "\n")
 
 
 def run_sweep(
@@ -114,6 +112,9 @@ def run_sweep(
         models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
     claim_folder(output, "sweep")  # someone's folder (or a read-only one) is refused before any write
+    for cell in cells:  # a cell's folder planted as a link to elsewhere is refused, not run into
+        if Path(cell.config.output).is_relative_to(output):
+            ConfinedFolder(output, Path(cell.config.output).relative_to(output)).close()
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status, models)

@@ -16,8 +16,10 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from povagent.train.chat_jsonl import IMAGES_DIR
 from povagent.train.export_options import FORMAT_FOLDERS, ExportOptions, ExportReport
 from povagent.train.parquet import FEATURES
+from povagent.train.shards import atomic_file
 
 if TYPE_CHECKING:
     from povagent.dataset.models import DatasetMeta
@@ -71,8 +73,17 @@ def write_card(
         "task_categories": ["visual-question-answering"],
         "tags": ["spatial-reasoning", "observer-grounding", "povbench-format"],
     }
+    # the loading config: load_dataset(<export folder>) reads these files (for messages, the
+    # conversations, never images/ as an image folder)
+    header["configs"] = [{"config_name": "default", "data_files": [{"split": s, "path": f"{folder}/{s}-*.{suffix}"} for s in splits]}]
+    if options.format == "messages":
+        # datasets' image-folder loader: the shards are its metadata files, and their
+        # images_file_names become the decoded images column, resolved below messages/
+        header["configs"][0]["metadata_filenames"] = [s.name for s in shards]
+        header["configs"][0]["data_files"] = [
+            {"split": s, "path": [f"{folder}/{s}-*.{suffix}", f"{folder}/{IMAGES_DIR}/**"]} for s in splits
+        ]
     if options.format == "hf":
-        header["configs"] = [{"config_name": "default", "data_files": [{"split": s, "path": f"{folder}/{s}-*.{suffix}"} for s in splits]}]
         header["dataset_info"] = {"features": _features_yaml()}
     meta = dataset_meta.model_dump(mode="json") if dataset_meta is not None else {}
     generator = meta.get("generator") if isinstance(meta.get("generator"), dict) else None
@@ -83,6 +94,7 @@ def write_card(
     )
     reasons = Counter(report.skipped.values())
     skipped = "\n".join(f"- {n} instance(s): {why}" for why, n in reasons.most_common()) or "- none"
+    dropped = "\n".join(f"- {where}: {why}" for where, why in report.left_out.items()) or "- none"
     if report.evaluation_sources:
         checked = "\n".join(f"- {s}" for s in report.evaluation_sources)
     else:
@@ -116,13 +128,16 @@ Houses per split: {', '.join(f'{k} {len(v)}' for k, v in report.houses_by_split.
 
 ## Left out
 
+Houses and pairs the dataset holds but that could not be used (file, field and why):
+{dropped}
+
 Instances that no frame can teach (no frame sees the anchor with the target inside it; for
 Given, a target outside the observer view):
 {skipped}
 
 ## Evaluation houses
 
-Checked against (by pair-file content hash and generator seed/index):
+Checked against (by pair-file content hash, shared frames and generator seed/index):
 {checked}
 
 Excluded:
@@ -133,9 +148,8 @@ Excluded:
 {LICENCES}
 """
     text = "---\n" + yaml.safe_dump(header, sort_keys=False, allow_unicode=True) + "---\n" + body
-    tmp = out / f".{CARD}.tmp"
-    tmp.write_text(text)
-    tmp.replace(out / CARD)
+    with atomic_file(out / CARD, "w", inside=out) as handle:
+        handle.write(text)
     if options.format == "messages":
         info = {
             f"povagent_{s.split}_{s.name.split('-')[1]}": {
@@ -145,6 +159,5 @@ Excluded:
             }
             for s in shards
         }
-        tmp = out / f".{LLAMA_FACTORY_INFO}.tmp"
-        tmp.write_text(json.dumps(info, indent=1) + "\n")
-        tmp.replace(out / LLAMA_FACTORY_INFO)
+        with atomic_file(out / LLAMA_FACTORY_INFO, "w", inside=out) as handle:
+            handle.write(json.dumps(info, indent=1) + "\n")

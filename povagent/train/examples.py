@@ -8,7 +8,9 @@ The answer is the rationale text from :mod:`povagent.train.rationale`, ending in
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +18,7 @@ from typing import Any
 
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import House
+from povagent.errors import DatasetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
 from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
@@ -34,6 +37,22 @@ class QuestionPart:
 
 
 @dataclass(frozen=True)
+class ExampleImage:
+    """An image of a question: the file it was read from, its label, and what it held.
+
+    ``label`` is the image's path under the dataset's ``artifacts/`` folder
+    (``house/exploration_images/x.png``), only ever written as a value inside a row; an export
+    names its own files after ``sha256`` (never after the dataset's text), and writes the bytes
+    only while they still hash to it.
+    """
+
+    file: Path
+    label: str
+    sha256: str
+    media_type: str
+
+
+@dataclass(frozen=True)
 class TrainingExample:
     """A question (parts in the benchmark's order), the answer text, and where it came from."""
 
@@ -43,15 +62,20 @@ class TrainingExample:
     direction: str
     condition: str
     parts: tuple[QuestionPart, ...]
-    image_files: tuple[Path, ...]
+    images: tuple[ExampleImage, ...]
     answer: str
     answer_json: str
     facts: InstanceFacts
 
     @property
+    def image_files(self) -> tuple[Path, ...]:
+        """The images' files, in the order the question shows them."""
+        return tuple(i.file for i in self.images)
+
+    @property
     def image_paths(self) -> tuple[str, ...]:
-        """The images' paths relative to the house folder, in the order the question shows them."""
-        return tuple(p.image for p in self.parts if p.image is not None)
+        """The images' labels (paths under ``artifacts/``), in the order the question shows them."""
+        return tuple(i.label for i in self.images)
 
     @property
     def question_text(self) -> str:
@@ -103,6 +127,36 @@ class TrainingExample:
         }
 
 
+#: The most bytes read back for one image (a file swapped for a huge one is refused, not read).
+MAX_IMAGE_BYTES = 256 * 1024 * 1024
+
+
+def image_bytes(image: ExampleImage) -> bytes:
+    """``image``'s bytes, read again from its file for writing; a file that changed since the
+    question was built (another size, other bytes) is a :class:`DatasetError` naming it, never
+    a different image written under the old one's name."""
+    try:
+        with open(image.file, "rb") as handle:
+            data = handle.read(MAX_IMAGE_BYTES + 1)
+    except OSError as exc:
+        raise DatasetError(f"{image.file}: cannot be read again for the export ({exc.strerror or exc})") from None
+    if hashlib.sha256(data).hexdigest() != image.sha256:
+        raise DatasetError(f"{image.file}: changed since export-train read it (other bytes now); run the export again")
+    return data
+
+
+def image_label(house: House, source: Path) -> str:
+    """``source``'s path under the dataset's ``artifacts/`` folder, spelled without ``..``.
+
+    An observer view may be named relative to the dataset root and live in another house's
+    folder (or outside ``artifacts/``): the label then says where it is, or is its file name
+    alone; it is a value in a row, never a path anything is written to.
+    """
+    artifacts = Path(os.path.normpath(house.folder.parent))
+    where = Path(os.path.normpath(source))
+    return where.relative_to(artifacts).as_posix() if where.is_relative_to(artifacts) else where.name
+
+
 def make_strategy(rationale: str) -> Any:
     """The built-in strategy whose prompt fits ``rationale``, made through the plugin host."""
     from povagent.plugins import get_plugin_host
@@ -132,7 +186,7 @@ def house_examples(
             continue
         request = strategy.build(inst, images)
         parts: list[QuestionPart] = []
-        files: list[Path] = []
+        shown: list[ExampleImage] = []
         for message in request.messages:
             for part in message.parts:
                 if isinstance(part, TextPart):
@@ -141,8 +195,9 @@ def house_examples(
                     source = images.source_file(part.image_hash)
                     if source is None:  # a drawn image: the built-in text strategies draw none
                         raise ValueError(f"{inst.id}: strategy {strategy!r} sent an image that is not a dataset file")
-                    parts.append(QuestionPart(image=source.relative_to(house.folder).as_posix()))
-                    files.append(source)
+                    image = ExampleImage(source, image_label(house, source), part.image_hash, images.info(part.image_hash).media_type)
+                    parts.append(QuestionPart(image=image.label))
+                    shown.append(image)
         answer = rationale_text(facts, rationale, seed=seed, exact=exact)
         yield TrainingExample(
             id=inst.id,
@@ -151,7 +206,7 @@ def house_examples(
             direction=inst.direction.value,
             condition=inst.condition.value,
             parts=tuple(parts),
-            image_files=tuple(files),
+            images=tuple(shown),
             answer=answer,
             answer_json=answer.rsplit("\n", 1)[-1],
             facts=facts,

@@ -1,9 +1,11 @@
 """``export_training_set``: a POVBench-format dataset -> a training set on disk.
 
-The flow: check no house is an evaluation house, read the houses one at a time (bad houses
-skipped) to plan their examples, assign houses to splits, cut the plan into shards, then write
-each shard that is not already there (one after another, or as cluster tasks), and last the
-dataset card. ``export.json`` records the options and the plan: the same command resumes, and
+The flow: check the options and the extras they need (before anything is written), check no
+house is an evaluation house, read the houses one at a time (a house or pair that cannot be used
+is left out and named, with why) to plan their examples, assign houses to splits, cut the plan
+into shards, then hold the export folder (:mod:`povagent.train.export_folder`: checked, locked)
+and write each shard that is not already there (one after another, or as cluster tasks), count
+the shards on disk, and last write the dataset card. ``export.json`` records the options and the plan: the same command resumes, and
 other options over an existing export are refused naming the option that differs.
 
 Memory stays flat in the number of houses: no step holds more than one house's records (the
@@ -12,11 +14,9 @@ plan keeps only each example's id and size), and a shard is written from one hou
 
 from __future__ import annotations
 
-import json
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -27,16 +27,15 @@ from povagent.errors import DatasetError
 from povagent.train.card import write_card
 from povagent.train.examples import TrainingExample
 from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
+from povagent.train.export_folder import MANIFEST, MANIFEST_VERSION, export_folder, manifest
 from povagent.train.export_options import FORMAT_FOLDERS, ExportError, ExportOptions, ExportReport
 from povagent.train.facts import NoTeachingFrame, instance_facts
+from povagent.train.left_out import left_out
 from povagent.train.shards import PlannedExample, Shard, plan_shards, remove_stale_temporaries
 from povagent.train.splits import assign_splits, parse_split
 
-MANIFEST = "export.json"
-#: The version of what an export writes: raised when the same options write other bytes (2: the
-#: rationales state where the speaker stood and the anchor's box in more views), so a resume
-#: never mixes the two in one export.
-MANIFEST_VERSION = 2
+__all__ = ["MANIFEST", "MANIFEST_VERSION", "export_training_set", "shard_path", "write_shard"]
+
 #: Estimated bytes of an example's text (question, rationale, facts) for shard planning.
 TEXT_BYTES = 8 * 1024
 
@@ -61,11 +60,12 @@ def _house_plan(root: Path, house: House, options: ExportOptions, report: Export
         except NoTeachingFrame as exc:
             report.skipped[inst.id] = str(exc).partition(": ")[2]
             continue
-        if options.format == "hf":
+        if options.format in ("hf", "openai"):  # images inside the shard (openai: base64, 4/3)
             if inst.condition.uses_exploration_frames:
                 size = sum(frame_bytes.get(f.image_path, 0) for f in inst.frames)
             else:
                 size = inst.frames[0].file.stat().st_size
+            size = size * 4 // 3 if options.format == "openai" else size
         else:
             size = 0
         out.append((inst.id, size + TEXT_BYTES))
@@ -73,10 +73,13 @@ def _house_plan(root: Path, house: House, options: ExportOptions, report: Export
 
 
 def _plan_houses(root: Path, folders: Sequence[Path], options: ExportOptions, report: ExportReport, problems: list[Problem]) -> dict[str, list[tuple[str, int]]]:
-    """:func:`_house_plan` of every house that loads (image checks on), one house read at a time."""
+    """:func:`_house_plan` of every house that loads (image checks on), one house read at a time;
+    what loading left out (houses, pairs) goes into ``report.left_out``."""
     by_house = {}
     for folder in folders:
+        before = len(problems)
         house = load_house(folder, root, problems, check_images=True)
+        report.left_out.update(left_out(folder, house, problems[before:]))
         if house is not None:
             by_house[house.house_id] = _house_plan(root, house, options, report)
     return by_house
@@ -87,52 +90,6 @@ def _plan(by_house: dict[str, list[tuple[str, int]]], splits: dict[str, str | No
     order = {"train": 0, "validation": 1, "test": 2}
     houses = sorted((h for h in by_house if splits.get(h) is not None), key=lambda h: (order[splits[h] or "train"], h))
     return [PlannedExample(iid, hid, splits[hid] or "train", size) for hid in houses for iid, size in by_house[hid]]
-
-
-def _manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Path) -> dict[str, Any]:
-    return {
-        "version": MANIFEST_VERSION,
-        "tool": "povagent export-train",
-        "dataset": str(dataset_root),
-        "options": {**asdict(options), "conditions": list(options.conditions)},
-        "shards": [{"name": s.name, "split": s.split, "examples": [e.id for e in s.examples]} for s in shards],
-    }
-
-
-def _check_resume(out: Path, manifest: dict[str, Any]) -> None:
-    """Refuse to resume an export made by another version, with other options, or from a
-    dataset that changed."""
-    path = out / MANIFEST
-    try:
-        old = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise ExportError(f"{path}: unreadable ({exc}); remove the export folder or choose another --out") from None
-    old_version = old.get("version") if isinstance(old, dict) else None
-    if old_version != MANIFEST_VERSION:
-        raise ExportError(
-            f"{out} holds an export written by another version of export-train (format {old_version!r}, now {MANIFEST_VERSION}): "
-            "its shards would differ from the ones written now; choose another --out"
-        )
-    old_options = old.get("options", {}) if isinstance(old, dict) else {}
-    for key, value in manifest["options"].items():
-        if old_options.get(key) != value:
-            raise ExportError(
-                f"{out} holds an export made with {key}={old_options.get(key)!r}, not {value!r}: "
-                "run with the same options to resume, or choose another --out"
-            )
-    if old.get("shards") != manifest["shards"]:
-        raise ExportError(f"{out}: the dataset's houses changed since this export began; choose another --out")
-
-
-def _prepare_out(out: Path, manifest: dict[str, Any]) -> None:
-    if (out / MANIFEST).exists():
-        _check_resume(out, manifest)
-    elif out.exists() and any(out.iterdir()):
-        raise ExportError(f"{out} is not empty and holds no export of ours: choose an empty or new folder")
-    out.mkdir(parents=True, exist_ok=True)
-    tmp = out / f".{MANIFEST}.tmp"
-    tmp.write_text(json.dumps(manifest, indent=1) + "\n")
-    tmp.replace(out / MANIFEST)
 
 
 def shard_path(out: Path, fmt: str, shard_name: str) -> Path:
@@ -148,6 +105,7 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
     """
     from povagent.train.chat_jsonl import write_jsonl_shard
     from povagent.train.examples import house_examples, make_strategy
+    from povagent.train.openai_jsonl import write_openai_shard
     from povagent.train.parquet import write_parquet_shard
 
     root, target = Path(dataset_root), Path(out)
@@ -167,7 +125,9 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
 
     path = shard_path(target, options.format, shard.name)
     if options.format == "hf":
-        n = write_parquet_shard(path, examples(), shard.split, options.rationale)
+        n = write_parquet_shard(path, examples(), shard.split, options.rationale, inside=target, planned_bytes=shard.size)
+    elif options.format == "openai":
+        n = write_openai_shard(path, target, examples())
     else:
         n = write_jsonl_shard(path, target, examples(), shard.split, options.rationale)
     if n != len(shard.examples):
@@ -178,7 +138,7 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
 
 def _shard_complete(out: Path, options: ExportOptions, shard: Shard) -> bool:
     path = shard_path(out, options.format, shard.name)
-    if not path.is_file():
+    if path.is_symlink() or not path.is_file():  # a planted link is no shard of ours
         return False
     if options.format == "hf":
         from povagent.train.parquet import parquet_rows
@@ -195,6 +155,21 @@ def _shard_complete(out: Path, options: ExportOptions, shard: Shard) -> bool:
 ShardProgress = Callable[[Shard, int, int], None]
 
 
+def _check_requirements(options: ExportOptions, cluster: Any) -> None:
+    """Say what is missing (an extra) before anything is written: a refused export leaves no
+    ``export.json`` that would refuse the next try with other options."""
+    if options.format == "hf":
+        from povagent.train.parquet import require_pyarrow
+
+        require_pyarrow()
+    if cluster is not None and isinstance(cluster, str):
+        from povagent.cluster.client import require_distributed
+        from povagent.config.cluster_spec import parse_cluster_spec
+
+        parse_cluster_spec(cluster)
+        require_distributed()
+
+
 def export_training_set(
     dataset: str | Path,
     out: str | Path,
@@ -207,20 +182,21 @@ def export_training_set(
 ) -> ExportReport:
     """Export ``dataset`` as a training set under ``out`` (see the module docstring).
 
-    ``exclude``: evaluation datasets whose houses must not be exported (by content hash and
-    generator identity); the release is checked too when it is in the local Hugging Face cache
-    (``check_release``). A match is an :class:`ExportError` naming the houses, unless
+    ``exclude``: evaluation datasets whose houses must not be exported (by content hash, shared
+    frames and generator identity); the release is checked too when it is in the local Hugging
+    Face cache (``check_release``). A match is an :class:`ExportError` naming the houses, unless
     ``drop_excluded`` (then they are left out and listed in the card). ``cluster``: a
     ``--cluster`` value or a ``distributed.Client`` to write shards as cluster tasks.
     """
     options = options or ExportOptions()
     options.check()
+    _check_requirements(options, cluster)
     start = time.perf_counter()
-    root, target = Path(dataset), Path(out)
+    root, target = Path(dataset).absolute(), Path(out).absolute()
     folders = dataset_house_folders(root)
     problems: list[Problem] = []
     meta = read_meta(root, problems)
-    report = ExportReport(out=target)
+    report = ExportReport(out=Path(out))
     evaluation = EvaluationSets()
     release = cached_release_root() if check_release else None
     if release is not None:
@@ -255,39 +231,54 @@ def export_training_set(
             report.houses_by_split.setdefault(split, []).append(hid)
     planned = _plan(by_house, splits)
     shards = plan_shards(planned, options.max_shard_bytes, FORMAT_FOLDERS[options.format][1])
-    manifest = _manifest(options, shards, root)
-    _prepare_out(target, manifest)
-    remove_stale_temporaries(target)
-    todo = [s for s in shards if not _shard_complete(target, options, s)]
-    done = len(shards) - len(todo)
+    with export_folder(target, manifest(options, shards, root)):
+        remove_stale_temporaries(target)
+        todo = [s for s in shards if not _shard_complete(target, options, s)]
+        _write(root, target, todo, len(shards) - len(todo), len(shards), options, cluster, progress)
+        # what is on disk, not what the writers said: a worker writing where this machine does
+        # not look would otherwise count as done
+        missing = [s.name for s in shards if not _shard_complete(target, options, s)]
+        if missing:
+            raise ExportError(
+                f"{target}: {len(missing)} shard(s) not on disk after writing ({', '.join(missing[:3])}"
+                f"{' ...' if len(missing) > 3 else ''}); run the same command again to write them"
+            )
+        report.shards = [s.name for s in shards]
+        report.shards_written = len(todo)
+        report.examples = len(planned)
+        report.counts = _counts(planned)
+        write_card(target, root, meta, len(by_house) + len(report.excluded), options, report, shards)
+    report.seconds = time.perf_counter() - start
+    return report
+
+
+def _write(
+    root: Path, target: Path, todo: Sequence[Shard], done: int, total: int, options: ExportOptions, cluster: Any, progress: ShardProgress | None
+) -> None:
+    """Write the shards ``todo``, one after another or as cluster tasks."""
+
+    def finished(shard: Shard) -> None:
+        nonlocal done
+        done += 1
+        if progress:
+            progress(shard, done, total)
+
     if cluster is None:
         for shard in todo:
             write_shard(str(root), str(target), shard, options)
-            done += 1
-            if progress:
-                progress(shard, done, len(shards))
-    else:
-        from povagent.cluster.client import cluster_client
+            finished(shard)
+    elif todo:
+        from povagent.cluster.export_shards import write_shards_on_cluster
 
-        with cluster_client(cluster) as client:
-            assert client is not None
-            futures = client.map(write_shard, [str(root)] * len(todo), [str(target)] * len(todo), todo, [options] * len(todo), pure=False, retries=2)
-            for shard, future in zip(todo, futures):
-                future.result()
-                done += 1
-                if progress:
-                    progress(shard, done, len(shards))
-    report.shards = [s.name for s in shards]
-    report.shards_written = len(todo)
-    report.examples = len(planned)
-    ids = {e.id: e for e in planned}
+        write_shards_on_cluster(cluster, write_shard, root, target, todo, options, finished)
+
+
+def _counts(planned: Sequence[PlannedExample]) -> dict[str, dict[str, int]]:
+    """Examples per split, condition and direction."""
     counts: dict[str, Counter[str]] = {"split": Counter(), "condition": Counter(), "direction": Counter()}
-    for e in ids.values():
-        _house, _pair, direction, condition = e.id.split("/")
+    for e in planned:
+        _instance, direction, condition = e.id.rsplit("/", 2)  # a pair id may hold "/"
         counts["split"][e.split] += 1
         counts["condition"][condition] += 1
         counts["direction"][direction] += 1
-    report.counts = {k: dict(sorted(v.items())) for k, v in counts.items()}
-    write_card(target, root, meta, len(by_house) + len(report.excluded), options, report, shards)
-    report.seconds = time.perf_counter() - start
-    return report
+    return {k: dict(sorted(v.items())) for k, v in counts.items()}

@@ -16,11 +16,11 @@ from povagent.dataset.models import CONDITIONS
 from povagent.errors import PovagentError
 from povagent.train.rationale import RATIONALES
 from povagent.train.shards import DEFAULT_SHARD_BYTES
-from povagent.train.splits import DEFAULT_SPLIT, parse_split
+from povagent.train.splits import DEFAULT_SPLIT, SplitError, parse_split
 
-FORMATS = ("hf", "messages")
+FORMATS = ("hf", "messages", "openai")
 #: Where each format's shards go, and their suffix.
-FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl")}
+FORMAT_FOLDERS = {"hf": ("data", "parquet"), "messages": ("messages", "jsonl"), "openai": ("openai", "jsonl")}
 
 
 class ExportError(PovagentError):
@@ -40,6 +40,14 @@ class ExportOptions:
     max_shard_bytes: int = DEFAULT_SHARD_BYTES
     exact_answers: bool = False
 
+    def __post_init__(self) -> None:
+        # one spelling per set of conditions: ``a,b,b`` and ``b,a`` are ``a,b`` (the card, the
+        # shards and a resume's comparison all read this one tuple)
+        known = [c.value for c in CONDITIONS]
+        given = tuple(str(c).strip() for c in self.conditions)
+        ordered = sorted(set(given), key=lambda c: (known.index(c) if c in known else len(known), c))
+        object.__setattr__(self, "conditions", tuple(ordered))
+
     def check(self) -> None:
         """Refuse values outside what the exporter knows, naming the option."""
         if self.format not in FORMATS:
@@ -51,7 +59,12 @@ class ExportOptions:
         for c in self.conditions:
             if c not in {x.value for x in CONDITIONS}:
                 raise ExportError(f"--conditions {c!r}: one of a, b, c")
-        parse_split(self.split)
+        if not self.conditions:
+            raise ExportError("--conditions: name at least one of a, b, c")
+        try:
+            parse_split(self.split)
+        except SplitError as exc:
+            raise ExportError(str(exc)) from None
 
 
 @dataclass
@@ -64,6 +77,8 @@ class ExportReport:
     shards_written: int = 0
     counts: dict[str, dict[str, int]] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)
+    #: Houses and pairs loading left out (``house`` or ``house pair P`` -> the loader's reasons).
+    left_out: dict[str, str] = field(default_factory=dict)
     excluded: dict[str, str] = field(default_factory=dict)
     evaluation_sources: list[str] = field(default_factory=list)
     houses_by_split: dict[str, list[str]] = field(default_factory=dict)

@@ -16,11 +16,19 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from povagent.train.examples import TrainingExample
+from povagent.train.examples import TrainingExample, image_bytes
 from povagent.train.shards import atomic_file
 
-#: Rows buffered before a row group is written: a handful of 30-frame examples, so memory stays flat.
+#: Rows buffered before a row group is written, at least: a handful of 30-frame examples.
 ROW_GROUP_BYTES = 16 * 1024 * 1024
+#: The most row groups a shard is cut into. A streamed read with ``datasets`` that stops
+#: before the end of a file of many row groups can leave the interpreter hanging at exit
+#: (datasets 5.2, pyarrow 26: a race at shutdown, seen in 3 of 5 runs on a file of six row
+#: groups and in none of 9 on a file of three; one row group would leave no read pending at
+#: all, at the cost of buffering a whole shard). ``tests/train/test_export_formats.py`` reads
+#: a stream left early in a subprocess that must exit. Memory while writing grows with the
+#: shard size (``--max-shard-mb``) divided by this number.
+MAX_ROW_GROUPS = 3
 
 _STRING = {"dtype": "string", "_type": "Value"}
 
@@ -44,6 +52,11 @@ FEATURES: dict[str, Any] = {
 }
 
 MISSING_PYARROW = "the hf format writes Parquet with pyarrow: pip install 'povagent[train]'"
+
+
+def require_pyarrow() -> None:
+    """Raise the one-line error naming the extra when pyarrow cannot be imported."""
+    _pyarrow()
 
 
 def _pyarrow() -> Any:
@@ -86,7 +99,7 @@ def example_row(example: TrainingExample, split: str, rationale: str) -> dict[st
     return {
         **example.identity(split),
         "messages": chat_messages(example),
-        "images": [{"bytes": f.read_bytes(), "path": f"{example.house_id}/{p}"} for f, p in zip(example.image_files, example.image_paths)],
+        "images": [{"bytes": image_bytes(i), "path": i.label} for i in example.images],
         "question": example.question_text,
         "answer": example.answer_json,
         "rationale": rationale,
@@ -94,33 +107,47 @@ def example_row(example: TrainingExample, split: str, rationale: str) -> dict[st
     }
 
 
-def write_parquet_shard(path: Path, examples: Iterable[TrainingExample], split: str, rationale: str) -> int:
-    """Write ``examples`` to the Parquet file ``path`` atomically; returns the row count."""
+def write_parquet_shard(
+    path: Path, examples: Iterable[TrainingExample], split: str, rationale: str, inside: Path | None = None, planned_bytes: int = 0
+) -> int:
+    """Write ``examples`` to the Parquet file ``path`` atomically (only in a folder inside
+    ``inside``); returns the row count. ``planned_bytes`` (the shard's planned size) sets the
+    row groups' size: at least :data:`ROW_GROUP_BYTES`, and at most :data:`MAX_ROW_GROUPS` of them."""
+    group_bytes = max(ROW_GROUP_BYTES, -(-planned_bytes // MAX_ROW_GROUPS))
     pa, pq = _pyarrow()
     schema = arrow_schema()
-    rows: list[dict[str, Any]] = []
+    batches: list[Any] = []
     buffered = 0
     count = 0
-    with atomic_file(path) as handle:
+    with atomic_file(path, inside=inside) as handle:
         # no dictionary and no min/max statistics for the image bytes: both would store image
         # data a second time (a dictionary page before the fallback, statistics per page)
         small = ["id", "house_id", "pair_id", "direction", "condition", "split", "rationale"]
         writer = pq.ParquetWriter(handle, schema, compression="zstd", use_dictionary=small, write_statistics=small)
+
+        def flush() -> None:
+            # the buffered examples as one row group: a table over the batches (no copy)
+            table = pa.Table.from_batches(batches, schema=schema)
+            writer.write_table(table, row_group_size=max(1, table.num_rows))
+            batches.clear()
+            # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group used and
+            # its footprint crept up with every shard; handing them back keeps it flat
+            pa.default_memory_pool().release_unused()
+
         try:
             for example in examples:
                 row = example_row(example, split, rationale)
-                rows.append(row)
+                # each example becomes Arrow data at once: its Python bytes are not kept
+                # beside the Arrow copy until the row group is written
+                batches.append(pa.RecordBatch.from_pylist([row], schema=schema))
                 buffered += sum(len(i["bytes"]) for i in row["images"]) + len(row["question"]) + len(row["answer"])
+                del row
                 count += 1
-                if buffered >= ROW_GROUP_BYTES:
-                    writer.write_table(pa.Table.from_pylist(rows, schema=schema))
-                    rows, buffered = [], 0
-                    # Arrow's allocator (mimalloc in the wheels) keeps the pages a row group
-                    # used and its footprint crept up with every shard: 294 MB peak at 10
-                    # houses, 348 MB at 100; handing them back each row group keeps it flat
-                    pa.default_memory_pool().release_unused()
-            if rows or count == 0:
-                writer.write_table(pa.Table.from_pylist(rows, schema=schema))
+                if buffered >= group_bytes:
+                    flush()
+                    buffered = 0
+            if batches or count == 0:
+                flush()
         finally:
             writer.close()
     return count

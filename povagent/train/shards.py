@@ -10,17 +10,17 @@ yet there; a killed export leaves at most temporary files, which the next run re
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from povagent.errors import PovagentError
+
 #: The default bound on one shard's size, as the issue asks (Hub-friendly Parquet files).
 DEFAULT_SHARD_BYTES = 500 * 1024 * 1024
 
-TMP_MARK = ".tmp-"
 
 
 @dataclass(frozen=True)
@@ -73,34 +73,49 @@ def plan_shards(examples: Sequence[PlannedExample], max_bytes: int, suffix: str)
     return shards
 
 
+class ExportWriteError(PovagentError):
+    """A file of an export cannot be written (a full disk, a read-only place); the message
+    names the file and why. A link planted where the export writes is a
+    :class:`~povagent.errors.WriteTargetError`."""
+
+
 @contextmanager
-def atomic_file(path: Path, mode: str = "wb") -> Iterator[IO[Any]]:
+def atomic_file(path: Path, mode: str = "wb", inside: Path | None = None, unique: bool = False) -> Iterator[IO[Any]]:
     """Write ``path`` through a temporary file beside it, fsync it, and rename it into place.
 
-    On any error the temporary file is removed and ``path`` is left as it was.
+    Through :class:`~povagent.run.confined_write.ConfinedFolder`: ``inside`` (default:
+    ``path``'s folder) is the folder the user named, and no link below it is followed, so a
+    link planted in an export folder cannot carry a write elsewhere; the rename replaces a
+    link at ``path`` itself. ``unique``: the temporary name carries the process and thread
+    (for a file several cluster workers may write at once). On any error the temporary file
+    is removed and ``path`` is left as it was; a disk error is an :class:`ExportWriteError`
+    naming ``path``.
     """
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}{TMP_MARK}{os.getpid()}")
-    handle = open(tmp, mode)
+    from povagent.run.confined_write import ConfinedFolder
+
+    root = inside if inside is not None else path.parent
     try:
-        yield handle
-        handle.flush()
-        os.fsync(handle.fileno())
-        handle.close()
-        os.replace(tmp, path)
-    except BaseException:
-        handle.close()
-        tmp.unlink(missing_ok=True)
-        raise
+        rel = path.parent.relative_to(root).as_posix()
+    except ValueError:
+        raise ExportWriteError(f"{path}: outside {root}; not written") from None
+    try:
+        with ConfinedFolder(root, "" if rel == "." else rel) as folder, folder.staged(
+            path.name, encoding=None if "b" in mode else "utf-8", unique=unique
+        ) as staged:
+            yield staged.file
+            staged.commit(fsync=True)
+    except OSError as exc:
+        raise ExportWriteError(f"{path}: cannot be written ({exc.strerror or exc})") from None
 
 
 def remove_stale_temporaries(folder: Path) -> int:
-    """Remove the temporary files a killed export left in ``folder`` (recursively); returns how many."""
+    """Remove the temporary files a killed export left in ``folder`` (recursively, links not
+    followed); returns how many."""
     if not folder.is_dir():
         return 0
     n = 0
-    for path in folder.rglob(f".*{TMP_MARK}*"):
-        if path.is_file():
+    for path in folder.rglob("*.tmp"):
+        if path.is_file() and not path.is_symlink():
             path.unlink(missing_ok=True)
             n += 1
     return n

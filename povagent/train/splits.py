@@ -19,6 +19,7 @@ SPLITS = ("train", "validation", "test")
 DEFAULT_SPLIT = "0.8,0.1,0.1"
 
 _INDEX = re.compile(r"(\d+)$")
+_BOUND = re.compile(r"[0-9]{1,12}")
 
 
 class SplitError(ValueError):
@@ -56,7 +57,9 @@ def parse_split(text: str) -> SplitSpec:
         name, _, span = item.partition("=")
         start, sep, stop = span.partition(":")
         name = name.strip()
-        if name not in SPLITS or not sep or not start.strip().isdigit() or not stop.strip().isdigit():
+        # ASCII digits of a sane length only: ``str.isdigit`` takes "²" and int() refuses
+        # thousands of digits, both of which would end in a traceback
+        if name not in SPLITS or not sep or not _BOUND.fullmatch(start.strip()) or not _BOUND.fullmatch(stop.strip()):
             raise SplitError(f"--split {item!r}: a range is NAME=START:STOP with NAME one of {', '.join(SPLITS)}")
         a, b = int(start), int(stop)
         if b <= a:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import pytest
+
 from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportOptions
 
@@ -19,3 +21,33 @@ def test_shards_written_as_cluster_tasks_equal_a_local_export(dask_cluster, gene
     remote = export_training_set(generated_release, tmp_path / "remote", options, check_release=False, cluster=dask_cluster.address)
     assert len(local.shards) > 2 and remote.shards == local.shards
     assert _files(tmp_path / "remote") == _files(tmp_path / "local")
+
+
+def test_a_relative_out_lands_where_the_user_ran_the_command_not_under_a_workers_folder(
+    cluster_factory, generated_release: Path, tmp_path: Path, monkeypatch
+) -> None:
+    elsewhere = tmp_path / "worker-cwd"
+    elsewhere.mkdir()
+    cluster = cluster_factory(workers=1, worker_prefix=["sh", "-c", 'cd "$0" && exec "$@"', str(elsewhere)])
+    here = tmp_path / "here"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    report = export_training_set(
+        generated_release, Path("rel-out"), ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=cluster.address
+    )
+    assert report.shards_written == len(report.shards) > 0
+    assert sorted(p.name for p in (here / "rel-out" / "data").glob("*.parquet")) == sorted(report.shards)
+    assert not (elsewhere / "rel-out").exists()
+
+
+def test_workers_that_cannot_see_the_out_folder_are_named_before_any_shard_is_sent(
+    cluster_factory, hidden_folder, generated_release: Path, tmp_path: Path
+) -> None:
+    from povagent.errors import ClusterError
+
+    here_only = tmp_path / "here-only"
+    cluster = cluster_factory(workers=1, worker_prefix=hidden_folder(here_only))
+    out = here_only / "out"
+    with pytest.raises(ClusterError, match=f"{out}: worker\\(s\\) .* cannot read this folder"):
+        export_training_set(generated_release, out, ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=cluster.address)
+    assert not list(out.rglob("*.parquet"))
