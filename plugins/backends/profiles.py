@@ -154,7 +154,7 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
             "target object.\"), basic strategy only. The authors decoded its point tokens with the "
             "model's own processor (extract_image_points); behind an OpenAI-compatible server "
             "only answers written as <points ...> text can be read (molmo parser): see "
-            "docs/backends.md."
+            "docs/how-to/models.md."
         ),
     ),
     ModelProfile(

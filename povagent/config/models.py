@@ -384,7 +384,7 @@ class SweepConfig(_Strict):
           short-answers: {strategy: {name: basic, options: {max_tokens: 64}}}
         cache: runs/cache.sqlite     # shared by every cell (default <output>/cache.sqlite)
         cluster: local:4             # optional: each cell a task on Dask (or tcp://HOST:8786);
-                                     # --cluster overrides it (docs/cluster.md)
+                                     # --cluster overrides it (docs/how-to/cluster.md)
     """
 
     base: str | dict[str, Any]

@@ -124,7 +124,7 @@ def test_the_backends_profile_table_agrees_with_povagent_plugins():
     assert profile_table_disagreements(stale, listed) == ["gpt-5.4: docs ('openai/gpt-5.4', 'json') != plugins ('openai/gpt-5.4', 'official')"]
 
 
-@pytest.mark.parametrize(("page", "header"), [("README.md", "| parser | what it adds"), ("docs/official.md", "| parser | reads |")])
+@pytest.mark.parametrize(("page", "header"), [("README.md", "| parser | what it adds"), ("docs/explanation/official.md", "| parser | reads |")])
 def test_every_parser_a_docs_table_names_is_registered(page, header):
     parsers = {p["name"] for p in plugins_json()["parser"]}
     rows = markdown_table((ROOT / page).read_text(encoding="utf-8"), header)
