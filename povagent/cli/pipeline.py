@@ -137,6 +137,11 @@ def run_command(
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
+    from povagent.run.runner import SET_UP_KINDS
+
+    if result.stop_kind in SET_UP_KINDS:  # nothing was sent: no table to show, the one line says it all
+        typer.echo(f"stopped early: {result.stopped}", err=True)
+        raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
     title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
