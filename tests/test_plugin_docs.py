@@ -67,6 +67,8 @@ def test_a_changed_hookspec_docstring_makes_the_check_fail_and_name_the_command(
 def test_a_changed_example_makes_the_check_fail(tmp_path):
     (tmp_path / "docs" / "reference").mkdir(parents=True)
     shutil.copytree(ROOT / "examples" / "plugins", tmp_path / "examples" / "plugins")
+    (tmp_path / "examples" / "plugin_package").mkdir()
+    shutil.copy(ROOT / "examples" / "plugin_package" / "pyproject.toml", tmp_path / "examples" / "plugin_package")
     page = tmp_path / "docs" / "reference" / "plugins.md"
     shutil.copy(PAGE, page)
     assert check_page(page) is None

@@ -215,8 +215,11 @@ def profiles_page() -> str:
         NOTICE,
         "A pipeline's `model:` names one of these (or any litellm model string). A profile brings the "
         "litellm model, the parser (a pipeline's `parser:` overrides it) and defaults for the strategy "
-        "and backend options. `api_key_env` names the variable holding the key at the top level of the "
-        "profile, never inside `backend_options`; `povagent plugins` lists the same profiles.\n",
+        "and backend options. The key variable is where the provider's key usually is (litellm reads it "
+        "by itself); to read it from another variable, name that in the litellm backend's options "
+        "(`backend: {name: litellm, options: {model: PROFILE, api_key_env: MY_KEY}}`, or "
+        "`backend_options={\"api_key_env\": \"MY_KEY\"}` for the agent). A key itself is never accepted. "
+        "`povagent plugins` lists the same profiles.\n",
         "| profile | litellm model | parser | conditions | needs `api_base` | key variable |",
         "|---|---|---|---|---|---|",
     ]
