@@ -41,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
-from povagent.engine.llm_import import import_litellm, preload_litellm, warm_up_litellm
+from povagent.engine.llm_import import LiteLLMUnavailable, import_litellm_async, preload_litellm, warm_up_litellm_async
 from povagent.engine.llm_logging import povagent_call, skip_truncation_when_unobserved
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
@@ -478,7 +478,7 @@ class LiteLLMBackend(Backend):
             self._deployments()
         if _LITELLM is None:
             await _import_litellm_off_loop()
-        await asyncio.to_thread(warm_up_litellm, self._warm_up_model())
+        await warm_up_litellm_async(self._warm_up_model())
 
     async def aclose(self) -> None:
         """Drop the Router (its clients are litellm's shared, cached ones)."""
@@ -490,9 +490,14 @@ _LITELLM: ModuleType | None = None
 
 
 async def _import_litellm_off_loop() -> ModuleType:
-    """Import litellm in a worker thread (seconds, the first time) so the event loop keeps running."""
+    """Import litellm off the event loop (seconds, the first time; bounded and cancellable: see
+    :mod:`povagent.engine.llm_import`). An import that fails is a permanent failure of kind
+    ``client_import``: the run stops at its first key with one line, nothing sent."""
     global _LITELLM
-    litellm = await asyncio.to_thread(import_litellm)
+    try:
+        litellm = await import_litellm_async()
+    except LiteLLMUnavailable as exc:
+        raise PermanentBackendError(str(exc), kind="client_import") from None
     skip_truncation_when_unobserved(litellm)
     _LITELLM = litellm
     return litellm

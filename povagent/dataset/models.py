@@ -50,6 +50,9 @@ class Condition(StrEnum):
 
 #: The largest image side a camera may declare (POVBench renders 512x512).
 MAX_SCREEN_SIDE = 16384
+#: The largest side (m) an object's box may have: a house is tens of metres across, and the
+#: per-instance geometry (the relation region's samples) is sized by the anchor's box.
+MAX_OBJECT_SIDE_M = 100.0
 
 DIRECTIONS: tuple[Direction, ...] = (Direction.RIGHT, Direction.LEFT, Direction.FRONT, Direction.UP)
 CONDITIONS: tuple[Condition, ...] = (Condition.INFERRED, Condition.STATED, Condition.GIVEN)
@@ -128,12 +131,25 @@ class Vec3(_Record):
         return (self.x, self.y, self.z)
 
 
+ObjectSide = Annotated[float, Field(ge=-MAX_OBJECT_SIDE_M, le=MAX_OBJECT_SIDE_M)]
+
+
+class BoxSize(Vec3):
+    """A box's side lengths (m), each at most :data:`MAX_OBJECT_SIDE_M` in magnitude."""
+
+    x: ObjectSide
+    y: ObjectSide
+    z: ObjectSide
+
+
 class AxisAlignedBoundingBox(_Record):
     """An object's world-space box as AI2-THOR reports it."""
 
     center: Vec3
-    size: Vec3
+    # a plain Vec3 built in code (a real-world set's unmeasured box) is checked as a size too
+    size: Annotated[BoxSize, BeforeValidator(lambda v: v.model_dump() if type(v) is Vec3 else v)]
     cornerPoints: Annotated[list[Float3], Field(min_length=8, max_length=8)]
+
 
 
 class RawMetadata(_Record):

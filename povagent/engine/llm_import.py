@@ -24,17 +24,39 @@ collection would otherwise walk once more (~0.5 s). A program that embeds povage
 app's :class:`~povagent.agent.GroundingAgent`) gets the pause only: a freeze would also take
 in the app's own objects of that moment, and a cycle among them that became garbage later
 would never be collected. Objects freed by reference counting are freed as usual either way.
+
+An import is untrusted in one way: it may never end (a broken install, a network file system)
+or fail late. Async callers wait through :func:`import_litellm_async`, which runs the import in
+a daemon thread of its own and waits at most :func:`import_deadline_s`: the event loop stays
+free, so SIGINT/SIGTERM end a run at any point of its start-up, and neither the loop's
+shutdown nor the interpreter's exit waits for a thread stuck in an import. The first failure
+(an error or the deadline) is remembered and raised to every later caller as
+:class:`LiteLLMUnavailable`, one line: an import that failed after 20 s is never waited for twice.
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import functools
 import gc
 import os
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from types import ModuleType
+from typing import TypeVar
+
+_T = TypeVar("_T")
+
+#: How long an import of litellm may take before it counts as failed (seconds). A healthy
+#: import takes seconds even on a loaded machine; ``POVAGENT_LITELLM_IMPORT_TIMEOUT`` overrides.
+DEFAULT_IMPORT_DEADLINE_S = 120.0
+
+
+class LiteLLMUnavailable(RuntimeError):
+    """litellm could not be imported (missing, broken, or still importing at the deadline).
+
+    Its message is one line that says what happened and what to do."""
 
 #: litellm, once imported and set up.
 _litellm: ModuleType | None = None
@@ -45,6 +67,31 @@ _freeze_loaded = False
 #: The background import started by :func:`preload_litellm`, if any.
 _preload: threading.Thread | None = None
 _preload_lock = threading.Lock()
+#: The first failed import's one-line reason; every later caller gets it at once.
+_failure: str | None = None
+
+
+def import_deadline_s() -> float:
+    """Seconds an import may take: ``POVAGENT_LITELLM_IMPORT_TIMEOUT`` (positive) or the default."""
+    raw = os.environ.get("POVAGENT_LITELLM_IMPORT_TIMEOUT", "")
+    try:
+        value = float(raw)
+    except ValueError:
+        return DEFAULT_IMPORT_DEADLINE_S
+    return value if 0 < value < float("inf") else DEFAULT_IMPORT_DEADLINE_S
+
+
+def _remember_failure(exc: BaseException) -> str:
+    global _failure
+    if _failure is None:
+        detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        hint = (
+            "check the Python environment (an import that never ends: a hung file system or a broken package)"
+            if isinstance(exc, TimeoutError)
+            else "reinstall povagent's dependencies (pip install povagent)"
+        )
+        _failure = f"cannot import litellm ({type(exc).__name__}{': ' + detail if detail else ''}): {hint}"
+    return _failure
 
 
 def import_litellm() -> ModuleType:
@@ -64,12 +111,19 @@ def import_litellm() -> ModuleType:
     if _litellm is not None:
         return _litellm
     wait_for_preload()
+    if _failure is not None:
+        raise LiteLLMUnavailable(_failure)
     with _import_lock:
+        if _failure is not None:
+            raise LiteLLMUnavailable(_failure)
         if _litellm is None:
             os.environ.setdefault("LITELLM_LOCAL_MODEL_COST_MAP", "True")
             os.environ.setdefault("LITELLM_MODE", "PRODUCTION")
-            with collector_paused(freeze=_freeze_loaded):
-                import litellm
+            try:
+                with collector_paused(freeze=_freeze_loaded):
+                    import litellm
+            except Exception as exc:  # ImportError, or whatever a broken install raises while importing
+                raise LiteLLMUnavailable(_remember_failure(exc)) from None
 
             # the "Give Feedback / Get Help" banner on every exception drowns our own error messages
             litellm.suppress_debug_info = True
@@ -95,17 +149,71 @@ def preload_litellm(model: str) -> None:
 
 
 def wait_for_preload() -> None:
-    """Wait until the background import of :func:`preload_litellm` (if any) has ended."""
+    """Wait until the background import of :func:`preload_litellm` (if any) has ended, at most
+    :func:`import_deadline_s` seconds; a preload still importing then counts as failed."""
     thread = _preload
     if thread is not None and thread is not threading.current_thread():
-        thread.join()
+        thread.join(import_deadline_s())
+        if thread.is_alive():
+            raise LiteLLMUnavailable(_remember_failure(TimeoutError(f"still importing after {import_deadline_s():g} s")))
 
 
 def _preload_quietly(model: str) -> None:
     try:
         _warm_up(model)
-    except Exception:  # the foreground import meets the same failure and reports it
+    except Exception:  # remembered by import_litellm: the foreground caller reports it, once
         pass
+
+
+async def import_litellm_async() -> ModuleType:
+    """:func:`import_litellm` for async callers: in a daemon thread, at most
+    :func:`import_deadline_s` seconds, cancellable at any moment (see the module's docstring)."""
+    if _litellm is not None:
+        return _litellm
+    if _failure is not None:
+        raise LiteLLMUnavailable(_failure)
+    return await in_daemon_thread(import_litellm, "povagent-import-litellm")
+
+
+async def warm_up_litellm_async(model: str) -> None:
+    """:func:`warm_up_litellm` for async callers, bounded and cancellable like the import."""
+    await in_daemon_thread(lambda: warm_up_litellm(model), "povagent-warm-up-litellm")
+
+
+async def in_daemon_thread(fn: Callable[[], _T], name: str) -> _T:
+    """Run ``fn`` in a new daemon thread and wait for it at most :func:`import_deadline_s`.
+
+    Not the loop's default executor: its threads are joined when the loop shuts down and when
+    the interpreter exits, so one stuck in an import would hold a cancelled run forever."""
+    loop = asyncio.get_running_loop()
+    future: asyncio.Future[_T] = loop.create_future()
+
+    def settle(ok: bool, value: object) -> None:
+        if future.done():  # cancelled or timed out meanwhile
+            return
+        if ok:
+            future.set_result(value)  # type: ignore[arg-type]  # fn's own result
+        else:
+            future.set_exception(value)  # type: ignore[arg-type]  # the exception fn raised
+
+    def work() -> None:
+        try:
+            result: object = fn()
+            ok = True
+        except BaseException as exc:  # handed to the waiting task, not lost in this thread
+            result, ok = exc, False
+        try:
+            loop.call_soon_threadsafe(settle, ok, result)
+        except RuntimeError:  # the loop has closed: nobody waits any more
+            pass
+
+    threading.Thread(target=work, name=name, daemon=True).start()
+    deadline = import_deadline_s()
+    try:
+        return await asyncio.wait_for(future, deadline)
+    except TimeoutError:
+        reason = _remember_failure(TimeoutError(f"still importing after {deadline:g} s"))
+        raise LiteLLMUnavailable(reason) from None
 
 
 @functools.cache

@@ -20,7 +20,10 @@ tests a predicted pixel against their image:
 * a direction whose verdict is not ``appropriate`` has only its raw placement.
 
 The ground truth is always one of the samples. Samples are spaced at most about 0.1 m apart
-(5 degree steps, 0.1 m gaps), finer than the cube. In a frame, each sample in front of the
+(5 degree steps, 0.1 m gaps), finer than the cube, over at most :data:`MAX_STEPS` steps a side:
+beyond 10 m (no furniture is that large; ``validate`` refuses boxes over
+:data:`~povagent.dataset.models.MAX_OBJECT_SIDE_M`) the spacing grows instead, so one
+instance's samples stay bounded (about 10,000 over a top) whatever a dataset says. In a frame, each sample in front of the
 camera becomes a disc of the cube's projected half-size (``f * 0.2 / depth`` pixels) plus
 :data:`PIXEL_TOLERANCE` (4 px); the region is their union, i.e. the image area the cube would
 cover at some valid placement, except that a sample nearer than :data:`DISC_DEPTH_FLOOR`
@@ -59,6 +62,10 @@ ANGLE_STEP = 5.0
 MAX_GAP = 0.5
 #: Step (m) of the sampled gaps and of the grid over the anchor's top.
 DISTANCE_STEP = 0.1
+#: At most this many steps along one side of a sampled range: the bound on one instance's
+#: samples (time and memory grew with the square of the anchor's size: a 300 m anchor took 5 s
+#: and 1.3 GB). 10 m of furniture at :data:`DISTANCE_STEP`; larger ranges are sampled coarser.
+MAX_STEPS = 100
 #: A target on the anchor's top stands at least this far (m) from the top's centre towards its side.
 MIN_ON_TOP_OFFSET = 0.1
 #: Pixels added to each sample's projected cube half-size: pointing slack at far, small regions.
@@ -83,8 +90,9 @@ def _sector(d: np.ndarray) -> np.ndarray:
 
 
 def _steps(lo: float, hi: float) -> list[float]:
-    """``lo`` to ``hi`` in equal steps of at most :data:`DISTANCE_STEP` (both ends included)."""
-    n = max(1, int(math.ceil((hi - lo) / DISTANCE_STEP - 1e-9)))
+    """``lo`` to ``hi`` in equal steps of at most :data:`DISTANCE_STEP` (both ends included),
+    and at most :data:`MAX_STEPS` steps."""
+    n = min(MAX_STEPS, max(1, int(math.ceil((hi - lo) / DISTANCE_STEP - 1e-9))))
     return [lo + (hi - lo) * k / n for k in range(n + 1)]
 
 

@@ -71,10 +71,11 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 
 #: Failure kinds of the first key that stop a run before it fans out: no other key can get
 #: past them until the user changes something.
-FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection"})
-#: Fail-fast kinds found before anything was sent (an unset key variable): the command says so in
-#: one line, so the run logs them to its file only, not as console warnings above that line.
-SET_UP_KINDS = frozenset({"missing_key"})
+FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import"})
+#: Fail-fast kinds found before anything was sent (an unset key variable, a model client that
+#: cannot be imported): the command says so in one line, so the run logs them to its file only,
+#: not as console warnings above that line.
+SET_UP_KINDS = frozenset({"missing_key", "client_import"})
 
 # -- the run -------------------------------------------------------------------------------------
 def _forget_reads(reads: dict[Any, Any], paths: list[Any], _task: object) -> None:
