@@ -65,7 +65,7 @@ def record(
         command = "python " + " ".join(["benchmarks/" + Path(sys.argv[0]).name, *sys.argv[1:]])
     doc: dict[str, Any] = {
         "benchmark": stem,
-        "date": date or _dt.datetime.now(_dt.timezone.utc).date().isoformat(),
+        "date": date or _dt.datetime.now(_dt.UTC).date().isoformat(),
         "machine": machine_info or machine(),
         "command": command,
         "figures": figures,

@@ -24,7 +24,8 @@ from povagent.report.analysis import Analysis, analyze, load_collection_dataset,
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
-from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, run_shown_note, write_answer_chunks
+from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
+from povagent.report.gallery_runs import run_shown_note
 from povagent.report.html import (
     DIAGNOSIS_LEGEND,
     OFFICIAL_LEGEND,

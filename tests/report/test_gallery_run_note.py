@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from povagent.report.gallery import run_shown_note
+from povagent.report.gallery_runs import run_shown_note
 from povagent.report.html import render_page
 
 
