@@ -29,6 +29,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.probes",
     # backends
     "povagent_plugins.backends.litellm_backend",
+    "povagent_plugins.backends.transformers_backend",
     "povagent_plugins.backends.baselines",
     "povagent_plugins.backends.replay",
     "povagent_plugins.backends.simulated",

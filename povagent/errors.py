@@ -43,8 +43,27 @@ class ResultsError(PovagentError):
         )
 
 
+class WriteTargetError(PovagentError):
+    """A place povagent writes is a symbolic link, a second name of another file, or the wrong
+    kind of entry (a file where a folder goes, or the reverse): refused, never followed
+    (see :mod:`povagent.run.confined_write`)."""
+
+
 #: ``errno`` values of a write that found no room: a full disk, a full quota, a file size limit.
 NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+
+
+#: ``errno`` values of a file system refusing a path or a write (beside a full one), as opposed
+#: to a network connection's failures, which are OSErrors too.
+FILE_SYSTEM_ERRNOS = NO_ROOM_ERRNOS | {
+    errno.EROFS, errno.EACCES, errno.EPERM, errno.EIO, errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.ENAMETOOLONG, errno.ELOOP,
+}
+
+
+def is_file_system_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is a file or folder that could not be written or read (a full disk, a
+    read-only mount, a missing folder), not a lost connection."""
+    return isinstance(exc, OSError) and (exc.filename is not None or exc.errno in FILE_SYSTEM_ERRNOS)
 
 
 class GenerationError(PovagentError):
@@ -54,6 +73,16 @@ class GenerationError(PovagentError):
     def __init__(self, message: str, failures: Sequence[object] = ()) -> None:
         super().__init__(message)
         self.failures = list(failures)
+
+    @classmethod
+    def cannot_write(cls, out: object, exc: OSError) -> GenerationError:
+        """The one-line stop of a generation whose output folder refused a write."""
+        why = exc.strerror or f"{type(exc).__name__}: {exc}"
+        where = exc.filename if exc.filename is not None else out
+        return cls(
+            f"{where}: cannot write ({why}); houses already complete in {out} are kept: free space or choose a "
+            "writable --out, then run the same command again"
+        )
 
 
 class ClusterError(PovagentError):

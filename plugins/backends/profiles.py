@@ -14,6 +14,11 @@ own strategy options (which win):
   locally with Transformers keep the strategy's own budget (256; CoT and S-CoT 1,024), with
   greedy decoding (temperature 0) where the runner asked for it (``do_sample=False``);
 * prompts: MolmoPoint-8B and RoboPoint get the runner's own prompts for them (``prompts``).
+
+The two rows the authors ran in-process with Transformers, ``qwen3-vl-8b-transformers`` and
+``molmopoint-8b``, run in-process too (``backend="transformers"``: ``model: <name>`` loads their
+``checkpoint``); named as the litellm backend's ``model`` they are the same weights behind an
+OpenAI-compatible server.
 """
 
 from __future__ import annotations
@@ -37,6 +42,14 @@ VLLM_GENERATION: dict[str, Any] = {"max_tokens": 256, "temperature": 0.0}
 GEMINI_GENERATION: dict[str, Any] = {"max_tokens": None}
 #: Transformers with ``do_sample=False``: greedy; the budget is the strategy's (256 / 1,024).
 GREEDY_LOCAL_GENERATION: dict[str, Any] = {"temperature": 0.0}
+
+#: How the runner loaded Qwen3-VL-8B with Transformers (``torch_dtype=torch.bfloat16``,
+#: ``device_map="auto"``, ``AutoProcessor.from_pretrained(model_dir)`` with no pixel limits) and
+#: decoded (``generate(**inputs, max_new_tokens=...)``: the checkpoint's generation_config).
+QWEN_TRANSFORMERS_LOADING: dict[str, Any] = {"dtype": "bfloat16", "device_map": "auto", "sampling": "checkpoint"}
+#: How the runner loaded MolmoPoint-8B (``trust_remote_code=True``, ``dtype="auto"``,
+#: ``device_map="auto"``, processor ``padding_side="left"``) and decoded (no sampling arguments).
+MOLMOPOINT_LOADING: dict[str, Any] = {"trust_remote_code": True, "dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}
 
 PAPER_PROFILES: tuple[ModelProfile, ...] = (
     ModelProfile(
@@ -104,10 +117,16 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         litellm_model="hosted_vllm/Qwen/Qwen3-VL-8B-Instruct",
         default_parser="official",
         needs_api_base=True,
+        backend="transformers",
+        checkpoint="Qwen/Qwen3-VL-8B-Instruct",
+        checkpoint_options=QWEN_TRANSFORMERS_LOADING,
         notes=(
-            _VLLM_NOTE + " The generation settings of the authors' Transformers run (the ablation "
-            "table's Qwen3-VL-8B): the strategy's budget (256; CoT and S-CoT 1,024) and the "
-            "checkpoint's own sampling; the same weights behind an OpenAI-compatible server."
+            "Runs in-process (backend transformers, torch + povagent[local]) as the authors' runner "
+            "did: bfloat16, device_map auto, the checkpoint's own processor with its default pixel "
+            "limits (the runner set no min_pixels/max_pixels), the strategy's budget (256; CoT and "
+            "S-CoT 1,024) and the checkpoint's generation_config (generate was called with "
+            "max_new_tokens only). Named as the litellm backend's model, the same weights behind "
+            "an OpenAI-compatible server (" + _VLLM_NOTE + ")"
         ),
     ),
     ModelProfile(
@@ -149,12 +168,16 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         default_parser="molmo",
         needs_api_base=True,
         strategy_options={"prompts": "molmopoint"},
+        backend="transformers",
+        checkpoint="allenai/MolmoPoint-8B",
+        checkpoint_options=MOLMOPOINT_LOADING,
         notes=(
-            "The runner's MolmoPoint prompts (task text unchanged, \"Point to the center of the "
-            "target object.\"), basic strategy only. The authors decoded its point tokens with the "
-            "model's own processor (extract_image_points); behind an OpenAI-compatible server "
-            "only answers written as <points ...> text can be read (molmo parser): see "
-            "docs/how-to/models.md."
+            "Runs in-process (backend transformers, trust_remote_code) as the authors' runner did: "
+            "the runner's MolmoPoint prompts (task text unchanged, \"Point to the center of the "
+            "target object.\"), basic strategy only; its point tokens are decoded by the model's "
+            "own extract_image_points (the point reader) and the first point is answered as the "
+            "benchmark's JSON; without a point the text is read (molmo parser). Behind an "
+            "OpenAI-compatible server (litellm) only answers written as <points ...> text can be read."
         ),
     ),
     ModelProfile(
@@ -188,4 +211,5 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
 def register_model_profiles(register) -> None:
     """Contribute the paper's model profiles."""
     for profile in PAPER_PROFILES:
-        register(profile.name, profile, description=f"{profile.litellm_model} (parser {profile.default_parser})")
+        where = f"in-process {profile.checkpoint}" if profile.backend == "transformers" else profile.litellm_model
+        register(profile.name, profile, description=f"{where} (parser {profile.default_parser})")

@@ -33,6 +33,7 @@ COMMAND_MODULES = (
     "povagent.cli.quickstart", # quickstart
     "povagent.cli.download",   # download
     "povagent.cli.train",      # export-train
+    "povagent.cli.ros",        # ros-node, ros-replay
 )
 
 for _name in COMMAND_MODULES:

@@ -26,7 +26,7 @@ from typing import Any
 
 from povagent.cluster.client import WORKER_LOG_LEVEL, cluster_client, dashboard_link
 from povagent.cluster.storage import probe_storage
-from povagent.errors import ClusterError
+from povagent.errors import ClusterError, is_file_system_error
 from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house, make_house_files
 from povagent.generate.judge import SurfaceJudge
 from povagent.generate.record import PARTIAL, GenerationOptions, place_house_files
@@ -97,10 +97,17 @@ def _address(cluster: Any, client: Any) -> str:
 
 @contextmanager
 def _scheduler_watch(address: str, total: int, left: Callable[[], int]) -> Iterator[None]:
-    """Turn a connection lost mid-call (CommClosedError is an OSError) into one line saying what to do."""
+    """Turn a connection lost mid-call (CommClosedError is an OSError) into one line saying what to do.
+
+    A file that could not be written here (a full disk under the probe or a house sent back, a
+    read-only folder) is an OSError too, but not a lost scheduler: it goes on as it is, for the
+    caller to name the file and the error.
+    """
     try:
         yield
-    except (OSError, TimeoutError, CancelledError):
+    except (OSError, TimeoutError, CancelledError) as exc:
+        if is_file_system_error(exc):
+            raise
         raise _scheduler_gone(address, total, left()) from None
 
 

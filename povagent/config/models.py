@@ -24,7 +24,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from povagent.config.addresses import parse_bind
-from povagent.config.cluster_spec import parse_cluster_spec  # pure: no Dask import
+from povagent.config.cluster_spec import yaml_cluster_spec  # pure: no Dask import
 from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
@@ -383,8 +383,8 @@ class SweepConfig(_Strict):
         overrides:                   # named partial pipelines, one more axis (optional)
           short-answers: {strategy: {name: basic, options: {max_tokens: 64}}}
         cache: runs/cache.sqlite     # shared by every cell (default <output>/cache.sqlite)
-        cluster: local:4             # optional: each cell a task on Dask (or tcp://HOST:8786);
-                                     # --cluster overrides it (docs/how-to/cluster.md)
+        cluster: local:4             # optional: each cell a task on Dask, local:N only; a
+                                     # scheduler's address is given with --cluster (docs/how-to/cluster.md)
     """
 
     base: str | dict[str, Any]
@@ -399,9 +399,9 @@ class SweepConfig(_Strict):
     def _cluster_spec(cls, value: str | None) -> str | None:
         if value is not None:
             try:
-                parse_cluster_spec(value)
+                yaml_cluster_spec(value)
             except ClusterError as exc:
-                raise ValueError(str(exc).replace("--cluster ", "", 1)) from None
+                raise ValueError(str(exc).removeprefix("--cluster ")) from None
         return value
 
     @field_validator("output")

@@ -82,12 +82,17 @@ def check_profile_option(backend: ComponentSpec, host: PluginHost, source: Confi
         problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: {unknown_name_message('profile', cut(model), known)}")
 
 
+#: Backends whose ``model`` option may name a model profile (which then brings its defaults).
+PROFILE_BACKENDS = frozenset({"litellm", "transformers"})
+
+
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
     """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
     when no parser is given, the profile's default parser (``official`` otherwise: a repair
     parser runs only when a pipeline or a profile names it). A profile named
     as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
-    its parser and strategy defaults the same way."""
+    its parser and strategy defaults the same way, and so does one named as the in-process
+    ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
     backend, parser, strategy = config.backend, config.parser, config.strategy
     profile = None
     if config.model is not None:
@@ -95,7 +100,7 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
         # The litellm backend resolves a profile name given as its model (and applies the
         # profile's backend options itself).
         backend = ComponentSpec(name=getattr(profile, "backend", None) or "litellm", options={"model": config.model})
-    elif backend is not None and backend.name == "litellm" and backend.options.get("model") in host.names("profile"):
+    elif backend is not None and backend.name in PROFILE_BACKENDS and backend.options.get("model") in host.names("profile"):
         profile = host.profile(backend.options["model"])
     if profile is not None:
         if parser is None:

@@ -15,7 +15,7 @@ import difflib
 import re
 from typing import Any, Iterable, Mapping
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from povagent.dataset.models import CONDITIONS, Condition
 
@@ -29,6 +29,13 @@ class ModelProfile(BaseModel):
     says the model is self-hosted (vLLM) and the pipeline must give ``api_base``;
     ``api_key_env`` names the environment variable that usually holds the key (the key itself
     is never stored); ``conditions`` are those the model can answer; ``notes`` the quirks.
+
+    ``backend`` is the backend ``model: <name>`` runs the profile with: ``litellm`` (a server or
+    a provider, the default) or ``transformers`` (in-process). ``checkpoint`` is the Hugging
+    Face id or folder the in-process backend loads, and ``checkpoint_options`` that backend's
+    defaults (``trust_remote_code``, ``dtype``...), kept apart from ``backend_options`` because
+    the same profile may still be served behind an OpenAI-compatible server through litellm
+    (``litellm_model``), whose options differ.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -39,6 +46,9 @@ class ModelProfile(BaseModel):
     strategy_options: dict[str, Any] = Field(default_factory=dict)
     backend_options: dict[str, Any] = Field(default_factory=dict)
     needs_api_base: bool = False
+    backend: str = Field("litellm", min_length=1)
+    checkpoint: str | None = Field(None, min_length=1)
+    checkpoint_options: dict[str, Any] = Field(default_factory=dict)
     api_key_env: str | None = None
     conditions: tuple[Condition, ...] = CONDITIONS
     paper_name: str | None = None
@@ -50,6 +60,12 @@ class ModelProfile(BaseModel):
         if "api_key" in value:
             raise ValueError("a profile must not carry an api_key; name the variable in api_key_env")
         return value
+
+    @model_validator(mode="after")
+    def _in_process_needs_a_checkpoint(self) -> ModelProfile:
+        if self.backend == "transformers" and self.checkpoint is None:
+            raise ValueError("a profile run in-process (backend: transformers) needs a checkpoint (a Hugging Face id or folder)")
+        return self
 
     def supports(self, condition: Condition | str) -> bool:
         """Whether the model can answer instances of ``condition``."""

@@ -5,8 +5,10 @@ image that is opened is base64-sent to a model: a path that is absolute, climbs 
 ``../``, or runs through a symlink to somewhere else would send that file (``/etc/passwd``, a
 private photo) to a third party. Every path is resolved (symlinks followed) and must land inside
 the dataset root before anything opens it. Paths that climb and come back (``../house_b/x.png``)
-and symlinks between files of the dataset are fine: the rule is where a path leads, not how it
-is spelled.
+and symlinks between files of the dataset are fine: the rule is where a path leads. As written,
+too, a path must stay inside: ``..`` parts that climb out through a symlinked folder and come
+back resolve inside, yet the same text joined to another folder (an export laying out files)
+leads out of it.
 
 This module decides where a path leads; it never opens a file.
 """
@@ -69,10 +71,19 @@ def confined(real_root: Path, base: Path, rel: str, what: str = "image path") ->
             "and stay inside the dataset; not opened"
         )
     path = base / rel
+    spelled_inside = Path(os.path.normpath(base.resolve() / rel)).is_relative_to(real_root)
     if not is_inside(real_root, path):
         # Spelled inside but resolving outside: a symlink on the way leads out.
-        via = " through a symlink" if Path(os.path.normpath(base.resolve() / rel)).is_relative_to(real_root) else ""
+        via = " through a symlink" if spelled_inside else ""
         raise OutsideDatasetError(f"{what} {shown(rel)} leads outside the dataset folder{via}; not opened")
+    if not spelled_inside:
+        # Resolving inside but spelled outside: a symlinked folder deeper than it looks, climbed
+        # back out of with ``..``. Whoever joins the text to another folder (an export laying out
+        # files) would land outside that folder, so the text itself must stay inside too.
+        raise OutsideDatasetError(
+            f"{what} {shown(rel)} climbs out of the dataset folder as written (its '..' parts pass "
+            "through a symlinked folder and come back); write the path without climbing through the link"
+        )
     return path
 
 

@@ -67,7 +67,13 @@ class ResponseCache:
         self.path = Path(path)
         self._read_also = Path(read_also) if read_also is not None else None
         self._rdb: sqlite3.Connection | None = None
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        from povagent.run.confined_write import ConfinedFolder
+
+        # SQLite opens its files by path, following links: one planted as the cache (or its
+        # journal) in a run folder would have answers written into a file elsewhere.
+        with ConfinedFolder(self.path.parent) as folder:
+            for name in (self.path.name, self.path.name + "-wal", self.path.name + "-shm", self.path.name + "-journal"):
+                folder.check_plain_file(name)
         self.hits = 0
         self.misses = 0
         self.writes = 0

@@ -96,7 +96,9 @@ class RequestPath:
     ``timeout_s`` is the per-attempt timeout (a backend that retries inside gets room for its
     own attempts: see :meth:`attempt_timeout`); ``cache`` is optional (and ignored for a backend
     that is not ``cacheable``); ``limiter`` defaults to no limit; ``redact`` scrubs secrets from
-    every message that leaves this path.
+    every message that leaves this path, and ``redact_answer`` the secret values povagent knows
+    from every answer (fresh or cached), before the cache, the row or the log sees it: a server
+    may echo the ``Authorization`` header inside a successful answer.
     """
 
     def __init__(
@@ -109,6 +111,7 @@ class RequestPath:
         cache: ResponseCache | None = None,
         limiter: Limiter | None = None,
         redact: Callable[[str], str] = _identity,
+        redact_answer: Callable[[str], str] = _identity,
         on_retry: OnRetry | None = None,
         on_bug: OnBug | None = None,
         start_backend: bool = False,
@@ -120,6 +123,7 @@ class RequestPath:
         self.cache = cache if getattr(backend, "cacheable", True) else None
         self.limiter = limiter
         self.redact = redact
+        self.redact_answer = redact_answer
         self.on_retry = on_retry
         self.on_bug = on_bug
         self.stats = PathStats()
@@ -162,7 +166,7 @@ class RequestPath:
             cached = cache.get(key)
             if cached is not None:
                 self.stats.cache_hits += 1
-                return cached
+                return self._scrubbed(cached)  # a cache written before the key was known
         if self._start_backend:
             await self._started(label)
         response = await self.call(request, label=label, deadline=deadline)
@@ -212,6 +216,12 @@ class RequestPath:
         response.retries = attempts - 1
         self.stats.retries += attempts - 1
         response.text = valid_text(response.text)
+        return self._scrubbed(response)
+
+    def _scrubbed(self, response: Response) -> Response:
+        response.text = self.redact_answer(response.text)
+        if response.model is not None:
+            response.model = self.redact_answer(response.model)
         return response
 
     # -- one attempt ---------------------------------------------------------------------------

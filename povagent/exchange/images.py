@@ -28,6 +28,8 @@ import base64
 import functools
 import hashlib
 import io
+import os
+import stat
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -120,7 +122,10 @@ class ImageStore:
             facts = check_image_bytes(data)
         except ImageFileError as exc:
             raise DatasetError(f"{p}: image {exc}") from None
-        info = self._remember(data, facts.size, facts.media_type, functools.partial(self._read_file, p))
+        h = hashlib.sha256(data).hexdigest()
+        # Bytes let go (a released house, an evicted entry) are read again from the file: only
+        # the very bytes checked and hashed now may come back under this hash.
+        info = self._remember(data, facts.size, facts.media_type, functools.partial(self._read_again, p, h, len(data)), h)
         with self._lock:
             self._sources.setdefault(info.image_hash, str(p))
         with self._lock:
@@ -268,10 +273,39 @@ class ImageStore:
         return im
 
     # -- internals ----------------------------------------------------------------------------
-    def _read_file(self, path: Path) -> bytes:
-        data = path.read_bytes()
+    def _read_file(self, path: Path, size: int | None = None) -> bytes:
+        """The bytes of a regular file (``size``: exactly that many are expected, no more read).
+
+        Opened without blocking (a FIFO or a device planted where a frame was would otherwise
+        wait or stream forever), and refused unless it is a regular file.
+        """
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+        with os.fdopen(fd, "rb") as fh:
+            st = os.fstat(fd)
+            if not stat.S_ISREG(st.st_mode):
+                raise DatasetError(f"{path}: image is not a regular file (a device, a pipe or a folder); not read")
+            data = fh.read(size + 1) if size is not None else fh.read()
         with self._lock:
             self.stats.file_reads += 1
+        return data
+
+    def _read_again(self, path: Path, image_hash: str, size: int) -> bytes:
+        """A file's bytes read again after they were let go: they must be the bytes first read.
+
+        The first read checked the image and named it by its hash; a file changed since (or
+        swapped for a link to another file) would otherwise be sent under that old hash. A
+        change is a :class:`DatasetError` naming the file (the request that needed it fails, and
+        its row records why), never a different image.
+        """
+        try:
+            data = self._read_file(path, size)
+        except OSError as exc:
+            raise DatasetError(f"{path}: image cannot be read again ({exc.strerror or exc}); not sent") from None
+        if len(data) != size or hashlib.sha256(data).hexdigest() != image_hash:
+            raise DatasetError(
+                f"{path}: image changed since it was first read and checked (its bytes are not those of "
+                f"sha256 {image_hash[:12]}...); not sent: restore the file, or run again to read it afresh"
+            )
         return data
 
     def _encode_png(self, image: Image.Image) -> bytes:
@@ -281,8 +315,10 @@ class ImageStore:
         self.stats.png_encodes += 1
         return buf.getvalue()
 
-    def _remember(self, data: bytes, size: tuple[int, int], media_type: str, recipe: Callable[[], bytes]) -> StoredImage:
-        h = hashlib.sha256(data).hexdigest()
+    def _remember(
+        self, data: bytes, size: tuple[int, int], media_type: str, recipe: Callable[[], bytes], h: str | None = None
+    ) -> StoredImage:
+        h = h or hashlib.sha256(data).hexdigest()
         with self._lock:
             known = self._by_hash.get(h)
             if known is not None:

@@ -15,6 +15,7 @@ from pathlib import Path
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Request, TextPart
+from povagent.run.confined_write import write_inside
 
 
 @dataclass
@@ -66,7 +67,8 @@ def preview_request(
             if out_dir is not None:
                 suffix = "marked" if marked else "frame"
                 path = out_dir / f"{len(saved):02d}_{_slug(part.label)}_{suffix}_{part.image_hash[:12]}.png"
-                path.write_bytes(images.encoded_bytes(part.image_hash))
+                # aside and renamed: a link left under the name in a reused folder is replaced
+                write_inside(out_dir, path.name, images.encoded_bytes(part.image_hash))
             saved.append(SavedImage(len(saved), part.label, part.image_hash, path, marked))
             note = " marked" if marked else ""
             where = f" -> {path}" if path is not None else ""

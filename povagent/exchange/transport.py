@@ -105,8 +105,8 @@ class _ByReference(ImageTransport):
         """The derived image's file under ``cache_dir`` (written once; named by its hash)."""
         suffix = _SUFFIXES.get(images.info(image_hash).media_type, ".png")
         target = self.cache_dir / f"{image_hash}{suffix}"
-        if target.is_file():  # content-addressed: an existing file holds these very bytes
-            return target
+        if target.is_file() and not target.is_symlink():  # content-addressed: it holds these very bytes
+            return target  # (a link planted under the name would have the server read elsewhere: replaced below)
         self.cache_dir.mkdir(parents=True, exist_ok=True)
         # written aside and renamed, so a model server never reads a half-written file; made
         # as an ordinary file is (0666 less the umask: 0644 under umask 022), not mkstemp's
@@ -198,10 +198,17 @@ def open_image_transport(
     ``http`` starts the static server (serving ``dataset_root`` and the cache folder) here and
     stops it when the block ends, however it ends.
     """
+    cache_dir = spec.cache_folder(Path(output))
+    if spec.transport != "inline" and cache_dir.is_relative_to(Path(output)):
+        from povagent.run.confined_write import ConfinedFolder
+
+        # the default folder lies in the run folder (untrusted): a link planted there would have
+        # derived images written, and served, elsewhere
+        ConfinedFolder(Path(output), cache_dir.relative_to(Path(output))).close()
     transport = make_transport(
         spec.transport,
         dataset_root=dataset_root,
-        cache_dir=spec.cache_folder(Path(output)),
+        cache_dir=cache_dir,
         bind=spec.bind,
         public_url=spec.public_url,
     )

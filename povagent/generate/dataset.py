@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Literal, Mapping, Sequence
 
-from povagent.errors import DatasetError, GenerationError
+from povagent.errors import DatasetError, GenerationError, is_file_system_error
 from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary
@@ -165,7 +165,9 @@ def generate_dataset(
     The files depend only on (houses, seed, frames, with_render, judge), never on ``jobs``, the
     cluster or the order houses finish. A house that raises does not stop the others; at the
     end :class:`~povagent.errors.GenerationError` names every failed house (index, seed, error),
-    ``meta.json`` is not written, and the same call redoes only those houses.
+    ``meta.json`` is not written, and the same call redoes only those houses. An output folder
+    that refuses a write (full, read-only, here or under the workers) raises
+    :class:`~povagent.errors.GenerationError` naming the file and the error; complete houses stay.
 
     ``jobs``: worker processes, one house each at a time; ``None`` (the default) is
     :func:`default_jobs`: a worker per core this process may use, at most one per house (one
@@ -194,45 +196,52 @@ def generate_dataset(
         if isinstance(cluster, str):
             parse_cluster_spec(cluster)
         require_distributed()
-    start = time.perf_counter()
-    kept = _prepare(out, options, houses)
-    pending = [i for i in range(houses) if i not in kept]
-    report = GenerationReport(out=out, seed=seed, kept=len(kept))
-    failures: list[HouseFailure] = []
-    if pending:
-        # The dataset is changing: until meta.json is written again, it is not a finished one.
-        (out / "meta.json").unlink(missing_ok=True)
-        remove_half_written(out, keep=set(kept))
-        callback, finish = _progress(progress, houses, len(kept))
-        done = len(kept)
+    try:
+        start = time.perf_counter()
+        kept = _prepare(out, options, houses)
+        pending = [i for i in range(houses) if i not in kept]
+        report = GenerationReport(out=out, seed=seed, kept=len(kept))
+        failures: list[HouseFailure] = []
+        if pending:
+            # The dataset is changing: until meta.json is written again, it is not a finished one.
+            (out / "meta.json").unlink(missing_ok=True)
+            remove_half_written(out, keep=set(kept))
+            callback, finish = _progress(progress, houses, len(kept))
+            done = len(kept)
 
-        def finished(outcome: HouseOutcome) -> None:
-            nonlocal done
-            if outcome.failure is not None:
-                failures.append(outcome.failure)
-                return
-            assert outcome.record is not None
-            done += 1
-            report.generated += 0 if outcome.kept else 1
-            report.cpu_seconds += outcome.cpu_seconds
-            callback(outcome.record.summary, done, houses)
+            def finished(outcome: HouseOutcome) -> None:
+                nonlocal done
+                if outcome.failure is not None:
+                    failures.append(outcome.failure)
+                    return
+                assert outcome.record is not None
+                done += 1
+                report.generated += 0 if outcome.kept else 1
+                report.cpu_seconds += outcome.cpu_seconds
+                callback(outcome.record.summary, done, houses)
 
-        try:
-            if cluster is not None:
-                from povagent.cluster.generation import generate_on_cluster
+            try:
+                if cluster is not None:
+                    from povagent.cluster.generation import generate_on_cluster
 
-                generate_on_cluster(cluster, out, options, pending, judge, finished, storage=storage, notice=notice)
-            else:
-                _generate_here(out, options, pending, judge, jobs, finished)
-        finally:
-            finish()
-        clear_partial(out)
-    if failures:
-        failures.sort(key=lambda f: f.index)
-        raise GenerationError(_failure_message(out, failures, houses), failures)
-    on_disk = complete_houses(out)
-    report.houses = [on_disk[i].summary for i in range(houses)]
-    _write_meta(out, options, judge_options, report)
+                    generate_on_cluster(cluster, out, options, pending, judge, finished, storage=storage, notice=notice)
+                else:
+                    _generate_here(out, options, pending, judge, jobs, finished)
+            finally:
+                finish()
+            clear_partial(out)
+        if failures:
+            failures.sort(key=lambda f: f.index)
+            raise GenerationError(_failure_message(out, failures, houses), failures)
+        on_disk = complete_houses(out)
+        report.houses = [on_disk[i].summary for i in range(houses)]
+        _write_meta(out, options, judge_options, report)
+    except OSError as exc:
+        # a full disk or a read-only --out (here or on the workers' shared folder) is the
+        # user's to fix: one line naming the file, not a traceback nor a lost scheduler
+        if not is_file_system_error(exc):
+            raise
+        raise GenerationError.cannot_write(out, exc) from exc
     report.seconds = time.perf_counter() - start
     return report
 

@@ -24,6 +24,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from povagent.geometry.camera import Camera
+from povagent.run.confined_write import write_inside
 
 #: Colours shared with the gallery's drawings (GT green, prediction red).
 GT_COLOUR = "#00c853"
@@ -211,9 +212,7 @@ def write_birds_eye(svg: str, images_dir: Path) -> str:
     key = hashlib.sha256(svg.encode()).hexdigest()
     path = images_dir / f"{key}.svg"
     if not path.exists():
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(svg, encoding="utf-8")
-        tmp.replace(path)
+        write_inside(images_dir, path.name, svg, unique=True)  # aside and renamed: a link planted there is replaced
     return key
 
 

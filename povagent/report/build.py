@@ -24,7 +24,7 @@ from povagent.report.analysis import Analysis, analyze, load_collection_dataset,
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
-from povagent.report.gallery import ANSWERS_DIR, GalleryStats, build_gallery, write_answer_chunks
+from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
 from povagent.report.gallery_runs import run_shown_note
 from povagent.report.html import (
     DIAGNOSIS_LEGEND,
@@ -43,6 +43,7 @@ from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
 from povagent.report.why import FIGURE as WHY_FIGURE
 from povagent.report.why import failure_steps_figure, why_section
+from povagent.run.confined_write import ConfinedFolder, write_inside
 
 REPORT_PAGE = "report.html"
 
@@ -63,16 +64,29 @@ class ReportResult:
 def write_tables(tables: list[Table], out: Path) -> dict[str, list[tuple[str, str]]]:
     """Each table as Markdown, CSV and LaTeX under ``out/tables``, plus combined files;
     returns the per-table download links relative to ``out``."""
-    tdir = out / "tables"
-    tdir.mkdir(parents=True, exist_ok=True)
     links: dict[str, list[tuple[str, str]]] = {}
     for t in tables:
         for ext, text in (("md", to_markdown(t)), ("csv", to_csv(t)), ("tex", to_latex(t))):
-            (tdir / f"{t.key}.{ext}").write_text(text, encoding="utf-8")
+            write_inside(out, f"tables/{t.key}.{ext}", text)
         links[t.key] = [(name, f"tables/{t.key}.{ext}") for name, ext in (("Markdown", "md"), ("CSV", "csv"), ("LaTeX", "tex"))]
-    (out / "tables.md").write_text("\n".join(to_markdown(t) for t in tables), encoding="utf-8")
-    (out / "tables.tex").write_text("\n".join(to_latex(t) for t in tables), encoding="utf-8")
+    write_inside(out, "tables.md", "\n".join(to_markdown(t) for t in tables))
+    write_inside(out, "tables.tex", "\n".join(to_latex(t) for t in tables))
     return links
+
+
+def report_folder(source: Path, out: Path | None) -> Path:
+    """The report's folder, made with its subfolders, none of them a link planted there.
+
+    The default ``<source>/report`` lies in a run folder, which is untrusted: ``report`` and
+    everything below it are opened without following links (see
+    :mod:`povagent.run.confined_write`), a link is one line naming it. An ``--out`` the user
+    typed is theirs to place (followed), its subfolders are not.
+    """
+    root, rel = (source, "report") if out is None else (out, "")
+    with ConfinedFolder(root, rel) as folder:
+        for name in ("tables", "plots", IMAGES_DIR, ANSWERS_DIR):
+            folder.sub(name).close()
+        return folder.path
 
 
 def _frame_size_lookup(dataset: Any):
@@ -100,8 +114,7 @@ def write_report(
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     source = Path(source)
-    out = Path(out) if out is not None else source / "report"
-    out.mkdir(parents=True, exist_ok=True)
+    out = report_folder(source, Path(out) if out is not None else None)
     collection = collect(source)
     dataset, note = load_collection_dataset(collection, dataset_path)
     timings["load"] = time.perf_counter() - t0
@@ -117,11 +130,9 @@ def write_report(
     t = time.perf_counter()
     links = write_tables(tables, out)
     figures = report_figures(analysis, _frame_size_lookup(dataset))
-    pdir = out / "plots"
-    pdir.mkdir(exist_ok=True)
     why_figure = failure_steps_figure(analysis)
     for name, (_, svg) in (figures | ({WHY_FIGURE: why_figure} if why_figure else {})).items():
-        (pdir / f"{name}.svg").write_text(svg, encoding="utf-8")
+        write_inside(out, f"plots/{name}.svg", svg)
     timings["tables_plots"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -165,12 +176,12 @@ def write_report(
         legend=legend,
     )
     page = out / REPORT_PAGE
-    page.write_text(page_html, encoding="utf-8")
+    write_inside(out, REPORT_PAGE, page_html)
     timings["html"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - t0
     summary = analysis.as_dict() | {
         "gallery": None if gstats is None else gstats.__dict__,
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, allow_nan=False), encoding="utf-8")
+    write_inside(out, "summary.json", json.dumps(summary, indent=1, allow_nan=False))
     return ReportResult(out, page, tables, analysis, gstats, note, timings)

@@ -17,10 +17,11 @@ scorers wrote them) and never writes.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 import yaml
 
@@ -442,12 +443,37 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     left_out = 0
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
+        scrub = _key_scrubber(r.config)
         for row in r.rows:
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            obs.append(observation_of(row, r.system, r.name, r.scorer))
+            o = observation_of(row, r.system, r.name, r.scorer)
+            obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out)
+
+
+def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation] | None:
+    """What removes the keys povagent knows (the run config's ``api_key_env`` values, key-like
+    environment values) from an observation's answer texts, or ``None`` when none is known.
+
+    A run made before answers were redacted as they arrived may hold a key a server echoed:
+    the report never copies it onto its pages (see :meth:`povagent.run.logs.Redactor.known`).
+    """
+    from povagent.run.logs import Redactor, secrets_named_by
+
+    redactor = Redactor(secrets_named_by(config))
+    if not redactor.knows_secrets:
+        return None
+    known = redactor.known
+
+    def scrub(o: Observation) -> Observation:
+        return dataclasses.replace(
+            o, raw=known(o.raw) if o.raw is not None else None, parse_reason=known(o.parse_reason),
+            turns=tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
+        )
+
+    return scrub
 
 
 def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:

@@ -245,7 +245,9 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
         legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
-    path = out / "compare.html"
-    path.write_text(page, encoding="utf-8")
-    (out / "compare.json").write_text(json.dumps(cmp.as_dict(), indent=1), encoding="utf-8")
+    from povagent.run.confined_write import write_inside
+
+    # aside and renamed: a link planted at either name is replaced, never followed
+    path = write_inside(out, "compare.html", page)
+    write_inside(out, "compare.json", json.dumps(cmp.as_dict(), indent=1))
     return path

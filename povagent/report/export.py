@@ -21,12 +21,14 @@ Reading and writing files; the numbers come from :mod:`povagent.scoring`.
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 from typing import Any, Iterable
 
 from povagent import __version__
 from povagent.results.official_format import OfficialPrediction, write_official_predictions
 from povagent.results.rows import ResultRow, RowStatus
+from povagent.run.confined_write import write_inside
 
 OFFICIAL_FILE = "official_predictions.json"
 LONG_CSV_FILE = "all_runs_long.csv"
@@ -114,11 +116,14 @@ def export_run(run_dir: str | Path, out: str | Path | None = None, run: int | No
         "parser": info.axes.get("parser"),
     }
     target = Path(out) if out is not None else Path(run_dir) / OFFICIAL_FILE
+    # the default lies in the run folder (untrusted): nothing below it is followed; an --out
+    # the user typed is theirs to place
+    root = Path(run_dir) if out is None else None
     if len(per_run) == 1:
         (k, rows), = per_run.items()
-        return [write_official_predictions(target, rows, meta | {"run": k})]
+        return [write_official_predictions(target, rows, meta | {"run": k}, root=root)]
     folder = target.with_suffix("") if target.suffix == ".json" else target
-    return [write_official_predictions(folder / f"run_{k}.json", rows, meta | {"run": k}) for k, rows in per_run.items()]
+    return [write_official_predictions(folder / f"run_{k}.json", rows, meta | {"run": k}, root=root or folder) for k, rows in per_run.items()]
 
 
 def raise_many(path: str | Path, n: int) -> None:
@@ -176,13 +181,17 @@ def long_csv_lines(rows: Iterable[ResultRow], dataset: Any, model: str, eval_dir
 
 
 def write_long_csv(path: str | Path, lines: Iterable[dict[str, Any]]) -> Path:
-    """Write lines under the official header (UTF-8, the ``csv`` module's default dialect)."""
+    """Write lines under the official header (UTF-8, the ``csv`` module's default dialect).
+
+    Written aside and renamed, never through a link planted at ``path`` (the default lies in
+    an untrusted run folder): see :mod:`povagent.run.confined_write`.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="", encoding="utf-8") as f:
-        writer = csv.DictWriter(f, fieldnames=list(LONG_CSV_COLUMNS))
-        writer.writeheader()
-        writer.writerows(lines)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=list(LONG_CSV_COLUMNS))
+    writer.writeheader()
+    writer.writerows(lines)
+    write_inside(path.parent, path.name, text.getvalue())
     return path
 
 

@@ -40,6 +40,7 @@ they exist: the official projection, or the success scorer's hit radius).
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
 import threading
@@ -54,6 +55,7 @@ from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
 from povagent.report.html import script_json
+from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"
@@ -206,10 +208,16 @@ def write_strip(strip: Strip, images_dir: Path, key: str) -> bool:
         with Image.open(source) as src:
             src.draft("RGB", (tw, th))  # JPEG sources decode at a fraction of their size
             sheet.paste(src.convert("RGB").resize((tw, th), Image.Resampling.BILINEAR), (i * tw, 0))
-    tmp = path.with_name(path.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    sheet.save(tmp, "JPEG", quality=72)
-    tmp.replace(path)
+    _save_jpeg(sheet, path, 72)
     return True
+
+
+def _save_jpeg(image: Image.Image, path: Path, quality: int) -> None:
+    # Encoded in memory, then written aside and renamed: a link planted at the name (the report
+    # folder may lie in an untrusted run folder) is replaced, never followed.
+    buffer = io.BytesIO()
+    image.save(buffer, "JPEG", quality=quality)
+    write_inside(path.parent, path.name, buffer.getvalue(), unique=True)  # drawn by several threads
 
 
 def _strip_of(instance: Any) -> Strip | None:
@@ -414,14 +422,9 @@ def write_drawing(drawing: Drawing, images_dir: Path, key: str) -> bool:
     if full.exists() and thumb.exists():
         return False
     im = render(drawing)  # may raise IMAGE_ERRORS: nothing is written then
-    tmp = full.with_name(full.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    im.save(tmp, "JPEG", quality=85)
-    tmp.replace(full)
+    _save_jpeg(im, full, 85)
     f = max(1, im.width // THUMB_SIZE)
-    small = im.reduce(f) if f > 1 else im
-    tmp = thumb.with_name(thumb.name + f".{os.getpid()}.{threading.get_ident()}.tmp")
-    small.save(tmp, "JPEG", quality=80)
-    tmp.replace(thumb)
+    _save_jpeg(im.reduce(f) if f > 1 else im, thumb, 80)
     return True
 
 
@@ -604,9 +607,7 @@ def write_answer_chunks(
         if not path.exists():
             # the name is a hash of the content, so an existing file already holds exactly this
             script = "povAnswers(" + json.dumps(name) + "," + body + ");\n"
-            tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-            tmp.write_text(script, encoding="utf-8")
-            tmp.replace(path)
+            write_inside(folder, path.name, script)
         for j, e in enumerate(part):
             e["ac"] = [len(names), j]
         names.append(name)

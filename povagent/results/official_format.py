@@ -234,14 +234,20 @@ def official_document(rows: Iterable[OfficialPrediction], metadata: Mapping[str,
 
 
 def write_official_predictions(
-    path: str | Path, rows: Iterable[OfficialPrediction], metadata: Mapping[str, Any] | None = None
+    path: str | Path, rows: Iterable[OfficialPrediction], metadata: Mapping[str, Any] | None = None,
+    root: str | Path | None = None,
 ) -> Path:
-    """Write ``rows`` as a ``{metadata, predictions}`` file; returns the path written."""
+    """Write ``rows`` as a ``{metadata, predictions}`` file; returns the path written.
+
+    Written aside and renamed (a reader never sees half a file), never through a link planted
+    at ``path`` or in a folder between ``root`` (the folder the user named, default ``path``'s
+    own) and it: see :mod:`povagent.run.confined_write`.
+    """
+    from povagent.run.confined_write import write_inside
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(p.name + ".tmp")
-    tmp.write_text(json.dumps(official_document(rows, metadata), indent=1) + "\n", encoding="utf-8")
-    tmp.replace(p)  # atomic: a reader never sees half a file
+    base = Path(root) if root is not None else p.parent
+    write_inside(base, p.relative_to(base), json.dumps(official_document(rows, metadata), indent=1) + "\n")
     return p
 
 

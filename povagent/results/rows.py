@@ -131,26 +131,34 @@ def utc_now() -> str:
 
 
 class ResultsWriter:
-    """Appends rows to a JSONL file, flushing and fsyncing each, so a crash loses nothing written."""
+    """Appends rows to a JSONL file, flushing and fsyncing each, so a crash loses nothing written.
 
-    def __init__(self, path: str | Path) -> None:
+    The file is opened without following a link planted where it goes, nor a second name (see
+    :mod:`povagent.run.confined_write`): once, not per row. ``root`` is the folder the user named
+    (default: the file's own folder); the folders between it and the file are never followed.
+    """
+
+    def __init__(self, path: str | Path, root: str | Path | None = None) -> None:
+        from povagent.run.confined_write import ConfinedFolder
+
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._repair_tail()
-        self._fh = open(self.path, "a", encoding="utf-8")
+        base = Path(root) if root is not None else self.path.parent
+        with ConfinedFolder(base, self.path.parent.relative_to(base)) as folder:
+            self._fh = folder.open_append(self.path.name)
+            self._repair_tail(folder)
 
-    def _repair_tail(self) -> None:
+    def _repair_tail(self, folder: Any) -> None:
         # A kill mid-write leaves a last line without its newline: cut it so the next append
         # starts on a fresh line (its key is simply run again).
-        if not self.path.exists() or self.path.stat().st_size == 0:
+        size = os.fstat(self._fh.fileno()).st_size
+        if size == 0:
             return
-        with open(self.path, "rb+") as fh:
-            fh.seek(0, os.SEEK_END)
-            size = fh.tell()
-            fh.seek(max(0, size - 1))
+        with folder.open_update(self.path.name) as fh:
+            fh.seek(size - 1)
             if fh.read(1) == b"\n":
                 return
-            data = self.path.read_bytes()
+            fh.seek(0)
+            data = fh.read()
             cut = data.rfind(b"\n") + 1
             fh.truncate(cut)
 
@@ -192,11 +200,21 @@ class StagedResults:
     counts only once it is complete, so one fsync at the end gives the same guarantee.
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, root: str | Path | None = None) -> None:
+        from povagent.run.confined_write import ConfinedFolder
+
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self.tmp = self.path.with_name(self.path.name + ".tmp")
-        self._fh = open(self.tmp, "w", encoding="utf-8")  # a leftover of a killed run is truncated
+        base = Path(root) if root is not None else self.path.parent
+        # Made new beside the target (a leftover of a killed run, or a link planted there, is
+        # removed, never followed); renamed over the target, which replaces a link there.
+        self._folder = ConfinedFolder(base, self.path.parent.relative_to(base))
+        try:
+            self._staged = self._folder.staged(self.path.name)
+        except BaseException:
+            self._folder.close()
+            raise
+        self._fh = self._staged.file
         self.committed = False
 
     def write(self, row: ResultRow) -> None:
@@ -205,25 +223,15 @@ class StagedResults:
 
     def commit(self) -> None:
         """Make the staged rows durable and put them in place of ``path`` (atomically)."""
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
-        self._fh.close()
-        os.replace(self.tmp, self.path)
+        self._staged.commit(fsync=True)  # the rename itself is fsynced too: it survives a power cut
         self.committed = True
-        folder = os.open(self.path.parent, os.O_RDONLY)
-        try:
-            os.fsync(folder)  # the rename itself survives a power cut
-        finally:
-            os.close(folder)
 
     def __enter__(self) -> StagedResults:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        if not self._fh.closed:
-            self._fh.close()
-        if not self.committed:
-            self.tmp.unlink(missing_ok=True)
+        self._staged.__exit__(*exc)
+        self._folder.close()
 
 
 def iter_rows(path: str | Path) -> Iterator[ResultRow]:

@@ -11,7 +11,8 @@ import contextlib
 from pathlib import Path
 from typing import Iterator
 
-from povagent.errors import ConfigError
+from povagent.errors import ConfigError, WriteTargetError
+from povagent.run.confined_write import open_inside
 
 #: The lock file's name inside a run folder.
 LOCK = ".lock"
@@ -27,7 +28,9 @@ def folder_lock(run_dir: Path) -> Iterator[None]:
         yield
         return
     try:
-        fh = open(run_dir / LOCK, "a")
+        fh = open_inside(run_dir, LOCK, "a")  # a link planted as the lock file is refused, not created through
+    except WriteTargetError:
+        raise
     except OSError as exc:  # a read-only mount, no permission: the user's to fix, one line
         raise ConfigError(f"{run_dir}: cannot write the run folder ({exc.strerror or exc}); choose a folder you can write to") from None
     try:

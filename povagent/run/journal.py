@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import time
 from pathlib import Path
 from typing import Callable
 
 from povagent.results.rows import ResultRow, ResultsWriter
+from povagent.run.confined_write import ConfinedFolder
 
 
 class RowJournal(ResultsWriter):
@@ -110,9 +110,10 @@ def drop_rows(results: Path, keys: set[str]) -> None:
     last line (no newline: a kill or a full disk mid-write, cut at any byte) is dropped, as the
     writer would cut it anyway.
     """
-    tmp = results.with_suffix(".jsonl.tmp")
     # Bytes, not text: a torn tail may end inside a character, and every kept line is copied as is.
-    with open(results, "rb") as src, open(tmp, "wb") as dst:
+    # Staged beside and renamed over ``results``: a link planted at either name is never followed.
+    with open(results, "rb") as src, ConfinedFolder(results.parent) as folder, folder.staged(results.name, encoding=None) as staged:
+        dst = staged.file
         for line in src:
             if not line.endswith(b"\n"):
                 continue
@@ -123,6 +124,4 @@ def drop_rows(results: Path, keys: set[str]) -> None:
             key = record.get("key") if isinstance(record, dict) else None
             if key not in keys:
                 dst.write(line)
-        dst.flush()
-        os.fsync(dst.fileno())
-    os.replace(tmp, results)
+        staged.commit(fsync=True)

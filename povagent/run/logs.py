@@ -22,7 +22,7 @@ import sys
 import threading
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Callable, Mapping, TextIO
+from typing import Any, Callable, Mapping, TextIO, cast
 
 import structlog
 from structlog.typing import EventDict
@@ -67,9 +67,12 @@ class Redactor:
         secrets = {v for k, v in os.environ.items() if _SECRET_ENV.match(k) and len(v) >= 6}
         secrets.update(s for s in extra_secrets if s and len(s) >= 6)
         patterns = list(_SECRET_TEXT)
+        #: the secret values themselves (no pattern): what :meth:`known` removes from answers
+        self._known: re.Pattern[str] | None = None
         if secrets:
             # Longest first so a key containing another is removed whole.
-            patterns.append(re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True))))
+            self._known = re.compile("|".join(re.escape(s) for s in sorted(secrets, key=len, reverse=True)))
+            patterns.append(self._known)
         self._patterns = patterns
         # One search decides the common case (nothing to redact); it runs on every logged string.
         self._any = re.compile("|".join(f"(?:{p.pattern})" for p in patterns))
@@ -81,6 +84,22 @@ class Redactor:
         for p in self._patterns:
             value = p.sub(REDACTED, value)
         return value
+
+    @property
+    def knows_secrets(self) -> bool:
+        """Whether any secret value is known (else :meth:`known` changes nothing)."""
+        return self._known is not None
+
+    def known(self, value: str) -> str:
+        """``value`` with every secret value povagent knows replaced, and nothing else touched.
+
+        For what a server sends back in a successful answer (a server echoing the request's
+        ``Authorization`` header): an answer is kept exactly as sent, except for the keys
+        povagent itself holds; the secret-looking patterns of :meth:`text` are for messages.
+        """
+        if self._known is None or not self._known.search(value):
+            return value
+        return self._known.sub(REDACTED, value)
 
     def value(self, value: Any, key: str | None = None) -> Any:
         """Redact a value found under ``key`` (recursing into mappings and lists)."""
@@ -107,6 +126,37 @@ class Redactor:
     def __call__(self, logger: Any, method: str, event: EventDict) -> dict[str, Any]:
         """structlog processor."""
         return {k: self.value(v, k) for k, v in event.items()}
+
+
+_LITELLM_ENV_REF = "os.environ/"
+
+
+def secrets_named_by(config: Any) -> tuple[str, ...]:
+    """The values of the environment variables a resolved config names in its ``*_env`` fields
+    (a backend's ``api_key_env``, each router deployment's) or by litellm's ``os.environ/NAME``
+    reference: keys povagent sends, whatever the variable is called (``MY_LAB_KEY`` matches no
+    secret-looking name). Unset ones are skipped."""
+    found: list[str] = []
+
+    def walk(node: Any) -> None:
+        if isinstance(node, Mapping):
+            for k, v in node.items():
+                # ``api_key_env: NAME``, and litellm's own reference ``api_key: os.environ/NAME``
+                name = v if isinstance(v, str) and _names_a_variable(str(k)) else None
+                if isinstance(v, str) and v.startswith(_LITELLM_ENV_REF):
+                    name = v[len(_LITELLM_ENV_REF):]
+                if name is not None and ENV_VAR_NAME.match(name):
+                    value = os.environ.get(name)
+                    if value:
+                        found.append(value)
+                else:
+                    walk(v)
+        elif isinstance(node, (list, tuple)):
+            for v in node:
+                walk(v)
+
+    walk(config)
+    return tuple(found)
 
 
 @functools.lru_cache(maxsize=1024)
@@ -199,10 +249,12 @@ class RunLog:
         self.path = Path(path) if path is not None else None
         self._file: TextIO | None = None
         if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
+            from povagent.run.confined_write import open_inside
+
             # line-buffered is too slow for one event per request; flushed on close and by the
-            # runner before each batch of rows; no fsync (results.jsonl is the record).
-            self._file = open(self.path, "a", encoding="utf-8")
+            # runner before each batch of rows; no fsync (results.jsonl is the record). Never
+            # through a link planted where the log goes (a resumed run's folder is untrusted).
+            self._file = cast(TextIO, open_inside(self.path.parent, self.path.name, "a"))
         self.redactor = redactor or Redactor()
         stream = (_stderr if console is True else console) or None
         self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))

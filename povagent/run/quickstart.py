@@ -13,6 +13,8 @@ from typing import Callable
 
 import yaml
 
+from povagent.run.confined_write import write_inside
+
 #: The baselines the quickstart compares (all offline and instant).
 BASELINES = ("center", "random", "oracle")
 
@@ -46,10 +48,9 @@ def write_quickstart_configs(out: Path, dataset: Path, runs: int = 1) -> Path:
         "output": str((out / "sweep").resolve()),
         "axes": {"backend": [{"name": "center", "options": {"frame_policy": "first"}}, {"name": "random", "options": {"seed": 0}}, "oracle"]},
     }
-    (out / "pipeline.yaml").write_text(yaml.safe_dump(pipeline, sort_keys=False), encoding="utf-8")
-    path = out / "sweep.yaml"
-    path.write_text(yaml.safe_dump(sweep, sort_keys=False), encoding="utf-8")
-    return path
+    # aside and renamed: a link left at either name in a reused folder is replaced, not followed
+    write_inside(out, "pipeline.yaml", yaml.safe_dump(pipeline, sort_keys=False))
+    return write_inside(out, "sweep.yaml", yaml.safe_dump(sweep, sort_keys=False))
 
 
 def run_quickstart(

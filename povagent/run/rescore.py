@@ -20,7 +20,6 @@ slice holding one is NaN).
 
 from __future__ import annotations
 
-import os
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,6 +44,7 @@ from povagent.results.official_reading import (
     read_officially,
 )
 from povagent.results.rows import Prediction, ResultRow, RowStatus, StagedResults, read_rows
+from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.run_folder import read_run_config
 from povagent.run.summary import diagnosed_row, write_json
 from povagent.scoring.breakdown import ScoredRow, breakdown
@@ -201,7 +201,9 @@ def rescore_run(
     # The folder is replaced whole: the rows are staged and published in one move only once
     # every row is rescored, so a rescore killed at any moment leaves the previous complete
     # folder (or none), never some of the new rows or a row twice (see StagedResults).
-    with StagedResults(out_dir / "results.jsonl") as staged:
+    # The run folder is the one the user named: ``rescored-*`` and every file in it are opened
+    # below it without following a link planted there (see confined_write).
+    with StagedResults(out_dir / "results.jsonl", root=run) as staged:
         for row in read_rows(results):
             instance = dataset.instance(row.instance_id)
             if instance is None:
@@ -222,11 +224,10 @@ def rescore_run(
                                                                               if n not in {s.name for s in config.scorers})]
         # an earlier rescore's summary and config must never stand beside these rows: gone
         # before the rows land; the summary comes last, so a folder with one is complete
-        for name in ("summary.json", "config.yaml"):
-            (out_dir / name).unlink(missing_ok=True)
+        with ConfinedFolder(run, out_dir.name) as folder:
+            for name in ("summary.json", "config.yaml"):
+                folder.unlink(name)
         staged.commit()
-    config_tmp = out_dir / "config.yaml.tmp"
-    config_tmp.write_text(yaml.safe_dump(rescored_config, sort_keys=False), encoding="utf-8")
-    os.replace(config_tmp, out_dir / "config.yaml")
-    write_json(out_dir / "summary.json", summary)
+    write_inside(run, f"{out_dir.name}/config.yaml", yaml.safe_dump(rescored_config, sort_keys=False))
+    write_json(out_dir / "summary.json", summary, root=run)
     return RescoreResult(out_dir, summary, warnings)

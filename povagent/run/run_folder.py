@@ -23,7 +23,6 @@ runs nothing.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 from typing import Any, Literal
 
@@ -31,6 +30,7 @@ from povagent.config.models import PipelineConfig
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import read_yaml
 from povagent.errors import ConfigError
+from povagent.run.confined_write import ConfinedFolder, write_inside
 
 #: The marker file of a folder povagent made, and the format version it holds.
 MARKER = ".povagent-run"
@@ -82,16 +82,13 @@ def _claim(folder: Path, kind: Kind) -> None:
 
 def _writable(folder: Path) -> None:
     """An ``OSError`` now (no permission, a read-only mount) rather than a traceback at the first write."""
-    probe = folder / f"{MARKER}.probe"
-    fd = os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)  # a read-only mount says so here
-    os.close(fd)
-    probe.unlink()
+    with ConfinedFolder(folder, create=False) as confined:  # a link planted as the probe is replaced, not followed
+        confined.write_replace(f"{MARKER}.probe", "")  # a read-only mount says so here
+        confined.unlink(f"{MARKER}.probe")
 
 
 def _write_marker(folder: Path, kind: Kind) -> None:
-    tmp = folder / f"{MARKER}.tmp"
-    tmp.write_text(json.dumps({"format": MARKER_FORMAT, "kind": kind}) + "\n", encoding="utf-8")
-    os.replace(tmp, folder / MARKER)
+    write_inside(folder, MARKER, json.dumps({"format": MARKER_FORMAT, "kind": kind}) + "\n")
 
 
 def _read_marker(folder: Path) -> dict[str, Any] | None:

@@ -52,12 +52,14 @@ from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart, read_officially
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, model_label, utc_now
+from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.journal import RowJournal, drop_rows
-from povagent.run.logs import Redactor, RunLog
+from povagent.run.logs import Redactor, RunLog, secrets_named_by
 from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
+from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
 from povagent.run.summary import RowDigest, digest, summarize_digests, write_json
 
 LOG = "log.jsonl"
@@ -236,7 +238,9 @@ class PipelineRun:
         self.run_dir = Path(config.output)
         self.stats = RunStats()
         self.config_hash = config.config_hash()
-        self._redactor = Redactor()
+        # every key the config names (api_key_env values) is known to the redactor, so it is
+        # removed from whatever the run writes: messages, logs, and answers that echo it
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._digests: dict[str, RowDigest] = {}
         self._reads: dict[Path, asyncio.Future[Any]] = {}
         self._frames_read: dict[int, tuple[Any, ...]] = {}
@@ -507,6 +511,10 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        # the backend's own options too: a profile may name the key's variable (api_key_env)
+        options: Any = getattr(self.components.backend, "options", None)
+        dumped = options.model_dump() if hasattr(options, "model_dump") else options
+        self._redactor = Redactor(secrets_named_by(config.resolved_dict()) + secrets_named_by(dumped))
         self.components.backend.check_image_transport(config.images.transport)
         if self._will_send():
             # a client library (litellm: seconds) loads in the background meanwhile
@@ -521,7 +529,7 @@ class PipelineRun:
         claim_folder(self.run_dir, "run")
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
-        ):
+        ), cancelled_on_stop():
             return await self._run_in_folder(instances, t_start)
 
     def _will_send(self) -> bool:
@@ -550,7 +558,7 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         self._digests = plan.digests
         pending, wanted = plan.pending, plan.wanted
-        (self.run_dir / CONFIG).write_text(dump_pipeline(config, self._redactor), encoding="utf-8")
+        write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
         self._names = (config.backend.name, config.strategy.name, config.parser.name)  # type: ignore[union-attr]  # resolve_components set backend and parser
@@ -563,7 +571,7 @@ class PipelineRun:
         self._path = RequestPath(
             backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
             limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
-            redact=self._redactor.text,
+            redact=self._redactor.text, redact_answer=self._redactor.known,
             on_retry=self._log_retry, on_bug=self._log_bug, start_backend=True,
         )  # fmt: skip
         # Before each batch of rows is written (in the journal's thread, off the event loop) the
@@ -590,9 +598,11 @@ class PipelineRun:
             failing = True  # the first failure is the one reported, not the summary's after it
             raise
         finally:
+            # A stop (SIGTERM, Ctrl-C) that arrives from here on is held until the run folder is
+            # complete: the journal closed, summary.json written, then it goes on (see below).
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
-            await self._journal.aclose()
+            stop_came = await finish_through_stop(self._journal.aclose())
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
             self.stats.requests, self.stats.cache_hits, self.stats.retries = (
@@ -601,24 +611,30 @@ class PipelineRun:
             if self._stopped:
                 stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
                 stop_log("run_stopped", reason=self._stopped)
-            summary = self.summarize(instances, runs, interrupted)
+            summary = self.summarize(instances, runs, interrupted or stop_came)
+            # a stop requested while the summary was computed (plain code: not yet delivered) too
+            summary["interrupted"] = summary["interrupted"] or stop_requested()
             try:
                 write_json(self.run_dir / SUMMARY, summary)
             except OSError as exc:  # a full disk: reported below, once the run is closed
                 unwritten: OSError | None = exc
             else:
                 unwritten = None
-            self._log.info("run_end", interrupted=interrupted, stopped=self._stopped,
+            self._log.info("run_end", interrupted=summary["interrupted"], stopped=self._stopped,
                            **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
             self.host.hooks.run_end(str(self.run_dir), summary)
             self._log.close()
             try:
-                await backend.aclose()
+                stop_came = await finish_through_stop(backend.aclose()) or stop_came
             finally:
                 if self._own_cache and self._cache is not None:
                     self._cache.close()
             if unwritten is not None and not failing:
                 raise ResultsError.cannot_write(self.run_dir / SUMMARY, unwritten) from unwritten
+            if stop_came and not interrupted:
+                # every key had finished when the stop came: the folder is complete, and the
+                # stop still ends the command (a sweep must not start its next cell)
+                raise asyncio.CancelledError
         return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped, self._stop_kind)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:

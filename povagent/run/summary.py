@@ -8,7 +8,6 @@ again; :func:`summarize_run` reads a finished folder for everyone else.
 from __future__ import annotations
 
 import json
-import os
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -226,12 +225,14 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
     return summarize_digests(by_key.values(), keys)
 
 
-def write_json(path: Path, data: Mapping[str, Any]) -> None:
-    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one)."""
-    tmp = path.with_suffix(".json.tmp")
-    try:
-        tmp.write_text(json.dumps(data, indent=2, default=str) + "\n", encoding="utf-8")
-    except OSError:  # a full disk: the old file stays, and no half-written copy beside it
-        tmp.unlink(missing_ok=True)
-        raise
-    os.replace(tmp, path)
+def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) -> None:
+    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one).
+
+    Written aside and renamed, never through a link planted at ``path`` or in a folder between
+    ``root`` (the folder the user named; default ``path``'s own) and it; a full disk leaves the
+    old file and no half-written copy beside it (see :mod:`povagent.run.confined_write`).
+    """
+    from povagent.run.confined_write import write_inside
+
+    base = root if root is not None else path.parent
+    write_inside(base, path.relative_to(base), json.dumps(data, indent=2, default=str) + "\n")

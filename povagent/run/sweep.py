@@ -24,7 +24,6 @@ import functools
 import itertools
 import json
 import math
-import os
 import re
 import uuid
 from dataclasses import dataclass, field
@@ -43,11 +42,13 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, TextPart
 from povagent.interfaces import declares_turns, whole_answer_placeholders
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, pending_keys, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.run_folder import claim_folder
 from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
+from povagent.run.stop_signals import cancelled_on_stop
 
 SWEEP_INDEX = "sweep.json"
 #: A cell's own response-cache file on a cluster (see :mod:`povagent.engine.cache`, shards),
@@ -266,10 +267,7 @@ def _write_index(
             for c in cells
         ],
     }  # fmt: skip
-    output.mkdir(parents=True, exist_ok=True)
-    tmp = output / (SWEEP_INDEX + ".tmp")
-    tmp.write_text(json.dumps(index, indent=2, default=str) + "\n", encoding="utf-8")
-    os.replace(tmp, output / SWEEP_INDEX)
+    write_inside(output, SWEEP_INDEX, json.dumps(index, indent=2, default=str) + "\n")
 
 
 def run_sweep(
@@ -306,6 +304,9 @@ def run_sweep(
         models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
     claim_folder(output, "sweep")  # someone's folder (or a read-only one) is refused before any write
+    for cell in cells:  # a cell's folder planted as a link to elsewhere is refused, not run into
+        if Path(cell.config.output).is_relative_to(output):
+            ConfinedFolder(output, Path(cell.config.output).relative_to(output)).close()
     result = SweepResult(output, cells)
     status: dict[str, dict[str, Any]] = {}
     _write_index(output, str(path), cells, status, models)
@@ -315,6 +316,10 @@ def run_sweep(
         return result
 
     async def run_cells() -> None:
+        with cancelled_on_stop():  # a SIGTERM between cells lands at an await too
+            await run_each_cell()
+
+    async def run_each_cell() -> None:
         first = cells[0].config
         images = ImageStore(max_bytes=first.images.max_mb * 1024 * 1024)
         cache_path = first.cache_path()

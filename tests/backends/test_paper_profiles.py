@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from povagent.dataset.models import Condition
@@ -127,3 +129,60 @@ def test_molmopoint_points_map_to_a_frame_and_pixels_through_the_molmo_parser(mi
     assert (parsed.selected_image, parsed.x, parsed.y) == (1, pytest.approx(256.0), pytest.approx(128.0))
     given = parser.parse('<point x="25.0" y="50.0" alt="mug">mug</point>', strategy.answer_spec(mini_dataset.instance("train_house_00000/0/left/c")))
     assert (given.x, given.y) == (pytest.approx(128.0), pytest.approx(256.0))
+
+
+# -- the two rows the authors ran in-process (backend transformers) ---------------------------------
+IN_PROCESS = {
+    "qwen3-vl-8b-transformers": ("Qwen/Qwen3-VL-8B-Instruct", {"dtype": "bfloat16", "device_map": "auto", "sampling": "checkpoint"}),
+    "molmopoint-8b": ("allenai/MolmoPoint-8B", {"trust_remote_code": True, "dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}),
+}
+
+
+def test_exactly_the_transformers_rows_of_the_paper_run_in_process():
+    in_process = {p.name: (p.checkpoint, p.checkpoint_options) for p in PAPER_PROFILES if p.backend == "transformers"}
+    assert in_process == IN_PROCESS
+
+
+@pytest.mark.parametrize("name", sorted(IN_PROCESS))
+def test_a_model_profile_run_in_process_resolves_to_the_transformers_backend(tmp_path, mini_root, name):
+    import yaml
+
+    from povagent.config.pipeline import load_pipeline
+
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "model": name, "output": str(tmp_path / "o")}))
+    config = load_pipeline(path)
+    profile = get_plugin_host().profile(name)
+    assert config.backend.name == "transformers" and config.parser.name == profile.default_parser
+    backend = get_plugin_host().create("backend", config.backend.name, config.backend.options)
+    checkpoint, options = IN_PROCESS[name]
+    assert backend.options.model == checkpoint
+    assert {k: getattr(backend.options, k) for k in options} == options
+    # nothing is downloaded to name it: a Hub id not in the cache has no fingerprint yet
+    assert backend.identity()["model"].startswith(checkpoint)
+
+
+def test_the_transformers_backend_takes_a_profile_as_its_model_with_the_profiles_defaults(tmp_path, mini_root):
+    import yaml
+
+    from povagent.config.pipeline import load_pipeline
+
+    path = tmp_path / "p.yaml"
+    doc = {"dataset": {"path": str(mini_root)}, "backend": {"name": "transformers", "options": {"model": "molmopoint-8b", "max_batch": 2}}, "output": str(tmp_path / "o")}
+    path.write_text(yaml.safe_dump(doc))
+    config = load_pipeline(path)
+    assert config.parser.name == "molmo" and config.strategy.options["prompts"] == "molmopoint"
+    backend = get_plugin_host().create("backend", "transformers", config.backend.options)
+    assert backend.options.trust_remote_code and backend.options.max_batch == 2
+
+
+def test_povagent_plugins_lists_the_in_process_profiles_and_the_backend():
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    listing = json.loads(CliRunner().invoke(app, ["plugins", "--json"]).output)
+    text = json.dumps(listing)
+    assert '"transformers"' in text
+    for name, (checkpoint, _) in IN_PROCESS.items():
+        assert name in text and f"in-process {checkpoint}" in text

@@ -82,10 +82,20 @@ def _symlinked_log(root: Path) -> None:
     os.symlink(outside, house(root, "exploration_log.json"))
 
 
+def _rgb_path_climbing_through_a_symlinked_folder(root: Path) -> None:
+    # ``deep`` looks one level down but is four: the path resolves back inside the dataset
+    # (to the pair's own view), while as written it climbs out of the dataset folder.
+    target = house(root, "img_from_observer/a/b")
+    target.mkdir(parents=True)
+    os.symlink(target, house(root, "deep"))
+    edit(house(root), lambda d: d[0].update(rgb_path=f"deep/../../../../../artifacts/{TARGET}/img_from_observer/pair_7.png"))
+
+
 #: name -> (damage, file named in the messages, field named or None)
 DATASETS: dict[str, tuple[Callable[[Path], None], str, str | None]] = {
     "absolute image_path": (lambda r: edit(house(r, "exploration_log.json"), lambda d: d[0].update(image_path=str(_outside(r)))), "exploration_log.json", "$[0].image_path"),
     "rgb_path climbing out": (lambda r: edit(house(r), lambda d: d[0].update(rgb_path="../../../secret.png")), f"{TARGET}.json", "$[0].rgb_path"),
+    "rgb_path climbing out through a symlinked folder": (_rgb_path_climbing_through_a_symlinked_folder, f"{TARGET}.json", "$[0].rgb_path"),
     "frame symlinked out": (_symlinked_frame, "exploration_log.json", "$[0].image_path"),
     "log symlinked out": (_symlinked_log, "exploration_log.json", None),
     "NaN camera position": (lambda r: edit(house(r), lambda d: d[0]["camera"]["cam_pos"].__setitem__(0, float("nan"))), f"{TARGET}.json", "$[0].camera.cam_pos[0]"),
@@ -234,6 +244,41 @@ def test_a_server_that_answers_nothing_fails_the_keys_and_writes_nothing_wrong(t
     assert "run `povagent run" in text or "again" in text
 
 
+def test_a_key_echoed_inside_a_successful_answer_reaches_no_file(tmp_path, dataset, answer_server, monkeypatch):
+    # The variable's name matches no secret-looking pattern: only knowing api_key_env finds it.
+    from povagent.testing.loopback_server import Reply
+
+    key = "lab-key-4f9a8c7e2b1d"
+    monkeypatch.setenv("POVAGENT_ECHO_VAR", key)
+
+    def echo(request):
+        sent = request.headers.get("authorization", "")
+        return Reply('{"selected_image": 0, "x": 256, "y": 256} (you sent ' + sent + ")")
+
+    answer_server.reply = echo
+    pipeline = tmp_path / "pipeline.yaml"
+    pipeline.write_text(yaml.safe_dump({
+        "dataset": str(dataset),
+        "instances": {"houses": [TARGET], "conditions": ["a", "c"]},
+        "backend": {"name": "litellm", "options": {"model": "openai/echo", "api_base": answer_server.url, "api_key_env": "POVAGENT_ECHO_VAR"}},
+        "retry": {"attempts": 1, "initial_wait": 0.0, "max_wait": 0.0},
+        "output": str(tmp_path / "run"),
+    }))
+    code, text = invoke("run", pipeline, "--quiet")
+    assert code == 0, text[-3000:]
+    assert answer_server.requests and key in answer_server.requests[-1].headers["authorization"]  # it was sent
+    rows = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 4 and all("[REDACTED]" in r["exchanges"][-1]["raw"] for r in rows)
+    assert all(r["status"] == "answered" for r in rows)  # the answer itself is kept exactly
+    code, _ = invoke("run", pipeline, "--quiet")  # again: every answer now from the cache
+    assert code == 0
+    assert invoke("report", tmp_path / "run", "--bootstrap", "0")[0] == 0
+    assert invoke("rescore", tmp_path / "run")[0] == 0
+    written = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert any(p.name == "cache.sqlite" for p in written) and any(p.name == "report.html" for p in written)
+    assert [str(p) for p in written if key.encode() in p.read_bytes()] == []
+
+
 #: name -> an official predictions file's text
 PREDICTIONS: dict[str, str] = {
     "not JSON": "[{house_id: 1",
@@ -251,3 +296,82 @@ def test_a_bad_predictions_file_is_scored_or_refused_with_its_name(tmp_path, dat
     code, output = invoke("score", "--predictions", path, "--dataset", dataset)
     assert code in (0, 2), output
     assert code == 0 or str(path) in output or "predictions.json" in output, output
+
+
+@pytest.fixture(scope="module")
+def finished_run_once(tmp_path_factory, mini_root) -> tuple[Path, Path]:
+    """One finished run of the two good houses (its folder, its pipeline), copied by each case."""
+    base = tmp_path_factory.mktemp("finished")
+    root = base / "ds"
+    (root / "artifacts").mkdir(parents=True)
+    shutil.copy(mini_root / "meta.json", root / "meta.json")
+    for name in ("train_house_00000", TARGET):
+        shutil.copytree(mini_root / "artifacts" / name, root / "artifacts" / name)
+    pipeline = base / "good.yaml"
+    pipeline.write_text(yaml.safe_dump({"dataset": str(root), "backend": "center", "cache": False, "output": str(base / "run")}))
+    code, text = invoke("run", pipeline, "--quiet")
+    assert code == 0, text
+    return base / "run", pipeline
+
+
+def _plant_link(rel: str, to_folder: bool = False) -> Callable[[Path, Path], None]:
+    def plant(run: Path, outside: Path) -> None:
+        (run / rel).parent.mkdir(parents=True, exist_ok=True)
+        (run / rel).unlink(missing_ok=True)  # the file povagent wrote, swapped for a link
+        os.symlink(outside.parent if to_folder else outside, run / rel)
+
+    return plant
+
+
+def _plant_folder(rel: str) -> Callable[[Path, Path], None]:
+    return lambda run, outside: (run / rel).mkdir(parents=True)
+
+
+def _plant_file(rel: str) -> Callable[[Path, Path], None]:
+    return lambda run, outside: (run / rel).write_text("someone's file")
+
+
+#: name -> (command after the run folder, what is planted in the run folder, the entry the one
+#: line names, or None where the writer replaces the link without following it and succeeds)
+RUN_FOLDER_PLANTS: dict[str, tuple[tuple[str, ...], Callable[[Path, Path], None], str | None]] = {
+    "rescored folder linked out": (("rescore",), _plant_link("rescored-official", to_folder=True), "rescored-official"),
+    "rescore's staged rows linked out": (("rescore",), _plant_link("rescored-official/results.jsonl.tmp"), None),
+    "rescore's config linked out": (("rescore",), _plant_link("rescored-official/config.yaml"), None),
+    "rescore's summary staging linked out": (("rescore",), _plant_link("rescored-official/summary.json.tmp"), None),
+    "rescored folder is a file": (("rescore",), _plant_file("rescored-official"), "rescored-official"),
+    "rescore's staged rows are a folder": (("rescore",), _plant_folder("rescored-official/results.jsonl.tmp"), "results.jsonl.tmp"),
+    "rescore's rows are a folder": (("rescore",), _plant_folder("rescored-official/results.jsonl"), "results.jsonl"),
+    "rescore's summary is a folder": (("rescore",), _plant_folder("rescored-official/summary.json"), "summary.json"),
+    "resumed run's log linked out": (("run",), _plant_link("log.jsonl"), "log.jsonl"),
+    "resumed run's journal linked out": (("run",), _plant_link("results.jsonl"), "results.jsonl"),
+    "resumed run's summary linked out": (("run",), _plant_link("summary.json"), None),
+    "report folder linked out": (("report", "--bootstrap", "0"), _plant_link("report", to_folder=True), "report"),
+    "report page linked out": (("report", "--bootstrap", "0"), _plant_link("report/report.html"), None),
+    "report summary linked out": (("report", "--bootstrap", "0"), _plant_link("report/summary.json"), None),
+    "official export linked out": (("export",), _plant_link("official_predictions.json"), None),
+    "official export's staging linked out": (("export",), _plant_link("official_predictions.json.tmp"), None),
+    "long CSV linked out": (("export", "--format", "long-csv"), _plant_link("all_runs_long.csv"), None),
+}
+
+
+@pytest.mark.parametrize("command, plant, named", RUN_FOLDER_PLANTS.values(), ids=RUN_FOLDER_PLANTS.keys())
+def test_a_link_planted_in_a_run_folder_never_writes_outside_it(tmp_path, finished_run_once, command, plant, named):
+    source, pipeline = finished_run_once
+    run = tmp_path / "run"
+    shutil.copytree(source, run, symlinks=True)
+    outside = tmp_path / "elsewhere" / "precious.txt"
+    outside.parent.mkdir()
+    outside.write_text("keep me\n")
+    plant(run, outside)
+    if command[0] == "run":  # the same pipeline pointed at the copy resumes it
+        resumed = tmp_path / "pipeline.yaml"
+        resumed.write_text(pipeline.read_text().replace(str(source), str(run)))
+        code, text = invoke("run", resumed, "--quiet")
+    else:
+        code, text = invoke(command[0], run, *command[1:])
+    assert outside.read_text() == "keep me\n" and sorted(p.name for p in outside.parent.iterdir()) == ["precious.txt"], text
+    if named is None:
+        assert code == 0, text[-3000:]
+    else:
+        error = [line for line in text.splitlines() if line.startswith("error:")]
+        assert code == 2 and len(error) == 1 and f"{named}:" in error[0], text[-3000:]

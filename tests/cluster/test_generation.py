@@ -138,3 +138,34 @@ def test_a_scheduler_gone_is_one_clear_line_and_the_same_command_resumes(cluster
     # the files do not depend on the engine, so any engine resumes (here this process, to keep the test short)
     generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, jobs=1)
     assert digests(out) == one_process
+
+
+@pytest.fixture
+def full_disk(tmp_path: Path):
+    """``tmp_path/disk``: a 64 KiB tmpfs filled to the last byte (unmounted after the test)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)], capture_output=True, text=True)
+    if mounted.returncode != 0:
+        pytest.skip(f"mounting a tmpfs is not permitted here ({mounted.stderr.strip()})")
+    try:
+        (disk / "out").mkdir()
+        try:
+            with open(disk / "filler", "wb", buffering=0) as fh:
+                while True:
+                    fh.write(b"\0" * 4096)
+        except OSError:  # the disk is full: what the test wants
+            pass
+        yield disk
+    finally:
+        subprocess.run(["umount", str(disk)], check=True)
+
+
+def test_a_full_disk_under_a_cluster_generation_names_the_disk_not_the_scheduler(full_disk: Path) -> None:
+    from povagent.errors import GenerationError
+
+    with pytest.raises(GenerationError) as info:
+        generate_dataset(full_disk / "out", houses=HOUSES, seed=SEED, frames=FRAMES, progress=False, cluster="local:1")
+    message = str(info.value)
+    assert "No space left on device" in message and "lost the Dask scheduler" not in message, message
+    assert "\n" not in message and str(full_disk / "out") in message

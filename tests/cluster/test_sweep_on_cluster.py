@@ -4,6 +4,7 @@ failed cells and a lost scheduler, and leave Dask alone when no cluster is asked
 from __future__ import annotations
 
 import json
+import socket
 import subprocess
 import sys
 import threading
@@ -72,16 +73,29 @@ def test_rerunning_a_finished_cluster_sweep_asks_no_model(shared_dask_cluster, w
     assert {name: (r.stats.requests, r.stats.cache_hits) for name, r in again.results.items()} == {n: (0, 4) for n in "abc"}
 
 
-def test_the_cluster_key_of_the_yaml_is_used_and_the_flag_overrides_it(shared_dask_cluster, write_sweep, tmp_path) -> None:
-    path = write_sweep(tmp_path / "keyed", extra=f"cluster: {shared_dask_cluster.address}\n")
-    said: list[str] = []
-    run_sweep(path, progress=QuietProgress(), notify=said.append)
-    assert any(m.startswith("storage:") for m in said)
-    # the flag wins over a YAML naming a scheduler nobody runs
-    dead = write_sweep(tmp_path / "flagged", extra="cluster: tcp://127.0.0.1:9\n")
-    result = CliRunner().invoke(app, ["sweep", str(dead), "--quiet", "--cluster", shared_dask_cluster.address])
+def test_the_flag_overrides_the_local_cluster_the_yaml_asks_for(shared_dask_cluster, write_sweep, tmp_path) -> None:
+    path = write_sweep(tmp_path / "flagged", extra="cluster: local:1\n")
+    result = CliRunner().invoke(app, ["sweep", str(path), "--quiet", "--cluster", shared_dask_cluster.address])
     assert result.exit_code == 0, result.output
-    assert "storage: all 2 worker(s)" in result.output
+    assert "storage: all 2 worker(s)" in result.output  # the running scheduler's two, not local:1's one
+
+
+def test_a_yaml_naming_a_scheduler_is_refused_and_nothing_connects_to_it(write_sweep, tmp_path) -> None:
+    # a hostile sweep file must not make povagent unpickle what some scheduler sends: the
+    # address it names is refused before any connection, in one line naming --cluster
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(8)
+        listener.setblocking(False)
+        port = listener.getsockname()[1]
+        path = write_sweep(tmp_path / "hostile", extra=f"cluster: tcp://127.0.0.1:{port}\n")
+        with pytest.raises(ConfigError) as info:
+            run_sweep(path, progress=QuietProgress())
+        with pytest.raises(BlockingIOError):
+            listener.accept()  # nobody knocked
+    message = str(info.value)
+    assert "hostile.yaml, line 5" in message and "--cluster" in message and "local:N only" in message, message
+    assert not (tmp_path / "hostile").exists()  # refused before the sweep folder was made
 
 
 def test_a_bad_cluster_key_names_the_sweep_file_and_line(write_sweep, tmp_path) -> None:

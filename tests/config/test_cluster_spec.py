@@ -7,7 +7,8 @@ import sys
 
 import pytest
 
-from povagent.config.cluster_spec import ClusterSpec, parse_cluster_spec
+from povagent.config.cluster_spec import ClusterSpec, local_worker_limit, parse_cluster_spec, yaml_cluster_spec
+from povagent.config.models import SweepConfig
 from povagent.errors import ClusterError
 
 
@@ -26,6 +27,35 @@ def test_anything_else_is_refused_naming_both_forms(value: str) -> None:
         parse_cluster_spec(value)
     assert "\n" not in str(info.value)
     assert repr(value) in str(info.value)
+
+
+@pytest.mark.parametrize("value", ["local:\u00b2", "local:\u0663", "local:" + "9" * 5000, "local:007x"])
+def test_a_local_count_is_ascii_digits_or_one_line(value: str) -> None:
+    # int() of a superscript two raises ValueError, and so does int() of 5,000 digits
+    with pytest.raises(ClusterError, match="local:N takes a number of worker processes") as info:
+        parse_cluster_spec(value)
+    assert "\n" not in str(info.value)
+
+
+def test_a_local_cluster_larger_than_this_machine_allows_is_refused() -> None:
+    most = local_worker_limit()
+    assert parse_cluster_spec(f"local:{most}") == ClusterSpec(local_workers=most)
+    with pytest.raises(ClusterError, match=f"from 1 to {most} on this machine"):
+        parse_cluster_spec(f"local:{most + 1}")
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:8786", "tls://scheduler.example:8786", "inproc://x"])
+def test_a_yaml_naming_a_scheduler_is_refused_naming_the_flag(address: str) -> None:
+    with pytest.raises(ClusterError, match="--cluster") as info:
+        yaml_cluster_spec(address)
+    assert "\n" not in str(info.value)
+    with pytest.raises(ValueError, match="a YAML file may ask for local:N only"):
+        SweepConfig.model_validate({"base": "b.yaml", "output": "out", "cluster": address})
+
+
+def test_a_yaml_may_ask_for_a_local_cluster() -> None:
+    assert yaml_cluster_spec("local:2") == ClusterSpec(local_workers=2)
+    assert SweepConfig.model_validate({"base": "b.yaml", "output": "out", "cluster": "local:2"}).cluster == "local:2"
 
 
 def test_reading_a_spec_does_not_import_dask() -> None:

@@ -94,3 +94,20 @@ def test_a_failed_flush_raises_and_keeps_the_answers_queued(tmp_path, monkeypatc
     assert cache.discard_pending() == 1 and cache.get("k") is None
     monkeypatch.undo()
     cache.close()
+
+
+@pytest.mark.parametrize("name", ["c.sqlite", "c.sqlite-wal", "c.sqlite-journal"])
+def test_a_cache_file_planted_as_a_link_is_refused_and_its_target_untouched(tmp_path, name):
+    import os
+
+    from povagent.errors import WriteTargetError
+
+    outside = tmp_path / "elsewhere.db"
+    outside.write_bytes(b"")  # an empty file: SQLite would happily make it a cache
+    run = tmp_path / "run"
+    run.mkdir()
+    os.symlink(outside, run / name)
+    with pytest.raises(WriteTargetError, match=rf"{name}: is a symbolic link"):
+        with ResponseCache(run / "c.sqlite") as cache:
+            cache.put("k", Response("answer"))
+    assert outside.read_bytes() == b""

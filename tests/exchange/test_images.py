@@ -121,3 +121,58 @@ def test_a_derived_image_is_drawn_once_per_recipe(tmp_path):
     assert other.image_hash != first.image_hash and calls == [(15, 15), (5, 5)]
     with Image.open(io.BytesIO(store.encoded_bytes(first.image_hash))) as im:
         assert im.convert("RGB").getpixel((15, 15)) == (255, 0, 0)
+
+
+def _released(tmp_path):
+    """A store that read ``a.png`` and let it go (a house done in one cell of a sweep)."""
+    store = ImageStore()
+    path = png(tmp_path / "a.png", (10, 20, 30), size=(32, 32))
+    store.hold_files([path])
+    h = store.add_file(path).image_hash
+    store.release_files([path])
+    return store, path, h
+
+
+def test_a_released_frame_swapped_for_a_symlink_is_an_error_naming_it_not_another_image(tmp_path):
+    import os
+
+    import pytest
+
+    from povagent.errors import DatasetError
+
+    store, path, h = _released(tmp_path)
+    other = png(tmp_path / "elsewhere.png", (200, 0, 0), size=(32, 32))
+    path.unlink()
+    os.symlink(other, path)
+    with pytest.raises(DatasetError, match=r"a\.png: image changed since it was first read"):
+        store.data_url(h)
+
+
+def test_a_released_frame_rewritten_in_place_is_an_error_naming_it(tmp_path):
+    import pytest
+
+    from povagent.errors import DatasetError
+
+    store, path, _ = _released(tmp_path)
+    png(path, (0, 0, 255), size=(32, 32))
+    with pytest.raises(DatasetError, match=r"a\.png: image changed"):
+        store.load_file(path)
+
+
+def test_a_released_frame_replaced_by_a_pipe_is_refused_at_once_not_waited_for(tmp_path):
+    import os
+
+    import pytest
+
+    from povagent.errors import DatasetError
+
+    store, path, h = _released(tmp_path)
+    path.unlink()
+    os.mkfifo(path)  # nobody writes to it: an ordinary open would wait for good
+    with pytest.raises(DatasetError, match=r"a\.png: .*not a regular file"):
+        store.encoded_bytes(h)
+
+
+def test_a_released_frame_left_as_it_was_is_read_again(tmp_path):
+    store, path, h = _released(tmp_path)
+    assert store.encoded_bytes(h) == path.read_bytes() and store.stats.rebuilds == 1

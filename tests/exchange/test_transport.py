@@ -278,3 +278,35 @@ def test_a_model_server_running_as_another_user_reads_a_derived_image(frames, tm
         assert hashlib.sha256(read.stdout).hexdigest() == derived
     finally:
         shutil.rmtree(shared)
+
+
+def test_a_derived_image_planted_as_a_link_is_replaced_not_sent(frames, tmp_path):
+    # The name is predictable (the hash of the derived bytes): a link left under it in a run
+    # folder would have the model server read the file it points at.
+    store = ImageStore()
+    derived = store.derive(store.add_file(frames[0]).image_hash, "marker", marked).image_hash
+    private = tmp_path / "private.png"
+    Image.new("RGB", (8, 8), (1, 2, 3)).save(private)
+    before = private.read_bytes()
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    os.symlink(private, cache / f"{derived}.png")
+    url = FileTransport(cache).url(store, derived)
+    written = cache / f"{derived}.png"
+    assert url == written.as_uri() and not written.is_symlink()
+    assert hashlib.sha256(written.read_bytes()).hexdigest() == derived and private.read_bytes() == before
+
+
+def test_the_default_derived_image_folder_planted_as_a_link_is_refused(release, tmp_path):
+    from povagent.config.models import DEFAULT_CACHE_DIR, ImagesSpec
+    from povagent.errors import WriteTargetError
+    from povagent.exchange.transport import open_image_transport
+
+    run = tmp_path / "run"
+    run.mkdir()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    os.symlink(elsewhere, run / DEFAULT_CACHE_DIR)
+    with pytest.raises(WriteTargetError, match=rf"{DEFAULT_CACHE_DIR}: is a symbolic link"):
+        with open_image_transport(ImagesSpec(transport="file"), ImageStore(), dataset_root=release, output=run):
+            pass

@@ -43,3 +43,22 @@ def test_secret_never_reaches_the_log_file(tmp_path, monkeypatch):
 
 def test_a_key_naming_an_environment_variable_is_kept():
     assert Redactor().value({"api_key_env": "OPENAI_API_KEY"}) == {"api_key_env": "OPENAI_API_KEY"}
+
+
+def test_the_key_a_config_names_by_api_key_env_is_known_whatever_the_variable_is_called(monkeypatch):
+    from povagent.run.logs import Redactor, secrets_named_by
+
+    monkeypatch.setenv("LAB_VAR", "lab-key-0123456789")
+    monkeypatch.setenv("OTHER_VAR", "other-key-987654321")
+    config = {"backend": {"options": {"api_key_env": "LAB_VAR", "router": [
+        {"litellm_params": {"api_key_env": "UNSET_VAR_XYZ"}}, {"litellm_params": {"api_key": "os.environ/OTHER_VAR"}}]}}}
+    redactor = Redactor(secrets_named_by(config))
+    assert secrets_named_by(config) == ("lab-key-0123456789", "other-key-987654321")
+    assert redactor.known("echo: Bearer lab-key-0123456789!") == "echo: Bearer [REDACTED]!"
+
+
+def test_an_answer_keeps_every_character_but_the_known_keys():
+    from povagent.run.logs import Redactor
+
+    answer = 'see http://user:pw@host and sk-abcdefghijkl {"x": 1}'
+    assert Redactor(("lab-key-0123456789",)).known(answer) == answer  # patterns are for messages

@@ -391,9 +391,9 @@ def test_a_second_run_on_the_same_store_reads_the_let_go_frames_again_off_the_ev
     readers: list[str] = []
 
     class Watched(ImageStore):
-        def _read_file(self, path):
+        def _read_file(self, path, size=None):
             readers.append(threading.current_thread().name)
-            return super()._read_file(path)
+            return super()._read_file(path, size)
 
     images = Watched()
     backend = {"name": "test-center", "options": {"encode": True}}
@@ -403,6 +403,34 @@ def test_a_second_run_on_the_same_store_reads_the_let_go_frames_again_off_the_ev
     assert again.summary["rows"]["answered"] == N_KEYS
     assert len(readers) == 2 * first and images.stats.rebuilds == first  # every frame once more, as a rebuild
     assert threading.main_thread().name not in readers  # never on the event loop's thread
+
+
+def test_a_frame_swapped_for_a_link_between_runs_on_one_store_fails_its_keys_naming_it(write_pipeline, small_release, tmp_path):
+    # A sweep's later cell reads the frames an earlier cell let go: a frame swapped meanwhile
+    # for a link to another image is not sent under the old hash; its keys fail, naming it.
+    import os
+    import shutil
+
+    from PIL import Image
+
+    from povagent.exchange.images import ImageStore
+
+    release = tmp_path / "release"
+    shutil.copytree(small_release, release)
+    images = ImageStore()
+    backend = {"name": "test-center", "options": {"encode": True}}
+    first = run(write_pipeline(backend=backend, dataset={"path": str(release)}), images=images)
+    assert first.summary["rows"]["answered"] == N_KEYS
+    frame = sorted(release.rglob("exploration_images/*.png"))[0]
+    other = release / "swapped.png"  # inside the dataset, so loading it again accepts it
+    Image.new("RGB", Image.open(frame).size, (255, 0, 255)).save(other)
+    frame.unlink()
+    os.symlink(other, frame)
+    again = run(write_pipeline("again.yaml", backend=backend, dataset={"path": str(release)}, output=str(tmp_path / "again")),
+                images=images)
+    failed = [r for r in rows_of(again) if r.status == "infra_error"]
+    assert failed and all(frame.name in (r.error_message or "") and "changed since it was first read" in r.error_message for r in failed)
+    assert {r.house_id for r in failed} == {frame.parents[1].name}
 
 
 def test_request_event_per_call_in_the_log(write_pipeline):

@@ -112,3 +112,20 @@ def test_dry_run_subtracts_finished_keys_and_estimates_tokens(sweep_file, offlin
     after = {c.name: c for c in dry_run(cells)}
     assert after["a"].requests == 0 and after["a"].n_done == PER_CONDITION and after["a"].prompt_tokens == 0
     assert offline_plugin.CALLS["count"] == 2 * PER_CONDITION  # a dry run calls nothing
+
+
+def test_a_cell_folder_planted_as_a_link_is_refused_before_any_cell_runs(sweep_file, tmp_path, offline_plugin):
+    import os
+
+    from povagent.errors import WriteTargetError
+
+    path = sweep_file("axes:\n  conditions: [a, b]\n")
+    run_sweep(path, quiet=True)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    cell = tmp_path / "sweep" / "b"
+    os.rename(cell, tmp_path / "b-moved")
+    os.symlink(elsewhere, cell)  # an empty folder elsewhere, which a run would take as new
+    with pytest.raises(WriteTargetError, match=r"sweep/b: is a symbolic link"):
+        run_sweep(path, quiet=True)
+    assert list(elsewhere.iterdir()) == []

@@ -1,0 +1,144 @@
+"""A keyframe memory saved to a folder and loaded back: a robot's tour as a reproducible input.
+
+Layout: ``memory.json`` (the settings and, per frame, its stamp, frame id, image file, 4x4
+camera-to-map pose, pose convention, intrinsics and optional depth file), ``frame_NNNN.png``
+(RGB) and ``depth_NNNN.npy`` (float metres). ``memory.json`` is written last, through a temporary
+file and a rename, so a folder either holds a whole memory or none.
+
+Loading treats the folder as untrusted: file names must be plain names inside the folder (no
+``/``, no ``..``), images are opened with Pillow's size guard, depth files with
+``allow_pickle=False``, and every problem is one :class:`~povagent.errors.ConfigError` naming the
+file and the field.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from PIL import Image, UnidentifiedImageError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from povagent.errors import ConfigError
+from povagent.geometry.goals import PinholeCamera, PoseConvention
+from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
+
+MEMORY_FILE = "memory.json"
+FORMAT_VERSION = 1
+
+
+class SavedFrame(BaseModel):
+    """One frame of ``memory.json``."""
+
+    model_config = ConfigDict(extra="forbid")
+    stamp_ns: int
+    frame_id: str = ""
+    image: str = Field(pattern=r"^[A-Za-z0-9_.-]+\.png$")
+    depth: str | None = Field(default=None, pattern=r"^[A-Za-z0-9_.-]+\.npy$")
+    camera_to_map: list[list[float]] = Field(min_length=4, max_length=4)
+    convention: Literal["opencv", "opengl", "ros"] = "opencv"
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    width: int = Field(ge=1)
+    height: int = Field(ge=1)
+
+
+class SavedMemory(BaseModel):
+    """``memory.json``: the format version, the rule settings and the frames in memory order."""
+
+    model_config = ConfigDict(extra="forbid")
+    format: Literal[1] = 1
+    min_translation: float
+    min_rotation: float
+    max_frames: int
+    coverage_depth: float
+    grid: tuple[int, int]
+    frames: list[SavedFrame]
+
+
+def save_memory(memory: KeyframeMemory, folder: str | os.PathLike) -> Path:
+    """Write ``memory`` to ``folder`` (created if needed); returns the ``memory.json`` path."""
+    root = Path(folder)
+    root.mkdir(parents=True, exist_ok=True)
+    entries = []
+    for i, frame in enumerate(memory.frames):
+        image = f"frame_{i:04d}.png"
+        Image.fromarray(np.ascontiguousarray(frame.rgb, dtype=np.uint8)).save(root / image)
+        depth = None
+        if frame.depth is not None:
+            depth = f"depth_{i:04d}.npy"
+            np.save(root / depth, np.asarray(frame.depth, dtype=np.float32), allow_pickle=False)
+        cam = frame.camera
+        entries.append(SavedFrame(
+            stamp_ns=frame.stamp_ns, frame_id=frame.frame_id, image=image, depth=depth,
+            camera_to_map=np.asarray(cam.camera_to_world).tolist(), convention=cam.convention.value,
+            fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, width=cam.width, height=cam.height,
+        ))
+    s = memory.settings
+    saved = SavedMemory(min_translation=s.min_translation, min_rotation=s.min_rotation, max_frames=s.max_frames,
+                        coverage_depth=s.coverage_depth, grid=s.grid, frames=entries)
+    target = root / MEMORY_FILE
+    tmp = root / (MEMORY_FILE + ".tmp")
+    tmp.write_text(json.dumps(saved.model_dump(mode="json"), indent=1), encoding="utf-8")
+    os.replace(tmp, target)
+    return target
+
+
+def load_memory(folder: str | os.PathLike) -> KeyframeMemory:
+    """The memory saved in ``folder``; :class:`ConfigError` naming the file and field when unusable."""
+    root = Path(folder)
+    path = root / MEMORY_FILE
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no saved keyframe memory here (write one with --save-memory)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from None
+    try:
+        saved = SavedMemory.model_validate_json(text)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        field = ".".join(str(p) for p in first["loc"]) or "(top level)"
+        raise ConfigError(f"{path}: field {field}: {first['msg']}") from None
+    try:
+        settings = MemorySettings(saved.min_translation, saved.min_rotation, saved.max_frames, saved.coverage_depth, saved.grid)
+    except ValueError as exc:
+        raise ConfigError(f"{path}: settings: {exc}") from None
+    frames = [_load_frame(root, path, i, entry) for i, entry in enumerate(saved.frames)]
+    memory = KeyframeMemory(settings)
+    memory.restore(frames)
+    return memory
+
+
+def _load_frame(root: Path, path: Path, i: int, entry: SavedFrame) -> Keyframe:
+    where = f"{path}: frames[{i}]"
+    try:
+        camera = PinholeCamera(np.asarray(entry.camera_to_map, dtype=float), entry.fx, entry.fy, entry.cx, entry.cy,
+                               entry.width, entry.height, PoseConvention(entry.convention))
+    except ValueError as exc:
+        raise ConfigError(f"{where}.camera_to_map: {exc}") from None
+    try:
+        with Image.open(root / entry.image) as im:
+            rgb = np.asarray(im.convert("RGB"))
+    except (OSError, UnidentifiedImageError, Image.DecompressionBombError) as exc:
+        raise ConfigError(f"{where}.image: cannot read {entry.image}: {exc}") from None
+    if rgb.shape[:2] != (entry.height, entry.width):
+        raise ConfigError(f"{where}.image: {entry.image} is {rgb.shape[1]}x{rgb.shape[0]}, the camera says {entry.width}x{entry.height}")
+    depth = None
+    if entry.depth is not None:
+        try:
+            depth = np.load(root / entry.depth, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise ConfigError(f"{where}.depth: cannot read {entry.depth}: {exc}") from None
+        if depth.ndim != 2 or not np.issubdtype(depth.dtype, np.floating):
+            raise ConfigError(f"{where}.depth: {entry.depth} must be a 2D float array of metres")
+        depth = depth.astype(float)
+    return Keyframe(entry.stamp_ns, rgb, camera, depth, entry.frame_id)
+
+
+__all__ = ["MEMORY_FILE", "SavedFrame", "SavedMemory", "load_memory", "save_memory"]

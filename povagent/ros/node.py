@@ -1,0 +1,206 @@
+"""The ROS 2 node: camera topics and transforms in, a command in, a goal in the map out.
+
+Topics (parameters give the names; defaults in :data:`DEFAULT_PARAMETERS`):
+
+* in: ``image_topic`` (``sensor_msgs/Image``; a name ending ``/compressed`` takes
+  ``CompressedImage``), ``camera_info_topic``, ``depth_topic`` (optional, ``""`` to disable),
+  ``tf_topic`` and ``tf_static_topic`` (``tf2_msgs/TFMessage``, when a ROS installation provides
+  tf2_msgs), ``odom_topic`` (``nav_msgs/Odometry``, ``""`` to disable), ``~/command``
+  (``std_msgs/String``);
+* out: ``~/goal`` (``geometry_msgs/PointStamped`` in ``map_frame``), ``/goal_pose``
+  (``geometry_msgs/PoseStamped`` at the goal, facing from the chosen keyframe's camera to it:
+  what Nav2's ``bt_navigator`` takes; remap it), ``~/result`` (``std_msgs/String``: the JSON of
+  :class:`~povagent.ros.result.CommandResult`).
+
+Every message goes to the same :class:`~povagent.ros.session.GroundingSession` the bag replay
+uses. The model is never called on the executor: commands go to a bounded queue served by one
+worker thread, so images keep arriving while a command is answered; a command that has to wait
+gets a ``queued`` result at once, one that finds the queue full a ``queue_full`` result. A
+malformed message is counted and logged once per kind. A camera mount given as parameters
+(``mount_parent``, ``mount_child``, ``mount_transform`` = x y z qx qy qz qw) stands in for
+``/tf_static`` where none is published.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import threading
+from typing import Any
+
+from povagent.errors import ConfigError
+from povagent.ros.extras import ROS_EXTRA, prepare_ros_environment, tf2_messages
+from povagent.ros.keyframes import DEFAULT_MAX_FRAMES, DEFAULT_MIN_ROTATION, DEFAULT_MIN_TRANSLATION, MemorySettings
+from povagent.ros.result import CommandResult, CommandStatus
+from povagent.ros.session import GroundingSession, Locate
+from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S
+from povagent.ros.transforms import RigidTransform, TransformProblem
+
+prepare_ros_environment()  # before rclpy's first import
+try:
+    from geometry_msgs.msg import PointStamped, PoseStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rclpy.time import Time
+    from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+    from std_msgs.msg import String
+except ImportError as _missing:
+    raise ConfigError(f"ros-node needs ROS 2's Python packages ({_missing.name} is missing): {ROS_EXTRA}") from None
+
+#: The node's parameters and their defaults.
+DEFAULT_PARAMETERS: dict[str, Any] = {
+    "image_topic": "/camera/image_raw",
+    "camera_info_topic": "/camera/camera_info",
+    "depth_topic": "/camera/depth/image_raw",
+    "tf_topic": "/tf",
+    "tf_static_topic": "/tf_static",
+    "odom_topic": "",
+    "map_frame": "map",
+    "min_translation": DEFAULT_MIN_TRANSLATION,
+    "min_rotation": DEFAULT_MIN_ROTATION,
+    "max_frames": DEFAULT_MAX_FRAMES,
+    "transform_tolerance": DEFAULT_TOLERANCE_S,
+    "max_queue": 4,
+    "reliable_images": False,
+    "mount_parent": "base_link",
+    "mount_child": "",
+    "mount_transform": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+}
+
+
+class GroundingNode(Node):
+    """``povagent`` as a ROS 2 node (see the module docstring); ``close()`` stops its worker."""
+
+    def __init__(self, locate: Locate, *, name: str = "povagent", context: Any = None, parameter_overrides: list[Any] | None = None) -> None:
+        super().__init__(name, context=context, parameter_overrides=parameter_overrides or [])
+        for key, default in DEFAULT_PARAMETERS.items():
+            self.declare_parameter(key, default)
+        p = {key: self.get_parameter(key).value for key in DEFAULT_PARAMETERS}
+        try:
+            settings = MemorySettings(float(p["min_translation"]), float(p["min_rotation"]), int(p["max_frames"]))
+            mount = RigidTransform.checked(list(p["mount_transform"])[:3], list(p["mount_transform"])[3:], "parameter mount_transform")
+            if float(p["transform_tolerance"]) < 0:
+                raise ValueError(f"transform_tolerance must be >= 0 seconds, got {p['transform_tolerance']}")
+        except (ValueError, TransformProblem) as exc:
+            self.destroy_node()
+            raise ConfigError(f"ros-node parameters: {exc}") from None
+        self.session = GroundingSession(
+            locate,
+            map_frame=str(p["map_frame"]),
+            settings=settings,
+            tolerance_s=float(p["transform_tolerance"]),
+            on_problem=self._log_problem,
+        )
+        if p["mount_child"]:
+            self.session.add_static(str(p["mount_parent"]), str(p["mount_child"]), mount)
+        self._commands: queue.Queue[str | None] = queue.Queue(maxsize=max(1, int(p["max_queue"])))
+        self._busy = threading.Event()
+        self.goal_pub = self.create_publisher(PointStamped, "~/goal", 10)
+        self.goal_pose_pub = self.create_publisher(PoseStamped, "/goal_pose", 10)
+        self.result_pub = self.create_publisher(String, "~/result", 10)
+        # reliable: a queue as deep as a short tour, so a slow answerer loses no image of a recorded playback
+        image_qos = QoSProfile(depth=30, reliability=ReliabilityPolicy.RELIABLE) if p["reliable_images"] else qos_profile_sensor_data
+        image_topic = str(p["image_topic"])
+        if image_topic.endswith("/compressed"):
+            self.create_subscription(CompressedImage, image_topic, self._guarded(self.session.on_compressed_image), image_qos)
+        else:
+            self.create_subscription(Image, image_topic, self._guarded(self.session.on_image), image_qos)
+        self.create_subscription(CameraInfo, str(p["camera_info_topic"]), self._guarded(self.session.on_camera_info), image_qos)
+        if p["depth_topic"]:
+            self.create_subscription(Image, str(p["depth_topic"]), self._guarded(self.session.on_depth), image_qos)
+        if p["odom_topic"]:
+            self.create_subscription(Odometry, str(p["odom_topic"]), self._guarded(self.session.on_odometry), 50)
+        tf2 = tf2_messages()
+        if tf2 is not None:
+            static_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+            self.create_subscription(tf2.TFMessage, str(p["tf_topic"]), self._guarded(self.session.on_tf), 100)
+            self.create_subscription(tf2.TFMessage, str(p["tf_static_topic"]), self._guarded(lambda m: self.session.on_tf(m, static=True)), static_qos)
+        else:
+            self.get_logger().warning(
+                "tf2_msgs is not installed (it has no PyPI wheel): /tf and /tf_static are not read; "
+                "poses come from odom_topic and the mount_* parameters"
+            )
+        self.create_subscription(String, "~/command", self._on_command, 10)
+        self._worker = threading.Thread(target=self._serve, name="povagent-ros-worker", daemon=True)
+        self._worker.start()
+
+    # -- messages -----------------------------------------------------------------------------
+    def _guarded(self, take: Any) -> Any:
+        def callback(msg: Any) -> None:
+            try:
+                take(msg)
+            except Exception as exc:
+                self.session.problem("unexpected", f"{type(exc).__name__}: {exc}")
+        return callback
+
+    def _log_problem(self, kind: str, message: str, first: bool) -> None:
+        if first:
+            self.get_logger().warning(f"malformed input ({kind}): {message}; counted, further {kind} problems are not logged")
+
+    # -- commands -----------------------------------------------------------------------------
+    def _on_command(self, msg: Any) -> None:
+        command = str(msg.data)
+        waiting = self._commands.qsize() + (1 if self._busy.is_set() else 0)
+        try:
+            self._commands.put_nowait(command)
+        except queue.Full:
+            self.publish_result(CommandResult(command=command, status=CommandStatus.QUEUE_FULL, map_frame=self.session.map_frame,
+                                              reason=f"{waiting} command(s) ahead and the queue holds {self._commands.maxsize}"))
+            return
+        if waiting:
+            self.publish_result(CommandResult(command=command, status=CommandStatus.QUEUED, map_frame=self.session.map_frame,
+                                              queue_position=waiting, reason=f"answered after {waiting} command(s) ahead"))
+
+    def _serve(self) -> None:
+        while True:
+            command = self._commands.get()
+            if command is None:
+                return
+            self._busy.set()
+            try:
+                result = self.session.answer(command)
+            except Exception as exc:
+                result = CommandResult(command=command, status=CommandStatus.NO_ANSWER, map_frame=self.session.map_frame,
+                                       reason=f"unexpected {type(exc).__name__}: {exc}")
+            finally:
+                self._busy.clear()
+            self.publish_result(result)
+
+    def publish_result(self, result: CommandResult) -> None:
+        """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose``."""
+        if result.goal is not None and result.frame_stamp_ns is not None:
+            stamp = Time(nanoseconds=result.frame_stamp_ns).to_msg()
+            point = PointStamped()
+            point.header.stamp, point.header.frame_id = stamp, result.map_frame
+            point.point.x, point.point.y, point.point.z = result.goal
+            pose = PoseStamped()
+            pose.header = point.header
+            pose.pose.position = point.point
+            yaw = result.facing_yaw() or 0.0
+            pose.pose.orientation.z, pose.pose.orientation.w = math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+            self.goal_pub.publish(point)
+            self.goal_pose_pub.publish(pose)
+        self.result_pub.publish(String(data=result.model_dump_json()))
+
+    @property
+    def answering(self) -> bool:
+        """Whether the worker is answering a command now."""
+        return self._busy.is_set()
+
+    def close(self) -> None:
+        """Stop the worker (after the command it is answering) and destroy the node."""
+        self._drain()
+        self._commands.put(None)
+        self._worker.join(timeout=30)
+        self.destroy_node()
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                self._commands.get_nowait()
+            except queue.Empty:
+                return
+
+
+__all__ = ["DEFAULT_PARAMETERS", "GroundingNode"]

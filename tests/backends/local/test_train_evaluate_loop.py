@@ -1,0 +1,80 @@
+"""The loop of docs/how-to/local-models.md: generate -> export-train -> TRL SFTTrainer a few steps
+on a tiny checkpoint -> povagent run with the saved checkpoint -> report. No glue in between."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+pytest.importorskip("trl")
+pytestmark = pytest.mark.timeout(240)
+
+
+def povagent(*args: str) -> str:
+    """Run a povagent command as the command line does (in this process: torch and
+    transformers are imported once for the whole loop), returning what it printed."""
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    done = CliRunner().invoke(app, list(args))
+    assert done.exit_code == 0, f"povagent {' '.join(args)} failed:\n{done.output}\n{done.exception!r}"
+    return done.output
+
+
+def sft(checkpoint: Path, export: Path, out: Path) -> list[float]:
+    """A few SFT steps on the hf export, assistant turns only, as the how-to's recipe."""
+    from datasets import load_dataset
+    from transformers import AutoModelForImageTextToText, AutoProcessor
+    from trl import SFTConfig, SFTTrainer
+
+    dataset = load_dataset("parquet", data_dir=str(export / "data"), split="train")
+    dataset = dataset.select_columns(["messages", "images"]).select(range(min(4, len(dataset))))
+    processor = AutoProcessor.from_pretrained(checkpoint)
+    model = AutoModelForImageTextToText.from_pretrained(checkpoint)
+    config = SFTConfig(
+        output_dir=str(out / "trainer"),
+        max_steps=3,
+        per_device_train_batch_size=2,
+        learning_rate=1e-3,
+        assistant_only_loss=True,
+        max_length=None,
+        logging_steps=1,
+        report_to=[],
+        save_strategy="no",
+        use_cpu=True,
+        dataloader_num_workers=0,
+    )
+    trainer = SFTTrainer(model=model, args=config, train_dataset=dataset, processing_class=processor)
+    trainer.train()
+    trainer.save_model(str(out))
+    processor.save_pretrained(str(out))
+    return [entry["loss"] for entry in trainer.state.log_history if "loss" in entry]
+
+
+def test_a_checkpoint_trained_on_the_export_is_evaluated_in_process(tmp_path, generated_release, tiny_idefics3):
+    povagent("export-train", str(generated_release), "--out", str(tmp_path / "train-set"), "--format", "hf",
+             "--rationale", "none", "--conditions", "c", "--split", "1,0,0")
+    losses = sft(tiny_idefics3, tmp_path / "train-set", tmp_path / "trained")
+    assert len(losses) == 3 and all(loss == loss for loss in losses)  # trained, no NaN
+    from povagent_plugins.backends.local_checkpoint import checkpoint_fingerprint
+
+    assert checkpoint_fingerprint(tmp_path / "trained") != checkpoint_fingerprint(tiny_idefics3)
+    doc = {
+        "dataset": str(generated_release),
+        "backend": {"name": "transformers", "options": {"model": str(tmp_path / "trained")}},
+        "strategy": {"name": "basic", "options": {"max_tokens": 8}},
+        "instances": {"conditions": ["c"], "limit": 2},
+        "timeout": 60,
+        "output": str(tmp_path / "eval"),
+    }
+    (tmp_path / "eval.yaml").write_text(yaml.safe_dump(doc))
+    povagent("run", str(tmp_path / "eval.yaml"))
+    rows = [json.loads(line) for line in (tmp_path / "eval" / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 2 and all(r["model"].startswith(str(tmp_path / "trained")) for r in rows)
+    assert all(r["status"] in ("answered", "parse_error") for r in rows)
+    report = povagent("report", str(tmp_path / "eval"))
+    assert "given" in report.lower()

@@ -1,0 +1,110 @@
+"""Shared fixtures of the ROS tests: a generated house as a tour, a simulated model, a ROS 2 graph.
+
+The graph is real (rclpy, Fast DDS) and stays on this machine: every test that starts ROS 2 runs
+in a context whose environment says ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and whose
+``ROS_DOMAIN_ID`` is this process's own (derived from the pid, within 0-101), and the context is
+shut down at the end of the session.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+from typing import Any, Callable, Iterator
+
+import pytest
+
+from povagent.agent import GroundingAgent
+from povagent.dataset.loader import load_dataset
+from povagent.geometry.goals import Plane
+from povagent.ros.house_tour import HouseTour, house_tour, well_seen_instance
+from povagent.ros.session import Locate
+
+MAP_FLOOR = Plane.horizontal(0.0, up_axis="z")
+
+
+@pytest.fixture(scope="session")
+def tour(generated_release) -> HouseTour:
+    """The first well-seen Inferred instance of the generated set, as a robot's tour."""
+    found = well_seen_instance(load_dataset(generated_release))
+    assert found is not None
+    return house_tour(*found)
+
+
+@pytest.fixture(scope="session")
+def simulated_locate(tour: HouseTour) -> Locate:
+    """The geometric agent with SIMULATED exact perception of the tour's house (not a model):
+    the simulator sees the scene through the cameras the agent is given."""
+    from povagent_plugins.backends.simulated import SimulatedScene
+
+    truth = tour.truth
+
+    def locate(sentence, frames, cameras, depths):
+        scene = SimulatedScene(truth.objects, cameras, anchor=truth.anchor, observer=truth.observer, direction=truth.direction, surface=truth.surface)
+        with GroundingAgent(backend=scene, strategy="geometric", parser="json", plane=MAP_FLOOR) as agent:
+            return agent.locate(sentence, list(frames), cameras=list(cameras))
+
+    return locate
+
+
+def _wait_until(condition: Callable[[], Any], timeout: float = 20.0, what: str = "condition") -> Any:
+    """Poll ``condition`` until it is truthy; fail naming ``what`` after ``timeout`` seconds."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.01)
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+
+
+@pytest.fixture(scope="session")
+def wait_until() -> Callable[..., Any]:
+    """``wait_until(condition, timeout=20, what=...)``: poll until truthy, else fail naming ``what``."""
+    return _wait_until
+
+
+@pytest.fixture(scope="session")
+def ros_graph(tmp_path_factory) -> Iterator[Any]:
+    """A real rclpy context on loopback with this process's own domain id; a background executor
+    spins every node added to it. Yields an object with ``context``, ``add(node)``, ``remove(node)``."""
+    keys = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_DOMAIN_ID", "ROS_LOG_DIR")
+    saved = {k: os.environ.get(k) for k in keys}
+    domain = 40 + os.getpid() % 60  # 40-99: clear of the default 0 and of other sessions' pids
+    os.environ.update({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_DOMAIN_ID": str(domain), "ROS_LOG_DIR": str(tmp_path_factory.mktemp("ros-log"))})
+    from povagent.ros.extras import require_rclpy
+
+    rclpy = require_rclpy("the ROS tests")
+    from rclpy.executors import MultiThreadedExecutor
+
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=domain)
+    executor = MultiThreadedExecutor(num_threads=2, context=context)
+    spinning = threading.Thread(target=executor.spin, name="ros-test-executor", daemon=True)
+    spinning.start()
+
+    class Graph:
+        def __init__(self) -> None:
+            self.context = context
+            self.domain = domain
+
+        def add(self, node: Any) -> Any:
+            executor.add_node(node)
+            return node
+
+        def remove(self, node: Any) -> None:
+            executor.remove_node(node)
+
+    try:
+        yield Graph()
+    finally:
+        executor.shutdown(timeout_sec=5)
+        rclpy.shutdown(context=context)
+        spinning.join(timeout=10)
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+

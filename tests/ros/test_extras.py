@@ -1,0 +1,43 @@
+"""Without the extras the ROS commands stop with one line naming the extra; rclpy from PyPI gets
+the environment a sourced workspace would give."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+
+from povagent.errors import ConfigError
+from povagent.ros.extras import prepare_ros_environment, require_rclpy, require_rosbags
+
+
+def test_a_missing_rclpy_names_the_ros_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "rclpy", None)
+    with pytest.raises(ConfigError, match=r"^ros-node needs ROS 2's Python packages .*pip install 'povagent\[ros\]'$"):
+        require_rclpy("ros-node")
+
+
+def test_a_missing_rosbags_names_the_bags_extra(monkeypatch):
+    monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)
+    with pytest.raises(ConfigError, match=r"^ros-replay needs rosbags: pip install 'povagent\[bags\]'$"):
+        require_rosbags("ros-replay")
+
+
+def test_the_middleware_the_extra_installs_is_chosen_unless_one_is_set(monkeypatch):
+    monkeypatch.delenv("RMW_IMPLEMENTATION", raising=False)
+    prepare_ros_environment()
+    import os
+
+    assert os.environ["RMW_IMPLEMENTATION"] == "rmw_fastrtps_cpp"
+    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_cyclonedds_cpp")
+    prepare_ros_environment()
+    assert os.environ["RMW_IMPLEMENTATION"] == "rmw_cyclonedds_cpp"
+
+
+def test_without_a_home_directory_ros_logs_go_to_a_temporary_folder(monkeypatch):
+    import os
+
+    monkeypatch.delenv("HOME", raising=False)
+    monkeypatch.delenv("ROS_LOG_DIR", raising=False)
+    prepare_ros_environment()
+    assert os.path.isdir(os.environ["ROS_LOG_DIR"])
