@@ -174,14 +174,16 @@ def test_a_link_to_a_missing_file_or_heading_is_reported(tmp_path):
 
 
 # -- figures -------------------------------------------------------------------------------------
-FIGURE = re.compile(r"(?<![\w.\-/])(\d[\d,]*(?:\.\d+)?)\s?(x|ms|s|%|MB|GB|KB|MiB|GiB|KiB)(?!\w)")
+#: A number and its unit; a ratio's ``x`` is written against the number (``0.35x``: ``8 x 6`` is a grid).
+FIGURE = re.compile(r"(?<![\w.\-/])(\d[\d,]*(?:\.\d+)?)(x|\s?(?:ms|s|%|MB|GB|KB|MiB|GiB|KiB))(?!\w)")
 
 #: Numbers with units that are settings, bounds or facts of the benchmark, not measurements.
 NOT_MEASUREMENTS = {
     "95%",  # the confidence level of every interval
     "512x",  # the benchmark's frame size (512x512)
     "1 MiB", "64 MiB", "4096 MiB", "64 KiB",  # config and download bounds; the test tmpfs
-    "5 s", "10 s", "90 s", "120 s", "0.25 s",  # timeouts, polling and lease settings
+    "5 s", "10 s", "20 s", "90 s", "120 s", "0.25 s", "0.2 s",  # timeouts, polling, lease and TF tolerance settings
+    "16 GB",  # an 8B model's weights in bfloat16 (arithmetic, not a measurement)
     "516 MiB", "226 KiB",  # the size of the public release (a fact of the data set)
     "429 s",  # "429s": HTTP 429 answers, plural
 }
@@ -192,7 +194,8 @@ GENERATED = {"cli.md", "configuration.md", "formats.md", "profiles.md"}
 
 def figures(text: str) -> list[str]:
     """The figures of ``text``'s prose, written as RESULTS.md writes them (``0.35x``, ``1.3 s``)."""
-    return [f"{n}{u}" if u in ("x", "%") else f"{n} {u}" for n, u in FIGURE.findall(prose(text))]
+    found = [(n, u.strip()) for n, u in FIGURE.findall(prose(text))]
+    return [f"{n}{u}" if u in ("x", "%") else f"{n} {u}" for n, u in found]
 
 
 def unsourced_figures(text: str, results: str) -> list[str]:
