@@ -27,6 +27,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.markers",
     "povagent_plugins.strategies.geometric",
     "povagent_plugins.strategies.probes",
+    "povagent_plugins.strategies.active",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.transformers_backend",
@@ -34,6 +35,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.backends.replay",
     "povagent_plugins.backends.simulated",
     "povagent_plugins.backends.planted",
+    "povagent_plugins.backends.explorers",
     # model profiles
     "povagent_plugins.backends.profiles",
     # surface judges (the dataset generator's stage 3)

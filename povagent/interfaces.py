@@ -10,6 +10,7 @@ from __future__ import annotations
 import abc
 import re
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
@@ -159,6 +160,11 @@ class Strategy(abc.ABC):
         """
         request = self.build(instance, images)
         return [(request, await ask(request))]
+
+    def use_run_folder(self, folder: Path) -> None:  # noqa: B027 - optional hook
+        """Where this run's files are: called once by the runner before the first instance, so a
+        strategy that makes files of its own (the active mode's rendered views) keeps them there
+        and a resumed run finds them. The default does nothing."""
 
     def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
         """Every turn :meth:`solve` takes for ``instance``, in order, without calling a model.

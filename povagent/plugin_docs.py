@@ -81,6 +81,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "instance": "The instance the request is for: context for offline backends; never sent to a model.",
         "run": "The repeat index (seeded baselines read it); never sent, not part of the fingerprint.",
         "question": "A machine-readable sub-question of a multi-turn strategy; model backends ignore it.",
+        "tools": "Functions the model may call (OpenAI function-calling schema, sent as litellm's `tools=`); empty for a plain request.",
     },
     "PlannedTurn": {
         "request": "The request as it will be sent, with `earlier_answer(turn)` placeholders where it carries the model's earlier answers.",
@@ -88,8 +89,10 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "note": "When the turn is taken if not always (e.g. `asked when turn 1 names an anchor`); empty when always.",
     },
     "Message": {
-        "role": "`system`, `user` or `assistant`.",
+        "role": "`system`, `user`, `assistant` or `tool` (the result of one function call).",
         "parts": "`TextPart(text)` and `ImagePart(image_hash, label)` in the order the model sees them.",
+        "tool_calls": "An assistant message's function calls (`ToolCall(id, name, arguments)`, arguments as sent).",
+        "tool_call_id": "A `tool` message: the id of the call it answers.",
     },
     "GenerationParams": {
         "max_tokens": "New-token budget; `None` sends no limit.",
@@ -105,6 +108,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "cached": "Set by the runner: the answer came from the response cache.",
         "by_strategy": "A multi-turn strategy worked this answer out itself (no model call).",
         "solved_point": "The 3D point such a strategy worked out (the agent returns it as its goal).",
+        "tool_calls": "The function calls the model made (`ToolCall`s) when the request offered tools; never cached.",
     },
     "Usage": {
         "prompt_tokens": "Tokens read, or `None`.",
@@ -127,6 +131,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "points": "Every point of a multi-point answer (the prediction is their centroid); else `None`.",
         "span": "The raw text the answer was read from.",
         "repair": "How the text was changed to read it (e.g. `rescaled 0-1000 -> pixels`), else `None`.",
+        "camera": "The camera of the image answered in when it is no dataset frame (the active mode's views): it is scored there.",
     },
     "OfficialScore": {
         "answered": "Whether the row counts as answered officially (a point, and for A/B a frame that was shown).",

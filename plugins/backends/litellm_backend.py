@@ -51,7 +51,7 @@ from povagent.interfaces import Backend, PermanentBackendError, TransientBackend
 from povagent.plugins import get_plugin_host, unknown_name_message
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error, unreachable_for_good
-from povagent_plugins.backends.openai_messages import openai_messages
+from povagent_plugins.backends.openai_messages import openai_messages, tool_calls_of
 
 #: Router constructor settings a pipeline may set (litellm.Router keyword arguments).
 ROUTER_SETTINGS = frozenset(
@@ -349,6 +349,8 @@ class LiteLLMBackend(Backend):
         self._check_condition(request)
         # messages first: a request that cannot be sent fails before the (slow) first import
         kwargs = {"messages": self._messages(request, images), **self.generation_kwargs(request)}
+        if request.tools:
+            kwargs["tools"] = [dict(t) for t in request.tools]
         litellm = _LITELLM or await _import_litellm_off_loop()
         key: str | None = None
         attempts = 1
@@ -401,11 +403,13 @@ class LiteLLMBackend(Backend):
             raise mapped from exc
         self._reached = True
         latency = time.perf_counter() - started
+        calls = tool_calls_of(response) if request.tools else ()
         return Response(
-            text=_text_of(response),
+            text="" if calls and _content_of(response) is None else _text_of(response),
             usage=_usage_of(litellm, response),
             latency_s=latency,
             model=getattr(response, "model", None),
+            tool_calls=calls,
         )
 
     def _endpoint(self) -> str:
@@ -501,6 +505,13 @@ async def _import_litellm_off_loop() -> ModuleType:
     skip_truncation_when_unobserved(litellm)
     _LITELLM = litellm
     return litellm
+
+
+def _content_of(response: Any) -> Any:
+    try:
+        return response.choices[0].message.content
+    except (AttributeError, IndexError, TypeError):
+        return None
 
 
 def _text_of(response: Any) -> str:

@@ -11,10 +11,11 @@ image store; never calls a model.
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 from povagent.exchange.images import ImageStore
-from povagent.exchange.messages import ImagePart, Message, Request, TextPart
+from povagent.exchange.messages import ImagePart, Message, Request, TextPart, ToolCall
 
 
 def openai_content(message: Message, images: ImageStore) -> str | list[dict[str, Any]]:
@@ -36,6 +37,49 @@ def openai_content(message: Message, images: ImageStore) -> str | list[dict[str,
     return parts
 
 
+def openai_message(message: Message, images: ImageStore) -> dict[str, Any]:
+    """One message in OpenAI chat form: an assistant's tool calls as ``tool_calls`` (content
+    ``None`` when it said nothing), a tool result with its ``tool_call_id``."""
+    out: dict[str, Any] = {"role": message.role, "content": openai_content(message, images)}
+    if message.tool_calls:
+        out["content"] = out["content"] or None
+        out["tool_calls"] = [
+            {"id": c.id, "type": "function", "function": {"name": c.name, "arguments": c.arguments}} for c in message.tool_calls
+        ]
+    if message.tool_call_id is not None:
+        out["tool_call_id"] = message.tool_call_id
+    return out
+
+
 def openai_messages(request: Request, images: ImageStore) -> list[dict[str, Any]]:
     """Every message of ``request`` in OpenAI chat form, in order."""
-    return [{"role": m.role, "content": openai_content(m, images)} for m in request.messages]
+    return [openai_message(m, images) for m in request.messages]
+
+
+#: The most tool calls read from one answer, and the longest arguments text kept: a model's
+#: output is untrusted, and each call read becomes a message sent back.
+MAX_TOOL_CALLS = 128
+MAX_ARGUMENTS_CHARS = 4096
+
+
+def tool_calls_of(response: Any) -> tuple[ToolCall, ...]:
+    """The function calls of an answer, as sent (names and arguments as text, cut to bounds);
+    a call the client could not read at all is kept with an empty name, for the strategy to
+    report as an invalid call."""
+    try:
+        raw = response.choices[0].message.tool_calls or ()
+    except (AttributeError, IndexError, TypeError):
+        return ()
+    calls = []
+    for k, call in enumerate(list(raw)[:MAX_TOOL_CALLS]):
+        function = getattr(call, "function", None)
+        name, arguments = getattr(function, "name", None), getattr(function, "arguments", None)
+        call_id = getattr(call, "id", None)
+        calls.append(
+            ToolCall(
+                id=str(call_id)[:128] if call_id else f"call_{k}",
+                name=str(name)[:128] if name is not None else "",
+                arguments=(arguments if isinstance(arguments, str) else json.dumps(arguments, default=repr))[:MAX_ARGUMENTS_CHARS],
+            )
+        )
+    return tuple(calls)

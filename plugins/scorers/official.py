@@ -13,16 +13,18 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent.scoring.official import UNANSWERED, closest_point_l2, score_point, scoring_frame
+from povagent.scoring.official import UNANSWERED, answered_in_camera, closest_point_l2, score_point, scoring_frame
 
 
 class OfficialScorer(Scorer):
-    """Clamped normalized L2 in the selected frame (A/B) or the observer view (C)."""
+    """Clamped normalized L2 in the selected frame (A/B), the observer view (C), or the camera
+    an answer carries (the active mode's rendered views)."""
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if not answer.answered:
             return UNANSWERED.as_dict()
-        frame = scoring_frame(instance, answer.selected_image)
+        # an answer given in a camera of its own (an active-mode view) is scored in that camera
+        frame = answered_in_camera(answer.camera) if answer.camera is not None else scoring_frame(instance, answer.selected_image)
         first = answer.points[0] if answer.points else None
         result = score_point(instance, frame, answer.x, answer.y, first).as_dict()
         if answer.points and len(answer.points) > 1 and frame is not None:

@@ -53,6 +53,23 @@ class AnswerSpec(BaseModel):
         return tuple(self.json_schema.get("required", ()))
 
 
+class AnsweredCamera(BaseModel):
+    """The camera of an image an answer was given in when it is no dataset frame (a view the
+    active mode rendered): position, yaw and horizon (degrees), fov, image size. Scoring
+    projects the ground truth into it, so a row is re-scored offline from what it holds."""
+
+    model_config = ConfigDict(frozen=True)
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+    horizon: float
+    fov: float = 100.0
+    width: int = 512
+    height: int = 512
+
+
 class ParsedAnswer(BaseModel):
     """A typed parse of one raw answer.
 
@@ -76,6 +93,9 @@ class ParsedAnswer(BaseModel):
     points: list[tuple[float, float]] | None = None
     span: str | None = None
     repair: str | None = None
+    #: Set when the answer names an image by its camera (the active mode's rendered views and
+    #: frames): it is scored in this camera, not in a frame picked by ``selected_image``.
+    camera: AnsweredCamera | None = None
 
     @property
     def answered(self) -> bool:

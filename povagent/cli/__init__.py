@@ -29,6 +29,7 @@ COMMAND_MODULES = (
     "povagent.cli.pipeline",   # run, sweep, plugins
     "povagent.cli.prompting",  # show-prompt, parse, rescore
     "povagent.cli.generate",   # generate
+    "povagent.cli.render",     # render
     "povagent.cli.reporting",  # report, export, compare
     "povagent.cli.quickstart", # quickstart
     "povagent.cli.download",   # download

@@ -147,8 +147,10 @@ class RequestPath:
         return self.timeout_s
 
     def cache_key_of(self, request: Request) -> str | None:
-        """The response-cache key of ``request`` (``None`` when nothing is cached)."""
-        if self.cache is None:
+        """The response-cache key of ``request`` (``None`` when nothing is cached). A request
+        offering tools is never cached: its answer's tool calls are more than the text the
+        cache keeps."""
+        if self.cache is None or request.tools:
             return None
         return cache_key(self._identity, request.content_hash(), request.run)
 

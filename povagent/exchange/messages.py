@@ -37,16 +37,46 @@ Part = TextPart | ImagePart
 
 
 @dataclass(frozen=True)
-class Message:
-    """A chat message: a role and an ordered list of parts."""
+class ToolCall:
+    """One function call a model asked for: its id, the function's name and its arguments as
+    the model sent them (JSON text, untrusted: the strategy that offered the tool checks it)."""
 
-    role: Literal["system", "user", "assistant"]
+    id: str
+    name: str
+    arguments: str
+
+
+@dataclass(frozen=True)
+class Message:
+    """A chat message: a role and an ordered list of parts.
+
+    An assistant message may carry the ``tool_calls`` the model made; a ``tool`` message is the
+    result of one call, named by ``tool_call_id`` (text only: tool results carry no images,
+    so a strategy shows an image in a user message after them).
+    """
+
+    role: Literal["system", "user", "assistant", "tool"]
     parts: tuple[Part, ...]
+    tool_calls: tuple[ToolCall, ...] = ()
+    tool_call_id: str | None = None
 
     @classmethod
-    def text(cls, role: Literal["system", "user", "assistant"], text: str) -> Message:
+    def text(cls, role: Literal["system", "user", "assistant", "tool"], text: str) -> Message:
         """A message holding one text part."""
         return cls(role, (TextPart(text),))
+
+    def fingerprint(self) -> dict[str, Any]:
+        """JSON-able form (images by hash); tool fields only when set, so a plain message's
+        fingerprint is what it always was."""
+        out: dict[str, Any] = {
+            "role": self.role,
+            "parts": [{"text": p.text} if isinstance(p, TextPart) else {"image": p.image_hash} for p in self.parts],
+        }
+        if self.tool_calls:
+            out["tool_calls"] = [{"id": c.id, "name": c.name, "arguments": c.arguments} for c in self.tool_calls]
+        if self.tool_call_id is not None:
+            out["tool_call_id"] = self.tool_call_id
+        return out
 
 
 @dataclass(frozen=True)
@@ -87,22 +117,19 @@ class Request:
     instance: Instance | None = field(default=None, compare=False)
     run: int = field(default=0, compare=False)
     question: Mapping[str, Any] | None = field(default=None, compare=False)
+    #: Functions the model may call (OpenAI function-calling schema, sent as litellm's
+    #: ``tools=``); empty for the usual single-answer request.
+    tools: tuple[Mapping[str, Any], ...] = field(default=(), compare=False)
 
     def fingerprint(self) -> dict[str, Any]:
         """JSON-able description of everything that determines the answer (images by hash)."""
-        return {
-            "messages": [
-                {
-                    "role": m.role,
-                    "parts": [
-                        {"text": p.text} if isinstance(p, TextPart) else {"image": p.image_hash}
-                        for p in m.parts
-                    ],
-                }
-                for m in self.messages
-            ],
+        out: dict[str, Any] = {
+            "messages": [m.fingerprint() for m in self.messages],
             "generation": self.generation.as_dict(),
         }
+        if self.tools:
+            out["tools"] = [dict(t) for t in self.tools]
+        return out
 
     def content_hash(self) -> str:
         """SHA-256 of :meth:`fingerprint` (stable across runs and machines)."""
@@ -115,8 +142,9 @@ class Request:
         :meth:`image_hashes`, in the same order). Rows keep it as the transcript."""
         lines: list[str] = []
         for m in self.messages:
-            lines.append(f"--- {m.role} ---")
+            lines.append(f"--- {m.role} ---" if m.tool_call_id is None else f"--- {m.role} ({m.tool_call_id}) ---")
             lines += [p.text if isinstance(p, TextPart) else f"[image: {p.label or 'unlabelled'}]" for p in m.parts]
+            lines += [f"[tool call {c.id}: {c.name}({c.arguments})]" for c in m.tool_calls]
         return "\n".join(lines)
 
     def image_hashes(self) -> list[str]:
@@ -141,7 +169,8 @@ class Response:
     multi-turn strategy worked out itself from the model's earlier answers (no model call): the
     runner records it as the row's last exchange, so the row holds the answer it scored.
     ``solved_point`` is the 3D target such a strategy worked out (in the world frame of the
-    frames' cameras), which the GroundingAgent returns as its goal.
+    frames' cameras), which the GroundingAgent returns as its goal. ``tool_calls`` are the
+    function calls of a request that offered ``tools`` (never cached: the cache keeps text).
     """
 
     text: str
@@ -152,3 +181,5 @@ class Response:
     cached: bool = False
     by_strategy: bool = False
     solved_point: tuple[float, float, float] | None = None
+    #: The function calls the model made instead of (or beside) a text answer.
+    tool_calls: tuple[ToolCall, ...] = ()

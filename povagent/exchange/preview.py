@@ -73,6 +73,9 @@ def preview_request(
             note = " marked" if marked else ""
             where = f" -> {path}" if path is not None else ""
             lines.append(f"[image{note}: {part.label or 'unlabelled'} sha256:{part.image_hash} {info.width}x{info.height}{where}]")
+        lines += [f"[tool call {c.id}: {c.name}({c.arguments})]" for c in message.tool_calls]
+    if request.tools:  # the functions offered, as sent (litellm's tools=)
+        lines.append(f"--- tools: {json.dumps([dict(t) for t in request.tools], sort_keys=True, indent=1)}")
     lines.append(f"--- generation: {json.dumps(request.generation.as_dict(), sort_keys=True)}")
     lines.append(f"--- answer schema: {json.dumps(request.answer.json_schema, sort_keys=True)}")
     return PromptPreview("\n".join(lines), saved)

@@ -42,7 +42,7 @@ class ReachableGrid:
     start: int
 
 
-def _blockers(house: House) -> list[Rect]:
+def blockers(house: House) -> list[Rect]:
     """Footprints the robot body cannot overlap: wall slabs, door jambs, floor furniture."""
     out = [s.rect for s in house.plan.slabs if s.y0 == 0.0]
     for o in house.objects:
@@ -74,7 +74,7 @@ def reachable_grid(house: House) -> ReachableGrid:
     ok = np.ones(gx.shape, dtype=bool)
     ok &= (gx > fp.x0 + AGENT_RADIUS) & (gx < fp.x1 - AGENT_RADIUS)
     ok &= (gz > fp.z0 + AGENT_RADIUS) & (gz < fp.z1 - AGENT_RADIUS)
-    for r in _blockers(house):
+    for r in blockers(house):
         q = r.inflate(AGENT_RADIUS - 1e-6)
         ok &= ~((gx > q.x0) & (gx < q.x1) & (gz > q.z0) & (gz < q.z1))
 

@@ -14,6 +14,7 @@ no external references). This module only draws: it never scores.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 from dataclasses import dataclass
@@ -33,6 +34,7 @@ ANCHOR_COLOUR = "#2962ff"
 OBSERVER_COLOUR = "#ff9100"
 OBJECT_COLOUR = "#9e9e9e"
 CAMERA_COLOUR = "#616161"
+PATH_COLOUR = "#6200ea"
 #: Size of the drawing (px), of the legend under it (px), and the margin around the scene (m).
 VIEW_PX = 360
 LEGEND_PX = 56
@@ -68,6 +70,8 @@ class BirdsEyeScene:
     selected: Camera | None
     prediction: tuple[float, float] | None
     title: str
+    #: An active-mode episode's poses, start first: (x, z, yaw) each; empty for a passive row.
+    path: tuple[tuple[float, float, float], ...] = ()
 
 
 def footprint(obj: Any) -> Box2D:
@@ -147,6 +151,7 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         points += _fov_wedge(scene.selected, FOV_LENGTH_M)
     if pred_floor is not None:
         points.append((float(pred_floor[0][0]), float(pred_floor[0][2])))
+    points += [(x, z) for x, z, _ in scene.path]
     page = _Frame(points)
     out = [
         f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + LEGEND_PX}" viewBox="0 0 {VIEW_PX} {VIEW_PX + LEGEND_PX}" font-family="sans-serif" font-size="10">',
@@ -172,6 +177,8 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
     if scene.selected is not None:
         wedge = " ".join(f"{_f(px)},{_f(py)}" for px, py in (page(*p) for p in _fov_wedge(scene.selected, FOV_LENGTH_M)))
         out.append(f'<polygon id="fov" points="{wedge}" fill="#ffd54f" fill-opacity="0.3" stroke="#f9a825"/>')
+    if scene.path:  # an active episode: where the robot went and which way each view looked
+        out.append(_trajectory(scene.path, page))
     oc = scene.observer_camera
     ox, oy = page(oc.position[0], oc.position[2])
     yaw = math.radians(oc.yaw)
@@ -195,6 +202,8 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         (GT_COLOUR, "GT target"), (PRED_COLOUR, "prediction's ray to the floor"), (ANCHOR_COLOUR, "anchor"),
         (OBSERVER_COLOUR, "observer"), ("#f9a825", "selected frame's view"),
     ]  # fmt: skip
+    if scene.path:
+        legend.append((PATH_COLOUR, "active episode's path and headings"))
     for i, (colour, text) in enumerate(legend):
         x, y = 4.0 + 180.0 * (i % 2), VIEW_PX + 8 + 13 * (i // 2)
         out.append(f'<rect x="{_f(x)}" y="{y}" width="8" height="8" fill="{colour}"/><text x="{_f(x + 11)}" y="{y + 8}">{escape(text)}</text>')
@@ -207,6 +216,17 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
     return "\n".join(out)
 
 
+def _trajectory(path: tuple[tuple[float, float, float], ...], page: _Frame) -> str:
+    """The episode's path (a polyline through its poses) with a heading tick at each pose."""
+    at = [page(x, z) for x, z, _ in path]
+    parts = ['<g id="trajectory"><polyline points="' + " ".join(f"{_f(a)},{_f(b)}" for a, b in at)
+             + f'" fill="none" stroke="{PATH_COLOUR}" stroke-width="1.5" stroke-dasharray="3 2"/>']  # fmt: skip
+    for (x, z, yaw), (a, b) in zip(path, at):
+        tx, ty = page(x + 0.3 * math.sin(math.radians(yaw)), z + 0.3 * math.cos(math.radians(yaw)))
+        parts.append(f'<line x1="{_f(a)}" y1="{_f(b)}" x2="{_f(tx)}" y2="{_f(ty)}" stroke="{PATH_COLOUR}"/>')
+    return "".join(parts) + "</g>"
+
+
 def write_birds_eye(svg: str, images_dir: Path) -> str:
     """Save an SVG under ``images_dir`` as ``<sha256>.svg`` (kept if it exists); returns the hash."""
     key = hashlib.sha256(svg.encode()).hexdigest()
@@ -216,13 +236,18 @@ def write_birds_eye(svg: str, images_dir: Path) -> str:
     return key
 
 
-def birds_eye_for_row(observation: Any, instance: Any, dataset: Any, images_dir: Path, frame: Any | None) -> str | None:
+def birds_eye_for_row(
+    observation: Any, instance: Any, dataset: Any, images_dir: Path, frame: Any | None,
+    path: tuple[tuple[float, float, float], ...] = (),
+) -> str | None:  # fmt: skip
     """The bird's-eye file of one gallery row (its hash), or ``None`` where the records cannot
-    draw one (a real-world set, a house the dataset does not hold)."""
+    draw one (a real-world set, a house the dataset does not hold). ``path`` is an active
+    episode's poses (x, z, yaw), drawn as its trajectory."""
     house = getattr(dataset, "houses", {}).get(getattr(instance, "house_id", None))
     if house is None or not hasattr(instance, "observer_camera") or not hasattr(house, "pairs"):
         return None
     pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
     selected = frame.camera if frame is not None else None
-    return write_birds_eye(birds_eye_svg(scene_for(instance, house, selected, pred)), images_dir)
+    scene = scene_for(instance, house, selected, pred)
+    return write_birds_eye(birds_eye_svg(dataclasses.replace(scene, path=path) if path else scene), images_dir)
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
@@ -140,7 +141,8 @@ def write_report(
     gstats = None
     if gallery:
         shown = [s.system for s in analysis.systems if s.system != CENTER_SYSTEM]
-        entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers)
+        folders = {r.name: r.folder for r in collection.runs}  # active rows show their rendered views
+        entries, gstats = build_gallery(analysis.observations, shown, dataset, out, gallery_limit, workers, folders)
         answers = write_answer_chunks(entries, out, keys=("a", "tr"))
         gallery_data = {
             "systems": shown, "entries": entries, "images_dir": "images", "answers_dir": ANSWERS_DIR, "answers": answers,
@@ -155,7 +157,9 @@ def write_report(
 
     t = time.perf_counter()
     why = why_section(analysis, why_figure)  # an addition: only when rows carry diagnose/relation scores
-    body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures) + why
+    # an addition too: only when a run used the active strategy
+    active, active_numbers = active_section(collection, dataset, out, n_boot=n_boot, seed=seed)
+    body = notes_section(analysis.notes) + tables_section(tables, links) + figures_section(figures) + why + active
     n_rows = sum(len(r.rows) for r in collection.runs)
     legend = "<br>".join(
         text for text, shown in ((OFFICIAL_LEGEND, analysis.has_official), (SUCCESS_LEGEND, analysis.has_success),
@@ -172,7 +176,8 @@ def write_report(
         subtitle,
         body,
         gallery_data,
-        nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")] + ([("#why", "Why it fails")] if why else []),
+        nav=[("#notes", "Notes"), ("#tables", "Tables"), ("#plots", "Plots")] + ([("#why", "Why it fails")] if why else [])
+        + ([("#active", "Active")] if active else []),
         legend=legend,
     )
     page = out / REPORT_PAGE
@@ -181,6 +186,7 @@ def write_report(
     timings["total"] = time.perf_counter() - t0
     summary = analysis.as_dict() | {
         "gallery": None if gstats is None else gstats.__dict__,
+        **({"active": active_numbers} if active_numbers else {}),
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
     write_inside(out, "summary.json", json.dumps(summary, indent=1, allow_nan=False))

@@ -47,11 +47,12 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
 
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from povagent.dataset.realworld import RealWorldInstance
+from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
 from povagent.report.html import script_json
@@ -140,9 +141,10 @@ class _SourceHashes:
         return h
 
 
-def drawing_for(observation: Observation, instance: Any) -> Drawing | None:
-    """The drawing of one row, or ``None`` when no frame was selected (or it is unknown)."""
-    frame = scoring_frame(instance, observation.selected_image, observation.image_path)
+def drawing_for(observation: Observation, instance: Any, frame: Any | None = None) -> Drawing | None:
+    """The drawing of one row, or ``None`` when no frame was selected (or it is unknown);
+    ``frame`` is the image answered in when it is no dataset frame (an active-mode view)."""
+    frame = frame if frame is not None else scoring_frame(instance, observation.selected_image, observation.image_path)
     if frame is None:
         return None
     if isinstance(instance, RealWorldInstance):
@@ -452,8 +454,12 @@ def build_gallery(
     out_dir: str | Path,
     limit_per_system: int | None = None,
     workers: int | None = None,
+    run_folders: Mapping[str, Path] | None = None,
 ) -> tuple[list[dict[str, Any]], GalleryStats]:
-    """Draw the gallery images under ``out_dir/images`` and return the page's entry records."""
+    """Draw the gallery images under ``out_dir/images`` and return the page's entry records.
+
+    ``run_folders`` (run name -> folder) lets an active-mode row show the rendered view it
+    answered in (from the run folder's ``views/``) and its trajectory on the bird's-eye card."""
     import time
 
     t0 = time.perf_counter()
@@ -470,7 +476,9 @@ def build_gallery(
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
         inst = dataset.instance(o.instance_id) if dataset is not None else None
-        drawing = drawing_for(o, inst) if inst is not None else None
+        active = answered_view(o, run_folders) if run_folders is not None and inst is not None else None
+        view = active.frame if active is not None else None
+        drawing = drawing_for(o, inst, view) if inst is not None else None
         key = None
         if drawing is not None and drawing.source.exists():
             try:
@@ -482,8 +490,9 @@ def build_gallery(
         else:
             stats.without_image += 1
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
-        frame = scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
-        from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame) if inst is not None else None
+        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
+        path = active.path if active is not None else ()
+        from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame, path) if inst is not None else None
         raw = o.raw or ""
         transcript = _transcript(o.turns)
         entries.append(

@@ -527,6 +527,7 @@ class PipelineRun:
         self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
         # ours to write, or refused before anything is written (someone's folder, read-only)
         claim_folder(self.run_dir, "run")
+        self.components.strategy.use_run_folder(self.run_dir)
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
         ), cancelled_on_stop():

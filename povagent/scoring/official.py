@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from povagent.answers.spec import AnsweredCamera
 from povagent.dataset.instances import Frame, Instance
 from povagent.geometry.camera import BEHIND_EPSILON, Camera
 
@@ -133,6 +135,12 @@ class OfficialScore:
 
 
 UNANSWERED = OfficialScore(False, None, None, None, None, None, None, "no answer")
+
+
+def answered_in_camera(camera: AnsweredCamera) -> Frame:
+    """The image an answer named by its camera (an active-mode view), as a frame to score in."""
+    cam = Camera((camera.x, camera.y, camera.z), camera.yaw, camera.horizon, camera.fov, camera.width, camera.height)
+    return Frame(index=-1, image_path="", file=Path(), camera=cam)
 
 
 def scoring_frame(instance: Instance, selected_image: int | None = None, image_path: str | None = None) -> Frame | None:

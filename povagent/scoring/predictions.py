@@ -44,6 +44,7 @@ from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,
     OfficialScore,
+    answered_in_camera,
     point_errors,
     points_l2,
     project_ground_truth,
@@ -429,7 +430,9 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
         if not answered:
             scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED, None, parse_error))
             continue
-        frame = scoring_frame(inst, p.selected_image, p.image_path)
+        # an answer given in a camera of its own (an active-mode view) is scored in that camera
+        camera = row.parse.camera if row.parse is not None else None
+        frame = answered_in_camera(camera) if camera is not None else scoring_frame(inst, p.selected_image, p.image_path)
         first = row.parse.points[0] if row.parse is not None and row.parse.points else None
         score = score_point(inst, frame, float(p.x), float(p.y), first)
         scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, None, parse_error))

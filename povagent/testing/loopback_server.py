@@ -70,6 +70,9 @@ class Reply:
     prompt_tokens: int = 10
     completion_tokens: int = 5
     no_choices: bool = False
+    #: Function calls to answer with, each ``{"name": ..., "arguments": <dict or raw text>}``
+    #: (raw text is sent as is, so a test can send malformed arguments).
+    tool_calls: tuple[dict[str, Any], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -470,15 +473,26 @@ class LoopbackServer:
             "object": "chat.completion",
             "created": int(time.time()),
             "model": body.get("model", self.model),
-            "choices": []
-            if reply.no_choices
-            else [{"index": 0, "message": {"role": "assistant", "content": reply.text}, "finish_reason": "stop"}],
+            "choices": [] if reply.no_choices else [_choice(reply, n)],
             "usage": {
                 "prompt_tokens": reply.prompt_tokens,
                 "completion_tokens": reply.completion_tokens,
                 "total_tokens": reply.prompt_tokens + reply.completion_tokens,
             },
         }
+
+
+def _choice(reply: Reply, n: int) -> dict[str, Any]:
+    """The one choice of an answer: the text, and the scripted tool calls (ids per request)."""
+    message: dict[str, Any] = {"role": "assistant", "content": reply.text}
+    if not reply.tool_calls:
+        return {"index": 0, "message": message, "finish_reason": "stop"}
+    message["tool_calls"] = [
+        {"id": f"call_{n}_{k}", "type": "function", "function": {"name": c.get("name"), "arguments": c["arguments"]
+         if isinstance(c.get("arguments"), str) else json.dumps(c.get("arguments", {}))}}
+        for k, c in enumerate(reply.tool_calls)
+    ]  # fmt: skip
+    return {"index": 0, "message": message, "finish_reason": "tool_calls"}
 
 
 #: What the command-line server answers by default: a valid answer for conditions A and B.

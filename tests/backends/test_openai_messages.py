@@ -50,3 +50,32 @@ def test_system_and_assistant_text_are_plain_strings(store):
     assert out[0] == {"role": "system", "content": "sys"}
     assert out[1] == {"role": "user", "content": [{"type": "text", "text": "hi"}]}
     assert out[2] == {"role": "assistant", "content": "ok"}
+
+
+def test_an_assistant_tool_call_and_its_result_are_sent_in_the_function_calling_form(store):
+    from povagent.exchange.messages import ToolCall
+
+    call = Message("assistant", (), (ToolCall("call_1", "turn", '{"degrees": 30}'),))
+    result = Message("tool", (TextPart("View 1: turned 30 degrees"),), tool_call_id="call_1")
+    sent_call, sent_result = openai_messages(_request(call, result), store)
+    assert sent_call == {"role": "assistant", "content": None, "tool_calls": [
+        {"id": "call_1", "type": "function", "function": {"name": "turn", "arguments": '{"degrees": 30}'}}]}  # fmt: skip
+    assert sent_result == {"role": "tool", "content": "View 1: turned 30 degrees", "tool_call_id": "call_1"}
+
+
+def test_a_plain_message_fingerprint_is_unchanged_by_the_tool_fields():
+    request = _request(Message.text("user", "hi"))
+    assert request.fingerprint() == {"messages": [{"role": "user", "parts": [{"text": "hi"}]}], "generation": {"max_tokens": 256}}
+
+
+def test_tool_calls_read_from_an_answer_are_bounded_and_never_raise():
+    from types import SimpleNamespace as NS
+
+    from povagent_plugins.backends.openai_messages import MAX_ARGUMENTS_CHARS, MAX_TOOL_CALLS, tool_calls_of
+
+    many = [NS(id=f"c{k}", function=NS(name="turn", arguments="x" * (MAX_ARGUMENTS_CHARS + 10))) for k in range(MAX_TOOL_CALLS + 5)]
+    calls = tool_calls_of(NS(choices=[NS(message=NS(tool_calls=many + [NS()]))]))
+    assert len(calls) == MAX_TOOL_CALLS and all(len(c.arguments) == MAX_ARGUMENTS_CHARS for c in calls)
+    odd = tool_calls_of(NS(choices=[NS(message=NS(tool_calls=[NS(id=None, function=NS(name=None, arguments={"a": 1}))]))]))
+    assert (odd[0].id, odd[0].name, odd[0].arguments) == ("call_0", "", '{"a": 1}')
+    assert tool_calls_of(NS(choices=[])) == ()

@@ -1,0 +1,216 @@
+"""The ``active`` strategy and parser: a model looks around a generated house through tool calls.
+
+The first message is the condition's passive prompt (A/B: the first ``max_frames`` exploration
+frames, labelled ``Image k``; C: the observer view) followed by the tools preamble, which
+states the budget; every request offers the tools of :mod:`povagent.active.tools`. Each turn's
+calls run in an :class:`~povagent.active.episode.Episode`; each tool result goes back as a
+``tool`` message, and each rendered view as an image labelled ``View n:`` in a user message
+after them (tool messages carry no images). The episode ends with the ``answer`` call, or with
+a text answer in the official JSON (accepted, and labelled so), or at a limit (the budget,
+``max_turns``, ``max_seconds``). The row's final answer is the episode's record (trajectory,
+counts, the answer and the camera of the image answered in); the ``active`` parser reads it,
+and the official scorer scores it in that camera.
+
+Options (besides the basic strategy's ``prompts``, ``max_tokens``, ``temperature``):
+``max_frames`` (default 8: fewer frames than the house has, so looking matters; ``null``: all),
+``max_actions`` (default 8, ``answer`` not counted), ``max_turns`` (default ``max_actions``
++ 2), ``max_seconds`` (default 600: the episode's wall-clock limit).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from povagent import hookimpl
+from povagent.active.episode import DEFAULT_BUDGET, Episode
+from povagent.active.pose import Pose
+from povagent.active.speaker import pair_facts
+from povagent.active.tools import TOOLS
+from povagent.active.views import VIEWS, ViewStore
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.dataset.instances import Instance
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import ImagePart, Message, Request, Response, TextPart
+from povagent.interfaces import Ask, Parser, PlannedTurn, earlier_answer
+from povagent.results.episode import read_record
+from povagent_plugins.parsers.official import parse_official
+from povagent_plugins.strategies.basic import BasicStrategy, _positive_or_none
+from povagent_plugins.strategies.layout import prompt_message
+
+#: The largest record the parser reads (a budget of 64 actions stays far below it).
+MAX_RECORD_CHARS = 4 * 1024 * 1024
+
+
+def preamble(budget: int, n_frames: int, given: bool) -> str:
+    """The tools preamble after the passive prompt: what the model may do, and its budget."""
+    shown = "the observer view above is frame 0" if given else f"the images above are frames 0-{n_frames - 1} (Image k is frame k)"
+    return (
+        "\n\nYou may look around the house before you answer, with the tools offered: go_to_frame(frame) "
+        "stands where an exploration frame was taken; turn(degrees) rotates in place (positive: right); "
+        "tilt(degrees) looks further down (positive) or up, within [-30, 60]; move(forward, right) walks in "
+        "metres and stops at walls and furniture; ask(question) asks the person who spoke. Each "
+        "go_to_frame, turn, tilt and move returns a new view, numbered View 1, View 2, ... in order. "
+        f"You start where frame 0 was taken; {shown}. You have {budget} actions (answer is not counted; "
+        "invalid calls count). Finish with answer(image, x, y): image is \"frame k\" or \"view n\", "
+        "x and y are the target's pixel in that image (the JSON above, written instead, answers in a frame)."
+    )
+
+
+class ActiveStrategy(BasicStrategy):
+    """Active observer grounding: the passive prompt, then tools to look around before answering."""
+
+    default_max_tokens: int | None = 512
+    default_max_frames: int | None = 8
+
+    def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
+                 **basic: Any) -> None:  # fmt: skip
+        super().__init__(**basic)
+        self.max_actions = _positive_or_none(max_actions, "max_actions", "the action budget") or DEFAULT_BUDGET
+        if self.max_actions > 64:
+            raise ValueError(f"strategy option max_actions must be at most 64, got {max_actions!r}")
+        self.max_turns = _positive_or_none(max_turns, "max_turns", "default: max_actions + 2") or self.max_actions + 2
+        if isinstance(max_seconds, bool) or not isinstance(max_seconds, (int, float)) or not 0 < max_seconds <= 86400:
+            raise ValueError(f"strategy option max_seconds must be a number in (0, 86400], got {max_seconds!r}")
+        self.max_seconds = float(max_seconds)
+        self._views: ViewStore | None = None
+        self._scratch: tempfile.TemporaryDirectory[str] | None = None
+
+    def use_run_folder(self, folder: Path) -> None:
+        """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again)."""
+        self._views = ViewStore(Path(folder) / VIEWS)
+
+    def views(self) -> ViewStore:
+        """The view store: the run folder's, else a private temporary one (tests, embedding)."""
+        if self._views is None:
+            self._scratch = tempfile.TemporaryDirectory(prefix="povagent-views-")
+            self._views = ViewStore(Path(self._scratch.name))
+        return self._views
+
+    # -- the requests ---------------------------------------------------------------------------
+    def first_message(self, instance: Instance, images: ImageStore) -> Message:
+        """The passive prompt with its images, then the tools preamble."""
+        n = len(self.shown_frames(instance))
+        text = self.prompt_text(instance) + preamble(self.max_actions, n, not instance.condition.uses_exploration_frames)
+        return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
+
+    def _request(self, instance: Instance, messages: list[Message], state: dict[str, object] | None = None) -> Request:
+        return Request(messages=tuple(messages), answer=self.answer_spec(instance), generation=self.generation,
+                       instance=instance, tools=TOOLS, question=state)  # fmt: skip
+
+    def build(self, instance: Instance, images: ImageStore) -> Request:
+        """The first request: the first message, with the tools offered."""
+        return self._request(instance, [self.first_message(instance, images)])
+
+    def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
+        """The first request, and the later turns taken while the model keeps calling tools."""
+        first = self.first_message(instance, images)
+        later = [first, Message.text("assistant", earlier_answer(1)),
+                 Message.text("user", "<<one tool result per call, then View n: with each view rendered>>")]  # fmt: skip
+        note = f"taken while the model calls tools: at most {self.max_turns - 1} more turns"
+        return [PlannedTurn(self._request(instance, [first])), PlannedTurn(self._request(instance, later), note=note)]
+
+    # -- the episode ----------------------------------------------------------------------------
+    def episode(self, instance: Instance, images: ImageStore) -> Episode:
+        """A new episode of ``instance`` (rebuilds the house unless this process has it)."""
+        # the renderer and the generator load here, with the first house (not with the plugin list)
+        from povagent.active.floor import Floor
+        from povagent.active.house import house_for
+
+        if not instance.frames:
+            raise ValueError(f"{instance.id}: no frames to start from")
+        house_dir = instance.frames[0].file.parent.parent
+        house = house_for(house_dir.parent.parent, instance.house_id)
+        store = self.views()
+
+        def render(pose: Pose) -> str:
+            sha, path = store.view(instance.house_id, pose, lambda p: house.render_png(p.camera()))
+            images.add_file(path)
+            return sha
+
+        frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
+        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
+        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.max_actions, self.max_seconds)
+
+    async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
+        """Run the episode: ask, run the calls, show the views, until it ends."""
+        episode = await asyncio.to_thread(self.episode, instance, images)
+        messages = [self.first_message(instance, images)]
+        turns: list[tuple[Request, Response]] = []
+        request = self._request(instance, messages, episode.state())
+        for turn in range(1, self.max_turns + 1):
+            if episode.done:
+                break
+            request = self._request(instance, messages, episode.state())
+            response = await ask(request)
+            turns.append((request, response))
+            if not response.tool_calls:
+                self._text_answer(instance, episode, response.text, request.answer)
+                break
+            messages.append(Message("assistant", (TextPart(response.text),) if response.text else (), response.tool_calls))
+            observations = await asyncio.to_thread(episode.handle, response.tool_calls, turn)
+            messages += [Message("tool", (TextPart(o.text),), tool_call_id=o.call_id) for o in observations]
+            shown: list[TextPart | ImagePart] = []
+            for o in observations:
+                if o.view is not None and o.sha256 is not None:
+                    shown += [TextPart(f"View {o.view}: {o.text.split(': ', 1)[-1]}"), ImagePart(o.sha256, label=f"View {o.view}")]
+            if shown:
+                messages.append(Message("user", tuple(shown)))
+        episode.stop(f"no answer within {self.max_turns} turns")
+        final = Response(text=episode.record().model_dump_json(), by_strategy=True)
+        return [*turns, (request, final)]
+
+    def _text_answer(self, instance: Instance, episode: Episode, text: str, spec: AnswerSpec) -> None:
+        """A reply without tool calls: the official JSON is accepted as the answer (labelled)."""
+        parsed = parse_official(text, spec)
+        if not parsed.answered or parsed.x is None or parsed.y is None:
+            episode.stop("no answer: the model replied without a tool call or an answer in the official JSON")
+            return
+        frame = parsed.selected_image if instance.condition.uses_exploration_frames else 0
+        if frame is None or episode.image_camera("frame", frame) is None:
+            episode.stop(f"no answer: the text answer names no frame shown ({parsed.selected_image!r})")
+            return
+        episode.finish(f"frame {frame}", parsed.x, parsed.y, "text")
+
+
+class ActiveParser(Parser):
+    """Reads the episode record the ``active`` strategy leaves as a row's final answer.
+
+    The active mode has no official runner to read otherwise: the ``answer`` call's values are
+    the answer as given, so no second, "official" reading is kept beside this one.
+    """
+
+    reproduces_official = True
+
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """The answer and the camera of the image it was given in (never raises)."""
+        record = read_record(text[:MAX_RECORD_CHARS]) if isinstance(text, str) else None
+        if record is None:
+            return unparseable("not an active episode record (use the active strategy with the active parser)")
+        answer = record.answer
+        if answer is None:
+            return unparseable(record.end or "no answer")
+        inside = 0 <= answer.x <= answer.camera.width - 1 and 0 <= answer.y <= answer.camera.height - 1
+        return ParsedAnswer(
+            status=ParseStatus.OK if inside else ParseStatus.OUT_OF_RANGE,
+            selected_image=answer.frame,
+            x=answer.x,
+            y=answer.y,
+            span=answer.image,
+            repair="answered in text (official JSON), not with the answer tool" if answer.via == "text" else None,
+            camera=answer.camera,
+        )
+
+
+@hookimpl
+def register_strategies(register) -> None:
+    """Contribute the active strategy."""
+    register("active", ActiveStrategy, description="Active observer grounding: look around a generated house with tool calls, then answer")
+
+
+@hookimpl
+def register_parsers(register) -> None:
+    """Contribute the active parser (reads the active strategy's episode record)."""
+    register("active", ActiveParser, description="The active strategy's episode record: the answer and its image's camera")

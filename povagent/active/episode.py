@@ -1,0 +1,234 @@
+"""One active episode: the budget, the numbered views, and every call turned into an observation.
+
+What it is for: the strategy hands each turn's tool calls here and gets back one observation per
+call (the text of its tool result, and the view it rendered, if any). Views are numbered from
+1 in the order returned across the episode; ``go_to_frame``, ``turn``, ``tilt`` and ``move``
+each return one, ``ask`` returns the speaker's words, ``answer`` ends the episode. Every call
+but a valid ``answer`` counts against the budget (``max_actions``), invalid ones included; once
+it is used up further calls are refused without running, so no model can make an episode
+render more than its budget or run past its wall-clock limit. What it must not do: talk to a
+model, touch the image store or write files (the ``render`` callable it is given does).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from povagent.active.pose import Pose
+from povagent.active.speaker import PairFacts
+from povagent.active.tools import Answer, Ask, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
+from povagent.answers.spec import AnsweredCamera
+from povagent.exchange.messages import ToolCall
+
+if TYPE_CHECKING:  # the floor needs the generator: loaded with the house, not with this module
+    from povagent.active.floor import Floor
+from povagent.results.episode import EpisodeAnswer, EpisodeCounts, EpisodeRecord, Step, ViewRecord
+
+#: The default action budget (``answer`` not counted).
+DEFAULT_BUDGET = 8
+#: The most characters of a call's arguments a step keeps, and the most steps a record keeps
+#: (the rest are counted in ``steps_dropped``): a record's size is bounded whatever a model sends.
+KEPT_ARGUMENTS = 500
+MAX_RECORDED_STEPS = 256
+
+#: Renders a pose: returns the view PNG's SHA-256 (the caller stores the bytes).
+RenderFn = Callable[[Pose], str]
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What one call gave back: the tool result text, and the view it rendered (number, SHA-256)."""
+
+    call_id: str
+    text: str
+    view: int | None = None
+    sha256: str | None = None
+    pose: Pose | None = None
+
+
+def camera_record(pose: Pose) -> AnsweredCamera:
+    """A pose as the record (and the scorer) holds a camera."""
+    return AnsweredCamera(x=pose.x, y=pose.y, z=pose.z, yaw=pose.yaw, horizon=pose.horizon, fov=pose.fov,
+                          width=pose.width, height=pose.height)  # fmt: skip
+
+
+class Episode:
+    """The state of one episode; :meth:`handle` runs one turn's calls, in order."""
+
+    def __init__(
+        self,
+        frames: Sequence[Pose],
+        start: Pose,
+        render: RenderFn,
+        floor: Callable[[], Floor],
+        speaker: PairFacts,
+        budget: int = DEFAULT_BUDGET,
+        max_seconds: float = 600.0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.frames = tuple(frames)
+        self.pose = start
+        self.start = start
+        self.budget = budget
+        self._render = render
+        self._floor_factory = floor
+        self._floor: Floor | None = None
+        self.speaker = speaker
+        self._clock = clock
+        self.deadline = clock() + max_seconds
+        self.max_seconds = max_seconds
+        self.views: list[ViewRecord] = []
+        self.steps: list[Step] = []
+        self.counts = EpisodeCounts()
+        self.answer: EpisodeAnswer | None = None
+        self.end = ""
+        self.steps_dropped = 0
+
+    @property
+    def done(self) -> bool:
+        """Whether the episode has ended (answered, or stopped by a limit)."""
+        return bool(self.end)
+
+    @property
+    def budget_left(self) -> int:
+        """Actions still allowed."""
+        return max(0, self.budget - self.counts.actions)
+
+    def state(self) -> dict[str, object]:
+        """What offline explorers read (``Request.question``): poses of the frames and views."""
+        return {
+            "kind": "active",
+            "frames": [camera_record(p).model_dump() for p in self.frames],
+            "views": [{"n": v.n, "camera": v.camera.model_dump()} for v in self.views],
+            "pose": camera_record(self.pose).model_dump(),
+            "budget_left": self.budget_left,
+            "actions": [s.action for s in self.steps if s.valid],
+        }
+
+    def stop(self, why: str) -> None:
+        """End the episode without an answer (a limit was reached)."""
+        if not self.end:
+            self.end = why
+
+    # -- one turn ------------------------------------------------------------------------------
+    def handle(self, calls: Sequence[ToolCall], turn: int) -> list[Observation]:
+        """Run ``calls`` in order; one observation each (calls after the end are not run)."""
+        self.counts.turns = max(self.counts.turns, turn)
+        out = []
+        for call in calls:
+            if not self.end and self._clock() > self.deadline:
+                self.stop(f"no answer within the episode's time limit ({self.max_seconds:g} s)")
+            out.append(self._one(call, turn))
+        return out
+
+    def _one(self, call: ToolCall, turn: int) -> Observation:
+        args = call.arguments[:KEPT_ARGUMENTS]
+        if self.end:
+            self._step(turn, call.name, args, False, "not run: the episode has ended", counted=False)
+            return Observation(call.id, "not run: the episode has ended")
+        action = read_call(call.name, call.arguments)
+        if isinstance(action, Answer):
+            return self._answer(call, turn, action)
+        if self.budget_left == 0:
+            self.counts.refused_over_budget += 1
+            text = f"not run: the budget of {self.budget} actions is used up; call answer"
+            self._step(turn, call.name[:40], args, False, text, counted=False)
+            return Observation(call.id, text)
+        self.counts.actions += 1
+        if isinstance(action, InvalidCall):
+            return self._invalid(call, turn, action.reason)
+        if isinstance(action, Ask):
+            self.counts.questions += 1
+            said = self.speaker.answer(action.question)
+            self._step(turn, call.name, args, True, said)
+            return Observation(call.id, said)
+        blocked = False
+        if isinstance(action, GoToFrame):
+            if not 0 <= action.frame < len(self.frames):
+                return self._invalid(call, turn, f"go_to_frame: no frame {action.frame} (frames 0-{len(self.frames) - 1})")
+            self.pose, said = self.frames[action.frame], f"at frame {action.frame}"
+        elif isinstance(action, Turn):
+            self.pose, said = self.pose.turned(action.degrees), f"turned {action.degrees:g} degrees"
+        elif isinstance(action, Tilt):
+            self.pose, said = self.pose.tilted(action.degrees), f"tilted {action.degrees:g} degrees"
+        else:
+            assert isinstance(action, Move)
+            said, blocked = self._move(action)
+        view = self._view()
+        text = f"View {view.n}: {said}; now {self.pose.in_words(self.start)}"
+        self._step(turn, call.name, args, True, text, view=view, blocked=blocked)
+        return Observation(call.id, text, view.n, view.sha256, self.pose)
+
+    def _move(self, action: Move) -> tuple[str, bool]:
+        if self._floor is None:
+            self._floor = self._floor_factory()
+        dx, dz = self.pose.offset(action.forward, action.right)
+        moved = self._floor.move(self.pose.x, self.pose.z, dx, dz)
+        self.pose = self.pose.moved_to(moved.x, moved.z)
+        wanted = (action.forward**2 + action.right**2) ** 0.5
+        if moved.blocked:
+            self.counts.blocked_moves += 1
+            return f"moved {moved.travelled:.2f} m of {wanted:.2f} m (stopped by a wall or furniture)", True
+        return f"moved {moved.travelled:.2f} m", False
+
+    def _view(self) -> ViewRecord:
+        sha = self._render(self.pose)
+        view = ViewRecord(n=len(self.views) + 1, sha256=sha, camera=camera_record(self.pose))
+        self.views.append(view)
+        self.counts.views += 1
+        return view
+
+    def _invalid(self, call: ToolCall, turn: int, reason: str) -> Observation:
+        self.counts.invalid_calls += 1
+        text = f"invalid call: {reason}"
+        self._step(turn, call.name[:40], call.arguments[:KEPT_ARGUMENTS], False, text)
+        return Observation(call.id, text)
+
+    def _answer(self, call: ToolCall, turn: int, action: Answer) -> Observation:
+        camera = self.image_camera(action.kind, action.number)
+        if camera is None:
+            if self.budget_left == 0:  # an invalid answer cannot count any more: refused
+                self.counts.refused_over_budget += 1
+                text = f"not run: no {action.image} was shown, and the budget is used up"
+                self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], False, text, counted=False)
+                return Observation(call.id, text)
+            self.counts.actions += 1
+            return self._invalid(call, turn, f"answer: no {action.image} was shown")
+        self.finish(action.image, action.x, action.y, "answer_tool")
+        self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], True, "answer recorded", counted=False)
+        return Observation(call.id, "answer recorded")
+
+    def image_camera(self, kind: str, number: int) -> AnsweredCamera | None:
+        """The camera of ``frame k`` or ``view n``, or ``None`` when no such image was shown."""
+        if kind == "frame":
+            return camera_record(self.frames[number]) if 0 <= number < len(self.frames) else None
+        return self.views[number - 1].camera if 1 <= number <= len(self.views) else None
+
+    def finish(self, image: str, x: float, y: float, via: str) -> None:
+        """Record the answer (``image`` as ``frame k``/``view n``) and end the episode."""
+        kind, number = image.split()
+        camera = self.image_camera(kind, int(number))
+        assert camera is not None, "finish() takes an image that was shown"
+        frame = int(number) if kind == "frame" else None
+        self.answer = EpisodeAnswer(image=image, x=x, y=y, via=via, camera=camera, frame=frame)
+        self.end = "answered" if via == "answer_tool" else "answered in text (official JSON), not with the answer tool"
+
+    def _step(self, turn: int, action: str, args: str, valid: bool, text: str, *, view: ViewRecord | None = None,
+              blocked: bool = False, counted: bool = True) -> None:  # fmt: skip
+        if len(self.steps) >= MAX_RECORDED_STEPS:
+            self.steps_dropped += 1
+            return
+        self.steps.append(
+            Step(turn=turn, action=action, arguments=args, valid=valid, observation=text[:300],
+                 pose=camera_record(self.pose),
+                 view=view.n if view else None, sha256=view.sha256 if view else None, blocked=blocked, counted=counted)
+        )  # fmt: skip
+
+    def record(self) -> EpisodeRecord:
+        """The episode as the row keeps it."""
+        return EpisodeRecord(budget=self.budget, shown_frames=len(self.frames), start=camera_record(self.start),
+                             steps=self.steps, views=self.views, counts=self.counts, answer=self.answer,
+                             end=self.end or "no answer", steps_dropped=self.steps_dropped)  # fmt: skip

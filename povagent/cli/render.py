@@ -1,0 +1,47 @@
+"""The ``render`` command: any camera of a generated house, as the active mode renders it."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from povagent.cli import app
+
+
+def _position(text: str) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise typer.BadParameter(f"{text[:60]!r}: give three finite numbers X,Y,Z (metres)", param_hint="--cam-pos")
+    return values[0], values[1], values[2]
+
+
+@app.command("render")
+def render_command(
+    dataset: Path = typer.Argument(..., metavar="DATASET", help="A dataset made by `povagent generate` (this version)."),
+    house: str = typer.Option(..., "--house", metavar="H", help="The house folder name, e.g. train_house_00000."),
+    cam_pos: str = typer.Option(..., "--cam-pos", metavar="X,Y,Z", help="Camera position in metres (y up)."),
+    yaw: float = typer.Option(..., "--yaw", metavar="Y", help="Yaw in degrees, as the dataset's cam_yaw (clockwise from above)."),
+    horizon: float = typer.Option(..., "--horizon", metavar="H", help="Horizon in degrees, positive looks down."),
+    fov: float = typer.Option(100.0, "--fov", min=1.0, max=179.0, metavar="DEGREES", help="Field of view in degrees (1-179)."),
+    out: Path = typer.Option(..., "--out", metavar="FILE.png", help="Where to write the PNG."),
+) -> None:
+    """Render one camera of a generated house to a PNG (512x512).
+
+    The camera of an exploration frame or an observer view gives that image byte for byte.
+    A dataset this generator version did not make (the public release) is refused.
+    """
+    from povagent.active.house import render_view
+    from povagent.geometry.camera import Camera
+
+    position = _position(cam_pos)
+    if not (math.isfinite(yaw) and math.isfinite(horizon)):
+        raise typer.BadParameter("yaw and horizon must be finite numbers")
+    data = render_view(dataset, house, Camera(position, yaw, horizon, fov, 512, 512))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_bytes(data)
+    typer.echo(f"{out} ({len(data)} bytes)")

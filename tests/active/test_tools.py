@@ -1,0 +1,59 @@
+"""A tool call is read into a typed action, or into an invalid call saying why: never an exception."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from povagent.active.tools import TOOL_NAMES, TOOLS, Answer, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
+
+
+def test_the_schema_offers_exactly_the_six_tools_by_their_names():
+    assert TOOL_NAMES == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
+    assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in TOOLS)
+
+
+@pytest.mark.parametrize(
+    ("name", "arguments", "action"),
+    [
+        ("go_to_frame", {"frame": 3}, GoToFrame(3)),
+        ("go_to_frame", {"frame": 3.0}, GoToFrame(3)),
+        ("turn", {"degrees": -45}, Turn(-45.0)),
+        ("tilt", {"degrees": 12.5}, Tilt(12.5)),
+        ("move", {"forward": 1, "right": -0.5}, Move(1.0, -0.5)),
+        ("answer", {"image": "View 2", "x": 10, "y": 20.5}, Answer("view", 2, 10.0, 20.5)),
+        ("answer", {"image": "frame 0", "x": 0, "y": 0}, Answer("frame", 0, 0.0, 0.0)),
+    ],
+)
+def test_a_well_formed_call_becomes_its_typed_action(name, arguments, action):
+    assert read_call(name, json.dumps(arguments)) == action
+
+
+@pytest.mark.parametrize(
+    ("name", "arguments", "why"),
+    [
+        ("fly", "{}", "unknown tool 'fly'"),
+        ("turn", "{}", "missing degrees"),
+        ("turn", '{"degrees": 1, "speed": 2}', "unexpected speed"),
+        ("turn", '{"degrees": "90"}', "must be a number, got str"),
+        ("turn", '{"degrees": true}', "must be a number, got bool"),
+        ("turn", '{"degrees": NaN}', "finite"),
+        ("tilt", '{"degrees": Infinity}', "finite"),
+        ("move", '{"forward": 1e308, "right": 0}', "within"),
+        ("move", '{"forward": 1e999, "right": 0}', "finite"),
+        ("go_to_frame", '{"frame": "2"}', "must be an integer"),
+        ("go_to_frame", '{"frame": 1.5}', "must be an integer"),
+        ("answer", '{"image": "picture 2", "x": 1, "y": 2}', '"frame k" or "view n"'),
+        ("answer", '{"image": "view 1", "x": NaN, "y": 2}', "finite"),
+        ("ask", '{"question": 42}', "must be a string"),
+        ("ask", json.dumps({"question": "x" * 600}), "longer than"),
+        ("turn", "not json", "not a JSON object"),
+        ("turn", "[1, 2]", "not a JSON object"),
+        ("turn", "[" * 5000, "longer than"),
+    ],
+)
+def test_a_hostile_call_becomes_an_invalid_call_naming_the_problem(name, arguments, why):
+    result = read_call(name, arguments)
+    assert isinstance(result, InvalidCall)
+    assert why in result.reason

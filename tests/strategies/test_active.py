@@ -1,0 +1,105 @@
+"""The active strategy end to end over HTTP: litellm sends the tools, the loopback server answers
+with scripted tool calls, the views come back as labelled images, the row is scored in the
+camera of the view answered in; hostile calls and text answers never crash a run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from povagent.active.tools import TOOL_NAMES
+from povagent.config.pipeline import load_pipeline
+from povagent.dataset.loader import load_dataset
+from povagent.geometry.camera import Camera
+from povagent.results.episode import read_record
+from povagent.results.rows import read_rows
+from povagent.run.runner import run_pipeline
+from povagent.scoring.official import normalized_l2, project_ground_truth
+from povagent.testing.loopback_server import LoopbackServer, Reply
+
+pytestmark = pytest.mark.timeout(120)
+
+
+def calls(*pairs: tuple[str, object]) -> Reply:
+    """A reply of tool calls only (content null), as a model calling functions sends it."""
+    return Reply(None, tool_calls=tuple({"name": n, "arguments": a} for n, a in pairs))
+
+
+def run_active(dataset: Path, folder: Path, server: LoopbackServer, **strategy) -> tuple:
+    doc = {
+        "dataset": {"path": str(dataset)},
+        "instances": {"houses": ["train_house_00000"], "conditions": ["a"], "limit": 1},
+        "backend": {"name": "litellm", "options": {"model": "openai/loopback-vlm", "api_base": server.url,
+                                                   "api_key_env": "POVAGENT_TEST_KEY"}},
+        "strategy": {"name": "active", "options": strategy},
+        "parser": "active",
+        "scorers": ["official"],
+        "retry": {"attempts": 1},
+        "output": str(folder),
+    }  # fmt: skip
+    (folder.parent / "pipeline.yaml").write_text(yaml.safe_dump(doc))
+    run_pipeline(load_pipeline(folder.parent / "pipeline.yaml"))
+    (row,) = read_rows(folder / "results.jsonl")
+    return row, read_record(row.exchanges[-1].raw)
+
+
+@pytest.fixture
+def model(monkeypatch):
+    monkeypatch.setenv("POVAGENT_TEST_KEY", "sk-test-not-a-key")
+    with LoopbackServer(reply="I cannot tell.", max_lifetime_s=100, fetch_images=True) as server:
+        yield server
+
+
+def test_the_whole_episode_runs_over_http_and_is_scored_in_the_view_answered_in(generated_release, tmp_path, model):
+    model.script(calls(("go_to_frame", {"frame": 1}), ("turn", {"degrees": 10})),
+                 calls(("answer", {"image": "view 2", "x": 100, "y": 200})))  # fmt: skip
+    row, record = run_active(generated_release, tmp_path / "run", model)
+    first, second = (r.body for r in model.requests)
+    assert [t["function"]["name"] for t in first["tools"]] == list(TOOL_NAMES)
+    roles = [m["role"] for m in second["messages"]]
+    assert roles == ["user", "assistant", "tool", "tool", "user"]
+    assert [c["function"]["name"] for c in second["messages"][1]["tool_calls"]] == ["go_to_frame", "turn"]
+    assert second["messages"][2]["tool_call_id"] == second["messages"][1]["tool_calls"][0]["id"]
+    views = [p for p in second["messages"][4]["content"] if p["type"] == "text"]
+    assert views[0]["text"].startswith("View 1: at frame 1") and views[1]["text"].startswith("View 2: turned 10 degrees")
+    # the images the server received are the views the run folder holds, by content
+    sent = [i.sha256 for i in model.requests[1].images][-2:]
+    assert sent == [v.sha256 for v in record.views]
+    assert all((tmp_path / "run" / "views" / f"{s}.png").is_file() for s in sent)
+    # scored in view 2's camera: recomputed here from the camera the row holds
+    cam = record.answer.camera
+    instance = load_dataset(generated_release).instance(row.instance_id)
+    gt = project_ground_truth(instance.target, Camera((cam.x, cam.y, cam.z), cam.yaw, cam.horizon, cam.fov))
+    assert row.scores["official"]["l2"] == pytest.approx(normalized_l2(100, 200, 512, 512, gt.u, gt.v))
+    assert (record.counts.actions, record.counts.views, record.answer.image) == (2, 2, "view 2")
+
+
+def test_hostile_tool_calls_become_typed_observations_and_the_run_goes_on(generated_release, tmp_path, model):
+    hostile = [("fly", {}), ("turn", {}), ("turn", {"degrees": 1, "x": 2}), ("move", {"forward": "1", "right": 0}),
+               ("tilt", '{"degrees": NaN}'), ("tilt", '{"degrees": Infinity}'), ("move", '{"forward": 1e308, "right": 0}'),
+               ("go_to_frame", {"frame": 99}), ("turn", "not json")]  # fmt: skip
+    flood = hostile + [("turn", {"degrees": 1})] * (100 - len(hostile))
+    model.script(calls(*flood), calls(("answer", {"image": "view 1", "x": 1, "y": 2})))
+    row, record = run_active(generated_release, tmp_path / "run", model, max_actions=10)
+    assert row.status == "answered" and row.error_type is None
+    assert record.counts.invalid_calls == 9 and record.counts.actions == 10 and record.counts.refused_over_budget == 90
+    assert record.counts.views == 1
+    tool_results = [m["content"] for m in model.requests[1].body["messages"] if m["role"] == "tool"]
+    assert len(tool_results) == 100 and all(t.startswith("invalid call:") for t in tool_results[:9])
+
+
+def test_a_text_answer_in_the_official_json_is_accepted_and_labelled(generated_release, tmp_path, model):
+    model.script('{"selected_image": 1, "x": 10, "y": 20}')
+    row, record = run_active(generated_release, tmp_path / "run", model)
+    assert record.answer.via == "text" and record.answer.image == "frame 1"
+    assert row.parse.repair == "answered in text (official JSON), not with the answer tool"
+    assert row.parse.selected_image == 1 and row.scores["official"]["answered"]
+
+
+def test_a_model_that_never_answers_is_a_recorded_non_response_within_the_turn_limit(generated_release, tmp_path, model):
+    model.reply = calls(("ask", {"question": "What were you doing?"}))
+    row, record = run_active(generated_release, tmp_path / "run", model, max_actions=2)
+    assert row.status == "parse_error" and len(model.requests) == 4  # max_turns = max_actions + 2
+    assert record.answer is None and record.end == "no answer within 4 turns" and record.counts.questions == 2
