@@ -1,4 +1,4 @@
-"""docs/plugins.md and the code it documents cannot drift apart: the page's reference sections
+"""docs/reference/plugins.md and the code it documents cannot drift apart: the page's reference sections
 and example code are generated (``python -m povagent.plugin_docs``), and these tests fail while
 the page is out of date, saying which command brings it back."""
 
@@ -16,7 +16,7 @@ from povagent import hookspecs, plugin_docs
 from povagent.plugin_docs import COMMAND, PluginDocsError, check_page, hookspec_names, main, markdown, render_page
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGE = ROOT / "docs" / "plugins.md"
+PAGE = ROOT / "docs" / "reference" / "plugins.md"
 EXAMPLES = sorted((ROOT / "examples" / "plugins").glob("*.py"))
 
 
@@ -65,9 +65,11 @@ def test_a_changed_hookspec_docstring_makes_the_check_fail_and_name_the_command(
 
 
 def test_a_changed_example_makes_the_check_fail(tmp_path):
-    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "reference").mkdir(parents=True)
     shutil.copytree(ROOT / "examples" / "plugins", tmp_path / "examples" / "plugins")
-    page = tmp_path / "docs" / "plugins.md"
+    (tmp_path / "examples" / "plugin_package").mkdir()
+    shutil.copy(ROOT / "examples" / "plugin_package" / "pyproject.toml", tmp_path / "examples" / "plugin_package")
+    page = tmp_path / "docs" / "reference" / "plugins.md"
     shutil.copy(PAGE, page)
     assert check_page(page) is None
     example = tmp_path / "examples" / "plugins" / "within_radius_scorer.py"

@@ -137,6 +137,11 @@ def run_command(
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
+    from povagent.run.runner import SET_UP_KINDS
+
+    if result.stop_kind in SET_UP_KINDS:  # nothing was sent: no table to show, the one line says it all
+        typer.echo(f"stopped early: {result.stopped}", err=True)
+        raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
     title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
@@ -252,7 +257,7 @@ def sweep_command(
         l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
         rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
         official = res.summary.get("official_parse")
-        beside = "" if official is None else (
+        beside = "" if official is None or not _repair_changed(res.summary) else (
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
             f"mean L2 {_official_l2(official['overall'])}, response rate {_rate(official['overall'], 'response_rate')})"
         )
@@ -286,8 +291,9 @@ def sweep_command(
     finished = [c for c in result.cells if c.name in result.results]
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in finished}
     with_success = any(v is not None for v in successes.values())  # real-world sets
-    # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
-    with_official = any("official_parse" in result.results[c.name].summary for c in finished)
+    # cells whose named repair changed an answer: the official parse's numbers beside (``=``: the
+    # cell reads officially, or its repair read every answer as the official parse does)
+    with_official = any(_repair_changed(result.results[c.name].summary) for c in finished)
     official_cols = ("official parse L2", "official parse resp.") if with_official else ()
     headers = ("mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ())
     rows = []
@@ -329,14 +335,25 @@ def _official_l2(cell: dict[str, Any]) -> str:
     return "-" if cell.get("mean_l2") is None else f"{cell['mean_l2']:.3f}"
 
 
+def _repair_changed(summary: dict[str, Any]) -> bool:
+    """Whether a cell's summary holds an official reading that differs from its own numbers."""
+    from povagent.cli.official_beside import repair_changed_numbers
+
+    official = summary.get("official_parse")
+    return official is not None and repair_changed_numbers(summary, official)
+
+
 def _official_cells(summary: dict[str, Any]) -> tuple[str, str]:
     """A sweep cell's official-parse columns: its numbers, ``=`` when the cell reads officially
-    itself, ``?`` when a lenient cell recorded no official reading."""
+    itself or its repair changed no number, ``?`` when a lenient cell recorded no official reading."""
+    from povagent.cli.official_beside import repair_changed_numbers
     from povagent.results.official_reading import OFFICIAL_PARSERS
 
     official = summary.get("official_parse")
-    if official is not None:
+    if official is not None and repair_changed_numbers(summary, official):
         return _official_l2(official["overall"]), _rate(official["overall"], "response_rate")
+    if official is not None:
+        return "=", "="
     mark = "=" if summary.get("pipeline", {}).get("parser") in OFFICIAL_PARSERS else "?"
     return mark, mark
 
