@@ -28,6 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from baseline_code import baseline_checkout, cpu_of, imported_from
+from results_file import figure, record
 
 #: The last commit whose scorer recomputed each row's ground truth.
 BEFORE = "43eae40"
@@ -118,6 +119,19 @@ def main() -> None:
         print(f"median CPU to score {len(rows)} rows: before {b:.2f} s, after {a:.2f} s: {a / b:.2f}x (goal <= 0.4x)")
         print(f"summaries identical to 1e-12: {same(summaries['before'], summaries['after'])}")
         print(f"load average: {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+        instances = len({(r["house_id"], r["pair_id"], r["direction"]) for r in rows})
+        houses = len({r["house_id"] for r in rows})
+        ratios = [x / y for x, y in zip(cpu["after"], cpu["before"])]
+        beside = f"the scorer of commit {args.baseline}, same {len(rows)} rows, in-process CPU, rounds alternating"
+        stem = "bench_score" if args.dataset is None else f"bench_score_{houses}_houses"
+        print("wrote", record(stem, [
+            figure(f"CPU to score {len(rows)} official rows, {houses} houses ({instances} instances), median of {args.rounds} rounds",
+                   round(a / b, 2), "x", "<= 0.4x", beside),
+            figure("smallest round ratio", round(min(ratios), 2), "x", "", beside),
+            figure("largest round ratio", round(max(ratios), 2), "x", "", beside),
+            figure("CPU before (median)", round(b, 2), "s", "", beside),
+            figure("CPU after (median)", round(a, 2), "s", "", beside),
+        ], note=f"summaries identical to 1e-12: {same(summaries['before'], summaries['after'])}"))  # fmt: skip
 
 
 if __name__ == "__main__":

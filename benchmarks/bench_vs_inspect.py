@@ -32,6 +32,12 @@ start to its end (the tools' libraries, litellm and openai, imported before the 
   an OpenAI-compatible server), ``max_connections`` = the concurrency; its eval log is written
   as usual.
 
+Two settings give two different ratios, and both are published (``benchmarks/RESULTS.md``):
+inspect_ai as it comes (its eval log embeds every image: over a gigabyte per 256 samples) with
+povagent on ``hosted_vllm/`` (the defaults here), and ``--inspect-no-log-images --model
+openai/bench-model``, both tools then on the openai SDK and inspect_ai writing no images. The
+second is the like-for-like one; povagent's lead is smaller there but remains.
+
 Throughput: ``--rounds`` rounds of ``--requests`` requests each, the two tools in alternating
 order; the ratio is taken within each round (the machine is shared: rounds differ by what else
 runs) and the median reported, with each tool's client CPU per request (the child's user+system
@@ -122,10 +128,11 @@ def write_samples(data: Path, path: Path, n: int) -> None:
                                 for inst in _instances(data, n)]))
 
 
-def run_inspect(samples_file: Path, out: Path, url: str, n: int, concurrency: int, images: str = "path") -> dict:
+def run_inspect(samples_file: Path, out: Path, url: str, n: int, concurrency: int, images: str = "path", log_images: bool = True) -> dict:
     """One inspect_ai eval of the same ``n`` instances; its figures (imports nothing of povagent).
     ``images``: ``path`` (the PNG's path) or ``data-url`` (one data URL per file, shared by
-    every sample showing it)."""
+    every sample showing it). ``log_images=False`` is inspect's ``--no-log-images``: the eval
+    log keeps no copy of the frames."""
     import base64
 
     from inspect_ai import Task, eval
@@ -156,7 +163,7 @@ def run_inspect(samples_file: Path, out: Path, url: str, n: int, concurrency: in
 
     cpu0, t0 = _cpu_s(), time.perf_counter()
     logs = eval(task, model="openai-api/loopback/bench-model", max_connections=concurrency, max_tokens=256,
-                log_dir=str(out), display="none", fail_on_error=True)  # fmt: skip
+                log_dir=str(out), display="none", fail_on_error=True, log_images=log_images)  # fmt: skip
     wall, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
     assert logs[0].status == "success", logs[0].status
     return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": _peak_rss_mb()}
@@ -167,7 +174,8 @@ def child(args: argparse.Namespace) -> None:
     if args.child == "povagent":
         figures = run_povagent(Path(args.child_data), out, args.url, args.n, args.concurrency, args.model)
     else:
-        figures = run_inspect(Path(args.child_data), out, args.url, args.n, args.concurrency, args.inspect_images)  # --child-data: the samples file
+        figures = run_inspect(Path(args.child_data), out, args.url, args.n, args.concurrency, args.inspect_images,
+                              not args.inspect_no_log_images)  # --child-data: the samples file
     print(json.dumps(figures))
 
 
@@ -178,7 +186,7 @@ def measure(tool: str, n: int, args: argparse.Namespace, data: Path, url: str, w
     done = subprocess.run(
         [python, __file__, "--child", tool, "--n", str(n), "--child-data", str(data), "--url", url,
          "--workdir", str(workdir), "--concurrency", str(args.concurrency), "--model", args.model,
-         "--inspect-images", args.inspect_images],
+         "--inspect-images", args.inspect_images, *(["--inspect-no-log-images"] if args.inspect_no_log_images else [])],
         capture_output=True, text=True,
     )  # fmt: skip
     if done.returncode != 0:
@@ -197,6 +205,8 @@ def main() -> None:
     ap.add_argument("--model", default="hosted_vllm/bench-model", help="povagent's litellm model string")
     ap.add_argument("--inspect-python", default=sys.executable,
                     help="interpreter of an environment with inspect-ai (and openai >= 3.4) installed")
+    ap.add_argument("--inspect-no-log-images", action="store_true",
+                    help="run inspect_ai with log_images=False (its --no-log-images): its eval log keeps no frames")
     ap.add_argument("--inspect-images", choices=["path", "data-url"], default="path",
                     help="how inspect_ai is handed each frame: the PNG's path (read and encoded by inspect) or a ready data URL")
     ap.add_argument("--child", choices=["povagent", "inspect_ai"], help=argparse.SUPPRESS)

@@ -1,4 +1,4 @@
-"""Do the diagnostics recover planted behaviour? The worked example of docs/diagnostics.md.
+"""Do the diagnostics recover planted behaviour? The worked example of docs/how-to/why-models-fail.md.
 
 Runs ``planted`` simulations (a behaviour simulation, not a model) with known shares, and two
 baselines for scale, over a generated set (default: 10 houses, seed 0, 30 frames), scored with

@@ -11,7 +11,7 @@ Two kinds of hooks:
   exception in one is logged and the run goes on).
 
 Implement them with ``@povagent.hookimpl``. No hook here is ``firstresult``: none chooses
-one answer among plugins. ``docs/plugins.md`` renders every hook below from this module
+one answer among plugins. ``docs/reference/plugins.md`` renders every hook below from this module
 (``python tools/plugin_docs.py``), so a docstring here is the page's text.
 """
 

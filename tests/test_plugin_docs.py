@@ -1,4 +1,4 @@
-"""docs/plugins.md and the code it documents cannot drift apart: the page's reference sections
+"""docs/reference/plugins.md and the code it documents cannot drift apart: the page's reference sections
 and example code are generated (``python tools/plugin_docs.py``), and these tests fail while
 the page is out of date, saying which command brings it back."""
 
@@ -19,7 +19,7 @@ sys.path.insert(0, str(ROOT / "tools"))  # the generator is a repository tool, n
 import plugin_docs  # noqa: E402
 from plugin_docs import COMMAND, PluginDocsError, check_page, hookspec_names, main, markdown, render_page  # noqa: E402
 
-PAGE = ROOT / "docs" / "plugins.md"
+PAGE = ROOT / "docs" / "reference" / "plugins.md"
 EXAMPLES = sorted((ROOT / "examples" / "plugins").glob("*.py"))
 
 
@@ -68,9 +68,11 @@ def test_a_changed_hookspec_docstring_makes_the_check_fail_and_name_the_command(
 
 
 def test_a_changed_example_makes_the_check_fail(tmp_path):
-    (tmp_path / "docs").mkdir()
+    (tmp_path / "docs" / "reference").mkdir(parents=True)
     shutil.copytree(ROOT / "examples" / "plugins", tmp_path / "examples" / "plugins")
-    page = tmp_path / "docs" / "plugins.md"
+    (tmp_path / "examples" / "plugin_package").mkdir()
+    shutil.copy(ROOT / "examples" / "plugin_package" / "pyproject.toml", tmp_path / "examples" / "plugin_package")
+    page = tmp_path / "docs" / "reference" / "plugins.md"
     shutil.copy(PAGE, page)
     assert check_page(page) is None
     example = tmp_path / "examples" / "plugins" / "within_radius_scorer.py"
@@ -114,7 +116,7 @@ def test_rest_docstrings_become_markdown():
 
 
 def test_the_parser_table_of_docs_official_is_up_to_date_with_the_registrations():
-    problem = check_page(ROOT / "docs" / "official.md")
+    problem = check_page(ROOT / "docs" / "explanation" / "official.md")
     assert problem is None, problem
 
 

@@ -1,4 +1,4 @@
-"""Generates the reference parts of ``docs/plugins.md`` from the code, so the page cannot drift.
+"""Generates the reference parts of ``docs/reference/plugins.md`` from the code, so the page cannot drift.
 
 The page is hand-written prose with marked blocks that this module fills in::
 
@@ -17,7 +17,7 @@ is up to date (the test suite runs it). A field table's meanings are written her
 is an error, so the tables stay complete.
 
 A tool of the repository, not of the installed package: it lives outside ``povagent/`` so the
-runtime carries no docs generator. Reads modules and Markdown files (``docs/plugins.md``, and ``docs/official.md`` for its parser
+runtime carries no docs generator. Reads modules and Markdown files (``docs/reference/plugins.md``, and ``docs/explanation/official.md`` for its parser
 table); imports only the built-in plugins, for the parser table.
 """
 
@@ -38,7 +38,7 @@ from pydantic_core import PydanticUndefined
 from povagent import hookspecs, interfaces
 
 #: The page, from the repository root.
-DEFAULT_PAGE = Path("docs") / "plugins.md"
+DEFAULT_PAGE = Path("docs") / "reference" / "plugins.md"
 
 #: The command that regenerates the page (named in every "out of date" message).
 COMMAND = "python tools/plugin_docs.py"
@@ -405,7 +405,7 @@ def check_page(page: Path = DEFAULT_PAGE) -> str | None:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m povagent.plugin_docs [PAGE] [--check]``: rewrite the page's generated blocks."""
-    parser = argparse.ArgumentParser(prog=COMMAND, description="Fill in the generated blocks of docs/plugins.md from the code.")
+    parser = argparse.ArgumentParser(prog=COMMAND, description="Fill in the generated blocks of docs/reference/plugins.md from the code.")
     parser.add_argument("page", nargs="?", type=Path, default=DEFAULT_PAGE, help=f"the page (default: {DEFAULT_PAGE})")
     parser.add_argument("--check", action="store_true", help="only say whether the page is up to date (exit 1 if not)")
     args = parser.parse_args(argv)

@@ -4,7 +4,7 @@ Per answered row, ``scores["diagnose"]`` holds ``step`` (``frame``, ``anchor``, 
 ``placement`` or ``correct``), ``frame_shows``, the distances to the ground truth and to the
 egocentric and mirrored targets, the counterfactual targets' image positions (for drawing), and
 the egocentric-bias vote (``bias_eligible``, ``nearer_egocentric``); rules and thresholds are in
-:mod:`povagent.scoring.diagnosis` and ``docs/diagnostics.md``. ``summary.json`` gathers them per
+:mod:`povagent.scoring.diagnosis` and ``docs/how-to/why-models-fail.md``. ``summary.json`` gathers them per
 condition under ``diagnostics``. It needs a release-layout set (3D records); it never changes the
 official score. Runs offline on a finished run: ``povagent rescore RUN --scorer diagnose``.
 """

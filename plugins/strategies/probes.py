@@ -1,6 +1,6 @@
 """The perception probes ``probe-anchor`` and ``probe-observer``: can the model find the object at all?
 
-An addition (issue 26, docs/diagnostics.md): they measure perception apart from reasoning, on
+An addition (issue 26, docs/how-to/why-models-fail.md): they measure perception apart from reasoning, on
 the same instances and in the frame the model itself chose.
 
 * **Inferred / Stated** (three turns): turn 1 is the ``basic`` strategy's own question (the

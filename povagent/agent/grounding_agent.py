@@ -124,7 +124,7 @@ class GroundingAgent:
         if parser is None:
             # a model profile knows how its family writes points (Qwen 0-1000, Gemini [y, x] ...)
             profile = getattr(self.backend, "profile", None)
-            parser = getattr(profile, "default_parser", None) or "json"
+            parser = getattr(profile, "default_parser", None) or "official"
         if isinstance(parser, Parser):
             self.parser: Parser = parser
         else:

@@ -141,7 +141,7 @@ def score_command(
         metavar="official|povagent",
         help="official (default): official prediction rows are counted exactly as the official scorer counts them "
         "(pair ids as written, log paths as written, every pair it can read); povagent: against the pairs and frames "
-        "povagent's loader accepts (see docs/official.md).",
+        "povagent's loader accepts (see docs/explanation/official.md).",
     ),
 ) -> None:
     """Score predictions with the official metric.

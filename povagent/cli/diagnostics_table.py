@@ -55,5 +55,5 @@ def render_diagnostics(summary: dict[str, Any]) -> None:
         [("addition", "label"), *((c, "number") for c in conditions)], rows,
         title="Additions (not in the paper): why answers fail",
         caption="steps, relation success: shares of answered rows; egocentric bias: share nearer the egocentric "
-        "target where it differs from the true one (not for C); docs/diagnostics.md",
+        "target where it differs from the true one (not for C); docs/how-to/why-models-fail.md",
     ))  # fmt: skip

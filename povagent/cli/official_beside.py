@@ -6,7 +6,9 @@ prints such a run's scores (after ``run``, ``rescore``, ``score`` on a run folde
 follows, putting the official parse's response rate and mean beside the repaired ones per slice,
 both labelled. It reads the summary's ``official_parse`` section (see
 :mod:`povagent.results.official_reading`); a lenient run without one (rows written before
-readings were recorded) gets a note saying how to obtain the official numbers.
+readings were recorded) gets a note saying how to obtain the official numbers. When the repair
+changed no answer (every slice's mean and response rate are the official ones: a baseline's
+answers, a model that wrote clean JSON) there is nothing to set beside and nothing is printed.
 """
 
 from __future__ import annotations
@@ -22,9 +24,25 @@ def parser_reads_officially(name: str, options: dict[str, Any] | None = None, pl
     return official_counterpart(get_plugin_host(plugins).parser(name, options or {})) is None
 
 
+def repair_changed_numbers(summary: dict[str, Any], official: dict[str, Any]) -> bool:
+    """Whether any slice's mean L2 or response rate differs between the repaired ``summary``
+    and its ``official`` reading (an incomplete reading counts as a difference)."""
+    from povagent.cli.dataset import breakdown_slices
+
+    if official.get("rows_without_reading"):
+        return True
+    mine = dict(breakdown_slices(summary))
+    theirs = dict(breakdown_slices(official))
+    keys = ("mean_l2", "response_rate")
+    return mine.keys() != theirs.keys() or any(
+        [mine[name].get(k) for k in keys] != [theirs[name].get(k) for k in keys] for name in mine
+    )
+
+
 def render_official_beside(summary: dict[str, Any], parser: str, *, reads_officially: bool, run_dir: Any = None) -> None:
     """Print the official parse's response rate and mean beside the repaired ones (per slice), or
-    the note saying how to get them; nothing when ``parser`` reads officially."""
+    the note saying how to get them; nothing when ``parser`` reads officially or its repairs
+    changed no number."""
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
@@ -41,6 +59,8 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
             f"[yellow]note:[/] parser {parser!r} repairs answers, so these numbers are not the paper's; "
             f"for the official reading run: povagent rescore {where} --parser official"
         )
+        return
+    if not repair_changed_numbers(summary, official):
         return
 
     def rate(cell: dict[str, Any]) -> str:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import typer
 
@@ -142,6 +142,11 @@ def run_command(
     if as_json:
         typer.echo(json.dumps(result.summary, indent=2, default=str))
         raise typer.Exit(result.exit_code)
+    from povagent.run.runner import SET_UP_KINDS
+
+    if result.stop_kind in SET_UP_KINDS:  # nothing was sent: no table to show, the one line says it all
+        typer.echo(f"stopped early: {result.stopped}", err=True)
+        raise typer.Exit(result.exit_code)
     rows = result.summary["rows"]
     title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
     _summary_table(result.summary, title, result.run_dir)
@@ -243,7 +248,7 @@ def sweep_command(
         l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
         rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
         official = res.summary.get("official_parse")
-        beside = "" if official is None else (
+        beside = "" if official is None or not _repair_changed(res.summary) else (
             f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
             f"mean L2 {mean_l2(official['overall'])}, response rate {rate(official['overall'], 'response_rate')})"
         )
@@ -277,7 +282,7 @@ def sweep_command(
     finished = [c for c in result.cells if c.name in result.results]
     summaries = {c.name: result.results[c.name].summary for c in finished}
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in finished}
-    columns, rows = sweep_table(summaries, successes)
+    columns, rows = sweep_table(summaries, successes, _repair_changed)
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table(columns, rows, title=title))
     from povagent.cli.process_exit import allow_fast_exit
@@ -291,6 +296,14 @@ def sweep_command(
             typer.echo(f"cell {cell.name}:", err=True)
             _say_what_next(res, command)
     raise typer.Exit(max(codes, default=0))
+
+
+def _repair_changed(summary: Mapping[str, Any]) -> bool:
+    """Whether a cell's summary holds an official reading that differs from its own numbers."""
+    from povagent.cli.official_beside import repair_changed_numbers
+
+    official = summary.get("official_parse")
+    return official is not None and repair_changed_numbers(dict(summary), official)
 
 
 #: The heading of each kind in ``povagent plugins``.

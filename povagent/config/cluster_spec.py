@@ -58,7 +58,7 @@ def parse_cluster_spec(value: str) -> ClusterSpec:
         if local is None or not 1 <= int(local["count"]) <= most:
             raise ClusterError(
                 f"--cluster {shown!r}: local:N takes a number of worker processes from 1 to {most} on this machine "
-                f"({LOCAL_WORKERS_PER_CORE} per core); for more, start a scheduler and workers (docs/cluster.md)"
+                f"({LOCAL_WORKERS_PER_CORE} per core); for more, start a scheduler and workers (docs/how-to/cluster.md)"
             )
         return ClusterSpec(local_workers=int(local["count"]))
     match = _ADDRESS.match(text)
@@ -88,6 +88,6 @@ def yaml_cluster_spec(value: str) -> ClusterSpec:
     if spec.local_workers is None:
         raise ClusterError(
             f"{spec.address!r}: a YAML file may ask for local:N only; give a scheduler's address on the command line "
-            "with --cluster (a Dask scheduler runs code on this machine: use only one you run, see docs/security.md)"
+            "with --cluster (a Dask scheduler runs code on this machine: use only one you run, see docs/explanation/security.md)"
         )
     return spec

@@ -384,7 +384,7 @@ class SweepConfig(_Strict):
           short-answers: {strategy: {name: basic, options: {max_tokens: 64}}}
         cache: runs/cache.sqlite     # shared by every cell (default <output>/cache.sqlite)
         cluster: local:4             # optional: each cell a task on Dask, local:N only; a
-                                     # scheduler's address is given with --cluster (docs/cluster.md)
+                                     # scheduler's address is given with --cluster (docs/how-to/cluster.md)
     """
 
     base: str | dict[str, Any]

@@ -4,7 +4,7 @@ A pipeline YAML (every key but ``dataset``, ``output`` and one of ``backend``/``
 default)::
 
     plugins: [my_pkg.my_plugin]          # extra plugin modules: installed dotted names, or .py paths
-                                         # inside this file's folder (see docs/security.md)
+                                         # inside this file's folder (see docs/explanation/security.md)
     dataset: {path: data/povbench}       # or {generate: {houses: 3, seed: 0, frames: 30, out: data/gen}}
                                          # or {hub: owl-owl/POVBench, revision: main} (the release,
                                          # fetched into the Hugging Face cache; bounded by

@@ -21,6 +21,7 @@ from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.yaml_reader import ConfigSource
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
+from povagent.results.official_reading import OFFICIAL_PARSER
 from povagent.run.logs import ENV_NAME_WANTED, Redactor
 
 
@@ -87,7 +88,8 @@ PROFILE_BACKENDS = frozenset({"litellm", "transformers"})
 
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
     """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
-    when no parser is given, the profile's default parser (``json`` otherwise). A profile named
+    when no parser is given, the profile's default parser (``official`` otherwise: a repair
+    parser runs only when a pipeline or a profile names it). A profile named
     as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
     its parser and strategy defaults the same way, and so does one named as the in-process
     ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
@@ -109,7 +111,7 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
         if isinstance(defaults, Mapping) and defaults:
             strategy = strategy.model_copy(update={"options": {**defaults, **strategy.options}})
     if parser is None:
-        parser = ComponentSpec(name="json")
+        parser = ComponentSpec(name=OFFICIAL_PARSER)
     return config.model_copy(update={"backend": backend, "parser": parser, "strategy": strategy})
 
 

@@ -32,7 +32,7 @@ from typing import Sequence
 from povagent.errors import ConfigError
 
 #: What the rule says, quoted in every refusal so the way out is in the message.
-RULE = "a config loads .py plugins only from its own folder or below, dotted names only from installed packages (docs/security.md)"
+RULE = "a config loads .py plugins only from its own folder or below, dotted names only from installed packages (docs/explanation/security.md)"
 
 
 def is_plugin_path(entry: str) -> bool:

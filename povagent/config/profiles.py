@@ -42,7 +42,7 @@ class ModelProfile(BaseModel):
 
     name: str = Field(min_length=1)
     litellm_model: str = Field(min_length=1)
-    default_parser: str = "json"
+    default_parser: str = "official"
     strategy_options: dict[str, Any] = Field(default_factory=dict)
     backend_options: dict[str, Any] = Field(default_factory=dict)
     needs_api_base: bool = False

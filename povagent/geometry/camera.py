@@ -227,14 +227,22 @@ class Camera:
 
     # -- back-projection ----------------------------------------------------------------------
     def ray(self, pixels: np.ndarray) -> np.ndarray:
-        """Unit world-space ray directions ``(..., 3)`` through pixel coordinates ``(..., 2)``."""
+        """Unit world-space ray directions ``(..., 3)`` through pixel coordinates ``(..., 2)``.
+
+        A pixel with a NaN or infinite coordinate (a model's answer past float range) has no
+        ray: its row is NaN, as a point behind the camera projects to NaN. Without that rule the
+        matrix product mixes ``inf * 0`` into the row, which is NaN too but warns on every call.
+        """
         p = np.asarray(pixels, dtype=float)
         f = self.focal_px
+        finite = np.isfinite(p).all(axis=-1)
+        p = np.where(finite[..., None], p, 0.0)  # a stand-in, replaced by NaN below
         xc = (p[..., 0] - self.width / 2.0) / f
         yc = (self.height / 2.0 - p[..., 1]) / f
         cam = np.stack([xc, yc, np.ones_like(xc)], axis=-1)
         world = cam @ self.axes()
-        return world / np.linalg.norm(world, axis=-1, keepdims=True)
+        rays = world / np.linalg.norm(world, axis=-1, keepdims=True)
+        return np.where(finite[..., None], rays, np.nan)
 
     def point_at_depth(self, pixels: np.ndarray, depth: np.ndarray | float) -> np.ndarray:
         """World point at optical-axis ``depth`` (metres along forward) under each pixel."""

@@ -25,6 +25,7 @@ from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
+from povagent.report.gallery_runs import run_shown_note
 from povagent.report.html import (
     DIAGNOSIS_LEGEND,
     OFFICIAL_LEGEND,
@@ -148,6 +149,7 @@ def write_report(
             "strips": gstats.strips,
             "views": gstats.views,
             "strip_tick": OFFICIAL_STRIP_TICK if analysis.has_official else SUCCESS_STRIP_TICK,
+            "run_note": run_shown_note(analysis.observations, shown),
         }
         if dataset is None:
             analysis.notes.append("Gallery images need the dataset's frames: " + (note or "dataset not available") + ".")

@@ -158,6 +158,7 @@ def render_page(
         "{{BODY}}": body,
         "{{GALLERY_HIDDEN}}": "" if gallery is not None else "hidden",
         "{{LEGEND}}": legend,
+        "{{RUN_NOTE}}": html.escape((gallery or {}).get("run_note") or ""),
         "{{SORT_EXTRA}}": sort_extra,
         "{{DIRECTION_OPTIONS}}": "".join(f"<option>{html.escape(name)}</option>" for name in DIRECTION_NAMES),
         "{{GALLERY_JSON}}": script_json(gallery or {"entries": [], "systems": []}),

@@ -5,7 +5,9 @@ repaired numbers in the main tables. This table puts, per condition, its mean er
 rate beside those of the official parse of the same answers (recorded in each row, see
 :mod:`povagent.results.official_reading`), both labelled, so that nobody compares a repaired
 number with the paper by accident. Runs are aggregated as the main breakdown aggregates them.
-Systems parsed officially are not listed; the table is absent when there is none to list.
+Systems parsed officially are not listed, nor baselines (they write their answer, no model's
+text is repaired), nor a system whose repair changed no answer (both sides would be the same
+numbers); the table is absent when there is none to list.
 """
 
 from __future__ import annotations
@@ -14,13 +16,22 @@ from povagent.dataset.models import Condition
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.collect import Collection
 from povagent.report.tables import Cell, Column, Row, Table
-from povagent.results.official_reading import OFFICIAL_PARSERS, officially_read
+from povagent.results.official_reading import OFFICIAL_PARSERS, officially_read, scores_alike
 
 KEY = "official_parse_beside"
 
 
-def _lenient(run) -> bool:
-    return any(r.official_reading is not None or (r.parse is not None and r.parser not in OFFICIAL_PARSERS) for r in run.rows)
+def _repair_changed(row) -> bool:
+    """Whether a named repair read ``row``'s answer otherwise than the official runner does;
+    a lenient row written before readings were recorded counts too (its official side is
+    unknown, and the table says how to obtain it)."""
+    if row.official_reading is None:
+        return row.parse is not None and row.parser not in OFFICIAL_PARSERS
+    return row.parse is None or not scores_alike(row.official_reading.parse, row.parse)
+
+
+def _repaired(run) -> bool:
+    return not is_baseline_system(run.axes, run.system) and any(_repair_changed(r) for r in run.rows)
 
 
 def official_beside_table(collection: Collection) -> Table | None:
@@ -30,7 +41,7 @@ def official_beside_table(collection: Collection) -> Table | None:
 
     by_system: dict[str, list] = {}
     for run in collection.runs:
-        if run.scorer == "official" and _lenient(run):
+        if run.scorer == "official" and _repaired(run):
             by_system.setdefault(run.system, []).extend(run.rows)
     if not by_system:
         return None
@@ -65,14 +76,8 @@ def official_beside_table(collection: Collection) -> Table | None:
         for c in conditions:
             mine, theirs = repaired.get(c, {}), official.get(c, {})
             cells += [Cell(mine.get("mean_l2")), Cell(mine.get("response_rate")), Cell(theirs.get("mean_l2")), Cell(theirs.get("response_rate"))]
-        axes = next(r.axes for r in collection.runs if r.system == system)
-        baseline = is_baseline_system(axes, system)
-        # a baseline writes its answer, it reads no model's text: no parser to name
-        label = system if baseline else f"{system} ({', '.join(parsers)}{'; no official reading recorded: rescore with --parser official' if unread else ''})"
-        table.rows.append(Row(label, cells, reference=baseline))
-    models = sum(1 for row in table.rows if not row.reference)
+        note = "; no official reading recorded: rescore with --parser official" if unread else ""
+        table.rows.append(Row(f"{system} ({', '.join(parsers)}{note})", cells))
     # bold marks the best model of a column (tables.best_rows): say so only when it happens
-    table.caption += " The best model per column is in bold." if models >= 2 else " Nothing is bolded (bold marks the best of two or more models)."
-    if models < len(table.rows):
-        table.caption += " Baselines are in italics."
+    table.caption += " The best model per column is in bold." if len(table.rows) >= 2 else " Nothing is bolded (bold marks the best of two or more models)."
     return table

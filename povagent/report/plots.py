@@ -148,6 +148,40 @@ def _fitted_text(text: str, x: float, y: float, max_width: float, font_size: flo
     return f'<text x="{x}" y="{y}" font-size="{font_size}" font-weight="600"{fit}>{_e(text)}</text>'
 
 
+def wrapped_lines(text: str, max_chars: int) -> list[str]:
+    """``text`` in lines of at most ``max_chars`` characters, broken after a space, ``/`` or
+    ``-`` where it can be (a system name such as ``qwen3-vl-8b-transformers · spatial-cot``),
+    inside a word only when a word alone is longer than a line. Nothing is dropped."""
+    import re
+
+    pieces = re.findall(r"[^\s/-]*[\s/-]*", text)
+    lines: list[str] = []
+    line = ""
+    for piece in (p for p in pieces if p):
+        while len(piece) > max_chars:  # a word longer than a line: cut it
+            if line:
+                lines.append(line.rstrip())
+                line = ""
+            lines.append(piece[:max_chars])
+            piece = piece[max_chars:]
+        if len((line + piece).rstrip()) > max_chars and line:
+            lines.append(line.rstrip())
+            line = ""
+        line += piece
+    if line.strip():
+        lines.append(line.rstrip())
+    return lines or [""]
+
+
+def _wrapped_text(text: str, x: float, y: float, max_width: float, font_size: float, line_height: float) -> tuple[str, int]:
+    """A bold label wrapped onto lines that fit ``max_width`` (estimated at 0.6 em a
+    character), never squeezed: ``(svg, number of lines)``."""
+    chars = max(8, int(max_width / (0.6 * font_size)))
+    lines = wrapped_lines(text, chars)
+    spans = "".join(f'<tspan x="{x}" dy="{0 if i == 0 else line_height}">{_e(line)}</tspan>' for i, line in enumerate(lines))
+    return f'<text x="{x}" y="{y}" font-size="{font_size}" font-weight="600">{spans}<title>{_e(text)}</title></text>', len(lines)
+
+
 def _uid(title: str, names: Sequence[str]) -> str:
     """An id prefix for a plot's patterns: several plots share one page, so ids must differ."""
     return "p" + hashlib.sha256((title + "|" + "|".join(names)).encode()).hexdigest()[:8]
@@ -345,11 +379,17 @@ def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], c
     y = top
     body: list[str] = []
     previous = None
+    line_h = 14
+    group_end = 0.0  # where the current group's wrapped name ends: the next group starts below it
     for bar in bars:
         if bar.group != previous:
             if previous is not None:
-                y += group_gap
-            body.append(_fitted_text(bar.group, 8, y + bar_h - 3, left - 50, 12))
+                y = max(y, group_end) + group_gap
+            # a long system name wraps onto lines beside its bars (never squeezed); the bars leave
+            # room below when its lines outnumber them
+            label, n_lines = _wrapped_text(bar.group, 8, y + bar_h - 3, left - 58, 12, line_h)
+            body.append(label)
+            group_end = y + bar_h - 3 + (n_lines - 1) * line_h + 6
             previous = bar.group
         body.append(f'<text x="{left - 8}" y="{y + bar_h - 4}" font-size="11" text-anchor="end">{_e(bar.label)}</text>')
         x = float(left)
@@ -367,6 +407,7 @@ def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], c
             body.append(f'<a href="{_e(link)}">{rect}</a>' if link else rect)
             x += w
         y += bar_h + gap
+    y = max(y, group_end)
     height = y + 30
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
     out.append(_fitted_text(title, 8, 18, width - 12, 13))

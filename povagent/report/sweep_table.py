@@ -8,7 +8,7 @@ Only table contents: ``povagent sweep`` lays them out on the console
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from povagent.results.official_reading import OFFICIAL_PARSERS
@@ -16,6 +16,8 @@ from povagent.run.sweep_estimate import DryRunCell
 
 #: A table's columns: (heading, ``label`` or ``number``).
 Columns = list[tuple[str, str]]
+#: Whether a cell's summary holds an official reading whose numbers differ from the cell's own.
+RepairChanged = Callable[[Mapping[str, Any]], bool]
 
 
 def rate(cell: Mapping[str, Any], key: str = "success_rate") -> str:
@@ -29,12 +31,15 @@ def mean_l2(cell: Mapping[str, Any]) -> str:
     return "-" if cell.get("mean_l2") is None else f"{cell['mean_l2']:.3f}"
 
 
-def official_cells(summary: Mapping[str, Any]) -> tuple[str, str]:
-    """A sweep cell's official-parse columns: its numbers, ``=`` when the cell reads officially
-    itself, ``?`` when a lenient cell recorded no official reading."""
+def official_cells(summary: Mapping[str, Any], repair_changed: RepairChanged) -> tuple[str, str]:
+    """A sweep cell's official-parse columns: its numbers when its repair changed one, ``=`` when
+    the cell reads officially itself or its repair changed no number, ``?`` when a lenient cell
+    recorded no official reading."""
     official = summary.get("official_parse")
-    if official is not None:
+    if official is not None and repair_changed(summary):
         return mean_l2(official["overall"]), rate(official["overall"], "response_rate")
+    if official is not None:
+        return "=", "="
     mark = "=" if summary.get("pipeline", {}).get("parser") in OFFICIAL_PARSERS else "?"
     return mark, mark
 
@@ -62,13 +67,17 @@ def dry_run_table(plans: Iterable[DryRunCell]) -> tuple[Columns, list[list[str]]
     return columns, rows, notes
 
 
-def sweep_table(summaries: Mapping[str, Mapping[str, Any]], successes: Mapping[str, Mapping[str, Any] | None]) -> tuple[Columns, list[list[str]]]:
+def sweep_table(
+    summaries: Mapping[str, Mapping[str, Any]], successes: Mapping[str, Mapping[str, Any] | None], repair_changed: RepairChanged
+) -> tuple[Columns, list[list[str]]]:
     """The finished cells' columns and rows, in ``summaries``' order: mean L2, response rate,
-    answered of total; the official parse's numbers when any cell was parsed leniently; the
-    success rate when any cell is a real-world set's (``successes``: its success breakdown)."""
+    answered of total; the official parse's numbers when any cell's named repair changed an
+    answer (``repair_changed``); the success rate when any cell is a real-world set's
+    (``successes``: its success breakdown)."""
     with_success = any(v is not None for v in successes.values())  # real-world sets
-    # cells parsed leniently: the official parse's numbers beside (``=``: the cell reads officially)
-    with_official = any("official_parse" in s for s in summaries.values())
+    # cells whose named repair changed an answer: the official parse's numbers beside (``=``: the
+    # cell reads officially, or its repair read every answer as the official parse does)
+    with_official = any(repair_changed(s) for s in summaries.values())
     official_cols = ("official parse L2", "official parse resp.") if with_official else ()
     headers = ("mean L2", "resp. rate", "answered / total") + official_cols + (("success rate",) if with_success else ())
     rows = []
@@ -87,7 +96,7 @@ def sweep_table(summaries: Mapping[str, Mapping[str, Any]], successes: Mapping[s
             "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
             "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
             f"{o['n']} / {s['rows']['total']}",
-            *(official_cells(s) if with_official else ()),
+            *(official_cells(s, repair_changed) if with_official else ()),
             *(("-",) if with_success else ()),
         ])  # fmt: skip
     return [("cell", "label")] + [(h, "number") for h in headers], rows

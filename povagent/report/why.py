@@ -1,6 +1,6 @@
 """The report's "Why it fails" section: failure steps, egocentric bias, relation-consistent success.
 
-An addition, labelled as one (docs/diagnostics.md): shown only when the runs were scored with
+An addition, labelled as one (docs/how-to/why-models-fail.md): shown only when the runs were scored with
 ``diagnose`` and/or ``relation`` (``scorers: [official, diagnose, relation]``, or ``povagent
 rescore RUN --scorer diagnose --scorer relation`` and a report of the rescored folder). From
 each system's ``diagnostics`` breakdown (:func:`~povagent.report.analysis.system_diagnostics`):
@@ -145,7 +145,7 @@ def why_section(a: Analysis, figure: tuple[str, str] | None) -> str:
     if not systems:
         return ""
     parts = ['<section id="why"><h2>Why it fails <span class="muted">(addition, not in the paper)</span></h2>',
-             '<p class="help">From the <code>diagnose</code> and <code>relation</code> scores of the rows (docs/diagnostics.md). '
+             '<p class="help">From the <code>diagnose</code> and <code>relation</code> scores of the rows (docs/how-to/why-models-fail.md). '
              "The gallery filters by failure step (<code>step=viewpoint</code> in its address) and draws the egocentric and "
              "mirrored targets beside the ground truth when asked (<code>cf=1</code>).</p>"]  # fmt: skip
     if figure is not None:

@@ -38,7 +38,7 @@ def write_quickstart_configs(out: Path, dataset: Path, runs: int = 1) -> Path:
         "instances": {"conditions": ["a", "b", "c"], "directions": list(DIRECTION_NAMES)},
         "backend": {"name": "center", "options": {"frame_policy": "first"}},
         "strategy": "basic",
-        "parser": "json",
+        "parser": "official",
         "scorers": ["official"],
         "runs": runs,
         "concurrency": 16,

@@ -74,6 +74,10 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 #: Failure kinds of the first key that stop a run before it fans out: no other key can get
 #: past them until the user changes something.
 FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import"})
+#: Fail-fast kinds found before anything was sent (an unset key variable, a model client that
+#: cannot be imported): the command says so in one line, so the run logs them to its file only,
+#: not as console warnings above that line.
+SET_UP_KINDS = frozenset({"missing_key", "client_import"})
 
 # -- the run -------------------------------------------------------------------------------------
 @dataclass
@@ -111,6 +115,8 @@ class RunResult:
     interrupted: bool = False
     #: why the run stopped before every pending key was tried (fail fast, circuit breaker)
     stopped: str | None = None
+    #: the first row's error type when it stopped the run at once (fail fast), else ``None``
+    stop_kind: str | None = None
 
     @functools.cached_property
     def typed_summary(self) -> RunSummary:
@@ -189,6 +195,7 @@ class PipelineRun:
         self._frames = FrameReader(self.images)
         self._failures_in_a_row = 0
         self._stopped: str | None = None
+        self._stop_kind: str | None = None
 
     # -- one key -------------------------------------------------------------------------------
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
@@ -230,7 +237,8 @@ class PipelineRun:
         s.statuses[row.status.value] += 1
         self._session_spent.append(UsageTotals.of([row]))
         if row.status is RowStatus.INFRA_ERROR:
-            self._log.warning("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
+            log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
+            log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
         self.progress.advance(row.status.value)
         if self._observed:
             self.host.hooks.instance_done(str(self.run_dir), row)
@@ -255,6 +263,7 @@ class PipelineRun:
         self._failures_in_a_row += 1
         where = self._redactor.text(backend_label(self.components.backend))  # URL credentials never shown
         if first and row.error_type in FAIL_FAST_KINDS:
+            self._stop_kind = row.error_type
             self._stopped = (
                 f"the first request failed ({row.error_type}: {row.error_message}); {where}: nothing else was sent. "
                 "Fix the key, the model name or the server, then run the same command again to resume"
@@ -376,7 +385,8 @@ class PipelineRun:
                 self._path.stats.requests, self._path.stats.cache_hits, self._path.stats.retries,
             )  # fmt: skip
             if self._stopped:
-                self._log.error("run_stopped", reason=self._stopped)
+                stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
+                stop_log("run_stopped", reason=self._stopped)
             summary = self.summarize(instances, runs, interrupted or stop_came)
             # a stop requested while the summary was computed (plain code: not yet delivered) too
             summary["interrupted"] = summary["interrupted"] or stop_requested()
@@ -401,7 +411,7 @@ class PipelineRun:
                 # every key had finished when the stop came: the folder is complete, and the
                 # stop still ends the command (a sweep must not start its next cell)
                 raise asyncio.CancelledError
-        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped)
+        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped, self._stop_kind)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
         """Run ``pending``: the first key alone (fail fast), then the rest with ``concurrency``

@@ -15,7 +15,7 @@ that fails:
    reading.) In C the observer view always faces the anchor: the step passes.
 2. **anchor**: the point (clamped to the image, as officially) is farther than
    :data:`ANCHOR_THRESHOLD` (normalized units, the official metric's) from the anchor's
-   box in the image (the part in front of the camera): the model did not find the anchor. Why 0.15: see ``docs/diagnostics.md``
+   box in the image (the part in front of the camera): the model did not find the anchor. Why 0.15: see ``docs/how-to/why-models-fail.md``
    (on generated sets every ground truth lies within it; most random answers do not).
 3. **viewpoint**: the point is nearer (official clamped distance) the egocentric or the
    mirrored target (:mod:`povagent.geometry.counterfactual`) than the ground truth, counting

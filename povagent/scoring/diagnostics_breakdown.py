@@ -25,7 +25,7 @@ from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 from povagent.scoring.diagnosis import STEPS
 
 #: What every ``diagnostics`` section says of itself.
-LABEL = "addition, not in the paper: first failing step, egocentric bias and relation-consistent success (docs/diagnostics.md)"
+LABEL = "addition, not in the paper: first failing step, egocentric bias and relation-consistent success (docs/how-to/why-models-fail.md)"
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,5 +1,5 @@
 """Where an object is in a frame, and how far a pointed pixel is from it: the perception probes'
-error (an addition, docs/diagnostics.md).
+error (an addition, docs/how-to/why-models-fail.md).
 
 An object's extent in a frame is the 2D box (normalized, clipped to the image) around the part
 of its axis-aligned box in front of the camera (:func:`~povagent.geometry.box_outline.outline`,

@@ -131,6 +131,18 @@ def test_run_stops_at_once_on_an_unset_api_key_env_before_any_request(tmp_path, 
     assert session(tmp_path)["requests"] == 0
 
 
+def test_an_unset_api_key_env_prints_only_the_one_line(tmp_path, mini_root):
+    """No warning row, no error row, no empty score table: the stop line alone (exit code 4);
+    the run's log file keeps the row's and the stop's events."""
+    with LoopbackServer(max_lifetime_s=120) as server:
+        done, _ = run_cli(pipeline(tmp_path, mini_root, api_base=server.url, api_key_env="POVAGENT_UNSET_KEY"))
+    stop_line(done)
+    shown = [line for line in (done.stdout + done.stderr).splitlines() if line.strip() and "dataset_problem" not in line]
+    assert len(shown) == 1 and shown[0].startswith("stopped early:"), shown
+    events = [json.loads(line)["event"] for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    assert "infra_error" in events and "run_stopped" in events
+
+
 def test_run_stops_at_once_when_nothing_listens_and_hides_url_credentials(tmp_path, mini_root):
     port = free_port()
     api_base = f"http://127.0.0.1:{port}/v1"

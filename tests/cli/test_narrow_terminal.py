@@ -53,7 +53,7 @@ def test_the_run_summary_fits_and_keeps_labels_and_numbers_whole(center_run):
     assert [line for line in shown.splitlines() if line.startswith("│") and "…" in line] == []
     # the run folder in the title is shortened in its middle: its last folder is still there
     title = shown.splitlines()[0].strip()
-    assert title.endswith("/run (center / basic / json)") and len(title) <= 80
+    assert title.endswith("/run (center / basic / official)") and len(title) <= 80
 
 
 def test_a_real_world_run_prints_its_success_table_in_80_columns(tmp_path, monkeypatch):
@@ -66,7 +66,7 @@ def test_a_real_world_run_prints_its_success_table_in_80_columns(tmp_path, monke
     shown = result.stdout
     assert widest(shown) <= 80, shown
     first, second = (line.strip() for line in shown.splitlines()[:2])
-    assert first.endswith("for-the-real-world-demo/run (center / basic / json)") and "…" in first
+    assert first.endswith("for-the-real-world-demo/run (center / basic / official)") and "…" in first
     assert second == "success rate (unanswered = failure)"
     assert row_of(shown, "overall")[1:] == ["0.0%", "0 / 6", "100.0%", "6 / 6"]
 
@@ -108,7 +108,7 @@ def test_the_sweep_table_fits_and_names_every_cell_in_full(tmp_path, mini_root):
     assert result.exit_code == 0, result.output
     table = result.stdout.split("sweep sweep.yaml (4 cells) -> ", 1)[1]
     assert widest(table) <= 80, table
-    assert row_of(table, "center__spatial-cot")[1:] == ["0.208", "100.0%", "18 / 18", "0.208", "100.0%"]
+    assert row_of(table, "center__spatial-cot")[1:] == ["0.208", "100.0%", "18 / 18"]  # read officially: no column beside
     assert row_of(table, "random__basic")[3] == "18 / 18"
 
 

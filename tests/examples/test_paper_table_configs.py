@@ -117,14 +117,14 @@ def profile_table_disagreements(page: str, listed: dict) -> list[str]:
 
 def test_the_backends_profile_table_agrees_with_povagent_plugins():
     listed = plugins_json()
-    page = (ROOT / "docs" / "backends.md").read_text(encoding="utf-8")
+    page = (ROOT / "docs" / "how-to" / "models.md").read_text(encoding="utf-8")
     assert profile_table_disagreements(page, listed) == []
     # and the check sees a stale row (the table as it was: gpt-5.4 read with json)
     stale = page.replace("| `gpt-5.4` | `openai/gpt-5.4` | `official` |", "| `gpt-5.4` | `openai/gpt-5.4` | `json` |")
     assert profile_table_disagreements(stale, listed) == ["gpt-5.4: docs ('openai/gpt-5.4', 'json') != plugins ('openai/gpt-5.4', 'official')"]
 
 
-@pytest.mark.parametrize(("page", "header"), [("README.md", "| parser | what it adds"), ("docs/official.md", "| parser | reads |")])
+@pytest.mark.parametrize(("page", "header"), [("docs/explanation/official.md", "| parser | reads |")])
 def test_every_parser_a_docs_table_names_is_registered(page, header):
     parsers = {p["name"] for p in plugins_json()["parser"]}
     rows = markdown_table((ROOT / page).read_text(encoding="utf-8"), header)

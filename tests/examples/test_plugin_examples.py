@@ -1,4 +1,4 @@
-"""The four short plugin examples of ``docs/plugins.md`` (``examples/plugins/``), each run
+"""The four short plugin examples of ``docs/reference/plugins.md`` (``examples/plugins/``), each run
 through the real runner: a pipeline YAML names the example by its ``.py`` path under
 ``plugins:`` (relative to the YAML's folder, as the page shows), on a small synthetic release,
 and the rows and ``summary.json`` show what the plugin did."""

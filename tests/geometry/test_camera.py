@@ -89,6 +89,19 @@ def test_ray_through_the_centre_is_the_forward_axis():
     assert np.allclose(cam.ray(np.array([256.0, 256.0])), cam.axes()[2])
 
 
+def test_a_pixel_past_float_range_has_a_nan_ray_without_a_warning():
+    """A model may answer a number past float range (inf): that pixel has no ray, the others
+    keep theirs, and numpy is not asked to compute inf * 0 (which warned on every call)."""
+    import warnings
+
+    cam = Camera.from_pose([0, 1, 0], yaw=37, horizon=12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rays = cam.ray(np.array([[np.inf, 10.0], [256.0, 256.0], [np.nan, 0.0]]))
+    assert np.isnan(rays[0]).all() and np.isnan(rays[2]).all()
+    assert np.allclose(rays[1], cam.axes()[2])
+
+
 def test_axes_are_orthonormal():
     cam = Camera.from_pose([0, 1, 0], yaw=123, horizon=-17)
     r = cam.axes()

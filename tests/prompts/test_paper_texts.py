@@ -7,9 +7,9 @@ The expected texts below were transcribed by hand from the appendix "Evaluation 
 (N = 30 frames, 512x512, the sentence below), independently of the template files, following
 the LaTeX-to-text rules of ``prompts/README.md``. They are also derived mechanically, by those
 rules, from ``paper_prompts.tex`` (the appendix's LaTeX copied verbatim) and compared, so a
-drift in either the hand transcription or the templates fails. When the paper's ``.tex`` is
-beside the clone (``../shared/seed/``), every prompt box of the copy must be byte-identical
-to the paper's.
+drift in either the hand transcription or the templates fails. That the copy is the paper's,
+byte for byte, is checked against the paper's own source by ``benchmarks/paper_fidelity.py``
+(CI runs it where the source is present; a user's clone has no such file).
 """
 
 from __future__ import annotations
@@ -145,8 +145,6 @@ def test_a_dollar_sign_in_the_sentence_is_kept_verbatim():
 # -- against the paper's LaTeX ----------------------------------------------------------------------
 #: The appendix "Evaluation Prompts", copied verbatim from the paper's .tex (always present).
 PROMPTS_TEX = Path(__file__).resolve().parent / "paper_prompts.tex"
-#: The paper itself, when the clone sits beside the shared seed folder.
-TEX = Path(__file__).resolve().parents[3] / "shared" / "seed" / "contextual-observer-grounding.tex"
 HEADINGS = {
     "basic-frames": "\\paragraph{Basic prompt (Inferred / Stated).}",
     "basic-given": "\\paragraph{Basic prompt (Given).}",
@@ -239,12 +237,3 @@ def test_the_spatial_cot_box_replaces_exactly_the_cot_step4():
     tex = PROMPTS_TEX.read_text(encoding="utf-8")
     cot = latex_to_text(_box_after(tex, HEADINGS["cot"]))
     assert fill(cot).count(COT_STEP4) == 1
-
-
-@pytest.mark.skipif(not TEX.is_file(), reason=f"the paper's .tex is not beside the clone ({TEX})")
-@pytest.mark.parametrize("box", sorted(HEADINGS))
-def test_the_latex_copy_is_the_papers_verbatim(box):
-    copy, paper = PROMPTS_TEX.read_text(encoding="utf-8"), TEX.read_text(encoding="utf-8")
-    assert _box_after(copy, HEADINGS[box]) == _box_after(paper, HEADINGS[box])
-    intro = "Placeholders (\\textit{N} images, the task \\textit{sentence}, and image size $W\\times H$) are filled at runtime."
-    assert intro in copy and intro in paper

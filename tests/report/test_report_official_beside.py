@@ -59,13 +59,19 @@ def test_the_report_writes_the_table(tmp_path, mini_root, run_parsed_with):
     assert any(t.key == "official_parse_beside" for t in result.tables)
 
 
-def test_a_baseline_row_names_no_parser(sweep_with_center):
-    """A baseline writes its own answers: its row is the system's name alone, a model's row
-    names its parser."""
+def test_a_baseline_is_never_listed(sweep_with_center):
+    """A baseline writes its own answers, no repair changes them: only the model has a row,
+    and it names its parser."""
     table = official_beside_table(collect(sweep_with_center))
-    labels = {row.reference: row.label for row in table.rows}
-    assert labels[True] == "center"
-    assert labels[False].startswith("mock-a") and "(json" in labels[False]
+    assert [row.label.split(" ")[0] for row in table.rows] == ["mock-a"]
+    assert "(json" in table.rows[0].label
+
+
+def test_a_repair_that_changed_no_answer_is_not_listed(tmp_path, write_answered_run):
+    clean = [(key, '{"x": 100, "y": 100}') for key, _ in ANSWERS]
+    run = write_answered_run(tmp_path / "raw", clean, backend=MODEL)
+    assert runner.invoke(app, ["rescore", str(run), "--parser", "json", "--json"]).exit_code == 0
+    assert official_beside_table(collect(run / "rescored-json")) is None
 
 
 def page_widths(page, tmp_path, window: str) -> dict[str, int]:

@@ -27,8 +27,10 @@ from povagent.scoring.official import project_ground_truth
 STRATEGIES = ("basic", "o-plot", "oa-plot", "cot", "spatial-cot")
 #: The quickstart link the README shows (proposed in the README text of this change): the random
 #: baseline's Inferred answers, worst first, the first one opened.
-# the example link the README's Quickstart gives, read from the README so the two cannot drift
-README_LINK_STATE = re.search(r"`report\.html#([^`]+)`", (Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8")).group(1)
+# the example link the first-evaluation tutorial gives, read from it so the two cannot drift
+README_LINK_STATE = re.search(
+    r"`report\.html#([^`]+)`", (Path(__file__).parents[2] / "docs" / "tutorials" / "first-evaluation.md").read_text(encoding="utf-8")
+).group(1)
 WINDOW = "--window-size=1300,900"
 
 

@@ -18,13 +18,18 @@ def test_a_multi_turn_cell_lists_each_turn_under_it_and_the_total_sums_the_cells
     assert len(columns) == len(rows[0])
 
 
-def test_official_parse_columns_appear_once_any_cell_was_parsed_leniently():
+def test_official_parse_columns_appear_once_a_cells_repair_changed_a_number():
     lenient = {"overall": CELL, "rows": {"total": 4}, "official_parse": {"overall": {"mean_l2": 0.5, "response_rate": 0.5}}}
     official = {"overall": CELL, "rows": {"total": 4}, "pipeline": {"parser": "official"}}
-    columns, rows = sweep_table({"lenient": lenient, "official": official}, {"lenient": None, "official": None})
+    columns, rows = sweep_table({"lenient": lenient, "official": official}, {"lenient": None, "official": None}, lambda s: "official_parse" in s)
     assert [c[0] for c in columns] == ["cell", "mean L2", "resp. rate", "answered / total", "official parse L2", "official parse resp."]
     assert rows == [["lenient", "0.250", "75.0%", "3 / 4", "0.500", "50.0%"], ["official", "0.250", "75.0%", "3 / 4", "=", "="]]
 
 
 def test_a_lenient_cell_without_an_official_reading_is_marked_unknown():
-    assert official_cells({"pipeline": {"parser": "json"}}) == ("?", "?")
+    assert official_cells({"pipeline": {"parser": "json"}}, lambda s: True) == ("?", "?")
+
+
+def test_a_repair_that_changed_no_number_is_marked_as_reading_officially():
+    summary = {"official_parse": {"overall": {"mean_l2": 0.5, "response_rate": 0.5}}}
+    assert official_cells(summary, lambda s: False) == ("=", "=")

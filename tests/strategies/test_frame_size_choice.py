@@ -1,4 +1,4 @@
-"""A labelled choice (docs/official.md, "Frame sizes"): the prompt's pixel range and the
+"""A labelled choice (docs/explanation/official.md, "Frame sizes"): the prompt's pixel range and the
 parser's range check use the size of the frame the model is shown.
 
 The authors' runners used fixed or borrowed sizes: ``run_vlm_eval.py`` states 512x512 in the

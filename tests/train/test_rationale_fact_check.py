@@ -239,7 +239,7 @@ def test_the_wording_varies_with_the_seed_but_the_facts_do_not(generated_release
 
 
 def test_the_example_in_docs_training_is_what_the_exporter_writes(generated_release: Path) -> None:
-    docs = (Path(__file__).parents[2] / "docs" / "training.md").read_text()
+    docs = (Path(__file__).parents[2] / "docs" / "how-to" / "training.md").read_text()
     block = docs.split("An S-CoT rationale as exported", 1)[1].split("```text\n", 1)[1].split("\n  ```", 1)[0]
     shown = "\n".join(line.removeprefix("  ") for line in block.splitlines())
     ds = load_dataset(generated_release)
