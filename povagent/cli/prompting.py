@@ -184,9 +184,10 @@ def parse_command(
 @app.command("rescore")
 def rescore_command(
     run_dir: Path = typer.Argument(..., metavar="RUN_DIR", help="A finished run folder (with config.yaml and results.jsonl)."),
-    parser: str = typer.Option(
-        "official", "--parser", metavar="NAME", help="Parser to read every raw answer again with (names: povagent plugins); "
-        "official gives numbers comparable with the paper."
+    parser: str | None = typer.Option(
+        None, "--parser", metavar="NAME", help="Parser to read every raw answer again with (names: povagent plugins). "
+        "Default: the official reading, comparable with the paper (official, or the run's own parser when it reads "
+        "as the official runner does, such as active)."
     ),
     dataset: Path | None = typer.Option(
         None, "--dataset", metavar="FOLDER", help="Dataset folder, if not the one named in the run's config.yaml."
@@ -204,8 +205,9 @@ def rescore_command(
     """Score a finished run again with another parser, offline.
 
     No model is called: the raw answers in the run folder are read again and the result is
-    written to RUN_DIR/rescored-PARSER/. The default parser, official, turns any run into
-    numbers comparable with the paper; with a lenient parser the official parse's numbers are
+    written to RUN_DIR/rescored-PARSER/. The default, the official reading (official, or the
+    run's own parser when it reads as the official runner does), turns any run into numbers
+    comparable with the paper; with a lenient parser the official parse's numbers are
     printed beside the repaired ones.
     """
     from povagent.cli.console_width import PathTitle
@@ -215,6 +217,7 @@ def rescore_command(
     from povagent.run.rescore import rescore_run
 
     result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin, extra_scorers=tuple(scorer))
+    parser = str(result.summary["parser"])
     for w in result.warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
     if as_json:

@@ -39,10 +39,13 @@ CONDITION_LABELS = {"a": "Inferred (A)", "b": "Stated (B)", "c": "Given (C)"}
 class AnsweredView:
     """What the gallery draws for an active row: the image answered in when it is a rendered
     view (its camera, and its PNG in the run folder; ``None`` for an exploration frame, drawn as
-    usual) and the episode's poses (x, z, yaw), start first, for the bird's-eye card."""
+    usual), the episode's poses (x, z, yaw), start first, for the bird's-eye card, and every view
+    the episode rendered (their PNGs, view 1 first) with the number of the one answered in."""
 
     frame: Frame | None
     path: tuple[tuple[float, float, float], ...]
+    views: tuple[Path, ...] = ()
+    answered: int | None = None
 
 
 def answered_view(observation: Observation, folders: Mapping[str, Path]) -> AnsweredView | None:
@@ -51,14 +54,15 @@ def answered_view(observation: Observation, folders: Mapping[str, Path]) -> Answ
     if record is None:
         return None
     path = tuple((c.x, c.z, c.yaw) for c in [record.start, *(v.camera for v in record.views)])
+    folder = folders.get(observation.run_name, Path()) / "views"
+    views = tuple(folder / f"{v.sha256}.png" for v in record.views)
     answer = record.answer
     if answer is None or answer.frame is not None:
-        return AnsweredView(None, path)
+        return AnsweredView(None, path, views)
     number = int(answer.image.split()[1])
     if not 1 <= number <= len(record.views):
-        return AnsweredView(None, path)
-    png = folders.get(observation.run_name, Path()) / "views" / f"{record.views[number - 1].sha256}.png"
-    return AnsweredView(dataclasses.replace(answered_in_camera(answer.camera), file=png), path)
+        return AnsweredView(None, path, views)
+    return AnsweredView(dataclasses.replace(answered_in_camera(answer.camera), file=views[number - 1]), path, views, number)
 
 
 @dataclass(frozen=True)

@@ -267,6 +267,24 @@ class _StripBook:
             self.stats.views.append(views)
         return {"fs": self.by_strip[strip], "fw": index}
 
+    def views_fields(self, active: Any) -> dict[str, Any]:
+        """An active row's ``{"vs": strip, "va": view answered in}``: the views its episode
+        rendered, as one more strip (``{}``: none rendered, or one cannot be read)."""
+        if active is None or not active.views or not all(p.exists() for p in active.views):
+            return {}
+        with Image.open(active.views[0]) as first:
+            w, h = first.size
+        strip = Strip(active.views, (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
+        if strip not in self.by_strip:
+            try:
+                key = strip.key(self.hashes)
+            except OSError:
+                return {}
+            self.by_strip[strip] = len(self.stats.strips)
+            self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
+            self.jobs[key] = strip
+        return {"vs": self.by_strip[strip], "va": active.answered}
+
 
 def _marked_drawing(observation: Observation, instance: RealWorldInstance, frame: Any) -> Drawing:
     """A real-world row: the letterboxed frame with the marks made in its original."""
@@ -520,6 +538,7 @@ def build_gallery(
             }
             | ({"nt": len(transcript), "tr": transcript} if transcript else {})
             | strip_fields
+            | strips.views_fields(active)
             | diagnosis_fields(o, frame)
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}

@@ -148,17 +148,28 @@ def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict
     return summary
 
 
+def official_reading_of_run(host: PluginHost, run_parser: str | None) -> str:
+    """The parser giving a run's official reading: its own parser when that parser reads as the
+    official runner does (``reproduces_official``: the ``active`` mode's tool-call reader, the
+    ``robopoint-official`` reading), else ``official``. A run's parser that no loaded plugin
+    registers falls back to ``official``."""
+    if run_parser and run_parser != OFFICIAL_PARSER and run_parser in host.names("parser"):
+        if getattr(host.parser(run_parser, {}), "reproduces_official", False):
+            return run_parser
+    return OFFICIAL_PARSER
+
+
 def rescore_run(
     run_dir: str | Path,
-    parser_name: str = OFFICIAL_PARSER,
+    parser_name: str | None = None,
     *,
     dataset_root: str | Path | None = None,
     host: PluginHost | None = None,
     plugins: Sequence[str] = (),
     extra_scorers: Sequence[str] = (),
 ) -> RescoreResult:
-    """Re-parse every row of a finished run with ``parser_name`` (default: the official reading)
-    and re-score it (offline) with the run's scorers plus ``extra_scorers`` (names, default
+    """Re-parse every row of a finished run with ``parser_name`` (default: the official reading,
+    see :func:`official_reading_of_run`) and re-score it (offline) with the run's scorers plus ``extra_scorers`` (names, default
     options; e.g. ``diagnose`` and ``relation``, whose figures go to the summary's
     ``diagnostics``).
 
@@ -178,6 +189,8 @@ def rescore_run(
     for kind, name in [("strategy", config.strategy.name), *(("scorer", s.name) for s in config.scorers)]:
         if name not in host.names(kind):
             raise PluginError(missing_plugin_message("rescore", run, kind, name, config.plugins))
+    if parser_name is None:
+        parser_name = official_reading_of_run(host, config.parser.name if config.parser else None)
     parser = host.parser(parser_name, {})
     counterpart = official_counterpart(parser)
     official = (host.parser(counterpart, {}), counterpart) if counterpart else None

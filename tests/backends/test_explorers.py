@@ -86,3 +86,15 @@ def test_povagent_score_recomputes_an_active_run_offline_in_the_answered_cameras
     summary, _ = score_predictions(folder, load_dataset(generated_release))
     assert summary["overall"]["n"] == len(rows)
     assert summary["overall"]["mean_l2"] < 0.01
+
+
+def test_rescore_reads_an_active_run_with_its_own_official_reading_by_default(oracle_run):
+    from povagent.run.rescore import rescore_run
+
+    folder, rows = oracle_run
+    result = rescore_run(folder)
+    assert result.out_dir.name == "rescored-active"
+    rescored = {r.key: r.scores["official"]["l2"] for r in read_rows(result.out_dir / "results.jsonl")}
+    first = {r.key: r.scores["official"]["l2"] for r in rows}
+    assert sorted(rescored) == sorted(first)
+    assert [rescored[k] for k in sorted(first)] == pytest.approx([first[k] for k in sorted(first)])

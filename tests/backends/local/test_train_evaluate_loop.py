@@ -78,3 +78,27 @@ def test_a_checkpoint_trained_on_the_export_is_evaluated_in_process(tmp_path, ge
     assert all(r["status"] in ("answered", "parse_error") for r in rows)
     report = povagent("report", str(tmp_path / "eval"))
     assert "given" in report.lower()
+
+
+@pytest.mark.parametrize("fmt", ["hf", "messages"])
+def test_trl_trains_on_an_export_loaded_by_its_folder_alone(tmp_path, generated_release, tiny_idefics3, fmt, monkeypatch):
+    """What `trl sft --dataset_name EXPORT` does: `load_dataset(EXPORT)` from another working
+    folder, every column as exported, straight into SFTTrainer (no column picking, no paths fixed)."""
+    from datasets import load_dataset
+    from transformers import AutoModelForImageTextToText, AutoProcessor
+    from trl import SFTConfig, SFTTrainer
+
+    export = tmp_path / "train-set"
+    povagent("export-train", str(generated_release), "--out", str(export), "--format", fmt,
+             "--rationale", "none", "--conditions", "c", "--split", "1,0,0")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    dataset = load_dataset(str(export), split="train").select(range(2))
+    assert {"messages", "images"} <= set(dataset.column_names)
+    config = SFTConfig(output_dir=str(tmp_path / "trainer"), max_steps=1, per_device_train_batch_size=2,
+                       assistant_only_loss=True, max_length=None, report_to=[], save_strategy="no", use_cpu=True)
+    trainer = SFTTrainer(model=AutoModelForImageTextToText.from_pretrained(tiny_idefics3), args=config,
+                         train_dataset=dataset, processing_class=AutoProcessor.from_pretrained(tiny_idefics3))
+    result = trainer.train()
+    assert result.global_step == 1 and result.training_loss == result.training_loss  # one step, no NaN
