@@ -37,7 +37,7 @@ import time
 from types import ModuleType
 from typing import Any, ClassVar, Mapping
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import ValidationError
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile, near_profile, resolve_profile
@@ -49,26 +49,10 @@ from povagent.exchange.messages import Request, Response, Usage
 from povagent.exchange.transport import ImageReferenceError
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 from povagent.plugins import get_plugin_host, unknown_name_message
-from povagent.run.logs import ENV_NAME_WANTED, Redactor
 from povagent_plugins.backends.litellm_errors import map_litellm_error, unreachable_for_good
+from povagent_plugins.backends.litellm_options import KEY_MESSAGE, LiteLLMOptions, options_error
 from povagent_plugins.backends.openai_messages import openai_messages, tool_calls_of
 
-#: Router constructor settings a pipeline may set (litellm.Router keyword arguments).
-ROUTER_SETTINGS = frozenset(
-    {
-        "num_retries",
-        "timeout",
-        "routing_strategy",
-        "routing_strategy_args",
-        "allowed_fails",
-        "cooldown_time",
-        "disable_cooldowns",
-        "retry_after",
-        "retry_policy",
-        "enable_pre_call_checks",
-        "default_max_parallel_requests",
-    }
-)
 #: litellm providers that send an OpenAI-style request to the ``api_base`` given, image URLs
 #: untouched: the server there fetches ``file://``/``http://`` references itself.
 REFERENCE_PROVIDERS = frozenset({"openai", "hosted_vllm"})
@@ -77,108 +61,6 @@ DEFAULT_ROUTER_RETRIES = 3
 #: Extra time over the request timeout (times attempts) before a call is abandoned: a guard
 #: against a client that never returns, not a timeout anyone should hit.
 HARD_DEADLINE_SLACK_S = 30.0
-
-_KEY_MESSAGE = (
-    "API keys are never read from YAML (it gets committed); export the key and name the "
-    "variable instead: api_key_env: MY_KEY_VAR"
-)
-
-
-def _check_key_env(value: Any) -> Any:
-    """Refuse an ``api_key_env`` that cannot be a variable name, without repeating the value."""
-    if value is not None and not (isinstance(value, str) and Redactor().plausible_variable_name(value)):
-        raise ValueError(ENV_NAME_WANTED)
-    return value
-
-
-#: Request headers that carry a credential (a key passed as a header is still a key in YAML).
-_CREDENTIAL_HEADERS = frozenset({"authorization", "api-key", "x-api-key", "x-goog-api-key", "proxy-authorization"})
-
-
-def _reject_literal_key(where: str, params: Mapping[str, Any]) -> None:
-    if "api_key_env" in params:
-        try:
-            _check_key_env(params["api_key_env"])
-        except ValueError as exc:
-            raise ValueError(f"{where}.api_key_env: {exc}") from None
-    key = params.get("api_key")
-    # litellm's own "os.environ/NAME" form is a reference to the environment, not a key
-    if key is not None and not (isinstance(key, str) and key.startswith("os.environ/")):
-        raise ValueError(f"{where}: api_key given literally. {_KEY_MESSAGE}")
-    for name in ("extra_headers", "headers"):
-        headers = params.get(name)
-        if isinstance(headers, Mapping):
-            secret = sorted(h for h in headers if str(h).lower() in _CREDENTIAL_HEADERS)
-            if secret:
-                raise ValueError(f"{where}: {name} carries a credential ({', '.join(secret)}). {_KEY_MESSAGE}")
-
-
-class LiteLLMOptions(BaseModel):
-    """The ``backend.options`` of the litellm backend (unknown keys are errors)."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    model: str | None = Field(None, min_length=1)
-    api_base: str | None = None
-    api_key_env: str | None = None
-    temperature: float | None = Field(None, ge=0)
-    max_tokens: int | None = Field(None, gt=0)
-    timeout: float = Field(120.0, gt=0)
-    extra: dict[str, Any] = Field(default_factory=dict)
-    router: list[dict[str, Any]] | None = Field(None, min_length=1)
-    router_settings: dict[str, Any] = Field(default_factory=dict)
-
-    @field_validator("api_key_env", mode="before")
-    @classmethod
-    def _a_variable_name(cls, value: Any) -> Any:
-        return _check_key_env(value)
-
-    @field_validator("extra")
-    @classmethod
-    def _extra_has_no_key(cls, value: dict[str, Any]) -> dict[str, Any]:
-        _reject_literal_key("extra", value)
-        for name in ("num_retries", "max_retries"):
-            if name in value:
-                raise ValueError(f"extra: {name} is set by povagent (the runner or the Router retries)")
-        return value
-
-    @field_validator("router")
-    @classmethod
-    def _deployments_are_sound(cls, value: list[dict[str, Any]] | None) -> list[dict[str, Any]] | None:
-        for i, dep in enumerate(value or []):
-            params = dep.get("litellm_params") if isinstance(dep, Mapping) else None
-            if not isinstance(params, Mapping) or not params.get("model"):
-                raise ValueError(f"router[{i}]: needs litellm_params with a model (litellm Router model_list form)")
-            _reject_literal_key(f"router[{i}].litellm_params", params)
-        return value
-
-    @field_validator("router_settings")
-    @classmethod
-    def _known_router_settings(cls, value: dict[str, Any]) -> dict[str, Any]:
-        unknown = sorted(set(value) - ROUTER_SETTINGS)
-        if unknown:
-            raise ValueError(f"unknown router_settings {unknown}; known: {sorted(ROUTER_SETTINGS)}")
-        return value
-
-    @model_validator(mode="after")
-    def _router_settings_need_a_router(self) -> LiteLLMOptions:
-        if self.router_settings and self.router is None:
-            raise ValueError("router_settings apply to a router: give router (the deployments) too, or drop them")
-        return self
-
-
-def _options_error(exc: ValidationError) -> ConfigError:
-    lines = []
-    for e in exc.errors():
-        field = ".".join(str(p) for p in e["loc"]) or "options"
-        msg = e["msg"].removeprefix("Value error, ")
-        if e["type"] == "extra_forbidden":
-            msg = f"unknown option (known: {sorted(LiteLLMOptions.model_fields)})"
-            if e["loc"] and e["loc"][0] == "api_key":
-                msg = _KEY_MESSAGE
-        lines.append(f"backend 'litellm': option '{field}': {msg}")
-    return ConfigError("; ".join(lines))
-
 
 def _jsonable(value: Any) -> Any:
     """``value`` made JSON-able (non-JSON leaves become their repr) for the identity."""
@@ -192,14 +74,14 @@ class LiteLLMBackend(Backend):
 
     def __init__(self, **options: Any) -> None:
         if options.get("api_key") is not None:
-            raise ConfigError(f"backend 'litellm': option 'api_key': {_KEY_MESSAGE}")
+            raise ConfigError(f"backend 'litellm': option 'api_key': {KEY_MESSAGE}")
         profile = self._profile_for(options.get("model"))
         if profile is not None:
             options = self._with_profile_defaults(profile, options)
         try:
             opts = LiteLLMOptions.model_validate(options)
         except ValidationError as exc:
-            raise _options_error(exc) from None
+            raise options_error(exc) from None
         if opts.model is None and opts.router is None:
             raise ConfigError("backend 'litellm': option 'model': required (a litellm model string or a profile name)")
         if profile is not None and profile.needs_api_base and opts.api_base is None and opts.router is None:

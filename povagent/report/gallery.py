@@ -49,12 +49,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from PIL import Image, ImageDraw, UnidentifiedImageError
+from PIL import Image
 
 from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import Observation
+from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, render
 from povagent.report.html import script_json
 from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
@@ -64,44 +65,12 @@ ANSWERS_DIR = "answers"
 #: Entries per answers file: one file is loaded when any of its cards is opened.
 ANSWER_CHUNK = 200
 THUMB_SIZE = 256
-#: Bumped when the drawing changes, so cached images are redrawn.
-RECIPE_VERSION = 3
 #: Raw answers longer than this are cut in the answers files (the full text stays in results.jsonl).
 MAX_RAW_CHARS = 8000
 
 #: Height of one frame in a strip image (the page shows it at 18 to 64 px).
 STRIP_TILE_HEIGHT = 64
 
-GT_COLOUR = (0, 200, 83)
-PRED_COLOUR = (255, 45, 45)
-
-
-@dataclass(frozen=True)
-class Drawing:
-    """What one gallery image shows: a source frame plus markers, in pixels of that frame."""
-
-    source: Path
-    gt: tuple[float, float] | None
-    gt_state: str  # "in", "out" (in front, outside the frame), "behind"; real-world: "marked", "unmarked"
-    pred: tuple[float, float] | None
-    #: Hand-made marks (real-world sets): ``("point", (x, y), radius or None)``,
-    #: ``("box", (x0, y0, x1, y1))`` or ``("region", ((x, y), ...))``, in this frame's pixels.
-    marks: tuple[tuple[Any, ...], ...] = ()
-
-    def recipe(self) -> dict[str, Any]:
-        """The drawing's parameters (hashed with the source's bytes to name the files)."""
-        r = lambda p: None if p is None else [round(p[0], 2), round(p[1], 2)]  # noqa: E731
-        out = {"v": RECIPE_VERSION, "gt": r(self.gt), "state": self.gt_state, "pred": r(self.pred)}
-        if self.marks:  # only then: official drawings keep their names (and their cached files)
-            out["marks"] = _rounded(self.marks)
-        return out
-
-
-def _rounded(value: Any) -> Any:
-    """Nested tuples of numbers as lists rounded to 0.01 px (a stable hash input)."""
-    if isinstance(value, (tuple, list)):
-        return [_rounded(v) for v in value]
-    return round(value, 2) if isinstance(value, float) else value
 
 
 @dataclass
@@ -305,104 +274,6 @@ def _marked_drawing(observation: Observation, instance: RealWorldInstance, frame
     return Drawing(Path(frame.file), None, "marked" if shapes else "unmarked", pred, tuple(shapes))
 
 
-def _draw_marks(im: Image.Image, marks: tuple[tuple[Any, ...], ...], scale: float, lw: int) -> Image.Image:
-    """Marks as a light green fill (the hit zone) under a green outline with a white halo."""
-    fill = Image.new("RGBA", im.size, (0, 0, 0, 0))
-    f = ImageDraw.Draw(fill)
-    zone = GT_COLOUR + (70,)
-    for shape in marks:
-        if shape[0] == "point" and shape[2] is not None:
-            (x, y), r = shape[1], shape[2]
-            f.ellipse([x - r, y - r, x + r, y + r], fill=zone)
-        elif shape[0] == "box":
-            f.rectangle(list(shape[1]), fill=zone)
-        elif shape[0] == "region":
-            f.polygon(list(shape[1]), fill=zone)
-    im = Image.alpha_composite(im.convert("RGBA"), fill).convert("RGB")
-    d = ImageDraw.Draw(im)
-    for shape in marks:
-        for col, width in (((255, 255, 255), lw + 3), (GT_COLOUR, lw)):
-            if shape[0] == "point":
-                (x, y), r = shape[1], (shape[2] if shape[2] is not None else 16 * scale)
-                _ring(d, x, y, r, col, width)
-            elif shape[0] == "box":
-                d.rectangle(list(shape[1]), outline=col, width=width)
-            else:
-                d.line(list(shape[1]) + [shape[1][0]], fill=col, width=width, joint="curve")
-        if shape[0] == "point":
-            x, y = shape[1]
-            d.ellipse([x - 3 * scale, y - 3 * scale, x + 3 * scale, y + 3 * scale], fill=GT_COLOUR)
-    return im
-
-
-def _ring(d: ImageDraw.ImageDraw, x: float, y: float, r: float, col, width: int, dashed: bool = False) -> None:
-    if not dashed:
-        d.ellipse([x - r, y - r, x + r, y + r], outline=col, width=width)
-        return
-    for k in range(0, 360, 30):
-        d.arc([x - r, y - r, x + r, y + r], k, k + 18, fill=col, width=width)
-
-
-def _off_frame_arrow(d: ImageDraw.ImageDraw, gx: float, gy: float, w: int, h: int, scale: float) -> None:
-    """A thick arrow pointing from inside the frame at a GT beyond its border.
-
-    Drawn to be read on the 256 px thumbnail (half the size of a 512 px frame): a 9 px shaft
-    and a 30 px head, green on a black outline on a white halo, so it shows on light walls
-    and dark floors alike.
-    """
-    margin = 4 * scale
-    bx, by = min(w - margin, max(margin, gx)), min(h - margin, max(margin, gy))
-    vx, vy = gx - w / 2.0, gy - h / 2.0
-    n = max(1e-6, (vx * vx + vy * vy) ** 0.5)
-    ux, uy = vx / n, vy / n
-    head, half, length = 30 * scale, 16 * scale, 90 * scale
-    base = (bx - ux * head, by - uy * head)
-    tail = (bx - ux * length, by - uy * length)
-    tip = (bx, by)
-    wing_a = (base[0] - uy * half, base[1] + ux * half)
-    wing_b = (base[0] + uy * half, base[1] - ux * half)
-    shaft = max(3, int(round(9 * scale)))
-    for col, grow in (((255, 255, 255), 7), ((0, 0, 0), 4), (GT_COLOUR, 0)):
-        g = grow * scale
-        d.line([tail, base], fill=col, width=shaft + int(round(2 * g)))
-        if grow:
-            # the outline of the head: the same triangle pushed out by ``g``
-            d.polygon([(tip[0] + ux * g, tip[1] + uy * g), (wing_a[0] - ux * g / 2 - uy * g, wing_a[1] - uy * g / 2 + ux * g),
-                       (wing_b[0] - ux * g / 2 + uy * g, wing_b[1] - uy * g / 2 - ux * g)], fill=col)
-        else:
-            d.polygon([tip, wing_a, wing_b], fill=col)
-
-
-def render(drawing: Drawing) -> Image.Image:
-    """The frame with its markers drawn (full size, RGB)."""
-    with Image.open(drawing.source) as src:
-        im = src.convert("RGB")
-    w, h = im.size
-    scale = max(1.0, w / 512.0)
-    lw = max(2, int(round(3 * scale)))
-    if drawing.marks:
-        im = _draw_marks(im, drawing.marks, scale, lw)
-    d = ImageDraw.Draw(im)
-    if drawing.gt is not None:
-        gx, gy = drawing.gt
-        if drawing.gt_state == "out":
-            _off_frame_arrow(d, gx, gy, w, h, scale)
-        else:
-            r = 16 * scale
-            dashed = drawing.gt_state == "behind"
-            # a white halo under the green keeps the ring visible on green or dark frames
-            _ring(d, gx, gy, r + 1, (255, 255, 255), lw + 3, dashed)
-            _ring(d, gx, gy, r, GT_COLOUR, lw + 1, dashed)
-            d.ellipse([gx - 3 * scale, gy - 3 * scale, gx + 3 * scale, gy + 3 * scale], fill=GT_COLOUR)
-    if drawing.pred is not None:
-        px, py = min(w - 1.0, max(0.0, drawing.pred[0])), min(h - 1.0, max(0.0, drawing.pred[1]))
-        a = 11 * scale
-        for col, width in (((0, 0, 0), lw + 3), (PRED_COLOUR, lw)):
-            d.line([(px - a, py - a), (px + a, py + a)], fill=col, width=width)
-            d.line([(px - a, py + a), (px + a, py - a)], fill=col, width=width)
-    return im
-
-
 def image_key(drawing: Drawing, hashes: _SourceHashes) -> str:
     """The SHA-256 naming a drawing's files (source bytes + markers)."""
     payload = hashes.of(drawing.source) + json.dumps(drawing.recipe(), sort_keys=True)
@@ -412,28 +283,6 @@ def image_key(drawing: Drawing, hashes: _SourceHashes) -> str:
 def image_files(images_dir: Path, key: str) -> tuple[Path, Path]:
     """``(full, thumbnail)`` paths of a drawing."""
     return images_dir / f"{key}.jpg", images_dir / f"{key}.t.jpg"
-
-
-#: What reading or decoding a bad source image raises (Pillow: OSError for truncated or
-#: unidentified files, SyntaxError/ValueError/EOFError from some decoders, the bomb error).
-IMAGE_ERRORS = (OSError, SyntaxError, ValueError, EOFError, Image.DecompressionBombError)
-
-
-def image_error(source: Path, exc: BaseException, root: Path | None = None) -> str:
-    """The sentence a card shows for a source image that could not be drawn (file named)."""
-    try:
-        name = str(source.relative_to(root)) if root is not None else str(source)
-    except ValueError:
-        name = str(source)
-    if isinstance(exc, UnidentifiedImageError):
-        reason = "not an image file"  # Pillow's own text names a buffer, not the file
-    elif isinstance(exc, FileNotFoundError):
-        reason = "file not found"
-    elif "truncated" in str(exc):
-        reason = "the file is truncated"
-    else:
-        reason = f"{type(exc).__name__}: {str(exc)[:200]}"
-    return f"{name}: {reason}"
 
 
 def write_drawing(drawing: Drawing, images_dir: Path, key: str) -> bool:

@@ -7,7 +7,8 @@ import pytest
 from PIL import Image
 
 from povagent.report.collect import Observation
-from povagent.report.gallery import GT_COLOUR, PRED_COLOUR, drawing_for, render, write_answer_chunks
+from povagent.report.gallery import drawing_for, write_answer_chunks
+from povagent.report.gallery_drawing import GT_COLOUR, PRED_COLOUR, render
 from povagent.scoring.official import score_point
 
 

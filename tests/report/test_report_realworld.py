@@ -26,7 +26,8 @@ from povagent.dataset.realworld import load_realworld
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.build import write_report
 from povagent.report.collect import Observation
-from povagent.report.gallery import GT_COLOUR, PRED_COLOUR, drawing_for, render
+from povagent.report.gallery import drawing_for
+from povagent.report.gallery_drawing import GT_COLOUR, PRED_COLOUR, render
 from povagent.report.paper_tables import success_table, system_row
 from povagent.results.rows import iter_rows
 
