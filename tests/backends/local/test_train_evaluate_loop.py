@@ -94,7 +94,8 @@ def test_trl_trains_on_an_export_loaded_by_its_folder_alone(tmp_path, generated_
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)
-    dataset = load_dataset(str(export), split="train").select(range(2))
+    # a datasets cache of the test's own: the shared default one keeps rows of earlier runs
+    dataset = load_dataset(str(export), split="train", cache_dir=str(tmp_path / "hf-cache")).select(range(2))
     assert {"messages", "images"} <= set(dataset.column_names)
     config = SFTConfig(output_dir=str(tmp_path / "trainer"), max_steps=1, per_device_train_batch_size=2,
                        assistant_only_loss=True, max_length=None, report_to=[], save_strategy="no", use_cpu=True)
