@@ -75,7 +75,7 @@ def measure(path: Path, cluster: object | None) -> tuple[float, int]:
     result = run_sweep(path, cluster=cluster, quiet=True, progress=QuietProgress())
     wall = time.perf_counter() - t0
     assert not result.failed, result.failed
-    return wall, sum(r.summary["rows"]["done"] for r in result.results.values())
+    return wall, sum(r.summary.rows.done for r in result.results.values())
 
 
 def main() -> None:

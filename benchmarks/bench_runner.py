@@ -157,11 +157,11 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
     result = asyncio.run(run.run())
     run_s = time.perf_counter() - t0
     cpu_s = _cpu_s() - cpu0
-    n = result.summary["rows"]["done"]
+    n = result.summary.rows.done
     figures: dict[str, Any] = {
         "scenario": name,
         "instances": n,
-        "answered": result.summary["rows"]["answered"],
+        "answered": result.summary.rows.answered,
         "dataset_load_s": load_s,
         "run_s": run_s,
         "fsyncs": result.stats.fsyncs,

@@ -117,8 +117,8 @@ def run_povagent(data: Path, out: Path, url: str, n: int, concurrency: int, mode
     cpu0, t0 = _cpu_s(), time.perf_counter()
     result = asyncio.run(run.run())
     wall, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
-    done = result.summary["rows"]["done"]
-    assert done == n and result.summary["rows"].get("infra_error", 0) == 0, result.summary["rows"]
+    done = result.summary.rows.done
+    assert done == n and result.summary.rows.infra_error == 0, result.summary.rows
     return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": _peak_rss_mb()}
 
 

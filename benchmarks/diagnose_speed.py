@@ -110,7 +110,9 @@ def main() -> int:
     args = parser.parse_args()
     work = Path(tempfile.mkdtemp(prefix="diagnose_speed_"))
     runs = make_runs(args.dataset, args.runs_dir or work / "runs")
-    rows = sum(json.loads((r / "summary.json").read_text())["rows"]["done"] for r in runs)
+    from povagent.run.summary_model import RunSummary
+
+    rows = sum(RunSummary.model_validate_json((r / "summary.json").read_text()).rows.done for r in runs)
     old = baseline_checkout(args.baseline, work / "baseline")
     print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
     print(f"{args.dataset}: {len(runs)} systems, {rows} rows ({rows / len(runs):.0f} per system; the paper: {PAPER_INSTANCES})")

@@ -110,7 +110,8 @@ def replayed_run(out: Path, cases, houses: int, seed: int) -> list[tuple[str, di
         })
         run = run_pipeline(config)
         rescored = rescore_run(run.run_dir, "official")
-        results.append((parser, run.summary, rescored.summary))
+        # the summaries as their files hold them
+        results.append((parser, json.loads((run.run_dir / "summary.json").read_text()), json.loads((rescored.out_dir / "summary.json").read_text())))
         for w in rescored.warnings:
             print(f"  ({parser}) warning: {w[:160]}...")
     return results

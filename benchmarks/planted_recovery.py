@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import json
 import sys
 import tempfile
 from pathlib import Path
@@ -54,7 +55,8 @@ def run(dataset: Path, backend: dict[str, Any], out: Path, runs: int) -> dict[st
         "dataset": {"path": str(dataset)}, "backend": backend, "strategy": "basic", "parser": "official",
         "scorers": ["official", "diagnose", "relation"], "runs": runs, "cache": False, "output": str(out),
     }, {}))  # fmt: skip
-    return asyncio.run(PipelineRun(config).run()).summary
+    asyncio.run(PipelineRun(config).run())
+    return json.loads((out / "summary.json").read_text())  # the summary as its file holds it
 
 
 def drawn(out: Path, backend: dict[str, Any], dataset) -> dict[str, tuple[float | None, float]]:

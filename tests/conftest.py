@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
 import pytest
+
+# Every summary.json, results row, sweep.json and export.json that povagent writes while the tests
+# run (in this process and in every process they start) is checked against its shipped schema as
+# it is written (povagent.results.output_check).
+os.environ["POVAGENT_CHECK_OUTPUTS"] = "1"
 
 # Our own fixtures for plugin authors are opt-in (no pytest11 entry point): we opt in here.
 pytest_plugins = ["povagent.testing.pytest_plugin"]

@@ -3,14 +3,34 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Any, Iterator
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
 from povagent.cli.options import strict_option
+
+if TYPE_CHECKING:
+    from povagent.run.summary_model import Breakdown, Cell
+
+C = TypeVar("C", covariant=True)
+
+
+class Slices(Protocol[C]):
+    """A breakdown of any cell type: official means (:class:`~povagent.run.summary_model.Cell`)
+    or success rates (:class:`~povagent.run.summary_model.SuccessCell`)."""
+
+    @property
+    def overall(self) -> C: ...
+
+    @property
+    def per_condition(self) -> Mapping[str, C]: ...
+
+    @property
+    def per_direction(self) -> Mapping[str, C]: ...
 
 
 @app.command("validate")
@@ -50,19 +70,19 @@ def _fit_to_terminal(line: str) -> str:
     return textwrap.fill(line, width, subsequent_indent="    ", break_long_words=False, break_on_hyphens=False)
 
 
-def breakdown_slices(breakdown: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
+def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
     """The rows of a breakdown table, labelled: overall, each condition, each direction."""
     from povagent.dataset.models import Condition
 
-    yield "overall", breakdown["overall"]
+    yield "overall", breakdown.overall
     known = {str(c) for c in Condition}
-    for c, cell in breakdown["per_condition"].items():
+    for c, cell in breakdown.per_condition.items():
         # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
         yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
-    yield from breakdown["per_direction"].items()
+    yield from breakdown.per_direction.items()
 
 
-def render_summary(summary: dict[str, Any], title: str | PathTitle = "POVBench scores") -> None:
+def render_summary(summary: Breakdown, title: str | PathTitle = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table.
 
     A :class:`~povagent.cli.console_width.PathTitle` has its path shortened to fit.
@@ -75,27 +95,27 @@ def render_summary(summary: dict[str, Any], title: str | PathTitle = "POVBench s
     from povagent.cli.console_width import fitted_table
     from povagent.cli.numbers import format_number
 
-    runs = summary.get("runs") or []
+    runs = summary.runs
     caption = f"mean of per-run means over {len(runs)} runs (the paper's aggregation); n / total summed over runs" if len(runs) > 1 else None
     rows: list[list[str]] = []
 
-    def add(name: str, cell: dict[str, Any]) -> None:
-        rr = cell["response_rate"]
-        pif = cell["pct_in_frame"]
+    def add(name: str, cell: Cell) -> None:
+        rr = cell.response_rate
+        pif = cell.pct_in_frame
         rows.append([
             name,
-            format_number(cell["mean_l2"]),
-            format_number(cell["std_l2"]),
+            format_number(cell.mean_l2),
+            format_number(cell.std_l2),
             "-" if rr is None else f"{100 * rr:.1f}%",
             "-" if pif is None else f"{pif:.1f}%",
-            format_number(cell.get("mean_l2_strict")),
-            f"{cell['n']} / {cell['n_total']}",
+            format_number(cell.mean_l2_strict),
+            f"{cell.n} / {cell.n_total}",
         ])  # fmt: skip
 
     for name, cell in breakdown_slices(summary):
         add(name, cell)
-    if "pooled" in summary:
-        add(f"overall, pooled ({len(runs)} runs in one mean)", summary["pooled"]["overall"])
+    if summary.pooled is not None:
+        add(f"overall, pooled ({len(runs)} runs in one mean)", summary.pooled.overall)
     columns = [("slice", "label")] + [(h, "number") for h in ("mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total")]
     Console().print(fitted_table(columns, rows, title=title, caption=caption))
 
@@ -152,6 +172,7 @@ def score_command(
     """
     from povagent.dataset.loader import load_dataset
     from povagent.results.prediction_files import score_predictions
+    from povagent.run.summary_model import ScoreSummary
     from povagent.scoring.official_release import read_release
 
     if counting not in ("official", "povagent"):
@@ -176,6 +197,6 @@ def score_command(
         typer.echo(json.dumps(_score_json(summary), indent=2))
     elif "models" in summary:
         for model, model_summary in summary["models"].items():
-            render_summary(model_summary, title=f"POVBench scores: {model}")
+            render_summary(ScoreSummary.model_validate(model_summary), title=f"POVBench scores: {model}")
     else:
-        render_summary(summary)
+        render_summary(ScoreSummary.model_validate(summary))

@@ -8,9 +8,12 @@ for a run scored without ``diagnose`` or ``relation``.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from povagent.scoring.diagnosis import STEPS
+
+if TYPE_CHECKING:
+    from povagent.run.summary_model import DiagnosedCondition, Diagnostics, RunSummary
 
 
 def _pct(value: Any) -> str:
@@ -20,31 +23,31 @@ def _pct(value: Any) -> str:
 CONDITION_NAMES = {"a": "Inferred (A)", "b": "Stated (B)", "c": "Given (C)"}
 
 
-def diagnostics_rows(diagnostics: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+def diagnostics_rows(diagnostics: Diagnostics) -> tuple[list[str], list[list[str]]]:
     """``(conditions, rows)``: a row per failure step (share of answered rows), then the
     egocentric bias, its 95% CI, the answers it counts, and the relation success; a column per
     condition (a terminal has room for three columns, not for ten)."""
-    cells = sorted((diagnostics.get("per_condition") or {}).items())
-    rows = [[f"step: {s}", *(_pct((c.get("failure_steps") or {}).get(s)) for _, c in cells)] for s in STEPS]
+    cells = sorted(diagnostics.per_condition.items())
+    rows = [[f"step: {s}", *(_pct(c.failure_steps.get(s)) for _, c in cells)] for s in STEPS]
 
-    def bias(c: dict[str, Any]) -> tuple[str, str, str]:
-        value, ci = c.get("egocentric_bias"), c.get("egocentric_bias_ci")
-        if not isinstance(value, (int, float)):
+    def bias(c: DiagnosedCondition) -> tuple[str, str, str]:
+        value, ci = c.egocentric_bias, c.egocentric_bias_ci
+        if value is None:
             return ("-", "-", "-")
-        return (f"{value:.2f}", f"{ci[0]:.2f}-{ci[1]:.2f}" if ci else "-", str(c.get("bias_n", 0)))
+        return (f"{value:.2f}", f"{ci[0]:.2f}-{ci[1]:.2f}" if ci else "-", str(c.bias_n))
 
     biases = [bias(c) for _, c in cells]
     rows.append(["egocentric bias", *(b[0] for b in biases)])
     rows.append(["  95% CI", *(b[1] for b in biases)])
     rows.append(["  answers counted", *(b[2] for b in biases)])
-    rows.append(["relation success", *(_pct(c.get("relation_success")) for _, c in cells)])
+    rows.append(["relation success", *(_pct(c.relation_success) for _, c in cells)])
     return [CONDITION_NAMES.get(k, k) for k, _ in cells], rows
 
 
-def render_diagnostics(summary: dict[str, Any]) -> None:
+def render_diagnostics(summary: RunSummary) -> None:
     """Print the ``diagnostics`` section of ``summary`` (nothing when it has none)."""
-    diagnostics = summary.get("diagnostics")
-    if not isinstance(diagnostics, dict):
+    diagnostics = summary.diagnostics
+    if diagnostics is None:
         return
     from rich.console import Console
 

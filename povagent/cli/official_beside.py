@@ -13,7 +13,10 @@ answers, a model that wrote clean JSON) there is nothing to set beside and nothi
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from povagent.run.summary_model import Breakdown, Cell, OfficialParseBreakdown, RunSummary
 
 
 def parser_reads_officially(name: str, options: dict[str, Any] | None = None, plugins: tuple[str, ...] = ()) -> bool:
@@ -24,22 +27,26 @@ def parser_reads_officially(name: str, options: dict[str, Any] | None = None, pl
     return official_counterpart(get_plugin_host(plugins).parser(name, options or {})) is None
 
 
-def repair_changed_numbers(summary: dict[str, Any], official: dict[str, Any]) -> bool:
+def repair_changed_numbers(summary: Breakdown, official: OfficialParseBreakdown) -> bool:
     """Whether any slice's mean L2 or response rate differs between the repaired ``summary``
     and its ``official`` reading (an incomplete reading counts as a difference)."""
     from povagent.cli.dataset import breakdown_slices
 
-    if official.get("rows_without_reading"):
+    if official.rows_without_reading:
         return True
     mine = dict(breakdown_slices(summary))
     theirs = dict(breakdown_slices(official))
-    keys = ("mean_l2", "response_rate")
     return mine.keys() != theirs.keys() or any(
-        [mine[name].get(k) for k in keys] != [theirs[name].get(k) for k in keys] for name in mine
+        (mine[name].mean_l2, mine[name].response_rate) != (theirs[name].mean_l2, theirs[name].response_rate) for name in mine
     )
 
 
-def render_official_beside(summary: dict[str, Any], parser: str, *, reads_officially: bool, run_dir: Any = None) -> None:
+def repair_changed(summary: RunSummary) -> bool:
+    """Whether ``summary`` holds an official reading whose numbers differ from its own."""
+    return summary.official_parse is not None and repair_changed_numbers(summary, summary.official_parse)
+
+
+def render_official_beside(summary: RunSummary, parser: str, *, reads_officially: bool, run_dir: Any = None) -> None:
     """Print the official parse's response rate and mean beside the repaired ones (per slice), or
     the note saying how to get them; nothing when ``parser`` reads officially or its repairs
     changed no number."""
@@ -52,7 +59,7 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
     console = Console()
     if reads_officially:
         return
-    official = summary.get("official_parse")
+    official = summary.official_parse
     if official is None:
         where = run_dir if run_dir is not None else "RUN"
         console.print(
@@ -63,24 +70,24 @@ def render_official_beside(summary: dict[str, Any], parser: str, *, reads_offici
     if not repair_changed_numbers(summary, official):
         return
 
-    def rate(cell: dict[str, Any]) -> str:
-        rr = cell.get("response_rate")
+    def rate(cell: Cell | None) -> str:
+        rr = cell.response_rate if cell is not None else None
         return "-" if rr is None else f"{100 * rr:.1f}%"
 
     lenient_cells = dict(breakdown_slices(summary))
     rows = []
     for name, cell in breakdown_slices(official):
-        mine = lenient_cells.get(name, {})
-        rows.append([name, format_number(mine.get("mean_l2")), rate(mine), format_number(cell.get("mean_l2")), rate(cell)])
-    headers = (f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official['parser']} (official)", f"resp. {official['parser']}")
+        mine = lenient_cells.get(name)
+        rows.append([name, format_number(mine.mean_l2 if mine is not None else None), rate(mine), format_number(cell.mean_l2), rate(cell)])
+    headers = (f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official.parser} (official)", f"resp. {official.parser}")
     console.print(fitted_table(
         [("slice", "label")] + [(h, "number") for h in headers],
         rows,
         title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
         caption=(
-            f"{official['rows_without_reading']} row(s) with an answer carry no official reading and are left out: incomplete; "
+            f"{official.rows_without_reading} row(s) with an answer carry no official reading and are left out: incomplete; "
             "run povagent rescore RUN --parser official"
-            if official.get("rows_without_reading")
+            if official.rows_without_reading
             else None
         ),
     ))  # fmt: skip

@@ -9,16 +9,20 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
 from povagent.cli.options import keep_errors_option, strict_option
+from povagent.results.summary_json import finite_json
+
+if TYPE_CHECKING:
+    from povagent.run.summary_model import RunSummary, SuccessBreakdown
 
 
-def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> None:
+def _summary_table(summary: RunSummary, title: PathTitle, run_dir: Path) -> None:
     """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
@@ -31,59 +35,57 @@ def _summary_table(summary: dict[str, Any], title: PathTitle, run_dir: Path) -> 
     render_diagnostics(summary)  # additions, under the official table
 
 
-def _success_summary(summary: dict[str, Any], run_dir: Path) -> dict[str, Any] | None:
+def _success_summary(summary: RunSummary, run_dir: Path) -> SuccessBreakdown | None:
     """A real-world run's success breakdown with response rates (``None`` for other runs).
 
     Read from the run's rows as ``povagent report`` reads them, because the official columns
     of ``summary.json`` say nothing about a set without official ground truth; the runner's
     own breakdown is kept when the folder holds rows of keys outside this run's selection.
     """
-    if "success" not in summary:
+    if summary.success is None:
         return None
     from povagent.report.collect import run_success_breakdown
+    from povagent.run.summary_model import SuccessBreakdown
 
     full = run_success_breakdown(run_dir)
-    if full is None or full["overall"]["n_total"] != summary["success"]["overall"]["n_total"]:
-        return summary["success"]
-    return full
+    if full is None:
+        return summary.success
+    read = SuccessBreakdown.model_validate(full)
+    return read if read.overall.n_total == summary.success.overall.n_total else summary.success
 
 
-def _scored_officially(summary: dict[str, Any]) -> bool:
+def _scored_officially(summary: RunSummary) -> bool:
     """Did the run's scorers include ``official`` (a summary without the pipeline: yes)?"""
-    from povagent.run.summary_model import RunSummary
-
-    pipeline = RunSummary.model_validate(summary).pipeline
-    return pipeline is None or "official" in pipeline.scorers
+    return summary.pipeline is None or "official" in summary.pipeline.scorers
 
 
-def _what_ran(summary: dict[str, Any], backend: str) -> str:
+def _what_ran(summary: RunSummary, backend: str) -> str:
     """The backend and the model that answered, from ``summary.json``: ``litellm gpt-5.4 =
     openai/gpt-5.4``; a baseline is its own model (``center``)."""
     from povagent.results.rows import model_label
-    from povagent.run.summary_model import RunSummary
 
-    pipeline = RunSummary.model_validate(summary).pipeline
+    pipeline = summary.pipeline
     model = model_label(pipeline.model, pipeline.profile) if pipeline is not None else ""
     return backend if model in ("", backend) else f"{backend} {model}"
 
 
-def _cell_title(name: str, summary: dict[str, Any], backend: str) -> str:
+def _cell_title(name: str, summary: RunSummary, backend: str) -> str:
     """A sweep cell's name with the model that answered (left out when the name is it)."""
     what = _what_ran(summary, backend)
     return f"[bold]{name}[/]" if what == name else f"[bold]{name}[/] ({what})"
 
 
-def _success_table(success: dict[str, Any], title: PathTitle) -> None:
+def _success_table(success: SuccessBreakdown, title: PathTitle) -> None:
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
     from povagent.cli.dataset import breakdown_slices
-    from povagent.report.sweep_table import rate
+    from povagent.report.sweep_table import percent, rate
 
     rows = []
     for name, cell in breakdown_slices(success):
-        answered = "-" if cell.get("n_answered") is None else f"{cell['n_answered']} / {cell['n_total']}"
-        rows.append([name, rate(cell), f"{cell['n_success']} / {cell['n_total']}", rate(cell, "response_rate"), answered])
+        answered = "-" if cell.n_answered is None else f"{cell.n_answered} / {cell.n_total}"
+        rows.append([name, rate(cell), f"{cell.n_success} / {cell.n_total}", percent(cell.response_rate), answered])
     columns = [("slice", "label")] + [(h, "number") for h in ("success rate", "hits / total", "resp. rate", "answered / total")]
     Console().print(fitted_table(columns, rows, title=title._replace(after=f"{title.after}\nsuccess rate (unanswered = failure)")))
 
@@ -140,34 +142,36 @@ def run_command(
 
     allow_fast_exit()  # the run folder is complete and closed (see povagent.cli.process_exit)
     if as_json:
-        typer.echo(json.dumps(result.summary, indent=2, default=str))
+        typer.echo(json.dumps(finite_json(result.summary.model_dump(mode="json", exclude_unset=True)), indent=2))
         raise typer.Exit(result.exit_code)
     from povagent.run.runner import SET_UP_KINDS
 
     if result.stop_kind in SET_UP_KINDS:  # nothing was sent: no table to show, the one line says it all
         typer.echo(f"stopped early: {result.stopped}", err=True)
         raise typer.Exit(result.exit_code)
-    rows = result.summary["rows"]
+    summary = result.summary
     title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
-    _summary_table(result.summary, title, result.run_dir)
-    if result.summary.get("nan_coordinate_rows"):
+    _summary_table(summary, title, result.run_dir)
+    if summary.nan_coordinate_rows:
         from povagent.results.official_reading import nan_warning
 
-        typer.echo(f"warning: {nan_warning(result.summary['nan_coordinate_rows'])}", err=True)
-    if _scored_officially(result.summary):
+        typer.echo(f"warning: {nan_warning(summary.nan_coordinate_rows)}", err=True)
+    if _scored_officially(summary):
         from povagent.cli.official_beside import parser_reads_officially, render_official_beside
 
         render_official_beside(
-            result.summary,
+            summary,
             config.parser.name,  # type: ignore[union-attr]  # load_pipeline resolved it
             reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]  # load_pipeline resolved it
             run_dir=result.run_dir,
         )
     # two short lines rather than one that an 80-column terminal breaks mid-phrase
-    typer.echo(
-        f"{rows['done']}/{rows['total']} keys: {rows['answered']} answered, {rows['parse_error']} parse errors, "
-        f"{rows['infra_error']} infra errors"
-    )
+    rows = summary.rows
+    if rows is not None:
+        typer.echo(
+            f"{rows.done}/{rows.total} keys: {rows.answered} answered, {rows.parse_error} parse errors, "
+            f"{rows.infra_error} infra errors"
+        )
     typer.echo(
         f"this session: {result.stats.requests} requests, {result.stats.cache_hits} cache hits, "
         f"{result.stats.retries} retries, {result.stats.wall_s:.1f} s"
@@ -220,7 +224,8 @@ def sweep_command(
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
-    from povagent.report.sweep_table import dry_run_table, mean_l2, rate, sweep_table
+    from povagent.cli.official_beside import repair_changed
+    from povagent.report.sweep_table import dry_run_table, mean_l2, percent, rate, sweep_table
     from povagent.run.stop_signals import sigterm_as_interrupt
     from povagent.run.sweep import expand_sweep, run_sweep
     from povagent.run.sweep_estimate import dry_run as plan
@@ -235,25 +240,24 @@ def sweep_command(
         return
 
     def done(cell: Any, res: Any) -> None:
-        success = _success_summary(res.summary, res.run_dir)
+        summary: RunSummary = res.summary
+        success = _success_summary(summary, res.run_dir)
         if success is not None:  # a real-world set: no official error to show
-            o = success["overall"]
+            o = success.overall
             console.print(
-                f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: success rate {rate(o)}, "
-                f"response rate {rate(o, 'response_rate')}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
+                f"{_cell_title(cell.name, summary, cell.config.backend.name)}: success rate {rate(o)}, "
+                f"response rate {percent(o.response_rate)}, {res.stats.requests} requests, {res.stats.cache_hits} cache hits",
                 highlight=False,
             )
             return
-        o = res.summary["overall"]
-        l2 = "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}"
-        rr = "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%"
-        official = res.summary.get("official_parse")
-        beside = "" if official is None or not _repair_changed(res.summary) else (
-            f" (repaired by {res.summary.get('pipeline', {}).get('parser', 'a lenient parser')}; official parse: "
-            f"mean L2 {mean_l2(official['overall'])}, response rate {rate(official['overall'], 'response_rate')})"
+        official = summary.official_parse
+        beside = "" if official is None or not repair_changed(summary) else (
+            f" (repaired by {summary.pipeline.parser if summary.pipeline is not None else 'a lenient parser'}; official parse: "
+            f"mean L2 {mean_l2(official.overall)}, response rate {percent(official.overall.response_rate)})"
         )
         console.print(
-            f"{_cell_title(cell.name, res.summary, cell.config.backend.name)}: mean L2 {l2}, response rate {rr}{beside}, {res.stats.requests} requests, "
+            f"{_cell_title(cell.name, summary, cell.config.backend.name)}: mean L2 {mean_l2(summary.overall)}, "
+            f"response rate {percent(summary.overall.response_rate)}{beside}, {res.stats.requests} requests, "
             f"{res.stats.cache_hits} cache hits",
             highlight=False,
         )
@@ -282,7 +286,7 @@ def sweep_command(
     finished = [c for c in result.cells if c.name in result.results]
     summaries = {c.name: result.results[c.name].summary for c in finished}
     successes = {c.name: _success_summary(result.results[c.name].summary, result.results[c.name].run_dir) for c in finished}
-    columns, rows = sweep_table(summaries, successes, _repair_changed)
+    columns, rows = sweep_table(summaries, successes, repair_changed)
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table(columns, rows, title=title))
     from povagent.cli.process_exit import allow_fast_exit
@@ -296,14 +300,6 @@ def sweep_command(
             typer.echo(f"cell {cell.name}:", err=True)
             _say_what_next(res, command)
     raise typer.Exit(max(codes, default=0))
-
-
-def _repair_changed(summary: Mapping[str, Any]) -> bool:
-    """Whether a cell's summary holds an official reading that differs from its own numbers."""
-    from povagent.cli.official_beside import repair_changed_numbers
-
-    official = summary.get("official_parse")
-    return official is not None and repair_changed_numbers(dict(summary), official)
 
 
 #: The heading of each kind in ``povagent plugins``.

@@ -217,14 +217,17 @@ def rescore_command(
     from povagent.run.rescore import rescore_run
 
     result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin, extra_scorers=tuple(scorer))
-    parser = str(result.summary["parser"])
+    summary = result.summary
+    parser = str(summary.parser)
     for w in result.warnings[:20]:
         typer.echo(f"warning: {w}", err=True)
     if as_json:
-        typer.echo(json.dumps(result.summary, indent=2))
+        from povagent.results.summary_json import finite_json
+
+        typer.echo(json.dumps(finite_json(summary.model_dump(mode="json", exclude_unset=True)), indent=2))
     else:
-        render_summary(result.summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
-        render_official_beside(result.summary, parser, reads_officially="official_parse" not in result.summary, run_dir=run_dir)
-        render_diagnostics(result.summary)
-        typer.echo(f"parse status: {json.dumps(result.summary['parse_status'])}; repaired: {result.summary['repaired']}")
+        render_summary(summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
+        render_official_beside(summary, parser, reads_officially=summary.official_parse is None, run_dir=run_dir)
+        render_diagnostics(summary)
+        typer.echo(f"parse status: {json.dumps(summary.parse_status)}; repaired: {summary.repaired}")
     typer.echo(f"written to {result.out_dir}", err=True)

@@ -9,38 +9,46 @@ Only table contents: ``povagent sweep`` lays them out on the console
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING
 
 from povagent.results.official_reading import OFFICIAL_PARSERS
 from povagent.run.sweep_estimate import DryRunCell
 
+if TYPE_CHECKING:
+    from povagent.run.summary_model import Cell, RunSummary, SuccessBreakdown, SuccessCell
+
 #: A table's columns: (heading, ``label`` or ``number``).
 Columns = list[tuple[str, str]]
 #: Whether a cell's summary holds an official reading whose numbers differ from the cell's own.
-RepairChanged = Callable[[Mapping[str, Any]], bool]
+RepairChanged = Callable[["RunSummary"], bool]
 
 
-def rate(cell: Mapping[str, Any], key: str = "success_rate") -> str:
+def percent(value: float | None) -> str:
     """A rate as a percentage with one decimal, ``-`` when there is none."""
-    value = cell.get(key)
     return "-" if value is None else f"{100 * value:.1f}%"
 
 
-def mean_l2(cell: Mapping[str, Any]) -> str:
+def rate(cell: SuccessCell) -> str:
+    """A success cell's success rate as :func:`percent`."""
+    return percent(cell.success_rate)
+
+
+def mean_l2(cell: Cell) -> str:
     """A cell's mean L2 with three decimals, ``-`` when there is none."""
-    return "-" if cell.get("mean_l2") is None else f"{cell['mean_l2']:.3f}"
+    return "-" if cell.mean_l2 is None else f"{cell.mean_l2:.3f}"
 
 
-def official_cells(summary: Mapping[str, Any], repair_changed: RepairChanged) -> tuple[str, str]:
+def official_cells(summary: RunSummary, repair_changed: RepairChanged) -> tuple[str, str]:
     """A sweep cell's official-parse columns: its numbers when its repair changed one, ``=`` when
     the cell reads officially itself or its repair changed no number, ``?`` when a lenient cell
     recorded no official reading."""
-    official = summary.get("official_parse")
+    official = summary.official_parse
     if official is not None and repair_changed(summary):
-        return mean_l2(official["overall"]), rate(official["overall"], "response_rate")
+        return mean_l2(official.overall), percent(official.overall.response_rate)
     if official is not None:
         return "=", "="
-    mark = "=" if summary.get("pipeline", {}).get("parser") in OFFICIAL_PARSERS else "?"
+    parser = summary.pipeline.parser if summary.pipeline is not None else None
+    mark = "=" if parser in OFFICIAL_PARSERS else "?"
     return mark, mark
 
 
@@ -68,7 +76,7 @@ def dry_run_table(plans: Iterable[DryRunCell]) -> tuple[Columns, list[list[str]]
 
 
 def sweep_table(
-    summaries: Mapping[str, Mapping[str, Any]], successes: Mapping[str, Mapping[str, Any] | None], repair_changed: RepairChanged
+    summaries: Mapping[str, RunSummary], successes: Mapping[str, SuccessBreakdown | None], repair_changed: RepairChanged
 ) -> tuple[Columns, list[list[str]]]:
     """The finished cells' columns and rows, in ``summaries``' order: mean L2, response rate,
     answered of total; the official parse's numbers when any cell's named repair changed an
@@ -86,16 +94,17 @@ def sweep_table(
         if success is not None:
             # response and answered as the success scorer judged them: the official columns
             # of the summary count every row of a set without official GT as unanswered
-            o = success["overall"]
-            answered = "-" if o.get("n_answered") is None else f"{o['n_answered']} / {o['n_total']}"
-            rows.append([name, "-", rate(o, "response_rate"), answered, *(("-", "-") if with_official else ()), rate(o)])
+            o = success.overall
+            answered = "-" if o.n_answered is None else f"{o.n_answered} / {o.n_total}"
+            rows.append([name, "-", percent(o.response_rate), answered, *(("-", "-") if with_official else ()), rate(o)])
             continue
-        o = s["overall"]
+        cell = s.overall
+        total = s.rows.total if s.rows is not None else cell.n_total
         rows.append([
             name,
-            "-" if o["mean_l2"] is None else f"{o['mean_l2']:.3f}",
-            "-" if o["response_rate"] is None else f"{100 * o['response_rate']:.1f}%",
-            f"{o['n']} / {s['rows']['total']}",
+            mean_l2(cell),
+            percent(cell.response_rate),
+            f"{cell.n} / {total}",
             *(official_cells(s, repair_changed) if with_official else ()),
             *(("-",) if with_success else ()),
         ])  # fmt: skip

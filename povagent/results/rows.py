@@ -19,6 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
+from povagent.results.output_check import check_output_line
 
 
 class RowStatus(StrEnum):
@@ -130,6 +131,14 @@ def utc_now() -> str:
     return datetime.now(UTC).isoformat(timespec="milliseconds")
 
 
+def row_line(row: ResultRow, where: object) -> str:
+    """``row`` as its ``results.jsonl`` line (newline included), checked against the shipped row
+    schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file)."""
+    line = row.model_dump_json(exclude_none=False) + "\n"
+    check_output_line("row", line, where)
+    return line
+
+
 class ResultsWriter:
     """Appends rows to a JSONL file, flushing and fsyncing each, so a crash loses nothing written.
 
@@ -164,7 +173,7 @@ class ResultsWriter:
 
     def write(self, row: ResultRow) -> None:
         """Append one row durably."""
-        self.write_lines(row.model_dump_json(exclude_none=False) + "\n")
+        self.write_lines(row_line(row, self.path))
 
     def write_lines(self, text: str) -> None:
         """Append already-serialized rows (each ending in a newline), then fsync once.
@@ -215,16 +224,14 @@ class StagedResults:
             self._folder.close()
             raise
         self._fh = self._staged.file
-        self.committed = False
 
     def write(self, row: ResultRow) -> None:
         """Append one row to the staged file (durable only at :meth:`commit`)."""
-        self._fh.write(row.model_dump_json(exclude_none=False) + "\n")
+        self._fh.write(row_line(row, self.path))
 
     def commit(self) -> None:
         """Make the staged rows durable and put them in place of ``path`` (atomically)."""
         self._staged.commit(fsync=True)  # the rename itself is fsynced too: it survives a power cut
-        self.committed = True
 
     def __enter__(self) -> StagedResults:
         return self

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from povagent.results.rows import ResultRow, ResultsWriter
+from povagent.results.rows import ResultRow, ResultsWriter, row_line
 from povagent.run.confined_write import ConfinedFolder
 
 
@@ -46,7 +46,7 @@ class RowJournal(ResultsWriter):
         """Queue a finished row for the next batch (raises if an earlier batch failed)."""
         if self.error is not None:
             raise self.error
-        self._queue.append((row.model_dump_json() + "\n", row))
+        self._queue.append((row_line(row, self.path), row))
         if self._committer is None or self._committer.done():
             self._committer = asyncio.get_running_loop().create_task(self._commit_loop())
 

@@ -46,7 +46,8 @@ from povagent.results.official_reading import (
 from povagent.results.rows import Prediction, ResultRow, RowStatus, StagedResults, read_rows
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.run_folder import read_run_config
-from povagent.run.summary import diagnosed_row, write_json
+from povagent.run.summary import diagnosed_row, write_summary
+from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.diagnostics_breakdown import diagnostics_breakdown
 from povagent.scoring.official import scoring_frame
@@ -57,7 +58,8 @@ class RescoreResult:
     """Where the rescored run went, its summary, and rows that could not be rescored."""
 
     out_dir: Path
-    summary: dict[str, Any]
+    #: The rescored folder's ``summary.json``, as the type it is.
+    summary: RunSummary
     warnings: list[str] = field(default_factory=list)
 
 
@@ -242,5 +244,4 @@ def rescore_run(
                 folder.unlink(name)
         staged.commit()
     write_inside(run, f"{out_dir.name}/config.yaml", yaml.safe_dump(rescored_config, sort_keys=False))
-    write_json(out_dir / "summary.json", summary, root=run)
-    return RescoreResult(out_dir, summary, warnings)
+    return RescoreResult(out_dir, write_summary(out_dir / "summary.json", summary, root=run), warnings)

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
-import functools
 import time
 from collections import Counter
 from dataclasses import dataclass, field
@@ -59,7 +58,7 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import summarize_rows, summary_row, write_json
+from povagent.run.summary import summarize_rows, summary_row, write_summary
 from povagent.run.summary_model import RunSummary
 
 LOG = "log.jsonl"
@@ -108,7 +107,8 @@ class RunResult:
     """What :func:`run_pipeline` returns."""
 
     run_dir: Path
-    summary: dict[str, Any]
+    #: What ``summary.json`` holds, as the type it is.
+    summary: RunSummary
     stats: RunStats
     n_total: int
     n_pending: int
@@ -118,21 +118,16 @@ class RunResult:
     #: the first row's error type when it stopped the run at once (fail fast), else ``None``
     stop_kind: str | None = None
 
-    @functools.cached_property
-    def typed_summary(self) -> RunSummary:
-        """:attr:`summary` read as the :class:`RunSummary` it is (``summary.json``'s type)."""
-        return RunSummary.model_validate(self.summary)
-
     @property
     def n_failed(self) -> int:
         """Keys whose row is ``infra_error``."""
-        rows = self.typed_summary.rows
+        rows = self.summary.rows
         return rows.infra_error if rows is not None else 0
 
     @property
     def n_missing(self) -> int:
         """Keys with no row at all (a stopped or interrupted run)."""
-        rows = self.typed_summary.rows
+        rows = self.summary.rows
         return rows.missing if rows is not None else 0
 
     @property
@@ -387,18 +382,19 @@ class PipelineRun:
             if self._stopped:
                 stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
                 stop_log("run_stopped", reason=self._stopped)
-            summary = self.summarize(instances, runs, interrupted or stop_came)
+            written = self.summarize(instances, runs, interrupted or stop_came)
             # a stop requested while the summary was computed (plain code: not yet delivered) too
-            summary["interrupted"] = summary["interrupted"] or stop_requested()
+            written["interrupted"] = written["interrupted"] or stop_requested()
             try:
-                write_json(self.run_dir / SUMMARY, summary)
+                summary = write_summary(self.run_dir / SUMMARY, written)
             except OSError as exc:  # a full disk: reported below, once the run is closed
                 unwritten: OSError | None = exc
+                summary = RunSummary.model_validate(written)
             else:
                 unwritten = None
-            self._log.info("run_end", interrupted=summary["interrupted"], stopped=self._stopped,
+            self._log.info("run_end", interrupted=summary.interrupted, stopped=self._stopped,
                            **{k: v for k, v in self.stats.as_dict().items() if k != "statuses"})
-            self.host.hooks.run_end(str(self.run_dir), summary)
+            self.host.hooks.run_end(str(self.run_dir), written)
             self._log.close()
             try:
                 stop_came = await finish_through_stop(backend.aclose()) or stop_came
@@ -461,7 +457,8 @@ class PipelineRun:
                 raise
 
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
-        """What ``summary.json`` holds: official breakdown over the selected keys, plus run stats."""
+        """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
+        over the selected keys, plus the run's counters."""
         summary = summarize_rows(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0

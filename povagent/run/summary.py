@@ -14,8 +14,10 @@ from typing import Any, Iterable, Mapping
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
+from povagent.results.output_check import check_output_line, checking
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.results.summary_json import summary_json_text
+from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 
@@ -180,6 +182,18 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
         if keys is None or row.key in keys:
             by_key[row.key] = summary_row(row)
     return summarize_rows(by_key.values(), keys)
+
+
+def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:
+    """Write a run's (or a rescore's) ``summary.json`` as :func:`write_json` does, and return it
+    read as the :class:`RunSummary` it is. It is read before it is written: a summary that is
+    not a :class:`RunSummary` (a povagent bug) raises, and nothing is written; while tests run it
+    is also checked against the shipped schema (:mod:`povagent.results.output_check`)."""
+    summary = RunSummary.model_validate(data)
+    if checking():
+        check_output_line("summary", summary_json_text(data, indent=None, default=str), path)
+    write_json(path, data, root)
+    return summary
 
 
 def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) -> None:

@@ -12,8 +12,6 @@ Only types: nothing here reads or writes a file.
 
 from __future__ import annotations
 
-from typing import Any
-
 from pydantic import BaseModel, ConfigDict
 
 
@@ -63,6 +61,15 @@ class Breakdown(PooledBreakdown):
     per_run: dict[str, Cell] | None = None
 
 
+class ScoreSummary(Breakdown):
+    """What ``povagent score`` computes for one model's predictions: the breakdown, the run
+    folders it averaged (a root of ``<model>_<run>`` folders) and how rows were counted."""
+
+    run_folders: list[str] | None = None
+    #: ``official`` or ``povagent`` (``score --counting``).
+    counting: str | None = None
+
+
 class OfficialParseBreakdown(Breakdown):
     """The paper-comparable reading beside a lenient parser's (``official_parse``)."""
 
@@ -108,6 +115,100 @@ class PipelineNames(BaseModel):
     config_hash: str
 
 
+class SuccessCell(BaseModel):
+    """A real-world set's success rate in one slice (unanswered = failure): see
+    :func:`povagent.dataset.realworld.success_breakdown`; the answered counts when the rows say
+    whether they were answered."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    n_total: int
+    n_success: int
+    success_rate: float | None
+    n_answered: int | None = None
+    response_rate: float | None = None
+
+
+class SuccessBreakdown(BaseModel):
+    """A real-world set's success rates, overall and per slice."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    overall: SuccessCell
+    per_condition: dict[str, SuccessCell]
+    per_direction: dict[str, SuccessCell]
+    per_condition_direction: dict[str, SuccessCell]
+
+
+class DiagnosedDirection(BaseModel):
+    """Relation-consistent success of one direction's answered rows, beside their official mean."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    n: int
+    relation_success: float | None
+    official_mean_l2: float | None
+
+
+class DiagnosedCondition(BaseModel):
+    """Why one condition's answers failed: see :mod:`povagent.scoring.diagnostics_breakdown`."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    n_diagnosed: int
+    #: The share of diagnosed rows per first failing step (``None``: no row diagnosed).
+    failure_steps: dict[str, float | None]
+    egocentric_bias: float | None
+    egocentric_bias_ci: list[float] | None
+    bias_n: int
+    #: Why the bias is left out (condition C only).
+    egocentric_bias_note: str | None = None
+    relation_success: float | None
+    relation_n: int
+    per_direction: dict[str, DiagnosedDirection]
+
+
+class Diagnostics(BaseModel):
+    """``summary.json``'s ``diagnostics`` section (an addition, labelled as one)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    label: str
+    per_condition: dict[str, DiagnosedCondition]
+
+
+class SessionCounters(BaseModel):
+    """What the session that wrote the summary did (:class:`povagent.run.runner.RunStats`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    requests: int
+    cache_hits: int
+    retries: int
+    rows_written: int
+    prompt_tokens: int
+    completion_tokens: int
+    cost_usd: float
+    wall_s: float
+    fsyncs: int
+    fsync_s: float
+    #: Rows written this session, by status.
+    statuses: dict[str, int]
+
+
+class ImageCounters(BaseModel):
+    """The image store's counters (:class:`povagent.exchange.images.ImageStoreStats`) and how
+    many distinct images it held."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    file_reads: int
+    png_encodes: int
+    base64_encodes: int
+    rebuilds: int
+    distinct: int
+
+
 class RunSummary(Breakdown):
     """Everything ``summary.json`` holds.
 
@@ -118,11 +219,11 @@ class RunSummary(Breakdown):
 
     official_parse: OfficialParseBreakdown | None = None
     #: A real-world set's success rates (:func:`povagent.dataset.realworld.success_breakdown`).
-    success: dict[str, Any] | None = None
+    success: SuccessBreakdown | None = None
     #: Each plugin scorer's true/false and number fields: ``{scorer: {field: {n, true, rate} | {n, mean}}}``.
     scorers: dict[str, dict[str, dict[str, float]]] | None = None
     #: Why answers failed (:mod:`povagent.scoring.diagnostics_breakdown`), an addition.
-    diagnostics: dict[str, Any] | None = None
+    diagnostics: Diagnostics | None = None
     #: Keys whose parse holds a NaN coordinate (their official mean is NaN, as officially).
     nan_coordinate_rows: list[str] | None = None
     #: The run's keys and what their rows cost (``None`` in ``rescore``'s summary of re-parsed rows).
@@ -142,6 +243,6 @@ class RunSummary(Breakdown):
     #: What stopped the run early (a signal, a budget), or ``None``.
     stopped: str | None = None
     #: This session's request, cache, journal and timing counters (``RunStats``).
-    session: dict[str, Any] | None = None
+    session: SessionCounters | None = None
     #: The image store's counters.
-    images: dict[str, int] | None = None
+    images: ImageCounters | None = None

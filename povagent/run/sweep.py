@@ -34,6 +34,7 @@ from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import get_plugin_host
+from povagent.results.output_check import check_output_line, checking
 from povagent.results.summary_json import summary_json_text
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
@@ -75,7 +76,21 @@ def _write_index(
             for c in cells
         ],
     }  # fmt: skip
-    write_inside(output, SWEEP_INDEX, summary_json_text(index, indent=2, default=str) + "\n")
+    text = summary_json_text(index, indent=2, default=str)
+    if checking():
+        check_output_line("sweep", text, output / SWEEP_INDEX)
+    write_inside(output, SWEEP_INDEX, text + "\n")
+
+
+def cell_status(res: RunResult) -> dict[str, Any]:
+    """A finished cell's entry in ``sweep.json`` (:class:`~povagent.run.sweep_index.SweepCell`'s
+    status, row counts and overall cell), from its run's summary."""
+    summary = res.summary
+    return {
+        "status": "interrupted" if res.interrupted else ("done" if summary.complete else "incomplete"),
+        "rows": summary.rows.model_dump() if summary.rows is not None else None,
+        "overall": summary.overall.model_dump(exclude_unset=True),
+    }
 
 
 def run_sweep(
@@ -151,12 +166,7 @@ def run_sweep(
                     status[cell.name] = {"status": "interrupted"}
                     raise
                 result.results[cell.name] = res
-                status[cell.name] = {
-                    "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
-
-                    "rows": res.summary["rows"],
-                    "overall": res.summary["overall"],
-                }
+                status[cell.name] = cell_status(res)
                 if on_cell_done is not None:
                     on_cell_done(cell, res)
         finally:
@@ -332,11 +342,7 @@ def _run_on_cluster(
             status[name] = {"status": "failed", "error": error}
         else:
             result.results[name] = res
-            status[name] = {
-                "status": "interrupted" if res.interrupted else ("done" if res.summary["complete"] else "incomplete"),
-                "rows": res.summary["rows"],
-                "overall": res.summary["overall"],
-            }
+            status[name] = cell_status(res)
         _write_index(output, sweep_file, cells, status, models)
         if res is not None and on_cell_done is not None:
             on_cell_done(cell, res)

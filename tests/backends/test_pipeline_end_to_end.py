@@ -94,9 +94,9 @@ def test_sweep_over_baselines_and_a_served_model_runs_end_to_end(tmp_path, mini_
     summaries = {name: r.summary for name, r in result.results.items()}
     assert len(summaries) == 4
     for name, summary in summaries.items():
-        assert summary["complete"], name
-        assert summary["rows"]["answered"] == N_INSTANCES, name
-    by_backend = {s["pipeline"]["backend"]: s["overall"]["mean_l2"] for s in summaries.values()}
+        assert summary.complete, name
+        assert summary.rows.answered == N_INSTANCES, name
+    by_backend = {s.pipeline.backend: s.overall.mean_l2 for s in summaries.values()}
     assert by_backend["oracle"] < 1e-3
     assert by_backend["oracle"] < min(by_backend["center"], by_backend["random"], by_backend["litellm"])
     assert model_server.request_count == N_INSTANCES
@@ -117,8 +117,8 @@ def test_served_model_rows_record_raw_answers_tokens_and_prediction(tmp_path, mi
 
 def test_oracle_error_is_zero_through_the_runner(tmp_path, mini_root):
     result = run_yaml(tmp_path, pipeline(tmp_path, mini_root, "oracle"))
-    assert result.summary["overall"]["response_rate"] == 1.0
-    assert result.summary["overall"]["mean_l2"] < 1e-3
+    assert result.summary.overall.response_rate == 1.0
+    assert result.summary.overall.mean_l2 < 1e-3
 
 
 # -- faults through the runner -------------------------------------------------------------------
@@ -131,7 +131,7 @@ def test_transient_faults_are_retried_by_the_runner_and_answered(tmp_path, mini_
     doc = pipeline(tmp_path, mini_root, litellm_backend(model_server, timeout=0.5), concurrency=1)
     result = run_yaml(tmp_path, doc)
     rows = read_rows(tmp_path / "run" / "results.jsonl")
-    assert result.summary["rows"]["answered"] == N_INSTANCES
+    assert result.summary.rows.answered == N_INSTANCES
     assert sum(r.retries for r in rows) == 4
     assert model_server.request_count == N_INSTANCES + 4
 
@@ -186,7 +186,7 @@ def test_the_key_never_reaches_rows_or_logs(tmp_path, mini_root, model_server, a
 def test_router_over_two_servers_carries_a_whole_run(tmp_path, mini_root, model_server, api_key):
     with LoopbackServer(reply=answer_for, max_lifetime_s=80) as second:
         result = run_yaml(tmp_path, pipeline(tmp_path, mini_root, litellm_backend(model_server, second)))
-    assert result.summary["rows"]["answered"] == N_INSTANCES
+    assert result.summary.rows.answered == N_INSTANCES
     assert model_server.request_count > 0 and second.request_count > 0
     assert model_server.request_count + second.request_count == N_INSTANCES
 
@@ -247,7 +247,7 @@ def test_a_profile_named_in_the_backend_options_brings_its_parser(tmp_path, mini
     (row,) = read_rows(tmp_path / "run" / "results.jsonl")
     assert row.parser == "official" and row.status == "answered"
     assert (row.prediction.x, row.prediction.y) == (900, 800)
-    assert result.summary["pipeline"]["parser"] == "official"
+    assert result.summary.pipeline.parser == "official"
 
 
 def test_a_given_only_profile_refuses_frames_without_calling_the_model(tmp_path, mini_root):
@@ -305,4 +305,4 @@ def test_replaying_a_run_or_its_official_export_reproduces_its_predictions(tmp_p
         assert replayed.keys() == original.keys(), name
         for key, row in replayed.items():
             assert row.prediction == original[key].prediction, (name, key)
-        assert result.summary["overall"]["mean_l2"] == pytest.approx(first.summary["overall"]["mean_l2"]), name
+        assert result.summary.overall.mean_l2 == pytest.approx(first.summary.overall.mean_l2), name

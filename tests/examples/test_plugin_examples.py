@@ -164,7 +164,7 @@ def test_local_model_answers_retries_a_busy_device_and_records_a_permanent_failu
     # every second call finds the device busy: the first key answers at once, every later
     # key's first call is a busy one and its retry answers
     assert sorted(r.retries for r in rows) == [0, 1, 1, 1]
-    assert result.summary["usage"]["retries"] == 3
+    assert result.summary.usage.retries == 3
 
 
 def test_local_model_records_too_many_images_at_once_and_answers_the_rest(pipeline, tmp_path):

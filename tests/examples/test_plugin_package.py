@@ -105,7 +105,7 @@ def test_a_sweep_runs_the_grid_strategy_beside_basic(installed, tmp_path):
             "import json, sys\n"
             "from povagent.run.sweep import run_sweep\n"
             f"r = run_sweep({str(sweep)!r}, quiet=True)\n"
-            "print(json.dumps({c.name: r.results[c.name].summary['rows'] for c in r.cells}))",
+            "print(json.dumps({c.name: r.results[c.name].summary.rows.model_dump() for c in r.cells}))",
             installed,
             **{KEY_ENV: "test-key"},
         )

@@ -49,7 +49,7 @@ def test_the_oracle_backend_run_as_a_pipeline_scores_zero_on_a_generated_set(tin
     }
     (tmp_path / "pipeline.yaml").write_text(yaml.safe_dump(doc))
     summary = run_pipeline(load_pipeline(tmp_path / "pipeline.yaml")).summary
-    assert summary["overall"]["n_total"] == 3 * len(load_dataset(tiny_dataset.root).instances(conditions=["c"]))
-    assert summary["overall"]["response_rate"] == 1.0
+    assert summary.overall.n_total == 3 * len(load_dataset(tiny_dataset.root).instances(conditions=["c"]))
+    assert summary.overall.response_rate == 1.0
     for condition in ("a", "b", "c"):
-        assert summary["per_condition"][condition]["mean_l2"] < 1e-4, condition
+        assert summary.per_condition[condition].mean_l2 < 1e-4, condition

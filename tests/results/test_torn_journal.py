@@ -104,3 +104,74 @@ def test_blank_lines_carry_no_row_and_are_skipped(tmp_path):
     path = tmp_path / "results.jsonl"
     path.write_bytes(line(row("a#0")) + b"\n  \n" + line(row("b#0")))
     assert [r.key for r in iter_rows(path)] == ["a#0", "b#0"]
+
+
+def test_the_next_writer_cuts_a_tail_of_one_byte_after_a_newline(tmp_path):
+    path = tmp_path / "results.jsonl"
+    path.write_bytes(line(row("a#0")) + b"{")
+    with ResultsWriter(path) as w:
+        w.write(row("c#0"))
+    assert path.read_bytes() == line(row("a#0")) + line(row("c#0"))
+
+
+def _bytes_read() -> int:
+    """Bytes this process has read through read() calls so far (Linux's /proc/self/io)."""
+    with open("/proc/self/io", encoding="ascii") as io:
+        return int(next(f for f in io if f.startswith("rchar:")).split()[1])
+
+
+def test_opening_an_intact_journal_reads_its_last_byte_not_the_whole_file(tmp_path):
+    # a resumed run opens its journal once per session: its cost must not grow with the file
+    path = tmp_path / "results.jsonl"
+    one = line(row("a#0"))
+    path.write_bytes(one * (16 * 2**20 // len(one)))
+    before = _bytes_read()
+    with ResultsWriter(path):
+        pass
+    assert _bytes_read() - before < 2**20
+    assert path.stat().st_size == len(one) * (16 * 2**20 // len(one))
+
+
+class FsyncSpy:
+    """Records what each os.fsync call was given: a regular file or a folder."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        import os
+        import stat
+
+        self.kinds: list[str] = []
+        real = os.fsync
+
+        def spy(fd: int) -> None:
+            self.kinds.append("folder" if stat.S_ISDIR(os.fstat(fd).st_mode) else "file")
+            real(fd)
+
+        monkeypatch.setattr(os, "fsync", spy)
+
+
+def test_staged_results_are_fsynced_then_renamed_in_with_the_folder_fsynced(tmp_path, monkeypatch):
+    from povagent.results.rows import StagedResults
+
+    spy = FsyncSpy(monkeypatch)
+    with StagedResults(tmp_path / "results.jsonl") as staged:
+        staged.write(row("a#0"))
+        staged.commit()
+    assert spy.kinds == ["file", "folder"]
+    assert [r.key for r in iter_rows(tmp_path / "results.jsonl")] == ["a#0"]
+
+
+def test_a_staging_that_fails_leaves_no_folder_open(tmp_path, monkeypatch):
+    import os
+
+    from povagent.results.rows import StagedResults
+    from povagent.run.confined_write import ConfinedFolder
+
+    def refuse(self, name, **kw):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(ConfinedFolder, "staged", refuse)
+    open_before = len(os.listdir("/proc/self/fd"))
+    for _ in range(3):
+        with pytest.raises(OSError):
+            StagedResults(tmp_path / "results.jsonl")
+    assert len(os.listdir("/proc/self/fd")) == open_before

@@ -86,7 +86,7 @@ def test_the_litellm_import_does_not_count_against_the_first_requests_timeout(tm
         from povagent.run.runner import run_pipeline
         assert "litellm" not in sys.modules
         result = run_pipeline(load_pipeline({str(path)!r}))
-        print(result.summary["rows"]["answered"], result.summary["rows"]["infra_error"])
+        print(result.summary.rows.answered, result.summary.rows.infra_error)
         """
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=110, env={**__import__("os").environ})

@@ -96,7 +96,7 @@ def test_a_run_restarted_with_another_transport_resumes_from_the_cache_with_zero
     tmp_path, mini_root, model_server, api_key
 ):
     first = run_pipeline(load_pipeline(write_pipeline(tmp_path, mini_root, model_server, output="inline")))
-    assert first.summary["rows"]["answered"] == N_INSTANCES
+    assert first.summary.rows.answered == N_INSTANCES
     sent = model_server.request_count
     assert sent == N_INSTANCES and all(img.scheme == "data" for r in model_server.requests for img in r.images)
 
@@ -137,7 +137,7 @@ def test_o_plot_markers_travel_over_http_from_the_cache_folder(tmp_path, mini_ro
     config = write_pipeline(tmp_path, mini_root, model_server, output="run", strategy="o-plot",
                             images={"transport": "http", "bind": f"127.0.0.1:{port}"})
     result = run_pipeline(load_pipeline(config))
-    assert result.summary["rows"]["answered"] == N_INSTANCES
+    assert result.summary.rows.answered == N_INSTANCES
     cached = {p.stem for p in (tmp_path / "run" / "image-cache").glob("*.png")}
     fetched = {img.sha256 for r in model_server.requests for img in r.images}
     assert cached and cached <= fetched  # marked frames were written once and fetched by URL

@@ -154,3 +154,22 @@ def test_a_key_is_read_not_searched_for(tmp_path):
     path.write_text(text, encoding="utf-8")
     drop_rows(path, {"b#0"})
     assert path.read_text(encoding="utf-8") == text
+
+
+def test_dropped_rows_are_fsynced_then_renamed_in_with_the_folder_fsynced(tmp_path, monkeypatch):
+    import os
+    import stat
+
+    kinds: list[str] = []
+    real = os.fsync
+
+    def spy(fd: int) -> None:
+        kinds.append("folder" if stat.S_ISDIR(os.fstat(fd).st_mode) else "file")
+        real(fd)
+
+    path = tmp_path / "results.jsonl"
+    path.write_text('{"key": "a#0"}\n{"key": "b#0"}\n', encoding="utf-8")
+    monkeypatch.setattr(os, "fsync", spy)
+    drop_rows(path, {"b#0"})
+    assert kinds == ["file", "folder"]  # a power cut after the rename keeps the new file
+    assert path.read_text(encoding="utf-8") == '{"key": "a#0"}\n'

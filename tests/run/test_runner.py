@@ -65,7 +65,7 @@ def test_unparseable_answer_is_a_parse_error_and_not_scored(write_pipeline):
 
 def test_parse_errors_count_against_the_response_rate(write_pipeline):
     result = run(write_pipeline(backend={"name": "test-center", "options": {"reply": "no idea"}}))
-    assert result.summary["overall"]["response_rate"] == 0.0 and result.summary["overall"]["mean_l2"] is None
+    assert result.summary.overall.response_rate == 0.0 and result.summary.overall.mean_l2 is None
 
 
 def test_transient_failures_are_retried_then_answered(write_pipeline, offline_plugin):
@@ -100,7 +100,7 @@ def test_exhausted_retries_are_an_infra_error_never_scored(write_pipeline):
     (row,) = rows_of(result)
     assert result.stats.requests == 3  # retry.attempts in the test pipeline
     assert row.status == "infra_error" and row.error_type == "server_error" and "after 3 attempts" in row.error_message
-    assert result.summary["overall"]["response_rate"] == 0.0
+    assert result.summary.overall.response_rate == 0.0
 
 
 def test_backend_bug_is_recorded_not_retried(write_pipeline):
@@ -303,7 +303,7 @@ def test_an_infra_error_row_counts_the_retries_it_spent(write_pipeline, offline_
     offline_plugin.FlakyBackend.SCRIPT[:] = ["ok", 503, 503, 503]
     result = run(path)
     failed = [r for r in rows_of(result) if r.status == "infra_error"]
-    assert [r.retries for r in failed] == [2] and result.summary["usage"]["retries"] == 2
+    assert [r.retries for r in failed] == [2] and result.summary.usage.retries == 2
 
 
 def test_lifecycle_hooks_observe_the_run(write_pipeline, povagent_host):
@@ -343,7 +343,7 @@ def test_observer_that_raises_does_not_stop_the_run(write_pipeline, povagent_hos
         result = run(write_pipeline())
     finally:
         povagent_host.remove_plugin("broken-observer")
-    assert result.summary["rows"]["answered"] == N_KEYS
+    assert result.summary.rows.answered == N_KEYS
     assert "dashboard down" in capsys.readouterr().err
 
 
@@ -375,7 +375,7 @@ def test_the_image_store_keeps_the_houses_in_flight_not_every_house_seen(write_p
 
     images = Watched()
     result = run(write_pipeline(backend={"name": "test-center", "options": {"encode": True}}, concurrency=1), images=images)
-    assert result.summary["rows"]["answered"] == N_KEYS
+    assert result.summary.rows.answered == N_KEYS
     assert len({i.house_id for i in instances}) == 2 and {h for c in cached_houses for h in c} == set(house_of.values())
     # one house at a time: the first house's frames are let go before the second's are read
     assert max(len(c) for c in cached_houses) == 1
@@ -400,7 +400,7 @@ def test_a_second_run_on_the_same_store_reads_the_let_go_frames_again_off_the_ev
     run(write_pipeline(backend=backend), images=images)
     first = len(readers)
     again = run(write_pipeline("again.yaml", backend=backend, output=str(write_pipeline().parent / "again")), images=images)
-    assert again.summary["rows"]["answered"] == N_KEYS
+    assert again.summary.rows.answered == N_KEYS
     assert len(readers) == 2 * first and images.stats.rebuilds == first  # every frame once more, as a rebuild
     assert threading.main_thread().name not in readers  # never on the event loop's thread
 
@@ -420,7 +420,7 @@ def test_a_frame_swapped_for_a_link_between_runs_on_one_store_fails_its_keys_nam
     images = ImageStore()
     backend = {"name": "test-center", "options": {"encode": True}}
     first = run(write_pipeline(backend=backend, dataset={"path": str(release)}), images=images)
-    assert first.summary["rows"]["answered"] == N_KEYS
+    assert first.summary.rows.answered == N_KEYS
     frame = sorted(release.rglob("exploration_images/*.png"))[0]
     other = release / "swapped.png"  # inside the dataset, so loading it again accepts it
     Image.new("RGB", Image.open(frame).size, (255, 0, 255)).save(other)
@@ -450,18 +450,19 @@ def test_each_distinct_image_is_read_and_encoded_once_per_run(write_pipeline, sm
     result = run(write_pipeline(backend={"name": "test-center", "options": {"encode": True}}, runs=2), images=images)
     assert result.stats.requests == 2 * N_KEYS
     assert images.stats.file_reads == len(distinct) and images.stats.base64_encodes == len(distinct)
-    assert images.stats.rebuilds == 0 and result.summary["images"]["distinct"] == len(distinct)
+    assert images.stats.rebuilds == 0 and result.summary.images.distinct == len(distinct)
 
 
 def test_summary_after_resume_covers_the_rows_of_both_sessions(write_pipeline):
     from povagent.run.summary import summarize_run
+    from povagent.run.summary_model import RunSummary
 
     run(write_pipeline(instances={"limit": 5}))
     result = run(write_pipeline())
-    fresh = summarize_run(result.run_dir / "results.jsonl")
-    assert result.summary["rows"]["done"] == N_KEYS and result.summary["rows"]["missing"] == 0
+    fresh = RunSummary.model_validate(summarize_run(result.run_dir / "results.jsonl"))
+    assert result.summary.rows.done == N_KEYS and result.summary.rows.missing == 0
     for part in ("overall", "per_condition", "per_direction", "per_run", "usage"):
-        assert result.summary[part] == fresh[part], part
+        assert getattr(result.summary, part) == getattr(fresh, part), part
 
 
 def test_a_bad_house_is_logged_by_file_and_skipped(write_pipeline, mini_root):
@@ -588,7 +589,7 @@ def test_a_second_process_on_the_same_run_folder_is_refused(write_pipeline, tmp_
         with pytest.raises(ConfigError, match=r"another povagent process is running a pipeline into this folder"):
             run(write_pipeline())
     assert offline_plugin.CALLS["count"] == 0 and not (run_dir / "results.jsonl").exists()
-    assert run(write_pipeline()).summary["complete"]  # released: the folder is usable again
+    assert run(write_pipeline()).summary.complete  # released: the folder is usable again
 
 
 def test_answers_are_cached_off_the_event_loop_before_their_rows_are_durable(write_pipeline, monkeypatch, tmp_path):
@@ -636,7 +637,7 @@ def test_a_cache_that_cannot_be_written_costs_calls_not_the_run(write_pipeline, 
     with monkeypatch.context() as m:
         m.setattr(ResponseCache, "_insert", broken)
         result = run(write_pipeline(cache=cache))
-    assert result.summary["complete"] and result.summary["rows"]["answered"] == N_KEYS
+    assert result.summary.complete and result.summary.rows.answered == N_KEYS
     events = [json.loads(line) for line in (result.run_dir / "log.jsonl").read_text().splitlines()]
     failed = [e for e in events if e["event"] == "cache_write_failed"]
     assert failed and all(e["level"] == "warning" and "disk I/O error" in e["error"] for e in failed)

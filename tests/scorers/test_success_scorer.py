@@ -130,7 +130,7 @@ def test_the_runner_runs_a_real_world_set_and_rows_carry_success(tmp_path, monke
         }, {}))
         result = asyncio.run(PipelineRun(config, dataset=demo).run())
     rows = list(iter_rows(tmp_path / "run" / "results.jsonl"))
-    assert result.summary["rows"]["answered"] == 6
+    assert result.summary.rows.answered == 6
     hits = {r.instance_id: r.scores["success"]["success"] for r in rows}
     assert hits == {
         "house_1/kitchen/right/a": True, "house_1/kitchen/right/b": True, "house_1/kitchen/right/c": True,

@@ -62,11 +62,11 @@ def test_a_link_planted_in_an_export_folder_is_not_followed(generated_release: P
 
 
 def test_a_second_export_into_a_folder_being_written_is_refused(generated_release: Path, tmp_path: Path) -> None:
-    from povagent.train.export_folder import export_folder
+    from povagent.train.export_folder import export_folder, manifest
 
     out = tmp_path / "out"
     out.mkdir()
-    with export_folder(out, {"version": 0, "options": {}, "shards": []}):
+    with export_folder(out, manifest(ExportOptions(format="messages"), [], generated_release)):
         with pytest.raises(ExportError, match="another export-train is writing into this folder"):
             export_training_set(generated_release, out, ExportOptions(format="messages", conditions=("c",)), check_release=False)
         assert sorted(p.name for p in out.iterdir()) == [".lock", "export.json"]

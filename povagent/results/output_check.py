@@ -1,0 +1,66 @@
+"""What povagent writes, checked against the JSON Schemas it ships, at the moment it is written.
+
+Every writer of a file with a shipped schema (:mod:`povagent.run.output_schemas`: a run's and a
+rescore's ``summary.json``, each ``results.jsonl`` row, ``sweep.json``, ``export.json``) hands
+the JSON it is about to write to :func:`check_output`. With ``POVAGENT_CHECK_OUTPUTS=1`` in the
+environment the JSON is validated against the shipped schema file and a mismatch raises
+:class:`OutputSchemaError` naming the file, the JSON path and what is wrong, before anything is
+written. The test suite sets the variable for itself and for every process it starts, so every
+such file any test makes is checked; a user's run does not pay for it (one environment lookup
+per call).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+from importlib import resources
+from typing import Any
+
+#: The environment variable that turns the check on (``1``).
+ENV = "POVAGENT_CHECK_OUTPUTS"
+
+
+class OutputSchemaError(RuntimeError):
+    """A file povagent was about to write does not meet its shipped schema (a povagent bug)."""
+
+
+def checking() -> bool:
+    """Whether written outputs are checked (``POVAGENT_CHECK_OUTPUTS=1``)."""
+    return os.environ.get(ENV) == "1"
+
+
+@functools.cache
+def _validator(name: str) -> Any:
+    from jsonschema import Draft202012Validator
+
+    text = resources.files("povagent").joinpath("schemas", f"output_{name}.schema.json").read_text(encoding="utf-8")
+    return Draft202012Validator(json.loads(text))
+
+
+def schema_errors(name: str, data: Any, limit: int = 3) -> list[str]:
+    """The first ``limit`` ways ``data`` misses output ``name``'s shipped schema (``[]``: it meets
+    it), each as ``JSON path: message``."""
+    from jsonschema.exceptions import best_match
+
+    errors = sorted(_validator(name).iter_errors(data), key=lambda e: [str(p) for p in e.absolute_path])
+    # an error under "any of" (a field that may be null) is told by its most relevant branch
+    deepest = [best_match([e]) for e in errors[:limit]]
+    return [f"{e.json_path}: {e.message[:300]}" for e in deepest if e is not None]
+
+
+def check_output(name: str, data: Any, where: object) -> None:
+    """Validate ``data`` (about to be written to ``where``) against output ``name``'s shipped
+    schema when :func:`checking`; :class:`OutputSchemaError` when it misses it."""
+    if not checking():
+        return
+    errors = schema_errors(name, data)
+    if errors:
+        raise OutputSchemaError(f"{where}: povagent was about to write a {name} that misses its shipped schema: " + "; ".join(errors))
+
+
+def check_output_line(name: str, line: str, where: object) -> None:
+    """:func:`check_output` of one JSON line (a results row as serialized)."""
+    if checking():
+        check_output(name, json.loads(line), where)
