@@ -338,8 +338,9 @@ def run_module(module: RuleModule, work_dir: Path, test_prefix: list[str], timeo
 
 
 # -- report -----------------------------------------------------------------------------------
-def print_report(results: list[ModuleResult], equivalents: list[dict], goal: float) -> bool:
-    """Print the table, the unexplained survivors and stale equivalence entries; True when the goal is met."""
+def print_report(results: list[ModuleResult], equivalents: list[dict], goal: float) -> tuple[bool, dict[str, int], float]:
+    """Print the table, the unexplained survivors and stale equivalence entries; ``(goal met,
+    totals, overall kill rate)``."""
     head = f"{'module':38} {'mutants':>7} {'killed':>6} {'t/o':>4} {'incomp':>6} {'equiv':>5} {'surv':>4} {'kill rate':>9}"
     print("\n" + head + "\n" + "-" * len(head))
     tot = {"mutants": 0, "killed": 0, "timeout": 0, "incompetent": 0, "equivalent": 0, "survived": 0, "non_eq": 0}
@@ -373,7 +374,26 @@ def print_report(results: list[ModuleResult], equivalents: list[dict], goal: flo
         print(f"\n{len(stale)} equivalence entries matched no survivor (the line changed, or a test now kills it):")
         for e in stale:
             print(f"  {e['module']} {e['operator']}: {e['line']!r} -> {e['mutant']!r}")
-    return overall >= goal
+    return overall >= goal, tot, overall
+
+
+def record_figures(totals: dict[str, int], overall: float) -> None:
+    """Write ``benchmarks/results/mutation_check.json`` (a check of every rule module only)."""
+    from results_file import figure, record
+
+    record("mutation_check", [
+        figure("mutants of the rule modules", totals["mutants"], "mutants"),
+        figure("non-equivalent mutants killed", round(100 * overall, 1), "%", ">= 90%",
+               f"{totals['equivalent']} listed as equivalent with reasons in benchmarks/mutation_equivalent.toml"),
+        figure("survivors neither killed nor listed as equivalent", totals["survived"], "mutants", "0"),
+    ], command="pip install -e '.[mutation]' && python benchmarks/mutation_check.py")
+
+
+def _report(results: list[ModuleResult], equivalents: list[dict], goal: float, every_module: bool) -> int:
+    met, totals, overall = print_report(results, equivalents, goal)
+    if every_module and not any(r.error for r in results):
+        record_figures(totals, overall)
+    return 0 if met else 1
 
 
 def _snapshot(modules: list[RuleModule]) -> dict[Path, bytes]:
@@ -409,7 +429,7 @@ def main(argv: list[str] | None = None) -> int:
         for m in modules:
             session = _session_paths(args.work_dir, m)[1]
             results.append(read_session(m, session, equivalents) if session.exists() else ModuleResult(m, error="no session"))
-        return 0 if print_report(results, equivalents, args.goal) else 1
+        return _report(results, equivalents, args.goal, not args.module)
 
     snapshot = _snapshot(modules)
     previous_term = signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
@@ -435,7 +455,7 @@ def main(argv: list[str] | None = None) -> int:
         _restore(snapshot)
         signal.signal(signal.SIGTERM, previous_term)
     print(f"\ntotal time {time.monotonic() - started:.0f} s")
-    return 0 if print_report(results, equivalents, args.goal) else 1
+    return _report(results, equivalents, args.goal, not args.module)
 
 
 if __name__ == "__main__":
