@@ -23,10 +23,7 @@ CPU is ``time.process_time`` (the machine may be shared); figures go to
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
-import os
-import platform
 import statistics
 import sys
 import tempfile
@@ -34,21 +31,8 @@ import time
 from pathlib import Path
 
 import yaml
+from results_file import record
 
-RESULTS = Path(__file__).resolve().parent / "results" / "bench_active.json"
-
-
-def machine() -> dict:
-    """Cores, CPU model and load averages, as every benchmark records them."""
-    model = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {"cores": os.cpu_count(), "cpu_model": model, "load_avg": [round(v, 2) for v in os.getloadavg()]}
 
 
 def ensure_dataset(data: Path, houses: int) -> int:
@@ -179,11 +163,8 @@ def main() -> None:
            "target": "<= 0.01", "comparison": f"every instance of {len(oracle_houses)} houses (n={len(by_cond[c])})"}
           for c, v in oracle.items()],
     ]  # fmt: skip
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    argv = " ".join(sys.argv[1:])
-    RESULTS.write_text(json.dumps({"benchmark": "bench_active", "date": datetime.date.today().isoformat(), "machine": machine(),
-                                   "command": f"python benchmarks/bench_active.py {argv}", "figures": figures}, indent=1) + "\n")  # fmt: skip
-    print(f"figures: {RESULTS}")
+    command = "python benchmarks/bench_active.py " + " ".join(sys.argv[1:])
+    print(f"figures: {record('bench_active', figures, command)}")
 
 
 if __name__ == "__main__":

@@ -24,12 +24,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
 import sys
 import tempfile
 import time
-from datetime import date
 from pathlib import Path
 from typing import Any, Callable
 
@@ -38,8 +36,8 @@ from PIL import Image
 from povagent.exchange.images import ImageStore
 from povagent.run.confined_write import open_inside, write_inside
 from povagent.run.logs import Redactor
+from results_file import record
 
-RESULTS = Path(__file__).resolve().parent / "results" / "bench_confined_writes.json"
 #: The runner's per-instance overhead target (benchmarks/bench_runner.py).
 OVERHEAD_TARGET_MS = 2.0
 
@@ -53,16 +51,6 @@ def best_us(fn: Callable[[], Any], repeat: int, number: int) -> float:
             fn()
         rounds.append((time.perf_counter() - t0) / number * 1e6)
     return statistics.median(rounds)
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def main() -> None:
@@ -136,15 +124,8 @@ def main() -> None:
     load_after = os.getloadavg()
     print(f"load average before {' '.join(f'{x:.2f}' for x in load_before)}, after {' '.join(f'{x:.2f}' for x in load_after)} "
           f"({os.cpu_count()} CPUs)")
-    RESULTS.parent.mkdir(parents=True, exist_ok=True)
-    RESULTS.write_text(json.dumps({
-        "benchmark": "bench_confined_writes",
-        "date": date.today().isoformat(),
-        "machine": {"cores": os.cpu_count(), "cpu_model": cpu_model(), "load_avg": [round(x, 2) for x in load_after]},
-        "command": " ".join(["python benchmarks/bench_confined_writes.py", *sys.argv[1:]]),
-        "figures": figures,
-    }, indent=2) + "\n", encoding="utf-8")
-    print(f"wrote {RESULTS}")
+    command = " ".join(["python benchmarks/bench_confined_writes.py", *sys.argv[1:]])
+    print(f"wrote {record('bench_confined_writes', figures, command)}")
 
 
 if __name__ == "__main__":

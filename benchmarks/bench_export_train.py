@@ -21,7 +21,6 @@ Usage: python benchmarks/bench_export_train.py [--houses-small 10] [--houses-lar
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import shutil
@@ -30,6 +29,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from results_file import record
 
 CHILD = r"""
 import json, resource, sys, time
@@ -77,15 +78,6 @@ def run(root: Path, fmt: str, groups: str = "bounded") -> dict:
         return result
     finally:
         shutil.rmtree(out.parent, ignore_errors=True)
-
-
-def _machine() -> dict:
-    model = "unknown"
-    try:
-        model = next(line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return {"cores": os.cpu_count(), "cpu_model": model, "load_avg": [round(v, 2) for v in os.getloadavg()]}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -139,16 +131,7 @@ def main(argv: list[str] | None = None) -> int:
                                 "unit": "ratio", "target": "", "comparison": "the same export with MAX_ROW_GROUPS lifted (a row group every 16 MB)"})
     finally:
         shutil.rmtree(small_dir, ignore_errors=True)
-    record = {
-        "benchmark": "bench_export_train",
-        "date": datetime.date.today().isoformat(),
-        "machine": _machine(),
-        "command": "python benchmarks/bench_export_train.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-        "figures": figures,
-    }
-    results = Path(__file__).resolve().parent / "results"
-    results.mkdir(exist_ok=True)
-    (results / "bench_export_train.json").write_text(json.dumps(record, indent=1) + "\n")
+    record("bench_export_train", figures, "python benchmarks/bench_export_train.py " + " ".join(argv if argv is not None else sys.argv[1:]))
     return 0
 
 

@@ -29,15 +29,12 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import os
-import platform
 import resource
 import statistics
 import sys
 import tempfile
 import time
-from datetime import date
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +43,7 @@ from PIL import Image
 from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
+from results_file import record
 
 HERE = Path(__file__).resolve().parent
 
@@ -61,13 +59,6 @@ def rss_mib() -> float:
 def peak_mib() -> float:
     """The process's peak resident set, in MiB."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-
-
-def cpu_model() -> str:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("model name"):
-            return line.split(":", 1)[1].strip()
-    return platform.processor() or "unknown"
 
 
 def make_requests(store: ImageStore, n: int, max_tokens: int) -> list[Request]:
@@ -155,23 +146,16 @@ def main() -> int:
     print(f"load average {load}")
     model_note = f"tiny Qwen2-VL-style checkpoint, {args.layers} layer(s), hidden 32" if args.checkpoint is None else args.checkpoint
     comparison = f"{model_note}; {args.requests - 1} requests of 2 images, {args.max_tokens} new tokens, greedy, sent at once"
-    result = {
-        "benchmark": "bench_local",
-        "date": date.today().isoformat(),
-        "machine": {"cores": os.cpu_count(), "cpu_model": cpu_model(), "load_avg": load},
-        "command": "python benchmarks/bench_local.py " + " ".join(sys.argv[1:]),
-        "figures": [
-            {"name": "requests/s, max_batch 1", "value": round(r1, 3), "unit": "requests/s", "target": "", "comparison": comparison},
-            {"name": "requests/s, max_batch 8", "value": round(r8, 3), "unit": "requests/s", "target": "", "comparison": comparison},
-            {"name": "batching speed-up (max_batch 8 / 1), same answers", "value": round(ratio, 3), "unit": "x", "target": "> 1 with identical answers", "comparison": comparison},
-            {"name": "time to first answer (load + one request)", "value": round(statistics.median(firsts), 3), "unit": "s", "target": "", "comparison": model_note},
-            {"name": "resident memory with the model loaded", "value": round(after_load, 1), "unit": "MiB", "target": "", "comparison": f"{before_load:.0f} MiB before torch and transformers were imported"},
-            {"name": "peak resident memory", "value": round(peak_mib(), 1), "unit": "MiB", "target": "", "comparison": "whole process, both settings"},
-            {"name": "batches split after running out of memory", "value": splits, "unit": "count", "target": "0 on this size", "comparison": "all rounds"},
-        ],
-    }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2) + "\n")
+    figures = [
+        {"name": "requests/s, max_batch 1", "value": round(r1, 3), "unit": "requests/s", "target": "", "comparison": comparison},
+        {"name": "requests/s, max_batch 8", "value": round(r8, 3), "unit": "requests/s", "target": "", "comparison": comparison},
+        {"name": "batching speed-up (max_batch 8 / 1), same answers", "value": round(ratio, 3), "unit": "x", "target": "> 1 with identical answers", "comparison": comparison},
+        {"name": "time to first answer (load + one request)", "value": round(statistics.median(firsts), 3), "unit": "s", "target": "", "comparison": model_note},
+        {"name": "resident memory with the model loaded", "value": round(after_load, 1), "unit": "MiB", "target": "", "comparison": f"{before_load:.0f} MiB before torch and transformers were imported"},
+        {"name": "peak resident memory", "value": round(peak_mib(), 1), "unit": "MiB", "target": "", "comparison": "whole process, both settings"},
+        {"name": "batches split after running out of memory", "value": splits, "unit": "count", "target": "0 on this size", "comparison": "all rounds"},
+    ]
+    record(args.out.stem, figures, "python benchmarks/bench_local.py " + " ".join(sys.argv[1:]), results_dir=args.out.parent)
     return 0
 
 

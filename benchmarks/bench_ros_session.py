@@ -17,14 +17,9 @@ Prints the intake rates and their ratios to a 30 Hz camera and to each other; wr
 from __future__ import annotations
 
 import argparse
-import datetime
-import json
 import math
-import os
-import platform
 import threading
 import time
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -32,6 +27,7 @@ import numpy as np
 from povagent.ros.camera_info import Intrinsics
 from povagent.ros.session import GroundingSession
 from povagent.ros.transforms import RigidTransform
+from results_file import record
 
 CAMERA_HZ = 30.0
 W, H = 640, 480
@@ -126,27 +122,7 @@ def main() -> None:
         {"name": "intake while answering over idle", "value": round(busy / idle, 2), "unit": "x", "target": ">= 0.9",
          "comparison": "the same messages with no command being answered; the model call waits 2 s on I/O"},
     ]
-    result = {
-        "benchmark": "bench_ros_session",
-        "date": datetime.date.today().isoformat(),
-        "machine": {"cores": os.cpu_count(), "cpu_model": _cpu_model(), "load_avg": [round(v, 2) for v in os.getloadavg()]},
-        "command": f"python benchmarks/bench_ros_session.py --images {args.images}",
-        "figures": figures,
-    }
-    out = Path(__file__).resolve().parent / "results" / "bench_ros_session.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(result, indent=1) + "\n")
-    print(f"wrote {out}")
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+    print(f"wrote {record('bench_ros_session', figures, f'python benchmarks/bench_ros_session.py --images {args.images}')}")
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
 Every writer of a file with a shipped schema (:mod:`povagent.run.output_schemas`: a run's and a
 rescore's ``summary.json``, each ``results.jsonl`` row, ``sweep.json``, ``export.json``) hands
-the JSON it is about to write to :func:`check_output`. With ``POVAGENT_CHECK_OUTPUTS=1`` in the
+the JSON text it is about to write to :func:`check_output_text`. With ``POVAGENT_CHECK_OUTPUTS=1`` in the
 environment the JSON is validated against the shipped schema file and a mismatch raises
 :class:`OutputSchemaError` naming the file, the JSON path and what is wrong, before anything is
 written. The test suite sets the variable for itself and for every process it starts, so every
@@ -50,17 +50,12 @@ def schema_errors(name: str, data: Any, limit: int = 3) -> list[str]:
     return [f"{e.json_path}: {e.message[:300]}" for e in deepest if e is not None]
 
 
-def check_output(name: str, data: Any, where: object) -> None:
-    """Validate ``data`` (about to be written to ``where``) against output ``name``'s shipped
-    schema when :func:`checking`; :class:`OutputSchemaError` when it misses it."""
+def check_output_text(name: str, text: str, where: object) -> None:
+    """When :func:`checking`, validate the JSON ``text`` about to be written to ``where`` (a
+    results row as serialized, a whole summary) against output ``name``'s shipped schema;
+    :class:`OutputSchemaError` when it misses it."""
     if not checking():
         return
-    errors = schema_errors(name, data)
+    errors = schema_errors(name, json.loads(text))
     if errors:
         raise OutputSchemaError(f"{where}: povagent was about to write a {name} that misses its shipped schema: " + "; ".join(errors))
-
-
-def check_output_line(name: str, line: str, where: object) -> None:
-    """:func:`check_output` of one JSON line (a results row as serialized)."""
-    if checking():
-        check_output(name, json.loads(line), where)

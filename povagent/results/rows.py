@@ -19,7 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
-from povagent.results.output_check import check_output_line
+from povagent.results.output_check import check_output_text
 
 
 class RowStatus(StrEnum):
@@ -135,7 +135,7 @@ def row_line(row: ResultRow, where: object) -> str:
     """``row`` as its ``results.jsonl`` line (newline included), checked against the shipped row
     schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file)."""
     line = row.model_dump_json(exclude_none=False) + "\n"
-    check_output_line("row", line, where)
+    check_output_text("row", line, where)
     return line
 
 

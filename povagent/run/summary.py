@@ -14,7 +14,7 @@ from typing import Any, Iterable, Mapping
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
-from povagent.results.output_check import check_output_line, checking
+from povagent.results.output_check import check_output_text
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
@@ -185,26 +185,23 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
 
 
 def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:
-    """Write a run's (or a rescore's) ``summary.json`` as :func:`write_json` does, and return it
-    read as the :class:`RunSummary` it is. It is read before it is written: a summary that is
-    not a :class:`RunSummary` (a povagent bug) raises, and nothing is written; while tests run it
-    is also checked against the shipped schema (:mod:`povagent.results.output_check`)."""
-    summary = RunSummary.model_validate(data)
-    if checking():
-        check_output_line("summary", summary_json_text(data, indent=None, default=str), path)
-    write_json(path, data, root)
-    return summary
+    """Write a run's (or a rescore's) ``summary.json`` and return it read as the
+    :class:`RunSummary` it is.
 
-
-def write_json(path: Path, data: Mapping[str, Any], root: Path | None = None) -> None:
-    """Write ``data`` as indented JSON, atomically (a kill leaves the old file or the new one);
-    a number that is not finite (a NaN answer's margin) is ``null``, so the file is always JSON.
-
-    Written aside and renamed, never through a link planted at ``path`` or in a folder between
-    ``root`` (the folder the user named; default ``path``'s own) and it; a full disk leaves the
-    old file and no half-written copy beside it (see :mod:`povagent.run.confined_write`).
+    It is read before it is written: a summary that is not a :class:`RunSummary` (a povagent
+    bug) raises, and nothing is written; while tests run it is also checked against the shipped
+    schema (:mod:`povagent.results.output_check`). Written as indented JSON, atomically (a kill
+    leaves the old file or the new one); a number that is not finite (a NaN answer's margin) is
+    ``null``, so the file is always JSON. Written aside and renamed, never through a link planted
+    at ``path`` or in a folder between ``root`` (the folder the user named; default ``path``'s
+    own) and it; a full disk leaves the old file and no half-written copy beside it (see
+    :mod:`povagent.run.confined_write`).
     """
     from povagent.run.confined_write import write_inside
 
+    summary = RunSummary.model_validate(data)
+    text = summary_json_text(data, indent=2, default=str)
+    check_output_text("summary", text, path)
     base = root if root is not None else path.parent
-    write_inside(base, path.relative_to(base), summary_json_text(data, indent=2, default=str) + "\n")
+    write_inside(base, path.relative_to(base), text + "\n")
+    return summary

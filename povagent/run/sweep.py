@@ -34,7 +34,7 @@ from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import get_plugin_host
-from povagent.results.output_check import check_output_line, checking
+from povagent.results.output_check import check_output_text
 from povagent.results.summary_json import summary_json_text
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.folder_lock import folder_lock
@@ -77,8 +77,7 @@ def _write_index(
         ],
     }  # fmt: skip
     text = summary_json_text(index, indent=2, default=str)
-    if checking():
-        check_output_line("sweep", text, output / SWEEP_INDEX)
+    check_output_text("sweep", text, output / SWEEP_INDEX)
     write_inside(output, SWEEP_INDEX, text + "\n")
 
 

@@ -18,7 +18,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from povagent.results.output_check import check_output_line
+from povagent.results.output_check import check_output_text
 from povagent.train.export_options import ExportError, ExportOptions
 from povagent.train.shards import Shard, atomic_file
 
@@ -105,7 +105,7 @@ def export_folder(out: Path, wanted: dict[str, Any]) -> Iterator[None]:
         if (out / MANIFEST).exists():
             check_resume(out, wanted)
         text = json.dumps(wanted, indent=1)
-        check_output_line("export", text, out / MANIFEST)
+        check_output_text("export", text, out / MANIFEST)
         with atomic_file(out / MANIFEST, "w", inside=out) as handle:
             handle.write(text + "\n")
         yield
