@@ -20,7 +20,6 @@ import json
 import os
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -86,6 +85,7 @@ def main(argv: list[str] | None = None) -> int:
     from std_msgs.msg import String
 
     from povagent.ros.node import GroundingNode
+    from povagent.ros.spinning import BackgroundSpin
     from povagent.ros.tour_player import TourPlayer, camera_info, mount_parameters
 
     rclpy.init()
@@ -98,18 +98,18 @@ def main(argv: list[str] | None = None) -> int:
     executor = MultiThreadedExecutor(num_threads=2)
     executor.add_node(node)
     executor.add_node(player_node)
-    spinning = threading.Thread(target=executor.spin, daemon=True)
-    spinning.start()
+    # Shut down in the order rclpy requires: the executor (its thread stopped and joined), then
+    # the nodes, then the context; a thread left inside rclpy at exit aborts the process.
     try:
-        wait(lambda: player.image.get_subscription_count() and node.result_pub.get_subscription_count(), 20, "discovery")
-        player.info.publish(camera_info(tour, tour.frames[0].stamp_ns))
-        wait(lambda: node.session.calibrated, 20, "the camera_info")
-        player.play(tour, after_each=lambda i: wait(lambda: node.session.images_seen > i, 20, f"image {i}"))
-        wait(lambda: len(node.session.memory) == len(tour.frames), 20, "the keyframes")
-        player.say(truth.sentence)
-        wait(lambda: any(r["status"] not in ("queued",) for r in results), 120, "the node's answer")
+        with BackgroundSpin(executor):
+            wait(lambda: player.image.get_subscription_count() and node.result_pub.get_subscription_count(), 20, "discovery")
+            player.info.publish(camera_info(tour, tour.frames[0].stamp_ns))
+            wait(lambda: node.session.calibrated, 20, "the camera_info")
+            player.play(tour, after_each=lambda i: wait(lambda: node.session.images_seen > i, 20, f"image {i}"))
+            wait(lambda: len(node.session.memory) == len(tour.frames), 20, "the keyframes")
+            player.say(truth.sentence)
+            wait(lambda: any(r["status"] not in ("queued",) for r in results), 120, "the node's answer")
     finally:
-        executor.shutdown(timeout_sec=5)
         node.close()
         player_node.destroy_node()
         if agent is not None:

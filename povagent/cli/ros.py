@@ -51,22 +51,25 @@ def ros_node_command(
 
     rclpy = require_rclpy("ros-node")
     agent = _agent(pipeline, model, floor_height, timeout)
-    from rclpy.executors import ExternalShutdownException
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
     from povagent.ros.node import GroundingNode
     from povagent.ros.session import agent_locate
 
     rclpy.init(args=["povagent", *ctx.args])
     node = GroundingNode(agent_locate(agent))
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
     try:
-        rclpy.spin(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass  # Ctrl-C or SIGTERM: rclpy's signal handler shut the context down
     finally:
+        # the order rclpy requires: the executor, then the node, then the context
+        executor.shutdown(timeout_sec=5)
         node.close()
         agent.close()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
 
 
 @app.command("ros-replay")

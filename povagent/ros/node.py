@@ -48,6 +48,9 @@ try:
 except ImportError as _missing:
     raise ConfigError(f"ros-node needs ROS 2's Python packages ({_missing.name} is missing): {ROS_EXTRA}") from None
 
+#: Seconds ``close()`` waits for the command being answered before the node is destroyed anyway.
+CLOSE_TIMEOUT_S = 30.0
+
 #: The node's parameters and their defaults.
 DEFAULT_PARAMETERS: dict[str, Any] = {
     "image_topic": "/camera/image_raw",
@@ -96,6 +99,9 @@ class GroundingNode(Node):
             self.session.add_static(str(p["mount_parent"]), str(p["mount_child"]), mount)
         self._commands: queue.Queue[str | None] = queue.Queue(maxsize=max(1, int(p["max_queue"])))
         self._busy = threading.Event()
+        # held while publishing and while closing: no publish can reach a destroyed publisher
+        self._publishing = threading.Lock()
+        self._closed = False
         self.goal_pub = self.create_publisher(PointStamped, "~/goal", 10)
         self.goal_pose_pub = self.create_publisher(PoseStamped, "/goal_pose", 10)
         self.result_pub = self.create_publisher(String, "~/result", 10)
@@ -168,7 +174,12 @@ class GroundingNode(Node):
             self.publish_result(result)
 
     def publish_result(self, result: CommandResult) -> None:
-        """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose``."""
+        """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose`` (nothing once closed)."""
+        with self._publishing:
+            if not self._closed:
+                self._publish(result)
+
+    def _publish(self, result: CommandResult) -> None:
         if result.goal is not None and result.frame_stamp_ns is not None:
             stamp = Time(nanoseconds=result.frame_stamp_ns).to_msg()
             point = PointStamped()
@@ -189,11 +200,21 @@ class GroundingNode(Node):
         return self._busy.is_set()
 
     def close(self) -> None:
-        """Stop the worker (after the command it is answering) and destroy the node."""
+        """Stop the worker (after the command it is answering), join it, then destroy the node.
+
+        Call it after the executor spinning this node has stopped (see
+        :class:`~povagent.ros.spinning.BackgroundSpin`) and before the context shuts down. A
+        worker still answering after ``CLOSE_TIMEOUT_S`` is left to finish on its own: its result
+        is not published (the publishers are gone), and a warning says so.
+        """
         self._drain()
         self._commands.put(None)
-        self._worker.join(timeout=30)
-        self.destroy_node()
+        self._worker.join(timeout=CLOSE_TIMEOUT_S)
+        if self._worker.is_alive():
+            self.get_logger().warning(f"a command was still being answered after {CLOSE_TIMEOUT_S:g} s; its result is dropped")
+        with self._publishing:
+            self._closed = True
+            self.destroy_node()
 
     def _drain(self) -> None:
         while True:

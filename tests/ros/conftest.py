@@ -9,7 +9,6 @@ shut down at the end of the session.
 from __future__ import annotations
 
 import os
-import threading
 import time
 from typing import Any, Callable, Iterator
 
@@ -80,9 +79,10 @@ def ros_graph(tmp_path_factory) -> Iterator[Any]:
 
     context = rclpy.Context()
     rclpy.init(context=context, domain_id=domain)
+    from povagent.ros.spinning import BackgroundSpin
+
     executor = MultiThreadedExecutor(num_threads=2, context=context)
-    spinning = threading.Thread(target=executor.spin, name="ros-test-executor", daemon=True)
-    spinning.start()
+    spinning = BackgroundSpin(executor, name="ros-test-executor").start()
 
     class Graph:
         def __init__(self) -> None:
@@ -99,9 +99,8 @@ def ros_graph(tmp_path_factory) -> Iterator[Any]:
     try:
         yield Graph()
     finally:
-        executor.shutdown(timeout_sec=5)
+        spinning.stop()  # the executor first (its thread joined), then the context
         rclpy.shutdown(context=context)
-        spinning.join(timeout=10)
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
