@@ -29,18 +29,25 @@ def report_command(
     workers: int | None = typer.Option(
         None, "--workers", min=1, metavar="N", help="Threads drawing gallery images (default: one per core, at most 4)."
     ),
+    pool: bool = typer.Option(
+        False, "--pool", help="Pool runs of the same name into one system (default: every run folder is its own system)."
+    ),
 ) -> None:
     """Write the paper's tables, plots and an HTML report.
 
     Tables in Markdown, CSV and LaTeX, plots, and one self-contained HTML page with a
-    gallery of the predictions drawn on their frames.
+    gallery of the predictions drawn on their frames. Each run folder (each sweep cell) is one
+    system, named by its config's label: or its model; runs are pooled only with --pool or a
+    shared label:, and the report says so.
     """
     from povagent.report.build import write_report
     from povagent.report.tables import to_markdown
 
     result = write_report(
-        source, out, dataset, n_boot=bootstrap, gallery_limit=gallery_limit, gallery=not no_gallery, workers=workers
+        source, out, dataset, n_boot=bootstrap, gallery_limit=gallery_limit, gallery=not no_gallery, workers=workers, pool=pool
     )
+    for pooling in result.poolings:
+        typer.echo(f"note: {pooling.note()}", err=True)
     if result.dataset_note:
         typer.echo(f"warning: no center baseline, counting-non-responses variant or gallery images: {result.dataset_note}", err=True)
     typer.echo(to_markdown(result.tables[0]))

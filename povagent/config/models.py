@@ -32,6 +32,8 @@ from povagent.errors import ClusterError
 
 #: Most repeats a pipeline may ask for (``runs: N`` or a list of N indices); the paper uses 3.
 MAX_RUNS = 100
+#: Longest ``label:`` a pipeline may give its system (it heads table rows and plot legends).
+MAX_LABEL_CHARS = 120
 #: Longest request timeout, in seconds.
 MAX_WAIT_S = 3600.0
 #: Most requests in flight.
@@ -289,6 +291,9 @@ class PipelineConfig(_Strict):
     cache: CacheSpec = Field(default_factory=CacheSpec)
     images: ImagesSpec = Field(default_factory=ImagesSpec)
     output: Path
+    #: The system's name in reports (``base``, ``fine-tuned step 120``); default: its model.
+    #: Presentation only, so not in the config hash. Runs of one ``label`` pool into one system.
+    label: str | None = Field(None, min_length=1, max_length=MAX_LABEL_CHARS, pattern=r"\S")
 
     @field_validator("runs")
     @classmethod

@@ -40,6 +40,7 @@ from povagent.report.html import (
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
+from povagent.report.systems import Pooling
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
 from povagent.report.why import FIGURE as WHY_FIGURE
 from povagent.report.why import failure_steps_figure, why_section
@@ -60,6 +61,8 @@ class ReportResult:
     gallery: GalleryStats | None
     dataset_note: str | None = None
     timings: dict[str, float] = field(default_factory=dict)
+    #: Runs pooled into one system (``pool`` or a shared ``label:``); empty: every run its own system.
+    poolings: list[Pooling] = field(default_factory=list)
 
 
 def write_tables(tables: list[Table], out: Path) -> dict[str, list[tuple[str, str]]]:
@@ -110,18 +113,22 @@ def write_report(
     gallery: bool = True,
     workers: int | None = None,
     seed: int = 0,
+    pool: bool = False,
 ) -> ReportResult:
-    """Write the full report of a run or sweep folder (default ``out``: ``<source>/report``)."""
+    """Write the full report of a run or sweep folder (default ``out``: ``<source>/report``).
+
+    Every run is its own system; ``pool`` pools runs of the same name (the notes say so)."""
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     source = Path(source)
     out = report_folder(source, Path(out) if out is not None else None)
-    collection = collect(source)
+    collection = collect(source, pool=pool)
     dataset, note = load_collection_dataset(collection, dataset_path)
     timings["load"] = time.perf_counter() - t0
 
     t = time.perf_counter()
     analysis = analyze(collection, dataset, note, n_boot=n_boot, seed=seed)
+    analysis.notes.extend(p.note() for p in collection.poolings)
     tables = paper_tables(analysis)
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
@@ -190,4 +197,4 @@ def write_report(
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
     write_inside(out, "summary.json", summary_json_text(summary))
-    return ReportResult(out, page, tables, analysis, gstats, note, timings)
+    return ReportResult(out, page, tables, analysis, gstats, note, timings, collection.poolings)

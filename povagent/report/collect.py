@@ -2,9 +2,9 @@
 
 A run folder holds ``config.yaml`` and ``results.jsonl``; a sweep folder holds one run folder
 per cell and ``sweep.json`` (the cell index, with each cell's axis values). Every row becomes an
-:class:`Observation` labelled with its *system*: the values of the axes that vary across the
-collected runs (model, strategy, parser, ...), without the condition and the run index, which
-the tables break down and average over.
+:class:`Observation` labelled with its *system*: its run, named as
+:mod:`povagent.report.systems` names runs (a config's ``label:``, else the axes that vary across
+the collected runs; two runs are never pooled unless the user asks).
 
 A run is scored by the ``official`` metric (POVBench-format sets) or, for a real-world set
 with hand-marked ground truth (:mod:`povagent.dataset.realworld`), by the ``success`` scorer; each
@@ -27,17 +27,12 @@ import yaml
 
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, read_rows
 
 RESULTS_FILE = "results.jsonl"
 CONFIG_FILE = "config.yaml"
 SWEEP_INDEX = "sweep.json"
-
-#: Sweep axes that are not part of a system's identity: tables break these down or average them.
-NON_SYSTEM_AXES = frozenset({"run", "runs", "condition", "conditions", "condition_set", "conditions_set", "seed"})
-
-#: Axis order used to build a system label (the most telling first).
-AXIS_ORDER = ("model", "backend", "strategy", "parser")
 
 #: The scorers a report reads, in order of preference when a run names several.
 REPORTED_SCORERS = ("official", "success")
@@ -103,6 +98,10 @@ class RunInfo:
     axes: dict[str, str]
     rows: list[ResultRow]
     system: str = ""
+    #: The sweep folder whose index listed this run (``None``: a run folder of its own).
+    sweep: Path | None = None
+    #: The axis values the sweep's index gives this cell (``{}`` for a run of its own).
+    cell_axes: dict[str, str] = field(default_factory=dict)
 
     @property
     def scorer(self) -> str:
@@ -131,6 +130,8 @@ class Collection:
     observations: list[Observation] = field(default_factory=list)
     #: Rows left out as outside the paper's protocol (see :func:`collect`).
     outside_protocol_rows: int = 0
+    #: Runs pooled into one system (by a shared ``label:`` or ``--pool``); empty: every run is its own.
+    poolings: list[Pooling] = field(default_factory=list)
 
     @property
     def systems(self) -> list[str]:
@@ -264,7 +265,7 @@ def _axis_text(value: Any) -> str:
     return str(value)
 
 
-def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None) -> RunInfo:
+def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None, sweep: Path | None = None) -> RunInfo:
     results = folder / RESULTS_FILE
     if not results.exists():
         raise PredictionsError(f"{folder}: no {RESULTS_FILE} (is this a run folder?)")
@@ -275,7 +276,7 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None)
     # the index adds the axes a config cannot say, such as a named override
     for k, v in (extra_axes or {}).items():
         axes.setdefault(k, v)
-    return RunInfo(folder, name, config, axes, rows)
+    return RunInfo(folder, name, config, axes, rows, sweep=sweep, cell_axes=dict(extra_axes or {}))
 
 
 def find_runs(path: str | Path) -> list[RunInfo]:
@@ -299,7 +300,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
             found = [root / n for n in names if (root / n / RESULTS_FILE).exists()]
             found += [Path(n) for n in names if Path(n).is_absolute() and (Path(n) / RESULTS_FILE).exists()]
             if found:  # a cell not run yet has no results: nothing to report for it
-                runs.append(_load_run(found[0], found[0].name, _cell_axes(cell)))
+                runs.append(_load_run(found[0], found[0].name, _cell_axes(cell), sweep=root))
     if not runs:
         for folder in sorted(p for p in root.iterdir() if p.is_dir()):
             if (folder / RESULTS_FILE).exists():
@@ -307,45 +308,6 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     if not runs:
         raise PredictionsError(f"{root}: neither a run folder ({RESULTS_FILE}) nor a sweep folder with run folders")
     return runs
-
-
-#: Joins a system's axis values in its label (``gpt-4o · s-cot``).
-LABEL_JOIN = " · "
-
-
-def _is_baseline_run(run: RunInfo) -> bool:
-    return is_baseline_system(run.axes, run.axes.get("model") or run.axes.get("backend", ""))
-
-
-def assign_systems(runs: list[RunInfo]) -> None:
-    """Label each run with its system: the values of the identity axes that vary across runs.
-
-    A model's label always names its model and its strategy (``qwen3-vl-8b · cot``), even when
-    one of them is the same in every run: a reader of a strategy sweep's table, plot legend or
-    gallery card should never have to guess which model the strategies ran on. Baselines ignore
-    the prompt, so theirs name only what varies (``center``, ``random``).
-    """
-    keys: dict[str, None] = {}
-    for r in runs:
-        for k in r.axes:
-            if k not in NON_SYSTEM_AXES:
-                keys.setdefault(k, None)
-    varying = [k for k in keys if len({r.axes.get(k, "") for r in runs}) > 1]
-    ordered = [k for k in AXIS_ORDER if k in varying] + [k for k in varying if k not in AXIS_ORDER]
-    if "model" in ordered and "backend" in ordered:
-        # the model already names the backend in almost every sweep; keep one unless both matter
-        pairs = {(r.axes.get("model"), r.axes.get("backend")) for r in runs}
-        if len(pairs) == len({p[0] for p in pairs}):
-            ordered.remove("backend")
-    for r in runs:
-        named = ordered
-        if not _is_baseline_run(r):
-            always = [k for k in ("model", "strategy") if r.axes.get(k) and k not in ordered]
-            named = [k for k in AXIS_ORDER if k in ordered or k in always] + [k for k in ordered if k not in AXIS_ORDER]
-        if named:
-            r.system = LABEL_JOIN.join(r.axes.get(k, "?") for k in named)
-        else:
-            r.system = r.axes.get("model") or r.axes.get("backend") or r.name
 
 
 def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official") -> Observation:
@@ -423,8 +385,12 @@ def diagnosis_of(row: ResultRow) -> dict[str, Any]:
     }
 
 
-def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False) -> Collection:
+def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False, pool: bool = False) -> Collection:
     """Load one or more run/sweep folders into a :class:`Collection`.
+
+    Each run is one system; runs of the same name are pooled only with ``pool`` or a shared
+    ``label:`` (:func:`povagent.report.systems.assign_systems`), and the collection lists each
+    pooling.
 
     Rows the paper's protocol does not cover (a model under an intervention on Given:
     :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
@@ -438,7 +404,7 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     runs: list[RunInfo] = []
     for p in paths:
         runs.extend(find_runs(p))
-    assign_systems(runs)
+    poolings = assign_systems(runs, pool=pool)
     obs: list[Observation] = []
     left_out = 0
     for r in runs:
@@ -450,7 +416,7 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
                 continue
             o = observation_of(row, r.system, r.name, r.scorer)
             obs.append(scrub(o) if scrub is not None else o)
-    return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out)
+    return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 
 
 def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation] | None:

@@ -93,6 +93,8 @@ class ResultRow(BaseModel):
     profile: str | None = None
     strategy: str = ""
     parser: str = ""
+    #: The system's name its pipeline gave (``label:``), or ``None`` (reports name it by its model).
+    label: str | None = None
     config_hash: str = ""
     status: RowStatus
     exchanges: list[ExchangeRecord] = Field(default_factory=list)

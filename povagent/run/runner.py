@@ -416,7 +416,7 @@ class PipelineRun:
             return
         solve = KeySolver(
             self.components, self._names, self._model, self.config_hash, self._path, self.images, self.dataset,
-            self._log, self._redactor, self._frames.read,
+            self._log, self._redactor, self._frames.read, label=self.config.label,
         ).solve  # fmt: skip
         with HouseFrames(self.images, pending) as houses:
             first, rest = pending[0], iter(pending[1:])

@@ -48,6 +48,8 @@ class KeySolver:
     redactor: Redactor
     #: Reads an instance's frames into the image store before its strategy runs.
     read_frames: Callable[[Instance], Awaitable[None]]
+    #: The system's name the pipeline gave (``label:``), carried by every row.
+    label: str | None = None
 
     def make_ask(self, run: int, exchanges: list[ExchangeRecord], row_id: str) -> Callable[[Request], Any]:
         path = self.path
@@ -144,6 +146,7 @@ class KeySolver:
             profile=self.model[1],
             strategy=self.names.strategy,
             parser=self.names.parser,
+            label=self.label,
             config_hash=self.config_hash,
             status=status,
             exchanges=exchanges,
