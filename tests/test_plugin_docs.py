@@ -128,3 +128,20 @@ def test_every_built_in_parser_says_what_it_reads_and_how_it_compares_with_offic
             assert getattr(entry.factory, "reads", ""), entry.name
             assert getattr(entry.factory, "beside_official", ""), entry.name
             assert f"| `{entry.name}` | {entry.factory.reads.replace('|', chr(92) + '|')} |" in plugin_docs.render_parsers()
+
+
+def test_a_stale_page_other_than_the_plugin_reference_names_the_command_that_rewrites_it():
+    official = ROOT / "docs" / "explanation" / "official.md"
+    text = official.read_text(encoding="utf-8")
+    stale = render_page(text, official).replace("| `official` |", "| `official-renamed` |", 1)
+    assert stale != text
+    copy = official.with_name("official.stale-copy.md")
+    try:
+        copy.write_text(stale, encoding="utf-8")
+        problem = check_page(copy)
+    finally:
+        copy.unlink()
+    assert problem is not None and "run `python tools/plugin_docs.py docs/explanation/official.stale-copy.md`" in problem
+    # and the bare command rewrites exactly the page the message names by default
+    plugins_page = ROOT / "docs" / "reference" / "plugins.md"
+    assert check_page(plugins_page) is None

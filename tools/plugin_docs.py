@@ -400,11 +400,22 @@ def check_page(page: Path = DEFAULT_PAGE) -> str | None:
     text = page.read_text(encoding="utf-8")
     if render_page(text, page) == text:
         return None
-    return f"{page} is out of date with the code (hookspecs, interfaces, models or examples): run `{COMMAND}` and commit it"
+    # the command names the page: the bare command rewrites only the default page
+    command = COMMAND if _shown(page) == str(DEFAULT_PAGE) else f"{COMMAND} {_shown(page)}"
+    return f"{page} is out of date with the code (hookspecs, interfaces, models or examples): run `{command}` and commit it"
+
+
+def _shown(page: Path) -> str:
+    """``page`` relative to the repository root when it is inside it (how the command is run)."""
+    root = Path(__file__).resolve().parents[1]
+    try:
+        return str(page.resolve().relative_to(root))
+    except ValueError:
+        return str(page)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m povagent.plugin_docs [PAGE] [--check]``: rewrite the page's generated blocks."""
+    """``python tools/plugin_docs.py [PAGE] [--check]``: rewrite the page's generated blocks."""
     parser = argparse.ArgumentParser(prog=COMMAND, description="Fill in the generated blocks of docs/reference/plugins.md from the code.")
     parser.add_argument("page", nargs="?", type=Path, default=DEFAULT_PAGE, help=f"the page (default: {DEFAULT_PAGE})")
     parser.add_argument("--check", action="store_true", help="only say whether the page is up to date (exit 1 if not)")

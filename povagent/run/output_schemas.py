@@ -4,6 +4,13 @@ a training export's ``export.json``, generated from their pydantic models and sh
 ``povagent schema NAME`` prints one; ``python -m povagent.run.output_schemas`` rewrites the shipped
 files (``povagent/schemas/output_<name>.schema.json``), and a test checks they equal what the
 models generate and that every such file a test run writes validates against them.
+
+The shipped schemas are closed: every object a model describes says ``additionalProperties:
+false``, also where the model itself lets a reader keep fields it does not know (a row written by
+another version of povagent loads and rescores with its fields intact). So a field no model
+declares, such as a misspelled new row field, fails the output check the tests run on every file
+they make, while reading stays lenient. Maps a model declares as open (a row's ``scores``, keyed
+by scorer) stay open: they are typed as maps, not as objects with properties.
 """
 
 from __future__ import annotations
@@ -31,9 +38,18 @@ OUTPUT_MODELS: dict[str, tuple[type[BaseModel], str]] = {
 def output_schema(name: str) -> dict[str, Any]:
     """The JSON Schema of output ``name`` (one of :data:`OUTPUT_MODELS`)."""
     model, what = OUTPUT_MODELS[name]
-    schema = model.model_json_schema()
+    schema = closed(model.model_json_schema())
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["title"] = f"povagent {name}: {what}"
+    return schema
+
+
+def closed(schema: dict[str, Any]) -> dict[str, Any]:
+    """``schema`` with every object that lists ``properties`` (the root and each ``$defs`` entry)
+    refusing properties it does not list (see the module docstring)."""
+    for definition in [schema, *schema.get("$defs", {}).values()]:
+        if "properties" in definition:
+            definition["additionalProperties"] = False
     return schema
 
 

@@ -132,3 +132,32 @@ def test_a_rescored_summary_meets_the_summary_schema(two_run_sweep):
     data = json.loads((result.out_dir / "summary.json").read_text())
     assert list(validator("summary").iter_errors(data)) == []
     assert RunSummary.model_validate(data).parse_status is not None
+
+
+def _objects(schema: dict) -> list[tuple[str, dict]]:
+    return [("(root)", schema), *schema.get("$defs", {}).items()]
+
+
+@pytest.mark.parametrize("name", list(OUTPUT_MODELS))
+def test_every_object_a_shipped_schema_describes_refuses_fields_it_does_not_list(name):
+    open_objects = [where for where, d in _objects(json.loads(shipped(name))) if "properties" in d and d.get("additionalProperties") is not False]
+    assert open_objects == []
+
+
+def test_a_row_holding_a_misspelled_field_fails_the_output_check_before_it_is_written(two_run_sweep, tmp_path, monkeypatch):
+    from povagent.results.output_check import ENV, OutputSchemaError
+    from povagent.results.rows import ResultsWriter
+
+    monkeypatch.setenv(ENV, "1")
+    line = next(two_run_sweep.glob("*/results.jsonl")).read_text().splitlines()[0]
+    row = ResultRow.model_validate_json(line)
+    misspelled = ResultRow.model_construct(**{**dict(row), "lable": "fine-tuned"})  # the maintainer meant "label"
+    with pytest.raises(OutputSchemaError, match="lable"), ResultsWriter(tmp_path / "results.jsonl") as writer:
+        writer.write(misspelled)
+    assert (tmp_path / "results.jsonl").read_text() == ""
+
+
+def test_a_row_another_version_wrote_with_a_field_unknown_here_still_reads(two_run_sweep):
+    line = next(two_run_sweep.glob("*/results.jsonl")).read_text().splitlines()[0]
+    row = ResultRow.model_validate_json(json.dumps({**json.loads(line), "from_a_later_version": 1}))
+    assert row.key == json.loads(line)["key"]
