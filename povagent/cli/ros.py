@@ -47,9 +47,10 @@ def ros_node_command(
     /goal_pose, the answer as JSON on ~/result. ROS arguments follow, e.g.
     --ros-args -p image_topic:=/cam/image -r /goal_pose:=/nav/goal (needs pip install 'povagent[ros]').
     """
-    from povagent.ros.extras import require_rclpy
+    from povagent.ros.extras import discovery_summary, require_rclpy
 
     rclpy = require_rclpy("ros-node")
+    typer.echo(discovery_summary(), err=True)
     agent = _agent(pipeline, model, floor_height, timeout)
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
@@ -100,10 +101,13 @@ def ros_replay_command(
 
     require_rosbags("ros-replay")
     from povagent.ros.keyframes import MemorySettings
+    from povagent.ros.memory_folder import check_memory_folder
     from povagent.ros.memory_folder import save_memory as write_memory
     from povagent.ros.replay import ReplayTopics, replay_bag
     from povagent.ros.session import GroundingSession, agent_locate
 
+    if save_memory is not None:
+        check_memory_folder(save_memory)  # before the bag is read: a folder we may not write is one line at once
     settings = MemorySettings(min_translation, min_rotation, max_frames)
     topics = ReplayTopics(image=image_topic, camera_info=camera_info_topic, depth=depth_topic, odom=odom_topic)
     agent = _agent(pipeline, model, floor_height, timeout)

@@ -9,7 +9,13 @@ as anything but an image decoder). Depth: ``16UC1`` (millimetres, 0 = no reading
 
 Rows may be padded (``step`` larger than ``width`` x bytes per pixel): the padding is cut.
 Every problem is an :class:`ImageProblem` whose ``kind`` names it (``encoding``,
-``size``, ``compressed``), so a node can count each kind and log it once. Pure.
+``size``, ``compressed``, ``pixel_budget``), so a node can count each kind and log it once. Pure.
+
+The pixel budget (:data:`MAX_PIXELS`) bounds the memory one image may take: a small compressed
+message can claim a huge image (a 1.5 MB bag of twelve 6000 x 6000 PNGs decodes to gigabytes).
+It is checked before any pixel is decoded: from ``width`` and ``height`` of a raw image, and
+from the PNG or JPEG header of a compressed one (Pillow reads only the header until asked for
+pixels); over it is the ``pixel_budget`` kind, never a decode.
 """
 
 from __future__ import annotations
@@ -34,8 +40,12 @@ DEPTH_ENCODINGS: dict[str, tuple[np.dtype, float]] = {
     "mono16": (np.dtype(np.uint16), 0.001),
     "32FC1": (np.dtype(np.float32), 1.0),
 }
-#: The largest image accepted (pixels): a malformed header must not make us allocate gigabytes.
-MAX_PIXELS = 40_000_000
+#: The pixel budget: the largest image decoded (width x height), 4096 x 3072 (12.6 megapixels,
+#: above a robot camera's usual stream). One such RGB image is 38 MB; a full memory of
+#: ``max_frames`` (30) keyframes at most 1.1 GB.
+MAX_PIXELS = 4096 * 3072
+#: The compressed formats read (Pillow is asked for no other decoder).
+COMPRESSED_FORMATS = ("JPEG", "PNG")
 
 
 class ImageProblem(ValueError):
@@ -44,6 +54,11 @@ class ImageProblem(ValueError):
     def __init__(self, kind: str, message: str) -> None:
         super().__init__(message)
         self.kind = kind
+
+
+def _within_budget(width: int, height: int, what: str) -> None:
+    if width * height > MAX_PIXELS:
+        raise ImageProblem("pixel_budget", f"{what} of {width}x{height} pixels is over the pixel budget of {MAX_PIXELS:,}: not decoded")
 
 
 def _raw_bytes(msg: Any) -> np.ndarray:
@@ -56,8 +71,7 @@ def _rows(msg: Any, bytes_per_pixel: int) -> np.ndarray:
     height, width, step = int(msg.height), int(msg.width), int(msg.step)
     if height < 1 or width < 1:
         raise ImageProblem("size", f"image of size {width}x{height}")
-    if height * width > MAX_PIXELS:
-        raise ImageProblem("size", f"image of {width}x{height} pixels is larger than {MAX_PIXELS:,}")
+    _within_budget(width, height, "image")
     row = width * bytes_per_pixel
     if step < row:
         raise ImageProblem("size", f"step {step} is shorter than a row of {width} pixels ({row} bytes)")
@@ -86,15 +100,15 @@ def compressed_to_rgb(msg: Any) -> np.ndarray:
     if data.size == 0:
         raise ImageProblem("size", "compressed image with no data")
     try:
-        with Image.open(io.BytesIO(data.tobytes())) as im:
-            if im.format not in ("JPEG", "PNG"):
-                raise ImageProblem("compressed", f"compressed image holds {im.format}, not JPEG or PNG")
-            if im.width * im.height > MAX_PIXELS:
-                raise ImageProblem("size", f"compressed image of {im.width}x{im.height} pixels is larger than {MAX_PIXELS:,}")
+        # open reads the header only; the pixels are decoded by convert, after the budget check
+        with Image.open(io.BytesIO(data.tobytes()), formats=COMPRESSED_FORMATS) as im:
+            _within_budget(im.width, im.height, "compressed image")
             return np.asarray(im.convert("RGB"))
-    except (UnidentifiedImageError, Image.DecompressionBombError, OSError, ValueError) as exc:
-        if isinstance(exc, ImageProblem):
-            raise
+    except ImageProblem:
+        raise
+    except Image.DecompressionBombError as exc:  # Pillow's own guard, far above ours, met while reading the header
+        raise ImageProblem("pixel_budget", f"compressed image over the pixel budget of {MAX_PIXELS:,}: {exc}; not decoded") from None
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
         raise ImageProblem("compressed", f"cannot decode the compressed image: {exc}") from None
 
 
@@ -112,4 +126,4 @@ def depth_to_metres(msg: Any) -> np.ndarray:
     return metres
 
 
-__all__ = ["COLOUR_ENCODINGS", "DEPTH_ENCODINGS", "MAX_PIXELS", "ImageProblem", "compressed_to_rgb", "depth_to_metres", "image_to_rgb"]
+__all__ = ["COLOUR_ENCODINGS", "COMPRESSED_FORMATS", "DEPTH_ENCODINGS", "MAX_PIXELS", "ImageProblem", "compressed_to_rgb", "depth_to_metres", "image_to_rgb"]

@@ -5,6 +5,12 @@ camera-to-map pose, pose convention, intrinsics and optional depth file), ``fram
 (RGB) and ``depth_NNNN.npy`` (float metres). ``memory.json`` is written last, through a temporary
 file and a rename, so a folder either holds a whole memory or none.
 
+Saving treats the folder as untrusted too: it may be new, empty, or hold an earlier memory (a
+``memory.json`` that reads as one), and any other folder is refused in one line before anything
+is written, so a memory never lands among someone else's files. Every file is written through
+:class:`~povagent.run.confined_write.ConfinedFolder` (aside, then renamed over its name): a link
+planted in the folder is replaced, never written through.
+
 Loading treats the folder as untrusted: file names must be plain names inside the folder (no
 ``/``, no ``..``), images are opened with Pillow's size guard, depth files with
 ``allow_pickle=False``, and every problem is one :class:`~povagent.errors.ConfigError` naming the
@@ -13,8 +19,11 @@ file and the field.
 
 from __future__ import annotations
 
+import io
 import json
 import os
+import re
+import stat
 from pathlib import Path
 from typing import Literal
 
@@ -25,9 +34,15 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from povagent.errors import ConfigError
 from povagent.geometry.goals import PinholeCamera, PoseConvention
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
+from povagent.run.confined_write import ConfinedFolder
 
 MEMORY_FILE = "memory.json"
 FORMAT_VERSION = 1
+#: The largest ``memory.json`` read when deciding whether a folder holds an earlier memory
+#: (30 frames take a few kilobytes; anything far larger is not ours).
+MAX_MEMORY_JSON_BYTES = 16 * 1024 * 1024
+#: The files a saved memory is made of (``memory.json.tmp``: one a killed save left behind).
+_OURS = re.compile(r"^(frame_\d{4,}\.png|depth_\d{4,}\.npy|memory\.json(\.tmp)?)$")
 
 
 class SavedFrame(BaseModel):
@@ -62,31 +77,78 @@ class SavedMemory(BaseModel):
 
 
 def save_memory(memory: KeyframeMemory, folder: str | os.PathLike) -> Path:
-    """Write ``memory`` to ``folder`` (created if needed); returns the ``memory.json`` path."""
+    """Write ``memory`` to ``folder`` (created if needed); returns the ``memory.json`` path.
+
+    ``folder`` must be new, empty or hold an earlier memory (:func:`check_memory_folder`); files
+    of an earlier memory that the new one does not name are removed."""
     root = Path(folder)
-    root.mkdir(parents=True, exist_ok=True)
+    earlier = check_memory_folder(root)
     entries = []
-    for i, frame in enumerate(memory.frames):
-        image = f"frame_{i:04d}.png"
-        Image.fromarray(np.ascontiguousarray(frame.rgb, dtype=np.uint8)).save(root / image)
-        depth = None
-        if frame.depth is not None:
-            depth = f"depth_{i:04d}.npy"
-            np.save(root / depth, np.asarray(frame.depth, dtype=np.float32), allow_pickle=False)
-        cam = frame.camera
-        entries.append(SavedFrame(
-            stamp_ns=frame.stamp_ns, frame_id=frame.frame_id, image=image, depth=depth,
-            camera_to_map=np.asarray(cam.camera_to_world).tolist(), convention=cam.convention.value,
-            fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, width=cam.width, height=cam.height,
-        ))
-    s = memory.settings
-    saved = SavedMemory(min_translation=s.min_translation, min_rotation=s.min_rotation, max_frames=s.max_frames,
-                        coverage_depth=s.coverage_depth, grid=s.grid, frames=entries)
-    target = root / MEMORY_FILE
-    tmp = root / (MEMORY_FILE + ".tmp")
-    tmp.write_text(json.dumps(saved.model_dump(mode="json"), indent=1), encoding="utf-8")
-    os.replace(tmp, target)
-    return target
+    with ConfinedFolder(root) as out:
+        for i, frame in enumerate(memory.frames):
+            image = f"frame_{i:04d}.png"
+            png = io.BytesIO()
+            Image.fromarray(np.ascontiguousarray(frame.rgb, dtype=np.uint8)).save(png, format="PNG")
+            out.write_replace(image, png.getvalue())
+            depth = None
+            if frame.depth is not None:
+                depth = f"depth_{i:04d}.npy"
+                npy = io.BytesIO()
+                np.save(npy, np.asarray(frame.depth, dtype=np.float32), allow_pickle=False)
+                out.write_replace(depth, npy.getvalue())
+            cam = frame.camera
+            entries.append(SavedFrame(
+                stamp_ns=frame.stamp_ns, frame_id=frame.frame_id, image=image, depth=depth,
+                camera_to_map=np.asarray(cam.camera_to_world).tolist(), convention=cam.convention.value,
+                fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, width=cam.width, height=cam.height,
+            ))
+        s = memory.settings
+        saved = SavedMemory(min_translation=s.min_translation, min_rotation=s.min_rotation, max_frames=s.max_frames,
+                            coverage_depth=s.coverage_depth, grid=s.grid, frames=entries)
+        out.write_replace(MEMORY_FILE, json.dumps(saved.model_dump(mode="json"), indent=1), fsync=True)
+        if earlier is not None:
+            named = {f.image for f in entries} | {f.depth for f in entries if f.depth}
+            for stale in ({f.image for f in earlier.frames} | {f.depth for f in earlier.frames if f.depth}) - named:
+                out.unlink(stale)
+    return root / MEMORY_FILE
+
+
+def check_memory_folder(folder: str | os.PathLike) -> SavedMemory | None:
+    """The earlier memory ``folder`` holds (``None`` when it is new or empty); :class:`ConfigError`
+    in one line, before anything is written, when it holds anything else: the files of someone
+    else are never written among. Reads nothing but a regular, bounded ``memory.json``."""
+    root = Path(folder)
+    if not root.is_dir():
+        return None  # missing (made when saving) or not a folder (the confined writer names it)
+    entries = sorted(p.name for p in root.iterdir())
+    if not entries:
+        return None
+    earlier = _earlier_memory(root)
+    if earlier is not None:
+        return earlier
+    shown = ", ".join(entries[:3]) + (f" and {len(entries) - 3} more" if len(entries) > 3 else "")
+    raise ConfigError(
+        f"{root}: not empty and not a saved keyframe memory (it holds {shown}, and no readable {MEMORY_FILE}); "
+        "nothing was written: choose another --save-memory folder, or empty this one"
+    )
+
+
+def _earlier_memory(root: Path) -> SavedMemory | None:
+    """``root``'s ``memory.json`` when it is a plain file of ours and every entry beside it is a
+    memory's file; ``None`` otherwise (a link, a FIFO, a huge file, other files, another format)."""
+    if not all(_OURS.match(p.name) for p in root.iterdir()):
+        return None
+    path = root / MEMORY_FILE
+    try:
+        st = os.lstat(path)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_MEMORY_JSON_BYTES:
+            return None
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as f:
+            text = f.read(MAX_MEMORY_JSON_BYTES + 1)
+        return SavedMemory.model_validate_json(text)
+    except (OSError, ValidationError):
+        return None
 
 
 def load_memory(folder: str | os.PathLike) -> KeyframeMemory:
@@ -141,4 +203,4 @@ def _load_frame(root: Path, path: Path, i: int, entry: SavedFrame) -> Keyframe:
     return Keyframe(entry.stamp_ns, rgb, camera, depth, entry.frame_id)
 
 
-__all__ = ["MEMORY_FILE", "SavedFrame", "SavedMemory", "load_memory", "save_memory"]
+__all__ = ["MAX_MEMORY_JSON_BYTES", "MEMORY_FILE", "SavedFrame", "SavedMemory", "check_memory_folder", "load_memory", "save_memory"]

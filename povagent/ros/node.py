@@ -14,24 +14,24 @@ Topics (parameters give the names; defaults in :data:`DEFAULT_PARAMETERS`):
 
 Every message goes to the same :class:`~povagent.ros.session.GroundingSession` the bag replay
 uses. The model is never called on the executor: commands go to a bounded queue served by one
-worker thread, so images keep arriving while a command is answered; a command that has to wait
-gets a ``queued`` result at once, one that finds the queue full a ``queue_full`` result. A
-malformed message is counted and logged once per kind. A camera mount given as parameters
-(``mount_parent``, ``mount_child``, ``mount_transform`` = x y z qx qy qz qw) stands in for
-``/tf_static`` where none is published.
+worker thread (:mod:`~povagent.ros.command_worker`), so images keep arriving while a command is
+answered; a command that has to wait gets a ``queued`` result at once, one that finds the queue
+full a ``queue_full`` result, and every command one final result. A malformed message is counted
+and logged once per kind. A camera mount given as parameters (``mount_parent``, ``mount_child``,
+``mount_transform`` = x y z qx qy qz qw) stands in for ``/tf_static`` where none is published.
 """
 
 from __future__ import annotations
 
 import math
-import queue
 import threading
 from typing import Any
 
 from povagent.errors import ConfigError
+from povagent.ros.command_worker import CommandWorker
 from povagent.ros.extras import ROS_EXTRA, prepare_ros_environment, tf2_messages
 from povagent.ros.keyframes import DEFAULT_MAX_FRAMES, DEFAULT_MIN_ROTATION, DEFAULT_MIN_TRANSLATION, MemorySettings
-from povagent.ros.result import CommandResult, CommandStatus
+from povagent.ros.result import CommandResult
 from povagent.ros.session import GroundingSession, Locate
 from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S
 from povagent.ros.transforms import RigidTransform, TransformProblem
@@ -41,7 +41,7 @@ try:
     from geometry_msgs.msg import PointStamped, PoseStamped
     from nav_msgs.msg import Odometry
     from rclpy.node import Node
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
     from rclpy.time import Time
     from sensor_msgs.msg import CameraInfo, CompressedImage, Image
     from std_msgs.msg import String
@@ -71,6 +71,13 @@ DEFAULT_PARAMETERS: dict[str, Any] = {
     "mount_transform": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
 }
 
+#: ``~/command``: reliable, and every command kept until the executor takes it: a history of 10
+#: dropped all but 10 of a burst before the node saw them; taken, each gets a final result.
+COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_ALL, reliability=ReliabilityPolicy.RELIABLE)
+#: ``~/result``: reliable, the last 1,000 results kept for a subscriber catching up after a burst
+#: (a history, not KEEP_ALL: a slow subscriber must never block the worker's publish).
+RESULT_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+
 
 class GroundingNode(Node):
     """``povagent`` as a ROS 2 node (see the module docstring); ``close()`` stops its worker."""
@@ -97,14 +104,12 @@ class GroundingNode(Node):
         )
         if p["mount_child"]:
             self.session.add_static(str(p["mount_parent"]), str(p["mount_child"]), mount)
-        self._commands: queue.Queue[str | None] = queue.Queue(maxsize=max(1, int(p["max_queue"])))
-        self._busy = threading.Event()
         # held while publishing and while closing: no publish can reach a destroyed publisher
         self._publishing = threading.Lock()
         self._closed = False
         self.goal_pub = self.create_publisher(PointStamped, "~/goal", 10)
         self.goal_pose_pub = self.create_publisher(PoseStamped, "/goal_pose", 10)
-        self.result_pub = self.create_publisher(String, "~/result", 10)
+        self.result_pub = self.create_publisher(String, "~/result", RESULT_QOS)
         # reliable: a queue as deep as a short tour, so a slow answerer loses no image of a recorded playback
         image_qos = QoSProfile(depth=30, reliability=ReliabilityPolicy.RELIABLE) if p["reliable_images"] else qos_profile_sensor_data
         image_topic = str(p["image_topic"])
@@ -127,9 +132,9 @@ class GroundingNode(Node):
                 "tf2_msgs is not installed (it has no PyPI wheel): /tf and /tf_static are not read; "
                 "poses come from odom_topic and the mount_* parameters"
             )
-        self.create_subscription(String, "~/command", self._on_command, 10)
-        self._worker = threading.Thread(target=self._serve, name="povagent-ros-worker", daemon=True)
-        self._worker.start()
+        self.commands = CommandWorker(self.session.answer, self.publish_result, map_frame=self.session.map_frame,
+                                      max_queue=int(p["max_queue"]), log_bug=self.get_logger().error)
+        self.create_subscription(String, "~/command", lambda msg: self.commands.submit(str(msg.data)), COMMAND_QOS)
 
     # -- messages -----------------------------------------------------------------------------
     def _guarded(self, take: Any) -> Any:
@@ -144,35 +149,7 @@ class GroundingNode(Node):
         if first:
             self.get_logger().warning(f"malformed input ({kind}): {message}; counted, further {kind} problems are not logged")
 
-    # -- commands -----------------------------------------------------------------------------
-    def _on_command(self, msg: Any) -> None:
-        command = str(msg.data)
-        waiting = self._commands.qsize() + (1 if self._busy.is_set() else 0)
-        try:
-            self._commands.put_nowait(command)
-        except queue.Full:
-            self.publish_result(CommandResult(command=command, status=CommandStatus.QUEUE_FULL, map_frame=self.session.map_frame,
-                                              reason=f"{waiting} command(s) ahead and the queue holds {self._commands.maxsize}"))
-            return
-        if waiting:
-            self.publish_result(CommandResult(command=command, status=CommandStatus.QUEUED, map_frame=self.session.map_frame,
-                                              queue_position=waiting, reason=f"answered after {waiting} command(s) ahead"))
-
-    def _serve(self) -> None:
-        while True:
-            command = self._commands.get()
-            if command is None:
-                return
-            self._busy.set()
-            try:
-                result = self.session.answer(command)
-            except Exception as exc:
-                result = CommandResult(command=command, status=CommandStatus.NO_ANSWER, map_frame=self.session.map_frame,
-                                       reason=f"unexpected {type(exc).__name__}: {exc}")
-            finally:
-                self._busy.clear()
-            self.publish_result(result)
-
+    # -- results ------------------------------------------------------------------------------
     def publish_result(self, result: CommandResult) -> None:
         """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose`` (nothing once closed)."""
         with self._publishing:
@@ -197,7 +174,7 @@ class GroundingNode(Node):
     @property
     def answering(self) -> bool:
         """Whether the worker is answering a command now."""
-        return self._busy.is_set()
+        return self.commands.answering
 
     def close(self) -> None:
         """Stop the worker (after the command it is answering), join it, then destroy the node.
@@ -207,21 +184,12 @@ class GroundingNode(Node):
         worker still answering after ``CLOSE_TIMEOUT_S`` is left to finish on its own: its result
         is not published (the publishers are gone), and a warning says so.
         """
-        self._drain()
-        self._commands.put(None)
-        self._worker.join(timeout=CLOSE_TIMEOUT_S)
-        if self._worker.is_alive():
+        self.commands.close(timeout=CLOSE_TIMEOUT_S)
+        if self.commands.answering:
             self.get_logger().warning(f"a command was still being answered after {CLOSE_TIMEOUT_S:g} s; its result is dropped")
         with self._publishing:
             self._closed = True
             self.destroy_node()
 
-    def _drain(self) -> None:
-        while True:
-            try:
-                self._commands.get_nowait()
-            except queue.Empty:
-                return
 
-
-__all__ = ["DEFAULT_PARAMETERS", "GroundingNode"]
+__all__ = ["COMMAND_QOS", "DEFAULT_PARAMETERS", "RESULT_QOS", "GroundingNode"]

@@ -5,8 +5,11 @@ log-time order and each message on the chosen topics goes to the
 :class:`~povagent.ros.session.GroundingSession` call the node's subscription makes for it; then
 the command is answered. Messages are deserialized with the definitions the bag carries, or
 ROS 2 Jazzy's standard ones when it carries none. A bag that cannot be opened is one
-:class:`~povagent.errors.ConfigError` naming it; a message that cannot be deserialized is counted
-(``deserialize``) like any malformed message, and the replay goes on.
+:class:`~povagent.errors.ConfigError` naming it, on one line whatever the reader said; a message
+that cannot be deserialized is counted (``deserialize``) like any malformed message, and the
+replay goes on. So is a message of another type than its topic takes (a ``std_msgs/String``
+under the camera_info topic), or whose definition, carried in the bag under the right name, lacks
+a field read (``message_type``): it is never handed on.
 """
 
 from __future__ import annotations
@@ -22,6 +25,11 @@ from povagent.ros.session import GroundingSession
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
+CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+ODOMETRY = "nav_msgs/msg/Odometry"
+#: The longest reader message quoted in the one-line error of a bag that cannot be opened.
+MAX_REASON_CHARS = 300
 
 
 @dataclass(frozen=True)
@@ -45,25 +53,29 @@ def replay_bag(bag: str | os.PathLike, session: GroundingSession, topics: Replay
     path = Path(bag)
     if not path.exists():
         raise ConfigError(f"{path}: no such bag")
-    takes: dict[str, Callable[[Any, str], None]] = {}
+    # topic -> (the message types it takes, what takes one)
+    takes: dict[str, tuple[tuple[str, ...], Callable[[Any, str], None]]] = {}
     if topics.image:
-        takes[topics.image] = lambda m, t: session.on_compressed_image(m) if t == COMPRESSED else session.on_image(m)
+        takes[topics.image] = ((IMAGE, COMPRESSED), lambda m, t: session.on_compressed_image(m) if t == COMPRESSED else session.on_image(m))
     if topics.camera_info:
-        takes[topics.camera_info] = lambda m, t: session.on_camera_info(m)
+        takes[topics.camera_info] = ((CAMERA_INFO,), lambda m, t: session.on_camera_info(m))
     if topics.depth:
-        takes[topics.depth] = lambda m, t: session.on_depth(m)
+        takes[topics.depth] = ((IMAGE,), lambda m, t: session.on_depth(m))
     if topics.tf:
-        takes[topics.tf] = lambda m, t: session.on_tf(m)
+        takes[topics.tf] = ((TF_MESSAGE,), lambda m, t: session.on_tf(m))
     if topics.tf_static:
-        takes[topics.tf_static] = lambda m, t: session.on_tf(m, static=True)
+        takes[topics.tf_static] = ((TF_MESSAGE,), lambda m, t: session.on_tf(m, static=True))
     if topics.odom:
-        takes[topics.odom] = lambda m, t: session.on_odometry(m)
+        takes[topics.odom] = ((ODOMETRY,), lambda m, t: session.on_odometry(m))
     count = 0
     try:
         reader = highlevel.AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY))
         reader.open()
     except Exception as exc:
-        raise ConfigError(f"{path}: cannot open the bag: {type(exc).__name__}: {exc}") from None
+        reason = " ".join(f"{type(exc).__name__}: {exc}".split())  # a YAML error spans lines: one line
+        if len(reason) > MAX_REASON_CHARS:
+            reason = reason[:MAX_REASON_CHARS] + "..."
+        raise ConfigError(f"{path}: cannot open the bag: {reason}") from None
     try:
         connections = [c for c in reader.connections if c.topic in takes]
         if not any(c.topic == topics.image for c in connections):
@@ -71,16 +83,23 @@ def replay_bag(bag: str | os.PathLike, session: GroundingSession, topics: Replay
             raise ConfigError(f"{path}: no image topic {topics.image!r} in the bag (topics: {found}); give --image-topic")
         for connection, _, raw in reader.messages(connections=connections):
             count += 1
+            types, take = takes[connection.topic]
+            if connection.msgtype not in types:
+                session.problem("message_type", f"{connection.topic}: a {connection.msgtype} message, but the topic takes {' or '.join(types)}")
+                continue
             try:
                 msg = reader.deserialize(raw, connection.msgtype)
             except Exception as exc:
                 session.problem("deserialize", f"{connection.topic}: {type(exc).__name__}: {exc}")
                 continue
-            takes[connection.topic](msg, connection.msgtype)
+            try:
+                take(msg, connection.msgtype)
+            except (AttributeError, TypeError) as exc:  # the bag's own definition of the type differs from the standard one
+                session.problem("message_type", f"{connection.topic}: the bag's {connection.msgtype} is not the standard one ({type(exc).__name__}: {exc})")
     finally:
         reader.close()
     session.flush()
     return count
 
 
-__all__ = ["COMPRESSED", "IMAGE", "ReplayTopics", "replay_bag"]
+__all__ = ["CAMERA_INFO", "COMPRESSED", "IMAGE", "ODOMETRY", "TF_MESSAGE", "ReplayTopics", "replay_bag"]

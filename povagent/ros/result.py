@@ -3,7 +3,8 @@
 Every command gets one :class:`CommandResult`, never silence: a goal (``ok``), a pixel without a
 3D point (``no_goal``), or a typed reason it could not be answered. A command that arrives while
 another is answered first gets a ``queued`` result (its place in the queue), then its own answer;
-one that finds the queue full gets ``queue_full``.
+one that finds the queue full gets ``queue_full`` (it is dropped, and says so). A bug met while
+answering is that command's ``internal_error``, and the next command is answered.
 """
 
 from __future__ import annotations
@@ -33,8 +34,10 @@ class CommandStatus(StrEnum):
     EMPTY_COMMAND = "empty_command"
     #: accepted, waiting behind another command
     QUEUED = "queued"
-    #: refused: the command queue is full
+    #: refused: the command queue is full (the command is dropped; send it again later)
     QUEUE_FULL = "queue_full"
+    #: answering or publishing raised an unexpected error (a bug: the node logs its traceback)
+    INTERNAL_ERROR = "internal_error"
 
 
 class CommandResult(BaseModel):

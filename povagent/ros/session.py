@@ -35,7 +35,7 @@ from povagent.ros.camera_info import CameraProblem, Intrinsics, intrinsics_from_
 from povagent.ros.images import ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
 from povagent.ros.result import CommandResult, CommandStatus
-from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S, PoseUnavailable, TransformBuffer, stamp_ns
+from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S, PoseUnavailable, StampProblem, TransformBuffer, stamp_ns
 from povagent.ros.transforms import RigidTransform, TransformProblem, pose_convention
 
 #: What answers a command: the agent's ``locate`` over the memory's frames, cameras and depths.
@@ -119,12 +119,13 @@ class GroundingSession:
     def on_depth(self, msg: Any) -> None:
         """A depth ``sensor_msgs/Image``, kept for the colour image with the same stamp."""
         try:
+            stamp = stamp_ns(msg.header.stamp)
             metres = depth_to_metres(msg)
-        except ImageProblem as exc:
+        except (ImageProblem, StampProblem) as exc:
             self.problem(f"depth_{exc.kind}", f"depth: {exc}")
             return
         with self._lock:
-            self._depths.append((stamp_ns(msg.header.stamp), metres))
+            self._depths.append((stamp, metres))
 
     def on_tf(self, msg: Any, static: bool = False) -> None:
         """A ``tf2_msgs/TFMessage`` from ``/tf`` or (``static``) ``/tf_static``."""
@@ -133,6 +134,9 @@ class GroundingSession:
                 self.transforms.add_message(msg, static=static)
         except TransformProblem as exc:
             self.problem("transform", str(exc))
+            return
+        except StampProblem as exc:
+            self.problem(exc.kind, f"transform: {exc}")
             return
         self._retry_pending()
 
@@ -143,6 +147,9 @@ class GroundingSession:
                 self.transforms.add_odometry(msg)
         except TransformProblem as exc:
             self.problem("transform", str(exc))
+            return
+        except StampProblem as exc:
+            self.problem(exc.kind, f"odometry: {exc}")
             return
         self._retry_pending()
 
@@ -155,8 +162,9 @@ class GroundingSession:
         with self._lock:
             self.images_seen += 1
         try:
+            stamp = stamp_ns(msg.header.stamp)
             rgb = decode(msg)
-        except ImageProblem as exc:
+        except (ImageProblem, StampProblem) as exc:
             self.problem(exc.kind, str(exc))
             return
         with self._lock:
@@ -167,7 +175,6 @@ class GroundingSession:
         if (rgb.shape[1], rgb.shape[0]) != (intrinsics.width, intrinsics.height):
             self.problem("size_mismatch", f"image of {rgb.shape[1]}x{rgb.shape[0]} but camera_info says {intrinsics.width}x{intrinsics.height}")
             return
-        stamp = stamp_ns(msg.header.stamp)
         overflow: list[_Pending] = []
         with self._lock:
             depth = next((d for s, d in self._depths if s == stamp), None)

@@ -10,7 +10,9 @@ either side of it, and is the nearest sample itself otherwise. The rule that ref
 ``tolerance_s`` from ``t`` (a gap in the data or a stamp far from any transform), or when no
 chain joins the two frames. Nothing is extrapolated.
 
-Pure: stamps are integers of nanoseconds; no clock is read.
+Pure: stamps are integers of nanoseconds; no clock is read. A stamp is a time since the epoch,
+as ``builtin_interfaces/Time`` means it: negative seconds, or nanoseconds outside a second, are
+a :class:`StampProblem` (malformed input, counted like any other), never a stamp.
 """
 
 from __future__ import annotations
@@ -40,9 +42,18 @@ class PoseUnavailable(ValueError):
     kind = "missing_transform"
 
 
+class StampProblem(ValueError):
+    """A header stamp that is no time (see the module docstring); ``kind`` is its counter."""
+
+    kind = "stamp"
+
+
 def stamp_ns(stamp: Any) -> int:
-    """A ``builtin_interfaces/Time`` as integer nanoseconds."""
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+    """A ``builtin_interfaces/Time`` as integer nanoseconds; :class:`StampProblem` when it is no time."""
+    sec, nanosec = int(stamp.sec), int(stamp.nanosec)
+    if sec < 0 or not 0 <= nanosec < 1_000_000_000:
+        raise StampProblem(f"header stamp {sec} s {nanosec} ns is not a time (seconds must be >= 0, nanoseconds 0-999999999)")
+    return sec * 1_000_000_000 + nanosec
 
 
 def _clean(frame: str) -> str:
@@ -175,4 +186,4 @@ def add_transforms(buffer: TransformBuffer, transforms: Iterable[tuple[str, str,
         buffer.add(parent, child, stamp, transform, static)
 
 
-__all__ = ["DEFAULT_CACHE_S", "DEFAULT_TOLERANCE_S", "MAX_FRAMES", "MAX_SAMPLES_PER_EDGE", "PoseUnavailable", "TransformBuffer", "add_transforms", "stamp_ns"]
+__all__ = ["DEFAULT_CACHE_S", "DEFAULT_TOLERANCE_S", "MAX_FRAMES", "MAX_SAMPLES_PER_EDGE", "PoseUnavailable", "StampProblem", "TransformBuffer", "add_transforms", "stamp_ns"]

@@ -68,3 +68,17 @@ def test_ros_replay_of_a_missing_bag_is_one_line(tmp_path):
     (tmp_path / "center.yaml").write_text(CENTER)
     result = CliRunner().invoke(app, ["ros-replay", str(tmp_path / "nowhere"), "--command", "x", "--pipeline", str(tmp_path / "center.yaml")])
     assert isinstance(result.exception, ConfigError) and str(result.exception) == f"{tmp_path / 'nowhere'}: no such bag"
+
+
+def test_ros_replay_refuses_to_save_a_memory_among_someone_elses_files_in_one_line_before_reading_the_bag(tmp_path):
+    (tmp_path / "center.yaml").write_text(CENTER)
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "todo.txt").write_text("mine")
+    # the bag does not exist: the folder is refused before the bag is even looked at
+    proc = povagent("ros-replay", "nowhere", "--command", "x", "--pipeline", "center.yaml", "--save-memory", "notes", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.splitlines() == [
+        "error: notes: not empty and not a saved keyframe memory (it holds todo.txt, and no readable memory.json); "
+        "nothing was written: choose another --save-memory folder, or empty this one"
+    ]
+    assert [p.name for p in (tmp_path / "notes").iterdir()] == ["todo.txt"]

@@ -9,7 +9,9 @@ shut down at the end of the session.
 from __future__ import annotations
 
 import os
+import struct
 import time
+import zlib
 from typing import Any, Callable, Iterator
 
 import pytest
@@ -62,6 +64,21 @@ def _wait_until(condition: Callable[[], Any], timeout: float = 20.0, what: str =
 def wait_until() -> Callable[..., Any]:
     """``wait_until(condition, timeout=20, what=...)``: poll until truthy, else fail naming ``what``."""
     return _wait_until
+
+
+def _claimed_png(width: int, height: int) -> bytes:
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)  # 8-bit RGB
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(b"\x00" * 64))
+
+
+@pytest.fixture(scope="session")
+def claimed_png() -> Callable[[int, int], bytes]:
+    """``claimed_png(width, height)``: a PNG that claims that many RGB pixels and holds a few bytes
+    of them, so any attempt to decode it fails: only a check made before decoding names its size."""
+    return _claimed_png
 
 
 @pytest.fixture(scope="session")

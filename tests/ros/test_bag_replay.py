@@ -86,3 +86,61 @@ def test_a_damaged_record_in_a_bag_is_counted_and_the_replay_goes_on(tour, simul
     session = GroundingSession(simulated_locate)
     replay_bag(tmp_path / "damaged", session)
     assert session.problems["deserialize"] == 1 and session.answer("x").status == "no_keyframes"
+
+
+def write_bag(folder, topics, messages):
+    """A bag at ``folder`` with ``topics`` (topic -> (type, typestore)) and ``messages`` ((topic, message) in order)."""
+    from rosbags.rosbag2 import Writer
+
+    with Writer(folder, version=9) as writer:
+        connections = {topic: (writer.add_connection(topic, msgtype, typestore=store), msgtype, store) for topic, (msgtype, store) in topics.items()}
+        for i, (topic, msg) in enumerate(messages):
+            connection, msgtype, store = connections[topic]
+            writer.write(connection, i + 1, store.serialize_cdr(msg, msgtype))
+    return folder
+
+
+def test_compressed_images_over_the_pixel_budget_are_counted_and_never_decoded(tmp_path, simulated_locate, claimed_png):
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    Compressed, Header, Time = (store.types[t] for t in ("sensor_msgs/msg/CompressedImage", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"))
+    png = np.frombuffer(claimed_png(6000, 6000), dtype=np.uint8)
+    images = [("/camera/image_raw/compressed", Compressed(header=Header(stamp=Time(sec=i, nanosec=0), frame_id="cam"), format="png", data=png)) for i in range(12)]
+    bag = write_bag(tmp_path / "huge", {"/camera/image_raw/compressed": ("sensor_msgs/msg/CompressedImage", store)}, images)
+    session = GroundingSession(simulated_locate)
+    replay_bag(bag, session, ReplayTopics(image="/camera/image_raw/compressed"))
+    assert session.problems == {"pixel_budget": 12}
+
+
+def test_a_message_of_another_type_under_a_known_topic_is_counted_not_a_traceback(tmp_path, simulated_locate):
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    String = store.types["std_msgs/msg/String"]
+    topics = {"/camera/camera_info": ("std_msgs/msg/String", store), "/camera/image_raw": ("sensor_msgs/msg/Image", store)}
+    session = GroundingSession(simulated_locate)
+    replay_bag(write_bag(tmp_path / "wrong", topics, [("/camera/camera_info", String(data="not a calibration"))]), session)
+    assert session.problems == {"message_type": 1}
+
+
+def test_a_bag_defining_a_known_type_its_own_way_is_counted_not_a_traceback(tmp_path, simulated_locate):
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    own = get_typestore(Stores.EMPTY)
+    own.register(get_types_from_msg("string data", "sensor_msgs/msg/CameraInfo"))  # the bag carries this definition
+    topics = {"/camera/camera_info": ("sensor_msgs/msg/CameraInfo", own), "/camera/image_raw": ("sensor_msgs/msg/Image", get_typestore(Stores.ROS2_JAZZY))}
+    bag = write_bag(tmp_path / "own", topics, [("/camera/camera_info", own.types["sensor_msgs/msg/CameraInfo"](data="no K here"))])
+    session = GroundingSession(simulated_locate)
+    replay_bag(bag, session)
+    assert session.problems == {"message_type": 1}
+
+
+def test_a_metadata_file_with_a_python_tag_is_refused_in_one_line_and_runs_nothing(tmp_path, simulated_locate):
+    bag = tmp_path / "tagged"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text(f"rosbag2_bagfile_information: !!python/object/apply:os.system ['touch {tmp_path / 'ran'}']\n")
+    with pytest.raises(ConfigError) as info:
+        replay_bag(bag, GroundingSession(simulated_locate))
+    assert str(info.value).startswith(f"{bag}: cannot open the bag: ") and "python/object/apply" in str(info.value)
+    assert "\n" not in str(info.value) and not (tmp_path / "ran").exists()

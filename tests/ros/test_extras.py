@@ -41,3 +41,26 @@ def test_without_a_home_directory_ros_logs_go_to_a_temporary_folder(monkeypatch)
     monkeypatch.delenv("ROS_LOG_DIR", raising=False)
     prepare_ros_environment()
     assert os.path.isdir(os.environ["ROS_LOG_DIR"])
+
+
+DISCOVERY = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_STATIC_PEERS", "ROS_LOCALHOST_ONLY")
+
+
+def test_with_no_discovery_variable_set_ros_discovers_on_this_machine_only(monkeypatch):
+    import os
+
+    for name in DISCOVERY:
+        monkeypatch.delenv(name, raising=False)
+    prepare_ros_environment()
+    assert os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+
+
+@pytest.mark.parametrize(("name", "value"), [("ROS_AUTOMATIC_DISCOVERY_RANGE", "SUBNET"), ("ROS_STATIC_PEERS", "192.168.1.20"), ("ROS_LOCALHOST_ONLY", "0")])
+def test_a_discovery_variable_the_user_set_is_kept_and_no_range_is_added(monkeypatch, name, value):
+    import os
+
+    for other in DISCOVERY:
+        monkeypatch.delenv(other, raising=False)
+    monkeypatch.setenv(name, value)
+    prepare_ros_environment()
+    assert {k: os.environ.get(k) for k in DISCOVERY} == {k: value if k == name else None for k in DISCOVERY}

@@ -4,13 +4,14 @@ with the same field names, as both rclpy and rosbags give them)."""
 from __future__ import annotations
 
 import io
+import struct
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.ros.images import ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
+from povagent.ros.images import MAX_PIXELS, ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
 
 RGB = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3) * 10
 
@@ -74,8 +75,54 @@ def test_a_size_that_does_not_add_up_is_a_size_problem(broken):
 def test_a_huge_claimed_size_is_refused_before_reading():
     msg = message(RGB, "rgb8")
     msg.width, msg.height, msg.step = 100_000, 100_000, 300_000
-    with pytest.raises(ImageProblem, match="larger than"):
+    with pytest.raises(ImageProblem, match="over the pixel budget"):
         image_to_rgb(msg)
+
+
+def jpeg_header(width: int, height: int) -> bytes:
+    """A real 16x16 JPEG whose frame header (SOF0) is rewritten to claim ``width`` x ``height``."""
+    buf = io.BytesIO()
+    Image.fromarray(np.zeros((16, 16, 3), np.uint8)).save(buf, format="JPEG")
+    data = bytearray(buf.getvalue())
+    sof = data.index(b"\xff\xc0")
+    data[sof + 5:sof + 9] = struct.pack(">HH", height, width)
+    return bytes(data)
+
+
+@pytest.mark.parametrize(("fmt", "header"), [("png", None), ("jpeg", jpeg_header)])
+def test_a_compressed_image_over_the_pixel_budget_is_refused_from_its_header_never_decoded(fmt, header, claimed_png):
+    header = claimed_png if header is None else header
+    with pytest.raises(ImageProblem, match=r"6000x6000 pixels is over the pixel budget") as info:
+        compressed_to_rgb(SimpleNamespace(format=fmt, data=header(6000, 6000)))
+    assert info.value.kind == "pixel_budget"
+
+
+def test_an_image_at_the_pixel_budget_goes_on_to_be_decoded_and_one_row_more_does_not(claimed_png):
+    width = 4096
+    height = MAX_PIXELS // width
+    raw = message(RGB, "rgb8")  # claims the budget's size, holds 18 bytes: reading it fails on its data
+    raw.width, raw.height, raw.step = width, height, 3 * width
+    kinds = []
+    for rows in (height, height + 1):
+        raw.height = rows
+        for decode, msg in ((image_to_rgb, raw), (compressed_to_rgb, SimpleNamespace(format="png", data=claimed_png(width, rows)))):
+            with pytest.raises(ImageProblem) as info:
+                decode(msg)
+            kinds.append(info.value.kind)
+    assert kinds == ["size", "compressed", "pixel_budget", "pixel_budget"]
+
+
+def test_a_raw_image_over_the_pixel_budget_is_its_own_kind_whatever_its_data():
+    msg = message(RGB, "rgb8")
+    msg.width, msg.height, msg.step = 6000, 6000, 18000
+    with pytest.raises(ImageProblem) as info:
+        image_to_rgb(msg)
+    assert info.value.kind == "pixel_budget"
+    depth = message(np.zeros((2, 3), "<u2")[..., None], "16UC1")
+    depth.width, depth.height, depth.step = 6000, 6000, 12000
+    with pytest.raises(ImageProblem) as info:
+        depth_to_metres(depth)
+    assert info.value.kind == "pixel_budget"
 
 
 @pytest.mark.parametrize(("fmt", "pil"), [("png", "PNG"), ("rgb8; jpeg compressed bgr8", "JPEG")])

@@ -88,3 +88,46 @@ def test_a_pickled_depth_file_is_not_loaded(tmp_path):
     np.save(tmp_path / "mem" / "depth_0001.npy", np.array([{"x": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(ConfigError, match=r"frames\[1\].depth"):
         load_memory(tmp_path / "mem")
+
+
+def test_links_planted_in_an_earlier_memory_are_replaced_and_the_files_they_point_at_untouched(tmp_path):
+    save_memory(memory_with_two_frames(), tmp_path / "mem")
+    outside = {name: tmp_path / f"precious_{name}" for name in ("frame_0000.png", "depth_0001.npy", "frame_0001.png")}
+    for name, target in outside.items():
+        target.write_bytes(b"someone else's bytes")
+        (tmp_path / "mem" / name).unlink()
+        (tmp_path / "mem" / name).symlink_to(target)
+    save_memory(memory_with_two_frames(), tmp_path / "mem")
+    assert all(target.read_bytes() == b"someone else's bytes" for target in outside.values())
+    assert not any((tmp_path / "mem" / name).is_symlink() for name in outside)
+    assert len(load_memory(tmp_path / "mem")) == 2
+
+
+def test_a_folder_holding_someone_elses_files_is_refused_in_one_line_and_left_untouched(tmp_path):
+    folder = tmp_path / "notes"
+    folder.mkdir()
+    (folder / "thesis.tex").write_text("mine")
+    (folder / "frame_0000.png").symlink_to(tmp_path / "elsewhere.png")
+    before = {p.name: (p.is_symlink(), p.read_text() if not p.is_symlink() else "") for p in folder.iterdir()}
+    with pytest.raises(ConfigError) as info:
+        save_memory(memory_with_two_frames(), folder)
+    assert str(info.value).startswith(f"{folder}: not empty and not a saved keyframe memory") and "\n" not in str(info.value)
+    assert {p.name: (p.is_symlink(), p.read_text() if not p.is_symlink() else "") for p in folder.iterdir()} == before
+    assert not (tmp_path / "elsewhere.png").exists()
+
+
+def test_a_memory_json_planted_as_a_link_is_not_taken_for_an_earlier_memory(tmp_path):
+    save_memory(memory_with_two_frames(), tmp_path / "real")
+    folder = tmp_path / "planted"
+    folder.mkdir()
+    (folder / MEMORY_FILE).symlink_to(tmp_path / "real" / MEMORY_FILE)
+    with pytest.raises(ConfigError, match="not empty and not a saved keyframe memory"):
+        save_memory(memory_with_two_frames(), folder)
+
+
+def test_saving_a_smaller_memory_over_an_earlier_one_removes_the_frames_it_no_longer_names(tmp_path):
+    save_memory(memory_with_two_frames(), tmp_path / "mem")
+    one = memory_with_two_frames()
+    one.restore(one.frames[:1])
+    save_memory(one, tmp_path / "mem")
+    assert sorted(p.name for p in (tmp_path / "mem").iterdir()) == ["frame_0000.png", MEMORY_FILE]
