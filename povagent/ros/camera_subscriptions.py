@@ -25,7 +25,9 @@ The node therefore subscribes each stream twice, to the same session:
   before the node started). A second copy of a calibration sets the same intrinsics again.
 
 A reliable subscription facing a best-effort driver is an expected mismatch, not a fault: those
-subscriptions log no "incompatible QoS" warning. ``reliable_images:=true`` keeps only the
+subscriptions log no "incompatible QoS" warning (the driver's own publisher may log one line per
+topic when the node starts; a subscription made only once a reliable publisher shows up would
+spare that line but miss the start of a script's burst, which is what the reliable one is for). ``reliable_images:=true`` keeps only the
 reliable subscriptions (no second copies; a best-effort driver is then not heard). Images that arrive before their calibration wait for it
 (:mod:`~povagent.ros.session`), so the order of the two topics does not matter.
 """
