@@ -8,6 +8,7 @@ they stop with one line naming it.
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,7 @@ def ros_node_command(
     /goal_pose, the answer as JSON on ~/result. ROS arguments follow, e.g.
     --ros-args -p image_topic:=/cam/image -r /goal_pose:=/nav/goal (needs pip install 'povagent[ros]').
     """
+    from povagent.errors import ConfigError
     from povagent.ros.extras import require_rclpy
 
     rclpy = require_rclpy("ros-node")
@@ -56,7 +58,11 @@ def ros_node_command(
     from povagent.ros.node import GroundingNode
     from povagent.ros.session import agent_locate
 
-    rclpy.init(args=["povagent", *ctx.args])
+    try:
+        rclpy.init(args=["povagent", *ctx.args])
+    except RuntimeError as exc:  # rclpy's RCLError: ROS arguments rcl cannot read
+        agent.close()
+        raise ConfigError(_ros_arguments_problem(str(exc))) from None
     node = GroundingNode(agent_locate(agent))
     try:
         rclpy.spin(node)
@@ -67,6 +73,16 @@ def ros_node_command(
         agent.close()
         if rclpy.ok():
             rclpy.shutdown()
+
+
+def _ros_arguments_problem(rcl_message: str) -> str:
+    """rcl's refusal of the ROS arguments as one line: its source locations dropped, and for an
+    array mixing whole numbers and decimals (YAML types them apart) what to write instead."""
+    text = re.sub(r"(,? at /\S+:\d+)+|,? at line_num \d+", "", rcl_message).removeprefix("failed to initialize rcl: ").strip()
+    hint = ""
+    if "Sequence should be of same type" in text:
+        hint = ' (write every number of an array as a decimal, 0.0 not 0, or give mount_transform as one string: mount_transform:="x y z qx qy qz qw")'
+    return f"ros-node: the ROS arguments could not be read: {text}{hint}"
 
 
 @app.command("ros-replay")

@@ -80,3 +80,14 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
     if tf2_messages() is None:  # the PyPI packages alone: the odometry's frame, decided by its first message
         assert "goals will be in the frame of the first odometry message on /odom" in err
         assert "goals are in the 'map' frame: the frame of the odometry on /odom" in err
+
+
+def test_ros_arguments_rcl_cannot_read_are_one_error_line_not_a_traceback(ros_graph, tmp_path):
+    (tmp_path / "center.yaml").write_text("backend: center\nstrategy: basic\nparser: json\n")
+    mixed = "mount_transform:=[0.1, 0, 0.9, -0.5, 0.5, -0.5, 0.5]"  # YAML reads 0 as an integer among decimals
+    proc = subprocess.run([sys.executable, "-m", "povagent.cli", "ros-node", "--pipeline", "center.yaml", "--ros-args", "-p", mixed],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    [line] = [x for x in proc.stderr.splitlines() if x.startswith("error:")]
+    assert line.startswith("error: ros-node: the ROS arguments could not be read: Couldn't parse parameter override rule")
+    assert "0.0 not 0" in line
