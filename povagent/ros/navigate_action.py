@@ -89,6 +89,7 @@ class NavigateToPose:
         self.interface = interface if interface is not None else nav2_navigate_to_pose()
         self.client: ActionClient[Any, Any, Any] = ActionClient(node, self.interface.action_type, action_name)
         self._on_outcome = on_outcome
+        self._destroyed = False
 
     def send(self, pose: Any, result: CommandResult) -> NavigationOutcome:
         """Send ``pose`` as a goal for the command ``result`` answers; the outcome follows through ``on_outcome``."""
@@ -120,8 +121,10 @@ class NavigateToPose:
         self._on_outcome(result.model_copy(update={"navigation": outcome}))
 
     def destroy(self) -> None:
-        """Destroy the action client (before the node)."""
-        self.client.destroy()
+        """Destroy the action client (before the node); a second call does nothing."""
+        if not self._destroyed:
+            self._destroyed = True
+            self.client.destroy()
 
 
 __all__ = ["NAV2_ACTION", "TERMINAL", "NavigateToPose", "NavigationInterface", "nav2_navigate_to_pose", "outcome_of"]

@@ -200,8 +200,7 @@ class GroundingNode(Node):
             self.publish_result(result)
 
     def publish_result(self, result: CommandResult) -> None:
-        """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose`` (or, with
-        ``navigate_action``, the action's goal: its outcome follows on ``~/result``)."""
+        """Publish ``~/result`` and, with a goal, ``~/goal`` and ``/goal_pose``."""
         if result.goal is not None and result.frame_stamp_ns is not None:
             stamp = Time(nanoseconds=result.frame_stamp_ns).to_msg()
             point = PointStamped()
@@ -220,7 +219,15 @@ class GroundingNode(Node):
         self.result_pub.publish(String(data=result.model_dump_json()))
 
     def _publish_outcome(self, result: CommandResult) -> None:
+        """A navigation's outcome: ``~/result`` alone (from the action client's futures, on the executor)."""
         self.result_pub.publish(String(data=result.model_dump_json()))
+
+    def destroy_node(self) -> None:
+        """Destroy the navigation action's client first (rclpy leaves waitables to their owner), then the node."""
+        navigate = getattr(self, "navigate", None)  # absent when a parameter was refused
+        if navigate is not None:
+            navigate.destroy()
+        super().destroy_node()
 
     @property
     def answering(self) -> bool:
@@ -232,8 +239,6 @@ class GroundingNode(Node):
         self._drain()
         self._commands.put(None)
         self._worker.join(timeout=30)
-        if self.navigate is not None:
-            self.navigate.destroy()
         self.destroy_node()
 
     def _drain(self) -> None:
