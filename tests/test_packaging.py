@@ -25,7 +25,8 @@ def test_every_package_folder_is_listed_in_pyproject():
 DISTRIBUTION_OF = {"PIL": "pillow", "yaml": "pyyaml", "pydantic_core": "pydantic-core",
                    # ROS 2's packages on PyPI are named ros-<package> (the ros extra)
                    "rclpy": "ros-rclpy", "std_msgs": "ros-std-msgs", "sensor_msgs": "ros-sensor-msgs",
-                   "geometry_msgs": "ros-geometry-msgs", "nav_msgs": "ros-nav-msgs"}
+                   "geometry_msgs": "ros-geometry-msgs", "nav_msgs": "ros-nav-msgs",
+                   "rcl_interfaces": "ros-rcl-interfaces", "action_msgs": "ros-action-msgs"}
 #: Modules only ever imported by pytest itself (a pytest plugin): they may import the ``test`` extra.
 PYTEST_ONLY = {"povagent/testing/pytest_plugin.py"}
 OURS = {"povagent", "povagent_plugins", "povagent_prompts"}

@@ -8,6 +8,7 @@ they stop with one line naming it.
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 from typing import Any
@@ -47,7 +48,12 @@ def ros_node_command(
     /goal_pose, the answer as JSON on ~/result. ROS arguments follow, e.g.
     --ros-args -p image_topic:=/cam/image -r /goal_pose:=/nav/goal (needs pip install 'povagent[ros]').
     """
+<<<<<<< HEAD
     from povagent.ros.extras import discovery_summary, require_rclpy
+=======
+    from povagent.errors import ConfigError
+    from povagent.ros.extras import require_rclpy
+>>>>>>> ros43
 
     rclpy = require_rclpy("ros-node")
     typer.echo(discovery_summary(), err=True)
@@ -57,7 +63,11 @@ def ros_node_command(
     from povagent.ros.node import GroundingNode
     from povagent.ros.session import agent_locate
 
-    rclpy.init(args=["povagent", *ctx.args])
+    try:
+        rclpy.init(args=["povagent", *ctx.args])
+    except RuntimeError as exc:  # rclpy's RCLError: ROS arguments rcl cannot read
+        agent.close()
+        raise ConfigError(_ros_arguments_problem(str(exc))) from None
     node = GroundingNode(agent_locate(agent))
     executor = SingleThreadedExecutor()
     executor.add_node(node)
@@ -71,6 +81,16 @@ def ros_node_command(
         node.close()
         agent.close()
         rclpy.try_shutdown()
+
+
+def _ros_arguments_problem(rcl_message: str) -> str:
+    """rcl's refusal of the ROS arguments as one line: its source locations dropped, and for an
+    array mixing whole numbers and decimals (YAML types them apart) what to write instead."""
+    text = re.sub(r"(,? at /\S+:\d+)+|,? at line_num \d+", "", rcl_message).removeprefix("failed to initialize rcl: ").strip()
+    hint = ""
+    if "Sequence should be of same type" in text:
+        hint = ' (write every number of an array as a decimal, 0.0 not 0, or give mount_transform as one string: mount_transform:="x y z qx qy qz qw")'
+    return f"ros-node: the ROS arguments could not be read: {text}{hint}"
 
 
 @app.command("ros-replay")

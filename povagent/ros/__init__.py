@@ -25,7 +25,11 @@ What is here, one job per module:
 * :mod:`~povagent.ros.node` (rclpy) and :mod:`~povagent.ros.replay` (rosbags): the two edges;
 >>>>>>> ros41
 * :mod:`~povagent.ros.house_tour`: a generated house as a robot's recorded tour, written as a bag
-  (:mod:`~povagent.ros.tour_bag`) or published live (:mod:`~povagent.ros.tour_player`).
+  (:mod:`~povagent.ros.tour_bag`) or published live (:mod:`~povagent.ros.tour_player`);
+* the node's parts: its camera subscriptions and their QoS (:mod:`~povagent.ros.camera_subscriptions`),
+  its camera mount parameter (:mod:`~povagent.ros.camera_mount`), the frame its goals are in
+  (:mod:`~povagent.ros.goal_frame`) and Nav2's ``navigate_to_pose`` action as the goal's way out
+  (:mod:`~povagent.ros.navigate_action`).
 
 Messages are read by their field names only (``msg.header.stamp.sec``, ``msg.encoding``, ``msg.k``),
 so rclpy's message objects and rosbags' deserialized ones take the same path. Nothing outside the

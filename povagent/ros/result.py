@@ -4,7 +4,10 @@ Every command gets one :class:`CommandResult`, never silence: a goal (``ok``), a
 3D point (``no_goal``), or a typed reason it could not be answered. A command that arrives while
 another is answered first gets a ``queued`` result (its place in the queue), then its own answer;
 one that finds the queue full gets ``queue_full`` (it is dropped, and says so). A bug met while
-answering is that command's ``internal_error``, and the next command is answered.
+answering is that command's ``internal_error``, and the next command is answered. With the
+``navigate_action`` parameter set, a goal also goes to Nav2 as an action: the answer's
+``navigation`` says it was ``sent`` (or why not), and a second result for the same command
+follows with the action's outcome.
 """
 
 from __future__ import annotations
@@ -40,6 +43,36 @@ class CommandStatus(StrEnum):
     INTERNAL_ERROR = "internal_error"
 
 
+class NavigationStatus(StrEnum):
+    """Where the goal sent as a ``navigate_to_pose`` action is."""
+
+    #: the goal was sent; a second result carries the outcome
+    SENT = "sent"
+    #: no action server was there to take the goal
+    UNAVAILABLE = "unavailable"
+    #: the server refused the goal
+    REJECTED = "rejected"
+    #: the robot reached the goal
+    SUCCEEDED = "succeeded"
+    #: navigation failed (Nav2 says why in ``error_code`` / ``error_msg`` since Iron)
+    ABORTED = "aborted"
+    #: the goal was cancelled (by another client, or a newer goal preempted it)
+    CANCELED = "canceled"
+
+
+class NavigationOutcome(BaseModel):
+    """The ``navigate_to_pose`` action's side of a command. ``error_code`` and ``error_msg`` are
+    the action result's fields; Humble's result has neither (``None`` and ``""`` then)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    action: str
+    status: NavigationStatus
+    reason: str = ""
+    error_code: int | None = None
+    error_msg: str = ""
+
+
 class CommandResult(BaseModel):
     """One command's answer. Pixels are continuous coordinates of the chosen keyframe's image;
     ``goal`` and ``viewpoint`` (the keyframe's camera centre) are in ``map_frame`` (metres);
@@ -64,6 +97,7 @@ class CommandResult(BaseModel):
     malformed: dict[str, int] = {}
     queue_position: int | None = None
     latency_s: float = 0.0
+    navigation: NavigationOutcome | None = None
 
     def facing_yaw(self) -> float | None:
         """The map yaw (radians, z up) from the chosen keyframe's camera (``viewpoint``) to the
@@ -73,4 +107,4 @@ class CommandResult(BaseModel):
         return math.atan2(self.goal[1] - self.viewpoint[1], self.goal[0] - self.viewpoint[0])
 
 
-__all__ = ["CommandResult", "CommandStatus"]
+__all__ = ["CommandResult", "CommandStatus", "NavigationOutcome", "NavigationStatus"]

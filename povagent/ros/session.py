@@ -10,7 +10,14 @@ pose (``map_frame`` to the image's ``frame_id`` at its stamp, :mod:`~povagent.ro
 optionally a depth image with the same stamp received before it. An image whose transform has not
 arrived yet waits in a bounded queue (``max_pending``) and is retried as transforms come; once
 transforms newer than its stamp by more than the tolerance exist and it still has no pose, it is
-dropped as ``missing_transform``.
+dropped as ``missing_transform``. An image that arrives before any usable ``CameraInfo`` (a
+calibration published once, or on its own topic a moment after the image) waits too, in a bounded
+queue of its own (``max_pending``; the oldest is dropped as ``no_camera_info`` when it is full),
+and goes on with the first calibration that comes.
+
+``map_frame=""`` leaves the goal frame to the first odometry message: its ``header.frame_id``
+becomes the frame (:mod:`~povagent.ros.goal_frame` says when the node does this) and
+``on_goal_frame`` is told; until then images wait for it as for a transform.
 
 A malformed message is counted by kind (:attr:`problems`) and reported through ``on_problem``
 with ``first=True`` the first time a kind is seen, so a node logs each kind once; nothing raised
@@ -42,6 +49,8 @@ from povagent.ros.transforms import RigidTransform, TransformProblem, pose_conve
 Locate = Callable[[str, Sequence[np.ndarray], Sequence[PinholeCamera], Sequence["np.ndarray | None"]], Localization]
 #: Called with (kind, message, first) for every malformed message.
 ProblemSink = Callable[[str, str, bool], None]
+#: Called with the goal frame once the first odometry message has decided it.
+GoalFrameSink = Callable[[str], None]
 
 DEFAULT_MAX_PENDING = 16
 #: The longest command answered (characters); a longer one is ``bad_input``, not sent to a model.
@@ -70,9 +79,12 @@ class GroundingSession:
         tolerance_s: float = DEFAULT_TOLERANCE_S,
         max_pending: int = DEFAULT_MAX_PENDING,
         on_problem: ProblemSink | None = None,
+        on_goal_frame: GoalFrameSink | None = None,
     ) -> None:
         self.locate = locate
+        #: the frame goals are in; ``""`` until the first odometry message decides it
         self.map_frame = map_frame.lstrip("/")
+        self._on_goal_frame = on_goal_frame
         self.memory = memory if memory is not None else KeyframeMemory(settings)
         self.transforms = TransformBuffer(tolerance_s=tolerance_s)
         self.problems: Counter[str] = Counter()
@@ -81,12 +93,13 @@ class GroundingSession:
         self._intrinsics: Intrinsics | None = None
         self._depths: deque[tuple[int, np.ndarray]] = deque(maxlen=8)
         self._pending: deque[_Pending] = deque()
+        self._uncalibrated: deque[tuple[int, str, np.ndarray]] = deque()
         self._max_pending = max_pending
         self._lock = threading.RLock()
 
     @property
     def calibrated(self) -> bool:
-        """Whether a usable ``CameraInfo`` has arrived (images before it are skipped and counted)."""
+        """Whether a usable ``CameraInfo`` has arrived (images before it wait for it, at most ``max_pending``)."""
         return self._intrinsics is not None
 
     # -- messages ---------------------------------------------------------------------------
@@ -99,7 +112,7 @@ class GroundingSession:
             self._on_problem(kind, message, first)
 
     def on_camera_info(self, msg: Any) -> None:
-        """Take the newest calibration."""
+        """Take the newest calibration; images that came before any go on with it."""
         try:
             intrinsics = intrinsics_from_info(msg)
         except CameraProblem as exc:
@@ -107,6 +120,9 @@ class GroundingSession:
             return
         with self._lock:
             self._intrinsics = intrinsics
+            waiting, self._uncalibrated = list(self._uncalibrated), deque()
+        for stamp, frame_id, rgb in waiting:
+            self._admit(stamp, frame_id, rgb, intrinsics)
 
     def on_image(self, msg: Any) -> None:
         """An RGB ``sensor_msgs/Image``."""
@@ -141,16 +157,22 @@ class GroundingSession:
         self._retry_pending()
 
     def on_odometry(self, msg: Any) -> None:
-        """A ``nav_msgs/Odometry``: the robot's pose as one more edge of the tree."""
+        """A ``nav_msgs/Odometry``: the robot's pose as one more edge of the tree (and, with no
+        goal frame given, the frame goals are in)."""
+        decided = ""
         try:
             with self._lock:
                 self.transforms.add_odometry(msg)
+                if not self.map_frame:
+                    self.map_frame = decided = str(msg.header.frame_id).strip("/ ")
         except TransformProblem as exc:
             self.problem("transform", str(exc))
             return
         except StampProblem as exc:
             self.problem(exc.kind, f"odometry: {exc}")
             return
+        if decided and self._on_goal_frame is not None:
+            self._on_goal_frame(decided)
         self._retry_pending()
 
     def add_static(self, parent: str, child: str, transform: RigidTransform) -> None:
@@ -167,18 +189,28 @@ class GroundingSession:
         except (ImageProblem, StampProblem) as exc:
             self.problem(exc.kind, str(exc))
             return
+        frame_id = str(msg.header.frame_id).lstrip("/")
+        uncalibrated: list[tuple[int, str, np.ndarray]] = []
         with self._lock:
             intrinsics = self._intrinsics
-        if intrinsics is None:
-            self.problem("no_camera_info", "an image arrived before any usable camera_info: it is skipped")
-            return
+            if intrinsics is None:
+                self._uncalibrated.append((stamp, frame_id, rgb))
+                while len(self._uncalibrated) > self._max_pending:
+                    uncalibrated.append(self._uncalibrated.popleft())
+        for s, f, _ in uncalibrated:
+            self.problem("no_camera_info", f"image at {s / 1e9:.3f} s in {f!r}: no usable camera_info came while {self._max_pending} newer images waited")
+        if intrinsics is not None:
+            self._admit(stamp, frame_id, rgb, intrinsics)
+
+    def _admit(self, stamp: int, frame_id: str, rgb: np.ndarray, intrinsics: Intrinsics) -> None:
+        """An image with its calibration: to the queue of images waiting for their pose."""
         if (rgb.shape[1], rgb.shape[0]) != (intrinsics.width, intrinsics.height):
             self.problem("size_mismatch", f"image of {rgb.shape[1]}x{rgb.shape[0]} but camera_info says {intrinsics.width}x{intrinsics.height}")
             return
         overflow: list[_Pending] = []
         with self._lock:
             depth = next((d for s, d in self._depths if s == stamp), None)
-            self._pending.append(_Pending(stamp, str(msg.header.frame_id).lstrip("/"), rgb, intrinsics, depth))
+            self._pending.append(_Pending(stamp, frame_id, rgb, intrinsics, depth))
             while len(self._pending) > self._max_pending:
                 overflow.append(self._pending.popleft())
         for dropped in overflow:
@@ -188,6 +220,8 @@ class GroundingSession:
     def _retry_pending(self) -> None:
         failures: list[str] = []
         with self._lock:
+            if not self.map_frame:
+                return  # no goal frame yet: every image waits for the first odometry
             still: deque[_Pending] = deque()
             newest = self.transforms.newest_stamp()
             for p in self._pending:
@@ -214,6 +248,9 @@ class GroundingSession:
         self._retry_pending()
         with self._lock:
             left, self._pending = list(self._pending), deque()
+            uncalibrated, self._uncalibrated = list(self._uncalibrated), deque()
+        for stamp, frame_id, _ in uncalibrated:
+            self.problem("no_camera_info", f"image at {stamp / 1e9:.3f} s in {frame_id!r}: no usable camera_info ever came")
         for p in left:
             self.problem("missing_transform", f"image at {p.stamp / 1e9:.3f} s in {p.frame_id!r}: no transform to {self.map_frame!r} ever came")
 
@@ -278,4 +315,4 @@ def agent_locate(agent: Any) -> Locate:
     return locate
 
 
-__all__ = ["DEFAULT_MAX_PENDING", "MAX_COMMAND_CHARS", "GroundingSession", "Locate", "ProblemSink", "agent_locate"]
+__all__ = ["DEFAULT_MAX_PENDING", "MAX_COMMAND_CHARS", "GoalFrameSink", "GroundingSession", "Locate", "ProblemSink", "agent_locate"]

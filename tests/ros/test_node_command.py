@@ -1,5 +1,6 @@
-"""``povagent ros-node`` as its own process on the graph: ROS arguments set its parameters, it
-answers a player's tour and command, and Ctrl-C ends it cleanly."""
+"""``povagent ros-node`` as its own process on the graph: ROS arguments set its parameters (the
+camera mount written as the docs show it), it answers a player's tour and command, says which
+frame its goals are in, and Ctrl-C ends it cleanly."""
 
 from __future__ import annotations
 
@@ -21,13 +22,14 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
 
     from povagent.agent import GroundingAgent
     from povagent.geometry.goals import Plane
+    from povagent.ros.extras import tf2_messages
     from povagent.ros.tour_player import TourPlayer, camera_info, mount_parameters
 
     (tmp_path / "center.yaml").write_text("backend: center\nstrategy: basic\nparser: json\n")
     mount = mount_parameters(tour)
     ros_args = ["--ros-args", "-r", "__node:=povagent_cli", "-p", "odom_topic:=/odom", "-p", "reliable_images:=true",
                 "-p", f"mount_parent:={mount['mount_parent']}", "-p", f"mount_child:={mount['mount_child']}",
-                "-p", f"mount_transform:={json.dumps(mount['mount_transform'])}"]
+                "-p", "mount_transform:=" + " ".join(f"{v:.17g}" for v in mount["mount_transform"])]  # the docs' string form
     proc = subprocess.Popen([sys.executable, "-m", "povagent.cli", "ros-node", "--pipeline", "center.yaml", *ros_args],
                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     player_node = ros_graph.add(rclpy.create_node("cli_player", context=ros_graph.context))
@@ -75,3 +77,17 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
             _, err = proc.communicate()
     assert proc.returncode == 0, err
     assert "Traceback" not in err
+    if tf2_messages() is None:  # the PyPI packages alone: the odometry's frame, decided by its first message
+        assert "goals will be in the frame of the first odometry message on /odom" in err
+        assert "goals are in the 'map' frame: the frame of the odometry on /odom" in err
+
+
+def test_ros_arguments_rcl_cannot_read_are_one_error_line_not_a_traceback(ros_graph, tmp_path):
+    (tmp_path / "center.yaml").write_text("backend: center\nstrategy: basic\nparser: json\n")
+    mixed = "mount_transform:=[0.1, 0, 0.9, -0.5, 0.5, -0.5, 0.5]"  # YAML reads 0 as an integer among decimals
+    proc = subprocess.run([sys.executable, "-m", "povagent.cli", "ros-node", "--pipeline", "center.yaml", "--ros-args", "-p", mixed],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    [line] = [x for x in proc.stderr.splitlines() if x.startswith("error:")]
+    assert line.startswith("error: ros-node: the ROS arguments could not be read: Couldn't parse parameter override rule")
+    assert "0.0 not 0" in line

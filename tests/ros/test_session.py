@@ -84,7 +84,6 @@ def test_an_image_whose_transform_comes_later_waits_for_it(session):
 
 
 def test_each_kind_of_malformed_message_is_counted_and_reported_first_once(session):
-    session.on_image(image(S))  # before any camera_info
     session.on_camera_info(info(k=[float("nan")] * 9))
     session.on_camera_info(info())
     session.on_image(image(S, encoding="yuv422"))
@@ -93,8 +92,59 @@ def test_each_kind_of_malformed_message_is_counted_and_reported_first_once(sessi
     zero.width = 0
     session.on_image(zero)
     session.on_odometry(odom(S, 0.0, nan=True))
-    assert dict(session.problems) == {"no_camera_info": 1, "camera_info": 1, "encoding": 2, "size": 1, "transform": 1}
+    assert dict(session.problems) == {"camera_info": 1, "encoding": 2, "size": 1, "transform": 1}
     assert session.reported.count(("encoding", True)) == 1 and ("encoding", False) in session.reported
+
+
+def test_an_image_before_its_calibration_waits_for_it_and_becomes_a_keyframe(session):
+    session.on_odometry(odom(S, 2.0))
+    session.on_image(image(S))
+    assert len(session.memory) == 0
+    session.on_camera_info(info())
+    [kept] = session.memory.frames
+    assert kept.stamp_ns == S and kept.camera.cx == 4.0 and not session.problems
+
+
+def test_images_waiting_for_a_calibration_are_bounded_the_oldest_dropped_and_counted(centre_agent):
+    session = GroundingSession(agent_locate(centre_agent), max_pending=2)
+    session.add_static("base_link", "cam_optical_frame", pitched_down_mount(45.0))
+    for i in (1, 2, 3):
+        session.on_odometry(odom(i * S, 2.0 * i))  # each pose far enough from the last to be kept
+        session.on_image(image(i * S))
+    assert session.problems["no_camera_info"] == 1
+    session.on_camera_info(info())
+    assert [f.stamp_ns for f in session.memory.frames] == [2 * S, 3 * S]
+
+
+def test_the_end_of_a_bag_counts_images_that_never_had_a_calibration(session):
+    session.on_odometry(odom(S, 2.0))
+    session.on_image(image(S))
+    session.flush()
+    assert session.problems["no_camera_info"] == 1 and len(session.memory) == 0
+
+
+def test_with_no_goal_frame_given_the_first_odometry_messages_frame_is_the_goal_frame(centre_agent):
+    decided = []
+    session = GroundingSession(agent_locate(centre_agent), map_frame="", on_goal_frame=decided.append)
+    session.add_static("base_link", "cam_optical_frame", pitched_down_mount(45.0))
+    session.on_camera_info(info())
+    session.on_image(image(S))  # waits: no goal frame yet
+    in_odom = odom(S, 2.0)
+    in_odom.header.frame_id = "odom"
+    session.on_odometry(in_odom)
+    later = odom(2 * S, 4.0)  # a second odometry in another frame changes nothing
+    session.on_odometry(later)
+    assert decided == ["odom"] and session.map_frame == "odom"
+    assert len(session.memory) == 1 and np.allclose(session.memory.frames[0].camera.position, [2.0, 0.0, 1.0])
+    result = session.answer("the mug")
+    assert result.status == "ok" and result.map_frame == "odom"
+
+
+def test_a_goal_frame_given_is_kept_whatever_frame_the_odometry_is_in(session):
+    in_odom = odom(S, 2.0)
+    in_odom.header.frame_id = "odom"
+    session.on_odometry(in_odom)
+    assert session.map_frame == "map"
 
 
 def test_an_image_with_no_transform_near_its_stamp_is_given_up_once_newer_transforms_come(session):
