@@ -48,12 +48,8 @@ def ros_node_command(
     /goal_pose, the answer as JSON on ~/result. ROS arguments follow, e.g.
     --ros-args -p image_topic:=/cam/image -r /goal_pose:=/nav/goal (needs pip install 'povagent[ros]').
     """
-<<<<<<< HEAD
-    from povagent.ros.extras import discovery_summary, require_rclpy
-=======
     from povagent.errors import ConfigError
-    from povagent.ros.extras import require_rclpy
->>>>>>> ros43
+    from povagent.ros.extras import discovery_summary, require_rclpy
 
     rclpy = require_rclpy("ros-node")
     typer.echo(discovery_summary(), err=True)

@@ -15,15 +15,11 @@ What is here, one job per module:
 * :mod:`~povagent.ros.session`: the one code path the node and the bag replay share: messages in,
   keyframes kept, a command answered into a :class:`~povagent.ros.result.CommandResult`
   (:mod:`~povagent.ros.result`: what ``~/result`` carries);
-<<<<<<< HEAD
+* :mod:`~povagent.ros.command_worker`: the node's answering, a bounded command queue and one
+  worker thread giving every command one final result (pure: no ROS);
 * :mod:`~povagent.ros.node` (rclpy) and :mod:`~povagent.ros.replay` (rosbags): the two edges, and
   :mod:`~povagent.ros.spinning`: an executor spun in the background and stopped in the order rclpy
   requires (executor, node, context);
-=======
-* :mod:`~povagent.ros.command_worker`: the node's answering, a bounded command queue and one
-  worker thread giving every command one final result (pure: no ROS);
-* :mod:`~povagent.ros.node` (rclpy) and :mod:`~povagent.ros.replay` (rosbags): the two edges;
->>>>>>> ros41
 * :mod:`~povagent.ros.house_tour`: a generated house as a robot's recorded tour, written as a bag
   (:mod:`~povagent.ros.tour_bag`) or published live (:mod:`~povagent.ros.tour_player`);
 * the node's parts: its camera subscriptions and their QoS (:mod:`~povagent.ros.camera_subscriptions`),
