@@ -17,8 +17,10 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-#: The longest arguments text read, and the longest question passed to the speaker.
-MAX_ARGUMENTS_CHARS = 4096
+from povagent.engine.received import MAX_ARGUMENTS_CHARS
+
+#: The longest question passed to the speaker (the longest arguments text read is the bound
+#: every answer's calls are cut to: :data:`povagent.engine.received.MAX_ARGUMENTS_CHARS`).
 MAX_QUESTION_CHARS = 500
 #: Bounds of the numbers a call may carry (beyond them a call is invalid, not clamped).
 MAX_DEGREES = 3600.0
