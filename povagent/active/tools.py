@@ -130,6 +130,8 @@ def _number(args: dict[str, Any], key: str, bound: float) -> float | str:
     value = args[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"{key} must be a number, got {type(value).__name__}"
+    if isinstance(value, int) and abs(value) > bound:  # checked as an integer: a 400-digit one has no float
+        return f"{key} must lie within [-{bound:g}, {bound:g}], got an integer of {len(str(abs(value)))} digits"
     value = float(value)
     if not math.isfinite(value):
         return f"{key} must be a finite number, got {value}"
