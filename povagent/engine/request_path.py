@@ -32,11 +32,12 @@ from tenacity import AsyncRetrying, retry_if_exception, stop_after_attempt
 
 from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.cache import ResponseCache, cache_key, identity_json
-from povagent.engine.received import received, valid_text
+from povagent.engine.received import received
 from povagent.engine.retry import InfraFailure, error_type_of, is_transient, wait_before_retry
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.interfaces import Backend
+
 
 class Limiter(Protocol):
     """What bounds the requests in flight: an ``asyncio.Semaphore`` or an adaptive limiter.
