@@ -29,7 +29,7 @@ from povagent.active.episode import DEFAULT_BUDGET, Episode
 from povagent.active.pose import Pose
 from povagent.active.speaker import pair_facts
 from povagent.active.tools import TOOLS
-from povagent.active.views import VIEWS, ViewStore
+from povagent.active.views import ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
@@ -79,8 +79,9 @@ class ActiveStrategy(BasicStrategy):
         self._scratch: tempfile.TemporaryDirectory[str] | None = None
 
     def use_run_folder(self, folder: Path) -> None:
-        """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again)."""
-        self._views = ViewStore(Path(folder) / VIEWS)
+        """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again); a
+        link planted there is refused now, in one line, before any episode runs."""
+        self._views = ViewStore(Path(folder))
 
     def views(self) -> ViewStore:
         """The view store: the run folder's, else a private temporary one (tests, embedding)."""
@@ -126,9 +127,9 @@ class ActiveStrategy(BasicStrategy):
         store = self.views()
 
         def render(pose: Pose) -> str:
-            sha, path = store.view(instance.house_id, pose, lambda p: house.render_png(p.camera()))
-            images.add_file(path)
-            return sha
+            view = store.view(instance.house_id, pose, lambda p: house.render_png(p.camera()))
+            images.add_file(view.path, view.png)  # the bytes checked against the hash, not read again
+            return view.sha256
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
         facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
