@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.active.pose import Pose
+from povagent.errors import WriteTargetError
 from povagent.run.confined_write import ConfinedFolder
 
 #: The folder inside the run folder, and the camera index inside it.
@@ -67,6 +68,23 @@ def read_view_file(folder: ConfinedFolder, name: str, limit: int) -> bytes | Non
             return None
         data = fh.read(limit + 1)
     return data if len(data) <= limit else None
+
+
+def view_file(run_dir: Path, sha256: str) -> Path | None:
+    """``RUN/views/<sha256>.png`` for a reader that opens it by its path (the report draws
+    it), when it is a regular file of bounded size in a ``views`` folder that is no link;
+    ``None`` otherwise (missing, a link, a pipe, a device). A check, not a descriptor: it cannot
+    see a swap made after it (see :meth:`ConfinedFolder.check_plain_file`)."""
+    name = f"{sha256}.png"
+    try:
+        with ConfinedFolder(run_dir, VIEWS, create=False) as views:
+            if views.descriptor is not None:
+                st = os.stat(name, dir_fd=views.descriptor, follow_symlinks=False)
+            else:
+                st = os.lstat(views.path / name)
+    except (OSError, WriteTargetError):
+        return None
+    return views.path / name if stat.S_ISREG(st.st_mode) and st.st_size <= MAX_VIEW_BYTES else None
 
 
 @dataclass(frozen=True)
