@@ -53,9 +53,11 @@ def received(response: Response, redact: Callable[[str], str], *, offered_tools:
     ``redact`` removes the keys povagent knows (:meth:`povagent.run.logs.Redactor.known`);
     ``offered_tools``: the request offered tools, so the text is bounded too.
     """
-    if response.tool_calls or offered_tools:
+    if response.tool_calls:
         calls = tuple(bounded_call(c) for c in response.tool_calls[:MAX_TOOL_CALLS])
-        response = dataclasses.replace(response, text=response.text[:MAX_TOOL_TURN_TEXT_CHARS], tool_calls=calls)
+        response = dataclasses.replace(response, tool_calls=calls)
+    if offered_tools and len(response.text) > MAX_TOOL_TURN_TEXT_CHARS:
+        response = dataclasses.replace(response, text=response.text[:MAX_TOOL_TURN_TEXT_CHARS])
     return _strings_of(response, lambda text: redact(valid_text(text)))
 
 
