@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from povagent.engine.received import MAX_TOOL_CALLS, bounded_call
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Message, Request, TextPart, ToolCall
 
@@ -56,15 +57,10 @@ def openai_messages(request: Request, images: ImageStore) -> list[dict[str, Any]
     return [openai_message(m, images) for m in request.messages]
 
 
-#: The most tool calls read from one answer, and the longest arguments text kept: a model's
-#: output is untrusted, and each call read becomes a message sent back.
-MAX_TOOL_CALLS = 128
-MAX_ARGUMENTS_CHARS = 4096
-
-
 def tool_calls_of(response: Any) -> tuple[ToolCall, ...]:
-    """The function calls of an answer, as sent (names and arguments as text, cut to bounds);
-    a call the client could not read at all is kept with an empty name, for the strategy to
+    """The function calls of an answer, as sent (names and arguments as text, cut to the bounds
+    of :mod:`povagent.engine.received` while read, so a flood of calls is never held whole); a
+    call the client could not read at all is kept with an empty name, for the strategy to
     report as an invalid call."""
     try:
         raw = response.choices[0].message.tool_calls or ()
@@ -75,11 +71,6 @@ def tool_calls_of(response: Any) -> tuple[ToolCall, ...]:
         function = getattr(call, "function", None)
         name, arguments = getattr(function, "name", None), getattr(function, "arguments", None)
         call_id = getattr(call, "id", None)
-        calls.append(
-            ToolCall(
-                id=str(call_id)[:128] if call_id else f"call_{k}",
-                name=str(name)[:128] if name is not None else "",
-                arguments=(arguments if isinstance(arguments, str) else json.dumps(arguments, default=repr))[:MAX_ARGUMENTS_CHARS],
-            )
-        )
+        text = arguments if isinstance(arguments, str) else json.dumps(arguments, default=repr)
+        calls.append(bounded_call(ToolCall(str(call_id) if call_id else f"call_{k}", str(name) if name is not None else "", text)))
     return tuple(calls)

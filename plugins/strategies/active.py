@@ -13,8 +13,14 @@ and the official scorer scores it in that camera.
 
 Options (besides the basic strategy's ``prompts``, ``max_tokens``, ``temperature``):
 ``max_frames`` (default 8: fewer frames than the house has, so looking matters; ``null``: all),
-``max_actions`` (default 8, ``answer`` not counted), ``max_turns`` (default ``max_actions``
-+ 2), ``max_seconds`` (default 600: the episode's wall-clock limit).
+``max_actions`` (default 8, ``answer`` not counted; at most 64), ``max_turns`` (default
+``max_actions`` + 2; at most 66), ``max_seconds`` (default 600: the episode's wall-clock limit).
+
+One row stays under :data:`ROW_BOUND_BYTES` whatever a model sends: each turn's answer is
+bounded where it enters (:mod:`povagent.engine.received`: 128 calls, their ids, names and
+arguments, the text), the calls go back to the model with their arguments cut as the record
+keeps them (:func:`~povagent.active.episode.kept_call`), the row keeps each turn's new messages
+once (:mod:`povagent.results.transcript`), and the turns are bounded.
 """
 
 from __future__ import annotations
@@ -25,11 +31,11 @@ from pathlib import Path
 from typing import Any
 
 from povagent import hookimpl
-from povagent.active.episode import DEFAULT_BUDGET, Episode
+from povagent.active.episode import DEFAULT_BUDGET, Episode, kept_call
 from povagent.active.pose import Pose
 from povagent.active.speaker import pair_facts
 from povagent.active.tools import TOOLS
-from povagent.active.views import VIEWS, ViewStore
+from povagent.active.views import ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
@@ -42,6 +48,11 @@ from povagent_plugins.strategies.layout import prompt_message
 
 #: The largest record the parser reads (a budget of 64 actions stays far below it).
 MAX_RECORD_CHARS = 4 * 1024 * 1024
+#: The most actions and the most turns (model calls) an episode may be given.
+MAX_ACTIONS = 64
+MAX_TURNS = MAX_ACTIONS + 2
+#: What one row of an episode stays under at any budget, whatever the model sends.
+ROW_BOUND_BYTES = 8 * 1024 * 1024
 
 
 def preamble(budget: int, n_frames: int, given: bool) -> str:
@@ -69,9 +80,11 @@ class ActiveStrategy(BasicStrategy):
                  **basic: Any) -> None:  # fmt: skip
         super().__init__(**basic)
         self.max_actions = _positive_or_none(max_actions, "max_actions", "the action budget") or DEFAULT_BUDGET
-        if self.max_actions > 64:
-            raise ValueError(f"strategy option max_actions must be at most 64, got {max_actions!r}")
+        if self.max_actions > MAX_ACTIONS:
+            raise ValueError(f"strategy option max_actions must be at most {MAX_ACTIONS}, got {max_actions!r}")
         self.max_turns = _positive_or_none(max_turns, "max_turns", "default: max_actions + 2") or self.max_actions + 2
+        if self.max_turns > MAX_TURNS:
+            raise ValueError(f"strategy option max_turns must be at most {MAX_TURNS} (so one row stays under 8 MB), got {max_turns!r}")
         if isinstance(max_seconds, bool) or not isinstance(max_seconds, (int, float)) or not 0 < max_seconds <= 86400:
             raise ValueError(f"strategy option max_seconds must be a number in (0, 86400], got {max_seconds!r}")
         self.max_seconds = float(max_seconds)
@@ -79,8 +92,9 @@ class ActiveStrategy(BasicStrategy):
         self._scratch: tempfile.TemporaryDirectory[str] | None = None
 
     def use_run_folder(self, folder: Path) -> None:
-        """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again)."""
-        self._views = ViewStore(Path(folder) / VIEWS)
+        """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again); a
+        link planted there is refused now, in one line, before any episode runs."""
+        self._views = ViewStore(Path(folder))
 
     def views(self) -> ViewStore:
         """The view store: the run folder's, else a private temporary one (tests, embedding)."""
@@ -126,9 +140,9 @@ class ActiveStrategy(BasicStrategy):
         store = self.views()
 
         def render(pose: Pose) -> str:
-            sha, path = store.view(instance.house_id, pose, lambda p: house.render_png(p.camera()))
-            images.add_file(path)
-            return sha
+            view = store.view(instance.house_id, pose, lambda p: house.render_png(p.camera()))
+            images.add_file(view.path, view.png)  # the bytes checked against the hash, not read again
+            return view.sha256
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
         facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
@@ -149,7 +163,8 @@ class ActiveStrategy(BasicStrategy):
             if not response.tool_calls:
                 self._text_answer(instance, episode, response.text, request.answer)
                 break
-            messages.append(Message("assistant", (TextPart(response.text),) if response.text else (), response.tool_calls))
+            said = (TextPart(response.text),) if response.text else ()
+            messages.append(Message("assistant", said, tuple(kept_call(c) for c in response.tool_calls)))
             observations = await asyncio.to_thread(episode.handle, response.tool_calls, turn)
             messages += [Message("tool", (TextPart(o.text),), tool_call_id=o.call_id) for o in observations]
             shown: list[TextPart | ImagePart] = []

@@ -29,13 +29,20 @@ from povagent.results.episode import EpisodeAnswer, EpisodeCounts, EpisodeRecord
 
 #: The default action budget (``answer`` not counted).
 DEFAULT_BUDGET = 8
-#: The most characters of a call's arguments a step keeps, and the most steps a record keeps
-#: (the rest are counted in ``steps_dropped``): a record's size is bounded whatever a model sends.
-KEPT_ARGUMENTS = 500
+#: The most characters of a call's arguments a step keeps (and the conversation sent back, and
+#: so the row's transcript: :func:`kept_call`), and the most steps a record keeps (the rest are
+#: counted in ``steps_dropped``): a record's size is bounded whatever a model sends.
+KEPT_ARGUMENTS = 256
 MAX_RECORDED_STEPS = 256
 
 #: Renders a pose: returns the view PNG's SHA-256 (the caller stores the bytes).
 RenderFn = Callable[[Pose], str]
+
+
+def kept_call(call: ToolCall) -> ToolCall:
+    """A call as the episode keeps it in the conversation: its arguments cut to
+    :data:`KEPT_ARGUMENTS` (a valid call's are far shorter; the call is run on the whole text)."""
+    return call if len(call.arguments) <= KEPT_ARGUMENTS else ToolCall(call.id, call.name, call.arguments[:KEPT_ARGUMENTS])
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,10 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-#: The longest arguments text read, and the longest question passed to the speaker.
-MAX_ARGUMENTS_CHARS = 4096
+from povagent.engine.received import MAX_ARGUMENTS_CHARS
+
+#: The longest question passed to the speaker (the longest arguments text read is the bound
+#: every answer's calls are cut to: :data:`povagent.engine.received.MAX_ARGUMENTS_CHARS`).
 MAX_QUESTION_CHARS = 500
 #: Bounds of the numbers a call may carry (beyond them a call is invalid, not clamped).
 MAX_DEGREES = 3600.0
@@ -128,6 +130,8 @@ def _number(args: dict[str, Any], key: str, bound: float) -> float | str:
     value = args[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"{key} must be a number, got {type(value).__name__}"
+    if isinstance(value, int) and abs(value) > bound:  # checked as an integer: a 400-digit one has no float
+        return f"{key} must lie within [-{bound:g}, {bound:g}], got an integer of {len(str(abs(value)))} digits"
     value = float(value)
     if not math.isfinite(value):
         return f"{key} must be a finite number, got {value}"

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import re
 import time
 import traceback
 from dataclasses import dataclass
@@ -33,19 +32,11 @@ from tenacity import AsyncRetrying, retry_if_exception, stop_after_attempt
 
 from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.cache import ResponseCache, cache_key, identity_json
+from povagent.engine.received import received
 from povagent.engine.retry import InfraFailure, error_type_of, is_transient, wait_before_retry
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.interfaces import Backend
-
-#: Lone UTF-16 surrogates (``"\\ud800"`` in a JSON answer) are not text: UTF-8 cannot hold them.
-_LONE_SURROGATE = re.compile("[\ud800-\udfff]")
-
-
-def valid_text(text: str) -> str:
-    """``text`` with lone surrogates replaced by U+FFFD, so rows, logs and the cache (all
-    UTF-8) can hold every answer a server sends."""
-    return _LONE_SURROGATE.sub("\ufffd", text) if _LONE_SURROGATE.search(text) else text
 
 
 class Limiter(Protocol):
@@ -97,8 +88,9 @@ class RequestPath:
     own attempts: see :meth:`attempt_timeout`); ``cache`` is optional (and ignored for a backend
     that is not ``cacheable``); ``limiter`` defaults to no limit; ``redact`` scrubs secrets from
     every message that leaves this path, and ``redact_answer`` the secret values povagent knows
-    from every answer (fresh or cached), before the cache, the row or the log sees it: a server
-    may echo the ``Authorization`` header inside a successful answer.
+    from every string of every answer (fresh or cached; text, model name, tool calls), before
+    the strategy, the cache, the row or the log sees it: a server may echo the ``Authorization``
+    header anywhere in a successful answer (see :mod:`povagent.engine.received`).
     """
 
     def __init__(
@@ -168,7 +160,7 @@ class RequestPath:
             cached = cache.get(key)
             if cached is not None:
                 self.stats.cache_hits += 1
-                return self._scrubbed(cached)  # a cache written before the key was known
+                return received(cached, self.redact_answer)  # a cache written before the key was known
         if self._start_backend:
             await self._started(label)
         response = await self.call(request, label=label, deadline=deadline)
@@ -217,14 +209,7 @@ class RequestPath:
             raise self._failure(exc, attempts, label) from exc
         response.retries = attempts - 1
         self.stats.retries += attempts - 1
-        response.text = valid_text(response.text)
-        return self._scrubbed(response)
-
-    def _scrubbed(self, response: Response) -> Response:
-        response.text = self.redact_answer(response.text)
-        if response.model is not None:
-            response.model = self.redact_answer(response.model)
-        return response
+        return received(response, self.redact_answer, offered_tools=bool(request.tools))
 
     # -- one attempt ---------------------------------------------------------------------------
     async def _attempt(self, request: Request, deadline: float | None) -> Response:

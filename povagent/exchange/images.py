@@ -104,8 +104,10 @@ class ImageStore:
         self.transport: StoreTransport | None = None
 
     # -- adding -------------------------------------------------------------------------------
-    def add_file(self, path: str | Path) -> StoredImage:
-        """Register an image file (read once per run); returns its hash and size.
+    def add_file(self, path: str | Path, data: bytes | None = None) -> StoredImage:
+        """Register an image file (read once per run); returns its hash and size. ``data``: the
+        file's bytes, when the caller has just read them itself (read confined and hashed, as
+        the active mode's views are), so they are not read a second time.
 
         Safe to call from a worker thread (the runner reads a house's frames off the event
         loop): the file is read and hashed outside the store's lock, so a slow disk never
@@ -117,7 +119,8 @@ class ImageStore:
         known = self._by_path.get(p)
         if known is not None:
             return known
-        data = self._read_file(p)
+        if data is None:
+            data = self._read_file(p)
         try:
             facts = check_image_bytes(data)
         except ImageFileError as exc:

@@ -7,15 +7,21 @@ references, so identical requests share one key whatever their images weigh.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Mapping
+from typing import TYPE_CHECKING, Any, Literal, Mapping, Sequence
 
 from povagent.answers.spec import AnswerSpec
 
 if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
+
+
+def _canonical(value: Any) -> str:
+    """The one JSON form hashes are taken of: keys sorted, no spaces."""
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
 
 
 @dataclass(frozen=True)
@@ -64,6 +70,12 @@ class Message:
     def text(cls, role: Literal["system", "user", "assistant", "tool"], text: str) -> Message:
         """A message holding one text part."""
         return cls(role, (TextPart(text),))
+
+    @functools.cached_property
+    def fingerprint_json(self) -> str:
+        """:meth:`fingerprint` as canonical JSON, made once per message: a long conversation
+        repeats every earlier message in each request, and hashing one must not redo them all."""
+        return _canonical(self.fingerprint())
 
     def fingerprint(self) -> dict[str, Any]:
         """JSON-able form (images by hash); tool fields only when set, so a plain message's
@@ -132,24 +144,42 @@ class Request:
         return out
 
     def content_hash(self) -> str:
-        """SHA-256 of :meth:`fingerprint` (stable across runs and machines)."""
-        blob = json.dumps(self.fingerprint(), sort_keys=True, separators=(",", ":"))
+        """SHA-256 of :meth:`fingerprint` as canonical JSON (stable across runs and machines),
+        put together from each message's own JSON (the same bytes, each message serialized once)."""
+        blob = (
+            '{"generation":' + _canonical(self.generation.as_dict())
+            + ',"messages":[' + ",".join(m.fingerprint_json for m in self.messages) + "]"
+            + (',"tools":' + _canonical([dict(t) for t in self.tools]) if self.tools else "")
+            + "}"
+        )  # fmt: skip
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def as_text(self) -> str:
-        """The request as a reader sees it: each message's role on a line (``--- user ---``),
-        its text parts verbatim and each image as ``[image: LABEL]`` (hashes in
-        :meth:`image_hashes`, in the same order). Rows keep it as the transcript."""
-        lines: list[str] = []
-        for m in self.messages:
-            lines.append(f"--- {m.role} ---" if m.tool_call_id is None else f"--- {m.role} ({m.tool_call_id}) ---")
-            lines += [p.text if isinstance(p, TextPart) else f"[image: {p.label or 'unlabelled'}]" for p in m.parts]
-            lines += [f"[tool call {c.id}: {c.name}({c.arguments})]" for c in m.tool_calls]
-        return "\n".join(lines)
+        """The request as a reader sees it (:func:`messages_text` of every message). Rows keep
+        it as the transcript."""
+        return messages_text(self.messages)
 
     def image_hashes(self) -> list[str]:
         """Hashes of every image in the request, in order."""
-        return [p.image_hash for m in self.messages for p in m.parts if isinstance(p, ImagePart)]
+        return messages_images(self.messages)
+
+
+def messages_text(messages: Sequence[Message]) -> str:
+    """Messages as a reader sees them: each message's role on a line (``--- user ---``), its
+    text parts verbatim, each image as ``[image: LABEL]`` (hashes in :func:`messages_images`,
+    in the same order) and each tool call as ``[tool call ID: NAME(ARGUMENTS)]``. The text of
+    a list that extends another is that list's text, a newline, then the added messages'."""
+    lines: list[str] = []
+    for m in messages:
+        lines.append(f"--- {m.role} ---" if m.tool_call_id is None else f"--- {m.role} ({m.tool_call_id}) ---")
+        lines += [p.text if isinstance(p, TextPart) else f"[image: {p.label or 'unlabelled'}]" for p in m.parts]
+        lines += [f"[tool call {c.id}: {c.name}({c.arguments})]" for c in m.tool_calls]
+    return "\n".join(lines)
+
+
+def messages_images(messages: Sequence[Message]) -> list[str]:
+    """Hashes of every image in ``messages``, in order."""
+    return [p.image_hash for m in messages for p in m.parts if isinstance(p, ImagePart)]
 
 
 @dataclass

@@ -21,6 +21,7 @@ from typing import Any, Mapping
 
 from PIL import Image
 
+from povagent.active.views import view_file
 from povagent.dataset.instances import Frame
 from povagent.report.collect import Collection, Observation
 from povagent.report.statistics import paired_comparison
@@ -54,8 +55,10 @@ def answered_view(observation: Observation, folders: Mapping[str, Path]) -> Answ
     if record is None:
         return None
     path = tuple((c.x, c.z, c.yaw) for c in [record.start, *(v.camera for v in record.views)])
-    folder = folders.get(observation.run_name, Path()) / "views"
-    views = tuple(folder / f"{v.sha256}.png" for v in record.views)
+    files = [view_file(folders.get(observation.run_name, Path()), v.sha256) for v in record.views]
+    if any(f is None for f in files):  # missing, or planted (a link, a pipe): the card draws no view
+        return AnsweredView(None, path)
+    views = tuple(f for f in files if f is not None)
     answer = record.answer
     if answer is None or answer.frame is not None:
         return AnsweredView(None, path, views)
@@ -182,10 +185,10 @@ def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | N
 
 def _thumbnail(folder: Path, sha: str, out: Path) -> str | None:
     """A JPEG thumbnail of a rendered view under ``out/images/active`` (``None``: not on disk)."""
-    source = folder / "views" / f"{sha}.png"
     target = out / "images" / "active" / f"{sha}.jpg"
     if not target.is_file():
-        if not source.is_file():
+        source = view_file(folder, sha)
+        if source is None:
             return None
         target.parent.mkdir(parents=True, exist_ok=True)
         with Image.open(source) as im:

@@ -29,6 +29,11 @@ from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, read_rows
+from povagent.results.transcript import transcripts
+
+#: Raw answers and requests longer than this are cut in the report's answers files (the full
+#: text stays in results.jsonl).
+MAX_RAW_CHARS = 8000
 
 RESULTS_FILE = "results.jsonl"
 CONFIG_FILE = "config.yaml"
@@ -75,7 +80,8 @@ class Observation:
     #: ``success`` rows: the hit radius of point marks without their own, in original pixels.
     hit_radius_px: float | None = None
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
-    #: (the transcript; rows written before requests were kept have ``None`` requests).
+    #: (the transcript, each request rebuilt and cut to one character over
+    #: :data:`MAX_RAW_CHARS`; rows written before requests were kept have ``None`` requests).
     turns: tuple[tuple[str | None, str | None], ...] = ()
     #: The ``diagnose`` scorer's first failing step (``frame`` ... ``correct``; ``None``: not diagnosed).
     fail_step: str | None = None
@@ -357,7 +363,7 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         success=success,
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
-        turns=tuple((e.prompt, e.raw) for e in row.exchanges),
+        turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
         **diagnosis_of(row),
     )
 

@@ -54,7 +54,7 @@ from PIL import Image
 from povagent.dataset.realworld import RealWorldInstance
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
-from povagent.report.collect import Observation
+from povagent.report.collect import MAX_RAW_CHARS, Observation
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, render
 from povagent.report.html import script_json
 from povagent.run.confined_write import write_inside
@@ -65,8 +65,6 @@ ANSWERS_DIR = "answers"
 #: Entries per answers file: one file is loaded when any of its cards is opened.
 ANSWER_CHUNK = 200
 THUMB_SIZE = 256
-#: Raw answers longer than this are cut in the answers files (the full text stays in results.jsonl).
-MAX_RAW_CHARS = 8000
 
 #: Height of one frame in a strip image (the page shows it at 18 to 64 px).
 STRIP_TILE_HEIGHT = 64

@@ -35,9 +35,16 @@ class ExchangeRecord(BaseModel):
     """One model call of a row (multi-turn strategies have several)."""
 
     request_hash: str
+    #: The images of :attr:`prompt`, in order.
     image_hashes: list[str] = Field(default_factory=list)
-    #: The request as sent (:meth:`povagent.exchange.messages.Request.as_text`): the transcript.
+    #: The request as sent (:meth:`povagent.exchange.messages.Request.as_text`): the transcript;
+    #: with :attr:`prompt_continues`, only the messages it added to the previous exchange's.
     prompt: str | None = None
+    #: Whether the request began with every message of the previous exchange's request, so
+    #: :attr:`prompt` holds only the messages added after them (each message is kept once; the
+    #: whole text is rebuilt by :func:`povagent.results.transcript.transcripts`). ``False`` in
+    #: rows written before: each prompt is whole there.
+    prompt_continues: bool = False
     raw: str | None = None
     latency_s: float = 0.0
     prompt_tokens: int | None = None

@@ -24,7 +24,8 @@ row). The API, for every writer of povagent (run, rescore, report, summaries, ex
   when missing, never followed); ``.sub(rel)``, ``.open_append(name)``, ``.open_update(name)``,
   ``.write_replace(name, data)``, ``.staged(name)`` (write aside, ``commit()`` renames),
   ``.unlink(name)``, ``.check_plain_file(name)`` (for a file another library opens by path),
-  ``.path``; a context manager that closes its descriptor;
+  ``.path``, ``.descriptor`` (to read a file relative to the folder); a context manager that
+  closes its descriptor;
 - :func:`write_inside` ``(root, rel, data)``: one file written whole at ``root/rel``;
 - :func:`open_inside` ``(root, rel, mode)``: ``"a"``/``"ab"`` to append, ``"r+b"`` to update.
 
@@ -130,6 +131,12 @@ class ConfinedFolder:
             raise _refusal(target, exc, "folder") from None
         os.close(self._fd)
         self._fd, self.path = fd, target
+
+    @property
+    def descriptor(self) -> int | None:
+        """The folder's open descriptor, for opening a file relative to it (``dir_fd``); ``None``
+        where the platform cannot (then :attr:`path` is all there is)."""
+        return self._fd
 
     def sub(self, rel: str | PurePath, *, create: bool = True) -> ConfinedFolder:
         """The folder ``rel`` below this one, opened the same way (the caller closes it)."""

@@ -27,7 +27,8 @@ from povagent.exchange.usage_totals import UsageTotals
 from povagent.interfaces import Parser, Scorer
 from povagent.results.official_reading import read_officially
 from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
-from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus, utc_now
+from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
+from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
 from povagent.run.logs import Redactor, RunLog
 
@@ -51,7 +52,7 @@ class KeySolver:
     #: The system's name the pipeline gave (``label:``), carried by every row.
     label: str | None = None
 
-    def make_ask(self, run: int, exchanges: list[ExchangeRecord], row_id: str) -> Callable[[Request], Any]:
+    def make_ask(self, run: int, transcript: RowTranscript, row_id: str) -> Callable[[Request], Any]:
         path = self.path
 
         async def ask(request: Request) -> Response:
@@ -60,22 +61,11 @@ class KeySolver:
                 request = dataclasses.replace(request, run=run)
             response = await path.send(request, label=row_id)
             usage = response.usage
-            # model_construct: every field is built here with the right type; validating
-            # again per request cost ~0.1 ms an instance.
-            exchanges.append(
-                ExchangeRecord.model_construct(
-                    request_hash=request.content_hash(),
-                    image_hashes=request.image_hashes(),
-                    prompt=request.as_text(),
-                    raw=response.text,
-                    latency_s=response.latency_s,
-                    prompt_tokens=usage.prompt_tokens,
-                    completion_tokens=usage.completion_tokens,
-                    cost_usd=usage.cost_usd,
-                    retries=response.retries,
-                    cached=response.cached,
-                )
-            )
+            transcript.record(
+                request, raw=response.text, latency_s=response.latency_s, prompt_tokens=usage.prompt_tokens,
+                completion_tokens=usage.completion_tokens, cost_usd=usage.cost_usd, retries=response.retries,
+                cached=response.cached,
+            )  # fmt: skip
             self.log.debug(
                 "request",
                 row=row_id,
@@ -97,7 +87,8 @@ class KeySolver:
         key = row_key(iid, run)
         started = utc_now()
         t0 = time.perf_counter()
-        exchanges: list[ExchangeRecord] = []
+        transcript = RowTranscript()
+        exchanges = transcript.exchanges
         parse: ParsedAnswer | None = None
         scores: dict[str, dict[str, Any]] = {}
         prediction = Prediction()
@@ -106,10 +97,10 @@ class KeySolver:
         failed_retries = 0  # retries of a request that never got an answer (no exchange holds them)
         try:
             await self.read_frames(instance)
-            turns = await comps.strategy.solve(instance, self.make_ask(run, exchanges, key), self.images)
+            turns = await comps.strategy.solve(instance, self.make_ask(run, transcript, key), self.images)
             request, response = turns[-1]
             if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
-                exchanges.append(ExchangeRecord(request_hash=request.content_hash(), prompt=request.as_text(), raw=response.text))
+                transcript.record(request, raw=response.text)
             parse = self.parse(comps.parser, response.text, request, key)
             shown = as_shown(instance, request)
             if parse.answered:

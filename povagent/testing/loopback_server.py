@@ -62,7 +62,8 @@ class Reply:
     completion_tokens: int = 5
     no_choices: bool = False
     #: Function calls to answer with, each ``{"name": ..., "arguments": <dict or raw text>}``
-    #: (raw text is sent as is, so a test can send malformed arguments).
+    #: (raw text is sent as is, so a test can send malformed arguments), and ``"id"`` when the
+    #: call's id is not to be ``call_<request>_<k>``.
     tool_calls: tuple[dict[str, Any], ...] = ()
 
 
@@ -336,7 +337,7 @@ def _choice(reply: Reply, n: int) -> dict[str, Any]:
     if not reply.tool_calls:
         return {"index": 0, "message": message, "finish_reason": "stop"}
     message["tool_calls"] = [
-        {"id": f"call_{n}_{k}", "type": "function", "function": {"name": c.get("name"), "arguments": c["arguments"]
+        {"id": c.get("id") or f"call_{n}_{k}", "type": "function", "function": {"name": c.get("name"), "arguments": c["arguments"]
          if isinstance(c.get("arguments"), str) else json.dumps(c.get("arguments", {}))}}
         for k, c in enumerate(reply.tool_calls)
     ]  # fmt: skip

@@ -34,6 +34,13 @@ def test_invalid_calls_are_typed_observations_counted_against_the_budget(make_ep
     assert ep.counts.invalid_calls == 3 and ep.budget_left == 0 and not ep.views
 
 
+def test_a_400_digit_integer_in_a_call_is_an_invalid_call_not_a_crash(make_episode):
+    ep = make_episode(budget=2)
+    out = ep.handle([ToolCall("c0", "turn", '{"degrees": ' + "9" * 400 + "}")], turn=1)
+    assert out[0].text.startswith("invalid call: turn: degrees must lie within")
+    assert ep.counts.invalid_calls == 1 and ep.steps[0].valid is False and not ep.views
+
+
 def test_a_hundred_calls_in_one_turn_run_only_the_budget_and_render_no_more(make_episode):
     ep = make_episode(budget=8)
     out = ep.handle([call("turn", k, degrees=1) for k in range(100)], turn=1)

@@ -57,3 +57,12 @@ def test_a_hostile_call_becomes_an_invalid_call_naming_the_problem(name, argumen
     result = read_call(name, arguments)
     assert isinstance(result, InvalidCall)
     assert why in result.reason
+
+
+@pytest.mark.parametrize(("name", "field"), [("turn", "degrees"), ("tilt", "degrees"), ("move", "forward"), ("answer", "x")])
+def test_an_integer_too_large_for_a_float_is_an_invalid_call_naming_its_length(name, field):
+    arguments = {"turn": {"degrees": 0}, "tilt": {"degrees": 0}, "move": {"forward": 0, "right": 0},
+                 "answer": {"image": "view 1", "x": 0, "y": 0}}[name]  # fmt: skip
+    text = json.dumps(arguments).replace(f'"{field}": 0', f'"{field}": {"9" * 400}')
+    result = read_call(name, text)
+    assert isinstance(result, InvalidCall) and "an integer of 400 digits" in result.reason

@@ -71,7 +71,8 @@ def test_a_plain_message_fingerprint_is_unchanged_by_the_tool_fields():
 def test_tool_calls_read_from_an_answer_are_bounded_and_never_raise():
     from types import SimpleNamespace as NS
 
-    from povagent_plugins.backends.openai_messages import MAX_ARGUMENTS_CHARS, MAX_TOOL_CALLS, tool_calls_of
+    from povagent.engine.received import MAX_ARGUMENTS_CHARS, MAX_TOOL_CALLS
+    from povagent_plugins.backends.openai_messages import tool_calls_of
 
     many = [NS(id=f"c{k}", function=NS(name="turn", arguments="x" * (MAX_ARGUMENTS_CHARS + 10))) for k in range(MAX_TOOL_CALLS + 5)]
     calls = tool_calls_of(NS(choices=[NS(message=NS(tool_calls=many + [NS()]))]))

@@ -11,7 +11,8 @@ import pytest
 from povagent.answers.spec import AnswerSpec, point_answer_schema
 from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.cache import ResponseCache
-from povagent.engine.request_path import RequestPath, SemaphoreLimiter, valid_text
+from povagent.engine.received import valid_text
+from povagent.engine.request_path import RequestPath, SemaphoreLimiter
 from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Message, Request, Response, TextPart

@@ -100,3 +100,22 @@ def dump(page, tmp_path, state: str) -> str:
                            page.as_uri() + "#" + state], capture_output=True, text=True, timeout=90)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
+
+
+@pytest.mark.timeout(90)
+def test_views_planted_in_a_run_folder_are_not_read_and_the_report_is_written(report, tmp_path):
+    import os
+
+    runs = tmp_path / "runs"
+    shutil.copytree(report.out.parent / "runs", runs)
+    views = sorted((runs / "oracle" / "views").glob("*.png"))
+    fifo, linked = views[0], views[1]
+    outside = tmp_path / "outside.png"
+    outside.write_bytes(linked.read_bytes())
+    fifo.unlink()
+    os.mkfifo(fifo)  # opened by path, it would wait for a writer forever
+    linked.unlink()
+    linked.symlink_to(outside)
+    again = write_report(runs, tmp_path / "report", n_boot=0)
+    thumbs = {p.stem for p in (again.out / "images" / "active").glob("*.jpg")}
+    assert thumbs and fifo.stem not in thumbs and linked.stem not in thumbs

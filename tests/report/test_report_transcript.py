@@ -15,6 +15,7 @@ from test_report_html import dump  # the Chromium helpers
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
 from povagent.results.rows import read_rows
+from povagent.results.transcript import transcripts
 from povagent.run.runner import run_pipeline
 from povagent.testing.loopback_server import LoopbackServer
 
@@ -55,9 +56,10 @@ def test_each_exchange_of_a_row_keeps_the_request_it_answered(two_turn_report):
     first, second = row.exchanges
     assert (first.raw, second.raw) == (FIRST, SECOND) and row.prediction.x == 33
     assert first.prompt.startswith("--- user ---\nImage:\n[image: observer view]\n") and first.prompt.count("--- ") == 1
-    # turn 2 as sent: turn 1's message, the model's real answer (no placeholder), the check
-    assert second.prompt.startswith(first.prompt + "\n--- assistant ---\n" + FIRST + "\n--- user ---\nCheck that point")
+    # turn 2 keeps what it added to turn 1's messages: the model's real answer (no placeholder), the check
+    assert second.prompt_continues and second.prompt.startswith("--- assistant ---\n" + FIRST + "\n--- user ---\nCheck that point")
     assert "<<" not in second.prompt
+    assert transcripts(row.exchanges) == [first.prompt, first.prompt + "\n" + second.prompt]  # each request as sent
 
 
 def test_the_card_shows_every_turn_in_chromium_and_the_page_does_not_inline_it(two_turn_report):
@@ -72,5 +74,5 @@ def test_the_card_shows_every_turn_in_chromium_and_the_page_does_not_inline_it(t
     assert [t[0] for t in turns] == ["1", "2"]
     (_, q1, a1), (_, q2, a2) = ((n, html.unescape(q), html.unescape(a)) for n, q, a in turns)
     assert (a1, a2) == (FIRST, SECOND)
-    assert q1 == rows[0].exchanges[0].prompt and q2 == rows[0].exchanges[1].prompt
+    assert [q1, q2] == transcripts(rows[0].exchanges)  # each request as sent, rebuilt
     assert "[image: " in q1 and "--- assistant ---\n" + FIRST in q2

@@ -13,6 +13,7 @@ import yaml
 from jsonschema import Draft202012Validator
 from typer.testing import CliRunner
 
+import povagent.results.transcript as transcript_module
 import povagent.run.solve_key as solve_key_module
 from povagent.cli import app
 from povagent.results.rows import ExchangeRecord, ResultRow
@@ -102,14 +103,16 @@ def test_a_summary_with_an_unknown_section_fails_its_schema(two_run_sweep):
 
 
 def _construct_keywords(model: str) -> set[str]:
-    """The keywords of the solve step's ``<model>.model_construct(...)`` call."""
-    tree = ast.parse((Path(solve_key_module.__file__)).read_text(encoding="utf-8"))
+    """The keywords of the ``<model>.model_construct(...)`` call of the module that builds it
+    (the solve step a row, the row's transcript an exchange)."""
+    module = transcript_module if model == "ExchangeRecord" else solve_key_module
+    tree = ast.parse((Path(module.__file__)).read_text(encoding="utf-8"))
     calls = [
         node for node in ast.walk(tree)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "model_construct"
         and isinstance(node.func.value, ast.Name) and node.func.value.id == model
     ]  # fmt: skip
-    assert len(calls) == 1, f"expected one {model}.model_construct call in the solve step"
+    assert len(calls) == 1, f"expected one {model}.model_construct call in {module.__name__}"
     return {k.arg for k in calls[0].keywords if k.arg is not None}
 
 

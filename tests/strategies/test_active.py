@@ -8,13 +8,18 @@ from pathlib import Path
 
 import pytest
 import yaml
+from PIL import Image
+from typer.testing import CliRunner
 
 from povagent.active.tools import TOOL_NAMES
+from povagent.cli import app
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
+from povagent.errors import WriteTargetError
 from povagent.geometry.camera import Camera
 from povagent.results.episode import read_record
 from povagent.results.rows import read_rows
+from povagent.run.run_folder import MARKER
 from povagent.run.runner import run_pipeline
 from povagent.scoring.official import normalized_l2, project_ground_truth
 from povagent.testing.loopback_server import LoopbackServer, Reply
@@ -103,3 +108,67 @@ def test_a_model_that_never_answers_is_a_recorded_non_response_within_the_turn_l
     row, record = run_active(generated_release, tmp_path / "run", model, max_actions=2)
     assert row.status == "parse_error" and len(model.requests) == 4  # max_turns = max_actions + 2
     assert record.answer is None and record.end == "no answer within 4 turns" and record.counts.questions == 2
+
+
+def test_a_key_echoed_in_tool_call_ids_names_arguments_and_text_reaches_no_file(generated_release, tmp_path, monkeypatch):
+    # The variable's name matches no secret-looking pattern: only knowing api_key_env finds it.
+    key = "lab-key-4f9a8c7e2b1d"
+    monkeypatch.setenv("POVAGENT_ECHO_VAR", key)
+
+    def echo(request) -> Reply:
+        sent = request.headers["authorization"]
+        if not any(m["role"] == "tool" for m in request.body["messages"]):
+            return Reply(f"looking around ({sent})", tool_calls=(
+                {"id": f"call-{sent}", "name": "turn", "arguments": {"degrees": 5}},
+                {"name": f"fly{key}", "arguments": {}},
+                {"name": "tilt", "arguments": {"degrees": 5, "why": sent}},
+            ))  # fmt: skip
+        return Reply(f"done ({sent})", tool_calls=({"id": f"end-{key}", "name": "answer", "arguments": {"image": "view 1", "x": 1, "y": 2}},))
+
+    with LoopbackServer(reply=echo, max_lifetime_s=100) as server:
+        doc = {
+            "dataset": {"path": str(generated_release)},
+            "instances": {"houses": ["train_house_00000"], "conditions": ["a"], "limit": 1},
+            "backend": {"name": "litellm", "options": {"model": "openai/echo", "api_base": server.url, "api_key_env": "POVAGENT_ECHO_VAR"}},
+            "strategy": {"name": "active", "options": {"max_actions": 4}},
+            "parser": "active",
+            "scorers": ["official"],
+            "retry": {"attempts": 1},
+            "output": str(tmp_path / "run"),
+        }  # fmt: skip
+        (tmp_path / "pipeline.yaml").write_text(yaml.safe_dump(doc))
+        run_pipeline(load_pipeline(tmp_path / "pipeline.yaml"))
+        assert key in server.requests[-1].headers["authorization"]  # it was sent, and echoed
+    result = CliRunner().invoke(app, ["report", str(tmp_path / "run"), "--bootstrap", "0"])
+    assert result.exit_code == 0, result.output
+    (row,) = read_rows(tmp_path / "run" / "results.jsonl")
+    assert row.status == "answered" and "[REDACTED]" in row.exchanges[1].prompt  # echoed, then redacted
+    written = [p for p in tmp_path.rglob("*") if p.is_file()]
+    assert any(p.suffix == ".js" for p in written) and any(p.name == "report.html" for p in written)
+    assert [str(p) for p in written if key.encode() in p.read_bytes()] == []
+
+
+def test_a_planted_view_with_other_bytes_is_rendered_again_on_resume_and_the_key_answered(generated_release, tmp_path, model):
+    script = (calls(("go_to_frame", {"frame": 1})), calls(("answer", {"image": "view 1", "x": 1, "y": 2})))
+    model.script(*script)
+    row, record = run_active(generated_release, tmp_path / "run", model)
+    view = tmp_path / "run" / "views" / f"{record.views[0].sha256}.png"
+    rendered = view.read_bytes()
+    view.write_bytes(Image.new("RGB", (8, 8)).tobytes())  # other bytes under the view's name
+    (tmp_path / "run" / "results.jsonl").write_bytes(b"")  # the key runs again, as after a kill
+    model.script(*script)
+    row, record = run_active(generated_release, tmp_path / "run", model)
+    assert row.status == "answered" and row.error_type is None
+    assert view.read_bytes() == rendered and model.requests[-1].images[-1].sha256 == record.views[0].sha256
+
+
+def test_a_resumed_run_whose_views_folder_is_a_link_is_refused_in_one_line(generated_release, tmp_path, model):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / MARKER).write_text('{"format": 1, "kind": "run"}\n')
+    (run / "views").symlink_to(outside, target_is_directory=True)
+    with pytest.raises(WriteTargetError, match=r"views: is a symbolic link"):
+        run_active(generated_release, run, model)
+    assert list(outside.iterdir()) == [] and model.requests == []

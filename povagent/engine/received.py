@@ -1,0 +1,73 @@
+"""What a model sent back, made fit to keep: the one door an answer passes into povagent.
+
+A server is untrusted: it may echo the ``Authorization`` header (the key) anywhere in what it
+returns, in the text, in the model name, in a tool call's id, name or arguments, and it may
+send more tool calls, longer than anything a row, a log or the next request should carry. So
+every answer, from any backend (litellm, a local checkpoint, a plugin's), fresh or from the
+cache, goes through :func:`received` before the strategy, the row, the cache, the log or the
+report sees it: every string in it, found by walking the answer's fields (a field added later
+is covered without being named here), has the keys povagent knows replaced and lone
+surrogates made into U+FFFD; tool calls are bounded in number and length; and the text of an
+answer to a request that offered tools (a turn of an episode: a remark beside the calls, or
+the final answer in JSON) is bounded too, so one episode's row stays small whatever a model
+sends each turn. The text of any other answer is kept whole (a chain of thought runs long).
+
+This module must not send requests or know runs, rows or strategies.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from typing import Any, Callable
+
+from povagent.exchange.messages import Response, ToolCall
+
+#: Lone UTF-16 surrogates (``"\\ud800"`` in a JSON answer) are not text: UTF-8 cannot hold them.
+_LONE_SURROGATE = re.compile("[\ud800-\udfff]")
+
+#: The most tool calls kept from one answer (the rest are dropped: each kept one becomes a
+#: message sent back), and the longest id, function name and arguments text of a call.
+MAX_TOOL_CALLS = 128
+MAX_CALL_ID_CHARS = 128
+MAX_TOOL_NAME_CHARS = 64
+MAX_ARGUMENTS_CHARS = 4096
+#: The longest text kept from an answer to a request that offered tools.
+MAX_TOOL_TURN_TEXT_CHARS = 8192
+
+
+def valid_text(text: str) -> str:
+    """``text`` with lone surrogates replaced by U+FFFD, so rows, logs and the cache (all
+    UTF-8) can hold every answer a server sends."""
+    return _LONE_SURROGATE.sub("\ufffd", text) if _LONE_SURROGATE.search(text) else text
+
+
+def bounded_call(call: ToolCall) -> ToolCall:
+    """``call`` with its id, name and arguments cut to their bounds."""
+    return ToolCall(call.id[:MAX_CALL_ID_CHARS], call.name[:MAX_TOOL_NAME_CHARS], call.arguments[:MAX_ARGUMENTS_CHARS])
+
+
+def received(response: Response, redact: Callable[[str], str], *, offered_tools: bool = False) -> Response:
+    """``response`` as povagent keeps it: bounded, valid UTF-8 text, no known key in any string.
+
+    ``redact`` removes the keys povagent knows (:meth:`povagent.run.logs.Redactor.known`);
+    ``offered_tools``: the request offered tools, so the text is bounded too.
+    """
+    if response.tool_calls:
+        calls = tuple(bounded_call(c) for c in response.tool_calls[:MAX_TOOL_CALLS])
+        response = dataclasses.replace(response, tool_calls=calls)
+    if offered_tools and len(response.text) > MAX_TOOL_TURN_TEXT_CHARS:
+        response = dataclasses.replace(response, text=response.text[:MAX_TOOL_TURN_TEXT_CHARS])
+    return _strings_of(response, lambda text: redact(valid_text(text)))
+
+
+def _strings_of(value: Any, clean: Callable[[str], str]) -> Any:
+    """``value`` with ``clean`` applied to every string inside it (dataclass fields, tuples)."""
+    if isinstance(value, str):
+        return clean(value)
+    if isinstance(value, tuple):
+        return tuple(_strings_of(v, clean) for v in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        changed = {f.name: _strings_of(getattr(value, f.name), clean) for f in dataclasses.fields(value) if f.init}
+        return dataclasses.replace(value, **changed)
+    return value

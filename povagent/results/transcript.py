@@ -1,0 +1,69 @@
+"""A row's transcript, each message kept once, and each request's text rebuilt from it.
+
+A multi-turn strategy's request usually repeats every earlier message and adds a few (the
+active mode adds the model's calls, one tool result each, and the views). Kept whole in every
+exchange, a row grew with the square of its turns (90 MB at 16 actions against a model sending
+128 padded calls a turn). So an exchange whose request begins with every message of the
+previous exchange's request keeps only the messages added after them
+(:attr:`~povagent.results.rows.ExchangeRecord.prompt_continues`), and :func:`transcripts`
+rebuilds each request's text, for a row written either way (rows written before this keep
+each prompt whole, and read as they always did).
+
+What it must not do: decide what a request holds, or write files.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from povagent.exchange.messages import Request, messages_images, messages_text
+from povagent.results.rows import ExchangeRecord
+
+
+@dataclass
+class RowTranscript:
+    """The exchanges of one row, recorded as they happen (each request's new messages only)."""
+
+    exchanges: list[ExchangeRecord] = field(default_factory=list)
+    #: The request of the last exchange recorded (what the next one may continue).
+    last: Request | None = None
+
+    def record(
+        self, request: Request, raw: str | None, *, latency_s: float = 0.0, prompt_tokens: int | None = None,
+        completion_tokens: int | None = None, cost_usd: float | None = None, retries: int = 0, cached: bool = False,
+    ) -> None:  # fmt: skip
+        """Record an exchange: ``request``, the ``raw`` answer to it, and what it cost."""
+        last = self.last
+        n = len(last.messages) if last is not None else 0
+        continues = last is not None and request.messages[:n] == last.messages
+        added = request.messages[n:] if continues else request.messages
+        # model_construct: every field is built here with the right type (and named: a field
+        # left out would quietly take its default); validating again cost ~0.1 ms a request.
+        self.exchanges.append(
+            ExchangeRecord.model_construct(
+                request_hash=request.content_hash(), image_hashes=messages_images(added), prompt=messages_text(added),
+                prompt_continues=continues, raw=raw, latency_s=latency_s, prompt_tokens=prompt_tokens,
+                completion_tokens=completion_tokens, cost_usd=cost_usd, retries=retries, cached=cached,
+            )
+        )  # fmt: skip
+        self.last = request
+
+
+def transcripts(exchanges: Sequence[ExchangeRecord], keep: int | None = None) -> list[str | None]:
+    """The text of each exchange's request as sent (``None`` where no request was kept).
+
+    ``keep``: at most that many leading characters of each (what a page shows), so rebuilding a
+    long episode costs memory in proportion to its turns, not to the square of them.
+    """
+    out: list[str | None] = []
+    previous: str | None = None
+    for exchange in exchanges:
+        text = exchange.prompt
+        if text is not None and exchange.prompt_continues and previous is not None:
+            text = previous + "\n" + text if text else previous
+        if text is not None and keep is not None:
+            text = text[:keep]
+        out.append(text)
+        previous = text
+    return out
