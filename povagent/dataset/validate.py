@@ -18,10 +18,11 @@ from typing import Any, Iterable
 from jsonschema import ValidationError as SchemaError
 
 from povagent.dataset.image_files import image_problem
+from povagent.dataset.json_files import read_dataset_json
 from povagent.dataset.loader import EXPLORATION_LOG, VISIBLE_OBJECTS, house_folders
 from povagent.dataset.models import DIRECTIONS
-from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
-from povagent.dataset.problems import Problem, json_path, non_finite_problems
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
+from povagent.dataset.problems import Problem, folder_name_problem, json_path, non_finite_problems
 from povagent.dataset.schema import validator
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
@@ -72,27 +73,9 @@ def _schema_problems(file: str, name: str, data: Any) -> list[Problem]:
 
 
 def _load_json(path: Path, rel: str, problems: list[Problem], real_root: Path) -> Any:
-    if not path.exists() and not path.is_symlink():
-        problems.append(Problem(rel, "$", "file is missing"))
-        return None
-    if not is_inside(real_root, path):
-        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
-        return None
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        problems.append(Problem(rel, "$", "is not UTF-8 text"))
-        return None
-    except json.JSONDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-        return None
-    except RecursionError:
-        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
-        return None
-    except OSError as exc:
-        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
-        return None
-    problems.extend(non_finite_problems(rel, data))
+    data = read_dataset_json(path, rel, real_root, problems)
+    if data is not None:
+        problems.extend(non_finite_problems(rel, data))
     return data
 
 
@@ -110,6 +93,9 @@ def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512,
     real_root = dataset_root(root)
     house_id = folder.name
     rel_house = folder.relative_to(root)
+    not_text = folder_name_problem(str(rel_house))
+    if not_text is not None:
+        return [not_text]
     pairs_rel = str(rel_house / f"{house_id}.json")
     log_rel = str(rel_house / EXPLORATION_LOG)
     vis_rel = str(rel_house / VISIBLE_OBJECTS)
