@@ -24,6 +24,7 @@ from povagent.dataset.models import DIRECTIONS
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
 from povagent.dataset.problems import Problem, folder_name_problem, json_path, non_finite_problems
 from povagent.dataset.schema import validator
+from povagent.generate.record import NO_DIGEST, RECORD, parse_record, record_problem
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
 _JSON_NAMES = {"array": "list", "object": "object (a mapping of keys to values)"}
@@ -87,8 +88,10 @@ def check_image(path: Path, name: str, rel: str, where: str, size: tuple[int, in
         problems.append(Problem(rel, where, problem))
 
 
-def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
-    """Every problem of one house folder."""
+def validate_house(
+    folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512), warnings: list[Problem] | None = None
+) -> list[Problem]:
+    """Every problem of one house folder; what is worth saying but no problem goes to ``warnings``."""
     problems: list[Problem] = []
     real_root = dataset_root(root)
     house_id = folder.name
@@ -136,6 +139,27 @@ def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512,
             for key in vis:
                 if key not in frame_paths and not _exists_inside(real_root, folder, key):
                     problems.append(Problem(vis_rel, json_path([key]), f"names image {key!r}, which is neither in the exploration log nor on disk"))
+
+    record = folder / RECORD
+    if record.exists() or record.is_symlink():  # a house povagent generated: its record must describe it
+        problems.extend(_record_problems(folder, str(rel_house / RECORD), real_root, [] if warnings is None else warnings))
+    return problems
+
+
+def _record_problems(folder: Path, rel: str, real_root: Path, warnings: list[Problem]) -> list[Problem]:
+    """The problems of a generated house's record: readable, naming its folder, its digest matching."""
+    problems: list[Problem] = []
+    raw = _load_json(folder / RECORD, rel, problems, real_root)
+    if raw is None:
+        return problems
+    record = parse_record(raw)
+    if record is None:
+        return [*problems, Problem(rel, "$", "is not a generation record (an object with index, options and summary)")]
+    wrong = record_problem(record, folder.name)
+    if wrong is not None:
+        problems.append(Problem(rel, f"$.{wrong[0]}", wrong[1]))
+    elif record.digest is None:
+        warnings.append(Problem(rel, "$.digest", f"{NO_DIGEST}; `povagent render` and the active mode use it as it is"))
     return problems
 
 
@@ -185,8 +209,11 @@ def _pair_checks(pairs: list[Any], folder: Path, rel: str, real_root: Path) -> I
             yield from probs
 
 
-def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
-    """Every problem in a dataset folder (empty list: the dataset is valid)."""
+def validate_dataset(
+    root: str | Path, frame_size: tuple[int, int] = (512, 512), warnings: list[Problem] | None = None
+) -> list[Problem]:
+    """Every problem in a dataset folder (empty list: the dataset is valid); what is worth
+    saying but leaves it valid (a generation record without a digest) goes to ``warnings``."""
     root = Path(root)
     if not root.is_dir():
         return [Problem(str(root), "$", "dataset folder not found")]
@@ -199,5 +226,5 @@ def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512))
     if not folders:
         problems.append(Problem("artifacts", "$", "no house folders (expected artifacts/<house_id>/)"))
     for folder in folders:
-        problems.extend(validate_house(folder, root, frame_size))
+        problems.extend(validate_house(folder, root, frame_size, warnings))
     return problems
