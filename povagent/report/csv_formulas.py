@@ -10,7 +10,8 @@ spreadsheets show it as text, and the quote is the one change. The rule, exactly
 
 * only text cells are guarded; a number povagent writes as a number (an ``int`` or a
   ``float``, such as ``-0.5`` or ``-3``) is written as it is, and so is a text cell that is a
-  plain decimal number (``-0.5``, ``+3``, ``-1e-05``: a spreadsheet reads it as that number);
+  plain decimal number in ASCII digits (``-0.5``, ``+3``, ``-1e-05``: a spreadsheet reads it
+  as that number);
 * a text cell whose first character is ``=``, ``+``, ``-``, ``@``, a tab or a carriage return
   gets a ``'`` before it; every other cell is written unchanged.
 
@@ -25,8 +26,8 @@ import re
 
 #: The first characters that make a spreadsheet read a cell as a formula (OWASP's list).
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
-#: Text a spreadsheet reads as a plain number, never a formula.
-_PLAIN_NUMBER = re.compile(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?")
+#: Text a spreadsheet reads as a plain number, never a formula (ASCII digits only).
+_PLAIN_NUMBER = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
 
 
 def inert(cell: object) -> object:

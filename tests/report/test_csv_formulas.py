@@ -12,7 +12,7 @@ from povagent.report.csv_formulas import inert
 from povagent.report.tables import Cell, Column, Row, Table, to_csv
 
 
-@pytest.mark.parametrize("cell", ["=1+1", "+cmd|' /C calc'!A0", "-", "-1+1", "-inf", "@SUM(A1)", "\t=1", "\r=1"])
+@pytest.mark.parametrize("cell", ["=1+1", "+cmd|' /C calc'!A0", "-", "-1+1", "-inf", "-\u0663", "@SUM(A1)", "\t=1", "\r=1"])
 def test_text_starting_a_formula_gets_a_single_quote(cell):
     assert inert(cell) == "'" + cell
 
