@@ -97,10 +97,14 @@ def test_render_refuses_a_negative_seed_in_one_line(generated_release, tmp_path)
 
 def test_render_uses_a_record_written_before_digests_as_it_is(generated_release, tmp_path):
     dataset = _house_copy(generated_release, tmp_path, lambda r: r.pop("digest"))
-    code, output = _render(dataset, tmp_path / "old.png")
-    assert code == 0, output
-    code, output = _render(generated_release, tmp_path / "new.png")
-    assert code == 0 and (tmp_path / "old.png").read_bytes() == (tmp_path / "new.png").read_bytes()
+    house = dataset / "artifacts" / "train_house_00000"
+    entry = json.loads((house / "exploration_log.json").read_text())[1]
+    cam, out = entry["camera"], tmp_path / "view.png"
+    result = runner.invoke(app, ["render", str(dataset), "--house", "train_house_00000",
+                                 "--cam-pos", ",".join(str(v) for v in cam["cam_pos"]), "--yaw", str(cam["cam_yaw"]),
+                                 "--horizon", str(cam["cam_horizon"]), "--out", str(out)])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes() == (house / entry["image_path"]).read_bytes()
 
 
 @pytest.mark.parametrize("where", ["a folder", "an empty path", "an unwritable place"])
