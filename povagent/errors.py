@@ -49,6 +49,11 @@ class WriteTargetError(PovagentError):
     (see :mod:`povagent.run.confined_write`)."""
 
 
+class OutputFileError(PovagentError):
+    """A file named on the command line for output (``--out FILE``) cannot be written there: an
+    empty name, a folder in its place, a place that refuses the write."""
+
+
 #: ``errno`` values of a write that found no room: a full disk, a full quota, a file size limit.
 NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 

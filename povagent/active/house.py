@@ -7,7 +7,8 @@ be rendered, and the camera of an exploration frame or an observer view reproduc
 byte for byte (same renderer, same encoder settings as the writer). Houses are kept in a small
 per-process cache (least recently used out), since a rebuild costs far more than a view.
 What it must not do: accept a house this generator version did not make (the public release
-has no 3D scene: its houses have no record), or read outside the dataset folder.
+has no 3D scene: its houses have no record), or a record changed since (its digest no longer
+matches: another seed renders another house), or read outside the dataset folder.
 """
 
 from __future__ import annotations
@@ -22,8 +23,8 @@ from PIL import Image
 
 from povagent.errors import DatasetError
 from povagent.generate.dataset import GENERATOR_VERSION
-from povagent.generate.pipeline import BuiltHouse, build_house, house_id
-from povagent.generate.record import ARTIFACTS, RECORD, read_record
+from povagent.generate.pipeline import BuiltHouse, build_house
+from povagent.generate.record import ARTIFACTS, RECORD, read_record, record_problem
 from povagent.generate.writer import PNG_COMPRESS_LEVEL
 from povagent.geometry.camera import Camera
 
@@ -88,10 +89,11 @@ def check_generated(dataset_dir: Path, house: str) -> tuple[int, int]:
             f"{folder / RECORD}: made by generator version {version!r}, this povagent renders version "
             f"{GENERATOR_VERSION!r} only: generate the dataset again with this version"
         )
-    seed = record.options.get("seed")
-    if not isinstance(seed, int) or isinstance(seed, bool) or house_id(record.index) != house:
-        raise DatasetError(f"{folder / RECORD}: field seed or index does not describe house {house}")
-    return seed, record.index
+    wrong = record_problem(record, house)  # a record without a digest (an earlier povagent's) is used as it is
+    if wrong is not None:
+        field, why = wrong
+        raise DatasetError(f"{folder / RECORD}: field {field} {why}")
+    return int(record.options["seed"]), record.index
 
 
 def house_for(dataset_dir: Path, house: str) -> ActiveHouse:

@@ -42,11 +42,15 @@ def validate_command(
     """Check every file and image of a dataset; list every problem.
 
     Each problem names the file, the JSON path and what is wrong with it. Exit code 1 when
-    there is any.
+    there is any. Warnings (on stderr) leave the dataset valid.
     """
+    from povagent.dataset.problems import Problem
     from povagent.dataset.validate import validate_dataset
 
-    problems = validate_dataset(dataset_dir, (width, height))
+    warnings: list[Problem] = []
+    problems = validate_dataset(dataset_dir, (width, height), warnings)
+    for w in warnings:
+        typer.echo(f"warning: {w}", err=True)
     for p in problems:
         typer.echo(_fit_to_terminal(str(p)))
     if problems:

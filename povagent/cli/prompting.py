@@ -98,6 +98,12 @@ def show_prompt_command(
     dataset = load_dataset(config.dataset.root)
     inst = dataset.instance(instance)
     if inst is None:
+        # an instance of a house the loader left out: say why in one line, not "no such id"
+        house = instance.split("/", 1)[0]
+        left_out = house not in dataset.houses
+        why = next((p for p in dataset.problems if left_out and Path(p.file).parts[:2] == ("artifacts", house)), None)
+        if why is not None:
+            raise DatasetError(f"no instance {instance!r} in {config.dataset.root}: loading left it out ({why})")
         raise DatasetError(unknown_instance_message(instance, [i.id for i in dataset.instances()], config.dataset.root))
     host = get_plugin_host(config.plugins)
     strategy = host.strategy(config.strategy.name, config.strategy.options)

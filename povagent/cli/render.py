@@ -41,7 +41,34 @@ def render_command(
     position = _position(cam_pos)
     if not (math.isfinite(yaw) and math.isfinite(horizon)):
         raise typer.BadParameter("yaw and horizon must be finite numbers")
+    _check_out(out)  # before the house is rebuilt: a bad --out costs no render
     data = render_view(dataset, house, Camera(position, yaw, horizon, fov, 512, 512))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_bytes(data)
+    _write_png(out, data)
     typer.echo(f"{out} ({len(data)} bytes)")
+
+
+def _check_out(out: Path) -> None:
+    """``--out`` names a file: not empty, not a folder (one line otherwise)."""
+    from povagent.errors import OutputFileError
+
+    if not out.name or out.name in (".", ".."):
+        raise OutputFileError(f"--out {str(out)!r}: name a file to write the PNG to (e.g. view.png)")
+    if out.is_dir():
+        raise OutputFileError(f"--out {out}: is a folder; name a file to write the PNG to (e.g. {out / 'view.png'})")
+
+
+def _write_png(out: Path, data: bytes) -> None:
+    """Write ``out`` whole (aside and renamed, never through a link planted there); a place that
+    refuses the write is one line naming it."""
+    from povagent.errors import OutputFileError, WriteTargetError, is_file_system_error
+    from povagent.run.confined_write import write_inside
+
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)  # the folder the user named: theirs to place
+        write_inside(out.parent, out.name, data)
+    except WriteTargetError as exc:
+        raise OutputFileError(f"--out {out}: {exc}") from None
+    except OSError as exc:
+        if not is_file_system_error(exc):
+            raise
+        raise OutputFileError(f"--out {out}: cannot write ({exc.strerror or exc}); choose a file in a folder you can write to") from None

@@ -2,14 +2,14 @@
 
 Loading never crashes on one bad house or pair: it records a :class:`Problem` and goes on
 (``strict=True`` raises instead). A dataset is untrusted: no file outside the dataset folder is
-ever opened (a house naming one is refused), no number may be NaN or infinite, and every image
+ever opened (a house naming one is refused), no number may be NaN or infinite, no string may
+hold what is not text (:mod:`povagent.dataset.json_files`), and every image
 a run would send is checked once here (complete, of its camera's size) rather than failing
 mid-run. Thorough checks of every file are the job of :mod:`povagent.dataset.validate`.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -20,6 +20,7 @@ from pydantic import TypeAdapter, ValidationError
 
 from povagent.dataset.image_files import image_problem
 from povagent.dataset.instances import Frame, Instance, instance_id
+from povagent.dataset.json_files import read_dataset_json
 from povagent.dataset.models import (
     CONDITIONS,
     RELEASE_FILE,
@@ -29,8 +30,8 @@ from povagent.dataset.models import (
     ExplorationRecord,
     PairEntry,
 )
-from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
-from povagent.dataset.problems import Problem, problems_from_validation_error
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
+from povagent.dataset.problems import Problem, folder_name_problem, problems_from_validation_error
 from povagent.errors import DatasetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, PlacementCase
@@ -263,28 +264,7 @@ class Dataset:
 
 
 def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:
-    rel = _rel(path, root)
-    if (path.exists() or path.is_symlink()) and not is_inside(dataset_root(root), path):
-        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
-        return None
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        problems.append(Problem(rel, "$", "file is missing"))
-        return None
-    except UnicodeDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not UTF-8 text (byte {exc.start})"))
-        return None
-    except OSError as exc:
-        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
-        return None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-    except RecursionError:
-        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
-    return None
+    return read_dataset_json(path, _rel(path, root), dataset_root(root), problems)
 
 
 def _rel(path: Path, root: Path) -> str:
@@ -311,6 +291,10 @@ def load_house(
     the dataset): for readers that only draw, and say so on a bad image themselves.
     """
     house_id = folder.name
+    not_text = folder_name_problem(_rel(folder, root))
+    if not_text is not None:
+        problems.append(not_text)
+        return None
     before = len(problems)
     raw_pairs = _read_json(folder / f"{house_id}.json", root, problems)
     raw_log = _read_json(folder / EXPLORATION_LOG, root, problems)

@@ -1,12 +1,15 @@
 """Problems found in a dataset: file, JSON path and a plain sentence.
 
 Shared by loading (which reports a bad house and goes on) and ``povagent validate`` (which
-reports every problem). Converts pydantic and jsonschema errors into readable sentences.
+reports every problem). Converts pydantic and jsonschema errors into readable sentences, and
+holds the rules every value read from a dataset's JSON obeys: numbers are finite, and text is
+text (:func:`not_text_problems`).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any, Iterable, Iterator
 
@@ -66,6 +69,63 @@ def non_finite_message(value: float) -> str:
 def non_finite_problems(file: str, data: Any, prefix: tuple[Any, ...] = ()) -> list[Problem]:
     """One :class:`Problem` per NaN or infinity in ``data``."""
     return [Problem(file, json_path(loc), non_finite_message(v)) for loc, v in non_finite_numbers(data, prefix)]
+
+
+#: A UTF-16 surrogate code point. Python's ``json`` joins an escaped pair (``\\ud83d\\ude00``)
+#: into one character, so any surrogate left in a parsed string is a lone one.
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def _escaped(text: str) -> str:
+    """``text`` with lone surrogates written as ``\\udXXX`` (a message can always be printed)."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def not_text_problems(file: str, data: Any) -> list[Problem]:
+    """One :class:`Problem` per string (value or key) of parsed JSON holding a lone surrogate.
+
+    JSON may write ``"\\ud800"``, and Python's ``json`` reads it as a string no UTF-8 file can
+    hold: every result row, prompt, report and export holding it would fail to be written. So
+    a dataset file holding one is not text, as a file with a byte that is not UTF-8 is not:
+    loading refuses the file and ``validate`` names each string by file and JSON path. Walks
+    without recursion (a hostile file may nest deeply); paths show bad keys escaped.
+    """
+    found: list[Problem] = []
+    stack: list[tuple[tuple[Any, ...], Any]] = [((), data)]
+    while stack:
+        loc, value = stack.pop()
+        if isinstance(value, str):
+            found += _lone_surrogate(file, loc, value, "text")
+        elif isinstance(value, dict):
+            for key in value:
+                found += _lone_surrogate(file, loc + (_escaped(key),), key, "key")
+            stack.extend((loc + (_escaped(k),), v) for k, v in reversed(list(value.items())))
+        elif isinstance(value, list):
+            stack.extend((loc + (i,), v) for i, v in reversed(list(enumerate(value))))
+    return found
+
+
+def _lone_surrogate(file: str, loc: tuple[Any, ...], text: str, what: str) -> list[Problem]:
+    hit = _SURROGATE.search(text)
+    if hit is None:
+        return []
+    return [Problem(file, json_path(loc), (
+        f"{what} holds {_escaped(hit.group())} at character {hit.start()}, a lone surrogate: not Unicode text, "
+        "and no results, report or export file can hold it (write the character meant)"
+    ))]  # fmt: skip
+
+
+def folder_name_problem(rel: str) -> Problem | None:
+    """A :class:`Problem` when the house folder ``rel`` (relative to the dataset) has a name that
+    is not UTF-8: Python reads such bytes as lone surrogates, and the name is the house id every
+    row and export holds. ``None`` when the name is text."""
+    hit = _SURROGATE.search(rel)
+    if hit is None:
+        return None
+    return Problem(_escaped(rel), "$", (
+        f"the folder name is not UTF-8 text ({_escaped(hit.group())} at character {hit.start()}), and no results, "
+        "report or export file can hold a house id made from it: rename the folder"
+    ))  # fmt: skip
 
 
 _FRIENDLY = {

@@ -55,7 +55,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.dataset.paths import dataset_root, is_inside
-from povagent.dataset.problems import Problem
+from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
@@ -178,6 +178,10 @@ def read_realworld(root: str | Path) -> RealWorldSet:
         raise DatasetError(f"{index}: cannot be read: {exc}") from None
     except json.JSONDecodeError as exc:
         raise DatasetError(f"{index}: not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}") from None
+    not_text = not_text_problems(str(index), data)  # the same rule as a release's files
+    if not_text:
+        more = f" (and {len(not_text) - 1} more)" if len(not_text) > 1 else ""
+        raise DatasetError(f"{not_text[0]}{more}")
     try:
         rw = RealWorldSet.model_validate(data)
     except ValidationError as exc:

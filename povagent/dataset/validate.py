@@ -18,11 +18,13 @@ from typing import Any, Iterable
 from jsonschema import ValidationError as SchemaError
 
 from povagent.dataset.image_files import image_problem
+from povagent.dataset.json_files import read_dataset_json
 from povagent.dataset.loader import EXPLORATION_LOG, VISIBLE_OBJECTS, house_folders
 from povagent.dataset.models import DIRECTIONS
-from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
-from povagent.dataset.problems import Problem, json_path, non_finite_problems
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
+from povagent.dataset.problems import Problem, folder_name_problem, json_path, non_finite_problems
 from povagent.dataset.schema import validator
+from povagent.generate.record import NO_DIGEST, RECORD, parse_record, record_problem
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
 _JSON_NAMES = {"array": "list", "object": "object (a mapping of keys to values)"}
@@ -72,27 +74,9 @@ def _schema_problems(file: str, name: str, data: Any) -> list[Problem]:
 
 
 def _load_json(path: Path, rel: str, problems: list[Problem], real_root: Path) -> Any:
-    if not path.exists() and not path.is_symlink():
-        problems.append(Problem(rel, "$", "file is missing"))
-        return None
-    if not is_inside(real_root, path):
-        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
-        return None
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        problems.append(Problem(rel, "$", "is not UTF-8 text"))
-        return None
-    except json.JSONDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-        return None
-    except RecursionError:
-        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
-        return None
-    except OSError as exc:
-        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
-        return None
-    problems.extend(non_finite_problems(rel, data))
+    data = read_dataset_json(path, rel, real_root, problems)
+    if data is not None:
+        problems.extend(non_finite_problems(rel, data))
     return data
 
 
@@ -104,12 +88,17 @@ def check_image(path: Path, name: str, rel: str, where: str, size: tuple[int, in
         problems.append(Problem(rel, where, problem))
 
 
-def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
-    """Every problem of one house folder."""
+def validate_house(
+    folder: Path, root: Path, frame_size: tuple[int, int] = (512, 512), warnings: list[Problem] | None = None
+) -> list[Problem]:
+    """Every problem of one house folder; what is worth saying but no problem goes to ``warnings``."""
     problems: list[Problem] = []
     real_root = dataset_root(root)
     house_id = folder.name
     rel_house = folder.relative_to(root)
+    not_text = folder_name_problem(str(rel_house))
+    if not_text is not None:
+        return [not_text]
     pairs_rel = str(rel_house / f"{house_id}.json")
     log_rel = str(rel_house / EXPLORATION_LOG)
     vis_rel = str(rel_house / VISIBLE_OBJECTS)
@@ -150,6 +139,27 @@ def validate_house(folder: Path, root: Path, frame_size: tuple[int, int] = (512,
             for key in vis:
                 if key not in frame_paths and not _exists_inside(real_root, folder, key):
                     problems.append(Problem(vis_rel, json_path([key]), f"names image {key!r}, which is neither in the exploration log nor on disk"))
+
+    record = folder / RECORD
+    if record.exists() or record.is_symlink():  # a house povagent generated: its record must describe it
+        problems.extend(_record_problems(folder, str(rel_house / RECORD), real_root, [] if warnings is None else warnings))
+    return problems
+
+
+def _record_problems(folder: Path, rel: str, real_root: Path, warnings: list[Problem]) -> list[Problem]:
+    """The problems of a generated house's record: readable, naming its folder, its digest matching."""
+    problems: list[Problem] = []
+    raw = _load_json(folder / RECORD, rel, problems, real_root)
+    if raw is None:
+        return problems
+    record = parse_record(raw)
+    if record is None:
+        return [*problems, Problem(rel, "$", "is not a generation record (an object with index, options and summary)")]
+    wrong = record_problem(record, folder.name)
+    if wrong is not None:
+        problems.append(Problem(rel, f"$.{wrong[0]}", wrong[1]))
+    elif record.digest is None:
+        warnings.append(Problem(rel, "$.digest", f"{NO_DIGEST}; `povagent render` and the active mode use it as it is"))
     return problems
 
 
@@ -199,8 +209,11 @@ def _pair_checks(pairs: list[Any], folder: Path, rel: str, real_root: Path) -> I
             yield from probs
 
 
-def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512)) -> list[Problem]:
-    """Every problem in a dataset folder (empty list: the dataset is valid)."""
+def validate_dataset(
+    root: str | Path, frame_size: tuple[int, int] = (512, 512), warnings: list[Problem] | None = None
+) -> list[Problem]:
+    """Every problem in a dataset folder (empty list: the dataset is valid); what is worth
+    saying but leaves it valid (a generation record without a digest) goes to ``warnings``."""
     root = Path(root)
     if not root.is_dir():
         return [Problem(str(root), "$", "dataset folder not found")]
@@ -213,5 +226,5 @@ def validate_dataset(root: str | Path, frame_size: tuple[int, int] = (512, 512))
     if not folders:
         problems.append(Problem("artifacts", "$", "no house folders (expected artifacts/<house_id>/)"))
     for folder in folders:
-        problems.extend(validate_house(folder, root, frame_size))
+        problems.extend(validate_house(folder, root, frame_size, warnings))
     return problems

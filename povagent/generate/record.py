@@ -2,19 +2,25 @@
 
 What it is for: a generated dataset grows one house at a time. Each house is written into a
 folder of its own under ``OUT/.partial/`` with a small record of what made it (generator
-version, seed, index, options: ``_generated.json``), then renamed to ``OUT/artifacts/<house>``.
+version, seed, index, options, and the digest of them: ``_generated.json``), then renamed to
+``OUT/artifacts/<house>``.
 A house folder under ``artifacts/`` with a readable record is therefore complete, and anything
 under ``.partial/`` is a house some process did not finish (it is removed and redone). The same
 house written twice (a retried task whose first attempt was still running) is harmless: the
 second rename finds the folder in place and its copy, byte-identical, is dropped. The records
 are also how a re-run learns what is on disk: which houses to skip, whether the options asked
 for are the options the dataset was made with, and the counts ``meta.json`` is written from.
+The record's ``digest`` is the SHA-256 of its index and options: a house is a pure function of
+them, so a record edited since (a changed seed renders another house) no longer matches it, and
+``validate``, ``render`` and the active mode refuse it (:func:`record_problem`). It is a check
+against edits and mix-ups, not a signature: whoever can write the record can write a new digest.
 What it must not do: render anything, or record anything that differs between machines, worker
 counts or runs (no times, hosts or pids), so a record is as reproducible as the house.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -26,7 +32,7 @@ from typing import Any
 
 from povagent.errors import DatasetError
 from povagent.generate.pipeline import HouseSummary, house_id
-from povagent.generate.writer import write_json
+from povagent.generate.writer import rounded, write_json
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).
 RECORD = "_generated.json"
@@ -64,17 +70,59 @@ class GenerationOptions:
         return None
 
 
+def generation_digest(index: int, options: Mapping[str, Any]) -> str:
+    """The SHA-256 (hex) of what made house ``index``: its index and the recorded options
+    (generator version, seed, frames, with_render, judge and its options), as canonical JSON."""
+    canonical = json.dumps({"index": index, "options": options}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(canonical.encode("ascii")).hexdigest()
+
+
 @dataclass(frozen=True)
 class HouseRecord:
-    """A complete house: the options that made it and its summary (counts, no timings)."""
+    """A complete house: the options that made it, their digest and its summary (counts, no timings).
+
+    ``digest`` is ``None`` for a record written before records carried one.
+    """
 
     index: int
     options: dict[str, Any]
     summary: HouseSummary
+    digest: str | None = None
+
+    @classmethod
+    def made(cls, index: int, options: GenerationOptions, summary: HouseSummary) -> HouseRecord:
+        """The record of house ``index`` just made with ``options``, its digest computed."""
+        # the values as the file holds them (floats rounded as written, JSON types)
+        recorded = json.loads(json.dumps(rounded(options.record())))
+        return cls(index, recorded, summary, generation_digest(index, recorded))
 
     def to_json(self) -> dict[str, Any]:
         """The record as written to ``_generated.json``."""
-        return {"index": self.index, "options": self.options, "summary": asdict(self.summary)}
+        written = {"index": self.index, "options": self.options, "summary": asdict(self.summary)}
+        return written if self.digest is None else {**written, "digest": self.digest}
+
+
+#: What ``validate`` says of a record without a digest (written by an earlier povagent), which
+#: ``render`` and the active mode use as it is.
+NO_DIGEST = "has no digest (written by an earlier povagent): its seed and options cannot be checked"
+
+
+def record_problem(record: HouseRecord, house: str) -> tuple[str, str] | None:
+    """The first field of ``record`` that does not describe the house folder named ``house`` as
+    generated, and why (``("index", ...)``, ``("options.seed", ...)``, ``("digest", ...)``);
+    ``None`` when the record holds. A record without a digest holds (:data:`NO_DIGEST`)."""
+    if house_id(record.index) != house:
+        return "index", f"{record.index} names house {house_id(record.index)}, not {house}"
+    seed = record.options.get("seed")
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        return "options.seed", f"must be a non-negative integer, as every generated house's is (got {json.dumps(seed)[:40]})"
+    if record.digest is not None and record.digest != generation_digest(record.index, record.options):
+        return "digest", (
+            "does not match the record's index and options (seed, generator version, frames, judge): the record was "
+            "changed after the house was generated, so it no longer describes the house on disk; restore it or "
+            "generate the dataset again"
+        )
+    return None
 
 
 def house_folder(out: Path, index: int) -> Path:
@@ -86,8 +134,21 @@ def read_record(folder: Path) -> HouseRecord | None:
     """The record of a house folder, or None when it has none or it cannot be read (not complete)."""
     try:
         raw = json.loads((folder / RECORD).read_text(encoding="utf-8"))
-        return HouseRecord(int(raw["index"]), dict(raw["options"]), HouseSummary(**raw["summary"]))
-    except (OSError, ValueError, TypeError, KeyError):
+    except (OSError, ValueError):
+        return None
+    return parse_record(raw)
+
+
+def parse_record(raw: Any) -> HouseRecord | None:
+    """A record from its parsed JSON, or None when it is not one."""
+    if not isinstance(raw, dict):
+        return None
+    digest = raw.get("digest")
+    try:
+        # a digest of any other type is kept as its JSON text: it never matches, so it is refused
+        kept = None if digest is None else digest if isinstance(digest, str) else json.dumps(digest)
+        return HouseRecord(int(raw["index"]), dict(raw["options"]), HouseSummary(**raw["summary"]), kept)
+    except (ValueError, TypeError, KeyError, OverflowError):
         return None
 
 
@@ -150,7 +211,7 @@ def write_house_atomically(
     staging, made = _staging(out, index)
     try:
         summary = write(staging)
-        record = HouseRecord(index, options.record(), summary)
+        record = HouseRecord.made(index, options, summary)
         write_json(staging / RECORD, record.to_json())
         return _place(staging, made, house_folder(out, index), record)
     finally:

@@ -12,8 +12,10 @@ frames shown (A/B, read from the dataset when it can be loaded).
 
 ``--format long-csv`` writes instead the official ``aggregate_runs.py``'s long table
 (``all_runs_long.csv``): one line per model, run and item, the same columns in the same order,
-values written as that script writes them, so analysis notebooks built on it read ours. Its
-numbers are the official scorer's per-item record (:mod:`povagent.scoring.evaluations`).
+values written as that script writes them, so analysis notebooks built on it read ours, with
+one exception: a text cell a spreadsheet would run as a formula gets a ``'`` before it
+(:mod:`povagent.report.csv_formulas`). Its numbers are the official scorer's per-item record
+(:mod:`povagent.scoring.evaluations`).
 
 Reading and writing files; the numbers come from :mod:`povagent.scoring`.
 """
@@ -26,6 +28,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from povagent import __version__
+from povagent.report.csv_formulas import inert
 from povagent.results.official_format import OfficialPrediction, write_official_predictions
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.confined_write import write_inside
@@ -183,6 +186,10 @@ def long_csv_lines(rows: Iterable[ResultRow], dataset: Any, model: str, eval_dir
 def write_long_csv(path: str | Path, lines: Iterable[dict[str, Any]]) -> Path:
     """Write lines under the official header (UTF-8, the ``csv`` module's default dialect).
 
+    A text cell a spreadsheet would run as a formula (a model's answer ``=HYPERLINK(...)``) is
+    written with a ``'`` before it; numbers are written as they are
+    (:mod:`povagent.report.csv_formulas` states the rule).
+
     Written aside and renamed, never through a link planted at ``path`` (the default lies in
     an untrusted run folder): see :mod:`povagent.run.confined_write`.
     """
@@ -190,7 +197,7 @@ def write_long_csv(path: str | Path, lines: Iterable[dict[str, Any]]) -> Path:
     text = io.StringIO(newline="")
     writer = csv.DictWriter(text, fieldnames=list(LONG_CSV_COLUMNS))
     writer.writeheader()
-    writer.writerows(lines)
+    writer.writerows({column: inert(value) for column, value in line.items()} for line in lines)
     write_inside(path.parent, path.name, text.getvalue())
     return path
 

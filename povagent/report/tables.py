@@ -16,6 +16,8 @@ import io
 from dataclasses import dataclass, field
 from typing import Literal
 
+from povagent.report.csv_formulas import inert
+
 Kind = Literal["l2", "rate", "p", "count", "signed"]
 Better = Literal["lower", "higher", None]
 
@@ -139,20 +141,21 @@ def _md_escape(text: str) -> str:
 
 
 def to_csv(table: Table) -> str:
-    """CSV with full precision: per column its value, CI bounds, and a ``best`` flag."""
+    """CSV with full precision: per column its value, CI bounds, and a ``best`` flag; a label a
+    spreadsheet would run as a formula is written inert (:mod:`povagent.report.csv_formulas`)."""
     best = best_rows(table)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     header = [table.row_header, "reference"]
     for c in table.columns:
         header += [c.name, f"{c.name} ci_lo", f"{c.name} ci_hi", f"{c.name} best"]
-    w.writerow(header)
+    w.writerow([inert(h) for h in header])
     for i, row in _ordered_rows(table):
-        out: list[object] = [row.label, int(row.reference)]
+        out: list[object] = [inert(row.label), int(row.reference)]
         for j, _ in enumerate(table.columns):
             cell = row.cells[j]
             out += [_num(cell.value), _num(cell.lo), _num(cell.hi), int(i in best[j])]
-        w.writerow(out)
+        w.writerow(out)  # the numbers are written as numbers (repr), never guarded
     return buf.getvalue()
 
 

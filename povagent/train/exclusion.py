@@ -84,7 +84,8 @@ def content_hash(pair_file: Path) -> str | None:
         canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
     except (OSError, ValueError, RecursionError):
         return None
-    return hashlib.sha256(canonical.encode()).hexdigest()
+    # a lone surrogate (the loader refuses such a file) is hashed as its UTF-16 code unit, not a crash
+    return hashlib.sha256(canonical.encode("utf-8", "surrogatepass")).hexdigest()
 
 
 def _file_hash(path: Path) -> str | None:

@@ -61,3 +61,14 @@ def test_the_per_process_house_cache_is_bounded(active_dataset, monkeypatch, tmp
     house_for(copy, "train_house_00001")
     assert len(house_module._CACHE) == 1
     assert house_for(active_dataset, "train_house_00000") is not first  # rebuilt: it had been let go
+
+
+def test_a_house_whose_record_seed_was_changed_is_refused_naming_the_digest(active_dataset, tmp_path):
+    folder = tmp_path / "artifacts" / "train_house_00000"
+    folder.mkdir(parents=True)
+    record = json.loads((active_dataset / "artifacts" / "train_house_00000" / "_generated.json").read_text())
+    record["options"]["seed"] += 1  # the same index of another seed: another house
+    (folder / "_generated.json").write_text(json.dumps(record))
+    with pytest.raises(DatasetError) as err:
+        house_for(tmp_path, "train_house_00000")
+    assert str(err.value).startswith(f"{folder / '_generated.json'}: field digest does not match") and "\n" not in str(err.value)

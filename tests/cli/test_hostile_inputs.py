@@ -107,6 +107,7 @@ DATASETS: dict[str, tuple[Callable[[Path], None], str, str | None]] = {
     "pair file nested 100000 deep": (lambda r: house(r).write_text("[" * 100000 + "]" * 100000), f"{TARGET}.json", None),
     "pair file not UTF-8": (lambda r: house(r).write_bytes(b'[{"pair_id": "\xff"}]'), f"{TARGET}.json", None),
     "log is an object": (lambda r: house(r, "exploration_log.json").write_text('{"frames": []}'), "exploration_log.json", None),
+    "lone surrogate in a sentence": (lambda r: edit(house(r), lambda d: d[0]["stage5"]["front"].update(type_a="the remote \ud800")), f"{TARGET}.json", "$[0].stage5.front.type_a"),
     "pair with an absurd screen size": (lambda r: edit(house(r), lambda d: d[0]["camera"].update(screen_width=10**9)), f"{TARGET}.json", "$[0].camera.screen_width"),
 }
 

@@ -136,3 +136,17 @@ def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
     assert "ids in this dataset for house train_house_00000:" in done.stderr
+
+
+def test_an_instance_of_a_house_loading_left_out_says_why_in_one_line(tmp_path, dataset_copy):
+    import json
+
+    pairs = dataset_copy / "artifacts" / "train_house_00000" / "train_house_00000.json"
+    data = json.loads(pairs.read_text())
+    data[0]["stage5"]["right"]["type_a"] = "the book \ud800"  # a lone surrogate: no file can hold it
+    pairs.write_text(json.dumps(data))
+    result, _ = show(tmp_path, dataset_copy, "basic")
+    assert isinstance(result.exception, DatasetError)
+    message = str(result.exception)
+    assert "\n" not in message and "loading left it out" in message
+    assert "train_house_00000.json: $[0].stage5.right.type_a: text holds \\ud800" in message

@@ -87,6 +87,14 @@ def test_a_typo_in_a_key_is_named_with_its_path(demo_copy):
         read_realworld(demo_copy)
 
 
+def test_a_lone_surrogate_in_a_command_is_one_line_naming_the_field(demo_copy):
+    edit_index(demo_copy, lambda d: d["houses"][0]["scenarios"][0]["commands"][0].update(sentence="the mug \ud800"))
+    with pytest.raises(DatasetError) as err:
+        read_realworld(demo_copy)
+    message = str(err.value)
+    assert "\n" not in message and "realworld.json: $.houses[0].scenarios[0].commands[0].sentence: text holds \\ud800" in message
+
+
 def test_a_mark_with_two_shapes_is_refused(demo_copy):
     edit_index(demo_copy, lambda d: d["houses"][0]["scenarios"][0]["commands"][0]["gt"][0].update(box=[0, 0, 5, 5]))
     with pytest.raises(DatasetError, match="exactly one of point, box or region"):

@@ -277,3 +277,19 @@ def test_an_unreadable_robopoint_answer_records_the_runners_points_failure(write
     ]
     lines = read_csv(export_long_csv(write_rows(rows)))
     assert [line["parse_error"] for line in lines] == ["failed to parse points", "failed to parse points", "failed to parse JSON"]
+
+
+# -- formulas ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("raw", ["=HYPERLINK(\"http://x\",\"y\")", "+1+cmd|' /C calc'!A0", "-2+3", "@SUM(A1:A9)", "\t=1+1", "\r=1+1"])
+def test_an_answer_a_spreadsheet_would_run_is_written_after_a_single_quote(write_rows, mini_dataset, raw):
+    inst = mini_dataset.instance(C_ID)
+    line = export_one(write_rows([answered(inst, 256.0, 256.0, raw=raw)]))
+    assert line["raw_response"] == "'" + raw
+
+
+def test_negative_numbers_and_plain_answers_are_written_as_they_are(write_rows, mini_dataset):
+    inst = mini_dataset.instance(C_ID)
+    # a point left of and above the ground truth: the signed errors are negative numbers
+    line = export_one(write_rows([answered(inst, 0.0, 0.0, raw="-0.5")]))
+    assert line["error_x"].startswith("-") and float(line["error_x"]) < 0 and float(line["error_y"]) < 0
+    assert line["raw_response"] == "-0.5"  # text that is a plain number is no formula

@@ -107,3 +107,22 @@ def test_a_full_disk_mid_shard_names_the_file_and_leaves_no_temporary(generated_
     assert left == []
     assert not (out / "messages" / "train-00000-of-00001.jsonl").exists()
     os.sync()
+
+
+@pytest.mark.parametrize("fmt", ["hf", "messages", "openai"])
+def test_a_lone_surrogate_in_a_sentence_leaves_its_house_out_of_every_format(mini_root: Path, tmp_path: Path, fmt: str) -> None:
+    import shutil
+
+    root = tmp_path / "ds"
+    for house in ("train_house_00000", "train_house_00001"):
+        shutil.copytree(mini_root / "artifacts" / house, root / "artifacts" / house)
+    pairs = root / "artifacts" / "train_house_00001" / "train_house_00001.json"
+    data = json.loads(pairs.read_text())
+    data[0]["stage5"]["front"]["type_a"] = "the remote \ud800"  # no file can hold it: it crashed every format
+    pairs.write_text(json.dumps(data))
+    code, text = invoke("export-train", root, "--out", tmp_path / "out", "--format", fmt)
+    assert code == 0, text
+    assert "left out train_house_00001: artifacts/train_house_00001/train_house_00001.json: $[0].stage5.front.type_a" in text
+    assert "out: 12 examples" in text  # the other house's 12 instances
+    card = (tmp_path / "out" / "README.md").read_text(encoding="utf-8")
+    assert "- train_house_00001: artifacts/train_house_00001/train_house_00001.json: $[0].stage5.front.type_a" in card

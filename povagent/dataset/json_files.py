@@ -1,0 +1,54 @@
+"""Reading one JSON file of a dataset: the boundary every value read from a dataset crosses.
+
+What it is for: loading (:mod:`povagent.dataset.loader`) and ``povagent validate``
+(:mod:`povagent.dataset.validate`) read a dataset's JSON files through
+:func:`read_dataset_json`, so both refuse the same files for the same reasons in the same
+words: a file leading outside the dataset (never opened), a missing or unreadable one, bytes
+that are not UTF-8, text that is not JSON or nests too deeply, and strings that are not text
+(a lone surrogate such as ``"\\ud800"``, which no results, report or export file can hold:
+:func:`~povagent.dataset.problems.not_text_problems`). Each refusal is a :class:`Problem`
+naming the file (and, for a string, its JSON path), and the file reads as ``None``. What it
+must not do: judge what the values mean (the models and the shipped schemas do that).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from povagent.dataset.paths import is_inside
+from povagent.dataset.problems import Problem, not_text_problems
+
+
+def read_dataset_json(path: Path, rel: str, real_root: Path, problems: list[Problem]) -> Any:
+    """The parsed JSON of the dataset file ``path`` (named ``rel`` in problems), or ``None``
+    when it is refused, each reason appended to ``problems``; ``real_root`` is the dataset's
+    real location (:func:`~povagent.dataset.paths.dataset_root`)."""
+    if (path.exists() or path.is_symlink()) and not is_inside(real_root, path):
+        problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
+        return None
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        problems.append(Problem(rel, "$", "file is missing"))
+        return None
+    except UnicodeDecodeError as exc:
+        problems.append(Problem(rel, "$", f"is not UTF-8 text (byte {exc.start})"))
+        return None
+    except OSError as exc:
+        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
+        return None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
+        return None
+    except RecursionError:
+        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
+        return None
+    not_text = not_text_problems(rel, data)
+    if not_text:
+        problems.extend(not_text)
+        return None
+    return data
