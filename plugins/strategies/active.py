@@ -14,7 +14,10 @@ and the official scorer scores it in that camera.
 Options (besides the basic strategy's ``prompts``, ``max_tokens``, ``temperature``):
 ``max_frames`` (default 8: fewer frames than the house has, so looking matters; ``null``: all),
 ``max_actions`` (default 8, ``answer`` not counted), ``max_turns`` (default ``max_actions``
-+ 2), ``max_seconds`` (default 600: the episode's wall-clock limit).
++ 2), ``max_seconds`` (default 600: the episode's wall-clock limit), ``speaker`` (default
+``stated``: ``ask`` is answered with the Stated sentence and the furniture in every condition,
+so Inferred (A) nearly becomes Stated (B) once the model asks; ``condition``: the speaker keeps
+to the condition's information, see :mod:`povagent.active.speaker`).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from typing import Any
 from povagent import hookimpl
 from povagent.active.episode import DEFAULT_BUDGET, Episode
 from povagent.active.pose import Pose
-from povagent.active.speaker import pair_facts
+from povagent.active.speaker import SPEAKER_KNOWLEDGE, pair_facts
 from povagent.active.tools import TOOLS
 from povagent.active.views import VIEWS, ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
@@ -66,8 +69,11 @@ class ActiveStrategy(BasicStrategy):
     default_max_frames: int | None = 8
 
     def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
-                 **basic: Any) -> None:  # fmt: skip
+                 speaker: str = "stated", **basic: Any) -> None:  # fmt: skip
         super().__init__(**basic)
+        if speaker not in SPEAKER_KNOWLEDGE:
+            raise ValueError(f"strategy option speaker must be one of {', '.join(SPEAKER_KNOWLEDGE)}, got {speaker!r}")
+        self.speaker = speaker
         self.max_actions = _positive_or_none(max_actions, "max_actions", "the action budget") or DEFAULT_BUDGET
         if self.max_actions > 64:
             raise ValueError(f"strategy option max_actions must be at most 64, got {max_actions!r}")
@@ -131,7 +137,7 @@ class ActiveStrategy(BasicStrategy):
             return sha
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
-        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
+        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value, instance.condition.value, self.speaker)
         return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.max_actions, self.max_seconds)
 
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
