@@ -78,7 +78,7 @@ def test_kept_to_a_condition_the_speaker_still_names_what_they_faced(active_data
 
 
 def test_a_pair_without_the_conditions_sentence_is_one_line_naming_the_field(active_dataset, tmp_path):
-    folder, pair, direction = the_pair(active_dataset)
+    _folder, pair, direction = the_pair(active_dataset)
     del pair["stage5"][direction]["type_a"]
     (tmp_path / "train_house_00000.json").write_text(json.dumps([pair]))
     with pytest.raises(DatasetError, match=rf"pair {pair['pair_id']}: field stage5\.{direction}\.type_a is missing"):

@@ -13,8 +13,8 @@ import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
-from povagent.report.floor_plan import WALL_COLOUR
 from povagent.report.build import write_report
+from povagent.report.floor_plan import WALL_COLOUR
 from povagent.run.runner import run_pipeline
 
 pytestmark = pytest.mark.timeout(120)
