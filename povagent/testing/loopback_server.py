@@ -43,44 +43,11 @@ from typing import Any, Callable, Iterable
 
 from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
 from povagent.testing.image_urls import FetchedImage, ImageFetchError, decode_data_url, download, read_file_url
+from povagent.testing.replies import Fault, Reply
 
 __all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
 
 #: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
-
-
-@dataclass(frozen=True)
-class Reply:
-    """A successful answer: the assistant's text, after ``delay_s``, with token counts.
-
-    ``text=None`` sends ``content: null``; ``no_choices=True`` sends an empty ``choices`` list
-    (both seen from real servers under load, and neither is an answer).
-    """
-
-    text: str | None
-    delay_s: float = 0.0
-    prompt_tokens: int = 10
-    completion_tokens: int = 5
-    no_choices: bool = False
-    #: Function calls to answer with, each ``{"name": ..., "arguments": <dict or raw text>}``
-    #: (raw text is sent as is, so a test can send malformed arguments).
-    tool_calls: tuple[dict[str, Any], ...] = ()
-
-
-@dataclass(frozen=True)
-class Fault:
-    """A failure to inject.
-
-    ``status`` sends that HTTP status with an OpenAI-style error body (and ``Retry-After`` when
-    ``retry_after`` is set); ``drop`` closes the connection without answering; ``delay_s``
-    waits first (a delay longer than the client's timeout is a timeout).
-    """
-
-    status: int | None = None
-    retry_after: float | None = None
-    delay_s: float = 0.0
-    drop: bool = False
-    message: str = "injected fault"
 
 
 @dataclass
@@ -458,8 +425,4 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    # the importable module's main, not this __main__ copy of it: the turns of --script are
-    # povagent.testing.loopback_server.Reply objects, which this copy's classes would not know
-    from povagent.testing.loopback_server import main as importable_main
-
-    importable_main()
+    main()

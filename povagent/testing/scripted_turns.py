@@ -31,7 +31,7 @@ from typing import Any
 from povagent.config.quoting import Loc, dotted, shown
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError
-from povagent.testing.loopback_server import Reply
+from povagent.testing.replies import Reply
 
 __all__ = ["read_turns", "turns_of"]
 
