@@ -111,10 +111,11 @@ def test_the_caption_says_that_ask_tells_inferred_the_stated_sentence_unless_kep
 
 
 def test_the_explorer_oracle_is_a_baseline_styled_and_sorted_as_the_passive_oracle_would_be(report):
-    systems = json.loads((report.out / "summary.json").read_text())["systems"]
-    assert {s["system"]: s["reference"] for s in systems} == {"center · basic · json": True, "explorer-oracle · active · active": True}
+    reference = {s["system"]: s["reference"] for s in json.loads((report.out / "summary.json").read_text())["systems"]}
+    oracle = next(name for name in reference if "explorer-oracle" in name)
+    assert reference[oracle] and all(reference.values())  # the centre guess too: two baselines
     tables = (report.out / "tables.md").read_text()
-    assert "| *explorer-oracle · active · active* |" in tables and "**0.000" not in tables
+    assert f"| *{oracle}* |" in tables and "**0.000" not in tables
 
 
 def oracle_records(report) -> list:
