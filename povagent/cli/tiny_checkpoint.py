@@ -1,4 +1,4 @@
-"""The ``tiny-checkpoint`` command: a tiny vision-language checkpoint to try the in-process
+"""The ``tiny-model`` command: a tiny vision-language checkpoint to try the in-process
 backend (and training) with no download.
 
 It writes one of :mod:`povagent.testing.tiny_checkpoints`' folders (random weights, a tokenizer
@@ -46,7 +46,7 @@ def build_tiny_checkpoint(folder: Path, architecture: str = "idefics3", seed: in
         raise PovagentError(f"a tiny checkpoint needs torch and transformers ({exc.name or exc} is missing): {LOCAL_EXTRA}") from None
 
 
-@app.command("tiny-checkpoint")
+@app.command("tiny-model")
 def tiny_checkpoint_command(
     folder: Path = typer.Argument(..., metavar="FOLDER", help="Where to write it: a new or empty folder."),
     architecture: str = typer.Option(
@@ -54,10 +54,10 @@ def tiny_checkpoint_command(
     ),
     seed: int = typer.Option(0, "--seed", metavar="N", help="Seed of the random weights (the same seed writes the same weights)."),
 ) -> None:
-    """Write a tiny vision-language checkpoint (random weights, no download) to try the
-    transformers backend or a training script on a CPU.
+    """Write a tiny checkpoint to try models with no download.
 
-    Its answers are nonsense: it shows a folder becoming rows, not a model's skill. Needs torch
+    A tiny vision-language checkpoint (random weights, nothing downloaded) for the transformers
+    backend or a training script, on a CPU. Its answers are nonsense: it shows a folder becoming rows, not a model's skill. Needs torch
     and the local extra (pip install torch, then pip install 'povagent[local]').
     """
     made = build_tiny_checkpoint(folder, architecture, seed)

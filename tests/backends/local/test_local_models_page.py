@@ -53,7 +53,7 @@ def test_the_cpu_loop_runs_as_the_page_shows_it(tmp_path, monkeypatch):
     monkeypatch.setattr(datasets.config, "HF_DATASETS_CACHE", tmp_path / "hf-datasets")  # the test's own cache
     monkeypatch.setenv("HF_HUB_OFFLINE", "1")  # nothing may be downloaded
     (tmp_path / "sft.py").write_text(block('"""Fine-tune'))
-    for line in block("povagent tiny-checkpoint tiny-vlm\npovagent generate").splitlines():
+    for line in block("povagent tiny-model tiny-vlm\npovagent generate").splitlines():
         if line.startswith("povagent "):
             povagent(line)
         else:
@@ -69,8 +69,8 @@ def test_the_tiny_checkpoint_is_evaluated_by_the_transformers_backend_as_the_pag
     from povagent.results.rows import read_rows
 
     monkeypatch.chdir(tmp_path)
-    assert "povagent tiny-checkpoint tiny-vlm\n" in blocks()  # the section's one command
-    povagent("povagent tiny-checkpoint tiny-vlm")
+    assert "povagent tiny-model tiny-vlm\n" in blocks()  # the section's one command
+    povagent("povagent tiny-model tiny-vlm")
     doc = yaml.safe_load(block("# tiny.yaml"))
     doc["dataset"]["path"] = str(mini_root)  # the quickstart's data: a release-layout set like this one
     (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(doc))
@@ -90,7 +90,7 @@ def test_the_train_extra_holds_what_the_page_installs_for_training():
 
 def test_a_tiny_checkpoint_is_never_written_into_a_folder_that_holds_something(tmp_path):
     (tmp_path / "kept.txt").write_text("a real checkpoint's file")
-    done = CliRunner().invoke(app, ["tiny-checkpoint", str(tmp_path)])
+    done = CliRunner().invoke(app, ["tiny-model", str(tmp_path)])
     assert done.exit_code != 0 and "exists and is not an empty folder" in str(done.exception)
     assert [p.name for p in tmp_path.iterdir()] == ["kept.txt"]
 
