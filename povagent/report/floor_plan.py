@@ -50,9 +50,9 @@ def _plan(root: str, house_id: str) -> FloorPlan | None:
 
     try:
         seed, index = check_generated(Path(root), house_id)
-    except DatasetError:
+        return generate_floorplan(house_generators(seed, index)["plan"])
+    except (DatasetError, ValueError, RuntimeError):  # no record, or one no generator run wrote (a negative seed)
         return None
-    return generate_floorplan(house_generators(seed, index)["plan"])
 
 
 def plan_points(plan: FloorPlan) -> list[tuple[float, float]]:
