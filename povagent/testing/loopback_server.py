@@ -1,9 +1,9 @@
 """An OpenAI-compatible chat server on 127.0.0.1 for tests, benchmarks and plugin authors.
 
 It answers ``POST /v1/chat/completions`` with scripted replies (texts and tool calls, queued in
-code or, from the command line, read from a turns file: :mod:`povagent.testing.scripted_turns`),
-records every request body (so a test can check which images, labels, prompt text and generation parameters arrived), and
-injects faults: an HTTP status (429 with ``Retry-After``, 500, 400, 401...), a delay, or a
+code or read from a turns file: :mod:`povagent.testing.scripted_turns`), records every request
+body (so a test can check which images, labels, prompt text and generation parameters arrived),
+and injects faults: an HTTP status (429 with ``Retry-After``, 500, 400, 401...), a delay, or a
 dropped connection (the socket closed without a response).
 
 With ``fetch_images=True`` it also does what a vLLM server does with image URLs: it decodes
@@ -43,11 +43,45 @@ from typing import Any, Callable, Iterable
 
 from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
 from povagent.testing.image_urls import FetchedImage, ImageFetchError, decode_data_url, download, read_file_url
-from povagent.testing.replies import Fault, Reply
+from povagent.testing.scripted_turns import Turn, read_turns
 
-__all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
+__all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer", "read_turns"]
 
 #: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
+
+
+@dataclass(frozen=True)
+class Reply:
+    """A successful answer: the assistant's text, after ``delay_s``, with token counts.
+
+    ``text=None`` sends ``content: null``; ``no_choices=True`` sends an empty ``choices`` list
+    (both seen from real servers under load, and neither is an answer).
+    """
+
+    text: str | None
+    delay_s: float = 0.0
+    prompt_tokens: int = 10
+    completion_tokens: int = 5
+    no_choices: bool = False
+    #: Function calls to answer with, each ``{"name": ..., "arguments": <dict or raw text>}``
+    #: (raw text is sent as is, so a test can send malformed arguments).
+    tool_calls: tuple[dict[str, Any], ...] = ()
+
+
+@dataclass(frozen=True)
+class Fault:
+    """A failure to inject.
+
+    ``status`` sends that HTTP status with an OpenAI-style error body (and ``Retry-After`` when
+    ``retry_after`` is set); ``drop`` closes the connection without answering; ``delay_s``
+    waits first (a delay longer than the client's timeout is a timeout).
+    """
+
+    status: int | None = None
+    retry_after: float | None = None
+    delay_s: float = 0.0
+    drop: bool = False
+    message: str = "injected fault"
 
 
 @dataclass
@@ -239,14 +273,15 @@ class LoopbackServer(BackgroundServer):
     def script(self, *outcomes: Outcome | ReplyFn | Iterable[Outcome | ReplyFn]) -> None:
         """Queue outcomes for the next requests, in order (then ``reply`` answers again).
 
-        An item may be a callable like ``reply`` (it answers that one request).
+        An item may be a callable like ``reply`` (it answers that one request), or a
+        :class:`~povagent.testing.scripted_turns.Turn` of a turns file (:func:`read_turns`).
         """
         with self._lock:
             for o in outcomes:
-                if isinstance(o, (str, Reply, Fault)) or callable(o):
-                    self._script.append(o)
+                if isinstance(o, (str, Reply, Fault, Turn)) or callable(o):
+                    self._script.append(_outcome(o))
                 else:
-                    self._script.extend(o)
+                    self._script.extend(_outcome(x) for x in o)
 
     # -- images -------------------------------------------------------------------------------
     def _fetch(self, index: int, url: str) -> FetchedImage:
@@ -296,6 +331,11 @@ class LoopbackServer(BackgroundServer):
                 "total_tokens": reply.prompt_tokens + reply.completion_tokens,
             },
         }
+
+
+def _outcome(item: Any) -> Any:
+    """A turns file's turn as the reply it stands for; anything else as it is."""
+    return Reply(item.text, tool_calls=item.tool_calls) if isinstance(item, Turn) else item
 
 
 def _choice(reply: Reply, n: int) -> dict[str, Any]:
@@ -384,10 +424,9 @@ def main(argv: list[str] | None = None) -> None:
 
     if args.local_media_root is not None and not Path(args.local_media_root).is_dir():
         ap.error(f"--local-media-root {args.local_media_root}: not a folder")
-    turns = []
+    turns: list[Turn] = []
     if args.script is not None:
         from povagent.errors import ConfigError
-        from povagent.testing.scripted_turns import read_turns
 
         try:
             turns = read_turns(args.script)

@@ -26,14 +26,24 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from typing import Any
 
 from povagent.config.quoting import Loc, dotted, shown
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError
-from povagent.testing.replies import Reply
 
-__all__ = ["read_turns", "turns_of"]
+__all__ = ["Turn", "read_turns", "turns_of"]
+
+@dataclass(frozen=True)
+class Turn:
+    """One turn of the model: its text (``None``: ``content: null``) and its tool calls, each
+    ``{"name": ..., "arguments": <mapping, or text sent as it is>}`` (the server's ``Reply``
+    takes both as they are)."""
+
+    text: str | None
+    tool_calls: tuple[dict[str, Any], ...] = ()
+
 
 #: The keys a turn given as a mapping may hold, and those of one tool call.
 TURN_KEYS = ("text", "tool_calls")
@@ -42,12 +52,12 @@ CALL_KEYS = ("name", "arguments")
 MAX_CALLS_PER_TURN = 1000
 
 
-def read_turns(path: str | os.PathLike[str]) -> list[Reply]:
-    """The turns of a JSON or YAML turns file, in order, as the loopback server's replies."""
+def read_turns(path: str | os.PathLike[str]) -> list[Turn]:
+    """The turns of a JSON or YAML turns file, in order (``LoopbackServer.script`` queues them)."""
     return turns_of(read_yaml(path))
 
 
-def turns_of(source: ConfigSource) -> list[Reply]:
+def turns_of(source: ConfigSource) -> list[Turn]:
     """The turns of an already parsed document (see the module docstring for its shape)."""
     if not isinstance(source.data, list) or not source.data:
         raise ConfigError(f"{source.where()}: a turns file is a list of turns, each a text or {{tool_calls: [...]}} (got {shown(source.data)})")
@@ -60,9 +70,9 @@ def _problem(source: ConfigSource, loc: Loc, what: str) -> ConfigError:
     return ConfigError(f"{source.where(loc)}: turn {loc[0] + 1}{field}: {what}")
 
 
-def _turn(source: ConfigSource, turn: Any, loc: Loc) -> Reply:
+def _turn(source: ConfigSource, turn: Any, loc: Loc) -> Turn:
     if isinstance(turn, str):
-        return Reply(turn)
+        return Turn(turn)
     if not isinstance(turn, dict):
         raise _problem(source, loc, f"a turn is a text or a mapping with {' and/or '.join(TURN_KEYS)}, got {shown(turn)}")
     unknown = [k for k in turn if k not in TURN_KEYS]
@@ -76,7 +86,7 @@ def _turn(source: ConfigSource, turn: Any, loc: Loc) -> Reply:
         raise _problem(source, loc + ("tool_calls",), f"must be a list of at most {MAX_CALLS_PER_TURN} calls, each {{name: ..., arguments: {{...}}}}")
     if text is None and not calls:
         raise _problem(source, loc, "a turn needs a text or at least one tool call")
-    return Reply(text, tool_calls=tuple(_call(source, call, loc + ("tool_calls", k)) for k, call in enumerate(calls)))
+    return Turn(text, tool_calls=tuple(_call(source, call, loc + ("tool_calls", k)) for k, call in enumerate(calls)))
 
 
 def _call(source: ConfigSource, call: Any, loc: Loc) -> dict[str, Any]:

@@ -12,8 +12,8 @@ import urllib.request
 import pytest
 
 from povagent.errors import ConfigError
-from povagent.testing.loopback_server import LoopbackServer, Reply
-from povagent.testing.scripted_turns import read_turns
+from povagent.testing.loopback_server import LoopbackServer
+from povagent.testing.scripted_turns import Turn, read_turns
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -57,7 +57,7 @@ def test_a_json_file_reads_as_the_same_turns(tmp_path):
 
     (tmp_path / "turns.json").write_text(json.dumps(yaml.safe_load(TURNS_YAML)))
     assert read_turns(tmp_path / "turns.json") == read_turns(tmp_path / "turns.yaml")
-    assert read_turns(tmp_path / "turns.json")[1] == Reply('{"selected_image": 0, "x": 1, "y": 2}')
+    assert read_turns(tmp_path / "turns.json")[1] == Turn('{"selected_image": 0, "x": 1, "y": 2}')
 
 
 @pytest.mark.parametrize(
