@@ -270,7 +270,7 @@ class LoopbackServer(BackgroundServer):
         return f"http://127.0.0.1:{self.port}/v1"
 
     # -- scripting ----------------------------------------------------------------------------
-    def script(self, *outcomes: Outcome | ReplyFn | Iterable[Outcome | ReplyFn]) -> None:
+    def script(self, *outcomes: Outcome | ReplyFn | Turn | Iterable[Outcome | ReplyFn | Turn]) -> None:
         """Queue outcomes for the next requests, in order (then ``reply`` answers again).
 
         An item may be a callable like ``reply`` (it answers that one request), or a
