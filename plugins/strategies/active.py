@@ -14,10 +14,7 @@ and the official scorer scores it in that camera.
 Options (besides the basic strategy's ``prompts``, ``max_tokens``, ``temperature``):
 ``max_frames`` (default 8: fewer frames than the house has, so looking matters; ``null``: all),
 ``max_actions`` (default 8, ``answer`` not counted), ``max_turns`` (default ``max_actions``
-+ 2), ``max_seconds`` (default 600: the episode's wall-clock limit), ``speaker`` (default
-``stated``: ``ask`` is answered with the Stated sentence and the furniture in every condition,
-so Inferred (A) nearly becomes Stated (B) once the model asks; ``condition``: the speaker keeps
-to the condition's information, see :mod:`povagent.active.speaker`).
++ 2), ``max_seconds`` (default 600: the episode's wall-clock limit).
 """
 
 from __future__ import annotations
@@ -63,7 +60,12 @@ def preamble(budget: int, n_frames: int, given: bool) -> str:
 
 
 class ActiveStrategy(BasicStrategy):
-    """Active observer grounding: the passive prompt, then tools to look around before answering."""
+    """Active observer grounding: the passive prompt, then tools to look around before answering.
+
+    ``speaker`` (default ``stated``) says what ``ask`` may tell: ``stated``, the Stated sentence
+    and the furniture in every condition, so Inferred (A) nearly becomes Stated (B) once the
+    model asks; ``condition``, only the condition's information (:mod:`povagent.active.speaker`).
+    """
 
     default_max_tokens: int | None = 512
     default_max_frames: int | None = 8

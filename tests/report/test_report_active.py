@@ -58,52 +58,6 @@ def test_the_gallery_card_shows_the_rendered_view_answered_in_and_the_trajectory
     assert report.gallery.without_image == 0  # every active row answered in a view has its drawing
 
 
-def _active(report) -> dict:
-    import json
-
-    return json.loads((report.out / "summary.json").read_text())["active"]
-
-
-def test_the_gallery_card_carries_every_view_the_episode_rendered_as_a_strip(report):
-    data = gallery_data(report)
-    active = [e for e in data["entries"] if e.get("vs") is not None]
-    assert len(active) == 3  # the oracle's rows; the centre baseline's have none
-    for e in active:
-        strip = data["strips"][e["vs"]]
-        assert strip["n"] >= 1 and (report.out / "images" / f"{strip['k']}.s.jpg").is_file()
-        assert e["va"] is None or 1 <= e["va"] <= strip["n"]
-
-
-def test_the_opened_card_shows_the_rendered_views_numbered_with_the_answered_one_outlined(report, tmp_path):
-    data = gallery_data(report)
-    entries = data["entries"]
-    first = next(e for e in entries if e.get("vs") is not None and e.get("va"))
-    system = data["systems"][first["s"]]
-    dom = dump(report.page, tmp_path, state=f"system={system}&open=0")
-    tiles = re.findall(r'<div class="tile( sel)?" data-view="(\d+)"', dom)
-    assert [int(n) for _, n in tiles] == list(range(1, data["strips"][first["vs"]]["n"] + 1))
-    assert [int(n) for sel, n in tiles if sel] == [first["va"]]
-    assert "The views it rendered" in dom
-
-
-def gallery_data(report) -> dict:
-    html = report.page.read_text(encoding="utf-8")
-    return json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
-
-
-def dump(page, tmp_path, state: str) -> str:
-    """The page's DOM after its script ran, in headless Chromium (Debian's, as CI installs it)."""
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    if browser is None:
-        pytest.fail("Chromium is not installed: `apt-get install -y chromium`")
-    done = subprocess.run([browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                           "--disable-component-update", "--disable-sync", "--no-first-run",
-                           f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", "--dump-dom",
-                           page.as_uri() + "#" + state], capture_output=True, text=True, timeout=90)  # fmt: skip
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout
-
-
 def test_the_caption_says_that_ask_tells_inferred_the_stated_sentence_unless_kept_to_the_condition(report):
     section = report.page.read_text().split('id="active"', 1)[1].split("</p>", 1)[0]
     assert "In Inferred (A), <code>ask</code> answers with the Stated sentence" in section
@@ -149,3 +103,49 @@ def test_the_maps_from_above_draw_the_house_floor_plan_under_the_path(report, ge
         assert card.index('id="floor-plan"') < card.index("<polyline")  # under the path
     trajectories = [p.read_text() for p in (report.out / "images").glob("*.svg") if 'id="trajectory"' in p.read_text()]
     assert len(trajectories) == 3 and all(s.index('id="floor-plan"') < s.index('id="trajectory"') for s in trajectories)
+
+
+def _active(report) -> dict:
+    import json
+
+    return json.loads((report.out / "summary.json").read_text())["active"]
+
+
+def test_the_gallery_card_carries_every_view_the_episode_rendered_as_a_strip(report):
+    data = gallery_data(report)
+    active = [e for e in data["entries"] if e.get("vs") is not None]
+    assert len(active) == 3  # the oracle's rows; the centre baseline's have none
+    for e in active:
+        strip = data["strips"][e["vs"]]
+        assert strip["n"] >= 1 and (report.out / "images" / f"{strip['k']}.s.jpg").is_file()
+        assert e["va"] is None or 1 <= e["va"] <= strip["n"]
+
+
+def test_the_opened_card_shows_the_rendered_views_numbered_with_the_answered_one_outlined(report, tmp_path):
+    data = gallery_data(report)
+    entries = data["entries"]
+    first = next(e for e in entries if e.get("vs") is not None and e.get("va"))
+    system = data["systems"][first["s"]]
+    dom = dump(report.page, tmp_path, state=f"system={system}&open=0")
+    tiles = re.findall(r'<div class="tile( sel)?" data-view="(\d+)"', dom)
+    assert [int(n) for _, n in tiles] == list(range(1, data["strips"][first["vs"]]["n"] + 1))
+    assert [int(n) for sel, n in tiles if sel] == [first["va"]]
+    assert "The views it rendered" in dom
+
+
+def gallery_data(report) -> dict:
+    html = report.page.read_text(encoding="utf-8")
+    return json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
+
+
+def dump(page, tmp_path, state: str) -> str:
+    """The page's DOM after its script ran, in headless Chromium (Debian's, as CI installs it)."""
+    browser = shutil.which("chromium") or shutil.which("chromium-browser")
+    if browser is None:
+        pytest.fail("Chromium is not installed: `apt-get install -y chromium`")
+    done = subprocess.run([browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                           "--disable-component-update", "--disable-sync", "--no-first-run",
+                           f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", "--dump-dom",
+                           page.as_uri() + "#" + state], capture_output=True, text=True, timeout=90)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
