@@ -127,19 +127,6 @@ def test_an_unknown_instance_names_the_part_that_is_wrong(tmp_path, mini_root):
         assert why in str(result.exception), (instance, str(result.exception))
 
 
-def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path, mini_root):
-    import subprocess
-    import sys
-
-    done = subprocess.run(
-        [sys.executable, "-m", "povagent.cli", "show-prompt", str(pipeline(tmp_path, mini_root, "basic")), "--instance", "train_house_00000/0/rigth/a"],
-        capture_output=True, text=True, timeout=120, cwd=tmp_path,
-    )  # fmt: skip
-    assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
-    assert "ids in this dataset for house train_house_00000:" in done.stderr
-
-
 def generated_pipeline(tmp_path: Path, dataset: Path) -> Path:
     path = tmp_path / "generated.yaml"
     path.write_text(yaml.safe_dump({"dataset": {"path": str(dataset)}, "backend": "center", "output": str(tmp_path / "run")}))
@@ -164,3 +151,17 @@ def test_a_mistyped_id_is_never_offered_back_as_the_example(tmp_path, generated_
     assert isinstance(result.exception, DatasetError) and message.count(mistyped) == 1  # only where it is quoted
     example = message.split("HOUSE/PAIR/DIRECTION/CONDITION, e.g. ", 1)[1].splitlines()[0]
     assert example.startswith("train_house_00000/pair_")
+
+
+def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path, mini_root):
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", "povagent.cli", "show-prompt", str(pipeline(tmp_path, mini_root, "basic")), "--instance", "train_house_00000/0/rigth/a"],
+        capture_output=True, text=True, timeout=120, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
+    assert "ids in this dataset for house train_house_00000:" in done.stderr
+
