@@ -164,4 +164,3 @@ def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
     assert "ids in this dataset for house train_house_00000:" in done.stderr
-
