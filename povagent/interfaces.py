@@ -98,6 +98,11 @@ class Backend(abc.ABC):
 
     #: Whether answers may be cached (offline baselines that are instant can say False).
     cacheable: ClassVar[bool] = True
+    #: Whether this backend is an offline baseline, not a model: it answers from the records or
+    #: by a fixed rule (the centre, a random pixel, the ground truth, an explorer walking to it).
+    #: Reports show its runs as reference rows, styled and sorted as baselines and never marked
+    #: best; the report reads this from the backend's class, never from its name.
+    offline_baseline: ClassVar[bool] = False
 
     @abc.abstractmethod
     def identity(self) -> Mapping[str, Any]:

@@ -84,6 +84,7 @@ class CenterBaseline(Backend):
     """Always the image centre; for A/B the frame chosen by ``frame_policy``."""
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(self, frame_policy: str = "first", seed: int = 0) -> None:
         if frame_policy not in FRAME_POLICIES:
@@ -129,6 +130,7 @@ class RandomBaseline(Backend):
     """A uniform frame and pixel, seeded by (seed, instance id, run)."""
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(self, seed: int = 0) -> None:
         self.seed = int(seed)
@@ -168,6 +170,7 @@ class OracleBaseline(Backend):
     """The projected ground truth: the metric's floor."""
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def identity(self) -> Mapping[str, Any]:
         """Name only: the oracle has no options."""

@@ -64,6 +64,7 @@ class ExplorerOracle(Backend):
     """Walks to the observer's standpoint and answers the ground truth in the view it sees."""
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def identity(self) -> Mapping[str, Any]:
         """Name only: it has no options."""
@@ -113,6 +114,7 @@ class ExplorerRandom(Backend):
     """Random actions until the budget is spent, then the centre of the last view."""
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(self, seed: int = 0) -> None:
         if isinstance(seed, bool) or not isinstance(seed, int):

@@ -81,6 +81,7 @@ class PlantedBehaviour(Backend):
     """
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(
         self,

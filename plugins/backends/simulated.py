@@ -88,6 +88,7 @@ class SimulatedPerception(Backend):
     """
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(
         self,
@@ -241,6 +242,7 @@ class SimulatedScene(Backend):
     """
 
     cacheable: ClassVar[bool] = False
+    offline_baseline: ClassVar[bool] = True
 
     def __init__(
         self,

@@ -33,7 +33,7 @@ from typing import Any
 from povagent import hookimpl
 from povagent.active.episode import DEFAULT_BUDGET, Episode, kept_call
 from povagent.active.pose import Pose
-from povagent.active.speaker import pair_facts
+from povagent.active.speaker import SPEAKER_KNOWLEDGE, pair_facts
 from povagent.active.tools import TOOLS
 from povagent.active.views import ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
@@ -71,14 +71,22 @@ def preamble(budget: int, n_frames: int, given: bool) -> str:
 
 
 class ActiveStrategy(BasicStrategy):
-    """Active observer grounding: the passive prompt, then tools to look around before answering."""
+    """Active observer grounding: the passive prompt, then tools to look around before answering.
+
+    ``speaker`` (default ``stated``) says what ``ask`` may tell: ``stated``, the Stated sentence
+    and the furniture in every condition, so Inferred (A) nearly becomes Stated (B) once the
+    model asks; ``condition``, only the condition's information (:mod:`povagent.active.speaker`).
+    """
 
     default_max_tokens: int | None = 512
     default_max_frames: int | None = 8
 
     def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
-                 **basic: Any) -> None:  # fmt: skip
+                 speaker: str = "stated", **basic: Any) -> None:  # fmt: skip
         super().__init__(**basic)
+        if speaker not in SPEAKER_KNOWLEDGE:
+            raise ValueError(f"strategy option speaker must be one of {', '.join(SPEAKER_KNOWLEDGE)}, got {speaker!r}")
+        self.speaker = speaker
         self.max_actions = _positive_or_none(max_actions, "max_actions", "the action budget") or DEFAULT_BUDGET
         if self.max_actions > MAX_ACTIONS:
             raise ValueError(f"strategy option max_actions must be at most {MAX_ACTIONS}, got {max_actions!r}")
@@ -145,7 +153,7 @@ class ActiveStrategy(BasicStrategy):
             return view.sha256
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
-        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
+        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value, instance.condition.value, self.speaker)
         return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.max_actions, self.max_seconds)
 
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:

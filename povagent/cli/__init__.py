@@ -34,6 +34,7 @@ COMMAND_MODULES = (
     "povagent.cli.quickstart", # quickstart
     "povagent.cli.download",   # download
     "povagent.cli.train",      # export-train
+    "povagent.cli.tiny_checkpoint",  # tiny-model
     "povagent.cli.schema",     # schema
     "povagent.cli.ros",        # ros-node, ros-replay
 )

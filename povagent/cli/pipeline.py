@@ -96,7 +96,7 @@ def run_command(
         ...,
         metavar="PIPELINE",
         help="The pipeline YAML file: dataset, model backend, strategy, parser, scorers and run folder "
-        "(the keys are listed under 'Pipelines' in the README).",
+        "(a pipeline explained: docs/tutorials/first-evaluation.md; every key: the YAML reference, see docs/reference/index.md).",
     ),
     output: Path | None = typer.Option(
         None, "--output", "-o", metavar="FOLDER", help="Run folder to write to, instead of the YAML's output: key."

@@ -17,9 +17,10 @@ import typer
 
 from povagent.cli import app
 
-#: How an instance id is written, and one from the release, for help and error messages.
+#: How an instance id is written, and one as `povagent generate` names them, for the help (an
+#: error message shows an id of the dataset at hand instead: pair ids differ between sets).
 INSTANCE_ID_FORMAT = "HOUSE/PAIR/DIRECTION/CONDITION"
-INSTANCE_ID_EXAMPLE = "train_house_00000/0/right/a"
+INSTANCE_ID_EXAMPLE = "train_house_00000/pair_000/right/a"
 
 
 def unknown_instance_message(instance: str, known: list[str], where: object) -> str:
@@ -43,8 +44,9 @@ def unknown_instance_message(instance: str, known: list[str], where: object) -> 
         lines.append(f"condition {parts[3]!r} is not one of a (Inferred), b (Stated), c (Given)")
     else:
         lines.append(f"house {parts[0]!r} has no pair {parts[1]!r} with direction {parts[2]!r} and condition {parts[3]!r}")
-    lines.append(f"an instance id is {INSTANCE_ID_FORMAT}, e.g. {INSTANCE_ID_EXAMPLE}")
     same_house = [k for k in known if k.split("/")[0] == parts[0]]
+    example = (same_house or known or [INSTANCE_ID_EXAMPLE])[0]  # a real id: never the one mistyped
+    lines.append(f"an instance id is {INSTANCE_ID_FORMAT}, e.g. {example}")
     examples = _spread(same_house or known, 3)
     if examples:
         lines.append("ids in this dataset" + (f" for house {parts[0]}" if same_house else "") + ":")
@@ -73,7 +75,7 @@ def show_prompt_command(
         "--instance",
         metavar="ID",
         help=f"The instance to show, as {INSTANCE_ID_FORMAT}, e.g. {INSTANCE_ID_EXAMPLE} "
-        "(condition a: Inferred, b: Stated, c: Given).",
+        "(PAIR as the house file's pair_id; condition a: Inferred, b: Stated, c: Given).",
     ),
     out: Path | None = typer.Option(
         None, "--out", metavar="FOLDER", help="Folder to save the images in (default: ./show-prompt/ID, slashes as _)."

@@ -23,15 +23,19 @@ from PIL import Image
 
 from povagent.active.views import view_file
 from povagent.dataset.instances import Frame
+from povagent.generate.floorplan import FloorPlan
 from povagent.report.collect import Collection, Observation
+from povagent.report.floor_plan import floor_plan_svg, house_plan, plan_points
 from povagent.report.statistics import paired_comparison
+from povagent.report.step_caption import ELLIPSIS, step_caption
 from povagent.results.episode import EpisodeRecord, read_record
 from povagent.scoring.bootstrap import bootstrap_mean_ci
 from povagent.scoring.official import answered_in_camera
 
-#: Episodes drawn per active system, views shown per episode, and the thumbnail side (px).
+#: Episodes drawn per active system, views and steps shown per episode, and the thumbnail side (px).
 TRAJECTORIES_PER_SYSTEM = 6
 VIEWS_PER_EPISODE = 10
+STEPS_PER_EPISODE = 12
 THUMB_PX = 128
 CONDITION_LABELS = {"a": "Inferred (A)", "b": "Stated (B)", "c": "Given (C)"}
 
@@ -146,14 +150,20 @@ def budget_rows(episodes: dict[str, list[Episode]], n_boot: int, seed: int) -> l
     return rows
 
 
-def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | None, px: int = 280) -> str:
-    """The episode from above: frames (grey), the path, a heading at each view, the view
-    answered in (red wedge), the target (green). x to the right, z up the page."""
+def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | None, px: int = 280,
+                   plan: FloorPlan | None = None) -> str:  # fmt: skip
+    """The episode from above: the house's floor plan (rooms and walls, when ``plan`` is given:
+    the map then spans the whole house), the path, a heading at each view, the view answered
+    in (red wedge), the target (green). x to the right, z up the page."""
     pts = [(c.x, c.z) for c in [record.start, *[v.camera for v in record.views]]]
     if target is not None:
         pts.append((target[0], target[2]))
-    x0, x1 = min(p[0] for p in pts) - 1.0, max(p[0] for p in pts) + 1.0
-    z0, z1 = min(p[1] for p in pts) - 1.0, max(p[1] for p in pts) + 1.0
+    margin = 1.0
+    if plan is not None:
+        pts += plan_points(plan)
+        margin = 0.3
+    x0, x1 = min(p[0] for p in pts) - margin, max(p[0] for p in pts) + margin
+    z0, z1 = min(p[1] for p in pts) - margin, max(p[1] for p in pts) + margin
     scale = px / max(x1 - x0, z1 - z0)
 
     def at(x: float, z: float) -> tuple[float, float]:
@@ -161,6 +171,8 @@ def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | N
 
     parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{px}" height="{px}" viewBox="0 0 {px} {px}">',
              f'<rect width="{px}" height="{px}" fill="#fafafa" stroke="#ccc"/>']  # fmt: skip
+    if plan is not None:
+        parts.append(floor_plan_svg(plan, at))
     path = " ".join(f"{a},{b}" for a, b in (at(c.x, c.z) for c in [record.start, *[v.camera for v in record.views]]))
     parts.append(f'<polyline points="{path}" fill="none" stroke="#2962ff" stroke-width="1.5"/>')
     answered = record.answer.camera if record.answer is not None else None
@@ -198,7 +210,8 @@ def _thumbnail(folder: Path, sha: str, out: Path) -> str | None:
 
 def _episode_card(e: Episode, dataset: Any, out: Path) -> str:
     inst = dataset.instance(e.observation.instance_id) if dataset is not None else None
-    svg = trajectory_svg(e.record, tuple(inst.target) if inst is not None else None)
+    plan = house_plan(getattr(dataset, "root", None), e.observation.house_id)
+    svg = trajectory_svg(e.record, tuple(inst.target) if inst is not None else None, plan=plan)
     answered = e.record.answer.image if e.record.answer is not None else "no answer"
     views = []
     for v in e.record.views[:VIEWS_PER_EPISODE]:
@@ -206,7 +219,9 @@ def _episode_card(e: Episode, dataset: Any, out: Path) -> str:
         mark = ' class="answered"' if answered == f"view {v.n}" else ""
         views.append(f'<figure{mark}><img src="{src}" alt="View {v.n}"><figcaption>View {v.n}</figcaption></figure>' if src
                      else f"<figure><figcaption>View {v.n} (not in the run folder)</figcaption></figure>")  # fmt: skip
-    steps = ", ".join(html.escape(f"{s.action}({s.arguments[:40]})") for s in e.record.steps[:12])
+    steps = ", ".join(html.escape(step_caption(s.action, s.arguments)) for s in e.record.steps[:STEPS_PER_EPISODE])
+    if len(e.record.steps) > STEPS_PER_EPISODE:
+        steps += html.escape(f", {ELLIPSIS} ({len(e.record.steps) - STEPS_PER_EPISODE} more steps)")
     l2 = _fmt(e.observation.l2)
     return (f'<div class="active-episode"><h4>{html.escape(e.observation.instance_id)} · answered in {html.escape(answered)} · L2 {l2}</h4>'
             f'{svg}<div class="views">{"".join(views)}</div><p class="muted">{steps}</p></div>')  # fmt: skip
@@ -223,7 +238,10 @@ def active_section(collection: Collection, dataset: Any, out: Path, n_boot: int 
     parts = ['<section id="active"><h2>Active <span class="muted">(addition, not in the paper)</span></h2>',
              '<p class="help">The <code>active</code> strategy lets a model look around the house with tool calls before it '
              "answers (docs/how-to/active.md). Official L2 in the camera of the image answered in; each active system beside "
-             "each passive system on the same instances (difference active - passive, 95% bootstrap CI; negative: looking helped).</p>",
+             "each passive system on the same instances (difference active - passive, 95% bootstrap CI; negative: looking helped). "
+             "In Inferred (A), <code>ask</code> answers with the Stated sentence (where the speaker was) unless the strategy "
+             "ran with <code>speaker: condition</code>, which keeps the speaker to what the condition gives (in A: what they "
+             "were doing, not where): with the default, A and B nearly meet once a model asks.</p>",
              "<table><tr><th>active</th><th>passive</th><th>condition</th><th>pairs</th><th>L2 passive</th><th>L2 active</th>"
              "<th>difference [CI]</th><th>active better</th></tr>"]  # fmt: skip
     for r in comparisons:

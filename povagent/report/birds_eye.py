@@ -24,7 +24,9 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
+from povagent.generate.floorplan import FloorPlan
 from povagent.geometry.camera import Camera
+from povagent.report.floor_plan import WALL_COLOUR, floor_plan_svg, house_plan, plan_points
 from povagent.run.confined_write import write_inside
 
 #: Colours shared with the gallery's drawings (GT green, prediction red).
@@ -38,6 +40,8 @@ PATH_COLOUR = "#6200ea"
 #: Size of the drawing (px), of the legend under it (px), and the margin around the scene (m).
 VIEW_PX = 360
 LEGEND_PX = 56
+#: Height of one legend row (px): a legend of more than three rows makes the drawing taller.
+LEGEND_ROW_PX = 13
 MARGIN_M = 0.6
 #: How far a ray that never reaches the floor is drawn (m).
 RAY_LENGTH_M = 4.0
@@ -72,6 +76,8 @@ class BirdsEyeScene:
     title: str
     #: An active-mode episode's poses, start first: (x, z, yaw) each; empty for a passive row.
     path: tuple[tuple[float, float, float], ...] = ()
+    #: The house's floor plan, drawn under everything (a generated house's, for an active row).
+    plan: FloorPlan | None = None
 
 
 def footprint(obj: Any) -> Box2D:
@@ -152,13 +158,26 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
     if pred_floor is not None:
         points.append((float(pred_floor[0][0]), float(pred_floor[0][2])))
     points += [(x, z) for x, z, _ in scene.path]
+    if scene.plan is not None:
+        points += plan_points(scene.plan)
     page = _Frame(points)
+    legend = [
+        (GT_COLOUR, "GT target"), (PRED_COLOUR, "prediction's ray to the floor"), (ANCHOR_COLOUR, "anchor"),
+        (OBSERVER_COLOUR, "observer"), ("#f9a825", "selected frame's view"),
+    ]  # fmt: skip
+    if scene.path:
+        legend.append((PATH_COLOUR, "active episode's path and headings"))
+    if scene.plan is not None:
+        legend.append((WALL_COLOUR, "walls (a gap: a doorway)"))
+    legend_px = LEGEND_PX + LEGEND_ROW_PX * max(0, (len(legend) + 1) // 2 - 3)  # three rows fit in LEGEND_PX
     out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + LEGEND_PX}" viewBox="0 0 {VIEW_PX} {VIEW_PX + LEGEND_PX}" font-family="sans-serif" font-size="10">',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + legend_px}" viewBox="0 0 {VIEW_PX} {VIEW_PX + legend_px}" font-family="sans-serif" font-size="10">',
         f"<title>{escape(scene.title)}</title>",
         f'<rect width="{VIEW_PX}" height="{VIEW_PX}" fill="#fafafa" stroke="#ccc"/>',
-        '<g id="objects">',
     ]
+    if scene.plan is not None:
+        out.append(floor_plan_svg(scene.plan, page))
+    out.append('<g id="objects">')
     for b in scene.objects:
         (x0, y1), (x1, y0) = page(b.x0, b.z0), page(b.x1, b.z1)
         role = "anchor" if b.object_id == scene.anchor_id else "observer" if b.object_id == scene.observer_id else "object"
@@ -198,16 +217,10 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         )
     gx, gy = page(scene.target[0], scene.target[2])
     out.append(f'<circle id="target" cx="{_f(gx)}" cy="{_f(gy)}" r="5" fill="{GT_COLOUR}" stroke="#fff" stroke-width="1.5"/>')
-    legend = [
-        (GT_COLOUR, "GT target"), (PRED_COLOUR, "prediction's ray to the floor"), (ANCHOR_COLOUR, "anchor"),
-        (OBSERVER_COLOUR, "observer"), ("#f9a825", "selected frame's view"),
-    ]  # fmt: skip
-    if scene.path:
-        legend.append((PATH_COLOUR, "active episode's path and headings"))
     for i, (colour, text) in enumerate(legend):
-        x, y = 4.0 + 180.0 * (i % 2), VIEW_PX + 8 + 13 * (i // 2)
+        x, y = 4.0 + 180.0 * (i % 2), VIEW_PX + 8 + LEGEND_ROW_PX * (i // 2)
         out.append(f'<rect x="{_f(x)}" y="{y}" width="8" height="8" fill="{colour}"/><text x="{_f(x + 11)}" y="{y + 8}">{escape(text)}</text>')
-    bar_y = VIEW_PX + LEGEND_PX - 6
+    bar_y = VIEW_PX + legend_px - 6
     out.append(
         f'<line x1="6" y1="{bar_y}" x2="{_f(6 + page.length(1.0))}" y2="{bar_y}" stroke="#333" stroke-width="2"/>'
         f'<text x="{_f(10 + page.length(1.0))}" y="{bar_y + 3}">1 m (from above: x right, z up)</text>'
@@ -249,5 +262,7 @@ def birds_eye_for_row(
     pred = (observation.x, observation.y) if observation.x is not None and observation.y is not None else None
     selected = frame.camera if frame is not None else None
     scene = scene_for(instance, house, selected, pred)
-    return write_birds_eye(birds_eye_svg(dataclasses.replace(scene, path=path) if path else scene), images_dir)
+    if path:  # an active row: the walls the episode moved between, under its path
+        scene = dataclasses.replace(scene, path=path, plan=house_plan(getattr(dataset, "root", None), instance.house_id))
+    return write_birds_eye(birds_eye_svg(scene), images_dir)
 

@@ -1,8 +1,9 @@
 """An OpenAI-compatible chat server on 127.0.0.1 for tests, benchmarks and plugin authors.
 
-It answers ``POST /v1/chat/completions`` with scripted replies, records every request body
-(so a test can check which images, labels, prompt text and generation parameters arrived), and
-injects faults: an HTTP status (429 with ``Retry-After``, 500, 400, 401...), a delay, or a
+It answers ``POST /v1/chat/completions`` with scripted replies (texts and tool calls, queued in
+code or read from a turns file: :mod:`povagent.testing.scripted_turns`), records every request
+body (so a test can check which images, labels, prompt text and generation parameters arrived),
+and injects faults: an HTTP status (429 with ``Retry-After``, 500, 400, 401...), a delay, or a
 dropped connection (the socket closed without a response).
 
 With ``fetch_images=True`` it also does what a vLLM server does with image URLs: it decodes
@@ -42,8 +43,9 @@ from typing import Any, Callable, Iterable
 
 from povagent.testing.background_server import BackgroundServer, TrackedHTTPServer
 from povagent.testing.image_urls import FetchedImage, ImageFetchError, decode_data_url, download, read_file_url
+from povagent.testing.scripted_turns import Turn, read_turns
 
-__all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer"]
+__all__ = ["Fault", "FetchedImage", "Reply", "RecordedRequest", "LoopbackServer", "read_turns"]
 
 #: Hosts an ``http://`` image URL may name: the server never reaches beyond this machine.
 
@@ -269,17 +271,18 @@ class LoopbackServer(BackgroundServer):
         return f"http://127.0.0.1:{self.port}/v1"
 
     # -- scripting ----------------------------------------------------------------------------
-    def script(self, *outcomes: Outcome | ReplyFn | Iterable[Outcome | ReplyFn]) -> None:
+    def script(self, *outcomes: Outcome | ReplyFn | Turn | Iterable[Outcome | ReplyFn | Turn]) -> None:
         """Queue outcomes for the next requests, in order (then ``reply`` answers again).
 
-        An item may be a callable like ``reply`` (it answers that one request).
+        An item may be a callable like ``reply`` (it answers that one request), or a
+        :class:`~povagent.testing.scripted_turns.Turn` of a turns file (:func:`read_turns`).
         """
         with self._lock:
             for o in outcomes:
-                if isinstance(o, (str, Reply, Fault)) or callable(o):
-                    self._script.append(o)
+                if isinstance(o, (str, Reply, Fault, Turn)) or callable(o):
+                    self._script.append(_outcome(o))
                 else:
-                    self._script.extend(o)
+                    self._script.extend(_outcome(x) for x in o)
 
     # -- images -------------------------------------------------------------------------------
     def _fetch(self, index: int, url: str) -> FetchedImage:
@@ -331,6 +334,11 @@ class LoopbackServer(BackgroundServer):
         }
 
 
+def _outcome(item: Any) -> Any:
+    """A turns file's turn as the reply it stands for; anything else as it is."""
+    return Reply(item.text, tool_calls=item.tool_calls) if isinstance(item, Turn) else item
+
+
 def _choice(reply: Reply, n: int) -> dict[str, Any]:
     """The one choice of an answer: the text, and the scripted tool calls (ids per request)."""
     message: dict[str, Any] = {"role": "assistant", "content": reply.text}
@@ -356,19 +364,24 @@ def argument_parser() -> argparse.ArgumentParser:
         prog="python -m povagent.testing.loopback_server",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="An OpenAI-compatible chat server on 127.0.0.1 that answers every request\n"
-        "with one fixed reply: try a pipeline or a backend without a model. The first\n"
-        "line it prints is its URL, the api_base to give a litellm backend; it serves\n"
-        "until Ctrl-C or --lifetime.",
+        "with one fixed reply (after the turns of --script, if given): try a pipeline\n"
+        "or a backend without a model. The first line it prints is its URL, the\n"
+        "api_base to give a litellm backend; it serves until Ctrl-C or --lifetime.",
         epilog="example:\n"
         "  python -m povagent.testing.loopback_server --port 8000 \\\n"
         "      --reply '{\"x\": 1, \"y\": 2}'\n"
         "  and in the pipeline: backend: {name: litellm, options: {model: openai/any,\n"
-        "    api_base: http://127.0.0.1:8000/v1, api_key_env: SOME_VAR}}  (any value)",
+        "    api_base: http://127.0.0.1:8000/v1, api_key_env: SOME_VAR}}  (any value)\n"
+        "  python -m povagent.testing.loopback_server --script turns.yaml\n"
+        "  a model that calls tools, turn by turn (see povagent.testing.scripted_turns)",
     )
     ap.add_argument("--port", type=port_number, default=0, metavar="N",
                     help="port on 127.0.0.1 to listen on (default: 0, any free port)")
     ap.add_argument("--reply", default=DEFAULT_REPLY, metavar="TEXT",
                     help="the assistant's text in every answer (default: %(default)s)")
+    ap.add_argument("--script", default=None, metavar="FILE",
+                    help="answer the first requests with the turns of FILE, in order, then --reply: a JSON or "
+                    "YAML list, each turn a text or {tool_calls: [{name: ..., arguments: {...}}]}")
     ap.add_argument("--delay", type=float, default=0.0, metavar="SECONDS",
                     help="wait this long before each answer, as a model takes time to answer (default: 0)")
     ap.add_argument("--lifetime", type=float, default=3600.0, metavar="SECONDS",
@@ -412,11 +425,20 @@ def main(argv: list[str] | None = None) -> None:
 
     if args.local_media_root is not None and not Path(args.local_media_root).is_dir():
         ap.error(f"--local-media-root {args.local_media_root}: not a folder")
+    turns: list[Turn] = []
+    if args.script is not None:
+        from povagent.errors import ConfigError
+
+        try:
+            turns = read_turns(args.script)
+        except ConfigError as exc:
+            ap.error(f"--script {exc}")
     server = LoopbackServer(
         reply=Reply(args.reply, delay_s=args.delay) if args.delay > 0 else args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
         fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
         keep_image_bytes=False, image_check=check, count_bodies=args.count_bodies,
     )  # fmt: skip
+    server.script(turns)
     try:
         server.start()
     except OSError as exc:

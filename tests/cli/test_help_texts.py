@@ -82,4 +82,4 @@ def test_keep_errors_has_its_opposite_spelled_out(tmp_path, mini_root):
 def test_show_prompt_help_gives_the_id_format_and_an_example():
     options = options_section(help_of("show-prompt"))
     assert "HOUSE/PAIR/DIRECTION/CONDITION" in options
-    assert "train_house_00000/0/right/a" in options
+    assert "train_house_00000/pair_000/right/a" in options  # as a generated set writes ids

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import yaml
@@ -107,7 +108,8 @@ def test_an_unknown_instance_shows_the_id_format_and_real_ids(tmp_path, mini_roo
     assert isinstance(result.exception, DatasetError)
     message = str(result.exception)
     assert "no instance 'x'" in message and "four parts separated by '/'" in message
-    assert "HOUSE/PAIR/DIRECTION/CONDITION, e.g. train_house_00000/0/right/a" in message
+    example = message.split("HOUSE/PAIR/DIRECTION/CONDITION, e.g. ", 1)[1].splitlines()[0]
+    assert mini_dataset.instance(example) is not None  # an id of this dataset, as it writes them
     shown = [line.strip() for line in message.splitlines() if line.startswith("  ")]
     assert 1 <= len(shown) <= 3 and all(mini_dataset.instance(i) is not None for i in shown)
     assert len({i.split("/")[0] for i in shown}) == 2  # the examples spread over the houses
@@ -123,6 +125,32 @@ def test_an_unknown_instance_names_the_part_that_is_wrong(tmp_path, mini_root):
     for instance, why in cases.items():
         result, _ = show(tmp_path, mini_root, "basic", instance=instance)
         assert why in str(result.exception), (instance, str(result.exception))
+
+
+def generated_pipeline(tmp_path: Path, dataset: Path) -> Path:
+    path = tmp_path / "generated.yaml"
+    path.write_text(yaml.safe_dump({"dataset": {"path": str(dataset)}, "backend": "center", "output": str(tmp_path / "run")}))
+    return path
+
+
+def test_the_help_example_is_an_id_as_a_generated_set_writes_them(generated_release):
+    from povagent.dataset.loader import load_dataset
+
+    shown = runner.invoke(app, ["show-prompt", "--help"]).stdout
+    example = re.search(r"e\.g\.\s+(\S+)", shown).group(1)
+    house, pair, direction, condition = example.split("/")
+    ids = [i.id for i in load_dataset(generated_release).instances()]
+    assert any(i.startswith(f"{house}/{pair}/") for i in ids) and condition in "abc"
+    assert direction in {i.split("/")[2] for i in ids}
+
+
+def test_a_mistyped_id_is_never_offered_back_as_the_example(tmp_path, generated_release):
+    mistyped = "train_house_00000/0/right/a"  # the release's pair ids, not a generated set's
+    result = runner.invoke(app, ["show-prompt", str(generated_pipeline(tmp_path, generated_release)), "--instance", mistyped])
+    message = str(result.exception)
+    assert isinstance(result.exception, DatasetError) and message.count(mistyped) == 1  # only where it is quoted
+    example = message.split("HOUSE/PAIR/DIRECTION/CONDITION, e.g. ", 1)[1].splitlines()[0]
+    assert example.startswith("train_house_00000/pair_")
 
 
 def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path, mini_root):

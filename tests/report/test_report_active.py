@@ -3,6 +3,7 @@ actions used, L2 against the budget, trajectories with the views each rendered."
 
 from __future__ import annotations
 
+import html
 import json
 import re
 import shutil
@@ -13,6 +14,7 @@ import yaml
 
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
+from povagent.report.floor_plan import WALL_COLOUR
 from povagent.run.runner import run_pipeline
 
 pytestmark = pytest.mark.timeout(120)
@@ -54,6 +56,53 @@ def test_the_gallery_card_shows_the_rendered_view_answered_in_and_the_trajectory
     svgs = [p.read_text() for p in (report.out / "images").glob("*.svg")]
     assert sum('id="trajectory"' in s for s in svgs) == 3  # one bird's-eye card per active row
     assert report.gallery.without_image == 0  # every active row answered in a view has its drawing
+
+
+def test_the_caption_says_that_ask_tells_inferred_the_stated_sentence_unless_kept_to_the_condition(report):
+    section = report.page.read_text().split('id="active"', 1)[1].split("</p>", 1)[0]
+    assert "In Inferred (A), <code>ask</code> answers with the Stated sentence" in section
+    assert "<code>speaker: condition</code>" in section and "A and B nearly meet" in section
+
+
+def test_the_explorer_oracle_is_a_baseline_styled_and_sorted_as_the_passive_oracle_would_be(report):
+    reference = {s["system"]: s["reference"] for s in json.loads((report.out / "summary.json").read_text())["systems"]}
+    oracle = next(name for name in reference if "explorer-oracle" in name)
+    assert reference[oracle] and all(reference.values())  # the centre guess too: two baselines
+    tables = (report.out / "tables.md").read_text()
+    assert f"| *{oracle}* |" in tables and "**0.000" not in tables
+
+
+def oracle_records(report) -> list:
+    from povagent.results.episode import read_record
+    from povagent.results.rows import read_rows
+
+    return [read_record(r.exchanges[-1].raw) for r in read_rows(report.out.parent / "runs" / "oracle" / "results.jsonl")]
+
+
+def test_each_trajectory_caption_rounds_every_argument_and_cuts_nothing_without_an_ellipsis(report):
+    from povagent.report.step_caption import step_caption
+
+    page = report.page.read_text()
+    captions = re.findall(r'<div class="active-episode">.*?<p class="muted">(.*?)</p>', page, re.S)
+    expected = [", ".join(step_caption(s.action, s.arguments) for s in r.steps) for r in oracle_records(report)]
+    assert sorted(captions) == sorted(html.escape(c) for c in expected)
+    assert all(re.search(r"\d\.\d{3}", c) is None for c in captions)  # no number shown beyond two decimals
+
+
+def test_the_maps_from_above_draw_the_house_floor_plan_under_the_path(report, generated_release):
+    from povagent.active.house import house_for
+
+    plan = house_for(generated_release, "train_house_00000").built.house.plan
+    walls = sum(1 for s in plan.slabs if s.y0 == 0.0)
+    page = report.page.read_text()
+    cards = re.findall(r'<div class="active-episode">(.*?)</svg>', page, re.S)
+    assert len(cards) == 3
+    for card in cards:
+        drawn = card.split('<g id="floor-plan">', 1)[1].split("</g>", 1)[0]
+        assert drawn.count(f'fill="{WALL_COLOUR}"') == walls and drawn.count("<text") == len(plan.rooms)
+        assert card.index('id="floor-plan"') < card.index("<polyline")  # under the path
+    trajectories = [p.read_text() for p in (report.out / "images").glob("*.svg") if 'id="trajectory"' in p.read_text()]
+    assert len(trajectories) == 3 and all(s.index('id="floor-plan"') < s.index('id="trajectory"') for s in trajectories)
 
 
 def _active(report) -> dict:
