@@ -31,9 +31,10 @@ from povagent.dataset.models import (
 )
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
 from povagent.dataset.problems import Problem, problems_from_validation_error
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, ReadTargetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, PlacementCase
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 _VISIBLE = TypeAdapter(dict[str, list[str]])
 
@@ -268,22 +269,21 @@ def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:
         problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
         return None
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_regular(path, MAX_DOCUMENT_BYTES, what="dataset file").decode("utf-8")
     except FileNotFoundError:
-        problems.append(Problem(rel, "$", "file is missing"))
-        return None
+        reason = "file is missing"
     except UnicodeDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not UTF-8 text (byte {exc.start})"))
-        return None
-    except OSError as exc:
-        problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
-        return None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
-    except RecursionError:
-        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
+        reason = f"is not UTF-8 text (byte {exc.start})"
+    except (OSError, ReadTargetError) as exc:  # a pipe, a device or a huge file: refused, never waited on
+        reason = exc.reason if isinstance(exc, ReadTargetError) else f"cannot be read: {exc.strerror or exc}"
+    else:
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError as exc:
+            reason = f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"
+        except RecursionError:
+            reason = "nests lists or objects too deeply to be a release file"
+    problems.append(Problem(rel, "$", reason))
     return None
 
 

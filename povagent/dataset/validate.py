@@ -23,6 +23,8 @@ from povagent.dataset.models import DIRECTIONS
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, is_inside, observer_view_path
 from povagent.dataset.problems import Problem, json_path, non_finite_problems
 from povagent.dataset.schema import validator
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 _DIRECTION_NAMES = ", ".join(str(d) for d in DIRECTIONS)
 _JSON_NAMES = {"array": "list", "object": "object (a mapping of keys to values)"}
@@ -79,7 +81,10 @@ def _load_json(path: Path, rel: str, problems: list[Problem], real_root: Path) -
         problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(read_regular(path, MAX_DOCUMENT_BYTES, what="dataset file").decode("utf-8"))
+    except ReadTargetError as exc:  # a pipe, a device, a folder or a huge file: never waited on
+        problems.append(Problem(rel, "$", exc.reason))
+        return None
     except UnicodeDecodeError:
         problems.append(Problem(rel, "$", "is not UTF-8 text"))
         return None
