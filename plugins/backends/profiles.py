@@ -215,4 +215,6 @@ def register_model_profiles(register) -> None:
     """Contribute the paper's model profiles."""
     for profile in PAPER_PROFILES:
         where = f"in-process {profile.checkpoint}" if profile.backend == "transformers" else profile.litellm_model
+        if profile.remote_code:  # said where the profile is listed, as its refusal says it
+            where += " with its own code (--trust-remote-code)"
         register(profile.name, profile, description=f"{where} (parser {profile.default_parser})")
