@@ -10,7 +10,8 @@ checks the folder first, reading files only through the confined reader
 (:mod:`povagent.run.confined_read`), and says what is wrong in one line naming the file:
 
 - every entry below the folder (links followed, as a Hugging Face cache snapshot links each
-  file to a blob) is a regular file or a folder, and at most :data:`MAX_ENTRIES` of them;
+  file to a blob; hidden folders such as ``.git`` left out, ``transformers`` never reads them)
+  is a regular file or a folder, and at most :data:`MAX_ENTRIES` of them;
 - every file ``transformers`` reads whole (JSON, the chat template, vocabularies, code) holds at
   most :data:`MAX_TEXT_BYTES`;
 - ``config.json`` is a JSON object, and so is every ``*.index.json``, whose ``weight_map``
@@ -72,6 +73,7 @@ def _entries(folder: Path) -> list[Path]:
     files: list[Path] = []
     seen = 0
     for here, dirs, names in os.walk(folder):
+        dirs[:] = [d for d in dirs if not d.startswith(".")]  # .git, .cache: never read by transformers
         for name in [*names, *dirs]:
             seen += 1
             if seen > MAX_ENTRIES:

@@ -17,7 +17,8 @@ queue (:mod:`povagent_plugins.backends.local_batching`) groups the requests wait
 ``concurrency`` of at least ``max_batch``. Greedy decoding gives the same answers batched or
 one at a time (tested on the tiny checkpoints).
 
-One model per process: it is loaded once, in a worker thread (the event loop keeps running),
+One model per process: it is loaded once, in a daemon thread of its own (the event loop keeps
+running, and a stop never waits for a load that does not end),
 by :meth:`~TransformersBackend.start`; a second backend on the same checkpoint and settings
 shares it, one on another checkpoint meanwhile is refused; it is freed when the last backend
 using it closes. Running out of device memory is
@@ -243,7 +244,7 @@ class TransformersBackend(Backend):
 
     # -- lifecycle ----------------------------------------------------------------------------
     async def start(self) -> None:
-        """Load the checkpoint (once per process) in a worker thread.
+        """Load the checkpoint (once per process) in a daemon thread.
 
         Every request that arrives while it loads waits on the same load and wakes with the
         others at once, so the first batch is as full as the later ones. A load that failed
