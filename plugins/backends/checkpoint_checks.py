@@ -81,10 +81,7 @@ def _entries(folder: Path) -> list[Path]:
             path = Path(here) / name
             if path.is_dir():
                 continue
-            try:
-                check_regular(path, MAX_TEXT_BYTES if path.suffix in TEXT_SUFFIXES else None, what="checkpoint file")
-            except FileNotFoundError:
-                raise _refuse(folder, f"{path.relative_to(folder)} is a link leading nowhere") from None
+            check_regular(path, MAX_TEXT_BYTES if path.suffix in TEXT_SUFFIXES else None, what="checkpoint file")
             files.append(path)
     return files
 
@@ -140,6 +137,15 @@ def _check_index(path: Path, folder: Path) -> None:
 def check_checkpoint_folder(folder: Path) -> None:
     """Refuse, in one line naming the file, a checkpoint folder ``transformers`` must not read
     (see the module docstring); return quietly for one it may."""
+    try:
+        _check(folder)
+    except FileNotFoundError as exc:  # a link leading nowhere
+        raise _refuse(folder, f"{exc.filename}: a link leading nowhere") from None
+    except OSError as exc:  # unreadable, a loop of links
+        raise _refuse(folder, f"{exc.filename or 'a file'}: cannot be read ({exc.strerror or exc})") from None
+
+
+def _check(folder: Path) -> None:
     files = _entries(folder)
     config = folder / "config.json"
     if config.exists():

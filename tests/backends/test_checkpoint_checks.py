@@ -114,3 +114,11 @@ def test_pickle_weights_beside_safetensors_pass_because_only_safetensors_are_loa
     folder = sound_checkpoint(tmp_path / "checkpoint")
     (folder / "pytorch_model.bin").write_bytes(b"\x80\x04\x95 a pickle")
     check_checkpoint_folder(folder)
+
+
+def test_a_loop_of_links_in_the_folder_is_one_line(tmp_path):
+    folder = sound_checkpoint(tmp_path / "checkpoint")
+    os.symlink(folder / "b.json", folder / "a.json")
+    os.symlink(folder / "a.json", folder / "b.json")
+    with pytest.raises(ConfigError, match=r"a\.json: cannot be read \(Too many levels of symbolic links\)"):
+        check_checkpoint_folder(folder)
