@@ -75,11 +75,16 @@ def make_requests(store: ImageStore, n: int, max_tokens: int) -> list[Request]:
     return out
 
 
-async def answer_all(options: dict[str, Any], batch: list[Request], store: ImageStore) -> tuple[list[str], float, float, Any]:
-    """(answers, seconds for the batch after loading, seconds from start to the first answer, stats)."""
+async def answer_all(
+    options: dict[str, Any], batch: list[Request], store: ImageStore, trust: bool = False
+) -> tuple[list[str], float, float, Any]:
+    """(answers, seconds for the batch after loading, seconds from start to the first answer, stats);
+    ``trust``: the checkpoint's own code may run (granted as the Python call grants it)."""
+    from povagent.config.remote_code import remote_code_granted
     from povagent_plugins.backends.transformers_backend import TransformersBackend
 
-    backend = TransformersBackend(**options)
+    with remote_code_granted(trust):
+        backend = TransformersBackend(**options)
     started = time.perf_counter()
     try:
         await backend.start()
@@ -116,7 +121,7 @@ def main() -> int:
             checkpoint, trust = args.checkpoint, False
         store = ImageStore()
         batch = make_requests(store, args.requests, args.max_tokens)
-        base = {"model": checkpoint, "trust_remote_code": trust, "dtype": args.dtype, "device_map": args.device_map}
+        base = {"model": checkpoint, "dtype": args.dtype, "device_map": args.device_map}
         rates: dict[int, list[float]] = {1: [], 8: []}
         firsts: list[float] = []
         answers: dict[int, list[str]] = {}
@@ -124,7 +129,7 @@ def main() -> int:
         splits = 0
         for round_ in range(args.rounds):
             for max_batch in (1, 8) if round_ % 2 == 0 else (8, 1):
-                texts, seconds, to_first, stats = asyncio.run(answer_all({**base, "max_batch": max_batch}, batch, store))
+                texts, seconds, to_first, stats = asyncio.run(answer_all({**base, "max_batch": max_batch}, batch, store, trust))
                 rates[max_batch].append((len(batch) - 1) / seconds)
                 firsts.append(to_first)
                 splits += stats.splits if stats is not None else 0

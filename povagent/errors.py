@@ -54,6 +54,15 @@ class OutputFileError(PovagentError):
     empty name, a folder in its place, a place that refuses the write."""
 
 
+class ReadTargetError(PovagentError):
+    """A file povagent reads from a folder someone else may have made is not a regular file (a
+    pipe, a device, a socket, a folder), is larger than what it may hold, or leads through a
+    link where none belongs: refused before it is read, never waited on
+    (see :mod:`povagent.run.confined_read`). ``reason`` is the message without the file's name."""
+
+    reason: str = ""
+
+
 #: ``errno`` values of a write that found no room: a full disk, a full quota, a file size limit.
 NO_ROOM_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 

@@ -182,6 +182,7 @@ NOT_MEASUREMENTS = {
     "95%",  # the confidence level of every interval
     "512x",  # the benchmark's frame size (512x512)
     "1 MiB", "64 MiB", "4096 MiB", "64 KiB",  # config and download bounds; the test tmpfs
+    "256 MiB", "512 MiB",  # bounds of an image file and of a results line read back
     "5 s", "10 s", "20 s", "90 s", "120 s", "0.25 s", "0.2 s",  # timeouts, polling, lease and TF tolerance settings
     "16 GB",  # an 8B model's weights in bfloat16 (arithmetic, not a measurement)
     "516 MiB", "226 KiB",  # the size of the public release (a fact of the data set)

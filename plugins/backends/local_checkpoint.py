@@ -16,15 +16,17 @@ This module reads files; it never imports ``torch`` or ``transformers``.
 from __future__ import annotations
 
 import hashlib
+import os
 import struct
 from pathlib import Path
+
+from povagent.run.confined_read import open_regular, read_regular
+from povagent_plugins.backends.checkpoint_checks import MAX_HEADER_BYTES, MAX_TEXT_BYTES
 
 #: Files that describe the model, hashed whole when present.
 DESCRIBING_FILES = ("config.json", "generation_config.json")
 #: Bytes read from the end of each weights file.
 TAIL_BYTES = 1 << 20
-#: A safetensors header larger than this is not one (the format caps it at 100 MB).
-MAX_HEADER_BYTES = 100_000_000
 
 
 def checkpoint_folder(model: str, revision: str | None = None) -> Path | None:
@@ -44,7 +46,7 @@ def checkpoint_folder(model: str, revision: str | None = None) -> Path | None:
 
 
 def _safetensors_header(path: Path) -> bytes:
-    with path.open("rb") as fh:
+    with open_regular(path, what="weights file") as fh:
         head = fh.read(8)
         if len(head) < 8:
             return head
@@ -53,20 +55,24 @@ def _safetensors_header(path: Path) -> bytes:
 
 
 def _tail(path: Path) -> bytes:
-    with path.open("rb") as fh:
-        fh.seek(max(0, path.stat().st_size - TAIL_BYTES))
+    with open_regular(path, what="weights file") as fh:
+        fh.seek(max(0, os.fstat(fh.fileno()).st_size - TAIL_BYTES))
         return fh.read(TAIL_BYTES)
 
 
 def checkpoint_fingerprint(folder: Path) -> str:
-    """SHA-256 (hex) of what identifies the checkpoint in ``folder`` (see the module docstring)."""
+    """SHA-256 (hex) of what identifies the checkpoint in ``folder`` (see the module docstring).
+
+    Every file is read through the confined reader, bounded (a pipe or a device there is a
+    one-line error, never a wait): call :func:`~povagent_plugins.backends.checkpoint_checks.check_checkpoint_folder`
+    first for the messages that say what a bad folder holds."""
     digest = hashlib.sha256()
     for name in DESCRIBING_FILES:
         path = folder / name
-        if path.is_file():
-            digest.update(f"{name}\0".encode() + path.read_bytes())
+        if path.exists():
+            digest.update(f"{name}\0".encode() + read_regular(path, MAX_TEXT_BYTES, what="checkpoint file"))
     for path in sorted(folder.glob("*.index.json")):
-        digest.update(f"{path.name}\0".encode() + path.read_bytes())
+        digest.update(f"{path.name}\0".encode() + read_regular(path, MAX_TEXT_BYTES, what="weights index"))
     weights = sorted(p for p in folder.iterdir() if p.suffix in (".safetensors", ".bin") and p.is_file())
     for path in weights:
         digest.update(f"{path.name}\0{path.stat().st_size}\0".encode())

@@ -1,7 +1,8 @@
 """One checkpoint loaded in this process: its processor, its model, and batched generation.
 
 :class:`LocalModel` loads a checkpoint with ``AutoProcessor`` and
-``AutoModelForImageTextToText`` (``trust_remote_code`` only when the pipeline says so), turns
+``AutoModelForImageTextToText`` (``trust_remote_code`` only when the user granted it, weights
+from safetensors only), turns
 requests into the model's own chat format (the processor's chat template: images where the
 strategy put them, the ``Image k:`` text parts kept) and generates for several requests in one
 ``generate`` call, padded on the left so every prompt ends where its answer begins.
@@ -27,6 +28,7 @@ from PIL import Image
 
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Request, TextPart
+from povagent_plugins.backends.chat_template_check import check_chat_template
 
 Sampling = Literal["greedy", "checkpoint"]
 
@@ -148,9 +150,11 @@ class LocalModel:
         if settings.revision is not None:
             common["revision"] = settings.revision
         processor = AutoProcessor.from_pretrained(settings.model, **common)
+        check_chat_template(processor)  # untrusted Jinja: refused here, not per request
         tokenizer = getattr(processor, "tokenizer", processor)
         tokenizer.padding_side = "left"  # prompts end where answers begin
-        kwargs: dict[str, Any] = dict(common)
+        # safetensors only: a pickle (pytorch_model.bin) beside them is never torch.load-ed
+        kwargs: dict[str, Any] = dict(common, use_safetensors=True)
         kwargs["dtype"] = settings.dtype if settings.dtype == "auto" else getattr(torch, settings.dtype)
         if settings.device_map is not None:
             kwargs["device_map"] = settings.device_map

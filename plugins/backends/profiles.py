@@ -49,7 +49,8 @@ GREEDY_LOCAL_GENERATION: dict[str, Any] = {"temperature": 0.0}
 QWEN_TRANSFORMERS_LOADING: dict[str, Any] = {"dtype": "bfloat16", "device_map": "auto", "sampling": "checkpoint"}
 #: How the runner loaded MolmoPoint-8B (``trust_remote_code=True``, ``dtype="auto"``,
 #: ``device_map="auto"``, processor ``padding_side="left"``) and decoded (no sampling arguments).
-MOLMOPOINT_LOADING: dict[str, Any] = {"trust_remote_code": True, "dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}
+#: Its remote code is the user's to grant (``--trust-remote-code``): the profile says it needs it.
+MOLMOPOINT_LOADING: dict[str, Any] = {"dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}
 
 PAPER_PROFILES: tuple[ModelProfile, ...] = (
     ModelProfile(
@@ -171,8 +172,10 @@ PAPER_PROFILES: tuple[ModelProfile, ...] = (
         backend="transformers",
         checkpoint="allenai/MolmoPoint-8B",
         checkpoint_options=MOLMOPOINT_LOADING,
+        remote_code=True,
         notes=(
-            "Runs in-process (backend transformers, trust_remote_code) as the authors' runner did: "
+            "Runs in-process (backend transformers) with the checkpoint's own code, which only "
+            "--trust-remote-code grants, as the authors' runner did: "
             "the runner's MolmoPoint prompts (task text unchanged, \"Point to the center of the "
             "target object.\"), basic strategy only; its point tokens are decoded by the model's "
             "own extract_image_points (the point reader) and the first point is answered as the "
@@ -212,4 +215,6 @@ def register_model_profiles(register) -> None:
     """Contribute the paper's model profiles."""
     for profile in PAPER_PROFILES:
         where = f"in-process {profile.checkpoint}" if profile.backend == "transformers" else profile.litellm_model
+        if profile.remote_code:  # said where the profile is listed, as its refusal says it
+            where += " with its own code (--trust-remote-code)"
         register(profile.name, profile, description=f"{where} (parser {profile.default_parser})")

@@ -1,10 +1,14 @@
 """The ``transformers`` backend: a checkpoint evaluated in this process, no server.
 
-``backend: {name: transformers, options: {model: PATH_OR_ID, dtype, device_map,
-trust_remote_code: false, max_batch: 8, attn_implementation, sampling, revision}}``. ``model``
+``backend: {name: transformers, options: {model: PATH_OR_ID, dtype, device_map, max_batch: 8,
+attn_implementation, sampling, revision}}``. ``model``
 is a folder, a Hugging Face id, or a model profile run in-process (``qwen3-vl-8b-transformers``,
 ``molmopoint-8b``: the profile's ``checkpoint`` and ``checkpoint_options`` are defaults under the
 pipeline's options). Needs ``torch`` (installed first, for the hardware) and ``povagent[local]``.
+
+A checkpoint's own Python code runs only when the command line or the Python call granted it
+(:mod:`povagent.config.remote_code`), never because an option or a profile says so; a folder is
+checked before ``transformers`` reads it (:mod:`povagent_plugins.backends.checkpoint_checks`).
 
 Requests take the one request path every backend takes (response cache, resume, concurrency,
 timeouts): the runner calls :meth:`TransformersBackend.complete` concurrently, and a batching
@@ -13,7 +17,8 @@ queue (:mod:`povagent_plugins.backends.local_batching`) groups the requests wait
 ``concurrency`` of at least ``max_batch``. Greedy decoding gives the same answers batched or
 one at a time (tested on the tiny checkpoints).
 
-One model per process: it is loaded once, in a worker thread (the event loop keeps running),
+One model per process: it is loaded once, in a daemon thread of its own (the event loop keeps
+running, and a stop never waits for a load that does not end),
 by :meth:`~TransformersBackend.start`; a second backend on the same checkpoint and settings
 shares it, one on another checkpoint meanwhile is refused; it is freed when the last backend
 using it closes. Running out of device memory is
@@ -34,14 +39,17 @@ import time
 from pathlib import Path
 from typing import Any, ClassVar, Literal, Mapping
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile, resolve_profile
+from povagent.config.remote_code import FROM_A_FILE, check_pinned_revision, needs_the_flag, remote_code_allowed
+from povagent.engine.daemon_threads import in_daemon_thread
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
 from povagent.interfaces import Backend, PermanentBackendError
+from povagent_plugins.backends.checkpoint_checks import check_checkpoint_folder
 from povagent_plugins.backends.local_batching import BatchQueue, LocalOutOfMemory
 from povagent_plugins.backends.local_checkpoint import checkpoint_fingerprint, checkpoint_folder, checkpoint_label
 from povagent_plugins.backends.local_model import (
@@ -68,6 +76,7 @@ class TransformersOptions(BaseModel):
     model: str = Field(min_length=1)
     dtype: Literal["auto", "float32", "bfloat16", "float16"] = "auto"
     device_map: str | dict[str, Any] | None = None
+    #: never true here: remote code is granted by the call, not an option (false is accepted)
     trust_remote_code: bool = False
     max_batch: int = Field(8, ge=1, le=256)
     attn_implementation: str | None = None
@@ -75,13 +84,20 @@ class TransformersOptions(BaseModel):
     sampling: Literal["greedy", "checkpoint"] = "greedy"
     revision: str | None = None
 
-    def load_settings(self) -> LoadSettings:
-        """What loading the checkpoint needs."""
+    @field_validator("trust_remote_code")
+    @classmethod
+    def _not_from_options(cls, value: bool) -> bool:
+        if value:
+            raise ValueError(FROM_A_FILE)
+        return value
+
+    def load_settings(self, remote_code: bool) -> LoadSettings:
+        """What loading the checkpoint needs (``remote_code``: granted by the call)."""
         return LoadSettings(
             model=self.model,
             dtype=self.dtype,
             device_map=self.device_map,
-            trust_remote_code=self.trust_remote_code,
+            trust_remote_code=remote_code,
             attn_implementation=self.attn_implementation,
             revision=self.revision,
         )
@@ -170,10 +186,25 @@ class TransformersBackend(Backend):
             raise _options_error(exc) from None
         _check_model_location(self.options.model)
         self.profile: ModelProfile | None = profile
+        #: whether the checkpoint's own code may run: granted by the call making this backend
+        self.remote_code = remote_code_allowed()
+        self._check_remote_code()
+        folder = checkpoint_folder(self.options.model, self.options.revision)
+        if folder is not None:  # a Hub id not downloaded yet is fetched and read by transformers
+            check_checkpoint_folder(folder)
         self._fingerprint: str | None = None
         self._local: LocalModel | None = None
         self._queue: BatchQueue[tuple[Request, ImageStore, Decoding], Generated] | None = None
         self._loading: asyncio.Task[None] | None = None
+
+    def _check_remote_code(self) -> None:
+        """A profile needing its checkpoint's code without the grant, or a granted Hub
+        checkpoint whose revision is a branch or a ref, is refused in one line."""
+        model, revision = self.options.model, self.options.revision
+        if self.remote_code:
+            check_pinned_revision(model, revision, hub_id=not Path(model).expanduser().is_dir())
+        elif self.profile is not None and self.profile.remote_code:
+            raise ConfigError(needs_the_flag(f"model profile {self.profile.name!r} ({model})", revision))
 
     @staticmethod
     def _profile_for(model: Any) -> ModelProfile | None:
@@ -208,12 +239,12 @@ class TransformersBackend(Backend):
             "dtype": o.dtype,
             "sampling": o.sampling,
             "attn_implementation": o.attn_implementation,
-            "trust_remote_code": o.trust_remote_code,
+            "trust_remote_code": self.remote_code,
         }
 
     # -- lifecycle ----------------------------------------------------------------------------
     async def start(self) -> None:
-        """Load the checkpoint (once per process) in a worker thread.
+        """Load the checkpoint (once per process) in a daemon thread.
 
         Every request that arrives while it loads waits on the same load and wakes with the
         others at once, so the first batch is as full as the later ones. A load that failed
@@ -227,7 +258,10 @@ class TransformersBackend(Backend):
 
     async def _load(self) -> None:
         try:
-            self._local = await asyncio.to_thread(_LoadedModel.acquire, self.options.load_settings())
+            # a daemon thread, not the default executor: a load that never ends (a checkpoint's
+            # own code, a file system that hangs) must not keep a stopped run from exiting
+            settings = self.options.load_settings(self.remote_code)
+            self._local = await in_daemon_thread(lambda: _LoadedModel.acquire(settings), "povagent-load-checkpoint")
         except ImportError as exc:
             raise PermanentBackendError(
                 f"the transformers backend needs torch and transformers ({exc}): install torch for your "
@@ -237,6 +271,9 @@ class TransformersBackend(Backend):
         except PermanentBackendError:
             raise
         except (OSError, ValueError) as exc:
+            if not self.remote_code and "trust_remote_code" in str(exc):  # transformers met an auto_map
+                reason = needs_the_flag(f"checkpoint {self.options.model}", self.options.revision)
+                raise PermanentBackendError(reason, kind="load_failed") from None
             raise PermanentBackendError(f"cannot load checkpoint {self.options.model}: {exc}", kind="load_failed") from None
         max_batch = 1 if reads_points(self._local.model) else self.options.max_batch
         self._queue = BatchQueue(self._run_batch, max_batch)

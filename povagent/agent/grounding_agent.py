@@ -73,6 +73,9 @@ class GroundingAgent:
     included. ``plane`` is the floor (normal pointing up) a pixel is back-projected onto when
     no depth image is given, and the floor the ``geometric`` solver stands objects on (default:
     AI2-THOR's ``y = 0``; a ROS robot passes ``Plane.horizontal(0.0, up_axis="z")``).
+    ``trust_remote_code=True`` lets a checkpoint's own Python code run (the ``transformers``
+    backend): only this call grants it, never a pipeline's options (see
+    :mod:`povagent.config.remote_code`).
     The agent holds a backend (with its connections): use it as a context manager, or call
     :meth:`close` / :meth:`aclose`.
     """
@@ -95,6 +98,7 @@ class GroundingAgent:
         depth_kind: Literal["z", "range"] = "z",
         pad_color: tuple[int, int, int] = DEFAULT_PAD_COLOR,
         ask_factory: AskFactory | None = None,
+        trust_remote_code: bool = False,
     ) -> None:
         if timeout_s <= 0:
             raise ValueError(f"timeout_s must be positive, got {timeout_s}")
@@ -115,7 +119,10 @@ class GroundingAgent:
             self.backend: Backend = backend
         else:
             assert host is not None  # a name, so the host was built above
-            self.backend = host.backend(backend, backend_options)
+            from povagent.config.remote_code import remote_code_granted
+
+            with remote_code_granted(trust_remote_code):
+                self.backend = host.backend(backend, backend_options)
         if isinstance(strategy, Strategy):
             self.strategy: Strategy = strategy
         else:

@@ -20,3 +20,13 @@ def keep_errors_option() -> Any:
         help="What to do with keys that failed in an earlier session (infra_error: no answer): keep their "
         "rows as they are, or try them again.",
     )
+
+
+def trust_remote_code_option() -> Any:
+    """``--trust-remote-code``: the one way a user lets a checkpoint's own Python code run."""
+    return typer.Option(
+        False,
+        "--trust-remote-code",
+        help="Let a checkpoint's own Python code run (the transformers backend; a YAML file cannot turn this on). "
+        "Only for checkpoints whose code you have read and trust: it runs with your rights.",
+    )

@@ -15,7 +15,7 @@ import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
-from povagent.cli.options import keep_errors_option, strict_option
+from povagent.cli.options import keep_errors_option, strict_option, trust_remote_code_option
 from povagent.results.summary_json import finite_json
 
 if TYPE_CHECKING:
@@ -106,6 +106,7 @@ def run_command(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Do not show the progress bar."),
     as_json: bool = typer.Option(False, "--json", help="Print the run summary as JSON instead of tables."),
     strict: bool = strict_option(),
+    trust_remote_code: bool = trust_remote_code_option(),
 ) -> None:
     """Run one pipeline and print its scores.
 
@@ -129,12 +130,13 @@ def run_command(
     try:
         with sigterm_as_interrupt() as stop:  # a scheduler's SIGTERM stops as cleanly as Ctrl-C
             result = run_pipeline(
-                config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True, retry_failed=not keep_errors
+                config, progress=make_progress(str(config.output), quiet=quiet or as_json), console_log=True,
+                retry_failed=not keep_errors, trust_remote_code=trust_remote_code,
             )
     except KeyboardInterrupt:
         typer.echo(
             f"{stop.what}: rows written so far are kept in {config.output} (summary.json says interrupted); "
-            f"run `povagent run {pipeline}` again to resume",
+            f"run `{_again(pipeline, trust_remote_code)}` again to resume",
             err=True,
         )
         raise typer.Exit(stop.exit_code) from None
@@ -176,8 +178,13 @@ def run_command(
         f"this session: {result.stats.requests} requests, {result.stats.cache_hits} cache hits, "
         f"{result.stats.retries} retries, {result.stats.wall_s:.1f} s"
     )
-    _say_what_next(result, f"povagent run {pipeline}")
+    _say_what_next(result, _again(pipeline, trust_remote_code))
     raise typer.Exit(result.exit_code)
+
+
+def _again(pipeline: Path, trust_remote_code: bool) -> str:
+    """The command that resumes a run (with the flag it was given: the grant is not stored)."""
+    return f"povagent run {pipeline}" + (" --trust-remote-code" if trust_remote_code else "")
 
 
 def _say_what_next(result: Any, command: str) -> None:
@@ -215,6 +222,7 @@ def sweep_command(
         help="Run each cell as a task on Dask: local:N starts N worker processes here, tcp://HOST:PORT "
         "uses a running scheduler (overrides the YAML's cluster: key; needs pip install 'povagent[cluster]').",
     ),
+    trust_remote_code: bool = trust_remote_code_option(),
 ) -> None:
     """Run every cell of a sweep: a grid of pipelines.
 
@@ -269,12 +277,13 @@ def sweep_command(
     try:
         with sigterm_as_interrupt() as stop:  # a scheduler's SIGTERM stops as cleanly as Ctrl-C
             result = run_sweep(sweep, quiet=quiet, retry_failed=not keep_errors, strict=strict, on_cell_done=done,
-                               cluster=cluster, notify=lambda message: typer.echo(message, err=True))
+                               cluster=cluster, notify=lambda message: typer.echo(message, err=True),
+                               trust_remote_code=trust_remote_code)
     except KeyboardInterrupt:
-        command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "")
+        command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "") + (" --trust-remote-code" if trust_remote_code else "")
         typer.echo(f"{stop.what}: finished rows are kept; run `{command}` again to resume", err=True)
         raise typer.Exit(stop.exit_code) from None
-    command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "")
+    command = f"povagent sweep {sweep}" + (f" --cluster {cluster}" if cluster else "") + (" --trust-remote-code" if trust_remote_code else "")
     for name, error in result.failed.items():
         typer.echo(f"cell {name} failed: {error}", err=True)
     if result.failed:

@@ -16,9 +16,10 @@ from typing import Any
 import typer
 
 from povagent.cli import app
+from povagent.cli.options import trust_remote_code_option
 
 
-def _agent(pipeline: Path | None, model: str | None, floor_height: float, timeout: float | None) -> Any:
+def _agent(pipeline: Path | None, model: str | None, floor_height: float, timeout: float | None, trust_remote_code: bool) -> Any:
     from povagent.agent import GroundingAgent
     from povagent.errors import ConfigError
     from povagent.geometry.goals import Plane
@@ -26,7 +27,7 @@ def _agent(pipeline: Path | None, model: str | None, floor_height: float, timeou
     if (pipeline is None) == (model is None):
         raise ConfigError("give --pipeline P.yaml or --model M (one of them)")
     plane = Plane.horizontal(floor_height, up_axis="z")
-    extra: dict[str, Any] = {"plane": plane}
+    extra: dict[str, Any] = {"plane": plane, "trust_remote_code": trust_remote_code}
     if timeout is not None:
         extra["timeout_s"] = timeout
     if pipeline is not None:
@@ -41,6 +42,7 @@ def ros_node_command(
     model: str = typer.Option(None, "--model", metavar="M", help="A litellm model string or profile name (basic strategy)."),
     floor_height: float = typer.Option(0.0, "--floor-height", metavar="Z", help="Height of the floor in the map frame (metres; the map is z-up)."),
     timeout: float = typer.Option(None, "--timeout", metavar="S", help="Seconds for one command, retries included (default: the pipeline's)."),
+    trust_remote_code: bool = trust_remote_code_option(),
 ) -> None:
     """Run the grounding agent as a ROS 2 node until Ctrl-C.
 
@@ -53,7 +55,7 @@ def ros_node_command(
 
     rclpy = require_rclpy("ros-node")
     typer.echo(discovery_summary(), err=True)
-    agent = _agent(pipeline, model, floor_height, timeout)
+    agent = _agent(pipeline, model, floor_height, timeout, trust_remote_code)
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
     from povagent.ros.node import GroundingNode
@@ -107,6 +109,7 @@ def ros_replay_command(
     timeout: float = typer.Option(None, "--timeout", metavar="S", help="Seconds for the command, retries included."),
     as_json: bool = typer.Option(False, "--json", help="Print the ~/result JSON instead of a table."),
     save_memory: Path = typer.Option(None, "--save-memory", metavar="DIR", help="Write the keyframe memory (frames, poses, intrinsics) to DIR."),
+    trust_remote_code: bool = trust_remote_code_option(),
 ) -> None:
     """Answer one command over a recorded ROS 2 bag.
 
@@ -126,7 +129,7 @@ def ros_replay_command(
         check_memory_folder(save_memory)  # before the bag is read: a folder we may not write is one line at once
     settings = MemorySettings(min_translation, min_rotation, max_frames)
     topics = ReplayTopics(image=image_topic, camera_info=camera_info_topic, depth=depth_topic, odom=odom_topic)
-    agent = _agent(pipeline, model, floor_height, timeout)
+    agent = _agent(pipeline, model, floor_height, timeout, trust_remote_code)
     with agent:
         session = GroundingSession(agent_locate(agent), map_frame=map_frame, settings=settings)
         read = replay_bag(bag, session, topics)

@@ -12,12 +12,14 @@ anything: it only asks the plugin host what is registered.
 
 from __future__ import annotations
 
+import math
 from typing import Any, Mapping
 
 from povagent.config.models import ComponentSpec, PipelineConfig
 from povagent.config.plugin_rule import allowed_plugins
 from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
+from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
@@ -40,6 +42,7 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         check("backend", config.backend.name, ("backend", "name") if ("backend", "name") in source.lines else ("backend",))
         check_profile_option(config.backend, host, source, prefix, problems)
         check_env_options(config.backend.options, ("backend", "options"), source, prefix, problems)
+        check_remote_code_options(config.backend.options, ("backend", "options"), source, prefix, problems)
     check("strategy", config.strategy.name, ("strategy", "name") if ("strategy", "name") in source.lines else ("strategy",))
     if config.parser is not None:
         check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
@@ -48,6 +51,8 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     if config.dataset.generate is not None:
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
+    for loc, options in component_options(config):
+        check_finite_options(options, loc, source, prefix, problems)
     if problems:
         raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
 
@@ -66,6 +71,33 @@ def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc,
                         problems.append(f"{source.where(prefix + here + (k,))}: {dotted(here + (k,))}: {ENV_NAME_WANTED}")
                 else:
                     stack.append((here + (k,), v))
+        elif isinstance(value, list):
+            stack.extend((here + (i,), v) for i, v in enumerate(value))
+
+
+def component_options(config: PipelineConfig) -> list[tuple[Loc, Any]]:
+    """Each named component's ``options`` with where they are in the pipeline."""
+    found: list[tuple[Loc, Any]] = [(("strategy", "options"), config.strategy.options)]
+    if config.backend is not None:
+        found.append((("backend", "options"), config.backend.options))
+    if config.parser is not None:
+        found.append((("parser", "options"), config.parser.options))
+    found += [(("scorers", i, "options"), s.options) for i, s in enumerate(config.scorers)]
+    if config.dataset.generate is not None:
+        found.append((("dataset", "generate", "judge", "options"), config.dataset.generate.judge.options))
+    return found
+
+
+def check_finite_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """Every number among a component's options is finite: ``.nan`` or ``.inf`` (YAML's spellings)
+    as a temperature or a limit is refused at its line, not met by every request in turn."""
+    stack: list[tuple[Loc, Any]] = [(loc, options)]
+    while stack:
+        here, value = stack.pop()
+        if isinstance(value, float) and not math.isfinite(value):
+            problems.append(f"{source.where(prefix + here)}: {dotted(here)}: {value} is not a finite number; give a number")
+        elif isinstance(value, Mapping):
+            stack.extend((here + (k,), v) for k, v in value.items())
         elif isinstance(value, list):
             stack.extend((here + (i,), v) for i, v in enumerate(value))
 

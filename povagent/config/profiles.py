@@ -17,6 +17,7 @@ from typing import Any, Iterable, Mapping
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from povagent.config.remote_code import REMOTE_CODE_FLAG, REMOTE_CODE_OPTION, is_commit_hash
 from povagent.dataset.models import CONDITIONS, Condition
 
 
@@ -33,9 +34,12 @@ class ModelProfile(BaseModel):
     ``backend`` is the backend ``model: <name>`` runs the profile with: ``litellm`` (a server or
     a provider, the default) or ``transformers`` (in-process). ``checkpoint`` is the Hugging
     Face id or folder the in-process backend loads, and ``checkpoint_options`` that backend's
-    defaults (``trust_remote_code``, ``dtype``...), kept apart from ``backend_options`` because
+    defaults (``dtype``, ``revision``...), kept apart from ``backend_options`` because
     the same profile may still be served behind an OpenAI-compatible server through litellm
-    (``litellm_model``), whose options differ.
+    (``litellm_model``), whose options differ. ``remote_code`` says the checkpoint needs its own
+    Python code: a profile never grants it (no ``trust_remote_code`` among its options); the
+    user does, with ``--trust-remote-code`` (see :mod:`povagent.config.remote_code`), and a
+    ``revision`` it pins is a commit hash.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -49,6 +53,7 @@ class ModelProfile(BaseModel):
     backend: str = Field("litellm", min_length=1)
     checkpoint: str | None = Field(None, min_length=1)
     checkpoint_options: dict[str, Any] = Field(default_factory=dict)
+    remote_code: bool = False
     api_key_env: str | None = None
     conditions: tuple[Condition, ...] = CONDITIONS
     paper_name: str | None = None
@@ -65,6 +70,15 @@ class ModelProfile(BaseModel):
     def _in_process_needs_a_checkpoint(self) -> ModelProfile:
         if self.backend == "transformers" and self.checkpoint is None:
             raise ValueError("a profile run in-process (backend: transformers) needs a checkpoint (a Hugging Face id or folder)")
+        return self
+
+    @model_validator(mode="after")
+    def _never_grants_remote_code(self) -> ModelProfile:
+        if REMOTE_CODE_OPTION in self.checkpoint_options or REMOTE_CODE_OPTION in self.backend_options:
+            raise ValueError(f"a profile cannot grant {REMOTE_CODE_OPTION}; set remote_code: true (the user passes {REMOTE_CODE_FLAG})")
+        revision = self.checkpoint_options.get("revision")
+        if self.remote_code and revision is not None and not is_commit_hash(revision):
+            raise ValueError(f"a profile needing remote code pins its revision to a commit hash, not {revision!r}")
         return self
 
     def supports(self, condition: Condition | str) -> bool:

@@ -22,7 +22,8 @@ from typing import Any, Iterable
 import yaml
 
 from povagent.config.quoting import Loc, cut, dotted, shown
-from povagent.errors import ConfigError
+from povagent.errors import ConfigError, ReadTargetError
+from povagent.run.confined_read import read_regular
 
 #: Largest config file read (a pipeline is a few hundred bytes; a sweep with routers a few KiB).
 MAX_CONFIG_BYTES = 1024 * 1024
@@ -190,12 +191,10 @@ def read_yaml(path: str | os.PathLike[str]) -> ConfigSource:
     try:
         if p.is_dir():
             raise ConfigError(f"{p}: is a folder, not a YAML file")
-        size = p.stat().st_size
-        if size > MAX_CONFIG_BYTES:
-            raise ConfigError(
-                f"{p}: {size / 1048576:.1f} MiB; a config is at most {MAX_CONFIG_BYTES // 1048576} MiB (is this the right file?)"
-            )
-        raw = p.read_bytes()
+        # a pipe or a device is refused, not waited on (a run folder's config.yaml is anyone's)
+        raw = read_regular(p, MAX_CONFIG_BYTES, what="config")
+    except ReadTargetError as exc:
+        raise ConfigError(f"{exc} (is this the right file?)") from None
     except FileNotFoundError:
         raise ConfigError(f"{p}: file not found") from None
     except OSError as exc:

@@ -25,6 +25,8 @@ from pathlib import Path
 from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.paths import shown
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: Larger images are refused before anything decodes them (Pillow's own bomb limit).
@@ -121,12 +123,21 @@ def decode_fully(path: Path) -> None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
-            with Image.open(path) as im:
+            with Image.open(io.BytesIO(_read_image(path))) as im:
                 im.load()
     except UnidentifiedImageError:
         raise ImageFileError("cannot be decoded: not an image file") from None
     except (OSError, SyntaxError, ValueError, EOFError, Image.DecompressionBombWarning, Image.DecompressionBombError) as exc:
         raise ImageFileError(f"cannot be decoded ({type(exc).__name__}: {str(exc)[:200]})") from None
+
+
+def _read_image(path: Path) -> bytes:
+    """The bytes of an image file: a regular file within the image bound, or ImageFileError (a
+    pipe or a device there is never waited on or read from)."""
+    try:
+        return read_regular(path, MAX_IMAGE_FILE_BYTES, what="image file")
+    except ReadTargetError as exc:
+        raise ImageFileError(exc.reason.removeprefix("image file ")) from None
 
 
 # -- files, checked once ----------------------------------------------------------------------
@@ -148,11 +159,9 @@ def inspect_image_file(path: Path) -> ImageFacts:
         verdict = _verdicts.get(key)
     if verdict is None:
         try:
-            verdict = check_image_bytes(Path(path).read_bytes())
+            verdict = check_image_bytes(_read_image(path))
         except ImageFileError as exc:
             verdict = str(exc)
-        except IsADirectoryError:
-            verdict = "is a folder, not an image file"
         except OSError as exc:
             verdict = f"cannot be read: {exc.strerror or exc}"
         with _lock:

@@ -3,8 +3,9 @@
 What it is for: loading (:mod:`povagent.dataset.loader`) and ``povagent validate``
 (:mod:`povagent.dataset.validate`) read a dataset's JSON files through
 :func:`read_dataset_json`, so both refuse the same files for the same reasons in the same
-words: a file leading outside the dataset (never opened), a missing or unreadable one, bytes
-that are not UTF-8, text that is not JSON or nests too deeply, and strings that are not text
+words: a file leading outside the dataset (never opened), a missing or unreadable one, one that
+is not a regular file or is too large (a pipe, a device: refused, never waited on:
+:mod:`povagent.run.confined_read`), bytes that are not UTF-8, text that is not JSON or nests too deeply, and strings that are not text
 (a lone surrogate such as ``"\\ud800"``, which no results, report or export file can hold:
 :func:`~povagent.dataset.problems.not_text_problems`). Each refusal is a :class:`Problem`
 naming the file (and, for a string, its JSON path), and the file reads as ``None``. What it
@@ -19,6 +20,8 @@ from typing import Any
 
 from povagent.dataset.paths import is_inside
 from povagent.dataset.problems import Problem, not_text_problems
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 
 def read_dataset_json(path: Path, rel: str, real_root: Path, problems: list[Problem]) -> Any:
@@ -29,7 +32,10 @@ def read_dataset_json(path: Path, rel: str, real_root: Path, problems: list[Prob
         problems.append(Problem(rel, "$", "leads outside the dataset folder (a symlink); not opened"))
         return None
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_regular(path, MAX_DOCUMENT_BYTES, what="dataset file").decode("utf-8")
+    except ReadTargetError as exc:  # a pipe, a device, a folder or a huge file: never waited on
+        problems.append(Problem(rel, "$", exc.reason))
+        return None
     except FileNotFoundError:
         problems.append(Problem(rel, "$", "file is missing"))
         return None

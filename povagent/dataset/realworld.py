@@ -41,6 +41,7 @@ condition``. This module must not call models or score; the ``success`` scorer p
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import tempfile
@@ -56,9 +57,10 @@ from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.dataset.paths import dataset_root, is_inside
 from povagent.dataset.problems import Problem, not_text_problems
-from povagent.errors import ConfigError, DatasetError
+from povagent.errors import ConfigError, DatasetError, ReadTargetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.scoring.breakdown import slices
 
 #: Built-in scorers that project a 3D target, which a real-world set does not have.
@@ -171,7 +173,7 @@ def read_realworld(root: str | Path) -> RealWorldSet:
     root = Path(root)
     index = root / INDEX_FILE
     try:
-        data = json.loads(index.read_text(encoding="utf-8"))
+        data = json.loads(read_regular(index, MAX_DOCUMENT_BYTES, what="real-world index").decode("utf-8"))
     except FileNotFoundError:
         raise DatasetError(f"{index}: not found (a real-world set is a folder holding {INDEX_FILE})") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -264,10 +266,12 @@ def _image_problem(root: Path, rel: str, where: str) -> list[str]:
     if not is_inside(dataset_root(root), path):  # a symlink leading out: never opened
         return [f"{where}: {rel!r} leads outside the set's folder (a symlink); not opened"]
     try:
-        with Image.open(path) as im:
+        with Image.open(io.BytesIO(read_regular(path, MAX_IMAGE_FILE_BYTES, what="image"))) as im:
             im.verify()
     except FileNotFoundError:
         return [f"{where}: image {rel} not found"]
+    except ReadTargetError as exc:
+        return [f"{where}: image {rel}: {exc.reason}; not read"]
     except (UnidentifiedImageError, OSError, SyntaxError) as exc:
         return [f"{where}: image {rel} cannot be read: {exc}"]
     return []
@@ -401,7 +405,7 @@ def load_realworld(root: str | Path, cache_dir: str | Path | None = None) -> Rea
 def _letterboxed_copy(root: Path, rel: str, cache: Path) -> tuple[Path, Letterbox]:
     """The 512x512 letterboxed copy of ``root/rel`` in ``cache`` (made once), and its transform."""
     src = root / rel
-    with Image.open(src) as im:
+    with Image.open(io.BytesIO(read_regular(src, MAX_IMAGE_FILE_BYTES, what="image"))) as im:
         im.load()
         box = Letterbox.for_size(*im.size)
         if box.is_identity and im.format == "PNG" and im.mode == "RGB":

@@ -46,6 +46,8 @@ from collections.abc import Callable, Iterator
 from types import ModuleType
 from typing import TypeVar
 
+from povagent.engine.daemon_threads import in_daemon_thread as daemon_thread_future
+
 _T = TypeVar("_T")
 
 #: How long an import of litellm may take before it counts as failed (seconds). A healthy
@@ -183,34 +185,11 @@ async def warm_up_litellm_async(model: str) -> None:
 async def in_daemon_thread(fn: Callable[[], _T], name: str) -> _T:
     """Run ``fn`` in a new daemon thread and wait for it at most :func:`import_deadline_s`.
 
-    Not the loop's default executor: its threads are joined when the loop shuts down and when
-    the interpreter exits, so one stuck in an import would hold a cancelled run forever."""
-    loop = asyncio.get_running_loop()
-    future: asyncio.Future[_T] = loop.create_future()
-
-    def settle(ok: bool, value: object) -> None:
-        if future.done():  # cancelled or timed out meanwhile
-            return
-        if ok:
-            future.set_result(value)  # type: ignore[arg-type]  # fn's own result
-        else:
-            future.set_exception(value)  # type: ignore[arg-type]  # the exception fn raised
-
-    def work() -> None:
-        try:
-            result: object = fn()
-            ok = True
-        except BaseException as exc:  # handed to the waiting task, not lost in this thread
-            result, ok = exc, False
-        try:
-            loop.call_soon_threadsafe(settle, ok, result)
-        except RuntimeError:  # the loop has closed: nobody waits any more
-            pass
-
-    threading.Thread(target=work, name=name, daemon=True).start()
+    Not the loop's default executor (see :mod:`povagent.engine.daemon_threads`): one stuck in an
+    import would hold a cancelled run forever."""
     deadline = import_deadline_s()
     try:
-        return await asyncio.wait_for(future, deadline)
+        return await asyncio.wait_for(daemon_thread_future(fn, name), deadline)
     except TimeoutError:
         reason = _remember_failure(TimeoutError(f"still importing after {deadline:g} s"))
         raise LiteLLMUnavailable(reason) from None

@@ -28,8 +28,6 @@ import base64
 import functools
 import hashlib
 import io
-import os
-import stat
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -39,7 +37,8 @@ from typing import Callable, Iterable, Protocol, cast
 from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.image_files import ImageFileError, check_image_bytes
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, ReadTargetError
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
@@ -277,17 +276,13 @@ class ImageStore:
 
     # -- internals ----------------------------------------------------------------------------
     def _read_file(self, path: Path, size: int | None = None) -> bytes:
-        """The bytes of a regular file (``size``: exactly that many are expected, no more read).
-
-        Opened without blocking (a FIFO or a device planted where a frame was would otherwise
-        wait or stream forever), and refused unless it is a regular file.
-        """
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-        with os.fdopen(fd, "rb") as fh:
-            st = os.fstat(fd)
-            if not stat.S_ISREG(st.st_mode):
-                raise DatasetError(f"{path}: image is not a regular file (a device, a pipe or a folder); not read")
-            data = fh.read(size + 1) if size is not None else fh.read()
+        """The bytes of a regular file, through the confined reader (a FIFO or a device planted
+        where a frame was is refused at once, never waited on or streamed); ``size``: exactly
+        that many are expected (a file grown since is told apart by the caller)."""
+        try:
+            data = read_regular(path, MAX_IMAGE_FILE_BYTES, what="image")
+        except ReadTargetError as exc:
+            raise DatasetError(str(exc)) from None
         with self._lock:
             self.stats.file_reads += 1
         return data

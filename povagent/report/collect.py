@@ -25,11 +25,13 @@ from typing import Any, Callable, Iterable
 
 import yaml
 
+from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, read_rows
 from povagent.results.transcript import transcripts
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -184,7 +186,7 @@ def _read_config(folder: Path) -> dict[str, Any]:
     if not path.exists():
         return {}
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.safe_load(read_regular(path, MAX_CONFIG_BYTES, what="run config").decode("utf-8"))
     except yaml.YAMLError as exc:
         raise PredictionsError(f"{path}: not valid YAML ({exc})") from exc
     return data if isinstance(data, dict) else {}
@@ -296,7 +298,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     index_path = root / SWEEP_INDEX
     if index_path.exists():
         try:
-            index = json.loads(index_path.read_text(encoding="utf-8"))
+            index = json.loads(read_regular(index_path, MAX_DOCUMENT_BYTES, what="sweep index"))
         except json.JSONDecodeError as exc:
             raise PredictionsError(f"{index_path}: not valid JSON ({exc.msg} at line {exc.lineno})") from exc
         for i, cell in enumerate(_cells_of_index(index)):

@@ -52,11 +52,13 @@ from typing import Any, Iterable, Mapping
 from PIL import Image
 
 from povagent.dataset.realworld import RealWorldInstance
+from povagent.errors import ReadTargetError
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
-from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, render
+from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
@@ -102,7 +104,7 @@ class _SourceHashes:
         with self.lock:
             h = self.known.get(path)
         if h is None:
-            h = hashlib.sha256(path.read_bytes()).hexdigest()
+            h = hashlib.sha256(read_regular(path, MAX_IMAGE_FILE_BYTES, what="image")).hexdigest()
             with self.lock:
                 self.known[path] = h
         return h
@@ -174,7 +176,7 @@ def write_strip(strip: Strip, images_dir: Path, key: str) -> bool:
     tw, th = strip.tile
     sheet = Image.new("RGB", (tw * len(strip.sources), th), (34, 34, 34))
     for i, source in enumerate(strip.sources):
-        with Image.open(source) as src:
+        with open_frame(source) as src:
             src.draft("RGB", (tw, th))  # JPEG sources decode at a fraction of their size
             sheet.paste(src.convert("RGB").resize((tw, th), Image.Resampling.BILINEAR), (i * tw, 0))
     _save_jpeg(sheet, path, 72)
@@ -223,8 +225,8 @@ class _StripBook:
         if strip not in self.by_strip:
             try:
                 key = strip.key(self.hashes)
-            except OSError:
-                return {}  # a frame cannot be read: no strip (the card says why its image is missing)
+            except (OSError, ReadTargetError):
+                return {}  # a frame cannot be read (or is a pipe): no strip (the card says why its image is missing)
             self.by_strip[strip] = len(self.stats.strips)
             self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
             self.jobs[key] = strip
@@ -239,13 +241,13 @@ class _StripBook:
         rendered, as one more strip (``{}``: none rendered, or one cannot be read)."""
         if active is None or not active.views or not all(p.exists() for p in active.views):
             return {}
-        with Image.open(active.views[0]) as first:
+        with open_frame(active.views[0]) as first:
             w, h = first.size
         strip = Strip(active.views, (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
         if strip not in self.by_strip:
             try:
                 key = strip.key(self.hashes)
-            except OSError:
+            except (OSError, ReadTargetError):
                 return {}
             self.by_strip[strip] = len(self.stats.strips)
             self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
@@ -349,7 +351,7 @@ def build_gallery(
             try:
                 key = image_key(drawing, hashes)
                 jobs.setdefault(key, drawing)
-            except OSError as exc:  # the source cannot even be read
+            except (OSError, ReadTargetError) as exc:  # the source cannot even be read (or is a pipe)
                 key = "unreadable:" + str(drawing.source)
                 unreadable[key] = image_error(drawing.source, exc, root)
         else:

@@ -9,11 +9,15 @@ and caching the files and the page's data are :mod:`povagent.report.gallery`'s j
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from PIL import Image, ImageDraw, UnidentifiedImageError
+
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Bumped when the drawing changes, so cached images are redrawn.
 RECIPE_VERSION = 3
@@ -120,7 +124,7 @@ def _off_frame_arrow(d: ImageDraw.ImageDraw, gx: float, gy: float, w: int, h: in
 
 def render(drawing: Drawing) -> Image.Image:
     """The frame with its markers drawn (full size, RGB)."""
-    with Image.open(drawing.source) as src:
+    with open_frame(drawing.source) as src:
         im = src.convert("RGB")
     w, h = im.size
     scale = max(1.0, w / 512.0)
@@ -150,7 +154,13 @@ def render(drawing: Drawing) -> Image.Image:
 
 #: What reading or decoding a bad source image raises (Pillow: OSError for truncated or
 #: unidentified files, SyntaxError/ValueError/EOFError from some decoders, the bomb error).
-IMAGE_ERRORS = (OSError, SyntaxError, ValueError, EOFError, Image.DecompressionBombError)
+IMAGE_ERRORS = (OSError, SyntaxError, ValueError, EOFError, Image.DecompressionBombError, ReadTargetError)
+
+
+def open_frame(path: Path) -> Image.Image:
+    """A source image the report draws from (a dataset's frame, an episode's view), read through
+    the confined reader: a pipe or a device there is one of :data:`IMAGE_ERRORS`, never a wait."""
+    return Image.open(io.BytesIO(read_regular(path, MAX_IMAGE_FILE_BYTES, what="image")))
 
 
 def image_error(source: Path, exc: BaseException, root: Path | None = None) -> str:

@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
 from povagent.results.output_check import check_output_text
+from povagent.run.confined_read import open_regular
 
 
 class RowStatus(StrEnum):
@@ -250,6 +251,10 @@ class StagedResults:
         self._folder.close()
 
 
+#: The longest line a results file may hold (rows of earlier versions reached hundreds of MiB).
+MAX_LINE_BYTES = 512 << 20
+
+
 def iter_rows(path: str | Path) -> Iterator[ResultRow]:
     """Rows of a results file, in file order.
 
@@ -263,8 +268,12 @@ def iter_rows(path: str | Path) -> Iterator[ResultRow]:
     p = Path(path)
     if not p.exists():
         return
-    with open(p, "rb") as fh:
-        for number, line in enumerate(fh, start=1):
+    # a pipe or a device planted as the journal is refused, not waited on or read forever;
+    # a line is read with its bound, so a file of one endless line cannot fill memory
+    with open_regular(p, what="results file") as fh:
+        for number, line in enumerate(iter(lambda: fh.readline(MAX_LINE_BYTES + 1), b""), start=1):
+            if len(line) > MAX_LINE_BYTES:
+                raise PredictionsError(f"{p}: line {number}: longer than {MAX_LINE_BYTES >> 20} MiB, which no row is; move the line out of the file")
             if not line.endswith(b"\n"):
                 return  # torn: only the last line can lack its newline
             if not line.strip():

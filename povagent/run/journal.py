@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Callable
 
 from povagent.results.rows import ResultRow, ResultsWriter, row_line
+from povagent.run.confined_read import open_regular
 from povagent.run.confined_write import ConfinedFolder
 
 
@@ -112,7 +113,7 @@ def drop_rows(results: Path, keys: set[str]) -> None:
     """
     # Bytes, not text: a torn tail may end inside a character, and every kept line is copied as is.
     # Staged beside and renamed over ``results``: a link planted at either name is never followed.
-    with open(results, "rb") as src, ConfinedFolder(results.parent) as folder, folder.staged(results.name, encoding=None) as staged:
+    with open_regular(results, what="results file") as src, ConfinedFolder(results.parent) as folder, folder.staged(results.name, encoding=None) as staged:
         dst = staged.file
         for line in src:
             if not line.endswith(b"\n"):

@@ -44,6 +44,7 @@ from povagent.results.official_reading import (
     read_officially,
 )
 from povagent.results.rows import Prediction, ResultRow, RowStatus, StagedResults, read_rows
+from povagent.run.confined_read import check_regular
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.run_folder import read_run_config
 from povagent.run.summary import diagnosed_row, write_summary
@@ -182,8 +183,9 @@ def rescore_run(
     """
     run = Path(run_dir)
     results = run / "results.jsonl"
-    if not results.is_file():
+    if not results.exists():
         raise PredictionsError(f"{results}: not found (is {run} a run folder?)")
+    check_regular(results, what="results file")  # a pipe or a device planted there: one line
     config = read_run_config(run)
     host = host or get_plugin_host(tuple(plugins))
     # the parser is named on the command line (the host says if it is unknown); the run's

@@ -29,7 +29,8 @@ from typing import Any, Literal
 from povagent.config.models import PipelineConfig
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import read_yaml
-from povagent.errors import ConfigError
+from povagent.errors import ConfigError, ReadTargetError
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
 from povagent.run.confined_write import ConfinedFolder, write_inside
 
 #: The marker file of a folder povagent made, and the format version it holds.
@@ -87,6 +88,10 @@ def _writable(folder: Path) -> None:
         confined.unlink(f"{MARKER}.probe")
 
 
+#: A marker is a line of JSON.
+MAX_MARKER_BYTES = 4096
+
+
 def _write_marker(folder: Path, kind: Kind) -> None:
     write_inside(folder, MARKER, json.dumps({"format": MARKER_FORMAT, "kind": kind}) + "\n")
 
@@ -96,8 +101,8 @@ def _read_marker(folder: Path) -> dict[str, Any] | None:
     if not path.is_file():
         return None
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        data = json.loads(read_regular(path, MAX_MARKER_BYTES, what="run folder marker"))
+    except (OSError, ValueError, ReadTargetError):
         data = None
     if not isinstance(data, dict) or not isinstance(data.get("format"), int):
         raise ConfigError(f"{path}: not a povagent marker (expected {{\"format\": {MARKER_FORMAT}, \"kind\": ...}}); choose another output folder")
@@ -120,7 +125,7 @@ def _an_earlier_run_folder(folder: Path) -> bool:
         return False
     try:
         read_run_config(folder)
-        with results.open("rb") as fh:
+        with open_regular(results, what="results file") as fh:
             first = fh.readline(1024 * 1024)
         if first.strip():
             ResultRow.model_validate_json(first)
@@ -133,10 +138,10 @@ def _an_earlier_sweep_folder(folder: Path) -> bool:
     """``sweep.json`` is our cell index: ``cells``, each with ``name`` and ``run_dir``."""
     index = folder / "sweep.json"
     try:
-        if not index.is_file() or index.stat().st_size > 64 * 1024 * 1024:
+        if not index.is_file():
             return False
-        data = json.loads(index.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        data = json.loads(read_regular(index, MAX_DOCUMENT_BYTES, what="sweep index"))
+    except (OSError, ValueError, ReadTargetError):
         return False
     cells = data.get("cells") if isinstance(data, dict) else None
     return isinstance(cells, list) and all(isinstance(c, dict) and "name" in c and "run_dir" in c for c in cells)

@@ -35,6 +35,7 @@ from typing import Any
 
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
+from povagent.config.remote_code import remote_code_granted
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
@@ -72,7 +73,7 @@ EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys w
 
 #: Failure kinds of the first key that stop a run before it fans out: no other key can get
 #: past them until the user changes something.
-FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import"})
+FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import", "load_failed"})
 #: Fail-fast kinds found before anything was sent (an unset key variable, a model client that
 #: cannot be imported): the command says so in one line, so the run logs them to its file only,
 #: not as console warnings above that line.
@@ -168,8 +169,12 @@ class PipelineRun:
         progress: RunProgress | None = None,
         console_log: bool = False,
         retry_failed: bool = True,
+        trust_remote_code: bool = False,
     ) -> None:
         self.config = config
+        #: the caller's grant of a checkpoint's own code (never the config's: see
+        #: :mod:`povagent.config.remote_code`)
+        self.trust_remote_code = trust_remote_code
         self.host = host or get_plugin_host(config.plugins)
         self.dataset = dataset
         self.images = images or ImageStore(max_bytes=config.images.max_mb * 1024 * 1024)
@@ -279,7 +284,8 @@ class PipelineRun:
         config = self.config
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
-        self.components = create_components(config, self.host)
+        with remote_code_granted(self.trust_remote_code):
+            self.components = create_components(config, self.host)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
         dumped = options.model_dump() if hasattr(options, "model_dump") else options

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from povagent.config.models import PipelineConfig
+from povagent.config.remote_code import remote_code_granted
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
@@ -102,6 +103,7 @@ def run_sweep(
     cluster: Any = None,
     progress: RunProgress | None = None,
     notify: Callable[[str], None] | None = None,
+    trust_remote_code: bool = False,
 ) -> SweepResult:
     """Run every cell of a sweep in turn, sharing one response cache and one image store.
 
@@ -113,6 +115,9 @@ def run_sweep(
     hears the dashboard's address and what the storage check found, and a cell that raises is
     recorded in :attr:`SweepResult.failed` while the others finish. Without a cluster Dask is
     never imported.
+
+    ``trust_remote_code``: the cells' checkpoints may run their own code (the caller's grant;
+    a sweep YAML cannot give it, see :mod:`povagent.config.remote_code`).
     """
     sweep, cells = expand_sweep(path, strict=strict)
     models: dict[str, tuple[str, str | None]] = {}
@@ -121,7 +126,8 @@ def run_sweep(
     for cell in cells:
         # Every cell's plugin options (and image transport) are checked before the first
         # request of the first cell.
-        backend = create_components(cell.config, get_plugin_host(cell.config.plugins)).backend
+        with remote_code_granted(trust_remote_code):
+            backend = create_components(cell.config, get_plugin_host(cell.config.plugins)).backend
         backend.check_image_transport(cell.config.images.transport)
         models[cell.name] = answering_model(backend)
     output = Path(sweep.output)
@@ -134,6 +140,7 @@ def run_sweep(
     _write_index(output, str(path), cells, status, models)
     if cluster is not None:
         _run_on_cluster(cluster, str(path), result, status, models, retry_failed=retry_failed, on_cell_done=on_cell_done,
+                        trust_remote_code=trust_remote_code,
                         progress=progress or make_progress(f"sweep on {cluster}", quiet=quiet), notify=notify or (lambda _: None))
         return result
 
@@ -159,6 +166,7 @@ def run_sweep(
                         cache=cache,
                         progress=make_progress(cell.name, quiet=quiet),
                         retry_failed=retry_failed,
+                        trust_remote_code=trust_remote_code,
                     )
                     res = await run.run()
                 except BaseException:
@@ -219,7 +227,9 @@ def _shared(sweep_id: str, config: PipelineConfig) -> tuple[dict[Any, Evaluation
     return _SHARED[key]
 
 
-def run_cell(config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str | None = None) -> RunResult:
+def run_cell(
+    config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str | None = None, trust_remote_code: bool = False
+) -> RunResult:
     """One sweep cell, start to end or from where its journal stopped: a cluster's unit of work.
 
     Plain and idempotent: the rows go through the cell's journal under its folder lock, so a
@@ -236,7 +246,7 @@ def run_cell(config: PipelineConfig, *, retry_failed: bool = True, sweep_id: str
     datasets, images = _shared(sweep_id, config) if sweep_id is not None else ({}, None)
     try:
         run = PipelineRun(config, dataset=ensure_dataset(config, datasets), images=images, cache=cache,
-                          progress=QuietProgress(), retry_failed=retry_failed)
+                          progress=QuietProgress(), retry_failed=retry_failed, trust_remote_code=trust_remote_code)
         return asyncio.run(run.run())
     finally:
         if cache is not None:
@@ -302,6 +312,7 @@ def _run_on_cluster(
     on_cell_done: Callable[[Cell, RunResult], None] | None,
     progress: RunProgress,
     notify: Callable[[str], None],
+    trust_remote_code: bool = False,
 ) -> None:
     """Every cell as a task on ``cluster``; ``sweep.json``, progress and the cache stay here."""
     from povagent.cluster.sweep import CellTask, run_cell_tasks  # the one room that knows Dask
@@ -325,7 +336,8 @@ def _run_on_cluster(
         plan = plan_keys(config, select_instances(dataset, config), retry_failed=retry_failed)
         watch.watch(config.output, plan.wanted, plan.done)
         total, done = total + plan.n_total, done + len(plan.done)
-        tasks.append(CellTask(cell.name, functools.partial(run_cell, config, retry_failed=retry_failed, sweep_id=sweep_id), dataset.root))
+        tasks.append(CellTask(cell.name, functools.partial(
+            run_cell, config, retry_failed=retry_failed, sweep_id=sweep_id, trust_remote_code=trust_remote_code), dataset.root))
     main_cache = cells[0].config.cache_path()
     _merge_cell_caches(main_cache, cells, notify)  # shards an interrupted sweep left behind
 

@@ -33,8 +33,10 @@ from typing import Any
 import numpy as np
 
 from povagent.dataset.paths import dataset_root, is_inside
+from povagent.errors import ReadTargetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, target_point
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.official import GroundTruthInFrame, project_ground_truth
 
 #: The official scorer's defaults for a camera field a record lacks.
@@ -165,8 +167,8 @@ class OfficialRelease:
             self.warnings.append(f"{path}: leads outside the dataset folder; not opened (no frame of {house_id} is known)")
             return {}
         try:
-            records = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+            records = json.loads(read_regular(path, MAX_DOCUMENT_BYTES, what="exploration log").decode("utf-8"))
+        except (OSError, ReadTargetError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
             self.warnings.append(f"{path}: unreadable ({exc}); no frame of {house_id} is known (the official scorer stops here)")
             return {}
         if not isinstance(records, list):
@@ -259,8 +261,8 @@ def read_release(root: str | Path) -> OfficialRelease:
             release.warnings.append(f"{path}: leads outside the dataset folder; not opened")
             continue
         try:
-            entries = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+            entries = json.loads(read_regular(path, MAX_DOCUMENT_BYTES, what="house file").decode("utf-8"))
+        except (OSError, ReadTargetError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
             release.warnings.append(f"{path.name}: unreadable ({exc}); its pairs are unknown, as officially")
             continue
         for i, entry in enumerate(entries if isinstance(entries, list) else []):

@@ -224,6 +224,40 @@ class ImageOnlyQwen2VLProcessor(Qwen2VLProcessor):
 '''
 
 
+def add_code_leaving_a_marker(folder: Path, marker: Path, *, hang: bool = False) -> Path:
+    """Name, in a checkpoint's ``config.json`` ``auto_map``, a Python file of its own that writes
+    ``marker`` when it is imported: whether a checkpoint's code ran is then a file test.
+
+    The model class it defines is the checkpoint's own architecture unchanged, so the folder
+    still loads without its code (``transformers`` then uses its built-in class); ``hang``
+    makes the import sleep for an hour after writing the marker (a load that never ends).
+    """
+    config = json.loads((folder / "config.json").read_text())
+    architecture = config["architectures"][0]
+    source = _MARKER_SOURCE.format(marker=str(marker), architecture=architecture, hang=hang)
+    (folder / "marker_model.py").write_text(source)
+    config["auto_map"] = {**config.get("auto_map", {}), "AutoModelForImageTextToText": "marker_model.MarkerModel"}
+    (folder / "config.json").write_text(json.dumps(config, indent=2))
+    return folder
+
+
+_MARKER_SOURCE = '''"""A checkpoint's own code that leaves a marker file (test checkpoint built by povagent.testing)."""
+
+import time
+from pathlib import Path
+
+from transformers import {architecture}
+
+Path({marker!r}).write_text("the checkpoint's code ran")
+if {hang}:
+    time.sleep(3600)
+
+
+class MarkerModel({architecture}):
+    """The architecture unchanged: only the import above tells that this code ran."""
+'''
+
+
 def _no_sampling(model: Any, eos: int, pad: int) -> None:
     """A generation config that stops at the end-of-turn token and pads with the pad token."""
     model.generation_config.eos_token_id = eos

@@ -18,9 +18,10 @@ from typing import Any
 
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import House
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, ReadTargetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
 
@@ -127,17 +128,14 @@ class TrainingExample:
         }
 
 
-#: The most bytes read back for one image (a file swapped for a huge one is refused, not read).
-MAX_IMAGE_BYTES = 256 * 1024 * 1024
-
-
 def image_bytes(image: ExampleImage) -> bytes:
     """``image``'s bytes, read again from its file for writing; a file that changed since the
     question was built (another size, other bytes) is a :class:`DatasetError` naming it, never
     a different image written under the old one's name."""
     try:
-        with open(image.file, "rb") as handle:
-            data = handle.read(MAX_IMAGE_BYTES + 1)
+        data = read_regular(image.file, MAX_IMAGE_FILE_BYTES, what="image")
+    except ReadTargetError as exc:
+        raise DatasetError(str(exc)) from None
     except OSError as exc:
         raise DatasetError(f"{image.file}: cannot be read again for the export ({exc.strerror or exc})") from None
     if hashlib.sha256(data).hexdigest() != image.sha256:

@@ -24,6 +24,8 @@ from pathlib import Path
 
 from povagent.dataset.loader import house_folders, official_frame_paths
 from povagent.dataset.paths import OutsideDatasetError, dataset_root, is_inside, observer_view_path
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
 from povagent.train.splits import house_index
 
 #: The release's repository on the Hub (checked in the local cache only: never downloaded here).
@@ -80,9 +82,9 @@ def content_hash(pair_file: Path) -> str | None:
     """sha256 of a pair file's canonical JSON (key order and whitespace do not matter);
     ``None`` for a file that is not JSON (the loader reports it)."""
     try:
-        data = json.loads(pair_file.read_bytes())
+        data = json.loads(read_regular(pair_file, MAX_DOCUMENT_BYTES, what="pair file"))
         canonical = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
-    except (OSError, ValueError, RecursionError):
+    except (OSError, ValueError, RecursionError, ReadTargetError):
         return None
     # a lone surrogate (the loader refuses such a file) is hashed as its UTF-16 code unit, not a crash
     return hashlib.sha256(canonical.encode("utf-8", "surrogatepass")).hexdigest()
@@ -90,9 +92,9 @@ def content_hash(pair_file: Path) -> str | None:
 
 def _file_hash(path: Path) -> str | None:
     try:
-        with open(path, "rb") as handle:
+        with open_regular(path, what="frame") as handle:
             return hashlib.file_digest(handle, "sha256").hexdigest()
-    except OSError:  # missing, a folder, unreadable: no frame to compare
+    except (OSError, ReadTargetError):  # missing, a folder, a pipe, unreadable: no frame to compare
         return None
 
 
@@ -103,8 +105,8 @@ def frame_hashes(root: Path, folder: Path) -> frozenset[str]:
     real_root = dataset_root(root)
     files = [folder / p for p in official_frame_paths(folder, [])]
     try:
-        pairs = json.loads((folder / f"{folder.name}.json").read_bytes())
-    except (OSError, ValueError, RecursionError):
+        pairs = json.loads(read_regular(folder / f"{folder.name}.json", MAX_DOCUMENT_BYTES, what="pair file"))
+    except (OSError, ValueError, RecursionError, ReadTargetError):
         pairs = []
     for pair in pairs if isinstance(pairs, list) else []:
         rel = pair.get("rgb_path") if isinstance(pair, dict) else None
@@ -121,8 +123,8 @@ def generator_seed(root: Path) -> int | None:
     """The seed of a dataset this project generated (``meta.json``), else ``None``."""
     meta = root / "meta.json"
     try:
-        data = json.loads(meta.read_text())
-    except (OSError, ValueError):
+        data = json.loads(read_regular(meta, MAX_DOCUMENT_BYTES, what="dataset metadata"))
+    except (OSError, ValueError, ReadTargetError):
         return None
     if not isinstance(data, dict) or not isinstance(data.get("generator"), dict):
         return None

@@ -16,14 +16,16 @@ from pathlib import Path
 
 from povagent.dataset.loader import House
 from povagent.dataset.problems import Problem
+from povagent.errors import ReadTargetError
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 _PAIR_ENTRY = re.compile(r"^\$\[(\d+)\]")
 
 
 def _raw_pair_ids(pair_file: Path) -> list[str | None]:
     try:
-        raw = json.loads(pair_file.read_bytes())
-    except (OSError, ValueError, RecursionError):
+        raw = json.loads(read_regular(pair_file, MAX_DOCUMENT_BYTES, what="pair file"))
+    except (OSError, ValueError, RecursionError, ReadTargetError):
         return []
     if not isinstance(raw, list):
         return []

@@ -6,6 +6,7 @@ import json
 
 import pytest
 
+from povagent.config.remote_code import remote_code_granted
 from povagent.dataset.models import Condition
 from povagent.plugins import get_plugin_host
 from povagent_plugins.backends.profiles import PAPER_PROFILES
@@ -134,7 +135,7 @@ def test_molmopoint_points_map_to_a_frame_and_pixels_through_the_molmo_parser(mi
 # -- the two rows the authors ran in-process (backend transformers) ---------------------------------
 IN_PROCESS = {
     "qwen3-vl-8b-transformers": ("Qwen/Qwen3-VL-8B-Instruct", {"dtype": "bfloat16", "device_map": "auto", "sampling": "checkpoint"}),
-    "molmopoint-8b": ("allenai/MolmoPoint-8B", {"trust_remote_code": True, "dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}),
+    "molmopoint-8b": ("allenai/MolmoPoint-8B", {"dtype": "auto", "device_map": "auto", "sampling": "checkpoint"}),
 }
 
 
@@ -154,7 +155,8 @@ def test_a_model_profile_run_in_process_resolves_to_the_transformers_backend(tmp
     config = load_pipeline(path)
     profile = get_plugin_host().profile(name)
     assert config.backend.name == "transformers" and config.parser.name == profile.default_parser
-    backend = get_plugin_host().create("backend", config.backend.name, config.backend.options)
+    with remote_code_granted():  # MolmoPoint's own code is the user's to grant: granted here
+        backend = get_plugin_host().create("backend", config.backend.name, config.backend.options)
     checkpoint, options = IN_PROCESS[name]
     assert backend.options.model == checkpoint
     assert {k: getattr(backend.options, k) for k in options} == options
@@ -172,8 +174,9 @@ def test_the_transformers_backend_takes_a_profile_as_its_model_with_the_profiles
     path.write_text(yaml.safe_dump(doc))
     config = load_pipeline(path)
     assert config.parser.name == "molmo" and config.strategy.options["prompts"] == "molmopoint"
-    backend = get_plugin_host().create("backend", "transformers", config.backend.options)
-    assert backend.options.trust_remote_code and backend.options.max_batch == 2
+    with remote_code_granted():
+        backend = get_plugin_host().create("backend", "transformers", config.backend.options)
+    assert backend.remote_code and backend.options.max_batch == 2
 
 
 def test_povagent_plugins_lists_the_in_process_profiles_and_the_backend():

@@ -77,3 +77,18 @@ def test_a_run_loaded_for_a_report_keeps_the_house_with_a_bad_image(damaged_data
     # (a run refuses the house; a report says which image failed).
     assert HOUSE in load_dataset(damaged_dataset, check_images=False).houses
     assert HOUSE not in load_dataset(damaged_dataset).houses
+
+
+def test_a_frame_planted_as_a_pipe_becomes_a_card_that_says_so_not_a_wait(run_dir, tmp_path, mini_root):
+    import os
+
+    root = tmp_path / "ds"
+    shutil.copytree(mini_root, root)
+    for path in sorted((root / "artifacts" / HOUSE).glob("*/*.png")):
+        path.unlink()
+        os.mkfifo(path)
+    out = tmp_path / "r"
+    result = CliRunner().invoke(app, ["report", str(run_dir), "--out", str(out), "--bootstrap", "0", "--dataset", str(root)])
+    assert result.exit_code == 0, result.output
+    bad = [e for e in gallery_entries((out / "report.html").read_text(encoding="utf-8")) if e["id"].startswith(HOUSE + "/") and e.get("ie")]
+    assert bad and all("named pipe" in e["ie"] and e["img"] is None for e in bad), bad

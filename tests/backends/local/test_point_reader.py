@@ -27,7 +27,7 @@ def test_no_well_formed_point_is_no_answer(points):
 def test_a_model_exposing_extract_image_points_is_read_by_the_point_reader(tmp_path, mini_root, tiny_pointing):
     doc = {
         "dataset": str(mini_root),
-        "backend": {"name": "transformers", "options": {"model": str(tiny_pointing), "trust_remote_code": True}},
+        "backend": {"name": "transformers", "options": {"model": str(tiny_pointing)}},
         "strategy": {"name": "basic", "options": {"max_tokens": 4, "prompts": "molmopoint"}},
         "parser": "molmo",
         "instances": {"conditions": ["a"], "houses": ["train_house_00000"], "directions": ["left"]},
@@ -35,7 +35,7 @@ def test_a_model_exposing_extract_image_points_is_read_by_the_point_reader(tmp_p
         "output": str(tmp_path / "run"),
     }
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(doc))
-    run_pipeline(load_pipeline(tmp_path / "p.yaml"))
+    run_pipeline(load_pipeline(tmp_path / "p.yaml"), trust_remote_code=True)
     (row,) = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
     answer = json.loads(row["exchanges"][0]["raw"])
     n_frames = len(row["exchanges"][0]["image_hashes"])

@@ -13,6 +13,7 @@ from PIL import Image
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.config.pipeline import load_pipeline
+from povagent.config.remote_code import remote_code_granted
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
@@ -60,6 +61,12 @@ def requests(store: ImageStore, n: int) -> list[Request]:
     return out
 
 
+def trusted(**options) -> TransformersBackend:
+    """A backend whose checkpoint's own code may run, granted as the Python call grants it."""
+    with remote_code_granted():
+        return TransformersBackend(**options)
+
+
 async def answers(backend: TransformersBackend, batch: list[Request], store: ImageStore) -> list[str]:
     try:
         responses = await asyncio.gather(*(backend.complete(r, store) for r in batch))
@@ -94,7 +101,7 @@ def test_a_finished_run_resumes_without_loading_the_model_again(tmp_path, mini_r
 def test_a_batch_out_of_memory_is_split_and_every_row_answered(tiny_fits_two):
     store = ImageStore()
     batch = requests(store, 5)
-    backend = TransformersBackend(model=str(tiny_fits_two), trust_remote_code=True, max_batch=8)
+    backend = trusted(model=str(tiny_fits_two), max_batch=8)
 
     async def go() -> tuple[list[str], object]:
         try:
@@ -109,8 +116,8 @@ def test_a_batch_out_of_memory_is_split_and_every_row_answered(tiny_fits_two):
 
 
 def test_a_request_that_never_fits_is_a_typed_row_not_retried(tmp_path, mini_root, tiny_fits_none):
-    path = pipeline(tmp_path, mini_root, {"model": str(tiny_fits_none), "trust_remote_code": True}, retry={"attempts": 3, "initial_wait": 0.0, "max_wait": 0.0})
-    run_pipeline(load_pipeline(path))
+    path = pipeline(tmp_path, mini_root, {"model": str(tiny_fits_none)}, retry={"attempts": 3, "initial_wait": 0.0, "max_wait": 0.0})
+    run_pipeline(load_pipeline(path), trust_remote_code=True)
     written = rows(tmp_path / "run")
     assert [r["status"] for r in written] == ["infra_error", "infra_error"]
     assert all(r["error_type"] == "out_of_memory" and r["retries"] == 0 for r in written)
@@ -119,8 +126,8 @@ def test_a_request_that_never_fits_is_a_typed_row_not_retried(tmp_path, mini_roo
 def test_batched_answers_equal_one_at_a_time_under_greedy_decoding(tiny_qwen):
     store = ImageStore()
     batch = requests(store, 6)
-    alone = asyncio.run(answers(TransformersBackend(model=str(tiny_qwen), trust_remote_code=True, max_batch=1), batch, store))
-    backend = TransformersBackend(model=str(tiny_qwen), trust_remote_code=True, max_batch=8)
+    alone = asyncio.run(answers(trusted(model=str(tiny_qwen), max_batch=1), batch, store))
+    backend = trusted(model=str(tiny_qwen), max_batch=8)
     together = asyncio.run(_with_stats(backend, batch, store))
     assert together[0] == alone and len(set(alone)) > 1
     assert together[1] == 6  # all six in one generate call
@@ -149,11 +156,11 @@ def test_the_processors_chat_template_sees_the_image_labels_in_order(tiny_idefic
 def test_a_sweep_runs_cells_on_a_local_checkpoint(tmp_path, mini_root, tiny_qwen):
     from povagent.run.sweep import run_sweep
 
-    base = yaml.safe_load(pipeline(tmp_path, mini_root, {"model": str(tiny_qwen), "trust_remote_code": True}).read_text())
+    base = yaml.safe_load(pipeline(tmp_path, mini_root, {"model": str(tiny_qwen)}).read_text())
     (tmp_path / "base.yaml").write_text(yaml.safe_dump(base))
     sweep = tmp_path / "sweep.yaml"
     sweep.write_text(f"base: base.yaml\noutput: {tmp_path / 'sweep'}\naxes:\n  conditions: [a, c]\n")
-    result = run_sweep(sweep, quiet=True)
+    result = run_sweep(sweep, quiet=True, trust_remote_code=True)
     assert sorted(result.results) == ["a", "c"]
     assert all(r.stats.requests == 1 for r in result.results.values())
 
@@ -162,8 +169,10 @@ def test_the_grounding_agent_locates_with_a_local_checkpoint(tiny_pointing):
     from povagent.agent import GroundingAgent
 
     frames = [Image.new("RGB", (64, 48), (200, 10, 10)), Image.new("RGB", (64, 48), (10, 200, 10))]
-    options = {"model": str(tiny_pointing), "trust_remote_code": True}
-    with GroundingAgent("transformers", backend_options=options, strategy_options={"max_tokens": 4}, timeout_s=60) as agent:
+    options = {"model": str(tiny_pointing)}
+    with GroundingAgent(
+        "transformers", backend_options=options, strategy_options={"max_tokens": 4}, timeout_s=60, trust_remote_code=True
+    ) as agent:
         loc = agent.locate("my mug is left of the sofa", frames)
     # the pointing checkpoint points into the last image it was shown, half-way down
     assert loc.frame_index == 1 and loc.status.value == "ok"
@@ -203,7 +212,7 @@ def test_a_profile_without_a_checkpoint_is_refused():
 def test_remote_code_is_not_run_unless_asked(tiny_qwen):
     store = ImageStore()
     backend = TransformersBackend(model=str(tiny_qwen))
-    with pytest.raises(Exception, match="trust_remote_code"):
+    with pytest.raises(Exception, match=r"runs the checkpoint's own Python code.*pass --trust-remote-code"):
         asyncio.run(answers(backend, requests(store, 1), store))
 
 
@@ -212,7 +221,7 @@ def test_one_model_per_process_a_second_checkpoint_waits_for_the_first_to_close(
 
     async def go() -> None:
         first = TransformersBackend(model=str(tiny_idefics3))
-        second = TransformersBackend(model=str(tiny_qwen), trust_remote_code=True)
+        second = trusted(model=str(tiny_qwen))
         await first.start()
         try:
             with pytest.raises(PermanentBackendError, match="one model per process") as refused:
