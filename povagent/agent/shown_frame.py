@@ -51,7 +51,7 @@ class ShownFrame:
 
     def __init__(self, frame: FrameInput, pad_color: tuple[int, int, int] = DEFAULT_PAD_COLOR) -> None:
         self.source = frame
-        self.pad_color = tuple(pad_color)
+        self.pad_color: tuple[int, int, int] = (int(pad_color[0]), int(pad_color[1]), int(pad_color[2]))
         self._lock = threading.Lock()
         self._checked: str | None = None
         self._box: Letterbox | None = None
