@@ -24,7 +24,6 @@ shown frame, the frame never refers to a store (a keyframe dropped from memory i
 from __future__ import annotations
 
 import hashlib
-import io
 import os
 import threading
 from pathlib import Path
@@ -34,10 +33,11 @@ from PIL import Image, UnidentifiedImageError
 
 from povagent.agent.frame_inputs import FrameInput, load_frame
 from povagent.errors import BadInputError
+from povagent.exchange.images import encode_png
 from povagent.geometry.letterbox import BENCHMARK_SIZE, DEFAULT_PAD_COLOR, Letterbox
 
 #: Formats a file may be passed through in unchanged (what every backend accepts as is).
-_PASS_THROUGH_FORMATS = {"PNG": "image/png", "JPEG": "image/jpeg"}
+_PASS_THROUGH_FORMATS = frozenset({"PNG", "JPEG"})
 
 
 class ShownFrame:
@@ -53,7 +53,6 @@ class ShownFrame:
         self.source = frame
         self.pad_color: tuple[int, int, int] = (int(pad_color[0]), int(pad_color[1]), int(pad_color[2]))
         self._lock = threading.Lock()
-        self._checked: str | None = None
         self._box: Letterbox | None = None
         self._square: Image.Image | None = None
         self._file: Path | None = None
@@ -106,10 +105,7 @@ class ShownFrame:
         with self._lock:
             if self._png is None:
                 assert self._square is not None, "prepare() first (and not a passed-through file)"
-                buf = io.BytesIO()
-                # compress_level 1, as the image store encodes: the bytes a call sent before
-                self._square.save(buf, format="PNG", compress_level=1)
-                self._png = buf.getvalue()
+                self._png = encode_png(self._square)  # as the image store encodes: the bytes sent before
                 self._square = None if self._hash is not None else self._square
             return self._png
 
