@@ -13,8 +13,8 @@ What it measures, on a tiny Qwen2-VL-style checkpoint built here with random wei
 Rounds alternate the two settings (the machine is shared); the speed-up is the median of the
 per-round ratios, reported with the per-round rates and the load average, in wall time and in
 CPU time (``time.process_time``, every thread: the figure the machine's other load moves
-least). ``--frames 30`` gives each request the dataset's 30 frames (A/B): batching then gains
-far less, as the images' encoding and the prompt's length dominate each request.
+least). ``--frames 30 --frame-size 512`` gives each request the dataset's 30 frames of 512x512 (A/B):
+batching then gains far less, as decoding and resizing each image (not batched) dominates.
 
 What a GPU run should show: on a CPU a tiny model is bound by Python overhead per ``generate``
 step, so batching gains what it saves in per-step overhead; on a GPU an 8B model's decoding is
@@ -64,13 +64,13 @@ def peak_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def make_requests(store: ImageStore, n: int, max_tokens: int, frames: int = 2) -> list[Request]:
-    """``n`` distinct requests, ``frames`` labelled images each, as the basic strategy lays them out."""
+def make_requests(store: ImageStore, n: int, max_tokens: int, frames: int = 2, size: tuple[int, int] = (64, 48)) -> list[Request]:
+    """``n`` distinct requests, ``frames`` labelled images of ``size`` each, as the basic strategy lays them out."""
     out = []
     for i in range(n):
         parts: list[Any] = []
         for k in range(frames):
-            image = store.add_pil(Image.new("RGB", (64, 48), ((37 * i) % 256, (91 * k) % 256, 30)))
+            image = store.add_pil(Image.new("RGB", size, ((37 * i) % 256, (91 * k) % 256, 30)))
             parts += [TextPart(f"Image {k}:"), ImagePart(image.image_hash)]
         parts.append(TextPart(f"Sentence: the mug {i} is left of the sofa. Output ONLY valid JSON, no other text."))
         spec = AnswerSpec(schema=frame_answer_schema(frames, 512, 512), n_frames=frames, asks_frame=True)
@@ -103,6 +103,7 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--max-tokens", type=int, default=16)
     parser.add_argument("--frames", type=int, default=2, help="images per request (the dataset's A/B requests show 30)")
+    parser.add_argument("--frame-size", type=int, default=None, help="square images of this side (the dataset's: 512); default 64x48")
     parser.add_argument("--layers", type=int, default=2)
     parser.add_argument("--checkpoint", default=None, help="a checkpoint to measure instead of the tiny one")
     parser.add_argument("--dtype", default="auto")
@@ -120,7 +121,8 @@ def main() -> int:
         else:
             checkpoint, trust = args.checkpoint, False
         store = ImageStore()
-        batch = make_requests(store, args.requests, args.max_tokens, args.frames)
+        size = (args.frame_size, args.frame_size) if args.frame_size else (64, 48)
+        batch = make_requests(store, args.requests, args.max_tokens, args.frames, size)
         base = {"model": checkpoint, "trust_remote_code": trust, "dtype": args.dtype, "device_map": args.device_map}
         rates: dict[int, list[float]] = {1: [], 8: []}
         cpu_rates: dict[int, list[float]] = {1: [], 8: []}
@@ -156,7 +158,8 @@ def main() -> int:
     print(f"memory: {before_load:.0f} MiB before loading, {after_load:.0f} MiB loaded, peak {peak_mib():.0f} MiB; identical answers: yes")
     print(f"load average {load}")
     model_note = f"tiny Qwen2-VL-style checkpoint, {args.layers} layer(s), hidden 32" if args.checkpoint is None else args.checkpoint
-    comparison = f"{model_note}; {args.requests - 1} requests of {args.frames} images, {args.max_tokens} new tokens, greedy, sent at once"
+    comparison = (f"{model_note}; {args.requests - 1} requests of {args.frames} {size[0]}x{size[1]} images, {args.max_tokens} new tokens, "
+                  "greedy, sent at once")
     figures = [
         {"name": "requests/s, max_batch 1", "value": round(r1, 3), "unit": "requests/s", "target": "", "comparison": comparison},
         {"name": "requests/s, max_batch 8", "value": round(r8, 3), "unit": "requests/s", "target": "", "comparison": comparison},
