@@ -48,6 +48,7 @@ from povagent.agent.ask_factory import AGENT_RETRY, AskFactory, default_ask_fact
 from povagent.agent.frame_inputs import FrameInput
 from povagent.agent.localization import Localization, localize
 from povagent.agent.prepared_call import PreparedCall, prepare_call
+from povagent.agent.shown_frame import ShownFrame
 from povagent.agent.solver_cameras import PosedSolver
 from povagent.config.retry_policy import RetryPolicy
 from povagent.errors import BackendError, NoAnswerError
@@ -189,9 +190,9 @@ class GroundingAgent:
     def locate(
         self,
         sentence: str,
-        frames: Sequence[FrameInput] = (),
+        frames: Sequence[FrameInput | ShownFrame] = (),
         *,
-        observer_view: FrameInput | None = None,
+        observer_view: FrameInput | ShownFrame | None = None,
         cameras: Sequence[GoalCamera | None] | GoalCamera | None = None,
         depths: Sequence[np.ndarray | None] | np.ndarray | None = None,
         timeout_s: float | None = None,
@@ -215,16 +216,18 @@ class GroundingAgent:
     async def alocate(
         self,
         sentence: str,
-        frames: Sequence[FrameInput] = (),
+        frames: Sequence[FrameInput | ShownFrame] = (),
         *,
-        observer_view: FrameInput | None = None,
+        observer_view: FrameInput | ShownFrame | None = None,
         cameras: Sequence[GoalCamera | None] | GoalCamera | None = None,
         depths: Sequence[np.ndarray | None] | np.ndarray | None = None,
         timeout_s: float | None = None,
     ) -> Localization:
         """Locate the target of ``sentence`` in ``frames`` (or in ``observer_view``).
 
-        ``frames``: the robot's exploration frames (conditions A/B). ``observer_view``: one
+        ``frames``: the robot's exploration frames (conditions A/B); a frame asked about again
+        and again is handed in as a :class:`~povagent.agent.shown_frame.ShownFrame`, which
+        keeps its letterbox, name and encoding from one call to the next. ``observer_view``: one
         frame from the speaker's viewpoint (condition C; ``frames`` are then not shown).
         ``cameras`` and ``depths`` line up with the images shown (``frames``, or the one
         observer view; ``None`` entries allowed): a camera (:class:`~povagent.geometry.camera.Camera`
@@ -248,10 +251,7 @@ class GroundingAgent:
                     prepare_call, sentence, frames, observer_view, cameras, depths,
                     pad_color=self.pad_color, plane=self.plane, posed=isinstance(self.strategy, PosedSolver),
                 )
-                try:
-                    exchanges = await self._solve(prepared, deadline)
-                finally:
-                    prepared.folder.cleanup()
+                exchanges = await self._solve(prepared, deadline)
         except TimeoutError:
             raise NoAnswerError(f"no answer within {budget:g} s (the agent's timeout_s)") from None
         return localize(prepared, exchanges, time.monotonic() - started, self.parser, self.plane, self.depth_kind)

@@ -6,7 +6,9 @@ frame with markers drawn on it) is made once per (source hash, recipe key). Enco
 entry is rebuilt from its recipe (the file, or the derivation) on next use, which the counters
 record, so a benchmark can check "one encode per distinct image" when memory suffices.
 In-memory images (:meth:`ImageStore.add_pil`) have nothing to be rebuilt from: their bytes stay
-for the store's lifetime.
+for the store's lifetime. An image its owner names and encodes itself (:meth:`ImageStore.add_unencoded`:
+the agent's frames, named by their pixels) is encoded only when its bytes are first asked for,
+so a backend that never looks at pixels never pays for an encode.
 
 A run also tells the store when it is done with files (:meth:`ImageStore.hold_files`,
 :meth:`ImageStore.release_files`): a house's frames are held while any of its keys is pending
@@ -42,6 +44,14 @@ from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024
+
+
+def encode_png(image: Image.Image) -> bytes:
+    """``image`` as the PNG every in-memory image is sent as (the store's own and the agent's
+    frames): compress level 1, several times faster than the default and a little larger."""
+    buf = io.BytesIO()
+    image.save(buf, format="PNG", compress_level=1)
+    return buf.getvalue()
 
 
 @dataclass(frozen=True)
@@ -89,6 +99,8 @@ class ImageStore:
         self._by_path: dict[Path, StoredImage] = {}
         self._by_hash: dict[str, StoredImage] = {}
         self._recipes: dict[str, Callable[[], bytes]] = {}
+        #: Images registered by :meth:`add_unencoded` whose bytes were never asked for yet.
+        self._unencoded: set[str] = set()
         #: The file an image was first read from (named in decode errors).
         self._sources: dict[str, str] = {}
         self._derived: dict[tuple[str, str], str] = {}
@@ -155,6 +167,24 @@ class ImageStore:
         """Register an in-memory image (encoded once as PNG)."""
         data = self._encode_png(image)
         return self._remember(data, image.size, "image/png", functools.partial(bytes, data))
+
+    def add_unencoded(
+        self, image_hash: str, size: tuple[int, int], encode: Callable[[], bytes], path: Path | None = None
+    ) -> StoredImage:
+        """Register a PNG image under a name its owner gives it (``image_hash``: a digest of its
+        content, e.g. of its pixels), without its bytes: ``encode`` makes them the first time
+        they are asked for (:meth:`encoded_bytes`, :meth:`data_url`). ``path``: the file name
+        strategies know the image by (:meth:`add_file` then answers without reading a file)."""
+        with self._lock:
+            info = self._by_hash.get(image_hash)
+            if info is None:
+                info = StoredImage(image_hash, size[0], size[1], "image/png")
+                self._by_hash[image_hash] = info
+                self._recipes[image_hash] = encode
+                self._unencoded.add(image_hash)
+            if path is not None:
+                self._by_path.setdefault(path, info)
+            return info
 
     def derive(self, source_hash: str, recipe_key: str, draw: Callable[[Image.Image], Image.Image]) -> StoredImage:
         """The image made by ``draw`` from ``source_hash``, made once per ``recipe_key``.
@@ -235,7 +265,10 @@ class ImageStore:
             hit = self._cache_get((image_hash, "bytes"))
             if hit is not None:
                 return cast(bytes, hit)  # "bytes" entries hold bytes
-            self.stats.rebuilds += 1
+            if image_hash in self._unencoded:
+                self._unencoded.discard(image_hash)  # a first build, not a rebuild
+            else:
+                self.stats.rebuilds += 1
             data = self._recipes[image_hash]()
             self._cache_put((image_hash, "bytes"), data)
             return data
@@ -307,11 +340,9 @@ class ImageStore:
         return data
 
     def _encode_png(self, image: Image.Image) -> bytes:
-        buf = io.BytesIO()
-        # compress_level 1: several times faster than the default, a little larger
-        image.save(buf, format="PNG", compress_level=1)
+        data = encode_png(image)
         self.stats.png_encodes += 1
-        return buf.getvalue()
+        return data
 
     def _remember(
         self, data: bytes, size: tuple[int, int], media_type: str, recipe: Callable[[], bytes], h: str | None = None

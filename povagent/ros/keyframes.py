@@ -22,10 +22,11 @@ loaded from a folder (:mod:`povagent.ros.memory_folder`). Pure: no clock, no ROS
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from povagent.agent.shown_frame import ShownFrame
 from povagent.geometry.goals import PinholeCamera
 from povagent.ros.transforms import rotation_angle
 
@@ -38,13 +39,21 @@ DEFAULT_GRID = (8, 6)
 
 @dataclass(frozen=True)
 class Keyframe:
-    """One kept frame: its stamp (ns), RGB pixels, camera (pose in the map + intrinsics), optional depth (m)."""
+    """One kept frame: its stamp (ns), RGB pixels, camera (pose in the map + intrinsics), optional depth (m).
+
+    ``shown`` is the frame as the agent shows it (letterboxed, named and encoded once, on the
+    first command that needs each), kept with the keyframe so that every later command over it
+    reuses that work (:mod:`povagent.agent.shown_frame`)."""
 
     stamp_ns: int
     rgb: np.ndarray
     camera: PinholeCamera
     depth: np.ndarray | None = None
     frame_id: str = ""
+    shown: ShownFrame = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "shown", ShownFrame(self.rgb))
 
     def optical_rotation(self) -> np.ndarray:
         """The camera's optical axes (rows right, down, forward) in the map: comparable across conventions."""

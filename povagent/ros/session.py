@@ -36,6 +36,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from povagent.agent.localization import Localization
+from povagent.agent.shown_frame import ShownFrame
 from povagent.errors import BadInputError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.goals import PinholeCamera
 from povagent.ros.camera_info import CameraProblem, Intrinsics, intrinsics_from_info
@@ -46,7 +47,7 @@ from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S, PoseUnavailable, StampPr
 from povagent.ros.transforms import RigidTransform, TransformProblem, pose_convention
 
 #: What answers a command: the agent's ``locate`` over the memory's frames, cameras and depths.
-Locate = Callable[[str, Sequence[np.ndarray], Sequence[PinholeCamera], Sequence["np.ndarray | None"]], Localization]
+Locate = Callable[[str, Sequence[ShownFrame], Sequence[PinholeCamera], Sequence["np.ndarray | None"]], Localization]
 #: Called with (kind, message, first) for every malformed message.
 ProblemSink = Callable[[str, str, bool], None]
 #: Called with the goal frame once the first odometry message has decided it.
@@ -275,7 +276,8 @@ class GroundingSession:
         if not frames:
             return CommandResult(status=CommandStatus.NO_KEYFRAMES, reason="no frame has been kept yet (images, camera_info and transforms are all needed)", **base)
         try:
-            loc = self.locate(command, [f.rgb for f in frames], [f.camera for f in frames], [f.depth for f in frames])
+            # each keyframe's shown frame: what an earlier command computed of it is reused
+            loc = self.locate(command, [f.shown for f in frames], [f.camera for f in frames], [f.depth for f in frames])
         except UnparseableAnswerError as exc:
             status, reason = CommandStatus.UNPARSEABLE, str(exc)
         except NoAnswerError as exc:
@@ -308,7 +310,7 @@ def agent_locate(agent: Any) -> Locate:
     """The :data:`Locate` of a :class:`~povagent.agent.grounding_agent.GroundingAgent`: the
     memory's frames, their cameras and (where every frame has one) their depth images."""
 
-    def locate(sentence: str, frames: Sequence[np.ndarray], cameras: Sequence[PinholeCamera], depths: Sequence[np.ndarray | None]) -> Localization:
+    def locate(sentence: str, frames: Sequence[ShownFrame], cameras: Sequence[PinholeCamera], depths: Sequence[np.ndarray | None]) -> Localization:
         given = list(depths) if any(d is not None for d in depths) else None
         return agent.locate(sentence, list(frames), cameras=list(cameras), depths=given)
 

@@ -17,8 +17,8 @@ from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import ConfigError
-from povagent.results.rows import ResultRow, RowStatus, iter_rows
-from povagent.run.summary import summary_row
+from povagent.results.rows import RowStatus, iter_rows
+from povagent.run.summary import SummaryDigest, summary_digest
 
 #: The results file of a run folder.
 RESULTS = "results.jsonl"
@@ -67,9 +67,9 @@ class KeyPlan:
     #: keys whose last row is ``infra_error`` (pending again unless they are kept)
     failed: set[str]
     pending: list[tuple[Instance, int]]
-    #: the done keys' rows as a summary keeps them (:func:`~povagent.run.summary.summary_row`;
+    #: the done keys' rows as a summary keeps them (:func:`~povagent.run.summary.summary_digest`;
     #: read once here, so the summary never re-reads the file)
-    digests: dict[str, ResultRow] = field(default_factory=dict)
+    digests: dict[str, SummaryDigest] = field(default_factory=dict)
 
     @property
     def n_total(self) -> int:
@@ -97,7 +97,7 @@ def plan_keys(
     run_dir = Path(config.output)
     done: set[str] = set()
     failed: set[str] = set()
-    digests: dict[str, ResultRow] = {}
+    digests: dict[str, SummaryDigest] = {}
     for row in iter_rows(run_dir / RESULTS):
         if row.config_hash and row.config_hash != config_hash:
             raise ConfigError(
@@ -107,7 +107,7 @@ def plan_keys(
         if row.key not in wanted:
             continue
         done.add(row.key)
-        digests[row.key] = summary_row(row)  # the last row of a key wins
+        digests[row.key] = summary_digest(row)  # the last row of a key wins
         if row.status is RowStatus.INFRA_ERROR:
             failed.add(row.key)
         else:

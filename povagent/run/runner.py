@@ -59,7 +59,7 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import summarize_rows, summary_row, write_summary
+from povagent.run.summary import SummaryDigest, summarize_digests, summary_digest, write_summary
 from povagent.run.summary_model import RunSummary
 
 LOG = "log.jsonl"
@@ -189,9 +189,9 @@ class PipelineRun:
         # every key the config names (api_key_env values) is known to the redactor, so it is
         # removed from whatever the run writes: messages, logs, and answers that echo it
         self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
-        self._digests: dict[str, ResultRow] = {}
-        #: what each row written in this session spent (``session`` in summary.json)
-        self._session_spent: list[UsageTotals] = []
+        self._digests: dict[str, SummaryDigest] = {}
+        #: the digests of the rows written in this session: what they spent is ``session`` in summary.json
+        self._session_spent: list[SummaryDigest] = []
         self._frames = FrameReader(self.images)
         self._failures_in_a_row = 0
         self._stopped: str | None = None
@@ -231,11 +231,12 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        self._digests[row.key] = summary_row(row)
+        digest = summary_digest(row)
+        self._digests[row.key] = digest
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
-        self._session_spent.append(UsageTotals.of([row]))
+        self._session_spent.append(digest)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
@@ -465,7 +466,7 @@ class PipelineRun:
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
         over the selected keys, plus the run's counters."""
-        summary = summarize_rows(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
+        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
         spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0

@@ -1,14 +1,18 @@
 """Run summaries: ``summary.json``'s breakdown of a run's rows (:class:`ResultRow`, one per key).
 
-The runner keeps each key's row without its exchanges (:func:`summary_row`; rows of earlier
-sessions read once at resume, its own rows as they become durable), so writing the summary
-never parses ``results.jsonl`` again; :func:`summarize_run` reads a finished folder for
-everyone else. :mod:`povagent.run.summary_model` says what the summary is.
+The runner keeps each key's :class:`SummaryDigest` (:func:`summary_digest`: the few values a
+summary reads of a row, a few hundred bytes; rows of earlier sessions read once at resume, its
+own rows as they become durable), so writing the summary never parses ``results.jsonl`` again
+and a run's memory hardly grows with its rows; :func:`summarize_run` reads a finished folder
+for everyone else, and :func:`summarize_rows` summarizes rows in hand: all three through
+:func:`summarize_digests`. :mod:`povagent.run.summary_model` says what the summary is.
 """
 
 from __future__ import annotations
 
+import sys
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
@@ -58,9 +62,15 @@ def plugin_scores(scores: Mapping[str, Any]) -> tuple[tuple[str, tuple[tuple[str
 def plugin_score_summary(rows: Iterable[ResultRow]) -> dict[str, dict[str, dict[str, Any]]]:
     """``{scorer: {field: ...}}`` over the rows a plugin scorer scored (answered rows): a
     true/false field as ``{"n", "true", "rate"}``, a number as ``{"n", "mean"}``."""
+    return _plugin_score_summary(plugin_scores(row.scores) for row in rows)
+
+
+def _plugin_score_summary(
+    per_row: Iterable[tuple[tuple[str, tuple[tuple[str, float], ...]], ...]],
+) -> dict[str, dict[str, dict[str, Any]]]:
     values: dict[str, dict[str, list[float]]] = {}
-    for row in rows:
-        for name, fields in plugin_scores(row.scores):
+    for scores in per_row:
+        for name, fields in scores:
             for key, value in fields:
                 values.setdefault(name, {}).setdefault(key, []).append(value)
     out: dict[str, dict[str, dict[str, Any]]] = {}
@@ -74,12 +84,61 @@ def plugin_score_summary(rows: Iterable[ResultRow]) -> dict[str, dict[str, dict[
     return out
 
 
-def summary_row(row: ResultRow) -> ResultRow:
-    """The row as a summary keeps it: without its exchanges (prompts and raw answers, which no
-    summary reads and which are most of a row's size). The runner keeps one per key (rows of
-    earlier sessions read once at resume, its own rows as they become durable), so writing the
-    summary never parses ``results.jsonl`` again."""
-    return row.model_copy(update={"exchanges": []}) if row.exchanges else row
+@dataclass(frozen=True, slots=True)
+class SummaryDigest:
+    """What a summary reads of one row, taken once when the row is made or read: the row's
+    official score, its official reading's (lenient parsers), the success scorer's verdict, the
+    plugin scorers' fields, the diagnostics, whether it holds a NaN coordinate, and what it
+    spent. Slotted and without the row's text (prompts, answers, sentence): a run keeps one
+    per key."""
+
+    key: str
+    run: int
+    status: str
+    scored: ScoredRow
+    #: the parser whose official reading the row records (``None``: it records none)
+    official_parser: str | None
+    #: the row as its official reading scores it (rows with a reading, and failed requests)
+    officially_scored: ScoredRow | None
+    #: ``(condition, direction, success, answered)`` when the success scorer scored the row
+    success: tuple[str, str, Any, bool] | None
+    plugin_scores: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]
+    diagnosed: DiagnosedRow | None
+    has_nan: bool
+    prompt_tokens: int | None
+    completion_tokens: int | None
+    cost_usd: float | None
+    retries: int
+
+
+def summary_digest(row: ResultRow) -> SummaryDigest:
+    """The row as a summary keeps it (see :class:`SummaryDigest`)."""
+    infra = RowStatus(row.status) is RowStatus.INFRA_ERROR
+    reading = row.official_reading
+    official = officially_read(row)
+    success = row.scores.get("success")
+    scored = scored_row(row)
+    officially_scored = scored_row(official) if reading is not None or infra else None
+    if officially_scored == scored:
+        officially_scored = scored  # read the same way (the usual case): one object, not two
+    return SummaryDigest(
+        key=row.key,
+        run=row.run,
+        status=sys.intern(RowStatus(row.status).value),
+        scored=scored,
+        official_parser=None if reading is None else sys.intern(reading.parser),
+        officially_scored=officially_scored,
+        success=None if success is None else (
+            row.condition, row.direction, (success or {}).get("success"), (success or {}).get("answered") is True
+        ),
+        plugin_scores=plugin_scores(row.scores),
+        diagnosed=diagnosed_row(row),
+        has_nan=bool(nan_rows([official])),
+        prompt_tokens=row.prompt_tokens,
+        completion_tokens=row.completion_tokens,
+        cost_usd=row.cost_usd,
+        retries=row.retries,
+    )
 
 
 def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
@@ -114,47 +173,45 @@ def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> d
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
     are left out.
     """
-    rows = [r for r in rows if keys is None or r.key in keys]
-    scored = [scored_row(r) for r in rows]
-    out = breakdown(scored)
-    official_parser = next((r.official_reading.parser for r in rows if r.official_reading is not None), None)
-    with_success = [r for r in rows if r.scores.get("success") is not None]
+    return summarize_digests((summary_digest(r) for r in rows if keys is None or r.key in keys), keys)
+
+
+def summarize_digests(digests: Iterable[SummaryDigest], keys: set[str] | None = None) -> dict[str, Any]:
+    """:func:`summarize_rows` of the rows these digests were taken from (one per key)."""
+    rows = [d for d in digests if keys is None or d.key in keys]
+    out = breakdown([d.scored for d in rows])
+    official_parser = next((d.official_parser for d in rows if d.official_parser is not None), None)
+    with_success = [d.success for d in rows if d.success is not None]
     # parsed leniently: the paper-comparable reading beside it (official metric only: a
     # real-world set's success scorer has no official numbers to compare)
     if official_parser is not None and not with_success:
         # a row with an answer but no reading (written before readings were recorded) is left
         # out and counted, never counted with its repaired parse
-        unread = [r for r in rows if r.official_reading is None and RowStatus(r.status) is not RowStatus.INFRA_ERROR]
+        unread = sum(1 for d in rows if d.official_parser is None and d.status != RowStatus.INFRA_ERROR.value)
         out["official_parse"] = official_parse_breakdown(
-            [scored_row(officially_read(r)) for r in rows
-             if r.official_reading is not None or RowStatus(r.status) is RowStatus.INFRA_ERROR],
-            official_parser,
-            len(unread),
-        )  # fmt: skip
+            [d.officially_scored for d in rows if d.officially_scored is not None], official_parser, unread
+        )
     if with_success:
         from povagent.dataset.realworld import success_breakdown
 
-        def success_of(row: ResultRow) -> dict[str, Any]:
-            success = row.scores.get("success") or {}
-            # a row the runner never scored (parse or infra error) is unanswered
-            return {"condition": row.condition, "direction": row.direction, "success": success.get("success"),
-                    "answered": success.get("answered") is True}  # fmt: skip
-
-        out["success"] = success_breakdown(success_of(r) for r in rows)
-    by_plugin = plugin_score_summary(rows)
+        # a row the runner never scored (parse or infra error) is unanswered
+        out["success"] = success_breakdown(
+            {"condition": c, "direction": d, "success": hit, "answered": answered} for c, d, hit, answered in with_success
+        )
+    by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
         out["scorers"] = by_plugin
-    diagnostics = diagnostics_breakdown(d for d in (diagnosed_row(r) for r in rows) if d is not None)
+    diagnostics = diagnostics_breakdown(d.diagnosed for d in rows if d.diagnosed is not None)
     if diagnostics is not None:  # an addition, beside the official breakdown
         out["diagnostics"] = diagnostics
-    nan_keys = [r.key for r in rows if nan_rows([officially_read(r)])]
+    nan_keys = [d.key for d in rows if d.has_nan]
     if nan_keys:  # degenerate as officially: named, so a NaN mean is never a mystery
         out["nan_coordinate_rows"] = nan_keys
     per_run: dict[int, list[ScoredRow]] = {}
-    for row, one in zip(rows, scored):
-        per_run.setdefault(row.run, []).append(one)
+    for d in rows:
+        per_run.setdefault(d.run, []).append(d.scored)
     out["per_run"] = {str(k): summarize(v) for k, v in sorted(per_run.items())}
-    statuses = Counter(RowStatus(r.status).value for r in rows)
+    statuses = Counter(d.status for d in rows)
     out["rows"] = {
         "total": len(keys) if keys is not None else len(rows),
         "done": len(rows),
@@ -177,11 +234,11 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
     ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
     When a key repeats, its last row counts.
     """
-    by_key: dict[str, ResultRow] = {}
+    by_key: dict[str, SummaryDigest] = {}
     for row in iter_rows(results):
         if keys is None or row.key in keys:
-            by_key[row.key] = summary_row(row)
-    return summarize_rows(by_key.values(), keys)
+            by_key[row.key] = summary_digest(row)
+    return summarize_digests(by_key.values(), keys)
 
 
 def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:

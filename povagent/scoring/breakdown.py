@@ -41,7 +41,7 @@ AVERAGED_FIELDS = ("response_rate", "mean_l2", "std_l2", "pct_in_frame", "mean_l
 SLICE_GROUPS = ("per_condition", "per_direction", "per_condition_direction")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ScoredRow:
     """The few fields a summary needs from a row; ``run`` is the run index it belongs to.
 

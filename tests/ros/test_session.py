@@ -259,3 +259,21 @@ def test_an_overlong_command_is_bad_input_and_never_reaches_the_model(session):
     session.on_image(image(S))
     result = session.answer("x" * (MAX_COMMAND_CHARS + 1))
     assert result.status == "bad_input" and len(result.command) < 300
+
+
+def test_every_command_shows_the_agent_each_keyframes_own_shown_frame(session):
+    """What one command computed of a keyframe (letterbox, name, encoding) the next reuses."""
+    shown = []
+
+    def record(sentence, frames, cameras, depths):
+        shown.append(list(frames))
+        raise NoAnswerError("recorded")
+
+    session.locate = record
+    session.on_camera_info(info())
+    session.on_odometry(odom(S, 2.0))
+    session.on_image(image(S))
+    session.answer("the mug")
+    session.answer("the kettle")
+    [kept] = session.memory.frames
+    assert shown[0][0] is kept.shown and shown[1][0] is kept.shown

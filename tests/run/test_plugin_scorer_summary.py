@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent.results.rows import ResultRow, RowStatus
-from povagent.run.summary import summarize_rows, summary_row
+from povagent.run.summary import summarize_rows
 
 
 def row(n: int, scores: dict[str, dict[str, Any]], status: RowStatus = RowStatus.ANSWERED) -> ResultRow:
@@ -15,7 +15,7 @@ def row(n: int, scores: dict[str, dict[str, Any]], status: RowStatus = RowStatus
 
 
 def summary(*rows: ResultRow) -> dict[str, Any]:
-    return summarize_rows([summary_row(r) for r in rows])
+    return summarize_rows(rows)
 
 
 def test_true_false_fields_are_counted_and_number_fields_averaged():

@@ -1,0 +1,125 @@
+"""What a rendered view costs beside the Embree casts it is made of (issue 44, item 3).
+
+    python benchmarks/bench_render_view.py [--rounds 3] [--views 20]
+
+House 0 (seed 0) is built once; ``--views`` of its exploration cameras are rendered. For each
+camera, in one process and interleaved camera by camera (the machine is shared), the CPU time
+(``time.process_time``) and minor page faults of:
+
+* ``primary``: the bare Embree cast of the view's 512x512 primary rays (the renderer's own
+  scene, rays and origin, nothing else);
+* ``shadow``: the Embree occlusion pass of the same view's shadow rays, as the renderer casts
+  it (the rays are made beforehand, outside the clock);
+* ``view``: a whole view as the active mode makes it (:meth:`ActiveHouse.render_png`: render,
+  shade and encode the PNG as the writer does).
+
+Prints per round the mean of each, and the figure: view / (primary + shadow), goal <= 1.6;
+writes ``benchmarks/results/bench_render_view.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from results_file import figure, record
+
+
+def shadow_rays(renderer, camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The shadow pass's (starts, directions, lengths) of ``camera``'s view, as ``render`` makes them."""
+    from povagent.generate.mesh_parts import CEILING, EMISSIVE
+
+    d = renderer._directions(camera)
+    origin = np.asarray(camera.position, dtype=np.float32)
+    out = renderer._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
+    tri = out["primID"].astype(np.intp)
+    hit = tri >= 0
+    idx = np.flatnonzero(hit)
+    tri, dh = tri[idx], d[:, idx]
+    p = dh * out["tfar"][idx]
+    p += origin[:, None]
+    n, L = np.take(renderer._normals, tri, axis=1), np.take(renderer._lights, tri, axis=1)
+    facing = (n * dh).sum(axis=0)
+    np.negative(n, out=n, where=facing > 0)
+    L -= p
+    dist = np.sqrt((L * L).sum(axis=0))
+    L /= dist
+    lambert = (n * L).sum(axis=0)
+    mat = np.take(renderer._materials, tri)
+    probe = (lambert > 0.02) & (mat != EMISSIVE) & (mat != CEILING)
+    start = n * np.float32(2e-3)
+    start += p
+    length = dist - np.float32(0.05)
+    length[~probe] = -1.0
+    return np.ascontiguousarray(start.T), np.ascontiguousarray(L.T), length
+
+
+def timed(fn) -> tuple[float, int]:
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    t = time.process_time()
+    fn()
+    return time.process_time() - t, resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--views", type=int, default=20)
+    args = parser.parse_args()
+    from povagent.active.house import ActiveHouse
+    from povagent.generate.exploration import plan_tour
+    from povagent.generate.pipeline import build_house
+
+    built = build_house(0, 0)
+    renderer = built.renderer
+    house = ActiveHouse(Path("."), "train_house_00000", 0, 0, built, threading.Lock())
+    cameras = plan_tour(built.house, renderer, args.views)
+    house.render_png(cameras[0])  # the ray grid of the frame size is built once
+    rays = [shadow_rays(renderer, c) for c in cameras]
+    print(f"load before: {os.getloadavg()}")
+    per_round: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "ratio": []}
+    faults: dict[str, list[int]] = {"primary": [], "shadow": [], "view": []}
+    for r in range(args.rounds):
+        cpu: dict[str, list[float]] = {"primary": [], "shadow": [], "view": []}
+        for camera, (start, direction, length) in zip(cameras, rays):
+            d = renderer._directions(camera).T
+            origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), d.shape)
+            for name, fn in (
+                ("primary", lambda: renderer._scene.run(origins, d, output=1)),
+                ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),
+                ("view", lambda: house.render_png(camera)),
+            ):
+                seconds, flt = timed(fn)
+                cpu[name].append(seconds)
+                faults[name].append(flt)
+        means = {k: statistics.mean(v) for k, v in cpu.items()}
+        for k, v in means.items():
+            per_round[k].append(v)
+        per_round["ratio"].append(means["view"] / (means["primary"] + means["shadow"]))
+        print(f"round {r + 1}: primary {1000 * means['primary']:.1f} ms, shadow {1000 * means['shadow']:.1f} ms, "
+              f"view {1000 * means['view']:.1f} ms CPU: view / (primary + shadow) = {per_round['ratio'][-1]:.2f}; "
+              f"page faults per view {statistics.mean(faults['view'][-len(cameras):]):.0f}", flush=True)
+    ratio = statistics.median(per_round["ratio"])
+    med = {k: 1000 * statistics.median(v) for k, v in per_round.items() if k != "ratio"}
+    load = os.getloadavg()
+    print(f"median: view {med['view']:.1f} ms = {ratio:.2f}x primary + shadow ({med['primary']:.1f} + {med['shadow']:.1f} ms); "
+          f"{statistics.mean(faults['view']):.0f} page faults per view; load after: {load}")
+    setting = f"house 0 (seed 0), {len(cameras)} exploration cameras, 512x512; CPU time, median of {args.rounds} interleaved rounds"
+    record("bench_render_view", [
+        figure("rendered view / (primary rays + shadow pass)", round(ratio, 2), "x", target="<= 1.6", comparison=setting),
+        figure("rendered view (render, shade, PNG)", round(med["view"], 1), "ms", comparison="ActiveHouse.render_png"),
+        figure("primary rays, bare Embree cast", round(med["primary"], 1), "ms"),
+        figure("shadow pass, bare Embree cast", round(med["shadow"], 1), "ms"),
+        figure("page faults per view", round(statistics.mean(faults["view"])), "count"),
+    ])
+
+
+if __name__ == "__main__":
+    main()
