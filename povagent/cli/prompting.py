@@ -86,8 +86,8 @@ def show_prompt_command(
     show <<the model's answer to turn N>> where its earlier answer will stand.
     """
     from povagent.config.pipeline import load_pipeline
+    from povagent.dataset.evaluation_set import open_evaluation_set
     from povagent.dataset.hub import resolve_hub_dataset
-    from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
     from povagent.exchange.preview import preview_request
@@ -95,7 +95,7 @@ def show_prompt_command(
     from povagent.plugins import get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
-    dataset = load_dataset(config.dataset.root)
+    dataset = open_evaluation_set(config.dataset.root)
     inst = dataset.instance(instance)
     if inst is None:
         raise DatasetError(unknown_instance_message(instance, [i.id for i in dataset.instances()], config.dataset.root))

@@ -196,19 +196,16 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
     A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
     gallery draws on, as the runner loads them.
     """
-    from povagent.dataset.loader import load_dataset
-    from povagent.dataset.realworld import is_realworld, load_realworld
+    from povagent.dataset.evaluation_set import open_evaluation_set
     from povagent.errors import DatasetError
 
     paths = [Path(override)] if override else collection.dataset_paths()
     if not paths:
         return None, "no dataset path in the runs' config.yaml (pass --dataset)"
     try:
-        if is_realworld(paths[0]):
-            return load_realworld(paths[0]), None
         # No load-time image check: the gallery draws a card for every row and says on it
         # which image failed, instead of the house vanishing from the report.
-        return load_dataset(paths[0], check_images=False), None
+        return open_evaluation_set(paths[0], check_images=False), None
     except DatasetError as exc:
         return None, f"dataset not loadable: {exc}"
 

@@ -135,12 +135,9 @@ def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
                 g.out, houses=g.houses, seed=g.seed, frames=g.frames,
                 judge=g.judge.name, judge_options=g.judge.options, plugins=config.plugins,
             )  # fmt: skip
-    from povagent.dataset.loader import load_dataset
-    from povagent.dataset.realworld import is_realworld, load_realworld
+    from povagent.dataset.evaluation_set import open_evaluation_set
 
-    if is_realworld(spec.root):
-        return load_realworld(spec.root)
-    return load_dataset(spec.root, strict=spec.strict)
+    return open_evaluation_set(spec.root, strict=spec.strict)
 
 
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:

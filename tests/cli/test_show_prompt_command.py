@@ -136,3 +136,11 @@ def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
     assert "ids in this dataset for house train_house_00000:" in done.stderr
+
+
+def test_prints_the_prompt_of_an_instance_of_the_shipped_real_world_demo(tmp_path):
+    demo = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
+    result, out = show(tmp_path, demo, "basic", "house_1/kitchen/right/c")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("--- message 1 (user) ---") and "--- answer schema:" in result.stdout
+    assert len(list(out.glob("*.png"))) == 1  # condition C: the observer view, letterboxed
