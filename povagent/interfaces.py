@@ -139,6 +139,13 @@ class Backend(abc.ABC):
 class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
 
+    #: The parser this strategy's answers need, when only one reads them (the ``active``
+    #: strategy's episode record: ``"active"``); ``None``: any parser of its answer type. A
+    #: pipeline naming no parser gets this one; one naming another is refused at load.
+    answer_parser: ClassVar[str | None] = None
+    #: The answer type this strategy asks for; a parser that does not read it is refused at load.
+    answer_type: ClassVar[str] = "point"
+
     @abc.abstractmethod
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The (first) request for an instance."""
@@ -188,7 +195,10 @@ def declares_turns(strategy: Strategy) -> bool:
 
 
 class Parser(abc.ABC):
-    """Reads a point (and a frame) out of a model's raw answer. Must never raise on bad text."""
+    """Reads an answer (a point, and a frame) out of a model's raw text. Must never raise on bad text."""
+
+    #: The answer types this parser reads (see :attr:`Strategy.answer_type`).
+    answer_types: ClassVar[frozenset[str]] = frozenset({"point"})
 
     @abc.abstractmethod
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:

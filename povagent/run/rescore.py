@@ -32,6 +32,7 @@ from typing import Any, Sequence
 import yaml
 
 from povagent.answers.spec import AnswerSpec
+from povagent.config.plugin_checks import parser_misfit
 from povagent.config.plugin_rule import missing_plugin_message
 from povagent.dataset.evaluation_set import open_evaluation_set
 from povagent.dataset.instances import Instance
@@ -145,6 +146,9 @@ def rescore_run(
             raise PluginError(missing_plugin_message("rescore", run, kind, name, config.plugins))
     if parser_name is None:
         parser_name = official_reading_of_run(host, config.parser.name if config.parser else None)
+    misfit = parser_misfit(host, config.strategy.name, parser_name)
+    if misfit is not None:
+        raise PluginError(f"rescore {run}: {misfit}")
     parser = host.parser(parser_name, {})
     counterpart = official_counterpart(parser)
     official = (host.parser(counterpart, {}), counterpart) if counterpart else None

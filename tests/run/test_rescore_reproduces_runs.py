@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
+from povagent.errors import PluginError
 from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
@@ -56,12 +57,24 @@ def test_a_run_showing_fewer_frames_rescores_to_its_own_scores(tmp_path, small_r
     assert_rescore_reproduces(folder)
 
 
-def test_an_active_run_rescores_to_its_own_scores(tmp_path, generated_release):
-    folder = run(
-        tmp_path, dataset={"path": str(generated_release)}, instances={"houses": ["train_house_00001"], "limit": 3},
-        backend="explorer-random", strategy="active", parser="active", scorers=["official"],
+@pytest.fixture(scope="module")
+def active_run(generated_release, tmp_path_factory) -> Path:
+    """Three keys of the active strategy, the random explorer looking around (8 of 12 frames shown)."""
+    return run(
+        tmp_path_factory.mktemp("active"), dataset={"path": str(generated_release)},
+        instances={"houses": ["train_house_00001"], "limit": 3}, backend="explorer-random", strategy="active",
+        scorers=["official"],
     )  # fmt: skip
-    assert_rescore_reproduces(folder)
+
+
+def test_an_active_run_rescores_to_its_own_scores(active_run):
+    assert_rescore_reproduces(active_run)
+
+
+def test_rescore_refuses_a_parser_that_cannot_read_the_runs_answers(active_run):
+    with pytest.raises(PluginError, match="parser 'json' cannot read the answers of strategy 'active'"):
+        rescore_run(active_run, "json")
+    assert not (active_run / "rescored-json").exists()
 
 
 #: Official-format answers to the demo set's A/B commands: a hit, a non-response, a miss, an
