@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
+    from povagent.scoring.metrics import Metric
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
@@ -207,6 +208,10 @@ class Parser(abc.ABC):
 
 class Scorer(abc.ABC):
     """Scores one parsed answer against the ground truth."""
+
+    #: The numbers this scorer's fields give (:class:`~povagent.scoring.metrics.Metric`):
+    #: ``summary.json``'s ``metrics`` section, the console and the report show each, per slice.
+    metrics: ClassVar[tuple[Metric, ...]] = ()
 
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:

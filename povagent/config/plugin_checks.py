@@ -132,6 +132,9 @@ def parser_misfit(host: PluginHost, strategy: str, parser: str) -> str | None:
     if needed is not None and parser != needed:
         return f"parser {parser!r} cannot read the answers of strategy {strategy!r}, which need parser {needed!r} (name it, or leave parser: out)"
     asked = getattr(host.entry("strategy", strategy).factory, "answer_type", "point")
+    if asked not in host.names("answer_type"):
+        known = ", ".join(host.names("answer_type")) or "none"
+        return f"strategy {strategy!r} asks for a {asked} answer, an answer type no loaded plugin registers (registered: {known})"
     reads = getattr(host.entry("parser", parser).factory, "answer_types", frozenset({"point"}))
     if asked not in reads:
         return f"parser {parser!r} reads {', '.join(sorted(reads))} answers, and strategy {strategy!r} asks for a {asked} answer"

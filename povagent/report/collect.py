@@ -27,7 +27,9 @@ import yaml
 
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.run_summaries import declared_in_summary
 from povagent.results.rows import ResultRow, read_rows
+from povagent.scoring.metrics import Declared, row_metric_values
 
 RESULTS_FILE = "results.jsonl"
 CONFIG_FILE = "config.yaml"
@@ -91,6 +93,8 @@ class Observation:
     nearer_egocentric: bool | None = None
     #: ``relation``: the point lies in the relation region (``None``: not scored).
     relation: bool | None = None
+    #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
+    metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
 
 
 @dataclass
@@ -348,7 +352,7 @@ def assign_systems(runs: list[RunInfo]) -> None:
             r.system = r.axes.get("model") or r.axes.get("backend") or r.name
 
 
-def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official") -> Observation:
+def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official", declared: Declared | None = None) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
     ``official``: answered when the official scorer answered it, with its error. ``success``:
@@ -396,6 +400,7 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
         turns=tuple((e.prompt, e.raw) for e in row.exchanges),
+        metric_values=row_metric_values(row, declared) if declared else {},
         **diagnosis_of(row),
     )
 
@@ -444,11 +449,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
+        declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
         for row in r.rows:
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, r.scorer)
+            o = observation_of(row, r.system, r.name, r.scorer, declared)
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out)
 

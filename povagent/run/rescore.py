@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import yaml
 
@@ -44,7 +44,7 @@ from povagent.results.rows import ResultRow, RowStatus, StagedResults, read_rows
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring
-from povagent.run.summary import summarize_rows, write_summary
+from povagent.run.summary import declared_metrics, summarize_rows, write_summary
 from povagent.run.summary_model import RunSummary
 
 
@@ -88,10 +88,11 @@ def rescore_row(row: ResultRow, instance: Instance, spec: AnswerSpec, scoring: A
     )
 
 
-def rescore_summary(rows: list[ResultRow]) -> dict[str, Any]:
-    """The rescored rows' summary: the run's own (:func:`~povagent.run.summary.summarize_rows`),
-    with the rows by parse status and how many answers the parser repaired."""
-    summary = summarize_rows(rows)
+def rescore_summary(rows: list[ResultRow], scorers: Mapping[str, Any]) -> dict[str, Any]:
+    """The rescored rows' summary: the run's own (:func:`~povagent.run.summary.summarize_rows`,
+    with ``scorers``' declared metrics), with the rows by parse status and how many answers the
+    parser repaired."""
+    summary = summarize_rows(rows, None, declared_metrics(scorers))
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
     summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
     return summary
@@ -165,7 +166,8 @@ def rescore_run(
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
     dataset = open_evaluation_set(root, check_images=False)  # answers are re-read, not re-sent
-    scoring = AnswerScoring(parser, scorers, dataset, *(official or (None, None)),
+    official_parser, official_name = official if official is not None else (None, None)
+    scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
                             on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc))  # fmt: skip
     images = ImageStore()
     warnings: list[str] = []
@@ -189,7 +191,7 @@ def rescore_run(
         nan_note = nan_warning(nan_rows(officially_read(r) for r in rows_out))
         if nan_note:
             warnings.append(nan_note)
-        summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **rescore_summary(rows_out)}
+        summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **rescore_summary(rows_out, scorers)}
         rescored_config = config.resolved_dict()
         rescored_config["parser"] = {"name": parser_name, "options": {}}
         rescored_config["scorers"] = [*rescored_config.get("scorers", []), *({"name": n, "options": {}} for n in extra_scorers

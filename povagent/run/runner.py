@@ -58,7 +58,7 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import summarize_rows, summary_row, write_summary
+from povagent.run.summary import declared_metrics, summarize_rows, summary_row, write_summary
 from povagent.run.summary_model import RunSummary
 
 LOG = "log.jsonl"
@@ -459,7 +459,8 @@ class PipelineRun:
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
         over the selected keys, plus the run's counters."""
-        summary = summarize_rows(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
+        keys = {row_key(i.id, r) for i in instances for r in runs}
+        summary = summarize_rows(self._digests.values(), keys, declared_metrics(self.components.scorers))
         spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections import Counter
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
@@ -20,6 +20,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
+from povagent.scoring.metrics import Metric, metrics_breakdown
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -108,11 +109,14 @@ def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
     )
 
 
-def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> dict[str, Any]:
+def summarize_rows(
+    rows: Iterable[ResultRow], keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None
+) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
-    are left out.
+    are left out. ``declared`` is each scorer's metrics (``Scorer.metrics``): the ``metrics``
+    section holds them per slice (see :mod:`povagent.scoring.metrics`).
     """
     rows = [r for r in rows if keys is None or r.key in keys]
     scored = [scored_row(r) for r in rows]
@@ -141,6 +145,8 @@ def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> d
                     "answered": success.get("answered") is True}  # fmt: skip
 
         out["success"] = success_breakdown(success_of(r) for r in rows)
+    if declared and any(declared.values()):
+        out["metrics"] = metrics_breakdown(rows, declared)
     by_plugin = plugin_score_summary(rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
         out["scorers"] = by_plugin
@@ -169,6 +175,11 @@ def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> d
         "retries": spent.retries,
     }
     return out
+
+
+def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]]:
+    """``{name: metrics}`` of scorer objects (or factories): what each declared."""
+    return {name: tuple(getattr(scorer, "metrics", ())) for name, scorer in scorers.items()}
 
 
 def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:

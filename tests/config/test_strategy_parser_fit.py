@@ -13,7 +13,10 @@ from povagent.errors import ConfigError
 
 CHOICE_PLUGIN = '''
 from povagent import hookimpl
+from povagent.answers.types import AnswerType
 from povagent_plugins.strategies.basic import BasicStrategy
+
+CHOICE = AnswerType("choice", "a label", {"type": "object"}, lambda p: None, lambda i: None, lambda v: "")
 
 
 class ChoiceStrategy(BasicStrategy):
@@ -23,6 +26,12 @@ class ChoiceStrategy(BasicStrategy):
 @hookimpl
 def register_strategies(register):
     register("test-choice", ChoiceStrategy, description="test: asks for a choice")
+'''
+#: The plugin above, and the choice answer type registered.
+CHOICE_TYPE = '''
+@hookimpl
+def register_answer_types(register):
+    register("choice", CHOICE)
 '''
 
 
@@ -57,8 +66,18 @@ def test_a_parser_that_cannot_read_the_active_record_is_refused_in_one_line(tmp_
     )
 
 
-def test_a_parser_not_reading_the_asked_answer_type_is_refused(tmp_path):
+def test_a_strategy_asking_for_an_answer_type_no_plugin_registers_is_refused(tmp_path):
     (tmp_path / "choice_plugin.py").write_text(CHOICE_PLUGIN, encoding="utf-8")
+    path = write(tmp_path, "plugins: [choice_plugin.py]\ndataset: d\nbackend: center\nstrategy: test-choice\noutput: runs/c\n")
+    with pytest.raises(ConfigError) as err:
+        load_pipeline(path)
+    assert str(err.value) == (
+        f"{path}, line 4: strategy 'test-choice' asks for a choice answer, an answer type no loaded plugin registers (registered: point)"
+    )
+
+
+def test_a_parser_not_reading_the_asked_answer_type_is_refused(tmp_path):
+    (tmp_path / "choice_plugin.py").write_text(CHOICE_PLUGIN + CHOICE_TYPE, encoding="utf-8")
     path = write(tmp_path, "plugins: [choice_plugin.py]\ndataset: d\nbackend: center\nstrategy: test-choice\noutput: runs/c\n")
     with pytest.raises(ConfigError) as err:
         load_pipeline(path)
