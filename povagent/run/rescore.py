@@ -168,7 +168,8 @@ def rescore_run(
     dataset = open_evaluation_set(root, check_images=False)  # answers are re-read, not re-sent
     official_parser, official_name = official if official is not None else (None, None)
     scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
-                            on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc))  # fmt: skip
+                            on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc),
+                            answer_type=host.answer_type(strategy.answer_type))  # fmt: skip
     images = ImageStore()
     warnings: list[str] = []
     out_dir = run / f"rescored-{parser_name}"

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.answers.types import AnswerType
 from povagent.dataset.instances import Instance
 from povagent.dataset.protocol import EvaluationSet
 from povagent.interfaces import Parser, Scorer
@@ -45,12 +46,15 @@ def instance_view(instance: Instance, spec: AnswerSpec) -> Instance:
     return instance
 
 
-def prediction_of(instance: Instance, parse: ParsedAnswer) -> Prediction:
-    """What a row records as the prediction: the frame index, its image path (A/B) and the point."""
+def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerType | None = None) -> Prediction:
+    """What a row records as the prediction: the frame index, its image path (A/B), the point,
+    and the typed value ``answer_type`` reads from the parse."""
     sel = parse.selected_image
     frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
     image_path = frame.image_path if frame is not None else None
-    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y)
+    typed = answer_type.name if answer_type is not None else None
+    value = answer_type.value_of(parse) if answer_type is not None else None
+    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y, answer_type=typed, value=value)
 
 
 @dataclass(frozen=True)
@@ -67,8 +71,8 @@ class ScoredAnswer:
 @dataclass
 class AnswerScoring:
     """What scoring an answer needs: the parser, the scorers, the set, the official reading's
-    parser (``None`` when ``parser`` reads officially itself), and what to do when a plugin
-    raises (``run`` logs it and the row records it; ``rescore`` stops)."""
+    parser (``None`` when ``parser`` reads officially itself), what to do when a plugin raises
+    (``run`` logs it and the row records it; ``rescore`` stops), and the answer type asked for."""
 
     parser: Parser
     scorers: Mapping[str, Scorer]
@@ -77,6 +81,8 @@ class AnswerScoring:
     official_parser_name: str | None = None
     on_parser_error: OnParserError | None = None
     on_scorer_error: OnScorerError | None = None
+    #: The answer type the strategy asked for: the prediction's typed value.
+    answer_type: AnswerType | None = None
 
     def score_answer(self, instance: Instance, spec: AnswerSpec, text: str) -> ScoredAnswer:
         """``text`` (the final raw answer to ``spec``) parsed and scored on ``instance`` as shown."""
@@ -86,7 +92,7 @@ class AnswerScoring:
         prediction = Prediction()
         if parse.answered:
             status = RowStatus.ANSWERED
-            prediction = prediction_of(shown, parse)
+            prediction = prediction_of(shown, parse, self.answer_type)
             scores = self.scores_of(shown, parse)
         else:
             status = RowStatus.PARSE_ERROR

@@ -162,4 +162,4 @@ class KeySolver:
             self.log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
         return AnswerScoring(comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name,
-                             parser_raised, scorer_raised)  # fmt: skip
+                             parser_raised, scorer_raised, comps.answer_type)  # fmt: skip

@@ -97,3 +97,15 @@ def test_a_real_world_run_rescores_to_its_own_scores(tmp_path):
         instances={"houses": ["house_1"], "conditions": ["a", "b"]}, strategy="basic", parser="json", scorers=["success"],
     )  # fmt: skip
     assert_rescore_reproduces(folder)
+
+
+def test_an_answered_rows_prediction_carries_its_typed_point(tmp_path, small_release, povagent_host, offline_plugin):
+    folder = run(
+        tmp_path, plugins=[offline_plugin.__file__], dataset={"path": str(small_release)},
+        backend={"name": "test-center", "options": {"reply": '{"selected_image": 1, "x": 100, "y": 200}'}},
+        strategy="basic", parser="json", scorers=["official"],
+    )  # fmt: skip
+    rows = read_rows(folder / "results.jsonl")
+    ab = [r for r in rows if r.condition != "c"]
+    assert ab and all(r.prediction.answer_type == "point" and r.prediction.value == {"selected_image": 1, "x": 100.0, "y": 200.0}
+                      for r in ab)  # fmt: skip

@@ -28,9 +28,13 @@ def copy_of_the_old_run(tmp_path: Path) -> Path:
 def test_an_old_run_rescores_to_the_scores_and_summary_it_was_written_with(tmp_path, mini_root):
     folder = copy_of_the_old_run(tmp_path)
     result = rescore_run(folder, "json", dataset_root=mini_root)
-    old = {r.key: r.model_dump(mode="json", include=SCORED_FIELDS) for r in read_rows(folder / "results.jsonl")}
-    new = {r.key: r.model_dump(mode="json", include=SCORED_FIELDS) for r in read_rows(result.out_dir / "results.jsonl")}
+    typed = {"prediction": {"answer_type", "value"}}  # new since: the old rows' x/y are what it reads
+    old = {r.key: r.model_dump(mode="json", include=SCORED_FIELDS, exclude=typed) for r in read_rows(folder / "results.jsonl")}
+    new_rows = read_rows(result.out_dir / "results.jsonl")
+    new = {r.key: r.model_dump(mode="json", include=SCORED_FIELDS, exclude=typed) for r in new_rows}
     assert new == old
+    assert all(r.prediction.value == {"selected_image": r.prediction.selected_image, "x": r.prediction.x, "y": r.prediction.y}
+               for r in new_rows)
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     rescored = json.loads((result.out_dir / "summary.json").read_text(encoding="utf-8"))
     # the sections it was written with (a section added since, such as metrics, comes beside them)
