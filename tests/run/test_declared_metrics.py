@@ -78,3 +78,11 @@ def test_a_third_party_scorers_metrics_get_a_report_table(tmp_path, write_pipeli
     assert result.exit_code == 0, result.output
     tables = (out / "tables.md").read_text(encoding="utf-8")
     assert "Scorer test-near" in tables and "Near the centre" in tables and "100.0%" in tables
+
+
+def test_rescore_prints_a_third_party_scorers_metrics_table(tmp_path, write_pipeline, offline_plugin):
+    folder, _ = run_with_near(tmp_path, write_pipeline, offline_plugin, ["official", "test-near"])
+    plugins = ["--plugin", offline_plugin.__file__, "--plugin", str(tmp_path / "near_plugin.py")]
+    result = CliRunner().invoke(app, ["rescore", str(folder), "--parser", "test-json", *plugins], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "scorer test-near" in result.stdout and "Offset ↓" in result.stdout
