@@ -5,6 +5,8 @@ implements ``register_*`` hooks. Keep one module per line, grouped by kind.
 """
 
 DEFAULT_PLUGINS: tuple[str, ...] = (
+    # answer types
+    "povagent_plugins.answers.point",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",

@@ -88,7 +88,22 @@ def register_scorers(register: Register) -> None:
     ``options`` those of the scorer's entry under the pipeline YAML's ``scorers:``, returns a
     :class:`povagent.interfaces.Scorer`, whose ``score(instance, answer, dataset)`` returns a
     JSON-able dict, stored in each answered row as ``scores[name]``; ``summary.json``'s
-    ``scorers`` section averages its number fields and counts its true/false ones.
+    ``scorers`` section averages its number fields and counts its true/false ones. The metrics
+    its class declares (``Scorer.metrics``: :class:`povagent.scoring.metrics.Metric`) get
+    ``summary.json``'s ``metrics`` section, a console table and a report table.
+    """
+
+
+@hookspec
+def register_answer_types(register: Register) -> None:
+    """Contribute answer types: the kind of value a parser produces (a point, a choice label).
+
+    Called once per plugin, when the plugin host first collects registered names. For each type
+    call ``register(name, answer_type, description="...")`` where ``answer_type`` is a
+    :class:`povagent.answers.types.AnswerType` (the JSON Schema of its value, how a parse gives
+    the value, how the gold value is read from an instance, how a row shows a value). A strategy
+    names the type it asks for (``Strategy.answer_type``) and a parser the types it reads
+    (``Parser.answer_types``); a pipeline asking for a type no plugin registers is refused at load.
     """
 
 

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
+    from povagent.scoring.metrics import Metric
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
@@ -144,6 +145,13 @@ class Backend(abc.ABC):
 class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
 
+    #: The parser this strategy's answers need, when only one reads them (the ``active``
+    #: strategy's episode record: ``"active"``); ``None``: any parser of its answer type. A
+    #: pipeline naming no parser gets this one; one naming another is refused at load.
+    answer_parser: ClassVar[str | None] = None
+    #: The answer type this strategy asks for; a parser that does not read it is refused at load.
+    answer_type: ClassVar[str] = "point"
+
     @abc.abstractmethod
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The (first) request for an instance."""
@@ -193,7 +201,10 @@ def declares_turns(strategy: Strategy) -> bool:
 
 
 class Parser(abc.ABC):
-    """Reads a point (and a frame) out of a model's raw answer. Must never raise on bad text."""
+    """Reads an answer (a point, and a frame) out of a model's raw text. Must never raise on bad text."""
+
+    #: The answer types this parser reads (see :attr:`Strategy.answer_type`).
+    answer_types: ClassVar[frozenset[str]] = frozenset({"point"})
 
     @abc.abstractmethod
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
@@ -202,6 +213,10 @@ class Parser(abc.ABC):
 
 class Scorer(abc.ABC):
     """Scores one parsed answer against the ground truth."""
+
+    #: The numbers this scorer's fields give (:class:`~povagent.scoring.metrics.Metric`):
+    #: ``summary.json``'s ``metrics`` section, the console and the report show each, per slice.
+    metrics: ClassVar[tuple[Metric, ...]] = ()
 
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:

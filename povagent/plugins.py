@@ -35,6 +35,7 @@ import pluggy
 import structlog
 
 from povagent import hookspecs
+from povagent.answers.types import AnswerType
 from povagent.errors import PluginError
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 
@@ -49,6 +50,8 @@ KIND_HOOKS: dict[str, str] = {
 }
 KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
+#: Contribution hooks that register objects rather than factories, and the kind each fills.
+OBJECT_HOOKS: dict[str, str] = {"profile": PROFILE_HOOK, "answer_type": "register_answer_types"}
 
 #: The entry-point group third-party distributions declare their plugins under.
 ENTRY_POINT_GROUP = "povagent"
@@ -156,8 +159,8 @@ class PluginHost:
     def _collect(self) -> dict[str, dict[str, PluginEntry]]:
         if self._registry is not None:
             return self._registry
-        registry: dict[str, dict[str, PluginEntry]] = {k: {} for k in (*KINDS, "profile")}
-        for kind, hook_name in (*KIND_HOOKS.items(), ("profile", PROFILE_HOOK)):
+        registry: dict[str, dict[str, PluginEntry]] = {k: {} for k in (*KINDS, *OBJECT_HOOKS)}
+        for kind, hook_name in (*KIND_HOOKS.items(), *OBJECT_HOOKS.items()):
             table = registry[kind]
             caller = getattr(self.pm.hook, hook_name)
             for impl in reversed(caller.get_hookimpls()):
@@ -287,6 +290,13 @@ class PluginHost:
     def profile(self, name: str) -> Any:
         """The model profile registered as ``name`` (see ``register_model_profiles``)."""
         return self.entry("profile", name).factory
+
+    def answer_type(self, name: str) -> AnswerType:
+        """The answer type registered as ``name`` (see ``register_answer_types``)."""
+        found = self.entry("answer_type", name).factory
+        if not isinstance(found, AnswerType):
+            raise PluginError(f"{self.entry('answer_type', name).source}: answer type {name!r} is not a povagent.answers.types.AnswerType")
+        return found
 
     def profiles(self) -> dict[str, Any]:
         """Every model profile by name."""

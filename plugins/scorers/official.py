@@ -13,12 +13,28 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
+from povagent.scoring.metrics import Metric
 from povagent.scoring.official import UNANSWERED, answered_in_camera, closest_point_l2, score_point, scoring_frame
+
+#: The official number, its response rate, and the protocol's extras.
+OFFICIAL_METRICS = (
+    Metric("mean_l2", "lower", "mean", "l2", "Mean L2", "Official: mean clamped normalized L2 over answered instances."),
+    Metric("response_rate", "higher", "rate", "answered", "Response rate",
+           "Answered / total instances (unparseable answers and API failures are non-responses).", over="all"),
+    Metric("strict_l2", "lower", "mean", "l2_strict", "Strict L2",
+           "A GT behind the scored frame's camera or outside the frame counts as a miss (sqrt 2)."),
+    Metric("frame_accuracy", "higher", "rate", "gt_in_frame", "GT in selected frame",
+           "Share of answered instances whose GT projects inside the scored frame (Inferred/Stated: frame selection)."),
+    Metric("blind_spot", "lower", "rate", "gt_behind", "GT behind camera",
+           "Share of answered instances scored by the blind spot (GT behind the camera, placed at the centre)."),
+)  # fmt: skip
 
 
 class OfficialScorer(Scorer):
     """Clamped normalized L2 in the selected frame (A/B), the observer view (C), or the camera
     an answer carries (the active mode's rendered views)."""
+
+    metrics = OFFICIAL_METRICS
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if not answer.answered:

@@ -31,6 +31,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.dataset.realworld import Mark, RealWorldInstance
 from povagent.interfaces import Scorer
+from povagent.scoring.metrics import Metric
 
 #: The default hit radius, as a fraction of the original frame's diagonal.
 DEFAULT_RADIUS = 0.1
@@ -57,6 +58,13 @@ def inside_polygon(x: float, y: float, polygon: Sequence[Sequence[float]]) -> bo
 
 class SuccessScorer(Scorer):
     """Hit or miss against a real-world set's marks (options: ``radius``, ``radius_px``)."""
+
+    metrics = (
+        Metric("success_rate", "higher", "rate", "success", "Success rate",
+               "Hits / all instances, an unanswered instance counting as a failure (the paper's protocol for real houses).",
+               over="all"),
+        Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answered / total instances.", over="all"),
+    )  # fmt: skip
 
     def __init__(self, radius: float = DEFAULT_RADIUS, radius_px: float | None = None) -> None:
         if not isinstance(radius, (int, float)) or isinstance(radius, bool) or radius <= 0:

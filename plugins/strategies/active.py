@@ -80,6 +80,8 @@ class ActiveStrategy(BasicStrategy):
 
     default_max_tokens: int | None = 512
     default_max_frames: int | None = 8
+    #: Only the ``active`` parser reads the episode record a row ends with.
+    answer_parser = "active"
 
     def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
                  speaker: str = "stated", **basic: Any) -> None:  # fmt: skip

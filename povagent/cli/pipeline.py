@@ -26,12 +26,17 @@ def _summary_table(summary: RunSummary, title: PathTitle, run_dir: Path) -> None
     """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
+    from povagent.cli.metrics_table import render_metrics
 
+    shown = []  # scorers whose numbers a table of their own printed
     success = _success_summary(summary, run_dir)
     if success is not None:  # a real-world set: success rates, as the paper reports them
         _success_table(success, title)
+        shown.append("success")
     if _scored_officially(summary):
         render_summary(summary, title=title)
+        shown.append("official")
+    render_metrics(summary, title, shown)  # every other scorer's declared metrics
     render_diagnostics(summary)  # additions, under the official table
 
 

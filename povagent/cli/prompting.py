@@ -88,8 +88,8 @@ def show_prompt_command(
     show <<the model's answer to turn N>> where its earlier answer will stand.
     """
     from povagent.config.pipeline import load_pipeline
+    from povagent.dataset.evaluation_set import open_evaluation_set
     from povagent.dataset.hub import resolve_hub_dataset
-    from povagent.dataset.loader import load_dataset
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
     from povagent.exchange.preview import preview_request
@@ -97,7 +97,7 @@ def show_prompt_command(
     from povagent.plugins import get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
-    dataset = load_dataset(config.dataset.root)
+    dataset = open_evaluation_set(config.dataset.root)
     inst = dataset.instance(instance)
     if inst is None:
         # an instance of a house the loader left out: say why in one line, not "no such id"
@@ -221,6 +221,7 @@ def rescore_command(
     from povagent.cli.console_width import PathTitle
     from povagent.cli.dataset import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
+    from povagent.cli.metrics_table import render_metrics
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
 
@@ -234,7 +235,9 @@ def rescore_command(
 
         typer.echo(json.dumps(finite_json(summary.model_dump(mode="json", exclude_unset=True)), indent=2))
     else:
-        render_summary(summary, title=PathTitle(run_dir, f" re-parsed with {parser}"))
+        title = PathTitle(run_dir, f" re-parsed with {parser}")
+        render_summary(summary, title=title)
+        render_metrics(summary, title, shown=["official"])  # every other scorer's declared metrics
         render_official_beside(summary, parser, reads_officially=summary.official_parse is None, run_dir=run_dir)
         render_diagnostics(summary)
         typer.echo(f"parse status: {json.dumps(summary.parse_status)}; repaired: {summary.repaired}")

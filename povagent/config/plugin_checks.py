@@ -120,12 +120,16 @@ PROFILE_BACKENDS = frozenset({"litellm", "transformers"})
 
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
     """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
-    when no parser is given, the profile's default parser (``official`` otherwise: a repair
+    when no parser is given, the parser the strategy's answers need (its ``answer_parser``),
+    else the profile's default parser (``official`` otherwise: a repair
     parser runs only when a pipeline or a profile names it). A profile named
     as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
     its parser and strategy defaults the same way, and so does one named as the in-process
     ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
     backend, parser, strategy = config.backend, config.parser, config.strategy
+    if parser is None:  # a strategy whose answers one parser reads gets it, whatever a profile says
+        needed = needed_parser(host, strategy.name)
+        parser = ComponentSpec(name=needed) if needed is not None else None
     profile = None
     if config.model is not None:
         profile = host.profile(config.model)
@@ -145,6 +149,38 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
     if parser is None:
         parser = ComponentSpec(name=OFFICIAL_PARSER)
     return config.model_copy(update={"backend": backend, "parser": parser, "strategy": strategy})
+
+
+def needed_parser(host: PluginHost, strategy: str) -> str | None:
+    """The parser strategy ``strategy``'s answers need (its ``answer_parser``), or ``None``."""
+    needed = getattr(host.entry("strategy", strategy).factory, "answer_parser", None)
+    return needed if isinstance(needed, str) else None
+
+
+def parser_misfit(host: PluginHost, strategy: str, parser: str) -> str | None:
+    """Why parser ``parser`` cannot read strategy ``strategy``'s answers, or ``None`` when it can:
+    the strategy needs another parser, or asks for an answer type the parser does not read."""
+    needed = needed_parser(host, strategy)
+    if needed is not None and parser != needed:
+        return f"parser {parser!r} cannot read the answers of strategy {strategy!r}, which need parser {needed!r} (name it, or leave parser: out)"
+    asked = getattr(host.entry("strategy", strategy).factory, "answer_type", "point")
+    if asked not in host.names("answer_type"):
+        known = ", ".join(host.names("answer_type")) or "none"
+        return f"strategy {strategy!r} asks for a {asked} answer, an answer type no loaded plugin registers (registered: {known})"
+    reads = getattr(host.entry("parser", parser).factory, "answer_types", frozenset({"point"}))
+    if asked not in reads:
+        return f"parser {parser!r} reads {', '.join(sorted(reads))} answers, and strategy {strategy!r} asks for a {asked} answer"
+    return None
+
+
+def check_parser_fits(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc = ()) -> None:
+    """The resolved parser must read what the strategy asks: one line naming the ``parser:`` line
+    (the strategy's when the parser came from a default), before any request."""
+    assert config.parser is not None, "resolve_components() first"
+    misfit = parser_misfit(host, config.strategy.name, config.parser.name)
+    if misfit is not None:
+        loc = ("parser",) if prefix + ("parser",) in source.lines else ("strategy",)
+        raise ConfigError(f"{source.where(prefix + loc)}: {misfit}")
 
 
 def plugin_host_for(plugins: list[str], source: ConfigSource, host: PluginHost | None) -> PluginHost:

@@ -17,7 +17,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
@@ -30,8 +30,11 @@ from povagent.report.baseline import (
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
 from povagent.report.collect import Collection, Observation
+from povagent.report.run_summaries import declared_in_summary
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
+from povagent.scoring.bootstrap import Estimate, bootstrap_mean_ci
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
+from povagent.scoring.metrics import Metric
 
 #: Above this many systems, paired comparisons are against the first system only.
 MAX_ALL_PAIRS = 6
@@ -113,6 +116,10 @@ class Analysis:
     notes: list[str] = field(default_factory=list)
     #: The scorers whose numbers the rows carry (``official``, ``success``), in that order.
     scorers: list[str] = field(default_factory=lambda: ["official"])
+    #: Every scorer's declared metrics (:mod:`povagent.scoring.metrics`), as the runs' summaries
+    #: record them, and per scorer, system and metric the estimate over the system's rows.
+    declared: dict[str, dict[str, Metric]] = field(default_factory=dict)
+    declared_estimates: dict[str, dict[str, dict[str, Estimate]]] = field(default_factory=dict)
 
     @property
     def has_official(self) -> bool:
@@ -196,19 +203,16 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
     A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
     gallery draws on, as the runner loads them.
     """
-    from povagent.dataset.loader import load_dataset
-    from povagent.dataset.realworld import is_realworld, load_realworld
+    from povagent.dataset.evaluation_set import open_evaluation_set
     from povagent.errors import DatasetError
 
     paths = [Path(override)] if override else collection.dataset_paths()
     if not paths:
         return None, "no dataset path in the runs' config.yaml (pass --dataset)"
     try:
-        if is_realworld(paths[0]):
-            return load_realworld(paths[0]), None
         # No load-time image check: the gallery draws a card for every row and says on it
         # which image failed, instead of the house vanishing from the report.
-        return load_dataset(paths[0], check_images=False), None
+        return open_evaluation_set(paths[0], check_images=False), None
     except DatasetError as exc:
         return None, f"dataset not loadable: {exc}"
 
@@ -408,6 +412,7 @@ def analyze(
             "bootstrap CIs resampling instances. This set has no 3D ground truth, so no official "
             "error is reported for it."
         )
+    declared, estimates = declared_metric_estimates(collection, by_system, ordered, n_boot, seed)
     return Analysis(
         source=collection.source,
         systems=stats,
@@ -419,7 +424,31 @@ def analyze(
         dataset_path=getattr(dataset, "root", None),
         notes=notes,
         scorers=scorers,
+        declared=declared,
+        declared_estimates=estimates,
     )
+
+
+def declared_metric_estimates(
+    collection: Collection, by_system: Mapping[str, list[Observation]], systems: list[str], n_boot: int, seed: int
+) -> tuple[dict[str, dict[str, Metric]], dict[str, dict[str, dict[str, Estimate]]]]:
+    """The metrics the runs' scorers declared, and each one's mean (a rate: of true values) per
+    system with its bootstrap CI, from the values each row's observation carries."""
+    declared: dict[str, dict[str, Metric]] = {}
+    for run in collection.runs:
+        for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
+            for m in run_metrics:
+                declared.setdefault(scorer, {}).setdefault(m.name, m)
+    estimates: dict[str, dict[str, dict[str, Estimate]]] = {}
+    for scorer, metrics in declared.items():
+        for system in systems:
+            rows = [o.metric_values[scorer] for o in by_system.get(system, []) if scorer in o.metric_values]
+            if rows:
+                estimates.setdefault(scorer, {})[system] = {
+                    name: bootstrap_mean_ci([v for r in rows if (v := r.get(name)) is not None], n_boot=n_boot, seed=seed)
+                    for name in metrics
+                }
+    return declared, estimates
 
 
 def _is_realworld(dataset: Any) -> bool:

@@ -28,10 +28,12 @@ import yaml
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, read_rows
 from povagent.results.transcript import transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+from povagent.scoring.metrics import Declared, row_metric_values
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -94,6 +96,8 @@ class Observation:
     nearer_egocentric: bool | None = None
     #: ``relation``: the point lies in the relation region (``None``: not scored).
     relation: bool | None = None
+    #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
+    metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
 
 
 @dataclass
@@ -318,7 +322,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     return runs
 
 
-def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official") -> Observation:
+def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official", declared: Declared | None = None) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
     ``official``: answered when the official scorer answered it, with its error. ``success``:
@@ -366,6 +370,7 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
+        metric_values=row_metric_values(row, declared) if declared else {},
         **diagnosis_of(row),
     )
 
@@ -418,11 +423,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
+        declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
         for row in r.rows:
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, r.scorer)
+            o = observation_of(row, r.system, r.name, r.scorer, declared)
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 

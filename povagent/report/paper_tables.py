@@ -18,6 +18,8 @@ Only table assembly: numbers come from the analysis, text from :mod:`povagent.re
 
 from __future__ import annotations
 
+import re
+
 from povagent.dataset.models import Condition
 from povagent.report.analysis import Analysis
 from povagent.report.statistics import CellStats, Estimate
@@ -260,7 +262,8 @@ def paired_table(a: Analysis) -> Table | None:
 
 def paper_tables(a: Analysis) -> list[Table]:
     """Every table of a report, in reading order: the official tables for a POVBench-format
-    set, the success tables for a real-world set (both when a collection mixes them)."""
+    set, the success tables for a real-world set (both when a collection mixes them), then a
+    table per other scorer's declared metrics."""
     tables: list[Table | None] = []
     if a.has_official:
         tables += [main_table(a), ablation_table(a), direction_table(a), condition_direction_table(a)]
@@ -270,7 +273,28 @@ def paper_tables(a: Analysis) -> list[Table]:
     if a.has_official:
         tables.append(metric_variants_table(a))
     tables.append(paired_table(a))
+    tables += declared_metric_tables(a)  # every other scorer's declared metrics
     return [t for t in tables if t is not None]
+
+
+def declared_metric_tables(a: Analysis) -> list[Table]:
+    """A table per scorer with declared metrics and no tables of its own: a row per system, a
+    column per metric (bold on the better side), 95% bootstrap CIs in brackets."""
+    tables = []
+    for scorer, metrics in a.declared.items():
+        if scorer in a.scorers or scorer not in a.declared_estimates:
+            continue
+        columns = [Column(m.label, "rate" if m.aggregation == "rate" else "l2", m.better) for m in metrics.values()]
+        caption = " ".join(f"{m.label}: {m.caption}" for m in metrics.values())
+        key = "metrics_" + re.sub(r"[^A-Za-z0-9_]+", "_", scorer)
+        t = Table(key, f"Scorer {scorer}", f"{caption} 95% bootstrap CIs. {bold_note(a)}", row_header(a), columns)
+        by_system = a.declared_estimates[scorer]
+        for s in a.systems:
+            estimates = by_system.get(s.system)
+            if estimates is not None:
+                t.rows.append(Row(s.system, [Cell(e.value, e.lo, e.hi) for e in (estimates[n] for n in metrics)], s.reference))
+        tables.append(t)
+    return tables
 
 
 def system_row(t: Table, system: str) -> Row:

@@ -65,6 +65,11 @@ class Prediction(BaseModel):
     image_path: str | None = None
     x: float | None = None
     y: float | None = None
+    #: The answer type the strategy asked for (``point``, a plugin's ``choice``) and the parse's
+    #: value as that type reads it (:class:`povagent.answers.types.AnswerType`); ``None`` for no
+    #: answer and in rows written before answer types were registered (their x/y still read).
+    answer_type: str | None = None
+    value: dict[str, Any] | None = None
 
 
 class OfficialReading(BaseModel):

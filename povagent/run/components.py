@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from povagent.answers.types import AnswerType
 from povagent.config.models import PipelineConfig
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
 from povagent.plugins import PluginHost
@@ -28,6 +29,8 @@ class Components:
     #: (``None`` when ``parser`` reads officially itself).
     official_parser: Parser | None = None
     official_parser_name: str | None = None
+    #: The answer type the strategy asks for (its ``answer_type``, as registered).
+    answer_type: AnswerType | None = None
 
 
 @dataclass(frozen=True)
@@ -45,13 +48,15 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
     parser = host.parser(config.parser.name, config.parser.options)
     counterpart = official_counterpart(parser)
+    strategy = host.strategy(config.strategy.name, config.strategy.options)
     return Components(
         backend=host.backend(config.backend.name, config.backend.options),
-        strategy=host.strategy(config.strategy.name, config.strategy.options),
+        strategy=strategy,
         parser=parser,
         scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
         official_parser=host.parser(counterpart) if counterpart else None,
         official_parser_name=counterpart,
+        answer_type=host.answer_type(strategy.answer_type),
     )
 
 

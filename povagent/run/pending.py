@@ -19,6 +19,7 @@ from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import ConfigError
 from povagent.results.rows import RowStatus, iter_rows
 from povagent.run.summary import SummaryDigest, summary_digest
+from povagent.scoring.metrics import Declared
 
 #: The results file of a run folder.
 RESULTS = "results.jsonl"
@@ -83,13 +84,15 @@ def plan_keys(
     *,
     config_hash: str | None = None,
     retry_failed: bool = True,
+    declared: Declared | None = None,
 ) -> KeyPlan:
     """Read ``config.output``'s results once and plan the keys of ``instances`` x runs.
 
     A row of another pipeline (a different ``config_hash``) is refused with a clear message:
     appending to it would mix two pipelines in one file. With ``retry_failed`` (the default) a
     key whose row is ``infra_error`` is pending again (its old row is dropped when the run
-    starts); parse errors are answers and stay done.
+    starts); parse errors are answers and stay done. Each done key's digest holds its values of
+    the ``declared`` metrics.
     """
     runs = config.run_indices
     wanted = {row_key(i.id, r) for i in instances for r in runs}
@@ -107,7 +110,7 @@ def plan_keys(
         if row.key not in wanted:
             continue
         done.add(row.key)
-        digests[row.key] = summary_digest(row)  # the last row of a key wins
+        digests[row.key] = summary_digest(row, declared)  # the last row of a key wins
         if row.status is RowStatus.INFRA_ERROR:
             failed.add(row.key)
         else:
@@ -135,12 +138,9 @@ def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
                 g.out, houses=g.houses, seed=g.seed, frames=g.frames,
                 judge=g.judge.name, judge_options=g.judge.options, plugins=config.plugins,
             )  # fmt: skip
-    from povagent.dataset.loader import load_dataset
-    from povagent.dataset.realworld import is_realworld, load_realworld
+    from povagent.dataset.evaluation_set import open_evaluation_set
 
-    if is_realworld(spec.root):
-        return load_realworld(spec.root)
-    return load_dataset(spec.root, strict=spec.strict)
+    return open_evaluation_set(spec.root, strict=spec.strict)
 
 
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:

@@ -3,7 +3,11 @@
 Every row keeps its raw answer(s), so a run can be read again: for each row of
 ``RUN_DIR/results.jsonl`` the final raw answer is parsed with the named parser against the
 answer schema the run's strategy asked for (rebuilt from the strategy, without images when it
-offers ``answer_spec(instance)``), scored with the run's scorers, and written to
+offers ``answer_spec(instance)``), scored with the run's scorers by the score step the runner
+uses (:mod:`povagent.run.score_step`: the instance as the model saw it, the same status and
+prediction rules) against the set read by the loader the runner chooses
+(:func:`~povagent.dataset.evaluation_set.open_evaluation_set`), summarized as the runner
+summarizes (with the run's own parser, rows and ``summary.json`` sections come out as the run's), and written to
 ``RUN_DIR/rescored-<parser>/`` (``results.jsonl``, ``summary.json``, ``config.yaml``). The
 original run is never modified. Rows without an answer (infrastructure errors) are kept as is.
 The new rows are staged and replace the folder's ``results.jsonl`` in one move once all are
@@ -23,14 +27,15 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import yaml
 
-from povagent.answers.spec import AnswerSpec, ParsedAnswer
+from povagent.answers.spec import AnswerSpec
+from povagent.config.plugin_checks import parser_misfit
 from povagent.config.plugin_rule import missing_plugin_message
+from povagent.dataset.evaluation_set import open_evaluation_set
 from povagent.dataset.instances import Instance
-from povagent.dataset.loader import Dataset, load_dataset
 from povagent.errors import DatasetError, PluginError, PredictionsError
 from povagent.exchange.images import ImageStore
 from povagent.plugins import PluginHost, get_plugin_host
@@ -39,19 +44,15 @@ from povagent.results.official_reading import (
     nan_rows,
     nan_warning,
     official_counterpart,
-    official_parse_breakdown,
     officially_read,
-    read_officially,
 )
-from povagent.results.rows import Prediction, ResultRow, RowStatus, StagedResults, read_rows
+from povagent.results.rows import ResultRow, RowStatus, StagedResults, read_rows
 from povagent.run.confined_read import check_regular
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.run_folder import read_run_config
-from povagent.run.summary import diagnosed_row, write_summary
+from povagent.run.score_step import AnswerScoring
+from povagent.run.summary import declared_metrics, summarize_rows, write_summary
 from povagent.run.summary_model import RunSummary
-from povagent.scoring.breakdown import ScoredRow, breakdown
-from povagent.scoring.diagnostics_breakdown import diagnostics_breakdown
-from povagent.scoring.official import scoring_frame
 
 
 @dataclass
@@ -75,80 +76,39 @@ def answer_spec_for(strategy: Any, instance: Instance, images: ImageStore) -> An
     return strategy.build(instance, images).answer
 
 
-def prediction_of(instance: Instance, parsed: ParsedAnswer) -> Prediction:
-    """The prediction as scored: pixels, and for A/B the selected frame's ``image_path``."""
-    frame = scoring_frame(instance, parsed.selected_image) if parsed.answered else None
-    image_path = frame.image_path if frame is not None and instance.condition.uses_exploration_frames else None
-    return Prediction(selected_image=parsed.selected_image, image_path=image_path, x=parsed.x, y=parsed.y)
-
-
-def rescore_row(
-    row: ResultRow,
-    instance: Instance,
-    spec: AnswerSpec,
-    parser: Any,
-    parser_name: str,
-    scorers: dict[str, Any],
-    dataset: Dataset,
-    official: tuple[Any, str] | None = None,
-) -> ResultRow:
-    """``row`` re-parsed from its final raw answer and re-scored (infra errors kept as they are).
-
-    ``official`` is ``(parser, name)`` of the official reading to keep beside a lenient
-    ``parser``'s (``None``: ``parser`` reads officially, the row keeps no second reading).
-    """
+def rescore_row(row: ResultRow, instance: Instance, spec: AnswerSpec, scoring: AnswerScoring, parser_name: str) -> ResultRow:
+    """``row`` re-parsed from its final raw answer and re-scored by the score step the runner
+    uses (:mod:`povagent.run.score_step`); infrastructure errors are kept as they are."""
     raw = row.raw_response
     if row.status is RowStatus.INFRA_ERROR or raw is None:
         return row.model_copy(update={"parser": parser_name, "official_reading": None})
-
-    def score(parsed: ParsedAnswer) -> dict[str, dict[str, Any]]:
-        return {name: scorer.score(instance, parsed, dataset) for name, scorer in scorers.items()}
-
-    parsed = parser.parse(raw, spec)
-    scores = score(parsed)
-    reading = read_officially(official[0], official[1], raw, spec, parsed, scores, score) if official else None
+    scored = scoring.score_answer(instance, spec, raw)
     return row.model_copy(
         update={
             "parser": parser_name,
-            "parse": parsed,
-            "status": RowStatus.ANSWERED if parsed.answered else RowStatus.PARSE_ERROR,
-            "prediction": prediction_of(instance, parsed),
-            "scores": scores,
-            "official_reading": reading,
+            "parse": scored.parse,
+            "status": scored.status,
+            "prediction": scored.prediction,
+            "scores": scored.scores,
+            "official_reading": scored.official_reading,
         }
     )
 
 
-def summarize_rows(rows: list[ResultRow], scorer_name: str = "official") -> dict[str, Any]:
-    """The official breakdown of rescored rows (from ``scores[scorer_name]``), with parse counts."""
-    from povagent.scoring.evaluations import official_parse_error
-
-    scored = []
-    for row in rows:
-        s = row.scores.get(scorer_name, {})
-        scored.append(
-            ScoredRow(
-                row.condition, row.direction, bool(s.get("answered")), s.get("l2"), s.get("gt_in_frame"), s.get("l2_strict"), row.run,
-                s.get("error_x"), s.get("error_y"), official_parse_error(row) is not None,
-            )
-        )
-    summary = breakdown(scored)
-    readings = [r.official_reading.parser for r in rows if r.official_reading is not None]
-    if readings and scorer_name == "official":  # parsed leniently: the paper-comparable reading beside
-        from povagent.run.summary import scored_row
-
-        summary["official_parse"] = official_parse_breakdown(
-            [scored_row(officially_read(r), scorer_name) if r.official_reading is not None else s
-             for r, s in zip(rows, scored) if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR],
-            readings[0],
-            sum(1 for r in rows if r.official_reading is None and r.status is not RowStatus.INFRA_ERROR),
-        )
-    diagnostics = diagnostics_breakdown(d for d in (diagnosed_row(r) for r in rows) if d is not None)
-    if diagnostics is not None:  # an addition, beside the official breakdown
-        summary["diagnostics"] = diagnostics
+def rescore_summary(rows: list[ResultRow], scorers: Mapping[str, Any]) -> dict[str, Any]:
+    """The rescored rows' summary: the run's own (:func:`~povagent.run.summary.summarize_rows`,
+    with ``scorers``' declared metrics), with the rows by parse status and how many answers the
+    parser repaired."""
+    summary = summarize_rows(rows, None, declared_metrics(scorers))
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
     summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
     return summary
+
+
+def _raise(exc: BaseException, *_: Any) -> None:
+    """A plugin that raises stops a rescore: it rewrites a finished run, and keeps the previous
+    rescore rather than write one with holes."""
+    raise exc
 
 
 def official_reading_of_run(host: PluginHost, run_parser: str | None) -> str:
@@ -195,6 +155,9 @@ def rescore_run(
             raise PluginError(missing_plugin_message("rescore", run, kind, name, config.plugins))
     if parser_name is None:
         parser_name = official_reading_of_run(host, config.parser.name if config.parser else None)
+    misfit = parser_misfit(host, config.strategy.name, parser_name)
+    if misfit is not None:
+        raise PluginError(f"rescore {run}: {misfit}")
     parser = host.parser(parser_name, {})
     counterpart = official_counterpart(parser)
     official = (host.parser(counterpart, {}), counterpart) if counterpart else None
@@ -210,7 +173,11 @@ def rescore_run(
             f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
-    dataset = load_dataset(root, check_images=False)  # answers are re-read, not re-sent
+    dataset = open_evaluation_set(root, check_images=False)  # answers are re-read, not re-sent
+    official_parser, official_name = official if official is not None else (None, None)
+    scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
+                            on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc),
+                            answer_type=host.answer_type(strategy.answer_type))  # fmt: skip
     images = ImageStore()
     warnings: list[str] = []
     out_dir = run / f"rescored-{parser_name}"
@@ -227,14 +194,13 @@ def rescore_run(
                 warnings.append(f"{row.key}: instance {row.instance_id} is not in the dataset {root}; row left out")
                 continue
             spec = answer_spec_for(strategy, instance, images)
-            new = rescore_row(row, instance, spec, parser, parser_name, scorers, dataset, official)
+            new = rescore_row(row, instance, spec, scoring, parser_name)
             staged.write(new)
             rows_out.append(new)
         nan_note = nan_warning(nan_rows(officially_read(r) for r in rows_out))
         if nan_note:
             warnings.append(nan_note)
-        scorer_name = "official" if "official" in scorers else next(iter(scorers), "official")
-        summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **summarize_rows(rows_out, scorer_name)}
+        summary = {"source_run": str(run), "parser": parser_name, "n_rows": len(rows_out), **rescore_summary(rows_out, scorers)}
         rescored_config = config.resolved_dict()
         rescored_config["parser"] = {"name": parser_name, "options": {}}
         rescored_config["scorers"] = [*rescored_config.get("scorers", []), *({"name": n, "options": {}} for n in extra_scorers

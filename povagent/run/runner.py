@@ -59,8 +59,9 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import SummaryDigest, summarize_digests, summary_digest, write_summary
+from povagent.run.summary import SummaryDigest, declared_metrics, summarize_digests, summary_digest, write_summary
 from povagent.run.summary_model import RunSummary
+from povagent.scoring.metrics import Declared
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
@@ -190,6 +191,7 @@ class PipelineRun:
         # removed from whatever the run writes: messages, logs, and answers that echo it
         self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._digests: dict[str, SummaryDigest] = {}
+        self._declared: Declared = {}  # each scorer's declared metrics, set with the components
         #: the digests of the rows written in this session: what they spent is ``session`` in summary.json
         self._session_spent: list[SummaryDigest] = []
         self._frames = FrameReader(self.images)
@@ -231,7 +233,7 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        digest = summary_digest(row)
+        digest = summary_digest(row, self._declared)
         self._digests[row.key] = digest
         s = self.stats
         s.rows_written += 1
@@ -287,6 +289,7 @@ class PipelineRun:
         # before the dataset is read and before anything is written to the run folder.
         with remote_code_granted(self.trust_remote_code):
             self.components = create_components(config, self.host)
+        self._declared = declared_metrics(self.components.scorers)  # what each row's digest keeps
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
         dumped = options.model_dump() if hasattr(options, "model_dump") else options
@@ -328,7 +331,7 @@ class PipelineRun:
         """The run proper, with the run folder locked against a second process."""
         config = self.config
         runs = config.run_indices
-        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed)
+        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared)
         retried = plan.failed if self.retry_failed else set()
         if retried:
             # the failed rows go before their keys run again, so a retried key has one row
@@ -466,7 +469,7 @@ class PipelineRun:
     def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
         over the selected keys, plus the run's counters."""
-        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs})
+        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs}, self._declared)
         spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0

@@ -1,5 +1,5 @@
-"""The solve step of one key: ask the model through the strategy, parse, score, read officially,
-and build the key's row.
+"""The solve step of one key: ask the model through the strategy, hand the final answer to the
+score step (:mod:`povagent.run.score_step`, which ``rescore`` shares), and build the key's row.
 
 :class:`KeySolver` holds what that step needs from the run (its components and their names,
 the request path, the image store, the log); :meth:`KeySolver.solve` never raises for a plugin
@@ -24,13 +24,12 @@ from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals
-from povagent.interfaces import Parser, Scorer
-from povagent.results.official_reading import read_officially
-from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
+from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
 from povagent.run.logs import Redactor, RunLog
+from povagent.run.score_step import AnswerScoring
 
 
 @dataclass
@@ -101,20 +100,9 @@ class KeySolver:
             request, response = turns[-1]
             if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
                 transcript.record(request, raw=response.text)
-            parse = self.parse(comps.parser, response.text, request, key)
-            shown = as_shown(instance, request)
-            if parse.answered:
-                status = RowStatus.ANSWERED
-                prediction = prediction_of(shown, parse)
-                for name, scorer in comps.scorers.items():
-                    scores[name] = self.score(name, scorer, shown, parse, key)
-            else:
-                status = RowStatus.PARSE_ERROR
-            if comps.official_parser is not None:  # a lenient parser: keep the official reading beside
-                official_reading = read_officially(
-                    comps.official_parser, comps.official_parser_name or "", response.text, request.answer, parse, scores,
-                    lambda p: {n: self.score(n, s, shown, p, key) for n, s in comps.scorers.items()},
-                )
+            scored = self.scoring(key).score_answer(instance, request.answer, response.text)
+            parse, status, prediction = scored.parse, scored.status, scored.prediction
+            scores, official_reading = scored.scores, scored.official_reading
         except InfraFailure as exc:
             status, error_type, error_message = RowStatus.INFRA_ERROR, exc.error_type, exc.message
             failed_retries = exc.retries
@@ -156,32 +144,16 @@ class KeySolver:
             official_reading=official_reading,
         )
 
-    def parse(self, parser: Parser, text: str, request: Request, key: str) -> ParsedAnswer:
-        def logged(exc: BaseException) -> None:
+    def scoring(self, key: str) -> AnswerScoring:
+        """The score step for key ``key``: a plugin that raises is logged with its traceback and
+        its failure recorded in the row (see :mod:`povagent.results.plugin_errors`)."""
+        comps = self.components
+
+        def parser_raised(exc: BaseException) -> None:
             self.log.error("parser_exception", row=key, error=error_text(exc), traceback=traceback.format_exc())
 
-        return parse_or_unparseable(parser, text, request.answer, logged)  # a raising parser: a parse error
-
-    def score(self, name: str, scorer: Scorer, instance: Instance, parse: ParsedAnswer, key: str) -> dict[str, Any]:
-        def logged(exc: BaseException) -> None:
+        def scorer_raised(name: str, exc: BaseException) -> None:
             self.log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
-        return score_or_error(scorer, instance, parse, self.dataset, logged)
-
-
-def as_shown(instance: Instance, request: Request) -> Instance:
-    """The instance as the model saw it: a strategy that shows the first N frames (the ablation
-    scripts show 30) is scored against those N, so an answer naming a frame it never showed is
-    no frame at all (the official runner maps the index back through the frames it sent)."""
-    n = request.answer.n_frames
-    if request.answer.asks_frame and 0 < n < len(instance.frames):
-        return dataclasses.replace(instance, frames=instance.frames[:n])
-    return instance
-
-
-def prediction_of(instance: Instance, parse: ParsedAnswer) -> Prediction:
-    """What a row records as the prediction: the frame index, its image path (A/B) and the point."""
-    sel = parse.selected_image
-    frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
-    image_path = frame.image_path if frame is not None else None
-    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y)
+        return AnswerScoring(comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name,
+                             parser_raised, scorer_raised, comps.answer_type)  # fmt: skip

@@ -14,7 +14,7 @@ import sys
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
@@ -24,6 +24,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
+from povagent.scoring.metrics import Declared, Metric, metric_values_breakdown, row_metric_values
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -109,10 +110,14 @@ class SummaryDigest:
     completion_tokens: int | None
     cost_usd: float | None
     retries: int
+    #: ``((scorer, ((metric, value), ...)), ...)``: the row's value of every declared metric
+    #: (:func:`~povagent.scoring.metrics.row_metric_values`); empty when no metrics were declared
+    metric_values: tuple[tuple[str, tuple[tuple[str, float | None], ...]], ...] = ()
 
 
-def summary_digest(row: ResultRow) -> SummaryDigest:
-    """The row as a summary keeps it (see :class:`SummaryDigest`)."""
+def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryDigest:
+    """The row as a summary keeps it (see :class:`SummaryDigest`), with its values of the
+    ``declared`` metrics."""
     infra = RowStatus(row.status) is RowStatus.INFRA_ERROR
     reading = row.official_reading
     official = officially_read(row)
@@ -138,6 +143,7 @@ def summary_digest(row: ResultRow) -> SummaryDigest:
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
+        metric_values=tuple((scorer, tuple(values.items())) for scorer, values in row_metric_values(row, declared).items()) if declared else (),
     )
 
 
@@ -167,17 +173,23 @@ def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
     )
 
 
-def summarize_rows(rows: Iterable[ResultRow], keys: set[str] | None = None) -> dict[str, Any]:
+def summarize_rows(
+    rows: Iterable[ResultRow], keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None
+) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
-    are left out.
+    are left out. ``declared`` is each scorer's metrics (``Scorer.metrics``): the ``metrics``
+    section holds them per slice (see :mod:`povagent.scoring.metrics`).
     """
-    return summarize_digests((summary_digest(r) for r in rows if keys is None or r.key in keys), keys)
+    return summarize_digests((summary_digest(r, declared) for r in rows if keys is None or r.key in keys), keys, declared)
 
 
-def summarize_digests(digests: Iterable[SummaryDigest], keys: set[str] | None = None) -> dict[str, Any]:
-    """:func:`summarize_rows` of the rows these digests were taken from (one per key)."""
+def summarize_digests(
+    digests: Iterable[SummaryDigest], keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None
+) -> dict[str, Any]:
+    """:func:`summarize_rows` of the rows these digests were taken from (one per key), the digests
+    taken with the same ``declared`` metrics."""
     rows = [d for d in digests if keys is None or d.key in keys]
     out = breakdown([d.scored for d in rows])
     official_parser = next((d.official_parser for d in rows if d.official_parser is not None), None)
@@ -197,6 +209,10 @@ def summarize_digests(digests: Iterable[SummaryDigest], keys: set[str] | None = 
         # a row the runner never scored (parse or infra error) is unanswered
         out["success"] = success_breakdown(
             {"condition": c, "direction": d, "success": hit, "answered": answered} for c, d, hit, answered in with_success
+        )
+    if declared and any(declared.values()):
+        out["metrics"] = metric_values_breakdown(
+            [(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values}) for d in rows], declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
@@ -226,6 +242,11 @@ def summarize_digests(digests: Iterable[SummaryDigest], keys: set[str] | None = 
         "retries": spent.retries,
     }
     return out
+
+
+def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]]:
+    """``{name: metrics}`` of scorer objects (or factories): what each declared."""
+    return {name: tuple(getattr(scorer, "metrics", ())) for name, scorer in scorers.items()}
 
 
 def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:

@@ -12,7 +12,11 @@ Only types: nothing here reads or writes a file.
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict
+
+from povagent.scoring.metrics import Metric
 
 
 class Cell(BaseModel):
@@ -209,6 +213,48 @@ class ImageCounters(BaseModel):
     distinct: int
 
 
+class MetricEstimate(BaseModel):
+    """One declared metric over one slice: its value, 95% bootstrap CI and the rows it counts."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    value: float | None
+    ci_lo: float | None
+    ci_hi: float | None
+    n: int
+
+
+class MetricDeclaration(BaseModel):
+    """What a scorer declared of a metric (:class:`povagent.scoring.metrics.Metric`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    label: str
+    caption: str
+    better: Literal["lower", "higher"]
+    aggregation: Literal["mean", "rate"]
+    #: The scorer's row field the value is read from, which rows count, and whether a false value is the hit.
+    field: str
+    over: Literal["answered", "all"]
+    negate: bool
+
+    def metric(self, name: str) -> Metric:
+        """The declared metric, to compute again from rows."""
+        return Metric.declared(name, self.model_dump())
+
+
+class ScorerMetrics(BaseModel):
+    """One scorer's declared metrics, per slice (:func:`povagent.scoring.metrics.metrics_breakdown`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    declared: dict[str, MetricDeclaration]
+    overall: dict[str, MetricEstimate]
+    per_condition: dict[str, dict[str, MetricEstimate]]
+    per_direction: dict[str, dict[str, MetricEstimate]]
+    per_condition_direction: dict[str, dict[str, MetricEstimate]]
+
+
 class RunSummary(Breakdown):
     """Everything ``summary.json`` holds.
 
@@ -222,6 +268,8 @@ class RunSummary(Breakdown):
     success: SuccessBreakdown | None = None
     #: Each plugin scorer's true/false and number fields: ``{scorer: {field: {n, true, rate} | {n, mean}}}``.
     scorers: dict[str, dict[str, dict[str, float]]] | None = None
+    #: Every scorer's declared metrics, per slice: ``{scorer: ScorerMetrics}``.
+    metrics: dict[str, ScorerMetrics] | None = None
     #: Why answers failed (:mod:`povagent.scoring.diagnostics_breakdown`), an addition.
     diagnostics: Diagnostics | None = None
     #: Keys whose parse holds a NaN coordinate (their official mean is NaN, as officially).

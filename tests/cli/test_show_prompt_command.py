@@ -178,3 +178,11 @@ def test_an_instance_of_a_house_loading_left_out_says_why_in_one_line(tmp_path, 
     message = str(result.exception)
     assert "\n" not in message and "loading left it out" in message
     assert "train_house_00000.json: $[0].stage5.right.type_a: text holds \\ud800" in message
+
+
+def test_prints_the_prompt_of_an_instance_of_the_shipped_real_world_demo(tmp_path):
+    demo = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
+    result, out = show(tmp_path, demo, "basic", "house_1/kitchen/right/c")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("--- message 1 (user) ---") and "--- answer schema:" in result.stdout
+    assert len(list(out.glob("*.png"))) == 1  # condition C: the observer view, letterboxed

@@ -1,0 +1,38 @@
+"""Answer types: what kind of value a parser produces, registered like any plugin.
+
+A point in one of the images shown is one answer type among others (a choice label, later a box
+or a number): each is an :class:`AnswerType` a plugin contributes through the
+``register_answer_types`` hook, the built-in ``point`` exactly as a third party's would be
+(``povagent_plugins.answers.point``). A strategy names the type it asks for
+(``Strategy.answer_type``), a parser the types it reads (``Parser.answer_types``); a pipeline
+whose strategy asks for a type no plugin registers, or that its parser does not read, is refused
+at load (:func:`povagent.config.plugin_checks.parser_misfit`).
+
+Only the description of a type lives here; nothing here reads files or knows a plugin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Mapping
+
+if TYPE_CHECKING:
+    from povagent.answers.spec import ParsedAnswer
+    from povagent.dataset.instances import Instance
+
+
+@dataclass(frozen=True)
+class AnswerType:
+    """One kind of answer: its name, the JSON Schema of its value, how a parse gives that value,
+    how the gold value is read from an instance, and how a row shows a value."""
+
+    name: str
+    description: str
+    #: The JSON Schema of the value (:attr:`value_of`'s result).
+    value_schema: Mapping[str, Any]
+    #: The typed value of a parse that answered (``None``: no value).
+    value_of: Callable[[ParsedAnswer], dict[str, Any] | None]
+    #: The gold value of an instance, as the type's scorers compare against it.
+    gold: Callable[[Instance], Any]
+    #: How a row shows a value, in one line.
+    show: Callable[[Mapping[str, Any]], str]

@@ -1,0 +1,134 @@
+"""Metrics a scorer declares, and the one function that turns a row into their values.
+
+A scorer says what its numbers mean (``Scorer.metrics``): each :class:`Metric` has a name, which
+direction is better, how a row gives its value (a field of the scorer's scores, over the answered
+rows or over every row), how values aggregate (``mean``, or ``rate`` of true values) and the words
+a table shows (label, caption). The core never names a scorer: ``summary.json``'s ``metrics``
+section, the console and the report render whatever was declared, per slice (overall, per
+condition, per direction, per condition x direction: :func:`~povagent.scoring.breakdown.slices`),
+each with its bootstrap CI (:func:`~povagent.scoring.bootstrap.bootstrap_mean_ci`).
+
+Pure: nothing here reads files or knows a plugin; a row is anything with ``status``, ``scores``,
+``condition`` and ``direction``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable, Literal, Mapping, Sequence
+
+from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
+from povagent.scoring.breakdown import slices
+
+#: Which way is better.
+Better = Literal["lower", "higher"]
+#: How row values aggregate: the mean of numbers, or the rate of true values.
+Aggregation = Literal["mean", "rate"]
+
+
+@dataclass(frozen=True)
+class Metric:
+    """One number a scorer declares.
+
+    ``field`` is the key of the scorer's row scores the value is read from. ``over`` says which
+    rows count: ``"answered"`` (rows the scorer scored as answered, e.g. a mean error) or
+    ``"all"`` (every row; a row the scorer did not score, or scored unanswered, counts as
+    false for a rate: a response rate, a success rate with non-responses as failures).
+    ``negate`` counts a false value as the hit (a rate of ``gt_in_frame`` false, say).
+    """
+
+    name: str
+    better: Better
+    aggregation: Aggregation
+    field: str
+    label: str
+    caption: str
+    over: Literal["answered", "all"] = "answered"
+    negate: bool = False
+
+    def describe(self) -> dict[str, Any]:
+        """What ``summary.json`` says of the metric: enough to compute it again from rows
+        (:meth:`declared`), so a report reads a third-party scorer's metrics without its plugin."""
+        return {"label": self.label, "caption": self.caption, "better": self.better, "aggregation": self.aggregation,
+                "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
+
+    @classmethod
+    def declared(cls, name: str, description: Mapping[str, Any]) -> Metric:
+        """The metric :meth:`describe` described."""
+        return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
+                   description["caption"], description["over"], description["negate"])  # fmt: skip
+
+
+#: Each scorer's declared metrics: ``{scorer: metrics}``.
+Declared = Mapping[str, Sequence["Metric"]]
+
+
+def metric_value(metric: Metric, fields: Mapping[str, Any] | None, answered: bool) -> float | None:
+    """``metric``'s value for one row whose scorer wrote ``fields`` (``None``: not scored), or
+    ``None`` when the row does not count for it."""
+    scored = answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
+    if metric.over == "answered" and not scored:
+        return None
+    raw = fields.get(metric.field) if isinstance(fields, Mapping) and scored else None
+    if metric.aggregation == "rate":
+        if raw is None and metric.over == "answered":
+            return None
+        hit = raw is True if not metric.negate else raw is False
+        return 1.0 if hit else 0.0
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+        return None
+    return float(raw)
+
+
+def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float | None]]:
+    """The one function turning a row into metric values: ``{scorer: {metric: value}}`` for every
+    metric each scorer declared (see :func:`metric_value`)."""
+    answered = str(getattr(row, "status", "")) == "answered"
+    scores = getattr(row, "scores", None) or {}
+    return {
+        scorer: {m.name: metric_value(m, scores.get(scorer), answered) for m in metrics}
+        for scorer, metrics in declared.items()
+        if metrics
+    }
+
+
+@dataclass(frozen=True)
+class _Valued:
+    condition: str | None
+    direction: str | None
+    values: dict[str, dict[str, float | None]]
+
+
+def metrics_breakdown(
+    rows: Iterable[Any], declared: Declared, n_boot: int = DEFAULT_BOOT
+) -> dict[str, dict[str, Any]]:
+    """``summary.json``'s ``metrics`` section: per scorer, what it declared and, per slice, each
+    metric's value with its 95% bootstrap CI and the number of rows it counts."""
+    return metric_values_breakdown(
+        [(str(r.condition) if r.condition is not None else None, str(r.direction) if r.direction is not None else None,
+          row_metric_values(r, declared)) for r in rows],
+        declared, n_boot,
+    )  # fmt: skip
+
+
+def metric_values_breakdown(
+    rows: Iterable[tuple[str | None, str | None, dict[str, dict[str, float | None]]]], declared: Declared, n_boot: int = DEFAULT_BOOT
+) -> dict[str, dict[str, Any]]:
+    """:func:`metrics_breakdown` of rows already turned into ``(condition, direction, values)``
+    by :func:`row_metric_values` (what a run keeps of each row)."""
+    valued = [_Valued(condition, direction, values) for condition, direction, values in rows]
+    out: dict[str, dict[str, Any]] = {}
+    for scorer, metrics in declared.items():
+        if not metrics:
+            continue
+
+        def cell(group: list[_Valued], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
+            cells = {}
+            for m in metrics:
+                values = [v for row in group if (v := row.values[scorer][m.name]) is not None]
+                cells[m.name] = bootstrap_mean_ci(values, n_boot=n_boot).as_dict()
+            return cells
+
+        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(valued, cell)}
+    return out
