@@ -193,7 +193,11 @@ def summarize_digests(
     rows = [d for d in digests if keys is None or d.key in keys]
     out = breakdown([d.scored for d in rows])
     official_parser = next((d.official_parser for d in rows if d.official_parser is not None), None)
-    with_success = [d.success for d in rows if d.success is not None]
+    # every row counts once any row was scored by success: a row it never scored (a parse or
+    # infra error) is an unanswered failure, as the paper counts it
+    with_success = (
+        [d.success or (d.scored.condition, d.scored.direction, None, False) for d in rows] if any(d.success is not None for d in rows) else []
+    )
     # parsed leniently: the paper-comparable reading beside it (official metric only: a
     # real-world set's success scorer has no official numbers to compare)
     if official_parser is not None and not with_success:
