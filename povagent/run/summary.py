@@ -20,7 +20,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
-from povagent.scoring.metrics import Metric, metrics_breakdown
+from povagent.scoring.metrics import Metric, metrics_breakdown, valued_row
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -146,7 +146,7 @@ def summarize_rows(
 
         out["success"] = success_breakdown(success_of(r) for r in rows)
     if declared and any(declared.values()):
-        out["metrics"] = metrics_breakdown(rows, declared)
+        out["metrics"] = metrics_breakdown((valued_row(r, declared) for r in rows), declared)
     by_plugin = plugin_score_summary(rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
         out["scorers"] = by_plugin
