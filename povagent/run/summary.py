@@ -24,7 +24,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
-from povagent.scoring.metrics import Declared, Metric, metric_values_breakdown, row_metric_values
+from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_metric_values
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -215,8 +215,8 @@ def summarize_digests(
             {"condition": c, "direction": d, "success": hit, "answered": answered} for c, d, hit, answered in with_success
         )
     if declared and any(declared.values()):
-        out["metrics"] = metric_values_breakdown(
-            [(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values}) for d in rows], declared
+        out["metrics"] = metrics_breakdown(
+            (ValuedRow(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values}) for d in rows), declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first

@@ -94,41 +94,37 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
 
 
 @dataclass(frozen=True)
-class _Valued:
+class ValuedRow:
+    """A row as a metrics breakdown reads it: its slice labels and its metric values (small:
+    a summary may keep one per key instead of the row)."""
+
     condition: str | None
     direction: str | None
     values: dict[str, dict[str, float | None]]
 
 
-def metrics_breakdown(
-    rows: Iterable[Any], declared: Declared, n_boot: int = DEFAULT_BOOT
-) -> dict[str, dict[str, Any]]:
+def valued_row(row: Any, declared: Declared) -> ValuedRow:
+    """``row``'s slice labels and :func:`row_metric_values`."""
+    condition, direction = getattr(row, "condition", None), getattr(row, "direction", None)
+    return ValuedRow(None if condition is None else str(condition), None if direction is None else str(direction),
+                     row_metric_values(row, declared))  # fmt: skip
+
+
+def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: int = DEFAULT_BOOT) -> dict[str, dict[str, Any]]:
     """``summary.json``'s ``metrics`` section: per scorer, what it declared and, per slice, each
     metric's value with its 95% bootstrap CI and the number of rows it counts."""
-    return metric_values_breakdown(
-        [(str(r.condition) if r.condition is not None else None, str(r.direction) if r.direction is not None else None,
-          row_metric_values(r, declared)) for r in rows],
-        declared, n_boot,
-    )  # fmt: skip
-
-
-def metric_values_breakdown(
-    rows: Iterable[tuple[str | None, str | None, dict[str, dict[str, float | None]]]], declared: Declared, n_boot: int = DEFAULT_BOOT
-) -> dict[str, dict[str, Any]]:
-    """:func:`metrics_breakdown` of rows already turned into ``(condition, direction, values)``
-    by :func:`row_metric_values` (what a run keeps of each row)."""
-    valued = [_Valued(condition, direction, values) for condition, direction, values in rows]
+    rows = list(valued)
     out: dict[str, dict[str, Any]] = {}
     for scorer, metrics in declared.items():
         if not metrics:
             continue
 
-        def cell(group: list[_Valued], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
+        def cell(group: list[ValuedRow], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
             cells = {}
             for m in metrics:
-                values = [v for row in group if (v := row.values[scorer][m.name]) is not None]
+                values = [v for row in group if (v := row.values.get(scorer, {}).get(m.name)) is not None]
                 cells[m.name] = bootstrap_mean_ci(values, n_boot=n_boot).as_dict()
             return cells
 
-        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(valued, cell)}
+        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(rows, cell)}
     return out

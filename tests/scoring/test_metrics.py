@@ -7,7 +7,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from povagent.scoring.metrics import Metric, metrics_breakdown, row_metric_values
+from povagent.scoring.metrics import Metric, metrics_breakdown, row_metric_values, valued_row
 
 ERROR = Metric("error", "lower", "mean", "err", "Error", "mean error over answered rows")
 HITS = Metric("hit_rate", "higher", "rate", "hit", "Hit rate", "hits over every row", over="all")
@@ -45,7 +45,7 @@ def test_the_breakdown_holds_each_metric_per_slice_with_its_ci_and_what_was_decl
         row("answered", {"mine": {"err": 0.4, "hit": False}}, "a", "right"),
         row("infra_error", {}, "b", "left"),
     ]
-    out = metrics_breakdown(rows, DECLARED, n_boot=200)["mine"]
+    out = metrics_breakdown([valued_row(r, DECLARED) for r in rows], DECLARED, n_boot=200)["mine"]
     assert out["declared"]["hit_rate"] == {"label": "Hit rate", "caption": "hits over every row", "better": "higher", "aggregation": "rate",
                                          "field": "hit", "over": "all", "negate": False}
     assert out["overall"]["error"]["value"] == pytest.approx(0.3) and out["overall"]["error"]["n"] == 2
@@ -57,7 +57,7 @@ def test_the_breakdown_holds_each_metric_per_slice_with_its_ci_and_what_was_decl
 
 
 def test_a_scorer_declaring_nothing_has_no_section():
-    assert metrics_breakdown([row("answered", {"quiet": {"x": 1}})], {"quiet": ()}) == {}
+    assert metrics_breakdown([valued_row(row("answered", {"quiet": {"x": 1}}), {"quiet": ()})], {"quiet": ()}) == {}
 
 
 def test_a_declaration_as_a_summary_records_it_gives_the_metric_back():
