@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
+    from povagent.plugins import PluginHost
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
@@ -165,6 +166,17 @@ class Strategy(abc.ABC):
         """Where this run's files are: called once by the runner before the first instance, so a
         strategy that makes files of its own (the active mode's rendered views) keeps them there
         and a resumed run finds them. The default does nothing."""
+
+    def use_plugins(self, host: PluginHost) -> None:  # noqa: B027 - optional hook
+        """The plugins the run loaded: called once when the strategy is made for a run, so a
+        strategy that offers registered things (the active mode's tools) offers the run's. The
+        default does nothing."""
+
+    def identity(self) -> Mapping[str, Any]:
+        """What, beyond the pipeline's YAML, decides the rows this strategy makes (the active
+        mode: the tools it offers), recorded in the config hash so rows made otherwise never
+        mix. The default is empty, which leaves the hash the YAML's alone."""
+        return {}
 
     def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
         """Every turn :meth:`solve` takes for ``instance``, in order, without calling a model.

@@ -29,7 +29,7 @@ import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable, Iterable, Literal, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Literal, Mapping, Sequence
 
 import pluggy
 import structlog
@@ -37,6 +37,9 @@ import structlog
 from povagent import hookspecs
 from povagent.errors import PluginError
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
+
+if TYPE_CHECKING:  # the active mode loads with the first episode, not with the plugin list
+    from povagent.active.tools import ToolSet
 
 #: The kinds of things plugins contribute through a factory, and the hook for each.
 Kind = Literal["backend", "strategy", "parser", "scorer", "judge"]
@@ -49,6 +52,8 @@ KIND_HOOKS: dict[str, str] = {
 }
 KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
+#: The hook active-mode tools are registered by (kept in load order: the order they are offered).
+TOOL_HOOK = "register_tools"
 
 #: The entry-point group third-party distributions declare their plugins under.
 ENTRY_POINT_GROUP = "povagent"
@@ -151,6 +156,7 @@ class PluginHost:
         self.failures = failures
         self.hooks = LifecycleHooks(pm)
         self._registry: dict[str, dict[str, PluginEntry]] | None = None
+        self._tools: ToolSet | None = None
 
     # -- registration -------------------------------------------------------------------------
     def _collect(self) -> dict[str, dict[str, PluginEntry]]:
@@ -203,6 +209,7 @@ class PluginHost:
             registered = self.pm.get_name(plugin) or ""
         self._sources[registered] = source or f"plugin {registered}"
         self._registry = None
+        self._tools = None
         return registered
 
     def remove_plugin(self, name: str) -> None:
@@ -211,6 +218,37 @@ class PluginHost:
             self.pm.unregister(name=name)
         self._sources.pop(name, None)
         self._registry = None
+        self._tools = None
+
+    def tools(self) -> ToolSet:
+        """Every registered active-mode tool, in the order the plugins were loaded (the order an
+        episode offers them); a name registered twice is a :class:`PluginError` naming both."""
+        if self._tools is not None:
+            return self._tools
+        from povagent.active.tools import Tool, ToolSet
+
+        found: dict[str, tuple[Tool, str]] = {}
+        for impl in self.pm.hook.register_tools.get_hookimpls():  # load order, unlike a hook call
+            source = self.source_of(impl.plugin_name)
+
+            def register(name: str, tool: Tool, *, _source: str = source) -> None:
+                if not isinstance(name, str) or not name:
+                    raise PluginError(f"{_source}: registered a tool with an invalid name {name!r}")
+                if not isinstance(tool, Tool):
+                    raise PluginError(f"{_source}: tool {name!r} is a {type(tool).__name__}, not a povagent.active.tools.Tool")
+                if name in found:
+                    raise PluginError(f"tool name {name!r} is registered twice: by {found[name][1]} and by {_source}; "
+                                      f"uninstall or rename one of them")  # fmt: skip
+                found[name] = (tool, _source)
+
+            try:
+                impl.function(**{a: register for a in impl.argnames})
+            except PluginError:
+                raise
+            except Exception as exc:
+                raise PluginError(f"{source}: {TOOL_HOOK} raised {type(exc).__name__}: {exc}") from exc
+        self._tools = ToolSet((name, tool) for name, (tool, _) in found.items())
+        return self._tools
 
     # -- lookup -------------------------------------------------------------------------------
     def names(self, kind: str) -> list[str]:

@@ -45,14 +45,22 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
     parser = host.parser(config.parser.name, config.parser.options)
     counterpart = official_counterpart(parser)
+    strategy = host.strategy(config.strategy.name, config.strategy.options)
+    strategy.use_plugins(host)
     return Components(
         backend=host.backend(config.backend.name, config.backend.options),
-        strategy=host.strategy(config.strategy.name, config.strategy.options),
+        strategy=strategy,
         parser=parser,
         scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
         official_parser=host.parser(counterpart) if counterpart else None,
         official_parser_name=counterpart,
     )
+
+
+def pipeline_hash(config: PipelineConfig, components: Components) -> str:
+    """The config hash a run's rows carry: the YAML's, with what its strategy says decides its
+    rows beyond it (:meth:`~povagent.interfaces.Strategy.identity`, e.g. the tools offered)."""
+    return config.config_hash(components.strategy.identity())
 
 
 def backend_label(backend: Backend) -> str:

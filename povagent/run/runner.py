@@ -47,7 +47,7 @@ from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
-from povagent.run.components import ComponentNames, answering_model, backend_label, create_components
+from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
 from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
@@ -280,6 +280,7 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
         self.components = create_components(config, self.host)
+        self.config_hash = pipeline_hash(config, self.components)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
         dumped = options.model_dump() if hasattr(options, "model_dump") else options

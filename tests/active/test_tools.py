@@ -1,4 +1,5 @@
-"""A tool call is read into a typed action, or into an invalid call saying why: never an exception."""
+"""A tool call is read into the registered tool and its typed arguments, or into an invalid call
+saying why: never an exception."""
 
 from __future__ import annotations
 
@@ -6,12 +7,18 @@ import json
 
 import pytest
 
-from povagent.active.tools import TOOL_NAMES, TOOLS, Answer, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
+from povagent.active.tools import InvalidCall, offered_tools, read_call
+from povagent_plugins.tools.answer import Answer
+from povagent_plugins.tools.go_to_frame import GoToFrame
+from povagent_plugins.tools.move import Move
+from povagent_plugins.tools.tilt import Tilt
+from povagent_plugins.tools.turn import Turn
 
 
-def test_the_schema_offers_exactly_the_six_tools_by_their_names():
-    assert TOOL_NAMES == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
-    assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in TOOLS)
+def test_the_registry_offers_exactly_the_six_built_in_tools_by_their_names():
+    tools = offered_tools()
+    assert tools.names == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
+    assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in tools.schemas())
 
 
 @pytest.mark.parametrize(
@@ -27,7 +34,8 @@ def test_the_schema_offers_exactly_the_six_tools_by_their_names():
     ],
 )
 def test_a_well_formed_call_becomes_its_typed_action(name, arguments, action):
-    assert read_call(name, json.dumps(arguments)) == action
+    tool, typed = read_call(name, json.dumps(arguments))
+    assert tool is offered_tools()[name] and typed == action
 
 
 @pytest.mark.parametrize(
