@@ -11,16 +11,16 @@ import abc
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
+from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping, Protocol
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.exchange.messages import Request, Response
 
 if TYPE_CHECKING:
+    from povagent.active.tools import ToolSet
     from povagent.dataset.instances import Instance
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
-    from povagent.plugins import PluginHost
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
@@ -137,6 +137,14 @@ class Backend(abc.ABC):
         """
 
 
+class LoadedPlugins(Protocol):
+    """What a strategy may ask of the plugins a run loaded (:class:`povagent.plugins.PluginHost`)."""
+
+    def tools(self) -> ToolSet:
+        """Every registered active-mode tool, in the order offered."""
+        ...
+
+
 class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
 
@@ -167,7 +175,7 @@ class Strategy(abc.ABC):
         strategy that makes files of its own (the active mode's rendered views) keeps them there
         and a resumed run finds them. The default does nothing."""
 
-    def use_plugins(self, host: PluginHost) -> None:  # noqa: B027 - optional hook
+    def use_plugins(self, host: LoadedPlugins) -> None:  # noqa: B027 - optional hook
         """The plugins the run loaded: called once when the strategy is made for a run, so a
         strategy that offers registered things (the active mode's tools) offers the run's. The
         default does nothing."""

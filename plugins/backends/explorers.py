@@ -25,11 +25,11 @@ import math
 from typing import Any, ClassVar, Mapping
 
 from povagent import hookimpl
-from povagent.active.tools import offered_tools
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, ToolCall, Usage
 from povagent.geometry.camera import Camera
 from povagent.interfaces import Backend, PermanentBackendError
+from povagent.plugins import get_plugin_host
 from povagent.scoring.official import project_ground_truth
 from povagent_plugins.backends.baselines import request_run, seeded_rng
 
@@ -133,7 +133,7 @@ class ExplorerRandom(Backend):
             return _answer_centre(request, state)
         instance = request.instance.id if request.instance is not None else ""
         rng = seeded_rng(self.seed, instance, request_run(request), len(state.get("actions", [])))
-        registered = offered_tools().tools
+        registered = get_plugin_host().tools().tools
         offered = [t["function"]["name"] for t in request.tools]
         choices = [(n, explore) for n in offered if n in registered and (explore := registered[n].explore) is not None]
         if not choices:

@@ -37,20 +37,21 @@ from povagent import hookimpl
 from povagent.active.episode import DEFAULT_BUDGET, Episode, kept_call
 from povagent.active.pose import Pose
 from povagent.active.speaker import pair_facts
-from povagent.active.tools import ToolSet, offered_tools
+from povagent.active.tools import ToolSet
 from povagent.active.views import ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Message, Request, Response, TextPart
 from povagent.interfaces import Ask, Parser, PlannedTurn, earlier_answer
+from povagent.plugins import get_plugin_host
 from povagent.results.episode import read_record
 from povagent_plugins.parsers.official import parse_official
 from povagent_plugins.strategies.basic import BasicStrategy, _positive_or_none
 from povagent_plugins.strategies.layout import prompt_message
 
 if TYPE_CHECKING:
-    from povagent.plugins import PluginHost
+    from povagent.interfaces import LoadedPlugins
 
 #: The largest record the parser reads (a budget of 64 actions stays far below it).
 MAX_RECORD_CHARS = 4 * 1024 * 1024
@@ -72,7 +73,7 @@ def _words(names: list[str]) -> str:
 def preamble(budget: int, n_frames: int, given: bool, tools: ToolSet | None = None) -> str:
     """The tools preamble after the passive prompt: what the model may do (each tool's
     signature and prose, as registered), and its budget."""
-    tools = tools if tools is not None else offered_tools()
+    tools = tools if tools is not None else get_plugin_host().tools()
     shown = "the observer view above is frame 0" if given else f"the images above are frames 0-{n_frames - 1} (Image k is frame k)"
     acting = [f"{t.signature(n)} {t.prose}" for n, t in tools.tools.items() if not t.ends]
     ending = [n for n, t in tools.tools.items() if t.ends]
@@ -113,14 +114,14 @@ class ActiveStrategy(BasicStrategy):
         link planted there is refused now, in one line, before any episode runs."""
         self._views = ViewStore(Path(folder))
 
-    def use_plugins(self, host: PluginHost) -> None:
+    def use_plugins(self, host: LoadedPlugins) -> None:
         """Offer the tools the run's plugins registered (its ``plugins:`` included)."""
         self._tools = host.tools()
 
     def tools(self) -> ToolSet:
         """The tools offered: the run's (:meth:`use_plugins`), else the process's registered ones."""
         if self._tools is None:
-            self._tools = offered_tools()
+            self._tools = get_plugin_host().tools()
         return self._tools
 
     def identity(self) -> dict[str, Any]:
@@ -180,8 +181,8 @@ class ActiveStrategy(BasicStrategy):
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
         facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value)
-        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.max_actions, self.max_seconds,
-                       tools=self.tools())  # fmt: skip
+        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.tools(), self.max_actions,
+                       self.max_seconds)  # fmt: skip
 
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
         """Run the episode: ask, run the calls, show the views, until it ends."""

@@ -2,7 +2,7 @@
 
 What it is for: the strategy hands each turn's tool calls here and gets back one observation per
 call (the text of its tool result, and the view it rendered, if any). Each call is read and run
-by the tool it names (:mod:`.tools`: the registered tools, or the set the episode is given), and
+by the tool it names of the set the episode is given (:mod:`.tools`: the registered ones), and
 the episode applies what the tool returns: a new pose is rendered as the next view (views are
 numbered from 1 in the order returned across the episode), words go back as they are, the
 final answer ends the episode. Every call but a valid one of a tool that ``ends`` the episode
@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
-from povagent.active.tools import Answered, InvalidCall, Moved, Told, Tool, ToolSet, offered_tools, read_call
+from povagent.active.tools import Answered, InvalidCall, Moved, Told, Tool, ToolSet, read_call
 from povagent.answers.spec import AnsweredCamera
 from povagent.exchange.messages import ToolCall
 
@@ -74,12 +74,12 @@ class Episode:
         render: RenderFn,
         floor: Callable[[], Floor],
         speaker: PairFacts,
+        tools: ToolSet,
         budget: int = DEFAULT_BUDGET,
         max_seconds: float = 600.0,
         clock: Callable[[], float] = time.monotonic,
-        tools: ToolSet | None = None,
     ) -> None:
-        self.tools = tools if tools is not None else offered_tools()
+        self.tools = tools
         self.frames = tuple(frames)
         self.pose = start
         self.start = start

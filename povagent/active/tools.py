@@ -4,7 +4,8 @@ What it is for: a tool is contributed by a plugin (``register_tools``, the built
 ``povagent_plugins.tools`` exactly as a third party's): it declares the schema the model is
 offered (OpenAI function calling, sent by litellm as ``tools=``), how the preamble and the docs
 describe it, how its arguments are read, and what it does to the episode (a typed function over
-the episode's state returning an :data:`Effect`). This module owns the one place a call the
+the episode's state returning an :data:`Effect`); the plugin host collects them
+(:meth:`povagent.plugins.PluginHost.tools`). This module owns the one place a call the
 model made is read. A call is untrusted output: an unknown name, missing or extra arguments, a
 string where a number belongs, NaN, Infinity or 1e308, an over-long text, all become an
 :class:`InvalidCall` with one line saying what was wrong, never an exception.
@@ -148,13 +149,6 @@ class ToolSet:
         return self.tools[name]
 
 
-def offered_tools() -> ToolSet:
-    """The tools registered with the process's plugin host (built-ins and installed plugins)."""
-    from povagent.plugins import get_plugin_host
-
-    return get_plugin_host().tools()
-
-
 # -- reading arguments: the rules every tool shares ---------------------------------------------
 def number_argument(args: Mapping[str, Any], key: str, bound: float) -> float | str:
     """``args[key]`` as a finite float within ``[-bound, bound]``, or why it is not (a bool, a
@@ -172,11 +166,9 @@ def number_argument(args: Mapping[str, Any], key: str, bound: float) -> float | 
     return value
 
 
-def read_call(name: str, arguments: str, tools: ToolSet | None = None) -> tuple[Tool, Any] | InvalidCall:
-    """The tool a call names and its typed arguments, or why the call is invalid (never raises).
-
-    ``tools`` defaults to :func:`offered_tools`."""
-    tools = tools if tools is not None else offered_tools()
+def read_call(name: str, arguments: str, tools: ToolSet) -> tuple[Tool, Any] | InvalidCall:
+    """The tool of ``tools`` a call names and its typed arguments, or why the call is invalid
+    (never raises)."""
     if name not in tools.tools:
         return InvalidCall(f"unknown tool {name[:40]!r} (tools: {', '.join(tools.names)})")
     if len(arguments) > MAX_ARGUMENTS_CHARS:

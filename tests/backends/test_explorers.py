@@ -112,3 +112,12 @@ def test_the_random_explorer_makes_the_calls_it_made_before_tools_were_registere
     rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 1)
     steps = [(s.action, s.arguments) for s in read_record(rows[0].exchanges[-1].raw).steps]
     assert hashlib.sha256(json.dumps(steps).encode()).hexdigest() == RANDOM_CALLS_SHA256
+
+
+def test_the_random_explorer_also_calls_a_plugin_tool_the_request_offers(generated_release, tmp_path, povagent_host):
+    from povagent.plugins import get_plugin_host
+
+    get_plugin_host([str(Path(__file__).resolve().parents[1] / "tools" / "plugins" / "zoom.py")])  # into the test's host
+    rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 1)
+    steps = read_record(rows[0].exchanges[-1].raw).steps
+    assert "zoom" in [s.action for s in steps] and all(s.valid for s in steps)
