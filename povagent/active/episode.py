@@ -151,7 +151,8 @@ class Episode:
             return self._ending(call, turn, *read)
         if self.budget_left == 0:
             self.counts.refused_over_budget += 1
-            text = f"not run: the budget of {self.budget} actions is used up; call answer"
+            ending = " or ".join(n for n, t in self.tools.tools.items() if t.ends)
+            text = f"not run: the budget of {self.budget} actions is used up; call {ending}"
             self._step(turn, call.name[:40], args, False, text, counted=False)
             return Observation(call.id, text)
         self.counts.actions += 1

@@ -280,7 +280,7 @@ class PipelineRun:
         # Plugins check their options first: a rejected option (a literal API key, say) fails
         # before the dataset is read and before anything is written to the run folder.
         self.components = create_components(config, self.host)
-        self.config_hash = pipeline_hash(config, self.components)
+        self.config_hash = pipeline_hash(config, self.components.strategy)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
         dumped = options.model_dump() if hasattr(options, "model_dump") else options

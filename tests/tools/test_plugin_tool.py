@@ -98,3 +98,14 @@ def test_rows_made_with_another_set_of_tools_are_another_pipeline(generated_rele
     with pytest.raises(ConfigError, match=r"holds rows of a different pipeline"):
         run_pipeline(with_zoom)
     assert len(model.requests) == 1
+
+
+def test_a_dry_run_of_a_finished_run_with_a_plugin_tool_plans_its_keys_done(generated_release, tmp_path, model):
+    from povagent.dataset.loader import load_dataset
+    from povagent.run.pending import pending_keys
+
+    model.script(calls(("answer", {"image": "frame 0", "x": 1, "y": 2})))
+    config = load_pipeline(write_pipeline(generated_release, tmp_path / "run", model, zoom=True))
+    run_pipeline(config)
+    assert read_rows(tmp_path / "run" / "results.jsonl")[0].config_hash != config.config_hash()  # the tools are in it
+    assert pending_keys(config, load_dataset(generated_release)) == (1, 1, [])
