@@ -24,6 +24,7 @@ import difflib
 import importlib
 import importlib.metadata
 import importlib.util
+import re
 import sys
 import traceback
 from dataclasses import dataclass
@@ -54,6 +55,7 @@ KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
 #: The hook active-mode tools are registered by (kept in load order: the order they are offered).
 TOOL_HOOK = "register_tools"
+_TOOL_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 #: The entry-point group third-party distributions declare their plugins under.
 ENTRY_POINT_GROUP = "povagent"
@@ -232,8 +234,8 @@ class PluginHost:
             source = self.source_of(impl.plugin_name)
 
             def register(name: str, tool: Tool, *, _source: str = source) -> None:
-                if not isinstance(name, str) or not name:
-                    raise PluginError(f"{_source}: registered a tool with an invalid name {name!r}")
+                if not isinstance(name, str) or not _TOOL_NAME.fullmatch(name):  # what function calling accepts
+                    raise PluginError(f"{_source}: registered a tool with an invalid name {name!r} (letters, digits, _ and -, at most 64)")
                 if not isinstance(tool, Tool):
                     raise PluginError(f"{_source}: tool {name!r} is a {type(tool).__name__}, not a povagent.active.tools.Tool")
                 if name in found:

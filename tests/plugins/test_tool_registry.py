@@ -39,3 +39,9 @@ def test_something_registered_that_is_not_a_tool_is_an_error_naming_the_plugin(p
     povagent_host.add_plugin(_tool_plugin("spin", {"name": "spin"}), name="dict-tool", source="plugin dict-tool")
     with pytest.raises(PluginError, match=r"plugin dict-tool: tool 'spin' is a dict, not a povagent.active.tools.Tool"):
         povagent_host.tools()
+
+
+def test_a_tool_name_function_calling_cannot_carry_is_an_error_naming_the_plugin(povagent_host):
+    povagent_host.add_plugin(_tool_plugin("look around"), name="spaced", source="plugin spaced")
+    with pytest.raises(PluginError, match=r"plugin spaced: registered a tool with an invalid name 'look around'"):
+        povagent_host.tools()
