@@ -249,8 +249,13 @@ class PluginHost:
                 raise
             except Exception as exc:
                 raise PluginError(f"{source}: {TOOL_HOOK} raised {type(exc).__name__}: {exc}") from exc
-        self._tools = ToolSet((name, tool) for name, (tool, _) in found.items())
+        self._tools = ToolSet(((name, tool) for name, (tool, _) in found.items()), {n: s for n, (_, s) in found.items()})
         return self._tools
+
+    def tool_entries(self) -> list[PluginEntry]:
+        """Every registered tool as ``povagent plugins`` lists it, in the order offered."""
+        tools = self.tools()
+        return [PluginEntry("tool", n, t, t.description, tools.sources.get(n, "")) for n, t in tools.tools.items()]
 
     # -- lookup -------------------------------------------------------------------------------
     def names(self, kind: str) -> list[str]:

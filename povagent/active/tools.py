@@ -131,10 +131,12 @@ class Tool:
 
 
 class ToolSet:
-    """The tools an episode offers, by name, in the order they were registered."""
+    """The tools an episode offers, by name, in the order they were registered (``sources``:
+    where each came from, as the plugin host names plugins)."""
 
-    def __init__(self, tools: Iterable[tuple[str, Tool]]) -> None:
+    def __init__(self, tools: Iterable[tuple[str, Tool]], sources: Mapping[str, str] | None = None) -> None:
         self.tools: dict[str, Tool] = dict(tools)
+        self.sources: dict[str, str] = dict(sources or {})
 
     @property
     def names(self) -> tuple[str, ...]:

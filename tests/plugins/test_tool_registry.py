@@ -45,3 +45,17 @@ def test_a_tool_name_function_calling_cannot_carry_is_an_error_naming_the_plugin
     povagent_host.add_plugin(_tool_plugin("look around"), name="spaced", source="plugin spaced")
     with pytest.raises(PluginError, match=r"plugin spaced: registered a tool with an invalid name 'look around'"):
         povagent_host.tools()
+
+
+def test_the_plugins_command_lists_each_tool_with_its_source_in_the_order_offered():
+    import json
+
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    result = CliRunner().invoke(app, ["plugins", "--json"])
+    assert result.exit_code == 0, result.output
+    tools = json.loads(result.output)["tool"]
+    assert [t["name"] for t in tools] == ["go_to_frame", "turn", "tilt", "move", "ask", "answer"]
+    assert tools[1]["source"] == "built-in povagent_plugins.tools.turn" and tools[1]["description"].startswith("Rotate in place")
