@@ -176,9 +176,9 @@ class Strategy(abc.ABC):
         and a resumed run finds them. The default does nothing."""
 
     def use_plugins(self, host: LoadedPlugins) -> None:  # noqa: B027 - optional hook
-        """The plugins the run loaded: called once when the strategy is made for a run, so a
-        strategy that offers registered things (the active mode's tools) offers the run's. The
-        default does nothing."""
+        """The plugins loaded where the strategy is made: the plugin host calls it once, as it
+        makes the strategy, so a strategy that offers registered things (the active mode's
+        tools) offers those of the run's plugins. The default does nothing."""
 
     def identity(self) -> Mapping[str, Any]:
         """What, beyond the pipeline's YAML, decides the rows this strategy makes (the active

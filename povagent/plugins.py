@@ -301,10 +301,13 @@ class PluginHost:
         return made
 
     def strategy(self, name: str, options: Mapping[str, Any] | None = None) -> Strategy:
-        """The strategy registered as ``name``, made with its YAML ``options``."""
+        """The strategy registered as ``name``, made with its YAML ``options``, and handed these
+        plugins (:meth:`~povagent.interfaces.Strategy.use_plugins`: the tools it offers are this
+        host's, wherever it is made: a run, ``show-prompt``, a dry run, ``rescore``)."""
         made = self.create("strategy", name, options)
         if not isinstance(made, Strategy):
             raise self._not_a("strategy", name, made, Strategy)
+        made.use_plugins(self)
         return made
 
     def parser(self, name: str, options: Mapping[str, Any] | None = None) -> Parser:

@@ -45,11 +45,9 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
     assert config.backend is not None and config.parser is not None, "resolve_components() first"
     parser = host.parser(config.parser.name, config.parser.options)
     counterpart = official_counterpart(parser)
-    strategy = host.strategy(config.strategy.name, config.strategy.options)
-    strategy.use_plugins(host)
     return Components(
         backend=host.backend(config.backend.name, config.backend.options),
-        strategy=strategy,
+        strategy=host.strategy(config.strategy.name, config.strategy.options),
         parser=parser,
         scorers={s.name: host.scorer(s.name, s.options) for s in config.scorers},
         official_parser=host.parser(counterpart) if counterpart else None,
@@ -62,9 +60,7 @@ def pipeline_hash(config: PipelineConfig, strategy: Strategy | None = None) -> s
     rows beyond it (:meth:`~povagent.interfaces.Strategy.identity`, e.g. the tools offered).
     ``strategy`` is the run's; without it, one is made with the config's plugins (dry runs)."""
     if strategy is None:
-        host = get_plugin_host(config.plugins)
-        strategy = host.strategy(config.strategy.name, config.strategy.options)
-        strategy.use_plugins(host)
+        strategy = get_plugin_host(config.plugins).strategy(config.strategy.name, config.strategy.options)
     return config.config_hash(strategy.identity())
 
 

@@ -109,3 +109,14 @@ def test_a_dry_run_of_a_finished_run_with_a_plugin_tool_plans_its_keys_done(gene
     run_pipeline(config)
     assert read_rows(tmp_path / "run" / "results.jsonl")[0].config_hash != config.config_hash()  # the tools are in it
     assert pending_keys(config, load_dataset(generated_release)) == (1, 1, [])
+
+
+def test_show_prompt_describes_a_plugin_tool_the_run_would_offer(generated_release, tmp_path, model):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    path = write_pipeline(generated_release, tmp_path / "run", model, zoom=True)
+    result = CliRunner().invoke(app, ["show-prompt", str(path), "--instance", "train_house_00000/pair_000/front/a"])
+    assert result.exit_code == 0, result.output
+    assert "zoom(factor) narrows the field of view" in " ".join(result.output.split())
