@@ -38,6 +38,13 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.backends.simulated",
     "povagent_plugins.backends.planted",
     "povagent_plugins.backends.explorers",
+    # active-mode tools (offered in this order)
+    "povagent_plugins.tools.go_to_frame",
+    "povagent_plugins.tools.turn",
+    "povagent_plugins.tools.tilt",
+    "povagent_plugins.tools.move",
+    "povagent_plugins.tools.ask",
+    "povagent_plugins.tools.answer",
     # model profiles
     "povagent_plugins.backends.profiles",
     # surface judges (the dataset generator's stage 3)

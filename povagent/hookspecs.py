@@ -118,6 +118,22 @@ def register_model_profiles(register: Register) -> None:
     """
 
 
+# -- contribution hooks: the active mode ----------------------------------------------------
+@hookspec
+def register_tools(register: Register) -> None:
+    """Contribute active-mode tools: what a model may call to look around before it answers.
+
+    Called once per plugin, when the plugin host first collects the tools (an ``active``
+    episode offers every registered tool, in the order the plugins were loaded: the built-ins
+    first). For each tool call ``register(name, tool)`` with ``tool`` a
+    :class:`povagent.active.tools.Tool`: its description and arguments (the OpenAI function
+    schema the model is offered), how its arguments are read, what it does to the episode
+    (``run(state, arguments)`` returns a new pose to render, words, or the final answer), and
+    how the preamble and the docs describe it. The set offered is recorded in the config hash,
+    so rows made with other tools never mix. A name registered twice is an error naming both.
+    """
+
+
 # -- contribution hooks: dataset generation ---------------------------------------------------
 @hookspec
 def register_judges(register: Register) -> None:

@@ -11,12 +11,13 @@ import abc
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping
+from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping, Protocol
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.exchange.messages import Request, Response
 
 if TYPE_CHECKING:
+    from povagent.active.tools import ToolSet
     from povagent.dataset.instances import Instance
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
@@ -142,6 +143,14 @@ class Backend(abc.ABC):
         """
 
 
+class LoadedPlugins(Protocol):
+    """What a strategy may ask of the plugins a run loaded (:class:`povagent.plugins.PluginHost`)."""
+
+    def tools(self) -> ToolSet:
+        """Every registered active-mode tool, in the order offered."""
+        ...
+
+
 class Strategy(abc.ABC):
     """How a model is asked: prompt text, images (perhaps marked) and the answer format."""
 
@@ -178,6 +187,17 @@ class Strategy(abc.ABC):
         """Where this run's files are: called once by the runner before the first instance, so a
         strategy that makes files of its own (the active mode's rendered views) keeps them there
         and a resumed run finds them. The default does nothing."""
+
+    def use_plugins(self, host: LoadedPlugins) -> None:  # noqa: B027 - optional hook
+        """The plugins loaded where the strategy is made: the plugin host calls it once, as it
+        makes the strategy, so a strategy that offers registered things (the active mode's
+        tools) offers those of the run's plugins. The default does nothing."""
+
+    def identity(self) -> Mapping[str, Any]:
+        """What, beyond the pipeline's YAML, decides the rows this strategy makes (the active
+        mode: the tools it offers), recorded in the config hash so rows made otherwise never
+        mix. The default is empty, which leaves the hash the YAML's alone."""
+        return {}
 
     def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
         """Every turn :meth:`solve` takes for ``instance``, in order, without calling a model.

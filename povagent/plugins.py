@@ -24,12 +24,13 @@ import difflib
 import importlib
 import importlib.metadata
 import importlib.util
+import re
 import sys
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable, Iterable, Literal, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Literal, Mapping, Sequence
 
 import pluggy
 import structlog
@@ -38,6 +39,9 @@ from povagent import hookspecs
 from povagent.answers.types import AnswerType
 from povagent.errors import PluginError
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
+
+if TYPE_CHECKING:  # the active mode loads with the first episode, not with the plugin list
+    from povagent.active.tools import ToolSet
 
 #: The kinds of things plugins contribute through a factory, and the hook for each.
 Kind = Literal["backend", "strategy", "parser", "scorer", "judge"]
@@ -52,6 +56,10 @@ KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
 #: Contribution hooks that register objects rather than factories, and the kind each fills.
 OBJECT_HOOKS: dict[str, str] = {"profile": PROFILE_HOOK, "answer_type": "register_answer_types"}
+
+#: The hook active-mode tools are registered by (kept in load order: the order they are offered).
+TOOL_HOOK = "register_tools"
+_TOOL_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 #: The entry-point group third-party distributions declare their plugins under.
 ENTRY_POINT_GROUP = "povagent"
@@ -154,6 +162,7 @@ class PluginHost:
         self.failures = failures
         self.hooks = LifecycleHooks(pm)
         self._registry: dict[str, dict[str, PluginEntry]] | None = None
+        self._tools: ToolSet | None = None
 
     # -- registration -------------------------------------------------------------------------
     def _collect(self) -> dict[str, dict[str, PluginEntry]]:
@@ -206,6 +215,7 @@ class PluginHost:
             registered = self.pm.get_name(plugin) or ""
         self._sources[registered] = source or f"plugin {registered}"
         self._registry = None
+        self._tools = None
         return registered
 
     def remove_plugin(self, name: str) -> None:
@@ -214,6 +224,42 @@ class PluginHost:
             self.pm.unregister(name=name)
         self._sources.pop(name, None)
         self._registry = None
+        self._tools = None
+
+    def tools(self) -> ToolSet:
+        """Every registered active-mode tool, in the order the plugins were loaded (the order an
+        episode offers them); a name registered twice is a :class:`PluginError` naming both."""
+        if self._tools is not None:
+            return self._tools
+        from povagent.active.tools import Tool, ToolSet
+
+        found: dict[str, tuple[Tool, str]] = {}
+        for impl in self.pm.hook.register_tools.get_hookimpls():  # load order, unlike a hook call
+            source = self.source_of(impl.plugin_name)
+
+            def register(name: str, tool: Tool, *, _source: str = source) -> None:
+                if not isinstance(name, str) or not _TOOL_NAME.fullmatch(name):  # what function calling accepts
+                    raise PluginError(f"{_source}: registered a tool with an invalid name {name!r} (letters, digits, _ and -, at most 64)")
+                if not isinstance(tool, Tool):
+                    raise PluginError(f"{_source}: tool {name!r} is a {type(tool).__name__}, not a povagent.active.tools.Tool")
+                if name in found:
+                    raise PluginError(f"tool name {name!r} is registered twice: by {found[name][1]} and by {_source}; "
+                                      f"uninstall or rename one of them")  # fmt: skip
+                found[name] = (tool, _source)
+
+            try:
+                impl.function(**{a: register for a in impl.argnames})
+            except PluginError:
+                raise
+            except Exception as exc:
+                raise PluginError(f"{source}: {TOOL_HOOK} raised {type(exc).__name__}: {exc}") from exc
+        self._tools = ToolSet(((name, tool) for name, (tool, _) in found.items()), {n: s for n, (_, s) in found.items()})
+        return self._tools
+
+    def tool_entries(self) -> list[PluginEntry]:
+        """Every registered tool as ``povagent plugins`` lists it, in the order offered."""
+        tools = self.tools()
+        return [PluginEntry("tool", n, t, t.description, tools.sources.get(n, "")) for n, t in tools.tools.items()]
 
     # -- lookup -------------------------------------------------------------------------------
     def names(self, kind: str) -> list[str]:
@@ -259,10 +305,13 @@ class PluginHost:
         return made
 
     def strategy(self, name: str, options: Mapping[str, Any] | None = None) -> Strategy:
-        """The strategy registered as ``name``, made with its YAML ``options``."""
+        """The strategy registered as ``name``, made with its YAML ``options``, and handed these
+        plugins (:meth:`~povagent.interfaces.Strategy.use_plugins`: the tools it offers are this
+        host's, wherever it is made: a run, ``show-prompt``, a dry run, ``rescore``)."""
         made = self.create("strategy", name, options)
         if not isinstance(made, Strategy):
             raise self._not_a("strategy", name, made, Strategy)
+        made.use_plugins(self)
         return made
 
     def parser(self, name: str, options: Mapping[str, Any] | None = None) -> Parser:

@@ -5,6 +5,7 @@ the page is out of date, saying which command brings it back."""
 from __future__ import annotations
 
 import ast
+import dataclasses
 import shutil
 import subprocess
 import sys
@@ -145,3 +146,17 @@ def test_a_stale_page_other_than_the_plugin_reference_names_the_command_that_rew
     # and the bare command rewrites exactly the page the message names by default
     plugins_page = ROOT / "docs" / "reference" / "plugins.md"
     assert check_page(plugins_page) is None
+
+
+def test_the_tools_table_of_the_active_how_to_is_generated_from_the_registrations():
+    active = ROOT / "docs" / "how-to" / "active.md"
+    assert "<!-- generated: tools -->" in active.read_text(encoding="utf-8")
+    assert check_page(active) is None, check_page(active)
+
+
+def test_a_tool_whose_explanation_changed_makes_the_active_how_to_stale(monkeypatch):
+    from povagent_plugins.tools import turn
+
+    monkeypatch.setattr(turn, "TOOL", dataclasses.replace(turn.TOOL, explained="rotate (reworded)"))
+    problem = check_page(ROOT / "docs" / "how-to" / "active.md")
+    assert problem is not None and "run `python tools/plugin_docs.py docs/how-to/active.md`" in problem

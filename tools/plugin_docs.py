@@ -7,6 +7,7 @@ The page is hand-written prose with marked blocks that this module fills in::
     <!-- generated: fields povagent.x.y:Class -->    a field table of a dataclass or pydantic model
     <!-- generated: include ../examples/a.py -->    a file's code (path from the page's folder)
     <!-- generated: parsers -->                     the built-in parsers: what each reads, beside ``official``
+    <!-- generated: tools -->                       the built-in active-mode tools: arguments, what each does
     ...whatever is here is replaced...
     <!-- end generated -->
 
@@ -17,8 +18,8 @@ is up to date (the test suite runs it). A field table's meanings are written her
 is an error, so the tables stay complete.
 
 A tool of the repository, not of the installed package: it lives outside ``povagent/`` so the
-runtime carries no docs generator. Reads modules and Markdown files (``docs/reference/plugins.md``, and ``docs/explanation/official.md`` for its parser
-table); imports only the built-in plugins, for the parser table.
+runtime carries no docs generator. Reads modules and Markdown files (``docs/reference/plugins.md``, ``docs/explanation/official.md`` for its parser
+table, ``docs/how-to/active.md`` for its tools table); imports only the built-in plugins, for those tables.
 """
 
 from __future__ import annotations
@@ -362,6 +363,19 @@ def render_parsers() -> str:
     return "\n".join(lines)
 
 
+def render_tools() -> str:
+    """The built-in active-mode tools' table, in the order an episode offers them: each tool's
+    arguments (from its schema) and what it does (its ``explained``)."""
+    from povagent.plugins import build_plugin_host
+
+    host = build_plugin_host(strict=False, entry_points=False)
+    lines = ["| tool | arguments | what it does |", "|---|---|---|"]
+    for name, tool in host.tools().tools.items():
+        arguments = ", ".join(f"{k}: {v.get('type', 'any')}" for k, v in tool.parameters.items())
+        lines.append(f"| `{name}` | `{arguments}` | {_cell(tool.explained)} |")
+    return "\n".join(lines)
+
+
 def render_block(what: str, page: Path) -> str:
     """The content of one ``<!-- generated: WHAT -->`` block."""
     kind, _, argument = what.strip().partition(" ")
@@ -375,7 +389,9 @@ def render_block(what: str, page: Path) -> str:
         return render_include(argument.strip(), page)
     if kind == "parsers" and not argument:
         return render_parsers()
-    raise PluginDocsError(f"{page}: unknown generated block {what!r}; known: hooks, interfaces, fields MODULE:CLASS, include PATH, parsers")
+    if kind == "tools" and not argument:
+        return render_tools()
+    raise PluginDocsError(f"{page}: unknown generated block {what!r}; known: hooks, interfaces, fields MODULE:CLASS, include PATH, parsers, tools")
 
 
 def render_page(text: str, page: Path) -> str:

@@ -10,7 +10,9 @@ far) and, for the oracle, the ground truth from the instance. They anchor the ac
   tilts to look at the target, then answers the ground truth projected into that last view.
   Its official L2 is ~0: an end-to-end check of poses, rendering, records and scoring.
 * ``explorer-random``: random actions (seeded by instance, run and step) until the budget is
-  spent, then the centre of the last view.
+  spent, then the centre of the last view. Its actions are the tools the request offers that
+  declare how a random explorer calls them (:attr:`povagent.active.tools.Tool.explore`), so a
+  plugin's tool is explored like the built-ins.
 
 Neither reads files, calls a network or is cached. A request without tools (a passive
 strategy) is refused: these backends only explore.
@@ -27,6 +29,7 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, ToolCall, Usage
 from povagent.geometry.camera import Camera
 from povagent.interfaces import Backend, PermanentBackendError
+from povagent.plugins import get_plugin_host
 from povagent.scoring.official import project_ground_truth
 from povagent_plugins.backends.baselines import request_run, seeded_rng
 
@@ -132,14 +135,13 @@ class ExplorerRandom(Backend):
             return _answer_centre(request, state)
         instance = request.instance.id if request.instance is not None else ""
         rng = seeded_rng(self.seed, instance, request_run(request), len(state.get("actions", [])))
-        kind = rng.choice(("go_to_frame", "turn", "tilt", "move"))
-        if kind == "go_to_frame":
-            return _calls(request, (kind, {"frame": rng.randrange(len(state["frames"]))}))
-        if kind == "turn":
-            return _calls(request, (kind, {"degrees": round(rng.uniform(-180, 180), 1)}))
-        if kind == "tilt":
-            return _calls(request, (kind, {"degrees": round(rng.uniform(-30, 30), 1)}))
-        return _calls(request, (kind, {"forward": round(rng.uniform(-1.0, 2.0), 2), "right": round(rng.uniform(-1.0, 1.0), 2)}))
+        registered = get_plugin_host().tools().tools
+        offered = [t["function"]["name"] for t in request.tools]
+        choices = [(n, explore) for n in offered if n in registered and (explore := registered[n].explore) is not None]
+        if not choices:
+            return _answer_centre(request, state)
+        name, explore = rng.choice(choices)
+        return _calls(request, (name, explore(rng, state)))
 
 
 @hookimpl

@@ -2,7 +2,8 @@
 
 The first message is the condition's passive prompt (A/B: the first ``max_frames`` exploration
 frames, labelled ``Image k``; C: the observer view) followed by the tools preamble, which
-states the budget; every request offers the tools of :mod:`povagent.active.tools`. Each turn's
+states the budget; every request offers the registered tools (``register_tools``: the built-in
+six of :mod:`povagent_plugins.tools` and any plugin's, :mod:`povagent.active.tools`). Each turn's
 calls run in an :class:`~povagent.active.episode.Episode`; each tool result goes back as a
 ``tool`` message, and each rendered view as an image labelled ``View n:`` in a user message
 after them (tool messages carry no images). The episode ends with the ``answer`` call, or with
@@ -26,25 +27,31 @@ once (:mod:`povagent.results.transcript`), and the turns are bounded.
 from __future__ import annotations
 
 import asyncio
+import hashlib
+import json
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from povagent import hookimpl
 from povagent.active.episode import DEFAULT_BUDGET, Episode, kept_call
 from povagent.active.pose import Pose
 from povagent.active.speaker import SPEAKER_KNOWLEDGE, pair_facts
-from povagent.active.tools import TOOLS
+from povagent.active.tools import ToolSet
 from povagent.active.views import ViewStore
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Message, Request, Response, TextPart
 from povagent.interfaces import Ask, Parser, PlannedTurn, earlier_answer
+from povagent.plugins import get_plugin_host
 from povagent.results.episode import read_record
 from povagent_plugins.parsers.official import parse_official
 from povagent_plugins.strategies.basic import BasicStrategy, _positive_or_none
 from povagent_plugins.strategies.layout import prompt_message
+
+if TYPE_CHECKING:
+    from povagent.interfaces import LoadedPlugins
 
 #: The largest record the parser reads (a budget of 64 actions stays far below it).
 MAX_RECORD_CHARS = 4 * 1024 * 1024
@@ -53,20 +60,30 @@ MAX_ACTIONS = 64
 MAX_TURNS = MAX_ACTIONS + 2
 #: What one row of an episode stays under at any budget, whatever the model sends.
 ROW_BOUND_BYTES = 8 * 1024 * 1024
+#: The SHA-256 of the tools every active run offered before tools were registered (the six
+#: built-ins' schemas, canonical JSON): a pipeline offering exactly these records nothing more
+#: in its config hash.
+REFERENCE_TOOLS_SHA256 = "257f62899100ef4dfb553c612d0f96277d80eb84049a1533677ce4b6ce176ec2"
 
 
-def preamble(budget: int, n_frames: int, given: bool) -> str:
-    """The tools preamble after the passive prompt: what the model may do, and its budget."""
+def _words(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
+
+
+def preamble(budget: int, n_frames: int, given: bool, tools: ToolSet | None = None) -> str:
+    """The tools preamble after the passive prompt: what the model may do (each tool's
+    signature and prose, as registered), and its budget."""
+    tools = tools if tools is not None else get_plugin_host().tools()
     shown = "the observer view above is frame 0" if given else f"the images above are frames 0-{n_frames - 1} (Image k is frame k)"
+    acting = [f"{t.signature(n)} {t.prose}" for n, t in tools.tools.items() if not t.ends]
+    ending = [n for n, t in tools.tools.items() if t.ends]
+    rendering = _words([n for n, t in tools.tools.items() if t.renders])
+    finish = " or ".join(f"{tools[n].signature(n)}: {tools[n].prose}" for n in ending)
     return (
-        "\n\nYou may look around the house before you answer, with the tools offered: go_to_frame(frame) "
-        "stands where an exploration frame was taken; turn(degrees) rotates in place (positive: right); "
-        "tilt(degrees) looks further down (positive) or up, within [-30, 60]; move(forward, right) walks in "
-        "metres and stops at walls and furniture; ask(question) asks the person who spoke. Each "
-        "go_to_frame, turn, tilt and move returns a new view, numbered View 1, View 2, ... in order. "
-        f"You start where frame 0 was taken; {shown}. You have {budget} actions (answer is not counted; "
-        "invalid calls count). Finish with answer(image, x, y): image is \"frame k\" or \"view n\", "
-        "x and y are the target's pixel in that image (the JSON above, written instead, answers in a frame)."
+        f"\n\nYou may look around the house before you answer, with the tools offered: {'; '.join(acting)}. "
+        f"Each {rendering} returns a new view, numbered View 1, View 2, ... in order. "
+        f"You start where frame 0 was taken; {shown}. You have {budget} actions ({_words(ending)} "
+        f"{'is' if len(ending) == 1 else 'are'} not counted; invalid calls count). Finish with {finish}"
     )
 
 
@@ -99,12 +116,30 @@ class ActiveStrategy(BasicStrategy):
             raise ValueError(f"strategy option max_seconds must be a number in (0, 86400], got {max_seconds!r}")
         self.max_seconds = float(max_seconds)
         self._views: ViewStore | None = None
+        self._tools: ToolSet | None = None
         self._scratch: tempfile.TemporaryDirectory[str] | None = None
 
     def use_run_folder(self, folder: Path) -> None:
         """Views go to ``RUN/views`` (content-addressed: a resumed run renders none again); a
         link planted there is refused now, in one line, before any episode runs."""
         self._views = ViewStore(Path(folder))
+
+    def use_plugins(self, host: LoadedPlugins) -> None:
+        """Offer the tools the run's plugins registered (its ``plugins:`` included)."""
+        self._tools = host.tools()
+
+    def tools(self) -> ToolSet:
+        """The tools offered: the run's (:meth:`use_plugins`), else the process's registered ones."""
+        if self._tools is None:
+            self._tools = get_plugin_host().tools()
+        return self._tools
+
+    def identity(self) -> dict[str, Any]:
+        """The tools offered, by the SHA-256 of their schemas, unless they are the reference set
+        (:data:`REFERENCE_TOOLS_SHA256`): such a pipeline's config hash stays what it was before
+        tools were registered, so those run folders resume; any other set never mixes with it."""
+        digest = hashlib.sha256(json.dumps(self.tools().schemas(), sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+        return {} if digest == REFERENCE_TOOLS_SHA256 else {"tools": digest}
 
     def views(self) -> ViewStore:
         """The view store: the run folder's, else a private temporary one (tests, embedding)."""
@@ -117,12 +152,12 @@ class ActiveStrategy(BasicStrategy):
     def first_message(self, instance: Instance, images: ImageStore) -> Message:
         """The passive prompt with its images, then the tools preamble."""
         n = len(self.shown_frames(instance))
-        text = self.prompt_text(instance) + preamble(self.max_actions, n, not instance.condition.uses_exploration_frames)
+        text = self.prompt_text(instance) + preamble(self.max_actions, n, not instance.condition.uses_exploration_frames, self.tools())
         return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
 
     def _request(self, instance: Instance, messages: list[Message], state: dict[str, object] | None = None) -> Request:
         return Request(messages=tuple(messages), answer=self.answer_spec(instance), generation=self.generation,
-                       instance=instance, tools=TOOLS, question=state)  # fmt: skip
+                       instance=instance, tools=self.tools().schemas(), question=state)  # fmt: skip
 
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The first request: the first message, with the tools offered."""
@@ -156,7 +191,8 @@ class ActiveStrategy(BasicStrategy):
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
         facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value, instance.condition.value, self.speaker)
-        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.max_actions, self.max_seconds)
+        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.tools(), self.max_actions,
+                       self.max_seconds)  # fmt: skip
 
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
         """Run the episode: ask, run the calls, show the views, until it ends."""

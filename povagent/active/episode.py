@@ -1,13 +1,15 @@
 """One active episode: the budget, the numbered views, and every call turned into an observation.
 
 What it is for: the strategy hands each turn's tool calls here and gets back one observation per
-call (the text of its tool result, and the view it rendered, if any). Views are numbered from
-1 in the order returned across the episode; ``go_to_frame``, ``turn``, ``tilt`` and ``move``
-each return one, ``ask`` returns the speaker's words, ``answer`` ends the episode. Every call
-but a valid ``answer`` counts against the budget (``max_actions``), invalid ones included; once
-it is used up further calls are refused without running, so no model can make an episode
-render more than its budget or run past its wall-clock limit. What it must not do: talk to a
-model, touch the image store or write files (the ``render`` callable it is given does).
+call (the text of its tool result, and the view it rendered, if any). Each call is read and run
+by the tool it names of the set the episode is given (:mod:`.tools`: the registered ones), and
+the episode applies what the tool returns: a new pose is rendered as the next view (views are
+numbered from 1 in the order returned across the episode), words go back as they are, the
+final answer ends the episode. Every call but a valid one of a tool that ``ends`` the episode
+counts against the budget (``max_actions``), invalid ones included; once it is used up further
+calls are refused without running, so no model can make an episode render more than its budget
+or run past its wall-clock limit. What it must not do: name a tool, talk to a model, touch the
+image store or write files (the ``render`` callable it is given does).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
-from povagent.active.tools import Answer, Ask, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
+from povagent.active.tools import Answered, InvalidCall, Moved, Told, Tool, ToolSet, read_call
 from povagent.answers.spec import AnsweredCamera
 from povagent.exchange.messages import ToolCall
 
@@ -72,10 +74,12 @@ class Episode:
         render: RenderFn,
         floor: Callable[[], Floor],
         speaker: PairFacts,
+        tools: ToolSet,
         budget: int = DEFAULT_BUDGET,
         max_seconds: float = 600.0,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
+        self.tools = tools
         self.frames = tuple(frames)
         self.pose = start
         self.start = start
@@ -131,55 +135,44 @@ class Episode:
             out.append(self._one(call, turn))
         return out
 
+    def floor(self) -> Floor:
+        """The house's reachable floor, built on first use (a move needs it, a turn does not)."""
+        if self._floor is None:
+            self._floor = self._floor_factory()
+        return self._floor
+
     def _one(self, call: ToolCall, turn: int) -> Observation:
         args = call.arguments[:KEPT_ARGUMENTS]
         if self.end:
             self._step(turn, call.name, args, False, "not run: the episode has ended", counted=False)
             return Observation(call.id, "not run: the episode has ended")
-        action = read_call(call.name, call.arguments)
-        if isinstance(action, Answer):
-            return self._answer(call, turn, action)
+        read = read_call(call.name, call.arguments, self.tools)
+        if not isinstance(read, InvalidCall) and read[0].ends:
+            return self._ending(call, turn, *read)
         if self.budget_left == 0:
             self.counts.refused_over_budget += 1
-            text = f"not run: the budget of {self.budget} actions is used up; call answer"
+            ending = " or ".join(n for n, t in self.tools.tools.items() if t.ends)
+            text = f"not run: the budget of {self.budget} actions is used up; call {ending}"
             self._step(turn, call.name[:40], args, False, text, counted=False)
             return Observation(call.id, text)
         self.counts.actions += 1
-        if isinstance(action, InvalidCall):
-            return self._invalid(call, turn, action.reason)
-        if isinstance(action, Ask):
-            self.counts.questions += 1
-            said = self.speaker.answer(action.question)
-            self._step(turn, call.name, args, True, said)
-            return Observation(call.id, said)
-        blocked = False
-        if isinstance(action, GoToFrame):
-            if not 0 <= action.frame < len(self.frames):
-                return self._invalid(call, turn, f"go_to_frame: no frame {action.frame} (frames 0-{len(self.frames) - 1})")
-            self.pose, said = self.frames[action.frame], f"at frame {action.frame}"
-        elif isinstance(action, Turn):
-            self.pose, said = self.pose.turned(action.degrees), f"turned {action.degrees:g} degrees"
-        elif isinstance(action, Tilt):
-            self.pose, said = self.pose.tilted(action.degrees), f"tilted {action.degrees:g} degrees"
-        else:
-            assert isinstance(action, Move)
-            said, blocked = self._move(action)
+        if isinstance(read, InvalidCall):
+            return self._invalid(call, turn, read.reason)
+        tool, typed = read
+        effect = tool.run(self, typed)
+        if isinstance(effect, InvalidCall):
+            return self._invalid(call, turn, f"{call.name}: {effect.reason}")
+        if isinstance(effect, Told):
+            self.counts.questions += effect.question
+            self._step(turn, call.name, args, True, effect.text)
+            return Observation(call.id, effect.text)
+        assert isinstance(effect, Moved) and tool.renders, f"tool {call.name!r} returned {effect!r} (renders={tool.renders})"
+        self.pose = effect.pose
+        self.counts.blocked_moves += effect.blocked
         view = self._view()
-        text = f"View {view.n}: {said}; now {self.pose.in_words(self.start)}"
-        self._step(turn, call.name, args, True, text, view=view, blocked=blocked)
+        text = f"View {view.n}: {effect.said}; now {self.pose.in_words(self.start)}"
+        self._step(turn, call.name, args, True, text, view=view, blocked=effect.blocked)
         return Observation(call.id, text, view.n, view.sha256, self.pose)
-
-    def _move(self, action: Move) -> tuple[str, bool]:
-        if self._floor is None:
-            self._floor = self._floor_factory()
-        dx, dz = self.pose.offset(action.forward, action.right)
-        moved = self._floor.move(self.pose.x, self.pose.z, dx, dz)
-        self.pose = self.pose.moved_to(moved.x, moved.z)
-        wanted = (action.forward**2 + action.right**2) ** 0.5
-        if moved.blocked:
-            self.counts.blocked_moves += 1
-            return f"moved {moved.travelled:.2f} m of {wanted:.2f} m (stopped by a wall or furniture)", True
-        return f"moved {moved.travelled:.2f} m", False
 
     def _view(self) -> ViewRecord:
         sha = self._render(self.pose)
@@ -194,17 +187,20 @@ class Episode:
         self._step(turn, call.name[:40], call.arguments[:KEPT_ARGUMENTS], False, text)
         return Observation(call.id, text)
 
-    def _answer(self, call: ToolCall, turn: int, action: Answer) -> Observation:
-        camera = self.image_camera(action.kind, action.number)
-        if camera is None:
+    def _ending(self, call: ToolCall, turn: int, tool: Tool, typed: object) -> Observation:
+        """A call of a tool that ends the episode: not counted when valid; an invalid one counts,
+        or is refused once the budget is used up."""
+        effect = tool.run(self, typed)
+        if isinstance(effect, InvalidCall):
             if self.budget_left == 0:  # an invalid answer cannot count any more: refused
                 self.counts.refused_over_budget += 1
-                text = f"not run: no {action.image} was shown, and the budget is used up"
+                text = f"not run: {effect.reason}, and the budget is used up"
                 self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], False, text, counted=False)
                 return Observation(call.id, text)
             self.counts.actions += 1
-            return self._invalid(call, turn, f"answer: no {action.image} was shown")
-        self.finish(action.image, action.x, action.y, "answer_tool")
+            return self._invalid(call, turn, f"{call.name}: {effect.reason}")
+        assert isinstance(effect, Answered), f"tool {call.name!r} ends the episode but returned {effect!r}"
+        self.finish(effect.image, effect.x, effect.y, "answer_tool")
         self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], True, "answer recorded", counted=False)
         return Observation(call.id, "answer recorded")
 

@@ -1,132 +1,160 @@
-"""The tools a model may call in the active mode: their schema and the checking of a call.
+"""What an active-mode tool is, the set an episode offers, and the reading of a call.
 
-What it is for: the exact names and meanings results are compared by (``go_to_frame``,
-``turn``, ``tilt``, ``move``, ``ask``, ``answer``), in the OpenAI function-calling schema
-litellm sends as ``tools=``, and the one place a call the model made is read. A call is
-untrusted output: an unknown name, missing or extra arguments, a string where a number
-belongs, NaN, Infinity or 1e308, an over-long text, all become an :class:`InvalidCall` with
-one line saying what was wrong, never an exception. What it must not do: know the episode's
-state (whether a frame or view exists is the episode's to check), render or move.
+What it is for: a tool is contributed by a plugin (``register_tools``, the built-in six by
+``povagent_plugins.tools`` exactly as a third party's): it declares the schema the model is
+offered (OpenAI function calling, sent by litellm as ``tools=``), how the preamble and the docs
+describe it, how its arguments are read, and what it does to the episode (a typed function over
+the episode's state returning an :data:`Effect`); the plugin host collects them
+(:meth:`povagent.plugins.PluginHost.tools`). This module owns the one place a call the
+model made is read. A call is untrusted output: an unknown name, missing or extra arguments, a
+string where a number belongs, NaN, Infinity or 1e308, an over-long text, all become an
+:class:`InvalidCall` with one line saying what was wrong, never an exception.
+
+What it must not do: name a tool (the core knows kinds of effect, never tools), render or move.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import re
+import random
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from povagent.engine.received import MAX_ARGUMENTS_CHARS
 
-#: The longest question passed to the speaker (the longest arguments text read is the bound
-#: every answer's calls are cut to: :data:`povagent.engine.received.MAX_ARGUMENTS_CHARS`).
-MAX_QUESTION_CHARS = 500
-#: Bounds of the numbers a call may carry (beyond them a call is invalid, not clamped).
-MAX_DEGREES = 3600.0
-MAX_METRES = 100.0
-MAX_PIXELS = 1e6
-
-_NUMBER = {"type": "number"}
+if TYPE_CHECKING:  # only for the types a tool function sees
+    from povagent.active.floor import Floor
+    from povagent.active.pose import Pose
+    from povagent.active.speaker import PairFacts
+    from povagent.answers.spec import AnsweredCamera
 
 
-def _function(name: str, description: str, properties: dict[str, Any]) -> dict[str, Any]:
-    return {
-        "type": "function",
-        "function": {
-            "name": name,
-            "description": description,
-            "parameters": {"type": "object", "properties": properties, "required": list(properties), "additionalProperties": False},
-        },
-    }
+# -- what a call does to the episode ------------------------------------------------------------
+@dataclass(frozen=True)
+class Moved:
+    """The robot stands in a new ``pose``: the episode renders the view there (``said`` is how
+    the tool result begins, ``blocked`` whether a wall or furniture stopped it)."""
 
-
-#: The tool schema sent with every request of an episode (names and semantics are fixed).
-TOOLS: tuple[dict[str, Any], ...] = (
-    _function("go_to_frame", "Stand where exploration frame `frame` was taken, facing as it was; returns that view.",
-              {"frame": {"type": "integer", "description": "the exploration frame's number, as labelled"}}),
-    _function("turn", "Rotate in place; positive turns right (clockwise seen from above). Returns the new view.",
-              {"degrees": {**_NUMBER, "description": "degrees, positive to the right"}}),
-    _function("tilt", "Tilt the camera; positive looks further down. The result is clamped to [-30, 60] degrees. "
-              "Returns the new view.", {"degrees": {**_NUMBER, "description": "degrees, positive looks down"}}),
-    _function("move", "Move the robot (camera at 0.9 m, body radius 0.25 m) in its current heading; it stops at "
-              "walls and furniture. Returns how far it got and the new view.",
-              {"forward": {**_NUMBER, "description": "metres ahead (negative: back)"},
-               "right": {**_NUMBER, "description": "metres to the right (negative: left)"}}),
-    _function("ask", "Ask the person who spoke a question; they say what they were doing, where, and what they faced, "
-              "nothing more.", {"question": {"type": "string"}}),
-    _function("answer", "Give the final answer: the pixel (x, y) of the target in an image you have seen.",
-              {"image": {"type": "string", "description": "\"frame k\" for exploration frame k, \"view n\" for rendered view n"},
-               "x": {**_NUMBER, "description": "pixel column"}, "y": {**_NUMBER, "description": "pixel row"}}),
-)  # fmt: skip
-TOOL_NAMES: tuple[str, ...] = tuple(t["function"]["name"] for t in TOOLS)
-_PARAMETERS = {t["function"]["name"]: tuple(t["function"]["parameters"]["properties"]) for t in TOOLS}
+    pose: Pose
+    said: str
+    blocked: bool = False
 
 
 @dataclass(frozen=True)
-class GoToFrame:
-    """``go_to_frame(frame)``."""
+class Told:
+    """The call is answered in words, no view (``question``: it was a question to the speaker)."""
 
-    frame: int
-
-
-@dataclass(frozen=True)
-class Turn:
-    """``turn(degrees)``."""
-
-    degrees: float
+    text: str
+    question: bool = False
 
 
 @dataclass(frozen=True)
-class Tilt:
-    """``tilt(degrees)``."""
+class Answered:
+    """The final answer: pixel (``x``, ``y``) in ``image`` (``frame k`` or ``view n``, shown)."""
 
-    degrees: float
-
-
-@dataclass(frozen=True)
-class Move:
-    """``move(forward, right)``."""
-
-    forward: float
-    right: float
-
-
-@dataclass(frozen=True)
-class Ask:
-    """``ask(question)``."""
-
-    question: str
-
-
-@dataclass(frozen=True)
-class Answer:
-    """``answer(image, x, y)``: ``kind`` is ``frame`` or ``view``, ``number`` as written."""
-
-    kind: str
-    number: int
+    image: str
     x: float
     y: float
-
-    @property
-    def image(self) -> str:
-        """The image as the model named it (normalised): ``frame 3``, ``view 2``."""
-        return f"{self.kind} {self.number}"
 
 
 @dataclass(frozen=True)
 class InvalidCall:
-    """A call that cannot be run: ``reason`` is the one line the model is told."""
+    """A call that cannot be run: ``reason`` is the one line the model is told. A tool's own
+    functions give the reason in its words; :func:`read_call` and the episode prefix its name."""
 
     reason: str
 
 
-Action = GoToFrame | Turn | Tilt | Move | Ask | Answer
-
-_IMAGE = re.compile(r"^\s*(frame|view)\s*#?\s*(\d{1,6})\s*$", re.IGNORECASE)
+Effect = Moved | Told | Answered
 
 
-def _number(args: dict[str, Any], key: str, bound: float) -> float | str:
+class EpisodeState(Protocol):
+    """What a tool's :attr:`Tool.run` reads of the episode (it changes nothing itself)."""
+
+    frames: tuple[Pose, ...]
+    pose: Pose
+    start: Pose
+    speaker: PairFacts
+
+    def floor(self) -> Floor:
+        """The house's reachable floor (built on first use)."""
+        ...
+
+    def image_camera(self, kind: str, number: int) -> AnsweredCamera | None:
+        """The camera of ``frame k`` or ``view n``, or ``None`` when no such image was shown."""
+        ...
+
+
+# -- a tool -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Tool:
+    """One active-mode tool, as a plugin registers it: ``register(name, Tool(...))``.
+
+    ``parameters`` are the JSON Schema of each argument, in the order the model sees them (all
+    required, no others). ``read(arguments)`` turns the checked JSON object into the tool's
+    typed arguments, or an :class:`InvalidCall` saying what is wrong; ``run(state, typed)``
+    returns what the call does (:class:`Moved`, :class:`Told`, :class:`Answered`) or why it
+    cannot run in this episode. ``renders``: the call returns a new view (its ``run`` returns
+    :class:`Moved`). ``ends``: the call finishes the episode and is not counted against the
+    budget. ``prose`` follows the tool's signature in the preamble; ``explained`` is its row of
+    the docs table. ``explore(rng, state)``, when given, is the arguments a random explorer
+    calls it with (``state`` is :meth:`Episode.state`).
+    """
+
+    description: str
+    parameters: Mapping[str, Mapping[str, Any]]
+    read: Callable[[Mapping[str, Any]], Any]
+    run: Callable[[EpisodeState, Any], Effect | InvalidCall]
+    prose: str
+    explained: str
+    renders: bool = False
+    ends: bool = False
+    explore: Callable[[random.Random, Mapping[str, Any]], dict[str, Any]] | None = None
+
+    def schema(self, name: str) -> dict[str, Any]:
+        """The OpenAI function schema offered under ``name``."""
+        properties = {k: dict(v) for k, v in self.parameters.items()}
+        return {
+            "type": "function",
+            "function": {
+                "name": name,
+                "description": self.description,
+                "parameters": {"type": "object", "properties": properties, "required": list(properties), "additionalProperties": False},
+            },
+        }
+
+    def signature(self, name: str) -> str:
+        """``name(arg, arg)``, as the preamble writes a call."""
+        return f"{name}({', '.join(self.parameters)})"
+
+
+class ToolSet:
+    """The tools an episode offers, by name, in the order they were registered (``sources``:
+    where each came from, as the plugin host names plugins)."""
+
+    def __init__(self, tools: Iterable[tuple[str, Tool]], sources: Mapping[str, str] | None = None) -> None:
+        self.tools: dict[str, Tool] = dict(tools)
+        self.sources: dict[str, str] = dict(sources or {})
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The tools' names, in order."""
+        return tuple(self.tools)
+
+    def schemas(self) -> tuple[dict[str, Any], ...]:
+        """The ``tools=`` list every request of an episode sends."""
+        return tuple(tool.schema(name) for name, tool in self.tools.items())
+
+    def __getitem__(self, name: str) -> Tool:
+        return self.tools[name]
+
+
+# -- reading arguments: the rules every tool shares ---------------------------------------------
+def number_argument(args: Mapping[str, Any], key: str, bound: float) -> float | str:
+    """``args[key]`` as a finite float within ``[-bound, bound]``, or why it is not (a bool, a
+    string, NaN, Infinity and an integer too large for a float are not numbers here)."""
     value = args[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"{key} must be a number, got {type(value).__name__}"
@@ -140,10 +168,11 @@ def _number(args: dict[str, Any], key: str, bound: float) -> float | str:
     return value
 
 
-def read_call(name: str, arguments: str) -> Action | InvalidCall:
-    """The typed action a call names, or why it is invalid (never raises)."""
-    if name not in _PARAMETERS:
-        return InvalidCall(f"unknown tool {name[:40]!r} (tools: {', '.join(TOOL_NAMES)})")
+def read_call(name: str, arguments: str, tools: ToolSet) -> tuple[Tool, Any] | InvalidCall:
+    """The tool of ``tools`` a call names and its typed arguments, or why the call is invalid
+    (never raises)."""
+    if name not in tools.tools:
+        return InvalidCall(f"unknown tool {name[:40]!r} (tools: {', '.join(tools.names)})")
     if len(arguments) > MAX_ARGUMENTS_CHARS:
         return InvalidCall(f"{name}: arguments longer than {MAX_ARGUMENTS_CHARS} characters")
     try:
@@ -152,46 +181,15 @@ def read_call(name: str, arguments: str) -> Action | InvalidCall:
         return InvalidCall(f"{name}: arguments are not a JSON object")
     if not isinstance(args, dict):
         return InvalidCall(f"{name}: arguments are not a JSON object")
-    wanted = _PARAMETERS[name]
+    tool = tools[name]
+    wanted = tuple(tool.parameters)
     missing = [k for k in wanted if k not in args]
     extra = sorted(str(k)[:40] for k in args if k not in wanted)
     if missing or extra:
         said = [f"missing {', '.join(missing)}"] if missing else []
         said += [f"unexpected {', '.join(extra[:5])}"] if extra else []
         return InvalidCall(f"{name}: {'; '.join(said)} (takes {', '.join(wanted) or 'nothing'})")
-    return _typed(name, args)
-
-
-def _typed(name: str, args: dict[str, Any]) -> Action | InvalidCall:
-    if name == "go_to_frame":
-        frame = args["frame"]
-        if isinstance(frame, float) and frame.is_integer():
-            frame = int(frame)
-        if isinstance(frame, bool) or not isinstance(frame, int):
-            return InvalidCall(f"go_to_frame: frame must be an integer, got {type(args['frame']).__name__}")
-        return GoToFrame(frame)
-    if name == "ask":
-        question = args["question"]
-        if not isinstance(question, str):
-            return InvalidCall(f"ask: question must be a string, got {type(question).__name__}")
-        if len(question) > MAX_QUESTION_CHARS:
-            return InvalidCall(f"ask: question longer than {MAX_QUESTION_CHARS} characters")
-        return Ask(question)
-    if name == "answer":
-        image = args["image"]
-        match = _IMAGE.match(image) if isinstance(image, str) and len(image) < 40 else None
-        if match is None:
-            return InvalidCall('answer: image must be "frame k" or "view n"')
-        x, y = _number(args, "x", MAX_PIXELS), _number(args, "y", MAX_PIXELS)
-        if isinstance(x, str) or isinstance(y, str):
-            return InvalidCall(f"answer: {x if isinstance(x, str) else y}")
-        return Answer(match.group(1).lower(), int(match.group(2)), x, y)
-    bound = MAX_METRES if name == "move" else MAX_DEGREES
-    values = [_number(args, k, bound) for k in _PARAMETERS[name]]
-    problems = [v for v in values if isinstance(v, str)]
-    if problems:
-        return InvalidCall(f"{name}: {problems[0]}")
-    numbers = [float(v) for v in values]
-    if name == "move":
-        return Move(numbers[0], numbers[1])
-    return Turn(numbers[0]) if name == "turn" else Tilt(numbers[0])
+    typed = tool.read(args)
+    if isinstance(typed, InvalidCall):
+        return InvalidCall(f"{name}: {typed.reason}")
+    return tool, typed

@@ -317,7 +317,7 @@ def sweep_command(
 
 
 #: The heading of each kind in ``povagent plugins``.
-KIND_HEADINGS = {"profile": "model profiles", "strategy": "strategies"}
+KIND_HEADINGS = {"profile": "model profiles", "strategy": "strategies", "tool": "active-mode tools"}
 
 
 def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
@@ -363,7 +363,7 @@ def _profile_fields(entry: Any) -> dict[str, Any]:
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
     """List every plugin a YAML file can name, and its source.
 
-    Every backend, strategy, parser, scorer, surface judge and model profile, with the package
+    Every backend, strategy, parser, scorer, surface judge, model profile and active-mode tool, with the package
     or file that registered it; plugins that failed to load are listed after them (exit code 1).
     """
     from rich.console import Console
@@ -371,17 +371,17 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     from povagent.plugins import KINDS, build_plugin_host
 
     host = build_plugin_host(strict=False)
-    kinds = (*KINDS, "profile")
+    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries()}
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
-            k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in host.entries(k)]
-            for k in kinds
+            k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in entries]
+            for k, entries in listed.items()
         }
         out["failures"] = [{"plugin": f.plugin, "origin": f.origin, "error": f.error} for f in host.failures]
         typer.echo(json.dumps(out, indent=2))
     else:
         console = Console()
-        console.print(_plugins_table({k: host.entries(k) for k in kinds}, console.width))
+        console.print(_plugins_table(listed, console.width))
         for f in host.failures:
             console.print(f"[red]failed:[/] {f}", highlight=False)
     if host.failures:

@@ -19,7 +19,7 @@ import hashlib
 import json
 import re
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, Mapping
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -333,13 +333,17 @@ class PipelineConfig(_Strict):
             return None
         return self.cache.path if self.cache.path is not None else self.output / "cache.sqlite"
 
-    def config_hash(self) -> str:
+    def config_hash(self, strategy_identity: Mapping[str, Any] | None = None) -> str:
         """Hash of what determines a row's content (backend, strategy, parser, scorers).
 
         Resuming into a folder whose rows were made by a different pipeline is refused by
         comparing this. Where and how fast it runs (output, concurrency, retries) is left out.
+        ``strategy_identity`` is what the strategy says decides its rows beyond the YAML (the
+        active mode's tools offered); empty or ``None`` leaves the hash as the YAML's alone.
         """
         keep = {k: v for k, v in self.model_dump(mode="json").items() if k in ("model", "backend", "strategy", "parser", "scorers")}
+        if strategy_identity:
+            keep["strategy_identity"] = dict(strategy_identity)
         blob = json.dumps(keep, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:16]
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from povagent.answers.types import AnswerType
 from povagent.config.models import PipelineConfig
 from povagent.interfaces import Backend, Parser, Scorer, Strategy
-from povagent.plugins import PluginHost
+from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import official_counterpart
 
 
@@ -58,6 +58,15 @@ def create_components(config: PipelineConfig, host: PluginHost) -> Components:
         official_parser_name=counterpart,
         answer_type=host.answer_type(strategy.answer_type),
     )
+
+
+def pipeline_hash(config: PipelineConfig, strategy: Strategy | None = None) -> str:
+    """The config hash a run's rows carry: the YAML's, with what its strategy says decides its
+    rows beyond it (:meth:`~povagent.interfaces.Strategy.identity`, e.g. the tools offered).
+    ``strategy`` is the run's; without it, one is made with the config's plugins (dry runs)."""
+    if strategy is None:
+        strategy = get_plugin_host(config.plugins).strategy(config.strategy.name, config.strategy.options)
+    return config.config_hash(strategy.identity())
 
 
 def backend_label(backend: Backend) -> str:

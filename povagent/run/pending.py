@@ -18,6 +18,7 @@ from povagent.dataset.instances import Instance, row_key
 from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import ConfigError
 from povagent.results.rows import RowStatus, iter_rows
+from povagent.run.components import pipeline_hash
 from povagent.run.summary import SummaryDigest, summary_digest
 from povagent.scoring.metrics import Declared
 
@@ -96,12 +97,13 @@ def plan_keys(
     """
     runs = config.run_indices
     wanted = {row_key(i.id, r) for i in instances for r in runs}
-    config_hash = config_hash or config.config_hash()
     run_dir = Path(config.output)
     done: set[str] = set()
     failed: set[str] = set()
     digests: dict[str, SummaryDigest] = {}
     for row in iter_rows(run_dir / RESULTS):
+        if row.config_hash and config_hash is None:  # made once, and only for a folder with rows
+            config_hash = pipeline_hash(config)
         if row.config_hash and row.config_hash != config_hash:
             raise ConfigError(
                 f"{run_dir}: holds rows of a different pipeline (config hash {row.config_hash}, this one "

@@ -19,8 +19,7 @@ stay pending: fix the cause and run the same command again.
 
 The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl``,
 ``summary.json`` and the marker that makes it ours (:mod:`povagent.run.run_folder`: a folder
-holding anything else is refused). This module must not parse YAML or print tables (see :mod:`povagent.config`
-and :mod:`povagent.cli.pipeline`).
+holding anything else is refused). It must not parse YAML or print tables (:mod:`povagent.config`, :mod:`povagent.cli.pipeline`).
 """
 
 from __future__ import annotations
@@ -48,7 +47,7 @@ from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
-from povagent.run.components import ComponentNames, answering_model, backend_label, create_components
+from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
 from povagent.run.confined_write import write_inside
 from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
@@ -290,6 +289,7 @@ class PipelineRun:
         with remote_code_granted(self.trust_remote_code):
             self.components = create_components(config, self.host)
         self._declared = declared_metrics(self.components.scorers)  # what each row's digest keeps
+        self.config_hash = pipeline_hash(config, self.components.strategy)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
         dumped = options.model_dump() if hasattr(options, "model_dump") else options

@@ -13,6 +13,7 @@ from povagent.active.floor import Floor
 from povagent.active.house import house_for
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
+from povagent.plugins import get_plugin_host
 
 
 @pytest.fixture(scope="session")
@@ -53,6 +54,6 @@ def make_episode(floor0):
 
     def make(budget: int = 8, frames: int = 3, **kwargs) -> Episode:
         poses = [Pose(1.0 + k, 0.9, -2.0, 30.0 * k, 30.0) for k in range(frames)]
-        return Episode(poses, poses[0], pose_sha, lambda: floor0, FACTS, budget, **kwargs)
+        return Episode(poses, poses[0], pose_sha, lambda: floor0, FACTS, get_plugin_host().tools(), budget, **kwargs)
 
     return make

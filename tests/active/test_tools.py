@@ -1,4 +1,5 @@
-"""A tool call is read into a typed action, or into an invalid call saying why: never an exception."""
+"""A tool call is read into the registered tool and its typed arguments, or into an invalid call
+saying why: never an exception."""
 
 from __future__ import annotations
 
@@ -6,12 +7,19 @@ import json
 
 import pytest
 
-from povagent.active.tools import TOOL_NAMES, TOOLS, Answer, GoToFrame, InvalidCall, Move, Tilt, Turn, read_call
+from povagent.active.tools import InvalidCall, read_call
+from povagent.plugins import get_plugin_host
+from povagent_plugins.tools.answer import Answer
+from povagent_plugins.tools.go_to_frame import GoToFrame
+from povagent_plugins.tools.move import Move
+from povagent_plugins.tools.tilt import Tilt
+from povagent_plugins.tools.turn import Turn
 
 
-def test_the_schema_offers_exactly_the_six_tools_by_their_names():
-    assert TOOL_NAMES == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
-    assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in TOOLS)
+def test_the_registry_offers_exactly_the_six_built_in_tools_by_their_names():
+    tools = get_plugin_host().tools()
+    assert tools.names == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
+    assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in tools.schemas())
 
 
 @pytest.mark.parametrize(
@@ -27,7 +35,8 @@ def test_the_schema_offers_exactly_the_six_tools_by_their_names():
     ],
 )
 def test_a_well_formed_call_becomes_its_typed_action(name, arguments, action):
-    assert read_call(name, json.dumps(arguments)) == action
+    tool, typed = read_call(name, json.dumps(arguments), get_plugin_host().tools())
+    assert tool is get_plugin_host().tools()[name] and typed == action
 
 
 @pytest.mark.parametrize(
@@ -54,7 +63,7 @@ def test_a_well_formed_call_becomes_its_typed_action(name, arguments, action):
     ],
 )
 def test_a_hostile_call_becomes_an_invalid_call_naming_the_problem(name, arguments, why):
-    result = read_call(name, arguments)
+    result = read_call(name, arguments, get_plugin_host().tools())
     assert isinstance(result, InvalidCall)
     assert why in result.reason
 
@@ -64,5 +73,5 @@ def test_an_integer_too_large_for_a_float_is_an_invalid_call_naming_its_length(n
     arguments = {"turn": {"degrees": 0}, "tilt": {"degrees": 0}, "move": {"forward": 0, "right": 0},
                  "answer": {"image": "view 1", "x": 0, "y": 0}}[name]  # fmt: skip
     text = json.dumps(arguments).replace(f'"{field}": 0', f'"{field}": {"9" * 400}')
-    result = read_call(name, text)
+    result = read_call(name, text, get_plugin_host().tools())
     assert isinstance(result, InvalidCall) and "an integer of 400 digits" in result.reason

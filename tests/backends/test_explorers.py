@@ -98,3 +98,26 @@ def test_rescore_reads_an_active_run_with_its_own_official_reading_by_default(or
     first = {r.key: r.scores["official"]["l2"] for r in rows}
     assert sorted(rescored) == sorted(first)
     assert [rescored[k] for k in sorted(first)] == pytest.approx([first[k] for k in sorted(first)])
+
+
+#: The random explorer's calls (seed 3, the first instance of the random run above) as it made
+#: them before tools were registered: deriving its actions from the registry changed none.
+RANDOM_CALLS_SHA256 = "1187785a31bbe9d365042b62003ce30d4fe7134cf365ddce2261bc5fc6fe19db"
+
+
+def test_the_random_explorer_makes_the_calls_it_made_before_tools_were_registered(generated_release, tmp_path):
+    import hashlib
+    import json
+
+    rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 1)
+    steps = [(s.action, s.arguments) for s in read_record(rows[0].exchanges[-1].raw).steps]
+    assert hashlib.sha256(json.dumps(steps).encode()).hexdigest() == RANDOM_CALLS_SHA256
+
+
+def test_the_random_explorer_also_calls_a_plugin_tool_the_request_offers(generated_release, tmp_path, povagent_host):
+    from povagent.plugins import get_plugin_host
+
+    get_plugin_host([str(Path(__file__).resolve().parents[1] / "tools" / "plugins" / "zoom.py")])  # into the test's host
+    rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 1)
+    steps = read_record(rows[0].exchanges[-1].raw).steps
+    assert "zoom" in [s.action for s in steps] and all(s.valid for s in steps)

@@ -11,7 +11,7 @@ import yaml
 from PIL import Image
 from typer.testing import CliRunner
 
-from povagent.active.tools import TOOL_NAMES
+from povagent.plugins import get_plugin_host
 from povagent.cli import app
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
@@ -62,7 +62,7 @@ def test_the_whole_episode_runs_over_http_and_is_scored_in_the_view_answered_in(
                  calls(("answer", {"image": "view 2", "x": 100, "y": 200})))  # fmt: skip
     row, record = run_active(generated_release, tmp_path / "run", model)
     first, second = (r.body for r in model.requests)
-    assert [t["function"]["name"] for t in first["tools"]] == list(TOOL_NAMES)
+    assert [t["function"]["name"] for t in first["tools"]] == list(get_plugin_host().tools().names)
     roles = [m["role"] for m in second["messages"]]
     assert roles == ["user", "assistant", "tool", "tool", "user"]
     assert [c["function"]["name"] for c in second["messages"][1]["tool_calls"]] == ["go_to_frame", "turn"]
