@@ -99,8 +99,12 @@ def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.Embre
 
 def _hash2(a: np.ndarray, b: np.ndarray | float) -> np.ndarray:
     """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
-    v = np.sin(a * 12.9898 + b * 78.233) * 43758.5453
-    return v - np.floor(v)
+    v = a * 12.9898  # in place from here: the same operations in the same order
+    v += b * 78.233
+    np.sin(v, out=v)
+    v *= 43758.5453
+    v -= np.floor(v)
+    return v
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
