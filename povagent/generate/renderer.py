@@ -12,11 +12,13 @@ cameras go or what is visible (exploration and pairs read the mask).
 Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
 30 ms of CPU and the occlusion-only shadow rays in about 15 ms (in its fast, not robust, mode),
 leaving ~30 ms for numpy shading: ~0.07 s a frame in all (``benchmarks/bench_generate.py``
-measures it). embreex casts one ray per Embree call whatever the batch, so each pass hands it
-the whole frame at once (its fastest shape: 8x8 tiles or 8k-ray chunks cost ~20% more). The
-shading works on float32 arrays of shape (3, N), one contiguous row per coordinate (numpy runs
-several times faster along a row than down the columns of an (N, 3) array), changed in place
-where the order of operations allows; embree reads the rays through their (N, 3) views. trimesh's
+measures it). embreex casts one ray per Embree call whatever the batch, so the primary pass
+hands it the whole frame at once and the shadow pass blocks of 64k rays (as fast; 8x8 tiles or
+8k-ray chunks cost ~20% more). The shading works block by block (``SHADE_BLOCK`` pixels, so its
+arrays stay in the CPU's caches) on float32 arrays of shape (3, n), one contiguous row per
+coordinate (numpy runs several times faster along a row than down the columns of an (n, 3)
+array), changed in place where the order of operations allows; embree reads the rays through
+their (n, 3) views. trimesh's
 pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
 rasterizer could match embree on primary visibility but would still need a ray caster for the
 shadows, so one engine does both.
