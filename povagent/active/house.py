@@ -47,7 +47,7 @@ class ActiveHouse:
         """The PNG bytes of ``camera``'s view, encoded exactly as the writer encodes frames."""
         with self.lock:  # the renderer caches ray grids per size: one render at a time per house
             planes = self.built.renderer.render_planes(camera)
-        # the same pixels as ``render(camera).rgb``, so the same bytes as ``encode_png`` of it
+        # the pixels of ``render(camera).rgb`` (Pillow interleaves the planes): the writer's bytes
         size = (camera.width, camera.height)
         image = Image.merge("RGB", [Image.frombuffer("L", size, plane, "raw", "L", 0, 1) for plane in planes])
         return encode_png(image)
