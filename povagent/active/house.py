@@ -46,14 +46,17 @@ class ActiveHouse:
     def render_png(self, camera: Camera) -> bytes:
         """The PNG bytes of ``camera``'s view, encoded exactly as the writer encodes frames."""
         with self.lock:  # the renderer caches ray grids per size: one render at a time per house
-            frame = self.built.renderer.render(camera)
-        return encode_png(frame.rgb)
+            planes = self.built.renderer.render_planes(camera)
+        # the pixels of ``render(camera).rgb`` (Pillow interleaves the planes): the writer's bytes
+        size = (camera.width, camera.height)
+        image = Image.merge("RGB", [Image.frombuffer("L", size, plane, "raw", "L", 0, 1) for plane in planes])
+        return encode_png(image)
 
 
-def encode_png(rgb: object) -> bytes:
-    """An RGB array as PNG bytes with the writer's settings (no metadata, the same zlib level)."""
+def encode_png(image: Image.Image) -> bytes:
+    """An RGB image as PNG bytes with the writer's settings (no metadata, the same zlib level)."""
     buf = io.BytesIO()
-    Image.fromarray(rgb).save(buf, format="PNG", compress_level=PNG_COMPRESS_LEVEL)  # type: ignore[arg-type]
+    image.save(buf, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
     return buf.getvalue()
 
 

@@ -12,11 +12,13 @@ cameras go or what is visible (exploration and pairs read the mask).
 Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
 30 ms of CPU and the occlusion-only shadow rays in about 15 ms (in its fast, not robust, mode),
 leaving ~30 ms for numpy shading: ~0.07 s a frame in all (``benchmarks/bench_generate.py``
-measures it). embreex casts one ray per Embree call whatever the batch, so each pass hands it
-the whole frame at once (its fastest shape: 8x8 tiles or 8k-ray chunks cost ~20% more). The
-shading works on float32 arrays of shape (3, N), one contiguous row per coordinate (numpy runs
-several times faster along a row than down the columns of an (N, 3) array), changed in place
-where the order of operations allows; embree reads the rays through their (N, 3) views. trimesh's
+measures it). embreex casts one ray per Embree call whatever the batch, so the primary pass
+hands it the whole frame at once and the shadow pass blocks of 64k rays (as fast; 8x8 tiles or
+8k-ray chunks cost ~20% more). The shading works block by block (``SHADE_BLOCK`` pixels, so its
+arrays stay in the CPU's caches) on float32 arrays of shape (3, n), one contiguous row per
+coordinate (numpy runs several times faster along a row than down the columns of an (n, 3)
+array), changed in place where the order of operations allows; embree reads the rays through
+their (n, 3) views. trimesh's
 pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
 rasterizer could match embree on primary visibility but would still need a ray caster for the
 shadows, so one engine does both.
@@ -57,6 +59,14 @@ from povagent.generate.scene import House
 from povagent.geometry.camera import Camera
 
 BACKGROUND = np.array([0.55, 0.6, 0.65], dtype=np.float32)
+#: Pixels shaded at a time. The shading makes dozens of passes over float32 arrays: over a
+#: whole 512x512 frame each pass streams megabytes from memory, over 64k pixels the arrays
+#: stay in the CPU's caches (the frame's shading and shadow rays then cost ~0.75x the CPU;
+#: embree casts 64k shadow rays per call as fast as a whole frame's). Every pixel is shaded
+#: on its own, so the values do not depend on the block size.
+SHADE_BLOCK = 65536
+#: A face code's bits (``Renderer._face_codes``): its material, then its texture's axes.
+_MATERIAL_BITS, _A_IS_Z, _B_IS_Z = 0x0F, 0x10, 0x20
 
 
 @dataclass(frozen=True)
@@ -91,15 +101,20 @@ def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.Embre
 
 def _hash2(a: np.ndarray, b: np.ndarray | float) -> np.ndarray:
     """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
-    v = np.sin(a * 12.9898 + b * 78.233) * 43758.5453
-    return v - np.floor(v)
+    v = a * 12.9898  # in place from here: the same operations in the same order
+    v += b * 78.233
+    np.sin(v, out=v)
+    v *= 43758.5453
+    v -= np.floor(v)
+    return v
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot product of two (3, N) arrays: x, y, z summed in that order."""
     out = a[0] * b[0]
-    out += a[1] * b[1]
-    out += a[2] * b[2]
+    term = a[1] * b[1]  # one temporary for both terms
+    out += term
+    out += np.multiply(a[2], b[2], out=term)
     return out
 
 
@@ -126,6 +141,15 @@ class Renderer:
         self._colors = np.ascontiguousarray(colors.T, dtype=np.float32)
         self._lights = np.ascontiguousarray(lights[rooms].T, dtype=np.float32)
         self._materials = materials
+        # one byte per face, gathered once per pixel: the material (low bits) and the texture's
+        # in-plane axes (a is z on faces turned to x, b is z on floors and ceilings), worked out
+        # once per face rather than per pixel (the same values: a normal turned to the viewer
+        # keeps its absolute values)
+        ax = np.abs(self._normals)
+        up = ax[1] >= np.maximum(ax[0], ax[2])
+        self._face_codes = materials.astype(np.uint8)
+        self._face_codes[(ax[0] >= ax[2]) & ~up] |= _A_IS_Z
+        self._face_codes[up] |= _B_IS_Z
         self._owners = owners.astype(np.uint16)
         self._grids: dict[tuple[int, int, float], np.ndarray] = {}
         # each object's own triangles, for its unoccluded silhouette (scenes built on demand)
@@ -150,12 +174,12 @@ class Renderer:
         # row k = sum_j g[j] * ax[j, k], summed in j order, on whole contiguous rows: several
         # times faster than an einsum over (N, 3), with the same sums (``g.T @ ax`` would hand
         # the product to BLAS, whose threads cost more than they save and may round otherwise)
-        out = np.empty_like(g)
+        out, term = np.empty_like(g), np.empty_like(g[0])
         for k in range(3):
             row = out[k]
             np.multiply(g[0], ax[0, k], out=row)
-            row += g[1] * ax[1, k]
-            row += g[2] * ax[2, k]
+            row += np.multiply(g[1], ax[1, k], out=term)
+            row += np.multiply(g[2], ax[2, k], out=term)
         return out
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -174,40 +198,64 @@ class Renderer:
     def render(self, camera: Camera) -> Frame:
         """Render RGB, depth and instance mask for ``camera``."""
         W, H = camera.width, camera.height
+        tri, t, planes = self._cast_and_shade(camera)
+        hit = tri >= 0
+        t[~hit] = np.inf
+        # optical-axis depth: the ray length times the cosine to the forward axis (= zc)
+        depth = t * self._grids[(W, H, camera.fov)][2]  # inf where nothing was hit
+        if hit.all():  # the usual case indoors
+            instance = self._owners[tri]
+        else:
+            instance = self._owners[np.where(hit, tri, 0)]
+            instance[~hit] = 0
+        rgb = np.empty((H, W, 3), dtype=np.uint8)
+        rgb.reshape(-1, 3).T[...] = planes  # interleaved in one pass
+        return Frame(camera, rgb, depth.reshape(H, W), instance.reshape(H, W))
+
+    def render_planes(self, camera: Camera) -> np.ndarray:
+        """Only the colours of ``camera``'s view, uint8 (3, H * W): one contiguous plane per
+        channel, the same values as :meth:`render`'s ``rgb``.
+
+        For a view that is only encoded (the active mode's): no depth, no instance mask, and
+        no interleaving in numpy (Pillow merges the planes into its own pixel layout at once).
+        """
+        return self._cast_and_shade(camera)[2]
+
+    def _cast_and_shade(self, camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
         d = self._directions(camera)
         origin = np.asarray(camera.position, dtype=np.float32)
         # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy
         out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
         tri, t = out["primID"].astype(np.intp), out["tfar"]  # indices as numpy's gathers want them
-        hit = tri >= 0
-        t[~hit] = np.inf
-        # optical-axis depth: the ray length times the cosine to the forward axis (= zc)
-        cos_forward = self._grids[(W, H, camera.fov)][2]
-        depth = t * cos_forward  # inf where nothing was hit
+        planes = np.empty((3, len(tri)), dtype=np.uint8)
+        for start in range(0, len(tri), SHADE_BLOCK):
+            block = slice(start, start + SHADE_BLOCK)
+            rgb = self._shade_block(tri[block], t[block], d[:, block], origin)
+            np.copyto(planes[:, block], rgb, casting="unsafe")  # as ``astype(np.uint8)``
+        return tri, t, planes
 
-        # shading works on one contiguous row per coordinate, (3, N): numpy's passes over
-        # whole rows run several times faster than over the columns of an (N, 3) array
-        if hit.all():  # the usual case indoors: no gathers needed
+    def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        """Colours (3, n) of a block of pixels, scaled to 0.5-255 (truncated to bytes after)."""
+        # shading works on one contiguous row per coordinate, (3, n): numpy's passes over
+        # whole rows run several times faster than over the columns of an (n, 3) array
+        if tri.min() >= 0:  # the usual case indoors: every ray hits, no gathers needed
             p = d * t
             p += origin[:, None]
             rgb = self._shade(tri, d, p)
-            instance = self._owners[tri]
         else:
             rgb = np.empty((3, len(tri)), dtype=np.float32)
             rgb[:] = BACKGROUND[:, None]
-            instance = np.zeros(len(tri), dtype=np.uint16)
-            idx = np.flatnonzero(hit)
+            idx = np.flatnonzero(tri >= 0)
             if len(idx):
                 dh = d[:, idx]
                 p = dh * t[idx]
                 p += origin[:, None]
                 rgb[:, idx] = self._shade(tri[idx], dh, p)
-                instance[idx] = self._owners[tri[idx]]
         rgb *= 255.0
         rgb += 0.5
         np.clip(rgb, 0, 255, out=rgb)
-        rgb8 = np.ascontiguousarray(rgb.astype(np.uint8).T).reshape(H, W, 3)
-        return Frame(camera, rgb8, depth.reshape(H, W), instance.reshape(H, W))
+        return rgb
 
     def instance_mask(self, camera: Camera) -> np.ndarray:
         """Only the instance mask (no shading): a cheap probe of what a camera would see."""
@@ -242,9 +290,10 @@ class Renderer:
         n, base, L = (np.take(a, tri, axis=1) for a in (self._normals, self._colors, self._lights))
         facing = _dot(n, d)
         np.negative(n, out=n, where=facing > 0)  # face the viewer
-        fill = np.abs(facing)
-        mat = np.take(self._materials, tri)
-        base *= self._texture(mat, n, p)
+        fill = np.abs(facing, out=facing)
+        code = np.take(self._face_codes, tri)
+        mat = code & _MATERIAL_BITS
+        base *= self._texture(code, mat, p)
 
         L -= p  # the light's position, turned into the unit vector to it in place
         dist2 = _dot(L, L)
@@ -268,7 +317,7 @@ class Renderer:
                 length[~probe] = -1.0
                 blocked = self._shadow_scene.run(start.T, L.T, dists=length, query="OCCLUDED") >= 0
                 blocked &= probe
-                diffuse[blocked] *= 0.15
+                np.multiply(diffuse, np.float32(0.15), out=diffuse, where=blocked)
         # 0.30 + 0.85 * diffuse + 0.22 * fill, in place (the same operations in the same order)
         shade = diffuse
         shade *= 0.85
@@ -283,21 +332,24 @@ class Renderer:
 
         shiny = np.flatnonzero((mat == METAL) | (mat == GLOSS))
         if len(shiny):
-            half = L[:, shiny] - d[:, shiny]
+            # np.take and a gather per row: the same values as fancy indexing, several times faster
+            half = np.take(L, shiny, axis=1)
+            half -= np.take(d, shiny, axis=1)
             half /= np.sqrt(_dot(half, half))
-            spec = np.clip(_dot(n[:, shiny], half), 0, 1) ** 40
-            color[:, shiny] += 0.45 * spec
+            spec = np.clip(_dot(np.take(n, shiny, axis=1), half), 0, 1) ** 40
+            spec *= 0.45
+            for row in color:
+                row[shiny] = np.take(row, shiny) + spec
         return color
 
-    def _texture(self, mat: np.ndarray, n: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """A brightness factor per pixel from the material's procedural pattern."""
+    def _texture(self, code: np.ndarray, mat: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """A brightness factor per pixel from the material's procedural pattern (``code``:
+        the pixels' face codes, ``mat``: their materials)."""
         out = np.ones(len(mat), dtype=np.float32)
-        ax0, ax1, ax2 = np.abs(n)
         px, py, pz = p
-        # in-plane coordinates (a, b) of each hit, from its dominant normal axis
-        up = ax1 >= np.maximum(ax0, ax2)
-        a = np.where(up, px, np.where(ax0 >= ax2, pz, px))
-        b = np.where(up, pz, py)
+        # in-plane coordinates (a, b) of each hit, from its face's dominant normal axis
+        a = np.where(code & _A_IS_Z, pz, px)
+        b = np.where(code & _B_IS_Z, pz, py)
 
         m = mat == WOOD
         if m.any():
