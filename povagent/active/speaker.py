@@ -20,7 +20,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, ReadTargetError
+from povagent.run.confined_read import read_regular
 
 #: The answer to any question outside the speaker's facts.
 CANNOT_SAY = "I can't say more."
@@ -68,10 +69,10 @@ def pair_facts(house_dir: Path, house_id: str, pair_id: str, direction: str, con
     """The speaker's facts for one pair, direction and condition (``a``, ``b``, ``c``), read from
     the house's pair file; ``knowledge`` is one of :data:`SPEAKER_KNOWLEDGE`."""
     path = Path(house_dir) / f"{house_id}.json"
-    try:
-        if path.stat().st_size > MAX_PAIR_FILE:
-            raise DatasetError(f"{path}: larger than {MAX_PAIR_FILE} bytes, not read")
-        pairs = json.loads(path.read_text(encoding="utf-8"))
+    try:  # regular files only, bounded: a pipe or a device planted there is refused, never waited on
+        pairs = json.loads(read_regular(path, MAX_PAIR_FILE, what="pair file").decode("utf-8"))
+    except ReadTargetError as exc:
+        raise DatasetError(str(exc)) from None
     except (OSError, ValueError) as exc:
         raise DatasetError(f"{path}: cannot be read ({type(exc).__name__})") from None
     for entry in pairs if isinstance(pairs, list) else []:

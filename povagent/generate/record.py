@@ -30,9 +30,10 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from povagent.errors import DatasetError
+from povagent.errors import DatasetError, ReadTargetError
 from povagent.generate.pipeline import HouseSummary, house_id
 from povagent.generate.writer import rounded, write_json
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).
 RECORD = "_generated.json"
@@ -132,9 +133,9 @@ def house_folder(out: Path, index: int) -> Path:
 
 def read_record(folder: Path) -> HouseRecord | None:
     """The record of a house folder, or None when it has none or it cannot be read (not complete)."""
-    try:
-        raw = json.loads((folder / RECORD).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+    try:  # a pipe or a device planted as the record is refused, never waited on
+        raw = json.loads(read_regular(folder / RECORD, MAX_DOCUMENT_BYTES, what="house record").decode("utf-8"))
+    except (OSError, ValueError, ReadTargetError):
         return None
     return parse_record(raw)
 

@@ -31,9 +31,10 @@ import numpy as np
 from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from povagent.errors import ConfigError
+from povagent.errors import ConfigError, ReadTargetError
 from povagent.geometry.goals import PinholeCamera, PoseConvention
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_inside
 from povagent.run.confined_write import ConfinedFolder
 
 MEMORY_FILE = "memory.json"
@@ -155,10 +156,12 @@ def load_memory(folder: str | os.PathLike) -> KeyframeMemory:
     """The memory saved in ``folder``; :class:`ConfigError` naming the file and field when unusable."""
     root = Path(folder)
     path = root / MEMORY_FILE
-    try:
-        text = path.read_text(encoding="utf-8")
+    try:  # no link below the folder, regular files only, bounded: never waited on
+        text = read_inside(root, MEMORY_FILE, MAX_DOCUMENT_BYTES, what="keyframe memory").decode("utf-8")
     except FileNotFoundError:
         raise ConfigError(f"{path}: no saved keyframe memory here (write one with --save-memory)") from None
+    except ReadTargetError as exc:
+        raise ConfigError(str(exc)) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from None
     try:
@@ -185,8 +188,10 @@ def _load_frame(root: Path, path: Path, i: int, entry: SavedFrame) -> Keyframe:
     except ValueError as exc:
         raise ConfigError(f"{where}.camera_to_map: {exc}") from None
     try:
-        with Image.open(root / entry.image) as im:
+        with Image.open(io.BytesIO(read_inside(root, entry.image, MAX_IMAGE_FILE_BYTES, what="keyframe image"))) as im:
             rgb = np.asarray(im.convert("RGB"))
+    except ReadTargetError as exc:
+        raise ConfigError(f"{where}.image: {exc}") from None
     except (OSError, UnidentifiedImageError, Image.DecompressionBombError) as exc:
         raise ConfigError(f"{where}.image: cannot read {entry.image}: {exc}") from None
     if rgb.shape[:2] != (entry.height, entry.width):
@@ -194,7 +199,9 @@ def _load_frame(root: Path, path: Path, i: int, entry: SavedFrame) -> Keyframe:
     depth = None
     if entry.depth is not None:
         try:
-            depth = np.load(root / entry.depth, allow_pickle=False)
+            depth = np.load(io.BytesIO(read_inside(root, entry.depth, MAX_IMAGE_FILE_BYTES, what="keyframe depth")), allow_pickle=False)
+        except ReadTargetError as exc:
+            raise ConfigError(f"{where}.depth: {exc}") from None
         except (OSError, ValueError) as exc:
             raise ConfigError(f"{where}.depth: cannot read {entry.depth}: {exc}") from None
         if depth.ndim != 2 or not np.issubdtype(depth.dtype, np.floating):

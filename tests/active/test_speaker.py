@@ -83,3 +83,12 @@ def test_a_pair_without_the_conditions_sentence_is_one_line_naming_the_field(act
     (tmp_path / "train_house_00000.json").write_text(json.dumps([pair]))
     with pytest.raises(DatasetError, match=rf"pair {pair['pair_id']}: field stage5\.{direction}\.type_a is missing"):
         pair_facts(tmp_path, "train_house_00000", pair["pair_id"], direction, "a", knowledge="condition")
+
+
+def test_a_pipe_planted_as_the_pair_file_is_one_line_never_waited_on(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "train_house_00000.json")  # no writer: an ordinary open waits forever
+    with pytest.raises(DatasetError, match="not a regular file") as refused:
+        pair_facts(tmp_path, "train_house_00000", "pair_000", "front")
+    assert "\n" not in str(refused.value)

@@ -48,3 +48,10 @@ def test_a_negative_seed_is_refused_even_with_a_matching_digest(tiny_dataset):
 def test_a_record_naming_another_house_is_refused_by_its_index(tiny_dataset):
     record = read_record(tiny_dataset.house_dir)
     assert record_problem(record, "train_house_00003")[0] == "index"
+
+
+def test_a_pipe_planted_as_the_record_reads_as_no_record_at_once(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / RECORD)  # no writer: an ordinary open waits forever
+    assert read_record(tmp_path) is None

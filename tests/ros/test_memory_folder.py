@@ -131,3 +131,26 @@ def test_saving_a_smaller_memory_over_an_earlier_one_removes_the_frames_it_no_lo
     one.restore(one.frames[:1])
     save_memory(one, tmp_path / "mem")
     assert sorted(p.name for p in (tmp_path / "mem").iterdir()) == ["frame_0000.png", MEMORY_FILE]
+
+
+def test_a_pipe_planted_as_the_memory_file_is_refused_in_one_line_never_waited_on(tmp_path):
+    import os
+
+    folder = tmp_path / "mem"
+    folder.mkdir()
+    os.mkfifo(folder / MEMORY_FILE)  # no writer: an ordinary open would wait for one forever
+    with pytest.raises(ConfigError, match="not a regular file") as refused:
+        load_memory(folder)
+    assert "\n" not in str(refused.value) and MEMORY_FILE in str(refused.value)
+
+
+def test_a_keyframe_image_linked_to_a_device_is_refused_naming_the_frame(tmp_path):
+    import os
+
+    memory = memory_with_two_frames()
+    save_memory(memory, tmp_path / "mem")
+    image = json.loads((tmp_path / "mem" / MEMORY_FILE).read_text())["frames"][0]["image"]
+    (tmp_path / "mem" / image).unlink()
+    os.symlink("/dev/zero", tmp_path / "mem" / image)  # reading it would fill memory
+    with pytest.raises(ConfigError, match=r"frames\[0\]\.image: .*link"):
+        load_memory(tmp_path / "mem")
