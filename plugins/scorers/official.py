@@ -3,6 +3,9 @@
 Beside the official ``l2`` it records the strict variant (``l2_strict``: a GT behind or outside
 the scored frame counts as sqrt 2), whether the GT is in the scored frame, and for multi-point
 answers the closest point's error (``l2_closest``); the centroid's error is the one reported.
+It also records the error a guess at the centre of the scored frame would have had
+(``l2_center``), declared as the ``center_l2`` metric: the centre baseline in the frame the
+answer chose (the report's centre baseline guesses the first frame's centre instead).
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ OFFICIAL_METRICS = (
            "Share of answered instances whose GT projects inside the scored frame (Inferred/Stated: frame selection)."),
     Metric("blind_spot", "lower", "rate", "gt_behind", "GT behind camera",
            "Share of answered instances scored by the blind spot (GT behind the camera, placed at the centre)."),
+    Metric("center_l2", "lower", "mean", "l2_center", "Centre guess L2",
+           "Mean official L2 of guessing the centre of each answered instance's scored frame: the bar its answers must clear."),
 )  # fmt: skip
 
 

@@ -3,35 +3,18 @@
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
 from povagent.cli.options import strict_option
+from povagent.cli.slice_rows import breakdown_slices
 
 if TYPE_CHECKING:
-    from povagent.run.summary_model import Breakdown, Cell
-
-C = TypeVar("C", covariant=True)
-
-
-class Slices(Protocol[C]):
-    """A breakdown of any cell type: official means (:class:`~povagent.run.summary_model.Cell`)
-    or success rates (:class:`~povagent.run.summary_model.SuccessCell`)."""
-
-    @property
-    def overall(self) -> C: ...
-
-    @property
-    def per_condition(self) -> Mapping[str, C]: ...
-
-    @property
-    def per_direction(self) -> Mapping[str, C]: ...
-
+    from povagent.run.summary_model import Breakdown, Cell, ScoreSummary
 
 @app.command("validate")
 def validate_command(
@@ -74,18 +57,6 @@ def _fit_to_terminal(line: str) -> str:
     return textwrap.fill(line, width, subsequent_indent="    ", break_long_words=False, break_on_hyphens=False)
 
 
-def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
-    """The rows of a breakdown table, labelled: overall, each condition, each direction."""
-    from povagent.dataset.models import Condition
-
-    yield "overall", breakdown.overall
-    known = {str(c) for c in Condition}
-    for c, cell in breakdown.per_condition.items():
-        # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
-        yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
-    yield from breakdown.per_direction.items()
-
-
 def render_summary(summary: Breakdown, title: str | PathTitle = "POVBench scores") -> None:
     """Print a summary (overall / per condition / per direction) as a rich table.
 
@@ -124,6 +95,10 @@ def render_summary(summary: Breakdown, title: str | PathTitle = "POVBench scores
     Console().print(fitted_table(columns, rows, title=title, caption=caption))
 
 
+#: The scorer ``score`` scores as (``score`` counts rows as the official scorer does): its
+#: declared metrics are the summary's ``metrics`` section.
+OFFICIAL_SCORER = "official"
+
 #: The keys of a breakdown that ``score --json`` prints.
 SCORE_JSON_KEYS = (
     "overall",
@@ -137,6 +112,7 @@ SCORE_JSON_KEYS = (
     "run_folders",
     "n_parse_error",
     "counting",
+    "metrics",
 )
 
 
@@ -175,7 +151,9 @@ def score_command(
     number), the pooled mean shown beside it, labelled.
     """
     from povagent.dataset.loader import load_dataset
+    from povagent.plugins import get_plugin_host
     from povagent.results.prediction_files import score_predictions
+    from povagent.run.summary import declared_metrics
     from povagent.run.summary_model import ScoreSummary
     from povagent.scoring.official_release import read_release
 
@@ -188,7 +166,9 @@ def score_command(
         # under official counting the official rows still see such a pair as the official scorer does
         how = " by povagent's loader (official rows are counted against the release as officially)" if release is not None else ""
         typer.echo(f"warning: dataset problem, skipped{how}: {p}", err=True)
-    summary, warnings = score_predictions(predictions, ds, release)
+    # the official metric is the official scorer's: its declared metrics, as run and rescore report them
+    declared = declared_metrics({OFFICIAL_SCORER: get_plugin_host().scorer(OFFICIAL_SCORER)})
+    summary, warnings = score_predictions(predictions, ds, release, declared)
     # the release's own (its exploration logs are read as predictions name their houses)
     for w in release.warnings if release is not None else []:
         typer.echo(f"warning: {w}", err=True)
@@ -201,6 +181,15 @@ def score_command(
         typer.echo(json.dumps(_score_json(summary), indent=2))
     elif "models" in summary:
         for model, model_summary in summary["models"].items():
-            render_summary(ScoreSummary.model_validate(model_summary), title=f"POVBench scores: {model}")
+            _render_score(ScoreSummary.model_validate(model_summary), f"POVBench scores: {model}")
     else:
-        render_summary(ScoreSummary.model_validate(summary))
+        _render_score(ScoreSummary.model_validate(summary), "POVBench scores")
+
+
+def _render_score(summary: ScoreSummary, title: str) -> None:
+    """The official table, then the declared metrics' table (every one the official scorer
+    declares, with its CI: the extras the official table has no column for)."""
+    from povagent.cli.metrics_table import render_metrics
+
+    render_summary(summary, title=title)
+    render_metrics(summary, title)

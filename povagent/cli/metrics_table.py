@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Iterable
 
 if TYPE_CHECKING:
     from povagent.cli.console_width import PathTitle
-    from povagent.run.summary_model import MetricEstimate, RunSummary, ScorerMetrics
+    from povagent.run.summary_model import MetricEstimate, RunSummary, ScorerMetrics, ScoreSummary
 
 
 def metric_cell(estimate: MetricEstimate | None, aggregation: str) -> str:
@@ -29,7 +29,7 @@ def metric_cell(estimate: MetricEstimate | None, aggregation: str) -> str:
 def metrics_rows(metrics: ScorerMetrics) -> tuple[list[str], list[list[str]]]:
     """``(headers, rows)``: a column per declared metric (its label, arrow of the better
     direction), a row per slice."""
-    from povagent.cli.dataset import breakdown_slices
+    from povagent.cli.slice_rows import breakdown_slices
 
     names = list(metrics.declared)
     headers = [f"{d.label} {'↓' if d.better == 'lower' else '↑'}" for d in metrics.declared.values()]
@@ -38,7 +38,7 @@ def metrics_rows(metrics: ScorerMetrics) -> tuple[list[str], list[list[str]]]:
     return headers, rows
 
 
-def render_metrics(summary: RunSummary, title: str | PathTitle, shown: Iterable[str] = ()) -> None:
+def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, shown: Iterable[str] = ()) -> None:
     """Print a table per scorer in ``summary.metrics`` not in ``shown`` (scorers whose numbers
     a table of their own already printed)."""
     from rich.console import Console

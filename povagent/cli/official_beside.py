@@ -30,7 +30,7 @@ def parser_reads_officially(name: str, options: dict[str, Any] | None = None, pl
 def repair_changed_numbers(summary: Breakdown, official: OfficialParseBreakdown) -> bool:
     """Whether any slice's mean L2 or response rate differs between the repaired ``summary``
     and its ``official`` reading (an incomplete reading counts as a difference)."""
-    from povagent.cli.dataset import breakdown_slices
+    from povagent.cli.slice_rows import breakdown_slices
 
     if official.rows_without_reading:
         return True
@@ -53,8 +53,8 @@ def render_official_beside(summary: RunSummary, parser: str, *, reads_officially
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
-    from povagent.cli.dataset import breakdown_slices
     from povagent.cli.numbers import format_number
+    from povagent.cli.slice_rows import breakdown_slices
 
     console = Console()
     if reads_officially:

@@ -84,7 +84,7 @@ def _success_table(success: SuccessBreakdown, title: PathTitle) -> None:
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
-    from povagent.cli.dataset import breakdown_slices
+    from povagent.cli.slice_rows import breakdown_slices
     from povagent.report.sweep_table import percent, rate
 
     rows = []

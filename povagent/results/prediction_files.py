@@ -18,6 +18,7 @@ from typing import Any
 from povagent.dataset.loader import Dataset
 from povagent.errors import PredictionsError
 from povagent.results.official_format import NOT_PREDICTIONS, read_official_run
+from povagent.scoring.metrics import Declared
 from povagent.scoring.official_release import OfficialRelease
 from povagent.scoring.predictions import (
     RUN_FOLDER_NAME,
@@ -98,7 +99,9 @@ def _score_one(path: Path, dataset: Dataset, release: OfficialRelease | None, ru
     return score_official_run(loaded, release if release is not None else dataset, run_index)
 
 
-def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelease | None = None) -> tuple[dict[str, Any], list[str]]:
+def score_predictions(
+    path: str | Path, dataset: Dataset, release: OfficialRelease | None = None, declared: Declared | None = None
+) -> tuple[dict[str, Any], list[str]]:
     """Score a predictions path against ``dataset``: the summary and any warnings.
 
     ``path`` is a predictions file, an official run folder, our run folder or results file, or
@@ -109,7 +112,8 @@ def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelea
     With ``release`` (:func:`povagent.scoring.official_release.read_release` of the same
     folder) official rows are counted exactly as the official scorer counts them; without it,
     against the loaded ``dataset`` (povagent's own counting). Our own rows are scored against
-    ``dataset`` either way.
+    ``dataset`` either way. ``declared`` (the official scorer's declared metrics) adds each
+    model's ``metrics`` section (:func:`~povagent.scoring.predictions.summary_of`).
     """
     p = Path(path)
     folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() else []
@@ -117,7 +121,7 @@ def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelea
         scored, warnings = _score_one(p, dataset, release)
         if not scored:
             raise PredictionsError(f"{path}: no prediction rows to score")
-        return summary_of(scored), warnings
+        return summary_of(scored, declared), warnings
     by_model: dict[str, list[Path]] = defaultdict(list)
     for folder in folders:
         by_model[run_folder_label(folder.name)[0]].append(folder)
@@ -136,7 +140,7 @@ def score_predictions(path: str | Path, dataset: Dataset, release: OfficialRelea
             # an official run folder is one run; our run folder may hold several (its rows' run)
             scored += [replace(x, run=run_ids.setdefault((k, x.run), len(run_ids))) for x in s]
             warnings += [f"{folder.name}: {m}" for m in w]
-        summary = summary_of(scored)
+        summary = summary_of(scored, declared)
         summary["run_folders"] = [f.name for f in runs]
         models[model] = summary
     if len(models) == 1:

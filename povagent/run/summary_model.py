@@ -65,15 +65,6 @@ class Breakdown(PooledBreakdown):
     per_run: dict[str, Cell] | None = None
 
 
-class ScoreSummary(Breakdown):
-    """What ``povagent score`` computes for one model's predictions: the breakdown, the run
-    folders it averaged (a root of ``<model>_<run>`` folders) and how rows were counted."""
-
-    run_folders: list[str] | None = None
-    #: ``official`` or ``povagent`` (``score --counting``).
-    counting: str | None = None
-
-
 class OfficialParseBreakdown(Breakdown):
     """The paper-comparable reading beside a lenient parser's (``official_parse``)."""
 
@@ -253,6 +244,18 @@ class ScorerMetrics(BaseModel):
     per_condition: dict[str, dict[str, MetricEstimate]]
     per_direction: dict[str, dict[str, MetricEstimate]]
     per_condition_direction: dict[str, dict[str, MetricEstimate]]
+
+
+class ScoreSummary(Breakdown):
+    """What ``povagent score`` computes for one model's predictions: the breakdown, the run
+    folders it averaged (a root of ``<model>_<run>`` folders), how rows were counted, and the
+    scorer's declared metrics over every row (runs pooled), as a run's summary has them."""
+
+    run_folders: list[str] | None = None
+    #: ``official`` or ``povagent`` (``score --counting``).
+    counting: str | None = None
+    #: The declared metrics, per slice: ``{scorer: ScorerMetrics}``.
+    metrics: dict[str, ScorerMetrics] | None = None
 
 
 class RunSummary(Breakdown):

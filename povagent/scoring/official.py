@@ -118,6 +118,17 @@ class OfficialScore:
     error_x: float | None = None
     error_y: float | None = None
 
+    @property
+    def l2_center(self) -> float | None:
+        """The official error of guessing the centre ``(W/2, H/2)`` of the frame this row was
+        scored in: the bar the answer must clear in that frame (``gt_u``/``gt_v`` are already
+        normalized, so the centre is ``(0.5, 0.5)`` whatever the frame's size). A GT behind
+        the camera sits at the centre, so the guess is perfect there, as officially.
+        ``None`` for a non-response."""
+        if not self.answered or self.gt_u is None or self.gt_v is None:
+            return None
+        return math.hypot(0.5 - clamp_unit(self.gt_u), 0.5 - clamp_unit(self.gt_v))
+
     def as_dict(self) -> dict[str, object]:
         """JSON-able form, as stored in a row's ``scores``."""
         return {
@@ -131,6 +142,7 @@ class OfficialScore:
             "reason": self.reason,
             "error_x": self.error_x,
             "error_y": self.error_y,
+            "l2_center": self.l2_center,
         }
 
 

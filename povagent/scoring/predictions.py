@@ -39,6 +39,7 @@ from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.results.official_format import OfficialRun, RawPrediction
 from povagent.scoring.breakdown import ScoredRow, breakdown
+from povagent.scoring.metrics import Declared, metrics_breakdown, valued_row
 from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,
@@ -452,13 +453,36 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
 # -- summaries ----------------------------------------------------------------------------------
 
 
-def summary_of(scored: Iterable[ScoredPrediction]) -> dict[str, Any]:
+@dataclass(frozen=True)
+class _ScoredAsRow:
+    """A scored prediction as :func:`~povagent.scoring.metrics.row_metric_values` reads a row:
+    its status and, under each scorer named, the official fields it was scored with."""
+
+    status: str
+    scores: dict[str, dict[str, object]]
+    condition: str | None
+    direction: str | None
+
+
+def summary_of(scored: Iterable[ScoredPrediction], declared: Declared | None = None) -> dict[str, Any]:
     """The breakdown (overall, per condition, per direction, condition x direction); several
-    runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``."""
-    return breakdown(
+    runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``.
+
+    With ``declared`` (the official scorer's declared metrics, by its name) the summary has the
+    ``metrics`` section a run's has, every row in one breakdown: each row's values come from its
+    official fields through the function ``run`` and ``rescore`` use."""
+    scored = list(scored)
+    out = breakdown(
         ScoredRow(
             s.condition, s.direction, s.score.answered, s.score.l2, s.score.gt_in_frame, s.score.l2_strict, s.run,
             s.score.error_x, s.score.error_y, s.parse_error,
         )
         for s in scored
     )
+    if declared and any(declared.values()):
+        rows = (
+            _ScoredAsRow("answered" if s.score.answered else "unanswered", {name: s.score.as_dict() for name in declared}, s.condition, s.direction)
+            for s in scored
+        )
+        out["metrics"] = metrics_breakdown((valued_row(row, declared) for row in rows), declared)
+    return out

@@ -68,7 +68,7 @@ def test_the_official_scorers_declared_mean_is_the_official_number(tmp_path, wri
     declared = summary["metrics"]["official"]
     assert declared["overall"]["mean_l2"]["value"] == summary["overall"]["mean_l2"]
     assert declared["overall"]["response_rate"]["value"] == summary["overall"]["response_rate"]
-    assert set(declared["declared"]) == {"mean_l2", "response_rate", "strict_l2", "frame_accuracy", "blind_spot"}
+    assert set(declared["declared"]) == {"mean_l2", "response_rate", "strict_l2", "frame_accuracy", "blind_spot", "center_l2"}
 
 
 def test_a_third_party_scorers_metrics_get_a_report_table(tmp_path, write_pipeline, offline_plugin):

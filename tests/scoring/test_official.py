@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from povagent.scoring.official import MAX_L2, normalized_l2, score_point, scoring_frame
+from povagent.scoring.official import MAX_L2, UNANSWERED, normalized_l2, score_point, scoring_frame
 from povagent.scoring.predictions import score_official_rows, summary_of
 
 # house 0 GT points (surface-corrected) and their projections
@@ -133,3 +133,21 @@ def test_rows_for_unknown_instances_are_warned_about(mini_dataset):
     scored, warnings = score_official_rows([row("nohouse", 1, "up", "c", 1, 1)], mini_dataset)
     assert warnings and "nohouse/1/up/c" in warnings[0]
     assert len(scored) == 1 and not scored[0].score.answered
+
+
+def test_the_centre_guess_error_in_the_scored_frame_is_recorded_beside_the_answer(mini_dataset):
+    inst = mini_dataset.instance("train_house_00000/0/left/a")
+    frame = scoring_frame(inst, selected_image=0)
+    answer, centre = score_point(inst, frame, 40.0, 470.0), score_point(inst, frame, 256.0, 256.0)
+    assert answer.as_dict()["l2_center"] == pytest.approx(centre.l2, abs=1e-12)
+    assert answer.l2 != pytest.approx(centre.l2)
+
+
+def test_the_centre_guess_is_perfect_when_the_gt_is_behind_the_scored_frame(mini_dataset):
+    inst = mini_dataset.instance("train_house_00000/0/left/b")
+    behind = score_point(inst, scoring_frame(inst, selected_image=1), 10.0, 10.0)
+    assert behind.gt_behind and behind.as_dict()["l2_center"] == 0.0
+
+
+def test_an_unanswered_row_has_no_centre_guess_error():
+    assert UNANSWERED.as_dict()["l2_center"] is None

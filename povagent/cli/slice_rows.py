@@ -1,0 +1,39 @@
+"""The rows of a breakdown table, labelled: overall, each condition, each direction.
+
+Every console table of a breakdown (the official means, success rates, declared metrics, the
+official reading beside a lenient one) lists its slices in this order with these labels; a
+module of its own so the tables' modules need not import each other.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from typing import Protocol, TypeVar
+
+C = TypeVar("C", covariant=True)
+
+
+class Slices(Protocol[C]):
+    """A breakdown of any cell type: official means (:class:`~povagent.run.summary_model.Cell`)
+    or success rates (:class:`~povagent.run.summary_model.SuccessCell`)."""
+
+    @property
+    def overall(self) -> C: ...
+
+    @property
+    def per_condition(self) -> Mapping[str, C]: ...
+
+    @property
+    def per_direction(self) -> Mapping[str, C]: ...
+
+
+def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
+    """The rows of a breakdown table, labelled: overall, each condition, each direction."""
+    from povagent.dataset.models import Condition
+
+    yield "overall", breakdown.overall
+    known = {str(c) for c in Condition}
+    for c, cell in breakdown.per_condition.items():
+        # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
+        yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
+    yield from breakdown.per_direction.items()
