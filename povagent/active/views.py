@@ -28,7 +28,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.active.pose import Pose
-from povagent.errors import WriteTargetError
+from povagent.errors import ReadTargetError, WriteTargetError
+from povagent.run.confined_read import read_at
 from povagent.run.confined_write import ConfinedFolder
 
 #: The folder inside the run folder, and the camera index inside it.
@@ -39,7 +40,6 @@ CAMERAS = "cameras"
 MAX_VIEW_BYTES = 64 * 1024 * 1024
 MAX_INDEX_BYTES = 128
 _SHA = frozenset("0123456789abcdef")
-_READ = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
 
 
 def camera_key(house: str, pose: Pose) -> str:
@@ -50,24 +50,13 @@ def camera_key(house: str, pose: Pose) -> str:
 
 def read_view_file(folder: ConfinedFolder, name: str, limit: int) -> bytes | None:
     """The bytes of ``name`` in ``folder``, or ``None`` unless it is a regular file of at most
-    ``limit`` bytes: opened without following a link and without blocking (a FIFO planted
-    there would wait for a writer forever; ``/dev/zero`` would never end), checked on the open
-    descriptor, and read no further than the bound."""
+    ``limit`` bytes, read through the folder's descriptor by the one confined reader
+    (:func:`~povagent.run.confined_read.read_at`: no link followed, no wait on a pipe, never
+    past the bound)."""
     try:
-        if folder.descriptor is not None:
-            fd = os.open(name, _READ, dir_fd=folder.descriptor)
-        elif (folder.path / name).is_symlink():  # no dir_fd (Windows): the best that platform offers
-            return None
-        else:
-            fd = os.open(folder.path / name, _READ)
-    except OSError:
+        return read_at(folder, name, limit, what="view")
+    except (OSError, ReadTargetError):
         return None
-    with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > limit:
-            return None
-        data = fh.read(limit + 1)
-    return data if len(data) <= limit else None
 
 
 def view_file(run_dir: Path, sha256: str) -> Path | None:

@@ -23,7 +23,6 @@ import io
 import json
 import os
 import re
-import stat
 from pathlib import Path
 from typing import Literal
 
@@ -34,7 +33,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from povagent.errors import ConfigError, ReadTargetError
 from povagent.geometry.goals import PinholeCamera, PoseConvention
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_inside
+from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_inside
 from povagent.run.confined_write import ConfinedFolder
 
 MEMORY_FILE = "memory.json"
@@ -139,16 +138,9 @@ def _earlier_memory(root: Path) -> SavedMemory | None:
     memory's file; ``None`` otherwise (a link, a FIFO, a huge file, other files, another format)."""
     if not all(_OURS.match(p.name) for p in root.iterdir()):
         return None
-    path = root / MEMORY_FILE
     try:
-        st = os.lstat(path)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_MEMORY_JSON_BYTES:
-            return None
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
-        with os.fdopen(fd, "rb") as f:
-            text = f.read(MAX_MEMORY_JSON_BYTES + 1)
-        return SavedMemory.model_validate_json(text)
-    except (OSError, ValidationError):
+        return SavedMemory.model_validate_json(read_inside(root, MEMORY_FILE, MAX_MEMORY_JSON_BYTES, what="keyframe memory"))
+    except (OSError, ReadTargetError, ValidationError):
         return None
 
 
@@ -157,7 +149,7 @@ def load_memory(folder: str | os.PathLike) -> KeyframeMemory:
     root = Path(folder)
     path = root / MEMORY_FILE
     try:  # no link below the folder, regular files only, bounded: never waited on
-        text = read_inside(root, MEMORY_FILE, MAX_DOCUMENT_BYTES, what="keyframe memory").decode("utf-8")
+        text = read_inside(root, MEMORY_FILE, MAX_MEMORY_JSON_BYTES, what="keyframe memory").decode("utf-8")
     except FileNotFoundError:
         raise ConfigError(f"{path}: no saved keyframe memory here (write one with --save-memory)") from None
     except ReadTargetError as exc:

@@ -29,6 +29,9 @@ The API, for every reader of untrusted files:
   reader that streams (a journal read line by line keeps its own bound per line);
 - :func:`read_inside` ``(root, rel, max_bytes, what=...)``: like :func:`read_regular`, with no
   link followed below ``root``;
+- :func:`read_at` ``(folder, name, max_bytes, what=...)``: a file of a folder povagent holds open
+  (a :class:`~povagent.run.confined_write.ConfinedFolder`), read through the folder's descriptor,
+  so the folder cannot be swapped for a link between its check and the read;
 - :func:`check_regular` ``(path, max_bytes, what=...)``: the size of a file another library opens
   by path (``transformers``, ``safetensors``), refused as :func:`read_regular` would refuse it.
 
@@ -43,6 +46,7 @@ import io
 import os
 import stat
 from pathlib import Path, PurePosixPath
+from typing import Any
 
 from povagent.errors import ReadTargetError
 
@@ -194,5 +198,21 @@ def read_inside(root: str | Path, rel: str | PurePosixPath, max_bytes: int, *, w
     (the user named it) and no link below it; refusals as in :func:`read_regular`."""
     path = Path(root) / str(rel)
     fd = _open_inside(root, rel, what)
+    _checked(fd, path, what, max_bytes)
+    return _read_all(fd, path, what, max_bytes)
+
+
+def read_at(folder: Any, name: str, max_bytes: int, *, what: str = "file") -> bytes:
+    """The bytes of the regular file ``name`` in ``folder`` (a
+    :class:`~povagent.run.confined_write.ConfinedFolder`: its open ``descriptor`` and its
+    ``path``), not following a link, at most ``max_bytes``; refusals as in :func:`read_inside`.
+    Without a descriptor (a platform with no ``dir_fd``) it is :func:`read_inside` of the path."""
+    if folder.descriptor is None:
+        return read_inside(folder.path, name, max_bytes, what=what)
+    path = Path(folder.path) / name
+    try:
+        fd = os.open(name, _READ | _NOFOLLOW, dir_fd=folder.descriptor)
+    except OSError as exc:
+        raise _link_refusal(path, exc, what) from None
     _checked(fd, path, what, max_bytes)
     return _read_all(fd, path, what, max_bytes)

@@ -8,7 +8,8 @@ import time
 import pytest
 
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import check_regular, open_regular, read_inside, read_regular
+from povagent.run.confined_read import check_regular, open_regular, read_at, read_inside, read_regular
+from povagent.run.confined_write import ConfinedFolder
 
 pytestmark = pytest.mark.timeout(20)
 
@@ -96,3 +97,18 @@ def test_read_inside_reads_a_plain_file_and_follows_the_named_root(folder, tmp_p
     (folder / "views" / "key.png").write_bytes(b"png")
     os.symlink(folder, tmp_path / "named")
     assert read_inside(tmp_path / "named", "views/key.png", 3, what="view") == b"png"
+
+
+def test_read_at_reads_a_file_of_a_held_folder_and_refuses_a_link_a_pipe_and_an_oversize_one(tmp_path):
+    (tmp_path / "views").mkdir()
+    (tmp_path / "views" / "ok").write_bytes(b"view")
+    (tmp_path / "outside").write_bytes(b"secret")
+    os.symlink(tmp_path / "outside", tmp_path / "views" / "link")
+    os.mkfifo(tmp_path / "views" / "pipe")
+    with ConfinedFolder(tmp_path, "views", create=False) as views:
+        assert read_at(views, "ok", 4) == b"view"
+        for name, refusal in (("link", "symbolic link"), ("pipe", "not a regular file")):
+            with pytest.raises(ReadTargetError, match=refusal):
+                read_at(views, name, 100)
+        with pytest.raises(ReadTargetError, match="more than"):
+            read_at(views, "ok", 3)
