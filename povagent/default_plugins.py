@@ -7,12 +7,14 @@ implements ``register_*`` hooks. Keep one module per line, grouped by kind.
 DEFAULT_PLUGINS: tuple[str, ...] = (
     # answer types
     "povagent_plugins.answers.point",
+    "povagent_plugins.answers.choice",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
     "povagent_plugins.scorers.diagnose",
     "povagent_plugins.scorers.relation",
     "povagent_plugins.scorers.probe",
+    "povagent_plugins.scorers.choice",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -23,6 +25,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.molmo",
     "povagent_plugins.parsers.robopoint",
     "povagent_plugins.parsers.internvl",
+    "povagent_plugins.parsers.choice",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
@@ -30,6 +33,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.geometric",
     "povagent_plugins.strategies.probes",
     "povagent_plugins.strategies.active",
+    "povagent_plugins.strategies.choice",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.transformers_backend",

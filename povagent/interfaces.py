@@ -160,6 +160,9 @@ class Strategy(abc.ABC):
     answer_parser: ClassVar[str | None] = None
     #: The answer type this strategy asks for; a parser that does not read it is refused at load.
     answer_type: ClassVar[str] = "point"
+    #: The parser a pipeline naming none gets, when any parser of :attr:`answer_type` may read
+    #: the answers (the ``choice`` strategy's: ``"choice"``); ``None``: the usual default.
+    default_parser: ClassVar[str | None] = None
 
     @abc.abstractmethod
     def build(self, instance: Instance, images: ImageStore) -> Request:

@@ -70,6 +70,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "observer_object": "The furniture the speaker used (for markers, e.g. `o-plot`).",
         "anchor_object": "The object the sentence names as the reference (for markers).",
         "observer_camera": "The speaker's camera (the Given view's camera).",
+        "question": "The multiple-choice question asked (`ChoiceQuestion`: question, labelled options, gold label, category), or `None` for the point task.",
     },
     "Frame": {
         "index": "Position in `Instance.frames`: what an answer's `selected_image` names.",
@@ -125,6 +126,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "height": "Frame height in pixels: y is on `[0, height-1]`.",
         "n_frames": "Images shown (1 for C): `selected_image` is on `[0, n_frames-1]`.",
         "asks_frame": "Whether the answer names a frame (A/B) or not (C).",
+        "choices": "A multiple-choice question's options as `(label, text)` pairs, in the order shown; empty for a point.",
     },
     "ParsedAnswer": {
         "status": "`ok`, `repaired`, `out_of_range` (all answers) or `unparseable` (a non-response).",
@@ -136,6 +138,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "span": "The raw text the answer was read from.",
         "repair": "How the text was changed to read it (e.g. `rescaled 0-1000 -> pixels`), else `None`.",
         "camera": "The camera of the image answered in when it is no dataset frame (the active mode's views): it is scored there.",
+        "choice": "The option label a multiple-choice answer chose, or `None`.",
     },
     "OfficialScore": {
         "answered": "Whether the row counts as answered officially (a point, and for A/B a frame that was shown).",

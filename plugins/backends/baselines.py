@@ -16,6 +16,10 @@ as a model's.
   the camera (where the official scorer places it). For C the observer view is used the same
   way. Coordinates are written with 3 decimals.
 
+A multiple-choice question (a request offering options) is answered with a bare label: the
+``oracle`` gives the gold one, ``random`` one drawn uniformly (seeded as above); every
+multiple-choice rule reads a bare label.
+
 None of them reads files, calls a network or is worth caching.
 """
 
@@ -143,6 +147,8 @@ class RandomBaseline(Backend):
         """A reproducible uniform guess (integer pixels in range)."""
         spec = request.answer
         rng = seeded_rng(self.seed, "random", _instance_id(request), request_run(request))
+        if spec.choices:  # a multiple-choice question: a uniform label
+            return _instant(rng.choice(spec.choices)[0], "random")
         frame = rng.randrange(shown_frame_count(request)) if spec.asks_frame else None
         x, y = rng.randrange(spec.width), rng.randrange(spec.height)
         return _instant(answer_text(request, frame, x, y), "random")
@@ -182,6 +188,10 @@ class OracleBaseline(Backend):
         if instance is None:
             raise PermanentBackendError("the oracle needs request.instance (the ground truth); the strategy sent none")
         spec = request.answer
+        if spec.choices:  # a multiple-choice question: the gold label
+            if instance.question is None:
+                raise PermanentBackendError(f"instance {instance.id} asks no question, yet the request offers options")
+            return _instant(instance.question.gold, "oracle")
         n_shown = shown_frame_count(request) if spec.asks_frame else 1
         frame, u, v = oracle_answer(instance, n_shown)
         # clamp to the last pixel: u = 1.0 exactly is only reached by a GT out of every frame

@@ -46,6 +46,9 @@ class AnswerSpec(BaseModel):
     height: int = 512
     n_frames: int = 1
     asks_frame: bool = True
+    #: A multiple-choice question's options as ``(label, text)`` pairs, in the order shown
+    #: (empty for a point): what a choice parser reads a label among.
+    choices: tuple[tuple[str, str], ...] = ()
 
     @property
     def required_keys(self) -> tuple[str, ...]:
@@ -96,11 +99,16 @@ class ParsedAnswer(BaseModel):
     #: Set when the answer names an image by its camera (the active mode's rendered views and
     #: frames): it is scored in this camera, not in a frame picked by ``selected_image``.
     camera: AnsweredCamera | None = None
+    #: The option label a multiple-choice answer chose (``"B"``), or ``None`` (a point answer,
+    #: or a choice answer that names no option).
+    choice: str | None = None
 
     @property
     def answered(self) -> bool:
-        """True when the parse yields a point."""
-        return self.status.answered and self.x is not None and self.y is not None
+        """True when the parse yields a point or a chosen option."""
+        if not self.status.answered:
+            return False
+        return (self.x is not None and self.y is not None) or self.choice is not None
 
     @property
     def point(self) -> tuple[float, float] | None:

@@ -128,7 +128,7 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
     ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
     backend, parser, strategy = config.backend, config.parser, config.strategy
     if parser is None:  # a strategy whose answers one parser reads gets it, whatever a profile says
-        needed = needed_parser(host, strategy.name)
+        needed = needed_parser(host, strategy.name) or strategy_default_parser(host, strategy.name)
         parser = ComponentSpec(name=needed) if needed is not None else None
     profile = None
     if config.model is not None:
@@ -155,6 +155,12 @@ def needed_parser(host: PluginHost, strategy: str) -> str | None:
     """The parser strategy ``strategy``'s answers need (its ``answer_parser``), or ``None``."""
     needed = getattr(host.entry("strategy", strategy).factory, "answer_parser", None)
     return needed if isinstance(needed, str) else None
+
+
+def strategy_default_parser(host: PluginHost, strategy: str) -> str | None:
+    """The parser strategy ``strategy`` gives a pipeline that names none (its ``default_parser``), or ``None``."""
+    default = getattr(host.entry("strategy", strategy).factory, "default_parser", None)
+    return default if isinstance(default, str) else None
 
 
 def parser_misfit(host: PluginHost, strategy: str, parser: str) -> str | None:

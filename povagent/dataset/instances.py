@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.models import Condition, Direction, SceneObject
 from povagent.geometry.camera import Camera
 
@@ -46,6 +47,9 @@ class Instance:
     observer_object: SceneObject
     anchor_object: SceneObject
     observer_camera: Camera
+    #: The multiple-choice question the instance asks (:mod:`povagent.answers.choice`), or
+    #: ``None`` for POVBench's point task.
+    question: ChoiceQuestion | None = None
 
     @property
     def id(self) -> str:

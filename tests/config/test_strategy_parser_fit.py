@@ -16,11 +16,11 @@ from povagent import hookimpl
 from povagent.answers.types import AnswerType
 from povagent_plugins.strategies.basic import BasicStrategy
 
-CHOICE = AnswerType("choice", "a label", {"type": "object"}, lambda p: None, lambda i: None, lambda v: "")
+CHOICE = AnswerType("ranking", "a label", {"type": "object"}, lambda p: None, lambda i: None, lambda v: "")
 
 
 class ChoiceStrategy(BasicStrategy):
-    answer_type = "choice"
+    answer_type = "ranking"
 
 
 @hookimpl
@@ -31,7 +31,7 @@ def register_strategies(register):
 CHOICE_TYPE = '''
 @hookimpl
 def register_answer_types(register):
-    register("choice", CHOICE)
+    register("ranking", CHOICE)
 '''
 
 
@@ -72,7 +72,7 @@ def test_a_strategy_asking_for_an_answer_type_no_plugin_registers_is_refused(tmp
     with pytest.raises(ConfigError) as err:
         load_pipeline(path)
     assert str(err.value) == (
-        f"{path}, line 4: strategy 'test-choice' asks for a choice answer, an answer type no loaded plugin registers (registered: point)"
+        f"{path}, line 4: strategy 'test-choice' asks for a ranking answer, an answer type no loaded plugin registers (registered: choice, point)"
     )
 
 
@@ -81,4 +81,4 @@ def test_a_parser_not_reading_the_asked_answer_type_is_refused(tmp_path):
     path = write(tmp_path, "plugins: [choice_plugin.py]\ndataset: d\nbackend: center\nstrategy: test-choice\noutput: runs/c\n")
     with pytest.raises(ConfigError) as err:
         load_pipeline(path)
-    assert str(err.value) == f"{path}, line 4: parser 'official' reads point answers, and strategy 'test-choice' asks for a choice answer"
+    assert str(err.value) == f"{path}, line 4: parser 'official' reads point answers, and strategy 'test-choice' asks for a ranking answer"

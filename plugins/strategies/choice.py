@@ -1,0 +1,104 @@
+"""The ``choice`` strategy: images, then a question and its labelled options, asking for a label.
+
+Single-turn. The wording around the question is a *profile* (:data:`CHOICE_PROFILES`), named by
+the instance's question (``ChoiceQuestion.profile``) unless the ``profile`` option overrides it:
+each perspective-taking set is asked in its own published wording, and a generated relation
+task in povagent's ``plain`` one. The images are the instance's frames in order (a set's images
+as its records list them).
+
+Options: ``max_tokens`` (default 256; ``null`` sends no limit), ``temperature`` (default: the
+backend's), ``profile`` (default: each question's own).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from povagent import hookimpl
+from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.spec import AnswerSpec
+from povagent.dataset.instances import Instance
+from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
+from povagent.interfaces import Strategy
+
+
+@dataclass(frozen=True)
+class ChoiceProfile:
+    """How a set words a multiple-choice prompt: the text after the images."""
+
+    name: str
+    text: Callable[[ChoiceQuestion], str]
+    source: str
+
+
+def plain_text(question: ChoiceQuestion) -> str:
+    """The question, the options one per line (``A. left``), and the instruction to answer with a label."""
+    return f"{question.question}\n{question.options_block()}\nAnswer with the option's letter from the given choices directly."
+
+
+#: Prompt profiles by name; a set's reader names its set's profile in each question.
+CHOICE_PROFILES: dict[str, ChoiceProfile] = {
+    "plain": ChoiceProfile("plain", plain_text, "povagent's wording (the instruction lmms-eval's multiple-choice tasks append)"),
+}
+
+
+def choice_answer_spec(instance: Instance) -> AnswerSpec:
+    """The answer asked: one of the question's labels."""
+    question = instance.question
+    if question is None:
+        raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
+    schema = {"type": "object", "required": ["choice"], "properties": {"choice": {"enum": list(question.labels)}}}
+    width, height = instance.frame_size
+    return AnswerSpec(schema=schema, width=width, height=height, n_frames=len(instance.frames), asks_frame=False,
+                      choices=question.options)  # fmt: skip
+
+
+class ChoiceStrategy(Strategy):
+    """The question's images, then its profile's text (see the module docstring)."""
+
+    answer_type = "choice"
+    default_parser = "choice"
+
+    def __init__(self, max_tokens: int | None = 256, temperature: float | None = None, profile: str | None = None) -> None:
+        if max_tokens is not None and (not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1):
+            raise ValueError(f"strategy option max_tokens must be a positive integer or null, got {max_tokens!r}")
+        if temperature is not None and (not isinstance(temperature, (int, float)) or isinstance(temperature, bool) or temperature < 0):
+            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+        if profile is not None and profile not in CHOICE_PROFILES:
+            raise ValueError(f"strategy option profile must be one of {', '.join(sorted(CHOICE_PROFILES))}, got {profile!r}")
+        self.generation = GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
+        self.profile = profile
+
+    def identity(self) -> dict[str, Any]:
+        """Nothing beyond the YAML decides the rows."""
+        return {}
+
+    def prompt_text(self, instance: Instance) -> str:
+        """The text after the images."""
+        question = instance.question
+        if question is None:
+            raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
+        name = self.profile or question.profile
+        profile = CHOICE_PROFILES.get(name)
+        if profile is None:
+            raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
+        return profile.text(question)
+
+    def answer_spec(self, instance: Instance) -> AnswerSpec:
+        """One of the question's labels."""
+        return choice_answer_spec(instance)
+
+    def build(self, instance: Instance, images: ImageStore) -> Request:
+        """One user message: every image of the instance in order, then the question."""
+        parts: list[Part] = [ImagePart(images.add_file(frame.file).image_hash, label=f"Image {frame.index}") for frame in instance.frames]
+        parts.append(TextPart(self.prompt_text(instance)))
+        return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance),
+                       generation=self.generation, instance=instance)  # fmt: skip
+
+
+@hookimpl
+def register_strategies(register) -> None:
+    """Contribute the choice strategy."""
+    register("choice", ChoiceStrategy, description="Multiple choice: the images, the question and its labelled options; answer a label")
