@@ -1,0 +1,177 @@
+"use strict";
+// The annotation page. Everything shown from the data is set with textContent (never markup);
+// the token comes from this page's own address and goes back in a header on every API call.
+(function () {
+  const token = new URLSearchParams(location.search).get("token") || "";
+  const headers = { "X-Povagent-Token": token };
+  const $ = (id) => document.getElementById(id);
+  const el = (tag, text) => { const e = document.createElement(tag); if (text !== undefined) e.textContent = text; return e; };
+  let state = null, frames = [], current = 0, mark = null, choice = null, verdict = null, busy = false;
+
+  function keysHelp(q, mode) {
+    const keys = [];
+    if (frames.length > 1) keys.push("← → frames");
+    if (mode === "answer" && q.choices.length) keys.push("1-9 or A-E choose");
+    else if (mode === "answer") keys.push("click the image to mark · I J K L move the mark (Shift: 1 px)");
+    if (mode === "judge") keys.push("S success · F failure · C can't tell · N note (Esc leaves it)");
+    keys.push("Enter submit · Backspace clear");
+    $("keys").textContent = "Keys: " + keys.join(" · ");
+  }
+
+  function imageUrl(q, i) { return "/api/image/" + q.number + "/" + i; }
+
+  function showFrame(i) {
+    if (!frames.length) return;
+    current = (i + frames.length) % frames.length;
+    const f = frames[current];
+    $("view").src = imageUrl(state.question, f.image);
+    $("view").alt = f.label || ("image " + (current + 1));
+    $("frame-label").textContent = (f.label || "image") + " (" + (current + 1) + " of " + frames.length + ")";
+    for (const b of $("strip").children) b.setAttribute("aria-current", String(Number(b.dataset.index) === current));
+    drawMark();
+  }
+
+  function drawMark() {
+    const m = $("marker"), f = frames[current];
+    const point = state.mode === "judge" ? state.question.point : mark;
+    if (!point || !f || point.image !== f.image) { m.hidden = true; return; }
+    m.hidden = false;
+    m.style.left = (100 * point.x / f.width) + "%";
+    m.style.top = (100 * point.y / f.height) + "%";
+  }
+
+  function ready() {
+    const q = state && state.question;
+    let ok = false;
+    if (q && state.mode === "answer") ok = q.choices.length ? choice !== null : mark !== null;
+    if (q && state.mode === "judge") ok = verdict !== null;
+    $("submit").disabled = !ok || busy;
+  }
+
+  function render() {
+    const q = state.question;
+    $("progress").textContent = state.who + ": " + state.done + " of " + state.total + " saved";
+    $("prompt").replaceChildren(); $("choices").replaceChildren(); $("strip").replaceChildren();
+    mark = null; choice = null; verdict = null; frames = [];
+    $("note").value = "";
+    if (!q) {
+      $("viewer").hidden = true; $("verdicts").hidden = true;
+      $("status").textContent = state.finished ? "All done. Thank you: you may close this tab." : "Waiting for the next item…";
+      ready();
+      return;
+    }
+    $("status").textContent = state.mode === "judge"
+      ? "Is the red mark where the sentence places the object, from the speaker's view?"
+      : (q.choices.length ? "Choose the answer." : "Click the point the sentence describes, in the image where you see it.");
+    for (const part of q.parts) {
+      if (part.text !== undefined) $("prompt").append(el("p", part.text));
+      else frames.push(part);
+    }
+    frames.forEach((f, i) => {
+      const b = el("button"); b.type = "button"; b.dataset.index = String(i); b.setAttribute("role", "listitem");
+      const img = el("img"); img.src = imageUrl(q, f.image); img.alt = f.label || ("image " + (i + 1));
+      b.append(img); b.addEventListener("click", () => showFrame(i));
+      $("strip").append(b);
+    });
+    $("viewer").hidden = frames.length === 0;
+    $("strip").hidden = frames.length < 2;
+    $("verdicts").hidden = state.mode !== "judge";
+    if (state.mode === "answer") q.choices.forEach(([label, text], i) => {
+      const b = el("button", label + ". " + text); b.type = "button"; b.dataset.choice = label;
+      b.setAttribute("aria-keyshortcuts", String(i + 1)); b.setAttribute("aria-pressed", "false");
+      b.addEventListener("click", () => choose(label));
+      $("choices").append(b);
+    });
+    for (const b of $("verdicts").querySelectorAll("button")) b.setAttribute("aria-pressed", "false");
+    const start = state.mode === "judge" ? frames.findIndex((f) => f.image === q.point.image) : 0;
+    showFrame(Math.max(0, start));
+    keysHelp(q, state.mode);
+    ready();
+  }
+
+  function choose(label) {
+    choice = label;
+    for (const b of $("choices").children) b.setAttribute("aria-pressed", String(b.dataset.choice === label));
+    ready();
+  }
+
+  function judge(v) {
+    verdict = v;
+    for (const b of $("verdicts").querySelectorAll("button")) b.setAttribute("aria-pressed", String(b.dataset.verdict === v));
+    ready();
+  }
+
+  function place(x, y) {
+    const f = frames[current];
+    mark = { image: f.image, x: Math.min(f.width, Math.max(0, x)), y: Math.min(f.height, Math.max(0, y)) };
+    drawMark(); ready();
+  }
+
+  $("view").addEventListener("click", (e) => {
+    if (state.mode !== "answer" || state.question.choices.length) return;
+    const r = $("view").getBoundingClientRect(), f = frames[current];
+    // the pixel in the frame's own coordinates, whatever size the page shows it at
+    place((e.clientX - r.left) * f.width / r.width, (e.clientY - r.top) * f.height / r.height);
+  });
+
+  async function submit() {
+    if ($("submit").disabled) return;
+    const q = state.question, body = { question: q.number };
+    if (state.mode === "judge") { body.verdict = verdict; body.note = $("note").value; }
+    else if (q.choices.length) body.choice = choice;
+    else Object.assign(body, mark);
+    busy = true; ready();
+    $("status").textContent = "Saving…";
+    try {
+      const r = await fetch("/api/" + state.mode, { method: "POST", headers: { ...headers, "Content-Type": "application/json" }, body: JSON.stringify(body) });
+      const reply = await r.json();
+      if (!r.ok) { $("status").textContent = "Not saved: " + (reply.error || r.status); return; }
+    } catch (err) {
+      $("status").textContent = "Not saved (the server is gone?): reload this page to resume.";
+      return;
+    } finally { busy = false; ready(); }
+    poll();
+  }
+
+  async function poll() {
+    try {
+      const r = await fetch("/api/state", { headers });
+      if (!r.ok) { $("status").textContent = "Refused (" + r.status + "): open the address the command printed."; return; }
+      state = await r.json();
+    } catch (err) {
+      $("status").textContent = "The server is gone: start it again and reload this page to resume.";
+      return;
+    }
+    render();
+    if (!state.question && !state.finished) setTimeout(poll, 300);
+  }
+
+  $("prev").addEventListener("click", () => showFrame(current - 1));
+  $("next").addEventListener("click", () => showFrame(current + 1));
+  $("submit").addEventListener("click", submit);
+  $("clear").addEventListener("click", () => { mark = null; choice = null; verdict = null; render(); });
+  for (const b of $("verdicts").querySelectorAll("button")) b.addEventListener("click", () => judge(b.dataset.verdict));
+
+  document.addEventListener("keydown", (e) => {
+    if (!state || !state.question) return;
+    if (e.target === $("note")) { if (e.key === "Escape") $("note").blur(); else if (e.key === "Enter") submit(); return; }
+    const q = state.question, k = e.key;
+    if (k === "ArrowLeft") showFrame(current - 1);
+    else if (k === "ArrowRight") showFrame(current + 1);
+    else if (k === "Enter") submit();
+    else if (k === "Backspace") { mark = null; choice = null; drawMark(); render(); }
+    else if (state.mode === "judge" && "sfc".includes(k.toLowerCase()) && k.length === 1) judge({ s: "success", f: "failure", c: "cant_tell" }[k.toLowerCase()]);
+    else if (state.mode === "judge" && k.toLowerCase() === "n") $("note").focus();
+    else if (state.mode === "answer" && q.choices.length && /^[1-9]$/.test(k) && Number(k) <= q.choices.length) choose(q.choices[Number(k) - 1][0]);
+    else if (state.mode === "answer" && q.choices.length && q.choices.some((c) => c[0] === k.toUpperCase())) choose(k.toUpperCase());
+    else if (state.mode === "answer" && !q.choices.length && "ijkl".includes(k.toLowerCase()) && k.length === 1) {
+      const f = frames[current], step = e.shiftKey ? 1 : 10;
+      const m = mark && mark.image === f.image ? mark : { x: f.width / 2, y: f.height / 2 };
+      const d = { i: [0, -step], k: [0, step], j: [-step, 0], l: [step, 0] }[k.toLowerCase()];
+      place(m.x + d[0], m.y + d[1]);
+    } else return;
+    e.preventDefault();
+  });
+
+  poll();
+})();
