@@ -11,6 +11,7 @@ from the dataset (item number and image index from the page, never a path).
 from __future__ import annotations
 
 import hashlib
+import io
 import random
 import threading
 import time
@@ -50,7 +51,16 @@ def item_id(run_name: str, key: str) -> str:
     return hashlib.sha256(f"{run_name}|{key}".encode()).hexdigest()[:20]
 
 
-def judge_items(paths: list[Path]) -> list[JudgeItem]:
+@dataclass(frozen=True)
+class Predictions:
+    """The items to judge and the dataset their frames belong to (held: a real-world set's
+    letterboxed frames live as long as its dataset does)."""
+
+    items: list[JudgeItem]
+    dataset: Any
+
+
+def judge_items(paths: list[Path]) -> Predictions:
     """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame."""
     from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
@@ -70,16 +80,17 @@ def judge_items(paths: list[Path]) -> list[JudgeItem]:
         key = f"{o.instance_id}#{o.run}"
         items.append(JudgeItem(item_id(o.run_name, key), Path(frame.file), float(o.x), float(o.y), o.sentence, o.system,
                                o.run_name, key, o.instance_id, o.condition))  # fmt: skip
-    return items
+    return Predictions(items, dataset)
 
 
 class JudgePage:
     """One judge's session (a :class:`~povagent.annotate.server.PageApp`)."""
 
-    def __init__(self, items: list[JudgeItem], journal: JudgementJournal, judge: str, seed: int = 0) -> None:
+    def __init__(self, predictions: Predictions, journal: JudgementJournal, judge: str, seed: int = 0) -> None:
         self.judge, self.journal = judge, journal
+        self.predictions = predictions
         digest = hashlib.sha256(f"{judge}|{seed}".encode()).digest()
-        self.items = sorted(items, key=lambda i: i.item)
+        self.items = sorted(predictions.items, key=lambda i: i.item)
         random.Random(int.from_bytes(digest[:8], "big")).shuffle(self.items)
         judged = {j.item for j in journal.read()}
         self._left = [i for i in self.items if i.item not in judged]
@@ -109,7 +120,7 @@ class JudgePage:
             if item is not None:
                 if self._shown_at is None:
                     self._shown_at = time.monotonic()
-                width, height = self._size(item)
+                width, height = self._frame(item)[2]
                 question = {
                     "number": self._done,
                     "parts": [{"text": item.sentence}, {"image": 0, "label": "the answered frame", "width": width, "height": height}],
@@ -120,9 +131,11 @@ class JudgePage:
                     "finished": item is None, "question": question}  # fmt: skip
 
     @staticmethod
-    def _size(item: JudgeItem) -> tuple[int, int]:
-        with Image.open(item.frame_file) as im:
-            return im.size
+    def _frame(item: JudgeItem) -> tuple[bytes, str, tuple[int, int]]:
+        """The frame's bytes (read through the confined reader), media type and size."""
+        data = read_regular(item.frame_file, MAX_IMAGE_FILE_BYTES, what="image")
+        with Image.open(io.BytesIO(data)) as im:
+            return data, MEDIA_TYPES.get(im.format or "", "application/octet-stream"), im.size
 
     def image(self, number: int, index: int) -> tuple[bytes, str] | None:
         """The frame of the prediction being judged."""
@@ -130,9 +143,7 @@ class JudgePage:
             item = self._current()
             if item is None or number != self._done or index != 0:
                 return None
-        data = read_regular(item.frame_file, MAX_IMAGE_FILE_BYTES, what="image")
-        with Image.open(item.frame_file) as im:
-            media = MEDIA_TYPES.get(im.format or "", "application/octet-stream")
+        data, media, _ = self._frame(item)
         return data, media
 
     def post(self, action: str, body: dict[str, Any]) -> dict[str, Any]:

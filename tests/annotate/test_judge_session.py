@@ -3,6 +3,7 @@ killed midway resumed, two judges' overlap, and the report's manual tables."""
 
 from __future__ import annotations
 
+import concurrent.futures
 from pathlib import Path
 
 import pytest
@@ -29,7 +30,9 @@ def realworld_run(tmp_path_factory):
         "strategy": "basic", "parser": "json", "scorers": ["success"],
         "output": str(base / "runs" / "model-a"),
     }))  # fmt: skip
-    run_pipeline(load_pipeline(base / "pipeline.yaml"))
+    # in a thread of its own: the browser's driver holds this thread's event loop
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        pool.submit(run_pipeline, load_pipeline(base / "pipeline.yaml")).result(timeout=300)
     return base
 
 
@@ -49,7 +52,7 @@ def judge_on_page(page, key: str) -> None:
 
 
 @pytest.fixture(scope="module")
-def judged(browser, realworld_run):
+def judged(realworld_run, browser):
     """carol judges two predictions, her server is killed, she judges the rest; dave judges all,
     disagreeing with her on the second one he sees."""
     base = realworld_run
