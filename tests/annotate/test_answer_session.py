@@ -55,6 +55,7 @@ def session(browser, tmp_path_factory, mini_root, mini_dataset):
     config = load_answer_study(path).pipeline
     order = [i for i, _ in annotator_order([(i, 0) for i in select_instances(mini_dataset, config)], "alice")]
     page = browser.new_page(viewport={"width": 1280, "height": 720})
+    page.set_default_timeout(120_000)  # a loaded machine: the first question may take a while
     served = Served(path)
     try:
         page.goto(served.url)

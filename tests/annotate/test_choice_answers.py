@@ -58,6 +58,7 @@ def asked(mini_dataset):
 def test_a_key_chooses_an_option_and_enter_answers_with_its_bare_label(browser, asked):
     server, answered = asked
     page = browser.new_page(viewport={"width": 1280, "height": 720})
+    page.set_default_timeout(120_000)  # a loaded machine: the first question may take a while
     page.goto(server.url)
     page.wait_for_selector("#choices button")
     page.keyboard.press("3")

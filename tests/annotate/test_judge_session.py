@@ -57,6 +57,7 @@ def judged(realworld_run, browser):
     disagreeing with her on the second one he sees."""
     base = realworld_run
     page = browser.new_page(viewport={"width": 1280, "height": 720})
+    page.set_default_timeout(120_000)  # a loaded machine: the first question may take a while
     served = Served(judge_yaml(base, "carol"))
     try:
         page.goto(served.url)

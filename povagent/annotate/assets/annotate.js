@@ -10,12 +10,57 @@
 
   function keysHelp(q, mode) {
     const keys = [];
-    if (frames.length > 1) keys.push("← → frames");
+    if (frames.length > 1) keys.push("← → images");
+    if (tools().length) keys.push("1-" + tools().length + " use a tool (type its values, Enter to go)");
     if (mode === "answer" && q.choices.length) keys.push("1-9 or A-E choose");
     else if (mode === "answer") keys.push("click the image to mark · I J K L move the mark (Shift: 1 px)");
     if (mode === "judge") keys.push("S success · F failure · C can't tell · N note (Esc leaves it)");
     keys.push("Enter submit · Backspace clear");
     $("keys").textContent = "Keys: " + keys.join(" · ");
+  }
+
+  // A tool whose parameters hold a pixel (number x and y) is answered by a click on an image.
+  const isPointTool = (t) => ["x", "y"].every((n) => t.parameters.some((p) => p.name === n && p.type === "number"));
+  const tools = () => (state && state.question && state.question.tools) || [];
+
+  function toolForm(t, i) {
+    const box = el("fieldset"); box.dataset.tool = t.name;
+    box.append(el("legend", (i + 1) + ". " + t.name));
+    box.append(el("p", t.description)); box.lastChild.className = "what";
+    const point = isPointTool(t);
+    for (const p of t.parameters) {
+      if (point && (p.name === "x" || p.name === "y" || p.type === "string")) continue;  // the click fills them
+      const id = "tool-" + i + "-" + p.name;
+      const label = el("label", p.name); label.htmlFor = id; label.title = p.description;
+      const input = el("input"); input.id = id; input.dataset.param = p.name; input.dataset.type = p.type;
+      input.type = p.type === "number" || p.type === "integer" ? "number" : "text";
+      if (input.type === "number") input.step = p.type === "integer" ? "1" : "any";
+      input.setAttribute("aria-label", t.name + " " + p.name + ": " + p.description);
+      input.addEventListener("keydown", (e) => { if (e.key === "Enter") { e.preventDefault(); e.stopPropagation(); callTool(t); } });
+      box.append(label, input);
+    }
+    if (point) box.append(el("span", "click the image to place the point"));
+    const go = el("button", point ? "Answer (" + (i + 1) + ")" : "Go (" + (i + 1) + ")"); go.type = "button";
+    go.setAttribute("aria-keyshortcuts", String(i + 1));
+    go.addEventListener("click", () => callTool(t));
+    box.append(go);
+    return box;
+  }
+
+  function callTool(t) {
+    const box = $("tools").querySelector("fieldset[data-tool='" + CSS.escape(t.name) + "']");
+    const args = {};
+    for (const input of box.querySelectorAll("input")) {
+      if (input.value === "") { input.focus(); return; }
+      args[input.dataset.param] = input.dataset.type === "string" ? input.value : Number(input.value);
+    }
+    const body = { tool: t.name, arguments: args };
+    if (isPointTool(t)) {
+      if (!mark) { $("status").textContent = "Click the image first, then answer."; return; }
+      Object.assign(body.arguments, { x: mark.x, y: mark.y });
+      body.image = mark.image;
+    }
+    send(body);
   }
 
   function imageUrl(q, i) { return "/api/image/" + q.number + "/" + i; }
@@ -44,6 +89,7 @@
     const q = state && state.question;
     let ok = false;
     if (q && state.mode === "answer") ok = q.choices.length ? choice !== null : mark !== null;
+    if (q && tools().length) ok = mark !== null && tools().some(isPointTool);
     if (q && state.mode === "judge") ok = verdict !== null;
     $("submit").disabled = !ok || busy;
   }
@@ -51,7 +97,7 @@
   function render() {
     const q = state.question;
     $("progress").textContent = state.who + ": " + state.done + " of " + state.total + " saved";
-    $("prompt").replaceChildren(); $("choices").replaceChildren(); $("strip").replaceChildren();
+    $("prompt").replaceChildren(); $("choices").replaceChildren(); $("strip").replaceChildren(); $("tools").replaceChildren();
     mark = null; choice = null; verdict = null; frames = [];
     $("note").value = "";
     if (!q) {
@@ -62,7 +108,9 @@
     }
     $("status").textContent = state.mode === "judge"
       ? "Is the red mark where the sentence places the object, from the speaker's view?"
-      : (q.choices.length ? "Choose the answer." : "Click the point the sentence describes, in the image where you see it.");
+      : q.choices.length ? "Choose the answer."
+      : (q.tools || []).length ? "Look around with the tools; answer by clicking the point in an image you were shown, then Enter."
+      : "Click the point the sentence describes, in the image where you see it.";
     for (const part of q.parts) {
       if (part.text !== undefined) $("prompt").append(el("p", part.text));
       else frames.push(part);
@@ -82,8 +130,10 @@
       b.addEventListener("click", () => choose(label));
       $("choices").append(b);
     });
+    (q.tools || []).forEach((t, i) => $("tools").append(toolForm(t, i)));
     for (const b of $("verdicts").querySelectorAll("button")) b.setAttribute("aria-pressed", "false");
-    const start = state.mode === "judge" ? frames.findIndex((f) => f.image === q.point.image) : 0;
+    // judge mode: the answered frame; an episode: its newest view; else the first image
+    const start = state.mode === "judge" ? frames.findIndex((f) => f.image === q.point.image) : (tools().length ? frames.length - 1 : 0);
     showFrame(Math.max(0, start));
     keysHelp(q, state.mode);
     ready();
@@ -109,6 +159,7 @@
 
   $("view").addEventListener("click", (e) => {
     if (state.mode !== "answer" || state.question.choices.length) return;
+    if (tools().length && !tools().some(isPointTool)) return;
     const r = $("view").getBoundingClientRect(), f = frames[current];
     // the pixel in the frame's own coordinates, whatever size the page shows it at
     place((e.clientX - r.left) * f.width / r.width, (e.clientY - r.top) * f.height / r.height);
@@ -116,10 +167,17 @@
 
   async function submit() {
     if ($("submit").disabled) return;
-    const q = state.question, body = { question: q.number };
+    const q = state.question, body = {};
+    if (tools().length) return callTool(tools().find(isPointTool));
     if (state.mode === "judge") { body.verdict = verdict; body.note = $("note").value; }
     else if (q.choices.length) body.choice = choice;
     else Object.assign(body, mark);
+    send(body);
+  }
+
+  async function send(answer) {
+    if (busy) return;
+    const body = { question: state.question.number, ...answer };
     busy = true; ready();
     $("status").textContent = "Saving…";
     try {
@@ -154,6 +212,7 @@
 
   document.addEventListener("keydown", (e) => {
     if (!state || !state.question) return;
+    if (e.target.closest && e.target.closest("#tools")) return;  // typing a tool's argument
     if (e.target === $("note")) { if (e.key === "Escape") $("note").blur(); else if (e.key === "Enter") submit(); return; }
     const q = state.question, k = e.key;
     if (k === "ArrowLeft") showFrame(current - 1);
@@ -162,6 +221,10 @@
     else if (k === "Backspace") { mark = null; choice = null; drawMark(); render(); }
     else if (state.mode === "judge" && "sfc".includes(k.toLowerCase()) && k.length === 1) judge({ s: "success", f: "failure", c: "cant_tell" }[k.toLowerCase()]);
     else if (state.mode === "judge" && k.toLowerCase() === "n") $("note").focus();
+    else if (tools().length && /^[1-9]$/.test(k) && Number(k) <= tools().length) {
+      const t = tools()[Number(k) - 1], empty = $("tools").querySelectorAll("fieldset")[Number(k) - 1].querySelector("input");
+      if (empty && empty.value === "") empty.focus(); else callTool(t);
+    }
     else if (state.mode === "answer" && q.choices.length && /^[1-9]$/.test(k) && Number(k) <= q.choices.length) choose(q.choices[Number(k) - 1][0]);
     else if (state.mode === "answer" && q.choices.length && q.choices.some((c) => c[0] === k.toUpperCase())) choose(k.toUpperCase());
     else if (state.mode === "answer" && !q.choices.length && "ijkl".includes(k.toLowerCase()) && k.length === 1) {
