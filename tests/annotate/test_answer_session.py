@@ -59,6 +59,8 @@ def session(browser, tmp_path_factory, mini_root, mini_dataset):
     served = Served(path)
     try:
         page.goto(served.url)
+        page.wait_for_selector("#view[src]")
+        shown = (page.locator("#prompt p").all_text_contents(), page.locator("#strip img").count())
         for instance in order[:2]:
             answer_on_page(page, instance)
     finally:
@@ -73,28 +75,39 @@ def session(browser, tmp_path_factory, mini_root, mini_dataset):
     finally:
         served.kill()
         page.close()
-    return order, after_kill, list(iter_rows(run_dir / "results.jsonl")), run_dir, exit_code
+    return order, after_kill, list(iter_rows(run_dir / "results.jsonl")), run_dir, exit_code, shown
+
+
+def test_the_page_shows_the_strategys_own_request(session):
+    from povagent.exchange.images import ImageStore
+    from povagent.exchange.messages import TextPart
+    from povagent.plugins import get_plugin_host
+
+    order, *_, (texts, n_images) = session
+    request = get_plugin_host().strategy("basic", {}).build(order[0], ImageStore())
+    assert texts == [p.text for m in request.messages for p in m.parts if isinstance(p, TextPart)]
+    assert n_images == len(request.image_hashes())
 
 
 def test_a_killed_session_keeps_every_answer_it_acknowledged(session):
-    order, after_kill, _, _, _ = session
+    order, after_kill, *_ = session
     assert [r.instance_id for r in after_kill] == [i.id for i in order[:2]]
 
 
 def test_the_session_resumes_at_the_next_instance_with_no_row_doubled(session):
-    order, _, rows, _, exit_code = session
+    order, _, rows, _, exit_code, _ = session
     assert [r.instance_id for r in rows] == [i.id for i in order]
     assert exit_code == 0
 
 
 def test_each_click_on_the_ground_truth_pixel_scores_as_a_hit(session):
-    _, _, rows, _, _ = session
+    _, _, rows, *_ = session
     for row in rows:
         assert row.scores["official"]["l2"] < 0.01, (row.instance_id, row.exchanges[-1].raw)
 
 
 def test_each_row_names_the_person_and_how_long_they_looked(session):
-    _, _, rows, _, _ = session
+    _, _, rows, *_ = session
     for row in rows:
         assert row.model == "human:alice"
         assert row.exchanges[-1].latency_s > 0
