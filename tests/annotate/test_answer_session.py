@@ -123,3 +123,15 @@ def test_the_report_shows_the_person_as_a_system(session, tmp_path):
     result = CliRunner().invoke(app, ["report", str(run_dir), "--out", str(out), "--no-gallery"])
     assert result.exit_code == 0, result.output
     assert "human:alice" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def test_rescore_reads_a_persons_run_like_a_models(session):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    run_dir = session[3]
+    result = CliRunner().invoke(app, ["rescore", str(run_dir), "--parser", "json"])
+    assert result.exit_code == 0, result.output
+    rescored = list(iter_rows(run_dir / "rescored-json" / "results.jsonl"))
+    assert [r.scores["official"]["l2"] for r in rescored] == [r.scores["official"]["l2"] for r in session[2]]

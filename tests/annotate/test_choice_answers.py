@@ -80,3 +80,15 @@ def test_dataset_text_is_shown_as_text_never_as_markup(browser, asked):
     page.locator("#submit").click()
     assert answered.result(timeout=60).text == "B"
     page.close()
+
+
+def test_an_options_letter_chooses_it(browser, asked):
+    server, answered = asked
+    page = browser.new_page(viewport={"width": 1280, "height": 720})
+    page.set_default_timeout(120_000)
+    page.goto(server.url)
+    page.wait_for_selector("#choices button")
+    page.keyboard.press("d")
+    page.keyboard.press("Enter")
+    assert answered.result(timeout=60).text == "D"
+    page.close()

@@ -33,3 +33,9 @@ def test_a_plain_run_with_a_human_backend_stops_at_once_and_says_to_annotate(tmp
     result = run_pipeline(load_pipeline(path))
     assert result.stopped is not None and "povagent annotate" in result.stopped
     assert result.n_missing == 1  # nothing else was asked
+
+
+def test_a_person_is_a_system_of_the_report_not_a_baseline(povagent_host):
+    from povagent.report.baseline_systems import is_baseline_system
+
+    assert not is_baseline_system({"backend": "human", "model": "human:alice"}, "human:alice", povagent_host)
