@@ -41,7 +41,7 @@ def read_answer(question: Question, answer: Any) -> str | ToolCall:
     spec = question.request.answer
     if spec.choices:
         label = answer.get("choice")
-        if label not in {c[0] for c in spec.choices}:
+        if not isinstance(label, str) or label not in {c[0] for c in spec.choices}:
             raise AnswerRefused(f"choice must be one of {', '.join(c[0] for c in spec.choices)}")
         return str(label)
     image, x, y = answer.get("image"), answer.get("x"), answer.get("y")
@@ -66,7 +66,7 @@ def _tool_call(question: Question, answer: dict[str, Any]) -> ToolCall:
     and checks them, as it does a model's)."""
     offered = {t.get("function", {}).get("name") for t in question.request.tools if isinstance(t, dict)}
     name, arguments = answer.get("tool"), answer.get("arguments", {})
-    if name not in offered:
+    if not isinstance(name, str) or name not in offered:
         raise AnswerRefused(f"tool must be one of {', '.join(sorted(str(n) for n in offered)) or 'none (no tool is offered)'}")
     if not isinstance(arguments, dict):
         raise AnswerRefused("arguments must be a JSON object")

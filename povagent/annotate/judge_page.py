@@ -61,7 +61,8 @@ class Predictions:
 
 
 def judge_items(paths: list[Path]) -> Predictions:
-    """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame."""
+    """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame
+    (an answer in an active episode's rendered view is left out: its image is no dataset's)."""
     from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
 
@@ -69,10 +70,12 @@ def judge_items(paths: list[Path]) -> Predictions:
     dataset, note = load_collection_dataset(collection, None)
     if dataset is None:
         raise ConfigError(f"{paths[0]}: the runs' dataset is needed to show their frames: {note}")
+    # an answer given in a rendered view (the active mode) lies in no dataset frame: not drawn here
+    in_views = {(r.name, row.key) for r in collection.runs for row in r.rows if row.parse is not None and row.parse.camera is not None}
     items: list[JudgeItem] = []
     for o in collection.observations:
         instance = dataset.instance(o.instance_id)
-        if o.x is None or o.y is None or instance is None:
+        if o.x is None or o.y is None or instance is None or (o.run_name, f"{o.instance_id}#{o.run}") in in_views:
             continue
         frame = scoring_frame(instance, o.selected_image, o.image_path)
         if frame is None or not getattr(frame, "file", None):
@@ -151,7 +154,7 @@ class JudgePage:
         if action != "judge":
             raise KeyError(action)
         verdict, note = body.get("verdict"), body.get("note", "")
-        if verdict not in VERDICTS:
+        if not isinstance(verdict, str) or verdict not in VERDICTS:
             raise AnswerRefused(f"verdict must be one of {', '.join(VERDICTS)}")
         if not isinstance(note, str) or len(note) > MAX_NOTE_CHARS:
             raise AnswerRefused(f"note must be text of at most {MAX_NOTE_CHARS} characters")

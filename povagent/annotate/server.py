@@ -70,8 +70,10 @@ class PageApp(Protocol):
 class AnnotateServer:
     """The server of one session: :attr:`url` is what the person opens."""
 
-    def __init__(self, app: PageApp, port: int = 0) -> None:
+    def __init__(self, app: PageApp, port: int = 0, client_timeout: float = 60.0) -> None:
         self.app = app
+        #: seconds a client may take to send its request
+        self.client_timeout = client_timeout
         self.token = secrets.token_urlsafe(32)
         self.httpd = ThreadingHTTPServer(("127.0.0.1", port), _handler_for(self))
         self.httpd.daemon_threads = True
@@ -111,6 +113,8 @@ def _handler_for(server: AnnotateServer) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
         server_version = "povagent-annotate"
         sys_version = ""
+        #: a body promised and never sent is no wait forever
+        timeout = server.client_timeout
 
         def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base class's name
             """Nothing: a request line carries the token."""

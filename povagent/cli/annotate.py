@@ -60,7 +60,7 @@ def annotate_command(
 
 def _judge(study, port: int) -> None:
     """Serve judge mode until every prediction is judged or the command is stopped."""
-    import threading
+    import time
 
     from povagent.annotate.judge_page import JudgePage, judge_items
     from povagent.annotate.judgements import JudgementJournal
@@ -73,7 +73,7 @@ def _judge(study, port: int) -> None:
     typer.echo(f"open {server.url}")
     try:
         while not page.state_finished():
-            threading.Event().wait(0.5)
+            time.sleep(0.5)
     except KeyboardInterrupt:
         typer.echo(f"interrupted: every saved judgement is kept in {page.journal.path}; run the same command again to resume", err=True)
         raise typer.Exit(130) from None

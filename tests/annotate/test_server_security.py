@@ -14,7 +14,7 @@ from povagent.annotate.server import AnnotateServer
 
 @pytest.fixture(scope="module")
 def server():
-    srv = AnnotateServer(AnswerPage(AnswerDesk("alice"), wait_s=0.0))
+    srv = AnnotateServer(AnswerPage(AnswerDesk("alice"), wait_s=0.0), client_timeout=1.0)
     srv.start()
     try:
         yield srv
@@ -104,3 +104,21 @@ def test_an_oversized_answer_is_refused_unread(server):
 def test_an_answer_to_no_open_question_is_refused_with_its_reason(server):
     status, _, body = request(server, "POST", "/api/answer", {"X-Povagent-Token": server.token}, json.dumps({"question": 7, "choice": "A"}).encode())
     assert status == 422 and b"not open" in body
+
+
+def test_a_body_promised_and_never_sent_is_given_up_on(server):
+    import socket
+    import time
+
+    with socket.create_connection(("127.0.0.1", server.port), timeout=30) as sock:
+        sock.sendall(f"POST /api/answer HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\nX-Povagent-Token: {server.token}\r\n"
+                     "Content-Length: 100\r\n\r\n".encode())
+        t0 = time.monotonic()
+        assert sock.recv(1024) == b""  # the server closed the connection instead of waiting on
+        assert time.monotonic() - t0 < 20
+
+
+@pytest.mark.parametrize("body", [{"question": 1, "choice": ["A"]}, {"question": True}, [1, 2], "x"])
+def test_an_answer_of_the_wrong_shape_is_refused_not_a_crash(server, body):
+    status, _, _ = request(server, "POST", "/api/answer", {"X-Povagent-Token": server.token}, json.dumps(body).encode())
+    assert status in (400, 422)

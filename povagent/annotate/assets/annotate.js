@@ -183,7 +183,12 @@
     try {
       const r = await fetch("/api/" + state.mode, { method: "POST", headers: { ...headers, "Content-Type": "application/json" }, body: JSON.stringify(body) });
       const reply = await r.json();
-      if (!r.ok) { $("status").textContent = "Not saved: " + (reply.error || r.status); return; }
+      if (!r.ok) {
+        $("status").textContent = "Not saved: " + (reply.error || r.status);
+        // a question that is no longer open (asked again after a long wait): show the open one
+        if (r.status === 422 && / is not open|not the one shown/.test(reply.error || "")) setTimeout(poll, 1500);
+        return;
+      }
     } catch (err) {
       $("status").textContent = "Not saved (the server is gone?): reload this page to resume.";
       return;
