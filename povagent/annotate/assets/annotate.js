@@ -123,6 +123,7 @@
     });
     $("viewer").hidden = frames.length === 0;
     $("strip").hidden = frames.length < 2;
+    $("frame-nav").hidden = frames.length < 2;
     $("verdicts").hidden = state.mode !== "judge";
     if (state.mode === "answer") q.choices.forEach(([label, text], i) => {
       const b = el("button", label + ". " + text); b.type = "button"; b.dataset.choice = label;
