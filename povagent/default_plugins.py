@@ -42,6 +42,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.backends.simulated",
     "povagent_plugins.backends.planted",
     "povagent_plugins.backends.explorers",
+    "povagent_plugins.backends.human",
     # active-mode tools (offered in this order)
     "povagent_plugins.tools.go_to_frame",
     "povagent_plugins.tools.turn",

@@ -37,6 +37,7 @@ COMMAND_MODULES = (
     "povagent.cli.tiny_checkpoint",  # tiny-model
     "povagent.cli.schema",     # schema
     "povagent.cli.ros",        # ros-node, ros-replay
+    "povagent.cli.annotate",   # annotate
 )
 
 for _name in COMMAND_MODULES:

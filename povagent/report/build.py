@@ -37,6 +37,7 @@ from povagent.report.html import (
     render_page,
     tables_section,
 )
+from povagent.report.manual import manual_tables
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
 from povagent.report.statistics import DEFAULT_BOOT
@@ -133,6 +134,7 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
+    tables += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
     timings["statistics"] = time.perf_counter() - t
 
     t = time.perf_counter()
