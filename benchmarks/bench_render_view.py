@@ -139,7 +139,9 @@ def main() -> None:
         figure("primary rays, bare Embree cast", round(med["primary"], 1), "ms"),
         figure("shadow pass, bare Embree cast", round(med["shadow"], 1), "ms"),
         figure("page faults per view", round(statistics.mean(faults["view"])), "count"),
-    ])
+    ], note=("the PNG is encoded by generate/frame_png.py (Pillow's bytes: the row filters chosen with numpy, "
+             "zlib at level 1 with Pillow's settings, zlib's share fixed by the byte-exact PNGs); the load slows "
+             "numpy's shading and filter passes more than Embree's casts, so the ratio rises with the load average"))
 
 
 if __name__ == "__main__":

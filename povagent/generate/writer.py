@@ -54,7 +54,7 @@ def write_json(path: Path, value: Any) -> None:
 def write_png(path: Path, image: np.ndarray) -> None:
     """Write an RGB (uint8) or 16-bit single-channel image as PNG, without metadata."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    if image.ndim == 3 and image.dtype == np.uint8:  # a frame: Pillow's bytes, encoded faster
+    if image.ndim == 3 and image.shape[2] == 3 and image.dtype == np.uint8:  # a frame: Pillow's bytes, faster
         path.write_bytes(encode_frame_png(image))
         return
     # uint16 arrays become Pillow's "I;16" mode and round-trip exactly
