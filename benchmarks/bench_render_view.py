@@ -13,11 +13,17 @@ camera, in one process and interleaved camera by camera (the machine is shared),
 * ``view``: a whole view as the active mode makes it (:meth:`ActiveHouse.render_png`: render,
   shade and encode the PNG as the writer does);
 * ``render``: the same view's colours without the PNG encoding (:meth:`Renderer.render_planes`),
-  so the split between shading and encoding shows (the encoding is Pillow's zlib and filter
-  work, fixed by the byte-exact PNGs).
+  so the split between shading and encoding shows (the encoding is ``generate/frame_png.py``:
+  Pillow's row filters chosen with numpy, then zlib with Pillow's settings, for Pillow's bytes;
+  zlib's share is fixed by the byte-exact PNGs).
 
-Prints per round the mean of each, and the figure: view / (primary + shadow), goal <= 1.6 (the
-issue counts the encoding in the view's cost), beside render / (primary + shadow); writes
+The four take turns in a rotating order (camera by camera, round by round), so none always
+runs first on a cold cache or right after another. The machine is shared: CPU time
+(``time.process_time``) leaves out the time other jobs hold the cores, but their cache and
+memory traffic still slows numpy's passes more than Embree's casts, so the load average is
+printed before and after every round. Prints per round the mean of each and the figure: view /
+(primary + shadow), goal <= 1.6 (the issue counts the encoding in the view's cost), beside
+render / (primary + shadow); the median over rounds goes to
 ``benchmarks/results/bench_render_view.json``.
 """
 
@@ -92,15 +98,18 @@ def main() -> None:
     faults: dict[str, list[int]] = {"primary": [], "shadow": [], "view": [], "render": []}
     for r in range(args.rounds):
         cpu: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "render": []}
-        for camera, (start, direction, length) in zip(cameras, rays):
+        load_before = os.getloadavg()[0]
+        for k, (camera, (start, direction, length)) in enumerate(zip(cameras, rays)):
             d = renderer._directions(camera).T
             origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), d.shape)
-            for name, fn in (
+            contenders = [
                 ("primary", lambda: renderer._scene.run(origins, d, output=1)),
                 ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),
                 ("view", lambda: house.render_png(camera)),
                 ("render", lambda: renderer.render_planes(camera)),
-            ):
+            ]
+            turn = (k + r) % len(contenders)
+            for name, fn in contenders[turn:] + contenders[:turn]:
                 seconds, flt = timed(fn)
                 cpu[name].append(seconds)
                 faults[name].append(flt)
@@ -112,7 +121,8 @@ def main() -> None:
         print(f"round {r + 1}: primary {1000 * means['primary']:.1f} ms, shadow {1000 * means['shadow']:.1f} ms, "
               f"view {1000 * means['view']:.1f} ms CPU: view / (primary + shadow) = {per_round['ratio'][-1]:.2f}; "
               f"without the PNG {1000 * means['render']:.1f} ms = {per_round['render_ratio'][-1]:.2f}; "
-              f"page faults per view {statistics.mean(faults['view'][-len(cameras):]):.0f}", flush=True)
+              f"page faults per view {statistics.mean(faults['view'][-len(cameras):]):.0f}; "
+              f"load {load_before:.2f} -> {os.getloadavg()[0]:.2f}", flush=True)
     ratio, render_ratio = statistics.median(per_round["ratio"]), statistics.median(per_round["render_ratio"])
     med = {k: 1000 * statistics.median(v) for k, v in per_round.items() if not k.endswith("ratio")}
     load = os.getloadavg()
@@ -129,7 +139,9 @@ def main() -> None:
         figure("primary rays, bare Embree cast", round(med["primary"], 1), "ms"),
         figure("shadow pass, bare Embree cast", round(med["shadow"], 1), "ms"),
         figure("page faults per view", round(statistics.mean(faults["view"])), "count"),
-    ])
+    ], note=("the PNG is encoded by generate/frame_png.py (Pillow's bytes: the row filters chosen with numpy, "
+             "zlib at level 1 with Pillow's settings, zlib's share fixed by the byte-exact PNGs); the load slows "
+             "numpy's shading and filter passes more than Embree's casts, so the ratio rises with the load average"))
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ What it is for: write exactly the files the POVBench release has (the house's pa
 ``exploration_images/``, ``img_from_observer/``, ``exploration_log.json``,
 ``per_image_visible_objects.json``) plus, on request, a ``_render/`` folder with depth maps and
 instance masks. Same inputs give the same bytes: keys sorted, floats rounded to 4 decimals,
-PNGs written by Pillow with a fixed compression level and no metadata, no timestamps anywhere.
+PNGs as Pillow writes them with a fixed compression level and no metadata, no timestamps anywhere.
 What it must not do: decide content (pairs, sentences, cameras come in finished).
 """
 
@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
+from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png
 from povagent.generate.pairs import Pair
 from povagent.generate.renderer import Frame
 from povagent.generate.scene import House
@@ -24,9 +25,6 @@ from povagent.geometry.camera import Camera
 
 #: Decimals kept for every float in JSON (0.1 mm: far below a pixel at any distance used here).
 FLOAT_DECIMALS = 4
-#: zlib level for PNGs: 1 costs ~17 ms a frame (3: ~22 ms) and gives ~210 KB (3: ~190 KB), about the
-#: size of the release's; the bytes are the same for any number of workers either way.
-PNG_COMPRESS_LEVEL = 1
 #: Pixels an object needs in a frame to count as hit (``object_in_frame_hits``).
 MIN_HIT_PIXELS = 20
 
@@ -56,6 +54,9 @@ def write_json(path: Path, value: Any) -> None:
 def write_png(path: Path, image: np.ndarray) -> None:
     """Write an RGB (uint8) or 16-bit single-channel image as PNG, without metadata."""
     path.parent.mkdir(parents=True, exist_ok=True)
+    if image.ndim == 3 and image.shape[2] == 3 and image.dtype == np.uint8:  # a frame: Pillow's bytes, faster
+        path.write_bytes(encode_frame_png(image))
+        return
     # uint16 arrays become Pillow's "I;16" mode and round-trip exactly
     Image.fromarray(np.ascontiguousarray(image)).save(path, format="PNG", compress_level=PNG_COMPRESS_LEVEL)
 
