@@ -12,22 +12,22 @@ from povagent.answers.types import AnswerType
 from povagent.errors import PluginError
 from povagent.plugins import build_plugin_host
 
-CHOICE = AnswerType(
-    name="choice", description="one of the labelled options", value_schema={"type": "object"},
-    value_of=lambda parse: None, gold=lambda instance: None, show=lambda value: str(value.get("label")),
+BOX = AnswerType(
+    name="box", description="a box around the target", value_schema={"type": "object"},
+    value_of=lambda parse: None, gold=lambda instance: None, show=lambda value: str(value.get("box")),
 )  # fmt: skip
 
 
-class ChoicePlugin:
+class BoxPlugin:
     @hookimpl
     def register_answer_types(self, register):
-        register("choice", CHOICE, description="test: a choice")
+        register("box", BOX, description="test: a box")
 
 
 class PointAgainPlugin:
     @hookimpl
     def register_answer_types(self, register):
-        register("point", CHOICE)
+        register("point", BOX)
 
 
 def test_point_is_registered_by_its_built_in_plugin_module():
@@ -37,12 +37,12 @@ def test_point_is_registered_by_its_built_in_plugin_module():
 
 
 def test_a_third_party_answer_type_is_registered_beside_point(povagent_host):
-    povagent_host.add_plugin(ChoicePlugin(), name="choice-plugin")
+    povagent_host.add_plugin(BoxPlugin(), name="box-plugin")
     try:
-        assert povagent_host.names("answer_type") == ["choice", "point"]
-        assert povagent_host.answer_type("choice") is CHOICE
+        assert povagent_host.names("answer_type") == ["box", "choice", "point"]
+        assert povagent_host.answer_type("box") is BOX
     finally:
-        povagent_host.remove_plugin("choice-plugin")
+        povagent_host.remove_plugin("box-plugin")
 
 
 def test_an_answer_type_registered_twice_names_both_plugins(povagent_host):
