@@ -99,6 +99,8 @@ class ActiveStrategy(BasicStrategy):
     default_max_frames: int | None = 8
     #: Only the ``active`` parser reads the episode record a row ends with.
     answer_parser = "active"
+    #: The task whose tools an episode offers (:attr:`povagent.active.tools.Tool.tasks`).
+    task = "point"
 
     def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
                  speaker: str = "stated", **basic: Any) -> None:  # fmt: skip
@@ -126,12 +128,12 @@ class ActiveStrategy(BasicStrategy):
 
     def use_plugins(self, host: LoadedPlugins) -> None:
         """Offer the tools the run's plugins registered (its ``plugins:`` included)."""
-        self._tools = host.tools()
+        self._tools = host.tools(self.task)
 
     def tools(self) -> ToolSet:
         """The tools offered: the run's (:meth:`use_plugins`), else the process's registered ones."""
         if self._tools is None:
-            self._tools = get_plugin_host().tools()
+            self._tools = get_plugin_host().tools(self.task)
         return self._tools
 
     def identity(self) -> dict[str, Any]:
