@@ -33,6 +33,9 @@ INSTRUCTION = (
     "within 1 m of it and see it in your view, then call arrived()."
 )
 
+#: Where a Given (C) walk starts, as the preamble says it (the observer view is the speaker's).
+GIVEN_START = "You start just inside the house's entrance, not where the observer view above was taken"
+
 
 class NavigateStrategy(ActiveStrategy):
     """The navigate task in active mode: walk to the target, then ``arrived()``."""
@@ -47,8 +50,19 @@ class NavigateStrategy(ActiveStrategy):
         """The condition's prompt with its images, the navigation instruction, the tools preamble."""
         n = len(self.shown_frames(instance))
         given = not instance.condition.uses_exploration_frames
-        text = self.prompt_text(instance) + INSTRUCTION + preamble(self.max_actions, n, given, self.tools())
+        start = GIVEN_START if given else None
+        text = self.prompt_text(instance) + INSTRUCTION + preamble(self.max_actions, n, given, self.tools(), start)
         return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
+
+    def episode(self, instance: Instance, images: ImageStore) -> Episode:
+        """The active episode; in Given (C) it starts at the house's entrance, not at the
+        observer's standpoint (the speaker's place, often no place for the robot)."""
+        episode = super().episode(instance, images)
+        if not instance.condition.uses_exploration_frames:
+            from povagent.active.navigation import entrance_pose, house_of
+
+            episode.start = episode.pose = entrance_pose(house_of(instance), episode.start)
+        return episode
 
     def _text_answer(self, instance: Instance, episode: Episode, text: str, spec: AnswerSpec) -> None:
         """A reply without tool calls ends the walk with no arrival (a pixel is no answer here)."""

@@ -18,14 +18,16 @@ import math
 import threading
 from collections import OrderedDict
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
 from povagent.active.floor import Floor
 from povagent.active.geodesic import FloorGrid, GeodesicPath
 from povagent.active.house import CACHE_SIZE, ActiveHouse, house_for
-from povagent.active.pose import ROBOT_CAMERA_HEIGHT
+from povagent.active.pose import ROBOT_CAMERA_HEIGHT, Pose
 from povagent.dataset.instances import Instance
+from povagent.generate.exploration import CAMERA_HORIZON, reachable_grid
 from povagent.generate.floorplan import GRID
 from povagent.generate.renderer import Renderer
 from povagent.geometry.camera import Camera
@@ -104,6 +106,17 @@ def house_floor(house: ActiveHouse) -> tuple[Floor, FloorGrid]:
             while len(_FLOORS) > CACHE_SIZE:
                 _FLOORS.popitem(last=False)
     return kept
+
+
+def entrance_pose(house: ActiveHouse, like: Pose) -> Pose:
+    """The robot standing just inside the entrance (the reachable cell the generator's tour
+    starts from), at robot height and with the exploration frames' tilt, facing the house's
+    middle; ``like`` gives the lens."""
+    grid = reachable_grid(house.built.house)
+    x, z = (float(v) for v in grid.points[grid.start])
+    cx, cz = (float(v) for v in grid.points.mean(axis=0))
+    yaw = round(math.degrees(math.atan2(cx - x, cz - z)) % 360.0, 3)
+    return replace(like, x=round(x, 4), y=ROBOT_CAMERA_HEIGHT, z=round(z, 4), yaw=yaw, horizon=CAMERA_HORIZON)
 
 
 def house_of(instance: Instance) -> ActiveHouse:
