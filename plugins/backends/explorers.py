@@ -18,7 +18,8 @@ far) and, for the oracle, the ground truth from the instance. They anchor the ac
   declare how a random explorer calls them (:attr:`povagent.active.tools.Tool.explore`), so a
   plugin's tool is explored like the built-ins.
 
-Neither reads files, calls a network or is cached. A request without tools (a passive
+Neither calls a network or is cached, and neither reads files, but the oracle on the navigate
+task rebuilds the house it walks (:func:`povagent.active.navigation.house_of`). A request without tools (a passive
 strategy) is refused: these backends only explore.
 """
 
