@@ -15,6 +15,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.relation",
     "povagent_plugins.scorers.probe",
     "povagent_plugins.scorers.choice",
+    "povagent_plugins.scorers.navigate",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -33,6 +34,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.geometric",
     "povagent_plugins.strategies.probes",
     "povagent_plugins.strategies.active",
+    "povagent_plugins.strategies.navigate",
     "povagent_plugins.strategies.choice",
     # backends
     "povagent_plugins.backends.litellm_backend",
@@ -50,6 +52,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.tools.move",
     "povagent_plugins.tools.ask",
     "povagent_plugins.tools.answer",
+    "povagent_plugins.tools.arrived",
     # model profiles
     "povagent_plugins.backends.profiles",
     # surface judges (the dataset generator's stage 3)

@@ -146,8 +146,9 @@ class Backend(abc.ABC):
 class LoadedPlugins(Protocol):
     """What a strategy may ask of the plugins a run loaded (:class:`povagent.plugins.PluginHost`)."""
 
-    def tools(self) -> ToolSet:
-        """Every registered active-mode tool, in the order offered."""
+    def tools(self, task: str | None = "point") -> ToolSet:
+        """The registered active-mode tools an episode of ``task`` offers (``None``: every
+        registered tool), in the order offered."""
         ...
 
 

@@ -226,9 +226,15 @@ class PluginHost:
         self._registry = None
         self._tools = None
 
-    def tools(self) -> ToolSet:
-        """Every registered active-mode tool, in the order the plugins were loaded (the order an
-        episode offers them); a name registered twice is a :class:`PluginError` naming both."""
+    def tools(self, task: str | None = "point") -> ToolSet:
+        """The registered active-mode tools an episode of ``task`` offers (the point task's by
+        default, as every episode offered before tasks; ``None``: every registered tool), in the
+        order the plugins were loaded (the order an episode offers them); a name registered
+        twice is a :class:`PluginError` naming both."""
+        every = self._registered_tools()
+        return every if task is None else every.for_task(task)
+
+    def _registered_tools(self) -> ToolSet:
         if self._tools is not None:
             return self._tools
         from povagent.active.tools import Tool, ToolSet
@@ -258,7 +264,7 @@ class PluginHost:
 
     def tool_entries(self) -> list[PluginEntry]:
         """Every registered tool as ``povagent plugins`` lists it, in the order offered."""
-        tools = self.tools()
+        tools = self.tools(None)
         return [PluginEntry("tool", n, t, t.description, tools.sources.get(n, "")) for n, t in tools.tools.items()]
 
     # -- lookup -------------------------------------------------------------------------------

@@ -139,6 +139,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "repair": "How the text was changed to read it (e.g. `rescaled 0-1000 -> pixels`), else `None`.",
         "camera": "The camera of the image answered in when it is no dataset frame (the active mode's views): it is scored there.",
         "choice": "The option label a multiple-choice answer chose, or `None`.",
+        "path": "The floor positions `(x, z)` a navigate episode walked through, start first (its last is where the walk ended; `camera` what it saw there), or `None` (then not written).",
     },
     "OfficialScore": {
         "answered": "Whether the row counts as answered officially (a point, and for A/B a frame that was shown).",
@@ -373,9 +374,9 @@ def render_tools() -> str:
 
     host = build_plugin_host(strict=False, entry_points=False)
     lines = ["| tool | arguments | what it does |", "|---|---|---|"]
-    for name, tool in host.tools().tools.items():
+    for name, tool in host.tools(None).tools.items():
         arguments = ", ".join(f"{k}: {v.get('type', 'any')}" for k, v in tool.parameters.items())
-        lines.append(f"| `{name}` | `{arguments}` | {_cell(tool.explained)} |")
+        lines.append(f"| `{name}` | {f'`{arguments}`' if arguments else 'none'} | {_cell(tool.explained)} |")
     return "\n".join(lines)
 
 

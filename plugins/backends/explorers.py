@@ -9,22 +9,29 @@ far) and, for the oracle, the ground truth from the instance. They anchor the ac
   heading (or, when that heading leaves the target outside the view, towards the target) and
   tilts to look at the target, then answers the ground truth projected into that last view.
   Its official L2 is ~0: an end-to-end check of poses, rendering, records and scoring.
+* on the navigate task (the request offers ``arrived``), ``explorer-oracle`` walks the
+  geodesic shortest path to where the target is reached and seen (each move the longest
+  straight stretch of it the floor allows, so it never walks farther than the path), turns and
+  tilts to the target and calls ``arrived``: SPL ~1, success 100%.
 * ``explorer-random``: random actions (seeded by instance, run and step) until the budget is
-  spent, then the centre of the last view. Its actions are the tools the request offers that
+  spent, then the centre of the last view (on the navigate task: ``arrived`` where it stands). Its actions are the tools the request offers that
   declare how a random explorer calls them (:attr:`povagent.active.tools.Tool.explore`), so a
   plugin's tool is explored like the built-ins.
 
-Neither reads files, calls a network or is cached. A request without tools (a passive
+Neither calls a network or is cached, and neither reads files, but the oracle on the navigate
+task rebuilds the house it walks (:func:`povagent.active.navigation.house_of`). A request without tools (a passive
 strategy) is refused: these backends only explore.
 """
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 from typing import Any, ClassVar, Mapping
 
 from povagent import hookimpl
+from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, ToolCall, Usage
 from povagent.geometry.camera import Camera
@@ -35,6 +42,8 @@ from povagent_plugins.backends.baselines import request_run, seeded_rng
 
 #: Half the field of view kept clear around the target when the oracle turns (degrees).
 _IN_VIEW = 40.0
+#: How near (m) the oracle's walk must be to the shortest path's end to stop walking.
+_THERE = 0.01
 
 
 def _camera(record: Mapping[str, Any]) -> Camera:
@@ -56,7 +65,13 @@ def _state(request: Request, name: str) -> Mapping[str, Any]:
     return state
 
 
+def _offered(request: Request) -> set[str]:
+    return {t["function"]["name"] for t in request.tools}
+
+
 def _answer_centre(request: Request, state: Mapping[str, Any]) -> Response:
+    if "arrived" in _offered(request):  # the navigate task: the answer is where it stands
+        return _calls(request, ("arrived", {}))
     views = state.get("views", [])
     cam = views[-1]["camera"] if views else state["frames"][0]
     image = f"view {views[-1]['n']}" if views else "frame 0"
@@ -80,6 +95,8 @@ class ExplorerOracle(Backend):
         if instance is None:
             raise PermanentBackendError("explorer-oracle needs the instance (its ground truth)")
         actions, views, left = list(state.get("actions", [])), state.get("views", []), int(state.get("budget_left", 0))
+        if "arrived" in _offered(request):
+            return await asyncio.to_thread(self._walk, request, state, instance)
         obs = instance.observer_camera
         ox, oz = float(obs.position[0]), float(obs.position[2])
         pose = state["pose"]
@@ -100,6 +117,27 @@ class ExplorerOracle(Backend):
         y = min(cam.height - 1.0, max(0.0, gt.v * cam.height))
         image = f"view {views[-1]['n']}" if views else "frame 0"
         return _calls(request, ("answer", {"image": image, "x": round(x, 3), "y": round(y, 3)}))
+
+    def _walk(self, request: Request, state: Mapping[str, Any], instance: Instance) -> Response:
+        """The navigate task: the longest straight move along the shortest arrival path, and
+        once there, turn and tilt to the target and call ``arrived``."""
+        from povagent.active.navigation import house_floor, house_of, shortest_arrival
+
+        pose, left = state["pose"], int(state.get("budget_left", 0))
+        house = house_of(instance)
+        floor, _ = house_floor(house)
+        plan = shortest_arrival(house, (pose["x"], pose["z"]), instance.target)
+        if plan is not None and left > 2 and plan.length > _THERE:
+            for px, pz in reversed(plan.points[1:]):  # the farthest point of the path one move reaches
+                dx, dz = px - pose["x"], pz - pose["z"]
+                if not floor.move(pose["x"], pose["z"], dx, dz).blocked:
+                    break
+            yaw = math.radians(pose["yaw"])
+            fx, fz = math.sin(yaw), math.cos(yaw)
+            return _calls(request, ("move", {"forward": round(dx * fx + dz * fz, 4), "right": round(dx * fz - dz * fx, 4)}))
+        bearing = math.degrees(math.atan2(instance.target[0] - pose["x"], instance.target[2] - pose["z"])) % 360.0
+        looks = self._look(pose, bearing, instance.target) if left >= 2 else []
+        return _calls(request, *looks, ("arrived", {}))
 
     @staticmethod
     def _look(pose: Mapping[str, Any], observer_yaw: float, target: tuple[float, float, float]) -> list[tuple[str, dict[str, Any]]]:
@@ -135,7 +173,7 @@ class ExplorerRandom(Backend):
             return _answer_centre(request, state)
         instance = request.instance.id if request.instance is not None else ""
         rng = seeded_rng(self.seed, instance, request_run(request), len(state.get("actions", [])))
-        registered = get_plugin_host().tools().tools
+        registered = get_plugin_host().tools(None).tools
         offered = [t["function"]["name"] for t in request.tools]
         choices = [(n, explore) for n in offered if n in registered and (explore := registered[n].explore) is not None]
         if not choices:

@@ -70,11 +70,13 @@ def _words(names: list[str]) -> str:
     return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
-def preamble(budget: int, n_frames: int, given: bool, tools: ToolSet | None = None) -> str:
+def preamble(budget: int, n_frames: int, given: bool, tools: ToolSet | None = None, start: str | None = None) -> str:
     """The tools preamble after the passive prompt: what the model may do (each tool's
-    signature and prose, as registered), and its budget."""
+    signature and prose, as registered), and its budget. ``start`` says where the episode
+    starts when that is not where frame 0 was taken."""
     tools = tools if tools is not None else get_plugin_host().tools()
     shown = "the observer view above is frame 0" if given else f"the images above are frames 0-{n_frames - 1} (Image k is frame k)"
+    start = start or f"You start where frame 0 was taken; {shown}"
     acting = [f"{t.signature(n)} {t.prose}" for n, t in tools.tools.items() if not t.ends]
     ending = [n for n, t in tools.tools.items() if t.ends]
     rendering = _words([n for n, t in tools.tools.items() if t.renders])
@@ -82,7 +84,7 @@ def preamble(budget: int, n_frames: int, given: bool, tools: ToolSet | None = No
     return (
         f"\n\nYou may look around the house before you answer, with the tools offered: {'; '.join(acting)}. "
         f"Each {rendering} returns a new view, numbered View 1, View 2, ... in order. "
-        f"You start where frame 0 was taken; {shown}. You have {budget} actions ({_words(ending)} "
+        f"{start}. You have {budget} actions ({_words(ending)} "
         f"{'is' if len(ending) == 1 else 'are'} not counted; invalid calls count). Finish with {finish}"
     )
 
@@ -99,6 +101,8 @@ class ActiveStrategy(BasicStrategy):
     default_max_frames: int | None = 8
     #: Only the ``active`` parser reads the episode record a row ends with.
     answer_parser = "active"
+    #: The task whose tools an episode offers (:attr:`povagent.active.tools.Tool.tasks`).
+    task = "point"
 
     def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
                  speaker: str = "stated", **basic: Any) -> None:  # fmt: skip
@@ -126,12 +130,12 @@ class ActiveStrategy(BasicStrategy):
 
     def use_plugins(self, host: LoadedPlugins) -> None:
         """Offer the tools the run's plugins registered (its ``plugins:`` included)."""
-        self._tools = host.tools()
+        self._tools = host.tools(self.task)
 
     def tools(self) -> ToolSet:
         """The tools offered: the run's (:meth:`use_plugins`), else the process's registered ones."""
         if self._tools is None:
-            self._tools = get_plugin_host().tools()
+            self._tools = get_plugin_host().tools(self.task)
         return self._tools
 
     def identity(self) -> dict[str, Any]:

@@ -60,6 +60,7 @@ TOOL = Tool(
     explained="the final answer: `\"frame k\"` for an exploration frame, `\"view n\"` for the n-th rendered view; `x, y` "
     "are pixels of that image",
     ends=True,
+    tasks=("point",),  # the navigate task ends with ``arrived`` instead
 )  # fmt: skip
 
 

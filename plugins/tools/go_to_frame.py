@@ -48,6 +48,7 @@ TOOL = Tool(
     explained="stand where exploration frame `frame` (labelled `Image frame`) was taken, facing as it was; the view equals that frame",
     renders=True,
     explore=explore,
+    tasks=("point",),  # a jump would walk through walls: the navigate task walks
 )
 
 

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
-from povagent.active.tools import Answered, InvalidCall, Moved, Told, Tool, ToolSet, read_call
+from povagent.active.tools import Answered, Arrived, InvalidCall, Moved, Told, Tool, ToolSet, read_call
 from povagent.answers.spec import AnsweredCamera
 from povagent.exchange.messages import ToolCall
 
@@ -36,6 +36,9 @@ DEFAULT_BUDGET = 8
 #: counted in ``steps_dropped``): a record's size is bounded whatever a model sends.
 KEPT_ARGUMENTS = 256
 MAX_RECORDED_STEPS = 256
+
+#: How an episode of the navigate task ends when the robot says it has arrived.
+ARRIVED = "arrived"
 
 #: Renders a pose: returns the view PNG's SHA-256 (the caller stores the bytes).
 RenderFn = Callable[[Pose], str]
@@ -199,6 +202,10 @@ class Episode:
                 return Observation(call.id, text)
             self.counts.actions += 1
             return self._invalid(call, turn, f"{call.name}: {effect.reason}")
+        if isinstance(effect, Arrived):  # the pose it stands in is the answer: the record's last pose
+            self.end = ARRIVED
+            self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], True, "arrival recorded", counted=False)
+            return Observation(call.id, "arrival recorded")
         assert isinstance(effect, Answered), f"tool {call.name!r} ends the episode but returned {effect!r}"
         self.finish(effect.image, effect.x, effect.y, "answer_tool")
         self._step(turn, call.name, call.arguments[:KEPT_ARGUMENTS], True, "answer recorded", counted=False)

@@ -47,6 +47,11 @@ class Floor:
         self._boxes = np.array([[r.x0, r.z0, r.x1, r.z1] for r in rects], dtype=float).reshape(-1, 4)
         self._cells = reachable_grid(house).points.astype(float)
 
+    @property
+    def cells(self) -> np.ndarray:
+        """The reachable cell centres (n, 2): the floor the robot may stand on."""
+        return self._cells
+
     def _touching(self, x: float, z: float) -> np.ndarray:
         b = self._boxes
         return (b[:, 0] < x) & (x < b[:, 2]) & (b[:, 1] < z) & (z < b[:, 3])
@@ -69,3 +74,20 @@ class Floor:
                 return MoveResult(last[0], last[1], math.hypot(last[0] - x, last[1] - z), True)
             last = (px, pz)
         return MoveResult(last[0], last[1], length, False)
+
+    def clear(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """Whether each straight walk from ``starts[k]`` to ``ends[k]`` ((n, 2) floor points)
+        keeps the body clear of every blocker its start does not already touch, as :meth:`move`
+        rules; exact (the segment against each box), so a walk it passes ``move`` walks. The
+        reachable floor is not checked: callers walk between neighbouring reachable cells."""
+        p = np.asarray(starts, dtype=float).reshape(-1, 1, 2)
+        d = np.asarray(ends, dtype=float).reshape(-1, 1, 2) - p
+        lo, hi = self._boxes[None, :, :2], self._boxes[None, :, 2:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t0, t1 = (lo - p) / d, (hi - p) / d
+        inside_axis = (lo < p) & (p < hi)  # a still axis crosses the box only from within its span
+        enter = np.where(d == 0, np.where(inside_axis, -np.inf, np.inf), np.minimum(t0, t1)).max(axis=2)
+        leave = np.where(d == 0, np.where(inside_axis, np.inf, -np.inf), np.maximum(t0, t1)).min(axis=2)
+        crosses = (enter < leave) & (enter < 1.0) & (leave > 0.0)
+        already = inside_axis.all(axis=2)
+        return ~(crosses & ~already).any(axis=1)

@@ -60,6 +60,12 @@ class Answered:
 
 
 @dataclass(frozen=True)
+class Arrived:
+    """The navigate task's end: the robot says it stands where the target is (the pose it
+    stands in is the answer)."""
+
+
+@dataclass(frozen=True)
 class InvalidCall:
     """A call that cannot be run: ``reason`` is the one line the model is told. A tool's own
     functions give the reason in its words; :func:`read_call` and the episode prefix its name."""
@@ -67,7 +73,7 @@ class InvalidCall:
     reason: str
 
 
-Effect = Moved | Told | Answered
+Effect = Moved | Told | Answered | Arrived
 
 
 class EpisodeState(Protocol):
@@ -95,12 +101,14 @@ class Tool:
     ``parameters`` are the JSON Schema of each argument, in the order the model sees them (all
     required, no others). ``read(arguments)`` turns the checked JSON object into the tool's
     typed arguments, or an :class:`InvalidCall` saying what is wrong; ``run(state, typed)``
-    returns what the call does (:class:`Moved`, :class:`Told`, :class:`Answered`) or why it
+    returns what the call does (:class:`Moved`, :class:`Told`, :class:`Answered`, :class:`Arrived`) or why it
     cannot run in this episode. ``renders``: the call returns a new view (its ``run`` returns
     :class:`Moved`). ``ends``: the call finishes the episode and is not counted against the
     budget. ``prose`` follows the tool's signature in the preamble; ``explained`` is its row of
     the docs table. ``explore(rng, state)``, when given, is the arguments a random explorer
-    calls it with (``state`` is :meth:`Episode.state`).
+    calls it with (``state`` is :meth:`Episode.state`). ``tasks`` names the tasks whose
+    episodes offer the tool (``point``, ``navigate``; ``None``: every task): the final answer
+    of one task is no tool of another.
     """
 
     description: str
@@ -112,6 +120,7 @@ class Tool:
     renders: bool = False
     ends: bool = False
     explore: Callable[[random.Random, Mapping[str, Any]], dict[str, Any]] | None = None
+    tasks: tuple[str, ...] | None = None
 
     def schema(self, name: str) -> dict[str, Any]:
         """The OpenAI function schema offered under ``name``."""
@@ -146,6 +155,11 @@ class ToolSet:
     def schemas(self) -> tuple[dict[str, Any], ...]:
         """The ``tools=`` list every request of an episode sends."""
         return tuple(tool.schema(name) for name, tool in self.tools.items())
+
+    def for_task(self, task: str) -> ToolSet:
+        """The tools an episode of ``task`` offers, in the same order."""
+        kept = [(n, t) for n, t in self.tools.items() if t.tasks is None or task in t.tasks]
+        return ToolSet(kept, {n: s for n, s in self.sources.items() if n in dict(kept)})
 
     def __getitem__(self, name: str) -> Tool:
         return self.tools[name]

@@ -9,7 +9,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, SerializerFunctionWrapHandler, model_serializer
 
 
 class ParseStatus(StrEnum):
@@ -102,13 +102,25 @@ class ParsedAnswer(BaseModel):
     #: The option label a multiple-choice answer chose (``"B"``), or ``None`` (a point answer,
     #: or a choice answer that names no option).
     choice: str | None = None
+    #: The floor positions (x, z) an active episode of the navigate task walked through, start
+    #: first, when it ended with an arrival (its last is where the robot arrived, and
+    #: ``camera`` what it saw there); ``None`` for every other answer, and then not written, so
+    #: rows of the other tasks keep their bytes.
+    path: list[tuple[float, float]] | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_unset_path(self, handler: SerializerFunctionWrapHandler) -> Any:
+        data = handler(self)
+        if self.path is None and isinstance(data, dict):
+            data.pop("path", None)
+        return data
 
     @property
     def answered(self) -> bool:
-        """True when the parse yields a point or a chosen option."""
+        """True when the parse yields a point, a chosen option or an arrival."""
         if not self.status.answered:
             return False
-        return (self.x is not None and self.y is not None) or self.choice is not None
+        return (self.x is not None and self.y is not None) or self.choice is not None or self.path is not None
 
     @property
     def point(self) -> tuple[float, float] | None:

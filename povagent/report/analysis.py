@@ -218,11 +218,14 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
 
 
 def _answers_signature(obs: list[Observation]) -> str:
-    """A digest of what a system answered, row by row (equal digests: the same answers)."""
+    """A digest of what a system answered, row by row (equal digests: the same answers). The
+    declared metrics' values are in it: answers that are no pixel (a navigate walk) differ by
+    what they scored."""
     rows = sorted(
-        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y)
+        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y,
+         repr(sorted((scorer, sorted(values.items())) for scorer, values in o.metric_values.items())))
         for o in obs
-    )
+    )  # fmt: skip
     return hashlib.sha256(repr(rows).encode()).hexdigest()
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from povagent.active.floor import BODY_RADIUS, MAX_MOVE
 from povagent.generate.exploration import reachable_grid
 
@@ -25,3 +27,15 @@ def test_the_body_never_ends_inside_a_blocker_it_was_not_touching(house0, floor0
         moved = floor0.move(float(x), float(z), 0.0, 3.0)
         assert not (floor0._touching(moved.x, moved.z) & ~start).any()
     assert BODY_RADIUS == 0.25
+
+
+def test_a_step_the_clear_check_passes_is_walked_whole_by_a_move(house0, floor0):
+    points = reachable_grid(house0.built.house).points.astype(float)
+    cells = {(round(x, 4), round(z, 4)) for x, z in points}
+    pairs = [((x, z), (x + dx, z + dz)) for x, z in points for dx in (-0.25, 0.0, 0.25) for dz in (-0.25, 0.0, 0.25)
+             if (dx or dz) and (round(x + dx, 4), round(z + dz, 4)) in cells]  # fmt: skip
+    passes = floor0.clear(np.array([a for a, _ in pairs]), np.array([b for _, b in pairs]))
+    assert passes.any() and not passes.all()  # furniture stops some steps between reachable cells
+    for ((x, z), (ex, ez)), ok in zip(pairs, passes):
+        if ok:
+            assert not floor0.move(x, z, ex - x, ez - z).blocked

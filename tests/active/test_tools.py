@@ -4,10 +4,11 @@ saying why: never an exception."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
-from povagent.active.tools import InvalidCall, read_call
+from povagent.active.tools import InvalidCall, ToolSet, read_call
 from povagent.plugins import get_plugin_host
 from povagent_plugins.tools.answer import Answer
 from povagent_plugins.tools.go_to_frame import GoToFrame
@@ -20,6 +21,22 @@ def test_the_registry_offers_exactly_the_six_built_in_tools_by_their_names():
     tools = get_plugin_host().tools()
     assert tools.names == ("go_to_frame", "turn", "tilt", "move", "ask", "answer")
     assert all(t["type"] == "function" and t["function"]["parameters"]["additionalProperties"] is False for t in tools.schemas())
+
+
+def test_each_task_offers_its_own_tools_and_a_tool_for_every_task_is_offered_by_all():
+    every = get_plugin_host().tools(None)
+    assert every.names == ("go_to_frame", "turn", "tilt", "move", "ask", "answer", "arrived")
+    assert every.for_task("navigate").names == ("turn", "tilt", "move", "ask", "arrived")
+    zoom = ToolSet([("zoom", replace(every["turn"], tasks=None)), *every.tools.items()])
+    assert zoom.for_task("point").names[0] == zoom.for_task("navigate").names[0] == "zoom"
+
+
+def test_the_arrived_call_takes_no_arguments_and_ends_the_episode():
+    tools = get_plugin_host().tools("navigate")
+    tool, typed = read_call("arrived", "{}", tools)
+    assert tool.ends and typed is None
+    assert read_call("arrived", '{"here": true}', tools) == InvalidCall("arrived: unexpected here (takes nothing)")
+    assert isinstance(read_call("arrived", "{}", get_plugin_host().tools()), InvalidCall)  # the point task has no arrived
 
 
 @pytest.mark.parametrize(

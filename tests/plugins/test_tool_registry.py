@@ -57,5 +57,5 @@ def test_the_plugins_command_lists_each_tool_with_its_source_in_the_order_offere
     result = CliRunner().invoke(app, ["plugins", "--json"])
     assert result.exit_code == 0, result.output
     tools = json.loads(result.output)["tool"]
-    assert [t["name"] for t in tools] == ["go_to_frame", "turn", "tilt", "move", "ask", "answer"]
+    assert [t["name"] for t in tools] == ["go_to_frame", "turn", "tilt", "move", "ask", "answer", "arrived"]
     assert tools[1]["source"] == "built-in povagent_plugins.tools.turn" and tools[1]["description"].startswith("Rotate in place")
