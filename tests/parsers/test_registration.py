@@ -12,8 +12,8 @@ from povagent import hookspecs
 from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
-PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice"}
-STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice"}
+PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice", "navigate"}
+STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice", "navigate"}
 
 
 @cache
