@@ -274,7 +274,8 @@ class ImagesSpec(_Strict):
 #: future-work tasks on generated houses (:mod:`povagent.tasks`).
 TASK_NAMES = ("point", "relation", "multi-hop")
 #: The answers each task may be asked in, its default first.
-TASK_ANSWERS: dict[str, tuple[str, ...]] = {"point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice")}
+TaskAnswer = Literal["point", "choice"]
+TASK_ANSWERS: dict[str, tuple[TaskAnswer, ...]] = {"point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice")}
 
 
 class TaskSpec(_Strict):
@@ -283,7 +284,7 @@ class TaskSpec(_Strict):
     official metric)."""
 
     name: Literal["point", "relation", "multi-hop"] = "point"
-    answer: Literal["point", "choice"] | None = None
+    answer: TaskAnswer | None = None
 
     @model_validator(mode="before")
     @classmethod

@@ -43,19 +43,15 @@ class TaskSet:
 
     base: EvaluationSet
     task: TaskSpec
+    #: The dataset folder and the problems met loading it: the underlying set's.
+    root: Path = field(init=False)
+    problems: list[Problem] = field(init=False)
     _built: dict[str, Instance | None] = field(default_factory=dict, init=False, repr=False)
     _scenes: dict[str, Scene] = field(default_factory=dict, init=False, repr=False)
     _hops: dict[str, Hop] = field(default_factory=dict, init=False, repr=False)
 
-    @property
-    def root(self) -> Path:
-        """The dataset folder."""
-        return self.base.root
-
-    @property
-    def problems(self) -> list[Problem]:
-        """The problems met loading the set."""
-        return self.base.problems
+    def __post_init__(self) -> None:
+        self.root, self.problems = self.base.root, self.base.problems
 
     @property
     def houses(self) -> Mapping[str, Any]:

@@ -6,14 +6,19 @@ from __future__ import annotations
 import json
 import math
 import re
+from pathlib import Path
 
 import pytest
+import yaml
+from typer.testing import CliRunner
 
+from povagent.cli import app
 from povagent.config.models import PipelineConfig, TaskSpec
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.directions import DIRECTION_REGISTRY, spec_of
+from povagent.run.rescore import rescore_run
 from povagent.tasks.relation import GIVEN_VIEW
 from povagent.tasks.task_set import for_task
 
@@ -125,3 +130,20 @@ def test_a_set_whose_sentences_the_generator_did_not_write_is_refused_naming_the
     relation = for_task(load_dataset(dataset_copy, check_images=False), TaskSpec(name="relation"))
     with pytest.raises(DatasetError, match=rf"train_house_00000\.json: pair \S+ field stage5\.{direction}\.type_a: .*povagent generate"):
         relation.instances(conditions=["a"])
+
+
+def test_rescore_reads_a_relation_run_through_its_task(task_pipeline, run_rows):
+    pipeline = task_pipeline("relation", "oracle", instances={"conditions": ["c"]})
+    rows = run_rows(pipeline)
+    result = rescore_run(Path(yaml.safe_load(pipeline.read_text())["output"]), "choice")
+    rescored = [json.loads(line) for line in (result.out_dir / "results.jsonl").read_text().splitlines()]
+    assert not result.warnings and len(rescored) == len(rows)
+    assert all(r["scores"]["choice"]["correct"] for r in rescored)
+
+
+def test_show_prompt_shows_the_relation_question(task_pipeline, relation_set, tmp_path):
+    _, relation = relation_set
+    inst = next(i for i in relation.instances() if i.condition.value == "c")
+    result = CliRunner().invoke(app, ["show-prompt", str(task_pipeline("relation")), "--instance", inst.id, "--out", str(tmp_path / "shown")])
+    assert result.exit_code == 0, result.output
+    assert inst.question.question in result.output and inst.question.options_block() in result.output
