@@ -19,6 +19,7 @@ from povagent.dataset.loader import load_dataset
 from povagent.errors import ConfigError, DatasetError
 from povagent.geometry.directions import DIRECTION_REGISTRY, spec_of
 from povagent.run.rescore import rescore_run
+from povagent.run.runner import run_pipeline
 from povagent.tasks.relation import GIVEN_VIEW
 from povagent.tasks.task_set import for_task
 
@@ -147,3 +148,10 @@ def test_show_prompt_shows_the_relation_question(task_pipeline, relation_set, tm
     result = CliRunner().invoke(app, ["show-prompt", str(task_pipeline("relation")), "--instance", inst.id, "--out", str(tmp_path / "shown")])
     assert result.exit_code == 0, result.output
     assert inst.question.question in result.output and inst.question.options_block() in result.output
+
+
+def test_a_run_handed_a_loaded_set_asks_it_the_pipelines_task(task_pipeline, relation_set):
+    point, _ = relation_set
+    result = run_pipeline(load_pipeline(task_pipeline("relation", instances={"conditions": ["c"], "limit": 4})), dataset=point)
+    rows = [json.loads(line) for line in (result.run_dir / "results.jsonl").read_text().splitlines()]
+    assert len(rows) == 4 and all(r["scores"]["choice"]["correct"] for r in rows)
