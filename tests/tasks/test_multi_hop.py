@@ -3,8 +3,10 @@ checked against the generated house's geometry by a computation of its own here.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,11 +39,18 @@ def point_hop_set(point_set):
     return for_task(point_set, TaskSpec(name="multi-hop"))
 
 
+@functools.cache
 def _objects(house_id: str) -> dict[str, object]:
     """The house's furniture by objectId, planned and furnished here from the seed."""
     rngs = house_generators(SEED, int(house_id.rsplit("_", 1)[1]))
     plan = generate_floorplan(rngs["plan"])
     return {o.object_id: o for o in furnish(plan, rngs["furnish"])}
+
+
+@functools.cache
+def _scene(root: Path, house_id: str):
+    """The house as the task rebuilds it (once a house)."""
+    return house_scene(root, house_id)
 
 
 def _pair(generated_release, house_id: str, pair_id: str) -> dict:
@@ -89,7 +98,7 @@ def test_the_gold_is_where_the_target_stands_from_the_intermediate_in_the_speake
     checked = 0
     for inst in choice_set.instances():
         objects = _objects(inst.house_id)
-        hop = find_hop(inst, house_scene(generated_release, inst.house_id))
+        hop = find_hop(inst, _scene(generated_release, inst.house_id))
         pair = _pair(generated_release, inst.house_id, inst.pair_id)
         right, forward = _speaker_axes(pair)
         expected = _expected(inst.target, objects[hop.intermediate.object_id], right, forward)
@@ -101,7 +110,7 @@ def test_the_gold_is_where_the_target_stands_from_the_intermediate_in_the_speake
 def test_the_stated_hop_holds_in_the_geometry(choice_set, generated_release):
     for inst in choice_set.instances():
         objects = _objects(inst.house_id)
-        hop = find_hop(inst, house_scene(generated_release, inst.house_id))
+        hop = find_hop(inst, _scene(generated_release, inst.house_id))
         pair = _pair(generated_release, inst.house_id, inst.pair_id)
         anchor, middle = objects[pair["object_landmark"]["objectId"]], objects[hop.intermediate.object_id]
         right, _ = _speaker_axes(pair)
@@ -117,14 +126,14 @@ def test_the_stated_hop_holds_in_the_geometry(choice_set, generated_release):
 
 def test_the_question_asks_the_target_relative_to_the_intermediate(choice_set, generated_release):
     for inst in choice_set.instances():
-        hop = find_hop(inst, house_scene(generated_release, inst.house_id))
+        hop = find_hop(inst, _scene(generated_release, inst.house_id))
         assert inst.question.question.endswith(f"relative to the {hop.name}?") and inst.question.category == hop.gold
 
 
 def test_the_point_answer_keeps_the_point_tasks_ground_truth_and_names_the_anchor_through_the_intermediate(point_hop_set, point_set, generated_release):
     for inst in point_hop_set.instances():
         point = point_set.instance(inst.id)
-        hop = find_hop(inst, house_scene(generated_release, inst.house_id))
+        hop = find_hop(inst, _scene(generated_release, inst.house_id))
         assert inst.question is None and inst.target == point.target
         assert inst.sentence.startswith(point.sentence[:-1] + " that ") and f"the {hop.name}" in inst.sentence
 

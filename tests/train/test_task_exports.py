@@ -71,7 +71,7 @@ def test_an_openai_export_answers_each_question_with_its_gold_label(generated_re
 def test_an_hf_export_answers_each_question_with_its_gold_label(generated_release, tmp_path):
     pq = pytest.importorskip("pyarrow.parquet", reason="the hf format needs pyarrow (the train extra)")
     out = tmp_path / "hf"
-    export_training_set(generated_release, out, ExportOptions(format="hf", task="relation", conditions=("b",), split="1,0,0"), check_release=False)
+    export_training_set(generated_release, out, ExportOptions(format="hf", task="relation", conditions=("c",), split="1,0,0"), check_release=False)
     rows = [r for p in sorted((out / "data").glob("*.parquet")) for r in pq.read_table(p).to_pylist()]
     asked = _asked(generated_release, "relation")
     assert rows and all(json.loads(r["answer"]) == {"choice": asked[r["id"]].question.gold} for r in rows)
