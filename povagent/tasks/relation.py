@@ -75,11 +75,11 @@ def sighting(instance: Instance) -> str | None:
     return f"{where}, the {{target}} is at pixel ({int(pixel[0])}, {int(pixel[1])})."
 
 
-def question_text(parts: SentenceParts, seen: str, target: str, reference: str) -> str:
+def question_text(given: bool, parts: SentenceParts, seen: str, target: str, reference: str) -> str:
     """The context the condition gives (none for Given: its image is the view), where the
     target is seen, then "From where the speaker stood, where is the <target> relative to the
     <reference>?"."""
-    lead = GIVEN_VIEW if parts.given else parts.observed
+    lead = GIVEN_VIEW if given else parts.observed
     return f"{lead} {seen.format(target=target)} From where the speaker stood, where is the {target} relative to the {reference}?"
 
 
@@ -94,7 +94,7 @@ def relation_instance(instance: Instance) -> Instance | None:
     if seen is None:
         return None
     options = direction_options(instance.id)
-    text = question_text(parts, seen, parts.target, parts.anchor)
+    text = question_text(not instance.condition.uses_exploration_frames, parts, seen, parts.target, parts.anchor)
     question = ChoiceQuestion(
         question=text,
         options=options,

@@ -42,14 +42,9 @@ class SentenceParts:
 
     @property
     def observed(self) -> str:
-        """The context as a sentence of its own, without the relation (C: none, as the view
-        is given): ``While replacing the bulb, I saw the book.``."""
-        return "" if self.given else f"{self.context}."
-
-    @property
-    def given(self) -> bool:
-        """A C (Given) sentence: ``The book was ...`` names no activity."""
-        return self.context.startswith("The ")
+        """The context as a sentence of its own, without the relation: ``While replacing the
+        bulb, I saw the book.`` (a Given sentence's, ``The book was.``, says nothing)."""
+        return f"{self.context}."
 
 
 def _prefixes(direction: str) -> list[str]:
