@@ -100,3 +100,17 @@ def test_a_point_export_records_its_options_as_before_tasks(generated_release, t
     export_training_set(generated_release, tmp_path / "out", ExportOptions(format="messages", conditions=("c",)), check_release=False)
     recorded = json.loads((tmp_path / "out" / "export.json").read_text())["options"]
     assert "task" not in recorded and recorded["rationale"] == "s-cot"
+
+
+def test_export_train_names_the_task_on_the_command_line(generated_release, tmp_path):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    out = tmp_path / "cli"
+    args = ["export-train", str(generated_release), "--out", str(out), "--format", "messages", "--task", "relation", "--conditions", "c", "--rationale", "none"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    rows = [json.loads(line) for p in sorted((out / "messages").glob("*.jsonl")) for line in p.read_text().splitlines()]
+    assert rows and all(set(json.loads(r["answer"])) == {"choice"} and r["conversations"][1]["value"] == r["answer"] for r in rows)
+    assert json.loads((out / "export.json").read_text())["options"]["task"] == "relation"
