@@ -95,9 +95,10 @@ def show_prompt_command(
     from povagent.exchange.preview import preview_request
     from povagent.interfaces import declares_turns
     from povagent.plugins import get_plugin_host
+    from povagent.run.pending import asked_by
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
-    dataset = open_evaluation_set(config.dataset.root)
+    dataset = asked_by(config, open_evaluation_set(config.dataset.root))
     inst = dataset.instance(instance)
     if inst is None:
         # an instance of a house the loader left out: say why in one line, not "no such id"

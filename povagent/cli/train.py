@@ -27,6 +27,10 @@ def export_train_command(
     text_seed: int = typer.Option(0, "--text-seed", metavar="N", help="Seed of the rationales' wording (the facts never change)."),
     conditions: str = typer.Option("a,b,c", "--conditions", metavar="a,b,c", help="Conditions to export: a Inferred, b Stated, c Given."),
     max_shard_mb: int = typer.Option(500, "--max-shard-mb", min=1, metavar="MB", help="Largest shard, in MB."),
+    task: str = typer.Option(
+        "point", "--task", metavar="point|relation|multi-hop",
+        help="What each example asks: the point task, or a generated task's multiple-choice question answered with its label.",
+    ),
     exact: bool = typer.Option(False, "--exact-answers", help="Answer with the ground truth's exact float pixel instead of whole pixels."),
     exclude: list[Path] = typer.Option([], "--exclude", metavar="DATASET", help="An evaluation dataset whose houses must not be exported (repeatable)."),
     drop_excluded: bool = typer.Option(False, "--drop-excluded", help="Leave evaluation houses out (listed in the card) instead of stopping."),
@@ -50,6 +54,7 @@ def export_train_command(
         conditions=tuple(c.strip() for c in conditions.split(",") if c.strip()),
         max_shard_bytes=max_shard_mb * 1024 * 1024,
         exact_answers=exact,
+        task=task,
     )
 
     def progress(shard: object, done: int, total: int) -> None:

@@ -270,12 +270,54 @@ class ImagesSpec(_Strict):
         return self.cache_dir if self.cache_dir is not None else Path(output) / DEFAULT_CACHE_DIR
 
 
+#: The tasks a pipeline may ask of a dataset's instances: POVBench's point task, and the paper's
+#: future-work tasks on generated houses (:mod:`povagent.tasks`).
+TASK_NAMES = ("point", "relation", "multi-hop")
+#: The answers each task may be asked in, its default first.
+TaskAnswer = Literal["point", "choice"]
+TASK_ANSWERS: dict[str, tuple[TaskAnswer, ...]] = {"point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice")}
+
+
+class TaskSpec(_Strict):
+    """What a pipeline asks of each instance: ``task: relation`` or ``task: {name: multi-hop,
+    answer: choice}``. ``answer`` defaults to the task's first (multi-hop: ``point``, the
+    official metric)."""
+
+    name: Literal["point", "relation", "multi-hop"] = "point"
+    answer: TaskAnswer | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _bare_name(cls, value: Any) -> Any:
+        value = {"name": value} if isinstance(value, str) else value
+        name = value.get("name", "point") if isinstance(value, dict) else "point"
+        if name not in TASK_NAMES:
+            raise ValueError(f"unknown task {str(name)[:80]!r}: one of {', '.join(TASK_NAMES)}")
+        return value
+
+    @model_validator(mode="after")
+    def _answer_fits(self) -> TaskSpec:
+        allowed = TASK_ANSWERS[self.name]
+        if self.answer is None:
+            self.answer = allowed[0]
+        elif self.answer not in allowed:
+            raise ValueError(f"task {self.name} is answered as {' or '.join(allowed)}, not {self.answer}")
+        return self
+
+    @property
+    def is_point_task(self) -> bool:
+        """POVBench's own task (the default): the config hash and ``config.yaml`` leave it out."""
+        return self.name == "point"
+
+
 class PipelineConfig(_Strict):
     """One pipeline: a dataset, a model, a strategy, a parser, scorers, and how to run them."""
 
     plugins: list[str] = Field(default_factory=list)
     dataset: DatasetSpec
     instances: InstanceFilter = Field(default_factory=InstanceFilter)
+    #: What each instance asks (:class:`TaskSpec`); in the config hash unless it is the point task.
+    task: TaskSpec = Field(default_factory=TaskSpec)
     model: str | None = None
     backend: ComponentSpec | None = None
     strategy: ComponentSpec = Field(default_factory=lambda: ComponentSpec(name="basic"))
@@ -342,14 +384,17 @@ class PipelineConfig(_Strict):
         active mode's tools offered); empty or ``None`` leaves the hash as the YAML's alone.
         """
         keep = {k: v for k, v in self.model_dump(mode="json").items() if k in ("model", "backend", "strategy", "parser", "scorers")}
+        if not self.task.is_point_task:  # rows of different tasks never share a folder
+            keep["task"] = self.task.model_dump(mode="json")
         if strategy_identity:
             keep["strategy_identity"] = dict(strategy_identity)
         blob = json.dumps(keep, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
     def resolved_dict(self) -> dict[str, Any]:
-        """JSON-able dict of the config as run (written to the run folder's ``config.yaml``)."""
-        return self.model_dump(mode="json")
+        """JSON-able dict of the config as run (written to the run folder's ``config.yaml``); the
+        point task, the default, is left out (a point run's file is as it always was)."""
+        return self.model_dump(mode="json", exclude={"task"} if self.task.is_point_task else None)
 
 
 class SweepAxes(_Strict):

@@ -60,7 +60,7 @@ from pydantic import BaseModel, ValidationError
 
 from povagent.config.models import PipelineConfig, SweepConfig
 from povagent.config.overrides import REPLACED_WHOLE, deep_merge
-from povagent.config.plugin_checks import check_parser_fits, check_plugin_names, checked_plugins, plugin_host_for, resolve_components
+from povagent.config.plugin_checks import check_parser_fits, check_plugin_names, check_task_fits, checked_plugins, plugin_host_for, resolve_components
 from povagent.config.quoting import Loc
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import ConfigSource, read_yaml
@@ -93,6 +93,7 @@ def pipeline_from_source(
     check_plugin_names(config, h, source, prefix)
     resolved = resolve_components(config, h)
     check_parser_fits(resolved, h, source, prefix)
+    check_task_fits(resolved, h, source, prefix)
     return resolved
 
 

@@ -189,6 +189,19 @@ def check_parser_fits(config: PipelineConfig, host: PluginHost, source: ConfigSo
         raise ConfigError(f"{source.where(prefix + loc)}: {misfit}")
 
 
+def check_task_fits(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc = ()) -> None:
+    """A pipeline's ``task:`` other than the point task is answered as its ``answer``: the
+    strategy must ask for that answer type (one line naming the ``strategy:`` line)."""
+    if config.task.is_point_task:
+        return
+    asked = getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point")
+    if asked != config.task.answer:
+        raise ConfigError(
+            f"{source.where(prefix + ('strategy',))}: task {config.task.name} is answered as a {config.task.answer}, "
+            f"and strategy {config.strategy.name!r} asks for a {asked} answer: name a strategy that asks for a {config.task.answer}"
+        )
+
+
 def plugin_host_for(plugins: list[str], source: ConfigSource, host: PluginHost | None) -> PluginHost:
     """The plugin host with the config's ``plugins`` loaded (into ``host`` when one is given);
     a plugin that fails to load is a :class:`ConfigError` at the ``plugins:`` line."""

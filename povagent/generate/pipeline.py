@@ -54,11 +54,18 @@ class BuiltHouse:
     rngs: dict[str, np.random.Generator]
 
 
+def furnished_house(seed: int, index: int, rngs: dict[str, np.random.Generator] | None = None) -> House:
+    """Plan and furnish house ``index`` of the dataset with ``seed``: the objects and their boxes,
+    without meshes (milliseconds; the tasks read object positions from it)."""
+    rngs = rngs if rngs is not None else house_generators(seed, index)
+    plan = generate_floorplan(rngs["plan"])
+    return House(house_id(index), plan, furnish(plan, rngs["furnish"]))
+
+
 def build_house(seed: int, index: int, shadows: bool = True) -> BuiltHouse:
     """Plan, furnish and mesh house ``index`` of the dataset with ``seed``."""
     rngs = house_generators(seed, index)
-    plan = generate_floorplan(rngs["plan"])
-    house = House(house_id(index), plan, furnish(plan, rngs["furnish"]))
+    house = furnished_house(seed, index, rngs)
     renderer = Renderer(house, house_mesh(house, rngs["paint"]), shadows=shadows)
     return BuiltHouse(house, renderer, rngs)
 

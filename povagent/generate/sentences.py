@@ -171,7 +171,8 @@ _FRAMES = (
     "When I was {act}, I {verb} the {target} {rel}.",
     "I was {act} when I {verb} the {target} {rel}.",
 )
-_VERBS = ("saw", "spotted", "noticed")
+#: The verbs of sighting the target ("I saw the book ...").
+SIGHTING_VERBS = ("saw", "spotted", "noticed")
 #: Anchors one sits or lies on: a target "up" is on them rather than "on top of" them.
 _SEATS = frozenset({"Sofa", "ArmChair", "Bed", "Chair", "Stool"})
 
@@ -293,7 +294,7 @@ def sentences(
     rel = relation_phrase(direction, anchor_type, anchor_name, on_anchor)
     act_a, act_b = activity(observer, house, rng)
     frame = _choice(rng, _FRAMES)
-    verb = _choice(rng, _VERBS)
+    verb = _choice(rng, SIGHTING_VERBS)
     a = frame.format(act=act_a, verb=verb, target=target, rel=rel)
     b = frame.format(act=act_b, verb=verb, target=target, rel=rel)
     c = f"The {target} {'were' if target in _PLURALS else 'was'} {rel}."

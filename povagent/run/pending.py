@@ -127,7 +127,21 @@ def plan_keys(
 
 def prepare_dataset(config: PipelineConfig) -> EvaluationSet:
     """Load the dataset, generating it first for a ``generate:`` spec whose folder is empty, or
-    fetching it first for a ``hub:`` spec (which then names the local copy)."""
+    fetching it first for a ``hub:`` spec (which then names the local copy); its instances are
+    the ones the pipeline's ``task:`` asks (:func:`povagent.tasks.task_set.for_task`)."""
+    return asked_by(config, _loaded_dataset(config))
+
+
+def asked_by(config: PipelineConfig, dataset: EvaluationSet) -> EvaluationSet:
+    """``dataset`` as the pipeline's task asks it (the set itself for the point task)."""
+    if config.task.is_point_task:
+        return dataset
+    from povagent.tasks.task_set import for_task  # the generator's scene: only when a task asks
+
+    return for_task(dataset, config.task)
+
+
+def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
     from povagent.dataset.hub import resolve_hub_dataset
 
     spec = resolve_hub_dataset(config).dataset
@@ -152,11 +166,11 @@ def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | No
 
     key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict)
     if loaded is not None and key in loaded:
-        return loaded[key]
-    ds = prepare_dataset(config)
+        return asked_by(config, loaded[key])
+    ds = _loaded_dataset(config)
     if loaded is not None:
         loaded[key] = ds
-    return ds
+    return asked_by(config, ds)
 
 
 def pending_keys(config: PipelineConfig, dataset: EvaluationSet, *, retry_failed: bool = True) -> tuple[int, int, list[tuple[Instance, int]]]:

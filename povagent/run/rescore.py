@@ -49,6 +49,7 @@ from povagent.results.official_reading import (
 from povagent.results.rows import ResultRow, RowStatus, StagedResults, read_rows
 from povagent.run.confined_read import check_regular
 from povagent.run.confined_write import ConfinedFolder, write_inside
+from povagent.run.pending import asked_by
 from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring
 from povagent.run.summary import declared_metrics, summarize_rows, write_summary
@@ -173,7 +174,7 @@ def rescore_run(
             f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
-    dataset = open_evaluation_set(root, check_images=False)  # answers are re-read, not re-sent
+    dataset = asked_by(config, open_evaluation_set(root, check_images=False))  # answers are re-read, not re-sent
     official_parser, official_name = official if official is not None else (None, None)
     scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
                             on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc),

@@ -53,7 +53,7 @@ from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.logs import Redactor, RunLog, secrets_named_by
-from povagent.run.pending import RESULTS, plan_keys, prepare_dataset, select_instances
+from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
@@ -298,8 +298,8 @@ class PipelineRun:
         if self._will_send():
             # a client library (litellm: seconds) loads in the background meanwhile
             self.components.backend.preload()
-        if self.dataset is None:
-            self.dataset = prepare_dataset(config)
+        # a set handed in (sweeps share one loaded set) is asked the pipeline's task too
+        self.dataset = prepare_dataset(config) if self.dataset is None else asked_by(config, self.dataset)
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")

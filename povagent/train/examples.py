@@ -11,10 +11,10 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import House
@@ -22,8 +22,12 @@ from povagent.errors import DatasetError, ReadTargetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
 from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.train.choice_rationale import choice_rationale_text
 from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
+
+if TYPE_CHECKING:  # the generator's scene loads only when a task asks
+    from povagent.tasks.multi_hop import Hop
 
 #: The strategy whose prompt asks for each kind of rationale.
 STRATEGY_FOR_RATIONALE = {"none": "basic", "cot": "cot", "s-cot": "spatial-cot"}
@@ -155,11 +159,17 @@ def image_label(house: House, source: Path) -> str:
     return where.relative_to(artifacts).as_posix() if where.is_relative_to(artifacts) else where.name
 
 
-def make_strategy(rationale: str) -> Any:
-    """The built-in strategy whose prompt fits ``rationale``, made through the plugin host."""
+#: The strategy that asks a generated task's multiple-choice question (whatever the rationale).
+CHOICE_STRATEGY = "choice"
+
+
+def make_strategy(rationale: str, task: str = "point") -> Any:
+    """The built-in strategy whose prompt fits ``rationale`` (a generated task's: the one asking
+    its question), made through the plugin host."""
     from povagent.plugins import get_plugin_host
 
-    return get_plugin_host().strategy(STRATEGY_FOR_RATIONALE[rationale], {})
+    name = STRATEGY_FOR_RATIONALE[rationale] if task == "point" else CHOICE_STRATEGY
+    return get_plugin_host().strategy(name, {})
 
 
 def house_examples(
@@ -169,10 +179,13 @@ def house_examples(
     strategy: Any,
     seed: int,
     exact: bool = False,
+    hop_of: Callable[[str], Hop | None] | None = None,
 ) -> Iterator[TrainingExample | tuple[str, str]]:
     """Each instance of ``house`` as an example; ``(instance id, reason)`` for one that cannot teach.
 
     ``strategy`` is :func:`make_strategy`'s; a fresh image store per house keeps memory flat.
+    An instance asking a multiple-choice question is answered with its label
+    (:mod:`povagent.train.choice_rationale`; ``hop_of`` names a multi-hop instance's intermediate).
     """
     images = ImageStore()
     for inst in instances:
@@ -196,7 +209,10 @@ def house_examples(
                     image = ExampleImage(source, image_label(house, source), part.image_hash, images.info(part.image_hash).media_type)
                     parts.append(QuestionPart(image=image.label))
                     shown.append(image)
-        answer = rationale_text(facts, rationale, seed=seed, exact=exact)
+        if inst.question is not None:
+            answer = choice_rationale_text(facts, inst.question, rationale, hop_of(inst.id) if hop_of else None)
+        else:
+            answer = rationale_text(facts, rationale, seed=seed, exact=exact)
         yield TrainingExample(
             id=inst.id,
             house_id=inst.house_id,

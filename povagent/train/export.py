@@ -23,12 +23,13 @@ from typing import Any
 from povagent.dataset.loader import Dataset, House, dataset_house_folders, house_folders, load_house, read_meta
 from povagent.dataset.models import Condition
 from povagent.dataset.problems import Problem
+from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import DatasetError
 from povagent.train.card import write_card
 from povagent.train.examples import TrainingExample
 from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
 from povagent.train.export_folder import MANIFEST, MANIFEST_VERSION, export_folder, manifest
-from povagent.train.export_options import FORMAT_FOLDERS, ExportError, ExportOptions, ExportReport
+from povagent.train.export_options import FORMAT_FOLDERS, ExportError, ExportOptions, ExportReport, task_spec
 from povagent.train.facts import NoTeachingFrame, instance_facts
 from povagent.train.left_out import left_out
 from povagent.train.shards import PlannedExample, Shard, plan_shards, remove_stale_temporaries
@@ -49,12 +50,21 @@ def one_house(root: Path, house: House) -> Dataset:
     return Dataset(root, None, {house.house_id: house}, [])
 
 
+def asked_house(root: Path, house: House, options: ExportOptions) -> EvaluationSet:
+    """``house`` alone, its instances as the export's task asks them (the point task: the loader's)."""
+    if options.task == "point":
+        return one_house(root, house)
+    from povagent.tasks.task_set import for_task
+
+    return for_task(one_house(root, house), task_spec(options))
+
+
 def _house_plan(root: Path, house: House, options: ExportOptions, report: ExportReport) -> list[tuple[str, int]]:
     """``(instance id, estimated bytes)`` of every example of ``house``, in the loader's
     instance order; an instance that cannot teach goes into ``report.skipped``."""
     frame_bytes = {f.image_path: f.file.stat().st_size for f in house.frames}
     out = []
-    for inst in one_house(root, house).instances(conditions=_conditions(options)):
+    for inst in asked_house(root, house, options).instances(conditions=_conditions(options)):
         try:
             instance_facts(inst, house.pairs[inst.pair_id])
         except NoTeachingFrame as exc:
@@ -103,6 +113,7 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
     Loads only the shard's houses, builds their examples in plan order and writes them
     atomically; returns the number of examples written.
     """
+    from povagent.tasks.task_set import TaskSet
     from povagent.train.chat_jsonl import write_jsonl_shard
     from povagent.train.examples import house_examples, make_strategy
     from povagent.train.openai_jsonl import write_openai_shard
@@ -110,15 +121,17 @@ def write_shard(dataset_root: str, out: str, shard: Shard, options: ExportOption
 
     root, target = Path(dataset_root), Path(out)
     wanted = {e.id for e in shard.examples}
-    strategy = make_strategy(options.rationale)
+    strategy = make_strategy(options.rationale, options.task)
 
     def examples() -> Iterator[TrainingExample]:
         for hid in shard.houses:  # one house in memory at a time
             house = load_house(root / "artifacts" / hid, root, [], check_images=False)
             if house is None:
                 raise DatasetError(f"{root / 'artifacts' / hid}: the house could not be loaded for shard {shard.name}")
-            insts = [i for i in one_house(root, house).instances(conditions=_conditions(options)) if i.id in wanted]
-            for ex in house_examples(house, insts, options.rationale, strategy, options.text_seed, options.exact_answers):
+            asked = asked_house(root, house, options)
+            insts = [i for i in asked.instances(conditions=_conditions(options)) if i.id in wanted]
+            hop_of = asked.hop if isinstance(asked, TaskSet) else None  # a multi-hop instance's intermediate
+            for ex in house_examples(house, insts, options.rationale, strategy, options.text_seed, options.exact_answers, hop_of):
                 if isinstance(ex, tuple):
                     raise DatasetError(f"{ex[0]}: planned for {shard.name} but cannot teach now ({ex[1]})")
                 yield ex

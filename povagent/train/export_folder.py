@@ -33,13 +33,27 @@ LOCK = ".lock"
 _OURS = {LOCK}
 
 
+#: Options ``export.json`` records only when they differ from these defaults.
+UNRECORDED_DEFAULTS = {"task": "point"}
+
+
+def recorded_options(options: ExportOptions) -> dict[str, Any]:
+    """The options as ``export.json`` records them; the point task, the default, is left out (an
+    export of it records what it always did, and resumes one made before tasks existed)."""
+    recorded = {**asdict(options), "conditions": list(options.conditions)}
+    for key, default in UNRECORDED_DEFAULTS.items():
+        if recorded[key] == default:
+            del recorded[key]
+    return recorded
+
+
 def manifest(options: ExportOptions, shards: Sequence[Shard], dataset_root: Path) -> dict[str, Any]:
     """What ``export.json`` holds: the version, the options and the shard plan."""
     return {
         "version": MANIFEST_VERSION,
         "tool": "povagent export-train",
         "dataset": str(dataset_root),
-        "options": {**asdict(options), "conditions": list(options.conditions)},
+        "options": recorded_options(options),
         "shards": [{"name": s.name, "split": s.split, "examples": [e.id for e in s.examples]} for s in shards],
     }
 
@@ -78,10 +92,11 @@ def check_resume(out: Path, wanted: dict[str, Any]) -> None:
     old_options = old.get("options")
     if not isinstance(old_options, dict):
         raise ExportError(f"{path}: field 'options' is not an object (a {type(old_options).__name__}); remove the export folder or choose another --out")
-    for key, value in wanted["options"].items():
-        if old_options.get(key) != value:
+    for key, value in {**UNRECORDED_DEFAULTS, **wanted["options"]}.items():
+        made_with = old_options.get(key, UNRECORDED_DEFAULTS.get(key))
+        if made_with != value:
             raise ExportError(
-                f"{out} holds an export made with {key}={old_options.get(key)!r}, not {value!r}: "
+                f"{out} holds an export made with {key}={made_with!r}, not {value!r}: "
                 "run with the same options to resume, or choose another --out"
             )
     if old.get("shards") != wanted["shards"]:

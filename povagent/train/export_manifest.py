@@ -22,6 +22,8 @@ class RecordedOptions(BaseModel):
     conditions: list[str]
     max_shard_bytes: int
     exact_answers: bool
+    #: The task the examples ask (recorded only when it is not the point task).
+    task: str = "point"
 
 
 class RecordedShard(BaseModel):

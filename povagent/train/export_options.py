@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from povagent.config.models import TASK_NAMES, TaskSpec
 from povagent.dataset.models import CONDITIONS
 from povagent.errors import PovagentError
 from povagent.train.rationale import RATIONALES
@@ -39,6 +40,9 @@ class ExportOptions:
     conditions: tuple[str, ...] = tuple(c.value for c in CONDITIONS)
     max_shard_bytes: int = DEFAULT_SHARD_BYTES
     exact_answers: bool = False
+    #: The task each example asks (:data:`~povagent.config.models.TASK_NAMES`): ``point``, or a
+    #: generated choice task (``relation``, ``multi-hop``) answered with its option's label.
+    task: str = "point"
 
     def __post_init__(self) -> None:
         # one spelling per set of conditions: ``a,b,b`` and ``b,a`` are ``a,b`` (the card, the
@@ -52,6 +56,8 @@ class ExportOptions:
         """Refuse values outside what the exporter knows, naming the option."""
         if self.format not in FORMATS:
             raise ExportError(f"--format {self.format!r}: one of {', '.join(FORMATS)}")
+        if self.task not in TASK_NAMES:
+            raise ExportError(f"--task {self.task!r}: one of {', '.join(TASK_NAMES)}")
         if self.rationale not in RATIONALES:
             raise ExportError(f"--rationale {self.rationale!r}: one of {', '.join(RATIONALES)}")
         if self.max_shard_bytes < 1024 * 1024:
@@ -65,6 +71,11 @@ class ExportOptions:
             parse_split(self.split)
         except SplitError as exc:
             raise ExportError(str(exc)) from None
+
+
+def task_spec(options: ExportOptions) -> TaskSpec:
+    """The task the export's examples ask: a generated task is asked as a choice."""
+    return TaskSpec(name=options.task) if options.task == "point" else TaskSpec(name=options.task, answer="choice")
 
 
 @dataclass
