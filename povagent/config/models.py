@@ -272,10 +272,16 @@ class ImagesSpec(_Strict):
 
 #: The tasks a pipeline may ask of a dataset's instances: POVBench's point task, and the paper's
 #: future-work tasks on generated houses (:mod:`povagent.tasks`).
-TASK_NAMES = ("point", "relation", "multi-hop")
-#: The answers each task may be asked in, its default first.
-TaskAnswer = Literal["point", "choice"]
-TASK_ANSWERS: dict[str, tuple[TaskAnswer, ...]] = {"point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice")}
+TASK_NAMES = ("point", "relation", "multi-hop", "navigate")
+#: The answers each task may be asked in, its default first (``navigate``: a walk ending in
+#: ``arrived()``, which the ``navigate`` strategy records).
+TaskAnswer = Literal["point", "choice", "walk"]
+TASK_ANSWERS: dict[str, tuple[TaskAnswer, ...]] = {
+    "point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice"), "navigate": ("walk",),
+}  # fmt: skip
+#: The strategy and scorers a pipeline of a task gets when it names none (the point task's are
+#: the fields' own defaults).
+TASK_DEFAULTS: dict[str, tuple[str, tuple[str, ...]]] = {"navigate": ("navigate", ("navigate",))}
 
 
 class TaskSpec(_Strict):
@@ -283,7 +289,7 @@ class TaskSpec(_Strict):
     answer: choice}``. ``answer`` defaults to the task's first (multi-hop: ``point``, the
     official metric)."""
 
-    name: Literal["point", "relation", "multi-hop"] = "point"
+    name: Literal["point", "relation", "multi-hop", "navigate"] = "point"
     answer: TaskAnswer | None = None
 
     @model_validator(mode="before")
@@ -362,6 +368,18 @@ class PipelineConfig(_Strict):
             raise ValueError("give either model: (a model profile) or backend:, not both")
         if self.model is None and self.backend is None:
             raise ValueError("a backend is required: backend: {name: ..., options: {...}} or model: <profile name>")
+        return self
+
+    @model_validator(mode="after")
+    def _task_defaults(self) -> PipelineConfig:
+        """A task's own strategy and scorers where the pipeline names none (``task: navigate``)."""
+        defaults = TASK_DEFAULTS.get(self.task.name)
+        if defaults is not None:
+            strategy, scorers = defaults
+            if "strategy" not in self.model_fields_set:
+                self.strategy = ComponentSpec(name=strategy)
+            if "scorers" not in self.model_fields_set:
+                self.scorers = [ComponentSpec(name=name) for name in scorers]
         return self
 
     @property

@@ -194,7 +194,15 @@ def check_task_fits(config: PipelineConfig, host: PluginHost, source: ConfigSour
     strategy must ask for that answer type (one line naming the ``strategy:`` line)."""
     if config.task.is_point_task:
         return
-    asked = getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point")
+    factory = host.entry("strategy", config.strategy.name).factory
+    if config.task.answer == "walk":  # a walk is the active mode's: a strategy of that task walks it
+        if getattr(factory, "task", None) != config.task.name:
+            raise ConfigError(
+                f"{source.where(prefix + ('strategy',))}: task {config.task.name} is walked in active mode, and strategy "
+                f"{config.strategy.name!r} does not walk it: name strategy: navigate (or leave strategy: out)"
+            )
+        return
+    asked = getattr(factory, "answer_type", "point")
     if asked != config.task.answer:
         raise ConfigError(
             f"{source.where(prefix + ('strategy',))}: task {config.task.name} is answered as a {config.task.answer}, "

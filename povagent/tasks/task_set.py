@@ -116,7 +116,7 @@ class TaskSet:
 def for_task(dataset: EvaluationSet, task: TaskSpec | None) -> EvaluationSet:
     """``dataset`` as the pipeline's task asks it: itself for the point task, and for a set
     already asked that task (the runner asks a set a sweep hands it, which may be asked)."""
-    if task is None or task.is_point_task:
+    if task is None or task.is_point_task or task.answer == "walk":  # a walk goes to the point task's target
         return dataset
     if isinstance(dataset, TaskSet):  # already asked: asked again it is the same set
         if dataset.task != task:
