@@ -26,6 +26,12 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.robopoint",
     "povagent_plugins.parsers.internvl",
     "povagent_plugins.parsers.choice",
+    "povagent_plugins.parsers.mcq.viewspatial",
+    "povagent_plugins.parsers.mcq.mindcube",
+    "povagent_plugins.parsers.mcq.threedsrbench",
+    "povagent_plugins.parsers.mcq.vlmevalkit_exact",
+    "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
+    "povagent_plugins.parsers.mcq.lmms_mcq_extract",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
