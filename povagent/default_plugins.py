@@ -15,6 +15,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.relation",
     "povagent_plugins.scorers.probe",
     "povagent_plugins.scorers.choice",
+    "povagent_plugins.scorers.choice_vlmevalkit",
+    "povagent_plugins.scorers.choice_sparbench",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -32,6 +34,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.vlmevalkit_exact",
     "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
     "povagent_plugins.parsers.mcq.lmms_mcq_extract",
+    "povagent_plugins.parsers.mcq.sparbench",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
