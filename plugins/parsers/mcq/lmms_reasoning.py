@@ -13,19 +13,35 @@ REASONING_TAGS: tuple[tuple[str, str], ...] = (("<think>", "</think>"), ("<analy
 
 
 def _drop_pair(text: str, opening: str, closing: str) -> str:
-    """``text`` with one tag pair's blocks removed, as lmms-eval removes them."""
-    while opening in text and closing in text:
-        start = text.find(opening)
-        end = text.find(closing, start)
-        if end == -1:
-            # a closing tag only before the first opening tag: no complete block is left
+    """``text`` with one tag pair's blocks removed, as lmms-eval removes them.
+
+    lmms-eval removes the block from the first opening tag to the first closing tag after it,
+    then looks again from the start, until no opening tag has a closing tag after it. Copying
+    the whole text at each removal would take quadratic time on a reply of many blocks, so the
+    text already kept is never searched again: no opening tag can start in it, except one
+    completed by the text a removal brings next to it, which can only start among its last
+    ``len(opening) - 1`` characters (``head``).
+    """
+    kept: list[str] = []  # the result before ``head``
+    head = ""  # the last kept characters, where an opening tag may start across a removal
+    pos = 0  # the rest of the result is text[pos:]
+    while True:
+        joined = head + text[pos : pos + len(opening)]
+        at = joined.find(opening)
+        start = pos + at - len(head) if 0 <= at < len(head) else text.find(opening, pos)
+        if start == -1 or (end := text.find(closing, max(pos, start + len(opening)))) == -1:
             break
-        text = text[:start] + text[end + len(closing) :]
-    if closing in text and opening not in text:
+        before = head + text[pos:start] if start >= pos else head[: len(head) - (pos - start)]
+        keep = len(opening) - 1
+        kept.append(before[: len(before) - keep] if len(before) > keep else "")
+        head = before[-keep:] if len(before) > keep else before
+        pos = end + len(closing)
+    result = "".join(kept) + head + text[pos:]
+    if closing in result and opening not in result:
         # chat templates that prefill the opening tag leave only its closing tag: the answer
         # is what follows the last one
-        text = text.rsplit(closing, 1)[1]
-    return text
+        result = result.rsplit(closing, 1)[1]
+    return result
 
 
 def strip_reasoning_blocks(text: str) -> str:

@@ -38,25 +38,59 @@ TAIL_LINES = 6
 TAIL_CHARS = 800
 
 _ZERO_WIDTH = re.compile("[\u200b\u200c\u200d\ufeff]")
-_ANSWER_BLOCK = re.compile(
-    r"<\s*answer\b[^>]*>\s*([A-Ja-j])(?:\s*[\.．:：\)\]】、])?.*?<\s*/\s*answer\s*>", re.IGNORECASE | re.DOTALL
-)
+
+# Upstream's patterns backtrack in quadratic (and, for the concluding phrase, worse) time on long
+# runs of spaces or markdown; a reply is untrusted, so each is written here in a form that reads
+# the same letters in linear time: a possessive quantifier (``*+``) where the next token can never
+# match what it gave back, and the letter-finding patterns reduced to the conditions that decide
+# them (each reduction says why it is the same). The probe corpus and a differential check against
+# the upstream functions hold the two equal.
+
+# step 1, an <answer ...> block: the opening tag, then (after the first ">") the letter
+_ANSWER_OPEN = re.compile(r"<\s*+answer\b", re.IGNORECASE)
+_LETTER_AFTER_TAG = re.compile(r"\s*+([A-Ja-j])", re.IGNORECASE)
+_ANSWER_CLOSE = re.compile(r"<\s*+/\s*+answer\s*+>", re.IGNORECASE)
+# step 2, a letter right before </answer> or </think> (only ever run on the 800-character tail)
 _OPEN = r"[\(\[\{（【]?\s*"
 _CLOSE = r"[\)\]\}）】]?"
 _BEFORE_ANSWER_END = re.compile(rf"(?<![A-Za-z]){_OPEN}([{LETTERS}])\s*{_CLOSE}\s*</\s*answer\s*>", re.IGNORECASE)
 _BEFORE_THINK_END = re.compile(rf"(?<![A-Za-z]){_OPEN}([{LETTERS}])\s*{_CLOSE}\s*</\s*think\s*>", re.IGNORECASE)
-_THINK_END = re.compile(r"</\s*think\s*>", re.IGNORECASE)
-_THINK_START = re.compile(r"<\s*think\s*>", re.IGNORECASE)
+_THINK_END = re.compile(r"</\s*+think\s*+>", re.IGNORECASE)
+_THINK_START = re.compile(r"<\s*+think\s*+>", re.IGNORECASE)
+# steps 3 and 4, line by line
 _OPTION_LINE = re.compile(r"^(?:[*_>\-\s]*)(?:option|选项)\s+[A-J]\s*[:：]", re.IGNORECASE)
-_SINGLE_LETTER_LINE = re.compile(r"^\s*[*_`>（）\[\]【】\(\)]*\s*([A-Fa-f])\s*[*_`（）\[\]【】\(\)]*\s*$")
+_SINGLE_LETTER_LINE = re.compile(r"^\s*+[*_`>（）\[\]【】\(\)]*+\s*+([A-Fa-f])\s*+[*_`（）\[\]【】\(\)]*+\s*+$")
 _LABELLED_LINE = re.compile(r"^\s*([A-F])\s*[\.．:：\)\]】、-]\s+", re.IGNORECASE)
 _TIGHT = r"\.,:;!?\)\]】》」』，。；、：）】》」』"
-_INLINE_CAPITAL = re.compile(rf"(?<![A-Za-z])[*_`（\[\{{\(]*\s*([A-F])\s*[*_`）\]\}})]*(?=$|[\s{_TIGHT}])")
+# Upstream allows markdown and spaces before the letter and after it; what decides a letter is
+# only that no ASCII letter precedes it (the symbols before it may be read as none) and that,
+# after optional closing markdown, a line end, a space or tight punctuation follows.
+_INLINE_CAPITAL = re.compile(rf"(?<![A-Za-z])([A-F])(?=[*_`）\]\}})]*(?:$|[\s{_TIGHT}]))")
+# step 5, a concluding phrase (the spaces before the letter possessive; after it, as upstream)
 _CONCLUSION = re.compile(
-    r"(?i)(?:final\s*answer|the\s*answer\s*is|answer(?:\s*is)?|correct\s*answer|答案|最终答案|结论|所以|因此|我选(?:择)?|选择|选)"
-    rf"\s*[:：>＝=]?\s*{_OPEN}([{LETTERS}])\s*{_CLOSE}(?:\b|[.)、。])"
+    r"(?i)(?:final\s*+answer|the\s*+answer\s*+is|answer(?:\s*+is)?|correct\s*+answer|答案|最终答案|结论|所以|因此|我选(?:择)?|选择|选)"
+    rf"\s*+[:：>＝=]?\s*+[\(\[\{{（【]?\s*+([{LETTERS}])\s*{_CLOSE}(?:\b|[.)、。])"
 )
-_LONE_CAPITAL = re.compile(rf"(?<![A-Za-z]){_OPEN}([{LETTERS}])\s*{_CLOSE}(?![A-Za-z])")
+# step 6: upstream allows a bracket and spaces either side of the letter; what decides it is only
+# that no ASCII letter touches it on either side.
+_LONE_CAPITAL = re.compile(rf"(?<![A-Za-z])([{LETTERS}])(?![A-Za-z])")
+
+
+def _answer_block_letter(text: str) -> str | None:
+    """Step 1: the letter opening the first ``<answer ...>`` tag that has one, when a closing
+    ``</answer>`` follows it. A later opening tag's letter can only sit further on, so when no
+    closing tag follows the first, none follows any; tags sharing a ``>`` share their letter, so
+    each ``>`` is looked for, and read after, once."""
+    tag_end = -1
+    for opening in _ANSWER_OPEN.finditer(text):
+        if opening.end() <= tag_end:
+            continue  # the same ">" and the same (missing) letter as the tag before
+        tag_end = text.find(">", opening.end())
+        if tag_end == -1:
+            return None
+        if letter := _LETTER_AFTER_TAG.match(text, tag_end + 1):
+            return letter.group(1) if _ANSWER_CLOSE.search(text, letter.end()) else None
+    return None
 
 
 def _from_last_lines(lines: list[str]) -> str | None:
@@ -86,8 +120,8 @@ def _after_reasoning(text: str) -> str:
 def spatial_bench_label(reply: str) -> str | None:
     """The letter VLMEvalKit's spatial-bench rule reads in ``reply`` (module docstring), or ``None``."""
     text = _ZERO_WIDTH.sub("", reply.strip())
-    if block := _ANSWER_BLOCK.search(text):
-        return block.group(1).upper()
+    if block := _answer_block_letter(text):
+        return block.upper()
     tail = text[-TAIL_CHARS:]
     for closing in (_BEFORE_ANSWER_END, _BEFORE_THINK_END):
         if anchored := closing.search(tail):
