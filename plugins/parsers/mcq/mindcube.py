@@ -14,8 +14,8 @@ step that finds a capital ``A``-``E`` gives it (lower case is never read).
 4. the last line holding "X. words";
 5. from the bottom line up, the first X standing alone.
 
-So "A chair blocks the view, so the answer is B." is ``B`` (step 3 reads "answer is B" before
-the article is considered), and "C. Because" is ``C`` by step 1.
+So "A chair blocks the view, so the answer is B." is ``B`` (step 1: its last ``X.`` is ``B.``;
+the article is never read), and "The answer is c" is no label (lower case).
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ class MindCubeParser(RuleParser):
     """MindCube's cascade (module docstring)."""
 
     reads = "MindCube's five-step cascade over capital A-E (the set's official rule, lmms-eval's mindcube)"
-    beside_official = "reads choice answers, which the official (point) parser does not read; the MindCube default"
+    beside_official = "reads choice answers, which the official (point) parser does not read; MindCube's own rule"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

@@ -33,7 +33,7 @@ class ViewSpatialParser(RuleParser):
     """ViewSpatial-Bench's rule (module docstring)."""
 
     reads = "the first A-D standing alone on the last line, any case (ViewSpatial-Bench's official rule, lmms-eval's viewspatial)"
-    beside_official = "reads choice answers, which the official (point) parser does not read; the ViewSpatial-Bench default"
+    beside_official = "reads choice answers, which the official (point) parser does not read; ViewSpatial-Bench's own rule"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
