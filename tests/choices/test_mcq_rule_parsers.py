@@ -67,3 +67,9 @@ def test_vlmevalkit_exact_says_z_where_vlmevalkit_reads_no_option():
 def test_a_rule_parser_reads_nothing_without_options():
     parsed = get_plugin_host(()).parser("viewspatial", {}).parse("B", AnswerSpec(schema={}))
     assert parsed.choice is None and parsed.status == ParseStatus.UNPARSEABLE
+
+
+def test_vlmevalkit_exact_refuses_options_not_labelled_by_capital_letters():
+    spec = AnswerSpec(schema={}, asks_frame=False, choices=(("1", "left"), ("2", "right")))
+    parsed = get_plugin_host(()).parser("vlmevalkit-exact", {}).parse("left", spec)
+    assert parsed.choice is None and "capital letters" in parsed.reason

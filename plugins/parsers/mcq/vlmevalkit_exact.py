@@ -27,7 +27,7 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 
@@ -86,10 +86,14 @@ class VlmevalkitExactParser(RuleParser):
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's reading without a judge"
     no_label_reason = f"the rule reads {NO_OPTION} (VLMEvalKit's no-option label, scored wrong)"
 
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """The rule's label; options not labelled by capital letters are refused, as VLMEvalKit asserts."""
+        if not all(len(label) == 1 and "A" <= label <= "Z" for label, _ in spec.choices):
+            return unparseable("VLMEvalKit's rule reads options labelled by single capital letters only")
+        return super().parse(text, spec)
+
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label; ``None`` for ``Z``."""
-        if not all(len(label) == 1 and "A" <= label <= "Z" for label, _ in spec.choices):
-            return None
         label = vlmevalkit_exact_label(text, spec.choices)
         return None if label == NO_OPTION else label
 
