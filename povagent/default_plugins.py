@@ -16,6 +16,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.probe",
     "povagent_plugins.scorers.choice",
     "povagent_plugins.scorers.navigate",
+    "povagent_plugins.scorers.choice_vlmevalkit",
+    "povagent_plugins.scorers.choice_sparbench",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -27,6 +29,13 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.robopoint",
     "povagent_plugins.parsers.internvl",
     "povagent_plugins.parsers.choice",
+    "povagent_plugins.parsers.mcq.viewspatial",
+    "povagent_plugins.parsers.mcq.mindcube",
+    "povagent_plugins.parsers.mcq.threedsrbench",
+    "povagent_plugins.parsers.mcq.vlmevalkit_exact",
+    "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
+    "povagent_plugins.parsers.mcq.lmms_mcq_extract",
+    "povagent_plugins.parsers.mcq.sparbench",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",

@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 from povagent import hookimpl
 from povagent.answers.choice import ChoiceQuestion
-from povagent.answers.spec import AnswerSpec
+from povagent.answers.spec import AnswerSpec, choice_answer_schema
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
@@ -49,9 +49,8 @@ def choice_answer_spec(instance: Instance) -> AnswerSpec:
     question = instance.question
     if question is None:
         raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
-    schema = {"type": "object", "required": ["choice"], "properties": {"choice": {"enum": list(question.labels)}}}
     width, height = instance.frame_size
-    return AnswerSpec(schema=schema, width=width, height=height, n_frames=len(instance.frames), asks_frame=False,
+    return AnswerSpec(schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames), asks_frame=False,
                       choices=question.options)  # fmt: skip
 
 

@@ -158,3 +158,8 @@ def point_answer_schema(width: int, height: int) -> dict[str, Any]:
             "y": {"type": "number", "minimum": 0, "maximum": height - 1},
         },
     }
+
+
+def choice_answer_schema(labels: tuple[str, ...]) -> dict[str, Any]:
+    """JSON Schema of a multiple-choice answer ``{"choice"}``: one of ``labels``."""
+    return {"type": "object", "required": ["choice"], "properties": {"choice": {"enum": list(labels)}}}

@@ -152,16 +152,20 @@ def parse_command(
         "a", "--condition", metavar="CONDITION", help="a (Inferred), b (Stated) or c (Given), or those names: A and B answers name a frame."
     ),
     frames: int = typer.Option(30, "--frames", min=1, metavar="N", help="Number of exploration frames shown (conditions a and b)."),
+    choices: str | None = typer.Option(
+        None, "--choices", metavar="LABEL=TEXT,...", help="Read a multiple-choice answer among these options "
+        "(A=right,B=left,C=front,D=back); the JSON's choice is the label read, or null."
+    ),
     plugin: list[str] = typer.Option(
         [], "--plugin", metavar="MODULE", help="Load a plugin module first: a dotted name or a .py path (repeatable)."
     ),
 ) -> None:
     """Parse one raw model answer (read from stdin) into JSON.
 
-    The JSON holds the parse status, the frame chosen and the point in pixels, and says
-    whether the parser had to repair the answer.
+    The JSON holds the parse status, the frame chosen and the point in pixels (or, with
+    ``--choices``, the option label chosen), and says whether the parser had to repair the answer.
     """
-    from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
+    from povagent.answers.spec import AnswerSpec, choice_answer_schema, frame_answer_schema, point_answer_schema
     from povagent.dataset.models import Condition
     from povagent.errors import ConfigError
     from povagent.plugins import get_plugin_host
@@ -171,7 +175,11 @@ def parse_command(
         cond = Condition(names.get(condition.lower(), condition.lower()))
     except ValueError:
         raise ConfigError(f"--condition: {condition!r} is not one of a, b, c (inferred, stated, given)") from None
-    if cond.uses_exploration_frames:
+    if choices is not None:
+        options = options_from_flag(choices)
+        labels = tuple(label for label, _ in options)
+        spec = AnswerSpec(schema=choice_answer_schema(labels), width=width, height=height, asks_frame=False, choices=options)
+    elif cond.uses_exploration_frames:
         spec = AnswerSpec(schema=frame_answer_schema(frames, width, height), width=width, height=height, n_frames=frames, asks_frame=True)
     else:
         spec = AnswerSpec(schema=point_answer_schema(width, height), width=width, height=height, n_frames=1, asks_frame=False)
@@ -186,8 +194,26 @@ def parse_command(
         "repair": parsed.repair,
         "points": [list(p) for p in parsed.points] if parsed.points else None,
         "span": parsed.span,
+        "choice": parsed.choice,
     }
     typer.echo(json.dumps(out, ensure_ascii=False))
+
+
+def options_from_flag(value: str) -> tuple[tuple[str, str], ...]:
+    """The ``(label, text)`` options of ``--choices A=right,B=left``; a malformed list is one
+    ``ConfigError`` line naming the option."""
+    from povagent.errors import ConfigError
+
+    options: list[tuple[str, str]] = []
+    for item in value.split(","):
+        label, sep, text = item.partition("=")
+        label, text = label.strip(), text.strip()
+        if not sep or not label or not text:
+            raise ConfigError(f"--choices: {item.strip()!r} is not LABEL=TEXT (write --choices \"A=right,B=left\")")
+        if any(label == seen for seen, _ in options):
+            raise ConfigError(f"--choices: the label {label!r} appears twice")
+        options.append((label, text))
+    return tuple(options)
 
 
 @app.command("rescore")

@@ -1,0 +1,35 @@
+"""What every upstream-rule parser shares: a rule gives a label or no label, and the parser says which.
+
+A rule parser reports the label its rule gives exactly, even a letter outside the question's
+options (``E`` on a four-option question), because the harness scores that letter as it is: a
+label no option carries is simply never the gold one. Without options (a point question) no
+rule is applied, as the ``choice`` parser does.
+"""
+
+from __future__ import annotations
+
+from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
+from povagent.interfaces import Parser
+
+
+class RuleParser(Parser):
+    """A parser applying one upstream rule; subclasses implement :meth:`label`."""
+
+    answer_types = frozenset({"choice"})
+    reads = ""
+    beside_official = ""
+    #: Why a reply with no label is not one (the rule's own word for it, e.g. VLMEvalKit's ``Z``).
+    no_label_reason = "the rule reads no option label"
+
+    def label(self, text: str, spec: AnswerSpec) -> str | None:
+        """The label the rule reads in ``text``, or ``None`` where it reads none."""
+        raise NotImplementedError
+
+    def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
+        """The rule's label as a typed parse; never raises."""
+        if not spec.choices:
+            return unparseable("the question has no options")
+        label = self.label(text or "", spec)
+        if label is None:
+            return unparseable(self.no_label_reason, span=(text or "")[:200] or None)
+        return ParsedAnswer(status=ParseStatus.OK, choice=label, span=(text or "")[:200])

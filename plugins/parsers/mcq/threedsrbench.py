@@ -1,0 +1,61 @@
+"""The ``3dsrbench-lmms`` parser: lmms-eval's ``3dsrbench`` rule (3DSRBench publishes no rule of its own
+that lmms-eval follows; VLMEvalKit's reading of the same set is ``vlmevalkit-exact``).
+
+The rule (``extract_answer`` and ``process_results`` of lmms-eval's
+``lmms_eval/tasks/3dsrbench/utils.py``), after lmms-eval's reasoning strip: the first pattern
+that matches anywhere gives its capital ``A``-``D`` (its first match, not its last):
+the reply opening with X and then a period, space or ``)``; the reply being X alone;
+"answer" then spaces or colons then X; "the answer is X"; "my answer is X"; ``(X)``; ``X.``;
+finally any X standing alone. So "A chair blocks the view, so the answer is B." is ``A``.
+"""
+
+from __future__ import annotations
+
+import re
+
+from povagent import hookimpl
+from povagent.answers.spec import AnswerSpec
+from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
+from povagent_plugins.parsers.mcq.rule import RuleParser
+from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL
+
+_IN_ORDER = tuple(re.compile(p) for p in (
+    r"^([A-D])[\.\s\)]",
+    r"^([A-D])$",
+    r"[Aa]nswer[:\s]+([A-D])",
+    r"[Tt]he answer is[:\s]+([A-D])",
+    r"[Mm]y answer is[:\s]+([A-D])",
+    r"\(([A-D])\)",
+    r"([A-D])\.",
+    r"\b([A-D])\b",
+))  # fmt: skip
+
+
+def threedsrbench_lmms_label(text: str) -> str | None:
+    """The label lmms-eval's 3DSRBench rule reads in ``text`` (module docstring), or ``None``."""
+    text = strip_reasoning_blocks(text)
+    if not text:
+        return None
+    for pattern in _IN_ORDER:
+        if found := pattern.search(text):
+            return found.group(1)
+    return None
+
+
+class ThreeDSRBenchLmmsParser(RuleParser):
+    """lmms-eval's 3DSRBench rule (module docstring)."""
+
+    reads = "the first of eight capital A-D patterns that matches (lmms-eval's 3dsrbench)"
+    beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's reading of 3DSRBench"
+
+    def label(self, text: str, spec: AnswerSpec) -> str | None:
+        """The rule's label."""
+        return threedsrbench_lmms_label(text)
+
+
+@hookimpl
+def register_parsers(register) -> None:
+    """Contribute the 3dsrbench-lmms parser."""
+    register("3dsrbench-lmms", ThreeDSRBenchLmmsParser, description=(
+        f"lmms-eval's 3DSRBench rule: the first of eight A-D patterns (lmms_eval/tasks/3dsrbench/utils.py "
+        f"extract_answer @ {LMMS_EVAL})"))  # fmt: skip
