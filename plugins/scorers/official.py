@@ -40,6 +40,7 @@ class OfficialScorer(Scorer):
     an answer carries (the active mode's rendered views)."""
 
     metrics = OFFICIAL_METRICS
+    protocol = "normalized_l2"
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if not answer.answered:

@@ -391,7 +391,7 @@ def build_gallery(
             | diagnosis_fields(o, frame)
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
-                if o.scorer == "success"
+                if o.protocol == "marked_hit"
                 else {}
             )
         )

@@ -41,7 +41,7 @@ def official_beside_table(collection: Collection) -> Table | None:
 
     by_system: dict[str, list] = {}
     for run in collection.runs:
-        if run.scorer == "official" and _repaired(run):
+        if run.protocol == "normalized_l2" and _repaired(run):
             by_system.setdefault(run.system, []).extend(run.rows)
     if not by_system:
         return None
