@@ -35,6 +35,7 @@ from povagent.report.baseline_systems import is_baseline_system, is_center_syste
 from povagent.report.collect import Collection, Observation
 from povagent.report.run_summaries import declared_in_summary
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
+from povagent.scoring.bootstrap import Estimate
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 from povagent.scoring.metrics import Metric, ValuedRow, metric_estimates
 from povagent.scoring.protocols import PROTOCOLS
@@ -331,7 +332,7 @@ def analyze(
 
     systems = collection.systems
     center_cells = [s for s in systems if is_center_system(collection.system_axes(s), s)]
-    protocols = [p for p in PROTOCOLS if any(o.protocol == p for o in obs)]
+    protocols: list[str] = [p for p in PROTOCOLS if any(o.protocol == p for o in obs)]
     scorers = [next(o.scorer for o in obs if o.protocol == p) for p in protocols]
     error_scorer = scorers[protocols.index("normalized_l2")] if "normalized_l2" in protocols else None
     hit_scorer = scorers[protocols.index("marked_hit")] if "marked_hit" in protocols else None
@@ -393,7 +394,9 @@ def analyze(
     # what to compare, and the name a comparison shows: the protocol scorer's, or "counted"
     compared: list[tuple[Compared, str]] = []
     if error_scorer is not None:
-        compared += [("l2", error_scorer)] + ([("counted", "counted")] if fill is not None else [])
+        compared.append(("l2", error_scorer))
+        if fill is not None:
+            compared.append(("counted", "counted"))
     if hit_scorer is not None:
         compared.append(("hit", hit_scorer))
     for a, b in pairs:
@@ -460,10 +463,12 @@ def declared_metric_estimates(
     for scorer, metrics in declared.items():
         for system in systems:
             rows = [ValuedRow(o.condition, o.direction, o.metric_values) for o in by_system.get(system, []) if scorer in o.metric_values]
+
+            def cell(group: list[ValuedRow], scorer: str = scorer, metrics: tuple[Metric, ...] = tuple(metrics.values())) -> dict[str, Estimate]:
+                return metric_estimates(group, scorer, metrics, n_boot, seed)
+
             if rows:
-                estimates.setdefault(scorer, {})[system] = slices(
-                    rows, lambda group, scorer=scorer, metrics=metrics: metric_estimates(group, scorer, list(metrics.values()), n_boot, seed)
-                )
+                estimates.setdefault(scorer, {})[system] = slices(rows, cell)
     return declared, estimates
 
 

@@ -347,7 +347,7 @@ def observation_of(
     so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
     No protocol: answered when the row's status says so (its declared metrics say the rest).
     """
-    fields = row.scores.get(scorer) or {} if scorer else {}
+    fields = (row.scores.get(scorer) or {}) if scorer else {}
     hit_fields = fields if protocol == "marked_hit" else {}
     off = fields if protocol == "normalized_l2" else {}
     if protocol == "marked_hit":
@@ -393,7 +393,7 @@ def observation_of(
         hit_radius_px=hit_fields.get("hit_radius_px"),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
         metric_values=row_metric_values(row, declared) if declared else {},
-        **diagnosis_of(row),
+        **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
 
 
@@ -402,12 +402,13 @@ def _uv(value: Any) -> tuple[float, float] | None:
     return (float(value[0]), float(value[1])) if ok else None
 
 
-def diagnosis_of(row: ResultRow) -> dict[str, Any]:
+def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
     """An answered row's ``diagnose`` and ``relation`` scores as :class:`Observation` fields
-    (read as stored, never recomputed; ``{}`` when neither scored it)."""
+    (read as stored, never recomputed; ``{}`` when neither scored it); ``error_scorer`` is the
+    run's ``normalized_l2`` scorer."""
     from povagent.run.summary import diagnosed_row
 
-    diagnosed = diagnosed_row(row)
+    diagnosed = diagnosed_row(row, error_scorer)
     if diagnosed is None:
         return {}
     fields = row.scores.get("diagnose") or {}

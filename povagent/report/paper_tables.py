@@ -27,7 +27,7 @@ from typing import Any, Callable
 from povagent.dataset.models import Condition
 from povagent.report.analysis import Analysis
 from povagent.report.statistics import CellStats, Estimate
-from povagent.report.tables import Cell, Column, Row, Table
+from povagent.report.tables import Cell, Column, Kind, Row, Table
 
 
 def condition_label(c: str) -> str:
@@ -325,7 +325,7 @@ def declared_metric_tables(a: Analysis) -> list[Table]:
 def _declared_metric_table(a: Analysis, scorer: str, m: Any, by_system: dict[str, Any], slice_key: str, word: str,
                            keys: list[tuple[str, str]]) -> Table:  # fmt: skip
     """One declared metric per system: a column per slice of ``slice_key``, then overall."""
-    kind = "rate" if m.aggregation == "rate" else "l2"
+    kind: Kind = "rate" if m.aggregation == "rate" else "l2"
     columns = [Column(text, kind, m.better) for _, text in keys] + [Column("Overall", kind, m.better)]
     safe = re.sub(r"[^A-Za-z0-9_]+", "_", f"{scorer}_{m.name}")
     key = f"metric_{safe}" + ("" if slice_key == "per_condition" else "_by_direction")

@@ -61,6 +61,7 @@ from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, st
 from povagent.run.summary import SummaryDigest, declared_metrics, summarize_digests, summary_digest, write_summary
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.metrics import Declared
+from povagent.scoring.protocols import scorer_protocols
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
@@ -200,14 +201,8 @@ class PipelineRun:
 
     # -- one key -------------------------------------------------------------------------------
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
-        self._log.info(
-            "retry",
-            row=row_id,
-            attempt=failed_attempts,
-            error_type=error_type_of(exc),
-            error=self._redactor.text(f"{type(exc).__name__}: {exc}"),
-            wait_s=round(wait_s, 3),
-        )
+        self._log.info("retry", row=row_id, attempt=failed_attempts, error_type=error_type_of(exc),
+                       error=self._redactor.text(f"{type(exc).__name__}: {exc}"), wait_s=round(wait_s, 3))  # fmt: skip
 
     def _log_bug(self, row_id: str, message: str, trace: str) -> None:
         self._log.error("backend_exception", row=row_id, error=message, traceback=trace)
@@ -232,7 +227,7 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        digest = summary_digest(row, self._declared)
+        digest = summary_digest(row, self._declared, self._protocols)
         self._digests[row.key] = digest
         s = self.stats
         s.rows_written += 1
@@ -289,6 +284,7 @@ class PipelineRun:
         with remote_code_granted(self.trust_remote_code):
             self.components = create_components(config, self.host)
         self._declared = declared_metrics(self.components.scorers)  # what each row's digest keeps
+        self._protocols: dict[str, str] = dict(scorer_protocols(self.components.scorers))  # which follows which protocol
         self.config_hash = pipeline_hash(config, self.components.strategy)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
@@ -331,7 +327,7 @@ class PipelineRun:
         """The run proper, with the run folder locked against a second process."""
         config = self.config
         runs = config.run_indices
-        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared)
+        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared, protocols=self._protocols)
         retried = plan.failed if self.retry_failed else set()
         if retried:
             # the failed rows go before their keys run again, so a retried key has one row

@@ -10,7 +10,7 @@ Only a lookup: nothing here reads a run folder or scores a row.
 
 from __future__ import annotations
 
-from typing import Iterable, Mapping, get_args
+from typing import Any, Mapping, get_args
 
 from povagent.interfaces import ScoreProtocol
 
@@ -33,7 +33,13 @@ def registered_protocols() -> dict[str, ScoreProtocol]:
     return {e.name: p for e in host.entries("scorer") if (p := getattr(e.factory, "protocol", None)) in PROTOCOLS}
 
 
-def scorer_following(protocol: ScoreProtocol, names: Iterable[str], known: Mapping[str, ScoreProtocol] | None = None) -> str | None:
-    """The first of ``names`` whose scorer follows ``protocol`` (``None``: none does)."""
-    table = registered_protocols() if known is None else known
-    return next((n for n in names if table.get(n) == protocol), None)
+def scorer_protocols(scorers: Mapping[str, Any]) -> dict[str, ScoreProtocol]:
+    """``{name: protocol}`` of a run's scorer objects (or factories) that follow one."""
+    return {name: p for name, s in scorers.items() if (p := getattr(s, "protocol", None)) in PROTOCOLS}
+
+
+def following(protocols: Mapping[str, str], protocol: str, scores: Mapping[str, Any] | None = None) -> str | None:
+    """The scorer of ``protocols`` that follows ``protocol``: the one whose fields ``scores`` (a
+    row's) carry, else the first; ``None`` when none follows it."""
+    names = [n for n, p in protocols.items() if p == protocol]
+    return next((n for n in names if scores and n in scores), names[0] if names else None)
