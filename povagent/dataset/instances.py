@@ -46,6 +46,9 @@ class Instance:
     observer_object: SceneObject
     anchor_object: SceneObject
     observer_camera: Camera
+    #: The answer type the instance asks for (a registered ``AnswerType``'s name): a strategy
+    #: asking another is refused at load (:func:`povagent.answers.types.answer_type_misfit`).
+    answer_type: str = "point"
 
     @property
     def id(self) -> str:

@@ -36,7 +36,7 @@ from povagent.results.rows import ResultRow, read_rows
 from povagent.results.transcript import transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.metrics import Declared, row_metric_values
-from povagent.scoring.protocols import PROTOCOLS, registered_protocols
+from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -101,6 +101,8 @@ class Observation:
     relation: bool | None = None
     #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
     metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
+    answer: str | None = None
 
 
 @dataclass
@@ -186,12 +188,10 @@ def run_scorer(config: dict[str, Any], rows: list[ResultRow]) -> str:
     Read from the config first because a row that failed before scoring (an infra error) has
     no scores, yet still counts: as a non-response, and for a hit protocol as a failure.
     """
-    from povagent.config.models import PipelineConfig
-
     known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
     carried = list(dict.fromkeys(name for row in rows for name in row.scores))
-    default = [] if named else [s.name for s in PipelineConfig.model_fields["scorers"].get_default(call_default_factory=True)]
+    default = [] if named else default_scorers()
     for candidates in (named, carried, default):
         for protocol in PROTOCOLS:
             found = next((n for n in candidates if known.get(n) == protocol), None)
@@ -393,6 +393,7 @@ def observation_of(
         hit_radius_px=hit_fields.get("hit_radius_px"),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
         metric_values=row_metric_values(row, declared) if declared else {},
+        answer=shown_answer(row.prediction.answer_type, row.prediction.value),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
 

@@ -383,6 +383,7 @@ def build_gallery(
                 "y": o.y,
                 "img": key,
                 "an": o.answered,
+                "v": o.answer,
                 "be": from_above,
             }
             | ({"nt": len(transcript), "tr": transcript} if transcript else {})

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from povagent.answers.types import answer_type_misfit
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.config.remote_code import remote_code_granted
@@ -300,6 +301,8 @@ class PipelineRun:
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
         self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
+        if self.components.answer_type is not None and (misfit := answer_type_misfit(config.strategy.name, self.components.answer_type, instances)):
+            raise ConfigError(misfit)  # a strategy asking a type the instances do not ask for: before any request
         # ours to write, or refused before anything is written (someone's folder, read-only)
         claim_folder(self.run_dir, "run")
         self.components.strategy.use_run_folder(self.run_dir)

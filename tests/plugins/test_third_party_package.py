@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -144,6 +145,18 @@ def test_the_report_has_a_table_for_the_scorer(passive_run, tmp_path):
     assert "66.7%" in tables and f"{(GIVEN_OFFSET + FRAME0_OFFSET) / 2:.3f}" in tables
 
 
+def test_the_console_prints_no_error_table_for_a_run_without_a_pixel_scorer(passive_run):
+    _, printed = passive_run
+    assert "mean L2" not in printed and "strict L2" not in printed
+
+
+def test_rescore_prints_no_error_table_for_a_run_without_a_pixel_scorer(passive_run):
+    folder, _ = passive_run
+    result = CliRunner().invoke(app, ["rescore", str(folder), "--parser", "anchor-json"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "scorer anchor-check" in result.stdout and "mean L2" not in result.stdout
+
+
 @pytest.fixture
 def passive_report(passive_run, tmp_path):
     """``povagent report`` of the passive run (the dataset found through its config): the report folder."""
@@ -182,6 +195,16 @@ def test_the_reports_response_rate_counts_the_rows_answered(passive_report):
     (system,) = summary["systems"]
     assert system["overall"]["response_rate"]["value"] == 1.0
     assert system["overall"]["official_mean_l2"]["value"] is None
+
+
+def test_the_report_gallery_shows_each_answer_as_its_type_shows_it(passive_run, tmp_path):
+    folder, _ = passive_run
+    out = tmp_path / "gallery-report"
+    result = CliRunner().invoke(app, ["report", str(folder), "--out", str(out), "--bootstrap", "0"])
+    assert result.exit_code == 0, result.output
+    page = (out / "report.html").read_text(encoding="utf-8")
+    shown = set(re.findall(r'"v": ?"([^"]*)"', page))
+    assert shown == {"anchor at (256.0, 256.0) in image None", "anchor at (256.0, 256.0) in image 0"}
 
 
 def calls(*pairs: tuple[str, object]) -> Reply:
