@@ -251,6 +251,9 @@ class Scorer(abc.ABC):
     #: sections of their own (:data:`ScoreProtocol`); ``None``, the usual case, when its declared
     #: metrics say all there is to show.
     protocol: ClassVar[ScoreProtocol | None] = None
+    #: Whether it projects the instance's 3D target (a real-world set, marked by hand in 2D,
+    #: refuses such a scorer before any request).
+    needs_3d_target: ClassVar[bool] = False
 
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:

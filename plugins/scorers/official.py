@@ -41,6 +41,7 @@ class OfficialScorer(Scorer):
 
     metrics = OFFICIAL_METRICS
     protocol = "normalized_l2"
+    needs_3d_target = True
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if not answer.answered:

@@ -300,7 +300,7 @@ class PipelineRun:
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
-        self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
+        self.dataset.check_scorers(self.components.scorers)  # a real-world set has no 3D GT
         if self.components.answer_type is not None and (misfit := answer_type_misfit(config.strategy.name, self.components.answer_type, instances)):
             raise ConfigError(misfit)  # a strategy asking a type the instances do not ask for: before any request
         # ours to write, or refused before anything is written (someone's folder, read-only)
