@@ -70,6 +70,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "observer_object": "The furniture the speaker used (for markers, e.g. `o-plot`).",
         "anchor_object": "The object the sentence names as the reference (for markers).",
         "observer_camera": "The speaker's camera (the Given view's camera).",
+        "answer_type": "The answer type the instance asks for (`point` unless its loader says otherwise); a strategy asking another is refused at load.",
     },
     "Frame": {
         "index": "Position in `Instance.frames`: what an answer's `selected_image` names.",
