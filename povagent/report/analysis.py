@@ -20,7 +20,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
@@ -33,11 +33,10 @@ from povagent.report.baseline import (
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
 from povagent.report.collect import Collection, Observation
-from povagent.report.run_summaries import declared_in_summary
+from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
-from povagent.scoring.bootstrap import Estimate
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
-from povagent.scoring.metrics import Metric, ValuedRow, metric_estimates
+from povagent.scoring.metrics import Metric
 from povagent.scoring.protocols import PROTOCOLS
 
 #: Above this many systems, paired comparisons are against the first system only.
@@ -168,6 +167,7 @@ class Analysis:
             "conditions": self.conditions,
             "directions": self.directions,
             "systems": [s.as_dict() for s in self.systems],
+            "metrics": declared_estimates_json(self.declared_estimates),
             "paired_comparisons": [c.as_dict() for c in self.comparisons],
             "notes": self.notes,
         }
@@ -445,31 +445,6 @@ def analyze(
         declared=declared,
         declared_estimates=estimates,
     )
-
-
-def declared_metric_estimates(
-    collection: Collection, by_system: Mapping[str, list[Observation]], systems: list[str], n_boot: int, seed: int
-) -> tuple[dict[str, dict[str, Metric]], dict[str, dict[str, dict[str, Any]]]]:
-    """The metrics the runs' scorers declared, and per scorer and system each one's mean (a
-    rate: of true values) with its bootstrap CI, overall and per slice (condition, direction),
-    from the values each row's observation carries, through the one estimate ``summary.json``
-    uses (:func:`~povagent.scoring.metrics.metric_estimates`)."""
-    declared: dict[str, dict[str, Metric]] = {}
-    for run in collection.runs:
-        for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
-            for m in run_metrics:
-                declared.setdefault(scorer, {}).setdefault(m.name, m)
-    estimates: dict[str, dict[str, dict[str, Any]]] = {}
-    for scorer, metrics in declared.items():
-        for system in systems:
-            rows = [ValuedRow(o.condition, o.direction, o.metric_values) for o in by_system.get(system, []) if scorer in o.metric_values]
-
-            def cell(group: list[ValuedRow], scorer: str = scorer, metrics: tuple[Metric, ...] = tuple(metrics.values())) -> dict[str, Estimate]:
-                return metric_estimates(group, scorer, metrics, n_boot, seed)
-
-            if rows:
-                estimates.setdefault(scorer, {})[system] = slices(rows, cell)
-    return declared, estimates
 
 
 def _is_realworld(dataset: Any) -> bool:

@@ -156,8 +156,10 @@ def condition_direction_table(a: Analysis) -> Table:
 def response_table(a: Analysis) -> Table:
     """Systems x conditions, response rate, plus all conditions."""
     cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] + [Column("Overall", "rate", "higher")]
+    # a response as the protocol scorer counts it, else as the rows' status says
+    what = "a parseable coordinate" if a.has_official or a.has_success else "a row whose status is answered"
     caption = (
-        "Answered / total instances (a response is a parseable coordinate; unparseable answers and "
+        f"Answered / total instances (a response is {what}; unparseable answers and "
         "API failures are non-responses), averaged over runs; 95% bootstrap CIs. Overall pools "
         "every instance, which equals the paper's average over conditions when, as in POVBench, "
         "each condition has the same instances. " + bold_note(a)

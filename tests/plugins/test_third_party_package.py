@@ -175,6 +175,14 @@ def test_the_report_has_a_table_per_declared_metric_per_condition(passive_report
     assert f"{GIVEN_OFFSET:.3f}" in offset and f"{(GIVEN_OFFSET + FRAME0_OFFSET) / 2:.3f}" in offset
 
 
+def test_the_reports_summary_holds_each_declared_metric_per_system_and_slice(passive_report):
+    summary = json.loads((passive_report / "summary.json").read_text(encoding="utf-8"))
+    center = summary["metrics"]["anchor-check"]["center"]
+    assert center["overall"]["anchor_in_view"]["value"] == pytest.approx(8 / 12) and center["overall"]["anchor_in_view"]["n"] == 12
+    assert [center["per_condition"][c]["anchor_in_view"]["value"] for c in "abc"] == [0.5, 0.5, 1.0]
+    assert center["per_condition"]["c"]["anchor_offset"]["value"] == pytest.approx(GIVEN_OFFSET, abs=1e-6)
+
+
 def test_the_report_plots_each_declared_metric(passive_report):
     plots = sorted(p.name for p in (passive_report / "plots").iterdir())
     assert plots == ["metric_anchor_check_anchor_in_view.svg", "metric_anchor_check_anchor_offset.svg"]
@@ -195,6 +203,7 @@ def test_the_reports_response_rate_counts_the_rows_answered(passive_report):
     (system,) = summary["systems"]
     assert system["overall"]["response_rate"]["value"] == 1.0
     assert system["overall"]["official_mean_l2"]["value"] is None
+    assert "a response is a row whose status is answered" in (passive_report / "tables" / "response_rates.md").read_text(encoding="utf-8")
 
 
 def test_the_report_gallery_shows_each_answer_as_its_type_shows_it(passive_run, tmp_path):
