@@ -90,7 +90,7 @@ def register_scorers(register: Register) -> None:
     JSON-able dict, stored in each answered row as ``scores[name]``; ``summary.json``'s
     ``scorers`` section averages its number fields and counts its true/false ones. The metrics
     its class declares (``Scorer.metrics``: :class:`povagent.scoring.metrics.Metric`) get
-    ``summary.json``'s ``metrics`` section, a console table and a report table.
+    ``summary.json``'s ``metrics`` section, a console table, and a report table and plot per metric.
     """
 
 

@@ -11,7 +11,7 @@ import abc
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Mapping, Protocol
+from typing import TYPE_CHECKING, Any, Awaitable, Callable, ClassVar, Literal, Mapping, Protocol
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.exchange.messages import Request, Response
@@ -235,12 +235,29 @@ class Parser(abc.ABC):
         """A typed parse of ``text`` given what was asked (``spec``)."""
 
 
+#: The scoring protocols the core breaks down beyond declared metrics, each a fixed set of score
+#: fields. ``normalized_l2``: POVBench's error (``answered``, ``l2``, ``l2_strict``,
+#: ``gt_in_frame``, ``gt_behind``, ``gt_u``, ``gt_v``), the top-level breakdown of
+#: ``summary.json``, the report's error tables, centre baseline and paired comparisons.
+#: ``marked_hit``: a hit against hand-marked ground truth (``answered``, ``success``,
+#: ``frame_has_gt``, ``distance_norm``, ``hit_radius_px``), the ``success`` section of
+#: ``summary.json`` and the report's success-rate tables.
+ScoreProtocol = Literal["normalized_l2", "marked_hit"]
+
+
 class Scorer(abc.ABC):
     """Scores one parsed answer against the ground truth."""
 
     #: The numbers this scorer's fields give (:class:`~povagent.scoring.metrics.Metric`):
     #: ``summary.json``'s ``metrics`` section, the console and the report show each, per slice.
     metrics: ClassVar[tuple[Metric, ...]] = ()
+    #: The protocol this scorer's fields follow, when the summary and the report break it down in
+    #: sections of their own (:data:`ScoreProtocol`); ``None``, the usual case, when its declared
+    #: metrics say all there is to show.
+    protocol: ClassVar[ScoreProtocol | None] = None
+    #: Whether it projects the instance's 3D target (a real-world set, marked by hand in 2D,
+    #: refuses such a scorer before any request).
+    needs_3d_target: ClassVar[bool] = False
 
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:

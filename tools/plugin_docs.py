@@ -71,6 +71,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "anchor_object": "The object the sentence names as the reference (for markers).",
         "observer_camera": "The speaker's camera (the Given view's camera).",
         "question": "The multiple-choice question asked (`ChoiceQuestion`: question, labelled options, gold label, category), or `None` for the point task.",
+        "answer_type": "The answer type the instance asks for (`point` unless its loader says otherwise; `choice` for an instance carrying a `question`); a strategy asking another is refused at load.",
     },
     "Frame": {
         "index": "Position in `Instance.frames`: what an answer's `selected_image` names.",

@@ -104,6 +104,8 @@ def answered_point(instance: Instance, answer: ParsedAnswer) -> tuple[Frame, flo
 class DiagnoseScorer(Scorer):
     """First failing step (frame, anchor, viewpoint, placement) and the egocentric-bias vote."""
 
+    needs_3d_target = True
+
     def __init__(self) -> None:
         self.records = TargetRecords()
 

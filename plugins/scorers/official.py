@@ -40,6 +40,8 @@ class OfficialScorer(Scorer):
     an answer carries (the active mode's rendered views)."""
 
     metrics = OFFICIAL_METRICS
+    protocol = "normalized_l2"
+    needs_3d_target = True
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if not answer.answered:

@@ -28,6 +28,7 @@ class ProbeScorer(Scorer):
     """The pointing error against one object of the instance (``role``: anchor or observer)."""
 
     role: ClassVar[str] = "anchor"
+    needs_3d_target = True
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The pointing error of one answer (``{"answered": False}`` without a scorable answer)."""

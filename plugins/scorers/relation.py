@@ -24,6 +24,8 @@ from povagent_plugins.scorers.diagnose import TargetRecords, answered_point
 class RelationScorer(Scorer):
     """Success when the point lies in the relation region of the answered frame."""
 
+    needs_3d_target = True
+
     def __init__(self) -> None:
         self.records = TargetRecords()
 

@@ -65,6 +65,7 @@ class SuccessScorer(Scorer):
                over="all"),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answered / total instances.", over="all"),
     )  # fmt: skip
+    protocol = "marked_hit"
 
     def __init__(self, radius: float = DEFAULT_RADIUS, radius_px: float | None = None) -> None:
         if not isinstance(radius, (int, float)) or isinstance(radius, bool) or radius <= 0:

@@ -56,6 +56,7 @@ from povagent.exchange.messages import Request, Response
 from povagent.geometry.goals import FLOOR, GoalCamera, Plane
 from povagent.geometry.letterbox import DEFAULT_PAD_COLOR
 from povagent.interfaces import Backend, Parser, PermanentBackendError, Strategy, TransientBackendError
+from povagent.results.official_reading import OFFICIAL_PARSER
 
 #: Default wall-clock budget of one ``locate`` call (seconds), every attempt included.
 DEFAULT_TIMEOUT_S = 120.0
@@ -132,7 +133,7 @@ class GroundingAgent:
         if parser is None:
             # a model profile knows how its family writes points (Qwen 0-1000, Gemini [y, x] ...)
             profile = getattr(self.backend, "profile", None)
-            parser = getattr(profile, "default_parser", None) or "official"
+            parser = getattr(profile, "default_parser", None) or OFFICIAL_PARSER
         if isinstance(parser, Parser):
             self.parser: Parser = parser
         else:

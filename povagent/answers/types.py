@@ -14,7 +14,7 @@ Only the description of a type lives here; nothing here reads files or knows a p
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping
 
 if TYPE_CHECKING:
     from povagent.answers.spec import ParsedAnswer
@@ -36,3 +36,23 @@ class AnswerType:
     gold: Callable[[Instance], Any]
     #: How a row shows a value, in one line.
     show: Callable[[Mapping[str, Any]], str]
+    #: The answer type this one refines (its value has that type's shape, e.g. a point read as
+    #: marking another object): it answers instances asking either (``None``: only its own).
+    refines: str | None = None
+
+    def answers(self, asked: str) -> bool:
+        """Whether an answer of this type answers an instance asking for ``asked``."""
+        return asked in (self.name, self.refines)
+
+
+def answer_type_misfit(strategy: str, answer_type: AnswerType, instances: Iterable[Instance]) -> str | None:
+    """One line refusing a pipeline whose strategy (``strategy``, asking ``answer_type``) cannot
+    answer the first instance asking another type, or ``None`` when it answers them all: a
+    choice set asked for points would score every row as a parse error, silently."""
+    for instance in instances:
+        if not answer_type.answers(instance.answer_type):
+            return (
+                f"strategy {strategy!r} asks for a {answer_type.name!r} answer, but instance {instance.id} asks for "
+                f"a {instance.answer_type!r} answer: choose a strategy that asks for {instance.answer_type!r}"
+            )
+    return None

@@ -94,11 +94,6 @@ def render_summary(summary: Breakdown, title: str | PathTitle = "POVBench scores
     columns = [("slice", "label")] + [(h, "number") for h in ("mean L2", "std", "resp. rate", "GT in frame", "strict L2", "n / total")]
     Console().print(fitted_table(columns, rows, title=title, caption=caption))
 
-
-#: The scorer ``score`` scores as (``score`` counts rows as the official scorer does): its
-#: declared metrics are the summary's ``metrics`` section.
-OFFICIAL_SCORER = "official"
-
 #: The keys of a breakdown that ``score --json`` prints.
 SCORE_JSON_KEYS = (
     "overall",
@@ -156,6 +151,7 @@ def score_command(
     from povagent.run.summary import declared_metrics
     from povagent.run.summary_model import ScoreSummary
     from povagent.scoring.official_release import read_release
+    from povagent.scoring.protocols import following, registered_protocols
 
     if counting not in ("official", "povagent"):
         typer.echo(f"error: --counting must be official or povagent (got {counting!r})", err=True)
@@ -166,8 +162,9 @@ def score_command(
         # under official counting the official rows still see such a pair as the official scorer does
         how = " by povagent's loader (official rows are counted against the release as officially)" if release is not None else ""
         typer.echo(f"warning: dataset problem, skipped{how}: {p}", err=True)
-    # the official metric is the official scorer's: its declared metrics, as run and rescore report them
-    declared = declared_metrics({OFFICIAL_SCORER: get_plugin_host().scorer(OFFICIAL_SCORER)})
+    # the official metric is the normalized_l2 scorer's: its declared metrics, as run and rescore report them
+    official = following(registered_protocols(), "normalized_l2")
+    declared = declared_metrics({official: get_plugin_host().scorer(official)} if official is not None else {})
     summary, warnings = score_predictions(predictions, ds, release, declared)
     # the release's own (its exploration logs are read as predictions name their houses)
     for w in release.warnings if release is not None else []:

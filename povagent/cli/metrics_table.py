@@ -38,6 +38,18 @@ def metrics_rows(metrics: ScorerMetrics) -> tuple[list[str], list[list[str]]]:
     return headers, rows
 
 
+def protocol_scorers(summary: RunSummary | ScoreSummary, protocol: str) -> list[str]:
+    """The scorers of the summarized rows that follow ``protocol`` (``Scorer.protocol``): those
+    the pipeline names, else those that declared metrics (a rescore), else, for a summary written
+    before either was recorded, the pipeline's default scorers."""
+    from povagent.scoring.protocols import default_scorers, registered_protocols
+
+    pipeline = getattr(summary, "pipeline", None)
+    names = list(pipeline.scorers) if pipeline is not None else list(summary.metrics or {}) or default_scorers()
+    known = registered_protocols()
+    return [n for n in names if known.get(n) == protocol]
+
+
 def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, shown: Iterable[str] = ()) -> None:
     """Print a table per scorer in ``summary.metrics`` not in ``shown`` (scorers whose numbers
     a table of their own already printed)."""

@@ -26,16 +26,16 @@ def _summary_table(summary: RunSummary, title: PathTitle, run_dir: Path) -> None
     """The run's score tables under ``title`` (the run folder and what ran)."""
     from povagent.cli.dataset import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
-    from povagent.cli.metrics_table import render_metrics
+    from povagent.cli.metrics_table import protocol_scorers, render_metrics
 
     shown = []  # scorers whose numbers a table of their own printed
     success = _success_summary(summary, run_dir)
     if success is not None:  # a real-world set: success rates, as the paper reports them
         _success_table(success, title)
-        shown.append("success")
+        shown += protocol_scorers(summary, "marked_hit")
     if _scored_officially(summary):
         render_summary(summary, title=title)
-        shown.append("official")
+        shown += protocol_scorers(summary, "normalized_l2")
     render_metrics(summary, title, shown)  # every other scorer's declared metrics
     render_diagnostics(summary)  # additions, under the official table
 
@@ -60,8 +60,11 @@ def _success_summary(summary: RunSummary, run_dir: Path) -> SuccessBreakdown | N
 
 
 def _scored_officially(summary: RunSummary) -> bool:
-    """Did the run's scorers include ``official`` (a summary without the pipeline: yes)?"""
-    return summary.pipeline is None or "official" in summary.pipeline.scorers
+    """Did a scorer of the run follow POVBench's ``normalized_l2`` protocol (a summary without the
+    pipeline: its default scorers did)?"""
+    from povagent.cli.metrics_table import protocol_scorers
+
+    return bool(protocol_scorers(summary, "normalized_l2"))
 
 
 def _what_ran(summary: RunSummary, backend: str) -> str:

@@ -248,7 +248,7 @@ def rescore_command(
     from povagent.cli.console_width import PathTitle
     from povagent.cli.dataset import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
-    from povagent.cli.metrics_table import render_metrics
+    from povagent.cli.metrics_table import protocol_scorers, render_metrics
     from povagent.cli.official_beside import render_official_beside
     from povagent.run.rescore import rescore_run
 
@@ -263,8 +263,10 @@ def rescore_command(
         typer.echo(json.dumps(finite_json(summary.model_dump(mode="json", exclude_unset=True)), indent=2))
     else:
         title = PathTitle(run_dir, f" re-parsed with {parser}")
-        render_summary(summary, title=title)
-        render_metrics(summary, title, shown=["official"])  # every other scorer's declared metrics
+        official = protocol_scorers(summary, "normalized_l2")
+        if official:  # POVBench's error table, for rows a normalized_l2 scorer scored
+            render_summary(summary, title=title)
+        render_metrics(summary, title, shown=official)  # every other scorer's declared metrics
         render_official_beside(summary, parser, reads_officially=summary.official_parse is None, run_dir=run_dir)
         render_diagnostics(summary)
         typer.echo(f"parse status: {json.dumps(summary.parse_status)}; repaired: {summary.repaired}")

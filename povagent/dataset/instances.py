@@ -50,6 +50,14 @@ class Instance:
     #: The multiple-choice question the instance asks (:mod:`povagent.answers.choice`), or
     #: ``None`` for POVBench's point task.
     question: ChoiceQuestion | None = None
+    #: The answer type the instance asks for (a registered ``AnswerType``'s name): a strategy
+    #: asking another is refused at load (:func:`povagent.answers.types.answer_type_misfit`).
+    #: An instance carrying a :attr:`question` asks for a ``choice`` unless it names another type.
+    answer_type: str = "point"
+
+    def __post_init__(self) -> None:
+        if self.question is not None and self.answer_type == "point":
+            object.__setattr__(self, "answer_type", "choice")
 
     @property
     def id(self) -> str:

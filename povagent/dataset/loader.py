@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Iterable, cast
+from typing import Any, Iterable, Mapping, cast
 
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
@@ -255,7 +255,7 @@ class Dataset:
         """The instance with id ``house/pair/direction/condition``, or ``None``."""
         return self._index.get(id_)
 
-    def check_scorers(self, names: Iterable[str]) -> None:
+    def check_scorers(self, scorers: Mapping[str, Any]) -> None:
         """Every scorer can score a release-layout set (its ground truth is 3D): no-op."""
 
     def instance_for(self, house_id: str, pair_id: str | int, direction: str, condition: str) -> Instance | None:

@@ -40,7 +40,7 @@ class EvaluationSet(Protocol):
         """The instance with id ``house/pair/direction/condition``, or ``None``."""
         ...
 
-    def check_scorers(self, names: Iterable[str]) -> None:
-        """Raise :class:`~povagent.errors.ConfigError` when a scorer cannot score this set
-        (before any request is made); return quietly otherwise."""
+    def check_scorers(self, scorers: Mapping[str, Any]) -> None:
+        """Raise :class:`~povagent.errors.ConfigError` when a scorer (``{name: scorer}``, objects
+        or factories) cannot score this set (before any request is made); return quietly otherwise."""
         ...

@@ -63,9 +63,6 @@ from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.scoring.breakdown import slices
 
-#: Built-in scorers that project a 3D target, which a real-world set does not have.
-NEEDS_3D_GROUND_TRUTH = frozenset({"official", "diagnose", "relation", "probe-anchor", "probe-observer"})
-
 #: The file that makes a folder a real-world set.
 INDEX_FILE = "realworld.json"
 FORMAT_VERSION = 1
@@ -333,17 +330,21 @@ class RealWorldDataset:
         """The instance with id ``house/scenario/direction/condition``."""
         return self._by_id.get(id_)
 
-    def check_scorers(self, names: Iterable[str]) -> None:
-        """Refuse scorers that need 3D ground truth (the runner asks before any request).
+    def check_scorers(self, scorers: Mapping[str, Any]) -> None:
+        """Refuse scorers that need 3D ground truth (``Scorer.needs_3d_target``; the runner asks
+        before any request).
 
         The marks are 2D: the ``official`` metric would project a NaN target, which its rules
         place at the image centre, and score a centre guess a perfect 0.
         """
-        needs_3d = sorted(set(names) & NEEDS_3D_GROUND_TRUTH)
+        from povagent.scoring.protocols import registered_protocols
+
+        needs_3d = sorted(name for name, scorer in scorers.items() if getattr(scorer, "needs_3d_target", False))
         if needs_3d:
+            marked = [n for n, p in registered_protocols().items() if p == "marked_hit"]
             raise ConfigError(
                 f"{self.root}: scorer {', '.join(needs_3d)} needs 3D ground truth, and a real-world set's is "
-                "marked by hand in 2D: use scorers: [success]"
+                f"marked by hand in 2D: use scorers: [{', '.join(marked)}]"
             )
 
 

@@ -4,7 +4,10 @@ Takes a :class:`~povagent.report.collect.Collection` (and, when it can be loaded
 the runs used) and computes every statistic the tables, plots and JSON summary show: official
 means with CIs, response rates, the strict and counting-non-responses variants, frame-selection
 accuracy, the computed center baseline, and paired comparisons between systems. Runs on a
-real-world set (scored by ``success``) get success rates instead, with the same machinery.
+real-world set (scored by a ``marked_hit`` scorer) get success rates instead, with the same
+machinery. Every scorer's declared metrics are estimated per system and slice
+(:func:`declared_metric_estimates`), whatever the scorer: a run scored only by a third party's
+scorer gets those and its response rate, never an error table it did not ask for.
 
 It never changes a run's number: those come from the rows' stored scores.
 """
@@ -17,7 +20,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
@@ -30,11 +33,11 @@ from povagent.report.baseline import (
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
 from povagent.report.collect import Collection, Observation
-from povagent.report.run_summaries import declared_in_summary
-from povagent.report.statistics import DEFAULT_BOOT, CellStats, PairedComparison, cell_stats, paired_comparison
-from povagent.scoring.bootstrap import Estimate, bootstrap_mean_ci
+from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
+from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 from povagent.scoring.metrics import Metric
+from povagent.scoring.protocols import PROTOCOLS
 
 #: Above this many systems, paired comparisons are against the first system only.
 MAX_ALL_PAIRS = 6
@@ -84,7 +87,7 @@ def pooled_official(observations: list[Observation]) -> dict[str, Any]:
     rows = [
         ScoredRow(o.condition, o.direction, o.answered and o.l2 is not None, o.l2, o.gt_in_frame, o.l2_strict, o.run)
         for o in observations
-        if o.scorer == "official"
+        if o.protocol == "normalized_l2"
     ]
     if not rows:
         return {}
@@ -114,22 +117,29 @@ class Analysis:
     center_fill: dict[str, float] | None
     dataset_path: Path | None
     notes: list[str] = field(default_factory=list)
-    #: The scorers whose numbers the rows carry (``official``, ``success``), in that order.
-    scorers: list[str] = field(default_factory=lambda: ["official"])
+    #: The scorers whose protocol fields the rows carry, in :data:`PROTOCOLS` order (one per protocol).
+    scorers: list[str] = field(default_factory=list)
+    #: Their protocols, in the same order.
+    protocols: list[str] = field(default_factory=list)
     #: Every scorer's declared metrics (:mod:`povagent.scoring.metrics`), as the runs' summaries
-    #: record them, and per scorer, system and metric the estimate over the system's rows.
+    #: record them, and per scorer and system each metric's estimate over the system's rows, per
+    #: slice (``{"overall": {metric: estimate}, "per_condition": {c: ...}, "per_direction": ...}``).
     declared: dict[str, dict[str, Metric]] = field(default_factory=dict)
-    declared_estimates: dict[str, dict[str, dict[str, Estimate]]] = field(default_factory=dict)
+    declared_estimates: dict[str, dict[str, dict[str, Any]]] = field(default_factory=dict)
 
     @property
     def has_official(self) -> bool:
-        """True when some rows carry official scores (a POVBench-format set)."""
-        return "official" in self.scorers
+        """True when some rows carry POVBench's normalized L2 (a scorer following ``normalized_l2``)."""
+        return "normalized_l2" in self.protocols
 
     @property
     def has_success(self) -> bool:
-        """True when some rows carry success scores (a real-world set)."""
-        return "success" in self.scorers
+        """True when some rows carry hits against hand-marked ground truth (``marked_hit``)."""
+        return "marked_hit" in self.protocols
+
+    def scorer_of(self, protocol: str) -> str | None:
+        """The scorer whose rows follow ``protocol`` (``None``: no row does)."""
+        return next((s for s, p in zip(self.scorers, self.protocols) if p == protocol), None)
 
     def system(self, name: str) -> SystemStats:
         """The stats of one system by label."""
@@ -157,6 +167,7 @@ class Analysis:
             "conditions": self.conditions,
             "directions": self.directions,
             "systems": [s.as_dict() for s in self.systems],
+            "metrics": declared_estimates_json(self.declared_estimates),
             "paired_comparisons": [c.as_dict() for c in self.comparisons],
             "notes": self.notes,
         }
@@ -324,9 +335,12 @@ def analyze(
 
     systems = collection.systems
     center_cells = [s for s in systems if is_center_system(collection.system_axes(s), s)]
-    scorers = [name for name in ("official", "success") if any(o.scorer == name for o in obs)] or ["official"]
+    protocols: list[str] = [p for p in PROTOCOLS if any(o.protocol == p for o in obs)]
+    scorers = [next(o.scorer for o in obs if o.protocol == p) for p in protocols]
+    error_scorer = scorers[protocols.index("normalized_l2")] if "normalized_l2" in protocols else None
+    hit_scorer = scorers[protocols.index("marked_hit")] if "marked_hit" in protocols else None
     fill: dict[str, float] | None = None
-    if dataset is not None:
+    if dataset is not None and (error_scorer or hit_scorer):
         ids = sorted({o.instance_id for o in obs})
         instances = [dataset.instance(i) for i in ids]
         missing = [i for i, inst in zip(ids, instances) if inst is None]
@@ -335,24 +349,24 @@ def analyze(
             notes.append(f"{len(missing)} instance(s) of the runs are not in the dataset (e.g. {missing[0]}): no center score for them")
         if _is_realworld(dataset):
             # hand-marked 2D ground truth: no official score, so no center fill either
-            if not center_cells and "success" in scorers:
-                scorer, options_note = _success_scorer(collection)
-                obs = obs + center_success_observations(instances, scorer)
+            if not center_cells and hit_scorer is not None:
+                scorer, options_note = _hit_scorer(collection, hit_scorer)
+                obs = obs + center_success_observations(instances, scorer, hit_scorer)
                 notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_SUCCESS_POLICY}{options_note}.")
-        else:
+        elif error_scorer is not None:
             fill = {}
             for inst in instances:
                 s = center_score(inst)
                 if s.l2 is not None:
                     fill[inst.id] = s.l2
             if not center_cells:
-                obs = obs + center_observations(instances)
+                obs = obs + center_observations(instances, error_scorer)
                 notes.append(f"'{CENTER_SYSTEM}' is computed by the report (no center cell in the sweep): it {CENTER_POLICY}.")
             notes.append(
                 "'Counting non-responses' scores an unanswered instance as the center guess "
                 "(same policy as the center baseline) instead of dropping it."
             )
-    else:
+    elif error_scorer or hit_scorer:
         notes.append(
             "Center baseline and the counting-non-responses variant need the dataset: "
             + (dataset_note or "not available")
@@ -380,21 +394,24 @@ def analyze(
     models = [s.system for s in stats if not s.reference]
     refs = [s.system for s in stats if s.reference]
     pairs = list(combinations(models, 2)) if len(models) <= MAX_ALL_PAIRS else [(models[0], m) for m in models[1:]]
-    metrics: list[str] = []
-    if "official" in scorers:
-        metrics += ["official"] + (["counted"] if fill is not None else [])
-    if "success" in scorers:
-        metrics.append("success")
+    # what to compare, and the name a comparison shows: the protocol scorer's, or "counted"
+    compared: list[tuple[Compared, str]] = []
+    if error_scorer is not None:
+        compared.append(("l2", error_scorer))
+        if fill is not None:
+            compared.append(("counted", "counted"))
+    if hit_scorer is not None:
+        compared.append(("hit", hit_scorer))
     for a, b in pairs:
-        for metric in metrics:
-            comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], metric, fill, n_boot, seed))
+        for metric, label in compared:
+            comparisons.append(paired_comparison(a, by_system[a], b, by_system[b], metric, fill, n_boot, seed, label))
     # models against the center baseline (the computed one, or the sweep's center cell)
     centers = [s for s in refs if s == CENTER_SYSTEM or is_center_system(axes_of[s], s)]
     for ref in centers[:1]:
         for m in models:
-            for metric in [x for x in metrics if x != "counted"]:
-                comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], metric, fill, n_boot, seed))
-    if "official" in scorers:
+            for metric, label in [x for x in compared if x[0] != "counted"]:
+                comparisons.append(paired_comparison(ref, by_system[ref], m, by_system[m], metric, fill, n_boot, seed, label))
+    if error_scorer is not None:
         notes.append(
             "Means are over answered instances (official), averaged over runs: the mean of per-run "
             "means, as the paper reports several runs; brackets are 95% percentile bootstrap CIs "
@@ -405,7 +422,7 @@ def analyze(
             "Strict: a GT behind the selected frame's camera or outside it counts as a miss (sqrt 2); "
             "the official metric puts a behind-camera GT at the image centre."
         )
-    if "success" in scorers:
+    if hit_scorer is not None:
         notes.append(
             "Success rate (real-world set, hand-marked ground truth): hits / all instances, an "
             "unanswered instance counting as a failure, as the paper scores real houses. A hit is an "
@@ -427,31 +444,10 @@ def analyze(
         dataset_path=getattr(dataset, "root", None),
         notes=notes,
         scorers=scorers,
+        protocols=protocols,
         declared=declared,
         declared_estimates=estimates,
     )
-
-
-def declared_metric_estimates(
-    collection: Collection, by_system: Mapping[str, list[Observation]], systems: list[str], n_boot: int, seed: int
-) -> tuple[dict[str, dict[str, Metric]], dict[str, dict[str, dict[str, Estimate]]]]:
-    """The metrics the runs' scorers declared, and each one's mean (a rate: of true values) per
-    system with its bootstrap CI, from the values each row's observation carries."""
-    declared: dict[str, dict[str, Metric]] = {}
-    for run in collection.runs:
-        for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
-            for m in run_metrics:
-                declared.setdefault(scorer, {}).setdefault(m.name, m)
-    estimates: dict[str, dict[str, dict[str, Estimate]]] = {}
-    for scorer, metrics in declared.items():
-        for system in systems:
-            rows = [o.metric_values[scorer] for o in by_system.get(system, []) if scorer in o.metric_values]
-            if rows:
-                estimates.setdefault(scorer, {})[system] = {
-                    name: bootstrap_mean_ci([v for r in rows if (v := r.get(name)) is not None], n_boot=n_boot, seed=seed)
-                    for name in metrics
-                }
-    return declared, estimates
 
 
 def _is_realworld(dataset: Any) -> bool:
@@ -460,22 +456,22 @@ def _is_realworld(dataset: Any) -> bool:
     return isinstance(dataset, RealWorldDataset)
 
 
-def _success_scorer(collection: Collection) -> tuple[Any, str]:
-    """The ``success`` scorer as the runs configured it (through the plugin host, like a run),
-    and a note when the runs disagree on its options (the first run's are used)."""
+def _hit_scorer(collection: Collection, name: str) -> tuple[Any, str]:
+    """The ``marked_hit`` scorer ``name`` as the runs configured it (through the plugin host,
+    like a run), and a note when the runs disagree on its options (the first run's are used)."""
     from povagent.plugins import build_plugin_host
 
     options: list[dict[str, Any]] = []
     for r in collection.runs:
         for spec in r.config.get("scorers") or []:
-            if isinstance(spec, dict) and spec.get("name") == "success":
+            if isinstance(spec, dict) and spec.get("name") == name:
                 options.append(dict(spec.get("options") or {}))
-            elif spec == "success":
+            elif spec == name:
                 options.append({})
     chosen = options[0] if options else {}
     note = ""
     if any(o != chosen for o in options[1:]):
-        note = f" (the runs score with different success options; the baseline uses the first run's, {chosen})"
+        note = f" (the runs score with different {name} options; the baseline uses the first run's, {chosen})"
     elif chosen:
         note = f" (options {chosen})"
-    return build_plugin_host(strict=False).scorer("success", chosen), note
+    return build_plugin_host(strict=False).scorer(name, chosen), note

@@ -10,7 +10,7 @@ The same per-instance score fills a non-response in the "counting non-responses"
 unanswered instance counts as if the model had guessed the centre.
 
 On a real-world set (hand-marked 2D ground truth, no 3D target) the same guess is judged by the
-runs' ``success`` scorer instead (:func:`center_success_observations`): the official metric
+runs' ``marked_hit`` scorer instead (:func:`center_success_observations`): the official metric
 would place the missing target at the image centre and call the centre guess perfect.
 
 This module computes scores only; it does not read run folders or write anything.
@@ -67,15 +67,16 @@ def _center_guess(inst: Instance, system: str, **scores: Any) -> Observation:
     )
 
 
-def center_observations(instances: Iterable[Instance], system: str = CENTER_SYSTEM) -> list[Observation]:
-    """The center baseline as observations (run 0), ready to sit beside the models' rows."""
+def center_observations(instances: Iterable[Instance], scorer: str, system: str = CENTER_SYSTEM) -> list[Observation]:
+    """The center baseline as observations (run 0), ready to sit beside the models' rows, as
+    if ``scorer`` (the runs' ``normalized_l2`` scorer) had scored them."""
     out: list[Observation] = []
     for inst in instances:
         s = center_score(inst)
         out.append(
             _center_guess(
                 inst, system, answered=s.answered, l2=s.l2, l2_strict=s.l2_strict, gt_in_frame=s.gt_in_frame,
-                gt_behind=s.gt_behind, gt_u=s.gt_u, gt_v=s.gt_v,
+                gt_behind=s.gt_behind, gt_u=s.gt_u, gt_v=s.gt_v, scorer=scorer, protocol="normalized_l2",
             )
         )
     return out
@@ -89,9 +90,9 @@ CENTER_SUCCESS_POLICY = (
 )
 
 
-def center_success_observations(instances: Iterable[Instance], scorer: Any, system: str = CENTER_SYSTEM) -> list[Observation]:
-    """The center baseline on a real-world set: the same guess, hit or miss by ``scorer``
-    (the ``success`` scorer, built with the runs' options), as observations (run 0)."""
+def center_success_observations(instances: Iterable[Instance], scorer: Any, name: str, system: str = CENTER_SYSTEM) -> list[Observation]:
+    """The center baseline on a real-world set: the same guess, hit or miss by ``scorer`` (the
+    runs' ``marked_hit`` scorer, named ``name``, built with the runs' options), as observations (run 0)."""
     out: list[Observation] = []
     for inst in instances:
         w, h = inst.frame_size
@@ -100,7 +101,7 @@ def center_success_observations(instances: Iterable[Instance], scorer: Any, syst
         out.append(
             _center_guess(
                 inst, system, answered=bool(s["answered"]), l2=None, l2_strict=None, gt_in_frame=s["frame_has_gt"],
-                gt_behind=None, gt_u=None, gt_v=None, scorer="success", success=bool(s["success"]),
+                gt_behind=None, gt_u=None, gt_v=None, scorer=name, protocol="marked_hit", success=bool(s["success"]),
                 distance_norm=s.get("distance_norm"), hit_radius_px=s.get("hit_radius_px"),
             )
         )

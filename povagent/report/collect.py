@@ -6,10 +6,12 @@ per cell and ``sweep.json`` (the cell index, with each cell's axis values). Ever
 :mod:`povagent.report.systems` names runs (a config's ``label:``, else the axes that vary across
 the collected runs; two runs are never pooled unless the user asks).
 
-A run is scored by the ``official`` metric (POVBench-format sets) or, for a real-world set
-with hand-marked ground truth (:mod:`povagent.dataset.realworld`), by the ``success`` scorer; each
-observation says which (``scorer``) and carries that scorer's numbers: official rows their
-error, success rows their hit or miss.
+A run's rows carry the fields of the scorer that follows a scoring protocol
+(``Scorer.protocol``, :mod:`povagent.scoring.protocols`): POVBench's normalized L2 on a
+release-layout set, a hit against hand-marked ground truth on a real-world set
+(:mod:`povagent.dataset.realworld`); each observation says which scorer and protocol (``scorer``,
+``protocol``) and carries those numbers: an error, or a hit or miss. A run scored only by scorers
+without a protocol carries their declared metrics alone, answered when its row's status says so.
 
 This module only reads: it never rescores a row (the numbers are the row's ``scores`` as the
 scorers wrote them) and never writes.
@@ -34,6 +36,7 @@ from povagent.results.rows import ResultRow, read_rows
 from povagent.results.transcript import transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.metrics import Declared, row_metric_values
+from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -42,9 +45,6 @@ MAX_RAW_CHARS = 8000
 RESULTS_FILE = "results.jsonl"
 CONFIG_FILE = "config.yaml"
 SWEEP_INDEX = "sweep.json"
-
-#: The scorers a report reads, in order of preference when a run names several.
-REPORTED_SCORERS = ("official", "success")
 
 
 @dataclass(frozen=True)
@@ -75,13 +75,16 @@ class Observation:
     sentence: str
     raw: str | None
     parse_reason: str = ""
-    #: Which scorer's numbers the row carries: ``official``, ``success`` or ``""`` (neither).
-    scorer: str = "official"
-    #: ``success`` rows: the answer is within a mark (a failure when unanswered); else ``None``.
+    #: The scorer whose protocol fields the row carries (``""``: none).
+    scorer: str = ""
+    #: That scorer's protocol (:data:`~povagent.interfaces.ScoreProtocol`; ``None``: no scorer of
+    #: the run follows one, and only declared metrics describe the row).
+    protocol: str | None = "normalized_l2"
+    #: ``marked_hit`` rows: the answer is within a mark (a failure when unanswered); else ``None``.
     success: bool | None = None
-    #: ``success`` rows: distance to the nearest point mark, in frame diagonals (``None``: no point mark).
+    #: ``marked_hit`` rows: distance to the nearest point mark, in frame diagonals (``None``: no point mark).
     distance_norm: float | None = None
-    #: ``success`` rows: the hit radius of point marks without their own, in original pixels.
+    #: ``marked_hit`` rows: the hit radius of point marks without their own, in original pixels.
     hit_radius_px: float | None = None
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
@@ -98,6 +101,8 @@ class Observation:
     relation: bool | None = None
     #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
     metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
+    answer: str | None = None
 
 
 @dataclass
@@ -117,8 +122,13 @@ class RunInfo:
 
     @property
     def scorer(self) -> str:
-        """The scorer whose numbers the report reads for this run (see :func:`run_scorer`)."""
+        """The scorer whose protocol fields the report reads for this run (see :func:`run_scorer`)."""
         return run_scorer(self.config, self.rows)
+
+    @property
+    def protocol(self) -> str | None:
+        """That scorer's protocol (``None``: the run has no protocol scorer)."""
+        return registered_protocols().get(self.scorer)
 
     @property
     def dataset_path(self) -> Path | None:
@@ -170,19 +180,24 @@ class Collection:
 
 
 def run_scorer(config: dict[str, Any], rows: list[ResultRow]) -> str:
-    """``official`` or ``success``: what the run's config asked for, else what its rows carry.
+    """The scorer whose protocol fields the report reads for a run: the first protocol's
+    (:data:`~povagent.scoring.protocols.PROTOCOLS` order) among the scorers the config names,
+    else among those its rows carry, else, for a config naming none, the pipeline's default
+    scorers'; ``""`` when no scorer of the run follows a protocol.
 
     Read from the config first because a row that failed before scoring (an infra error) has
-    no scores, yet still counts: as a non-response, and for ``success`` as a failure.
+    no scores, yet still counts: as a non-response, and for a hit protocol as a failure.
     """
+    known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
-    for name in REPORTED_SCORERS:
-        if name in named:
-            return name
-    for name in REPORTED_SCORERS:
-        if any(name in row.scores for row in rows):
-            return name
-    return "official" if not named else ""
+    carried = list(dict.fromkeys(name for row in rows for name in row.scores))
+    default = [] if named else default_scorers()
+    for candidates in (named, carried, default):
+        for protocol in PROTOCOLS:
+            found = next((n for n in candidates if known.get(n) == protocol), None)
+            if found is not None:
+                return found
+    return ""
 
 
 def _read_config(folder: Path) -> dict[str, Any]:
@@ -322,24 +337,30 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     return runs
 
 
-def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official", declared: Declared | None = None) -> Observation:
+def observation_of(
+    row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None
+) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
-    ``official``: answered when the official scorer answered it, with its error. ``success``:
-    answered when the success scorer answered it, and a hit only when it said so (a row it
-    did not score, such as an infra error, is a failure, as the paper counts it).
+    ``protocol`` is ``scorer``'s. ``normalized_l2``: answered when the scorer answered it, with
+    its error. ``marked_hit``: answered when the scorer answered it, and a hit only when it said
+    so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
+    No protocol: answered when the row's status says so (its declared metrics say the rest).
     """
-    off = row.scores.get("official") or {}
-    suc = row.scores.get("success") or {}
-    if scorer == "success":
-        answered = row.status == "answered" and bool(suc.get("answered"))
-        success: bool | None = answered and suc.get("success") is True
-        in_frame = suc.get("frame_has_gt") if answered else None
-    else:
+    fields = (row.scores.get(scorer) or {}) if scorer else {}
+    hit_fields = fields if protocol == "marked_hit" else {}
+    off = fields if protocol == "normalized_l2" else {}
+    if protocol == "marked_hit":
+        answered = row.status == "answered" and bool(hit_fields.get("answered"))
+        success: bool | None = answered and hit_fields.get("success") is True
+        in_frame = hit_fields.get("frame_has_gt") if answered else None
+    elif protocol == "normalized_l2":
         answered = bool(off.get("answered")) and off.get("l2") is not None
         success = None
         in_frame = off.get("gt_in_frame")
-    with_l2 = scorer == "official" and answered
+    else:
+        answered, success, in_frame = row.status == "answered", None, None
+    with_l2 = protocol == "normalized_l2" and answered
     return Observation(
         system=system,
         run_name=run_name,
@@ -366,12 +387,14 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         raw=row.raw_response,
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
+        protocol=protocol,
         success=success,
-        distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
-        hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
+        distance_norm=hit_fields.get("distance_norm") if answered else None,
+        hit_radius_px=hit_fields.get("hit_radius_px"),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
         metric_values=row_metric_values(row, declared) if declared else {},
-        **diagnosis_of(row),
+        answer=shown_answer(row.prediction.answer_type, row.prediction.value),
+        **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
 
 
@@ -380,12 +403,13 @@ def _uv(value: Any) -> tuple[float, float] | None:
     return (float(value[0]), float(value[1])) if ok else None
 
 
-def diagnosis_of(row: ResultRow) -> dict[str, Any]:
+def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
     """An answered row's ``diagnose`` and ``relation`` scores as :class:`Observation` fields
-    (read as stored, never recomputed; ``{}`` when neither scored it)."""
+    (read as stored, never recomputed; ``{}`` when neither scored it); ``error_scorer`` is the
+    run's ``normalized_l2`` scorer."""
     from povagent.run.summary import diagnosed_row
 
-    diagnosed = diagnosed_row(row)
+    diagnosed = diagnosed_row(row, error_scorer)
     if diagnosed is None:
         return {}
     fields = row.scores.get("diagnose") or {}
@@ -424,11 +448,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
         declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
+        scorer, protocol = r.scorer, r.protocol
         for row in r.rows:
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, r.scorer, declared)
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol)
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 
@@ -458,17 +483,17 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
 
 def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:
     """:func:`success_breakdown` of a run folder's rows, with response rates, read as
-    ``povagent report`` reads them (the success scorer's ``answered`` and ``success`` per row;
-    a row it did not score, such as a parse or infra error, is an unanswered failure).
-    ``None`` when the run is not scored by ``success``.
+    ``povagent report`` reads them (the ``marked_hit`` scorer's ``answered`` and ``success`` per
+    row; a row it did not score, such as a parse or infra error, is an unanswered failure).
+    ``None`` when no scorer of the run follows that protocol.
     """
     from povagent.dataset.realworld import success_breakdown
 
     collection = collect(run_dir)
-    if not any(r.scorer == "success" for r in collection.runs):
+    if not any(r.protocol == "marked_hit" for r in collection.runs):
         return None
     return success_breakdown(
         {"condition": o.condition, "direction": o.direction, "success": o.success, "answered": o.answered}
         for o in collection.observations
-        if o.scorer == "success"
+        if o.protocol == "marked_hit"
     )

@@ -1,6 +1,7 @@
 """The report's figures, drawn from an analysis: error by condition, by direction, by
-condition x direction, predicted vs GT scatter, and the error distribution; for a real-world
-set (scored by success), success rate by condition and by direction.
+condition x direction, predicted vs GT scatter, and the error distribution (rows of a
+``normalized_l2`` scorer); for a real-world set (a ``marked_hit`` scorer), success rate by
+condition and by direction; for every other scorer, each declared metric by condition.
 
 Chooses what to plot; :mod:`povagent.report.plots` draws it. Returns SVG strings by name;
 writing them is the caller's job.
@@ -12,14 +13,21 @@ from collections import defaultdict
 from typing import Callable
 
 from povagent.report.analysis import Analysis
-from povagent.report.paper_tables import condition_label
+from povagent.report.paper_tables import cell_error, cell_hit, condition_label
+from povagent.report.statistics import CellStats, Estimate
 
 #: Scatter plots are drawn for at most this many systems (the first ones).
 MAX_SCATTER_SYSTEMS = 6
+#: Declared metrics are plotted for at most this many (the first declared); every one has its table.
+MAX_METRIC_PLOTS = 12
 
 
 def _safe_name(text: str) -> str:
     return "".join(ch if ch.isalnum() else "_" for ch in text).strip("_").lower()[:60] or "system"
+
+
+def _of(cell: CellStats | None, number: Callable[[CellStats], Estimate]) -> Estimate | None:
+    return number(cell) if cell is not None else None
 
 
 def _baseline_note(a: Analysis, drawn_as: str) -> str:
@@ -36,6 +44,35 @@ def report_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | N
         figs |= _official_figures(a, frame_size)
     if a.has_success:
         figs |= _success_figures(a)
+    figs |= declared_metric_figures(a)
+    return figs
+
+
+def declared_metric_figures(a: Analysis) -> dict[str, tuple[str, str]]:
+    """A plot per declared metric of every scorer without figures of its own (no protocol): the
+    metric per condition and overall, a bar per system with its declared bootstrap CI."""
+    from povagent.report.plots import grouped_bars
+
+    figs: dict[str, tuple[str, str]] = {}
+    for scorer, metrics in a.declared.items():
+        if scorer in a.scorers or scorer not in a.declared_estimates:
+            continue
+        by_system = a.declared_estimates[scorer]
+        for m in metrics.values():
+            if len(figs) >= MAX_METRIC_PLOTS:
+                return figs
+            series = [
+                (s.system, [*(by_system[s.system]["per_condition"].get(c, {}).get(m.name) for c in a.conditions),
+                            by_system[s.system]["overall"][m.name]], s.reference)
+                for s in a.systems if s.system in by_system
+            ]  # fmt: skip
+            better = "higher" if m.better == "higher" else "lower"
+            figs[f"metric_{_safe_name(scorer)}_{_safe_name(m.name)}"] = (
+                f"{m.label} ({scorer}) by condition and overall; {better} is better (whiskers: 95% bootstrap CI)."
+                + _baseline_note(a, "hatched bars"),
+                grouped_bars(f"{m.label} by condition", [*(condition_label(c) for c in a.conditions), "Overall"], series,
+                             y_label=m.label.lower()),
+            )  # fmt: skip
     return figs
 
 
@@ -43,12 +80,12 @@ def _success_figures(a: Analysis) -> dict[str, tuple[str, str]]:
     from povagent.report.plots import grouped_bars
 
     figs: dict[str, tuple[str, str]] = {}
-    series = [(s.system, [getattr(s.by_condition.get(c), "success", None) for c in a.conditions], s.reference) for s in a.systems]
+    series = [(s.system, [_of(s.by_condition.get(c), cell_hit) for c in a.conditions], s.reference) for s in a.systems]
     figs["success_by_condition"] = (
         "Success rate by condition (unanswered = failure; whiskers: 95% bootstrap CI)." + _baseline_note(a, "hatched bars"),
         grouped_bars("Success rate by condition", [condition_label(c) for c in a.conditions], series, y_label="success rate"),
     )
-    series = [(s.system, [getattr(s.by_direction.get(d), "success", None) for d in a.directions], s.reference) for s in a.systems]
+    series = [(s.system, [_of(s.by_direction.get(d), cell_hit) for d in a.directions], s.reference) for s in a.systems]
     figs["success_by_direction"] = (
         "Success rate by direction, pooled over conditions." + _baseline_note(a, "hatched bars"),
         grouped_bars("Success rate by direction", [d.capitalize() for d in a.directions], series, y_label="success rate"),
@@ -61,18 +98,18 @@ def _official_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] 
 
     size = frame_size or (lambda _id: (512, 512))
     figs: dict[str, tuple[str, str]] = {}
-    series = [(s.system, [getattr(s.by_condition.get(c), "official", None) for c in a.conditions], s.reference) for s in a.systems]
+    series = [(s.system, [_of(s.by_condition.get(c), cell_error) for c in a.conditions], s.reference) for s in a.systems]
     figs["error_by_condition"] = (
         "Mean normalized L2 by condition (answered instances; whiskers: 95% bootstrap CI)." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by condition", [condition_label(c) for c in a.conditions], series),
     )
-    series = [(s.system, [getattr(s.by_direction.get(d), "official", None) for d in a.directions], s.reference) for s in a.systems]
+    series = [(s.system, [_of(s.by_direction.get(d), cell_error) for d in a.directions], s.reference) for s in a.systems]
     figs["error_by_direction"] = (
         "Mean normalized L2 by direction, pooled over conditions." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by direction", [d.capitalize() for d in a.directions], series),
     )
     keys = [(c, d) for c in a.conditions for d in a.directions]
-    series = [(s.system, [getattr(s.by_condition_direction.get(f"{c}/{d}"), "official", None) for c, d in keys], s.reference) for s in a.systems]
+    series = [(s.system, [_of(s.by_condition_direction.get(f"{c}/{d}"), cell_error) for c, d in keys], s.reference) for s in a.systems]
     figs["error_by_condition_direction"] = (
         "Mean normalized L2 by condition (I, S, G) and direction." + _baseline_note(a, "hatched bars"),
         grouped_bars("Error by condition x direction", [f"{condition_label(c)[0]}-{d}" for c, d in keys], series, width=max(820, 70 * len(keys))),

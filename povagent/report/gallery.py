@@ -383,6 +383,7 @@ def build_gallery(
                 "y": o.y,
                 "img": key,
                 "an": o.answered,
+                "v": o.answer,
                 "be": from_above,
             }
             | ({"nt": len(transcript), "tr": transcript} if transcript else {})
@@ -391,7 +392,7 @@ def build_gallery(
             | diagnosis_fields(o, frame)
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
-                if o.scorer == "success"
+                if o.protocol == "marked_hit"
                 else {}
             )
         )

@@ -40,9 +40,11 @@ def official_beside_table(collection: Collection) -> Table | None:
     from povagent.scoring.breakdown import breakdown
 
     by_system: dict[str, list] = {}
+    scorer_of: dict[str, str] = {}  # each system's normalized_l2 scorer
     for run in collection.runs:
-        if run.scorer == "official" and _repaired(run):
+        if run.protocol == "normalized_l2" and _repaired(run):
             by_system.setdefault(run.system, []).extend(run.rows)
+            scorer_of.setdefault(run.system, run.scorer)
     if not by_system:
         return None
     conditions = [c for c in (str(c) for c in Condition) if any(r.condition == c for rows in by_system.values() for r in rows)]
@@ -68,10 +70,10 @@ def official_beside_table(collection: Collection) -> Table | None:
     )
     for system, rows in by_system.items():
         parsers = sorted({r.parser for r in rows if r.parser})
-        repaired = breakdown([scored_row(r) for r in rows])["per_condition"]
+        repaired = breakdown([scored_row(r, scorer_of[system]) for r in rows])["per_condition"]
         unread = any(r.official_reading is None and r.parse is not None and r.parser not in OFFICIAL_PARSERS for r in rows)
         # rows written before readings were recorded: the official side is unknown, not zero
-        official = {} if unread else breakdown([scored_row(officially_read(r)) for r in rows])["per_condition"]
+        official = {} if unread else breakdown([scored_row(officially_read(r), scorer_of[system]) for r in rows])["per_condition"]
         cells = []
         for c in conditions:
             mine, theirs = repaired.get(c, {}), official.get(c, {})

@@ -8,10 +8,13 @@
   frame-selection accuracy (GT inside the selected frame);
 - ``paired``: paired comparisons (mean difference with CI, Wilcoxon and sign tests).
 
-A real-world set (hand-marked ground truth, scored by ``success``) has no official error: its
-report has ``success`` (success rate per system and condition, with the response rate) and
-``success_by_direction`` instead, beside ``response_rates`` and ``paired``; the official
-tables are left out for a collection that carries no official score.
+The error tables follow the ``normalized_l2`` protocol (``Scorer.protocol``): they appear only
+for rows a scorer following it scored. A real-world set (hand-marked ground truth, a
+``marked_hit`` scorer) has no official error: its report has ``success`` (success rate per
+system and condition, with the response rate) and ``success_by_direction`` instead, beside
+``response_rates`` and ``paired``. Every other scorer gets a table per metric it declares
+(``metric_<scorer>_<metric>``: per condition and overall, and by direction); the response rate
+of a run scored by such scorers alone counts the rows whose status is ``answered``.
 
 Only table assembly: numbers come from the analysis, text from :mod:`povagent.report.tables`.
 """
@@ -19,11 +22,12 @@ Only table assembly: numbers come from the analysis, text from :mod:`povagent.re
 from __future__ import annotations
 
 import re
+from typing import Any, Callable
 
 from povagent.dataset.models import Condition
 from povagent.report.analysis import Analysis
 from povagent.report.statistics import CellStats, Estimate
-from povagent.report.tables import Cell, Column, Row, Table
+from povagent.report.tables import Cell, Column, Kind, Row, Table
 
 
 def condition_label(c: str) -> str:
@@ -40,8 +44,26 @@ def _cell(e: Estimate | None) -> Cell:
     return Cell(e.value, e.lo, e.hi)
 
 
-def _get(stats: dict[str, CellStats], key: str) -> CellStats | None:
-    return stats.get(key)
+def _pick(stats: dict[str, CellStats], key: str, number: Callable[[CellStats], Estimate]) -> Estimate | None:
+    """One number of a slice's cell (``None``: the system has no row in the slice)."""
+    cell = stats.get(key)
+    return number(cell) if cell is not None else None
+
+
+def cell_error(cell: CellStats) -> Estimate:
+    """A cell's official mean L2."""
+    return cell.official
+
+
+def cell_hit(cell: CellStats) -> Estimate:
+    """A cell's success rate."""
+    return cell.success
+
+
+def cell_response(cell: CellStats) -> Estimate:
+    """A cell's response rate."""
+    return cell.response_rate
+
 
 
 PROTOCOL = (
@@ -80,7 +102,7 @@ def main_table(a: Analysis) -> Table:
     """Systems x conditions, official mean L2."""
     t = Table("main", "Main results", f"{PROTOCOL} {bold_note(a)}", row_header(a), [Column(condition_label(c)) for c in a.conditions])
     for s in a.systems:
-        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions], s.reference))
+        t.rows.append(Row(s.system, [_cell(_pick(s.by_condition, c, cell_error)) for c in a.conditions], s.reference))
     return t
 
 
@@ -100,7 +122,7 @@ def ablation_table(a: Analysis) -> Table | None:
     t = Table("ablation", title, caption, row_header(a), cols)
     for s in a.systems:
         label = s.system  # model and strategy, as in every table (the title alone is easy to miss)
-        cells = [_cell(getattr(_get(s.by_condition, c), "official", None)) for c in a.conditions]
+        cells = [_cell(_pick(s.by_condition, c, cell_error)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))
         t.rows.append(Row(label, cells, s.reference))
     return t
@@ -110,7 +132,7 @@ def direction_table(a: Analysis) -> Table:
     """Systems x directions (pooled over conditions), official mean L2."""
     t = Table("per_direction", "Error by direction", f"{PROTOCOL} Pooled over conditions. {bold_note(a)}", row_header(a), [Column(d.capitalize()) for d in a.directions])
     for s in a.systems:
-        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_direction, d), "official", None)) for d in a.directions], s.reference))
+        t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_error)) for d in a.directions], s.reference))
     return t
 
 
@@ -127,22 +149,24 @@ def condition_direction_table(a: Analysis) -> Table:
         show_ci=False,
     )
     for s in a.systems:
-        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_condition_direction, f"{c}/{d}"), "official", None)) for c, d in keys], s.reference))
+        t.rows.append(Row(s.system, [_cell(_pick(s.by_condition_direction, f"{c}/{d}", cell_error)) for c, d in keys], s.reference))
     return t
 
 
 def response_table(a: Analysis) -> Table:
     """Systems x conditions, response rate, plus all conditions."""
     cols = [Column(condition_label(c), "rate", "higher") for c in a.conditions] + [Column("Overall", "rate", "higher")]
+    # a response as the protocol scorer counts it, else as the rows' status says
+    what = "a parseable coordinate" if a.has_official or a.has_success else "a row whose status is answered"
     caption = (
-        "Answered / total instances (a response is a parseable coordinate; unparseable answers and "
+        f"Answered / total instances (a response is {what}; unparseable answers and "
         "API failures are non-responses), averaged over runs; 95% bootstrap CIs. Overall pools "
         "every instance, which equals the paper's average over conditions when, as in POVBench, "
         "each condition has the same instances. " + bold_note(a)
     )
     t = Table("response_rates", "Response rates", caption, row_header(a), cols)
     for s in a.systems:
-        cells = [_cell(getattr(_get(s.by_condition, c), "response_rate", None)) for c in a.conditions]
+        cells = [_cell(_pick(s.by_condition, c, cell_response)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))
         t.rows.append(Row(s.system, cells, s.reference))
     return t
@@ -199,7 +223,7 @@ def success_table(a: Analysis) -> Table:
     caption = SUCCESS_PROTOCOL + (" Overall pools every instance." if several else "") + " Resp. is the response rate (answered / total). " + bold_note(a)
     t = Table("success", "Success rate", caption, row_header(a), cols)
     for s in a.systems:
-        cells = [_cell(getattr(_get(s.by_condition, c), "success", None)) for c in a.conditions] if several else []
+        cells = [_cell(_pick(s.by_condition, c, cell_hit)) for c in a.conditions] if several else []
         cells += [_cell(s.overall.success), _cell(s.overall.response_rate)]
         t.rows.append(Row(s.system, cells, s.reference))
     return t
@@ -215,7 +239,7 @@ def success_direction_table(a: Analysis) -> Table:
         [Column(d.capitalize(), "rate", "higher") for d in a.directions],
     )
     for s in a.systems:
-        t.rows.append(Row(s.system, [_cell(getattr(_get(s.by_direction, d), "success", None)) for d in a.directions], s.reference))
+        t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_hit)) for d in a.directions], s.reference))
     return t
 
 
@@ -277,24 +301,49 @@ def paper_tables(a: Analysis) -> list[Table]:
     return [t for t in tables if t is not None]
 
 
+#: The slices a declared metric's table shows as columns, beside ``Overall``.
+_SLICE_WORDS = {"per_condition": ("condition", condition_label), "per_direction": ("direction", str.capitalize)}
+
+
 def declared_metric_tables(a: Analysis) -> list[Table]:
-    """A table per scorer with declared metrics and no tables of its own: a row per system, a
-    column per metric (bold on the better side), 95% bootstrap CIs in brackets."""
-    tables = []
+    """A table per declared metric of every scorer without tables of its own (no protocol): a
+    row per system, a column per condition and ``Overall`` (and a second table by direction,
+    when several), each cell the metric's value with its declared bootstrap CI, bold on the
+    better side the metric declares."""
+    tables: list[Table] = []
     for scorer, metrics in a.declared.items():
         if scorer in a.scorers or scorer not in a.declared_estimates:
             continue
-        columns = [Column(m.label, "rate" if m.aggregation == "rate" else "l2", m.better) for m in metrics.values()]
-        caption = " ".join(f"{m.label}: {m.caption}" for m in metrics.values())
-        key = "metrics_" + re.sub(r"[^A-Za-z0-9_]+", "_", scorer)
-        t = Table(key, f"Scorer {scorer}", f"{caption} 95% bootstrap CIs. {bold_note(a)}", row_header(a), columns)
         by_system = a.declared_estimates[scorer]
-        for s in a.systems:
-            estimates = by_system.get(s.system)
-            if estimates is not None:
-                t.rows.append(Row(s.system, [Cell(e.value, e.lo, e.hi) for e in (estimates[n] for n in metrics)], s.reference))
-        tables.append(t)
+        for m in metrics.values():
+            for slice_key, (word, label) in _SLICE_WORDS.items():
+                keys = list(a.conditions if slice_key == "per_condition" else a.directions)
+                if slice_key == "per_direction" and len(keys) < 2:
+                    continue
+                tables.append(_declared_metric_table(a, scorer, m, by_system, slice_key, word, [(k, label(k)) for k in keys]))
     return tables
+
+
+def _declared_metric_table(a: Analysis, scorer: str, m: Any, by_system: dict[str, Any], slice_key: str, word: str,
+                           keys: list[tuple[str, str]]) -> Table:  # fmt: skip
+    """One declared metric per system: a column per slice of ``slice_key``, then overall."""
+    kind: Kind = "rate" if m.aggregation == "rate" else "l2"
+    columns = [Column(text, kind, m.better) for _, text in keys] + [Column("Overall", kind, m.better)]
+    safe = re.sub(r"[^A-Za-z0-9_]+", "_", f"{scorer}_{m.name}")
+    key = f"metric_{safe}" + ("" if slice_key == "per_condition" else "_by_direction")
+    better = "higher" if m.better == "higher" else "lower"
+    caption = (f"{m.caption} Scorer {scorer}; {better} is better; per {word} and overall, pooling every run's rows; "
+               f"95% bootstrap CIs in brackets. {bold_note(a)}")  # fmt: skip
+    title = f"{m.label} ({scorer})" + ("" if slice_key == "per_condition" else " by direction")
+    t = Table(key, title, caption, row_header(a), columns)
+    for s in a.systems:
+        cells = by_system.get(s.system)
+        if cells is None:
+            continue
+        per = cells[slice_key]
+        row = [_cell(per[k][m.name]) if k in per else Cell(None) for k, _ in keys] + [_cell(cells["overall"][m.name])]
+        t.rows.append(Row(s.system, row, s.reference))
+    return t
 
 
 def system_row(t: Table, system: str) -> Row:

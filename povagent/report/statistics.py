@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Iterable, Literal, Mapping
 
 import numpy as np
 
@@ -68,8 +68,8 @@ def instance_matrix(observations: Iterable[Observation], fill: Mapping[str, floa
         present[i, r] = True
         if o.success is not None:
             success[i, r] = 1.0 if o.success else 0.0
-        # an official row is answered with its error; a success row has no error to carry
-        if o.answered and (o.l2 is not None or o.scorer == "success"):
+        # a normalized_l2 row is answered with its error; any other row has no error to carry
+        if o.answered and (o.l2 is not None or o.protocol != "normalized_l2"):
             answered[i, r] = True
             l2[i, r] = o.l2 if o.l2 is not None else np.nan
             strict[i, r] = o.l2_strict if o.l2_strict is not None else np.nan
@@ -262,15 +262,19 @@ class PairedComparison:
         }
 
 
+#: What a paired comparison compares per instance (:func:`per_instance_error`).
+Compared = Literal["l2", "strict", "counted", "hit"]
+
+
 def per_instance_error(
-    observations: Iterable[Observation], metric: str = "official", fill: Mapping[str, float] | None = None
+    observations: Iterable[Observation], metric: Compared = "l2", fill: Mapping[str, float] | None = None
 ) -> dict[str, float]:
-    """Each instance's score averaged over runs: the error ``official`` (answered runs only; an
+    """Each instance's score averaged over runs: the error ``l2`` (answered runs only; an
     instance never answered is absent), ``strict``, or ``counted`` (non-responses scored by
-    ``fill``); or ``success``, the hit rate over every run (real-world sets; higher is better)."""
+    ``fill``); or ``hit``, the hit rate over every run (real-world sets; higher is better)."""
     sums: dict[str, list[float]] = defaultdict(list)
     for o in observations:
-        if metric == "success":
+        if metric == "hit":
             v = None if o.success is None else float(o.success)
         elif metric == "counted":
             v = o.l2 if o.answered else (fill or {}).get(o.instance_id)
@@ -284,7 +288,7 @@ def per_instance_error(
 
 
 #: Metrics of :func:`per_instance_error` where a larger value is the better one.
-HIGHER_IS_BETTER = frozenset({"success"})
+HIGHER_IS_BETTER = frozenset({"hit"})
 
 
 def sign_test_p(n_pos: int, n_neg: int) -> float | None:
@@ -302,14 +306,16 @@ def paired_comparison(
     a_obs: Iterable[Observation],
     b_label: str,
     b_obs: Iterable[Observation],
-    metric: str = "official",
+    metric: Compared = "l2",
     fill: Mapping[str, float] | None = None,
     n_boot: int = DEFAULT_BOOT,
     seed: int = 0,
+    label: str | None = None,
 ) -> PairedComparison:
     """Compare B with A on the same instances: mean difference (B - A) with CI, Wilcoxon
     signed-rank and exact sign tests. ``b_better`` counts instances where B's value is the
-    better one: lower for errors, higher for ``success``."""
+    better one: lower for errors, higher for ``hit``. ``label`` names the comparison's metric
+    (default: ``metric``)."""
     ea = per_instance_error(a_obs, metric, fill)
     eb = per_instance_error(b_obs, metric, fill)
     common = sorted(set(ea) & set(eb))
@@ -330,7 +336,7 @@ def paired_comparison(
     return PairedComparison(
         a=a_label,
         b=b_label,
-        metric=metric,
+        metric=label or metric,
         n_pairs=len(common),
         mean_a=float(va.mean()) if va.size else None,
         mean_b=float(vb.mean()) if vb.size else None,

@@ -5,7 +5,8 @@ rescore's ``summary.json``, each ``results.jsonl`` row, ``sweep.json``, ``export
 the JSON text it is about to write to :func:`check_output_text`. With ``POVAGENT_CHECK_OUTPUTS=1`` in the
 environment the JSON is validated against the shipped schema file and a mismatch raises
 :class:`OutputSchemaError` naming the file, the JSON path and what is wrong, before anything is
-written. The test suite sets the variable for itself and for every process it starts, so every
+written. A row's typed prediction (``prediction.value``) is checked likewise against its answer
+type's ``value_schema`` when the score step makes it (:func:`check_answer_value`). The test suite sets the variable for itself and for every process it starts, so every
 such file any test makes is checked; a user's run does not pay for it (one environment lookup
 per call).
 """
@@ -16,7 +17,7 @@ import functools
 import json
 import os
 from importlib import resources
-from typing import Any
+from typing import Any, Mapping
 
 #: The environment variable that turns the check on (``1``).
 ENV = "POVAGENT_CHECK_OUTPUTS"
@@ -48,6 +49,20 @@ def schema_errors(name: str, data: Any, limit: int = 3) -> list[str]:
     # an error under "any of" (a field that may be null) is told by its most relevant branch
     deepest = [best_match([e]) for e in errors[:limit]]
     return [f"{e.json_path}: {e.message[:300]}" for e in deepest if e is not None]
+
+
+def check_answer_value(answer_type: str, schema: Mapping[str, Any], value: Any, where: object) -> None:
+    """When :func:`checking`, validate a prediction's typed ``value`` against the JSON Schema its
+    answer type ``answer_type`` declares (``AnswerType.value_schema``); :class:`OutputSchemaError`
+    when it misses it: a type's reader and its published shape never drift apart in a test."""
+    if not checking() or value is None:
+        return
+    from jsonschema import Draft202012Validator
+
+    errors = sorted(Draft202012Validator(dict(schema)).iter_errors(value), key=lambda e: [str(p) for p in e.absolute_path])
+    if errors:
+        shown = "; ".join(f"$.prediction.value{e.json_path[1:]}: {e.message[:300]}" for e in errors[:3])
+        raise OutputSchemaError(f"{where}: a {answer_type!r} value misses the answer type's value_schema: {shown}")
 
 
 def check_output_text(name: str, text: str, where: object) -> None:

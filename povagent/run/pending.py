@@ -11,7 +11,7 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance, row_key
@@ -86,6 +86,7 @@ def plan_keys(
     config_hash: str | None = None,
     retry_failed: bool = True,
     declared: Declared | None = None,
+    protocols: Mapping[str, str] | None = None,
 ) -> KeyPlan:
     """Read ``config.output``'s results once and plan the keys of ``instances`` x runs.
 
@@ -112,7 +113,7 @@ def plan_keys(
         if row.key not in wanted:
             continue
         done.add(row.key)
-        digests[row.key] = summary_digest(row, declared)  # the last row of a key wins
+        digests[row.key] = summary_digest(row, declared, protocols)  # the last row of a key wins
         if row.status is RowStatus.INFRA_ERROR:
             failed.add(row.key)
         else:

@@ -14,7 +14,9 @@ from typing import Callable
 import yaml
 
 from povagent.geometry.directions import DIRECTION_NAMES
+from povagent.results.official_reading import OFFICIAL_PARSER
 from povagent.run.confined_write import write_inside
+from povagent.scoring.protocols import default_scorers
 
 #: The baselines the quickstart compares (all offline and instant).
 BASELINES = ("center", "random", "oracle")
@@ -38,8 +40,8 @@ def write_quickstart_configs(out: Path, dataset: Path, runs: int = 1) -> Path:
         "instances": {"conditions": ["a", "b", "c"], "directions": list(DIRECTION_NAMES)},
         "backend": {"name": "center", "options": {"frame_policy": "first"}},
         "strategy": "basic",
-        "parser": "official",
-        "scorers": ["official"],
+        "parser": OFFICIAL_PARSER,  # the official reading, and the pipeline's default scorers
+        "scorers": default_scorers(),
         "runs": runs,
         "concurrency": 16,
         "output": str((out / "runs" / "single").resolve()),

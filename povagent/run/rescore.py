@@ -54,6 +54,7 @@ from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring
 from povagent.run.summary import declared_metrics, summarize_rows, write_summary
 from povagent.run.summary_model import RunSummary
+from povagent.scoring.protocols import scorer_protocols
 
 
 @dataclass
@@ -100,7 +101,7 @@ def rescore_summary(rows: list[ResultRow], scorers: Mapping[str, Any]) -> dict[s
     """The rescored rows' summary: the run's own (:func:`~povagent.run.summary.summarize_rows`,
     with ``scorers``' declared metrics), with the rows by parse status and how many answers the
     parser repaired."""
-    summary = summarize_rows(rows, None, declared_metrics(scorers))
+    summary = summarize_rows(rows, None, declared_metrics(scorers), scorer_protocols(scorers))
     summary["parse_status"] = dict(Counter(str(r.parse.status) if r.parse else str(r.status) for r in rows))
     summary["repaired"] = sum(1 for r in rows if r.parse is not None and r.parse.repair)
     return summary

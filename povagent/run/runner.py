@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from povagent.answers.types import answer_type_misfit
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.config.remote_code import remote_code_granted
@@ -61,6 +62,7 @@ from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, st
 from povagent.run.summary import SummaryDigest, declared_metrics, summarize_digests, summary_digest, write_summary
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.metrics import Declared
+from povagent.scoring.protocols import scorer_protocols
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"
@@ -200,14 +202,8 @@ class PipelineRun:
 
     # -- one key -------------------------------------------------------------------------------
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
-        self._log.info(
-            "retry",
-            row=row_id,
-            attempt=failed_attempts,
-            error_type=error_type_of(exc),
-            error=self._redactor.text(f"{type(exc).__name__}: {exc}"),
-            wait_s=round(wait_s, 3),
-        )
+        self._log.info("retry", row=row_id, attempt=failed_attempts, error_type=error_type_of(exc),
+                       error=self._redactor.text(f"{type(exc).__name__}: {exc}"), wait_s=round(wait_s, 3))  # fmt: skip
 
     def _log_bug(self, row_id: str, message: str, trace: str) -> None:
         self._log.error("backend_exception", row=row_id, error=message, traceback=trace)
@@ -232,7 +228,7 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        digest = summary_digest(row, self._declared)
+        digest = summary_digest(row, self._declared, self._protocols)
         self._digests[row.key] = digest
         s = self.stats
         s.rows_written += 1
@@ -289,6 +285,7 @@ class PipelineRun:
         with remote_code_granted(self.trust_remote_code):
             self.components = create_components(config, self.host)
         self._declared = declared_metrics(self.components.scorers)  # what each row's digest keeps
+        self._protocols: dict[str, str] = dict(scorer_protocols(self.components.scorers))  # which follows which protocol
         self.config_hash = pipeline_hash(config, self.components.strategy)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
         options: Any = getattr(self.components.backend, "options", None)
@@ -303,7 +300,9 @@ class PipelineRun:
         instances = select_instances(self.dataset, config)
         if not instances:
             raise ConfigError(f"no instances selected from {config.dataset.root} (check instances: conditions, directions, houses)")
-        self.dataset.check_scorers([s.name for s in config.scorers])  # a real-world set has no 3D GT
+        self.dataset.check_scorers(self.components.scorers)  # a real-world set has no 3D GT
+        if self.components.answer_type is not None and (misfit := answer_type_misfit(config.strategy.name, self.components.answer_type, instances)):
+            raise ConfigError(misfit)  # a strategy asking a type the instances do not ask for: before any request
         # ours to write, or refused before anything is written (someone's folder, read-only)
         claim_folder(self.run_dir, "run")
         self.components.strategy.use_run_folder(self.run_dir)
@@ -331,7 +330,7 @@ class PipelineRun:
         """The run proper, with the run folder locked against a second process."""
         config = self.config
         runs = config.run_indices
-        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared)
+        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared, protocols=self._protocols)
         retried = plan.failed if self.retry_failed else set()
         if retried:
             # the failed rows go before their keys run again, so a retried key has one row

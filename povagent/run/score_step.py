@@ -28,6 +28,7 @@ from povagent.dataset.instances import Instance
 from povagent.dataset.protocol import EvaluationSet
 from povagent.interfaces import Parser, Scorer
 from povagent.results.official_reading import read_officially
+from povagent.results.output_check import check_answer_value
 from povagent.results.plugin_errors import parse_or_unparseable, score_or_error
 from povagent.results.rows import OfficialReading, Prediction, RowStatus
 
@@ -54,6 +55,8 @@ def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerTy
     image_path = frame.image_path if frame is not None else None
     typed = answer_type.name if answer_type is not None else None
     value = answer_type.value_of(parse) if answer_type is not None else None
+    if answer_type is not None:  # while testing: the value has the shape its type publishes
+        check_answer_value(answer_type.name, answer_type.value_schema, value, instance.id)
     return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y, answer_type=typed, value=value)
 
 

@@ -25,13 +25,15 @@ from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_metric_values
+from povagent.scoring.protocols import following, registered_protocols
 
 
-def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
-    """The fields a summary needs, from a row's official score (non-answers count as such)."""
+def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
+    """The fields a summary needs, from the row's score by ``scorer``, the run's ``normalized_l2``
+    scorer (non-answers count as such; ``None``: the run has none, and no row is answered)."""
     from povagent.scoring.evaluations import official_parse_error
 
-    score = row.scores.get(scorer) or {}
+    score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     return ScoredRow(
         condition=row.condition,
@@ -47,23 +49,22 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
     )
 
 
-#: Scorers whose fields ``summary.json`` breaks down in sections of their own.
-_OWN_SECTIONS = frozenset({"official", "success"})
-
-
-def plugin_scores(scores: Mapping[str, Any]) -> tuple[tuple[str, tuple[tuple[str, float], ...]], ...]:
-    """For every other scorer of a row, its true/false and number fields (text and lists left out)."""
+def plugin_scores(scores: Mapping[str, Any], protocols: Mapping[str, str]) -> tuple[tuple[str, tuple[tuple[str, float], ...]], ...]:
+    """For every scorer of a row that follows no protocol (``protocols``: ``{scorer: protocol}``;
+    a protocol's fields have sections of their own), its true/false and number fields (text and
+    lists left out)."""
     return tuple(
         (name, tuple((k, v) for k, v in fields.items() if isinstance(v, (bool, int, float))))
         for name, fields in sorted(scores.items())
-        if name not in _OWN_SECTIONS and isinstance(fields, Mapping)
+        if name not in protocols and isinstance(fields, Mapping)
     )
 
 
-def plugin_score_summary(rows: Iterable[ResultRow]) -> dict[str, dict[str, dict[str, Any]]]:
+def plugin_score_summary(rows: Iterable[ResultRow], protocols: Mapping[str, str] | None = None) -> dict[str, dict[str, dict[str, Any]]]:
     """``{scorer: {field: ...}}`` over the rows a plugin scorer scored (answered rows): a
     true/false field as ``{"n", "true", "rate"}``, a number as ``{"n", "mean"}``."""
-    return _plugin_score_summary(plugin_scores(row.scores) for row in rows)
+    known = registered_protocols() if protocols is None else protocols
+    return _plugin_score_summary(plugin_scores(row.scores, known) for row in rows)
 
 
 def _plugin_score_summary(
@@ -88,8 +89,8 @@ def _plugin_score_summary(
 @dataclass(frozen=True, slots=True)
 class SummaryDigest:
     """What a summary reads of one row, taken once when the row is made or read: the row's
-    official score, its official reading's (lenient parsers), the success scorer's verdict, the
-    plugin scorers' fields, the diagnostics, whether it holds a NaN coordinate, and what it
+    ``normalized_l2`` score, its official reading's (lenient parsers), the ``marked_hit``
+    scorer's verdict, the other scorers' fields, the diagnostics, whether it holds a NaN coordinate, and what it
     spent. Slotted and without the row's text (prompts, answers, sentence): a run keeps one
     per key."""
 
@@ -101,7 +102,7 @@ class SummaryDigest:
     official_parser: str | None
     #: the row as its official reading scores it (rows with a reading, and failed requests)
     officially_scored: ScoredRow | None
-    #: ``(condition, direction, success, answered)`` when the success scorer scored the row
+    #: ``(condition, direction, success, answered)`` when a ``marked_hit`` scorer scored the row
     success: tuple[str, str, Any, bool] | None
     plugin_scores: tuple[tuple[str, tuple[tuple[str, float], ...]], ...]
     diagnosed: DiagnosedRow | None
@@ -115,15 +116,19 @@ class SummaryDigest:
     metric_values: tuple[tuple[str, tuple[tuple[str, float | None], ...]], ...] = ()
 
 
-def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryDigest:
+def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: Mapping[str, str] | None = None) -> SummaryDigest:
     """The row as a summary keeps it (see :class:`SummaryDigest`), with its values of the
-    ``declared`` metrics."""
+    ``declared`` metrics; ``protocols`` says which of the run's scorers follows which protocol
+    (``{scorer: protocol}``; default: as the registered scorers declare)."""
+    protocols = registered_protocols() if protocols is None else protocols
+    error_scorer = following(protocols, "normalized_l2", row.scores)
+    hit_scorer = following(protocols, "marked_hit", row.scores)
     infra = RowStatus(row.status) is RowStatus.INFRA_ERROR
     reading = row.official_reading
     official = officially_read(row)
-    success = row.scores.get("success")
-    scored = scored_row(row)
-    officially_scored = scored_row(official) if reading is not None or infra else None
+    success = row.scores.get(hit_scorer) if hit_scorer is not None else None
+    scored = scored_row(row, error_scorer)
+    officially_scored = scored_row(official, error_scorer) if reading is not None or infra else None
     if officially_scored == scored:
         officially_scored = scored  # read the same way (the usual case): one object, not two
     return SummaryDigest(
@@ -136,8 +141,8 @@ def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryD
         success=None if success is None else (
             row.condition, row.direction, (success or {}).get("success"), (success or {}).get("answered") is True
         ),
-        plugin_scores=plugin_scores(row.scores),
-        diagnosed=diagnosed_row(row),
+        plugin_scores=plugin_scores(row.scores, protocols),
+        diagnosed=diagnosed_row(row, error_scorer),
         has_nan=bool(nan_rows([official])),
         prompt_tokens=row.prompt_tokens,
         completion_tokens=row.completion_tokens,
@@ -147,8 +152,9 @@ def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryD
     )
 
 
-def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
-    """The ``diagnose`` and ``relation`` fields of an answered row (``None`` when neither scored it)."""
+def diagnosed_row(row: ResultRow, error_scorer: str | None) -> DiagnosedRow | None:
+    """The ``diagnose`` and ``relation`` fields of an answered row, with its error by
+    ``error_scorer`` (the run's ``normalized_l2`` scorer), or ``None`` when neither scored it."""
     if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
         return None
     diagnose = row.scores.get("diagnose")
@@ -157,7 +163,7 @@ def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
     relation = relation if isinstance(relation, Mapping) and relation.get("answered") is True else None
     if diagnose is None and relation is None:
         return None
-    official = row.scores.get("official") or {}
+    official = (row.scores.get(error_scorer) if error_scorer is not None else None) or {}
     l2 = official.get("l2") if isinstance(official, Mapping) else None
     step = diagnose.get("step") if diagnose is not None else None
     vote = diagnose.get("nearer_egocentric") if diagnose is not None else None
@@ -174,15 +180,20 @@ def diagnosed_row(row: ResultRow) -> DiagnosedRow | None:
 
 
 def summarize_rows(
-    rows: Iterable[ResultRow], keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None
+    rows: Iterable[ResultRow],
+    keys: set[str] | None = None,
+    declared: Mapping[str, Sequence[Metric]] | None = None,
+    protocols: Mapping[str, str] | None = None,
 ) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
     are left out. ``declared`` is each scorer's metrics (``Scorer.metrics``): the ``metrics``
-    section holds them per slice (see :mod:`povagent.scoring.metrics`).
+    section holds them per slice (see :mod:`povagent.scoring.metrics`); ``protocols`` says which
+    scorer follows which protocol (see :func:`summary_digest`).
     """
-    return summarize_digests((summary_digest(r, declared) for r in rows if keys is None or r.key in keys), keys, declared)
+    protocols = registered_protocols() if protocols is None else protocols
+    return summarize_digests((summary_digest(r, declared, protocols) for r in rows if keys is None or r.key in keys), keys, declared)
 
 
 def summarize_digests(
@@ -260,9 +271,10 @@ def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]
     When a key repeats, its last row counts.
     """
     by_key: dict[str, SummaryDigest] = {}
+    protocols = registered_protocols()
     for row in iter_rows(results):
         if keys is None or row.key in keys:
-            by_key[row.key] = summary_digest(row)
+            by_key[row.key] = summary_digest(row, None, protocols)
     return summarize_digests(by_key.values(), keys)
 
 

@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterable, Literal, Mapping, Sequence
 
-from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
+from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate, bootstrap_mean_ci
 from povagent.scoring.breakdown import slices
 
 #: Which way is better.
@@ -110,6 +110,19 @@ def valued_row(row: Any, declared: Declared) -> ValuedRow:
                      row_metric_values(row, declared))  # fmt: skip
 
 
+def metric_estimates(
+    group: Iterable[ValuedRow], scorer: str, metrics: Sequence[Metric], n_boot: int = DEFAULT_BOOT, seed: int = 0
+) -> dict[str, Estimate]:
+    """Each of ``scorer``'s ``metrics`` over the rows of ``group``: the mean of the row values
+    that count (a rate: of true values) with its 95% bootstrap CI and the number of rows counted.
+    ``summary.json`` and the report both estimate a declared metric here."""
+    rows = list(group)
+    return {
+        m.name: bootstrap_mean_ci([v for row in rows if (v := row.values.get(scorer, {}).get(m.name)) is not None], n_boot=n_boot, seed=seed)
+        for m in metrics
+    }
+
+
 def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: int = DEFAULT_BOOT) -> dict[str, dict[str, Any]]:
     """``summary.json``'s ``metrics`` section: per scorer, what it declared and, per slice, each
     metric's value with its 95% bootstrap CI and the number of rows it counts."""
@@ -120,11 +133,7 @@ def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: i
             continue
 
         def cell(group: list[ValuedRow], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
-            cells = {}
-            for m in metrics:
-                values = [v for row in group if (v := row.values.get(scorer, {}).get(m.name)) is not None]
-                cells[m.name] = bootstrap_mean_ci(values, n_boot=n_boot).as_dict()
-            return cells
+            return {name: e.as_dict() for name, e in metric_estimates(group, scorer, metrics, n_boot).items()}
 
         out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(rows, cell)}
     return out

@@ -108,9 +108,9 @@ class TaskSet:
         point = self.base.instance(id_)
         return None if point is None else self.asked(point)
 
-    def check_scorers(self, names: Iterable[str]) -> None:
+    def check_scorers(self, scorers: Mapping[str, Any]) -> None:
         """As the underlying set's."""
-        self.base.check_scorers(names)
+        self.base.check_scorers(scorers)
 
 
 def for_task(dataset: EvaluationSet, task: TaskSpec | None) -> EvaluationSet:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -143,6 +144,77 @@ def test_the_report_has_a_table_for_the_scorer(passive_run, tmp_path):
     tables = (out / "tables.md").read_text(encoding="utf-8")
     assert "Scorer anchor-check" in tables and "Anchor in view" in tables and "Anchor offset" in tables
     assert "66.7%" in tables and f"{(GIVEN_OFFSET + FRAME0_OFFSET) / 2:.3f}" in tables
+
+
+def test_the_console_prints_no_error_table_for_a_run_without_a_pixel_scorer(passive_run):
+    _, printed = passive_run
+    assert "mean L2" not in printed and "strict L2" not in printed
+
+
+def test_rescore_prints_no_error_table_for_a_run_without_a_pixel_scorer(passive_run):
+    folder, _ = passive_run
+    result = CliRunner().invoke(app, ["rescore", str(folder), "--parser", "anchor-json"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "scorer anchor-check" in result.stdout and "mean L2" not in result.stdout
+
+
+@pytest.fixture
+def passive_report(passive_run, tmp_path):
+    """``povagent report`` of the passive run (the dataset found through its config): the report folder."""
+    folder, _ = passive_run
+    out = tmp_path / "report"
+    result = CliRunner().invoke(app, ["report", str(folder), "--out", str(out), "--bootstrap", "50", "--no-gallery"])
+    assert result.exit_code == 0, result.output
+    return out
+
+
+def test_the_report_has_a_table_per_declared_metric_per_condition(passive_report):
+    in_view = (passive_report / "tables" / "metric_anchor_check_anchor_in_view.md").read_text(encoding="utf-8")
+    offset = (passive_report / "tables" / "metric_anchor_check_anchor_offset.md").read_text(encoding="utf-8")
+    assert "Anchor in view (anchor-check)" in in_view and "| Inferred | Stated | Given | Overall |" in in_view.replace("**", "")
+    assert "50.0%" in in_view and "100.0%" in in_view and "66.7%" in in_view
+    assert f"{GIVEN_OFFSET:.3f}" in offset and f"{(GIVEN_OFFSET + FRAME0_OFFSET) / 2:.3f}" in offset
+
+
+def test_the_reports_summary_holds_each_declared_metric_per_system_and_slice(passive_report):
+    summary = json.loads((passive_report / "summary.json").read_text(encoding="utf-8"))
+    center = summary["metrics"]["anchor-check"]["center"]
+    assert center["overall"]["anchor_in_view"]["value"] == pytest.approx(8 / 12) and center["overall"]["anchor_in_view"]["n"] == 12
+    assert [center["per_condition"][c]["anchor_in_view"]["value"] for c in "abc"] == [0.5, 0.5, 1.0]
+    assert center["per_condition"]["c"]["anchor_offset"]["value"] == pytest.approx(GIVEN_OFFSET, abs=1e-6)
+
+
+def test_the_report_plots_each_declared_metric(passive_report):
+    plots = sorted(p.name for p in (passive_report / "plots").iterdir())
+    assert plots == ["metric_anchor_check_anchor_in_view.svg", "metric_anchor_check_anchor_offset.svg"]
+
+
+def test_the_report_of_a_run_scored_only_by_a_third_party_has_no_pixel_table(passive_report):
+    summary = json.loads((passive_report / "summary.json").read_text(encoding="utf-8"))
+    tables = sorted(p.stem for p in (passive_report / "tables").glob("*.md"))
+    assert tables == [
+        "metric_anchor_check_anchor_in_view", "metric_anchor_check_anchor_in_view_by_direction",
+        "metric_anchor_check_anchor_offset", "metric_anchor_check_anchor_offset_by_direction", "response_rates",
+    ]
+    assert summary["scorers"] == [] and [s["system"] for s in summary["systems"]] == ["center"]  # no computed centre baseline
+
+
+def test_the_reports_response_rate_counts_the_rows_answered(passive_report):
+    summary = json.loads((passive_report / "summary.json").read_text(encoding="utf-8"))
+    (system,) = summary["systems"]
+    assert system["overall"]["response_rate"]["value"] == 1.0
+    assert system["overall"]["official_mean_l2"]["value"] is None
+    assert "a response is a row whose status is answered" in (passive_report / "tables" / "response_rates.md").read_text(encoding="utf-8")
+
+
+def test_the_report_gallery_shows_each_answer_as_its_type_shows_it(passive_run, tmp_path):
+    folder, _ = passive_run
+    out = tmp_path / "gallery-report"
+    result = CliRunner().invoke(app, ["report", str(folder), "--out", str(out), "--bootstrap", "0"])
+    assert result.exit_code == 0, result.output
+    page = (out / "report.html").read_text(encoding="utf-8")
+    shown = set(re.findall(r'"v": ?"([^"]*)"', page))
+    assert shown == {"anchor at (256.0, 256.0) in image None", "anchor at (256.0, 256.0) in image 0"}
 
 
 def calls(*pairs: tuple[str, object]) -> Reply:

@@ -100,3 +100,20 @@ def test_schema_errors_name_the_json_path(tmp_path):
     assert schema_errors("row", row) == []
     errors = schema_errors("row", {**row, "status": 3})
     assert errors and errors[0].startswith("$.status:")
+
+
+def test_a_prediction_value_that_misses_its_answer_types_schema_is_refused_naming_the_instance(mini_root):
+    from povagent.answers.spec import ParsedAnswer, ParseStatus
+    from povagent.answers.types import AnswerType
+    from povagent.dataset.loader import load_dataset
+    from povagent.run.score_step import prediction_of
+    from povagent_plugins.answers.point import POINT
+
+    instance = next(iter(load_dataset(mini_root, check_images=False).instances()))
+    parse = ParsedAnswer(status=ParseStatus.OK, selected_image=0, x=10.0, y=20.0)
+    drifted = AnswerType(name="drifted", description="", value_schema=POINT.value_schema, gold=POINT.gold, show=POINT.show,
+                         value_of=lambda p: {"selected_image": p.selected_image, "x": str(p.x), "y": p.y})  # fmt: skip
+    assert prediction_of(instance, parse, POINT).value == {"selected_image": 0, "x": 10.0, "y": 20.0}
+    with pytest.raises(OutputSchemaError) as caught:
+        prediction_of(instance, parse, drifted)
+    assert instance.id in str(caught.value) and "$.prediction.value.x: '10.0' is not of type 'number'" in str(caught.value)

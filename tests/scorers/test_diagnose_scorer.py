@@ -138,4 +138,4 @@ def test_a_real_world_set_refuses_both_before_any_request(tmp_path):
 
     demo = load_realworld(Path(__file__).resolve().parents[2] / "examples" / "realworld_demo", cache_dir=tmp_path)
     with pytest.raises(ConfigError, match="diagnose, relation"):
-        demo.check_scorers(["diagnose", "relation"])
+        demo.check_scorers({"diagnose": DiagnoseScorer, "relation": RelationScorer})

@@ -150,6 +150,20 @@ def test_the_official_metric_on_a_real_world_set_is_refused_before_any_request(t
     assert not (tmp_path / "run" / "results.jsonl").exists()
 
 
+def test_a_third_party_scorer_declaring_it_needs_a_3d_target_is_refused_by_a_real_world_set(demo):
+    from povagent.interfaces import Scorer
+
+    class DepthScorer(Scorer):
+        needs_3d_target = True
+
+        def score(self, instance, answer, dataset=None):
+            return {}
+
+    with pytest.raises(ConfigError, match=r"scorer depth needs 3D ground truth.*scorers: \[success\]"):
+        demo.check_scorers({"depth": DepthScorer, "success": SuccessScorer})
+    demo.check_scorers({"success": SuccessScorer})  # hand-marked ground truth is what it reads
+
+
 def test_povagent_run_runs_the_demo_pipeline_and_prints_success_rates(tmp_path):
     # from the repository root, as the README says (the pipeline names its set relative to it)
     done = subprocess.run(

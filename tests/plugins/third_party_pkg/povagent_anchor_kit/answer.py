@@ -36,6 +36,7 @@ def show_anchor_point(value: Mapping[str, Any]) -> str:
 ANCHOR_POINT = AnswerType(
     name="anchor-point",
     description="a pixel point marking the anchor object in one of the images shown",
+    refines="point",  # a point read another way: it answers the instances that ask for points
     value_schema={
         "type": "object",
         "properties": {"selected_image": {"type": ["integer", "null"]}, "x": {"type": "number"}, "y": {"type": "number"}},

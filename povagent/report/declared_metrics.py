@@ -1,0 +1,61 @@
+"""The report's numbers of every declared metric: per scorer and system, overall and per slice.
+
+A scorer declares its metrics (:mod:`povagent.scoring.metrics`); the runs' summaries record the
+declarations (:mod:`povagent.report.run_summaries`), and each observation carries its row's
+values. This estimates each metric per system through the one estimate ``summary.json`` uses
+(:func:`~povagent.scoring.metrics.metric_estimates`), whatever the scorer, so the report's
+tables and plots of a third party's metrics need no code of its own.
+
+Pure numerics over observations: nothing here reads rows or writes files.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+from povagent.report.collect import Collection, Observation
+from povagent.report.run_summaries import declared_in_summary
+from povagent.scoring.bootstrap import Estimate
+from povagent.scoring.breakdown import slices
+from povagent.scoring.metrics import Metric, ValuedRow, metric_estimates
+
+
+def declared_metric_estimates(
+    collection: Collection, by_system: Mapping[str, list[Observation]], systems: list[str], n_boot: int, seed: int
+) -> tuple[dict[str, dict[str, Metric]], dict[str, dict[str, dict[str, Any]]]]:
+    """The metrics the runs' scorers declared, and per scorer and system each one's mean (a
+    rate: of true values) with its bootstrap CI, overall and per slice (condition, direction),
+    from the values each row's observation carries, through the one estimate ``summary.json``
+    uses (:func:`~povagent.scoring.metrics.metric_estimates`)."""
+    declared: dict[str, dict[str, Metric]] = {}
+    for run in collection.runs:
+        for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
+            for m in run_metrics:
+                declared.setdefault(scorer, {}).setdefault(m.name, m)
+    estimates: dict[str, dict[str, dict[str, Any]]] = {}
+    for scorer, metrics in declared.items():
+        for system in systems:
+            rows = [ValuedRow(o.condition, o.direction, o.metric_values) for o in by_system.get(system, []) if scorer in o.metric_values]
+
+            def cell(group: list[ValuedRow], scorer: str = scorer, metrics: tuple[Metric, ...] = tuple(metrics.values())) -> dict[str, Estimate]:
+                return metric_estimates(group, scorer, metrics, n_boot, seed)
+
+            if rows:
+                estimates.setdefault(scorer, {})[system] = slices(rows, cell)
+    return declared, estimates
+
+
+def declared_estimates_json(estimates: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> dict[str, Any]:
+    """The estimates as the report's ``summary.json`` holds them: per scorer, system and slice,
+    each metric's value, CI and count."""
+
+    def cell(metrics: Mapping[str, Estimate]) -> dict[str, Any]:
+        return {name: e.as_dict() for name, e in metrics.items()}
+
+    return {
+        scorer: {
+            system: {"overall": cell(b["overall"]), **{k: {label: cell(c) for label, c in b[k].items()} for k in b if k != "overall"}}
+            for system, b in by_system.items()
+        }
+        for scorer, by_system in estimates.items()
+    }

@@ -1,0 +1,69 @@
+"""Which registered scorer follows which scoring protocol (:data:`~povagent.interfaces.ScoreProtocol`).
+
+The summary and the report break a protocol's fields down in sections of their own (the
+official error tables, the success-rate tables); they learn which scorer's fields those are
+from the scorer itself (``Scorer.protocol``), asked through the plugin registry, never from a
+scorer's name. A scorer that declares no protocol is shown through its declared metrics only.
+
+The same registry shows a row's typed prediction (:func:`shown_answer`). Only lookups: nothing
+here reads a run folder or scores a row.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Mapping, get_args
+
+from povagent.interfaces import ScoreProtocol
+
+if TYPE_CHECKING:
+    from povagent.plugins import PluginHost
+
+#: Every protocol, in the order reports show their sections.
+PROTOCOLS: tuple[ScoreProtocol, ...] = get_args(ScoreProtocol)
+
+
+def reading_host() -> PluginHost:
+    """The plugin host a reader of run folders asks (the process's own). A plugin that fails to
+    load hides only what it registers: reading a run's scores never depends on every installed
+    plugin loading."""
+    from povagent.errors import PluginError
+    from povagent.plugins import build_plugin_host, get_plugin_host
+
+    try:
+        return get_plugin_host()
+    except PluginError:
+        return build_plugin_host(strict=False)
+
+
+def registered_protocols() -> dict[str, ScoreProtocol]:
+    """``{scorer name: protocol}`` for every registered scorer that declares one."""
+    return {e.name: p for e in reading_host().entries("scorer") if (p := getattr(e.factory, "protocol", None)) in PROTOCOLS}
+
+
+def shown_answer(answer_type: str | None, value: Mapping[str, Any] | None) -> str | None:
+    """A row's typed prediction as its answer type shows it (``AnswerType.show``); ``None`` for a
+    row without a typed value, or of a type no plugin registers here."""
+    if answer_type is None or value is None:
+        return None
+    host = reading_host()
+    return host.answer_type(answer_type).show(value) if answer_type in host.names("answer_type") else None
+
+
+def scorer_protocols(scorers: Mapping[str, Any]) -> dict[str, ScoreProtocol]:
+    """``{name: protocol}`` of a run's scorer objects (or factories) that follow one."""
+    return {name: p for name, s in scorers.items() if (p := getattr(s, "protocol", None)) in PROTOCOLS}
+
+
+def following(protocols: Mapping[str, str], protocol: str, scores: Mapping[str, Any] | None = None) -> str | None:
+    """The scorer of ``protocols`` that follows ``protocol``: the one whose fields ``scores`` (a
+    row's) carry, else the first; ``None`` when none follows it."""
+    names = [n for n, p in protocols.items() if p == protocol]
+    return next((n for n in names if scores and n in scores), names[0] if names else None)
+
+
+def default_scorers() -> list[str]:
+    """The scorers of a pipeline that names none (the config's default): what a run folder
+    written before it recorded its scorers was scored by."""
+    from povagent.config.models import PipelineConfig
+
+    return [s.name for s in PipelineConfig.model_fields["scorers"].get_default(call_default_factory=True)]
