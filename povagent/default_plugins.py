@@ -8,6 +8,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     # answer types
     "povagent_plugins.answers.point",
     "povagent_plugins.answers.choice",
+    "povagent_plugins.answers.walk",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",

@@ -41,6 +41,7 @@ class NavigateStrategy(ActiveStrategy):
     """The navigate task in active mode: walk to the target, then ``arrived()``."""
 
     answer_parser = "navigate"
+    answer_type = "walk"
     task = "navigate"
 
     def __init__(self, max_actions: int = NAVIGATE_BUDGET, **active: Any) -> None:
@@ -81,6 +82,7 @@ def walked(record: EpisodeRecord) -> list[tuple[float, float]]:
 class NavigateParser(Parser):
     """Reads the episode record the ``navigate`` strategy leaves: the arrival and the path."""
 
+    answer_types = frozenset({"walk"})
     reproduces_official = True
     reads = "the episode record the `navigate` strategy leaves as a row's final answer: the pose the robot called `arrived` in and the path it walked"
     beside_official = "its own reference: navigation has no official runner, so no second reading is kept"

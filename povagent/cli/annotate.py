@@ -16,9 +16,11 @@ def annotate_command(
         ..., metavar="CONFIG",
         help="A pipeline YAML with `backend: human` and `annotator: NAME` (docs/how-to/human-study.md).",
     ),
-    port: int = typer.Option(0, "--port", min=0, max=65535, help="The port on 127.0.0.1 to serve on (0: a free one, printed)."),
+    port: int = typer.Option(0, "--port", min=0, max=65535, metavar="PORT", help="The port on 127.0.0.1 to serve on (0: a free one, printed)."),
 ) -> None:
-    """Serve a local page (127.0.0.1 only, a random token in its address) where a person answers or judges.
+    """Serve a local page where a person answers or judges.
+
+    The page is on 127.0.0.1 only, with a random token in its address.
 
     Answer mode (annotator: NAME): the person sees what a model is shown and answers by clicking a
     point or choosing an option; each answer is a row of an ordinary run folder (the config's

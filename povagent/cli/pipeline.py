@@ -337,7 +337,7 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
     from povagent.cli.console_width import break_between_words
 
     name_width = max((len(e.name) for es in entries.values() for e in es), default=4)
-    name_width = min(name_width, max(12, width // 3))
+    name_width = min(name_width, max(12, width * 3 // 8))  # 30 in 80 columns: the longest built-in name whole
     room = max(20, width - name_width - 7)  # borders and padding of a two-column table
     table = Table(title="povagent plugins", show_header=False)
     table.add_column("name", overflow="fold", width=name_width)

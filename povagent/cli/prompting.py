@@ -163,7 +163,7 @@ def parse_command(
     """Parse one raw model answer (read from stdin) into JSON.
 
     The JSON holds the parse status, the frame chosen and the point in pixels (or, with
-    ``--choices``, the option label chosen), and says whether the parser had to repair the answer.
+    --choices, the option label chosen), and says whether the parser had to repair the answer.
     """
     from povagent.answers.spec import AnswerSpec, choice_answer_schema, frame_answer_schema, point_answer_schema
     from povagent.dataset.models import Condition

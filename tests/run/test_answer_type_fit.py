@@ -7,60 +7,27 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from povagent import hookimpl
 from povagent.answers.types import AnswerType, answer_type_misfit
 from povagent.config.pipeline import load_pipeline
 from povagent.errors import ConfigError
 from povagent.run.progress import QuietProgress
 from povagent.run.runner import run_pipeline
 from povagent.testing.pytest_plugin import write_release
+from povagent_plugins.answers.choice import CHOICE
 from povagent_plugins.answers.point import POINT
-from povagent_plugins.parsers.json_answer import JsonAnswerParser
-from povagent_plugins.strategies.basic import BasicStrategy
-
-CHOICE = AnswerType(
-    name="choice", description="one of the labelled options", value_schema={"type": "object"},
-    value_of=lambda parse: None, gold=lambda instance: None, show=lambda value: str(value.get("label")),
-)  # fmt: skip
 
 
-class ChoiceStrategy(BasicStrategy):
-    answer_type = "choice"
-
-
-class ChoiceParser(JsonAnswerParser):
-    answer_types = frozenset({"choice"})
-
-
-class ChoicePlugin:
-    @hookimpl
-    def register_answer_types(self, register):
-        register("choice", CHOICE, description="test: a choice")
-
-    @hookimpl
-    def register_strategies(self, register):
-        register("ask-choice", ChoiceStrategy, description="test: asks for a choice")
-
-    @hookimpl
-    def register_parsers(self, register):
-        register("read-choice", ChoiceParser, description="test: reads a choice")
-
-
-def test_a_strategy_asking_another_answer_type_than_the_instances_is_refused_in_one_line(povagent_host, tmp_path):
+def test_a_strategy_asking_another_answer_type_than_the_instances_is_refused_in_one_line(tmp_path):
     release = write_release(tmp_path / "povbench", houses=1, pairs=1, pair_directions=1, frames=2)
     path = tmp_path / "choice.yaml"
     path.write_text(yaml.safe_dump({
-        "dataset": {"path": str(release)}, "backend": {"name": "center"}, "strategy": "ask-choice",
-        "parser": "read-choice", "scorers": [], "output": str(tmp_path / "run"),
+        "dataset": {"path": str(release)}, "backend": {"name": "center"}, "strategy": "choice",
+        "parser": "choice", "scorers": [], "output": str(tmp_path / "run"),
     }))  # fmt: skip
-    povagent_host.add_plugin(ChoicePlugin(), name="choice-plugin")
-    try:
-        with pytest.raises(ConfigError) as refused:
-            run_pipeline(load_pipeline(path), progress=QuietProgress())
-    finally:
-        povagent_host.remove_plugin("choice-plugin")
+    with pytest.raises(ConfigError) as refused:
+        run_pipeline(load_pipeline(path), progress=QuietProgress())
     (line,) = str(refused.value).splitlines()
-    assert "strategy 'ask-choice' asks for a 'choice' answer" in line and "asks for a 'point' answer" in line
+    assert "strategy 'choice' asks for a 'choice' answer" in line and "asks for a 'point' answer" in line
     assert not (tmp_path / "run" / "results.jsonl").exists()
 
 
@@ -72,4 +39,4 @@ def test_a_type_refining_the_asked_one_answers_its_instances(mini_root):
                          show=POINT.show, refines="point")  # fmt: skip
     assert answer_type_misfit("basic", POINT, instances) is None
     assert answer_type_misfit("anchor", refined, instances) is None
-    assert answer_type_misfit("ask-choice", CHOICE, instances) is not None
+    assert answer_type_misfit("choice", CHOICE, instances) is not None
