@@ -15,6 +15,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.relation",
     "povagent_plugins.scorers.probe",
     "povagent_plugins.scorers.choice",
+    "povagent_plugins.scorers.srbench3d",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",

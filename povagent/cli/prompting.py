@@ -97,7 +97,7 @@ def show_prompt_command(
     from povagent.plugins import get_plugin_host
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
-    dataset = open_evaluation_set(config.dataset.root)
+    dataset = open_evaluation_set(config.dataset.root, format=config.dataset.format, images=config.dataset.images)
     inst = dataset.instance(instance)
     if inst is None:
         # an instance of a house the loader left out: say why in one line, not "no such id"
