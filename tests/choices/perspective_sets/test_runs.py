@@ -75,3 +75,20 @@ def test_the_summary_json_of_a_choice_run_holds_the_category_slices(choice_pipel
         "Camera perspective - Relative Direction", "Person perspective - Object View Orientation",
         "Person perspective - Scene Simulation Relative Direction",
     }  # fmt: skip
+
+
+def test_rescoring_a_3dsrbench_run_gives_its_four_accuracies_again(choice_pipeline):
+    from povagent.run.rescore import rescore_run
+
+    config = load_pipeline(choice_pipeline("3dsrbench", backend="test-center", reply="A", scorers=("choice-3dsrbench",)))
+    result = run_pipeline(config)
+    again = rescore_run(result.run_dir, "choice", plugins=config.plugins)
+    assert again.summary.metrics["choice-3dsrbench"] == result.summary.metrics["choice-3dsrbench"]
+
+
+def test_the_console_table_of_a_choice_run_has_a_row_per_category(choice_pipeline):
+    from povagent.cli.metrics_table import metrics_rows
+
+    result = run_pipeline(load_pipeline(choice_pipeline("mindcube", backend="test-center", reply="A")))
+    _, rows = metrics_rows(result.summary.metrics["choice"])
+    assert [row[0] for row in rows] == ["overall", "category 'among'", "category 'around'", "category 'rotation'"]
