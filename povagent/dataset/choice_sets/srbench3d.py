@@ -22,6 +22,7 @@ from __future__ import annotations
 import base64
 import binascii
 import csv
+import hashlib
 import re
 from pathlib import Path
 
@@ -112,12 +113,12 @@ def _item(row: dict[str, str], where: str, cache: Path, image_of_index: dict[str
     if image.lower().endswith(_IMAGE_SUFFIXES):
         return Item(qid, question, (image,))
     try:
-        return Item(qid, question, (_embedded_image(image, qid, cache),), embedded=True)
+        return Item(qid, question, (_embedded_image(image, cache),), embedded=True)
     except ValueError as exc:
         return f"{where}.image", str(exc)
 
 
-def _embedded_image(text: str, qid: str, cache: Path) -> str:
+def _embedded_image(text: str, cache: Path) -> str:
     """Decode a base64 image into ``cache`` and give its file name; :class:`ValueError` says
     why it cannot be (the file is then checked like any image: :mod:`.external`)."""
     try:
@@ -128,6 +129,8 @@ def _embedded_image(text: str, qid: str, cache: Path) -> str:
     if kind is None:
         raise ValueError("the decoded image is neither PNG nor JPEG")
     cache.mkdir(parents=True, exist_ok=True)
-    name = f"{qid}.{kind}"
-    (cache / name).write_bytes(data)
+    # named by content, never by the qid (text from the file): the same image is one file
+    name = f"{hashlib.sha256(data).hexdigest()[:32]}.{kind}"
+    if not (cache / name).is_file():
+        (cache / name).write_bytes(data)
     return name

@@ -92,3 +92,14 @@ def test_the_console_table_of_a_choice_run_has_a_row_per_category(choice_pipelin
     result = run_pipeline(load_pipeline(choice_pipeline("mindcube", backend="test-center", reply="A")))
     _, rows = metrics_rows(result.summary.metrics["choice"])
     assert [row[0] for row in rows] == ["overall", "category 'among'", "category 'around'", "category 'rotation'"]
+
+
+def test_a_report_of_a_choice_run_is_written(choice_pipeline):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    result = run_pipeline(load_pipeline(choice_pipeline("viewspatial")))
+    outcome = CliRunner().invoke(app, ["report", str(result.run_dir)])
+    assert outcome.exit_code == 0, outcome.output
+    assert (result.run_dir / "report" / "report.html").is_file()
