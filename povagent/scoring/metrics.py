@@ -15,6 +15,7 @@ Pure: nothing here reads files or knows a plugin; a row is anything with ``statu
 from __future__ import annotations
 
 import math
+import re
 from collections import defaultdict
 from dataclasses import dataclass, field
 from operator import attrgetter
@@ -38,9 +39,11 @@ class Metric:
     ``"all"`` (every row; a row the scorer did not score, or scored unanswered, counts as
     false for a rate: a response rate, a success rate with non-responses as failures).
     ``negate`` counts a false value as the hit (a rate of ``gt_in_frame`` false, say).
-    ``group`` names a field of the scores holding the row's group (3DSRBench's copies of one
-    question): the metric is then a rate over groups, a group a hit only when every row of it
-    is (a run's rows group apart from another run's).
+    ``group`` is a regular expression that makes a metric a rate over groups of rows (a set's
+    copies of one question): rows whose pair ids are equal once every match of it is removed
+    form a group (``-flip`` pairs ``Q-2`` with ``Q-flip-2``), a hit only when every row of it
+    is. The id is the row's own, so a row no scorer scored (an unreadable answer) still sinks
+    its group; a run's rows group apart from another run's.
     """
 
     name: str
@@ -103,15 +106,17 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
 
 
 def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]:
-    """``{scorer: {metric: group}}`` for every grouped metric whose group field the row's scores
-    hold (a text), the run's index before it (a group never spans runs)."""
-    scores = getattr(row, "scores", None) or {}
+    """``{scorer: {metric: group}}`` for every grouped metric: the row's pair id with every
+    match of the metric's ``group`` removed, the run's index before it (a group never spans
+    runs). Empty for a row with no pair id."""
+    pair_id = getattr(row, "pair_id", None)
+    if not isinstance(pair_id, str):
+        return {}
     out: dict[str, dict[str, str]] = {}
     for scorer, metrics in declared.items():
-        fields = scores.get(scorer)
         for m in metrics:
-            if m.group is not None and isinstance(fields, Mapping) and isinstance(fields.get(m.group), str):
-                out.setdefault(scorer, {})[m.name] = f"{getattr(row, 'run', 0)}#{fields[m.group]}"
+            if m.group is not None:
+                out.setdefault(scorer, {})[m.name] = f"{getattr(row, 'run', 0)}#{re.sub(m.group, '', pair_id)}"
     return out
 
 
