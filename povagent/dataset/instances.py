@@ -35,7 +35,8 @@ class Frame:
 
 @dataclass(frozen=True)
 class Instance:
-    """One evaluation instance; ``id`` is ``house/pair/direction/condition``."""
+    """One evaluation instance; ``id`` is ``house/pair/direction/condition`` (an external
+    multiple-choice set's item, with no direction or condition: ``set/record``)."""
 
     house_id: str
     pair_id: str
