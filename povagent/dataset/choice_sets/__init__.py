@@ -43,7 +43,7 @@ def load_choice_set(file: str | Path, format: str, *, images: str | Path | None 
         frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache)
         if frames is not None:
             instances.append(choice_instance(CHOICE_FORMATS[format], item, frames))
-    choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache)
+    choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache_dir=cache)
     if own_cache:
         weakref.finalize(choice_set, shutil.rmtree, str(cache), True)
     return choice_set

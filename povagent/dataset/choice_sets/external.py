@@ -99,6 +99,7 @@ class ChoiceSet:
     name: str
     problems: list[Problem] = field(default_factory=list)
     _instances: list[Instance] = field(default_factory=list, repr=False)
+    _by_id: dict[str, Instance] = field(default_factory=dict, repr=False)
     #: where embedded images were written (3DSRBench's base64 cells); removed with the set
     cache_dir: Path | None = None
 
@@ -122,8 +123,10 @@ class ChoiceSet:
         return list(self._instances)
 
     def instance(self, id_: str) -> Instance | None:
-        """The item with id ``<set>/<record id>``."""
-        return next((i for i in self._instances if i.id == id_), None)
+        """The item with id ``<set>/<record id>`` (rescore asks once per row: an index, kept)."""
+        if len(self._by_id) != len(self._instances):
+            self._by_id = {i.id: i for i in self._instances}
+        return self._by_id.get(id_)
 
     def check_scorers(self, names: Iterable[str]) -> None:
         """Refuse scorers that need POVBench's point ground truth (the runner asks before any

@@ -77,3 +77,9 @@ def test_image_paths_are_read_relative_to_the_images_folder_given(set_file):
     assert load_choice_set(moved, "mindcube").problems  # beside the file: not there
     loaded = load_choice_set(moved, "mindcube", images=data)
     assert loaded.problems == [] and len(loaded.instances()) == 3
+
+
+def test_an_item_is_found_by_its_instance_id(set_file):
+    loaded = load_choice_set(set_file("3dsrbench"), "3dsrbench")
+    assert loaded.instance("3dsrbench/QUES0001-flip").question.variant == "flip"
+    assert loaded.instance("3dsrbench/QUES9999") is None
