@@ -102,11 +102,10 @@ class DatasetSpec(_Strict):
     download: DownloadLimits | None = None
     #: Stop at the first bad house or pair instead of reporting it and going on.
     strict: bool = False
-    #: The published format of an external multiple-choice set whose file ``path`` names
-    #: (:mod:`povagent.dataset.choice_sets`); ``None``: a POVBench-layout folder.
+    #: The format of an external multiple-choice set whose file ``path`` names (see
+    #: :mod:`povagent.dataset.choice_sets`), and the folder its image paths are relative to and
+    #: confined to (default: the file's). ``None``: a POVBench-layout folder.
     format: Literal["viewspatial", "mindcube", "3dsrbench"] | None = None
-    #: The folder an external set's image paths are relative to, and confined to (default:
-    #: the folder of the set's file; MindCube's official layout keeps them in ``data/``).
     images: Path | None = None
 
     @model_validator(mode="before")
@@ -117,11 +116,7 @@ class DatasetSpec(_Strict):
     @model_serializer(mode="wrap")
     def _no_format_for_a_folder(self, handler: Any) -> dict[str, Any]:
         # a POVBench run's config.yaml stays byte for byte what it was before formats existed
-        out = handler(self)
-        for key in ("format", "images"):
-            if out.get(key) is None:
-                out.pop(key, None)
-        return out
+        return {k: v for k, v in handler(self).items() if k not in ("format", "images") or v is not None}
 
     @field_validator("hub")
     @classmethod
