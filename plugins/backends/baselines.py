@@ -127,7 +127,7 @@ def instance_ordinal(instance: Instance) -> int:
         pair = int(instance.pair_id)
     except ValueError:
         pair = zlib.crc32(instance.pair_id.encode())
-    return pair * len(DIRECTIONS) + DIRECTIONS.index(instance.direction)
+    return pair * len(DIRECTIONS) + DIRECTIONS.index(instance.povbench_direction)
 
 
 class RandomBaseline(Backend):

@@ -218,8 +218,9 @@ class LiteLLMBackend(Backend):
     def _check_condition(self, request: Request) -> None:
         # a profile that cannot answer a condition (RoboPoint: Given only) is refused before
         # any paid call, with the reason, instead of failing slowly or answering nonsense
+        # (an external multiple-choice item has no condition: nothing to refuse)
         profile, instance = self.profile, request.instance
-        if profile is not None and instance is not None and not profile.supports(instance.condition):
+        if profile is not None and instance is not None and instance.condition is not None and not profile.supports(instance.condition):
             allowed = ", ".join(f"{c.label} ({c.value})" for c in profile.conditions)
             raise PermanentBackendError(
                 f"model profile {profile.name!r} answers {allowed} only, not {instance.condition.label} "

@@ -149,7 +149,7 @@ class PlantedBehaviour(Backend):
             pair = house.pairs.get(instance.pair_id)
             if pair is None:
                 raise PermanentBackendError(f"planted backend: no pair {instance.pair_id!r} in the records of {instance.house_id}")
-            case = placement_case(pair, instance.direction)
+            case = placement_case(pair, instance.povbench_direction)
             target = egocentric_target(case, frame.camera) if behaviour == "egocentric" else mirrored_target(case)
         gt = project_ground_truth(target, frame.camera)
         noise = rng.normal(0.0, self.pixel_sigma, size=2) if self.pixel_sigma > 0 else np.zeros(2)

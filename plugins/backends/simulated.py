@@ -169,7 +169,7 @@ class SimulatedPerception(Backend):
         return answer
 
     def _surface(self, question: Mapping[str, Any], instance: Instance, house: House, pair: PairEntry, rng: np.random.Generator) -> dict[str, Any]:
-        judgement = pair.stage3.get(instance.direction)
+        judgement = pair.stage3.get(instance.povbench_direction)
         kind = surface_kind(judgement.surface if judgement else None, pair.object_landmark.object_type)
         if rng.random() < self.wrong_surface_rate:
             others = [k for k in SURFACE_KINDS if k != kind]
@@ -180,7 +180,7 @@ class SimulatedPerception(Backend):
         obj = pointed_object(str(question.get("object", "")), str(question.get("role", "")), house, pair)
         if obj is None:
             return {"detections": []}
-        given = not instance.condition.uses_exploration_frames
+        given = not instance.povbench_condition.uses_exploration_frames
         detections = []
         for index, frame in enumerate(instance.frames):
             seen_by_record = given or (index < len(house.exploration) and obj.objectId in house.exploration[index].object_in_frame_hits)

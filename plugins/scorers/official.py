@@ -44,6 +44,9 @@ class OfficialScorer(Scorer):
     needs_3d_target = True
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
+        if instance.condition is None:  # an external multiple-choice item: no point to score
+            raise ValueError(f"instance {instance.id} is a multiple-choice item with no POVBench condition: "
+                             "the official scorer scores points; score it with a choice scorer")  # fmt: skip
         if not answer.answered:
             return UNANSWERED.as_dict()
         # an answer given in a camera of its own (an active-mode view) is scored in that camera

@@ -37,7 +37,7 @@ class ProbeScorer(Scorer):
             return {"answered": False}
         frame, x, y = point
         obj = instance.anchor_object if self.role == "anchor" else instance.observer_object
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             seen = str(obj.objectId) in frame.in_frame_hits
         else:
             seen = self.role == "anchor"  # the observer view faces the anchor, from the observer

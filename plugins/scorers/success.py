@@ -87,7 +87,7 @@ class SuccessScorer(Scorer):
         point = answer.point
         if point is None:
             return failure
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             k = answer.selected_image
             if k is None or instance.selected_frame(k) is None:
                 return failure  # no frame: unanswered, as the official rules count it

@@ -156,7 +156,7 @@ class ActiveStrategy(BasicStrategy):
     def first_message(self, instance: Instance, images: ImageStore) -> Message:
         """The passive prompt with its images, then the tools preamble."""
         n = len(self.shown_frames(instance))
-        text = self.prompt_text(instance) + preamble(self.max_actions, n, not instance.condition.uses_exploration_frames, self.tools())
+        text = self.prompt_text(instance) + preamble(self.max_actions, n, not instance.povbench_condition.uses_exploration_frames, self.tools())
         return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
 
     def _request(self, instance: Instance, messages: list[Message], state: dict[str, object] | None = None) -> Request:
@@ -194,7 +194,7 @@ class ActiveStrategy(BasicStrategy):
             return view.sha256
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
-        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.direction.value, instance.condition.value, self.speaker)
+        facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.povbench_direction.value, instance.povbench_condition.value, self.speaker)
         return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.tools(), self.max_actions,
                        self.max_seconds)  # fmt: skip
 
@@ -233,7 +233,7 @@ class ActiveStrategy(BasicStrategy):
         if not parsed.answered or parsed.x is None or parsed.y is None:
             episode.stop("no answer: the model replied without a tool call or an answer in the official JSON")
             return
-        frame = parsed.selected_image if instance.condition.uses_exploration_frames else 0
+        frame = parsed.selected_image if instance.povbench_condition.uses_exploration_frames else 0
         if frame is None or episode.image_camera("frame", frame) is None:
             episode.stop(f"no answer: the text answer names no frame shown ({parsed.selected_image!r})")
             return

@@ -111,7 +111,7 @@ class BasicStrategy(Strategy):
     # -- what is shown -----------------------------------------------------------------------
     def shown_frames(self, instance: Instance) -> tuple[Frame, ...]:
         """The frames shown, in the official order: A/B the first ``max_frames``; C the observer view."""
-        if instance.condition.uses_exploration_frames and self.max_frames is not None:
+        if instance.povbench_condition.uses_exploration_frames and self.max_frames is not None:
             return instance.frames[: self.max_frames]
         return instance.frames
 
@@ -122,12 +122,12 @@ class BasicStrategy(Strategy):
     def prompt_text(self, instance: Instance) -> str:
         """The filled prompt text for ``instance``."""
         width, height = instance.frame_size
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             name = self.prompts.frames
             if name is None:
                 raise ValueError(
-                    f"prompts {self.prompts.name!r} are for Given (c) only, not {instance.condition.label} "
-                    f"({instance.condition.value}): {self.prompts.source}; restrict instances.conditions"
+                    f"prompts {self.prompts.name!r} are for Given (c) only, not {instance.povbench_condition.label} "
+                    f"({instance.povbench_condition.value}): {self.prompts.source}; restrict instances.conditions"
                 )
             return fill_sentence(name, instance.sentence, width, height, len(self.shown_frames(instance)))
         assert self.prompts.given is not None  # every family has a Given prompt

@@ -22,6 +22,7 @@ from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
 from povagent.interfaces import Strategy
+from povagent_plugins.strategies import set_profiles
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,8 @@ class ChoiceProfile:
     name: str
     text: Callable[[ChoiceQuestion], str]
     source: str
+    #: The images go where the text has an ``<image>`` marker (MindCube), instead of all first.
+    interleaved: bool = False
 
 
 def plain_text(question: ChoiceQuestion) -> str:
@@ -41,7 +44,13 @@ def plain_text(question: ChoiceQuestion) -> str:
 #: Prompt profiles by name; a set's reader names its set's profile in each question.
 CHOICE_PROFILES: dict[str, ChoiceProfile] = {
     "plain": ChoiceProfile("plain", plain_text, "povagent's wording (the instruction lmms-eval's multiple-choice tasks append)"),
+    "viewspatial": ChoiceProfile("viewspatial", set_profiles.viewspatial_text, set_profiles.VIEWSPATIAL_SOURCE),
+    "mindcube": ChoiceProfile("mindcube", set_profiles.mindcube_text, set_profiles.MINDCUBE_SOURCE, interleaved=True),
+    "3dsrbench": ChoiceProfile("3dsrbench", set_profiles.srbench3d_text, set_profiles.SRBENCH3D_SOURCE),
 }
+
+#: Where an interleaved profile's text places an image.
+IMAGE_MARKER = "<image>"
 
 
 def choice_answer_spec(instance: Instance) -> AnswerSpec:
@@ -74,8 +83,9 @@ class ChoiceStrategy(Strategy):
         """Nothing beyond the YAML decides the rows."""
         return {}
 
-    def prompt_text(self, instance: Instance) -> str:
-        """The text after the images."""
+    def profile_of(self, instance: Instance) -> tuple[ChoiceProfile, ChoiceQuestion]:
+        """The profile the instance is asked in (the strategy's option, else the question's
+        own) and its question."""
         question = instance.question
         if question is None:
             raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
@@ -83,6 +93,11 @@ class ChoiceStrategy(Strategy):
         profile = CHOICE_PROFILES.get(name)
         if profile is None:
             raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
+        return profile, question
+
+    def prompt_text(self, instance: Instance) -> str:
+        """The text after the images (an interleaved profile's still holds its image markers)."""
+        profile, question = self.profile_of(instance)
         return profile.text(question)
 
     def answer_spec(self, instance: Instance) -> AnswerSpec:
@@ -90,9 +105,23 @@ class ChoiceStrategy(Strategy):
         return choice_answer_spec(instance)
 
     def build(self, instance: Instance, images: ImageStore) -> Request:
-        """One user message: every image of the instance in order, then the question."""
-        parts: list[Part] = [ImagePart(images.add_file(frame.file).image_hash, label=f"Image {frame.index}") for frame in instance.frames]
-        parts.append(TextPart(self.prompt_text(instance)))
+        """One user message: every image of the instance in order, then the question; an
+        interleaved profile puts image *k* at the text's *k*-th ``<image>`` marker instead
+        (each text piece stripped, empty pieces left out, as lmms-eval's MindCube task does)."""
+        text = self.prompt_text(instance)
+        image_parts = [ImagePart(images.add_file(frame.file).image_hash, label=f"Image {frame.index}") for frame in instance.frames]
+        parts: list[Part] = []
+        if self.profile_of(instance)[0].interleaved:
+            pieces = text.split(IMAGE_MARKER)
+            if len(pieces) - 1 != len(image_parts):
+                raise ValueError(f"instance {instance.id}: its question has {len(pieces) - 1} {IMAGE_MARKER} marker(s) for {len(image_parts)} image(s)")
+            for k, piece in enumerate(pieces):
+                if piece.strip():
+                    parts.append(TextPart(piece.strip()))
+                if k < len(image_parts):
+                    parts.append(image_parts[k])
+        else:
+            parts = [*image_parts, TextPart(text)]
         return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance),
                        generation=self.generation, instance=instance)  # fmt: skip
 

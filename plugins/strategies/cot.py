@@ -35,7 +35,7 @@ class CotStrategy(BasicStrategy):
 
     def prompt_text(self, instance: Instance) -> str:
         """The CoT template with this strategy's Step 4 (the basic Given prompt for C)."""
-        if not instance.condition.uses_exploration_frames:
+        if not instance.povbench_condition.uses_exploration_frames:
             return super().prompt_text(instance)
         width, height = instance.frame_size
         values = frame_values(width, height, len(self.shown_frames(instance)))

@@ -257,7 +257,7 @@ class GeometricStrategy(Strategy):
         types = ", ".join(known_types())
         directions = {"type": "string", "enum": list(DIRECTION_NAMES)}
         words = {"directions": ", ".join(DIRECTION_NAMES), "direction_choices": "|".join(DIRECTION_NAMES)}
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             text = render("geometric_read_frames", sentence=instance.sentence, types=types, **words)
             props = {"observer": {"type": "string"}, "anchor": {"type": "string"}, "direction": directions}
         else:
@@ -278,7 +278,7 @@ class GeometricStrategy(Strategy):
         ``words`` replace the object's name made from ``object_type`` (a planned turn's placeholder)."""
         width, height = instance.frame_size
         hashes = shown_images(instance, images)
-        frames = instance.condition.uses_exploration_frames
+        frames = instance.povbench_condition.uses_exploration_frames
         name = object_words(object_type) if words is None else words
         if frames:
             text = render("geometric_locate_frames", object=name, **frame_values(width, height, len(hashes)))
@@ -303,7 +303,7 @@ class GeometricStrategy(Strategy):
             PlannedTurn(self.surface_request(instance, anchor, direction, words=(anchor, direction)), note="asked when turn 1 names an anchor"),
             PlannedTurn(self.locate_request(instance, images, anchor, "anchor", words=anchor), note="asked when turn 1 names an anchor"),
         ]
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             observer = earlier_answer(1, "observer")
             turns.append(
                 PlannedTurn(
@@ -353,7 +353,7 @@ class GeometricStrategy(Strategy):
         read = await exchange(self.read_request(instance))
         anchor = normalize_type(read.get("anchor")) if read else None
         direction = normalize_direction(read.get("direction")) if read else None
-        observer = normalize_type(read.get("observer")) if read and instance.condition.uses_exploration_frames else None
+        observer = normalize_type(read.get("observer")) if read and instance.povbench_condition.uses_exploration_frames else None
         if anchor is None:
             account.fallback("the anchor could not be read from the answer: no geometry is possible")
             return turns + [self._final(instance, None, account)]
@@ -380,7 +380,7 @@ class GeometricStrategy(Strategy):
             account.fallback("the anchor was not found in any frame: no geometry is possible")
             return turns + [self._final(instance, None, account)]
 
-        if not instance.condition.uses_exploration_frames:
+        if not instance.povbench_condition.uses_exploration_frames:
             first = anchor_seen[0]
             sol = solve_given_view(direction, anchor, size_prior(anchor), first.pixel, first.box, surface, width, height, cameras[0].fov)
             how = "tilt fitted to the anchor's box" if sol.fitted else "no usable box: tilt guessed from the pointed centre"
@@ -452,9 +452,9 @@ class GeometricStrategy(Strategy):
         width, height = instance.frame_size
         if answer is None:
             answer = (0, (width / 2.0, height / 2.0))
-            account.fallback("answered the image centre" + (" of frame 0" if instance.condition.uses_exploration_frames else ""))
+            account.fallback("answered the image centre" + (" of frame 0" if instance.povbench_condition.uses_exploration_frames else ""))
         frame, (x, y) = answer
-        doc: dict[str, Any] = {"selected_image": frame} if instance.condition.uses_exploration_frames else {}
+        doc: dict[str, Any] = {"selected_image": frame} if instance.povbench_condition.uses_exploration_frames else {}
         doc |= {"x": round(float(x), 2), "y": round(float(y), 2)}
         if target is not None:
             doc[TARGET_3D] = [round(float(v), 4) for v in target]

@@ -78,7 +78,7 @@ def prompt_message(
     instance: Instance, image_hashes: Sequence[str], prompt_text: str, given_label: str | None = GIVEN_LABEL
 ) -> Message:
     """The user message: labelled frames (A/B) or the labelled observer view (C), then the prompt text."""
-    parts = image_parts(image_hashes, instance.condition.uses_exploration_frames, given_label)
+    parts = image_parts(image_hashes, instance.povbench_condition.uses_exploration_frames, given_label)
     return Message("user", (*parts, TextPart(prompt_text)))
 
 
@@ -98,6 +98,6 @@ def answer_spec(instance: Instance, n_frames: int | None = None) -> AnswerSpec:
     (frozen) spec per condition kind, frame count and frame size.
     """
     width, height = instance.frame_size
-    if instance.condition.uses_exploration_frames:
+    if instance.povbench_condition.uses_exploration_frames:
         return _answer_spec(True, len(instance.frames) if n_frames is None else n_frames, width, height)
     return _answer_spec(False, 1, width, height)

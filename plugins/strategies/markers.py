@@ -206,7 +206,7 @@ class ObserverPlotStrategy(BasicStrategy):
     def prompt_text(self, instance: Instance) -> str:
         """The basic prompt with the runner's note on the marks (A/B, ``prompts: runner``)."""
         text = super().prompt_text(instance)
-        if instance.condition.uses_exploration_frames and self.prompts.marker_notes:
+        if instance.povbench_condition.uses_exploration_frames and self.prompts.marker_notes:
             text = with_marker_note(text, load_template(self.note_template))
         return text
 

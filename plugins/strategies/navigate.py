@@ -50,7 +50,7 @@ class NavigateStrategy(ActiveStrategy):
     def first_message(self, instance: Instance, images: ImageStore) -> Message:
         """The condition's prompt with its images, the navigation instruction, the tools preamble."""
         n = len(self.shown_frames(instance))
-        given = not instance.condition.uses_exploration_frames
+        given = not instance.povbench_condition.uses_exploration_frames
         start = GIVEN_START if given else None
         text = self.prompt_text(instance) + INSTRUCTION + preamble(self.max_actions, n, given, self.tools(), start)
         return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
@@ -59,7 +59,7 @@ class NavigateStrategy(ActiveStrategy):
         """The active episode; in Given (C) it starts at the house's entrance, not at the
         observer's standpoint (the speaker's place, often no place for the robot)."""
         episode = super().episode(instance, images)
-        if not instance.condition.uses_exploration_frames:
+        if not instance.povbench_condition.uses_exploration_frames:
             from povagent.active.navigation import entrance_pose, house_of
 
             episode.start = episode.pose = entrance_pose(house_of(instance), episode.start)

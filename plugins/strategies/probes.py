@@ -76,7 +76,7 @@ class PerceptionProbe(Strategy):
         return self.task.answer_spec(instance)
 
     def _refuse_given(self, instance: Instance) -> None:
-        if self.role == "observer" and not instance.condition.uses_exploration_frames:
+        if self.role == "observer" and not instance.povbench_condition.uses_exploration_frames:
             raise ValueError(
                 f"strategy probe-observer: {instance.id} is a Given (c) instance, whose observer view is taken from the "
                 "observer, so the observer is not in it; run probe-observer with instances: {conditions: [a, b]}"
@@ -105,7 +105,7 @@ class PerceptionProbe(Strategy):
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The first request: the basic question (A/B), or the probe itself (Given)."""
         self._refuse_given(instance)
-        if instance.condition.uses_exploration_frames:
+        if instance.povbench_condition.uses_exploration_frames:
             return self.task.build(instance, images)
         return self.probe_request(instance, images, instance.frames[0], None)
 
@@ -113,7 +113,7 @@ class PerceptionProbe(Strategy):
         """A/B: the basic question, the probe (shown here in frame 0; asked in the frame turn 1
         selects), the worked-out answer. Given: the probe alone."""
         first = self.build(instance, images)
-        if not instance.condition.uses_exploration_frames:
+        if not instance.povbench_condition.uses_exploration_frames:
             return [PlannedTurn(first)]
         probe = self.probe_request(instance, images, instance.frames[0], 0)
         return [
@@ -125,7 +125,7 @@ class PerceptionProbe(Strategy):
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
         """Ask the basic question, then the probe in the frame it selected (see the module docstring)."""
         first = self.build(instance, images)
-        if not instance.condition.uses_exploration_frames:
+        if not instance.povbench_condition.uses_exploration_frames:
             return [(first, await ask(first))]
         answer = await ask(first)
         turns = [(first, answer)]

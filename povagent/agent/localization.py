@@ -99,7 +99,7 @@ def localize(
             text,
             parsed,
         )
-    if instance.condition.uses_exploration_frames:
+    if instance.povbench_condition.uses_exploration_frames:
         k = parsed.selected_image
         if k is None or instance.selected_frame(k) is None:
             named = "no frame" if k is None else f"frame {k}"

@@ -18,20 +18,29 @@ if TYPE_CHECKING:
 
 @app.command("validate")
 def validate_command(
-    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR", help="Dataset folder in the POVBench release layout."),
+    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR", help="Dataset folder in the POVBench release layout (with --format: the set's file)."),
     width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width every exploration frame must have."),
     height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height every exploration frame must have."),
+    format: str | None = typer.Option(None, "--format", metavar="FORMAT",
+                                      help="An external multiple-choice set's file: viewspatial, mindcube or 3dsrbench."),
+    images: Path | None = typer.Option(None, "--images", metavar="DIR",
+                                       help="With --format: the folder the set's image paths are relative to (default: the file's)."),
 ) -> None:
     """Check every file and image of a dataset; list every problem.
 
-    Each problem names the file, the JSON path and what is wrong with it. Exit code 1 when
-    there is any. Warnings (on stderr) leave the dataset valid.
+    Each problem names the file, the JSON path (or line, or record) and what is wrong with it.
+    Exit code 1 when there is any. Warnings (on stderr) leave the dataset valid.
     """
     from povagent.dataset.problems import Problem
     from povagent.dataset.validate import validate_dataset
 
     warnings: list[Problem] = []
-    problems = validate_dataset(dataset_dir, (width, height), warnings)
+    if format is not None:
+        from povagent.dataset.choice_sets import validate_choice_set
+
+        problems = validate_choice_set(dataset_dir, format, images)
+    else:
+        problems = validate_dataset(dataset_dir, (width, height), warnings)
     for w in warnings:
         typer.echo(f"warning: {w}", err=True)
     for p in problems:

@@ -1,4 +1,5 @@
-"""The rows of a breakdown table, labelled: overall, each condition, each direction.
+"""The rows of a breakdown table, labelled: overall, each condition, each direction (and each
+question category, for a breakdown that has them: a multiple-choice run's declared metrics).
 
 Every console table of a breakdown (the official means, success rates, declared metrics, the
 official reading beside a lenient one) lists its slices in this order with these labels; a
@@ -37,3 +38,6 @@ def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
         # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
         yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
     yield from breakdown.per_direction.items()
+    # a multiple-choice set's items have no condition or direction: their category instead
+    for category, cell in (getattr(breakdown, "per_category", None) or {}).items():
+        yield f"category {category!r}", cell

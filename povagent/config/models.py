@@ -21,7 +21,7 @@ import re
 from pathlib import Path
 from typing import Any, Literal, Mapping
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_serializer, model_validator
 
 from povagent.config.addresses import parse_bind
 from povagent.config.cluster_spec import yaml_cluster_spec  # pure: no Dask import
@@ -102,11 +102,21 @@ class DatasetSpec(_Strict):
     download: DownloadLimits | None = None
     #: Stop at the first bad house or pair instead of reporting it and going on.
     strict: bool = False
+    #: The format of an external multiple-choice set whose file ``path`` names (see
+    #: :mod:`povagent.dataset.choice_sets`), and the folder its image paths are relative to and
+    #: confined to (default: the file's). ``None``: a POVBench-layout folder.
+    format: Literal["viewspatial", "mindcube", "3dsrbench"] | None = None
+    images: Path | None = None
 
     @model_validator(mode="before")
     @classmethod
     def _bare_path(cls, value: Any) -> Any:
         return {"path": value} if isinstance(value, str) else value
+
+    @model_serializer(mode="wrap")
+    def _no_format_for_a_folder(self, handler: Any) -> dict[str, Any]:
+        # a POVBench run's config.yaml stays byte for byte what it was before formats existed
+        return {k: v for k, v in handler(self).items() if k not in ("format", "images") or v is not None}
 
     @field_validator("hub")
     @classmethod
@@ -128,6 +138,10 @@ class DatasetSpec(_Strict):
                 check_revision(self.revision, "dataset.revision")
             except HubValueError as exc:
                 raise ValueError(str(exc)) from None
+        if self.format is not None and (self.path is None or self.generate is not None or self.hub is not None):
+            raise ValueError(f"dataset.format {self.format} needs dataset.path: the set's file, downloaded yourself")
+        if self.images is not None and self.format is None:
+            raise ValueError("dataset.images needs dataset.format (it is where an external set's images are)")
         if self.hub is not None:
             # a path beside hub is the local copy a run resolved it to (see config.yaml)
             if self.generate is not None:

@@ -35,12 +35,15 @@ class Frame:
 
 @dataclass(frozen=True)
 class Instance:
-    """One evaluation instance; ``id`` is ``house/pair/direction/condition``."""
+    """One evaluation instance; ``id`` is ``house/pair/direction/condition`` (an external
+    multiple-choice set's item, with no direction or condition: ``set/record``)."""
 
     house_id: str
     pair_id: str
-    direction: Direction
-    condition: Condition
+    #: POVBench's direction and condition; ``None`` for an item of an external multiple-choice
+    #: set (:mod:`povagent.dataset.choice_sets`), which has neither.
+    direction: Direction | None
+    condition: Condition | None
     sentence: str
     frames: tuple[Frame, ...]
     target: tuple[float, float, float]
@@ -63,6 +66,30 @@ class Instance:
     def id(self) -> str:
         """Stable id ``house/pair/direction/condition``."""
         return instance_id(self.house_id, self.pair_id, self.direction, self.condition)
+
+    @property
+    def answers_a_frame(self) -> bool:
+        """Whether an answer names one of several frames (POVBench's A/B: the exploration
+        frames); false for C and for an external item, whose answer names no frame."""
+        return self.condition is not None and self.condition.uses_exploration_frames
+
+    @property
+    def povbench_condition(self) -> Condition:
+        """The condition, for code that only POVBench's point task runs (a point strategy, the
+        official scorer); an external multiple-choice item has none and is refused here."""
+        if self.condition is None:
+            raise ValueError(f"instance {self.id} is a multiple-choice item with no POVBench condition: "
+                             "ask it with the choice strategy and score it with a choice scorer")  # fmt: skip
+        return self.condition
+
+    @property
+    def povbench_direction(self) -> Direction:
+        """The direction, for code that only POVBench's point task runs; refused as
+        :attr:`povbench_condition` is for an external item."""
+        if self.direction is None:
+            raise ValueError(f"instance {self.id} is a multiple-choice item with no POVBench direction: "
+                             "ask it with the choice strategy and score it with a choice scorer")  # fmt: skip
+        return self.direction
 
     @property
     def frame_size(self) -> tuple[int, int]:
@@ -91,8 +118,11 @@ class Instance:
         return None
 
 
-def instance_id(house_id: str, pair_id: str, direction: str, condition: str) -> str:
-    """``house/pair/direction/condition`` with enum values as plain strings."""
+def instance_id(house_id: str, pair_id: str, direction: str | None, condition: str | None) -> str:
+    """``house/pair/direction/condition`` with enum values as plain strings; an external set's
+    item (no direction, no condition) is ``set/record``."""
+    if direction is None or condition is None:
+        return f"{house_id}/{pair_id}"
     return f"{house_id}/{pair_id}/{direction!s}/{condition!s}"
 
 

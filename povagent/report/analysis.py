@@ -328,8 +328,9 @@ def analyze(
     counting-non-responses variant; without it they are left out with a note)."""
     notes: list[str] = []
     obs = list(collection.observations)
-    present_c = {o.condition for o in obs}
-    present_d = {o.direction for o in obs}
+    # an external multiple-choice item has no condition or direction (its rows write ""): no column
+    present_c = {o.condition for o in obs if o.condition}
+    present_d = {o.direction for o in obs if o.direction}
     conditions = [str(c) for c in CONDITIONS if str(c) in present_c] + sorted(present_c - {str(c) for c in CONDITIONS})
     directions = [str(d) for d in DIRECTIONS if str(d) in present_d] + sorted(present_d - {str(d) for d in DIRECTIONS})
 

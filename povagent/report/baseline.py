@@ -57,7 +57,7 @@ def _center_guess(inst: Instance, system: str, **scores: Any) -> Observation:
         condition=str(inst.condition),
         status="answered",
         parse_status="ok",
-        selected_image=0 if inst.condition.uses_exploration_frames else None,
+        selected_image=0 if inst.povbench_condition.uses_exploration_frames else None,
         image_path=frame.image_path if frame is not None else None,
         x=w / 2.0,
         y=h / 2.0,
@@ -96,7 +96,7 @@ def center_success_observations(instances: Iterable[Instance], scorer: Any, name
     out: list[Observation] = []
     for inst in instances:
         w, h = inst.frame_size
-        k = 0 if inst.condition.uses_exploration_frames else None
+        k = 0 if inst.povbench_condition.uses_exploration_frames else None
         s = scorer.score(inst, ParsedAnswer(status=ParseStatus.OK, selected_image=k, x=w / 2.0, y=h / 2.0))
         out.append(
             _center_guess(

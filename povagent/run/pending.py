@@ -57,7 +57,7 @@ def house_major(keys: list[tuple[Instance, int]]) -> list[tuple[Instance, int]]:
     first_seen: dict[str, int] = {}
     for inst, _ in keys:
         first_seen.setdefault(inst.house_id, len(first_seen))
-    return sorted(keys, key=lambda k: (first_seen[k[0].house_id], not k[0].condition.uses_exploration_frames))
+    return sorted(keys, key=lambda k: (first_seen[k[0].house_id], not k[0].answers_a_frame))
 
 
 @dataclass
@@ -157,7 +157,7 @@ def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
             )  # fmt: skip
     from povagent.dataset.evaluation_set import open_evaluation_set
 
-    return open_evaluation_set(spec.root, strict=spec.strict)
+    return open_evaluation_set(spec.root, strict=spec.strict, format=spec.format, images=spec.images)
 
 
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:
@@ -165,7 +165,7 @@ def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | No
     (sweeps)."""
     from povagent.dataset.hub import resolve_hub_dataset
 
-    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict)
+    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict, config.dataset.format)
     if loaded is not None and key in loaded:
         return asked_by(config, loaded[key])
     ds = _loaded_dataset(config)

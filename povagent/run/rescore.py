@@ -175,7 +175,9 @@ def rescore_run(
             f"{run / 'config.yaml'} names the dataset by the relative path {str(root)!r}, which is not "
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
-    dataset = asked_by(config, open_evaluation_set(root, check_images=False))  # answers are re-read, not re-sent
+    dataset = asked_by(  # answers are re-read, not re-sent
+        config, open_evaluation_set(root, check_images=False, format=config.dataset.format, images=config.dataset.images)
+    )
     official_parser, official_name = official if official is not None else (None, None)
     scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
                             on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc),

@@ -51,7 +51,7 @@ def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerTy
     """What a row records as the prediction: the frame index, its image path (A/B), the point,
     and the typed value ``answer_type`` reads from the parse."""
     sel = parse.selected_image
-    frame = instance.selected_frame(sel) if instance.condition.uses_exploration_frames else None
+    frame = instance.selected_frame(sel) if instance.answers_a_frame else None
     image_path = frame.image_path if frame is not None else None
     typed = answer_type.name if answer_type is not None else None
     value = answer_type.value_of(parse) if answer_type is not None else None

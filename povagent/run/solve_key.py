@@ -116,8 +116,8 @@ class KeySolver:
             instance_id=iid,
             house_id=instance.house_id,
             pair_id=instance.pair_id,
-            direction=instance.direction.value,
-            condition=instance.condition.value,
+            direction="" if instance.direction is None else instance.direction.value,  # an external item has neither
+            condition="" if instance.condition is None else instance.condition.value,
             run=run,
             sentence=instance.sentence,
             backend=self.names.backend,

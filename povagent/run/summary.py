@@ -24,7 +24,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
-from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_metric_values
+from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_category, row_metric_groups, row_metric_values
 from povagent.scoring.protocols import following, registered_protocols
 
 
@@ -114,6 +114,10 @@ class SummaryDigest:
     #: ``((scorer, ((metric, value), ...)), ...)``: the row's value of every declared metric
     #: (:func:`~povagent.scoring.metrics.row_metric_values`); empty when no metrics were declared
     metric_values: tuple[tuple[str, tuple[tuple[str, float | None], ...]], ...] = ()
+    #: the question's category and the groups of grouped metrics (a multiple-choice row's;
+    #: :func:`~povagent.scoring.metrics.valued_row`)
+    category: str | None = None
+    metric_groups: Mapping[str, Mapping[str, str]] | None = None
 
 
 def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: Mapping[str, str] | None = None) -> SummaryDigest:
@@ -149,6 +153,8 @@ def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: 
         cost_usd=row.cost_usd,
         retries=row.retries,
         metric_values=tuple((scorer, tuple(values.items())) for scorer, values in row_metric_values(row, declared).items()) if declared else (),
+        category=row_category(row),
+        metric_groups=(row_metric_groups(row, declared) or None) if declared else None,
     )
 
 
@@ -227,7 +233,8 @@ def summarize_digests(
         )
     if declared and any(declared.values()):
         out["metrics"] = metrics_breakdown(
-            (ValuedRow(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values}) for d in rows), declared
+            (ValuedRow(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values},
+                       d.category, d.metric_groups or {}) for d in rows), declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first

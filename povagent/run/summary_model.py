@@ -228,6 +228,8 @@ class MetricDeclaration(BaseModel):
     field: str
     over: Literal["answered", "all"]
     negate: bool
+    #: The scorer's row field naming a row's group, for a rate over groups (``None``: over rows).
+    group: str | None = None
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""
@@ -244,6 +246,8 @@ class ScorerMetrics(BaseModel):
     per_condition: dict[str, dict[str, MetricEstimate]]
     per_direction: dict[str, dict[str, MetricEstimate]]
     per_condition_direction: dict[str, dict[str, MetricEstimate]]
+    #: Per question category (a multiple-choice run's; absent otherwise).
+    per_category: dict[str, dict[str, MetricEstimate]] | None = None
 
 
 class ScoreSummary(Breakdown):

@@ -126,29 +126,36 @@ def slices(
     cell: Callable[[list[T]], C],
     condition: Callable[[T], str | None] = attrgetter("condition"),
     direction: Callable[[T], str | None] = attrgetter("direction"),
+    category: Callable[[T], str | None] | None = None,
 ) -> dict[str, Any]:
     """The one breakdown: ``cell`` of all rows (``overall``), of each condition, each direction
     and each condition x direction. Every summary povagent shows (official means, success rates,
     a report's bootstrapped cells) is this grouping with its own ``cell``.
 
-    A row without a condition (or direction) counts overall only, as officially. Labels come in
-    the paper's order, then any other label, sorted; only labels with rows appear.
+    A row without a condition (or direction; ``None`` or ``""``, as a multiple-choice set's item
+    has none) counts overall only, as officially. Labels come in the paper's order, then any
+    other label, sorted; only labels with rows appear. With ``category`` given and some row
+    in a category (a multiple-choice question's type), ``per_category`` breaks the rows down
+    by it too, labels sorted.
     """
     rows = list(rows)
     by_c: dict[str, list[T]] = defaultdict(list)
     by_d: dict[str, list[T]] = defaultdict(list)
     by_cd: dict[tuple[str, str], list[T]] = defaultdict(list)
+    by_category: dict[str, list[T]] = defaultdict(list)
     for r in rows:
         c, d = condition(r), direction(r)
-        if c is not None:
+        if c:
             by_c[c].append(r)
-        if d is not None:
+        if d:
             by_d[d].append(r)
-        if c is not None and d is not None:
+        if c and d:
             by_cd[(c, d)].append(r)
+        if category is not None and (k := category(r)):
+            by_category[k].append(r)
     c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
     d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
-    return {
+    out = {
         "overall": cell(rows),
         "per_condition": {c: cell(by_c[c]) for c in c_order},
         "per_direction": {d: cell(by_d[d]) for d in d_order},
@@ -156,6 +163,9 @@ def slices(
             f"{c}/{d}": cell(by_cd[(c, d)]) for c in c_order for d in d_order if (c, d) in by_cd
         },
     }
+    if by_category:  # only a run whose rows have categories says so: a POVBench summary is unchanged
+        out["per_category"] = {k: cell(by_category[k]) for k in sorted(by_category)}
+    return out
 
 
 def pooled_breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:

@@ -101,7 +101,7 @@ class Diagnosis:
 def frame_shows(instance: Instance, frame: Frame) -> str:
     """``both``, ``anchor``, ``observer`` or ``neither`` by the frame's recorded hits; the
     observer view (C) is ``observer view``."""
-    if not instance.condition.uses_exploration_frames:
+    if not instance.povbench_condition.uses_exploration_frames:
         return "observer view"
     hits = frame.in_frame_hits
     anchor = str(instance.anchor_object.objectId) in hits
@@ -162,7 +162,7 @@ def diagnose_answer(instance: Instance, view: TargetView, frame: Frame, x: float
     l2_truth = math.hypot(u - truth[0], v - truth[1])
     l2_ego = math.hypot(u - ego[0], v - ego[1])
     l2_mirror = math.hypot(u - mirror[0], v - mirror[1])
-    given = not instance.condition.uses_exploration_frames
+    given = not instance.povbench_condition.uses_exploration_frames
     ego_apart = not given and math.hypot(ego[0] - truth[0], ego[1] - truth[1]) > BIAS_MARGIN
     mirror_apart = math.hypot(mirror[0] - truth[0], mirror[1] - truth[1]) > BIAS_MARGIN
     shows = frame_shows(instance, frame)
@@ -210,4 +210,4 @@ def instance_case(instance: Instance, dataset: Any) -> PlacementCase:
             f"{instance.id}: diagnostics need the release's placement records (anchor box, stage-3 verdict and surface), "
             "and the dataset given holds none for this instance (a real-world set, or no dataset)"
         )
-    return placement_case(pair, instance.direction)
+    return placement_case(pair, instance.povbench_direction)

@@ -105,7 +105,7 @@ def official_evaluation(row: ResultRow, dataset: Any) -> dict[str, Any]:
         return record | {"status": "entry_not_found"}
     if instance is None:
         return record | {"status": "placement_not_found"}
-    if instance.condition.uses_exploration_frames:
+    if instance.povbench_condition.uses_exploration_frames:
         if not image:
             return record | {"status": "no_selected_image"}
         record["predicted_image"] = image

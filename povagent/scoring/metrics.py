@@ -15,7 +15,10 @@ Pure: nothing here reads files or knows a plugin; a row is anything with ``statu
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from collections import defaultdict
+from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Any, Iterable, Literal, Mapping, Sequence
 
 from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate, bootstrap_mean_ci
@@ -36,6 +39,11 @@ class Metric:
     ``"all"`` (every row; a row the scorer did not score, or scored unanswered, counts as
     false for a rate: a response rate, a success rate with non-responses as failures).
     ``negate`` counts a false value as the hit (a rate of ``gt_in_frame`` false, say).
+    ``group`` is a regular expression that makes a metric a rate over groups of rows (a set's
+    copies of one question): rows whose pair ids are equal once every match of it is removed
+    form a group (``-flip`` pairs ``Q-2`` with ``Q-flip-2``), a hit only when every row of it
+    is. The id is the row's own, so a row no scorer scored (an unreadable answer) still sinks
+    its group; a run's rows group apart from another run's.
     """
 
     name: str
@@ -46,18 +54,22 @@ class Metric:
     caption: str
     over: Literal["answered", "all"] = "answered"
     negate: bool = False
+    group: str | None = None
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
         (:meth:`declared`), so a report reads a third-party scorer's metrics without its plugin."""
-        return {"label": self.label, "caption": self.caption, "better": self.better, "aggregation": self.aggregation,
-                "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
+        out = {"label": self.label, "caption": self.caption, "better": self.better, "aggregation": self.aggregation,
+               "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
+        if self.group is not None:  # said only when set: an ungrouped metric reads as it always did
+            out["group"] = self.group
+        return out
 
     @classmethod
     def declared(cls, name: str, description: Mapping[str, Any]) -> Metric:
         """The metric :meth:`describe` described."""
         return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
-                   description["caption"], description["over"], description["negate"])  # fmt: skip
+                   description["caption"], description["over"], description["negate"], description.get("group"))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
@@ -93,21 +105,60 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
     }
 
 
+def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]:
+    """``{scorer: {metric: group}}`` for every grouped metric: the row's pair id with every
+    match of the metric's ``group`` removed, the run's index before it (a group never spans
+    runs). Empty for a row with no pair id."""
+    pair_id = getattr(row, "pair_id", None)
+    if not isinstance(pair_id, str):
+        return {}
+    out: dict[str, dict[str, str]] = {}
+    for scorer, metrics in declared.items():
+        for m in metrics:
+            if m.group is not None:
+                out.setdefault(scorer, {})[m.name] = f"{getattr(row, 'run', 0)}#{re.sub(m.group, '', pair_id)}"
+    return out
+
+
+def row_category(row: Any) -> str | None:
+    """The question's category a scorer wrote (the first non-empty ``category`` text among the
+    row's scores, by scorer name), or ``None``: the slice a multiple-choice run breaks down by."""
+    scores = getattr(row, "scores", None) or {}
+    for name in sorted(scores):
+        fields = scores[name]
+        if isinstance(fields, Mapping) and isinstance(fields.get("category"), str) and fields["category"]:
+            return str(fields["category"])
+    return None
+
+
 @dataclass(frozen=True)
 class ValuedRow:
-    """A row as a metrics breakdown reads it: its slice labels and its metric values (small:
-    a summary may keep one per key instead of the row)."""
+    """A row as a metrics breakdown reads it: its slice labels, its metric values and the
+    groups of its grouped metrics (small: a summary may keep one per key instead of the row)."""
 
     condition: str | None
     direction: str | None
     values: dict[str, dict[str, float | None]]
+    category: str | None = None
+    groups: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
 
 def valued_row(row: Any, declared: Declared) -> ValuedRow:
-    """``row``'s slice labels and :func:`row_metric_values`."""
+    """``row``'s slice labels, :func:`row_metric_values`, its category and its groups."""
     condition, direction = getattr(row, "condition", None), getattr(row, "direction", None)
     return ValuedRow(None if condition is None else str(condition), None if direction is None else str(direction),
-                     row_metric_values(row, declared))  # fmt: skip
+                     row_metric_values(row, declared), row_category(row), row_metric_groups(row, declared))  # fmt: skip
+
+
+def grouped_values(rows: Iterable[ValuedRow], scorer: str, metric: Metric) -> list[float]:
+    """One value per group of ``rows`` (1.0 when every row of the group hit): what a grouped
+    metric averages. A row with no group counts as a group of its own."""
+    by_group: dict[Any, list[float]] = defaultdict(list)
+    for n, row in enumerate(rows):
+        value = row.values.get(scorer, {}).get(metric.name)
+        if value is not None:
+            by_group[row.groups.get(scorer, {}).get(metric.name, ("row", n))].append(value)
+    return [1.0 if all(v == 1.0 for v in values) else 0.0 for values in by_group.values()]
 
 
 def metric_estimates(
@@ -117,10 +168,15 @@ def metric_estimates(
     that count (a rate: of true values) with its 95% bootstrap CI and the number of rows counted.
     ``summary.json`` and the report both estimate a declared metric here."""
     rows = list(group)
-    return {
-        m.name: bootstrap_mean_ci([v for row in rows if (v := row.values.get(scorer, {}).get(m.name)) is not None], n_boot=n_boot, seed=seed)
-        for m in metrics
-    }
+    return {m.name: bootstrap_mean_ci(metric_values(rows, scorer, m), n_boot=n_boot, seed=seed) for m in metrics}
+
+
+def metric_values(rows: Sequence[ValuedRow], scorer: str, metric: Metric) -> list[float]:
+    """The values ``metric`` averages over ``rows``: one per row that counts, or one per group
+    for a grouped metric (:func:`grouped_values`)."""
+    if metric.group is not None:
+        return grouped_values(rows, scorer, metric)
+    return [v for row in rows if (v := row.values.get(scorer, {}).get(metric.name)) is not None]
 
 
 def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: int = DEFAULT_BOOT) -> dict[str, dict[str, Any]]:
@@ -135,5 +191,5 @@ def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: i
         def cell(group: list[ValuedRow], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
             return {name: e.as_dict() for name, e in metric_estimates(group, scorer, metrics, n_boot).items()}
 
-        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(rows, cell)}
+        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(rows, cell, category=attrgetter("category"))}
     return out

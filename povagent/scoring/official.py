@@ -161,7 +161,7 @@ def scoring_frame(instance: Instance, selected_image: int | None = None, image_p
     The selected frame is named by index or by ``image_path``; an unknown or missing one gives
     ``None`` (the row is then unanswered, as officially).
     """
-    if not instance.condition.uses_exploration_frames:
+    if not instance.povbench_condition.uses_exploration_frames:
         return instance.frames[0]
     if image_path is not None:
         return instance.frame_by_path(image_path)

@@ -178,7 +178,7 @@ def multi_hop_instance(instance: Instance, hop: Hop, answer: str) -> Instance:
     anchor_type = instance.anchor_object.object_type
     if answer == "point":
         return replace(instance, sentence=parts.with_anchor(anchor_through(hop, parts.anchor)))
-    lead = instance.sentence if instance.condition.uses_exploration_frames else f"{GIVEN_VIEW} {instance.sentence}"
+    lead = instance.sentence if instance.povbench_condition.uses_exploration_frames else f"{GIVEN_VIEW} {instance.sentence}"
     text = f"{lead} {hop_sentence(hop, anchor_type, parts.anchor)} From where the speaker stood, where is the {parts.target} relative to the {hop.name}?"
     options = direction_options(instance.id)
     question = ChoiceQuestion(question=text, options=options, gold=label_of(options, hop.gold), category=hop.gold, profile="plain")

@@ -61,7 +61,7 @@ def sighting(instance: Instance) -> str | None:
     The generator renders no target, so the question says where it is in the images (the frame
     the point task teaches with: the anchor seen, the target inside); which way that is from
     the speaker is what the question asks."""
-    if instance.condition.uses_exploration_frames:
+    if instance.povbench_condition.uses_exploration_frames:
         try:
             frame = teaching_frame(instance)
         except NoTeachingFrame:
@@ -94,7 +94,7 @@ def relation_instance(instance: Instance) -> Instance | None:
     if seen is None:
         return None
     options = direction_options(instance.id)
-    text = question_text(not instance.condition.uses_exploration_frames, parts, seen, parts.target, parts.anchor)
+    text = question_text(not instance.povbench_condition.uses_exploration_frames, parts, seen, parts.target, parts.anchor)
     question = ChoiceQuestion(
         question=text,
         options=options,

@@ -71,7 +71,7 @@ def _house_plan(root: Path, house: House, options: ExportOptions, report: Export
             report.skipped[inst.id] = str(exc).partition(": ")[2]
             continue
         if options.format in ("hf", "openai"):  # images inside the shard (openai: base64, 4/3)
-            if inst.condition.uses_exploration_frames:
+            if inst.povbench_condition.uses_exploration_frames:
                 size = sum(frame_bytes.get(f.image_path, 0) for f in inst.frames)
             else:
                 size = inst.frames[0].file.stat().st_size

@@ -214,7 +214,7 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
     Raises :class:`NoTeachingFrame` for an Inferred/Stated instance no frame can teach, and for
     a Given instance whose ground truth is outside the observer view (no correct pixel exists).
     """
-    if instance.condition.uses_exploration_frames:
+    if instance.povbench_condition.uses_exploration_frames:
         frame = teaching_frame(instance)
         frame_index: int | None = frame.index
     else:
@@ -234,10 +234,10 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
     anchor_pos = np.asarray(instance.anchor_object.position.as_tuple(), dtype=float)
     facing = facing_angle(camera, observer_cam[[0, 2]], anchor_pos[[0, 2]])
     # which way the direction points in this image: step from the target's resting point
-    if spec_of(instance.direction).vertical:
+    if spec_of(instance.povbench_direction).vertical:
         step = np.array([0.0, DIRECTION_PROBE_M, 0.0])
     else:
-        step = DIRECTION_PROBE_M * direction_vectors(anchor_pos, observer_cam)[instance.direction.value]
+        step = DIRECTION_PROBE_M * direction_vectors(anchor_pos, observer_cam)[instance.povbench_direction.value]
     start = np.array([box.center.x, instance.target[1], box.center.z])
     p0, p1 = camera.project_pixels(np.stack([start, start + step]))
     if np.isfinite(p0).all() and np.isfinite(p1).all():
@@ -265,8 +265,8 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
     anchor_visible = instance.anchor_object.objectId in frame.in_frame_hits if frame_index is not None else True
     return InstanceFacts(
         instance_id=instance.id,
-        condition=instance.condition.value,
-        direction=instance.direction,
+        condition=instance.povbench_condition.value,
+        direction=instance.povbench_direction,
         frame_index=frame_index,
         frame_path=frame.image_path,
         frame_size=(w, h),
@@ -281,9 +281,9 @@ def instance_facts(instance: Instance, pair: PairEntry) -> InstanceFacts:
         facing=facing_words(facing),
         speaker_offset=camera.floor_offset(observer_cam),
         facing_deg=facing,
-        relation=RELATION_WORDS[instance.direction],
+        relation=RELATION_WORDS[instance.povbench_direction],
         image_direction=towards,
-        surface=surface_phrase(pair, instance.direction),
+        surface=surface_phrase(pair, instance.povbench_direction),
         answer_xy=answer,
         anchor_other_views=other_views,
     )

@@ -1,0 +1,98 @@
+"""External multiple-choice perspective-taking sets, read from the user's download in their
+published formats: ViewSpatial-Bench (:mod:`.viewspatial`), MindCube (:mod:`.mindcube`) and
+3DSRBench (:mod:`.srbench3d`).
+
+``dataset: {path: F, format: viewspatial | mindcube | 3dsrbench}`` names the set's file;
+:func:`load_choice_set` reads it into a runnable :class:`~.external.ChoiceSet` (what
+:func:`povagent.dataset.evaluation_set.open_evaluation_set` returns for such a format) and
+``povagent validate F --format NAME`` lists its problems. Nothing here fetches a set.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import weakref
+from pathlib import Path
+
+from povagent.dataset.choice_sets.external import ChoiceSet, choice_instance, item_frames
+from povagent.dataset.problems import Problem
+from povagent.errors import DatasetError
+
+#: The formats a set's file may be given in (``dataset.format``), each with the set's name.
+CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench"}
+
+
+def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
+    """The set in ``file``, read as ``format``, its image paths relative to (and confined to)
+    the folder ``images`` (default: the file's folder); bad records are left out and named in
+    ``problems``. :class:`~povagent.errors.DatasetError` when the file cannot be read at all."""
+    file = Path(file)
+    if format not in CHOICE_FORMATS:
+        raise DatasetError(f"{file}: unknown dataset format {format!r} (known: {', '.join(CHOICE_FORMATS)})")
+    if not file.is_file():
+        raise DatasetError(f"{file}: not found (dataset.path of a {format} set names the set's file)")
+    own_cache = cache_dir is None
+    cache = Path(tempfile.mkdtemp(prefix="povagent-choices-")) if cache_dir is None else Path(cache_dir)
+    items, problems = _read(file, format, cache)
+    root = file.parent if images is None else Path(images)
+    if not root.is_dir():
+        raise DatasetError(f"{root}: not a folder (dataset.images names the folder a set's image paths are relative to)")
+    instances = []
+    for item in items:
+        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache)
+        if frames is not None:
+            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames))
+    choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache_dir=cache)
+    if own_cache:
+        weakref.finalize(choice_set, shutil.rmtree, str(cache), True)
+    return choice_set
+
+
+def validate_choice_set(file: str | Path, format: str, images: str | Path | None = None) -> list[Problem]:
+    """Every problem of the set in ``file`` (``povagent validate F --format NAME``): the records
+    its reader leaves out, each image fully decoded too; a file that cannot be read at all is
+    one problem."""
+    from povagent.dataset.image_files import decode_fully
+
+    try:
+        loaded = load_choice_set(file, format, images=images)
+    except DatasetError as exc:
+        return [Problem(str(file), "", str(exc).removeprefix(f"{file}: "))]
+    problems = list(loaded.problems)
+    for instance in loaded.instances():
+        for frame in instance.frames:
+            try:
+                decode_fully(frame.file)
+            except (OSError, ValueError) as exc:
+                problems.append(Problem(str(file), f"{_where(format, instance.pair_id)}.images[{frame.index}]", f"image {frame.image_path!r} {exc}"))
+    return problems
+
+
+def _read(file: Path, format: str, cache: Path) -> tuple[list, list[Problem]]:
+    from povagent.errors import ReadTargetError
+
+    try:
+        if format == "viewspatial":
+            from povagent.dataset.choice_sets.viewspatial import read_viewspatial
+
+            return read_viewspatial(file)
+        if format == "mindcube":
+            from povagent.dataset.choice_sets.mindcube import read_mindcube
+
+            return read_mindcube(file)
+        from povagent.dataset.choice_sets.srbench3d import read_srbench3d
+
+        return read_srbench3d(file, cache)
+    except ReadTargetError as exc:
+        raise DatasetError(str(exc)) from None
+    except OSError as exc:
+        raise DatasetError(f"{file}: cannot be read: {exc}") from None
+
+
+def _where(format: str, item_id: str) -> str:
+    """How a problem names a record: its position in a JSON list, or its id."""
+    return f"$[{item_id}]" if format == "viewspatial" else f"record {item_id}"
+
+
+__all__ = ["CHOICE_FORMATS", "ChoiceSet", "load_choice_set", "validate_choice_set"]

@@ -1,0 +1,172 @@
+"""An external multiple-choice set loaded into povagent's instances: what the three readers share.
+
+A reader (:mod:`.viewspatial`, :mod:`.mindcube`, :mod:`.srbench3d`) turns each record of its
+set's published file into an :class:`Item` (its id, a :class:`~povagent.answers.choice.ChoiceQuestion`
+and the images it shows) or into :class:`~povagent.dataset.problems.Problem` lines naming the file,
+the record and the field. This module makes the items runnable: every image path is confined to
+the folder the set's file is in (:func:`~povagent.dataset.paths.confined`; an absolute path, a
+``..`` that climbs out or a symlink leading out is a problem and never opened), every image is
+checked sound once (:func:`~povagent.dataset.image_files.image_problem`), and each item becomes an
+:class:`~povagent.dataset.instances.Instance` with no direction, no condition and NaN 3D fields
+(the set has none: only a choice scorer can score it).
+
+This module must not parse a set's file (the readers do) nor word a prompt (the strategy's
+profiles do).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+from povagent.answers.choice import ChoiceQuestion
+from povagent.dataset.image_files import ImageFileError, inspect_image_file
+from povagent.dataset.instances import Frame, Instance
+from povagent.dataset.models import Condition, Direction
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
+from povagent.dataset.problems import Problem
+from povagent.errors import ConfigError
+from povagent.geometry.camera import Camera
+
+#: Built-in scorers a multiple-choice set cannot feed: they need a 3D target or hand marks.
+NEEDS_POINT_GROUND_TRUTH = frozenset({"official", "diagnose", "relation", "probe-anchor", "probe-observer", "success"})
+
+
+@dataclass(frozen=True)
+class Item:
+    """One record of a set as read: its id (unique in the set), its question and the images it
+    shows, each a path relative to the set's folder (or, for 3DSRBench's embedded images, a file
+    the reader wrote into its cache: ``embedded=True``)."""
+
+    id: str
+    question: ChoiceQuestion
+    images: tuple[str, ...]
+    embedded: bool = False
+
+
+def image_camera(width: int, height: int) -> Camera:
+    """The camera of an image nobody posed: only its size is real (a strategy reads the frame
+    size from it; nothing may project through it)."""
+    return Camera((0.0, 0.0, 0.0), 0.0, 0.0, 100.0, width, height)
+
+
+def item_frames(root: Path, item: Item, file: str, where: str, problems: list[Problem], cache: Path | None = None) -> tuple[Frame, ...] | None:
+    """The item's images as frames, each confined to ``root`` and checked sound; ``None`` (and
+    a problem naming ``file``, the record ``where`` and the image field) when any is not."""
+    real_root = dataset_root(root)
+    frames: list[Frame] = []
+    for index, rel in enumerate(item.images):
+        at = f"{where}.images[{index}]"
+        try:
+            path = cache / rel if item.embedded and cache is not None else confined(real_root, root, rel)
+            facts = inspect_image_file(path)
+        except OutsideDatasetError as exc:
+            problems.append(Problem(file, at, str(exc)))
+            return None
+        except ImageFileError as exc:
+            problems.append(Problem(file, at, f"image {shown(rel)} {exc}"))
+            return None
+        frames.append(Frame(index, rel, path, image_camera(facts.width, facts.height)))
+    return tuple(frames)
+
+
+def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...]) -> Instance:
+    """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition."""
+    from povagent.dataset.realworld import unknown_object
+
+    nowhere = unknown_object()
+    camera = frames[0].camera if frames else image_camera(1, 1)
+    return Instance(
+        house_id=set_name, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
+        frames=frames, target=(float("nan"),) * 3, observer_object=nowhere, anchor_object=nowhere,
+        observer_camera=camera, question=item.question,
+    )  # fmt: skip
+
+
+@dataclass
+class ChoiceSet:
+    """A loaded external multiple-choice set, with the interface the runner uses
+    (:class:`~povagent.dataset.protocol.EvaluationSet`).
+
+    ``root`` is the folder of the set's file (images are confined to it); ``houses`` holds one
+    entry, the set's name, so a ``houses`` filter naming it selects every item. ``problems`` are
+    the records left out, each one line naming file, record and field.
+    """
+
+    root: Path
+    file: Path
+    name: str
+    problems: list[Problem] = field(default_factory=list)
+    _instances: list[Instance] = field(default_factory=list, repr=False)
+    _by_id: dict[str, Instance] = field(default_factory=dict, repr=False)
+    #: where embedded images were written (3DSRBench's base64 cells); removed with the set
+    cache_dir: Path | None = None
+
+    @property
+    def houses(self) -> Mapping[str, Path]:
+        """The one "house": the set's name, with its file."""
+        return {self.name: self.file}
+
+    def instances(
+        self,
+        conditions: Iterable[Condition | str] | None = None,
+        directions: Iterable[Direction | str] | None = None,
+        houses: Iterable[str] | None = None,
+    ) -> Sequence[Instance]:
+        """Every item in file order. An item has no condition and no direction, so a filter on
+        either selects none; a ``houses`` filter selects all or none by the set's name."""
+        if conditions is not None or directions is not None:
+            return []
+        if houses is not None and self.name not in set(houses):
+            return []
+        return list(self._instances)
+
+    def instance(self, id_: str) -> Instance | None:
+        """The item with id ``<set>/<record id>`` (rescore asks once per row: an index, kept)."""
+        if len(self._by_id) != len(self._instances):
+            self._by_id = {i.id: i for i in self._instances}
+        return self._by_id.get(id_)
+
+    def check_scorers(self, names: Iterable[str]) -> None:
+        """Refuse scorers that need POVBench's point ground truth (the runner asks before any
+        request): a multiple-choice item has a gold label, no 3D target and no marks."""
+        refused = sorted(set(names) & NEEDS_POINT_GROUND_TRUTH)
+        if refused:
+            raise ConfigError(
+                f"{self.file}: scorer {', '.join(refused)} needs a point ground truth, and a multiple-choice set "
+                "has a gold label: use scorers: [choice] (or the set's own, see docs/how-to/perspective-sets.md)"
+            )
+
+
+#: The longest record line a JSONL or TSV set may hold (a 3DSRBench line embeds its image).
+MAX_RECORD_LINE_BYTES = 64 << 20
+
+
+def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tuple[int, str]]:
+    """The text lines of a line-per-record file, numbered from 1, each read with its bound
+    (:data:`MAX_RECORD_LINE_BYTES`). A line longer than that, or not UTF-8, is a problem; an
+    over-long line ends the reading (what follows it cannot be told apart from its rest)."""
+    from povagent.run.confined_read import open_regular
+
+    with open_regular(path, what=what) as handle:
+        for number, raw in enumerate(iter(lambda: handle.readline(MAX_RECORD_LINE_BYTES + 1), b""), start=1):
+            if len(raw) > MAX_RECORD_LINE_BYTES:
+                problems.append(Problem(str(path), f"line {number}", f"longer than {MAX_RECORD_LINE_BYTES} bytes; this line and the rest of the file are not read"))
+                return
+            try:
+                text = raw.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                problems.append(Problem(str(path), f"line {number}", f"byte 0x{raw[exc.start]:02x} at column {exc.start + 1} is not UTF-8; record left out"))
+                continue
+            if text.strip():
+                yield number, text.rstrip("\r\n")
+
+
+def record_id_problem(value: object) -> str | None:
+    """Why ``value`` cannot be a record id (an instance id is ``<set>/<record id>``), or ``None``."""
+    if not isinstance(value, str) or not value:
+        return f"must be a non-empty string, got {value!r:.60}"
+    if "/" in value or "#" in value:
+        return f"{shown(value)} holds '/' or '#', which an instance id cannot"
+    return None

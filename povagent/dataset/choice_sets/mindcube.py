@@ -1,0 +1,104 @@
+"""MindCube (``MLL-Lab/MindCube``) in its published format.
+
+One JSON record a line: ``{id, question, images: [...], gt_answer, ...}``. ``question`` holds an
+``<image>`` marker where each image goes (as many markers as images) and its options inline
+(``... A. Behind the sofa B. Left of the lamp``); ``gt_answer`` is the gold label. Images are
+paths relative to the JSONL file's folder. The category is the id's first word as the set's
+own evaluation splits it (``among``, ``around`` (also ``aroundnew``), ``rotation``; any other:
+``other``). Other keys (``category``, ``meta_info``, ...) are left as they are.
+
+This module reads the file; it never opens an image (see :mod:`.external`).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+from povagent.answers.choice import ChoiceQuestion
+from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines
+from povagent.dataset.problems import Problem
+
+#: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
+PROFILE = "mindcube"
+#: Where an image goes in a question.
+IMAGE_MARKER = "<image>"
+
+#: An inline option's label: a capital A-E, a full stop and a space, not inside a word.
+_OPTION = re.compile(r"(?<![A-Za-z])([A-E])\.\s+")
+_CATEGORIES = {"among": "among", "around": "around", "aroundnew": "around", "rotation": "rotation"}
+
+
+def category_of(record_id: str) -> str:
+    """The question's setting, from the first word of its id (``around_0012_q3`` -> ``around``)."""
+    return _CATEGORIES.get(record_id.split("_", 1)[0], "other")
+
+
+def inline_options(question: str) -> tuple[tuple[str, str], ...]:
+    """The options written in ``question``: the last run of labels ``A.``, ``B.``, ... in order,
+    each option's text running to the next label (empty: no such run)."""
+    marks = list(_OPTION.finditer(question))
+    starts = [i for i, m in enumerate(marks) if m.group(1) == "A"]
+    for start in reversed(starts):
+        run = [marks[start]]
+        for m in marks[start + 1 :]:
+            if ord(m.group(1)) == ord(run[-1].group(1)) + 1:
+                run.append(m)
+        if len(run) >= 2:
+            ends = [m.start() for m in run[1:]] + [len(question)]
+            return tuple((m.group(1), question[m.end() : end].strip()) for m, end in zip(run, ends))
+    return ()
+
+
+def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
+    """Every sound record of the JSONL file as an item, and one problem per bad record."""
+    items: list[Item] = []
+    problems: list[Problem] = []
+    seen: set[str] = set()
+    for number, line in record_lines(file, "MindCube file", problems):
+        where = f"line {number}"
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError as exc:
+            problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
+            continue
+        item = _item(record, where)
+        if isinstance(item, tuple):
+            problems.append(Problem(str(file), *item))
+        elif item.id in seen:
+            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
+        else:
+            seen.add(item.id)
+            items.append(item)
+    return items, problems
+
+
+def _item(record: Any, where: str) -> Item | tuple[str, str]:
+    """The record as an item, or ``(where, message)`` saying what is wrong with it."""
+    if not isinstance(record, dict):
+        return where, "a record must be a JSON object"
+    id_problem = record_id_problem(record.get("id"))
+    if id_problem:
+        return f"{where}.id", id_problem
+    question = record.get("question")
+    if not isinstance(question, str) or not question.strip():
+        return f"{where}.question", "required, a non-empty string"
+    images = record.get("images")
+    if not isinstance(images, list) or not images or not all(isinstance(p, str) and p for p in images):
+        return f"{where}.images", "required, a non-empty list of image paths"
+    markers = question.count(IMAGE_MARKER)
+    if markers != len(images):
+        return f"{where}.question", f"holds {markers} {IMAGE_MARKER} marker(s) for {len(images)} image(s); each image needs its marker"
+    options = inline_options(question.replace(IMAGE_MARKER, " "))
+    if not options:
+        return f"{where}.question", "names no options (inline 'A. ... B. ...')"
+    gold = record.get("gt_answer")
+    if not isinstance(gold, str):
+        return f"{where}.gt_answer", f"required, an option label (got {gold!r:.60})"
+    try:
+        choice = ChoiceQuestion(question, options, gold, category=category_of(record["id"]), profile=PROFILE)
+    except ValueError as exc:
+        return f"{where}.gt_answer", str(exc)
+    return Item(record["id"], choice, tuple(images))

@@ -1,0 +1,89 @@
+"""ViewSpatial-Bench (``lidingm/ViewSpatial-Bench``, Apache-2.0) in its published format.
+
+The set is one JSON list; each record is ``{question_type, image_path: [...], question, answer,
+choices}``: ``choices`` is the options one a line (``"A. right\\nB. left"``), ``answer`` the
+gold option written out (``"A. right"``), ``image_path`` one image, or 2-32 frames for the
+scene-simulation questions, relative to the JSON file's folder. The gold label is read from
+``answer`` by the set's official rule (ZJU-REAL ``eval/evaluate.py``, = lmms-eval
+``viewspatial``): the first standalone ``A``-``D``, either case, upper-cased. The record's
+position in the list is its id (the set gives none); ``question_type`` is its category.
+
+This module reads the file; it never opens an image (see :mod:`.external`).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+from povagent.answers.choice import ChoiceQuestion
+from povagent.dataset.choice_sets.external import Item
+from povagent.dataset.problems import Problem
+from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+
+#: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
+PROFILE = "viewspatial"
+#: The most frames a record shows (the scene-simulation questions show 2-32).
+MAX_FRAMES = 32
+
+_OPTION_LINE = re.compile(r"([A-Z])\.\s*(.*)")
+_GOLD = re.compile(r"\b([A-D])\b", re.IGNORECASE)
+
+
+def gold_label(answer: str) -> str | None:
+    """The label the official rule reads in ``answer`` (``"A. right"`` -> ``A``), or ``None``."""
+    match = _GOLD.search(answer)
+    return match.group(1).upper() if match else None
+
+
+def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
+    """Every sound record of the JSON list as an item, and one problem per bad record."""
+    name = str(file)
+    try:
+        data = json.loads(read_regular(file, MAX_DOCUMENT_BYTES, what="ViewSpatial-Bench file").decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        return [], [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")]
+    except json.JSONDecodeError as exc:
+        return [], [Problem(name, "", f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")]
+    if not isinstance(data, list):
+        return [], [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")]
+    items: list[Item] = []
+    problems: list[Problem] = []
+    for index, record in enumerate(data):
+        where = f"$[{index}]"
+        item = _item(index, record, where)
+        if isinstance(item, Item):
+            items.append(item)
+        else:
+            problems.append(Problem(name, item[0], item[1]))
+    return items, problems
+
+
+def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
+    """The record as an item, or ``(json path, message)`` saying what is wrong with it."""
+    if not isinstance(record, dict):
+        return where, f"a record must be a JSON object (got {json.dumps(record)[:60]})"
+    for key in ("question", "answer", "choices", "question_type"):
+        if not isinstance(record.get(key), str) or not record[key].strip():
+            return f"{where}.{key}", "required, a non-empty string"
+    images = record.get("image_path")
+    if not isinstance(images, list) or not images or not all(isinstance(p, str) and p for p in images):
+        return f"{where}.image_path", "required, a list of 1 to 32 image paths"
+    if len(images) > MAX_FRAMES:
+        return f"{where}.image_path", f"{len(images)} images; a record shows at most {MAX_FRAMES}"
+    options = []
+    for number, line in enumerate(record["choices"].strip().splitlines()):
+        match = _OPTION_LINE.fullmatch(line.strip())
+        if match is None:
+            return f"{where}.choices", f"line {number + 1} {line[:60]!r} is not an option 'X. text'"
+        options.append((match.group(1), match.group(2).strip()))
+    gold = gold_label(record["answer"])
+    if gold is None:
+        return f"{where}.answer", f"{record['answer'][:60]!r} names no label A-D (the official rule reads the first standalone letter)"
+    try:
+        question = ChoiceQuestion(record["question"], tuple(options), gold, category=record["question_type"], profile=PROFILE)
+    except ValueError as exc:
+        return (f"{where}.answer" if "gold" in str(exc) else f"{where}.choices"), str(exc)
+    return Item(str(index), question, tuple(images))
