@@ -14,7 +14,7 @@ import sys
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Iterable, Iterator, Mapping, Sequence
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
@@ -34,8 +34,8 @@ def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
     score = row.scores.get(scorer) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     return ScoredRow(
-        condition=row.condition,
-        direction=row.direction,
+        condition=sys.intern(row.condition),  # one string per label, not one per row a summary keeps
+        direction=sys.intern(row.direction),
         answered=answered,
         l2=score.get("l2") if answered else None,
         gt_in_frame=score.get("gt_in_frame") if answered else None,
@@ -110,9 +110,10 @@ class SummaryDigest:
     completion_tokens: int | None
     cost_usd: float | None
     retries: int
-    #: ``((scorer, ((metric, value), ...)), ...)``: the row's value of every declared metric
-    #: (:func:`~povagent.scoring.metrics.row_metric_values`); empty when no metrics were declared
-    metric_values: tuple[tuple[str, tuple[tuple[str, float | None], ...]], ...] = ()
+    #: the row's value of every declared metric (:func:`~povagent.scoring.metrics.row_metric_values`),
+    #: flat in the declared order, scorer by scorer (the names are the declaration's: one tuple
+    #: per key, not a pair per value); empty when no metrics were declared
+    metric_values: tuple[float | None, ...] = ()
 
 
 def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryDigest:
@@ -134,7 +135,7 @@ def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryD
         official_parser=None if reading is None else sys.intern(reading.parser),
         officially_scored=officially_scored,
         success=None if success is None else (
-            row.condition, row.direction, (success or {}).get("success"), (success or {}).get("answered") is True
+            sys.intern(row.condition), sys.intern(row.direction), (success or {}).get("success"), (success or {}).get("answered") is True
         ),
         plugin_scores=plugin_scores(row.scores),
         diagnosed=diagnosed_row(row),
@@ -143,7 +144,7 @@ def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryD
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
-        metric_values=tuple((scorer, tuple(values.items())) for scorer, values in row_metric_values(row, declared).items()) if declared else (),
+        metric_values=tuple(v for values in row_metric_values(row, declared).values() for v in values.values()) if declared else (),
     )
 
 
@@ -215,8 +216,9 @@ def summarize_digests(
             {"condition": c, "direction": d, "success": hit, "answered": answered} for c, d, hit, answered in with_success
         )
     if declared and any(declared.values()):
+        at = _positions(declared)
         out["metrics"] = metrics_breakdown(
-            (ValuedRow(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values}) for d in rows), declared
+            (ValuedRow(d.scored.condition, d.scored.direction, _NamedValues(d.metric_values, at)) for d in rows), declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
@@ -248,22 +250,69 @@ def summarize_digests(
     return out
 
 
+def _positions(declared: Mapping[str, Sequence[Metric]]) -> dict[str, dict[str, int]]:
+    """Where each declared metric sits in a digest's flat :attr:`SummaryDigest.metric_values`."""
+    at: dict[str, dict[str, int]] = {}
+    for scorer, metrics in declared.items():
+        if metrics:
+            at[scorer] = {m.name: sum(map(len, at.values())) + k for k, m in enumerate(metrics)}
+    return at
+
+
+class _NamedValues(Mapping[str, Mapping[str, "float | None"]]):
+    """A digest's flat metric values read as ``{scorer: {metric: value}}`` (what a
+    :class:`~povagent.scoring.metrics.ValuedRow` holds), without two dicts per row."""
+
+    __slots__ = ("_flat", "_at")
+
+    def __init__(self, flat: Sequence[float | None], at: dict[str, dict[str, int]]) -> None:
+        self._flat, self._at = flat, at
+
+    def __getitem__(self, scorer: str) -> Mapping[str, float | None]:
+        return _ScorerValues(self._flat, self._at[scorer])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
+class _ScorerValues(Mapping[str, "float | None"]):
+    """One scorer's values of a digest (see :class:`_NamedValues`)."""
+
+    __slots__ = ("_flat", "_at")
+
+    def __init__(self, flat: Sequence[float | None], at: dict[str, int]) -> None:
+        self._flat, self._at = flat, at
+
+    def __getitem__(self, metric: str) -> float | None:
+        return self._flat[self._at[metric]]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
 def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]]:
     """``{name: metrics}`` of scorer objects (or factories): what each declared."""
     return {name: tuple(getattr(scorer, "metrics", ())) for name, scorer in scorers.items()}
 
 
-def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:
+def summarize_run(results: Path, keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction) of a results file, per run too.
 
     ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
-    When a key repeats, its last row counts.
+    When a key repeats, its last row counts. ``declared``: as for :func:`summarize_rows`.
+    The file is read one row at a time; only each key's digest is kept.
     """
     by_key: dict[str, SummaryDigest] = {}
     for row in iter_rows(results):
         if keys is None or row.key in keys:
-            by_key[row.key] = summary_digest(row)
-    return summarize_digests(by_key.values(), keys)
+            by_key[row.key] = summary_digest(row, declared)
+    return summarize_digests(by_key.values(), keys, declared)
 
 
 def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:

@@ -93,14 +93,14 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
     }
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ValuedRow:
     """A row as a metrics breakdown reads it: its slice labels and its metric values (small:
     a summary may keep one per key instead of the row)."""
 
     condition: str | None
     direction: str | None
-    values: dict[str, dict[str, float | None]]
+    values: Mapping[str, Mapping[str, float | None]]
 
 
 def valued_row(row: Any, declared: Declared) -> ValuedRow:
