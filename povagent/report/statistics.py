@@ -26,7 +26,7 @@ from typing import Iterable, Mapping
 import numpy as np
 
 from povagent.report.collect import Observation
-from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci
+from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci, resample_draws
 
 
 @dataclass
@@ -94,12 +94,20 @@ def _mean_over_runs(per_run: np.ndarray) -> np.ndarray:
 
 
 def _resample_counts(n_inst: int, n_boot: int, seed: int) -> np.ndarray:
-    """(n_boot, n_inst) how often each instance is drawn in each bootstrap resample."""
-    rng = np.random.default_rng(seed)
-    draws = rng.integers(0, n_inst, size=(n_boot, n_inst))
-    # one bincount over (resample, instance) cells: much faster than numpy's multinomial
-    flat = (draws + (np.arange(n_boot) * n_inst)[:, None]).ravel()
-    return np.bincount(flat, minlength=n_boot * n_inst).reshape(n_boot, n_inst).astype(float)
+    """(n_boot, n_inst) how often each instance is drawn in each bootstrap resample.
+
+    Filled a block of resamples at a time (:func:`~povagent.scoring.bootstrap.resample_draws`:
+    the same draws as one matrix), so only the counts themselves grow with the instances, not
+    four matrices of their size."""
+    counts = np.empty((n_boot, n_inst))
+    start = 0
+    for draws in resample_draws(n_inst, n_boot, seed):
+        rows = draws.shape[0]
+        # one bincount over (resample, instance) cells: much faster than numpy's multinomial
+        flat = (draws + (np.arange(rows) * n_inst)[:, None]).ravel()
+        counts[start : start + rows] = np.bincount(flat, minlength=rows * n_inst).reshape(rows, n_inst)
+        start += rows
+    return counts
 
 
 def _ratio_estimates(
