@@ -21,7 +21,7 @@ import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Sequence
 
 import yaml
 
@@ -30,8 +30,8 @@ from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems
-from povagent.results.rows import ResultRow, read_rows
-from povagent.results.transcript import transcripts
+from povagent.results.rows import ResultRow, StoredRows
+from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.metrics import Declared, row_metric_values
 
@@ -47,9 +47,9 @@ SWEEP_INDEX = "sweep.json"
 REPORTED_SCORERS = ("official", "success")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Observation:
-    """One result row as the report sees it."""
+    """One result row as the report sees it (slotted: a report holds one per row)."""
 
     system: str
     run_name: str
@@ -86,7 +86,9 @@ class Observation:
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
     #: :data:`MAX_RAW_CHARS`; rows written before requests were kept have ``None`` requests).
-    turns: tuple[tuple[str | None, str | None], ...] = ()
+    #: :func:`collect` leaves them in the results file until they are looked at
+    #: (:class:`~povagent.results.transcript.StoredTurns`).
+    turns: Sequence[tuple[str | None, str | None]] = ()
     #: The ``diagnose`` scorer's first failing step (``frame`` ... ``correct``; ``None``: not diagnosed).
     fail_step: str | None = None
     #: ``diagnose``: the egocentric and mirrored targets in the scored frame (clamped fractions).
@@ -108,7 +110,9 @@ class RunInfo:
     name: str
     config: dict[str, Any]
     axes: dict[str, str]
-    rows: list[ResultRow]
+    #: read from the results file as they are iterated (:class:`~povagent.results.rows.StoredRows`):
+    #: a report holds no row objects, whatever the run's length
+    rows: Sequence[ResultRow]
     system: str = ""
     #: The sweep folder whose index listed this run (``None``: a run folder of its own).
     sweep: Path | None = None
@@ -169,7 +173,7 @@ class Collection:
         return {}
 
 
-def run_scorer(config: dict[str, Any], rows: list[ResultRow]) -> str:
+def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     """``official`` or ``success``: what the run's config asked for, else what its rows carry.
 
     Read from the config first because a row that failed before scoring (an infra error) has
@@ -204,7 +208,7 @@ def _name_of(section: Any) -> str:
     return ""
 
 
-def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]:
+def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, str]:
     """Model, backend, strategy and parser of a run, from its config (falling back to its rows).
 
     The model is the one the rows name when they do (its profile's name, else the model
@@ -281,7 +285,7 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None,
     results = folder / RESULTS_FILE
     if not results.exists():
         raise PredictionsError(f"{folder}: no {RESULTS_FILE} (is this a run folder?)")
-    rows = read_rows(results)
+    rows = StoredRows(results)
     config = _read_config(folder)
     axes = config_axes(config, rows)
     # the run's own config names model, strategy and parser best (sweep labels are slugs);
@@ -322,12 +326,16 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     return runs
 
 
-def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "official", declared: Declared | None = None) -> Observation:
+def observation_of(
+    row: ResultRow, system: str, run_name: str, scorer: str = "official", declared: Declared | None = None,
+    turns: Sequence[tuple[str | None, str | None]] | None = None,
+) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
     ``official``: answered when the official scorer answered it, with its error. ``success``:
     answered when the success scorer answered it, and a hit only when it said so (a row it
-    did not score, such as an infra error, is a failure, as the paper counts it).
+    did not score, such as an infra error, is a failure, as the paper counts it). ``turns``:
+    the row's turns as stored elsewhere (default: taken from ``row``).
     """
     off = row.scores.get("official") or {}
     suc = row.scores.get("success") or {}
@@ -369,7 +377,7 @@ def observation_of(row: ResultRow, system: str, run_name: str, scorer: str = "of
         success=success,
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
-        turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
+        turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
         metric_values=row_metric_values(row, declared) if declared else {},
         **diagnosis_of(row),
     )
@@ -424,11 +432,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
         declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
-        for row in r.rows:
+        scorer = r.scorer  # once: the rows are read again each time they are looked at
+        for index, row in enumerate(r.rows):
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, r.scorer, declared)
+            o = observation_of(row, r.system, r.name, scorer, declared, StoredTurns(r.rows, index, MAX_RAW_CHARS + 1))
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 
@@ -450,7 +459,8 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
     def scrub(o: Observation) -> Observation:
         return dataclasses.replace(
             o, raw=known(o.raw) if o.raw is not None else None, parse_reason=known(o.parse_reason),
-            turns=tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
+            turns=o.turns.redacted(known) if isinstance(o.turns, StoredTurns) else
+            tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
         )
 
     return scrub

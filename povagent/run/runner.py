@@ -333,8 +333,9 @@ class PipelineRun:
         if retried:
             # the failed rows go before their keys run again, so a retried key has one row
             drop_rows(self.run_dir / RESULTS, retried)
-        self._wanted = plan.wanted  # the summary's keys: made once
-        pending, wanted = plan.pending, plan.wanted
+        pending, wanted, n_pending = plan.pending, plan.wanted, len(plan.pending)
+        self._wanted = wanted  # the summary's keys: made once
+        del plan  # a resumed run's digests of its done keys: the summary reads the file back instead
         write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
@@ -363,8 +364,7 @@ class PipelineRun:
                        retried_failed_keys=len(retried))
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
-        interrupted = True
-        failing = False
+        interrupted, failing = True, False
         try:
             # The backend starts (litellm: an import of seconds) when the first request misses
             # the response cache, before that request's clock starts (RequestPath).
@@ -380,6 +380,7 @@ class PipelineRun:
             # complete: the journal closed, summary.json written, then it goes on (see below).
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
+            pending.clear()  # the keys' tuples go before the summary reads the rows back
             stop_came = await finish_through_stop(self._journal.aclose())
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
@@ -414,7 +415,7 @@ class PipelineRun:
                 # every key had finished when the stop came: the folder is complete, and the
                 # stop still ends the command (a sweep must not start its next cell)
                 raise asyncio.CancelledError
-        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped, self._stop_kind)
+        return RunResult(self.run_dir, summary, self.stats, len(wanted), n_pending, interrupted, self._stopped, self._stop_kind)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
         """Run ``pending``: the first key alone (fail fast), then the rest with ``concurrency``
