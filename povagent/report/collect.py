@@ -19,9 +19,10 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import yaml
 
@@ -33,7 +34,7 @@ from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.scoring.metrics import Declared, row_metric_values
+from povagent.scoring.metrics import Declared, MetricValues
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -99,7 +100,7 @@ class Observation:
     #: ``relation``: the point lies in the relation region (``None``: not scored).
     relation: bool | None = None
     #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
-    metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    metric_values: Mapping[str, Mapping[str, float | None]] = field(default_factory=dict)
 
 
 @dataclass
@@ -352,13 +353,14 @@ def observation_of(
         system=system,
         run_name=run_name,
         run=row.run,
-        instance_id=row.instance_id,
-        house_id=row.house_id,
-        pair_id=row.pair_id,
-        direction=str(row.direction),
-        condition=str(row.condition),
-        status=str(row.status),
-        parse_status=str(row.parse.status) if row.parse is not None else None,
+        # labels and texts repeat over rows (runs, houses, conditions): one string each, not one a row
+        instance_id=sys.intern(row.instance_id),
+        house_id=sys.intern(row.house_id),
+        pair_id=sys.intern(row.pair_id),
+        direction=sys.intern(str(row.direction)),
+        condition=sys.intern(str(row.condition)),
+        status=sys.intern(str(row.status)),
+        parse_status=sys.intern(str(row.parse.status)) if row.parse is not None else None,
         answered=answered,
         l2=float(off["l2"]) if with_l2 else None,
         l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
@@ -367,10 +369,10 @@ def observation_of(
         gt_u=off.get("gt_u"),
         gt_v=off.get("gt_v"),
         selected_image=row.prediction.selected_image,
-        image_path=row.prediction.image_path,
+        image_path=sys.intern(row.prediction.image_path) if row.prediction.image_path is not None else None,
         x=row.prediction.x,
         y=row.prediction.y,
-        sentence=row.sentence,
+        sentence=sys.intern(row.sentence),
         raw=row.raw_response,
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
@@ -378,7 +380,7 @@ def observation_of(
         distance_norm=suc.get("distance_norm") if answered and scorer == "success" else None,
         hit_radius_px=suc.get("hit_radius_px") if scorer == "success" else None,
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
-        metric_values=row_metric_values(row, declared) if declared else {},
+        metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         **diagnosis_of(row),
     )
 

@@ -14,7 +14,7 @@ import sys
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, official_parse_breakdown, officially_read
@@ -24,7 +24,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
-from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_metric_values
+from povagent.scoring.metrics import Declared, Metric, MetricValues, ValuedRow, metrics_breakdown
 
 
 def scored_row(row: ResultRow, scorer: str = "official") -> ScoredRow:
@@ -144,7 +144,7 @@ def summary_digest(row: ResultRow, declared: Declared | None = None) -> SummaryD
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
-        metric_values=tuple(v for values in row_metric_values(row, declared).values() for v in values.values()) if declared else (),
+        metric_values=MetricValues.of(row, declared).flat if declared else (),
     )
 
 
@@ -216,9 +216,8 @@ def summarize_digests(
             {"condition": c, "direction": d, "success": hit, "answered": answered} for c, d, hit, answered in with_success
         )
     if declared and any(declared.values()):
-        at = _positions(declared)
         out["metrics"] = metrics_breakdown(
-            (ValuedRow(d.scored.condition, d.scored.direction, _NamedValues(d.metric_values, at)) for d in rows), declared
+            (ValuedRow(d.scored.condition, d.scored.direction, MetricValues(d.metric_values, declared)) for d in rows), declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
@@ -248,52 +247,6 @@ def summarize_digests(
         "retries": spent.retries,
     }
     return out
-
-
-def _positions(declared: Mapping[str, Sequence[Metric]]) -> dict[str, dict[str, int]]:
-    """Where each declared metric sits in a digest's flat :attr:`SummaryDigest.metric_values`."""
-    at: dict[str, dict[str, int]] = {}
-    for scorer, metrics in declared.items():
-        if metrics:
-            at[scorer] = {m.name: sum(map(len, at.values())) + k for k, m in enumerate(metrics)}
-    return at
-
-
-class _NamedValues(Mapping[str, Mapping[str, "float | None"]]):
-    """A digest's flat metric values read as ``{scorer: {metric: value}}`` (what a
-    :class:`~povagent.scoring.metrics.ValuedRow` holds), without two dicts per row."""
-
-    __slots__ = ("_flat", "_at")
-
-    def __init__(self, flat: Sequence[float | None], at: dict[str, dict[str, int]]) -> None:
-        self._flat, self._at = flat, at
-
-    def __getitem__(self, scorer: str) -> Mapping[str, float | None]:
-        return _ScorerValues(self._flat, self._at[scorer])
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._at)
-
-    def __len__(self) -> int:
-        return len(self._at)
-
-
-class _ScorerValues(Mapping[str, "float | None"]):
-    """One scorer's values of a digest (see :class:`_NamedValues`)."""
-
-    __slots__ = ("_flat", "_at")
-
-    def __init__(self, flat: Sequence[float | None], at: dict[str, int]) -> None:
-        self._flat, self._at = flat, at
-
-    def __getitem__(self, metric: str) -> float | None:
-        return self._flat[self._at[metric]]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._at)
-
-    def __len__(self) -> int:
-        return len(self._at)
 
 
 def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]]:
