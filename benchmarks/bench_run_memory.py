@@ -9,9 +9,9 @@ then the offline ``center`` backend with the real ``basic`` strategy, ``json`` p
 limited to a quarter of the rows), each run in a fresh process of its own so that its peak RSS
 (``VmHWM``) is its own, with today's code and with the ``povagent`` package of commit
 ``--baseline`` (:mod:`baseline_code`). Rounds alternate the order (the machine is shared); the
-figure is the median over rounds of peak(large) / peak(small), held to <= 1.1 (a run keeps what
-each key needs for the summary; a row's prompts and answers must not stay). CPU time (user +
-system) per run is printed beside it, with the load average.
+figure is the median over rounds of peak(large) / peak(small), held to <= 1.1 (a run keeps no
+state per key while it runs: its summary reads the rows back from results.jsonl at the end). CPU
+time (user + system) per run is printed beside it, with the load average.
 Writes ``benchmarks/results/bench_run_memory.json``.
 """
 

@@ -21,21 +21,23 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import yaml
 
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.diagnosed_observation import diagnosis_of
 from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems
-from povagent.results.rows import ResultRow, read_rows
-from povagent.results.transcript import transcripts
+from povagent.results.rows import ResultRow, StoredRows
+from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.scoring.metrics import Declared, row_metric_values
+from povagent.scoring.metrics import Declared, MetricValues
 from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -47,9 +49,9 @@ CONFIG_FILE = "config.yaml"
 SWEEP_INDEX = "sweep.json"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Observation:
-    """One result row as the report sees it."""
+    """One result row as the report sees it (slotted: a report holds one per row)."""
 
     system: str
     run_name: str
@@ -89,7 +91,9 @@ class Observation:
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
     #: :data:`MAX_RAW_CHARS`; rows written before requests were kept have ``None`` requests).
-    turns: tuple[tuple[str | None, str | None], ...] = ()
+    #: :func:`collect` leaves them in the results file until they are looked at
+    #: (:class:`~povagent.results.transcript.StoredTurns`).
+    turns: Sequence[tuple[str | None, str | None]] = ()
     #: The ``diagnose`` scorer's first failing step (``frame`` ... ``correct``; ``None``: not diagnosed).
     fail_step: str | None = None
     #: ``diagnose``: the egocentric and mirrored targets in the scored frame (clamped fractions).
@@ -100,7 +104,7 @@ class Observation:
     #: ``relation``: the point lies in the relation region (``None``: not scored).
     relation: bool | None = None
     #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
-    metric_values: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    metric_values: Mapping[str, Mapping[str, float | None]] = field(default_factory=dict)
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
 
@@ -113,7 +117,9 @@ class RunInfo:
     name: str
     config: dict[str, Any]
     axes: dict[str, str]
-    rows: list[ResultRow]
+    #: read from the results file as they are iterated (:class:`~povagent.results.rows.StoredRows`):
+    #: a report holds no row objects, whatever the run's length
+    rows: Sequence[ResultRow]
     system: str = ""
     #: The sweep folder whose index listed this run (``None``: a run folder of its own).
     sweep: Path | None = None
@@ -179,7 +185,7 @@ class Collection:
         return {}
 
 
-def run_scorer(config: dict[str, Any], rows: list[ResultRow]) -> str:
+def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     """The scorer whose protocol fields the report reads for a run: the first protocol's
     (:data:`~povagent.scoring.protocols.PROTOCOLS` order) among the scorers the config names,
     else among those its rows carry, else, for a config naming none, the pipeline's default
@@ -219,7 +225,7 @@ def _name_of(section: Any) -> str:
     return ""
 
 
-def config_axes(config: dict[str, Any], rows: list[ResultRow]) -> dict[str, str]:
+def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, str]:
     """Model, backend, strategy and parser of a run, from its config (falling back to its rows).
 
     The model is the one the rows name when they do (its profile's name, else the model
@@ -296,7 +302,7 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None,
     results = folder / RESULTS_FILE
     if not results.exists():
         raise PredictionsError(f"{folder}: no {RESULTS_FILE} (is this a run folder?)")
-    rows = read_rows(results)
+    rows = StoredRows(results)
     config = _read_config(folder)
     axes = config_axes(config, rows)
     # the run's own config names model, strategy and parser best (sweep labels are slugs);
@@ -338,7 +344,8 @@ def find_runs(path: str | Path) -> list[RunInfo]:
 
 
 def observation_of(
-    row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None
+    row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None,
+    turns: Sequence[tuple[str | None, str | None]] | None = None,
 ) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
@@ -346,6 +353,7 @@ def observation_of(
     its error. ``marked_hit``: answered when the scorer answered it, and a hit only when it said
     so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
     No protocol: answered when the row's status says so (its declared metrics say the rest).
+    ``turns``: the row's turns as stored elsewhere (default: taken from ``row``).
     """
     fields = (row.scores.get(scorer) or {}) if scorer else {}
     hit_fields = fields if protocol == "marked_hit" else {}
@@ -365,13 +373,14 @@ def observation_of(
         system=system,
         run_name=run_name,
         run=row.run,
-        instance_id=row.instance_id,
-        house_id=row.house_id,
-        pair_id=row.pair_id,
-        direction=str(row.direction),
-        condition=str(row.condition),
-        status=str(row.status),
-        parse_status=str(row.parse.status) if row.parse is not None else None,
+        # labels and texts repeat over rows (runs, houses, conditions): one string each, not one a row
+        instance_id=sys.intern(row.instance_id),
+        house_id=sys.intern(row.house_id),
+        pair_id=sys.intern(row.pair_id),
+        direction=sys.intern(str(row.direction)),
+        condition=sys.intern(str(row.condition)),
+        status=sys.intern(str(row.status)),
+        parse_status=sys.intern(str(row.parse.status)) if row.parse is not None else None,
         answered=answered,
         l2=float(off["l2"]) if with_l2 else None,
         l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
@@ -380,10 +389,10 @@ def observation_of(
         gt_u=off.get("gt_u"),
         gt_v=off.get("gt_v"),
         selected_image=row.prediction.selected_image,
-        image_path=row.prediction.image_path,
+        image_path=sys.intern(row.prediction.image_path) if row.prediction.image_path is not None else None,
         x=row.prediction.x,
         y=row.prediction.y,
-        sentence=row.sentence,
+        sentence=sys.intern(row.sentence),
         raw=row.raw_response,
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
@@ -391,35 +400,11 @@ def observation_of(
         success=success,
         distance_norm=hit_fields.get("distance_norm") if answered else None,
         hit_radius_px=hit_fields.get("hit_radius_px"),
-        turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))),
-        metric_values=row_metric_values(row, declared) if declared else {},
+        turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
+        metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         answer=shown_answer(row.prediction.answer_type, row.prediction.value),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
-
-
-def _uv(value: Any) -> tuple[float, float] | None:
-    ok = isinstance(value, (list, tuple)) and len(value) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-    return (float(value[0]), float(value[1])) if ok else None
-
-
-def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
-    """An answered row's ``diagnose`` and ``relation`` scores as :class:`Observation` fields
-    (read as stored, never recomputed; ``{}`` when neither scored it); ``error_scorer`` is the
-    run's ``normalized_l2`` scorer."""
-    from povagent.run.summary import diagnosed_row
-
-    diagnosed = diagnosed_row(row, error_scorer)
-    if diagnosed is None:
-        return {}
-    fields = row.scores.get("diagnose") or {}
-    return {
-        "fail_step": diagnosed.step,
-        "egocentric_uv": _uv(fields.get("egocentric")),
-        "mirrored_uv": _uv(fields.get("mirrored")),
-        "nearer_egocentric": diagnosed.nearer_egocentric,
-        "relation": diagnosed.relation,
-    }
 
 
 def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False, pool: bool = False) -> Collection:
@@ -448,12 +433,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
         declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
-        scorer, protocol = r.scorer, r.protocol
-        for row in r.rows:
+        scorer, protocol = r.scorer, r.protocol  # once: the rows are read again each time they are looked at
+        for index, row in enumerate(r.rows):
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, scorer, declared, protocol)
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol, StoredTurns(r.rows, index, MAX_RAW_CHARS + 1))
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 
@@ -475,7 +460,8 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
     def scrub(o: Observation) -> Observation:
         return dataclasses.replace(
             o, raw=known(o.raw) if o.raw is not None else None, parse_reason=known(o.parse_reason),
-            turns=tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
+            turns=o.turns.redacted(known) if isinstance(o.turns, StoredTurns) else
+            tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
         )
 
     return scrub

@@ -47,7 +47,7 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Iterable, Mapping, Sequence
 
 from PIL import Image
 
@@ -456,9 +456,10 @@ def _cut(text: str | None) -> str | None:
     return text[:MAX_RAW_CHARS] + ("…" if len(text) > MAX_RAW_CHARS else "")
 
 
-def _transcript(turns: tuple[tuple[str | None, str | None], ...]) -> list[list[str | None]]:
+def _transcript(stored: Sequence[tuple[str | None, str | None]]) -> list[list[str | None]]:
     """The row's turns as ``[[request text, raw answer], ...]`` (each cut at
     :data:`MAX_RAW_CHARS`); empty when no request was kept (rows from before transcripts)."""
+    turns = tuple(stored)  # read once (collect leaves them in the results file)
     if not any(q is not None for q, _ in turns):
         return []
     return [[_cut(q), _cut(a)] for q, a in turns]

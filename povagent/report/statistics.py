@@ -21,12 +21,12 @@ from __future__ import annotations
 import math
 from collections import defaultdict
 from dataclasses import dataclass
-from typing import Iterable, Literal, Mapping
+from typing import Iterable, Iterator, Literal, Mapping
 
 import numpy as np
 
 from povagent.report.collect import Observation
-from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci
+from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci, resample_draws
 
 
 @dataclass
@@ -93,13 +93,16 @@ def _mean_over_runs(per_run: np.ndarray) -> np.ndarray:
         return np.where(cnt > 0, s / np.where(cnt > 0, cnt, 1), np.nan)
 
 
-def _resample_counts(n_inst: int, n_boot: int, seed: int) -> np.ndarray:
-    """(n_boot, n_inst) how often each instance is drawn in each bootstrap resample."""
-    rng = np.random.default_rng(seed)
-    draws = rng.integers(0, n_inst, size=(n_boot, n_inst))
-    # one bincount over (resample, instance) cells: much faster than numpy's multinomial
-    flat = (draws + (np.arange(n_boot) * n_inst)[:, None]).ravel()
-    return np.bincount(flat, minlength=n_boot * n_inst).reshape(n_boot, n_inst).astype(float)
+def _resample_counts(n_inst: int, n_boot: int, seed: int) -> Iterator[np.ndarray]:
+    """How often each instance is drawn in each bootstrap resample: the rows of an
+    (n_boot, n_inst) matrix, a block of resamples at a time
+    (:func:`~povagent.scoring.bootstrap.resample_draws`), so a report's memory does not grow
+    with the instances."""
+    for draws in resample_draws(n_inst, n_boot, seed):
+        rows = draws.shape[0]
+        # one bincount over (resample, instance) cells: much faster than numpy's multinomial
+        flat = (draws + (np.arange(rows) * n_inst)[:, None]).ravel()
+        yield np.bincount(flat, minlength=rows * n_inst).reshape(rows, n_inst).astype(float)
 
 
 def _ratio_estimates(
@@ -110,7 +113,7 @@ def _ratio_estimates(
     a resample is a count per instance, so its sums are one matrix product (fast at 2,439
     instances x 2,000 resamples)."""
     n_inst = metrics[0][0].shape[0] if metrics else 0
-    counts = _resample_counts(n_inst, n_boot, seed) if n_boot > 0 and n_inst >= 2 else None
+    resampled = n_boot > 0 and n_inst >= 2
     alpha = (1.0 - level) / 2.0
     prepared = []
     for values, weights in metrics:
@@ -118,9 +121,10 @@ def _ratio_estimates(
         vw = np.where(weights > 0, np.nan_to_num(values) * weights, 0.0)
         prepared.append((vw, weights))
     sums = None
-    if counts is not None and prepared:
-        # every metric's numerators and denominators in one matrix product
-        sums = counts @ np.concatenate([a for pair in prepared for a in pair], axis=1)
+    if resampled and prepared:
+        # every metric's numerators and denominators in one matrix product per block of resamples
+        columns = np.concatenate([a for pair in prepared for a in pair], axis=1)
+        sums = np.concatenate([counts @ columns for counts in _resample_counts(n_inst, n_boot, seed)])
     out: list[Estimate] = []
     n_runs = metrics[0][0].shape[1] if metrics else 0
     for k, (vw, weights) in enumerate(prepared):

@@ -10,10 +10,11 @@ is an error naming the file and the line (see :func:`iter_rows`).
 from __future__ import annotations
 
 import os
+from array import array
 from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Sequence, overload
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -271,19 +272,26 @@ def iter_rows(path: str | Path) -> Iterator[ResultRow]:
     skipping it would silently change a score, or make a resumed run answer that key twice.
     """
     p = Path(path)
+    for number, _, line in _complete_lines(p):
+        yield _read_line(p, number, line)
+
+
+def _complete_lines(p: Path) -> Iterator[tuple[int, int, bytes]]:
+    """``(line number, byte offset, line)`` of each complete, non-blank line (see :func:`iter_rows`)."""
     if not p.exists():
         return
     # a pipe or a device planted as the journal is refused, not waited on or read forever;
     # a line is read with its bound, so a file of one endless line cannot fill memory
     with open_regular(p, what="results file") as fh:
+        offset = 0
         for number, line in enumerate(iter(lambda: fh.readline(MAX_LINE_BYTES + 1), b""), start=1):
             if len(line) > MAX_LINE_BYTES:
                 raise PredictionsError(f"{p}: line {number}: longer than {MAX_LINE_BYTES >> 20} MiB, which no row is; move the line out of the file")
             if not line.endswith(b"\n"):
                 return  # torn: only the last line can lack its newline
-            if not line.strip():
-                continue
-            yield _read_line(p, number, line)
+            if line.strip():
+                yield number, offset, line
+            offset += len(line)
 
 
 def _read_line(path: Path, number: int, line: bytes) -> ResultRow:
@@ -303,6 +311,42 @@ def _read_line(path: Path, number: int, line: bytes) -> ResultRow:
         f"{path}: line {number}: {problem}; povagent never writes such a line (a damaged or hand-edited "
         f"file): move that line out of the file (the other rows stay good) and run the command again"
     )
+
+
+class StoredRows(Sequence[ResultRow]):
+    """The rows :func:`read_rows` returns (one per key, the last row of a key winning, in the
+    order keys first appear), held as where each lies in the file: 12 bytes a row instead of
+    the row, read and parsed again each time they are iterated, so a reader of any number of
+    rows (the report) keeps none of them. Checked as :func:`iter_rows` checks them when made."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        last: dict[str, tuple[int, int]] = {}
+        for number, offset, line in _complete_lines(self.path):
+            last[_read_line(self.path, number, line).key] = (number, offset)
+        self._numbers = array("l", (n for n, _ in last.values()))
+        self._offsets = array("q", (o for _, o in last.values()))
+
+    def __len__(self) -> int:
+        return len(self._offsets)
+
+    def __iter__(self) -> Iterator[ResultRow]:
+        with open_regular(self.path, what="results file") as fh:
+            for number, offset in zip(self._numbers, self._offsets):
+                fh.seek(offset)
+                yield _read_line(self.path, number, fh.readline(MAX_LINE_BYTES + 1))
+
+    @overload
+    def __getitem__(self, index: int) -> ResultRow: ...
+    @overload
+    def __getitem__(self, index: slice) -> list[ResultRow]: ...
+    def __getitem__(self, index: int | slice) -> ResultRow | list[ResultRow]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        number, offset = self._numbers[index], self._offsets[index]
+        with open_regular(self.path, what="results file") as fh:
+            fh.seek(offset)
+            return _read_line(self.path, number, fh.readline(MAX_LINE_BYTES + 1))
 
 
 def read_rows(path: str | Path) -> list[ResultRow]:

@@ -14,11 +14,12 @@ What it must not do: decide what a request holds, or write files.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import overload
 
 from povagent.exchange.messages import Request, messages_images, messages_text
-from povagent.results.rows import ExchangeRecord
+from povagent.results.rows import ExchangeRecord, ResultRow
 
 
 @dataclass
@@ -67,3 +68,40 @@ def transcripts(exchanges: Sequence[ExchangeRecord], keep: int | None = None) ->
         out.append(text)
         previous = text
     return out
+
+
+class StoredTurns(Sequence[tuple[str | None, str | None]]):
+    """A stored row's turns, ``(request as sent or None, raw answer or None)`` each, read from
+    its results file only when they are looked at (the report's gallery, for the rows it
+    shows): a report of any length holds no request texts. ``redact`` is applied to every
+    text as it is read."""
+
+    __slots__ = ("_rows", "_index", "_keep", "_redact")
+
+    def __init__(self, rows: Sequence[ResultRow], index: int, keep: int | None = None, redact: Callable[[str], str] | None = None) -> None:
+        self._rows, self._index, self._keep, self._redact = rows, index, keep, redact
+
+    def _read(self) -> tuple[tuple[str | None, str | None], ...]:
+        exchanges = self._rows[self._index].exchanges
+        turns = tuple(zip(transcripts(exchanges, keep=self._keep), (e.raw for e in exchanges)))
+        known = self._redact
+        if known is None:
+            return turns
+        return tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in turns)
+
+    def redacted(self, redact: Callable[[str], str]) -> StoredTurns:
+        """The same turns, each text passed through ``redact`` as it is read."""
+        return StoredTurns(self._rows, self._index, self._keep, redact)
+
+    def __iter__(self) -> Iterator[tuple[str | None, str | None]]:
+        return iter(self._read())
+
+    def __len__(self) -> int:
+        return len(self._rows[self._index].exchanges)
+
+    @overload
+    def __getitem__(self, index: int) -> tuple[str | None, str | None]: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[tuple[str | None, str | None]]: ...
+    def __getitem__(self, index: int | slice) -> tuple[str | None, str | None] | Sequence[tuple[str | None, str | None]]:
+        return self._read()[index]

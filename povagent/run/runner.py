@@ -29,6 +29,7 @@ import dataclasses
 import time
 from collections import Counter
 from dataclasses import dataclass, field
+from itertools import islice
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +37,7 @@ from povagent.answers.types import answer_type_misfit
 from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.config.remote_code import remote_code_granted
-from povagent.dataset.instances import Instance, row_key
+from povagent.dataset.instances import Instance
 from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache
 from povagent.engine.concurrency import AdaptiveConcurrency
@@ -59,7 +60,7 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import SummaryDigest, declared_metrics, summarize_digests, summary_digest, write_summary
+from povagent.run.summary import declared_metrics, summarize_run, write_summary
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.metrics import Declared
 from povagent.scoring.protocols import scorer_protocols
@@ -191,10 +192,9 @@ class PipelineRun:
         # every key the config names (api_key_env values) is known to the redactor, so it is
         # removed from whatever the run writes: messages, logs, and answers that echo it
         self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
-        self._digests: dict[str, SummaryDigest] = {}
         self._declared: Declared = {}  # each scorer's declared metrics, set with the components
-        #: the digests of the rows written in this session: what they spent is ``session`` in summary.json
-        self._session_spent: list[SummaryDigest] = []
+        #: what the rows written in this session spent (``session`` in summary.json), summed as they come
+        self._session_spent = UsageTotals(0, 0, 0.0)
         self._frames = FrameReader(self.images)
         self._failures_in_a_row = 0
         self._stopped: str | None = None
@@ -228,12 +228,10 @@ class PipelineRun:
 
     def _reported(self, row: ResultRow) -> None:
         """A row is durable: count it, show it, tell the observers."""
-        digest = summary_digest(row, self._declared, self._protocols)
-        self._digests[row.key] = digest
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
-        self._session_spent.append(digest)
+        self._session_spent = UsageTotals.of((self._session_spent, row), unstated_tokens=0, unstated_cost=0.0)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
@@ -284,7 +282,7 @@ class PipelineRun:
         # before the dataset is read and before anything is written to the run folder.
         with remote_code_granted(self.trust_remote_code):
             self.components = create_components(config, self.host)
-        self._declared = declared_metrics(self.components.scorers)  # what each row's digest keeps
+        self._declared = declared_metrics(self.components.scorers)  # what the summary breaks down
         self._protocols: dict[str, str] = dict(scorer_protocols(self.components.scorers))  # which follows which protocol
         self.config_hash = pipeline_hash(config, self.components.strategy)
         # the backend's own options too: a profile may name the key's variable (api_key_env)
@@ -329,14 +327,14 @@ class PipelineRun:
     async def _run_in_folder(self, instances: list[Instance], t_start: float) -> RunResult:
         """The run proper, with the run folder locked against a second process."""
         config = self.config
-        runs = config.run_indices
-        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed, declared=self._declared, protocols=self._protocols)
+        plan = plan_keys(config, instances, config_hash=self.config_hash, retry_failed=self.retry_failed)
         retried = plan.failed if self.retry_failed else set()
         if retried:
             # the failed rows go before their keys run again, so a retried key has one row
             drop_rows(self.run_dir / RESULTS, retried)
-        self._digests = plan.digests
-        pending, wanted = plan.pending, plan.wanted
+        pending, wanted, n_pending = plan.pending, plan.wanted, len(plan.pending)
+        self._wanted = wanted  # the summary's keys: made once
+        del plan  # a resumed run's digests of its done keys: the summary reads the file back instead
         write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
@@ -365,8 +363,7 @@ class PipelineRun:
                        retried_failed_keys=len(retried))
         self.host.hooks.run_start(str(self.run_dir), config.resolved_dict(), len(pending), len(wanted))
         self.progress.start(len(wanted), len(wanted) - len(pending))
-        interrupted = True
-        failing = False
+        interrupted, failing = True, False
         try:
             # The backend starts (litellm: an import of seconds) when the first request misses
             # the response cache, before that request's clock starts (RequestPath).
@@ -382,6 +379,7 @@ class PipelineRun:
             # complete: the journal closed, summary.json written, then it goes on (see below).
             self.progress.stop()
             self.stats.wall_s = time.perf_counter() - t_start
+            pending.clear()  # the keys' tuples go before the summary reads the rows back
             stop_came = await finish_through_stop(self._journal.aclose())
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
@@ -391,7 +389,7 @@ class PipelineRun:
             if self._stopped:
                 stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
                 stop_log("run_stopped", reason=self._stopped)
-            written = self.summarize(instances, runs, interrupted or stop_came)
+            written = self.summarize(interrupted or stop_came)
             # a stop requested while the summary was computed (plain code: not yet delivered) too
             written["interrupted"] = written["interrupted"] or stop_requested()
             try:
@@ -416,7 +414,7 @@ class PipelineRun:
                 # every key had finished when the stop came: the folder is complete, and the
                 # stop still ends the command (a sweep must not start its next cell)
                 raise asyncio.CancelledError
-        return RunResult(self.run_dir, summary, self.stats, len(wanted), len(pending), interrupted, self._stopped, self._stop_kind)
+        return RunResult(self.run_dir, summary, self.stats, len(wanted), n_pending, interrupted, self._stopped, self._stop_kind)
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
         """Run ``pending``: the first key alone (fail fast), then the rest with ``concurrency``
@@ -428,7 +426,7 @@ class PipelineRun:
             self._log, self._redactor, self._frames.read, label=self.config.label,
         ).solve  # fmt: skip
         with HouseFrames(self.images, pending) as houses:
-            first, rest = pending[0], iter(pending[1:])
+            first, rest = pending[0], islice(pending, 1, None)  # no copy of the list
             row = await solve(*first)
             houses.done(first[0])
             self._journal.submit(row)
@@ -465,11 +463,13 @@ class PipelineRun:
                         raise exc.exceptions[0] from None  # one worker's bug: its own traceback, not a group's
                 raise
 
-    def summarize(self, instances: list[Instance], runs: list[int], interrupted: bool) -> dict[str, Any]:
+    def summarize(self, interrupted: bool) -> dict[str, Any]:
         """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
         over the selected keys, plus the run's counters."""
-        summary = summarize_digests(self._digests.values(), {row_key(i.id, r) for i in instances for r in runs}, self._declared)
-        spent = UsageTotals.of(self._session_spent, unstated_tokens=0, unstated_cost=0.0)
+        # read back from results.jsonl, where every row of the run is durable: a run keeps no
+        # state per key while it runs, so its memory stays flat however many rows it writes
+        summary = summarize_run(self.run_dir / RESULTS, self._wanted, self._declared, self._protocols)
+        spent = self._session_spent
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0
         summary["pipeline"] = {

@@ -24,7 +24,7 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
-from povagent.scoring.metrics import Declared, Metric, ValuedRow, metrics_breakdown, row_category, row_metric_groups, row_metric_values
+from povagent.scoring.metrics import Declared, Metric, MetricValues, ValuedRow, metrics_breakdown, row_category, row_metric_groups
 from povagent.scoring.protocols import following, registered_protocols
 
 
@@ -36,8 +36,8 @@ def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
     score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     return ScoredRow(
-        condition=row.condition,
-        direction=row.direction,
+        condition=sys.intern(row.condition),  # one string per label, not one per row a summary keeps
+        direction=sys.intern(row.direction),
         answered=answered,
         l2=score.get("l2") if answered else None,
         gt_in_frame=score.get("gt_in_frame") if answered else None,
@@ -111,9 +111,10 @@ class SummaryDigest:
     completion_tokens: int | None
     cost_usd: float | None
     retries: int
-    #: ``((scorer, ((metric, value), ...)), ...)``: the row's value of every declared metric
-    #: (:func:`~povagent.scoring.metrics.row_metric_values`); empty when no metrics were declared
-    metric_values: tuple[tuple[str, tuple[tuple[str, float | None], ...]], ...] = ()
+    #: the row's value of every declared metric (:func:`~povagent.scoring.metrics.row_metric_values`),
+    #: flat in the declared order, scorer by scorer (the names are the declaration's: one tuple
+    #: per key, not a pair per value); empty when no metrics were declared
+    metric_values: tuple[float | None, ...] = ()
     #: the question's category and the groups of grouped metrics (a multiple-choice row's;
     #: :func:`~povagent.scoring.metrics.valued_row`)
     category: str | None = None
@@ -143,7 +144,7 @@ def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: 
         official_parser=None if reading is None else sys.intern(reading.parser),
         officially_scored=officially_scored,
         success=None if success is None else (
-            row.condition, row.direction, (success or {}).get("success"), (success or {}).get("answered") is True
+            sys.intern(row.condition), sys.intern(row.direction), (success or {}).get("success"), (success or {}).get("answered") is True
         ),
         plugin_scores=plugin_scores(row.scores, protocols),
         diagnosed=diagnosed_row(row, error_scorer),
@@ -152,7 +153,7 @@ def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: 
         completion_tokens=row.completion_tokens,
         cost_usd=row.cost_usd,
         retries=row.retries,
-        metric_values=tuple((scorer, tuple(values.items())) for scorer, values in row_metric_values(row, declared).items()) if declared else (),
+        metric_values=MetricValues.of(row, declared).flat if declared else (),
         category=row_category(row),
         metric_groups=(row_metric_groups(row, declared) or None) if declared else None,
     )
@@ -233,8 +234,8 @@ def summarize_digests(
         )
     if declared and any(declared.values()):
         out["metrics"] = metrics_breakdown(
-            (ValuedRow(d.scored.condition, d.scored.direction, {scorer: dict(values) for scorer, values in d.metric_values},
-                       d.category, d.metric_groups or {}) for d in rows), declared
+            (ValuedRow(d.scored.condition, d.scored.direction, MetricValues(d.metric_values, declared), d.category,
+                       d.metric_groups or {}) for d in rows), declared
         )
     by_plugin = _plugin_score_summary(d.plugin_scores for d in rows)
     if by_plugin:  # a plugin scorer's own fields: what its author looks for first
@@ -271,18 +272,23 @@ def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]
     return {name: tuple(getattr(scorer, "metrics", ())) for name, scorer in scorers.items()}
 
 
-def summarize_run(results: Path, keys: set[str] | None = None) -> dict[str, Any]:
+def summarize_run(
+    results: Path, keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None,
+    protocols: Mapping[str, str] | None = None,
+) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction) of a results file, per run too.
 
     ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
-    When a key repeats, its last row counts.
+    When a key repeats, its last row counts. ``declared`` and ``protocols``: as for
+    :func:`summary_digest` (default: the registered scorers' protocols). The file is read one
+    row at a time; only each key's digest is kept.
     """
     by_key: dict[str, SummaryDigest] = {}
-    protocols = registered_protocols()
+    protocols = registered_protocols() if protocols is None else protocols
     for row in iter_rows(results):
         if keys is None or row.key in keys:
-            by_key[row.key] = summary_digest(row, None, protocols)
-    return summarize_digests(by_key.values(), keys)
+            by_key[row.key] = summary_digest(row, declared, protocols)
+    return summarize_digests(by_key.values(), keys, declared)
 
 
 def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:

@@ -8,7 +8,7 @@ report or the run layers (the run summary and the report both reach down to it).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,6 +16,9 @@ import numpy as np
 #: Bootstrap resamples per interval; 2,000 keeps the 2.5/97.5 percentiles stable to ~0.001.
 DEFAULT_BOOT = 2000
 CONFIDENCE = 0.95
+#: Draws held at once while resampling (2 MB of indices): a resample's draws are the same in
+#: one block or in many (one generator, read in order), so memory stays flat at any row count.
+DRAWS_PER_BLOCK = 1 << 18
 
 
 @dataclass(frozen=True)
@@ -53,8 +56,18 @@ def bootstrap_mean_ci(
     point = float(x.sum() / n)
     if n_boot <= 0 or n < 2:
         return Estimate(point, None, None, n)
-    draws = np.random.default_rng(seed).integers(0, n, size=(n_boot, n))
-    boot = x[draws].sum(axis=1) / n
+    boot = np.concatenate([x[draws].sum(axis=1) for draws in resample_draws(n, n_boot, seed)]) / n
     alpha = (1.0 - level) / 2.0
     lo, hi = np.quantile(boot, [alpha, 1.0 - alpha])
     return Estimate(point, float(lo), float(hi), n)
+
+
+def resample_draws(n: int, n_boot: int, seed: int) -> Iterator[np.ndarray]:
+    """The ``(n_boot, n)`` matrix of bootstrap draws (indices in ``[0, n)``, seeded with
+    ``seed``), yielded a block of whole resamples at a time, at most :data:`DRAWS_PER_BLOCK`
+    draws each: the same numbers as one ``integers(0, n, size=(n_boot, n))`` call (the
+    generator hands out its stream in order whatever the block), without holding them all."""
+    rng = np.random.default_rng(seed)
+    per_block = max(1, DRAWS_PER_BLOCK // max(n, 1))
+    for start in range(0, n_boot, per_block):
+        yield rng.integers(0, n, size=(min(per_block, n_boot - start), n))

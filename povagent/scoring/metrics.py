@@ -19,7 +19,7 @@ import re
 from collections import defaultdict
 from dataclasses import dataclass, field
 from operator import attrgetter
-from typing import Any, Iterable, Literal, Mapping, Sequence
+from typing import Any, Iterable, Iterator, Literal, Mapping, Sequence
 
 from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate, bootstrap_mean_ci
 from povagent.scoring.breakdown import slices
@@ -131,14 +131,74 @@ def row_category(row: Any) -> str | None:
     return None
 
 
-@dataclass(frozen=True)
+#: The positions of every declaration met so far (a few per process): one dict shared by the rows.
+_POSITIONS: dict[tuple[tuple[str, tuple[str, ...]], ...], dict[str, dict[str, int]]] = {}
+
+
+class MetricValues(Mapping[str, Mapping[str, "float | None"]]):
+    """A row's :func:`row_metric_values`, ``{scorer: {metric: value}}``, held as one flat tuple
+    in the declared order (the names are the declaration's, shared by every row): what a summary
+    or a report keeps per row, without two dicts a row."""
+
+    __slots__ = ("_flat", "_at")
+
+    def __init__(self, flat: Sequence[float | None], declared: Declared) -> None:
+        names = tuple((scorer, tuple(m.name for m in metrics)) for scorer, metrics in declared.items() if metrics)
+        at = _POSITIONS.get(names)
+        if at is None:
+            at, i = {}, 0
+            for scorer, metric_names in names:
+                at[scorer] = {name: i + k for k, name in enumerate(metric_names)}
+                i += len(metric_names)
+            at = _POSITIONS.setdefault(names, at)
+        self._flat, self._at = tuple(flat), at
+
+    @classmethod
+    def of(cls, row: Any, declared: Declared) -> MetricValues:
+        """``row``'s values of the ``declared`` metrics (see :func:`row_metric_values`)."""
+        return cls([v for values in row_metric_values(row, declared).values() for v in values.values()], declared)
+
+    @property
+    def flat(self) -> tuple[float | None, ...]:
+        """The values, scorer by scorer, each scorer's in its declared order."""
+        return self._flat
+
+    def __getitem__(self, scorer: str) -> Mapping[str, float | None]:
+        return _ScorerValues(self._flat, self._at[scorer])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
+class _ScorerValues(Mapping[str, "float | None"]):
+    """One scorer's values of a :class:`MetricValues`."""
+
+    __slots__ = ("_flat", "_at")
+
+    def __init__(self, flat: tuple[float | None, ...], at: dict[str, int]) -> None:
+        self._flat, self._at = flat, at
+
+    def __getitem__(self, metric: str) -> float | None:
+        return self._flat[self._at[metric]]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
+@dataclass(frozen=True, slots=True)
 class ValuedRow:
     """A row as a metrics breakdown reads it: its slice labels, its metric values and the
     groups of its grouped metrics (small: a summary may keep one per key instead of the row)."""
 
     condition: str | None
     direction: str | None
-    values: dict[str, dict[str, float | None]]
+    values: Mapping[str, Mapping[str, float | None]]
     category: str | None = None
     groups: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
