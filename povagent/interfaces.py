@@ -243,6 +243,11 @@ class Parser(abc.ABC):
 #: ``frame_has_gt``, ``distance_norm``, ``hit_radius_px``), the ``success`` section of
 #: ``summary.json`` and the report's success-rate tables.
 ScoreProtocol = Literal["normalized_l2", "marked_hit"]
+#: The diagnoses a scorer's fields may carry for the summary's ``diagnostics`` section (an
+#: addition beside the official breakdown): ``failure_step``, the step of the chain an answer
+#: failed at (with ``step``, ``nearer_egocentric``, ``egocentric``, ``mirrored``), and
+#: ``relation_hit``, whether the answer satisfies the sentence's relation (``success``).
+Diagnosis = Literal["failure_step", "relation_hit"]
 
 
 class Scorer(abc.ABC):
@@ -255,6 +260,9 @@ class Scorer(abc.ABC):
     #: sections of their own (:data:`ScoreProtocol`); ``None``, the usual case, when its declared
     #: metrics say all there is to show.
     protocol: ClassVar[ScoreProtocol | None] = None
+    #: The diagnosis this scorer's fields carry (:data:`Diagnosis`), which the summary's and the
+    #: report's diagnostics read from it; ``None``, the usual case, for none.
+    diagnosis: ClassVar[Diagnosis | None] = None
     #: Whether it projects the instance's 3D target (a real-world set, marked by hand in 2D,
     #: refuses such a scorer before any request).
     needs_3d_target: ClassVar[bool] = False

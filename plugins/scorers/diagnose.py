@@ -105,6 +105,7 @@ class DiagnoseScorer(Scorer):
     """First failing step (frame, anchor, viewpoint, placement) and the egocentric-bias vote."""
 
     needs_3d_target = True
+    diagnosis = "failure_step"
 
     def __init__(self) -> None:
         self.records = TargetRecords()

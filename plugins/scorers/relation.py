@@ -25,6 +25,7 @@ class RelationScorer(Scorer):
     """Success when the point lies in the relation region of the answered frame."""
 
     needs_3d_target = True
+    diagnosis = "relation_hit"
 
     def __init__(self) -> None:
         self.records = TargetRecords()

@@ -1,8 +1,9 @@
 """An answered row's error diagnosis as the report's observation holds it.
 
-The ``diagnose`` and ``relation`` scorers' fields (where the answer fell: the egocentric or the
-mirrored reading, the step that failed), read as the row stored them, never recomputed; the
-summary reads them the same way (:func:`povagent.run.summary.diagnosed_row`).
+The fields of the scorers that declare a diagnosis (``Scorer.diagnosis``: the step an answer
+failed at and whether it fell nearer the egocentric or the mirrored reading; whether it
+satisfies the sentence's relation), read as the row stored them, never recomputed; the summary
+reads them the same way (:func:`povagent.run.summary.diagnosed_row`).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent.results.rows import ResultRow
+from povagent.scoring.protocols import diagnosing_scorers
 
 
 def _uv(value: Any) -> tuple[float, float] | None:
@@ -18,7 +20,7 @@ def _uv(value: Any) -> tuple[float, float] | None:
 
 
 def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
-    """An answered row's ``diagnose`` and ``relation`` scores as :class:`Observation` fields
+    """An answered row's diagnosing scorers' fields (``Scorer.diagnosis``) as :class:`Observation` fields
     (read as stored, never recomputed; ``{}`` when neither scored it); ``error_scorer`` is the
     run's ``normalized_l2`` scorer."""
     from povagent.run.summary import diagnosed_row
@@ -26,7 +28,7 @@ def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
     diagnosed = diagnosed_row(row, error_scorer)
     if diagnosed is None:
         return {}
-    fields = row.scores.get("diagnose") or {}
+    fields = row.scores.get(diagnosing_scorers().get("failure_step", "")) or {}
     return {
         "fail_step": diagnosed.step,
         "egocentric_uv": _uv(fields.get("egocentric")),

@@ -25,7 +25,7 @@ from povagent.run.summary_model import RunSummary
 from povagent.scoring.breakdown import ScoredRow, breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow, diagnostics_breakdown
 from povagent.scoring.metrics import Declared, Metric, MetricValues, ValuedRow, metrics_breakdown, row_category, row_metric_groups
-from povagent.scoring.protocols import following, registered_protocols
+from povagent.scoring.protocols import diagnosing_scorers, following, registered_protocols
 
 
 def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
@@ -160,12 +160,14 @@ def summary_digest(row: ResultRow, declared: Declared | None = None, protocols: 
 
 
 def diagnosed_row(row: ResultRow, error_scorer: str | None) -> DiagnosedRow | None:
-    """The ``diagnose`` and ``relation`` fields of an answered row, with its error by
+    """The fields of the scorers diagnosing an answered row (``failure_step`` and
+    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`), with its error by
     ``error_scorer`` (the run's ``normalized_l2`` scorer), or ``None`` when neither scored it."""
     if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
         return None
-    diagnose = row.scores.get("diagnose")
-    relation = row.scores.get("relation")
+    by = diagnosing_scorers()
+    diagnose = row.scores.get(by.get("failure_step", ""))
+    relation = row.scores.get(by.get("relation_hit", ""))
     diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None
     relation = relation if isinstance(relation, Mapping) and relation.get("answered") is True else None
     if diagnose is None and relation is None:

@@ -13,13 +13,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Mapping, get_args
 
-from povagent.interfaces import ScoreProtocol
+from povagent.interfaces import Diagnosis, ScoreProtocol
 
 if TYPE_CHECKING:
     from povagent.plugins import PluginHost
 
 #: Every protocol, in the order reports show their sections.
 PROTOCOLS: tuple[ScoreProtocol, ...] = get_args(ScoreProtocol)
+#: Every diagnosis a scorer may declare.
+DIAGNOSES: tuple[Diagnosis, ...] = get_args(Diagnosis)
 
 
 def reading_host() -> PluginHost:
@@ -38,6 +40,27 @@ def reading_host() -> PluginHost:
 def registered_protocols() -> dict[str, ScoreProtocol]:
     """``{scorer name: protocol}`` for every registered scorer that declares one."""
     return {e.name: p for e in reading_host().entries("scorer") if (p := getattr(e.factory, "protocol", None)) in PROTOCOLS}
+
+
+#: The last :func:`diagnosing_scorers` answer, with the registry table it was read from.
+_diagnosing: tuple[Any, dict[str, str]] | None = None
+
+
+def diagnosing_scorers() -> dict[str, str]:
+    """``{diagnosis: scorer name}`` of the registered scorers that declare one (``Scorer.diagnosis``;
+    the first by name for each): where a row's diagnostics are. Read again only when the registry
+    changes (a row at a time asks it)."""
+    global _diagnosing
+    table = reading_host()._table("scorer")
+    if _diagnosing is not None and _diagnosing[0] is table:
+        return _diagnosing[1]
+    found: dict[str, str] = {}
+    for name in sorted(table):
+        kind = getattr(table[name].factory, "diagnosis", None)
+        if kind in DIAGNOSES and kind not in found:
+            found[kind] = name
+    _diagnosing = (table, found)
+    return found
 
 
 def shown_answer(answer_type: str | None, value: Mapping[str, Any] | None) -> str | None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.image_files import ImageFileError, inspect_image_file
@@ -28,9 +28,6 @@ from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, 
 from povagent.dataset.problems import Problem
 from povagent.errors import ConfigError
 from povagent.geometry.camera import Camera
-
-#: Built-in scorers a multiple-choice set cannot feed: they need a 3D target or hand marks.
-NEEDS_POINT_GROUND_TRUTH = frozenset({"official", "diagnose", "relation", "probe-anchor", "probe-observer", "success"})
 
 
 @dataclass(frozen=True)
@@ -128,10 +125,14 @@ class ChoiceSet:
             self._by_id = {i.id: i for i in self._instances}
         return self._by_id.get(id_)
 
-    def check_scorers(self, names: Iterable[str]) -> None:
+    def check_scorers(self, scorers: Mapping[str, Any]) -> None:
         """Refuse scorers that need POVBench's point ground truth (the runner asks before any
-        request): a multiple-choice item has a gold label, no 3D target and no marks."""
-        refused = sorted(set(names) & NEEDS_POINT_GROUND_TRUTH)
+        request): a multiple-choice item has a gold label, no 3D target and no marks. A scorer
+        says so itself (``Scorer.needs_3d_target``, or a point protocol: ``Scorer.protocol``)."""
+        refused = sorted(
+            name for name, scorer in scorers.items()
+            if getattr(scorer, "needs_3d_target", False) or getattr(scorer, "protocol", None) is not None
+        )  # fmt: skip
         if refused:
             raise ConfigError(
                 f"{self.file}: scorer {', '.join(refused)} needs a point ground truth, and a multiple-choice set "
