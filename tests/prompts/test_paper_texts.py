@@ -91,7 +91,7 @@ class _Stub:
     """Just what ``prompt_text`` reads from an instance."""
 
     def __init__(self, condition: Condition, n_frames: int = 30) -> None:
-        self.condition = condition
+        self.condition = self.povbench_condition = condition
         self.sentence = SENTENCE
         self.frames = tuple(range(n_frames if condition.uses_exploration_frames else 1))
         self.frame_size = (512, 512)

@@ -282,7 +282,7 @@ class _Stub:
     """Just what ``prompt_text`` reads from an instance."""
 
     def __init__(self, sentence: str = "I saw it left of the desk.", n_frames: int = 2, size=(512, 512)) -> None:
-        self.condition = Condition.INFERRED
+        self.condition = self.povbench_condition = Condition.INFERRED
         self.sentence = sentence
         self.frames = tuple(range(n_frames))
         self.frame_size = size
