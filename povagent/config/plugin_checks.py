@@ -21,6 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
+from povagent.dataset.choice_sets import OFFICIAL_SET_PARSERS
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
@@ -162,8 +163,6 @@ def set_official_parser(config: PipelineConfig, host: PluginHost) -> str | None:
     """The official rule of the external set a choice pipeline runs on (``dataset.format``): what
     it gets when it names no parser, before the choice strategy's generic default; ``None`` for
     a POVBench-layout set or a strategy asking for another answer type."""
-    from povagent.dataset.choice_sets import OFFICIAL_SET_PARSERS
-
     fmt = config.dataset.format
     if fmt is None or getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point") != "choice":
         return None

@@ -38,9 +38,9 @@ UNKNOWN = "?"
 ALL = "All"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ChoiceAnswer:
-    """One scored row of a choice run, as these tables read it."""
+    """One row of a choice run, as these tables read it (slotted: one per row)."""
 
     system: str
     instance_id: str

@@ -25,14 +25,14 @@ OBJECT = "Person perspective - Object View Orientation"
 
 @pytest.fixture
 def runs_folder(tmp_path, choice_pipeline):
-    """``runs_folder(*(label, backend, reply)) -> Path``: a folder of real choice runs on the
-    ViewSpatial fixture, each run labelled."""
+    """``runs_folder(*(label, backend, reply[, parser])) -> Path``: a folder of real choice runs on
+    the ViewSpatial fixture, each run labelled (read by the set's rule unless a parser is named)."""
 
-    def make(*systems: tuple[str, str, str | None]) -> Path:
+    def make(*systems: tuple) -> Path:
         folder = tmp_path / "runs"
-        for label, backend, reply in systems:
+        for label, backend, reply, *parser in systems:
             path = choice_pipeline("viewspatial", backend=backend, reply=reply)
-            data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / label)}
+            data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / label)} | ({"parser": parser[0]} if parser else {})
             path.write_text(yaml.safe_dump(data, sort_keys=False))
             run_pipeline(load_pipeline(path))
         return folder
@@ -57,6 +57,11 @@ def test_the_accuracy_table_gives_each_systems_accuracy_per_category(runs_folder
     assert _values(table, "always-a") == {CAMERA: 0.5, OBJECT: 1.0, SCENE: 0.0, "All": 0.5}
     overall = next(r for r in table.rows if r.label == "always-a").cells[-1]
     assert overall.lo is not None and overall.hi is not None and overall.lo <= 0.5 <= overall.hi
+
+
+def test_a_question_answered_with_no_option_counts_as_wrong(runs_folder, tmp_path):
+    result = write_report(runs_folder(("always-a", "test-center", "A"), ("silent", "test-center", "no idea")), tmp_path / "report", gallery=False, n_boot=200)
+    assert _values(_table(result, "choice_accuracy_choice"), "silent") == {CAMERA: 0.0, OBJECT: 0.0, SCENE: 0.0, "All": 0.0}
 
 
 def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder, tmp_path):
@@ -85,6 +90,14 @@ def test_every_choice_table_names_the_rule_that_read_it(runs_folder, tmp_path):
     choice = [t for t in result.tables if t.key.startswith("choice_")]
     assert len(choice) == 4 and all(described in t.caption for t in choice)
     assert "ZJU-REAL" in described
+
+
+def test_systems_read_by_different_rules_have_each_rule_named(runs_folder, tmp_path):
+    result = write_report(runs_folder(("always-a", "test-center", "A", "vlmevalkit-exact"), ("oracle", "oracle", None)),
+                          tmp_path / "report", gallery=False, n_boot=200)  # fmt: skip
+    caption = _table(result, "choice_accuracy_choice").caption
+    assert "`vlmevalkit-exact` (" in caption and "for always-a" in caption
+    assert "`viewspatial` (" in caption and "for oracle" in caption
 
 
 def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_path, mini_root):
