@@ -21,6 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
+from povagent.dataset.choice_sets import OFFICIAL_SET_PARSERS
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
@@ -121,14 +122,15 @@ PROFILE_BACKENDS = frozenset({"litellm", "transformers"})
 def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
     """Fill in what a ``model:`` profile implies: the backend (litellm with that model) and,
     when no parser is given, the parser the strategy's answers need (its ``answer_parser``),
-    else the profile's default parser (``official`` otherwise: a repair
+    else, for a choice strategy on an external set, that set's official rule
+    (:func:`set_official_parser`), else the strategy's default, else the profile's default parser (``official`` otherwise: a repair
     parser runs only when a pipeline or a profile names it). A profile named
     as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
     its parser and strategy defaults the same way, and so does one named as the in-process
     ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
     backend, parser, strategy = config.backend, config.parser, config.strategy
     if parser is None:  # a strategy whose answers one parser reads gets it, whatever a profile says
-        needed = needed_parser(host, strategy.name) or strategy_default_parser(host, strategy.name)
+        needed = needed_parser(host, strategy.name) or set_official_parser(config, host) or strategy_default_parser(host, strategy.name)
         parser = ComponentSpec(name=needed) if needed is not None else None
     profile = None
     if config.model is not None:
@@ -155,6 +157,16 @@ def needed_parser(host: PluginHost, strategy: str) -> str | None:
     """The parser strategy ``strategy``'s answers need (its ``answer_parser``), or ``None``."""
     needed = getattr(host.entry("strategy", strategy).factory, "answer_parser", None)
     return needed if isinstance(needed, str) else None
+
+
+def set_official_parser(config: PipelineConfig, host: PluginHost) -> str | None:
+    """The official rule of the external set a choice pipeline runs on (``dataset.format``): what
+    it gets when it names no parser, before the choice strategy's generic default; ``None`` for
+    a POVBench-layout set or a strategy asking for another answer type."""
+    fmt = config.dataset.format
+    if fmt is None or getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point") != "choice":
+        return None
+    return OFFICIAL_SET_PARSERS.get(fmt)
 
 
 def strategy_default_parser(host: PluginHost, strategy: str) -> str | None:

@@ -22,6 +22,7 @@ from typing import Any
 from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
+from povagent.report.choice_tables import choice_tables
 from povagent.report.collect import collect
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
@@ -134,6 +135,7 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
+    tables += choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
     tables += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
     timings["statistics"] = time.perf_counter() - t
 

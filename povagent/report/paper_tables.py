@@ -25,7 +25,7 @@ import re
 from typing import Any, Callable
 
 from povagent.dataset.models import Condition
-from povagent.report.analysis import Analysis
+from povagent.report.analysis import Analysis, SystemStats
 from povagent.report.statistics import CellStats, Estimate
 from povagent.report.tables import Cell, Column, Kind, Row, Table
 
@@ -98,10 +98,17 @@ def row_header(a: Analysis) -> str:
     return "Model · strategy" if a.model_systems else "Baseline"
 
 
+def scored_systems(a: Analysis, protocol: str) -> list[SystemStats]:
+    """The systems with rows under ``protocol``: a protocol's tables leave out a system whose
+    answers are no point (a multiple-choice run has its own tables, :mod:`povagent.report.choice_tables`)."""
+    under = {o.system for o in a.observations if o.protocol == protocol}
+    return [s for s in a.systems if s.system in under]
+
+
 def main_table(a: Analysis) -> Table:
     """Systems x conditions, official mean L2."""
     t = Table("main", "Main results", f"{PROTOCOL} {bold_note(a)}", row_header(a), [Column(condition_label(c)) for c in a.conditions])
-    for s in a.systems:
+    for s in scored_systems(a, "normalized_l2"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_condition, c, cell_error)) for c in a.conditions], s.reference))
     return t
 
@@ -120,7 +127,7 @@ def ablation_table(a: Analysis) -> Table | None:
     caption = f"{PROTOCOL} Resp. is the response rate (answered / total) over all conditions. {bold_note(a)}"
     title = "Ablation" + (f" ({next(iter(models))})" if one_model and next(iter(models)) else "")
     t = Table("ablation", title, caption, row_header(a), cols)
-    for s in a.systems:
+    for s in scored_systems(a, "normalized_l2"):
         label = s.system  # model and strategy, as in every table (the title alone is easy to miss)
         cells = [_cell(_pick(s.by_condition, c, cell_error)) for c in a.conditions]
         cells.append(_cell(s.overall.response_rate))
@@ -131,7 +138,7 @@ def ablation_table(a: Analysis) -> Table | None:
 def direction_table(a: Analysis) -> Table:
     """Systems x directions (pooled over conditions), official mean L2."""
     t = Table("per_direction", "Error by direction", f"{PROTOCOL} Pooled over conditions. {bold_note(a)}", row_header(a), [Column(d.capitalize()) for d in a.directions])
-    for s in a.systems:
+    for s in scored_systems(a, "normalized_l2"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_error)) for d in a.directions], s.reference))
     return t
 
@@ -148,7 +155,7 @@ def condition_direction_table(a: Analysis) -> Table:
         cols,
         show_ci=False,
     )
-    for s in a.systems:
+    for s in scored_systems(a, "normalized_l2"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_condition_direction, f"{c}/{d}", cell_error)) for c, d in keys], s.reference))
     return t
 
@@ -222,7 +229,7 @@ def success_table(a: Analysis) -> Table:
     cols += [Column(overall, "rate", "higher"), Column("Resp.", "rate", "higher")]
     caption = SUCCESS_PROTOCOL + (" Overall pools every instance." if several else "") + " Resp. is the response rate (answered / total). " + bold_note(a)
     t = Table("success", "Success rate", caption, row_header(a), cols)
-    for s in a.systems:
+    for s in scored_systems(a, "marked_hit"):
         cells = [_cell(_pick(s.by_condition, c, cell_hit)) for c in a.conditions] if several else []
         cells += [_cell(s.overall.success), _cell(s.overall.response_rate)]
         t.rows.append(Row(s.system, cells, s.reference))
@@ -238,7 +245,7 @@ def success_direction_table(a: Analysis) -> Table:
         row_header(a),
         [Column(d.capitalize(), "rate", "higher") for d in a.directions],
     )
-    for s in a.systems:
+    for s in scored_systems(a, "marked_hit"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_hit)) for d in a.directions], s.reference))
     return t
 

@@ -22,6 +22,11 @@ from povagent.errors import DatasetError
 #: The formats a set's file may be given in (``dataset.format``), each with the set's name.
 CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench"}
 
+#: Each set's official rule, the parser a choice pipeline on that format gets when it names none:
+#: ViewSpatial-Bench's ``evaluate.py``, MindCube's ``extractors.py`` cascade, and for 3DSRBench the
+#: lmms-eval ``3dsrbench`` rule its own evaluation uses. A harness's rule is named, never defaulted.
+OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench-lmms"}
+
 
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
     """The set in ``file``, read as ``format``, its image paths relative to (and confined to)

@@ -1,0 +1,189 @@
+"""The report's tables of multiple-choice runs: accuracy per category with CIs, paired
+differences between systems on the same questions, and a confusion of chosen vs gold labels.
+
+A choice run's rows carry a choice scorer's fields (``answered, correct, chosen, gold,
+category``: :mod:`povagent_plugins.scorers.choice` and the scorers built on it); a row has no
+pixels, so these tables stand in for the point tables. Harnesses read the same answer
+differently (issue 45), so every table names the rule that read its answers: the rows' parser,
+with its registered description. Accuracy counts every scored row (no option read = wrong).
+An accuracy is the mean over questions of each question's mean over runs, its 95% CI a
+bootstrap over questions (:func:`~povagent.scoring.bootstrap.bootstrap_mean_ci`).
+
+Reads the runs' rows as stored (never rescored); writes nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import defaultdict
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from povagent.errors import PluginError
+from povagent.plugins import get_plugin_host
+from povagent.report.collect import Collection
+from povagent.report.statistics import sign_test_p
+from povagent.report.tables import Cell, Column, Row, Table
+from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
+
+#: The fields a choice scorer writes: a scorer whose scores carry them all is read here.
+CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
+#: The confusion column of answers naming no option.
+NO_OPTION = "no option"
+#: The gold label of a question no row of which was scored (every system named no option).
+UNKNOWN = "?"
+#: The accuracy column over every category.
+ALL = "All"
+
+
+@dataclass(frozen=True, slots=True)
+class ChoiceAnswer:
+    """One row of a choice run, as these tables read it (slotted: one per row)."""
+
+    system: str
+    instance_id: str
+    correct: bool
+    chosen: str | None
+    gold: str
+    category: str
+    parser: str
+
+
+def choice_answers(collection: Collection) -> dict[str, list[ChoiceAnswer]]:
+    """Per choice scorer (in the order first met), the rows of the runs it scored, run by run.
+
+    A row the scorer did not score (no option read, a failed request: the runner scores only
+    answers) counts as an answer naming no option, as the scorer's accuracy counts it; its gold
+    label and category are the question's as another row of it records them (:data:`UNKNOWN`
+    when no row of the question was scored)."""
+    carried = [{scorer for row in run.rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS} for run in collection.runs]
+    scorers = sorted(set().union(*carried), key=lambda name: next(i for i, c in enumerate(carried) if name in c))
+    questions: dict[tuple[str, str], tuple[str, str]] = {}
+    out: dict[str, list[ChoiceAnswer]] = {scorer: [] for scorer in scorers}
+    for run, its_own in zip(collection.runs, carried):
+        named = {_scorer_name(s) for s in run.config.get("scorers") or []}
+        mine = [s for s in scorers if s in named or s in its_own]
+        for row in run.rows:
+            for scorer in mine:
+                f = row.scores.get(scorer) or {}
+                if f.keys() >= CHOICE_FIELDS:
+                    questions[(scorer, row.instance_id)] = (str(f["gold"]), str(f["category"] or ""))
+                    chosen = None if f["chosen"] is None else str(f["chosen"])
+                    out[scorer].append(ChoiceAnswer(run.system, row.instance_id, f["correct"] is True, chosen, str(f["gold"]),
+                                                    str(f["category"] or ""), row.parser))  # fmt: skip
+                else:
+                    out[scorer].append(ChoiceAnswer(run.system, row.instance_id, False, None, "", "", row.parser))
+    return {scorer: [_with_question(a, questions.get((scorer, a.instance_id))) for a in answers] for scorer, answers in out.items()}
+
+
+def _scorer_name(spec: object) -> str:
+    return str(spec.get("name", "")) if isinstance(spec, dict) else str(spec)
+
+
+def _with_question(answer: ChoiceAnswer, question: tuple[str, str] | None) -> ChoiceAnswer:
+    if answer.gold:
+        return answer
+    gold, category = question if question is not None else (UNKNOWN, "")
+    return dataclasses.replace(answer, gold=gold, category=category)
+
+
+def choice_tables(collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0) -> list[Table]:
+    """Each choice scorer's accuracy table, paired differences (with two systems or more) and a
+    confusion table per system (none for a report without choice rows)."""
+    tables: list[Table] = []
+    for scorer, answers in choice_answers(collection).items():
+        systems = list(dict.fromkeys(a.system for a in answers))
+        read_by = rules_note(answers, systems)
+        tables.append(_accuracy_table(scorer, answers, systems, read_by, n_boot, seed))
+        if len(systems) > 1:
+            tables.append(_paired_table(scorer, answers, systems, read_by, n_boot, seed))
+        tables += [_confusion_table(scorer, i, system, [a for a in answers if a.system == system], read_by)
+                   for i, system in enumerate(systems)]  # fmt: skip
+    return tables
+
+
+def rule_name(parser: str) -> str:
+    """A parser named with its registered description (the rule and the commit it follows)."""
+    try:
+        description = get_plugin_host().entry("parser", parser).description
+    except PluginError:  # a run's parser from a plugin this report did not load: its name alone
+        description = ""
+    return f"`{parser}` ({description})" if description else f"`{parser}`"
+
+
+def rules_note(answers: list[ChoiceAnswer], systems: list[str]) -> str:
+    """Which rule read the answers: one sentence naming each parser (and its systems when they differ)."""
+    by_parser: dict[str, list[str]] = defaultdict(list)
+    for system in systems:
+        for parser in dict.fromkeys(a.parser for a in answers if a.system == system):
+            by_parser[parser].append(system)
+    if len(by_parser) == 1:
+        return f"Read by {rule_name(next(iter(by_parser)) or 'unknown')}."
+    parts = [f"{rule_name(p or 'unknown')} for {', '.join(s)}" for p, s in by_parser.items()]
+    return "Read by " + "; by ".join(parts) + " (different rules: the systems' numbers are not read alike)."
+
+
+def per_question(answers: list[ChoiceAnswer]) -> dict[str, float]:
+    """Each question's accuracy over its runs."""
+    hits: dict[str, list[float]] = defaultdict(list)
+    for a in answers:
+        hits[a.instance_id].append(1.0 if a.correct else 0.0)
+    return {k: sum(v) / len(v) for k, v in hits.items()}
+
+
+def _accuracy_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
+    categories = sorted({a.category for a in answers})
+    columns = [c or "(none)" for c in categories] + [ALL] if len(categories) > 1 else [ALL]
+    rows = []
+    for system in systems:
+        mine = [a for a in answers if a.system == system]
+        groups = [[a for a in mine if a.category == c] for c in categories] + [mine] if len(categories) > 1 else [mine]
+        cells = []
+        for group in groups:
+            e = bootstrap_mean_ci(list(per_question(group).values()), n_boot=n_boot, seed=seed)
+            cells.append(Cell(e.value, e.lo, e.hi))
+        rows.append(Row(system, cells))
+    return Table(
+        key=f"choice_accuracy_{scorer}", title=f"Multiple-choice accuracy per category ({scorer})",
+        caption=f"Correct / all questions per category (no option read = wrong), 95% bootstrap CI over questions. {read_by}",
+        row_header="System", columns=[Column(c, "rate", "higher") for c in columns], rows=rows,
+    )  # fmt: skip
+
+
+def _paired_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
+    acc = {s: per_question([a for a in answers if a.system == s]) for s in systems}
+    rows = []
+    for a, b in combinations(systems, 2):
+        shared = sorted(set(acc[a]) & set(acc[b]))
+        d = np.array([acc[b][k] - acc[a][k] for k in shared], dtype=float)
+        diff = bootstrap_mean_ci(d, n_boot=n_boot, seed=seed)
+        va = float(np.mean([acc[a][k] for k in shared])) if shared else None
+        vb = float(np.mean([acc[b][k] for k in shared])) if shared else None
+        p = sign_test_p(int((d > 1e-12).sum()), int((d < -1e-12).sum()))
+        rows.append(Row(f"{b} vs {a}", [Cell(len(shared)), Cell(va), Cell(vb), Cell(diff.value, diff.lo, diff.hi), Cell(p)]))
+    return Table(
+        key=f"choice_paired_{scorer}", title=f"Paired accuracy differences ({scorer})",
+        caption=("Second system minus first on the questions both were asked (accuracy averaged over runs per "
+                 f"question), 95% paired bootstrap CI over questions; exact sign test over questions that differ. {read_by}"),
+        row_header="Comparison",
+        columns=[Column("Questions", "count", None), Column("Accuracy (first)", "rate", None), Column("Accuracy (second)", "rate", None),
+                 Column("Difference", "signed", None), Column("Sign test p", "p", None)],
+        rows=rows,
+    )  # fmt: skip
+
+
+def _confusion_table(scorer: str, index: int, system: str, answers: list[ChoiceAnswer], read_by: str) -> Table:
+    labels = sorted({a.gold for a in answers} | {a.chosen for a in answers if a.chosen is not None})
+    counts: dict[tuple[str, str], int] = defaultdict(int)
+    for a in answers:
+        counts[(a.gold, a.chosen if a.chosen is not None else NO_OPTION)] += 1
+    golds = sorted({a.gold for a in answers})
+    return Table(
+        key=f"choice_confusion_{scorer}_{index + 1}", title=f"Chosen vs gold labels: {system} ({scorer})",
+        caption=f"Rows: the gold label; columns: the label chosen (every run's row counts once). {read_by}",
+        row_header="Gold",
+        columns=[Column(label, "count", None) for label in labels] + [Column(NO_OPTION, "count", None)],
+        rows=[Row(g, [Cell(counts[(g, c)]) for c in labels + [NO_OPTION]]) for g in golds], show_ci=False,
+    )  # fmt: skip

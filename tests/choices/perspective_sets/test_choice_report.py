@@ -1,0 +1,112 @@
+"""The report of multiple-choice runs: accuracy per category with CIs, paired differences,
+the confusion of chosen vs gold labels, each table naming the rule that read it; and no pixel
+table for a choice system beside a point run.
+
+The runs are real: the ViewSpatial fixture (gold A, B, A, C; categories Camera Relative
+Direction for questions 1 and 4, Scene Simulation for 2, Object View Orientation for 3)
+answered by the ``oracle``, by a model always answering "A" and by one naming no option.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from povagent.config.pipeline import load_pipeline
+from povagent.report.build import write_report
+from povagent.run.runner import run_pipeline
+
+CAMERA = "Camera perspective - Relative Direction"
+SCENE = "Person perspective - Scene Simulation Relative Direction"
+OBJECT = "Person perspective - Object View Orientation"
+
+
+@pytest.fixture
+def runs_folder(tmp_path, choice_pipeline):
+    """``runs_folder(*(label, backend, reply[, parser])) -> Path``: a folder of real choice runs on
+    the ViewSpatial fixture, each run labelled (read by the set's rule unless a parser is named)."""
+
+    def make(*systems: tuple) -> Path:
+        folder = tmp_path / "runs"
+        for label, backend, reply, *parser in systems:
+            path = choice_pipeline("viewspatial", backend=backend, reply=reply)
+            data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / label)} | ({"parser": parser[0]} if parser else {})
+            path.write_text(yaml.safe_dump(data, sort_keys=False))
+            run_pipeline(load_pipeline(path))
+        return folder
+
+    return make
+
+
+def _table(result, key: str):
+    return next(t for t in result.tables if t.key == key)
+
+
+def _values(table, label: str) -> dict[str, float | None]:
+    row = next(r for r in table.rows if r.label == label)
+    return {c.name: cell.value for c, cell in zip(table.columns, row.cells)}
+
+
+def test_the_accuracy_table_gives_each_systems_accuracy_per_category(runs_folder, tmp_path):
+    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    table = _table(result, "choice_accuracy_choice")
+    assert _values(table, "oracle") == {CAMERA: 1.0, OBJECT: 1.0, SCENE: 1.0, "All": 1.0}
+    # always "A": right on questions 1 and 3 (gold A), wrong on 2 (B) and 4 (C)
+    assert _values(table, "always-a") == {CAMERA: 0.5, OBJECT: 1.0, SCENE: 0.0, "All": 0.5}
+    overall = next(r for r in table.rows if r.label == "always-a").cells[-1]
+    assert overall.lo is not None and overall.hi is not None and overall.lo <= 0.5 <= overall.hi
+
+
+def test_a_question_answered_with_no_option_counts_as_wrong(runs_folder, tmp_path):
+    result = write_report(runs_folder(("always-a", "test-center", "A"), ("silent", "test-center", "no idea")), tmp_path / "report", gallery=False, n_boot=200)
+    assert _values(_table(result, "choice_accuracy_choice"), "silent") == {CAMERA: 0.0, OBJECT: 0.0, SCENE: 0.0, "All": 0.0}
+
+
+def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder, tmp_path):
+    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    # systems in the collection's order (run folders by name): always-a first
+    values = _values(_table(result, "choice_paired_choice"), "oracle vs always-a")
+    # right on the 2 of 4 questions always-a gets wrong: +1 twice, 0 twice; the sign test over those 2
+    assert values == {"Questions": 4, "Accuracy (first)": 0.5, "Accuracy (second)": 1.0, "Difference": pytest.approx(0.5), "Sign test p": 0.5}
+
+
+def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_apart(runs_folder, tmp_path):
+    result = write_report(runs_folder(("always-a", "test-center", "A"), ("silent", "test-center", "no idea")), tmp_path / "report", gallery=False, n_boot=200)
+    always_a = _table(result, "choice_confusion_choice_1")
+    assert "always-a" in always_a.title
+    assert {r.label: [c.value for c in r.cells] for r in always_a.rows} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
+    assert [c.name for c in always_a.columns] == ["A", "B", "C", "no option"]
+    silent = _table(result, "choice_confusion_choice_2")
+    assert {r.label: [c.value for c in r.cells] for r in silent.rows} == {"A": [0, 0, 0, 2], "B": [0, 0, 0, 1], "C": [0, 0, 0, 1]}
+
+
+def test_every_choice_table_names_the_rule_that_read_it(runs_folder, tmp_path):
+    from povagent.plugins import get_plugin_host
+
+    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    described = f"Read by `viewspatial` ({get_plugin_host().entry('parser', 'viewspatial').description})."
+    choice = [t for t in result.tables if t.key.startswith("choice_")]
+    assert len(choice) == 4 and all(described in t.caption for t in choice)
+    assert "ZJU-REAL" in described
+
+
+def test_systems_read_by_different_rules_have_each_rule_named(runs_folder, tmp_path):
+    result = write_report(runs_folder(("always-a", "test-center", "A", "vlmevalkit-exact"), ("oracle", "oracle", None)),
+                          tmp_path / "report", gallery=False, n_boot=200)  # fmt: skip
+    caption = _table(result, "choice_accuracy_choice").caption
+    assert "`vlmevalkit-exact` (" in caption and "for always-a" in caption
+    assert "`viewspatial` (" in caption and "for oracle" in caption
+
+
+def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_path, mini_root):
+    folder = runs_folder(("oracle", "oracle", None))
+    point = tmp_path / "point.yaml"
+    point.write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "oracle", "strategy": "basic", "scorers": ["official"],
+                                     "label": "pointer", "runs": 1, "concurrency": 2, "output": str(folder / "pointer")}))  # fmt: skip
+    run_pipeline(load_pipeline(point))
+    result = write_report(folder, tmp_path / "report", gallery=False, n_boot=200)
+    pixel = [t for t in result.tables if any(c.kind == "l2" for c in t.columns)]
+    assert pixel and all("pointer" in r.label and "oracle" not in r.label for t in pixel for r in t.rows)
+    assert [r.label for r in _table(result, "choice_accuracy_choice").rows] == ["oracle"]
