@@ -135,8 +135,9 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
-    tables += choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
-    tables += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
+    added = choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
+    added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
+    tables += added
     timings["statistics"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -198,6 +199,7 @@ def write_report(
     summary = analysis.as_dict() | {
         "gallery": None if gstats is None else gstats.__dict__,
         **({"active": active_numbers} if active_numbers else {}),
+        **({"tables": {t.key: t.numbers() for t in added}} if added else {}),
         "timings_s": {k: round(v, 3) for k, v in timings.items()},
     }
     write_inside(out, "summary.json", summary_json_text(summary))

@@ -61,6 +61,15 @@ class Table:
     rows: list[Row] = field(default_factory=list)
     show_ci: bool = True
 
+    def numbers(self) -> dict[str, object]:
+        """The table's numbers for a ``summary.json``: its title, columns and, per row, each
+        cell's value with its CI (``None`` where it has none)."""
+        return {
+            "title": self.title,
+            "columns": [c.name for c in self.columns],
+            "rows": {r.label: [{"value": c.value, "ci_lo": c.lo, "ci_hi": c.hi} for c in r.cells] for r in self.rows},
+        }
+
 
 def format_value(value: float | None, kind: Kind) -> str:
     """The displayed text of a number of a given kind (``--`` for missing)."""

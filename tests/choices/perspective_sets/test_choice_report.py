@@ -110,3 +110,15 @@ def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_pat
     pixel = [t for t in result.tables if any(c.kind == "l2" for c in t.columns)]
     assert pixel and all("pointer" in r.label and "oracle" not in r.label for t in pixel for r in t.rows)
     assert [r.label for r in _table(result, "choice_accuracy_choice").rows] == ["oracle"]
+
+
+def test_the_reports_summary_json_holds_the_choice_tables_numbers(runs_folder, tmp_path):
+    import json
+
+    result = write_report(runs_folder(("always-a", "test-center", "A"),), tmp_path / "report", gallery=False, n_boot=200)
+    summary = json.loads((result.out / "summary.json").read_text(encoding="utf-8"))
+    accuracy = summary["tables"]["choice_accuracy_choice"]
+    assert accuracy["columns"] == [CAMERA, OBJECT, SCENE, "All"]
+    assert [cell["value"] for cell in accuracy["rows"]["always-a"]] == [0.5, 1.0, 0.0, 0.5]
+    confusion = summary["tables"]["choice_confusion_choice_1"]["rows"]
+    assert {gold: [c["value"] for c in cells] for gold, cells in confusion.items()} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
