@@ -13,6 +13,7 @@ same machine load.
 from __future__ import annotations
 
 import io
+import json
 import os
 import subprocess
 import sys
@@ -40,12 +41,32 @@ def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     return into
 
 
-def cpu_of(code: str, pythonpath: Path | None, timeout: float = 3600) -> dict[str, float]:
-    """Run ``code`` in a fresh interpreter (``pythonpath`` first on the import path, or today's
-    code when ``None``); ``code`` prints ``key=value`` lines, returned as floats."""
+def env_with(pythonpath: Path | None) -> dict[str, str]:
+    """This process's environment with ``pythonpath`` first on the import path (``None``: as is)."""
     env = dict(os.environ)
     if pythonpath is not None:
         env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    return env
+
+
+def child_json(script: str, args: list[str], pythonpath: Path | None) -> dict:
+    """Run ``script`` with ``args`` in a fresh interpreter (``pythonpath`` first on the import
+    path) and return the JSON object its last output line holds: a measurement taken in a
+    process of its own, so its peak RSS is its own."""
+    done = subprocess.run([sys.executable, script, *args], check=True, capture_output=True, text=True, env=env_with(pythonpath))
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def peak_rss_mib() -> float:
+    """This process's own peak RSS (``VmHWM``), in MiB: ``ru_maxrss`` would count a parent's too."""
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
+
+
+def cpu_of(code: str, pythonpath: Path | None, timeout: float = 3600) -> dict[str, float]:
+    """Run ``code`` in a fresh interpreter (``pythonpath`` first on the import path, or today's
+    code when ``None``); ``code`` prints ``key=value`` lines, returned as floats."""
+    env = env_with(pythonpath)
     # run outside the repository: ``python -c`` puts the working folder first on the path
     out = subprocess.run(
         [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True, timeout=timeout

@@ -22,13 +22,11 @@ import os
 import resource
 import shutil
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, imported_from
+from baseline_code import baseline_checkout, child_json, imported_from, peak_rss_mib
 from bench_run_memory import RUNS, measure
 from results_file import figure, record
 
@@ -41,22 +39,13 @@ def one_report(run: Path, data: Path, out: Path) -> dict[str, Any]:
     write_report(run, out, dataset_path=data, gallery=False)
     usage1 = resource.getrusage(resource.RUSAGE_SELF)
     cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
-    with open("/proc/self/status") as f:
-        peak_kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
-    return {"peak_mib": peak_kb / 1024, "cpu_s": cpu}
+    return {"peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 
 def report_in_process(run: Path, data: Path, out: Path, pythonpath: Path | None) -> dict[str, Any]:
     """One report in a fresh process (``pythonpath``: the baseline's code first on the path)."""
     shutil.rmtree(out, ignore_errors=True)
-    env = dict(os.environ)
-    if pythonpath is not None:
-        env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    done = subprocess.run(
-        [sys.executable, __file__, "--child", str(run), "--data", str(data), "--out", str(out)],
-        check=True, capture_output=True, text=True, env=env,
-    )  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return child_json(__file__, ["--child", str(run), "--data", str(data), "--out", str(out)], pythonpath)
 
 
 def main() -> None:

@@ -24,13 +24,11 @@ import os
 import resource
 import shutil
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, imported_from
+from baseline_code import baseline_checkout, child_json, imported_from, peak_rss_mib
 from results_file import figure, record
 
 RUNS = 4  # each instance 4 times: 2,500 instances x 4 = 10,000 rows
@@ -63,23 +61,14 @@ def one_run(data: Path, out: Path, rows: int) -> dict[str, Any]:
     result = asyncio.run(PipelineRun(config, host=host).run())
     usage1 = resource.getrusage(resource.RUSAGE_SELF)
     cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
-    with open("/proc/self/status") as f:
-        peak_kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
-    return {"rows": result.summary.rows.done, "peak_mib": peak_kb / 1024, "cpu_s": cpu}
+    return {"rows": result.summary.rows.done, "peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 
 def measure(data: Path, workdir: Path, rows: int, label: str, pythonpath: Path | None) -> dict[str, Any]:
     """One run in a fresh process (``pythonpath``: the baseline's code first on the path)."""
     out = workdir / f"run_{label}_{rows}"
     shutil.rmtree(out, ignore_errors=True)
-    env = dict(os.environ)
-    if pythonpath is not None:
-        env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    done = subprocess.run(
-        [sys.executable, __file__, "--child", str(rows), "--data", str(data), "--out", str(out)],
-        check=True, capture_output=True, text=True, env=env,
-    )  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return child_json(__file__, ["--child", str(rows), "--data", str(data), "--out", str(out)], pythonpath)
 
 
 def main() -> None:
