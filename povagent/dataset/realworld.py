@@ -48,7 +48,7 @@ import tempfile
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -448,7 +448,7 @@ def success_breakdown(rows: Iterable[Mapping[str, Any]]) -> dict[str, Any]:
     rows = list(rows)
     with_answered = any("answered" in r for r in rows)
 
-    def cell(sub: list[Mapping[str, Any]]) -> dict[str, Any]:
+    def cell(sub: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
         hits = sum(1 for r in sub if r.get("success") is True)
         out = {"n_total": len(sub), "n_success": hits, "success_rate": hits / len(sub) if sub else None}
         if with_answered:

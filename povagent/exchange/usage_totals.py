@@ -8,8 +8,9 @@ expected) is the caller's word, given as ``unstated_tokens`` / ``unstated_cost``
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Iterable, Protocol
+from typing import Any, Iterable, Protocol
 
 
 class Spent(Protocol):
@@ -27,14 +28,23 @@ class Spent(Protocol):
 
 def _stated_tokens(values: Iterable[int | None]) -> int | None:
     """The sum of the counts that are stated; ``None`` when none is."""
-    known = [v for v in values if v is not None]
-    return sum(known) if known else None
+    return _stated_sum(values)
 
 
 def _stated_cost(values: Iterable[float | None]) -> float | None:
     """The sum of the costs that are stated (in their order); ``None`` when none is."""
-    known = [v for v in values if v is not None]
-    return sum(known) if known else None
+    return _stated_sum(values)
+
+
+def _stated_sum(values: Iterable[Any]) -> Any:
+    # summed as they come (as sum() of the stated ones would, from 0): nothing held a value
+    total: Any = 0
+    stated = False
+    for v in values:
+        if v is not None:
+            total += v
+            stated = True
+    return total if stated else None
 
 
 @dataclass(frozen=True)
@@ -52,7 +62,7 @@ class UsageTotals:
     ) -> UsageTotals:
         """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
         or ``unstated_cost`` (cost)."""
-        items = list(items)
+        items = items if isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
         prompt = _stated_tokens(i.prompt_tokens for i in items)
         completion = _stated_tokens(i.completion_tokens for i in items)
         cost = _stated_cost(i.cost_usd for i in items)

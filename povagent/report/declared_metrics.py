@@ -3,7 +3,7 @@
 A scorer declares its metrics (:mod:`povagent.scoring.metrics`); the runs' summaries record the
 declarations (:mod:`povagent.report.run_summaries`), and each observation carries its row's
 values. This estimates each metric per system through the one estimate ``summary.json`` uses
-(:func:`~povagent.scoring.metrics.metric_estimates`), whatever the scorer, so the report's
+(:func:`~povagent.scoring.metric_columns.metric_slices`), whatever the scorer, so the report's
 tables and plots of a third party's metrics need no code of its own.
 
 Pure numerics over observations: nothing here reads rows or writes files.
@@ -16,8 +16,8 @@ from typing import Any, Mapping
 from povagent.report.collect import Collection, Observation
 from povagent.report.run_summaries import declared_in_summary
 from povagent.scoring.bootstrap import Estimate
-from povagent.scoring.breakdown import slices
-from povagent.scoring.metrics import Metric, ValuedRow, metric_estimates
+from povagent.scoring.metric_columns import MetricColumns, metric_slices
+from povagent.scoring.metrics import Metric, ValuedRow
 
 
 def declared_metric_estimates(
@@ -26,7 +26,7 @@ def declared_metric_estimates(
     """The metrics the runs' scorers declared, and per scorer and system each one's mean (a
     rate: of true values) with its bootstrap CI, overall and per slice (condition, direction),
     from the values each row's observation carries, through the one estimate ``summary.json``
-    uses (:func:`~povagent.scoring.metrics.metric_estimates`)."""
+    uses (:func:`~povagent.scoring.metric_columns.metric_slices`)."""
     declared: dict[str, dict[str, Metric]] = {}
     for run in collection.runs:
         for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
@@ -35,13 +35,12 @@ def declared_metric_estimates(
     estimates: dict[str, dict[str, dict[str, Any]]] = {}
     for scorer, metrics in declared.items():
         for system in systems:
-            rows = [ValuedRow(o.condition, o.direction, o.metric_values) for o in by_system.get(system, []) if scorer in o.metric_values]
-
-            def cell(group: list[ValuedRow], scorer: str = scorer, metrics: tuple[Metric, ...] = tuple(metrics.values())) -> dict[str, Estimate]:
-                return metric_estimates(group, scorer, metrics, n_boot, seed)
-
-            if rows:
-                estimates.setdefault(scorer, {})[system] = slices(rows, cell)
+            rows = MetricColumns.of(
+                (ValuedRow(o.condition, o.direction, o.metric_values) for o in by_system.get(system, []) if scorer in o.metric_values),
+                {scorer: tuple(metrics.values())},
+            )
+            if len(rows):
+                estimates.setdefault(scorer, {})[system] = metric_slices(rows, scorer, n_boot, seed)
     return declared, estimates
 
 

@@ -3,7 +3,7 @@
 The fields of the scorers that declare a diagnosis (``Scorer.diagnosis``: the step an answer
 failed at and whether it fell nearer the egocentric or the mirrored reading; whether it
 satisfies the sentence's relation), read as the row stored them, never recomputed; the summary
-reads them the same way (:func:`povagent.run.summary.diagnosed_row`).
+reads them the same way (:func:`povagent.run.summary_fields.diagnosed_row`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def diagnosis_of(row: ResultRow, error_scorer: str | None) -> dict[str, Any]:
     """An answered row's diagnosing scorers' fields (``Scorer.diagnosis``) as :class:`Observation` fields
     (read as stored, never recomputed; ``{}`` when neither scored it); ``error_scorer`` is the
     run's ``normalized_l2`` scorer."""
-    from povagent.run.summary import diagnosed_row
+    from povagent.run.summary_fields import diagnosed_row
 
     diagnosed = diagnosed_row(row, error_scorer)
     if diagnosed is None:

@@ -36,7 +36,7 @@ def _repaired(run) -> bool:
 
 def official_beside_table(collection: Collection) -> Table | None:
     """Per lenient system and condition: mean L2 and response rate, repaired and official."""
-    from povagent.run.summary import scored_row
+    from povagent.run.summary_fields import scored_row
     from povagent.scoring.breakdown import breakdown
 
     by_system: dict[str, list] = {}

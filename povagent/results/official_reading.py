@@ -21,8 +21,9 @@ this module makes and applies it. It never calls a model, reads a run folder or 
 
 from __future__ import annotations
 
+import copy
 import math
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.results.plugin_errors import parse_or_unparseable
@@ -120,14 +121,19 @@ def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:
     return out, warnings
 
 
-def official_parse_breakdown(scored: Sequence[Any], parser: str, without_reading: int) -> dict[str, Any]:
+def official_parse_breakdown(
+    scored: Sequence[Any], parser: str, without_reading: int, computed: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
     """The ``official_parse`` section of a summary: the official reading's breakdown (one
     :class:`~povagent.scoring.breakdown.ScoredRow` per row that has a reading or no answer at
     all, aggregated as the main breakdown is), the parser that gave it, and how many rows with
-    an answer lack a reading: those are left out, so the section is then incomplete and says so."""
+    an answer lack a reading: those are left out, so the section is then incomplete and says so.
+    ``computed``: the breakdown of ``scored`` when it is already at hand (every row read as
+    parsed: the main breakdown), copied instead of computed again."""
     from povagent.scoring.breakdown import breakdown
 
-    return {"parser": parser, "rows_without_reading": without_reading, **breakdown(scored)}
+    numbers = copy.deepcopy(dict(computed)) if computed is not None else breakdown(scored)
+    return {"parser": parser, "rows_without_reading": without_reading, **numbers}
 
 
 def nan_rows(rows: Iterable[Any]) -> list[str]:

@@ -9,9 +9,9 @@ The runner and dry runs (``sweep --dry-run``) both call :func:`plan_keys`, so th
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance, row_key
@@ -19,8 +19,6 @@ from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import ConfigError
 from povagent.results.rows import RowStatus, iter_rows
 from povagent.run.components import pipeline_hash
-from povagent.run.summary import SummaryDigest, summary_digest
-from povagent.scoring.metrics import Declared
 
 #: The results file of a run folder.
 RESULTS = "results.jsonl"
@@ -69,9 +67,6 @@ class KeyPlan:
     #: keys whose last row is ``infra_error`` (pending again unless they are kept)
     failed: set[str]
     pending: list[tuple[Instance, int]]
-    #: the done keys' rows as a summary keeps them (:func:`~povagent.run.summary.summary_digest`;
-    #: read once here, so the summary never re-reads the file)
-    digests: dict[str, SummaryDigest] = field(default_factory=dict)
 
     @property
     def n_total(self) -> int:
@@ -85,23 +80,20 @@ def plan_keys(
     *,
     config_hash: str | None = None,
     retry_failed: bool = True,
-    declared: Declared | None = None,
-    protocols: Mapping[str, str] | None = None,
 ) -> KeyPlan:
     """Read ``config.output``'s results once and plan the keys of ``instances`` x runs.
 
     A row of another pipeline (a different ``config_hash``) is refused with a clear message:
     appending to it would mix two pipelines in one file. With ``retry_failed`` (the default) a
     key whose row is ``infra_error`` is pending again (its old row is dropped when the run
-    starts); parse errors are answers and stay done. Each done key's digest holds its values of
-    the ``declared`` metrics.
+    starts); parse errors are answers and stay done. Nothing of a done row is kept but its key:
+    the summary reads the rows back at the run's end.
     """
     runs = config.run_indices
     wanted = {row_key(i.id, r) for i in instances for r in runs}
     run_dir = Path(config.output)
     done: set[str] = set()
     failed: set[str] = set()
-    digests: dict[str, SummaryDigest] = {}
     for row in iter_rows(run_dir / RESULTS):
         if row.config_hash and config_hash is None:  # made once, and only for a folder with rows
             config_hash = pipeline_hash(config)
@@ -113,17 +105,14 @@ def plan_keys(
         if row.key not in wanted:
             continue
         done.add(row.key)
-        digests[row.key] = summary_digest(row, declared, protocols)  # the last row of a key wins
         if row.status is RowStatus.INFRA_ERROR:
             failed.add(row.key)
         else:
             failed.discard(row.key)
     if retry_failed:
         done -= failed
-        for key in failed:
-            digests.pop(key, None)
     pending = house_major([(i, r) for i in instances for r in runs if row_key(i.id, r) not in done])
-    return KeyPlan(wanted=wanted, done=done, failed=failed, pending=pending, digests=digests)
+    return KeyPlan(wanted=wanted, done=done, failed=failed, pending=pending)
 
 
 def prepare_dataset(config: PipelineConfig) -> EvaluationSet:

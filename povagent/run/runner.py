@@ -334,7 +334,7 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         pending, wanted, n_pending = plan.pending, plan.wanted, len(plan.pending)
         self._wanted = wanted  # the summary's keys: made once
-        del plan  # a resumed run's digests of its done keys: the summary reads the file back instead
+        del plan  # its done keys: the summary reads the rows back instead
         write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend

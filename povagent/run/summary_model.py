@@ -237,7 +237,7 @@ class MetricDeclaration(BaseModel):
 
 
 class ScorerMetrics(BaseModel):
-    """One scorer's declared metrics, per slice (:func:`povagent.scoring.metrics.metrics_breakdown`)."""
+    """One scorer's declared metrics, per slice (:func:`povagent.scoring.metric_columns.metrics_breakdown`)."""
 
     model_config = ConfigDict(extra="forbid")
 

@@ -20,10 +20,12 @@ Pure arithmetic: nothing here reads files or knows about tables.
 from __future__ import annotations
 
 import math
+from array import array
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from operator import attrgetter
-from typing import Any, Callable, Iterable, TypeVar
+from typing import Any, Callable, Iterable, Iterator, TypeVar, overload
 
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 
@@ -63,6 +65,48 @@ class ScoredRow:
     parse_error: bool = False
 
 
+class Picked(Sequence[T]):
+    """Some rows of a sequence, by position, each read when it is reached: a slice of a
+    breakdown holds its rows' positions, not the rows, so rows kept in columns (a run summary's,
+    :mod:`povagent.run.summary_table`) are built one at a time, and a list's rows are its own."""
+
+    __slots__ = ("_rows", "_at")
+
+    def __init__(self, rows: Sequence[T], at: array) -> None:
+        if isinstance(rows, Picked):  # a slice of a slice: positions in the rows underneath
+            under: Picked[T] = rows
+            at, rows = array("q", (under._at[i] for i in at)), under._rows
+        self._rows: Sequence[T] = rows
+        self._at: array = at
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+    @overload
+    def __getitem__(self, i: int) -> T: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> Sequence[T]: ...
+
+    def __getitem__(self, i: int | slice) -> T | Sequence[T]:
+        if isinstance(i, slice):
+            return Picked(self._rows, self._at[i])
+        return self._rows[self._at[i]]
+
+    def __iter__(self) -> Iterator[T]:
+        rows = self._rows
+        for i in self._at:
+            yield rows[i]
+
+
+def _positions() -> array:
+    return array("q")
+
+
+def _values() -> array:
+    return array("d")
+
+
 def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     """One cell of one run (or of pooled rows): ``n`` (answered), ``n_total``,
     ``response_rate``, ``mean_l2``, ``std_l2`` (population std), ``pct_in_frame`` (percent of
@@ -73,11 +117,12 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
     the official mean is.
     """
-    # one pass over the rows; each mean is still ``sum()`` of its values in row order
-    errs: list[float] = []
-    strict: list[float] = []
-    abs_x: list[float] = []
-    abs_y: list[float] = []
+    # one pass over the rows; each mean is still ``sum()`` of its values in row order, the
+    # values held unboxed (8 bytes each: a cell of every row of a run holds them all)
+    errs = _values()
+    strict = _values()
+    abs_x = _values()
+    abs_y = _values()
     total = in_frame = parse_errors = 0
     for r in rows:
         total += 1
@@ -123,7 +168,7 @@ def _ordered(labels: Iterable[str], canonical: Iterable[str]) -> list[str]:
 
 def slices(
     rows: Iterable[T],
-    cell: Callable[[list[T]], C],
+    cell: Callable[[Sequence[T]], C],
     condition: Callable[[T], str | None] = attrgetter("condition"),
     direction: Callable[[T], str | None] = attrgetter("direction"),
     category: Callable[[T], str | None] | None = None,
@@ -137,34 +182,38 @@ def slices(
     other label, sorted; only labels with rows appear. With ``category`` given and some row
     in a category (a multiple-choice question's type), ``per_category`` breaks the rows down
     by it too, labels sorted.
+
+    A slice holds its rows' positions; ``cell`` gets it as a :class:`Picked` view of ``rows``
+    (``overall``: ``rows`` itself, a sequence as handed in), so slicing keeps nothing per row
+    but a position.
     """
-    rows = list(rows)
-    by_c: dict[str, list[T]] = defaultdict(list)
-    by_d: dict[str, list[T]] = defaultdict(list)
-    by_cd: dict[tuple[str, str], list[T]] = defaultdict(list)
-    by_category: dict[str, list[T]] = defaultdict(list)
-    for r in rows:
+    rows = rows if isinstance(rows, Sequence) else list(rows)
+    by_c: dict[str, array] = defaultdict(_positions)
+    by_d: dict[str, array] = defaultdict(_positions)
+    by_cd: dict[tuple[str, str], array] = defaultdict(_positions)
+    by_category: dict[str, array] = defaultdict(_positions)
+    for i, r in enumerate(rows):
         c, d = condition(r), direction(r)
         if c:
-            by_c[c].append(r)
+            by_c[c].append(i)
         if d:
-            by_d[d].append(r)
+            by_d[d].append(i)
         if c and d:
-            by_cd[(c, d)].append(r)
+            by_cd[(c, d)].append(i)
         if category is not None and (k := category(r)):
-            by_category[k].append(r)
+            by_category[k].append(i)
     c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
     d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
     out = {
         "overall": cell(rows),
-        "per_condition": {c: cell(by_c[c]) for c in c_order},
-        "per_direction": {d: cell(by_d[d]) for d in d_order},
+        "per_condition": {c: cell(Picked(rows, by_c[c])) for c in c_order},
+        "per_direction": {d: cell(Picked(rows, by_d[d])) for d in d_order},
         "per_condition_direction": {
-            f"{c}/{d}": cell(by_cd[(c, d)]) for c in c_order for d in d_order if (c, d) in by_cd
+            f"{c}/{d}": cell(Picked(rows, by_cd[(c, d)])) for c in c_order for d in d_order if (c, d) in by_cd
         },
     }
     if by_category:  # only a run whose rows have categories says so: a POVBench summary is unchanged
-        out["per_category"] = {k: cell(by_category[k]) for k in sorted(by_category)}
+        out["per_category"] = {k: cell(Picked(rows, by_category[k])) for k in sorted(by_category)}
     return out
 
 
@@ -208,10 +257,10 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     ``n_parse_error`` (top level, as in the official summary) counts rows with a parse error,
     over every run.
     """
-    rows = list(rows)
-    by_run: dict[int, list[ScoredRow]] = defaultdict(list)
-    for r in rows:
-        by_run[r.run].append(r)
+    rows = rows if isinstance(rows, Sequence) else list(rows)
+    by_run: dict[int, array] = defaultdict(_positions)
+    for i, r in enumerate(rows):
+        by_run[r.run].append(i)
     runs = sorted(by_run)
     if len(runs) <= 1:
         single = pooled_breakdown(rows)
@@ -219,7 +268,7 @@ def breakdown(rows: Iterable[ScoredRow]) -> dict[str, Any]:
         single["runs"] = runs
         single["n_parse_error"] = single["overall"]["n_parse_error"]
         return single
-    per_run = {run: pooled_breakdown(by_run[run]) for run in runs}
+    per_run = {run: pooled_breakdown(Picked(rows, by_run[run])) for run in runs}
     pooled = pooled_breakdown(rows)
     empty = summarize([])
     out: dict[str, Any] = {"overall": mean_over_runs([b["overall"] for b in per_run.values()])}

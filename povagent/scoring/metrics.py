@@ -6,7 +6,8 @@ rows or over every row), how values aggregate (``mean``, or ``rate`` of true val
 a table shows (label, caption). The core never names a scorer: ``summary.json``'s ``metrics``
 section, the console and the report render whatever was declared, per slice (overall, per
 condition, per direction, per condition x direction: :func:`~povagent.scoring.breakdown.slices`),
-each with its bootstrap CI (:func:`~povagent.scoring.bootstrap.bootstrap_mean_ci`).
+each with its bootstrap CI (:func:`~povagent.scoring.bootstrap.bootstrap_mean_ci`), estimated
+over rows' values kept in columns (:mod:`povagent.scoring.metric_columns`).
 
 Pure: nothing here reads files or knows a plugin; a row is anything with ``status``, ``scores``,
 ``condition`` and ``direction``.
@@ -16,13 +17,8 @@ from __future__ import annotations
 
 import math
 import re
-from collections import defaultdict
 from dataclasses import dataclass, field
-from operator import attrgetter
-from typing import Any, Iterable, Iterator, Literal, Mapping, Sequence
-
-from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate, bootstrap_mean_ci
-from povagent.scoring.breakdown import slices
+from typing import Any, Iterator, Literal, Mapping, Sequence
 
 #: Which way is better.
 Better = Literal["lower", "higher"]
@@ -208,48 +204,3 @@ def valued_row(row: Any, declared: Declared) -> ValuedRow:
     condition, direction = getattr(row, "condition", None), getattr(row, "direction", None)
     return ValuedRow(None if condition is None else str(condition), None if direction is None else str(direction),
                      row_metric_values(row, declared), row_category(row), row_metric_groups(row, declared))  # fmt: skip
-
-
-def grouped_values(rows: Iterable[ValuedRow], scorer: str, metric: Metric) -> list[float]:
-    """One value per group of ``rows`` (1.0 when every row of the group hit): what a grouped
-    metric averages. A row with no group counts as a group of its own."""
-    by_group: dict[Any, list[float]] = defaultdict(list)
-    for n, row in enumerate(rows):
-        value = row.values.get(scorer, {}).get(metric.name)
-        if value is not None:
-            by_group[row.groups.get(scorer, {}).get(metric.name, ("row", n))].append(value)
-    return [1.0 if all(v == 1.0 for v in values) else 0.0 for values in by_group.values()]
-
-
-def metric_estimates(
-    group: Iterable[ValuedRow], scorer: str, metrics: Sequence[Metric], n_boot: int = DEFAULT_BOOT, seed: int = 0
-) -> dict[str, Estimate]:
-    """Each of ``scorer``'s ``metrics`` over the rows of ``group``: the mean of the row values
-    that count (a rate: of true values) with its 95% bootstrap CI and the number of rows counted.
-    ``summary.json`` and the report both estimate a declared metric here."""
-    rows = list(group)
-    return {m.name: bootstrap_mean_ci(metric_values(rows, scorer, m), n_boot=n_boot, seed=seed) for m in metrics}
-
-
-def metric_values(rows: Sequence[ValuedRow], scorer: str, metric: Metric) -> list[float]:
-    """The values ``metric`` averages over ``rows``: one per row that counts, or one per group
-    for a grouped metric (:func:`grouped_values`)."""
-    if metric.group is not None:
-        return grouped_values(rows, scorer, metric)
-    return [v for row in rows if (v := row.values.get(scorer, {}).get(metric.name)) is not None]
-
-
-def metrics_breakdown(valued: Iterable[ValuedRow], declared: Declared, n_boot: int = DEFAULT_BOOT) -> dict[str, dict[str, Any]]:
-    """``summary.json``'s ``metrics`` section: per scorer, what it declared and, per slice, each
-    metric's value with its 95% bootstrap CI and the number of rows it counts."""
-    rows = list(valued)
-    out: dict[str, dict[str, Any]] = {}
-    for scorer, metrics in declared.items():
-        if not metrics:
-            continue
-
-        def cell(group: list[ValuedRow], scorer: str = scorer, metrics: Sequence[Metric] = metrics) -> dict[str, Any]:
-            return {name: e.as_dict() for name, e in metric_estimates(group, scorer, metrics, n_boot).items()}
-
-        out[scorer] = {"declared": {m.name: m.describe() for m in metrics}, **slices(rows, cell, category=attrgetter("category"))}
-    return out

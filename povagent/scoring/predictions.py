@@ -39,7 +39,8 @@ from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.results.official_format import OfficialRun, RawPrediction
 from povagent.scoring.breakdown import ScoredRow, breakdown
-from povagent.scoring.metrics import Declared, metrics_breakdown, valued_row
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import Declared, valued_row
 from povagent.scoring.official import (
     MAX_L2,
     UNANSWERED,

@@ -6,7 +6,7 @@ from __future__ import annotations
 from povagent import hookimpl
 from povagent.interfaces import Scorer
 from povagent.results.rows import ResultRow, RowStatus
-from povagent.run.summary import diagnosed_row
+from povagent.run.summary_fields import diagnosed_row
 from povagent.scoring.protocols import diagnosing_scorers
 
 

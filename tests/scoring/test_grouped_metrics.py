@@ -8,7 +8,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from povagent.scoring.metrics import Metric, metrics_breakdown, valued_row
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import Metric, valued_row
 
 ALL_RIGHT = Metric("all_right", "higher", "rate", "correct", "All copies right", "groups all right", over="all", group=r"-flip")
 DECLARED = {"mine": (ALL_RIGHT,)}

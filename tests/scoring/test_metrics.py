@@ -7,7 +7,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from povagent.scoring.metrics import Metric, metrics_breakdown, row_metric_values, valued_row
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import Metric, row_metric_values, valued_row
 
 ERROR = Metric("error", "lower", "mean", "err", "Error", "mean error over answered rows")
 HITS = Metric("hit_rate", "higher", "rate", "hit", "Hit rate", "hits over every row", over="all")

@@ -1,0 +1,108 @@
+"""One field of many rows, held without an object a row: what a run summary keeps per key.
+
+A :class:`Column` stores each value in a byte: ``None``, ``True``, ``False``, a small whole
+number or a repeated text (a label: a condition, a status, a parser's name) is the byte; a
+float or a larger whole number adds a double (8 bytes more), and a column holding none has no
+doubles at all. Any other value (a rare third-party field) is kept aside as the object it is.
+Reading a position gives back an equal value of the same type (the same object for texts), so
+numbers summed from a column are the numbers summed from the rows.
+
+Pure storage: it knows no row and no summary (:mod:`povagent.run.summary_table` fills it).
+"""
+
+from __future__ import annotations
+
+import sys
+from array import array
+from typing import Any
+
+import numpy as np
+
+_NONE, _FLOAT, _TRUE, _FALSE, _INT, _TEXT, _ASIDE = range(7)
+#: Kinds from here on are a small whole number (kind - _SMALL) held in the kind byte alone ...
+_SMALL = 8
+#: ... and from here on a text's code (kind - _CODE), for a column's first 128 texts.
+_CODE = 128
+#: Whole numbers a double holds exactly.
+_EXACT = 2**53
+
+
+class Column:
+    """The values of one field, a row each, appended in order (see the module's docstring)."""
+
+    __slots__ = ("_numbers", "_kinds", "_texts", "_text_code", "_aside")
+
+    def __init__(self) -> None:
+        # made at the first value a byte cannot hold: a column of flags or labels has none
+        self._numbers: array | None = None
+        self._kinds = bytearray()
+        self._texts: list[str] = []
+        self._text_code: dict[str, int] = {}
+        self._aside: dict[int, Any] = {}
+
+    def __len__(self) -> int:
+        return len(self._kinds)
+
+    def append(self, value: Any) -> None:
+        """Add ``value`` as the next row's."""
+        kind, number = _ASIDE, None
+        t = type(value)
+        if t is float:
+            kind, number = _FLOAT, value
+        elif value is None:
+            kind = _NONE
+        elif value is True:
+            kind = _TRUE
+        elif value is False:
+            kind = _FALSE
+        elif t is int and 0 <= value < _CODE - _SMALL:
+            kind = _SMALL + value
+        elif t is int and -_EXACT <= value <= _EXACT:
+            kind, number = _INT, float(value)
+        elif t is str:
+            code = self._text_code.get(value)
+            if code is None:
+                code = self._text_code[value] = len(self._texts)
+                self._texts.append(sys.intern(value))
+            kind, number = (_CODE + code, None) if code < 256 - _CODE else (_TEXT, float(code))
+        if kind == _ASIDE:
+            self._aside[len(self._kinds)] = value
+        if number is not None and self._numbers is None:
+            self._numbers = array("d", bytes(8 * len(self._kinds)))
+        if self._numbers is not None:
+            self._numbers.append(0.0 if number is None else number)
+        self._kinds.append(kind)
+
+    def __getitem__(self, i: int) -> Any:
+        kind = self._kinds[i]
+        if kind >= _CODE:
+            return self._texts[kind - _CODE]
+        if kind >= _SMALL:
+            return kind - _SMALL
+        if kind == _FLOAT:
+            return self._numbers[i]  # type: ignore[index]  # a float's column has its numbers
+        if kind == _NONE:
+            return None
+        if kind == _TRUE:
+            return True
+        if kind == _FALSE:
+            return False
+        if kind == _INT:
+            return int(self._numbers[i])  # type: ignore[index]
+        if kind == _TEXT:
+            return self._texts[int(self._numbers[i])]  # type: ignore[index]
+        return self._aside[i]
+
+    def taken(self, positions: np.ndarray, new_position: np.ndarray) -> Column:
+        """The rows at ``positions`` (in that order) as a column of their own; ``new_position``
+        maps each old position to its new one (-1: not taken)."""
+        out = Column.__new__(Column)
+        out._numbers = None if self._numbers is None else array("d", np.frombuffer(self._numbers, dtype=np.float64)[positions].tobytes())
+        out._kinds = bytearray(np.frombuffer(bytes(self._kinds), dtype=np.uint8)[positions].tobytes())
+        out._texts, out._text_code = self._texts, self._text_code
+        out._aside = {int(new_position[old]): v for old, v in self._aside.items() if new_position[old] >= 0}
+        return out
+
+    def nbytes(self) -> int:
+        """Bytes the column holds (its arrays; texts and kept-aside values not counted)."""
+        return len(self._kinds) + (0 if self._numbers is None else 8 * len(self._numbers))

@@ -1,0 +1,78 @@
+"""What a summary reads of one row: its score by the run's ``normalized_l2`` scorer
+(:func:`scored_row`), the fields of the scorers that follow no protocol (:func:`plugin_scores`)
+and its diagnosis (:func:`diagnosed_row`). A run summary keeps these
+(:mod:`povagent.run.summary_table`), and the report reads rows the same way.
+
+Pure: a row in, values out.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any, Mapping
+
+from povagent.results.rows import ResultRow, RowStatus
+from povagent.scoring.breakdown import ScoredRow
+from povagent.scoring.diagnostics_breakdown import DiagnosedRow
+from povagent.scoring.protocols import diagnosing_scorers
+
+
+def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
+    """The fields a summary needs, from the row's score by ``scorer``, the run's ``normalized_l2``
+    scorer (non-answers count as such; ``None``: the run has none, and no row is answered)."""
+    from povagent.scoring.evaluations import official_parse_error
+
+    score = (row.scores.get(scorer) if scorer is not None else None) or {}
+    answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
+    return ScoredRow(
+        condition=sys.intern(row.condition),  # one string per label, not one per row a summary keeps
+        direction=sys.intern(row.direction),
+        answered=answered,
+        l2=score.get("l2") if answered else None,
+        gt_in_frame=score.get("gt_in_frame") if answered else None,
+        l2_strict=score.get("l2_strict") if answered else None,
+        run=row.run,
+        error_x=score.get("error_x") if answered else None,
+        error_y=score.get("error_y") if answered else None,
+        parse_error=official_parse_error(row) is not None,
+    )
+
+
+def plugin_scores(scores: Mapping[str, Any], protocols: Mapping[str, str]) -> tuple[tuple[str, tuple[tuple[str, float], ...]], ...]:
+    """For every scorer of a row that follows no protocol (``protocols``: ``{scorer: protocol}``;
+    a protocol's fields have sections of their own), its true/false and number fields (text and
+    lists left out)."""
+    return tuple(
+        (name, tuple((k, v) for k, v in fields.items() if isinstance(v, (bool, int, float))))
+        for name, fields in sorted(scores.items())
+        if name not in protocols and isinstance(fields, Mapping)
+    )
+
+
+def diagnosed_row(row: ResultRow, error_scorer: str | None) -> DiagnosedRow | None:
+    """The fields of the scorers diagnosing an answered row (``failure_step`` and
+    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`), with its error by
+    ``error_scorer`` (the run's ``normalized_l2`` scorer), or ``None`` when neither scored it."""
+    if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
+        return None
+    by = diagnosing_scorers()
+    diagnose = row.scores.get(by.get("failure_step", ""))
+    relation = row.scores.get(by.get("relation_hit", ""))
+    diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None
+    relation = relation if isinstance(relation, Mapping) and relation.get("answered") is True else None
+    if diagnose is None and relation is None:
+        return None
+    official = (row.scores.get(error_scorer) if error_scorer is not None else None) or {}
+    l2 = official.get("l2") if isinstance(official, Mapping) else None
+    step = diagnose.get("step") if diagnose is not None else None
+    vote = diagnose.get("nearer_egocentric") if diagnose is not None else None
+    hit = relation.get("success") if relation is not None else None
+    return DiagnosedRow(
+        instance_id=row.instance_id,
+        condition=str(row.condition),
+        direction=str(row.direction),
+        l2=float(l2) if isinstance(l2, (int, float)) and not isinstance(l2, bool) else None,
+        step=step if isinstance(step, str) else None,
+        nearer_egocentric=vote if isinstance(vote, bool) else None,
+        relation=hit if isinstance(hit, bool) else None,
+    )

@@ -1,0 +1,287 @@
+"""What a summary reads of a run's rows, one row per key, kept in columns.
+
+:class:`SummaryTable` takes rows one at a time (``results.jsonl`` read back, or rows in hand)
+and keeps of each only the values ``summary.json`` is computed from, each field a
+:class:`~povagent.run.row_columns.Column` (9 bytes a value) and the declared metrics'
+values a :class:`~povagent.scoring.metric_columns.MetricColumns`: about 150 bytes a row
+whatever its text, where an object a row held several times that. Values that only some rows
+have (a plugin scorer's fields, a diagnosis, a NaN coordinate's key) are kept by position for
+those rows.
+
+When a key repeats, its last row counts, in the place of the key's first row (the order a
+summary's sums run in). Keys are told apart by a 128-bit BLAKE2b digest of each, so the table
+keeps 16 bytes a row instead of the key's text.
+
+Its rows are read back as the objects the breakdowns take (:class:`ScoredRow`, and the like),
+built one at a time as a breakdown reaches them (:class:`~povagent.scoring.breakdown.Picked`).
+Nothing here reads a file or writes one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from array import array
+from collections import Counter, defaultdict
+from collections.abc import Container, Iterator, Mapping, Sequence
+from typing import Any, overload
+
+import numpy as np
+
+from povagent.exchange.usage_totals import UsageTotals
+from povagent.results.official_reading import nan_rows, officially_read
+from povagent.results.rows import ResultRow, RowStatus
+from povagent.run.row_columns import Column
+from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
+from povagent.scoring.breakdown import Picked, ScoredRow
+from povagent.scoring.diagnostics_breakdown import DiagnosedRow
+from povagent.scoring.metric_columns import MetricColumns
+from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
+from povagent.scoring.protocols import following, registered_protocols
+
+#: A :class:`ScoredRow`'s fields, in its order: one column each.
+_SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error")
+#: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
+_NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
+_INFRA = RowStatus.INFRA_ERROR.value
+
+
+class SummaryTable:
+    """A run's rows as its summary reads them (see the module's docstring).
+
+    ``declared``: the scorers' metrics whose values are kept; ``protocols``: which scorer
+    follows which protocol (``{scorer: protocol}``; default: as the registered scorers
+    declare); ``keys``: the run's selection (a row of another key is left out). Add rows with
+    :meth:`add`, then :meth:`close` once before reading.
+    """
+
+    def __init__(self, declared: Declared | None = None, protocols: Mapping[str, str] | None = None, keys: Container[str] | None = None) -> None:
+        self.declared = declared or {}
+        self._protocols = registered_protocols() if protocols is None else protocols
+        self._keys = keys
+        self._digests = bytearray()
+        self._fields = {name: Column() for name in (*_SCORED, "status", "official_parser", "reading", "success",
+                                                    "success_answered", "prompt_tokens", "completion_tokens", "cost_usd", "retries")}  # fmt: skip
+        self.metrics = MetricColumns(self.declared)
+        #: values only some rows have, by position
+        self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}
+        self._closed = False
+
+    def add(self, row: ResultRow) -> None:
+        """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
+        if self._closed:
+            raise RuntimeError("SummaryTable.add after close()")
+        if self._keys is not None and row.key not in self._keys:
+            return
+        at = len(self._fields["run"])
+        protocols = self._protocols
+        error_scorer = following(protocols, "normalized_l2", row.scores)
+        hit_scorer = following(protocols, "marked_hit", row.scores)
+        reading = row.official_reading
+        official = officially_read(row)
+        scored = scored_row(row, error_scorer)
+        columns = self._fields
+        for name in _SCORED:
+            columns[name].append(getattr(scored, name))
+        columns["status"].append(RowStatus(row.status).value)
+        columns["official_parser"].append(None if reading is None else reading.parser)
+        state = _NO_READING
+        if reading is not None or RowStatus(row.status) is RowStatus.INFRA_ERROR:
+            officially = scored_row(official, error_scorer)
+            state = _AS_SCORED if officially == scored else _OTHERWISE
+            if state == _OTHERWISE:
+                self._aside["officially_scored"][at] = officially
+        columns["reading"].append(state)
+        success = row.scores.get(hit_scorer) if hit_scorer is not None else None
+        # "success_answered" is None where no marked_hit scorer gave a verdict
+        columns["success"].append(None if success is None else (success or {}).get("success"))
+        columns["success_answered"].append(None if success is None else (success or {}).get("answered") is True)
+        for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"):
+            columns[name].append(getattr(row, name))
+        if extra := plugin_scores(row.scores, protocols):
+            self._aside["plugin_scores"][at] = extra
+        if (diagnosed := diagnosed_row(row, error_scorer)) is not None:
+            self._aside["diagnosed"][at] = diagnosed
+        if nan_rows([official]):
+            self._aside["nan_key"][at] = row.key
+        if self.metrics.declared:
+            self.metrics.append(MetricValues.of(row, self.declared).flat, row.condition, row.direction,
+                                row_category(row), row_metric_groups(row, self.declared))  # fmt: skip
+        self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
+
+    def close(self) -> SummaryTable:
+        """Keep each key's last row, in the place of its first (once; rows in key order after)."""
+        if self._closed:
+            return self
+        self._closed = True
+        n = len(self._fields["run"])
+        if n == 0:
+            return self
+        digests = np.frombuffer(bytes(self._digests), dtype="<u8").reshape(n, 2)
+        order = np.lexsort((digests[:, 1], digests[:, 0]))  # stable: a key's rows stay in file order
+        ordered = digests[order]
+        first_of_key = np.ones(n, dtype=bool)
+        first_of_key[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+        last_of_key = np.ones(n, dtype=bool)
+        last_of_key[:-1] = first_of_key[1:]
+        take = order[last_of_key][np.argsort(order[first_of_key], kind="stable")]
+        self._digests = bytearray()
+        if len(take) == n and bool((take == np.arange(n)).all()):
+            return self  # no key repeats (a run's usual file): the rows are already one per key
+        new_position = np.full(n, -1, dtype=np.int64)
+        new_position[take] = np.arange(len(take))
+        self._fields = {name: column.taken(take, new_position) for name, column in self._fields.items()}
+        self._aside = {
+            name: {int(new_position[old]): v for old, v in values.items() if new_position[old] >= 0} for name, values in self._aside.items()
+        }
+        if self.metrics.declared:
+            self.metrics = self.metrics.taken(take)
+        return self
+
+    def __len__(self) -> int:
+        return len(self._fields["run"])
+
+    # -- read back (after close) ------------------------------------------------------------
+    @property
+    def scored(self) -> Sequence[ScoredRow]:
+        """Each row as its ``normalized_l2`` score gives it (see :func:`~povagent.run.summary_fields.scored_row`)."""
+        self._check_closed()
+        return _ScoredRows(self)
+
+    def officially_scored(self) -> Sequence[ScoredRow]:
+        """The rows that have an official reading (and failed requests), as the reading scores them."""
+        reading = self._fields["reading"]
+        return Picked(_OfficialRows(self), array("q", (i for i in range(len(self)) if reading[i] != _NO_READING)))
+
+    def read_as_scored(self) -> bool:
+        """Whether every row has an official reading that scores it as the row itself is scored
+        (the official breakdown is then the main one)."""
+        reading = self._fields["reading"]
+        return all(reading[i] == _AS_SCORED for i in range(len(self)))
+
+    def official_parser(self) -> str | None:
+        """The parser whose official reading the first row with one records."""
+        parsers = self._fields["official_parser"]
+        return next((p for i in range(len(self)) if (p := parsers[i]) is not None), None)
+
+    def unread(self) -> int:
+        """Rows with an answer but no official reading (written before readings were recorded)."""
+        parsers, status = self._fields["official_parser"], self._fields["status"]
+        return sum(1 for i in range(len(self)) if parsers[i] is None and status[i] != _INFRA)
+
+    def has_success(self) -> bool:
+        """Whether a ``marked_hit`` scorer scored any row."""
+        answered = self._fields["success_answered"]
+        return any(answered[i] is not None for i in range(len(self)))
+
+    def success_rows(self) -> Iterator[dict[str, Any]]:
+        """Each row's ``marked_hit`` verdict (a row it never scored: an unanswered failure)."""
+        condition, direction = self._fields["condition"], self._fields["direction"]
+        success, answered = self._fields["success"], self._fields["success_answered"]
+        for i in range(len(self)):
+            yield {"condition": condition[i], "direction": direction[i], "success": success[i], "answered": bool(answered[i])}
+
+    def plugin_scores(self) -> Iterator[tuple[tuple[str, tuple[tuple[str, float], ...]], ...]]:
+        """The fields of the scorers that follow no protocol, row by row (rows that have any)."""
+        return iter(self._aside["plugin_scores"][i] for i in sorted(self._aside["plugin_scores"]))
+
+    def diagnosed(self) -> Iterator[DiagnosedRow]:
+        """The diagnosed rows' diagnoses, in order."""
+        return iter(self._aside["diagnosed"][i] for i in sorted(self._aside["diagnosed"]))
+
+    def nan_keys(self) -> list[str]:
+        """Keys of the rows whose official reading holds a NaN coordinate."""
+        return [self._aside["nan_key"][i] for i in sorted(self._aside["nan_key"])]
+
+    def by_run(self) -> dict[int, Sequence[ScoredRow]]:
+        """Each run's rows (runs in order)."""
+        runs = self._fields["run"]
+        positions: dict[int, array] = defaultdict(lambda: array("q"))
+        for i in range(len(self)):
+            positions[runs[i]].append(i)
+        return {run: Picked(self.scored, at) for run, at in sorted(positions.items())}
+
+    def statuses(self) -> Counter[str]:
+        """How many rows have each status."""
+        status = self._fields["status"]
+        return Counter(status[i] for i in range(len(self)))
+
+    def usage(self) -> UsageTotals:
+        """The rows' tokens, cost and retries, summed in row order (unstated tokens: 0)."""
+        return UsageTotals.of(_SpentRows(self), unstated_tokens=0)
+
+    def field(self, name: str) -> Column:
+        """One kept field's column."""
+        return self._fields[name]
+
+    def aside(self, name: str) -> Mapping[int, Any]:
+        """Values only some rows have, by position."""
+        return self._aside.get(name, {})
+
+    def nbytes(self) -> int:
+        """Bytes the columns hold (texts and values kept aside not counted)."""
+        return sum(c.nbytes() for c in self._fields.values()) + len(self._digests) + self.metrics.nbytes()
+
+    def _check_closed(self) -> None:
+        if not self._closed:
+            raise RuntimeError("SummaryTable read before close()")
+
+
+class _ScoredRows(Sequence[ScoredRow]):
+    """A table's rows as :class:`ScoredRow` objects, each built when it is read."""
+
+    __slots__ = ("_columns", "_n")
+
+    def __init__(self, table: SummaryTable) -> None:
+        self._columns = [table.field(name) for name in _SCORED]
+        self._n = len(table)
+
+    def __len__(self) -> int:
+        return self._n
+
+    @overload
+    def __getitem__(self, i: int) -> ScoredRow: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> Sequence[ScoredRow]: ...
+
+    def __getitem__(self, i: int | slice) -> ScoredRow | Sequence[ScoredRow]:
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(self._n))]
+        if not -self._n <= i < self._n:
+            raise IndexError(i)
+        i %= self._n
+        c, d, answered, l2, in_frame, strict, run, ex, ey, pe = self._columns
+        return ScoredRow(c[i], d[i], answered[i], l2[i], in_frame[i], strict[i], run[i], ex[i], ey[i], pe[i])
+
+
+class _OfficialRows(_ScoredRows):
+    """A table's rows as their official readings score them (the row itself where the same)."""
+
+    __slots__ = ("_otherwise",)
+
+    def __init__(self, table: SummaryTable) -> None:
+        super().__init__(table)
+        self._otherwise = table.aside("officially_scored")
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, int) and i in self._otherwise:
+            return self._otherwise[i]
+        return super().__getitem__(i)
+
+
+class _SpentRows(Sequence[Any]):
+    """A table's rows as what they spent (tokens, cost, retries), for :meth:`UsageTotals.of`."""
+
+    __slots__ = ("_columns", "_n")
+
+    def __init__(self, table: SummaryTable) -> None:
+        self._columns = [table.field(name) for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries")]
+        self._n = len(table)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def __getitem__(self, i: Any) -> Any:
+        prompt, completion, cost, retries = self._columns
+        return UsageTotals(prompt[i], completion[i], cost[i], retries[i])
+

@@ -1,0 +1,124 @@
+"""What a summary keeps of a run's rows: a few bytes a key in columns, read back as the rows were."""
+
+from __future__ import annotations
+
+import json
+import math
+import tracemalloc
+from typing import Any
+
+import numpy as np
+import pytest
+
+from povagent.config.pipeline import load_pipeline
+from povagent.results.rows import ResultRow, RowStatus, iter_rows
+from povagent.run.row_columns import Column
+from povagent.run.runner import run_pipeline
+from povagent.run.summary import summarize_rows, summarize_run
+from povagent.run.summary_fields import scored_row
+from povagent.run.summary_table import SummaryTable
+from povagent.scoring.breakdown import breakdown
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import Metric, valued_row
+
+#: The most the table may hold a key (bytes, traced): its official score, usage and metric values.
+BYTES_PER_KEY = 256
+
+DECLARED = {
+    "official": (
+        Metric("mean_l2", "lower", "mean", "l2", "Mean L2", "mean error"),
+        Metric("frame_accuracy", "higher", "rate", "gt_in_frame", "GT in frame", "share in frame"),
+        Metric("response_rate", "higher", "rate", "answered", "Response rate", "answered / all", over="all"),
+    )
+}
+
+
+def row(n: int, run: int = 0, l2: float | None = 0.25, status: RowStatus = RowStatus.ANSWERED, condition: str = "a", **extra: Any) -> ResultRow:
+    scores = {} if l2 is None else {"official": {"answered": True, "l2": l2, "l2_strict": l2, "gt_in_frame": l2 < 0.5, "error_x": -l2, "error_y": l2 / 2}}
+    return ResultRow(key=f"h/{n}/left/{condition}#{run}", instance_id=f"h/{n}/left/{condition}", house_id="h", pair_id=str(n),
+                     direction="left" if n % 2 else "right", condition=condition, run=run, status=status, scores=scores,
+                     prompt_tokens=100 + n, completion_tokens=n, cost_usd=0.001 * n, **extra)  # fmt: skip
+
+
+def test_a_column_gives_back_each_value_as_it_was_appended():
+    labels = [f"label {i}" for i in range(300)]  # past the 128 a byte holds
+    values = [0.5, -0.0, math.inf, 3, 119, 120, -1, -(2**53), 2**60, True, False, None, "a", "a", "b", ("kept", "aside"), 1e-300, *labels]
+    column = Column()
+    for v in values:
+        column.append(v)
+    back = [column[i] for i in range(len(values))]
+    assert back == values and [type(v) for v in back] == [type(v) for v in values]
+    assert math.copysign(1.0, back[1]) == -1.0  # the sign of a zero is kept
+    assert back[12] is back[13]  # one string a label, however many rows carry it
+    nan = Column()
+    nan.append(float("nan"))
+    assert math.isnan(nan[0])
+
+
+def test_taking_rows_of_a_column_keeps_their_values_and_what_was_kept_aside():
+    column = Column()
+    for v in [1.5, ("aside",), None, "x", 7]:
+        column.append(v)
+    positions = np.array([4, 1, 3])
+    new_position = np.full(5, -1)
+    new_position[positions] = np.arange(3)
+    taken = column.taken(positions, new_position)
+    assert [taken[i] for i in range(3)] == [7, ("aside",), "x"]
+
+
+def test_a_key_costs_the_table_a_few_hundred_bytes_however_long_its_row(write_pipeline):
+    result = run_pipeline(load_pipeline(write_pipeline()))
+    done = list(iter_rows(result.run_dir / "results.jsonl"))
+    long = done[0].model_copy(update={"key": "long", "sentence": "s" * 5000, "exchanges": done[0].exchanges * 20})
+    rows = [r.model_copy(update={"key": f"{r.key}/{i}"}) for i in range(200) for r in [*done, long]]
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        table = SummaryTable(DECLARED)
+        for r in rows:
+            table.add(r)
+        table.close()
+        held = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert len(table) == len(rows)
+    assert held / len(rows) < BYTES_PER_KEY, f"{held / len(rows):.0f} bytes a key"
+
+
+def test_the_last_row_of_a_key_counts_in_the_place_of_its_first():
+    first, other, again = row(1, l2=0.9), row(2, l2=0.1), row(1, l2=0.3)
+    assert summarize_rows([first, other, again]) == summarize_rows([again, other])
+    assert summarize_rows([first, other, again])["overall"]["mean_l2"] == pytest.approx(0.2)
+
+
+def test_a_table_summarizes_what_the_rows_as_objects_give():
+    rows = [
+        *(row(n, run, l2=(n * 7 % 10) / 10 + 0.05 * run) for n in range(12) for run in range(3)),
+        row(20, status=RowStatus.PARSE_ERROR, l2=None),
+        row(21, status=RowStatus.INFRA_ERROR, l2=None),
+        row(22, condition="b"),
+        row(1, l2=0.45),  # key h/1/left/a#0 again: its last row counts
+    ]
+    summary = summarize_rows(rows, None, DECLARED)
+    last = list({r.key: r for r in rows}.values())  # the rows one per key, as a dict keeps them
+    expected = breakdown([scored_row(r, "official") for r in last])
+    for section in ("overall", "per_condition", "per_direction", "per_condition_direction", "pooled", "per_run"):
+        assert summary[section] == expected[section], section
+    assert summary["metrics"] == metrics_breakdown([valued_row(r, DECLARED) for r in last], DECLARED)
+    assert summary["rows"]["done"] == len(last) and summary["rows"]["parse_error"] == 1 and summary["rows"]["infra_error"] == 1
+    assert summary["usage"]["prompt_tokens"] == sum(r.prompt_tokens or 0 for r in last)
+    assert summary["usage"]["cost_usd"] == sum(r.cost_usd or 0.0 for r in last)
+
+
+def test_the_summary_a_run_writes_is_the_summary_of_its_results_file(write_pipeline):
+    result = run_pipeline(load_pipeline(write_pipeline(runs=2)))
+    written = json.loads((result.run_dir / "summary.json").read_text())
+    again = json.loads(json.dumps(summarize_run(result.run_dir / "results.jsonl"), default=str))
+    for section in ("overall", "per_condition", "per_direction", "per_run", "rows", "usage", "official_parse"):
+        assert written.get(section) == again.get(section), section
+
+
+def test_rows_of_keys_outside_the_selection_are_left_out_and_missing_keys_counted():
+    rows = [row(1), row(2), row(3)]
+    summary = summarize_rows(rows, {rows[0].key, rows[2].key, "h/9/left/a#0"})
+    assert summary["rows"]["done"] == 2 and summary["rows"]["missing"] == 1 and summary["rows"]["total"] == 3
