@@ -22,6 +22,8 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from povagent.dataset.models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
     CENTER_POLICY,
@@ -32,7 +34,7 @@ from povagent.report.baseline import (
     center_success_observations,
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
-from povagent.report.collect import Collection, Observation
+from povagent.report.collect import Collection, Observation, RunInfo, dataset_paths
 from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
@@ -208,8 +210,10 @@ def what_was_compared(a: Analysis) -> str:
     return " · ".join(parts) or "no system"
 
 
-def load_collection_dataset(collection: Collection, override: str | Path | None = None):
-    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load.
+def load_collection_dataset(collection: Collection | list[RunInfo], override: str | Path | None = None):
+    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load
+    (``collection``: a collection, or the runs :func:`~povagent.report.collect.find_runs` found,
+    so that a report loads the set before it holds the rows' observations).
 
     A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
     gallery draws on, as the runner loads them.
@@ -217,7 +221,7 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
     from povagent.dataset.evaluation_set import open_evaluation_set
     from povagent.errors import DatasetError
 
-    paths = [Path(override)] if override else collection.dataset_paths()
+    paths = [Path(override)] if override else dataset_paths(collection.runs if isinstance(collection, Collection) else collection)
     if not paths:
         return None, "no dataset path in the runs' config.yaml (pass --dataset)"
     try:
@@ -229,15 +233,17 @@ def load_collection_dataset(collection: Collection, override: str | Path | None 
 
 
 def _answers_signature(obs: list[Observation]) -> str:
-    """A digest of what a system answered, row by row (equal digests: the same answers). The
-    declared metrics' values are in it: answers that are no pixel (a navigate walk) differ by
-    what they scored."""
-    rows = sorted(
-        (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y,
-         repr(sorted((scorer, sorted(values.items())) for scorer, values in o.metric_values.items())))
-        for o in obs
-    )  # fmt: skip
-    return hashlib.sha256(repr(rows).encode()).hexdigest()
+    """A digest of what a system answered, row by row, in any order (equal digests: the same
+    answers). The declared metrics' values are in it: answers that are no pixel (a navigate
+    walk) differ by what they scored. Each row is digested on its own (128-bit BLAKE2b) and the
+    row digests are sorted, so nothing a row is held but 16 bytes."""
+    digests = bytearray()
+    for o in obs:
+        row = (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y,
+               sorted((scorer, sorted(values.items())) for scorer, values in o.metric_values.items()))  # fmt: skip
+        digests += hashlib.blake2b(repr(row).encode(), digest_size=16).digest()
+    pairs = np.frombuffer(bytes(digests), dtype=">u8").reshape(-1, 2)
+    return hashlib.sha256(pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].tobytes()).hexdigest()
 
 
 def merge_identical_baselines(

@@ -23,7 +23,7 @@ from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.choice_tables import choice_tables
-from povagent.report.collect import collect
+from povagent.report.collect import collect, find_runs
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
 from povagent.report.gallery_runs import run_shown_note
@@ -124,8 +124,10 @@ def write_report(
     t0 = time.perf_counter()
     source = Path(source)
     out = report_folder(source, Path(out) if out is not None else None)
-    collection = collect(source, pool=pool)
-    dataset, note = load_collection_dataset(collection, dataset_path)
+    # the set first: the transient memory of reading its files does not stack on the rows' observations
+    runs = find_runs(source)
+    dataset, note = load_collection_dataset(runs, dataset_path)
+    collection = collect(source, pool=pool, runs=runs)
     timings["load"] = time.perf_counter() - t0
 
     t = time.perf_counter()

@@ -37,7 +37,7 @@ from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.scoring.metrics import Declared, MetricValues
+from povagent.scoring.metrics import Declared, MetricValues, row_metric_groups
 from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -105,6 +105,10 @@ class Observation:
     relation: bool | None = None
     #: Each scorer's declared metrics for this row (:func:`povagent.scoring.metrics.row_metric_values`).
     metric_values: Mapping[str, Mapping[str, float | None]] = field(default_factory=dict)
+    #: The row's groups of grouped metrics (:func:`povagent.scoring.metrics.row_metric_groups`;
+    #: ``None``: no grouped metric declared), so the report groups a set's copies of a question as
+    #: the run's summary does.
+    metric_groups: Mapping[str, Mapping[str, str]] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
 
@@ -171,11 +175,7 @@ class Collection:
 
     def dataset_paths(self) -> list[Path]:
         """Distinct dataset folders named by the runs' configs."""
-        out: dict[Path, None] = {}
-        for r in self.runs:
-            if r.dataset_path is not None:
-                out.setdefault(r.dataset_path, None)
-        return list(out)
+        return dataset_paths(self.runs)
 
     def system_axes(self, system: str) -> dict[str, str]:
         """The axis values of a system (from its first run)."""
@@ -312,6 +312,11 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None,
     return RunInfo(folder, name, config, axes, rows, sweep=sweep, cell_axes=dict(extra_axes or {}))
 
 
+def dataset_paths(runs: Iterable[RunInfo]) -> list[Path]:
+    """Distinct dataset folders named by ``runs``' configs, in order."""
+    return list(dict.fromkeys(r.dataset_path for r in runs if r.dataset_path is not None))
+
+
 def find_runs(path: str | Path) -> list[RunInfo]:
     """The runs under ``path``: a run folder, or a sweep folder (by its index, or by scanning)."""
     root = Path(path)
@@ -402,12 +407,22 @@ def observation_of(
         hit_radius_px=hit_fields.get("hit_radius_px"),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
         metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
+        metric_groups=_groups_of(row, run_name, declared) if declared else None,
         answer=shown_answer(row.prediction.answer_type, row.prediction.value),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
 
 
-def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False, pool: bool = False) -> Collection:
+def _groups_of(row: ResultRow, run_name: str, declared: Declared) -> dict[str, dict[str, str]] | None:
+    """The row's groups of grouped metrics, apart from another run folder's (a system pooling
+    folders must not join one folder's copy of a question with another's)."""
+    groups = row_metric_groups(row, declared)
+    return {s: {m: f"{run_name}/{g}" for m, g in by.items()} for s, by in groups.items()} or None
+
+
+def collect(
+    paths: str | Path | Iterable[str | Path], *, outside_protocol: bool = False, pool: bool = False, runs: list[RunInfo] | None = None
+) -> Collection:
     """Load one or more run/sweep folders into a :class:`Collection`.
 
     Each run is one system; runs of the same name are pooled only with ``pool`` or a shared
@@ -417,15 +432,12 @@ def collect(paths: str | Path | Iterable[str | Path], *, outside_protocol: bool 
     Rows the paper's protocol does not cover (a model under an intervention on Given:
     :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
     counts them in ``outside_protocol_rows``. Baselines never read the prompt: theirs stay.
+    ``runs``: the runs :func:`find_runs` found under ``paths`` already (found again when not given).
     """
     from povagent.report.protocol import outside_paper_protocol
 
-    if isinstance(paths, (str, Path)):
-        paths = [paths]
-    paths = [Path(p) for p in paths]
-    runs: list[RunInfo] = []
-    for p in paths:
-        runs.extend(find_runs(p))
+    paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
+    runs = list(runs) if runs is not None else [r for p in paths for r in find_runs(p)]
     poolings = assign_systems(runs, pool=pool)
     obs: list[Observation] = []
     left_out = 0

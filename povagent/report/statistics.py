@@ -115,18 +115,22 @@ def _ratio_estimates(
     n_inst = metrics[0][0].shape[0] if metrics else 0
     resampled = n_boot > 0 and n_inst >= 2
     alpha = (1.0 - level) / 2.0
+    n_runs = metrics[0][0].shape[1] if metrics else 0
+    # every metric's numerators and denominators side by side, written in place (one matrix,
+    # not a copy of each pair): one matrix product per block of resamples sums them all
+    columns = np.empty((n_inst, 2 * n_runs * len(metrics)))
     prepared = []
-    for values, weights in metrics:
-        weights = weights.astype(float)
-        vw = np.where(weights > 0, np.nan_to_num(values) * weights, 0.0)
-        prepared.append((vw, weights))
+    for k, (values, weights) in enumerate(metrics):
+        vw = columns[:, 2 * k * n_runs : (2 * k + 1) * n_runs]
+        w = columns[:, (2 * k + 1) * n_runs : (2 * k + 2) * n_runs]
+        w[...] = weights
+        np.multiply(np.nan_to_num(values), w, out=vw)
+        vw[w <= 0] = 0.0
+        prepared.append((vw, w))
     sums = None
     if resampled and prepared:
-        # every metric's numerators and denominators in one matrix product per block of resamples
-        columns = np.concatenate([a for pair in prepared for a in pair], axis=1)
         sums = np.concatenate([counts @ columns for counts in _resample_counts(n_inst, n_boot, seed)])
     out: list[Estimate] = []
-    n_runs = metrics[0][0].shape[1] if metrics else 0
     for k, (vw, weights) in enumerate(prepared):
         point = float(_mean_over_runs(_ratio(vw.sum(axis=0), weights.sum(axis=0))))
         n = int((weights.sum(axis=1) > 0).sum())

@@ -103,3 +103,19 @@ def test_a_report_of_a_choice_run_is_written(choice_pipeline):
     outcome = CliRunner().invoke(app, ["report", str(result.run_dir)])
     assert outcome.exit_code == 0, outcome.output
     assert (result.run_dir / "report" / "report.html").is_file()
+
+
+def test_the_report_gives_3dsrbench_grouped_accuracies_as_the_run_summary_does(choice_pipeline):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    result = run_pipeline(load_pipeline(choice_pipeline("3dsrbench", backend="test-center", reply="A", scorers=("choice-3dsrbench",))))
+    outcome = CliRunner().invoke(app, ["report", str(result.run_dir)])
+    assert outcome.exit_code == 0, outcome.output
+    reported = json.loads((result.run_dir / "report" / "summary.json").read_text())["metrics"]["choice-3dsrbench"]
+    (system,) = reported
+    overall = result.summary.metrics["choice-3dsrbench"].overall
+    for name in ("flip_accuracy", "circular_accuracy", "flip_circular_accuracy"):
+        assert reported[system]["overall"][name]["value"] == pytest.approx(overall[name].value), name
+        assert reported[system]["overall"][name]["n"] == overall[name].n, name
