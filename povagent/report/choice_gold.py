@@ -2,24 +2,27 @@
 
 The runner scores only answers, so a question every system answered with no option (or whose
 every request failed) has no scored row telling its gold label. The set the run names
-(``dataset: {path, format, images}`` in its config) knows it: each of its instances carries its
-:class:`~povagent.answers.choice.ChoiceQuestion`, whose ``gold`` and ``category`` are what the
-choice scorer writes (:mod:`povagent_plugins.scorers.choice`). The set is opened as the runner
-opens it (:func:`~povagent.dataset.evaluation_set.open_evaluation_set`), once per report and
-only when a question needs it; a set that cannot be opened leaves the question's gold unknown,
+(``dataset: {path, format, images}`` in its config, asked as its ``task:``) knows it: each of
+its instances carries its :class:`~povagent.answers.choice.ChoiceQuestion`, whose ``gold`` and
+``category`` are what the choice scorer writes (:mod:`povagent_plugins.scorers.choice`). The set
+is opened as the runner opens it (:func:`~povagent.dataset.evaluation_set.open_evaluation_set`,
+then :func:`~povagent.tasks.task_set.for_task`), once per report and only when a question needs
+it; a set that cannot be opened leaves the question's gold unknown,
 and :meth:`SetQuestions.why_unknown` says why in one line.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
 from povagent.errors import PovagentError
 from povagent.report.collect import RunInfo
 
-#: How a set is told apart: its file or folder, its format and its images folder.
-_SetKey = tuple[Path, str | None, Path | None]
+#: How a set is told apart: its file or folder, its format, its images folder and the task it is
+#: asked as (the config's ``task:`` as JSON; ``None``: POVBench's point task).
+_SetKey = tuple[Path, str | None, Path | None, str | None]
 
 
 class SetQuestions:
@@ -65,7 +68,8 @@ def _set_key(run: RunInfo) -> _SetKey | None:
     ds = ds if isinstance(ds, dict) else {}
     format = str(ds["format"]) if ds.get("format") else None
     images = _resolved(run, ds["images"]) if ds.get("images") else None
-    return path, format, images
+    task = run.config.get("task")
+    return path, format, images, None if task in (None, "point") else json.dumps(task, sort_keys=True)
 
 
 def _resolved(run: RunInfo, raw: object) -> Path:
@@ -78,9 +82,15 @@ def _open(key: _SetKey) -> Any:
     """The set, or one line (``<file>: <reason>``) saying why it cannot be opened."""
     from povagent.dataset.evaluation_set import open_evaluation_set
 
-    root, format, images = key
+    root, format, images, task = key
     try:
-        return open_evaluation_set(root, check_images=False, format=format, images=images)
-    except (PovagentError, OSError) as exc:
+        loaded = open_evaluation_set(root, check_images=False, format=format, images=images)
+        if task is None:
+            return loaded
+        from povagent.config.models import TaskSpec
+        from povagent.tasks.task_set import for_task  # the generator's scene: only when a task asks
+
+        return for_task(loaded, TaskSpec.model_validate(json.loads(task)))
+    except (PovagentError, OSError, ValueError) as exc:  # ValueError: a task the config cannot hold
         reason = " ".join(str(exc).split())
         return reason if reason.startswith(str(root)) else f"{root}: {reason}"

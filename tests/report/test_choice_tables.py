@@ -109,3 +109,28 @@ def test_a_set_named_by_several_runs_is_opened_once_per_report(runs_folder, set_
     result = write_report(folder, tmp_path / "report", gallery=False, n_boot=200)
     assert _confusion_rows(_table(result, "choice_confusion_choice_3")) == {"B": [0, 0, 1], "C": [0, 0, 1]}
     assert opened.count((set_file, "viewspatial")) == 1
+
+
+def test_a_question_a_task_asks_has_the_gold_label_and_category_of_the_task(tmp_path, generated_release, offline_plugin_file):
+    from collections import Counter
+
+    from povagent.config.models import TaskSpec
+    from povagent.dataset.loader import load_dataset
+    from povagent.tasks.task_set import for_task
+
+    folder = tmp_path / "runs"
+    for label, backend, limit in (("oracle", {"name": "oracle"}, 1), ("silent", {"name": "test-center", "options": {"reply": "no idea"}}, 6)):
+        config = tmp_path / f"{label}.yaml"
+        config.write_text(yaml.safe_dump({
+            "plugins": [str(offline_plugin_file)], "dataset": {"path": str(generated_release)}, "task": "relation",
+            "backend": backend, "strategy": "choice", "scorers": ["choice"], "label": label, "runs": 1, "concurrency": 2,
+            "timeout": 5, "instances": {"limit": limit}, "output": str(folder / label),
+        }))  # fmt: skip
+        run_pipeline(load_pipeline(config))
+    asked = for_task(load_dataset(generated_release, check_images=False), TaskSpec(name="relation")).instances()[:6]
+    result = write_report(folder, tmp_path / "report", gallery=False, n_boot=200)
+    golds = Counter(i.question.gold for i in asked if i.question is not None)
+    silent = _table(result, "choice_confusion_choice_2")
+    assert {label: cells[-1] for label, cells in _confusion_rows(silent).items()} == golds
+    categories = sorted({i.question.category for i in asked if i.question is not None})
+    assert len(categories) > 1 and [c.name for c in _table(result, "choice_accuracy_choice").columns] == categories + ["All"]
