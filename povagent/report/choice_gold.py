@@ -30,12 +30,15 @@ class SetQuestions:
 
     def __init__(self) -> None:
         self._sets: dict[_SetKey, Any] = {}
+        self._keys: dict[Path, _SetKey | None] = {}  # each run's set, read from its config once
         self._reasons: dict[str, None] = {}  # why a question stayed unknown, in the order met
 
     def question(self, run: RunInfo, instance_id: str) -> tuple[str, str] | None:
         """``(gold, category)`` of ``instance_id`` in the set ``run`` names, or ``None`` (the
         reason is kept for :meth:`why_unknown`)."""
-        key = _set_key(run)
+        if run.folder not in self._keys:
+            self._keys[run.folder] = _set_key(run)
+        key = self._keys[run.folder]
         if key is None:
             self._reasons.setdefault(f"{run.folder / 'config.yaml'} names no dataset", None)
             return None
@@ -48,7 +51,7 @@ class SetQuestions:
         instance = loaded.instance(instance_id)
         question = getattr(instance, "question", None)
         if question is None:
-            self._reasons.setdefault(f"{key[0]} holds no multiple-choice question of that id", None)
+            self._reasons.setdefault(f"{key[0]} holds no multiple-choice question of their ids", None)
             return None
         return str(question.gold), str(question.category or "")
 
