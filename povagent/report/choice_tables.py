@@ -9,7 +9,8 @@ with its registered description. Accuracy counts every scored row (no option rea
 An accuracy is the mean over questions of each question's mean over runs, its 95% CI a
 bootstrap over questions (:func:`~povagent.scoring.bootstrap.bootstrap_mean_ci`).
 
-Reads the runs' rows as stored (never rescored); writes nothing.
+Reads the runs' rows as stored (never rescored) and, for a question no row scored, the set the
+runs name (:mod:`povagent.report.choice_gold`); writes nothing.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ import numpy as np
 
 from povagent.errors import PluginError
 from povagent.plugins import get_plugin_host
-from povagent.report.collect import Collection
+from povagent.report.choice_gold import SetQuestions
+from povagent.report.collect import Collection, RunInfo
 from povagent.report.statistics import sign_test_p
 from povagent.report.tables import Cell, Column, Row, Table
 from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
@@ -32,7 +34,8 @@ from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
 #: The confusion column of answers naming no option.
 NO_OPTION = "no option"
-#: The gold label of a question no row of which was scored (every system named no option).
+#: The gold label of a question no row of which was scored (every system named no option) and
+#: whose set cannot be opened.
 UNKNOWN = "?"
 #: The accuracy column over every category.
 ALL = "All"
@@ -51,16 +54,19 @@ class ChoiceAnswer:
     parser: str
 
 
-def choice_answers(collection: Collection) -> dict[str, list[ChoiceAnswer]]:
+def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> dict[str, list[ChoiceAnswer]]:
     """Per choice scorer (in the order first met), the rows of the runs it scored, run by run.
 
     A row the scorer did not score (no option read, a failed request: the runner scores only
     answers) counts as an answer naming no option, as the scorer's accuracy counts it; its gold
-    label and category are the question's as another row of it records them (:data:`UNKNOWN`
-    when no row of the question was scored)."""
+    label and category are the question's as another row of it records them, or, when no row of
+    the question was scored, as the set the run names holds them (``sets``; :data:`UNKNOWN`
+    when that set cannot be opened)."""
+    sets = SetQuestions() if sets is None else sets
     carried = [{scorer for row in run.rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS} for run in collection.runs]
     scorers = sorted(set().union(*carried), key=lambda name: next(i for i, c in enumerate(carried) if name in c))
     questions: dict[tuple[str, str], tuple[str, str]] = {}
+    unscored: list[tuple[str, int, RunInfo]] = []  # (scorer, position in its answers, run) of rows it did not score
     out: dict[str, list[ChoiceAnswer]] = {scorer: [] for scorer in scorers}
     for run, its_own in zip(collection.runs, carried):
         named = {_scorer_name(s) for s in run.config.get("scorers") or []}
@@ -74,28 +80,28 @@ def choice_answers(collection: Collection) -> dict[str, list[ChoiceAnswer]]:
                     out[scorer].append(ChoiceAnswer(run.system, row.instance_id, f["correct"] is True, chosen, str(f["gold"]),
                                                     str(f["category"] or ""), row.parser))  # fmt: skip
                 else:
+                    unscored.append((scorer, len(out[scorer]), run))
                     out[scorer].append(ChoiceAnswer(run.system, row.instance_id, False, None, "", "", row.parser))
-    return {scorer: [_with_question(a, questions.get((scorer, a.instance_id))) for a in answers] for scorer, answers in out.items()}
+    for scorer, position, run in unscored:
+        answer = out[scorer][position]
+        question = questions.get((scorer, answer.instance_id)) or sets.question(run, answer.instance_id) or (UNKNOWN, "")
+        out[scorer][position] = dataclasses.replace(answer, gold=question[0], category=question[1])
+    return out
 
 
 def _scorer_name(spec: object) -> str:
     return str(spec.get("name", "")) if isinstance(spec, dict) else str(spec)
 
 
-def _with_question(answer: ChoiceAnswer, question: tuple[str, str] | None) -> ChoiceAnswer:
-    if answer.gold:
-        return answer
-    gold, category = question if question is not None else (UNKNOWN, "")
-    return dataclasses.replace(answer, gold=gold, category=category)
-
-
 def choice_tables(collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0) -> list[Table]:
     """Each choice scorer's accuracy table, paired differences (with two systems or more) and a
     confusion table per system (none for a report without choice rows)."""
     tables: list[Table] = []
-    for scorer, answers in choice_answers(collection).items():
+    sets = SetQuestions()  # each set the runs name opened once, for every scorer
+    for scorer, answers in choice_answers(collection, sets).items():
         systems = list(dict.fromkeys(a.system for a in answers))
-        read_by = rules_note(answers, systems)
+        unknown = sets.why_unknown(len({a.instance_id for a in answers if a.gold == UNKNOWN}))
+        read_by = rules_note(answers, systems) + (f" {unknown}" if unknown else "")
         tables.append(_accuracy_table(scorer, answers, systems, read_by, n_boot, seed))
         if len(systems) > 1:
             tables.append(_paired_table(scorer, answers, systems, read_by, n_boot, seed))
