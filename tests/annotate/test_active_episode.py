@@ -43,6 +43,8 @@ def episode(browser, generated_release, tmp_path_factory):
         page.wait_for_function("() => document.getElementById('view').complete && document.getElementById('view').naturalWidth > 0")
         box = page.locator("#view").bounding_box()
         page.locator("#view").click(position={"x": box["width"] / 2, "y": box["height"] / 2})
+        # the mark placed and the page not busy (Enter on a busy page, or before the click took, does nothing)
+        page.wait_for_function("() => !document.getElementById('submit').disabled", timeout=120_000)
         page.keyboard.press("Enter")
         page.wait_for_function("() => document.getElementById('status').textContent.startsWith('All done')", timeout=120_000)
         exit_code = served.wait()
