@@ -42,15 +42,22 @@ class Served:
         )  # fmt: skip
         lines: queue.Queue[str] = queue.Queue()
         threading.Thread(target=lambda: [lines.put(line) for line in self.process.stdout], daemon=True).start()  # type: ignore[union-attr]
+        # stderr read as it comes too: a full pipe would stop the server mid-answer
+        self._said: list[str] = []
+        threading.Thread(target=lambda: [self._said.append(line) for line in self.process.stderr], daemon=True).start()  # type: ignore[union-attr]
         self.url = ""
         while not self.url:
             try:
                 line = lines.get(timeout=120)
             except queue.Empty:
                 self.kill()
-                pytest.fail(f"povagent annotate printed no URL: {self.process.stderr.read() if self.process.stderr else ''}")
+                pytest.fail(f"povagent annotate printed no URL: {self.said()}")
             if line.startswith("open "):
                 self.url = line.split(" ", 1)[1].strip()
+
+    def said(self) -> str:
+        """The end of what the server wrote on stderr so far (for a failure's message)."""
+        return "".join(self._said)[-4000:]
 
     def kill(self) -> None:
         """SIGKILL, by the pid this test started: no clean shutdown at all."""
