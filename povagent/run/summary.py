@@ -2,7 +2,7 @@
 
 A run keeps nothing per key while it runs: at its end the runner reads ``results.jsonl`` back
 (:func:`summarize_run`), a row at a time, into a :class:`~povagent.run.summary_table.SummaryTable`
-(the values a summary reads of each key's row, in columns: about 150 bytes a key, so a run's
+(the values a summary reads of each key's row, in columns: under 200 bytes a key, so a run's
 memory hardly grows with its rows). :func:`summarize_rows` summarizes rows in hand (a rescore's);
 both go through :func:`summarize_table`. :mod:`povagent.run.summary_model` says what the
 summary is; :mod:`povagent.run.summary_fields` what a summary reads of one row.
