@@ -2,7 +2,7 @@
 
 :class:`SummaryTable` takes rows one at a time (``results.jsonl`` read back, or rows in hand)
 and keeps of each only the values ``summary.json`` is computed from, each field a
-:class:`~povagent.run.row_columns.Column` (9 bytes a value) and the declared metrics'
+:class:`~povagent.run.row_columns.Column` (a byte a value, 9 for a number) and the declared metrics'
 values a :class:`~povagent.scoring.metric_columns.MetricColumns`: under 200 bytes a row
 whatever its text, where an object a row held several times that. Values that only some rows
 have (a plugin scorer's fields, a diagnosis, a NaN coordinate's key) are kept by position for
