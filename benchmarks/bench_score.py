@@ -37,7 +37,10 @@ SCORE = """
 import json, time
 from povagent.dataset.loader import load_dataset
 from povagent.scoring.official_release import read_release
-from povagent.results.prediction_files import score_predictions
+try:
+    from povagent.results.prediction_files import score_predictions
+except ImportError:  # a baseline from before the reader moved to results/
+    from povagent.scoring.predictions import score_predictions
 ds = load_dataset({dataset!r}, check_images=False)
 release = read_release({dataset!r})
 t = time.process_time()

@@ -206,8 +206,10 @@ def _row_labels(row: Mapping[str, Any], notes: _Notes, ref: str | None) -> tuple
     """``(house_id, pair_id, direction, condition, condition label, direction label, instance
     id)`` of an official row, the first four as written; an odd condition or direction label is
     noted under ``ref`` (or the id)."""
-    house_id, pair_id, direction, cond = (row[k] for k in REQUIRED_FIELDS)
-    c_label, d_label = group_label(cond), group_label(direction)
+    house_id, pair_id, direction, cond = row["house_id"], row["pair_id"], row["direction"], row["type"]  # REQUIRED_FIELDS
+    # a label is a string as written (every row of the release): group_label for anything else
+    c_label = cond if type(cond) is str else group_label(cond)
+    d_label = direction if type(direction) is str else group_label(direction)
     iid = f"{house_id}/{pair_id}/{d_label}/{c_label}"
     if c_label is not None and c_label not in CONDITION_LABELS:
         notes.odd_type[c_label].append(ref or iid)
