@@ -38,6 +38,8 @@ class BackgroundSpin:
         self._join_timeout_s = join_timeout_s
         self._thread = threading.Thread(target=self._spin, name=name, daemon=True)
         self.error: BaseException | None = None
+        self._slices = 0  # spin_once calls ended, for settle()
+        self._sliced = threading.Condition()
 
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException, ShutdownException
@@ -46,6 +48,9 @@ class BackgroundSpin:
         try:
             while not self._stop.is_set() and context.ok():
                 self.executor.spin_once(timeout_sec=SLICE_S)
+                with self._sliced:
+                    self._slices += 1
+                    self._sliced.notify_all()
         except (ExternalShutdownException, ShutdownException):
             return  # the context was shut down under us (Ctrl-C, SIGTERM): nothing left to spin
         except BaseException as exc:  # kept for stop() to re-raise on the caller's thread
@@ -66,6 +71,16 @@ class BackgroundSpin:
         self.executor.shutdown(timeout_sec=self._join_timeout_s)
         if self.error is not None:
             raise self.error
+
+    def settle(self, timeout_s: float = 10.0) -> None:
+        """Return once a ``spin_once`` slice that began after this call has ended (or the loop
+        has ended): a node removed from the executor before the call is then in no wait set the
+        loop builds, so it may be destroyed while the executor goes on spinning. Without this, the
+        loop may be adding the node's entities to a wait set as they are destroyed
+        (``InvalidHandle``), which ends the loop."""
+        with self._sliced:
+            target = self._slices + 2  # the slice running now may have taken the node; the next began after
+            self._sliced.wait_for(lambda: self._slices >= target or not self._thread.is_alive(), timeout=timeout_s)
 
     @property
     def spinning(self) -> bool:

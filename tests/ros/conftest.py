@@ -111,7 +111,9 @@ def ros_graph(tmp_path_factory) -> Iterator[Any]:
             return node
 
         def remove(self, node: Any) -> None:
+            """Take ``node`` out of the executor; it may be destroyed once this returns."""
             executor.remove_node(node)
+            spinning.settle()
 
     try:
         yield Graph()

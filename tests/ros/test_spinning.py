@@ -56,3 +56,36 @@ def test_an_error_raised_while_spinning_reaches_the_caller_on_stop(ros_graph):
             spin.stop()
     finally:
         node.destroy_node()
+
+
+def test_settle_returns_only_after_a_slice_begun_after_the_call_has_run(ros_graph):
+    # what lets the ROS tests destroy a node they took out of the shared executor: no wait set
+    # the loop builds after settle() holds it (one built while the node was being destroyed
+    # raised InvalidHandle and ended the loop for every later test)
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    node = rclpy.create_node("settle_probe", context=ros_graph.context)
+    ran: list[float] = []
+    node.create_timer(0.005, lambda: ran.append(time.monotonic()))
+    executor = SingleThreadedExecutor(context=ros_graph.context)
+    executor.add_node(node)
+    try:
+        with BackgroundSpin(executor) as spin:
+            for _ in range(20):
+                called = time.monotonic()
+                spin.settle()
+                assert any(t > called for t in ran), "settle() returned before a later slice ran"
+    finally:
+        node.destroy_node()
+
+
+def test_settle_returns_once_a_later_slice_has_ended(ros_graph):
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=ros_graph.context)
+    with BackgroundSpin(executor) as spin:
+        started = time.monotonic()
+        spin.settle()
+        assert time.monotonic() - started < 10 * SLICE_S + 1.0
+    spin.settle(timeout_s=1.0)  # a loop that has ended: returns at once
