@@ -55,6 +55,16 @@ class Served:
             if line.startswith("open "):
                 self.url = line.split(" ", 1)[1].strip()
 
+    def wait_all_done(self, page, timeout_ms: float = 120_000) -> None:
+        """Wait for the page to say the session is done; a session that never ends fails with
+        the page's status and what the server said."""
+        from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+        try:
+            page.wait_for_function("() => document.getElementById('status').textContent.startsWith('All done')", timeout=timeout_ms)
+        except PlaywrightTimeout:
+            pytest.fail(f"no 'All done' (page status: {page.locator('#status').text_content()!r}); the server said: {self.said()}")
+
     def said(self) -> str:
         """The end of what the server wrote on stderr so far (for a failure's message)."""
         return "".join(self._said)[-4000:]

@@ -4,7 +4,6 @@ views rendered by the same renderer, and the person's steps in the same episode 
 from __future__ import annotations
 
 import pytest
-from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from served_page import Served, write_study
 
 from povagent.results.episode import read_record
@@ -47,10 +46,7 @@ def episode(browser, generated_release, tmp_path_factory):
         # the mark placed and the page not busy (Enter on a busy page, or before the click took, does nothing)
         page.wait_for_function("() => !document.getElementById('submit').disabled", timeout=120_000)
         page.keyboard.press("Enter")
-        try:
-            page.wait_for_function("() => document.getElementById('status').textContent.startsWith('All done')", timeout=120_000)
-        except PlaywrightTimeout:
-            pytest.fail(f"no 'All done' (page status: {page.locator('#status').text_content()!r}); the server said: {served.said()}")
+        served.wait_all_done(page)
         exit_code = served.wait()
     finally:
         served.kill()

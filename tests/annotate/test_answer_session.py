@@ -70,7 +70,7 @@ def session(browser, tmp_path_factory, mini_root, mini_dataset):
     try:
         page.goto(served.url)
         answer_on_page(page, order[2])
-        page.wait_for_function("() => document.getElementById('status').textContent.startsWith('All done')")
+        served.wait_all_done(page)
         exit_code = served.wait()
     finally:
         served.kill()
