@@ -15,11 +15,13 @@ from __future__ import annotations
 import io
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tarfile
 import tempfile
 from pathlib import Path
+from typing import Any, Callable
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -88,3 +90,31 @@ def imported_from(pythonpath: Path | None) -> str:
     return subprocess.run(
         [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(), check=True, capture_output=True, text=True
     ).stdout.strip()
+
+
+def before_after_rounds(
+    rounds: int, old: Path, measure: Callable[[str, Path | None, str], dict[str, Any]], after_round: Callable[[int, dict], None]
+) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """``got[label][size]``: ``measure(label, pythonpath, size)`` of the ``small`` and ``large``
+    sizes, ``before`` (``old``'s code) and ``after`` (today's), ``rounds`` times, the round's
+    first label alternating (the machine is shared); ``after_round(r, got)`` prints a round."""
+    got: dict[str, dict[str, list[dict[str, Any]]]] = {k: {"small": [], "large": []} for k in ("before", "after")}
+    for r in range(rounds):
+        order: tuple[tuple[str, Path | None], ...] = (("before", old), ("after", None)) if r % 2 == 0 else (("after", None), ("before", old))
+        for label, path in order:
+            for size in ("small", "large"):
+                got[label][size].append(measure(label, path, size))
+        after_round(r, got)
+    return got
+
+
+def peak_medians(by_size: dict[str, list[dict[str, Any]]]) -> dict[str, float]:
+    """Medians over rounds of one label's measurements: peak(large) / peak(small) (``ratio``),
+    each size's peak, and the large size's CPU seconds."""
+    small, large = by_size["small"], by_size["large"]
+    return {
+        "ratio": statistics.median(b["peak_mib"] / s["peak_mib"] for s, b in zip(small, large)),
+        "small": statistics.median(s["peak_mib"] for s in small),
+        "large": statistics.median(b["peak_mib"] for b in large),
+        "cpu_large": statistics.median(b["cpu_s"] for b in large),
+    }

@@ -21,12 +21,11 @@ import json
 import os
 import resource
 import shutil
-import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, child_json, imported_from, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
 from bench_run_memory import RUNS, measure
 from results_file import figure, record
 
@@ -71,25 +70,18 @@ def main() -> None:
         old = baseline_checkout(args.baseline, work / "baseline")
         print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
-        got: dict[str, dict[str, list[dict[str, Any]]]] = {k: {"small": [], "large": []} for k in ("before", "after")}
-        for r in range(args.rounds):
-            order = (("before", old), ("after", None)) if r % 2 == 0 else (("after", None), ("before", old))
-            for label, path in order:
-                for size in ("small", "large"):
-                    got[label][size].append(report_in_process(runs[size], data, work / f"report_{label}_{size}", path))
+
+        def round_done(r: int, got: dict) -> None:
             print(f"round {r + 1}: " + "; ".join(
                 f"{label} {got[label]['small'][-1]['peak_mib']:.1f} -> {got[label]['large'][-1]['peak_mib']:.1f} MiB "
                 f"({got[label]['small'][-1]['cpu_s']:.1f} -> {got[label]['large'][-1]['cpu_s']:.1f} s CPU)" for label in ("before", "after")), flush=True)
+
+        got = before_after_rounds(
+            args.rounds, old, lambda label, path, size: report_in_process(runs[size], data, work / f"report_{label}_{size}", path), round_done
+        )
         load = os.getloadavg()
-        med: dict[str, dict[str, float]] = {}
-        for label, by in got.items():
-            small, large = by["small"], by["large"]
-            med[label] = {
-                "ratio": statistics.median(b["peak_mib"] / s["peak_mib"] for s, b in zip(small, large)),
-                "small": statistics.median(s["peak_mib"] for s in small),
-                "large": statistics.median(b["peak_mib"] for b in large),
-                "cpu_large": statistics.median(b["cpu_s"] for b in large),
-            }
+        med = {label: peak_medians(by) for label, by in got.items()}
+        for label in got:
             print(f"{label}: report peak {med[label]['small']:.1f} MiB at {rows['small']} rows, {med[label]['large']:.1f} MiB at "
                   f"{rows['large']} rows: {med[label]['ratio']:.3f}x")
         a, b = med["after"], med["before"]

@@ -28,7 +28,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, child_json, imported_from, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
 from results_file import figure, record
 
 RUNS = 4  # each instance 4 times: 2,500 instances x 4 = 10,000 rows
@@ -93,26 +93,22 @@ def main() -> None:
         old = baseline_checkout(args.baseline, work / "baseline")
         print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
-        got: dict[str, dict[str, list[dict[str, Any]]]] = {k: {"small": [], "large": []} for k in ("before", "after")}
-        for r in range(args.rounds):
-            order = (("before", old), ("after", None)) if r % 2 == 0 else (("after", None), ("before", old))
-            for label, path in order:
-                for size, rows in (("small", args.small), ("large", args.large)):
-                    got[label][size].append(measure(data, work, rows, label, path))
+        sizes = {"small": args.small, "large": args.large}
+
+        def round_done(r: int, got: dict) -> None:
             print(f"round {r + 1}: " + "; ".join(
                 f"{label} {got[label]['small'][-1]['peak_mib']:.1f} -> {got[label]['large'][-1]['peak_mib']:.1f} MiB "
                 f"({got[label]['large'][-1]['cpu_s']:.1f} s CPU at {got[label]['large'][-1]['rows']} rows)" for label in ("before", "after")), flush=True)
+
+        got = before_after_rounds(args.rounds, old, lambda label, path, size: measure(data, work, sizes[size], label, path), round_done)
         load = os.getloadavg()
         med: dict[str, dict[str, float]] = {}
         for label, by in got.items():
             small, large = by["small"], by["large"]
             med[label] = {
-                "ratio": statistics.median(b["peak_mib"] / s["peak_mib"] for s, b in zip(small, large)),
-                "small": statistics.median(s["peak_mib"] for s in small),
-                "large": statistics.median(b["peak_mib"] for b in large),
+                **peak_medians(by),
                 "per_row_kib": 1024 * statistics.median(b["peak_mib"] - s["peak_mib"] for s, b in zip(small, large))
                 / (large[0]["rows"] - small[0]["rows"]),
-                "cpu_large": statistics.median(b["cpu_s"] for b in large),
             }
             print(f"{label}: peak {med[label]['small']:.1f} MiB at {small[0]['rows']} rows, {med[label]['large']:.1f} MiB at "
                   f"{large[0]['rows']} rows: {med[label]['ratio']:.3f}x, {med[label]['per_row_kib']:.2f} KiB per extra row")
