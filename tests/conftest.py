@@ -4,14 +4,23 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 # Every summary.json, results row, sweep.json and export.json that povagent writes while the tests
 # run (in this process and in every process they start) is checked against its shipped schema as
 # it is written (povagent.results.output_check).
 os.environ["POVAGENT_CHECK_OUTPUTS"] = "1"
+
+# Hypothesis: no per-example deadline and no "too slow" health check (both wall-clock budgets
+# that the machine's load moves: a property either holds or not, however long an example
+# takes; a hang is pytest-timeout's), and no example database (it would be written into the
+# checkout). Tests that set their own settings keep them.
+settings.register_profile("povagent", deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("povagent")
 
 # Our own fixtures for plugin authors are opt-in (no pytest11 entry point): we opt in here.
 pytest_plugins = ["povagent.testing.pytest_plugin"]
@@ -103,3 +112,48 @@ def offline_plugin_file(tmp_path) -> Path:
     path = tmp_path / "offline_plugin.py"
     shutil.copy(OFFLINE_PLUGIN_SOURCE, path)
     return path.resolve()
+
+
+# -- the checkout is left as it was found -------------------------------------------------------
+# Every test writes under its tmp folder. A file a test leaves in the checkout (a command's
+# default output folder written relative to the working directory, say) fails the run here,
+# naming the paths, whichever test wrote them.
+_CHECKOUT = Path(__file__).resolve().parent.parent
+
+
+def _checkout_status() -> set[str] | None:
+    import subprocess
+
+    if not (_CHECKOUT / ".git").exists():
+        return None  # an installed copy of the tests, not a checkout: nothing to compare
+    try:
+        done = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all", "--ignored=no"], cwd=_CHECKOUT,
+                              capture_output=True, text=True, timeout=60)  # fmt: skip
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return set(done.stdout.splitlines()) if done.returncode == 0 else None
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    session.config.stash[_STATUS_KEY] = _checkout_status()
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    before = session.config.stash.get(_STATUS_KEY, None)
+    if before is None or hasattr(session.config, "workerinput"):
+        return
+    after = _checkout_status()
+    if after is None:
+        return
+    changed = sorted(after - before)
+    if changed:
+        reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+        message = "the tests changed the checkout (every test writes under its tmp folder): " + ", ".join(changed[:20])
+        if reporter is not None:
+            reporter.write_line(message, red=True)
+        else:
+            print(message, file=sys.stderr)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+_STATUS_KEY = pytest.StashKey[set[str] | None]()

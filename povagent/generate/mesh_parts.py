@@ -32,11 +32,14 @@ class MeshParts:
     materials: list[np.ndarray] = field(default_factory=list)
     owners: list[np.ndarray] = field(default_factory=list)
     rooms: list[np.ndarray] = field(default_factory=list)
+    closed: list[np.ndarray] = field(default_factory=list)
     count: int = 0
 
-    def add(self, vertices: np.ndarray, faces: np.ndarray, color, material: int, owner: int, room: int) -> None:
+    def add(self, vertices: np.ndarray, faces: np.ndarray, color, material: int, owner: int, room: int, closed: bool = True) -> None:
         """Append a triangle set; ``owner`` is the instance id (0: structure or decoration),
-        ``room`` the room whose light falls on it."""
+        ``room`` the room whose light falls on it; ``closed``: the set bounds a solid, its
+        triangles turned outward (seen from outside only), as every box, prism and sphere is;
+        a floor or a ceiling is a lone quad, seen from either side."""
         self.vertices.append(np.asarray(vertices, dtype=float))
         self.faces.append(np.asarray(faces, dtype=np.int64) + self.count)
         n = len(faces)
@@ -44,7 +47,12 @@ class MeshParts:
         self.materials.append(np.full(n, material, dtype=np.int8))
         self.owners.append(np.full(n, owner, dtype=np.int32))
         self.rooms.append(np.full(n, room, dtype=np.int32))
+        self.closed.append(np.full(n, closed, dtype=bool))
         self.count += len(vertices)
+
+    def closed_faces(self) -> np.ndarray:
+        """Per face, whether it bounds a closed solid (see :meth:`add`)."""
+        return np.concatenate(self.closed)
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(vertices, faces, face colours, materials, owners, rooms) as flat arrays."""

@@ -459,8 +459,8 @@ def add_structure(mesh: MeshParts, plan: FloorPlan, rng: np.random.Generator) ->
         floor = _pick(rng, FLOOR_TILES if tiled else FLOOR_WOODS)
         quad = np.array([[r.x0, 0, r.z0], [r.x1, 0, r.z0], [r.x1, 0, r.z1], [r.x0, 0, r.z1]], dtype=float)
         tris = np.array([[0, 1, 2], [0, 2, 3]])
-        mesh.add(quad, tris, floor, FLOOR_TILE if tiled else FLOOR_WOOD, 0, room.room_id)
-        mesh.add(quad + [0, WALL_HEIGHT, 0], tris, (0.96, 0.96, 0.95), CEILING, 0, room.room_id)
+        mesh.add(quad, tris, floor, FLOOR_TILE if tiled else FLOOR_WOOD, 0, room.room_id, closed=False)
+        mesh.add(quad + [0, WALL_HEIGHT, 0], tris, (0.96, 0.96, 0.95), CEILING, 0, room.room_id, closed=False)
     for slab in plan.slabs:
         r = slab.rect
         mesh.add(*box_mesh((r.x0, slab.y0, r.z0), (r.x1, slab.y1, r.z1)), paints[slab.room_id], WALL, 0, slab.room_id)

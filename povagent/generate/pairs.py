@@ -12,6 +12,7 @@ sentences are written. What it must not do: write files.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -162,8 +163,9 @@ def observer_camera(house: House, observer: PlacedObject, anchor: PlacedObject) 
     horizontal = float(np.linalg.norm(flat))
     if horizontal < 0.6 or float(np.dot(flat, d)) <= 0:
         return None
-    yaw = float(np.degrees(np.arctan2(flat[0], flat[1]))) % 360.0
-    horizon = float(np.degrees(np.arctan2(OBSERVER_HEIGHT - anchor.center[1], horizontal)))
+    # math's atan2 (libm), not numpy's, whose AVX-512 kernel rounds otherwise than its AVX2 one
+    yaw = math.degrees(math.atan2(float(flat[0]), float(flat[1]))) % 360.0
+    horizon = math.degrees(math.atan2(OBSERVER_HEIGHT - anchor.center[1], horizontal))
     x, z = (round(float(v), 4) for v in pos)
     return Camera((x, OBSERVER_HEIGHT, z), round(yaw, 3), round(horizon, 3), FOV, 512, 512)
 

@@ -56,6 +56,7 @@ from povagent.generate.mesh_parts import (
     MeshParts,
 )  # fmt: skip
 from povagent.generate.scene import House
+from povagent.generate.visible_face import VisibleFaces
 from povagent.geometry.camera import Camera
 
 BACKGROUND = np.array([0.55, 0.6, 0.65], dtype=np.float32)
@@ -99,14 +100,52 @@ def _embree_scene(vertices: np.ndarray, faces: np.ndarray) -> rtcore_scene.Embre
     return scene
 
 
+_TWO_PI = 2.0 * np.pi
+_SINE_TERMS = tuple((-1.0) ** k / np.prod(np.arange(1.0, 2 * k + 2)) for k in range(1, 9))  # -1/3!, 1/5!, ... -1/17!
+
+
+def _sin(x: np.ndarray) -> np.ndarray:
+    """``sin(x)`` as an array of ``x``'s dtype, the same bits on every CPU.
+
+    numpy's own ``sin`` runs kernels chosen for the CPU (its float32 loop differs between
+    x86-64-v2 and v3 machines in the last bit, which the texture hash multiplies by 43758):
+    here the argument is reduced by 2 pi and folded into [-pi/2, pi/2] in float64, then the
+    Taylor series to x^17 (error under 1e-12) is summed with IEEE products and sums only.
+    """
+    r = np.asarray(x, dtype=np.float64)
+    r = r - np.rint(r * (1.0 / _TWO_PI)) * _TWO_PI
+    r = np.where(r > np.pi / 2, np.pi - r, r)
+    r = np.where(r < -np.pi / 2, -np.pi - r, r)
+    r2 = r * r
+    total = np.full_like(r, _SINE_TERMS[-1])
+    for term in _SINE_TERMS[-2::-1]:
+        total *= r2
+        total += term
+    total *= r2
+    total *= r
+    total += r
+    return total.astype(np.asarray(x).dtype, copy=False)
+
+
 def _hash2(a: np.ndarray, b: np.ndarray | float) -> np.ndarray:
     """A cheap deterministic pseudo-random value in [0, 1) per integer cell (a, b)."""
     v = a * 12.9898  # in place from here: the same operations in the same order
     v += b * 78.233
-    np.sin(v, out=v)
+    v = _sin(v)
     v *= 43758.5453
     v -= np.floor(v)
     return v
+
+
+def _power_40(x: np.ndarray) -> np.ndarray:
+    """``x ** 40`` by squaring (numpy's ``power`` differs between CPUs in the last bit)."""
+    x8 = x * x
+    x8 *= x8
+    x8 *= x8  # x^8
+    x32 = x8 * x8
+    x32 *= x32  # x^32
+    x32 *= x8
+    return x32
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -130,10 +169,12 @@ class Renderer:
         # lamp shades glow and let their light through: the shadow scene leaves them out
         opaque = materials != EMISSIVE
         self._shadow_scene = _embree_scene(vertices, faces[opaque])
-        v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
-        n = np.cross(v1 - v0, v2 - v0)
-        norm = np.linalg.norm(n, axis=1, keepdims=True)
-        normals = n / np.where(norm > 0, norm, 1.0)
+        # faces that shade alike (colour, material, object, room) share a look: between two
+        # coplanar faces of one look it does not matter which one embree reports
+        look_rows = np.column_stack([np.asarray(colors, dtype=np.float32).view(np.int32), materials, owners, rooms]).astype(np.int64)
+        looks = np.unique(look_rows, axis=0, return_inverse=True)[1].ravel()
+        self._visible = VisibleFaces.build(vertices, faces, looks, mesh.closed_faces())
+        normals = self._visible.face_normals  # each face's coplanar group's normal
         lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
         # per face, gathered per frame (each its own contiguous (3, F) array, so a gather gives
         # (3, N) rows that numpy's passes run over at full speed): normal, colour, its room's light
@@ -183,12 +224,12 @@ class Renderer:
         return out
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """First triangle hit by each (unit) ray and the distance to it (-1 and inf: no hit)."""
+        """First triangle seen by each (unit) ray, (N, 3) arrays, and the float64 distance to it
+        (-1 and inf: no hit), the same on every CPU (:class:`VisibleFaces`)."""
         # float32 views are read as they are (embree's wrapper takes any strides): no copies
-        out = self._scene.run(np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32), output=1)
-        tri = out["primID"].astype(np.int64)
-        t = np.where(tri >= 0, out["tfar"], np.inf)
-        return tri, t
+        o32, d32 = np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32)
+        out = self._scene.run(o32, d32, output=1)
+        return self._visible.decide(out["primID"].astype(np.int64), o32.T, d32.T)
 
     def first_hit(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Instance id (0: structure or nothing) and distance of each ray's first hit."""
@@ -200,9 +241,8 @@ class Renderer:
         W, H = camera.width, camera.height
         tri, t, planes = self._cast_and_shade(camera)
         hit = tri >= 0
-        t[~hit] = np.inf
         # optical-axis depth: the ray length times the cosine to the forward axis (= zc)
-        depth = t * self._grids[(W, H, camera.fov)][2]  # inf where nothing was hit
+        depth = t.astype(np.float32) * self._grids[(W, H, camera.fov)][2]  # inf where nothing was hit
         if hit.all():  # the usual case indoors
             instance = self._owners[tri]
         else:
@@ -227,13 +267,14 @@ class Renderer:
         origin = np.asarray(camera.position, dtype=np.float32)
         # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy
         out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
-        tri, t = out["primID"].astype(np.intp), out["tfar"]  # indices as numpy's gathers want them
+        tri, t64 = self._visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width)
+        t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
             block = slice(start, start + SHADE_BLOCK)
             rgb = self._shade_block(tri[block], t[block], d[:, block], origin)
             np.copyto(planes[:, block], rgb, casting="unsafe")  # as ``astype(np.uint8)``
-        return tri, t, planes
+        return tri, t64, planes
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """Colours (3, n) of a block of pixels, scaled to 0.5-255 (truncated to bytes after)."""
@@ -260,8 +301,9 @@ class Renderer:
     def instance_mask(self, camera: Camera) -> np.ndarray:
         """Only the instance mask (no shading): a cheap probe of what a camera would see."""
         dirs = self._directions(camera).T
-        origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), dirs.shape)
-        tri, _ = self.cast(origins, dirs)
+        origin = np.asarray(camera.position, dtype=np.float32)
+        out = self._scene.run(np.broadcast_to(origin, dirs.shape), dirs, output=1)
+        tri, _ = self._visible.decide_image(out["primID"].astype(np.int64), origin, dirs.T, camera.height, camera.width)
         owners = np.where(tri >= 0, self._owners[np.where(tri >= 0, tri, 0)], 0)
         return owners.reshape(camera.height, camera.width)
 
@@ -336,7 +378,8 @@ class Renderer:
             half = np.take(L, shiny, axis=1)
             half -= np.take(d, shiny, axis=1)
             half /= np.sqrt(_dot(half, half))
-            spec = np.clip(_dot(np.take(n, shiny, axis=1), half), 0, 1) ** 40
+            spec = np.clip(_dot(np.take(n, shiny, axis=1), half), 0, 1)
+            spec = _power_40(spec)
             spec *= 0.45
             for row in color:
                 row[shiny] = np.take(row, shiny) + spec
@@ -354,7 +397,7 @@ class Renderer:
         m = mat == WOOD
         if m.any():
             am = a[m]
-            out[m] = 0.94 + 0.06 * np.sin(am * 30.0 + 2.0 * np.sin(b[m] * 5.0 + am * 2.0))
+            out[m] = 0.94 + 0.06 * _sin(am * 30.0 + 2.0 * _sin(b[m] * 5.0 + am * 2.0))
         m = mat == FABRIC
         if m.any():
             out[m] = 0.93 + 0.07 * _hash2(np.floor(a[m] * 160), np.floor(b[m] * 160))
@@ -371,7 +414,7 @@ class Renderer:
             along = (z + shift) / 1.4
             # v - floor(v) is v % 1.0 exactly (the same value, rounded once) at a fraction of the cost
             seam = (across - plank < 0.05) | (along - np.floor(along) < 0.012)
-            grain = 0.97 + 0.03 * np.sin(z * 25.0 + 1.5 * np.sin(x * 20.0 + plank))
+            grain = 0.97 + 0.03 * _sin(z * 25.0 + 1.5 * _sin(x * 20.0 + plank))
             out[m] = np.where(seam, 0.55, tint * grain)
         m = mat == FLOOR_TILE
         if m.any():

@@ -132,7 +132,7 @@ class Camera:
     @property
     def focal_px(self) -> float:
         """Focal length in pixels: ``(W/2)/tan(fov/2)``, the width's field of view (as officially)."""
-        return (self.width / 2.0) / np.tan(np.radians(self.fov) / 2.0)
+        return (self.width / 2.0) / math.tan(math.radians(self.fov) / 2.0)  # libm: numpy's tan differs by CPU
 
     def axes(self) -> np.ndarray:
         """Rows ``right, up, forward`` as a (3, 3) world-to-camera rotation."""

@@ -1,4 +1,5 @@
-"""SIGTERM stops a run the way Ctrl-C does: cleanly, rows kept, the summary marked interrupted.
+"""SIGTERM stops a run the way Ctrl-C does: cleanly, rows kept, the summary marked interrupted;
+SIGINT stops it even where it was inherited ignored (a job a script started in the background).
 
 Schedulers (Slurm, Kubernetes, systemd) and ``timeout`` stop a job with SIGTERM; Python's
 default for it is to die at once, with no message and no summary. Inside
@@ -82,6 +83,12 @@ def sigterm_as_interrupt() -> Iterator[StopRequest]:
             raise KeyboardInterrupt
 
     previous = signal.signal(signal.SIGTERM, on_sigterm)
+    # a command started in the background by a script (``cmd &``, ``nohup cmd &``) inherits
+    # SIGINT ignored, and Python keeps it so: a ``kill -INT`` would then do nothing. A run is
+    # stopped by SIGINT wherever it was started, as Ctrl-C stops it in a terminal.
+    ignored = signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    if ignored:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         yield state
     except asyncio.CancelledError:
@@ -92,6 +99,8 @@ def sigterm_as_interrupt() -> Iterator[StopRequest]:
         raise KeyboardInterrupt from None
     finally:
         signal.signal(signal.SIGTERM, previous)
+        if ignored:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 @contextlib.contextmanager

@@ -77,11 +77,19 @@ def rows(tmp_path: Path) -> list[dict]:
     return [json.loads(line) for line in text.splitlines() if line.strip()]
 
 
-@pytest.mark.parametrize("which", [signal.SIGTERM, signal.SIGINT])
-def test_a_signal_ends_a_run_whose_litellm_import_never_finishes(tmp_path, mini_root, which):
+def _sigint(disposition):
+    """A child's SIGINT handling as set before it starts, whatever this process's is (a suite run
+    in the background, ``nohup pytest &``, inherits SIGINT ignored)."""
+    return lambda: signal.signal(signal.SIGINT, disposition)
+
+
+@pytest.mark.parametrize(("which", "inherited"), [(signal.SIGTERM, signal.SIG_DFL), (signal.SIGINT, signal.SIG_DFL), (signal.SIGINT, signal.SIG_IGN)],
+                         ids=["SIGTERM", "SIGINT", "SIGINT inherited ignored"])  # fmt: skip
+def test_a_signal_ends_a_run_whose_litellm_import_never_finishes(tmp_path, mini_root, which, inherited):
     folder = stand_in(tmp_path, HANGING)
     proc = subprocess.Popen([sys.executable, "-c", CLI, "run", str(pipeline(tmp_path, mini_root)), "--quiet"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env_with(folder))
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env_with(folder),
+                            preexec_fn=_sigint(inherited))  # fmt: skip
     try:
         deadline = time.monotonic() + 60
         while not (tmp_path / "run" / "results.jsonl").exists() and time.monotonic() < deadline:

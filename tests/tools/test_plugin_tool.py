@@ -117,6 +117,6 @@ def test_show_prompt_describes_a_plugin_tool_the_run_would_offer(generated_relea
     from povagent.cli import app
 
     path = write_pipeline(generated_release, tmp_path / "run", model, zoom=True)
-    result = CliRunner().invoke(app, ["show-prompt", str(path), "--instance", "train_house_00000/pair_000/front/a"])
+    result = CliRunner().invoke(app, ["show-prompt", str(path), "--instance", "train_house_00000/pair_000/front/a", "--out", str(tmp_path / "shown")])
     assert result.exit_code == 0, result.output
     assert "zoom(factor) narrows the field of view" in " ".join(result.output.split())

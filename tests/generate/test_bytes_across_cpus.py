@@ -1,0 +1,150 @@
+"""A generated set and a rendered view are the same bytes whatever the CPU's features.
+
+The pins of ``test_active_tool_bytes.py`` once held only on the kind of machine they were made
+on: embree's AVX-512 and AVX2 kernels round hit distances differently, so every frame differed.
+Here one small set and one view are made in child processes that each switch off what this
+machine can switch off, and every file must match the pins and each other:
+
+* embree's ISA (sse2 ... avx512), forced through ``rtcNewDevice``'s configuration string by a
+  shim preloaded into the child (embreex passes no configuration of its own); the shim is
+  compiled here with the C compiler the README's machine has;
+* numpy's dispatch (``NPY_DISABLE_CPU_FEATURES``: x86-64-v2 baseline only, or no AVX-512);
+* OpenBLAS's kernel (``OPENBLAS_CORETYPE``).
+
+What no child can switch off (another vendor's rounding of approximate instructions, another
+zlib) is named in ``docs/explanation/reproducibility.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
+
+CHILD = Path(__file__).with_name("cpu_bytes_child.py")
+#: SHA-256 of the child's JSON (every file of the set and the view's PNG, by name).
+PINNED = "d803e1c545ac2656ac7519c3f9f6b8cd17ed442e5c662264d8280c313babd0cd"
+#: numpy's dispatch targets above the x86-64-v2 baseline, and the AVX-512 ones alone.
+NUMPY_V2_ONLY = "X86_V3 X86_V4 AVX512_ICL AVX512_SPR"
+NUMPY_NO_AVX512 = "X86_V4 AVX512_ICL AVX512_SPR"
+
+SHIM = r"""
+#include <dlfcn.h>
+#include <stdlib.h>
+typedef void *RTCDevice;
+RTCDevice rtcNewDevice(const char *cfg) {
+    static RTCDevice (*real)(const char *) = 0;
+    if (!real) {
+        void *lib = dlopen(getenv("POVAGENT_TEST_EMBREE_LIB"), RTLD_NOW | RTLD_NOLOAD);
+        if (!lib) lib = dlopen(getenv("POVAGENT_TEST_EMBREE_LIB"), RTLD_NOW);
+        if (!lib) abort();
+        real = (RTCDevice (*)(const char *))dlsym(lib, "rtcNewDevice");
+        if (!real) abort();
+    }
+    const char *forced = getenv("POVAGENT_TEST_EMBREE_CONFIG");
+    return real(forced ? forced : cfg);
+}
+"""
+
+
+def _embree_library() -> Path:
+    import embreex
+
+    found = sorted((Path(embreex.__file__).parent.parent / "embreex.libs").glob("libembree4*.so*"))
+    assert found, "the embreex wheel's bundled libembree4 was not found beside it (embreex.libs/)"
+    return found[0]
+
+
+def _cpu_flags() -> set[str]:
+    for line in Path("/proc/cpuinfo").read_text().splitlines():
+        if line.startswith("flags"):
+            return set(line.split(":", 1)[1].split())
+    return set()
+
+
+def _isas() -> list[str]:
+    """The embree ISAs this CPU runs, each with the numpy and OpenBLAS setting its child uses."""
+    flags = _cpu_flags()
+    isas = ["sse2", "sse4.2"]
+    if {"avx", "avx2", "fma"} <= flags:
+        isas += ["avx", "avx2"]
+    if {"avx512f", "avx512dq", "avx512cd", "avx512bw", "avx512vl"} <= flags:
+        isas.append("avx512")
+    return isas
+
+
+@pytest.fixture(scope="module")
+def shim(tmp_path_factory) -> Path:
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    assert compiler, "a C compiler (cc) is needed to force embree's ISA in this test"
+    folder = tmp_path_factory.mktemp("embree-shim")
+    (folder / "shim.c").write_text(SHIM)
+    subprocess.run([compiler, "-shared", "-fPIC", "-o", str(folder / "shim.so"), str(folder / "shim.c"), "-ldl"], check=True, timeout=120)
+    return folder / "shim.so"
+
+
+def _child(out: Path, env: dict[str, str]) -> dict[str, str]:
+    base = {k: v for k, v in os.environ.items() if not k.startswith(("NPY_", "OPENBLAS_", "POVAGENT_TEST_EMBREE"))}
+    done = subprocess.run([sys.executable, str(CHILD), str(out)], env={**base, **env}, capture_output=True, text=True, timeout=240)
+    assert done.returncode == 0, f"{env}: {done.stderr[-2000:]}"
+    return json.loads(done.stdout)
+
+
+def _settings(shim: Path) -> dict[str, dict[str, str]]:
+    library = str(_embree_library())
+    settings: dict[str, dict[str, str]] = {"as installed": {}}
+    for k, isa in enumerate(_isas()):
+        numpy = [NUMPY_V2_ONLY, NUMPY_NO_AVX512, ""][k % 3]
+        blas = ["Prescott", "Haswell", "SkylakeX"][k % 3]
+        settings[f"embree {isa}, numpy off: {numpy or '-'}, OpenBLAS {blas}"] = {
+            "LD_PRELOAD": str(shim), "POVAGENT_TEST_EMBREE_LIB": library, "POVAGENT_TEST_EMBREE_CONFIG": f"isa={isa}",
+            "NPY_DISABLE_CPU_FEATURES": numpy, "OPENBLAS_CORETYPE": blas,
+        }  # fmt: skip
+    return settings
+
+
+def test_a_generated_set_and_a_view_are_the_same_bytes_with_every_cpu_feature_switched_off(shim, tmp_path):
+    settings = _settings(shim)
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        results = dict(zip(settings, pool.map(lambda kv: _child(tmp_path / f"set{kv[0]}", kv[1]), enumerate(settings.values()))))
+    reference = results["as installed"]
+    for name, digests in results.items():
+        differing = sorted(k for k in reference.keys() | digests.keys() if reference.get(k) != digests.get(k))
+        assert not differing, f"{name}: {differing}"
+    assert hashlib.sha256(json.dumps(reference, sort_keys=True).encode()).hexdigest() == PINNED
+
+
+RAW_DISTANCES = """
+import hashlib, numpy as np
+from embreex import rtcore_scene
+from embreex.mesh_construction import TriangleMesh
+rng = np.random.default_rng(0)
+scene = rtcore_scene.EmbreeScene(robust=False)
+TriangleMesh(scene=scene, vertices=(rng.random((3000, 3)) * 10).astype(np.float32), indices=rng.integers(0, 3000, (3000, 3)).astype(np.int32))
+d = rng.normal(size=(65536, 3)).astype(np.float32)
+d /= np.sqrt((d * d).sum(axis=1))[:, None]
+out = scene.run(np.tile(np.float32([5, 5, -5]), (65536, 1)), d, output=1)
+print(hashlib.sha256(out["tfar"].tobytes()).hexdigest())
+"""
+
+
+def test_the_isas_forced_here_are_real_embree_reports_other_distances_under_them(shim):
+    """What the fix is for, and proof the shim reaches embree: its own hit distances differ
+    between the lowest and the highest ISA forced (so the test above compares real kernels)."""
+    isas = _isas()
+    seen = {}
+    for isa in (isas[0], isas[-1]):
+        env = {**os.environ, "LD_PRELOAD": str(shim), "POVAGENT_TEST_EMBREE_LIB": str(_embree_library()), "POVAGENT_TEST_EMBREE_CONFIG": f"isa={isa}"}
+        done = subprocess.run([sys.executable, "-c", RAW_DISTANCES], env=env, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr[-2000:]
+        seen[isa] = done.stdout.strip()
+    assert seen[isas[0]] != seen[isas[-1]], seen
