@@ -50,8 +50,10 @@ CONTAINS_TOLERANCE = 1e-5
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
 #: A hit within this distance (metres) of a watched edge is decided exactly.
 EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
-#: Side of the cubic cells (metres) of the lookup tables.
+#: Side of the cubic cells (metres) of the faces' lookup table ...
 CELL = 0.25
+#: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
+EDGE_CELL = 0.0625
 #: Cell coordinates are packed into one integer key, this many values an axis (a house spans
 #: far less than 2048 * 0.25 m).
 _CELL_SPAN = 2048
@@ -70,11 +72,10 @@ class CellTable:
 
     @classmethod
     def build(cls, key_lists: list[np.ndarray], item_lists: list[np.ndarray], order_by: np.ndarray | None = None) -> CellTable:
-        """From per-item key arrays; within a key, items in ``order_by``'s order (ascending)."""
-        if not key_lists:
-            return cls(np.zeros(0, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64))
-        key = np.concatenate(key_lists)
-        item = np.concatenate(item_lists)
+        """From key arrays and the item of each key; within a key, items in ``order_by``'s
+        order (ascending), else by item."""
+        key = np.concatenate(key_lists).astype(np.int64)
+        item = np.concatenate(item_lists).astype(np.int64)
         rank = item if order_by is None else order_by[item]
         order = np.lexsort((rank, key))
         key, item = key[order], item[order]
@@ -148,9 +149,8 @@ class VisibleFaces:
         np.minimum.at(first, group, np.arange(count))
         edges, edge_offsets = _inward_edges(own, a, b, c)
         # every face under (its group, each cell its grown box reaches), the highest first
-        low, high = _cell(lo), _cell(hi)
-        keys = [_box_keys(group[f], low[f], high[f]) for f in range(count)]
-        table = CellTable.build(keys, [np.full(len(k), f) for f, k in enumerate(keys)], order_by=-np.arange(count))
+        key, item = _boxes_keys(group, _cell(lo, CELL), _cell(hi, CELL))
+        table = CellTable.build([key], [item], order_by=-np.arange(count))
         look = looks[table.items]
         sizes = np.diff(table.starts)
         differs = look != np.repeat(look[table.starts[:-1]], sizes)
@@ -158,10 +158,11 @@ class VisibleFaces:
         np.logical_or.at(mixed, np.repeat(np.arange(len(table.keys)), sizes), differs)
         overlapped = _overlapped_sides(v, faces, own, closed, looks, left, right)
         # watched edges: creases, and every edge of a face listed under a mixed key
-        across = _groups_across_edges(v, faces, group)
+        across, internal = _groups_across_edges(v, faces, group, looks)
         in_mixed = np.zeros(count, dtype=bool)
         in_mixed[table.items[np.repeat(mixed, sizes)]] = True
-        watch = (across >= 0).any(axis=2) | in_mixed[:, None]
+        # (an edge inside a region of one look, a quad's diagonal, decides nothing)
+        watch = (across >= 0).any(axis=2) | (in_mixed[:, None] & ~internal)
         wf, we = np.nonzero(watch)
         p, q = v[faces[wf, we]], v[faces[wf, (we + 1) % 3]]
         line = _unit(_cross(own[wf], q - p))
@@ -169,9 +170,8 @@ class VisibleFaces:
         edge_line = np.concatenate([line, _dot3(line, p)[:, None]], axis=1)
         edge_along = np.concatenate([along, _dot3(along, p)[:, None], _dot3(along, q)[:, None]], axis=1)
         grow = EDGE_MARGIN + TOUCH_MARGIN
-        elow, ehigh = _cell(np.minimum(p, q) - grow), _cell(np.maximum(p, q) + grow)
-        ekeys = [_box_keys(group[wf[i]], elow[i], ehigh[i]) for i in range(len(wf))]
-        watched = CellTable.build(ekeys, [np.full(len(k), i) for i, k in enumerate(ekeys)])
+        ekey, eitem = _boxes_keys(group[wf], _cell(np.minimum(p, q) - grow, EDGE_CELL), _cell(np.maximum(p, q) + grow, EDGE_CELL))
+        watched = CellTable.build([ekey], [eitem])
         return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
                    watched, edge_line, edge_along, across[wf, we])  # fmt: skip
 
@@ -204,7 +204,7 @@ class VisibleFaces:
         side = (n[:, 0] * d[0][rays] + n[:, 1] * d[1][rays] + n[:, 2] * d[2][rays] >= 0).astype(np.intp)
         decide = np.flatnonzero(self.overlapped[tri[rays], side] | near_edge)
         if len(decide):
-            at = self.faces.find(_key(self.group[tri[rays[decide]]], [p[decide] for p in point]))
+            at = self.faces.find(_key(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
             listed = at >= 0
             listed[listed] = self.mixed[at[listed]]
             pick = decide[listed]
@@ -246,7 +246,7 @@ class VisibleFaces:
         ahead = np.isfinite(dist) & (dist > 0)
         ray, cand, dist = ray[ahead], cand[ahead], dist[ahead]
         point = _points(o, d, ray, dist)
-        at = self.faces.find(_key(cand, point))
+        at = self.faces.find(_key(cand, point, CELL))
         face = np.full(len(ray), -1, dtype=np.int64)
         listed = np.flatnonzero(at >= 0)
         face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[listed], d)
@@ -274,7 +274,7 @@ class VisibleFaces:
         """Which points lie within ``EDGE_MARGIN`` of a watched edge of their group, and the
         (point index, group) pairs of the groups across the creases they lie near."""
         near = np.zeros(len(group), dtype=bool)
-        at = self.watched.find(_key(group, point))
+        at = self.watched.find(_key(group, point, EDGE_CELL))
         listed = np.flatnonzero(at >= 0)
         row, edge = self.watched.explode(at[listed])
         row = listed[row]
@@ -330,9 +330,9 @@ def _points(o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray, dist: np.
     return [(o[k] if o.ndim == 1 else o[k][ray]) + d[k][ray] * dist for k in range(3)]
 
 
-def _cell(x: np.ndarray) -> np.ndarray:
-    """The cell coordinates of positions."""
-    return np.floor(np.asarray(x, dtype=np.float64) * (1.0 / CELL)).astype(np.int64)
+def _cell(x: np.ndarray, size: float) -> np.ndarray:
+    """The cell coordinates of positions, in cells of ``size`` metres."""
+    return np.floor(np.asarray(x, dtype=np.float64) * (1.0 / size)).astype(np.int64)
 
 
 def _pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -344,16 +344,21 @@ def _pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
     return key
 
 
-def _key(group: np.ndarray, point: list[np.ndarray]) -> np.ndarray:
+def _key(group: np.ndarray, point: list[np.ndarray], size: float) -> np.ndarray:
     """The (group, cell) key of each point."""
-    return _pack(group, np.stack([_cell(p) for p in point], axis=-1))
+    return _pack(group, np.stack([_cell(p, size) for p in point], axis=-1))
 
 
-def _box_keys(group: int, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-    """The keys of every cell from ``low`` to ``high`` (inclusive) for one group."""
-    cells = [np.arange(low[k], high[k] + 1) for k in range(3)]
-    grid = np.stack(np.meshgrid(*cells, indexing="ij"), axis=-1).reshape(-1, 3)
-    return _pack(np.full(len(grid), group), grid)
+def _boxes_keys(group: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The keys of every cell from ``low[i]`` to ``high[i]`` (inclusive) of each item i, in its
+    group, and the item of each key."""
+    dims = high - low + 1  # (n, 3)
+    sizes = dims.prod(axis=1)
+    item = np.repeat(np.arange(len(group)), sizes)
+    local = np.arange(len(item)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    dy, dz = dims[item, 1], dims[item, 2]
+    cells = np.stack([local // (dy * dz), (local // dz) % dy, local % dz], axis=1) + low[item]
+    return _pack(group[item], cells), item
 
 
 def _unique_pairs(ray: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -423,9 +428,11 @@ def _overlapped_sides(v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed:
     return out
 
 
-def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray) -> np.ndarray:
+def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3, 2): for each face's edge k (from corner k to k + 1), the groups of up to two other
-    faces with an edge between the same two points, where their group is not the face's (-1)."""
+    faces with an edge between the same two points, where their group is not the face's (-1);
+    and (F, 3): whether every other face on the edge is of the face's group and look (and
+    there is one: the edge lies inside a region of one look)."""
     _, position = np.unique(v, axis=0, return_inverse=True)
     corner = position.ravel()[faces]
     ends = np.stack([corner, np.roll(corner, -1, axis=1)], axis=-1)  # (F, 3, 2)
@@ -434,6 +441,7 @@ def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray) ->
     order = np.lexsort((owner, edge_id))
     edge_sorted, owner_sorted = edge_id[order], owner[order]
     across = np.full((len(faces) * 3, 2), -1, dtype=np.int64)
+    internal = np.zeros(len(faces) * 3, dtype=bool)
     starts = np.flatnonzero(np.r_[True, edge_sorted[1:] != edge_sorted[:-1]])
     stops = np.r_[starts[1:], len(edge_sorted)]
     for s, e in zip(starts.tolist(), stops.tolist()):
@@ -441,10 +449,12 @@ def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray) ->
             continue
         sharing = owner_sorted[s:e].tolist()
         for slot in order[s:e].tolist():
-            mine = group[slot // 3]
-            others = [int(group[f]) for f in sharing if group[f] != mine][:2]
-            across[slot, : len(others)] = others
-    return across.reshape(len(faces), 3, 2)
+            me = slot // 3
+            others = [f for f in sharing if f != me]
+            crossing = [int(group[f]) for f in others if group[f] != group[me]][:2]
+            across[slot, : len(crossing)] = crossing
+            internal[slot] = all(group[f] == group[me] and looks[f] == looks[me] for f in others)
+    return across.reshape(len(faces), 3, 2), internal.reshape(len(faces), 3)
 
 
 def _inward_edges(normal: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

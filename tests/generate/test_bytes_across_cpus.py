@@ -6,8 +6,8 @@ Here one small set and one view are made in child processes that each switch off
 machine can switch off, and every file must match the pins and each other:
 
 * embree's ISA (sse2 ... avx512), forced through ``rtcNewDevice``'s configuration string by a
-  shim preloaded into the child (embreex passes no configuration of its own); the shim is
-  compiled here with the C compiler the README's machine has;
+  shim preloaded into the child (:mod:`povagent.testing.embree_isa`: embreex passes no
+  configuration of its own); the shim is compiled with the C compiler the README's machine has;
 * numpy's dispatch (``NPY_DISABLE_CPU_FEATURES``: x86-64-v2 baseline only, or no AVX-512);
 * OpenBLAS's kernel (``OPENBLAS_CORETYPE``).
 
@@ -20,13 +20,14 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+
+from povagent.testing.embree_isa import build_shim, cpu_isas, isa_environment
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
@@ -37,59 +38,9 @@ PINNED = "d803e1c545ac2656ac7519c3f9f6b8cd17ed442e5c662264d8280c313babd0cd"
 NUMPY_V2_ONLY = "X86_V3 X86_V4 AVX512_ICL AVX512_SPR"
 NUMPY_NO_AVX512 = "X86_V4 AVX512_ICL AVX512_SPR"
 
-SHIM = r"""
-#include <dlfcn.h>
-#include <stdlib.h>
-typedef void *RTCDevice;
-RTCDevice rtcNewDevice(const char *cfg) {
-    static RTCDevice (*real)(const char *) = 0;
-    if (!real) {
-        void *lib = dlopen(getenv("POVAGENT_TEST_EMBREE_LIB"), RTLD_NOW | RTLD_NOLOAD);
-        if (!lib) lib = dlopen(getenv("POVAGENT_TEST_EMBREE_LIB"), RTLD_NOW);
-        if (!lib) abort();
-        real = (RTCDevice (*)(const char *))dlsym(lib, "rtcNewDevice");
-        if (!real) abort();
-    }
-    const char *forced = getenv("POVAGENT_TEST_EMBREE_CONFIG");
-    return real(forced ? forced : cfg);
-}
-"""
-
-
-def _embree_library() -> Path:
-    import embreex
-
-    found = sorted((Path(embreex.__file__).parent.parent / "embreex.libs").glob("libembree4*.so*"))
-    assert found, "the embreex wheel's bundled libembree4 was not found beside it (embreex.libs/)"
-    return found[0]
-
-
-def _cpu_flags() -> set[str]:
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("flags"):
-            return set(line.split(":", 1)[1].split())
-    return set()
-
-
-def _isas() -> list[str]:
-    """The embree ISAs this CPU runs, each with the numpy and OpenBLAS setting its child uses."""
-    flags = _cpu_flags()
-    isas = ["sse2", "sse4.2"]
-    if {"avx", "avx2", "fma"} <= flags:
-        isas += ["avx", "avx2"]
-    if {"avx512f", "avx512dq", "avx512cd", "avx512bw", "avx512vl"} <= flags:
-        isas.append("avx512")
-    return isas
-
-
 @pytest.fixture(scope="module")
 def shim(tmp_path_factory) -> Path:
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    assert compiler, "a C compiler (cc) is needed to force embree's ISA in this test"
-    folder = tmp_path_factory.mktemp("embree-shim")
-    (folder / "shim.c").write_text(SHIM)
-    subprocess.run([compiler, "-shared", "-fPIC", "-o", str(folder / "shim.so"), str(folder / "shim.c"), "-ldl"], check=True, timeout=120)
-    return folder / "shim.so"
+    return build_shim(tmp_path_factory.mktemp("embree-shim"))
 
 
 def _child(out: Path, env: dict[str, str]) -> dict[str, str]:
@@ -100,15 +51,12 @@ def _child(out: Path, env: dict[str, str]) -> dict[str, str]:
 
 
 def _settings(shim: Path) -> dict[str, dict[str, str]]:
-    library = str(_embree_library())
     settings: dict[str, dict[str, str]] = {"as installed": {}}
-    for k, isa in enumerate(_isas()):
+    for k, isa in enumerate(cpu_isas()):
         numpy = [NUMPY_V2_ONLY, NUMPY_NO_AVX512, ""][k % 3]
         blas = ["Prescott", "Haswell", "SkylakeX"][k % 3]
         settings[f"embree {isa}, numpy off: {numpy or '-'}, OpenBLAS {blas}"] = {
-            "LD_PRELOAD": str(shim), "POVAGENT_TEST_EMBREE_LIB": library, "POVAGENT_TEST_EMBREE_CONFIG": f"isa={isa}",
-            "NPY_DISABLE_CPU_FEATURES": numpy, "OPENBLAS_CORETYPE": blas,
-        }  # fmt: skip
+            **isa_environment(shim, isa), "NPY_DISABLE_CPU_FEATURES": numpy, "OPENBLAS_CORETYPE": blas}
     return settings
 
 
@@ -140,10 +88,10 @@ print(hashlib.sha256(out["tfar"].tobytes()).hexdigest())
 def test_the_isas_forced_here_are_real_embree_reports_other_distances_under_them(shim):
     """What the fix is for, and proof the shim reaches embree: its own hit distances differ
     between the lowest and the highest ISA forced (so the test above compares real kernels)."""
-    isas = _isas()
+    isas = cpu_isas()
     seen = {}
     for isa in (isas[0], isas[-1]):
-        env = {**os.environ, "LD_PRELOAD": str(shim), "POVAGENT_TEST_EMBREE_LIB": str(_embree_library()), "POVAGENT_TEST_EMBREE_CONFIG": f"isa={isa}"}
+        env = {**os.environ, **isa_environment(shim, isa)}
         done = subprocess.run([sys.executable, "-c", RAW_DISTANCES], env=env, capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stderr[-2000:]
         seen[isa] = done.stdout.strip()
