@@ -23,7 +23,6 @@ from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ReadTargetError
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
-
 #: What a document nesting deeper than Python's parser follows is told (a hostile file may nest
 #: lists 100,000 deep: one line, never a ``RecursionError``).
 TOO_DEEP = "nests lists or objects too deeply to be a release file"
