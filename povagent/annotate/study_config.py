@@ -22,6 +22,7 @@ Judge mode takes a YAML of its own, naming the judge and the runs whose predicti
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
@@ -62,8 +63,6 @@ def load_study(path: str | Path) -> AnswerStudy | JudgeStudy:
 
 
 def _judge_study(source: ConfigSource) -> JudgeStudy:
-    import re
-
     data = dict(source.data)
     unknown = sorted(set(data) - {"judge", "runs", "judgements", "seed"})
     if unknown:
@@ -105,6 +104,8 @@ def load_answer_study(path: str | Path) -> AnswerStudy:
     annotator = data.pop("annotator", None)
     if not isinstance(annotator, str):
         raise ConfigError(f"{source.where(('annotator',))}: annotator: name the person answering (annotator: alice)")
+    if not re.fullmatch(PERSON_NAME, annotator):  # refused here, before any page is served or its address printed
+        raise ConfigError(f"{source.where(('annotator',))}: annotator: {annotator!r:.80} is not a name (letters, digits, '_', '.', '-'; at most 64)")
     extra = data.pop("annotation", None) or {}
     if not isinstance(extra, Mapping) or set(extra) - {"seed", "pairs_apart"}:
         raise ConfigError(f"{source.where(('annotation',))}: annotation: takes only seed (an integer) and pairs_apart (true or false)")

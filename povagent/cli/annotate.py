@@ -42,11 +42,13 @@ def annotate_command(
     from povagent.run.stop_signals import sigterm_as_interrupt
 
     desk = AnswerDesk(study.annotator)
+    # the session (its plugins) and the port first: whatever is refused is refused before the
+    # page's address and token are printed
+    session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
     server = AnnotateServer(AnswerPage(desk), port)
     server.start()
     typer.echo(f"annotating as human:{study.annotator} into {study.pipeline.output}")
     typer.echo(f"open {server.url}", err=False)
-    session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
     try:
         with serving(desk), sigterm_as_interrupt() as stop:
             result = asyncio.run(session.run())
