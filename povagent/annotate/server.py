@@ -239,6 +239,8 @@ def _handler_for(server: AnnotateServer) -> type[BaseHTTPRequestHandler]:
         def send_error(self, code: int, message: str | None = None, explain: str | None = None) -> None:
             """The base class's errors (a malformed request line or header) as ours: JSON and one line."""
             self.close_connection = True
+            self.request_version = "HTTP/1.0"  # a status line even for a request line that named none
+            self.command = self.command or "malformed"
             self._refuse(code, message or "malformed request")
 
         # -- the gate every request passes ---------------------------------------------------
