@@ -70,7 +70,8 @@ def _judge(study, port: int) -> None:
     from povagent.annotate.judgements import JudgementJournal
     from povagent.annotate.server import AnnotateServer
 
-    page = JudgePage(judge_items(study.runs), JudgementJournal(study.judgements, study.judge), study.judge, study.seed)
+    journal = JudgementJournal(study.judgements, study.judge, study.judgements_below)
+    page = JudgePage(judge_items(study.runs), journal, study.judge, study.seed)
     server = AnnotateServer(page, port)
     server.start()
     typer.echo(f"judging as {study.judge} into {page.journal.path}")
