@@ -39,12 +39,14 @@ def annotate_command(
     from povagent.annotate.desk import AnswerDesk, serving
     from povagent.annotate.server import AnnotateServer
     from povagent.annotate.session import AnswerSession
+    from povagent.run.components import create_components
     from povagent.run.stop_signals import sigterm_as_interrupt
 
     desk = AnswerDesk(study.annotator)
-    # the session (its plugins) and the port first: whatever is refused is refused before the
-    # page's address and token are printed
+    # the session (its plugins, each component's options) and the port first: whatever is
+    # refused is refused before the page's address and token are printed
     session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
+    create_components(study.pipeline, session.host)
     server = AnnotateServer(AnswerPage(desk), port)
     server.start()
     typer.echo(f"annotating as human:{study.annotator} into {study.pipeline.output}")

@@ -120,11 +120,11 @@ def test_a_refusal_line_never_holds_the_token_or_the_path(served):
     assert lines and all(server.token not in line and "api/nothing" not in line for line in lines)
 
 
-def _study(tmp_path, mini_root, annotator: str = "alice"):
+def _study(tmp_path, mini_root, annotator: str = "alice", strategy: object = "basic"):
     import yaml
 
     path = tmp_path / "study.yaml"
-    path.write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "human", "annotator": annotator, "strategy": "basic",
+    path.write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "human", "annotator": annotator, "strategy": strategy,
                                     "parser": "json", "scorers": ["official"], "output": str(tmp_path / "out")}))  # fmt: skip
     return path
 
@@ -152,3 +152,9 @@ def test_an_invalid_annotator_name_is_refused_before_any_address_is_printed(tmp_
     assert "annotator" in done.stderr and "not a name" in done.stderr
     assert "http://" not in done.stdout + done.stderr  # no URL, no token was ever shown
     assert json.dumps("../../etc/x")[1:-1] in done.stderr
+
+
+def test_a_component_option_that_is_refused_is_refused_before_any_address_is_printed(tmp_path, mini_root):
+    done = _annotate(str(_study(tmp_path, mini_root, strategy={"name": "basic", "options": {"no_such_option": 1}})))
+    assert done.returncode != 0 and "Traceback" not in done.stderr and "no_such_option" in done.stderr
+    assert "http://" not in done.stdout + done.stderr
