@@ -111,3 +111,13 @@ def test_a_megabyte_mindcube_question_is_validated_in_linear_time(set_file):
     problems = validate_choice_set(path, "mindcube")
     assert time.process_time() - start < 3.0
     assert problems == []
+
+
+def test_a_run_over_a_set_with_a_lone_surrogate_and_its_resume_score_the_other_records(choice_pipeline, set_file):
+    from povagent.config.pipeline import load_pipeline
+    from povagent.run.runner import run_pipeline
+
+    _viewspatial_with(set_file, json.dumps(VIEWSPATIAL_RECORD).replace("Where is", "Where\\ud800 is"))
+    first = run_pipeline(load_pipeline(choice_pipeline("viewspatial")))
+    again = run_pipeline(load_pipeline(choice_pipeline("viewspatial")))  # the resume: it crashed every time
+    assert (first.n_total, first.exit_code, again.n_pending, again.exit_code) == (4, 0, 0, 0)
