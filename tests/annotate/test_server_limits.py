@@ -50,18 +50,14 @@ def post(server, body: bytes, path: str = "api/judge"):
 
 
 def _closed_by_server(sock: socket.socket) -> bool:
-    """Whether the server ended the connection (a read gives end of file, or the send fails)."""
+    """Whether the server ended the connection: sending one more byte fails, or the socket reads
+    (end of file or a reset: the server never answers a request still arriving)."""
     try:
         sock.send(b"x")
     except OSError:
         return True
     ready, _, _ = select.select([sock], [], [], 0)
-    if not ready:
-        return False
-    try:
-        return sock.recv(4096) == b"" or True  # an answer then a close, or a reset: over either way
-    except OSError:
-        return True
+    return bool(ready)
 
 
 def test_clients_trickling_a_byte_at_a_time_are_all_dropped_by_the_deadline(served):
