@@ -28,6 +28,8 @@ from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 PROFILE = "viewspatial"
 #: The most frames a record shows (the scene-simulation questions show 2-32).
 MAX_FRAMES = 32
+#: The most options a record may list (one a line, each labelled A-Z).
+MAX_OPTIONS = 26
 
 _OPTION_LINE = re.compile(r"([A-Z])\.\s*(.*)")
 _GOLD = re.compile(r"\b([A-D])\b", re.IGNORECASE)
@@ -81,8 +83,11 @@ def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
         return f"{where}.image_path", "required, a list of 1 to 32 image paths"
     if len(images) > MAX_FRAMES:
         return f"{where}.image_path", f"{len(images)} images; a record shows at most {MAX_FRAMES}"
+    lines = record["choices"].strip().splitlines()
+    if len(lines) > MAX_OPTIONS:  # each a label A-Z: more cannot be options, and the problem stays one short line
+        return f"{where}.choices", f"{len(lines)} lines; a question has at most {MAX_OPTIONS} options 'X. text'"
     options = []
-    for number, line in enumerate(record["choices"].strip().splitlines()):
+    for number, line in enumerate(lines):
         match = _OPTION_LINE.fullmatch(line.strip())
         if match is None:
             return f"{where}.choices", f"line {number + 1} {line[:60]!r} is not an option 'X. text'"

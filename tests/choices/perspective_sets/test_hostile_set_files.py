@@ -121,3 +121,10 @@ def test_a_run_over_a_set_with_a_lone_surrogate_and_its_resume_score_the_other_r
     first = run_pipeline(load_pipeline(choice_pipeline("viewspatial")))
     again = run_pipeline(load_pipeline(choice_pipeline("viewspatial")))  # the resume: it crashed every time
     assert (first.n_total, first.exit_code, again.n_pending, again.exit_code) == (4, 0, 0, 0)
+
+
+def test_a_viewspatial_record_listing_a_megabyte_of_options_is_one_short_line(set_file):
+    record = dict(VIEWSPATIAL_RECORD, choices="A. right\n" * 100_000)
+    loaded = load_choice_set(_viewspatial_with(set_file, json.dumps(record)), "viewspatial")
+    (problem,) = loaded.problems
+    assert problem.json_path == "$[0].choices" and "at most 26 options" in problem.message and len(str(problem)) < 300
