@@ -138,7 +138,7 @@ def write_report(
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
     added = choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
-    added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
+    added += manual_tables(source, collection.runs)  # judgements by hand of these runs (povagent annotate, judge mode)
     tables += added
     timings["statistics"] = time.perf_counter() - t
 

@@ -25,7 +25,7 @@ from povagent.dataset.image_files import ImageFileError, inspect_image_file
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import Condition, Direction
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
-from povagent.dataset.problems import Problem
+from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ConfigError
 from povagent.geometry.camera import Camera
 
@@ -171,3 +171,10 @@ def record_id_problem(value: object) -> str | None:
     if "/" in value or "#" in value:
         return f"{shown(value)} holds '/' or '#', which an instance id cannot"
     return None
+
+
+def text_problems(file: str, where: str, record: Any) -> list[Problem]:
+    """The release reader's rule (:func:`~povagent.dataset.problems.not_text_problems`) on one
+    record: a problem per string holding a lone surrogate, named ``<where>.<json path>``. A
+    record with one is left out (no row, prompt or report could hold its text)."""
+    return [Problem(p.file, where + p.json_path.removeprefix("$"), p.message) for p in not_text_problems(file, record)]

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines
+from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines, text_problems
+from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.problems import Problem
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
@@ -38,18 +39,28 @@ def category_of(record_id: str) -> str:
 
 def inline_options(question: str) -> tuple[tuple[str, str], ...]:
     """The options written in ``question``: the last run of labels ``A.``, ``B.``, ... in order,
-    each option's text running to the next label (empty: no such run)."""
+    each option's text running to the next label (empty: no such run).
+
+    A run starts at the last ``A.`` with a ``B.`` somewhere after it and takes, after each
+    label, the first next label that follows (other labels between are option text). One pass
+    finds that ``A.`` and one more follows its run: time linear in the question's length (a
+    question of many labels once took time quadratic in their number)."""
     marks = list(_OPTION.finditer(question))
-    starts = [i for i, m in enumerate(marks) if m.group(1) == "A"]
-    for start in reversed(starts):
-        run = [marks[start]]
-        for m in marks[start + 1 :]:
-            if ord(m.group(1)) == ord(run[-1].group(1)) + 1:
-                run.append(m)
-        if len(run) >= 2:
-            ends = [m.start() for m in run[1:]] + [len(question)]
-            return tuple((m.group(1), question[m.end() : end].strip()) for m, end in zip(run, ends))
-    return ()
+    start, b_after = None, False
+    for i in range(len(marks) - 1, -1, -1):
+        label = marks[i].group(1)
+        if label == "A" and b_after:
+            start = i
+            break
+        b_after = b_after or label == "B"
+    if start is None:
+        return ()
+    run = [marks[start]]
+    for m in marks[start + 1 :]:
+        if ord(m.group(1)) == ord(run[-1].group(1)) + 1:
+            run.append(m)
+    ends = [m.start() for m in run[1:]] + [len(question)]
+    return tuple((m.group(1), question[m.end() : end].strip()) for m, end in zip(run, ends))
 
 
 def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
@@ -60,9 +71,16 @@ def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
     for number, line in record_lines(file, "MindCube file", problems):
         where = f"line {number}"
         try:
-            record = json.loads(line)
+            record = loads_dataset_json(line)
         except json.JSONDecodeError as exc:
             problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
+            continue
+        except TooDeepError as exc:
+            problems.append(Problem(str(file), where, str(exc)))
+            continue
+        not_text = text_problems(str(file), where, record)
+        if not_text:  # the rule the release reader holds: a lone surrogate is not text
+            problems.extend(not_text)
             continue
         item = _item(record, where)
         if isinstance(item, tuple):
