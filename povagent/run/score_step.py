@@ -47,6 +47,14 @@ def instance_view(instance: Instance, spec: AnswerSpec) -> Instance:
     return instance
 
 
+def question_category(instance: Instance) -> str | None:
+    """The category a row of ``instance`` records (:attr:`ResultRow.category`): its
+    multiple-choice question's, or ``None`` for an instance asking no such question. Recorded
+    whatever the answer, so a reply naming no option counts, wrong, in its category's slice."""
+    question = instance.question
+    return None if question is None else str(question.category or "")
+
+
 def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerType | None = None) -> Prediction:
     """What a row records as the prediction: the frame index, its image path (A/B), the point,
     and the typed value ``answer_type`` reads from the parse."""

@@ -63,6 +63,10 @@ class ScoredRow:
     error_y: float | None = None
     #: The row carries a ``parse_error`` as the official runner would have written one.
     parse_error: bool = False
+    #: The row answers a point question (POVBench's); a multiple-choice row is not counted
+    #: here at all (its scorers' declared metrics say how it did), so a choice run's summary
+    #: never claims its rows unanswered or misread by the official point reader.
+    asks_point: bool = True
 
 
 class Picked(Sequence[T]):
@@ -115,7 +119,8 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     ``parse_error``, answered or not, as the official summary counts them).
 
     A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
-    the official mean is.
+    the official mean is. Rows that ask no point (``asks_point`` false) are left out: a cell of
+    a multiple-choice run's rows counts none (``n_total`` 0, no response rate).
     """
     # one pass over the rows; each mean is still ``sum()`` of its values in row order, the
     # values held unboxed (8 bytes each: a cell of every row of a run holds them all)
@@ -125,6 +130,8 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     abs_y = _values()
     total = in_frame = parse_errors = 0
     for r in rows:
+        if not r.asks_point:
+            continue
         total += 1
         if r.parse_error:
             parse_errors += 1

@@ -117,8 +117,13 @@ def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]
 
 
 def row_category(row: Any) -> str | None:
-    """The question's category a scorer wrote (the first non-empty ``category`` text among the
-    row's scores, by scorer name), or ``None``: the slice a multiple-choice run breaks down by."""
+    """The question's category, the slice a multiple-choice run breaks down by: the one the row
+    records (``row.category``, written whatever the answer, so a reply naming no option counts
+    in its slice as the wrong answer it is), else, for a row written before rows recorded it,
+    the first non-empty ``category`` text among its scores (by scorer name); ``None``: none."""
+    recorded = getattr(row, "category", None)
+    if isinstance(recorded, str):
+        return recorded or None
     scores = getattr(row, "scores", None) or {}
     for name in sorted(scores):
         fields = scores[name]
