@@ -132,6 +132,9 @@ class ResultRow(BaseModel):
     #: its category's slice. ``None``: the instance asks no multiple-choice question (a point),
     #: or the row was written before rows named it (its scorer's ``category`` is read instead).
     category: str | None = None
+    #: The broader type the category belongs to, where the set has one (3DSRBench's
+    #: ``orientation`` for ``orientation_viewpoint``): a slice of its own. ``None``: none.
+    main_category: str | None = None
 
     @property
     def raw_response(self) -> str | None:

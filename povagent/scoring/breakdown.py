@@ -178,7 +178,7 @@ def slices(
     cell: Callable[[Sequence[T]], C],
     condition: Callable[[T], str | None] = attrgetter("condition"),
     direction: Callable[[T], str | None] = attrgetter("direction"),
-    category: Callable[[T], str | None] | None = None,
+    category: Callable[[T], str | tuple[str, ...] | None] | None = None,
 ) -> dict[str, Any]:
     """The one breakdown: ``cell`` of all rows (``overall``), of each condition, each direction
     and each condition x direction. Every summary povagent shows (official means, success rates,
@@ -188,7 +188,8 @@ def slices(
     has none) counts overall only, as officially. Labels come in the paper's order, then any
     other label, sorted; only labels with rows appear. With ``category`` given and some row
     in a category (a multiple-choice question's type), ``per_category`` breaks the rows down
-    by it too, labels sorted.
+    by it too, labels sorted; a row whose ``category`` gives several labels (a sub-category and
+    its main category) counts in each.
 
     A slice holds its rows' positions; ``cell`` gets it as a :class:`Picked` view of ``rows``
     (``overall``: ``rows`` itself, a sequence as handed in), so slicing keeps nothing per row
@@ -208,7 +209,8 @@ def slices(
         if c and d:
             by_cd[(c, d)].append(i)
         if category is not None and (k := category(r)):
-            by_category[k].append(i)
+            for label in (k,) if isinstance(k, str) else k:
+                by_category[label].append(i)
     c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
     d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
     out = {

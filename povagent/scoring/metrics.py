@@ -116,13 +116,18 @@ def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]
     return out
 
 
-def row_category(row: Any) -> str | None:
+def row_category(row: Any) -> str | tuple[str, ...] | None:
     """The question's category, the slice a multiple-choice run breaks down by: the one the row
     records (``row.category``, written whatever the answer, so a reply naming no option counts
-    in its slice as the wrong answer it is), else, for a row written before rows recorded it,
-    the first non-empty ``category`` text among its scores (by scorer name); ``None``: none."""
+    in its slice as the wrong answer it is), with its main category where the row records one
+    (``(category, main_category)``: the row counts in both slices), else, for a row written
+    before rows recorded it, the first non-empty ``category`` text among its scores (by scorer
+    name); ``None``: none."""
     recorded = getattr(row, "category", None)
     if isinstance(recorded, str):
+        main = getattr(row, "main_category", None)
+        if isinstance(main, str) and main and main != recorded:
+            return (recorded, main) if recorded else main
         return recorded or None
     scores = getattr(row, "scores", None) or {}
     for name in sorted(scores):
@@ -200,7 +205,7 @@ class ValuedRow:
     condition: str | None
     direction: str | None
     values: Mapping[str, Mapping[str, float | None]]
-    category: str | None = None
+    category: str | tuple[str, ...] | None = None
     groups: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
 

@@ -13,7 +13,7 @@ from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
 PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice",
-           "navigate", "viewspatial", "mindcube", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
+           "navigate", "viewspatial", "viewspatial-official", "mindcube", "mindcube-official", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
            "lmms-mcq-extract-corrected", "sparbench-lmms", "sparbench-lmms-corrected"}
 STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice", "navigate"}
 

@@ -34,9 +34,15 @@ IMAGES_HINT = {
 }
 
 #: Each set's official rule, the parser a choice pipeline on that format gets when it names none:
-#: ViewSpatial-Bench's ``evaluate.py``, MindCube's ``extractors.py`` cascade, and for 3DSRBench the
-#: lmms-eval ``3dsrbench`` rule its own evaluation uses. A harness's rule is named, never defaulted.
-OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench-lmms"}
+#: ViewSpatial-Bench's own ``evaluate.py``, MindCube's own evaluator (its ``extractors.py`` cascade
+#: on the reply as written), and for 3DSRBench VLMEvalKit's exact matching, with which its authors
+#: score it. lmms-eval's ports (``viewspatial``, ``mindcube``, ``3dsrbench-lmms``: after lmms-eval's
+#: reasoning-tag strip) are alternatives a pipeline names, never defaults.
+OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact"}
+#: Each set's own scorer: plain accuracy for ViewSpatial-Bench, MindCube's with its ``translation``
+#: setting left out of the overall (a scorer option), and 3DSRBench's four accuracies per type
+#: and sub-category (the authors' circular evaluation with VLMEvalKit's).
+OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench"}
 
 
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:

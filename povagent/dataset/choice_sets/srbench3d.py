@@ -35,6 +35,17 @@ from povagent.dataset.problems import Problem
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
 PROFILE = "3dsrbench"
 COLUMNS = ("index", "qid", "question", "A", "B", "C", "D", "answer", "category", "image")
+#: The set's four types and the twelve sub-categories (the ``category`` column) each holds, as the
+#: authors' results script and lmms-eval's ``3dsrbench`` task map them: a question counts in its
+#: sub-category's slice and in its type's (``ChoiceQuestion.main_category``).
+TYPES = {
+    "height": ("height_higher",),
+    "location": ("location_above", "location_closer_to_camera", "location_next_to"),
+    "orientation": ("orientation_in_front_of", "orientation_on_the_left", "orientation_viewpoint"),
+    "multi_object": ("multi_object_closer_to", "multi_object_facing", "multi_object_viewpoint_towards_object",
+                     "multi_object_parallel", "multi_object_same_direction"),
+}  # fmt: skip
+_TYPE_OF = {sub: kind for kind, subs in TYPES.items() for sub in subs}
 _QID = re.compile(r"(?P<base>.+?)(?:-(?P<variant>flip(?:-\d+)?|\d+))?")
 #: An image cell ending so is a path; any other is an earlier record's index or the image in base64.
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
@@ -183,8 +194,9 @@ def _item(row: dict[str, str], where: str, cache: Path) -> Item | tuple[str, str
         return f"{where}.A", "a question needs at least options A and B"
     group, variant = qid_parts(qid)
     try:
-        question = ChoiceQuestion(row["question"].strip(), options, row["answer"].strip(), category=row["category"].strip(),
-                                  group=group, variant=variant, profile=PROFILE)  # fmt: skip
+        category = row["category"].strip()
+        question = ChoiceQuestion(row["question"].strip(), options, row["answer"].strip(), category=category,
+                                  group=group, variant=variant, profile=PROFILE, main_category=_TYPE_OF.get(category, ""))  # fmt: skip
     except ValueError as exc:
         return f"{where}.answer", str(exc)
     if not question.question:
