@@ -118,6 +118,17 @@ class MetricColumns:
                 by_group[self._groups.get(i, {}).get(scorer, {}).get(metric.name, ("row", n))].append(value)
         return [1.0 if all(v == 1.0 for v in values) else 0.0 for values in by_group.values()]
 
+    def outside(self, rows: Sequence[int], categories: tuple[str, ...]) -> list[int]:
+        """The positions of ``rows`` whose category (or main category) is none of ``categories``."""
+        left_out = set(categories)
+        kept = []
+        for i in rows:
+            label = self._category[i]
+            labels = () if label is None else (label,) if isinstance(label, str) else label
+            if left_out.isdisjoint(labels):
+                kept.append(i)
+        return kept
+
     def nbytes(self) -> int:
         """Bytes the columns hold (the values, and a pointer a label; groups not counted)."""
         return sum(8 * len(c) for c in self._values) + 24 * len(self)
@@ -135,13 +146,18 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
     95% bootstrap CI (resampled with ``seed``) and the number of values counted."""
     metrics = columns.declared.get(scorer, ())
     condition, direction, category = columns.slice_labels()
+    everything = range(len(columns))
+
+    def counted(metric: Metric, rows: Sequence[int]) -> Sequence[int]:
+        # only the overall cell (``slices`` hands it ``everything`` itself) leaves categories out
+        return columns.outside(rows, metric.overall_excludes) if rows is everything and metric.overall_excludes else rows
 
     def cell(rows: Sequence[int]) -> dict[str, Estimate]:
-        estimates = bootstrap_mean_cis([columns.values(scorer, m, rows) for m in metrics], n_boot=n_boot, seed=seed)
+        estimates = bootstrap_mean_cis([columns.values(scorer, m, counted(m, rows)) for m in metrics], n_boot=n_boot, seed=seed)
         return {m.name: e for m, e in zip(metrics, estimates, strict=True)}
 
     return slices(
-        range(len(columns)), cell, condition=condition.__getitem__, direction=direction.__getitem__,
+        everything, cell, condition=condition.__getitem__, direction=direction.__getitem__,
         category=None if category is None else category.__getitem__,
     )  # fmt: skip
 

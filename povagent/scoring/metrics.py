@@ -39,7 +39,9 @@ class Metric:
     copies of one question): rows whose pair ids are equal once every match of it is removed
     form a group (``-flip`` pairs ``Q-2`` with ``Q-flip-2``), a hit only when every row of it
     is. The id is the row's own, so a row no scorer scored (an unreadable answer) still sinks
-    its group; a run's rows group apart from another run's.
+    its group; a run's rows group apart from another run's. ``overall_excludes`` names question
+    categories whose rows the ``overall`` cell leaves out (MindCube's evaluator scores its
+    ``translation`` setting on its own, outside the overall); their own slices keep them.
     """
 
     name: str
@@ -51,6 +53,7 @@ class Metric:
     over: Literal["answered", "all"] = "answered"
     negate: bool = False
     group: str | None = None
+    overall_excludes: tuple[str, ...] = ()
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -59,13 +62,16 @@ class Metric:
                "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
         if self.group is not None:  # said only when set: an ungrouped metric reads as it always did
             out["group"] = self.group
+        if self.overall_excludes:
+            out["overall_excludes"] = list(self.overall_excludes)
         return out
 
     @classmethod
     def declared(cls, name: str, description: Mapping[str, Any]) -> Metric:
         """The metric :meth:`describe` described."""
         return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
-                   description["caption"], description["over"], description["negate"], description.get("group"))  # fmt: skip
+                   description["caption"], description["over"], description["negate"], description.get("group"),
+                   tuple(description.get("overall_excludes") or ()))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
