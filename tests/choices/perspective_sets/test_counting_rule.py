@@ -86,3 +86,13 @@ def test_a_choice_run_s_point_breakdown_claims_no_parse_error_and_no_response_ra
     written = json.loads((mixed_run.run_dir / "summary.json").read_text())
     assert written["overall"]["n_parse_error"] == 0 and written["n_parse_error"] == 0
     assert written["overall"]["response_rate"] is None and written["overall"]["n_total"] == 0
+
+
+def test_the_report_s_declared_metrics_give_the_run_s_numbers_per_category(mixed_run, tmp_path):
+    from povagent.report.build import write_report
+
+    write_report(mixed_run.run_dir, tmp_path / "report", gallery=False, n_boot=200)
+    (system,) = (reported := json.loads((tmp_path / "report" / "summary.json").read_text())["metrics"]["choice"]).values()
+    cells = {"overall": system["overall"], **system["per_category"]}
+    assert {k: (c["accuracy"]["value"], c["response_rate"]["value"]) for k, c in cells.items()} == EXPECTED
+    assert len(reported) == 1

@@ -197,3 +197,12 @@ def test_3dsrbench_read_by_lmms_eval_s_rule_gives_lmms_eval_s_numbers(srbench_ru
     again = rescore_run(srbench_run.run_dir, "3dsrbench-lmms").summary.metrics["choice-3dsrbench"]
     assert {m: again.overall[m].value for m in LMMS_EVAL} == pytest.approx(LMMS_EVAL, abs=1e-12)
     assert {k: v for k, v in _values(again, "vanilla_accuracy").items() if k != "overall"} == pytest.approx(LMMS_EVAL_VANILLA, abs=1e-12)
+
+
+def test_the_report_gives_mindcube_s_overall_with_translation_left_out(mindcube_run, tmp_path):
+    from povagent.report.build import write_report
+
+    write_report(mindcube_run.run_dir, tmp_path / "report", gallery=False, n_boot=200)
+    (system,) = json.loads((tmp_path / "report" / "summary.json").read_text())["metrics"]["choice-mindcube"].values()
+    reported = {"overall": system["overall"]["accuracy"]["value"], **{k: c["accuracy"]["value"] for k, c in system["per_category"].items()}}
+    assert reported == pytest.approx(MINDCUBE_ACCURACY, abs=1e-12)
