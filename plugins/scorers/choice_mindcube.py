@@ -14,24 +14,37 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from typing import ClassVar
 
 from povagent import hookimpl
+from povagent.scoring.metrics import Metric
 from povagent_plugins.scorers.choice import ChoiceScorer
 
 #: The settings MindCube's evaluator leaves out of its overall accuracy.
 MINDCUBE_OVERALL_EXCLUDES = ("translation",)
 
 
+def _excluding(categories: tuple[str, ...]) -> tuple[Metric, ...]:
+    """The choice scorer's metrics, their overall leaving ``categories`` out."""
+    return tuple(dataclasses.replace(m, overall_excludes=categories) for m in ChoiceScorer.metrics)
+
+
 class MindCubeChoiceScorer(ChoiceScorer):
     """The choice scorer, its overall leaving out the categories named (module docstring)."""
 
-    metrics = tuple(dataclasses.replace(m, overall_excludes=MINDCUBE_OVERALL_EXCLUDES) for m in ChoiceScorer.metrics)
+    metrics: ClassVar[tuple[Metric, ...]] = _excluding(MINDCUBE_OVERALL_EXCLUDES)
 
-    def __init__(self, overall_excludes: Sequence[str] = MINDCUBE_OVERALL_EXCLUDES) -> None:
+    def __new__(cls, overall_excludes: Sequence[str] = MINDCUBE_OVERALL_EXCLUDES) -> MindCubeChoiceScorer:
         if isinstance(overall_excludes, str) or not all(isinstance(c, str) and c for c in overall_excludes):
             raise ValueError(f"overall_excludes must be a list of category names, got {overall_excludes!r}")
         excluded = tuple(overall_excludes)
-        self.metrics = tuple(dataclasses.replace(m, overall_excludes=excluded) for m in ChoiceScorer.metrics)
+        if excluded != MINDCUBE_OVERALL_EXCLUDES:
+            # metrics are what a scorer class declares: another setting is a class declaring its own
+            cls = type(cls.__name__, (cls,), {"metrics": _excluding(excluded), "__module__": cls.__module__})
+        return super().__new__(cls)
+
+    def __init__(self, overall_excludes: Sequence[str] = MINDCUBE_OVERALL_EXCLUDES) -> None:
+        super().__init__()
 
 
 @hookimpl
