@@ -109,9 +109,7 @@ class Observation:
     #: ``None``: no grouped metric declared), so the report groups a set's copies of a question as
     #: the run's summary does.
     metric_groups: Mapping[str, Mapping[str, str]] | None = None
-    #: The question's category slices (:func:`povagent.scoring.metrics.row_category`), so the
-    #: report counts a reply naming no option in its category, and leaves a category out of the
-    #: overall where a metric says so, as the run's summary does.
+    #: The question's category slices as the run's summary counts them (:func:`~povagent.scoring.metrics.row_category`).
     category: str | tuple[str, ...] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
