@@ -9,12 +9,13 @@ cell of 64 characters or fewer as such an index). A cell ending in ``.png``, ``.
 ``.jpeg`` is a path; a cell of more than 64 characters is base64 (PNG or JPEG, else refused).
 A cell may hold :data:`MAX_CELL_CHARS` characters (the real set's embedded images are a few
 hundred KB of base64; Python's ``csv`` module stops at 128 KiB, so the line is split here,
-with no global limit changed): a longer one is one problem naming the line and the column. A qid names the question's copies:
-``XXXXXXXX`` the question, ``-flip`` its flipped copy (the answer mirrored), ``-N`` its N-th
-circular copy (the options rotated), ``-flip-N`` both. The copies of one question share
-``ChoiceQuestion.group`` (the base qid); ``variant`` is the suffix (``""``, ``flip``, ``2``,
-``flip-2``), from which :mod:`povagent_plugins.scorers.srbench3d` reads the set's Flip,
-Circular and Flip+Circular accuracies.
+with no global limit changed): a longer one is one problem naming the line and the column.
+A qid names the question's copies: ``XXXXXXXX`` the question, ``-flip`` its flipped copy (the
+answer mirrored), ``-N`` its N-th circular copy (the options rotated), ``-flip-N`` both. The
+copies of one question share ``ChoiceQuestion.group`` (the base qid); ``variant`` is the suffix
+(``""``, ``flip``, ``2``, ``flip-2``), from which :mod:`povagent_plugins.scorers.srbench3d`
+reads the set's Flip, Circular and Flip+Circular accuracies. The ``category`` column holds one
+of 12 sub-categories, each of one of 4 types (:data:`TYPES`, ``ChoiceQuestion.main_category``).
 
 This module reads the file and decodes embedded images (bounded by the line's bound); it
 never opens an image file (see :mod:`.external`).
@@ -47,7 +48,7 @@ TYPES = {
 }  # fmt: skip
 _TYPE_OF = {sub: kind for kind, subs in TYPES.items() for sub in subs}
 _QID = re.compile(r"(?P<base>.+?)(?:-(?P<variant>flip(?:-\d+)?|\d+))?")
-#: An image cell ending so is a path; any other is an earlier record's index or the image in base64.
+#: An image cell ending so is a path; any other is a record's index or the image in base64.
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 _SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
 #: The most characters a cell may hold: 32 MiB, base64 of a 24 MiB image (the line's own
