@@ -72,7 +72,7 @@ def test_no_parser_raises_on_generated_text(name):
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
-    from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parser = registered("register_parsers")[name]()
