@@ -3,7 +3,8 @@
 What an instance carries when it asks for a ``choice`` answer (``Instance.question``): the
 perspective-taking sets' questions (ViewSpatial-Bench, MindCube, 3DSRBench) and the relation
 tasks povagent generates on its own houses. ``category`` is the set's question type (the slice
-accuracy is broken down by); ``group`` and ``variant`` tie together the records a set scores
+accuracy is broken down by), ``main_category`` the broader type it belongs to where the set has
+one (3DSRBench's ``orientation`` for ``orientation_viewpoint``: a slice too); ``group`` and ``variant`` tie together the records a set scores
 jointly (3DSRBench's circular and flipped copies of one question). ``profile`` names the prompt
 wording the set is asked in (:mod:`povagent_plugins.strategies.choice`).
 
@@ -26,6 +27,7 @@ class ChoiceQuestion:
     group: str = ""
     variant: str = ""
     profile: str = "plain"
+    main_category: str = ""
 
     def __post_init__(self) -> None:
         labels = self.labels

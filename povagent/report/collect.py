@@ -37,7 +37,7 @@ from povagent.report.systems import Pooling, assign_systems
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.scoring.metrics import Declared, MetricValues, row_metric_groups
+from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
 from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -109,6 +109,8 @@ class Observation:
     #: ``None``: no grouped metric declared), so the report groups a set's copies of a question as
     #: the run's summary does.
     metric_groups: Mapping[str, Mapping[str, str]] | None = None
+    #: The question's category slices as the run's summary counts them (:func:`~povagent.scoring.metrics.row_category`).
+    category: str | tuple[str, ...] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
 
@@ -408,6 +410,7 @@ def observation_of(
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
         metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
+        category=row_category(row),
         answer=shown_answer(row.prediction.answer_type, row.prediction.value),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )

@@ -127,6 +127,14 @@ class ResultRow(BaseModel):
     #: How the official runner reads the final answer, when the row's parser is a lenient one
     #: (see :mod:`povagent.results.official_reading`); ``None`` when the parser reads officially.
     official_reading: OfficialReading | None = None
+    #: The category of the multiple-choice question the row answers (the set's question type,
+    #: ``""`` for none), whatever became of the answer: a reply naming no option still counts in
+    #: its category's slice. ``None``: the instance asks no multiple-choice question (a point),
+    #: or the row was written before rows named it (its scorer's ``category`` is read instead).
+    category: str | None = None
+    #: The broader type the category belongs to, where the set has one (3DSRBench's
+    #: ``orientation`` for ``orientation_viewpoint``): a slice of its own. ``None``: none.
+    main_category: str | None = None
 
     @property
     def raw_response(self) -> str | None:

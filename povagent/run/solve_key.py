@@ -30,7 +30,7 @@ from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
 from povagent.run.logs import Redactor, RunLog
-from povagent.run.score_step import AnswerScoring
+from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 
 
 @dataclass
@@ -144,6 +144,8 @@ class KeySolver:
             started_at=started,
             finished_at=utc_now(),
             official_reading=official_reading,
+            category=question_category(instance),
+            main_category=question_main_category(instance),
         )
 
     def scoring(self, key: str) -> AnswerScoring:

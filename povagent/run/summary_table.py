@@ -39,7 +39,7 @@ from povagent.scoring.metrics import Declared, MetricValues, row_category, row_m
 from povagent.scoring.protocols import following, registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
-_SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error")
+_SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error", "asks_point")
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
@@ -250,8 +250,8 @@ class _ScoredRows(Sequence[ScoredRow]):
         if not -self._n <= i < self._n:
             raise IndexError(i)
         i %= self._n
-        c, d, answered, l2, in_frame, strict, run, ex, ey, pe = self._columns
-        return ScoredRow(c[i], d[i], answered[i], l2[i], in_frame[i], strict[i], run[i], ex[i], ey[i], pe[i])
+        c, d, answered, l2, in_frame, strict, run, ex, ey, pe, point = self._columns
+        return ScoredRow(c[i], d[i], answered[i], l2[i], in_frame[i], strict[i], run[i], ex[i], ey[i], pe[i], point[i])
 
 
 class _OfficialRows(_ScoredRows):

@@ -1,10 +1,15 @@
 """MindCube (``MLL-Lab/MindCube``) in its published format.
 
-One JSON record a line: ``{id, question, images: [...], gt_answer, ...}``. ``question`` holds an
-``<image>`` marker where each image goes (as many markers as images) and its options inline
-(``... A. Behind the sofa B. Left of the lamp``); ``gt_answer`` is the gold label. Images are
-paths relative to the JSONL file's folder. The category is the id's first word as the set's
-own evaluation splits it (``among``, ``around`` (also ``aroundnew``), ``rotation``; any other:
+One JSON record a line: ``{id, question, images: [...], gt_answer, ...}``, the raw files
+(``data/raw/MindCube_tinybench.jsonl``, as the set's README and dataset card print a record) and
+the converted ones (``data/prompts/general/*.jsonl``: the same keys plus ``input_prompt`` and
+``grounded_output``) alike. ``question`` holds its options inline (``... A. Behind the sofa B.
+Left of the lamp``) and either no ``<image>`` marker (the images go first, as MindCube's own
+inference shows them) or one where each image goes (as many markers as images, lmms-eval's
+copy of the set). ``gt_answer`` is the gold label. Images are paths relative to the folder
+named (default: the JSONL file's; the set's own layout names them from ``data/``). The category
+is the setting MindCube's evaluator reads in the id (``get_setting_from_id``: the first of
+``around``, ``rotation``, ``translation``, ``among`` the lower-cased id contains; else
 ``other``). Other keys (``category``, ``meta_info``, ...) are left as they are.
 
 This module reads the file; it never opens an image (see :mod:`.external`).
@@ -29,12 +34,16 @@ IMAGE_MARKER = "<image>"
 
 #: An inline option's label: a capital A-E, a full stop and a space, not inside a word.
 _OPTION = re.compile(r"(?<![A-Za-z])([A-E])\.\s+")
-_CATEGORIES = {"among": "among", "around": "around", "aroundnew": "around", "rotation": "rotation"}
+#: The settings MindCube's evaluator looks for in an id, in its order.
+SETTINGS = ("around", "rotation", "translation", "among")
 
 
 def category_of(record_id: str) -> str:
-    """The question's setting, from the first word of its id (``around_0012_q3`` -> ``around``)."""
-    return _CATEGORIES.get(record_id.split("_", 1)[0], "other")
+    """The question's setting as MindCube's evaluator reads it (``get_setting_from_id`` @
+    6d8fd9ac): the first of :data:`SETTINGS` the lower-cased id contains, else ``other``
+    (``aroundnew_0012_q3`` -> ``around``)."""
+    lowered = record_id.lower()
+    return next((setting for setting in SETTINGS if setting in lowered), "other")
 
 
 def inline_options(question: str) -> tuple[tuple[str, str], ...]:
@@ -107,8 +116,11 @@ def _item(record: Any, where: str) -> Item | tuple[str, str]:
     if not isinstance(images, list) or not images or not all(isinstance(p, str) and p for p in images):
         return f"{where}.images", "required, a non-empty list of image paths"
     markers = question.count(IMAGE_MARKER)
-    if markers != len(images):
-        return f"{where}.question", f"holds {markers} {IMAGE_MARKER} marker(s) for {len(images)} image(s); each image needs its marker"
+    if markers and markers != len(images):
+        return (
+            f"{where}.question",
+            f"holds {markers} {IMAGE_MARKER} marker(s) for {len(images)} image(s); give each image its marker, or none (the images then go first)",
+        )
     options = inline_options(question.replace(IMAGE_MARKER, " "))
     if not options:
         return f"{where}.question", "names no options (inline 'A. ... B. ...')"

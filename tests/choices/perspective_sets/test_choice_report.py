@@ -86,7 +86,7 @@ def test_every_choice_table_names_the_rule_that_read_it(runs_folder, tmp_path):
     from povagent.plugins import get_plugin_host
 
     result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
-    described = f"Read by `viewspatial` ({get_plugin_host().entry('parser', 'viewspatial').description})."
+    described = f"Read by `viewspatial-official` ({get_plugin_host().entry('parser', 'viewspatial-official').description})."
     choice = [t for t in result.tables if t.key.startswith("choice_")]
     assert len(choice) == 4 and all(described in t.caption for t in choice)
     assert "ZJU-REAL" in described
@@ -97,7 +97,7 @@ def test_systems_read_by_different_rules_have_each_rule_named(runs_folder, tmp_p
                           tmp_path / "report", gallery=False, n_boot=200)  # fmt: skip
     caption = _table(result, "choice_accuracy_choice").caption
     assert "`vlmevalkit-exact` (" in caption and "for always-a" in caption
-    assert "`viewspatial` (" in caption and "for oracle" in caption
+    assert "`viewspatial-official` (" in caption and "for oracle" in caption
 
 
 def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_path, mini_root):
