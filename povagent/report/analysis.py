@@ -210,26 +210,41 @@ def what_was_compared(a: Analysis) -> str:
     return " · ".join(parts) or "no system"
 
 
-def load_collection_dataset(collection: Collection | list[RunInfo], override: str | Path | None = None):
-    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load
-    (``collection``: a collection, or the runs :func:`~povagent.report.collect.find_runs` found,
-    so that a report loads the set before it holds the rows' observations).
+def load_collection_dataset(collection: Collection | list[RunInfo], override: str | Path | None = None, sets: Any = None):
+    """The set the runs were asked (``override`` in place of its file or folder), or
+    ``(None, reason)`` if it cannot load (``collection``: a collection, or the runs
+    :func:`~povagent.report.collect.find_runs` found, so that a report loads the set before it
+    holds the rows' observations).
 
-    A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
-    gallery draws on, as the runner loads them.
+    Each set is opened as the runner opened it: a release-layout set, a real-world set
+    (``realworld.json``, whose letterboxed frames the gallery draws on), or an external
+    multiple-choice set's file in its ``dataset.format`` (with its ``dataset.images``), asked
+    as the run's ``task:``. Runs asking different sets get them all
+    (:class:`~povagent.report.run_sets.RunSets`, each run's own). ``sets``: the report's
+    :class:`~povagent.report.choice_gold.SetQuestions`, so each set is opened once per report.
     """
-    from povagent.dataset.evaluation_set import open_evaluation_set
-    from povagent.errors import DatasetError
+    from povagent.report.choice_gold import SetQuestions, run_set_key
+    from povagent.report.run_sets import RunSets
 
-    paths = [Path(override)] if override else dataset_paths(collection.runs if isinstance(collection, Collection) else collection)
-    if not paths:
-        return None, "no dataset path in the runs' config.yaml (pass --dataset)"
-    try:
-        # No load-time image check: the gallery draws a card for every row and says on it
-        # which image failed, instead of the house vanishing from the report.
-        return open_evaluation_set(paths[0], check_images=False), None
-    except DatasetError as exc:
-        return None, f"dataset not loadable: {exc}"
+    sets = SetQuestions() if sets is None else sets
+
+    runs = collection.runs if isinstance(collection, Collection) else collection
+    keys = {r.name: run_set_key(r, Path(override) if override else None) for r in runs}
+    distinct = list(dict.fromkeys(k for k in keys.values() if k is not None))
+    if not distinct:
+        if override:  # no config names a set: the folder given, read as a release or real-world set
+            distinct = [(Path(override), None, None, None)]
+        else:
+            return None, "no dataset path in the runs' config.yaml (pass --dataset)"
+    # No load-time image check: the gallery draws a card for every row and says on it
+    # which image failed, instead of the house vanishing from the report.
+    opened = {key: sets.opened(key) for key in distinct}
+    failed = [reason for reason in opened.values() if isinstance(reason, str)]
+    if failed:
+        return None, f"dataset not loadable: {failed[0]}"
+    if len(opened) == 1:
+        return next(iter(opened.values())), None
+    return RunSets([opened[k] for k in distinct], {name: opened[k] for name, k in keys.items() if k is not None}), None
 
 
 def _answers_signature(obs: list[Observation]) -> str:
@@ -348,7 +363,8 @@ def analyze(
     hit_scorer = scorers[protocols.index("marked_hit")] if "marked_hit" in protocols else None
     fill: dict[str, float] | None = None
     if dataset is not None and (error_scorer or hit_scorer):
-        ids = sorted({o.instance_id for o in obs})
+        # the center guess is a point: only for the rows a point protocol scored (a choice run beside has none)
+        ids = sorted({o.instance_id for o in obs if o.protocol in ("normalized_l2", "marked_hit")})
         instances = [dataset.instance(i) for i in ids]
         missing = [i for i, inst in zip(ids, instances) if inst is None]
         instances = [inst for inst in instances if inst is not None]

@@ -22,6 +22,7 @@ from typing import Any
 from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
+from povagent.report.choice_gold import SetQuestions
 from povagent.report.choice_tables import choice_tables
 from povagent.report.collect import collect, find_runs
 from povagent.report.figures import report_figures
@@ -126,7 +127,8 @@ def write_report(
     out = report_folder(source, Path(out) if out is not None else None)
     # the set first: the transient memory of reading its files does not stack on the rows' observations
     runs = find_runs(source)
-    dataset, note = load_collection_dataset(runs, dataset_path)
+    sets = SetQuestions()  # each set the runs asked, opened once for the gallery and the choice tables
+    dataset, note = load_collection_dataset(runs, dataset_path, sets)
     collection = collect(source, pool=pool, runs=runs)
     timings["load"] = time.perf_counter() - t0
 
@@ -137,7 +139,7 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
-    added = choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
+    added = choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets)  # multiple-choice runs: accuracy, pairs, confusion
     added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
     tables += added
     timings["statistics"] = time.perf_counter() - t

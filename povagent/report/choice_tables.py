@@ -25,13 +25,11 @@ import numpy as np
 from povagent.errors import PluginError
 from povagent.plugins import get_plugin_host
 from povagent.report.choice_gold import SetQuestions
-from povagent.report.collect import Collection, RunInfo
+from povagent.report.collect import CHOICE_FIELDS, Collection, RunInfo
 from povagent.report.statistics import sign_test_p
 from povagent.report.tables import Cell, Column, Row, Table
 from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 
-#: The fields a choice scorer writes: a scorer whose scores carry them all is read here.
-CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
 #: The confusion column of answers naming no option.
 NO_OPTION = "no option"
 #: The gold label of a question no row of which was scored (every system named no option) and
@@ -93,11 +91,12 @@ def _scorer_name(spec: object) -> str:
     return str(spec.get("name", "")) if isinstance(spec, dict) else str(spec)
 
 
-def choice_tables(collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0) -> list[Table]:
+def choice_tables(collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0, sets: SetQuestions | None = None) -> list[Table]:
     """Each choice scorer's accuracy table, paired differences (with two systems or more) and a
-    confusion table per system (none for a report without choice rows)."""
+    confusion table per system (none for a report without choice rows). ``sets``: the sets the
+    report opened already (each set the runs name is opened once, for every scorer)."""
     tables: list[Table] = []
-    sets = SetQuestions()  # each set the runs name opened once, for every scorer
+    sets = SetQuestions() if sets is None else sets
     for scorer, answers in choice_answers(collection, sets).items():
         systems = list(dict.fromkeys(a.system for a in answers))
         unknown = sets.why_unknown(len({a.instance_id for a in answers if a.gold == UNKNOWN}))

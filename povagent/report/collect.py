@@ -111,6 +111,9 @@ class Observation:
     metric_groups: Mapping[str, Mapping[str, str]] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
+    #: The option label a choice scorer recorded as chosen (``None``: no choice scorer scored the
+    #: row, or the reply named no option).
+    chosen: str | None = None
 
 
 @dataclass
@@ -409,8 +412,22 @@ def observation_of(
         metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
         answer=shown_answer(row.prediction.answer_type, row.prediction.value),
+        chosen=chosen_label(row),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
+
+
+#: The fields a choice scorer writes: a row's scores carrying them all are a choice scorer's.
+CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
+
+
+def chosen_label(row: ResultRow) -> str | None:
+    """The label the row's first choice scorer (a scorer writing :data:`CHOICE_FIELDS`)
+    recorded as chosen (``None``: none scored it, or the reply named no option)."""
+    for fields in row.scores.values():
+        if fields.keys() >= CHOICE_FIELDS:
+            return None if fields["chosen"] is None else sys.intern(str(fields["chosen"]))
+    return None
 
 
 def _groups_of(row: ResultRow, run_name: str, declared: Declared) -> dict[str, dict[str, str]] | None:
