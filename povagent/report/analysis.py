@@ -34,9 +34,10 @@ from povagent.report.baseline import (
     center_success_observations,
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
-from povagent.report.collect import Collection, Observation, RunInfo, dataset_paths
+from povagent.report.collect import Collection, Observation, RunInfo
 from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
+from povagent.report.systems import config_label
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 from povagent.scoring.metrics import Metric
 from povagent.scoring.protocols import PROTOCOLS
@@ -262,21 +263,26 @@ def _answers_signature(obs: list[Observation]) -> str:
 
 
 def merge_identical_baselines(
-    ordered: list[str], by_system: dict[str, list[Observation]], axes_of: dict[str, dict[str, str]], reference: set[str]
+    ordered: list[str], by_system: dict[str, list[Observation]], axes_of: dict[str, dict[str, str]], reference: set[str],
+    labelled: frozenset[str] = frozenset(),
 ) -> tuple[list[str], list[str]]:
     """Show a baseline once when a sweep crossed it with axes it ignores.
 
     A sweep over ``backend: [model, center]`` x ``strategy: [basic, cot]`` makes ``center ·
     basic`` and ``center · cot``: the center guess ignores the prompt, so the two cells hold the
-    same answers. Reference systems with identical answers on every row are merged into one,
-    labelled by the axis values they share (``center``). Updates ``by_system``, ``axes_of`` and
-    ``reference`` in place; returns the new system order and a note per merge. Models are never
-    merged: two strategies that happen to agree are still two rows of an ablation.
+    same answers. Reference systems of one backend and model with identical answers on every row
+    are merged into one, labelled by the axis values they share (``center``). Updates
+    ``by_system``, ``axes_of`` and ``reference`` in place; returns the new system order and a
+    note per merge. Models are never merged: two strategies that happen to agree are still two
+    rows of an ablation; nor are two different baselines that happen to agree (the ``oracle``
+    and an always-``A`` guess on a set whose gold is always A), nor a system its run's config
+    names (``labelled``: the user asked for that row).
     """
-    groups: dict[str, list[str]] = {}
+    groups: dict[tuple[str, str, str], list[str]] = {}
     for name in ordered:
-        if name in reference:
-            groups.setdefault(_answers_signature(by_system[name]), []).append(name)
+        if name in reference and name not in labelled:
+            axes = axes_of[name]
+            groups.setdefault((axes.get("backend", ""), axes.get("model", ""), _answers_signature(by_system[name])), []).append(name)
     notes: list[str] = []
     rename: dict[str, str] = {}
     shared_axes: dict[str, dict[str, str]] = {}
@@ -402,7 +408,8 @@ def analyze(
     ordered = [s for s in systems if s in by_system] + [s for s in by_system if s not in systems]
     axes_of = {name: dict(collection.system_axes(name)) for name in ordered}
     reference_set = {n for n in ordered if n == CENTER_SYSTEM or is_baseline_system(axes_of[n], n)}
-    ordered, merge_notes = merge_identical_baselines(ordered, by_system, axes_of, reference_set)
+    labelled = frozenset(r.system for r in collection.runs if config_label(r.config))
+    ordered, merge_notes = merge_identical_baselines(ordered, by_system, axes_of, reference_set, labelled)
     notes.extend(merge_notes)
     obs = [o for name in ordered for o in by_system[name]]
     stats: list[SystemStats] = []

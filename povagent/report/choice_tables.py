@@ -170,11 +170,12 @@ def _paired_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], 
         rows.append(Row(f"{b} vs {a}", [Cell(len(shared)), Cell(va), Cell(vb), Cell(diff.value, diff.lo, diff.hi), Cell(p)]))
     return Table(
         key=f"choice_paired_{scorer}", title=f"Paired accuracy differences ({scorer})",
-        caption=("Second system minus first on the questions both were asked (accuracy averaged over runs per "
-                 f"question), 95% paired bootstrap CI over questions; exact sign test over questions that differ. {read_by}"),
-        row_header="Comparison",
-        columns=[Column("Questions", "count", None), Column("Accuracy (first)", "rate", None), Column("Accuracy (second)", "rate", None),
-                 Column("Difference", "signed", None), Column("Sign test p", "p", None)],
+        caption=("B - A: system B's accuracy minus system A's on the questions both were asked (accuracy averaged over runs per "
+                 "question; B - A > 0 means B is better), 95% paired bootstrap CI over questions; exact sign test over questions "
+                 f"that differ. {read_by}"),
+        row_header="B vs A",
+        columns=[Column("Questions", "count", None), Column("Accuracy A", "rate", None), Column("Accuracy B", "rate", None),
+                 Column("B - A", "signed", None), Column("Sign test p", "p", None)],
         rows=rows,
     )  # fmt: skip
 

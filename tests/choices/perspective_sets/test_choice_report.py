@@ -66,10 +66,13 @@ def test_a_question_answered_with_no_option_counts_as_wrong(runs_folder, tmp_pat
 
 def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder, tmp_path):
     result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
-    # systems in the collection's order (run folders by name): always-a first
-    values = _values(_table(result, "choice_paired_choice"), "oracle vs always-a")
+    # systems in the collection's order (run folders by name): always-a is A, oracle B
+    table = _table(result, "choice_paired_choice")
+    values = _values(table, "oracle vs always-a")
     # right on the 2 of 4 questions always-a gets wrong: +1 twice, 0 twice; the sign test over those 2
-    assert values == {"Questions": 4, "Accuracy (first)": 0.5, "Accuracy (second)": 1.0, "Difference": pytest.approx(0.5), "Sign test p": 0.5}
+    assert values == {"Questions": 4, "Accuracy A": 0.5, "Accuracy B": 1.0, "B - A": pytest.approx(0.5), "Sign test p": 0.5}
+    # the row reads as its header says: "B vs A", each accuracy under its own system's letter
+    assert table.row_header == "B vs A" and "B - A > 0 means B is better" in table.caption
 
 
 def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_apart(runs_folder, tmp_path):
