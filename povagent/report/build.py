@@ -23,7 +23,7 @@ from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.choice_gold import SetQuestions
-from povagent.report.choice_tables import choice_tables
+from povagent.report.choice_tables import choice_answers, choice_tables
 from povagent.report.collect import collect, find_runs
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
@@ -39,6 +39,7 @@ from povagent.report.html import (
     render_page,
     tables_section,
 )
+from povagent.report.leaderboard import leaderboard_tables
 from povagent.report.manual import manual_tables
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
@@ -139,7 +140,10 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
-    added = choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets)  # multiple-choice runs: accuracy, pairs, confusion
+    answers = choice_answers(collection, sets)
+    # multiple-choice runs: the systems x sets leaderboard, then per set accuracy, pairs, confusion
+    added = leaderboard_tables(collection, analysis, list(answers), dataset, n_boot=n_boot, seed=seed)
+    added += choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets, answers=answers)
     added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
     tables += added
     timings["statistics"] = time.perf_counter() - t

@@ -128,6 +128,9 @@ class RunInfo:
     #: a report holds no row objects, whatever the run's length
     rows: Sequence[ResultRow]
     system: str = ""
+    #: The system's name without the set it was asked (a leaderboard's row); :attr:`system` adds
+    #: the set when runs of one name were asked different sets.
+    entrant: str = ""
     #: The sweep folder whose index listed this run (``None``: a run folder of its own).
     sweep: Path | None = None
     #: The axis values the sweep's index gives this cell (``{}`` for a run of its own).
@@ -142,6 +145,19 @@ class RunInfo:
     def protocol(self) -> str | None:
         """That scorer's protocol (``None``: the run has no protocol scorer)."""
         return registered_protocols().get(self.scorer)
+
+    @property
+    def benchmark(self) -> str:
+        """The set the run was asked, by name: an external set's ``dataset.format``
+        (``viewspatial``), else its folder's name, with the ``task:`` when it is not the point
+        task (``release · relation``); ``""`` when the config names no set."""
+        ds = self.config.get("dataset")
+        format = ds.get("format") if isinstance(ds, dict) else None
+        path = self.dataset_path
+        name = str(format) if format else (path.name if path is not None else "")
+        task = self.config.get("task")
+        task_name = task.get("name") if isinstance(task, dict) else task
+        return f"{name} · {task_name}" if name and task_name not in (None, "", "point") else name
 
     @property
     def dataset_path(self) -> Path | None:

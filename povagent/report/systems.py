@@ -9,6 +9,10 @@ The one exception is a sweep that splits one system's evaluation into cells by c
 index (axes the tables break down or average): cells of one sweep whose axes differ only there
 are that one system.
 
+Runs asked different sets are never one system: runs sharing a name on several sets are one
+system per set, named with the set (``gpt-4o · viewspatial``), and each keeps the name without
+it as its ``entrant`` (a leaderboard's row).
+
 Runs are pooled into one system only when the user asks: with ``pool=True`` (``povagent report
 --pool``) runs of the same name pool, and runs whose configs give the same explicit ``label:``
 always pool (the label says they are one system). Every pooling is returned as a
@@ -42,6 +46,8 @@ class NamedRun(Protocol):
     axes: dict[str, str]
     config: dict[str, Any]
     system: str
+    #: The system's name without its set (set with :attr:`system`).
+    entrant: str
     #: The sweep folder whose index listed the run (``None``: a run folder of its own).
     sweep: Any
     #: The axis values the sweep's index gives the cell (``{}`` for a run of its own).
@@ -49,6 +55,9 @@ class NamedRun(Protocol):
 
     @property
     def folder(self) -> Any: ...
+
+    @property
+    def benchmark(self) -> str: ...
 
 
 @dataclass(frozen=True)
@@ -147,32 +156,35 @@ def assign_systems(runs: Sequence[NamedRun], *, pool: bool = False) -> list[Pool
     labels = axis_labels(runs)
     evaluation = evaluations(runs)
     explicit = [config_label(r.config) for r in runs]
-    names = [e or a for e, a in zip(explicit, labels, strict=True)]
+    entrants = [e or a for e, a in zip(explicit, labels, strict=True)]
+    # runs of one name asked different sets are one system per set: a set's number never pools another's
+    sets_of: dict[str, set[str]] = {}
+    for run, entrant in zip(runs, entrants, strict=True):
+        sets_of.setdefault(entrant, set()).add(run.benchmark)
+    names = [f"{e}{LABEL_JOIN}{r.benchmark}" if len(sets_of[e]) > 1 and r.benchmark else e for r, e in zip(runs, entrants, strict=True)]
     groups: dict[str, list[int]] = {}
     for i, name in enumerate(names):
         groups.setdefault(name, []).append(i)
     poolings: list[Pooling] = []
     for name, members in groups.items():
+        for i in members:
+            runs[i].system, runs[i].entrant = name, entrants[i]
         if len(members) == 1:
-            runs[members[0]].system = name
             continue
-        labelled = all(explicit[i] == name for i in members)
+        labelled = all(explicit[i] == entrants[i] for i in members)
         if labelled or pool:
-            for i in members:
-                runs[i].system = name
             poolings.append(Pooling(name, tuple(runs[i].name for i in members), "label" if labelled else "asked"))
             continue
         split: dict[tuple[Any, ...], list[int]] = {}
         for i in members:
             split.setdefault(evaluation[i], []).append(i)
         if len(split) == 1:  # one sweep's cells of one system, split by condition or run
-            for i in members:
-                runs[i].system = name
             continue
         shown = [runs[cells[0]].folder if len(cells) == 1 else runs[cells[0]].sweep for cells in split.values()]
         for cells, folder in zip(split.values(), _folder_names(shown), strict=True):
             for i in cells:
                 runs[i].system = f"{name} ({folder})"
+                runs[i].entrant = f"{entrants[i]} ({folder})"
     return poolings
 
 
