@@ -190,7 +190,7 @@ def write_report(
         f"{what_was_compared(analysis)} · {n_rows} rows"
     )
     if analysis.dataset_path:
-        subtitle += f" · {'real-world set' if not analysis.has_official else 'dataset'} {analysis.dataset_path}"
+        subtitle += f" · {'real-world set' if analysis.has_success and not analysis.has_official else 'dataset'} {analysis.dataset_path}"
     page_html = render_page(
         f"povagent report: {source.name}",
         subtitle,
