@@ -126,3 +126,15 @@ def test_the_reports_summary_json_holds_the_choice_tables_numbers(runs_folder, t
     assert [cell["value"] for cell in accuracy["rows"]["always-a"]] == [0.5, 1.0, 0.0, 0.5]
     confusion = summary["tables"]["choice_confusion_choice_1"]["rows"]
     assert {gold: [c["value"] for c in cells] for gold, cells in confusion.items()} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
+
+
+def test_a_set_without_conditions_is_plotted_overall_on_an_axis_from_0_to_1(runs_folder, tmp_path):
+    import re
+
+    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    plots = sorted((result.out / "plots").glob("*.svg"))
+    assert plots and not any("condition" in p.name for p in plots)
+    svg = (result.out / "plots" / "metric_choice_accuracy.svg").read_text(encoding="utf-8")
+    assert "by condition" not in svg
+    ticks = [float(t) for t in re.findall(r'text-anchor="end">([0-9.]+)</text>', svg)]
+    assert min(ticks) == 0.0 and max(ticks) == 1.0  # an accuracy, whose CI reaches 1, on [0, 1]
