@@ -28,6 +28,15 @@ CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrben
 OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench-lmms"}
 
 
+#: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
+#: defaults on such a set: :func:`povagent.config.plugin_checks.resolve_components`).
+SET_ANSWER_TYPE = "choice"
+
+#: A set's own scorer, where it has one beyond the answer type's (3DSRBench's four accuracies):
+#: what a pipeline on that format gets when it names no ``scorers:``.
+OFFICIAL_SET_SCORERS = {"3dsrbench": "choice-3dsrbench"}
+
+
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
     """The set in ``file``, read as ``format``, its image paths relative to (and confined to)
     the folder ``images`` (default: the file's folder); bad records are left out and named in
@@ -100,4 +109,4 @@ def _where(format: str, item_id: str) -> str:
     return f"$[{item_id}]" if format == "viewspatial" else f"record {item_id}"
 
 
-__all__ = ["CHOICE_FORMATS", "ChoiceSet", "load_choice_set", "validate_choice_set"]
+__all__ = ["CHOICE_FORMATS", "OFFICIAL_SET_SCORERS", "SET_ANSWER_TYPE", "ChoiceSet", "load_choice_set", "validate_choice_set"]
