@@ -138,3 +138,10 @@ def test_a_set_without_conditions_is_plotted_overall_on_an_axis_from_0_to_1(runs
     assert "by condition" not in svg
     ticks = [float(t) for t in re.findall(r'text-anchor="end">([0-9.]+)</text>', svg)]
     assert min(ticks) == 0.0 and max(ticks) == 1.0  # an accuracy, whose CI reaches 1, on [0, 1]
+
+
+def test_two_labelled_systems_that_answered_alike_are_both_shown(runs_folder, tmp_path):
+    result = write_report(runs_folder(("oracle", "oracle", None), ("oracle-again", "oracle", None)), tmp_path / "report", gallery=False, n_boot=200)
+    assert [s.system for s in result.analysis.systems] == ["oracle", "oracle-again"]
+    assert not any("shown once" in note for note in result.analysis.notes)
+    assert [r.label for r in _table(result, "choice_accuracy_choice").rows] == ["oracle", "oracle-again"]
