@@ -63,8 +63,8 @@ class Predictions:
 def judge_items(paths: list[Path]) -> Predictions:
     """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame
     (an answer in an active episode's rendered view is left out: its image is no dataset's)."""
-    from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
+    from povagent.report.run_sets import load_collection_dataset
 
     collection = collect(paths)
     dataset, note = load_collection_dataset(collection, None)

@@ -119,9 +119,9 @@ def compare_command(
     Paired statistics over the instances both runs answered, and the instances whose error
     changed most.
     """
-    from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
     from povagent.report.compare import compare_runs, print_comparison, write_comparison_html
+    from povagent.report.run_sets import load_collection_dataset
 
     cmp = compare_runs(run_a, run_b, n_boot=bootstrap)
     print_comparison(cmp, top)

@@ -34,7 +34,7 @@ from povagent.report.baseline import (
     center_success_observations,
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
-from povagent.report.collect import Collection, Observation, RunInfo
+from povagent.report.collect import Collection, Observation
 from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
 from povagent.report.systems import config_label
@@ -209,43 +209,6 @@ def what_was_compared(a: Analysis) -> str:
     if refs:
         parts.append(f"{len(refs)} baseline{'s' if len(refs) > 1 else ''}: {', '.join(refs)}")
     return " · ".join(parts) or "no system"
-
-
-def load_collection_dataset(collection: Collection | list[RunInfo], override: str | Path | None = None, sets: Any = None):
-    """The set the runs were asked (``override`` in place of its file or folder), or
-    ``(None, reason)`` if it cannot load (``collection``: a collection, or the runs
-    :func:`~povagent.report.collect.find_runs` found, so that a report loads the set before it
-    holds the rows' observations).
-
-    Each set is opened as the runner opened it: a release-layout set, a real-world set
-    (``realworld.json``, whose letterboxed frames the gallery draws on), or an external
-    multiple-choice set's file in its ``dataset.format`` (with its ``dataset.images``), asked
-    as the run's ``task:``. Runs asking different sets get them all
-    (:class:`~povagent.report.run_sets.RunSets`, each run's own). ``sets``: the report's
-    :class:`~povagent.report.choice_gold.SetQuestions`, so each set is opened once per report.
-    """
-    from povagent.report.choice_gold import SetQuestions, run_set_key
-    from povagent.report.run_sets import RunSets
-
-    sets = SetQuestions() if sets is None else sets
-
-    runs = collection.runs if isinstance(collection, Collection) else collection
-    keys = {r.name: run_set_key(r, Path(override) if override else None) for r in runs}
-    distinct = list(dict.fromkeys(k for k in keys.values() if k is not None))
-    if not distinct:
-        if override:  # no config names a set: the folder given, read as a release or real-world set
-            distinct = [(Path(override), None, None, None)]
-        else:
-            return None, "no dataset path in the runs' config.yaml (pass --dataset)"
-    # No load-time image check: the gallery draws a card for every row and says on it
-    # which image failed, instead of the house vanishing from the report.
-    opened = {key: sets.opened(key) for key in distinct}
-    failed = [reason for reason in opened.values() if isinstance(reason, str)]
-    if failed:
-        return None, f"dataset not loadable: {failed[0]}"
-    if len(opened) == 1:
-        return next(iter(opened.values())), None
-    return RunSets([opened[k] for k in distinct], {name: opened[k] for name, k in keys.items() if k is not None}), None
 
 
 def _answers_signature(obs: list[Observation]) -> str:

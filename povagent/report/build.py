@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.report.active import active_section
-from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
+from povagent.report.analysis import Analysis, analyze, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.choice_gold import SetQuestions
 from povagent.report.choice_tables import choice_answers, choice_tables
@@ -43,6 +43,7 @@ from povagent.report.leaderboard import leaderboard_tables
 from povagent.report.manual import manual_tables
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
+from povagent.report.run_sets import load_collection_dataset
 from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.systems import Pooling
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
@@ -140,10 +141,10 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
-    answers = choice_answers(collection, sets)
+    choices = choice_answers(collection, sets)
     # multiple-choice runs: the systems x sets leaderboard, then per set accuracy, pairs, confusion
-    added = leaderboard_tables(collection, analysis, list(answers), dataset, n_boot=n_boot, seed=seed)
-    added += choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets, answers=answers)
+    added = leaderboard_tables(collection, analysis, list(choices), dataset, n_boot=n_boot, seed=seed)
+    added += choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets, read=choices)
     added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
     tables += added
     timings["statistics"] = time.perf_counter() - t

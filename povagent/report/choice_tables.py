@@ -25,8 +25,9 @@ import numpy as np
 from povagent.errors import PluginError
 from povagent.plugins import get_plugin_host
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.choice_fields import CHOICE_FIELDS
 from povagent.report.choice_gold import SetQuestions
-from povagent.report.collect import CHOICE_FIELDS, Collection, RunInfo
+from povagent.report.collect import Collection, RunInfo
 from povagent.report.statistics import sign_test_p
 from povagent.report.tables import Cell, Column, Row, Table
 from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
@@ -97,15 +98,15 @@ def _scorer_name(spec: object) -> str:
 
 def choice_tables(
     collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0, sets: SetQuestions | None = None,
-    answers: dict[str, list[ChoiceAnswer]] | None = None,
+    read: dict[str, list[ChoiceAnswer]] | None = None,
 ) -> list[Table]:
     """Each choice scorer's accuracy table, paired differences (with two systems or more) and a
     confusion table per system (none for a report without choice rows), per set the runs were
     asked. ``sets``: the sets the report opened already (each set the runs name is opened once,
-    for every scorer); ``answers``: :func:`choice_answers`, when the report read them already."""
+    for every scorer); ``read``: :func:`choice_answers`, when the report read them already."""
     tables: list[Table] = []
     sets = SetQuestions() if sets is None else sets
-    for scorer, all_answers in (choice_answers(collection, sets) if answers is None else answers).items():
+    for scorer, all_answers in (choice_answers(collection, sets) if read is None else read).items():
         by_set: dict[str, list[ChoiceAnswer]] = defaultdict(list)
         for a in all_answers:
             by_set[a.benchmark].append(a)

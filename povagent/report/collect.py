@@ -31,9 +31,10 @@ import yaml
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
 from povagent.report.run_summaries import declared_in_summary
-from povagent.report.systems import Pooling, assign_systems
+from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
@@ -111,8 +112,7 @@ class Observation:
     metric_groups: Mapping[str, Mapping[str, str]] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
-    #: The option label a choice scorer recorded as chosen (``None``: no choice scorer scored the
-    #: row, or the reply named no option).
+    #: The option label a choice scorer recorded (``None``: none scored the row, or no option was read).
     chosen: str | None = None
 
 
@@ -148,16 +148,8 @@ class RunInfo:
 
     @property
     def benchmark(self) -> str:
-        """The set the run was asked, by name: an external set's ``dataset.format``
-        (``viewspatial``), else its folder's name, with the ``task:`` when it is not the point
-        task (``release · relation``); ``""`` when the config names no set."""
-        ds = self.config.get("dataset")
-        format = ds.get("format") if isinstance(ds, dict) else None
-        path = self.dataset_path
-        name = str(format) if format else (path.name if path is not None else "")
-        task = self.config.get("task")
-        task_name = task.get("name") if isinstance(task, dict) else task
-        return f"{name} · {task_name}" if name and task_name not in (None, "", "point") else name
+        """The set the run was asked, by name (:func:`~povagent.report.systems.set_name`)."""
+        return set_name(self.config, self.dataset_path)
 
     @property
     def dataset_path(self) -> Path | None:
@@ -271,23 +263,6 @@ def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, 
     if not axes["model"]:
         axes["model"] = axes["backend"]
     return {k: v for k, v in axes.items() if v}
-
-
-def simulation_label(options: Any) -> str:
-    """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
-    its noise options that are set, so a reader never mistakes it for a model."""
-    opts = options if isinstance(options, dict) else {}
-    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
-    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
-    return "simulation (" + (", ".join(parts) or "no noise") + ")"
-
-
-def planted_label(options: Any) -> str:
-    """How reports name a ``planted`` backend: ``planted simulation (egocentric 0.4, sigma 5 px)``."""
-    opts = options if isinstance(options, dict) else {}
-    names = (("egocentric", "egocentric {}"), ("mirror", "mirror {}"), ("random_frame", "random frame {}"), ("pixel_sigma", "sigma {} px"))
-    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
-    return "planted simulation (" + (", ".join(parts) or "ground truth") + ")"
 
 
 def _cells_of_index(index: Any) -> list[dict[str, Any]]:
@@ -431,19 +406,6 @@ def observation_of(
         chosen=chosen_label(row),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
-
-
-#: The fields a choice scorer writes: a row's scores carrying them all are a choice scorer's.
-CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
-
-
-def chosen_label(row: ResultRow) -> str | None:
-    """The label the row's first choice scorer (a scorer writing :data:`CHOICE_FIELDS`)
-    recorded as chosen (``None``: none scored it, or the reply named no option)."""
-    for fields in row.scores.values():
-        if fields.keys() >= CHOICE_FIELDS:
-            return None if fields["chosen"] is None else sys.intern(str(fields["chosen"]))
-    return None
 
 
 def _groups_of(row: ResultRow, run_name: str, declared: Declared) -> dict[str, dict[str, str]] | None:

@@ -42,7 +42,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import math
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -57,7 +56,7 @@ from povagent.errors import ReadTargetError
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
-from povagent.report.gallery_choice import asked_question, choice_fields, question_drawing
+from povagent.report.gallery_choice import asked_question, choice_fields, has_target, question_drawing, shows_several_images
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
 from povagent.report.run_sets import RunSets
@@ -197,9 +196,7 @@ def _save_jpeg(image: Image.Image, path: Path, quality: int) -> None:
 def _strip_of(instance: Any) -> Strip | None:
     """The strip of an instance's exploration frames, or of a multiple-choice question's
     images when it has several (``None`` for Given, or a single image, or no frames)."""
-    explored = getattr(instance.condition, "uses_exploration_frames", False)
-    several = asked_question(instance) is not None and len(instance.frames) > 1
-    if not (explored or several) or not instance.frames:
+    if not (getattr(instance.condition, "uses_exploration_frames", False) or shows_several_images(instance)) or not instance.frames:
         return None
     w, h = instance.frame_size
     return Strip(tuple(Path(f.file) for f in instance.frames), (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
@@ -236,8 +233,7 @@ class _StripBook:
             self.by_strip[strip] = len(self.stats.strips)
             self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
             self.jobs[key] = strip
-        # a question from a set with no 3D target (NaN) ticks no frame
-        views = list(ground_truth_views(instance)) if all(math.isfinite(v) for v in instance.target) else [[], []]
+        views = list(ground_truth_views(instance)) if has_target(instance) else [[], []]  # no 3D target: no tick
         index = self.by_views.setdefault(json.dumps(views), len(self.stats.views))
         if index == len(self.stats.views):
             self.stats.views.append(views)

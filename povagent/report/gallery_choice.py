@@ -14,6 +14,7 @@ This module only says what a card shows; drawing and naming the files is
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,16 @@ QUESTION_IMAGE = "question"
 def asked_question(instance: Any) -> Any:
     """The multiple-choice question an instance asks (``None``: it asks for no choice)."""
     return getattr(instance, "question", None) if instance is not None else None
+
+
+def shows_several_images(instance: Any) -> bool:
+    """Whether the instance asks a question shown with several images (they get a strip)."""
+    return asked_question(instance) is not None and len(getattr(instance, "frames", ())) > 1
+
+
+def has_target(instance: Any) -> bool:
+    """Whether the instance has a 3D target a frame may show (an external set's has none: NaN)."""
+    return all(math.isfinite(v) for v in instance.target)
 
 
 def question_drawing(instance: Any) -> Drawing | None:

@@ -78,7 +78,7 @@ def _set_scorer(system: str, choice_scorers: Sequence[str], analysis: Analysis, 
     scorer) before a generic one, in the order the report met them."""
     scored = [s for s in choice_scorers if system in analysis.declared_estimates.get(s, {})]
     own = [s for s in scored if _declared_headline(s, host) is not None]
-    return (own or scored or [None])[0]
+    return next(iter(own or scored), None)
 
 
 def _declared_headline(scorer: str, host: Any) -> str | None:

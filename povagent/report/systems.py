@@ -75,6 +75,35 @@ class Pooling:
         return f"Pooled {len(self.runs)} runs into the system '{self.system}' ({why}): {', '.join(self.runs)}."
 
 
+def simulation_label(options: Any) -> str:
+    """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
+    its noise options that are set, so a reader never mistakes it for a model."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "simulation (" + (", ".join(parts) or "no noise") + ")"
+
+
+def planted_label(options: Any) -> str:
+    """How reports name a ``planted`` backend: ``planted simulation (egocentric 0.4, sigma 5 px)``."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("egocentric", "egocentric {}"), ("mirror", "mirror {}"), ("random_frame", "random frame {}"), ("pixel_sigma", "sigma {} px"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "planted simulation (" + (", ".join(parts) or "ground truth") + ")"
+
+
+def set_name(config: dict[str, Any], path: Any) -> str:
+    """The set a run was asked, by name: an external set's ``dataset.format`` (``viewspatial``),
+    else its folder's name (``path``), with the ``task:`` when it is not the point task
+    (``release · relation``); ``""`` when the config names no set."""
+    ds = config.get("dataset")
+    format = ds.get("format") if isinstance(ds, dict) else None
+    name = str(format) if format else (getattr(path, "name", "") if path is not None else "")
+    task = config.get("task")
+    task_name = task.get("name") if isinstance(task, dict) else task
+    return f"{name}{LABEL_JOIN}{task_name}" if name and task_name not in (None, "", "point") else name
+
+
 def config_label(config: dict[str, Any]) -> str | None:
     """The ``label:`` a run's config gives its system, or ``None``."""
     value = config.get("label")
@@ -188,4 +217,4 @@ def assign_systems(runs: Sequence[NamedRun], *, pool: bool = False) -> list[Pool
     return poolings
 
 
-__all__ = ["AXIS_ORDER", "LABEL_JOIN", "NON_SYSTEM_AXES", "Pooling", "assign_systems", "axis_labels", "config_label"]
+__all__ = ["AXIS_ORDER", "LABEL_JOIN", "NON_SYSTEM_AXES", "Pooling", "assign_systems", "axis_labels", "config_label", "planted_label", "set_name", "simulation_label"]
