@@ -13,7 +13,6 @@ from povagent.run.runner import run_pipeline
 from povagent.testing.loopback_server import Fault, LoopbackServer
 from povagent_plugins.backends.litellm_backend import NO_KEY, keyless_placeholder
 
-
 #: A ViewSpatial-Bench file in its published layout (gold A, B, A, C), written per test.
 QUESTIONS = [
     {"question_type": "Camera perspective - Relative Direction", "image_path": ["images/scene.png"],
