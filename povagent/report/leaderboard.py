@@ -44,6 +44,8 @@ class Entry:
     system: str
     scorer: str
     metric: str
+    #: The rule that read the run's replies (its parser).
+    parser: str = ""
 
 
 def leaderboard_tables(
@@ -69,7 +71,8 @@ def _entries(collection: Collection, analysis: Analysis, choice_scorers: Sequenc
         if scorer is None:
             continue
         seen.add(run.system)
-        out.append(Entry(run.entrant or run.system, run.benchmark or "(set not named)", run.system, scorer, _headline(scorer, analysis, host)))
+        out.append(Entry(run.entrant or run.system, run.benchmark or "(set not named)", run.system, scorer, _headline(scorer, analysis, host),
+                         run.axes.get("parser", "")))  # fmt: skip
     return out
 
 
@@ -107,8 +110,11 @@ def _leaderboard_table(entries: list[Entry], analysis: Analysis, collection: Col
             cells.append(Cell(est.value, est.lo, est.hi) if est is not None else Cell(None))
         system = next(e.system for e in entries if e.entrant == entrant)
         rows.append(Row(entrant, cells, reference=is_baseline_system(collection.system_axes(system), entrant)))
-    numbers = sorted({(e.benchmark, e.scorer, e.metric) for e in entries})
-    said = "; ".join(f"{b}: {_metric_label(analysis, s, m)} ({s})" for b, s, m in numbers)
+    numbers: dict[tuple[str, str, str], dict[str, None]] = {}
+    for e in entries:
+        numbers.setdefault((e.benchmark, e.scorer, e.metric), {})[e.parser or "unknown"] = None
+    said = "; ".join(f"{b}: {_metric_label(analysis, s, m)} ({s}), read by {', '.join(f'`{p}`' for p in parsers)}"
+                     for (b, s, m), parsers in sorted(numbers.items()))  # fmt: skip
     caption = (f"Each set's own number with its 95% bootstrap CI over questions: {said}. A row is one system, a column one set; "
                "runs of different sets are never pooled, and an empty cell is a set the system was not asked. "
                + ("The same replies read by every rule that reads a choice answer: 'the harness readings', folded "

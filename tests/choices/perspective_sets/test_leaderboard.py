@@ -69,6 +69,14 @@ def test_each_leaderboard_cell_is_the_sets_own_number_of_that_run(report):
     assert grid["always-a"] == {"viewspatial": pytest.approx(0.5), "mindcube": pytest.approx(1 / 3)}
 
 
+def test_the_leaderboard_names_each_sets_number_and_the_rule_that_read_it(report):
+    result, results = report
+    caption = _table(result, LEADERBOARD).caption
+    for format in SETS:
+        parser = results[("oracle", format)].summary.pipeline.parser
+        assert f"{format}: Accuracy (choice), read by `{parser}`" in caption
+
+
 def test_a_leaderboard_cell_carries_its_confidence_interval(report):
     result, _ = report
     row = next(r for r in _table(result, LEADERBOARD).rows if r.label == "always-a")
@@ -142,3 +150,15 @@ def test_a_baseline_is_never_bolded_in_the_per_category_table(two_sets_three_sys
     assert best_rows(table) == [set() for _ in table.columns]
     body = (result.out / "tables" / "choice_accuracy_choice_viewspatial.md").read_text(encoding="utf-8").split("\n", 1)[1]
     assert "**" not in body
+
+
+def test_the_report_command_prints_the_leaderboard(two_sets_three_systems, tmp_path):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    folder, _ = two_sets_three_systems
+    outcome = CliRunner().invoke(app, ["report", str(folder), "--out", str(tmp_path / "printed"), "--no-gallery", "--bootstrap", "50"])
+    assert outcome.exit_code == 0, outcome.output
+    assert "**Leaderboard: systems x sets**" in outcome.stdout
+    assert "| System | mindcube | viewspatial |" in outcome.stdout
