@@ -41,6 +41,9 @@ QUESTION = r"-.*$"
 class SRBench3DScorer(Scorer):
     """The choice scorer's fields, the copy's question and variant, and 3DSRBench's four accuracies."""
 
+    #: the authors' circular evaluation is the set's number
+    headline = "circular_accuracy"
+
     metrics = (
         Metric("vanilla_accuracy", "higher", "rate", "correct", "Vanilla accuracy",
                "Correct / all records, every copy counted once (no option read = wrong).", over="all"),

@@ -59,10 +59,10 @@ def judge_items(paths: list[Path]) -> Predictions:
     """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame
     (an answer in an active episode's rendered view is left out: its image is no dataset's), each
     named by its run's identity and row key (:func:`~povagent.annotate.judgements.judged_item`)."""
-    from povagent.report.analysis import load_collection_dataset
     from povagent.report.baseline_systems import is_baseline_system
     from povagent.report.collect import collect
     from povagent.report.protocol import outside_paper_protocol
+    from povagent.report.run_sets import load_collection_dataset
 
     collection = collect(paths)
     dataset, note = load_collection_dataset(collection, None)

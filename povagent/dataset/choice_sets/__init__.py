@@ -41,8 +41,14 @@ IMAGES_HINT = {
 OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact"}
 #: Each set's own scorer: plain accuracy for ViewSpatial-Bench, MindCube's with its ``translation``
 #: setting left out of the overall (a scorer option), and 3DSRBench's four accuracies per type
-#: and sub-category (the authors' circular evaluation with VLMEvalKit's).
+#: and sub-category (the authors' circular evaluation with VLMEvalKit's): what a pipeline on that
+#: format gets first when it names no ``scorers:``.
 OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench"}
+
+
+#: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
+#: defaults on such a set: :func:`povagent.config.plugin_checks.resolve_components`).
+SET_ANSWER_TYPE = "choice"
 
 
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
@@ -125,4 +131,4 @@ def _where(format: str, item_id: str) -> str:
     return f"$[{item_id}]" if format == "viewspatial" else f"record {item_id}"
 
 
-__all__ = ["CHOICE_FORMATS", "ChoiceSet", "load_choice_set", "validate_choice_set"]
+__all__ = ["CHOICE_FORMATS", "OFFICIAL_SET_SCORERS", "SET_ANSWER_TYPE", "ChoiceSet", "load_choice_set", "validate_choice_set"]
