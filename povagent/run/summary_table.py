@@ -35,7 +35,7 @@ from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
 from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
-from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
+from povagent.scoring.metrics import Declared, row_category, row_metric_groups, row_metric_values
 from povagent.scoring.protocols import following, registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
@@ -104,8 +104,8 @@ class SummaryTable:
         if nan_rows([official]):
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
-            self.metrics.append(MetricValues.of(row, self.declared).flat, row.condition, row.direction,
-                                row_category(row), row_metric_groups(row, self.declared))  # fmt: skip
+            flat = [v for values in row_metric_values(row, self.declared).values() for v in values.values()]
+            self.metrics.append(flat, row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
         self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
     def close(self) -> SummaryTable:
