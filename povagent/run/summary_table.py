@@ -65,6 +65,7 @@ class SummaryTable:
         #: values only some rows have, by position
         self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}
         self._closed = False
+        self._scored: _ScoredRows | None = None
 
     def add(self, row: ResultRow) -> None:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
@@ -145,7 +146,9 @@ class SummaryTable:
     def scored(self) -> Sequence[ScoredRow]:
         """Each row as its ``normalized_l2`` score gives it (see :func:`~povagent.run.summary_fields.scored_row`)."""
         self._check_closed()
-        return _ScoredRows(self)
+        if self._scored is None:
+            self._scored = _ScoredRows(self)  # one view: its rows are built once
+        return self._scored
 
     def officially_scored(self) -> Sequence[ScoredRow]:
         """The rows that have an official reading (and failed requests), as the reading scores them."""
@@ -227,13 +230,22 @@ class SummaryTable:
 
 
 class _ScoredRows(Sequence[ScoredRow]):
-    """A table's rows as :class:`ScoredRow` objects, each built when it is read."""
+    """A table's rows as :class:`ScoredRow` objects, built together when one is first read and
+    kept while this view lives (a summary reads each row a dozen times, by slice; the table
+    itself stays in columns)."""
 
-    __slots__ = ("_columns", "_n")
+    __slots__ = ("_columns", "_n", "_rows")
 
     def __init__(self, table: SummaryTable) -> None:
         self._columns = [table.field(name) for name in _SCORED]
         self._n = len(table)
+        self._rows: list[ScoredRow] | None = None
+
+    def _built(self) -> list[ScoredRow]:
+        if self._rows is None:
+            n = self._n
+            self._rows = [ScoredRow(*values) for values in zip(*([column[i] for i in range(n)] for column in self._columns))]
+        return self._rows
 
     def __len__(self) -> int:
         return self._n
@@ -247,11 +259,7 @@ class _ScoredRows(Sequence[ScoredRow]):
     def __getitem__(self, i: int | slice) -> ScoredRow | Sequence[ScoredRow]:
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(self._n))]
-        if not -self._n <= i < self._n:
-            raise IndexError(i)
-        i %= self._n
-        c, d, answered, l2, in_frame, strict, run, ex, ey, pe = self._columns
-        return ScoredRow(c[i], d[i], answered[i], l2[i], in_frame[i], strict[i], run[i], ex[i], ey[i], pe[i])
+        return self._built()[i]
 
 
 class _OfficialRows(_ScoredRows):
