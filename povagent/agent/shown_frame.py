@@ -81,13 +81,14 @@ class ShownFrame:
                 self._file, size = file
                 self._box = Letterbox.for_size(*size)
                 return
+            pixels: np.ndarray | Image.Image
             if isinstance(source, np.ndarray):
-                pixels: np.ndarray | Image.Image = checked_array(source, what)
-                size = (pixels.shape[1], pixels.shape[0])
+                array = checked_array(source, what)
+                pixels, size = array, (array.shape[1], array.shape[0])
             else:
                 # an image is decoded now, so that a file that does not decode is refused now
-                pixels = load_frame(source, what)
-                size = pixels.size
+                image = load_frame(source, what)
+                pixels, size = image, image.size
             self._content = content or content_digest(pixels)
             self._pixels = pixels
             self._box = Letterbox.for_size(*size)
@@ -142,7 +143,7 @@ def content_digest(frame: FrameInput) -> str:
         digest.update(frame.tobytes())
     else:
         digest = hashlib.sha256(b"file\n")
-        digest.update(read_regular(frame, MAX_IMAGE_FILE_BYTES, what="image file"))
+        digest.update(read_regular(os.fspath(frame), MAX_IMAGE_FILE_BYTES, what="image file"))
     return digest.hexdigest()
 
 
