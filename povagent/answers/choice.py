@@ -22,9 +22,10 @@ _SHARED_OPTIONS: dict[tuple[tuple[str, str], ...], tuple[tuple[str, str], ...]] 
 _MAX_SHARED_OPTIONS = 4096
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ChoiceQuestion:
-    """One question with labelled options (``(("A", "left"), ("B", "right"))``) and the gold label."""
+    """One question with labelled options (``(("A", "left"), ("B", "right"))``) and the gold label
+    (slotted: a set of 10,000 questions holds 10,000 of them)."""
 
     question: str
     options: tuple[tuple[str, str], ...]

@@ -96,6 +96,10 @@ class ImageLookups:
         return Frame(index, rel, path, image_camera(facts.width, facts.height))
 
 
+#: The 3D target of every item: none (one tuple for all of them).
+_NO_TARGET = (float("nan"),) * 3
+
+
 def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowhere: Any = None) -> Instance:
     """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition.
     ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
@@ -105,7 +109,7 @@ def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowher
     camera = frames[0].camera if frames else image_camera(1, 1)
     return Instance(
         house_id=set_name, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
-        frames=frames, target=(float("nan"),) * 3, observer_object=nowhere, anchor_object=nowhere,
+        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,
         observer_camera=camera, question=item.question,
     )  # fmt: skip
 
