@@ -43,6 +43,8 @@ _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
+#: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
+_MAX_SHARED_SCORES = 1024
 
 
 class SummaryTable:
@@ -66,6 +68,7 @@ class SummaryTable:
         self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}
         self._closed = False
         self._scored: _ScoredRows | None = None
+        self._shared_scores: dict[Any, Any] = {}
 
     def add(self, row: ResultRow) -> None:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
@@ -99,7 +102,11 @@ class SummaryTable:
         for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"):
             columns[name].append(getattr(row, name))
         if extra := plugin_scores(row.scores, protocols):
-            self._aside["plugin_scores"][at] = extra
+            # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each
+            shared = self._shared_scores.get(extra)
+            if shared is None and len(self._shared_scores) < _MAX_SHARED_SCORES:
+                shared = self._shared_scores.setdefault(extra, extra)
+            self._aside["plugin_scores"][at] = extra if shared is None else shared
         if (diagnosed := diagnosed_row(row, error_scorer)) is not None:
             self._aside["diagnosed"][at] = diagnosed
         if nan_rows([official]):
