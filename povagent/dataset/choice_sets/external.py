@@ -63,7 +63,7 @@ def item_frames(
             problems.append(Problem(file, f"{where}.images[{index}]", found))
             return None
         frames.append(found)
-    return tuple(frames)
+    return lookups.shared(tuple(frames))
 
 
 class ImageLookups:
@@ -75,6 +75,14 @@ class ImageLookups:
         self.root = root
         self.real_root = dataset_root(root)
         self._frames: dict[tuple[int, str, Path | None], Frame | str] = {}
+        self._shown: dict[tuple[Frame, ...], tuple[Frame, ...]] = {}
+
+    def shared(self, frames: tuple[Frame, ...]) -> tuple[Frame, ...]:
+        """``frames``, as one tuple for every item showing the same images (up to 4,096 lists)."""
+        known = self._shown.get(frames)
+        if known is None and len(self._shown) < 4096:
+            known = self._shown.setdefault(frames, frames)
+        return frames if known is None else known
 
     def frame(self, index: int, rel: str, embedded_in: Path | None) -> Frame | str:
         """The frame at position ``index`` showing ``rel`` (an image written into the reader's
