@@ -231,7 +231,7 @@ class PipelineRun:
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
-        self._session_spent = UsageTotals.of((self._session_spent, row), unstated_tokens=0, unstated_cost=0.0)
+        self._session_spent = self._session_spent.plus(row)  # UsageTotals.of((spent, row), unstated 0)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
