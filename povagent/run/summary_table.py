@@ -102,10 +102,13 @@ class SummaryTable:
         for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"):
             columns[name].append(getattr(row, name))
         if extra := plugin_scores(row.scores, protocols):
-            # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each
-            shared = self._shared_scores.get(extra)
-            if shared is None and len(self._shared_scores) < _MAX_SHARED_SCORES:
-                shared = self._shared_scores.setdefault(extra, extra)
+            # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each.
+            # Only all-true/false ones: True == 1, and a summary tells a flag from a number
+            shared = None
+            if all(type(v) is bool for _, fields in extra for _, v in fields):
+                shared = self._shared_scores.get(extra)
+                if shared is None and len(self._shared_scores) < _MAX_SHARED_SCORES:
+                    shared = self._shared_scores.setdefault(extra, extra)
             self._aside["plugin_scores"][at] = extra if shared is None else shared
         if (diagnosed := diagnosed_row(row, error_scorer)) is not None:
             self._aside["diagnosed"][at] = diagnosed
