@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -30,6 +31,7 @@ from povagent.report.choice_gold import SetQuestions
 from povagent.report.collect import Collection, RunInfo
 from povagent.report.statistics import sign_test_p
 from povagent.report.tables import Cell, Column, Row, Table
+from povagent.results.rows import ResultRow, StoredRows
 from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 
 #: The confusion column of answers naming no option.
@@ -65,7 +67,7 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
     the question was scored, as the set the run names holds them (``sets``; :data:`UNKNOWN`
     when that set cannot be opened)."""
     sets = SetQuestions() if sets is None else sets
-    carried = [{scorer for row in run.rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS} for run in collection.runs]
+    carried = [_choice_scorers(run.rows) for run in collection.runs]
     scorers = sorted(set().union(*carried), key=lambda name: next(i for i, c in enumerate(carried) if name in c))
     questions: dict[tuple[str, str], tuple[str, str]] = {}
     unscored: list[tuple[str, int, RunInfo]] = []  # (scorer, position in its answers, run) of rows it did not score
@@ -73,6 +75,8 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
     for run, its_own in zip(collection.runs, carried):
         named = {_scorer_name(s) for s in run.config.get("scorers") or []}
         mine = [s for s in scorers if s in named or s in its_own]
+        if not mine:
+            continue  # no choice scorer of this run: its rows are not read
         benchmark = run.benchmark
         for row in run.rows:
             for scorer in mine:
@@ -90,6 +94,13 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
         question = questions.get((scorer, answer.instance_id)) or sets.question(run, answer.instance_id) or (UNKNOWN, "")
         out[scorer][position] = dataclasses.replace(answer, gold=question[0], category=question[1])
     return out
+
+
+def _choice_scorers(rows: Sequence[ResultRow]) -> set[str]:
+    """The scorers that wrote a choice verdict (:data:`CHOICE_FIELDS`) into some row of ``rows``."""
+    if isinstance(rows, StoredRows):  # known from its one reading of the file
+        return {scorer for scorer, shapes in rows.carried_scores.items() if any(f >= CHOICE_FIELDS for f in shapes)}
+    return {scorer for row in rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS}
 
 
 def _scorer_name(spec: object) -> str:

@@ -209,7 +209,7 @@ def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     """
     known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
-    carried = list(dict.fromkeys(name for row in rows for name in row.scores))
+    carried = list(rows.carried_scores) if isinstance(rows, StoredRows) else list(dict.fromkeys(name for row in rows for name in row.scores))
     default = [] if named else default_scorers()
     for candidates in (named, carried, default):
         for protocol in PROTOCOLS:

@@ -9,7 +9,8 @@ Pure: a row in, values out.
 from __future__ import annotations
 
 import sys
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow

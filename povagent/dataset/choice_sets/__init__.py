@@ -15,7 +15,7 @@ import tempfile
 import weakref
 from pathlib import Path
 
-from povagent.dataset.choice_sets.external import ChoiceSet, choice_instance, item_frames
+from povagent.dataset.choice_sets.external import ChoiceSet, ImageLookups, choice_instance, item_frames
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 
@@ -71,12 +71,16 @@ def load_choice_set(file: str | Path, format: str, *, images: str | Path | None 
     root = file.parent if images is None else Path(images)
     if not root.is_dir():
         raise DatasetError(f"{root}: not a folder (dataset.images names the folder a set's image paths are relative to)")
+    from povagent.dataset.realworld import unknown_object
+
     instances = []
+    lookups = ImageLookups(root)  # each image path resolved and checked once per set
+    nowhere = unknown_object()  # the items' unknown observer and anchor: one object for the set
     for item in items:
         before = len(problems)
-        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache)
+        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache, lookups)
         if frames is not None:
-            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames))
+            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames, nowhere))
         elif format in IMAGES_HINT and images is None and problems[before:] and problems[-1].message.endswith("does not exist"):
             problems[-1] = Problem(problems[-1].file, problems[-1].json_path, f"{problems[-1].message} ({IMAGES_HINT[format]})")
     choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache_dir=cache)
