@@ -14,6 +14,12 @@ see the same load. CPU time (``time.process_time``, every thread of the process)
 * ``second``: the same command again over the same, unchanged keyframes (the ROS session
   hands the agent each keyframe's ``shown`` frame; before, the bare arrays); goal: <= 0.15x
   ``first``;
+* ``arrays_first`` / ``arrays_second``: the same two commands over 30 other frames handed in as
+  bare numpy arrays (the agent's documented input), the second with equal arrays (copies);
+  ``files_first`` / ``files_second``: the same over those frames saved as 640x480 PNG files;
+  goal: second <= 0.15x first (issue 55, goal 3);
+* ``center_first``: one command with the offline ``center`` baseline over 30 fresh arrays (a
+  backend that never reads pixels: nothing to letterbox or encode);
 * ``ros_center``: one command through the ROS session (:class:`~povagent.ros.session.GroundingSession`)
   over a full memory of 30 keyframes with the offline ``center`` baseline, the mean of
   ``--commands`` commands after the first; goal: under 40 ms.
@@ -32,6 +38,8 @@ from pathlib import Path
 
 from baseline_code import baseline_checkout, cpu_of, imported_from
 from results_file import figure, record
+
+KEYS = ("first", "second", "ros_center", "arrays_first", "arrays_second", "files_first", "files_second", "center_first")
 
 SNIPPET = r"""
 import time
@@ -80,6 +88,28 @@ with GroundingAgent("sends-pixels", parser="json") as agent:
     print("first=", time.process_time() - t)
     t = time.process_time(); agent.locate("the phone is left of the sofa", shown)
     print("second=", time.process_time() - t)
+    arrays = [frame(i + 100) for i in range(N)]
+    t = time.process_time(); agent.locate("the mug is right of the kettle", arrays)
+    print("arrays_first=", time.process_time() - t)
+    again = [a.copy() for a in arrays]
+    t = time.process_time(); agent.locate("the phone is left of the sofa", again)
+    print("arrays_second=", time.process_time() - t)
+    from PIL import Image
+    import tempfile, os
+    folder = tempfile.mkdtemp()
+    files = [os.path.join(folder, f"frame_{i}.png") for i in range(N)]
+    for i, path in enumerate(files):
+        Image.fromarray(frame(i + 200)).save(path)
+    t = time.process_time(); agent.locate("the mug is right of the kettle", files)
+    print("files_first=", time.process_time() - t)
+    t = time.process_time(); agent.locate("the phone is left of the sofa", files)
+    print("files_second=", time.process_time() - t)
+
+with GroundingAgent("center") as agent:
+    agent.locate("warm-up", [frame(98)])
+    fresh = [frame(i + 300) for i in range(N)]
+    t = time.process_time(); agent.locate("the mug is right of the kettle", fresh)
+    print("center_first=", time.process_time() - t)
 
 with GroundingAgent("center") as agent:
     session = GroundingSession(agent_locate(agent))
@@ -111,10 +141,15 @@ def main() -> None:
                 got[label].append(cpu_of(code, path))
             b, a = got["before"][-1], got["after"][-1]
             print(f"round {r + 1}: " + "; ".join(
-                f"{k}: before {1000 * b[k]:.1f} ms, after {1000 * a[k]:.1f} ms" for k in ("first", "second", "ros_center")))
-    med = {label: {k: statistics.median(m[k] for m in runs) for k in ("first", "second", "ros_center")} for label, runs in got.items()}
+                f"{k}: before {1000 * b[k]:.1f} ms, after {1000 * a[k]:.1f} ms" for k in KEYS))
+    med = {label: {k: statistics.median(m[k] for m in runs) for k in KEYS} for label, runs in got.items()}
     b, a = med["before"], med["after"]
     second_over_first = statistics.median(m["second"] / m["first"] for m in got["after"])
+    ratio = {kind: {label: statistics.median(m[f"{kind}_second"] / m[f"{kind}_first"] for m in got[label]) for label in got}
+             for kind in ("arrays", "files")}
+    for kind in ("arrays", "files"):
+        print(f"{kind}: second / first before {ratio[kind]['before']:.3f}, after {ratio[kind]['after']:.3f} (goal <= 0.15)")
+    print(f"center first command: before {1000 * b['center_first']:.1f} ms, after {1000 * a['center_first']:.1f} ms")
     load = os.getloadavg()
     print(f"medians (CPU ms): before first {1000 * b['first']:.1f}, second {1000 * b['second']:.1f}, ROS center {1000 * b['ros_center']:.1f}")
     print(f"                  after  first {1000 * a['first']:.1f}, second {1000 * a['second']:.1f}, ROS center {1000 * a['ros_center']:.1f}")
@@ -127,6 +162,12 @@ def main() -> None:
         figure("second command, CPU", round(1000 * a["second"], 1), "ms", comparison=f"before (commit {args.baseline}): {1000 * b['second']:.1f} ms"),
         figure("ROS command with the center baseline, CPU", round(1000 * a["ros_center"], 1), "ms", target="< 40",
                comparison=f"before (commit {args.baseline}): {1000 * b['ros_center']:.1f} ms; GroundingSession.answer over a full memory"),
+        *(figure(f"second command with the same {what} / first", round(ratio[kind]["after"], 3), "x", target="<= 0.15",
+                 comparison=f"before (commit {args.baseline}): {ratio[kind]['before']:.3f}x; {setting}, handed in as {what}; "
+                 f"first {1000 * a[kind + '_first']:.1f} ms, second {1000 * a[kind + '_second']:.1f} ms")
+          for kind, what in (("arrays", "numpy arrays"), ("files", "640x480 PNG files"))),
+        figure("first command with the center baseline over 30 fresh arrays, CPU", round(1000 * a["center_first"], 1), "ms",
+               comparison=f"before (commit {args.baseline}): {1000 * b['center_first']:.1f} ms; a backend that reads no pixels"),
     ])
 
 

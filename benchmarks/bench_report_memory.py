@@ -21,6 +21,7 @@ import json
 import os
 import resource
 import shutil
+import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -85,7 +86,8 @@ def main() -> None:
             print(f"{label}: report peak {med[label]['small']:.1f} MiB at {rows['small']} rows, {med[label]['large']:.1f} MiB at "
                   f"{rows['large']} rows: {med[label]['ratio']:.3f}x")
         a, b = med["after"], med["before"]
-        print(f"after: {a['ratio']:.3f}x (target <= 1.1); load after: {load}")
+        cpu_ratio = statistics.median(x["cpu_s"] / y["cpu_s"] for x, y in zip(got["after"]["large"], got["before"]["large"], strict=True))
+        print(f"after: {a['ratio']:.3f}x (target <= 1.1); report CPU at {rows['large']} rows after / before: {cpu_ratio:.3f}x; load after: {load}")
         before = f"before (commit {args.baseline})"
         record("bench_report_memory", [
             figure(f"report peak RSS, {rows['large']:,} rows over {rows['small']:,}", round(a["ratio"], 3), "x", target="<= 1.1",
@@ -94,6 +96,8 @@ def main() -> None:
             figure(f"report peak RSS at {rows['large']:,} rows", round(a["large"], 1), "MiB", comparison=f"{before}: {b['large']:.1f} MiB"),
             figure(f"report peak RSS at {rows['small']:,} rows", round(a["small"], 1), "MiB", comparison=f"{before}: {b['small']:.1f} MiB"),
             figure(f"report CPU at {rows['large']:,} rows", round(a["cpu_large"], 1), "s", comparison=f"{before}: {b['cpu_large']:.1f} s"),
+            figure(f"report CPU at {rows['large']:,} rows / before's", round(cpu_ratio, 3), "x", target="<= 1.05",
+                   comparison=f"{before}, the same run folder; median of the {args.rounds} rounds' ratios (user + system CPU)"),
         ])
 
 

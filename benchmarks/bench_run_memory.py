@@ -114,7 +114,8 @@ def main() -> None:
                   f"{large[0]['rows']} rows: {med[label]['ratio']:.3f}x, {med[label]['per_row_kib']:.2f} KiB per extra row")
         a, b = med["after"], med["before"]
         n_small, n_large = got["after"]["small"][0]["rows"], got["after"]["large"][0]["rows"]
-        print(f"after: {a['ratio']:.3f}x (target <= 1.1); load after: {load}")
+        cpu_ratio = statistics.median(x["cpu_s"] / y["cpu_s"] for x, y in zip(got["after"]["large"], got["before"]["large"], strict=True))
+        print(f"after: {a['ratio']:.3f}x (target <= 1.1); run CPU at {n_large} rows after / before: {cpu_ratio:.3f}x; load after: {load}")
         before = f"before (commit {args.baseline})"
         record("bench_run_memory", [
             figure(f"peak RSS, {n_large:,} rows over {n_small:,}", round(a["ratio"], 3), "x", target="<= 1.1",
@@ -124,6 +125,8 @@ def main() -> None:
             figure(f"peak RSS at {n_small:,} rows", round(a["small"], 1), "MiB", comparison=f"{before}: {b['small']:.1f} MiB"),
             figure("peak RSS per extra row", round(a["per_row_kib"], 2), "KiB", comparison=f"{before}: {b['per_row_kib']:.2f} KiB"),
             figure(f"run CPU at {n_large:,} rows", round(a["cpu_large"], 1), "s", comparison=f"{before}: {b['cpu_large']:.1f} s"),
+            figure(f"run CPU at {n_large:,} rows / before's", round(cpu_ratio, 3), "x", target="<= 1.05",
+                   comparison=f"{before}, the same rows; median of the {args.rounds} rounds' ratios (user + system CPU)"),
         ])
 
 

@@ -24,9 +24,9 @@ END = "<!-- end choice-rules tables -->"
 
 #: Each rule parser: the upstream rule it reproduces and the commit (``repo@sha``) it follows.
 RULES = {
-    "viewspatial": ("`lmms_eval/tasks/viewspatial/utils.py` `extract_option` (= the set's `evaluate.py`)", LMMS_EVAL),
-    "mindcube": ("`lmms_eval/tasks/mindcube/utils.py` `extract_answer` (= the set's `extractors.py`)", LMMS_EVAL),
-    "3dsrbench-lmms": ("`lmms_eval/tasks/3dsrbench/utils.py` `extract_answer`", LMMS_EVAL),
+    "viewspatial": ("reasoning-tag strip, then `lmms_eval/tasks/viewspatial/utils.py` `extract_option`", LMMS_EVAL),
+    "mindcube": ("reasoning-tag strip, then `lmms_eval/tasks/mindcube/utils.py` `extract_answer`", LMMS_EVAL),
+    "3dsrbench-lmms": ("reasoning-tag strip, then `lmms_eval/tasks/3dsrbench/utils.py` `extract_answer`", LMMS_EVAL),
     "vlmevalkit-exact": ("`vlmeval/utils/matching_util.py` `can_infer`, else `Z`", VLMEVALKIT),
     "vlmevalkit-spatial": ("`vlmeval/dataset/utils/spatial_bench/matching_func.py` `can_match_option`", VLMEVALKIT),
     "lmms-mcq-extract": ("`lmms_eval/tasks/_task_utils/mcq_extract.py` `extract_mcq_answer`", LMMS_EVAL),

@@ -20,6 +20,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.choice_vlmevalkit",
     "povagent_plugins.scorers.choice_sparbench",
     "povagent_plugins.scorers.srbench3d",
+    "povagent_plugins.scorers.choice_mindcube",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",

@@ -266,6 +266,9 @@ class Scorer(abc.ABC):
     #: Whether it projects the instance's 3D target (a real-world set, marked by hand in 2D,
     #: refuses such a scorer before any request).
     needs_3d_target: ClassVar[bool] = False
+    #: The declared metric a leaderboard shows as the set's number (the report's systems x sets
+    #: table); ``None``: the first of :attr:`metrics`.
+    headline: ClassVar[str | None] = None
 
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:

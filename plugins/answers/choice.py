@@ -40,6 +40,9 @@ CHOICE = AnswerType(
     value_of=choice_value,
     gold=gold_label,
     show=show_choice,
+    # a set of choice questions named with nothing else is asked in its own wording and scored by accuracy
+    default_strategy="choice",
+    default_scorers=("choice",),
 )
 
 

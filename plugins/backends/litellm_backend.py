@@ -67,6 +67,25 @@ def _jsonable(value: Any) -> Any:
     return json.loads(json.dumps(value, sort_keys=True, default=repr))
 
 
+#: What an OpenAI-compatible local server that needs no key (vLLM without ``--api-key``,
+#: Ollama's ``/v1``) is sent in the key's place: the OpenAI client refuses to send a request
+#: without one, and such a server reads none. A server that does need a key answers 401, which
+#: the run reports as a missing key naming the variable to export.
+NO_KEY = "no-key"
+
+#: The litellm providers that speak the OpenAI API through the OpenAI client (which needs a key)
+#: and read ``OPENAI_API_KEY`` when no key is given.
+_OPENAI_CLIENT_PROVIDERS = ("openai/", "text-completion-openai/")
+
+
+def keyless_placeholder(model: str, api_base: str | None) -> str | None:
+    """:data:`NO_KEY` for an ``openai/...`` model on a server of its own (``api_base``) when
+    ``OPENAI_API_KEY`` is not set, else ``None`` (litellm reads the provider's variable)."""
+    if api_base and model.startswith(_OPENAI_CLIENT_PROVIDERS) and not os.environ.get("OPENAI_API_KEY"):
+        return NO_KEY
+    return None
+
+
 class LiteLLMBackend(Backend):
     """Calls a model through litellm (one deployment, or a Router over several)."""
 
@@ -146,7 +165,7 @@ class LiteLLMBackend(Backend):
     def _api_key(self) -> str | None:
         name = self.options.api_key_env
         if name is None:
-            return None
+            return keyless_placeholder(self.model, self.options.api_base)
         value = os.environ.get(name)
         if not value:
             raise PermanentBackendError(
@@ -310,7 +329,7 @@ class LiteLLMBackend(Backend):
             d["litellm_params"].get("api_key_env") for d in (self.options.router or [])
         ]
         values = [os.environ.get(n, "") for n in names if n]
-        return tuple(v for v in [key, *values] if v)
+        return tuple(v for v in [key, *values] if v and v != NO_KEY)
 
     def _get_router(self, litellm: Any) -> Any:
         # built on first use: litellm is imported lazily, and keys are read from the environment

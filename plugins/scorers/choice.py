@@ -8,7 +8,7 @@ Scores: ``answered`` (an option was read), ``correct``, ``chosen``, ``gold`` and
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
@@ -20,7 +20,7 @@ from povagent.scoring.metrics import Metric
 class ChoiceScorer(Scorer):
     """Hit when the chosen label is the gold label (no options)."""
 
-    metrics = (
+    metrics: ClassVar[tuple[Metric, ...]] = (
         Metric("accuracy", "higher", "rate", "correct", "Accuracy",
                "Correct / all questions; an answer naming no option counts as wrong.", over="all"),
         Metric("response_rate", "higher", "rate", "answered", "Response rate",

@@ -3,9 +3,11 @@
 3DSRBench asks each question in copies (:mod:`povagent.dataset.choice_sets.srbench3d`), its
 qid the instance's pair id: the question ``Q``, its flipped copy ``Q-flip`` (the answer
 mirrored), its circular copies ``Q-N`` (the options rotated), and ``Q-flip-N``. Its accuracies,
-as lmms-eval's ``3dsrbench`` task aggregates them (@ 75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3,
-``lmms_eval/tasks/3dsrbench/utils.py``), each a rate over groups of copies, a group right only
-when every copy in it is (:class:`povagent.scoring.metrics.Metric` ``group``):
+as VLMEvalKit's ``_3DSRBench.evaluate`` (@ e8e78f05), the authors' circular results script and
+lmms-eval's ``3dsrbench`` task (@ 75571cfe) group the copies, each a rate over groups of copies, a
+group right only when every copy in it is (:class:`povagent.scoring.metrics.Metric` ``group``);
+every slice has all four, overall, per sub-category and per type (a question counts in both:
+:data:`povagent.dataset.choice_sets.srbench3d.TYPES`):
 
 - ``vanilla_accuracy``: correct / every record (every copy counts once);
 - ``flip_accuracy``: a copy and its flipped twin (the qid with ``-flip`` removed: ``Q`` with
@@ -38,6 +40,9 @@ QUESTION = r"-.*$"
 
 class SRBench3DScorer(Scorer):
     """The choice scorer's fields, the copy's question and variant, and 3DSRBench's four accuracies."""
+
+    #: the authors' circular evaluation is the set's number
+    headline = "circular_accuracy"
 
     metrics = (
         Metric("vanilla_accuracy", "higher", "rate", "correct", "Vanilla accuracy",

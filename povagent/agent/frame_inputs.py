@@ -47,22 +47,35 @@ def load_frame(frame: FrameInput, what: str) -> Image.Image:
 
 
 def _array_to_image(a: np.ndarray, what: str) -> Image.Image:
+    return array_image(checked_array(a, what))
+
+
+def checked_array(a: np.ndarray, what: str) -> np.ndarray:
+    """``a`` if it is a usable image array (an ``(H, W, 1)`` array as ``(H, W)``), else a
+    :class:`BadInputError` naming ``what``; nothing is converted (:func:`array_image` does)."""
     if a.ndim == 3 and a.shape[2] == 1:
         a = a[..., 0]
     if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))):
         raise BadInputError(f"{what}: an image array must be (H, W), (H, W, 3) or (H, W, 4), got shape {a.shape}")
     if a.shape[0] < 1 or a.shape[1] < 1:
         raise BadInputError(f"{what}: empty image array of shape {a.shape}")
+    if a.dtype == np.uint8 or a.dtype == np.bool_:
+        return a
+    if np.issubdtype(a.dtype, np.floating):
+        if not np.isfinite(a).all() or a.min() < 0 or a.max() > 1:
+            raise BadInputError(f"{what}: a float image array must hold values in [0, 1]")
+        return a
+    raise BadInputError(f"{what}: image arrays must be uint8 or float in [0, 1], got dtype {a.dtype}")
+
+
+def array_image(a: np.ndarray) -> Image.Image:
+    """The RGB image of an array :func:`checked_array` accepted."""
     if a.dtype == np.uint8:
         data = a
     elif a.dtype == np.bool_:
         data = a.astype(np.uint8) * 255
-    elif np.issubdtype(a.dtype, np.floating):
-        if not np.isfinite(a).all() or a.min() < 0 or a.max() > 1:
-            raise BadInputError(f"{what}: a float image array must hold values in [0, 1]")
-        data = np.round(a * 255).astype(np.uint8)
     else:
-        raise BadInputError(f"{what}: image arrays must be uint8 or float in [0, 1], got dtype {a.dtype}")
+        data = np.round(a * 255).astype(np.uint8)
     if data.ndim == 3 and data.shape[2] == 4:
         data = data[..., :3]
     return Image.fromarray(np.ascontiguousarray(data)).convert("RGB")

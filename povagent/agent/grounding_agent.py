@@ -46,6 +46,7 @@ import numpy as np
 
 from povagent.agent.ask_factory import AGENT_RETRY, AskFactory, default_ask_factory
 from povagent.agent.frame_inputs import FrameInput
+from povagent.agent.frame_memory import FrameMemory
 from povagent.agent.localization import Localization, localize
 from povagent.agent.prepared_call import PreparedCall, prepare_call
 from povagent.agent.shown_frame import ShownFrame
@@ -149,6 +150,8 @@ class GroundingAgent:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._loop_thread: threading.Thread | None = None
         self._lock = threading.Lock()
+        #: frames handed in bare, by content: the same arrays or files again cost a digest each
+        self._frames = FrameMemory()
 
     @classmethod
     def from_pipeline(cls, pipeline: str | os.PathLike | Mapping[str, Any], **overrides: Any) -> GroundingAgent:
@@ -227,8 +230,9 @@ class GroundingAgent:
         """Locate the target of ``sentence`` in ``frames`` (or in ``observer_view``).
 
         ``frames``: the robot's exploration frames (conditions A/B); a frame asked about again
-        and again is handed in as a :class:`~povagent.agent.shown_frame.ShownFrame`, which
-        keeps its letterbox, name and encoding from one call to the next. ``observer_view``: one
+        and again keeps its name, letterbox and encoding from one call to the next, whether it
+        is handed in as a :class:`~povagent.agent.shown_frame.ShownFrame` or again as the same
+        array, image or file (the agent knows it by a digest of its content). ``observer_view``: one
         frame from the speaker's viewpoint (condition C; ``frames`` are then not shown).
         ``cameras`` and ``depths`` line up with the images shown (``frames``, or the one
         observer view; ``None`` entries allowed): a camera (:class:`~povagent.geometry.camera.Camera`
@@ -251,6 +255,7 @@ class GroundingAgent:
                 prepared = await asyncio.to_thread(
                     prepare_call, sentence, frames, observer_view, cameras, depths,
                     pad_color=self.pad_color, plane=self.plane, posed=isinstance(self.strategy, PosedSolver),
+                    memory=self._frames,
                 )
                 exchanges = await self._solve(prepared, deadline)
         except TimeoutError:

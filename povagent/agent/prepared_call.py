@@ -5,7 +5,8 @@ What it is for: a strategy expects a POVBench :class:`~povagent.dataset.instance
 agent builds one: condition A when frames are given, C when an ``observer_view`` is; the frames
 letterboxed to the benchmark's 512x512 (:mod:`povagent.geometry.letterbox`, as the paper does
 for house-tour videos; once per frame, kept by a :class:`~povagent.agent.shown_frame.ShownFrame`
-handed in, and PNG-encoded only when a backend asks for the bytes), each told the unposed
+handed in or by the agent's :class:`~povagent.agent.frame_memory.FrameMemory`, and letterboxed
+and PNG-encoded only when a backend asks for the bytes), each told the unposed
 square camera; for a strategy that solves the
 geometry itself, the robot's cameras brought into its world (:mod:`povagent.agent.solver_cameras`).
 
@@ -24,6 +25,7 @@ import numpy as np
 from PIL import Image
 
 from povagent.agent.frame_inputs import FrameInput, aligned
+from povagent.agent.frame_memory import FrameMemory
 from povagent.agent.shown_frame import ShownFrame
 from povagent.agent.solver_cameras import posed_cameras
 from povagent.dataset.instances import Frame, Instance
@@ -69,6 +71,7 @@ def prepare_call(
     pad_color: tuple[int, int, int],
     plane: Plane,
     posed: bool,
+    memory: FrameMemory | None = None,
 ) -> PreparedCall:
     """One call's inputs, checked and made ready for the strategy.
 
@@ -78,13 +81,15 @@ def prepare_call(
     being written; a frame is PNG-encoded only if a backend asks for its bytes. Cameras and
     depth images are lined up with them and checked. ``posed``: the strategy is a
     :class:`~povagent.agent.solver_cameras.PosedSolver`, so the robot's cameras are brought
-    into its world (the floor ``plane``). Any problem is a :class:`~povagent.errors.BadInputError`.
+    into its world (the floor ``plane``). ``memory``: the agent's frames seen before, by
+    content (a frame handed in bare again gets back what was made of it). Any problem is a
+    :class:`~povagent.errors.BadInputError`.
     """
     if not isinstance(sentence, str) or not sentence.strip():
         raise BadInputError("sentence: give the user's sentence as a non-empty string")
     if observer_view is not None:
         condition = Condition.GIVEN
-        shown = [_shown(observer_view, "observer_view", pad_color)]
+        shown = [_shown(observer_view, "observer_view", pad_color, memory)]
     else:
         if isinstance(frames, (str, os.PathLike, Image.Image, np.ndarray, ShownFrame)):
             frames = [frames]  # one frame given bare
@@ -92,7 +97,7 @@ def prepare_call(
         if not frames:
             raise BadInputError("no frames: give at least one frame, or an observer_view")
         condition = Condition.INFERRED
-        shown = [_shown(f, f"frames[{i}]", pad_color) for i, f in enumerate(frames)]
+        shown = [_shown(f, f"frames[{i}]", pad_color, memory) for i, f in enumerate(frames)]
     cams = aligned(cameras, len(shown), "cameras", (Camera, PinholeCamera))
     deps = aligned(depths, len(shown), "depths", (np.ndarray,))
     for i, (frame, cam) in enumerate(zip(shown, cams)):
@@ -149,9 +154,15 @@ def prepare_call(
     return PreparedCall(instance, images, boxes, cams, deps, solver_cameras, world)
 
 
-def _shown(frame: FrameInput | ShownFrame, what: str, pad_color: tuple[int, int, int]) -> ShownFrame:
+def _shown(frame: FrameInput | ShownFrame, what: str, pad_color: tuple[int, int, int], memory: FrameMemory | None) -> ShownFrame:
     """``frame`` made ready to be shown: a :class:`ShownFrame` handed in keeps what it already
-    computed (a keyframe asked about again); anything else is made ready for this call only."""
-    shown = frame.for_pad(pad_color) if isinstance(frame, ShownFrame) else ShownFrame(frame, pad_color)
+    computed (a keyframe asked about again), as does a frame ``memory`` has seen; anything else
+    is made ready for this call only."""
+    if isinstance(frame, ShownFrame):
+        shown = frame.for_pad(pad_color)
+    elif memory is not None:
+        return memory.shown(frame, what, pad_color)
+    else:
+        shown = ShownFrame(frame, pad_color)
     shown.prepare(what)
     return shown

@@ -22,7 +22,7 @@ from typing import Any
 from PIL import Image
 
 from povagent.annotate.desk import AnswerRefused
-from povagent.annotate.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal
+from povagent.annotate.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal, judged_item, run_identity
 from povagent.errors import ConfigError
 from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.scoring.official import scoring_frame
@@ -46,11 +46,6 @@ class JudgeItem:
     condition: str
 
 
-def item_id(run_name: str, key: str) -> str:
-    """A prediction's name in the judgement files: a digest that tells the judge nothing."""
-    return hashlib.sha256(f"{run_name}|{key}".encode()).hexdigest()[:20]
-
-
 @dataclass(frozen=True)
 class Predictions:
     """The items to judge and the dataset their frames belong to (held: a real-world set's
@@ -62,27 +57,34 @@ class Predictions:
 
 def judge_items(paths: list[Path]) -> Predictions:
     """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame
-    (an answer in an active episode's rendered view is left out: its image is no dataset's)."""
-    from povagent.report.analysis import load_collection_dataset
+    (an answer in an active episode's rendered view is left out: its image is no dataset's), each
+    named by its run's identity and row key (:func:`~povagent.annotate.judgements.judged_item`)."""
+    from povagent.report.baseline_systems import is_baseline_system
     from povagent.report.collect import collect
+    from povagent.report.protocol import outside_paper_protocol
+    from povagent.report.run_sets import load_collection_dataset
 
     collection = collect(paths)
     dataset, note = load_collection_dataset(collection, None)
     if dataset is None:
         raise ConfigError(f"{paths[0]}: the runs' dataset is needed to show their frames: {note}")
-    # an answer given in a rendered view (the active mode) lies in no dataset frame: not drawn here
-    in_views = {(r.name, row.key) for r in collection.runs for row in r.rows if row.parse is not None and row.parse.camera is not None}
     items: list[JudgeItem] = []
-    for o in collection.observations:
-        instance = dataset.instance(o.instance_id)
-        if o.x is None or o.y is None or instance is None or (o.run_name, f"{o.instance_id}#{o.run}") in in_views:
-            continue
-        frame = scoring_frame(instance, o.selected_image, o.image_path)
-        if frame is None or not getattr(frame, "file", None):
-            continue
-        key = f"{o.instance_id}#{o.run}"
-        items.append(JudgeItem(item_id(o.run_name, key), Path(frame.file), float(o.x), float(o.y), o.sentence, o.system,
-                               o.run_name, key, o.instance_id, o.condition))  # fmt: skip
+    for run in collection.runs:
+        identity = run_identity(run.folder)
+        screened = not is_baseline_system(run.axes, run.system)  # the rows the report reads, as collect() screens them
+        for row in run.rows:
+            p = row.prediction
+            # an answer given in a rendered view (the active mode) lies in no dataset frame: not drawn here
+            if p.x is None or p.y is None or (row.parse is not None and row.parse.camera is not None):
+                continue
+            if screened and outside_paper_protocol(row.strategy, str(row.condition)):
+                continue
+            instance = dataset.instance(row.instance_id)
+            frame = scoring_frame(instance, p.selected_image, p.image_path) if instance is not None else None
+            if frame is None or not getattr(frame, "file", None):
+                continue
+            items.append(JudgeItem(judged_item(identity, row.key, p), Path(frame.file), float(p.x), float(p.y), row.sentence,
+                                   run.system, run.name, row.key, row.instance_id, str(row.condition)))  # fmt: skip
     return Predictions(items, dataset)
 
 

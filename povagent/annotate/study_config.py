@@ -22,11 +22,13 @@ Judge mode takes a YAML of its own, naming the judge and the runs whose predicti
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
 from povagent.annotate.desk import PERSON_NAME
+from povagent.annotate.judgements import JUDGEMENTS_FOLDER
 from povagent.config.models import MAX_WAIT_S, PipelineConfig
 from povagent.config.pipeline import pipeline_from_source
 from povagent.config.yaml_reader import ConfigSource, read_yaml
@@ -49,8 +51,11 @@ class JudgeStudy:
 
     judge: str
     runs: list[Path]
+    #: the folder the judge named (followed), or the first run's parent for the default
     judgements: Path
     seed: int = 0
+    #: the default ``judgements`` folder below :attr:`judgements`, never followed as a link ("": named)
+    judgements_below: str = ""
 
 
 def load_study(path: str | Path) -> AnswerStudy | JudgeStudy:
@@ -62,8 +67,6 @@ def load_study(path: str | Path) -> AnswerStudy | JudgeStudy:
 
 
 def _judge_study(source: ConfigSource) -> JudgeStudy:
-    import re
-
     data = dict(source.data)
     unknown = sorted(set(data) - {"judge", "runs", "judgements", "seed"})
     if unknown:
@@ -84,11 +87,12 @@ def _judge_study(source: ConfigSource) -> JudgeStudy:
     where = data.get("judgements")
     if where is not None and not isinstance(where, str):
         raise ConfigError(f"{source.where(('judgements',))}: judgements: a folder path")
-    judgements = (base / where).resolve() if where else folders[0].parent / "judgements"
     seed = data.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool):
         raise ConfigError(f"{source.where(('seed',))}: seed: an integer")
-    return JudgeStudy(judge, folders, judgements, seed)
+    if where:
+        return JudgeStudy(judge, folders, (base / where).resolve(), seed)
+    return JudgeStudy(judge, folders, folders[0].parent, seed, judgements_below=JUDGEMENTS_FOLDER)
 
 
 def _backend_name(backend: Any) -> Any:
@@ -105,6 +109,8 @@ def load_answer_study(path: str | Path) -> AnswerStudy:
     annotator = data.pop("annotator", None)
     if not isinstance(annotator, str):
         raise ConfigError(f"{source.where(('annotator',))}: annotator: name the person answering (annotator: alice)")
+    if not re.fullmatch(PERSON_NAME, annotator):  # refused here, before any page is served or its address printed
+        raise ConfigError(f"{source.where(('annotator',))}: annotator: {annotator!r:.80} is not a name (letters, digits, '_', '.', '-'; at most 64)")
     extra = data.pop("annotation", None) or {}
     if not isinstance(extra, Mapping) or set(extra) - {"seed", "pairs_apart"}:
         raise ConfigError(f"{source.where(('annotation',))}: annotation: takes only seed (an integer) and pairs_apart (true or false)")

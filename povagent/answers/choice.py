@@ -3,7 +3,8 @@
 What an instance carries when it asks for a ``choice`` answer (``Instance.question``): the
 perspective-taking sets' questions (ViewSpatial-Bench, MindCube, 3DSRBench) and the relation
 tasks povagent generates on its own houses. ``category`` is the set's question type (the slice
-accuracy is broken down by); ``group`` and ``variant`` tie together the records a set scores
+accuracy is broken down by), ``main_category`` the broader type it belongs to where the set has
+one (3DSRBench's ``orientation`` for ``orientation_viewpoint``: a slice too); ``group`` and ``variant`` tie together the records a set scores
 jointly (3DSRBench's circular and flipped copies of one question). ``profile`` names the prompt
 wording the set is asked in (:mod:`povagent_plugins.strategies.choice`).
 
@@ -12,12 +13,20 @@ Pure values: nothing here reads files or parses answers.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
+#: Option tuples met so far, each kept once: a set's questions repeat a few option lists (the
+#: directions, shuffled), so 10,000 questions share a few dozen tuples instead of holding 10,000.
+#: Bounded: past it, new option lists are kept by their own question only.
+_SHARED_OPTIONS: dict[tuple[tuple[str, str], ...], tuple[tuple[str, str], ...]] = {}
+_MAX_SHARED_OPTIONS = 4096
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, slots=True)
 class ChoiceQuestion:
-    """One question with labelled options (``(("A", "left"), ("B", "right"))``) and the gold label."""
+    """One question with labelled options (``(("A", "left"), ("B", "right"))``) and the gold label
+    (slotted: a set of 10,000 questions holds 10,000 of them)."""
 
     question: str
     options: tuple[tuple[str, str], ...]
@@ -26,8 +35,17 @@ class ChoiceQuestion:
     group: str = ""
     variant: str = ""
     profile: str = "plain"
+    main_category: str = ""
 
     def __post_init__(self) -> None:
+        if type(self.options) is tuple and all(type(o) is tuple and len(o) == 2 and type(o[0]) is str and type(o[1]) is str for o in self.options):
+            options = _SHARED_OPTIONS.get(self.options)
+            if options is None and len(_SHARED_OPTIONS) < _MAX_SHARED_OPTIONS:
+                options = _SHARED_OPTIONS.setdefault(self.options, tuple((sys.intern(label), sys.intern(text)) for label, text in self.options))
+            if options is not None:
+                object.__setattr__(self, "options", options)  # equal values: the question is the same
+        if type(self.category) is str:
+            object.__setattr__(self, "category", sys.intern(self.category))
         labels = self.labels
         if len(set(labels)) != len(labels):
             raise ValueError(f"option labels repeat: {', '.join(labels)}")

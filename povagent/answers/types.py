@@ -39,6 +39,12 @@ class AnswerType:
     #: The answer type this one refines (its value has that type's shape, e.g. a point read as
     #: marking another object): it answers instances asking either (``None``: only its own).
     refines: str | None = None
+    #: The strategy a pipeline gets when its set asks this type and it names none (``None``:
+    #: the pipeline's own default, POVBench's ``basic``).
+    default_strategy: str | None = None
+    #: The scorers a pipeline gets when its set asks this type and it names none (empty: the
+    #: pipeline's own default, POVBench's ``official``); a set's own scorer comes first.
+    default_scorers: tuple[str, ...] = ()
 
     def answers(self, asked: str) -> bool:
         """Whether an answer of this type answers an instance asking for ``asked``."""

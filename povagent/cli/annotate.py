@@ -39,14 +39,18 @@ def annotate_command(
     from povagent.annotate.desk import AnswerDesk, serving
     from povagent.annotate.server import AnnotateServer
     from povagent.annotate.session import AnswerSession
+    from povagent.run.components import create_components
     from povagent.run.stop_signals import sigterm_as_interrupt
 
     desk = AnswerDesk(study.annotator)
+    # the session (its plugins, each component's options) and the port first: whatever is
+    # refused is refused before the page's address and token are printed
+    session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
+    create_components(study.pipeline, session.host)
     server = AnnotateServer(AnswerPage(desk), port)
     server.start()
     typer.echo(f"annotating as human:{study.annotator} into {study.pipeline.output}")
     typer.echo(f"open {server.url}", err=False)
-    session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
     try:
         with serving(desk), sigterm_as_interrupt() as stop:
             result = asyncio.run(session.run())
@@ -68,7 +72,8 @@ def _judge(study, port: int) -> None:
     from povagent.annotate.judgements import JudgementJournal
     from povagent.annotate.server import AnnotateServer
 
-    page = JudgePage(judge_items(study.runs), JudgementJournal(study.judgements, study.judge), study.judge, study.seed)
+    journal = JudgementJournal(study.judgements, study.judge, study.judgements_below)
+    page = JudgePage(judge_items(study.runs), journal, study.judge, study.seed)
     server = AnnotateServer(page, port)
     server.start()
     typer.echo(f"judging as {study.judge} into {page.journal.path}")

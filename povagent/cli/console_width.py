@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 from povagent.run.narrow_console import middle_ellipsis
 
-__all__ = ["PathTitle", "break_between_words", "console_width", "fitted_table", "middle_ellipsis", "path_in_line"]
+__all__ = ["PathTitle", "break_between_words", "console_width", "fitted_table", "fitted_tables", "middle_ellipsis", "path_in_line", "stacked_number"]
 
 #: Where a name or path may go on to the next line, best first: after a space, ``/`` or ``__``
 #: (between a sweep cell's parts); then after ``.``, ``_``, ``-``, ``=`` or ``:``. A piece is a
@@ -72,12 +72,18 @@ def fitted_table(
 
     def table_width(headers: list[str]) -> int:
         # each column: its widest line, one space of padding either side, one border
-        cells = [max([len(x) for x in h.split("\n")] + [len(r[i]) for r in plain_rows if i < len(r)]) for i, h in enumerate(headers)]
+        cells = [max([len(x) for x in h.split("\n")] + [len(x) for r in plain_rows if i < len(r) for x in r[i].split("\n")])
+                 for i, h in enumerate(headers)]  # fmt: skip
         return sum(cells) + 3 * len(headers) + 1
 
     headers = [h for h, _ in columns]
     if table_width(headers) > width:
         headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
+    if table_width(headers) > width:
+        # a number with its interval and count goes on lines of its own: each part stays whole
+        rows = [[stacked_number(c) if kind == "number" and c == p else c for c, p, (_, kind) in zip(row, plain, columns)]
+                for row, plain in zip(rows, plain_rows)]  # fmt: skip
+        plain_rows = [[_plain(c) for c in row] for row in rows]
     label_widths: dict[int, int] = {}
     if table_width(headers) > width:
         # labels that do not fit go on several lines, broken between words (a cell name's
@@ -108,6 +114,51 @@ def fitted_table(
     for row in rows:
         table.add_row(*row)
     return table
+
+
+def stacked_number(cell: str) -> str:
+    """``66.7% [33.3%, 100.0%] n=6`` as three lines: the value, its interval, its count."""
+    return re.sub(r" (?=\[)|(?<=\]) ", "\n", cell)
+
+
+def fitted_tables(
+    columns: list[tuple[str, str]],
+    rows: list[list[str]],
+    *,
+    title: str | PathTitle | None = None,
+    caption: str | None = None,
+    width: int | None = None,
+) -> list[Any]:
+    """:func:`fitted_table`, as several tables when its number columns cannot stand side by
+    side in ``width`` even stacked: each table repeats the label columns (so every row keeps
+    its name) with as many number columns as fit; the title goes on the first, the caption on
+    the last."""
+    width = console_width() if width is None else width
+    numbers = [i for i, (_, kind) in enumerate(columns) if kind == "number"]
+    labels = [i for i, (_, kind) in enumerate(columns) if kind != "number"]
+
+    def narrowest(i: int) -> int:  # a column's width with its header on two lines and its numbers stacked
+        lines = _two_lines(columns[i][0]).split("\n") + [x for r in rows if i < len(r) for x in stacked_number(_plain(r[i])).split("\n")]
+        return max(len(x) for x in lines) + 3
+
+    # a label column may wrap, but not below its longest word (a slice's name stays readable)
+    label_room = sum(min(24, max([len(w) for r in rows if i < len(r) for w in _plain(r[i]).split()] + [len(columns[i][0])])) + 3 for i in labels)
+    groups: list[list[int]] = [[]]
+    used = label_room + 1
+    for i in numbers:
+        if groups[-1] and used + narrowest(i) > width:
+            groups.append([])
+            used = label_room + 1
+        groups[-1].append(i)
+        used += narrowest(i)
+    if len(groups) == 1:
+        return [fitted_table(columns, rows, title=title, caption=caption, width=width)]
+    tables = []
+    for k, group in enumerate(groups):
+        keep = sorted(labels + group)
+        tables.append(fitted_table([columns[i] for i in keep], [[r[i] for i in keep if i < len(r)] for r in rows],
+                                   title=title if k == 0 else None, caption=caption if k == len(groups) - 1 else None, width=width))  # fmt: skip
+    return tables
 
 
 def break_between_words(text: str, room: int) -> str:

@@ -55,7 +55,7 @@ def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, s
     a table of their own already printed)."""
     from rich.console import Console
 
-    from povagent.cli.console_width import fitted_table
+    from povagent.cli.console_width import fitted_tables
 
     skip = set(shown)
     for scorer, metrics in (summary.metrics or {}).items():
@@ -65,4 +65,5 @@ def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, s
         captions = "; ".join(f"{d.label}: {d.caption}" for d in metrics.declared.values())
         columns = [("slice", "label")] + [(h, "number") for h in headers]
         heading = f"{title}\nscorer {scorer}" if isinstance(title, str) else title._replace(after=f"{title.after}\nscorer {scorer}")
-        Console().print(fitted_table(columns, rows, title=heading, caption=captions))
+        for table in fitted_tables(columns, rows, title=heading, caption=captions):
+            Console().print(table)

@@ -183,8 +183,11 @@ def parse_command(
         spec = AnswerSpec(schema=frame_answer_schema(frames, width, height), width=width, height=height, n_frames=frames, asks_frame=True)
     else:
         spec = AnswerSpec(schema=point_answer_schema(width, height), width=width, height=height, n_frames=1, asks_frame=False)
+    from povagent.results.plugin_errors import MAX_REPLY_CHARS, parse_or_unparseable
+
     the_parser = get_plugin_host(tuple(plugin)).parser(parser, {})
-    parsed = the_parser.parse(sys.stdin.read(), spec)
+    # read as a run reads it: a reply past the bound is a non-response, never read whole
+    parsed = parse_or_unparseable(the_parser, sys.stdin.read(MAX_REPLY_CHARS + 1), spec)
     out = {
         "status": str(parsed.status),
         "reason": parsed.reason,

@@ -41,6 +41,7 @@ def report_command(
     shared label:, and the report says so.
     """
     from povagent.report.build import write_report
+    from povagent.report.leaderboard import LEADERBOARD
     from povagent.report.tables import to_markdown
 
     result = write_report(
@@ -51,6 +52,9 @@ def report_command(
     if result.dataset_note:
         typer.echo(f"warning: no center baseline, counting-non-responses variant or gallery images: {result.dataset_note}", err=True)
     typer.echo(to_markdown(result.tables[0]))
+    for table in result.tables[1:]:
+        if table.key == LEADERBOARD:  # choice runs: the sets side by side, the numbers a reader came for
+            typer.echo(to_markdown(table))
     g = result.gallery
     if g is not None:
         typer.echo(f"gallery: {g.entries} predictions, {g.drawn} images drawn, {g.cached} reused, {g.without_image} without a frame")
@@ -119,9 +123,9 @@ def compare_command(
     Paired statistics over the instances both runs answered, and the instances whose error
     changed most.
     """
-    from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
     from povagent.report.compare import compare_runs, print_comparison, write_comparison_html
+    from povagent.report.run_sets import load_collection_dataset
 
     cmp = compare_runs(run_a, run_b, n_boot=bootstrap)
     print_comparison(cmp, top)

@@ -38,6 +38,8 @@ def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
         # a type the official rows wrote oddly (e.g. "A") is its own group: shown as written
         yield (f"{Condition(c).label} ({c.upper()})" if c in known else f"type {c!r}"), cell
     yield from breakdown.per_direction.items()
-    # a multiple-choice set's items have no condition or direction: their category instead
+    # a multiple-choice set's items have no condition or direction: their category instead; a
+    # category that is a direction with the same numbers (povagent's relation task) is listed once
     for category, cell in (getattr(breakdown, "per_category", None) or {}).items():
-        yield f"category {category!r}", cell
+        if breakdown.per_direction.get(category) != cell:
+            yield f"category {category!r}", cell

@@ -21,7 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
-from povagent.dataset.choice_sets import OFFICIAL_SET_PARSERS
+from povagent.dataset.choice_sets import CHOICE_FORMATS, OFFICIAL_SET_PARSERS, OFFICIAL_SET_SCORERS, SET_ANSWER_TYPE
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
@@ -128,6 +128,7 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
     as the litellm backend's ``model`` option (how a vLLM profile gets its ``api_base``) brings
     its parser and strategy defaults the same way, and so does one named as the in-process
     ``transformers`` backend's ``model`` (a profile with a ``checkpoint``)."""
+    config = set_defaults(config, host)
     backend, parser, strategy = config.backend, config.parser, config.strategy
     if parser is None:  # a strategy whose answers one parser reads gets it, whatever a profile says
         needed = needed_parser(host, strategy.name) or set_official_parser(config, host) or strategy_default_parser(host, strategy.name)
@@ -151,6 +152,25 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
     if parser is None:
         parser = ComponentSpec(name=OFFICIAL_PARSER)
     return config.model_copy(update={"backend": backend, "parser": parser, "strategy": strategy})
+
+
+def set_defaults(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
+    """``config`` with the strategy and scorers an external set's answer type chooses where the
+    pipeline names none (``dataset: {format: mindcube}`` and a model is a complete pipeline): the
+    answer type's ``default_strategy`` and ``default_scorers``, the set's own scorer first
+    (:data:`~povagent.dataset.choice_sets.OFFICIAL_SET_SCORERS`); a name the pipeline gives is
+    kept, and a POVBench-layout set keeps the pipeline's defaults."""
+    fmt = config.dataset.format
+    if fmt is None or fmt not in CHOICE_FORMATS or SET_ANSWER_TYPE not in host.names("answer_type"):
+        return config
+    answer_type = host.answer_type(SET_ANSWER_TYPE)
+    update: dict[str, Any] = {}
+    if "strategy" not in config.model_fields_set and answer_type.default_strategy is not None:
+        update["strategy"] = ComponentSpec(name=answer_type.default_strategy)
+    if "scorers" not in config.model_fields_set and (answer_type.default_scorers or fmt in OFFICIAL_SET_SCORERS):
+        own = [OFFICIAL_SET_SCORERS[fmt]] if fmt in OFFICIAL_SET_SCORERS else []
+        update["scorers"] = [ComponentSpec(name=n) for n in dict.fromkeys([*own, *answer_type.default_scorers])]
+    return config.model_copy(update=update) if update else config
 
 
 def needed_parser(host: PluginHost, strategy: str) -> str | None:

@@ -23,6 +23,26 @@ from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ReadTargetError
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
+#: What a document nesting deeper than Python's parser follows is told (a hostile file may nest
+#: lists 100,000 deep: one line, never a ``RecursionError``).
+TOO_DEEP = "nests lists or objects too deeply to be a release file"
+
+
+class TooDeepError(ValueError):
+    """JSON text nesting too deeply to be read (the message is :data:`TOO_DEEP`)."""
+
+
+def loads_dataset_json(text: str) -> Any:
+    """``text`` parsed as JSON, by the rule every dataset reader shares (the release layout, the
+    multiple-choice sets): :class:`json.JSONDecodeError` for text that is not JSON, and
+    :class:`TooDeepError` for text nesting deeper than the parser can follow. The value's strings
+    are checked by :func:`~povagent.dataset.problems.not_text_problems`, which walks without
+    recursion."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise TooDeepError(TOO_DEEP) from None
+
 
 def read_dataset_json(path: Path, rel: str, real_root: Path, problems: list[Problem]) -> Any:
     """The parsed JSON of the dataset file ``path`` (named ``rel`` in problems), or ``None``
@@ -46,12 +66,12 @@ def read_dataset_json(path: Path, rel: str, real_root: Path, problems: list[Prob
         problems.append(Problem(rel, "$", f"cannot be read: {exc.strerror or exc}"))
         return None
     try:
-        data = json.loads(text)
+        data = loads_dataset_json(text)
     except json.JSONDecodeError as exc:
         problems.append(Problem(rel, "$", f"is not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}"))
         return None
-    except RecursionError:
-        problems.append(Problem(rel, "$", "nests lists or objects too deeply to be a release file"))
+    except TooDeepError as exc:
+        problems.append(Problem(rel, "$", str(exc)))
         return None
     not_text = not_text_problems(rel, data)
     if not_text:

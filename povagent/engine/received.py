@@ -62,12 +62,33 @@ def received(response: Response, redact: Callable[[str], str], *, offered_tools:
 
 
 def _strings_of(value: Any, clean: Callable[[str], str]) -> Any:
-    """``value`` with ``clean`` applied to every string inside it (dataclass fields, tuples)."""
+    """``value`` with ``clean`` applied to every string inside it (dataclass fields, tuples). A
+    frozen dataclass or a tuple in which nothing changed is kept as it is (nobody can change
+    it); any other dataclass is copied."""
     if isinstance(value, str):
         return clean(value)
     if isinstance(value, tuple):
-        return tuple(_strings_of(v, clean) for v in value)
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        changed = {f.name: _strings_of(getattr(value, f.name), clean) for f in dataclasses.fields(value) if f.init}
-        return dataclasses.replace(value, **changed)
-    return value
+        cleaned = tuple(_strings_of(v, clean) for v in value)
+        return value if type(value) is tuple and all(a is b for a, b in zip(cleaned, value)) else cleaned
+    kind = type(value)
+    shape = _SHAPES.get(kind)
+    if shape is None:
+        shape = _SHAPES.setdefault(kind, _shape(kind))
+    names, frozen = shape
+    if not names:
+        return value
+    changed = {name: _strings_of(getattr(value, name), clean) for name in names}
+    if frozen and all(v is getattr(value, name) for name, v in changed.items()):
+        return value
+    return dataclasses.replace(value, **changed)
+
+
+#: Each type's dataclass fields set by its ``__init__`` and whether it is frozen (no fields:
+#: not a dataclass instance), found once per type.
+_SHAPES: dict[type, tuple[tuple[str, ...], bool]] = {}
+
+
+def _shape(kind: type) -> tuple[tuple[str, ...], bool]:
+    if not dataclasses.is_dataclass(kind):
+        return (), False
+    return tuple(f.name for f in dataclasses.fields(kind) if f.init), bool(kind.__dataclass_params__.frozen)  # type: ignore[attr-defined]

@@ -72,3 +72,26 @@ class UsageTotals:
             cost_usd=unstated_cost if cost is None else cost,
             retries=sum(int(getattr(i, "retries", 0) or 0) for i in items),
         )
+
+    def plus(self, item: Spent) -> UsageTotals:
+        """``UsageTotals.of((self, item), unstated_tokens=0, unstated_cost=0.0)``: the same sums in
+        the same order, without building a sequence (a run adds each row it writes)."""
+        return UsageTotals(
+            prompt_tokens=_stated_pair(self.prompt_tokens, item.prompt_tokens, 0),
+            completion_tokens=_stated_pair(self.completion_tokens, item.completion_tokens, 0),
+            cost_usd=_stated_pair(self.cost_usd, item.cost_usd, 0.0),
+            retries=0 + int(self.retries or 0) + int(getattr(item, "retries", 0) or 0),
+        )
+
+
+def _stated_pair(a: Any, b: Any, unstated: Any) -> Any:
+    """:func:`_stated_sum` of ``(a, b)``, or ``unstated`` when neither is stated."""
+    total: Any = 0
+    stated = False
+    if a is not None:
+        total += a
+        stated = True
+    if b is not None:
+        total += b
+        stated = True
+    return total if stated else unstated

@@ -14,8 +14,35 @@ views, targets), ``writer`` (deterministic files), ``pipeline`` (one house), ``h
 house as a task any engine runs), ``dataset`` (many).
 """
 
-from povagent.generate.dataset import GenerationReport, generate_dataset
-from povagent.generate.judge import JudgeRequest, PhysicalRulesJudge, SurfaceJudge, SurfaceVerdict
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from povagent.generate.dataset import GenerationReport, generate_dataset
+    from povagent.generate.judge import JudgeRequest, PhysicalRulesJudge, SurfaceJudge, SurfaceVerdict
+
+#: Where each name is defined: imported when first asked for, so that importing one room (the
+#: report's floor plans read ``floorplan``) does not load the renderer and the mesh library.
+_DEFINED_IN = {
+    "GenerationReport": "povagent.generate.dataset",
+    "generate_dataset": "povagent.generate.dataset",
+    "JudgeRequest": "povagent.generate.judge",
+    "PhysicalRulesJudge": "povagent.generate.judge",
+    "SurfaceJudge": "povagent.generate.judge",
+    "SurfaceVerdict": "povagent.generate.judge",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _DEFINED_IN.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "GenerationReport",

@@ -34,9 +34,10 @@ from povagent.report.baseline import (
     center_success_observations,
 )
 from povagent.report.baseline_systems import is_baseline_system, is_center_system
-from povagent.report.collect import Collection, Observation, RunInfo, dataset_paths
+from povagent.report.collect import Collection, Observation
 from povagent.report.declared_metrics import declared_estimates_json, declared_metric_estimates
 from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, PairedComparison, cell_stats, paired_comparison
+from povagent.report.systems import config_label
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 from povagent.scoring.metrics import Metric
 from povagent.scoring.protocols import PROTOCOLS
@@ -210,28 +211,6 @@ def what_was_compared(a: Analysis) -> str:
     return " · ".join(parts) or "no system"
 
 
-def load_collection_dataset(collection: Collection | list[RunInfo], override: str | Path | None = None):
-    """The dataset the runs used (``override`` first), or ``(None, reason)`` if it cannot load
-    (``collection``: a collection, or the runs :func:`~povagent.report.collect.find_runs` found,
-    so that a report loads the set before it holds the rows' observations).
-
-    A release-layout set or a real-world set (``realworld.json``), whose letterboxed frames the
-    gallery draws on, as the runner loads them.
-    """
-    from povagent.dataset.evaluation_set import open_evaluation_set
-    from povagent.errors import DatasetError
-
-    paths = [Path(override)] if override else dataset_paths(collection.runs if isinstance(collection, Collection) else collection)
-    if not paths:
-        return None, "no dataset path in the runs' config.yaml (pass --dataset)"
-    try:
-        # No load-time image check: the gallery draws a card for every row and says on it
-        # which image failed, instead of the house vanishing from the report.
-        return open_evaluation_set(paths[0], check_images=False), None
-    except DatasetError as exc:
-        return None, f"dataset not loadable: {exc}"
-
-
 def _answers_signature(obs: list[Observation]) -> str:
     """A digest of what a system answered, row by row, in any order (equal digests: the same
     answers). The declared metrics' values are in it: answers that are no pixel (a navigate
@@ -247,21 +226,26 @@ def _answers_signature(obs: list[Observation]) -> str:
 
 
 def merge_identical_baselines(
-    ordered: list[str], by_system: dict[str, list[Observation]], axes_of: dict[str, dict[str, str]], reference: set[str]
+    ordered: list[str], by_system: dict[str, list[Observation]], axes_of: dict[str, dict[str, str]], reference: set[str],
+    labelled: frozenset[str] = frozenset(),
 ) -> tuple[list[str], list[str]]:
     """Show a baseline once when a sweep crossed it with axes it ignores.
 
     A sweep over ``backend: [model, center]`` x ``strategy: [basic, cot]`` makes ``center ·
     basic`` and ``center · cot``: the center guess ignores the prompt, so the two cells hold the
-    same answers. Reference systems with identical answers on every row are merged into one,
-    labelled by the axis values they share (``center``). Updates ``by_system``, ``axes_of`` and
-    ``reference`` in place; returns the new system order and a note per merge. Models are never
-    merged: two strategies that happen to agree are still two rows of an ablation.
+    same answers. Reference systems of one backend and model with identical answers on every row
+    are merged into one, labelled by the axis values they share (``center``). Updates
+    ``by_system``, ``axes_of`` and ``reference`` in place; returns the new system order and a
+    note per merge. Models are never merged: two strategies that happen to agree are still two
+    rows of an ablation; nor are two different baselines that happen to agree (the ``oracle``
+    and an always-``A`` guess on a set whose gold is always A), nor a system its run's config
+    names (``labelled``: the user asked for that row).
     """
-    groups: dict[str, list[str]] = {}
+    groups: dict[tuple[str, str, str], list[str]] = {}
     for name in ordered:
-        if name in reference:
-            groups.setdefault(_answers_signature(by_system[name]), []).append(name)
+        if name in reference and name not in labelled:
+            axes = axes_of[name]
+            groups.setdefault((axes.get("backend", ""), axes.get("model", ""), _answers_signature(by_system[name])), []).append(name)
     notes: list[str] = []
     rename: dict[str, str] = {}
     shared_axes: dict[str, dict[str, str]] = {}
@@ -348,7 +332,8 @@ def analyze(
     hit_scorer = scorers[protocols.index("marked_hit")] if "marked_hit" in protocols else None
     fill: dict[str, float] | None = None
     if dataset is not None and (error_scorer or hit_scorer):
-        ids = sorted({o.instance_id for o in obs})
+        # the center guess is a point: only for the rows a point protocol scored (a choice run beside has none)
+        ids = sorted({o.instance_id for o in obs if o.protocol in ("normalized_l2", "marked_hit")})
         instances = [dataset.instance(i) for i in ids]
         missing = [i for i, inst in zip(ids, instances) if inst is None]
         instances = [inst for inst in instances if inst is not None]
@@ -386,7 +371,8 @@ def analyze(
     ordered = [s for s in systems if s in by_system] + [s for s in by_system if s not in systems]
     axes_of = {name: dict(collection.system_axes(name)) for name in ordered}
     reference_set = {n for n in ordered if n == CENTER_SYSTEM or is_baseline_system(axes_of[n], n)}
-    ordered, merge_notes = merge_identical_baselines(ordered, by_system, axes_of, reference_set)
+    labelled = frozenset(r.system for r in collection.runs if config_label(r.config))
+    ordered, merge_notes = merge_identical_baselines(ordered, by_system, axes_of, reference_set, labelled)
     notes.extend(merge_notes)
     obs = [o for name in ordered for o in by_system[name]]
     stats: list[SystemStats] = []

@@ -20,9 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from povagent.report.active import active_section
-from povagent.report.analysis import Analysis, analyze, load_collection_dataset, what_was_compared
+from povagent.report.analysis import Analysis, analyze, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
-from povagent.report.choice_tables import choice_tables
+from povagent.report.choice_gold import SetQuestions
+from povagent.report.choice_tables import choice_answers, choice_tables
 from povagent.report.collect import collect, find_runs
 from povagent.report.figures import report_figures
 from povagent.report.gallery import ANSWERS_DIR, IMAGES_DIR, GalleryStats, build_gallery, write_answer_chunks
@@ -38,9 +39,11 @@ from povagent.report.html import (
     render_page,
     tables_section,
 )
+from povagent.report.leaderboard import leaderboard_tables
 from povagent.report.manual import manual_tables
 from povagent.report.official_beside import official_beside_table
 from povagent.report.paper_tables import paper_tables
+from povagent.report.run_sets import load_collection_dataset
 from povagent.report.statistics import DEFAULT_BOOT
 from povagent.report.systems import Pooling
 from povagent.report.tables import Table, to_csv, to_latex, to_markdown
@@ -126,7 +129,8 @@ def write_report(
     out = report_folder(source, Path(out) if out is not None else None)
     # the set first: the transient memory of reading its files does not stack on the rows' observations
     runs = find_runs(source)
-    dataset, note = load_collection_dataset(runs, dataset_path)
+    sets = SetQuestions()  # each set the runs asked, opened once for the gallery and the choice tables
+    dataset, note = load_collection_dataset(runs, dataset_path, sets)
     collection = collect(source, pool=pool, runs=runs)
     timings["load"] = time.perf_counter() - t0
 
@@ -137,8 +141,11 @@ def write_report(
     beside = official_beside_table(collection)
     if beside is not None:  # repaired numbers never stand alone: the official parse beside them
         tables.append(beside)
-    added = choice_tables(collection, n_boot=n_boot, seed=seed)  # multiple-choice runs: accuracy, pairs, confusion
-    added += manual_tables(source)  # judgements by hand beside the runs (povagent annotate, judge mode)
+    choices = choice_answers(collection, sets)
+    # multiple-choice runs: the systems x sets leaderboard, then per set accuracy, pairs, confusion
+    added = leaderboard_tables(collection, analysis, list(choices), dataset, n_boot=n_boot, seed=seed)
+    added += choice_tables(collection, n_boot=n_boot, seed=seed, sets=sets, read=choices)
+    added += manual_tables(source, collection.runs)  # judgements by hand of these runs (povagent annotate, judge mode)
     tables += added
     timings["statistics"] = time.perf_counter() - t
 
@@ -184,7 +191,7 @@ def write_report(
         f"{what_was_compared(analysis)} · {n_rows} rows"
     )
     if analysis.dataset_path:
-        subtitle += f" · {'real-world set' if not analysis.has_official else 'dataset'} {analysis.dataset_path}"
+        subtitle += f" · {'real-world set' if analysis.has_success and not analysis.has_official else 'dataset'} {analysis.dataset_path}"
     page_html = render_page(
         f"povagent report: {source.name}",
         subtitle,

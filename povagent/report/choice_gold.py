@@ -37,14 +37,12 @@ class SetQuestions:
         """``(gold, category)`` of ``instance_id`` in the set ``run`` names, or ``None`` (the
         reason is kept for :meth:`why_unknown`)."""
         if run.folder not in self._keys:
-            self._keys[run.folder] = _set_key(run)
+            self._keys[run.folder] = run_set_key(run)
         key = self._keys[run.folder]
         if key is None:
             self._reasons.setdefault(f"{run.folder / 'config.yaml'} names no dataset", None)
             return None
-        if key not in self._sets:
-            self._sets[key] = _open(key)
-        loaded = self._sets[key]
+        loaded = self.opened(key)
         if isinstance(loaded, str):
             self._reasons.setdefault(loaded, None)
             return None
@@ -55,6 +53,12 @@ class SetQuestions:
             return None
         return str(question.gold), str(question.category or "")
 
+    def opened(self, key: _SetKey) -> Any:
+        """The set ``key`` names (:func:`open_run_set`, opened once), or the line saying why not."""
+        if key not in self._sets:
+            self._sets[key] = open_run_set(key)
+        return self._sets[key]
+
     def why_unknown(self, n: int) -> str:
         """One sentence: the gold of ``n`` questions is unknown, and why (``""`` when ``n`` is 0)."""
         if n == 0:
@@ -63,8 +67,10 @@ class SetQuestions:
         return f"The gold label of {n} question{'s' if n != 1 else ''} is unknown because {because}."
 
 
-def _set_key(run: RunInfo) -> _SetKey | None:
-    path = run.dataset_path
+def run_set_key(run: RunInfo, override: Path | None = None) -> _SetKey | None:
+    """What tells the set ``run`` was asked apart: its file or folder (``override`` in its
+    place when given), format, images folder and task (``None``: its config names no set)."""
+    path = override if override is not None else run.dataset_path
     if path is None:
         return None
     ds = run.config.get("dataset")
@@ -81,8 +87,8 @@ def _resolved(run: RunInfo, raw: object) -> Path:
     return p if p.is_absolute() or p.exists() else (run.folder / p).resolve()
 
 
-def _open(key: _SetKey) -> Any:
-    """The set, or one line (``<file>: <reason>``) saying why it cannot be opened."""
+def open_run_set(key: _SetKey) -> Any:
+    """The set ``key`` names, opened as the runner opens it (its format, images and task), or one line (``<file>: <reason>``) saying why it cannot be opened."""
     from povagent.dataset.evaluation_set import open_evaluation_set
 
     root, format, images, task = key

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -24,14 +25,15 @@ import numpy as np
 
 from povagent.errors import PluginError
 from povagent.plugins import get_plugin_host
+from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.choice_fields import CHOICE_FIELDS
 from povagent.report.choice_gold import SetQuestions
 from povagent.report.collect import Collection, RunInfo
 from povagent.report.statistics import sign_test_p
 from povagent.report.tables import Cell, Column, Row, Table
+from povagent.results.rows import ResultRow, StoredRows
 from povagent.scoring.bootstrap import DEFAULT_BOOT, bootstrap_mean_ci
 
-#: The fields a choice scorer writes: a scorer whose scores carry them all is read here.
-CHOICE_FIELDS = frozenset({"answered", "correct", "chosen", "gold", "category"})
 #: The confusion column of answers naming no option.
 NO_OPTION = "no option"
 #: The gold label of a question no row of which was scored (every system named no option) and
@@ -52,6 +54,8 @@ class ChoiceAnswer:
     gold: str
     category: str
     parser: str
+    #: The set the row's run was asked (:attr:`~povagent.report.collect.RunInfo.benchmark`).
+    benchmark: str = ""
 
 
 def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> dict[str, list[ChoiceAnswer]]:
@@ -63,7 +67,7 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
     the question was scored, as the set the run names holds them (``sets``; :data:`UNKNOWN`
     when that set cannot be opened)."""
     sets = SetQuestions() if sets is None else sets
-    carried = [{scorer for row in run.rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS} for run in collection.runs]
+    carried = [_choice_scorers(run.rows) for run in collection.runs]
     scorers = sorted(set().union(*carried), key=lambda name: next(i for i, c in enumerate(carried) if name in c))
     questions: dict[tuple[str, str], tuple[str, str]] = {}
     unscored: list[tuple[str, int, RunInfo]] = []  # (scorer, position in its answers, run) of rows it did not score
@@ -71,6 +75,9 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
     for run, its_own in zip(collection.runs, carried):
         named = {_scorer_name(s) for s in run.config.get("scorers") or []}
         mine = [s for s in scorers if s in named or s in its_own]
+        if not mine:
+            continue  # no choice scorer of this run: its rows are not read
+        benchmark = run.benchmark
         for row in run.rows:
             for scorer in mine:
                 f = row.scores.get(scorer) or {}
@@ -78,10 +85,10 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
                     questions[(scorer, row.instance_id)] = (str(f["gold"]), str(f["category"] or ""))
                     chosen = None if f["chosen"] is None else str(f["chosen"])
                     out[scorer].append(ChoiceAnswer(run.system, row.instance_id, f["correct"] is True, chosen, str(f["gold"]),
-                                                    str(f["category"] or ""), row.parser))  # fmt: skip
+                                                    str(f["category"] or ""), row.parser, benchmark))  # fmt: skip
                 else:
                     unscored.append((scorer, len(out[scorer]), run))
-                    out[scorer].append(ChoiceAnswer(run.system, row.instance_id, False, None, "", "", row.parser))
+                    out[scorer].append(ChoiceAnswer(run.system, row.instance_id, False, None, "", "", row.parser, benchmark))
     for scorer, position, run in unscored:
         answer = out[scorer][position]
         question = questions.get((scorer, answer.instance_id)) or sets.question(run, answer.instance_id) or (UNKNOWN, "")
@@ -89,25 +96,50 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
     return out
 
 
+def _choice_scorers(rows: Sequence[ResultRow]) -> set[str]:
+    """The scorers that wrote a choice verdict (:data:`CHOICE_FIELDS`) into some row of ``rows``."""
+    if isinstance(rows, StoredRows):  # known from its one reading of the file
+        return {scorer for scorer, shapes in rows.carried_scores.items() if any(f >= CHOICE_FIELDS for f in shapes)}
+    return {scorer for row in rows for scorer, f in row.scores.items() if f.keys() >= CHOICE_FIELDS}
+
+
 def _scorer_name(spec: object) -> str:
     return str(spec.get("name", "")) if isinstance(spec, dict) else str(spec)
 
 
-def choice_tables(collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0) -> list[Table]:
+def choice_tables(
+    collection: Collection, n_boot: int = DEFAULT_BOOT, seed: int = 0, sets: SetQuestions | None = None,
+    read: dict[str, list[ChoiceAnswer]] | None = None,
+) -> list[Table]:
     """Each choice scorer's accuracy table, paired differences (with two systems or more) and a
-    confusion table per system (none for a report without choice rows)."""
+    confusion table per system (none for a report without choice rows), per set the runs were
+    asked. ``sets``: the sets the report opened already (each set the runs name is opened once,
+    for every scorer); ``read``: :func:`choice_answers`, when the report read them already."""
     tables: list[Table] = []
-    sets = SetQuestions()  # each set the runs name opened once, for every scorer
-    for scorer, answers in choice_answers(collection, sets).items():
-        systems = list(dict.fromkeys(a.system for a in answers))
-        unknown = sets.why_unknown(len({a.instance_id for a in answers if a.gold == UNKNOWN}))
-        read_by = rules_note(answers, systems) + (f" {unknown}" if unknown else "")
-        tables.append(_accuracy_table(scorer, answers, systems, read_by, n_boot, seed))
-        if len(systems) > 1:
-            tables.append(_paired_table(scorer, answers, systems, read_by, n_boot, seed))
-        tables += [_confusion_table(scorer, i, system, [a for a in answers if a.system == system], read_by)
-                   for i, system in enumerate(systems)]  # fmt: skip
+    sets = SetQuestions() if sets is None else sets
+    for scorer, all_answers in (choice_answers(collection, sets) if read is None else read).items():
+        by_set: dict[str, list[ChoiceAnswer]] = defaultdict(list)
+        for a in all_answers:
+            by_set[a.benchmark].append(a)
+        baselines = {s for s in collection.systems if is_baseline_system(collection.system_axes(s), s)}
+        for benchmark, answers in by_set.items():  # a set's questions are never pooled with another's
+            # one set keeps the tables' plain names; several are told apart by the set's
+            key = scorer if len(by_set) == 1 else f"{scorer}_{_slug(benchmark)}"
+            named = scorer if len(by_set) == 1 else f"{scorer}, {benchmark}"
+            systems = list(dict.fromkeys(a.system for a in answers))
+            unknown = sets.why_unknown(len({a.instance_id for a in answers if a.gold == UNKNOWN}))
+            read_by = rules_note(answers, systems) + (f" {unknown}" if unknown else "")
+            tables.append(_accuracy_table(key, named, answers, systems, read_by, n_boot, seed, baselines))
+            if len(systems) > 1:
+                tables.append(_paired_table(key, named, answers, systems, read_by, n_boot, seed))
+            tables += [_confusion_table(key, named, i, system, [a for a in answers if a.system == system], read_by)
+                       for i, system in enumerate(systems)]  # fmt: skip
     return tables
+
+
+def _slug(text: str) -> str:
+    """A set's name as a table key's part (``release · relation`` -> ``release_relation``)."""
+    return "_".join("".join(c if c.isalnum() else " " for c in text).split()) or "set"
 
 
 def rule_name(parser: str) -> str:
@@ -139,7 +171,9 @@ def per_question(answers: list[ChoiceAnswer]) -> dict[str, float]:
     return {k: sum(v) / len(v) for k, v in hits.items()}
 
 
-def _accuracy_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
+def _accuracy_table(
+    scorer: str, named: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int, baselines: set[str]
+) -> Table:
     categories = sorted({a.category for a in answers})
     columns = [c or "(none)" for c in categories] + [ALL] if len(categories) > 1 else [ALL]
     rows = []
@@ -150,15 +184,15 @@ def _accuracy_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str]
         for group in groups:
             e = bootstrap_mean_ci(list(per_question(group).values()), n_boot=n_boot, seed=seed)
             cells.append(Cell(e.value, e.lo, e.hi))
-        rows.append(Row(system, cells))
+        rows.append(Row(system, cells, reference=system in baselines))  # a baseline is never bolded as best
     return Table(
-        key=f"choice_accuracy_{scorer}", title=f"Multiple-choice accuracy per category ({scorer})",
+        key=f"choice_accuracy_{scorer}", title=f"Multiple-choice accuracy per category ({named})",
         caption=f"Correct / all questions per category (no option read = wrong), 95% bootstrap CI over questions. {read_by}",
         row_header="System", columns=[Column(c, "rate", "higher") for c in columns], rows=rows,
     )  # fmt: skip
 
 
-def _paired_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
+def _paired_table(scorer: str, named: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
     acc = {s: per_question([a for a in answers if a.system == s]) for s in systems}
     rows = []
     for a, b in combinations(systems, 2):
@@ -170,24 +204,25 @@ def _paired_table(scorer: str, answers: list[ChoiceAnswer], systems: list[str], 
         p = sign_test_p(int((d > 1e-12).sum()), int((d < -1e-12).sum()))
         rows.append(Row(f"{b} vs {a}", [Cell(len(shared)), Cell(va), Cell(vb), Cell(diff.value, diff.lo, diff.hi), Cell(p)]))
     return Table(
-        key=f"choice_paired_{scorer}", title=f"Paired accuracy differences ({scorer})",
-        caption=("Second system minus first on the questions both were asked (accuracy averaged over runs per "
-                 f"question), 95% paired bootstrap CI over questions; exact sign test over questions that differ. {read_by}"),
-        row_header="Comparison",
-        columns=[Column("Questions", "count", None), Column("Accuracy (first)", "rate", None), Column("Accuracy (second)", "rate", None),
-                 Column("Difference", "signed", None), Column("Sign test p", "p", None)],
+        key=f"choice_paired_{scorer}", title=f"Paired accuracy differences ({named})",
+        caption=("B - A: system B's accuracy minus system A's on the questions both were asked (accuracy averaged over runs per "
+                 "question; B - A > 0 means B is better), 95% paired bootstrap CI over questions; exact sign test over questions "
+                 f"that differ. {read_by}"),
+        row_header="B vs A",
+        columns=[Column("Questions", "count", None), Column("Accuracy A", "rate", None), Column("Accuracy B", "rate", None),
+                 Column("B - A", "signed", None), Column("Sign test p", "p", None)],
         rows=rows,
     )  # fmt: skip
 
 
-def _confusion_table(scorer: str, index: int, system: str, answers: list[ChoiceAnswer], read_by: str) -> Table:
+def _confusion_table(scorer: str, named: str, index: int, system: str, answers: list[ChoiceAnswer], read_by: str) -> Table:
     labels = sorted({a.gold for a in answers} | {a.chosen for a in answers if a.chosen is not None})
     counts: dict[tuple[str, str], int] = defaultdict(int)
     for a in answers:
         counts[(a.gold, a.chosen if a.chosen is not None else NO_OPTION)] += 1
     golds = sorted({a.gold for a in answers})
     return Table(
-        key=f"choice_confusion_{scorer}_{index + 1}", title=f"Chosen vs gold labels: {system} ({scorer})",
+        key=f"choice_confusion_{scorer}_{index + 1}", title=f"Chosen vs gold labels: {system} ({named})",
         caption=f"Rows: the gold label; columns: the label chosen (every run's row counts once). {read_by}",
         row_header="Gold",
         columns=[Column(label, "count", None) for label in labels] + [Column(NO_OPTION, "count", None)],

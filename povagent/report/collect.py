@@ -31,13 +31,14 @@ import yaml
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.report.baseline_systems import is_baseline_system
+from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
 from povagent.report.run_summaries import declared_in_summary
-from povagent.report.systems import Pooling, assign_systems
+from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.scoring.metrics import Declared, MetricValues, row_metric_groups
+from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
 from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -109,8 +110,12 @@ class Observation:
     #: ``None``: no grouped metric declared), so the report groups a set's copies of a question as
     #: the run's summary does.
     metric_groups: Mapping[str, Mapping[str, str]] | None = None
+    #: The question's category slices as the run's summary counts them (:func:`~povagent.scoring.metrics.row_category`).
+    category: str | tuple[str, ...] | None = None
     #: The prediction as its answer type shows it (``AnswerType.show``; ``None``: an untyped row).
     answer: str | None = None
+    #: The option label a choice scorer recorded (``None``: none scored the row, or no option was read).
+    chosen: str | None = None
 
 
 @dataclass
@@ -125,6 +130,9 @@ class RunInfo:
     #: a report holds no row objects, whatever the run's length
     rows: Sequence[ResultRow]
     system: str = ""
+    #: The system's name without the set it was asked (a leaderboard's row); :attr:`system` adds
+    #: the set when runs of one name were asked different sets.
+    entrant: str = ""
     #: The sweep folder whose index listed this run (``None``: a run folder of its own).
     sweep: Path | None = None
     #: The axis values the sweep's index gives this cell (``{}`` for a run of its own).
@@ -139,6 +147,11 @@ class RunInfo:
     def protocol(self) -> str | None:
         """That scorer's protocol (``None``: the run has no protocol scorer)."""
         return registered_protocols().get(self.scorer)
+
+    @property
+    def benchmark(self) -> str:
+        """The set the run was asked, by name (:func:`~povagent.report.systems.set_name`)."""
+        return set_name(self.config, self.dataset_path)
 
     @property
     def dataset_path(self) -> Path | None:
@@ -196,7 +209,7 @@ def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     """
     known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
-    carried = list(dict.fromkeys(name for row in rows for name in row.scores))
+    carried = list(rows.carried_scores) if isinstance(rows, StoredRows) else list(dict.fromkeys(name for row in rows for name in row.scores))
     default = [] if named else default_scorers()
     for candidates in (named, carried, default):
         for protocol in PROTOCOLS:
@@ -252,23 +265,6 @@ def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, 
     if not axes["model"]:
         axes["model"] = axes["backend"]
     return {k: v for k, v in axes.items() if v}
-
-
-def simulation_label(options: Any) -> str:
-    """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
-    its noise options that are set, so a reader never mistakes it for a model."""
-    opts = options if isinstance(options, dict) else {}
-    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
-    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
-    return "simulation (" + (", ".join(parts) or "no noise") + ")"
-
-
-def planted_label(options: Any) -> str:
-    """How reports name a ``planted`` backend: ``planted simulation (egocentric 0.4, sigma 5 px)``."""
-    opts = options if isinstance(options, dict) else {}
-    names = (("egocentric", "egocentric {}"), ("mirror", "mirror {}"), ("random_frame", "random frame {}"), ("pixel_sigma", "sigma {} px"))
-    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
-    return "planted simulation (" + (", ".join(parts) or "ground truth") + ")"
 
 
 def _cells_of_index(index: Any) -> list[dict[str, Any]]:
@@ -408,7 +404,9 @@ def observation_of(
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
         metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
+        category=row_category(row),
         answer=shown_answer(row.prediction.answer_type, row.prediction.value),
+        chosen=chosen_label(row),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
 

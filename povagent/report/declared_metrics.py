@@ -36,7 +36,7 @@ def declared_metric_estimates(
     for scorer, metrics in declared.items():
         for system in systems:
             rows = MetricColumns.of(
-                (ValuedRow(o.condition, o.direction, o.metric_values, groups=o.metric_groups or {})
+                (ValuedRow(o.condition, o.direction, o.metric_values, o.category, o.metric_groups or {})
                  for o in by_system.get(system, []) if scorer in o.metric_values),
                 {scorer: tuple(metrics.values())},
             )

@@ -99,8 +99,8 @@ def export_run(run_dir: str | Path, out: str | Path | None = None, run: int | No
     ``out`` defaults to ``<run_dir>/official_predictions.json``. With several run indices and no
     ``run`` chosen, ``out`` is a folder holding ``run_<k>.json`` per run.
     """
-    from povagent.report.analysis import load_collection_dataset
     from povagent.report.collect import collect
+    from povagent.report.run_sets import load_collection_dataset
 
     collection = collect(run_dir)
     if len(collection.runs) != 1:

@@ -67,11 +67,13 @@ def declared_metric_figures(a: Analysis) -> dict[str, tuple[str, str]]:
                 for s in a.systems if s.system in by_system
             ]  # fmt: skip
             better = "higher" if m.better == "higher" else "lower"
+            # only the groupings the rows have: a set without conditions is plotted overall
+            grouped = " by condition" if a.conditions else ""
             figs[f"metric_{_safe_name(scorer)}_{_safe_name(m.name)}"] = (
-                f"{m.label} ({scorer}) by condition and overall; {better} is better (whiskers: 95% bootstrap CI)."
+                f"{m.label} ({scorer}){grouped and grouped + ' and'} overall; {better} is better (whiskers: 95% bootstrap CI)."
                 + _baseline_note(a, "hatched bars"),
-                grouped_bars(f"{m.label} by condition", [*(condition_label(c) for c in a.conditions), "Overall"], series,
-                             y_label=m.label.lower()),
+                grouped_bars(f"{m.label}{grouped}", [*(condition_label(c) for c in a.conditions), "Overall"], series,
+                             y_label=m.label.lower(), y_limit=1.0 if m.aggregation == "rate" else None),
             )  # fmt: skip
     return figs
 
@@ -83,12 +85,12 @@ def _success_figures(a: Analysis) -> dict[str, tuple[str, str]]:
     series = [(s.system, [_of(s.by_condition.get(c), cell_hit) for c in a.conditions], s.reference) for s in a.systems]
     figs["success_by_condition"] = (
         "Success rate by condition (unanswered = failure; whiskers: 95% bootstrap CI)." + _baseline_note(a, "hatched bars"),
-        grouped_bars("Success rate by condition", [condition_label(c) for c in a.conditions], series, y_label="success rate"),
+        grouped_bars("Success rate by condition", [condition_label(c) for c in a.conditions], series, y_label="success rate", y_limit=1.0),
     )
     series = [(s.system, [_of(s.by_direction.get(d), cell_hit) for d in a.directions], s.reference) for s in a.systems]
     figs["success_by_direction"] = (
         "Success rate by direction, pooled over conditions." + _baseline_note(a, "hatched bars"),
-        grouped_bars("Success rate by direction", [d.capitalize() for d in a.directions], series, y_label="success rate"),
+        grouped_bars("Success rate by direction", [d.capitalize() for d in a.directions], series, y_label="success rate", y_limit=1.0),
     )
     return figs
 

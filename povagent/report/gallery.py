@@ -56,8 +56,10 @@ from povagent.errors import ReadTargetError
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
+from povagent.report.gallery_choice import asked_question, choice_fields, has_target, question_drawing, shows_several_images
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
+from povagent.report.run_sets import RunSets
 from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
@@ -192,8 +194,9 @@ def _save_jpeg(image: Image.Image, path: Path, quality: int) -> None:
 
 
 def _strip_of(instance: Any) -> Strip | None:
-    """The strip of an instance's exploration frames (``None`` for Given or without frames)."""
-    if not getattr(instance.condition, "uses_exploration_frames", False) or not instance.frames:
+    """The strip of an instance's exploration frames, or of a multiple-choice question's
+    images when it has several (``None`` for Given, or a single image, or no frames)."""
+    if not (getattr(instance.condition, "uses_exploration_frames", False) or shows_several_images(instance)) or not instance.frames:
         return None
     w, h = instance.frame_size
     return Strip(tuple(Path(f.file) for f in instance.frames), (max(1, round(STRIP_TILE_HEIGHT * w / h)), STRIP_TILE_HEIGHT))
@@ -230,7 +233,7 @@ class _StripBook:
             self.by_strip[strip] = len(self.stats.strips)
             self.stats.strips.append({"k": key, "n": len(strip.sources), "w": strip.tile[0], "h": strip.tile[1]})
             self.jobs[key] = strip
-        views = list(ground_truth_views(instance))
+        views = list(ground_truth_views(instance)) if has_target(instance) else [[], []]  # no 3D target: no tick
         index = self.by_views.setdefault(json.dumps(views), len(self.stats.views))
         if index == len(self.stats.views):
             self.stats.views.append(views)
@@ -342,10 +345,12 @@ def build_gallery(
     entries: list[dict[str, Any]] = []
     unreadable: dict[str, str] = {}  # drawing key -> why its source could not be drawn
     for o in rows:
-        inst = dataset.instance(o.instance_id) if dataset is not None else None
+        asked = dataset.for_run(o.run_name) if isinstance(dataset, RunSets) else dataset  # the set this row's run asked
+        inst = asked.instance(o.instance_id) if asked is not None else None
         active = answered_view(o, run_folders) if run_folders is not None and inst is not None else None
         view = active.frame if active is not None else None
-        drawing = drawing_for(o, inst, view) if inst is not None else None
+        question = asked_question(inst)
+        drawing = question_drawing(inst) if question is not None else drawing_for(o, inst, view) if inst is not None else None
         key = None
         if drawing is not None and drawing.source.exists():
             try:
@@ -357,7 +362,7 @@ def build_gallery(
         else:
             stats.without_image += 1
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
-        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None else None
+        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None and question is None else None
         path = active.path if active is not None else ()
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame, path) if inst is not None else None
         raw = o.raw or ""
@@ -390,6 +395,7 @@ def build_gallery(
             | strip_fields
             | strips.views_fields(active)
             | diagnosis_fields(o, frame)
+            | (choice_fields(o, question) if question is not None else {})
             | (
                 {"ok": o.success, "dn": None if o.distance_norm is None else round(o.distance_norm, 4)}
                 if o.protocol == "marked_hit"

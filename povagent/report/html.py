@@ -101,13 +101,28 @@ def _finite(value: Any) -> Any:
 
 def tables_section(tables: Iterable[Table], downloads: dict[str, list[tuple[str, str]]] | None = None) -> str:
     """The tables, each followed by links to its Markdown/CSV/LaTeX files."""
-    parts = ['<section id="tables"><h2>Tables</h2>']
+    tables = list(tables)
+    folded: dict[str, list[Table]] = {}
     for t in tables:
+        if t.folded_under is not None and any(u.key == t.folded_under for u in tables):
+            folded.setdefault(t.folded_under, []).append(t)
+    parts = ['<section id="tables"><h2>Tables</h2>']
+
+    def one(t: Table) -> None:
         # a table wider than the page scrolls inside its own box, never the whole page
         parts.append(f'<div class="table-box">{to_html(t)}</div>')
         links = (downloads or {}).get(t.key)
         if links:
             parts.append('<div class="downloads">' + " · ".join(f'<a href="{html.escape(href)}">{html.escape(name)}</a>' for name, href in links) + "</div>")
+
+    for t in tables:
+        if any(t in under for under in folded.values()):
+            continue
+        one(t)
+        for inner in folded.get(t.key, []):  # one click away, under the table it details
+            parts.append(f'<details class="folded" id="folded-{html.escape(inner.key)}"><summary>{html.escape(inner.title)}</summary>')
+            one(inner)
+            parts.append("</details>")
     parts.append("</section>")
     return "".join(parts)
 

@@ -5,8 +5,10 @@ The judgements come from ``povagent annotate``'s judge mode (:mod:`povagent.anno
 the files in a ``judgements/`` folder inside the report's source folder or beside it. A rate is
 success / (success + failure) over every judgement (judges pooled), with a 95% Wilson interval;
 "can't tell" counts in neither and is reported beside. Where two judges judged the same
-predictions, their agreement and Cohen's kappa over the three verdicts are shown. Nothing here
-reads run folders: the judgements name the system each prediction came from.
+predictions, their agreement and Cohen's kappa over the three verdicts are shown. Only the
+judgements of the report's own runs count: a judgement names its prediction by the judged run's
+identity, row key and prediction (:func:`~povagent.annotate.judgements.judged_item`), and a
+judgement of any other run (a neighbouring sweep's, a cell of the same name elsewhere) is left out.
 """
 
 from __future__ import annotations
@@ -15,8 +17,9 @@ import math
 from collections import Counter, defaultdict
 from itertools import combinations
 from pathlib import Path
+from typing import Any, Sequence
 
-from povagent.annotate.judgements import JUDGEMENTS_FOLDER, VERDICTS, Judgement, read_judgements
+from povagent.annotate.judgements import JUDGEMENTS_FOLDER, VERDICTS, Judgement, judged_item, read_judgements, run_identity
 from povagent.report.tables import Cell, Column, Row, Table
 
 #: z of a two-sided 95% interval.
@@ -55,10 +58,23 @@ def cohen_kappa(first: list[str], second: list[str]) -> float | None:
     return None if expected >= 1.0 else (observed - expected) / (1.0 - expected)
 
 
-def manual_tables(source: Path) -> list[Table]:
-    """The manual success table and, where judges overlap, the agreement table (none without
-    judgements)."""
+def judged_items_of(runs: Sequence[Any]) -> set[str]:
+    """The item names (:func:`~povagent.annotate.judgements.judged_item`) of every prediction
+    with a point in ``runs`` (each a run's ``folder`` and its ``rows``)."""
+    items: set[str] = set()
+    for run in runs:
+        identity = run_identity(run.folder)
+        items.update(judged_item(identity, row.key, row.prediction) for row in run.rows if row.prediction.x is not None)
+    return items
+
+
+def manual_tables(source: Path, runs: Sequence[Any]) -> list[Table]:
+    """The manual success table and, where judges overlap, the agreement table, over the
+    judgements of predictions of ``runs`` (the report's runs) only; none without such judgements."""
     judgements = [j for f in judgement_files(source) for j in read_judgements(f)]
+    if judgements:  # the runs' rows are read again only when someone judged something
+        own = judged_items_of(runs)
+        judgements = [j for j in judgements if j.item in own]
     if not judgements:
         return []
     tables = [_success_table(judgements)]

@@ -194,8 +194,10 @@ def grouped_bars(
     y_label: str = "mean normalized L2",
     width: int = 820,
     height: int = 340,
+    y_limit: float | None = None,
 ) -> str:
-    """Bars per group and series, with CI whiskers; a series is ``(name, estimates, reference)``."""
+    """Bars per group and series, with CI whiskers; a series is ``(name, estimates, reference)``.
+    ``y_limit``: the axis's top (a rate's is 1); ``None``: a round number above the tallest bar."""
     styles = series_styles(series)
     colours = [st.colour for st in styles]
     uid = _uid(title, [s[0] for s in series])
@@ -205,7 +207,7 @@ def grouped_bars(
     left, right, bottom = 60, 16, 46
     plot_h = height - top - bottom
     vals = [e.hi if e and e.hi is not None else (e.value if e and e.value is not None else 0.0) for _, ests, _ in series for e in ests]
-    y_max = _nice_max(max(vals, default=0.0) * 1.05)
+    y_max = y_limit if y_limit is not None else _nice_max(max(vals, default=0.0) * 1.05)
     plot_w = width - left - right
     gw = plot_w / max(1, len(groups))
     bw = min(28.0, gw * 0.8 / max(1, len(series)))

@@ -9,6 +9,10 @@ The one exception is a sweep that splits one system's evaluation into cells by c
 index (axes the tables break down or average): cells of one sweep whose axes differ only there
 are that one system.
 
+Runs asked different sets are never one system: runs sharing a name on several sets are one
+system per set, named with the set (``gpt-4o · viewspatial``), and each keeps the name without
+it as its ``entrant`` (a leaderboard's row).
+
 Runs are pooled into one system only when the user asks: with ``pool=True`` (``povagent report
 --pool``) runs of the same name pool, and runs whose configs give the same explicit ``label:``
 always pool (the label says they are one system). Every pooling is returned as a
@@ -42,6 +46,8 @@ class NamedRun(Protocol):
     axes: dict[str, str]
     config: dict[str, Any]
     system: str
+    #: The system's name without its set (set with :attr:`system`).
+    entrant: str
     #: The sweep folder whose index listed the run (``None``: a run folder of its own).
     sweep: Any
     #: The axis values the sweep's index gives the cell (``{}`` for a run of its own).
@@ -49,6 +55,9 @@ class NamedRun(Protocol):
 
     @property
     def folder(self) -> Any: ...
+
+    @property
+    def benchmark(self) -> str: ...
 
 
 @dataclass(frozen=True)
@@ -64,6 +73,35 @@ class Pooling:
         """One sentence for the report's notes and the console."""
         why = "their configs give the same label" if self.reason == "label" else "--pool was given"
         return f"Pooled {len(self.runs)} runs into the system '{self.system}' ({why}): {', '.join(self.runs)}."
+
+
+def simulation_label(options: Any) -> str:
+    """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
+    its noise options that are set, so a reader never mistakes it for a model."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "simulation (" + (", ".join(parts) or "no noise") + ")"
+
+
+def planted_label(options: Any) -> str:
+    """How reports name a ``planted`` backend: ``planted simulation (egocentric 0.4, sigma 5 px)``."""
+    opts = options if isinstance(options, dict) else {}
+    names = (("egocentric", "egocentric {}"), ("mirror", "mirror {}"), ("random_frame", "random frame {}"), ("pixel_sigma", "sigma {} px"))
+    parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
+    return "planted simulation (" + (", ".join(parts) or "ground truth") + ")"
+
+
+def set_name(config: dict[str, Any], path: Any) -> str:
+    """The set a run was asked, by name: an external set's ``dataset.format`` (``viewspatial``),
+    else its folder's name (``path``), with the ``task:`` when it is not the point task
+    (``release · relation``); ``""`` when the config names no set."""
+    ds = config.get("dataset")
+    format = ds.get("format") if isinstance(ds, dict) else None
+    name = str(format) if format else (getattr(path, "name", "") if path is not None else "")
+    task = config.get("task")
+    task_name = task.get("name") if isinstance(task, dict) else task
+    return f"{name}{LABEL_JOIN}{task_name}" if name and task_name not in (None, "", "point") else name
 
 
 def config_label(config: dict[str, Any]) -> str | None:
@@ -147,33 +185,36 @@ def assign_systems(runs: Sequence[NamedRun], *, pool: bool = False) -> list[Pool
     labels = axis_labels(runs)
     evaluation = evaluations(runs)
     explicit = [config_label(r.config) for r in runs]
-    names = [e or a for e, a in zip(explicit, labels, strict=True)]
+    entrants = [e or a for e, a in zip(explicit, labels, strict=True)]
+    # runs of one name asked different sets are one system per set: a set's number never pools another's
+    sets_of: dict[str, set[str]] = {}
+    for run, entrant in zip(runs, entrants, strict=True):
+        sets_of.setdefault(entrant, set()).add(run.benchmark)
+    names = [f"{e}{LABEL_JOIN}{r.benchmark}" if len(sets_of[e]) > 1 and r.benchmark else e for r, e in zip(runs, entrants, strict=True)]
     groups: dict[str, list[int]] = {}
     for i, name in enumerate(names):
         groups.setdefault(name, []).append(i)
     poolings: list[Pooling] = []
     for name, members in groups.items():
+        for i in members:
+            runs[i].system, runs[i].entrant = name, entrants[i]
         if len(members) == 1:
-            runs[members[0]].system = name
             continue
-        labelled = all(explicit[i] == name for i in members)
+        labelled = all(explicit[i] == entrants[i] for i in members)
         if labelled or pool:
-            for i in members:
-                runs[i].system = name
             poolings.append(Pooling(name, tuple(runs[i].name for i in members), "label" if labelled else "asked"))
             continue
         split: dict[tuple[Any, ...], list[int]] = {}
         for i in members:
             split.setdefault(evaluation[i], []).append(i)
         if len(split) == 1:  # one sweep's cells of one system, split by condition or run
-            for i in members:
-                runs[i].system = name
             continue
         shown = [runs[cells[0]].folder if len(cells) == 1 else runs[cells[0]].sweep for cells in split.values()]
         for cells, folder in zip(split.values(), _folder_names(shown), strict=True):
             for i in cells:
                 runs[i].system = f"{name} ({folder})"
+                runs[i].entrant = f"{entrants[i]} ({folder})"
     return poolings
 
 
-__all__ = ["AXIS_ORDER", "LABEL_JOIN", "NON_SYSTEM_AXES", "Pooling", "assign_systems", "axis_labels", "config_label"]
+__all__ = ["AXIS_ORDER", "LABEL_JOIN", "NON_SYSTEM_AXES", "Pooling", "assign_systems", "axis_labels", "config_label", "planted_label", "set_name", "simulation_label"]

@@ -60,6 +60,9 @@ class Table:
     columns: list[Column]
     rows: list[Row] = field(default_factory=list)
     show_ci: bool = True
+    #: The key of the table this one is folded under on the report's page (one click opens it
+    #: there); ``None``: shown in its own place. Exports list it as any other table.
+    folded_under: str | None = None
 
     def numbers(self) -> dict[str, object]:
         """The table's numbers for a ``summary.json``: its title, columns and, per row, each

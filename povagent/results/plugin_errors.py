@@ -17,6 +17,12 @@ if TYPE_CHECKING:
     from povagent.dataset.protocol import EvaluationSet
     from povagent.interfaces import Parser, Scorer
 
+#: The longest reply a parser is handed, in characters (about a megabyte). A longer one (a model
+#: repeating itself to its token limit) is a non-response saying so, whatever the rule: every
+#: built-in rule reads in time linear in the reply, so this bounds each parse to well under a
+#: second, and a plugin's rule, whose cost nobody here knows, gets the same bound.
+MAX_REPLY_CHARS = 1_000_000
+
 #: Told of an exception a plugin raised (to log it with its traceback), before it becomes data.
 OnError = Callable[[BaseException], None]
 
@@ -27,7 +33,10 @@ def error_text(exc: BaseException) -> str:
 
 
 def parse_or_unparseable(parser: Parser, text: str, spec: AnswerSpec, on_error: OnError | None = None) -> ParsedAnswer:
-    """``parser.parse(text, spec)``; an exception is an unparseable answer saying so."""
+    """``parser.parse(text, spec)``; an exception is an unparseable answer saying so, and a reply
+    longer than :data:`MAX_REPLY_CHARS` is one too, never handed to the parser."""
+    if len(text) > MAX_REPLY_CHARS:
+        return unparseable(f"the reply is {len(text)} characters, longer than the {MAX_REPLY_CHARS} a parser reads", span=text[:200])
     try:
         return parser.parse(text, spec)
     except Exception as exc:  # parsers must not raise; if one does, the answer is no answer

@@ -127,6 +127,14 @@ class ResultRow(BaseModel):
     #: How the official runner reads the final answer, when the row's parser is a lenient one
     #: (see :mod:`povagent.results.official_reading`); ``None`` when the parser reads officially.
     official_reading: OfficialReading | None = None
+    #: The category of the multiple-choice question the row answers (the set's question type,
+    #: ``""`` for none), whatever became of the answer: a reply naming no option still counts in
+    #: its category's slice. ``None``: the instance asks no multiple-choice question (a point),
+    #: or the row was written before rows named it (its scorer's ``category`` is read instead).
+    category: str | None = None
+    #: The broader type the category belongs to, where the set has one (3DSRBench's
+    #: ``orientation`` for ``orientation_viewpoint``): a slice of its own. ``None``: none.
+    main_category: str | None = None
 
     @property
     def raw_response(self) -> str | None:
@@ -321,11 +329,22 @@ class StoredRows(Sequence[ResultRow]):
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        last: dict[str, tuple[int, int]] = {}
+        last: dict[str, tuple[int, int, tuple[tuple[str, frozenset[str]], ...]]] = {}
+        shapes: dict[tuple[tuple[str, frozenset[str]], ...], tuple[tuple[str, frozenset[str]], ...]] = {}
         for number, offset, line in _complete_lines(self.path):
-            last[_read_line(self.path, number, line).key] = (number, offset)
-        self._numbers = array("l", (n for n, _ in last.values()))
-        self._offsets = array("q", (o for _, o in last.values()))
+            row = _read_line(self.path, number, line)
+            shape = tuple((scorer, frozenset(fields)) for scorer, fields in row.scores.items())
+            last[row.key] = (number, offset, shapes.setdefault(shape, shape))
+        self._numbers = array("l", (n for n, _, _ in last.values()))
+        self._offsets = array("q", (o for _, o, _ in last.values()))
+        carried: dict[str, set[frozenset[str]]] = {}
+        for _, _, shape in last.values():
+            for scorer, fields in shape:
+                carried.setdefault(scorer, set()).add(fields)
+        #: Each scorer the rows carry (in the order the rows first carry it) with the sets of
+        #: field names it wrote: what a reader asks of every row's scores, known without
+        #: reading the rows again.
+        self.carried_scores: dict[str, frozenset[frozenset[str]]] = {k: frozenset(v) for k, v in carried.items()}
 
     def __len__(self) -> int:
         return len(self._offsets)

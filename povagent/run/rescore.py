@@ -51,7 +51,7 @@ from povagent.run.confined_read import check_regular
 from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.pending import asked_by
 from povagent.run.run_folder import read_run_config
-from povagent.run.score_step import AnswerScoring
+from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 from povagent.run.summary import declared_metrics, summarize_rows, write_summary
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.protocols import scorer_protocols
@@ -82,8 +82,10 @@ def rescore_row(row: ResultRow, instance: Instance, spec: AnswerSpec, scoring: A
     """``row`` re-parsed from its final raw answer and re-scored by the score step the runner
     uses (:mod:`povagent.run.score_step`); infrastructure errors are kept as they are."""
     raw = row.raw_response
+    # a row written before rows named its categories gets them here
+    categories = {"category": question_category(instance), "main_category": question_main_category(instance)}
     if row.status is RowStatus.INFRA_ERROR or raw is None:
-        return row.model_copy(update={"parser": parser_name, "official_reading": None})
+        return row.model_copy(update={"parser": parser_name, "official_reading": None, **categories})
     scored = scoring.score_answer(instance, spec, raw)
     return row.model_copy(
         update={
@@ -93,6 +95,7 @@ def rescore_row(row: ResultRow, instance: Instance, spec: AnswerSpec, scoring: A
             "prediction": scored.prediction,
             "scores": scored.scores,
             "official_reading": scored.official_reading,
+            **categories,
         }
     )
 

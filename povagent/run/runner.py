@@ -60,7 +60,7 @@ from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
-from povagent.run.summary import declared_metrics, summarize_run, write_summary
+from povagent.run.summary import declared_metrics, summarize_run, write_summary, written_rows_table
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.metrics import Declared
 from povagent.scoring.protocols import scorer_protocols
@@ -231,11 +231,13 @@ class PipelineRun:
         s = self.stats
         s.rows_written += 1
         s.statuses[row.status.value] += 1
-        self._session_spent = UsageTotals.of((self._session_spent, row), unstated_tokens=0, unstated_cost=0.0)
+        self._session_spent = self._session_spent.plus(row)  # UsageTotals.of((spent, row), unstated 0)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
         self.progress.advance(row.status.value)
+        if self._written is not None:
+            self._written.add(row)
         if self._observed:
             self.host.hooks.instance_done(str(self.run_dir), row)
 
@@ -334,7 +336,8 @@ class PipelineRun:
             drop_rows(self.run_dir / RESULTS, retried)
         pending, wanted, n_pending = plan.pending, plan.wanted, len(plan.pending)
         self._wanted = wanted  # the summary's keys: made once
-        del plan  # its done keys: the summary reads the rows back instead
+        del plan  # its done keys: the summary reads the rows (as written, or back) instead
+        self._written = written_rows_table(self.run_dir / RESULTS, wanted, self._declared, self._protocols)
         write_inside(self.run_dir, CONFIG, dump_pipeline(config, self._redactor))
 
         backend = self.components.backend
@@ -464,11 +467,9 @@ class PipelineRun:
                 raise
 
     def summarize(self, interrupted: bool) -> dict[str, Any]:
-        """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown
-        over the selected keys, plus the run's counters."""
-        # read back from results.jsonl, where every row of the run is durable: a run keeps no
-        # state per key while it runs, so its memory stays flat however many rows it writes
-        summary = summarize_run(self.run_dir / RESULTS, self._wanted, self._declared, self._protocols)
+        """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown over the
+        selected keys (rows as written if the file started empty and no write failed, else read back), plus the run's counters."""
+        summary = summarize_run(self.run_dir / RESULTS, self._wanted, self._declared, self._protocols, None if self._journal.error else self._written)
         spent = self._session_spent
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0

@@ -47,6 +47,21 @@ def instance_view(instance: Instance, spec: AnswerSpec) -> Instance:
     return instance
 
 
+def question_category(instance: Instance) -> str | None:
+    """The category a row of ``instance`` records (:attr:`ResultRow.category`): its
+    multiple-choice question's, or ``None`` for an instance asking no such question. Recorded
+    whatever the answer, so a reply naming no option counts, wrong, in its category's slice."""
+    question = instance.question
+    return None if question is None else str(question.category or "")
+
+
+def question_main_category(instance: Instance) -> str | None:
+    """The broader type of ``instance``'s question category a row records
+    (:attr:`ResultRow.main_category`: 3DSRBench's ``orientation``), or ``None`` where it has none."""
+    question = instance.question
+    return (question.main_category or None) if question is not None else None
+
+
 def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerType | None = None) -> Prediction:
     """What a row records as the prediction: the frame index, its image path (A/B), the point,
     and the typed value ``answer_type`` reads from the parse."""

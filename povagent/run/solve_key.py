@@ -10,6 +10,7 @@ is :mod:`povagent.run.runner`'s.
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
 import time
 import traceback
@@ -29,7 +30,7 @@ from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
 from povagent.run.logs import Redactor, RunLog
-from povagent.run.score_step import AnswerScoring
+from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 
 
 @dataclass
@@ -100,7 +101,8 @@ class KeySolver:
             request, response = turns[-1]
             if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
                 transcript.record(request, raw=response.text)
-            scored = self.scoring(key).score_answer(instance, request.answer, response.text)
+            # parsed and scored in a worker thread: a slow plugin rule never stalls the run's other keys
+            scored = await asyncio.to_thread(self.scoring(key).score_answer, instance, request.answer, response.text)
             parse, status, prediction = scored.parse, scored.status, scored.prediction
             scores, official_reading = scored.scores, scored.official_reading
         except InfraFailure as exc:
@@ -142,6 +144,8 @@ class KeySolver:
             started_at=started,
             finished_at=utc_now(),
             official_reading=official_reading,
+            category=question_category(instance),
+            main_category=question_main_category(instance),
         )
 
     def scoring(self, key: str) -> AnswerScoring:

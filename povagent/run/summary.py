@@ -1,10 +1,12 @@
 """Run summaries: ``summary.json``'s breakdown of a run's rows (:class:`ResultRow`, one per key).
 
-A run keeps nothing per key while it runs: at its end the runner reads ``results.jsonl`` back
-(:func:`summarize_run`), a row at a time, into a :class:`~povagent.run.summary_table.SummaryTable`
-(the values a summary reads of each key's row, in columns: under 200 bytes a key, so a run's
-memory hardly grows with its rows). :func:`summarize_rows` summarizes rows in hand (a rescore's);
-both go through :func:`summarize_table`. :mod:`povagent.run.summary_model` says what the
+A run keeps of each key only what its summary reads: a
+:class:`~povagent.run.summary_table.SummaryTable` (the values a summary reads of each key's row,
+in columns: under 200 bytes a key, so a run's memory hardly grows with its rows). A run whose
+``results.jsonl`` started empty adds each row as it is written (:func:`written_rows_table`), so
+its rows are read once; any other run reads the file back at its end (:func:`summarize_run`), a
+row at a time. :func:`summarize_rows` summarizes rows in hand (a rescore's); all go through
+:func:`summarize_table`. :mod:`povagent.run.summary_model` says what the
 summary is; :mod:`povagent.run.summary_fields` what a summary reads of one row.
 """
 
@@ -131,15 +133,31 @@ def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]
 
 def summarize_run(
     results: Path, keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None,
-    protocols: Mapping[str, str] | None = None,
+    protocols: Mapping[str, str] | None = None, written: SummaryTable | None = None,
 ) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction) of a results file, per run too.
 
     ``keys`` restricts it to a run's selection; ``rows`` counts statuses and missing keys.
     When a key repeats, its last row counts. ``declared`` and ``protocols``: as for
-    :func:`summarize_rows`. The file is read one row at a time, and kept in columns.
+    :func:`summarize_rows`. The file is read one row at a time, and kept in columns; unless
+    ``written`` holds every row of the file already (:func:`written_rows_table`, made with the
+    same ``keys``, ``declared`` and ``protocols``): then it is not read again.
     """
+    if written is not None:
+        return summarize_table(written.close(), None if keys is None else len(keys))
     return summarize_rows(iter_rows(results), keys, declared, protocols)
+
+
+def written_rows_table(
+    results: Path, keys: set[str] | None, declared: Mapping[str, Sequence[Metric]] | None, protocols: Mapping[str, str] | None
+) -> SummaryTable | None:
+    """A table to add a run's rows to as they are written, when ``results`` holds no row yet:
+    the rows written are then the file's rows, in the file's order, and :func:`summarize_run`
+    given the table reads the same values the file holds without reading it. ``None`` when the
+    file has rows already (a resumed run: the file is read back at the end)."""
+    if results.exists() and results.stat().st_size:
+        return None
+    return SummaryTable(declared, protocols, keys)
 
 
 def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None) -> RunSummary:

@@ -9,7 +9,8 @@ Pure: a row in, values out.
 from __future__ import annotations
 
 import sys
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow
@@ -19,11 +20,14 @@ from povagent.scoring.protocols import diagnosing_scorers
 
 def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
     """The fields a summary needs, from the row's score by ``scorer``, the run's ``normalized_l2``
-    scorer (non-answers count as such; ``None``: the run has none, and no row is answered)."""
+    scorer (non-answers count as such; ``None``: the run has none, and no row is answered). A row
+    of a multiple-choice question (it records a category, or its parse chose an option) asks no
+    point: the point breakdown leaves it out."""
     from povagent.scoring.evaluations import official_parse_error
 
     score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
+    asks_point = row.category is None and (row.parse is None or row.parse.choice is None)
     return ScoredRow(
         condition=sys.intern(row.condition),  # one string per label, not one per row a summary keeps
         direction=sys.intern(row.direction),
@@ -34,7 +38,8 @@ def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
         run=row.run,
         error_x=score.get("error_x") if answered else None,
         error_y=score.get("error_y") if answered else None,
-        parse_error=official_parse_error(row) is not None,
+        parse_error=asks_point and official_parse_error(row) is not None,
+        asks_point=asks_point,
     )
 
 

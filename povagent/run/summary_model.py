@@ -230,6 +230,8 @@ class MetricDeclaration(BaseModel):
     negate: bool
     #: The scorer's row field naming a row's group, for a rate over groups (``None``: over rows).
     group: str | None = None
+    #: Question categories the overall cell leaves out (their own slices keep them).
+    overall_excludes: list[str] | None = None
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""

@@ -35,14 +35,16 @@ from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
 from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
-from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
+from povagent.scoring.metrics import Declared, row_category, row_metric_groups, row_metric_values
 from povagent.scoring.protocols import following, registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
-_SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error")
+_SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error", "asks_point")
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
+#: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
+_MAX_SHARED_SCORES = 1024
 
 
 class SummaryTable:
@@ -65,6 +67,8 @@ class SummaryTable:
         #: values only some rows have, by position
         self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}
         self._closed = False
+        self._scored: _ScoredRows | None = None
+        self._shared_scores: dict[Any, Any] = {}
 
     def add(self, row: ResultRow) -> None:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
@@ -98,14 +102,21 @@ class SummaryTable:
         for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"):
             columns[name].append(getattr(row, name))
         if extra := plugin_scores(row.scores, protocols):
-            self._aside["plugin_scores"][at] = extra
+            # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each.
+            # Only all-true/false ones: True == 1, and a summary tells a flag from a number
+            shared = None
+            if all(type(v) is bool for _, fields in extra for _, v in fields):
+                shared = self._shared_scores.get(extra)
+                if shared is None and len(self._shared_scores) < _MAX_SHARED_SCORES:
+                    shared = self._shared_scores.setdefault(extra, extra)
+            self._aside["plugin_scores"][at] = extra if shared is None else shared
         if (diagnosed := diagnosed_row(row, error_scorer)) is not None:
             self._aside["diagnosed"][at] = diagnosed
         if nan_rows([official]):
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
-            self.metrics.append(MetricValues.of(row, self.declared).flat, row.condition, row.direction,
-                                row_category(row), row_metric_groups(row, self.declared))  # fmt: skip
+            flat = [v for values in row_metric_values(row, self.declared).values() for v in values.values()]
+            self.metrics.append(flat, row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
         self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
     def close(self) -> SummaryTable:
@@ -145,7 +156,9 @@ class SummaryTable:
     def scored(self) -> Sequence[ScoredRow]:
         """Each row as its ``normalized_l2`` score gives it (see :func:`~povagent.run.summary_fields.scored_row`)."""
         self._check_closed()
-        return _ScoredRows(self)
+        if self._scored is None:
+            self._scored = _ScoredRows(self)  # one view: its rows are built once
+        return self._scored
 
     def officially_scored(self) -> Sequence[ScoredRow]:
         """The rows that have an official reading (and failed requests), as the reading scores them."""
@@ -227,13 +240,22 @@ class SummaryTable:
 
 
 class _ScoredRows(Sequence[ScoredRow]):
-    """A table's rows as :class:`ScoredRow` objects, each built when it is read."""
+    """A table's rows as :class:`ScoredRow` objects, built together when one is first read and
+    kept while this view lives (a summary reads each row a dozen times, by slice; the table
+    itself stays in columns)."""
 
-    __slots__ = ("_columns", "_n")
+    __slots__ = ("_columns", "_n", "_rows")
 
     def __init__(self, table: SummaryTable) -> None:
         self._columns = [table.field(name) for name in _SCORED]
         self._n = len(table)
+        self._rows: list[ScoredRow] | None = None
+
+    def _built(self) -> list[ScoredRow]:
+        if self._rows is None:
+            n = self._n
+            self._rows = [ScoredRow(*values) for values in zip(*([column[i] for i in range(n)] for column in self._columns))]
+        return self._rows
 
     def __len__(self) -> int:
         return self._n
@@ -247,11 +269,7 @@ class _ScoredRows(Sequence[ScoredRow]):
     def __getitem__(self, i: int | slice) -> ScoredRow | Sequence[ScoredRow]:
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(self._n))]
-        if not -self._n <= i < self._n:
-            raise IndexError(i)
-        i %= self._n
-        c, d, answered, l2, in_frame, strict, run, ex, ey, pe = self._columns
-        return ScoredRow(c[i], d[i], answered[i], l2[i], in_frame[i], strict[i], run[i], ex[i], ey[i], pe[i])
+        return self._built()[i]
 
 
 class _OfficialRows(_ScoredRows):

@@ -69,14 +69,45 @@ def bootstrap_mean_cis(
             by_size.setdefault(n, []).append(k)
     alpha = (1.0 - level) / 2.0
     for n, ks in by_size.items():
-        sums: list[list[np.ndarray]] = [[] for _ in ks]
-        for draws in resample_draws(n, n_boot, seed):
-            for sink, k in zip(sums, ks, strict=True):
-                sink.append(kept[k][draws].sum(axis=1))
-        for sink, k in zip(sums, ks, strict=True):
+        resampled = _resampled(kept, ks, out)
+        sums: list[list[np.ndarray]] = [[] for _ in resampled]
+        for draws in resample_draws(n, n_boot, seed) if resampled else ():
+            for sink, (x, binary) in zip(sums, resampled.values(), strict=True):
+                # a resample's sum of 0s and 1s is a count, exact in any order: the same
+                # number as the float sum; ``take`` gathers as indexing does, faster
+                sink.append(np.count_nonzero(x.take(draws), axis=1) if binary else x.take(draws).sum(axis=1))
+        for sink, k in zip(sums, resampled, strict=True):
             lo, hi = np.quantile(np.concatenate(sink) / n, [alpha, 1.0 - alpha])
             out[k] = Estimate(out[k].value, float(lo), float(hi), n)
+        for k in ks:
+            if out[k].lo is None:  # the same values as an earlier column: its interval
+                twin = next(j for j in resampled if _same(kept[j], kept[k]))
+                out[k] = Estimate(out[k].value, out[twin].lo, out[twin].hi, n)
     return out
+
+
+def _resampled(kept: list[np.ndarray], ks: list[int], out: list[Estimate]) -> dict[int, tuple[np.ndarray, bool]]:
+    """Which of the columns ``ks`` (as many values each) must be resampled, each with what is
+    gathered and whether its values are all 0 or 1: a column equal to an earlier one is left
+    out (its interval is that one's), and a column of 0s only or 1s only gets its interval in
+    ``out`` now (every resample's mean is that value, exactly)."""
+    resampled: dict[int, tuple[np.ndarray, bool]] = {}
+    for k in ks:
+        x = kept[k]
+        if any(_same(kept[j], x) for j in resampled):
+            continue
+        # 0.0 and 1.0 only (not -0.0, whose sums may keep its sign)
+        binary = bool(((x == 1.0) | ((x == 0.0) & ~np.signbit(x))).all())
+        if binary and (x[0] == x).all():
+            out[k] = Estimate(out[k].value, float(x[0]), float(x[0]), out[k].n)
+            continue
+        resampled[k] = (x.astype(bool) if binary else x, binary)
+    return resampled
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two columns hold the same values, bit for bit."""
+    return a.shape == b.shape and bool((a.view(np.uint64) == b.view(np.uint64)).all())
 
 
 def resample_draws(n: int, n_boot: int, seed: int) -> Iterator[np.ndarray]:

@@ -63,6 +63,10 @@ class ScoredRow:
     error_y: float | None = None
     #: The row carries a ``parse_error`` as the official runner would have written one.
     parse_error: bool = False
+    #: The row answers a point question (POVBench's); a multiple-choice row is not counted
+    #: here at all (its scorers' declared metrics say how it did), so a choice run's summary
+    #: never claims its rows unanswered or misread by the official point reader.
+    asks_point: bool = True
 
 
 class Picked(Sequence[T]):
@@ -115,7 +119,8 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     ``parse_error``, answered or not, as the official summary counts them).
 
     A NaN error (the official scorer records one for a NaN coordinate) makes the mean NaN, as
-    the official mean is.
+    the official mean is. Rows that ask no point (``asks_point`` false) are left out: a cell of
+    a multiple-choice run's rows counts none (``n_total`` 0, no response rate).
     """
     # one pass over the rows; each mean is still ``sum()`` of its values in row order, the
     # values held unboxed (8 bytes each: a cell of every row of a run holds them all)
@@ -125,6 +130,8 @@ def summarize(rows: Iterable[ScoredRow]) -> dict[str, Any]:
     abs_y = _values()
     total = in_frame = parse_errors = 0
     for r in rows:
+        if not r.asks_point:
+            continue
         total += 1
         if r.parse_error:
             parse_errors += 1
@@ -171,7 +178,7 @@ def slices(
     cell: Callable[[Sequence[T]], C],
     condition: Callable[[T], str | None] = attrgetter("condition"),
     direction: Callable[[T], str | None] = attrgetter("direction"),
-    category: Callable[[T], str | None] | None = None,
+    category: Callable[[T], str | tuple[str, ...] | None] | None = None,
 ) -> dict[str, Any]:
     """The one breakdown: ``cell`` of all rows (``overall``), of each condition, each direction
     and each condition x direction. Every summary povagent shows (official means, success rates,
@@ -181,7 +188,8 @@ def slices(
     has none) counts overall only, as officially. Labels come in the paper's order, then any
     other label, sorted; only labels with rows appear. With ``category`` given and some row
     in a category (a multiple-choice question's type), ``per_category`` breaks the rows down
-    by it too, labels sorted.
+    by it too, labels sorted; a row whose ``category`` gives several labels (a sub-category and
+    its main category) counts in each.
 
     A slice holds its rows' positions; ``cell`` gets it as a :class:`Picked` view of ``rows``
     (``overall``: ``rows`` itself, a sequence as handed in), so slicing keeps nothing per row
@@ -201,7 +209,8 @@ def slices(
         if c and d:
             by_cd[(c, d)].append(i)
         if category is not None and (k := category(r)):
-            by_category[k].append(i)
+            for label in (k,) if isinstance(k, str) else k:
+                by_category[label].append(i)
     c_order = _ordered(by_c, [str(c) for c in CONDITIONS])
     d_order = _ordered(by_d, [str(d) for d in DIRECTIONS])
     out = {

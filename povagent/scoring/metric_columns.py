@@ -29,9 +29,22 @@ from povagent.scoring.metrics import Declared, Metric, ValuedRow
 _NAN = float("nan")
 
 
+#: The category tuples met so far: one object per distinct tuple, however many rows carry it.
+_TUPLES: dict[tuple[str, ...], tuple[str, ...]] = {}
+
+
 def _label(value: Any) -> str | None:
     """A slice label as a row gives it, one string object per label however many rows carry it."""
     return None if value is None else sys.intern(str(value))
+
+
+def _categories(value: Any) -> str | tuple[str, ...] | None:
+    """A row's category label, or labels (a sub-category and its main category), shared objects."""
+    if isinstance(value, tuple):
+        labels = tuple(sys.intern(str(v)) for v in value)
+        # a set has a few categories; a file with thousands is kept per row, not remembered
+        return _TUPLES.setdefault(labels, labels) if len(_TUPLES) < 4096 else labels
+    return _label(value)
 
 
 class MetricColumns:
@@ -48,7 +61,7 @@ class MetricColumns:
         self._values = [array("d") for _ in self._at]
         self._condition: list[str | None] = []
         self._direction: list[str | None] = []
-        self._category: list[str | None] = []
+        self._category: list[str | tuple[str, ...] | None] = []
         self._groups: dict[int, Mapping[str, Mapping[str, str]]] = {}
 
     @classmethod
@@ -64,7 +77,7 @@ class MetricColumns:
         return len(self._condition)
 
     def append(
-        self, flat: Sequence[float | None], condition: Any, direction: Any, category: str | None = None,
+        self, flat: Sequence[float | None], condition: Any, direction: Any, category: str | tuple[str, ...] | None = None,
         groups: Mapping[str, Mapping[str, str]] | None = None,
     ) -> None:  # fmt: skip
         """One row: its values in the declared order (``None``: the row does not count), its
@@ -75,7 +88,7 @@ class MetricColumns:
             self._groups[len(self._condition)] = groups
         self._condition.append(_label(condition))
         self._direction.append(_label(direction))
-        self._category.append(_label(category))
+        self._category.append(_categories(category))
 
     def taken(self, positions: np.ndarray) -> MetricColumns:
         """The rows at ``positions``, in that order, as columns of their own (compact)."""
@@ -105,11 +118,22 @@ class MetricColumns:
                 by_group[self._groups.get(i, {}).get(scorer, {}).get(metric.name, ("row", n))].append(value)
         return [1.0 if all(v == 1.0 for v in values) else 0.0 for values in by_group.values()]
 
+    def outside(self, rows: Sequence[int], categories: tuple[str, ...]) -> list[int]:
+        """The positions of ``rows`` whose category (or main category) is none of ``categories``."""
+        left_out = set(categories)
+        kept = []
+        for i in rows:
+            label = self._category[i]
+            labels = () if label is None else (label,) if isinstance(label, str) else label
+            if left_out.isdisjoint(labels):
+                kept.append(i)
+        return kept
+
     def nbytes(self) -> int:
         """Bytes the columns hold (the values, and a pointer a label; groups not counted)."""
         return sum(8 * len(c) for c in self._values) + 24 * len(self)
 
-    def slice_labels(self) -> tuple[Sequence[str | None], Sequence[str | None], Sequence[str | None] | None]:
+    def slice_labels(self) -> tuple[Sequence[str | None], Sequence[str | None], Sequence[str | tuple[str, ...] | None] | None]:
         """Each row's condition, direction and category (``None`` when no row has a category)."""
         has_category = any(c is not None for c in self._category)
         return self._condition, self._direction, self._category if has_category else None
@@ -122,13 +146,18 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
     95% bootstrap CI (resampled with ``seed``) and the number of values counted."""
     metrics = columns.declared.get(scorer, ())
     condition, direction, category = columns.slice_labels()
+    everything = range(len(columns))
+
+    def counted(metric: Metric, rows: Sequence[int]) -> Sequence[int]:
+        # only the overall cell (``slices`` hands it ``everything`` itself) leaves categories out
+        return columns.outside(rows, metric.overall_excludes) if rows is everything and metric.overall_excludes else rows
 
     def cell(rows: Sequence[int]) -> dict[str, Estimate]:
-        estimates = bootstrap_mean_cis([columns.values(scorer, m, rows) for m in metrics], n_boot=n_boot, seed=seed)
+        estimates = bootstrap_mean_cis([columns.values(scorer, m, counted(m, rows)) for m in metrics], n_boot=n_boot, seed=seed)
         return {m.name: e for m, e in zip(metrics, estimates, strict=True)}
 
     return slices(
-        range(len(columns)), cell, condition=condition.__getitem__, direction=direction.__getitem__,
+        everything, cell, condition=condition.__getitem__, direction=direction.__getitem__,
         category=None if category is None else category.__getitem__,
     )  # fmt: skip
 

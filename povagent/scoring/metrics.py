@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Iterator, Literal, Mapping, Sequence
+from typing import Any, Iterator, Literal, Sequence
 
 #: Which way is better.
 Better = Literal["lower", "higher"]
@@ -39,7 +40,9 @@ class Metric:
     copies of one question): rows whose pair ids are equal once every match of it is removed
     form a group (``-flip`` pairs ``Q-2`` with ``Q-flip-2``), a hit only when every row of it
     is. The id is the row's own, so a row no scorer scored (an unreadable answer) still sinks
-    its group; a run's rows group apart from another run's.
+    its group; a run's rows group apart from another run's. ``overall_excludes`` names question
+    categories whose rows the ``overall`` cell leaves out (MindCube's evaluator scores its
+    ``translation`` setting on its own, outside the overall); their own slices keep them.
     """
 
     name: str
@@ -51,6 +54,7 @@ class Metric:
     over: Literal["answered", "all"] = "answered"
     negate: bool = False
     group: str | None = None
+    overall_excludes: tuple[str, ...] = ()
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -59,13 +63,16 @@ class Metric:
                "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
         if self.group is not None:  # said only when set: an ungrouped metric reads as it always did
             out["group"] = self.group
+        if self.overall_excludes:
+            out["overall_excludes"] = list(self.overall_excludes)
         return out
 
     @classmethod
     def declared(cls, name: str, description: Mapping[str, Any]) -> Metric:
         """The metric :meth:`describe` described."""
         return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
-                   description["caption"], description["over"], description["negate"], description.get("group"))  # fmt: skip
+                   description["caption"], description["over"], description["negate"], description.get("group"),
+                   tuple(description.get("overall_excludes") or ()))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
@@ -116,9 +123,19 @@ def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]
     return out
 
 
-def row_category(row: Any) -> str | None:
-    """The question's category a scorer wrote (the first non-empty ``category`` text among the
-    row's scores, by scorer name), or ``None``: the slice a multiple-choice run breaks down by."""
+def row_category(row: Any) -> str | tuple[str, ...] | None:
+    """The question's category, the slice a multiple-choice run breaks down by: the one the row
+    records (``row.category``, written whatever the answer, so a reply naming no option counts
+    in its slice as the wrong answer it is), with its main category where the row records one
+    (``(category, main_category)``: the row counts in both slices), else, for a row written
+    before rows recorded it, the first non-empty ``category`` text among its scores (by scorer
+    name); ``None``: none."""
+    recorded = getattr(row, "category", None)
+    if isinstance(recorded, str):
+        main = getattr(row, "main_category", None)
+        if isinstance(main, str) and main and main != recorded:
+            return (recorded, main) if recorded else main
+        return recorded or None
     scores = getattr(row, "scores", None) or {}
     for name in sorted(scores):
         fields = scores[name]
@@ -195,7 +212,7 @@ class ValuedRow:
     condition: str | None
     direction: str | None
     values: Mapping[str, Mapping[str, float | None]]
-    category: str | None = None
+    category: str | tuple[str, ...] | None = None
     groups: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
 

@@ -13,7 +13,7 @@ from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
 PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice",
-           "navigate", "viewspatial", "mindcube", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
+           "navigate", "viewspatial", "viewspatial-official", "mindcube", "mindcube-official", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
            "lmms-mcq-extract-corrected", "sparbench-lmms", "sparbench-lmms-corrected"}
 STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice", "navigate"}
 
@@ -72,7 +72,7 @@ def test_no_parser_raises_on_generated_text(name):
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
-    from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema
+    from povagent.answers.spec import AnswerSpec, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30)
     parser = registered("register_parsers")[name]()

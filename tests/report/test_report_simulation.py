@@ -6,7 +6,8 @@ import yaml
 
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
-from povagent.report.collect import collect, simulation_label
+from povagent.report.collect import collect
+from povagent.report.systems import simulation_label
 from povagent.run.runner import run_pipeline
 
 

@@ -8,10 +8,11 @@ from collections import defaultdict
 
 import pytest
 
-from povagent.report.analysis import analyze, load_collection_dataset
+from povagent.report.analysis import analyze
 from povagent.report.baseline import CENTER_SYSTEM, center_score
 from povagent.report.collect import collect
 from povagent.report.paper_tables import main_table, paper_tables, response_table, system_row
+from povagent.report.run_sets import load_collection_dataset
 from povagent.report.tables import Cell, Column, Row, Table, to_csv, to_html, to_latex, to_markdown
 from povagent.results.rows import read_rows
 from povagent.scoring.breakdown import ScoredRow, breakdown

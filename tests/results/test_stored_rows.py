@@ -46,3 +46,18 @@ def test_a_line_that_is_not_a_row_is_named_when_the_rows_are_stored(tmp_path):
     write(path, row("a#0"), tail=b"not json\n")
     with pytest.raises(PredictionsError, match="line 2"):
         StoredRows(path)
+
+
+def test_stored_rows_know_the_scorers_their_rows_carry_as_the_rows_say(tmp_path):
+    path = tmp_path / "results.jsonl"
+    scored = [row(k) for k in ("a#0", "b#0", "a#0", "c#0")]
+    scored[0].scores = {"early": {"x": 1}}  # superseded by a#0's last row: not carried
+    scored[1].scores = {"choice": {"correct": True, "chosen": "A"}, "official": {"l2": 0.1}}
+    scored[2].scores = {"official": {"l2": 0.2, "answered": True}}
+    write(path, *scored)
+    stored = StoredRows(path)
+    assert list(stored.carried_scores) == list(dict.fromkeys(name for r in stored for name in r.scores))
+    assert stored.carried_scores == {
+        "official": frozenset({frozenset({"l2", "answered"}), frozenset({"l2"})}),
+        "choice": frozenset({frozenset({"correct", "chosen"})}),
+    }

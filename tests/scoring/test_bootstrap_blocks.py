@@ -56,3 +56,16 @@ def alone(values, n_boot: int, seed: int) -> Estimate:
     alpha = (1.0 - 0.95) / 2.0
     lo, hi = np.quantile(means, [alpha, 1.0 - alpha])
     return Estimate(float(x.sum() / x.size), float(lo), float(hi), int(x.size))
+
+
+def test_columns_of_0s_and_1s_constants_and_repeats_get_the_rules_estimate_to_the_bit():
+    rng = np.random.default_rng(11)
+    l2 = rng.random(400)
+    hits = (rng.random(400) < 0.3).astype(float)
+    columns = [
+        l2, hits, np.ones(400), np.zeros(400), l2.copy(), hits.copy(),  # repeats share their twin's resamples
+        -np.zeros(400), np.r_[-0.0, np.zeros(399)],  # -0.0 is not a plain 0: summed as the rule sums it
+        rng.integers(0, 3, 400).astype(float),  # whole numbers, not only 0 and 1
+    ]  # fmt: skip
+    together = bootstrap_mean_cis(columns, n_boot=300, seed=2)
+    assert [repr(e) for e in together] == [repr(alone(c, n_boot=300, seed=2)) for c in columns]

@@ -1,4 +1,5 @@
-"""The ``mindcube`` parser: MindCube's official answer cascade, as lmms-eval's ``mindcube`` task runs it.
+"""The ``mindcube`` parser: MindCube's answer cascade, as lmms-eval's ``mindcube`` task runs it (after
+lmms-eval's reasoning-tag strip; the set's own evaluator, with no strip, is ``mindcube-official``).
 
 The rule (``extract_answer`` of lmms-eval's ``lmms_eval/tasks/mindcube/utils.py``, taken from
 MindCube's ``src/evaluation/core/extractors.py``), after lmms-eval's reasoning strip: the first
@@ -16,6 +17,11 @@ step that finds a capital ``A``-``E`` gives it (lower case is never read).
 
 So "A chair blocks the view, so the answer is B." is ``B`` (step 1: its last ``X.`` is ``B.``;
 the article is never read), and "The answer is c" is no label (lower case).
+
+``mindcube-official`` is the same cascade as MindCube's own evaluator runs it
+(``src/evaluation/evaluator.py``: ``extract_answer`` on the reply as written): no reasoning block
+is removed, so ``"<think>Maybe A. Keyboard</think>\nD"`` reads ``A`` (step 1 finds ``A.`` in the
+block), where lmms-eval, having removed the block, reads ``D``.
 """
 
 from __future__ import annotations
@@ -61,8 +67,14 @@ def _last_hit(patterns: tuple[re.Pattern[str], ...], text: str) -> str | None:
 
 
 def mindcube_label(text: str) -> str | None:
-    """The label MindCube's cascade reads in ``text`` (module docstring), or ``None``."""
-    text = strip_reasoning_blocks(text)
+    """The label lmms-eval's copy of MindCube's cascade reads in ``text``: after lmms-eval's
+    reasoning-tag strip (module docstring), or ``None``."""
+    return mindcube_cascade(strip_reasoning_blocks(text))
+
+
+def mindcube_cascade(text: str) -> str | None:
+    """The label MindCube's five-step cascade reads in ``text`` as given (no strip of any kind:
+    MindCube's own evaluator calls it so), or ``None``."""
     if not text:
         return None
     if hits := _LABEL_PERIOD.findall(text):
@@ -85,17 +97,32 @@ def mindcube_label(text: str) -> str | None:
 class MindCubeParser(RuleParser):
     """MindCube's cascade (module docstring)."""
 
-    reads = "MindCube's five-step cascade over capital A-E (the set's official rule, lmms-eval's mindcube)"
-    beside_official = "reads choice answers, which the official (point) parser does not read; MindCube's own rule"
+    reads = "lmms-eval's mindcube: its reasoning-tag strip (<think>, <analysis> blocks), then MindCube's five-step cascade over capital A-E"
+    beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's port of MindCube's rule"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
         return mindcube_label(text)
 
 
+class MindCubeOfficialParser(RuleParser):
+    """MindCube's own evaluator: the cascade on the reply as it is, no reasoning block removed."""
+
+    reads = "MindCube's own evaluator: the five-step cascade over capital A-E on the reply as written (a <think> block is read like any text)"
+    beside_official = "reads choice answers, which the official (point) parser does not read; MindCube's own rule, the set's default"
+
+    def label(self, text: str, spec: AnswerSpec) -> str | None:
+        """The rule's label."""
+        return mindcube_cascade(text)
+
+
 @hookimpl
 def register_parsers(register) -> None:
-    """Contribute the mindcube parser."""
+    """Contribute MindCube's own rule and lmms-eval's port of it."""
+    register("mindcube-official", MindCubeOfficialParser, description=(
+        f"MindCube's own answer reading: its five-step cascade on the reply as written, no reasoning strip, so "
+        f"'<think>Maybe A. Keyboard</think>\\nD' reads A ({MINDCUBE} src/evaluation/core/extractors.py extract_answer, "
+        f"as src/evaluation/evaluator.py calls it)"))  # fmt: skip
     register("mindcube", MindCubeParser, description=(
-        f"MindCube's official answer cascade (lmms-eval lmms_eval/tasks/mindcube/utils.py extract_answer @ {LMMS_EVAL}; "
-        f"= {MINDCUBE} src/evaluation/core/extractors.py)"))  # fmt: skip
+        f"lmms-eval's MindCube rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then MindCube's "
+        f"answer cascade (lmms_eval/tasks/mindcube/utils.py extract_answer @ {LMMS_EVAL}); the set's own reading is mindcube-official"))  # fmt: skip

@@ -1,5 +1,5 @@
-"""The ``3dsrbench-lmms`` parser: lmms-eval's ``3dsrbench`` rule (3DSRBench publishes no rule of its own
-that lmms-eval follows; VLMEvalKit's reading of the same set is ``vlmevalkit-exact``).
+"""The ``3dsrbench-lmms`` parser: lmms-eval's ``3dsrbench`` rule, after lmms-eval's reasoning-tag strip
+(3DSRBench's authors score with VLMEvalKit, whose reading is ``vlmevalkit-exact``: the set's default).
 
 The rule (``extract_answer`` and ``process_results`` of lmms-eval's
 ``lmms_eval/tasks/3dsrbench/utils.py``), after lmms-eval's reasoning strip: the first pattern
@@ -45,7 +45,7 @@ def threedsrbench_lmms_label(text: str) -> str | None:
 class ThreeDSRBenchLmmsParser(RuleParser):
     """lmms-eval's 3DSRBench rule (module docstring)."""
 
-    reads = "the first of eight capital A-D patterns that matches (lmms-eval's 3dsrbench)"
+    reads = "lmms-eval's 3dsrbench: its reasoning-tag strip (<think>, <analysis> blocks), then the first of eight capital A-D patterns that matches"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's reading of 3DSRBench"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
@@ -57,5 +57,6 @@ class ThreeDSRBenchLmmsParser(RuleParser):
 def register_parsers(register) -> None:
     """Contribute the 3dsrbench-lmms parser."""
     register("3dsrbench-lmms", ThreeDSRBenchLmmsParser, description=(
-        f"lmms-eval's 3DSRBench rule: the first of eight A-D patterns (lmms_eval/tasks/3dsrbench/utils.py "
-        f"extract_answer @ {LMMS_EVAL})"))  # fmt: skip
+        f"lmms-eval's 3DSRBench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the first of "
+        f"eight A-D patterns (lmms_eval/tasks/3dsrbench/utils.py extract_answer @ {LMMS_EVAL}); the set's own default is "
+        f"vlmevalkit-exact with the choice-3dsrbench scorer"))  # fmt: skip

@@ -1,8 +1,9 @@
 "use strict";
 // The annotation page. Everything shown from the data is set with textContent (never markup);
-// the token comes from this page's own address and goes back in a header on every API call.
+// the token is the first part of this page's own path: every URL here is relative to it, so
+// each request carries it (and no cookie does), and an answer sends it in a header too.
 (function () {
-  const token = new URLSearchParams(location.search).get("token") || "";
+  const token = decodeURIComponent(location.pathname.split("/")[1] || "");
   const headers = { "X-Povagent-Token": token };
   const $ = (id) => document.getElementById(id);
   const el = (tag, text) => { const e = document.createElement(tag); if (text !== undefined) e.textContent = text; return e; };
@@ -63,7 +64,7 @@
     send(body);
   }
 
-  function imageUrl(q, i) { return "/api/image/" + q.number + "/" + i; }
+  function imageUrl(q, i) { return "api/image/" + q.number + "/" + i; }
 
   function showFrame(i) {
     if (!frames.length) return;
@@ -182,7 +183,7 @@
     busy = true; ready();
     $("status").textContent = "Saving…";
     try {
-      const r = await fetch("/api/" + state.mode, { method: "POST", headers: { ...headers, "Content-Type": "application/json" }, body: JSON.stringify(body) });
+      const r = await fetch("api/" + state.mode, { method: "POST", headers: { ...headers, "Content-Type": "application/json" }, body: JSON.stringify(body) });
       const reply = await r.json();
       if (!r.ok) {
         $("status").textContent = "Not saved: " + (reply.error || r.status);
@@ -199,7 +200,7 @@
 
   async function poll() {
     try {
-      const r = await fetch("/api/state", { headers });
+      const r = await fetch("api/state", { headers });
       if (!r.ok) { $("status").textContent = "Refused (" + r.status + "): open the address the command printed."; return; }
       state = await r.json();
     } catch (err) {

@@ -15,26 +15,54 @@ import tempfile
 import weakref
 from pathlib import Path
 
-from povagent.dataset.choice_sets.external import ChoiceSet, choice_instance, item_frames
+from povagent.dataset.choice_sets.external import ChoiceSet, ImageLookups, choice_instance, item_frames
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 
 #: The formats a set's file may be given in (``dataset.format``), each with the set's name.
 CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench"}
 
+#: Where a set's file sits in its repository: ``dataset.path`` may name the repository folder
+#: instead of the file (ViewSpatial-Bench's image paths are relative to the repository root,
+#: ``ViewSpatial-Bench/scannetv2_val/...`` beside ``eval/ViewSpatial-Bench.json``).
+REPOSITORY_FILES = {"viewspatial": "eval/ViewSpatial-Bench.json"}
+#: What a problem of an image that does not exist adds, for a set whose image paths are
+#: relative to somewhere other than its file's folder.
+IMAGES_HINT = {
+    "viewspatial": "ViewSpatial-Bench's image paths are relative to its repository root: give the repository "
+    "folder as dataset.path (the set's file is then its eval/ViewSpatial-Bench.json), or that root as dataset.images",
+}
+
 #: Each set's official rule, the parser a choice pipeline on that format gets when it names none:
-#: ViewSpatial-Bench's ``evaluate.py``, MindCube's ``extractors.py`` cascade, and for 3DSRBench the
-#: lmms-eval ``3dsrbench`` rule its own evaluation uses. A harness's rule is named, never defaulted.
-OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench-lmms"}
+#: ViewSpatial-Bench's own ``evaluate.py``, MindCube's own evaluator (its ``extractors.py`` cascade
+#: on the reply as written), and for 3DSRBench VLMEvalKit's exact matching, with which its authors
+#: score it. lmms-eval's ports (``viewspatial``, ``mindcube``, ``3dsrbench-lmms``: after lmms-eval's
+#: reasoning-tag strip) are alternatives a pipeline names, never defaults.
+OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact"}
+#: Each set's own scorer: plain accuracy for ViewSpatial-Bench, MindCube's with its ``translation``
+#: setting left out of the overall (a scorer option), and 3DSRBench's four accuracies per type
+#: and sub-category (the authors' circular evaluation with VLMEvalKit's): what a pipeline on that
+#: format gets first when it names no ``scorers:``.
+OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench"}
+
+
+#: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
+#: defaults on such a set: :func:`povagent.config.plugin_checks.resolve_components`).
+SET_ANSWER_TYPE = "choice"
 
 
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
     """The set in ``file``, read as ``format``, its image paths relative to (and confined to)
     the folder ``images`` (default: the file's folder); bad records are left out and named in
-    ``problems``. :class:`~povagent.errors.DatasetError` when the file cannot be read at all."""
+    ``problems``. ``file`` may be the set's repository folder where the set's image paths are
+    relative to it (:data:`REPOSITORY_FILES`): the file is then found in it, and it is the
+    default ``images``. :class:`~povagent.errors.DatasetError` when the file cannot be read at all."""
     file = Path(file)
     if format not in CHOICE_FORMATS:
         raise DatasetError(f"{file}: unknown dataset format {format!r} (known: {', '.join(CHOICE_FORMATS)})")
+    if file.is_dir() and format in REPOSITORY_FILES:
+        images = file if images is None else images
+        file = file / REPOSITORY_FILES[format]
     if not file.is_file():
         raise DatasetError(f"{file}: not found (dataset.path of a {format} set names the set's file)")
     own_cache = cache_dir is None
@@ -43,11 +71,18 @@ def load_choice_set(file: str | Path, format: str, *, images: str | Path | None 
     root = file.parent if images is None else Path(images)
     if not root.is_dir():
         raise DatasetError(f"{root}: not a folder (dataset.images names the folder a set's image paths are relative to)")
+    from povagent.dataset.realworld import unknown_object
+
     instances = []
+    lookups = ImageLookups(root)  # each image path resolved and checked once per set
+    nowhere = unknown_object()  # the items' unknown observer and anchor: one object for the set
     for item in items:
-        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache)
+        before = len(problems)
+        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache, lookups)
         if frames is not None:
-            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames))
+            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames, nowhere))
+        elif format in IMAGES_HINT and images is None and problems[before:] and problems[-1].message.endswith("does not exist"):
+            problems[-1] = Problem(problems[-1].file, problems[-1].json_path, f"{problems[-1].message} ({IMAGES_HINT[format]})")
     choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache_dir=cache)
     if own_cache:
         weakref.finalize(choice_set, shutil.rmtree, str(cache), True)
@@ -100,4 +135,4 @@ def _where(format: str, item_id: str) -> str:
     return f"$[{item_id}]" if format == "viewspatial" else f"record {item_id}"
 
 
-__all__ = ["CHOICE_FORMATS", "ChoiceSet", "load_choice_set", "validate_choice_set"]
+__all__ = ["CHOICE_FORMATS", "OFFICIAL_SET_SCORERS", "SET_ANSWER_TYPE", "ChoiceSet", "load_choice_set", "validate_choice_set"]

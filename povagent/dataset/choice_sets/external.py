@@ -25,7 +25,7 @@ from povagent.dataset.image_files import ImageFileError, inspect_image_file
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import Condition, Direction
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
-from povagent.dataset.problems import Problem
+from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ConfigError
 from povagent.geometry.camera import Camera
 
@@ -48,35 +48,76 @@ def image_camera(width: int, height: int) -> Camera:
     return Camera((0.0, 0.0, 0.0), 0.0, 0.0, 100.0, width, height)
 
 
-def item_frames(root: Path, item: Item, file: str, where: str, problems: list[Problem], cache: Path | None = None) -> tuple[Frame, ...] | None:
+def item_frames(
+    root: Path, item: Item, file: str, where: str, problems: list[Problem], cache: Path | None = None, lookups: ImageLookups | None = None,
+) -> tuple[Frame, ...] | None:
     """The item's images as frames, each confined to ``root`` and checked sound; ``None`` (and
-    a problem naming ``file``, the record ``where`` and the image field) when any is not."""
-    real_root = dataset_root(root)
+    a problem naming ``file``, the record ``where`` and the image field) when any is not.
+    ``lookups``: the set's images looked up so far (each image path is resolved and checked
+    once per set, its frame shared by the items showing it); default: none."""
+    lookups = lookups if lookups is not None else ImageLookups(root)
     frames: list[Frame] = []
     for index, rel in enumerate(item.images):
-        at = f"{where}.images[{index}]"
+        found = lookups.frame(index, rel, cache if item.embedded else None)
+        if isinstance(found, str):
+            problems.append(Problem(file, f"{where}.images[{index}]", found))
+            return None
+        frames.append(found)
+    return lookups.shared(tuple(frames))
+
+
+class ImageLookups:
+    """A set's image paths, each resolved inside ``root`` (:func:`~povagent.dataset.paths.confined`)
+    and checked sound once: a set of 10,000 items over 40 images resolves 40 paths, not 10,000
+    (and shares 40 frames). A path that is refused is refused for every item naming it."""
+
+    def __init__(self, root: Path) -> None:
+        self.root = root
+        self.real_root = dataset_root(root)
+        self._frames: dict[tuple[int, str, Path | None], Frame | str] = {}
+        self._shown: dict[tuple[Frame, ...], tuple[Frame, ...]] = {}
+
+    def shared(self, frames: tuple[Frame, ...]) -> tuple[Frame, ...]:
+        """``frames``, as one tuple for every item showing the same images (up to 4,096 lists)."""
+        known = self._shown.get(frames)
+        if known is None and len(self._shown) < 4096:
+            known = self._shown.setdefault(frames, frames)
+        return frames if known is None else known
+
+    def frame(self, index: int, rel: str, embedded_in: Path | None) -> Frame | str:
+        """The frame at position ``index`` showing ``rel`` (an image written into the reader's
+        cache ``embedded_in``, else a path inside ``root``), or why it cannot be shown."""
+        key = (index, rel, embedded_in)
+        found = self._frames.get(key)
+        if found is None:
+            found = self._frames[key] = self._look_up(index, rel, embedded_in)
+        return found
+
+    def _look_up(self, index: int, rel: str, embedded_in: Path | None) -> Frame | str:
         try:
-            path = cache / rel if item.embedded and cache is not None else confined(real_root, root, rel)
+            path = embedded_in / rel if embedded_in is not None else confined(self.real_root, self.root, rel)
             facts = inspect_image_file(path)
         except OutsideDatasetError as exc:
-            problems.append(Problem(file, at, str(exc)))
-            return None
+            return str(exc)
         except ImageFileError as exc:
-            problems.append(Problem(file, at, f"image {shown(rel)} {exc}"))
-            return None
-        frames.append(Frame(index, rel, path, image_camera(facts.width, facts.height)))
-    return tuple(frames)
+            return f"image {shown(rel)} {exc}"
+        return Frame(index, rel, path, image_camera(facts.width, facts.height))
 
 
-def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...]) -> Instance:
-    """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition."""
+#: The 3D target of every item: none (one tuple for all of them).
+_NO_TARGET = (float("nan"),) * 3
+
+
+def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowhere: Any = None) -> Instance:
+    """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition.
+    ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
     from povagent.dataset.realworld import unknown_object
 
-    nowhere = unknown_object()
+    nowhere = unknown_object() if nowhere is None else nowhere
     camera = frames[0].camera if frames else image_camera(1, 1)
     return Instance(
         house_id=set_name, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
-        frames=frames, target=(float("nan"),) * 3, observer_object=nowhere, anchor_object=nowhere,
+        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,
         observer_camera=camera, question=item.question,
     )  # fmt: skip
 
@@ -171,3 +212,10 @@ def record_id_problem(value: object) -> str | None:
     if "/" in value or "#" in value:
         return f"{shown(value)} holds '/' or '#', which an instance id cannot"
     return None
+
+
+def text_problems(file: str, where: str, record: Any) -> list[Problem]:
+    """The release reader's rule (:func:`~povagent.dataset.problems.not_text_problems`) on one
+    record: a problem per string holding a lone surrogate, named ``<where>.<json path>``. A
+    record with one is left out (no row, prompt or report could hold its text)."""
+    return [Problem(p.file, where + p.json_path.removeprefix("$"), p.message) for p in not_text_problems(file, record)]

@@ -1,10 +1,15 @@
 """MindCube (``MLL-Lab/MindCube``) in its published format.
 
-One JSON record a line: ``{id, question, images: [...], gt_answer, ...}``. ``question`` holds an
-``<image>`` marker where each image goes (as many markers as images) and its options inline
-(``... A. Behind the sofa B. Left of the lamp``); ``gt_answer`` is the gold label. Images are
-paths relative to the JSONL file's folder. The category is the id's first word as the set's
-own evaluation splits it (``among``, ``around`` (also ``aroundnew``), ``rotation``; any other:
+One JSON record a line: ``{id, question, images: [...], gt_answer, ...}``, the raw files
+(``data/raw/MindCube_tinybench.jsonl``, as the set's README and dataset card print a record) and
+the converted ones (``data/prompts/general/*.jsonl``: the same keys plus ``input_prompt`` and
+``grounded_output``) alike. ``question`` holds its options inline (``... A. Behind the sofa B.
+Left of the lamp``) and either no ``<image>`` marker (the images go first, as MindCube's own
+inference shows them) or one where each image goes (as many markers as images, lmms-eval's
+copy of the set). ``gt_answer`` is the gold label. Images are paths relative to the folder
+named (default: the JSONL file's; the set's own layout names them from ``data/``). The category
+is the setting MindCube's evaluator reads in the id (``get_setting_from_id``: the first of
+``around``, ``rotation``, ``translation``, ``among`` the lower-cased id contains; else
 ``other``). Other keys (``category``, ``meta_info``, ...) are left as they are.
 
 This module reads the file; it never opens an image (see :mod:`.external`).
@@ -18,7 +23,8 @@ from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines
+from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines, text_problems
+from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.problems import Problem
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
@@ -28,28 +34,42 @@ IMAGE_MARKER = "<image>"
 
 #: An inline option's label: a capital A-E, a full stop and a space, not inside a word.
 _OPTION = re.compile(r"(?<![A-Za-z])([A-E])\.\s+")
-_CATEGORIES = {"among": "among", "around": "around", "aroundnew": "around", "rotation": "rotation"}
+#: The settings MindCube's evaluator looks for in an id, in its order.
+SETTINGS = ("around", "rotation", "translation", "among")
 
 
 def category_of(record_id: str) -> str:
-    """The question's setting, from the first word of its id (``around_0012_q3`` -> ``around``)."""
-    return _CATEGORIES.get(record_id.split("_", 1)[0], "other")
+    """The question's setting as MindCube's evaluator reads it (``get_setting_from_id`` @
+    6d8fd9ac): the first of :data:`SETTINGS` the lower-cased id contains, else ``other``
+    (``aroundnew_0012_q3`` -> ``around``)."""
+    lowered = record_id.lower()
+    return next((setting for setting in SETTINGS if setting in lowered), "other")
 
 
 def inline_options(question: str) -> tuple[tuple[str, str], ...]:
     """The options written in ``question``: the last run of labels ``A.``, ``B.``, ... in order,
-    each option's text running to the next label (empty: no such run)."""
+    each option's text running to the next label (empty: no such run).
+
+    A run starts at the last ``A.`` with a ``B.`` somewhere after it and takes, after each
+    label, the first next label that follows (other labels between are option text). One pass
+    finds that ``A.`` and one more follows its run: time linear in the question's length (a
+    question of many labels once took time quadratic in their number)."""
     marks = list(_OPTION.finditer(question))
-    starts = [i for i, m in enumerate(marks) if m.group(1) == "A"]
-    for start in reversed(starts):
-        run = [marks[start]]
-        for m in marks[start + 1 :]:
-            if ord(m.group(1)) == ord(run[-1].group(1)) + 1:
-                run.append(m)
-        if len(run) >= 2:
-            ends = [m.start() for m in run[1:]] + [len(question)]
-            return tuple((m.group(1), question[m.end() : end].strip()) for m, end in zip(run, ends))
-    return ()
+    start, b_after = None, False
+    for i in range(len(marks) - 1, -1, -1):
+        label = marks[i].group(1)
+        if label == "A" and b_after:
+            start = i
+            break
+        b_after = b_after or label == "B"
+    if start is None:
+        return ()
+    run = [marks[start]]
+    for m in marks[start + 1 :]:
+        if ord(m.group(1)) == ord(run[-1].group(1)) + 1:
+            run.append(m)
+    ends = [m.start() for m in run[1:]] + [len(question)]
+    return tuple((m.group(1), question[m.end() : end].strip()) for m, end in zip(run, ends))
 
 
 def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
@@ -60,9 +80,16 @@ def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
     for number, line in record_lines(file, "MindCube file", problems):
         where = f"line {number}"
         try:
-            record = json.loads(line)
+            record = loads_dataset_json(line)
         except json.JSONDecodeError as exc:
             problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
+            continue
+        except TooDeepError as exc:
+            problems.append(Problem(str(file), where, str(exc)))
+            continue
+        not_text = text_problems(str(file), where, record)
+        if not_text:  # the rule the release reader holds: a lone surrogate is not text
+            problems.extend(not_text)
             continue
         item = _item(record, where)
         if isinstance(item, tuple):
@@ -89,8 +116,11 @@ def _item(record: Any, where: str) -> Item | tuple[str, str]:
     if not isinstance(images, list) or not images or not all(isinstance(p, str) and p for p in images):
         return f"{where}.images", "required, a non-empty list of image paths"
     markers = question.count(IMAGE_MARKER)
-    if markers != len(images):
-        return f"{where}.question", f"holds {markers} {IMAGE_MARKER} marker(s) for {len(images)} image(s); each image needs its marker"
+    if markers and markers != len(images):
+        return (
+            f"{where}.question",
+            f"holds {markers} {IMAGE_MARKER} marker(s) for {len(images)} image(s); give each image its marker, or none (the images then go first)",
+        )
     options = inline_options(question.replace(IMAGE_MARKER, " "))
     if not options:
         return f"{where}.question", "names no options (inline 'A. ... B. ...')"

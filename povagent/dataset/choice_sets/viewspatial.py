@@ -19,7 +19,8 @@ from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item
+from povagent.dataset.choice_sets.external import Item, text_problems
+from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.problems import Problem
 from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
@@ -27,6 +28,8 @@ from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 PROFILE = "viewspatial"
 #: The most frames a record shows (the scene-simulation questions show 2-32).
 MAX_FRAMES = 32
+#: The most options a record may list (one a line, each labelled A-Z).
+MAX_OPTIONS = 26
 
 _OPTION_LINE = re.compile(r"([A-Z])\.\s*(.*)")
 _GOLD = re.compile(r"\b([A-D])\b", re.IGNORECASE)
@@ -42,7 +45,9 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound record of the JSON list as an item, and one problem per bad record."""
     name = str(file)
     try:
-        data = json.loads(read_regular(file, MAX_DOCUMENT_BYTES, what="ViewSpatial-Bench file").decode("utf-8"))
+        data = loads_dataset_json(read_regular(file, MAX_DOCUMENT_BYTES, what="ViewSpatial-Bench file").decode("utf-8"))
+    except TooDeepError as exc:
+        return [], [Problem(name, "", str(exc))]
     except UnicodeDecodeError as exc:
         return [], [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")]
     except json.JSONDecodeError as exc:
@@ -53,6 +58,10 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     problems: list[Problem] = []
     for index, record in enumerate(data):
         where = f"$[{index}]"
+        not_text = text_problems(name, where, record)
+        if not_text:  # the rule the release reader holds: a lone surrogate is not text
+            problems.extend(not_text)
+            continue
         item = _item(index, record, where)
         if isinstance(item, Item):
             items.append(item)
@@ -64,7 +73,8 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
 def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
     """The record as an item, or ``(json path, message)`` saying what is wrong with it."""
     if not isinstance(record, dict):
-        return where, f"a record must be a JSON object (got {json.dumps(record)[:60]})"
+        # named by its type, never re-encoded: a record nesting ~1000 deep would overflow the encoder
+        return where, f"a record must be a JSON object (got {type(record).__name__})"
     for key in ("question", "answer", "choices", "question_type"):
         if not isinstance(record.get(key), str) or not record[key].strip():
             return f"{where}.{key}", "required, a non-empty string"
@@ -73,8 +83,11 @@ def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
         return f"{where}.image_path", "required, a list of 1 to 32 image paths"
     if len(images) > MAX_FRAMES:
         return f"{where}.image_path", f"{len(images)} images; a record shows at most {MAX_FRAMES}"
+    lines = record["choices"].strip().splitlines()
+    if len(lines) > MAX_OPTIONS:  # each a label A-Z: more cannot be options, and the problem stays one short line
+        return f"{where}.choices", f"{len(lines)} lines; a question has at most {MAX_OPTIONS} options 'X. text'"
     options = []
-    for number, line in enumerate(record["choices"].strip().splitlines()):
+    for number, line in enumerate(lines):
         match = _OPTION_LINE.fullmatch(line.strip())
         if match is None:
             return f"{where}.choices", f"line {number + 1} {line[:60]!r} is not an option 'X. text'"

@@ -66,10 +66,13 @@ def test_a_question_answered_with_no_option_counts_as_wrong(runs_folder, tmp_pat
 
 def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder, tmp_path):
     result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
-    # systems in the collection's order (run folders by name): always-a first
-    values = _values(_table(result, "choice_paired_choice"), "oracle vs always-a")
+    # systems in the collection's order (run folders by name): always-a is A, oracle B
+    table = _table(result, "choice_paired_choice")
+    values = _values(table, "oracle vs always-a")
     # right on the 2 of 4 questions always-a gets wrong: +1 twice, 0 twice; the sign test over those 2
-    assert values == {"Questions": 4, "Accuracy (first)": 0.5, "Accuracy (second)": 1.0, "Difference": pytest.approx(0.5), "Sign test p": 0.5}
+    assert values == {"Questions": 4, "Accuracy A": 0.5, "Accuracy B": 1.0, "B - A": pytest.approx(0.5), "Sign test p": 0.5}
+    # the row reads as its header says: "B vs A", each accuracy under its own system's letter
+    assert table.row_header == "B vs A" and "B - A > 0 means B is better" in table.caption
 
 
 def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_apart(runs_folder, tmp_path):
@@ -86,7 +89,7 @@ def test_every_choice_table_names_the_rule_that_read_it(runs_folder, tmp_path):
     from povagent.plugins import get_plugin_host
 
     result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
-    described = f"Read by `viewspatial` ({get_plugin_host().entry('parser', 'viewspatial').description})."
+    described = f"Read by `viewspatial-official` ({get_plugin_host().entry('parser', 'viewspatial-official').description})."
     choice = [t for t in result.tables if t.key.startswith("choice_")]
     assert len(choice) == 4 and all(described in t.caption for t in choice)
     assert "ZJU-REAL" in described
@@ -97,7 +100,7 @@ def test_systems_read_by_different_rules_have_each_rule_named(runs_folder, tmp_p
                           tmp_path / "report", gallery=False, n_boot=200)  # fmt: skip
     caption = _table(result, "choice_accuracy_choice").caption
     assert "`vlmevalkit-exact` (" in caption and "for always-a" in caption
-    assert "`viewspatial` (" in caption and "for oracle" in caption
+    assert "`viewspatial-official` (" in caption and "for oracle" in caption
 
 
 def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_path, mini_root):
@@ -108,7 +111,8 @@ def test_a_choice_run_beside_a_point_run_has_no_pixel_table(runs_folder, tmp_pat
     run_pipeline(load_pipeline(point))
     result = write_report(folder, tmp_path / "report", gallery=False, n_boot=200)
     pixel = [t for t in result.tables if any(c.kind == "l2" for c in t.columns)]
-    assert pixel and all("pointer" in r.label and "oracle" not in r.label for t in pixel for r in t.rows)
+    # the point run, and the center guess the report computes on its set (both sets load)
+    assert pixel and all(r.label.startswith(("pointer", "Center baseline")) for t in pixel for r in t.rows)
     assert [r.label for r in _table(result, "choice_accuracy_choice").rows] == ["oracle"]
 
 
@@ -122,3 +126,22 @@ def test_the_reports_summary_json_holds_the_choice_tables_numbers(runs_folder, t
     assert [cell["value"] for cell in accuracy["rows"]["always-a"]] == [0.5, 1.0, 0.0, 0.5]
     confusion = summary["tables"]["choice_confusion_choice_1"]["rows"]
     assert {gold: [c["value"] for c in cells] for gold, cells in confusion.items()} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
+
+
+def test_a_set_without_conditions_is_plotted_overall_on_an_axis_from_0_to_1(runs_folder, tmp_path):
+    import re
+
+    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    plots = sorted((result.out / "plots").glob("*.svg"))
+    assert plots and not any("condition" in p.name for p in plots)
+    svg = (result.out / "plots" / "metric_choice_accuracy.svg").read_text(encoding="utf-8")
+    assert "by condition" not in svg
+    ticks = [float(t) for t in re.findall(r'text-anchor="end">([0-9.]+)</text>', svg)]
+    assert min(ticks) == 0.0 and max(ticks) == 1.0  # an accuracy, whose CI reaches 1, on [0, 1]
+
+
+def test_two_labelled_systems_that_answered_alike_are_both_shown(runs_folder, tmp_path):
+    result = write_report(runs_folder(("oracle", "oracle", None), ("oracle-again", "oracle", None)), tmp_path / "report", gallery=False, n_boot=200)
+    assert [s.system for s in result.analysis.systems] == ["oracle", "oracle-again"]
+    assert not any("shown once" in note for note in result.analysis.notes)
+    assert [r.label for r in _table(result, "choice_accuracy_choice").rows] == ["oracle", "oracle-again"]

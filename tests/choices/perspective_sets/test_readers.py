@@ -83,3 +83,23 @@ def test_an_item_is_found_by_its_instance_id(set_file):
     loaded = load_choice_set(set_file("3dsrbench"), "3dsrbench")
     assert loaded.instance("3dsrbench/QUES0001-flip").question.variant == "flip"
     assert loaded.instance("3dsrbench/QUES9999") is None
+
+
+def test_a_set_resolves_each_image_path_once_however_many_records_name_it(tmp_path, monkeypatch):
+    import json
+    import os.path
+
+    from PIL import Image
+
+    (tmp_path / "images").mkdir()
+    Image.new("RGB", (8, 6)).save(tmp_path / "images" / "a.png")
+    record = {"question_type": "t", "image_path": ["images/a.png"], "question": "q?", "answer": "A. x", "choices": "A. x\nB. y"}
+    bad = {**record, "image_path": ["../outside.png"]}
+    (tmp_path / "set.json").write_text(json.dumps([record] * 50 + [bad] * 2))
+    calls = []
+    real = os.path.realpath
+    monkeypatch.setattr(os.path, "realpath", lambda p, *a, **k: calls.append(p) or real(p, *a, **k))
+    loaded = load_choice_set(tmp_path / "set.json", "viewspatial")
+    assert len(loaded.instances()) == 50 and 0 < len(calls) < 20
+    assert [p.json_path for p in loaded.problems] == ["$[50].images[0]", "$[51].images[0]"]  # each record still named
+    assert len({id(i.frames[0]) for i in loaded.instances()}) == 1
