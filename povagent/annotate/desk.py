@@ -143,9 +143,12 @@ class AnswerDesk:
             self._lock.notify_all()
 
     def finish(self) -> None:
-        """The run ended: no question will come."""
+        """The run ended: no question will come; one still waiting for an answer is cancelled
+        (its asker stops waiting, and leaves the desk it served)."""
         with self._lock:
             self._finished = True
+            if self._question is not None:
+                self._question.future.cancel()
             self._lock.notify_all()
 
     # -- the page's side (server threads) ------------------------------------------------------

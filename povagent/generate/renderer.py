@@ -6,8 +6,11 @@ with one primary ray per pixel through embree (``embreex``, the engine behind tr
 pixel with numpy at once: a point light under each room's ceiling with hard shadows (a second
 embree pass), a camera fill light, highlights on metal and gloss, procedural textures (wood
 grain, planks, tiles, fabric) and glowing lamp shades. The depth map is the optical-axis depth
-AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. What it must not do: decide where
-cameras go or what is visible (exploration and pairs read the mask).
+AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. Which face a pixel shows and how far
+it is are decided from embree's hits by :mod:`povagent.generate.visible_face`, the same on every
+CPU, and the shading uses IEEE arithmetic only, so a frame is the same bytes on every machine
+(``docs/explanation/reproducibility.md``). What it must not do: decide where cameras go or what
+is visible (exploration and pairs read the mask).
 
 Why embree: on a house of ~3-5k triangles it casts a 512x512 frame's primary rays in about
 30 ms of CPU and the occlusion-only shadow rays in about 15 ms (in its fast, not robust, mode),
@@ -173,7 +176,10 @@ class Renderer:
         # coplanar faces of one look it does not matter which one embree reports
         look_rows = np.column_stack([np.asarray(colors, dtype=np.float32).view(np.int32), materials, owners, rooms]).astype(np.int64)
         looks = np.unique(look_rows, axis=0, return_inverse=True)[1].ravel()
-        self._visible = VisibleFaces.build(vertices, faces, looks, mesh.closed_faces())
+        closed = mesh.closed_faces()
+        self._visible = VisibleFaces.build(vertices, faces, looks, closed)
+        # what an instance mask and a probe ray need: only which object a ray meets
+        self._objects = VisibleFaces.build(vertices, faces, owners.astype(np.int64), closed, by_look=True)
         normals = self._visible.face_normals  # each face's coplanar group's normal
         lights = np.array([[r.rect.center[0], WALL_HEIGHT - 0.35, r.rect.center[1]] for r in house.plan.rooms])
         # per face, gathered per frame (each its own contiguous (3, F) array, so a gather gives
@@ -224,12 +230,12 @@ class Renderer:
         return out
 
     def cast(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """First triangle seen by each (unit) ray, (N, 3) arrays, and the float64 distance to it
-        (-1 and inf: no hit), the same on every CPU (:class:`VisibleFaces`)."""
+        """A triangle of the object each (unit) ray, (N, 3) arrays, meets first and the float64
+        distance to it (-1 and inf: no hit), the same on every CPU (:class:`VisibleFaces`)."""
         # float32 views are read as they are (embree's wrapper takes any strides): no copies
         o32, d32 = np.asarray(origins, dtype=np.float32), np.asarray(directions, dtype=np.float32)
         out = self._scene.run(o32, d32, output=1)
-        return self._visible.decide(out["primID"].astype(np.int64), o32.T, d32.T)
+        return self._objects.decide(out["primID"].astype(np.int64), o32.T, d32.T)
 
     def first_hit(self, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Instance id (0: structure or nothing) and distance of each ray's first hit."""
@@ -263,11 +269,7 @@ class Renderer:
 
     def _cast_and_shade(self, camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
-        d = self._directions(camera)
-        origin = np.asarray(camera.position, dtype=np.float32)
-        # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy
-        out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
-        tri, t64 = self._visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width)
+        d, origin, tri, t64 = self._seen(camera)
         t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
@@ -275,6 +277,18 @@ class Renderer:
             rgb = self._shade_block(tri[block], t[block], d[:, block], origin)
             np.copyto(planes[:, block], rgb, casting="unsafe")  # as ``astype(np.uint8)``
         return tri, t64, planes
+
+    def _seen(self, camera: Camera, objects_only: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The camera's rays (3, N), its origin, and per pixel the face seen and the float64
+        distance to it, decided alike on every CPU (:meth:`VisibleFaces.decide_image`; with
+        ``objects_only``, only the object a pixel shows is decided so)."""
+        d = self._directions(camera)
+        origin = np.asarray(camera.position, dtype=np.float32)
+        # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy
+        out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
+        visible = self._objects if objects_only else self._visible
+        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width)
+        return d, origin, tri, t  # face indices as numpy's gathers want them
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """Colours (3, n) of a block of pixels, scaled to 0.5-255 (truncated to bytes after)."""
@@ -300,10 +314,7 @@ class Renderer:
 
     def instance_mask(self, camera: Camera) -> np.ndarray:
         """Only the instance mask (no shading): a cheap probe of what a camera would see."""
-        dirs = self._directions(camera).T
-        origin = np.asarray(camera.position, dtype=np.float32)
-        out = self._scene.run(np.broadcast_to(origin, dirs.shape), dirs, output=1)
-        tri, _ = self._visible.decide_image(out["primID"].astype(np.int64), origin, dirs.T, camera.height, camera.width)
+        _, _, tri, _ = self._seen(camera, objects_only=True)
         owners = np.where(tri >= 0, self._owners[np.where(tri >= 0, tri, 0)], 0)
         return owners.reshape(camera.height, camera.width)
 

@@ -110,7 +110,8 @@ class VisibleFaces:
     coplanar face seen from the same side (0: rays against the face's normal, 1: along it)
     overlaps the face; ``watched``: per (group, cell), the edges near which a hit is decided
     exactly (creases, and every edge of a face in a mixed cell); ``edge_*``: those edges'
-    in-plane line (normal, offset), direction and extent, and the groups across a crease.
+    in-plane line (normal, offset), direction and extent, and the groups across a crease;
+    ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``).
     """
 
     group: np.ndarray
@@ -127,13 +128,20 @@ class VisibleFaces:
     edge_line: np.ndarray
     edge_along: np.ndarray
     edge_across: np.ndarray
+    outline: np.ndarray
 
     @classmethod
-    def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None) -> VisibleFaces:
+    def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None,
+              by_look: bool = False) -> VisibleFaces:  # fmt: skip
         """From float32 ``vertices`` (as embree reads them), (F, 3) ``faces``, one integer
         ``looks`` per face (equal where two faces shade alike) and whether each face bounds a
         closed solid, turned outward (no ray from outside meets it from behind: a wall's foot,
-        in the floor's plane, is never a floor pixel's face); default: none does."""
+        in the floor's plane, is never a floor pixel's face); default: none does.
+
+        ``by_look``: only the look a pixel shows matters, not the face (an instance mask, whose
+        look is the object): a pixel is decided between groups only where its neighbours' looks
+        differ or it lies near a crease to another look. A rendered frame needs the face
+        (two faces of a box shade differently however alike their colour): the default."""
         v = np.asarray(vertices, dtype=np.float32).astype(np.float64)
         count = len(faces)
         closed = np.zeros(count, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
@@ -158,7 +166,7 @@ class VisibleFaces:
         np.logical_or.at(mixed, np.repeat(np.arange(len(table.keys)), sizes), differs)
         overlapped = _overlapped_sides(v, faces, own, closed, looks, left, right)
         # watched edges: creases, and every edge of a face listed under a mixed key
-        across, internal = _groups_across_edges(v, faces, group, looks)
+        across, internal = _groups_across_edges(v, faces, group, looks, by_look)
         in_mixed = np.zeros(count, dtype=bool)
         in_mixed[table.items[np.repeat(mixed, sizes)]] = True
         # (an edge inside a region of one look, a quad's diagonal, decides nothing)
@@ -172,8 +180,9 @@ class VisibleFaces:
         grow = EDGE_MARGIN + TOUCH_MARGIN
         ekey, eitem = _boxes_keys(group[wf], _cell(np.minimum(p, q) - grow, EDGE_CELL), _cell(np.maximum(p, q) + grow, EDGE_CELL))
         watched = CellTable.build([ekey], [eitem])
+        outline = looks if by_look else group
         return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
-                   watched, edge_line, edge_along, across[wf, we])  # fmt: skip
+                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64))  # fmt: skip
 
     @property
     def face_normals(self) -> np.ndarray:
@@ -220,14 +229,16 @@ class VisibleFaces:
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
         shown, t, crease_ray, crease_group = self._decide(tri, o, d)
-        g = np.where(shown >= 0, self.group[np.maximum(shown, 0)], -1).reshape(height, width)
-        padded = np.pad(g, 1, mode="edge")
+        face = np.maximum(shown, 0)
+        seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
+        outlined = np.pad(seen, 1, mode="edge")
         edge = np.zeros((height, width), dtype=bool)
         for dy in (-1, 0, 1):
             for dx in (-1, 0, 1):
                 if dy or dx:
-                    edge |= padded[1 + dy : 1 + dy + height, 1 + dx : 1 + dx + width] != g
+                    edge |= outlined[1 + dy : 1 + dy + height, 1 + dx : 1 + dx + width] != seen
         pixels = np.flatnonzero(edge.ravel())
+        padded = np.pad(np.where(shown >= 0, self.group[face], -1).reshape(height, width), 1, mode="edge")
         if not len(pixels) and not len(crease_ray):
             return shown, t
         # candidates: the groups the 3x3 neighbourhood shows, those across a crease near the
@@ -428,9 +439,10 @@ def _overlapped_sides(v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed:
     return out
 
 
-def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray, by_look: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3, 2): for each face's edge k (from corner k to k + 1), the groups of up to two other
-    faces with an edge between the same two points, where their group is not the face's (-1);
+    faces with an edge between the same two points, where their group is not the face's (-1;
+    ``by_look``: nor their look);
     and (F, 3): whether every other face on the edge is of the face's group and look (and
     there is one: the edge lies inside a region of one look)."""
     _, position = np.unique(v, axis=0, return_inverse=True)
@@ -451,7 +463,7 @@ def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, lo
         for slot in order[s:e].tolist():
             me = slot // 3
             others = [f for f in sharing if f != me]
-            crossing = [int(group[f]) for f in others if group[f] != group[me]][:2]
+            crossing = [int(group[f]) for f in others if group[f] != group[me] and (not by_look or looks[f] != looks[me])][:2]
             across[slot, : len(crossing)] = crossing
             internal[slot] = all(group[f] == group[me] and looks[f] == looks[me] for f in others)
     return across.reshape(len(faces), 3, 2), internal.reshape(len(faces), 3)

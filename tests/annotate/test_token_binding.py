@@ -36,17 +36,25 @@ class Session:
         self.answered: concurrent.futures.Future = concurrent.futures.Future()
 
         async def person() -> None:
-            with serving(self.desk):
-                response = await host.backend("human", {"annotator": annotator}).complete(request, images)
+            try:
+                with serving(self.desk):
+                    response = await host.backend("human", {"annotator": annotator}).complete(request, images)
+            except asyncio.CancelledError:
+                return  # the session closed before an answer came (the desk cancels the question)
             self.desk.row_saved()
             self.desk.finish()
             self.answered.set_result(response)
 
-        threading.Thread(target=lambda: asyncio.run(person()), daemon=True).start()
+        self.person = threading.Thread(target=lambda: asyncio.run(person()), daemon=True)
+        self.person.start()
 
     def close(self) -> None:
         self.desk.finish()
         self.server.close()
+        # the person's thread leaves the desk it served (a desk left served would be the one a
+        # later run's human backend answers through)
+        self.person.join(timeout=30)
+        assert not self.person.is_alive()
 
 
 class Neighbour:
