@@ -275,10 +275,15 @@ class VisibleFaces:
     # -- the exact tests --------------------------------------------------------------------
     def _distance(self, group: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
         """Distance along each ray (an index into ``d``'s rows) to its group's plane (inf where parallel)."""
-        n = self.group_normal[group]
-        oo = [o[k] if o.ndim == 1 else o[k][ray] for k in range(3)]
-        across = self.group_offset[group] - (n[:, 0] * oo[0] + n[:, 1] * oo[1] + n[:, 2] * oo[2])
-        along = n[:, 0] * d[0][ray] + n[:, 1] * d[1][ray] + n[:, 2] * d[2][ray]
+        nx, ny, nz = (np.take(self.group_normal[:, k], group) for k in range(3))
+        if o.ndim == 1:  # one origin: the plane's offset from it once per group
+            n = self.group_normal
+            across = np.take(self.group_offset - (n[:, 0] * o[0] + n[:, 1] * o[1] + n[:, 2] * o[2]), group)
+        else:
+            across = np.take(self.group_offset, group) - (nx * o[0][ray] + ny * o[1][ray] + nz * o[2][ray])
+        along = nx * np.take(d[0], ray)
+        along += ny * np.take(d[1], ray)
+        along += nz * np.take(d[2], ray)
         return np.divide(across, along, out=np.full(len(group), np.inf), where=along != 0)
 
     def _near_watched(self, group: np.ndarray, point: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
