@@ -38,6 +38,7 @@ def _from_time_log(text: str) -> tuple[float, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--timed", type=Path, help="a /usr/bin/time -v log of the README's pytest command")
+    ap.add_argument("--load", help="with --timed: the load average seen while that run ran (recorded as said)")
     args = ap.parse_args()
     load = os.getloadavg()
     if args.timed is not None:
@@ -55,7 +56,7 @@ def main() -> None:
     record("bench_suite", [
         figure("the README's test command, wall time", round(wall / 60, 1), "min", target="<= 12 on an idle machine"),
         figure("the README's test command, CPU time", round(cpu), "s", target="<= 450"),
-    ], command=command, note=f"load average at the start {load[0]:.1f}")  # fmt: skip
+    ], command=command, note=f"load average during the run: {args.load}" if args.timed else f"load average at the start {load[0]:.1f}")  # fmt: skip
 
 
 if __name__ == "__main__":
