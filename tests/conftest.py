@@ -29,6 +29,25 @@ FIXTURES = Path(__file__).resolve().parent / "fixtures"
 MINI = FIXTURES / "povbench_mini"
 
 
+#: Debian's chromium (the README's test command installs it; never a downloaded build), headless.
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+BROWSER_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """One headless chromium for a module's tests (the annotation page's, the report gallery's)."""
+    sync_api = pytest.importorskip("playwright.sync_api", reason="the test extra installs playwright")
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"chromium not found at {CHROMIUM}: the README's test command installs it")
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
 @pytest.fixture(scope="session")
 def mini_root() -> Path:
     """The hand-made dataset: two good houses and one broken house (train_house_00002)."""

@@ -7,7 +7,6 @@ Real runs: the ViewSpatial-Bench fixture (gold A, B, A, C; question 2 shows two 
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
@@ -16,23 +15,6 @@ import yaml
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
 from povagent.run.runner import run_pipeline
-
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-BROWSER_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """One headless Debian chromium for the module's tests (never a downloaded build)."""
-    sync_api = pytest.importorskip("playwright.sync_api", reason="the test extra installs playwright")
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"chromium not found at {CHROMIUM}: `apt-get install -y chromium`")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
 
 
 def _run(config: Path):
