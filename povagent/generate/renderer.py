@@ -270,6 +270,7 @@ class Renderer:
     def _cast_and_shade(self, camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
         d, origin, tri, t64 = self._seen(camera)
+        assert t64 is not None
         t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
@@ -278,7 +279,7 @@ class Renderer:
             np.copyto(planes[:, block], rgb, casting="unsafe")  # as ``astype(np.uint8)``
         return tri, t64, planes
 
-    def _seen(self, camera: Camera, objects_only: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _seen(self, camera: Camera, objects_only: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """The camera's rays (3, N), its origin, and per pixel the face seen and the float64
         distance to it, decided alike on every CPU (:meth:`VisibleFaces.decide_image`; with
         ``objects_only``, only the object a pixel shows is decided so)."""
@@ -287,7 +288,8 @@ class Renderer:
         # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy
         out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
         visible = self._objects if objects_only else self._visible
-        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width)
+        # (an instance mask wants no distances: then they are left uncomputed, None)
+        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only)
         return d, origin, tri, t  # face indices as numpy's gathers want them
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:

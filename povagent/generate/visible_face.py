@@ -111,7 +111,8 @@ class VisibleFaces:
     overlaps the face; ``watched``: per (group, cell), the edges near which a hit is decided
     exactly (creases, and every edge of a face in a mixed cell); ``edge_*``: those edges'
     in-plane line (normal, offset), direction and extent, and the groups across a crease;
-    ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``).
+    ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``);
+    ``watching``: the groups with a watched edge at all.
     """
 
     group: np.ndarray
@@ -129,6 +130,7 @@ class VisibleFaces:
     edge_along: np.ndarray
     edge_across: np.ndarray
     outline: np.ndarray
+    watching: np.ndarray
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None,
@@ -181,8 +183,10 @@ class VisibleFaces:
         ekey, eitem = _boxes_keys(group[wf], _cell(np.minimum(p, q) - grow, EDGE_CELL), _cell(np.maximum(p, q) + grow, EDGE_CELL))
         watched = CellTable.build([ekey], [eitem])
         outline = looks if by_look else group
+        watching = np.zeros(len(first), dtype=bool)
+        watching[group[wf]] = True
         return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
-                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64))  # fmt: skip
+                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64), watching)  # fmt: skip
 
     @property
     def face_normals(self) -> np.ndarray:
@@ -197,21 +201,38 @@ class VisibleFaces:
         o = np.asarray(origins, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
         shown, t, _, _ = self._decide(tri, o, d)
+        assert t is not None
         return shown, t
 
-    def _decide(self, tri: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`decide`, and the (ray, group) pairs of groups across a crease near each hit."""
+    def _decide(self, tri: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], want_distance: bool = True,
+                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:  # fmt: skip
+        """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
+        across a crease near each hit."""
         hit = tri >= 0
         face = np.where(hit, tri, 0)
-        t = self._distance(self.group[face], o, d, np.arange(len(tri)))
-        t[~hit] = np.inf
         shown = tri.copy()
-        rays = np.flatnonzero(hit & np.isfinite(t))
-        point = _points(o, d, rays, t[rays])
+        # which side of its face each ray meets (0: against the face's normal)
+        side = np.take(self.own_normal[:, 0], face) * d[0]
+        side += np.take(self.own_normal[:, 1], face) * d[1]
+        side += np.take(self.own_normal[:, 2], face) * d[2]
+        side = (side >= 0).astype(np.intp)
+        # only a hit in a group with a watched edge, or on a face a rival overlaps from that side,
+        # can be decided otherwise
+        examined = hit & (self.watching[self.group[face]] | self.overlapped[face, side])
+        t: np.ndarray | None = None
+        if want_distance:
+            every = self._distance(self.group[face], o, d, np.arange(len(tri)))
+            every[~hit] = np.inf
+            rays = np.flatnonzero(examined & np.isfinite(every))  # (a parallel ray's t is inf)
+            reach = every[rays]
+            t = every
+        else:
+            rays = np.flatnonzero(examined)
+            reach = self._distance(self.group[face[rays]], o, d, rays)
+            rays, reach = rays[np.isfinite(reach)], reach[np.isfinite(reach)]
+        point = _points(o, d, rays, reach)
         near_edge, crease_ray, crease_group = self._near_watched(self.group[tri[rays]], point)
-        n = self.own_normal[tri[rays]]
-        side = (n[:, 0] * d[0][rays] + n[:, 1] * d[1][rays] + n[:, 2] * d[2][rays] >= 0).astype(np.intp)
-        decide = np.flatnonzero(self.overlapped[tri[rays], side] | near_edge)
+        decide = np.flatnonzero(self.overlapped[tri[rays], side[rays]] | near_edge)
         if len(decide):
             at = self.faces.find(_key(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
             listed = at >= 0
@@ -222,13 +243,14 @@ class VisibleFaces:
         return shown, t, rays[crease_ray], crease_group
 
     # -- a camera's pixels ------------------------------------------------------------------
-    def decide_image(self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    def decide_image(self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int,
+                     want_distance: bool = True) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
-        the nearest of the groups whose faces hold its ray."""
+        the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted."""
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance)
         face = np.maximum(shown, 0)
         seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
         outlined = np.pad(seen, 1, mode="edge")
@@ -269,7 +291,8 @@ class VisibleFaces:
         first = np.ones(len(ray), dtype=bool)
         first[1:] = ray[1:] != ray[:-1]
         shown[ray[first]] = face[first]
-        t[ray[first]] = dist[first]
+        if t is not None:
+            t[ray[first]] = dist[first]
         return shown, t
 
     # -- the exact tests --------------------------------------------------------------------
@@ -290,9 +313,11 @@ class VisibleFaces:
         """Which points lie within ``EDGE_MARGIN`` of a watched edge of their group, and the
         (point index, group) pairs of the groups across the creases they lie near."""
         near = np.zeros(len(group), dtype=bool)
-        at = self.watched.find(_key(group, point, EDGE_CELL))
-        listed = np.flatnonzero(at >= 0)
-        row, edge = self.watched.explode(at[listed])
+        some = np.flatnonzero(self.watching[group])  # only groups with a watched edge are looked up
+        at = self.watched.find(_key(group[some], [p[some] for p in point], EDGE_CELL))
+        listed = some[at >= 0]
+        at = at[at >= 0]
+        row, edge = self.watched.explode(at)
         row = listed[row]
         line, along = self.edge_line[edge], self.edge_along[edge]
         x = [p[row] for p in point]
