@@ -127,9 +127,12 @@ class AnnotateServer:
         self._thread.start()
         self.httpd.deadlines.start()
 
-    def close(self) -> None:
-        """Stop serving and release the port."""
+    def close(self, grace_s: float = 3.0) -> None:
+        """Stop serving and release the port: no new connection is taken, and the requests in
+        flight (a page's last poll, which tells it the session is over) get up to ``grace_s``
+        to be answered before their connections are closed."""
         self.httpd.shutdown()
+        self.httpd.drain(grace_s)
         self.httpd.server_close()
         self.httpd.deadlines.stop()
 
@@ -187,7 +190,14 @@ class _BoundedServer(ThreadingHTTPServer):
         self.slots = threading.BoundedSemaphore(max_connections)
         self.deadlines = _Deadlines(deadline_s)
         self.log = log
+        self.in_flight = 0
+        self.settled = threading.Condition()
         super().__init__(address, handler)
+
+    def drain(self, grace_s: float) -> None:
+        """Wait until no request is in flight, ``grace_s`` at most."""
+        with self.settled:
+            self.settled.wait_for(lambda: self.in_flight == 0, timeout=grace_s)
 
     def process_request(self, request: Any, client_address: Any) -> None:
         if not self.slots.acquire(blocking=False):
@@ -195,19 +205,26 @@ class _BoundedServer(ThreadingHTTPServer):
             self.shutdown_request(request)  # closed unread: a flood holds no thread
             return
         self.deadlines.add(request)
+        with self.settled:
+            self.in_flight += 1
         try:
             super().process_request(request, client_address)
         except BaseException:
-            self.deadlines.done(request)
-            self.slots.release()
+            self._ended(request)
             raise
 
     def process_request_thread(self, request: Any, client_address: Any) -> None:
         try:
             super().process_request_thread(request, client_address)
         finally:
-            self.deadlines.done(request)
-            self.slots.release()
+            self._ended(request)
+
+    def _ended(self, request: Any) -> None:
+        self.deadlines.done(request)
+        self.slots.release()
+        with self.settled:
+            self.in_flight -= 1
+            self.settled.notify_all()
 
     def handle_error(self, request: Any, client_address: Any) -> None:
         exc = sys.exc_info()[1]

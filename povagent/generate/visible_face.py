@@ -38,6 +38,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from povagent.generate.cell_table import CellTable, boxes_keys, cell, key_of, unique_pairs
+
 #: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
 PARALLEL_TOLERANCE = 1e-9
 #: ... and their planes are this close (metres).
@@ -54,47 +56,8 @@ EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
 EDGE_CELL = 0.0625
-#: Cell coordinates are packed into one integer key, this many values an axis (a house spans
-#: far less than 2048 * 0.25 m).
-_CELL_SPAN = 2048
 #: Rows of the pairwise coplanar search at a time (its arrays stay small).
 _PAIR_BLOCK = 256
-
-
-@dataclass(frozen=True)
-class CellTable:
-    """Sorted (group, cell) keys and, from ``starts[k]`` to ``starts[k + 1]`` in ``items``,
-    what is listed under key k."""
-
-    keys: np.ndarray
-    starts: np.ndarray
-    items: np.ndarray
-
-    @classmethod
-    def build(cls, key_lists: list[np.ndarray], item_lists: list[np.ndarray], order_by: np.ndarray | None = None) -> CellTable:
-        """From key arrays and the item of each key; within a key, items in ``order_by``'s
-        order (ascending), else by item."""
-        key = np.concatenate(key_lists).astype(np.int64)
-        item = np.concatenate(item_lists).astype(np.int64)
-        rank = item if order_by is None else order_by[item]
-        order = np.lexsort((rank, key))
-        key, item = key[order], item[order]
-        keys, starts = np.unique(key, return_index=True)
-        return cls(keys, np.append(starts, len(key)), item)
-
-    def find(self, key: np.ndarray) -> np.ndarray:
-        """The index of each key in the table, -1 where it is not listed."""
-        if not len(self.keys):
-            return np.full(len(key), -1, dtype=np.int64)
-        at = np.minimum(np.searchsorted(self.keys, key), len(self.keys) - 1)
-        return np.where(self.keys[at] == key, at, -1)
-
-    def explode(self, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For listed entries ``at`` (>= 0): (position in ``at``, item) for every listed item."""
-        counts = self.starts[at + 1] - self.starts[at]
-        row = np.repeat(np.arange(len(at)), counts)
-        slot = np.arange(len(row)) - np.repeat(np.cumsum(counts) - counts, counts)
-        return row, self.items[self.starts[at][row] + slot]
 
 
 @dataclass(frozen=True)
@@ -159,7 +122,7 @@ class VisibleFaces:
         np.minimum.at(first, group, np.arange(count))
         edges, edge_offsets = _inward_edges(own, a, b, c)
         # every face under (its group, each cell its grown box reaches), the highest first
-        key, item = _boxes_keys(group, _cell(lo, CELL), _cell(hi, CELL))
+        key, item = boxes_keys(group, cell(lo, CELL), cell(hi, CELL))
         table = CellTable.build([key], [item], order_by=-np.arange(count))
         look = looks[table.items]
         sizes = np.diff(table.starts)
@@ -180,7 +143,7 @@ class VisibleFaces:
         edge_line = np.concatenate([line, _dot3(line, p)[:, None]], axis=1)
         edge_along = np.concatenate([along, _dot3(along, p)[:, None], _dot3(along, q)[:, None]], axis=1)
         grow = EDGE_MARGIN + TOUCH_MARGIN
-        ekey, eitem = _boxes_keys(group[wf], _cell(np.minimum(p, q) - grow, EDGE_CELL), _cell(np.maximum(p, q) + grow, EDGE_CELL))
+        ekey, eitem = boxes_keys(group[wf], cell(np.minimum(p, q) - grow, EDGE_CELL), cell(np.maximum(p, q) + grow, EDGE_CELL))
         watched = CellTable.build([ekey], [eitem])
         outline = looks if by_look else group
         watching = np.zeros(len(first), dtype=bool)
@@ -234,7 +197,7 @@ class VisibleFaces:
         near_edge, crease_ray, crease_group = self._near_watched(self.group[tri[rays]], point)
         decide = np.flatnonzero(self.overlapped[tri[rays], side[rays]] | near_edge)
         if len(decide):
-            at = self.faces.find(_key(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
+            at = self.faces.find(key_of(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
             listed = at >= 0
             listed[listed] = self.mixed[at[listed]]
             pick = decide[listed]
@@ -268,18 +231,18 @@ class VisibleFaces:
         y, x = np.divmod(pixels, width)
         stride = width + 2
         around = padded.ravel()[((y + 1) * stride + x + 1)[:, None] + np.array([dy * stride + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)])]
-        ray, cand = _unique_pairs(np.concatenate([np.repeat(pixels, 9), crease_ray]), np.concatenate([around.ravel(), crease_group]))
+        ray, cand = unique_pairs(np.concatenate([np.repeat(pixels, 9), crease_ray]), np.concatenate([around.ravel(), crease_group]))
         dist = self._distance(cand, o, d, ray)
         ahead = np.isfinite(dist) & (dist > 0)
         point = _points(o, d, ray[ahead], dist[ahead])
         _, extra_at, extra_group = self._near_watched(cand[ahead], point)
         if len(extra_at):
-            ray, cand = _unique_pairs(np.concatenate([ray, ray[ahead][extra_at]]), np.concatenate([cand, extra_group]))
+            ray, cand = unique_pairs(np.concatenate([ray, ray[ahead][extra_at]]), np.concatenate([cand, extra_group]))
             dist = self._distance(cand, o, d, ray)
         ahead = np.isfinite(dist) & (dist > 0)
         ray, cand, dist = ray[ahead], cand[ahead], dist[ahead]
         point = _points(o, d, ray, dist)
-        at = self.faces.find(_key(cand, point, CELL))
+        at = self.faces.find(key_of(cand, point, CELL))
         face = np.full(len(ray), -1, dtype=np.int64)
         listed = np.flatnonzero(at >= 0)
         face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[listed], d)
@@ -314,7 +277,7 @@ class VisibleFaces:
         (point index, group) pairs of the groups across the creases they lie near."""
         near = np.zeros(len(group), dtype=bool)
         some = np.flatnonzero(self.watching[group])  # only groups with a watched edge are looked up
-        at = self.watched.find(_key(group[some], [p[some] for p in point], EDGE_CELL))
+        at = self.watched.find(key_of(group[some], [p[some] for p in point], EDGE_CELL))
         listed = some[at >= 0]
         at = at[at >= 0]
         row, edge = self.watched.explode(at)
@@ -369,48 +332,6 @@ def _unit(v: np.ndarray) -> np.ndarray:
 def _points(o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray, dist: np.ndarray) -> list[np.ndarray]:
     """The points ``o + d * dist`` of the given rays, one array per coordinate."""
     return [(o[k] if o.ndim == 1 else o[k][ray]) + d[k][ray] * dist for k in range(3)]
-
-
-def _cell(x: np.ndarray, size: float) -> np.ndarray:
-    """The cell coordinates of positions, in cells of ``size`` metres."""
-    return np.floor(np.asarray(x, dtype=np.float64) * (1.0 / size)).astype(np.int64)
-
-
-def _pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """One integer key per (group, cell x, y, z)."""
-    half = _CELL_SPAN // 2
-    key = np.asarray(group, dtype=np.int64)
-    for k in range(3):
-        key = key * _CELL_SPAN + (np.clip(cells[..., k], -half, half - 1) + half)
-    return key
-
-
-def _key(group: np.ndarray, point: list[np.ndarray], size: float) -> np.ndarray:
-    """The (group, cell) key of each point."""
-    return _pack(group, np.stack([_cell(p, size) for p in point], axis=-1))
-
-
-def _boxes_keys(group: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The keys of every cell from ``low[i]`` to ``high[i]`` (inclusive) of each item i, in its
-    group, and the item of each key."""
-    dims = high - low + 1  # (n, 3)
-    sizes = dims.prod(axis=1)
-    item = np.repeat(np.arange(len(group)), sizes)
-    local = np.arange(len(item)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    dy, dz = dims[item, 1], dims[item, 2]
-    cells = np.stack([local // (dy * dz), (local // dz) % dy, local % dz], axis=1) + low[item]
-    return _pack(group[item], cells), item
-
-
-def _unique_pairs(ray: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct (ray, group) pairs with a group (>= 0), sorted by ray then group."""
-    keep = group >= 0
-    packed = ray[keep].astype(np.int64) * (1 << 32) + group[keep]
-    packed.sort()
-    fresh = np.ones(len(packed), dtype=bool)
-    fresh[1:] = packed[1:] != packed[:-1]
-    packed = packed[fresh]
-    return packed >> 32, packed & ((1 << 32) - 1)
 
 
 def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,96 @@
+"""Lookup tables keyed by (group, cell): what lies near a point, found in one sorted search.
+
+What it is for: :mod:`povagent.generate.visible_face` asks, for hundreds of thousands of hit
+points a frame, which faces of a group (or which watched edges) come near each point. Space is
+cut into cubic cells; an item is listed under every (group, cell) key its grown box reaches; a
+point's key is found with one ``searchsorted``. What it must not do: decide anything (it only
+lists candidates; the exact tests are the caller's).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Cell coordinates are packed into one integer key, this many values an axis (a house spans
+#: far less than 2048 cells of the sizes used).
+_CELL_SPAN = 2048
+
+
+@dataclass(frozen=True)
+class CellTable:
+    """Sorted (group, cell) keys and, from ``starts[k]`` to ``starts[k + 1]`` in ``items``,
+    what is listed under key k."""
+
+    keys: np.ndarray
+    starts: np.ndarray
+    items: np.ndarray
+
+    @classmethod
+    def build(cls, key_lists: list[np.ndarray], item_lists: list[np.ndarray], order_by: np.ndarray | None = None) -> CellTable:
+        """From key arrays and the item of each key; within a key, items in ``order_by``'s
+        order (ascending), else by item."""
+        key = np.concatenate(key_lists).astype(np.int64)
+        item = np.concatenate(item_lists).astype(np.int64)
+        rank = item if order_by is None else order_by[item]
+        order = np.lexsort((rank, key))
+        key, item = key[order], item[order]
+        keys, starts = np.unique(key, return_index=True)
+        return cls(keys, np.append(starts, len(key)), item)
+
+    def find(self, key: np.ndarray) -> np.ndarray:
+        """The index of each key in the table, -1 where it is not listed."""
+        if not len(self.keys):
+            return np.full(len(key), -1, dtype=np.int64)
+        at = np.minimum(np.searchsorted(self.keys, key), len(self.keys) - 1)
+        return np.where(self.keys[at] == key, at, -1)
+
+    def explode(self, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For listed entries ``at`` (>= 0): (position in ``at``, item) for every listed item."""
+        counts = self.starts[at + 1] - self.starts[at]
+        row = np.repeat(np.arange(len(at)), counts)
+        slot = np.arange(len(row)) - np.repeat(np.cumsum(counts) - counts, counts)
+        return row, self.items[self.starts[at][row] + slot]
+
+
+def cell(x: np.ndarray, size: float) -> np.ndarray:
+    """The cell coordinates of positions, in cells of ``size`` metres."""
+    return np.floor(np.asarray(x, dtype=np.float64) * (1.0 / size)).astype(np.int64)
+
+
+def pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """One integer key per (group, cell x, y, z)."""
+    half = _CELL_SPAN // 2
+    key = np.asarray(group, dtype=np.int64)
+    for k in range(3):
+        key = key * _CELL_SPAN + (np.clip(cells[..., k], -half, half - 1) + half)
+    return key
+
+
+def key_of(group: np.ndarray, point: list[np.ndarray], size: float) -> np.ndarray:
+    """The (group, cell) key of each point."""
+    return pack(group, np.stack([cell(p, size) for p in point], axis=-1))
+
+
+def boxes_keys(group: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The keys of every cell from ``low[i]`` to ``high[i]`` (inclusive) of each item i, in its
+    group, and the item of each key."""
+    dims = high - low + 1  # (n, 3)
+    sizes = dims.prod(axis=1)
+    item = np.repeat(np.arange(len(group)), sizes)
+    local = np.arange(len(item)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    dy, dz = dims[item, 1], dims[item, 2]
+    cells = np.stack([local // (dy * dz), (local // dz) % dy, local % dz], axis=1) + low[item]
+    return pack(group[item], cells), item
+
+
+def unique_pairs(ray: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct (ray, group) pairs with a group (>= 0), sorted by ray then group."""
+    keep = group >= 0
+    packed = ray[keep].astype(np.int64) * (1 << 32) + group[keep]
+    packed.sort()
+    fresh = np.ones(len(packed), dtype=bool)
+    fresh[1:] = packed[1:] != packed[:-1]
+    packed = packed[fresh]
+    return packed >> 32, packed & ((1 << 32) - 1)
