@@ -6,6 +6,7 @@ request the strategy built, the images the model would be sent), never by a name
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 from povagent.annotate.desk import AnswerDesk, AnswerRefused
@@ -17,17 +18,23 @@ class AnswerPage:
     def __init__(self, desk: AnswerDesk, wait_s: float = 10.0) -> None:
         self.desk = desk
         self.wait_s = wait_s
+        #: set once a reply has told the page the session is over: the server keeps serving
+        #: until then (a few seconds at most), so an open page says "All done", not "gone"
+        self.told_finished = threading.Event()
 
     def state(self) -> dict[str, Any]:
         """The question to show (waits up to ``wait_s`` for one), progress, and whether the
         session is over."""
         question = self.desk.current(self.wait_s)
+        finished = question is None and self.desk.finished
+        if finished:
+            self.told_finished.set()
         return {
             "mode": "answer",
             "who": self.desk.annotator,
             "done": self.desk.done,
             "total": self.desk.total,
-            "finished": question is None and self.desk.finished,
+            "finished": finished,
             "question": question.page() if question is not None else None,
         }
 

@@ -127,10 +127,16 @@ class AnnotateServer:
         self._thread.start()
         self.httpd.deadlines.start()
 
-    def close(self, grace_s: float = 3.0) -> None:
-        """Stop serving and release the port: no new connection is taken, and the requests in
-        flight (a page's last poll, which tells it the session is over) get up to ``grace_s``
-        to be answered before their connections are closed."""
+    def close(self, grace_s: float = 3.0, told: threading.Event | None = None) -> None:
+        """Stop serving and release the port.
+
+        With ``told`` (set once a reply has told the page the session is over), serving goes on
+        until it is set, ``grace_s`` at most: a page polls every fraction of a second, and its
+        poll after the last answer would otherwise find the port closed. Then no new connection
+        is taken, and the requests in flight get up to ``grace_s`` to be answered before their
+        connections are closed."""
+        if told is not None:
+            told.wait(grace_s)
         self.httpd.shutdown()
         self.httpd.drain(grace_s)
         self.httpd.server_close()

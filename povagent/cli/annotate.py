@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import threading
 from pathlib import Path
 
 import typer
@@ -47,19 +48,22 @@ def annotate_command(
     # refused is refused before the page's address and token are printed
     session = AnswerSession(study.pipeline, desk, seed=study.seed, pairs_apart=study.pairs_apart)
     create_components(study.pipeline, session.host)
-    server = AnnotateServer(AnswerPage(desk), port)
+    page = AnswerPage(desk)
+    server = AnnotateServer(page, port)
     server.start()
     typer.echo(f"annotating as human:{study.annotator} into {study.pipeline.output}")
     typer.echo(f"open {server.url}", err=False)
+    told: threading.Event | None = None
     try:
         with serving(desk), sigterm_as_interrupt() as stop:
             result = asyncio.run(session.run())
+        told = page.told_finished  # a finished session waits (briefly) for the page to hear it
     except KeyboardInterrupt:
         typer.echo(f"{stop.what}: every saved answer is kept in {study.pipeline.output}; run `povagent annotate {config}` again to resume", err=True)
         raise typer.Exit(stop.exit_code) from None
     finally:
         desk.finish()
-        server.close()
+        server.close(told=told)
     typer.echo(f"done: {result.summary.rows.answered if result.summary.rows else 0} answers in {result.run_dir}")
     raise typer.Exit(result.exit_code)
 
