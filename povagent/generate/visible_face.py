@@ -52,6 +52,11 @@ CONTAINS_TOLERANCE = 1e-5
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
 #: A hit within this distance (metres) of a watched edge is decided exactly.
 EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
+#: A hit embree places farther than this (metres, divided by the cosine of the ray's angle to
+#: the face) inside every edge of a face no coplanar face overlaps is near no edge of its group:
+#: its exact tests are skipped. Embree's own error is micrometres; the skip is decided on its
+#: numbers, so it may differ by CPU, but a skipped hit is one the exact test would leave as it is.
+FAR_FROM_EDGE = 1e-3
 #: Side of the cubic cells (metres) of the faces' lookup table ...
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
@@ -75,7 +80,9 @@ class VisibleFaces:
     exactly (creases, and every edge of a face in a mixed cell); ``edge_*``: those edges'
     in-plane line (normal, offset), direction and extent, and the groups across a crease;
     ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``);
-    ``watching``: the groups with a watched edge at all.
+    ``watching``: the groups with a watched edge at all; ``heights``: (F, 3) float32, each
+    corner's distance to the opposite edge; ``clean``: faces no other coplanar face overlaps
+    (a hit far inside one is near no edge of its group).
     """
 
     group: np.ndarray
@@ -94,6 +101,8 @@ class VisibleFaces:
     edge_across: np.ndarray
     outline: np.ndarray
     watching: np.ndarray
+    heights: np.ndarray
+    clean: np.ndarray
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None,
@@ -148,8 +157,20 @@ class VisibleFaces:
         outline = looks if by_look else group
         watching = np.zeros(len(first), dtype=bool)
         watching[group[wf]] = True
+        # a face no watched edge of its group crosses: a hit far inside it is near none
+        ckey, citem = boxes_keys(group[wf], cell(np.minimum(p, q) - grow, CELL), cell(np.maximum(p, q) + grow, CELL))
+        at = table.find(ckey)
+        row, crossed = table.explode(at[at >= 0])
+        edge = citem[at >= 0][row]
+        cut = _segments_cross(p[edge], q[edge], edge_line[edge], edges[crossed], edge_offsets[crossed], a[crossed], b[crossed], c[crossed])
+        clean = np.ones(count, dtype=bool)
+        clean[crossed[cut]] = False
+        twice_area = np.sqrt(_dot3(_cross(b - a, c - a), _cross(b - a, c - a)))
+        opposite = np.stack([np.sqrt(_dot3(c - b, c - b)), np.sqrt(_dot3(a - c, a - c)), np.sqrt(_dot3(b - a, b - a))], axis=1)
+        heights = (twice_area[:, None] / np.where(opposite > 0, opposite, np.inf)).astype(np.float32)
         return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
-                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64), watching)  # fmt: skip
+                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64), watching,
+                   heights, clean)  # fmt: skip
 
     @property
     def face_normals(self) -> np.ndarray:
@@ -168,20 +189,26 @@ class VisibleFaces:
         return shown, t
 
     def _decide(self, tri: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], want_distance: bool = True,
+                uv: tuple[np.ndarray, np.ndarray] | None = None,
                 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:  # fmt: skip
         """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
-        across a crease near each hit."""
+        across a crease near each hit. ``uv``: embree's barycentric coordinates of each hit
+        (the hit is ``(1 - u - v) a + u b + v c``), which let a hit far inside a clean face skip
+        the exact tests (:data:`FAR_FROM_EDGE`)."""
         hit = tri >= 0
         face = np.where(hit, tri, 0)
         shown = tri.copy()
         # which side of its face each ray meets (0: against the face's normal)
-        side = np.take(self.own_normal[:, 0], face) * d[0]
-        side += np.take(self.own_normal[:, 1], face) * d[1]
-        side += np.take(self.own_normal[:, 2], face) * d[2]
-        side = (side >= 0).astype(np.intp)
+        facing = np.take(self.own_normal[:, 0], face) * d[0]
+        facing += np.take(self.own_normal[:, 1], face) * d[1]
+        facing += np.take(self.own_normal[:, 2], face) * d[2]
+        side = (facing >= 0).astype(np.intp)
         # only a hit in a group with a watched edge, or on a face a rival overlaps from that side,
         # can be decided otherwise
-        examined = hit & (self.watching[self.group[face]] | self.overlapped[face, side])
+        watched = self.watching[self.group[face]]
+        if uv is not None:
+            watched &= ~self._far_inside(face, uv, facing, d)
+        examined = hit & (watched | self.overlapped[face, side])
         t: np.ndarray | None = None
         if want_distance:
             every = self._distance(self.group[face], o, d, np.arange(len(tri)))
@@ -205,15 +232,29 @@ class VisibleFaces:
             shown[rays[pick]] = np.where(best >= 0, best, tri[rays[pick]])
         return shown, t, rays[crease_ray], crease_group
 
+    def _far_inside(self, face: np.ndarray, uv: tuple[np.ndarray, np.ndarray], facing: np.ndarray, d: tuple[np.ndarray, ...]) -> np.ndarray:
+        """Whether embree's hit lies farther than :data:`FAR_FROM_EDGE` (over the cosine of the
+        ray's angle to the face) inside every edge of a clean face."""
+        u, v = (np.asarray(x, dtype=np.float32) for x in uv)
+        length = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        margin = (FAR_FROM_EDGE * length / np.maximum(np.abs(facing), 1e-12)).astype(np.float32)
+        far = np.take(self.clean, face)
+        far &= (1 - u - v) * np.take(self.heights[:, 0], face) > margin
+        far &= u * np.take(self.heights[:, 1], face) > margin
+        far &= v * np.take(self.heights[:, 2], face) > margin
+        return far
+
     # -- a camera's pixels ------------------------------------------------------------------
     def decide_image(self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int,
-                     want_distance: bool = True) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
+                     want_distance: bool = True, uv: tuple[np.ndarray, np.ndarray] | None = None,
+                     ) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
-        the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted."""
+        the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
+        ``uv``: embree's barycentrics of the hits, to skip exact tests far inside faces."""
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, uv)
         face = np.maximum(shown, 0)
         seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
         outlined = np.pad(seen, 1, mode="edge")
@@ -362,6 +403,38 @@ def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndar
     return np.concatenate(left).astype(np.int64), np.concatenate(right).astype(np.int64)
 
 
+def _segments_cross(p: np.ndarray, q: np.ndarray, line: np.ndarray, edges: np.ndarray, edge_offsets: np.ndarray,
+                    a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Per (segment pq in a triangle's plane, triangle abc with its inward edge normals and
+    offsets): whether the segment passes through the triangle's inside by more than the
+    tolerance (no edge of the triangle, nor the segment's line, separates them)."""
+    apart = np.zeros(len(p), dtype=bool)
+    for k in range(3):
+        m, off = edges[:, k], edge_offsets[:, k]
+        apart |= (_dot3(m, p) - off <= CONTAINS_TOLERANCE) & (_dot3(m, q) - off <= CONTAINS_TOLERANCE)
+    n, off = line[:, :3], line[:, 3]
+    corners = np.stack([_dot3(n, x) - off for x in (a, b, c)], axis=1)
+    apart |= (corners <= CONTAINS_TOLERANCE).all(axis=1) | (corners >= -CONTAINS_TOLERANCE).all(axis=1)
+    return ~apart
+
+
+def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
+    """Per coplanar pair (lf, rf): whether the two triangles' areas do not overlap (an axis
+    in their plane separates them, within the tolerance: faces sharing an edge are apart)."""
+    apart = np.zeros(len(lf), dtype=bool)
+    if not len(lf):
+        return apart
+    tris = [v[faces[lf]], v[faces[rf]]]  # (n, 3 corners, 3)
+    for which, normal in ((0, own[lf]), (1, own[rf])):
+        corners = tris[which]
+        for k in range(3):
+            axis = _unit(_cross(normal, corners[:, (k + 1) % 3] - corners[:, k]))
+            a = tris[0][:, :, 0] * axis[:, None, 0] + tris[0][:, :, 1] * axis[:, None, 1] + tris[0][:, :, 2] * axis[:, None, 2]
+            b = tris[1][:, :, 0] * axis[:, None, 0] + tris[1][:, :, 1] * axis[:, None, 1] + tris[1][:, :, 2] * axis[:, None, 2]
+            apart |= (a.max(axis=1) <= b.min(axis=1) + CONTAINS_TOLERANCE) | (b.max(axis=1) <= a.min(axis=1) + CONTAINS_TOLERANCE)
+    return apart
+
+
 def _overlapped_sides(v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray,
                       left: np.ndarray, right: np.ndarray) -> np.ndarray:  # fmt: skip
     """(F, 2): per side of each face (0: seen against its normal, 1: along it), whether a
@@ -371,15 +444,7 @@ def _overlapped_sides(v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed:
     out = np.zeros((len(faces), 2), dtype=bool)
     if not len(lf):
         return out
-    tris = [v[faces[lf]], v[faces[rf]]]  # (n, 3 corners, 3)
-    apart = np.zeros(len(lf), dtype=bool)
-    for which, normal in ((0, own[lf]), (1, own[rf])):
-        corners = tris[which]
-        for k in range(3):
-            axis = _unit(_cross(normal, corners[:, (k + 1) % 3] - corners[:, k]))
-            a = tris[0][:, :, 0] * axis[:, None, 0] + tris[0][:, :, 1] * axis[:, None, 1] + tris[0][:, :, 2] * axis[:, None, 2]
-            b = tris[1][:, :, 0] * axis[:, None, 0] + tris[1][:, :, 1] * axis[:, None, 1] + tris[1][:, :, 2] * axis[:, None, 2]
-            apart |= (a.max(axis=1) <= b.min(axis=1) + CONTAINS_TOLERANCE) | (b.max(axis=1) <= a.min(axis=1) + CONTAINS_TOLERANCE)
+    apart = _apart(v, faces, own, lf, rf)
     aligned = _dot3(own[lf], own[rf]) > 0
     for side in (0, 1):
         # a ray against f's normal meets the rival's front where the two face one way
