@@ -94,3 +94,54 @@ def unique_pairs(ray: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.nda
     fresh[1:] = packed[1:] != packed[:-1]
     packed = packed[fresh]
     return packed >> 32, packed & ((1 << 32) - 1)
+
+
+@dataclass(frozen=True)
+class CellMask:
+    """A dense grid of cells (any group) marked where something listed may lie: a point in an
+    unmarked cell needs no lookup. Built with every box grown by one cell, so a point whose
+    cell is computed in float32 (off by less than a cell) is still found in a marked one."""
+
+    origin: np.ndarray  # (3,) int64: the first cell's coordinates
+    shape: tuple[int, int, int]
+    marked: np.ndarray  # flat bool, x slowest
+    size: float
+
+    #: a grid larger than this many cells is not built (every point is then looked up)
+    MAX_CELLS = 1 << 26
+
+    @classmethod
+    def build(cls, low: np.ndarray, high: np.ndarray, size: float) -> CellMask | None:
+        """From (n, 3) inclusive cell ranges; ``None`` when there are none or the grid would be too large."""
+        if not len(low):
+            return None
+        low, high = low - 1, high + 1
+        origin = low.min(axis=0)
+        dims = high.max(axis=0) - origin + 1
+        if int(np.prod(dims.astype(np.float64))) > cls.MAX_CELLS:
+            return None
+        # inclusion-exclusion at the 8 corners of each box, then prefix sums along the axes
+        count = np.zeros(tuple(int(k) + 1 for k in dims), dtype=np.int32)
+        lo, hi = low - origin, high - origin + 1
+        for corner in range(8):
+            pick = [(hi if corner >> k & 1 else lo)[:, k] for k in range(3)]
+            sign = -1 if bin(corner).count("1") % 2 else 1
+            np.add.at(count, tuple(pick), sign)
+        for axis in range(3):
+            np.cumsum(count, axis=axis, out=count)
+        marked = count[: dims[0], : dims[1], : dims[2]] > 0
+        return cls(origin.astype(np.int64), (int(dims[0]), int(dims[1]), int(dims[2])), marked.ravel(), size)
+
+    def covers(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """Whether each point (float32 coordinates are enough) lies in a marked cell."""
+        index = np.zeros(len(x), dtype=np.int64)
+        inside = np.ones(len(x), dtype=bool)
+        inv = np.float32(1.0 / self.size)
+        for k, coord in enumerate((x, y, z)):
+            c = np.floor(coord * inv).astype(np.int64) - self.origin[k]
+            inside &= (c >= 0) & (c < self.shape[k])
+            index *= self.shape[k]
+            index += c
+        out = np.zeros(len(x), dtype=bool)
+        out[inside] = self.marked[index[inside]]
+        return out

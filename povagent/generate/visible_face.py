@@ -38,7 +38,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from povagent.generate.cell_table import CellTable, boxes_keys, cell, key_of, unique_pairs
+from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
 
 #: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
 PARALLEL_TOLERANCE = 1e-9
@@ -52,11 +52,6 @@ CONTAINS_TOLERANCE = 1e-5
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
 #: A hit within this distance (metres) of a watched edge is decided exactly.
 EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
-#: A hit embree places farther than this (metres, divided by the cosine of the ray's angle to
-#: the face) inside every edge of a face no coplanar face overlaps is near no edge of its group:
-#: its exact tests are skipped. Embree's own error is micrometres; the skip is decided on its
-#: numbers, so it may differ by CPU, but a skipped hit is one the exact test would leave as it is.
-FAR_FROM_EDGE = 1e-3
 #: Side of the cubic cells (metres) of the faces' lookup table ...
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
@@ -80,9 +75,8 @@ class VisibleFaces:
     exactly (creases, and every edge of a face in a mixed cell); ``edge_*``: those edges'
     in-plane line (normal, offset), direction and extent, and the groups across a crease;
     ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``);
-    ``watching``: the groups with a watched edge at all; ``heights``: (F, 3) float32, each
-    corner's distance to the opposite edge; ``clean``: faces no other coplanar face overlaps
-    (a hit far inside one is near no edge of its group).
+    ``watching``: the groups with a watched edge at all; ``near_cells``: the ``EDGE_CELL``
+    cells (any group) a watched edge may be near.
     """
 
     group: np.ndarray
@@ -101,8 +95,7 @@ class VisibleFaces:
     edge_across: np.ndarray
     outline: np.ndarray
     watching: np.ndarray
-    heights: np.ndarray
-    clean: np.ndarray
+    near_cells: CellMask | None
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None,
@@ -152,25 +145,15 @@ class VisibleFaces:
         edge_line = np.concatenate([line, _dot3(line, p)[:, None]], axis=1)
         edge_along = np.concatenate([along, _dot3(along, p)[:, None], _dot3(along, q)[:, None]], axis=1)
         grow = EDGE_MARGIN + TOUCH_MARGIN
-        ekey, eitem = boxes_keys(group[wf], cell(np.minimum(p, q) - grow, EDGE_CELL), cell(np.maximum(p, q) + grow, EDGE_CELL))
+        elo, ehi = cell(np.minimum(p, q) - grow, EDGE_CELL), cell(np.maximum(p, q) + grow, EDGE_CELL)
+        ekey, eitem = boxes_keys(group[wf], elo, ehi)
         watched = CellTable.build([ekey], [eitem])
         outline = looks if by_look else group
         watching = np.zeros(len(first), dtype=bool)
         watching[group[wf]] = True
-        # a face no watched edge of its group crosses: a hit far inside it is near none
-        ckey, citem = boxes_keys(group[wf], cell(np.minimum(p, q) - grow, CELL), cell(np.maximum(p, q) + grow, CELL))
-        at = table.find(ckey)
-        row, crossed = table.explode(at[at >= 0])
-        edge = citem[at >= 0][row]
-        cut = _segments_cross(p[edge], q[edge], edge_line[edge], edges[crossed], edge_offsets[crossed], a[crossed], b[crossed], c[crossed])
-        clean = np.ones(count, dtype=bool)
-        clean[crossed[cut]] = False
-        twice_area = np.sqrt(_dot3(_cross(b - a, c - a), _cross(b - a, c - a)))
-        opposite = np.stack([np.sqrt(_dot3(c - b, c - b)), np.sqrt(_dot3(a - c, a - c)), np.sqrt(_dot3(b - a, b - a))], axis=1)
-        heights = (twice_area[:, None] / np.where(opposite > 0, opposite, np.inf)).astype(np.float32)
         return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
                    watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64), watching,
-                   heights, clean)  # fmt: skip
+                   CellMask.build(elo, ehi, EDGE_CELL))  # fmt: skip
 
     @property
     def face_normals(self) -> np.ndarray:
@@ -189,12 +172,11 @@ class VisibleFaces:
         return shown, t
 
     def _decide(self, tri: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], want_distance: bool = True,
-                uv: tuple[np.ndarray, np.ndarray] | None = None,
+                near: np.ndarray | None = None,
                 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:  # fmt: skip
         """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
-        across a crease near each hit. ``uv``: embree's barycentric coordinates of each hit
-        (the hit is ``(1 - u - v) a + u b + v c``), which let a hit far inside a clean face skip
-        the exact tests (:data:`FAR_FROM_EDGE`)."""
+        across a crease near each hit. ``near``: whether each hit lies in one of ``near_cells``
+        (one that does not is near no watched edge: its exact tests are skipped)."""
         hit = tri >= 0
         face = np.where(hit, tri, 0)
         shown = tri.copy()
@@ -206,8 +188,8 @@ class VisibleFaces:
         # only a hit in a group with a watched edge, or on a face a rival overlaps from that side,
         # can be decided otherwise
         watched = self.watching[self.group[face]]
-        if uv is not None:
-            watched &= ~self._far_inside(face, uv, facing, d)
+        if near is not None:
+            watched &= near
         examined = hit & (watched | self.overlapped[face, side])
         t: np.ndarray | None = None
         if want_distance:
@@ -232,29 +214,24 @@ class VisibleFaces:
             shown[rays[pick]] = np.where(best >= 0, best, tri[rays[pick]])
         return shown, t, rays[crease_ray], crease_group
 
-    def _far_inside(self, face: np.ndarray, uv: tuple[np.ndarray, np.ndarray], facing: np.ndarray, d: tuple[np.ndarray, ...]) -> np.ndarray:
-        """Whether embree's hit lies farther than :data:`FAR_FROM_EDGE` (over the cosine of the
-        ray's angle to the face) inside every edge of a clean face."""
-        u, v = (np.asarray(x, dtype=np.float32) for x in uv)
-        length = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        margin = (FAR_FROM_EDGE * length / np.maximum(np.abs(facing), 1e-12)).astype(np.float32)
-        far = np.take(self.clean, face)
-        far &= (1 - u - v) * np.take(self.heights[:, 0], face) > margin
-        far &= u * np.take(self.heights[:, 1], face) > margin
-        far &= v * np.take(self.heights[:, 2], face) > margin
-        return far
-
     # -- a camera's pixels ------------------------------------------------------------------
     def decide_image(self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int,
-                     want_distance: bool = True, uv: tuple[np.ndarray, np.ndarray] | None = None,
-                     ) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
+                     want_distance: bool = True, reach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
-        ``uv``: embree's barycentrics of the hits, to skip exact tests far inside faces."""
+        ``reach``: embree's float32 distances, to skip the exact tests of hits in no cell a
+        watched edge reaches (the skip is decided on embree's numbers, so it may differ by CPU,
+        but only for hits a cell or more from any watched edge, which the exact test leaves
+        as they are)."""
+        near = None
+        if reach is not None and self.near_cells is not None:
+            o32 = np.asarray(origin, dtype=np.float32)
+            t32 = np.where(tri >= 0, reach, np.float32(0))
+            near = self.near_cells.covers(*(o32[k] + np.asarray(directions[k], dtype=np.float32) * t32 for k in range(3)))
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, uv)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, near)
         face = np.maximum(shown, 0)
         seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
         outlined = np.pad(seen, 1, mode="edge")
@@ -272,7 +249,13 @@ class VisibleFaces:
         y, x = np.divmod(pixels, width)
         stride = width + 2
         around = padded.ravel()[((y + 1) * stride + x + 1)[:, None] + np.array([dy * stride + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)])]
-        ray, cand = unique_pairs(np.concatenate([np.repeat(pixels, 9), crease_ray]), np.concatenate([around.ravel(), crease_group]))
+        # each pixel's distinct groups, ascending (a sort of nine per row, not of them all)
+        around.sort(axis=1)
+        fresh = around >= 0
+        fresh[:, 1:] &= around[:, 1:] != around[:, :-1]
+        ray, cand = np.repeat(pixels, fresh.sum(axis=1)), around[fresh]
+        if len(crease_ray):
+            ray, cand = unique_pairs(np.concatenate([ray, crease_ray]), np.concatenate([cand, crease_group]))
         dist = self._distance(cand, o, d, ray)
         ahead = np.isfinite(dist) & (dist > 0)
         point = _points(o, d, ray[ahead], dist[ahead])
@@ -401,21 +384,6 @@ def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndar
     if not left:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     return np.concatenate(left).astype(np.int64), np.concatenate(right).astype(np.int64)
-
-
-def _segments_cross(p: np.ndarray, q: np.ndarray, line: np.ndarray, edges: np.ndarray, edge_offsets: np.ndarray,
-                    a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:  # fmt: skip
-    """Per (segment pq in a triangle's plane, triangle abc with its inward edge normals and
-    offsets): whether the segment passes through the triangle's inside by more than the
-    tolerance (no edge of the triangle, nor the segment's line, separates them)."""
-    apart = np.zeros(len(p), dtype=bool)
-    for k in range(3):
-        m, off = edges[:, k], edge_offsets[:, k]
-        apart |= (_dot3(m, p) - off <= CONTAINS_TOLERANCE) & (_dot3(m, q) - off <= CONTAINS_TOLERANCE)
-    n, off = line[:, :3], line[:, 3]
-    corners = np.stack([_dot3(n, x) - off for x in (a, b, c)], axis=1)
-    apart |= (corners <= CONTAINS_TOLERANCE).all(axis=1) | (corners >= -CONTAINS_TOLERANCE).all(axis=1)
-    return ~apart
 
 
 def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
