@@ -56,8 +56,6 @@ EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
 EDGE_CELL = 0.0625
-#: Rows of the pairwise coplanar search at a time (its arrays stay small).
-_PAIR_BLOCK = 256
 
 
 @dataclass(frozen=True)
@@ -359,31 +357,31 @@ def _points(o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray, dist: np.
 
 
 def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every ordered pair (i, j), i != j, of faces in one plane (either side) whose grown boxes overlap."""
-    count = len(normal)
-    left: list[np.ndarray] = []
-    right: list[np.ndarray] = []
-    for start in range(0, count, _PAIR_BLOCK):
-        rows = slice(start, min(start + _PAIR_BLOCK, count))
-        overlap = np.ones((rows.stop - rows.start, count), dtype=bool)
-        for k in range(3):
-            overlap &= lo[rows, k][:, None] <= hi[None, :, k]
-            overlap &= lo[None, :, k] <= hi[rows, k][:, None]
-        i, j = np.nonzero(overlap)
-        i += rows.start
-        keep = i != j
-        i, j = i[keep], j[keep]
-        # either side: the generated meshes' floors are wound facing down
-        cos = _dot3(normal[i], normal[j])
-        same = cos >= 1 - PARALLEL_TOLERANCE
-        opposite = cos <= -(1 - PARALLEL_TOLERANCE)
-        gap = np.where(same, np.abs(offset[i] - offset[j]), np.abs(offset[i] + offset[j]))
-        keep = (same | opposite) & (gap <= PLANE_TOLERANCE)
-        left.append(i[keep])
-        right.append(j[keep])
-    if not left:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    return np.concatenate(left).astype(np.int64), np.concatenate(right).astype(np.int64)
+    """Every ordered pair (i, j), i != j, of faces in one plane (either side) whose grown boxes overlap.
+
+    Two such faces' offsets differ by at most ``PLANE_TOLERANCE`` in absolute value (either
+    side: ``|a - b|`` and ``|a + b|`` are both at least ``||a| - |b||``), so only faces close in
+    ``|offset|`` (sorted, a window of twice the tolerance) are compared."""
+    size = np.abs(offset)
+    order = np.argsort(size, kind="stable")
+    ranked = size[order]
+    stop = np.searchsorted(ranked, ranked + 2 * PLANE_TOLERANCE, side="right")
+    span = stop - np.arange(len(order)) - 1  # later faces within the window of each
+    first = np.repeat(np.arange(len(order)), span)
+    later = np.arange(len(first)) - np.repeat(np.cumsum(span) - span, span) + first + 1
+    i, j = order[first], order[later]
+    keep = np.ones(len(i), dtype=bool)
+    for k in range(3):
+        keep &= (lo[i, k] <= hi[j, k]) & (lo[j, k] <= hi[i, k])
+    i, j = i[keep], j[keep]
+    # either side: the generated meshes' floors are wound facing down
+    cos = _dot3(normal[i], normal[j])
+    same = cos >= 1 - PARALLEL_TOLERANCE
+    opposite = cos <= -(1 - PARALLEL_TOLERANCE)
+    gap = np.where(same, np.abs(offset[i] - offset[j]), np.abs(offset[i] + offset[j]))
+    keep = (same | opposite) & (gap <= PLANE_TOLERANCE)
+    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
+    return np.concatenate([i, j]), np.concatenate([j, i])
 
 
 def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
