@@ -16,7 +16,7 @@ from povagent.geometry.camera import Camera
 
 
 def main(out: Path) -> None:
-    generate_dataset(out, houses=1, seed=11, frames=6, jobs=1, progress=False)
+    generate_dataset(out, houses=1, seed=11, frames=3, jobs=1, progress=False)
     digests = {p.relative_to(out).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
                for p in sorted(out.rglob("*")) if p.is_file()}  # fmt: skip
     built = build_house(11, 0)

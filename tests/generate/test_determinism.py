@@ -16,8 +16,8 @@ def _tree(root: Path) -> dict[str, bytes]:
 @pytest.fixture(scope="module")
 def two_runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, bytes], dict[str, bytes]]:
     a, b = tmp_path_factory.mktemp("run_a"), tmp_path_factory.mktemp("run_b")
-    generate_dataset(a, houses=2, seed=11, frames=4, jobs=1, progress=False)
-    generate_dataset(b, houses=2, seed=11, frames=4, jobs=2, progress=False)
+    generate_dataset(a, houses=2, seed=11, frames=2, jobs=1, progress=False)
+    generate_dataset(b, houses=2, seed=11, frames=2, jobs=2, progress=False)
     return _tree(a), _tree(b)
 
 
