@@ -17,7 +17,6 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Mapping
 
 from povagent.dataset.problems import Problem
 from povagent.results.plugin_errors import MAX_REPLY_CHARS as PARSED_REPLY_CHARS
@@ -139,27 +138,4 @@ def checked_reply(value: object) -> str | None:
     return value
 
 
-#: Reads a log: ``(file) -> HarnessLog``.
-LogReader = Callable[[Path], HarnessLog]
-
-
-def log_readers() -> Mapping[str, LogReader]:
-    """The harnesses whose logs can be read, by the name ``--harness`` takes."""
-    from povagent.results.lmms_eval_log import read_lmms_eval_log
-    from povagent.results.vlmevalkit_log import read_vlmevalkit_predictions
-
-    return {"lmms-eval": read_lmms_eval_log, "vlmevalkit": read_vlmevalkit_predictions}
-
-
-def read_harness_log(file: str | Path, harness: str) -> HarnessLog:
-    """The log ``file`` as ``harness`` writes it (a name of :func:`log_readers`);
-    :class:`~povagent.errors.PredictionsError` when the file cannot be read at all."""
-    from povagent.errors import PredictionsError
-
-    readers = log_readers()
-    if harness not in readers:
-        raise PredictionsError(f"unknown harness {harness!r} (known: {', '.join(readers)})")
-    return readers[harness](Path(file))
-
-
-__all__ = ["HarnessLog", "LoggedReply", "gold_label", "log_readers", "options_in_prompt", "read_harness_log"]
+__all__ = ["HarnessLog", "LoggedReply", "gold_label", "options_in_prompt", "with_gold"]

@@ -1,6 +1,6 @@
 """A second opinion on a run another harness made: every logged reply scored by every rule of its set.
 
-``povagent rescore-log FILE --harness H --set S`` reads the log (:mod:`povagent.results.harness_logs`),
+``povagent rescore-log FILE --harness H --set S`` reads the log (:mod:`povagent.results.harness_log_files`),
 and scores each reply with the set's official rule and each harness rule povagent has for the set
 (:func:`povagent.scoring.log_rules.set_rules`): no model, no media, nothing but the file named. A
 reply is parsed and scored by the score step ``run`` and ``rescore`` use
@@ -22,7 +22,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec
-from povagent.results.harness_logs import HarnessLog, LoggedReply, read_harness_log
+from povagent.results.harness_log_files import read_harness_log
+from povagent.results.harness_logs import HarnessLog, LoggedReply
 from povagent.run.score_step import AnswerScoring
 from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate
 from povagent.scoring.log_rules import LogRule, set_rules
