@@ -94,7 +94,7 @@ def _tsv_rows(file: Path, data: bytes) -> Iterable[tuple[int, list[Any]]]:
     except UnicodeDecodeError as exc:
         raise PredictionsError(f"{file}: byte {exc.start + 1} is not UTF-8 (a VLMEvalKit .tsv is UTF-8 text)") from None
     limit = csv.field_size_limit()
-    csv.field_size_limit(MAX_REPLY_CHARS + 1)  # a long reply is a bad row, named below, not a crash
+    csv.field_size_limit(MAX_LOG_BYTES)  # the file is bounded already; a long reply is a bad row, named below
     try:
         reader = csv.reader(io.StringIO(text, newline=""), dialect="excel-tab")
         rows = []
