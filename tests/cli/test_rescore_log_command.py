@@ -84,3 +84,13 @@ def test_a_rule_from_a_plugin_module_is_scored_beside_the_others(tmp_path):
     assert result.exit_code == 0, result.output
     rules = {r["rule"]: r for r in json.loads(result.stdout)["rules"]}
     assert rules["first-letter"]["harness"] == "example-harness" and rules["first-letter"]["overall"] is not None
+
+
+def test_the_json_validates_against_the_shipped_schema(tmp_path):
+    from importlib import resources
+
+    from jsonschema import Draft202012Validator
+
+    result = runner.invoke(app, ["rescore-log", str(lmms_log(tmp_path)), "--harness", "lmms-eval", "--set", "viewspatial", "--json"])
+    schema = json.loads(resources.files("povagent").joinpath("schemas", "output_rescore-log.schema.json").read_text(encoding="utf-8"))
+    assert list(Draft202012Validator(schema).iter_errors(json.loads(result.stdout))) == []
