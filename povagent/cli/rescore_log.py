@@ -23,6 +23,12 @@ def _cell(value: float | None, ci: tuple[float, float] | None) -> str:
     return f"{100 * value:.1f}%" + (f" [{100 * ci[0]:.1f}, {100 * ci[1]:.1f}]" if ci is not None else "")
 
 
+def _excerpt(reply: str, width: int = 40) -> str:
+    """A reply on one line, ``⏎`` for each line break, cut to ``width`` characters."""
+    flat = reply.replace("\r\n", "⏎").replace("\n", "⏎")
+    return flat if len(flat) <= width else flat[: width - 1] + "…"
+
+
 def render_rescored_log(result: object, shown: int) -> None:
     """Print the rules, their numbers and up to ``shown`` disagreements of a :class:`RescoredLog`."""
     from rich.console import Console
@@ -48,10 +54,10 @@ def render_rescored_log(result: object, shown: int) -> None:
                    "(resps differs from filtered_resps): each rule above reads the field its 'reads' names.")  # fmt: skip
     if result.disagreements_total:
         names = [r.rule for r in result.rules]
-        lines = [[f"{d.item} ({d.where})", d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
+        lines = [[d.item, _excerpt(d.reply), d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
                  for d in result.disagreements[:shown]]  # fmt: skip
         heading = f"The rules read {result.disagreements_total} of {result.items} replies differently (first {min(shown, len(result.disagreements))}; ✓ a hit)"
-        for table in fitted_tables([("item", "label"), ("gold", "label"), *((n, "label") for n in names)], lines, title=heading):
+        for table in fitted_tables([("item", "label"), ("reply", "label"), ("gold", "label"), *((n, "label") for n in names)], lines, title=heading):
             console.print(table)
     else:
         typer.echo(f"Every rule reads the same label in all {result.items} replies.")

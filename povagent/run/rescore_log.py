@@ -32,6 +32,8 @@ from povagent.scoring.metrics import valued_row
 
 #: Disagreements kept in the JSON at most (the count is always whole).
 MAX_DISAGREEMENTS = 10_000
+#: How much of a reply a disagreement quotes.
+REPLY_EXCERPT = 200
 
 
 class Figure(BaseModel):
@@ -69,6 +71,8 @@ class Disagreement(BaseModel):
 
     item: str
     where: str
+    #: The reply's first :data:`REPLY_EXCERPT` characters.
+    reply: str
     gold: str
     labels: dict[str, str | None]
     correct: dict[str, bool]
@@ -159,7 +163,7 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
             columns.append([valued.values[rule.scorer][m.name] for m in declared[rule.scorer]], None, None, valued.category, valued.groups)
         results.append(_result(rule, log, scorer, columns, n_boot, seed, sum(label is not None for label in labels[rule.name])))
     disagreements = [
-        Disagreement(item=r.item, where=r.where, gold=r.gold, labels={n: labels[n][k] for n in labels}, correct={n: hits[n][k] for n in hits})
+        Disagreement(item=r.item, where=r.where, reply=r.reply[:REPLY_EXCERPT], gold=r.gold, labels={n: labels[n][k] for n in labels}, correct={n: hits[n][k] for n in hits})
         for k, r in enumerate(log.replies)
         if len({labels[n][k] for n in labels}) > 1
     ]
