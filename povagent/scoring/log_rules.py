@@ -1,8 +1,8 @@
 """The rules a set's replies are scored by in a second opinion (``povagent rescore-log``): the set's
 official rule and every harness's rule povagent has for it, each a registered parser and scorer.
 
-Nothing here names a set or a rule: the official rule is the set's format's (its official parser
-and scorer), and a harness's rule is a registered parser that says which sets its harness reads
+Nothing here names a set or a rule: the official rule is the set's registered dataset format's
+(:class:`~povagent.dataset.formats.DatasetFormat`: its official parser and scorer), and a harness's rule is a registered parser that says which sets its harness reads
 with it and with which scorer (``harness_sets``, ``(set, scorer)`` pairs, with ``source``, ``harness`` and
 ``harness_filter``: :class:`povagent_plugins.parsers.mcq.rule.RuleParser`). A set added later
 plugs in by registering its format and its rule parsers; this module does not change.
@@ -34,15 +34,25 @@ class LogRule:
     harness_filter: str = ""
 
 
-def official_rules(host: Any) -> Mapping[str, tuple[str, str, str]]:
-    """``{set: (official parser, official scorer, source)}`` of every set whose format declares them."""
-    from povagent.dataset.choice_sets import OFFICIAL_SET_PARSERS, OFFICIAL_SET_SCORERS
+#: The answer types a logged reply can be scored as: a reply and a question's labelled options.
+LOGGED_ANSWER_TYPES = ("choice",)
 
-    return {key: (parser, OFFICIAL_SET_SCORERS[key], _declared(host, parser, "source")) for key, parser in OFFICIAL_SET_PARSERS.items()}
+
+def official_rules(host: Any) -> Mapping[str, tuple[str, str, str]]:
+    """``{set: (official parser, official scorer, source)}`` of every registered dataset format
+    whose records ask for an answer type a log can be scored as (:data:`LOGGED_ANSWER_TYPES`).
+    The source is the one the official parser declares (the rule's own commit), else the format's."""
+    from povagent.dataset.formats import registered_formats
+
+    return {
+        key: (fmt.official_parser, fmt.official_scorer, _declared(host, fmt.official_parser, "source") or fmt.source)
+        for key, fmt in registered_formats(host).items()
+        if fmt.answer_type in LOGGED_ANSWER_TYPES
+    }
 
 
 def known_sets(host: Any) -> list[str]:
-    """The sets a log can be scored as: those with an official rule."""
+    """The sets a log can be scored as: the registered formats with an answer type a log holds."""
     return sorted(official_rules(host))
 
 
@@ -60,7 +70,8 @@ def set_rules(host: Any, set_name: str) -> list[LogRule]:
     :class:`~povagent.errors.PluginError` for a set with no official rule, naming the known sets."""
     official = official_rules(host)
     if set_name not in official:
-        raise PluginError(f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))}")
+        kinds = " or ".join(LOGGED_ANSWER_TYPES)
+        raise PluginError(f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))} (the registered formats whose answers are a {kinds})")
     parser, scorer, source = official[set_name]
     found = [(parser, scorer, source, _declared(host, parser, "harness") or "the set's own code", True, _declared(host, parser, "harness_filter"))]
     for entry in host.entries("parser"):

@@ -66,6 +66,56 @@ def test_a_harness_rule_plugs_in_by_naming_its_set_with_no_edit_of_the_command(p
         povagent_host.remove_plugin("first-letter-plugin")
 
 
+class _FourthSet:
+    """A set added later: its format (official rule: the first-letter parser) and an lmms-eval rule for it."""
+
+    @hookimpl
+    def register_dataset_formats(self, register) -> None:
+        from povagent.dataset.formats import DatasetFormat, DocsRow
+
+        def never_read(request):
+            raise AssertionError("rescore-log never reads a set")
+
+        register("fourthset", DatasetFormat(
+            key="fourthset", description="a fourth choice set", read=never_read, record_id=lambda i: f"record {i}", answer_type="choice",
+            official_parser="first-letter", official_scorer="choice", source="example/fourthset@" + "1" * 40, licence="CC-BY-4.0",
+            docs_row=DocsRow("FourthSet", "here", "the file", "how-to/perspective-sets.md"),
+        ), description="a fourth choice set")  # fmt: skip
+
+    @hookimpl
+    def register_parsers(self, register) -> None:
+        class Lmms(_FirstLetter):
+            source, harness, harness_sets = "EvolvingLMMs-Lab/lmms-eval@" + "2" * 40, "lmms-eval", (("fourthset", "choice"),)
+
+        register("first-letter", _FirstLetter, description="the first character")
+        register("fourthset-lmms", Lmms, description="lmms-eval's reading of the fourth set")
+
+
+def test_a_set_added_later_plugs_in_by_registering_its_format_and_naming_its_rules(povagent_host, tmp_path):
+    import json
+
+    from povagent.run.rescore_log import rescore_log
+
+    povagent_host.add_plugin(_FourthSet(), name="fourth-set")
+    try:
+        rules = set_rules(povagent_host, "fourthset")
+        assert [(r.parser, r.official, r.source) for r in rules] == [
+            ("first-letter", True, "example/harness@" + "0" * 40), ("fourthset-lmms", False, "EvolvingLMMs-Lab/lmms-eval@" + "2" * 40),
+        ]
+        log = tmp_path / "samples_fourthset.jsonl"
+        log.write_text("".join(json.dumps({"doc_id": k, "target": "B", "filtered_resps": reply, "input": "A. x\nB. y"}) + "\n"
+                               for k, reply in enumerate(["B", "A", "Bee"])), encoding="utf-8")  # fmt: skip
+        result = rescore_log(log, "lmms-eval", "fourthset", host=povagent_host, n_boot=0)
+        assert [(r.rule, r.overall) for r in result.rules] == [("first-letter", 2 / 3), ("fourthset-lmms", 2 / 3)]
+    finally:
+        povagent_host.remove_plugin("fourth-set")
+
+
+def test_a_set_whose_answers_are_no_choice_is_not_offered(povagent_host):
+    assert "povbench" not in known_sets(povagent_host)
+    assert {"viewspatial", "mindcube", "3dsrbench"} <= set(known_sets(povagent_host))
+
+
 def test_an_unknown_set_is_refused_naming_the_sets_a_log_can_be_scored_as(povagent_host):
     with pytest.raises(PluginError, match=r"unknown set 'vsi': a log can be scored as .*viewspatial"):
         set_rules(povagent_host, "vsi")
