@@ -76,7 +76,7 @@ def rescore_log_command(
     shown: int = typer.Option(20, "--show", min=0, metavar="N", help="How many disagreements and bad records to print (the JSON holds them all)."),
     plugin: list[str] = typer.Option([], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."),
 ) -> None:
-    """Score another harness's logged replies with the set's official rule and every harness rule.
+    """Score another harness's log by every rule of its set, offline.
 
     No model and no media: only FILE is read. Each reply is read by the set's own rule and by each
     rule povagent reproduces for the set (lmms-eval's, VLMEvalKit's), each at the commit it names;
