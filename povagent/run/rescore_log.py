@@ -140,7 +140,7 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
     rules = set_rules(host, set_name)  # an unknown set is refused before the file is read
     log = read_harness_log(file, harness)
     instances = [_instance(set_name, r) for r in log.replies]
-    specs = {}
+    specs: dict[tuple[tuple[str, str], ...], AnswerSpec] = {}
     labels: dict[str, list[str | None]] = {}
     hits: dict[str, list[bool]] = {}
     results = []
@@ -178,7 +178,7 @@ def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns,
     """One rule's :class:`RuleResult` from its rows' metric columns."""
     metrics = tuple(scorer.metrics)
     headline = getattr(scorer, "headline", None) or metrics[0].name
-    by_slice = metric_slices(columns, rule.scorer, n_boot, seed) if len(columns) else {"overall": {m.name: Estimate(None) for m in metrics}}
+    by_slice: dict[str, Any] = metric_slices(columns, rule.scorer, n_boot, seed) if len(columns) else {"overall": {m.name: Estimate(None) for m in metrics}}
     overall = by_slice["overall"]
     per_category = by_slice.get("per_category", {})
     return RuleResult(
