@@ -7,7 +7,7 @@ writes it at EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3
 300 questions; MindCube, 240; 3DSRBench's circular subset, 192 copies of 30 questions), and
 VLMEvalKit's prediction files as ``infer_data_job`` dumps them at
 open-compass/VLMEvalKit@e8e78f05f3080fe28154f2130321f17951c3be94 (ViewSpatial-Bench as .tsv and
-.xlsx, MindCube as .xlsx) holding the same questions and replies. The expected figures below
+.xlsx, MindCube as .xlsx, 3DSRBench as .tsv) holding the same questions and replies. The expected figures below
 were produced by RUNNING the upstream functions at those commits (and at the sets' own:
 ZJU-REAL/ViewSpatial-Bench@2e85a5e41a29e7919b1d326d8aba316661579983 ``evaluate.py``
 ``extract_option`` on the last line; mll-lab-nu/MindCube@6d8fd9acdf5b80769373a21cdbfcf068ab356e0f
@@ -22,7 +22,8 @@ project, never written by hand:
   ``exact_match``), the mean of ``hit`` overall and per ``question_type`` / ``category`` as
   ``eval_mcq_score`` groups;
 - VLMEvalKit's exact matching (3DSRBench's official reading): ``can_infer(reply, options)``, ``Z``
-  when it gives ``False``, scored against the gold and grouped by lmms-eval's aggregations.
+  when it gives ``False``, scored against the gold and grouped by lmms-eval's aggregations; on the
+  prediction file, VLMEvalKit's own ``_3DSRBench.evaluate`` (which gives the same figures).
 """
 
 from __future__ import annotations
@@ -111,6 +112,20 @@ def test_3dsrbench_circular_log_gives_the_four_accuracies_of_the_upstream_aggreg
         assert rule.metric == "circular_accuracy"  # the set's headline: the authors' circular evaluation
         assert {m: rule.metrics[m].value for m in SRBENCH3D[rule.rule]} == pytest.approx({m: float(Fraction(v)) for m, v in SRBENCH3D[rule.rule].items()})
     assert_equal_to_upstream(result, {rule: (SRBENCH3D[rule]["circular_accuracy"], cats) for rule, cats in SRBENCH3D_CATEGORIES.items()})
+
+
+def test_3dsrbench_prediction_file_gives_what_vlmevalkits_own_3dsrbench_evaluate_gives(tmp_path):
+    # _3DSRBench.evaluate (vlmeval/dataset/image_mcq.py @ e8e78f05, exact matching): mcq_vanilla_eval's hits,
+    # its flip, circular and flip+circular groupings, report_acc per category of the circular groups
+    result = rescore_log(fixture("3DSRBench_preds.tsv", tmp_path), "vlmevalkit", "3dsrbench", n_boot=0)
+    assert result.items == 192
+    official = result.rules[0]
+    assert (official.rule, official.metric) == ("vlmevalkit-exact", "circular_accuracy")
+    assert {m: official.metrics[m].value for m in SRBENCH3D["vlmevalkit-exact"]} == pytest.approx(
+        {m: float(Fraction(v)) for m, v in SRBENCH3D["vlmevalkit-exact"].items()}
+    )
+    subs = {c: v for c, v in SRBENCH3D_CATEGORIES["vlmevalkit-exact"].items() if "_" in c and c != "multi_object"}
+    assert official.per_category == pytest.approx({c: float(Fraction(v)) for c, v in subs.items()})  # the file has no main category
 
 
 def test_the_official_rule_comes_first_and_each_rule_names_its_commit(tmp_path):
