@@ -29,6 +29,8 @@ MAX_LOG_LINE_BYTES = 16 << 20
 MAX_REPLY_CHARS = PARSED_REPLY_CHARS
 #: The most records read: the sets hold at most a few tens of thousands of questions.
 MAX_RECORDS = 1_000_000
+#: The longest record name (``doc_id``, ``index``) kept: a table and a disagreement quote it.
+MAX_ITEM_CHARS = 200
 #: The most options a question may have (labels ``A``-``Z``).
 MAX_OPTIONS = 26
 

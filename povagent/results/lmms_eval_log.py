@@ -26,9 +26,10 @@ import json
 from pathlib import Path
 from typing import Any, Mapping
 
-from povagent.dataset.problems import Problem
+from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import PredictionsError, ReadTargetError
 from povagent.results.harness_logs import (
+    MAX_ITEM_CHARS,
     MAX_LOG_BYTES,
     MAX_LOG_LINE_BYTES,
     MAX_RECORDS,
@@ -79,6 +80,10 @@ def read_lmms_eval_log(file: Path) -> HarnessLog:
             except (json.JSONDecodeError, TooDeepError) as exc:
                 log.problems.append(Problem(name, where, f"not a JSON record ({str(exc).split(':')[0]}); record left out"))
                 continue
+            if lone := not_text_problems(name, record):  # "\ud800" reads as a str no file or console can hold
+                path = lone[0].json_path
+                log.problems.append(Problem(name, where + (path[1:] if path.startswith("$") else path), f"{lone[0].message}; record left out"))
+                continue
             read = _reply(record, where)
             if isinstance(read, tuple):
                 log.problems.append(Problem(name, *read))
@@ -128,8 +133,8 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
     if not isinstance(record, dict):
         return where, f"a record must be a JSON object (got {type(record).__name__}); record left out"
     doc_id = record.get("doc_id")
-    if isinstance(doc_id, bool) or not isinstance(doc_id, (int, str)) or str(doc_id) == "":
-        return f"{where}.doc_id", "required, a number or text naming the document; record left out"
+    if isinstance(doc_id, bool) or not isinstance(doc_id, (int, str)) or not 0 < len(str(doc_id)) <= MAX_ITEM_CHARS:
+        return f"{where}.doc_id", f"required, a number or text of at most {MAX_ITEM_CHARS} characters naming the document; record left out"
     filtered = checked_reply(_first_text(record.get("filtered_resps")))
     if "filtered_resps" not in record or filtered is None:
         return f"{where}.filtered_resps", f"required, the reply as text of at most {MAX_REPLY_CHARS} characters; record left out"

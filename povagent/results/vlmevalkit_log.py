@@ -25,6 +25,7 @@ from typing import Any, Iterable
 from povagent.dataset.problems import Problem
 from povagent.errors import PredictionsError, ReadTargetError
 from povagent.results.harness_logs import (
+    MAX_ITEM_CHARS,
     MAX_LOG_BYTES,
     MAX_OPTIONS,
     MAX_RECORDS,
@@ -163,8 +164,8 @@ def _listed_options(cell: str) -> tuple[tuple[str, str], ...]:
 def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
     """The row as a logged reply, or ``(where, message)`` saying which cell is wrong."""
     index = _text(row.get("index"))
-    if not index:
-        return f"{where}.index", "required, the row's index; row left out"
+    if not 0 < len(index) <= MAX_ITEM_CHARS:
+        return f"{where}.index", f"required, the row's index (at most {MAX_ITEM_CHARS} characters); row left out"
     prediction = row.get("prediction")
     reply = checked_reply(_text(prediction) if not isinstance(prediction, str) else prediction)
     if reply is None:

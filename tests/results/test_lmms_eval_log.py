@@ -89,7 +89,7 @@ def test_without_listed_options_the_labels_run_from_a_to_the_gold_one(tmp_path):
     [
         ("[1, 2]", "line 2", "a record must be a JSON object (got list); record left out"),
         ('{"doc_id": 0, "target": "B"', "line 2", "not a JSON record (Expecting ',' delimiter); record left out"),
-        ({"doc_id": True, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "required, a number or text naming the document; record left out"),
+        ({"doc_id": True, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "required, a number or text of at most 200 characters naming the document; record left out"),
         ({"doc_id": 5, "target": "B"}, "line 2.filtered_resps", "required, the reply as text of at most 1000000 characters; record left out"),
         ({"doc_id": 5, "target": "B", "filtered_resps": "B", "resps": {"x": 1}}, "line 2.resps", "the reply must be text of at most 1000000 characters; record left out"),
         ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z; record left out"),
@@ -101,6 +101,14 @@ def test_a_bad_record_is_one_problem_naming_file_line_and_field_and_the_rest_are
     log = read_lmms_eval_log(path)
     assert [r.item for r in log.replies] == ["0", "1"]
     assert [str(p) for p in log.problems] == [f"{path}: {where}: {message}"]
+
+
+def test_a_lone_surrogate_is_a_bad_record_named_by_its_field_not_a_crash_later(tmp_path):
+    path = write(tmp_path, '{"doc_id": 0, "target": "B", "filtered_resps": "B\\ud800"}', record(1))
+    log = read_lmms_eval_log(path)
+    assert [r.item for r in log.replies] == ["1"]
+    assert str(log.problems[0]).startswith(f"{path}: line 1.filtered_resps: text holds \\ud800 at character 1, a lone surrogate")
+    assert str(log.problems[0]).endswith("; record left out")
 
 
 def test_a_reply_longer_than_a_parser_reads_is_a_bad_record(tmp_path):

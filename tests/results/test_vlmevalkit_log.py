@@ -114,7 +114,7 @@ def test_a_file_without_the_prediction_column_is_refused_naming_it(tmp_path):
 @pytest.mark.parametrize(
     ("bad", "where", "message"),
     [
-        (row(None), "row 3.index", "required, the row's index; row left out"),
+        (row(None), "row 3.index", "required, the row's index (at most 200 characters); row left out"),
         (row(9, answer="unknown"), "row 3.answer", "'unknown' names no option label A-Z; row left out"),
         (row(9, answer="C"), "row 3.answer", "the gold label 'C' is not among the row's options (A, B); row left out"),
         (row(0), "row 3.index", "'0' is used by an earlier row; this one left out"),
