@@ -16,8 +16,9 @@ What a record gives:
 - gold: the label ``target`` names (:func:`~.harness_logs.gold_label`), else the ``doc``'s
   ``gt_answer`` / ``answer``;
 - options: the lines of ``input`` labelled ``A.``, ``B.``... (else the ``doc``'s ``A``-``D``);
-- category: the first ``question_type``, ``category`` or ``type`` in a metric's dict (what the
-  task's own aggregation groups by), else in ``doc``; ``main_category`` and ``qid`` likewise.
+- category: the first of :data:`CATEGORY_KEYS` in a metric's dict (what the task's own
+  aggregation groups by), else in ``doc``; the main category (:data:`MAIN_CATEGORY_KEYS`) and
+  ``qid`` likewise.
 """
 
 from __future__ import annotations
@@ -42,8 +43,13 @@ from povagent.results.harness_logs import (
     with_gold,
 )
 
-#: The keys a task's per-sample metric (or its ``doc``) names a question's category by, in order.
-CATEGORY_KEYS = ("question_type", "category", "type")
+#: The keys a task's per-sample metric (or its ``doc``) names a question's category by, in order
+#: (at lmms-eval@75571cfe: viewspatial's ``question_type``, 3dsrbench's ``category``, mindcube's
+#: ``type``, omni_spatial's ``sub_task_type``, mmsi_bench's ``l2_category``, vsibench's
+#: ``question_type``).
+CATEGORY_KEYS = ("question_type", "category", "sub_task_type", "type", "l2_category")
+#: The keys naming the broader type a category belongs to (3dsrbench's, omni_spatial's ``task_type``).
+MAIN_CATEGORY_KEYS = ("main_category", "task_type")
 #: What lmms-eval writes besides the metrics.
 _FIXED_KEYS = frozenset({"doc_id", "doc", "target", "arguments", "resps", "filtered_resps", "token_counts", "doc_hash", "input", "input_media"})
 
@@ -155,6 +161,6 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
         return f"{where}.target", f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out"
     return LoggedReply(
         item=str(doc_id), where=where, reply=reply, options=options, gold=gold,
-        category=_metric_field(record, CATEGORY_KEYS), main_category=_metric_field(record, ("main_category",)),
+        category=_metric_field(record, CATEGORY_KEYS), main_category=_metric_field(record, MAIN_CATEGORY_KEYS),
         question_id=_metric_field(record, ("qid",)) or str(doc_id), filtered=filtered,
     )  # fmt: skip

@@ -62,6 +62,12 @@ def test_the_category_and_question_id_come_from_the_tasks_metric_dicts(tmp_path)
     assert (reply.category, reply.main_category, reply.question_id) == ("orientation_viewpoint", "orientation", "VIN6MS3J-flip-1")
 
 
+def test_omni_spatials_sub_task_counts_in_its_task_type(tmp_path):
+    metric = {"score": 1.0, "task_type": "Perspective_Taking", "sub_task_type": "Allocentric"}
+    [reply] = read_lmms_eval_log(write(tmp_path, {"doc_id": 0, "target": "A", "filtered_resps": "A", "omni_spatial_score": metric})).replies
+    assert (reply.category, reply.main_category) == ("Allocentric", "Perspective_Taking")
+
+
 def test_a_logged_doc_of_an_older_lmms_eval_gives_the_gold_and_options(tmp_path):
     doc = {"question": "q", "A": "left", "B": "right", "C": "nan", "answer": "B", "category": "height_higher"}
     [reply] = read_lmms_eval_log(write(tmp_path, {"doc_id": 0, "doc": doc, "target": "", "filtered_resps": "B"})).replies
