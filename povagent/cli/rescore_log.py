@@ -59,8 +59,10 @@ def render_rescored_log(result: object, shown: int) -> None:
         heading = f"The rules read {result.disagreements_total} of {result.items} replies differently (first {min(shown, len(result.disagreements))}; ✓ a hit)"
         for table in fitted_tables([("item", "label"), ("reply", "label"), ("gold", "label"), *((n, "label") for n in names)], lines, title=heading):
             console.print(table)
-    else:
+    elif result.items:
         typer.echo(f"Every rule reads the same label in all {result.items} replies.")
+    else:
+        typer.echo("No record of the log could be scored (each is named below).")
     for problem in result.problems[:shown]:
         typer.echo(f"bad record: {problem}", err=True)
     if result.bad_records:
