@@ -49,6 +49,8 @@ def render_rescored_log(result: object, shown: int) -> None:
                "over questions.")  # fmt: skip
     for table in fitted_tables([("slice", "label"), *((r.rule, "number") for r in result.rules)], rows, caption=caption):
         console.print(table)
+    for note in result.notes:
+        typer.echo(f"note: {note}")
     if result.stripped:
         typer.echo(f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
                    "(resps differs from filtered_resps): each rule above reads the field its 'reads' names.")  # fmt: skip

@@ -73,6 +73,8 @@ class HarnessLog:
     reply_field: str = ""
     #: The field holding the harness's filtered reply (``filtered_resps``), or ``""``.
     filtered_field: str = ""
+    #: What a reader of the numbers must know about the log as a whole (one sentence each).
+    notes: list[str] = field(default_factory=list)
 
     @property
     def stripped(self) -> int:

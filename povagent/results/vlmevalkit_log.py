@@ -4,7 +4,7 @@ read as logged replies.
 At the pinned commit (open-compass/VLMEvalKit@e8e78f05, ``vlmeval/inference.py``
 ``infer_data_job`` and ``vlmeval/smp/file.py`` ``dump``) the file is the dataset's table without its
 ``image`` column, plus ``prediction`` (the reply as text; with ``SPLIT_THINK`` set, the text after
-``</think>``, the reasoning in ``thinking``): an xlsx sheet written by pandas (header row first), or
+``</think>``, the reasoning in ``thinking``: the log then says so in a note): an xlsx sheet written by pandas (header row first), or
 a tab-separated file with every cell quoted (``csv.QUOTE_ALL``), cells free to hold newlines.
 Columns read: ``index``, ``answer``, ``prediction``, the options (``A``, ``B``... or, for
 ViewSpatial-Bench, ``candidates``: ``"A. right\\nB. left"`` or a list of them), the category
@@ -60,6 +60,7 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     log = HarnessLog(file, "vlmevalkit", reply_field="prediction")
     header: list[str] | None = None
     seen: set[str] = set()
+    thought = 0  # rows whose reasoning VLMEvalKit moved to the thinking column
     name = str(file)
     for number, cells in rows:
         if header is None:
@@ -75,6 +76,7 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
         row = dict(zip(header, cells))
         if all(_text(v) == "" for v in row.values()):
             continue
+        thought += bool(_text(row.get("thinking")))
         read = _reply(row, where)
         if isinstance(read, tuple):
             log.problems.append(Problem(name, *read))
@@ -85,6 +87,9 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
             log.replies.append(read)
     if header is None:
         raise PredictionsError(f"{file}: holds no header row (a VLMEvalKit prediction file has {', '.join(REQUIRED)})")
+    if thought:
+        log.notes.append(f"{thought} rows keep reasoning in a thinking column (VLMEvalKit's SPLIT_THINK): prediction, what every rule "
+                         "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would")  # fmt: skip
     return log
 
 

@@ -88,6 +88,7 @@ class RescoredLog(BaseModel):
     bad_records: int = Field(description="Records left out, each named in problems.")
     problems: list[str] = Field(default_factory=list)
     stripped: int = Field(description="Replies the harness's own filter changed (lmms-eval: resps differs from filtered_resps).")
+    notes: list[str] = Field(default_factory=list, description="What a reader of the numbers must know about the log as a whole.")
     rules: list[RuleResult]
     disagreements_total: int = 0
     disagreements: list[Disagreement] = Field(default_factory=list)
@@ -169,7 +170,7 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
     ]
     return RescoredLog(
         set=set_name, harness=harness, file=str(file), items=len(log.replies), bad_records=len(log.problems),
-        problems=[str(p) for p in log.problems], stripped=log.stripped, rules=results,
+        problems=[str(p) for p in log.problems], stripped=log.stripped, notes=log.notes, rules=results,
         disagreements_total=len(disagreements), disagreements=disagreements[:MAX_DISAGREEMENTS],
     )  # fmt: skip
 

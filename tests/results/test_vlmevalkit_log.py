@@ -105,6 +105,14 @@ def test_an_xlsx_unpacking_past_the_bound_is_refused_before_it_is_parsed(tmp_pat
         read_vlmevalkit_predictions(path)
 
 
+def test_a_file_split_by_split_think_says_so_in_a_note(tmp_path):
+    header = ["index", "answer", "prediction", "thinking"]
+    log = read_vlmevalkit_predictions(tsv(tmp_path, [[0, "A", "A", "The lamp is right, so A."], [1, "B", "B", ""]], header))
+    assert len(log.replies) == 2
+    assert log.notes == ["1 rows keep reasoning in a thinking column (VLMEvalKit's SPLIT_THINK): prediction, what every rule reads here, "
+                         "is the text after </think>, so a rule that reads the whole reply as written sees less than it would"]  # fmt: skip
+
+
 def test_a_file_without_the_prediction_column_is_refused_naming_it(tmp_path):
     path = tsv(tmp_path, [[0, "B"]], ["index", "answer"])
     with pytest.raises(PredictionsError, match=r"row 1: no column prediction"):
