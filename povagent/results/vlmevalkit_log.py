@@ -88,7 +88,7 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     if header is None:
         raise PredictionsError(f"{file}: holds no header row (a VLMEvalKit prediction file has {', '.join(REQUIRED)})")
     if thought:
-        log.notes.append(f"{thought} rows keep reasoning in a thinking column (VLMEvalKit's SPLIT_THINK): prediction, what every rule "
+        log.notes.append(f"rows keeping reasoning in a thinking column: {thought} (VLMEvalKit's SPLIT_THINK); prediction, what every rule "
                          "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would")  # fmt: skip
     return log
 

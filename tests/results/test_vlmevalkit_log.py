@@ -109,7 +109,7 @@ def test_a_file_split_by_split_think_says_so_in_a_note(tmp_path):
     header = ["index", "answer", "prediction", "thinking"]
     log = read_vlmevalkit_predictions(tsv(tmp_path, [[0, "A", "A", "The lamp is right, so A."], [1, "B", "B", ""]], header))
     assert len(log.replies) == 2
-    assert log.notes == ["1 rows keep reasoning in a thinking column (VLMEvalKit's SPLIT_THINK): prediction, what every rule reads here, "
+    assert log.notes == ["rows keeping reasoning in a thinking column: 1 (VLMEvalKit's SPLIT_THINK); prediction, what every rule reads here, "
                          "is the text after </think>, so a rule that reads the whole reply as written sees less than it would"]  # fmt: skip
 
 
