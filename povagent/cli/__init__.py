@@ -28,6 +28,7 @@ COMMAND_MODULES = (
     "povagent.cli.dataset",    # validate, score
     "povagent.cli.pipeline",   # run, sweep, plugins
     "povagent.cli.prompting",  # show-prompt, parse, rescore
+    "povagent.cli.rescore_log",  # rescore-log
     "povagent.cli.generate",   # generate
     "povagent.cli.render",     # render
     "povagent.cli.reporting",  # report, export, compare

@@ -8,14 +8,14 @@ import typer
 from povagent.cli import app
 
 #: The names ``povagent schema`` takes, in the order its help lists them.
-SCHEMA_NAMES = ("summary", "row", "sweep", "export")
+SCHEMA_NAMES = ("summary", "row", "sweep", "export", "rescore-log")
 
 
 @app.command("schema")
 def schema_command(
     name: str = typer.Argument(
         ..., metavar="NAME",
-        help="summary (a run's summary.json), row (a results.jsonl line), sweep (sweep.json) or export (export.json).",
+        help="summary (a run's summary.json), row (a results.jsonl line), sweep (sweep.json), export (export.json) or rescore-log (rescore-log --json).",
     ),
 ) -> None:
     """Print the JSON Schema of a file povagent writes.

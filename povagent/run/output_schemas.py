@@ -1,5 +1,5 @@
 """The JSON Schemas of what povagent writes: ``summary.json``, a results row, ``sweep.json`` and
-a training export's ``export.json``, generated from their pydantic models and shipped.
+a training export's ``export.json``, and ``povagent rescore-log --json``'s object, generated from their pydantic models and shipped.
 
 ``povagent schema NAME`` prints one; ``python -m povagent.run.output_schemas`` rewrites the shipped
 files (``povagent/schemas/output_<name>.schema.json``), and a test checks they equal what the
@@ -22,6 +22,7 @@ from typing import Any
 from pydantic import BaseModel
 
 from povagent.results.rows import ResultRow
+from povagent.run.rescore_log import RescoredLog
 from povagent.run.summary_model import RunSummary
 from povagent.run.sweep_index import SweepIndex
 from povagent.train.export_manifest import ExportManifest
@@ -32,6 +33,7 @@ OUTPUT_MODELS: dict[str, tuple[type[BaseModel], str]] = {
     "row": (ResultRow, "one line of a run folder's results.jsonl"),
     "sweep": (SweepIndex, "a sweep folder's sweep.json (the cell index)"),
     "export": (ExportManifest, "a training export's export.json (its options and plan)"),
+    "rescore-log": (RescoredLog, "povagent rescore-log --json: another harness's logged replies scored by each rule of their set"),
 }
 
 

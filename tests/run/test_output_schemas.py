@@ -48,7 +48,7 @@ def test_povagent_schema_prints_the_shipped_schema(name):
 def test_povagent_schema_refuses_an_unknown_name_naming_the_known_ones():
     result = CliRunner().invoke(app, ["schema", "summaries"])
     assert result.exit_code != 0
-    assert "summary, row, sweep, export" in str(result.exception)
+    assert "summary, row, sweep, export, rescore-log" in str(result.exception)
 
 
 @pytest.fixture(scope="module")

@@ -99,6 +99,11 @@ class MindCubeParser(RuleParser):
 
     reads = "lmms-eval's mindcube: its reasoning-tag strip (<think>, <analysis> blocks), then MindCube's five-step cascade over capital A-E"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's port of MindCube's rule"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    #: lmms-eval's overall counts every question (MindCube's own leaves translation out)
+    harness_sets = (("mindcube", "choice"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
@@ -110,6 +115,8 @@ class MindCubeOfficialParser(RuleParser):
 
     reads = "MindCube's own evaluator: the five-step cascade over capital A-E on the reply as written (a <think> block is read like any text)"
     beside_official = "reads choice answers, which the official (point) parser does not read; MindCube's own rule, the set's default"
+    source = MINDCUBE
+    harness = "MindCube"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

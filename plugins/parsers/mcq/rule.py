@@ -8,6 +8,8 @@ rule is applied, as the ``choice`` parser does.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 
@@ -20,6 +22,18 @@ class RuleParser(Parser):
     beside_official = ""
     #: Why a reply with no label is not one (the rule's own word for it, e.g. VLMEvalKit's ``Z``).
     no_label_reason = "the rule reads no option label"
+    #: Where the rule comes from, ``owner/repo@commit`` (:mod:`.upstream`).
+    source: ClassVar[str] = ""
+    #: Whose rule it is: a harness (``lmms-eval``, ``VLMEvalKit``) or the set's own code.
+    harness: ClassVar[str] = ""
+    #: ``(set, scorer)`` pairs: the sets (dataset format keys) ``harness`` reads with this rule,
+    #: each with the scorer that counts its hits as the harness does: what ``povagent rescore-log``
+    #: scores a log of the set with, beside the set's official rule. A set added later names its
+    #: harness rules here.
+    harness_sets: ClassVar[tuple[tuple[str, str], ...]] = ()
+    #: The filter the rule applies to the reply itself before reading it, as its harness does
+    #: (lmms-eval's reasoning-tag strip); ``""``: it reads the reply as written.
+    harness_filter: ClassVar[str] = ""
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The label the rule reads in ``text``, or ``None`` where it reads none."""

@@ -47,6 +47,10 @@ class ThreeDSRBenchLmmsParser(RuleParser):
 
     reads = "lmms-eval's 3dsrbench: its reasoning-tag strip (<think>, <analysis> blocks), then the first of eight capital A-D patterns that matches"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's reading of 3DSRBench"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    harness_sets = (("3dsrbench", "choice-3dsrbench"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

@@ -39,6 +39,10 @@ class ViewSpatialParser(RuleParser):
 
     reads = "lmms-eval's viewspatial: its reasoning-tag strip (<think>, <analysis> blocks, then whitespace), then the first A-D standing alone on the last line, any case"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's port of ViewSpatial-Bench's rule"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    harness_sets = (("viewspatial", "choice"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
@@ -58,6 +62,8 @@ class ViewSpatialOfficialParser(RuleParser):
 
     reads = "ViewSpatial-Bench's evaluate.py: the first A-D standing alone, any case, on the text after the last newline as written (a reply ending in a newline reads nothing)"
     beside_official = "reads choice answers, which the official (point) parser does not read; ViewSpatial-Bench's own rule, the set's default"
+    source = VIEWSPATIAL_BENCH
+    harness = "ViewSpatial-Bench"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

@@ -85,6 +85,10 @@ class VlmevalkitExactParser(RuleParser):
     reads = "one option letter among the last words, else 'answer is X', else one option's text; else Z (VLMEvalKit, no judge)"
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's reading without a judge"
     no_label_reason = f"the rule reads {NO_OPTION} (VLMEvalKit's no-option label, scored wrong)"
+    source = VLMEVALKIT
+    harness = "VLMEvalKit"
+    #: VLMEvalKit's ``_3DSRBench`` reads with exact matching (its authors' rule: the set's official one)
+    harness_sets = (("3dsrbench", "choice-3dsrbench"),)
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """The rule's label; options not labelled by capital letters are refused, as VLMEvalKit asserts."""

@@ -142,6 +142,10 @@ class VlmevalkitSpatialParser(RuleParser):
     reads = "an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit spatial bench)"
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's spatial-bench reading without a judge"
     no_label_reason = "the rule reads no option letter (VLMEvalKit's False)"
+    source = VLMEVALKIT
+    harness = "VLMEvalKit"
+    #: VLMEvalKit's ViewSpatialBench and MindCubeBench score with compute_mcq_score (no judge)
+    harness_sets = (("viewspatial", "choice-vlmevalkit"), ("mindcube", "choice-vlmevalkit"))
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's letter."""
