@@ -65,8 +65,8 @@ from povagent.config.quoting import Loc
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError
+from povagent.files.redaction import Redactor
 from povagent.plugins import PluginHost
-from povagent.run.logs import Redactor
 
 
 def pipeline_from_source(

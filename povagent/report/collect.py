@@ -30,6 +30,7 @@ import yaml
 
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
@@ -37,7 +38,6 @@ from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
 from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
 
@@ -458,9 +458,9 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
     environment values) from an observation's answer texts, or ``None`` when none is known.
 
     A run made before answers were redacted as they arrived may hold a key a server echoed:
-    the report never copies it onto its pages (see :meth:`povagent.run.logs.Redactor.known`).
+    the report never copies it onto its pages (see :meth:`povagent.files.redaction.Redactor.known`).
     """
-    from povagent.run.logs import Redactor, secrets_named_by
+    from povagent.files.redaction import Redactor, secrets_named_by
 
     redactor = Redactor(secrets_named_by(config))
     if not redactor.knows_secrets:

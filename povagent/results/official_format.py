@@ -241,9 +241,9 @@ def write_official_predictions(
 
     Written aside and renamed (a reader never sees half a file), never through a link planted
     at ``path`` or in a folder between ``root`` (the folder the user named, default ``path``'s
-    own) and it: see :mod:`povagent.run.confined_write`.
+    own) and it: see :mod:`povagent.files.confined_write`.
     """
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     p = Path(path)
     base = Path(root) if root is not None else p.parent

@@ -52,7 +52,7 @@ def summary_json_text(data: Any, indent: int | None = 1, default: Any = None) ->
 def write_summary_json(path: Path, data: Any, indent: int | None = 1, default: Any = None) -> None:
     """Write ``data`` to ``path`` as :func:`summary_json_text` with a trailing newline, aside and
     renamed into place, never through a link planted at ``path`` (see
-    :mod:`povagent.run.confined_write`)."""
-    from povagent.run.confined_write import write_inside
+    :mod:`povagent.files.confined_write`)."""
+    from povagent.files.confined_write import write_inside
 
     write_inside(path.parent, path.name, summary_json_text(data, indent, default) + "\n")

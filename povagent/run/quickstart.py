@@ -13,9 +13,9 @@ from typing import Callable
 
 import yaml
 
+from povagent.files.confined_write import write_inside
 from povagent.geometry.directions import DIRECTION_NAMES
 from povagent.results.official_reading import OFFICIAL_PARSER
-from povagent.run.confined_write import write_inside
 from povagent.scoring.protocols import default_scorers
 
 #: The baselines the quickstart compares (all offline and instant).

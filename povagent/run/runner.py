@@ -47,14 +47,15 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
+from povagent.files.confined_write import write_inside
+from povagent.files.folder_lock import folder_lock
+from povagent.files.redaction import Redactor, secrets_named_by
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
-from povagent.run.confined_write import write_inside
-from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
-from povagent.run.logs import Redactor, RunLog, secrets_named_by
+from povagent.run.logs import RunLog
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder

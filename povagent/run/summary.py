@@ -171,9 +171,9 @@ def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None)
     ``null``, so the file is always JSON. Written aside and renamed, never through a link planted
     at ``path`` or in a folder between ``root`` (the folder the user named; default ``path``'s
     own) and it; a full disk leaves the old file and no half-written copy beside it (see
-    :mod:`povagent.run.confined_write`).
+    :mod:`povagent.files.confined_write`).
     """
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     summary = RunSummary.model_validate(data)
     text = summary_json_text(data, indent=2, default=str)

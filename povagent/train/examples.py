@@ -21,7 +21,7 @@ from povagent.dataset.loader import House
 from povagent.errors import DatasetError, ReadTargetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.train.choice_rationale import choice_rationale_text
 from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
