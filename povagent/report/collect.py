@@ -39,7 +39,7 @@ from povagent.report.systems import Pooling, assign_systems, planted_label, set_
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
-from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
+from povagent.scoring.protocols import PROTOCOLS, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -207,6 +207,8 @@ def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     Read from the config first because a row that failed before scoring (an infra error) has
     no scores, yet still counts: as a non-response, and for a hit protocol as a failure.
     """
+    from povagent.config.pipeline import default_scorers  # the plugin checks: only when asked
+
     known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
     carried = list(rows.carried_scores) if isinstance(rows, StoredRows) else list(dict.fromkeys(name for row in rows for name in row.scores))

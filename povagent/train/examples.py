@@ -22,8 +22,8 @@ from povagent.errors import DatasetError, ReadTargetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.tasks.scene_facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.choice_rationale import choice_rationale_text
-from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
 
 if TYPE_CHECKING:  # the generator's scene loads only when a task asks

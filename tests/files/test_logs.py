@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from povagent.run.logs import RunLog
+from povagent.files.logs import RunLog
 
 
 def test_events_are_json_lines_with_level_and_time(tmp_path):

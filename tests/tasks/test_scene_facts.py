@@ -10,7 +10,7 @@ import pytest
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.geometry.camera import Camera
-from povagent.train.facts import facing_relative_to, gt_pixel, image_direction, teaching_frame
+from povagent.tasks.scene_facts import facing_relative_to, gt_pixel, image_direction, teaching_frame
 
 # an observer at the origin facing +x (the anchor 2 m along +x)
 OBSERVER = np.array([0.0, 0.0])
