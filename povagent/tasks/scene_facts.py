@@ -167,11 +167,6 @@ def facing_words(angle: float) -> str:
     return FACINGS[3] if angle > 0 else FACINGS[2]
 
 
-def facing_relative_to(camera: Camera, observer_xz: np.ndarray, anchor_xz: np.ndarray) -> str:
-    """Which way an observer at ``observer_xz`` facing ``anchor_xz`` looks, seen from ``camera``."""
-    return facing_words(facing_angle(camera, observer_xz, anchor_xz))
-
-
 def image_direction(du: float, dv: float) -> str:
     """Eight-way words for an image-space step ``(du, dv)`` (v grows downwards)."""
     angle = math.degrees(math.atan2(-dv, du)) % 360.0  # 0 = right, 90 = up the image

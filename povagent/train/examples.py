@@ -9,7 +9,6 @@ The answer is the rationale text from :mod:`povagent.train.rationale`, ending in
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -225,8 +224,3 @@ def house_examples(
             answer_json=answer.rsplit("\n", 1)[-1],
             facts=facts,
         )
-
-
-def answer_fields(example: TrainingExample) -> dict[str, Any]:
-    """The answer's JSON as a mapping (what the official parser reads from the last line)."""
-    return dict(json.loads(example.answer_json))
