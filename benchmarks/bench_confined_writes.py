@@ -4,7 +4,7 @@
 
 Each figure sets the new way beside the old one, measured in this one run on this machine:
 
-* opening a run's journal or log to append: :func:`povagent.run.confined_write.open_inside`
+* opening a run's journal or log to append: :func:`povagent.files.confined_write.open_inside`
   (descriptor walk, ``O_NOFOLLOW``, a hard-link check) beside ``open(path, "a")``; once per file
   and run, never per row;
 * writing a ``summary.json`` whole: ``write_inside`` (aside, renamed) beside the previous
@@ -32,11 +32,11 @@ from pathlib import Path
 from typing import Any, Callable
 
 from PIL import Image
+from results_file import record
 
 from povagent.exchange.images import ImageStore
-from povagent.run.confined_write import open_inside, write_inside
-from povagent.run.logs import Redactor
-from results_file import record
+from povagent.files.confined_write import open_inside, write_inside
+from povagent.files.redaction import Redactor
 
 #: The runner's per-instance overhead target (benchmarks/bench_runner.py).
 OVERHEAD_TARGET_MS = 2.0

@@ -46,8 +46,8 @@ from povagent.geometry.size_priors import size_prior
 from povagent.geometry.triangulation import Sighting, locate
 from povagent.plugins import get_plugin_host
 from povagent.scoring.official import score_point
+from povagent.tasks.scene_facts import PixelBox
 from povagent.train.examples import house_examples, make_strategy
-from povagent.train.facts import PixelBox
 from povagent_plugins.strategies.geometric import Detection, parse_detections
 
 SPAN = r", spanning x (\d+)-(\d+) and y (\d+)-(\d+)"

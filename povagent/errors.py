@@ -46,7 +46,7 @@ class ResultsError(PovagentError):
 class WriteTargetError(PovagentError):
     """A place povagent writes is a symbolic link, a second name of another file, or the wrong
     kind of entry (a file where a folder goes, or the reverse): refused, never followed
-    (see :mod:`povagent.run.confined_write`)."""
+    (see :mod:`povagent.files.confined_write`)."""
 
 
 class OutputFileError(PovagentError):
@@ -58,7 +58,7 @@ class ReadTargetError(PovagentError):
     """A file povagent reads from a folder someone else may have made is not a regular file (a
     pipe, a device, a socket, a folder), is larger than what it may hold, or leads through a
     link where none belongs: refused before it is read, never waited on
-    (see :mod:`povagent.run.confined_read`). ``reason`` is the message without the file's name."""
+    (see :mod:`povagent.files.confined_read`). ``reason`` is the message without the file's name."""
 
     reason: str = ""
 

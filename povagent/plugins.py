@@ -296,7 +296,7 @@ class PluginHost:
         except (TypeError, ValueError) as exc:
             # Wrong or invalid options: a user error worth a clear message, not a traceback.
             # The message reaches the terminal: a secret passed as an option must not.
-            from povagent.run.logs import Redactor
+            from povagent.files.redaction import Redactor
 
             redactor = Redactor()
             shown = redactor.value(dict(options or {}))

@@ -56,3 +56,45 @@ def test_what_is_where_names_every_package_of_the_core():
 
 def test_what_is_where_names_only_folders_that_exist():
     assert [f for f in what_is_where() if not (ROOT / f).is_dir()] == []
+
+
+def section(title: str) -> str:
+    """The README's ``## title`` section."""
+    return (ROOT / "README.md").read_text(encoding="utf-8").split(f"## {title}", 1)[1].split("\n## ", 1)[0]
+
+
+def test_the_quickstart_house_count_is_what_the_quickstart_generates():
+    import inspect
+
+    from povagent.report.quickstart import run_quickstart
+
+    houses = int(re.search(r"Generate a (\d+)-house", section("Quickstart")).group(1))
+    assert houses == inspect.signature(run_quickstart).parameters["houses"].default
+
+
+def test_the_suite_times_are_the_measured_ones():
+    wall, cpu = re.search(r"about ([\d.]+) min after the install \((\d+) s of CPU\)", " ".join(section("Quickstart").split())).groups()
+    results = (ROOT / "benchmarks" / "RESULTS.md").read_text(encoding="utf-8")
+    assert f"| the README's test command, wall time | {wall} min |" in results
+    assert f"| the README's test command, CPU time | {cpu} s |" in results
+
+
+def job_commands() -> list[list[str]]:
+    block = re.search(r"```bash\n(.*?)```", section("Four jobs, one command each"), flags=re.S).group(1)
+    return [line.split("#", 1)[0].split() for line in block.strip().splitlines()]
+
+
+def test_the_four_jobs_are_four_povagent_commands_that_exist():
+    from typer.main import get_command
+
+    from povagent.cli import app
+
+    commands = get_command(app).commands  # type: ignore[attr-defined]
+    jobs = job_commands()
+    assert len(jobs) == 4 and all(job[0] == "povagent" and job[1] in commands for job in jobs)
+    assert [arg for job in jobs for arg in job[2:] if arg.startswith("examples/") and not (ROOT / arg).is_file()] == []
+
+
+def test_each_job_links_its_how_to():
+    linked = set(re.findall(r"\]\((docs/how-to/[\w-]+\.md)\)", section("Four jobs, one command each")))
+    assert {"docs/how-to/paper-tables.md", "docs/how-to/perspective-sets.md", "docs/how-to/active.md", "docs/how-to/human-study.md"} <= linked

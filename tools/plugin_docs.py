@@ -320,7 +320,7 @@ def render_fields(target: str) -> str:
     stale = sorted(set(notes) - {n for n, _, _ in fields})
     if missing or stale:
         raise PluginDocsError(
-            f"fields {target}: FIELD_NOTES[{class_name!r}] in povagent/plugin_docs.py must describe exactly the fields of "
+            f"fields {target}: FIELD_NOTES[{class_name!r}] in tools/plugin_docs.py must describe exactly the fields of "
             f"{class_name}; fields without a note: {missing or 'none'}; notes for no field: {stale or 'none'}"
         )
     lines = [f"`{module_name}.{class_name}`: {_summary(cls)}", "",

@@ -7,7 +7,7 @@ fills memory, ``config.json`` holding a list ends in an ``AttributeError`` trace
 safetensors header claiming 2^62 bytes ends in a ``SafetensorError``, and pickle weights
 (``pytorch_model.bin``, read with ``torch.load``) are a format that can run code. This module
 checks the folder first, reading files only through the confined reader
-(:mod:`povagent.run.confined_read`), and says what is wrong in one line naming the file:
+(:mod:`povagent.files.confined_read`), and says what is wrong in one line naming the file:
 
 - every entry below the folder (links followed, as a Hugging Face cache snapshot links each
   file to a blob; hidden folders such as ``.git`` left out, ``transformers`` never reads them)
@@ -36,7 +36,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from povagent.errors import ConfigError
-from povagent.run.confined_read import check_regular, open_regular, read_regular
+from povagent.files.confined_read import check_regular, open_regular, read_regular
 
 #: A safetensors header larger than this is not one (the format caps it at 100 MB).
 MAX_HEADER_BYTES = 100_000_000

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.errors import ConfigError
-from povagent.run.logs import ENV_NAME_WANTED, Redactor
+from povagent.files.redaction import ENV_NAME_WANTED, Redactor
 
 #: Router constructor settings a pipeline may set (litellm.Router keyword arguments).
 ROUTER_SETTINGS = frozenset(

@@ -20,7 +20,7 @@ import os
 import struct
 from pathlib import Path
 
-from povagent.run.confined_read import open_regular, read_regular
+from povagent.files.confined_read import open_regular, read_regular
 from povagent_plugins.backends.checkpoint_checks import MAX_HEADER_BYTES, MAX_TEXT_BYTES
 
 #: Files that describe the model, hashed whole when present.

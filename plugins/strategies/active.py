@@ -2,8 +2,8 @@
 
 The first message is the condition's passive prompt (A/B: the first ``max_frames`` exploration
 frames, labelled ``Image k``; C: the observer view) followed by the tools preamble, which
-states the budget; every request offers the registered tools (``register_tools``: the built-in
-six of :mod:`povagent_plugins.tools` and any plugin's, :mod:`povagent.active.tools`). Each turn's
+states the budget; every request offers the registered tools (``register_tools``: the built-ins
+of :mod:`povagent_plugins.tools` and any plugin's, :mod:`povagent.active.tools`). Each turn's
 calls run in an :class:`~povagent.active.episode.Episode`; each tool result goes back as a
 ``tool`` message, and each rendered view as an image labelled ``View n:`` in a user message
 after them (tool messages carry no images). The episode ends with the ``answer`` call, or with

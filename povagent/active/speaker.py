@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.errors import DatasetError, ReadTargetError
-from povagent.run.confined_read import read_regular
+from povagent.files.confined_read import read_regular
 
 #: The answer to any question outside the speaker's facts.
 CANNOT_SAY = "I can't say more."

@@ -1,6 +1,6 @@
 """What an active-mode tool is, the set an episode offers, and the reading of a call.
 
-What it is for: a tool is contributed by a plugin (``register_tools``, the built-in six by
+What it is for: a tool is contributed by a plugin (``register_tools``, the built-in ones by
 ``povagent_plugins.tools`` exactly as a third party's): it declares the schema the model is
 offered (OpenAI function calling, sent by litellm as ``tools=``), how the preamble and the docs
 describe it, how its arguments are read, and what it does to the episode (a typed function over

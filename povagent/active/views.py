@@ -7,7 +7,7 @@ episode as a whole, find every view it already rendered without rendering it aga
 
 A run folder is untrusted once it exists (a resumed run, a copied one): whoever prepared it may
 have planted links or odd files there. So every write goes through the confined writer every
-writer of povagent uses (:mod:`povagent.run.confined_write`: no link below the run folder is
+writer of povagent uses (:mod:`povagent.files.confined_write`: no link below the run folder is
 followed, a file is written aside and renamed over its name, so a killed run leaves whole files
 or none), and every read through :func:`read_view_file` (no link followed, no wait on a pipe, a
 regular file of bounded size only). A stored view is used only if its bytes hash to the SHA-256
@@ -29,8 +29,8 @@ from pathlib import Path
 
 from povagent.active.pose import Pose
 from povagent.errors import ReadTargetError, WriteTargetError
-from povagent.run.confined_read import read_at
-from povagent.run.confined_write import ConfinedFolder
+from povagent.files.confined_read import read_at
+from povagent.files.confined_write import ConfinedFolder
 
 #: The folder inside the run folder, and the camera index inside it.
 VIEWS = "views"
@@ -51,7 +51,7 @@ def camera_key(house: str, pose: Pose) -> str:
 def read_view_file(folder: ConfinedFolder, name: str, limit: int) -> bytes | None:
     """The bytes of ``name`` in ``folder``, or ``None`` unless it is a regular file of at most
     ``limit`` bytes, read through the folder's descriptor by the one confined reader
-    (:func:`~povagent.run.confined_read.read_at`: no link followed, no wait on a pipe, never
+    (:func:`~povagent.files.confined_read.read_at`: no link followed, no wait on a pipe, never
     past the bound)."""
     try:
         return read_at(folder, name, limit, what="view")

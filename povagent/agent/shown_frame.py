@@ -39,8 +39,8 @@ from PIL import Image, UnidentifiedImageError
 from povagent.agent.frame_inputs import FrameInput, array_image, checked_array, load_frame
 from povagent.errors import BadInputError
 from povagent.exchange.images import encode_png
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.geometry.letterbox import BENCHMARK_SIZE, DEFAULT_PAD_COLOR, Letterbox
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Formats a file may be passed through in unchanged (what every backend accepts as is).
 _PASS_THROUGH_FORMATS = frozenset({"PNG", "JPEG"})

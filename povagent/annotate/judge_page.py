@@ -24,7 +24,7 @@ from PIL import Image
 from povagent.annotate.desk import AnswerRefused
 from povagent.annotate.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal, judged_item, run_identity
 from povagent.errors import ConfigError
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.scoring.official import scoring_frame
 
 MEDIA_TYPES = {"PNG": "image/png", "JPEG": "image/jpeg", "WEBP": "image/webp"}

@@ -10,7 +10,7 @@ speaker's view (``success``), is not (``failure``), or cannot be told (``cant_te
 optional note. Each is one line of ``<judgements folder>/<judge>.jsonl``, appended and fsynced
 before the page hears "saved", so a judge session stopped at any moment resumes after the last
 judgement it acknowledged. The file is written and read through the confined writer and reader
-(:mod:`povagent.run.confined_write`): the folder the judge named is followed, but the default
+(:mod:`povagent.files.confined_write`): the folder the judge named is followed, but the default
 ``judgements/`` beside the runs, and the file in it, are never followed as links (one planted
 there is refused, nothing written). The report reads these files (:mod:`povagent.report.manual`);
 a line that does not read as a judgement (a torn last line) is skipped, never guessed.
@@ -27,8 +27,8 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_inside, read_regular
-from povagent.run.confined_write import ConfinedFolder
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_inside, read_regular
+from povagent.files.confined_write import ConfinedFolder
 
 Verdict = Literal["success", "failure", "cant_tell"]
 VERDICTS: tuple[str, ...] = ("success", "failure", "cant_tell")

@@ -42,7 +42,8 @@ def protocol_scorers(summary: RunSummary | ScoreSummary, protocol: str) -> list[
     """The scorers of the summarized rows that follow ``protocol`` (``Scorer.protocol``): those
     the pipeline names, else those that declared metrics (a rescore), else, for a summary written
     before either was recorded, the pipeline's default scorers."""
-    from povagent.scoring.protocols import default_scorers, registered_protocols
+    from povagent.config.pipeline import default_scorers
+    from povagent.scoring.protocols import registered_protocols
 
     pipeline = getattr(summary, "pipeline", None)
     names = list(pipeline.scorers) if pipeline is not None else list(summary.metrics or {}) or default_scorers()

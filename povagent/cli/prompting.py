@@ -87,9 +87,8 @@ def show_prompt_command(
     them; the images (markers drawn) are saved to a folder. A multi-turn strategy's later turns
     show <<the model's answer to turn N>> where its earlier answer will stand.
     """
-    from povagent.config.pipeline import load_pipeline
+    from povagent.config.pipeline import load_pipeline, resolve_hub_dataset
     from povagent.dataset.evaluation_set import open_evaluation_set
-    from povagent.dataset.hub import resolve_hub_dataset
     from povagent.errors import DatasetError, PluginError
     from povagent.exchange.images import ImageStore
     from povagent.exchange.preview import preview_request

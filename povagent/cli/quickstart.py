@@ -29,7 +29,7 @@ def quickstart_command(
     Generates about three houses, runs the center, random and oracle baselines on conditions
     A, B and C, and writes the report. Running it again resumes: no work is repeated.
     """
-    from povagent.run.quickstart import run_quickstart
+    from povagent.report.quickstart import run_quickstart
 
     result = run_quickstart(out, dataset, houses=houses, seed=seed, jobs=jobs, quiet=quiet, say=typer.echo)
     typer.echo("")

@@ -61,7 +61,7 @@ def _write_png(out: Path, data: bytes) -> None:
     """Write ``out`` whole (aside and renamed, never through a link planted there); a place that
     refuses the write is one line naming it."""
     from povagent.errors import OutputFileError, WriteTargetError, is_file_system_error
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     try:
         out.parent.mkdir(parents=True, exist_ok=True)  # the folder the user named: theirs to place

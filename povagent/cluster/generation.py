@@ -137,7 +137,7 @@ def _logged(index: int, options: GenerationOptions, make: Callable[[], HouseOutc
 
 
 def _worker_log() -> Any:
-    """This worker process's structured logger (run/logs.py's format, on the worker's stderr).
+    """This worker process's structured logger (files/logs.py's format, on the worker's stderr).
 
     Its level is the Dask config key ``povagent.worker-log-level`` (default info; a
     ``LocalCluster`` started by ``--cluster local:N`` sets warning, since its workers print on the
@@ -147,7 +147,7 @@ def _worker_log() -> Any:
     if _LOG is None:
         import dask
 
-        from povagent.run.logs import RunLog
+        from povagent.files.logs import RunLog
 
         level = str(dask.config.get(WORKER_LOG_LEVEL, default="info"))
         _LOG = RunLog(None, console=True, console_level=level, pid=os.getpid())

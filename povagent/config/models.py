@@ -158,7 +158,7 @@ class DatasetSpec(_Strict):
     @property
     def root(self) -> Path:
         """The dataset folder (the generator's ``out`` for generated datasets; the fetched
-        release for ``hub``, once :func:`povagent.dataset.hub.resolve_hub_dataset` ran)."""
+        release for ``hub``, once :func:`povagent.config.pipeline.resolve_hub_dataset` ran)."""
         if self.path is not None:
             return self.path
         if self.generate is not None:
@@ -166,7 +166,7 @@ class DatasetSpec(_Strict):
         from povagent.errors import DatasetError
 
         raise DatasetError(
-            f"dataset.hub {self.hub}: not fetched yet (call povagent.dataset.hub.resolve_hub_dataset on the "
+            f"dataset.hub {self.hub}: not fetched yet (call povagent.config.pipeline.resolve_hub_dataset on the "
             f"pipeline first, or fetch it with `povagent download {self.hub}` and give dataset.path)"
         )
 

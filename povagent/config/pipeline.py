@@ -65,8 +65,8 @@ from povagent.config.quoting import Loc
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError
+from povagent.files.redaction import Redactor
 from povagent.plugins import PluginHost
-from povagent.run.logs import Redactor
 
 
 def pipeline_from_source(
@@ -134,3 +134,30 @@ def load_sweep(path: str | Path) -> tuple[SweepConfig, ConfigSource, ConfigSourc
     else:
         base = ConfigSource(source.file, sweep.base, {k[1:]: v for k, v in source.lines.items() if k[:1] == ("base",)})
     return sweep, source, base
+
+
+def default_scorers() -> list[str]:
+    """The scorers of a pipeline that names none (the config's default): what a run folder
+    written before it recorded its scorers was scored by."""
+    return [s.name for s in PipelineConfig.model_fields["scorers"].get_default(call_default_factory=True)]
+
+
+def resolve_hub_dataset(config: PipelineConfig, *, progress: bool = True) -> PipelineConfig:
+    """Fetch a pipeline's ``dataset: {hub: ...}`` and point ``dataset.path`` at the release root.
+
+    Only the files of the pipeline's ``instances.conditions`` are fetched. The revision is
+    pinned to the commit it resolved to, so the run folder's ``config.yaml`` names exactly the
+    data the run used (and a resume reads that commit, offline from the cache). Updates
+    ``config`` in place (every later reader of ``config.dataset.root`` sees the local folder)
+    and returns it; a config without ``hub`` is returned untouched.
+    """
+    from povagent.dataset.hub import download_release  # huggingface_hub: only when a hub set is named
+
+    spec = config.dataset
+    if spec.hub is None:
+        return config
+    release = download_release(
+        spec.hub, revision=spec.revision, conditions=config.instances.conditions, progress=progress, limits=spec.download
+    )
+    config.dataset = spec.model_copy(update={"path": release.root, "revision": release.commit})
+    return config

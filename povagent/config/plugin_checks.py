@@ -23,9 +23,9 @@ from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.formats import registered_format
 from povagent.errors import ConfigError, PluginError
+from povagent.files.redaction import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
-from povagent.run.logs import ENV_NAME_WANTED, Redactor
 
 
 def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc = ()) -> None:

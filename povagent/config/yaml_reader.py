@@ -23,7 +23,7 @@ import yaml
 
 from povagent.config.quoting import Loc, cut, dotted, shown
 from povagent.errors import ConfigError, ReadTargetError
-from povagent.run.confined_read import read_regular
+from povagent.files.confined_read import read_regular
 
 #: Largest config file read (a pipeline is a few hundred bytes; a sweep with routers a few KiB).
 MAX_CONFIG_BYTES = 1024 * 1024

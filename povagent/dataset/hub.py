@@ -38,16 +38,13 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterable
+from typing import Iterable
 
 from povagent.dataset.hub_checks import COMMIT_ID, HubValueError, check_revision, shown
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.hub_transfer import inside
 from povagent.dataset.models import CONDITIONS, Condition
 from povagent.errors import DatasetError
-
-if TYPE_CHECKING:
-    from povagent.config.models import PipelineConfig
 
 #: The official release on the Hub.
 RELEASE_REPO = "owl-owl/POVBench"
@@ -361,22 +358,3 @@ def _user_error(
     if isinstance(exc, transfer_error):
         return DatasetError(f"{where}: the download from {endpoint} failed ({type(exc).__name__}: {exc}); try again")
     return None
-
-
-def resolve_hub_dataset(config: PipelineConfig, *, progress: bool = True) -> PipelineConfig:
-    """Fetch a pipeline's ``dataset: {hub: ...}`` and point ``dataset.path`` at the release root.
-
-    Only the files of the pipeline's ``instances.conditions`` are fetched. The revision is
-    pinned to the commit it resolved to, so the run folder's ``config.yaml`` names exactly the
-    data the run used (and a resume reads that commit, offline from the cache). Updates
-    ``config`` in place (every later reader of ``config.dataset.root`` sees the local folder)
-    and returns it; a config without ``hub`` is returned untouched.
-    """
-    spec = config.dataset
-    if spec.hub is None:
-        return config
-    release = download_release(
-        spec.hub, revision=spec.revision, conditions=config.instances.conditions, progress=progress, limits=spec.download
-    )
-    config.dataset = spec.model_copy(update={"path": release.root, "revision": release.commit})
-    return config

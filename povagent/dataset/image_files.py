@@ -26,7 +26,7 @@ from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.paths import shown
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 #: Larger images are refused before anything decodes them (Pillow's own bomb limit).

@@ -5,7 +5,7 @@ What it is for: loading (:mod:`povagent.dataset.loader`) and ``povagent validate
 :func:`read_dataset_json`, so both refuse the same files for the same reasons in the same
 words: a file leading outside the dataset (never opened), a missing or unreadable one, one that
 is not a regular file or is too large (a pipe, a device: refused, never waited on:
-:mod:`povagent.run.confined_read`), bytes that are not UTF-8, text that is not JSON or nests too deeply, and strings that are not text
+:mod:`povagent.files.confined_read`), bytes that are not UTF-8, text that is not JSON or nests too deeply, and strings that are not text
 (a lone surrogate such as ``"\\ud800"``, which no results, report or export file can hold:
 :func:`~povagent.dataset.problems.not_text_problems`). Each refusal is a :class:`Problem`
 naming the file (and, for a string, its JSON path), and the file reads as ``None``. What it
@@ -21,7 +21,7 @@ from typing import Any
 from povagent.dataset.paths import is_inside
 from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: What a document nesting deeper than Python's parser follows is told (a hostile file may nest
 #: lists 100,000 deep: one line, never a ``RecursionError``).

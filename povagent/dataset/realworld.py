@@ -58,9 +58,9 @@ from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingB
 from povagent.dataset.paths import dataset_root, is_inside
 from povagent.dataset.problems import Problem, not_text_problems
 from povagent.errors import ConfigError, DatasetError, ReadTargetError
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.geometry.camera import Camera
 from povagent.geometry.letterbox import BENCHMARK_SIZE, Letterbox
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.scoring.breakdown import slices
 
 #: The file that makes a folder a real-world set.

@@ -67,7 +67,7 @@ class ResponseCache:
         self.path = Path(path)
         self._read_also = Path(read_also) if read_also is not None else None
         self._rdb: sqlite3.Connection | None = None
-        from povagent.run.confined_write import ConfinedFolder
+        from povagent.files.confined_write import ConfinedFolder
 
         # SQLite opens its files by path, following links: one planted as the cache (or its
         # journal) in a run folder would have answers written into a file elsewhere.

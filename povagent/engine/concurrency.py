@@ -36,7 +36,7 @@ DEFAULT_INCREASE = 1.0
 
 
 class EventLog(Protocol):
-    """Where limit changes are reported (:class:`povagent.run.logs.RunLog` fits)."""
+    """Where limit changes are reported (:class:`povagent.files.logs.RunLog` fits)."""
 
     def info(self, event: str, **fields: Any) -> None:
         """Record one event with its fields."""

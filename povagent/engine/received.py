@@ -50,7 +50,7 @@ def bounded_call(call: ToolCall) -> ToolCall:
 def received(response: Response, redact: Callable[[str], str], *, offered_tools: bool = False) -> Response:
     """``response`` as povagent keeps it: bounded, valid UTF-8 text, no known key in any string.
 
-    ``redact`` removes the keys povagent knows (:meth:`povagent.run.logs.Redactor.known`);
+    ``redact`` removes the keys povagent knows (:meth:`povagent.files.redaction.Redactor.known`);
     ``offered_tools``: the request offered tools, so the text is bounded too.
     """
     if response.tool_calls:

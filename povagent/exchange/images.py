@@ -40,7 +40,7 @@ from PIL import Image, UnidentifiedImageError
 
 from povagent.dataset.image_files import ImageFileError, check_image_bytes
 from povagent.errors import DatasetError, ReadTargetError
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Default memory bound for encoded bytes plus data URLs.
 DEFAULT_MAX_BYTES = 256 * 1024 * 1024

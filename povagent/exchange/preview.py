@@ -15,7 +15,7 @@ from pathlib import Path
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Request, TextPart
-from povagent.run.confined_write import write_inside
+from povagent.files.confined_write import write_inside
 
 
 @dataclass

@@ -200,7 +200,7 @@ def open_image_transport(
     """
     cache_dir = spec.cache_folder(Path(output))
     if spec.transport != "inline" and cache_dir.is_relative_to(Path(output)):
-        from povagent.run.confined_write import ConfinedFolder
+        from povagent.files.confined_write import ConfinedFolder
 
         # the default folder lies in the run folder (untrusted): a link planted there would have
         # derived images written, and served, elsewhere

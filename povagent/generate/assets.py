@@ -27,14 +27,6 @@ OBSERVER_ANCHOR_CATEGORIES: tuple[str, ...] = (
     "TowelHolder", "WashingMachine",
 )  # fmt: skip
 
-#: ProcTHOR's room types, as the placement annotations name their columns.
-ROOM_TYPE_COLUMNS: dict[str, str] = {
-    "Kitchen": "inKitchens",
-    "LivingRoom": "inLivingRooms",
-    "Bedroom": "inBedrooms",
-    "Bathroom": "inBathrooms",
-}
-
 
 @dataclass(frozen=True)
 class AssetSpec:
@@ -88,13 +80,6 @@ def asset_database() -> dict[str, tuple[AssetSpec, ...]]:
 def placement_annotations() -> dict[str, dict[str, object]]:
     """ProcTHOR's placement annotations: column (``inKitchens``, ``onWall``...) -> type -> value."""
     return json.loads(database_path("placement-annotations.json").read_text())
-
-
-def room_frequency(object_type: str, room_type: str) -> int:
-    """How often ProcTHOR puts ``object_type`` in ``room_type`` (0 never, 1 sometimes, 2 often)."""
-    column = placement_annotations().get(ROOM_TYPE_COLUMNS[room_type], {})
-    value = column.get(object_type)
-    return int(value) if isinstance(value, (int, float)) else 0
 
 
 def choose_asset(

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, Callable, Literal, Mapping, Sequence
 
 from povagent.errors import DatasetError, GenerationError, is_file_system_error
+from povagent.files.redaction import Redactor
 from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.pipeline import HouseSummary
@@ -38,7 +39,6 @@ from povagent.generate.record import (
 )
 from povagent.generate.writer import write_json
 from povagent.geometry.directions import DIRECTION_NAMES
-from povagent.run.logs import Redactor
 
 GENERATOR_VERSION = "3"
 #: The directions registry's :func:`~povagent.geometry.directions.generation_fingerprint` each

@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from povagent.generate.assets import asset_database, choose_asset, room_frequency
+from povagent.generate.assets import asset_database, choose_asset
 from povagent.generate.floorplan import FloorPlan, Opening, Rect
 from povagent.generate.room_layout import OPPOSITE, RoomLayout
 from povagent.generate.scene import PlacedObject, object_id_for
@@ -308,8 +308,3 @@ def _renamed(o: PlacedObject, object_id: str) -> PlacedObject:
     from dataclasses import replace
 
     return replace(o, object_id=object_id)
-
-
-def room_types_holding(object_type: str) -> list[str]:
-    """Room types where ProcTHOR's placement annotations put ``object_type``."""
-    return [rt for rt in ("Kitchen", "LivingRoom", "Bedroom", "Bathroom") if room_frequency(object_type, rt) > 0]

@@ -31,9 +31,9 @@ from pathlib import Path
 from typing import Any
 
 from povagent.errors import DatasetError, ReadTargetError
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.generate.pipeline import HouseSummary, house_id
 from povagent.generate.writer import rounded, write_json
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).
 RECORD = "_generated.json"

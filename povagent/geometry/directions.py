@@ -176,15 +176,6 @@ def spec_of(name: str) -> DirectionSpec:
     return _BY_NAME[str(name)]
 
 
-def direction_for_word(word: str) -> str | None:
-    """The direction a model's word names (``above`` -> ``up``), or None when no direction has it."""
-    text = word.strip().lower()
-    for spec in DIRECTION_REGISTRY:
-        if text in spec.words:
-            return spec.name
-    return None
-
-
 def generation_fingerprint() -> str:
     """A hash of the registry's order and every field the generator's output depends on.
 

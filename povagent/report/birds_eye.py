@@ -24,10 +24,10 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
+from povagent.files.confined_write import write_inside
 from povagent.generate.floorplan import FloorPlan
 from povagent.geometry.camera import Camera
 from povagent.report.floor_plan import WALL_COLOUR, floor_plan_svg, house_plan, plan_points
-from povagent.run.confined_write import write_inside
 
 #: Colours shared with the gallery's drawings (GT green, prediction red).
 GT_COLOUR = "#00c853"

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from povagent.files.confined_write import ConfinedFolder, write_inside
 from povagent.report.active import active_section
 from povagent.report.analysis import Analysis, analyze, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
@@ -50,7 +51,6 @@ from povagent.report.tables import Table, to_csv, to_latex, to_markdown
 from povagent.report.why import FIGURE as WHY_FIGURE
 from povagent.report.why import failure_steps_figure, why_section
 from povagent.results.summary_json import summary_json_text
-from povagent.run.confined_write import ConfinedFolder, write_inside
 
 REPORT_PAGE = "report.html"
 
@@ -88,7 +88,7 @@ def report_folder(source: Path, out: Path | None) -> Path:
 
     The default ``<source>/report`` lies in a run folder, which is untrusted: ``report`` and
     everything below it are opened without following links (see
-    :mod:`povagent.run.confined_write`), a link is one line naming it. An ``--out`` the user
+    :mod:`povagent.files.confined_write`), a link is one line naming it. An ``--out`` the user
     typed is theirs to place (followed), its subfolders are not.
     """
     root, rel = (source, "report") if out is None else (out, "")

@@ -30,6 +30,7 @@ import yaml
 
 from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
@@ -37,9 +38,8 @@ from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
-from povagent.scoring.protocols import PROTOCOLS, default_scorers, registered_protocols, shown_answer
+from povagent.scoring.protocols import PROTOCOLS, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -207,6 +207,8 @@ def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     Read from the config first because a row that failed before scoring (an infra error) has
     no scores, yet still counts: as a non-response, and for a hit protocol as a failure.
     """
+    from povagent.config.pipeline import default_scorers  # the plugin checks: only when asked
+
     known = registered_protocols()
     named = [_name_of(s) for s in config.get("scorers") or [] if _name_of(s)]
     carried = list(rows.carried_scores) if isinstance(rows, StoredRows) else list(dict.fromkeys(name for row in rows for name in row.scores))
@@ -458,9 +460,9 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
     environment values) from an observation's answer texts, or ``None`` when none is known.
 
     A run made before answers were redacted as they arrived may hold a key a server echoed:
-    the report never copies it onto its pages (see :meth:`povagent.run.logs.Redactor.known`).
+    the report never copies it onto its pages (see :meth:`povagent.files.redaction.Redactor.known`).
     """
-    from povagent.run.logs import Redactor, secrets_named_by
+    from povagent.files.redaction import Redactor, secrets_named_by
 
     redactor = Redactor(secrets_named_by(config))
     if not redactor.knows_secrets:

@@ -245,7 +245,7 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
         legend=OFFICIAL_LEGEND + " In the strip, <span style=\"color:#2d7dff;font-weight:700\">blue outline</span>: the frame B selected (red: A's).",
         sort_extra='<option value="delta-desc">|B - A|, largest first</option>',
     )
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     # aside and renamed: a link planted at either name is replaced, never followed
     path = write_inside(out, "compare.html", page)

@@ -28,10 +28,10 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from povagent import __version__
+from povagent.files.confined_write import write_inside
 from povagent.report.csv_formulas import inert
 from povagent.results.official_format import OfficialPrediction, write_official_predictions
 from povagent.results.rows import ResultRow, RowStatus
-from povagent.run.confined_write import write_inside
 
 OFFICIAL_FILE = "official_predictions.json"
 LONG_CSV_FILE = "all_runs_long.csv"
@@ -191,7 +191,7 @@ def write_long_csv(path: str | Path, lines: Iterable[dict[str, Any]]) -> Path:
     (:mod:`povagent.report.csv_formulas` states the rule).
 
     Written aside and renamed, never through a link planted at ``path`` (the default lies in
-    an untrusted run folder): see :mod:`povagent.run.confined_write`.
+    an untrusted run folder): see :mod:`povagent.files.confined_write`.
     """
     path = Path(path)
     text = io.StringIO(newline="")

@@ -53,6 +53,8 @@ from PIL import Image
 
 from povagent.dataset.realworld import RealWorldInstance
 from povagent.errors import ReadTargetError
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_write import write_inside
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
@@ -60,8 +62,6 @@ from povagent.report.gallery_choice import asked_question, choice_fields, has_ta
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
 from povagent.report.run_sets import RunSets
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
-from povagent.run.confined_write import write_inside
 from povagent.scoring.official import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"

@@ -17,7 +17,7 @@ from typing import Any
 from PIL import Image, ImageDraw, UnidentifiedImageError
 
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 
 #: Bumped when the drawing changes, so cached images are redrawn.
 RECIPE_VERSION = 3

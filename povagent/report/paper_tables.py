@@ -351,12 +351,3 @@ def _declared_metric_table(a: Analysis, scorer: str, m: Any, by_system: dict[str
         row = [_cell(per[k][m.name]) if k in per else Cell(None) for k, _ in keys] + [_cell(cells["overall"][m.name])]
         t.rows.append(Row(s.system, row, s.reference))
     return t
-
-
-def system_row(t: Table, system: str) -> Row:
-    """The row of a system in a table (for tests and callers that pick one number)."""
-    for r in t.rows:
-        if r.label == system:
-            return r
-    raise KeyError(system)
-

@@ -64,11 +64,6 @@ def series_styles(series: Sequence[tuple]) -> list[SeriesStyle]:
     return out
 
 
-def series_colours(series: Sequence[tuple]) -> list[str]:
-    """A colour per ``(name, values, is_reference)`` series (see :func:`series_styles`)."""
-    return [st.colour for st in series_styles(series)]
-
-
 def marker(style: SeriesStyle, x: float, y: float, r: float = 4.5) -> str:
     """The series' marker centred at ``(x, y)``: filled for a model, hollow for a baseline."""
     fill = "#fff" if style.reference else style.colour

@@ -173,17 +173,6 @@ def read_predictions_file(file: str | Path) -> list[OfficialPrediction]:
     return _parse_rows(enumerate(raw_rows), file, prefix)
 
 
-def read_predictions_metadata(file: str | Path) -> dict[str, Any]:
-    """The ``metadata`` object of a ``{metadata, predictions}`` file (``{}`` for a bare list)."""
-    file = Path(file)
-    try:
-        doc = json.loads(file.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        raise PredictionsError(f"{file}: cannot read predictions metadata ({exc})") from None
-    meta = doc.get("metadata") if isinstance(doc, Mapping) else None
-    return dict(meta) if isinstance(meta, Mapping) else {}
-
-
 def prediction_files(path: str | Path) -> list[Path]:
     """The files a predictions path stands for: the file itself, or a folder's JSON files sorted by name."""
     p = Path(path)
@@ -208,23 +197,6 @@ def read_official_predictions(path: str | Path) -> list[OfficialPrediction]:
     return rows
 
 
-def looks_like_official_predictions(file: str | Path) -> bool:
-    """Cheap check: is this JSON file an official predictions file (vs. our results rows)?
-
-    True for a list whose first element has ``predicted_x`` or ``type``, or an object with
-    ``predictions``. Never raises.
-    """
-    try:
-        doc = json.loads(Path(file).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
-        return False
-    if isinstance(doc, Mapping):
-        return "predictions" in doc
-    return bool(doc) and isinstance(doc, list) and isinstance(doc[0], Mapping) and (
-        "predicted_x" in doc[0] or "type" in doc[0]
-    )
-
-
 def official_document(rows: Iterable[OfficialPrediction], metadata: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The ``{metadata, predictions}`` document for ``rows`` (JSON-able)."""
     return {
@@ -241,9 +213,9 @@ def write_official_predictions(
 
     Written aside and renamed (a reader never sees half a file), never through a link planted
     at ``path`` or in a folder between ``root`` (the folder the user named, default ``path``'s
-    own) and it: see :mod:`povagent.run.confined_write`.
+    own) and it: see :mod:`povagent.files.confined_write`.
     """
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     p = Path(path)
     base = Path(root) if root is not None else p.parent

@@ -20,8 +20,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
+from povagent.files.confined_read import open_regular
 from povagent.results.output_check import check_output_text
-from povagent.run.confined_read import open_regular
 
 
 class RowStatus(StrEnum):
@@ -167,12 +167,12 @@ class ResultsWriter:
     """Appends rows to a JSONL file, flushing and fsyncing each, so a crash loses nothing written.
 
     The file is opened without following a link planted where it goes, nor a second name (see
-    :mod:`povagent.run.confined_write`): once, not per row. ``root`` is the folder the user named
+    :mod:`povagent.files.confined_write`): once, not per row. ``root`` is the folder the user named
     (default: the file's own folder); the folders between it and the file are never followed.
     """
 
     def __init__(self, path: str | Path, root: str | Path | None = None) -> None:
-        from povagent.run.confined_write import ConfinedFolder
+        from povagent.files.confined_write import ConfinedFolder
 
         self.path = Path(path)
         base = Path(root) if root is not None else self.path.parent
@@ -234,7 +234,7 @@ class StagedResults:
     """
 
     def __init__(self, path: str | Path, root: str | Path | None = None) -> None:
-        from povagent.run.confined_write import ConfinedFolder
+        from povagent.files.confined_write import ConfinedFolder
 
         self.path = Path(path)
         self.tmp = self.path.with_name(self.path.name + ".tmp")

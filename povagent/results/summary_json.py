@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 from typing import Any
 
 
@@ -47,12 +46,3 @@ def summary_json_text(data: Any, indent: int | None = 1, default: Any = None) ->
         return json.dumps(data, indent=indent, allow_nan=False, default=default)
     except ValueError:  # a number that is not finite somewhere: the walk costs only then
         return json.dumps(finite_json(data), indent=indent, allow_nan=False, default=default)
-
-
-def write_summary_json(path: Path, data: Any, indent: int | None = 1, default: Any = None) -> None:
-    """Write ``data`` to ``path`` as :func:`summary_json_text` with a trailing newline, aside and
-    renamed into place, never through a link planted at ``path`` (see
-    :mod:`povagent.run.confined_write`)."""
-    from povagent.run.confined_write import write_inside
-
-    write_inside(path.parent, path.name, summary_json_text(data, indent, default) + "\n")

@@ -8,7 +8,7 @@ file and a rename, so a folder either holds a whole memory or none.
 Saving treats the folder as untrusted too: it may be new, empty, or hold an earlier memory (a
 ``memory.json`` that reads as one), and any other folder is refused in one line before anything
 is written, so a memory never lands among someone else's files. Every file is written through
-:class:`~povagent.run.confined_write.ConfinedFolder` (aside, then renamed over its name): a link
+:class:`~povagent.files.confined_write.ConfinedFolder` (aside, then renamed over its name): a link
 planted in the folder is replaced, never written through.
 
 Loading treats the folder as untrusted: file names must be plain names inside the folder (no
@@ -31,10 +31,10 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from povagent.errors import ConfigError, ReadTargetError
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_inside
+from povagent.files.confined_write import ConfinedFolder
 from povagent.geometry.goals import PinholeCamera, PoseConvention
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_inside
-from povagent.run.confined_write import ConfinedFolder
 
 MEMORY_FILE = "memory.json"
 FORMAT_VERSION = 1

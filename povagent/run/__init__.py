@@ -1,5 +1,5 @@
 """Running pipelines and sweeps: the runner, the row journal, instance selection and pending keys,
-the run-folder lock, summaries, progress and logs, offline re-scoring and the quickstart.
+summaries, progress and offline re-scoring.
 
 Effects live here (files, clocks, concurrency); rules it applies come from the pure packages.
 """

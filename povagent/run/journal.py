@@ -14,9 +14,9 @@ import time
 from pathlib import Path
 from typing import Callable
 
+from povagent.files.confined_read import open_regular
+from povagent.files.confined_write import ConfinedFolder
 from povagent.results.rows import ResultRow, ResultsWriter, row_line
-from povagent.run.confined_read import open_regular
-from povagent.run.confined_write import ConfinedFolder
 
 
 class RowJournal(ResultsWriter):

@@ -133,7 +133,7 @@ def asked_by(config: PipelineConfig, dataset: EvaluationSet) -> EvaluationSet:
 
 
 def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
-    from povagent.dataset.hub import resolve_hub_dataset
+    from povagent.config.pipeline import resolve_hub_dataset
 
     spec = resolve_hub_dataset(config).dataset
     if spec.generate is not None:
@@ -153,7 +153,7 @@ def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:
     """The config's dataset, loaded once per folder (and strictness) when ``loaded`` is shared
     (sweeps)."""
-    from povagent.dataset.hub import resolve_hub_dataset
+    from povagent.config.pipeline import resolve_hub_dataset
 
     options = json.dumps(config.dataset.options, sort_keys=True, default=str) if config.dataset.options else None
     key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict, config.dataset.format, options)

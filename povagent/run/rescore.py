@@ -38,6 +38,8 @@ from povagent.dataset.evaluation_set import open_evaluation_set
 from povagent.dataset.instances import Instance
 from povagent.errors import DatasetError, PluginError, PredictionsError
 from povagent.exchange.images import ImageStore
+from povagent.files.confined_read import check_regular
+from povagent.files.confined_write import ConfinedFolder, write_inside
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.official_reading import (
     OFFICIAL_PARSER,
@@ -47,8 +49,6 @@ from povagent.results.official_reading import (
     officially_read,
 )
 from povagent.results.rows import ResultRow, RowStatus, StagedResults, read_rows
-from povagent.run.confined_read import check_regular
-from povagent.run.confined_write import ConfinedFolder, write_inside
 from povagent.run.pending import asked_by
 from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category

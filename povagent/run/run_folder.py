@@ -30,8 +30,8 @@ from povagent.config.models import PipelineConfig
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import read_yaml
 from povagent.errors import ConfigError, ReadTargetError
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
-from povagent.run.confined_write import ConfinedFolder, write_inside
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
+from povagent.files.confined_write import ConfinedFolder, write_inside
 
 #: The marker file of a folder povagent made, and the format version it holds.
 MARKER = ".povagent-run"

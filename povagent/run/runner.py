@@ -47,14 +47,15 @@ from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.transport import open_image_transport
 from povagent.exchange.usage_totals import UsageTotals
+from povagent.files.confined_write import write_inside
+from povagent.files.folder_lock import folder_lock
+from povagent.files.logs import RunLog
+from povagent.files.redaction import Redactor, secrets_named_by
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
-from povagent.run.confined_write import write_inside
-from povagent.run.folder_lock import folder_lock
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
-from povagent.run.logs import Redactor, RunLog, secrets_named_by
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
@@ -189,8 +190,7 @@ class PipelineRun:
         self.run_dir = Path(config.output)
         self.stats = RunStats()
         self.config_hash = config.config_hash()
-        # every key the config names (api_key_env values) is known to the redactor, so it is
-        # removed from whatever the run writes: messages, logs, and answers that echo it
+        # every key the config names (api_key_env) is removed from messages, logs and echoed answers
         self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._declared: Declared = {}  # each scorer's declared metrics, set with the components
         #: what the rows written in this session spent (``session`` in summary.json), summed as they come

@@ -25,11 +25,12 @@ from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals
+from povagent.files.logs import RunLog
+from povagent.files.redaction import Redactor
 from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
-from povagent.run.logs import Redactor, RunLog
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 
 

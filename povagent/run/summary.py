@@ -19,21 +19,12 @@ from povagent.results.official_reading import official_parse_breakdown
 from povagent.results.output_check import check_output_text
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.results.summary_json import summary_json_text
-from povagent.run.summary_fields import plugin_scores
 from povagent.run.summary_model import RunSummary
 from povagent.run.summary_table import SummaryTable
 from povagent.scoring.breakdown import breakdown, summarize
 from povagent.scoring.diagnostics_breakdown import diagnostics_breakdown
 from povagent.scoring.metric_columns import metrics_breakdown
 from povagent.scoring.metrics import Metric
-from povagent.scoring.protocols import registered_protocols
-
-
-def plugin_score_summary(rows: Iterable[ResultRow], protocols: Mapping[str, str] | None = None) -> dict[str, dict[str, dict[str, Any]]]:
-    """``{scorer: {field: ...}}`` over the rows a plugin scorer scored (answered rows): a
-    true/false field as ``{"n", "true", "rate"}``, a number as ``{"n", "mean"}``."""
-    known = registered_protocols() if protocols is None else protocols
-    return _plugin_score_summary(plugin_scores(row.scores, known) for row in rows)
 
 
 def _plugin_score_summary(
@@ -171,9 +162,9 @@ def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None)
     ``null``, so the file is always JSON. Written aside and renamed, never through a link planted
     at ``path`` or in a folder between ``root`` (the folder the user named; default ``path``'s
     own) and it; a full disk leaves the old file and no half-written copy beside it (see
-    :mod:`povagent.run.confined_write`).
+    :mod:`povagent.files.confined_write`).
     """
-    from povagent.run.confined_write import write_inside
+    from povagent.files.confined_write import write_inside
 
     summary = RunSummary.model_validate(data)
     text = summary_json_text(data, indent=2, default=str)

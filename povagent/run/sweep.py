@@ -34,11 +34,11 @@ from povagent.dataset.protocol import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
+from povagent.files.confined_write import ConfinedFolder, write_inside
+from povagent.files.folder_lock import folder_lock
 from povagent.plugins import get_plugin_host
 from povagent.results.output_check import check_output_text
 from povagent.results.summary_json import summary_json_text
-from povagent.run.confined_write import ConfinedFolder, write_inside
-from povagent.run.folder_lock import folder_lock
 from povagent.run.pending import RESULTS, ensure_dataset, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.run_folder import claim_folder

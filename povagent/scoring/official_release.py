@@ -34,9 +34,9 @@ import numpy as np
 
 from povagent.dataset.paths import dataset_root, is_inside
 from povagent.errors import ReadTargetError
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, target_point
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.scoring.official import GroundTruthInFrame, project_ground_truth
 
 #: The official scorer's defaults for a camera field a record lacks.

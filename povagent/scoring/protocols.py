@@ -82,11 +82,3 @@ def following(protocols: Mapping[str, str], protocol: str, scores: Mapping[str, 
     row's) carry, else the first; ``None`` when none follows it."""
     names = [n for n, p in protocols.items() if p == protocol]
     return next((n for n in names if scores and n in scores), names[0] if names else None)
-
-
-def default_scorers() -> list[str]:
-    """The scorers of a pipeline that names none (the config's default): what a run folder
-    written before it recorded its scorers was scored by."""
-    from povagent.config.models import PipelineConfig
-
-    return [s.name for s in PipelineConfig.model_fields["scorers"].get_default(call_default_factory=True)]

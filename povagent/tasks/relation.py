@@ -24,8 +24,8 @@ from dataclasses import replace
 from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.instances import Instance
 from povagent.geometry.directions import DIRECTION_NAMES, spec_of
+from povagent.tasks.scene_facts import NoTeachingFrame, gt_pixel, teaching_frame
 from povagent.tasks.sentence_parts import SentenceParts, sentence_parts
-from povagent.train.facts import NoTeachingFrame, gt_pixel, teaching_frame
 
 #: Option labels, one per registry direction.
 LABELS = "ABCDEFGH"

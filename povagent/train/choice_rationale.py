@@ -3,7 +3,7 @@
 The point task's trace (:mod:`povagent.train.rationale`) ends in a pixel; a choice task's ends
 in the option's label, as the ``choice`` prompt asks (``{"choice": "B"}``, which the ``choice``
 parser reads by its rule 2). The steps say where the speaker stood and which way they faced
-(the same :class:`~povagent.train.facts.InstanceFacts` the point trace states), the target's
+(the same :class:`~povagent.tasks.scene_facts.InstanceFacts` the point trace states), the target's
 relation to the anchor from there, then, for a multi-hop question, the hop through the
 intermediate object (:class:`~povagent.tasks.multi_hop.Hop`, from the house's object boxes),
 and last the option whose words name the relation. ``none`` is the bare answer; ``cot`` and
@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.geometry.directions import spec_of
-from povagent.train.facts import InstanceFacts
+from povagent.tasks.scene_facts import InstanceFacts
 from povagent.train.rationale import RATIONALES, stood_phrase, turned_phrase
 
 if TYPE_CHECKING:  # the generator's scene loads only when a task asks

@@ -9,7 +9,6 @@ The answer is the rationale text from :mod:`povagent.train.rationale`, ending in
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -21,9 +20,9 @@ from povagent.dataset.loader import House
 from povagent.errors import DatasetError, ReadTargetError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.tasks.scene_facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.choice_rationale import choice_rationale_text
-from povagent.train.facts import InstanceFacts, NoTeachingFrame, PixelBox, instance_facts
 from povagent.train.rationale import rationale_text
 
 if TYPE_CHECKING:  # the generator's scene loads only when a task asks
@@ -225,8 +224,3 @@ def house_examples(
             answer_json=answer.rsplit("\n", 1)[-1],
             facts=facts,
         )
-
-
-def answer_fields(example: TrainingExample) -> dict[str, Any]:
-    """The answer's JSON as a mapping (what the official parser reads from the last line)."""
-    return dict(json.loads(example.answer_json))

@@ -25,7 +25,7 @@ from pathlib import Path
 from povagent.dataset.loader import house_folders, official_frame_paths
 from povagent.dataset.paths import OutsideDatasetError, dataset_root, is_inside, observer_view_path
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
 from povagent.train.splits import house_index
 
 #: The release's repository on the Hub (checked in the local cache only: never downloaded here).

@@ -25,12 +25,12 @@ from povagent.dataset.models import Condition
 from povagent.dataset.problems import Problem
 from povagent.dataset.protocol import EvaluationSet
 from povagent.errors import DatasetError
+from povagent.tasks.scene_facts import NoTeachingFrame, instance_facts
 from povagent.train.card import write_card
 from povagent.train.examples import TrainingExample
 from povagent.train.exclusion import EvaluationSets, cached_release_root, dataset_identities
 from povagent.train.export_folder import MANIFEST, MANIFEST_VERSION, export_folder, manifest
 from povagent.train.export_options import FORMAT_FOLDERS, ExportError, ExportOptions, ExportReport, task_spec
-from povagent.train.facts import NoTeachingFrame, instance_facts
 from povagent.train.left_out import left_out
 from povagent.train.shards import PlannedExample, Shard, plan_shards, remove_stale_temporaries
 from povagent.train.splits import assign_splits, parse_split

@@ -17,7 +17,7 @@ from pathlib import Path
 from povagent.dataset.loader import House
 from povagent.dataset.problems import Problem
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 _PAIR_ENTRY = re.compile(r"^\$\[(\d+)\]")
 

@@ -4,7 +4,7 @@
 reasoning, 5 conclusion); ``cot`` the CoT prompt's (its step 4 is one sentence); ``none`` is the
 bare answer. Each step has a few phrasings picked by a generator seeded from (seed, instance id),
 so the text varies across a set yet is the same on every export. Every number and word that
-states a fact comes from :class:`~povagent.train.facts.InstanceFacts`; the template adds nothing
+states a fact comes from :class:`~povagent.tasks.scene_facts.InstanceFacts`; the template adds nothing
 the geometry does not say (the S-CoT step 4c inventory lists only what the scene records hold:
 the anchor's box edges and the observer's furniture, not objects whose positions the release
 lacks). The final line is the answer in the benchmark's JSON, as the prompt asks.
@@ -19,7 +19,7 @@ from collections.abc import Sequence
 
 from povagent.dataset.models import DIRECTIONS, Direction
 from povagent.geometry.directions import spec_of
-from povagent.train.facts import InstanceFacts, PixelBox
+from povagent.tasks.scene_facts import InstanceFacts, PixelBox
 
 RATIONALES = ("none", "cot", "s-cot")
 

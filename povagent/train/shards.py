@@ -83,7 +83,7 @@ class ExportWriteError(PovagentError):
 def atomic_file(path: Path, mode: str = "wb", inside: Path | None = None, unique: bool = False) -> Iterator[IO[Any]]:
     """Write ``path`` through a temporary file beside it, fsync it, and rename it into place.
 
-    Through :class:`~povagent.run.confined_write.ConfinedFolder`: ``inside`` (default:
+    Through :class:`~povagent.files.confined_write.ConfinedFolder`: ``inside`` (default:
     ``path``'s folder) is the folder the user named, and no link below it is followed, so a
     link planted in an export folder cannot carry a write elsewhere; the rename replaces a
     link at ``path`` itself. ``unique``: the temporary name carries the process and thread
@@ -91,7 +91,7 @@ def atomic_file(path: Path, mode: str = "wb", inside: Path | None = None, unique
     is removed and ``path`` is left as it was; a disk error is an :class:`ExportWriteError`
     naming ``path``.
     """
-    from povagent.run.confined_write import ConfinedFolder
+    from povagent.files.confined_write import ConfinedFolder
 
     root = inside if inside is not None else path.parent
     try:

@@ -208,7 +208,7 @@ def test_an_unparseable_answer_carries_the_raw_text(model_agent, server):
 
 def test_an_answer_naming_a_missing_frame_is_unparseable(model_agent, server):
     server.script('{"selected_image": 7, "x": 10, "y": 10}')
-    with pytest.raises(UnparseableAnswerError, match="frames 0..1"):
+    with pytest.raises(UnparseableAnswerError, match=r"frames 0..1"):
         model_agent.locate("x", wide_frames(2))
 
 
@@ -251,7 +251,7 @@ def test_a_repair_parser_given_with_a_profile_rescales_0_1000_answers(server):
 
 
 def test_model_and_another_backend_together_are_refused():
-    with pytest.raises(ValueError, match="model= .* or backend=, not both"):
+    with pytest.raises(ValueError, match=r"model= .* or backend=, not both"):
         GroundingAgent("center", model="gpt-5.4")
 
 

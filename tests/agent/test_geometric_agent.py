@@ -57,7 +57,7 @@ def test_the_agent_returns_the_solved_3d_goal_in_the_robots_world(generated_rele
 
 def test_when_the_solver_falls_back_its_pixel_is_back_projected_as_any_answer_is(generated_release, queued_backend):
     dataset = load_dataset(generated_release)
-    instance, house = well_seen_instance(dataset)
+    instance, _house = well_seen_instance(dataset)
     queued_backend.queue('{"anchor": "kettle", "direction": "right"}', '{"surface": "floor"}', '{"detections": []}')
     with GroundingAgent(backend="queued", strategy="geometric", parser="json") as agent:
         found = agent.locate(instance.sentence, [f.file for f in instance.frames[:3]], cameras=[f.camera for f in instance.frames[:3]])

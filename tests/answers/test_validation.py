@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from povagent.answers.validation import judge, judge_points, relative_to_pixels, validator_for
 from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
+from povagent.answers.validation import judge, judge_points, relative_to_pixels, validator_for
 
 FRAMES = AnswerSpec(schema=frame_answer_schema(30, 512, 512), n_frames=30, asks_frame=True)
 GIVEN = AnswerSpec(schema=point_answer_schema(512, 512), asks_frame=False)

@@ -7,8 +7,8 @@ import pytest
 from PIL import Image
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema, point_answer_schema
-from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
 from povagent.exchange.images import ImageStore
+from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
 from povagent.testing.loopback_server import LoopbackServer
 
 

@@ -104,7 +104,7 @@ def test_center_random_policy_is_reproducible_and_in_range(requests_):
 
 
 def test_center_unknown_frame_policy_is_a_config_error():
-    with pytest.raises(ConfigError, match="frame_policy.*first, random, cycle"):
+    with pytest.raises(ConfigError, match=r"frame_policy.*first, random, cycle"):
         CenterBaseline(frame_policy="last")
 
 

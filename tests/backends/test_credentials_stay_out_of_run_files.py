@@ -17,9 +17,10 @@ from pathlib import Path
 
 import pytest
 import yaml
+
 from povagent.config.pipeline import dump_pipeline, load_pipeline
 from povagent.errors import ConfigError
-from povagent.run.logs import REDACTED, Redactor
+from povagent.files.redaction import REDACTED, Redactor
 from povagent.run.runner import run_pipeline
 from povagent.testing.loopback_server import LoopbackServer
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend

@@ -10,10 +10,10 @@ import sys
 
 import pytest
 
+from povagent.engine.llm_import import import_litellm
 from povagent.errors import ConfigError
 from povagent.exchange.messages import GenerationParams
 from povagent.interfaces import PermanentBackendError, TransientBackendError
-from povagent.engine.llm_import import import_litellm
 from povagent_plugins.backends.litellm_backend import LiteLLMBackend
 
 pytestmark = pytest.mark.timeout(60)
@@ -150,7 +150,7 @@ def test_litellm_retries_cannot_be_stacked_through_extra():
 
 
 def test_unknown_option_is_a_config_error_listing_known_ones():
-    with pytest.raises(ConfigError, match="option 'temprature'.*temperature"):
+    with pytest.raises(ConfigError, match=r"option 'temprature'.*temperature"):
         LiteLLMBackend(model="openai/gpt-4o", temprature=0.1)
 
 
@@ -171,7 +171,7 @@ def test_profile_backend_defaults_apply_under_the_users_options():
 
 
 def test_self_hosted_profile_without_api_base_is_a_config_error():
-    with pytest.raises(ConfigError, match="qwen3-vl-8b.*api_base"):
+    with pytest.raises(ConfigError, match=r"qwen3-vl-8b.*api_base"):
         LiteLLMBackend(model="qwen3-vl-8b")
 
 
@@ -245,5 +245,5 @@ def test_a_credential_header_in_the_yaml_is_refused(where):
         if where == "extra"
         else {"router": [{"litellm_params": {"model": "openai/m", **headers}}]}
     )
-    with pytest.raises(ConfigError, match="carries a credential \\(Authorization\\).*api_key_env"):
+    with pytest.raises(ConfigError, match=r"carries a credential \(Authorization\).*api_key_env"):
         LiteLLMBackend(**options)

@@ -7,8 +7,8 @@ import email.utils
 import httpx
 import pytest
 
-from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent.engine.llm_import import import_litellm
+from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent_plugins.backends.litellm_errors import map_litellm_error, retry_after_seconds, scrub
 
 litellm = import_litellm()

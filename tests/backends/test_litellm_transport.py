@@ -64,7 +64,7 @@ def test_a_router_with_one_hosted_deployment_refuses_references():
             {"litellm_params": {"model": "openai/gpt-5.4"}},
         ],
     )
-    with pytest.raises(ConfigError, match="openai/gpt-5.4"):
+    with pytest.raises(ConfigError, match=r"openai/gpt-5.4"):
         backend.check_image_transport("file")
 
 
@@ -89,9 +89,8 @@ def test_a_backend_that_skipped_the_check_still_never_sends_a_reference_to_a_hos
     h = store.add_file(path).image_hash
     request = Request(messages=(Message("user", (ImagePart(h),)),), answer=AnswerSpec(schema=point_answer_schema(4, 4)))
     backend = LiteLLMBackend(model="gemini/gemini-2.5-flash")
-    with image_transport(store, FileTransport(tmp_path / "cache")):
-        with pytest.raises(PermanentBackendError, match="inline"):
-            asyncio.run(backend.complete(request, store))
+    with image_transport(store, FileTransport(tmp_path / "cache")), pytest.raises(PermanentBackendError, match="inline"):
+        asyncio.run(backend.complete(request, store))
 
 
 def test_backends_accept_every_transport_by_default():

@@ -17,10 +17,10 @@ import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
-from povagent.testing.loopback_server import Fault, LoopbackServer, RecordedRequest, Reply
 from povagent.results.rows import read_rows
 from povagent.run.runner import run_pipeline
 from povagent.run.sweep import run_sweep
+from povagent.testing.loopback_server import Fault, LoopbackServer, RecordedRequest, Reply
 
 pytestmark = pytest.mark.timeout(90)
 

@@ -128,7 +128,7 @@ def test_official_folder_is_read_whole(tmp_path, requests_):
 def test_bad_official_file_fails_when_the_backend_is_made(tmp_path):
     f = tmp_path / "preds.json"
     f.write_text(json.dumps([{"house_id": "h"}]))
-    with pytest.raises(PredictionsError, match="preds.json: row 0"):
+    with pytest.raises(PredictionsError, match=r"preds.json: row 0"):
         ReplayBackend(str(f))
 
 

@@ -48,7 +48,7 @@ SOFA_A = "train_house_00001/7/left/a"
 
 def test_a_free_form_prompt_is_refused_as_a_simulation(mini):
     request = BasicStrategy().build(mini.instance(SOFA_A), ImageStore())
-    with pytest.raises(PermanentBackendError, match="simulation, not a model.*strategy: geometric"):
+    with pytest.raises(PermanentBackendError, match=r"simulation, not a model.*strategy: geometric"):
         answer(SimulatedPerception(), request)
 
 

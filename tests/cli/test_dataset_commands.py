@@ -19,7 +19,7 @@ runner = CliRunner()
 def test_validate_lists_every_problem_and_exits_non_zero(mini_root):
     result = runner.invoke(app, ["validate", str(mini_root)])
     assert result.exit_code == 1
-    lines = [l for l in result.stdout.splitlines() if l.startswith("artifacts/train_house_00002/")]
+    lines = [line for line in result.stdout.splitlines() if line.startswith("artifacts/train_house_00002/")]
     assert len(lines) == 9
     assert "9 problem(s)" in result.output
 

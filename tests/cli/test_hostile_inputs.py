@@ -39,7 +39,7 @@ GOOD_HOUSE_INSTANCES = 12
 def invoke(*args: str) -> tuple[int, str]:
     """Run a command as ``povagent`` would: (exit code, everything it printed or raised)."""
     result = CliRunner().invoke(app, [str(a) for a in args])
-    text = result.output + (getattr(result, "stderr", "") if not getattr(result, "stderr_bytes", None) is None else "")
+    text = result.output + (getattr(result, "stderr", "") if getattr(result, "stderr_bytes", None) is not None else "")
     exc = result.exception
     if exc is not None and not isinstance(exc, SystemExit):
         assert isinstance(exc, PovagentError), f"traceback instead of a message: {type(exc).__name__}: {exc}"

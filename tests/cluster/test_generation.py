@@ -51,7 +51,7 @@ def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_pr
     assert any(f"all 2 workers read and write {out}" in n for n in notices), notices
     # the progress callback counts houses as they finish on the cluster
     assert seen == [(1, HOUSES), (2, HOUSES)]
-    # the workers' logs keep the structured format (run/logs.py's renderer: level, event, key=value)
+    # the workers' logs keep the structured format (files/logs.py's renderer: level, event, key=value)
     logs = "".join(p.read_text() for p in dask_cluster.logs.glob("worker*.log"))
     for index in range(HOUSES):
         assert re.search(rf"\[info\s*\] house done\s.*index={index} .*seed={SEED}", logs), logs[-2000:]

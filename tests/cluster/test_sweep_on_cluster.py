@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 from povagent.cli import app
 from povagent.engine.cache import ResponseCache
 from povagent.errors import ClusterError, ConfigError
-from povagent.run.folder_lock import folder_lock
+from povagent.files.folder_lock import folder_lock
 from povagent.run.progress import QuietProgress
 from povagent.run.run_folder import claim_folder
 from povagent.run.sweep import CELL_CACHE_SHARD, expand_sweep, run_sweep

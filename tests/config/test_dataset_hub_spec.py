@@ -32,17 +32,17 @@ def test_the_revision_is_optional(tmp_path):
 
 
 def test_a_revision_without_a_repository_is_refused(tmp_path):
-    with pytest.raises(ConfigError, match="dataset.revision needs dataset.hub"):
+    with pytest.raises(ConfigError, match=r"dataset.revision needs dataset.hub"):
         pipeline(tmp_path, "dataset: {path: data/povbench, revision: main}\n")
 
 
 def test_hub_and_generate_together_are_refused(tmp_path):
-    with pytest.raises(ConfigError, match="exactly one of dataset.path, dataset.generate or dataset.hub"):
+    with pytest.raises(ConfigError, match=r"exactly one of dataset.path, dataset.generate or dataset.hub"):
         pipeline(tmp_path, "dataset: {hub: owl-owl/POVBench, generate: {out: data/gen}}\n")
 
 
 def test_a_repository_id_is_owner_slash_name(tmp_path):
-    with pytest.raises(ConfigError, match="dataset.hub"):
+    with pytest.raises(ConfigError, match=r"dataset.hub"):
         pipeline(tmp_path, "dataset: {hub: POVBench}\n")
 
 
@@ -71,11 +71,11 @@ def test_download_bounds_out_of_range_or_misspelled_are_refused(tmp_path, downlo
 
 
 def test_download_bounds_without_a_hub_are_refused(tmp_path):
-    with pytest.raises(ConfigError, match="dataset.download needs dataset.hub"):
+    with pytest.raises(ConfigError, match=r"dataset.download needs dataset.hub"):
         pipeline(tmp_path, "dataset: {path: data/povbench, download: {deadline_s: 5}}\n")
 
 
 @pytest.mark.parametrize("revision", ["../../../venv/site-packages/evil.pth", "/abs", "a//b", ".hidden"])
 def test_a_revision_that_could_leave_the_cache_is_refused_when_the_config_is_read(tmp_path, revision):
-    with pytest.raises(ConfigError, match="dataset.revision"):
+    with pytest.raises(ConfigError, match=r"dataset.revision"):
         pipeline(tmp_path, f"dataset: {{hub: owl-owl/POVBench, revision: '{revision}'}}\n")

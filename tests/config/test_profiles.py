@@ -6,9 +6,9 @@ import pytest
 from pydantic import ValidationError
 
 from povagent import hookimpl
+from povagent.config.profiles import ModelProfile, resolve_profile
 from povagent.dataset.models import Condition
 from povagent.plugins import build_plugin_host
-from povagent.config.profiles import ModelProfile, resolve_profile
 
 
 def test_profile_refuses_an_api_key_in_backend_options():

@@ -106,8 +106,8 @@ def test_a_repeated_log_path_takes_the_last_record(release):
 
 
 def test_a_selected_index_names_the_frame_of_the_same_order(release):
-    from povagent_plugins.strategies.basic import BasicStrategy
     from povagent.exchange.images import ImageStore
+    from povagent_plugins.strategies.basic import BasicStrategy
 
     add_frame(release, "a_first.png", yaw=45.0)
     inst = load_dataset(release).instance(f"{HOUSE}/0/right/a")

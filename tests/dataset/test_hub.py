@@ -11,13 +11,13 @@ from pathlib import Path
 
 import pytest
 
+from povagent.config.pipeline import resolve_hub_dataset
 from povagent.dataset.hub import (
     RELEASE_REPO,
     download_release,
     find_release_root,
     parse_conditions,
     release_patterns,
-    resolve_hub_dataset,
 )
 from povagent.dataset.loader import load_dataset
 from povagent.dataset.models import Condition
@@ -222,7 +222,7 @@ def test_a_hub_pipeline_resolves_to_the_local_root_pinned_to_its_commit(hub, tmp
 def test_a_hub_pipeline_not_resolved_yet_has_no_root(tmp_path):
     from povagent.config.models import DatasetSpec
 
-    with pytest.raises(DatasetError, match="dataset.hub owl-owl/POVBench: not fetched yet"):
+    with pytest.raises(DatasetError, match=r"dataset\.hub owl-owl/POVBench: not fetched yet"):
         DatasetSpec(hub=RELEASE_REPO).root  # noqa: B018 - the property raises
 
 

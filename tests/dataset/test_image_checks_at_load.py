@@ -87,7 +87,7 @@ def test_an_observer_view_takes_its_size_from_its_own_camera(dataset_copy, edito
 
 def test_strict_loading_stops_at_a_bad_image(dataset_copy):
     truncate(house_path(dataset_copy, FRAME))
-    with pytest.raises(DatasetError, match="frame_001.png"):
+    with pytest.raises(DatasetError, match=r"frame_001.png"):
         load_dataset(dataset_copy, strict=True)
 
 
@@ -124,7 +124,7 @@ def test_the_image_store_names_a_truncated_file(tmp_path):
     path = tmp_path / "frame_010.png"
     Image.effect_noise((64, 64), 40).convert("RGB").save(path)
     truncate(path, 0.5)
-    with pytest.raises(DatasetError, match="frame_010.png"):
+    with pytest.raises(DatasetError, match=r"frame_010.png"):
         ImageStore().add_file(path)
 
 

@@ -10,8 +10,6 @@ import pytest
 from PIL import Image
 
 from povagent.dataset.models import Condition, Direction
-from povagent.errors import DatasetError
-from povagent.geometry.letterbox import Letterbox
 from povagent.dataset.realworld import (
     INDEX_FILE,
     RealWorldInstance,
@@ -21,6 +19,8 @@ from povagent.dataset.realworld import (
     success_breakdown,
     write_realworld,
 )
+from povagent.errors import DatasetError
+from povagent.geometry.letterbox import Letterbox
 
 DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
 
@@ -77,7 +77,7 @@ def test_a_missing_image_is_named(demo_copy):
 
 def test_an_unreadable_image_is_named(demo_copy):
     (demo_copy / "house_1" / "frame_00.jpg").write_bytes(b"junk")
-    with pytest.raises(DatasetError, match="frame_00.jpg cannot be read"):
+    with pytest.raises(DatasetError, match=r"frame_00.jpg cannot be read"):
         read_realworld(demo_copy)
 
 
@@ -125,7 +125,7 @@ def test_two_commands_for_the_same_direction_and_condition_are_refused(demo_copy
 
 def test_invalid_json_names_the_line(demo_copy):
     (demo_copy / INDEX_FILE).write_text('{"houses": [\n  {"id": }]}')
-    with pytest.raises(DatasetError, match="not valid JSON.*line 2"):
+    with pytest.raises(DatasetError, match=r"not valid JSON.*line 2"):
         read_realworld(demo_copy)
 
 

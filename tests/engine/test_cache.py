@@ -107,7 +107,6 @@ def test_a_cache_file_planted_as_a_link_is_refused_and_its_target_untouched(tmp_
     run = tmp_path / "run"
     run.mkdir()
     os.symlink(outside, run / name)
-    with pytest.raises(WriteTargetError, match=rf"{name}: is a symbolic link"):
-        with ResponseCache(run / "c.sqlite") as cache:
-            cache.put("k", Response("answer"))
+    with pytest.raises(WriteTargetError, match=rf"{name}: is a symbolic link"), ResponseCache(run / "c.sqlite") as cache:
+        cache.put("k", Response("answer"))
     assert outside.read_bytes() == b""

@@ -11,7 +11,7 @@ from povagent.engine.received import (
     received,
 )
 from povagent.exchange.messages import Response, ToolCall
-from povagent.run.logs import Redactor
+from povagent.files.redaction import Redactor
 
 KEY = "lab-key-4f9a8c7e2b1d"
 

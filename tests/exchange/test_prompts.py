@@ -6,7 +6,6 @@ import pytest
 
 from povagent.exchange.prompts import frame_values, load_template, render
 
-
 TEMPLATES = [
     "basic_frames", "basic_given", "coordinate_system", "cot_frames", "cot_step4", "spatial_cot_step4",
     "o_plot_note", "oa_plot_note", "molmopoint_frames", "molmopoint_given", "robopoint_given",
@@ -26,7 +25,7 @@ def test_the_txt_suffix_is_optional():
 
 
 def test_an_unknown_template_names_itself():
-    with pytest.raises(FileNotFoundError, match="no_such_prompt.txt"):
+    with pytest.raises(FileNotFoundError, match=r"no_such_prompt.txt"):
         load_template("no_such_prompt")
 
 

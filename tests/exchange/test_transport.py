@@ -195,9 +195,11 @@ def test_a_symlinked_frame_pointing_out_of_the_dataset_is_refused_over_http(rele
     try:
         store = ImageStore()
         h = store.add_file(link).image_hash
-        with image_transport(store, make_transport("http", dataset_root=release, cache_dir=tmp_path / "cache")):
-            with pytest.raises(ImageReferenceError, match="outside"):
-                store.url(h)
+        with (
+            image_transport(store, make_transport("http", dataset_root=release, cache_dir=tmp_path / "cache")),
+            pytest.raises(ImageReferenceError, match="outside"),
+        ):
+            store.url(h)
     finally:
         link.unlink()
 
@@ -226,9 +228,8 @@ def test_the_loopback_server_refuses_file_urls_outside_its_media_root(release, f
     with LoopbackServer(fetch_images=True, local_media_root=elsewhere, max_lifetime_s=30) as s:
         store = ImageStore()
         request = thirty_frame_request(store, frames[:1])
-        with image_transport(store, FileTransport(tmp_path / "cache")):
-            with pytest.raises(PermanentBackendError, match="400|outside"):
-                send(backend_for(s), request, store)
+        with image_transport(store, FileTransport(tmp_path / "cache")), pytest.raises(PermanentBackendError, match=r"400|outside"):
+            send(backend_for(s), request, store)
         assert s.image_failures == 1 and s.images_fetched == 0
 
 
@@ -307,6 +308,8 @@ def test_the_default_derived_image_folder_planted_as_a_link_is_refused(release, 
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     os.symlink(elsewhere, run / DEFAULT_CACHE_DIR)
-    with pytest.raises(WriteTargetError, match=rf"{DEFAULT_CACHE_DIR}: is a symbolic link"):
-        with open_image_transport(ImagesSpec(transport="file"), ImageStore(), dataset_root=release, output=run):
-            pass
+    with (
+        pytest.raises(WriteTargetError, match=rf"{DEFAULT_CACHE_DIR}: is a symbolic link"),
+        open_image_transport(ImagesSpec(transport="file"), ImageStore(), dataset_root=release, output=run),
+    ):
+        pass

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from povagent.generate.assets import asset_database
+from povagent.generate.assets import asset_database, placement_annotations
 from povagent.generate.floorplan import generate_floorplan
-from povagent.generate.furnishing import furnish, room_types_holding
+from povagent.generate.furnishing import furnish
 from povagent.generate.pipeline import house_generators
 from povagent.generate.scene import House
 
@@ -23,6 +23,20 @@ def houses() -> list[House]:
         plan = generate_floorplan(rngs["plan"])
         out.append(House(f"h{index}", plan, furnish(plan, rngs["furnish"])))
     return out
+
+
+#: ProcTHOR's room types, as its placement annotations name their columns.
+ROOM_TYPE_COLUMNS = {"Kitchen": "inKitchens", "LivingRoom": "inLivingRooms", "Bedroom": "inBedrooms", "Bathroom": "inBathrooms"}
+
+
+def room_types_holding(object_type: str) -> list[str]:
+    """Room types where ProcTHOR's placement annotations put ``object_type`` (0 never, 1
+    sometimes, 2 often): the check the generator's own furnishing table is held to."""
+    def frequency(room_type: str) -> int:
+        value = placement_annotations().get(ROOM_TYPE_COLUMNS[room_type], {}).get(object_type)
+        return int(value) if isinstance(value, (int, float)) else 0
+
+    return [room_type for room_type in ROOM_TYPE_COLUMNS if frequency(room_type) > 0]
 
 
 def test_every_object_stands_in_a_room_type_procthor_puts_it_in(houses):

@@ -55,7 +55,7 @@ def main(out: Path) -> None:
 
     from povagent.dataset.models import DIRECTIONS
     from povagent.geometry.ground_truth import AnchorBox, target_point
-    from povagent.run.quickstart import run_quickstart
+    from povagent.report.quickstart import run_quickstart
 
     box = AnchorBox(center_xz=(0.0, 0.0), half_xz=(0.5, 0.3), top=0.8)
     # observer at z = -3 looking at the anchor: "behind" is the anchor's far side, +z

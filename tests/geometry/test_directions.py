@@ -7,14 +7,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from povagent.dataset.models import DIRECTIONS, Direction
 from povagent.generate.dataset import DIRECTIONS_FINGERPRINTS, GENERATOR_VERSION
 from povagent.geometry.directions import (
     DIRECTION_NAMES,
     DIRECTION_REGISTRY,
-    direction_for_word,
     direction_spec,
     generation_fingerprint,
 )
@@ -76,11 +73,6 @@ def test_only_lateral_directions_are_swapped_by_a_mirror():
 def test_a_beside_direction_has_an_axis_and_an_on_top_one_has_none():
     for spec in DIRECTION_REGISTRY:
         assert (spec.axis is None) == spec.vertical
-
-
-@pytest.mark.parametrize(("word", "name"), [("Right", "right"), (" above ", "up"), ("in front", "front"), ("behind", None)])
-def test_a_models_word_names_its_direction(word, name):
-    assert direction_for_word(word) == name
 
 
 def test_an_unknown_name_has_no_spec():

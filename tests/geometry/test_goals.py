@@ -12,7 +12,6 @@ from povagent.generate import generate_dataset
 from povagent.generate.pipeline import build_house
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import (
-    FLOOR,
     GoalUnavailable,
     PinholeCamera,
     Plane,

@@ -113,7 +113,7 @@ def test_an_anchor_outside_the_flat_topped_set_never_holds_a_left_right_target()
 
 
 def test_the_flat_topped_set_is_the_official_one():
-    assert FLAT_TOPPED_ANCHORS == {"Bed", "CounterTop", "Desk", "Desktop", "DiningTable", "Dresser", "SideTable"}
+    assert {"Bed", "CounterTop", "Desk", "Desktop", "DiningTable", "Dresser", "SideTable"} == FLAT_TOPPED_ANCHORS
 
 
 def test_front_is_never_on_the_anchor_even_when_the_surface_names_it():

@@ -88,7 +88,7 @@ def test_a_marked_pixel_lands_where_the_transform_says():
 
 
 def test_padding_has_the_pad_colour():
-    square, box = letterbox(Image.new("RGB", (200, 100), (255, 255, 255)), pad_color=(7, 8, 9))
+    square, _box = letterbox(Image.new("RGB", (200, 100), (255, 255, 255)), pad_color=(7, 8, 9))
     assert square.size == (512, 512)
     assert square.getpixel((5, 5)) == (7, 8, 9)
     assert square.getpixel((256, 256)) == (255, 255, 255)

@@ -95,7 +95,7 @@ def test_box_edges_on_the_letterbox_border_are_left_out_as_the_images_own_border
 def test_a_target_on_the_padding_is_not_in_frame():
     wide = PinholeCamera.from_intrinsics(np.eye(4), K_640, 640, 480).letterboxed(Letterbox.for_size(640, 480))
     above_the_view = np.array([0.0, -2.0, 4.0])  # OpenCV y is down: 2 m up, 4 m ahead
-    u, v, _ = wide.project_point(above_the_view)
+    _u, v, _ = wide.project_point(above_the_view)
     assert 0.0 < v * 512 < 64.0  # inside the square, on its padding
     choice = choose_frame(above_the_view, [wide])
     assert choice.placement == "in front, outside the frame" and choice.pixel[1] == 64.0

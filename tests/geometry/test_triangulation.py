@@ -92,7 +92,7 @@ def test_box_outlines_from_three_views_give_the_box():
 
 def test_box_edges_cut_by_the_image_border_are_left_out():
     cam = looking_at((-1.5, 0.9, 0.5), CENTRE)
-    x0, y0, x1, y1 = projected_box(cam, CENTRE, HALF)
+    _x0, y0, x1, _y1 = projected_box(cam, CENTRE, HALF)
     clipped = Outline(cam, (0.0, y0, x1, 511.0))  # left and bottom edges at the border
     box = fit_box(CENTRE, [clipped], prior_half=tuple(HALF), centre_sigma=0.05)
     assert box.edges_used == 2

@@ -13,8 +13,8 @@ import time
 import pytest
 
 import povagent.answers.text as answer_text
-from povagent.answers.text import MAX_NESTING, find_objects, index_from_digits
 from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
+from povagent.answers.text import MAX_NESTING, find_objects, index_from_digits
 from povagent.plugins import build_plugin_host
 
 PARSERS = ["json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "internvl"]

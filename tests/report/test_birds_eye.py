@@ -14,14 +14,13 @@ import numpy as np
 import pytest
 import yaml
 from PIL import Image
+from test_report_html import browse, dump, gallery_data
 
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
 from povagent.report.birds_eye import VIEW_PX, _Frame, birds_eye_svg, prediction_on_floor, scene_for
 from povagent.report.build import write_report
 from povagent.run.runner import run_pipeline
-
-from test_report_html import browse, dump, gallery_data
 
 SVG = "{http://www.w3.org/2000/svg}"
 

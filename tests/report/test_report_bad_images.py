@@ -12,7 +12,6 @@ import re
 import shutil
 
 import pytest
-from PIL import Image
 from typer.testing import CliRunner
 
 from povagent.cli import app

@@ -6,8 +6,8 @@ import re
 
 import pytest
 
-from povagent.report.compare import compare_runs, write_comparison_html
 from povagent.report.collect import collect
+from povagent.report.compare import compare_runs, write_comparison_html
 
 
 def per_instance(path):

@@ -7,10 +7,10 @@ import json
 import pytest
 
 from povagent.errors import PredictionsError
-from povagent.results.official_format import read_official_predictions
 from povagent.report.export import export_run
-from povagent.results.rows import read_rows
+from povagent.results.official_format import read_official_predictions
 from povagent.results.prediction_files import score_predictions
+from povagent.results.rows import read_rows
 from povagent.scoring.breakdown import ScoredRow, breakdown
 
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import pytest
 import yaml
+from table_rows import system_row
 
-from povagent.report.build import write_report
 from povagent.report.baseline import CENTER_SYSTEM
-from povagent.report.paper_tables import main_table, system_row
+from povagent.report.build import write_report
+from povagent.report.paper_tables import main_table
 
 
 @pytest.fixture(scope="module")

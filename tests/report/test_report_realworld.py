@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-
+from table_rows import system_row
 from test_report_html import body_attr, browse, cards, dump, gallery_data  # the Chromium helpers
 
 from povagent.dataset.realworld import load_realworld
@@ -28,7 +28,7 @@ from povagent.report.build import write_report
 from povagent.report.collect import Observation
 from povagent.report.gallery import drawing_for
 from povagent.report.gallery_drawing import GT_COLOUR, PRED_COLOUR, render
-from povagent.report.paper_tables import success_table, system_row
+from povagent.report.paper_tables import success_table
 from povagent.results.rows import iter_rows
 
 REALWORLD_DEMO = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"

@@ -10,8 +10,8 @@ gallery cards and their frame strips, the filters in the page address; and scree
 from __future__ import annotations
 
 import re
-from pathlib import Path
 import urllib.parse
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,7 +37,7 @@ WINDOW = "--window-size=1300,900"
 @pytest.fixture(scope="module")
 def quickstart(tmp_path_factory, mini_root):
     """The quickstart's report, made by the real quickstart on the hand-made dataset."""
-    from povagent.run.quickstart import run_quickstart
+    from povagent.report.quickstart import run_quickstart
 
     done = run_quickstart(tmp_path_factory.mktemp("quickstart") / "qs", dataset=mini_root, quiet=True, say=lambda _text: None)
     return write_report(done.sweep, done.report.parent, n_boot=100)

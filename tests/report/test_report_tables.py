@@ -7,11 +7,12 @@ import io
 from collections import defaultdict
 
 import pytest
+from table_rows import system_row
 
 from povagent.report.analysis import analyze
 from povagent.report.baseline import CENTER_SYSTEM, center_score
 from povagent.report.collect import collect
-from povagent.report.paper_tables import main_table, paper_tables, response_table, system_row
+from povagent.report.paper_tables import main_table, paper_tables, response_table
 from povagent.report.run_sets import load_collection_dataset
 from povagent.report.tables import Cell, Column, Row, Table, to_csv, to_html, to_latex, to_markdown
 from povagent.results.rows import read_rows

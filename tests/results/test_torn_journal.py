@@ -163,8 +163,8 @@ def test_staged_results_are_fsynced_then_renamed_in_with_the_folder_fsynced(tmp_
 def test_a_staging_that_fails_leaves_no_folder_open(tmp_path, monkeypatch):
     import os
 
+    from povagent.files.confined_write import ConfinedFolder
     from povagent.results.rows import StagedResults
-    from povagent.run.confined_write import ConfinedFolder
 
     def refuse(self, name, **kw):
         raise OSError(28, "No space left on device")

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import json
-from typing import Any
+from typing import Any, ClassVar
 
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema, point_answer_schema, unparseable
@@ -61,7 +61,7 @@ class FlakyBackend(CenterBackend):
     any timeout), ``"connection"``, ``"crash"`` (a plugin bug) or ``"ok"`` (answer this one).
     """
 
-    SCRIPT: list[Any] = []
+    SCRIPT: ClassVar[list[Any]] = []  # shared across instances: the script outlives each one
 
     def __init__(self, script: list[Any] | None = None, retry_after: float | None = None, **kw: Any) -> None:
         super().__init__(**kw)

@@ -168,6 +168,6 @@ def test_a_sweep_refuses_references_for_a_hosted_cell_before_any_cell_runs(tmp_p
     }
     path = tmp_path / "sweep.yaml"
     path.write_text(yaml.safe_dump(sweep, sort_keys=False))
-    with pytest.raises(ConfigError, match="gemini/gemini-2.5-flash"):
+    with pytest.raises(ConfigError, match=r"gemini/gemini-2.5-flash"):
         run_sweep(path, quiet=True)
     assert not list((tmp_path / "sweep").glob("*/results.jsonl"))  # not even the center cell ran

@@ -75,7 +75,7 @@ def test_a_nan_coordinate_is_stored_as_recorded(write_pipeline):
 def test_rows_without_a_reading_are_counted_not_mixed_in(write_pipeline):
     from povagent.run.summary import summarize_rows
 
-    result, rows = run(write_pipeline(backend=reply(TRAILING_COMMA), parser="json"))
+    _result, rows = run(write_pipeline(backend=reply(TRAILING_COMMA), parser="json"))
     older = [r.model_copy(update={"official_reading": None}) for r in rows[:3]]  # as written before readings
     summary = summarize_rows(older + rows[3:])
     official = summary["official_parse"]

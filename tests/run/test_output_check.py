@@ -89,9 +89,8 @@ def test_a_sweep_index_that_misses_its_schema_is_refused_naming_sweep_json(tmp_p
 
 def test_an_export_manifest_that_misses_its_schema_is_refused_and_not_written(tmp_path):
     out = tmp_path / "export"
-    with pytest.raises(OutputSchemaError, match=r"export\.json"):
-        with export_folder(out, {"version": 3, "options": {}, "surprise": 1}):
-            pass
+    with pytest.raises(OutputSchemaError, match=r"export\.json"), export_folder(out, {"version": 3, "options": {}, "surprise": 1}):
+        pass
     assert not (out / "export.json").exists()
 
 

@@ -11,10 +11,10 @@ import pytest
 
 from povagent import hookimpl
 from povagent.config.pipeline import load_pipeline
+from povagent.engine.retry import error_type_of, is_transient
 from povagent.errors import ConfigError
 from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent.results.rows import read_rows
-from povagent.engine.retry import error_type_of, is_transient
 from povagent.run.runner import run_pipeline
 
 N_KEYS = 12  # 4 (pair, direction)s x 3 conditions in the small release
@@ -120,7 +120,7 @@ class _Status(Exception):
     [
         (TransientBackendError("x", status=503), True),
         (TimeoutError(), True),
-        (asyncio.TimeoutError(), True),
+        (TimeoutError(), True),
         (ConnectionResetError(), True),
         (OSError("network unreachable"), True),
         (_Status(429), True),
@@ -187,8 +187,8 @@ def test_secrets_are_redacted_from_rows_and_logs(write_pipeline, monkeypatch):
 
 
 def test_concurrency_bounds_requests_in_flight(write_pipeline, povagent_host):
-    from povagent.interfaces import Backend
     from povagent.exchange.messages import Response
+    from povagent.interfaces import Backend
 
     state = {"now": 0, "peak": 0}
 

@@ -21,8 +21,8 @@ from povagent.dataset.loader import ground_truth_point
 from povagent.dataset.validate import validate_dataset
 from povagent.geometry.camera import Camera
 from povagent.results.official_format import read_official_run
-from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.results.prediction_files import score_predictions
+from povagent.scoring.breakdown import ScoredRow, breakdown
 from povagent.scoring.predictions import score_official_rows, summary_of
 
 runner = CliRunner()

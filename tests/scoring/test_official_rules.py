@@ -60,7 +60,7 @@ def test_a_gt_outside_the_frame_is_clamped_to_its_edge(gu, gv, clamped):
 
 
 def test_the_largest_error_is_the_diagonal_sqrt2():
-    assert MAX_L2 == math.sqrt(2.0)
+    assert math.sqrt(2.0) == MAX_L2
     assert normalized_l2(0.0, 0.0, 512, 512, 1.0, 1.0) == pytest.approx(math.sqrt(2.0), abs=1e-12)
 
 

@@ -11,12 +11,12 @@ import yaml
 from PIL import Image
 from typer.testing import CliRunner
 
-from povagent.plugins import get_plugin_host
 from povagent.cli import app
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
 from povagent.errors import WriteTargetError
 from povagent.geometry.camera import Camera
+from povagent.plugins import get_plugin_host
 from povagent.results.episode import read_record
 from povagent.results.rows import read_rows
 from povagent.run.run_folder import MARKER

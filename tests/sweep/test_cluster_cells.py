@@ -34,7 +34,7 @@ def test_a_cells_cache_shard_is_merged_only_when_no_one_runs_the_cell(tmp_path) 
 
     from povagent.engine.cache import ResponseCache
     from povagent.exchange.messages import Response, Usage
-    from povagent.run.folder_lock import folder_lock
+    from povagent.files.folder_lock import folder_lock
     from povagent.run.sweep import CELL_CACHE_SHARD, _merge_cell_caches
 
     run_dir = tmp_path / "cell"

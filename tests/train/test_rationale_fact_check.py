@@ -1,7 +1,7 @@
 """Every fact a rationale states is recomputed from the scene, independently, for every instance.
 
 The recomputation here uses the camera's projection and the instance's records directly, not
-:mod:`povagent.train.facts`: the frame named (it saw the anchor, the target projects inside it),
+:mod:`povagent.tasks.scene_facts`: the frame named (it saw the anchor, the target projects inside it),
 the side (the sentence's direction), where the speaker stood (the observer camera on the floor,
 in the frame camera's axes) and which way they faced (the observer-to-anchor heading in those
 axes, in words and degrees), the anchor's pixel and box in the frame and in every other view

@@ -189,7 +189,7 @@ def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tup
     """The text lines of a line-per-record file, numbered from 1, each read with its bound
     (:data:`MAX_RECORD_LINE_BYTES`). A line longer than that, or not UTF-8, is a problem; an
     over-long line ends the reading (what follows it cannot be told apart from its rest)."""
-    from povagent.run.confined_read import open_regular
+    from povagent.files.confined_read import open_regular
 
     with open_regular(path, what=what) as handle:
         for number, raw in enumerate(iter(lambda: handle.readline(MAX_RECORD_LINE_BYTES + 1), b""), start=1):

@@ -22,7 +22,7 @@ from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, text_problems
 from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.problems import Problem
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
 PROFILE = "viewspatial"

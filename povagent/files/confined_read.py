@@ -30,13 +30,13 @@ The API, for every reader of untrusted files:
 - :func:`read_inside` ``(root, rel, max_bytes, what=...)``: like :func:`read_regular`, with no
   link followed below ``root``;
 - :func:`read_at` ``(folder, name, max_bytes, what=...)``: a file of a folder povagent holds open
-  (a :class:`~povagent.run.confined_write.ConfinedFolder`), read through the folder's descriptor,
+  (a :class:`~povagent.files.confined_write.ConfinedFolder`), read through the folder's descriptor,
   so the folder cannot be swapped for a link between its check and the read;
 - :func:`check_regular` ``(path, max_bytes, what=...)``: the size of a file another library opens
   by path (``transformers``, ``safetensors``), refused as :func:`read_regular` would refuse it.
 
 This module must not decide where a path may lead (that is :mod:`povagent.dataset.paths`), and
-it never writes (that is :mod:`povagent.run.confined_write`).
+it never writes (that is :mod:`povagent.files.confined_write`).
 """
 
 from __future__ import annotations
@@ -204,7 +204,7 @@ def read_inside(root: str | Path, rel: str | PurePosixPath, max_bytes: int, *, w
 
 def read_at(folder: Any, name: str, max_bytes: int, *, what: str = "file") -> bytes:
     """The bytes of the regular file ``name`` in ``folder`` (a
-    :class:`~povagent.run.confined_write.ConfinedFolder`: its open ``descriptor`` and its
+    :class:`~povagent.files.confined_write.ConfinedFolder`: its open ``descriptor`` and its
     ``path``), not following a link, at most ``max_bytes``; refusals as in :func:`read_inside`.
     Without a descriptor (a platform with no ``dir_fd``) it is :func:`read_inside` of the path."""
     if folder.descriptor is None:

@@ -5,7 +5,8 @@ frame shows the target best (and whether the observer's furniture and the anchor
 the anchor and the furniture are in that frame, which way the observer faces relative to the
 camera (and where the speaker stood, which is what the ground truth's directions depend on),
 which way the direction points in the image, and the ground-truth pixel. A rationale is text
-around these facts; the fact-check test recomputes each of them independently.
+around these facts; the fact-check test recomputes each of them independently. They stand with
+the tasks because a generated relation question reads them too (the training export sits above).
 """
 
 from __future__ import annotations
@@ -164,11 +165,6 @@ def facing_words(angle: float) -> str:
     if abs(angle) >= 135.0:
         return FACINGS[1]
     return FACINGS[3] if angle > 0 else FACINGS[2]
-
-
-def facing_relative_to(camera: Camera, observer_xz: np.ndarray, anchor_xz: np.ndarray) -> str:
-    """Which way an observer at ``observer_xz`` facing ``anchor_xz`` looks, seen from ``camera``."""
-    return facing_words(facing_angle(camera, observer_xz, anchor_xz))
 
 
 def image_direction(du: float, dv: float) -> str:

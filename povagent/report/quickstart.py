@@ -13,10 +13,10 @@ from typing import Callable
 
 import yaml
 
+from povagent.config.pipeline import default_scorers
+from povagent.files.confined_write import write_inside
 from povagent.geometry.directions import DIRECTION_NAMES
 from povagent.results.official_reading import OFFICIAL_PARSER
-from povagent.run.confined_write import write_inside
-from povagent.scoring.protocols import default_scorers
 
 #: The baselines the quickstart compares (all offline and instant).
 BASELINES = ("center", "random", "oracle")

@@ -7,7 +7,7 @@ import os
 import pytest
 
 from povagent.errors import WriteTargetError
-from povagent.run.confined_write import ConfinedFolder, open_inside, write_inside
+from povagent.files.confined_write import ConfinedFolder, open_inside, write_inside
 
 
 @pytest.fixture

@@ -8,8 +8,8 @@ import time
 import pytest
 
 from povagent.errors import ReadTargetError
-from povagent.run.confined_read import check_regular, open_regular, read_at, read_inside, read_regular
-from povagent.run.confined_write import ConfinedFolder
+from povagent.files.confined_read import check_regular, open_regular, read_at, read_inside, read_regular
+from povagent.files.confined_write import ConfinedFolder
 
 pytestmark = pytest.mark.timeout(20)
 

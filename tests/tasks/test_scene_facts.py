@@ -10,7 +10,7 @@ import pytest
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.geometry.camera import Camera
-from povagent.train.facts import facing_relative_to, gt_pixel, image_direction, teaching_frame
+from povagent.tasks.scene_facts import facing_angle, facing_words, gt_pixel, image_direction, teaching_frame
 
 # an observer at the origin facing +x (the anchor 2 m along +x)
 OBSERVER = np.array([0.0, 0.0])
@@ -30,7 +30,7 @@ ANCHOR = np.array([2.0, 0.0])
 )
 def test_facing_is_the_observers_heading_in_the_cameras_frame(yaw: float, facing: str) -> None:
     camera = Camera.from_pose((5.0, 0.9, 5.0), yaw, 30.0)
-    assert facing_relative_to(camera, OBSERVER, ANCHOR) == facing
+    assert facing_words(facing_angle(camera, OBSERVER, ANCHOR)) == facing
 
 
 @pytest.mark.parametrize(

@@ -1,30 +1,24 @@
-"""Structured run logs: JSON lines in the run folder, a readable rendering on the console.
+"""Redaction: secrets never reach a file or a terminal.
 
-Each run gets its own structlog logger (no global configuration is touched, so runs and cells
-in one process do not fight over it). Every event passes :class:`Redactor` first: values of
-keys named like a secret, ``sk-...`` keys, ``Bearer ...`` tokens, credentials inside URLs
-(``http://user:password@host``), a key pasted into a ``*_env`` field where a variable's name
-belongs, and the current values of ``*_API_KEY`` (and ``*_TOKEN``/``*_SECRET``) environment
-variables never reach a file or a terminal. The same redaction guards error messages stored in
-result rows and the resolved ``config.yaml``.
+:class:`Redactor` removes values of keys named like a secret, ``sk-...`` keys, ``Bearer ...``
+tokens, credentials inside URLs (``http://user:password@host``), a key pasted into a ``*_env``
+field where a variable's name belongs, and the current values of ``*_API_KEY`` (and
+``*_TOKEN``/``*_SECRET``) environment variables. Run logs pass every event through it; error
+messages stored in result rows, the resolved ``config.yaml``, the report's pages and the
+configuration checks use the same one.
 
-This module formats and writes log events; it must not decide what to log.
+It sits on the ground floor with the confined reads and writes: every room that writes what a
+user or a server handed it stands on it. This module only recognises and removes secrets; it
+must not write, log or decide what is logged.
 """
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import json
 import os
 import re
-import sys
-import threading
-from datetime import UTC, datetime
-from pathlib import Path
-from typing import Any, Callable, Mapping, TextIO, cast
+from typing import Any, Mapping
 
-import structlog
 from structlog.typing import EventDict
 
 REDACTED = "[REDACTED]"
@@ -52,9 +46,6 @@ ENV_NAME_WANTED = (
 #: Longer "names" are refused too: a variable name is a word, a key is a long random string.
 MAX_VARIABLE_NAME = 64
 _SECRET_ENV = re.compile(r".*(_API_KEY|_TOKEN|_SECRET|_ACCESS_KEY)$|^API_KEY$", re.IGNORECASE)
-
-LEVELS = {"debug": 10, "info": 20, "warning": 30, "error": 40, "critical": 50}
-
 
 class Redactor:
     """Removes secrets from strings and nested structures.
@@ -168,140 +159,3 @@ def _secret_key(key: str) -> bool:
 def _names_a_variable(key: str) -> bool:
     # ``api_key_env``, ``token_env``: fields whose value is the name of an environment variable
     return key.lower().endswith("_env")
-
-
-def _default(obj: Any) -> Any:
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, BaseException):
-        return f"{type(obj).__name__}: {obj}"
-    return repr(obj)
-
-
-class _Sinks:
-    """The final processor: JSON line to the file, rendered line to the console; drops the event."""
-
-    def __init__(self, file: TextIO | None, console: Callable[[], TextIO] | None, console_level: int) -> None:
-        self.file = file
-        #: the first write to the file that failed (a full disk): no further line goes there, and
-        #: :meth:`flush` raises it, so the runner writes no row whose events are not in the log
-        self.error: OSError | None = None
-        self.console = console
-        self.console_level = console_level
-        self._lock = threading.Lock()
-        self._render = structlog.dev.ConsoleRenderer(colors=bool(console is not None and console().isatty()))
-
-    def __call__(self, logger: Any, method: str, event: EventDict) -> Any:
-        level = event.get("level", method)
-        with self._lock:
-            if self.file is not None and self.error is None:
-                try:
-                    self.file.write(json.dumps(event, default=_default, separators=(",", ":")) + "\n")
-                except OSError as exc:  # logging must not fail the request that logs
-                    self.error = _named(exc, self.file)
-            if self.console is not None and LEVELS.get(level, 20) >= self.console_level:
-                stream = self.console()
-                stream.write(self._render(logger, method, dict(event)) + "\n")
-                stream.flush()
-        raise structlog.DropEvent
-
-    def flush(self) -> None:
-        """Flush the file sink; raises the first write failure (an ``OSError`` naming the file)."""
-        with self._lock:
-            if self.file is not None and self.error is None:
-                try:
-                    self.file.flush()
-                except OSError as exc:
-                    self.error = _named(exc, self.file)
-            if self.error is not None:
-                raise self.error
-
-
-def _named(exc: OSError, file: TextIO) -> OSError:
-    """``exc`` with the file's name (a failed ``write`` on an open file does not carry it)."""
-    if exc.filename is None and exc.errno is not None:
-        return OSError(exc.errno, exc.strerror, getattr(file, "name", None))
-    return exc
-
-
-def _add_level(logger: Any, method: str, event: EventDict) -> EventDict:
-    event["level"] = "warning" if method == "warn" else method
-    return event
-
-
-def _timestamp(logger: Any, method: str, event: EventDict) -> EventDict:
-    event["ts"] = datetime.now(UTC).isoformat(timespec="milliseconds")
-    return event
-
-
-class RunLog:
-    """A run's logger: ``log = RunLog(path); log.info("request", latency_s=...)``; ``close()`` at end."""
-
-    def __init__(
-        self,
-        path: str | Path | None,
-        *,
-        console: bool | Callable[[], TextIO] = False,
-        console_level: str = "warning",
-        redactor: Redactor | None = None,
-        **context: Any,
-    ) -> None:
-        self.path = Path(path) if path is not None else None
-        self._file: TextIO | None = None
-        if self.path is not None:
-            from povagent.run.confined_write import open_inside
-
-            # line-buffered is too slow for one event per request; flushed on close and by the
-            # runner before each batch of rows; no fsync (results.jsonl is the record). Never
-            # through a link planted where the log goes (a resumed run's folder is untrusted).
-            self._file = cast(TextIO, open_inside(self.path.parent, self.path.name, "a"))
-        self.redactor = redactor or Redactor()
-        stream = (_stderr if console is True else console) or None
-        self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))
-        self.logger = structlog.wrap_logger(
-            None,
-            processors=[_add_level, _timestamp, self.redactor, self._sinks],
-            context_class=dict,
-            cache_logger_on_first_use=True,
-        ).bind(**context)
-
-    def bind(self, **context: Any) -> Any:
-        """A bound logger carrying ``context`` on every event."""
-        return self.logger.bind(**context)
-
-    def debug(self, event: str, **kw: Any) -> None:
-        """Log at debug level."""
-        self.logger.debug(event, **kw)
-
-    def info(self, event: str, **kw: Any) -> None:
-        """Log at info level."""
-        self.logger.info(event, **kw)
-
-    def warning(self, event: str, **kw: Any) -> None:
-        """Log at warning level."""
-        self.logger.warning(event, **kw)
-
-    def error(self, event: str, **kw: Any) -> None:
-        """Log at error level."""
-        self.logger.error(event, **kw)
-
-    def flush(self) -> None:
-        """Push buffered lines to the file."""
-        self._sinks.flush()
-
-    def close(self) -> None:
-        """Flush and close the file. A write that failed (a full disk) does not raise here: the
-        runner has already stopped on it (see :meth:`flush`), and closing must still happen."""
-        with contextlib.suppress(OSError):
-            self._sinks.flush()
-        if self._file is not None:
-            with contextlib.suppress(OSError):  # the buffer's lines could not be written
-                self._file.close()
-            self._file = None
-            self._sinks.file = None
-
-
-def _stderr() -> TextIO:
-    # Looked up at each write: a live progress display swaps sys.stderr to keep lines above it.
-    return sys.stderr
-

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Iterator
 
 from povagent.errors import ConfigError, WriteTargetError
-from povagent.run.confined_write import open_inside
+from povagent.files.confined_write import open_inside
 
 #: The lock file's name inside a run folder.
 LOCK = ".lock"
