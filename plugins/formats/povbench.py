@@ -26,7 +26,7 @@ def release_problems(request: FormatRead) -> list:
     """Every problem of the release-layout folder (:func:`povagent.dataset.validate.validate_dataset`)."""
     from povagent.dataset.validate import validate_dataset
 
-    return validate_dataset(request.path, _frame_size(request))
+    return validate_dataset(request.path, _frame_size(request), request.warnings)
 
 
 def _frame_size(request: FormatRead) -> tuple[int, int]:

@@ -42,6 +42,9 @@ class FormatRead:
     #: config admits only the format's :attr:`DatasetFormat.option_names`); a reader refuses a
     #: bad value with :class:`~povagent.errors.DatasetError` naming the file.
     options: Mapping[str, Any] = field(default_factory=dict)
+    #: Where a validator puts what leaves the set valid (``povagent validate`` prints them on
+    #: stderr); ``None``: nobody asks.
+    warnings: list[Problem] | None = None
 
 
 @dataclass(frozen=True)
