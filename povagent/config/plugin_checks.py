@@ -21,7 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
-from povagent.dataset.formats import registered_format
+from povagent.dataset.formats import missing_rules, registered_format
 from povagent.errors import ConfigError, PluginError
 from povagent.files.redaction import ENV_NAME_WANTED, Redactor
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
@@ -52,12 +52,7 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     if config.dataset.format is not None:
         check("format", config.dataset.format, ("dataset", "format"))
         if config.dataset.format in host.names("format"):
-            accepted = registered_format(host, config.dataset.format).option_names
-            for key in config.dataset.options or {}:
-                if key not in accepted:
-                    loc = ("dataset", "options", key)
-                    takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
-                    problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: format {config.dataset.format!r} has no option {cut(str(key))!r}; {takes}")
+            check_format_fits(config, host, source, prefix, problems)
     if config.dataset.generate is not None:
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
@@ -65,6 +60,20 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         check_finite_options(options, loc, source, prefix, problems)
     if problems:
         raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
+
+
+def check_format_fits(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """The registered format ``dataset.format`` names has its official rule (a registered parser
+    and scorer: :func:`~povagent.dataset.formats.missing_rules`), and takes every key of ``dataset.options``."""
+    fmt = str(config.dataset.format)
+    at: Loc = ("dataset", "format")
+    problems += [f"{source.where(prefix + at)}: {dotted(at)}: {why}" for why in missing_rules(host, [fmt])]
+    accepted = registered_format(host, fmt).option_names
+    for key in config.dataset.options or {}:
+        if key not in accepted:
+            loc: Loc = ("dataset", "options", key)
+            takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
+            problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: format {fmt!r} has no option {cut(str(key))!r}; {takes}")
 
 
 def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:

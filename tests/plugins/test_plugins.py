@@ -207,6 +207,21 @@ def test_plugins_command_lists_every_kind_with_its_source():
     assert rules and rules[0]["source"] == "built-in povagent_plugins.judges.physical_rules"
 
 
+def test_plugins_json_lists_formats_and_answer_types_beside_the_other_kinds():
+    from povagent.cli import app
+
+    listing = json.loads(CliRunner().invoke(app, ["plugins", "--json"]).output)
+    assert {e["name"] for e in listing["answer_type"]} >= {"point", "choice"}
+    formats = {e["name"]: e for e in listing["format"]}
+    assert set(formats) >= {"povbench", "generated", "realworld", "viewspatial", "mindcube", "3dsrbench"}
+    assert formats["mindcube"] == {
+        "name": "mindcube", "source": "built-in povagent_plugins.formats.mindcube",
+        "description": "MindCube: multiple-choice spatial reasoning from a few views of one scene",
+        "answer_type": "choice", "official_parser": "mindcube-official", "official_scorer": "choice-mindcube",
+        "upstream": "mll-lab-nu/MindCube@6d8fd9acdf5b80769373a21cdbfcf068ab356e0f", "licence": "see the dataset card (the code is MIT)",
+    }  # fmt: skip
+
+
 def test_every_contribution_hook_has_a_builtin_plugin_using_it():
     from povagent.plugins import KINDS, OBJECT_HOOKS
 
