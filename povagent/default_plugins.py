@@ -39,6 +39,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
     "povagent_plugins.parsers.mcq.lmms_mcq_extract",
     "povagent_plugins.parsers.mcq.sparbench",
+    "povagent_plugins.parsers.mcq.mmsi",
+    "povagent_plugins.parsers.mcq.omnispatial",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
