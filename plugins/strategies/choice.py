@@ -22,7 +22,7 @@ from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
 from povagent.interfaces import Strategy
-from povagent_plugins.strategies import set_profiles
+from povagent_plugins.strategies import set_profiles, spatial_set_profiles
 
 
 @dataclass(frozen=True)
@@ -47,6 +47,10 @@ CHOICE_PROFILES: dict[str, ChoiceProfile] = {
     "viewspatial": ChoiceProfile("viewspatial", set_profiles.viewspatial_text, set_profiles.VIEWSPATIAL_SOURCE),
     "mindcube": ChoiceProfile("mindcube", set_profiles.mindcube_text, set_profiles.MINDCUBE_SOURCE, interleaved=True),
     "3dsrbench": ChoiceProfile("3dsrbench", set_profiles.srbench3d_text, set_profiles.SRBENCH3D_SOURCE),
+    "mmsi": ChoiceProfile("mmsi", spatial_set_profiles.mmsi_text, spatial_set_profiles.MMSI_SOURCE),
+    "omnispatial": ChoiceProfile("omnispatial", spatial_set_profiles.omnispatial_text, spatial_set_profiles.OMNISPATIAL_SOURCE),
+    "omnispatial-json": ChoiceProfile("omnispatial-json", spatial_set_profiles.omnispatial_json_text, spatial_set_profiles.OMNISPATIAL_SOURCE),
+    "omnispatial-direct": ChoiceProfile("omnispatial-direct", spatial_set_profiles.omnispatial_direct_text, spatial_set_profiles.OMNISPATIAL_SOURCE),
 }
 
 #: Where an interleaved profile's text places an image.

@@ -105,7 +105,7 @@ class DatasetSpec(_Strict):
     #: The format of an external multiple-choice set whose file ``path`` names (see
     #: :mod:`povagent.dataset.choice_sets`), and the folder its image paths are relative to and
     #: confined to (default: the file's). ``None``: a POVBench-layout folder.
-    format: Literal["viewspatial", "mindcube", "3dsrbench"] | None = None
+    format: Literal["viewspatial", "mindcube", "3dsrbench", "mmsi", "omnispatial"] | None = None
     images: Path | None = None
 
     @model_validator(mode="before")

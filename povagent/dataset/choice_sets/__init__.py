@@ -20,12 +20,12 @@ from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 
 #: The formats a set's file may be given in (``dataset.format``), each with the set's name.
-CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench"}
+CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench", "mmsi": "mmsi", "omnispatial": "omnispatial"}
 
 #: Where a set's file sits in its repository: ``dataset.path`` may name the repository folder
 #: instead of the file (ViewSpatial-Bench's image paths are relative to the repository root,
 #: ``ViewSpatial-Bench/scannetv2_val/...`` beside ``eval/ViewSpatial-Bench.json``).
-REPOSITORY_FILES = {"viewspatial": "eval/ViewSpatial-Bench.json"}
+REPOSITORY_FILES = {"viewspatial": "eval/ViewSpatial-Bench.json", "mmsi": "MMSI_Bench.parquet", "omnispatial": "data.json"}
 #: What a problem of an image that does not exist adds, for a set whose image paths are
 #: relative to somewhere other than its file's folder.
 IMAGES_HINT = {
@@ -38,12 +38,13 @@ IMAGES_HINT = {
 #: on the reply as written), and for 3DSRBench VLMEvalKit's exact matching, with which its authors
 #: score it. lmms-eval's ports (``viewspatial``, ``mindcube``, ``3dsrbench-lmms``: after lmms-eval's
 #: reasoning-tag strip) are alternatives a pipeline names, never defaults.
-OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact"}
+OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact",
+                        "mmsi": "mmsi-official", "omnispatial": "omnispatial-re"}  # fmt: skip
 #: Each set's own scorer: plain accuracy for ViewSpatial-Bench, MindCube's with its ``translation``
 #: setting left out of the overall (a scorer option), and 3DSRBench's four accuracies per type
 #: and sub-category (the authors' circular evaluation with VLMEvalKit's): what a pipeline on that
 #: format gets first when it names no ``scorers:``.
-OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench"}
+OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench", "mmsi": "choice", "omnispatial": "choice"}
 
 
 #: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
@@ -121,6 +122,14 @@ def _read(file: Path, format: str, cache: Path) -> tuple[list, list[Problem]]:
             from povagent.dataset.choice_sets.mindcube import read_mindcube
 
             return read_mindcube(file)
+        if format == "mmsi":
+            from povagent.dataset.choice_sets.mmsi import read_mmsi
+
+            return read_mmsi(file, cache)
+        if format == "omnispatial":
+            from povagent.dataset.choice_sets.omnispatial import read_omnispatial
+
+            return read_omnispatial(file)
         from povagent.dataset.choice_sets.srbench3d import read_srbench3d
 
         return read_srbench3d(file, cache)
