@@ -120,7 +120,9 @@ def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, 
                         number += 1
                         yield number, row
             except Exception as exc:  # a corrupt page: the rest of the group cannot be told apart
-                problems.append(Problem(str(file), f"row {number + 1}", f"cannot be decoded ({type(exc).__name__}: {str(exc)[:200]}); the rest of its row group left out"))
+                problems.append(
+                    Problem(str(file), f"row {number + 1}", f"cannot be decoded ({type(exc).__name__}: {str(exc)[:200]}); the rest of its row group left out")
+                )
                 number = sum(parquet.metadata.row_group(g).num_rows for g in range(group + 1))
 
 

@@ -56,7 +56,9 @@ def test_a_missing_image_is_one_problem_naming_the_record_and_image(tmp_path):
     path = write_omnispatial(tmp_path / "set", omnispatial_records()[:4])
     (tmp_path / "set" / "Perspective_Taking" / "1.png").unlink()
     loaded = load_choice_set(path, "omnispatial")
-    assert [(p.json_path, p.message) for p in loaded.problems] == [("record Perspective_Taking_1_0.images[0]", "image 'Perspective_Taking/1.png' does not exist")]
+    assert [(p.json_path, p.message) for p in loaded.problems] == [
+        ("record Perspective_Taking_1_0.images[0]", "image 'Perspective_Taking/1.png' does not exist")
+    ]
 
 
 def test_an_image_outside_the_set_s_folder_is_never_opened(tmp_path):

@@ -24,7 +24,12 @@ from povagent.run.runner import run_pipeline
 from .conftest import MMSI_ROWS, OMNI_RECORDS
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
-    "Positional Relationship (Cam.-Obj.)", "Positional Relationship (Obj.-Obj.)", "Attribute (Meas.)", "Motion (Cam.)", "MSR")
+    "Positional Relationship (Cam.-Obj.)",
+    "Positional Relationship (Obj.-Obj.)",
+    "Attribute (Meas.)",
+    "Motion (Cam.)",
+    "MSR",
+)
 
 #: one reply per MMSI row (gold in brackets), and whether each rule hits: official, lmms-eval, VLMEvalKit
 MMSI_REPLIES = [
