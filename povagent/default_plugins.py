@@ -9,6 +9,14 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.answers.point",
     "povagent_plugins.answers.choice",
     "povagent_plugins.answers.walk",
+    # dataset formats
+    "povagent_plugins.formats.povbench",
+    "povagent_plugins.formats.realworld",
+    "povagent_plugins.formats.viewspatial",
+    "povagent_plugins.formats.mindcube",
+    "povagent_plugins.formats.srbench3d",
+    "povagent_plugins.formats.mmsi",
+    "povagent_plugins.formats.omnispatial",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",

@@ -4,12 +4,10 @@ Re-written from the code named in each source (MMSI-Bench @ 5de2f3d2; lmms-eval 
 images come first in both; the ``choice`` strategy places them. Pure text: nothing here reads
 files.
 
-OmniSpatial's evaluation asks for the reply format its rule reads, so it has three wordings: its
-default ``omnispatial`` (the manual chain-of-thought instruction, then "end with ``Answer: X``",
-read by ``omnispatial-re``), ``omnispatial-json`` (a JSON reply, read by ``omnispatial-json``) and
-``omnispatial-direct`` (a letter alone, read by ``omnispatial-direct``). The set's ``api_eval.py``
-sends the instruction as a system message; lmms-eval's ``omnispatial_test`` task sends it at the
-head of the one user message, as these profiles do.
+OmniSpatial's evaluation asks for the reply format its rule reads; its default, sent here, is the
+manual chain-of-thought instruction, then "end with ``Answer: X``" (read by ``omnispatial-re``).
+The set's ``api_eval.py`` sends the instruction as a system message; lmms-eval's
+``omnispatial_test`` task sends it at the head of the one user message, as this profile does.
 """
 
 from __future__ import annotations
@@ -37,13 +35,8 @@ OMNISPATIAL_INSTRUCTION = (
     "Always ground your answer in the visual evidence; do not hallucinate unseen objects.\n"
     "If uncertain, pick the most plausible option\u2014never refuse or reply \u201cinsufficient information.\u201d\n"
 )
-#: The reply format each OmniSpatial rule reads, as its prompt asks for it (``FORMAT_PROMPTS``).
-OMNISPATIAL_FORMATS = {
-    "re": "\nEnd your answer with a separate line formatted exactly as:\n\nAnswer: X\nwhere X \u2208 {A, B, C, D}.\n",
-    "json": '\nYou need to respond with the answer in JSON format:\n\n```json\n{\n    "analysis": "The analysis of the image and question",\n'
-    '    "answer": "A"\n}\n```\n',
-    "direct": "\nNote: You only need to respond with A, B, C, or D without providing any additional information.\n",
-}
+#: The reply format OmniSpatial's default ``re`` rule reads, as its prompt asks for it (``RE_FORMAT``).
+OMNISPATIAL_RE_FORMAT = "\nEnd your answer with a separate line formatted exactly as:\n\nAnswer: X\nwhere X \u2208 {A, B, C, D}.\n"
 
 
 def mmsi_text(question: ChoiceQuestion) -> str:
@@ -51,17 +44,7 @@ def mmsi_text(question: ChoiceQuestion) -> str:
     return f"{question.question}\n{MMSI_POST_PROMPT}"
 
 
-def omnispatial_text(question: ChoiceQuestion, reply_format: str = "re") -> str:
+def omnispatial_text(question: ChoiceQuestion) -> str:
     """The instruction and the reply format, a blank line, the question, then ``A. text`` a line."""
     options = "".join(f"\n{label}. {text}" for label, text in question.options)
-    return f"{OMNISPATIAL_INSTRUCTION}\n{OMNISPATIAL_FORMATS[reply_format]}\n\n{question.question}{options}"
-
-
-def omnispatial_json_text(question: ChoiceQuestion) -> str:
-    """:func:`omnispatial_text` asking for a JSON reply."""
-    return omnispatial_text(question, "json")
-
-
-def omnispatial_direct_text(question: ChoiceQuestion) -> str:
-    """:func:`omnispatial_text` asking for a letter alone."""
-    return omnispatial_text(question, "direct")
+    return f"{OMNISPATIAL_INSTRUCTION}\n{OMNISPATIAL_RE_FORMAT}\n\n{question.question}{options}"
