@@ -141,3 +141,53 @@ def test_validate_decodes_every_embedded_image(mmsi_parquet, tmp_path):
 ])  # fmt: skip
 def test_the_options_are_the_labelled_run_after_the_last_options_mark(question, options):
     assert inline_options(question) == options
+
+
+def test_a_truncated_file_is_one_line(tmp_path, mmsi_parquet):
+    path = tmp_path / "MMSI_Bench.parquet"
+    path.write_bytes(mmsi_parquet.read_bytes()[: mmsi_parquet.stat().st_size // 2])
+    (problem,) = validate_choice_set(path, "mmsi")
+    assert problem.file == str(path) and problem.message.startswith("not a Parquet file") and "\n" not in problem.message
+
+
+def test_a_corrupt_page_leaves_its_row_group_out_in_one_line_and_the_rest_is_read(tmp_path):
+    import pyarrow.parquet as pq
+
+    path = write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", mmsi_rows()[:6])
+    data = bytearray(path.read_bytes())
+    at = pq.ParquetFile(path).metadata.row_group(0).column(0).data_page_offset + 2  # inside the first page's header
+    data[at : at + 8] = bytes(b ^ 0xFF for b in data[at : at + 8])
+    path.write_bytes(bytes(data))
+    loaded = _load(path, tmp_path)
+    assert [(p.json_path, "cannot be decoded" in p.message) for p in loaded.problems] == [("row 1", True)]
+    assert [i.pair_id for i in loaded.instances()] == ["4", "5"]
+
+
+def test_an_image_declaring_more_pixels_than_allowed_is_never_decoded(tmp_path):
+    import struct
+    import zlib
+
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    bomb = (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", 100_000, 100_000, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(b"\0" * 64))
+        + chunk(b"IEND", b"")
+    )
+    rows = mmsi_rows()[:2]
+    rows[0]["images"][0] = bomb
+    loaded = _load(write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", rows), tmp_path)
+    (problem,) = loaded.problems
+    assert problem.json_path == "record 0.images[0]" and "more than the" in problem.message
+    assert [i.pair_id for i in loaded.instances()] == ["1"]
+
+
+def test_a_pipe_named_as_the_file_is_never_waited_on(tmp_path):
+    import os
+
+    fifo = tmp_path / "MMSI_Bench.parquet"
+    os.mkfifo(fifo)
+    with pytest.raises(DatasetError, match=r"MMSI_Bench\.parquet: not found \(dataset\.path"):
+        _load(fifo, tmp_path)
