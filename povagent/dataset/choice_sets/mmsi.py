@@ -11,8 +11,8 @@ The images are untrusted bytes: each must be a PNG or a JPEG of at most
 :data:`~povagent.run.confined_read.MAX_IMAGE_FILE_BYTES`, and a row at most
 :data:`MAX_IMAGES` of them; each is written once, named by its content, into the set's cache
 folder, where :mod:`.external` checks it sound (its pixel count bounded) like any image. The
-file is read a few rows at a time, and a row group whose columns would decode to more than
-:data:`MAX_ROW_GROUP_BYTES` is refused before it is read (a small file may declare a huge one).
+file is read a few rows at a time, and a row group whose columns would decode to far more than
+the file holds (:data:`MAX_ROW_GROUP_BYTES`, :data:`EXPANSION`) is refused before it is read.
 
 Reading Parquet needs ``pyarrow`` (``pip install pyarrow``). This module never opens an image
 file (see :mod:`.external`).
@@ -21,6 +21,7 @@ file (see :mod:`.external`).
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from pathlib import Path
 from typing import Any, Iterator
@@ -38,9 +39,12 @@ PROFILE = "mmsi"
 COLUMNS = ("id", "images", "question_type", "question", "answer")
 #: The most images a question shows (the set's multi-step questions show a handful).
 MAX_IMAGES = 64
-#: The most a row group may decode to (the set's file is about a gigabyte; a row group of it
-#: a fraction of that).
-MAX_ROW_GROUP_BYTES = 2 << 30
+#: The most a row group may decode to: this, or :data:`EXPANSION` times the file's size when
+#: that is more. Encoded images do not compress further, so a sound file decodes to about its
+#: own size (the set's file is written as one row group of every row); a small file declaring
+#: far more is a decompression bomb, refused before it is decoded.
+MAX_ROW_GROUP_BYTES = 512 << 20
+EXPANSION = 4
 #: Rows decoded at a time.
 BATCH_ROWS = 8
 MISSING_PYARROW = "reading MMSI_Bench.parquet needs pyarrow: pip install pyarrow"
@@ -106,12 +110,13 @@ def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, 
         if missing:
             raise DatasetError(f"{file}: no column {', '.join(missing)} (MMSI_Bench.parquet has {', '.join(COLUMNS)}, thought)")
         number = 0
+        bound = max(MAX_ROW_GROUP_BYTES, EXPANSION * os.fstat(handle.fileno()).st_size)
         for group in range(parquet.num_row_groups):
             size = parquet.metadata.row_group(group).total_byte_size
             rows = parquet.metadata.row_group(group).num_rows
-            if size > MAX_ROW_GROUP_BYTES:
+            if size > bound:
                 problems.append(Problem(str(file), f"rows {number + 1}-{number + rows}",
-                                        f"a row group of {size} bytes, over the {MAX_ROW_GROUP_BYTES} one may hold; its rows left out"))  # fmt: skip
+                                        f"a row group declaring {size} bytes, over the {bound} one may decode to; its rows left out"))  # fmt: skip
                 number += rows
                 continue
             try:

@@ -116,11 +116,12 @@ def test_a_parquet_file_without_the_set_s_columns_names_them(tmp_path):
         _load(path, tmp_path)
 
 
-def test_a_row_group_over_the_bound_is_refused_before_it_is_decoded(tmp_path, monkeypatch):
+def test_a_row_group_declaring_more_than_the_bound_is_refused_before_it_is_decoded(tmp_path, monkeypatch):
     from povagent.dataset.choice_sets import mmsi
 
     path = write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", mmsi_rows()[:6])  # row groups of 4 and 2 rows
-    monkeypatch.setattr(mmsi, "MAX_ROW_GROUP_BYTES", 2_000_000)  # the 4-row group holds ~4 MB of images
+    monkeypatch.setattr(mmsi, "MAX_ROW_GROUP_BYTES", 2_000_000)  # the 4-row group holds over 2 MB of images
+    monkeypatch.setattr(mmsi, "EXPANSION", 0)
     loaded = _load(path, tmp_path)
     assert [p.json_path for p in loaded.problems] == ["rows 1-4"]
     assert [i.pair_id for i in loaded.instances()] == ["4", "5"]
@@ -191,3 +192,12 @@ def test_a_pipe_named_as_the_file_is_never_waited_on(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(DatasetError, match=r"MMSI_Bench\.parquet: not found \(dataset\.path"):
         _load(fifo, tmp_path)
+
+
+def test_the_bound_grows_with_the_file_so_a_sound_file_is_never_refused(tmp_path, monkeypatch):
+    from povagent.dataset.choice_sets import mmsi
+
+    path = write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", mmsi_rows()[:6])
+    monkeypatch.setattr(mmsi, "MAX_ROW_GROUP_BYTES", 1)  # only the file-size bound is left
+    loaded = _load(path, tmp_path)
+    assert loaded.problems == [] and len(loaded.instances()) == 6
