@@ -13,6 +13,9 @@ The images are untrusted bytes: each must be a PNG or a JPEG of at most
 folder, where :mod:`.external` checks it sound (its pixel count bounded) like any image. The
 file is read a few rows at a time, and a row group whose columns would decode to far more than
 the file holds (:data:`MAX_ROW_GROUP_BYTES`, :data:`EXPANSION`) is refused before it is read.
+pyarrow decodes a row group's ``images`` column whole, so reading peaks at about twice the
+largest row group in Arrow's memory (the set's file is one row group: about twice the file;
+measured in the results notes).
 
 Reading Parquet needs ``pyarrow`` (``pip install pyarrow``). This module never opens an image
 file (see :mod:`.external`).
@@ -47,6 +50,9 @@ MAX_ROW_GROUP_BYTES = 512 << 20
 EXPANSION = 4
 #: Rows decoded at a time.
 BATCH_ROWS = 8
+#: How much of a column chunk is read at a time: with no pre-buffering, the pages stream through
+#: a buffer this size instead of the whole row group being read first.
+BUFFER_BYTES = 1 << 20
 MISSING_PYARROW = "reading MMSI_Bench.parquet needs pyarrow: pip install pyarrow"
 
 _SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
@@ -103,7 +109,7 @@ def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, 
 
     with open_regular(file, what="MMSI-Bench file") as handle:
         try:
-            parquet = pq.ParquetFile(handle)
+            parquet = pq.ParquetFile(handle, pre_buffer=False, buffer_size=BUFFER_BYTES)
         except Exception as exc:  # pyarrow's errors (ArrowInvalid, OSError) say what is wrong
             raise DatasetError(f"{file}: not a Parquet file ({type(exc).__name__}: {str(exc)[:200]})") from None
         missing = [c for c in COLUMNS if c not in parquet.schema_arrow.names]
