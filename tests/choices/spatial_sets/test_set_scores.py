@@ -194,3 +194,19 @@ def test_the_report_breaks_perspective_taking_down_by_sub_task(omni_run, tmp_pat
     per_category = {k: c["accuracy"]["value"] for k, c in system["per_category"].items()}
     expected = OMNI_EXPECTED["omnispatial-re"]
     assert {k: per_category[k] for k in (PT, EGO, ALLO, HYPO)} == pytest.approx({k: expected[k] for k in (PT, EGO, ALLO, HYPO)}, abs=1e-12)
+
+
+def _oracle_run(tmp_path, path, plugin, parser):
+    config = {"plugins": [str(plugin)], "dataset": {"path": str(path), "format": "omnispatial"}, "backend": "oracle", "parser": parser,
+              "strategy": "choice", "runs": 1, "concurrency": 2, "timeout": 5, "output": str(tmp_path / f"oracle-{parser}")}  # fmt: skip
+    (tmp_path / f"oracle-{parser}.yaml").write_text(yaml.safe_dump(config))
+    return run_pipeline(load_pipeline(tmp_path / f"oracle-{parser}.yaml"))
+
+
+def test_the_oracle_backend_s_bare_letters_check_omnispatial_s_wiring_read_directly(tmp_path, omni_copy, offline_plugin_file):
+    assert _values(_oracle_run(tmp_path, omni_copy, offline_plugin_file, "omnispatial-direct").summary)["overall"] == 1.0
+
+
+def test_the_set_s_re_rule_reads_the_oracle_s_bare_letters_as_a(tmp_path, omni_copy, offline_plugin_file):
+    gold_a = sum(gold == 0 for *_, gold in OMNI_RECORDS) / len(OMNI_RECORDS)
+    assert _values(_oracle_run(tmp_path, omni_copy, offline_plugin_file, "omnispatial-re").summary)["overall"] == pytest.approx(gold_a, abs=1e-12)
