@@ -15,6 +15,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.formats.viewspatial",
     "povagent_plugins.formats.mindcube",
     "povagent_plugins.formats.srbench3d",
+    "povagent_plugins.formats.mmsi",
+    "povagent_plugins.formats.omnispatial",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
@@ -45,6 +47,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
     "povagent_plugins.parsers.mcq.lmms_mcq_extract",
     "povagent_plugins.parsers.mcq.sparbench",
+    "povagent_plugins.parsers.mcq.mmsi",
+    "povagent_plugins.parsers.mcq.omnispatial",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",

@@ -28,7 +28,12 @@ def test_an_unknown_format_is_refused_in_one_line_naming_the_file_and_the_field(
         load_pipeline(pipeline)
     (line,) = [ln for ln in str(err.value).splitlines() if "format" in ln]
     assert line.startswith(f"{pipeline}, line 3:") and "dataset.format: unknown format 'viewspatail' (did you mean 'viewspatial'?)" in line
-    assert "3dsrbench, generated, mindcube, povbench, realworld, viewspatial" in line
+    from povagent.dataset.formats import registered_formats
+    from povagent.plugins import get_plugin_host
+
+    # every registered format is named (built-ins and any a plugin adds), in order
+    assert ", ".join(sorted(registered_formats(get_plugin_host()))) in line
+    assert "3dsrbench, generated, mindcube" in line
 
 
 def test_images_without_a_format_is_refused():

@@ -113,10 +113,12 @@ def test_the_harness_readings_read_each_reply_by_every_choice_rule(report):
     host = get_plugin_host()
     row = _grid(readings)["lower-b · viewspatial"]
     assert row["Questions"] == 4
+    golds = "ABAC"  # the ViewSpatial-Bench fixture's, in file order
     for rule in rules:
-        reads_b = host.parser(rule, {}).parse("(b)", spec).choice == "B"
-        assert row[rule] == pytest.approx(0.25 if reads_b else 0.0), rule
-    assert len({row[rule] for rule in rules}) == 2  # the rules disagree on it: that is why the readings are shown
+        # a rule with a fallback label (OmniSpatial's re and json read A) scores where the gold is it
+        label = host.parser(rule, {}).parse("(b)", spec).choice
+        assert row[rule] == pytest.approx(golds.count(label) / 4 if label else 0.0), rule
+    assert len({row[rule] for rule in rules}) >= 2  # the rules disagree on it: that is why the readings are shown
 
 
 def test_the_leaderboard_is_exported_as_csv_and_latex(report):
