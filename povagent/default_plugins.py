@@ -9,6 +9,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.answers.point",
     "povagent_plugins.answers.choice",
     "povagent_plugins.answers.walk",
+    "povagent_plugins.answers.number",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
