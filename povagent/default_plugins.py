@@ -22,6 +22,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.choice_sparbench",
     "povagent_plugins.scorers.srbench3d",
     "povagent_plugins.scorers.choice_mindcube",
+    "povagent_plugins.scorers.vsibench",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -40,6 +41,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.vlmevalkit_spatial",
     "povagent_plugins.parsers.mcq.lmms_mcq_extract",
     "povagent_plugins.parsers.mcq.sparbench",
+    "povagent_plugins.parsers.vsibench.official",
+    "povagent_plugins.parsers.vsibench.lmms",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",

@@ -232,6 +232,8 @@ class MetricDeclaration(BaseModel):
     group: str | None = None
     #: Question categories the overall cell leaves out (their own slices keep them).
     overall_excludes: list[str] | None = None
+    #: The value a mean over every row gives a row the scorer did not score (``None``: absent).
+    unscored: float | None = None
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""
