@@ -37,3 +37,15 @@ class NumericQuestion:
         """``value`` with the question's unit (``"3.2 meters"``, ``"4"``)."""
         text = f"{value:g}"
         return f"{text} {self.unit}" if self.unit else text
+
+
+def number_answer_schema() -> dict[str, object]:
+    """JSON Schema of a numerical answer ``{"number"}``: what a strategy asking a number
+    declares (``AnswerSpec.schema``), and what tells a parser reading both options and numbers
+    which one it is asked."""
+    return {"type": "object", "required": ["number"], "properties": {"number": {"type": "number"}}}
+
+
+def asks_number(required_keys: tuple[str, ...]) -> bool:
+    """Whether an answer spec with these required keys asks for a number."""
+    return required_keys == ("number",)

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from povagent.answers.number import number_answer_schema
 from povagent.answers.spec import AnswerSpec, choice_answer_schema
 from povagent.dataset.choice_sets.external import image_camera
 from povagent.dataset.choice_sets.vsibench import scene_question
@@ -82,7 +83,7 @@ def corpus_instance(index: int, question_type: str, gold: str):
 
 def spec_of(instance) -> AnswerSpec:
     if instance.question is None:
-        return AnswerSpec(schema={"type": "object"}, asks_frame=False)
+        return AnswerSpec(schema=number_answer_schema(), asks_frame=False)
     return AnswerSpec(schema=choice_answer_schema(instance.question.labels), asks_frame=False, choices=instance.question.options)
 
 
@@ -179,3 +180,11 @@ def test_a_choice_reply_naming_no_option_is_kept_as_the_word_and_never_the_gold(
     parse = VSIBenchParser().parse("Answer: A", spec_of(instance))
     assert parse.choice == "Answer:"
     assert VSIBenchScorer().score(instance, parse)["correct"] is False
+
+
+def test_a_question_asking_neither_an_option_nor_a_number_is_not_read():
+    from povagent.answers.spec import point_answer_schema
+
+    for parser in (VSIBenchParser(), VSIBenchLmmsParser()):
+        parse = parser.parse("3", AnswerSpec(schema=point_answer_schema(8, 8)))
+        assert not parse.answered and "neither" in parse.reason

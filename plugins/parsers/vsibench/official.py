@@ -19,9 +19,12 @@ word), its trailing dots removed, then surrounding whitespace. Nothing is stripp
 from __future__ import annotations
 
 from povagent import hookimpl
+from povagent.answers.number import asks_number
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 
+#: Why a question asking neither an option nor a number is not read (a point question).
+NEITHER = "the question asks neither an option label nor a number"
 #: The commit the rule is read at.
 THINKING_IN_SPACE = "vision-x-nyu/thinking-in-space@51e089c3ae69b9435e9489058610f5b3964c56a8"
 
@@ -68,7 +71,9 @@ class VSIBenchParser(Parser):
         word = first_word(text or "")
         if spec.choices:
             return choice_parse(word, spec)
-        return number_parse(word_number(word), word)
+        if asks_number(spec.required_keys):
+            return number_parse(word_number(word), word)
+        return unparseable(NEITHER)
 
 
 @hookimpl
