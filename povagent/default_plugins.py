@@ -10,6 +10,12 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.answers.choice",
     "povagent_plugins.answers.walk",
     "povagent_plugins.answers.number",
+    # dataset formats
+    "povagent_plugins.formats.povbench",
+    "povagent_plugins.formats.realworld",
+    "povagent_plugins.formats.viewspatial",
+    "povagent_plugins.formats.mindcube",
+    "povagent_plugins.formats.srbench3d",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",

@@ -108,6 +108,20 @@ def register_answer_types(register: Register) -> None:
 
 
 @hookspec
+def register_dataset_formats(register: Register) -> None:
+    """Contribute dataset formats: what a set's files are and how they are read and scored.
+
+    Called once per plugin, when the plugin host first collects registered names. For each
+    format call ``register(key, dataset_format, description="...")`` where ``dataset_format``
+    is a :class:`povagent.dataset.formats.DatasetFormat` whose ``key`` is ``key`` (what
+    ``dataset.format`` and ``povagent validate --format`` name): its reader, how a problem names
+    a record, its answer type, its official parser and scorer (registered plugins, checked when a
+    pipeline names the format), its prompt profile, its source and licence, and its row in the
+    docs' table of sets. A pipeline naming a format no plugin registers is refused at load.
+    """
+
+
+@hookspec
 def register_model_profiles(register: Register) -> None:
     """Contribute model profiles: short names for models with their defaults (``model: NAME``).
 

@@ -55,7 +55,7 @@ KIND_HOOKS: dict[str, str] = {
 KINDS: tuple[str, ...] = tuple(KIND_HOOKS)
 PROFILE_HOOK = "register_model_profiles"
 #: Contribution hooks that register objects rather than factories, and the kind each fills.
-OBJECT_HOOKS: dict[str, str] = {"profile": PROFILE_HOOK, "answer_type": "register_answer_types"}
+OBJECT_HOOKS: dict[str, str] = {"profile": PROFILE_HOOK, "answer_type": "register_answer_types", "format": "register_dataset_formats"}
 
 #: The hook active-mode tools are registered by (kept in load order: the order they are offered).
 TOOL_HOOK = "register_tools"

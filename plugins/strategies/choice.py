@@ -1,6 +1,7 @@
 """The ``choice`` strategy: images, then a question and its labelled options, asking for a label.
 
-Single-turn. The wording around the question is a *profile* (:data:`CHOICE_PROFILES`), named by
+Single-turn. The wording around the question is a *profile* (:func:`prompt_profiles`: ``plain``
+and each registered dataset format's), named by
 the instance's question (``ChoiceQuestion.profile``) unless the ``profile`` option overrides it:
 each perspective-taking set is asked in its own published wording, and a generated relation
 task in povagent's ``plain`` one. The images are the instance's frames in order (a set's images
@@ -12,28 +13,22 @@ backend's), ``profile`` (default: each question's own).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 from povagent import hookimpl
 from povagent.answers.choice import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec, choice_answer_schema
+from povagent.dataset.formats import PromptProfile, registered_formats
 from povagent.dataset.instances import Instance
+from povagent.errors import PluginError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
-from povagent.interfaces import Strategy
-from povagent_plugins.strategies import set_profiles
+from povagent.interfaces import LoadedPlugins, Strategy
+from povagent.plugins import PluginHost
 
-
-@dataclass(frozen=True)
-class ChoiceProfile:
-    """How a set words a multiple-choice prompt: the text after the images."""
-
-    name: str
-    text: Callable[[ChoiceQuestion], str]
-    source: str
-    #: The images go where the text has an ``<image>`` marker (MindCube), instead of all first.
-    interleaved: bool = False
+#: How a set words a multiple-choice prompt: the text after the images (a dataset format's
+#: :attr:`~povagent.dataset.formats.DatasetFormat.prompt_profile`).
+ChoiceProfile = PromptProfile
 
 
 def plain_text(question: ChoiceQuestion) -> str:
@@ -41,13 +36,23 @@ def plain_text(question: ChoiceQuestion) -> str:
     return f"{question.question}\n{question.options_block()}\nAnswer with the option's letter from the given choices directly."
 
 
-#: Prompt profiles by name; a set's reader names its set's profile in each question.
-CHOICE_PROFILES: dict[str, ChoiceProfile] = {
-    "plain": ChoiceProfile("plain", plain_text, "povagent's wording (the instruction lmms-eval's multiple-choice tasks append)"),
-    "viewspatial": ChoiceProfile("viewspatial", set_profiles.viewspatial_text, set_profiles.VIEWSPATIAL_SOURCE),
-    "mindcube": ChoiceProfile("mindcube", set_profiles.mindcube_text, set_profiles.MINDCUBE_SOURCE, interleaved=True),
-    "3dsrbench": ChoiceProfile("3dsrbench", set_profiles.srbench3d_text, set_profiles.SRBENCH3D_SOURCE),
-}
+#: povagent's own prompt profile; every other is a registered dataset format's (:func:`prompt_profiles`).
+PLAIN = ChoiceProfile("plain", plain_text, "povagent's wording (the instruction lmms-eval's multiple-choice tasks append)")
+
+
+def prompt_profiles(host: PluginHost | None = None) -> dict[str, ChoiceProfile]:
+    """Prompt profiles by name: ``plain``, then each registered dataset format's (a set's reader
+    names its format's profile in each question), from ``host`` (default: the process's)."""
+    if host is None:
+        from povagent.plugins import get_plugin_host
+
+        host = get_plugin_host()
+    found = {PLAIN.name: PLAIN}
+    for dataset_format in registered_formats(host).values():
+        if dataset_format.prompt_profile is not None:
+            found.setdefault(dataset_format.prompt_profile.name, dataset_format.prompt_profile)
+    return found
+
 
 #: Where an interleaved profile's text places an image.
 IMAGE_MARKER = "<image>"
@@ -74,10 +79,20 @@ class ChoiceStrategy(Strategy):
             raise ValueError(f"strategy option max_tokens must be a positive integer or null, got {max_tokens!r}")
         if temperature is not None and (not isinstance(temperature, (int, float)) or isinstance(temperature, bool) or temperature < 0):
             raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
-        if profile is not None and profile not in CHOICE_PROFILES:
-            raise ValueError(f"strategy option profile must be one of {', '.join(sorted(CHOICE_PROFILES))}, got {profile!r}")
+        if profile is not None and not isinstance(profile, str):
+            raise ValueError(f"strategy option profile must be a prompt profile's name, got {profile!r}")
         self.generation = GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
         self.profile = profile
+        # the process's profiles until the plugin host hands over its own (a pipeline's plugins'
+        # formats too), which is where an unknown profile is refused
+        self.profiles = prompt_profiles()
+
+    def use_plugins(self, host: LoadedPlugins) -> None:
+        """The prompt profiles are those of the formats ``host`` registers (a pipeline's plugins too)."""
+        if isinstance(host, PluginHost):
+            self.profiles = prompt_profiles(host)
+            if self.profile is not None and self.profile not in self.profiles:
+                raise PluginError(f"strategy option profile must be one of {', '.join(sorted(self.profiles))}, got {self.profile!r}")
 
     def identity(self) -> dict[str, Any]:
         """Nothing beyond the YAML decides the rows."""
@@ -90,7 +105,7 @@ class ChoiceStrategy(Strategy):
         if question is None:
             raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
         name = self.profile or question.profile
-        profile = CHOICE_PROFILES.get(name)
+        profile = self.profiles.get(name)
         if profile is None:
             raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
         return profile, question

@@ -4,8 +4,8 @@ Each function is the text one set's evaluation puts around a question, re-writte
 code named in its source (lmms-eval @ 75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3; MindCube @
 6d8fd9acdf5b80769373a21cdbfcf068ab356e0f). The images come first (ViewSpatial-Bench,
 3DSRBench) or at each ``<image>`` marker of the question (MindCube): the ``choice`` strategy
-places them (:data:`povagent_plugins.strategies.choice.CHOICE_PROFILES` lists these profiles
-and whether each interleaves). Pure text: nothing here reads files.
+places them (each set's format plugin, ``povagent_plugins.formats``, names its profile and
+whether it interleaves). Pure text: nothing here reads files.
 """
 
 from __future__ import annotations

@@ -105,8 +105,10 @@ class DatasetSpec(_Strict):
     #: The format of an external multiple-choice set whose file ``path`` names (see
     #: :mod:`povagent.dataset.choice_sets`), and the folder its image paths are relative to and
     #: confined to (default: the file's). ``None``: a POVBench-layout folder.
-    format: Literal["viewspatial", "mindcube", "3dsrbench"] | None = None
+    format: str | None = Field(None, min_length=1, max_length=64)
     images: Path | None = None
+    #: The format's own options (``{frames: 16}``; :attr:`~povagent.dataset.formats.DatasetFormat.option_names`).
+    options: dict[str, Any] | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -116,7 +118,7 @@ class DatasetSpec(_Strict):
     @model_serializer(mode="wrap")
     def _no_format_for_a_folder(self, handler: Any) -> dict[str, Any]:
         # a POVBench run's config.yaml stays byte for byte what it was before formats existed
-        return {k: v for k, v in handler(self).items() if k not in ("format", "images") or v is not None}
+        return {k: v for k, v in handler(self).items() if k not in ("format", "images", "options") or v is not None}
 
     @field_validator("hub")
     @classmethod
@@ -140,6 +142,8 @@ class DatasetSpec(_Strict):
                 raise ValueError(str(exc)) from None
         if self.format is not None and (self.path is None or self.generate is not None or self.hub is not None):
             raise ValueError(f"dataset.format {self.format} needs dataset.path: the set's file, downloaded yourself")
+        if self.options is not None and self.format is None:
+            raise ValueError("dataset.options needs dataset.format (they are that format's reader's options)")
         if self.images is not None and self.format is None:
             raise ValueError("dataset.images needs dataset.format (it is where an external set's images are)")
         if self.hub is not None:

@@ -21,7 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
-from povagent.dataset.choice_sets import CHOICE_FORMATS, OFFICIAL_SET_PARSERS, OFFICIAL_SET_SCORERS, SET_ANSWER_TYPE
+from povagent.dataset.formats import registered_format
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
@@ -49,6 +49,15 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         check("parser", config.parser.name, ("parser", "name") if ("parser", "name") in source.lines else ("parser",))
     for i, scorer in enumerate(config.scorers):
         check("scorer", scorer.name, ("scorers", i))
+    if config.dataset.format is not None:
+        check("format", config.dataset.format, ("dataset", "format"))
+        if config.dataset.format in host.names("format"):
+            accepted = registered_format(host, config.dataset.format).option_names
+            for key in config.dataset.options or {}:
+                if key not in accepted:
+                    loc = ("dataset", "options", key)
+                    takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
+                    problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: format {config.dataset.format!r} has no option {cut(str(key))!r}; {takes}")
     if config.dataset.generate is not None:
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
@@ -155,21 +164,24 @@ def resolve_components(config: PipelineConfig, host: PluginHost) -> PipelineConf
 
 
 def set_defaults(config: PipelineConfig, host: PluginHost) -> PipelineConfig:
-    """``config`` with the strategy and scorers an external set's answer type chooses where the
-    pipeline names none (``dataset: {format: mindcube}`` and a model is a complete pipeline): the
-    answer type's ``default_strategy`` and ``default_scorers``, the set's own scorer first
-    (:data:`~povagent.dataset.choice_sets.OFFICIAL_SET_SCORERS`); a name the pipeline gives is
-    kept, and a POVBench-layout set keeps the pipeline's defaults."""
+    """``config`` with the strategy and scorers a named dataset format chooses where the pipeline
+    names none (``dataset: {format: mindcube}`` and a model is a complete pipeline): its answer
+    type's ``default_strategy`` and ``default_scorers``, the format's official scorer first
+    (:attr:`~povagent.dataset.formats.DatasetFormat.official_scorer`); a name the pipeline gives
+    is kept, and a set with no ``dataset.format`` keeps the pipeline's defaults."""
     fmt = config.dataset.format
-    if fmt is None or fmt not in CHOICE_FORMATS or SET_ANSWER_TYPE not in host.names("answer_type"):
+    if fmt is None or fmt not in host.names("format"):
         return config
-    answer_type = host.answer_type(SET_ANSWER_TYPE)
+    dataset_format = registered_format(host, fmt)
+    if dataset_format.answer_type not in host.names("answer_type"):
+        return config
+    answer_type = host.answer_type(dataset_format.answer_type)
     update: dict[str, Any] = {}
     if "strategy" not in config.model_fields_set and answer_type.default_strategy is not None:
         update["strategy"] = ComponentSpec(name=answer_type.default_strategy)
-    if "scorers" not in config.model_fields_set and (answer_type.default_scorers or fmt in OFFICIAL_SET_SCORERS):
-        own = [OFFICIAL_SET_SCORERS[fmt]] if fmt in OFFICIAL_SET_SCORERS else []
-        update["scorers"] = [ComponentSpec(name=n) for n in dict.fromkeys([*own, *answer_type.default_scorers])]
+    if "scorers" not in config.model_fields_set:
+        names = [dataset_format.official_scorer, *answer_type.default_scorers]
+        update["scorers"] = [ComponentSpec(name=n) for n in dict.fromkeys(names)]
     return config.model_copy(update=update) if update else config
 
 
@@ -180,13 +192,19 @@ def needed_parser(host: PluginHost, strategy: str) -> str | None:
 
 
 def set_official_parser(config: PipelineConfig, host: PluginHost) -> str | None:
-    """The official rule of the external set a choice pipeline runs on (``dataset.format``): what
-    it gets when it names no parser, before the choice strategy's generic default; ``None`` for
-    a POVBench-layout set or a strategy asking for another answer type."""
+    """The official rule of the dataset format a pipeline names (``dataset.format``): what it gets
+    when it names no parser, before the strategy's generic default, when the strategy asks the
+    format's answer type; ``None`` for a set with no ``dataset.format``, a strategy asking for
+    another answer type, or a format whose rule is the generic ``official`` (which a model
+    profile's parser may still replace, as on any POVBench-layout set)."""
     fmt = config.dataset.format
-    if fmt is None or getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point") != "choice":
+    if fmt is None or fmt not in host.names("format"):
         return None
-    return OFFICIAL_SET_PARSERS.get(fmt)
+    dataset_format = registered_format(host, fmt)
+    asked = getattr(host.entry("strategy", config.strategy.name).factory, "answer_type", "point")
+    if asked != dataset_format.answer_type or dataset_format.official_parser == OFFICIAL_PARSER:
+        return None
+    return dataset_format.official_parser
 
 
 def strategy_default_parser(host: PluginHost, strategy: str) -> str | None:

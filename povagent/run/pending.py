@@ -8,6 +8,7 @@ The runner and dry runs (``sweep --dry-run``) both call :func:`plan_keys`, so th
 
 from __future__ import annotations
 
+import json
 import random
 from dataclasses import dataclass
 from pathlib import Path
@@ -146,7 +147,7 @@ def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
             )  # fmt: skip
     from povagent.dataset.evaluation_set import open_evaluation_set
 
-    return open_evaluation_set(spec.root, strict=spec.strict, format=spec.format, images=spec.images)
+    return open_evaluation_set(spec.root, strict=spec.strict, format=spec.format, images=spec.images, options=spec.options, plugins=config.plugins)
 
 
 def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | None = None) -> EvaluationSet:
@@ -154,7 +155,8 @@ def ensure_dataset(config: PipelineConfig, loaded: dict[Any, EvaluationSet] | No
     (sweeps)."""
     from povagent.dataset.hub import resolve_hub_dataset
 
-    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict, config.dataset.format)
+    options = json.dumps(config.dataset.options, sort_keys=True, default=str) if config.dataset.options else None
+    key = (Path(resolve_hub_dataset(config).dataset.root).resolve(), config.dataset.strict, config.dataset.format, options)
     if loaded is not None and key in loaded:
         return asked_by(config, loaded[key])
     ds = _loaded_dataset(config)

@@ -2,10 +2,12 @@
 published formats: ViewSpatial-Bench (:mod:`.viewspatial`), MindCube (:mod:`.mindcube`) and
 3DSRBench (:mod:`.srbench3d`).
 
-``dataset: {path: F, format: viewspatial | mindcube | 3dsrbench}`` names the set's file;
-:func:`load_choice_set` reads it into a runnable :class:`~.external.ChoiceSet` (what
+Each is a dataset format plugin (``povagent_plugins.formats``) whose reader is a
+:class:`ChoiceReader`: ``dataset: {path: F, format: NAME}`` names the set's file;
+:func:`read_choice_set` reads it into a runnable :class:`~.external.ChoiceSet` (what
 :func:`povagent.dataset.evaluation_set.open_evaluation_set` returns for such a format) and
-``povagent validate F --format NAME`` lists its problems. Nothing here fetches a set.
+``povagent validate F --format NAME`` lists its problems. Only what every choice set shares lives
+here (a set's own file layout is its :class:`ChoiceFiles`). Nothing here fetches a set.
 """
 
 from __future__ import annotations
@@ -13,61 +15,102 @@ from __future__ import annotations
 import shutil
 import tempfile
 import weakref
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
-from povagent.dataset.choice_sets.external import ChoiceSet, ImageLookups, choice_instance, item_frames
+from povagent.dataset.choice_sets.external import ChoiceSet, ImageLookups, Item, choice_instance, item_frames
+from povagent.dataset.formats import FormatRead, registered_formats
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
-
-#: The formats a set's file may be given in (``dataset.format``), each with the set's name.
-CHOICE_FORMATS = {"viewspatial": "viewspatial", "mindcube": "mindcube", "3dsrbench": "3dsrbench"}
-
-#: Where a set's file sits in its repository: ``dataset.path`` may name the repository folder
-#: instead of the file (ViewSpatial-Bench's image paths are relative to the repository root,
-#: ``ViewSpatial-Bench/scannetv2_val/...`` beside ``eval/ViewSpatial-Bench.json``).
-REPOSITORY_FILES = {"viewspatial": "eval/ViewSpatial-Bench.json"}
-#: What a problem of an image that does not exist adds, for a set whose image paths are
-#: relative to somewhere other than its file's folder.
-IMAGES_HINT = {
-    "viewspatial": "ViewSpatial-Bench's image paths are relative to its repository root: give the repository "
-    "folder as dataset.path (the set's file is then its eval/ViewSpatial-Bench.json), or that root as dataset.images",
-}
-
-#: Each set's official rule, the parser a choice pipeline on that format gets when it names none:
-#: ViewSpatial-Bench's own ``evaluate.py``, MindCube's own evaluator (its ``extractors.py`` cascade
-#: on the reply as written), and for 3DSRBench VLMEvalKit's exact matching, with which its authors
-#: score it. lmms-eval's ports (``viewspatial``, ``mindcube``, ``3dsrbench-lmms``: after lmms-eval's
-#: reasoning-tag strip) are alternatives a pipeline names, never defaults.
-OFFICIAL_SET_PARSERS = {"viewspatial": "viewspatial-official", "mindcube": "mindcube-official", "3dsrbench": "vlmevalkit-exact"}
-#: Each set's own scorer: plain accuracy for ViewSpatial-Bench, MindCube's with its ``translation``
-#: setting left out of the overall (a scorer option), and 3DSRBench's four accuracies per type
-#: and sub-category (the authors' circular evaluation with VLMEvalKit's): what a pipeline on that
-#: format gets first when it names no ``scorers:``.
-OFFICIAL_SET_SCORERS = {"viewspatial": "choice", "mindcube": "choice-mindcube", "3dsrbench": "choice-3dsrbench"}
-
 
 #: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
 #: defaults on such a set: :func:`povagent.config.plugin_checks.resolve_components`).
 SET_ANSWER_TYPE = "choice"
 
 
+@dataclass(frozen=True)
+class ChoiceFiles:
+    """How one multiple-choice set's file is read; the rest (images confined to one folder,
+    embedded images cached, each item an instance) is every choice set's."""
+
+    #: The set's name, as its instances carry it (``dataset.format``).
+    key: str
+    #: Reads the file: ``records(file, cache) -> (items, problems)`` (``cache``: where embedded
+    #: images may be written); never opens an image.
+    records: Callable[[Path, Path], tuple[list[Item], list[Problem]]]
+    #: How a problem names a record by its id (``"$[3]"``, ``"record 3"``).
+    record_id: Callable[[str], str]
+    #: Where the set's file sits in its repository, when ``dataset.path`` may name the repository
+    #: folder instead (ViewSpatial-Bench's image paths are relative to the repository root,
+    #: ``ViewSpatial-Bench/scannetv2_val/...`` beside ``eval/ViewSpatial-Bench.json``).
+    repository_file: str | None = None
+    #: What a problem of an image that does not exist adds, for a set whose image paths are
+    #: relative to somewhere other than its file's folder.
+    images_hint: str | None = None
+
+
+class ChoiceReader:
+    """A :class:`~povagent.dataset.formats.DatasetFormat` reader for a multiple-choice set:
+    ``ChoiceReader(files)(FormatRead(path, images=...))`` is :func:`read_choice_set`'s set."""
+
+    def __init__(self, files: ChoiceFiles) -> None:
+        self.files = files
+
+    def __call__(self, request: FormatRead) -> ChoiceSet:
+        """The set ``request`` names (``options`` are refused: a choice set has none)."""
+        if request.options:
+            raise DatasetError(f"{request.path}: a {self.files.key} set takes no dataset.options (got {', '.join(map(str, request.options))})")
+        return read_choice_set(request.path, self.files, images=request.images)
+
+    def problems(self, request: FormatRead) -> list[Problem]:
+        """Every problem of the set ``request`` names (:func:`check_choice_set`)."""
+        return check_choice_set(request.path, self.files, request.images)
+
+
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
-    """The set in ``file``, read as ``format``, its image paths relative to (and confined to)
+    """The set in ``file``, read as the registered multiple-choice format ``format``
+    (:func:`read_choice_set`). :class:`~povagent.errors.DatasetError` for a format that is not a
+    registered choice set."""
+    return read_choice_set(file, _files(file, format), images=images, cache_dir=cache_dir)
+
+
+def validate_choice_set(file: str | Path, format: str, images: str | Path | None = None) -> list[Problem]:
+    """Every problem of the set in ``file``, read as the registered multiple-choice format
+    ``format`` (:func:`check_choice_set`)."""
+    try:
+        files = _files(file, format)
+    except DatasetError as exc:
+        return [Problem(str(file), "", str(exc).removeprefix(f"{file}: "))]
+    return check_choice_set(file, files, images)
+
+
+def _files(file: str | Path, format: str) -> ChoiceFiles:
+    from povagent.plugins import get_plugin_host
+
+    formats = registered_formats(get_plugin_host())
+    reader = formats[format].read if format in formats else None
+    if not isinstance(reader, ChoiceReader):
+        known = [k for k, f in formats.items() if isinstance(f.read, ChoiceReader)]
+        raise DatasetError(f"{file}: unknown dataset format {format!r} (known: {', '.join(known)})")
+    return reader.files
+
+
+def read_choice_set(file: str | Path, files: ChoiceFiles, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
+    """The set in ``file``, read as ``files`` says, its image paths relative to (and confined to)
     the folder ``images`` (default: the file's folder); bad records are left out and named in
     ``problems``. ``file`` may be the set's repository folder where the set's image paths are
-    relative to it (:data:`REPOSITORY_FILES`): the file is then found in it, and it is the
+    relative to it (:attr:`ChoiceFiles.repository_file`): the file is then found in it, and it is the
     default ``images``. :class:`~povagent.errors.DatasetError` when the file cannot be read at all."""
     file = Path(file)
-    if format not in CHOICE_FORMATS:
-        raise DatasetError(f"{file}: unknown dataset format {format!r} (known: {', '.join(CHOICE_FORMATS)})")
-    if file.is_dir() and format in REPOSITORY_FILES:
+    if file.is_dir() and files.repository_file is not None:
         images = file if images is None else images
-        file = file / REPOSITORY_FILES[format]
+        file = file / files.repository_file
     if not file.is_file():
-        raise DatasetError(f"{file}: not found (dataset.path of a {format} set names the set's file)")
+        raise DatasetError(f"{file}: not found (dataset.path of a {files.key} set names the set's file)")
     own_cache = cache_dir is None
     cache = Path(tempfile.mkdtemp(prefix="povagent-choices-")) if cache_dir is None else Path(cache_dir)
-    items, problems = _read(file, format, cache)
+    items, problems = _read(file, files, cache)
     root = file.parent if images is None else Path(images)
     if not root.is_dir():
         raise DatasetError(f"{root}: not a folder (dataset.images names the folder a set's image paths are relative to)")
@@ -78,25 +121,25 @@ def load_choice_set(file: str | Path, format: str, *, images: str | Path | None 
     nowhere = unknown_object()  # the items' unknown observer and anchor: one object for the set
     for item in items:
         before = len(problems)
-        frames = item_frames(root, item, str(file), _where(format, item.id), problems, cache, lookups)
+        frames = item_frames(root, item, str(file), files.record_id(item.id), problems, cache, lookups)
         if frames is not None:
-            instances.append(choice_instance(CHOICE_FORMATS[format], item, frames, nowhere))
-        elif format in IMAGES_HINT and images is None and problems[before:] and problems[-1].message.endswith("does not exist"):
-            problems[-1] = Problem(problems[-1].file, problems[-1].json_path, f"{problems[-1].message} ({IMAGES_HINT[format]})")
-    choice_set = ChoiceSet(root, file, CHOICE_FORMATS[format], problems, instances, cache_dir=cache)
+            instances.append(choice_instance(files.key, item, frames, nowhere))
+        elif files.images_hint is not None and images is None and problems[before:] and problems[-1].message.endswith("does not exist"):
+            problems[-1] = Problem(problems[-1].file, problems[-1].json_path, f"{problems[-1].message} ({files.images_hint})")
+    choice_set = ChoiceSet(root, file, files.key, problems, instances, cache_dir=cache)
     if own_cache:
         weakref.finalize(choice_set, shutil.rmtree, str(cache), True)
     return choice_set
 
 
-def validate_choice_set(file: str | Path, format: str, images: str | Path | None = None) -> list[Problem]:
+def check_choice_set(file: str | Path, files: ChoiceFiles, images: str | Path | None = None) -> list[Problem]:
     """Every problem of the set in ``file`` (``povagent validate F --format NAME``): the records
     its reader leaves out, each image fully decoded too; a file that cannot be read at all is
     one problem."""
     from povagent.dataset.image_files import decode_fully
 
     try:
-        loaded = load_choice_set(file, format, images=images)
+        loaded = read_choice_set(file, files, images=images)
     except DatasetError as exc:
         return [Problem(str(file), "", str(exc).removeprefix(f"{file}: "))]
     problems = list(loaded.problems)
@@ -105,34 +148,22 @@ def validate_choice_set(file: str | Path, format: str, images: str | Path | None
             try:
                 decode_fully(frame.file)
             except (OSError, ValueError) as exc:
-                problems.append(Problem(str(file), f"{_where(format, instance.pair_id)}.images[{frame.index}]", f"image {frame.image_path!r} {exc}"))
+                problems.append(Problem(str(file), f"{files.record_id(instance.pair_id)}.images[{frame.index}]", f"image {frame.image_path!r} {exc}"))
     return problems
 
 
-def _read(file: Path, format: str, cache: Path) -> tuple[list, list[Problem]]:
+def _read(file: Path, files: ChoiceFiles, cache: Path) -> tuple[list[Item], list[Problem]]:
     from povagent.errors import ReadTargetError
 
     try:
-        if format == "viewspatial":
-            from povagent.dataset.choice_sets.viewspatial import read_viewspatial
-
-            return read_viewspatial(file)
-        if format == "mindcube":
-            from povagent.dataset.choice_sets.mindcube import read_mindcube
-
-            return read_mindcube(file)
-        from povagent.dataset.choice_sets.srbench3d import read_srbench3d
-
-        return read_srbench3d(file, cache)
+        return files.records(file, cache)
     except ReadTargetError as exc:
         raise DatasetError(str(exc)) from None
     except OSError as exc:
         raise DatasetError(f"{file}: cannot be read: {exc}") from None
 
 
-def _where(format: str, item_id: str) -> str:
-    """How a problem names a record: its position in a JSON list, or its id."""
-    return f"$[{item_id}]" if format == "viewspatial" else f"record {item_id}"
-
-
-__all__ = ["CHOICE_FORMATS", "OFFICIAL_SET_SCORERS", "SET_ANSWER_TYPE", "ChoiceSet", "load_choice_set", "validate_choice_set"]
+__all__ = [
+    "SET_ANSWER_TYPE", "ChoiceFiles", "ChoiceReader", "ChoiceSet", "check_choice_set", "load_choice_set", "read_choice_set",
+    "validate_choice_set",
+]  # fmt: skip

@@ -1,0 +1,42 @@
+"""The ``3dsrbench`` format: 3DSRBench's TSV in VLMEvalKit's layout (:mod:`povagent.dataset.choice_sets.srbench3d`),
+scored as its authors score it, with VLMEvalKit's exact matching and the four accuracies over a
+question's copies."""
+
+from __future__ import annotations
+
+from povagent import hookimpl
+from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets.srbench3d import PROFILE, read_srbench3d
+from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
+from povagent_plugins.strategies import set_profiles
+
+FILES = ChoiceFiles(key="3dsrbench", records=read_srbench3d, record_id=lambda item_id: f"record {item_id}")
+READER = ChoiceReader(FILES)
+
+SRBENCH3D = DatasetFormat(
+    key="3dsrbench",
+    description="3DSRBench: multiple-choice 3D spatial reasoning, each question asked in circular and flipped copies",
+    read=READER,
+    validate=READER.problems,
+    record_id=FILES.record_id,
+    answer_type=SET_ANSWER_TYPE,
+    # VLMEvalKit's exact matching, with which the set's authors score it; lmms-eval's is `3dsrbench-lmms`
+    official_parser="vlmevalkit-exact",
+    official_scorer="choice-3dsrbench",
+    prompt_profile=PromptProfile(PROFILE, set_profiles.srbench3d_text, set_profiles.SRBENCH3D_SOURCE),
+    source=VLMEVALKIT,
+    licence="CC-BY-4.0",
+    docs_row=DocsRow(
+        name="3DSRBench",
+        where="[`ccvl/3DSRBench`](https://huggingface.co/datasets/ccvl/3DSRBench)",
+        path="the TSV (VLMEvalKit's layout)",
+        how_to="how-to/perspective-sets.md",
+    ),
+)
+
+
+@hookimpl
+def register_dataset_formats(register) -> None:
+    """Contribute the 3DSRBench format."""
+    register(SRBENCH3D.key, SRBENCH3D, description=SRBENCH3D.description)
