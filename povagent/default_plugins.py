@@ -10,12 +10,14 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.answers.choice",
     "povagent_plugins.answers.walk",
     "povagent_plugins.answers.number",
+    "povagent_plugins.answers.choice_or_number",
     # dataset formats
     "povagent_plugins.formats.povbench",
     "povagent_plugins.formats.realworld",
     "povagent_plugins.formats.viewspatial",
     "povagent_plugins.formats.mindcube",
     "povagent_plugins.formats.srbench3d",
+    "povagent_plugins.formats.vsibench",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
@@ -58,6 +60,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.active",
     "povagent_plugins.strategies.navigate",
     "povagent_plugins.strategies.choice",
+    "povagent_plugins.strategies.choice_or_number",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.transformers_backend",
