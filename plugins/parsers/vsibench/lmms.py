@@ -74,7 +74,7 @@ def extract_number(text: str) -> float | None:
 class VSIBenchLmmsParser(Parser):
     """lmms-eval's reading of VSI-Bench (module docstring)."""
 
-    answer_types = frozenset({"choice", "number"})
+    answer_types = frozenset({"choice", "number", "choice-or-number"})
     reads = "lmms-eval's vsibench: its reasoning-tag strip, then the first word for a letter, and the first number or number words anywhere for a number"
     beside_official = "reads choice and number answers, which the official (point) parser does not read; lmms-eval's reading of VSI-Bench"
 

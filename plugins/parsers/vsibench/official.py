@@ -62,7 +62,7 @@ def number_parse(number: float | None, span: str) -> ParsedAnswer:
 class VSIBenchParser(Parser):
     """VSI-Bench's own first-word rule (module docstring)."""
 
-    answer_types = frozenset({"choice", "number"})
+    answer_types = frozenset({"choice", "number", "choice-or-number"})
     reads = "VSI-Bench's own rule: the reply's first space-separated word, trailing dots removed; the option letter in any case, or float() of it"
     beside_official = "reads choice and number answers, which the official (point) parser does not read; VSI-Bench's own rule, the set's default"
 
