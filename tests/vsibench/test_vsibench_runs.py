@@ -100,3 +100,17 @@ def test_an_unknown_dataset_option_is_refused(vsibench_pipeline):
 
     with pytest.raises((ConfigError, DatasetError), match="colour"):
         run_pipeline(vsibench_pipeline(**{"dataset": {"path": "x", "format": "vsibench", "options": {"colour": 1}}}))
+
+
+def test_the_sets_overall_comes_from_the_summarys_per_type_scores(vsibench_pipeline):
+    import json
+
+    from povagent_plugins.scorers.vsibench import official_overall
+
+    result = run_pipeline(vsibench_pipeline(backend="test-center", reply="A"))
+    summary = json.loads((result.run_dir / "summary.json").read_text())
+    per_type = {k: v["score"]["value"] for k, v in summary["metrics"]["vsibench"]["per_category"].items()}
+    table = official_overall(per_type)
+    # by hand: direction = (easy 1 + medium 0 + hard 0) / 3; route planning 1; the other six types 0
+    assert table["object_rel_direction"] == pytest.approx(1 / 3)
+    assert table["overall"] == pytest.approx((1 / 3 + 1) / 8)
