@@ -21,9 +21,11 @@ from pathlib import Path
 from PIL import Image
 
 from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.number import NumericQuestion
 from povagent.dataset.choice_sets.external import ChoiceSet, image_camera
 from povagent.dataset.choice_sets.vsibench import SceneQuestion, read_vsibench
 from povagent.dataset.instances import Frame, Instance
+from povagent.dataset.models import SceneObject
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem
 from povagent.dataset.video_frames import VideoError, sample_frames, sample_indices
@@ -94,16 +96,18 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     return tuple(Frame(k, f"{video}#{k}", f, camera) for k, f in enumerate(files))
 
 
-def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: object = None) -> Instance:
-    """The runnable instance of one record: id ``vsibench/<record id>``, showing ``frames``."""
+def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: SceneObject | None = None) -> Instance:
+    """The runnable instance of one record: id ``vsibench/<record id>``, showing ``frames``.
+    ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
     from povagent.dataset.realworld import unknown_object
 
     nowhere = unknown_object() if nowhere is None else nowhere
     choice = item.question if isinstance(item.question, ChoiceQuestion) else None
+    numeric = item.question if isinstance(item.question, NumericQuestion) else None
     return Instance(
         house_id=SET_NAME, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
-        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,  # type: ignore[arg-type]
-        observer_camera=frames[0].camera, question=choice, numeric=None if choice is not None else item.question,  # type: ignore[arg-type]
+        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,
+        observer_camera=frames[0].camera, question=choice, numeric=numeric,
     )  # fmt: skip
 
 
