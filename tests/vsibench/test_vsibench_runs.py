@@ -114,3 +114,14 @@ def test_the_sets_overall_comes_from_the_summarys_per_type_scores(vsibench_pipel
     # by hand: direction = (easy 1 + medium 0 + hard 0) / 3; route planning 1; the other six types 0
     assert table["object_rel_direction"] == pytest.approx(1 / 3)
     assert table["overall"] == pytest.approx((1 / 3 + 1) / 8)
+
+
+def test_the_report_of_a_run_shows_every_question_numerical_ones_too(vsibench_pipeline, tmp_path):
+    from povagent.report.build import write_report
+
+    result = run_pipeline(vsibench_pipeline())
+    write_report(result.run_dir, tmp_path / "report")
+    answers = "".join(p.read_text() for p in (tmp_path / "report" / "answers").glob("*.js"))
+    # a numerical card carries the set's wording and the number answered, a choice card its options
+    assert "How many chair(s) are in this room?" in answers and '"a":"4.0"' in answers
+    assert (tmp_path / "report" / "report.html").is_file()
