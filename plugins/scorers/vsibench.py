@@ -13,8 +13,10 @@ the three ``object_rel_direction_{easy,medium,hard}`` types first averaged into 
 same way (``_compute_all_subscores``) but rounds to 6 places on a 0-1 scale where the set's
 script prints percent, and requires all three direction levels (a run without one raises
 ``KeyError`` there; the set's own code merges them only when ``easy`` is present):
-:func:`lmms_overall`. The declared ``score`` metric's ``overall`` cell is the item mean; its
-per-category cells are the per-type scores the set's overall averages.
+:func:`lmms_overall`. The declared ``score`` metric's per-category cells are the type scores and
+its ``overall`` cell the set's overall (``Metric.category_mean``), so ``summary.json``, the
+console and the report show it; where a direction level has no question it averages the levels
+present, where both upstream functions raise.
 """
 
 from __future__ import annotations
@@ -62,9 +64,10 @@ class VSIBenchScorer(Scorer):
 
     metrics: ClassVar[tuple[Metric, ...]] = (
         Metric("score", "higher", "mean", "score", "VSI-Bench score",
-               "Accuracy (multiple choice) or mean relative accuracy (numbers) per question; a reply the rule reads "
-               "nothing in scores 0. Per category: the set's per-type score; the set's overall averages those (docs).",
-               over="all", unscored=0.0),
+               "Accuracy (multiple choice) or mean relative accuracy (numbers) per question, a reply the rule reads nothing "
+               "in scoring 0; per category the question type's score, overall the set's: the mean of the type scores, "
+               "the three direction levels first averaged into one.",
+               over="all", unscored=0.0, category_mean=True, merged_categories=(DIRECTION_LEVELS,)),
         Metric("mra", "higher", "mean", "mra", "MRA", "Mean relative accuracy of the numerical answers read (10 thresholds, 0.50-0.95)."),
         Metric("abs_error", "lower", "mean", "abs_error", "Absolute error", "|answer - gold| of the finite numerical answers read, in the question's unit."),
         Metric("rel_error", "lower", "mean", "rel_error", "Relative error", "|answer - gold| / gold of the finite numerical answers read."),

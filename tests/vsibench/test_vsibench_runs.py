@@ -54,7 +54,8 @@ def test_always_answering_a_scores_the_gold_a_questions_and_no_number(vsibench_p
     per_type = {k: v["score"].value for k, v in metrics.per_category.items()}
     assert per_type["object_rel_direction_easy"] == 1.0 and per_type["route_planning"] == 1.0
     assert per_type["object_counting"] == 0.0 and per_type["object_rel_distance"] == 0.0
-    assert metrics.overall["score"].value == pytest.approx(2 / 11)  # every question, a non-number counting 0
+    # the set's overall: the 8 type scores' mean, direction = (easy 1 + medium 0 + hard 0) / 3, route planning 1
+    assert metrics.overall["score"].value == pytest.approx((1 / 3 + 1) / 8)
     assert metrics.overall["response_rate"].value == pytest.approx(6 / 11)
 
 
@@ -114,6 +115,7 @@ def test_the_sets_overall_comes_from_the_summarys_per_type_scores(vsibench_pipel
     # by hand: direction = (easy 1 + medium 0 + hard 0) / 3; route planning 1; the other six types 0
     assert table["object_rel_direction"] == pytest.approx(1 / 3)
     assert table["overall"] == pytest.approx((1 / 3 + 1) / 8)
+    assert summary["metrics"]["vsibench"]["overall"]["score"]["value"] == pytest.approx(table["overall"])
 
 
 def test_the_report_of_a_run_shows_every_question_numerical_ones_too(vsibench_pipeline, tmp_path):
