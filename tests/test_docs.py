@@ -90,6 +90,37 @@ def test_every_model_profile_is_in_the_profiles_reference(reference):
     assert [n for n in names if f"| `{n}` |" not in reference["profiles"]] == []
 
 
+def test_every_dataset_format_has_its_row_in_the_datasets_reference(reference):
+    from povagent.dataset.formats import registered_formats
+    from povagent.plugins import get_plugin_host
+
+    formats = registered_formats(get_plugin_host(()))
+    assert {"povbench", "generated", "realworld", "viewspatial", "mindcube", "3dsrbench"} <= set(formats)
+    rows = [line for line in reference["datasets"].splitlines() if line.startswith("| ")][1:]  # the header row first
+    assert [line.split(" | ")[1] for line in rows] == [f"`{k}`" for k in formats]
+    for (key, fmt), line in zip(formats.items(), rows):
+        cells = [c.strip() for c in line.strip("|").split(" | ")]
+        assert cells[0] == fmt.docs_row.name and cells[4:7] == [f"`{fmt.answer_type}`", f"`{fmt.official_parser}`", f"`{fmt.official_scorer}`"], key
+        assert cells[7:9] == [fmt.source, fmt.licence] and (DOCS / fmt.docs_row.how_to).is_file(), key
+
+
+def test_the_perspective_sets_table_is_the_registered_formats_rows():
+    """The how-to's table of sets is every format that names the page as its how-to, each row as
+    its format says (a format added without its row, or a row left for a removed format, fails)."""
+    from povagent.dataset.formats import registered_formats
+    from povagent.plugins import get_plugin_host
+
+    page = "how-to/perspective-sets.md"
+    text = (DOCS / page).read_text(encoding="utf-8")
+    table = text.split("| set | Hub dataset | licence | file | `format` |\n|---|---|---|---|---|\n", 1)[1].split("\n\n", 1)[0]
+    expected = [
+        f"| {f.docs_row.name} | {f.docs_row.where} | {f.licence} | {f.docs_row.path} | `{f.key}` |"
+        for f in registered_formats(get_plugin_host(())).values()
+        if f.docs_row.how_to == page
+    ]
+    assert sorted(table.splitlines()) == sorted(expected)
+
+
 def test_every_file_format_carries_its_json_schema(reference):
     page = reference["formats"]
     for title in ("results.jsonl", "predictions export", "release: pair_file", "release: exploration_log"):

@@ -12,20 +12,29 @@ from pathlib import Path
 from povagent import hookimpl
 from povagent.dataset.formats import DatasetFormat, DocsRow, FormatRead
 from povagent.dataset.protocol import EvaluationSet
+from povagent.errors import DatasetError
 
 
 def read_release(request: FormatRead) -> EvaluationSet:
     """The release-layout set at ``request.path`` (:func:`povagent.dataset.loader.load_dataset`)."""
     from povagent.dataset.loader import load_dataset
 
-    return load_dataset(request.path, strict=request.strict, check_images=request.check_images)
+    return load_dataset(request.path, strict=request.strict, frame_size=_frame_size(request), check_images=request.check_images)
 
 
 def release_problems(request: FormatRead) -> list:
     """Every problem of the release-layout folder (:func:`povagent.dataset.validate.validate_dataset`)."""
     from povagent.dataset.validate import validate_dataset
 
-    return validate_dataset(request.path)
+    return validate_dataset(request.path, _frame_size(request), request.warnings)
+
+
+def _frame_size(request: FormatRead) -> tuple[int, int]:
+    """The size every frame must have: ``options`` ``width`` and ``height`` (default 512 x 512)."""
+    size = (request.options.get("width", 512), request.options.get("height", 512))
+    if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in size):
+        raise DatasetError(f"{request.path}: dataset.options width and height must be positive integers, got {size[0]!r} x {size[1]!r}")
+    return size
 
 
 def is_generated(root: Path) -> bool:
@@ -58,6 +67,7 @@ POVBENCH = DatasetFormat(
         path="the release folder",
         how_to="how-to/release.md",
     ),
+    option_names=("width", "height"),
     detect=lambda root: True,  # any folder no other format claims (a missing one: the loader says so)
     detect_order=1000,
 )
@@ -74,6 +84,7 @@ GENERATED = DatasetFormat(
     source="povagent generate (the paper's five-stage pipeline)",
     licence="yours (the assets' licences apply to the frames)",
     docs_row=DocsRow(name="a generated set", where="`povagent generate`", path="the folder it wrote", how_to="tutorials/first-dataset.md"),
+    option_names=("width", "height"),
     detect=is_generated,
     detect_order=500,
 )

@@ -10,19 +10,21 @@ import typer
 
 from povagent.cli import app
 from povagent.cli.console_width import PathTitle
+from povagent.cli.format_option import FormatsInHelp, format_option
 from povagent.cli.options import strict_option
 from povagent.cli.slice_rows import breakdown_slices
 
 if TYPE_CHECKING:
     from povagent.run.summary_model import Breakdown, Cell, ScoreSummary
 
-@app.command("validate")
+@app.command("validate", cls=FormatsInHelp)
 def validate_command(
-    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR", help="Dataset folder in the POVBench release layout (with --format: the set's file)."),
+    dataset_dir: Path = typer.Argument(..., metavar="DATASET_DIR",
+                                       help="Dataset folder: a POVBench release, a generated or a real-world set (with --format: the set's file)."),
     width: int = typer.Option(512, "--width", min=1, metavar="PIXELS", help="Width every exploration frame must have."),
     height: int = typer.Option(512, "--height", min=1, metavar="PIXELS", help="Height every exploration frame must have."),
-    format: str | None = typer.Option(None, "--format", metavar="FORMAT",
-                                      help="An external multiple-choice set's file: viewspatial, mindcube or 3dsrbench."),
+    format: str | None = format_option("The set's dataset format (default: the folder's own, as a run reads it: a real-world set by its "
+                                       "realworld.json, any other folder in the POVBench release layout)."),
     images: Path | None = typer.Option(None, "--images", metavar="DIR",
                                        help="With --format: the folder the set's image paths are relative to (default: the file's)."),
 ) -> None:
@@ -31,16 +33,19 @@ def validate_command(
     Each problem names the file, the JSON path (or line, or record) and what is wrong with it.
     Exit code 1 when there is any. Warnings (on stderr) leave the dataset valid.
     """
+    from povagent.dataset.evaluation_set import format_of
+    from povagent.dataset.formats import FormatRead
     from povagent.dataset.problems import Problem
-    from povagent.dataset.validate import validate_dataset
+    from povagent.errors import DatasetError
 
     warnings: list[Problem] = []
-    if format is not None:
-        from povagent.dataset.choice_sets import validate_choice_set
-
-        problems = validate_choice_set(dataset_dir, format, images)
+    try:  # no --format: the folder's own, as the runner reads it (a real-world set, a release)
+        found = format_of(dataset_dir, format)
+    except DatasetError as exc:
+        problems = [Problem(str(dataset_dir), "", str(exc).removeprefix(f"{dataset_dir}: "))]
     else:
-        problems = validate_dataset(dataset_dir, (width, height), warnings)
+        sizes = {k: v for k, v in (("width", width), ("height", height)) if k in found.option_names}  # a release's frames
+        problems = found.problems_of(FormatRead(dataset_dir, images=images, options=sizes, warnings=warnings))
     for w in warnings:
         typer.echo(f"warning: {w}", err=True)
     for p in problems:

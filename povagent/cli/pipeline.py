@@ -320,7 +320,7 @@ def sweep_command(
 
 
 #: The heading of each kind in ``povagent plugins``.
-KIND_HEADINGS = {"profile": "model profiles", "strategy": "strategies", "tool": "active-mode tools"}
+KIND_HEADINGS = {"profile": "model profiles", "strategy": "strategies", "tool": "active-mode tools", "answer_type": "answer types", "format": "dataset formats"}
 
 
 def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
@@ -354,8 +354,13 @@ def _plugins_table(entries: dict[str, list[Any]], width: int) -> Any:
 
 
 def _profile_fields(entry: Any) -> dict[str, Any]:
-    """A model profile's litellm model and default parser (for ``plugins --json``); nothing
-    for other kinds, or for a plugin's profile object without those fields."""
+    """A model profile's litellm model and default parser, a dataset format's answer type,
+    official rule, upstream source and licence (for ``plugins --json``); nothing for other kinds, or for
+    a plugin's object without those fields."""
+    if entry.kind == "format":  # its source (repo@commit) is "upstream": "source" is the plugin's
+        names = {"answer_type": "answer_type", "official_parser": "official_parser", "official_scorer": "official_scorer",
+                 "upstream": "source", "licence": "licence"}  # fmt: skip
+        return {k: getattr(entry.factory, a) for k, a in names.items() if isinstance(getattr(entry.factory, a, None), str)}
     if entry.kind != "profile":
         return {}
     fields = {"model": getattr(entry.factory, "litellm_model", None), "parser": getattr(entry.factory, "default_parser", None)}
@@ -366,7 +371,7 @@ def _profile_fields(entry: Any) -> dict[str, Any]:
 def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print the list as JSON instead of a table.")) -> None:
     """List every plugin a YAML file can name, and its source.
 
-    Every backend, strategy, parser, scorer, surface judge, model profile and active-mode tool, with the package
+    Every backend, strategy, parser, scorer, surface judge, model profile, active-mode tool, answer type and dataset format, with the package
     or file that registered it; plugins that failed to load are listed after them (exit code 1).
     """
     from rich.console import Console
@@ -374,7 +379,8 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     from povagent.plugins import KINDS, build_plugin_host
 
     host = build_plugin_host(strict=False)
-    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries()}
+    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries(),
+              **{k: host.entries(k) for k in ("answer_type", "format")}}  # fmt: skip
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
             k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in entries]

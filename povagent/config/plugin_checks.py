@@ -21,7 +21,7 @@ from povagent.config.profiles import near_profile
 from povagent.config.quoting import Loc, cut, dotted
 from povagent.config.remote_code import check_remote_code_options
 from povagent.config.yaml_reader import ConfigSource
-from povagent.dataset.formats import registered_format
+from povagent.dataset.formats import missing_rules, registered_format
 from povagent.errors import ConfigError, PluginError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
 from povagent.results.official_reading import OFFICIAL_PARSER
@@ -52,6 +52,8 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     if config.dataset.format is not None:
         check("format", config.dataset.format, ("dataset", "format"))
         if config.dataset.format in host.names("format"):
+            loc = ("dataset", "format")
+            problems += [f"{source.where(prefix + loc)}: {dotted(loc)}: {why}" for why in missing_rules(host, [config.dataset.format])]
             accepted = registered_format(host, config.dataset.format).option_names
             for key in config.dataset.options or {}:
                 if key not in accepted:

@@ -34,6 +34,7 @@ def open_evaluation_set(
     images: str | Path | None = None,
     options: Mapping[str, Any] | None = None,
     plugins: Sequence[str] = (),
+    host: PluginHost | None = None,
 ) -> EvaluationSet:
     """The set at ``root``, read by the reader of its format.
 
@@ -42,10 +43,12 @@ def open_evaluation_set(
     are checked as it is read). ``format`` (``dataset.format``) makes ``root`` an external
     set's file, read in that format, its image paths relative to ``images`` (default: the
     file's folder), with the format's own ``options`` (``dataset.options``). ``plugins`` are
-    the pipeline's ``plugins:`` (a format one of them registers is found).
+    the pipeline's ``plugins:`` (a format one of them registers is found), or ``host`` the
+    plugins already loaded (a run folder's ``plugins:`` are never imported: ``rescore`` passes
+    its command line's).
     """
     root = Path(root)
-    dataset_format = format_of(root, format, plugins)
+    dataset_format = format_of(root, format, plugins, host)
     request = FormatRead(root, images=None if images is None else Path(images), strict=strict, check_images=check_images, options=dict(options or {}))
     return dataset_format.read(request)
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping
 
 if TYPE_CHECKING:
     from povagent.dataset.problems import Problem
@@ -38,14 +38,18 @@ class FormatRead:
     strict: bool = False
     #: Whether images are opened as the set is read (the report reads ground truth only).
     check_images: bool = True
-    #: The format's own options (``dataset.options`` in a pipeline: e.g. ``{frames: 16}``); a
-    #: reader refuses one it does not know with :class:`ValueError`.
+    #: The format's own options (``dataset.options`` in a pipeline: e.g. ``{frames: 16}``; the
+    #: config admits only the format's :attr:`DatasetFormat.option_names`); a reader refuses a
+    #: bad value with :class:`~povagent.errors.DatasetError` naming the file.
     options: Mapping[str, Any] = field(default_factory=dict)
+    #: Where a validator puts what leaves the set valid (``povagent validate`` prints them on
+    #: stderr); ``None``: nobody asks.
+    warnings: list[Problem] | None = None
 
 
 @dataclass(frozen=True)
 class DocsRow:
-    """A format's row in the docs' table of sets (``docs/reference/dataset-formats.md``)."""
+    """A format's row in the docs' table of sets (``docs/reference/datasets.md``, generated)."""
 
     #: The set's name as its authors write it (``ViewSpatial-Bench``).
     name: str
@@ -144,6 +148,24 @@ def registered_formats(host: PluginHost) -> dict[str, DatasetFormat]:
     return {key: registered_format(host, key) for key in host.names("format")}
 
 
+def missing_rules(host: PluginHost, keys: Iterable[str] | None = None) -> list[str]:
+    """One line per registered format (of ``keys``; default: all) whose answer type, official
+    parser or official scorer no plugin registers, or whose official parser does not read its
+    answer type (empty: each can be read and scored by its own rule)."""
+    found = []
+    for key in host.names("format") if keys is None else keys:
+        fmt = registered_format(host, key)
+        source = host.entry("format", key).source
+        for kind, name in (("answer_type", fmt.answer_type), ("parser", fmt.official_parser), ("scorer", fmt.official_scorer)):
+            if name not in host.names(kind):
+                found.append(f"dataset format {key!r} ({source}) names {kind} {name!r}, which no plugin registers")
+        if fmt.official_parser in host.names("parser") and fmt.answer_type in host.names("answer_type"):
+            reads = getattr(host.entry("parser", fmt.official_parser).factory, "answer_types", None)
+            if reads is not None and fmt.answer_type not in reads:
+                found.append(f"dataset format {key!r} ({source}): its official parser {fmt.official_parser!r} does not read {fmt.answer_type!r} answers")
+    return found
+
+
 def check_format(fmt: object, source: str) -> DatasetFormat:
     """``fmt`` as a :class:`DatasetFormat`, or :class:`~povagent.errors.PluginError` naming the
     plugin that registered something else or an incomplete one."""
@@ -157,4 +179,4 @@ def check_format(fmt: object, source: str) -> DatasetFormat:
     return fmt
 
 
-__all__ = ["DatasetFormat", "DocsRow", "FormatRead", "PromptProfile", "check_format", "registered_format", "registered_formats"]
+__all__ = ["DatasetFormat", "DocsRow", "FormatRead", "PromptProfile", "check_format", "missing_rules", "registered_format", "registered_formats"]

@@ -22,7 +22,7 @@ from povagent.report.collect import RunInfo
 
 #: How a set is told apart: its file or folder, its format, its images folder and the task it is
 #: asked as (the config's ``task:`` as JSON; ``None``: POVBench's point task).
-_SetKey = tuple[Path, str | None, Path | None, str | None]
+_SetKey = tuple[Path, str | None, Path | None, str | None, str | None]
 
 
 class SetQuestions:
@@ -69,7 +69,8 @@ class SetQuestions:
 
 def run_set_key(run: RunInfo, override: Path | None = None) -> _SetKey | None:
     """What tells the set ``run`` was asked apart: its file or folder (``override`` in its
-    place when given), format, images folder and task (``None``: its config names no set)."""
+    place when given), format, images folder, task and format options (``None``: its config
+    names no set)."""
     path = override if override is not None else run.dataset_path
     if path is None:
         return None
@@ -78,7 +79,8 @@ def run_set_key(run: RunInfo, override: Path | None = None) -> _SetKey | None:
     format = str(ds["format"]) if ds.get("format") else None
     images = _resolved(run, ds["images"]) if ds.get("images") else None
     task = run.config.get("task")
-    return path, format, images, None if task in (None, "point") else json.dumps(task, sort_keys=True)
+    options = json.dumps(ds["options"], sort_keys=True) if isinstance(ds.get("options"), dict) and ds["options"] else None
+    return path, format, images, None if task in (None, "point") else json.dumps(task, sort_keys=True), options
 
 
 def _resolved(run: RunInfo, raw: object) -> Path:
@@ -91,9 +93,11 @@ def open_run_set(key: _SetKey) -> Any:
     """The set ``key`` names, opened as the runner opens it (its format, images and task), or one line (``<file>: <reason>``) saying why it cannot be opened."""
     from povagent.dataset.evaluation_set import open_evaluation_set
 
-    root, format, images, task = key
+    root, format, images, task, options = key
     try:
-        loaded = open_evaluation_set(root, check_images=False, format=format, images=images)
+        # the run's own plugins are not loaded: a report never runs code a run folder names (a
+        # format must be installed, built in or by entry point, for its runs to be reported)
+        loaded = open_evaluation_set(root, check_images=False, format=format, images=images, options=json.loads(options) if options else None)
         if task is None:
             return loaded
         from povagent.config.models import TaskSpec

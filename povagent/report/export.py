@@ -248,15 +248,16 @@ def export_long_csv(
 
 def _release_dataset(path: Path | None, run_folder: Path) -> Any:
     """The release-layout dataset a run used, loaded; a clear error when it cannot be."""
+    from povagent.dataset.evaluation_set import format_of
     from povagent.dataset.loader import load_dataset
-    from povagent.dataset.realworld import is_realworld
     from povagent.errors import DatasetError, PredictionsError
 
     if path is None:
         raise PredictionsError(f"{run_folder}: its config.yaml names no dataset folder; pass --dataset (the release it ran on)")
-    if is_realworld(path):
+    found = format_of(path, None)
+    if found.official_scorer != "official":  # a set scored otherwise (a real-world set's 2D marks) has no such numbers
         raise PredictionsError(
-            f"{run_folder}: ran on a real-world set ({path}); the long CSV holds the official scorer's "
+            f"{run_folder}: ran on {found.docs_row.name} ({path}); the long CSV holds the official scorer's "
             "numbers, which need a POVBench release (its 3D ground truth)"
         )
     try:

@@ -68,7 +68,7 @@ def load_collection_dataset(collection: Collection | list[RunInfo], override: st
     distinct = list(dict.fromkeys(k for k in keys.values() if k is not None))
     if not distinct:
         if override:  # no config names a set: the folder given, read as a release or real-world set
-            distinct = [(Path(override), None, None, None)]
+            distinct = [(Path(override), None, None, None, None)]
         else:
             return None, "no dataset path in the runs' config.yaml (pass --dataset)"
     # No load-time image check: the gallery draws a card for every row and says on it

@@ -7,6 +7,7 @@ import math
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -124,3 +125,18 @@ def test_validate_names_a_file_of_the_wrong_shape_plainly(mini_root, tmp_path):
     result = runner.invoke(app, ["validate", str(root)])
     assert result.exit_code == 1
     assert "artifacts/train_house_00001/exploration_log.json: the file must hold a JSON list" in result.stdout
+
+
+def test_validate_reads_a_real_world_folder_as_a_real_world_set():
+    demo = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
+    result = runner.invoke(app, ["validate", str(demo)])
+    assert result.exit_code == 0, result.output
+    assert result.stdout == f"{demo}: valid\n"
+
+
+def test_validate_help_lists_every_registered_format():
+    from povagent.dataset.formats import registered_formats
+    from povagent.plugins import get_plugin_host
+
+    shown = " ".join(runner.invoke(app, ["validate", "--help"]).stdout.split())
+    assert f"Registered: {', '.join(registered_formats(get_plugin_host()))}." in shown
