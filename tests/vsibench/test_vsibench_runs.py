@@ -127,3 +127,12 @@ def test_the_report_of_a_run_shows_every_question_numerical_ones_too(vsibench_pi
     # a numerical card carries the set's wording and the number answered, a choice card its options
     assert "How many chair(s) are in this room?" in answers and '"a":"4.0"' in answers
     assert (tmp_path / "report" / "report.html").is_file()
+
+
+def test_the_how_to_pages_row_is_the_formats_own():
+    from pathlib import Path
+
+    fmt = registered_format(build_plugin_host(), "vsibench")
+    page = Path(__file__).resolve().parents[2] / "docs" / fmt.docs_row.how_to
+    row = f"| {fmt.docs_row.name} | {fmt.docs_row.where} | {fmt.licence} | {fmt.docs_row.path} | `{fmt.key}` |"
+    assert row in page.read_text(encoding="utf-8").splitlines()
