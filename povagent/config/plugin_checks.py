@@ -52,14 +52,7 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
     if config.dataset.format is not None:
         check("format", config.dataset.format, ("dataset", "format"))
         if config.dataset.format in host.names("format"):
-            loc = ("dataset", "format")
-            problems += [f"{source.where(prefix + loc)}: {dotted(loc)}: {why}" for why in missing_rules(host, [config.dataset.format])]
-            accepted = registered_format(host, config.dataset.format).option_names
-            for key in config.dataset.options or {}:
-                if key not in accepted:
-                    loc = ("dataset", "options", key)
-                    takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
-                    problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: format {config.dataset.format!r} has no option {cut(str(key))!r}; {takes}")
+            check_format_fits(config, host, source, prefix, problems)
     if config.dataset.generate is not None:
         loc = ("dataset", "generate", "judge")
         check("judge", config.dataset.generate.judge.name, loc + ("name",) if loc + ("name",) in source.lines else loc)
@@ -67,6 +60,20 @@ def check_plugin_names(config: PipelineConfig, host: PluginHost, source: ConfigS
         check_finite_options(options, loc, source, prefix, problems)
     if problems:
         raise ConfigError("invalid pipeline:\n" + "\n".join(problems))
+
+
+def check_format_fits(config: PipelineConfig, host: PluginHost, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
+    """The registered format ``dataset.format`` names has its official rule (a registered parser
+    and scorer: :func:`~povagent.dataset.formats.missing_rules`), and takes every key of ``dataset.options``."""
+    fmt = str(config.dataset.format)
+    at: Loc = ("dataset", "format")
+    problems += [f"{source.where(prefix + at)}: {dotted(at)}: {why}" for why in missing_rules(host, [fmt])]
+    accepted = registered_format(host, fmt).option_names
+    for key in config.dataset.options or {}:
+        if key not in accepted:
+            loc: Loc = ("dataset", "options", key)
+            takes = f"it takes {', '.join(accepted)}" if accepted else "it takes none"
+            problems.append(f"{source.where(prefix + loc)}: {dotted(loc)}: format {fmt!r} has no option {cut(str(key))!r}; {takes}")
 
 
 def check_env_options(options: Any, loc: Loc, source: ConfigSource, prefix: Loc, problems: list[str]) -> None:
