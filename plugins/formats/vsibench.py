@@ -48,8 +48,9 @@ def _frames(request: FormatRead) -> int:
 
 
 def read(request: FormatRead) -> EvaluationSet:
-    """The set ``request`` names, each question showing ``frames`` frames of its scene."""
-    return load_vsibench(request.path, _frames(request), videos=request.images)
+    """The set ``request`` names, each question showing ``frames`` frames of its scene (decoded
+    only where images are checked: rescoring and the report read the gold answers alone)."""
+    return load_vsibench(request.path, _frames(request), videos=request.images, decode=request.check_images)
 
 
 def problems(request: FormatRead) -> list[Problem]:

@@ -136,3 +136,18 @@ def test_the_how_to_pages_row_is_the_formats_own():
     page = Path(__file__).resolve().parents[2] / "docs" / fmt.docs_row.how_to
     row = f"| {fmt.docs_row.name} | {fmt.docs_row.where} | {fmt.licence} | {fmt.docs_row.path} | `{fmt.key}` |"
     assert row in page.read_text(encoding="utf-8").splitlines()
+
+
+def test_rescoring_a_run_under_lmms_evals_reading_reads_no_video(vsibench_pipeline, vsibench_folder):
+    from povagent.run.rescore import rescore_run
+
+    result = run_pipeline(vsibench_pipeline(backend="test-center", reply="about 2"))
+    assert result.summary.metrics["vsibench"].overall["score"].value == 0.0  # officially "about" is no number
+    for video in vsibench_folder.rglob("*.mp4"):
+        video.unlink()  # rescoring needs the gold answers, not the frames
+    again = rescore_run(result.run_dir, "vsibench-lmms").summary.metrics["vsibench"]
+    # lmms-eval reads 2: counting golds 4 and 2 -> MRA 0.1 and 1 (type 0.55); distance 1.8 -> 0.8;
+    # size 203 and room 22.4 -> 0; the six choice types 0 -> (0.55 + 0.8) / 8
+    assert again.per_category["object_counting"]["score"].value == pytest.approx(0.55)
+    assert again.overall["score"].value == pytest.approx((0.55 + 0.8) / 8)
+    assert rescore_run(result.run_dir, "vsibench").summary.metrics["vsibench"].overall["score"].value == 0.0

@@ -118,3 +118,11 @@ def test_a_parquet_file_that_is_not_parquet_is_one_problem(tmp_path):
 def test_a_missing_file_is_a_dataset_error(tmp_path):
     with pytest.raises(DatasetError, match="not found"):
         load_vsibench(tmp_path / "test.jsonl")
+
+
+def test_reading_the_gold_answers_alone_opens_no_video(tmp_path):
+    file = write_jsonl(tmp_path / "test.jsonl", RECORDS[:2])  # no video on disk at all
+    loaded = load_vsibench(file, frames=3, cache_dir=tmp_path / "cache", decode=False)
+    assert loaded.problems == [] and [i.numeric.gold for i in loaded.instances()] == [4.0, 1.8]
+    assert [len(i.frames) for i in loaded.instances()] == [3, 3]
+    assert not any(f.file.exists() for i in loaded.instances() for f in i.frames)

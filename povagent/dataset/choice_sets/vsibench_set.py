@@ -39,12 +39,15 @@ _NO_TARGET = (float("nan"),) * 3
 
 
 def load_vsibench(
-    file: str | Path, frames: int = DEFAULT_FRAMES, *, videos: str | Path | None = None, cache_dir: str | Path | None = None
+    file: str | Path, frames: int = DEFAULT_FRAMES, *, videos: str | Path | None = None, cache_dir: str | Path | None = None,
+    decode: bool = True,
 ) -> ChoiceSet:
     """The set in ``file`` (``.parquet`` or ``.jsonl``), each item showing ``frames`` frames of
     its scene's video found under ``videos`` (default: the file's folder); bad records are left
     out and named in ``problems``. :class:`~povagent.errors.DatasetError` when the file cannot
-    be read at all."""
+    be read at all. ``decode=False`` reads the questions and their gold answers only (what
+    rescoring and the report's tables need): no video is opened, and each frame is a path where
+    a decoded frame would be, which does not exist."""
     file = Path(file)
     if not file.is_file():
         raise DatasetError(f"{file}: not found (dataset.path of a vsibench set names its .parquet or .jsonl file)")
@@ -68,7 +71,9 @@ def load_vsibench(
     for item in items:
         shown_frames = scenes.get(item.video)
         if shown_frames is None:
-            shown_frames = scenes[item.video] = _scene_frames(real_root, root, item.video, frames, cache)
+            shown_frames = scenes[item.video] = (
+                _scene_frames(real_root, root, item.video, frames, cache) if decode else _undecoded_frames(item.video, frames, cache)
+            )
         if isinstance(shown_frames, str):
             problems.append(Problem(str(file), f"record {item.id}.scene_name", shown_frames))
             continue
@@ -94,6 +99,13 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     with Image.open(files[0]) as first:
         camera = image_camera(*first.size)
     return tuple(Frame(k, f"{video}#{k}", f, camera) for k, f in enumerate(files))
+
+
+def _undecoded_frames(video: str, n: int, cache: Path) -> tuple[Frame, ...]:
+    """Where the ``n`` frames of ``video`` would be written, none of them decoded (``decode=False``)."""
+    camera = image_camera(1, 1)
+    folder = cache / video.replace("/", "__")
+    return tuple(Frame(k, f"{video}#{k}", folder / f"frame-{k:03d}.png", camera) for k in range(n))
 
 
 def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: SceneObject | None = None) -> Instance:
