@@ -126,3 +126,10 @@ def test_reading_the_gold_answers_alone_opens_no_video(tmp_path):
     assert loaded.problems == [] and [i.numeric.gold for i in loaded.instances()] == [4.0, 1.8]
     assert [len(i.frames) for i in loaded.instances()] == [3, 3]
     assert not any(f.file.exists() for i in loaded.instances() for f in i.frames)
+
+
+def test_reading_the_gold_answers_writes_only_each_scenes_first_frame(vsibench_folder):
+    loaded = load_vsibench(vsibench_folder / "test.jsonl", frames=3, cache_dir=vsibench_folder / "cache", decode=False)
+    frames = loaded.instance("vsibench/6").frames
+    assert [f.file.exists() for f in frames] == [True, False, False]
+    assert round(grey_level(frames[0].file) / LEVEL_STEP) == 0

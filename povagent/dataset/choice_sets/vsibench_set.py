@@ -29,7 +29,7 @@ from povagent.dataset.models import SceneObject
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem
 from povagent.dataset.video_frames import VideoError, sample_frames, sample_indices
-from povagent.errors import DatasetError, ReadTargetError
+from povagent.errors import DatasetError, PovagentError, ReadTargetError
 
 #: The set's name: the instances' "house" (ids are ``vsibench/<record id>``).
 SET_NAME = "vsibench"
@@ -45,9 +45,10 @@ def load_vsibench(
     """The set in ``file`` (``.parquet`` or ``.jsonl``), each item showing ``frames`` frames of
     its scene's video found under ``videos`` (default: the file's folder); bad records are left
     out and named in ``problems``. :class:`~povagent.errors.DatasetError` when the file cannot
-    be read at all. ``decode=False`` reads the questions and their gold answers only (what
-    rescoring and the report's tables need): no video is opened, and each frame is a path where
-    a decoded frame would be, which does not exist."""
+    be read at all. ``decode=False`` reads the questions and their gold answers (what rescoring
+    and the report need) without sampling the videos: each frame is the path a decoded frame
+    would have, and only a scene's first frame (always sampled) is written, where its video is
+    there and decodes (the report's card shows it); a missing video is then no problem."""
     file = Path(file)
     if not file.is_file():
         raise DatasetError(f"{file}: not found (dataset.path of a vsibench set names its .parquet or .jsonl file)")
@@ -72,7 +73,7 @@ def load_vsibench(
         shown_frames = scenes.get(item.video)
         if shown_frames is None:
             shown_frames = scenes[item.video] = (
-                _scene_frames(real_root, root, item.video, frames, cache) if decode else _undecoded_frames(item.video, frames, cache)
+                _scene_frames(real_root, root, item.video, frames, cache) if decode else _first_frame_only(real_root, root, item.video, frames, cache)
             )
         if isinstance(shown_frames, str):
             problems.append(Problem(str(file), f"record {item.id}.scene_name", shown_frames))
@@ -101,10 +102,15 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     return tuple(Frame(k, f"{video}#{k}", f, camera) for k, f in enumerate(files))
 
 
-def _undecoded_frames(video: str, n: int, cache: Path) -> tuple[Frame, ...]:
-    """Where the ``n`` frames of ``video`` would be written, none of them decoded (``decode=False``)."""
-    camera = image_camera(1, 1)
+def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Path) -> tuple[Frame, ...]:
+    """Where the ``n`` frames of ``video`` would be written, only the first of them written (a
+    video that is missing, outside the folder or undecodable, or no PyAV: none written)."""
     folder = cache / video.replace("/", "__")
+    try:
+        sample_frames(confined(real_root, root, video, what="video path"), 1, folder)  # linspace(0, total - 1, 1): frame 0
+    except (OutsideDatasetError, VideoError, PovagentError, OSError):
+        pass  # the gold answers are all that is needed: the card goes without its image
+    camera = image_camera(1, 1)
     return tuple(Frame(k, f"{video}#{k}", folder / f"frame-{k:03d}.png", camera) for k in range(n))
 
 
