@@ -133,3 +133,12 @@ def test_reading_the_gold_answers_writes_only_each_scenes_first_frame(vsibench_f
     frames = loaded.instance("vsibench/6").frames
     assert [f.file.exists() for f in frames] == [True, False, False]
     assert round(grey_level(frames[0].file) / LEVEL_STEP) == 0
+
+
+def test_a_numerical_gold_written_as_a_json_number_reads_as_its_text_would(tmp_path):
+    write_video(tmp_path / "arkitscenes" / "41069025.mp4", 4)
+    file = write_jsonl(tmp_path / "test.jsonl", [{**RECORDS[1], "ground_truth": 1.8}, {**RECORDS[4], "ground_truth": 2}])
+    loaded = load_vsibench(file, frames=2, cache_dir=tmp_path / "cache")
+    assert [i.numeric.gold for i in loaded.instances()] == [1.8]
+    [problem] = loaded.problems  # a letter is text: a number is no gold for a multiple-choice type
+    assert problem.json_path == "line 2.ground_truth"

@@ -130,11 +130,12 @@ def scene_question(record: Any, where: str) -> SceneQuestion | tuple[str, str]:
     if not isinstance(text, str) or not text.strip():
         return f"{where}.question", "required, a non-empty string"
     gold = record.get("ground_truth")
-    if not isinstance(gold, str) or not gold.strip():
-        return f"{where}.ground_truth", f"required, a non-empty string, got {gold!r:.60}"
+    plain_number = isinstance(gold, (int, float)) and not isinstance(gold, bool)
+    if not (isinstance(gold, str) and gold.strip()) and not (plain_number and question_type in NUMBER_TYPES):
+        return f"{where}.ground_truth", f"required, a non-empty string (a number for a numerical type), got {gold!r:.60}"
     video = f"{record['dataset']}/{record['scene_name']}.mp4"
     if question_type in NUMBER_TYPES:
-        number = _gold_number(gold)
+        number = _gold_number(str(gold))  # the official to_float reads a JSON number as it reads its text
         if number is None:
             return f"{where}.ground_truth", f"{gold!r:.60} is not a finite non-zero number (the MRA divides by it)"
         return SceneQuestion(str(record_id), NumericQuestion(text, number, unit=UNITS[question_type], category=question_type, profile=PROFILE), video)
@@ -142,7 +143,7 @@ def scene_question(record: Any, where: str) -> SceneQuestion | tuple[str, str]:
     if isinstance(options, str):
         return f"{where}.options", options
     try:
-        choice = ChoiceQuestion(text, options, gold.strip(), category=question_type, profile=PROFILE)
+        choice = ChoiceQuestion(text, options, str(gold).strip(), category=question_type, profile=PROFILE)
     except ValueError as exc:
         return f"{where}.ground_truth", str(exc)
     return SceneQuestion(str(record_id), choice, video)
