@@ -142,3 +142,12 @@ def test_a_numerical_gold_written_as_a_json_number_reads_as_its_text_would(tmp_p
     assert [i.numeric.gold for i in loaded.instances()] == [1.8]
     [problem] = loaded.problems  # a letter is text: a number is no gold for a multiple-choice type
     assert problem.json_path == "line 2.ground_truth"
+
+
+def test_scenes_whose_names_run_together_keep_their_own_frames(tmp_path):
+    write_video(tmp_path / "a__b" / "c.mp4", 4)  # grey 0, 10, 20, 30
+    write_video(tmp_path / "a" / "b__c.mp4", 16)  # its last frame is grey 150
+    records = [{**RECORDS[0], "id": 0, "dataset": "a__b", "scene_name": "c"}, {**RECORDS[0], "id": 1, "dataset": "a", "scene_name": "b__c"}]
+    loaded = load_vsibench(write_jsonl(tmp_path / "test.jsonl", records), frames=2, cache_dir=tmp_path / "cache")
+    last = [round(grey_level(i.frames[-1].file) / LEVEL_STEP) for i in loaded.instances()]
+    assert last == [3, 15]

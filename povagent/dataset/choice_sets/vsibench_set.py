@@ -54,7 +54,7 @@ def load_vsibench(
         raise DatasetError(f"{file}: not found (dataset.path of a vsibench set names its .parquet or .jsonl file)")
     root = file.parent if videos is None else Path(videos)
     if not root.is_dir():
-        raise DatasetError(f"{root}: not a folder (dataset.videos names the folder holding <dataset>/<scene_name>.mp4)")
+        raise DatasetError(f"{root}: not a folder (dataset.images names the folder holding the videos, <dataset>/<scene_name>.mp4)")
     try:
         items, problems = read_vsibench(file)
     except ReadTargetError as exc:
@@ -94,7 +94,7 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     if not path.is_file():
         return f"video {shown(video)} does not exist"
     try:
-        files = sample_frames(path, n, cache / video.replace("/", "__"))
+        files = sample_frames(path, n, cache / video)  # dataset and scene_name are plain names: a folder per video
     except (VideoError, ReadTargetError) as exc:
         return f"video {shown(video)}: {exc}"
     with Image.open(files[0]) as first:
@@ -105,7 +105,7 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
 def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Path) -> tuple[Frame, ...]:
     """Where the ``n`` frames of ``video`` would be written, only the first of them written (a
     video that is missing, outside the folder or undecodable, or no PyAV: none written)."""
-    folder = cache / video.replace("/", "__")
+    folder = cache / video
     try:
         sample_frames(confined(real_root, root, video, what="video path"), 1, folder)  # linspace(0, total - 1, 1): frame 0
     except (OutsideDatasetError, VideoError, PovagentError, OSError):
