@@ -7,10 +7,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import av  # the test extra installs PyAV (as the video extra does): a missing one fails, never skips
 import numpy as np
 import pytest
-
-av = pytest.importorskip("av", reason="the video extra (PyAV) is part of the test extra")
 
 #: The grey level of frame i is ``i * LEVEL_STEP`` (0-255): 24 frames span 0-230.
 LEVEL_STEP = 10
