@@ -9,6 +9,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.answers.point",
     "povagent_plugins.answers.choice",
     "povagent_plugins.answers.walk",
+    "povagent_plugins.answers.number",
+    "povagent_plugins.answers.choice_or_number",
     # dataset formats
     "povagent_plugins.formats.povbench",
     "povagent_plugins.formats.realworld",
@@ -17,6 +19,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.formats.srbench3d",
     "povagent_plugins.formats.mmsi",
     "povagent_plugins.formats.omnispatial",
+    "povagent_plugins.formats.vsibench",
     # scorers
     "povagent_plugins.scorers.official",
     "povagent_plugins.scorers.success",
@@ -29,6 +32,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.choice_sparbench",
     "povagent_plugins.scorers.srbench3d",
     "povagent_plugins.scorers.choice_mindcube",
+    "povagent_plugins.scorers.vsibench",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -49,6 +53,8 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.sparbench",
     "povagent_plugins.parsers.mcq.mmsi",
     "povagent_plugins.parsers.mcq.omnispatial",
+    "povagent_plugins.parsers.vsibench.official",
+    "povagent_plugins.parsers.vsibench.lmms",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",
@@ -58,6 +64,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.strategies.active",
     "povagent_plugins.strategies.navigate",
     "povagent_plugins.strategies.choice",
+    "povagent_plugins.strategies.choice_or_number",
     # backends
     "povagent_plugins.backends.litellm_backend",
     "povagent_plugins.backends.transformers_backend",

@@ -72,6 +72,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "observer_camera": "The speaker's camera (the Given view's camera).",
         "question": "The multiple-choice question asked (`ChoiceQuestion`: question, labelled options, gold label, category), or `None` for the point task.",
         "answer_type": "The answer type the instance asks for (`point` unless its loader says otherwise; `choice` for an instance carrying a `question`); a strategy asking another is refused at load.",
+        "numeric": "The numerical question the instance asks (`NumericQuestion`: question, gold number, unit, category; VSI-Bench's numerical types), or `None`; it then asks for a `number`.",
     },
     "Frame": {
         "index": "Position in `Instance.frames`: what an answer's `selected_image` names.",
@@ -141,6 +142,7 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "camera": "The camera of the image answered in when it is no dataset frame (the active mode's views): it is scored there.",
         "choice": "The option label a multiple-choice answer chose, or `None`.",
         "path": "The floor positions `(x, z)` a navigate episode walked through, start first (its last is where the walk ended; `camera` what it saw there), or `None` (then not written).",
+        "number": "The number a `number` answer gave, as its rule read it (NaN or infinite when the reply said so), or `None` (then not written).",
     },
     "OfficialScore": {
         "answered": "Whether the row counts as answered officially (a point, and for A/B a frame that was shown).",

@@ -192,6 +192,8 @@ class OracleBaseline(Backend):
             if instance.question is None:
                 raise PermanentBackendError(f"instance {instance.id} asks no question, yet the request offers options")
             return _instant(instance.question.gold, "oracle")
+        if instance.numeric is not None:  # a numerical question: the gold number, as float() reads it back
+            return _instant(repr(instance.numeric.gold), "oracle")
         n_shown = shown_frame_count(request) if spec.asks_frame else 1
         frame, u, v = oracle_answer(instance, n_shown)
         # clamp to the last pixel: u = 1.0 exactly is only reached by a GT out of every frame

@@ -107,20 +107,27 @@ class ParsedAnswer(BaseModel):
     #: ``camera`` what it saw there); ``None`` for every other answer, and then not written, so
     #: rows of the other tasks keep their bytes.
     path: list[tuple[float, float]] | None = None
+    #: The number a ``number`` answer gave (:mod:`povagent.answers.number`), as the rule read it
+    #: (NaN or infinite when the reply said so: such a number is accurate at no threshold);
+    #: ``None`` for every other answer, and then not written, so other rows keep their bytes.
+    number: float | None = None
 
     @model_serializer(mode="wrap")
     def _without_unset_path(self, handler: SerializerFunctionWrapHandler) -> Any:
         data = handler(self)
-        if self.path is None and isinstance(data, dict):
-            data.pop("path", None)
+        if isinstance(data, dict):
+            if self.path is None:
+                data.pop("path", None)
+            if self.number is None:
+                data.pop("number", None)
         return data
 
     @property
     def answered(self) -> bool:
-        """True when the parse yields a point, a chosen option or an arrival."""
+        """True when the parse yields a point, a chosen option, an arrival or a number."""
         if not self.status.answered:
             return False
-        return (self.x is not None and self.y is not None) or self.choice is not None or self.path is not None
+        return (self.x is not None and self.y is not None) or self.choice is not None or self.path is not None or self.number is not None
 
     @property
     def point(self) -> tuple[float, float] | None:

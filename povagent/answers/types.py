@@ -39,6 +39,9 @@ class AnswerType:
     #: The answer type this one refines (its value has that type's shape, e.g. a point read as
     #: marking another object): it answers instances asking either (``None``: only its own).
     refines: str | None = None
+    #: Further answer types whose instances this one answers (a set mixing option and number
+    #: questions, VSI-Bench's, is answered by a type that answers both).
+    also_answers: tuple[str, ...] = ()
     #: The strategy a pipeline gets when its set asks this type and it names none (``None``:
     #: the pipeline's own default, POVBench's ``basic``).
     default_strategy: str | None = None
@@ -48,7 +51,7 @@ class AnswerType:
 
     def answers(self, asked: str) -> bool:
         """Whether an answer of this type answers an instance asking for ``asked``."""
-        return asked in (self.name, self.refines)
+        return asked in (self.name, self.refines) or asked in self.also_answers
 
 
 def answer_type_misfit(strategy: str, answer_type: AnswerType, instances: Iterable[Instance]) -> str | None:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.number import NumericQuestion
 from povagent.dataset.models import Condition, Direction, SceneObject
 from povagent.geometry.camera import Camera
 
@@ -57,10 +58,16 @@ class Instance:
     #: asking another is refused at load (:func:`povagent.answers.types.answer_type_misfit`).
     #: An instance carrying a :attr:`question` asks for a ``choice`` unless it names another type.
     answer_type: str = "point"
+    #: The question the instance asks when it asks for a number (:mod:`povagent.answers.number`:
+    #: VSI-Bench's numerical-answer questions), or ``None``. Such an instance asks for a
+    #: ``number`` unless it names another type.
+    numeric: NumericQuestion | None = None
 
     def __post_init__(self) -> None:
         if self.question is not None and self.answer_type == "point":
             object.__setattr__(self, "answer_type", "choice")
+        elif self.numeric is not None and self.answer_type == "point":
+            object.__setattr__(self, "answer_type", "number")
 
     @property
     def id(self) -> str:

@@ -58,7 +58,7 @@ from povagent.files.confined_write import write_inside
 from povagent.report.active import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
-from povagent.report.gallery_choice import asked_question, choice_fields, has_target, question_drawing, shows_several_images
+from povagent.report.gallery_choice import asked_question, asks_numeric_question, choice_fields, has_target, question_drawing, shows_several_images
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
 from povagent.report.run_sets import RunSets
@@ -350,7 +350,8 @@ def build_gallery(
         active = answered_view(o, run_folders) if run_folders is not None and inst is not None else None
         view = active.frame if active is not None else None
         question = asked_question(inst)
-        drawing = question_drawing(inst) if question is not None else drawing_for(o, inst, view) if inst is not None else None
+        asks_question = question is not None or asks_numeric_question(inst)  # a card of the question's own images
+        drawing = question_drawing(inst) if asks_question else drawing_for(o, inst, view) if inst is not None else None
         key = None
         if drawing is not None and drawing.source.exists():
             try:
@@ -362,7 +363,7 @@ def build_gallery(
         else:
             stats.without_image += 1
         strip_fields = strips.fields(o.instance_id, inst) if inst is not None else {}
-        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None and question is None else None
+        frame = view if view is not None else scoring_frame(inst, o.selected_image, o.image_path) if inst is not None and not asks_question else None
         path = active.path if active is not None else ()
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame, path) if inst is not None else None
         raw = o.raw or ""

@@ -30,9 +30,16 @@ def asked_question(instance: Any) -> Any:
     return getattr(instance, "question", None) if instance is not None else None
 
 
+def asks_numeric_question(instance: Any) -> bool:
+    """Whether the instance asks a numerical question (VSI-Bench's: a card like a choice
+    question's, its images and no options)."""
+    return getattr(instance, "numeric", None) is not None if instance is not None else False
+
+
 def shows_several_images(instance: Any) -> bool:
     """Whether the instance asks a question shown with several images (they get a strip)."""
-    return asked_question(instance) is not None and len(getattr(instance, "frames", ())) > 1
+    asks = asked_question(instance) is not None or asks_numeric_question(instance)
+    return asks and len(getattr(instance, "frames", ())) > 1
 
 
 def has_target(instance: Any) -> bool:

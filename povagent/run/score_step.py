@@ -49,9 +49,9 @@ def instance_view(instance: Instance, spec: AnswerSpec) -> Instance:
 
 def question_category(instance: Instance) -> str | None:
     """The category a row of ``instance`` records (:attr:`ResultRow.category`): its
-    multiple-choice question's, or ``None`` for an instance asking no such question. Recorded
+    multiple-choice or numerical question's, or ``None`` for an instance asking neither. Recorded
     whatever the answer, so a reply naming no option counts, wrong, in its category's slice."""
-    question = instance.question
+    question = instance.question if instance.question is not None else instance.numeric
     return None if question is None else str(question.category or "")
 
 

@@ -232,6 +232,12 @@ class MetricDeclaration(BaseModel):
     group: str | None = None
     #: Question categories the overall cell leaves out (their own slices keep them).
     overall_excludes: list[str] | None = None
+    #: The value a mean over every row gives a row the scorer did not score (``None``: absent).
+    unscored: float | None = None
+    #: The overall cell is the mean of the per-category means (categories of a group in
+    #: ``merged_categories`` first averaged into one); ``None``: the mean over rows.
+    category_mean: bool | None = None
+    merged_categories: list[list[str]] | None = None
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""

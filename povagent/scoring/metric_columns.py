@@ -129,6 +129,31 @@ class MetricColumns:
                 kept.append(i)
         return kept
 
+    def category_weighted(self, values: list[float] | np.ndarray, rows: Sequence[int], merged: tuple[tuple[str, ...], ...]) -> np.ndarray:
+        """``values`` (one a row of ``rows``; NaN: not counted) rescaled so that their plain mean is
+        the mean of the per-category means, the categories of each group in ``merged`` first
+        averaged into one (:attr:`Metric.category_mean`): each counted row weighs
+        ``1 / (units * categories in its unit * rows of its category)``. The bootstrap CI then
+        resamples rows with those weights held fixed."""
+        x = np.array(values, dtype=float)
+        counted = [n for n in range(len(x)) if np.isfinite(x[n])]
+        unit_of = {category: group for group in merged for category in group}
+        category = [self._category_name(rows[n]) for n in range(len(x))]
+        per_category: dict[str, int] = defaultdict(int)
+        for n in counted:
+            per_category[category[n]] += 1
+        per_unit: dict[Any, set[str]] = defaultdict(set)
+        for name in per_category:
+            per_unit[unit_of.get(name, name)].add(name)
+        for n in counted:
+            unit = per_unit[unit_of.get(category[n], category[n])]
+            x[n] *= len(counted) / (len(per_unit) * len(unit) * per_category[category[n]])
+        return x
+
+    def _category_name(self, i: int) -> str:
+        label = self._category[i]
+        return "" if label is None else label if isinstance(label, str) else label[0]
+
     def nbytes(self) -> int:
         """Bytes the columns hold (the values, and a pointer a label; groups not counted)."""
         return sum(8 * len(c) for c in self._values) + 24 * len(self)
@@ -152,8 +177,15 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
         # only the overall cell (``slices`` hands it ``everything`` itself) leaves categories out
         return columns.outside(rows, metric.overall_excludes) if rows is everything and metric.overall_excludes else rows
 
+    def values(metric: Metric, rows: Sequence[int]) -> list[float] | np.ndarray:
+        kept = counted(metric, rows)
+        found = columns.values(scorer, metric, kept)
+        if rows is everything and metric.category_mean and metric.group is None:
+            return columns.category_weighted(found, kept, metric.merged_categories)
+        return found
+
     def cell(rows: Sequence[int]) -> dict[str, Estimate]:
-        estimates = bootstrap_mean_cis([columns.values(scorer, m, counted(m, rows)) for m in metrics], n_boot=n_boot, seed=seed)
+        estimates = bootstrap_mean_cis([values(m, rows) for m in metrics], n_boot=n_boot, seed=seed)
         return {m.name: e for m, e in zip(metrics, estimates, strict=True)}
 
     return slices(

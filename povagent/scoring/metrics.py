@@ -43,6 +43,13 @@ class Metric:
     its group; a run's rows group apart from another run's. ``overall_excludes`` names question
     categories whose rows the ``overall`` cell leaves out (MindCube's evaluator scores its
     ``translation`` setting on its own, outside the overall); their own slices keep them.
+    ``unscored`` is the value of a mean over ``"all"`` rows for a row the scorer did not score
+    (a reply its parser read nothing in): VSI-Bench scores such a reply 0 (its
+    ``WORST_CASE_FOR_METRICS``), so its MRA counts it as 0, not as absent (``None``: absent).
+    ``category_mean`` makes the ``overall`` cell the mean of the per-category means rather than
+    the mean over rows (VSI-Bench's overall: each question type counts once, whatever its
+    size), the categories of each group in ``merged_categories`` first averaged into one
+    (VSI-Bench's three direction levels); the per-category cells are unchanged.
     """
 
     name: str
@@ -55,6 +62,9 @@ class Metric:
     negate: bool = False
     group: str | None = None
     overall_excludes: tuple[str, ...] = ()
+    unscored: float | None = None
+    category_mean: bool = False
+    merged_categories: tuple[tuple[str, ...], ...] = ()
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -65,6 +75,11 @@ class Metric:
             out["group"] = self.group
         if self.overall_excludes:
             out["overall_excludes"] = list(self.overall_excludes)
+        if self.unscored is not None:
+            out["unscored"] = self.unscored
+        if self.category_mean:
+            out["category_mean"] = True
+            out["merged_categories"] = [list(group) for group in self.merged_categories]
         return out
 
     @classmethod
@@ -72,7 +87,8 @@ class Metric:
         """The metric :meth:`describe` described."""
         return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
                    description["caption"], description["over"], description["negate"], description.get("group"),
-                   tuple(description.get("overall_excludes") or ()))  # fmt: skip
+                   tuple(description.get("overall_excludes") or ()), description.get("unscored"),
+                   bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
@@ -85,6 +101,8 @@ def metric_value(metric: Metric, fields: Mapping[str, Any] | None, answered: boo
     scored = answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
     if metric.over == "answered" and not scored:
         return None
+    if not scored and metric.unscored is not None and metric.aggregation == "mean":
+        return metric.unscored
     raw = fields.get(metric.field) if isinstance(fields, Mapping) and scored else None
     if metric.aggregation == "rate":
         if raw is None and metric.over == "answered":

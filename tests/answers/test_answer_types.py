@@ -39,7 +39,7 @@ def test_point_is_registered_by_its_built_in_plugin_module():
 def test_a_third_party_answer_type_is_registered_beside_point(povagent_host):
     povagent_host.add_plugin(BoxPlugin(), name="box-plugin")
     try:
-        assert povagent_host.names("answer_type") == ["box", "choice", "point", "walk"]
+        assert povagent_host.names("answer_type") == ["box", "choice", "choice-or-number", "number", "point", "walk"]
         assert povagent_host.answer_type("box") is BOX
     finally:
         povagent_host.remove_plugin("box-plugin")

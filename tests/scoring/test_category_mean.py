@@ -1,0 +1,51 @@
+"""A metric whose overall is the mean of its category means (``category_mean``: VSI-Bench's
+overall, each question type counted once), with listed categories first averaged into one; the
+per-category cells are the plain means."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import Metric, valued_row
+
+SCORE = Metric("score", "higher", "mean", "score", "Score", "per question", over="all", unscored=0.0,
+               category_mean=True, merged_categories=(("dir_easy", "dir_hard"),))  # fmt: skip
+DECLARED = {"mine": (SCORE,)}
+
+
+def row(category: str, score: float | None):
+    """A row of ``category``; ``score=None``: a reply read as nothing, which no scorer scored."""
+    scores = {} if score is None else {"mine": {"score": score, "answered": True, "category": category}}
+    return SimpleNamespace(status="parse_error" if score is None else "answered", scores=scores, condition="", direction="",
+                           pair_id=f"{category}-{id(scores)}", run=0, category=category)  # fmt: skip
+
+
+def breakdown(rows):
+    return metrics_breakdown([valued_row(r, DECLARED) for r in rows], DECLARED, n_boot=50)["mine"]
+
+
+def test_the_overall_is_the_mean_of_the_category_means_not_of_the_rows():
+    # counting: 1, 1, 1, 0 -> 0.75; size: 0 -> 0; overall (0.75 + 0) / 2, not 3/5
+    cells = breakdown([row("counting", 1.0), row("counting", 1.0), row("counting", 1.0), row("counting", 0.0), row("size", 0.0)])
+    assert cells["overall"]["score"]["value"] == pytest.approx(0.375)
+    assert cells["per_category"]["counting"]["score"]["value"] == pytest.approx(0.75)
+    assert cells["overall"]["score"]["n"] == 5
+
+
+def test_merged_categories_are_averaged_into_one_first():
+    # dir_easy 1, dir_hard 0 (two rows) -> direction 0.5; size 1 -> overall 0.75 (not (1 + 0 + 1) / 3)
+    cells = breakdown([row("dir_easy", 1.0), row("dir_hard", 0.0), row("dir_hard", 0.0), row("size", 1.0)])
+    assert cells["overall"]["score"]["value"] == pytest.approx(0.75)
+
+
+def test_an_unread_reply_counts_zero_in_its_category():
+    cells = breakdown([row("counting", 1.0), row("counting", None), row("size", 1.0)])
+    assert cells["per_category"]["counting"]["score"]["value"] == pytest.approx(0.5)
+    assert cells["overall"]["score"]["value"] == pytest.approx(0.75)
+
+
+def test_the_declaration_round_trips():
+    assert Metric.declared("score", SCORE.describe()) == SCORE
