@@ -31,7 +31,6 @@ from typing import Any
 from povagent import hookimpl
 from povagent.geometry.directions import spec_of
 
-
 PROMPT = """This photo shows a {anchor}. Imagine a small object, about 30 cm across (a book, a mug, a \
 pair of boots), placed {where} the {anchor}, as seen from this viewpoint. Could it physically stand \
 there, and on what surface? Answer with JSON only:
@@ -72,9 +71,9 @@ class VlmJudge:
 
         from povagent.answers.spec import AnswerSpec
         from povagent.engine.cache import ResponseCache, cache_key
+        from povagent.exchange.images import ImageStore
         from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
         from povagent.generate.judge import surface_noun
-        from povagent.exchange.images import ImageStore
         from povagent.plugins import get_plugin_host
 
         images = ImageStore()

@@ -20,8 +20,8 @@ from povagent.dataset.choice_sets.external import Item, text_problems
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.problems import Problem
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.interfaces import Parser
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 LABELS = "ABCD"
 PROFILE = "tinyspatial"

@@ -10,7 +10,7 @@ count repeats frames, as there (lmms-eval @ 75571cfe's own sampler caps N at the
 its index; the frames are decoded in presentation order and taken at those indices.
 
 A video is untrusted input: it is opened as a regular file only
-(:func:`~povagent.run.confined_read.open_regular`, after the caller confined its path), at most
+(:func:`~povagent.files.confined_read.open_regular`, after the caller confined its path), at most
 :data:`MAX_VIDEO_BYTES`, with at most :data:`MAX_PACKETS` packets and frames at most
 :data:`MAX_SIDE` pixels a side; anything else is a :class:`VideoError`, one line saying what.
 PyAV is imported only here and only when a video is read: without it, one line names the extra.
@@ -56,7 +56,7 @@ def sample_indices(total: int, n: int) -> list[int]:
 
 
 def _open(path: Path) -> Any:
-    from povagent.run.confined_read import open_regular
+    from povagent.files.confined_read import open_regular
 
     handle = open_regular(path, what="video")
     size = os.fstat(handle.fileno()).st_size

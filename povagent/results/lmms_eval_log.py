@@ -57,7 +57,7 @@ _FIXED_KEYS = frozenset({"doc_id", "doc", "target", "arguments", "resps", "filte
 def read_lmms_eval_log(file: Path) -> HarnessLog:
     """Every scorable record of an lmms-eval samples file, and one problem per record that is not."""
     from povagent.dataset.json_files import TooDeepError, loads_dataset_json
-    from povagent.run.confined_read import check_regular, open_regular
+    from povagent.files.confined_read import check_regular, open_regular
 
     log = HarnessLog(file, "lmms-eval", reply_field="resps", filtered_field="filtered_resps")
     name = str(file)

@@ -50,7 +50,7 @@ MAX_LIST_CELL = 1 << 16
 
 def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     """Every scorable row of a VLMEvalKit prediction file, and one problem per row that is not."""
-    from povagent.run.confined_read import read_regular
+    from povagent.files.confined_read import read_regular
 
     try:
         data = read_regular(file, MAX_LOG_BYTES, what="VLMEvalKit prediction file")

@@ -8,7 +8,7 @@ B: Front right, C: Back left, D: Back right``), ``answer`` (the gold letter) and
 annotated reasoning, not read). Other columns are left alone.
 
 The images are untrusted bytes: each must be a PNG or a JPEG of at most
-:data:`~povagent.run.confined_read.MAX_IMAGE_FILE_BYTES`, and a row at most
+:data:`~povagent.files.confined_read.MAX_IMAGE_FILE_BYTES`, and a row at most
 :data:`MAX_IMAGES` of them; each is written once, named by its content, into the set's cache
 folder, where :mod:`.external` checks it sound (its pixel count bounded) like any image. The
 file is read a few rows at a time, and a row group whose columns would decode to far more than
@@ -34,7 +34,7 @@ from povagent.dataset.choice_sets.external import Item, record_id_problem
 from povagent.dataset.paths import shown
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
-from povagent.run.confined_read import MAX_IMAGE_FILE_BYTES
+from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES
 
 #: The prompt profile the set is asked in.
 PROFILE = "mmsi"
@@ -105,7 +105,7 @@ def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, 
         import pyarrow.parquet as pq
     except ImportError:
         raise DatasetError(f"{file}: {MISSING_PYARROW}") from None
-    from povagent.run.confined_read import open_regular
+    from povagent.files.confined_read import open_regular
 
     with open_regular(file, what="MMSI-Bench file") as handle:
         try:

@@ -30,7 +30,7 @@ from povagent.dataset.choice_sets.external import Item, record_id_problem, text_
 from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.paths import shown
 from povagent.dataset.problems import Problem
-from povagent.run.confined_read import MAX_DOCUMENT_BYTES, read_regular
+from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: The prompt profile the set is asked in.
 PROFILE = "omnispatial"

@@ -99,7 +99,7 @@ def _parquet_records(file: Path, problems: list[Problem]) -> Iterable[tuple[str,
         import pyarrow.parquet as pq
     except ImportError:
         raise PovagentError(MISSING_PYARROW) from None
-    from povagent.run.confined_read import read_regular
+    from povagent.files.confined_read import read_regular
 
     data = read_regular(file, MAX_PARQUET_BYTES, what="VSI-Bench Parquet file")
     try:

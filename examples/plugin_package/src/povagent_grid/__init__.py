@@ -16,10 +16,10 @@ from PIL import Image, ImageColor, ImageDraw
 
 from povagent import hookimpl
 from povagent.dataset.instances import Instance
-from povagent.exchange.messages import GenerationParams, Request
 from povagent.exchange.images import ImageStore
-from povagent.interfaces import Strategy
+from povagent.exchange.messages import GenerationParams, Request
 from povagent.exchange.prompts import frame_values, render
+from povagent.interfaces import Strategy
 from povagent_plugins.strategies.layout import answer_spec, prompt_message
 
 __version__ = "0.1.0"
