@@ -152,24 +152,27 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
         # only the overall cell (``slices`` hands it ``everything`` itself) leaves categories out
         return columns.outside(rows, metric.overall_excludes) if rows is everything and metric.overall_excludes else rows
 
-    # every cell's columns are estimated in one call, filled in after: columns of as many
-    # values share their draws (the same estimates to the bit), and the cells of a breakdown
-    # often count as many rows (3 conditions x 4 runs: a cell's 6 metrics and its twins')
-    wanted: list[Sequence[float]] = []
-    cells: list[dict[str, Estimate]] = []
+    # cells of as many rows are estimated in one call, filled in after: their columns share
+    # their draws (the same estimates to the bit; a breakdown's cells often count as many rows,
+    # 3 conditions x 4 runs), and only one such group's values are held at a time
+    cells: list[tuple[Sequence[int], dict[str, Estimate]]] = []
 
     def cell(rows: Sequence[int]) -> dict[str, Estimate]:
-        wanted.extend(columns.values(scorer, m, counted(m, rows)) for m in metrics)
-        cells.append({})
-        return cells[-1]
+        cells.append((rows, {}))
+        return cells[-1][1]
 
     out = slices(
         everything, cell, condition=condition.__getitem__, direction=direction.__getitem__,
         category=None if category is None else category.__getitem__,
     )  # fmt: skip
-    estimates = iter(bootstrap_mean_cis(wanted, n_boot=n_boot, seed=seed))
-    for filled in cells:
-        filled.update((m.name, next(estimates)) for m in metrics)
+    by_size: dict[int, list[tuple[Sequence[int], dict[str, Estimate]]]] = {}
+    for rows, filled in cells:
+        by_size.setdefault(len(rows), []).append((rows, filled))
+    for group in by_size.values():
+        wanted = [columns.values(scorer, m, counted(m, rows)) for rows, _ in group for m in metrics]
+        estimates = iter(bootstrap_mean_cis(wanted, n_boot=n_boot, seed=seed))
+        for _, filled in group:
+            filled.update((m.name, next(estimates)) for m in metrics)
     return out
 
 
