@@ -85,7 +85,13 @@ class House:
 
     def observer_frame(self, pair: PairEntry) -> Frame:
         """The observer view of a pair (condition C)."""
-        return Frame(0, pair.rgb_path, resolve_image(self.folder, pair.rgb_path), observer_camera(pair))
+        return Frame(0, pair.rgb_path, resolve_image(self.folder, pair.rgb_path, self._real_places), observer_camera(pair))
+
+    @cached_property
+    def _real_places(self) -> tuple[Path, Path]:
+        """The dataset's real root and this house's real folder, resolved once for its observer
+        views (each condition-C instance asks for one)."""
+        return dataset_root(self.folder.parent.parent), self.folder.resolve()
 
 
 #: The folder of a house's exploration frames; a file whose name contains ``depth`` is a depth map.
@@ -120,12 +126,13 @@ def observer_camera(pair: PairEntry) -> Camera:
     return Camera.from_pose(c.cam_pos, c.cam_yaw, c.cam_horizon, c.fov, c.screen_width, c.screen_height)
 
 
-def resolve_image(house_folder: Path, rel: str) -> Path:
+def resolve_image(house_folder: Path, rel: str, real_places: tuple[Path, Path] | None = None) -> Path:
     """An image path of the release, relative to the house folder (or, failing that, the root);
-    a path leading outside the dataset is a :class:`DatasetError` (loading refuses such houses)."""
-    root = house_folder.parent.parent
+    a path leading outside the dataset is a :class:`DatasetError` (loading refuses such houses).
+    ``real_places``: the dataset's real root and the house's real folder, when known."""
+    real_root, real_folder = real_places if real_places is not None else (dataset_root(house_folder.parent.parent), None)
     try:
-        return observer_view_path(dataset_root(root), house_folder, rel)
+        return observer_view_path(real_root, house_folder, rel, real_folder)
     except OutsideDatasetError as exc:
         raise DatasetError(f"{house_folder / rel}: {exc}") from None
 
@@ -377,6 +384,7 @@ def _with_sound_files(
     exploration frame too (dropping it would shift the A/B frame indices predictions use).
     """
     real_root = dataset_root(root)
+    real_folder = house.folder.resolve()  # every frame's path is checked against it: resolved once
     log_file = _rel(house.folder / EXPLORATION_LOG, root)
     pairs_file = _rel(house.folder / f"{house.house_id}.json", root)
     usable = True
@@ -387,7 +395,7 @@ def _with_sound_files(
     for i, rec in enumerate(house.exploration):
         where = f"$[{_raw_index(raw_log, 'image_path', rec.image_path, i)}].image_path"
         try:
-            path = confined(real_root, house.folder, rec.image_path)
+            path = confined(real_root, house.folder, rec.image_path, real_base=real_folder)
         except OutsideDatasetError as exc:
             problems.append(Problem(log_file, where, str(exc)))
             usable = False
@@ -401,7 +409,7 @@ def _with_sound_files(
     for pair_id, pair in list(house.pairs.items()):
         where = f"$[{_raw_index(raw_pairs, 'pair_id', pair_id, -1)}].rgb_path"
         try:
-            path = observer_view_path(real_root, house.folder, pair.rgb_path)
+            path = observer_view_path(real_root, house.folder, pair.rgb_path, real_folder)
         except OutsideDatasetError as exc:
             problems.append(Problem(pairs_file, where, str(exc)))
             usable = False

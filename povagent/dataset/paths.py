@@ -56,12 +56,13 @@ def is_inside(real_root: Path, path: Path) -> bool:
     return path.resolve().is_relative_to(real_root)
 
 
-def confined(real_root: Path, base: Path, rel: str, what: str = "image path") -> Path:
+def confined(real_root: Path, base: Path, rel: str, what: str = "image path", real_base: Path | None = None) -> Path:
     """``base / rel``, checked to resolve inside ``real_root``; raises :class:`OutsideDatasetError`.
 
     ``rel`` must be relative (to the house folder ``base``, as the release writes it); an
     absolute path is refused even when it happens to point inside the dataset, because the
-    same dataset moved elsewhere would point outside it.
+    same dataset moved elsewhere would point outside it. ``real_base``: ``base.resolve()``
+    when the caller has it already (a house's frames share their folder: resolved once).
     """
     if "\x00" in rel:
         raise OutsideDatasetError(f"{what} {shown(rel)} contains a NUL character; not opened")
@@ -71,7 +72,7 @@ def confined(real_root: Path, base: Path, rel: str, what: str = "image path") ->
             "and stay inside the dataset; not opened"
         )
     path = base / rel
-    spelled_inside = Path(os.path.normpath(base.resolve() / rel)).is_relative_to(real_root)
+    spelled_inside = Path(os.path.normpath((base.resolve() if real_base is None else real_base) / rel)).is_relative_to(real_root)
     if not is_inside(real_root, path):
         # Spelled inside but resolving outside: a symlink on the way leads out.
         via = " through a symlink" if spelled_inside else ""
@@ -87,10 +88,11 @@ def confined(real_root: Path, base: Path, rel: str, what: str = "image path") ->
     return path
 
 
-def observer_view_path(real_root: Path, house_folder: Path, rel: str) -> Path:
+def observer_view_path(real_root: Path, house_folder: Path, rel: str, real_folder: Path | None = None) -> Path:
     """Where an ``rgb_path`` is: relative to the house folder, or (as some releases write it)
-    to the dataset root; both candidates must stay inside the dataset."""
-    path = confined(real_root, house_folder, rel)
+    to the dataset root; both candidates must stay inside the dataset. ``real_folder``: the
+    house folder resolved, when the caller has it."""
+    path = confined(real_root, house_folder, rel, real_base=real_folder)
     if path.exists():
         return path
     alt = confined(real_root, house_folder.parent.parent, rel)

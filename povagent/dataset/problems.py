@@ -8,6 +8,7 @@ text (:func:`not_text_problems`).
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from dataclasses import dataclass
@@ -47,18 +48,32 @@ def non_finite_numbers(data: Any, prefix: tuple[Any, ...] = ()) -> Iterator[tupl
 
     Python's ``json`` reads ``NaN``, ``Infinity`` and overflowing literals (``1e999``) as
     floats; no release field may hold one. Walks without recursion: a hostile file may nest
-    deeply.
+    deeply. A location is made only for a number found (every record of a release is checked as
+    it is loaded: a location made for every number was most of a release's loading).
     """
-    stack: list[tuple[tuple[Any, ...], Any]] = [(prefix, data)]
+    if isinstance(data, float):
+        if not math.isfinite(data):
+            yield prefix, data
+        return
+    if not isinstance(data, (dict, list)):
+        return
+    # each level gone into: its key in the level above and what is left of its items, in order
+    # (depth first); a location is put together from the keys only for a number found
+    stack: list[tuple[Any, Iterator[tuple[Any, Any]]]] = [(None, _items(data))]
     while stack:
-        loc, value = stack.pop()
-        if isinstance(value, float):
-            if not math.isfinite(value):
-                yield loc, value
-        elif isinstance(value, dict):
-            stack.extend((loc + (k,), v) for k, v in reversed(list(value.items())))
-        elif isinstance(value, list):
-            stack.extend((loc + (i,), v) for i, v in reversed(list(enumerate(value))))
+        for key, value in stack[-1][1]:
+            if isinstance(value, float):
+                if not math.isfinite(value):
+                    yield prefix + tuple(k for k, _ in stack[1:]) + (key,), value
+            elif isinstance(value, (dict, list)):
+                stack.append((key, _items(value)))
+                break
+        else:
+            stack.pop()
+
+
+def _items(container: dict[Any, Any] | list[Any]) -> Iterator[tuple[Any, Any]]:
+    return iter(list(container.items())) if isinstance(container, dict) else enumerate(list(container))
 
 
 def non_finite_message(value: float) -> str:
@@ -90,6 +105,8 @@ def not_text_problems(file: str, data: Any) -> list[Problem]:
     loading refuses the file and ``validate`` names each string by file and JSON path. Walks
     without recursion (a hostile file may nest deeply); paths show bad keys escaped.
     """
+    if _all_text(data):
+        return []
     found: list[Problem] = []
     stack: list[tuple[tuple[Any, ...], Any]] = [((), data)]
     while stack:
@@ -103,6 +120,18 @@ def not_text_problems(file: str, data: Any) -> list[Problem]:
         elif isinstance(value, list):
             stack.extend((loc + (i,), v) for i, v in reversed(list(enumerate(value))))
     return found
+
+
+def _all_text(data: Any) -> bool:
+    """Whether every string of ``data`` (values and keys) is text, told at C speed: its JSON,
+    written without escapes, is UTF-8 exactly when it holds no lone surrogate. ``False`` when
+    that cannot be told so (a value JSON cannot write, a document nesting too deeply): the
+    walk then decides."""
+    try:
+        json.dumps(data, ensure_ascii=False, check_circular=False).encode("utf-8")
+    except (UnicodeEncodeError, TypeError, ValueError, RecursionError):
+        return False
+    return True
 
 
 def _lone_surrogate(file: str, loc: tuple[Any, ...], text: str, what: str) -> list[Problem]:

@@ -77,12 +77,15 @@ def _strings_of(value: Any, clean: Callable[[str], str]) -> Any:
     names, frozen = shape
     if not names:
         return value
-    changed = {name: _strings_of(getattr(value, name), clean) for name in names}
+    # a number, a flag or None holds no string: kept without a call (most of a response's fields)
+    changed = {name: v if type(v := getattr(value, name)) in _NO_STRINGS else _strings_of(v, clean) for name in names}
     if frozen and all(v is getattr(value, name) for name, v in changed.items()):
         return value
     return dataclasses.replace(value, **changed)
 
 
+#: Types whose values hold no string (what :func:`_strings_of` gives back unchanged).
+_NO_STRINGS = frozenset({int, float, bool, type(None)})
 #: Each type's dataclass fields set by its ``__init__`` and whether it is frozen (no fields:
 #: not a dataclass instance), found once per type.
 _SHAPES: dict[type, tuple[tuple[str, ...], bool]] = {}

@@ -51,7 +51,7 @@ class _Sinks:
         with self._lock:
             if self.file is not None and self.error is None:
                 try:
-                    self.file.write(json.dumps(event, default=_default, separators=(",", ":")) + "\n")
+                    self.file.write(_LINE.encode(event) + "\n")
                 except OSError as exc:  # logging must not fail the request that logs
                     self.error = _named(exc, self.file)
             if self.console is not None and LEVELS.get(level, 20) >= self.console_level:
@@ -77,6 +77,11 @@ def _named(exc: OSError, file: TextIO) -> OSError:
     if exc.filename is None and exc.errno is not None:
         return OSError(exc.errno, exc.strerror, getattr(file, "name", None))
     return exc
+
+
+#: A log line's encoder, made once: ``json.dumps(event, default=_default, separators=(",", ":"))``
+#: makes the same one for every event.
+_LINE = json.JSONEncoder(default=_default, separators=(",", ":"))
 
 
 def _add_level(logger: Any, method: str, event: EventDict) -> EventDict:

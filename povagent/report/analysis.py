@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from collections import defaultdict
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
@@ -241,11 +241,15 @@ def merge_identical_baselines(
     and an always-``A`` guess on a set whose gold is always A), nor a system its run's config
     names (``labelled``: the user asked for that row).
     """
-    groups: dict[tuple[str, str, str], list[str]] = {}
-    for name in ordered:
-        if name in reference and name not in labelled:
-            axes = axes_of[name]
-            groups.setdefault((axes.get("backend", ""), axes.get("model", ""), _answers_signature(by_system[name])), []).append(name)
+    candidates = [name for name in ordered if name in reference and name not in labelled]
+    backend_model = {name: (axes_of[name].get("backend", ""), axes_of[name].get("model", "")) for name in candidates}
+    shared_by = Counter(backend_model.values())
+    groups: dict[tuple[str, str, str | None], list[str]] = {}
+    for name in candidates:
+        # only a baseline sharing its backend and model with another can be merged: the others'
+        # answers are never digested (a pass over every row of theirs)
+        signature = _answers_signature(by_system[name]) if shared_by[backend_model[name]] > 1 else None
+        groups.setdefault((*backend_model[name], signature), []).append(name)
     notes: list[str] = []
     rename: dict[str, str] = {}
     shared_axes: dict[str, dict[str, str]] = {}

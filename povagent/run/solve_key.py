@@ -10,11 +10,10 @@ is :mod:`povagent.run.runner`'s.
 
 from __future__ import annotations
 
-import asyncio
 import dataclasses
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Awaitable, Callable
 
 from povagent.answers.spec import ParsedAnswer
@@ -31,6 +30,7 @@ from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
 from povagent.run.components import ComponentNames, Components
+from povagent.run.score_lane import ScoreLane
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 
 
@@ -52,6 +52,8 @@ class KeySolver:
     read_frames: Callable[[Instance], Awaitable[None]]
     #: The system's name the pipeline gave (``label:``), carried by every row.
     label: str | None = None
+    #: The worker threads answers are parsed and scored in (never the event loop).
+    lane: ScoreLane = field(default_factory=ScoreLane)
 
     def make_ask(self, run: int, transcript: RowTranscript, row_id: str) -> Callable[[Request], Any]:
         path = self.path
@@ -103,7 +105,7 @@ class KeySolver:
             if response.by_strategy:  # worked out by the strategy, not asked: the row keeps it last
                 transcript.record(request, raw=response.text)
             # parsed and scored in a worker thread: a slow plugin rule never stalls the run's other keys
-            scored = await asyncio.to_thread(self.scoring(key).score_answer, instance, request.answer, response.text)
+            scored = await self.lane.call(self.scoring(key).score_answer, instance, request.answer, response.text)
             parse, status, prediction = scored.parse, scored.status, scored.prediction
             scores, official_reading = scored.scores, scored.official_reading
         except InfraFailure as exc:

@@ -23,7 +23,7 @@ import hashlib
 from array import array
 from collections import Counter, defaultdict
 from collections.abc import Container, Iterator, Mapping, Sequence
-from typing import Any, overload
+from typing import Any, NamedTuple, overload
 
 import numpy as np
 
@@ -35,8 +35,8 @@ from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
 from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
-from povagent.scoring.metrics import Declared, row_category, row_metric_groups, row_metric_values
-from povagent.scoring.protocols import following, registered_protocols
+from povagent.scoring.metrics import Declared, row_category, row_metric_flat, row_metric_groups
+from povagent.scoring.protocols import registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
 _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error", "asks_point")
@@ -59,6 +59,9 @@ class SummaryTable:
     def __init__(self, declared: Declared | None = None, protocols: Mapping[str, str] | None = None, keys: Container[str] | None = None) -> None:
         self.declared = declared or {}
         self._protocols = registered_protocols() if protocols is None else protocols
+        #: the scorers following each protocol a row is read by (``following``'s candidates, found once)
+        self._error_scorers = [n for n, p in self._protocols.items() if p == "normalized_l2"]
+        self._hit_scorers = [n for n, p in self._protocols.items() if p == "marked_hit"]
         self._keys = keys
         self._digests = bytearray()
         self._fields = {name: Column() for name in (*_SCORED, "status", "official_parser", "reading", "success",
@@ -67,7 +70,7 @@ class SummaryTable:
         #: values only some rows have, by position
         self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}
         self._closed = False
-        self._scored: _ScoredRows | None = None
+        self._scored: list[ScoredRow] | None = None
         self._shared_scores: dict[Any, Any] = {}
 
     def add(self, row: ResultRow) -> None:
@@ -78,8 +81,8 @@ class SummaryTable:
             return
         at = len(self._fields["run"])
         protocols = self._protocols
-        error_scorer = following(protocols, "normalized_l2", row.scores)
-        hit_scorer = following(protocols, "marked_hit", row.scores)
+        error_scorer = _following(self._error_scorers, row.scores)
+        hit_scorer = _following(self._hit_scorers, row.scores)
         reading = row.official_reading
         official = officially_read(row)
         scored = scored_row(row, error_scorer)
@@ -115,8 +118,7 @@ class SummaryTable:
         if nan_rows([official]):
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
-            flat = [v for values in row_metric_values(row, self.declared).values() for v in values.values()]
-            self.metrics.append(flat, row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
+            self.metrics.append(row_metric_flat(row, self.declared), row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
         self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
     def close(self) -> SummaryTable:
@@ -157,7 +159,7 @@ class SummaryTable:
         """Each row as its ``normalized_l2`` score gives it (see :func:`~povagent.run.summary_fields.scored_row`)."""
         self._check_closed()
         if self._scored is None:
-            self._scored = _ScoredRows(self)  # one view: its rows are built once
+            self._scored = _ScoredRows(self).built()  # built once, read by position at C speed
         return self._scored
 
     def officially_scored(self) -> Sequence[ScoredRow]:
@@ -207,20 +209,19 @@ class SummaryTable:
 
     def by_run(self) -> dict[int, Sequence[ScoredRow]]:
         """Each run's rows (runs in order)."""
-        runs = self._fields["run"]
         positions: dict[int, array] = defaultdict(lambda: array("q"))
-        for i in range(len(self)):
-            positions[runs[i]].append(i)
+        for i, run in enumerate(self._fields["run"].values()):
+            positions[run].append(i)
         return {run: Picked(self.scored, at) for run, at in sorted(positions.items())}
 
     def statuses(self) -> Counter[str]:
         """How many rows have each status."""
-        status = self._fields["status"]
-        return Counter(status[i] for i in range(len(self)))
+        return Counter(self._fields["status"].values())
 
     def usage(self) -> UsageTotals:
         """The rows' tokens, cost and retries, summed in row order (unstated tokens: 0)."""
-        return UsageTotals.of(_SpentRows(self), unstated_tokens=0)
+        columns = (self._fields[name].values() for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"))
+        return UsageTotals.of(list(map(_Spent, *columns)), unstated_tokens=0)
 
     def field(self, name: str) -> Column:
         """One kept field's column."""
@@ -239,6 +240,11 @@ class SummaryTable:
             raise RuntimeError("SummaryTable read before close()")
 
 
+def _following(names: list[str], scores: Mapping[str, Any]) -> str | None:
+    """:func:`~povagent.scoring.protocols.following` of a protocol whose scorers are ``names``."""
+    return next((n for n in names if scores and n in scores), names[0] if names else None)
+
+
 class _ScoredRows(Sequence[ScoredRow]):
     """A table's rows as :class:`ScoredRow` objects, built together when one is first read and
     kept while this view lives (a summary reads each row a dozen times, by slice; the table
@@ -251,10 +257,10 @@ class _ScoredRows(Sequence[ScoredRow]):
         self._n = len(table)
         self._rows: list[ScoredRow] | None = None
 
-    def _built(self) -> list[ScoredRow]:
+    def built(self) -> list[ScoredRow]:
+        """Every row, in order (built at the first read, then kept)."""
         if self._rows is None:
-            n = self._n
-            self._rows = [ScoredRow(*values) for values in zip(*([column[i] for i in range(n)] for column in self._columns))]
+            self._rows = [ScoredRow(*values) for values in zip(*(column.values() for column in self._columns), strict=True)]
         return self._rows
 
     def __len__(self) -> int:
@@ -269,7 +275,7 @@ class _ScoredRows(Sequence[ScoredRow]):
     def __getitem__(self, i: int | slice) -> ScoredRow | Sequence[ScoredRow]:
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(self._n))]
-        return self._built()[i]
+        return self.built()[i]
 
 
 class _OfficialRows(_ScoredRows):
@@ -287,19 +293,10 @@ class _OfficialRows(_ScoredRows):
         return super().__getitem__(i)
 
 
-class _SpentRows(Sequence[Any]):
-    """A table's rows as what they spent (tokens, cost, retries), for :meth:`UsageTotals.of`."""
+class _Spent(NamedTuple):
+    """What one row spent (tokens, cost, retries), for :meth:`UsageTotals.of`."""
 
-    __slots__ = ("_columns", "_n")
-
-    def __init__(self, table: SummaryTable) -> None:
-        self._columns = [table.field(name) for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries")]
-        self._n = len(table)
-
-    def __len__(self) -> int:
-        return self._n
-
-    def __getitem__(self, i: Any) -> Any:
-        prompt, completion, cost, retries = self._columns
-        return UsageTotals(prompt[i], completion[i], cost[i], retries[i])
-
+    prompt_tokens: int | None
+    completion_tokens: int | None
+    cost_usd: float | None
+    retries: int

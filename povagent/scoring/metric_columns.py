@@ -184,14 +184,28 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
             return columns.category_weighted(found, kept, metric.merged_categories)
         return found
 
-    def cell(rows: Sequence[int]) -> dict[str, Estimate]:
-        estimates = bootstrap_mean_cis([values(m, rows) for m in metrics], n_boot=n_boot, seed=seed)
-        return {m.name: e for m, e in zip(metrics, estimates, strict=True)}
+    # cells of as many rows are estimated in one call, filled in after: their columns share
+    # their draws (the same estimates to the bit; a breakdown's cells often count as many rows,
+    # 3 conditions x 4 runs), and only one such group's values are held at a time
+    cells: list[tuple[Sequence[int], dict[str, Estimate]]] = []
 
-    return slices(
+    def cell(rows: Sequence[int]) -> dict[str, Estimate]:
+        cells.append((rows, {}))
+        return cells[-1][1]
+
+    out = slices(
         everything, cell, condition=condition.__getitem__, direction=direction.__getitem__,
         category=None if category is None else category.__getitem__,
     )  # fmt: skip
+    by_size: dict[int, list[tuple[Sequence[int], dict[str, Estimate]]]] = {}
+    for rows, filled in cells:
+        by_size.setdefault(len(rows), []).append((rows, filled))
+    for group in by_size.values():
+        wanted = [values(m, rows) for rows, _ in group for m in metrics]
+        estimates = iter(bootstrap_mean_cis(wanted, n_boot=n_boot, seed=seed))
+        for _, filled in group:
+            filled.update((m.name, next(estimates)) for m in metrics)
+    return out
 
 
 def metrics_breakdown(valued: Iterable[ValuedRow] | MetricColumns, declared: Declared, n_boot: int = DEFAULT_BOOT) -> dict[str, dict[str, Any]]:

@@ -120,10 +120,47 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
     answered = str(getattr(row, "status", "")) == "answered"
     scores = getattr(row, "scores", None) or {}
     return {
-        scorer: {m.name: metric_value(m, scores.get(scorer), answered) for m in metrics}
+        scorer: dict(zip((m.name for m in metrics), _scorer_values(metrics, scores.get(scorer), answered), strict=True))
         for scorer, metrics in declared.items()
         if metrics
     }
+
+
+def row_metric_flat(row: Any, declared: Declared) -> list[float | None]:
+    """:func:`row_metric_values`' values alone, scorer by scorer in the declared order (what a
+    summary's columns and :class:`MetricValues` keep)."""
+    answered = str(getattr(row, "status", "")) == "answered"
+    scores = getattr(row, "scores", None) or {}
+    out: list[float | None] = []
+    for scorer, metrics in declared.items():
+        if metrics:
+            values = _scorer_values(metrics, scores.get(scorer), answered)
+            if len({m.name for m in metrics}) < len(metrics):  # a name declared twice: its last value, once
+                values = list(dict(zip((m.name for m in metrics), values)).values())
+            out += values
+    return out
+
+
+def _scorer_values(metrics: Sequence[Metric], fields: Mapping[str, Any] | None, answered: bool) -> list[float | None]:
+    """:func:`metric_value` of each of ``metrics`` for one scorer's ``fields``: whether the row
+    counts is decided once for the scorer, not once a metric (a summary asks it of every row)."""
+    scored = answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
+    out: list[float | None] = []
+    for metric in metrics:
+        if not scored and metric.over == "answered":
+            out.append(None)
+            continue
+        raw = fields.get(metric.field) if scored else None  # type: ignore[union-attr]  # scored: a mapping
+        if metric.aggregation == "rate":
+            if raw is None and metric.over == "answered":
+                out.append(None)
+            else:
+                out.append(1.0 if (raw is True if not metric.negate else raw is False) else 0.0)
+        elif isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
+            out.append(None)
+        else:
+            out.append(float(raw))
+    return out
 
 
 def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]:
@@ -187,7 +224,7 @@ class MetricValues(Mapping[str, Mapping[str, "float | None"]]):
     @classmethod
     def of(cls, row: Any, declared: Declared) -> MetricValues:
         """``row``'s values of the ``declared`` metrics (see :func:`row_metric_values`)."""
-        return cls([v for values in row_metric_values(row, declared).values() for v in values.values()], declared)
+        return cls(row_metric_flat(row, declared), declared)
 
     @property
     def flat(self) -> tuple[float | None, ...]:
