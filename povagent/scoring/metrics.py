@@ -150,6 +150,9 @@ def _scorer_values(metrics: Sequence[Metric], fields: Mapping[str, Any] | None, 
         if not scored and metric.over == "answered":
             out.append(None)
             continue
+        if not scored and metric.unscored is not None and metric.aggregation == "mean":
+            out.append(metric.unscored)
+            continue
         raw = fields.get(metric.field) if scored else None  # type: ignore[union-attr]  # scored: a mapping
         if metric.aggregation == "rate":
             if raw is None and metric.over == "answered":
