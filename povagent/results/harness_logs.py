@@ -103,7 +103,11 @@ def gold_label(answer: str) -> str | None:
 
 def options_in_prompt(prompt: str) -> tuple[tuple[str, str], ...]:
     """The options a prompt lists one a line (``A. right``, ``(B) left``, ``Choices: A. right``):
-    the longest run of lines labelled ``A``, ``B``, ``C``... in order; ``()`` when there is none."""
+    the longest run of lines labelled ``A``, ``B``, ``C``... in order; else the options one line
+    lists after ``Options:`` (``Options: A: left, B: right``, as MMSI-Bench writes them inside
+    its questions); ``()`` when there is neither."""
+    from povagent.dataset.choice_sets.mmsi import inline_options
+
     best: list[tuple[str, str]] = []
     run: list[tuple[str, str]] = []
     for line in prompt.splitlines():
@@ -117,6 +121,9 @@ def options_in_prompt(prompt: str) -> tuple[tuple[str, str], ...]:
             run = []
         if len(run) > len(best):
             best = list(run)
+    if not best:  # the last line naming options inline; the prompt's instructions follow on their own lines
+        line = next((line for line in reversed(prompt.splitlines()) if "Options:" in line), "")
+        return inline_options(line)[:MAX_OPTIONS]
     return tuple(best[:MAX_OPTIONS])
 
 

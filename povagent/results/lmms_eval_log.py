@@ -45,11 +45,12 @@ from povagent.results.harness_logs import (
 
 #: The keys a task's per-sample metric (or its ``doc``) names a question's category by, in order
 #: (at lmms-eval@75571cfe: viewspatial's ``question_type``, 3dsrbench's ``category``, mindcube's
-#: ``type``, omni_spatial's ``sub_task_type``, mmsi_bench's ``l2_category``, vsibench's
-#: ``question_type``).
-CATEGORY_KEYS = ("question_type", "category", "sub_task_type", "type", "l2_category")
-#: The keys naming the broader type a category belongs to (3dsrbench's, omni_spatial's ``task_type``).
-MAIN_CATEGORY_KEYS = ("main_category", "task_type")
+#: ``type``, omni_spatial's ``sub_task_type``, omnispatial_test's ``sub_task``, mmsi_bench's
+#: ``l2_category``, vsibench's ``question_type``).
+CATEGORY_KEYS = ("question_type", "category", "sub_task_type", "sub_task", "type", "l2_category")
+#: The keys naming the broader type a category belongs to (3dsrbench's, omni_spatial's
+#: ``task_type``, omnispatial_test's ``task``).
+MAIN_CATEGORY_KEYS = ("main_category", "task_type", "task")
 #: What lmms-eval writes besides the metrics.
 _FIXED_KEYS = frozenset({"doc_id", "doc", "target", "arguments", "resps", "filtered_resps", "token_counts", "doc_hash", "input", "input_media"})
 

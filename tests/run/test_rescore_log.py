@@ -192,5 +192,88 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set 'vsi': a log can be scored as 3dsrbench, mindcube, viewspatial"):
+    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial"):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
+
+
+# MMSI-Bench and OmniSpatial. Figures produced by running, on the logged replies: the set's own code
+# (InternRobotics/MMSI-Bench@5de2f3d2eb0159dbcc76790074029aa400143603 vlmeval/dataset/mmsi_bench.py
+# MMSIBenchDataset.evaluate; qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51 api_eval.py
+# process_info, --eval_type re, the model call replaced by the logged reply, its per-task and per-sub-task
+# means without the printout's 1e-6 in the denominator), lmms-eval@75571cfe's strip_reasoning_tags then
+# mmsi_bench's msr_process_results and msr_aggregate_results (per l2_category), omni_spatial's
+# omni_spatial_process_results and its aggregations (per task_type; its per-item scores grouped by
+# sub_task_type), omnispatial_test's omnispatial_process_results and omnispatial_aggregate_results (its
+# sub_task_accuracies and task_accuracies), and VLMEvalKit@e8e78f05's compute_mcq_score grouped as
+# MMSIBench.evaluate (category) and OmniSpatialBench.evaluate (task_type, sub_task_type) group it. The
+# corrected re reading is api_eval.py's pattern with its fallback left out: a reply with no line is no hit.
+
+MMSI_CATEGORIES = {  # VLMEvalKit's MMSIBench_wo_circular category -> lmms-eval's l2_category (its CATEGORY_ALIASES)
+    "Pos-Cam-Cam": "Positional Relationship (Cam.–Cam.)", "Pos-Obj-Obj": "Positional Relationship (Obj.–Obj.)",
+    "Pos-Reg-Reg": "Positional Relationship (Reg.–Reg.)", "Pos-Cam-Obj": "Positional Relationship (Cam.–Obj.)",
+    "Pos-Obj-Reg": "Positional Relationship (Obj.–Reg.)", "Pos-Cam-Reg": "Positional Relationship (Cam.–Reg.)",
+    "Attr-Meas": "Attribute (Meas.)", "Attr-Appr": "Attribute (Appr.)", "Motion-Cam": "Motion (Cam.)", "Motion-Obj": "Motion (Obj.)", "MSR": "MSR",
+}  # fmt: skip
+_MMSI_ORDER = list(MMSI_CATEGORIES)
+MMSI = {
+    "mmsi-official": ("29/80", ["4/21", "10/21", "7/23", "15/22", "1/12", "7/22", "10/21", "7/22", "1/3", "8/21", "5/11"]),
+    "mmsi-lmms": ("23/60", ["1/7", "10/21", "7/23", "15/22", "5/24", "9/22", "10/21", "7/22", "8/21", "3/7", "9/22"]),
+    "vlmevalkit-spatial": ("17/48", ["4/21", "10/21", "7/23", "15/22", "1/24", "7/22", "8/21", "7/22", "1/3", "10/21", "9/22"]),
+}
+OMNI_SUBS = ["Manipulation", "Motion_Analysis", "Traffic_Analysis", "Localization", "Geospatial_Strategy", "Pattern_Recognition",
+             "Geometric_Reasoning", "Egocentric", "Allocentric", "Hypothetical"]  # fmt: skip
+OMNI_TASKS = ["Dynamic_Reasoning", "Spatial_Interaction", "Complex_Logic", "Perspective_Taking"]
+OMNISPATIAL = {  # (overall, the ten sub-tasks in OMNI_SUBS' order, the four task types in OMNI_TASKS')
+    "omnispatial-re": ("19/55", ["11/21", "8/23", "3/10", "8/21", "7/23", "9/23", "3/11", "7/23", "8/21", "6/23"], ["19/44", "21/64", "1/3", "21/67"]),
+    "omnispatial-lmms-direct": ("31/110", ["5/21", "10/23", "1/5", "5/21", "6/23", "6/23", "9/22", "2/23", "1/3", "8/23"], ["15/44", "15/64", "1/3", "17/67"]),
+    "omnispatial-lmms-re": ("81/220", ["11/21", "10/23", "2/5", "3/7", "7/23", "9/23", "3/11", "6/23", "8/21", "7/23"], ["21/44", "3/8", "1/3", "21/67"]),
+    "omnispatial-re-corrected": ("21/110", ["5/21", "4/23", "3/20", "5/21", "4/23", "6/23", "3/22", "5/23", "4/21", "3/23"], ["9/44", "3/16", "1/5", "12/67"]),
+    "vlmevalkit-spatial": ("23/55", ["3/7", "11/23", "1/5", "10/21", "7/23", "12/23", "9/22", "9/23", "10/21", "11/23"], ["5/11", "21/64", "7/15", "30/67"]),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "harness"), [("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")])
+def test_mmsi_logs_score_as_the_upstream_functions_do(name, harness, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), harness, "mmsi", n_boot=0)
+    assert (result.items, result.bad_records) == (240, 0)
+    names = [MMSI_CATEGORIES[c] for c in _MMSI_ORDER] if harness == "lmms-eval" else _MMSI_ORDER  # each log as its harness names them
+    assert_equal_to_upstream(result, {rule: (overall, dict(zip(names, cells))) for rule, (overall, cells) in MMSI.items()})
+
+
+@pytest.mark.parametrize(
+    ("name", "harness", "sub_task"),
+    [
+        ("omni_spatial_samples.jsonl", "lmms-eval", str),  # lmms-eval's omni_spatial task: sub_task_type as the set writes it
+        ("omnispatial_test_samples.jsonl", "lmms-eval", lambda s: f"omnispatial_{s.lower()}"),  # omnispatial_test's own sub_task
+        ("OmniSpatialBench_manual_cot_preds.tsv", "vlmevalkit", str),
+    ],
+)
+def test_omnispatial_logs_score_as_the_upstream_functions_do(name, harness, sub_task, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), harness, "omnispatial", n_boot=0)
+    assert (result.items, result.bad_records) == (220, 0)
+    expected = {
+        rule: (overall, {**{sub_task(s): v for s, v in zip(OMNI_SUBS, subs)}, **dict(zip(OMNI_TASKS, tasks))})
+        for rule, (overall, subs, tasks) in OMNISPATIAL.items()
+    }
+    assert_equal_to_upstream(result, expected)
+
+
+def test_omnispatial_names_its_read_a_fallback_and_lmms_evals_strip_per_rule(tmp_path):
+    result = rescore_log(fixture("omnispatial_test_samples.jsonl", tmp_path), "lmms-eval", "omnispatial", n_boot=0)
+    rules = {r.rule: r for r in result.rules}
+    assert [r.official for r in result.rules] == [True, False, False, False, False]
+    assert rules["omnispatial-re"].source == "qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51"
+    assert rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    assert rules["omnispatial-re"].reads == "resps as written"
+    assert rules["omnispatial-lmms-re"].reads.startswith("resps, then lmms-eval's reasoning-tag strip")
+    # the fallback answers every reply; its corrected reading only the replies with an "Answer: X" line
+    assert rules["omnispatial-re"].answered == 220 > rules["omnispatial-re-corrected"].answered
+    assert result.stripped == 59
+
+
+def test_mmsi_options_are_read_from_the_question_as_the_set_writes_them(tmp_path):
+    from povagent.results.harness_log_files import read_harness_log
+
+    for name, harness in (("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")):
+        first = read_harness_log(fixture(name, tmp_path), harness).replies[0]
+        assert first.options == (("A", "A blue vase"), ("B", "Left"), ("C", "East"), ("D", "2.0 m")), name
