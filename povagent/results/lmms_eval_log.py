@@ -39,6 +39,7 @@ from povagent.results.harness_logs import (
     LoggedReply,
     checked_reply,
     gold_label,
+    gold_number,
     options_in_prompt,
     with_gold,
 )
@@ -153,10 +154,14 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
     gold = gold_label(target) if isinstance(target, str) else None
     if gold is None and isinstance(doc, dict):
         gold = next((g for key in ("gt_answer", "answer") if isinstance(doc.get(key), str) and (g := gold_label(doc[key]))), None)
-    if gold is None:
-        return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z; record left out"
     prompt = record.get("input")
     options = options_in_prompt(prompt) if isinstance(prompt, str) else ()
+    number = gold_number(target) if gold is None and isinstance(target, str) and not options else None
+    if number is not None:  # a numerical question (VSI-Bench's): the prompt lists no options, the target is a number
+        return LoggedReply(item=str(doc_id), where=where, reply=reply, options=(), gold=target.strip(), category=_metric_field(record, CATEGORY_KEYS),
+                           main_category=_metric_field(record, MAIN_CATEGORY_KEYS), question_id=str(doc_id), filtered=filtered, gold_number=number)  # fmt: skip
+    if gold is None:
+        return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z (nor a number, with no options in the prompt); record left out"
     options = with_gold(options or _doc_options(doc), gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.target", f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out"

@@ -98,7 +98,7 @@ def test_without_listed_options_the_labels_run_from_a_to_the_gold_one(tmp_path):
         ({"doc_id": True, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "required, a number or text of at most 200 characters naming the document; record left out"),
         ({"doc_id": 5, "target": "B"}, "line 2.filtered_resps", "required, the reply as text of at most 1000000 characters; record left out"),
         ({"doc_id": 5, "target": "B", "filtered_resps": "B", "resps": {"x": 1}}, "line 2.resps", "the reply must be text of at most 1000000 characters; record left out"),
-        ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z; record left out"),
+        ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z (nor a number, with no options in the prompt); record left out"),
         ({"doc_id": 0, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "'0' is logged by an earlier line; this one left out"),
     ],
 )

@@ -192,7 +192,7 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial"):
+    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial, vsibench"):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
 
 
@@ -277,3 +277,57 @@ def test_mmsi_options_are_read_from_the_question_as_the_set_writes_them(tmp_path
     for name, harness in (("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")):
         first = read_harness_log(fixture(name, tmp_path), harness).replies[0]
         assert first.options == (("A", "A blue vase"), ("B", "Left"), ("C", "East"), ("D", "2.0 m")), name
+
+
+# VSI-Bench, multiple-choice and numerical questions: 230 questions of its ten types in lmms-eval's vsibench
+# log. Figures from RUNNING vision-x-nyu/thinking-in-space@51e089c3ae69b9435e9489058610f5b3964c56a8
+# lmms_eval/tasks/vsibench/utils.py vsibench_process_results on the replies as written and
+# vsibench_aggregate_results (it prints percent; here / 100), and lmms-eval@75571cfe's strip_reasoning_tags,
+# vsibench_process_results and _compute_all_subscores (vsibench_aggregate_overall rounds the overall to 6
+# places: 0.334122). Neither reports the three direction levels apart: their mean is object_rel_direction.
+VSIBENCH_TYPES = ["obj_appearance_order", "object_abs_distance", "object_counting", "object_rel_distance", "object_size_estimation",
+                  "room_size_estimation", "route_planning", "object_rel_direction"]  # fmt: skip
+VSIBENCH = {
+    "vsibench": (17.35806258958433, [23.076923076923077, 21.200000000000003, 7.6, 4.3478260869565215, 19.090909090909093,
+                                     23.04347826086957, 21.73913043478261, 18.766233766233764]),
+    "vsibench-lmms": (33.41217357521705, [23.076923076923078, 50.4, 49.599999999999994, 4.3478260869565216, 42.27272727272727,
+                                          52.17391304347826, 21.739130434782608, 23.686868686868687]),
+}  # fmt: skip
+
+
+def test_vsibench_log_gives_the_sets_overall_and_lmms_evals_as_the_upstream_functions_do(tmp_path):
+    result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
+    assert (result.items, result.bad_records) == (230, 0)
+    assert [(r.rule, r.official, r.metric) for r in result.rules] == [("vsibench", True, "score"), ("vsibench-lmms", False, "score")]
+    for rule in result.rules:
+        overall, per_type = VSIBENCH[rule.rule]
+        cells = dict(rule.per_category)
+        cells["object_rel_direction"] = sum(cells.pop(f"object_rel_direction_{level}") for level in ("easy", "medium", "hard")) / 3
+        assert rule.overall == pytest.approx(overall / 100, rel=1e-12)
+        assert cells == pytest.approx({t: v / 100 for t, v in zip(VSIBENCH_TYPES, per_type)}, rel=1e-12)
+    assert round(result.rules[1].overall, 6) == 0.334122  # vsibench_aggregate_overall's own figure
+
+
+def test_a_numerical_reply_is_read_as_a_number_and_shown_as_one(tmp_path):
+    result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
+    reading = {r.rule: r.answered for r in result.rules}
+    assert reading == {"vsibench": 156, "vsibench-lmms": 205}  # lmms-eval's extract_number finds "About 3 meters"; the first word does not
+    about = [d for d in result.disagreements if d.reply.startswith("About ")]
+    assert len(about) == 8
+    for d in about:  # "About 8.5 meters.": the set's first word is no number; lmms-eval's extract_number reads 8.5
+        assert d.labels["vsibench"] is None and d.labels["vsibench-lmms"] == d.reply.split()[1]
+    # a numerical hit meets every threshold: within 5% of the gold (the 0.95 threshold)
+    full = [d for d in result.disagreements if d.gold[0].isdigit() and d.correct["vsibench-lmms"]]
+    assert full and all(abs(float(d.labels["vsibench-lmms"]) - float(d.gold)) <= 0.05 * float(d.gold) + 1e-9 for d in full)
+
+
+def test_a_number_logged_as_the_gold_of_a_choice_set_is_named_and_left_out(tmp_path):
+    log = tmp_path / "viewspatial.jsonl"
+    log.write_text(
+        '{"doc_id": 1, "target": "B. left", "filtered_resps": "B", "input": "Choices: A. right\\nB. left"}\n'
+        '{"doc_id": 2, "target": "3.5", "filtered_resps": "3.5"}\n',
+        encoding="utf-8",
+    )
+    result = rescore_log(log, "lmms-eval", "viewspatial", n_boot=0)
+    assert (result.items, result.bad_records) == (1, 1)
+    assert result.problems == [f"{log}: line 2.target: the target '3.5' is a number, and viewspatial's answers are option labels; record left out"]
