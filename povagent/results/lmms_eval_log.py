@@ -14,7 +14,8 @@ What a record gives:
 
 - reply: ``resps`` (the model's text), else ``filtered_resps`` (equal, so dropped);
 - gold: the label ``target`` names (:func:`~.harness_logs.gold_label`), else the ``doc``'s
-  ``gt_answer`` / ``answer``;
+  ``gt_answer`` / ``answer``; a ``target`` that is a number, where the prompt lists no options,
+  makes the record a numerical question (VSI-Bench's ``ground_truth``: ``"3.2"``);
 - options: the lines of ``input`` labelled ``A.``, ``B.``... (else the ``doc``'s ``A``-``D``);
 - category: the first of :data:`CATEGORY_KEYS` in a metric's dict (what the task's own
   aggregation groups by), else in ``doc``; the main category (:data:`MAIN_CATEGORY_KEYS`) and
@@ -157,7 +158,7 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
     prompt = record.get("input")
     options = options_in_prompt(prompt) if isinstance(prompt, str) else ()
     number = gold_number(target) if gold is None and isinstance(target, str) and not options else None
-    if number is not None:  # a numerical question (VSI-Bench's): the prompt lists no options, the target is a number
+    if number is not None and isinstance(target, str):  # a numerical question (VSI-Bench's): no options, the target a number
         return LoggedReply(item=str(doc_id), where=where, reply=reply, options=(), gold=target.strip(), category=_metric_field(record, CATEGORY_KEYS),
                            main_category=_metric_field(record, MAIN_CATEGORY_KEYS), question_id=str(doc_id), filtered=filtered, gold_number=number)  # fmt: skip
     if gold is None:
