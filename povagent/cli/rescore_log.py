@@ -38,15 +38,16 @@ def render_rescored_log(result: object, shown: int) -> None:
 
     assert isinstance(result, RescoredLog)
     console = Console()
+    read = "an answer (an option or a number)" if result.numerical else "an option"
     typer.echo(f"{result.file}: {result.items} replies of {result.set} logged by {result.harness}, read by {len(result.rules)} rules:")
     for r in result.rules:
         typer.echo(f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
-                   f"scorer {r.scorer} ({r.metric}); reads an option in {r.answered} of {result.items} replies")  # fmt: skip
+                   f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies")  # fmt: skip
     categories = sorted({c for r in result.rules for c in r.per_category})
     rows = [["overall", *(_cell(r.overall, r.overall_ci) for r in result.rules)]]
     rows += [[c, *(_cell(r.per_category.get(c), r.per_category_ci.get(c)) for r in result.rules)] for c in categories]
-    caption = ("Each rule's scorer's headline number over every logged question (no option read = wrong), 95% bootstrap CI "
-               "over questions.")  # fmt: skip
+    unread = "no answer read = 0" if result.numerical else "no option read = wrong"
+    caption = f"Each rule's scorer's headline number over every logged question ({unread}), 95% bootstrap CI over questions."
     for table in fitted_tables([("slice", "label"), *((r.rule, "number") for r in result.rules)], rows, caption=caption):
         console.print(table)
     for note in result.notes:

@@ -92,6 +92,7 @@ class RescoredLog(BaseModel):
     harness: str
     file: str
     items: int = Field(description="Records scored.")
+    numerical: int = Field(0, description="Of them, the questions answered with a number (VSI-Bench's counts and distances), scored by their numerical metric.")
     bad_records: int = Field(description="Records left out, each named in problems.")
     problems: list[str] = Field(default_factory=list)
     stripped: int = Field(description="Replies the harness's own filter changed (lmms-eval: resps differs from filtered_resps).")
@@ -218,7 +219,8 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
         if len({labels[n][k] for n in labels}) > 1
     ]
     return RescoredLog(
-        set=set_name, harness=harness, file=str(file), items=len(log.replies), bad_records=len(log.problems),
+        set=set_name, harness=harness, file=str(file), items=len(log.replies), numerical=sum(r.gold_number is not None for r in log.replies),
+        bad_records=len(log.problems),
         problems=[str(p) for p in log.problems], stripped=log.stripped, notes=log.notes, rules=results,
         disagreements_total=len(disagreements), disagreements=disagreements[:MAX_DISAGREEMENTS],
     )  # fmt: skip

@@ -297,7 +297,7 @@ VSIBENCH = {
 
 def test_vsibench_log_gives_the_sets_overall_and_lmms_evals_as_the_upstream_functions_do(tmp_path):
     result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
-    assert (result.items, result.bad_records) == (230, 0)
+    assert (result.items, result.numerical, result.bad_records) == (230, 95, 0)
     assert [(r.rule, r.official, r.metric) for r in result.rules] == [("vsibench", True, "score"), ("vsibench-lmms", False, "score")]
     for rule in result.rules:
         overall, per_type = VSIBENCH[rule.rule]
