@@ -38,15 +38,16 @@ def render_rescored_log(result: object, shown: int) -> None:
 
     assert isinstance(result, RescoredLog)
     console = Console()
+    read = "an answer (an option or a number)" if result.numerical else "an option"
     typer.echo(f"{result.file}: {result.items} replies of {result.set} logged by {result.harness}, read by {len(result.rules)} rules:")
     for r in result.rules:
         typer.echo(f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
-                   f"scorer {r.scorer} ({r.metric}); reads an option in {r.answered} of {result.items} replies")  # fmt: skip
+                   f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies")  # fmt: skip
     categories = sorted({c for r in result.rules for c in r.per_category})
     rows = [["overall", *(_cell(r.overall, r.overall_ci) for r in result.rules)]]
     rows += [[c, *(_cell(r.per_category.get(c), r.per_category_ci.get(c)) for r in result.rules)] for c in categories]
-    caption = ("Each rule's scorer's headline number over every logged question (no option read = wrong), 95% bootstrap CI "
-               "over questions.")  # fmt: skip
+    unread = "no answer read = 0" if result.numerical else "no option read = wrong"
+    caption = f"Each rule's scorer's headline number over every logged question ({unread}), 95% bootstrap CI over questions."
     for table in fitted_tables([("slice", "label"), *((r.rule, "number") for r in result.rules)], rows, caption=caption):
         console.print(table)
     for note in result.notes:
@@ -75,7 +76,7 @@ def render_rescored_log(result: object, shown: int) -> None:
 def rescore_log_command(
     file: Path = typer.Argument(..., metavar="FILE", help="lmms-eval's --log_samples file (<date>_samples_<task>.jsonl) or VLMEvalKit's prediction file (.xlsx or .tsv)."),
     harness: str = typer.Option(..., "--harness", metavar="NAME", help="The harness that wrote FILE: lmms-eval or vlmevalkit."),
-    set_name: str = typer.Option(..., "--set", metavar="NAME", help="The set the log is of: the key of a registered dataset format whose answers are choices (povagent plugins lists the formats)."),
+    set_name: str = typer.Option(..., "--set", metavar="NAME", help="The set the log is of: the key of a registered dataset format whose answers are choices or numbers (povagent plugins lists the formats)."),
     as_json: bool = typer.Option(False, "--json", help="Print {set, items, rules: [{rule, source, overall, per_category, ...}], ...} as JSON instead of tables."),
     shown: int = typer.Option(20, "--show", min=0, metavar="N", help="How many disagreements and bad records to print (the JSON holds them all)."),
     plugin: list[str] = typer.Option([], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."),

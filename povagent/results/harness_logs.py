@@ -14,6 +14,7 @@ This module holds what the readers share; it never scores (that is :mod:`povagen
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -59,6 +60,9 @@ class LoggedReply:
     #: What the harness's own filter made of the reply before its rule read it (lmms-eval's
     #: ``filtered_resps``: its reasoning-tag strip), where the log keeps it apart from ``reply``.
     filtered: str | None = None
+    #: The gold number of a numerical question (VSI-Bench's counts and distances): ``options``
+    #: is then empty and ``gold`` the number as logged.
+    gold_number: float | None = None
 
 
 @dataclass
@@ -103,7 +107,11 @@ def gold_label(answer: str) -> str | None:
 
 def options_in_prompt(prompt: str) -> tuple[tuple[str, str], ...]:
     """The options a prompt lists one a line (``A. right``, ``(B) left``, ``Choices: A. right``):
-    the longest run of lines labelled ``A``, ``B``, ``C``... in order; ``()`` when there is none."""
+    the longest run of lines labelled ``A``, ``B``, ``C``... in order; else the options one line
+    lists after ``Options:`` (``Options: A: left, B: right``, as MMSI-Bench writes them inside
+    its questions); ``()`` when there is neither."""
+    from povagent.dataset.choice_sets.mmsi import inline_options
+
     best: list[tuple[str, str]] = []
     run: list[tuple[str, str]] = []
     for line in prompt.splitlines():
@@ -117,6 +125,9 @@ def options_in_prompt(prompt: str) -> tuple[tuple[str, str], ...]:
             run = []
         if len(run) > len(best):
             best = list(run)
+    if not best:  # the last line naming options inline; the prompt's instructions follow on their own lines
+        line = next((line for line in reversed(prompt.splitlines()) if "Options:" in line), "")
+        return inline_options(line)[:MAX_OPTIONS]
     return tuple(best[:MAX_OPTIONS])
 
 
@@ -135,6 +146,15 @@ def with_gold(options: tuple[tuple[str, str], ...], gold: str) -> tuple[tuple[st
     return tuple((chr(c), "") for c in range(ord("A"), last + 1))
 
 
+def gold_number(answer: str) -> float | None:
+    """The number a gold cell holds (``"3"``, ``"2.5"``), if finite; ``None`` for anything else."""
+    try:
+        number = float(answer.strip())
+    except ValueError:
+        return None
+    return number if math.isfinite(number) else None
+
+
 def checked_reply(value: object) -> str | None:
     """A reply cell as text, or ``None`` when it is no text or longer than :data:`MAX_REPLY_CHARS`."""
     if not isinstance(value, str) or len(value) > MAX_REPLY_CHARS:
@@ -142,4 +162,4 @@ def checked_reply(value: object) -> str | None:
     return value
 
 
-__all__ = ["HarnessLog", "LoggedReply", "gold_label", "options_in_prompt", "with_gold"]
+__all__ = ["HarnessLog", "LoggedReply", "gold_label", "gold_number", "options_in_prompt", "with_gold"]

@@ -14,7 +14,8 @@ What a record gives:
 
 - reply: ``resps`` (the model's text), else ``filtered_resps`` (equal, so dropped);
 - gold: the label ``target`` names (:func:`~.harness_logs.gold_label`), else the ``doc``'s
-  ``gt_answer`` / ``answer``;
+  ``gt_answer`` / ``answer``; a ``target`` that is a number, where the prompt lists no options,
+  makes the record a numerical question (VSI-Bench's ``ground_truth``: ``"3.2"``);
 - options: the lines of ``input`` labelled ``A.``, ``B.``... (else the ``doc``'s ``A``-``D``);
 - category: the first of :data:`CATEGORY_KEYS` in a metric's dict (what the task's own
   aggregation groups by), else in ``doc``; the main category (:data:`MAIN_CATEGORY_KEYS`) and
@@ -39,17 +40,19 @@ from povagent.results.harness_logs import (
     LoggedReply,
     checked_reply,
     gold_label,
+    gold_number,
     options_in_prompt,
     with_gold,
 )
 
 #: The keys a task's per-sample metric (or its ``doc``) names a question's category by, in order
 #: (at lmms-eval@75571cfe: viewspatial's ``question_type``, 3dsrbench's ``category``, mindcube's
-#: ``type``, omni_spatial's ``sub_task_type``, mmsi_bench's ``l2_category``, vsibench's
-#: ``question_type``).
-CATEGORY_KEYS = ("question_type", "category", "sub_task_type", "type", "l2_category")
-#: The keys naming the broader type a category belongs to (3dsrbench's, omni_spatial's ``task_type``).
-MAIN_CATEGORY_KEYS = ("main_category", "task_type")
+#: ``type``, omni_spatial's ``sub_task_type``, omnispatial_test's ``sub_task``, mmsi_bench's
+#: ``l2_category``, vsibench's ``question_type``).
+CATEGORY_KEYS = ("question_type", "category", "sub_task_type", "sub_task", "type", "l2_category")
+#: The keys naming the broader type a category belongs to (3dsrbench's, omni_spatial's
+#: ``task_type``, omnispatial_test's ``task``).
+MAIN_CATEGORY_KEYS = ("main_category", "task_type", "task")
 #: What lmms-eval writes besides the metrics.
 _FIXED_KEYS = frozenset({"doc_id", "doc", "target", "arguments", "resps", "filtered_resps", "token_counts", "doc_hash", "input", "input_media"})
 
@@ -152,10 +155,14 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
     gold = gold_label(target) if isinstance(target, str) else None
     if gold is None and isinstance(doc, dict):
         gold = next((g for key in ("gt_answer", "answer") if isinstance(doc.get(key), str) and (g := gold_label(doc[key]))), None)
-    if gold is None:
-        return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z; record left out"
     prompt = record.get("input")
     options = options_in_prompt(prompt) if isinstance(prompt, str) else ()
+    number = gold_number(target) if gold is None and isinstance(target, str) and not options else None
+    if number is not None and isinstance(target, str):  # a numerical question (VSI-Bench's): no options, the target a number
+        return LoggedReply(item=str(doc_id), where=where, reply=reply, options=(), gold=target.strip(), category=_metric_field(record, CATEGORY_KEYS),
+                           main_category=_metric_field(record, MAIN_CATEGORY_KEYS), question_id=str(doc_id), filtered=filtered, gold_number=number)  # fmt: skip
+    if gold is None:
+        return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z (nor a number, with no options in the prompt); record left out"
     options = with_gold(options or _doc_options(doc), gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.target", f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out"

@@ -8,8 +8,9 @@ At the pinned commit (open-compass/VLMEvalKit@e8e78f05, ``vlmeval/inference.py``
 a tab-separated file with every cell quoted (``csv.QUOTE_ALL``), cells free to hold newlines.
 Columns read: ``index``, ``answer``, ``prediction``, the options (``A``, ``B``... or, for
 ViewSpatial-Bench, ``candidates``: ``"A. right\\nB. left"`` or a list of them), the category
-(``question_type``, as VLMEvalKit groups ViewSpatial-Bench, else ``category``), ``l2-category``
-or ``main_category`` where present, and ``qid`` (3DSRBench's copies). An xlsx file needs
+(``question_type``, as VLMEvalKit groups ViewSpatial-Bench, else ``category``, else
+OmniSpatialBench's ``sub_task_type``), ``main_category``, ``l2-category`` or ``task_type`` where
+present, and ``qid`` (3DSRBench's copies). An xlsx file needs
 ``openpyxl`` (``pip install 'povagent[xlsx]'``).
 """
 
@@ -40,8 +41,11 @@ from povagent.results.harness_logs import (
 
 #: The columns every prediction file has.
 REQUIRED = ("index", "answer", "prediction")
-#: The columns a question's category is read from, in order.
-CATEGORY_COLUMNS = ("question_type", "category")
+#: The columns a question's category is read from, in order (OmniSpatialBench groups by
+#: ``sub_task_type`` within ``task_type``).
+CATEGORY_COLUMNS = ("question_type", "category", "sub_task_type")
+#: The columns the broader type a category belongs to is read from, in order.
+MAIN_CATEGORY_COLUMNS = ("main_category", "l2-category", "task_type")
 #: The most bytes an xlsx file may unpack to (its XML is several times its zipped size).
 MAX_XLSX_UNPACKED = 4 << 30
 #: The longest options cell read as a list literal.
@@ -186,11 +190,12 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
         options += ((label, text),)
     if not options:
         cell = next((_text(row[c]) for c in ("candidates", "choices", "options") if _text(row.get(c))), "")
-        options = _listed_options(cell)
+        # else the question's own "Options: A: ..., B: ..." (the MMSI-Bench authors' table)
+        options = _listed_options(cell) or options_in_prompt(_text(row.get("question")))
     options = with_gold(options, gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.answer", f"the gold label {gold!r} is not among the row's options ({', '.join(label for label, _ in options)}); row left out"
     category = next((_text(row[c]) for c in CATEGORY_COLUMNS if _text(row.get(c))), "")
-    main = next((_text(row[c]) for c in ("main_category", "l2-category") if _text(row.get(c))), "")
+    main = next((_text(row[c]) for c in MAIN_CATEGORY_COLUMNS if _text(row.get(c))), "")
     return LoggedReply(item=index, where=where, reply=reply, options=options, gold=gold, category=category,
                        main_category=main, question_id=_text(row.get("qid")) or index)  # fmt: skip

@@ -4,9 +4,11 @@
 and scores each reply with the set's official rule and each harness rule povagent has for the set
 (:func:`povagent.scoring.log_rules.set_rules`): no model, no media, nothing but the file named. A
 reply is parsed and scored by the score step ``run`` and ``rescore`` use
-(:class:`~povagent.run.score_step.AnswerScoring`); each rule's numbers are its scorer's declared
-metrics, overall and per category, each with its 95% bootstrap CI, estimated as a run's summary
-estimates them (:func:`~povagent.scoring.metric_columns.metric_slices`). The rule's headline is
+(:class:`~povagent.run.score_step.AnswerScoring`): a question with options as a choice question,
+one whose log gives a gold number and no options (VSI-Bench's counts and distances) as a numerical
+question, which a set whose answers are only choices leaves out, named. Each rule's numbers are
+its scorer's declared metrics, overall and per category, each with its 95% bootstrap CI,
+estimated as a run's summary estimates them (:func:`~povagent.scoring.metric_columns.metric_slices`). The rule's headline is
 its scorer's ``headline`` metric (else its first). What it writes is :class:`RescoredLog`.
 
 This module must not print (the CLI does) nor write files.
@@ -21,7 +23,9 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.number import NumericQuestion, number_answer_schema
 from povagent.answers.spec import AnswerSpec
+from povagent.dataset.problems import Problem
 from povagent.results.harness_log_files import read_harness_log
 from povagent.results.harness_logs import HarnessLog, LoggedReply
 from povagent.run.score_step import AnswerScoring
@@ -34,6 +38,8 @@ from povagent.scoring.metrics import valued_row
 MAX_DISAGREEMENTS = 10_000
 #: How much of a reply a disagreement quotes.
 REPLY_EXCERPT = 200
+#: What a rule is asked to read in the reply to a numerical question.
+_NUMBER_SPEC = AnswerSpec(schema=number_answer_schema(), asks_frame=False)
 
 
 class Figure(BaseModel):
@@ -62,12 +68,13 @@ class RuleResult(BaseModel):
     overall_ci: tuple[float, float] | None = None
     per_category: dict[str, float | None] = Field(default_factory=dict)
     per_category_ci: dict[str, tuple[float, float] | None] = Field(default_factory=dict)
-    answered: int = Field(description="Replies the rule read an option label in.")
+    answered: int = Field(description="Replies the rule read an answer in: an option label, or a number for a numerical question.")
     metrics: dict[str, Figure] = Field(default_factory=dict, description="Every metric the scorer declares, overall.")
 
 
 class Disagreement(BaseModel):
-    """A question the rules read differently: each rule's label (``null``: none) and hit."""
+    """A question the rules read differently: each rule's label (``null``: none; a numerical
+    question's number, as text) and hit (a numerical question's: every MRA threshold met)."""
 
     item: str
     where: str
@@ -85,6 +92,7 @@ class RescoredLog(BaseModel):
     harness: str
     file: str
     items: int = Field(description="Records scored.")
+    numerical: int = Field(0, description="Of them, the questions answered with a number (VSI-Bench's counts and distances), scored by their numerical metric.")
     bad_records: int = Field(description="Records left out, each named in problems.")
     problems: list[str] = Field(default_factory=list)
     stripped: int = Field(description="Replies the harness's own filter changed (lmms-eval: resps differs from filtered_resps).")
@@ -109,11 +117,53 @@ class _LoggedRow:
 
 
 def _instance(set_name: str, reply: LoggedReply) -> Any:
-    """The reply's question as an instance with no image (only a choice scorer reads it)."""
+    """The reply's question as an instance with no image (only the scorer reads it): a choice
+    question, or a numerical one where the log gives a gold number."""
+    from dataclasses import replace
+
     from povagent.dataset.choice_sets.external import Item, choice_instance
 
-    question = ChoiceQuestion("", reply.options, reply.gold, category=reply.category, group=reply.question_id, main_category=reply.main_category)
-    return choice_instance(set_name, Item(reply.item, question, ()), ())
+    question = ChoiceQuestion("", reply.options or (("A", ""),), reply.gold if reply.gold_number is None else "A", category=reply.category,
+                              group=reply.question_id, main_category=reply.main_category)  # fmt: skip
+    instance = choice_instance(set_name, Item(reply.item, question, ()), ())
+    if reply.gold_number is None:
+        return instance
+    return replace(instance, question=None, numeric=NumericQuestion("", reply.gold_number, category=reply.category))
+
+
+def _spec(reply: LoggedReply, specs: dict[tuple[tuple[str, str], ...], AnswerSpec]) -> AnswerSpec:
+    """What the rule is asked to read: the question's options, or a number (one spec per option set)."""
+    if reply.gold_number is not None:
+        return _NUMBER_SPEC
+    spec = specs.get(reply.options)
+    if spec is None:
+        spec = specs[reply.options] = AnswerSpec(schema={}, asks_frame=False, choices=reply.options)
+    return spec
+
+
+def _label(parse: Any) -> str | None:
+    """What a rule read, as a disagreement shows it: the label, the number, or ``None``."""
+    if not parse.answered:
+        return None
+    return parse.choice if parse.choice is not None else (f"{parse.number:g}" if parse.number is not None else None)
+
+
+def _answer_types(host: Any, set_name: str) -> str:
+    from povagent.dataset.formats import registered_formats
+
+    return registered_formats(host)[set_name].answer_type
+
+
+def _numbers_left_out(log: HarnessLog, set_name: str) -> None:
+    """Drop from ``log`` the numerical questions of a set whose answers are choices, each named."""
+    kept = []
+    for reply in log.replies:
+        if reply.gold_number is None:
+            kept.append(reply)
+        else:
+            message = f"the target {reply.gold!r:.60} is a number, and {set_name}'s answers are option labels; record left out"
+            log.problems.append(Problem(str(log.file), f"{reply.where}.target", message))
+    log.replies[:] = kept
 
 
 def _reads(rule: LogRule, log: HarnessLog) -> str:
@@ -140,6 +190,8 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
     host = host or get_plugin_host()
     rules = set_rules(host, set_name)  # an unknown set is refused before the file is read
     log = read_harness_log(file, harness)
+    if "number" not in _answer_types(host, set_name):
+        _numbers_left_out(log, set_name)
     instances = [_instance(set_name, r) for r in log.replies]
     specs: dict[tuple[tuple[str, str], ...], AnswerSpec] = {}
     labels: dict[str, list[str | None]] = {}
@@ -152,13 +204,11 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
         columns = MetricColumns(declared)
         labels[rule.name], hits[rule.name] = [], []
         for reply, instance in zip(log.replies, instances):
-            spec = specs.get(reply.options)
-            if spec is None:
-                spec = specs[reply.options] = AnswerSpec(schema={}, asks_frame=False, choices=reply.options)
-            scored = scoring.score_answer(instance, spec, reply.reply)
+            scored = scoring.score_answer(instance, _spec(reply, specs), reply.reply)
             fields = scored.scores.get(rule.scorer, {})
-            labels[rule.name].append(scored.parse.choice if scored.parse.answered else None)
-            hits[rule.name].append(fields.get("correct") is True)
+            labels[rule.name].append(_label(scored.parse))
+            # a numerical question is a hit when every MRA threshold is met (its score is 1)
+            hits[rule.name].append(fields.get("correct") is True or (reply.gold_number is not None and fields.get("score") == 1.0))
             row = _LoggedRow(str(scored.status), scored.scores, reply.category or None, reply.main_category or None, reply.question_id)
             valued = valued_row(row, declared)
             columns.append([valued.values[rule.scorer][m.name] for m in declared[rule.scorer]], None, None, valued.category, valued.groups)
@@ -169,7 +219,8 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
         if len({labels[n][k] for n in labels}) > 1
     ]
     return RescoredLog(
-        set=set_name, harness=harness, file=str(file), items=len(log.replies), bad_records=len(log.problems),
+        set=set_name, harness=harness, file=str(file), items=len(log.replies), numerical=sum(r.gold_number is not None for r in log.replies),
+        bad_records=len(log.problems),
         problems=[str(p) for p in log.problems], stripped=log.stripped, notes=log.notes, rules=results,
         disagreements_total=len(disagreements), disagreements=disagreements[:MAX_DISAGREEMENTS],
     )  # fmt: skip

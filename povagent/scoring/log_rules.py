@@ -34,8 +34,9 @@ class LogRule:
     harness_filter: str = ""
 
 
-#: The answer types a logged reply can be scored as: a reply and a question's labelled options.
-LOGGED_ANSWER_TYPES = ("choice",)
+#: The answer types a logged reply can be scored as: a reply and a question's labelled options,
+#: or a reply and a gold number (a set mixing both, as VSI-Bench does).
+LOGGED_ANSWER_TYPES = ("choice", "choice-or-number", "number")
 
 
 def official_rules(host: Any) -> Mapping[str, tuple[str, str, str]]:
@@ -70,8 +71,8 @@ def set_rules(host: Any, set_name: str) -> list[LogRule]:
     :class:`~povagent.errors.PluginError` for a set with no official rule, naming the known sets."""
     official = official_rules(host)
     if set_name not in official:
-        kinds = " or ".join(LOGGED_ANSWER_TYPES)
-        raise PluginError(f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))} (the registered formats whose answers are a {kinds})")
+        kinds = ", ".join(LOGGED_ANSWER_TYPES)
+        raise PluginError(f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))} (the registered formats whose answer type is one of {kinds})")
     parser, scorer, source = official[set_name]
     found = [(parser, scorer, source, _declared(host, parser, "harness") or "the set's own code", True, _declared(host, parser, "harness_filter"))]
     for entry in host.entries("parser"):

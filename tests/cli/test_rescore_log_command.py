@@ -94,3 +94,13 @@ def test_the_json_validates_against_the_shipped_schema(tmp_path):
     result = runner.invoke(app, ["rescore-log", str(lmms_log(tmp_path)), "--harness", "lmms-eval", "--set", "viewspatial", "--json"])
     schema = json.loads(resources.files("povagent").joinpath("schemas", "output_rescore-log.schema.json").read_text(encoding="utf-8"))
     assert list(Draft202012Validator(schema).iter_errors(json.loads(result.stdout))) == []
+
+
+def test_a_log_with_numerical_questions_says_a_rule_reads_an_answer_and_shows_numbers(tmp_path):
+    path = tmp_path / "20261207_samples_vsibench.jsonl"
+    path.write_bytes(gzip.decompress((FIXTURES / "vsibench_samples.jsonl.gz").read_bytes()))
+    result = runner.invoke(app, ["rescore-log", str(path), "--harness", "lmms-eval", "--set", "vsibench", "--show", "40"], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "reads an answer (an option or a number) in 156 of 230 replies" in result.stdout
+    assert "(no answer read = 0)" in " ".join(result.stdout.split())  # the table's caption, wrapped to the console
+    assert "About 93 meters." in result.stdout and "│ 93 " in result.stdout  # lmms-eval's extract_number; the set's first word reads none

@@ -98,7 +98,7 @@ def test_without_listed_options_the_labels_run_from_a_to_the_gold_one(tmp_path):
         ({"doc_id": True, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "required, a number or text of at most 200 characters naming the document; record left out"),
         ({"doc_id": 5, "target": "B"}, "line 2.filtered_resps", "required, the reply as text of at most 1000000 characters; record left out"),
         ({"doc_id": 5, "target": "B", "filtered_resps": "B", "resps": {"x": 1}}, "line 2.resps", "the reply must be text of at most 1000000 characters; record left out"),
-        ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z; record left out"),
+        ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z (nor a number, with no options in the prompt); record left out"),
         ({"doc_id": 0, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "'0' is logged by an earlier line; this one left out"),
     ],
 )
@@ -154,3 +154,28 @@ def test_a_file_over_the_size_bound_is_refused_without_reading_it(tmp_path, monk
     monkeypatch.setattr(module, "MAX_LOG_BYTES", 100)
     with pytest.raises(PredictionsError, match="cannot be read"):
         read_lmms_eval_log(write(tmp_path, record(0), record(1)))
+
+
+def test_options_written_inline_after_options_are_read_from_their_line(tmp_path):
+    # lmms-eval's mmsi_bench prompt: the question with MMSI-Bench's own "Options: A: ..., B: ...", then the post-prompt
+    prompt = "Where is the lamp?\nOptions: A: Front left, B: Back, right side, C: Above\nAnswer with the option's letter. Enclose it within ``."
+    [reply] = read_lmms_eval_log(write(tmp_path, record(target="C", input=prompt))).replies
+    assert reply.options == (("A", "Front left"), ("B", "Back, right side"), ("C", "Above"))
+
+
+def test_omnispatial_tests_sub_task_and_task_are_the_category_and_its_main_category(tmp_path):
+    metric = {"id": "3_1", "query": "...", "gt_content": "B", "pred": "Answer: B", "task": "Perspective_Taking", "sub_task": "omnispatial_egocentric", "is_correct": True}
+    [reply] = read_lmms_eval_log(write(tmp_path, {"doc_id": 0, "target": "B", "filtered_resps": "Answer: B", "omnispatial": metric, "input": PROMPT})).replies
+    assert (reply.category, reply.main_category) == ("omnispatial_egocentric", "Perspective_Taking")
+
+
+def test_a_number_target_with_no_options_in_the_prompt_is_a_numerical_question(tmp_path):
+    doc = {"question_type": "object_counting", "ground_truth": "4", "prediction": "3", "MRA:.5:.95:.05": 0.5}
+    prompt = "These are frames of a video.\nHow many chairs are in this room?\nPlease answer the question using a single word or phrase."
+    [reply] = read_lmms_eval_log(write(tmp_path, {"doc_id": 2, "target": "4", "filtered_resps": "3", "vsibench_overall": doc, "input": prompt})).replies
+    assert (reply.gold, reply.gold_number, reply.options, reply.category) == ("4", 4.0, (), "object_counting")
+
+
+def test_a_number_target_beside_listed_options_is_no_numerical_question(tmp_path):
+    log = read_lmms_eval_log(write(tmp_path, record(target="3")))
+    assert log.replies == [] and log.problems[0].json_path == "line 1.target"

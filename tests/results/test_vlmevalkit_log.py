@@ -146,3 +146,18 @@ def test_a_tsv_that_is_not_utf8_is_refused_in_one_line(tmp_path):
     path.write_bytes(b'"index"\t"answer"\t"prediction"\n"0"\t"A"\t"\xff"\n')
     with pytest.raises(PredictionsError, match="is not UTF-8"):
         read_vlmevalkit_predictions(path)
+
+
+def test_omnispatialbench_groups_by_sub_task_type_within_task_type(tmp_path):
+    header = ["index", "question", "A", "B", "answer", "task_type", "sub_task_type", "prediction"]
+    file = tsv(tmp_path, [[0, "Where is the bench?", "left", "right", "B", "Perspective_Taking", "Egocentric", "Answer: B"]], header)
+    [reply] = read_vlmevalkit_predictions(file).replies
+    assert (reply.category, reply.main_category, reply.options) == ("Egocentric", "Perspective_Taking", (("A", "left"), ("B", "right")))
+
+
+def test_options_inside_the_question_are_read_where_the_row_has_no_option_columns(tmp_path):
+    # the MMSI-Bench authors' table: the options live in the question, as in the set's Parquet file
+    header = ["index", "question", "answer", "category", "prediction"]
+    file = tsv(tmp_path, [[0, "Which way did the camera turn?\nOptions: A: Left, B: Right, C: Back, D: None", "C", "Motion-Cam", "``C``"]], header)
+    [reply] = read_vlmevalkit_predictions(file).replies
+    assert reply.options == (("A", "Left"), ("B", "Right"), ("C", "Back"), ("D", "None"))

@@ -192,5 +192,142 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set 'vsi': a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial"):
+    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial, vsibench"):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
+
+
+# MMSI-Bench and OmniSpatial. Figures produced by running, on the logged replies: the set's own code
+# (InternRobotics/MMSI-Bench@5de2f3d2eb0159dbcc76790074029aa400143603 vlmeval/dataset/mmsi_bench.py
+# MMSIBenchDataset.evaluate; qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51 api_eval.py
+# process_info, --eval_type re, the model call replaced by the logged reply, its per-task and per-sub-task
+# means without the printout's 1e-6 in the denominator), lmms-eval@75571cfe's strip_reasoning_tags then
+# mmsi_bench's msr_process_results and msr_aggregate_results (per l2_category), omni_spatial's
+# omni_spatial_process_results and its aggregations (per task_type; its per-item scores grouped by
+# sub_task_type), omnispatial_test's omnispatial_process_results and omnispatial_aggregate_results (its
+# sub_task_accuracies and task_accuracies), and VLMEvalKit@e8e78f05's compute_mcq_score grouped as
+# MMSIBench.evaluate (category) and OmniSpatialBench.evaluate (task_type, sub_task_type) group it. The
+# corrected re reading is api_eval.py's pattern with its fallback left out: a reply with no line is no hit.
+
+MMSI_CATEGORIES = {  # VLMEvalKit's MMSIBench_wo_circular category -> lmms-eval's l2_category (its CATEGORY_ALIASES)
+    "Pos-Cam-Cam": "Positional Relationship (Cam.–Cam.)", "Pos-Obj-Obj": "Positional Relationship (Obj.–Obj.)",
+    "Pos-Reg-Reg": "Positional Relationship (Reg.–Reg.)", "Pos-Cam-Obj": "Positional Relationship (Cam.–Obj.)",
+    "Pos-Obj-Reg": "Positional Relationship (Obj.–Reg.)", "Pos-Cam-Reg": "Positional Relationship (Cam.–Reg.)",
+    "Attr-Meas": "Attribute (Meas.)", "Attr-Appr": "Attribute (Appr.)", "Motion-Cam": "Motion (Cam.)", "Motion-Obj": "Motion (Obj.)", "MSR": "MSR",
+}  # fmt: skip
+_MMSI_ORDER = list(MMSI_CATEGORIES)
+MMSI = {
+    "mmsi-official": ("29/80", ["4/21", "10/21", "7/23", "15/22", "1/12", "7/22", "10/21", "7/22", "1/3", "8/21", "5/11"]),
+    "mmsi-lmms": ("23/60", ["1/7", "10/21", "7/23", "15/22", "5/24", "9/22", "10/21", "7/22", "8/21", "3/7", "9/22"]),
+    "vlmevalkit-spatial": ("17/48", ["4/21", "10/21", "7/23", "15/22", "1/24", "7/22", "8/21", "7/22", "1/3", "10/21", "9/22"]),
+}
+OMNI_SUBS = ["Manipulation", "Motion_Analysis", "Traffic_Analysis", "Localization", "Geospatial_Strategy", "Pattern_Recognition",
+             "Geometric_Reasoning", "Egocentric", "Allocentric", "Hypothetical"]  # fmt: skip
+OMNI_TASKS = ["Dynamic_Reasoning", "Spatial_Interaction", "Complex_Logic", "Perspective_Taking"]
+OMNISPATIAL = {  # (overall, the ten sub-tasks in OMNI_SUBS' order, the four task types in OMNI_TASKS')
+    "omnispatial-re": ("19/55", ["11/21", "8/23", "3/10", "8/21", "7/23", "9/23", "3/11", "7/23", "8/21", "6/23"], ["19/44", "21/64", "1/3", "21/67"]),
+    "omnispatial-lmms-direct": ("31/110", ["5/21", "10/23", "1/5", "5/21", "6/23", "6/23", "9/22", "2/23", "1/3", "8/23"], ["15/44", "15/64", "1/3", "17/67"]),
+    "omnispatial-lmms-re": ("81/220", ["11/21", "10/23", "2/5", "3/7", "7/23", "9/23", "3/11", "6/23", "8/21", "7/23"], ["21/44", "3/8", "1/3", "21/67"]),
+    "omnispatial-re-corrected": ("21/110", ["5/21", "4/23", "3/20", "5/21", "4/23", "6/23", "3/22", "5/23", "4/21", "3/23"], ["9/44", "3/16", "1/5", "12/67"]),
+    "vlmevalkit-spatial": ("23/55", ["3/7", "11/23", "1/5", "10/21", "7/23", "12/23", "9/22", "9/23", "10/21", "11/23"], ["5/11", "21/64", "7/15", "30/67"]),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "harness"), [("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")])
+def test_mmsi_logs_score_as_the_upstream_functions_do(name, harness, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), harness, "mmsi", n_boot=0)
+    assert (result.items, result.bad_records) == (240, 0)
+    names = [MMSI_CATEGORIES[c] for c in _MMSI_ORDER] if harness == "lmms-eval" else _MMSI_ORDER  # each log as its harness names them
+    assert_equal_to_upstream(result, {rule: (overall, dict(zip(names, cells))) for rule, (overall, cells) in MMSI.items()})
+
+
+@pytest.mark.parametrize(
+    ("name", "harness", "sub_task"),
+    [
+        ("omni_spatial_samples.jsonl", "lmms-eval", str),  # lmms-eval's omni_spatial task: sub_task_type as the set writes it
+        ("omnispatial_test_samples.jsonl", "lmms-eval", lambda s: f"omnispatial_{s.lower()}"),  # omnispatial_test's own sub_task
+        ("OmniSpatialBench_manual_cot_preds.tsv", "vlmevalkit", str),
+    ],
+)
+def test_omnispatial_logs_score_as_the_upstream_functions_do(name, harness, sub_task, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), harness, "omnispatial", n_boot=0)
+    assert (result.items, result.bad_records) == (220, 0)
+    expected = {
+        rule: (overall, {**{sub_task(s): v for s, v in zip(OMNI_SUBS, subs)}, **dict(zip(OMNI_TASKS, tasks))})
+        for rule, (overall, subs, tasks) in OMNISPATIAL.items()
+    }
+    assert_equal_to_upstream(result, expected)
+
+
+def test_omnispatial_names_its_read_a_fallback_and_lmms_evals_strip_per_rule(tmp_path):
+    result = rescore_log(fixture("omnispatial_test_samples.jsonl", tmp_path), "lmms-eval", "omnispatial", n_boot=0)
+    rules = {r.rule: r for r in result.rules}
+    assert [r.official for r in result.rules] == [True, False, False, False, False]
+    assert rules["omnispatial-re"].source == "qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51"
+    assert rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    assert rules["omnispatial-re"].reads == "resps as written"
+    assert rules["omnispatial-lmms-re"].reads.startswith("resps, then lmms-eval's reasoning-tag strip")
+    # the fallback answers every reply; its corrected reading only the replies with an "Answer: X" line
+    assert rules["omnispatial-re"].answered == 220 > rules["omnispatial-re-corrected"].answered
+    assert result.stripped == 59
+
+
+def test_mmsi_options_are_read_from_the_question_as_the_set_writes_them(tmp_path):
+    from povagent.results.harness_log_files import read_harness_log
+
+    for name, harness in (("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")):
+        first = read_harness_log(fixture(name, tmp_path), harness).replies[0]
+        assert first.options == (("A", "A blue vase"), ("B", "Left"), ("C", "East"), ("D", "2.0 m")), name
+
+
+# VSI-Bench, multiple-choice and numerical questions: 230 questions of its ten types in lmms-eval's vsibench
+# log. Figures from RUNNING vision-x-nyu/thinking-in-space@51e089c3ae69b9435e9489058610f5b3964c56a8
+# lmms_eval/tasks/vsibench/utils.py vsibench_process_results on the replies as written and
+# vsibench_aggregate_results (it prints percent; here / 100), and lmms-eval@75571cfe's strip_reasoning_tags,
+# vsibench_process_results and _compute_all_subscores (vsibench_aggregate_overall rounds the overall to 6
+# places: 0.334122). Neither reports the three direction levels apart: their mean is object_rel_direction.
+VSIBENCH_TYPES = ["obj_appearance_order", "object_abs_distance", "object_counting", "object_rel_distance", "object_size_estimation",
+                  "room_size_estimation", "route_planning", "object_rel_direction"]  # fmt: skip
+VSIBENCH = {
+    "vsibench": (17.35806258958433, [23.076923076923077, 21.200000000000003, 7.6, 4.3478260869565215, 19.090909090909093,
+                                     23.04347826086957, 21.73913043478261, 18.766233766233764]),
+    "vsibench-lmms": (33.41217357521705, [23.076923076923078, 50.4, 49.599999999999994, 4.3478260869565216, 42.27272727272727,
+                                          52.17391304347826, 21.739130434782608, 23.686868686868687]),
+}  # fmt: skip
+
+
+def test_vsibench_log_gives_the_sets_overall_and_lmms_evals_as_the_upstream_functions_do(tmp_path):
+    result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
+    assert (result.items, result.numerical, result.bad_records) == (230, 95, 0)
+    assert [(r.rule, r.official, r.metric) for r in result.rules] == [("vsibench", True, "score"), ("vsibench-lmms", False, "score")]
+    for rule in result.rules:
+        overall, per_type = VSIBENCH[rule.rule]
+        cells = dict(rule.per_category)
+        cells["object_rel_direction"] = sum(cells.pop(f"object_rel_direction_{level}") for level in ("easy", "medium", "hard")) / 3
+        assert rule.overall == pytest.approx(overall / 100, rel=1e-12)
+        assert cells == pytest.approx({t: v / 100 for t, v in zip(VSIBENCH_TYPES, per_type)}, rel=1e-12)
+    assert round(result.rules[1].overall, 6) == 0.334122  # vsibench_aggregate_overall's own figure
+
+
+def test_a_numerical_reply_is_read_as_a_number_and_shown_as_one(tmp_path):
+    result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
+    reading = {r.rule: r.answered for r in result.rules}
+    assert reading == {"vsibench": 156, "vsibench-lmms": 205}  # lmms-eval's extract_number finds "About 3 meters"; the first word does not
+    about = [d for d in result.disagreements if d.reply.startswith("About ")]
+    assert len(about) == 8
+    for d in about:  # "About 8.5 meters.": the set's first word is no number; lmms-eval's extract_number reads 8.5
+        assert d.labels["vsibench"] is None and d.labels["vsibench-lmms"] == d.reply.split()[1]
+    # a numerical hit meets every threshold: within 5% of the gold (the 0.95 threshold)
+    full = [d for d in result.disagreements if d.gold[0].isdigit() and d.correct["vsibench-lmms"]]
+    assert full and all(abs(float(d.labels["vsibench-lmms"]) - float(d.gold)) <= 0.05 * float(d.gold) + 1e-9 for d in full)
+
+
+def test_a_number_logged_as_the_gold_of_a_choice_set_is_named_and_left_out(tmp_path):
+    log = tmp_path / "viewspatial.jsonl"
+    log.write_text(
+        '{"doc_id": 1, "target": "B. left", "filtered_resps": "B", "input": "Choices: A. right\\nB. left"}\n'
+        '{"doc_id": 2, "target": "3.5", "filtered_resps": "3.5"}\n',
+        encoding="utf-8",
+    )
+    result = rescore_log(log, "lmms-eval", "viewspatial", n_boot=0)
+    assert (result.items, result.bad_records) == (1, 1)
+    assert result.problems == [f"{log}: line 2.target: the target '3.5' is a number, and viewspatial's answers are option labels; record left out"]

@@ -119,3 +119,15 @@ def test_a_set_whose_answers_are_no_choice_is_not_offered(povagent_host):
 def test_an_unknown_set_is_refused_naming_the_sets_a_log_can_be_scored_as(povagent_host):
     with pytest.raises(PluginError, match=r"unknown set 'vsi': a log can be scored as .*viewspatial"):
         set_rules(povagent_host, "vsi")
+
+
+def test_mmsi_omnispatial_and_vsibench_have_their_own_rule_first_then_the_harnesses(povagent_host):
+    got = {s: [(r.parser, r.scorer, r.harness, r.official) for r in set_rules(povagent_host, s)] for s in ("mmsi", "omnispatial", "vsibench")}
+    assert got == {
+        "mmsi": [("mmsi-official", "choice", "MMSI-Bench", True), ("mmsi-lmms", "choice", "lmms-eval", False),
+                 ("vlmevalkit-spatial", "choice-vlmevalkit", "VLMEvalKit", False)],
+        "omnispatial": [("omnispatial-re", "choice", "OmniSpatial", True), ("omnispatial-lmms-direct", "choice", "lmms-eval", False),
+                        ("omnispatial-lmms-re", "choice", "lmms-eval", False), ("omnispatial-re-corrected", "choice", "OmniSpatial, corrected", False),
+                        ("vlmevalkit-spatial", "choice-vlmevalkit", "VLMEvalKit", False)],
+        "vsibench": [("vsibench", "vsibench", "VSI-Bench", True), ("vsibench-lmms", "vsibench", "lmms-eval", False)],
+    }  # fmt: skip

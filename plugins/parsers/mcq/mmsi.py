@@ -69,6 +69,8 @@ class MMSIOfficialParser(RuleParser):
 
     reads = "MMSI-Bench's own rule: the text in the first ``...`` then `...` if any, then the first capital A-D standing alone and not followed by a space and a letter"
     beside_official = "reads choice answers, which the official (point) parser does not read; MMSI-Bench's own rule, the set's default"
+    source = MMSI_BENCH
+    harness = "MMSI-Bench"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
@@ -80,6 +82,11 @@ class MMSILmmsParser(RuleParser):
 
     reads = "lmms-eval's mmsi_bench: its reasoning-tag strip, the backtick and {...} steps, then the first A-F in either case standing alone and not followed by a space and a letter"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's reading of MMSI-Bench"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    #: lmms-eval's mmsi_bench task: a hit is the label equal to the gold answer (msr_process_results)
+    harness_sets = (("mmsi", "choice"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

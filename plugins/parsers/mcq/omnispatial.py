@@ -114,6 +114,8 @@ class OmniSpatialReParser(_FallbackParser):
 
     reads = "OmniSpatial's re rule: the last 'Answer: X' (A-D, either case, kept as written); a reply with none reads A"
     beside_official = "reads choice answers, which the official (point) parser does not read; OmniSpatial's own default rule, the set's default"
+    source = OMNISPATIAL
+    harness = "OmniSpatial"
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
@@ -127,6 +129,9 @@ class OmniSpatialReCorrectedParser(OmniSpatialReParser):
     reads = "OmniSpatial's re rule corrected: the last 'Answer: X' (A-D, either case, kept as written); a reply with none is no answer"
     beside_official = "reads choice answers, which the official (point) parser does not read; OmniSpatial's re rule without its read-A fallback"
     no_label_reason = "no 'Answer: X' in the reply"
+    harness = "OmniSpatial, corrected"
+    #: beside the set's own re rule in a second opinion: how much its read-A fallback adds
+    harness_sets = (("omnispatial", "choice"),)
 
 
 class OmniSpatialJsonParser(RuleParser):
@@ -156,6 +161,10 @@ class OmniSpatialLmmsDirectParser(RuleParser):
 
     reads = "lmms-eval's omni_spatial: its reasoning-tag strip, the task's own </think>/</thought>/<answer> strip, then the first character upper-cased"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's omni_spatial task"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    harness_sets = (("omnispatial", "choice"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""
@@ -167,6 +176,10 @@ class OmniSpatialLmmsReParser(_FallbackParser):
 
     reads = "lmms-eval's omnispatial_test: its reasoning-tag strip, then the last 'Answer: X' (A-D, either case, as written); none reads A"
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's omnispatial_test task"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    harness_sets = (("omnispatial", "choice"),)
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label."""

@@ -144,8 +144,14 @@ class VlmevalkitSpatialParser(RuleParser):
     no_label_reason = "the rule reads no option letter (VLMEvalKit's False)"
     source = VLMEVALKIT
     harness = "VLMEvalKit"
-    #: VLMEvalKit's ViewSpatialBench and MindCubeBench score with compute_mcq_score (no judge)
-    harness_sets = (("viewspatial", "choice-vlmevalkit"), ("mindcube", "choice-vlmevalkit"))
+    #: VLMEvalKit's ViewSpatialBench, MindCubeBench, MMSIBench and OmniSpatialBench score with
+    #: compute_mcq_score (no judge)
+    harness_sets = (
+        ("viewspatial", "choice-vlmevalkit"),
+        ("mindcube", "choice-vlmevalkit"),
+        ("mmsi", "choice-vlmevalkit"),
+        ("omnispatial", "choice-vlmevalkit"),
+    )
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's letter."""

@@ -77,6 +77,12 @@ class VSIBenchLmmsParser(Parser):
     answer_types = frozenset({"choice", "number", "choice-or-number"})
     reads = "lmms-eval's vsibench: its reasoning-tag strip, then the first word for a letter, and the first number or number words anywhere for a number"
     beside_official = "reads choice and number answers, which the official (point) parser does not read; lmms-eval's reading of VSI-Bench"
+    source = LMMS_EVAL
+    harness = "lmms-eval"
+    harness_filter = "lmms-eval's reasoning-tag strip"
+    #: lmms-eval's vsibench task scores a question as the set does (exact_match, MRA) and
+    #: averages the types as the set does (_compute_all_subscores)
+    harness_sets = (("vsibench", "vsibench"),)
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """The first word as a label (a question with options), else the first number anywhere."""

@@ -65,6 +65,8 @@ class VSIBenchParser(Parser):
     answer_types = frozenset({"choice", "number", "choice-or-number"})
     reads = "VSI-Bench's own rule: the reply's first space-separated word, trailing dots removed; the option letter in any case, or float() of it"
     beside_official = "reads choice and number answers, which the official (point) parser does not read; VSI-Bench's own rule, the set's default"
+    source = THINKING_IN_SPACE
+    harness = "VSI-Bench"
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """The first word as a label (a question with options) or a number; never raises."""
