@@ -39,7 +39,7 @@ def _frame_size(request: FormatRead) -> tuple[int, int]:
 
 def is_generated(root: Path) -> bool:
     """Whether a house of ``root`` carries the generator's record (``artifacts/*/_generated.json``)."""
-    from povagent.generate.record import RECORD
+    from povagent.dataset.paths import GENERATED_RECORD as RECORD
 
     artifacts = root / "artifacts"
     return artifacts.is_dir() and any((house / RECORD).is_file() for house in artifacts.iterdir() if house.is_dir())

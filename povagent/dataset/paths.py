@@ -18,6 +18,11 @@ from __future__ import annotations
 import os
 from pathlib import Path, PurePosixPath, PureWindowsPath
 
+#: The generator's record of what made a house, inside the house's folder (povagent's own files
+#: start with ``_``): named here, low in the house, so telling a generated set from a release
+#: does not import the generator.
+GENERATED_RECORD = "_generated.json"
+
 #: Longest path text quoted back in a message (a hostile dataset may hold megabytes).
 _SHOWN = 120
 

@@ -30,13 +30,14 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from povagent.dataset.paths import GENERATED_RECORD
 from povagent.errors import DatasetError, ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.generate.pipeline import HouseSummary, house_id
 from povagent.generate.writer import rounded, write_json
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).
-RECORD = "_generated.json"
+RECORD = GENERATED_RECORD
 #: Where houses are written before they are complete (never inside ``artifacts/``, which the
 #: loader reads).
 PARTIAL = ".partial"

@@ -67,3 +67,19 @@ def test_a_format_a_plugin_registers_claims_its_folders_before_the_release_layou
         assert isinstance(open_evaluation_set(mini_root, check_images=False), Dataset)
     finally:
         povagent_host.remove_plugin("toy")
+
+
+def test_opening_a_release_by_detection_imports_no_generator(mini_root):
+    """Telling a generated set from a release reads the record's name, not the generator (whose
+    meshes bring SciPy and Embree: half a second and 60 MiB a run never needs)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\nfrom povagent.dataset.evaluation_set import open_evaluation_set\n"
+        f"open_evaluation_set({str(mini_root)!r})\n"
+        "print(sorted(m for m in ('povagent.generate.pipeline', 'scipy', 'embreex') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]"
