@@ -16,6 +16,7 @@ profiles do).
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
@@ -23,6 +24,7 @@ from typing import Any, Iterable, Mapping, Sequence
 from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.image_files import ImageFileError, inspect_image_file
 from povagent.dataset.instances import Frame, Instance
+from povagent.dataset.json_files import TooDeepError, loads_dataset_json
 from povagent.dataset.models import Condition, Direction
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem, not_text_problems
@@ -219,3 +221,22 @@ def text_problems(file: str, where: str, record: Any) -> list[Problem]:
     record: a problem per string holding a lone surrogate, named ``<where>.<json path>``. A
     record with one is left out (no row, prompt or report could hold its text)."""
     return [Problem(p.file, where + p.json_path.removeprefix("$"), p.message) for p in not_text_problems(file, record)]
+
+
+def json_list(file: Path, what: str) -> tuple[list[Any] | None, list[Problem]]:
+    """A JSON file holding a list of records (read regular-file-only and bounded), or ``None``
+    and the one problem saying why it is not: not UTF-8, not JSON, nested too deep, not a list."""
+    from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
+
+    name = str(file)
+    try:
+        data = loads_dataset_json(read_regular(file, MAX_DOCUMENT_BYTES, what=what).decode("utf-8"))
+    except TooDeepError as exc:
+        return None, [Problem(name, "", str(exc))]
+    except UnicodeDecodeError as exc:
+        return None, [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")]
+    except json.JSONDecodeError as exc:
+        return None, [Problem(name, "", f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")]
+    if not isinstance(data, list):
+        return None, [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")]
+    return data, []

@@ -13,16 +13,13 @@ This module reads the file; it never opens an image (see :mod:`.external`).
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, text_problems
-from povagent.dataset.json_files import TooDeepError, loads_dataset_json
+from povagent.dataset.choice_sets.external import Item, json_list, text_problems
 from povagent.dataset.problems import Problem
-from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
 PROFILE = "viewspatial"
@@ -44,16 +41,9 @@ def gold_label(answer: str) -> str | None:
 def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound record of the JSON list as an item, and one problem per bad record."""
     name = str(file)
-    try:
-        data = loads_dataset_json(read_regular(file, MAX_DOCUMENT_BYTES, what="ViewSpatial-Bench file").decode("utf-8"))
-    except TooDeepError as exc:
-        return [], [Problem(name, "", str(exc))]
-    except UnicodeDecodeError as exc:
-        return [], [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")]
-    except json.JSONDecodeError as exc:
-        return [], [Problem(name, "", f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")]
-    if not isinstance(data, list):
-        return [], [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")]
+    data, unread = json_list(file, "ViewSpatial-Bench file")
+    if data is None:
+        return [], unread
     items: list[Item] = []
     problems: list[Problem] = []
     for index, record in enumerate(data):
