@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.image_files import ImageFileError, inspect_image_file
@@ -240,3 +240,41 @@ def json_list(file: Path, what: str) -> tuple[list[Any] | None, list[Problem]]:
     if not isinstance(data, list):
         return None, [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")]
     return data, []
+
+
+def jsonl_records(file: Path, what: str, problems: list[Problem]) -> Iterator[tuple[str, Any]]:
+    """Each line's record of a JSON-lines file, named ``line N``; a line that is not JSON (or
+    nests too deep) is a problem, in line order with the ones the caller finds."""
+    for number, line in record_lines(file, what, problems):
+        where = f"line {number}"
+        try:
+            record = loads_dataset_json(line)
+        except json.JSONDecodeError as exc:
+            problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
+            continue
+        except TooDeepError as exc:
+            problems.append(Problem(str(file), where, str(exc)))
+            continue
+        yield where, record
+
+
+def sound_items(file: Path, records: Iterable[tuple[str, Any]], make: Callable[[Any, str], Any], problems: list[Problem]) -> list[Any]:
+    """The items ``make(record, where)`` builds from ``records``, in order; a record holding text
+    no output can hold, one ``make`` refuses (it returns ``(where, message)``) or one whose id an
+    earlier item took is a problem and left out."""
+    items: list[Any] = []
+    seen: set[str] = set()
+    for where, record in records:
+        not_text = text_problems(str(file), where, record)
+        if not_text:  # the rule the release reader holds: a lone surrogate is not text
+            problems.extend(not_text)
+            continue
+        item = make(record, where)
+        if isinstance(item, tuple):
+            problems.append(Problem(str(file), *item))
+        elif item.id in seen:
+            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
+        else:
+            seen.add(item.id)
+            items.append(item)
+    return items

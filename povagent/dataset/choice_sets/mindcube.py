@@ -17,14 +17,12 @@ This module reads the file; it never opens an image (see :mod:`.external`).
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines, text_problems
-from povagent.dataset.json_files import TooDeepError, loads_dataset_json
+from povagent.dataset.choice_sets.external import Item, jsonl_records, record_id_problem, sound_items
 from povagent.dataset.problems import Problem
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
@@ -74,31 +72,8 @@ def inline_options(question: str) -> tuple[tuple[str, str], ...]:
 
 def read_mindcube(file: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound record of the JSONL file as an item, and one problem per bad record."""
-    items: list[Item] = []
     problems: list[Problem] = []
-    seen: set[str] = set()
-    for number, line in record_lines(file, "MindCube file", problems):
-        where = f"line {number}"
-        try:
-            record = loads_dataset_json(line)
-        except json.JSONDecodeError as exc:
-            problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
-            continue
-        except TooDeepError as exc:
-            problems.append(Problem(str(file), where, str(exc)))
-            continue
-        not_text = text_problems(str(file), where, record)
-        if not_text:  # the rule the release reader holds: a lone surrogate is not text
-            problems.extend(not_text)
-            continue
-        item = _item(record, where)
-        if isinstance(item, tuple):
-            problems.append(Problem(str(file), *item))
-        elif item.id in seen:
-            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
-        else:
-            seen.add(item.id)
-            items.append(item)
+    items = sound_items(file, jsonl_records(file, "MindCube file", problems), _item, problems)
     return items, problems
 
 

@@ -16,7 +16,6 @@ This module reads the file; it never opens a video (see :mod:`.vsibench_set`).
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from dataclasses import dataclass
@@ -25,8 +24,7 @@ from typing import Any, Iterable
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.answers.number import NumericQuestion
-from povagent.dataset.choice_sets.external import record_lines, text_problems
-from povagent.dataset.json_files import TooDeepError, loads_dataset_json
+from povagent.dataset.choice_sets.external import jsonl_records, sound_items
 from povagent.dataset.problems import Problem
 from povagent.errors import PovagentError
 
@@ -63,34 +61,9 @@ def read_vsibench(file: Path) -> tuple[list[SceneQuestion], list[Problem]]:
     """Every sound record of the Parquet (``.parquet``) or JSONL file, and one problem per bad
     record (a record is named by its line, or its row in a Parquet file)."""
     problems: list[Problem] = []
-    records = _parquet_records(file, problems) if file.suffix.lower() == ".parquet" else _jsonl_records(file, problems)
-    items: list[SceneQuestion] = []
-    seen: set[str] = set()
-    for where, record in records:
-        not_text = text_problems(str(file), where, record)
-        if not_text:
-            problems.extend(not_text)
-            continue
-        item = scene_question(record, where)
-        if isinstance(item, tuple):
-            problems.append(Problem(str(file), *item))
-        elif item.id in seen:
-            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
-        else:
-            seen.add(item.id)
-            items.append(item)
+    records = _parquet_records(file, problems) if file.suffix.lower() == ".parquet" else jsonl_records(file, "VSI-Bench file", problems)
+    items: list[SceneQuestion] = sound_items(file, records, scene_question, problems)
     return items, problems
-
-
-def _jsonl_records(file: Path, problems: list[Problem]) -> Iterable[tuple[str, Any]]:
-    for number, line in record_lines(file, "VSI-Bench file", problems):
-        where = f"line {number}"
-        try:
-            yield where, loads_dataset_json(line)
-        except json.JSONDecodeError as exc:
-            problems.append(Problem(str(file), where, f"not valid JSON: {exc.msg} at column {exc.colno}"))
-        except TooDeepError as exc:
-            problems.append(Problem(str(file), where, str(exc)))
 
 
 def _parquet_records(file: Path, problems: list[Problem]) -> Iterable[tuple[str, Any]]:
