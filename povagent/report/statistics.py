@@ -129,7 +129,7 @@ def _ratio_estimates(
         prepared.append((vw, w))
     sums = None
     if resampled and prepared:
-        sums = np.concatenate([counts @ columns for counts in _resample_counts(n_inst, n_boot, seed)])
+        sums = np.concatenate([_exact_order_product(counts, columns) for counts in _resample_counts(n_inst, n_boot, seed)])
     out: list[Estimate] = []
     for k, (vw, weights) in enumerate(prepared):
         point = float(_mean_over_runs(_ratio(vw.sum(axis=0), weights.sum(axis=0))))
@@ -355,3 +355,13 @@ def paired_comparison(
         a_better=int(nz.size - b_wins.sum()),
         ties=int(d.size - nz.size),
     )
+
+
+def _exact_order_product(counts: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """``counts @ columns`` summed in one fixed order on every machine.
+
+    A BLAS matrix product picks its kernel by CPU and splits its sums by thread count, so the
+    last bit of a CI would differ between machines (OpenBLAS's Haswell and Sandybridge kernels,
+    or one thread and two, give different bits here). numpy's own ``einsum`` loop adds in the
+    order the arrays are laid out, whatever the CPU or thread count."""
+    return np.einsum("ij,jk->ik", counts, columns, optimize=False)
