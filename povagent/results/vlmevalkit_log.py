@@ -201,7 +201,8 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
         return LoggedReply(item=index, where=where, reply=reply, options=(), gold=answer, category=category, main_category=main,
                            question_id=_text(row.get("qid")) or index, gold_number=number)  # fmt: skip
     if gold is None:
-        return f"{where}.answer", f"{answer[:60]!r} names no option label A-Z (nor a number, with no options in the row); row left out"
+        unread = "names no option label A-Z" if options else "is neither an option label A-Z nor a number (the row lists no options)"
+        return f"{where}.answer", f"{answer[:60]!r} {unread}; row left out"
     options = with_gold(options, gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.answer", f"the gold label {gold!r} is not among the row's options ({', '.join(label for label, _ in options)}); row left out"
