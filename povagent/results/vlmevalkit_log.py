@@ -64,7 +64,7 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     except (ReadTargetError, OSError) as exc:
         raise PredictionsError(f"{file}: cannot be read: {exc}") from None
     rows = _xlsx_rows(file, data) if data[:4] == b"PK\x03\x04" else _tsv_rows(file, data)
-    log = HarnessLog(file, "vlmevalkit", reply_field="prediction")
+    log = HarnessLog(file, "vlmevalkit", reply_field="prediction", gold_field="answer")
     header: list[str] | None = None
     seen: set[str] = set()
     thought = 0  # rows whose reasoning VLMEvalKit moved to the thinking column

@@ -405,3 +405,11 @@ def test_a_number_logged_as_the_gold_of_a_choice_set_is_named_and_left_out(tmp_p
     result = rescore_log(log, "lmms-eval", "viewspatial", n_boot=0)
     assert (result.items, result.bad_records) == (1, 1)
     assert result.problems == [f"{log}: line 2.target: the target '3.5' is a number, and viewspatial's answers are option labels; record left out"]
+
+
+def test_a_number_as_the_answer_of_a_choice_sets_prediction_file_is_named_by_its_column_and_left_out(tmp_path):
+    log = tmp_path / "Model_ViewSpatialBench.tsv"
+    log.write_text('"index"\t"candidates"\t"answer"\t"prediction"\n"1"\t"[\'A. right\', \'B. left\']"\t"B"\t"B"\n"2"\t""\t"3.5"\t"3.5"\n', encoding="utf-8")
+    result = rescore_log(log, "vlmevalkit", "viewspatial", n_boot=0)
+    assert (result.items, result.bad_records) == (1, 1)
+    assert result.problems == [f"{log}: row 3.answer: the answer '3.5' is a number, and viewspatial's answers are option labels; record left out"]
