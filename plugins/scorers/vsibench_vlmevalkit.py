@@ -5,8 +5,9 @@ At open-compass/VLMEvalKit@e8e78f05f3080fe28154f2130321f17951c3be94 (``vlmeval/d
 
 * a multiple-choice question is a hit when the letter read in the reply equals the letter
   ``can_match_option`` reads in the gold answer, compared as lower-cased text
-  (``compute_mcq_score``): as the ``choice-vlmevalkit`` scorer, a reply naming no letter is a
-  hit where the gold names none either (``"false" == "false"``; VSI-Bench's golds are letters);
+  (``compute_mcq_score``), as the ``choice-vlmevalkit`` scorer compares them (two readings of
+  nothing would be equal, ``"false" == "false"``; VSI-Bench's golds are the letters A-D, which the
+  rule always reads, so that never fires on the set);
 * a numerical question scores the mean relative accuracy of the number read
   (``compute_na_score``, 0 when none is read) over the set's ten thresholds, with VLMEvalKit's
   own relative error ``abs_dist_norm``: ``|(pred - gold) / gold|``, and ``|pred - gold|`` for a
