@@ -330,7 +330,7 @@ def test_a_numerical_reply_is_read_as_a_number_and_shown_as_one(tmp_path):
 
 
 # VSI-Bench as VLMEvalKit's prediction file: 320 questions of the ten types (candidates a list literal, answer the
-# ground_truth), replies drawn from 60 forms (the lmms-eval fixture's, and "1,200 mm", "between 2 and 3 meters", "[2.5]",
+# ground_truth), replies drawn from 61 forms (the lmms-eval fixture's, and "1,200 mm", "between 2 and 3 meters", "[2.5]",
 # "<answer>3</answer>", "3-4 m", "N/A", "twenty-one", "1.20e+02", zero-width spaces, "<answer>B</answer>", "B or C"...). Figures
 # from RUNNING VLMEvalKit@e8e78f05 VsiBench.evaluate on the .tsv and on the .xlsx (equal), and the set's own and lmms-eval's
 # functions (as above) on the replies; per question type, the three direction levels apart (upstream's per-type means).
