@@ -33,6 +33,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.srbench3d",
     "povagent_plugins.scorers.choice_mindcube",
     "povagent_plugins.scorers.vsibench",
+    "povagent_plugins.scorers.vsibench_vlmevalkit",
     # parsers
     "povagent_plugins.parsers.official",
     "povagent_plugins.parsers.json_answer",
@@ -55,6 +56,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.parsers.mcq.omnispatial",
     "povagent_plugins.parsers.vsibench.official",
     "povagent_plugins.parsers.vsibench.lmms",
+    "povagent_plugins.parsers.vsibench.vlmevalkit",
     # strategies
     "povagent_plugins.strategies.basic",
     "povagent_plugins.strategies.cot",

@@ -27,6 +27,12 @@ def _as_vlmevalkit_writes(letter: str | None) -> str:
     return str(letter if letter is not None else False).strip().lower()
 
 
+def same_as_vlmevalkit_compares(chosen: str | None, gold_read: str | None) -> bool:
+    """``compute_mcq_score``'s hit: the two readings equal as lower-cased text, ``None`` written
+    as ``False`` (so two readings of nothing are equal)."""
+    return _as_vlmevalkit_writes(chosen) == _as_vlmevalkit_writes(gold_read)
+
+
 class VlmevalkitChoiceScorer(ChoiceScorer):
     """Hit as ``compute_mcq_score`` counts it (module docstring)."""
 
@@ -37,7 +43,7 @@ class VlmevalkitChoiceScorer(ChoiceScorer):
         scores = super().score(instance, answer, dataset)
         gold_read = spatial_bench_label(str(scores["gold"]).strip())
         chosen = scores["chosen"]
-        same = _as_vlmevalkit_writes(chosen) == _as_vlmevalkit_writes(gold_read)
+        same = same_as_vlmevalkit_compares(chosen, gold_read)
         scores["correct"] = same and (not self.corrected or chosen is not None)
         scores["gold_read"] = gold_read
         return scores

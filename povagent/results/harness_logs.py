@@ -77,6 +77,8 @@ class HarnessLog:
     reply_field: str = ""
     #: The field holding the harness's filtered reply (``filtered_resps``), or ``""``.
     filtered_field: str = ""
+    #: The field holding the gold answer (lmms-eval's ``target``, VLMEvalKit's ``answer``).
+    gold_field: str = "target"
     #: What a reader of the numbers must know about the log as a whole (one sentence each).
     notes: list[str] = field(default_factory=list)
 

@@ -7,10 +7,12 @@ At the pinned commit (open-compass/VLMEvalKit@e8e78f05, ``vlmeval/inference.py``
 ``</think>``, the reasoning in ``thinking``: the log then says so in a note): an xlsx sheet written by pandas (header row first), or
 a tab-separated file with every cell quoted (``csv.QUOTE_ALL``), cells free to hold newlines.
 Columns read: ``index``, ``answer``, ``prediction``, the options (``A``, ``B``... or, for
-ViewSpatial-Bench, ``candidates``: ``"A. right\\nB. left"`` or a list of them), the category
+ViewSpatial-Bench and VSI-Bench, ``candidates``: ``"A. right\\nB. left"`` or a list of them), the category
 (``question_type``, as VLMEvalKit groups ViewSpatial-Bench, else ``category``, else
 OmniSpatialBench's ``sub_task_type``), ``main_category``, ``l2-category`` or ``task_type`` where
-present, and ``qid`` (3DSRBench's copies). An xlsx file needs
+present, and ``qid`` (3DSRBench's copies). A row with no options whose ``answer`` is a number is a
+numerical question (VSI-Bench's counts and distances: ``VsiBench``'s ``answer`` holds the
+``ground_truth``, a letter or a number as text). An xlsx file needs
 ``openpyxl`` (``pip install 'povagent[xlsx]'``).
 """
 
@@ -35,6 +37,7 @@ from povagent.results.harness_logs import (
     LoggedReply,
     checked_reply,
     gold_label,
+    gold_number,
     options_in_prompt,
     with_gold,
 )
@@ -61,7 +64,7 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     except (ReadTargetError, OSError) as exc:
         raise PredictionsError(f"{file}: cannot be read: {exc}") from None
     rows = _xlsx_rows(file, data) if data[:4] == b"PK\x03\x04" else _tsv_rows(file, data)
-    log = HarnessLog(file, "vlmevalkit", reply_field="prediction")
+    log = HarnessLog(file, "vlmevalkit", reply_field="prediction", gold_field="answer")
     header: list[str] | None = None
     seen: set[str] = set()
     thought = 0  # rows whose reasoning VLMEvalKit moved to the thinking column
@@ -179,9 +182,8 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
     reply = checked_reply(_text(prediction) if not isinstance(prediction, str) else prediction)
     if reply is None:
         return f"{where}.prediction", f"the reply must be text of at most {MAX_REPLY_CHARS} characters; row left out"
-    gold = gold_label(_text(row.get("answer")))
-    if gold is None:
-        return f"{where}.answer", f"{_text(row.get('answer'))[:60]!r} names no option label A-Z; row left out"
+    answer = _text(row.get("answer"))
+    gold = gold_label(answer)
     options: tuple[tuple[str, str], ...] = ()
     for label in (chr(ord("A") + k) for k in range(MAX_OPTIONS)):
         text = _text(row.get(label))
@@ -192,10 +194,17 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
         cell = next((_text(row[c]) for c in ("candidates", "choices", "options") if _text(row.get(c))), "")
         # else the question's own "Options: A: ..., B: ..." (the MMSI-Bench authors' table)
         options = _listed_options(cell) or options_in_prompt(_text(row.get("question")))
+    category = next((_text(row[c]) for c in CATEGORY_COLUMNS if _text(row.get(c))), "")
+    main = next((_text(row[c]) for c in MAIN_CATEGORY_COLUMNS if _text(row.get(c))), "")
+    number = gold_number(answer) if gold is None and not options else None
+    if number is not None:  # a numerical question (VSI-Bench's): no options, the answer a number
+        return LoggedReply(item=index, where=where, reply=reply, options=(), gold=answer, category=category, main_category=main,
+                           question_id=_text(row.get("qid")) or index, gold_number=number)  # fmt: skip
+    if gold is None:
+        unread = "names no option label A-Z" if options else "is neither an option label A-Z nor a number (the row lists no options)"
+        return f"{where}.answer", f"{answer[:60]!r} {unread}; row left out"
     options = with_gold(options, gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.answer", f"the gold label {gold!r} is not among the row's options ({', '.join(label for label, _ in options)}); row left out"
-    category = next((_text(row[c]) for c in CATEGORY_COLUMNS if _text(row.get(c))), "")
-    main = next((_text(row[c]) for c in MAIN_CATEGORY_COLUMNS if _text(row.get(c))), "")
     return LoggedReply(item=index, where=where, reply=reply, options=options, gold=gold, category=category,
                        main_category=main, question_id=_text(row.get("qid")) or index)  # fmt: skip

@@ -161,8 +161,8 @@ def _numbers_left_out(log: HarnessLog, set_name: str) -> None:
         if reply.gold_number is None:
             kept.append(reply)
         else:
-            message = f"the target {reply.gold!r:.60} is a number, and {set_name}'s answers are option labels; record left out"
-            log.problems.append(Problem(str(log.file), f"{reply.where}.target", message))
+            message = f"the {log.gold_field} {reply.gold!r:.60} is a number, and {set_name}'s answers are option labels; record left out"
+            log.problems.append(Problem(str(log.file), f"{reply.where}.{log.gold_field}", message))
     log.replies[:] = kept
 
 

@@ -129,19 +129,22 @@ class MetricColumns:
                 kept.append(i)
         return kept
 
-    def category_weighted(self, values: list[float] | np.ndarray, rows: Sequence[int], merged: tuple[tuple[str, ...], ...]) -> np.ndarray:
+    def category_weighted(self, values: list[float] | np.ndarray, rows: Sequence[int], merged: tuple[tuple[str, ...], ...],
+                          only_whole: bool = False) -> np.ndarray:  # fmt: skip
         """``values`` (one a row of ``rows``; NaN: not counted) rescaled so that their plain mean is
         the mean of the per-category means, the categories of each group in ``merged`` first
         averaged into one (:attr:`Metric.category_mean`): each counted row weighs
-        ``1 / (units * categories in its unit * rows of its category)``. The bootstrap CI then
+        ``1 / (units * categories in its unit * rows of its category)``. With ``only_whole`` a group
+        merges only when each of its categories has counted rows. The bootstrap CI then
         resamples rows with those weights held fixed."""
         x = np.array(values, dtype=float)
         counted = [n for n in range(len(x)) if np.isfinite(x[n])]
-        unit_of = {category: group for group in merged for category in group}
         category = [self._category_name(rows[n]) for n in range(len(x))]
         per_category: dict[str, int] = defaultdict(int)
         for n in counted:
             per_category[category[n]] += 1
+        whole = [group for group in merged if not only_whole or all(name in per_category for name in group)]
+        unit_of = {name: group for group in whole for name in group}
         per_unit: dict[Any, set[str]] = defaultdict(set)
         for name in per_category:
             per_unit[unit_of.get(name, name)].add(name)
@@ -181,7 +184,7 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
         kept = counted(metric, rows)
         found = columns.values(scorer, metric, kept)
         if rows is everything and metric.category_mean and metric.group is None:
-            return columns.category_weighted(found, kept, metric.merged_categories)
+            return columns.category_weighted(found, kept, metric.merged_categories, metric.merge_only_whole)
         return found
 
     # cells of as many rows are estimated in one call, filled in after: their columns share

@@ -49,7 +49,10 @@ class Metric:
     ``category_mean`` makes the ``overall`` cell the mean of the per-category means rather than
     the mean over rows (VSI-Bench's overall: each question type counts once, whatever its
     size), the categories of each group in ``merged_categories`` first averaged into one
-    (VSI-Bench's three direction levels); the per-category cells are unchanged.
+    (VSI-Bench's three direction levels); the per-category cells are unchanged. A group merges
+    even when some of its categories have no row, unless ``merge_only_whole`` is set: then it
+    merges only when every one of them has rows, else each counts on its own (VLMEvalKit's
+    ``VsiBench._aggregate``).
     """
 
     name: str
@@ -65,6 +68,7 @@ class Metric:
     unscored: float | None = None
     category_mean: bool = False
     merged_categories: tuple[tuple[str, ...], ...] = ()
+    merge_only_whole: bool = False
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -80,6 +84,8 @@ class Metric:
         if self.category_mean:
             out["category_mean"] = True
             out["merged_categories"] = [list(group) for group in self.merged_categories]
+            if self.merge_only_whole:  # said only when set: other metrics read as they always did
+                out["merge_only_whole"] = True
         return out
 
     @classmethod
@@ -88,7 +94,8 @@ class Metric:
         return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
                    description["caption"], description["over"], description["negate"], description.get("group"),
                    tuple(description.get("overall_excludes") or ()), description.get("unscored"),
-                   bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()))  # fmt: skip
+                   bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()),
+                   bool(description.get("merge_only_whole")))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.

@@ -53,7 +53,13 @@ def mean_relative_accuracy(
     A NaN or infinite prediction is accurate at no threshold (0.0), as numpy's comparison makes
     it officially. A gold of 0 raises :class:`ZeroDivisionError` (the official code crashes on it;
     VSI-Bench has none)."""
-    error = relative_error(prediction, gold)
+    return accuracy_over_thresholds(relative_error(prediction, gold), start, end, interval)
+
+
+def accuracy_over_thresholds(error: float, start: float = MRA_START, end: float = MRA_END, interval: float = MRA_INTERVAL) -> float:
+    """The share of the thresholds θ (:func:`mra_thresholds`) at which ``error <= 1 - θ``: the
+    mean relative accuracy of a relative error however a harness computes it (VLMEvalKit's
+    ``abs_dist_norm`` differs from the official one for a gold of 0 or below). NaN meets none."""
     if math.isnan(error):
         return 0.0
     # 1 - linspace(...) in numpy's float64, element by element, as the official comparison makes it

@@ -104,3 +104,22 @@ def test_a_log_with_numerical_questions_says_a_rule_reads_an_answer_and_shows_nu
     assert "reads an answer (an option or a number) in 156 of 230 replies" in result.stdout
     assert "(no answer read = 0)" in " ".join(result.stdout.split())  # the table's caption, wrapped to the console
     assert "About 93 meters." in result.stdout and "│ 93 " in result.stdout  # lmms-eval's extract_number; the set's first word reads none
+
+
+def test_a_vlmevalkit_vsibench_file_gives_json_with_each_rule_beside_the_sets_that_validates(tmp_path):
+    from importlib import resources
+
+    from jsonschema import Draft202012Validator
+
+    path = tmp_path / "Qwen2.5-VL-7B_VSI-Bench.xlsx"
+    path.write_bytes((FIXTURES / "VSI-Bench_preds.xlsx").read_bytes())
+    result = runner.invoke(app, ["rescore-log", str(path), "--harness", "vlmevalkit", "--set", "vsibench", "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    schema = json.loads(resources.files("povagent").joinpath("schemas", "output_rescore-log.schema.json").read_text(encoding="utf-8"))
+    assert list(Draft202012Validator(schema).iter_errors(out)) == []
+    assert (out["items"], out["numerical"]) == (320, 131)
+    assert [(r["rule"], r["official"], r["scorer"]) for r in out["rules"]] == [
+        ("vsibench", True, "vsibench"), ("vlmevalkit-vsibench", False, "vsibench-vlmevalkit"), ("vsibench-lmms", False, "vsibench")]  # fmt: skip
+    assert round(100 * out["rules"][1]["overall"], 3) == 47.910  # VsiBench.evaluate's own table on this file
+    assert "VLMEvalKit's load" in out["rules"][1]["reads"]

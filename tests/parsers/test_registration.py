@@ -15,7 +15,8 @@ from povagent.interfaces import Parser, Strategy
 PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice",
            "navigate", "viewspatial", "viewspatial-official", "mindcube", "mindcube-official", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
            "lmms-mcq-extract-corrected", "sparbench-lmms", "sparbench-lmms-corrected", "mmsi-official", "mmsi-lmms", "omnispatial-re",
-           "omnispatial-re-corrected", "omnispatial-json", "omnispatial-direct", "omnispatial-lmms-direct", "omnispatial-lmms-re", "vsibench", "vsibench-lmms"}
+           "omnispatial-re-corrected", "omnispatial-json", "omnispatial-direct", "omnispatial-lmms-direct", "omnispatial-lmms-re", "vsibench", "vsibench-lmms",
+           "vlmevalkit-vsibench"}
 STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice", "choice-or-number", "navigate"}
 
 

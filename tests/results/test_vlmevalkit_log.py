@@ -54,6 +54,28 @@ def test_viewspatial_candidates_give_the_options_as_lines_or_a_list(tmp_path):
     assert replies[0].category == "Camera perspective - Relative Direction"  # question_type: how VLMEvalKit groups the set
 
 
+VSI_HEADER = ["index", "video", "question", "candidates", "answer", "question_type", "prediction"]
+
+
+def test_a_vsibench_row_with_no_candidates_and_a_number_as_answer_is_a_numerical_question(tmp_path):
+    rows = [[0, "scannet/scene0011_00.mp4", "How many chair(s) are in this room?", None, "4", "object_counting", "four"],
+            [1, "scannet/scene0011_00.mp4", "Which is closer?", "['A. sofa', 'B. lamp']", "B", "object_rel_distance", "B"]]  # fmt: skip
+    numerical, choice = read_vlmevalkit_predictions(tsv(tmp_path, rows, VSI_HEADER)).replies
+    assert (numerical.gold_number, numerical.gold, numerical.options, numerical.category) == (4.0, "4", (), "object_counting")
+    assert (choice.gold_number, choice.gold, choice.options) == (None, "B", (("A", "sofa"), ("B", "lamp")))
+
+
+@pytest.mark.parametrize(
+    ("candidates", "answer", "message"),
+    [(None, "about four", "'about four' is neither an option label A-Z nor a number (the row lists no options)"),
+     ("['A. sofa', 'B. lamp']", "4", "'4' names no option label A-Z")],  # options listed: the gold must be one of them
+)  # fmt: skip
+def test_a_vsibench_row_whose_answer_is_neither_is_named_and_left_out(tmp_path, candidates, answer, message):
+    path = tsv(tmp_path, [[0, "v.mp4", "q", candidates, answer, "object_counting", "4"]], VSI_HEADER)
+    log = read_vlmevalkit_predictions(path)
+    assert (log.replies, [str(p) for p in log.problems]) == ([], [f"{path}: row 2.answer: {message}; row left out"])
+
+
 def test_a_list_cell_is_read_as_a_literal_and_never_run(tmp_path):
     header = ["index", "candidates", "answer", "prediction"]
     rows = [[0, "[__import__('os').system('touch ran')]", "A", "A"]]

@@ -285,40 +285,114 @@ def test_mmsi_options_are_read_from_the_question_as_the_set_writes_them(tmp_path
 # vsibench_aggregate_results (it prints percent; here / 100), and lmms-eval@75571cfe's strip_reasoning_tags,
 # vsibench_process_results and _compute_all_subscores (vsibench_aggregate_overall rounds the overall to 6
 # places: 0.334122). Neither reports the three direction levels apart: their mean is object_rel_direction.
+# VLMEvalKit's figures: open-compass/VLMEvalKit@e8e78f05f3080fe28154f2130321f17951c3be94 VsiBench.evaluate (no judge:
+# compute_mcq_score, compute_na_score, _aggregate) RUN on the same replies (resps where kept, else filtered_resps)
+# dumped as its prediction file (.tsv).
 VSIBENCH_TYPES = ["obj_appearance_order", "object_abs_distance", "object_counting", "object_rel_distance", "object_size_estimation",
                   "room_size_estimation", "route_planning", "object_rel_direction"]  # fmt: skip
 VSIBENCH = {
     "vsibench": (17.35806258958433, [23.076923076923077, 21.200000000000003, 7.6, 4.3478260869565215, 19.090909090909093,
                                      23.04347826086957, 21.73913043478261, 18.766233766233764]),
+    "vlmevalkit-vsibench": (43.697944567509786, [42.30769230769231, 50.4, 49.599999999999994, 17.391304347826086, 42.272727272727266,
+                                                 52.17391304347826, 47.82608695652174, 47.61183261183262]),
     "vsibench-lmms": (33.41217357521705, [23.076923076923078, 50.4, 49.599999999999994, 4.3478260869565216, 42.27272727272727,
                                           52.17391304347826, 21.739130434782608, 23.686868686868687]),
 }  # fmt: skip
 
 
-def test_vsibench_log_gives_the_sets_overall_and_lmms_evals_as_the_upstream_functions_do(tmp_path):
+def test_vsibench_log_gives_the_sets_overall_and_each_harnesss_as_the_upstream_functions_do(tmp_path):
     result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
     assert (result.items, result.numerical, result.bad_records) == (230, 95, 0)
-    assert [(r.rule, r.official, r.metric) for r in result.rules] == [("vsibench", True, "score"), ("vsibench-lmms", False, "score")]
+    assert [(r.rule, r.official, r.metric) for r in result.rules] == [
+        ("vsibench", True, "score"), ("vlmevalkit-vsibench", False, "score"), ("vsibench-lmms", False, "score")]  # fmt: skip
     for rule in result.rules:
         overall, per_type = VSIBENCH[rule.rule]
         cells = dict(rule.per_category)
         cells["object_rel_direction"] = sum(cells.pop(f"object_rel_direction_{level}") for level in ("easy", "medium", "hard")) / 3
         assert rule.overall == pytest.approx(overall / 100, rel=1e-12)
         assert cells == pytest.approx({t: v / 100 for t, v in zip(VSIBENCH_TYPES, per_type)}, rel=1e-12)
-    assert round(result.rules[1].overall, 6) == 0.334122  # vsibench_aggregate_overall's own figure
+    assert round(result.rules[2].overall, 6) == 0.334122  # vsibench_aggregate_overall's own figure
 
 
 def test_a_numerical_reply_is_read_as_a_number_and_shown_as_one(tmp_path):
     result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
     reading = {r.rule: r.answered for r in result.rules}
-    assert reading == {"vsibench": 156, "vsibench-lmms": 205}  # lmms-eval's extract_number finds "About 3 meters"; the first word does not
+    # lmms-eval's extract_number finds "About 3 meters"; the first word does not; VLMEvalKit reads a capital A-F standing
+    # alone ("Option B") and the last number, and none of them an option's text ("sofa")
+    assert reading == {"vsibench": 156, "vlmevalkit-vsibench": 192, "vsibench-lmms": 205}
     about = [d for d in result.disagreements if d.reply.startswith("About ")]
     assert len(about) == 8
-    for d in about:  # "About 8.5 meters.": the set's first word is no number; lmms-eval's extract_number reads 8.5
-        assert d.labels["vsibench"] is None and d.labels["vsibench-lmms"] == d.reply.split()[1]
+    for d in about:  # "About 8.5 meters.": the set's first word is no number; lmms-eval's extract_number and VLMEvalKit read 8.5
+        assert d.labels["vsibench"] is None and d.labels["vsibench-lmms"] == d.labels["vlmevalkit-vsibench"] == d.reply.split()[1]
     # a numerical hit meets every threshold: within 5% of the gold (the 0.95 threshold)
     full = [d for d in result.disagreements if d.gold[0].isdigit() and d.correct["vsibench-lmms"]]
     assert full and all(abs(float(d.labels["vsibench-lmms"]) - float(d.gold)) <= 0.05 * float(d.gold) + 1e-9 for d in full)
+
+
+# VSI-Bench as VLMEvalKit's prediction file: 320 questions of the ten types (candidates a list literal, answer the
+# ground_truth), replies drawn from 61 forms (the lmms-eval fixture's, and "1,200 mm", "between 2 and 3 meters", "[2.5]",
+# "<answer>3</answer>", "3-4 m", "N/A", "twenty-one", "1.20e+02", zero-width spaces, "<answer>B</answer>", "B or C"...). Figures
+# from RUNNING VLMEvalKit@e8e78f05 VsiBench.evaluate on the .tsv and on the .xlsx (equal), and the set's own and lmms-eval's
+# functions (as above) on the replies; per question type, the three direction levels apart (upstream's per-type means).
+VSIBENCH_VLMEVALKIT_FILE = {
+    "vsibench": (14.42240829616304, {
+        "object_rel_direction_easy": 0.058823529411764705, "object_rel_direction_medium": 0.06451612903225806,
+        "object_rel_direction_hard": 0.22580645161290322, "object_rel_distance": 0.25806451612903225, "route_planning": 0.15625,
+        "obj_appearance_order": 0.13333333333333333, "object_abs_distance": 0.19090909090909092, "object_counting": 0.08857142857142858,
+        "object_size_estimation": 0.08125, "room_size_estimation": 0.12903225806451613}),
+    "vlmevalkit-vsibench": (47.910093518712465, {
+        "obj_appearance_order": 0.36666666666666664, "object_rel_direction_easy": 0.5, "object_rel_direction_hard": 0.5483870967741935,
+        "object_rel_direction_medium": 0.2903225806451613, "object_rel_distance": 0.5806451612903226, "route_planning": 0.59375,
+        "object_abs_distance": 0.39393939393939387, "object_counting": 0.4714285714285714, "object_size_estimation": 0.415625,
+        "room_size_estimation": 0.5645161290322581}),
+    "vsibench-lmms": (34.736171457219256, {
+        "object_rel_direction_easy": 0.11764705882352941, "object_rel_direction_medium": 0.12903225806451613,
+        "object_rel_direction_hard": 0.22580645161290322, "object_rel_distance": 0.2903225806451613, "route_planning": 0.21875,
+        "obj_appearance_order": 0.23333333333333334, "object_abs_distance": 0.5303030303030303, "object_counting": 0.5,
+        "object_size_estimation": 0.39062499999999994, "room_size_estimation": 0.45806451612903226}),
+}  # fmt: skip
+#: VsiBench._aggregate's own table for the same file (times 100): the direction levels merged.
+VLMEVALKIT_TABLE = {"object_counting": 47.14285714285714, "object_abs_distance": 39.393939393939384, "object_size_estimation": 41.5625,
+                    "room_size_estimation": 56.451612903225815, "object_rel_distance": 58.06451612903226,
+                    "object_rel_direction": 44.623655913978496, "route_planning": 59.375, "obj_appearance_order": 36.666666666666664}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["VSI-Bench_preds.tsv", "VSI-Bench_preds.xlsx"])
+def test_vsibench_prediction_file_gives_what_vlmevalkits_own_evaluate_and_the_other_rules_give(name, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), "vlmevalkit", "vsibench", n_boot=0)
+    assert (result.items, result.numerical, result.bad_records) == (320, 131, 0)
+    assert [(r.rule, r.official, r.harness) for r in result.rules] == [
+        ("vsibench", True, "VSI-Bench"), ("vlmevalkit-vsibench", False, "VLMEvalKit"), ("vsibench-lmms", False, "lmms-eval")]  # fmt: skip
+    for rule in result.rules:
+        overall, per_type = VSIBENCH_VLMEVALKIT_FILE[rule.rule]
+        assert rule.overall == pytest.approx(overall / 100, rel=1e-12), rule.rule
+        assert rule.per_category == pytest.approx(per_type, rel=1e-12), rule.rule
+    table = dict(result.rules[1].per_category)
+    table["object_rel_direction"] = sum(table.pop(f"object_rel_direction_{level}") for level in ("easy", "medium", "hard")) / 3
+    assert {t: 100 * v for t, v in table.items()} == pytest.approx(VLMEVALKIT_TABLE, rel=1e-12)
+    assert {r.rule: r.answered for r in result.rules} == {"vsibench": 215, "vlmevalkit-vsibench": 270, "vsibench-lmms": 295}
+
+
+def test_vlmevalkit_keeps_the_direction_levels_apart_when_one_has_no_question(tmp_path):
+    # the same file without its object_rel_direction_hard rows: VsiBench._aggregate merges the levels only when all three
+    # are there, so easy and medium count as two types (46.4099278111375, RUN); the set's code would raise, povagent's
+    # official reading averages the two levels present
+    import csv
+
+    full = fixture("VSI-Bench_preds.tsv", tmp_path)
+    with full.open(encoding="utf-8", newline="") as source:
+        rows = [row for row in csv.reader(source, dialect="excel-tab") if row[5] != "object_rel_direction_hard"]
+    kept = tmp_path / "VSI-Bench_no_hard.tsv"
+    with kept.open("w", encoding="utf-8", newline="") as sink:
+        csv.writer(sink, dialect="excel-tab", quoting=csv.QUOTE_ALL).writerows(rows)
+    result = rescore_log(kept, "vlmevalkit", "vsibench", n_boot=0)
+    assert result.items == 289
+    rules = {r.rule: r for r in result.rules}
+    assert rules["vlmevalkit-vsibench"].overall == pytest.approx(0.464099278111375, rel=1e-12)
+    cells = rules["vsibench"].per_category
+    merged = (cells["object_rel_direction_easy"] + cells["object_rel_direction_medium"]) / 2
+    others = [v for k, v in cells.items() if not k.startswith("object_rel_direction")]
+    assert rules["vsibench"].overall == pytest.approx((sum(others) + merged) / (len(others) + 1), rel=1e-12)
 
 
 def test_a_number_logged_as_the_gold_of_a_choice_set_is_named_and_left_out(tmp_path):
@@ -331,3 +405,11 @@ def test_a_number_logged_as_the_gold_of_a_choice_set_is_named_and_left_out(tmp_p
     result = rescore_log(log, "lmms-eval", "viewspatial", n_boot=0)
     assert (result.items, result.bad_records) == (1, 1)
     assert result.problems == [f"{log}: line 2.target: the target '3.5' is a number, and viewspatial's answers are option labels; record left out"]
+
+
+def test_a_number_as_the_answer_of_a_choice_sets_prediction_file_is_named_by_its_column_and_left_out(tmp_path):
+    log = tmp_path / "Model_ViewSpatialBench.tsv"
+    log.write_text('"index"\t"candidates"\t"answer"\t"prediction"\n"1"\t"[\'A. right\', \'B. left\']"\t"B"\t"B"\n"2"\t""\t"3.5"\t"3.5"\n', encoding="utf-8")
+    result = rescore_log(log, "vlmevalkit", "viewspatial", n_boot=0)
+    assert (result.items, result.bad_records) == (1, 1)
+    assert result.problems == [f"{log}: row 3.answer: the answer '3.5' is a number, and viewspatial's answers are option labels; record left out"]

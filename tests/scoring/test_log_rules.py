@@ -129,5 +129,6 @@ def test_mmsi_omnispatial_and_vsibench_have_their_own_rule_first_then_the_harnes
         "omnispatial": [("omnispatial-re", "choice", "OmniSpatial", True), ("omnispatial-lmms-direct", "choice", "lmms-eval", False),
                         ("omnispatial-lmms-re", "choice", "lmms-eval", False), ("omnispatial-re-corrected", "choice", "OmniSpatial, corrected", False),
                         ("vlmevalkit-spatial", "choice-vlmevalkit", "VLMEvalKit", False)],
-        "vsibench": [("vsibench", "vsibench", "VSI-Bench", True), ("vsibench-lmms", "vsibench", "lmms-eval", False)],
+        "vsibench": [("vsibench", "vsibench", "VSI-Bench", True), ("vlmevalkit-vsibench", "vsibench-vlmevalkit", "VLMEvalKit", False),
+                     ("vsibench-lmms", "vsibench", "lmms-eval", False)],
     }  # fmt: skip
