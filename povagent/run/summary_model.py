@@ -238,6 +238,8 @@ class MetricDeclaration(BaseModel):
     #: ``merged_categories`` first averaged into one); ``None``: the mean over rows.
     category_mean: bool | None = None
     merged_categories: list[list[str]] | None = None
+    #: A pattern a row's pair id must contain to count (``None``: every row).
+    select: str | None = None
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""
