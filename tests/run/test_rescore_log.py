@@ -192,7 +192,7 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial, vsibench"):
+    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, mmsi-circular, omnispatial, viewspatial, vsibench"):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
 
 
