@@ -145,3 +145,24 @@ def test_a_cache_dir_that_is_a_file_is_refused_naming_the_option(vsibench_folder
     (tmp_path / "kept").write_text("")
     with pytest.raises((DatasetError, ConfigError), match="cache_dir"):
         open_evaluation_set(vsibench_folder / "test.jsonl", format="vsibench", options={"cache_dir": str(tmp_path / "kept")})
+
+
+def test_validate_keeps_the_frames_in_the_folder_it_is_given(vsibench_folder, tmp_path):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    args = ["validate", str(vsibench_folder / "test.jsonl"), "--format", "vsibench", "--frame-cache", str(tmp_path / "kept")]
+    assert CliRunner().invoke(app, args).exit_code == 0 and len(_entries(tmp_path / "kept")) == 2
+    before = video_frames.videos_opened()
+    assert CliRunner().invoke(app, args).exit_code == 0 and video_frames.videos_opened() == before
+
+
+def test_validate_refuses_a_frame_cache_for_a_set_without_videos(tmp_path):
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    (tmp_path / "data.json").write_text("[]")
+    result = CliRunner().invoke(app, ["validate", str(tmp_path / "data.json"), "--format", "omnispatial", "--frame-cache", str(tmp_path / "kept")])
+    assert result.exit_code == 2 and "--frame-cache" in result.output and not (tmp_path / "kept").exists()
