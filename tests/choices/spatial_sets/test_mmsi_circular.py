@@ -185,3 +185,15 @@ def test_each_copy_s_row_names_its_question_and_option_order(circular_run):
 def test_read_with_vlmevalkit_s_exact_matching_the_run_gives_vlmevalkit_s_circular_figures(circular_run):
     rescored = rescore_run(circular_run.run_dir, "vlmevalkit-exact")
     assert _figures(rescored.summary, "choice-mmsi-circular", "circular_accuracy") == pytest.approx(_fractions(VLMEVALKIT), abs=1e-12)
+
+
+def test_the_report_gives_the_run_s_circular_and_vanilla_figures(circular_run, tmp_path):
+    import json
+
+    from povagent.report.build import write_report
+
+    write_report(circular_run.run_dir, tmp_path / "report", gallery=False, n_boot=200)
+    (system,) = json.loads((tmp_path / "report" / "summary.json").read_text())["metrics"]["choice-mmsi-circular"].values()
+    cells = {"overall": system["overall"], **system["per_category"]}
+    assert {k: c["circular_accuracy"]["value"] for k, c in cells.items()} == pytest.approx(_fractions(AUTHORS, lambda v: v[0]), abs=1e-12)
+    assert {k: c["vanilla_accuracy"]["value"] for k, c in cells.items()} == pytest.approx(_fractions(AUTHORS, lambda v: v[1]), abs=1e-12)
