@@ -18,6 +18,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.formats.mindcube",
     "povagent_plugins.formats.srbench3d",
     "povagent_plugins.formats.mmsi",
+    "povagent_plugins.formats.mmsi_circular",
     "povagent_plugins.formats.omnispatial",
     "povagent_plugins.formats.vsibench",
     # scorers
@@ -32,6 +33,7 @@ DEFAULT_PLUGINS: tuple[str, ...] = (
     "povagent_plugins.scorers.choice_sparbench",
     "povagent_plugins.scorers.srbench3d",
     "povagent_plugins.scorers.choice_mindcube",
+    "povagent_plugins.scorers.choice_mmsi_circular",
     "povagent_plugins.scorers.vsibench",
     "povagent_plugins.scorers.vsibench_vlmevalkit",
     # parsers

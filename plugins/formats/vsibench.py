@@ -4,10 +4,13 @@ first-word rule and scored by accuracy and mean relative accuracy.
 
 ``dataset: {path: test.parquet, format: vsibench, options: {frames: 32}}``; the videos are
 ``<dataset>/<scene_name>.mp4`` under the file's folder, or under ``dataset.images``.
+``options: {cache_dir: FOLDER}`` keeps each video's sampled frames in ``FOLDER`` across runs
+(:mod:`povagent.dataset.frame_cache`), keyed by the video's bytes, so a second run decodes nothing.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from povagent import hookimpl
@@ -25,6 +28,8 @@ SOURCE = f"{THINKING_IN_SPACE} lmms_eval/tasks/vsibench/utils.py vsibench_doc_to
 PRE_PROMPT = "These are frames of a video."
 CHOICE_POST_PROMPT = "Answer with the option's letter from the given choices directly."
 NUMBER_POST_PROMPT = "Please answer the question using a single word or phrase."
+#: ``dataset.options`` a vsibench set takes: the frames a question shows, the frame cache's folder.
+OPTION_NAMES = ("frames", "cache_dir")
 
 
 def vsibench_text(question: Any) -> str:
@@ -38,24 +43,36 @@ def vsibench_text(question: Any) -> str:
 
 
 def _frames(request: FormatRead) -> int:
-    unknown = sorted(set(request.options) - {"frames"})
+    unknown = sorted(set(request.options) - set(OPTION_NAMES))
     if unknown:
-        raise DatasetError(f"{request.path}: a vsibench set takes dataset.options frames only (got {', '.join(unknown)})")
+        raise DatasetError(f"{request.path}: a vsibench set takes dataset.options {' and '.join(OPTION_NAMES)} only (got {', '.join(unknown)})")
     frames = request.options.get("frames", DEFAULT_FRAMES)
     if not isinstance(frames, int) or isinstance(frames, bool) or not 1 <= frames <= 256:
         raise DatasetError(f"{request.path}: dataset.options.frames must be a whole number from 1 to 256, got {frames!r}")
     return frames
 
 
+def _frame_cache(request: FormatRead) -> Path | None:
+    folder = request.options.get("cache_dir")
+    if folder is None:
+        return None
+    if not isinstance(folder, (str, Path)) or not str(folder).strip():
+        raise DatasetError(f"{request.path}: dataset.options.cache_dir must name a folder, got {folder!r}")
+    path = Path(folder)
+    if path.exists() and not path.is_dir():
+        raise DatasetError(f"{request.path}: dataset.options.cache_dir {folder} is not a folder (it keeps the videos' sampled frames)")
+    return path
+
+
 def read(request: FormatRead) -> EvaluationSet:
     """The set ``request`` names, each question showing ``frames`` frames of its scene (decoded
     only where images are checked: rescoring and the report read the gold answers alone)."""
-    return load_vsibench(request.path, _frames(request), videos=request.images, decode=request.check_images)
+    return load_vsibench(request.path, _frames(request), videos=request.images, decode=request.check_images, frame_cache=_frame_cache(request))
 
 
 def problems(request: FormatRead) -> list[Problem]:
     """Every problem of the set ``request`` names (each scene video decoded once)."""
-    return validate_vsibench(request.path, _frames(request), videos=request.images)
+    return validate_vsibench(request.path, _frames(request), videos=request.images, frame_cache=_frame_cache(request))
 
 
 VSIBENCH = DatasetFormat(
@@ -77,7 +94,7 @@ VSIBENCH = DatasetFormat(
         path="the Parquet or JSONL file of questions, the scene videos `<dataset>/<scene_name>.mp4` beside it",
         how_to="how-to/vsibench.md",
     ),
-    option_names=("frames",),
+    option_names=OPTION_NAMES,
 )
 
 

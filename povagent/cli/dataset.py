@@ -27,6 +27,9 @@ def validate_command(
                                        "realworld.json, any other folder in the POVBench release layout)."),
     images: Path | None = typer.Option(None, "--images", metavar="DIR",
                                        help="With --format: the folder the set's image paths are relative to (default: the file's)."),
+    frame_cache: Path | None = typer.Option(None, "--frame-cache", metavar="DIR",
+                                            help="With a video set (--format vsibench): the folder keeping the videos' sampled frames across "
+                                                 "runs, as a pipeline's dataset.options.cache_dir (default: none, every video decoded)."),
 ) -> None:
     """Check every file and image of a dataset; list every problem.
 
@@ -44,8 +47,12 @@ def validate_command(
     except DatasetError as exc:
         problems = [Problem(str(dataset_dir), "", str(exc).removeprefix(f"{dataset_dir}: "))]
     else:
-        sizes = {k: v for k, v in (("width", width), ("height", height)) if k in found.option_names}  # a release's frames
-        problems = found.problems_of(FormatRead(dataset_dir, images=images, options=sizes, warnings=warnings))
+        options: dict[str, Any] = {k: v for k, v in (("width", width), ("height", height)) if k in found.option_names}  # a release's frames
+        if frame_cache is not None:
+            if "cache_dir" not in found.option_names:
+                raise typer.BadParameter(f"the {found.key} format reads no video: it keeps no frames", param_hint="--frame-cache")
+            options["cache_dir"] = str(frame_cache)
+        problems = found.problems_of(FormatRead(dataset_dir, images=images, options=options, warnings=warnings))
     for w in warnings:
         typer.echo(f"warning: {w}", err=True)
     for p in problems:

@@ -35,6 +35,14 @@ MAX_SIDE = 8192
 #: The most frames an item may be shown (``frames:``).
 MAX_SAMPLED = 256
 MISSING_PYAV = "reading a video needs PyAV: pip install 'povagent[video]'"
+#: The sampling rule's version: raised whenever the frames :func:`sample_frames` writes for a video
+#: change (which indices, the decoding, the encoding), so no frame cache entry of the old rule is
+#: read (:mod:`povagent.dataset.frame_cache`).
+SAMPLING_VERSION = 1
+
+#: Videos opened with PyAV in this process, counting and sampling alike: what a frame cache saves
+#: (:func:`videos_opened`; a benchmark and the tests read it).
+_opened = 0
 
 
 class VideoError(ValueError):
@@ -55,9 +63,16 @@ def sample_indices(total: int, n: int) -> list[int]:
     return [int(i) for i in np.linspace(0, total - 1, n, dtype=int)]
 
 
+def videos_opened() -> int:
+    """How many times this process has opened a video to count or decode its frames."""
+    return _opened
+
+
 def _open(path: Path) -> Any:
     from povagent.files.confined_read import open_regular
 
+    global _opened
+    _opened += 1
     handle = open_regular(path, what="video")
     size = os.fstat(handle.fileno()).st_size
     if size > MAX_VIDEO_BYTES:

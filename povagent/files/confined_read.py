@@ -32,6 +32,8 @@ The API, for every reader of untrusted files:
 - :func:`read_at` ``(folder, name, max_bytes, what=...)``: a file of a folder povagent holds open
   (a :class:`~povagent.files.confined_write.ConfinedFolder`), read through the folder's descriptor,
   so the folder cannot be swapped for a link between its check and the read;
+- :func:`open_at` ``(folder, name, what=...)``: the same file open for a reader that streams it
+  (a frame cache entry, read a chunk at a time; the caller bounds what it reads);
 - :func:`check_regular` ``(path, max_bytes, what=...)``: the size of a file another library opens
   by path (``transformers``, ``safetensors``), refused as :func:`read_regular` would refuse it.
 
@@ -200,6 +202,20 @@ def read_inside(root: str | Path, rel: str | PurePosixPath, max_bytes: int, *, w
     fd = _open_inside(root, rel, what)
     _checked(fd, path, what, max_bytes)
     return _read_all(fd, path, what, max_bytes)
+
+
+def open_at(folder: Any, name: str, *, what: str = "file") -> io.BufferedReader:
+    """The regular file ``name`` in ``folder`` (a :class:`~povagent.files.confined_write.ConfinedFolder`)
+    open for reading in binary, not following a link; refusals as in :func:`read_at`. The caller
+    bounds what it reads. Without a descriptor it opens the path below the folder, no link followed."""
+    path = Path(folder.path) / name
+    try:
+        fd = os.open(name, _READ | _NOFOLLOW, dir_fd=folder.descriptor) if folder.descriptor is not None else _open_inside(folder.path, name, what)
+    except OSError as exc:
+        raise _link_refusal(path, exc, what) from None
+    _checked(fd, path, what, None)
+    os.set_blocking(fd, True)
+    return os.fdopen(fd, "rb")
 
 
 def read_at(folder: Any, name: str, max_bytes: int, *, what: str = "file") -> bytes:

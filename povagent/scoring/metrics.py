@@ -49,10 +49,18 @@ class Metric:
     ``category_mean`` makes the ``overall`` cell the mean of the per-category means rather than
     the mean over rows (VSI-Bench's overall: each question type counts once, whatever its
     size), the categories of each group in ``merged_categories`` first averaged into one
+<<<<<<< HEAD
     (VSI-Bench's three direction levels); the per-category cells are unchanged. A group merges
     even when some of its categories have no row, unless ``merge_only_whole`` is set: then it
     merges only when every one of them has rows, else each counts on its own (VLMEvalKit's
     ``VsiBench._aggregate``).
+=======
+    (VSI-Bench's three direction levels); the per-category cells are unchanged.
+    ``select`` is a regular expression a row's pair id must contain (``re.search``) for the row
+    to count at all: a metric over some of a set's copies (MMSI-Bench's circular evaluation
+    reports its vanilla accuracy over each question's first copy alone); a row with no pair id
+    does not count. ``None``: every row.
+>>>>>>> mmsicirc
     """
 
     name: str
@@ -68,7 +76,11 @@ class Metric:
     unscored: float | None = None
     category_mean: bool = False
     merged_categories: tuple[tuple[str, ...], ...] = ()
+<<<<<<< HEAD
     merge_only_whole: bool = False
+=======
+    select: str | None = None
+>>>>>>> mmsicirc
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -84,8 +96,13 @@ class Metric:
         if self.category_mean:
             out["category_mean"] = True
             out["merged_categories"] = [list(group) for group in self.merged_categories]
+<<<<<<< HEAD
             if self.merge_only_whole:  # said only when set: other metrics read as they always did
                 out["merge_only_whole"] = True
+=======
+        if self.select is not None:
+            out["select"] = self.select
+>>>>>>> mmsicirc
         return out
 
     @classmethod
@@ -95,7 +112,11 @@ class Metric:
                    description["caption"], description["over"], description["negate"], description.get("group"),
                    tuple(description.get("overall_excludes") or ()), description.get("unscored"),
                    bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()),
+<<<<<<< HEAD
                    bool(description.get("merge_only_whole")))  # fmt: skip
+=======
+                   description.get("select"))  # fmt: skip
+>>>>>>> mmsicirc
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
@@ -127,7 +148,7 @@ def row_metric_values(row: Any, declared: Declared) -> dict[str, dict[str, float
     answered = str(getattr(row, "status", "")) == "answered"
     scores = getattr(row, "scores", None) or {}
     return {
-        scorer: dict(zip((m.name for m in metrics), _scorer_values(metrics, scores.get(scorer), answered), strict=True))
+        scorer: dict(zip((m.name for m in metrics), _selected(row, metrics, _scorer_values(metrics, scores.get(scorer), answered)), strict=True))
         for scorer, metrics in declared.items()
         if metrics
     }
@@ -141,11 +162,22 @@ def row_metric_flat(row: Any, declared: Declared) -> list[float | None]:
     out: list[float | None] = []
     for scorer, metrics in declared.items():
         if metrics:
-            values = _scorer_values(metrics, scores.get(scorer), answered)
+            values = _selected(row, metrics, _scorer_values(metrics, scores.get(scorer), answered))
             if len({m.name for m in metrics}) < len(metrics):  # a name declared twice: its last value, once
                 values = list(dict(zip((m.name for m in metrics), values)).values())
             out += values
     return out
+
+
+def _selected(row: Any, metrics: Sequence[Metric], values: list[float | None]) -> list[float | None]:
+    """``values`` with ``None`` for each metric whose ``select`` the row's pair id does not meet."""
+    if all(m.select is None for m in metrics):
+        return values
+    pair_id = getattr(row, "pair_id", None)
+    return [
+        None if m.select is not None and not (isinstance(pair_id, str) and re.search(m.select, pair_id)) else value
+        for m, value in zip(metrics, values, strict=True)
+    ]
 
 
 def _scorer_values(metrics: Sequence[Metric], fields: Mapping[str, Any] | None, answered: bool) -> list[float | None]:

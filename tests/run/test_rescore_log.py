@@ -192,7 +192,7 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, omnispatial, viewspatial, vsibench"):
+    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, mmsi-circular, omnispatial, viewspatial, vsibench"):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
 
 
@@ -413,3 +413,30 @@ def test_a_number_as_the_answer_of_a_choice_sets_prediction_file_is_named_by_its
     result = rescore_log(log, "vlmevalkit", "viewspatial", n_boot=0)
     assert (result.items, result.bad_records) == (1, 1)
     assert result.problems == [f"{log}: row 3.answer: the answer '3.5' is a number, and viewspatial's answers are option labels; record left out"]
+
+
+# MMSI-Bench's circular split (60 questions, 240 copies; ``MMSI_Bench_Circular_preds.tsv`` as the
+# authors' VLMEvalKit fork writes it, ``MMSIBench_circular_preds.tsv`` as VLMEvalKit does, the same
+# copies and replies): the official figures are the authors' MMSIBenchCircular.evaluate
+# (InternRobotics/MMSI-Bench@5de2f3d2), VLMEvalKit's are mcq_circular_eval with exact matching and
+# report_acc (VLMEvalKit@e8e78f05), each run on the file's replies.
+_PR = "Positional Relationship"
+MMSI_CIRCULAR_CATEGORIES = [f"{_PR} (Cam.–Cam.)", f"{_PR} (Obj.–Obj.)", f"{_PR} (Reg.–Reg.)", f"{_PR} (Cam.–Obj.)", f"{_PR} (Obj.–Reg.)",
+                            f"{_PR} (Cam.–Reg.)", "Attribute (Meas.)", "Attribute (Appr.)", "Motion (Cam.)", "Motion (Obj.)", "MSR"]  # fmt: skip
+MMSI_CIRCULAR = {
+    "mmsi-official": ("13/60", ["1/6", "1/6", "0", "1/6", "1/2", "1/5", "1/5", "0", "2/5", "0", "3/5"]),
+    "vlmevalkit-exact": ("3/20", ["0", "1/3", "0", "1/6", "0", "2/5", "0", "1/5", "2/5", "0", "1/5"]),
+}
+#: the authors' Vanilla column: each question's first copy
+MMSI_CIRCULAR_VANILLA = "31/60"
+
+
+@pytest.mark.parametrize("name", ["MMSI_Bench_Circular_preds.tsv", "MMSIBench_circular_preds.tsv"])
+def test_mmsi_circular_prediction_files_score_as_the_upstream_circular_evaluations_do(name, tmp_path):
+    result = rescore_log(fixture(name, tmp_path), "vlmevalkit", "mmsi-circular", n_boot=0)
+    assert (result.items, result.bad_records) == (240, 0)
+    expected = {rule: (overall, dict(zip(MMSI_CIRCULAR_CATEGORIES, cells))) for rule, (overall, cells) in MMSI_CIRCULAR.items()}
+    assert_equal_to_upstream(result, expected)
+    official = result.rules[0]
+    assert official.metric == "circular_accuracy" and official.metrics["circular_accuracy"].n == 60
+    assert official.metrics["vanilla_accuracy"].value == pytest.approx(float(Fraction(MMSI_CIRCULAR_VANILLA)), abs=1e-12)

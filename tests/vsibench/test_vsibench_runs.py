@@ -92,7 +92,7 @@ def test_the_request_shows_the_frames_then_the_sets_wording(vsibench_folder):
 
 def test_the_format_is_registered_with_its_official_rule():
     fmt = registered_format(build_plugin_host(), "vsibench")
-    assert (fmt.answer_type, fmt.official_parser, fmt.official_scorer, fmt.option_names) == ("choice-or-number", "vsibench", "vsibench", ("frames",))
+    assert (fmt.answer_type, fmt.official_parser, fmt.official_scorer, fmt.option_names) == ("choice-or-number", "vsibench", "vsibench", ("frames", "cache_dir"))
     assert fmt.prompt_profile.text.__name__ == "vsibench_text"
 
 

@@ -87,8 +87,9 @@ class VlmevalkitExactParser(RuleParser):
     no_label_reason = f"the rule reads {NO_OPTION} (VLMEvalKit's no-option label, scored wrong)"
     source = VLMEVALKIT
     harness = "VLMEvalKit"
-    #: VLMEvalKit's ``_3DSRBench`` reads with exact matching (its authors' rule: the set's official one)
-    harness_sets = (("3dsrbench", "choice-3dsrbench"),)
+    #: VLMEvalKit's ``_3DSRBench`` reads with exact matching (its authors' rule: the set's official one), and so does its
+    #: ``MMSIBench_circular`` (``ImageMCQDataset.evaluate_heuristic``: ``mcq_circular_eval`` with no judge)
+    harness_sets = (("3dsrbench", "choice-3dsrbench"), ("mmsi-circular", "choice-mmsi-circular"))
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """The rule's label; options not labelled by capital letters are refused, as VLMEvalKit asserts."""

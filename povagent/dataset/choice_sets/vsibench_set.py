@@ -24,11 +24,12 @@ from povagent.answers.choice import ChoiceQuestion
 from povagent.answers.number import NumericQuestion
 from povagent.dataset.choice_sets.external import ChoiceSet, image_camera
 from povagent.dataset.choice_sets.vsibench import SceneQuestion, read_vsibench
+from povagent.dataset.frame_cache import FrameCache, cached_sample_frames
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.models import SceneObject
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem
-from povagent.dataset.video_frames import VideoError, sample_frames, sample_indices
+from povagent.dataset.video_frames import VideoError, sample_indices
 from povagent.errors import DatasetError, PovagentError, ReadTargetError
 
 #: The set's name: the instances' "house" (ids are ``vsibench/<record id>``).
@@ -39,8 +40,13 @@ _NO_TARGET = (float("nan"),) * 3
 
 
 def load_vsibench(
-    file: str | Path, frames: int = DEFAULT_FRAMES, *, videos: str | Path | None = None, cache_dir: str | Path | None = None,
+    file: str | Path,
+    frames: int = DEFAULT_FRAMES,
+    *,
+    videos: str | Path | None = None,
+    cache_dir: str | Path | None = None,
     decode: bool = True,
+    frame_cache: str | Path | None = None,
 ) -> ChoiceSet:
     """The set in ``file`` (``.parquet`` or ``.jsonl``), each item showing ``frames`` frames of
     its scene's video found under ``videos`` (default: the file's folder); bad records are left
@@ -48,7 +54,9 @@ def load_vsibench(
     be read at all. ``decode=False`` reads the questions and their gold answers (what rescoring
     and the report need) without sampling the videos: each frame is the path a decoded frame
     would have, and only a scene's first frame (always sampled) is written, where its video is
-    there and decodes (the report's card shows it); a missing video is then no problem."""
+    there and decodes (the report's card shows it); a missing video is then no problem.
+    ``frame_cache``: a folder keeping each video's sampled frames across runs
+    (:mod:`povagent.dataset.frame_cache`; default: none, every video decoded)."""
     file = Path(file)
     if not file.is_file():
         raise DatasetError(f"{file}: not found (dataset.path of a vsibench set names its .parquet or .jsonl file)")
@@ -67,13 +75,16 @@ def load_vsibench(
 
     nowhere = unknown_object()
     real_root = dataset_root(root)
+    kept = FrameCache(Path(frame_cache)) if frame_cache is not None else None
     scenes: dict[str, tuple[Frame, ...] | str] = {}
     instances = []
     for item in items:
         shown_frames = scenes.get(item.video)
         if shown_frames is None:
             shown_frames = scenes[item.video] = (
-                _scene_frames(real_root, root, item.video, frames, cache) if decode else _first_frame_only(real_root, root, item.video, frames, cache)
+                _scene_frames(real_root, root, item.video, frames, cache, kept)
+                if decode
+                else _first_frame_only(real_root, root, item.video, frames, cache, kept)
             )
         if isinstance(shown_frames, str):
             problems.append(Problem(str(file), f"record {item.id}.scene_name", shown_frames))
@@ -85,7 +96,7 @@ def load_vsibench(
     return loaded
 
 
-def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) -> tuple[Frame, ...] | str:
+def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path, kept: FrameCache | None = None) -> tuple[Frame, ...] | str:
     """The ``n`` sampled frames of ``video`` (relative to ``root``), or why there are none."""
     try:
         path = confined(real_root, root, video, what="video path")
@@ -94,7 +105,7 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     if not path.is_file():
         return f"video {shown(video)} does not exist"
     try:
-        files = sample_frames(path, n, cache / video)  # dataset and scene_name are plain names: a folder per video
+        files = cached_sample_frames(path, n, cache / video, kept)  # dataset and scene_name are plain names: a folder per video
     except (VideoError, ReadTargetError) as exc:
         return f"video {shown(video)}: {exc}"
     with Image.open(files[0]) as first:
@@ -102,12 +113,12 @@ def _scene_frames(real_root: Path, root: Path, video: str, n: int, cache: Path) 
     return tuple(Frame(k, f"{video}#{k}", f, camera) for k, f in enumerate(files))
 
 
-def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Path) -> tuple[Frame, ...]:
+def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Path, kept: FrameCache | None = None) -> tuple[Frame, ...]:
     """Where the ``n`` frames of ``video`` would be written, only the first of them written (a
     video that is missing, outside the folder or undecodable, or no PyAV: none written)."""
     folder = cache / video
     try:
-        sample_frames(confined(real_root, root, video, what="video path"), 1, folder)  # linspace(0, total - 1, 1): frame 0
+        cached_sample_frames(confined(real_root, root, video, what="video path"), 1, folder, kept)  # linspace(0, total - 1, 1): frame 0
     except (OutsideDatasetError, VideoError, PovagentError, OSError):
         pass  # the gold answers are all that is needed: the card goes without its image
     camera = image_camera(1, 1)
@@ -129,11 +140,11 @@ def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: Scen
     )  # fmt: skip
 
 
-def validate_vsibench(file: str | Path, frames: int = DEFAULT_FRAMES, videos: str | Path | None = None) -> list[Problem]:
-    """Every problem of the set in ``file``: the records left out (each video decoded once); a
-    file that cannot be read at all is one problem."""
+def validate_vsibench(file: str | Path, frames: int = DEFAULT_FRAMES, videos: str | Path | None = None, frame_cache: str | Path | None = None) -> list[Problem]:
+    """Every problem of the set in ``file``: the records left out (each video decoded once, or
+    its frames taken from ``frame_cache``); a file that cannot be read at all is one problem."""
     try:
-        return list(load_vsibench(file, frames, videos=videos).problems)
+        return list(load_vsibench(file, frames, videos=videos, frame_cache=frame_cache).problems)
     except DatasetError as exc:
         return [Problem(str(file), "", str(exc).removeprefix(f"{file}: "))]
 
