@@ -238,13 +238,10 @@ class MetricDeclaration(BaseModel):
     #: ``merged_categories`` first averaged into one); ``None``: the mean over rows.
     category_mean: bool | None = None
     merged_categories: list[list[str]] | None = None
-<<<<<<< HEAD
     #: The groups merge only when each of their categories has rows (``None``: whatever is present).
     merge_only_whole: bool | None = None
-=======
     #: A pattern a row's pair id must contain to count (``None``: every row).
     select: str | None = None
->>>>>>> mmsicirc
 
     def metric(self, name: str) -> Metric:
         """The declared metric, to compute again from rows."""

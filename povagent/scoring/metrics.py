@@ -49,18 +49,14 @@ class Metric:
     ``category_mean`` makes the ``overall`` cell the mean of the per-category means rather than
     the mean over rows (VSI-Bench's overall: each question type counts once, whatever its
     size), the categories of each group in ``merged_categories`` first averaged into one
-<<<<<<< HEAD
     (VSI-Bench's three direction levels); the per-category cells are unchanged. A group merges
     even when some of its categories have no row, unless ``merge_only_whole`` is set: then it
     merges only when every one of them has rows, else each counts on its own (VLMEvalKit's
     ``VsiBench._aggregate``).
-=======
-    (VSI-Bench's three direction levels); the per-category cells are unchanged.
     ``select`` is a regular expression a row's pair id must contain (``re.search``) for the row
     to count at all: a metric over some of a set's copies (MMSI-Bench's circular evaluation
     reports its vanilla accuracy over each question's first copy alone); a row with no pair id
     does not count. ``None``: every row.
->>>>>>> mmsicirc
     """
 
     name: str
@@ -76,11 +72,8 @@ class Metric:
     unscored: float | None = None
     category_mean: bool = False
     merged_categories: tuple[tuple[str, ...], ...] = ()
-<<<<<<< HEAD
     merge_only_whole: bool = False
-=======
     select: str | None = None
->>>>>>> mmsicirc
 
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
@@ -96,13 +89,10 @@ class Metric:
         if self.category_mean:
             out["category_mean"] = True
             out["merged_categories"] = [list(group) for group in self.merged_categories]
-<<<<<<< HEAD
             if self.merge_only_whole:  # said only when set: other metrics read as they always did
                 out["merge_only_whole"] = True
-=======
         if self.select is not None:
             out["select"] = self.select
->>>>>>> mmsicirc
         return out
 
     @classmethod
@@ -112,11 +102,7 @@ class Metric:
                    description["caption"], description["over"], description["negate"], description.get("group"),
                    tuple(description.get("overall_excludes") or ()), description.get("unscored"),
                    bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()),
-<<<<<<< HEAD
-                   bool(description.get("merge_only_whole")))  # fmt: skip
-=======
-                   description.get("select"))  # fmt: skip
->>>>>>> mmsicirc
+                   bool(description.get("merge_only_whole")), description.get("select"))  # fmt: skip
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
