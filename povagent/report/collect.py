@@ -115,12 +115,18 @@ class Observation:
 
 @dataclass
 class RunInfo:
-    """One run folder as the report names it: the folder opened once (:attr:`opened`: its rows,
-    config, summary's declarations and transcripts), its name and its axis values."""
+    """One run folder as the report names it: the folder opened once (:attr:`opened`), its
+    config, rows and axis values."""
 
+    #: The run folder's one reader: its rows, config, summary's declarations and transcripts.
     opened: FinishedRun
+    folder: Path
     name: str
+    config: dict[str, Any]
     axes: dict[str, str]
+    #: read from the results file as they are iterated (:class:`~povagent.results.rows.StoredRows`):
+    #: a report holds no row objects, whatever the run's length
+    rows: Sequence[ResultRow]
     system: str = ""
     #: The system's name without the set it was asked (a leaderboard's row); :attr:`system` adds
     #: the set when runs of one name were asked different sets.
@@ -129,22 +135,6 @@ class RunInfo:
     sweep: Path | None = None
     #: The axis values the sweep's index gives this cell (``{}`` for a run of its own).
     cell_axes: dict[str, str] = field(default_factory=dict)
-
-    @property
-    def folder(self) -> Path:
-        """The run folder."""
-        return self.opened.folder
-
-    @property
-    def config(self) -> dict[str, Any]:
-        """Its resolved config, as plain data."""
-        return self.opened.config
-
-    @property
-    def rows(self) -> StoredRows:
-        """Its rows, read from the results file as they are iterated: a report holds no row
-        objects, whatever the run's length."""
-        return self.opened.rows
 
     @property
     def scorer(self) -> str:
@@ -300,7 +290,7 @@ def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None,
     # the index adds the axes a config cannot say, such as a named override
     for k, v in (extra_axes or {}).items():
         axes.setdefault(k, v)
-    return RunInfo(opened, name, axes, sweep=sweep, cell_axes=dict(extra_axes or {}))
+    return RunInfo(opened, folder, name, opened.config, axes, opened.rows, sweep=sweep, cell_axes=dict(extra_axes or {}))
 
 
 def dataset_paths(runs: Iterable[RunInfo]) -> list[Path]:
