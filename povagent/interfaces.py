@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from povagent.dataset.protocol import EvaluationSet
     from povagent.exchange.images import ImageStore
     from povagent.scoring.metrics import Metric
+    from povagent.scoring.official import OfficialScore
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]
@@ -273,3 +274,11 @@ class Scorer(abc.ABC):
     @abc.abstractmethod
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: EvaluationSet | None) -> dict[str, Any]:
         """JSON-able scores for one row (e.g. ``{"answered": True, "l2": 0.12, ...}``)."""
+
+    def point_fields(self, point: OfficialScore, l2_closest: float | None = None) -> dict[str, Any]:
+        """A ``normalized_l2`` scorer's row fields for a point the protocol placed already
+        (``point``: its official score in the scored frame; ``l2_closest``: a multi-point
+        answer's closest point's error). ``povagent score`` scores prediction files that hold
+        no parsed answer through it, so its fields and the metrics declared over them are a
+        run's; a scorer following no point protocol never has it asked."""
+        raise NotImplementedError(f"{type(self).__name__} scores no point placed by the normalized_l2 protocol")

@@ -17,7 +17,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent.scoring.official import UNANSWERED, answered_in_camera, closest_point_l2, score_point, scoring_frame
+from povagent.scoring.official import UNANSWERED, OfficialScore, answered_in_camera, closest_point_l2, score_point, scoring_frame
 
 #: The official number, its response rate, and the protocol's extras.
 OFFICIAL_METRICS = (
@@ -48,14 +48,23 @@ class OfficialScorer(Scorer):
             raise ValueError(f"instance {instance.id} is a multiple-choice item with no POVBench condition: "
                              "the official scorer scores points; score it with a choice scorer")  # fmt: skip
         if not answer.answered:
-            return UNANSWERED.as_dict()
+            return self.point_fields(UNANSWERED)
         # an answer given in a camera of its own (an active-mode view) is scored in that camera
         frame = answered_in_camera(answer.camera) if answer.camera is not None else scoring_frame(instance, answer.selected_image)
         first = answer.points[0] if answer.points else None
-        result = score_point(instance, frame, answer.x, answer.y, first).as_dict()
+        closest = None
         if answer.points and len(answer.points) > 1 and frame is not None:
-            result["l2_closest"] = closest_point_l2(instance, frame, answer.points)
-        return result
+            closest = closest_point_l2(instance, frame, answer.points)
+        return self.point_fields(score_point(instance, frame, answer.x, answer.y, first), closest)
+
+    def point_fields(self, point: OfficialScore, l2_closest: float | None = None) -> dict[str, Any]:
+        """The row fields of one placed point: the one place they are listed. A run, ``rescore``
+        and ``povagent score`` (prediction files hold no parsed answer) all ask it, so a field
+        added here, with its metric in :data:`OFFICIAL_METRICS`, reaches every command."""
+        fields = point.as_dict()
+        if l2_closest is not None:
+            fields["l2_closest"] = l2_closest
+        return fields
 
 
 @hookimpl

@@ -169,7 +169,6 @@ def score_command(
     from povagent.dataset.loader import load_dataset
     from povagent.plugins import get_plugin_host
     from povagent.results.prediction_files import score_predictions
-    from povagent.run.summary import declared_metrics
     from povagent.run.summary_model import ScoreSummary
     from povagent.scoring.official_release import read_release
     from povagent.scoring.protocols import following, registered_protocols
@@ -183,10 +182,11 @@ def score_command(
         # under official counting the official rows still see such a pair as the official scorer does
         how = " by povagent's loader (official rows are counted against the release as officially)" if release is not None else ""
         typer.echo(f"warning: dataset problem, skipped{how}: {p}", err=True)
-    # the official metric is the normalized_l2 scorer's: its declared metrics, as run and rescore report them
+    # the official metric is the normalized_l2 scorer's: its declared metrics over the fields it
+    # gives each point, as run and rescore report them
     official = following(registered_protocols(), "normalized_l2")
-    declared = declared_metrics({official: get_plugin_host().scorer(official)} if official is not None else {})
-    summary, warnings = score_predictions(predictions, ds, release, declared)
+    scorers = {official: get_plugin_host().scorer(official)} if official is not None else {}
+    summary, warnings = score_predictions(predictions, ds, release, scorers)
     # the release's own (its exploration logs are read as predictions name their houses)
     for w in release.warnings if release is not None else []:
         typer.echo(f"warning: {w}", err=True)

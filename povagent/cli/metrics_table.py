@@ -7,11 +7,11 @@ whatever the scorer is: a third-party scorer's numbers reach the console without
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Iterable
+from typing import TYPE_CHECKING, Iterable, Mapping
 
 if TYPE_CHECKING:
     from povagent.cli.console_width import PathTitle
-    from povagent.run.summary_model import MetricEstimate, RunSummary, ScorerMetrics, ScoreSummary
+    from povagent.run.summary_model import MetricDeclaration, MetricEstimate, RunSummary, ScorerMetrics, ScoreSummary
 
 
 def metric_cell(estimate: MetricEstimate | None, aggregation: str) -> str:
@@ -26,14 +26,15 @@ def metric_cell(estimate: MetricEstimate | None, aggregation: str) -> str:
     return f"{shown(estimate.value)}{ci} n={estimate.n}"
 
 
-def metrics_rows(metrics: ScorerMetrics) -> tuple[list[str], list[list[str]]]:
+def metrics_rows(metrics: ScorerMetrics, declared: Mapping[str, MetricDeclaration] | None = None) -> tuple[list[str], list[list[str]]]:
     """``(headers, rows)``: a column per declared metric (its label, arrow of the better
-    direction), a row per slice."""
+    direction; ``declared``: only these of them), a row per slice."""
     from povagent.cli.slice_rows import breakdown_slices
 
-    names = list(metrics.declared)
-    headers = [f"{d.label} {'↓' if d.better == 'lower' else '↑'}" for d in metrics.declared.values()]
-    rows = [[label, *(metric_cell(cell.get(n), metrics.declared[n].aggregation) for n in names)]
+    declared = metrics.declared if declared is None else declared
+    names = list(declared)
+    headers = [f"{d.label} {'↓' if d.better == 'lower' else '↑'}" for d in declared.values()]
+    rows = [[label, *(metric_cell(cell.get(n), declared[n].aggregation) for n in names)]
             for label, cell in breakdown_slices(metrics)]  # fmt: skip
     return headers, rows
 
@@ -52,18 +53,22 @@ def protocol_scorers(summary: RunSummary | ScoreSummary, protocol: str) -> list[
 
 
 def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, shown: Iterable[str] = ()) -> None:
-    """Print a table per scorer in ``summary.metrics`` not in ``shown`` (scorers whose numbers
-    a table of their own already printed)."""
+    """Print a table per scorer in ``summary.metrics``; of a scorer in ``shown`` (whose protocol's
+    table printed already) only the metrics that table does not show, if any
+    (:func:`~povagent.scoring.protocols.beyond_protocol`)."""
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_tables
+    from povagent.scoring.protocols import beyond_protocol, registered_protocols
 
     skip = set(shown)
+    protocols = registered_protocols() if skip else {}
     for scorer, metrics in (summary.metrics or {}).items():
-        if scorer in skip:
+        declared = beyond_protocol(metrics.declared, protocols.get(scorer)) if scorer in skip else metrics.declared
+        if not declared:
             continue
-        headers, rows = metrics_rows(metrics)
-        captions = "; ".join(f"{d.label}: {d.caption}" for d in metrics.declared.values())
+        headers, rows = metrics_rows(metrics, declared)
+        captions = "; ".join(f"{d.label}: {d.caption}" for d in declared.values())
         columns = [("slice", "label")] + [(h, "number") for h in headers]
         heading = f"{title}\nscorer {scorer}" if isinstance(title, str) else title._replace(after=f"{title.after}\nscorer {scorer}")
         for table in fitted_tables(columns, rows, title=heading, caption=captions):

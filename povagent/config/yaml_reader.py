@@ -199,8 +199,14 @@ def read_yaml(path: str | os.PathLike[str]) -> ConfigSource:
         raise ConfigError(f"{p}: file not found") from None
     except OSError as exc:
         raise ConfigError(f"{p}: cannot be read: {exc.strerror or exc}") from None
+    return yaml_source(p, raw)
+
+
+def yaml_source(path: str | os.PathLike[str], raw: bytes) -> ConfigSource:
+    """Parse the bytes read from the YAML file at ``path`` (a text that is not UTF-8 is a
+    :class:`ConfigError`): for a reader that read the file already (a run folder's)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise ConfigError(f"{p}: not UTF-8 text (byte {exc.start} is 0x{raw[exc.start]:02x}); a config is a YAML text file saved as UTF-8") from None
-    return parse_yaml(text, str(p))
+        raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start} is 0x{raw[exc.start]:02x}); a config is a YAML text file saved as UTF-8") from None
+    return parse_yaml(text, str(path))

@@ -144,6 +144,16 @@ class Analysis:
         """The scorer whose rows follow ``protocol`` (``None``: no row does)."""
         return next((s for s, p in zip(self.scorers, self.protocols) if p == protocol), None)
 
+    def metrics_of_own(self, scorer: str) -> dict[str, Metric]:
+        """``scorer``'s declared metrics that get tables and plots of their own: all of them, but
+        those its protocol's tables show already (:func:`~povagent.scoring.protocols.beyond_protocol`);
+        none when no row was estimated."""
+        from povagent.scoring.protocols import beyond_protocol
+
+        if scorer not in self.declared_estimates:
+            return {}
+        return beyond_protocol(self.declared.get(scorer, {}), dict(zip(self.scorers, self.protocols)).get(scorer))
+
     def system(self, name: str) -> SystemStats:
         """The stats of one system by label."""
         for s in self.systems:

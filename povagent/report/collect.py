@@ -26,16 +26,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-import yaml
-
-from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.errors import PredictionsError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
-from povagent.report.run_summaries import declared_in_summary
 from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
+from povagent.results.finished_run import RESULTS_FILE, FinishedRun, is_run_folder
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
@@ -45,8 +42,6 @@ from povagent.scoring.protocols import PROTOCOLS, registered_protocols, shown_an
 #: text stays in results.jsonl).
 MAX_RAW_CHARS = 8000
 
-RESULTS_FILE = "results.jsonl"
-CONFIG_FILE = "config.yaml"
 SWEEP_INDEX = "sweep.json"
 
 
@@ -120,8 +115,11 @@ class Observation:
 
 @dataclass
 class RunInfo:
-    """One run folder: its resolved config, its axis values and its rows."""
+    """One run folder as the report names it: the folder opened once (:attr:`opened`), its
+    config, rows and axis values."""
 
+    #: The run folder's one reader: its rows, config, summary's declarations and transcripts.
+    opened: FinishedRun
     folder: Path
     name: str
     config: dict[str, Any]
@@ -221,17 +219,6 @@ def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     return ""
 
 
-def _read_config(folder: Path) -> dict[str, Any]:
-    path = folder / CONFIG_FILE
-    if not path.exists():
-        return {}
-    try:
-        data = yaml.safe_load(read_regular(path, MAX_CONFIG_BYTES, what="run config").decode("utf-8"))
-    except yaml.YAMLError as exc:
-        raise PredictionsError(f"{path}: not valid YAML ({exc})") from exc
-    return data if isinstance(data, dict) else {}
-
-
 def _name_of(section: Any) -> str:
     if isinstance(section, str):
         return section
@@ -297,17 +284,13 @@ def _axis_text(value: Any) -> str:
 
 
 def _load_run(folder: Path, name: str, extra_axes: dict[str, str] | None = None, sweep: Path | None = None) -> RunInfo:
-    results = folder / RESULTS_FILE
-    if not results.exists():
-        raise PredictionsError(f"{folder}: no {RESULTS_FILE} (is this a run folder?)")
-    rows = StoredRows(results)
-    config = _read_config(folder)
-    axes = config_axes(config, rows)
+    opened = FinishedRun.open(folder)
+    axes = config_axes(opened.config, opened.rows)
     # the run's own config names model, strategy and parser best (sweep labels are slugs);
     # the index adds the axes a config cannot say, such as a named override
     for k, v in (extra_axes or {}).items():
         axes.setdefault(k, v)
-    return RunInfo(folder, name, config, axes, rows, sweep=sweep, cell_axes=dict(extra_axes or {}))
+    return RunInfo(opened, folder, name, opened.config, axes, opened.rows, sweep=sweep, cell_axes=dict(extra_axes or {}))
 
 
 def dataset_paths(runs: Iterable[RunInfo]) -> list[Path]:
@@ -320,7 +303,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
     root = Path(path)
     if not root.exists():
         raise PredictionsError(f"{root}: no such run or sweep folder")
-    if (root / RESULTS_FILE).exists():
+    if is_run_folder(root):
         return [_load_run(root, root.name)]
     runs: list[RunInfo] = []
     index_path = root / SWEEP_INDEX
@@ -444,13 +427,13 @@ def collect(
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
-        declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
+        declared = r.opened.declared  # none in a summary from before metrics
         scorer, protocol = r.scorer, r.protocol  # once: the rows are read again each time they are looked at
         for index, row in enumerate(r.rows):
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, scorer, declared, protocol, StoredTurns(r.rows, index, MAX_RAW_CHARS + 1))
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, MAX_RAW_CHARS + 1))
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 

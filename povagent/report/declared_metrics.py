@@ -1,8 +1,8 @@
 """The report's numbers of every declared metric: per scorer and system, overall and per slice.
 
 A scorer declares its metrics (:mod:`povagent.scoring.metrics`); the runs' summaries record the
-declarations (:mod:`povagent.report.run_summaries`), and each observation carries its row's
-values. This estimates each metric per system through the one estimate ``summary.json`` uses
+declarations (:attr:`povagent.results.finished_run.FinishedRun.declared`), and each observation
+carries its row's values. This estimates each metric per system through the one estimate ``summary.json`` uses
 (:func:`~povagent.scoring.metric_columns.metric_slices`), whatever the scorer, so the report's
 tables and plots of a third party's metrics need no code of its own.
 
@@ -14,7 +14,6 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from povagent.report.collect import Collection, Observation
-from povagent.report.run_summaries import declared_in_summary
 from povagent.scoring.bootstrap import Estimate
 from povagent.scoring.metric_columns import MetricColumns, metric_slices
 from povagent.scoring.metrics import Metric, ValuedRow
@@ -29,7 +28,7 @@ def declared_metric_estimates(
     uses (:func:`~povagent.scoring.metric_columns.metric_slices`)."""
     declared: dict[str, dict[str, Metric]] = {}
     for run in collection.runs:
-        for scorer, run_metrics in declared_in_summary(run.folder / "summary.json").items():
+        for scorer, run_metrics in run.opened.declared.items():
             for m in run_metrics:
                 declared.setdefault(scorer, {}).setdefault(m.name, m)
     estimates: dict[str, dict[str, dict[str, Any]]] = {}

@@ -49,16 +49,14 @@ def report_figures(a: Analysis, frame_size: Callable[[str], tuple[int, int]] | N
 
 
 def declared_metric_figures(a: Analysis) -> dict[str, tuple[str, str]]:
-    """A plot per declared metric of every scorer without figures of its own (no protocol): the
-    metric per condition and overall, a bar per system with its declared bootstrap CI."""
+    """A plot per declared metric that no protocol's figure shows (:meth:`Analysis.metrics_of_own`):
+    the metric per condition and overall, a bar per system with its declared bootstrap CI."""
     from povagent.report.plots import grouped_bars
 
     figs: dict[str, tuple[str, str]] = {}
-    for scorer, metrics in a.declared.items():
-        if scorer in a.scorers or scorer not in a.declared_estimates:
-            continue
-        by_system = a.declared_estimates[scorer]
-        for m in metrics.values():
+    for scorer in a.declared:
+        by_system = a.declared_estimates.get(scorer, {})
+        for m in a.metrics_of_own(scorer).values():
             if len(figs) >= MAX_METRIC_PLOTS:
                 return figs
             series = [

@@ -313,16 +313,15 @@ _SLICE_WORDS = {"per_condition": ("condition", condition_label), "per_direction"
 
 
 def declared_metric_tables(a: Analysis) -> list[Table]:
-    """A table per declared metric of every scorer without tables of its own (no protocol): a
+    """A table per declared metric that no protocol's table shows (every metric of a scorer
+    following no protocol, a protocol scorer's others: :meth:`Analysis.metrics_of_own`): a
     row per system, a column per condition and ``Overall`` (and a second table by direction,
     when several), each cell the metric's value with its declared bootstrap CI, bold on the
     better side the metric declares."""
     tables: list[Table] = []
-    for scorer, metrics in a.declared.items():
-        if scorer in a.scorers or scorer not in a.declared_estimates:
-            continue
-        by_system = a.declared_estimates[scorer]
-        for m in metrics.values():
+    for scorer in a.declared:
+        by_system = a.declared_estimates.get(scorer, {})
+        for m in a.metrics_of_own(scorer).values():
             for slice_key, (word, label) in _SLICE_WORDS.items():
                 keys = list(a.conditions if slice_key == "per_condition" else a.directions)
                 if slice_key == "per_direction" and len(keys) < 2:

@@ -44,7 +44,6 @@ class NamedRun(Protocol):
 
     name: str
     axes: dict[str, str]
-    config: dict[str, Any]
     system: str
     #: The system's name without its set (set with :attr:`system`).
     entrant: str
@@ -55,6 +54,9 @@ class NamedRun(Protocol):
 
     @property
     def folder(self) -> Any: ...
+
+    @property
+    def config(self) -> dict[str, Any]: ...
 
     @property
     def benchmark(self) -> str: ...

@@ -13,12 +13,11 @@ import re
 from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Mapping
 
 from povagent.dataset.loader import Dataset
 from povagent.errors import PredictionsError
 from povagent.results.official_format import NOT_PREDICTIONS, read_official_run
-from povagent.scoring.metrics import Declared
 from povagent.scoring.official_release import OfficialRelease
 from povagent.scoring.predictions import (
     RUN_FOLDER_NAME,
@@ -29,6 +28,9 @@ from povagent.scoring.predictions import (
     score_result_rows,
     summary_of,
 )
+
+if TYPE_CHECKING:
+    from povagent.interfaces import Scorer
 
 
 def run_folder_label(name: str) -> tuple[str, str]:
@@ -100,7 +102,7 @@ def _score_one(path: Path, dataset: Dataset, release: OfficialRelease | None, ru
 
 
 def score_predictions(
-    path: str | Path, dataset: Dataset, release: OfficialRelease | None = None, declared: Declared | None = None
+    path: str | Path, dataset: Dataset, release: OfficialRelease | None = None, scorers: Mapping[str, Scorer] | None = None
 ) -> tuple[dict[str, Any], list[str]]:
     """Score a predictions path against ``dataset``: the summary and any warnings.
 
@@ -112,8 +114,9 @@ def score_predictions(
     With ``release`` (:func:`povagent.scoring.official_release.read_release` of the same
     folder) official rows are counted exactly as the official scorer counts them; without it,
     against the loaded ``dataset`` (povagent's own counting). Our own rows are scored against
-    ``dataset`` either way. ``declared`` (the official scorer's declared metrics) adds each
-    model's ``metrics`` section (:func:`~povagent.scoring.predictions.summary_of`).
+    ``dataset`` either way. ``scorers`` (``{name: the normalized_l2 scorer}``) adds each
+    model's ``metrics`` section: its declared metrics over the fields it gives each point
+    (:func:`~povagent.scoring.predictions.summary_of`).
     """
     p = Path(path)
     folders = run_folders(p) if p.is_dir() and not (p / "results.jsonl").exists() else []
@@ -121,7 +124,7 @@ def score_predictions(
         scored, warnings = _score_one(p, dataset, release)
         if not scored:
             raise PredictionsError(f"{path}: no prediction rows to score")
-        return summary_of(scored, declared), warnings
+        return summary_of(scored, scorers), warnings
     by_model: dict[str, list[Path]] = defaultdict(list)
     for folder in folders:
         by_model[run_folder_label(folder.name)[0]].append(folder)
@@ -140,7 +143,7 @@ def score_predictions(
             # an official run folder is one run; our run folder may hold several (its rows' run)
             scored += [replace(x, run=run_ids.setdefault((k, x.run), len(run_ids))) for x in s]
             warnings += [f"{folder.name}: {m}" for m in w]
-        summary = summary_of(scored, declared)
+        summary = summary_of(scored, scorers)
         summary["run_folders"] = [f.name for f in runs]
         models[model] = summary
     if len(models) == 1:

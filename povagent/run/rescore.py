@@ -38,9 +38,9 @@ from povagent.dataset.evaluation_set import open_evaluation_set
 from povagent.dataset.instances import Instance
 from povagent.errors import DatasetError, PluginError, PredictionsError
 from povagent.exchange.images import ImageStore
-from povagent.files.confined_read import check_regular
 from povagent.files.confined_write import ConfinedFolder, write_inside
 from povagent.plugins import PluginHost, get_plugin_host
+from povagent.results.finished_run import RESULTS_FILE, FinishedRun
 from povagent.results.official_reading import (
     OFFICIAL_PARSER,
     nan_rows,
@@ -48,7 +48,7 @@ from povagent.results.official_reading import (
     official_counterpart,
     officially_read,
 )
-from povagent.results.rows import ResultRow, RowStatus, StagedResults, read_rows
+from povagent.results.rows import ResultRow, RowStatus, StagedResults
 from povagent.run.pending import asked_by
 from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category
@@ -147,11 +147,11 @@ def rescore_run(
     plugin to pass (see :func:`~povagent.config.plugin_rule.missing_plugin_message`).
     """
     run = Path(run_dir)
-    results = run / "results.jsonl"
+    results = run / RESULTS_FILE
     if not results.exists():
         raise PredictionsError(f"{results}: not found (is {run} a run folder?)")
-    check_regular(results, what="results file")  # a pipe or a device planted there: one line
-    config = read_run_config(run)
+    finished = FinishedRun.open(run)  # the one reader of a run folder: the report's, export's and compare's
+    config = read_run_config(run, finished.config_bytes)
     host = host or get_plugin_host(tuple(plugins))
     # the parser is named on the command line (the host says if it is unknown); the run's
     # strategy and scorers come from its folder
@@ -195,7 +195,7 @@ def rescore_run(
     # The run folder is the one the user named: ``rescored-*`` and every file in it are opened
     # below it without following a link planted there (see confined_write).
     with StagedResults(out_dir / "results.jsonl", root=run) as staged:
-        for row in read_rows(results):
+        for row in finished.all_rows():
             instance = dataset.instance(row.instance_id)
             if instance is None:
                 warnings.append(f"{row.key}: instance {row.instance_id} is not in the dataset {root}; row left out")

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 from povagent.config.models import PipelineConfig
 from povagent.config.validation_messages import validation_message
-from povagent.config.yaml_reader import read_yaml
+from povagent.config.yaml_reader import read_yaml, yaml_source
 from povagent.errors import ConfigError, ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, open_regular, read_regular
 from povagent.files.confined_write import ConfinedFolder, write_inside
@@ -147,10 +147,12 @@ def _an_earlier_sweep_folder(folder: Path) -> bool:
     return isinstance(cells, list) and all(isinstance(c, dict) and "name" in c and "run_dir" in c for c in cells)
 
 
-def read_run_config(run_dir: Path) -> PipelineConfig:
+def read_run_config(run_dir: Path, raw: bytes | None = None) -> PipelineConfig:
     """The pipeline a run was made with (``RUN_DIR/config.yaml``), validated; nothing it names
-    (plugins, datasets) is loaded."""
-    source = read_yaml(run_dir / "config.yaml")
+    (plugins, datasets) is loaded. ``raw``: the file's bytes as the run folder's reader read
+    them (:class:`~povagent.results.finished_run.FinishedRun`), not read again."""
+    path = run_dir / "config.yaml"
+    source = read_yaml(path) if raw is None else yaml_source(path, raw)
     if not isinstance(source.data, dict):
         raise ConfigError(f"{source.file}: a pipeline must be a YAML mapping (key: value)")
     data = dict(source.data)

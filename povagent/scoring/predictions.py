@@ -47,6 +47,7 @@ from povagent.scoring.official import (
     GroundTruthInFrame,
     OfficialScore,
     answered_in_camera,
+    closest_point_l2,
     point_errors,
     points_l2,
     project_ground_truth,
@@ -442,9 +443,11 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
         # an answer given in a camera of its own (an active-mode view) is scored in that camera
         camera = row.parse.camera if row.parse is not None else None
         frame = answered_in_camera(camera) if camera is not None else scoring_frame(inst, p.selected_image, p.image_path)
-        first = row.parse.points[0] if row.parse is not None and row.parse.points else None
-        score = score_point(inst, frame, float(p.x), float(p.y), first)
-        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, None, parse_error))
+        points = row.parse.points if row.parse is not None else None
+        score = score_point(inst, frame, float(p.x), float(p.y), points[0] if points else None)
+        # a multi-point answer's closest point, as the run's scorer recorded it
+        closest = closest_point_l2(inst, frame, [(a, b) for a, b in points]) if points and len(points) > 1 and frame is not None else None
+        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, closest, parse_error))
     if unknown:
         warnings.append(
             f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
@@ -459,21 +462,22 @@ def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[Score
 @dataclass(frozen=True)
 class _ScoredAsRow:
     """A scored prediction as :func:`~povagent.scoring.metrics.row_metric_values` reads a row:
-    its status and, under each scorer named, the official fields it was scored with."""
+    its status and, under each scorer named, the fields that scorer gives its point."""
 
     status: str
-    scores: dict[str, dict[str, object]]
+    scores: dict[str, dict[str, Any]]
     condition: str | None
     direction: str | None
 
 
-def summary_of(scored: Iterable[ScoredPrediction], declared: Declared | None = None) -> dict[str, Any]:
+def summary_of(scored: Iterable[ScoredPrediction], scorers: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The breakdown (overall, per condition, per direction, condition x direction); several
     runs are averaged per run, the paper's way, with the pooled numbers under ``pooled``.
 
-    With ``declared`` (the official scorer's declared metrics, by its name) the summary has the
-    ``metrics`` section a run's has, every row in one breakdown: each row's values come from its
-    official fields through the function ``run`` and ``rescore`` use."""
+    With ``scorers`` (``{name: scorer}``, the ``normalized_l2`` scorer: ``povagent score``'s)
+    the summary has the ``metrics`` section a run's has, every row in one breakdown: the
+    scorer's declared metrics (``Scorer.metrics``) over the fields it gives each point
+    (``Scorer.point_fields``), through the function ``run`` and ``rescore`` use."""
     scored = list(scored)
     out = breakdown(
         ScoredRow(
@@ -482,10 +486,13 @@ def summary_of(scored: Iterable[ScoredPrediction], declared: Declared | None = N
         )
         for s in scored
     )
-    if declared and any(declared.values()):
+    declared: Declared = {name: tuple(scorer.metrics) for name, scorer in (scorers or {}).items()}
+    if any(declared.values()):
         rows = (
-            _ScoredAsRow("answered" if s.score.answered else "unanswered", {name: s.score.as_dict() for name in declared}, s.condition, s.direction)
+            _ScoredAsRow("answered" if s.score.answered else "unanswered",
+                         {name: scorer.point_fields(s.score, s.l2_closest) for name, scorer in (scorers or {}).items()},
+                         s.condition, s.direction)
             for s in scored
-        )
+        )  # fmt: skip
         out["metrics"] = metrics_breakdown((valued_row(row, declared) for row in rows), declared)
     return out

@@ -11,17 +11,45 @@ here reads a run folder or scores a row.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Mapping, get_args
+from typing import TYPE_CHECKING, Any, Mapping, Protocol, TypeVar, get_args
 
 from povagent.interfaces import Diagnosis, ScoreProtocol
 
 if TYPE_CHECKING:
     from povagent.plugins import PluginHost
 
+
+class _Declared(Protocol):
+    """A declared metric as a scorer (:class:`~povagent.scoring.metrics.Metric`) or a summary
+    records it: the row field it reads."""
+
+    @property
+    def field(self) -> str: ...
+
+
+_M = TypeVar("_M", bound=_Declared)
+
 #: Every protocol, in the order reports show their sections.
 PROTOCOLS: tuple[ScoreProtocol, ...] = get_args(ScoreProtocol)
 #: Every diagnosis a scorer may declare.
 DIAGNOSES: tuple[Diagnosis, ...] = get_args(Diagnosis)
+
+#: The row fields each protocol's own sections read (the official error tables: the error, its
+#: strict variant, the GT in or behind the frame; the success tables: the hit), beside
+#: ``answered`` (the response rate). A metric a protocol's scorer declares over one of them is
+#: shown there; every other metric it declares is shown as any scorer's is
+#: (:func:`beyond_protocol`), so a metric added to the scorer needs no line elsewhere.
+PROTOCOL_FIELDS: dict[str, frozenset[str]] = {
+    "normalized_l2": frozenset({"answered", "l2", "l2_strict", "gt_in_frame", "gt_behind"}),
+    "marked_hit": frozenset({"answered", "success"}),
+}
+
+
+def beyond_protocol(declared: Mapping[str, _M], protocol: str | None) -> dict[str, _M]:
+    """The metrics of ``declared`` (``{name: metric}``, each with its row ``field``) that the
+    sections of ``protocol`` (the scorer's; ``None``: it follows none) do not show."""
+    shown = PROTOCOL_FIELDS.get(protocol, frozenset()) if protocol is not None else frozenset()
+    return {name: m for name, m in declared.items() if m.field not in shown}
 
 
 def reading_host() -> PluginHost:
