@@ -19,7 +19,7 @@ NUMBER = AnswerSpec(schema=number_answer_schema(), asks_frame=False)
 
 def test_the_missing_values_are_pandas_own_defaults():
     parsers = pytest.importorskip("pandas._libs.parsers")
-    assert PANDAS_MISSING == frozenset(parsers.STR_NA_VALUES)
+    assert frozenset(parsers.STR_NA_VALUES) == PANDAS_MISSING
 
 
 @pytest.mark.parametrize("cell", sorted(PANDAS_MISSING))
