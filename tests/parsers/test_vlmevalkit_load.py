@@ -9,7 +9,7 @@ import pytest
 from povagent.answers.number import number_answer_schema
 from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.vlmevalkit_exact import vlmevalkit_exact_label
-from povagent_plugins.parsers.mcq.vlmevalkit_load import PANDAS_MISSING, as_vlmevalkit_loads
+from povagent_plugins.parsers.mcq.vlmevalkit_load import PANDAS_MISSING, as_vlmevalkit_loads, options_as_vlmevalkit_loads
 from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
 
 YES_NO = AnswerSpec(schema={}, asks_frame=False, choices=(("A", "yes"), ("B", "no")))
@@ -54,3 +54,17 @@ def test_vlmevalkits_vsibench_rule_reads_no_number_in_an_empty_or_missing_reply(
 @pytest.mark.parametrize(("parser", "reads"), [("viewspatial-official", "A"), ("viewspatial", "A"), ("mmsi-official", "A")])
 def test_the_sets_own_rules_and_lmms_evals_read_n_a_as_written(povagent_host, parser, reads):
     assert povagent_host.parser(parser, {}).parse("N/A", FOUR).choice == reads
+
+
+def test_an_option_whose_text_pandas_reads_as_missing_is_no_choice_of_vlmevalkits_exact_rule(povagent_host):
+    # build_choices @ e8e78f05 on the loaded row keeps {A: yes, B: no, D: left}: "C" is no choice, so Z
+    spec = AnswerSpec(schema={}, asks_frame=False, choices=(("A", "yes"), ("B", "no"), ("C", "None"), ("D", "left")))
+    assert vlmevalkit_exact_label("C", spec.choices) == "C"  # what can_infer reads with the cell kept
+    parser = povagent_host.parser("vlmevalkit-exact", {})
+    assert parser.parse("C", spec).choice is None
+    assert parser.parse("D", spec).choice == "D"  # the options after it stay
+    assert parser.parse("C", spec.model_copy(update={"choices": (("A", "yes"), ("B", "NA"), ("C", "left"))})).choice == "C"
+
+
+def test_options_logged_without_their_text_stay_choices():
+    assert options_as_vlmevalkit_loads((("A", ""), ("B", ""), ("C", "NA"))) == (("A", ""), ("B", ""))

@@ -20,7 +20,9 @@ label no question has, so a wrong answer. No reasoning block is removed. The ste
 ``Z`` is no label here (``choice`` is ``None``, the reason says ``Z``). VLMEvalKit reads an
 extra word count when the ``VERBOSE`` environment variable is set; the default (unset) is
 reproduced. Option labels must be capital letters, as VLMEvalKit asserts. The reply is first
-what VLMEvalKit's ``load`` makes of it (:mod:`.vlmevalkit_load`: ``"None"`` is ``"nan"``).
+what VLMEvalKit's ``load`` makes of it (:mod:`.vlmevalkit_load`: ``"None"`` is ``"nan"``), and
+the options are those its ``build_choices`` keeps (an option whose text pandas reads as missing,
+such as ``"None"``, is no choice). A question whose options all go reads ``Z``.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ import re
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
-from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser
+from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser, options_as_vlmevalkit_loads
 
 #: VLMEvalKit's marker of a reply it never got.
 API_FAILURE = "Failed to obtain answer via API"
@@ -97,7 +99,7 @@ class VlmevalkitExactParser(VlmevalkitRuleParser):
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label; ``None`` for ``Z``."""
-        label = vlmevalkit_exact_label(text, spec.choices)
+        label = vlmevalkit_exact_label(text, options_as_vlmevalkit_loads(spec.choices))
         return None if label == NO_OPTION else label
 
 

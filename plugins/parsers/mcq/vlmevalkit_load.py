@@ -12,6 +12,12 @@ pandas' default missing-value strings (its ``STR_NA_VALUES``: ``N/A``, ``NA``, `
 is NaN, and ``str(NaN)`` is ``"nan"``: VLMEvalKit's rules read ``"nan"`` there, so ``"N/A"``
 names no option though the spatial-bench rule alone would read its ``A``.
 
+The option cells go the same way: VLMEvalKit's exact matching builds a question's choices from
+its ``A``-``Z`` cells that pandas does not read as missing (``build_choices``), so an option whose
+text is ``"None"`` or ``"NA"`` is no choice there (the options after it stay):
+:func:`options_as_vlmevalkit_loads`, which the rule reading option texts (``vlmevalkit-exact``)
+applies; the spatial-bench rule reads no options.
+
 Every VLMEvalKit rule parser applies :func:`as_vlmevalkit_loads` first and says so with
 :data:`LOAD_FILTER` (``harness_filter``); the set's own rules and lmms-eval's, which never read
 a reply through pandas, do not. Pure: text in, text out.
@@ -41,6 +47,13 @@ def as_vlmevalkit_loads(reply: str) -> str:
     """The reply as VLMEvalKit's ``evaluate`` hands it to its rule: ``"nan"`` where pandas reads
     the cell as missing, else as written."""
     return AS_MISSING if reply in PANDAS_MISSING else reply
+
+
+def options_as_vlmevalkit_loads(options: tuple[tuple[str, str], ...]) -> tuple[tuple[str, str], ...]:
+    """The options VLMEvalKit's ``build_choices`` keeps: those whose text pandas does not read as
+    missing, in order. An empty text stays: it is a label logged without its text (an lmms-eval
+    log, a prompt listing none), not an empty cell (a VLMEvalKit file's options end at one)."""
+    return tuple((label, text) for label, text in options if not text or text not in PANDAS_MISSING)
 
 
 class VlmevalkitRuleParser(RuleParser):
