@@ -7,6 +7,15 @@ letter in either case, else 0; a numerical question scores its mean relative acc
 number (``WORST_CASE_FOR_METRICS``). The row's ``score`` is that value; ``category`` is the
 question type. Numerical rows also carry ``mra``, ``abs_error`` and ``rel_error``.
 
+A numerical question whose gold is 0 and whose reply reads a number has no relative error: both
+upstream codes divide by the gold there and stop (``ZeroDivisionError``; VSI-Bench's golds are all
+above 0). Such a row is **unscorable**, a recorded outcome rather than a silent gap: its fields say
+``unscorable: true`` and why (:data:`UNSCORABLE_REASON`), it carries no ``score``, ``mra`` nor
+``rel_error`` (so the set's figures are those of the questions it can score), and the declared
+``unscorable`` metric counts it (``summary.json``; ``povagent rescore-log`` names each such row).
+A reply reading no number scores 0 there as anywhere (upstream reaches its worst case before it
+divides).
+
 The set's overall is not the mean over questions: it is the mean of the per-type means, with
 the three ``object_rel_direction_{easy,medium,hard}`` types first averaged into one
 (``vsibench_aggregate_results``): :func:`official_overall`. lmms-eval @ 75571cfe averages the
@@ -36,6 +45,8 @@ from povagent.scoring.relative_accuracy import absolute_error, mean_relative_acc
 #: The three direction levels the overall first averages into one type.
 DIRECTION_LEVELS = ("object_rel_direction_easy", "object_rel_direction_medium", "object_rel_direction_hard")
 DIRECTION = "object_rel_direction"
+#: Why a numerical row whose gold is 0 is not scored (module docstring).
+UNSCORABLE_REASON = "the gold is 0: the relative error |answer - gold| / gold is undefined (the set's code and lmms-eval's divide by it and stop)"
 
 
 def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
@@ -52,6 +63,10 @@ def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
     fields: dict[str, Any] = {"answered": number is not None, "gold": numeric.gold, "unit": numeric.unit, "category": numeric.category}
     if number is None:
         return {**fields, "score": 0.0}
+    if numeric.gold == 0.0:
+        finite = math.isfinite(number)
+        return {**fields, "number": number if finite else None, **({"abs_error": absolute_error(number, 0.0)} if finite else {}),
+                "unscorable": True, "unscorable_reason": UNSCORABLE_REASON}  # fmt: skip
     mra = mean_relative_accuracy(number, numeric.gold)
     fields.update(score=mra, mra=mra, number=number if math.isfinite(number) else None)
     if math.isfinite(number):
@@ -72,6 +87,9 @@ class VSIBenchScorer(Scorer):
         Metric("abs_error", "lower", "mean", "abs_error", "Absolute error", "|answer - gold| of the finite numerical answers read, in the question's unit."),
         Metric("rel_error", "lower", "mean", "rel_error", "Relative error", "|answer - gold| / gold of the finite numerical answers read."),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Replies the rule reads an answer in / all questions.", over="all"),
+        Metric("unscorable", "lower", "rate", "unscorable", "Unscorable",
+               "Numerical questions whose gold is 0 with a number read / all questions: no relative error exists, so score and "
+               "MRA leave them out; each row says so (unscorable_reason).", over="all"),
     )  # fmt: skip
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:

@@ -52,6 +52,12 @@ def render_rescored_log(result: object, shown: int) -> None:
         console.print(table)
     for note in result.notes:
         typer.echo(f"note: {note}")
+    for r in result.rules:
+        for line in r.unscorable[:shown]:
+            typer.echo(f"unscorable: {line}", err=True)
+        if r.unscorable:
+            typer.echo(f"{len(r.unscorable)} repl{'y' if len(r.unscorable) == 1 else 'ies'} {r.rule} could not score (named above), "
+                       "left out of its figures", err=True)  # fmt: skip
     if result.stripped:
         typer.echo(f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
                    "(resps differs from filtered_resps): each rule above reads the field its 'reads' names.")  # fmt: skip

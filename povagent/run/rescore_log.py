@@ -9,7 +9,10 @@ one whose log gives a gold number and no options (VSI-Bench's counts and distanc
 question, which a set whose answers are only choices leaves out, named. Each rule's numbers are
 its scorer's declared metrics, overall and per category, each with its 95% bootstrap CI,
 estimated as a run's summary estimates them (:func:`~povagent.scoring.metric_columns.metric_slices`). The rule's headline is
-its scorer's ``headline`` metric (else its first). What it writes is :class:`RescoredLog`.
+its scorer's ``headline`` metric (else its first). A reply a rule's scorer cannot score (its
+fields say ``unscorable``, as a VSI-Bench gold of 0 makes the set's own scorer say, or the scorer
+failed) is left out of that rule's figures and named in its ``unscorable`` list, never dropped
+silently. What it writes is :class:`RescoredLog`.
 
 This module must not print (the CLI does) nor write files.
 """
@@ -70,6 +73,9 @@ class RuleResult(BaseModel):
     per_category_ci: dict[str, tuple[float, float] | None] = Field(default_factory=dict)
     answered: int = Field(description="Replies the rule read an answer in: an option label, or a number for a numerical question.")
     metrics: dict[str, Figure] = Field(default_factory=dict, description="Every metric the scorer declares, overall.")
+    unscorable: list[str] = Field(default_factory=list, description=(
+        "The replies the rule's scorer could not score, each named by row and field with why (a numerical gold of 0, "
+        "a scorer failure): left out of the rule's figures."))  # fmt: skip
 
 
 class Disagreement(BaseModel):
@@ -203,16 +209,19 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
         declared = {rule.scorer: tuple(scorer.metrics)}
         columns = MetricColumns(declared)
         labels[rule.name], hits[rule.name] = [], []
+        unscorable: list[str] = []
         for reply, instance in zip(log.replies, instances):
             scored = scoring.score_answer(instance, _spec(reply, specs), reply.reply)
             fields = scored.scores.get(rule.scorer, {})
+            if why := _unscorable(fields):
+                unscorable.append(f"{log.file}: {reply.where}.{log.gold_field}: {why}; left out of {rule.name}'s figures")
             labels[rule.name].append(_label(scored.parse))
             # a numerical question is a hit when every MRA threshold is met (its score is 1)
             hits[rule.name].append(fields.get("correct") is True or (reply.gold_number is not None and fields.get("score") == 1.0))
             row = _LoggedRow(str(scored.status), scored.scores, reply.category or None, reply.main_category or None, reply.question_id)
             valued = valued_row(row, declared)
             columns.append([valued.values[rule.scorer][m.name] for m in declared[rule.scorer]], None, None, valued.category, valued.groups)
-        results.append(_result(rule, log, scorer, columns, n_boot, seed, sum(label is not None for label in labels[rule.name])))
+        results.append(_result(rule, log, scorer, columns, n_boot, seed, sum(label is not None for label in labels[rule.name]), unscorable))
     disagreements = [
         Disagreement(item=r.item, where=r.where, reply=r.reply[:REPLY_EXCERPT], gold=r.gold, labels={n: labels[n][k] for n in labels}, correct={n: hits[n][k] for n in hits})
         for k, r in enumerate(log.replies)
@@ -226,7 +235,18 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
     )  # fmt: skip
 
 
-def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns, n_boot: int, seed: int, answered: int) -> RuleResult:
+def _unscorable(fields: Any) -> str:
+    """Why a scorer's fields leave the reply unscored (``""``: they do not): the scorer said
+    ``unscorable`` (with its ``unscorable_reason``), or it failed (``error``)."""
+    if not isinstance(fields, dict):
+        return ""
+    if fields.get("unscorable") is True:
+        return str(fields.get("unscorable_reason") or "the scorer cannot score it")
+    return f"the scorer failed ({fields['error']})" if fields.get("error") else ""
+
+
+def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns, n_boot: int, seed: int, answered: int,
+            unscorable: list[str]) -> RuleResult:  # fmt: skip
     """One rule's :class:`RuleResult` from its rows' metric columns."""
     metrics = tuple(scorer.metrics)
     headline = getattr(scorer, "headline", None) or metrics[0].name
@@ -238,5 +258,5 @@ def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns,
         metric=headline, reads=_reads(rule, log), overall=overall[headline].value, overall_ci=_ci(overall[headline]),
         per_category={c: cell[headline].value for c, cell in per_category.items()},
         per_category_ci={c: _ci(cell[headline]) for c, cell in per_category.items()},
-        answered=answered, metrics={name: _figure(e) for name, e in overall.items()},
+        answered=answered, metrics={name: _figure(e) for name, e in overall.items()}, unscorable=unscorable,
     )  # fmt: skip

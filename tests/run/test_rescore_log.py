@@ -36,6 +36,7 @@ from pathlib import Path
 import pytest
 
 from povagent.run.rescore_log import rescore_log
+from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER
 
 FIXTURES = Path(__file__).resolve().parent.parent / "fixtures" / "harness_logs"
 
@@ -142,7 +143,7 @@ def test_each_rule_says_which_field_of_an_lmms_eval_log_it_read(tmp_path):
     result = rescore_log(fixture("viewspatial_samples.jsonl", tmp_path), "lmms-eval", "viewspatial", n_boot=0)
     reads = {r.rule: r.reads for r in result.rules}
     assert reads["viewspatial-official"] == "resps as written"
-    assert reads["vlmevalkit-spatial"] == "resps as written"
+    assert reads["vlmevalkit-spatial"] == f"resps, then {LOAD_FILTER}"  # VLMEvalKit reads every reply through pandas
     assert reads["viewspatial"].startswith("resps, then lmms-eval's reasoning-tag strip")
     assert result.stripped == 44  # replies whose logged filtered_resps differs from resps
 

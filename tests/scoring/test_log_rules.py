@@ -12,6 +12,7 @@ from povagent.answers.spec import AnswerSpec
 from povagent.errors import PluginError
 from povagent.scoring.log_rules import known_sets, set_rules
 from povagent_plugins.parsers.mcq.rule import RuleParser
+from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER
 
 COMMIT = re.compile(r"^[\w.-]+/[\w.-]+@[0-9a-f]{40}$")
 
@@ -35,7 +36,14 @@ def test_every_rule_names_the_commit_it_follows(povagent_host):
 
 def test_the_lmms_eval_rules_say_they_strip_reasoning_as_lmms_eval_does(povagent_host):
     filters = {r.parser: r.harness_filter for r in set_rules(povagent_host, "viewspatial")}
-    assert filters == {"viewspatial-official": "", "viewspatial": "lmms-eval's reasoning-tag strip", "vlmevalkit-spatial": ""}
+    assert filters == {"viewspatial-official": "", "viewspatial": "lmms-eval's reasoning-tag strip", "vlmevalkit-spatial": LOAD_FILTER}
+
+
+@pytest.mark.parametrize("set_name", ["viewspatial", "mindcube", "3dsrbench", "mmsi", "omnispatial", "vsibench"])
+def test_every_vlmevalkit_rule_says_it_reads_replies_through_vlmevalkits_load_and_no_other_rule_does(povagent_host, set_name):
+    rules = set_rules(povagent_host, set_name)
+    assert any(r.harness == "VLMEvalKit" for r in rules)
+    assert all((r.harness_filter == LOAD_FILTER) == (r.harness == "VLMEvalKit") for r in rules), rules
 
 
 class _FirstLetter(RuleParser):

@@ -21,6 +21,7 @@ from povagent.dataset.choice_sets.external import image_camera
 from povagent.dataset.choice_sets.vsibench import scene_question
 from povagent.dataset.choice_sets.vsibench_set import load_vsibench, scene_instance
 from povagent.dataset.instances import Frame
+from povagent.scoring.metrics import metric_value
 from povagent_plugins.parsers.vsibench.lmms import VSIBenchLmmsParser, extract_number
 from povagent_plugins.parsers.vsibench.official import VSIBenchParser, first_word
 from povagent_plugins.scorers.vsibench import VSIBenchScorer, lmms_overall, official_overall, per_type_scores
@@ -188,3 +189,29 @@ def test_a_question_asking_neither_an_option_nor_a_number_is_not_read():
     for parser in (VSIBenchParser(), VSIBenchLmmsParser()):
         parse = parser.parse("3", AnswerSpec(schema=point_answer_schema(8, 8)))
         assert not parse.answered and "neither" in parse.reason
+
+
+def zero_gold_instance():
+    """A counting question whose gold is 0 (a prediction file may hold one; the set's own file never does)."""
+    from dataclasses import replace
+
+    from povagent.answers.number import NumericQuestion
+
+    return replace(corpus_instance(0, "object_counting", "1"), numeric=NumericQuestion("?", 0.0, category="object_counting"))
+
+
+def test_a_numerical_row_whose_gold_is_0_is_unscorable_says_why_and_carries_no_score():
+    instance = zero_gold_instance()
+    fields = VSIBenchScorer().score(instance, VSIBenchParser().parse("2", spec_of(instance)))
+    assert fields["unscorable"] is True and "gold is 0" in fields["unscorable_reason"]
+    assert "score" not in fields and "mra" not in fields and "rel_error" not in fields  # left out of the figures, not scored 0
+    assert (fields["number"], fields["abs_error"]) == (2.0, 2.0)
+    unscorable = next(m for m in VSIBenchScorer.metrics if m.name == "unscorable")
+    assert metric_value(unscorable, fields, answered=True) == 1.0  # counted by the declared metric
+    assert metric_value(VSIBenchScorer.metrics[0], fields, answered=True) is None
+
+
+def test_a_reply_reading_no_number_scores_0_even_where_the_gold_is_0_as_upstream_reaches_its_worst_case_first():
+    instance = zero_gold_instance()
+    fields = VSIBenchScorer().score(instance, VSIBenchParser().parse("none", spec_of(instance)))
+    assert fields["score"] == 0.0 and "unscorable" not in fields

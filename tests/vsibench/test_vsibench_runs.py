@@ -44,6 +44,7 @@ def test_the_oracle_scores_every_question(vsibench_pipeline):
     metrics = result.summary.metrics["vsibench"]
     assert result.n_total == len(RECORDS)
     assert metrics.overall["score"].value == 1.0 and metrics.overall["response_rate"].value == 1.0
+    assert (metrics.overall["unscorable"].value, metrics.overall["unscorable"].n) == (0.0, len(RECORDS))  # the summary counts them
     assert {k: v["score"].value for k, v in metrics.per_category.items()} == {r["question_type"]: 1.0 for r in RECORDS}
 
 

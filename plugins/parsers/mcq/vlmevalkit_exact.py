@@ -19,7 +19,10 @@ label no question has, so a wrong answer. No reasoning block is removed. The ste
 
 ``Z`` is no label here (``choice`` is ``None``, the reason says ``Z``). VLMEvalKit reads an
 extra word count when the ``VERBOSE`` environment variable is set; the default (unset) is
-reproduced. Option labels must be capital letters, as VLMEvalKit asserts.
+reproduced. Option labels must be capital letters, as VLMEvalKit asserts. The reply is first
+what VLMEvalKit's ``load`` makes of it (:mod:`.vlmevalkit_load`: ``"None"`` is ``"nan"``), and
+the options are those its ``build_choices`` keeps (an option whose text pandas reads as missing,
+such as ``"None"``, is no choice). A question whose options all go reads ``Z``.
 """
 
 from __future__ import annotations
@@ -28,8 +31,8 @@ import re
 
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
-from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
+from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser, options_as_vlmevalkit_loads
 
 #: VLMEvalKit's marker of a reply it never got.
 API_FAILURE = "Failed to obtain answer via API"
@@ -79,14 +82,12 @@ def vlmevalkit_exact_label(reply: str, options: tuple[tuple[str, str], ...]) -> 
     return _by_label(reply, labels) or _by_text(reply, options) or NO_OPTION
 
 
-class VlmevalkitExactParser(RuleParser):
+class VlmevalkitExactParser(VlmevalkitRuleParser):
     """VLMEvalKit's exact-matching rule (module docstring)."""
 
     reads = "one option letter among the last words, else 'answer is X', else one option's text; else Z (VLMEvalKit, no judge)"
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's reading without a judge"
     no_label_reason = f"the rule reads {NO_OPTION} (VLMEvalKit's no-option label, scored wrong)"
-    source = VLMEVALKIT
-    harness = "VLMEvalKit"
     #: VLMEvalKit's ``_3DSRBench`` reads with exact matching (its authors' rule: the set's official one), and so does its
     #: ``MMSIBench_circular`` (``ImageMCQDataset.evaluate_heuristic``: ``mcq_circular_eval`` with no judge)
     harness_sets = (("3dsrbench", "choice-3dsrbench"), ("mmsi-circular", "choice-mmsi-circular"))
@@ -99,7 +100,7 @@ class VlmevalkitExactParser(RuleParser):
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The rule's label; ``None`` for ``Z``."""
-        label = vlmevalkit_exact_label(text, spec.choices)
+        label = vlmevalkit_exact_label(text, options_as_vlmevalkit_loads(spec.choices))
         return None if label == NO_OPTION else label
 
 

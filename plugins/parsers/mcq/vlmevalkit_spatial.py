@@ -20,7 +20,8 @@ reads a letter gives it, upper-cased:
 6. when the capital letters standing alone (bracketed or not) in the lines that are not
    "option X:" lines are all one letter, that letter.
 
-Nothing read is ``False`` upstream; here no label.
+Nothing read is ``False`` upstream; here no label. The reply is first what VLMEvalKit's ``load``
+makes of it (:mod:`.vlmevalkit_load`: ``"N/A"`` is ``"nan"``, no letter).
 """
 
 from __future__ import annotations
@@ -29,8 +30,8 @@ import re
 
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec
-from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
+from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser
 
 #: The letters ``compute_mcq_score`` reads (``can_match_option`` with no options).
 LETTERS = "ABCDEF"
@@ -136,14 +137,12 @@ def spatial_bench_label(reply: str) -> str | None:
     return capitals.pop() if len(capitals) == 1 else None
 
 
-class VlmevalkitSpatialParser(RuleParser):
+class VlmevalkitSpatialParser(VlmevalkitRuleParser):
     """VLMEvalKit's spatial-bench rule (module docstring)."""
 
     reads = "an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit spatial bench)"
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's spatial-bench reading without a judge"
     no_label_reason = "the rule reads no option letter (VLMEvalKit's False)"
-    source = VLMEVALKIT
-    harness = "VLMEvalKit"
     #: VLMEvalKit's ViewSpatialBench, MindCubeBench, MMSIBench and OmniSpatialBench score with
     #: compute_mcq_score (no judge)
     harness_sets = (

@@ -19,10 +19,9 @@ with ``can_match_na`` (``vlmeval/dataset/utils/spatial_bench/matching_func.py``)
    number anywhere: ``[-+]?(?:\\d*\\.\\d+|\\d+)(?:[eE][-+]?\\d+)?``, so ``"1,200"`` reads 200,
    ``"3-4 m"`` reads -4 and ``"between 2 and 3 meters"`` reads 3.
 
-Before either, the reply is what VLMEvalKit's own ``load`` hands the rule: a prediction cell
-pandas reads as missing (exactly ``N/A``, ``NA``, ``NULL``, ``None``, ``nan``, empty, ...: its
-default ``na_values``) is the text ``"nan"``, so ``"N/A"`` names no option there though
-``can_match_option("N/A")`` alone reads ``A``.
+Before either, the reply is what VLMEvalKit's own ``load`` hands the rule, as for every
+VLMEvalKit rule (:mod:`~povagent_plugins.parsers.mcq.vlmevalkit_load`): a prediction cell pandas
+reads as missing (exactly ``N/A``, ``NA``, ``NULL``, ``None``, ``nan``, empty, ...) is ``"nan"``.
 
 Upstream's number patterns backtrack in quadratic time on long runs (an ``<answer`` with no
 ``>``, say); a reply is untrusted, so step 3 is written here to look at each ``>`` once, and
@@ -40,15 +39,10 @@ from povagent.answers.number import asks_number
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
+from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER, as_vlmevalkit_loads
 from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
 from povagent_plugins.parsers.vsibench.official import NEITHER, number_parse
 
-#: The cells pandas' ``read_csv`` and ``read_excel`` read as missing by default (its
-#: ``STR_NA_VALUES``): VLMEvalKit's ``str()`` then makes each of them ``"nan"``.
-PANDAS_MISSING = frozenset({
-    "", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN", "<NA>", "N/A", "NA", "NULL",
-    "NaN", "None", "n/a", "nan", "null",
-})  # fmt: skip
 #: The number words ``normalize_number_words`` turns into digits (``num2words(0)`` .. ``(20)``).
 NUMBER_WORDS = (
     "zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven", "twelve", "thirteen", "fourteen",
@@ -70,12 +64,6 @@ _NUMBER_AFTER_TAG = re.compile(rf"\s*+({NUMBER})")
 _ANSWER_CLOSE = re.compile(r"<\s*+/\s*+answer\s*+>", re.IGNORECASE)
 _THINK_END = re.compile(r"</\s*+think\s*+>", re.IGNORECASE)
 _THINK_START = re.compile(r"<\s*+think\s*+>", re.IGNORECASE)
-
-
-def as_vlmevalkit_loads(reply: str) -> str:
-    """The reply as ``VsiBench.evaluate`` hands it to its rules: ``"nan"`` where pandas reads the
-    cell as missing, else as written."""
-    return "nan" if reply in PANDAS_MISSING else reply
 
 
 def _words_as_digits(text: str) -> str:
@@ -165,7 +153,7 @@ class VlmevalkitVSIBenchParser(Parser):
     beside_official = "reads choice and number answers, which the official (point) parser does not read; VLMEvalKit's reading of VSI-Bench, no judge"
     source = VLMEVALKIT
     harness = "VLMEvalKit"
-    harness_filter = "VLMEvalKit's load: a reply pandas reads as missing (N/A, NULL, None, empty...) is 'nan'"
+    harness_filter = LOAD_FILTER
     #: VLMEvalKit's VsiBench scores with compute_mcq_score and compute_na_score, and averages
     #: the question types as its own _aggregate does: the vsibench-vlmevalkit scorer
     harness_sets = (("vsibench", "vsibench-vlmevalkit"),)
