@@ -91,7 +91,7 @@ class Observation:
     hit_radius_px: float | None = None
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
-    #: :data:`MAX_RAW_CHARS`; rows written before requests were kept have ``None`` requests).
+    #: :data:`MAX_RAW_CHARS`; a request not kept, as in early rows of format 0, is ``None``).
     #: :func:`collect` leaves them in the results file until they are looked at
     #: (:class:`~povagent.results.transcript.StoredTurns`).
     turns: Sequence[tuple[str | None, str | None]] = ()
@@ -244,7 +244,7 @@ def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, 
     """Model, backend, strategy and parser of a run, from its config (falling back to its rows).
 
     The model is the one the rows name when they do (its profile's name, else the model
-    string: what answered); rows written before rows named it take it from the config."""
+    string: what answered); rows that name none (early rows of format 0) take it from the config."""
     backend = config.get("backend")
     first = rows[0] if rows else None
     # a pipeline names either a model profile (top-level ``model:``) or a backend with options
@@ -444,7 +444,7 @@ def collect(
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
-        declared = declared_in_summary(r.folder / "summary.json")  # none in a summary from before metrics
+        declared = declared_in_summary(r.folder / "summary.json")  # none in a summary without metrics
         scorer, protocol = r.scorer, r.protocol  # once: the rows are read again each time they are looked at
         for index, row in enumerate(r.rows):
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
