@@ -102,7 +102,8 @@ def _categories(row: dict[str, Any]) -> None:
     first non-empty ``category`` among its scores (by scorer name), which its choice scorer
     wrote when the answer was scored; ``main_category`` is ``null``."""
     if "category" not in row:
-        scores = row.get("scores") if isinstance(row.get("scores"), dict) else {}
+        scores = row.get("scores")
+        scores = scores if isinstance(scores, dict) else {}
         found = (fields.get("category") for _, fields in sorted(scores.items()) if isinstance(fields, dict))
         row["category"] = next((c for c in found if isinstance(c, str) and c), None)
     row.setdefault("main_category", None)

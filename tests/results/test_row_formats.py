@@ -20,7 +20,7 @@ import pytest
 
 from povagent.errors import PredictionsError
 from povagent.report.run_summaries import declared_in_summary
-from povagent.results.rows import CURRENT_ROW_START, ResultRow, iter_rows, read_rows, row_line
+from povagent.results.rows import CURRENT_ROW_START, ResultRow, ResultsWriter, iter_rows, read_rows, row_line
 from povagent.results.upgrade import ROW_FORMAT, ROW_STEPS, SUMMARY_FORMAT
 from povagent.run.summary import summarize_rows, write_summary
 from povagent.scoring.metrics import row_category
@@ -104,6 +104,18 @@ def test_an_older_row_is_written_back_in_the_current_format_and_reads_the_same(e
     path.write_text("".join(row_line(r, path) for r in rows), encoding="utf-8")
     assert all(line.startswith(CURRENT_ROW_START) for line in path.read_bytes().splitlines())
     assert read_rows(path) == rows
+
+
+def test_a_file_resumed_by_this_release_holds_both_formats_and_reads_as_one(tmp_path):
+    # a run of format 0 resumed: its rows stay as written, the new rows are of format 1
+    path = tmp_path / "results.jsonl"
+    path.write_bytes((FORMATS / "format_0_2026-11-25.jsonl").read_bytes())
+    old = read_rows(path)
+    new = read_rows(CURRENT)[1]
+    with ResultsWriter(path) as writer:
+        writer.write(new)
+    assert read_rows(path) == [*old, new]
+    assert [line.startswith(CURRENT_ROW_START) for line in path.read_bytes().splitlines()] == [False] * len(old) + [True]
 
 
 def _with_version(version: object) -> bytes:
