@@ -200,10 +200,38 @@ def formats_page() -> str:
         "(the breakdown overall, per condition and per direction, and the `official_parse` section "
         "of a run parsed with a repair) and its log.\n",
     ]
+    lines += format_versions()
     for name, (what, kind) in format_models().items():
         schema = TypeAdapter(kind).json_schema()
         lines += [f"## {name}\n", what + ".\n", "```json", json.dumps(schema, indent=1, default=str), "```\n"]
     return "\n".join(lines)
+
+
+def format_versions() -> list[str]:
+    """The section on ``format_version``: the current versions, the upgrade policy and each
+    older shape's step (:mod:`povagent.results.upgrade`), from the steps themselves."""
+    from povagent.results import upgrade
+
+    lines = [
+        "## Format versions\n",
+        f"Each `results.jsonl` row and each run's `summary.json` carries `{upgrade.FIELD}`, the shape it was "
+        f"written in: rows are at format {upgrade.ROW_FORMAT}, summaries at format {upgrade.SUMMARY_FORMAT} "
+        f"(first in the line or the object). A file without the field is format 0, as every povagent "
+        f"wrote before the field came (release 0.1.0 included). Every reader of a row or a summary reads it "
+        f"through one step per older format (`povagent.results.upgrade`), so an older file reads, rescores "
+        f"and reports as the current shape, and a row read and written back is in the current format. "
+        f"A row or summary of a format newer than the installed povagent is refused with one line naming "
+        f"the file, the line and `{upgrade.FIELD}`, and so is a version that is not a whole number: a field "
+        f"a later release added is never guessed at. What an older row never recorded stays `null` (no "
+        f"official reading, no request kept); `povagent rescore` writes the rows anew. A run folder's "
+        f"`.povagent-run` marker has its own `format` (a folder made before the marker is recognised by "
+        f"its content and adopted).\n",
+    ]
+    for kind, steps in (("row", upgrade.ROW_STEPS), ("summary", upgrade.SUMMARY_STEPS)):
+        for step in steps:
+            lines.append(f"- {kind} format {step.version} to {step.version + 1}: {step.shape}.")
+            lines += [f"  - {' '.join((era.__doc__ or '').split())}" for era in step.eras]
+    return [*lines, ""]
 
 
 # -- the model profiles -------------------------------------------------------------------------

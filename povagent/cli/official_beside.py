@@ -5,8 +5,8 @@ unanswered or reads otherwise; its mean and response rate are not the paper's. W
 prints such a run's scores (after ``run``, ``rescore``, ``score`` on a run folder) this table
 follows, putting the official parse's response rate and mean beside the repaired ones per slice,
 both labelled. It reads the summary's ``official_parse`` section (see
-:mod:`povagent.results.official_reading`); a lenient run without one (rows written before
-readings were recorded) gets a note saying how to obtain the official numbers. When the repair
+:mod:`povagent.results.official_reading`); a lenient run without one (rows of format 0 without
+readings: :mod:`povagent.results.upgrade`) gets a note saying how to obtain the official numbers. When the repair
 changed no answer (every slice's mean and response rate are the official ones: a baseline's
 answers, a model that wrote clean JSON) there is nothing to set beside and nothing is printed.
 """

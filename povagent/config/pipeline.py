@@ -137,8 +137,8 @@ def load_sweep(path: str | Path) -> tuple[SweepConfig, ConfigSource, ConfigSourc
 
 
 def default_scorers() -> list[str]:
-    """The scorers of a pipeline that names none (the config's default): what a run folder
-    written before it recorded its scorers was scored by."""
+    """The scorers of a pipeline that names none (the config's default): what a run whose
+    config names no scorers was scored by."""
     return [s.name for s in PipelineConfig.model_fields["scorers"].get_default(call_default_factory=True)]
 
 

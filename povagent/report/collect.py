@@ -86,7 +86,7 @@ class Observation:
     hit_radius_px: float | None = None
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
-    #: :data:`MAX_RAW_CHARS`; rows written before requests were kept have ``None`` requests).
+    #: :data:`MAX_RAW_CHARS`; a request not kept, as in early rows of format 0, is ``None``).
     #: :func:`collect` leaves them in the results file until they are looked at
     #: (:class:`~povagent.results.transcript.StoredTurns`).
     turns: Sequence[tuple[str | None, str | None]] = ()
@@ -231,7 +231,7 @@ def config_axes(config: dict[str, Any], rows: Sequence[ResultRow]) -> dict[str, 
     """Model, backend, strategy and parser of a run, from its config (falling back to its rows).
 
     The model is the one the rows name when they do (its profile's name, else the model
-    string: what answered); rows written before rows named it take it from the config."""
+    string: what answered); rows that name none (early rows of format 0) take it from the config."""
     backend = config.get("backend")
     first = rows[0] if rows else None
     # a pipeline names either a model profile (top-level ``model:``) or a backend with options

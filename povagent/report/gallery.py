@@ -465,7 +465,7 @@ def _cut(text: str | None) -> str | None:
 
 def _transcript(stored: Sequence[tuple[str | None, str | None]]) -> list[list[str | None]]:
     """The row's turns as ``[[request text, raw answer], ...]`` (each cut at
-    :data:`MAX_RAW_CHARS`); empty when no request was kept (rows from before transcripts)."""
+    :data:`MAX_RAW_CHARS`); empty when no request was kept (a row of format 0 that kept none)."""
     turns = tuple(stored)  # read once (collect leaves them in the results file)
     if not any(q is not None for q, _ in turns):
         return []

@@ -23,8 +23,8 @@ KEY = "official_parse_beside"
 
 def _repair_changed(row) -> bool:
     """Whether a named repair read ``row``'s answer otherwise than the official runner does;
-    a lenient row written before readings were recorded counts too (its official side is
-    unknown, and the table says how to obtain it)."""
+    a lenient row without a reading (format 0: :mod:`povagent.results.upgrade`) counts too (its
+    official side is unknown, and the table says how to obtain it)."""
     if row.official_reading is None:
         return row.parse is not None and row.parser not in OFFICIAL_PARSERS
     return row.parse is None or not scores_alike(row.official_reading.parse, row.parse)
@@ -72,7 +72,7 @@ def official_beside_table(collection: Collection) -> Table | None:
         parsers = sorted({r.parser for r in rows if r.parser})
         repaired = breakdown([scored_row(r, scorer_of[system]) for r in rows])["per_condition"]
         unread = any(r.official_reading is None and r.parse is not None and r.parser not in OFFICIAL_PARSERS for r in rows)
-        # rows written before readings were recorded: the official side is unknown, not zero
+        # lenient rows without a reading (format 0): the official side is unknown, not zero
         official = {} if unread else breakdown([scored_row(officially_read(r), scorer_of[system]) for r in rows])["per_condition"]
         cells = []
         for c in conditions:

@@ -26,6 +26,7 @@ from povagent.errors import PredictionsError
 from povagent.files.confined_read import check_regular, read_regular
 from povagent.results.rows import ResultRow, StoredRows, read_rows
 from povagent.results.transcript import StoredTurns
+from povagent.results.upgrade import upgrade_summary
 from povagent.scoring.metrics import Metric
 
 RESULTS_FILE = "results.jsonl"
@@ -89,12 +90,17 @@ class FinishedRun:
         """``{scorer: metrics}`` as the summary's ``metrics`` section declares them (each
         :meth:`~povagent.scoring.metrics.Metric.describe`\\ d), so a reader computes each one
         again from the rows without the scorer's plugin; empty when there is no summary, it
-        declares nothing, or it is not a summary."""
+        declares nothing, or it is not a summary; a summary of a format newer than this release
+        is refused (:func:`~povagent.results.upgrade.upgrade_summary`)."""
         path = self.folder / SUMMARY_FILE
         try:
             if not path.exists() or path.stat().st_size > MAX_SUMMARY_BYTES:
                 return {}
-            sections = json.loads(read_regular(path, MAX_SUMMARY_BYTES, what="run summary")).get("metrics") or {}
+            data = json.loads(read_regular(path, MAX_SUMMARY_BYTES, what="run summary"))
+        except (OSError, ValueError):
+            return {}
+        sections = upgrade_summary(data, str(path)).get("metrics") or {} if isinstance(data, dict) else {}
+        try:
             return {scorer: tuple(Metric.declared(name, d) for name, d in section["declared"].items()) for scorer, section in sections.items()}
         except (OSError, ValueError, TypeError, KeyError, AttributeError):
             return {}

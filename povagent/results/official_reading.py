@@ -11,9 +11,10 @@ and the scorers, and the official parse costs tens of microseconds (when it read
 as the lenient parser, its scores are the lenient ones, not recomputed). Summaries, reports and
 ``povagent score`` then read it without the dataset or the strategy, a resumed run keeps every
 earlier row's reading, and ``povagent rescore`` writes a fresh one for each row it re-parses.
-Rows written before readings were recorded carry none: summaries count them
-(``rows_without_reading``) rather than mix repaired numbers in; ``povagent rescore RUN --parser
-official`` gives such a run its official numbers offline.
+Format 0 rows of povagent's first days carry none (an upgrade cannot make one:
+:mod:`povagent.results.upgrade`): summaries count them (``rows_without_reading``) rather than
+mix repaired numbers in; ``povagent rescore RUN --parser official`` gives such a run its
+official numbers offline.
 
 The reading's record is part of the row format (:class:`~povagent.results.rows.OfficialReading`);
 this module makes and applies it. It never calls a model, reads a run folder or writes a file.
@@ -111,8 +112,8 @@ def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:
     if unread:
         parsers = sorted({r.parser for r in out if r.key in set(unread)})
         warnings.append(
-            f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (written before "
-            f"readings were recorded) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
+            f"{len(unread)} row(s) parsed with {', '.join(parsers)} carry no official reading (format 0 rows "
+            f"of povagent's first days) and are scored as parsed, i.e. repaired: for paper-comparable numbers "
             f"run povagent rescore RUN --parser official"
         )
     nan_note = nan_warning(nan_rows(out))

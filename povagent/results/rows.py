@@ -4,7 +4,9 @@ A row holds everything needed to re-parse, re-score and report without calling a
 the raw answer(s), the parse, the scores, and the cost. Never image bytes: only hashes.
 Rows are appended one JSON line each; a last line cut short by a crash or a full disk (at any
 byte) is skipped on read (and the key is then run again on resume); a damaged line anywhere else
-is an error naming the file and the line (see :func:`iter_rows`).
+is an error naming the file and the line (see :func:`iter_rows`). Each row carries the format
+version it was written in (``format_version``); a row of an older format is read through its
+upgrade steps (:mod:`povagent.results.upgrade`), so every reader sees the current shape.
 """
 
 from __future__ import annotations
@@ -17,11 +19,13 @@ from pathlib import Path
 from typing import Any, Iterator, Sequence, overload
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic_core import from_json
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
 from povagent.files.confined_read import open_regular
 from povagent.results.output_check import check_output_text
+from povagent.results.upgrade import FIELD, ROW_FORMAT, upgrade_row
 
 
 class RowStatus(StrEnum):
@@ -44,8 +48,7 @@ class ExchangeRecord(BaseModel):
     prompt: str | None = None
     #: Whether the request began with every message of the previous exchange's request, so
     #: :attr:`prompt` holds only the messages added after them (each message is kept once; the
-    #: whole text is rebuilt by :func:`povagent.results.transcript.transcripts`). ``False`` in
-    #: rows written before: each prompt is whole there.
+    #: whole text is rebuilt by :func:`povagent.results.transcript.transcripts`).
     prompt_continues: bool = False
     raw: str | None = None
     latency_s: float = 0.0
@@ -68,7 +71,7 @@ class Prediction(BaseModel):
     y: float | None = None
     #: The answer type the strategy asked for (``point``, a plugin's ``choice``) and the parse's
     #: value as that type reads it (:class:`povagent.answers.types.AnswerType`); ``None`` for no
-    #: answer and in rows written before answer types were registered (their x/y still read).
+    #: answer, or an untyped one (its x/y are what it answered).
     answer_type: str | None = None
     value: dict[str, Any] | None = None
 
@@ -90,6 +93,10 @@ class ResultRow(BaseModel):
     # NaN and infinity (an official parse's coordinate, a NaN error) stay themselves on disk
     model_config = ConfigDict(extra="allow", ser_json_inf_nan="constants")
 
+    #: The row format it was written in (:data:`~povagent.results.upgrade.ROW_FORMAT`; a row read
+    #: from a file is in the current one, whatever it was written in). First, so a reader knows a
+    #: current row by its first bytes (:data:`CURRENT_ROW_START`).
+    format_version: int = ROW_FORMAT
     key: str
     instance_id: str
     house_id: str
@@ -100,8 +107,8 @@ class ResultRow(BaseModel):
     sentence: str = ""
     backend: str = ""
     #: The model that answered: the litellm model string (or router group) a ``litellm`` row
-    #: called, the backend's own name for a baseline (``center``); ``""`` in rows written
-    #: before rows named it (read from the run's config instead).
+    #: called, the backend's own name for a baseline (``center``); ``""``: not recorded (a
+    #: report reads the run's config instead).
     model: str = ""
     #: The model profile the model was named by (``gpt-5.4``), or ``None``.
     profile: str | None = None
@@ -129,8 +136,7 @@ class ResultRow(BaseModel):
     official_reading: OfficialReading | None = None
     #: The category of the multiple-choice question the row answers (the set's question type,
     #: ``""`` for none), whatever became of the answer: a reply naming no option still counts in
-    #: its category's slice. ``None``: the instance asks no multiple-choice question (a point),
-    #: or the row was written before rows named it (its scorer's ``category`` is read instead).
+    #: its category's slice. ``None``: the instance asks no multiple-choice question (a point).
     category: str | None = None
     #: The broader type the category belongs to, where the set has one (3DSRBench's
     #: ``orientation`` for ``orientation_viewpoint``): a slice of its own. ``None``: none.
@@ -265,7 +271,7 @@ class StagedResults:
         self._folder.close()
 
 
-#: The longest line a results file may hold (rows of earlier versions reached hundreds of MiB).
+#: The longest line a results file may hold (rows of format 0 reached hundreds of MiB).
 MAX_LINE_BYTES = 512 << 20
 
 
@@ -302,15 +308,30 @@ def _complete_lines(p: Path) -> Iterator[tuple[int, int, bytes]]:
             offset += len(line)
 
 
+#: How every row this release writes begins: a line that does is read straight into the row
+#: model; any other (an older format, a hand-edited line) is parsed and upgraded first.
+CURRENT_ROW_START = f'{{"{FIELD}":{ROW_FORMAT},'.encode()
+
+
 def _read_line(path: Path, number: int, line: bytes) -> ResultRow:
-    """One complete line of a results file as a row, or a one-line error naming file and line."""
+    """One complete line of a results file as a row in the current format (upgraded from the
+    format it was written in), or a one-line error naming file and line."""
     try:
         line.decode("utf-8")
     except UnicodeDecodeError as exc:
         problem = f"byte 0x{line[exc.start]:02x} at column {exc.start + 1} is not UTF-8"
     else:
         try:
-            return ResultRow.model_validate_json(line)
+            if line.startswith(CURRENT_ROW_START):
+                row = ResultRow.model_validate_json(line)
+                if row.format_version == ROW_FORMAT:  # a second "format_version" later in the line wins in JSON
+                    return row
+            try:
+                data = from_json(line)
+            except ValueError as exc:
+                problem = f"not a result row (invalid JSON: {exc})"
+            else:
+                return ResultRow.model_validate(upgrade_row(data, f"{path}: line {number}"))
         except ValidationError as exc:
             first = exc.errors(include_url=False)[0]
             where = ".".join(str(part) for part in first["loc"])

@@ -6,8 +6,8 @@ exchange, a row grew with the square of its turns (90 MB at 16 actions against a
 128 padded calls a turn). So an exchange whose request begins with every message of the
 previous exchange's request keeps only the messages added after them
 (:attr:`~povagent.results.rows.ExchangeRecord.prompt_continues`), and :func:`transcripts`
-rebuilds each request's text, for a row written either way (rows written before this keep
-each prompt whole, and read as they always did).
+rebuilds each request's text, for a row written either way (each prompt whole, as in every
+row of format 0, or continued).
 
 What it must not do: decide what a request holds, or write files.
 """

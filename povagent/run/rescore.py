@@ -82,7 +82,7 @@ def rescore_row(row: ResultRow, instance: Instance, spec: AnswerSpec, scoring: A
     """``row`` re-parsed from its final raw answer and re-scored by the score step the runner
     uses (:mod:`povagent.run.score_step`); infrastructure errors are kept as they are."""
     raw = row.raw_response
-    # a row written before rows named its categories gets them here
+    # the categories are the instance's, whatever the row recorded
     categories = {"category": question_category(instance), "main_category": question_main_category(instance)}
     if row.status is RowStatus.INFRA_ERROR or raw is None:
         return row.model_copy(update={"parser": parser_name, "official_reading": None, **categories})

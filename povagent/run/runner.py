@@ -53,6 +53,7 @@ from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor, secrets_named_by
 from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
+from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
@@ -392,7 +393,7 @@ class PipelineRun:
             if self._stopped:
                 stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
                 stop_log("run_stopped", reason=self._stopped)
-            written = self.summarize(interrupted or stop_came)
+            written = {FIELD: SUMMARY_FORMAT, **self.summarize(interrupted or stop_came)}  # what the file holds, for run_end too
             # a stop requested while the summary was computed (plain code: not yet delivered) too
             written["interrupted"] = written["interrupted"] or stop_requested()
             try:

@@ -29,6 +29,7 @@ from povagent.files.redaction import Redactor
 from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
+from povagent.results.upgrade import ROW_FORMAT
 from povagent.run.components import ComponentNames, Components
 from povagent.run.score_lane import ScoreLane
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category
@@ -117,6 +118,7 @@ class KeySolver:
             self.log.error("strategy_error", row=key, error=error_message, traceback=self.redactor.text(traceback.format_exc()))
         spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
         return ResultRow.model_construct(
+            format_version=ROW_FORMAT,
             key=key,
             instance_id=iid,
             house_id=instance.house_id,

@@ -19,6 +19,7 @@ from povagent.results.official_reading import official_parse_breakdown
 from povagent.results.output_check import check_output_text
 from povagent.results.rows import ResultRow, RowStatus, iter_rows
 from povagent.results.summary_json import summary_json_text
+from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.summary_model import RunSummary
 from povagent.run.summary_table import SummaryTable
 from povagent.scoring.breakdown import breakdown, summarize
@@ -79,7 +80,7 @@ def summarize_table(table: SummaryTable, n_keys: int | None = None) -> dict[str,
     # parsed leniently: the paper-comparable reading beside it (official metric only: a
     # real-world set's success scorer has no official numbers to compare)
     if official_parser is not None and not with_success:
-        # a row with an answer but no reading (written before readings were recorded) is left
+        # a row with an answer but no reading (a format 0 row: povagent.results.upgrade) is left
         # out and counted, never counted with its repaired parse
         same = out if table.read_as_scored() else None  # the same rows, scored the same: the same breakdown
         out["official_parse"] = official_parse_breakdown(table.officially_scored(), official_parser, table.unread(), same)
@@ -155,6 +156,7 @@ def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None)
     """Write a run's (or a rescore's) ``summary.json`` and return it read as the
     :class:`RunSummary` it is.
 
+    It carries its format version first (``format_version``: :mod:`povagent.results.upgrade`).
     It is read before it is written: a summary that is not a :class:`RunSummary` (a povagent
     bug) raises, and nothing is written; while tests run it is also checked against the shipped
     schema (:mod:`povagent.results.output_check`). Written as indented JSON, atomically (a kill
@@ -166,6 +168,7 @@ def write_summary(path: Path, data: Mapping[str, Any], root: Path | None = None)
     """
     from povagent.files.confined_write import write_inside
 
+    data = {FIELD: SUMMARY_FORMAT, **data}  # first: a reader sees the shape before the sections
     summary = RunSummary.model_validate(data)
     text = summary_json_text(data, indent=2, default=str)
     check_output_text("summary", text, path)

@@ -16,6 +16,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict
 
+from povagent.results.upgrade import SUMMARY_FORMAT
 from povagent.scoring.metrics import Metric
 
 
@@ -282,6 +283,9 @@ class RunSummary(Breakdown):
     ``images`` are written by the runner (a summary made from a results file alone has none).
     """
 
+    #: The summary format it was written in (:data:`~povagent.results.upgrade.SUMMARY_FORMAT`;
+    #: a summary read from a file is in the current one: :func:`~povagent.results.upgrade.upgrade_summary`).
+    format_version: int = SUMMARY_FORMAT
     official_parse: OfficialParseBreakdown | None = None
     #: A real-world set's success rates (:func:`povagent.dataset.realworld.success_breakdown`).
     success: SuccessBreakdown | None = None

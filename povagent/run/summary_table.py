@@ -179,7 +179,7 @@ class SummaryTable:
         return next((p for i in range(len(self)) if (p := parsers[i]) is not None), None)
 
     def unread(self) -> int:
-        """Rows with an answer but no official reading (written before readings were recorded)."""
+        """Rows with an answer but no official reading (format 0 rows of the first days: :mod:`povagent.results.upgrade`)."""
         parsers, status = self._fields["official_parser"], self._fields["status"]
         return sum(1 for i in range(len(self)) if parsers[i] is None and status[i] != _INFRA)
 

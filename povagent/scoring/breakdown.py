@@ -58,7 +58,7 @@ class ScoredRow:
     gt_in_frame: bool | None
     l2_strict: float | None = None
     run: int = 0
-    #: The official signed errors of an answered row (``None``: not recorded, e.g. older rows).
+    #: The official signed errors of an answered row (``None``: not recorded).
     error_x: float | None = None
     error_y: float | None = None
     #: The row carries a ``parse_error`` as the official runner would have written one.

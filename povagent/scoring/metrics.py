@@ -210,21 +210,15 @@ def row_category(row: Any) -> str | tuple[str, ...] | None:
     """The question's category, the slice a multiple-choice run breaks down by: the one the row
     records (``row.category``, written whatever the answer, so a reply naming no option counts
     in its slice as the wrong answer it is), with its main category where the row records one
-    (``(category, main_category)``: the row counts in both slices), else, for a row written
-    before rows recorded it, the first non-empty ``category`` text among its scores (by scorer
-    name); ``None``: none."""
+    (``(category, main_category)``: the row counts in both slices); ``None``: none. (A row of
+    an older format gets its category when it is read: :mod:`povagent.results.upgrade`.)"""
     recorded = getattr(row, "category", None)
-    if isinstance(recorded, str):
-        main = getattr(row, "main_category", None)
-        if isinstance(main, str) and main and main != recorded:
-            return (recorded, main) if recorded else main
-        return recorded or None
-    scores = getattr(row, "scores", None) or {}
-    for name in sorted(scores):
-        fields = scores[name]
-        if isinstance(fields, Mapping) and isinstance(fields.get("category"), str) and fields["category"]:
-            return str(fields["category"])
-    return None
+    if not isinstance(recorded, str):
+        return None
+    main = getattr(row, "main_category", None)
+    if isinstance(main, str) and main and main != recorded:
+        return (recorded, main) if recorded else main
+    return recorded or None
 
 
 #: The positions of every declaration met so far (a few per process): one dict shared by the rows.

@@ -15,6 +15,7 @@ from povagent.engine.retry import error_type_of, is_transient
 from povagent.errors import ConfigError
 from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent.results.rows import read_rows
+from povagent.results.upgrade import SUMMARY_FORMAT
 from povagent.run.runner import run_pipeline
 
 N_KEYS = 12  # 4 (pair, direction)s x 3 conditions in the small release
@@ -321,14 +322,14 @@ def test_lifecycle_hooks_observe_the_run(write_pipeline, povagent_host):
 
         @hookimpl
         def povagent_run_end(self, run_dir, summary):
-            events.append(("end", summary["rows"]["done"]))
+            events.append(("end", summary["rows"]["done"], summary["format_version"]))  # what summary.json holds
 
     povagent_host.add_plugin(Observer(), name="observer")
     try:
         run(write_pipeline())
     finally:
         povagent_host.remove_plugin("observer")
-    assert events[0] == ("start", N_KEYS, N_KEYS) and events[-1] == ("end", N_KEYS)
+    assert events[0] == ("start", N_KEYS, N_KEYS) and events[-1] == ("end", N_KEYS, SUMMARY_FORMAT)
     assert len([e for e in events if e[0] == "done"]) == N_KEYS
 
 

@@ -16,10 +16,11 @@ DECLARED = {"mine": (ALL_RIGHT,)}
 
 
 def row(pair_id: str, correct: bool | None, category: str = "", run: int = 0):
-    """A row of ``pair_id``; ``correct=None``: an unreadable answer, which no scorer scored."""
+    """A row of ``pair_id`` (its question's ``category`` recorded, as a row records it whatever the
+    answer); ``correct=None``: an unreadable answer, which no scorer scored."""
     scores = {} if correct is None else {"mine": {"correct": correct, "answered": True, "category": category}}
     status = "parse_error" if correct is None else "answered"
-    return SimpleNamespace(status=status, scores=scores, condition="", direction="", pair_id=pair_id, run=run)
+    return SimpleNamespace(status=status, scores=scores, condition="", direction="", pair_id=pair_id, run=run, category=category)
 
 
 def _overall(rows):
