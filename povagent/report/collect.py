@@ -427,7 +427,7 @@ def collect(
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
-        declared = r.opened.declared  # none in a summary from before metrics
+        declared = r.opened.declared  # none in a summary without metrics
         scorer, protocol = r.scorer, r.protocol  # once: the rows are read again each time they are looked at
         for index, row in enumerate(r.rows):
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
