@@ -47,20 +47,29 @@ def plugin_scores(scores: Mapping[str, Any], protocols: Mapping[str, str]) -> tu
     """For every scorer of a row that follows no protocol (``protocols``: ``{scorer: protocol}``;
     a protocol's fields have sections of their own), its true/false and number fields (text and
     lists left out)."""
+    # a plain dict is told from other mappings first: the ABC check costs more than the rest
     return tuple(
-        (name, tuple((k, v) for k, v in fields.items() if isinstance(v, (bool, int, float))))
-        for name, fields in sorted(scores.items())
-        if name not in protocols and isinstance(fields, Mapping)
+        [
+            (name, tuple([(k, v) for k, v in fields.items() if type(v) in _NUMBER_TYPES or isinstance(v, (bool, int, float))]))
+            for name, fields in sorted(scores.items())
+            if name not in protocols and (type(fields) is dict or isinstance(fields, Mapping))
+        ]
     )
 
 
-def diagnosed_row(row: ResultRow, error_scorer: str | None) -> DiagnosedRow | None:
+#: The types :func:`plugin_scores` keeps, told by identity before ``isinstance`` (subclasses).
+_NUMBER_TYPES = frozenset({bool, int, float})
+
+
+def diagnosed_row(row: ResultRow, error_scorer: str | None, by: Mapping[str, str] | None = None) -> DiagnosedRow | None:
     """The fields of the scorers diagnosing an answered row (``failure_step`` and
-    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`), with its error by
-    ``error_scorer`` (the run's ``normalized_l2`` scorer), or ``None`` when neither scored it."""
+    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`, or ``by`` when the
+    caller asked it already), with its error by ``error_scorer`` (the run's ``normalized_l2``
+    scorer), or ``None`` when neither scored it."""
     if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
         return None
-    by = diagnosing_scorers()
+    if by is None:
+        by = diagnosing_scorers()
     diagnose = row.scores.get(by.get("failure_step", ""))
     relation = row.scores.get(by.get("relation_hit", ""))
     diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None
