@@ -15,6 +15,7 @@ from typing import Any
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
+from povagent.scoring.evaluations import official_parse_error
 from povagent.scoring.protocols import diagnosing_scorers
 
 
@@ -23,8 +24,6 @@ def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
     scorer (non-answers count as such; ``None``: the run has none, and no row is answered). A row
     of a multiple-choice question (it records a category, or its parse chose an option) asks no
     point: the point breakdown leaves it out."""
-    from povagent.scoring.evaluations import official_parse_error
-
     score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     asks_point = row.category is None and (row.parse is None or row.parse.choice is None)

@@ -94,7 +94,7 @@ class SummaryTable:
         scored = scored_row(row, error_scorer)
         for append, value in zip(appends.scored, _scored_values(scored)):
             append(value)
-        status = RowStatus(row.status)
+        status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
         appends.status(status.value)
         appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
