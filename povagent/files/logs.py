@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Callable, TextIO, cast
 
 import structlog
-from structlog.typing import EventDict
+from structlog.typing import EventDict, Processor
 
 from povagent.files.confined_write import open_inside
 from povagent.files.redaction import Redactor
@@ -116,7 +116,7 @@ class RunLog:
         self.redactor = redactor or Redactor()
         stream = (_stderr if console is True else console) or None
         self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))
-        processors = [_add_level, _timestamp, self.redactor, self._sinks]
+        processors: list[Processor] = [_add_level, _timestamp, self.redactor, self._sinks]
         self.logger = structlog.wrap_logger(None, processors=processors, context_class=dict, cache_logger_on_first_use=True).bind(**context)
         self._context = dict(context)
         self._processors = tuple(processors)
