@@ -64,8 +64,20 @@ def choice_answer_spec(instance: Instance) -> AnswerSpec:
     if question is None:
         raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
     width, height = instance.frame_size
-    return AnswerSpec(schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames), asks_frame=False,
-                      choices=question.options)  # fmt: skip
+    key = (question.options, width, height, len(instance.frames))
+    spec = _SPECS.get(key)
+    if spec is None:
+        spec = AnswerSpec(schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames),
+                          asks_frame=False, choices=question.options)  # fmt: skip
+        if len(_SPECS) < _MAX_SPECS:
+            _SPECS[key] = spec
+    return spec
+
+
+#: The answer specs made so far, by options, frame size and frame count: a set's 10,000
+#: questions ask a few dozen (a spec is frozen; made and validated once each).
+_SPECS: dict[tuple[tuple[tuple[str, str], ...], int, int, int], AnswerSpec] = {}
+_MAX_SPECS = 4096
 
 
 class ChoiceStrategy(Strategy):

@@ -38,9 +38,16 @@ class ChoiceQuestion:
     main_category: str = ""
 
     def __post_init__(self) -> None:
-        if type(self.options) is tuple and all(type(o) is tuple and len(o) == 2 and type(o[0]) is str and type(o[1]) is str for o in self.options):
-            options = _SHARED_OPTIONS.get(self.options)
-            if options is None and len(_SHARED_OPTIONS) < _MAX_SHARED_OPTIONS:
+        if type(self.options) is tuple:
+            try:  # a list already kept (most questions' options): no need to check its types again
+                options = _SHARED_OPTIONS.get(self.options)
+            except TypeError:  # an option that cannot be hashed (not a tuple of texts): kept as given
+                options = None
+            if (
+                options is None
+                and len(_SHARED_OPTIONS) < _MAX_SHARED_OPTIONS
+                and all(type(o) is tuple and len(o) == 2 and type(o[0]) is str and type(o[1]) is str for o in self.options)
+            ):
                 options = _SHARED_OPTIONS.setdefault(self.options, tuple((sys.intern(label), sys.intern(text)) for label, text in self.options))
             if options is not None:
                 object.__setattr__(self, "options", options)  # equal values: the question is the same

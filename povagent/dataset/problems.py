@@ -105,7 +105,7 @@ def not_text_problems(file: str, data: Any) -> list[Problem]:
     loading refuses the file and ``validate`` names each string by file and JSON path. Walks
     without recursion (a hostile file may nest deeply); paths show bad keys escaped.
     """
-    if _all_text(data):
+    if all_text(data):
         return []
     found: list[Problem] = []
     stack: list[tuple[tuple[Any, ...], Any]] = [((), data)]
@@ -122,7 +122,7 @@ def not_text_problems(file: str, data: Any) -> list[Problem]:
     return found
 
 
-def _all_text(data: Any) -> bool:
+def all_text(data: Any) -> bool:
     """Whether every string of ``data`` (values and keys) is text, told at C speed: its JSON,
     written without escapes, is UTF-8 exactly when it holds no lone surrogate. ``False`` when
     that cannot be told so (a value JSON cannot write, a document nesting too deeply): the

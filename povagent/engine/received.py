@@ -21,7 +21,7 @@ import dataclasses
 import re
 from typing import Any, Callable
 
-from povagent.exchange.messages import Response, ToolCall
+from povagent.exchange.messages import Response, ToolCall, Usage
 
 #: Lone UTF-16 surrogates (``"\\ud800"`` in a JSON answer) are not text: UTF-8 cannot hold them.
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
@@ -58,7 +58,30 @@ def received(response: Response, redact: Callable[[str], str], *, offered_tools:
         response = dataclasses.replace(response, tool_calls=calls)
     if offered_tools and len(response.text) > MAX_TOOL_TURN_TEXT_CHARS:
         response = dataclasses.replace(response, text=response.text[:MAX_TOOL_TURN_TEXT_CHARS])
+    if _plain(response):
+        # the usual answer (texts and numbers only): what the walk below gives, without walking
+        # (a copy, as the walk copies a dataclass that is not frozen)
+        usage, model = response.usage, response.model
+        return Response(
+            text=redact(valid_text(response.text)), usage=Usage(usage.prompt_tokens, usage.completion_tokens, usage.cost_usd),
+            latency_s=response.latency_s, model=None if model is None else redact(valid_text(model)), retries=response.retries,
+            cached=response.cached, by_strategy=response.by_strategy,
+        )  # fmt: skip
     return _strings_of(response, lambda text: redact(valid_text(text)))
+
+
+def _plain(response: Response) -> bool:
+    """Whether ``response`` is a plain :class:`Response` whose only strings are its text and
+    model name: no tool calls, no solved point, every other field a number, a flag or None."""
+    if type(response) is not Response or type(response.text) is not str or (response.model is not None and type(response.model) is not str):
+        return False
+    usage = response.usage
+    if type(usage) is not Usage or response.tool_calls != () or type(response.tool_calls) is not tuple or response.solved_point is not None:
+        return False
+    return all(
+        type(v) in _NO_STRINGS
+        for v in (usage.prompt_tokens, usage.completion_tokens, usage.cost_usd, response.latency_s, response.retries, response.cached, response.by_strategy)
+    )
 
 
 def _strings_of(value: Any, clean: Callable[[str], str]) -> Any:

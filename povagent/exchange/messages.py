@@ -123,6 +123,12 @@ class GenerationParams:
         d.update(dict(self.extra))
         return d
 
+    @functools.cached_property
+    def canonical_json(self) -> str:
+        """:meth:`as_dict` as canonical JSON, made once: a strategy's every request shares its
+        generation settings, and each request's hash holds them."""
+        return _canonical(self.as_dict())
+
 
 @dataclass(frozen=True)
 class Request:
@@ -160,7 +166,7 @@ class Request:
         """SHA-256 of :meth:`fingerprint` as canonical JSON (stable across runs and machines),
         put together from each message's own JSON (the same bytes, each message serialized once)."""
         blob = (
-            '{"generation":' + _canonical(self.generation.as_dict())
+            '{"generation":' + self.generation.canonical_json
             + ',"messages":[' + ",".join(m.fingerprint_json for m in self.messages) + "]"
             + (',"tools":' + _canonical([dict(t) for t in self.tools]) if self.tools else "")
             + "}"

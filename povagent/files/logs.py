@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Callable, TextIO, cast
 
 import structlog
-from structlog.typing import EventDict
+from structlog.typing import EventDict, Processor
 
 from povagent.files.confined_write import open_inside
 from povagent.files.redaction import Redactor
@@ -116,32 +116,42 @@ class RunLog:
         self.redactor = redactor or Redactor()
         stream = (_stderr if console is True else console) or None
         self._sinks = _Sinks(self._file, stream, LEVELS.get(console_level, 30))
-        self.logger = structlog.wrap_logger(
-            None,
-            processors=[_add_level, _timestamp, self.redactor, self._sinks],
-            context_class=dict,
-            cache_logger_on_first_use=True,
-        ).bind(**context)
+        processors: list[Processor] = [_add_level, _timestamp, self.redactor, self._sinks]
+        self.logger = structlog.wrap_logger(None, processors=processors, context_class=dict, cache_logger_on_first_use=True).bind(**context)
+        self._context = dict(context)
+        self._processors = tuple(processors)
 
     def bind(self, **context: Any) -> Any:
         """A bound logger carrying ``context`` on every event."""
         return self.logger.bind(**context)
 
+    def _emit(self, method: str, event: str, kw: dict[str, Any]) -> None:
+        # What the bound logger does with a call (its context, the call's fields, the event, then
+        # the processors; the sink drops the event), without the wrapper's layers of calls
+        # around it: a run logs an event for every request, and those layers cost more than
+        # the line. The same processors, in the same order, so the same line.
+        event_dict: Any = {**self._context, **kw, "event": event}
+        try:
+            for processor in self._processors:
+                event_dict = processor(None, method, event_dict)
+        except structlog.DropEvent:
+            pass
+
     def debug(self, event: str, **kw: Any) -> None:
         """Log at debug level."""
-        self.logger.debug(event, **kw)
+        self._emit("debug", event, kw)
 
     def info(self, event: str, **kw: Any) -> None:
         """Log at info level."""
-        self.logger.info(event, **kw)
+        self._emit("info", event, kw)
 
     def warning(self, event: str, **kw: Any) -> None:
         """Log at warning level."""
-        self.logger.warning(event, **kw)
+        self._emit("warning", event, kw)
 
     def error(self, event: str, **kw: Any) -> None:
         """Log at error level."""
-        self.logger.error(event, **kw)
+        self._emit("error", event, kw)
 
     def flush(self) -> None:
         """Push buffered lines to the file."""

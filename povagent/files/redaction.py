@@ -116,7 +116,24 @@ class Redactor:
 
     def __call__(self, logger: Any, method: str, event: EventDict) -> dict[str, Any]:
         """structlog processor."""
-        return {k: self.value(v, k) for k, v in event.items()}
+        # What :meth:`value` gives, with its checks told apart once: a number, a flag or None
+        # is kept, and a text under a key that names no secret is :meth:`text`'s (a run logs
+        # an event a request, and these are nearly all of its fields)
+        return {
+            k: v if (kind := type(v)) in _NO_SECRET else self.text(v) if kind is str and _plain_key(k) else self.value(v, k)
+            for k, v in event.items()
+        }
+
+
+#: The types :meth:`Redactor.value` returns unchanged whatever their key (counts, sizes, flags).
+_NO_SECRET = frozenset({int, float, bool, type(None)})
+
+
+@functools.lru_cache(maxsize=1024)
+def _plain_key(key: str) -> bool:
+    # a key under which :meth:`Redactor.value` treats a text as text: neither a secret's name
+    # nor one naming an environment variable
+    return not _secret_key(key) and not _names_a_variable(key)
 
 
 _LITELLM_ENV_REF = "os.environ/"

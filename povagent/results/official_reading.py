@@ -28,7 +28,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.results.plugin_errors import parse_or_unparseable
-from povagent.results.rows import OfficialReading, Prediction, RowStatus
+from povagent.results.rows import OfficialReading, Prediction, ResultRow, RowStatus
 
 #: The parser that reads the asked JSON answer as the official runner does.
 OFFICIAL_PARSER = "official"
@@ -87,16 +87,27 @@ def officially_read(row: Any) -> Any:
     if reading is None:
         return row
     parse = reading.parse
-    return row.model_copy(
-        update={
-            "parser": reading.parser,
-            "parse": parse,
-            "scores": reading.scores,
-            "status": RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR,
-            "prediction": Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction(),
-            "official_reading": None,
-        }
-    )
+    update = {
+        "parser": reading.parser,
+        "parse": parse,
+        "scores": reading.scores,
+        "status": RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR,
+        "prediction": Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction(),
+        "official_reading": None,
+    }
+    if type(row) is not ResultRow:
+        return row.model_copy(update=update)
+    # ``model_copy(update=...)``'s copy, made directly: a summary reads every row this way, and
+    # pydantic's generic copy (three ``copy.copy`` calls) was most of its cost
+    copied = ResultRow.__new__(ResultRow)
+    _set(copied, "__dict__", {**row.__dict__, **update})
+    _set(copied, "__pydantic_fields_set__", row.__pydantic_fields_set__ | update.keys())
+    _set(copied, "__pydantic_extra__", None if row.__pydantic_extra__ is None else dict(row.__pydantic_extra__))
+    _set(copied, "__pydantic_private__", None if row.__pydantic_private__ is None else dict(row.__pydantic_private__))
+    return copied
+
+
+_set = object.__setattr__
 
 
 def official_rows(rows: Iterable[Any]) -> tuple[list[Any], list[str]]:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from typing import overload
 
 from povagent.exchange.messages import Request, messages_images, messages_text
+from povagent.results.model_construct import construct
 from povagent.results.rows import ExchangeRecord, ResultRow
 
 
@@ -39,11 +40,11 @@ class RowTranscript:
         n = len(last.messages) if last is not None else 0
         continues = last is not None and request.messages[:n] == last.messages
         added = request.messages[n:] if continues else request.messages
-        # model_construct: every field is built here with the right type (and named: a field
-        # left out would quietly take its default); validating again cost ~0.1 ms a request.
+        # constructed: every field is built here with the right type (and named: a field left
+        # out would quietly take its default); validating again cost ~0.1 ms a request.
         self.exchanges.append(
-            ExchangeRecord.model_construct(
-                request_hash=request.content_hash(), image_hashes=messages_images(added), prompt=messages_text(added),
+            construct(
+                ExchangeRecord, request_hash=request.content_hash(), image_hashes=messages_images(added), prompt=messages_text(added),
                 prompt_continues=continues, raw=raw, latency_s=latency_s, prompt_tokens=prompt_tokens,
                 completion_tokens=completion_tokens, cost_usd=cost_usd, retries=retries, cached=cached,
             )

@@ -23,6 +23,8 @@ _NONE, _FLOAT, _TRUE, _FALSE, _INT, _TEXT, _ASIDE = range(7)
 _SMALL = 8
 #: ... and from here on a text's code (kind - _CODE), for a column's first 128 texts.
 _CODE = 128
+#: Texts whose code the kind byte holds (a column's first ones).
+_NEAR_TEXTS = 256 - _CODE
 #: Whole numbers a double holds exactly.
 _EXACT = 2**53
 #: What :meth:`Column.values` marks a value read on its own with (no value equals it).
@@ -47,6 +49,26 @@ class Column:
 
     def append(self, value: Any) -> None:
         """Add ``value`` as the next row's."""
+        # the common values first (a flag, None, a label already met, a small count): the
+        # byte alone, no branch more (a summary appends twenty values a row)
+        if value is None:
+            kind = _NONE
+        elif value is True:
+            kind = _TRUE
+        elif value is False:
+            kind = _FALSE
+        elif type(value) is str and (code := self._text_code.get(value, _NEAR_TEXTS)) < _NEAR_TEXTS:
+            kind = _CODE + code
+        elif type(value) is int and 0 <= value < _CODE - _SMALL:
+            kind = _SMALL + value
+        else:
+            self._append_other(value)
+            return
+        if self._numbers is not None:
+            self._numbers.append(0.0)
+        self._kinds.append(kind)
+
+    def _append_other(self, value: Any) -> None:
         kind, number = _ASIDE, None
         t = type(value)
         if t is float:

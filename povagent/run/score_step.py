@@ -27,6 +27,7 @@ from povagent.answers.types import AnswerType
 from povagent.dataset.instances import Instance
 from povagent.dataset.protocol import EvaluationSet
 from povagent.interfaces import Parser, Scorer
+from povagent.results.model_construct import construct
 from povagent.results.official_reading import read_officially
 from povagent.results.output_check import check_answer_value
 from povagent.results.plugin_errors import parse_or_unparseable, score_or_error
@@ -72,7 +73,7 @@ def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerTy
     value = answer_type.value_of(parse) if answer_type is not None else None
     if answer_type is not None:  # while testing: the value has the shape its type publishes
         check_answer_value(answer_type.name, answer_type.value_schema, value, instance.id)
-    return Prediction.model_construct(selected_image=sel, image_path=image_path, x=parse.x, y=parse.y, answer_type=typed, value=value)
+    return construct(Prediction, selected_image=sel, image_path=image_path, x=parse.x, y=parse.y, answer_type=typed, value=value)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor
+from povagent.results.model_construct import construct
 from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
 from povagent.results.transcript import RowTranscript
@@ -117,7 +118,7 @@ class KeySolver:
             error_message = self.redactor.text(f"{type(exc).__name__}: {exc}")
             self.log.error("strategy_error", row=key, error=error_message, traceback=self.redactor.text(traceback.format_exc()))
         spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
-        return ResultRow.model_construct(
+        return construct(ResultRow,
             format_version=ROW_FORMAT,
             key=key,
             instance_id=iid,

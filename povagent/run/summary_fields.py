@@ -15,6 +15,7 @@ from typing import Any
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
+from povagent.scoring.evaluations import official_parse_error
 from povagent.scoring.protocols import diagnosing_scorers
 
 
@@ -23,8 +24,6 @@ def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
     scorer (non-answers count as such; ``None``: the run has none, and no row is answered). A row
     of a multiple-choice question (it records a category, or its parse chose an option) asks no
     point: the point breakdown leaves it out."""
-    from povagent.scoring.evaluations import official_parse_error
-
     score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     asks_point = row.category is None and (row.parse is None or row.parse.choice is None)
@@ -47,20 +46,29 @@ def plugin_scores(scores: Mapping[str, Any], protocols: Mapping[str, str]) -> tu
     """For every scorer of a row that follows no protocol (``protocols``: ``{scorer: protocol}``;
     a protocol's fields have sections of their own), its true/false and number fields (text and
     lists left out)."""
+    # a plain dict is told from other mappings first: the ABC check costs more than the rest
     return tuple(
-        (name, tuple((k, v) for k, v in fields.items() if isinstance(v, (bool, int, float))))
-        for name, fields in sorted(scores.items())
-        if name not in protocols and isinstance(fields, Mapping)
+        [
+            (name, tuple([(k, v) for k, v in fields.items() if type(v) in _NUMBER_TYPES or isinstance(v, (bool, int, float))]))
+            for name, fields in sorted(scores.items())
+            if name not in protocols and (type(fields) is dict or isinstance(fields, Mapping))
+        ]
     )
 
 
-def diagnosed_row(row: ResultRow, error_scorer: str | None) -> DiagnosedRow | None:
+#: The types :func:`plugin_scores` keeps, told by identity before ``isinstance`` (subclasses).
+_NUMBER_TYPES = frozenset({bool, int, float})
+
+
+def diagnosed_row(row: ResultRow, error_scorer: str | None, by: Mapping[str, str] | None = None) -> DiagnosedRow | None:
     """The fields of the scorers diagnosing an answered row (``failure_step`` and
-    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`), with its error by
-    ``error_scorer`` (the run's ``normalized_l2`` scorer), or ``None`` when neither scored it."""
+    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`, or ``by`` when the
+    caller asked it already), with its error by ``error_scorer`` (the run's ``normalized_l2``
+    scorer), or ``None`` when neither scored it."""
     if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too
         return None
-    by = diagnosing_scorers()
+    if by is None:
+        by = diagnosing_scorers()
     diagnose = row.scores.get(by.get("failure_step", ""))
     relation = row.scores.get(by.get("relation_hit", ""))
     diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None

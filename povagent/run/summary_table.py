@@ -23,6 +23,7 @@ import hashlib
 from array import array
 from collections import Counter, defaultdict
 from collections.abc import Container, Iterator, Mapping, Sequence
+from operator import attrgetter
 from typing import Any, NamedTuple, overload
 
 import numpy as np
@@ -36,7 +37,7 @@ from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
 from povagent.scoring.metrics import Declared, row_category, row_metric_flat, row_metric_groups
-from povagent.scoring.protocols import registered_protocols
+from povagent.scoring.protocols import diagnosing_scorers, registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
 _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error", "asks_point")
@@ -72,6 +73,10 @@ class SummaryTable:
         self._closed = False
         self._scored: list[ScoredRow] | None = None
         self._shared_scores: dict[Any, Any] = {}
+        #: each column's ``append``, looked up once: a row makes twenty appends
+        self._appends = _Appends(self._fields)
+        #: where a row's diagnoses are (``{diagnosis: scorer}``), asked of the registry once a table
+        self._diagnosing = diagnosing_scorers()
 
     def add(self, row: ResultRow) -> None:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
@@ -79,31 +84,32 @@ class SummaryTable:
             raise RuntimeError("SummaryTable.add after close()")
         if self._keys is not None and row.key not in self._keys:
             return
-        at = len(self._fields["run"])
+        appends = self._appends
+        at = len(appends.run_column)
         protocols = self._protocols
         error_scorer = _following(self._error_scorers, row.scores)
         hit_scorer = _following(self._hit_scorers, row.scores)
         reading = row.official_reading
         official = officially_read(row)
         scored = scored_row(row, error_scorer)
-        columns = self._fields
-        for name in _SCORED:
-            columns[name].append(getattr(scored, name))
-        columns["status"].append(RowStatus(row.status).value)
-        columns["official_parser"].append(None if reading is None else reading.parser)
+        for append, value in zip(appends.scored, _scored_values(scored)):
+            append(value)
+        status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
+        appends.status(status.value)
+        appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
-        if reading is not None or RowStatus(row.status) is RowStatus.INFRA_ERROR:
+        if reading is not None or status is RowStatus.INFRA_ERROR:
             officially = scored_row(official, error_scorer)
             state = _AS_SCORED if officially == scored else _OTHERWISE
             if state == _OTHERWISE:
                 self._aside["officially_scored"][at] = officially
-        columns["reading"].append(state)
+        appends.reading(state)
         success = row.scores.get(hit_scorer) if hit_scorer is not None else None
         # "success_answered" is None where no marked_hit scorer gave a verdict
-        columns["success"].append(None if success is None else (success or {}).get("success"))
-        columns["success_answered"].append(None if success is None else (success or {}).get("answered") is True)
-        for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"):
-            columns[name].append(getattr(row, name))
+        appends.success(None if success is None else (success or {}).get("success"))
+        appends.success_answered(None if success is None else (success or {}).get("answered") is True)
+        for append, value in zip(appends.spent, _spent_values(row)):
+            append(value)
         if extra := plugin_scores(row.scores, protocols):
             # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each.
             # Only all-true/false ones: True == 1, and a summary tells a flag from a number
@@ -113,7 +119,7 @@ class SummaryTable:
                 if shared is None and len(self._shared_scores) < _MAX_SHARED_SCORES:
                     shared = self._shared_scores.setdefault(extra, extra)
             self._aside["plugin_scores"][at] = extra if shared is None else shared
-        if (diagnosed := diagnosed_row(row, error_scorer)) is not None:
+        if (diagnosed := diagnosed_row(row, error_scorer, self._diagnosing)) is not None:
             self._aside["diagnosed"][at] = diagnosed
         if nan_rows([official]):
             self._aside["nan_key"][at] = row.key
@@ -238,6 +244,25 @@ class SummaryTable:
     def _check_closed(self) -> None:
         if not self._closed:
             raise RuntimeError("SummaryTable read before close()")
+
+
+#: A :class:`ScoredRow`'s values in :data:`_SCORED`'s order, and a row's spending, each read in one call.
+_scored_values = attrgetter(*_SCORED)
+_SPENT = ("prompt_tokens", "completion_tokens", "cost_usd", "retries")
+_spent_values = attrgetter(*_SPENT)
+
+
+class _Appends:
+    """The ``append`` of each column a row adds to (a table's, while rows are added)."""
+
+    __slots__ = ("run_column", "scored", "spent", "status", "official_parser", "reading", "success", "success_answered")
+
+    def __init__(self, fields: Mapping[str, Column]) -> None:
+        self.run_column = fields["run"]
+        self.scored = tuple(fields[name].append for name in _SCORED)
+        self.spent = tuple(fields[name].append for name in _SPENT)
+        self.status, self.official_parser, self.reading = fields["status"].append, fields["official_parser"].append, fields["reading"].append
+        self.success, self.success_answered = fields["success"].append, fields["success_answered"].append
 
 
 def _following(names: list[str], scores: Mapping[str, Any]) -> str | None:

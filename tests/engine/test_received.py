@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from povagent.engine.received import (
     MAX_ARGUMENTS_CHARS,
     MAX_CALL_ID_CHARS,
@@ -9,8 +11,9 @@ from povagent.engine.received import (
     MAX_TOOL_NAME_CHARS,
     MAX_TOOL_TURN_TEXT_CHARS,
     received,
+    valid_text,
 )
-from povagent.exchange.messages import Response, ToolCall
+from povagent.exchange.messages import Response, ToolCall, Usage
 from povagent.files.redaction import Redactor
 
 KEY = "lab-key-4f9a8c7e2b1d"
@@ -39,3 +42,22 @@ def test_tool_calls_and_the_text_beside_them_are_cut_to_their_bounds_whatever_th
 
 def test_the_text_of_an_answer_to_a_request_without_tools_is_kept_whole():
     assert received(Response("t" * 99_999), str).text == "t" * 99_999
+
+
+@pytest.mark.parametrize(
+    "response",
+    [
+        Response(text="A", usage=Usage(0, 0, 0.0), latency_s=0.0, model="random"),
+        Response(text="key sk-SECRET in the text", usage=Usage(12, None, None), latency_s=0.5, model=None, retries=2, cached=True),
+        Response(text="lone \ud800 surrogate", model="model sk-SECRET \udfff", by_strategy=True),
+    ],
+)
+def test_a_plain_answer_is_what_walking_its_fields_gives(response):
+    """The usual answer takes a shorter path than the walk over its fields: the same result."""
+    from povagent.engine.received import _strings_of
+
+    redact = Redactor(("sk-SECRET",)).known
+    walked = _strings_of(response, lambda text: redact(valid_text(text)))
+    got = received(response, redact)
+    assert got == walked and got is not response and got.usage is not response.usage
+    assert "sk-SECRET" not in got.text and "\ud800" not in got.text

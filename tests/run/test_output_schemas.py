@@ -103,22 +103,23 @@ def test_a_summary_with_an_unknown_section_fails_its_schema(two_run_sweep):
 
 
 def _construct_keywords(model: str) -> set[str]:
-    """The keywords of the ``<model>.model_construct(...)`` call of the module that builds it
+    """The keywords of the ``construct(<model>, ...)`` call of the module that builds it
     (the solve step a row, the row's transcript an exchange)."""
     module = transcript_module if model == "ExchangeRecord" else solve_key_module
     tree = ast.parse((Path(module.__file__)).read_text(encoding="utf-8"))
     calls = [
         node for node in ast.walk(tree)
-        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "model_construct"
-        and isinstance(node.func.value, ast.Name) and node.func.value.id == model
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "construct"
+        and node.args and isinstance(node.args[0], ast.Name) and node.args[0].id == model
     ]  # fmt: skip
-    assert len(calls) == 1, f"expected one {model}.model_construct call in {module.__name__}"
+    assert len(calls) == 1, f"expected one construct({model}, ...) call in {module.__name__}"
     return {k.arg for k in calls[0].keywords if k.arg is not None}
 
 
 @pytest.mark.parametrize("model", [ResultRow, ExchangeRecord])
 def test_the_runner_builds_a_row_without_validation_only_by_naming_every_field(model):
-    # model_construct skips validation: a field left out would quietly take its default
+    # construct skips validation: a field left out would quietly take its default (and the
+    # model be built the slow way, by model_construct)
     assert _construct_keywords(model.__name__) == set(model.model_fields)
 
 

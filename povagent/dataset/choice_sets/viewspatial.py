@@ -19,7 +19,7 @@ from typing import Any
 
 from povagent.answers.choice import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, json_list, text_problems
-from povagent.dataset.problems import Problem
+from povagent.dataset.problems import Problem, all_text
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
 PROFILE = "viewspatial"
@@ -46,13 +46,16 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
         return [], unread
     items: list[Item] = []
     problems: list[Problem] = []
+    # the file's records hold only text (told at once, at C speed), or each is walked for it
+    walk = not all_text(data)
+    options_of: dict[str, tuple[tuple[str, str], ...] | str] = {}
     for index, record in enumerate(data):
         where = f"$[{index}]"
-        not_text = text_problems(name, where, record)
+        not_text = text_problems(name, where, record) if walk else None
         if not_text:  # the rule the release reader holds: a lone surrogate is not text
             problems.extend(not_text)
             continue
-        item = _item(index, record, where)
+        item = _item(index, record, where, options_of)
         if isinstance(item, Item):
             items.append(item)
         else:
@@ -60,8 +63,10 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     return items, problems
 
 
-def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
-    """The record as an item, or ``(json path, message)`` saying what is wrong with it."""
+def _item(index: int, record: Any, where: str, options_of: dict[str, tuple[tuple[str, str], ...] | str] | None = None) -> Item | tuple[str, str]:
+    """The record as an item, or ``(json path, message)`` saying what is wrong with it.
+    ``options_of``: each ``choices`` text read so far, with its options or its problem (a set's
+    records repeat a few dozen option lists)."""
     if not isinstance(record, dict):
         # named by its type, never re-encoded: a record nesting ~1000 deep would overflow the encoder
         return where, f"a record must be a JSON object (got {type(record).__name__})"
@@ -73,20 +78,33 @@ def _item(index: int, record: Any, where: str) -> Item | tuple[str, str]:
         return f"{where}.image_path", "required, a list of 1 to 32 image paths"
     if len(images) > MAX_FRAMES:
         return f"{where}.image_path", f"{len(images)} images; a record shows at most {MAX_FRAMES}"
-    lines = record["choices"].strip().splitlines()
-    if len(lines) > MAX_OPTIONS:  # each a label A-Z: more cannot be options, and the problem stays one short line
-        return f"{where}.choices", f"{len(lines)} lines; a question has at most {MAX_OPTIONS} options 'X. text'"
-    options = []
-    for number, line in enumerate(lines):
-        match = _OPTION_LINE.fullmatch(line.strip())
-        if match is None:
-            return f"{where}.choices", f"line {number + 1} {line[:60]!r} is not an option 'X. text'"
-        options.append((match.group(1), match.group(2).strip()))
+    choices = record["choices"]
+    options = options_of.get(choices) if options_of is not None else None
+    if options is None:
+        options = _options(choices)
+        if options_of is not None and len(options_of) < 4096:
+            options_of[choices] = options
+    if isinstance(options, str):  # why the text holds no options
+        return f"{where}.choices", options
     gold = gold_label(record["answer"])
     if gold is None:
         return f"{where}.answer", f"{record['answer'][:60]!r} names no label A-D (the official rule reads the first standalone letter)"
     try:
-        question = ChoiceQuestion(record["question"], tuple(options), gold, category=record["question_type"], profile=PROFILE)
+        question = ChoiceQuestion(record["question"], options, gold, category=record["question_type"], profile=PROFILE)
     except ValueError as exc:
         return (f"{where}.answer" if "gold" in str(exc) else f"{where}.choices"), str(exc)
     return Item(str(index), question, tuple(images))
+
+
+def _options(choices: str) -> tuple[tuple[str, str], ...] | str:
+    """The options of a record's ``choices`` text (``"A. right\\nB. left"``), or why it holds none."""
+    lines = choices.strip().splitlines()
+    if len(lines) > MAX_OPTIONS:  # each a label A-Z: more cannot be options, and the problem stays one short line
+        return f"{len(lines)} lines; a question has at most {MAX_OPTIONS} options 'X. text'"
+    options = []
+    for number, line in enumerate(lines):
+        match = _OPTION_LINE.fullmatch(line.strip())
+        if match is None:
+            return f"line {number + 1} {line[:60]!r} is not an option 'X. text'"
+        options.append((match.group(1), match.group(2).strip()))
+    return tuple(options)
