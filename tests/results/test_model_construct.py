@@ -6,7 +6,7 @@ from pydantic import BaseModel, Field
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.results.model_construct import construct
-from povagent.results.rows import ExchangeRecord, OfficialReading, Prediction, ResultRow, RowStatus
+from povagent.results.rows import ROW_FORMAT, ExchangeRecord, OfficialReading, Prediction, ResultRow, RowStatus
 
 
 def _state(model: BaseModel) -> tuple:
@@ -16,7 +16,7 @@ def _state(model: BaseModel) -> tuple:
 
 def _row_fields() -> dict:
     return dict(
-        key="set/1#0", instance_id="set/1", house_id="set", pair_id="1", direction="", condition="", run=0, sentence="Where?",
+        format_version=ROW_FORMAT, key="set/1#0", instance_id="set/1", house_id="set", pair_id="1", direction="", condition="", run=0, sentence="Where?",
         backend="random", model="random", profile=None, strategy="choice", parser="choice", label=None, config_hash="abc",
         status=RowStatus.ANSWERED, exchanges=[ExchangeRecord(request_hash="h", raw="A")], parse=ParsedAnswer(status="ok", choice="A"),
         prediction=Prediction(answer_type="choice", value={"choice": "A"}), scores={"choice": {"answered": True, "correct": False}},
