@@ -15,6 +15,18 @@ from hypothesis import HealthCheck, settings
 # it is written (povagent.results.output_check).
 os.environ["POVAGENT_CHECK_OUTPUTS"] = "1"
 
+# The Dask processes the tests start (tests/cluster's scheduler and workers, a LocalCluster's)
+# inherit this environment. Idle, each wakes every 20 ms to time its event loop and every 0.5 s
+# to sample its memory, and a worker samples its busy thread's stack every 10 ms: CPU that grows
+# with the wall time a loaded machine stretches a test to (2 s per idle minute of a 2-worker
+# cluster). None of it is tested here; a value set outside the tests wins.
+for _key, _value in {
+    "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "1s",
+    "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__INTERVAL": "5s",
+    "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
+}.items():
+    os.environ.setdefault(_key, _value)
+
 # Hypothesis: no per-example deadline and no "too slow" health check (both wall-clock budgets
 # that the machine's load moves: a property either holds or not, however long an example
 # takes; a hang is pytest-timeout's), and no example database (it would be written into the

@@ -4,8 +4,9 @@ What it is for: embree picks its kernels (SSE2, AVX, AVX2, AVX-512) for the CPU 
 embreex hands ``rtcNewDevice`` no configuration through which to choose. A tiny preloaded
 shim, compiled here with the machine's C compiler, passes ``isa=...`` (or any configuration)
 from the environment to embree, so one machine can render as machines of other kinds would
-(``tests/generate/test_bytes_across_cpus.py``, ``benchmarks/bench_render_isa.py``). What it
-must not do: touch the process that calls it (only the environment it returns is changed).
+(``tests/generate/test_bytes_across_cpus.py``, ``benchmarks/bytes_across_cpus.py``,
+``benchmarks/bench_render_isa.py``). What it must not do: touch the process that calls it
+(only the environment it returns is changed).
 """
 
 from __future__ import annotations
@@ -74,3 +75,23 @@ def cpu_isas() -> list[str]:
     if {"avx512f", "avx512dq", "avx512cd", "avx512bw", "avx512vl"} <= flags:
         isas.append("avx512")
     return isas
+
+
+#: numpy's dispatch targets above the x86-64-v2 baseline, and the AVX-512 ones alone
+#: (``NPY_DISABLE_CPU_FEATURES`` values).
+NUMPY_V2_ONLY = "X86_V3 X86_V4 AVX512_ICL AVX512_SPR"
+NUMPY_NO_AVX512 = "X86_V4 AVX512_ICL AVX512_SPR"
+
+
+def cpu_settings(shim: Path) -> dict[str, dict[str, str]]:
+    """Three kinds of machine, by name, as child environments, in this order: as installed; the
+    lowest embree ISA with numpy at its x86-64-v2 baseline and OpenBLAS's oldest kernel; and the
+    highest ISA below this machine's own with numpy's AVX-512 off and OpenBLAS Haswell (the kind
+    of machine the bytes once differed on: AVX2 under AVX-512)."""
+    isas = cpu_isas()
+    forced = [(isas[0], NUMPY_V2_ONLY, "Prescott"), (isas[-2], NUMPY_NO_AVX512, "Haswell")]
+    settings: dict[str, dict[str, str]] = {"as installed": {}}
+    for isa, numpy, blas in forced:
+        settings[f"embree {isa}, numpy off: {numpy}, OpenBLAS {blas}"] = {
+            **isa_environment(shim, isa), "NPY_DISABLE_CPU_FEATURES": numpy, "OPENBLAS_CORETYPE": blas}
+    return settings

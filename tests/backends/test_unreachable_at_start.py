@@ -122,24 +122,34 @@ def session(tmp_path: Path) -> dict:
     return json.loads((tmp_path / "run" / "summary.json").read_text())["session"]
 
 
-def test_run_stops_at_once_on_an_unset_api_key_env_before_any_request(tmp_path, mini_root):
+@pytest.fixture(scope="module")
+def unset_key_run(tmp_path_factory, mini_root) -> tuple[subprocess.CompletedProcess[str], int, Path]:
+    """(the finished process, the requests the server saw, the folder): ``povagent run`` whose
+    ``api_key_env`` names an unset variable, run once (a process that imports litellm costs
+    seconds of CPU) for the tests that read what it did."""
+    folder = tmp_path_factory.mktemp("unset-key")
     with LoopbackServer(max_lifetime_s=120) as server:
-        done, _ = run_cli(pipeline(tmp_path, mini_root, api_base=server.url, api_key_env="POVAGENT_UNSET_KEY"))
-        line = stop_line(done)
-        assert "environment variable POVAGENT_UNSET_KEY (api_key_env of backend 'litellm') is not set" in line
-        assert server.request_count == 0
-    assert session(tmp_path)["requests"] == 0
+        done, _ = run_cli(pipeline(folder, mini_root, api_base=server.url, api_key_env="POVAGENT_UNSET_KEY"))
+        requests = server.request_count
+    return done, requests, folder
 
 
-def test_an_unset_api_key_env_prints_only_the_one_line(tmp_path, mini_root):
+def test_run_stops_at_once_on_an_unset_api_key_env_before_any_request(unset_key_run):
+    done, requests, folder = unset_key_run
+    line = stop_line(done)
+    assert "environment variable POVAGENT_UNSET_KEY (api_key_env of backend 'litellm') is not set" in line
+    assert requests == 0
+    assert session(folder)["requests"] == 0
+
+
+def test_an_unset_api_key_env_prints_only_the_one_line(unset_key_run):
     """No warning row, no error row, no empty score table: the stop line alone (exit code 4);
     the run's log file keeps the row's and the stop's events."""
-    with LoopbackServer(max_lifetime_s=120) as server:
-        done, _ = run_cli(pipeline(tmp_path, mini_root, api_base=server.url, api_key_env="POVAGENT_UNSET_KEY"))
+    done, _, folder = unset_key_run
     stop_line(done)
     shown = [line for line in (done.stdout + done.stderr).splitlines() if line.strip() and "dataset_problem" not in line]
     assert len(shown) == 1 and shown[0].startswith("stopped early:"), shown
-    events = [json.loads(line)["event"] for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    events = [json.loads(line)["event"] for line in (folder / "run" / "log.jsonl").read_text().splitlines()]
     assert "infra_error" in events and "run_stopped" in events
 
 

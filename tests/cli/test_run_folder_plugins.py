@@ -9,6 +9,7 @@ the run folder (``rescore .``), as a user who received the folder would type it.
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -24,17 +25,32 @@ def povagent(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "povagent.cli", *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=150)
 
 
-@pytest.fixture
-def shared_run(tmp_path, dataset_copy) -> tuple[Path, Path, Path]:
-    """(run folder, the hostile plugin, its marker): a finished run whose config.yaml was then
-    edited to name ``hostile.py`` (in the run folder itself, and as ``plugins:`` of its own)."""
-    pipeline = tmp_path / "pipeline.yaml"
-    run = tmp_path / "run"
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory, mini_root) -> Path:
+    """A finished run folder made once by ``povagent run`` (a child process, seconds of CPU): each
+    test works on its own copy, so the commands it runs there never meet another test's edits."""
+    tmp = tmp_path_factory.mktemp("finished-run")
+    dataset = tmp / "ds"
+    (dataset / "artifacts").mkdir(parents=True)
+    shutil.copy(mini_root / "meta.json", dataset / "meta.json")
+    for house in ("train_house_00000", "train_house_00001"):  # its good houses (as the dataset_copy fixture)
+        shutil.copytree(mini_root / "artifacts" / house, dataset / "artifacts" / house)
+    pipeline = tmp / "pipeline.yaml"
+    run = tmp / "run"
     pipeline.write_text(yaml.safe_dump({
-        "dataset": str(dataset_copy), "instances": {"limit": 4}, "backend": "center", "cache": False, "output": str(run),
+        "dataset": str(dataset), "instances": {"limit": 4}, "backend": "center", "cache": False, "output": str(run),
     }))
-    done = povagent("run", str(pipeline), "--quiet", cwd=tmp_path)
+    done = povagent("run", str(pipeline), "--quiet", cwd=tmp)
     assert done.returncode == 0, done.stderr
+    return run
+
+
+@pytest.fixture
+def shared_run(tmp_path, finished_run) -> tuple[Path, Path, Path]:
+    """(run folder, the hostile plugin, its marker): a copy of the finished run whose config.yaml
+    was then edited to name ``hostile.py`` (in the run folder itself, and as ``plugins:`` of its own)."""
+    run = tmp_path / "run"
+    shutil.copytree(finished_run, run)
     marker = tmp_path / "IMPORTED"
     plugin = run / "hostile.py"
     plugin.write_text(

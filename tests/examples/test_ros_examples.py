@@ -34,27 +34,15 @@ def test_the_written_bag_replays_through_ros_replay(generated_release, tmp_path)
     assert result["status"] == "ok" and result["keyframes"] == 12 and replay.stderr == ""  # no malformed message in the bag
 
 
-#: Runs of the example in a row; each must exit cleanly (the abort at exit came in 2 runs of 10).
-REPEATS = 10
-#: Runs at a time, each on its own domain id (their graphs never meet).
-LANES = 2
-
-
-def test_the_tour_played_to_the_node_lands_within_tolerance_of_the_truth_and_exits_cleanly_every_time(generated_release, tmp_path):
+def test_the_tour_played_to_the_node_lands_within_tolerance_of_the_truth_and_exits_cleanly(generated_release, tmp_path):
+    """One run (the abort at exit once came in 2 runs of 10: benchmarks/ros_example_exits.py runs
+    the example 10 times in a row, with these same checks on every run)."""
     env = {**os.environ, "ROS_LOG_DIR": str(tmp_path)}
-    base = 10 + (os.getpid() % 15) * LANES  # 10-39: clear of the ROS tests' own 40-99
-    outcomes = []
-    for start in range(0, REPEATS, LANES):
-        procs = [subprocess.Popen([sys.executable, str(EXAMPLES / "play_to_node.py"), "--dataset", str(generated_release), "--domain-id", str(base + lane)],
-                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
-                 for lane in range(min(LANES, REPEATS - start))]
-        for proc in procs:
-            out, err = proc.communicate(timeout=180)
-            outcomes.append((proc.returncode, out, err))
-    unclean = [(rc, err[-300:]) for rc, _out, err in outcomes if rc != 0 or "terminate called" in err]
-    assert unclean == [], f"{len(unclean)} of {REPEATS} runs did not exit cleanly: {unclean}"
-    for _rc, out, _err in outcomes:
-        lines = dict(line.split(":", 1) for line in out.splitlines() if ":" in line)
-        assert lines["perception"].strip().startswith("SIMULATION") and lines["status"].strip() == "ok"
-        goal, truth = (np.array([float(v) for v in re.findall(r"-?\d+\.\d+", lines[k])[:3]]) for k in ("goal", "truth"))
-        assert np.linalg.norm(goal - truth) < GOAL_TOLERANCE
+    domain = 10 + os.getpid() % 30  # 10-39: clear of the ROS tests' own 40-99
+    proc = subprocess.run([sys.executable, str(EXAMPLES / "play_to_node.py"), "--dataset", str(generated_release), "--domain-id", str(domain)],
+                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=180)
+    assert proc.returncode == 0 and "terminate called" not in proc.stderr, proc.stderr[-300:]
+    lines = dict(line.split(":", 1) for line in proc.stdout.splitlines() if ":" in line)
+    assert lines["perception"].strip().startswith("SIMULATION") and lines["status"].strip() == "ok"
+    goal, truth = (np.array([float(v) for v in re.findall(r"-?\d+\.\d+", lines[k])[:3]]) for k in ("goal", "truth"))
+    assert np.linalg.norm(goal - truth) < GOAL_TOLERANCE

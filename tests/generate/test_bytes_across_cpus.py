@@ -3,7 +3,9 @@
 The pins of ``test_active_tool_bytes.py`` once held only on the kind of machine they were made
 on: embree's AVX-512 and AVX2 kernels round hit distances differently, so every frame differed.
 Here one small set and one view are made in child processes that each switch off what this
-machine can switch off, and every file must match the pins and each other:
+machine can switch off, and every file must match the pins and each other (the suite runs the
+set as installed and on the lowest kind of machine; ``benchmarks/bytes_across_cpus.py`` adds
+the highest below this machine's own, AVX2 under AVX-512):
 
 * embree's ISA (sse2 ... avx512), forced through ``rtcNewDevice``'s configuration string by a
   shim preloaded into the child (:mod:`povagent.testing.embree_isa`: embreex passes no
@@ -27,16 +29,14 @@ from pathlib import Path
 
 import pytest
 
-from povagent.testing.embree_isa import build_shim, cpu_isas, isa_environment
+from povagent.testing.embree_isa import build_shim, cpu_isas, cpu_settings, isa_environment
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
 
 CHILD = Path(__file__).with_name("cpu_bytes_child.py")
 #: SHA-256 of the child's JSON (every file of the set and the view's PNG, by name).
 PINNED = "ac8a17569adaa1ab03828b840642acc9bad007cf667c61184508e014be85cee8"
-#: numpy's dispatch targets above the x86-64-v2 baseline, and the AVX-512 ones alone.
-NUMPY_V2_ONLY = "X86_V3 X86_V4 AVX512_ICL AVX512_SPR"
-NUMPY_NO_AVX512 = "X86_V4 AVX512_ICL AVX512_SPR"
+
 
 @pytest.fixture(scope="module")
 def shim(tmp_path_factory) -> Path:
@@ -50,22 +50,9 @@ def _child(out: Path, env: dict[str, str]) -> dict[str, str]:
     return json.loads(done.stdout)
 
 
-def _settings(shim: Path) -> dict[str, dict[str, str]]:
-    """As installed, and two forced: the lowest ISA (with numpy at its x86-64-v2 baseline and
-    OpenBLAS's oldest kernel) and the highest below the machine's own (the kind of machine the
-    pins once failed on: AVX2 under AVX-512). ``benchmarks/bench_render_isa.py`` renders 180
-    frames under every ISA this CPU runs."""
-    isas = cpu_isas()
-    forced = [(isas[0], NUMPY_V2_ONLY, "Prescott"), (isas[-2], NUMPY_NO_AVX512, "Haswell")]
-    settings: dict[str, dict[str, str]] = {"as installed": {}}
-    for isa, numpy, blas in forced:
-        settings[f"embree {isa}, numpy off: {numpy}, OpenBLAS {blas}"] = {
-            **isa_environment(shim, isa), "NPY_DISABLE_CPU_FEATURES": numpy, "OPENBLAS_CORETYPE": blas}
-    return settings
-
-
 def test_a_generated_set_and_a_view_are_the_same_bytes_with_every_cpu_feature_switched_off(shim, tmp_path):
-    settings = _settings(shim)
+    # as installed, and the lowest ISA with numpy at its baseline and OpenBLAS's oldest kernel
+    settings = dict(list(cpu_settings(shim).items())[:2])
     with ThreadPoolExecutor(max_workers=2) as pool:
         results = dict(zip(settings, pool.map(lambda kv: _child(tmp_path / f"set{kv[0]}", kv[1]), enumerate(settings.values()))))
     reference = results["as installed"]

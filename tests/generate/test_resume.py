@@ -35,10 +35,18 @@ def copy(src: Path, dst: Path) -> Path:
     return dst
 
 
-def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files_untouched(one_house, tmp_path):
-    out = copy(one_house, tmp_path / "data")
+@pytest.fixture(scope="module")
+def extended(one_house, tmp_path_factory: pytest.TempPathFactory):
+    """(folder, files before, report): a copy of ``one_house`` asked for two houses (made once:
+    a house costs seconds; the tests only read the result or work on copies)."""
+    out = copy(one_house, tmp_path_factory.mktemp("extended") / "data")
     before = files(out)
     report = generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    return out, before, report
+
+
+def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files_untouched(extended):
+    out, before, report = extended
     after = files(out)
     assert (report.kept, report.generated) == (1, 1)
     assert {name: after[name] for name in before} == before  # same bytes and mtimes
@@ -71,9 +79,8 @@ def test_other_options_over_an_existing_dataset_are_refused_naming_the_option(on
     assert files(out) == before and (out / "meta.json").exists()
 
 
-def test_fewer_houses_than_are_complete_is_refused(one_house, tmp_path):
-    out = copy(one_house, tmp_path / "data")
-    generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+def test_fewer_houses_than_are_complete_is_refused(extended, tmp_path):
+    out = copy(extended[0], tmp_path / "data")
     with pytest.raises(DatasetError, match="ask for at least 2 houses"):
         generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
 
@@ -113,7 +120,9 @@ def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_n
     plugin = tmp_path / "failing_judge.py"
     plugin.write_text(FAILING_JUDGE)
     out = tmp_path / "data"
-    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1"]
+    # in this process (--jobs 1): the console script's test below fails a house in the worker pool
+    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1",
+            "--jobs", "1"]
     result = CliRunner().invoke(app, args)
     assert isinstance(result.exception, GenerationError)
     message = str(result.exception)
@@ -125,6 +134,8 @@ def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_n
 
 
 def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(tmp_path):
+    """Two houses, so the default job count runs them in a pool of worker processes (on a
+    machine with two cores or more): the failure crosses the process boundary."""
     plugin = tmp_path / "failing_judge.py"
     plugin.write_text(FAILING_JUDGE)
     code = "from povagent.cli import main; main()"

@@ -90,11 +90,23 @@ def test_sigterm_mid_run_stops_cleanly_and_the_same_command_resumes(tmp_path, da
     assert json.loads((run / "summary.json").read_text())["interrupted"] is False
 
 
-def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, slow_server):
+def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, offline_plugin_file):
     # one request at a time: the cell's last rows are a few tenths of a second away when the
     # signal is sent, so a test process slowed by load still signals mid-cell (the moment the
-    # cell finishes is aimed at on purpose in test_stop_window.py)
-    pipeline(tmp_path, dataset_copy, slow_server, tmp_path / "ignored", runs=1, concurrency=1)
+    # cell finishes is aimed at on purpose in test_stop_window.py). The model is the offline
+    # test backend, as slow as the server above: a request cut by the signal is the run test's
+    # (two sweep processes that import litellm cost 7 s of CPU and test nothing more here)
+    (tmp_path / "pipeline.yaml").write_text(yaml.safe_dump({
+        "plugins": [str(offline_plugin_file)],
+        "dataset": str(dataset_copy),
+        "instances": {"conditions": ["c"]},
+        "runs": 1,
+        "backend": {"name": "test-center", "options": {"delay_s": 0.15, "reply": ANSWER}},
+        "parser": "official",
+        "concurrency": 1,
+        "cache": False,
+        "output": str(tmp_path / "ignored"),
+    }))
     sweep = tmp_path / "sweep.yaml"
     sweep.write_text(yaml.safe_dump({"base": "pipeline.yaml", "output": str(tmp_path / "sw"), "axes": {"parser": ["official", "json"]}}))
     proc = start("sweep", str(sweep), cwd=tmp_path)
