@@ -43,8 +43,14 @@ def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
     if instance.question is not None:
         chosen = answer.choice if answer.status.answered else None
         correct = chosen is not None and chosen.lower() == instance.question.gold.lower()
-        return {"answered": chosen is not None, "score": 1.0 if correct else 0.0, "correct": correct,
-                "chosen": chosen, "gold": instance.question.gold, "category": instance.question.category}  # fmt: skip
+        return {
+            "answered": chosen is not None,
+            "score": 1.0 if correct else 0.0,
+            "correct": correct,
+            "chosen": chosen,
+            "gold": instance.question.gold,
+            "category": instance.question.category,
+        }
     numeric = instance.numeric
     if numeric is None:
         raise ValueError(f"instance {instance.id} asks neither a multiple-choice nor a numerical question")
@@ -63,16 +69,25 @@ class VSIBenchScorer(Scorer):
     """VSI-Bench's per-question score (module docstring)."""
 
     metrics: ClassVar[tuple[Metric, ...]] = (
-        Metric("score", "higher", "mean", "score", "VSI-Bench score",
-               "Accuracy (multiple choice) or mean relative accuracy (numbers) per question, a reply the rule reads nothing "
-               "in scoring 0; per category the question type's score, overall the set's: the mean of the type scores, "
-               "the three direction levels first averaged into one.",
-               over="all", unscored=0.0, category_mean=True, merged_categories=(DIRECTION_LEVELS,)),
+        Metric(
+            "score",
+            "higher",
+            "mean",
+            "score",
+            "VSI-Bench score",
+            "Accuracy (multiple choice) or mean relative accuracy (numbers) per question, a reply the rule reads nothing "
+            "in scoring 0; per category the question type's score, overall the set's: the mean of the type scores, "
+            "the three direction levels first averaged into one.",
+            over="all",
+            unscored=0.0,
+            category_mean=True,
+            merged_categories=(DIRECTION_LEVELS,),
+        ),
         Metric("mra", "higher", "mean", "mra", "MRA", "Mean relative accuracy of the numerical answers read (10 thresholds, 0.50-0.95)."),
         Metric("abs_error", "lower", "mean", "abs_error", "Absolute error", "|answer - gold| of the finite numerical answers read, in the question's unit."),
         Metric("rel_error", "lower", "mean", "rel_error", "Relative error", "|answer - gold| / gold of the finite numerical answers read."),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Replies the rule reads an answer in / all questions.", over="all"),
-    )  # fmt: skip
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The question's score and what was compared."""
@@ -95,8 +110,7 @@ def _merged(per_type: Mapping[str, float], reading: str) -> dict[str, float]:
     missing = [level for level in DIRECTION_LEVELS if level not in out]
     if reading == "lmms" or DIRECTION_LEVELS[0] in out:
         if missing:
-            raise ValueError(f"the {reading} overall averages the three direction levels, and {', '.join(missing)} has no "
-                             "question (upstream raises KeyError)")  # fmt: skip
+            raise ValueError(f"the {reading} overall averages the three direction levels, and {', '.join(missing)} has no question (upstream raises KeyError)")
         levels = [out.pop(level) for level in DIRECTION_LEVELS]
         out[DIRECTION] = sum(levels) / 3.0
     return out
@@ -121,6 +135,11 @@ def lmms_overall(per_type: Mapping[str, float]) -> dict[str, float]:
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute the VSI-Bench scorer."""
-    register("vsibench", VSIBenchScorer, description=(
-        "VSI-Bench: accuracy for its multiple-choice questions, mean relative accuracy for its numerical ones "
-        "(0 for a reply read as nothing); the set's overall is the mean of its per-type scores"))  # fmt: skip
+    register(
+        "vsibench",
+        VSIBenchScorer,
+        description=(
+            "VSI-Bench: accuracy for its multiple-choice questions, mean relative accuracy for its numerical ones "
+            "(0 for a reply read as nothing); the set's overall is the mean of its per-type scores"
+        ),
+    )

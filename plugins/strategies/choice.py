@@ -64,8 +64,9 @@ def choice_answer_spec(instance: Instance) -> AnswerSpec:
     if question is None:
         raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
     width, height = instance.frame_size
-    return AnswerSpec(schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames), asks_frame=False,
-                      choices=question.options)  # fmt: skip
+    return AnswerSpec(
+        schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames), asks_frame=False, choices=question.options
+    )
 
 
 class ChoiceStrategy(Strategy):
@@ -139,8 +140,7 @@ class ChoiceStrategy(Strategy):
                     parts.append(image_parts[k])
         else:
             parts = [*image_parts, TextPart(text)]
-        return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance),
-                       generation=self.generation, instance=instance)  # fmt: skip
+        return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance), generation=self.generation, instance=instance)
 
 
 @hookimpl

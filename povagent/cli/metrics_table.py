@@ -33,8 +33,7 @@ def metrics_rows(metrics: ScorerMetrics) -> tuple[list[str], list[list[str]]]:
 
     names = list(metrics.declared)
     headers = [f"{d.label} {'↓' if d.better == 'lower' else '↑'}" for d in metrics.declared.values()]
-    rows = [[label, *(metric_cell(cell.get(n), metrics.declared[n].aggregation) for n in names)]
-            for label, cell in breakdown_slices(metrics)]  # fmt: skip
+    rows = [[label, *(metric_cell(cell.get(n), metrics.declared[n].aggregation) for n in names)] for label, cell in breakdown_slices(metrics)]
     return headers, rows
 
 

@@ -358,8 +358,13 @@ def _profile_fields(entry: Any) -> dict[str, Any]:
     official rule, upstream source and licence (for ``plugins --json``); nothing for other kinds, or for
     a plugin's object without those fields."""
     if entry.kind == "format":  # its source (repo@commit) is "upstream": "source" is the plugin's
-        names = {"answer_type": "answer_type", "official_parser": "official_parser", "official_scorer": "official_scorer",
-                 "upstream": "source", "licence": "licence"}  # fmt: skip
+        names = {
+            "answer_type": "answer_type",
+            "official_parser": "official_parser",
+            "official_scorer": "official_scorer",
+            "upstream": "source",
+            "licence": "licence",
+        }
         return {k: getattr(entry.factory, a) for k, a in names.items() if isinstance(getattr(entry.factory, a, None), str)}
     if entry.kind != "profile":
         return {}
@@ -379,8 +384,7 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     from povagent.plugins import KINDS, build_plugin_host
 
     host = build_plugin_host(strict=False)
-    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries(),
-              **{k: host.entries(k) for k in ("answer_type", "format")}}  # fmt: skip
+    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries(), **{k: host.entries(k) for k in ("answer_type", "format")}}
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
             k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in entries]

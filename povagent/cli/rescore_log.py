@@ -41,8 +41,10 @@ def render_rescored_log(result: object, shown: int) -> None:
     read = "an answer (an option or a number)" if result.numerical else "an option"
     typer.echo(f"{result.file}: {result.items} replies of {result.set} logged by {result.harness}, read by {len(result.rules)} rules:")
     for r in result.rules:
-        typer.echo(f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
-                   f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies")  # fmt: skip
+        typer.echo(
+            f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
+            f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies"
+        )
     categories = sorted({c for r in result.rules for c in r.per_category})
     rows = [["overall", *(_cell(r.overall, r.overall_ci) for r in result.rules)]]
     rows += [[c, *(_cell(r.per_category.get(c), r.per_category_ci.get(c)) for r in result.rules)] for c in categories]
@@ -53,12 +55,16 @@ def render_rescored_log(result: object, shown: int) -> None:
     for note in result.notes:
         typer.echo(f"note: {note}")
     if result.stripped:
-        typer.echo(f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
-                   "(resps differs from filtered_resps): each rule above reads the field its 'reads' names.")  # fmt: skip
+        typer.echo(
+            f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
+            "(resps differs from filtered_resps): each rule above reads the field its 'reads' names."
+        )
     if result.disagreements_total:
         names = [r.rule for r in result.rules]
-        lines = [[d.item, _excerpt(d.reply), d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
-                 for d in result.disagreements[:shown]]  # fmt: skip
+        lines = [
+            [d.item, _excerpt(d.reply), d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
+            for d in result.disagreements[:shown]
+        ]
         heading = f"The rules read {result.disagreements_total} of {result.items} replies differently (first {min(shown, len(result.disagreements))}; ✓ a hit)"
         for table in fitted_tables([("item", "label"), ("reply", "label"), ("gold", "label"), *((n, "label") for n in names)], lines, title=heading):
             console.print(table)

@@ -160,11 +160,14 @@ class Request:
         """SHA-256 of :meth:`fingerprint` as canonical JSON (stable across runs and machines),
         put together from each message's own JSON (the same bytes, each message serialized once)."""
         blob = (
-            '{"generation":' + _canonical(self.generation.as_dict())
-            + ',"messages":[' + ",".join(m.fingerprint_json for m in self.messages) + "]"
+            '{"generation":'
+            + _canonical(self.generation.as_dict())
+            + ',"messages":['
+            + ",".join(m.fingerprint_json for m in self.messages)
+            + "]"
             + (',"tools":' + _canonical([dict(t) for t in self.tools]) if self.tools else "")
             + "}"
-        )  # fmt: skip
+        )
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def as_text(self) -> str:

@@ -162,9 +162,12 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         points += plan_points(scene.plan)
     page = _Frame(points)
     legend = [
-        (GT_COLOUR, "GT target"), (PRED_COLOUR, "prediction's ray to the floor"), (ANCHOR_COLOUR, "anchor"),
-        (OBSERVER_COLOUR, "observer"), ("#f9a825", "selected frame's view"),
-    ]  # fmt: skip
+        (GT_COLOUR, "GT target"),
+        (PRED_COLOUR, "prediction's ray to the floor"),
+        (ANCHOR_COLOUR, "anchor"),
+        (OBSERVER_COLOUR, "observer"),
+        ("#f9a825", "selected frame's view"),
+    ]
     if scene.path:
         legend.append((PATH_COLOUR, "active episode's path and headings"))
     if scene.plan is not None:
@@ -232,8 +235,11 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
 def _trajectory(path: tuple[tuple[float, float, float], ...], page: _Frame) -> str:
     """The episode's path (a polyline through its poses) with a heading tick at each pose."""
     at = [page(x, z) for x, z, _ in path]
-    parts = ['<g id="trajectory"><polyline points="' + " ".join(f"{_f(a)},{_f(b)}" for a, b in at)
-             + f'" fill="none" stroke="{PATH_COLOUR}" stroke-width="1.5" stroke-dasharray="3 2"/>']  # fmt: skip
+    parts = [
+        '<g id="trajectory"><polyline points="'
+        + " ".join(f"{_f(a)},{_f(b)}" for a, b in at)
+        + f'" fill="none" stroke="{PATH_COLOUR}" stroke-width="1.5" stroke-dasharray="3 2"/>'
+    ]
     for (x, z, yaw), (a, b) in zip(path, at):
         tx, ty = page(x + 0.3 * math.sin(math.radians(yaw)), z + 0.3 * math.cos(math.radians(yaw)))
         parts.append(f'<line x1="{_f(a)}" y1="{_f(b)}" x2="{_f(tx)}" y2="{_f(ty)}" stroke="{PATH_COLOUR}"/>')
@@ -250,9 +256,13 @@ def write_birds_eye(svg: str, images_dir: Path) -> str:
 
 
 def birds_eye_for_row(
-    observation: Any, instance: Any, dataset: Any, images_dir: Path, frame: Any | None,
+    observation: Any,
+    instance: Any,
+    dataset: Any,
+    images_dir: Path,
+    frame: Any | None,
     path: tuple[tuple[float, float, float], ...] = (),
-) -> str | None:  # fmt: skip
+) -> str | None:
     """The bird's-eye file of one gallery row (its hash), or ``None`` where the records cannot
     draw one (a real-world set, a house the dataset does not hold). ``path`` is an active
     episode's poses (x, z, yaw), drawn as its trajectory."""

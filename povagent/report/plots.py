@@ -396,8 +396,7 @@ def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], c
                 continue
             w = plot_w * share
             tip = f"{bar.group} · {bar.label}: {part} {100 * share:.1f}%"
-            rect = (f'<rect x="{x:.1f}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{col}" data-part="{_e(part)}">'
-                    f"<title>{_e(tip)}</title></rect>")  # fmt: skip
+            rect = f'<rect x="{x:.1f}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{col}" data-part="{_e(part)}"><title>{_e(tip)}</title></rect>'
             if w >= 34:
                 rect += f'<text x="{x + w / 2:.1f}" y="{y + bar_h - 4}" font-size="10" text-anchor="middle" fill="#fff" pointer-events="none">{100 * share:.0f}%</text>'
             link = bar.links.get(part)

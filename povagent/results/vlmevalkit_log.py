@@ -92,8 +92,10 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     if header is None:
         raise PredictionsError(f"{file}: holds no header row (a VLMEvalKit prediction file has {', '.join(REQUIRED)})")
     if thought:
-        log.notes.append(f"rows keeping reasoning in a thinking column: {thought} (VLMEvalKit's SPLIT_THINK); prediction, what every rule "
-                         "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would")  # fmt: skip
+        log.notes.append(
+            f"rows keeping reasoning in a thinking column: {thought} (VLMEvalKit's SPLIT_THINK); prediction, what every rule "
+            "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would"
+        )
     return log
 
 
@@ -197,5 +199,6 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
         return f"{where}.answer", f"the gold label {gold!r} is not among the row's options ({', '.join(label for label, _ in options)}); row left out"
     category = next((_text(row[c]) for c in CATEGORY_COLUMNS if _text(row.get(c))), "")
     main = next((_text(row[c]) for c in MAIN_CATEGORY_COLUMNS if _text(row.get(c))), "")
-    return LoggedReply(item=index, where=where, reply=reply, options=options, gold=gold, category=category,
-                       main_category=main, question_id=_text(row.get("qid")) or index)  # fmt: skip
+    return LoggedReply(
+        item=index, where=where, reply=reply, options=options, gold=gold, category=category, main_category=main, question_id=_text(row.get("qid")) or index
+    )

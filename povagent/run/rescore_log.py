@@ -123,8 +123,14 @@ def _instance(set_name: str, reply: LoggedReply) -> Any:
 
     from povagent.dataset.choice_sets.external import Item, choice_instance
 
-    question = ChoiceQuestion("", reply.options or (("A", ""),), reply.gold if reply.gold_number is None else "A", category=reply.category,
-                              group=reply.question_id, main_category=reply.main_category)  # fmt: skip
+    question = ChoiceQuestion(
+        "",
+        reply.options or (("A", ""),),
+        reply.gold if reply.gold_number is None else "A",
+        category=reply.category,
+        group=reply.question_id,
+        main_category=reply.main_category,
+    )
     instance = choice_instance(set_name, Item(reply.item, question, ()), ())
     if reply.gold_number is None:
         return instance
@@ -219,11 +225,19 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
         if len({labels[n][k] for n in labels}) > 1
     ]
     return RescoredLog(
-        set=set_name, harness=harness, file=str(file), items=len(log.replies), numerical=sum(r.gold_number is not None for r in log.replies),
+        set=set_name,
+        harness=harness,
+        file=str(file),
+        items=len(log.replies),
+        numerical=sum(r.gold_number is not None for r in log.replies),
         bad_records=len(log.problems),
-        problems=[str(p) for p in log.problems], stripped=log.stripped, notes=log.notes, rules=results,
-        disagreements_total=len(disagreements), disagreements=disagreements[:MAX_DISAGREEMENTS],
-    )  # fmt: skip
+        problems=[str(p) for p in log.problems],
+        stripped=log.stripped,
+        notes=log.notes,
+        rules=results,
+        disagreements_total=len(disagreements),
+        disagreements=disagreements[:MAX_DISAGREEMENTS],
+    )
 
 
 def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns, n_boot: int, seed: int, answered: int) -> RuleResult:
@@ -234,9 +248,18 @@ def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns,
     overall = by_slice["overall"]
     per_category = by_slice.get("per_category", {})
     return RuleResult(
-        rule=rule.name, source=rule.source, harness=rule.harness, official=rule.official, parser=rule.parser, scorer=rule.scorer,
-        metric=headline, reads=_reads(rule, log), overall=overall[headline].value, overall_ci=_ci(overall[headline]),
+        rule=rule.name,
+        source=rule.source,
+        harness=rule.harness,
+        official=rule.official,
+        parser=rule.parser,
+        scorer=rule.scorer,
+        metric=headline,
+        reads=_reads(rule, log),
+        overall=overall[headline].value,
+        overall_ci=_ci(overall[headline]),
         per_category={c: cell[headline].value for c, cell in per_category.items()},
         per_category_ci={c: _ci(cell[headline]) for c, cell in per_category.items()},
-        answered=answered, metrics={name: _figure(e) for name, e in overall.items()},
-    )  # fmt: skip
+        answered=answered,
+        metrics={name: _figure(e) for name, e in overall.items()},
+    )

@@ -71,12 +71,17 @@ def _write_index(
         "output": str(output),
         "cells": [
             {
-                "name": c.name, "axes": c.axes, "run_dir": str(c.config.output), "config_hash": c.config.config_hash(),
-                "model": models[c.name][0], "profile": models[c.name][1], **status.get(c.name, {"status": "pending"}),
+                "name": c.name,
+                "axes": c.axes,
+                "run_dir": str(c.config.output),
+                "config_hash": c.config.config_hash(),
+                "model": models[c.name][0],
+                "profile": models[c.name][1],
+                **status.get(c.name, {"status": "pending"}),
             }
             for c in cells
         ],
-    }  # fmt: skip
+    }
     text = summary_json_text(index, indent=2, default=str)
     check_output_text("sweep", text, output / SWEEP_INDEX)
     write_inside(output, SWEEP_INDEX, text + "\n")
@@ -200,13 +205,15 @@ def anchored(config: PipelineConfig) -> PipelineConfig:
     dataset = ds.model_copy(update={"path": absolute(ds.path)})
     if ds.generate is not None:
         dataset = dataset.model_copy(update={"generate": ds.generate.model_copy(update={"out": absolute(ds.generate.out)})})
-    return config.model_copy(update={
-        "output": absolute(config.output),
-        "dataset": dataset,
-        "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
-        "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
-        "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
-    })  # fmt: skip
+    return config.model_copy(
+        update={
+            "output": absolute(config.output),
+            "dataset": dataset,
+            "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
+            "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
+            "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
+        }
+    )
 
 
 #: What the cells of one sweep share in one worker process and thread, as the cells of a sweep

@@ -78,7 +78,15 @@ def set_rules(host: Any, set_name: str) -> list[LogRule]:
     for entry in host.entries("parser"):
         scorers = dict(getattr(entry.factory, "harness_sets", None) or ())
         if set_name in scorers and (entry.name, scorers[set_name]) != (parser, scorer):
-            found.append((entry.name, str(scorers[set_name]), _declared(host, entry.name, "source"), _declared(host, entry.name, "harness"), False,
-                          _declared(host, entry.name, "harness_filter")))  # fmt: skip
+            found.append(
+                (
+                    entry.name,
+                    str(scorers[set_name]),
+                    _declared(host, entry.name, "source"),
+                    _declared(host, entry.name, "harness"),
+                    False,
+                    _declared(host, entry.name, "harness_filter"),
+                )
+            )
     shared = {p for p, *_ in found if sum(1 for q, *_ in found if q == p) > 1}
     return [LogRule(p if p not in shared else f"{p}+{s}", p, s, src, h, o, f) for p, s, src, h, o, f in found]

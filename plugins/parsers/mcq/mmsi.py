@@ -96,10 +96,20 @@ class MMSILmmsParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute MMSI-Bench's own rule and lmms-eval's reading of it."""
-    register("mmsi-official", MMSIOfficialParser, description=(
-        f"MMSI-Bench's own rule: the text in ``...`` then `...` if present, then the first capital A-D word not followed by "
-        f"a space and a letter ({MMSI_BENCH} vlmeval/dataset/mmsi_bench.py extract_single_choice_with_word_boundary, evaluate)"))  # fmt: skip
-    register("mmsi-lmms", MMSILmmsParser, description=(
-        f"lmms-eval's MMSI-Bench rule: lmms-eval's reasoning-tag strip, the backtick and {{...}} steps, then the first A-F word in "
-        f"either case not followed by a space and a letter, upper-cased (lmms_eval/tasks/mmsi_bench/utils.py "
-        f"extract_single_choice_with_word_boundary @ {LMMS_EVAL}); the set's own reading is mmsi-official"))  # fmt: skip
+    register(
+        "mmsi-official",
+        MMSIOfficialParser,
+        description=(
+            f"MMSI-Bench's own rule: the text in ``...`` then `...` if present, then the first capital A-D word not followed by "
+            f"a space and a letter ({MMSI_BENCH} vlmeval/dataset/mmsi_bench.py extract_single_choice_with_word_boundary, evaluate)"
+        ),
+    )
+    register(
+        "mmsi-lmms",
+        MMSILmmsParser,
+        description=(
+            f"lmms-eval's MMSI-Bench rule: lmms-eval's reasoning-tag strip, the backtick and {{...}} steps, then the first A-F word in "
+            f"either case not followed by a space and a letter, upper-cased (lmms_eval/tasks/mmsi_bench/utils.py "
+            f"extract_single_choice_with_word_boundary @ {LMMS_EVAL}); the set's own reading is mmsi-official"
+        ),
+    )

@@ -73,10 +73,20 @@ class ViewSpatialOfficialParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute ViewSpatial-Bench's own rule and lmms-eval's port of it."""
-    register("viewspatial-official", ViewSpatialOfficialParser, description=(
-        f"ViewSpatial-Bench's own rule: the first A-D word, any case, after the reply's last newline as written, no strip "
-        f"(a reply ending in a newline reads nothing) ({VIEWSPATIAL_BENCH} evaluate.py extract_option, evaluate_vlm)"))  # fmt: skip
-    register("viewspatial", ViewSpatialParser, description=(
-        f"lmms-eval's ViewSpatial-Bench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the "
-        f"first A-D word on the last line (lmms_eval/tasks/viewspatial/utils.py extract_option @ {LMMS_EVAL}); "
-        f"the set's own reading ({VIEWSPATIAL_BENCH} evaluate.py) is viewspatial-official"))  # fmt: skip
+    register(
+        "viewspatial-official",
+        ViewSpatialOfficialParser,
+        description=(
+            f"ViewSpatial-Bench's own rule: the first A-D word, any case, after the reply's last newline as written, no strip "
+            f"(a reply ending in a newline reads nothing) ({VIEWSPATIAL_BENCH} evaluate.py extract_option, evaluate_vlm)"
+        ),
+    )
+    register(
+        "viewspatial",
+        ViewSpatialParser,
+        description=(
+            f"lmms-eval's ViewSpatial-Bench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the "
+            f"first A-D word on the last line (lmms_eval/tasks/viewspatial/utils.py extract_option @ {LMMS_EVAL}); "
+            f"the set's own reading ({VIEWSPATIAL_BENCH} evaluate.py) is viewspatial-official"
+        ),
+    )

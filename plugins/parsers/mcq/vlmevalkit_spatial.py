@@ -161,6 +161,11 @@ class VlmevalkitSpatialParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute the vlmevalkit-spatial parser."""
-    register("vlmevalkit-spatial", VlmevalkitSpatialParser, description=(
-        f"VLMEvalKit's spatial-bench rule, no judge: can_match_option with no options "
-        f"(vlmeval/dataset/utils/spatial_bench/matching_func.py, cal_scores.py compute_mcq_score @ {VLMEVALKIT})"))  # fmt: skip
+    register(
+        "vlmevalkit-spatial",
+        VlmevalkitSpatialParser,
+        description=(
+            f"VLMEvalKit's spatial-bench rule, no judge: can_match_option with no options "
+            f"(vlmeval/dataset/utils/spatial_bench/matching_func.py, cal_scores.py compute_mcq_score @ {VLMEVALKIT})"
+        ),
+    )
