@@ -307,7 +307,7 @@ def sweep_command(
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table(columns, rows, title=title))
     from povagent.cli.process_exit import allow_fast_exit
-    from povagent.run.runner import EXIT_STOPPED
+    from povagent.run.run_result import EXIT_STOPPED
 
     allow_fast_exit()  # every cell's folder is complete and closed (see povagent.cli.process_exit)
     codes = [result.results[c.name].exit_code for c in finished] + [EXIT_STOPPED] * len(result.failed)

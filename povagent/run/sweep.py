@@ -42,7 +42,8 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.pending import RESULTS, ensure_dataset, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.run_folder import claim_folder
-from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
+from povagent.run.run_result import RunResult
+from povagent.run.runner import PipelineRun, answering_model, create_components
 from povagent.run.stop_signals import cancelled_on_stop
 from povagent.run.sweep_grid import Cell, expand_sweep
 
