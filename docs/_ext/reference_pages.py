@@ -110,7 +110,8 @@ def config_models() -> list[tuple[str, Any]]:
     """The YAML's models, top down: the pipeline and the sweep, then every nested model."""
     from pydantic import BaseModel
 
-    from povagent.config.models import PipelineConfig, SweepConfig
+    from povagent.config.models import PipelineConfig
+    from povagent.config.sweep_models import SweepConfig
 
     seen: dict[str, Any] = {}
 
@@ -156,7 +157,8 @@ def configuration_page() -> str:
             cells = (f"`{key}`", f"`{_type_name(field.annotation)}`", _default(field))
             lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
         lines.append("")
-    from povagent.config.models import PipelineConfig, SweepConfig
+    from povagent.config.models import PipelineConfig
+    from povagent.config.sweep_models import SweepConfig
 
     for model in (PipelineConfig, SweepConfig):
         lines += [f"## JSON Schema: {model.__name__}\n", "```json", json.dumps(model.model_json_schema(), indent=1, default=str), "```\n"]

@@ -1,6 +1,6 @@
 """Sweeps: one base pipeline expanded over axes into cells, run with one cache and one image store.
 
-A sweep YAML (see :class:`povagent.config.models.SweepConfig`) names a base pipeline, axes
+A sweep YAML (see :class:`povagent.config.sweep_models.SweepConfig`) names a base pipeline, axes
 (``model``, ``backend``, ``strategy``, ``parser``, ``conditions``, ``runs``) and optional named
 overrides. Their cartesian product gives the cells; each cell is an ordinary pipeline whose
 output is ``<sweep output>/<cell name>`` and whose cache is the sweep's. ``sweep.json`` in the

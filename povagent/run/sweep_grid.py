@@ -12,10 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from povagent.config.models import ComponentSpec, PipelineConfig, SweepConfig
+from povagent.config.models import ComponentSpec, PipelineConfig
 from povagent.config.overrides import REPLACED_WHOLE, deep_merge
 from povagent.config.pipeline import load_sweep, pipeline_from_source
 from povagent.config.plugin_checks import checked_plugins
+from povagent.config.sweep_models import SweepConfig
 from povagent.config.yaml_reader import ConfigSource
 from povagent.errors import ConfigError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
