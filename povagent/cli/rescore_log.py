@@ -80,12 +80,23 @@ def render_rescored_log(result: object, shown: int) -> None:
 
 @app.command("rescore-log")
 def rescore_log_command(
-    file: Path = typer.Argument(..., metavar="FILE", help="lmms-eval's --log_samples file (<date>_samples_<task>.jsonl) or VLMEvalKit's prediction file (.xlsx or .tsv)."),
+    file: Path = typer.Argument(
+        ..., metavar="FILE", help="lmms-eval's --log_samples file (<date>_samples_<task>.jsonl) or VLMEvalKit's prediction file (.xlsx or .tsv)."
+    ),
     harness: str = typer.Option(..., "--harness", metavar="NAME", help="The harness that wrote FILE: lmms-eval or vlmevalkit."),
-    set_name: str = typer.Option(..., "--set", metavar="NAME", help="The set the log is of: the key of a registered dataset format whose answers are choices or numbers (povagent plugins lists the formats)."),
-    as_json: bool = typer.Option(False, "--json", help="Print {set, items, rules: [{rule, source, overall, per_category, ...}], ...} as JSON instead of tables."),
+    set_name: str = typer.Option(
+        ...,
+        "--set",
+        metavar="NAME",
+        help="The set the log is of: the key of a registered dataset format whose answers are choices or numbers (povagent plugins lists the formats).",
+    ),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print {set, items, rules: [{rule, source, overall, per_category, ...}], ...} as JSON instead of tables."
+    ),
     shown: int = typer.Option(20, "--show", min=0, metavar="N", help="How many disagreements and bad records to print (the JSON holds them all)."),
-    plugin: list[str] = typer.Option([], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."),
+    plugin: list[str] = typer.Option(
+        [], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."
+    ),
 ) -> None:
     """Score another harness's log by every rule of its set, offline.
 

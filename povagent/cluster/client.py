@@ -95,8 +95,9 @@ def _local_cluster(workers: int) -> Iterator[Client]:
 
     Its scheduler, workers and nannies bind to 127.0.0.1, and so does the scheduler's HTTP server
     (its pages show workers, logs, call stacks and task errors; the dashboard too when bokeh is
-    installed), on a free port so nothing clashes on 8787. Workers serve no HTTP pages. Local workers print to the user's terminal: their structured house logs are kept to warnings
-    and errors there (LOCAL_WORKER_LOG_LEVEL).
+    installed), on a free port so nothing clashes on 8787. Workers serve no HTTP pages. Local
+    workers print to the user's terminal: their structured house logs are kept to warnings and
+    errors there (LOCAL_WORKER_LOG_LEVEL).
     """
     import dask
     import distributed

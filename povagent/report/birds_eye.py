@@ -83,7 +83,9 @@ class BirdsEyeScene:
 def footprint(obj: Any) -> Box2D:
     """The xz footprint of a release ``SceneObject`` (from its box's corner points)."""
     corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
-    return Box2D(obj.object_type, str(obj.objectId), float(corners[:, 0].min()), float(corners[:, 2].min()), float(corners[:, 0].max()), float(corners[:, 2].max()))
+    return Box2D(
+        obj.object_type, str(obj.objectId), float(corners[:, 0].min()), float(corners[:, 2].min()), float(corners[:, 0].max()), float(corners[:, 2].max())
+    )
 
 
 def scene_for(instance: Any, house: Any, selected: Camera | None, prediction: tuple[float, float] | None) -> BirdsEyeScene:
@@ -174,7 +176,8 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         legend.append((WALL_COLOUR, "walls (a gap: a doorway)"))
     legend_px = LEGEND_PX + LEGEND_ROW_PX * max(0, (len(legend) + 1) // 2 - 3)  # three rows fit in LEGEND_PX
     out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + legend_px}" viewBox="0 0 {VIEW_PX} {VIEW_PX + legend_px}" font-family="sans-serif" font-size="10">',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + legend_px}" viewBox="0 0 {VIEW_PX} {VIEW_PX + legend_px}" '
+        'font-family="sans-serif" font-size="10">',
         f"<title>{escape(scene.title)}</title>",
         f'<rect width="{VIEW_PX}" height="{VIEW_PX}" fill="#fafafa" stroke="#ccc"/>',
     ]
@@ -216,7 +219,8 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         dash = "" if met else ' stroke-dasharray="4 3"'
         out.append(
             f'<g id="prediction"><line x1="{_f(cx)}" y1="{_f(cy)}" x2="{_f(ex)}" y2="{_f(ey)}" stroke="{PRED_COLOUR}" stroke-width="1.5"{dash}/>'
-            f'<path d="M{_f(ex - 4)},{_f(ey - 4)}L{_f(ex + 4)},{_f(ey + 4)}M{_f(ex - 4)},{_f(ey + 4)}L{_f(ex + 4)},{_f(ey - 4)}" stroke="{PRED_COLOUR}" stroke-width="2"/></g>'
+            f'<path d="M{_f(ex - 4)},{_f(ey - 4)}L{_f(ex + 4)},{_f(ey + 4)}M{_f(ex - 4)},{_f(ey + 4)}L{_f(ex + 4)},{_f(ey - 4)}" stroke="{PRED_COLOUR}" '
+            'stroke-width="2"/></g>'
         )
     gx, gy = page(scene.target[0], scene.target[2])
     out.append(f'<circle id="target" cx="{_f(gx)}" cy="{_f(gy)}" r="5" fill="{GT_COLOUR}" stroke="#fff" stroke-width="1.5"/>')

@@ -137,7 +137,13 @@ def ablation_table(a: Analysis) -> Table | None:
 
 def direction_table(a: Analysis) -> Table:
     """Systems x directions (pooled over conditions), official mean L2."""
-    t = Table("per_direction", "Error by direction", f"{PROTOCOL} Pooled over conditions. {bold_note(a)}", row_header(a), [Column(d.capitalize()) for d in a.directions])
+    t = Table(
+        "per_direction",
+        "Error by direction",
+        f"{PROTOCOL} Pooled over conditions. {bold_note(a)}",
+        row_header(a),
+        [Column(d.capitalize()) for d in a.directions],
+    )
     for s in scored_systems(a, "normalized_l2"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_error)) for d in a.directions], s.reference))
     return t

@@ -175,7 +175,10 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
         return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z (nor a number, with no options in the prompt); record left out"
     options = with_gold(options or _doc_options(doc), gold)
     if gold not in {label for label, _ in options}:
-        return f"{where}.target", f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out"
+        return (
+            f"{where}.target",
+            f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out",
+        )
     return LoggedReply(
         item=str(doc_id),
         where=where,

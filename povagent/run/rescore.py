@@ -179,7 +179,8 @@ def rescore_run(
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
     dataset = asked_by(  # answers are re-read, not re-sent
-        config, open_evaluation_set(root, check_images=False, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, host=host)
+        config,
+        open_evaluation_set(root, check_images=False, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, host=host),
     )
     official_parser, official_name = official if official is not None else (None, None)
     scoring = AnswerScoring(

@@ -220,7 +220,14 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
             columns.append([valued.values[rule.scorer][m.name] for m in declared[rule.scorer]], None, None, valued.category, valued.groups)
         results.append(_result(rule, log, scorer, columns, n_boot, seed, sum(label is not None for label in labels[rule.name])))
     disagreements = [
-        Disagreement(item=r.item, where=r.where, reply=r.reply[:REPLY_EXCERPT], gold=r.gold, labels={n: labels[n][k] for n in labels}, correct={n: hits[n][k] for n in hits})
+        Disagreement(
+            item=r.item,
+            where=r.where,
+            reply=r.reply[:REPLY_EXCERPT],
+            gold=r.gold,
+            labels={n: labels[n][k] for n in labels},
+            correct={n: hits[n][k] for n in hits},
+        )
         for k, r in enumerate(log.replies)
         if len({labels[n][k] for n in labels}) > 1
     ]

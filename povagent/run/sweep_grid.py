@@ -68,8 +68,12 @@ def _axis_values(sweep: SweepConfig) -> list[tuple[str, list[tuple[str, dict[str
 
 def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost) -> None:
     problems = []
-    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
-              ("strategy", "strategy", sweep.axes.strategy or []), ("parser", "parser", sweep.axes.parser or [])]
+    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [
+        ("model", "profile", sweep.axes.model or []),
+        ("backend", "backend", sweep.axes.backend or []),
+        ("strategy", "strategy", sweep.axes.strategy or []),
+        ("parser", "parser", sweep.axes.parser or []),
+    ]
     for axis, kind, values in checks:
         known = host.names(kind)
         for i, v in enumerate(values):

@@ -59,7 +59,9 @@ def test_a_yaml_may_ask_for_a_local_cluster() -> None:
 
 
 def test_reading_a_spec_does_not_import_dask() -> None:
-    code = "import sys; from povagent.cluster import parse_cluster_spec; parse_cluster_spec('local:2'); print('distributed' in sys.modules, 'dask' in sys.modules)"
+    code = (
+        "import sys; from povagent.cluster import parse_cluster_spec; parse_cluster_spec('local:2'); print('distributed' in sys.modules, 'dask' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
 

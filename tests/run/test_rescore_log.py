@@ -90,7 +90,8 @@ def assert_equal_to_upstream(result, expected: dict) -> None:
 
 
 @pytest.mark.parametrize(
-    ("name", "harness"), [("viewspatial_samples.jsonl", "lmms-eval"), ("ViewSpatialBench_preds.tsv", "vlmevalkit"), ("ViewSpatialBench_preds.xlsx", "vlmevalkit")]
+    ("name", "harness"),
+    [("viewspatial_samples.jsonl", "lmms-eval"), ("ViewSpatialBench_preds.tsv", "vlmevalkit"), ("ViewSpatialBench_preds.xlsx", "vlmevalkit")],
 )
 def test_viewspatial_logs_score_as_the_upstream_functions_do(name, harness, tmp_path):
     result = rescore_log(fixture(name, tmp_path), harness, "viewspatial", n_boot=0)
@@ -263,7 +264,9 @@ def test_omnispatial_names_its_read_a_fallback_and_lmms_evals_strip_per_rule(tmp
     rules = {r.rule: r for r in result.rules}
     assert [r.official for r in result.rules] == [True, False, False, False, False]
     assert rules["omnispatial-re"].source == "qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51"
-    assert rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    assert (
+        rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    )
     assert rules["omnispatial-re"].reads == "resps as written"
     assert rules["omnispatial-lmms-re"].reads.startswith("resps, then lmms-eval's reasoning-tag strip")
     # the fallback answers every reply; its corrected reading only the replies with an "Answer: X" line

@@ -37,7 +37,8 @@ def viewspatial_label(text: str) -> str | None:
 class ViewSpatialParser(RuleParser):
     """ViewSpatial-Bench's rule (module docstring)."""
 
-    reads = "lmms-eval's viewspatial: its reasoning-tag strip (<think>, <analysis> blocks, then whitespace), then the first A-D standing alone on the last line, any case"
+    reads = ("lmms-eval's viewspatial: its reasoning-tag strip (<think>, <analysis> blocks, then whitespace), then the first A-D standing alone on the last "
+             "line, any case")
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's port of ViewSpatial-Bench's rule"
     source = LMMS_EVAL
     harness = "lmms-eval"
@@ -60,7 +61,8 @@ def viewspatial_official_label(text: str) -> str | None:
 class ViewSpatialOfficialParser(RuleParser):
     """ViewSpatial-Bench's own ``evaluate.py`` (see :func:`viewspatial_official_label`)."""
 
-    reads = "ViewSpatial-Bench's evaluate.py: the first A-D standing alone, any case, on the text after the last newline as written (a reply ending in a newline reads nothing)"
+    reads = ("ViewSpatial-Bench's evaluate.py: the first A-D standing alone, any case, on the text after the last newline as written (a reply ending in a "
+             "newline reads nothing)")
     beside_official = "reads choice answers, which the official (point) parser does not read; ViewSpatial-Bench's own rule, the set's default"
     source = VIEWSPATIAL_BENCH
     harness = "ViewSpatial-Bench"

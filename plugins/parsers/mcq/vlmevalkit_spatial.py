@@ -139,7 +139,8 @@ def spatial_bench_label(reply: str) -> str | None:
 class VlmevalkitSpatialParser(RuleParser):
     """VLMEvalKit's spatial-bench rule (module docstring)."""
 
-    reads = "an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit spatial bench)"
+    reads = ("an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit "
+             "spatial bench)")
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's spatial-bench reading without a judge"
     no_label_reason = "the rule reads no option letter (VLMEvalKit's False)"
     source = VLMEVALKIT

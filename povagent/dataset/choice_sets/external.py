@@ -201,7 +201,9 @@ def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tup
     with open_regular(path, what=what) as handle:
         for number, raw in enumerate(iter(lambda: handle.readline(MAX_RECORD_LINE_BYTES + 1), b""), start=1):
             if len(raw) > MAX_RECORD_LINE_BYTES:
-                problems.append(Problem(str(path), f"line {number}", f"longer than {MAX_RECORD_LINE_BYTES} bytes; this line and the rest of the file are not read"))
+                problems.append(
+                    Problem(str(path), f"line {number}", f"longer than {MAX_RECORD_LINE_BYTES} bytes; this line and the rest of the file are not read")
+                )
                 return
             try:
                 text = raw.decode("utf-8")
