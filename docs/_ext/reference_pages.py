@@ -144,7 +144,7 @@ def configuration_page() -> str:
         f"# {PAGES['configuration']}\n",
         NOTICE,
         "The keys a pipeline file and a sweep file accept, from the pydantic models that read them "
-        "(`povagent.config.models`). An unknown key is an error naming the file and the key; numbers "
+        "(`povagent.config.models`, `povagent.config.sweep_models`). An unknown key is an error naming the file and the key; numbers "
         "are finite. `povagent validate FILE` checks a file without running it. A pipeline with no "
         "`parser:` reads answers with its profile's parser, or with `official` when it names no profile.\n",
     ]
