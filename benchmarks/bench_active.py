@@ -34,7 +34,6 @@ import yaml
 from results_file import record
 
 
-
 def ensure_dataset(data: Path, houses: int) -> int:
     """Generate the dataset unless it exists; returns the number of houses in it."""
     from povagent.generate import generate_dataset

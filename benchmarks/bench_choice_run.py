@@ -171,9 +171,12 @@ def main() -> None:
                                                                     "--set", str(files[size]), "--out", str(out)], None))  # fmt: skip
                 ours, theirs = got["povagent"][size][-1], got["lmms-eval"][size][-1]
                 assert abs(ours["accuracy"] - theirs["accuracy"]) < 1e-12, (ours, theirs)  # the same items and replies, scored alike
-            print(f"round {r + 1}: " + "; ".join(
-                f"{who} {got[who]['small'][-1]['cpu_s']:.3f} -> {got[who]['large'][-1]['cpu_s']:.3f} s CPU" for who in got)
-                + f"; povagent peak {got['povagent']['small'][-1]['peak_mib']:.1f} -> {got['povagent']['large'][-1]['peak_mib']:.1f} MiB", flush=True)  # fmt: skip
+            print(
+                f"round {r + 1}: "
+                + "; ".join(f"{who} {got[who]['small'][-1]['cpu_s']:.3f} -> {got[who]['large'][-1]['cpu_s']:.3f} s CPU" for who in got)
+                + f"; povagent peak {got['povagent']['small'][-1]['peak_mib']:.1f} -> {got['povagent']['large'][-1]['peak_mib']:.1f} MiB",
+                flush=True,
+            )
         load = os.getloadavg()
         added = args.large - args.small
         per_item = {who: [(b["cpu_s"] - s["cpu_s"]) / added for s, b in zip(by["small"], by["large"], strict=True)] for who, by in got.items()}

@@ -42,11 +42,11 @@ from pathlib import Path
 from typing import Any
 
 from PIL import Image
+from results_file import record
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, ImagePart, Message, Request, TextPart
-from results_file import record
 
 HERE = Path(__file__).resolve().parent
 
@@ -157,7 +157,10 @@ def main() -> int:
     c1, c8 = statistics.median(cpu_rates[1]), statistics.median(cpu_rates[8])
     cpu_ratio = statistics.median(b / a for a, b in zip(cpu_rates[1], cpu_rates[8]))
     load = list(os.getloadavg())
-    print(f"requests/s  max_batch 1: {r1:.2f}  max_batch 8: {r8:.2f}  ratio {ratio:.2f}x (median of per-round ratios)  (rounds: {[round(x, 2) for x in rates[1]]} / {[round(x, 2) for x in rates[8]]})")
+    print(
+        f"requests/s  max_batch 1: {r1:.2f}  max_batch 8: {r8:.2f}  ratio {ratio:.2f}x (median of per-round ratios)  (rounds: "
+        f"{[round(x, 2) for x in rates[1]]} / {[round(x, 2) for x in rates[8]]})"
+    )
     print(f"requests per CPU-second  max_batch 1: {c1:.2f}  max_batch 8: {c8:.2f}  ratio {cpu_ratio:.2f}x (median of per-round ratios)")
     print(f"time to first answer (load + 1 request): median {statistics.median(firsts):.2f} s")
     print(f"memory: {before_load:.0f} MiB before loading, {after_load:.0f} MiB loaded, peak {peak_mib():.0f} MiB; identical answers: yes")
@@ -168,12 +171,36 @@ def main() -> int:
     figures = [
         {"name": "requests/s, max_batch 1", "value": round(r1, 3), "unit": "requests/s", "target": "", "comparison": comparison},
         {"name": "requests/s, max_batch 8", "value": round(r8, 3), "unit": "requests/s", "target": "", "comparison": comparison},
-        {"name": "batching speed-up (max_batch 8 / 1), same answers", "value": round(ratio, 3), "unit": "x", "target": "> 1 with identical answers", "comparison": comparison + "; wall clock"},
+        {
+            "name": "batching speed-up (max_batch 8 / 1), same answers",
+            "value": round(ratio, 3),
+            "unit": "x",
+            "target": "> 1 with identical answers",
+            "comparison": comparison + "; wall clock",
+        },
         {"name": "requests per CPU-second, max_batch 1", "value": round(c1, 3), "unit": "requests/CPU-s", "target": "", "comparison": comparison},
         {"name": "requests per CPU-second, max_batch 8", "value": round(c8, 3), "unit": "requests/CPU-s", "target": "", "comparison": comparison},
-        {"name": "batching speed-up in CPU time (max_batch 8 / 1), same answers", "value": round(cpu_ratio, 3), "unit": "x", "target": "> 1 with identical answers", "comparison": comparison},
-        {"name": "time to first answer (load + one request)", "value": round(statistics.median(firsts), 3), "unit": "s", "target": "", "comparison": model_note},
-        {"name": "resident memory with the model loaded", "value": round(after_load, 1), "unit": "MiB", "target": "", "comparison": f"{before_load:.0f} MiB before torch and transformers were imported"},
+        {
+            "name": "batching speed-up in CPU time (max_batch 8 / 1), same answers",
+            "value": round(cpu_ratio, 3),
+            "unit": "x",
+            "target": "> 1 with identical answers",
+            "comparison": comparison,
+        },
+        {
+            "name": "time to first answer (load + one request)",
+            "value": round(statistics.median(firsts), 3),
+            "unit": "s",
+            "target": "",
+            "comparison": model_note,
+        },
+        {
+            "name": "resident memory with the model loaded",
+            "value": round(after_load, 1),
+            "unit": "MiB",
+            "target": "",
+            "comparison": f"{before_load:.0f} MiB before torch and transformers were imported",
+        },
         {"name": "peak resident memory", "value": round(peak_mib(), 1), "unit": "MiB", "target": "", "comparison": "whole process, both settings"},
         {"name": "batches split after running out of memory", "value": splits, "unit": "count", "target": "0 on this size", "comparison": "all rounds"},
     ]

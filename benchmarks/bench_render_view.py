@@ -38,7 +38,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from results_file import figure, record
 
 
@@ -102,11 +101,12 @@ def main() -> None:
         for k, (camera, (start, direction, length)) in enumerate(zip(cameras, rays)):
             d = renderer._directions(camera).T
             origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), d.shape)
+            # the lambdas are timed within this iteration: they see this camera's values
             contenders = [
-                ("primary", lambda: renderer._scene.run(origins, d, output=1)),
-                ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),
-                ("view", lambda: house.render_png(camera)),
-                ("render", lambda: renderer.render_planes(camera)),
+                ("primary", lambda: renderer._scene.run(origins, d, output=1)),  # noqa: B023
+                ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),  # noqa: B023
+                ("view", lambda: house.render_png(camera)),  # noqa: B023
+                ("render", lambda: renderer.render_planes(camera)),  # noqa: B023
             ]
             turn = (k + r) % len(contenders)
             for name, fn in contenders[turn:] + contenders[:turn]:

@@ -28,11 +28,11 @@ import time
 from types import SimpleNamespace
 
 import numpy as np
+from results_file import record
 
 from povagent.ros.camera_info import Intrinsics
 from povagent.ros.session import GroundingSession
 from povagent.ros.transforms import RigidTransform
-from results_file import record
 
 CAMERA_HZ = 30.0
 W, H = 640, 480

@@ -39,7 +39,8 @@ def digests(folder: Path, pins: list[str]) -> tuple[dict[str, str], str]:
     pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "-q", "--disable-pip-version-check"]
     subprocess.run([*pip, *pins, str(ROOT)], check=True)
     versions = subprocess.run([str(venv / "bin" / "python"), "-c",
-                               "import importlib.metadata as m; print(', '.join(f'{p} {m.version(p)}' for p in ('numpy', 'scipy', 'Pillow', 'trimesh', 'embreex')))"],
+                               "import importlib.metadata as m; print(', '.join(f'{p} {m.version(p)}' for p in ('numpy', 'scipy', 'Pillow', 'trimesh', "
+                               "'embreex')))"],
                               capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
     done = subprocess.run([str(venv / "bin" / "python"), str(CHILD), str(folder / "set")], capture_output=True, text=True, check=True, cwd=folder)
     return json.loads(done.stdout), versions

@@ -59,8 +59,12 @@ RULE_MODULES: tuple[RuleModule, ...] = (
     RuleModule("plugins/scorers/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
     RuleModule(
         "povagent/geometry/ground_truth.py",
-        ("tests/geometry/test_ground_truth_rules.py", "tests/geometry/test_ground_truth.py",
-         "tests/geometry/test_boundary_points.py", "tests/geometry/test_counterfactual_rules.py"),
+        (
+            "tests/geometry/test_ground_truth_rules.py",
+            "tests/geometry/test_ground_truth.py",
+            "tests/geometry/test_boundary_points.py",
+            "tests/geometry/test_counterfactual_rules.py",
+        ),
     ),
     RuleModule(
         "povagent/geometry/camera.py",
@@ -69,8 +73,12 @@ RULE_MODULES: tuple[RuleModule, ...] = (
         note="projection only; back-projection (ray, point_at_depth, point_on_plane) serves the generator and agent",
     ),
     RuleModule("povagent/geometry/letterbox.py", ("tests/geometry/test_letterbox_rules.py", "tests/geometry/test_letterbox.py")),
-    RuleModule("plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")),
-    RuleModule("plugins/parsers/rescale.py", ("tests/parsers/test_rescale_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")),
+    RuleModule(
+        "plugins/parsers/json_answer.py", ("tests/parsers/test_json_choice_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_registration.py")
+    ),
+    RuleModule(
+        "plugins/parsers/rescale.py", ("tests/parsers/test_rescale_rules.py", "tests/parsers/test_corpus.py", "tests/parsers/test_json_choice_rules.py")
+    ),
     RuleModule("povagent/engine/retry.py", ("tests/engine/test_retry_rules.py", "tests/engine/test_retry.py")),
     RuleModule("povagent/config/retry_policy.py", ("tests/engine/test_retry_rules.py", "tests/engine/test_retry.py")),
     RuleModule(
@@ -186,9 +194,7 @@ def annotation_spans(source: str) -> list[tuple[tuple[int, int], tuple[int, int]
         found = []
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
             found.append(node.returns)
-        elif isinstance(node, ast.arg):
-            found.append(node.annotation)
-        elif isinstance(node, ast.AnnAssign):
+        elif isinstance(node, (ast.arg, ast.AnnAssign)):
             found.append(node.annotation)
         for a in found:
             if a is not None:

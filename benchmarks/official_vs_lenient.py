@@ -26,6 +26,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import random
 import sys
@@ -142,7 +143,10 @@ def main(argv: list[str] | None = None) -> int:
         out = args.out or Path(tmp)
         rows = replayed_run(out, cases, args.houses, args.seed)
         print(f"\nReplayed run ({args.houses} synthetic houses, one corpus answer per instance, seed {args.seed}):")
-        print("| parser | rows | resp. rate (repaired) | mean L2 (repaired) | resp. rate (official parse) | mean L2 (official parse) | rescore --parser official agrees |")
+        print(
+            "| parser | rows | resp. rate (repaired) | mean L2 (repaired) | resp. rate (official parse) | mean L2 (official parse) | rescore --parser official "
+            "agrees |"
+        )
         print("|---|---|---|---|---|---|---|")
         for parser, summary, rescored in rows:
             mine, official = summary["overall"], summary["official_parse"]["overall"]

@@ -95,7 +95,15 @@ def read_rationale(text: str) -> Stated:
     ahead = float(stood[3]) * (1 if stood[4] == "ahead of" else -1)
     surface = re.search(r"relative to the [^(]*\(([^)]*)\)\.", text)
     assert surface is not None, text
-    return Stated(k, anchor, views, (float(furniture[1]), float(furniture[2])) if furniture else None, (right, ahead), surface[1], (float(answer["x"]), float(answer["y"])))
+    return Stated(
+        k,
+        anchor,
+        views,
+        (float(furniture[1]), float(furniture[2])) if furniture else None,
+        (right, ahead),
+        surface[1],
+        (float(answer["x"]), float(answer["y"])),
+    )
 
 
 def official_answers(ds, examples) -> dict[str, float]:  # type: ignore[no-untyped-def]
@@ -198,7 +206,9 @@ def profile(ds, examples) -> dict[str, list[tuple[str, float]]]:  # type: ignore
         furniture_centre = np.asarray(inst.observer_object.raw_metadata.axisAlignedBoundingBox.center.as_tuple())
         # the furniture as the solver locates it from the stated pixel (one view: the ray meets
         # its type's usual centre height), or its fallback when the furniture is not in the frame
-        seen = parse_detections({"detections": [{"image": s.frame, "x": s.furniture_xy[0], "y": s.furniture_xy[1]}] if s.furniture_xy else []}, len(cams), w, h)[0]
+        seen = parse_detections(
+            {"detections": [{"image": s.frame, "x": s.furniture_xy[0], "y": s.furniture_xy[1]}] if s.furniture_xy else []}, len(cams), w, h
+        )[0]
         found = locate([Sighting(cams[d.frame], d.pixel) for d in seen], size_prior(f.observer_type).centre_height)
         located = np.asarray(found.point) if found else np.mean([cams[d.frame].position for d in (s.anchor, *s.other_views)], axis=0)
         out.setdefault("furniture located, metres off its centre", []).append((f.direction.value, float(np.hypot(*(located - furniture_centre)[[0, 2]]))))
@@ -276,7 +286,10 @@ def main(argv: list[str] | None = None) -> int:
             rows = profile(ds, examples)
             kinds = [k for k, _ in rows.pop("kind")]
             off = [d for _, d in rows.pop("furniture located, metres off its centre")]
-            print(f"profile, the furniture located from its stated pixel: {statistics.median(off):.2f} m off its centre (median), p90 {sorted(off)[int(0.9 * (len(off) - 1))]:.2f} m")
+            print(
+                f"profile, the furniture located from its stated pixel: {statistics.median(off):.2f} m off its centre (median), p90 "
+                f"{sorted(off)[int(0.9 * (len(off) - 1))]:.2f} m"
+            )
             for name, pairs in rows.items():
                 print(f"profile, {name}:\n  " + summary(pairs))
             misses: dict[str, list[float]] = {k: [] for k in sorted(set(kinds))}

@@ -42,7 +42,6 @@ from povagent.report.collect import Collection, Observation
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
 from povagent.scoring.official import score_point
 
-
 #: A chain-of-thought-length preamble (~2,500 characters) before each simulated answer's JSON.
 REASONING = (
     "Step 1 - Observer: the sentence says where the speaker was and what they were doing. "
@@ -140,8 +139,14 @@ def main(argv: list[str] | None = None) -> int:
         size_img = sum(p.stat().st_size for p in images)
         page = (tmp / "report" / "report.html").stat().st_size
         print(f"gallery: {n} predictions ({cells} cells x {len(instances)} instances), {cold.gallery.drawn} drawings")
-        print(f"cold report: {t_cold:.1f} s (gallery {cold.timings['gallery']:.1f} s = {1000 * cold.timings['gallery'] / max(1, cold.gallery.drawn):.1f} ms/drawing; statistics {cold.timings['statistics']:.1f} s)")
-        print(f"warm report: {t_warm:.1f} s (gallery {warm.timings['gallery']:.2f} s, {warm.gallery.cached} reused); cold/warm gallery = {cold.timings['gallery'] / max(1e-9, warm.timings['gallery']):.0f}x")
+        print(
+            f"cold report: {t_cold:.1f} s (gallery {cold.timings['gallery']:.1f} s = {1000 * cold.timings['gallery'] / max(1, cold.gallery.drawn):.1f} "
+            f"ms/drawing; statistics {cold.timings['statistics']:.1f} s)"
+        )
+        print(
+            f"warm report: {t_warm:.1f} s (gallery {warm.timings['gallery']:.2f} s, {warm.gallery.cached} reused); cold/warm gallery = "
+            f"{cold.timings['gallery'] / max(1e-9, warm.timings['gallery']):.0f}x"
+        )
         answers = list((tmp / "report" / "answers").iterdir())
         size_ans = sum(p.stat().st_size for p in answers)
         print(f"sizes: report.html {page / 1e6:.2f} MB; answers {len(answers)} files, {size_ans / 1e6:.1f} MB "
@@ -161,7 +166,10 @@ def main(argv: list[str] | None = None) -> int:
                   f"{opened[1]:.1f} s wall including browser start-up")
         t = time.perf_counter()
         a = analyze(synthetic_collection(), None)
-        print(f"statistics at 2,439 instances x 3 runs, one system: {time.perf_counter() - t:.2f} s ({len(a.systems[0].by_condition_direction)} cells + conditions + directions, 2,000 resamples per CI)")
+        print(
+            f"statistics at 2,439 instances x 3 runs, one system: {time.perf_counter() - t:.2f} s ({len(a.systems[0].by_condition_direction)} cells + "
+            "conditions + directions, 2,000 resamples per CI)"
+        )
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return 0

@@ -249,8 +249,7 @@ class PluginHost:
                 if not isinstance(tool, Tool):
                     raise PluginError(f"{_source}: tool {name!r} is a {type(tool).__name__}, not a povagent.active.tools.Tool")
                 if name in found:
-                    raise PluginError(f"tool name {name!r} is registered twice: by {found[name][1]} and by {_source}; "
-                                      f"uninstall or rename one of them")  # fmt: skip
+                    raise PluginError(f"tool name {name!r} is registered twice: by {found[name][1]} and by {_source}; uninstall or rename one of them")
                 found[name] = (tool, _source)
 
             try:

@@ -69,7 +69,8 @@ def yaml_keys(model, prefix: str) -> list[str]:
 
 
 def test_every_pipeline_and_sweep_key_is_in_the_yaml_reference(reference):
-    from povagent.config.models import PipelineConfig, SweepConfig
+    from povagent.config.models import PipelineConfig
+    from povagent.config.sweep_models import SweepConfig
 
     page = reference["configuration"]
     missing = []

@@ -71,8 +71,10 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "anchor_object": "The object the sentence names as the reference (for markers).",
         "observer_camera": "The speaker's camera (the Given view's camera).",
         "question": "The multiple-choice question asked (`ChoiceQuestion`: question, labelled options, gold label, category), or `None` for the point task.",
-        "answer_type": "The answer type the instance asks for (`point` unless its loader says otherwise; `choice` for an instance carrying a `question`); a strategy asking another is refused at load.",
-        "numeric": "The numerical question the instance asks (`NumericQuestion`: question, gold number, unit, category; VSI-Bench's numerical types), or `None`; it then asks for a `number`.",
+        "answer_type": "The answer type the instance asks for (`point` unless its loader says otherwise; `choice` for an instance carrying a `question`); a "
+                       "strategy asking another is refused at load.",
+        "numeric": "The numerical question the instance asks (`NumericQuestion`: question, gold number, unit, category; VSI-Bench's numerical types), or "
+                   "`None`; it then asks for a `number`.",
     },
     "Frame": {
         "index": "Position in `Instance.frames`: what an answer's `selected_image` names.",
@@ -141,7 +143,8 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "repair": "How the text was changed to read it (e.g. `rescaled 0-1000 -> pixels`), else `None`.",
         "camera": "The camera of the image answered in when it is no dataset frame (the active mode's views): it is scored there.",
         "choice": "The option label a multiple-choice answer chose, or `None`.",
-        "path": "The floor positions `(x, z)` a navigate episode walked through, start first (its last is where the walk ended; `camera` what it saw there), or `None` (then not written).",
+        "path": "The floor positions `(x, z)` a navigate episode walked through, start first (its last is where the walk ended; `camera` what it saw there), "
+                "or `None` (then not written).",
         "number": "The number a `number` answer gave, as its rule read it (NaN or infinite when the reply said so), or `None` (then not written).",
     },
     "OfficialScore": {
@@ -153,7 +156,8 @@ FIELD_NOTES: dict[str, dict[str, str]] = {
         "gt_u": "The ground truth across the scored frame, as a fraction of its width (0.5 when behind the camera, as officially).",
         "gt_v": "The ground truth down the scored frame, as a fraction of its height (0.5 when behind the camera).",
         "reason": "Why the row is unanswered (e.g. `missing or unknown selected frame`), else empty.",
-        "error_x": "The official signed error `clamp(x/W) - clamp(gt_u)` of the recorded point (a point list's first), which `mean_abs_x` averages; `None` when unanswered.",
+        "error_x": "The official signed error `clamp(x/W) - clamp(gt_u)` of the recorded point (a point list's first), which `mean_abs_x` averages; `None` "
+                   "when unanswered.",
         "error_y": "The official signed error `clamp(y/H) - clamp(gt_v)` of the recorded point, which `mean_abs_y` averages; `None` when unanswered.",
     },
 }

@@ -110,7 +110,8 @@ def config_models() -> list[tuple[str, Any]]:
     """The YAML's models, top down: the pipeline and the sweep, then every nested model."""
     from pydantic import BaseModel
 
-    from povagent.config.models import PipelineConfig, SweepConfig
+    from povagent.config.models import PipelineConfig
+    from povagent.config.sweep_models import SweepConfig
 
     seen: dict[str, Any] = {}
 
@@ -143,7 +144,7 @@ def configuration_page() -> str:
         f"# {PAGES['configuration']}\n",
         NOTICE,
         "The keys a pipeline file and a sweep file accept, from the pydantic models that read them "
-        "(`povagent.config.models`). An unknown key is an error naming the file and the key; numbers "
+        "(`povagent.config.models`, `povagent.config.sweep_models`). An unknown key is an error naming the file and the key; numbers "
         "are finite. `povagent validate FILE` checks a file without running it. A pipeline with no "
         "`parser:` reads answers with its profile's parser, or with `official` when it names no profile.\n",
     ]
@@ -156,7 +157,8 @@ def configuration_page() -> str:
             cells = (f"`{key}`", f"`{_type_name(field.annotation)}`", _default(field))
             lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
         lines.append("")
-    from povagent.config.models import PipelineConfig, SweepConfig
+    from povagent.config.models import PipelineConfig
+    from povagent.config.sweep_models import SweepConfig
 
     for model in (PipelineConfig, SweepConfig):
         lines += [f"## JSON Schema: {model.__name__}\n", "```json", json.dumps(model.model_json_schema(), indent=1, default=str), "```\n"]

@@ -47,8 +47,7 @@ _THERE = 0.01
 
 
 def _camera(record: Mapping[str, Any]) -> Camera:
-    return Camera((record["x"], record["y"], record["z"]), record["yaw"], record["horizon"], record["fov"],
-                  record["width"], record["height"])  # fmt: skip
+    return Camera((record["x"], record["y"], record["z"]), record["yaw"], record["horizon"], record["fov"], record["width"], record["height"])
 
 
 def _calls(request: Request, *calls: tuple[str, dict[str, Any]]) -> Response:

@@ -92,8 +92,7 @@ class PlantedBehaviour(Backend):
         seed: int = 0,
         dataset: str | None = None,
     ) -> None:
-        self.shares = {"egocentric": _share("egocentric", egocentric), "mirror": _share("mirror", mirror),
-                       "random_frame": _share("random_frame", random_frame)}  # fmt: skip
+        self.shares = {"egocentric": _share("egocentric", egocentric), "mirror": _share("mirror", mirror), "random_frame": _share("random_frame", random_frame)}
         if sum(self.shares.values()) > 1.0 + 1e-9:
             raise ConfigError(f"backend 'planted': the shares egocentric + mirror + random_frame must not exceed 1, got {self.shares}")
         if isinstance(pixel_sigma, bool) or not isinstance(pixel_sigma, (int, float)) or not pixel_sigma >= 0:

@@ -116,7 +116,9 @@ class JsonAnswerParser(Parser):
     #: What it reads, and how that compares with the ``official`` reading (the parser tables
     #: of the docs are generated from these).
     reads = "the same choice (last in range, else last; the chosen object's frame decides) over a lenient reading"
-    beside_official = 'adds: trailing commas, single quotes, `//` and `/* */` comments, bare and upper-case keys, Python `True/None`, unicode minus, `+1`, `1.`, `"120px"`, objects nested in others, frames written `"Image 3"`, the frame named in the prose when the object has none (status `repaired`); refuses boolean and non-finite coordinates'
+    beside_official = ('adds: trailing commas, single quotes, `//` and `/* */` comments, bare and upper-case keys, Python `True/None`, unicode minus, `+1`, '
+                       '`1.`, `"120px"`, objects nested in others, frames written `"Image 3"`, the frame named in the prose when the object has none (status '
+                       '`repaired`); refuses boolean and non-finite coordinates')
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """Parse ``text`` (see the module docstring); never raises."""

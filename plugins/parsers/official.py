@@ -170,8 +170,11 @@ class OfficialParser(Parser):
 
     #: What it reads, and how that compares with the ``official`` reading (the parser tables
     #: of the docs are generated from these).
-    reads = 'every flat `{...}` (no brace inside) that `json.loads` accepts; keys `selected_image`, `x`, `y` (C: `x`, `y`), exact case; the last object whose `float(x)`, `float(y)` lie in [0, W-1] x [0, H-1], else the last that converts; then `int(selected_image)`'
-    beside_official = 'the reference: `NaN`/`Infinity`/`1e999` kept (infinity is scored at the edge, NaN makes the official mean NaN and is named in a warning); `3.6` -> frame 3, `"3"` -> 3, `true` -> 1 (coordinates too); trailing commas, single quotes, comments, upper-case keys, `"120px"`, a nested extra field, `"image_3"`, `null` frame: unanswered'
+    reads = ("every flat `{...}` (no brace inside) that `json.loads` accepts; keys `selected_image`, `x`, `y` (C: `x`, `y`), exact case; the last object whose "
+             "`float(x)`, `float(y)` lie in [0, W-1] x [0, H-1], else the last that converts; then `int(selected_image)`")
+    beside_official = ('the reference: `NaN`/`Infinity`/`1e999` kept (infinity is scored at the edge, NaN makes the official mean NaN and is named in a '
+                       'warning); `3.6` -> frame 3, `"3"` -> 3, `true` -> 1 (coordinates too); trailing commas, single quotes, comments, upper-case keys, '
+                       '`"120px"`, a nested extra field, `"image_3"`, `null` frame: unanswered')
 
     #: Numbers read by this parser compare with the paper's (see
     #: :func:`povagent.results.official_reading.official_counterpart`).

@@ -21,11 +21,9 @@ class ChoiceScorer(Scorer):
     """Hit when the chosen label is the gold label (no options)."""
 
     metrics: ClassVar[tuple[Metric, ...]] = (
-        Metric("accuracy", "higher", "rate", "correct", "Accuracy",
-               "Correct / all questions; an answer naming no option counts as wrong.", over="all"),
-        Metric("response_rate", "higher", "rate", "answered", "Response rate",
-               "Answers naming an option / all questions.", over="all"),
-    )  # fmt: skip
+        Metric("accuracy", "higher", "rate", "correct", "Accuracy", "Correct / all questions; an answer naming no option counts as wrong.", over="all"),
+        Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answers naming an option / all questions.", over="all"),
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """``correct`` and what was compared (see the module docstring)."""

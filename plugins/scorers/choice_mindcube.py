@@ -50,6 +50,11 @@ class MindCubeChoiceScorer(ChoiceScorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute the MindCube scorer."""
-    register("choice-mindcube", MindCubeChoiceScorer, description=(
-        "Multiple choice as MindCube's evaluator reports it: the overall leaves out the translation setting "
-        "(option overall_excludes), each setting's own accuracy kept"))  # fmt: skip
+    register(
+        "choice-mindcube",
+        MindCubeChoiceScorer,
+        description=(
+            "Multiple choice as MindCube's evaluator reports it: the overall leaves out the translation setting "
+            "(option overall_excludes), each setting's own accuracy kept"
+        ),
+    )

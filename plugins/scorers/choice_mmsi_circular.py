@@ -46,14 +46,28 @@ class MMSICircularScorer(Scorer):
     headline = "circular_accuracy"
 
     metrics = (
-        Metric("circular_accuracy", "higher", "rate", "correct", "Circular accuracy",
-               "Questions with all four rotated copies right / all questions (no option read = wrong).",
-               over="all", group=QUESTION_OF_COPY),
-        Metric("vanilla_accuracy", "higher", "rate", "correct", "Vanilla accuracy",
-               "Questions whose first copy (options in their own order) is right / all questions.", over="all", select=FIRST_COPY),
-        Metric("response_rate", "higher", "rate", "answered", "Response rate",
-               "Answers naming an option / all copies.", over="all"),
-    )  # fmt: skip
+        Metric(
+            "circular_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Circular accuracy",
+            "Questions with all four rotated copies right / all questions (no option read = wrong).",
+            over="all",
+            group=QUESTION_OF_COPY,
+        ),
+        Metric(
+            "vanilla_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Vanilla accuracy",
+            "Questions whose first copy (options in their own order) is right / all questions.",
+            over="all",
+            select=FIRST_COPY,
+        ),
+        Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answers naming an option / all copies.", over="all"),
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The choice scorer's fields, the question this is a copy of and its option order."""
@@ -66,5 +80,8 @@ class MMSICircularScorer(Scorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute MMSI-Bench's circular scorer."""
-    register("choice-mmsi-circular", MMSICircularScorer,
-             description="MMSI-Bench circular: a question right only when its four rotated copies all are; vanilla: its first copy")  # fmt: skip
+    register(
+        "choice-mmsi-circular",
+        MMSICircularScorer,
+        description="MMSI-Bench circular: a question right only when its four rotated copies all are; vanilla: its first copy",
+    )

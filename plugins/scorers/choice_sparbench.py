@@ -35,6 +35,8 @@ class SparBenchChoiceScorer(ChoiceScorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute SPAR-Bench's hit test."""
-    register("choice-sparbench", SparBenchChoiceScorer, description=(
-        "Multiple choice as lmms-eval's SPAR-Bench exact_match counts a hit, bugs included: an empty reply is a hit "
-        "(parse with sparbench-lmms)"))  # fmt: skip
+    register(
+        "choice-sparbench",
+        SparBenchChoiceScorer,
+        description=("Multiple choice as lmms-eval's SPAR-Bench exact_match counts a hit, bugs included: an empty reply is a hit (parse with sparbench-lmms)"),
+    )

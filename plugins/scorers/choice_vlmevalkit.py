@@ -58,7 +58,13 @@ class CorrectedVlmevalkitChoiceScorer(VlmevalkitChoiceScorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute VLMEvalKit's hit test and its correction."""
-    register("choice-vlmevalkit", VlmevalkitChoiceScorer, description=(
-        "Multiple choice as VLMEvalKit's compute_mcq_score counts a hit, bug included: no letter on either side is a hit"))  # fmt: skip
-    register("choice-vlmevalkit-corrected", CorrectedVlmevalkitChoiceScorer, description=(
-        "Multiple choice as VLMEvalKit's compute_mcq_score counts a hit, corrected: a hit needs a letter on both sides"))  # fmt: skip
+    register(
+        "choice-vlmevalkit",
+        VlmevalkitChoiceScorer,
+        description=("Multiple choice as VLMEvalKit's compute_mcq_score counts a hit, bug included: no letter on either side is a hit"),
+    )
+    register(
+        "choice-vlmevalkit-corrected",
+        CorrectedVlmevalkitChoiceScorer,
+        description=("Multiple choice as VLMEvalKit's compute_mcq_score counts a hit, corrected: a hit needs a letter on both sides"),
+    )

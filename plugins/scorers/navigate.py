@@ -34,12 +34,24 @@ class NavigateScorer(Scorer):
     """Success and SPL of a walk (no options)."""
 
     metrics = (
-        Metric("success_rate", "higher", "rate", "success", "Success rate",
-               "Arrivals within 1.0 m of the target with the target in view / navigable episodes; no arrival fails."),
-        Metric("spl", "higher", "mean", "spl", "SPL",
-               "Success weighted by path length, S * l / max(p, l) (Anderson et al. 2018), over navigable episodes: "
-               "l the geodesic shortest path, p the path walked; no arrival scores 0."),
-    )  # fmt: skip
+        Metric(
+            "success_rate",
+            "higher",
+            "rate",
+            "success",
+            "Success rate",
+            "Arrivals within 1.0 m of the target with the target in view / navigable episodes; no arrival fails.",
+        ),
+        Metric(
+            "spl",
+            "higher",
+            "mean",
+            "spl",
+            "SPL",
+            "Success weighted by path length, S * l / max(p, l) (Anderson et al. 2018), over navigable episodes: "
+            "l the geodesic shortest path, p the path walked; no arrival scores 0.",
+        ),
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """Success, SPL and what they were computed from (see the module docstring)."""

@@ -22,17 +22,41 @@ from povagent.scoring.official import UNANSWERED, OfficialScore, answered_in_cam
 #: The official number, its response rate, and the protocol's extras.
 OFFICIAL_METRICS = (
     Metric("mean_l2", "lower", "mean", "l2", "Mean L2", "Official: mean clamped normalized L2 over answered instances."),
-    Metric("response_rate", "higher", "rate", "answered", "Response rate",
-           "Answered / total instances (unparseable answers and API failures are non-responses).", over="all"),
-    Metric("strict_l2", "lower", "mean", "l2_strict", "Strict L2",
-           "A GT behind the scored frame's camera or outside the frame counts as a miss (sqrt 2)."),
-    Metric("frame_accuracy", "higher", "rate", "gt_in_frame", "GT in selected frame",
-           "Share of answered instances whose GT projects inside the scored frame (Inferred/Stated: frame selection)."),
-    Metric("blind_spot", "lower", "rate", "gt_behind", "GT behind camera",
-           "Share of answered instances scored by the blind spot (GT behind the camera, placed at the centre)."),
-    Metric("center_l2", "lower", "mean", "l2_center", "Centre guess L2",
-           "Mean official L2 of guessing the centre of each answered instance's scored frame: the bar its answers must clear."),
-)  # fmt: skip
+    Metric(
+        "response_rate",
+        "higher",
+        "rate",
+        "answered",
+        "Response rate",
+        "Answered / total instances (unparseable answers and API failures are non-responses).",
+        over="all",
+    ),
+    Metric("strict_l2", "lower", "mean", "l2_strict", "Strict L2", "A GT behind the scored frame's camera or outside the frame counts as a miss (sqrt 2)."),
+    Metric(
+        "frame_accuracy",
+        "higher",
+        "rate",
+        "gt_in_frame",
+        "GT in selected frame",
+        "Share of answered instances whose GT projects inside the scored frame (Inferred/Stated: frame selection).",
+    ),
+    Metric(
+        "blind_spot",
+        "lower",
+        "rate",
+        "gt_behind",
+        "GT behind camera",
+        "Share of answered instances scored by the blind spot (GT behind the camera, placed at the centre).",
+    ),
+    Metric(
+        "center_l2",
+        "lower",
+        "mean",
+        "l2_center",
+        "Centre guess L2",
+        "Mean official L2 of guessing the centre of each answered instance's scored frame: the bar its answers must clear.",
+    ),
+)
 
 
 class OfficialScorer(Scorer):
@@ -45,8 +69,9 @@ class OfficialScorer(Scorer):
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         if instance.condition is None:  # an external multiple-choice item: no point to score
-            raise ValueError(f"instance {instance.id} is a multiple-choice item with no POVBench condition: "
-                             "the official scorer scores points; score it with a choice scorer")  # fmt: skip
+            raise ValueError(
+                f"instance {instance.id} is a multiple-choice item with no POVBench condition: the official scorer scores points; score it with a choice scorer"
+            )
         if not answer.answered:
             return self.point_fields(UNANSWERED)
         # an answer given in a camera of its own (an active-mode view) is scored in that camera

@@ -45,17 +45,47 @@ class SRBench3DScorer(Scorer):
     headline = "circular_accuracy"
 
     metrics = (
-        Metric("vanilla_accuracy", "higher", "rate", "correct", "Vanilla accuracy",
-               "Correct / all records, every copy counted once (no option read = wrong).", over="all"),
-        Metric("flip_accuracy", "higher", "rate", "correct", "Flip accuracy",
-               "Pairs of a copy and its flipped twin with both right / all pairs.", over="all", group=FLIP_PAIR),
-        Metric("circular_accuracy", "higher", "rate", "correct", "Circular accuracy",
-               "Sets of a question's circular copies (flipped ones apart) all right / all sets.", over="all", group=CIRCULAR_SET),
-        Metric("flip_circular_accuracy", "higher", "rate", "correct", "Flip+Circular accuracy",
-               "Questions with every copy right / all questions.", over="all", group=QUESTION),
-        Metric("response_rate", "higher", "rate", "answered", "Response rate",
-               "Answers naming an option / all records.", over="all"),
-    )  # fmt: skip
+        Metric(
+            "vanilla_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Vanilla accuracy",
+            "Correct / all records, every copy counted once (no option read = wrong).",
+            over="all",
+        ),
+        Metric(
+            "flip_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Flip accuracy",
+            "Pairs of a copy and its flipped twin with both right / all pairs.",
+            over="all",
+            group=FLIP_PAIR,
+        ),
+        Metric(
+            "circular_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Circular accuracy",
+            "Sets of a question's circular copies (flipped ones apart) all right / all sets.",
+            over="all",
+            group=CIRCULAR_SET,
+        ),
+        Metric(
+            "flip_circular_accuracy",
+            "higher",
+            "rate",
+            "correct",
+            "Flip+Circular accuracy",
+            "Questions with every copy right / all questions.",
+            over="all",
+            group=QUESTION,
+        ),
+        Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answers naming an option / all records.", over="all"),
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The choice scorer's fields, the question this is a copy of and which copy."""
@@ -68,5 +98,4 @@ class SRBench3DScorer(Scorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute the 3DSRBench scorer."""
-    register("choice-3dsrbench", SRBench3DScorer,
-             description="3DSRBench: vanilla, Flip, Circular and Flip+Circular accuracy over a question's copies")  # fmt: skip
+    register("choice-3dsrbench", SRBench3DScorer, description="3DSRBench: vanilla, Flip, Circular and Flip+Circular accuracy over a question's copies")

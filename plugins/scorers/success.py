@@ -60,11 +60,17 @@ class SuccessScorer(Scorer):
     """Hit or miss against a real-world set's marks (options: ``radius``, ``radius_px``)."""
 
     metrics = (
-        Metric("success_rate", "higher", "rate", "success", "Success rate",
-               "Hits / all instances, an unanswered instance counting as a failure (the paper's protocol for real houses).",
-               over="all"),
+        Metric(
+            "success_rate",
+            "higher",
+            "rate",
+            "success",
+            "Success rate",
+            "Hits / all instances, an unanswered instance counting as a failure (the paper's protocol for real houses).",
+            over="all",
+        ),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answered / total instances.", over="all"),
-    )  # fmt: skip
+    )
     protocol = "marked_hit"
 
     def __init__(self, radius: float = DEFAULT_RADIUS, radius_px: float | None = None) -> None:

@@ -54,8 +54,14 @@ def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
     if instance.question is not None:
         chosen = answer.choice if answer.status.answered else None
         correct = chosen is not None and chosen.lower() == instance.question.gold.lower()
-        return {"answered": chosen is not None, "score": 1.0 if correct else 0.0, "correct": correct,
-                "chosen": chosen, "gold": instance.question.gold, "category": instance.question.category}  # fmt: skip
+        return {
+            "answered": chosen is not None,
+            "score": 1.0 if correct else 0.0,
+            "correct": correct,
+            "chosen": chosen,
+            "gold": instance.question.gold,
+            "category": instance.question.category,
+        }
     numeric = instance.numeric
     if numeric is None:
         raise ValueError(f"instance {instance.id} asks neither a multiple-choice nor a numerical question")
@@ -65,8 +71,13 @@ def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
         return {**fields, "score": 0.0}
     if numeric.gold == 0.0:
         finite = math.isfinite(number)
-        return {**fields, "number": number if finite else None, **({"abs_error": absolute_error(number, 0.0)} if finite else {}),
-                "unscorable": True, "unscorable_reason": UNSCORABLE_REASON}  # fmt: skip
+        return {
+            **fields,
+            "number": number if finite else None,
+            **({"abs_error": absolute_error(number, 0.0)} if finite else {}),
+            "unscorable": True,
+            "unscorable_reason": UNSCORABLE_REASON,
+        }
     mra = mean_relative_accuracy(number, numeric.gold)
     fields.update(score=mra, mra=mra, number=number if math.isfinite(number) else None)
     if math.isfinite(number):
@@ -78,19 +89,35 @@ class VSIBenchScorer(Scorer):
     """VSI-Bench's per-question score (module docstring)."""
 
     metrics: ClassVar[tuple[Metric, ...]] = (
-        Metric("score", "higher", "mean", "score", "VSI-Bench score",
-               "Accuracy (multiple choice) or mean relative accuracy (numbers) per question, a reply the rule reads nothing "
-               "in scoring 0; per category the question type's score, overall the set's: the mean of the type scores, "
-               "the three direction levels first averaged into one.",
-               over="all", unscored=0.0, category_mean=True, merged_categories=(DIRECTION_LEVELS,)),
+        Metric(
+            "score",
+            "higher",
+            "mean",
+            "score",
+            "VSI-Bench score",
+            "Accuracy (multiple choice) or mean relative accuracy (numbers) per question, a reply the rule reads nothing "
+            "in scoring 0; per category the question type's score, overall the set's: the mean of the type scores, "
+            "the three direction levels first averaged into one.",
+            over="all",
+            unscored=0.0,
+            category_mean=True,
+            merged_categories=(DIRECTION_LEVELS,),
+        ),
         Metric("mra", "higher", "mean", "mra", "MRA", "Mean relative accuracy of the numerical answers read (10 thresholds, 0.50-0.95)."),
         Metric("abs_error", "lower", "mean", "abs_error", "Absolute error", "|answer - gold| of the finite numerical answers read, in the question's unit."),
         Metric("rel_error", "lower", "mean", "rel_error", "Relative error", "|answer - gold| / gold of the finite numerical answers read."),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Replies the rule reads an answer in / all questions.", over="all"),
-        Metric("unscorable", "lower", "rate", "unscorable", "Unscorable",
-               "Numerical questions whose gold is 0 with a number read / all questions: no relative error exists, so score and "
-               "MRA leave them out; each row says so (unscorable_reason).", over="all"),
-    )  # fmt: skip
+        Metric(
+            "unscorable",
+            "lower",
+            "rate",
+            "unscorable",
+            "Unscorable",
+            "Numerical questions whose gold is 0 with a number read / all questions: no relative error exists, so score and "
+            "MRA leave them out; each row says so (unscorable_reason).",
+            over="all",
+        ),
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The question's score and what was compared."""
@@ -113,8 +140,7 @@ def _merged(per_type: Mapping[str, float], reading: str) -> dict[str, float]:
     missing = [level for level in DIRECTION_LEVELS if level not in out]
     if reading == "lmms" or DIRECTION_LEVELS[0] in out:
         if missing:
-            raise ValueError(f"the {reading} overall averages the three direction levels, and {', '.join(missing)} has no "
-                             "question (upstream raises KeyError)")  # fmt: skip
+            raise ValueError(f"the {reading} overall averages the three direction levels, and {', '.join(missing)} has no question (upstream raises KeyError)")
         levels = [out.pop(level) for level in DIRECTION_LEVELS]
         out[DIRECTION] = sum(levels) / 3.0
     return out
@@ -139,6 +165,11 @@ def lmms_overall(per_type: Mapping[str, float]) -> dict[str, float]:
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute the VSI-Bench scorer."""
-    register("vsibench", VSIBenchScorer, description=(
-        "VSI-Bench: accuracy for its multiple-choice questions, mean relative accuracy for its numerical ones "
-        "(0 for a reply read as nothing); the set's overall is the mean of its per-type scores"))  # fmt: skip
+    register(
+        "vsibench",
+        VSIBenchScorer,
+        description=(
+            "VSI-Bench: accuracy for its multiple-choice questions, mean relative accuracy for its numerical ones "
+            "(0 for a reply read as nothing); the set's overall is the mean of its per-type scores"
+        ),
+    )

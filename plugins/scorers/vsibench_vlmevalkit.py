@@ -49,8 +49,15 @@ def question_score(instance: Instance, answer: ParsedAnswer) -> dict[str, Any]:
         chosen = answer.choice if answer.status.answered else None
         gold_read = spatial_bench_label(str(instance.question.gold).strip())
         correct = same_as_vlmevalkit_compares(chosen, gold_read)
-        return {"answered": chosen is not None, "score": 1.0 if correct else 0.0, "correct": correct, "chosen": chosen,
-                "gold": instance.question.gold, "gold_read": gold_read, "category": instance.question.category}  # fmt: skip
+        return {
+            "answered": chosen is not None,
+            "score": 1.0 if correct else 0.0,
+            "correct": correct,
+            "chosen": chosen,
+            "gold": instance.question.gold,
+            "gold_read": gold_read,
+            "category": instance.question.category,
+        }
     numeric = instance.numeric
     if numeric is None:
         raise ValueError(f"instance {instance.id} asks neither a multiple-choice nor a numerical question")
@@ -70,16 +77,32 @@ class VlmevalkitVSIBenchScorer(Scorer):
     """VSI-Bench scored as VLMEvalKit scores it (module docstring)."""
 
     metrics: ClassVar[tuple[Metric, ...]] = (
-        Metric("score", "higher", "mean", "score", "VSI-Bench score (VLMEvalKit)",
-               "Accuracy (multiple choice) or mean relative accuracy (numbers) per question as VLMEvalKit's VsiBench scores them, "
-               "a reply read as nothing scoring 0; per category the question type's score, overall the mean of the type scores, "
-               "the three direction levels first averaged into one when all three have questions.",
-               over="all", unscored=0.0, category_mean=True, merged_categories=(DIRECTION_LEVELS,), merge_only_whole=True),
+        Metric(
+            "score",
+            "higher",
+            "mean",
+            "score",
+            "VSI-Bench score (VLMEvalKit)",
+            "Accuracy (multiple choice) or mean relative accuracy (numbers) per question as VLMEvalKit's VsiBench scores them, "
+            "a reply read as nothing scoring 0; per category the question type's score, overall the mean of the type scores, "
+            "the three direction levels first averaged into one when all three have questions.",
+            over="all",
+            unscored=0.0,
+            category_mean=True,
+            merged_categories=(DIRECTION_LEVELS,),
+            merge_only_whole=True,
+        ),
         *VSIBenchScorer.metrics[1:3],
-        Metric("rel_error", "lower", "mean", "rel_error", "Relative error",
-               "|(answer - gold) / gold| of the finite numerical answers read (VLMEvalKit's abs_dist_norm; |answer - gold| for a gold of 0)."),
+        Metric(
+            "rel_error",
+            "lower",
+            "mean",
+            "rel_error",
+            "Relative error",
+            "|(answer - gold) / gold| of the finite numerical answers read (VLMEvalKit's abs_dist_norm; |answer - gold| for a gold of 0).",
+        ),
         VSIBenchScorer.metrics[4],
-    )  # fmt: skip
+    )
 
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """The question's score and what was compared."""
@@ -89,6 +112,11 @@ class VlmevalkitVSIBenchScorer(Scorer):
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute VSI-Bench as VLMEvalKit scores it."""
-    register("vsibench-vlmevalkit", VlmevalkitVSIBenchScorer, description=(
-        "VSI-Bench as VLMEvalKit's VsiBench scores it: its letter match for multiple choice, mean relative accuracy with its "
-        "abs_dist_norm for numbers; direction levels merged only when all three have questions"))  # fmt: skip
+    register(
+        "vsibench-vlmevalkit",
+        VlmevalkitVSIBenchScorer,
+        description=(
+            "VSI-Bench as VLMEvalKit's VsiBench scores it: its letter match for multiple choice, mean relative accuracy with its "
+            "abs_dist_norm for numbers; direction levels merged only when all three have questions"
+        ),
+    )

@@ -104,8 +104,9 @@ class ActiveStrategy(BasicStrategy):
     #: The task whose tools an episode offers (:attr:`povagent.active.tools.Tool.tasks`).
     task = "point"
 
-    def __init__(self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0,
-                 speaker: str = "stated", **basic: Any) -> None:  # fmt: skip
+    def __init__(
+        self, max_actions: int = DEFAULT_BUDGET, max_turns: int | None = None, max_seconds: float = 600.0, speaker: str = "stated", **basic: Any
+    ) -> None:
         super().__init__(**basic)
         if speaker not in SPEAKER_KNOWLEDGE:
             raise ValueError(f"strategy option speaker must be one of {', '.join(SPEAKER_KNOWLEDGE)}, got {speaker!r}")
@@ -160,8 +161,14 @@ class ActiveStrategy(BasicStrategy):
         return prompt_message(instance, self.images_for(instance, images), text, self.prompts.given_label)
 
     def _request(self, instance: Instance, messages: list[Message], state: dict[str, object] | None = None) -> Request:
-        return Request(messages=tuple(messages), answer=self.answer_spec(instance), generation=self.generation,
-                       instance=instance, tools=self.tools().schemas(), question=state)  # fmt: skip
+        return Request(
+            messages=tuple(messages),
+            answer=self.answer_spec(instance),
+            generation=self.generation,
+            instance=instance,
+            tools=self.tools().schemas(),
+            question=state,
+        )
 
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The first request: the first message, with the tools offered."""
@@ -170,8 +177,11 @@ class ActiveStrategy(BasicStrategy):
     def plan_turns(self, instance: Instance, images: ImageStore) -> list[PlannedTurn]:
         """The first request, and the later turns taken while the model keeps calling tools."""
         first = self.first_message(instance, images)
-        later = [first, Message.text("assistant", earlier_answer(1)),
-                 Message.text("user", "<<one tool result per call, then View n: with each view rendered>>")]  # fmt: skip
+        later = [
+            first,
+            Message.text("assistant", earlier_answer(1)),
+            Message.text("user", "<<one tool result per call, then View n: with each view rendered>>"),
+        ]
         note = f"taken while the model calls tools: at most {self.max_turns - 1} more turns"
         return [PlannedTurn(self._request(instance, [first])), PlannedTurn(self._request(instance, later), note=note)]
 
@@ -195,8 +205,7 @@ class ActiveStrategy(BasicStrategy):
 
         frames = [Pose.of_camera(f.camera) for f in self.shown_frames(instance)]
         facts = pair_facts(house_dir, instance.house_id, instance.pair_id, instance.povbench_direction.value, instance.povbench_condition.value, self.speaker)
-        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.tools(), self.max_actions,
-                       self.max_seconds)  # fmt: skip
+        return Episode(frames, frames[0], render, lambda: Floor(house.built.house), facts, self.tools(), self.max_actions, self.max_seconds)
 
     async def solve(self, instance: Instance, ask: Ask, images: ImageStore) -> list[tuple[Request, Response]]:
         """Run the episode: ask, run the calls, show the views, until it ends."""

@@ -67,8 +67,9 @@ def choice_answer_spec(instance: Instance) -> AnswerSpec:
     key = (question.options, width, height, len(instance.frames))
     spec = _SPECS.get(key)
     if spec is None:
-        spec = AnswerSpec(schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames),
-                          asks_frame=False, choices=question.options)  # fmt: skip
+        spec = AnswerSpec(
+            schema=choice_answer_schema(question.labels), width=width, height=height, n_frames=len(instance.frames), asks_frame=False, choices=question.options
+        )
         if len(_SPECS) < _MAX_SPECS:
             _SPECS[key] = spec
     return spec
@@ -151,8 +152,7 @@ class ChoiceStrategy(Strategy):
                     parts.append(image_parts[k])
         else:
             parts = [*image_parts, TextPart(text)]
-        return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance),
-                       generation=self.generation, instance=instance)  # fmt: skip
+        return Request(messages=(Message("user", tuple(parts)),), answer=self.answer_spec(instance), generation=self.generation, instance=instance)
 
 
 @hookimpl

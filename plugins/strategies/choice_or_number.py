@@ -50,5 +50,8 @@ class ChoiceOrNumberStrategy(ChoiceStrategy):
 @hookimpl
 def register_strategies(register) -> None:
     """Contribute the choice-or-number strategy."""
-    register("choice-or-number", ChoiceOrNumberStrategy,
-             description="An option label or a number, as each question asks: the images, then the question in its set's wording")  # fmt: skip
+    register(
+        "choice-or-number",
+        ChoiceOrNumberStrategy,
+        description="An option label or a number, as each question asks: the images, then the question in its set's wording",
+    )

@@ -99,8 +99,7 @@ class PerceptionProbe(Strategy):
     def final_request(self, instance: Instance) -> Request:
         """The worked-out answer's request: it stands for the answer and is never sent."""
         note = f"(the {self.role} probe's answer in the frame chosen in turn 1; worked out, not sent to a model)"
-        return Request((Message.text("user", note),), self.answer_spec(instance), self.generation, instance=instance,
-                       question={"kind": PROBE_FINAL})  # fmt: skip
+        return Request((Message.text("user", note),), self.answer_spec(instance), self.generation, instance=instance, question={"kind": PROBE_FINAL})
 
     def build(self, instance: Instance, images: ImageStore) -> Request:
         """The first request: the basic question (A/B), or the probe itself (Given)."""
@@ -163,7 +162,7 @@ class ObserverProbe(PerceptionProbe):
 @hookimpl
 def register_strategies(register) -> None:
     """Contribute the two perception probes."""
-    register("probe-anchor", AnchorProbe,
-             description="Addition: the basic question, then 'point at the <anchor>' in the frame it chose (C: the observer view)")  # fmt: skip
-    register("probe-observer", ObserverProbe,
-             description="Addition: the basic question, then 'point at the <observer's object>' in the frame it chose (A/B only)")  # fmt: skip
+    register("probe-anchor", AnchorProbe, description="Addition: the basic question, then 'point at the <anchor>' in the frame it chose (C: the observer view)")
+    register(
+        "probe-observer", ObserverProbe, description="Addition: the basic question, then 'point at the <observer's object>' in the frame it chose (A/B only)"
+    )

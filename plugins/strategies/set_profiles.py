@@ -13,7 +13,9 @@ from __future__ import annotations
 from povagent.answers.choice import ChoiceQuestion
 
 VIEWSPATIAL_SOURCE = "lmms-eval viewspatial_doc_to_text (the ViewSpatial-Bench paper's format), lmms-eval @ 75571cfe"
-MINDCUBE_SOURCE = "MindCube raw_qa template (src/prompt_generation/templates.py @ 6d8fd9ac); images at its <image> markers as lmms-eval mindcube_doc_to_messages places them"
+MINDCUBE_SOURCE = (
+    "MindCube raw_qa template (src/prompt_generation/templates.py @ 6d8fd9ac); images at its <image> markers as lmms-eval mindcube_doc_to_messages places them"
+)
 SRBENCH3D_SOURCE = "lmms-eval 3dsrbench doc_to_text (VLMEvalKit's layout, no hint), lmms-eval @ 75571cfe"
 
 #: MindCube's raw-QA instruction, sent before the question.

@@ -51,17 +51,18 @@ def run(state: EpisodeState, call: Answer) -> Answered | InvalidCall:
 
 TOOL = Tool(
     description="Give the final answer: the pixel (x, y) of the target in an image you have seen.",
-    parameters={"image": {"type": "string", "description": "\"frame k\" for exploration frame k, \"view n\" for rendered view n"},
-                "x": {"type": "number", "description": "pixel column"}, "y": {"type": "number", "description": "pixel row"}},
+    parameters={
+        "image": {"type": "string", "description": '"frame k" for exploration frame k, "view n" for rendered view n'},
+        "x": {"type": "number", "description": "pixel column"},
+        "y": {"type": "number", "description": "pixel row"},
+    },
     read=read,
     run=run,
-    prose="image is \"frame k\" or \"view n\", x and y are the target's pixel in that image (the JSON above, written "
-    "instead, answers in a frame).",
-    explained="the final answer: `\"frame k\"` for an exploration frame, `\"view n\"` for the n-th rendered view; `x, y` "
-    "are pixels of that image",
+    prose='image is "frame k" or "view n", x and y are the target\'s pixel in that image (the JSON above, written instead, answers in a frame).',
+    explained='the final answer: `"frame k"` for an exploration frame, `"view n"` for the n-th rendered view; `x, y` are pixels of that image',
     ends=True,
     tasks=("point",),  # the navigate task ends with ``arrived`` instead
-)  # fmt: skip
+)
 
 
 @hookimpl

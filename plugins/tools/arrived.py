@@ -32,7 +32,7 @@ TOOL = Tool(
     "and sees it; the pose it stands in is the answer",
     ends=True,
     tasks=("navigate",),
-)  # fmt: skip
+)
 
 
 @hookimpl

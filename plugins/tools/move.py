@@ -49,8 +49,10 @@ def explore(rng: random.Random, state: Mapping[str, Any]) -> dict[str, Any]:
 TOOL = Tool(
     description="Move the robot (camera at 0.9 m, body radius 0.25 m) in its current heading; it stops at walls and "
     "furniture. Returns how far it got and the new view.",
-    parameters={"forward": {"type": "number", "description": "metres ahead (negative: back)"},
-                "right": {"type": "number", "description": "metres to the right (negative: left)"}},
+    parameters={
+        "forward": {"type": "number", "description": "metres ahead (negative: back)"},
+        "right": {"type": "number", "description": "metres to the right (negative: left)"},
+    },
     read=read,
     run=run,
     prose="walks in metres and stops at walls and furniture",
@@ -59,7 +61,7 @@ TOOL = Tool(
     "the reachable floor; the result says how far it got",
     renders=True,
     explore=explore,
-)  # fmt: skip
+)
 
 
 @hookimpl

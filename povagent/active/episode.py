@@ -63,8 +63,7 @@ class Observation:
 
 def camera_record(pose: Pose) -> AnsweredCamera:
     """A pose as the record (and the scorer) holds a camera."""
-    return AnsweredCamera(x=pose.x, y=pose.y, z=pose.z, yaw=pose.yaw, horizon=pose.horizon, fov=pose.fov,
-                          width=pose.width, height=pose.height)  # fmt: skip
+    return AnsweredCamera(x=pose.x, y=pose.y, z=pose.z, yaw=pose.yaw, horizon=pose.horizon, fov=pose.fov, width=pose.width, height=pose.height)
 
 
 class Episode:
@@ -226,19 +225,37 @@ class Episode:
         self.answer = EpisodeAnswer(image=image, x=x, y=y, via=via, camera=camera, frame=frame)
         self.end = "answered" if via == "answer_tool" else "answered in text (official JSON), not with the answer tool"
 
-    def _step(self, turn: int, action: str, args: str, valid: bool, text: str, *, view: ViewRecord | None = None,
-              blocked: bool = False, counted: bool = True) -> None:  # fmt: skip
+    def _step(
+        self, turn: int, action: str, args: str, valid: bool, text: str, *, view: ViewRecord | None = None, blocked: bool = False, counted: bool = True
+    ) -> None:
         if len(self.steps) >= MAX_RECORDED_STEPS:
             self.steps_dropped += 1
             return
         self.steps.append(
-            Step(turn=turn, action=action, arguments=args, valid=valid, observation=text[:300],
-                 pose=camera_record(self.pose),
-                 view=view.n if view else None, sha256=view.sha256 if view else None, blocked=blocked, counted=counted)
-        )  # fmt: skip
+            Step(
+                turn=turn,
+                action=action,
+                arguments=args,
+                valid=valid,
+                observation=text[:300],
+                pose=camera_record(self.pose),
+                view=view.n if view else None,
+                sha256=view.sha256 if view else None,
+                blocked=blocked,
+                counted=counted,
+            )
+        )
 
     def record(self) -> EpisodeRecord:
         """The episode as the row keeps it."""
-        return EpisodeRecord(budget=self.budget, shown_frames=len(self.frames), start=camera_record(self.start),
-                             steps=self.steps, views=self.views, counts=self.counts, answer=self.answer,
-                             end=self.end or "no answer", steps_dropped=self.steps_dropped)  # fmt: skip
+        return EpisodeRecord(
+            budget=self.budget,
+            shown_frames=len(self.frames),
+            start=camera_record(self.start),
+            steps=self.steps,
+            views=self.views,
+            counts=self.counts,
+            answer=self.answer,
+            end=self.end or "no answer",
+            steps_dropped=self.steps_dropped,
+        )

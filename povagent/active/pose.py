@@ -72,8 +72,7 @@ class Pose:
 
     def record(self) -> dict[str, float | int]:
         """The pose as rows store it (the camera fields, scoring-ready)."""
-        return {"x": self.x, "y": self.y, "z": self.z, "yaw": self.yaw, "horizon": self.horizon, "fov": self.fov,
-                "width": self.width, "height": self.height}  # fmt: skip
+        return {"x": self.x, "y": self.y, "z": self.z, "yaw": self.yaw, "horizon": self.horizon, "fov": self.fov, "width": self.width, "height": self.height}
 
     def in_words(self, start: Pose) -> str:
         """Where this pose is relative to ``start``: metres forward/right of it, degrees turned, tilt."""

@@ -64,8 +64,7 @@ class PairFacts:
         return " ".join(parts) if parts else CANNOT_SAY
 
 
-def pair_facts(house_dir: Path, house_id: str, pair_id: str, direction: str, condition: str = "b",
-               knowledge: str = "stated") -> PairFacts:  # fmt: skip
+def pair_facts(house_dir: Path, house_id: str, pair_id: str, direction: str, condition: str = "b", knowledge: str = "stated") -> PairFacts:
     """The speaker's facts for one pair, direction and condition (``a``, ``b``, ``c``), read from
     the house's pair file; ``knowledge`` is one of :data:`SPEAKER_KNOWLEDGE`."""
     path = Path(house_dir) / f"{house_id}.json"

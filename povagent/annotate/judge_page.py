@@ -83,8 +83,20 @@ def judge_items(paths: list[Path]) -> Predictions:
             frame = scoring_frame(instance, p.selected_image, p.image_path) if instance is not None else None
             if frame is None or not getattr(frame, "file", None):
                 continue
-            items.append(JudgeItem(judged_item(identity, row.key, p), Path(frame.file), float(p.x), float(p.y), row.sentence,
-                                   run.system, run.name, row.key, row.instance_id, str(row.condition)))  # fmt: skip
+            items.append(
+                JudgeItem(
+                    judged_item(identity, row.key, p),
+                    Path(frame.file),
+                    float(p.x),
+                    float(p.y),
+                    row.sentence,
+                    run.system,
+                    run.name,
+                    row.key,
+                    row.instance_id,
+                    str(row.condition),
+                )
+            )
     return Predictions(items, dataset)
 
 
@@ -132,8 +144,7 @@ class JudgePage:
                     "choices": [],
                     "point": {"image": 0, "x": item.x, "y": item.y},
                 }
-            return {"mode": "judge", "who": self.judge, "done": self._done, "total": len(self.items),
-                    "finished": item is None, "question": question}  # fmt: skip
+            return {"mode": "judge", "who": self.judge, "done": self._done, "total": len(self.items), "finished": item is None, "question": question}
 
     @staticmethod
     def _frame(item: JudgeItem) -> tuple[bytes, str, tuple[int, int]]:
@@ -165,10 +176,20 @@ class JudgePage:
             if item is None or body.get("question") != self._done:
                 raise AnswerRefused("that prediction is not the one shown (judged already?)")
             seconds = round(time.monotonic() - (self._shown_at or time.monotonic()), 3)
-            self.journal.append(Judgement(
-                item=item.item, judge=self.judge, verdict=verdict, note=note, seconds=seconds, system=item.system,
-                run_name=item.run_name, key=item.key, instance_id=item.instance_id, condition=item.condition,
-            ))  # fmt: skip
+            self.journal.append(
+                Judgement(
+                    item=item.item,
+                    judge=self.judge,
+                    verdict=verdict,
+                    note=note,
+                    seconds=seconds,
+                    system=item.system,
+                    run_name=item.run_name,
+                    key=item.key,
+                    instance_id=item.instance_id,
+                    condition=item.condition,
+                )
+            )
             self._left.pop(0)
             self._done += 1
             self._shown_at = None

@@ -57,8 +57,11 @@ SECURITY_HEADERS = {
 }
 TOKEN_HEADER = "X-Povagent-Token"
 #: The page's files, by the only paths that name them (below the token).
-ASSETS = {"": ("annotate.html", "text/html; charset=utf-8"), "annotate.js": ("annotate.js", "text/javascript; charset=utf-8"),
-          "annotate.css": ("annotate.css", "text/css; charset=utf-8")}  # fmt: skip
+ASSETS = {
+    "": ("annotate.html", "text/html; charset=utf-8"),
+    "annotate.js": ("annotate.js", "text/javascript; charset=utf-8"),
+    "annotate.css": ("annotate.css", "text/css; charset=utf-8"),
+}
 IMAGE_PATH = re.compile(r"api/image/([0-9]{1,9})/([0-9]{1,4})")
 #: The largest request body read (an answer or a judgement with its note).
 MAX_BODY = 64 * 1024

@@ -17,7 +17,8 @@ from povagent.annotate.order import annotator_order
 from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance
 from povagent.results.rows import ResultRow
-from povagent.run.runner import PipelineRun, RunResult
+from povagent.run.run_result import RunResult
+from povagent.run.runner import PipelineRun
 
 
 class AnswerSession(PipelineRun):

@@ -72,8 +72,7 @@ def fitted_table(
 
     def table_width(headers: list[str]) -> int:
         # each column: its widest line, one space of padding either side, one border
-        cells = [max([len(x) for x in h.split("\n")] + [len(x) for r in plain_rows if i < len(r) for x in r[i].split("\n")])
-                 for i, h in enumerate(headers)]  # fmt: skip
+        cells = [max([len(x) for x in h.split("\n")] + [len(x) for r in plain_rows if i < len(r) for x in r[i].split("\n")]) for i, h in enumerate(headers)]
         return sum(cells) + 3 * len(headers) + 1
 
     headers = [h for h, _ in columns]
@@ -81,8 +80,9 @@ def fitted_table(
         headers = [_two_lines(h) if kind == "number" else h for h, kind in columns]
     if table_width(headers) > width:
         # a number with its interval and count goes on lines of its own: each part stays whole
-        rows = [[stacked_number(c) if kind == "number" and c == p else c for c, p, (_, kind) in zip(row, plain, columns)]
-                for row, plain in zip(rows, plain_rows)]  # fmt: skip
+        rows = [
+            [stacked_number(c) if kind == "number" and c == p else c for c, p, (_, kind) in zip(row, plain, columns)] for row, plain in zip(rows, plain_rows)
+        ]
         plain_rows = [[_plain(c) for c in row] for row in rows]
     label_widths: dict[int, int] = {}
     if table_width(headers) > width:
@@ -156,8 +156,15 @@ def fitted_tables(
     tables = []
     for k, group in enumerate(groups):
         keep = sorted(labels + group)
-        tables.append(fitted_table([columns[i] for i in keep], [[r[i] for i in keep if i < len(r)] for r in rows],
-                                   title=title if k == 0 else None, caption=caption if k == len(groups) - 1 else None, width=width))  # fmt: skip
+        tables.append(
+            fitted_table(
+                [columns[i] for i in keep],
+                [[r[i] for i in keep if i < len(r)] for r in rows],
+                title=title if k == 0 else None,
+                caption=caption if k == len(groups) - 1 else None,
+                width=width,
+            )
+        )
     return tables
 
 

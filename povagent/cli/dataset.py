@@ -98,15 +98,17 @@ def render_summary(summary: Breakdown, title: str | PathTitle = "POVBench scores
     def add(name: str, cell: Cell) -> None:
         rr = cell.response_rate
         pif = cell.pct_in_frame
-        rows.append([
-            name,
-            format_number(cell.mean_l2),
-            format_number(cell.std_l2),
-            "-" if rr is None else f"{100 * rr:.1f}%",
-            "-" if pif is None else f"{pif:.1f}%",
-            format_number(cell.mean_l2_strict),
-            f"{cell.n} / {cell.n_total}",
-        ])  # fmt: skip
+        rows.append(
+            [
+                name,
+                format_number(cell.mean_l2),
+                format_number(cell.std_l2),
+                "-" if rr is None else f"{100 * rr:.1f}%",
+                "-" if pif is None else f"{pif:.1f}%",
+                format_number(cell.mean_l2_strict),
+                f"{cell.n} / {cell.n_total}",
+            ]
+        )
 
     for name, cell in breakdown_slices(summary):
         add(name, cell)

@@ -54,9 +54,12 @@ def render_diagnostics(summary: RunSummary) -> None:
     from povagent.cli.console_width import fitted_table
 
     conditions, rows = diagnostics_rows(diagnostics)
-    Console().print(fitted_table(
-        [("addition", "label"), *((c, "number") for c in conditions)], rows,
-        title="Additions (not in the paper): why answers fail",
-        caption="steps, relation success: shares of answered rows; egocentric bias: share nearer the egocentric "
-        "target where it differs from the true one (not for C); docs/how-to/why-models-fail.md",
-    ))  # fmt: skip
+    Console().print(
+        fitted_table(
+            [("addition", "label"), *((c, "number") for c in conditions)],
+            rows,
+            title="Additions (not in the paper): why answers fail",
+            caption="steps, relation success: shares of answered rows; egocentric bias: share nearer the egocentric "
+            "target where it differs from the true one (not for C); docs/how-to/why-models-fail.md",
+        )
+    )

@@ -34,8 +34,7 @@ def metrics_rows(metrics: ScorerMetrics, declared: Mapping[str, MetricDeclaratio
     declared = metrics.declared if declared is None else declared
     names = list(declared)
     headers = [f"{d.label} {'↓' if d.better == 'lower' else '↑'}" for d in declared.values()]
-    rows = [[label, *(metric_cell(cell.get(n), declared[n].aggregation) for n in names)]
-            for label, cell in breakdown_slices(metrics)]  # fmt: skip
+    rows = [[label, *(metric_cell(cell.get(n), declared[n].aggregation) for n in names)] for label, cell in breakdown_slices(metrics)]
     return headers, rows
 
 

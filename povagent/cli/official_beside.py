@@ -80,14 +80,16 @@ def render_official_beside(summary: RunSummary, parser: str, *, reads_officially
         mine = lenient_cells.get(name)
         rows.append([name, format_number(mine.mean_l2 if mine is not None else None), rate(mine), format_number(cell.mean_l2), rate(cell)])
     headers = (f"L2 {parser} (repaired)", f"resp. {parser}", f"L2 {official.parser} (official)", f"resp. {official.parser}")
-    console.print(fitted_table(
-        [("slice", "label")] + [(h, "number") for h in headers],
-        rows,
-        title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
-        caption=(
-            f"{official.rows_without_reading} row(s) with an answer carry no official reading and are left out: incomplete; "
-            "run povagent rescore RUN --parser official"
-            if official.rows_without_reading
-            else None
-        ),
-    ))  # fmt: skip
+    console.print(
+        fitted_table(
+            [("slice", "label")] + [(h, "number") for h in headers],
+            rows,
+            title=f"Official parse beside {parser!r} (repaired): the official runner's reading is the one to compare with the paper",
+            caption=(
+                f"{official.rows_without_reading} row(s) with an answer carry no official reading and are left out: incomplete; "
+                "run povagent rescore RUN --parser official"
+                if official.rows_without_reading
+                else None
+            ),
+        )
+    )

@@ -160,7 +160,9 @@ def run_command(
         typer.echo(f"stopped early: {result.stopped}", err=True)
         raise typer.Exit(result.exit_code)
     summary = result.summary
-    title = PathTitle(config.output, f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})")  # type: ignore[union-attr]  # load_pipeline resolved backend and parser
+    # load_pipeline resolved backend and parser
+    ran = f" ({_what_ran(result.summary, config.backend.name)} / {config.strategy.name} / {config.parser.name})"  # type: ignore[union-attr]
+    title = PathTitle(config.output, ran)
     _summary_table(summary, title, result.run_dir)
     if summary.nan_coordinate_rows:
         from povagent.results.official_reading import nan_warning
@@ -172,7 +174,8 @@ def run_command(
         render_official_beside(
             summary,
             config.parser.name,  # type: ignore[union-attr]  # load_pipeline resolved it
-            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]  # load_pipeline resolved it
+            # load_pipeline resolved the parser
+            reads_officially=parser_reads_officially(config.parser.name, config.parser.options, tuple(config.plugins)),  # type: ignore[union-attr]
             run_dir=result.run_dir,
         )
     # two short lines rather than one that an 80-column terminal breaks mid-phrase
@@ -307,7 +310,7 @@ def sweep_command(
     title = PathTitle(result.output / "sweep.json", before=f"sweep {sweep.name} ({len(result.cells)} cells) -> ")
     console.print(fitted_table(columns, rows, title=title))
     from povagent.cli.process_exit import allow_fast_exit
-    from povagent.run.runner import EXIT_STOPPED
+    from povagent.run.run_result import EXIT_STOPPED
 
     allow_fast_exit()  # every cell's folder is complete and closed (see povagent.cli.process_exit)
     codes = [result.results[c.name].exit_code for c in finished] + [EXIT_STOPPED] * len(result.failed)
@@ -358,8 +361,13 @@ def _profile_fields(entry: Any) -> dict[str, Any]:
     official rule, upstream source and licence (for ``plugins --json``); nothing for other kinds, or for
     a plugin's object without those fields."""
     if entry.kind == "format":  # its source (repo@commit) is "upstream": "source" is the plugin's
-        names = {"answer_type": "answer_type", "official_parser": "official_parser", "official_scorer": "official_scorer",
-                 "upstream": "source", "licence": "licence"}  # fmt: skip
+        names = {
+            "answer_type": "answer_type",
+            "official_parser": "official_parser",
+            "official_scorer": "official_scorer",
+            "upstream": "source",
+            "licence": "licence",
+        }
         return {k: getattr(entry.factory, a) for k, a in names.items() if isinstance(getattr(entry.factory, a, None), str)}
     if entry.kind != "profile":
         return {}
@@ -379,8 +387,7 @@ def plugins_command(as_json: bool = typer.Option(False, "--json", help="Print th
     from povagent.plugins import KINDS, build_plugin_host
 
     host = build_plugin_host(strict=False)
-    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries(),
-              **{k: host.entries(k) for k in ("answer_type", "format")}}  # fmt: skip
+    listed = {**{k: host.entries(k) for k in (*KINDS, "profile")}, "tool": host.tool_entries(), **{k: host.entries(k) for k in ("answer_type", "format")}}
     if as_json:
         out: dict[str, list[dict[str, Any]]] = {
             k: [{"name": e.name, "source": e.source, "description": e.description, **_profile_fields(e)} for e in entries]

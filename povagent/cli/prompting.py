@@ -97,7 +97,12 @@ def show_prompt_command(
     from povagent.run.pending import asked_by
 
     config = resolve_hub_dataset(load_pipeline(pipeline))  # a dataset: {hub: ...} is fetched first
-    dataset = asked_by(config, open_evaluation_set(config.dataset.root, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, plugins=config.plugins))
+    dataset = asked_by(
+        config,
+        open_evaluation_set(
+            config.dataset.root, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, plugins=config.plugins
+        ),
+    )
     inst = dataset.instance(instance)
     if inst is None:
         # an instance of a house the loader left out: say why in one line, not "no such id"

@@ -41,8 +41,10 @@ def render_rescored_log(result: object, shown: int) -> None:
     read = "an answer (an option or a number)" if result.numerical else "an option"
     typer.echo(f"{result.file}: {result.items} replies of {result.set} logged by {result.harness}, read by {len(result.rules)} rules:")
     for r in result.rules:
-        typer.echo(f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
-                   f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies")  # fmt: skip
+        typer.echo(
+            f"  {r.rule}{' (official)' if r.official else ''}: {r.harness}'s rule, {r.source}; reads {r.reads}; "
+            f"scorer {r.scorer} ({r.metric}); reads {read} in {r.answered} of {result.items} replies"
+        )
     categories = sorted({c for r in result.rules for c in r.per_category})
     rows = [["overall", *(_cell(r.overall, r.overall_ci) for r in result.rules)]]
     rows += [[c, *(_cell(r.per_category.get(c), r.per_category_ci.get(c)) for r in result.rules)] for c in categories]
@@ -56,16 +58,22 @@ def render_rescored_log(result: object, shown: int) -> None:
         for line in r.unscorable[:shown]:
             typer.echo(f"unscorable: {line}", err=True)
         if r.unscorable:
-            typer.echo(f"{len(r.unscorable)} repl{'y' if len(r.unscorable) == 1 else 'ies'} {r.rule} could not score (named above), "
-                       "left out of its figures", err=True)  # fmt: skip
+            typer.echo(
+                f"{len(r.unscorable)} repl{'y' if len(r.unscorable) == 1 else 'ies'} {r.rule} could not score (named above), left out of its figures", err=True
+            )
     if result.stripped:
-        typer.echo(f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
-                   "(resps differs from filtered_resps): each rule above reads the field its 'reads' names.")  # fmt: skip
+        typer.echo(
+            f"{result.stripped} of {result.items} replies were changed by the harness's own filter before its rule read them "
+            "(resps differs from filtered_resps): each rule above reads the field its 'reads' names."
+        )
     if result.disagreements_total:
         names = [r.rule for r in result.rules]
-        lines = [[d.item, _excerpt(d.reply), d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
-                 for d in result.disagreements[:shown]]  # fmt: skip
-        heading = f"The rules read {result.disagreements_total} of {result.items} replies differently (first {min(shown, len(result.disagreements))}; ✓ a hit)"
+        lines = [
+            [d.item, _excerpt(d.reply), d.gold, *((d.labels[n] or "none") + (" ✓" if d.correct[n] else "") for n in names)]
+            for d in result.disagreements[:shown]
+        ]
+        first = min(shown, len(result.disagreements))
+        heading = f"The rules read {result.disagreements_total} of {result.items} replies differently (first {first}; ✓ a hit)"
         for table in fitted_tables([("item", "label"), ("reply", "label"), ("gold", "label"), *((n, "label") for n in names)], lines, title=heading):
             console.print(table)
     elif result.items:
@@ -80,12 +88,23 @@ def render_rescored_log(result: object, shown: int) -> None:
 
 @app.command("rescore-log")
 def rescore_log_command(
-    file: Path = typer.Argument(..., metavar="FILE", help="lmms-eval's --log_samples file (<date>_samples_<task>.jsonl) or VLMEvalKit's prediction file (.xlsx or .tsv)."),
+    file: Path = typer.Argument(
+        ..., metavar="FILE", help="lmms-eval's --log_samples file (<date>_samples_<task>.jsonl) or VLMEvalKit's prediction file (.xlsx or .tsv)."
+    ),
     harness: str = typer.Option(..., "--harness", metavar="NAME", help="The harness that wrote FILE: lmms-eval or vlmevalkit."),
-    set_name: str = typer.Option(..., "--set", metavar="NAME", help="The set the log is of: the key of a registered dataset format whose answers are choices or numbers (povagent plugins lists the formats)."),
-    as_json: bool = typer.Option(False, "--json", help="Print {set, items, rules: [{rule, source, overall, per_category, ...}], ...} as JSON instead of tables."),
+    set_name: str = typer.Option(
+        ...,
+        "--set",
+        metavar="NAME",
+        help="The set the log is of: the key of a registered dataset format whose answers are choices or numbers (povagent plugins lists the formats).",
+    ),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print {set, items, rules: [{rule, source, overall, per_category, ...}], ...} as JSON instead of tables."
+    ),
     shown: int = typer.Option(20, "--show", min=0, metavar="N", help="How many disagreements and bad records to print (the JSON holds them all)."),
-    plugin: list[str] = typer.Option([], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."),
+    plugin: list[str] = typer.Option(
+        [], "--plugin", metavar="MODULE", help="Load a plugin module first (a set's or a rule's): a dotted name or a .py path (repeatable)."
+    ),
 ) -> None:
     """Score another harness's log by every rule of its set, offline.
 

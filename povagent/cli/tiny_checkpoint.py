@@ -62,5 +62,4 @@ def tiny_checkpoint_command(
     """
     made = build_tiny_checkpoint(folder, architecture, seed)
     note = ARCHITECTURES[architecture][1]
-    typer.echo(f"{made}: a tiny {architecture} checkpoint ({note}); try it with backend: "
-               f"{{name: transformers, options: {{model: {made}}}}}")  # fmt: skip
+    typer.echo(f"{made}: a tiny {architecture} checkpoint ({note}); try it with backend: {{name: transformers, options: {{model: {made}}}}}")

@@ -18,23 +18,33 @@ def export_train_command(
     dataset: Path = typer.Argument(..., metavar="DATASET", help="A POVBench-format dataset folder (generated, or the release's POVBench/)."),
     out: Path = typer.Option(..., "--out", metavar="FOLDER", help="Folder to write the training set to (new, empty, or an export to resume)."),
     fmt: str = typer.Option(
-        "hf", "--format", metavar="hf|messages|openai",
+        "hf",
+        "--format",
+        metavar="hf|messages|openai",
         help="hf: Parquet shards with embedded images; messages: chat JSONL for TRL and LLaMA-Factory; openai: OpenAI fine-tuning JSONL (data URLs).",
     ),
-    rationale: str = typer.Option("s-cot", "--rationale", metavar="none|cot|s-cot", help="The reasoning before the answer, computed from the scene (none: the answer only)."),
-    split: str = typer.Option("0.8,0.1,0.1", "--split", metavar="SHARES|RANGES", help="Split by house: shares 0.8,0.1,0.1 or index ranges train=0:800,test=800:1000."),
+    rationale: str = typer.Option(
+        "s-cot", "--rationale", metavar="none|cot|s-cot", help="The reasoning before the answer, computed from the scene (none: the answer only)."
+    ),
+    split: str = typer.Option(
+        "0.8,0.1,0.1", "--split", metavar="SHARES|RANGES", help="Split by house: shares 0.8,0.1,0.1 or index ranges train=0:800,test=800:1000."
+    ),
     split_seed: int = typer.Option(0, "--split-seed", metavar="N", help="Seed of the house order the shares cut."),
     text_seed: int = typer.Option(0, "--text-seed", metavar="N", help="Seed of the rationales' wording (the facts never change)."),
     conditions: str = typer.Option("a,b,c", "--conditions", metavar="a,b,c", help="Conditions to export: a Inferred, b Stated, c Given."),
     max_shard_mb: int = typer.Option(500, "--max-shard-mb", min=1, metavar="MB", help="Largest shard, in MB."),
     task: str = typer.Option(
-        "point", "--task", metavar="point|relation|multi-hop",
+        "point",
+        "--task",
+        metavar="point|relation|multi-hop",
         help="What each example asks: the point task, or a generated task's multiple-choice question answered with its label.",
     ),
     exact: bool = typer.Option(False, "--exact-answers", help="Answer with the ground truth's exact float pixel instead of whole pixels."),
     exclude: list[Path] = typer.Option([], "--exclude", metavar="DATASET", help="An evaluation dataset whose houses must not be exported (repeatable)."),
     drop_excluded: bool = typer.Option(False, "--drop-excluded", help="Leave evaluation houses out (listed in the card) instead of stopping."),
-    cluster: str = typer.Option(None, "--cluster", metavar="local:N|tcp://HOST:PORT", help="Write shards as Dask tasks (needs pip install 'povagent[cluster]')."),
+    cluster: str = typer.Option(
+        None, "--cluster", metavar="local:N|tcp://HOST:PORT", help="Write shards as Dask tasks (needs pip install 'povagent[cluster]')."
+    ),
 ) -> None:
     """Export a training set, with rationales from the geometry.
 

@@ -95,8 +95,9 @@ def _local_cluster(workers: int) -> Iterator[Client]:
 
     Its scheduler, workers and nannies bind to 127.0.0.1, and so does the scheduler's HTTP server
     (its pages show workers, logs, call stacks and task errors; the dashboard too when bokeh is
-    installed), on a free port so nothing clashes on 8787. Workers serve no HTTP pages. Local workers print to the user's terminal: their structured house logs are kept to warnings
-    and errors there (LOCAL_WORKER_LOG_LEVEL).
+    installed), on a free port so nothing clashes on 8787. Workers serve no HTTP pages. Local
+    workers print to the user's terminal: their structured house logs are kept to warnings and
+    errors there (LOCAL_WORKER_LOG_LEVEL).
     """
     import dask
     import distributed
@@ -104,9 +105,14 @@ def _local_cluster(workers: int) -> Iterator[Client]:
     with dask.config.set({WORKER_LOG_LEVEL: LOCAL_WORKER_LOG_LEVEL}):
         try:
             local = distributed.LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, host=LOCAL_HOST,
-                dashboard_address=f"{LOCAL_HOST}:0", worker_dashboard_address=None, silence_logs=50,
-            )  # fmt: skip
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host=LOCAL_HOST,
+                dashboard_address=f"{LOCAL_HOST}:0",
+                worker_dashboard_address=None,
+                silence_logs=50,
+            )
         except Exception as exc:  # no port, no process, no memory: nothing of ours is running
             raise ClusterError(f"could not start local:{workers} (a Dask LocalCluster on this machine): {_one_line(exc)}") from None
         with local, distributed.Client(local) as client:

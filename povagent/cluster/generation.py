@@ -130,9 +130,13 @@ def _logged(index: int, options: GenerationOptions, make: Callable[[], HouseOutc
         log.error("house failed", index=index, seed=options.seed, error=outcome.failure.error)
     else:
         log.info(
-            "house done", index=index, seed=options.seed, kept=outcome.kept,
-            cpu_s=round(outcome.cpu_seconds, 3), wall_s=round(time.perf_counter() - start, 3),
-        )  # fmt: skip
+            "house done",
+            index=index,
+            seed=options.seed,
+            kept=outcome.kept,
+            cpu_s=round(outcome.cpu_seconds, 3),
+            wall_s=round(time.perf_counter() - start, 3),
+        )
     return outcome
 
 

@@ -1,4 +1,5 @@
-"""The pipeline and sweep schema: pydantic models of every key a config may hold, with their defaults and bounds.
+"""The pipeline schema: pydantic models of every key a pipeline config may hold, with their defaults
+and bounds (a sweep's own keys are :mod:`povagent.config.sweep_models`).
 
 What a config may ask for is bounded here: repeats (:data:`MAX_RUNS`), retries and waits
 (:class:`~povagent.config.retry_policy.RetryPolicy`), the request timeout (finite, at most
@@ -7,7 +8,7 @@ is never silently ignored) and numbers are finite.
 
 The models are data, at the bottom of the config: besides the data models they hold
 (the retry policy, the Hub download bounds, conditions and directions) they use only pure
-parsers of single values (``host:port``, a cluster address). This module must not read files
+parsers of single values (``host:port``). This module must not read files
 (that is :mod:`povagent.config.yaml_reader`), load plugins or check their names
 (:mod:`povagent.config.plugin_checks`), or import the engine, the runner or the image
 transports that act on these values.
@@ -24,11 +25,9 @@ from typing import Any, Literal, Mapping
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_serializer, model_validator
 
 from povagent.config.addresses import parse_bind
-from povagent.config.cluster_spec import yaml_cluster_spec  # pure: no Dask import
 from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.models import Condition, Direction
-from povagent.errors import ClusterError
 
 #: Most repeats a pipeline may ask for (``runs: N`` or a list of N indices); the paper uses 3.
 MAX_RUNS = 100
@@ -40,14 +39,14 @@ MAX_WAIT_S = 3600.0
 MAX_CONCURRENCY = 1024
 
 
-class _Strict(BaseModel):
-    """Unknown keys are errors (a typo must never be silently ignored); numbers are finite
+class StrictModel(BaseModel):
+    """The base of every config model: unknown keys are errors (a typo must never be silently ignored); numbers are finite
     (``.inf`` is a wait that never ends)."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
-def _a_folder_path(value: Path) -> Path:
+def a_folder_path(value: Path) -> Path:
     """``value`` may become a folder: neither it nor any existing parent is a file."""
     for p in (value, *value.parents):
         if p.exists():
@@ -58,7 +57,7 @@ def _a_folder_path(value: Path) -> Path:
     return value
 
 
-class ComponentSpec(_Strict):
+class ComponentSpec(StrictModel):
     """A plugin by name with its options (a bare string is the name with no options)."""
 
     name: str = Field(min_length=1)
@@ -70,7 +69,7 @@ class ComponentSpec(_Strict):
         return {"name": value} if isinstance(value, str) else value
 
 
-class GenerateSpec(_Strict):
+class GenerateSpec(StrictModel):
     """Generate a synthetic dataset (once) into ``out``.
 
     ``judge`` is the surface judge by its registered name (``register_judges``), with options:
@@ -85,7 +84,7 @@ class GenerateSpec(_Strict):
     judge: ComponentSpec = Field(default_factory=lambda: ComponentSpec(name="physical-rules"))
 
 
-class DatasetSpec(_Strict):
+class DatasetSpec(StrictModel):
     """Where the instances come from: an existing release-layout folder, a generator spec, or
     a dataset repository on the Hugging Face Hub (``hub``, at ``revision``)."""
 
@@ -174,7 +173,7 @@ class DatasetSpec(_Strict):
 _CONDITION_NAMES = {"inferred": "a", "stated": "b", "given": "c"}
 
 
-class InstanceFilter(_Strict):
+class InstanceFilter(StrictModel):
     """Which instances a run covers; ``None`` means all."""
 
     conditions: list[Condition] | None = None
@@ -205,7 +204,7 @@ class InstanceFilter(_Strict):
 
 
 
-class CacheSpec(_Strict):
+class CacheSpec(StrictModel):
     """The response cache: on by default at ``<output>/cache.sqlite``."""
 
     enabled: bool = True
@@ -233,7 +232,7 @@ class CacheSpec(_Strict):
 DEFAULT_CACHE_DIR = "image-cache"
 
 
-class ImagesSpec(_Strict):
+class ImagesSpec(StrictModel):
     """The run's image store, and how images travel to the model.
 
     ``transport``: ``inline`` (default; base64 data URLs inside the request, as every provider
@@ -295,14 +294,17 @@ TASK_NAMES = ("point", "relation", "multi-hop", "navigate")
 #: ``arrived()``, which the ``navigate`` strategy records).
 TaskAnswer = Literal["point", "choice", "walk"]
 TASK_ANSWERS: dict[str, tuple[TaskAnswer, ...]] = {
-    "point": ("point",), "relation": ("choice",), "multi-hop": ("point", "choice"), "navigate": ("walk",),
-}  # fmt: skip
+    "point": ("point",),
+    "relation": ("choice",),
+    "multi-hop": ("point", "choice"),
+    "navigate": ("walk",),
+}
 #: The strategy and scorers a pipeline of a task gets when it names none (the point task's are
 #: the fields' own defaults).
 TASK_DEFAULTS: dict[str, tuple[str, tuple[str, ...]]] = {"navigate": ("navigate", ("navigate",))}
 
 
-class TaskSpec(_Strict):
+class TaskSpec(StrictModel):
     """What a pipeline asks of each instance: ``task: relation`` or ``task: {name: multi-hop,
     answer: choice}``. ``answer`` defaults to the task's first (multi-hop: ``point``, the
     official metric)."""
@@ -334,7 +336,7 @@ class TaskSpec(_Strict):
         return self.name == "point"
 
 
-class PipelineConfig(_Strict):
+class PipelineConfig(StrictModel):
     """One pipeline: a dataset, a model, a strategy, a parser, scorers, and how to run them."""
 
     plugins: list[str] = Field(default_factory=list)
@@ -378,7 +380,7 @@ class PipelineConfig(_Strict):
     @field_validator("output")
     @classmethod
     def _output_is_a_folder(cls, value: Path) -> Path:
-        return _a_folder_path(value)
+        return a_folder_path(value)
 
     @model_validator(mode="after")
     def _one_backend(self) -> PipelineConfig:
@@ -431,70 +433,3 @@ class PipelineConfig(_Strict):
         """JSON-able dict of the config as run (written to the run folder's ``config.yaml``); the
         point task, the default, is left out (a point run's file is as it always was)."""
         return self.model_dump(mode="json", exclude={"task"} if self.task.is_point_task else None)
-
-
-class SweepAxes(_Strict):
-    """Lists to take the cartesian product of; a missing axis keeps the base's value."""
-
-    model: list[str] | None = None
-    backend: list[ComponentSpec] | None = None
-    strategy: list[ComponentSpec] | None = None
-    parser: list[ComponentSpec] | None = None
-    conditions: list[Condition] | None = None
-    runs: list[int] | None = None
-
-    @field_validator("conditions", mode="before")
-    @classmethod
-    def _condition_names(cls, value: Any) -> Any:
-        return InstanceFilter._condition_names(value)
-
-    @field_validator("runs")
-    @classmethod
-    def _run_indices(cls, value: list[int] | None) -> list[int] | None:
-        if value is not None and any(r < 0 for r in value):
-            raise ValueError("run indices must be >= 0")
-        if value is not None and len(value) > MAX_RUNS:
-            raise ValueError(f"at most {MAX_RUNS} run indices (got {len(value)})")
-        return value
-
-
-class SweepConfig(_Strict):
-    """A sweep: a base pipeline expanded over axes (and named overrides) into cells.
-
-    ::
-
-        base: pipeline_center.yaml   # path relative to this file, or an inline pipeline mapping
-        output: runs/baselines       # one folder per cell under it, plus sweep.json
-        axes:                        # cartesian product; each value overrides the base
-          backend: [center, random, oracle]
-          strategy: [basic, spatial-cot]
-          conditions: [a, b, c]      # one cell per condition
-          runs: [0, 1, 2]            # one cell per run index
-        overrides:                   # named partial pipelines, one more axis (optional)
-          short-answers: {strategy: {name: basic, options: {max_tokens: 64}}}
-        cache: runs/cache.sqlite     # shared by every cell (default <output>/cache.sqlite)
-        cluster: local:4             # optional: each cell a task on Dask, local:N only; a
-                                     # scheduler's address is given with --cluster (docs/how-to/cluster.md)
-    """
-
-    base: str | dict[str, Any]
-    output: Path
-    axes: SweepAxes = Field(default_factory=SweepAxes)
-    overrides: dict[str, dict[str, Any]] = Field(default_factory=dict)
-    cache: CacheSpec = Field(default_factory=CacheSpec)
-    cluster: str | None = None
-
-    @field_validator("cluster")
-    @classmethod
-    def _cluster_spec(cls, value: str | None) -> str | None:
-        if value is not None:
-            try:
-                yaml_cluster_spec(value)
-            except ClusterError as exc:
-                raise ValueError(str(exc).removeprefix("--cluster ")) from None
-        return value
-
-    @field_validator("output")
-    @classmethod
-    def _output_is_a_folder(cls, value: Path) -> Path:
-        return _a_folder_path(value)

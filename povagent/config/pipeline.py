@@ -58,10 +58,11 @@ from typing import Any, Mapping
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from povagent.config.models import PipelineConfig, SweepConfig
+from povagent.config.models import PipelineConfig
 from povagent.config.overrides import REPLACED_WHOLE, deep_merge
 from povagent.config.plugin_checks import check_parser_fits, check_plugin_names, check_task_fits, checked_plugins, plugin_host_for, resolve_components
 from povagent.config.quoting import Loc
+from povagent.config.sweep_models import SweepConfig
 from povagent.config.validation_messages import validation_message
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError

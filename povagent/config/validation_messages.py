@@ -24,7 +24,8 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return [annotation]
     found: list[type[BaseModel]] = []
-    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):  # noqa: UP007 -- the runtime class of typing.Union objects, not an annotation
+    # the runtime class of typing.Union objects, not an annotation
+    if get_origin(annotation) is not None or isinstance(annotation, type(Union[int, str])):  # noqa: UP007
         for arg in get_args(annotation):
             found.extend(_models_in(arg))
     return found

@@ -231,11 +231,17 @@ def download_release(
             try:
                 snapshot = with_deadline(
                     lambda: fetch_snapshot(
-                        repo_id, asked, storage=storage, endpoint=endpoint, allow=allow, ignore=ignore, budget=budget,
+                        repo_id,
+                        asked,
+                        storage=storage,
+                        endpoint=endpoint,
+                        allow=allow,
+                        ignore=ignore,
+                        budget=budget,
                         progress=progress,
                     ),
                     budget,
-                )  # fmt: skip
+                )
             except MetadataUnavailable as unavailable:
                 snapshot = _from_cache(repo_id, asked, cache, allow, ignore, unavailable.cause)
     except HubValueError as exc:
@@ -281,9 +287,14 @@ def _from_cache(
 
     try:
         return snapshot_download(
-            repo_id, repo_type="dataset", revision=revision, cache_dir=cache, local_files_only=True,
-            allow_patterns=allow, ignore_patterns=ignore,
-        )  # fmt: skip
+            repo_id,
+            repo_type="dataset",
+            revision=revision,
+            cache_dir=cache,
+            local_files_only=True,
+            allow_patterns=allow,
+            ignore_patterns=ignore,
+        )
     except LocalEntryNotFoundError:
         if api_error is None:
             raise

@@ -399,9 +399,12 @@ def fetch_snapshot(
     headers = build_hf_headers()
     headers["Accept-Encoding"] = "identity"  # sizes and hashes are of the stored bytes
     bar = tqdm(
-        total=sum(f.size for f in missing), unit="B", unit_scale=True, desc=f"Fetching {len(missing)} files",
+        total=sum(f.size for f in missing),
+        unit="B",
+        unit_scale=True,
+        desc=f"Fetching {len(missing)} files",
         disable=not progress or not missing,
-    )  # fmt: skip
+    )
     lock = threading.Lock()
 
     def advance(n: int) -> None:

@@ -85,8 +85,9 @@ class Instance:
         """The condition, for code that only POVBench's point task runs (a point strategy, the
         official scorer); an external multiple-choice item has none and is refused here."""
         if self.condition is None:
-            raise ValueError(f"instance {self.id} is a multiple-choice item with no POVBench condition: "
-                             "ask it with the choice strategy and score it with a choice scorer")  # fmt: skip
+            raise ValueError(
+                f"instance {self.id} is a multiple-choice item with no POVBench condition: ask it with the choice strategy and score it with a choice scorer"
+            )
         return self.condition
 
     @property
@@ -94,8 +95,9 @@ class Instance:
         """The direction, for code that only POVBench's point task runs; refused as
         :attr:`povbench_condition` is for an external item."""
         if self.direction is None:
-            raise ValueError(f"instance {self.id} is a multiple-choice item with no POVBench direction: "
-                             "ask it with the choice strategy and score it with a choice scorer")  # fmt: skip
+            raise ValueError(
+                f"instance {self.id} is a multiple-choice item with no POVBench direction: ask it with the choice strategy and score it with a choice scorer"
+            )
         return self.direction
 
     @property

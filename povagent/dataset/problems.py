@@ -138,10 +138,16 @@ def _lone_surrogate(file: str, loc: tuple[Any, ...], text: str, what: str) -> li
     hit = _SURROGATE.search(text)
     if hit is None:
         return []
-    return [Problem(file, json_path(loc), (
-        f"{what} holds {_escaped(hit.group())} at character {hit.start()}, a lone surrogate: not Unicode text, "
-        "and no results, report or export file can hold it (write the character meant)"
-    ))]  # fmt: skip
+    return [
+        Problem(
+            file,
+            json_path(loc),
+            (
+                f"{what} holds {_escaped(hit.group())} at character {hit.start()}, a lone surrogate: not Unicode text, "
+                "and no results, report or export file can hold it (write the character meant)"
+            ),
+        )
+    ]
 
 
 def folder_name_problem(rel: str) -> Problem | None:
@@ -151,10 +157,14 @@ def folder_name_problem(rel: str) -> Problem | None:
     hit = _SURROGATE.search(rel)
     if hit is None:
         return None
-    return Problem(_escaped(rel), "$", (
-        f"the folder name is not UTF-8 text ({_escaped(hit.group())} at character {hit.start()}), and no results, "
-        "report or export file can hold a house id made from it: rename the folder"
-    ))  # fmt: skip
+    return Problem(
+        _escaped(rel),
+        "$",
+        (
+            f"the folder name is not UTF-8 text ({_escaped(hit.group())} at character {hit.start()}), and no results, "
+            "report or export file can hold a house id made from it: rename the folder"
+        ),
+    )
 
 
 _FRIENDLY = {

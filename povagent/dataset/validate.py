@@ -121,7 +121,11 @@ def validate_house(
                     rel = rec["image_path"]
                     if rel in first_at:
                         problems.append(
-                            Problem(log_rel, where, f"image_path {rel!r} repeats the one at $[{first_at[rel]}]; scoring uses this last record's camera, as officially")
+                            Problem(
+                                log_rel,
+                                where,
+                                f"image_path {rel!r} repeats the one at $[{first_at[rel]}]; scoring uses this last record's camera, as officially",
+                            )
                         )
                     first_at.setdefault(rel, i)
                     frame_paths.add(rel)

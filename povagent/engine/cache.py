@@ -119,7 +119,8 @@ class ResponseCache:
             _, text, u, model, latency, _ = pending
             return Response(text=text, usage=Usage(u.prompt_tokens, u.completion_tokens, u.cost_usd), latency_s=latency, model=model, cached=True)
         with self._lock:
-            row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]  # None only after close()
+            # the connection is None only after close()
+            row = self._db.execute("SELECT text, usage, model, latency_s FROM responses WHERE key = ?", (key,)).fetchone()  # type: ignore[union-attr]
             if row is None and self._read_also is not None:
                 row = self._read_other(key)
         if row is None:

@@ -63,10 +63,14 @@ def received(response: Response, redact: Callable[[str], str], *, offered_tools:
         # (a copy, as the walk copies a dataclass that is not frozen)
         usage, model = response.usage, response.model
         return Response(
-            text=redact(valid_text(response.text)), usage=Usage(usage.prompt_tokens, usage.completion_tokens, usage.cost_usd),
-            latency_s=response.latency_s, model=None if model is None else redact(valid_text(model)), retries=response.retries,
-            cached=response.cached, by_strategy=response.by_strategy,
-        )  # fmt: skip
+            text=redact(valid_text(response.text)),
+            usage=Usage(usage.prompt_tokens, usage.completion_tokens, usage.cost_usd),
+            latency_s=response.latency_s,
+            model=None if model is None else redact(valid_text(model)),
+            retries=response.retries,
+            cached=response.cached,
+            by_strategy=response.by_strategy,
+        )
     return _strings_of(response, lambda text: redact(valid_text(text)))
 
 

@@ -166,11 +166,14 @@ class Request:
         """SHA-256 of :meth:`fingerprint` as canonical JSON (stable across runs and machines),
         put together from each message's own JSON (the same bytes, each message serialized once)."""
         blob = (
-            '{"generation":' + self.generation.canonical_json
-            + ',"messages":[' + ",".join(m.fingerprint_json for m in self.messages) + "]"
+            '{"generation":'
+            + self.generation.canonical_json
+            + ',"messages":['
+            + ",".join(m.fingerprint_json for m in self.messages)
+            + "]"
             + (',"tools":' + _canonical([dict(t) for t in self.tools]) if self.tools else "")
             + "}"
-        )  # fmt: skip
+        )
         return hashlib.sha256(blob.encode()).hexdigest()
 
     def as_text(self) -> str:

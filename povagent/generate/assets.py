@@ -20,12 +20,38 @@ import numpy as np
 
 #: The paper's 31 observer/anchor categories (its appendix table), as AI2-THOR object types.
 OBSERVER_ANCHOR_CATEGORIES: tuple[str, ...] = (
-    "ArmChair", "Bed", "Chair", "ClothesDryer", "CoffeeMachine", "CoffeeTable", "CounterTop",
-    "Desk", "DeskLamp", "Desktop", "DiningTable", "Doorway", "Dresser", "Faucet", "FloorLamp",
-    "Fridge", "GarbageCan", "HandTowelHolder", "HousePlant", "Microwave", "Safe",
-    "ShelvingUnit", "SideTable", "Sink", "Sofa", "Stool", "Television", "Toaster", "Toilet",
-    "TowelHolder", "WashingMachine",
-)  # fmt: skip
+    "ArmChair",
+    "Bed",
+    "Chair",
+    "ClothesDryer",
+    "CoffeeMachine",
+    "CoffeeTable",
+    "CounterTop",
+    "Desk",
+    "DeskLamp",
+    "Desktop",
+    "DiningTable",
+    "Doorway",
+    "Dresser",
+    "Faucet",
+    "FloorLamp",
+    "Fridge",
+    "GarbageCan",
+    "HandTowelHolder",
+    "HousePlant",
+    "Microwave",
+    "Safe",
+    "ShelvingUnit",
+    "SideTable",
+    "Sink",
+    "Sofa",
+    "Stool",
+    "Television",
+    "Toaster",
+    "Toilet",
+    "TowelHolder",
+    "WashingMachine",
+)
 
 
 @dataclass(frozen=True)

@@ -93,8 +93,7 @@ class _RowFilter:
         choice += np.arange(k)
         np.take(cand.reshape(4 * k, -1), choice, axis=0, out=self.filtered[top:bottom])
 
-    def _paeth(self, k: int, rows: np.ndarray, x: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray,
-               out: np.ndarray) -> None:  # fmt: skip
+    def _paeth(self, k: int, rows: np.ndarray, x: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, out: np.ndarray) -> None:
         """PNG's paeth filter of a block: ``x`` minus whichever of left ``a``, above ``b`` and
         above-left ``c`` is nearest ``a + b - c`` (ties to ``a``, then ``b``)."""
         wide = self.wide[: k + 1]

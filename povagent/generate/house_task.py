@@ -58,9 +58,11 @@ def make_house(out: Path, options: GenerationOptions, index: int, judge: Surface
         return HouseOutcome(index, record=done, kept=True)
     try:
         record = write_house_atomically(
-            Path(out), index, options,
+            Path(out),
+            index,
+            options,
             lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
-        )  # fmt: skip
+        )
     except Exception as exc:  # the house's own failure: recorded, the other houses go on
         return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)
     return HouseOutcome(index, record=record, cpu_seconds=time.process_time() - start)
@@ -76,9 +78,11 @@ def make_house_files(options: GenerationOptions, index: int, judge: SurfaceJudge
     try:
         with tempfile.TemporaryDirectory(prefix="povagent-house-") as tmp:
             record = write_house_atomically(
-                Path(tmp), index, options,
+                Path(tmp),
+                index,
+                options,
                 lambda folder: generate_house(folder, options.seed, index, options.frames, options.with_render, judge),
-            )  # fmt: skip
+            )
             files = house_files(house_folder(Path(tmp), index))
     except Exception as exc:
         return HouseOutcome(index, failure=_failure(options, index, exc), cpu_seconds=time.process_time() - start)

@@ -50,10 +50,27 @@ INAPPROPRIATE = "inappropriate"
 
 #: Anchors whose top a 0.4 m target can rest on.
 UP_SURFACES = frozenset(
-    {"ArmChair", "Bed", "Chair", "ClothesDryer", "CoffeeTable", "CounterTop", "Desk", "DiningTable",
-     "Dresser", "Fridge", "Microwave", "Safe", "ShelvingUnit", "SideTable", "Sofa", "Stool",
-     "Toilet", "WashingMachine"}
-)  # fmt: skip
+    {
+        "ArmChair",
+        "Bed",
+        "Chair",
+        "ClothesDryer",
+        "CoffeeTable",
+        "CounterTop",
+        "Desk",
+        "DiningTable",
+        "Dresser",
+        "Fridge",
+        "Microwave",
+        "Safe",
+        "ShelvingUnit",
+        "SideTable",
+        "Sofa",
+        "Stool",
+        "Toilet",
+        "WashingMachine",
+    }
+)
 
 #: G members whose top is not a usable surface in practice (a monitor).
 _NOT_REALLY_FLAT = frozenset({"Desktop"})
@@ -122,9 +139,15 @@ def ground_truth(anchor: PlacedObject, camera: Camera, direction: str, verdict: 
     anchor_pos = np.asarray(anchor.center)
     cam = np.asarray(camera.position)
     return target_point(
-        direction, anchor_box(anchor), anchor.object_type, anchor_pos, cam,
-        verdict.verdict, verdict.surface, raw_placement=np.zeros(3),
-    )  # fmt: skip
+        direction,
+        anchor_box(anchor),
+        anchor.object_type,
+        anchor_pos,
+        cam,
+        verdict.verdict,
+        verdict.surface,
+        raw_placement=np.zeros(3),
+    )
 
 
 def create_judge(name: str, options: Mapping[str, Any] | None = None, host: PluginHost | None = None) -> SurfaceJudge:

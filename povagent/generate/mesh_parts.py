@@ -1,8 +1,9 @@
 """The primitives meshes are built from: a growing set of coloured triangles (:class:`MeshParts`),
 one object's parts in its local frame (:class:`Parts`), boxes, prisms and squashed spheres,
-and the materials the renderer shades.
+the materials the renderer shades, and the draw of a colour from a palette.
 
-What it must not do: know any furniture category (that is :mod:`povagent.generate.meshes`).
+What it must not do: know any furniture category (that is :mod:`povagent.generate.meshes`) or
+a room's walls and floors (:mod:`povagent.generate.house_shell`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,11 @@ def rgb(hex_color: str) -> tuple[float, float, float]:
     """An ``#rrggbb`` colour as floats in [0, 1]."""
     h = hex_color.lstrip("#")
     return (int(h[0:2], 16) / 255.0, int(h[2:4], 16) / 255.0, int(h[4:6], 16) / 255.0)
+
+
+def pick(rng: np.random.Generator, palette):
+    """One colour of ``palette``, drawn with the house's generator (one draw per call)."""
+    return palette[int(rng.integers(len(palette)))]
 
 
 @dataclass

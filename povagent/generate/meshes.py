@@ -1,4 +1,5 @@
-"""Triangle meshes of the house: composite furniture per category, walls, floors, ceilings.
+"""Triangle meshes of the house: composite furniture per category, placed on the rooms' shell
+(walls, floors, ceilings: :mod:`povagent.generate.house_shell`).
 
 What it is for: give every object a recognizable shape built from parts (a bed has legs, a
 frame, a mattress, a duvet, pillows and a headboard; a chair has legs, a seat and a back) that
@@ -17,22 +18,18 @@ from typing import Callable
 
 import numpy as np
 
-from povagent.generate.floorplan import WALL_HEIGHT, FloorPlan
 from povagent.generate.furnishing import DOOR_FRAME_TRIM
+from povagent.generate.house_shell import add_structure
 from povagent.generate.mesh_parts import (
-    CEILING,
     EMISSIVE,
     FABRIC,
-    FLOOR_TILE,
-    FLOOR_WOOD,
     GLOSS,
     METAL,
     PLAIN,
-    WALL,
     WOOD,
     MeshParts,
     Parts,
-    box_mesh,
+    pick,
     rgb,
 )
 from povagent.generate.scene import House, PlacedObject
@@ -46,17 +43,13 @@ STEEL, DARK_STEEL, GLASS = rgb("#b8bcc0"), rgb("#54585c"), rgb("#18222c")
 LAMP_LIGHT = rgb("#fff1c8")
 
 
-def _pick(rng: np.random.Generator, palette):
-    return palette[int(rng.integers(len(palette)))]
-
-
 #: How far the frame reaches into the opening, past the wall's cut face.
 JAMB_OVERLAP = 0.015
 
 
 # -- furniture builders: (parts, w, h, d, rng, obj) ---------------------------------------------
 def _bed(P: Parts, w, h, d, rng, obj):
-    wood, sheet = _pick(rng, WOODS), _pick(rng, BEDDING)
+    wood, sheet = pick(rng, WOODS), pick(rng, BEDDING)
     top = min(0.58, h * 0.62)
     hb = 0.07
     for x in (-w / 2 + 0.03, w / 2 - 0.09):
@@ -73,14 +66,14 @@ def _bed(P: Parts, w, h, d, rng, obj):
 
 
 def _sofa(P: Parts, w, h, d, rng, obj, seats=None):
-    cloth = _pick(rng, FABRICS)
+    cloth = pick(rng, FABRICS)
     dark = tuple(c * 0.8 for c in cloth)
     arm = min(0.18, w * 0.15)
     seat_h = min(0.45, h * 0.5)
     back = min(0.22, d * 0.25)
     for x in (-w / 2 + 0.05, w / 2 - 0.1):
         for z in (-d / 2 + 0.05, d / 2 - 0.1):
-            P.box(x, 0, z, x + 0.05, 0.08, z + 0.05, _pick(rng, WOODS), WOOD)
+            P.box(x, 0, z, x + 0.05, 0.08, z + 0.05, pick(rng, WOODS), WOOD)
     P.box(-w / 2 + arm, 0.08, -d / 2 + back, w / 2 - arm, seat_h - 0.1, d / 2 - 0.01, dark, FABRIC)
     n = seats or (3 if w > 2.0 else 2 if w > 1.3 else 1)
     cw = (w - 2 * arm) / n
@@ -104,10 +97,10 @@ def _legs(P: Parts, w, d, y1, color, material, inset=0.04, t=0.045):
 
 
 def _chair(P, w, h, d, rng, obj):
-    wood = _pick(rng, WOODS)
+    wood = pick(rng, WOODS)
     seat = min(0.47, h * 0.5)
     _legs(P, w, d, seat - 0.04, wood, WOOD, inset=0.03)
-    cushion = _pick(rng, FABRICS) if rng.random() < 0.5 else wood
+    cushion = pick(rng, FABRICS) if rng.random() < 0.5 else wood
     P.box(-w / 2, seat - 0.04, -d / 2, w / 2, seat, d / 2, cushion, FABRIC if cushion != wood else WOOD)
     for x in (-w / 2 + 0.03, w / 2 - 0.07):
         P.box(x, seat, -d / 2 + 0.02, x + 0.04, h, -d / 2 + 0.06, wood, WOOD)
@@ -116,14 +109,14 @@ def _chair(P, w, h, d, rng, obj):
 
 
 def _stool(P, w, h, d, rng, obj):
-    wood = _pick(rng, WOODS)
-    _legs(P, w * 0.8, d * 0.8, h - 0.04, _pick(rng, [wood, BLACK, STEEL]), WOOD, inset=0.02, t=0.035)
-    P.cyl(0, 0, min(w, d) / 2, h - 0.05, h, _pick(rng, [wood] + FABRICS[:3]), FABRIC)
+    wood = pick(rng, WOODS)
+    _legs(P, w * 0.8, d * 0.8, h - 0.04, pick(rng, [wood, BLACK, STEEL]), WOOD, inset=0.02, t=0.035)
+    P.cyl(0, 0, min(w, d) / 2, h - 0.05, h, pick(rng, [wood] + FABRICS[:3]), FABRIC)
     P.box(-w * 0.35, 0.22, -0.015, w * 0.35, 0.25, 0.015, wood, WOOD)
 
 
 def _table(P, w, h, d, rng, obj, shelf=False, color=None):
-    wood = color or _pick(rng, WOODS)
+    wood = color or pick(rng, WOODS)
     P.box(-w / 2, h - 0.045, -d / 2, w / 2, h, d / 2, wood, WOOD)
     _legs(P, w, d, h - 0.045, tuple(c * 0.85 for c in wood), WOOD, inset=0.05, t=0.06)
     P.box(-w / 2 + 0.05, h - 0.12, -d / 2 + 0.05, w / 2 - 0.05, h - 0.045, -d / 2 + 0.07, wood, WOOD)
@@ -141,9 +134,9 @@ def _dining_table(P, w, h, d, rng, obj):
 
 
 def _cabinet(P, w, h, d, rng, obj, rows: int, body=None, cols: int = 1, top=None):
-    body = body or _pick(rng, WOODS + [WHITE, OFFWHITE, rgb("#5d6d7e")])
+    body = body or pick(rng, WOODS + [WHITE, OFFWHITE, rgb("#5d6d7e")])
     front = tuple(min(1.0, c * 1.08) for c in body)
-    knob = _pick(rng, [STEEL, BLACK, rgb("#b08d57")])
+    knob = pick(rng, [STEEL, BLACK, rgb("#b08d57")])
     P.box(-w / 2 + 0.01, 0.0, -d / 2, w / 2 - 0.01, h - 0.03, d / 2 - 0.02, tuple(c * 0.8 for c in body), WOOD)
     P.box(-w / 2, h - 0.03, -d / 2, w / 2, h, d / 2, top or body, WOOD)
     rh = (h - 0.1) / rows
@@ -168,7 +161,7 @@ def _side_table(P, w, h, d, rng, obj):
 
 
 def _desk(P, w, h, d, rng, obj):
-    wood = _pick(rng, WOODS + [WHITE])
+    wood = pick(rng, WOODS + [WHITE])
     P.box(-w / 2, h - 0.04, -d / 2, w / 2, h, d / 2, wood, WOOD)
     pw = min(0.4, w * 0.35)
     _cabinet_like = tuple(c * 0.9 for c in wood)
@@ -182,7 +175,7 @@ def _desk(P, w, h, d, rng, obj):
 
 
 def _shelving(P, w, h, d, rng, obj):
-    wood = _pick(rng, WOODS + [WHITE, BLACK])
+    wood = pick(rng, WOODS + [WHITE, BLACK])
     t = 0.03
     P.box(-w / 2, 0, -d / 2, -w / 2 + t, h, d / 2, wood, WOOD)
     P.box(w / 2 - t, 0, -d / 2, w / 2, h, d / 2, wood, WOOD)
@@ -198,15 +191,15 @@ def _shelving(P, w, h, d, rng, obj):
             bw = float(rng.uniform(0.025, 0.05))
             bh = float(rng.uniform(0.16, min(0.3, (h - t) / n - 0.04)))
             if rng.random() < 0.8:
-                P.box(x, y + t, -d / 2 + 0.03, x + bw, y + t + bh, d / 2 - 0.04, _pick(rng, FABRICS + BEDDING[:2]), PLAIN)
+                P.box(x, y + t, -d / 2 + 0.03, x + bw, y + t + bh, d / 2 - 0.04, pick(rng, FABRICS + BEDDING[:2]), PLAIN)
             x += bw + 0.004
             if rng.random() < 0.08:
                 x += 0.15
 
 
 def _counter(P, w, h, d, rng, obj):
-    body = _pick(rng, [WHITE, OFFWHITE, rgb("#5d6d7e"), rgb("#7a5c3e"), rgb("#3f5e4a")])
-    stone = _pick(rng, [rgb("#d9d6cf"), rgb("#2b2b2b"), rgb("#bfb5a3"), rgb("#eeeeea")])
+    body = pick(rng, [WHITE, OFFWHITE, rgb("#5d6d7e"), rgb("#7a5c3e"), rgb("#3f5e4a")])
+    stone = pick(rng, [rgb("#d9d6cf"), rgb("#2b2b2b"), rgb("#bfb5a3"), rgb("#eeeeea")])
     P.box(-w / 2, 0, -d / 2, w / 2, 0.1, d / 2 - 0.08, BLACK, PLAIN)
     P.box(-w / 2, 0.1, -d / 2, w / 2, h - 0.04, d / 2 - 0.04, tuple(c * 0.8 for c in body), WOOD)
     P.box(-w / 2, h - 0.04, -d / 2, w / 2, h, d / 2, stone, FABRIC)
@@ -225,7 +218,7 @@ def _sink(P, w, h, d, rng, obj):
         P.box(-w / 2 + 0.05, h - 0.02, -d / 2 + 0.05, w / 2 - 0.05, h - 0.015, d / 2 - 0.05, DARK_STEEL, METAL)
         P.box(-w / 2 + 0.06, h - 0.015, -d / 2 + 0.06, w / 2 - 0.06, h - 0.012, d / 2 - 0.06, rgb("#3a3d40"), METAL)
         return
-    body = _pick(rng, [WHITE, rgb("#6b4f3a"), rgb("#5d6d7e"), OFFWHITE])
+    body = pick(rng, [WHITE, rgb("#6b4f3a"), rgb("#5d6d7e"), OFFWHITE])
     top = 0.85
     P.box(-w / 2 + 0.02, 0.08, -d / 2, w / 2 - 0.02, top - 0.06, d / 2 - 0.02, body, WOOD)
     P.box(-w / 2 + 0.02, 0, -d / 2, w / 2 - 0.02, 0.08, d / 2 - 0.06, BLACK, PLAIN)
@@ -237,7 +230,7 @@ def _sink(P, w, h, d, rng, obj):
 
 
 def _faucet(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, rgb("#d4d7da"), BLACK])
+    col = pick(rng, [STEEL, rgb("#d4d7da"), BLACK])
     r = min(w, d) * 0.18
     P.cyl(0, -d / 2 + r + 0.01, r * 1.4, 0, 0.02, col, METAL)
     P.cyl(0, -d / 2 + r + 0.01, r, 0, h, col, METAL)
@@ -246,7 +239,7 @@ def _faucet(P, w, h, d, rng, obj):
 
 
 def _fridge(P, w, h, d, rng, obj):
-    col = _pick(rng, [WHITE, STEEL, rgb("#2e2e30"), rgb("#d8d2c4")])
+    col = pick(rng, [WHITE, STEEL, rgb("#2e2e30"), rgb("#d8d2c4")])
     P.box(-w / 2, 0.03, -d / 2, w / 2, h, d / 2 - 0.04, col, METAL)
     P.box(-w / 2 + 0.05, 0, -d / 2, w / 2 - 0.05, 0.03, d / 2 - 0.08, BLACK, PLAIN)
     split = h * 0.66
@@ -258,7 +251,7 @@ def _fridge(P, w, h, d, rng, obj):
 
 
 def _microwave(P, w, h, d, rng, obj):
-    col = _pick(rng, [WHITE, STEEL, BLACK, DARK_STEEL])
+    col = pick(rng, [WHITE, STEEL, BLACK, DARK_STEEL])
     P.box(-w / 2, 0.01, -d / 2, w / 2, h, d / 2 - 0.01, col, METAL)
     P.box(-w / 2 + 0.03, 0.04, d / 2 - 0.01, w / 2 * 0.3, h - 0.04, d / 2, GLASS, GLOSS)
     P.box(w / 2 * 0.38, 0.04, d / 2 - 0.01, w / 2 - 0.03, h - 0.04, d / 2, BLACK, PLAIN)
@@ -269,7 +262,7 @@ def _microwave(P, w, h, d, rng, obj):
 
 
 def _toaster(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, rgb("#c0392b"), WHITE, BLACK, rgb("#e8d8b0")])
+    col = pick(rng, [STEEL, rgb("#c0392b"), WHITE, BLACK, rgb("#e8d8b0")])
     P.box(-w / 2, 0.01, -d / 2, w / 2, h - 0.006, d / 2, col, METAL)
     for x in (-w / 4 - 0.015, w / 4 - 0.015):
         P.box(x, h - 0.006, -d / 2 + 0.05, x + 0.03, h, d / 2 - 0.05, BLACK, PLAIN)
@@ -278,7 +271,7 @@ def _toaster(P, w, h, d, rng, obj):
 
 
 def _coffee_machine(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, rgb("#8b1e1e"), WHITE])
+    col = pick(rng, [BLACK, STEEL, rgb("#8b1e1e"), WHITE])
     P.box(-w / 2, 0, -d / 2, w / 2, 0.05, d / 2, col, METAL)
     P.box(-w / 2, 0.05, -d / 2, w / 2, h, -d / 2 + d * 0.45, col, METAL)
     P.box(-w / 2, h - 0.1, -d / 2 + d * 0.45, w / 2, h, d / 2, col, METAL)
@@ -308,11 +301,11 @@ def _desktop(P, w, h, d, rng, obj):
 
 
 def _lamp_shade(P, r, y0, y1, rng):
-    P.cyl(0, 0, r, y0, y1, _pick(rng, [LAMP_LIGHT, rgb("#f6e7d2"), rgb("#fbf5e6")]), EMISSIVE, sections=16)
+    P.cyl(0, 0, r, y0, y1, pick(rng, [LAMP_LIGHT, rgb("#f6e7d2"), rgb("#fbf5e6")]), EMISSIVE, sections=16)
 
 
 def _desk_lamp(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, rgb("#b08d57"), WHITE])
+    col = pick(rng, [BLACK, STEEL, rgb("#b08d57"), WHITE])
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.55, 0, 0.03, col, METAL)
     P.cyl(0, 0, 0.012, 0.03, h * 0.6, col, METAL)
@@ -320,7 +313,7 @@ def _desk_lamp(P, w, h, d, rng, obj):
 
 
 def _floor_lamp(P, w, h, d, rng, obj):
-    col = _pick(rng, [BLACK, STEEL, rgb("#b08d57")])
+    col = pick(rng, [BLACK, STEEL, rgb("#b08d57")])
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.6, 0, 0.03, col, METAL)
     P.cyl(0, 0, 0.015, 0.03, h - 0.3, col, METAL)
@@ -328,14 +321,14 @@ def _floor_lamp(P, w, h, d, rng, obj):
 
 
 def _garbage_can(P, w, h, d, rng, obj):
-    col = _pick(rng, [STEEL, BLACK, WHITE, rgb("#4d7c4a"), rgb("#7a8791")])
+    col = pick(rng, [STEEL, BLACK, WHITE, rgb("#4d7c4a"), rgb("#7a8791")])
     P.cyl(0, 0, w / 2 * 0.92, 0, h - 0.03, col, METAL, rb=d / 2 * 0.92)
     P.cyl(0, 0, w / 2, h - 0.03, h, tuple(c * 0.7 for c in col), METAL, rb=d / 2)
 
 
 def _house_plant(P, w, h, d, rng, obj):
-    pot = _pick(rng, [rgb("#b5651d"), WHITE, rgb("#3d3d3d"), rgb("#9c8b76")])
-    green = _pick(rng, [rgb("#3f7d3a"), rgb("#2e6b30"), rgb("#5a8f3e"), rgb("#4b7f52")])
+    pot = pick(rng, [rgb("#b5651d"), WHITE, rgb("#3d3d3d"), rgb("#9c8b76")])
+    green = pick(rng, [rgb("#3f7d3a"), rgb("#2e6b30"), rgb("#5a8f3e"), rgb("#4b7f52")])
     ph = h * 0.35
     r = min(w, d) / 2
     P.cyl(0, 0, r * 0.55, 0, ph, pot, PLAIN)
@@ -346,7 +339,7 @@ def _house_plant(P, w, h, d, rng, obj):
 
 
 def _safe(P, w, h, d, rng, obj):
-    col = _pick(rng, [rgb("#3a3f44"), rgb("#2b2b2b"), rgb("#6b6e70")])
+    col = pick(rng, [rgb("#3a3f44"), rgb("#2b2b2b"), rgb("#6b6e70")])
     P.box(-w / 2, 0, -d / 2, w / 2, h, d / 2 - 0.02, col, METAL)
     P.box(-w / 2 + 0.03, 0.03, d / 2 - 0.02, w / 2 - 0.03, h - 0.03, d / 2 - 0.01, tuple(c * 1.2 for c in col), METAL)
     P.disc_z(0, h / 2, min(w, h) * 0.12, d / 2 - 0.01, d / 2, STEEL, METAL)
@@ -361,7 +354,7 @@ def _toilet(P, w, h, d, rng, obj):
 
 
 def _towel(P, w, rng, drop: float):
-    towel = _pick(rng, BEDDING + [rgb("#7fb3d5"), rgb("#f5b7b1")])
+    towel = pick(rng, BEDDING + [rgb("#7fb3d5"), rgb("#f5b7b1")])
     P.box(-w / 2 + 0.05, -drop, 0.0, w / 2 - 0.05, 0.0, 0.03, towel, FABRIC, decor=True)
 
 
@@ -378,12 +371,12 @@ def _hand_towel_holder(P, w, h, d, rng, obj):
     P.box(-w / 2, h - 0.04, d / 2 - 0.02, w / 2, h, d / 2, STEEL, METAL)
     P.box(-w / 2, h * 0.2, d / 2 - 0.02, -w / 2 + 0.015, h, d / 2, STEEL, METAL)
     P.box(w / 2 - 0.015, h * 0.2, d / 2 - 0.02, w / 2, h, d / 2, STEEL, METAL)
-    towel = _pick(rng, BEDDING)
+    towel = pick(rng, BEDDING)
     P.box(-w / 2 + 0.02, h * 0.2 - 0.12, d / 2 - 0.035, w / 2 - 0.02, h - 0.04, d / 2 - 0.02, towel, FABRIC, decor=True)
 
 
 def _washer(P, w, h, d, rng, obj, door=GLASS):
-    col = _pick(rng, [WHITE, OFFWHITE, rgb("#cfd3d6")])
+    col = pick(rng, [WHITE, OFFWHITE, rgb("#cfd3d6")])
     P.box(-w / 2, 0.02, -d / 2, w / 2, h, d / 2 - 0.01, col, METAL)
     P.box(-w / 2 + 0.04, 0, -d / 2 + 0.04, w / 2 - 0.04, 0.02, d / 2 - 0.05, BLACK, PLAIN)
     P.box(-w / 2 + 0.02, h - 0.15, d / 2 - 0.01, w / 2 - 0.02, h - 0.02, d / 2, rgb("#d5d8dc"), METAL)
@@ -401,28 +394,50 @@ def _doorway(P, w, h, d, rng, obj):
     # the jambs and the head reach JAMB_OVERLAP into the opening: flush with the wall's cut
     # faces they would z-fight with them (a speckled frame) and let the baseboard ends poke out
     trim = DOOR_FRAME_TRIM + JAMB_OVERLAP
-    col = _pick(rng, [WHITE, OFFWHITE, rgb("#7a5230")]) if "entrance" not in obj.flags else rgb("#f4f1ea")
+    col = pick(rng, [WHITE, OFFWHITE, rgb("#7a5230")]) if "entrance" not in obj.flags else rgb("#f4f1ea")
     P.box(-w / 2, 0, -d / 2, -w / 2 + trim, h, d / 2, col, WOOD)
     P.box(w / 2 - trim, 0, -d / 2, w / 2, h, d / 2, col, WOOD)
     P.box(-w / 2 + trim, h - trim, -d / 2, w / 2 - trim, h, d / 2, col, WOOD)
     if "entrance" in obj.flags:
-        door = _pick(rng, WOODS[:3] + [rgb("#2c3e50"), rgb("#7b241c")])
+        door = pick(rng, WOODS[:3] + [rgb("#2c3e50"), rgb("#7b241c")])
         P.box(-w / 2 + trim, 0, -0.02, w / 2 - trim, h - trim, 0.02, door, WOOD)
         for z in (0.02, -0.045):
             P.box(w / 2 - trim - 0.12, 1.0, z, w / 2 - trim - 0.08, 1.05, z + 0.025, STEEL, METAL)
 
 
 BUILDERS: dict[str, Callable] = {
-    "ArmChair": _armchair, "Bed": _bed, "Chair": _chair, "ClothesDryer": _dryer,
-    "CoffeeMachine": _coffee_machine, "CoffeeTable": _coffee_table, "CounterTop": _counter,
-    "Desk": _desk, "DeskLamp": _desk_lamp, "Desktop": _desktop, "DiningTable": _dining_table,
-    "Doorway": _doorway, "Dresser": _dresser, "Faucet": _faucet, "FloorLamp": _floor_lamp,
-    "Fridge": _fridge, "GarbageCan": _garbage_can, "HandTowelHolder": _hand_towel_holder,
-    "HousePlant": _house_plant, "Microwave": _microwave, "Safe": _safe, "ShelvingUnit": _shelving,
-    "SideTable": _side_table, "Sink": _sink, "Sofa": _sofa, "Stool": _stool,
-    "Television": _television, "Toaster": _toaster, "Toilet": _toilet,
-    "TowelHolder": _towel_holder, "WashingMachine": _washer,
-}  # fmt: skip
+    "ArmChair": _armchair,
+    "Bed": _bed,
+    "Chair": _chair,
+    "ClothesDryer": _dryer,
+    "CoffeeMachine": _coffee_machine,
+    "CoffeeTable": _coffee_table,
+    "CounterTop": _counter,
+    "Desk": _desk,
+    "DeskLamp": _desk_lamp,
+    "Desktop": _desktop,
+    "DiningTable": _dining_table,
+    "Doorway": _doorway,
+    "Dresser": _dresser,
+    "Faucet": _faucet,
+    "FloorLamp": _floor_lamp,
+    "Fridge": _fridge,
+    "GarbageCan": _garbage_can,
+    "HandTowelHolder": _hand_towel_holder,
+    "HousePlant": _house_plant,
+    "Microwave": _microwave,
+    "Safe": _safe,
+    "ShelvingUnit": _shelving,
+    "SideTable": _side_table,
+    "Sink": _sink,
+    "Sofa": _sofa,
+    "Stool": _stool,
+    "Television": _television,
+    "Toaster": _toaster,
+    "Toilet": _toilet,
+    "TowelHolder": _towel_holder,
+    "WashingMachine": _washer,
+}
 
 
 def object_parts(obj: PlacedObject) -> Parts:
@@ -441,36 +456,6 @@ def add_object(mesh: MeshParts, obj: PlacedObject, instance: int) -> None:
     base = np.array([obj.center[0], obj.bottom, obj.center[2]])
     for verts, faces, color, material, decor in object_parts(obj).items:
         mesh.add(verts @ rot.T + base, faces, color, material, 0 if decor else instance, obj.room_id)
-
-
-# -- structure ----------------------------------------------------------------------------------
-WALL_PAINTS = [rgb(c) for c in ("#e9e4d8", "#d6dde3", "#e8dcc8", "#cfd8c7", "#e3d3d3", "#f0ede5", "#c9d3dc", "#ddd5c2")]
-FLOOR_WOODS = [rgb(c) for c in ("#a57a52", "#8d6241", "#c19a6b", "#7b5a3c", "#b08968")]
-FLOOR_TILES = [rgb(c) for c in ("#d8d4cc", "#bfc5c9", "#e6e0d4", "#9ea7ad", "#cfc6b8")]
-
-
-def add_structure(mesh: MeshParts, plan: FloorPlan, rng: np.random.Generator) -> dict[int, tuple]:
-    """Floors, ceilings and wall slabs of every room; returns each room's wall paint."""
-    paints: dict[int, tuple] = {}
-    for room in plan.rooms:
-        paints[room.room_id] = _pick(rng, WALL_PAINTS)
-        r = room.rect
-        tiled = room.room_type in ("Kitchen", "Bathroom")
-        floor = _pick(rng, FLOOR_TILES if tiled else FLOOR_WOODS)
-        quad = np.array([[r.x0, 0, r.z0], [r.x1, 0, r.z0], [r.x1, 0, r.z1], [r.x0, 0, r.z1]], dtype=float)
-        tris = np.array([[0, 1, 2], [0, 2, 3]])
-        mesh.add(quad, tris, floor, FLOOR_TILE if tiled else FLOOR_WOOD, 0, room.room_id, closed=False)
-        mesh.add(quad + [0, WALL_HEIGHT, 0], tris, (0.96, 0.96, 0.95), CEILING, 0, room.room_id, closed=False)
-    for slab in plan.slabs:
-        r = slab.rect
-        mesh.add(*box_mesh((r.x0, slab.y0, r.z0), (r.x1, slab.y1, r.z1)), paints[slab.room_id], WALL, 0, slab.room_id)
-        if slab.y0 == 0.0:
-            # a baseboard along the foot of the wall, 1 cm proud of it
-            t = 0.01
-            lo = (r.x0 - t, 0.0, r.z0 - t)
-            hi = (r.x1 + t, 0.08, r.z1 + t)
-            mesh.add(*box_mesh(lo, hi), (0.93, 0.92, 0.9), PLAIN, 0, slab.room_id)
-    return paints
 
 
 def house_mesh(house: House, rng: np.random.Generator) -> MeshParts:

@@ -57,7 +57,7 @@ from povagent.generate.mesh_parts import (
     WALL,
     WOOD,
     MeshParts,
-)  # fmt: skip
+)
 from povagent.generate.scene import House
 from povagent.generate.visible_face import VisibleFaces
 from povagent.geometry.camera import Camera
@@ -289,8 +289,7 @@ class Renderer:
         out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
         visible = self._objects if objects_only else self._visible
         # (an instance mask wants no distances: then they are left uncomputed, None)
-        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width,
-                                      want_distance=not objects_only, reach=out["tfar"])  # fmt: skip
+        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, reach=out["tfar"])
         return d, origin, tri, t  # face indices as numpy's gathers want them
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:

@@ -44,7 +44,7 @@ TARGET_POOLS: dict[str, tuple[str, ...]] = {
     "Safe": ("Book", "Watch", "KeyChain", "CellPhone"),
     "Stool": ("Book", "Cloth", "CellPhone", "Newspaper"),
     "Sink": ("Cloth", "TissueBox", "CellPhone"),
-}  # fmt: skip
+}
 
 #: How a target type reads in a sentence (variants are equally natural).
 TARGET_WORDS: dict[str, tuple[str, ...]] = {
@@ -98,6 +98,8 @@ OBJECT_NAMES: dict[str, tuple[str, ...]] = {
 #: Activities per observer type: (A, B). A never names the object; B names it as ``{obj}``.
 #: A key ``Type@RoomType`` overrides the type's list in that room.
 ACTIVITIES: dict[str, tuple[tuple[str, str], ...]] = {
+    # Laid out by hand (the formatter is told to skip it): a table, one pair per line with each
+    # type's pairs aligned under one another, so A and B read side by side.
     "ArmChair": (("reading a novel with a cup of tea", "reading a novel in the {obj} with a cup of tea"),
                  ("resting my feet after work", "resting in the {obj} after work")),
     "Bed": (("changing the sheets", "changing the sheets on the {obj}"),
@@ -225,10 +227,7 @@ def anchor_phrase(house: House, anchor: PlacedObject, rng: np.random.Generator) 
     if house.count_of_type(anchor.object_type) == 1:
         return name
     room_type = house.plan.rooms[anchor.room_id].room_type
-    same = [
-        o for o in house.objects
-        if o.object_type == anchor.object_type and house.plan.rooms[o.room_id].room_type == room_type
-    ]  # fmt: skip
+    same = [o for o in house.objects if o.object_type == anchor.object_type and house.plan.rooms[o.room_id].room_type == room_type]
     if len(same) == 1:
         return f"{name} in the {ROOM_WORDS[room_type]}"
     return None

@@ -96,8 +96,7 @@ class VisibleFaces:
     near_cells: CellMask | None
 
     @classmethod
-    def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None,
-              by_look: bool = False) -> VisibleFaces:  # fmt: skip
+    def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
         """From float32 ``vertices`` (as embree reads them), (F, 3) ``faces``, one integer
         ``looks`` per face (equal where two faces shade alike) and whether each face bounds a
         closed solid, turned outward (no ray from outside meets it from behind: a wall's foot,
@@ -149,9 +148,25 @@ class VisibleFaces:
         outline = looks if by_look else group
         watching = np.zeros(len(first), dtype=bool)
         watching[group[wf]] = True
-        return cls(group, own[first], offset[first], own, closed, edges, edge_offsets, table, mixed, overlapped,
-                   watched, edge_line, edge_along, across[wf, we], np.asarray(outline, dtype=np.int64), watching,
-                   CellMask.build(elo, ehi, EDGE_CELL))  # fmt: skip
+        return cls(
+            group,
+            own[first],
+            offset[first],
+            own,
+            closed,
+            edges,
+            edge_offsets,
+            table,
+            mixed,
+            overlapped,
+            watched,
+            edge_line,
+            edge_along,
+            across[wf, we],
+            np.asarray(outline, dtype=np.int64),
+            watching,
+            CellMask.build(elo, ehi, EDGE_CELL),
+        )
 
     @property
     def face_normals(self) -> np.ndarray:
@@ -169,9 +184,14 @@ class VisibleFaces:
         assert t is not None
         return shown, t
 
-    def _decide(self, tri: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], want_distance: bool = True,
-                near: np.ndarray | None = None,
-                ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:  # fmt: skip
+    def _decide(
+        self,
+        tri: np.ndarray,
+        o: np.ndarray,
+        d: tuple[np.ndarray, ...],
+        want_distance: bool = True,
+        near: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
         """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
         across a crease near each hit. ``near``: whether each hit lies in one of ``near_cells``
         (one that does not is near no watched edge: its exact tests are skipped)."""
@@ -213,8 +233,9 @@ class VisibleFaces:
         return shown, t, rays[crease_ray], crease_group
 
     # -- a camera's pixels ------------------------------------------------------------------
-    def decide_image(self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int,
-                     want_distance: bool = True, reach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:  # fmt: skip
+    def decide_image(
+        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, reach: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
@@ -336,6 +357,8 @@ class VisibleFaces:
 # -- helpers ----------------------------------------------------------------------------------
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise cross product of (n, 3) float64 arrays, with IEEE products and differences only."""
+    # Laid out by hand (the formatter is told to skip it): the x, y and z components one per
+    # row, as the cross product is written, so a wrong index stands out.
     return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
                      a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
                      a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)  # fmt: skip
@@ -401,8 +424,9 @@ def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf
     return apart
 
 
-def _overlapped_sides(v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray,
-                      left: np.ndarray, right: np.ndarray) -> np.ndarray:  # fmt: skip
+def _overlapped_sides(
+    v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray, left: np.ndarray, right: np.ndarray
+) -> np.ndarray:
     """(F, 2): per side of each face (0: seen against its normal, 1: along it), whether a
     differently looking coplanar face, seen from that side too, overlaps its area."""
     differs = looks[left] != looks[right]

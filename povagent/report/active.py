@@ -113,8 +113,9 @@ def comparison_rows(collection: Collection, episodes: dict[str, list[Episode]], 
         for other in passive:
             for cond in ["all", *sorted({o.condition for o in by_system[active]})]:
                 pick = (lambda o: True) if cond == "all" else (lambda o, c=cond: o.condition == c)
-                c = paired_comparison(other, [o for o in by_system[other] if pick(o)], active,
-                                      [o for o in by_system[active] if pick(o)], n_boot=n_boot, seed=seed)  # fmt: skip
+                c = paired_comparison(
+                    other, [o for o in by_system[other] if pick(o)], active, [o for o in by_system[active] if pick(o)], n_boot=n_boot, seed=seed
+                )
                 if c.n_pairs:
                     rows.append({"active": active, "passive": other, "condition": cond, **c.as_dict()})
     return rows
@@ -126,13 +127,16 @@ def usage_rows(episodes: dict[str, list[Episode]]) -> list[dict[str, Any]]:
     for system, eps in episodes.items():
         counts = [e.record.counts for e in eps]
         n = len(counts)
-        rows.append({
-            "system": system, "episodes": n,
-            "actions": dict(sorted(Counter(c.actions for c in counts).items())),
-            **{f"mean_{k}": sum(getattr(c, k) for c in counts) / n for k in ("actions", "views", "questions", "blocked_moves", "invalid_calls")},
-            "answered_in_text": sum(1 for e in eps if e.record.answer is not None and e.record.answer.via == "text"),
-            "no_answer": sum(1 for e in eps if e.record.answer is None),
-        })  # fmt: skip
+        rows.append(
+            {
+                "system": system,
+                "episodes": n,
+                "actions": dict(sorted(Counter(c.actions for c in counts).items())),
+                **{f"mean_{k}": sum(getattr(c, k) for c in counts) / n for k in ("actions", "views", "questions", "blocked_moves", "invalid_calls")},
+                "answered_in_text": sum(1 for e in eps if e.record.answer is not None and e.record.answer.via == "text"),
+                "no_answer": sum(1 for e in eps if e.record.answer is None),
+            }
+        )
     return rows
 
 
@@ -150,8 +154,7 @@ def budget_rows(episodes: dict[str, list[Episode]], n_boot: int, seed: int) -> l
     return rows
 
 
-def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | None, px: int = 280,
-                   plan: FloorPlan | None = None) -> str:  # fmt: skip
+def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | None, px: int = 280, plan: FloorPlan | None = None) -> str:
     """The episode from above: the house's floor plan (rooms and walls, when ``plan`` is given:
     the map then spans the whole house), the path, a heading at each view, the view answered
     in (red wedge), the target (green). x to the right, z up the page."""
@@ -169,8 +172,10 @@ def trajectory_svg(record: EpisodeRecord, target: tuple[float, float, float] | N
     def at(x: float, z: float) -> tuple[float, float]:
         return round((x - x0) * scale, 1), round(px - (z - z0) * scale, 1)
 
-    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{px}" height="{px}" viewBox="0 0 {px} {px}">',
-             f'<rect width="{px}" height="{px}" fill="#fafafa" stroke="#ccc"/>']  # fmt: skip
+    parts = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{px}" height="{px}" viewBox="0 0 {px} {px}">',
+        f'<rect width="{px}" height="{px}" fill="#fafafa" stroke="#ccc"/>',
+    ]
     if plan is not None:
         parts.append(floor_plan_svg(plan, at))
     path = " ".join(f"{a},{b}" for a, b in (at(c.x, c.z) for c in [record.start, *[v.camera for v in record.views]]))
@@ -217,14 +222,19 @@ def _episode_card(e: Episode, dataset: Any, out: Path) -> str:
     for v in e.record.views[:VIEWS_PER_EPISODE]:
         src = _thumbnail(e.folder, v.sha256, out)
         mark = ' class="answered"' if answered == f"view {v.n}" else ""
-        views.append(f'<figure{mark}><img src="{src}" alt="View {v.n}"><figcaption>View {v.n}</figcaption></figure>' if src
-                     else f"<figure><figcaption>View {v.n} (not in the run folder)</figcaption></figure>")  # fmt: skip
+        views.append(
+            f'<figure{mark}><img src="{src}" alt="View {v.n}"><figcaption>View {v.n}</figcaption></figure>'
+            if src
+            else f"<figure><figcaption>View {v.n} (not in the run folder)</figcaption></figure>"
+        )
     steps = ", ".join(html.escape(step_caption(s.action, s.arguments)) for s in e.record.steps[:STEPS_PER_EPISODE])
     if len(e.record.steps) > STEPS_PER_EPISODE:
         steps += html.escape(f", {ELLIPSIS} ({len(e.record.steps) - STEPS_PER_EPISODE} more steps)")
     l2 = _fmt(e.observation.l2)
-    return (f'<div class="active-episode"><h4>{html.escape(e.observation.instance_id)} · answered in {html.escape(answered)} · L2 {l2}</h4>'
-            f'{svg}<div class="views">{"".join(views)}</div><p class="muted">{steps}</p></div>')  # fmt: skip
+    return (
+        f'<div class="active-episode"><h4>{html.escape(e.observation.instance_id)} · answered in {html.escape(answered)} · L2 {l2}</h4>'
+        f'{svg}<div class="views">{"".join(views)}</div><p class="muted">{steps}</p></div>'
+    )
 
 
 def active_section(collection: Collection, dataset: Any, out: Path, n_boot: int = 2000, seed: int = 0) -> tuple[str, dict[str, Any]]:
@@ -235,34 +245,43 @@ def active_section(collection: Collection, dataset: Any, out: Path, n_boot: int 
     comparisons = comparison_rows(collection, episodes, n_boot, seed)
     usage = usage_rows(episodes)
     budgets = budget_rows(episodes, n_boot, seed)
-    parts = ['<section id="active"><h2>Active <span class="muted">(addition, not in the paper)</span></h2>',
-             '<p class="help">The <code>active</code> strategy lets a model look around the house with tool calls before it '
-             "answers (docs/how-to/active.md). Official L2 in the camera of the image answered in; each active system beside "
-             "each passive system on the same instances (difference active - passive, 95% bootstrap CI; negative: looking helped). "
-             "In Inferred (A), <code>ask</code> answers with the Stated sentence (where the speaker was) unless the strategy "
-             "ran with <code>speaker: condition</code>, which keeps the speaker to what the condition gives (in A: what they "
-             "were doing, not where): with the default, A and B nearly meet once a model asks.</p>",
-             "<table><tr><th>active</th><th>passive</th><th>condition</th><th>pairs</th><th>L2 passive</th><th>L2 active</th>"
-             "<th>difference [CI]</th><th>active better</th></tr>"]  # fmt: skip
+    parts = [
+        '<section id="active"><h2>Active <span class="muted">(addition, not in the paper)</span></h2>',
+        '<p class="help">The <code>active</code> strategy lets a model look around the house with tool calls before it '
+        "answers (docs/how-to/active.md). Official L2 in the camera of the image answered in; each active system beside "
+        "each passive system on the same instances (difference active - passive, 95% bootstrap CI; negative: looking helped). "
+        "In Inferred (A), <code>ask</code> answers with the Stated sentence (where the speaker was) unless the strategy "
+        "ran with <code>speaker: condition</code>, which keeps the speaker to what the condition gives (in A: what they "
+        "were doing, not where): with the default, A and B nearly meet once a model asks.</p>",
+        "<table><tr><th>active</th><th>passive</th><th>condition</th><th>pairs</th><th>L2 passive</th><th>L2 active</th>"
+        "<th>difference [CI]</th><th>active better</th></tr>",
+    ]
     for r in comparisons:
         d = r["mean_diff_b_minus_a"]
-        parts.append(f"<tr><td>{html.escape(r['active'])}</td><td>{html.escape(r['passive'])}</td>"
-                     f"<td>{CONDITION_LABELS.get(r['condition'], 'all')}</td><td>{r['n_pairs']}</td><td>{_fmt(r['mean_a'])}</td>"
-                     f"<td>{_fmt(r['mean_b'])}</td><td>{_fmt(d['value'], True)}{_ci(d['ci_lo'], d['ci_hi'])}</td>"
-                     f"<td>{r['b_better']} of {r['n_pairs']}</td></tr>")  # fmt: skip
+        parts.append(
+            f"<tr><td>{html.escape(r['active'])}</td><td>{html.escape(r['passive'])}</td>"
+            f"<td>{CONDITION_LABELS.get(r['condition'], 'all')}</td><td>{r['n_pairs']}</td><td>{_fmt(r['mean_a'])}</td>"
+            f"<td>{_fmt(r['mean_b'])}</td><td>{_fmt(d['value'], True)}{_ci(d['ci_lo'], d['ci_hi'])}</td>"
+            f"<td>{r['b_better']} of {r['n_pairs']}</td></tr>"
+        )
     if not comparisons:
         parts.append('<tr><td colspan="8">no passive run of the same instances in this report</td></tr>')
-    parts.append("</table><h3>Actions used</h3><table><tr><th>system</th><th>episodes</th><th>actions: episodes</th><th>mean actions</th>"
-                 "<th>views</th><th>questions</th><th>blocked moves</th><th>invalid calls</th><th>answered in text</th><th>no answer</th></tr>")  # fmt: skip
+    parts.append(
+        "</table><h3>Actions used</h3><table><tr><th>system</th><th>episodes</th><th>actions: episodes</th><th>mean actions</th>"
+        "<th>views</th><th>questions</th><th>blocked moves</th><th>invalid calls</th><th>answered in text</th><th>no answer</th></tr>"
+    )
     for u in usage:
         dist = ", ".join(f"{k}: {v}" for k, v in u["actions"].items())
-        parts.append(f"<tr><td>{html.escape(u['system'])}</td><td>{u['episodes']}</td><td>{dist}</td><td>{u['mean_actions']:.2f}</td>"
-                     f"<td>{u['mean_views']:.2f}</td><td>{u['mean_questions']:.2f}</td><td>{u['mean_blocked_moves']:.2f}</td>"
-                     f"<td>{u['mean_invalid_calls']:.2f}</td><td>{u['answered_in_text']}</td><td>{u['no_answer']}</td></tr>")  # fmt: skip
+        parts.append(
+            f"<tr><td>{html.escape(u['system'])}</td><td>{u['episodes']}</td><td>{dist}</td><td>{u['mean_actions']:.2f}</td>"
+            f"<td>{u['mean_views']:.2f}</td><td>{u['mean_questions']:.2f}</td><td>{u['mean_blocked_moves']:.2f}</td>"
+            f"<td>{u['mean_invalid_calls']:.2f}</td><td>{u['answered_in_text']}</td><td>{u['no_answer']}</td></tr>"
+        )
     parts.append("</table><h3>L2 against the action budget</h3><table><tr><th>system</th><th>budget</th><th>answered</th><th>L2 [CI]</th></tr>")
     for b in budgets:
-        parts.append(f"<tr><td>{html.escape(b['system'])}</td><td>{b['budget']}</td><td>{b['n']}</td>"
-                     f"<td>{_fmt(b['value'])}{_ci(b['ci_lo'], b['ci_hi'])}</td></tr>")  # fmt: skip
+        parts.append(
+            f"<tr><td>{html.escape(b['system'])}</td><td>{b['budget']}</td><td>{b['n']}</td><td>{_fmt(b['value'])}{_ci(b['ci_lo'], b['ci_hi'])}</td></tr>"
+        )
     parts.append("</table><h3>Trajectories</h3>")
     for system, eps in episodes.items():
         parts.append(f"<h4>{html.escape(system)}</h4>")

@@ -228,8 +228,17 @@ def _answers_signature(obs: list[Observation]) -> str:
     row digests are sorted, so nothing a row is held but 16 bytes."""
     digests = bytearray()
     for o in obs:
-        row = (o.instance_id, o.run, o.answered, None if o.l2 is None else round(o.l2, 12), o.success, o.selected_image, o.x, o.y,
-               sorted((scorer, sorted(values.items())) for scorer, values in o.metric_values.items()))  # fmt: skip
+        row = (
+            o.instance_id,
+            o.run,
+            o.answered,
+            None if o.l2 is None else round(o.l2, 12),
+            o.success,
+            o.selected_image,
+            o.x,
+            o.y,
+            sorted((scorer, sorted(values.items())) for scorer, values in o.metric_values.items()),
+        )
         digests += hashlib.blake2b(repr(row).encode(), digest_size=16).digest()
     pairs = np.frombuffer(bytes(digests), dtype=">u8").reshape(-1, 2)
     return hashlib.sha256(pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].tobytes()).hexdigest()
@@ -311,8 +320,7 @@ def _stats_for(obs: list[Observation], fill, n_boot: int, seed: int, conditions,
     system, through the one breakdown (:func:`povagent.scoring.breakdown.slices`), kept to the
     report's conditions and directions."""
     b = slices(obs, lambda sub: cell_stats(sub, fill, n_boot, seed))
-    per_cd = {f"{c}/{d}": b["per_condition_direction"][f"{c}/{d}"]
-              for c in conditions for d in directions if f"{c}/{d}" in b["per_condition_direction"]}  # fmt: skip
+    per_cd = {f"{c}/{d}": b["per_condition_direction"][f"{c}/{d}"] for c in conditions for d in directions if f"{c}/{d}" in b["per_condition_direction"]}
     return (
         b["overall"],
         {c: b["per_condition"][c] for c in conditions if c in b["per_condition"]},

@@ -83,7 +83,9 @@ class BirdsEyeScene:
 def footprint(obj: Any) -> Box2D:
     """The xz footprint of a release ``SceneObject`` (from its box's corner points)."""
     corners = np.asarray(obj.raw_metadata.axisAlignedBoundingBox.cornerPoints, dtype=float)
-    return Box2D(obj.object_type, str(obj.objectId), float(corners[:, 0].min()), float(corners[:, 2].min()), float(corners[:, 0].max()), float(corners[:, 2].max()))
+    return Box2D(
+        obj.object_type, str(obj.objectId), float(corners[:, 0].min()), float(corners[:, 2].min()), float(corners[:, 0].max()), float(corners[:, 2].max())
+    )
 
 
 def scene_for(instance: Any, house: Any, selected: Camera | None, prediction: tuple[float, float] | None) -> BirdsEyeScene:
@@ -162,16 +164,20 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         points += plan_points(scene.plan)
     page = _Frame(points)
     legend = [
-        (GT_COLOUR, "GT target"), (PRED_COLOUR, "prediction's ray to the floor"), (ANCHOR_COLOUR, "anchor"),
-        (OBSERVER_COLOUR, "observer"), ("#f9a825", "selected frame's view"),
-    ]  # fmt: skip
+        (GT_COLOUR, "GT target"),
+        (PRED_COLOUR, "prediction's ray to the floor"),
+        (ANCHOR_COLOUR, "anchor"),
+        (OBSERVER_COLOUR, "observer"),
+        ("#f9a825", "selected frame's view"),
+    ]
     if scene.path:
         legend.append((PATH_COLOUR, "active episode's path and headings"))
     if scene.plan is not None:
         legend.append((WALL_COLOUR, "walls (a gap: a doorway)"))
     legend_px = LEGEND_PX + LEGEND_ROW_PX * max(0, (len(legend) + 1) // 2 - 3)  # three rows fit in LEGEND_PX
     out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + legend_px}" viewBox="0 0 {VIEW_PX} {VIEW_PX + legend_px}" font-family="sans-serif" font-size="10">',
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{VIEW_PX}" height="{VIEW_PX + legend_px}" viewBox="0 0 {VIEW_PX} {VIEW_PX + legend_px}" '
+        'font-family="sans-serif" font-size="10">',
         f"<title>{escape(scene.title)}</title>",
         f'<rect width="{VIEW_PX}" height="{VIEW_PX}" fill="#fafafa" stroke="#ccc"/>',
     ]
@@ -213,7 +219,8 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
         dash = "" if met else ' stroke-dasharray="4 3"'
         out.append(
             f'<g id="prediction"><line x1="{_f(cx)}" y1="{_f(cy)}" x2="{_f(ex)}" y2="{_f(ey)}" stroke="{PRED_COLOUR}" stroke-width="1.5"{dash}/>'
-            f'<path d="M{_f(ex - 4)},{_f(ey - 4)}L{_f(ex + 4)},{_f(ey + 4)}M{_f(ex - 4)},{_f(ey + 4)}L{_f(ex + 4)},{_f(ey - 4)}" stroke="{PRED_COLOUR}" stroke-width="2"/></g>'
+            f'<path d="M{_f(ex - 4)},{_f(ey - 4)}L{_f(ex + 4)},{_f(ey + 4)}M{_f(ex - 4)},{_f(ey + 4)}L{_f(ex + 4)},{_f(ey - 4)}" stroke="{PRED_COLOUR}" '
+            'stroke-width="2"/></g>'
         )
     gx, gy = page(scene.target[0], scene.target[2])
     out.append(f'<circle id="target" cx="{_f(gx)}" cy="{_f(gy)}" r="5" fill="{GT_COLOUR}" stroke="#fff" stroke-width="1.5"/>')
@@ -232,8 +239,11 @@ def birds_eye_svg(scene: BirdsEyeScene) -> str:
 def _trajectory(path: tuple[tuple[float, float, float], ...], page: _Frame) -> str:
     """The episode's path (a polyline through its poses) with a heading tick at each pose."""
     at = [page(x, z) for x, z, _ in path]
-    parts = ['<g id="trajectory"><polyline points="' + " ".join(f"{_f(a)},{_f(b)}" for a, b in at)
-             + f'" fill="none" stroke="{PATH_COLOUR}" stroke-width="1.5" stroke-dasharray="3 2"/>']  # fmt: skip
+    parts = [
+        '<g id="trajectory"><polyline points="'
+        + " ".join(f"{_f(a)},{_f(b)}" for a, b in at)
+        + f'" fill="none" stroke="{PATH_COLOUR}" stroke-width="1.5" stroke-dasharray="3 2"/>'
+    ]
     for (x, z, yaw), (a, b) in zip(path, at):
         tx, ty = page(x + 0.3 * math.sin(math.radians(yaw)), z + 0.3 * math.cos(math.radians(yaw)))
         parts.append(f'<line x1="{_f(a)}" y1="{_f(b)}" x2="{_f(tx)}" y2="{_f(ty)}" stroke="{PATH_COLOUR}"/>')
@@ -250,9 +260,13 @@ def write_birds_eye(svg: str, images_dir: Path) -> str:
 
 
 def birds_eye_for_row(
-    observation: Any, instance: Any, dataset: Any, images_dir: Path, frame: Any | None,
+    observation: Any,
+    instance: Any,
+    dataset: Any,
+    images_dir: Path,
+    frame: Any | None,
     path: tuple[tuple[float, float, float], ...] = (),
-) -> str | None:  # fmt: skip
+) -> str | None:
     """The bird's-eye file of one gallery row (its hash), or ``None`` where the records cannot
     draw one (a real-world set, a house the dataset does not hold). ``path`` is an active
     episode's poses (x, z, yaw), drawn as its trajectory."""

@@ -84,8 +84,9 @@ def choice_answers(collection: Collection, sets: SetQuestions | None = None) -> 
                 if f.keys() >= CHOICE_FIELDS:
                     questions[(scorer, row.instance_id)] = (str(f["gold"]), str(f["category"] or ""))
                     chosen = None if f["chosen"] is None else str(f["chosen"])
-                    out[scorer].append(ChoiceAnswer(run.system, row.instance_id, f["correct"] is True, chosen, str(f["gold"]),
-                                                    str(f["category"] or ""), row.parser, benchmark))  # fmt: skip
+                    out[scorer].append(
+                        ChoiceAnswer(run.system, row.instance_id, f["correct"] is True, chosen, str(f["gold"]), str(f["category"] or ""), row.parser, benchmark)
+                    )
                 else:
                     unscored.append((scorer, len(out[scorer]), run))
                     out[scorer].append(ChoiceAnswer(run.system, row.instance_id, False, None, "", "", row.parser, benchmark))
@@ -132,8 +133,7 @@ def choice_tables(
             tables.append(_accuracy_table(key, named, answers, systems, read_by, n_boot, seed, baselines))
             if len(systems) > 1:
                 tables.append(_paired_table(key, named, answers, systems, read_by, n_boot, seed))
-            tables += [_confusion_table(key, named, i, system, [a for a in answers if a.system == system], read_by)
-                       for i, system in enumerate(systems)]  # fmt: skip
+            tables += [_confusion_table(key, named, i, system, [a for a in answers if a.system == system], read_by) for i, system in enumerate(systems)]
     return tables
 
 
@@ -186,10 +186,13 @@ def _accuracy_table(
             cells.append(Cell(e.value, e.lo, e.hi))
         rows.append(Row(system, cells, reference=system in baselines))  # a baseline is never bolded as best
     return Table(
-        key=f"choice_accuracy_{scorer}", title=f"Multiple-choice accuracy per category ({named})",
+        key=f"choice_accuracy_{scorer}",
+        title=f"Multiple-choice accuracy per category ({named})",
         caption=f"Correct / all questions per category (no option read = wrong), 95% bootstrap CI over questions. {read_by}",
-        row_header="System", columns=[Column(c, "rate", "higher") for c in columns], rows=rows,
-    )  # fmt: skip
+        row_header="System",
+        columns=[Column(c, "rate", "higher") for c in columns],
+        rows=rows,
+    )
 
 
 def _paired_table(scorer: str, named: str, answers: list[ChoiceAnswer], systems: list[str], read_by: str, n_boot: int, seed: int) -> Table:
@@ -204,15 +207,23 @@ def _paired_table(scorer: str, named: str, answers: list[ChoiceAnswer], systems:
         p = sign_test_p(int((d > 1e-12).sum()), int((d < -1e-12).sum()))
         rows.append(Row(f"{b} vs {a}", [Cell(len(shared)), Cell(va), Cell(vb), Cell(diff.value, diff.lo, diff.hi), Cell(p)]))
     return Table(
-        key=f"choice_paired_{scorer}", title=f"Paired accuracy differences ({named})",
-        caption=("B - A: system B's accuracy minus system A's on the questions both were asked (accuracy averaged over runs per "
-                 "question; B - A > 0 means B is better), 95% paired bootstrap CI over questions; exact sign test over questions "
-                 f"that differ. {read_by}"),
+        key=f"choice_paired_{scorer}",
+        title=f"Paired accuracy differences ({named})",
+        caption=(
+            "B - A: system B's accuracy minus system A's on the questions both were asked (accuracy averaged over runs per "
+            "question; B - A > 0 means B is better), 95% paired bootstrap CI over questions; exact sign test over questions "
+            f"that differ. {read_by}"
+        ),
         row_header="B vs A",
-        columns=[Column("Questions", "count", None), Column("Accuracy A", "rate", None), Column("Accuracy B", "rate", None),
-                 Column("B - A", "signed", None), Column("Sign test p", "p", None)],
+        columns=[
+            Column("Questions", "count", None),
+            Column("Accuracy A", "rate", None),
+            Column("Accuracy B", "rate", None),
+            Column("B - A", "signed", None),
+            Column("Sign test p", "p", None),
+        ],
         rows=rows,
-    )  # fmt: skip
+    )
 
 
 def _confusion_table(scorer: str, named: str, index: int, system: str, answers: list[ChoiceAnswer], read_by: str) -> Table:
@@ -222,9 +233,11 @@ def _confusion_table(scorer: str, named: str, index: int, system: str, answers: 
         counts[(a.gold, a.chosen if a.chosen is not None else NO_OPTION)] += 1
     golds = sorted({a.gold for a in answers})
     return Table(
-        key=f"choice_confusion_{scorer}_{index + 1}", title=f"Chosen vs gold labels: {system} ({named})",
+        key=f"choice_confusion_{scorer}_{index + 1}",
+        title=f"Chosen vs gold labels: {system} ({named})",
         caption=f"Rows: the gold label; columns: the label chosen (every run's row counts once). {read_by}",
         row_header="Gold",
         columns=[Column(label, "count", None) for label in labels] + [Column(NO_OPTION, "count", None)],
-        rows=[Row(g, [Cell(counts[(g, c)]) for c in labels + [NO_OPTION]]) for g in golds], show_ci=False,
-    )  # fmt: skip
+        rows=[Row(g, [Cell(counts[(g, c)]) for c in labels + [NO_OPTION]]) for g in golds],
+        show_ci=False,
+    )

@@ -221,9 +221,29 @@ def write_comparison_html(cmp: RunComparison, out: str | Path, dataset: Any = No
     answers = write_answer_chunks(entries, out, keys=("a", "a_b", "tr", "tr_b"))
     cols = [Column("n", "count", None), Column("Mean A", "l2", None), Column("Mean B", "l2", None), Column("B - A", "signed", None),
             Column("B better", "count", None), Column("A better", "count", None), Column("Wilcoxon p", "p", None), Column("Sign p", "p", None)]
-    table = Table("compare", "Paired comparison", f"A = {cmp.a_name}; B = {cmp.b_name}. Official L2 on instances both answered (averaged over runs); B - A < 0 means B is better; 95% bootstrap CI.", "Subset", cols)
+    table = Table(
+        "compare",
+        "Paired comparison",
+        f"A = {cmp.a_name}; B = {cmp.b_name}. Official L2 on instances both answered (averaged over runs); B - A < 0 means B is better; 95% bootstrap CI.",
+        "Subset",
+        cols,
+    )
     for name, p in [("All", cmp.overall)] + [(condition_label(c), p) for c, p in cmp.per_condition.items()]:
-        table.rows.append(Row(name, [Cell(p.n_pairs), Cell(p.mean_a), Cell(p.mean_b), Cell(p.diff.value, p.diff.lo, p.diff.hi), Cell(p.b_better), Cell(p.a_better), Cell(p.wilcoxon_p), Cell(p.sign_p)]))
+        table.rows.append(
+            Row(
+                name,
+                [
+                    Cell(p.n_pairs),
+                    Cell(p.mean_a),
+                    Cell(p.mean_b),
+                    Cell(p.diff.value, p.diff.lo, p.diff.hi),
+                    Cell(p.b_better),
+                    Cell(p.a_better),
+                    Cell(p.wilcoxon_p),
+                    Cell(p.sign_p),
+                ],
+            )
+        )
     body = '<section id="tables"><h2>Summary</h2>' + to_html(table) + "</section>"
     page = render_page(
         f"povagent compare: {cmp.b_name} vs {cmp.a_name}",

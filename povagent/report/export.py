@@ -38,6 +38,8 @@ LONG_CSV_FILE = "all_runs_long.csv"
 
 #: The columns of the official long CSV, in its order (notebooks index them by name).
 LONG_CSV_COLUMNS: tuple[str, ...] = (
+    # Laid out by hand (the formatter is told to skip it): one line per group of columns that
+    # belong together (the run, the instance, the prediction, the truth, the errors, the files).
     "model", "run_id", "eval_dir",
     "pair_id", "house_id", "direction", "type",
     "sentence",

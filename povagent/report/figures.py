@@ -60,19 +60,28 @@ def declared_metric_figures(a: Analysis) -> dict[str, tuple[str, str]]:
             if len(figs) >= MAX_METRIC_PLOTS:
                 return figs
             series = [
-                (s.system, [*(by_system[s.system]["per_condition"].get(c, {}).get(m.name) for c in a.conditions),
-                            by_system[s.system]["overall"][m.name]], s.reference)
-                for s in a.systems if s.system in by_system
-            ]  # fmt: skip
+                (
+                    s.system,
+                    [*(by_system[s.system]["per_condition"].get(c, {}).get(m.name) for c in a.conditions), by_system[s.system]["overall"][m.name]],
+                    s.reference,
+                )
+                for s in a.systems
+                if s.system in by_system
+            ]
             better = "higher" if m.better == "higher" else "lower"
             # only the groupings the rows have: a set without conditions is plotted overall
             grouped = " by condition" if a.conditions else ""
             figs[f"metric_{_safe_name(scorer)}_{_safe_name(m.name)}"] = (
                 f"{m.label} ({scorer}){grouped and grouped + ' and'} overall; {better} is better (whiskers: 95% bootstrap CI)."
                 + _baseline_note(a, "hatched bars"),
-                grouped_bars(f"{m.label}{grouped}", [*(condition_label(c) for c in a.conditions), "Overall"], series,
-                             y_label=m.label.lower(), y_limit=1.0 if m.aggregation == "rate" else None),
-            )  # fmt: skip
+                grouped_bars(
+                    f"{m.label}{grouped}",
+                    [*(condition_label(c) for c in a.conditions), "Overall"],
+                    series,
+                    y_label=m.label.lower(),
+                    y_limit=1.0 if m.aggregation == "rate" else None,
+                ),
+            )
     return figs
 
 

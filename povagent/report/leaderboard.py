@@ -71,8 +71,11 @@ def _entries(collection: Collection, analysis: Analysis, choice_scorers: Sequenc
         if scorer is None:
             continue
         seen.add(run.system)
-        out.append(Entry(run.entrant or run.system, run.benchmark or "(set not named)", run.system, scorer, _headline(scorer, analysis, host),
-                         run.axes.get("parser", "")))  # fmt: skip
+        out.append(
+            Entry(
+                run.entrant or run.system, run.benchmark or "(set not named)", run.system, scorer, _headline(scorer, analysis, host), run.axes.get("parser", "")
+            )
+        )
     return out
 
 
@@ -113,14 +116,27 @@ def _leaderboard_table(entries: list[Entry], analysis: Analysis, collection: Col
     numbers: dict[tuple[str, str, str], dict[str, None]] = {}
     for e in entries:
         numbers.setdefault((e.benchmark, e.scorer, e.metric), {})[e.parser or "unknown"] = None
-    said = "; ".join(f"{b}: {_metric_label(analysis, s, m)} ({s}), read by {', '.join(f'`{p}`' for p in parsers)}"
-                     for (b, s, m), parsers in sorted(numbers.items()))  # fmt: skip
-    caption = (f"Each set's own number with its 95% bootstrap CI over questions: {said}. A row is one system, a column one set; "
-               "runs of different sets are never pooled, and an empty cell is a set the system was not asked. "
-               + ("The same replies read by every rule that reads a choice answer: 'the harness readings', folded "
-                  "under this table on the report's page and a table of its own in the exports." if linked else ""))  # fmt: skip
-    return Table(key=LEADERBOARD, title="Leaderboard: systems x sets", caption=caption, row_header="System",
-                 columns=[Column(b, "rate", "higher") for b in benchmarks], rows=rows)  # fmt: skip
+    said = "; ".join(
+        f"{b}: {_metric_label(analysis, s, m)} ({s}), read by {', '.join(f'`{p}`' for p in parsers)}" for (b, s, m), parsers in sorted(numbers.items())
+    )
+    caption = (
+        f"Each set's own number with its 95% bootstrap CI over questions: {said}. A row is one system, a column one set; "
+        "runs of different sets are never pooled, and an empty cell is a set the system was not asked. "
+        + (
+            "The same replies read by every rule that reads a choice answer: 'the harness readings', folded "
+            "under this table on the report's page and a table of its own in the exports."
+            if linked
+            else ""
+        )
+    )
+    return Table(
+        key=LEADERBOARD,
+        title="Leaderboard: systems x sets",
+        caption=caption,
+        row_header="System",
+        columns=[Column(b, "rate", "higher") for b in benchmarks],
+        rows=rows,
+    )
 
 
 def _metric_label(analysis: Analysis, scorer: str, metric: str) -> str:
@@ -176,14 +192,19 @@ def _readings_table(entries: list[Entry], observations: Sequence[Observation], d
     if not rows:
         return None
     return Table(
-        key=READINGS, title="Leaderboard: the harness readings",
-        caption=("Each system's replies on each set read again by every registered rule that reads a choice answer "
-                 "(the harnesses' and the sets' own), against the question's options: correct / all questions, a reply "
-                 "a rule reads no option in counting as wrong, 95% bootstrap CI over questions. A reading beside the "
-                 "leaderboard, not the runs' stored numbers; a column per rule: " + "; ".join(f"`{n}` ({_description(host, n)})" for n in readers) + "."),
-        row_header="System · set", columns=[Column("Questions", "count", None)] + [Column(n, "rate", None) for n in readers], rows=rows,
+        key=READINGS,
+        title="Leaderboard: the harness readings",
+        caption=(
+            "Each system's replies on each set read again by every registered rule that reads a choice answer "
+            "(the harnesses' and the sets' own), against the question's options: correct / all questions, a reply "
+            "a rule reads no option in counting as wrong, 95% bootstrap CI over questions. A reading beside the "
+            "leaderboard, not the runs' stored numbers; a column per rule: " + "; ".join(f"`{n}` ({_description(host, n)})" for n in readers) + "."
+        ),
+        row_header="System · set",
+        columns=[Column("Questions", "count", None)] + [Column(n, "rate", None) for n in readers],
+        rows=rows,
         folded_under=LEADERBOARD,
-    )  # fmt: skip
+    )
 
 
 def _description(host: Any, parser: str) -> str:

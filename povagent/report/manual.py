@@ -97,8 +97,11 @@ def _success_table(judgements: list[Judgement]) -> Table:
         overall = tally[(system, "")]
         cells += [Cell(float(overall["success"] + overall["failure"])), Cell(float(overall["cant_tell"]))]
         rows.append(Row(system, cells))
-    columns = [Column(c, "rate", "higher") for c in conditions] + [Column("All", "rate", "higher"), Column("Judged", "count", None),
-                                                                    Column("Can't tell", "count", None)]  # fmt: skip
+    columns = [Column(c, "rate", "higher") for c in conditions] + [
+        Column("All", "rate", "higher"),
+        Column("Judged", "count", None),
+        Column("Can't tell", "count", None),
+    ]
     judges = sorted({j.judge for j in judgements})
     return Table(
         "manual_success", "Manual assessment: success judged by hand",

@@ -137,7 +137,13 @@ def ablation_table(a: Analysis) -> Table | None:
 
 def direction_table(a: Analysis) -> Table:
     """Systems x directions (pooled over conditions), official mean L2."""
-    t = Table("per_direction", "Error by direction", f"{PROTOCOL} Pooled over conditions. {bold_note(a)}", row_header(a), [Column(d.capitalize()) for d in a.directions])
+    t = Table(
+        "per_direction",
+        "Error by direction",
+        f"{PROTOCOL} Pooled over conditions. {bold_note(a)}",
+        row_header(a),
+        [Column(d.capitalize()) for d in a.directions],
+    )
     for s in scored_systems(a, "normalized_l2"):
         t.rows.append(Row(s.system, [_cell(_pick(s.by_direction, d, cell_error)) for d in a.directions], s.reference))
     return t
@@ -330,16 +336,16 @@ def declared_metric_tables(a: Analysis) -> list[Table]:
     return tables
 
 
-def _declared_metric_table(a: Analysis, scorer: str, m: Any, by_system: dict[str, Any], slice_key: str, word: str,
-                           keys: list[tuple[str, str]]) -> Table:  # fmt: skip
+def _declared_metric_table(a: Analysis, scorer: str, m: Any, by_system: dict[str, Any], slice_key: str, word: str, keys: list[tuple[str, str]]) -> Table:
     """One declared metric per system: a column per slice of ``slice_key``, then overall."""
     kind: Kind = "rate" if m.aggregation == "rate" else "l2"
     columns = [Column(text, kind, m.better) for _, text in keys] + [Column("Overall", kind, m.better)]
     safe = re.sub(r"[^A-Za-z0-9_]+", "_", f"{scorer}_{m.name}")
     key = f"metric_{safe}" + ("" if slice_key == "per_condition" else "_by_direction")
     better = "higher" if m.better == "higher" else "lower"
-    caption = (f"{m.caption} Scorer {scorer}; {better} is better; per {word} and overall, pooling every run's rows; "
-               f"95% bootstrap CIs in brackets. {bold_note(a)}")  # fmt: skip
+    caption = (
+        f"{m.caption} Scorer {scorer}; {better} is better; per {word} and overall, pooling every run's rows; 95% bootstrap CIs in brackets. {bold_note(a)}"
+    )
     title = f"{m.label} ({scorer})" + ("" if slice_key == "per_condition" else " by direction")
     t = Table(key, title, caption, row_header(a), columns)
     for s in a.systems:

@@ -210,7 +210,10 @@ def grouped_bars(
     def y(v: float) -> float:
         return top + plot_h * (1 - v / y_max)
 
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
+        f'aria-label="{_e(title)}">'
+    ]
     out.append(_hatch_defs(styles, uid))
     out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
     out += legend
@@ -234,7 +237,10 @@ def grouped_bars(
             )
             cx = x + (bw - 2) / 2
             if e.lo is not None and e.hi is not None:
-                out.append(f'<path d="M{cx:.1f} {y(e.lo):.1f}V{y(e.hi):.1f}M{cx - 3:.1f} {y(e.lo):.1f}h6M{cx - 3:.1f} {y(e.hi):.1f}h6" stroke="#222" stroke-width="1" fill="none"/>')
+                out.append(
+                    f'<path d="M{cx:.1f} {y(e.lo):.1f}V{y(e.hi):.1f}M{cx - 3:.1f} {y(e.lo):.1f}h6M{cx - 3:.1f} {y(e.hi):.1f}h6" stroke="#222" stroke-width="1" '
+                    'fill="none"/>'
+                )
             # the marker sits on the bar's top: a bar of height 0 (the oracle) is still seen
             out.append(marker(styles[s], cx, y(e.value), min(4.5, max(2.5, (bw - 2) / 2.4))))
         out.append(f'<text x="{left + g * gw + gw / 2:.1f}" y="{height - bottom + 16}" font-size="11" text-anchor="middle">{_e(name)}</text>')
@@ -265,7 +271,10 @@ def scatter(
     def py(v: float) -> float:
         return pad_t + plot * (1 - min(1.0, max(0.0, v)))
 
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {size} {height}" width="{size}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {size} {height}" width="{size}" height="{height}" {FONT} role="img" '
+        f'aria-label="{_e(title)}">'
+    ]
     out.append(_fitted_text(title, 8, 18, size - 12, 13))
     out += legend
     out.append(f'<rect x="{pad_l}" y="{pad_t}" width="{plot}" height="{plot}" fill="none" stroke="#999"/>')
@@ -323,7 +332,10 @@ def histogram(
     def y(v: float) -> float:
         return top + plot_h * (1 - v / y_max)
 
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
+        f'aria-label="{_e(title)}">'
+    ]
     out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
     out += legend
     for k in range(6):
@@ -396,17 +408,20 @@ def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], c
                 continue
             w = plot_w * share
             tip = f"{bar.group} · {bar.label}: {part} {100 * share:.1f}%"
-            rect = (f'<rect x="{x:.1f}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{col}" data-part="{_e(part)}">'
-                    f"<title>{_e(tip)}</title></rect>")  # fmt: skip
+            rect = f'<rect x="{x:.1f}" y="{y}" width="{w:.1f}" height="{bar_h}" fill="{col}" data-part="{_e(part)}"><title>{_e(tip)}</title></rect>'
             if w >= 34:
-                rect += f'<text x="{x + w / 2:.1f}" y="{y + bar_h - 4}" font-size="10" text-anchor="middle" fill="#fff" pointer-events="none">{100 * share:.0f}%</text>'
+                rect += (f'<text x="{x + w / 2:.1f}" y="{y + bar_h - 4}" font-size="10" text-anchor="middle" fill="#fff" '
+                         f'pointer-events="none">{100 * share:.0f}%</text>')
             link = bar.links.get(part)
             body.append(f'<a href="{_e(link)}">{rect}</a>' if link else rect)
             x += w
         y += bar_h + gap
     y = max(y, group_end)
     height = y + 30
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" aria-label="{_e(title)}">']
+    out = [
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
+        f'aria-label="{_e(title)}">'
+    ]
     out.append(_fitted_text(title, 8, 18, width - 12, 13))
     out += legend
     for k in range(0, 101, 25):

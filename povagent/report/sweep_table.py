@@ -100,12 +100,14 @@ def sweep_table(
             continue
         cell = s.overall
         total = s.rows.total if s.rows is not None else cell.n_total
-        rows.append([
-            name,
-            mean_l2(cell),
-            percent(cell.response_rate),
-            f"{cell.n} / {total}",
-            *(official_cells(s, repair_changed) if with_official else ()),
-            *(("-",) if with_success else ()),
-        ])  # fmt: skip
+        rows.append(
+            [
+                name,
+                mean_l2(cell),
+                percent(cell.response_rate),
+                f"{cell.n} / {total}",
+                *(official_cells(s, repair_changed) if with_official else ()),
+                *(("-",) if with_success else ()),
+            ]
+        )
     return [("cell", "label")] + [(h, "number") for h in headers], rows

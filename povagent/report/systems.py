@@ -81,7 +81,12 @@ def simulation_label(options: Any) -> str:
     """How reports name a ``simulated`` backend: ``simulation (sigma 10 px, wrong furniture 0.2)``,
     its noise options that are set, so a reader never mistakes it for a model."""
     opts = options if isinstance(options, dict) else {}
-    names = (("pixel_sigma", "sigma {} px"), ("miss_rate", "miss {}"), ("wrong_furniture_rate", "wrong furniture {}"), ("wrong_surface_rate", "wrong surface {}"))
+    names = (
+        ("pixel_sigma", "sigma {} px"),
+        ("miss_rate", "miss {}"),
+        ("wrong_furniture_rate", "wrong furniture {}"),
+        ("wrong_surface_rate", "wrong surface {}"),
+    )
     parts = [text.format(opts[k]) for k, text in names if opts.get(k)]
     return "simulation (" + (", ".join(parts) or "no noise") + ")"
 
@@ -219,4 +224,15 @@ def assign_systems(runs: Sequence[NamedRun], *, pool: bool = False) -> list[Pool
     return poolings
 
 
-__all__ = ["AXIS_ORDER", "LABEL_JOIN", "NON_SYSTEM_AXES", "Pooling", "assign_systems", "axis_labels", "config_label", "planted_label", "set_name", "simulation_label"]
+__all__ = [
+    "AXIS_ORDER",
+    "LABEL_JOIN",
+    "NON_SYSTEM_AXES",
+    "Pooling",
+    "assign_systems",
+    "axis_labels",
+    "config_label",
+    "planted_label",
+    "set_name",
+    "simulation_label",
+]

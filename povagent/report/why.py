@@ -129,8 +129,10 @@ def _relation_table(systems: list[SystemStats], directions: list[str]) -> str:
                 l2 = here.get("official_mean_l2")
                 tds.append(f'<td data-dir="{d}">{_pct(here.get("relation_success"))} <span class="ci">L2 {"--" if l2 is None else f"{l2:.3f}"}</span></td>')
             label = f"{s.system} · {condition_label(c)}"
-            rows.append(f'<tr data-system="{html.escape(s.system)}" data-cond="{c}"><th scope="row">{html.escape(label)}</th>'
-                        f'<td>{_pct(cell.get("relation_success"))}</td>{"".join(tds)}</tr>')  # fmt: skip
+            rows.append(
+                f'<tr data-system="{html.escape(s.system)}" data-cond="{c}"><th scope="row">{html.escape(label)}</th>'
+                f"<td>{_pct(cell.get('relation_success'))}</td>{''.join(tds)}</tr>"
+            )
     return (
         '<div class="table-box"><table class="results" id="table-relation"><caption>Relation-consistent success: the share '
         "of answered rows whose point lands where a valid 0.4 m target could stand, beside the official mean L2 of the same "
@@ -144,10 +146,12 @@ def why_section(a: Analysis, figure: tuple[str, str] | None) -> str:
     systems = _diagnosed(a)
     if not systems:
         return ""
-    parts = ['<section id="why"><h2>Why it fails <span class="muted">(addition, not in the paper)</span></h2>',
-             '<p class="help">From the <code>diagnose</code> and <code>relation</code> scores of the rows (docs/how-to/why-models-fail.md). '
-             "The gallery filters by failure step (<code>step=viewpoint</code> in its address) and draws the egocentric and "
-             "mirrored targets beside the ground truth when asked (<code>cf=1</code>).</p>"]  # fmt: skip
+    parts = [
+        '<section id="why"><h2>Why it fails <span class="muted">(addition, not in the paper)</span></h2>',
+        '<p class="help">From the <code>diagnose</code> and <code>relation</code> scores of the rows (docs/how-to/why-models-fail.md). '
+        "The gallery filters by failure step (<code>step=viewpoint</code> in its address) and draws the egocentric and "
+        "mirrored targets beside the ground truth when asked (<code>cf=1</code>).</p>",
+    ]
     if figure is not None:
         caption, svg = figure
         parts.append(f'<figure id="fig-{FIGURE}">{svg}<figcaption>{html.escape(caption)}</figcaption></figure>')

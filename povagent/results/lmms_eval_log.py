@@ -159,15 +159,34 @@ def _reply(record: Any, where: str) -> LoggedReply | tuple[str, str]:
     options = options_in_prompt(prompt) if isinstance(prompt, str) else ()
     number = gold_number(target) if gold is None and isinstance(target, str) and not options else None
     if number is not None and isinstance(target, str):  # a numerical question (VSI-Bench's): no options, the target a number
-        return LoggedReply(item=str(doc_id), where=where, reply=reply, options=(), gold=target.strip(), category=_metric_field(record, CATEGORY_KEYS),
-                           main_category=_metric_field(record, MAIN_CATEGORY_KEYS), question_id=str(doc_id), filtered=filtered, gold_number=number)  # fmt: skip
+        return LoggedReply(
+            item=str(doc_id),
+            where=where,
+            reply=reply,
+            options=(),
+            gold=target.strip(),
+            category=_metric_field(record, CATEGORY_KEYS),
+            main_category=_metric_field(record, MAIN_CATEGORY_KEYS),
+            question_id=str(doc_id),
+            filtered=filtered,
+            gold_number=number,
+        )
     if gold is None:
         return f"{where}.target", f"{str(target)[:60]!r} names no option label A-Z (nor a number, with no options in the prompt); record left out"
     options = with_gold(options or _doc_options(doc), gold)
     if gold not in {label for label, _ in options}:
-        return f"{where}.target", f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out"
+        return (
+            f"{where}.target",
+            f"the gold label {gold!r} is not among the options the prompt lists ({', '.join(label for label, _ in options)}); record left out",
+        )
     return LoggedReply(
-        item=str(doc_id), where=where, reply=reply, options=options, gold=gold,
-        category=_metric_field(record, CATEGORY_KEYS), main_category=_metric_field(record, MAIN_CATEGORY_KEYS),
-        question_id=_metric_field(record, ("qid",)) or str(doc_id), filtered=filtered,
-    )  # fmt: skip
+        item=str(doc_id),
+        where=where,
+        reply=reply,
+        options=options,
+        gold=gold,
+        category=_metric_field(record, CATEGORY_KEYS),
+        main_category=_metric_field(record, MAIN_CATEGORY_KEYS),
+        question_id=_metric_field(record, ("qid",)) or str(doc_id),
+        filtered=filtered,
+    )

@@ -6,9 +6,9 @@ the JSON text it is about to write to :func:`check_output_text`. With ``POVAGENT
 environment the JSON is validated against the shipped schema file and a mismatch raises
 :class:`OutputSchemaError` naming the file, the JSON path and what is wrong, before anything is
 written. A row's typed prediction (``prediction.value``) is checked likewise against its answer
-type's ``value_schema`` when the score step makes it (:func:`check_answer_value`). The test suite sets the variable for itself and for every process it starts, so every
-such file any test makes is checked; a user's run does not pay for it (one environment lookup
-per call).
+type's ``value_schema`` when the score step makes it (:func:`check_answer_value`). The test
+suite sets the variable for itself and for every process it starts, so every such file any test
+makes is checked; a user's run does not pay for it (one environment lookup per call).
 """
 
 from __future__ import annotations

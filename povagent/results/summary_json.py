@@ -4,7 +4,8 @@ Summaries aggregate whatever the rows hold, and a row may hold NaN or an infinit
 answered ``NaN``, a scorer's margin from it). JSON has no such numbers: Python's ``json`` writes
 ``NaN`` (which strict readers refuse) or, with ``allow_nan=False``, raises half-way through a
 report. Every summary file (a run's and a sweep's ``summary.json``, the report's, ``compare.json``)
-is written as :func:`summary_json_text`, which writes those numbers as ``null`` ("no number"). This module never decides what a summary holds; it only writes one.
+is written as :func:`summary_json_text`, which writes those numbers as ``null`` ("no number").
+This module never decides what a summary holds; it only writes one.
 """
 
 from __future__ import annotations

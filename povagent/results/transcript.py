@@ -32,9 +32,17 @@ class RowTranscript:
     last: Request | None = None
 
     def record(
-        self, request: Request, raw: str | None, *, latency_s: float = 0.0, prompt_tokens: int | None = None,
-        completion_tokens: int | None = None, cost_usd: float | None = None, retries: int = 0, cached: bool = False,
-    ) -> None:  # fmt: skip
+        self,
+        request: Request,
+        raw: str | None,
+        *,
+        latency_s: float = 0.0,
+        prompt_tokens: int | None = None,
+        completion_tokens: int | None = None,
+        cost_usd: float | None = None,
+        retries: int = 0,
+        cached: bool = False,
+    ) -> None:
         """Record an exchange: ``request``, the ``raw`` answer to it, and what it cost."""
         last = self.last
         n = len(last.messages) if last is not None else 0
@@ -44,11 +52,20 @@ class RowTranscript:
         # out would quietly take its default); validating again cost ~0.1 ms a request.
         self.exchanges.append(
             construct(
-                ExchangeRecord, request_hash=request.content_hash(), image_hashes=messages_images(added), prompt=messages_text(added),
-                prompt_continues=continues, raw=raw, latency_s=latency_s, prompt_tokens=prompt_tokens,
-                completion_tokens=completion_tokens, cost_usd=cost_usd, retries=retries, cached=cached,
+                ExchangeRecord,
+                request_hash=request.content_hash(),
+                image_hashes=messages_images(added),
+                prompt=messages_text(added),
+                prompt_continues=continues,
+                raw=raw,
+                latency_s=latency_s,
+                prompt_tokens=prompt_tokens,
+                completion_tokens=completion_tokens,
+                cost_usd=cost_usd,
+                retries=retries,
+                cached=cached,
             )
-        )  # fmt: skip
+        )
         self.last = request
 
 

@@ -95,8 +95,10 @@ def read_vlmevalkit_predictions(file: Path) -> HarnessLog:
     if header is None:
         raise PredictionsError(f"{file}: holds no header row (a VLMEvalKit prediction file has {', '.join(REQUIRED)})")
     if thought:
-        log.notes.append(f"rows keeping reasoning in a thinking column: {thought} (VLMEvalKit's SPLIT_THINK); prediction, what every rule "
-                         "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would")  # fmt: skip
+        log.notes.append(
+            f"rows keeping reasoning in a thinking column: {thought} (VLMEvalKit's SPLIT_THINK); prediction, what every rule "
+            "reads here, is the text after </think>, so a rule that reads the whole reply as written sees less than it would"
+        )
     return log
 
 
@@ -198,13 +200,23 @@ def _reply(row: dict[str, Any], where: str) -> LoggedReply | tuple[str, str]:
     main = next((_text(row[c]) for c in MAIN_CATEGORY_COLUMNS if _text(row.get(c))), "")
     number = gold_number(answer) if gold is None and not options else None
     if number is not None:  # a numerical question (VSI-Bench's): no options, the answer a number
-        return LoggedReply(item=index, where=where, reply=reply, options=(), gold=answer, category=category, main_category=main,
-                           question_id=_text(row.get("qid")) or index, gold_number=number)  # fmt: skip
+        return LoggedReply(
+            item=index,
+            where=where,
+            reply=reply,
+            options=(),
+            gold=answer,
+            category=category,
+            main_category=main,
+            question_id=_text(row.get("qid")) or index,
+            gold_number=number,
+        )
     if gold is None:
         unread = "names no option label A-Z" if options else "is neither an option label A-Z nor a number (the row lists no options)"
         return f"{where}.answer", f"{answer[:60]!r} {unread}; row left out"
     options = with_gold(options, gold)
     if gold not in {label for label, _ in options}:
         return f"{where}.answer", f"the gold label {gold!r} is not among the row's options ({', '.join(label for label, _ in options)}); row left out"
-    return LoggedReply(item=index, where=where, reply=reply, options=options, gold=gold, category=category,
-                       main_category=main, question_id=_text(row.get("qid")) or index)  # fmt: skip
+    return LoggedReply(
+        item=index, where=where, reply=reply, options=options, gold=gold, category=category, main_category=main, question_id=_text(row.get("qid")) or index
+    )

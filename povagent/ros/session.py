@@ -274,7 +274,9 @@ class GroundingSession:
             return CommandResult(status=CommandStatus.BAD_INPUT, reason=f"the command is {len(command):,} characters long (at most {MAX_COMMAND_CHARS:,})",
                                  **{**base, "command": command[:200] + "..."})
         if not frames:
-            return CommandResult(status=CommandStatus.NO_KEYFRAMES, reason="no frame has been kept yet (images, camera_info and transforms are all needed)", **base)
+            return CommandResult(
+                status=CommandStatus.NO_KEYFRAMES, reason="no frame has been kept yet (images, camera_info and transforms are all needed)", **base
+            )
         try:
             # each keyframe's shown frame: what an earlier command computed of it is reused
             loc = self.locate(command, [f.shown for f in frames], [f.camera for f in frames], [f.depth for f in frames])

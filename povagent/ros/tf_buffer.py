@@ -108,7 +108,12 @@ class TransformBuffer:
 
         A transform with NaN is :class:`TransformProblem` and none of the message is added."""
         checked = [
-            (t.header.frame_id, t.child_frame_id, stamp_ns(t.header.stamp), RigidTransform.from_message(t.transform, f"transform {t.header.frame_id} -> {t.child_frame_id}"))
+            (
+                t.header.frame_id,
+                t.child_frame_id,
+                stamp_ns(t.header.stamp),
+                RigidTransform.from_message(t.transform, f"transform {t.header.frame_id} -> {t.child_frame_id}"),
+            )
             for t in msg.transforms
         ]
         for parent, child, stamp, transform in checked:
@@ -186,4 +191,14 @@ def add_transforms(buffer: TransformBuffer, transforms: Iterable[tuple[str, str,
         buffer.add(parent, child, stamp, transform, static)
 
 
-__all__ = ["DEFAULT_CACHE_S", "DEFAULT_TOLERANCE_S", "MAX_FRAMES", "MAX_SAMPLES_PER_EDGE", "PoseUnavailable", "StampProblem", "TransformBuffer", "add_transforms", "stamp_ns"]
+__all__ = [
+    "DEFAULT_CACHE_S",
+    "DEFAULT_TOLERANCE_S",
+    "MAX_FRAMES",
+    "MAX_SAMPLES_PER_EDGE",
+    "PoseUnavailable",
+    "StampProblem",
+    "TransformBuffer",
+    "add_transforms",
+    "stamp_ns",
+]

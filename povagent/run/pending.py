@@ -142,9 +142,14 @@ def _loaded_dataset(config: PipelineConfig) -> EvaluationSet:
             from povagent.generate import generate_dataset  # heavy (trimesh): only when asked
 
             generate_dataset(
-                g.out, houses=g.houses, seed=g.seed, frames=g.frames,
-                judge=g.judge.name, judge_options=g.judge.options, plugins=config.plugins,
-            )  # fmt: skip
+                g.out,
+                houses=g.houses,
+                seed=g.seed,
+                frames=g.frames,
+                judge=g.judge.name,
+                judge_options=g.judge.options,
+                plugins=config.plugins,
+            )
     from povagent.dataset.evaluation_set import open_evaluation_set
 
     return open_evaluation_set(spec.root, strict=spec.strict, format=spec.format, images=spec.images, options=spec.options, plugins=config.plugins)

@@ -179,12 +179,20 @@ def rescore_run(
             f"found from {Path.cwd()}: run rescore from the directory the run was made in, or pass --dataset"
         )
     dataset = asked_by(  # answers are re-read, not re-sent
-        config, open_evaluation_set(root, check_images=False, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, host=host)
+        config,
+        open_evaluation_set(root, check_images=False, format=config.dataset.format, images=config.dataset.images, options=config.dataset.options, host=host),
     )
     official_parser, official_name = official if official is not None else (None, None)
-    scoring = AnswerScoring(parser, scorers, dataset, official_parser, official_name,
-                            on_parser_error=_raise, on_scorer_error=lambda _name, exc: _raise(exc),
-                            answer_type=host.answer_type(strategy.answer_type))  # fmt: skip
+    scoring = AnswerScoring(
+        parser,
+        scorers,
+        dataset,
+        official_parser,
+        official_name,
+        on_parser_error=_raise,
+        on_scorer_error=lambda _name, exc: _raise(exc),
+        answer_type=host.answer_type(strategy.answer_type),
+    )
     images = ImageStore()
     warnings: list[str] = []
     out_dir = run / f"rescored-{parser_name}"

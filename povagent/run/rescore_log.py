@@ -73,9 +73,13 @@ class RuleResult(BaseModel):
     per_category_ci: dict[str, tuple[float, float] | None] = Field(default_factory=dict)
     answered: int = Field(description="Replies the rule read an answer in: an option label, or a number for a numerical question.")
     metrics: dict[str, Figure] = Field(default_factory=dict, description="Every metric the scorer declares, overall.")
-    unscorable: list[str] = Field(default_factory=list, description=(
-        "The replies the rule's scorer could not score, each named by row and field with why (a numerical gold of 0, "
-        "a scorer failure): left out of the rule's figures."))  # fmt: skip
+    unscorable: list[str] = Field(
+        default_factory=list,
+        description=(
+            "The replies the rule's scorer could not score, each named by row and field with why (a numerical gold of 0, "
+            "a scorer failure): left out of the rule's figures."
+        ),
+    )
 
 
 class Disagreement(BaseModel):
@@ -129,8 +133,14 @@ def _instance(set_name: str, reply: LoggedReply) -> Any:
 
     from povagent.dataset.choice_sets.external import Item, choice_instance
 
-    question = ChoiceQuestion("", reply.options or (("A", ""),), reply.gold if reply.gold_number is None else "A", category=reply.category,
-                              group=reply.question_id, main_category=reply.main_category)  # fmt: skip
+    question = ChoiceQuestion(
+        "",
+        reply.options or (("A", ""),),
+        reply.gold if reply.gold_number is None else "A",
+        category=reply.category,
+        group=reply.question_id,
+        main_category=reply.main_category,
+    )
     instance = choice_instance(set_name, Item(reply.item, question, ()), ())
     if reply.gold_number is None:
         return instance
@@ -223,16 +233,31 @@ def rescore_log(file: str | Path, harness: str, set_name: str, *, host: Any = No
             columns.append([valued.values[rule.scorer][m.name] for m in declared[rule.scorer]], None, None, valued.category, valued.groups)
         results.append(_result(rule, log, scorer, columns, n_boot, seed, sum(label is not None for label in labels[rule.name]), unscorable))
     disagreements = [
-        Disagreement(item=r.item, where=r.where, reply=r.reply[:REPLY_EXCERPT], gold=r.gold, labels={n: labels[n][k] for n in labels}, correct={n: hits[n][k] for n in hits})
+        Disagreement(
+            item=r.item,
+            where=r.where,
+            reply=r.reply[:REPLY_EXCERPT],
+            gold=r.gold,
+            labels={n: labels[n][k] for n in labels},
+            correct={n: hits[n][k] for n in hits},
+        )
         for k, r in enumerate(log.replies)
         if len({labels[n][k] for n in labels}) > 1
     ]
     return RescoredLog(
-        set=set_name, harness=harness, file=str(file), items=len(log.replies), numerical=sum(r.gold_number is not None for r in log.replies),
+        set=set_name,
+        harness=harness,
+        file=str(file),
+        items=len(log.replies),
+        numerical=sum(r.gold_number is not None for r in log.replies),
         bad_records=len(log.problems),
-        problems=[str(p) for p in log.problems], stripped=log.stripped, notes=log.notes, rules=results,
-        disagreements_total=len(disagreements), disagreements=disagreements[:MAX_DISAGREEMENTS],
-    )  # fmt: skip
+        problems=[str(p) for p in log.problems],
+        stripped=log.stripped,
+        notes=log.notes,
+        rules=results,
+        disagreements_total=len(disagreements),
+        disagreements=disagreements[:MAX_DISAGREEMENTS],
+    )
 
 
 def _unscorable(fields: Any) -> str:
@@ -245,8 +270,7 @@ def _unscorable(fields: Any) -> str:
     return f"the scorer failed ({fields['error']})" if fields.get("error") else ""
 
 
-def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns, n_boot: int, seed: int, answered: int,
-            unscorable: list[str]) -> RuleResult:  # fmt: skip
+def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns, n_boot: int, seed: int, answered: int, unscorable: list[str]) -> RuleResult:
     """One rule's :class:`RuleResult` from its rows' metric columns."""
     metrics = tuple(scorer.metrics)
     headline = getattr(scorer, "headline", None) or metrics[0].name
@@ -254,9 +278,19 @@ def _result(rule: LogRule, log: HarnessLog, scorer: Any, columns: MetricColumns,
     overall = by_slice["overall"]
     per_category = by_slice.get("per_category", {})
     return RuleResult(
-        rule=rule.name, source=rule.source, harness=rule.harness, official=rule.official, parser=rule.parser, scorer=rule.scorer,
-        metric=headline, reads=_reads(rule, log), overall=overall[headline].value, overall_ci=_ci(overall[headline]),
+        rule=rule.name,
+        source=rule.source,
+        harness=rule.harness,
+        official=rule.official,
+        parser=rule.parser,
+        scorer=rule.scorer,
+        metric=headline,
+        reads=_reads(rule, log),
+        overall=overall[headline].value,
+        overall_ci=_ci(overall[headline]),
         per_category={c: cell[headline].value for c, cell in per_category.items()},
         per_category_ci={c: _ci(cell[headline]) for c, cell in per_category.items()},
-        answered=answered, metrics={name: _figure(e) for name, e in overall.items()}, unscorable=unscorable,
-    )  # fmt: skip
+        answered=answered,
+        metrics={name: _figure(e) for name, e in overall.items()},
+        unscorable=unscorable,
+    )

@@ -19,7 +19,9 @@ stay pending: fix the cause and run the same command again.
 
 The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl``,
 ``summary.json`` and the marker that makes it ours (:mod:`povagent.run.run_folder`: a folder
-holding anything else is refused). It must not parse YAML or print tables (:mod:`povagent.config`, :mod:`povagent.cli.pipeline`).
+holding anything else is refused). What a run returns (its exit code, summary and counters) is
+:mod:`povagent.run.run_result`. It must not parse YAML or print tables (:mod:`povagent.config`,
+:mod:`povagent.cli.pipeline`).
 """
 
 from __future__ import annotations
@@ -27,8 +29,6 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import time
-from collections import Counter
-from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
 from typing import Any
@@ -60,6 +60,7 @@ from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
 from povagent.run.progress import QuietProgress, RunProgress
 from povagent.run.run_folder import claim_folder
+from povagent.run.run_result import RunResult, RunStats
 from povagent.run.solve_key import KeySolver
 from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, stop_requested
 from povagent.run.summary import declared_metrics, summarize_run, write_summary, written_rows_table
@@ -71,11 +72,6 @@ LOG = "log.jsonl"
 SUMMARY = "summary.json"
 CONFIG = "config.yaml"
 
-#: Exit codes of ``povagent run`` and ``sweep`` (documented in the README's reliability section).
-EXIT_OK = 0  # every key has an answered or parse-error row
-EXIT_FAILED_KEYS = 3  # the run ended, but some keys are infra_error rows (run again to retry them)
-EXIT_STOPPED = 4  # the run stopped early (fail fast or circuit breaker): keys were left untried
-
 #: Failure kinds of the first key that stop a run before it fans out: no other key can get
 #: past them until the user changes something.
 FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "client_import", "load_failed"})
@@ -84,66 +80,8 @@ FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "
 #: not as console warnings above that line.
 SET_UP_KINDS = frozenset({"missing_key", "client_import"})
 
+
 # -- the run -------------------------------------------------------------------------------------
-@dataclass
-class RunStats:
-    """What this session did (a resumed run counts only its own calls)."""
-
-    requests: int = 0
-    cache_hits: int = 0
-    retries: int = 0
-    rows_written: int = 0
-    prompt_tokens: int = 0
-    completion_tokens: int = 0
-    cost_usd: float = 0.0
-    wall_s: float = 0.0
-    fsyncs: int = 0
-    fsync_s: float = 0.0
-    statuses: Counter = field(default_factory=Counter)
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-able form."""
-        d = dataclasses.asdict(self)
-        d["statuses"] = dict(self.statuses)
-        return d
-
-
-@dataclass
-class RunResult:
-    """What :func:`run_pipeline` returns."""
-
-    run_dir: Path
-    #: What ``summary.json`` holds, as the type it is.
-    summary: RunSummary
-    stats: RunStats
-    n_total: int
-    n_pending: int
-    interrupted: bool = False
-    #: why the run stopped before every pending key was tried (fail fast, circuit breaker)
-    stopped: str | None = None
-    #: the first row's error type when it stopped the run at once (fail fast), else ``None``
-    stop_kind: str | None = None
-
-    @property
-    def n_failed(self) -> int:
-        """Keys whose row is ``infra_error``."""
-        rows = self.summary.rows
-        return rows.infra_error if rows is not None else 0
-
-    @property
-    def n_missing(self) -> int:
-        """Keys with no row at all (a stopped or interrupted run)."""
-        rows = self.summary.rows
-        return rows.missing if rows is not None else 0
-
-    @property
-    def exit_code(self) -> int:
-        """:data:`EXIT_OK`, :data:`EXIT_FAILED_KEYS` or :data:`EXIT_STOPPED` (see there)."""
-        if self.stopped is not None or self.n_missing:
-            return EXIT_STOPPED
-        return EXIT_FAILED_KEYS if self.n_failed else EXIT_OK
-
-
 class _LimitEvents:
     """Where the adaptive limiter reports a change: the run's log and the progress bar."""
 
@@ -203,8 +141,14 @@ class PipelineRun:
 
     # -- one key -------------------------------------------------------------------------------
     def _log_retry(self, row_id: str, exc: BaseException, failed_attempts: int, wait_s: float) -> None:
-        self._log.info("retry", row=row_id, attempt=failed_attempts, error_type=error_type_of(exc),
-                       error=self._redactor.text(f"{type(exc).__name__}: {exc}"), wait_s=round(wait_s, 3))  # fmt: skip
+        self._log.info(
+            "retry",
+            row=row_id,
+            attempt=failed_attempts,
+            error_type=error_type_of(exc),
+            error=self._redactor.text(f"{type(exc).__name__}: {exc}"),
+            wait_s=round(wait_s, 3),
+        )
 
     def _log_bug(self, row_id: str, message: str, trace: str) -> None:
         self._log.error("backend_exception", row=row_id, error=message, traceback=trace)
@@ -351,11 +295,18 @@ class PipelineRun:
             self._cache = ResponseCache(cache_path)
         self._log = RunLog(self.run_dir / LOG, console=self.console_log, redactor=self._redactor, run=str(self.run_dir))
         self._path = RequestPath(
-            backend, self.images, policy=config.retry, timeout_s=config.timeout, cache=self._cache,
+            backend,
+            self.images,
+            policy=config.retry,
+            timeout_s=config.timeout,
+            cache=self._cache,
             limiter=AdaptiveConcurrency(config.concurrency, log=_LimitEvents(self._log, self.progress)),
-            redact=self._redactor.text, redact_answer=self._redactor.known,
-            on_retry=self._log_retry, on_bug=self._log_bug, start_backend=True,
-        )  # fmt: skip
+            redact=self._redactor.text,
+            redact_answer=self._redactor.known,
+            on_retry=self._log_retry,
+            on_bug=self._log_bug,
+            start_backend=True,
+        )
         # Before each batch of rows is written (in the journal's thread, off the event loop) the
         # log is pushed to the OS and queued answers are stored in the cache: after a kill, every
         # durable row has its request events in log.jsonl and its answers in the cache.
@@ -388,8 +339,10 @@ class PipelineRun:
             self._flush_cache()  # answers of keys that did not finish (an interrupted run)
             self.stats.fsyncs, self.stats.fsync_s = self._journal.fsyncs, self._journal.fsync_s
             self.stats.requests, self.stats.cache_hits, self.stats.retries = (
-                self._path.stats.requests, self._path.stats.cache_hits, self._path.stats.retries,
-            )  # fmt: skip
+                self._path.stats.requests,
+                self._path.stats.cache_hits,
+                self._path.stats.retries,
+            )
             if self._stopped:
                 stop_log = self._log.info if self._stop_kind in SET_UP_KINDS else self._log.error
                 stop_log("run_stopped", reason=self._stopped)
@@ -426,9 +379,18 @@ class PipelineRun:
         if not pending:
             return
         solve = KeySolver(
-            self.components, self._names, self._model, self.config_hash, self._path, self.images, self.dataset,
-            self._log, self._redactor, self._frames.read, label=self.config.label,
-        ).solve  # fmt: skip
+            self.components,
+            self._names,
+            self._model,
+            self.config_hash,
+            self._path,
+            self.images,
+            self.dataset,
+            self._log,
+            self._redactor,
+            self._frames.read,
+            label=self.config.label,
+        ).solve
         with HouseFrames(self.images, pending) as houses:
             first, rest = pending[0], islice(pending, 1, None)  # no copy of the list
             row = await solve(*first)

@@ -118,9 +118,14 @@ class AnswerScoring:
         reading = None
         if self.official_parser is not None:  # a lenient parser: keep the official reading beside
             reading = read_officially(
-                self.official_parser, self.official_parser_name or "", text, spec, parse, scores,
+                self.official_parser,
+                self.official_parser_name or "",
+                text,
+                spec,
+                parse,
+                scores,
                 lambda p: self.scores_of(shown, p),
-            )  # fmt: skip
+            )
         return ScoredAnswer(parse, status, prediction, scores, reading)
 
     def scores_of(self, shown: Instance, parse: ParsedAnswer) -> dict[str, dict[str, Any]]:

@@ -67,10 +67,15 @@ class KeySolver:
             response = await path.send(request, label=row_id)
             usage = response.usage
             transcript.record(
-                request, raw=response.text, latency_s=response.latency_s, prompt_tokens=usage.prompt_tokens,
-                completion_tokens=usage.completion_tokens, cost_usd=usage.cost_usd, retries=response.retries,
+                request,
+                raw=response.text,
+                latency_s=response.latency_s,
+                prompt_tokens=usage.prompt_tokens,
+                completion_tokens=usage.completion_tokens,
+                cost_usd=usage.cost_usd,
+                retries=response.retries,
                 cached=response.cached,
-            )  # fmt: skip
+            )
             self.log.debug(
                 "request",
                 row=row_id,
@@ -165,5 +170,6 @@ class KeySolver:
         def scorer_raised(name: str, exc: BaseException) -> None:
             self.log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
-        return AnswerScoring(comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name,
-                             parser_raised, scorer_raised, comps.answer_type)  # fmt: skip
+        return AnswerScoring(
+            comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name, parser_raised, scorer_raised, comps.answer_type
+        )

@@ -65,8 +65,21 @@ class SummaryTable:
         self._hit_scorers = [n for n, p in self._protocols.items() if p == "marked_hit"]
         self._keys = keys
         self._digests = bytearray()
-        self._fields = {name: Column() for name in (*_SCORED, "status", "official_parser", "reading", "success",
-                                                    "success_answered", "prompt_tokens", "completion_tokens", "cost_usd", "retries")}  # fmt: skip
+        self._fields = {
+            name: Column()
+            for name in (
+                *_SCORED,
+                "status",
+                "official_parser",
+                "reading",
+                "success",
+                "success_answered",
+                "prompt_tokens",
+                "completion_tokens",
+                "cost_usd",
+                "retries",
+            )
+        }
         self.metrics = MetricColumns(self.declared)
         #: values only some rows have, by position
         self._aside: dict[str, dict[int, Any]] = {"officially_scored": {}, "plugin_scores": {}, "diagnosed": {}, "nan_key": {}}

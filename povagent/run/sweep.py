@@ -1,6 +1,6 @@
 """Sweeps: one base pipeline expanded over axes into cells, run with one cache and one image store.
 
-A sweep YAML (see :class:`povagent.config.models.SweepConfig`) names a base pipeline, axes
+A sweep YAML (see :class:`povagent.config.sweep_models.SweepConfig`) names a base pipeline, axes
 (``model``, ``backend``, ``strategy``, ``parser``, ``conditions``, ``runs``) and optional named
 overrides. Their cartesian product gives the cells; each cell is an ordinary pipeline whose
 output is ``<sweep output>/<cell name>`` and whose cache is the sweep's. ``sweep.json`` in the
@@ -42,7 +42,8 @@ from povagent.results.summary_json import summary_json_text
 from povagent.run.pending import RESULTS, ensure_dataset, plan_keys, select_instances
 from povagent.run.progress import QuietProgress, RunProgress, make_progress
 from povagent.run.run_folder import claim_folder
-from povagent.run.runner import PipelineRun, RunResult, answering_model, create_components
+from povagent.run.run_result import RunResult
+from povagent.run.runner import PipelineRun, answering_model, create_components
 from povagent.run.stop_signals import cancelled_on_stop
 from povagent.run.sweep_grid import Cell, expand_sweep
 
@@ -71,12 +72,17 @@ def _write_index(
         "output": str(output),
         "cells": [
             {
-                "name": c.name, "axes": c.axes, "run_dir": str(c.config.output), "config_hash": c.config.config_hash(),
-                "model": models[c.name][0], "profile": models[c.name][1], **status.get(c.name, {"status": "pending"}),
+                "name": c.name,
+                "axes": c.axes,
+                "run_dir": str(c.config.output),
+                "config_hash": c.config.config_hash(),
+                "model": models[c.name][0],
+                "profile": models[c.name][1],
+                **status.get(c.name, {"status": "pending"}),
             }
             for c in cells
         ],
-    }  # fmt: skip
+    }
     text = summary_json_text(index, indent=2, default=str)
     check_output_text("sweep", text, output / SWEEP_INDEX)
     write_inside(output, SWEEP_INDEX, text + "\n")
@@ -200,13 +206,15 @@ def anchored(config: PipelineConfig) -> PipelineConfig:
     dataset = ds.model_copy(update={"path": absolute(ds.path)})
     if ds.generate is not None:
         dataset = dataset.model_copy(update={"generate": ds.generate.model_copy(update={"out": absolute(ds.generate.out)})})
-    return config.model_copy(update={
-        "output": absolute(config.output),
-        "dataset": dataset,
-        "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
-        "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
-        "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
-    })  # fmt: skip
+    return config.model_copy(
+        update={
+            "output": absolute(config.output),
+            "dataset": dataset,
+            "cache": config.cache.model_copy(update={"path": absolute(config.cache.path)}),
+            "images": config.images.model_copy(update={"cache_dir": absolute(config.images.cache_dir)}),
+            "plugins": [str(Path(p).absolute()) if p.endswith(".py") else p for p in config.plugins],
+        }
+    )
 
 
 #: What the cells of one sweep share in one worker process and thread, as the cells of a sweep

@@ -12,10 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from povagent.config.models import ComponentSpec, PipelineConfig, SweepConfig
+from povagent.config.models import ComponentSpec, PipelineConfig
 from povagent.config.overrides import REPLACED_WHOLE, deep_merge
 from povagent.config.pipeline import load_sweep, pipeline_from_source
 from povagent.config.plugin_checks import checked_plugins
+from povagent.config.sweep_models import SweepConfig
 from povagent.config.yaml_reader import ConfigSource
 from povagent.errors import ConfigError
 from povagent.plugins import PluginHost, get_plugin_host, unknown_name_message
@@ -67,8 +68,12 @@ def _axis_values(sweep: SweepConfig) -> list[tuple[str, list[tuple[str, dict[str
 
 def _check_axis_names(sweep: SweepConfig, source: ConfigSource, host: PluginHost) -> None:
     problems = []
-    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [("model", "profile", sweep.axes.model or []), ("backend", "backend", sweep.axes.backend or []),
-              ("strategy", "strategy", sweep.axes.strategy or []), ("parser", "parser", sweep.axes.parser or [])]
+    checks: list[tuple[str, str, Sequence[str | ComponentSpec]]] = [
+        ("model", "profile", sweep.axes.model or []),
+        ("backend", "backend", sweep.axes.backend or []),
+        ("strategy", "strategy", sweep.axes.strategy or []),
+        ("parser", "parser", sweep.axes.parser or []),
+    ]
     for axis, kind, values in checks:
         known = host.names(kind)
         for i, v in enumerate(values):

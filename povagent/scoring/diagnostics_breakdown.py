@@ -68,8 +68,7 @@ def _group(rows: list[DiagnosedRow], with_bias: bool, n_boot: int | None, seed: 
         value, ci, n = _bias(rows, n_boot, seed)
         out.update({"egocentric_bias": value, "egocentric_bias_ci": ci, "bias_n": n})
     else:
-        out.update({"egocentric_bias": None, "egocentric_bias_ci": None, "bias_n": 0,
-                    "egocentric_bias_note": "left out: in C the observer view is the camera"})  # fmt: skip
+        out.update({"egocentric_bias": None, "egocentric_bias_ci": None, "bias_n": 0, "egocentric_bias_note": "left out: in C the observer view is the camera"})
     out["relation_success"] = _share([bool(r.relation) for r in related])
     out["relation_n"] = len(related)
     per_direction: dict[str, Any] = {}

@@ -2,8 +2,9 @@
 official rule and every harness's rule povagent has for it, each a registered parser and scorer.
 
 Nothing here names a set or a rule: the official rule is the set's registered dataset format's
-(:class:`~povagent.dataset.formats.DatasetFormat`: its official parser and scorer), and a harness's rule is a registered parser that says which sets its harness reads
-with it and with which scorer (``harness_sets``, ``(set, scorer)`` pairs, with ``source``, ``harness`` and
+(:class:`~povagent.dataset.formats.DatasetFormat`: its official parser and scorer), and a
+harness's rule is a registered parser that says which sets its harness reads with it and with
+which scorer (``harness_sets``, ``(set, scorer)`` pairs, with ``source``, ``harness`` and
 ``harness_filter``: :class:`povagent_plugins.parsers.mcq.rule.RuleParser`). A set added later
 plugs in by registering its format and its rule parsers; this module does not change.
 """
@@ -72,13 +73,23 @@ def set_rules(host: Any, set_name: str) -> list[LogRule]:
     official = official_rules(host)
     if set_name not in official:
         kinds = ", ".join(LOGGED_ANSWER_TYPES)
-        raise PluginError(f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))} (the registered formats whose answer type is one of {kinds})")
+        raise PluginError(
+            f"unknown set {set_name!r}: a log can be scored as {', '.join(sorted(official))} (the registered formats whose answer type is one of {kinds})"
+        )
     parser, scorer, source = official[set_name]
     found = [(parser, scorer, source, _declared(host, parser, "harness") or "the set's own code", True, _declared(host, parser, "harness_filter"))]
     for entry in host.entries("parser"):
         scorers = dict(getattr(entry.factory, "harness_sets", None) or ())
         if set_name in scorers and (entry.name, scorers[set_name]) != (parser, scorer):
-            found.append((entry.name, str(scorers[set_name]), _declared(host, entry.name, "source"), _declared(host, entry.name, "harness"), False,
-                          _declared(host, entry.name, "harness_filter")))  # fmt: skip
+            found.append(
+                (
+                    entry.name,
+                    str(scorers[set_name]),
+                    _declared(host, entry.name, "source"),
+                    _declared(host, entry.name, "harness"),
+                    False,
+                    _declared(host, entry.name, "harness_filter"),
+                )
+            )
     shared = {p for p, *_ in found if sum(1 for q, *_ in found if q == p) > 1}
     return [LogRule(p if p not in shared else f"{p}+{s}", p, s, src, h, o, f) for p, s, src, h, o, f in found]

@@ -77,9 +77,13 @@ class MetricColumns:
         return len(self._condition)
 
     def append(
-        self, flat: Sequence[float | None], condition: Any, direction: Any, category: str | tuple[str, ...] | None = None,
+        self,
+        flat: Sequence[float | None],
+        condition: Any,
+        direction: Any,
+        category: str | tuple[str, ...] | None = None,
         groups: Mapping[str, Mapping[str, str]] | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """One row: its values in the declared order (``None``: the row does not count), its
         slice labels, its category and its groups of grouped metrics."""
         for column, value in zip(self._values, flat, strict=True):
@@ -129,8 +133,9 @@ class MetricColumns:
                 kept.append(i)
         return kept
 
-    def category_weighted(self, values: list[float] | np.ndarray, rows: Sequence[int], merged: tuple[tuple[str, ...], ...],
-                          only_whole: bool = False) -> np.ndarray:  # fmt: skip
+    def category_weighted(
+        self, values: list[float] | np.ndarray, rows: Sequence[int], merged: tuple[tuple[str, ...], ...], only_whole: bool = False
+    ) -> np.ndarray:
         """``values`` (one a row of ``rows``; NaN: not counted) rescaled so that their plain mean is
         the mean of the per-category means, the categories of each group in ``merged`` first
         averaged into one (:attr:`Metric.category_mean`): each counted row weighs
@@ -197,9 +202,12 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
         return cells[-1][1]
 
     out = slices(
-        everything, cell, condition=condition.__getitem__, direction=direction.__getitem__,
+        everything,
+        cell,
+        condition=condition.__getitem__,
+        direction=direction.__getitem__,
         category=None if category is None else category.__getitem__,
-    )  # fmt: skip
+    )
     by_size: dict[int, list[tuple[Sequence[int], dict[str, Estimate]]]] = {}
     for rows, filled in cells:
         by_size.setdefault(len(rows), []).append((rows, filled))

@@ -78,8 +78,15 @@ class Metric:
     def describe(self) -> dict[str, Any]:
         """What ``summary.json`` says of the metric: enough to compute it again from rows
         (:meth:`declared`), so a report reads a third-party scorer's metrics without its plugin."""
-        out = {"label": self.label, "caption": self.caption, "better": self.better, "aggregation": self.aggregation,
-               "field": self.field, "over": self.over, "negate": self.negate}  # fmt: skip
+        out = {
+            "label": self.label,
+            "caption": self.caption,
+            "better": self.better,
+            "aggregation": self.aggregation,
+            "field": self.field,
+            "over": self.over,
+            "negate": self.negate,
+        }
         if self.group is not None:  # said only when set: an ungrouped metric reads as it always did
             out["group"] = self.group
         if self.overall_excludes:
@@ -98,11 +105,23 @@ class Metric:
     @classmethod
     def declared(cls, name: str, description: Mapping[str, Any]) -> Metric:
         """The metric :meth:`describe` described."""
-        return cls(name, description["better"], description["aggregation"], description["field"], description["label"],
-                   description["caption"], description["over"], description["negate"], description.get("group"),
-                   tuple(description.get("overall_excludes") or ()), description.get("unscored"),
-                   bool(description.get("category_mean")), tuple(tuple(g) for g in description.get("merged_categories") or ()),
-                   bool(description.get("merge_only_whole")), description.get("select"))  # fmt: skip
+        return cls(
+            name,
+            description["better"],
+            description["aggregation"],
+            description["field"],
+            description["label"],
+            description["caption"],
+            description["over"],
+            description["negate"],
+            description.get("group"),
+            tuple(description.get("overall_excludes") or ()),
+            description.get("unscored"),
+            bool(description.get("category_mean")),
+            tuple(tuple(g) for g in description.get("merged_categories") or ()),
+            bool(description.get("merge_only_whole")),
+            description.get("select"),
+        )
 
 
 #: Each scorer's declared metrics: ``{scorer: metrics}``.
@@ -296,5 +315,10 @@ class ValuedRow:
 def valued_row(row: Any, declared: Declared) -> ValuedRow:
     """``row``'s slice labels, :func:`row_metric_values`, its category and its groups."""
     condition, direction = getattr(row, "condition", None), getattr(row, "direction", None)
-    return ValuedRow(None if condition is None else str(condition), None if direction is None else str(direction),
-                     row_metric_values(row, declared), row_category(row), row_metric_groups(row, declared))  # fmt: skip
+    return ValuedRow(
+        None if condition is None else str(condition),
+        None if direction is None else str(direction),
+        row_metric_values(row, declared),
+        row_category(row),
+        row_metric_groups(row, declared),
+    )

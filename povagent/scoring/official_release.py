@@ -228,9 +228,15 @@ class OfficialRelease:
         anchor_xz = np.array([_number(lm_pos.get("x", 0), "position.x"), 0.0, _number(lm_pos.get("z", 0), "position.z")])
         observer = np.array(CameraRecord.read(entry.get("camera", {}), "camera").position)
         point = target_point(
-            str(direction), box, anchor_type if isinstance(anchor_type, str) else "", anchor_xz, observer,
-            "appropriate", surface, np.array(raw),
-        )  # fmt: skip
+            str(direction),
+            box,
+            anchor_type if isinstance(anchor_type, str) else "",
+            anchor_xz,
+            observer,
+            "appropriate",
+            surface,
+            np.array(raw),
+        )
         return (float(point[0]), float(point[1]), float(point[2]))
 
 

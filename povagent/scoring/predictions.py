@@ -489,10 +489,13 @@ def summary_of(scored: Iterable[ScoredPrediction], scorers: Mapping[str, Any] | 
     declared: Declared = {name: tuple(scorer.metrics) for name, scorer in (scorers or {}).items()}
     if any(declared.values()):
         rows = (
-            _ScoredAsRow("answered" if s.score.answered else "unanswered",
-                         {name: scorer.point_fields(s.score, s.l2_closest) for name, scorer in (scorers or {}).items()},
-                         s.condition, s.direction)
+            _ScoredAsRow(
+                "answered" if s.score.answered else "unanswered",
+                {name: scorer.point_fields(s.score, s.l2_closest) for name, scorer in (scorers or {}).items()},
+                s.condition,
+                s.direction,
+            )
             for s in scored
-        )  # fmt: skip
+        )
         out["metrics"] = metrics_breakdown((valued_row(row, declared) for row in rows), declared)
     return out

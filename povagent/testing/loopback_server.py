@@ -345,10 +345,13 @@ def _choice(reply: Reply, n: int) -> dict[str, Any]:
     if not reply.tool_calls:
         return {"index": 0, "message": message, "finish_reason": "stop"}
     message["tool_calls"] = [
-        {"id": c.get("id") or f"call_{n}_{k}", "type": "function", "function": {"name": c.get("name"), "arguments": c["arguments"]
-         if isinstance(c.get("arguments"), str) else json.dumps(c.get("arguments", {}))}}
+        {
+            "id": c.get("id") or f"call_{n}_{k}",
+            "type": "function",
+            "function": {"name": c.get("name"), "arguments": c["arguments"] if isinstance(c.get("arguments"), str) else json.dumps(c.get("arguments", {}))},
+        }
         for k, c in enumerate(reply.tool_calls)
-    ]  # fmt: skip
+    ]
     return {"index": 0, "message": message, "finish_reason": "tool_calls"}
 
 
@@ -434,10 +437,16 @@ def main(argv: list[str] | None = None) -> None:
         except ConfigError as exc:
             ap.error(f"--script {exc}")
     server = LoopbackServer(
-        reply=Reply(args.reply, delay_s=args.delay) if args.delay > 0 else args.reply, port=args.port, max_lifetime_s=args.lifetime, record=False,
-        fetch_images=args.fetch_images or check is not None, local_media_root=args.local_media_root,
-        keep_image_bytes=False, image_check=check, count_bodies=args.count_bodies,
-    )  # fmt: skip
+        reply=Reply(args.reply, delay_s=args.delay) if args.delay > 0 else args.reply,
+        port=args.port,
+        max_lifetime_s=args.lifetime,
+        record=False,
+        fetch_images=args.fetch_images or check is not None,
+        local_media_root=args.local_media_root,
+        keep_image_bytes=False,
+        image_check=check,
+        count_bodies=args.count_bodies,
+    )
     server.script(turns)
     try:
         server.start()

@@ -100,17 +100,21 @@ def write_card(
     else:
         checked = "- none given (no `--exclude`, and the release is not in the local Hugging Face cache)"
     excluded = "\n".join(f"- {h}: same house as {m}" for h, m in report.excluded.items()) or "- none matched"
+    if options.rationale == "none":
+        answer_is = "the ground truth in the benchmark JSON"
+    else:
+        answer_is = f"a `{options.rationale}` rationale computed from the scene geometry (never written by a model), ending in the benchmark JSON"
     body = f"""
 # Observer grounding training set
 
 Made by `povagent export-train` from {source}; {houses_loaded} houses loaded from `{root.name}`.
 
 Each example is one POVBench instance (house, pair, direction, condition): the question is the
-benchmark's own request for it (the `{ {'none': 'basic', 'cot': 'cot', 's-cot': 'spatial-cot'}[options.rationale] }`
+benchmark's own request for it (the `{ {"none": "basic", "cot": "cot", "s-cot": "spatial-cot"}[options.rationale] }`
 prompt, frames labelled `Image k:` in the official order), and the answer is
-{'the ground truth in the benchmark JSON' if options.rationale == 'none' else f'a `{options.rationale}` rationale computed from the scene geometry (never written by a model), ending in the benchmark JSON'}.
+{answer_is}.
 Answers are the ground truth's pixel in the frame that shows it best
-({'exact floats' if options.exact_answers else 'whole pixels'}); Given (c) answers are the JSON alone, as the
+({"exact floats" if options.exact_answers else "whole pixels"}); Given (c) answers are the JSON alone, as the
 benchmark's Given prompt asks under every strategy.
 
 Format: `{options.format}` ({len(shards)} shard(s) of at most {options.max_shard_bytes / 2**20:.0f} MB under `{folder}/`).
@@ -118,13 +122,13 @@ Splits by house (`{options.split}`, seed {options.split_seed}): a house is in on
 
 ## Counts
 
-{_table('split', report.counts.get('split', {}))}
+{_table("split", report.counts.get("split", {}))}
 
-{_table('condition', report.counts.get('condition', {}))}
+{_table("condition", report.counts.get("condition", {}))}
 
-{_table('direction', report.counts.get('direction', {}))}
+{_table("direction", report.counts.get("direction", {}))}
 
-Houses per split: {', '.join(f'{k} {len(v)}' for k, v in report.houses_by_split.items())}.
+Houses per split: {", ".join(f"{k} {len(v)}" for k, v in report.houses_by_split.items())}.
 
 ## Left out
 

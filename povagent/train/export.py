@@ -82,7 +82,9 @@ def _house_plan(root: Path, house: House, options: ExportOptions, report: Export
     return out
 
 
-def _plan_houses(root: Path, folders: Sequence[Path], options: ExportOptions, report: ExportReport, problems: list[Problem]) -> dict[str, list[tuple[str, int]]]:
+def _plan_houses(
+    root: Path, folders: Sequence[Path], options: ExportOptions, report: ExportReport, problems: list[Problem]
+) -> dict[str, list[tuple[str, int]]]:
     """:func:`_house_plan` of every house that loads (image checks on), one house read at a time;
     what loading left out (houses, pairs) goes into ``report.left_out``."""
     by_house = {}

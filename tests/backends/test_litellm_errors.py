@@ -88,8 +88,14 @@ def test_scrub_masks_keys_but_not_short_placeholders():
     [
         # what litellm 1.103 raises for a call without a key: a 500, a connection error, a 401
         litellm.InternalServerError(message="OpenAIException - Missing credentials. Please pass an `api_key`", llm_provider="openai", model="m"),
-        litellm.APIConnectionError(message="Missing Gemini API key. Set the GEMINI_API_KEY or GOOGLE_API_KEY environment variable.\nTraceback (most recent call last):\n  File x", llm_provider="gemini", model="m"),
-        litellm.AuthenticationError(message="Missing Anthropic API Key - A call is being made to anthropic but no key is set", llm_provider="anthropic", model="m"),
+        litellm.APIConnectionError(
+            message="Missing Gemini API key. Set the GEMINI_API_KEY or GOOGLE_API_KEY environment variable.\nTraceback (most recent call last):\n  File x",
+            llm_provider="gemini",
+            model="m",
+        ),
+        litellm.AuthenticationError(
+            message="Missing Anthropic API Key - A call is being made to anthropic but no key is set", llm_provider="anthropic", model="m"
+        ),
     ],
     ids=["openai", "gemini", "anthropic"],
 )

@@ -170,7 +170,11 @@ def test_the_transformers_backend_takes_a_profile_as_its_model_with_the_profiles
     from povagent.config.pipeline import load_pipeline
 
     path = tmp_path / "p.yaml"
-    doc = {"dataset": {"path": str(mini_root)}, "backend": {"name": "transformers", "options": {"model": "molmopoint-8b", "max_batch": 2}}, "output": str(tmp_path / "o")}
+    doc = {
+        "dataset": {"path": str(mini_root)},
+        "backend": {"name": "transformers", "options": {"model": "molmopoint-8b", "max_batch": 2}},
+        "output": str(tmp_path / "o"),
+    }
     path.write_text(yaml.safe_dump(doc))
     config = load_pipeline(path)
     assert config.parser.name == "molmo" and config.strategy.options["prompts"] == "molmopoint"

@@ -93,22 +93,50 @@ def _rgb_path_climbing_through_a_symlinked_folder(root: Path) -> None:
 
 #: name -> (damage, file named in the messages, field named or None)
 DATASETS: dict[str, tuple[Callable[[Path], None], str, str | None]] = {
-    "absolute image_path": (lambda r: edit(house(r, "exploration_log.json"), lambda d: d[0].update(image_path=str(_outside(r)))), "exploration_log.json", "$[0].image_path"),
+    "absolute image_path": (
+        lambda r: edit(house(r, "exploration_log.json"), lambda d: d[0].update(image_path=str(_outside(r)))),
+        "exploration_log.json",
+        "$[0].image_path",
+    ),
     "rgb_path climbing out": (lambda r: edit(house(r), lambda d: d[0].update(rgb_path="../../../secret.png")), f"{TARGET}.json", "$[0].rgb_path"),
     "rgb_path climbing out through a symlinked folder": (_rgb_path_climbing_through_a_symlinked_folder, f"{TARGET}.json", "$[0].rgb_path"),
     "frame symlinked out": (_symlinked_frame, "exploration_log.json", "$[0].image_path"),
     "log symlinked out": (_symlinked_log, "exploration_log.json", None),
-    "NaN camera position": (lambda r: edit(house(r), lambda d: d[0]["camera"]["cam_pos"].__setitem__(0, float("nan"))), f"{TARGET}.json", "$[0].camera.cam_pos[0]"),
-    "infinite yaw": (lambda r: edit(house(r, "exploration_log.json"), lambda d: d[1]["camera"].update(cam_yaw=float("inf"))), "exploration_log.json", "$[1].camera.cam_yaw"),
-    "truncated frame": (lambda r: house(r, "exploration_images/frame_001.png").write_bytes(house(r, "exploration_images/frame_001.png").read_bytes()[:300]), "exploration_log.json", "$[1].image_path"),
-    "observer view of the wrong size": (lambda r: Image.new("RGB", (300, 200)).save(house(r, "img_from_observer/pair_7.png")), f"{TARGET}.json", "$[0].rgb_path"),
+    "NaN camera position": (
+        lambda r: edit(house(r), lambda d: d[0]["camera"]["cam_pos"].__setitem__(0, float("nan"))),
+        f"{TARGET}.json",
+        "$[0].camera.cam_pos[0]",
+    ),
+    "infinite yaw": (
+        lambda r: edit(house(r, "exploration_log.json"), lambda d: d[1]["camera"].update(cam_yaw=float("inf"))),
+        "exploration_log.json",
+        "$[1].camera.cam_yaw",
+    ),
+    "truncated frame": (
+        lambda r: house(r, "exploration_images/frame_001.png").write_bytes(house(r, "exploration_images/frame_001.png").read_bytes()[:300]),
+        "exploration_log.json",
+        "$[1].image_path",
+    ),
+    "observer view of the wrong size": (
+        lambda r: Image.new("RGB", (300, 200)).save(house(r, "img_from_observer/pair_7.png")),
+        f"{TARGET}.json",
+        "$[0].rgb_path",
+    ),
     "frame that is not an image": (lambda r: house(r, "exploration_images/frame_000.png").write_text("GIF? no."), "exploration_log.json", "$[0].image_path"),
     "pair file not JSON": (lambda r: house(r).write_text("{pairs: oops"), f"{TARGET}.json", None),
     "pair file nested 100000 deep": (lambda r: house(r).write_text("[" * 100000 + "]" * 100000), f"{TARGET}.json", None),
     "pair file not UTF-8": (lambda r: house(r).write_bytes(b'[{"pair_id": "\xff"}]'), f"{TARGET}.json", None),
     "log is an object": (lambda r: house(r, "exploration_log.json").write_text('{"frames": []}'), "exploration_log.json", None),
-    "lone surrogate in a sentence": (lambda r: edit(house(r), lambda d: d[0]["stage5"]["front"].update(type_a="the remote \ud800")), f"{TARGET}.json", "$[0].stage5.front.type_a"),
-    "pair with an absurd screen size": (lambda r: edit(house(r), lambda d: d[0]["camera"].update(screen_width=10**9)), f"{TARGET}.json", "$[0].camera.screen_width"),
+    "lone surrogate in a sentence": (
+        lambda r: edit(house(r), lambda d: d[0]["stage5"]["front"].update(type_a="the remote \ud800")),
+        f"{TARGET}.json",
+        "$[0].stage5.front.type_a",
+    ),
+    "pair with an absurd screen size": (
+        lambda r: edit(house(r), lambda d: d[0]["camera"].update(screen_width=10**9)),
+        f"{TARGET}.json",
+        "$[0].camera.screen_width",
+    ),
 }
 
 
@@ -146,8 +174,14 @@ CONFIGS: dict[str, tuple[Callable[[str], str | bytes], str]] = {
     "NaN timeout": (lambda good: good + "timeout: .nan\n", "timeout"),
     "10 MB value": (lambda good: good + "x: '" + "a" * 10_000_000 + "'\n", "MiB"),
     "duplicate key": (lambda good: good + "backend: random\n", "twice"),
-    "profile typo in backend options": (lambda good: good.replace("backend: center", "backend: {name: litellm, options: {model: qwen3-vl8b, api_base: 'http://127.0.0.1:9/v1'}}"), "did you mean 'qwen3-vl-8b'"),
-    "key pasted into api_key_env": (lambda good: good.replace("backend: center", "backend: {name: litellm, options: {model: openai/m, api_key_env: sk-abc123}}"), "api_key_env"),
+    "profile typo in backend options": (
+        lambda good: good.replace("backend: center", "backend: {name: litellm, options: {model: qwen3-vl8b, api_base: 'http://127.0.0.1:9/v1'}}"),
+        "did you mean 'qwen3-vl-8b'",
+    ),
+    "key pasted into api_key_env": (
+        lambda good: good.replace("backend: center", "backend: {name: litellm, options: {model: openai/m, api_key_env: sk-abc123}}"),
+        "api_key_env",
+    ),
     "unknown key": (lambda good: good + "stratgy: cot\n", "did you mean 'strategy'"),
     "empty file": (lambda good: "", "mapping"),
     "a list, not a mapping": (lambda good: "- dataset: x\n", "mapping"),

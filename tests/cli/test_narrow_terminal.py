@@ -241,7 +241,9 @@ def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
     done = subprocess.run([sys.executable, "-m", "povagent.cli", "plugins"], capture_output=True, text=True, env=env, timeout=120)
     assert done.returncode == 0, done.stderr
     assert widest(done.stdout) <= 80, done.stdout
-    listing = json.loads(subprocess.run([sys.executable, "-m", "povagent.cli", "plugins", "--json"], capture_output=True, text=True, env=env, timeout=120).stdout)
+    listing = json.loads(
+        subprocess.run([sys.executable, "-m", "povagent.cli", "plugins", "--json"], capture_output=True, text=True, env=env, timeout=120).stdout
+    )
     (entry,) = [e for e in listing["strategy"] if e["name"] == "perspective-taking"]
     assert "povagent-contributed-strategies-for-observer-grounding 2.11.4" in entry["source"]
     rows = [line.split("│")[1:-1] for line in done.stdout.splitlines() if line.startswith("│")]

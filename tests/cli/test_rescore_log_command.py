@@ -36,11 +36,16 @@ def test_json_is_the_object_the_issue_names(tmp_path):
 
 
 def test_the_table_names_each_rule_what_it_read_its_numbers_and_the_disagreements(tmp_path):
-    result = runner.invoke(app, ["rescore-log", str(lmms_log(tmp_path)), "--harness", "lmms-eval", "--set", "viewspatial", "--show", "5"], env={"COLUMNS": "200"})
+    result = runner.invoke(
+        app, ["rescore-log", str(lmms_log(tmp_path)), "--harness", "lmms-eval", "--set", "viewspatial", "--show", "5"], env={"COLUMNS": "200"}
+    )
     assert result.exit_code == 0, result.output
     out = result.stdout
     assert "300 replies of viewspatial logged by lmms-eval, read by 3 rules" in out
-    assert "viewspatial-official (official): ViewSpatial-Bench's rule, ZJU-REAL/ViewSpatial-Bench@2e85a5e41a29e7919b1d326d8aba316661579983; reads resps as written" in out
+    assert (
+        "viewspatial-official (official): ViewSpatial-Bench's rule, ZJU-REAL/ViewSpatial-Bench@2e85a5e41a29e7919b1d326d8aba316661579983; reads resps as written"
+        in out
+    )
     assert "viewspatial: lmms-eval's rule" in out and "reads resps, then lmms-eval's reasoning-tag strip" in out
     assert "44.3% [" in out  # lmms-eval's 133/300 with its CI
     assert "The rules read 41 of 300 replies differently (first 5" in out

@@ -41,7 +41,10 @@ def test_prints_labels_images_with_hashes_then_the_prompt(tmp_path, mini_root):
     assert lines[1] == "Image 0:"
     assert lines[2].startswith("[image: Image 0 sha256:") and "512x512" in lines[2]
     assert lines[3] == "Image 1:"
-    prompt_start = lines.index("You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of a home.")
+    prompt_start = lines.index(
+        "You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's "
+        "exploration of a home."
+    )
     assert lines[prompt_start + 1] == ""  # the runner's paragraphs: a blank line between them
     assert lines[prompt_start + 2].startswith("The 3 images above (labeled Image 0 through Image 2)")
     assert "describing where they last saw it.Your mission" in result.stdout  # the runner's text, typo kept

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from povagent.config.cluster_spec import ClusterSpec, local_worker_limit, parse_cluster_spec, yaml_cluster_spec
-from povagent.config.models import SweepConfig
+from povagent.config.sweep_models import SweepConfig
 from povagent.errors import ClusterError
 
 
@@ -59,7 +59,9 @@ def test_a_yaml_may_ask_for_a_local_cluster() -> None:
 
 
 def test_reading_a_spec_does_not_import_dask() -> None:
-    code = "import sys; from povagent.cluster import parse_cluster_spec; parse_cluster_spec('local:2'); print('distributed' in sys.modules, 'dask' in sys.modules)"
+    code = (
+        "import sys; from povagent.cluster import parse_cluster_spec; parse_cluster_spec('local:2'); print('distributed' in sys.modules, 'dask' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "False"]
 
@@ -68,7 +70,7 @@ def test_checking_a_config_loads_neither_the_cluster_room_nor_the_image_server()
     # configuration is data at the bottom: a pipeline with a cluster key and an image server's
     # bind is checked without importing the rooms that will act on them
     code = (
-        "import sys; from povagent.config.models import ImagesSpec, SweepConfig; "
+        "import sys; from povagent.config.models import ImagesSpec; from povagent.config.sweep_models import SweepConfig; "
         "ImagesSpec.model_validate({'transport': 'http', 'bind': '127.0.0.1:0'}); "
         "SweepConfig._cluster_spec('local:2'); "
         "print(*(name in sys.modules for name in ('povagent.cluster', 'povagent.exchange.image_server', 'dask')))"

@@ -72,7 +72,8 @@ def test_a_strategy_asking_for_an_answer_type_no_plugin_registers_is_refused(tmp
     with pytest.raises(ConfigError) as err:
         load_pipeline(path)
     assert str(err.value) == (
-        f"{path}, line 4: strategy 'test-choice' asks for a ranking answer, an answer type no loaded plugin registers (registered: choice, choice-or-number, number, point, walk)"
+        f"{path}, line 4: strategy 'test-choice' asks for a ranking answer, an answer type no loaded plugin registers (registered: choice, choice-or-number, "
+        "number, point, walk)"
     )
 
 

@@ -73,4 +73,7 @@ def test_a_pipeline_naming_a_format_without_its_rule_is_refused_at_the_format_li
     pipeline.write_text("plugins: [myset_format.py]\ndataset:\n  path: set.json\n  format: myset\nbackend: center\noutput: runs/x\n")
     with pytest.raises(ConfigError) as err:
         load_pipeline(pipeline)
-    assert f"{pipeline}, line 4: dataset.format: dataset format 'myset' (config plugin {plugin}) names parser 'myset-official', which no plugin registers" in str(err.value)
+    assert (
+        f"{pipeline}, line 4: dataset.format: dataset format 'myset' (config plugin {plugin}) names parser 'myset-official', which no plugin registers"
+        in str(err.value)
+    )

@@ -115,7 +115,16 @@ def test_image_at_never_raises_on_hostile_text():
     from povagent.answers.spec import AnswerSpec, frame_answer_schema
 
     spec = AnswerSpec(schema=frame_answer_schema(3, 512, 512), n_frames=3)
-    for text in ("", "(", "Image 99999999999999999999 at (1e5, -3)", "Image " + "9" * 5000 + " at (1, 2)", f"({'9' * 5000}, 1) image 1", "(1, 2) but no frame", "\x00" * 10_000, "Image 1 at (600, 7)"):
+    for text in (
+        "",
+        "(",
+        "Image 99999999999999999999 at (1e5, -3)",
+        "Image " + "9" * 5000 + " at (1, 2)",
+        f"({'9' * 5000}, 1) image 1",
+        "(1, 2) but no frame",
+        "\x00" * 10_000,
+        "Image 1 at (600, 7)",
+    ):
         parsed = parser.parse(text, spec)
         assert parsed.status in ("unparseable", "ok", "out_of_range")
     assert parser.parse("Image 1 at (600, 7)", spec).status == "out_of_range"
@@ -139,7 +148,9 @@ def test_within_radius_calls_success_exactly_when_the_official_l2_is_within_it(p
 
 def test_within_radius_refuses_a_radius_that_is_not_positive(pipeline):
     path = pipeline("within_radius_scorer.py", scorers=[{"name": "within-radius", "options": {"radius": -1}}])
-    with pytest.raises(PluginError, match=r"scorer 'within-radius' \(config plugin .*within_radius_scorer.py\) rejected its options.*radius must be a positive number"):
+    with pytest.raises(
+        PluginError, match=r"scorer 'within-radius' \(config plugin .*within_radius_scorer.py\) rejected its options.*radius must be a positive number"
+    ):
         run(path)
 
 

@@ -139,7 +139,21 @@ def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(
     plugin = tmp_path / "failing_judge.py"
     plugin.write_text(FAILING_JUDGE)
     code = "from povagent.cli import main; main()"
-    args = ["generate", "--out", str(tmp_path / "data"), "--houses", "2", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1"]
+    args = [
+        "generate",
+        "--out",
+        str(tmp_path / "data"),
+        "--houses",
+        "2",
+        "--seed",
+        str(SEED),
+        "--frames",
+        "1",
+        "--plugin",
+        str(plugin),
+        "--judge",
+        "fails-on-house-1",
+    ]
     done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=600)
     assert done.returncode != 0
     assert done.stderr.strip().splitlines()[-1].startswith("error: 1 of 2 houses failed: house 1 (seed 4)")

@@ -12,12 +12,57 @@ from povagent import hookspecs
 from povagent.default_plugins import DEFAULT_PLUGINS
 from povagent.interfaces import Parser, Strategy
 
-PARSERS = {"official", "active", "json", "cot", "rescale-1000", "qwen", "gemini", "molmo", "robopoint", "robopoint-official", "internvl", "choice",
-           "navigate", "viewspatial", "viewspatial-official", "mindcube", "mindcube-official", "3dsrbench-lmms", "vlmevalkit-exact", "vlmevalkit-spatial", "lmms-mcq-extract",
-           "lmms-mcq-extract-corrected", "sparbench-lmms", "sparbench-lmms-corrected", "mmsi-official", "mmsi-lmms", "omnispatial-re",
-           "omnispatial-re-corrected", "omnispatial-json", "omnispatial-direct", "omnispatial-lmms-direct", "omnispatial-lmms-re", "vsibench", "vsibench-lmms",
-           "vlmevalkit-vsibench"}
-STRATEGIES = {"active", "basic", "cot", "spatial-cot", "o-plot", "oa-plot", "geometric", "probe-anchor", "probe-observer", "choice", "choice-or-number", "navigate"}
+PARSERS = {
+    "official",
+    "active",
+    "json",
+    "cot",
+    "rescale-1000",
+    "qwen",
+    "gemini",
+    "molmo",
+    "robopoint",
+    "robopoint-official",
+    "internvl",
+    "choice",
+    "navigate",
+    "viewspatial",
+    "viewspatial-official",
+    "mindcube",
+    "mindcube-official",
+    "3dsrbench-lmms",
+    "vlmevalkit-exact",
+    "vlmevalkit-spatial",
+    "lmms-mcq-extract",
+    "lmms-mcq-extract-corrected",
+    "sparbench-lmms",
+    "sparbench-lmms-corrected",
+    "mmsi-official",
+    "mmsi-lmms",
+    "omnispatial-re",
+    "omnispatial-re-corrected",
+    "omnispatial-json",
+    "omnispatial-direct",
+    "omnispatial-lmms-direct",
+    "omnispatial-lmms-re",
+    "vsibench",
+    "vsibench-lmms",
+    "vlmevalkit-vsibench",
+}
+STRATEGIES = {
+    "active",
+    "basic",
+    "cot",
+    "spatial-cot",
+    "o-plot",
+    "oa-plot",
+    "geometric",
+    "probe-anchor",
+    "probe-observer",
+    "choice",
+    "choice-or-number",
+    "navigate",
+}
 
 
 @cache
@@ -52,7 +97,9 @@ def test_every_built_in_strategy_is_registered():
 
 
 @pytest.mark.parametrize("name", sorted(PARSERS))
-@pytest.mark.parametrize("text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}', '{"selected_image": 1, "x": 1%s, "y": 1}' % ("0" * 400)])
+@pytest.mark.parametrize(
+    "text", ["", "\x00\x01", "{" * 5000, "}" * 10, "<point x=>", "[(,)]", '{"x": "1e999", "y": 1}', '{"selected_image": 1, "x": 1%s, "y": 1}' % ("0" * 400)]
+)
 def test_no_parser_raises_on_hostile_text(name, text):
     from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, frame_answer_schema
 

@@ -26,63 +26,93 @@ from povagent_plugins.strategies.markers import ObserverAnchorPlotStrategy, Obse
 
 SENTENCE = "While watering the plant, I noticed my keys to the left of the sofa."
 
-BASIC_FRAMES = """You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of a home.
-The 30 images above (labeled Image 0 through Image 29) were all taken during exploration of the same single-story house. Each image is preceded by its label ("Image 0:", "Image 1:", etc.).
-Sentence: "While watering the plant, I noticed my keys to the left of the sofa."
-The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, where that object is located, based on the resident's description in the sentence above.
+BASIC_FRAMES = (
+    "You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of "
+    "a home.\n"
+    "The 30 images above (labeled Image 0 through Image 29) were all taken during exploration of the same single-story house. Each image is preceded by its "
+    "label (\"Image 0:\", \"Image 1:\", etc.).\n"
+    "Sentence: \"While watering the plant, I noticed my keys to the left of the sofa.\"\n"
+    "The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, "
+    "where that object is located, based on the resident's description in the sentence above.\n"
+    "\n"
+    "Task:\n"
+    "1. Select the image (0 to 29) that best represents the scene described in the sentence\u2014the image where both the observer's furniture and the "
+    "reference landmark are most clearly visible.\n"
+    "2. In the selected image, predict the center of the target object as pixel coordinates. The target object may not actually be visible in the image. Based "
+    "on the sentence, predict as faithfully and accurately as possible where the center of the object WOULD be located.\n"
+    "Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size "
+    "512\u00d7512 pixels.\n"
+    "IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid "
+    "range.\n"
+    "Output ONLY valid JSON, no other text:\n"
+    "{\"selected_image\": <integer 0-29>, \"x\": <integer 0-511>, \"y\": <integer 0-511>}"
+)
 
-Task:
-1. Select the image (0 to 29) that best represents the scene described in the sentence\u2014the image where both the observer's furniture and the reference landmark are most clearly visible.
-2. In the selected image, predict the center of the target object as pixel coordinates. The target object may not actually be visible in the image. Based on the sentence, predict as faithfully and accurately as possible where the center of the object WOULD be located.
-Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size 512\u00d7512 pixels.
-IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid range.
-Output ONLY valid JSON, no other text:
-{"selected_image": <integer 0-29>, "x": <integer 0-511>, "y": <integer 0-511>}"""
+BASIC_GIVEN = (
+    "You are the intelligent brain system of a home-assistance robot.\n"
+    "Sentence: \"While watering the plant, I noticed my keys to the left of the sofa.\"\n"
+    "The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, "
+    "where that object is located\u2014based on the resident's description in the sentence above.\n"
+    "The image provided shows the target scene from the perspective of the resident at the moment they spotted the target object.\n"
+    "\n"
+    "Task: Based on the sentence, predict the center of the target object as pixel coordinates. The target object may not actually be visible in the image. "
+    "Based on the sentence, predict as faithfully and accurately as possible where the center of the object WOULD be located.\n"
+    "Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size "
+    "512\u00d7512 pixels.\n"
+    "IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid "
+    "range.\n"
+    "Output ONLY valid JSON, no other text:\n"
+    "{\"x\": <integer 0-511>, \"y\": <integer 0-511>}"
+)
 
-BASIC_GIVEN = """You are the intelligent brain system of a home-assistance robot.
-Sentence: "While watering the plant, I noticed my keys to the left of the sofa."
-The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, where that object is located\u2014based on the resident's description in the sentence above.
-The image provided shows the target scene from the perspective of the resident at the moment they spotted the target object.
-
-Task: Based on the sentence, predict the center of the target object as pixel coordinates. The target object may not actually be visible in the image. Based on the sentence, predict as faithfully and accurately as possible where the center of the object WOULD be located.
-Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size 512\u00d7512 pixels.
-IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid range.
-Output ONLY valid JSON, no other text:
-{"x": <integer 0-511>, "y": <integer 0-511>}"""
-
-COT_FRAMES = """You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of a home.
-The 30 images above (labeled Image 0 through Image 29) were all taken during exploration of the same single-story house. Each image is preceded by its label ("Image 0:", "Image 1:", etc.).
-Sentence: "While watering the plant, I noticed my keys to the left of the sofa."
-The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, where that object is located, based on the resident's description in the sentence above.
-
-Think step by step:
-
-Step 1 \u2014 Image selection. Among the 30 images, identify the one that best represents the scene described in the sentence\u2014the image where both the furniture the observer was working with and the spatial landmark mentioned in the sentence are most clearly visible. Note its index.
-Step 2 \u2014 Observer position. In the selected image, identify the furniture the observer was working with at the time. Note roughly where it appears and what direction the observer would be facing.
-Step 3 \u2014 Anchor landmark. Identify the spatial landmark mentioned in the sentence in the selected image.
-Step 4 \u2014 Spatial reasoning. Based on the spatial relationship described in the sentence, estimate where the target object would be located in the selected image.
-Step 5 \u2014 Conclusion. State your selected image index and final coordinate estimate.
-
-Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size 512\u00d7512 pixels.
-IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid range.
-Write your step-by-step reasoning freely. End your response with ONLY the final JSON on the last line:
-{"selected_image": <integer 0-29>, "x": <integer 0-511>, "y": <integer 0-511>}"""
+COT_FRAMES = (
+    "You are the intelligent brain system of a home-assistance robot. You are given first-person perspective images captured during the robot's exploration of "
+    "a home.\n"
+    "The 30 images above (labeled Image 0 through Image 29) were all taken during exploration of the same single-story house. Each image is preceded by its "
+    "label (\"Image 0:\", \"Image 1:\", etc.).\n"
+    "Sentence: \"While watering the plant, I noticed my keys to the left of the sofa.\"\n"
+    "The resident has asked the robot to retrieve an object and is describing where they last saw it. Your mission is to predict, as accurately as possible, "
+    "where that object is located, based on the resident's description in the sentence above.\n"
+    "\n"
+    "Think step by step:\n"
+    "\n"
+    "Step 1 \u2014 Image selection. Among the 30 images, identify the one that best represents the scene described in the sentence\u2014the image where both "
+    "the furniture the observer was working with and the spatial landmark mentioned in the sentence are most clearly visible. Note its index.\n"
+    "Step 2 \u2014 Observer position. In the selected image, identify the furniture the observer was working with at the time. Note roughly where it appears "
+    "and what direction the observer would be facing.\n"
+    "Step 3 \u2014 Anchor landmark. Identify the spatial landmark mentioned in the sentence in the selected image.\n"
+    "Step 4 \u2014 Spatial reasoning. Based on the spatial relationship described in the sentence, estimate where the target object would be located in the "
+    "selected image.\n"
+    "Step 5 \u2014 Conclusion. State your selected image index and final coordinate estimate.\n"
+    "\n"
+    "Image coordinate system: origin [0,0] at the top-left corner; x-axis points right (x \u2208 [0,511]); y-axis points down (y \u2208 [0,511]); image size "
+    "512\u00d7512 pixels.\n"
+    "IMPORTANT: When predicting coordinates, pay close attention to the origin position and axis directions, and ensure all values fall within the valid "
+    "range.\n"
+    "Write your step-by-step reasoning freely. End your response with ONLY the final JSON on the last line:\n"
+    "{\"selected_image\": <integer 0-29>, \"x\": <integer 0-511>, \"y\": <integer 0-511>}"
+)
 
 COT_STEP4 = (
     "Step 4 \u2014 Spatial reasoning. Based on the spatial relationship described in the sentence, "
     "estimate where the target object would be located in the selected image."
 )
 
-SPATIAL_STEP4 = """Step 4 \u2014 Spatial reasoning
-4a) Directional frame. Define the viewing direction as from the observer's furniture toward the anchor object. Interpret spatial relations from the observer's perspective while facing the anchor object:
-- LEFT / RIGHT: object lies to the left or right of the anchor object
-- FRONT: object is closer to the observer than the anchor object
-- ON TOP: object is resting on or above the anchor object
-- OTHER: relation does not clearly fit the above categories
-4b) Anchor coordinate. Estimate the pixel coordinate (x, y) of the anchor object.
-4c) Scene inventory. Identify two or three nearby visible objects around the anchor object. For each object, provide: object name or description; spatial relation to the anchor object; estimated pixel coordinate (x, y).
-4d) Target relation. Determine the spatial relation of the target object relative to the anchor object.
-4e) Target coordinate estimation. Estimate the target pixel coordinate using the anchor object coordinate, nearby object coordinates, and spacing and scale cues."""
+SPATIAL_STEP4 = (
+    "Step 4 \u2014 Spatial reasoning\n"
+    "4a) Directional frame. Define the viewing direction as from the observer's furniture toward the anchor object. Interpret spatial relations from the "
+    "observer's perspective while facing the anchor object:\n"
+    "- LEFT / RIGHT: object lies to the left or right of the anchor object\n"
+    "- FRONT: object is closer to the observer than the anchor object\n"
+    "- ON TOP: object is resting on or above the anchor object\n"
+    "- OTHER: relation does not clearly fit the above categories\n"
+    "4b) Anchor coordinate. Estimate the pixel coordinate (x, y) of the anchor object.\n"
+    "4c) Scene inventory. Identify two or three nearby visible objects around the anchor object. For each object, provide: object name or description; spatial "
+    "relation to the anchor object; estimated pixel coordinate (x, y).\n"
+    "4d) Target relation. Determine the spatial relation of the target object relative to the anchor object.\n"
+    "4e) Target coordinate estimation. Estimate the target pixel coordinate using the anchor object coordinate, nearby object coordinates, and spacing and "
+    "scale cues."
+)
 
 SPATIAL_COT_FRAMES = COT_FRAMES.replace(COT_STEP4, SPATIAL_STEP4)
 

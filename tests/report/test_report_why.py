@@ -144,7 +144,8 @@ def test_a_link_inside_the_page_filters_the_gallery(report, tmp_path):
         "var f = document.getElementById('f');"
         "f.onload = function () { f.contentWindow.location.hash = " + json.dumps(f"system={ego}&step=correct") + ";"
         " setTimeout(function () { var b = f.contentDocument.body; document.body.setAttribute('data-shown', b.getAttribute('data-gallery-shown'));"
-        " document.body.setAttribute('data-steps', Array.prototype.map.call(f.contentDocument.querySelectorAll('#gallery .card'), function (c) { return c.getAttribute('data-step'); }).join(',')); }, 500); };"
+        " document.body.setAttribute('data-steps', Array.prototype.map.call(f.contentDocument.querySelectorAll('#gallery .card'), function (c) { return "
+        "c.getAttribute('data-step'); }).join(',')); }, 500); };"
         "</script></body>",
         encoding="utf-8",
     )

@@ -32,7 +32,15 @@ def summary(overall: dict[str, Any] | None = None, rows: dict[str, Any] | None =
     if "official_parse" in sections:
         data["official_parse"] = {**breakdown(sections.pop("official_parse")["overall"]), "parser": "official", "rows_without_reading": 0}
     if "pipeline" in sections:
-        names = {"backend": "center", "model": "center", "profile": None, "strategy": "basic", "parser": "official", "scorers": ["official"], "config_hash": "h"}
+        names = {
+            "backend": "center",
+            "model": "center",
+            "profile": None,
+            "strategy": "basic",
+            "parser": "official",
+            "scorers": ["official"],
+            "config_hash": "h",
+        }
         data["pipeline"] = {**names, **sections.pop("pipeline")}
     return RunSummary.model_validate({**data, **sections})
 

@@ -95,10 +95,22 @@ def test_without_listed_options_the_labels_run_from_a_to_the_gold_one(tmp_path):
     [
         ("[1, 2]", "line 2", "a record must be a JSON object (got list); record left out"),
         ('{"doc_id": 0, "target": "B"', "line 2", "not a JSON record (Expecting ',' delimiter); record left out"),
-        ({"doc_id": True, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "required, a number or text of at most 200 characters naming the document; record left out"),
+        (
+            {"doc_id": True, "target": "B", "filtered_resps": "B"},
+            "line 2.doc_id",
+            "required, a number or text of at most 200 characters naming the document; record left out",
+        ),
         ({"doc_id": 5, "target": "B"}, "line 2.filtered_resps", "required, the reply as text of at most 1000000 characters; record left out"),
-        ({"doc_id": 5, "target": "B", "filtered_resps": "B", "resps": {"x": 1}}, "line 2.resps", "the reply must be text of at most 1000000 characters; record left out"),
-        ({"doc_id": 5, "target": "none of them", "filtered_resps": "B"}, "line 2.target", "'none of them' names no option label A-Z (nor a number, with no options in the prompt); record left out"),
+        (
+            {"doc_id": 5, "target": "B", "filtered_resps": "B", "resps": {"x": 1}},
+            "line 2.resps",
+            "the reply must be text of at most 1000000 characters; record left out",
+        ),
+        (
+            {"doc_id": 5, "target": "none of them", "filtered_resps": "B"},
+            "line 2.target",
+            "'none of them' names no option label A-Z (nor a number, with no options in the prompt); record left out",
+        ),
         ({"doc_id": 0, "target": "B", "filtered_resps": "B"}, "line 2.doc_id", "'0' is logged by an earlier line; this one left out"),
     ],
 )
@@ -164,7 +176,15 @@ def test_options_written_inline_after_options_are_read_from_their_line(tmp_path)
 
 
 def test_omnispatial_tests_sub_task_and_task_are_the_category_and_its_main_category(tmp_path):
-    metric = {"id": "3_1", "query": "...", "gt_content": "B", "pred": "Answer: B", "task": "Perspective_Taking", "sub_task": "omnispatial_egocentric", "is_correct": True}
+    metric = {
+        "id": "3_1",
+        "query": "...",
+        "gt_content": "B",
+        "pred": "Answer: B",
+        "task": "Perspective_Taking",
+        "sub_task": "omnispatial_egocentric",
+        "is_correct": True,
+    }
     [reply] = read_lmms_eval_log(write(tmp_path, {"doc_id": 0, "target": "B", "filtered_resps": "Answer: B", "omnispatial": metric, "input": PROMPT})).replies
     assert (reply.category, reply.main_category) == ("omnispatial_egocentric", "Perspective_Taking")
 

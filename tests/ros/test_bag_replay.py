@@ -106,7 +106,9 @@ def test_compressed_images_over_the_pixel_budget_are_counted_and_never_decoded(t
     store = get_typestore(Stores.ROS2_JAZZY)
     Compressed, Header, Time = (store.types[t] for t in ("sensor_msgs/msg/CompressedImage", "std_msgs/msg/Header", "builtin_interfaces/msg/Time"))
     png = np.frombuffer(claimed_png(6000, 6000), dtype=np.uint8)
-    images = [("/camera/image_raw/compressed", Compressed(header=Header(stamp=Time(sec=i, nanosec=0), frame_id="cam"), format="png", data=png)) for i in range(12)]
+    images = [
+        ("/camera/image_raw/compressed", Compressed(header=Header(stamp=Time(sec=i, nanosec=0), frame_id="cam"), format="png", data=png)) for i in range(12)
+    ]
     bag = write_bag(tmp_path / "huge", {"/camera/image_raw/compressed": ("sensor_msgs/msg/CompressedImage", store)}, images)
     session = GroundingSession(simulated_locate)
     replay_bag(bag, session, ReplayTopics(image="/camera/image_raw/compressed"))

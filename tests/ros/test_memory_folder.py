@@ -37,7 +37,13 @@ def test_a_saved_memory_loads_back_frame_for_frame(tmp_path):
         assert (a.stamp_ns, a.frame_id) == (b.stamp_ns, b.frame_id)
         assert np.array_equal(a.rgb, b.rgb)
         assert np.array_equal(a.camera.camera_to_world, b.camera.camera_to_world)
-        assert (a.camera.fx, a.camera.fy, a.camera.cx, a.camera.cy, a.camera.convention) == (b.camera.fx, b.camera.fy, b.camera.cx, b.camera.cy, b.camera.convention)
+        assert (a.camera.fx, a.camera.fy, a.camera.cx, a.camera.cy, a.camera.convention) == (
+            b.camera.fx,
+            b.camera.fy,
+            b.camera.cx,
+            b.camera.cy,
+            b.camera.convention,
+        )
         assert (a.depth is None) == (b.depth is None)
     assert np.allclose(memory.frames[1].depth, loaded.frames[1].depth, atol=1e-6)
 

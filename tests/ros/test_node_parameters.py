@@ -51,7 +51,9 @@ def test_mount_transform_as_an_array_of_whole_numbers_is_taken(ros_graph, no_mod
 def test_mount_transform_of_another_shape_is_one_config_error_saying_what_is_expected(ros_graph, no_model):
     from povagent.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=r'^ros-node parameters: parameter mount_transform: expected seven numbers "x y z qx qy qz qw" \(a string or an array\), got 6 number'):
+    with pytest.raises(
+        ConfigError, match=r'^ros-node parameters: parameter mount_transform: expected seven numbers "x y z qx qy qz qw" \(a string or an array\), got 6 number'
+    ):
         start_node(ros_graph, no_model, "mount_six", mount_transform="0 0 0 0 0 1")
 
 

@@ -69,7 +69,9 @@ def two_run_sweep(tmp_path_factory) -> Path:
     }
     (root / "base.yaml").write_text(yaml.safe_dump(base))
     sweep = root / "sweep.yaml"
-    sweep.write_text(yaml.safe_dump({"base": "base.yaml", "output": str(root / "sweep"), "axes": {"backend": ["center", {"name": "random", "options": {"seed": 1}}]}}))
+    sweep.write_text(
+        yaml.safe_dump({"base": "base.yaml", "output": str(root / "sweep"), "axes": {"backend": ["center", {"name": "random", "options": {"seed": 1}}]}})
+    )
     return run_sweep(sweep, quiet=True).output
 
 

@@ -55,15 +55,43 @@ MINDCUBE = {
     "vlmevalkit-spatial": ("31/60", {"among": "39/80", "around": "19/40", "rotation": "47/80"}),
 }
 SRBENCH3D_CATEGORIES = {
-    "vlmevalkit-exact": {"height": "1/6", "height_higher": "1/6", "location": "1/9", "location_above": "1/6", "location_closer_to_camera": "0",
-                         "location_next_to": "1/6", "multi_object": "1/10", "multi_object_closer_to": "0", "multi_object_facing": "0",
-                         "multi_object_parallel": "1/4", "multi_object_same_direction": "0", "multi_object_viewpoint_towards_object": "1/4",
-                         "orientation": "1/16", "orientation_in_front_of": "0", "orientation_on_the_left": "0", "orientation_viewpoint": "1/4"},
-    "3dsrbench-lmms": {"height": "1/6", "height_higher": "1/6", "location": "2/9", "location_above": "1/6", "location_closer_to_camera": "1/6",
-                       "location_next_to": "1/3", "multi_object": "1/20", "multi_object_closer_to": "0", "multi_object_facing": "0",
-                       "multi_object_parallel": "0", "multi_object_same_direction": "0", "multi_object_viewpoint_towards_object": "1/4",
-                       "orientation": "0", "orientation_in_front_of": "0", "orientation_on_the_left": "0", "orientation_viewpoint": "0"},
-}  # fmt: skip
+    "vlmevalkit-exact": {
+        "height": "1/6",
+        "height_higher": "1/6",
+        "location": "1/9",
+        "location_above": "1/6",
+        "location_closer_to_camera": "0",
+        "location_next_to": "1/6",
+        "multi_object": "1/10",
+        "multi_object_closer_to": "0",
+        "multi_object_facing": "0",
+        "multi_object_parallel": "1/4",
+        "multi_object_same_direction": "0",
+        "multi_object_viewpoint_towards_object": "1/4",
+        "orientation": "1/16",
+        "orientation_in_front_of": "0",
+        "orientation_on_the_left": "0",
+        "orientation_viewpoint": "1/4",
+    },
+    "3dsrbench-lmms": {
+        "height": "1/6",
+        "height_higher": "1/6",
+        "location": "2/9",
+        "location_above": "1/6",
+        "location_closer_to_camera": "1/6",
+        "location_next_to": "1/3",
+        "multi_object": "1/20",
+        "multi_object_closer_to": "0",
+        "multi_object_facing": "0",
+        "multi_object_parallel": "0",
+        "multi_object_same_direction": "0",
+        "multi_object_viewpoint_towards_object": "1/4",
+        "orientation": "0",
+        "orientation_in_front_of": "0",
+        "orientation_on_the_left": "0",
+        "orientation_viewpoint": "0",
+    },
+}
 SRBENCH3D = {
     "vlmevalkit-exact": {"vanilla_accuracy": "11/24", "flip_accuracy": "19/96", "circular_accuracy": "1/10", "flip_circular_accuracy": "0"},
     "3dsrbench-lmms": {"vanilla_accuracy": "95/192", "flip_accuracy": "11/48", "circular_accuracy": "1/10", "flip_circular_accuracy": "0"},
@@ -91,7 +119,8 @@ def assert_equal_to_upstream(result, expected: dict) -> None:
 
 
 @pytest.mark.parametrize(
-    ("name", "harness"), [("viewspatial_samples.jsonl", "lmms-eval"), ("ViewSpatialBench_preds.tsv", "vlmevalkit"), ("ViewSpatialBench_preds.xlsx", "vlmevalkit")]
+    ("name", "harness"),
+    [("viewspatial_samples.jsonl", "lmms-eval"), ("ViewSpatialBench_preds.tsv", "vlmevalkit"), ("ViewSpatialBench_preds.xlsx", "vlmevalkit")],
 )
 def test_viewspatial_logs_score_as_the_upstream_functions_do(name, harness, tmp_path):
     result = rescore_log(fixture(name, tmp_path), harness, "viewspatial", n_boot=0)
@@ -193,7 +222,9 @@ def test_a_bad_record_is_named_in_one_line_and_the_rest_are_still_scored(tmp_pat
 def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read(tmp_path):
     from povagent.errors import PluginError
 
-    with pytest.raises(PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, mmsi-circular, omnispatial, viewspatial, vsibench"):
+    with pytest.raises(
+        PluginError, match=r"unknown set .vsi.: a log can be scored as 3dsrbench, mindcube, mmsi, mmsi-circular, omnispatial, viewspatial, vsibench"
+    ):
         rescore_log(tmp_path / "not-there.jsonl", "lmms-eval", "vsi")
 
 
@@ -210,19 +241,36 @@ def test_an_unknown_set_is_refused_naming_the_known_ones_before_the_file_is_read
 # corrected re reading is api_eval.py's pattern with its fallback left out: a reply with no line is no hit.
 
 MMSI_CATEGORIES = {  # VLMEvalKit's MMSIBench_wo_circular category -> lmms-eval's l2_category (its CATEGORY_ALIASES)
-    "Pos-Cam-Cam": "Positional Relationship (Cam.–Cam.)", "Pos-Obj-Obj": "Positional Relationship (Obj.–Obj.)",
-    "Pos-Reg-Reg": "Positional Relationship (Reg.–Reg.)", "Pos-Cam-Obj": "Positional Relationship (Cam.–Obj.)",
-    "Pos-Obj-Reg": "Positional Relationship (Obj.–Reg.)", "Pos-Cam-Reg": "Positional Relationship (Cam.–Reg.)",
-    "Attr-Meas": "Attribute (Meas.)", "Attr-Appr": "Attribute (Appr.)", "Motion-Cam": "Motion (Cam.)", "Motion-Obj": "Motion (Obj.)", "MSR": "MSR",
-}  # fmt: skip
+    "Pos-Cam-Cam": "Positional Relationship (Cam.–Cam.)",
+    "Pos-Obj-Obj": "Positional Relationship (Obj.–Obj.)",
+    "Pos-Reg-Reg": "Positional Relationship (Reg.–Reg.)",
+    "Pos-Cam-Obj": "Positional Relationship (Cam.–Obj.)",
+    "Pos-Obj-Reg": "Positional Relationship (Obj.–Reg.)",
+    "Pos-Cam-Reg": "Positional Relationship (Cam.–Reg.)",
+    "Attr-Meas": "Attribute (Meas.)",
+    "Attr-Appr": "Attribute (Appr.)",
+    "Motion-Cam": "Motion (Cam.)",
+    "Motion-Obj": "Motion (Obj.)",
+    "MSR": "MSR",
+}
 _MMSI_ORDER = list(MMSI_CATEGORIES)
 MMSI = {
     "mmsi-official": ("29/80", ["4/21", "10/21", "7/23", "15/22", "1/12", "7/22", "10/21", "7/22", "1/3", "8/21", "5/11"]),
     "mmsi-lmms": ("23/60", ["1/7", "10/21", "7/23", "15/22", "5/24", "9/22", "10/21", "7/22", "8/21", "3/7", "9/22"]),
     "vlmevalkit-spatial": ("17/48", ["4/21", "10/21", "7/23", "15/22", "1/24", "7/22", "8/21", "7/22", "1/3", "10/21", "9/22"]),
 }
-OMNI_SUBS = ["Manipulation", "Motion_Analysis", "Traffic_Analysis", "Localization", "Geospatial_Strategy", "Pattern_Recognition",
-             "Geometric_Reasoning", "Egocentric", "Allocentric", "Hypothetical"]  # fmt: skip
+OMNI_SUBS = [
+    "Manipulation",
+    "Motion_Analysis",
+    "Traffic_Analysis",
+    "Localization",
+    "Geospatial_Strategy",
+    "Pattern_Recognition",
+    "Geometric_Reasoning",
+    "Egocentric",
+    "Allocentric",
+    "Hypothetical",
+]
 OMNI_TASKS = ["Dynamic_Reasoning", "Spatial_Interaction", "Complex_Logic", "Perspective_Taking"]
 OMNISPATIAL = {  # (overall, the ten sub-tasks in OMNI_SUBS' order, the four task types in OMNI_TASKS')
     "omnispatial-re": ("19/55", ["11/21", "8/23", "3/10", "8/21", "7/23", "9/23", "3/11", "7/23", "8/21", "6/23"], ["19/44", "21/64", "1/3", "21/67"]),
@@ -230,7 +278,7 @@ OMNISPATIAL = {  # (overall, the ten sub-tasks in OMNI_SUBS' order, the four tas
     "omnispatial-lmms-re": ("81/220", ["11/21", "10/23", "2/5", "3/7", "7/23", "9/23", "3/11", "6/23", "8/21", "7/23"], ["21/44", "3/8", "1/3", "21/67"]),
     "omnispatial-re-corrected": ("21/110", ["5/21", "4/23", "3/20", "5/21", "4/23", "6/23", "3/22", "5/23", "4/21", "3/23"], ["9/44", "3/16", "1/5", "12/67"]),
     "vlmevalkit-spatial": ("23/55", ["3/7", "11/23", "1/5", "10/21", "7/23", "12/23", "9/22", "9/23", "10/21", "11/23"], ["5/11", "21/64", "7/15", "30/67"]),
-}  # fmt: skip
+}
 
 
 @pytest.mark.parametrize(("name", "harness"), [("mmsi_bench_samples.jsonl", "lmms-eval"), ("MMSIBench_wo_circular_preds.tsv", "vlmevalkit")])
@@ -264,7 +312,9 @@ def test_omnispatial_names_its_read_a_fallback_and_lmms_evals_strip_per_rule(tmp
     rules = {r.rule: r for r in result.rules}
     assert [r.official for r in result.rules] == [True, False, False, False, False]
     assert rules["omnispatial-re"].source == "qizekun/OmniSpatial@208bac258d8671c6857b3be2834997936ba7fc51"
-    assert rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    assert (
+        rules["omnispatial-lmms-re"].source == rules["omnispatial-lmms-direct"].source == "EvolvingLMMs-Lab/lmms-eval@75571cfe0fa36ca5ec2e6aa2bb268f9d38295af3"
+    )
     assert rules["omnispatial-re"].reads == "resps as written"
     assert rules["omnispatial-lmms-re"].reads.startswith("resps, then lmms-eval's reasoning-tag strip")
     # the fallback answers every reply; its corrected reading only the replies with an "Answer: X" line
@@ -289,23 +339,40 @@ def test_mmsi_options_are_read_from_the_question_as_the_set_writes_them(tmp_path
 # VLMEvalKit's figures: open-compass/VLMEvalKit@e8e78f05f3080fe28154f2130321f17951c3be94 VsiBench.evaluate (no judge:
 # compute_mcq_score, compute_na_score, _aggregate) RUN on the same replies (resps where kept, else filtered_resps)
 # dumped as its prediction file (.tsv).
-VSIBENCH_TYPES = ["obj_appearance_order", "object_abs_distance", "object_counting", "object_rel_distance", "object_size_estimation",
-                  "room_size_estimation", "route_planning", "object_rel_direction"]  # fmt: skip
+VSIBENCH_TYPES = [
+    "obj_appearance_order",
+    "object_abs_distance",
+    "object_counting",
+    "object_rel_distance",
+    "object_size_estimation",
+    "room_size_estimation",
+    "route_planning",
+    "object_rel_direction",
+]
 VSIBENCH = {
-    "vsibench": (17.35806258958433, [23.076923076923077, 21.200000000000003, 7.6, 4.3478260869565215, 19.090909090909093,
-                                     23.04347826086957, 21.73913043478261, 18.766233766233764]),
-    "vlmevalkit-vsibench": (43.697944567509786, [42.30769230769231, 50.4, 49.599999999999994, 17.391304347826086, 42.272727272727266,
-                                                 52.17391304347826, 47.82608695652174, 47.61183261183262]),
-    "vsibench-lmms": (33.41217357521705, [23.076923076923078, 50.4, 49.599999999999994, 4.3478260869565216, 42.27272727272727,
-                                          52.17391304347826, 21.739130434782608, 23.686868686868687]),
-}  # fmt: skip
+    "vsibench": (
+        17.35806258958433,
+        [23.076923076923077, 21.200000000000003, 7.6, 4.3478260869565215, 19.090909090909093, 23.04347826086957, 21.73913043478261, 18.766233766233764],
+    ),
+    "vlmevalkit-vsibench": (
+        43.697944567509786,
+        [42.30769230769231, 50.4, 49.599999999999994, 17.391304347826086, 42.272727272727266, 52.17391304347826, 47.82608695652174, 47.61183261183262],
+    ),
+    "vsibench-lmms": (
+        33.41217357521705,
+        [23.076923076923078, 50.4, 49.599999999999994, 4.3478260869565216, 42.27272727272727, 52.17391304347826, 21.739130434782608, 23.686868686868687],
+    ),
+}
 
 
 def test_vsibench_log_gives_the_sets_overall_and_each_harnesss_as_the_upstream_functions_do(tmp_path):
     result = rescore_log(fixture("vsibench_samples.jsonl", tmp_path), "lmms-eval", "vsibench", n_boot=0)
     assert (result.items, result.numerical, result.bad_records) == (230, 95, 0)
     assert [(r.rule, r.official, r.metric) for r in result.rules] == [
-        ("vsibench", True, "score"), ("vlmevalkit-vsibench", False, "score"), ("vsibench-lmms", False, "score")]  # fmt: skip
+        ("vsibench", True, "score"),
+        ("vlmevalkit-vsibench", False, "score"),
+        ("vsibench-lmms", False, "score"),
+    ]
     for rule in result.rules:
         overall, per_type = VSIBENCH[rule.rule]
         cells = dict(rule.per_category)
@@ -336,26 +403,63 @@ def test_a_numerical_reply_is_read_as_a_number_and_shown_as_one(tmp_path):
 # from RUNNING VLMEvalKit@e8e78f05 VsiBench.evaluate on the .tsv and on the .xlsx (equal), and the set's own and lmms-eval's
 # functions (as above) on the replies; per question type, the three direction levels apart (upstream's per-type means).
 VSIBENCH_VLMEVALKIT_FILE = {
-    "vsibench": (14.42240829616304, {
-        "object_rel_direction_easy": 0.058823529411764705, "object_rel_direction_medium": 0.06451612903225806,
-        "object_rel_direction_hard": 0.22580645161290322, "object_rel_distance": 0.25806451612903225, "route_planning": 0.15625,
-        "obj_appearance_order": 0.13333333333333333, "object_abs_distance": 0.19090909090909092, "object_counting": 0.08857142857142858,
-        "object_size_estimation": 0.08125, "room_size_estimation": 0.12903225806451613}),
-    "vlmevalkit-vsibench": (47.910093518712465, {
-        "obj_appearance_order": 0.36666666666666664, "object_rel_direction_easy": 0.5, "object_rel_direction_hard": 0.5483870967741935,
-        "object_rel_direction_medium": 0.2903225806451613, "object_rel_distance": 0.5806451612903226, "route_planning": 0.59375,
-        "object_abs_distance": 0.39393939393939387, "object_counting": 0.4714285714285714, "object_size_estimation": 0.415625,
-        "room_size_estimation": 0.5645161290322581}),
-    "vsibench-lmms": (34.736171457219256, {
-        "object_rel_direction_easy": 0.11764705882352941, "object_rel_direction_medium": 0.12903225806451613,
-        "object_rel_direction_hard": 0.22580645161290322, "object_rel_distance": 0.2903225806451613, "route_planning": 0.21875,
-        "obj_appearance_order": 0.23333333333333334, "object_abs_distance": 0.5303030303030303, "object_counting": 0.5,
-        "object_size_estimation": 0.39062499999999994, "room_size_estimation": 0.45806451612903226}),
-}  # fmt: skip
+    "vsibench": (
+        14.42240829616304,
+        {
+            "object_rel_direction_easy": 0.058823529411764705,
+            "object_rel_direction_medium": 0.06451612903225806,
+            "object_rel_direction_hard": 0.22580645161290322,
+            "object_rel_distance": 0.25806451612903225,
+            "route_planning": 0.15625,
+            "obj_appearance_order": 0.13333333333333333,
+            "object_abs_distance": 0.19090909090909092,
+            "object_counting": 0.08857142857142858,
+            "object_size_estimation": 0.08125,
+            "room_size_estimation": 0.12903225806451613,
+        },
+    ),
+    "vlmevalkit-vsibench": (
+        47.910093518712465,
+        {
+            "obj_appearance_order": 0.36666666666666664,
+            "object_rel_direction_easy": 0.5,
+            "object_rel_direction_hard": 0.5483870967741935,
+            "object_rel_direction_medium": 0.2903225806451613,
+            "object_rel_distance": 0.5806451612903226,
+            "route_planning": 0.59375,
+            "object_abs_distance": 0.39393939393939387,
+            "object_counting": 0.4714285714285714,
+            "object_size_estimation": 0.415625,
+            "room_size_estimation": 0.5645161290322581,
+        },
+    ),
+    "vsibench-lmms": (
+        34.736171457219256,
+        {
+            "object_rel_direction_easy": 0.11764705882352941,
+            "object_rel_direction_medium": 0.12903225806451613,
+            "object_rel_direction_hard": 0.22580645161290322,
+            "object_rel_distance": 0.2903225806451613,
+            "route_planning": 0.21875,
+            "obj_appearance_order": 0.23333333333333334,
+            "object_abs_distance": 0.5303030303030303,
+            "object_counting": 0.5,
+            "object_size_estimation": 0.39062499999999994,
+            "room_size_estimation": 0.45806451612903226,
+        },
+    ),
+}
 #: VsiBench._aggregate's own table for the same file (times 100): the direction levels merged.
-VLMEVALKIT_TABLE = {"object_counting": 47.14285714285714, "object_abs_distance": 39.393939393939384, "object_size_estimation": 41.5625,
-                    "room_size_estimation": 56.451612903225815, "object_rel_distance": 58.06451612903226,
-                    "object_rel_direction": 44.623655913978496, "route_planning": 59.375, "obj_appearance_order": 36.666666666666664}  # fmt: skip
+VLMEVALKIT_TABLE = {
+    "object_counting": 47.14285714285714,
+    "object_abs_distance": 39.393939393939384,
+    "object_size_estimation": 41.5625,
+    "room_size_estimation": 56.451612903225815,
+    "object_rel_distance": 58.06451612903226,
+    "object_rel_direction": 44.623655913978496,
+    "route_planning": 59.375,
+    "obj_appearance_order": 36.666666666666664,
+}
 
 
 @pytest.mark.parametrize("name", ["VSI-Bench_preds.tsv", "VSI-Bench_preds.xlsx"])
@@ -363,7 +467,10 @@ def test_vsibench_prediction_file_gives_what_vlmevalkits_own_evaluate_and_the_ot
     result = rescore_log(fixture(name, tmp_path), "vlmevalkit", "vsibench", n_boot=0)
     assert (result.items, result.numerical, result.bad_records) == (320, 131, 0)
     assert [(r.rule, r.official, r.harness) for r in result.rules] == [
-        ("vsibench", True, "VSI-Bench"), ("vlmevalkit-vsibench", False, "VLMEvalKit"), ("vsibench-lmms", False, "lmms-eval")]  # fmt: skip
+        ("vsibench", True, "VSI-Bench"),
+        ("vlmevalkit-vsibench", False, "VLMEvalKit"),
+        ("vsibench-lmms", False, "lmms-eval"),
+    ]
     for rule in result.rules:
         overall, per_type = VSIBENCH_VLMEVALKIT_FILE[rule.rule]
         assert rule.overall == pytest.approx(overall / 100, rel=1e-12), rule.rule
@@ -422,8 +529,19 @@ def test_a_number_as_the_answer_of_a_choice_sets_prediction_file_is_named_by_its
 # (InternRobotics/MMSI-Bench@5de2f3d2), VLMEvalKit's are mcq_circular_eval with exact matching and
 # report_acc (VLMEvalKit@e8e78f05), each run on the file's replies.
 _PR = "Positional Relationship"
-MMSI_CIRCULAR_CATEGORIES = [f"{_PR} (Cam.–Cam.)", f"{_PR} (Obj.–Obj.)", f"{_PR} (Reg.–Reg.)", f"{_PR} (Cam.–Obj.)", f"{_PR} (Obj.–Reg.)",
-                            f"{_PR} (Cam.–Reg.)", "Attribute (Meas.)", "Attribute (Appr.)", "Motion (Cam.)", "Motion (Obj.)", "MSR"]  # fmt: skip
+MMSI_CIRCULAR_CATEGORIES = [
+    f"{_PR} (Cam.–Cam.)",
+    f"{_PR} (Obj.–Obj.)",
+    f"{_PR} (Reg.–Reg.)",
+    f"{_PR} (Cam.–Obj.)",
+    f"{_PR} (Obj.–Reg.)",
+    f"{_PR} (Cam.–Reg.)",
+    "Attribute (Meas.)",
+    "Attribute (Appr.)",
+    "Motion (Cam.)",
+    "Motion (Obj.)",
+    "MSR",
+]
 MMSI_CIRCULAR = {
     "mmsi-official": ("13/60", ["1/6", "1/6", "0", "1/6", "1/2", "1/5", "1/5", "0", "2/5", "0", "3/5"]),
     "vlmevalkit-exact": ("3/20", ["0", "1/3", "0", "1/6", "0", "2/5", "0", "1/5", "2/5", "0", "1/5"]),

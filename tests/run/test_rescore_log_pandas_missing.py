@@ -32,13 +32,37 @@ VLMEVALKIT = [
     ("ViewSpatialBench_missing_preds.xlsx", "viewspatial", "vlmevalkit-spatial", "6/31", {VS_CAM: "1/16", VS_PER: "1/3"}),
     ("MindCubeBench_missing_preds.tsv", "mindcube", "vlmevalkit-spatial", "6/31", {"among": "1/11", "around": "1/5", "rotation": "3/10"}),
     ("MMSIBench_wo_circular_missing_preds.tsv", "mmsi", "vlmevalkit-spatial", "6/31", {"Pos-Cam-Cam": "1/11", "Attr-Meas": "1/5", "MSR": "3/10"}),
-    ("OmniSpatialBench_manual_cot_missing_preds.tsv", "omnispatial", "vlmevalkit-spatial", "6/31",
-     {"Dynamic_Reasoning": "1/16", "Manipulation": "1/16", "Perspective_Taking": "1/3", "Egocentric": "1/3"}),
+    (
+        "OmniSpatialBench_manual_cot_missing_preds.tsv",
+        "omnispatial",
+        "vlmevalkit-spatial",
+        "6/31",
+        {"Dynamic_Reasoning": "1/16", "Manipulation": "1/16", "Perspective_Taking": "1/3", "Egocentric": "1/3"},
+    ),
     ("3DSRBench_missing_preds.tsv", "3dsrbench", "vlmevalkit-exact", "4/33", {"height_higher": "1/5", "location_above": "1/18"}),
-]  # fmt: skip
+]
 #: The replies pandas reads as missing, in the files' order (their first 19 rows).
-MISSING = ["", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN", "<NA>", "N/A", "NA", "NULL", "NaN",
-           "None", "n/a", "nan", "null"]  # fmt: skip
+MISSING = [
+    "",
+    "#N/A",
+    "#N/A N/A",
+    "#NA",
+    "-1.#IND",
+    "-1.#QNAN",
+    "-NaN",
+    "-nan",
+    "1.#IND",
+    "1.#QNAN",
+    "<NA>",
+    "N/A",
+    "NA",
+    "NULL",
+    "NaN",
+    "None",
+    "n/a",
+    "nan",
+    "null",
+]
 
 
 def _fraction(value: str) -> float:
@@ -68,5 +92,7 @@ def test_the_sets_own_rule_and_lmms_evals_still_read_n_a_as_written():
     na = next(d for d in result.disagreements if d.reply == "N/A")  # row 12: gold A
     assert na.labels == {"viewspatial-official": "A", "viewspatial": "A", "vlmevalkit-spatial": None}
     assert na.correct == {"viewspatial-official": True, "viewspatial": True, "vlmevalkit-spatial": False}
-    assert {r.rule: r.overall for r in result.rules if not r.rule.startswith("vlmevalkit")} == pytest.approx({"viewspatial-official": 10 / 31, "viewspatial": 10 / 31})
+    assert {r.rule: r.overall for r in result.rules if not r.rule.startswith("vlmevalkit")} == pytest.approx(
+        {"viewspatial-official": 10 / 31, "viewspatial": 10 / 31}
+    )
 

@@ -12,16 +12,24 @@ import pytest
 from povagent.scoring.metric_columns import metrics_breakdown
 from povagent.scoring.metrics import Metric, valued_row
 
-SCORE = Metric("score", "higher", "mean", "score", "Score", "per question", over="all", unscored=0.0,
-               category_mean=True, merged_categories=(("dir_easy", "dir_hard"),))  # fmt: skip
+SCORE = Metric(
+    "score", "higher", "mean", "score", "Score", "per question", over="all", unscored=0.0, category_mean=True, merged_categories=(("dir_easy", "dir_hard"),)
+)
 DECLARED = {"mine": (SCORE,)}
 
 
 def row(category: str, score: float | None):
     """A row of ``category``; ``score=None``: a reply read as nothing, which no scorer scored."""
     scores = {} if score is None else {"mine": {"score": score, "answered": True, "category": category}}
-    return SimpleNamespace(status="parse_error" if score is None else "answered", scores=scores, condition="", direction="",
-                           pair_id=f"{category}-{id(scores)}", run=0, category=category)  # fmt: skip
+    return SimpleNamespace(
+        status="parse_error" if score is None else "answered",
+        scores=scores,
+        condition="",
+        direction="",
+        pair_id=f"{category}-{id(scores)}",
+        run=0,
+        category=category,
+    )
 
 
 def breakdown(rows, declared=DECLARED):
@@ -29,8 +37,23 @@ def breakdown(rows, declared=DECLARED):
 
 
 #: VLMEvalKit's VsiBench._aggregate: the group merges only when each of its categories has rows.
-WHOLE = {"mine": (Metric("score", "higher", "mean", "score", "Score", "per question", over="all", unscored=0.0, category_mean=True,
-                         merged_categories=(("dir_easy", "dir_mid", "dir_hard"),), merge_only_whole=True),)}  # fmt: skip
+WHOLE = {
+    "mine": (
+        Metric(
+            "score",
+            "higher",
+            "mean",
+            "score",
+            "Score",
+            "per question",
+            over="all",
+            unscored=0.0,
+            category_mean=True,
+            merged_categories=(("dir_easy", "dir_mid", "dir_hard"),),
+            merge_only_whole=True,
+        ),
+    )
+}
 
 
 def test_the_overall_is_the_mean_of_the_category_means_not_of_the_rows():
@@ -49,7 +72,9 @@ def test_merged_categories_are_averaged_into_one_first():
 
 def test_a_group_with_a_category_missing_still_merges_by_default():
     # dir_easy 1, dir_hard 0 merge into 0.5 though dir_mid has no row; with size 1 -> 0.75
-    cells = breakdown([row("dir_easy", 1.0), row("dir_hard", 0.0), row("size", 1.0)], {"mine": (replace(SCORE, merged_categories=(("dir_easy", "dir_mid", "dir_hard"),)),)})
+    cells = breakdown(
+        [row("dir_easy", 1.0), row("dir_hard", 0.0), row("size", 1.0)], {"mine": (replace(SCORE, merged_categories=(("dir_easy", "dir_mid", "dir_hard"),)),)}
+    )
     assert cells["overall"]["score"]["value"] == pytest.approx(0.75)
 
 

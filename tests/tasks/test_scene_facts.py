@@ -52,7 +52,9 @@ def _box_object(object_type: str, centre, size) -> SceneObject:
     (cx, cy, cz), (hx, hy, hz) = centre, (s / 2 for s in size)
     corners = [[cx + sx * hx, cy + sy * hy, cz + sz * hz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
     box = AxisAlignedBoundingBox(center=Vec3(x=cx, y=cy, z=cz), size=Vec3(x=size[0], y=size[1], z=size[2]), cornerPoints=corners)
-    return SceneObject(objectId=f"{object_type}|1", position=Vec3(x=cx, y=cy, z=cz), raw_metadata=RawMetadata(objectType=object_type, axisAlignedBoundingBox=box))
+    return SceneObject(
+        objectId=f"{object_type}|1", position=Vec3(x=cx, y=cy, z=cz), raw_metadata=RawMetadata(objectType=object_type, axisAlignedBoundingBox=box)
+    )
 
 
 def test_the_teaching_frame_has_the_anchors_centre_in_view_before_it_has_the_furniture(tmp_path) -> None:

@@ -20,8 +20,20 @@ def test_every_generated_sentence_comes_apart_and_back_together(generated_releas
     ("sentence", "direction", "context", "anchor", "target"),
     [
         ("While replacing the bulb, I saw the book on the left side of the counter.", "left", "While replacing the bulb, I saw the book", "counter", "book"),
-        ("I was turning on the floor lamp when I noticed the keys on the sofa.", "up", "I was turning on the floor lamp when I noticed the keys", "sofa", "keys"),
-        ("The boots were in front of the doorway between the kitchen and the bedroom.", "front", "The boots were", "doorway between the kitchen and the bedroom", "boots"),
+        (
+            "I was turning on the floor lamp when I noticed the keys on the sofa.",
+            "up",
+            "I was turning on the floor lamp when I noticed the keys",
+            "sofa",
+            "keys",
+        ),
+        (
+            "The boots were in front of the doorway between the kitchen and the bedroom.",
+            "front",
+            "The boots were",
+            "doorway between the kitchen and the bedroom",
+            "boots",
+        ),
     ],
 )
 def test_the_relation_phrase_of_the_direction_splits_context_and_anchor(sentence, direction, context, anchor, target):

@@ -30,7 +30,9 @@ def messages_export(generated_release: Path, tmp_path_factory: pytest.TempPathFa
     return out, report
 
 
-def test_the_messages_folder_loads_its_conversations_with_datasets_from_any_folder(messages_export, generated_release: Path, tmp_path: Path, monkeypatch) -> None:
+def test_the_messages_folder_loads_its_conversations_with_datasets_from_any_folder(
+    messages_export, generated_release: Path, tmp_path: Path, monkeypatch
+) -> None:
     out, report = messages_export
     monkeypatch.chdir(tmp_path)  # not the export folder: the images must resolve anyway
     # a cache of this test's own: datasets keeps the resolved image paths of a load in its cache

@@ -41,7 +41,8 @@ RECORDS = [
      "question": "If I am standing by the desk and facing the door, is the bed to my front-left, front-right, back-left, or back-right?",
      "options": ["A. front-left", "B. front-right", "C. back-left", "D. back-right"], "ground_truth": "D"},
     {"id": 8, "dataset": "scannet", "scene_name": "scene0011_00", "question_type": "route_planning",
-     "question": "You are a robot beginning at the door facing the bed. You want to navigate to the desk. [...] 1. Go forward until the bed 2. [please fill in] 3. Go forward until the desk.",
+     "question": "You are a robot beginning at the door facing the bed. You want to navigate to the desk. [...] 1. Go forward until the bed 2. [please fill "
+                 "in] 3. Go forward until the desk.",
      "options": ["A. Turn Left", "B. Turn Right", "C. Turn Back"], "ground_truth": "A"},
     {"id": 9, "dataset": "scannet", "scene_name": "scene0011_00", "question_type": "obj_appearance_order",
      "question": "What will be the first-time appearance order of the following categories in the video: bed, desk, door, chair?",

@@ -23,10 +23,12 @@ def vsibench_pipeline(tmp_path, vsibench_folder, offline_plugin_file):
             "plugins": [str(offline_plugin_file)],
             "dataset": {"path": str(vsibench_folder / file), "format": "vsibench", "options": {"frames": 3}},
             "backend": {"name": backend, **({"options": {"reply": reply}} if reply is not None else {})},
-            "runs": 1, "concurrency": 2, "timeout": 5,
+            "runs": 1,
+            "concurrency": 2,
+            "timeout": 5,
             "output": str(tmp_path / f"run-{backend}-{reply}"),
             **more,
-        }  # fmt: skip
+        }
         path = tmp_path / f"{backend}-{reply}.yaml"
         path.write_text(yaml.safe_dump(data, sort_keys=False))
         return load_pipeline(path)
@@ -93,7 +95,12 @@ def test_the_request_shows_the_frames_then_the_sets_wording(vsibench_folder):
 
 def test_the_format_is_registered_with_its_official_rule():
     fmt = registered_format(build_plugin_host(), "vsibench")
-    assert (fmt.answer_type, fmt.official_parser, fmt.official_scorer, fmt.option_names) == ("choice-or-number", "vsibench", "vsibench", ("frames", "cache_dir"))
+    assert (fmt.answer_type, fmt.official_parser, fmt.official_scorer, fmt.option_names) == (
+        "choice-or-number",
+        "vsibench",
+        "vsibench",
+        ("frames", "cache_dir"),
+    )
     assert fmt.prompt_profile.text.__name__ == "vsibench_text"
 
 

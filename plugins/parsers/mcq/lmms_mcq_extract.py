@@ -31,11 +31,34 @@ from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL
 
 #: The phrases after which a label is taken as the answer, in lmms-eval's order.
 ANSWER_PHRASES = (
-    "the answer is", "answer is", "the correct answer is", "correct answer is", "the best answer is",
-    "best answer is", "the correct option is", "correct option is", "the best option is", "best option is",
-    "the choice is", "choice is", "the correct choice is", "correct choice is", "i choose", "i select",
-    "i pick", "my answer is", "my choice is", "옵션", "정답은", "답은", "답:", "答案是", "答案为", "选", "答えは",
-)  # fmt: skip
+    "the answer is",
+    "answer is",
+    "the correct answer is",
+    "correct answer is",
+    "the best answer is",
+    "best answer is",
+    "the correct option is",
+    "correct option is",
+    "the best option is",
+    "best option is",
+    "the choice is",
+    "choice is",
+    "the correct choice is",
+    "correct choice is",
+    "i choose",
+    "i select",
+    "i pick",
+    "my answer is",
+    "my choice is",
+    "옵션",
+    "정답은",
+    "답은",
+    "답:",
+    "答案是",
+    "答案为",
+    "选",
+    "答えは",
+)
 #: Kinds of candidate by rank (higher wins), and the text after the label that marks each
 #: suffix kind.
 RANK = {"start": 10, "end": 9, "phrase": 7, "parentheses": 6, "period": 5, "colon": 4, "right_paren": 3, "space": 2, "fallback": 0}
@@ -142,7 +165,13 @@ class LmmsMcqExtractCorrectedParser(LmmsMcqExtractParser):
 def register_parsers(register) -> None:
     """Contribute lmms-eval's shared reader and its corrected reading."""
     where = f"lmms_eval/tasks/_task_utils/mcq_extract.py extract_mcq_answer @ {LMMS_EVAL}"
-    register("lmms-mcq-extract", LmmsMcqExtractParser,
-             description=f"lmms-eval's shared multiple-choice reader, bug included: 'The answer is C. Because' reads B ({where})")  # fmt: skip
-    register("lmms-mcq-extract-corrected", LmmsMcqExtractCorrectedParser,
-             description=f"lmms-eval's shared multiple-choice reader, corrected: an answer phrase names the first label standing alone after it ({where})")  # fmt: skip
+    register(
+        "lmms-mcq-extract",
+        LmmsMcqExtractParser,
+        description=f"lmms-eval's shared multiple-choice reader, bug included: 'The answer is C. Because' reads B ({where})",
+    )
+    register(
+        "lmms-mcq-extract-corrected",
+        LmmsMcqExtractCorrectedParser,
+        description=f"lmms-eval's shared multiple-choice reader, corrected: an answer phrase names the first label standing alone after it ({where})",
+    )

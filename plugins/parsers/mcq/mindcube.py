@@ -36,23 +36,29 @@ from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL, MINDCUBE
 
 _LABEL_PERIOD = re.compile(r"([A-E])\.")
 _ANSWER_SECTION = re.compile(r"<Answer>(.*?)(?:<|$)", re.DOTALL)
-_IN_SECTION = tuple(re.compile(p) for p in (
-    r"[Mm]y answer is ([A-E])",
-    r"[Mm]y answer is ([A-E])\.",
-    r"[Tt]he answer is ([A-E])",
-    r"(?:Answer: )?([A-E])\.",
-    r"\b([A-E])\b",
-))  # fmt: skip
-_IN_WHOLE = tuple(re.compile(p) for p in (
-    r"(?:Answer: )?([A-E])\. [A-Za-z0-9 \-\(\)\'\",]+(?=(?:\n|$|\.|\"))",
-    r"(?:Answer: )?([A-E])\. [A-Za-z0-9 \-\(\)\'\"]+",
-    r"(?:^|\n)(?:Answer: )?([A-E])(?:\.|$|\s)",
-    r"[\*\"]([A-E])[\*\"]",
-    r"\bAnswer:?\s*([A-E])\b",
-    r"[Mm]y answer is ([A-E])",
-    r"[Mm]y answer is ([A-E])\.",
-    r"answer is ([A-E])",
-))  # fmt: skip
+_IN_SECTION = tuple(
+    re.compile(p)
+    for p in (
+        r"[Mm]y answer is ([A-E])",
+        r"[Mm]y answer is ([A-E])\.",
+        r"[Tt]he answer is ([A-E])",
+        r"(?:Answer: )?([A-E])\.",
+        r"\b([A-E])\b",
+    )
+)
+_IN_WHOLE = tuple(
+    re.compile(p)
+    for p in (
+        r"(?:Answer: )?([A-E])\. [A-Za-z0-9 \-\(\)\'\",]+(?=(?:\n|$|\.|\"))",
+        r"(?:Answer: )?([A-E])\. [A-Za-z0-9 \-\(\)\'\"]+",
+        r"(?:^|\n)(?:Answer: )?([A-E])(?:\.|$|\s)",
+        r"[\*\"]([A-E])[\*\"]",
+        r"\bAnswer:?\s*([A-E])\b",
+        r"[Mm]y answer is ([A-E])",
+        r"[Mm]y answer is ([A-E])\.",
+        r"answer is ([A-E])",
+    )
+)
 _LABEL_WITH_WORDS = re.compile(r"([A-E])\. [A-Za-z0-9 \-\(\)\'\",]+")
 _LONE_LABEL = re.compile(r"\b([A-E])\b")
 
@@ -126,10 +132,20 @@ class MindCubeOfficialParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute MindCube's own rule and lmms-eval's port of it."""
-    register("mindcube-official", MindCubeOfficialParser, description=(
-        f"MindCube's own answer reading: its five-step cascade on the reply as written, no reasoning strip, so "
-        f"'<think>Maybe A. Keyboard</think>\\nD' reads A ({MINDCUBE} src/evaluation/core/extractors.py extract_answer, "
-        f"as src/evaluation/evaluator.py calls it)"))  # fmt: skip
-    register("mindcube", MindCubeParser, description=(
-        f"lmms-eval's MindCube rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then MindCube's "
-        f"answer cascade (lmms_eval/tasks/mindcube/utils.py extract_answer @ {LMMS_EVAL}); the set's own reading is mindcube-official"))  # fmt: skip
+    register(
+        "mindcube-official",
+        MindCubeOfficialParser,
+        description=(
+            f"MindCube's own answer reading: its five-step cascade on the reply as written, no reasoning strip, so "
+            f"'<think>Maybe A. Keyboard</think>\\nD' reads A ({MINDCUBE} src/evaluation/core/extractors.py extract_answer, "
+            f"as src/evaluation/evaluator.py calls it)"
+        ),
+    )
+    register(
+        "mindcube",
+        MindCubeParser,
+        description=(
+            f"lmms-eval's MindCube rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then MindCube's "
+            f"answer cascade (lmms_eval/tasks/mindcube/utils.py extract_answer @ {LMMS_EVAL}); the set's own reading is mindcube-official"
+        ),
+    )

@@ -67,7 +67,9 @@ def mmsi_lmms_label(text: str) -> str | None:
 class MMSIOfficialParser(RuleParser):
     """MMSI-Bench's own rule (module docstring)."""
 
-    reads = "MMSI-Bench's own rule: the text in the first ``...`` then `...` if any, then the first capital A-D standing alone and not followed by a space and a letter"
+    reads = ("MMSI-Bench's own rule: the text in the first ``...`` then `...` if any, then the first capital A-D standing alone and not followed by a space "
+             "and "
+             "a letter")
     beside_official = "reads choice answers, which the official (point) parser does not read; MMSI-Bench's own rule, the set's default"
     source = MMSI_BENCH
     harness = "MMSI-Bench"
@@ -80,7 +82,8 @@ class MMSIOfficialParser(RuleParser):
 class MMSILmmsParser(RuleParser):
     """lmms-eval's ``mmsi_bench`` rule (module docstring)."""
 
-    reads = "lmms-eval's mmsi_bench: its reasoning-tag strip, the backtick and {...} steps, then the first A-F in either case standing alone and not followed by a space and a letter"
+    reads = ("lmms-eval's mmsi_bench: its reasoning-tag strip, the backtick and {...} steps, then the first A-F in either case standing alone and not followed "
+             "by a space and a letter")
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's reading of MMSI-Bench"
     source = LMMS_EVAL
     harness = "lmms-eval"
@@ -96,10 +99,20 @@ class MMSILmmsParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute MMSI-Bench's own rule and lmms-eval's reading of it."""
-    register("mmsi-official", MMSIOfficialParser, description=(
-        f"MMSI-Bench's own rule: the text in ``...`` then `...` if present, then the first capital A-D word not followed by "
-        f"a space and a letter ({MMSI_BENCH} vlmeval/dataset/mmsi_bench.py extract_single_choice_with_word_boundary, evaluate)"))  # fmt: skip
-    register("mmsi-lmms", MMSILmmsParser, description=(
-        f"lmms-eval's MMSI-Bench rule: lmms-eval's reasoning-tag strip, the backtick and {{...}} steps, then the first A-F word in "
-        f"either case not followed by a space and a letter, upper-cased (lmms_eval/tasks/mmsi_bench/utils.py "
-        f"extract_single_choice_with_word_boundary @ {LMMS_EVAL}); the set's own reading is mmsi-official"))  # fmt: skip
+    register(
+        "mmsi-official",
+        MMSIOfficialParser,
+        description=(
+            f"MMSI-Bench's own rule: the text in ``...`` then `...` if present, then the first capital A-D word not followed by "
+            f"a space and a letter ({MMSI_BENCH} vlmeval/dataset/mmsi_bench.py extract_single_choice_with_word_boundary, evaluate)"
+        ),
+    )
+    register(
+        "mmsi-lmms",
+        MMSILmmsParser,
+        description=(
+            f"lmms-eval's MMSI-Bench rule: lmms-eval's reasoning-tag strip, the backtick and {{...}} steps, then the first A-F word in "
+            f"either case not followed by a space and a letter, upper-cased (lmms_eval/tasks/mmsi_bench/utils.py "
+            f"extract_single_choice_with_word_boundary @ {LMMS_EVAL}); the set's own reading is mmsi-official"
+        ),
+    )

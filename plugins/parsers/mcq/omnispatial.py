@@ -190,18 +190,42 @@ class OmniSpatialLmmsReParser(_FallbackParser):
 def register_parsers(register) -> None:
     """Contribute OmniSpatial's own rules, the corrected re rule, and lmms-eval's two tasks' rules."""
     source = f"{OMNISPATIAL} api_eval.py process_info"
-    register("omnispatial-re", OmniSpatialReParser, description=(
-        f"OmniSpatial's own default rule (--eval_type re): the last 'Answer: X', A-D in either case kept as written; "
-        f"a reply with none reads A, marked repaired ({source}); omnispatial-re-corrected reads none as no answer"))  # fmt: skip
-    register("omnispatial-re-corrected", OmniSpatialReCorrectedParser, description=(
-        f"OmniSpatial's re rule corrected: the last 'Answer: X'; a reply with none is no answer, not A (after {source})"))  # fmt: skip
-    register("omnispatial-json", OmniSpatialJsonParser, description=(
-        f"OmniSpatial's --eval_type json: the JSON reply's answer field, first character upper-cased; A on any failure ({source})"))  # fmt: skip
-    register("omnispatial-direct", OmniSpatialDirectParser, description=(
-        f"OmniSpatial's --eval_type direct: the stripped reply's first character, upper-cased ({source})"))  # fmt: skip
-    register("omnispatial-lmms-direct", OmniSpatialLmmsDirectParser, description=(
-        f"lmms-eval's omni_spatial task: reasoning-tag strip, its own </think>, </thought> and <answer> strip, then the first "
-        f"character upper-cased (lmms_eval/tasks/omni_spatial/utils.py omni_spatial_process_results @ {LMMS_EVAL})"))  # fmt: skip
-    register("omnispatial-lmms-re", OmniSpatialLmmsReParser, description=(
-        f"lmms-eval's omnispatial_test task (eval_type re): reasoning-tag strip, then the last 'Answer: X'; none reads A "
-        f"(lmms_eval/tasks/omnispatial/utils.py omnispatial_process_results @ {LMMS_EVAL})"))  # fmt: skip
+    register(
+        "omnispatial-re",
+        OmniSpatialReParser,
+        description=(
+            f"OmniSpatial's own default rule (--eval_type re): the last 'Answer: X', A-D in either case kept as written; "
+            f"a reply with none reads A, marked repaired ({source}); omnispatial-re-corrected reads none as no answer"
+        ),
+    )
+    register(
+        "omnispatial-re-corrected",
+        OmniSpatialReCorrectedParser,
+        description=(f"OmniSpatial's re rule corrected: the last 'Answer: X'; a reply with none is no answer, not A (after {source})"),
+    )
+    register(
+        "omnispatial-json",
+        OmniSpatialJsonParser,
+        description=(f"OmniSpatial's --eval_type json: the JSON reply's answer field, first character upper-cased; A on any failure ({source})"),
+    )
+    register(
+        "omnispatial-direct",
+        OmniSpatialDirectParser,
+        description=(f"OmniSpatial's --eval_type direct: the stripped reply's first character, upper-cased ({source})"),
+    )
+    register(
+        "omnispatial-lmms-direct",
+        OmniSpatialLmmsDirectParser,
+        description=(
+            f"lmms-eval's omni_spatial task: reasoning-tag strip, its own </think>, </thought> and <answer> strip, then the first "
+            f"character upper-cased (lmms_eval/tasks/omni_spatial/utils.py omni_spatial_process_results @ {LMMS_EVAL})"
+        ),
+    )
+    register(
+        "omnispatial-lmms-re",
+        OmniSpatialLmmsReParser,
+        description=(
+            f"lmms-eval's omnispatial_test task (eval_type re): reasoning-tag strip, then the last 'Answer: X'; none reads A "
+            f"(lmms_eval/tasks/omnispatial/utils.py omnispatial_process_results @ {LMMS_EVAL})"
+        ),
+    )

@@ -77,7 +77,11 @@ class SparBenchLmmsCorrectedParser(RuleParser):
 def register_parsers(register) -> None:
     """Contribute SPAR-Bench's reading and its correction."""
     where = f"lmms_eval/tasks/sparbench/utils.py exact_match @ {LMMS_EVAL}"
-    register("sparbench-lmms", SparBenchLmmsParser,
-             description=f"lmms-eval's SPAR-Bench exact_match, bugs included: the first character is the label ({where})")  # fmt: skip
-    register("sparbench-lmms-corrected", SparBenchLmmsCorrectedParser,
-             description=f"lmms-eval's SPAR-Bench exact_match, corrected: a letter the reply is or opens with standing alone ({where})")  # fmt: skip
+    register(
+        "sparbench-lmms", SparBenchLmmsParser, description=f"lmms-eval's SPAR-Bench exact_match, bugs included: the first character is the label ({where})"
+    )
+    register(
+        "sparbench-lmms-corrected",
+        SparBenchLmmsCorrectedParser,
+        description=f"lmms-eval's SPAR-Bench exact_match, corrected: a letter the reply is or opens with standing alone ({where})",
+    )

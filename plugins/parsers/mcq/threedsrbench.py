@@ -19,16 +19,19 @@ from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL
 
-_IN_ORDER = tuple(re.compile(p) for p in (
-    r"^([A-D])[\.\s\)]",
-    r"^([A-D])$",
-    r"[Aa]nswer[:\s]+([A-D])",
-    r"[Tt]he answer is[:\s]+([A-D])",
-    r"[Mm]y answer is[:\s]+([A-D])",
-    r"\(([A-D])\)",
-    r"([A-D])\.",
-    r"\b([A-D])\b",
-))  # fmt: skip
+_IN_ORDER = tuple(
+    re.compile(p)
+    for p in (
+        r"^([A-D])[\.\s\)]",
+        r"^([A-D])$",
+        r"[Aa]nswer[:\s]+([A-D])",
+        r"[Tt]he answer is[:\s]+([A-D])",
+        r"[Mm]y answer is[:\s]+([A-D])",
+        r"\(([A-D])\)",
+        r"([A-D])\.",
+        r"\b([A-D])\b",
+    )
+)
 
 
 def threedsrbench_lmms_label(text: str) -> str | None:
@@ -60,7 +63,12 @@ class ThreeDSRBenchLmmsParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute the 3dsrbench-lmms parser."""
-    register("3dsrbench-lmms", ThreeDSRBenchLmmsParser, description=(
-        f"lmms-eval's 3DSRBench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the first of "
-        f"eight A-D patterns (lmms_eval/tasks/3dsrbench/utils.py extract_answer @ {LMMS_EVAL}); the set's own default is "
-        f"vlmevalkit-exact with the choice-3dsrbench scorer"))  # fmt: skip
+    register(
+        "3dsrbench-lmms",
+        ThreeDSRBenchLmmsParser,
+        description=(
+            f"lmms-eval's 3DSRBench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the first of "
+            f"eight A-D patterns (lmms_eval/tasks/3dsrbench/utils.py extract_answer @ {LMMS_EVAL}); the set's own default is "
+            f"vlmevalkit-exact with the choice-3dsrbench scorer"
+        ),
+    )

@@ -37,7 +37,8 @@ def viewspatial_label(text: str) -> str | None:
 class ViewSpatialParser(RuleParser):
     """ViewSpatial-Bench's rule (module docstring)."""
 
-    reads = "lmms-eval's viewspatial: its reasoning-tag strip (<think>, <analysis> blocks, then whitespace), then the first A-D standing alone on the last line, any case"
+    reads = ("lmms-eval's viewspatial: its reasoning-tag strip (<think>, <analysis> blocks, then whitespace), then the first A-D standing alone on the last "
+             "line, any case")
     beside_official = "reads choice answers, which the official (point) parser does not read; lmms-eval's port of ViewSpatial-Bench's rule"
     source = LMMS_EVAL
     harness = "lmms-eval"
@@ -60,7 +61,8 @@ def viewspatial_official_label(text: str) -> str | None:
 class ViewSpatialOfficialParser(RuleParser):
     """ViewSpatial-Bench's own ``evaluate.py`` (see :func:`viewspatial_official_label`)."""
 
-    reads = "ViewSpatial-Bench's evaluate.py: the first A-D standing alone, any case, on the text after the last newline as written (a reply ending in a newline reads nothing)"
+    reads = ("ViewSpatial-Bench's evaluate.py: the first A-D standing alone, any case, on the text after the last newline as written (a reply ending in a "
+             "newline reads nothing)")
     beside_official = "reads choice answers, which the official (point) parser does not read; ViewSpatial-Bench's own rule, the set's default"
     source = VIEWSPATIAL_BENCH
     harness = "ViewSpatial-Bench"
@@ -73,10 +75,20 @@ class ViewSpatialOfficialParser(RuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute ViewSpatial-Bench's own rule and lmms-eval's port of it."""
-    register("viewspatial-official", ViewSpatialOfficialParser, description=(
-        f"ViewSpatial-Bench's own rule: the first A-D word, any case, after the reply's last newline as written, no strip "
-        f"(a reply ending in a newline reads nothing) ({VIEWSPATIAL_BENCH} evaluate.py extract_option, evaluate_vlm)"))  # fmt: skip
-    register("viewspatial", ViewSpatialParser, description=(
-        f"lmms-eval's ViewSpatial-Bench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the "
-        f"first A-D word on the last line (lmms_eval/tasks/viewspatial/utils.py extract_option @ {LMMS_EVAL}); "
-        f"the set's own reading ({VIEWSPATIAL_BENCH} evaluate.py) is viewspatial-official"))  # fmt: skip
+    register(
+        "viewspatial-official",
+        ViewSpatialOfficialParser,
+        description=(
+            f"ViewSpatial-Bench's own rule: the first A-D word, any case, after the reply's last newline as written, no strip "
+            f"(a reply ending in a newline reads nothing) ({VIEWSPATIAL_BENCH} evaluate.py extract_option, evaluate_vlm)"
+        ),
+    )
+    register(
+        "viewspatial",
+        ViewSpatialParser,
+        description=(
+            f"lmms-eval's ViewSpatial-Bench rule: lmms-eval's reasoning-tag strip (--reasoning_tags <think>, <analysis>), then the "
+            f"first A-D word on the last line (lmms_eval/tasks/viewspatial/utils.py extract_option @ {LMMS_EVAL}); "
+            f"the set's own reading ({VIEWSPATIAL_BENCH} evaluate.py) is viewspatial-official"
+        ),
+    )

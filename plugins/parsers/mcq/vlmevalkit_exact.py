@@ -107,5 +107,8 @@ class VlmevalkitExactParser(VlmevalkitRuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute the vlmevalkit-exact parser."""
-    register("vlmevalkit-exact", VlmevalkitExactParser, description=(
-        f"VLMEvalKit's exact-matching rule, no judge: can_infer, else Z (vlmeval/utils/matching_util.py @ {VLMEVALKIT})"))  # fmt: skip
+    register(
+        "vlmevalkit-exact",
+        VlmevalkitExactParser,
+        description=(f"VLMEvalKit's exact-matching rule, no judge: can_infer, else Z (vlmeval/utils/matching_util.py @ {VLMEVALKIT})"),
+    )

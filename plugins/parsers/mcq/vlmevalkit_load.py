@@ -33,10 +33,29 @@ from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 
 #: The cells ``pd.read_csv`` and ``pd.read_excel`` read as missing by default (pandas'
 #: ``STR_NA_VALUES``, checked on pandas 3.1.1; VLMEvalKit's requirements pin no pandas version).
-PANDAS_MISSING = frozenset({
-    "", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN", "<NA>", "N/A", "NA", "NULL",
-    "NaN", "None", "n/a", "nan", "null",
-})  # fmt: skip
+PANDAS_MISSING = frozenset(
+    {
+        "",
+        "#N/A",
+        "#N/A N/A",
+        "#NA",
+        "-1.#IND",
+        "-1.#QNAN",
+        "-NaN",
+        "-nan",
+        "1.#IND",
+        "1.#QNAN",
+        "<NA>",
+        "N/A",
+        "NA",
+        "NULL",
+        "NaN",
+        "None",
+        "n/a",
+        "nan",
+        "null",
+    }
+)
 #: What ``str()`` makes of the NaN pandas reads there.
 AS_MISSING = "nan"
 #: How a rule says it reads the reply through VLMEvalKit's ``load`` (``harness_filter``).

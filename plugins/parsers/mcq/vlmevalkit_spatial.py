@@ -140,7 +140,8 @@ def spatial_bench_label(reply: str) -> str | None:
 class VlmevalkitSpatialParser(VlmevalkitRuleParser):
     """VLMEvalKit's spatial-bench rule (module docstring)."""
 
-    reads = "an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit spatial bench)"
+    reads = ("an `<answer>` block, a letter before `</answer>` or `</think>`, the last lines, a concluding phrase, else one lone capital A-F (VLMEvalKit "
+             "spatial bench)")
     beside_official = "reads choice answers, which the official (point) parser does not read; VLMEvalKit's spatial-bench reading without a judge"
     no_label_reason = "the rule reads no option letter (VLMEvalKit's False)"
     #: VLMEvalKit's ViewSpatialBench, MindCubeBench, MMSIBench and OmniSpatialBench score with
@@ -160,6 +161,11 @@ class VlmevalkitSpatialParser(VlmevalkitRuleParser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute the vlmevalkit-spatial parser."""
-    register("vlmevalkit-spatial", VlmevalkitSpatialParser, description=(
-        f"VLMEvalKit's spatial-bench rule, no judge: can_match_option with no options "
-        f"(vlmeval/dataset/utils/spatial_bench/matching_func.py, cal_scores.py compute_mcq_score @ {VLMEVALKIT})"))  # fmt: skip
+    register(
+        "vlmevalkit-spatial",
+        VlmevalkitSpatialParser,
+        description=(
+            f"VLMEvalKit's spatial-bench rule, no judge: can_match_option with no options "
+            f"(vlmeval/dataset/utils/spatial_bench/matching_func.py, cal_scores.py compute_mcq_score @ {VLMEVALKIT})"
+        ),
+    )

@@ -24,6 +24,8 @@ from povagent_plugins.parsers.vsibench.official import NEITHER, choice_parse, fi
 
 #: The number words ``extract_number`` knows, with their values.
 NUMBER_WORDS = {
+    # Laid out by hand (the formatter is told to skip it): a word table read by rows (units,
+    # teens, tens), not thirty lines of one entry each.
     "zero": 0, "one": 1, "two": 2, "three": 3, "four": 4, "five": 5, "six": 6, "seven": 7, "eight": 8, "nine": 9,
     "ten": 10, "eleven": 11, "twelve": 12, "thirteen": 13, "fourteen": 14, "fifteen": 15, "sixteen": 16,
     "seventeen": 17, "eighteen": 18, "nineteen": 19, "twenty": 20, "thirty": 30, "forty": 40, "fifty": 50,
@@ -97,7 +99,12 @@ class VSIBenchLmmsParser(Parser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute lmms-eval's reading of VSI-Bench."""
-    register("vsibench-lmms", VSIBenchLmmsParser, description=(
-        "lmms-eval's VSI-Bench rule: its reasoning-tag strip, the first word for an option letter, and extract_number "
-        f"(the first number or number words anywhere) for a number (lmms_eval/tasks/vsibench/utils.py @ {LMMS_EVAL}); "
-        "the set's own reading is vsibench"))  # fmt: skip
+    register(
+        "vsibench-lmms",
+        VSIBenchLmmsParser,
+        description=(
+            "lmms-eval's VSI-Bench rule: its reasoning-tag strip, the first word for an option letter, and extract_number "
+            f"(the first number or number words anywhere) for a number (lmms_eval/tasks/vsibench/utils.py @ {LMMS_EVAL}); "
+            "the set's own reading is vsibench"
+        ),
+    )

@@ -81,7 +81,12 @@ class VSIBenchParser(Parser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute VSI-Bench's own rule."""
-    register("vsibench", VSIBenchParser, description=(
-        "VSI-Bench's own rule: the reply's first space-separated word, trailing dots removed; equals the option letter "
-        f"in any case, or float() of it for a number ({THINKING_IN_SPACE} lmms_eval/tasks/vsibench/utils.py "
-        "fuzzy_matching, exact_match, to_float)"))  # fmt: skip
+    register(
+        "vsibench",
+        VSIBenchParser,
+        description=(
+            "VSI-Bench's own rule: the reply's first space-separated word, trailing dots removed; equals the option letter "
+            f"in any case, or float() of it for a number ({THINKING_IN_SPACE} lmms_eval/tasks/vsibench/utils.py "
+            "fuzzy_matching, exact_match, to_float)"
+        ),
+    )

@@ -45,9 +45,28 @@ from povagent_plugins.parsers.vsibench.official import NEITHER, number_parse
 
 #: The number words ``normalize_number_words`` turns into digits (``num2words(0)`` .. ``(20)``).
 NUMBER_WORDS = (
-    "zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven", "twelve", "thirteen", "fourteen",
-    "fifteen", "sixteen", "seventeen", "eighteen", "nineteen", "twenty",
-)  # fmt: skip
+    "zero",
+    "one",
+    "two",
+    "three",
+    "four",
+    "five",
+    "six",
+    "seven",
+    "eight",
+    "nine",
+    "ten",
+    "eleven",
+    "twelve",
+    "thirteen",
+    "fourteen",
+    "fifteen",
+    "sixteen",
+    "seventeen",
+    "eighteen",
+    "nineteen",
+    "twenty",
+)
 #: The longest list literal read (upstream reads any: a megabyte of list takes half a gigabyte
 #: and seconds to parse); a longer one reads no number, a divergence no real reply reaches.
 MAX_LIST_CHARS = 1 << 16
@@ -174,7 +193,12 @@ class VlmevalkitVSIBenchParser(Parser):
 @hookimpl
 def register_parsers(register) -> None:
     """Contribute VLMEvalKit's reading of VSI-Bench."""
-    register("vlmevalkit-vsibench", VlmevalkitVSIBenchParser, description=(
-        "VLMEvalKit's VSI-Bench rule, no judge: can_match_option for an option letter, can_match_na (the last number after "
-        f"the reasoning, number words to twenty read) for a number (vlmeval/dataset/vsibench.py, "
-        f"utils/spatial_bench/matching_func.py @ {VLMEVALKIT}); the set's own reading is vsibench"))  # fmt: skip
+    register(
+        "vlmevalkit-vsibench",
+        VlmevalkitVSIBenchParser,
+        description=(
+            "VLMEvalKit's VSI-Bench rule, no judge: can_match_option for an option letter, can_match_na (the last number after "
+            f"the reasoning, number words to twenty read) for a number (vlmeval/dataset/vsibench.py, "
+            f"utils/spatial_bench/matching_func.py @ {VLMEVALKIT}); the set's own reading is vsibench"
+        ),
+    )

@@ -164,6 +164,12 @@ def _read(file: Path, files: ChoiceFiles, cache: Path) -> tuple[list[Item], list
 
 
 __all__ = [
-    "SET_ANSWER_TYPE", "ChoiceFiles", "ChoiceReader", "ChoiceSet", "check_choice_set", "load_choice_set", "read_choice_set",
+    "SET_ANSWER_TYPE",
+    "ChoiceFiles",
+    "ChoiceReader",
+    "ChoiceSet",
+    "check_choice_set",
+    "load_choice_set",
+    "read_choice_set",
     "validate_choice_set",
-]  # fmt: skip
+]

@@ -118,10 +118,18 @@ def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowher
     nowhere = unknown_object() if nowhere is None else nowhere
     camera = frames[0].camera if frames else image_camera(1, 1)
     return Instance(
-        house_id=set_name, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
-        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,
-        observer_camera=camera, question=item.question,
-    )  # fmt: skip
+        house_id=set_name,
+        pair_id=item.id,
+        direction=None,
+        condition=None,
+        sentence=item.question.question,
+        frames=frames,
+        target=_NO_TARGET,
+        observer_object=nowhere,
+        anchor_object=nowhere,
+        observer_camera=camera,
+        question=item.question,
+    )
 
 
 @dataclass
@@ -172,10 +180,7 @@ class ChoiceSet:
         """Refuse scorers that need POVBench's point ground truth (the runner asks before any
         request): a multiple-choice item has a gold label, no 3D target and no marks. A scorer
         says so itself (``Scorer.needs_3d_target``, or a point protocol: ``Scorer.protocol``)."""
-        refused = sorted(
-            name for name, scorer in scorers.items()
-            if getattr(scorer, "needs_3d_target", False) or getattr(scorer, "protocol", None) is not None
-        )  # fmt: skip
+        refused = sorted(name for name, scorer in scorers.items() if getattr(scorer, "needs_3d_target", False) or getattr(scorer, "protocol", None) is not None)
         if refused:
             raise ConfigError(
                 f"{self.file}: scorer {', '.join(refused)} needs a point ground truth, and a multiple-choice set "
@@ -196,7 +201,9 @@ def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tup
     with open_regular(path, what=what) as handle:
         for number, raw in enumerate(iter(lambda: handle.readline(MAX_RECORD_LINE_BYTES + 1), b""), start=1):
             if len(raw) > MAX_RECORD_LINE_BYTES:
-                problems.append(Problem(str(path), f"line {number}", f"longer than {MAX_RECORD_LINE_BYTES} bytes; this line and the rest of the file are not read"))
+                problems.append(
+                    Problem(str(path), f"line {number}", f"longer than {MAX_RECORD_LINE_BYTES} bytes; this line and the rest of the file are not read")
+                )
                 return
             try:
                 text = raw.decode("utf-8")

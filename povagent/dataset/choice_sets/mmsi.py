@@ -121,8 +121,13 @@ def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, 
             size = parquet.metadata.row_group(group).total_byte_size
             rows = parquet.metadata.row_group(group).num_rows
             if size > bound:
-                problems.append(Problem(str(file), f"rows {number + 1}-{number + rows}",
-                                        f"a row group declaring {size} bytes, over the {bound} one may decode to; its rows left out"))  # fmt: skip
+                problems.append(
+                    Problem(
+                        str(file),
+                        f"rows {number + 1}-{number + rows}",
+                        f"a row group declaring {size} bytes, over the {bound} one may decode to; its rows left out",
+                    )
+                )
                 number += rows
                 continue
             try:

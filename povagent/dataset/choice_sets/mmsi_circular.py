@@ -80,8 +80,15 @@ def rotated_copies(item: Item) -> list[Item] | str:
     for k, order in enumerate(ROTATIONS):
         shown = tuple((label, options[was]) for label, was in zip("ABCD", order) if was in options)
         listed = ", ".join(f"{label}: {text}" for label, text in shown)
-        asked = ChoiceQuestion(f"{question}\n{_OPTIONS_MARK} {listed}", shown, "ABCD"[order.index(gold)],
-                               category=item.question.category, group=str(int(base)), variant=order, profile=PROFILE)  # fmt: skip
+        asked = ChoiceQuestion(
+            f"{question}\n{_OPTIONS_MARK} {listed}",
+            shown,
+            "ABCD"[order.index(gold)],
+            category=item.question.category,
+            group=str(int(base)),
+            variant=order,
+            profile=PROFILE,
+        )
         copies.append(Item(str(int(base) + k * COPY_STRIDE), asked, item.images, embedded=item.embedded))
     return copies
 

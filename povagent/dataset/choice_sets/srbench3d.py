@@ -43,9 +43,14 @@ TYPES = {
     "height": ("height_higher",),
     "location": ("location_above", "location_closer_to_camera", "location_next_to"),
     "orientation": ("orientation_in_front_of", "orientation_on_the_left", "orientation_viewpoint"),
-    "multi_object": ("multi_object_closer_to", "multi_object_facing", "multi_object_viewpoint_towards_object",
-                     "multi_object_parallel", "multi_object_same_direction"),
-}  # fmt: skip
+    "multi_object": (
+        "multi_object_closer_to",
+        "multi_object_facing",
+        "multi_object_viewpoint_towards_object",
+        "multi_object_parallel",
+        "multi_object_same_direction",
+    ),
+}
 _TYPE_OF = {sub: kind for kind, subs in TYPES.items() for sub in subs}
 _QID = re.compile(r"(?P<base>.+?)(?:-(?P<variant>flip(?:-\d+)?|\d+))?")
 #: An image cell ending so is a path; any other is a record's index or the image in base64.
@@ -196,8 +201,16 @@ def _item(row: dict[str, str], where: str, cache: Path) -> Item | tuple[str, str
     group, variant = qid_parts(qid)
     try:
         category = row["category"].strip()
-        question = ChoiceQuestion(row["question"].strip(), options, row["answer"].strip(), category=category,
-                                  group=group, variant=variant, profile=PROFILE, main_category=_TYPE_OF.get(category, ""))  # fmt: skip
+        question = ChoiceQuestion(
+            row["question"].strip(),
+            options,
+            row["answer"].strip(),
+            category=category,
+            group=group,
+            variant=variant,
+            profile=PROFILE,
+            main_category=_TYPE_OF.get(category, ""),
+        )
     except ValueError as exc:
         return f"{where}.answer", str(exc)
     if not question.question:

@@ -31,12 +31,17 @@ from povagent.errors import PovagentError
 #: The prompt profile the set is asked in.
 PROFILE = "vsibench"
 #: The question types answered with an option letter, and those answered with a number.
-CHOICE_TYPES = ("object_rel_direction_easy", "object_rel_direction_medium", "object_rel_direction_hard",
-                "object_rel_distance", "route_planning", "obj_appearance_order")  # fmt: skip
+CHOICE_TYPES = (
+    "object_rel_direction_easy",
+    "object_rel_direction_medium",
+    "object_rel_direction_hard",
+    "object_rel_distance",
+    "route_planning",
+    "obj_appearance_order",
+)
 NUMBER_TYPES = ("object_abs_distance", "object_counting", "object_size_estimation", "room_size_estimation")
 #: The unit each numerical type's questions ask in (a count has none).
-UNITS = {"object_abs_distance": "meters", "object_counting": "", "object_size_estimation": "centimeters",
-         "room_size_estimation": "square meters"}  # fmt: skip
+UNITS = {"object_abs_distance": "meters", "object_counting": "", "object_size_estimation": "centimeters", "room_size_estimation": "square meters"}
 #: The most options a question may list (each ``X. text``, X a capital letter).
 MAX_OPTIONS = 26
 #: The largest Parquet file read (the published set is about 1 MB).

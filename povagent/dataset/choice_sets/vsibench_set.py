@@ -134,10 +134,19 @@ def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: Scen
     choice = item.question if isinstance(item.question, ChoiceQuestion) else None
     numeric = item.question if isinstance(item.question, NumericQuestion) else None
     return Instance(
-        house_id=SET_NAME, pair_id=item.id, direction=None, condition=None, sentence=item.question.question,
-        frames=frames, target=_NO_TARGET, observer_object=nowhere, anchor_object=nowhere,
-        observer_camera=frames[0].camera, question=choice, numeric=numeric,
-    )  # fmt: skip
+        house_id=SET_NAME,
+        pair_id=item.id,
+        direction=None,
+        condition=None,
+        sentence=item.question.question,
+        frames=frames,
+        target=_NO_TARGET,
+        observer_object=nowhere,
+        anchor_object=nowhere,
+        observer_camera=frames[0].camera,
+        question=choice,
+        numeric=numeric,
+    )
 
 
 def validate_vsibench(file: str | Path, frames: int = DEFAULT_FRAMES, videos: str | Path | None = None, frame_cache: str | Path | None = None) -> list[Problem]:

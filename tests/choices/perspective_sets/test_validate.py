@@ -74,7 +74,10 @@ def test_an_image_path_leading_out_of_the_sets_folder_is_refused_and_never_opene
     assert [i.pair_id for i in loaded.instances()] == ["1", "2"]
     assert [(p.json_path, p.message) for p in loaded.problems] == [
         ("$[0].images[0]", "image path '../secret.png' leads outside the dataset folder; not opened"),
-        ("$[3].images[0]", f"image path {str(secret)!r} is absolute: paths in a dataset are relative to the house folder and stay inside the dataset; not opened"),
+        (
+            "$[3].images[0]",
+            f"image path {str(secret)!r} is absolute: paths in a dataset are relative to the house folder and stay inside the dataset; not opened",
+        ),
     ]
 
 
