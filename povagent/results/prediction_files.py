@@ -19,6 +19,7 @@ from povagent.dataset.loader import Dataset
 from povagent.errors import PredictionsError
 from povagent.results.official_format import NOT_PREDICTIONS, read_official_run
 from povagent.scoring.official_release import OfficialRelease
+from povagent.scoring.prediction_summary import summary_of
 from povagent.scoring.predictions import (
     RUN_FOLDER_NAME,
     SKIPPED_RUN_FOLDER_SUFFIX,
@@ -26,7 +27,6 @@ from povagent.scoring.predictions import (
     listing,
     score_official_run,
     score_result_rows,
-    summary_of,
 )
 
 if TYPE_CHECKING:

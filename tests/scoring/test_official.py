@@ -15,7 +15,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from povagent.scoring.official import MAX_L2, UNANSWERED, normalized_l2, score_point, scoring_frame
-from povagent.scoring.predictions import score_official_rows, summary_of
+from povagent.scoring.prediction_summary import summary_of
+from povagent.scoring.predictions import score_official_rows
 
 # house 0 GT points (surface-corrected) and their projections
 UP = (0.5, 0.5 + 0.5 * 0.7 / 3.0)           # (0, 0.8, 3)

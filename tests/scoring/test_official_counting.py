@@ -23,7 +23,8 @@ from povagent.geometry.camera import Camera
 from povagent.results.official_format import read_official_run
 from povagent.results.prediction_files import score_predictions
 from povagent.scoring.breakdown import ScoredRow, breakdown
-from povagent.scoring.predictions import score_official_rows, summary_of
+from povagent.scoring.prediction_summary import summary_of
+from povagent.scoring.predictions import score_official_rows
 
 runner = CliRunner()
 FRAME0 = "exploration_images/frame_000.png"

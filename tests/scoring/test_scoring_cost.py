@@ -11,7 +11,8 @@ import povagent.dataset.loader as loader
 import povagent.scoring.official_release as official_release
 from povagent.dataset import load_dataset
 from povagent.scoring.official_release import read_release
-from povagent.scoring.predictions import score_official_rows, summary_of
+from povagent.scoring.prediction_summary import summary_of
+from povagent.scoring.predictions import score_official_rows
 
 
 def random_rows(release, n: int, seed: int = 0) -> list[dict]:
