@@ -36,7 +36,7 @@ CHILD = r"""
 import json, resource, sys, time
 from pathlib import Path
 import povagent.train.parquet as parquet
-from povagent.train.export import export_training_set
+from povagent.train.training_export import export_training_set
 from povagent.train.export_options import FORMAT_FOLDERS, ExportOptions
 root, out, fmt, groups = Path(sys.argv[1]), Path(sys.argv[2]), sys.argv[3], sys.argv[4]
 if groups == "16mb":

@@ -68,7 +68,7 @@ def compare(baseline: str, houses: int) -> None:
 def bench_frames(n: int = 20) -> tuple[float, float, float]:
     """(wall s/frame, CPU s/frame, PNG s/frame) over ``n`` exploration frames of one house."""
     from povagent.generate.exploration import plan_tour
-    from povagent.generate.pipeline import build_house
+    from povagent.generate.house_pipeline import build_house
     from povagent.generate.writer import write_png
 
     built = build_house(0, 0)

@@ -29,7 +29,7 @@ from results_file import figure, record
 CHILD = r"""
 import pickle, sys, time
 import numpy as np
-from povagent.generate.pipeline import build_house
+from povagent.generate.house_pipeline import build_house
 plan = pickle.load(open(sys.argv[1], "rb"))
 out = {}
 cpu = 0.0
@@ -46,7 +46,7 @@ pickle.dump({"frames": out, "cpu": cpu}, open(sys.argv[2], "wb"))
 
 def main() -> None:
     from povagent.generate.exploration import plan_tour
-    from povagent.generate.pipeline import build_house
+    from povagent.generate.house_pipeline import build_house
     from povagent.testing.embree_isa import build_shim, cpu_isas, isa_environment
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

@@ -84,7 +84,7 @@ def main() -> None:
     args = parser.parse_args()
     from povagent.active.house import ActiveHouse
     from povagent.generate.exploration import plan_tour
-    from povagent.generate.pipeline import build_house
+    from povagent.generate.house_pipeline import build_house
 
     built = build_house(0, 0)
     renderer = built.renderer

@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 from povagent.dataset.loader import load_dataset
-from povagent.scoring.official import project_ground_truth, score_point
+from povagent.scoring.normalized_l2 import project_ground_truth, score_point
 
 ROOT = Path(__file__).resolve().parent.parent
 FIXTURE = ROOT / "tests" / "fixtures" / "povbench_mini"

@@ -55,8 +55,8 @@ class RuleModule:
 
 
 RULE_MODULES: tuple[RuleModule, ...] = (
-    RuleModule("povagent/scoring/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
-    RuleModule("plugins/scorers/official.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
+    RuleModule("povagent/scoring/normalized_l2.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
+    RuleModule("plugins/scorers/official_scorer.py", ("tests/scoring/test_official_rules.py", "tests/scoring/test_official.py")),
     RuleModule(
         "povagent/geometry/ground_truth.py",
         (

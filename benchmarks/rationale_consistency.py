@@ -45,7 +45,7 @@ from povagent.geometry.placement import AnchorEstimate, place_target, surface_ki
 from povagent.geometry.size_priors import size_prior
 from povagent.geometry.triangulation import Sighting, locate
 from povagent.plugins import get_plugin_host
-from povagent.scoring.official import score_point
+from povagent.scoring.normalized_l2 import score_point
 from povagent.tasks.scene_facts import PixelBox
 from povagent.train.examples import house_examples, make_strategy
 from povagent_plugins.strategies.geometric import Detection, parse_detections

@@ -40,7 +40,7 @@ from povagent.report.analysis import analyze
 from povagent.report.build import write_report
 from povagent.report.collect import Collection, Observation
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
-from povagent.scoring.official import score_point
+from povagent.scoring.normalized_l2 import score_point
 
 #: A chain-of-thought-length preamble (~2,500 characters) before each simulated answer's JSON.
 REASONING = (

@@ -19,10 +19,10 @@ from povagent.exchange.messages import Request, Response
 if TYPE_CHECKING:
     from povagent.active.tools import ToolSet
     from povagent.dataset.instances import Instance
-    from povagent.dataset.protocol import EvaluationSet
+    from povagent.dataset.set_interface import EvaluationSet
     from povagent.exchange.images import ImageStore
     from povagent.scoring.metrics import Metric
-    from povagent.scoring.official import OfficialScore
+    from povagent.scoring.normalized_l2 import OfficialScore
 
 #: What a multi-turn strategy calls to talk to the model: cached, retried, rate-limited.
 Ask = Callable[[Request], Awaitable[Response]]

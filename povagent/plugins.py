@@ -196,7 +196,7 @@ class PluginHost:
         return registry
 
     def source_of(self, plugin_name: str) -> str:
-        """Where a pluggy plugin came from, e.g. ``built-in povagent_plugins.scorers.official``."""
+        """Where a pluggy plugin came from, e.g. ``built-in povagent_plugins.scorers.official_scorer``."""
         return self._sources.get(plugin_name, f"plugin {plugin_name}")
 
     def add_plugin(self, plugin: object, name: str | None = None, source: str | None = None) -> str:

@@ -13,7 +13,7 @@ import re
 from pathlib import Path
 
 from povagent import hookimpl
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.choice_sets import ChoiceFiles, ChoiceReader
 from povagent.dataset.choice_sets.external import Item, text_problems

@@ -15,7 +15,7 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
-from povagent.scoring.official import score_point, scoring_frame
+from povagent.scoring.normalized_l2 import score_point, scoring_frame
 
 
 class WithinRadiusScorer(Scorer):

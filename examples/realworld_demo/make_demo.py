@@ -12,7 +12,7 @@ from pathlib import Path
 
 from PIL import Image, ImageDraw
 
-from povagent.dataset.realworld import Command, Mark, RealWorldHouse, RealWorldSet, Scenario, write_realworld
+from povagent.dataset.realworld_set import Command, Mark, RealWorldHouse, RealWorldSet, Scenario, write_realworld
 
 HERE = Path(__file__).resolve().parent
 

@@ -1,7 +1,7 @@
 """The ``number`` answer type: a number, in the unit its question names where the set gives one.
 
 Registered exactly as the ``point`` and ``choice`` types are. Its gold value is the instance's
-numeric question's gold number and unit (:class:`povagent.answers.number.NumericQuestion`); the
+numeric question's gold number and unit (:class:`povagent.answers.numeric_question.NumericQuestion`); the
 metrics that compare the two (mean relative accuracy, absolute and relative error) live in
 :mod:`povagent.scoring.relative_accuracy`, and a set's scorer declares the ones it reports.
 """

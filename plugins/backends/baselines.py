@@ -33,12 +33,12 @@ from typing import Any, ClassVar, Mapping
 
 from povagent import hookimpl
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import DIRECTIONS
+from povagent.dataset.release_models import DIRECTIONS
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
 from povagent.interfaces import Backend, PermanentBackendError
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 
 FRAME_POLICIES: tuple[str, ...] = ("first", "random", "cycle")
 

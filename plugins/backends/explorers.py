@@ -37,7 +37,7 @@ from povagent.exchange.messages import Request, Response, ToolCall, Usage
 from povagent.geometry.camera import Camera
 from povagent.interfaces import Backend, PermanentBackendError
 from povagent.plugins import get_plugin_host
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 from povagent_plugins.backends.baselines import request_run, seeded_rng
 
 #: Half the field of view kept clear around the target when the oracle turns (degrees).

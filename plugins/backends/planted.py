@@ -42,7 +42,7 @@ from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage
 from povagent.geometry.counterfactual import egocentric_target, mirrored_target
 from povagent.interfaces import Backend, PermanentBackendError
-from povagent.scoring.official import clamp_unit, project_ground_truth
+from povagent.scoring.normalized_l2 import clamp_unit, project_ground_truth
 from povagent_plugins.backends.baselines import answer_text, request_run, shown_frame_count
 from povagent_plugins.backends.records import HouseRecords
 from povagent_plugins.backends.simulated import seeded_generator

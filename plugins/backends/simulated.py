@@ -41,7 +41,7 @@ import numpy as np
 from povagent import hookimpl
 from povagent.dataset.instances import Instance
 from povagent.dataset.loader import House
-from povagent.dataset.models import PairEntry, SceneObject
+from povagent.dataset.release_models import PairEntry, SceneObject
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response, Usage

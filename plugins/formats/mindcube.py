@@ -1,11 +1,11 @@
-"""The ``mindcube`` format: MindCube's JSONL records (:mod:`povagent.dataset.choice_sets.mindcube`), asked
+"""The ``mindcube`` format: MindCube's JSONL records (:mod:`povagent.dataset.choice_sets.mindcube_records`), asked
 in its raw-QA template and read by its own evaluator's cascade."""
 
 from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.mindcube import PROFILE, read_mindcube
+from povagent.dataset.choice_sets.mindcube_records import PROFILE, read_mindcube
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import MINDCUBE as MINDCUBE_SOURCE
 from povagent_plugins.strategies import set_profiles

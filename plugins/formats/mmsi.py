@@ -1,4 +1,4 @@
-"""The ``mmsi`` format: MMSI-Bench's ``MMSI_Bench.parquet``, images embedded (:mod:`povagent.dataset.choice_sets.mmsi`),
+"""The ``mmsi`` format: MMSI-Bench's ``MMSI_Bench.parquet``, images embedded (:mod:`povagent.dataset.choice_sets.mmsi_records`),
 asked in the set's own wording and read by its own rule (lmms-eval's ``mmsi-lmms`` and VLMEvalKit's
 ``vlmevalkit-spatial`` with ``choice-vlmevalkit`` are alternatives a pipeline names)."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.mmsi import PROFILE, read_mmsi
+from povagent.dataset.choice_sets.mmsi_records import PROFILE, read_mmsi
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import MMSI_BENCH
 from povagent_plugins.strategies import spatial_set_profiles

@@ -1,6 +1,6 @@
 """The ``mmsi-circular`` format: MMSI-Bench's circular split, each question of
 ``MMSI_Bench.parquet`` asked four times with its options rotated
-(:mod:`povagent.dataset.choice_sets.mmsi_circular`), in the set's own wording, read by its own
+(:mod:`povagent.dataset.choice_sets.mmsi_circular_copies`), in the set's own wording, read by its own
 rule and scored by ``choice-mmsi-circular``: a question right only when all four copies are.
 VLMEvalKit's ``MMSIBench_circular`` reads the copies with its exact-matching rule
 (``vlmevalkit-exact``), scored the same way."""
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.mmsi_circular import read_mmsi_circular
+from povagent.dataset.choice_sets.mmsi_circular_copies import read_mmsi_circular
 from povagent.dataset.formats import DatasetFormat, DocsRow
 from povagent_plugins.formats.mmsi import MMSI
 from povagent_plugins.parsers.mcq.upstream import MMSI_BENCH

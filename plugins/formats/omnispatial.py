@@ -1,12 +1,12 @@
 """The ``omnispatial`` format: OmniSpatial's ``data.json`` and its task folders' images
-(:mod:`povagent.dataset.choice_sets.omnispatial`), asked in the set's own wording and read by its
+(:mod:`povagent.dataset.choice_sets.omnispatial_records`), asked in the set's own wording and read by its
 own default ``re`` rule (its other readings and lmms-eval's two tasks' are alternatives a pipeline names)."""
 
 from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.omnispatial import DATA_FILE, PROFILE, read_omnispatial
+from povagent.dataset.choice_sets.omnispatial_records import DATA_FILE, PROFILE, read_omnispatial
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import OMNISPATIAL
 from povagent_plugins.strategies import spatial_set_profiles

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from povagent import hookimpl
 from povagent.dataset.formats import DatasetFormat, DocsRow, FormatRead
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import DatasetError
 
 

@@ -1,5 +1,5 @@
 """The ``realworld`` format: a folder of photos marked by hand with ``realworld.json``
-(:mod:`povagent.dataset.realworld`), its 2D marks scored by hit or miss (``success``)."""
+(:mod:`povagent.dataset.realworld_set`), its 2D marks scored by hit or miss (``success``)."""
 
 from __future__ import annotations
 
@@ -7,19 +7,19 @@ from pathlib import Path
 
 from povagent import hookimpl
 from povagent.dataset.formats import DatasetFormat, DocsRow, FormatRead
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 
 
 def read_realworld_set(request: FormatRead) -> EvaluationSet:
-    """The real-world set at ``request.path`` (:func:`povagent.dataset.realworld.load_realworld`)."""
-    from povagent.dataset.realworld import load_realworld
+    """The real-world set at ``request.path`` (:func:`povagent.dataset.realworld_set.load_realworld`)."""
+    from povagent.dataset.realworld_set import load_realworld
 
     return load_realworld(request.path)
 
 
 def holds_index(root: Path) -> bool:
     """Whether ``root`` holds ``realworld.json``."""
-    from povagent.dataset.realworld import is_realworld
+    from povagent.dataset.realworld_set import is_realworld
 
     return is_realworld(root)
 

@@ -1,4 +1,4 @@
-"""The ``3dsrbench`` format: 3DSRBench's TSV in VLMEvalKit's layout (:mod:`povagent.dataset.choice_sets.srbench3d`),
+"""The ``3dsrbench`` format: 3DSRBench's TSV in VLMEvalKit's layout (:mod:`povagent.dataset.choice_sets.srbench3d_records`),
 scored as its authors score it, with VLMEvalKit's exact matching and the four accuracies over a
 question's copies."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.srbench3d import PROFILE, read_srbench3d
+from povagent.dataset.choice_sets.srbench3d_records import PROFILE, read_srbench3d
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.strategies import set_profiles

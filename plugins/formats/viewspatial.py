@@ -1,11 +1,11 @@
-"""The ``viewspatial`` format: ViewSpatial-Bench's JSON list of questions (:mod:`povagent.dataset.choice_sets.viewspatial`),
+"""The ``viewspatial`` format: ViewSpatial-Bench's JSON list of questions (:mod:`povagent.dataset.choice_sets.viewspatial_records`),
 asked in its paper's wording and read by its own ``evaluate.py``."""
 
 from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
-from povagent.dataset.choice_sets.viewspatial import PROFILE, read_viewspatial
+from povagent.dataset.choice_sets.viewspatial_records import PROFILE, read_viewspatial
 from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import VIEWSPATIAL_BENCH
 from povagent_plugins.strategies import set_profiles

@@ -14,14 +14,14 @@ from pathlib import Path
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers.choice import ChoiceQuestion
-from povagent.dataset.choice_sets.vsibench import PROFILE
+from povagent.answers.choice_question import ChoiceQuestion
+from povagent.dataset.choice_sets.vsibench_records import PROFILE
 from povagent.dataset.choice_sets.vsibench_set import DEFAULT_FRAMES, load_vsibench, validate_vsibench
 from povagent.dataset.formats import DatasetFormat, DocsRow, FormatRead, PromptProfile
 from povagent.dataset.problems import Problem
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import DatasetError
-from povagent_plugins.parsers.vsibench.official import THINKING_IN_SPACE
+from povagent_plugins.parsers.vsibench.first_word import THINKING_IN_SPACE
 
 #: The wording's source: ``vsibench_doc_to_text`` with the task's default kwargs.
 SOURCE = f"{THINKING_IN_SPACE} lmms_eval/tasks/vsibench/utils.py vsibench_doc_to_text, vsibench.yaml's default prompts"

@@ -18,7 +18,7 @@ from typing import ClassVar
 
 from povagent import hookimpl
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 #: The settings MindCube's evaluator leaves out of its overall accuracy.
 MINDCUBE_OVERALL_EXCLUDES = ("translation",)

@@ -1,7 +1,7 @@
 """The ``choice-mmsi-circular`` scorer: MMSI-Bench's circular evaluation.
 
 The circular split asks each question four times, its options rotated
-(:mod:`povagent.dataset.choice_sets.mmsi_circular`); copy ``k`` of question ``i`` has the id
+(:mod:`povagent.dataset.choice_sets.mmsi_circular_copies`); copy ``k`` of question ``i`` has the id
 ``i + k * 1,000,000``. The set's authors (``MMSIBenchCircular.evaluate``,
 InternRobotics/MMSI-Bench@5de2f3d2, ``vlmeval/dataset/mmsi_bench.py``) and VLMEvalKit
 (``mcq_circular_eval`` and ``report_acc``, open-compass/VLMEvalKit@e8e78f05,
@@ -31,7 +31,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 #: Removed from a copy's id to name its question: ``id mod 1,000,000`` for ids below 10**12.
 QUESTION_OF_COPY = r"^(?:\d+(?=\d{6}$))?0*(?=\d)"

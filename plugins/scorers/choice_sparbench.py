@@ -17,7 +17,7 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent_plugins.parsers.mcq.sparbench import EMPTY_REPLY
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 
 class SparBenchChoiceScorer(ChoiceScorer):

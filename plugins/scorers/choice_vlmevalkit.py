@@ -19,7 +19,7 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 
 def _as_vlmevalkit_writes(letter: str | None) -> str:

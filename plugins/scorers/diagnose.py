@@ -24,7 +24,7 @@ from povagent.geometry.ground_truth import PlacementCase
 from povagent.geometry.relation_region import RelationRegion, valid_placements
 from povagent.interfaces import Scorer
 from povagent.scoring.diagnosis import TargetView, anchor_extent, diagnose_answer, instance_case, relation_region, target_view
-from povagent.scoring.official import scoring_frame
+from povagent.scoring.normalized_l2 import scoring_frame
 
 #: Per loaded dataset, by ``id`` (a dataset is not hashable; its entry goes when it does): the
 #: geometry of its targets, shared by the ``diagnose`` and ``relation`` scorers (see

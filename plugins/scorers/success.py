@@ -1,6 +1,6 @@
 """The ``success`` scorer: a hit or a miss against hand-marked ground truth, as the paper scores real houses.
 
-For instances of a real-world set (:mod:`povagent.dataset.realworld`). The answer (a pixel in the
+For instances of a real-world set (:mod:`povagent.dataset.realworld_set`). The answer (a pixel in the
 512x512 letterboxed frame the model saw) is mapped back to the original frame through the exact
 letterbox transform, then compared with the marks made in the frame the model selected (A/B) or
 in the observer view (C):
@@ -29,7 +29,7 @@ from typing import Any, Sequence
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
-from povagent.dataset.realworld import Mark, RealWorldInstance
+from povagent.dataset.realworld_set import Mark, RealWorldInstance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
 

@@ -34,7 +34,7 @@ from povagent.scoring.metrics import Metric
 from povagent.scoring.relative_accuracy import absolute_error, accuracy_over_thresholds
 from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
 from povagent_plugins.scorers.choice_vlmevalkit import same_as_vlmevalkit_compares
-from povagent_plugins.scorers.vsibench import DIRECTION_LEVELS, VSIBenchScorer
+from povagent_plugins.scorers.vsibench_scorer import DIRECTION_LEVELS, VSIBenchScorer
 
 
 def vlmevalkit_relative_error(prediction: float, gold: float) -> float:

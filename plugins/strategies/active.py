@@ -4,7 +4,7 @@ The first message is the condition's passive prompt (A/B: the first ``max_frames
 frames, labelled ``Image k``; C: the observer view) followed by the tools preamble, which
 states the budget; every request offers the registered tools (``register_tools``: the built-ins
 of :mod:`povagent_plugins.tools` and any plugin's, :mod:`povagent.active.tools`). Each turn's
-calls run in an :class:`~povagent.active.episode.Episode`; each tool result goes back as a
+calls run in an :class:`~povagent.active.live_episode.Episode`; each tool result goes back as a
 ``tool`` message, and each rendered view as an image labelled ``View n:`` in a user message
 after them (tool messages carry no images). The episode ends with the ``answer`` call, or with
 a text answer in the official JSON (accepted, and labelled so), or at a limit (the budget,
@@ -20,7 +20,7 @@ Options (besides the basic strategy's ``prompts``, ``max_tokens``, ``temperature
 One row stays under :data:`ROW_BOUND_BYTES` whatever a model sends: each turn's answer is
 bounded where it enters (:mod:`povagent.engine.received`: 128 calls, their ids, names and
 arguments, the text), the calls go back to the model with their arguments cut as the record
-keeps them (:func:`~povagent.active.episode.kept_call`), the row keeps each turn's new messages
+keeps them (:func:`~povagent.active.live_episode.kept_call`), the row keeps each turn's new messages
 once (:mod:`povagent.results.transcript`), and the turns are bounded.
 """
 
@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from povagent import hookimpl
-from povagent.active.episode import DEFAULT_BUDGET, Episode, kept_call
+from povagent.active.live_episode import DEFAULT_BUDGET, Episode, kept_call
 from povagent.active.pose import Pose
 from povagent.active.speaker import SPEAKER_KNOWLEDGE, pair_facts
 from povagent.active.tools import ToolSet

@@ -24,7 +24,7 @@ from typing import Any
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import CONDITIONS, Condition
+from povagent.dataset.release_models import CONDITIONS, Condition
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import GenerationParams, Request
 from povagent.exchange.prompts import frame_values, load_template, render

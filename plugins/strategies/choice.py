@@ -16,7 +16,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec, choice_answer_schema
 from povagent.dataset.formats import PromptProfile, registered_formats
 from povagent.dataset.instances import Instance

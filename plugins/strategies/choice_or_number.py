@@ -4,7 +4,7 @@ option label or a number, as the question asks.
 For a set mixing multiple-choice and numerical questions (VSI-Bench): an instance carrying a
 multiple-choice question (``Instance.question``) is asked exactly as the ``choice`` strategy asks
 it; one carrying a numerical question (``Instance.numeric``) is asked for ``{"number"}``
-(:func:`povagent.answers.number.number_answer_schema`). The wording is the question's prompt
+(:func:`povagent.answers.numeric_question.number_answer_schema`). The wording is the question's prompt
 profile (a registered dataset format's), which words both kinds. Options as the ``choice``
 strategy's (``max_tokens``, ``temperature``, ``profile``).
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers.number import number_answer_schema
+from povagent.answers.numeric_question import number_answer_schema
 from povagent.answers.spec import AnswerSpec
 from povagent.dataset.instances import Instance
 from povagent_plugins.strategies.choice import ChoiceProfile, ChoiceStrategy, choice_answer_spec

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from povagent import hookimpl
 from povagent.dataset.instances import Instance
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.exchange.prompts import frame_values, load_template, render
 from povagent_plugins.strategies.basic import ABLATION_MAX_FRAMES, BasicStrategy
 

@@ -39,7 +39,7 @@ from PIL import Image, ImageDraw
 
 from povagent import hookimpl
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import Condition, SceneObject
+from povagent.dataset.release_models import Condition, SceneObject
 from povagent.exchange.images import ImageStore
 from povagent.exchange.prompts import load_template
 from povagent.geometry.camera import Camera

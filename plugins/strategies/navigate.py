@@ -15,7 +15,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent import hookimpl
-from povagent.active.episode import ARRIVED, Episode
+from povagent.active.live_episode import ARRIVED, Episode
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore

@@ -10,7 +10,7 @@ whether it interleaves). Pure text: nothing here reads files.
 
 from __future__ import annotations
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 
 VIEWSPATIAL_SOURCE = "lmms-eval viewspatial_doc_to_text (the ViewSpatial-Bench paper's format), lmms-eval @ 75571cfe"
 MINDCUBE_SOURCE = (

@@ -12,7 +12,7 @@ The set's ``api_eval.py`` sends the instruction as a system message; lmms-eval's
 
 from __future__ import annotations
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 
 MMSI_SOURCE = "MMSI-Bench's build_prompt (vlmeval/dataset/mmsi_bench.py @ 5de2f3d2) = lmms-eval mmsi_bench's default post_prompt @ 75571cfe"
 OMNISPATIAL_SOURCE = "lmms-eval omnispatial_doc_to_text, prompt_type manual_cot (OmniSpatial api_eval.py's default), lmms-eval @ 75571cfe"

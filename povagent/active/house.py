@@ -24,7 +24,7 @@ from PIL import Image
 from povagent.errors import DatasetError
 from povagent.generate.dataset import GENERATOR_VERSION
 from povagent.generate.frame_png import encode_frame_png
-from povagent.generate.pipeline import BuiltHouse, build_house
+from povagent.generate.house_pipeline import BuiltHouse, build_house
 from povagent.generate.record import ARTIFACTS, RECORD, read_record, record_problem
 from povagent.geometry.camera import Camera
 

@@ -31,7 +31,7 @@ from povagent.generate.exploration import CAMERA_HORIZON, reachable_grid
 from povagent.generate.floorplan import GRID
 from povagent.generate.renderer import Renderer
 from povagent.geometry.camera import Camera
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 
 #: How near the target (m, on the floor) an arrival must be.
 ARRIVAL_RADIUS = 1.0

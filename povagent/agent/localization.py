@@ -20,7 +20,7 @@ from pydantic import BaseModel, ConfigDict
 from povagent.agent.prepared_call import PreparedCall
 from povagent.agent.solver_cameras import solved_goal
 from povagent.answers.spec import ParsedAnswer, ParseStatus
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.errors import UnparseableAnswerError
 from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals

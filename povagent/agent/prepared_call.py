@@ -29,8 +29,8 @@ from povagent.agent.frame_memory import FrameMemory
 from povagent.agent.shown_frame import ShownFrame
 from povagent.agent.solver_cameras import posed_cameras
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import Condition, Direction
-from povagent.dataset.realworld import unknown_object, unposed_square_camera
+from povagent.dataset.realworld_set import unknown_object, unposed_square_camera
+from povagent.dataset.release_models import Condition, Direction
 from povagent.errors import BadInputError, DatasetError
 from povagent.exchange.images import ImageStore
 from povagent.geometry.camera import Camera, ViewCamera

@@ -19,7 +19,7 @@ from typing import Protocol, Sequence, runtime_checkable
 import numpy as np
 
 from povagent.dataset.instances import Instance
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.errors import BadInputError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response

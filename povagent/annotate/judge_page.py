@@ -25,7 +25,7 @@ from povagent.annotate.desk import AnswerRefused
 from povagent.annotate.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal, judged_item, run_identity
 from povagent.errors import ConfigError
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
-from povagent.scoring.official import scoring_frame
+from povagent.scoring.normalized_l2 import scoring_frame
 
 MEDIA_TYPES = {"PNG": "image/png", "JPEG": "image/jpeg", "WEBP": "image/webp"}
 
@@ -61,7 +61,7 @@ def judge_items(paths: list[Path]) -> Predictions:
     named by its run's identity and row key (:func:`~povagent.annotate.judgements.judged_item`)."""
     from povagent.report.baseline_systems import is_baseline_system
     from povagent.report.collect import collect
-    from povagent.report.protocol import outside_paper_protocol
+    from povagent.report.paper_protocol import outside_paper_protocol
     from povagent.report.run_sets import load_collection_dataset
 
     collection = collect(paths)

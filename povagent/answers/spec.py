@@ -107,7 +107,7 @@ class ParsedAnswer(BaseModel):
     #: ``camera`` what it saw there); ``None`` for every other answer, and then not written, so
     #: rows of the other tasks keep their bytes.
     path: list[tuple[float, float]] | None = None
-    #: The number a ``number`` answer gave (:mod:`povagent.answers.number`), as the rule read it
+    #: The number a ``number`` answer gave (:mod:`povagent.answers.numeric_question`), as the rule read it
     #: (NaN or infinite when the reply said so: such a number is accurate at no threshold);
     #: ``None`` for every other answer, and then not written, so other rows keep their bytes.
     number: float | None = None

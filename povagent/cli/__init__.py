@@ -25,18 +25,18 @@ app = typer.Typer(
 
 #: Submodules that add commands to ``app`` (each owns its commands).
 COMMAND_MODULES = (
-    "povagent.cli.dataset",    # validate, score
-    "povagent.cli.pipeline",   # run, sweep, plugins
+    "povagent.cli.dataset_commands",    # validate, score
+    "povagent.cli.pipeline_commands",   # run, sweep, plugins
     "povagent.cli.prompting",  # show-prompt, parse, rescore
-    "povagent.cli.rescore_log",  # rescore-log
+    "povagent.cli.rescore_log_command",  # rescore-log
     "povagent.cli.generate",   # generate
     "povagent.cli.render",     # render
     "povagent.cli.reporting",  # report, export, compare
-    "povagent.cli.quickstart", # quickstart
+    "povagent.cli.quickstart_command", # quickstart
     "povagent.cli.download",   # download
     "povagent.cli.train",      # export-train
     "povagent.cli.tiny_checkpoint",  # tiny-model
-    "povagent.cli.schema",     # schema
+    "povagent.cli.schema_command",     # schema
     "povagent.cli.ros",        # ros-node, ros-replay
     "povagent.cli.annotate",   # annotate
 )

@@ -37,9 +37,9 @@ def annotate_command(
         _judge(study, port)
         return
     from povagent.annotate.answer_page import AnswerPage
+    from povagent.annotate.answer_session import AnswerSession
     from povagent.annotate.desk import AnswerDesk, serving
     from povagent.annotate.server import AnnotateServer
-    from povagent.annotate.session import AnswerSession
     from povagent.run.components import create_components
     from povagent.run.stop_signals import sigterm_as_interrupt
 

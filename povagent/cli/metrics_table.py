@@ -43,7 +43,7 @@ def protocol_scorers(summary: RunSummary | ScoreSummary, protocol: str) -> list[
     the pipeline names, else those that declared metrics (a rescore), else, for a summary written
     before either was recorded, the pipeline's default scorers."""
     from povagent.config.pipeline import default_scorers
-    from povagent.scoring.protocols import registered_protocols
+    from povagent.scoring.score_protocols import registered_protocols
 
     pipeline = getattr(summary, "pipeline", None)
     names = list(pipeline.scorers) if pipeline is not None else list(summary.metrics or {}) or default_scorers()
@@ -54,11 +54,11 @@ def protocol_scorers(summary: RunSummary | ScoreSummary, protocol: str) -> list[
 def render_metrics(summary: RunSummary | ScoreSummary, title: str | PathTitle, shown: Iterable[str] = ()) -> None:
     """Print a table per scorer in ``summary.metrics``; of a scorer in ``shown`` (whose protocol's
     table printed already) only the metrics that table does not show, if any
-    (:func:`~povagent.scoring.protocols.beyond_protocol`)."""
+    (:func:`~povagent.scoring.score_protocols.beyond_protocol`)."""
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_tables
-    from povagent.scoring.protocols import beyond_protocol, registered_protocols
+    from povagent.scoring.score_protocols import beyond_protocol, registered_protocols
 
     skip = set(shown)
     protocols = registered_protocols() if skip else {}

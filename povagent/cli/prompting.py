@@ -26,7 +26,7 @@ INSTANCE_ID_EXAMPLE = "train_house_00000/pair_000/right/a"
 def unknown_instance_message(instance: str, known: list[str], where: object) -> str:
     """Why ``instance`` names no instance of the dataset at ``where``, how ids are written,
     a near id if one is close, and a few real ids to copy (from the same house when it exists)."""
-    from povagent.dataset.models import Condition, Direction
+    from povagent.dataset.release_models import Condition, Direction
     from povagent.plugins import did_you_mean
 
     lines = [f"no instance {instance!r} in {where}{did_you_mean(instance, known)}"]
@@ -170,7 +170,7 @@ def parse_command(
     --choices, the option label chosen), and says whether the parser had to repair the answer.
     """
     from povagent.answers.spec import AnswerSpec, choice_answer_schema, frame_answer_schema, point_answer_schema
-    from povagent.dataset.models import Condition
+    from povagent.dataset.release_models import Condition
     from povagent.errors import ConfigError
     from povagent.plugins import get_plugin_host
 
@@ -253,10 +253,10 @@ def rescore_command(
     printed beside the repaired ones.
     """
     from povagent.cli.console_width import PathTitle
-    from povagent.cli.dataset import render_summary
+    from povagent.cli.dataset_commands import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
     from povagent.cli.metrics_table import protocol_scorers, render_metrics
-    from povagent.cli.official_beside import render_official_beside
+    from povagent.cli.official_beside_console import render_official_beside
     from povagent.run.rescore import rescore_run
 
     result = rescore_run(run_dir, parser, dataset_root=dataset, plugins=plugin, extra_scorers=tuple(scorer))

@@ -119,10 +119,10 @@ def ros_replay_command(
     from povagent.ros.extras import require_rosbags
 
     require_rosbags("ros-replay")
+    from povagent.ros.bag_replay import ReplayTopics, replay_bag
     from povagent.ros.keyframes import MemorySettings
     from povagent.ros.memory_folder import check_memory_folder
     from povagent.ros.memory_folder import save_memory as write_memory
-    from povagent.ros.replay import ReplayTopics, replay_bag
     from povagent.ros.session import GroundingSession, agent_locate
 
     if save_memory is not None:

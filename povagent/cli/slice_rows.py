@@ -30,7 +30,7 @@ class Slices(Protocol[C]):
 
 def breakdown_slices(breakdown: Slices[C]) -> Iterator[tuple[str, C]]:
     """The rows of a breakdown table, labelled: overall, each condition, each direction."""
-    from povagent.dataset.models import Condition
+    from povagent.dataset.release_models import Condition
 
     yield "overall", breakdown.overall
     known = {str(c) for c in Condition}

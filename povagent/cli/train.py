@@ -52,8 +52,8 @@ def export_train_command(
 
     Resumable: the same command finishes a stopped export; other options over it are refused.
     """
-    from povagent.train.export import export_training_set
     from povagent.train.export_options import ExportOptions
+    from povagent.train.training_export import export_training_set
 
     options = ExportOptions(
         format=fmt,

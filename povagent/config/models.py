@@ -27,7 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_serial
 from povagent.config.addresses import parse_bind
 from povagent.config.retry_policy import RetryPolicy
 from povagent.dataset.hub_limits import DownloadLimits
-from povagent.dataset.models import Condition, Direction
+from povagent.dataset.release_models import Condition, Direction
 
 #: Most repeats a pipeline may ask for (``runs: N`` or a list of N indices); the paper uses 3.
 MAX_RUNS = 100

@@ -18,7 +18,7 @@ from typing import Any, Iterable, Mapping
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from povagent.config.remote_code import REMOTE_CODE_FLAG, REMOTE_CODE_OPTION, is_commit_hash
-from povagent.dataset.models import CONDITIONS, Condition
+from povagent.dataset.release_models import CONDITIONS, Condition
 
 
 class ModelProfile(BaseModel):

@@ -15,7 +15,7 @@ from pydantic import Field, field_validator
 
 from povagent.config.cluster_spec import yaml_cluster_spec  # pure: no Dask import
 from povagent.config.models import MAX_RUNS, CacheSpec, ComponentSpec, InstanceFilter, StrictModel, a_folder_path
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.errors import ClusterError
 
 

@@ -2,7 +2,7 @@
 
 from povagent.dataset.instances import Frame, Instance, instance_id, row_key
 from povagent.dataset.loader import Dataset, House, load_dataset
-from povagent.dataset.models import CONDITIONS, DIRECTIONS, Condition, Direction
+from povagent.dataset.release_models import CONDITIONS, DIRECTIONS, Condition, Direction
 
 __all__ = [
     "CONDITIONS",

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 from povagent.dataset.formats import DatasetFormat, FormatRead, registered_format, registered_formats
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import DatasetError
 
 if TYPE_CHECKING:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping
 
 if TYPE_CHECKING:
     from povagent.dataset.problems import Problem
-    from povagent.dataset.protocol import EvaluationSet
+    from povagent.dataset.set_interface import EvaluationSet
     from povagent.plugins import PluginHost
 
 
@@ -66,7 +66,7 @@ class PromptProfile:
     """How a set words its prompt: the text around the images, in the set's published wording."""
 
     name: str
-    #: The text asked, from an instance's question (a :class:`~povagent.answers.choice.ChoiceQuestion`
+    #: The text asked, from an instance's question (a :class:`~povagent.answers.choice_question.ChoiceQuestion`
     #: for a choice set): ``text(question) -> str``.
     text: Callable[[Any], str]
     #: Where the wording comes from (``lmms-eval viewspatial_doc_to_text @ 75571cfe``).

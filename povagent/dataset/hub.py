@@ -43,7 +43,7 @@ from typing import Iterable
 from povagent.dataset.hub_checks import COMMIT_ID, HubValueError, check_revision, shown
 from povagent.dataset.hub_limits import DownloadLimits
 from povagent.dataset.hub_transfer import inside
-from povagent.dataset.models import CONDITIONS, Condition
+from povagent.dataset.release_models import CONDITIONS, Condition
 from povagent.errors import DatasetError
 
 #: The official release on the Hub.

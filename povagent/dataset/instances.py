@@ -12,9 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from povagent.answers.choice import ChoiceQuestion
-from povagent.answers.number import NumericQuestion
-from povagent.dataset.models import Condition, Direction, SceneObject
+from povagent.answers.choice_question import ChoiceQuestion
+from povagent.answers.numeric_question import NumericQuestion
+from povagent.dataset.release_models import Condition, Direction, SceneObject
 from povagent.geometry.camera import Camera
 
 
@@ -51,14 +51,14 @@ class Instance:
     observer_object: SceneObject
     anchor_object: SceneObject
     observer_camera: Camera
-    #: The multiple-choice question the instance asks (:mod:`povagent.answers.choice`), or
+    #: The multiple-choice question the instance asks (:mod:`povagent.answers.choice_question`), or
     #: ``None`` for POVBench's point task.
     question: ChoiceQuestion | None = None
     #: The answer type the instance asks for (a registered ``AnswerType``'s name): a strategy
     #: asking another is refused at load (:func:`povagent.answers.types.answer_type_misfit`).
     #: An instance carrying a :attr:`question` asks for a ``choice`` unless it names another type.
     answer_type: str = "point"
-    #: The question the instance asks when it asks for a number (:mod:`povagent.answers.number`:
+    #: The question the instance asks when it asks for a number (:mod:`povagent.answers.numeric_question`:
     #: VSI-Bench's numerical-answer questions), or ``None``. Such an instance asks for a
     #: ``number`` unless it names another type.
     numeric: NumericQuestion | None = None

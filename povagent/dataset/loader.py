@@ -21,7 +21,9 @@ from pydantic import TypeAdapter, ValidationError
 from povagent.dataset.image_files import image_problem
 from povagent.dataset.instances import Frame, Instance, instance_id
 from povagent.dataset.json_files import read_dataset_json
-from povagent.dataset.models import (
+from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
+from povagent.dataset.problems import Problem, folder_name_problem, problems_from_validation_error
+from povagent.dataset.release_models import (
     CONDITIONS,
     RELEASE_FILE,
     Condition,
@@ -30,8 +32,6 @@ from povagent.dataset.models import (
     ExplorationRecord,
     PairEntry,
 )
-from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
-from povagent.dataset.problems import Problem, folder_name_problem, problems_from_validation_error
 from povagent.errors import DatasetError
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, PlacementCase

@@ -16,7 +16,7 @@ from typing import Any
 from jsonschema import Draft202012Validator
 from pydantic import TypeAdapter
 
-from povagent.dataset.models import DatasetMeta, ExplorationRecord, PairEntry
+from povagent.dataset.release_models import DatasetMeta, ExplorationRecord, PairEntry
 
 #: Schema file name -> the type it describes.
 SCHEMA_TYPES: dict[str, Any] = {

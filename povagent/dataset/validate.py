@@ -20,9 +20,9 @@ from jsonschema import ValidationError as SchemaError
 from povagent.dataset.image_files import image_problem
 from povagent.dataset.json_files import read_dataset_json
 from povagent.dataset.loader import EXPLORATION_LOG, VISIBLE_OBJECTS, house_folders
-from povagent.dataset.models import DIRECTIONS
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
 from povagent.dataset.problems import Problem, folder_name_problem, json_path, non_finite_problems
+from povagent.dataset.release_models import DIRECTIONS
 from povagent.dataset.schema import validator
 from povagent.generate.record import NO_DIGEST, RECORD, parse_record, record_problem
 

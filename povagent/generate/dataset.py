@@ -24,9 +24,9 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 from povagent.errors import DatasetError, GenerationError, is_file_system_error
 from povagent.files.redaction import Redactor
+from povagent.generate.house_pipeline import HouseSummary
 from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
-from povagent.generate.pipeline import HouseSummary
 from povagent.generate.record import (
     ARTIFACTS,
     PARTIAL,

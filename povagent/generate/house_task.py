@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.files.redaction import Redactor
+from povagent.generate.house_pipeline import generate_house
 from povagent.generate.judge import SurfaceJudge
-from povagent.generate.pipeline import generate_house
 from povagent.generate.record import GenerationOptions, HouseRecord, house_files, house_folder, read_record, write_house_atomically
 
 

@@ -33,7 +33,7 @@ from typing import Any
 from povagent.dataset.paths import GENERATED_RECORD
 from povagent.errors import DatasetError, ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.generate.pipeline import HouseSummary, house_id
+from povagent.generate.house_pipeline import HouseSummary, house_id
 from povagent.generate.writer import rounded, write_json
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).

@@ -23,7 +23,7 @@ second copy of it) applied to the same record (:class:`PlacementCase`) with one 
 
 A direction whose verdict is not ``appropriate`` keeps its raw placement under every reading, as
 officially. Everything here is pure 3D geometry; projecting into a frame (with the official
-clamping and behind-camera rules) is :func:`povagent.scoring.official.project_ground_truth`'s job.
+clamping and behind-camera rules) is :func:`povagent.scoring.normalized_l2.project_ground_truth`'s job.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ tests a predicted pixel against their image:
 The ground truth is always one of the samples. Samples are spaced at most about 0.1 m apart
 (5 degree steps, 0.1 m gaps), finer than the cube, over at most :data:`MAX_STEPS` steps a side:
 beyond 10 m (no furniture is that large; ``validate`` refuses boxes over
-:data:`~povagent.dataset.models.MAX_OBJECT_SIDE_M`) the spacing grows instead, so one
+:data:`~povagent.dataset.release_models.MAX_OBJECT_SIDE_M`) the spacing grows instead, so one
 instance's samples stay bounded (about 10,000 over a top) whatever a dataset says. In a frame, each sample in front of the
 camera becomes a disc of the cube's projected half-size (``f * 0.2 / depth`` pixels) plus
 :data:`PIXEL_TOLERANCE` (4 px); the region is their union, i.e. the image area the cube would

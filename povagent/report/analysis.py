@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from povagent.dataset.models import CONDITIONS, DIRECTIONS
+from povagent.dataset.release_models import CONDITIONS, DIRECTIONS
 from povagent.report.baseline import (
     CENTER_POLICY,
     CENTER_SUCCESS_POLICY,
@@ -40,7 +40,7 @@ from povagent.report.statistics import DEFAULT_BOOT, CellStats, Compared, Paired
 from povagent.report.systems import config_label
 from povagent.scoring.breakdown import POOLED, ScoredRow, pooled_breakdown, slices
 from povagent.scoring.metrics import Metric
-from povagent.scoring.protocols import PROTOCOLS
+from povagent.scoring.score_protocols import PROTOCOLS
 
 #: Above this many systems, paired comparisons are against the first system only.
 MAX_ALL_PAIRS = 6
@@ -146,9 +146,9 @@ class Analysis:
 
     def metrics_of_own(self, scorer: str) -> dict[str, Metric]:
         """``scorer``'s declared metrics that get tables and plots of their own: all of them, but
-        those its protocol's tables show already (:func:`~povagent.scoring.protocols.beyond_protocol`);
+        those its protocol's tables show already (:func:`~povagent.scoring.score_protocols.beyond_protocol`);
         none when no row was estimated."""
-        from povagent.scoring.protocols import beyond_protocol
+        from povagent.scoring.score_protocols import beyond_protocol
 
         if scorer not in self.declared_estimates:
             return {}
@@ -466,7 +466,7 @@ def analyze(
 
 
 def _is_realworld(dataset: Any) -> bool:
-    from povagent.dataset.realworld import RealWorldDataset
+    from povagent.dataset.realworld_set import RealWorldDataset
 
     return isinstance(dataset, RealWorldDataset)
 

@@ -3,7 +3,7 @@
 The paper does not report it, yet a constant guess at the image centre is the bar every model
 must clear, so every report shows it. Policy ("center, first frame"): answer the pixel
 ``(W/2, H/2)``; for A/B select frame 0 (the first exploration frame), for C the observer view.
-It is scored with the official metric (:func:`povagent.scoring.official.score_point`), blind
+It is scored with the official metric (:func:`povagent.scoring.normalized_l2.score_point`), blind
 spot included, exactly like a model's answer.
 
 The same per-instance score fills a non-response in the "counting non-responses" variant: an
@@ -23,7 +23,7 @@ from typing import Any, Iterable
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Instance
 from povagent.report.collect import Observation
-from povagent.scoring.official import OfficialScore, score_point
+from povagent.scoring.normalized_l2 import OfficialScore, score_point
 
 #: The label of the computed baseline in tables and plots.
 CENTER_SYSTEM = "Center baseline (computed)"

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.files.confined_write import ConfinedFolder, write_inside
-from povagent.report.active import active_section
+from povagent.report.active_section import active_section
 from povagent.report.analysis import Analysis, analyze, what_was_compared
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.choice_gold import SetQuestions

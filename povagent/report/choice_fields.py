@@ -1,6 +1,6 @@
 """What tells a choice scorer's row scores apart, and the label a row's choice scorer recorded.
 
-A choice scorer (:mod:`povagent_plugins.scorers.choice` and the scorers built on it) writes
+A choice scorer (:mod:`povagent_plugins.scorers.choice_scorer` and the scorers built on it) writes
 :data:`CHOICE_FIELDS`; the report reads any scorer writing them as one, whatever its name. Pure
 reading of a row's stored scores: nothing here scores or opens a file.
 """

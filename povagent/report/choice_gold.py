@@ -3,8 +3,8 @@
 The runner scores only answers, so a question every system answered with no option (or whose
 every request failed) has no scored row telling its gold label. The set the run names
 (``dataset: {path, format, images}`` in its config, asked as its ``task:``) knows it: each of
-its instances carries its :class:`~povagent.answers.choice.ChoiceQuestion`, whose ``gold`` and
-``category`` are what the choice scorer writes (:mod:`povagent_plugins.scorers.choice`). The set
+its instances carries its :class:`~povagent.answers.choice_question.ChoiceQuestion`, whose ``gold`` and
+``category`` are what the choice scorer writes (:mod:`povagent_plugins.scorers.choice_scorer`). The set
 is opened as the runner opens it (:func:`~povagent.dataset.evaluation_set.open_evaluation_set`,
 then :func:`~povagent.tasks.task_set.for_task`), once per report and only when a question needs
 it; a set that cannot be opened leaves the question's gold unknown,

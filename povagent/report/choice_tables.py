@@ -2,7 +2,7 @@
 differences between systems on the same questions, and a confusion of chosen vs gold labels.
 
 A choice run's rows carry a choice scorer's fields (``answered, correct, chosen, gold,
-category``: :mod:`povagent_plugins.scorers.choice` and the scorers built on it); a row has no
+category``: :mod:`povagent_plugins.scorers.choice_scorer` and the scorers built on it); a row has no
 pixels, so these tables stand in for the point tables. Harnesses read the same answer
 differently (issue 45), so every table names the rule that read its answers: the rows' parser,
 with its registered description. Accuracy counts every scored row (no option read = wrong).

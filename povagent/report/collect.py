@@ -7,9 +7,9 @@ per cell and ``sweep.json`` (the cell index, with each cell's axis values). Ever
 the collected runs; two runs are never pooled unless the user asks).
 
 A run's rows carry the fields of the scorer that follows a scoring protocol
-(``Scorer.protocol``, :mod:`povagent.scoring.protocols`): POVBench's normalized L2 on a
+(``Scorer.protocol``, :mod:`povagent.scoring.score_protocols`): POVBench's normalized L2 on a
 release-layout set, a hit against hand-marked ground truth on a real-world set
-(:mod:`povagent.dataset.realworld`); each observation says which scorer and protocol (``scorer``,
+(:mod:`povagent.dataset.realworld_set`); each observation says which scorer and protocol (``scorer``,
 ``protocol``) and carries those numbers: an error, or a hit or miss. A run scored only by scorers
 without a protocol carries their declared metrics alone, answered when its row's status says so.
 
@@ -36,7 +36,7 @@ from povagent.results.finished_run import RESULTS_FILE, FinishedRun, is_run_fold
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
 from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
-from povagent.scoring.protocols import PROTOCOLS, registered_protocols, shown_answer
+from povagent.scoring.score_protocols import PROTOCOLS, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
 #: text stays in results.jsonl).
@@ -198,7 +198,7 @@ class Collection:
 
 def run_scorer(config: dict[str, Any], rows: Sequence[ResultRow]) -> str:
     """The scorer whose protocol fields the report reads for a run: the first protocol's
-    (:data:`~povagent.scoring.protocols.PROTOCOLS` order) among the scorers the config names,
+    (:data:`~povagent.scoring.score_protocols.PROTOCOLS` order) among the scorers the config names,
     else among those its rows carry, else, for a config naming none, the pipeline's default
     scorers'; ``""`` when no scorer of the run follows a protocol.
 
@@ -413,11 +413,11 @@ def collect(
     pooling.
 
     Rows the paper's protocol does not cover (a model under an intervention on Given:
-    :mod:`povagent.report.protocol`) are left out unless ``outside_protocol``; the collection
+    :mod:`povagent.report.paper_protocol`) are left out unless ``outside_protocol``; the collection
     counts them in ``outside_protocol_rows``. Baselines never read the prompt: theirs stay.
     ``runs``: the runs :func:`find_runs` found under ``paths`` already (found again when not given).
     """
-    from povagent.report.protocol import outside_paper_protocol
+    from povagent.report.paper_protocol import outside_paper_protocol
 
     paths = [Path(p) for p in ([paths] if isinstance(paths, (str, Path)) else paths)]
     runs = list(runs) if runs is not None else [r for p in paths for r in find_runs(p)]
@@ -468,7 +468,7 @@ def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:
     row; a row it did not score, such as a parse or infra error, is an unanswered failure).
     ``None`` when no scorer of the run follows that protocol.
     """
-    from povagent.dataset.realworld import success_breakdown
+    from povagent.dataset.realworld_set import success_breakdown
 
     collection = collect(run_dir)
     if not any(r.protocol == "marked_hit" for r in collection.runs):

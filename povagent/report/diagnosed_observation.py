@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from povagent.results.rows import ResultRow
-from povagent.scoring.protocols import diagnosing_scorers
+from povagent.scoring.score_protocols import diagnosing_scorers
 
 
 def _uv(value: Any) -> tuple[float, float] | None:

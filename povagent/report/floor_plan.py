@@ -46,7 +46,7 @@ def house_plan(dataset_root: Path | None, house_id: str) -> FloorPlan | None:
 def _plan(root: str, house_id: str) -> FloorPlan | None:
     from povagent.active.house import check_generated
     from povagent.generate.floorplan import generate_floorplan
-    from povagent.generate.pipeline import house_generators
+    from povagent.generate.house_pipeline import house_generators
 
     try:
         seed, index = check_generated(Path(root), house_id)

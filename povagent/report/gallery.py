@@ -51,18 +51,18 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from PIL import Image
 
-from povagent.dataset.realworld import RealWorldInstance
+from povagent.dataset.realworld_set import RealWorldInstance
 from povagent.errors import ReadTargetError
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.files.confined_write import write_inside
-from povagent.report.active import answered_view
+from povagent.report.active_section import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
 from povagent.report.collect import MAX_RAW_CHARS, Observation
 from povagent.report.gallery_choice import asked_question, asks_numeric_question, choice_fields, has_target, question_drawing, shows_several_images
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
 from povagent.report.run_sets import RunSets
-from povagent.scoring.official import project_ground_truth, scoring_frame
+from povagent.scoring.normalized_l2 import project_ground_truth, scoring_frame
 
 IMAGES_DIR = "images"
 ANSWERS_DIR = "answers"
@@ -135,7 +135,7 @@ def ground_truth_views(instance: Any) -> tuple[list[int], list[int]]:
     """The exploration frames (indices) that could show an instance's target: ``(seen, maybe_hidden)``.
 
     POVBench-format: a frame qualifies when the GT 3D point projects in front of its camera and
-    inside its bounds (:func:`povagent.scoring.official.project_ground_truth`, the test behind
+    inside its bounds (:func:`povagent.scoring.normalized_l2.project_ground_truth`, the test behind
     the metric's "GT in the selected frame", which ignores walls). It is *seen* when the
     exploration log also records the anchor object in that frame (or records no object at all,
     so cannot tell), *maybe hidden* when the log lists what the frame saw and the anchor is

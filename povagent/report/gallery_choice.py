@@ -6,7 +6,7 @@ A choice row has no point and often no frame it selected (ViewSpatial-Bench, Min
 question's own images: the first as the card's image, all of them as a strip when there are
 several (a question's frames, or a house's exploration frames in conditions A and B). The
 chosen label is what the run's choice scorer recorded (:attr:`Observation.chosen`), the gold
-and the options are the question's (:class:`~povagent.answers.choice.ChoiceQuestion`).
+and the options are the question's (:class:`~povagent.answers.choice_question.ChoiceQuestion`).
 
 This module only says what a card shows; drawing and naming the files is
 :mod:`povagent.report.gallery`'s job, and nothing here scores.

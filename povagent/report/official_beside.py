@@ -12,7 +12,7 @@ numbers); the table is absent when there is none to list.
 
 from __future__ import annotations
 
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.collect import Collection
 from povagent.report.tables import Cell, Column, Row, Table

@@ -24,7 +24,7 @@ from __future__ import annotations
 import re
 from typing import Any, Callable
 
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.report.analysis import Analysis, SystemStats
 from povagent.report.statistics import CellStats, Estimate
 from povagent.report.tables import Cell, Column, Kind, Row, Table

@@ -112,7 +112,7 @@ def options_in_prompt(prompt: str) -> tuple[tuple[str, str], ...]:
     the longest run of lines labelled ``A``, ``B``, ``C``... in order; else the options one line
     lists after ``Options:`` (``Options: A: left, B: right``, as MMSI-Bench writes them inside
     its questions); ``()`` when there is neither."""
-    from povagent.dataset.choice_sets.mmsi import inline_options
+    from povagent.dataset.choice_sets.mmsi_records import inline_options
 
     best: list[tuple[str, str]] = []
     run: list[tuple[str, str]] = []

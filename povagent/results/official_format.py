@@ -40,7 +40,7 @@ from typing import Any, Iterable, Mapping
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 
 from povagent.dataset.instances import instance_id
-from povagent.dataset.models import Condition, Direction
+from povagent.dataset.release_models import Condition, Direction
 from povagent.errors import PredictionsError
 
 #: File name suffixes read from a predictions folder.

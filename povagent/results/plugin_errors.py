@@ -14,7 +14,7 @@ from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 
 if TYPE_CHECKING:
     from povagent.dataset.instances import Instance
-    from povagent.dataset.protocol import EvaluationSet
+    from povagent.dataset.set_interface import EvaluationSet
     from povagent.interfaces import Parser, Scorer
 
 #: The longest reply a parser is handed, in characters (about a megabyte). A longer one (a model

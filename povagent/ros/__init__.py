@@ -6,7 +6,7 @@ What is here, one job per module:
   and the environment rclpy needs when it comes from PyPI;
 * :mod:`~povagent.ros.transforms`: rigid transforms, quaternions, interpolation and the REP 103/105
   frame conventions (pure);
-* :mod:`~povagent.ros.images` and :mod:`~povagent.ros.camera_info`: ``sensor_msgs`` images and
+* :mod:`~povagent.ros.image_messages` and :mod:`~povagent.ros.camera_info`: ``sensor_msgs`` images and
   calibrations to RGB arrays, depth in metres and :class:`~povagent.geometry.goals.PinholeCamera` (pure);
 * :mod:`~povagent.ros.tf_buffer`: ``/tf``, ``/tf_static`` and ``nav_msgs/Odometry`` to the camera's
   pose in the map at an image's stamp (pure);
@@ -17,7 +17,7 @@ What is here, one job per module:
   (:mod:`~povagent.ros.result`: what ``~/result`` carries);
 * :mod:`~povagent.ros.command_worker`: the node's answering, a bounded command queue and one
   worker thread giving every command one final result (pure: no ROS);
-* :mod:`~povagent.ros.node` (rclpy) and :mod:`~povagent.ros.replay` (rosbags): the two edges, and
+* :mod:`~povagent.ros.node` (rclpy) and :mod:`~povagent.ros.bag_replay` (rosbags): the two edges, and
   :mod:`~povagent.ros.spinning`: an executor spun in the background and stopped in the order rclpy
   requires (executor, node, context);
 * :mod:`~povagent.ros.house_tour`: a generated house as a robot's recorded tour, written as a bag

@@ -40,7 +40,7 @@ from povagent.agent.shown_frame import ShownFrame
 from povagent.errors import BadInputError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.goals import PinholeCamera
 from povagent.ros.camera_info import CameraProblem, Intrinsics, intrinsics_from_info
-from povagent.ros.images import ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
+from povagent.ros.image_messages import ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
 from povagent.ros.keyframes import Keyframe, KeyframeMemory, MemorySettings
 from povagent.ros.result import CommandResult, CommandStatus
 from povagent.ros.tf_buffer import DEFAULT_TOLERANCE_S, PoseUnavailable, StampProblem, TransformBuffer, stamp_ns

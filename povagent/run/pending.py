@@ -16,7 +16,7 @@ from typing import Any
 
 from povagent.config.models import PipelineConfig
 from povagent.dataset.instances import Instance, row_key
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import ConfigError
 from povagent.results.rows import RowStatus, iter_rows
 from povagent.run.components import pipeline_hash

@@ -54,7 +54,7 @@ from povagent.run.run_folder import read_run_config
 from povagent.run.score_step import AnswerScoring, question_category, question_main_category
 from povagent.run.summary import declared_metrics, summarize_rows, write_summary
 from povagent.run.summary_model import RunSummary
-from povagent.scoring.protocols import scorer_protocols
+from povagent.scoring.score_protocols import scorer_protocols
 
 
 @dataclass

@@ -25,8 +25,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from povagent.answers.choice import ChoiceQuestion
-from povagent.answers.number import NumericQuestion, number_answer_schema
+from povagent.answers.choice_question import ChoiceQuestion
+from povagent.answers.numeric_question import NumericQuestion, number_answer_schema
 from povagent.answers.spec import AnswerSpec
 from povagent.dataset.problems import Problem
 from povagent.results.harness_log_files import read_harness_log

@@ -21,7 +21,7 @@ The run folder holds ``config.yaml`` (resolved), ``results.jsonl``, ``log.jsonl`
 ``summary.json`` and the marker that makes it ours (:mod:`povagent.run.run_folder`: a folder
 holding anything else is refused). What a run returns (its exit code, summary and counters) is
 :mod:`povagent.run.run_result`. It must not parse YAML or print tables (:mod:`povagent.config`,
-:mod:`povagent.cli.pipeline`).
+:mod:`povagent.cli.pipeline_commands`).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from povagent.config.models import PipelineConfig
 from povagent.config.pipeline import dump_pipeline
 from povagent.config.remote_code import remote_code_granted
 from povagent.dataset.instances import Instance
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.engine.cache import ResponseCache
 from povagent.engine.concurrency import AdaptiveConcurrency
 from povagent.engine.request_path import RequestPath
@@ -66,7 +66,7 @@ from povagent.run.stop_signals import cancelled_on_stop, finish_through_stop, st
 from povagent.run.summary import declared_metrics, summarize_run, write_summary, written_rows_table
 from povagent.run.summary_model import RunSummary
 from povagent.scoring.metrics import Declared
-from povagent.scoring.protocols import scorer_protocols
+from povagent.scoring.score_protocols import scorer_protocols
 
 LOG = "log.jsonl"
 SUMMARY = "summary.json"

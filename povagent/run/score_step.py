@@ -25,7 +25,7 @@ from typing import Any, Callable, Mapping
 from povagent.answers.spec import AnswerSpec, ParsedAnswer
 from povagent.answers.types import AnswerType
 from povagent.dataset.instances import Instance
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.interfaces import Parser, Scorer
 from povagent.results.model_construct import construct
 from povagent.results.official_reading import read_officially

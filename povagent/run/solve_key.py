@@ -18,7 +18,7 @@ from typing import Any, Awaitable, Callable
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance, row_key
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.engine.request_path import RequestPath
 from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore

@@ -85,7 +85,7 @@ def summarize_table(table: SummaryTable, n_keys: int | None = None) -> dict[str,
         same = out if table.read_as_scored() else None  # the same rows, scored the same: the same breakdown
         out["official_parse"] = official_parse_breakdown(table.officially_scored(), official_parser, table.unread(), same)
     if with_success:
-        from povagent.dataset.realworld import success_breakdown
+        from povagent.dataset.realworld_set import success_breakdown
 
         out["success"] = success_breakdown(table.success_rows())
     if table.metrics.declared:

@@ -16,7 +16,7 @@ from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.evaluations import official_parse_error
-from povagent.scoring.protocols import diagnosing_scorers
+from povagent.scoring.score_protocols import diagnosing_scorers
 
 
 def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
@@ -62,7 +62,7 @@ _NUMBER_TYPES = frozenset({bool, int, float})
 
 def diagnosed_row(row: ResultRow, error_scorer: str | None, by: Mapping[str, str] | None = None) -> DiagnosedRow | None:
     """The fields of the scorers diagnosing an answered row (``failure_step`` and
-    ``relation_hit``, :func:`~povagent.scoring.protocols.diagnosing_scorers`, or ``by`` when the
+    ``relation_hit``, :func:`~povagent.scoring.score_protocols.diagnosing_scorers`, or ``by`` when the
     caller asked it already), with its error by ``error_scorer`` (the run's ``normalized_l2``
     scorer), or ``None`` when neither scored it."""
     if row.status != RowStatus.ANSWERED:  # a StrEnum: a plain string from model_construct compares too

@@ -113,7 +113,7 @@ class PipelineNames(BaseModel):
 
 class SuccessCell(BaseModel):
     """A real-world set's success rate in one slice (unanswered = failure): see
-    :func:`povagent.dataset.realworld.success_breakdown`; the answered counts when the rows say
+    :func:`povagent.dataset.realworld_set.success_breakdown`; the answered counts when the rows say
     whether they were answered."""
 
     model_config = ConfigDict(extra="forbid")
@@ -287,7 +287,7 @@ class RunSummary(Breakdown):
     #: a summary read from a file is in the current one: :func:`~povagent.results.upgrade.upgrade_summary`).
     format_version: int = SUMMARY_FORMAT
     official_parse: OfficialParseBreakdown | None = None
-    #: A real-world set's success rates (:func:`povagent.dataset.realworld.success_breakdown`).
+    #: A real-world set's success rates (:func:`povagent.dataset.realworld_set.success_breakdown`).
     success: SuccessBreakdown | None = None
     #: Each plugin scorer's true/false and number fields: ``{scorer: {field: {n, true, rate} | {n, mean}}}``.
     scorers: dict[str, dict[str, dict[str, float]]] | None = None

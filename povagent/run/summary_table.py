@@ -37,7 +37,7 @@ from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
 from povagent.scoring.metrics import Declared, row_category, row_metric_flat, row_metric_groups
-from povagent.scoring.protocols import diagnosing_scorers, registered_protocols
+from povagent.scoring.score_protocols import diagnosing_scorers, registered_protocols
 
 #: A :class:`ScoredRow`'s fields, in its order: one column each.
 _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict", "run", "error_x", "error_y", "parse_error", "asks_point")
@@ -279,7 +279,7 @@ class _Appends:
 
 
 def _following(names: list[str], scores: Mapping[str, Any]) -> str | None:
-    """:func:`~povagent.scoring.protocols.following` of a protocol whose scorers are ``names``."""
+    """:func:`~povagent.scoring.score_protocols.following` of a protocol whose scorers are ``names``."""
     return next((n for n in names if scores and n in scores), names[0] if names else None)
 
 

@@ -30,7 +30,7 @@ from typing import Any, Callable
 
 from povagent.config.models import PipelineConfig
 from povagent.config.remote_code import remote_code_granted
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.engine.cache import ResponseCache, merge_shards
 from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
@@ -323,7 +323,7 @@ def _run_on_cluster(
     trust_remote_code: bool = False,
 ) -> None:
     """Every cell as a task on ``cluster``; ``sweep.json``, progress and the cache stay here."""
-    from povagent.cluster.sweep import CellTask, run_cell_tasks  # the one room that knows Dask
+    from povagent.cluster.sweep_tasks import CellTask, run_cell_tasks  # the one room that knows Dask
 
     cells, output = result.cells, result.output
     for cell in cells:

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, TextPart
 from povagent.interfaces import declares_turns, whole_answer_placeholders

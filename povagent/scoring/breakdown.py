@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from operator import attrgetter
 from typing import Any, Callable, Iterable, Iterator, TypeVar, overload
 
-from povagent.dataset.models import CONDITIONS, DIRECTIONS
+from povagent.dataset.release_models import CONDITIONS, DIRECTIONS
 
 T = TypeVar("T")
 C = TypeVar("C")

@@ -26,7 +26,7 @@ that fails:
 5. **correct** otherwise.
 
 Every counterfactual is projected as the official metric projects the ground truth
-(:func:`~povagent.scoring.official.project_ground_truth`): clamped to [0, 1], and a point behind
+(:func:`~povagent.scoring.normalized_l2.project_ground_truth`): clamped to [0, 1], and a point behind
 the camera placed at the image centre.
 
 The egocentric-bias vote of an A/B answer: among answers that pass the frame and anchor steps
@@ -50,7 +50,7 @@ from povagent.geometry.counterfactual import anchor_centre as counterfactual_anc
 from povagent.geometry.counterfactual import egocentric_target, mirrored_target
 from povagent.geometry.ground_truth import PlacementCase
 from povagent.geometry.relation_region import RelationRegion, region_in_frame
-from povagent.scoring.official import clamp_unit, official_uv
+from povagent.scoring.normalized_l2 import clamp_unit, official_uv
 from povagent.scoring.perception import ObjectExtent, object_extent
 
 #: Normalized distance beyond which a point is "far from the anchor" (see the module docstring).

@@ -24,7 +24,7 @@ import math
 from typing import Any
 
 from povagent.results.rows import ResultRow, RowStatus
-from povagent.scoring.official import clamp_unit, points_l2, project_ground_truth
+from povagent.scoring.normalized_l2 import clamp_unit, points_l2, project_ground_truth
 
 #: What the official runner records as ``parse_error`` when an answer has no readable point.
 OFFICIAL_PARSE_FAILURE = "failed to parse JSON"

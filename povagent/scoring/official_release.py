@@ -37,7 +37,7 @@ from povagent.errors import ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.geometry.camera import Camera
 from povagent.geometry.ground_truth import AnchorBox, target_point
-from povagent.scoring.official import GroundTruthInFrame, project_ground_truth
+from povagent.scoring.normalized_l2 import GroundTruthInFrame, project_ground_truth
 
 #: The official scorer's defaults for a camera field a record lacks.
 DEFAULT_FOV = 100.0

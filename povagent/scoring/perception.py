@@ -4,7 +4,7 @@ error (an addition, docs/how-to/why-models-fail.md).
 An object's extent in a frame is the 2D box (normalized, clipped to the image) around the part
 of its axis-aligned box in front of the camera (:func:`~povagent.geometry.box_outline.outline`,
 what a detector would box), and its centre as the official metric places a point
-(:func:`~povagent.scoring.official.official_uv`: clamped, behind the camera at the image
+(:func:`~povagent.scoring.normalized_l2.official_uv`: clamped, behind the camera at the image
 centre). The diagnostics' anchor step measures from the anchor's extent; the ``probe-anchor``
 and ``probe-observer`` scorers give a pointed pixel's distance to the probed object's box and
 centre, in the official metric's normalized units. Pure: no file, no clock.
@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from povagent.dataset.instances import Frame
-from povagent.dataset.models import SceneObject
+from povagent.dataset.release_models import SceneObject
 from povagent.geometry.box_outline import outline
-from povagent.scoring.official import clamp_unit, official_uv
+from povagent.scoring.normalized_l2 import clamp_unit, official_uv
 
 
 @dataclass(frozen=True)

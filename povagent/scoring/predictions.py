@@ -36,9 +36,9 @@ from dataclasses import dataclass, replace
 from typing import Any, TypeGuard
 
 from povagent.dataset.loader import Dataset, observer_camera
-from povagent.dataset.models import CONDITIONS, DIRECTIONS
+from povagent.dataset.release_models import CONDITIONS, DIRECTIONS
 from povagent.results.official_format import OfficialRun, RawPrediction
-from povagent.scoring.official import (
+from povagent.scoring.normalized_l2 import (
     MAX_L2,
     UNANSWERED,
     GroundTruthInFrame,

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.instances import Instance
 from povagent.generate.scene import House, PlacedObject
 from povagent.generate.sentences import OBJECT_NAMES, anchor_phrase, relation_phrase
@@ -62,7 +62,7 @@ def house_scene(dataset_root: Path, house_id: str) -> House:
     """The generated house's objects rebuilt from its record (refused in one line for a house
     this generator version did not make)."""
     from povagent.active.house import check_generated
-    from povagent.generate.pipeline import furnished_house
+    from povagent.generate.house_pipeline import furnished_house
 
     seed, index = check_generated(dataset_root, house_id)
     return furnished_house(seed, index)

@@ -21,7 +21,7 @@ import hashlib
 import random
 from dataclasses import replace
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.instances import Instance
 from povagent.geometry.directions import DIRECTION_NAMES, spec_of
 from povagent.tasks.scene_facts import NoTeachingFrame, gt_pixel, teaching_frame

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import DIRECTIONS, Direction, PairEntry, SceneObject
+from povagent.dataset.release_models import DIRECTIONS, Direction, PairEntry, SceneObject
 from povagent.geometry.box_outline import outline
 from povagent.geometry.camera import BEHIND_EPSILON, Camera
 from povagent.geometry.directions import spec_of

@@ -1,7 +1,7 @@
 """A loaded set seen through a task: the instances a pipeline's ``task:`` asks.
 
 What it is for: the runner, rescore and show-prompt read instances from an
-:class:`~povagent.dataset.protocol.EvaluationSet`; :func:`for_task` hands them the loaded set
+:class:`~povagent.dataset.set_interface.EvaluationSet`; :func:`for_task` hands them the loaded set
 itself for the point task (POVBench's own: nothing changes) and a :class:`TaskSet` otherwise,
 whose instances are the task's (:mod:`povagent.tasks.relation`, :mod:`povagent.tasks.multi_hop`)
 under the point instances' ids. The config hash holds the task, so a run folder never mixes
@@ -20,9 +20,9 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from povagent.config.models import TaskSpec
 from povagent.dataset.instances import Instance
-from povagent.dataset.models import Condition, Direction
 from povagent.dataset.problems import Problem
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.release_models import Condition, Direction
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import DatasetError
 from povagent.generate.scene import House as Scene
 from povagent.tasks.multi_hop import Hop, find_hop, house_scene, multi_hop_instance

@@ -22,7 +22,7 @@ from povagent.train.parquet import FEATURES
 from povagent.train.shards import atomic_file
 
 if TYPE_CHECKING:
-    from povagent.dataset.models import DatasetMeta
+    from povagent.dataset.release_models import DatasetMeta
     from povagent.train.shards import Shard
 
 CARD = "README.md"

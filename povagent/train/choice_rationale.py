@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 from typing import TYPE_CHECKING
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.geometry.directions import spec_of
 from povagent.tasks.scene_facts import InstanceFacts
 from povagent.train.rationale import RATIONALES, stood_phrase, turned_phrase

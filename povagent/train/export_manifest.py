@@ -1,6 +1,6 @@
 """``export.json`` as a type: what a training export records (:class:`ExportManifest`).
 
-:mod:`povagent.train.export` writes it before the shards and reads it to resume; ``povagent
+:mod:`povagent.train.training_export` writes it before the shards and reads it to resume; ``povagent
 schema export`` publishes its JSON Schema. Only types.
 """
 

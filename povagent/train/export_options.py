@@ -1,5 +1,5 @@
 """What a training export is asked for, and what it reports back: plain data, shared by the
-exporter (:mod:`povagent.train.export`) and the dataset card (:mod:`povagent.train.card`).
+exporter (:mod:`povagent.train.training_export`) and the dataset card (:mod:`povagent.train.card`).
 
 :class:`ExportOptions` is everything that decides an export's bytes (``export.json`` records
 it, and resuming compares it); :data:`FORMAT_FOLDERS` says where each format's shards go;
@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from povagent.config.models import TASK_NAMES, TaskSpec
-from povagent.dataset.models import CONDITIONS
+from povagent.dataset.release_models import CONDITIONS
 from povagent.errors import PovagentError
 from povagent.train.rationale import RATIONALES
 from povagent.train.shards import DEFAULT_SHARD_BYTES

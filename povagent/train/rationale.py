@@ -17,7 +17,7 @@ import json
 import random
 from collections.abc import Sequence
 
-from povagent.dataset.models import DIRECTIONS, Direction
+from povagent.dataset.release_models import DIRECTIONS, Direction
 from povagent.geometry.directions import spec_of
 from povagent.tasks.scene_facts import InstanceFacts, PixelBox
 

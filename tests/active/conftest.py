@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from povagent.active.episode import Episode
 from povagent.active.floor import Floor
 from povagent.active.house import house_for
+from povagent.active.live_episode import Episode
 from povagent.active.pose import Pose
 from povagent.active.speaker import PairFacts
 from povagent.plugins import get_plugin_host

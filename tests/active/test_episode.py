@@ -86,7 +86,7 @@ def test_the_record_keeps_each_action_its_arguments_as_sent_and_the_view_hash(ma
 
 
 def test_the_record_keeps_a_bounded_number_of_steps_and_counts_the_rest(make_episode):
-    from povagent.active.episode import MAX_RECORDED_STEPS
+    from povagent.active.live_episode import MAX_RECORDED_STEPS
 
     ep = make_episode(budget=1)
     for turn in range(1, 4):

@@ -17,7 +17,7 @@ from PIL import Image
 from povagent.agent import GroundingAgent, Localization
 from povagent.answers.spec import ParseStatus
 from povagent.config.retry_policy import RetryPolicy
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.errors import BadInputError, ConfigError, NoAnswerError, UnparseableAnswerError
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import PinholeCamera

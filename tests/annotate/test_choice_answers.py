@@ -12,7 +12,7 @@ import pytest
 from povagent.annotate.answer_page import AnswerPage
 from povagent.annotate.desk import AnswerDesk, serving
 from povagent.annotate.server import AnnotateServer
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.exchange.images import ImageStore
 from povagent.plugins import get_plugin_host
 

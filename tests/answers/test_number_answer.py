@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from povagent.answers.number import NumericQuestion
+from povagent.answers.numeric_question import NumericQuestion
 from povagent.answers.spec import ParsedAnswer, ParseStatus, unparseable
 from povagent.plugins import build_plugin_host
 

@@ -57,7 +57,7 @@ def test_oracle_error_is_about_zero_on_every_instance(requests_, mini_dataset):
 
 
 def test_oracle_picks_the_frame_where_the_gt_is_most_central(requests_):
-    from povagent.scoring.official import project_ground_truth
+    from povagent.scoring.normalized_l2 import project_ground_truth
 
     for r in ab(requests_):
         chosen = answer(OracleBaseline(), r)["selected_image"]

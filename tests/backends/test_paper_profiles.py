@@ -1,4 +1,4 @@
-"""The paper's model profiles (plugins/backends/profiles.py)."""
+"""The paper's model profiles (plugins/backends/paper_profiles.py)."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import json
 import pytest
 
 from povagent.config.remote_code import remote_code_granted
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.plugins import get_plugin_host
-from povagent_plugins.backends.profiles import PAPER_PROFILES
+from povagent_plugins.backends.paper_profiles import PAPER_PROFILES
 
 PAPER_MODELS = {
     "gpt-5.4": "openai/gpt-5.4",

@@ -6,7 +6,7 @@ import dataclasses
 
 import pytest
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 
 
 @pytest.fixture

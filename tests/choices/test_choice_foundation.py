@@ -6,16 +6,16 @@ import asyncio
 
 import pytest
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec, ParseStatus
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
 from povagent.plugins import get_plugin_host
 from povagent.run.score_step import AnswerScoring
-from povagent_plugins.answers.choice import CHOICE
+from povagent_plugins.answers.choice_answer import CHOICE
 from povagent_plugins.backends.baselines import OracleBaseline, RandomBaseline
-from povagent_plugins.parsers.choice import ChoiceParser
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.parsers.choice_parser import ChoiceParser
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 from povagent_plugins.strategies.choice import ChoiceStrategy
 
 OPTIONS = (("A", "left"), ("B", "right"), ("C", "front"), ("D", "behind"))

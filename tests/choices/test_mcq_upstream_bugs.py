@@ -8,7 +8,7 @@ import dataclasses
 
 import pytest
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.plugins import get_plugin_host
 
 from .mcq_corpus import read_with, replies, reply_ids

@@ -15,10 +15,10 @@ from typing import Any
 import pytest
 import yaml
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.answers.spec import AnswerSpec, ParseStatus
 from povagent.plugins import get_plugin_host
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 HERE = Path(__file__).parent
 OPTIONS = (("A", "left"), ("B", "right"), ("C", "front"), ("D", "back"))

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportOptions
+from povagent.train.training_export import export_training_set
 
 
 def _files(folder: Path) -> dict[str, str]:

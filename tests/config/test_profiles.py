@@ -7,7 +7,7 @@ from pydantic import ValidationError
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile, resolve_profile
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.plugins import build_plugin_host
 
 

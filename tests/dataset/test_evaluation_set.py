@@ -13,7 +13,7 @@ from povagent import hookimpl
 from povagent.dataset.evaluation_set import format_of, open_evaluation_set
 from povagent.dataset.formats import FormatRead
 from povagent.dataset.loader import Dataset
-from povagent.dataset.realworld import RealWorldDataset
+from povagent.dataset.realworld_set import RealWorldDataset
 from povagent.errors import DatasetError
 from povagent_plugins.formats.povbench import POVBENCH
 
@@ -78,7 +78,7 @@ def test_opening_a_release_by_detection_imports_no_generator(mini_root):
     code = (
         "import sys\nfrom povagent.dataset.evaluation_set import open_evaluation_set\n"
         f"open_evaluation_set({str(mini_root)!r})\n"
-        "print(sorted(m for m in ('povagent.generate.pipeline', 'scipy', 'embreex') if m in sys.modules))"
+        "print(sorted(m for m in ('povagent.generate.house_pipeline', 'scipy', 'embreex') if m in sys.modules))"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]

@@ -159,7 +159,7 @@ def test_a_symlink_inside_the_dataset_to_another_file_of_it_is_allowed(dataset_c
 def test_a_real_world_set_refuses_a_frame_symlinked_out_of_its_folder(tmp_path, outside_png, opened_files):
     from pathlib import Path
 
-    from povagent.dataset.realworld import load_realworld
+    from povagent.dataset.realworld_set import load_realworld
 
     demo = Path(__file__).resolve().parents[2] / "examples" / "realworld_demo"
     root = tmp_path / "rw"

@@ -20,7 +20,7 @@ from povagent.dataset.hub import (
     release_patterns,
 )
 from povagent.dataset.loader import load_dataset
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.errors import DatasetError
 from povagent.testing.hub_server import HubServer
 

@@ -5,7 +5,7 @@ that passed ``validate`` once made one instance's relation region exhaust memory
 from __future__ import annotations
 
 from povagent.dataset.loader import load_dataset
-from povagent.dataset.models import MAX_OBJECT_SIDE_M
+from povagent.dataset.release_models import MAX_OBJECT_SIDE_M
 from povagent.dataset.validate import validate_dataset
 
 HOUSE = "train_house_00000"

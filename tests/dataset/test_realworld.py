@@ -9,8 +9,7 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
-from povagent.dataset.models import Condition, Direction
-from povagent.dataset.realworld import (
+from povagent.dataset.realworld_set import (
     INDEX_FILE,
     RealWorldInstance,
     is_realworld,
@@ -19,6 +18,7 @@ from povagent.dataset.realworld import (
     success_breakdown,
     write_realworld,
 )
+from povagent.dataset.release_models import Condition, Direction
 from povagent.errors import DatasetError
 from povagent.geometry.letterbox import Letterbox
 

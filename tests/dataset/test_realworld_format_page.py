@@ -9,7 +9,7 @@ from pathlib import Path
 
 from PIL import Image
 
-from povagent.dataset.realworld import Command, Mark, RealWorldHouse, RealWorldSet, Scenario, load_realworld, read_realworld
+from povagent.dataset.realworld_set import Command, Mark, RealWorldHouse, RealWorldSet, Scenario, load_realworld, read_realworld
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "how-to" / "realworld.md"
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from povagent.dataset.realworld import success_breakdown
+from povagent.dataset.realworld_set import success_breakdown
 from povagent.report.collect import run_success_breakdown
 from povagent.results.rows import iter_rows
 

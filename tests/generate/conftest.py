@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 from povagent.generate import generate_dataset
-from povagent.generate.pipeline import BuiltHouse, build_house
+from povagent.generate.house_pipeline import BuiltHouse, build_house
 
 SEED = 7
 FRAMES = 6

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from povagent.generate import generate_dataset
 from povagent.generate.frame_png import encode_frame_png
-from povagent.generate.pipeline import build_house
+from povagent.generate.house_pipeline import build_house
 from povagent.geometry.camera import Camera
 
 

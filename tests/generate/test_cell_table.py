@@ -50,7 +50,7 @@ def test_cells_match_the_tables_cells():
 def test_skipping_hits_in_no_edges_cell_changes_no_pixel(objects_only):
     """The same faces and distances with and without the skip, on a generated house's views."""
     from povagent.generate.exploration import plan_tour
-    from povagent.generate.pipeline import build_house
+    from povagent.generate.house_pipeline import build_house
 
     built = build_house(0, 0, shadows=False)
     renderer = built.renderer

@@ -8,7 +8,7 @@ import pytest
 from povagent.generate.assets import asset_database, placement_annotations
 from povagent.generate.floorplan import generate_floorplan
 from povagent.generate.furnishing import furnish
-from povagent.generate.pipeline import house_generators
+from povagent.generate.house_pipeline import house_generators
 from povagent.generate.scene import House
 
 #: ProcTHOR places these on other objects, so its room annotations count them nowhere.

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from povagent.dataset.loader import ground_truth_point, load_dataset
-from povagent.dataset.models import PairEntry
+from povagent.dataset.release_models import PairEntry
 
 
 def test_every_ground_truth_point_lies_inside_the_house(tiny_dataset):

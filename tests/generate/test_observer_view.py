@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from povagent.dataset.models import PairEntry
+from povagent.dataset.release_models import PairEntry
 from povagent.generate.pairs import (
     BODY_RADIUS,
     MIN_ANCHOR_PIXELS,

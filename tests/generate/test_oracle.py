@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from povagent.dataset.loader import load_dataset
-from povagent.scoring.official import project_ground_truth, score_point
+from povagent.scoring.normalized_l2 import project_ground_truth, score_point
 
 
 def test_the_ground_truth_is_in_frame_in_nearly_every_observer_view(tiny_dataset):

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from povagent.dataset.models import PairEntry
+from povagent.dataset.release_models import PairEntry
 from povagent.generate import JudgeRequest, PhysicalRulesJudge, SurfaceJudge, SurfaceVerdict
 from povagent.generate.exploration import plan_tour
 from povagent.generate.pairs import build_pairs

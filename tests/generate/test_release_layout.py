@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from povagent.dataset.loader import load_dataset
-from povagent.dataset.models import PairEntry
+from povagent.dataset.release_models import PairEntry
 from povagent.dataset.validate import validate_dataset
 from povagent.generate.writer import MIN_HIT_PIXELS
 

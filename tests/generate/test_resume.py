@@ -188,7 +188,7 @@ def test_a_staging_folder_recreated_after_another_run_cleared_it_is_never_placed
     """A stale writer (its client killed) goes on writing after a re-run cleared ``.partial/``:
     its writes recreate the folder (``mkdir(parents=True)``), possibly on the same inode number,
     without the files it wrote first. That half house must not be renamed into place."""
-    from povagent.generate.pipeline import HouseSummary
+    from povagent.generate.house_pipeline import HouseSummary
     from povagent.generate.record import GenerationOptions, clear_partial, house_folder, write_house_atomically
 
     out = tmp_path / "data"

@@ -53,7 +53,7 @@ def main(out: Path) -> None:
     install_edited_registry()
     import numpy as np
 
-    from povagent.dataset.models import DIRECTIONS
+    from povagent.dataset.release_models import DIRECTIONS
     from povagent.geometry.ground_truth import AnchorBox, target_point
     from povagent.report.quickstart import run_quickstart
 

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from povagent.dataset.models import DIRECTIONS, Direction
+from povagent.dataset.release_models import DIRECTIONS, Direction
 from povagent.generate.dataset import DIRECTIONS_FINGERPRINTS, GENERATOR_VERSION
 from povagent.geometry.directions import (
     DIRECTION_NAMES,

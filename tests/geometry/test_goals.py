@@ -9,7 +9,7 @@ import pytest
 
 from povagent.dataset import load_dataset
 from povagent.generate import generate_dataset
-from povagent.generate.pipeline import build_house
+from povagent.generate.house_pipeline import build_house
 from povagent.geometry.camera import Camera
 from povagent.geometry.goals import (
     GoalUnavailable,

@@ -17,7 +17,7 @@ from povagent.geometry.camera import Camera
 from povagent.geometry.placement import AnchorEstimate, choose_frame, place_target, surface_kind, surface_phrase
 from povagent.geometry.size_priors import size_prior
 from povagent.geometry.triangulation import Outline, Sighting, fit_box, locate, projected_box
-from povagent.scoring.official import score_point
+from povagent.scoring.normalized_l2 import score_point
 
 
 def exact_views(instance, house, obj):

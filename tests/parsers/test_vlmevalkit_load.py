@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from povagent.answers.number import number_answer_schema
+from povagent.answers.numeric_question import number_answer_schema
 from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.vlmevalkit_exact import vlmevalkit_exact_label
 from povagent_plugins.parsers.mcq.vlmevalkit_load import PANDAS_MISSING, as_vlmevalkit_loads, options_as_vlmevalkit_loads

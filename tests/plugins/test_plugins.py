@@ -53,7 +53,7 @@ def register_scorers(register):
 def test_builtins_are_registered_with_their_module_as_source():
     host = build_plugin_host()
     entry = host.entry("scorer", "official")
-    assert entry.source == "built-in povagent_plugins.scorers.official"
+    assert entry.source == "built-in povagent_plugins.scorers.official_scorer"
     assert entry.description
 
 
@@ -79,7 +79,7 @@ def test_duplicate_name_is_an_error_naming_both_plugins(povagent_host):
             povagent_host.names("scorer")
         message = str(err.value)
         assert "'official'" in message
-        assert "built-in povagent_plugins.scorers.official" in message and "plugin impostor" in message
+        assert "built-in povagent_plugins.scorers.official_scorer" in message and "plugin impostor" in message
     finally:
         povagent_host.remove_plugin("impostor")
 
@@ -90,7 +90,7 @@ def test_unknown_name_suggests_the_nearest(povagent_host):
 
 
 def test_bad_options_name_the_plugin_and_its_source(povagent_host):
-    with pytest.raises(PluginError, match=r"scorer 'official' \(built-in povagent_plugins.scorers.official\) rejected its options"):
+    with pytest.raises(PluginError, match=r"scorer 'official' \(built-in povagent_plugins.scorers.official_scorer\) rejected its options"):
         povagent_host.create("scorer", "official", {"no_such_option": 1})
 
 
@@ -202,7 +202,7 @@ def test_plugins_command_lists_every_kind_with_its_source():
     listing = json.loads(result.output)
     assert {"backend", "strategy", "parser", "scorer", "judge", "profile", "failures"} <= set(listing)
     official = [e for e in listing["scorer"] if e["name"] == "official"]
-    assert official and official[0]["source"] == "built-in povagent_plugins.scorers.official"
+    assert official and official[0]["source"] == "built-in povagent_plugins.scorers.official_scorer"
     rules = [e for e in listing["judge"] if e["name"] == "physical-rules"]
     assert rules and rules[0]["source"] == "built-in povagent_plugins.judges.physical_rules"
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent_plugins.strategies.basic import BasicStrategy
 from povagent_plugins.strategies.cot import CotStrategy, SpatialCotStrategy
 from povagent_plugins.strategies.markers import ObserverAnchorPlotStrategy, ObserverPlotStrategy

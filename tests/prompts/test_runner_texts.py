@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import pytest
 
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, TextPart
 from povagent_plugins.strategies.basic import BasicStrategy

@@ -18,8 +18,8 @@ import yaml
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
-from povagent.scoring.official import project_ground_truth
-from povagent_plugins.scorers.official import OfficialScorer
+from povagent.scoring.normalized_l2 import project_ground_truth
+from povagent_plugins.scorers.official_scorer import OfficialScorer
 
 
 def simulated_row(instance, run: int, rng: random.Random, model: str, strategy: str, answer_rate: float, noise: float) -> ResultRow:
@@ -196,7 +196,7 @@ def realworld_predictions(dataset, plan: dict[str, tuple[str, ...]]) -> list[dic
 def realworld_sweep(tmp_path_factory) -> Path:
     """A real sweep on the demo real-world set, two runs per cell: the center baseline and a
     "model" replaying :data:`REALWORLD_PLAN`; rows written and scored by the real runner."""
-    from povagent.dataset.realworld import load_realworld
+    from povagent.dataset.realworld_set import load_realworld
     from povagent.run.sweep import run_sweep
 
     base = tmp_path_factory.mktemp("realworld_sweep")

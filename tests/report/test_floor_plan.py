@@ -12,7 +12,7 @@ HOUSE = "train_house_00000"
 
 def test_a_generated_house_gives_the_plan_its_generator_built(generated_release):
     from povagent.generate.floorplan import generate_floorplan
-    from povagent.generate.pipeline import house_generators
+    from povagent.generate.house_pipeline import house_generators
 
     record = json.loads((generated_release / "artifacts" / HOUSE / "_generated.json").read_text())
     built = generate_floorplan(house_generators(record["options"]["seed"], record["index"])["plan"])

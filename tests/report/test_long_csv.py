@@ -21,7 +21,7 @@ from povagent.dataset.instances import row_key
 from povagent.errors import PredictionsError
 from povagent.report.export import LONG_CSV_COLUMNS, export_long_csv
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus, read_rows
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 
 #: The header of the official all_runs_long.csv, as aggregate_runs.py writes it.
 OFFICIAL_HEADER = (

@@ -1,12 +1,12 @@
 """Interventions on Given run, but stay out of the paper-layout tables by default
-(povagent/report/protocol.py and ``collect``): the authors ran them on Inferred and Stated only."""
+(povagent/report/paper_protocol.py and ``collect``): the authors ran them on Inferred and Stated only."""
 
 from __future__ import annotations
 
 import pytest
 
 from povagent.report.collect import collect
-from povagent.report.protocol import outside_paper_protocol, paper_conditions
+from povagent.report.paper_protocol import outside_paper_protocol, paper_conditions
 
 
 @pytest.mark.parametrize("strategy", ["o-plot", "oa-plot", "cot", "spatial-cot"])

@@ -9,7 +9,7 @@ from PIL import Image
 from povagent.report.collect import Observation
 from povagent.report.gallery import drawing_for, write_answer_chunks
 from povagent.report.gallery_drawing import GT_COLOUR, PRED_COLOUR, render
-from povagent.scoring.official import score_point
+from povagent.scoring.normalized_l2 import score_point
 
 
 def observation(instance, x: float, y: float, selected: int | None) -> Observation:

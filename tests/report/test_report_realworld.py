@@ -22,7 +22,7 @@ from PIL import Image
 from table_rows import system_row
 from test_report_html import body_attr, browse, cards, dump, gallery_data  # the Chromium helpers
 
-from povagent.dataset.realworld import load_realworld
+from povagent.dataset.realworld_set import load_realworld
 from povagent.report.baseline import CENTER_SYSTEM
 from povagent.report.build import write_report
 from povagent.report.collect import Observation

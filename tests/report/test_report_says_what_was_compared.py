@@ -22,7 +22,7 @@ from povagent.report.build import write_report
 from povagent.report.gallery import Drawing, ground_truth_views, write_drawing
 from povagent.report.plots import grouped_bars, histogram, series_styles
 from povagent.report.statistics import Estimate
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 
 STRATEGIES = ("basic", "o-plot", "oa-plot", "cot", "spatial-cot")
 #: The quickstart link the README shows (proposed in the README text of this change): the random

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from povagent.dataset.models import Condition, Direction
+from povagent.dataset.release_models import Condition, Direction
 from povagent.errors import PredictionsError
 from povagent.results.official_format import (
     OfficialPrediction,

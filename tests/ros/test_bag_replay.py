@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from povagent.errors import ConfigError
+from povagent.ros.bag_replay import ReplayTopics, replay_bag
 from povagent.ros.memory_folder import load_memory
-from povagent.ros.replay import ReplayTopics, replay_bag
 from povagent.ros.session import GroundingSession
 from povagent.ros.tour_bag import write_tour_bag
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.ros.images import MAX_PIXELS, ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
+from povagent.ros.image_messages import MAX_PIXELS, ImageProblem, compressed_to_rgb, depth_to_metres, image_to_rgb
 
 RGB = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3) * 10
 

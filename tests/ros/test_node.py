@@ -200,7 +200,7 @@ def test_commands_while_one_is_answered_are_queued_up_to_the_bound_then_refused(
 
 
 def test_a_bag_of_the_same_messages_replays_to_the_same_goal(live, tour, simulated_locate, tmp_path, wait_until):
-    from povagent.ros.replay import replay_bag
+    from povagent.ros.bag_replay import replay_bag
     from povagent.ros.tour_bag import write_tour_bag
 
     _, player, listener = live

@@ -13,7 +13,7 @@ from povagent.errors import ConfigError
 from povagent.run.progress import QuietProgress
 from povagent.run.runner import run_pipeline
 from povagent.testing.pytest_plugin import write_release
-from povagent_plugins.answers.choice import CHOICE
+from povagent_plugins.answers.choice_answer import CHOICE
 from povagent_plugins.answers.point import POINT
 
 

@@ -7,7 +7,7 @@ from povagent import hookimpl
 from povagent.interfaces import Scorer
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.summary_fields import diagnosed_row
-from povagent.scoring.protocols import diagnosing_scorers
+from povagent.scoring.score_protocols import diagnosing_scorers
 
 
 class RegionHit(Scorer):

@@ -20,9 +20,9 @@ from povagent.cli import app
 from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.official import OFFICIAL_METRICS, OfficialScorer
+from povagent_plugins.scorers.official_scorer import OFFICIAL_METRICS, OfficialScorer
 
-BUILT_IN = "povagent_plugins.scorers.official"
+BUILT_IN = "povagent_plugins.scorers.official_scorer"
 SQUARED = Metric("mean_squared_l2", "lower", "mean", "l2_squared", "Squared L2", "Mean squared official L2 over answered instances.")
 
 

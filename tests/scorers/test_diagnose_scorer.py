@@ -9,12 +9,12 @@ import pytest
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus, unparseable
 from povagent.dataset.loader import load_dataset, placement_case
-from povagent.dataset.realworld import load_realworld
+from povagent.dataset.realworld_set import load_realworld
 from povagent.errors import ConfigError
 from povagent.geometry.counterfactual import egocentric_target, mirrored_target
 from povagent.scoring.diagnosis import ANCHOR_THRESHOLD, BIAS_MARGIN, official_uv
 from povagent_plugins.scorers.diagnose import DiagnoseScorer
-from povagent_plugins.scorers.relation import RelationScorer
+from povagent_plugins.scorers.relation_scorer import RelationScorer
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ import pytest
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
+from povagent.dataset.release_models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.geometry.camera import Camera
 from povagent_plugins.scorers.probe import AnchorProbeScorer, ObserverProbeScorer
 

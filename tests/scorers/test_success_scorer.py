@@ -13,7 +13,7 @@ import pytest
 from povagent.answers.spec import ParsedAnswer, ParseStatus, unparseable
 from povagent.config.pipeline import pipeline_from_source
 from povagent.config.yaml_reader import ConfigSource
-from povagent.dataset.realworld import load_realworld, success_breakdown
+from povagent.dataset.realworld_set import load_realworld, success_breakdown
 from povagent.errors import ConfigError
 from povagent.results.rows import iter_rows
 from povagent.run.runner import PipelineRun

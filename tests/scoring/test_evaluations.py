@@ -8,7 +8,7 @@ from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus
 from povagent.scoring.evaluations import official_evaluation, raw_response
-from povagent.scoring.official import clamp_unit
+from povagent.scoring.normalized_l2 import clamp_unit
 
 C_ID = "train_house_00000/0/right/c"
 A_ID = "train_house_00000/0/right/a"

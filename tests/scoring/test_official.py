@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from povagent.scoring.official import MAX_L2, UNANSWERED, normalized_l2, score_point, scoring_frame
+from povagent.scoring.normalized_l2 import MAX_L2, UNANSWERED, normalized_l2, score_point, scoring_frame
 from povagent.scoring.prediction_summary import summary_of
 from povagent.scoring.predictions import score_official_rows
 

@@ -25,7 +25,7 @@ from povagent.dataset.loader import anchor_type
 from povagent.results.prediction_files import score_predictions
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, ResultsWriter, RowStatus
 from povagent.run.summary import summarize_run
-from povagent.scoring.official import project_ground_truth
+from povagent.scoring.normalized_l2 import project_ground_truth
 from povagent.scoring.official_release import read_release
 from povagent.scoring.predictions import score_official_rows
 

@@ -20,7 +20,7 @@ import pytest
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.geometry.camera import Camera
-from povagent.scoring.official import (
+from povagent.scoring.normalized_l2 import (
     MAX_L2,
     GroundTruthInFrame,
     OfficialScore,
@@ -31,7 +31,7 @@ from povagent.scoring.official import (
     signed_errors,
     strict_l2,
 )
-from povagent_plugins.scorers.official import OfficialScorer
+from povagent_plugins.scorers.official_scorer import OfficialScorer
 
 FRONT_CAMERA = Camera.from_pose((0.0, 0.0, 0.0), yaw=0.0, horizon=0.0, fov=90.0)
 

@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
+from povagent.dataset.release_models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.geometry.camera import Camera
 
 GREY = (128, 128, 128)

@@ -21,7 +21,7 @@ from povagent.results.episode import read_record
 from povagent.results.rows import read_rows
 from povagent.run.run_folder import MARKER
 from povagent.run.runner import run_pipeline
-from povagent.scoring.official import normalized_l2, project_ground_truth
+from povagent.scoring.normalized_l2 import normalized_l2, project_ground_truth
 from povagent.testing.loopback_server import LoopbackServer, Reply
 
 pytestmark = pytest.mark.timeout(120)

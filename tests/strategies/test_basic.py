@@ -6,7 +6,7 @@ import asyncio
 
 import pytest
 
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Response, TextPart
 from povagent_plugins.strategies.basic import BasicStrategy

@@ -19,7 +19,7 @@ import math
 
 import pytest
 
-from povagent.dataset.models import AxisAlignedBoundingBox, RawMetadata, SceneObject, Vec3
+from povagent.dataset.release_models import AxisAlignedBoundingBox, RawMetadata, SceneObject, Vec3
 from povagent.exchange.images import ImageStore
 from povagent_plugins.strategies.markers import (
     ObserverAnchorPlotStrategy,
@@ -205,7 +205,7 @@ def test_marked_frames_keep_the_frame_size(make_instance, facing_z):
 
 
 def test_given_is_sent_unmarked(make_instance, facing_z):
-    from povagent.dataset.models import Condition
+    from povagent.dataset.release_models import Condition
 
     inst = make_instance([facing_z()], condition=Condition.GIVEN, hits=())
     assert unchanged(ObserverAnchorPlotStrategy(), inst)

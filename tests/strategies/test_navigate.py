@@ -101,7 +101,7 @@ def test_a_given_walk_starts_at_the_entrance_on_the_robots_floor(oracle_run):
 
 def test_a_walk_that_ends_without_arrived_fails_where_it_stopped(oracle_run, generated_release):
     from povagent.dataset.loader import load_dataset
-    from povagent_plugins.scorers.navigate import NavigateScorer
+    from povagent_plugins.scorers.navigate_scorer import NavigateScorer
     from povagent_plugins.strategies.navigate import NavigateParser
 
     row = next(r for r in read_rows(oracle_run / "results.jsonl") if r.scores["navigate"]["success"])

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import hashlib
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.plugins import get_plugin_host
 from povagent_plugins.strategies.choice import prompt_profiles
 from povagent_plugins.strategies.spatial_set_profiles import mmsi_text, omnispatial_text

@@ -15,7 +15,7 @@ from povagent.config.models import PipelineConfig, TaskSpec
 from povagent.dataset.loader import load_dataset
 from povagent.generate.floorplan import generate_floorplan
 from povagent.generate.furnishing import furnish
-from povagent.generate.pipeline import house_generators
+from povagent.generate.house_pipeline import house_generators
 from povagent.geometry.directions import spec_of
 from povagent.tasks.multi_hop import find_hop, house_scene
 from povagent.tasks.task_set import for_task

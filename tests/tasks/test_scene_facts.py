@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
+from povagent.dataset.release_models import AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.geometry.camera import Camera
 from povagent.tasks.scene_facts import facing_angle, facing_words, gt_pixel, image_direction, teaching_frame
 

@@ -11,8 +11,8 @@ from typing import Any
 
 import pytest
 
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportError, ExportOptions
+from povagent.train.training_export import export_training_set
 
 
 def _extra_key(pairs: list[dict[str, Any]]) -> None:

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from povagent.dataset.loader import load_dataset
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportError, ExportOptions
+from povagent.train.training_export import export_training_set
 
 datasets = pytest.importorskip("datasets", reason="the export tests load the hf folder with datasets (test extra)")
 

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from povagent.errors import PovagentError
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportError, ExportOptions
+from povagent.train.training_export import export_training_set
 
 
 def _files(folder: Path) -> set[Path]:

@@ -17,8 +17,8 @@ import pytest
 from PIL import Image
 
 from povagent.dataset.loader import load_dataset
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportOptions
+from povagent.train.training_export import export_training_set
 
 datasets = pytest.importorskip("datasets", reason="the export tests load the exports with datasets (test extra)")
 

@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from povagent.errors import PovagentError
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportOptions
+from povagent.train.training_export import export_training_set
 
 
 def test_conditions_named_twice_are_exported_once_and_the_card_agrees(generated_release: Path, tmp_path: Path) -> None:

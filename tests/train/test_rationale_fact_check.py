@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from povagent.dataset.loader import load_dataset
-from povagent.scoring.official import score_point
+from povagent.scoring.normalized_l2 import score_point
 from povagent.train.examples import house_examples, make_strategy
 
 SIDES = {"left": "LEFT", "right": "RIGHT", "front": "FRONT", "up": "ON TOP"}

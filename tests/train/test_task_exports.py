@@ -14,8 +14,8 @@ from povagent.config.models import TaskSpec
 from povagent.dataset.loader import load_dataset
 from povagent.geometry.directions import spec_of
 from povagent.tasks.task_set import for_task
-from povagent.train.export import export_training_set
 from povagent.train.export_options import ExportError, ExportOptions
+from povagent.train.training_export import export_training_set
 from povagent_plugins.strategies.choice import plain_text
 
 

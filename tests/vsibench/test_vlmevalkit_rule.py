@@ -20,10 +20,10 @@ from pathlib import Path
 
 import pytest
 
-from povagent.answers.number import NumericQuestion, number_answer_schema
+from povagent.answers.numeric_question import NumericQuestion, number_answer_schema
 from povagent.answers.spec import AnswerSpec, choice_answer_schema
 from povagent.dataset.choice_sets.external import image_camera
-from povagent.dataset.choice_sets.vsibench import scene_question
+from povagent.dataset.choice_sets.vsibench_records import scene_question
 from povagent.dataset.choice_sets.vsibench_set import scene_instance
 from povagent.dataset.instances import Frame
 from povagent_plugins.parsers.vsibench.vlmevalkit import MAX_LIST_CHARS, VlmevalkitVSIBenchParser, vlmevalkit_number

@@ -15,16 +15,16 @@ from pathlib import Path
 
 import pytest
 
-from povagent.answers.number import number_answer_schema
+from povagent.answers.numeric_question import number_answer_schema
 from povagent.answers.spec import AnswerSpec, choice_answer_schema
 from povagent.dataset.choice_sets.external import image_camera
-from povagent.dataset.choice_sets.vsibench import scene_question
+from povagent.dataset.choice_sets.vsibench_records import scene_question
 from povagent.dataset.choice_sets.vsibench_set import load_vsibench, scene_instance
 from povagent.dataset.instances import Frame
 from povagent.scoring.metrics import metric_value
+from povagent_plugins.parsers.vsibench.first_word import VSIBenchParser, first_word
 from povagent_plugins.parsers.vsibench.lmms import VSIBenchLmmsParser, extract_number
-from povagent_plugins.parsers.vsibench.official import VSIBenchParser, first_word
-from povagent_plugins.scorers.vsibench import VSIBenchScorer, lmms_overall, official_overall, per_type_scores
+from povagent_plugins.scorers.vsibench_scorer import VSIBenchScorer, lmms_overall, official_overall, per_type_scores
 
 from .conftest import RECORDS
 
@@ -195,7 +195,7 @@ def zero_gold_instance():
     """A counting question whose gold is 0 (a prediction file may hold one; the set's own file never does)."""
     from dataclasses import replace
 
-    from povagent.answers.number import NumericQuestion
+    from povagent.answers.numeric_question import NumericQuestion
 
     return replace(corpus_instance(0, "object_counting", "1"), numeric=NumericQuestion("?", 0.0, category="object_counting"))
 

@@ -114,7 +114,7 @@ def test_an_unknown_dataset_option_is_refused(vsibench_pipeline):
 def test_the_sets_overall_comes_from_the_summarys_per_type_scores(vsibench_pipeline):
     import json
 
-    from povagent_plugins.scorers.vsibench import official_overall
+    from povagent_plugins.scorers.vsibench_scorer import official_overall
 
     result = run_pipeline(vsibench_pipeline(backend="test-center", reply="A"))
     summary = json.loads((result.run_dir / "summary.json").read_text())

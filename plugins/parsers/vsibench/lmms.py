@@ -15,12 +15,12 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.number import asks_number
+from povagent.answers.numeric_question import asks_number
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, unparseable
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL
-from povagent_plugins.parsers.vsibench.official import NEITHER, choice_parse, first_word, number_parse
+from povagent_plugins.parsers.vsibench.first_word import NEITHER, choice_parse, first_word, number_parse
 
 #: The number words ``extract_number`` knows, with their values.
 NUMBER_WORDS = {

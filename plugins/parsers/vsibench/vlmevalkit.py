@@ -35,13 +35,13 @@ import re
 from typing import Any
 
 from povagent import hookimpl
-from povagent.answers.number import asks_number
+from povagent.answers.numeric_question import asks_number
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER, as_vlmevalkit_loads
 from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
-from povagent_plugins.parsers.vsibench.official import NEITHER, number_parse
+from povagent_plugins.parsers.vsibench.first_word import NEITHER, number_parse
 
 #: The number words ``normalize_number_words`` turns into digits (``num2words(0)`` .. ``(20)``).
 NUMBER_WORDS = (

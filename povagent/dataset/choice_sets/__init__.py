@@ -114,7 +114,7 @@ def read_choice_set(file: str | Path, files: ChoiceFiles, *, images: str | Path 
     root = file.parent if images is None else Path(images)
     if not root.is_dir():
         raise DatasetError(f"{root}: not a folder (dataset.images names the folder a set's image paths are relative to)")
-    from povagent.dataset.realworld import unknown_object
+    from povagent.dataset.realworld_set import unknown_object
 
     instances = []
     lookups = ImageLookups(root)  # each image path resolved and checked once per set

@@ -1,7 +1,7 @@
 """An external multiple-choice set loaded into povagent's instances: what the three readers share.
 
 A reader (:mod:`.viewspatial`, :mod:`.mindcube`, :mod:`.srbench3d`) turns each record of its
-set's published file into an :class:`Item` (its id, a :class:`~povagent.answers.choice.ChoiceQuestion`
+set's published file into an :class:`Item` (its id, a :class:`~povagent.answers.choice_question.ChoiceQuestion`
 and the images it shows) or into :class:`~povagent.dataset.problems.Problem` lines naming the file,
 the record and the field. This module makes the items runnable: every image path is confined to
 the folder the set's file is in (:func:`~povagent.dataset.paths.confined`; an absolute path, a
@@ -21,13 +21,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.image_files import ImageFileError, inspect_image_file
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.json_files import TooDeepError, loads_dataset_json
-from povagent.dataset.models import Condition, Direction
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem, not_text_problems
+from povagent.dataset.release_models import Condition, Direction
 from povagent.errors import ConfigError
 from povagent.geometry.camera import Camera
 
@@ -113,7 +113,7 @@ _NO_TARGET = (float("nan"),) * 3
 def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowhere: Any = None) -> Instance:
     """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition.
     ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
-    from povagent.dataset.realworld import unknown_object
+    from povagent.dataset.realworld_set import unknown_object
 
     nowhere = unknown_object() if nowhere is None else nowhere
     camera = frames[0].camera if frames else image_camera(1, 1)
@@ -135,7 +135,7 @@ def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowher
 @dataclass
 class ChoiceSet:
     """A loaded external multiple-choice set, with the interface the runner uses
-    (:class:`~povagent.dataset.protocol.EvaluationSet`).
+    (:class:`~povagent.dataset.set_interface.EvaluationSet`).
 
     ``root`` is the folder of the set's file (images are confined to it); ``houses`` holds one
     entry, the set's name, so a ``houses`` filter naming it selects every item. ``problems`` are

@@ -20,15 +20,15 @@ from pathlib import Path
 
 from PIL import Image
 
-from povagent.answers.choice import ChoiceQuestion
-from povagent.answers.number import NumericQuestion
+from povagent.answers.choice_question import ChoiceQuestion
+from povagent.answers.numeric_question import NumericQuestion
 from povagent.dataset.choice_sets.external import ChoiceSet, image_camera
-from povagent.dataset.choice_sets.vsibench import SceneQuestion, read_vsibench
+from povagent.dataset.choice_sets.vsibench_records import SceneQuestion, read_vsibench
 from povagent.dataset.frame_cache import FrameCache, cached_sample_frames
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import SceneObject
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, shown
 from povagent.dataset.problems import Problem
+from povagent.dataset.release_models import SceneObject
 from povagent.dataset.video_frames import VideoError, sample_indices
 from povagent.errors import DatasetError, PovagentError, ReadTargetError
 
@@ -71,7 +71,7 @@ def load_vsibench(
         raise DatasetError(f"{file}: cannot be read: {exc}") from None
     own_cache = cache_dir is None
     cache = Path(tempfile.mkdtemp(prefix="povagent-vsibench-")) if cache_dir is None else Path(cache_dir)
-    from povagent.dataset.realworld import unknown_object
+    from povagent.dataset.realworld_set import unknown_object
 
     nowhere = unknown_object()
     real_root = dataset_root(root)
@@ -128,7 +128,7 @@ def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Pa
 def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: SceneObject | None = None) -> Instance:
     """The runnable instance of one record: id ``vsibench/<record id>``, showing ``frames``.
     ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
-    from povagent.dataset.realworld import unknown_object
+    from povagent.dataset.realworld_set import unknown_object
 
     nowhere = unknown_object() if nowhere is None else nowhere
     choice = item.question if isinstance(item.question, ChoiceQuestion) else None

@@ -9,7 +9,7 @@ import time
 import pytest
 
 from povagent.dataset.choice_sets import load_choice_set, validate_choice_set
-from povagent.dataset.choice_sets.mindcube import inline_options
+from povagent.dataset.choice_sets.mindcube_records import inline_options
 
 #: a quadratic scan of a megabyte takes hours: the bound ends the test instead
 pytestmark = pytest.mark.timeout(60)

@@ -20,8 +20,8 @@ from PIL import Image
 
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.choice_sets import load_choice_set
-from povagent.dataset.choice_sets.mindcube import category_of
-from povagent.dataset.choice_sets.srbench3d import MAX_CELL_CHARS, tsv_cells
+from povagent.dataset.choice_sets.mindcube_records import category_of
+from povagent.dataset.choice_sets.srbench3d_records import MAX_CELL_CHARS, tsv_cells
 from povagent.run.runner import run_pipeline
 
 HEADER = "index\tqid\tquestion\tA\tB\tC\tD\tanswer\tcategory\timage"

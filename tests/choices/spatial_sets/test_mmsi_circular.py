@@ -18,11 +18,11 @@ from fractions import Fraction
 import pytest
 import yaml
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.choice_sets import load_choice_set
 from povagent.dataset.choice_sets.external import Item
-from povagent.dataset.choice_sets.mmsi_circular import rotated_copies, split_options
+from povagent.dataset.choice_sets.mmsi_circular_copies import rotated_copies, split_options
 from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline

@@ -7,7 +7,7 @@ import shutil
 import pytest
 
 from povagent.dataset.choice_sets import load_choice_set, validate_choice_set
-from povagent.dataset.choice_sets.mmsi import inline_options
+from povagent.dataset.choice_sets.mmsi_records import inline_options
 from povagent.errors import DatasetError
 
 from .conftest import MMSI_ROWS, mmsi_rows, noise_photo, write_mmsi_parquet
@@ -117,7 +117,7 @@ def test_a_parquet_file_without_the_set_s_columns_names_them(tmp_path):
 
 
 def test_a_row_group_declaring_more_than_the_bound_is_refused_before_it_is_decoded(tmp_path, monkeypatch):
-    from povagent.dataset.choice_sets import mmsi
+    from povagent.dataset.choice_sets import mmsi_records as mmsi
 
     path = write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", mmsi_rows()[:6])  # row groups of 4 and 2 rows
     monkeypatch.setattr(mmsi, "MAX_ROW_GROUP_BYTES", 2_000_000)  # the 4-row group holds over 2 MB of images
@@ -195,7 +195,7 @@ def test_a_pipe_named_as_the_file_is_never_waited_on(tmp_path):
 
 
 def test_the_bound_grows_with_the_file_so_a_sound_file_is_never_refused(tmp_path, monkeypatch):
-    from povagent.dataset.choice_sets import mmsi
+    from povagent.dataset.choice_sets import mmsi_records as mmsi
 
     path = write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", mmsi_rows()[:6])
     monkeypatch.setattr(mmsi, "MAX_ROW_GROUP_BYTES", 1)  # only the file-size bound is left

@@ -10,7 +10,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent.scoring.official import project_ground_truth, scoring_frame
+from povagent.scoring.normalized_l2 import project_ground_truth, scoring_frame
 from povagent_anchor_kit.answer import ANCHOR_POINT
 
 

@@ -19,7 +19,7 @@ word), its trailing dots removed, then surrounding whitespace. Nothing is stripp
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.answers.number import asks_number
+from povagent.answers.numeric_question import asks_number
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparseable
 from povagent.interfaces import Parser
 

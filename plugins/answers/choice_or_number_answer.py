@@ -14,7 +14,7 @@ from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
 from povagent.answers.types import AnswerType
 from povagent.dataset.instances import Instance
-from povagent_plugins.answers.choice import CHOICE
+from povagent_plugins.answers.choice_answer import CHOICE
 from povagent_plugins.answers.number import NUMBER
 
 

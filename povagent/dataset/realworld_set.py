@@ -54,9 +54,9 @@ from PIL import Image, UnidentifiedImageError
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from povagent.dataset.instances import Frame, Instance
-from povagent.dataset.models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.dataset.paths import dataset_root, is_inside
 from povagent.dataset.problems import Problem, not_text_problems
+from povagent.dataset.release_models import CONDITIONS, DIRECTIONS, AxisAlignedBoundingBox, Condition, Direction, RawMetadata, SceneObject, Vec3
 from povagent.errors import ConfigError, DatasetError, ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.geometry.camera import Camera
@@ -337,7 +337,7 @@ class RealWorldDataset:
         The marks are 2D: the ``official`` metric would project a NaN target, which its rules
         place at the image centre, and score a centre guess a perfect 0.
         """
-        from povagent.scoring.protocols import registered_protocols
+        from povagent.scoring.score_protocols import registered_protocols
 
         needs_3d = sorted(name for name, scorer in scorers.items() if getattr(scorer, "needs_3d_target", False))
         if needs_3d:

@@ -21,7 +21,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, jsonl_records, record_id_problem, sound_items
 from povagent.dataset.problems import Problem
 

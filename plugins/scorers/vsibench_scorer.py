@@ -36,7 +36,7 @@ from typing import Any, ClassVar
 
 from povagent import hookimpl
 from povagent.answers.spec import ParsedAnswer
-from povagent.dataset.choice_sets.vsibench import CHOICE_TYPES, NUMBER_TYPES
+from povagent.dataset.choice_sets.vsibench_records import CHOICE_TYPES, NUMBER_TYPES
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric

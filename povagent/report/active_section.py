@@ -30,7 +30,7 @@ from povagent.report.statistics import paired_comparison
 from povagent.report.step_caption import ELLIPSIS, step_caption
 from povagent.results.episode import EpisodeRecord, read_record
 from povagent.scoring.bootstrap import bootstrap_mean_ci
-from povagent.scoring.official import answered_in_camera
+from povagent.scoring.normalized_l2 import answered_in_camera
 
 #: Episodes drawn per active system, views and steps shown per episode, and the thumbnail side (px).
 TRAJECTORIES_PER_SYSTEM = 6

@@ -22,7 +22,7 @@ the label the gold option now carries. The question is written again as the ques
 line break, and ``Options: A: ..., B: ...`` (comma-separated), which the set's prompt then asks.
 Copy ``k`` of the question with id ``i`` has the id ``i + k * 1,000,000`` (the authors' index,
 and VLMEvalKit's for every circular set), so an id must be a whole number below 1,000,000; its
-:class:`~povagent.answers.choice.ChoiceQuestion` records the question (``group``: ``i``) and the
+:class:`~povagent.answers.choice_question.ChoiceQuestion` records the question (``group``: ``i``) and the
 order (``variant``). Every copy shows the question's images.
 
 This module only builds the copies from the items :func:`~.mmsi.read_mmsi` reads; scoring them
@@ -34,9 +34,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item
-from povagent.dataset.choice_sets.mmsi import PROFILE, read_mmsi
+from povagent.dataset.choice_sets.mmsi_records import PROFILE, read_mmsi
 from povagent.dataset.problems import Problem
 
 #: The option orders of the four copies, the first the question as written.

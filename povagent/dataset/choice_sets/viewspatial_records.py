@@ -17,7 +17,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, json_list, text_problems
 from povagent.dataset.problems import Problem, all_text
 

@@ -29,7 +29,7 @@ import re
 from pathlib import Path
 from typing import Any, Iterator
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, record_id_problem
 from povagent.dataset.paths import shown
 from povagent.dataset.problems import Problem

@@ -24,7 +24,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent.scoring.official import answered_in_camera
+from povagent.scoring.normalized_l2 import answered_in_camera
 
 #: Decimals kept of the distances a row records.
 _DECIMALS = 4
@@ -56,8 +56,8 @@ class NavigateScorer(Scorer):
     def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
         """Success, SPL and what they were computed from (see the module docstring)."""
         # the generator and the renderer load with the first row scored, not with the plugin list
-        from povagent.active.episode import ARRIVED
         from povagent.active.geodesic import path_length, spl
+        from povagent.active.live_episode import ARRIVED
         from povagent.active.navigation import ARRIVAL_RADIUS, floor_distance, house_of, in_view, shortest_arrival
 
         if answer.path is None or answer.camera is None:

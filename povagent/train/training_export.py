@@ -21,9 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from povagent.dataset.loader import Dataset, House, dataset_house_folders, house_folders, load_house, read_meta
-from povagent.dataset.models import Condition
 from povagent.dataset.problems import Problem
-from povagent.dataset.protocol import EvaluationSet
+from povagent.dataset.release_models import Condition
+from povagent.dataset.set_interface import EvaluationSet
 from povagent.errors import DatasetError
 from povagent.tasks.scene_facts import NoTeachingFrame, instance_facts
 from povagent.train.card import write_card

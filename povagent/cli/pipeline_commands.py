@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 def _summary_table(summary: RunSummary, title: PathTitle, run_dir: Path) -> None:
     """The run's score tables under ``title`` (the run folder and what ran)."""
-    from povagent.cli.dataset import render_summary
+    from povagent.cli.dataset_commands import render_summary
     from povagent.cli.diagnostics_table import render_diagnostics
     from povagent.cli.metrics_table import protocol_scorers, render_metrics
 
@@ -169,7 +169,7 @@ def run_command(
 
         typer.echo(f"warning: {nan_warning(summary.nan_coordinate_rows)}", err=True)
     if _scored_officially(summary):
-        from povagent.cli.official_beside import parser_reads_officially, render_official_beside
+        from povagent.cli.official_beside_console import parser_reads_officially, render_official_beside
 
         render_official_beside(
             summary,
@@ -243,7 +243,7 @@ def sweep_command(
     from rich.console import Console
 
     from povagent.cli.console_width import fitted_table
-    from povagent.cli.official_beside import repair_changed
+    from povagent.cli.official_beside_console import repair_changed
     from povagent.report.sweep_table import dry_run_table, mean_l2, percent, rate, sweep_table
     from povagent.run.stop_signals import sigterm_as_interrupt
     from povagent.run.sweep import expand_sweep, run_sweep

@@ -24,7 +24,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, json_list, record_id_problem, text_problems
 from povagent.dataset.paths import shown
 from povagent.dataset.problems import Problem

@@ -173,7 +173,7 @@ def score_command(
     from povagent.results.prediction_files import score_predictions
     from povagent.run.summary_model import ScoreSummary
     from povagent.scoring.official_release import read_release
-    from povagent.scoring.protocols import following, registered_protocols
+    from povagent.scoring.score_protocols import following, registered_protocols
 
     if counting not in ("official", "povagent"):
         typer.echo(f"error: --counting must be official or povagent (got {counting!r})", err=True)

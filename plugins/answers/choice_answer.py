@@ -1,7 +1,7 @@
 """The ``choice`` answer type: one labelled option of a multiple-choice question.
 
 Registered exactly as the ``point`` type and as a third party's would be. Its gold value is the
-instance's question's gold label (:class:`povagent.answers.choice.ChoiceQuestion`).
+instance's question's gold label (:class:`povagent.answers.choice_question.ChoiceQuestion`).
 """
 
 from __future__ import annotations

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
-from povagent.answers.choice import ChoiceQuestion
-from povagent.answers.number import NumericQuestion
+from povagent.answers.choice_question import ChoiceQuestion
+from povagent.answers.numeric_question import NumericQuestion
 from povagent.dataset.choice_sets.external import jsonl_records, sound_items
 from povagent.dataset.problems import Problem
 from povagent.errors import PovagentError

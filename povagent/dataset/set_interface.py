@@ -1,7 +1,7 @@
 """What the runner needs of an evaluation set, whichever kind it is.
 
 The release-layout :class:`~povagent.dataset.loader.Dataset` and the hand-marked
-:class:`~povagent.dataset.realworld.RealWorldDataset` both satisfy :class:`EvaluationSet`, so the
+:class:`~povagent.dataset.realworld_set.RealWorldDataset` both satisfy :class:`EvaluationSet`, so the
 runner, sweeps and reports treat them alike and never probe for attributes.
 """
 
@@ -11,8 +11,8 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping, Protocol, Sequence, runtime_checkable
 
 from povagent.dataset.instances import Instance
-from povagent.dataset.models import Condition, Direction
 from povagent.dataset.problems import Problem
+from povagent.dataset.release_models import Condition, Direction
 
 
 @runtime_checkable

@@ -1,13 +1,13 @@
 """The ``choice-3dsrbench`` scorer: a choice scorer with 3DSRBench's four accuracies.
 
-3DSRBench asks each question in copies (:mod:`povagent.dataset.choice_sets.srbench3d`), its
+3DSRBench asks each question in copies (:mod:`povagent.dataset.choice_sets.srbench3d_records`), its
 qid the instance's pair id: the question ``Q``, its flipped copy ``Q-flip`` (the answer
 mirrored), its circular copies ``Q-N`` (the options rotated), and ``Q-flip-N``. Its accuracies,
 as VLMEvalKit's ``_3DSRBench.evaluate`` (@ e8e78f05), the authors' circular results script and
 lmms-eval's ``3dsrbench`` task (@ 75571cfe) group the copies, each a rate over groups of copies, a
 group right only when every copy in it is (:class:`povagent.scoring.metrics.Metric` ``group``);
 every slice has all four, overall, per sub-category and per type (a question counts in both:
-:data:`povagent.dataset.choice_sets.srbench3d.TYPES`):
+:data:`povagent.dataset.choice_sets.srbench3d_records.TYPES`):
 
 - ``vanilla_accuracy``: correct / every record (every copy counts once);
 - ``flip_accuracy``: a copy and its flipped twin (the qid with ``-flip`` removed: ``Q`` with
@@ -17,7 +17,7 @@ every slice has all four, overall, per sub-category and per type (a question cou
 - ``flip_circular_accuracy``: every copy of the question (the qid up to its first ``-``).
 
 An answer naming no option is wrong and sinks its group, as in
-:mod:`povagent_plugins.scorers.choice`. Each row also records the question it is a copy of
+:mod:`povagent_plugins.scorers.choice_scorer`. Each row also records the question it is a copy of
 and which copy (``question_group``, ``variant``: ``ChoiceQuestion.group`` and ``variant``).
 """
 
@@ -30,7 +30,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.choice import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
 #: What each grouped accuracy removes from a qid to name the copy's group.
 FLIP_PAIR = r"-flip"

@@ -17,7 +17,7 @@ from povagent.answers.spec import ParsedAnswer
 from povagent.dataset.instances import Instance
 from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent.scoring.official import UNANSWERED, OfficialScore, answered_in_camera, closest_point_l2, score_point, scoring_frame
+from povagent.scoring.normalized_l2 import UNANSWERED, OfficialScore, answered_in_camera, closest_point_l2, score_point, scoring_frame
 
 #: The official number, its response rate, and the protocol's extras.
 OFFICIAL_METRICS = (

@@ -13,7 +13,7 @@ with no global limit changed): a longer one is one problem naming the line and t
 A qid names the question's copies: ``XXXXXXXX`` the question, ``-flip`` its flipped copy (the
 answer mirrored), ``-N`` its N-th circular copy (the options rotated), ``-flip-N`` both. The
 copies of one question share ``ChoiceQuestion.group`` (the base qid); ``variant`` is the suffix
-(``""``, ``flip``, ``2``, ``flip-2``), from which :mod:`povagent_plugins.scorers.srbench3d`
+(``""``, ``flip``, ``2``, ``flip-2``), from which :mod:`povagent_plugins.scorers.srbench3d_scorer`
 reads the set's Flip, Circular and Flip+Circular accuracies. The ``category`` column holds one
 of 12 sub-categories, each of one of 4 types (:data:`TYPES`, ``ChoiceQuestion.main_category``).
 
@@ -29,7 +29,7 @@ import hashlib
 import re
 from pathlib import Path
 
-from povagent.answers.choice import ChoiceQuestion
+from povagent.answers.choice_question import ChoiceQuestion
 from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines
 from povagent.dataset.problems import Problem
 

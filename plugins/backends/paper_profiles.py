@@ -27,7 +27,7 @@ from typing import Any
 
 from povagent import hookimpl
 from povagent.config.profiles import ModelProfile
-from povagent.dataset.models import Condition
+from povagent.dataset.release_models import Condition
 
 _VLLM_NOTE = (
     "Self-hosted: serve with vLLM's OpenAI-compatible server started with "
