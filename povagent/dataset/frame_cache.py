@@ -9,7 +9,7 @@ instead of decoding.
 
 An entry's key is the SHA-256 of the video's bytes (never its path or its time: a video replaced
 under the same name is decoded again, and a copy elsewhere hits), the number of frames ``N``,
-and :data:`SAMPLER`: this module's format, the sampling rule's version
+and :func:`sampler`: this module's format, the sampling rule's version
 (:data:`~povagent.dataset.video_frames.SAMPLING_VERSION`) and the PyAV and Pillow versions that
 decode and encode the frames, so an entry is only ever the bytes this code would write. It is one
 file, ``<key>.frames``: a magic line, a JSON header (the key's parts; each frame's size and
@@ -29,6 +29,7 @@ removed here: the folder is the user's to clear.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import logging
@@ -51,8 +52,11 @@ MAX_FRAME_BYTES = 256 << 20
 CHUNK = 1 << 20
 
 
-def _sampler() -> str:
-    """What, beside the video and ``N``, decides the bytes written: the sampling rule, PyAV and Pillow."""
+@functools.cache
+def sampler() -> str:
+    """What, beside the video and ``N``, decides the bytes written: the sampling rule, PyAV and
+    Pillow (asked once a process, when a cache is first used: importing PyAV costs ~17 MiB, which
+    a run that opens no video must not pay)."""
     import PIL
 
     try:
@@ -62,10 +66,6 @@ def _sampler() -> str:
     except ImportError:
         decoder = "av/none"  # no entry is written without it: sampling then fails first
     return f"sampling/{SAMPLING_VERSION} {decoder} pillow/{PIL.__version__}"
-
-
-#: The sampler every key names (computed once a process).
-SAMPLER = _sampler()
 
 
 def video_digest(path: Path) -> str:
@@ -96,7 +96,7 @@ class FrameCache:
 
     def entry_name(self, digest: str, n: int) -> str:
         """The file name of the entry for a video of SHA-256 ``digest`` sampled to ``n`` frames."""
-        key = hashlib.sha256(f"{digest}\0{n}\0{SAMPLER}".encode()).hexdigest()
+        key = hashlib.sha256(f"{digest}\0{n}\0{sampler()}".encode()).hexdigest()
         return f"{key[:40]}.frames"
 
     def restore(self, digest: str, n: int, out_dir: Path) -> list[Path] | None:
@@ -118,7 +118,7 @@ class FrameCache:
                 return None
             with handle:
                 try:
-                    return _copy_frames(handle, {"video": digest, "n": n, "sampler": SAMPLER}, out_dir)
+                    return _copy_frames(handle, {"video": digest, "n": n, "sampler": sampler()}, out_dir)
                 except _Unusable as exc:
                     LOG.warning("%s: frame cache entry ignored (%s); decoding the video again", self.folder / name, exc)
                     return None
@@ -129,7 +129,7 @@ class FrameCache:
         from povagent.files.confined_write import ConfinedFolder
 
         listed = [{"bytes": f.stat().st_size, "sha256": _file_digest(f)} for f in frames]
-        header = json.dumps({"video": digest, "n": len(frames), "sampler": SAMPLER, "frames": listed}).encode()
+        header = json.dumps({"video": digest, "n": len(frames), "sampler": sampler(), "frames": listed}).encode()
         with ConfinedFolder(self.folder) as folder, folder.staged(self.entry_name(digest, len(frames)), encoding=None, unique=True) as staged:
             staged.file.write(MAGIC + len(header).to_bytes(4, "big") + header)
             for frame in frames:
@@ -216,4 +216,4 @@ def cached_sample_frames(path: Path, n: int, out_dir: Path, cache: FrameCache | 
     return frames
 
 
-__all__ = ["SAMPLER", "FrameCache", "cached_sample_frames", "video_digest"]
+__all__ = ["FrameCache", "cached_sample_frames", "sampler", "video_digest"]

@@ -71,14 +71,15 @@ def test_a_format_a_plugin_registers_claims_its_folders_before_the_release_layou
 
 def test_opening_a_release_by_detection_imports_no_generator(mini_root):
     """Telling a generated set from a release reads the record's name, not the generator (whose
-    meshes bring SciPy and Embree: half a second and 60 MiB a run never needs)."""
+    meshes bring SciPy and Embree: half a second and 60 MiB a run never needs), nor a video
+    decoder (PyAV, ~17 MiB: only a set of videos needs it)."""
     import subprocess
     import sys
 
     code = (
         "import sys\nfrom povagent.dataset.evaluation_set import open_evaluation_set\n"
         f"open_evaluation_set({str(mini_root)!r})\n"
-        "print(sorted(m for m in ('povagent.generate.house_pipeline', 'scipy', 'embreex') if m in sys.modules))"
+        "print(sorted(m for m in ('povagent.generate.house_pipeline', 'scipy', 'embreex', 'av') if m in sys.modules))"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
