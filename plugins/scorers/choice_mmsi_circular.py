@@ -24,14 +24,9 @@ the digits before the last six and the zeros that then lead are removed, which t
 
 from __future__ import annotations
 
-from typing import Any
-
 from povagent import hookimpl
-from povagent.answers.spec import ParsedAnswer
-from povagent.dataset.instances import Instance
-from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.choice_scorer import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import QuestionCopiesScorer
 
 #: Removed from a copy's id to name its question: ``id mod 1,000,000`` for ids below 10**12.
 QUESTION_OF_COPY = r"^(?:\d+(?=\d{6}$))?0*(?=\d)"
@@ -39,7 +34,7 @@ QUESTION_OF_COPY = r"^(?:\d+(?=\d{6}$))?0*(?=\d)"
 FIRST_COPY = r"^\d{1,6}$"
 
 
-class MMSICircularScorer(Scorer):
+class MMSICircularScorer(QuestionCopiesScorer):
     """The choice scorer's fields, the copy's question and option order, and the circular and vanilla accuracies."""
 
     #: the circular evaluation is the split's number
@@ -68,13 +63,6 @@ class MMSICircularScorer(Scorer):
         ),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answers naming an option / all copies.", over="all"),
     )
-
-    def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
-        """The choice scorer's fields, the question this is a copy of and its option order."""
-        fields = ChoiceScorer().score(instance, answer, dataset)
-        question = instance.question
-        assert question is not None  # the choice scorer refused an instance without one
-        return fields | {"question_group": question.group, "variant": question.variant}
 
 
 @hookimpl

@@ -40,6 +40,20 @@ class ChoiceScorer(Scorer):
         }
 
 
+
+class QuestionCopiesScorer(Scorer):
+    """The choice scorer for a set that asks each question in copies (3DSRBench's flips and
+    circular orders, MMSI-Bench's rotations): its fields, with the question a row is a copy of
+    (``question_group``) and which copy (``variant``), which the sets' grouped metrics read.
+    Subclasses declare those metrics."""
+
+    def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
+        """The choice scorer's fields, the question this is a copy of and which copy."""
+        fields = ChoiceScorer().score(instance, answer, dataset)
+        question = instance.question
+        assert question is not None  # the choice scorer refused an instance without one
+        return fields | {"question_group": question.group, "variant": question.variant}
+
 @hookimpl
 def register_scorers(register) -> None:
     """Contribute the choice scorer."""

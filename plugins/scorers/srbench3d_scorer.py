@@ -23,14 +23,9 @@ and which copy (``question_group``, ``variant``: ``ChoiceQuestion.group`` and ``
 
 from __future__ import annotations
 
-from typing import Any
-
 from povagent import hookimpl
-from povagent.answers.spec import ParsedAnswer
-from povagent.dataset.instances import Instance
-from povagent.interfaces import Scorer
 from povagent.scoring.metrics import Metric
-from povagent_plugins.scorers.choice_scorer import ChoiceScorer
+from povagent_plugins.scorers.choice_scorer import QuestionCopiesScorer
 
 #: What each grouped accuracy removes from a qid to name the copy's group.
 FLIP_PAIR = r"-flip"
@@ -38,7 +33,7 @@ CIRCULAR_SET = r"-\d+$"
 QUESTION = r"-.*$"
 
 
-class SRBench3DScorer(Scorer):
+class SRBench3DScorer(QuestionCopiesScorer):
     """The choice scorer's fields, the copy's question and variant, and 3DSRBench's four accuracies."""
 
     #: the authors' circular evaluation is the set's number
@@ -86,13 +81,6 @@ class SRBench3DScorer(Scorer):
         ),
         Metric("response_rate", "higher", "rate", "answered", "Response rate", "Answers naming an option / all records.", over="all"),
     )
-
-    def score(self, instance: Instance, answer: ParsedAnswer, dataset: Any = None) -> dict[str, Any]:
-        """The choice scorer's fields, the question this is a copy of and which copy."""
-        fields = ChoiceScorer().score(instance, answer, dataset)
-        question = instance.question
-        assert question is not None  # the choice scorer refused an instance without one
-        return fields | {"question_group": question.group, "variant": question.variant}
 
 
 @hookimpl
