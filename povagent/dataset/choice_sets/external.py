@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
 
 from povagent.answers.choice_question import ChoiceQuestion
+from povagent.answers.numeric_question import NumericQuestion
 from povagent.dataset.image_files import ImageFileError, inspect_image_file
 from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.json_files import TooDeepError, loads_dataset_json
@@ -113,22 +114,33 @@ _NO_TARGET = (float("nan"),) * 3
 def choice_instance(set_name: str, item: Item, frames: tuple[Frame, ...], nowhere: Any = None) -> Instance:
     """The runnable instance of one item: id ``<set>/<record id>``, no direction or condition.
     ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
+    return question_instance(set_name, item.id, item.question, frames, nowhere)
+
+
+def question_instance(
+    set_name: str, record_id: str, question: Any, frames: tuple[Frame, ...], nowhere: Any = None
+) -> Instance:
+    """The runnable instance of one record of an external set, asking ``question``: a
+    :class:`ChoiceQuestion` (``Instance.question``) or a numeric one (``Instance.numeric``). It has
+    no direction, condition or target; ``nowhere`` (the unknown object, one a set may share)
+    stands for its observer and anchor, and its first frame's camera for the observer's."""
     from povagent.dataset.realworld_set import unknown_object
 
     nowhere = unknown_object() if nowhere is None else nowhere
     camera = frames[0].camera if frames else image_camera(1, 1)
     return Instance(
         house_id=set_name,
-        pair_id=item.id,
+        pair_id=record_id,
         direction=None,
         condition=None,
-        sentence=item.question.question,
+        sentence=question.question,
         frames=frames,
         target=_NO_TARGET,
         observer_object=nowhere,
         anchor_object=nowhere,
         observer_camera=camera,
-        question=item.question,
+        question=question if isinstance(question, ChoiceQuestion) else None,
+        numeric=question if isinstance(question, NumericQuestion) else None,
     )
 
 

@@ -20,9 +20,7 @@ from pathlib import Path
 
 from PIL import Image
 
-from povagent.answers.choice_question import ChoiceQuestion
-from povagent.answers.numeric_question import NumericQuestion
-from povagent.dataset.choice_sets.external import ChoiceSet, image_camera
+from povagent.dataset.choice_sets.external import ChoiceSet, image_camera, question_instance
 from povagent.dataset.choice_sets.vsibench_records import SceneQuestion, read_vsibench
 from povagent.dataset.frame_cache import FrameCache, cached_sample_frames
 from povagent.dataset.instances import Frame, Instance
@@ -36,7 +34,6 @@ from povagent.errors import DatasetError, PovagentError, ReadTargetError
 SET_NAME = "vsibench"
 #: The frames an item shows unless ``frames:`` says otherwise (the set's 32-frame models).
 DEFAULT_FRAMES = 32
-_NO_TARGET = (float("nan"),) * 3
 
 
 def load_vsibench(
@@ -128,25 +125,7 @@ def _first_frame_only(real_root: Path, root: Path, video: str, n: int, cache: Pa
 def scene_instance(item: SceneQuestion, frames: tuple[Frame, ...], nowhere: SceneObject | None = None) -> Instance:
     """The runnable instance of one record: id ``vsibench/<record id>``, showing ``frames``.
     ``nowhere``: the unknown object to stand for its observer and anchor (one a set may share)."""
-    from povagent.dataset.realworld_set import unknown_object
-
-    nowhere = unknown_object() if nowhere is None else nowhere
-    choice = item.question if isinstance(item.question, ChoiceQuestion) else None
-    numeric = item.question if isinstance(item.question, NumericQuestion) else None
-    return Instance(
-        house_id=SET_NAME,
-        pair_id=item.id,
-        direction=None,
-        condition=None,
-        sentence=item.question.question,
-        frames=frames,
-        target=_NO_TARGET,
-        observer_object=nowhere,
-        anchor_object=nowhere,
-        observer_camera=frames[0].camera,
-        question=choice,
-        numeric=numeric,
-    )
+    return question_instance(SET_NAME, item.id, item.question, frames, nowhere)
 
 
 def validate_vsibench(file: str | Path, frames: int = DEFAULT_FRAMES, videos: str | Path | None = None, frame_cache: str | Path | None = None) -> list[Problem]:
