@@ -89,7 +89,10 @@ def test_every_command_of_a_burst_gets_exactly_one_final_result(robot, tour, wai
     finals = [sender.final(c) for c in commands]
     assert all(len(f) == 1 for f in finals)
     statuses = Counter(f[0]["status"] for f in finals)
-    assert set(statuses) == {"ok", "queue_full"} and statuses["ok"] >= 3, statuses  # the first, and the two queued behind it
+    # The queue holds two: however the burst interleaves with the worker taking the first command
+    # off it (under load the whole burst may arrive before it does), at least the two it held are
+    # answered, and every other command is refused at once as queue_full.
+    assert set(statuses) == {"ok", "queue_full"} and statuses["ok"] >= node.commands.max_queue == 2, statuses
     assert all(f[0]["reason"].startswith("dropped: ") for f in finals if f[0]["status"] == "queue_full")
 
 
