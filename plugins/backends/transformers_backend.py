@@ -64,9 +64,6 @@ from povagent_plugins.backends.local_model import (
 )
 from povagent_plugins.backends.point_reader import read_points, reads_points
 
-#: The dtypes a checkpoint may be loaded in (``auto``: the checkpoint's own).
-DTYPES = ("auto", "float32", "bfloat16", "float16")
-
 
 class TransformersOptions(BaseModel):
     """The ``backend.options`` of the ``transformers`` backend (unknown keys are errors)."""

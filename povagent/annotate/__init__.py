@@ -8,6 +8,6 @@ one annotator (:mod:`~povagent.annotate.order`) and serves the page safely
 (:mod:`~povagent.annotate.server`). It never writes a run folder itself.
 
 Judge mode: the predictions of finished runs, shown blind (:mod:`~povagent.annotate.judge_page`),
-each verdict a line of the judge's journalled file (:mod:`~povagent.annotate.judgements`), which
+each verdict a line of the judge's journalled file (:mod:`~povagent.results.judgements`), which
 the report reads (:mod:`povagent.report.manual`).
 """

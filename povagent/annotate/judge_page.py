@@ -22,9 +22,9 @@ from typing import Any
 from PIL import Image
 
 from povagent.annotate.desk import AnswerRefused
-from povagent.annotate.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal, judged_item, run_identity
 from povagent.errors import ConfigError
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
+from povagent.results.judgements import MAX_NOTE_CHARS, VERDICTS, Judgement, JudgementJournal, judged_item, run_identity
 from povagent.scoring.normalized_l2 import scoring_frame
 
 MEDIA_TYPES = {"PNG": "image/png", "JPEG": "image/jpeg", "WEBP": "image/webp"}
@@ -58,7 +58,7 @@ class Predictions:
 def judge_items(paths: list[Path]) -> Predictions:
     """Every answered prediction of the runs (or sweeps) at ``paths`` that lies in a dataset frame
     (an answer in an active episode's rendered view is left out: its image is no dataset's), each
-    named by its run's identity and row key (:func:`~povagent.annotate.judgements.judged_item`)."""
+    named by its run's identity and row key (:func:`~povagent.results.judgements.judged_item`)."""
     from povagent.report.baseline_systems import is_baseline_system
     from povagent.report.collect import collect
     from povagent.report.paper_protocol import outside_paper_protocol

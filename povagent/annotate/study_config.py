@@ -28,11 +28,11 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from povagent.annotate.desk import PERSON_NAME
-from povagent.annotate.judgements import JUDGEMENTS_FOLDER
 from povagent.config.models import MAX_WAIT_S, PipelineConfig
 from povagent.config.pipeline import pipeline_from_source
 from povagent.config.yaml_reader import ConfigSource, read_yaml
 from povagent.errors import ConfigError
+from povagent.results.judgements import JUDGEMENTS_FOLDER
 
 
 @dataclass(frozen=True)

@@ -64,10 +64,6 @@ class ChoiceQuestion:
         """The option labels, in the order shown."""
         return tuple(label for label, _ in self.options)
 
-    def text_of(self, label: str) -> str | None:
-        """The text of option ``label`` (``None``: no such option)."""
-        return next((text for lab, text in self.options if lab == label), None)
-
     def options_block(self) -> str:
         """The options one per line, ``A. left``."""
         return "\n".join(f"{label}. {text}" for label, text in self.options)

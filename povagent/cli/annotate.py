@@ -73,8 +73,8 @@ def _judge(study, port: int) -> None:
     import time
 
     from povagent.annotate.judge_page import JudgePage, judge_items
-    from povagent.annotate.judgements import JudgementJournal
     from povagent.annotate.server import AnnotateServer
+    from povagent.results.judgements import JudgementJournal
 
     journal = JudgementJournal(study.judgements, study.judge, study.judgements_below)
     page = JudgePage(judge_items(study.runs), journal, study.judge, study.seed)

@@ -19,7 +19,7 @@ import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
 from povagent.dataset.image_files import image_problem
-from povagent.dataset.instances import Frame, Instance, instance_id
+from povagent.dataset.instances import Frame, Instance
 from povagent.dataset.json_files import read_dataset_json
 from povagent.dataset.paths import OutsideDatasetError, confined, dataset_root, observer_view_path
 from povagent.dataset.problems import Problem, folder_name_problem, problems_from_validation_error
@@ -264,10 +264,6 @@ class Dataset:
 
     def check_scorers(self, scorers: Mapping[str, Any]) -> None:
         """Every scorer can score a release-layout set (its ground truth is 3D): no-op."""
-
-    def instance_for(self, house_id: str, pair_id: str | int, direction: str, condition: str) -> Instance | None:
-        """The instance for an official prediction row's fields, or ``None``."""
-        return self._index.get(instance_id(house_id, str(pair_id), direction.lower(), condition.lower()))
 
 
 def _read_json(path: Path, root: Path, problems: list[Problem]) -> Any:

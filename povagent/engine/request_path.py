@@ -49,18 +49,6 @@ class Limiter(Protocol):
     def slot(self) -> AsyncContextManager[Any]: ...
 
 
-class SemaphoreLimiter:
-    """A fixed number of requests in flight."""
-
-    def __init__(self, concurrency: int) -> None:
-        self.limit = concurrency
-        self._sem = asyncio.Semaphore(concurrency)
-
-    def slot(self) -> AsyncContextManager[Any]:
-        """Hold one of the ``concurrency`` slots."""
-        return self._sem
-
-
 @dataclass
 class PathStats:
     """What went through the path: attempts made, answers from the cache, retries."""

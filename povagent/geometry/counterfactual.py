@@ -29,7 +29,6 @@ clamping and behind-camera rules) is :func:`povagent.scoring.normalized_l2.proje
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -68,17 +67,3 @@ def anchor_centre(case: PlacementCase) -> np.ndarray:
     """The anchor's AABB centre."""
     return np.asarray(case.anchor_centre, dtype=float)
 
-
-@dataclass(frozen=True)
-class Counterfactuals:
-    """The ground truth and its counterfactual targets for one case seen from one camera (3D)."""
-
-    truth: np.ndarray
-    egocentric: np.ndarray
-    mirrored: np.ndarray
-    anchor_centre: np.ndarray
-
-
-def counterfactuals(case: PlacementCase, camera: Camera) -> Counterfactuals:
-    """Every target of one case for the viewing ``camera`` (the frame answered in)."""
-    return Counterfactuals(case.target(), egocentric_target(case, camera), mirrored_target(case), anchor_centre(case))

@@ -42,11 +42,6 @@ class SizePrior:
         """Half the median height."""
         return self.size[1] / 2.0
 
-    @property
-    def half_footprint(self) -> float:
-        """Half the mean of width and depth: a footprint size that ignores orientation."""
-        return (self.size[0] + self.size[2]) / 4.0
-
 
 def _median_size(specs) -> tuple[float, float, float]:
     return tuple(float(statistics.median(s.size[i] for s in specs)) for i in range(3))  # type: ignore[return-value]

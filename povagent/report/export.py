@@ -15,7 +15,7 @@ frames shown (A/B, read from the dataset when it can be loaded).
 values written as that script writes them, so analysis notebooks built on it read ours, with
 one exception: a text cell a spreadsheet would run as a formula gets a ``'`` before it
 (:mod:`povagent.report.csv_formulas`). Its numbers are the official scorer's per-item record
-(:mod:`povagent.scoring.evaluations`).
+(:mod:`povagent.results.evaluations`).
 
 Reading and writing files; the numbers come from :mod:`povagent.scoring`.
 """
@@ -170,7 +170,7 @@ def long_csv_lines(rows: Iterable[ResultRow], dataset: Any, model: str, eval_dir
 
     ``run_id`` counts from 1, as the official runs are numbered (our run index 0 is run 1).
     """
-    from povagent.scoring.evaluations import official_evaluation, raw_response
+    from povagent.results.evaluations import official_evaluation, raw_response
 
     order = _item_order(dataset)
     unknown = len(order)

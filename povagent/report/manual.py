@@ -1,13 +1,13 @@
 """Manual assessment in the report: success judged by hand, per system and condition, and how
 far two judges agree.
 
-The judgements come from ``povagent annotate``'s judge mode (:mod:`povagent.annotate.judgements`):
+The judgements come from ``povagent annotate``'s judge mode (:mod:`povagent.results.judgements`):
 the files in a ``judgements/`` folder inside the report's source folder or beside it. A rate is
 success / (success + failure) over every judgement (judges pooled), with a 95% Wilson interval;
 "can't tell" counts in neither and is reported beside. Where two judges judged the same
 predictions, their agreement and Cohen's kappa over the three verdicts are shown. Only the
 judgements of the report's own runs count: a judgement names its prediction by the judged run's
-identity, row key and prediction (:func:`~povagent.annotate.judgements.judged_item`), and a
+identity, row key and prediction (:func:`~povagent.results.judgements.judged_item`), and a
 judgement of any other run (a neighbouring sweep's, a cell of the same name elsewhere) is left out.
 """
 
@@ -19,8 +19,8 @@ from itertools import combinations
 from pathlib import Path
 from typing import Any, Sequence
 
-from povagent.annotate.judgements import JUDGEMENTS_FOLDER, VERDICTS, Judgement, judged_item, read_judgements, run_identity
 from povagent.report.tables import Cell, Column, Row, Table
+from povagent.results.judgements import JUDGEMENTS_FOLDER, VERDICTS, Judgement, judged_item, read_judgements, run_identity
 
 #: z of a two-sided 95% interval.
 Z95 = 1.959963984540054
@@ -59,7 +59,7 @@ def cohen_kappa(first: list[str], second: list[str]) -> float | None:
 
 
 def judged_items_of(runs: Sequence[Any]) -> set[str]:
-    """The item names (:func:`~povagent.annotate.judgements.judged_item`) of every prediction
+    """The item names (:func:`~povagent.results.judgements.judged_item`) of every prediction
     with a point in ``runs`` (each a run's ``folder`` and its ``rows``)."""
     items: set[str] = set()
     for run in runs:

@@ -152,11 +152,6 @@ def _ratio_estimates(
     return out
 
 
-def _ratio_estimate(values: np.ndarray, weights: np.ndarray, n_boot: int, level: float, seed: int) -> Estimate:
-    """One (values, weights) pair's estimate (see :func:`_ratio_estimates`)."""
-    return _ratio_estimates([(values, weights)], n_boot, level, seed)[0]
-
-
 @dataclass(frozen=True)
 class CellStats:
     """The numbers of one table cell group (a system on a subset of instances)."""

@@ -2,8 +2,9 @@
 
 ``povagent score PATH`` reads predictions here: an official predictions file or run folder, a
 prediction root holding one folder per run (``<model>_<run>``, as ``run_all_eval.py`` finds
-them), or our own run folder or ``results.jsonl``. The scoring itself is the pure
-:mod:`povagent.scoring.predictions`; this module is the file side of it.
+them), or our own run folder or ``results.jsonl``. The scoring rules are the pure
+:mod:`povagent.scoring.predictions`; this module is the file side of it: which rows a file holds,
+which run each belongs to, and how our own rows read as the official runner would read them.
 """
 
 from __future__ import annotations
@@ -11,22 +12,27 @@ from __future__ import annotations
 import json
 import re
 from collections import defaultdict
+from collections.abc import Iterable, Mapping
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any
 
 from povagent.dataset.loader import Dataset
 from povagent.errors import PredictionsError
-from povagent.results.official_format import NOT_PREDICTIONS, read_official_run
+from povagent.results.evaluations import official_parse_error
+from povagent.results.official_format import NOT_PREDICTIONS, OfficialRun, read_official_run
+from povagent.results.official_reading import official_rows
+from povagent.scoring.normalized_l2 import UNANSWERED, answered_in_camera, closest_point_l2, score_point, scoring_frame
 from povagent.scoring.official_release import OfficialRelease
 from povagent.scoring.prediction_summary import summary_of
 from povagent.scoring.predictions import (
+    ENTRY_NOT_FOUND,
     RUN_FOLDER_NAME,
     SKIPPED_RUN_FOLDER_SUFFIX,
     ScoredPrediction,
     listing,
-    score_official_run,
-    score_result_rows,
+    score_official_rows,
+    unanswered,
 )
 
 if TYPE_CHECKING:
@@ -91,6 +97,65 @@ def _holds_result_rows(path: Path) -> bool:
                 return True  # let the results reader report what it can read
             return isinstance(first, dict) and "key" in first and "status" in first
     return True
+
+
+def score_official_run(run: OfficialRun, dataset: Dataset | OfficialRelease, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
+    """Score what :func:`read_official_run` read, at its metadata's screen size.
+
+    Files that declare distinct ``metadata.run`` values (``povagent export`` writes one file
+    per run) are scored as those runs; otherwise every row belongs to ``run_index``.
+    """
+    screen = run.screen_size()
+    declared = {r.run for r in run.rows}
+    numbered = sorted(r for r in declared if r is not None)
+    warnings = list(run.warnings)
+    groups = [(k, [r for r in run.rows if r.run == k]) for k in numbered] if len(declared) > 1 and None not in declared else [(run_index, run.rows)]
+    if len(groups) > 1:
+        warnings.append(
+            f"the files declare runs {numbered} (metadata.run): scored as separate runs and "
+            "averaged per run (the official loader, given this folder, would pool them as one run)"
+        )
+    scored: list[ScoredPrediction] = []
+    for k, rows in groups:
+        s, w = score_official_rows([r.data for r in rows], dataset, screen, k, refs=[r.where for r in rows])
+        scored += s
+        warnings += w
+    return scored, warnings
+
+
+def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
+    """Re-score our own results rows from their stored predictions, each as the official runner
+    reads its answer (a row parsed leniently by its recorded official reading); a row whose
+    instance is not in the dataset counts as unanswered (as officially), with a warning."""
+    scored: list[ScoredPrediction] = []
+    unknown: list[str] = []
+    rows, warnings = official_rows(rows)
+    for row in rows:
+        inst = dataset.instance(row.instance_id)
+        if inst is None:
+            unknown.append(row.key)
+            scored.append(ScoredPrediction(row.instance_id, str(row.condition), str(row.direction), row.run, unanswered(ENTRY_NOT_FOUND)))
+            continue
+        p = row.prediction
+        answered = row.status == "answered" and p.x is not None and p.y is not None
+        parse_error = official_parse_error(row) is not None
+        if not answered:
+            scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED, None, parse_error))
+            continue
+        # an answer given in a camera of its own (an active-mode view) is scored in that camera
+        camera = row.parse.camera if row.parse is not None else None
+        frame = answered_in_camera(camera) if camera is not None else scoring_frame(inst, p.selected_image, p.image_path)
+        points = row.parse.points if row.parse is not None else None
+        score = score_point(inst, frame, float(p.x), float(p.y), points[0] if points else None)
+        # a multi-point answer's closest point, as the run's scorer recorded it
+        closest = closest_point_l2(inst, frame, [(a, b) for a, b in points]) if points and len(points) > 1 and frame is not None else None
+        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, closest, parse_error))
+    if unknown:
+        warnings.append(
+            f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
+            f"unanswered, as officially: {listing(unknown)}"
+        )
+    return scored, warnings
 
 
 def _score_one(path: Path, dataset: Dataset, release: OfficialRelease | None, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:

@@ -20,7 +20,7 @@ from __future__ import annotations
 import bisect
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any, Iterable
+from typing import Any
 
 import numpy as np
 
@@ -185,12 +185,6 @@ class TransformBuffer:
         return edge.samples[nearest]
 
 
-def add_transforms(buffer: TransformBuffer, transforms: Iterable[tuple[str, str, int, RigidTransform]], static: bool = False) -> None:
-    """Add plain ``(parent, child, stamp_ns, transform)`` samples."""
-    for parent, child, stamp, transform in transforms:
-        buffer.add(parent, child, stamp, transform, static)
-
-
 __all__ = [
     "DEFAULT_CACHE_S",
     "DEFAULT_TOLERANCE_S",
@@ -199,6 +193,5 @@ __all__ = [
     "PoseUnavailable",
     "StampProblem",
     "TransformBuffer",
-    "add_transforms",
     "stamp_ns",
 ]

@@ -12,10 +12,10 @@ import sys
 from collections.abc import Mapping
 from typing import Any
 
+from povagent.results.evaluations import official_parse_error
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.scoring.breakdown import ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
-from povagent.scoring.evaluations import official_parse_error
 from povagent.scoring.score_protocols import diagnosing_scorers
 
 

@@ -46,7 +46,7 @@ def bootstrap_mean_ci(
     The resamples are those of every other interval of a report
     (:func:`povagent.report.statistics._resample_counts`' draws, the same seed); a resample's mean
     is the mean of the values it drew, taken directly rather than through a count matrix (4x less
-    CPU; the same interval as :func:`povagent.report.statistics._ratio_estimate` of the values with
+    CPU; the same interval as :func:`povagent.report.statistics._ratio_estimates` of the values with
     unit weights, to rounding)."""
     return bootstrap_mean_cis([values], n_boot, level, seed)[0]
 

@@ -53,11 +53,6 @@ def official_rules(host: Any) -> Mapping[str, tuple[str, str, str]]:
     }
 
 
-def known_sets(host: Any) -> list[str]:
-    """The sets a log can be scored as: the registered formats with an answer type a log holds."""
-    return sorted(official_rules(host))
-
-
 def _declared(host: Any, parser: str, attribute: str) -> str:
     """What the parser registered as ``parser`` declares as ``attribute`` (``""``: nothing)."""
     try:

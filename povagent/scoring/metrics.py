@@ -131,12 +131,21 @@ Declared = Mapping[str, Sequence["Metric"]]
 def metric_value(metric: Metric, fields: Mapping[str, Any] | None, answered: bool) -> float | None:
     """``metric``'s value for one row whose scorer wrote ``fields`` (``None``: not scored), or
     ``None`` when the row does not count for it."""
-    scored = answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
+    return _value(metric, fields, _scored(fields, answered))
+
+
+def _scored(fields: Mapping[str, Any] | None, answered: bool) -> bool:
+    """Whether the row counts as scored by the scorer that wrote ``fields``."""
+    return answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
+
+
+def _value(metric: Metric, fields: Mapping[str, Any] | None, scored: bool) -> float | None:
+    """:func:`metric_value` once :func:`_scored` is known (``fields`` is a mapping when it is)."""
     if metric.over == "answered" and not scored:
         return None
     if not scored and metric.unscored is not None and metric.aggregation == "mean":
         return metric.unscored
-    raw = fields.get(metric.field) if isinstance(fields, Mapping) and scored else None
+    raw = fields.get(metric.field) if scored else None  # type: ignore[union-attr]  # scored: a mapping
     if metric.aggregation == "rate":
         if raw is None and metric.over == "answered":
             return None
@@ -188,26 +197,8 @@ def _selected(row: Any, metrics: Sequence[Metric], values: list[float | None]) -
 def _scorer_values(metrics: Sequence[Metric], fields: Mapping[str, Any] | None, answered: bool) -> list[float | None]:
     """:func:`metric_value` of each of ``metrics`` for one scorer's ``fields``: whether the row
     counts is decided once for the scorer, not once a metric (a summary asks it of every row)."""
-    scored = answered and isinstance(fields, Mapping) and fields.get("answered", True) is True
-    out: list[float | None] = []
-    for metric in metrics:
-        if not scored and metric.over == "answered":
-            out.append(None)
-            continue
-        if not scored and metric.unscored is not None and metric.aggregation == "mean":
-            out.append(metric.unscored)
-            continue
-        raw = fields.get(metric.field) if scored else None  # type: ignore[union-attr]  # scored: a mapping
-        if metric.aggregation == "rate":
-            if raw is None and metric.over == "answered":
-                out.append(None)
-            else:
-                out.append(1.0 if (raw is True if not metric.negate else raw is False) else 0.0)
-        elif isinstance(raw, bool) or not isinstance(raw, (int, float)) or not math.isfinite(raw):
-            out.append(None)
-        else:
-            out.append(float(raw))
-    return out
+    scored = _scored(fields, answered)
+    return [_value(metric, fields, scored) for metric in metrics]
 
 
 def row_metric_groups(row: Any, declared: Declared) -> dict[str, dict[str, str]]:

@@ -22,7 +22,9 @@ exactly as the official scorer (``evaluation/eval_results.py``) counts them:
 Each odd case is reported in a warning naming the rows. Several runs (an official prediction
 root with one folder per run, files declaring ``metadata.run``, or our rows) are aggregated
 by :func:`povagent.scoring.breakdown.breakdown`: the mean of per-run means, the paper's way.
-Our results rows are re-scored from their stored prediction.
+Our results rows are re-scored from their stored prediction by
+:func:`povagent.results.prediction_files.score_result_rows`, which reads them as the official
+runner would and scores each with this room's rules.
 """
 
 from __future__ import annotations
@@ -31,25 +33,19 @@ import json
 import math
 import re
 from collections import defaultdict
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, TypeGuard
 
 from povagent.dataset.loader import Dataset, observer_camera
 from povagent.dataset.release_models import CONDITIONS, DIRECTIONS
-from povagent.results.official_format import OfficialRun, RawPrediction
 from povagent.scoring.normalized_l2 import (
     MAX_L2,
-    UNANSWERED,
     GroundTruthInFrame,
     OfficialScore,
-    answered_in_camera,
-    closest_point_l2,
     point_errors,
     points_l2,
     project_ground_truth,
-    score_point,
-    scoring_frame,
 )
 from povagent.scoring.official_release import NO_CAMERA, NotScorable, OfficialRelease
 
@@ -120,7 +116,8 @@ def _pair_key(pair_id: Any) -> str | None:
     return pair_id if isinstance(pair_id, str) else None
 
 
-def _unanswered(status: str) -> OfficialScore:
+def unanswered(status: str) -> OfficialScore:
+    """The score of a row that is not scored, with the official status saying why."""
     return OfficialScore(False, None, None, None, None, None, None, status)
 
 
@@ -239,11 +236,11 @@ def score_official_row(
 
     x, y = row.get("predicted_x"), row.get("predicted_y")
     if x is None or y is None:
-        return result(_unanswered(NO_PREDICTION))
+        return result(unanswered(NO_PREDICTION))
     if pair is None:
-        return result(_unanswered(ENTRY_NOT_FOUND))
+        return result(unanswered(ENTRY_NOT_FOUND))
     if placement is None:
-        return result(_unanswered(PLACEMENT_NOT_FOUND))
+        return result(unanswered(PLACEMENT_NOT_FOUND))
     sw, sh = screen
     if cond == "c":
         cam = observer_camera(pair)
@@ -258,10 +255,10 @@ def score_official_row(
     else:
         image = row.get("predicted_image")
         if not image:
-            return result(_unanswered(NO_SELECTED_IMAGE))
+            return result(unanswered(NO_SELECTED_IMAGE))
         frame = house.frames_by_path.get(image) if isinstance(image, str) else None  # type: ignore[union-attr]  # a pair was found, so its house was
         if frame is None:
-            return result(_unanswered(IMAGE_NOT_IN_LOG))
+            return result(unanswered(IMAGE_NOT_IN_LOG))
         # the selected frame is projected at the metadata's size, as officially
         camera = replace(frame.camera, width=sw, height=sh)
     found = house  # a pair was found, so its house was
@@ -294,15 +291,15 @@ def score_release_row(
     if not placement:
         notes.unknown.append(f"{ref} ({iid})" if ref else iid)
     if x is None or y is None:
-        return result(_unanswered(NO_PREDICTION))
+        return result(unanswered(NO_PREDICTION))
     if entry is None:
-        return result(_unanswered(ENTRY_NOT_FOUND))
+        return result(unanswered(ENTRY_NOT_FOUND))
     if not placement:
-        return result(_unanswered(PLACEMENT_NOT_FOUND))
+        return result(unanswered(PLACEMENT_NOT_FOUND))
     try:
         raw_position = placement.get("position") if _is_mapping(placement) else None
         if not raw_position:
-            return result(_unanswered(NO_GT_POSITION))
+            return result(unanswered(NO_GT_POSITION))
         target = release.target(entry, direction, raw_position)
         sw, sh = screen
         if cond == "c":
@@ -311,16 +308,16 @@ def score_release_row(
         else:
             image = row.get("predicted_image")
             if not image:
-                return result(_unanswered(NO_SELECTED_IMAGE))
+                return result(unanswered(NO_SELECTED_IMAGE))
             record = release.log(house_id).get(image) if isinstance(house_id, str) and _hashable(image) else None
             if record is None:
-                return result(_unanswered(IMAGE_NOT_IN_LOG))
+                return result(unanswered(IMAGE_NOT_IN_LOG))
             # the selected frame is projected at the metadata's size, as officially
             cam, (width, height) = release.camera(record.get("camera", NO_CAMERA), "camera"), (sw, sh)
         gt = release.ground_truth_in(target, cam, width, height)
     except NotScorable as exc:
         notes.not_number.append(f"{ref or iid} ({exc})")
-        return result(_unanswered(NOT_A_NUMBER))
+        return result(unanswered(NOT_A_NUMBER))
     return _score_recorded_point(row, x, y, lambda: gt, width, height, notes, ref or iid, result)
 
 
@@ -341,7 +338,7 @@ def _score_recorded_point(
     closest. ``ground_truth`` is asked for only when the point is a number."""
     if not (_is_number(x) and _is_number(y)):
         notes.not_number.append(name)
-        return result(_unanswered(NOT_A_NUMBER))
+        return result(unanswered(NOT_A_NUMBER))
     x, y = float(x), float(y)
     if math.isnan(x) or math.isnan(y):
         notes.nan.append(name)
@@ -361,10 +358,15 @@ def _score_recorded_point(
 
 
 def score_official_rows(
-    rows: Iterable[Any], dataset: Dataset | OfficialRelease, screen: tuple[float, float] = (512.0, 512.0), run: int = 0
+    rows: Iterable[Any],
+    dataset: Dataset | OfficialRelease,
+    screen: tuple[float, float] = (512.0, 512.0),
+    run: int = 0,
+    refs: Sequence[str] | None = None,
 ) -> tuple[list[ScoredPrediction], list[str]]:
-    """Score official rows (mappings as written, or :class:`RawPrediction`); returns the scored
-    rows (every row that has the official fields, answered or not) and the warnings.
+    """Score official rows (mappings as written); returns the scored rows (every row that has
+    the official fields, answered or not) and the warnings. ``refs`` names each row in the
+    warnings (``file: row i``, as the file reader knows them); ``row i`` when not given.
 
     Against an :class:`OfficialRelease` each row is counted exactly as officially
     (:func:`score_release_row`); against a loaded :class:`Dataset`, povagent's own counting
@@ -372,8 +374,8 @@ def score_official_rows(
     text, ``./`` dropped from log paths)."""
     notes = _Notes.empty()
     scored: list[ScoredPrediction] = []
-    for i, item in enumerate(rows):
-        data, ref = (item.data, item.where) if isinstance(item, RawPrediction) else (item, f"row {i}")
+    for i, data in enumerate(rows):
+        ref = refs[i] if refs is not None else f"row {i}"
         if not _is_mapping(data) or not data.keys() >= REQUIRED_KEYS:
             notes.skipped.append(ref)
             continue
@@ -385,69 +387,3 @@ def score_official_rows(
         else:
             scored.append(score_official_row(data, dataset, screen, run, ref, notes))
     return scored, _warnings_of(notes)
-
-
-def score_official_run(run: OfficialRun, dataset: Dataset | OfficialRelease, run_index: int = 0) -> tuple[list[ScoredPrediction], list[str]]:
-    """Score what :func:`read_official_run` read, at its metadata's screen size.
-
-    Files that declare distinct ``metadata.run`` values (``povagent export`` writes one file
-    per run) are scored as those runs; otherwise every row belongs to ``run_index``.
-    """
-    screen = run.screen_size()
-    declared = {r.run for r in run.rows}
-    numbered = sorted(r for r in declared if r is not None)
-    warnings = list(run.warnings)
-    if len(declared) > 1 and None not in declared:
-        warnings.append(
-            f"the files declare runs {numbered} (metadata.run): scored as separate runs and "
-            "averaged per run (the official loader, given this folder, would pool them as one run)"
-        )
-        scored: list[ScoredPrediction] = []
-        for k in numbered:  # every row declares one (checked above)
-            s, w = score_official_rows([r for r in run.rows if r.run == k], dataset, screen, k)
-            scored += s
-            warnings += w
-        return scored, warnings
-    scored, w = score_official_rows(run.rows, dataset, screen, run_index)
-    return scored, warnings + w
-
-
-# -- our results rows -------------------------------------------------------------------------
-
-
-def score_result_rows(rows: Iterable[Any], dataset: Dataset) -> tuple[list[ScoredPrediction], list[str]]:
-    """Re-score our own results rows from their stored predictions, each as the official runner
-    reads its answer (a row parsed leniently by its recorded official reading); a row whose
-    instance is not in the dataset counts as unanswered (as officially), with a warning."""
-    from povagent.results.official_reading import official_rows
-    from povagent.scoring.evaluations import official_parse_error
-
-    scored: list[ScoredPrediction] = []
-    unknown: list[str] = []
-    rows, warnings = official_rows(rows)
-    for row in rows:
-        inst = dataset.instance(row.instance_id)
-        if inst is None:
-            unknown.append(row.key)
-            scored.append(ScoredPrediction(row.instance_id, str(row.condition), str(row.direction), row.run, _unanswered(ENTRY_NOT_FOUND)))
-            continue
-        p = row.prediction
-        answered = row.status == "answered" and p.x is not None and p.y is not None
-        parse_error = official_parse_error(row) is not None
-        if not answered:
-            scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, UNANSWERED, None, parse_error))
-            continue
-        # an answer given in a camera of its own (an active-mode view) is scored in that camera
-        camera = row.parse.camera if row.parse is not None else None
-        frame = answered_in_camera(camera) if camera is not None else scoring_frame(inst, p.selected_image, p.image_path)
-        points = row.parse.points if row.parse is not None else None
-        score = score_point(inst, frame, float(p.x), float(p.y), points[0] if points else None)
-        # a multi-point answer's closest point, as the run's scorer recorded it
-        closest = closest_point_l2(inst, frame, [(a, b) for a, b in points]) if points and len(points) > 1 and frame is not None else None
-        scored.append(ScoredPrediction(inst.id, str(row.condition), str(row.direction), row.run, score, closest, parse_error))
-    if unknown:
-        warnings.append(
-            f"{len(unknown)} row(s) name an instance the dataset does not have; counted in the total as "
-            f"unanswered, as officially: {listing(unknown)}"
-        )
-    return scored, warnings

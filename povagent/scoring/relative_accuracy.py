@@ -63,5 +63,5 @@ def accuracy_over_thresholds(error: float, start: float = MRA_START, end: float 
     if math.isnan(error):
         return 0.0
     # 1 - linspace(...) in numpy's float64, element by element, as the official comparison makes it
-    margins = 1 - np.linspace(start, end, int((end - start) / interval + 2))
+    margins = 1 - np.array(mra_thresholds(start, end, interval))
     return float(np.mean(error <= margins))

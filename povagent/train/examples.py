@@ -77,11 +77,6 @@ class TrainingExample:
         return tuple(i.file for i in self.images)
 
     @property
-    def image_paths(self) -> tuple[str, ...]:
-        """The images' labels (paths under ``artifacts/``), in the order the question shows them."""
-        return tuple(i.label for i in self.images)
-
-    @property
     def question_text(self) -> str:
         """The prompt text of the question (the text parts after the last image)."""
         texts: list[str] = []

@@ -12,10 +12,10 @@ import pytest
 import yaml
 
 from povagent.annotate.judge_page import JudgePage, judge_items
-from povagent.annotate.judgements import Judgement, JudgementJournal
 from povagent.annotate.server import AnnotateServer
 from povagent.annotate.study_config import load_study
 from povagent.errors import ReadTargetError, WriteTargetError
+from povagent.results.judgements import Judgement, JudgementJournal
 
 pytestmark = pytest.mark.timeout(300)
 

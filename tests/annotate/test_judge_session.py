@@ -10,7 +10,7 @@ import pytest
 import yaml
 from served_page import Served
 
-from povagent.annotate.judgements import read_judgements
+from povagent.results.judgements import read_judgements
 
 pytestmark = pytest.mark.slow
 

@@ -7,7 +7,7 @@ import shutil
 
 import pytest
 
-from povagent.dataset import Condition, Direction, load_dataset
+from povagent.dataset import load_dataset
 from povagent.errors import DatasetError
 
 
@@ -68,11 +68,6 @@ def test_numeric_pair_ids_become_strings(mini_dataset):
 def test_filters_select_conditions_directions_and_houses(mini_dataset):
     got = mini_dataset.instances(conditions=["c"], directions=["front"], houses=["train_house_00001"])
     assert [i.id for i in got] == ["train_house_00001/7/front/c"]
-
-
-def test_instance_for_accepts_official_row_fields(mini_dataset):
-    inst = mini_dataset.instance_for("train_house_00000", 0, "LEFT", "A")
-    assert inst is not None and inst.direction is Direction.LEFT and inst.condition is Condition.INFERRED
 
 
 def test_a_missing_dataset_folder_is_a_clear_error(tmp_path):

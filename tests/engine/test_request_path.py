@@ -12,13 +12,23 @@ from povagent.answers.spec import AnswerSpec, point_answer_schema
 from povagent.config.retry_policy import RetryPolicy
 from povagent.engine.cache import ResponseCache
 from povagent.engine.received import valid_text
-from povagent.engine.request_path import RequestPath, SemaphoreLimiter
+from povagent.engine.request_path import RequestPath
 from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Message, Request, Response, TextPart
 from povagent.interfaces import Backend, PermanentBackendError, TransientBackendError
 
 FAST = RetryPolicy(attempts=3, initial_wait=0.0, max_wait=0.0)
+
+
+class SemaphoreLimiter:
+    """The simplest limiter a caller may hand the path: a fixed number of requests in flight."""
+
+    def __init__(self, concurrency: int) -> None:
+        self._sem = asyncio.Semaphore(concurrency)
+
+    def slot(self):
+        return self._sem
 
 
 class Scripted(Backend):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from povagent.geometry.camera import Camera
-from povagent.geometry.counterfactual import anchor_centre, counterfactuals, egocentric_target, mirrored_target
+from povagent.geometry.counterfactual import anchor_centre, egocentric_target, mirrored_target
 from povagent.geometry.ground_truth import AnchorBox, PlacementCase
 
 BOX = AnchorBox(center_xz=(2.0, 0.0), half_xz=(0.5, 0.3), top=1.0)
@@ -34,10 +34,10 @@ FLOOR = [
 
 @pytest.mark.parametrize(("direction", "truth", "ego", "mirror"), FLOOR)
 def test_floor_targets_by_hand(direction, truth, ego, mirror):
-    targets = counterfactuals(case(direction), VIEW)
-    assert targets.truth == pytest.approx(truth)
-    assert targets.egocentric == pytest.approx(ego)
-    assert targets.mirrored == pytest.approx(mirror)
+    placed = case(direction)
+    assert placed.target() == pytest.approx(truth)
+    assert egocentric_target(placed, VIEW) == pytest.approx(ego)
+    assert mirrored_target(placed) == pytest.approx(mirror)
 
 
 # a bed with the target on the bed: left/right sit 0.2 m from the centre, on the top
@@ -46,10 +46,10 @@ def test_floor_targets_by_hand(direction, truth, ego, mirror):
     ("left", (2.0, 1.2, 0.2), (1.8, 1.2, 0.0), (2.0, 1.2, -0.2)),
 ])  # fmt: skip
 def test_on_the_anchor_targets_by_hand(direction, truth, ego, mirror):
-    targets = counterfactuals(case(direction, anchor_type="Bed", surface="on the bed"), VIEW)
-    assert targets.truth == pytest.approx(truth)
-    assert targets.egocentric == pytest.approx(ego)
-    assert targets.mirrored == pytest.approx(mirror)
+    placed = case(direction, anchor_type="Bed", surface="on the bed")
+    assert placed.target() == pytest.approx(truth)
+    assert egocentric_target(placed, VIEW) == pytest.approx(ego)
+    assert mirrored_target(placed) == pytest.approx(mirror)
 
 
 def test_egocentric_front_on_another_surface_uses_the_anchor_top():

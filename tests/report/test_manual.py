@@ -7,8 +7,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from povagent.annotate.judgements import Judgement, JudgementJournal, judged_item, run_identity
 from povagent.report.manual import cohen_kappa, manual_tables, wilson
+from povagent.results.judgements import Judgement, JudgementJournal, judged_item, run_identity
 
 
 def prediction(x=1.0):

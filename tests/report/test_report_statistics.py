@@ -33,11 +33,11 @@ def test_bootstrap_ci_covers_the_true_mean_in_about_95_percent_of_seeds():
 @pytest.mark.parametrize(("n", "n_boot"), [(1, 2000), (2, 2000), (37, 500), (800, 2000), (300, 0)])
 def test_the_mean_interval_is_the_one_every_other_interval_is_drawn_from(n, n_boot):
     # the same resamples as the count-matrix machinery of every cell (same seed, same draws)
-    from povagent.report.statistics import _ratio_estimate
+    from povagent.report.statistics import _ratio_estimates
 
     x = np.random.default_rng(n).exponential(0.3, size=n)
     fast = bootstrap_mean_ci(x, n_boot=n_boot, seed=5)
-    general = _ratio_estimate(x[:, None], np.ones((n, 1)), n_boot, 0.95, 5)
+    (general,) = _ratio_estimates([(x[:, None], np.ones((n, 1)))], n_boot, 0.95, 5)
     assert fast.n == general.n and fast.value == pytest.approx(general.value, abs=1e-12)
     if general.lo is None:
         assert fast.lo is None and fast.hi is None

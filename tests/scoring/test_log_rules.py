@@ -10,7 +10,7 @@ import pytest
 from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec
 from povagent.errors import PluginError
-from povagent.scoring.log_rules import known_sets, set_rules
+from povagent.scoring.log_rules import official_rules, set_rules
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER
 
@@ -29,7 +29,7 @@ def test_each_choice_set_has_its_official_rule_first_then_the_harness_rules(pova
 
 
 def test_every_rule_names_the_commit_it_follows(povagent_host):
-    for name in known_sets(povagent_host):
+    for name in official_rules(povagent_host):
         for rule in set_rules(povagent_host, name):
             assert COMMIT.match(rule.source), (name, rule)
 
@@ -120,8 +120,8 @@ def test_a_set_added_later_plugs_in_by_registering_its_format_and_naming_its_rul
 
 
 def test_a_set_whose_answers_are_no_choice_is_not_offered(povagent_host):
-    assert "povbench" not in known_sets(povagent_host)
-    assert {"viewspatial", "mindcube", "3dsrbench"} <= set(known_sets(povagent_host))
+    assert "povbench" not in official_rules(povagent_host)
+    assert {"viewspatial", "mindcube", "3dsrbench"} <= set(official_rules(povagent_host))
 
 
 def test_an_unknown_set_is_refused_naming_the_sets_a_log_can_be_scored_as(povagent_host):

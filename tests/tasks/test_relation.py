@@ -63,7 +63,7 @@ def test_the_options_are_the_registry_directions_and_the_gold_is_the_instances_d
     for inst in relation.instances():
         q = inst.question
         assert sorted(text for _, text in q.options) == sorted(s.short_words for s in DIRECTION_REGISTRY)
-        assert q.text_of(q.gold) == spec_of(inst.direction).short_words
+        assert dict(q.options)[q.gold] == spec_of(inst.direction).short_words
         assert q.category == str(inst.direction) and q.profile == "plain"
 
 

@@ -50,7 +50,7 @@ def test_the_rationale_reasons_from_the_observer_to_the_option_it_names(generate
         text, question = row["conversations"][1]["value"], asked[row["id"]].question
         facts = json.loads(row["facts"])
         assert f"Observer: in Image {facts['frame_index']} the speaker" in text and "Intermediate: the " in text
-        assert text.splitlines()[-2] == f"Conclusion: {question.text_of(question.gold)}, option {question.gold}."
+        assert text.splitlines()[-2] == f"Conclusion: {dict(question.options)[question.gold]}, option {question.gold}."
         assert f"target is {spec_of(row['direction']).paper_words} the " in text
 
 

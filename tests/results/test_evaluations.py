@@ -6,8 +6,8 @@ import math
 
 from povagent.answers.spec import ParsedAnswer, ParseStatus
 from povagent.dataset.instances import row_key
+from povagent.results.evaluations import official_evaluation, raw_response
 from povagent.results.rows import ExchangeRecord, Prediction, ResultRow, RowStatus
-from povagent.scoring.evaluations import official_evaluation, raw_response
 from povagent.scoring.normalized_l2 import clamp_unit
 
 C_ID = "train_house_00000/0/right/c"

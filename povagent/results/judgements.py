@@ -26,9 +26,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from povagent.config.yaml_reader import MAX_CONFIG_BYTES
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_inside, read_regular
 from povagent.files.confined_write import ConfinedFolder
+from povagent.results.finished_run import CONFIG_FILE, MAX_CONFIG_BYTES
 
 Verdict = Literal["success", "failure", "cant_tell"]
 VERDICTS: tuple[str, ...] = ("success", "failure", "cant_tell")
@@ -36,8 +36,6 @@ VERDICTS: tuple[str, ...] = ("success", "failure", "cant_tell")
 MAX_NOTE_CHARS = 2000
 #: The folder of judgement files a report looks for beside (or inside) its source folder.
 JUDGEMENTS_FOLDER = "judgements"
-#: The run folder's file whose bytes are the run's identity.
-RUN_CONFIG = "config.yaml"
 
 
 def run_identity(folder: Path) -> str:
@@ -45,7 +43,7 @@ def run_identity(folder: Path) -> str:
     pipeline, its output folder included), read with its bound. Not its name: cells of two
     sweeps may share names, never a config."""
     try:
-        config = read_regular(folder / RUN_CONFIG, MAX_CONFIG_BYTES, what="run config")
+        config = read_regular(folder / CONFIG_FILE, MAX_CONFIG_BYTES, what="run config")
     except FileNotFoundError:
         config = b""
     return hashlib.sha256(config).hexdigest()
