@@ -29,7 +29,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser
 
@@ -153,9 +152,7 @@ class VlmevalkitSpatialParser(VlmevalkitRuleParser):
         ("omnispatial", "choice-vlmevalkit"),
     )
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's letter."""
-        return spatial_bench_label(text)
+    rule = staticmethod(spatial_bench_label)
 
 
 @hookimpl
