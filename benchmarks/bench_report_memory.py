@@ -19,14 +19,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import shutil
 import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, imported_from, peak_medians, peak_rss_mib
 from bench_run_memory import RUNS, measure
 from results_file import figure, record
 
@@ -35,10 +34,9 @@ def one_report(run: Path, data: Path, out: Path) -> dict[str, Any]:
     """The report of ``run`` (no gallery) in this process; its peak RSS and CPU seconds."""
     from povagent.report.build import write_report
 
-    usage0 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = cpu_seconds()
     write_report(run, out, dataset_path=data, gallery=False)
-    usage1 = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    cpu = cpu_seconds() - cpu0
     return {"peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 

@@ -21,14 +21,13 @@ import argparse
 import asyncio
 import json
 import os
-import resource
 import shutil
 import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, imported_from, peak_medians, peak_rss_mib
 from results_file import figure, record
 
 RUNS = 4  # each instance 4 times: 2,500 instances x 4 = 10,000 rows
@@ -57,10 +56,9 @@ def one_run(data: Path, out: Path, rows: int) -> dict[str, Any]:
         }),
         host,
     )
-    usage0 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = cpu_seconds()
     result = asyncio.run(PipelineRun(config, host=host).run())
-    usage1 = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    cpu = cpu_seconds() - cpu0
     return {"rows": result.summary.rows.done, "peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 
