@@ -117,11 +117,15 @@ class ChoiceStrategy(Strategy):
         question = instance.question
         if question is None:
             raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
-        name = self.profile or question.profile
+        return self.named_profile(instance, question.profile), question
+
+    def named_profile(self, instance: Instance, own: str) -> ChoiceProfile:
+        """The profile the strategy's option names, else ``own`` (the question's)."""
+        name = self.profile or own
         profile = self.profiles.get(name)
         if profile is None:
             raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
-        return profile, question
+        return profile
 
     def prompt_text(self, instance: Instance) -> str:
         """The text after the images (an interleaved profile's still holds its image markers)."""
