@@ -16,6 +16,7 @@ profiles do).
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -224,6 +225,24 @@ def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tup
                 continue
             if text.strip():
                 yield number, text.rstrip("\r\n")
+
+
+#: How an embedded image's first bytes tell its kind (the cached file's extension).
+_IMAGE_SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
+
+
+def cached_image(data: bytes, cache: Path, not_an_image: str) -> str:
+    """Write an embedded image's ``data`` into ``cache`` and give its file name (the file is then
+    checked like any image); :class:`ValueError` ``not_an_image`` when it is neither a PNG nor a JPEG."""
+    kind = next((ext for sig, ext in _IMAGE_SIGNATURES.items() if data.startswith(sig)), None)
+    if kind is None:
+        raise ValueError(not_an_image)
+    cache.mkdir(parents=True, exist_ok=True)
+    # named by content, never by text from the file (an id, a qid): the same image is one file
+    name = f"{hashlib.sha256(data).hexdigest()[:32]}.{kind}"
+    if not (cache / name).is_file():
+        (cache / name).write_bytes(data)
+    return name
 
 
 def record_id_problem(value: object) -> str | None:
