@@ -296,10 +296,12 @@ def jsonl_records(file: Path, what: str, problems: list[Problem]) -> Iterator[tu
         yield where, record
 
 
-def sound_items(file: Path, records: Iterable[tuple[str, Any]], make: Callable[[Any, str], Any], problems: list[Problem]) -> list[Any]:
+def sound_items(
+    file: Path, records: Iterable[tuple[str, Any]], make: Callable[[Any, str], Any], problems: list[Problem], reused: str = "is used by an earlier record"
+) -> list[Any]:
     """The items ``make(record, where)`` builds from ``records``, in order; a record holding text
     no output can hold, one ``make`` refuses (it returns ``(where, message)``) or one whose id an
-    earlier item took is a problem and left out."""
+    earlier item took (its problem: the id, then ``reused``) is a problem and left out."""
     items: list[Any] = []
     seen: set[str] = set()
     for where, record in records:
@@ -311,7 +313,7 @@ def sound_items(file: Path, records: Iterable[tuple[str, Any]], make: Callable[[
         if isinstance(item, tuple):
             problems.append(Problem(str(file), *item))
         elif item.id in seen:
-            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
+            problems.append(Problem(str(file), f"{where}.id", f"{shown(item.id)} {reused}; this one left out"))
         else:
             seen.add(item.id)
             items.append(item)

@@ -29,8 +29,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from povagent.answers.choice_question import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, cached_image, record_id_problem
-from povagent.dataset.paths import shown
+from povagent.dataset.choice_sets.external import Item, cached_image, record_id_problem, sound_items
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES
@@ -81,20 +80,9 @@ def read_mmsi(file: Path, cache: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound row of the Parquet file as an item (its images written into ``cache``), and
     one problem per bad row. :class:`~povagent.errors.DatasetError` when the file is not a
     Parquet file of the set's columns."""
-    name = str(file)
-    items: list[Item] = []
     problems: list[Problem] = []
-    seen: set[str] = set()
-    for number, row in _rows(file, problems):
-        item = _item(row, f"row {number}", cache)
-        if isinstance(item, tuple):
-            problems.append(Problem(name, *item))
-        elif item.id in seen:
-            problems.append(Problem(name, f"row {number}.id", f"{shown(item.id)} is used by an earlier row; this one left out"))
-        else:
-            seen.add(item.id)
-            items.append(item)
-    return items, problems
+    rows = ((f"row {number}", row) for number, row in _rows(file, problems))
+    return sound_items(file, rows, lambda row, where: _item(row, where, cache), problems, reused="is used by an earlier row"), problems
 
 
 def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, Any]]]:
