@@ -16,7 +16,6 @@ Writes ``benchmarks/results/bench_report_memory.json``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -26,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, imported_from, peak_medians, peak_rss_mib
-from bench_run_memory import RUNS, measure
+from bench_run_memory import RUNS, measure, memory_arguments
 from results_file import figure, record
 
 
@@ -47,15 +46,7 @@ def report_in_process(run: Path, data: Path, out: Path, pythonpath: Path | None)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--small", type=int, default=1000)
-    parser.add_argument("--large", type=int, default=10000)
-    parser.add_argument("--baseline", default="5f3474e", help="the commit measured as 'before'")
-    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
-    parser.add_argument("--data", type=Path, help=argparse.SUPPRESS)
-    parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = memory_arguments(__doc__, "5f3474e", Path)
     if args.child:
         print(json.dumps(one_report(args.child, args.data, args.out)))
         return

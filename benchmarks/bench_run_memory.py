@@ -69,16 +69,22 @@ def measure(data: Path, workdir: Path, rows: int, label: str, pythonpath: Path |
     return child_json(__file__, ["--child", str(rows), "--data", str(data), "--out", str(out)], pythonpath)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def memory_arguments(doc: str | None, baseline: str, child: type) -> argparse.Namespace:
+    """The command line of a benchmark of memory at two sizes (this one and :mod:`bench_report_memory`):
+    rounds, the two sizes, the commit measured as "before", and what its child process is told."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--small", type=int, default=1000)
     parser.add_argument("--large", type=int, default=10000)
-    parser.add_argument("--baseline", default="f33d9c8", help="the commit measured as 'before'")
-    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--baseline", default=baseline, help="the commit measured as 'before'")
+    parser.add_argument("--child", type=child, help=argparse.SUPPRESS)
     parser.add_argument("--data", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = memory_arguments(__doc__, "f33d9c8", int)
     if args.child:
         print(json.dumps(one_run(args.data, args.out, args.child)))
         return
