@@ -30,7 +30,8 @@ REPO = Path(__file__).resolve().parent.parent
 def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository), with
     the built-in plugins and prompts of that commit under their import names
-    (``povagent_plugins/``, ``povagent_prompts/``) when it had them."""
+    (``povagent_plugins/``, ``povagent_prompts/``) when it had them. Where ``povagent`` is then
+    imported from before and after is printed: the output shows the baseline is the old code."""
     into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
     tree = subprocess.run(["git", "-C", str(REPO), "ls-tree", "--name-only", ref], check=True, capture_output=True,
                           text=True).stdout.split()  # fmt: skip
@@ -41,6 +42,7 @@ def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     for folder, name in (("plugins", "povagent_plugins"), ("prompts", "povagent_prompts")):
         if (into / folder).is_dir():
             (into / folder).rename(into / name)
+    print(f"before: {imported_from(into)} (commit {ref}); after: {imported_from(None)}")
     return into
 
 

@@ -33,7 +33,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, child_json, cpu_seconds, imported_from, peak_rss_mib
+from baseline_code import baseline_checkout, child_json, cpu_seconds, peak_rss_mib
 from results_file import figure, record
 
 SENTENCE = "Sentence: the mug {i} is left of the sofa. Output ONLY valid JSON, no other text."
@@ -132,7 +132,6 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_local_memory_") as tmp:
         checkpoint = build_qwen2_vl(Path(tmp) / "qwen2_vl", layers=2)
         old = baseline_checkout(args.baseline, Path(tmp) / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
         contenders = (("script", "script", None), ("backend", "backend", None), ("before", "backend", old))
         got: dict[str, list[dict[str, Any]]] = {name: [] for name, _, _ in contenders}

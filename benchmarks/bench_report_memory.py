@@ -24,7 +24,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, imported_from, peak_medians, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, peak_medians, peak_rss_mib
 from bench_run_memory import RUNS, measure, memory_arguments
 from results_file import figure, record
 
@@ -58,7 +58,6 @@ def main() -> None:
         rows = {size: measure(data, work, n, "run", None)["rows"] for size, n in (("small", args.small), ("large", args.large))}
         runs = {size: work / f"run_run_{n}" for size, n in (("small", args.small), ("large", args.large))}
         old = baseline_checkout(args.baseline, work / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
 
         def round_done(r: int, got: dict) -> None:

@@ -27,7 +27,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, imported_from, peak_medians, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, peak_medians, peak_rss_mib
 from results_file import figure, record
 
 RUNS = 4  # each instance 4 times: 2,500 instances x 4 = 10,000 rows
@@ -95,7 +95,6 @@ def main() -> None:
         # enough pair-directions for --large rows: 3 conditions each, RUNS runs each
         data = write_release(work / "data", houses=47, pairs=288, pair_directions=max(813, -(-args.large // (3 * RUNS))), frames=30)
         old = baseline_checkout(args.baseline, work / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
         sizes = {"small": args.small, "large": args.large}
 
