@@ -15,6 +15,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -29,7 +30,8 @@ REPO = Path(__file__).resolve().parent.parent
 def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     """A folder holding ``povagent/`` as it was at ``ref`` (a commit of this repository), with
     the built-in plugins and prompts of that commit under their import names
-    (``povagent_plugins/``, ``povagent_prompts/``) when it had them."""
+    (``povagent_plugins/``, ``povagent_prompts/``) when it had them. Where ``povagent`` is then
+    imported from before and after is printed: the output shows the baseline is the old code."""
     into = into or Path(tempfile.mkdtemp(prefix="povagent-baseline-"))
     tree = subprocess.run(["git", "-C", str(REPO), "ls-tree", "--name-only", ref], check=True, capture_output=True,
                           text=True).stdout.split()  # fmt: skip
@@ -40,6 +42,7 @@ def baseline_checkout(ref: str, into: Path | None = None) -> Path:
     for folder, name in (("plugins", "povagent_plugins"), ("prompts", "povagent_prompts")):
         if (into / folder).is_dir():
             (into / folder).rename(into / name)
+    print(f"before: {imported_from(into)} (commit {ref}); after: {imported_from(None)}")
     return into
 
 
@@ -51,11 +54,11 @@ def env_with(pythonpath: Path | None) -> dict[str, str]:
     return env
 
 
-def child_json(script: str, args: list[str], pythonpath: Path | None) -> dict:
+def child_json(script: str, args: list[str], pythonpath: Path | None = None, env: dict[str, str] | None = None) -> dict:
     """Run ``script`` with ``args`` in a fresh interpreter (``pythonpath`` first on the import
-    path) and return the JSON object its last output line holds: a measurement taken in a
-    process of its own, so its peak RSS is its own."""
-    done = subprocess.run([sys.executable, script, *args], check=True, capture_output=True, text=True, env=env_with(pythonpath))
+    path, or the environment ``env``) and return the JSON object its last output line holds: a
+    measurement taken in a process of its own, so its peak RSS is its own."""
+    done = subprocess.run([sys.executable, script, *args], check=True, capture_output=True, text=True, env=env or env_with(pythonpath))
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -63,6 +66,13 @@ def peak_rss_mib() -> float:
     """This process's own peak RSS (``VmHWM``), in MiB: ``ru_maxrss`` would count a parent's too."""
     with open("/proc/self/status") as f:
         return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
+
+
+def cpu_seconds() -> float:
+    """This process's CPU time so far, user + system (the machine is shared: wall time would
+    measure the other jobs too)."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
 
 
 def cpu_of(code: str, pythonpath: Path | None, timeout: float = 3600) -> dict[str, float]:

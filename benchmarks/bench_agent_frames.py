@@ -36,7 +36,7 @@ import statistics
 import tempfile
 from pathlib import Path
 
-from baseline_code import baseline_checkout, cpu_of, imported_from
+from baseline_code import baseline_checkout, cpu_of
 from results_file import figure, record
 
 KEYS = ("first", "second", "ros_center", "arrays_first", "arrays_second", "files_first", "files_second", "center_first")
@@ -132,7 +132,6 @@ def main() -> None:
     code = SNIPPET.replace("{commands}", str(args.commands))
     with tempfile.TemporaryDirectory() as tmp:
         old = baseline_checkout(args.baseline, Path(tmp) / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
         got: dict[str, list[dict[str, float]]] = {"before": [], "after": []}
         for r in range(args.rounds):

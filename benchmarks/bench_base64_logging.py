@@ -40,6 +40,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from baseline_code import child_json
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -140,12 +142,8 @@ def main() -> None:
                     env.pop("MAX_BASE64_LENGTH_FOR_LOGGING", None)
                     if settings[name] is not None:
                         env["MAX_BASE64_LENGTH_FOR_LOGGING"] = settings[name]
-                    out = subprocess.run(
-                        [sys.executable, __file__, "--child", "--url", url, "--workdir", str(workdir),
-                         "--requests", str(args.requests), "--concurrency", str(args.concurrency), "--model", args.model],
-                        env=env, capture_output=True, text=True, check=True,
-                    )  # fmt: skip
-                    doc = json.loads(out.stdout.strip().splitlines()[-1])
+                    argv = ["--child", "--url", url, "--workdir", str(workdir), "--requests", str(args.requests)]
+                    doc = child_json(__file__, [*argv, "--concurrency", str(args.concurrency), "--model", args.model], env=env)
                     results[name].append(doc)
                     print(f"{r:>5} {name:>17} {doc['rps']:>7.1f} {doc['cpu_ms']:>18.1f} {doc['longest_logged_data_url']:>32,}", flush=True)
         finally:

@@ -31,7 +31,6 @@ import importlib.util
 import json
 import os
 import random
-import resource
 import shutil
 import statistics
 import sys
@@ -40,7 +39,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from baseline_code import child_json, peak_rss_mib
+from baseline_code import child_json, cpu_seconds, peak_rss_mib
 from results_file import figure, record
 
 #: ViewSpatial-Bench's question types (its ``question_type`` values), one drawn per record.
@@ -106,10 +105,9 @@ def one_run(set_file: Path, out: Path) -> dict[str, Any]:
         }),
         host,
     )  # fmt: skip
-    usage0 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = cpu_seconds()
     result = asyncio.run(PipelineRun(config, host=host).run())
-    usage1 = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    cpu = cpu_seconds() - cpu0
     peak = peak_rss_mib()
     replies = {int(row.pair_id): row.exchanges[-1].raw for row in iter_rows(out / "results.jsonl")}
     (out / "replies.json").write_text(json.dumps([replies[i] for i in range(len(replies))]))

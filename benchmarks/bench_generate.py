@@ -47,11 +47,10 @@ with tempfile.TemporaryDirectory() as tmp:
 def compare(baseline: str, houses: int) -> None:
     """CPU per house before (``baseline``) and after, alternating, one house per seed."""
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from baseline_code import baseline_checkout, cpu_of, imported_from
+    from baseline_code import baseline_checkout, cpu_of
 
     with tempfile.TemporaryDirectory() as tmp:
         old = baseline_checkout(baseline, Path(tmp) / "baseline")
-        print(f"before: {imported_from(old)} (commit {baseline}); after: {imported_from(None)}")
         cpu: dict[str, list[float]] = {"before": [], "after": []}
         for seed in range(houses):
             order = (("before", old), ("after", None)) if seed % 2 == 0 else (("after", None), ("before", old))

@@ -35,15 +35,12 @@ import asyncio
 import importlib.metadata
 import json
 import os
-import signal
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-from generated_frames import frame_digests, generated_dataset
+from generated_frames import frame_digests, generated_dataset, start_verifying_server, stop_verifying_server
 
 from povagent.answers.spec import AnswerSpec, frame_answer_schema
 from povagent.engine.llm_import import import_litellm
@@ -75,35 +72,10 @@ def the_request(store: ImageStore, frames: list[Path], sentence: str) -> Request
     return Request(messages=(Message("user", tuple(parts)),), answer=spec, generation=GenerationParams(max_tokens=64))
 
 
-def start_server(media_root: Path, digests: Path) -> tuple[subprocess.Popen, str]:
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", "7200", "--fetch-images",
-         "--local-media-root", str(media_root), "--expect-sha256", str(digests)],
-        stdout=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    url = proc.stdout.readline().strip()  # type: ignore[union-attr]
-    if not url.startswith("http://127.0.0.1:"):
-        proc.kill()
-        raise SystemExit(f"loopback server did not start (printed {url!r})")
-    return proc, url
-
-
 def process_cpu_s(pid: int) -> float:
     """User + system CPU seconds of a process so far (Linux /proc)."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def stop_server(proc: subprocess.Popen) -> dict:
-    """Stop the server (SIGINT: it prints its counters) and return them."""
-    proc.send_signal(signal.SIGINT)
-    try:
-        out, _ = proc.communicate(timeout=120)
-    except subprocess.TimeoutExpired:  # a loaded machine: the figures measured so far still count
-        proc.kill()
-        out, _ = proc.communicate()
-    lines = [line for line in out.splitlines() if line.startswith("{")]
-    return json.loads(lines[-1]) if lines else {}
 
 
 async def drive(n: int, concurrency: int, one) -> float:
@@ -128,7 +100,7 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
     os.environ.setdefault("BENCH_KEY", "bench-key")
     print(f"dataset {data}: {N_FRAMES} generated frames per request, {sum(f.stat().st_size for f in frames) / N_FRAMES / 1024:.0f} "
           f"KB each | load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())} ({os.cpu_count()} CPUs)")
-    proc, url = start_server(Path(os.path.commonpath([data, workdir.resolve()])), digests)
+    proc, url = start_verifying_server(digests, extra=("--fetch-images", "--local-media-root", os.path.commonpath([data, workdir.resolve()])))
     sent_images = 0
     try:
         store = ImageStore()
@@ -188,7 +160,7 @@ async def main_async(args: argparse.Namespace, workdir: Path) -> None:
             transport.close()
         await backend.aclose()
     finally:
-        stats = stop_server(proc)
+        stats = stop_verifying_server(proc)
 
     print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print()

@@ -57,7 +57,6 @@ import json
 import os
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -66,6 +65,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from baseline_code import child_json, peak_rss_mib
 from generated_frames import frame_digests, generated_dataset, start_verifying_server, stop_verifying_server
 
 #: The JSON encoders a client may use; the raw contender uses the one that gives povagent's bytes.
@@ -336,16 +336,9 @@ def child(args: argparse.Namespace) -> None:
             await one()
         before = _rss_mb()
         await drive(args.n, args.concurrency, one)
-        return {"rss_before_mb": before, "peak_rss_mb": _peak_rss_mb()}
+        return {"rss_before_mb": before, "peak_rss_mb": peak_rss_mib()}
 
     print(json.dumps(asyncio.run(run())))
-
-
-def _peak_rss_mb() -> float:
-    """This process's own peak RSS (``VmHWM``): ``ru_maxrss`` would also count the parent's
-    memory, which a child started by fork and exec inherits as its high-water mark."""
-    with open("/proc/self/status") as f:
-        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
 
 
 def _rss_mb() -> float:
@@ -358,13 +351,9 @@ def memory(args: argparse.Namespace, data: Path, url: str, workdir: Path) -> dic
     got: dict[str, list[dict[str, float]]] = {n: [] for n in CONTENDERS}
     for r in range(2):
         for name in CONTENDERS if r == 0 else CONTENDERS[::-1]:
-            out = subprocess.run(
-                [sys.executable, __file__, "--child", name, "--url", url, "--body", str(workdir / "body.json"),
-                 "--child-data", str(data), "--n", str(args.memory), "--concurrency", str(args.concurrency),
-                 "--model", args.model, "--images", str(args.images)],
-                capture_output=True, text=True, check=True,
-            ).stdout  # fmt: skip
-            got[name].append(json.loads(out.strip().splitlines()[-1]))
+            argv = ["--child", name, "--url", url, "--body", str(workdir / "body.json"), "--child-data", str(data), "--n", str(args.memory)]
+            argv += ["--concurrency", str(args.concurrency), "--model", args.model, "--images", str(args.images)]
+            got[name].append(child_json(__file__, argv))
     print()
     print(f"| contender, own process, {args.memory} requests at concurrency {args.concurrency} | RSS before the first timed "
           f"request (MB) | peak RSS (MB) |")

@@ -28,15 +28,12 @@ import argparse
 import asyncio
 import json
 import os
-import resource
 import statistics
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, imported_from
+from baseline_code import baseline_checkout, child_json, cpu_seconds, peak_rss_mib
 from results_file import figure, record
 
 SENTENCE = "Sentence: the mug {i} is left of the sofa. Output ONLY valid JSON, no other text."
@@ -53,13 +50,6 @@ def request_frames(i: int, n_frames: int) -> list[Any]:
         Image.fromarray(np.stack([(xx * (k + 1) + 7 * i) % 256, (yy * (i % 5 + 1)) % 256, (xx + yy + 13 * k) % 256], axis=-1).astype(np.uint8))
         for k in range(n_frames)
     ]
-
-
-def peak_and_cpu() -> dict[str, float]:
-    with open("/proc/self/status") as f:
-        peak = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return {"peak_mib": peak, "cpu_s": usage.ru_utime + usage.ru_stime}
 
 
 def run_script(checkpoint: str, n_requests: int, n_frames: int, batch: int, max_tokens: int) -> list[str]:
@@ -117,15 +107,8 @@ def run_backend(checkpoint: str, n_requests: int, n_frames: int, batch: int, max
 
 
 def measure(kind: str, args: argparse.Namespace, checkpoint: Path, pythonpath: Path | None) -> dict[str, Any]:
-    env = dict(os.environ)
-    if pythonpath is not None:
-        env["PYTHONPATH"] = os.pathsep.join([str(pythonpath), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    done = subprocess.run(
-        [sys.executable, __file__, "--child", kind, "--checkpoint", str(checkpoint), "--requests", str(args.requests),
-         "--frames", str(args.frames), "--batch", str(args.batch), "--max-tokens", str(args.max_tokens)],
-        check=True, capture_output=True, text=True, env=env,
-    )  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    argv = ["--child", kind, "--checkpoint", str(checkpoint), "--requests", str(args.requests), "--frames", str(args.frames)]
+    return child_json(__file__, [*argv, "--batch", str(args.batch), "--max-tokens", str(args.max_tokens)], pythonpath)
 
 
 def main() -> None:
@@ -142,14 +125,13 @@ def main() -> None:
     if args.child:
         run = run_script if args.child == "script" else run_backend
         texts = run(str(args.checkpoint), args.requests, args.frames, args.batch, args.max_tokens)
-        print(json.dumps({**peak_and_cpu(), "answers": texts}))
+        print(json.dumps({"peak_mib": peak_rss_mib(), "cpu_s": cpu_seconds(), "answers": texts}))
         return
     from povagent.testing.tiny_checkpoints import build_qwen2_vl
 
     with tempfile.TemporaryDirectory(prefix="bench_local_memory_") as tmp:
         checkpoint = build_qwen2_vl(Path(tmp) / "qwen2_vl", layers=2)
         old = baseline_checkout(args.baseline, Path(tmp) / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
         contenders = (("script", "script", None), ("backend", "backend", None), ("before", "backend", old))
         got: dict[str, list[dict[str, Any]]] = {name: [] for name, _, _ in contenders}

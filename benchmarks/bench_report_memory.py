@@ -16,18 +16,16 @@ Writes ``benchmarks/results/bench_report_memory.json``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import resource
 import shutil
 import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
-from bench_run_memory import RUNS, measure
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, peak_medians, peak_rss_mib
+from bench_run_memory import RUNS, measure, memory_arguments
 from results_file import figure, record
 
 
@@ -35,10 +33,9 @@ def one_report(run: Path, data: Path, out: Path) -> dict[str, Any]:
     """The report of ``run`` (no gallery) in this process; its peak RSS and CPU seconds."""
     from povagent.report.build import write_report
 
-    usage0 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = cpu_seconds()
     write_report(run, out, dataset_path=data, gallery=False)
-    usage1 = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    cpu = cpu_seconds() - cpu0
     return {"peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 
@@ -49,15 +46,7 @@ def report_in_process(run: Path, data: Path, out: Path, pythonpath: Path | None)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--small", type=int, default=1000)
-    parser.add_argument("--large", type=int, default=10000)
-    parser.add_argument("--baseline", default="5f3474e", help="the commit measured as 'before'")
-    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
-    parser.add_argument("--data", type=Path, help=argparse.SUPPRESS)
-    parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    args = memory_arguments(__doc__, "5f3474e", Path)
     if args.child:
         print(json.dumps(one_report(args.child, args.data, args.out)))
         return
@@ -69,7 +58,6 @@ def main() -> None:
         rows = {size: measure(data, work, n, "run", None)["rows"] for size, n in (("small", args.small), ("large", args.large))}
         runs = {size: work / f"run_run_{n}" for size, n in (("small", args.small), ("large", args.large))}
         old = baseline_checkout(args.baseline, work / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
 
         def round_done(r: int, got: dict) -> None:

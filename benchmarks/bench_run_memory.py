@@ -21,14 +21,13 @@ import argparse
 import asyncio
 import json
 import os
-import resource
 import shutil
 import statistics
 import tempfile
 from pathlib import Path
 from typing import Any
 
-from baseline_code import baseline_checkout, before_after_rounds, child_json, imported_from, peak_medians, peak_rss_mib
+from baseline_code import baseline_checkout, before_after_rounds, child_json, cpu_seconds, peak_medians, peak_rss_mib
 from results_file import figure, record
 
 RUNS = 4  # each instance 4 times: 2,500 instances x 4 = 10,000 rows
@@ -57,10 +56,9 @@ def one_run(data: Path, out: Path, rows: int) -> dict[str, Any]:
         }),
         host,
     )
-    usage0 = resource.getrusage(resource.RUSAGE_SELF)
+    cpu0 = cpu_seconds()
     result = asyncio.run(PipelineRun(config, host=host).run())
-    usage1 = resource.getrusage(resource.RUSAGE_SELF)
-    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    cpu = cpu_seconds() - cpu0
     return {"rows": result.summary.rows.done, "peak_mib": peak_rss_mib(), "cpu_s": cpu}
 
 
@@ -71,16 +69,22 @@ def measure(data: Path, workdir: Path, rows: int, label: str, pythonpath: Path |
     return child_json(__file__, ["--child", str(rows), "--data", str(data), "--out", str(out)], pythonpath)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def memory_arguments(doc: str | None, baseline: str, child: type) -> argparse.Namespace:
+    """The command line of a benchmark of memory at two sizes (this one and :mod:`bench_report_memory`):
+    rounds, the two sizes, the commit measured as "before", and what its child process is told."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--small", type=int, default=1000)
     parser.add_argument("--large", type=int, default=10000)
-    parser.add_argument("--baseline", default="f33d9c8", help="the commit measured as 'before'")
-    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--baseline", default=baseline, help="the commit measured as 'before'")
+    parser.add_argument("--child", type=child, help=argparse.SUPPRESS)
     parser.add_argument("--data", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--out", type=Path, help=argparse.SUPPRESS)
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = memory_arguments(__doc__, "f33d9c8", int)
     if args.child:
         print(json.dumps(one_run(args.data, args.out, args.child)))
         return
@@ -91,7 +95,6 @@ def main() -> None:
         # enough pair-directions for --large rows: 3 conditions each, RUNS runs each
         data = write_release(work / "data", houses=47, pairs=288, pair_directions=max(813, -(-args.large // (3 * RUNS))), frames=30)
         old = baseline_checkout(args.baseline, work / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"load before: {os.getloadavg()}")
         sizes = {"small": args.small, "large": args.large}
 

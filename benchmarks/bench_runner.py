@@ -35,15 +35,14 @@ import asyncio
 import json
 import math
 import os
-import resource
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
+from baseline_code import child_json, cpu_seconds, peak_rss_mib
 from generated_frames import generated_dataset, povagent_command
 
 HOUSES = 47  # the paper's release: 47 houses of 30 frames
@@ -152,11 +151,11 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
     load_s = time.perf_counter() - t0
     images = ImageStore()
     run = PipelineRun(config, host=host, dataset=dataset, images=images)
-    cpu0 = _cpu_s()
+    cpu0 = cpu_seconds()
     t0 = time.perf_counter()
     result = asyncio.run(run.run())
     run_s = time.perf_counter() - t0
-    cpu_s = _cpu_s() - cpu0
+    cpu_s = cpu_seconds() - cpu0
     n = result.summary.rows.done
     figures: dict[str, Any] = {
         "scenario": name,
@@ -166,7 +165,7 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         "run_s": run_s,
         "fsyncs": result.stats.fsyncs,
         "fsync_s": result.stats.fsync_s,
-        "peak_rss_mb": _peak_rss_mb(),
+        "peak_rss_mb": peak_rss_mib(),
         "file_reads": images.stats.file_reads,
         "base64_encodes": images.stats.base64_encodes,
         "rebuilds": images.stats.rebuilds,
@@ -177,11 +176,11 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         # The encoding cost alone: read, hash and base64 every distinct image once.
         files = sorted({f.file for inst in dataset.instances() for f in inst.frames})
         fresh = ImageStore()
-        c0, t0 = _cpu_s(), time.perf_counter()
+        c0, t0 = cpu_seconds(), time.perf_counter()
         for f in files:
             fresh.data_url(fresh.add_file(f).image_hash)
         figures["encode_all_s"] = time.perf_counter() - t0
-        figures["encode_all_cpu_s"] = _cpu_s() - c0
+        figures["encode_all_cpu_s"] = cpu_seconds() - c0
         figures["distinct_files"] = len(files)
         figures["overhead_ms_per_instance"] = 1000 * (run_s - figures["encode_all_s"]) / n
         figures["overhead_cpu_ms_per_instance"] = 1000 * (cpu_s - figures["encode_all_cpu_s"]) / n
@@ -195,18 +194,6 @@ def scenario(name: str, data: Path, out: Path) -> dict[str, Any]:
         figures["in_flight_per_s"] = n / in_flight_s
         figures["mean_request_s"] = sum(latencies) / len(latencies)
     return figures
-
-
-def _peak_rss_mb() -> float:
-    """This process's own peak RSS (``VmHWM``): ``ru_maxrss`` would also count the parent's
-    memory, which a child started by fork and exec inherits as its high-water mark."""
-    with open("/proc/self/status") as f:
-        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
-
-
-def _cpu_s() -> float:
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return usage.ru_utime + usage.ru_stime
 
 
 def _from_log(path: Path) -> tuple[float, list[float]]:
@@ -251,11 +238,7 @@ def main() -> None:
         print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())} ({os.cpu_count()} CPUs)")
         results = {}
         for name in SCENARIOS:
-            proc = subprocess.run(
-                [sys.executable, __file__, "--scenario", name, "--data", str(data), "--out", str(tmp / "runs")],
-                capture_output=True, text=True, check=True,
-            )
-            results[name] = json.loads(proc.stdout.strip().splitlines()[-1])
+            results[name] = child_json(__file__, ["--scenario", name, "--data", str(data), "--out", str(tmp / "runs")])
         o = results["overhead"]
         print(f"instances: {o['instances']} (answered {o['answered']}); dataset load {o['dataset_load_s']:.2f} s")
         print(f"overhead run: {o['run_s']:.2f} s wall, encoding every distinct image once: {o['encode_all_s']:.2f} s")

@@ -27,7 +27,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from baseline_code import baseline_checkout, cpu_of, imported_from
+from baseline_code import baseline_checkout, cpu_of
 from results_file import figure, record
 
 #: The last commit whose scorer recomputed each row's ground truth.
@@ -106,7 +106,6 @@ def main() -> None:
         predictions = work / "predictions.json"
         predictions.write_text(json.dumps({"metadata": {"screen_width": 512, "screen_height": 512}, "predictions": rows}))
         old = baseline_checkout(args.baseline, work / "baseline")
-        print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
         print(f"{len(rows)} rows over {len({(r['house_id'], r['pair_id'], r['direction']) for r in rows})} instances")
         cpu = {"before": [], "after": []}
         summaries = {}

@@ -45,6 +45,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from generated_frames import povagent_command
+
 from povagent.testing.loopback_server import LoopbackServer
 
 KEY_ENV = "POVAGENT_BENCH_KEY"
@@ -72,11 +74,6 @@ response = litellm.completion(model=spec["model"], api_base=spec["api_base"], ap
                               messages=messages, **spec["params"])
 print(response.choices[0].message.content)
 """
-
-
-def _povagent_command() -> list[str]:
-    script = Path(sys.executable).with_name("povagent")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "povagent.cli"]
 
 
 def _timed(cmd: list[str], env: dict[str, str]) -> dict[str, float]:
@@ -163,7 +160,7 @@ def main() -> None:
         data = args.data
         if data is None:
             data = work / "POVBench"
-            subprocess.run([*_povagent_command(), "generate", "--out", str(data), "--houses", "1", "--frames", "30", "--seed", "0"],
+            subprocess.run([*povagent_command(), "generate", "--out", str(data), "--houses", "1", "--frames", "30", "--seed", "0"],
                            check=True, env=env, stdout=subprocess.DEVNULL)
         frames = _frames_by_sha(data)
         compiled = _byte_compile_povagent()
@@ -171,7 +168,7 @@ def main() -> None:
               f"{os.environ.get('PYTHONDONTWRITEBYTECODE', 'unset')} here)")
         with LoopbackServer(reply='{"selected_image": 1, "x": 0.5, "y": 0.5}', fetch_images=True, max_lifetime_s=3600) as server:
             # one untimed run gives the request povagent sends; the bare script rebuilds it
-            _run_measured(_povagent_command() + ["run", "-q", str(_pipeline(work / "probe.yaml", data, server.url, args.model,
+            _run_measured(povagent_command() + ["run", "-q", str(_pipeline(work / "probe.yaml", data, server.url, args.model,
                                                                         work / "probe", work / "probe" / "cache.sqlite"))], env)
             sent = server.requests[-1]
             spec = _bare_spec(sent.body, frames, server.url, args.model)
@@ -189,7 +186,7 @@ def main() -> None:
                 for who in order:
                     seen = len(server.requests)
                     if who == "run":
-                        rows["run"].append(_run_measured(_povagent_command() + ["run", "-q", str(fresh)], env))
+                        rows["run"].append(_run_measured(povagent_command() + ["run", "-q", str(fresh)], env))
                     else:
                         rows["bare"].append(_run_measured([sys.executable, "-c", BARE_SCRIPT, str(work / "bare.json")], env))
                     got = server.requests[seen:]
@@ -198,7 +195,7 @@ def main() -> None:
                     assert [i.sha256 for i in got[0].images] == [i.sha256 for i in sent.images], f"{who}: other image bytes"
                     assert all(i.sha256 in frames for i in got[0].images), f"{who}: an image that is no dataset frame"
                 seen = len(server.requests)
-                rows["cached"].append(_run_measured(_povagent_command() + ["run", "-q", str(again)], env))
+                rows["cached"].append(_run_measured(povagent_command() + ["run", "-q", str(again)], env))
                 assert len(server.requests) == seen, "the cached re-run sent a request"
                 print(f"round {r + 1}: run {rows['run'][-1]['wall']:.2f} s wall / {rows['run'][-1]['cpu']:.2f} s CPU, "
                       f"bare {rows['bare'][-1]['wall']:.2f} / {rows['bare'][-1]['cpu']:.2f}, "

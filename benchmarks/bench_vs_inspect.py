@@ -51,7 +51,6 @@ import argparse
 import asyncio
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
@@ -59,19 +58,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from baseline_code import cpu_seconds, peak_rss_mib
+
 FRAMES = 30  # per request: a generated house's exploration frames
-
-
-def _peak_rss_mb() -> float:
-    """This process's own peak RSS (``VmHWM``): ``ru_maxrss`` would also count the parent's
-    memory, which a child started by fork and exec inherits as its high-water mark."""
-    with open("/proc/self/status") as f:
-        return next(int(line.split()[1]) for line in f if line.startswith("VmHWM:")) / 1024
-
-
-def _cpu_s() -> float:
-    usage = resource.getrusage(resource.RUSAGE_SELF)
-    return usage.ru_utime + usage.ru_stime
 
 
 def _instances(data: Path, n: int) -> list:
@@ -114,12 +103,12 @@ def run_povagent(data: Path, out: Path, url: str, n: int, concurrency: int, mode
     from povagent.engine.llm_import import import_litellm
 
     import_litellm()
-    cpu0, t0 = _cpu_s(), time.perf_counter()
+    cpu0, t0 = cpu_seconds(), time.perf_counter()
     result = asyncio.run(run.run())
-    wall, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
+    wall, cpu = time.perf_counter() - t0, cpu_seconds() - cpu0
     done = result.summary.rows.done
     assert done == n and result.summary.rows.infra_error == 0, result.summary.rows
-    return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": _peak_rss_mb()}
+    return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": peak_rss_mib()}
 
 
 def write_samples(data: Path, path: Path, n: int) -> None:
@@ -161,12 +150,12 @@ def run_inspect(samples_file: Path, out: Path, url: str, n: int, concurrency: in
     task = Task(dataset=samples, solver=generate())
     import openai  # noqa: F401  (imported before the clock starts, as povagent's litellm is)
 
-    cpu0, t0 = _cpu_s(), time.perf_counter()
+    cpu0, t0 = cpu_seconds(), time.perf_counter()
     logs = eval(task, model="openai-api/loopback/bench-model", max_connections=concurrency, max_tokens=256,
                 log_dir=str(out), display="none", fail_on_error=True, log_images=log_images)  # fmt: skip
-    wall, cpu = time.perf_counter() - t0, _cpu_s() - cpu0
+    wall, cpu = time.perf_counter() - t0, cpu_seconds() - cpu0
     assert logs[0].status == "success", logs[0].status
-    return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": _peak_rss_mb()}
+    return {"requests": n, "wall_s": wall, "rps": n / wall, "cpu_ms": 1000 * cpu / n, "peak_rss_mb": peak_rss_mib()}
 
 
 def child(args: argparse.Namespace) -> None:

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from baseline_code import baseline_checkout, imported_from
+from baseline_code import baseline_checkout
 from bench_score import same
 
 #: The code before this benchmark's speed-ups (the per-row fsync, the parse of every row's
@@ -114,7 +114,6 @@ def main() -> int:
 
     rows = sum(RunSummary.model_validate_json((r / "summary.json").read_text()).rows.done for r in runs)
     old = baseline_checkout(args.baseline, work / "baseline")
-    print(f"before: {imported_from(old)} (commit {args.baseline}); after: {imported_from(None)}")
     print(f"{args.dataset}: {len(runs)} systems, {rows} rows ({rows / len(runs):.0f} per system; the paper: {PAPER_INSTANCES})")
     cpu: dict[str, list[float]] = {}
     agree: dict[str, bool] = {}

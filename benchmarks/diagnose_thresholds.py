@@ -46,13 +46,14 @@ SYSTEMS: dict[str, Any] = {
 }
 
 
-def dataset_path(args: argparse.Namespace) -> Path:
-    """The dataset given, or a freshly generated one."""
+def dataset_path(args: argparse.Namespace, prefix: str = "diagnose_thresholds_") -> Path:
+    """The dataset given (``--dataset``), or ``--houses`` houses of 30 frames freshly generated
+    (``--seed``) into a new temporary folder named ``prefix...``."""
     if args.dataset:
         return Path(args.dataset)
     from povagent.generate import generate_dataset
 
-    out = Path(tempfile.mkdtemp(prefix="diagnose_thresholds_")) / "POVBench"
+    out = Path(tempfile.mkdtemp(prefix=prefix)) / "POVBench"
     generate_dataset(out, houses=args.houses, seed=args.seed, frames=30, progress=False)
     return out
 

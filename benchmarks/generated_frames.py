@@ -47,15 +47,20 @@ def frame_digests(data: Path, path: Path) -> dict[str, Path]:
 
 
 def start_verifying_server(
-    digests_file: Path, lifetime_s: float = 7200, count_bodies: bool = False, delay_s: float = 0.0, reply: str | None = None
+    digests_file: Path,
+    lifetime_s: float = 7200,
+    count_bodies: bool = False,
+    delay_s: float = 0.0,
+    reply: str | None = None,
+    extra: tuple[str, ...] = (),
 ) -> tuple[subprocess.Popen, str]:
     """The loopback server in its own process, refusing any image not in ``digests_file``; with
     ``count_bodies`` it also counts every request body by its SHA-256 (reported on stop); each
-    answer (``reply``, else the server's default) after ``delay_s``."""
+    answer (``reply``, else the server's default) after ``delay_s``; ``extra``: more of its options."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "povagent.testing.loopback_server", "--lifetime", str(lifetime_s),
          "--expect-sha256", str(digests_file), *(["--count-bodies"] if count_bodies else []),
-         "--delay", str(delay_s), *(["--reply", reply] if reply is not None else [])],
+         "--delay", str(delay_s), *(["--reply", reply] if reply is not None else []), *extra],
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
     url = proc.stdout.readline().strip()  # type: ignore[union-attr]

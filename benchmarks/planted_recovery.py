@@ -21,6 +21,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from diagnose_thresholds import dataset_path
+
 from povagent.config.pipeline import pipeline_from_source
 from povagent.config.yaml_reader import ConfigSource
 from povagent.dataset.loader import load_dataset
@@ -38,16 +40,6 @@ SYSTEMS: dict[str, dict[str, Any]] = {
     "center (random frame)": {"name": "center", "options": {"frame_policy": "random", "seed": 0}},
     "random": {"name": "random", "options": {"seed": 0}},
 }
-
-
-def dataset_path(args: argparse.Namespace) -> Path:
-    if args.dataset:
-        return Path(args.dataset)
-    from povagent.generate import generate_dataset
-
-    out = Path(tempfile.mkdtemp(prefix="planted_recovery_")) / "POVBench"
-    generate_dataset(out, houses=args.houses, seed=args.seed, frames=30, progress=False)
-    return out
 
 
 def run(dataset: Path, backend: dict[str, Any], out: Path, runs: int) -> dict[str, Any]:
@@ -83,7 +75,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", type=int, default=1)
     args = parser.parse_args()
-    root = dataset_path(args)
+    root = dataset_path(args, "planted_recovery_")
     dataset = load_dataset(root, check_images=False)
     work = Path(tempfile.mkdtemp(prefix="planted_recovery_runs_"))
     print(f"dataset {root}: {len(dataset.houses)} houses, {len(dataset.instances(conditions=['a']))} instances per condition, "

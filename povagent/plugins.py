@@ -304,42 +304,35 @@ class PluginHost:
     # -- the typed seam: one method per kind, each returning what the interfaces promise ------
     def backend(self, name: str, options: Mapping[str, Any] | None = None) -> Backend:
         """The backend registered as ``name``, made with its YAML ``options``."""
-        made = self.create("backend", name, options)
-        if not isinstance(made, Backend):
-            raise self._not_a("backend", name, made, Backend)
-        return made
+        return self._made("backend", name, options, Backend)
 
     def strategy(self, name: str, options: Mapping[str, Any] | None = None) -> Strategy:
         """The strategy registered as ``name``, made with its YAML ``options``, and handed these
         plugins (:meth:`~povagent.interfaces.Strategy.use_plugins`: the tools it offers are this
         host's, wherever it is made: a run, ``show-prompt``, a dry run, ``rescore``)."""
-        made = self.create("strategy", name, options)
-        if not isinstance(made, Strategy):
-            raise self._not_a("strategy", name, made, Strategy)
+        made = self._made("strategy", name, options, Strategy)
         made.use_plugins(self)
         return made
 
     def parser(self, name: str, options: Mapping[str, Any] | None = None) -> Parser:
         """The parser registered as ``name``, made with its YAML ``options``."""
-        made = self.create("parser", name, options)
-        if not isinstance(made, Parser):
-            raise self._not_a("parser", name, made, Parser)
-        return made
+        return self._made("parser", name, options, Parser)
 
     def scorer(self, name: str, options: Mapping[str, Any] | None = None) -> Scorer:
         """The scorer registered as ``name``, made with its YAML ``options``."""
-        made = self.create("scorer", name, options)
-        if not isinstance(made, Scorer):
-            raise self._not_a("scorer", name, made, Scorer)
-        return made
+        return self._made("scorer", name, options, Scorer)
 
-    def _not_a(self, kind: str, name: str, made: object, expected: type) -> PluginError:
-        """A factory that returns something other than its kind's base class is the plugin's
-        bug, named when it is made rather than met as an AttributeError mid-run."""
-        return PluginError(
-            f"{kind} {name!r} ({self.entry(kind, name).source}) made a {type(made).__name__}, not a "
-            f"{expected.__name__}: its factory must return a povagent.interfaces.{expected.__name__}"
-        )
+    def _made(self, kind: str, name: str, options: Mapping[str, Any] | None, expected: type) -> Any:
+        """What :meth:`create` makes, held to its kind's base class: a factory that returns
+        something else is the plugin's bug, named when it is made rather than met as an
+        AttributeError mid-run."""
+        made = self.create(kind, name, options)
+        if not isinstance(made, expected):
+            raise PluginError(
+                f"{kind} {name!r} ({self.entry(kind, name).source}) made a {type(made).__name__}, not a "
+                f"{expected.__name__}: its factory must return a povagent.interfaces.{expected.__name__}"
+            )
+        return made
 
     def profile(self, name: str) -> Any:
         """The model profile registered as ``name`` (see ``register_model_profiles``)."""

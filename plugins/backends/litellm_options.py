@@ -124,13 +124,7 @@ class LiteLLMOptions(BaseModel):
 
 
 def options_error(exc: ValidationError) -> ConfigError:
-    lines = []
-    for e in exc.errors():
-        field = ".".join(str(p) for p in e["loc"]) or "options"
-        msg = e["msg"].removeprefix("Value error, ")
-        if e["type"] == "extra_forbidden":
-            msg = f"unknown option (known: {sorted(LiteLLMOptions.model_fields)})"
-            if e["loc"] and e["loc"][0] == "api_key":
-                msg = KEY_MESSAGE
-        lines.append(f"backend 'litellm': option '{field}': {msg}")
-    return ConfigError("; ".join(lines))
+    """The litellm backend's options refused in one line (a key in the YAML: :data:`KEY_MESSAGE`)."""
+    from povagent.config.validation_messages import options_message  # the error path only
+
+    return ConfigError(options_message("backend 'litellm'", exc, LiteLLMOptions, {"api_key": KEY_MESSAGE}))

@@ -45,18 +45,12 @@ from povagent.interfaces import Backend, PermanentBackendError
 from povagent.scoring.normalized_l2 import clamp_unit, project_ground_truth
 from povagent_plugins.backends.baselines import answer_text, request_run, shown_frame_count
 from povagent_plugins.backends.records import HouseRecords
-from povagent_plugins.backends.simulated import seeded_generator
+from povagent_plugins.backends.simulated import noise_options, rate_option, seeded_generator
 
 #: The label every answer carries in ``Response.model``.
 PLANTED_LABEL = "planted simulation"
 #: The behaviours a planted answer may follow.
 BEHAVIOURS: tuple[str, ...] = ("egocentric", "mirror", "random_frame", "truth")
-
-
-def _share(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) <= 1.0:
-        raise ConfigError(f"backend 'planted': option '{name}' must be a number in [0, 1], got {value!r}")
-    return float(value)
 
 
 def anchor_frame(instance: Instance, frames: tuple[Frame, ...]) -> int:
@@ -92,15 +86,11 @@ class PlantedBehaviour(Backend):
         seed: int = 0,
         dataset: str | None = None,
     ) -> None:
-        self.shares = {"egocentric": _share("egocentric", egocentric), "mirror": _share("mirror", mirror), "random_frame": _share("random_frame", random_frame)}
+        shares = {"egocentric": egocentric, "mirror": mirror, "random_frame": random_frame}
+        self.shares = {name: rate_option("planted", name, value) for name, value in shares.items()}
         if sum(self.shares.values()) > 1.0 + 1e-9:
             raise ConfigError(f"backend 'planted': the shares egocentric + mirror + random_frame must not exceed 1, got {self.shares}")
-        if isinstance(pixel_sigma, bool) or not isinstance(pixel_sigma, (int, float)) or not pixel_sigma >= 0:
-            raise ConfigError(f"backend 'planted': option 'pixel_sigma' must be a number >= 0 (pixels), got {pixel_sigma!r}")
-        if isinstance(seed, bool) or not isinstance(seed, int):
-            raise ConfigError(f"backend 'planted': option 'seed' must be an integer, got {seed!r}")
-        self.pixel_sigma = float(pixel_sigma)
-        self.seed = seed
+        self.pixel_sigma, self.seed = noise_options("planted", pixel_sigma, seed)
         self._records = HouseRecords("planted", Path(dataset).expanduser() if dataset else None)
 
     def identity(self) -> Mapping[str, Any]:

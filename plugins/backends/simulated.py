@@ -56,10 +56,20 @@ from povagent_plugins.backends.records import HouseRecords
 SIMULATION_LABEL = "simulation"
 
 
-def _rate(name: str, value: Any) -> float:
+def rate_option(backend: str, name: str, value: Any) -> float:
+    """A simulation's option ``name`` that is a probability or a share: a number in [0, 1]."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) <= 1.0:
-        raise ConfigError(f"backend 'simulated': option '{name}' must be a number in [0, 1], got {value!r}")
+        raise ConfigError(f"backend '{backend}': option '{name}' must be a number in [0, 1], got {value!r}")
     return float(value)
+
+
+def noise_options(backend: str, pixel_sigma: Any, seed: Any) -> tuple[float, int]:
+    """A simulation's ``pixel_sigma`` (a number >= 0, in pixels) and ``seed`` (an integer)."""
+    if isinstance(pixel_sigma, bool) or not isinstance(pixel_sigma, (int, float)) or not pixel_sigma >= 0:
+        raise ConfigError(f"backend '{backend}': option 'pixel_sigma' must be a number >= 0 (pixels), got {pixel_sigma!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise ConfigError(f"backend '{backend}': option 'seed' must be an integer, got {seed!r}")
+    return float(pixel_sigma), seed
 
 
 def seeded_generator(*parts: object) -> np.random.Generator:
@@ -99,15 +109,10 @@ class SimulatedPerception(Backend):
         seed: int = 0,
         dataset: str | None = None,
     ) -> None:
-        if isinstance(pixel_sigma, bool) or not isinstance(pixel_sigma, (int, float)) or not pixel_sigma >= 0:
-            raise ConfigError(f"backend 'simulated': option 'pixel_sigma' must be a number >= 0 (pixels), got {pixel_sigma!r}")
-        if isinstance(seed, bool) or not isinstance(seed, int):
-            raise ConfigError(f"backend 'simulated': option 'seed' must be an integer, got {seed!r}")
-        self.pixel_sigma = float(pixel_sigma)
-        self.miss_rate = _rate("miss_rate", miss_rate)
-        self.wrong_furniture_rate = _rate("wrong_furniture_rate", wrong_furniture_rate)
-        self.wrong_surface_rate = _rate("wrong_surface_rate", wrong_surface_rate)
-        self.seed = seed
+        self.pixel_sigma, self.seed = noise_options("simulated", pixel_sigma, seed)
+        self.miss_rate = rate_option("simulated", "miss_rate", miss_rate)
+        self.wrong_furniture_rate = rate_option("simulated", "wrong_furniture_rate", wrong_furniture_rate)
+        self.wrong_surface_rate = rate_option("simulated", "wrong_surface_rate", wrong_surface_rate)
         self.dataset = Path(dataset).expanduser() if dataset else None
         self._records = HouseRecords("simulated", self.dataset)
 

@@ -100,17 +100,6 @@ class TransformersOptions(BaseModel):
         )
 
 
-def _options_error(exc: ValidationError) -> ConfigError:
-    lines = []
-    for e in exc.errors():
-        field = ".".join(str(p) for p in e["loc"]) or "options"
-        msg = e["msg"].removeprefix("Value error, ")
-        if e["type"] == "extra_forbidden":
-            msg = f"unknown option (known: {sorted(TransformersOptions.model_fields)})"
-        lines.append(f"backend 'transformers': option '{field}': {msg}")
-    return ConfigError("; ".join(lines))
-
-
 #: A Hugging Face id: ``name`` or ``owner/name``.
 _HUB_ID = re.compile(r"^[A-Za-z0-9][\w.-]*(/[\w.-]+)?$")
 
@@ -180,7 +169,9 @@ class TransformersBackend(Backend):
         try:
             self.options = TransformersOptions.model_validate(options)
         except ValidationError as exc:
-            raise _options_error(exc) from None
+            from povagent.config.validation_messages import options_message  # the error path only
+
+            raise ConfigError(options_message("backend 'transformers'", exc, TransformersOptions)) from None
         _check_model_location(self.options.model)
         self.profile: ModelProfile | None = profile
         #: whether the checkpoint's own code may run: granted by the call making this backend

@@ -4,22 +4,17 @@ in its raw-QA template and read by its own evaluator's cascade."""
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.mindcube_records import PROFILE, read_mindcube
-from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent.dataset.formats import DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import MINDCUBE as MINDCUBE_SOURCE
 from povagent_plugins.strategies import set_profiles
 
-FILES = ChoiceFiles(key="mindcube", records=lambda file, cache: read_mindcube(file), record_id=lambda item_id: f"record {item_id}")
-READER = ChoiceReader(FILES)
+FILES = ChoiceFiles(key="mindcube", records=lambda file, cache: read_mindcube(file))
 
-MINDCUBE = DatasetFormat(
-    key="mindcube",
+MINDCUBE = choice_set_format(
+    FILES,
     description="MindCube: multiple-choice spatial reasoning from a few views of one scene",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     # the set's own evaluator (its cascade on the reply as written); lmms-eval's port is `mindcube`
     official_parser="mindcube-official",
     # the evaluator's overall leaves the translation setting out

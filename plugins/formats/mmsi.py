@@ -5,28 +5,18 @@ asked in the set's own wording and read by its own rule (lmms-eval's ``mmsi-lmms
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.mmsi_records import PROFILE, read_mmsi
-from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent.dataset.formats import DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import MMSI_BENCH
 from povagent_plugins.strategies import spatial_set_profiles
 
-FILES = ChoiceFiles(
-    key="mmsi",
-    records=read_mmsi,
-    # the reader names a bad row by its position ("row 3"); a bad image found later, by the row's id
-    record_id=lambda item_id: f"record {item_id}",
-    repository_file="MMSI_Bench.parquet",
-)
-READER = ChoiceReader(FILES)
+# the reader names a bad row by its position ("row 3"); a bad image found later, by the row's id
+FILES = ChoiceFiles(key="mmsi", records=read_mmsi, repository_file="MMSI_Bench.parquet")
 
-MMSI = DatasetFormat(
-    key="mmsi",
+MMSI = choice_set_format(
+    FILES,
     description="MMSI-Bench: multiple-choice spatial reasoning over several real-world images per question",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     # the set's own extract_single_choice_with_word_boundary; lmms-eval's reading is mmsi-lmms
     official_parser="mmsi-official",
     official_scorer="choice",

@@ -8,27 +8,17 @@ VLMEvalKit's ``MMSIBench_circular`` reads the copies with its exact-matching rul
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.mmsi_circular_copies import read_mmsi_circular
-from povagent.dataset.formats import DatasetFormat, DocsRow
+from povagent.dataset.formats import DocsRow
 from povagent_plugins.formats.mmsi import MMSI
 from povagent_plugins.parsers.mcq.upstream import MMSI_BENCH
 
-FILES = ChoiceFiles(
-    key="mmsi-circular",
-    records=read_mmsi_circular,
-    record_id=lambda item_id: f"record {item_id}",
-    repository_file="MMSI_Bench.parquet",
-)
-READER = ChoiceReader(FILES)
+FILES = ChoiceFiles(key="mmsi-circular", records=read_mmsi_circular, repository_file="MMSI_Bench.parquet")
 
-MMSI_CIRCULAR = DatasetFormat(
-    key="mmsi-circular",
+MMSI_CIRCULAR = choice_set_format(
+    FILES,
     description="MMSI-Bench's circular split: each question asked four times, its options rotated; right only when all four are",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     official_parser="mmsi-official",
     official_scorer="choice-mmsi-circular",
     prompt_profile=MMSI.prompt_profile,

@@ -5,27 +5,17 @@ own default ``re`` rule (its other readings and lmms-eval's two tasks' are alter
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.omnispatial_records import DATA_FILE, PROFILE, read_omnispatial
-from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent.dataset.formats import DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import OMNISPATIAL
 from povagent_plugins.strategies import spatial_set_profiles
 
-FILES = ChoiceFiles(
-    key="omnispatial",
-    records=lambda file, cache: read_omnispatial(file),
-    record_id=lambda item_id: f"record {item_id}",
-    repository_file=DATA_FILE,
-)
-READER = ChoiceReader(FILES)
+FILES = ChoiceFiles(key="omnispatial", records=lambda file, cache: read_omnispatial(file), repository_file=DATA_FILE)
 
-OMNISPATIAL_FORMAT = DatasetFormat(
-    key="omnispatial",
+OMNISPATIAL_FORMAT = choice_set_format(
+    FILES,
     description="OmniSpatial: multiple-choice spatial reasoning in four task types; Perspective_Taking by sub-task",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     # api_eval.py's default --eval_type re, its none-reads-A fallback included; omnispatial-re-corrected beside it
     official_parser="omnispatial-re",
     official_scorer="choice",

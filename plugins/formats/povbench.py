@@ -7,6 +7,7 @@ any folder no other format claims."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from povagent import hookimpl
@@ -72,19 +73,14 @@ POVBENCH = DatasetFormat(
     detect_order=1000,
 )
 
-GENERATED = DatasetFormat(
+# the release layout, read, checked and scored as the release is: only what it is and how it is found differ
+GENERATED = replace(
+    POVBENCH,
     key="generated",
     description="A generated set: houses povagent generate built, written in the release layout",
-    read=read_release,
-    validate=release_problems,
-    record_id=_pair_entry,
-    answer_type="point",
-    official_parser="official",
-    official_scorer="official",
     source="povagent generate (the paper's five-stage pipeline)",
     licence="yours (the assets' licences apply to the frames)",
     docs_row=DocsRow(name="a generated set", where="`povagent generate`", path="the folder it wrote", how_to="tutorials/first-dataset.md"),
-    option_names=("width", "height"),
     detect=is_generated,
     detect_order=500,
 )

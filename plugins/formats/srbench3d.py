@@ -5,22 +5,17 @@ question's copies."""
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.srbench3d_records import PROFILE, read_srbench3d
-from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent.dataset.formats import DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.strategies import set_profiles
 
-FILES = ChoiceFiles(key="3dsrbench", records=read_srbench3d, record_id=lambda item_id: f"record {item_id}")
-READER = ChoiceReader(FILES)
+FILES = ChoiceFiles(key="3dsrbench", records=read_srbench3d)
 
-SRBENCH3D = DatasetFormat(
-    key="3dsrbench",
+SRBENCH3D = choice_set_format(
+    FILES,
     description="3DSRBench: multiple-choice 3D spatial reasoning, each question asked in circular and flipped copies",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     # VLMEvalKit's exact matching, with which the set's authors score it; lmms-eval's is `3dsrbench-lmms`
     official_parser="vlmevalkit-exact",
     official_scorer="choice-3dsrbench",

@@ -4,9 +4,9 @@ asked in its paper's wording and read by its own ``evaluate.py``."""
 from __future__ import annotations
 
 from povagent import hookimpl
-from povagent.dataset.choice_sets import SET_ANSWER_TYPE, ChoiceFiles, ChoiceReader
+from povagent.dataset.choice_sets import ChoiceFiles, choice_set_format
 from povagent.dataset.choice_sets.viewspatial_records import PROFILE, read_viewspatial
-from povagent.dataset.formats import DatasetFormat, DocsRow, PromptProfile
+from povagent.dataset.formats import DocsRow, PromptProfile
 from povagent_plugins.parsers.mcq.upstream import VIEWSPATIAL_BENCH
 from povagent_plugins.strategies import set_profiles
 
@@ -18,15 +18,10 @@ FILES = ChoiceFiles(
     images_hint="ViewSpatial-Bench's image paths are relative to its repository root: give the repository "
     "folder as dataset.path (the set's file is then its eval/ViewSpatial-Bench.json), or that root as dataset.images",
 )
-READER = ChoiceReader(FILES)
 
-VIEWSPATIAL = DatasetFormat(
-    key="viewspatial",
+VIEWSPATIAL = choice_set_format(
+    FILES,
     description="ViewSpatial-Bench: multiple-choice perspective taking over ScanNet and COCO images",
-    read=READER,
-    validate=READER.problems,
-    record_id=FILES.record_id,
-    answer_type=SET_ANSWER_TYPE,
     # the set's own evaluate.py; lmms-eval's port (viewspatial, after its reasoning strip) is an alternative
     official_parser="viewspatial-official",
     official_scorer="choice",

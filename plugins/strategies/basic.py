@@ -71,6 +71,14 @@ def _positive_or_none(value: Any, option: str, what: str) -> int | None:
     return value
 
 
+def generation_options(max_tokens: int | None, temperature: Any) -> GenerationParams:
+    """What a strategy's ``max_tokens`` (checked by the caller) and ``temperature`` options ask of
+    the model; ``temperature`` is a number >= 0, or ``None`` for the model's own."""
+    if temperature is not None and (not isinstance(temperature, (int, float)) or isinstance(temperature, bool) or temperature < 0):
+        raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+    return GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
+
+
 class BasicStrategy(Strategy):
     """Basic prompt (Inferred/Stated with labelled frames; Given with the labelled observer view).
 
@@ -91,14 +99,7 @@ class BasicStrategy(Strategy):
         max_frames: int | None = _UNSET,
     ) -> None:
         max_tokens = self.default_max_tokens if max_tokens is _UNSET else max_tokens
-        max_tokens = _positive_or_none(max_tokens, "max_tokens", "null sends no limit")
-        if temperature is not None and (
-            not isinstance(temperature, (int, float)) or isinstance(temperature, bool) or temperature < 0
-        ):
-            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
-        self.generation = GenerationParams(
-            max_tokens=max_tokens, temperature=None if temperature is None else float(temperature)
-        )
+        self.generation = generation_options(_positive_or_none(max_tokens, "max_tokens", "null sends no limit"), temperature)
         self.prompts: PromptSet = prompt_set(prompts)
         self._check_prompts()
         self.max_frames = _positive_or_none(

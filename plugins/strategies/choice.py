@@ -22,9 +22,10 @@ from povagent.dataset.formats import PromptProfile, registered_formats
 from povagent.dataset.instances import Instance
 from povagent.errors import PluginError
 from povagent.exchange.images import ImageStore
-from povagent.exchange.messages import GenerationParams, ImagePart, Message, Part, Request, TextPart
+from povagent.exchange.messages import ImagePart, Message, Part, Request, TextPart
 from povagent.interfaces import LoadedPlugins, Strategy
 from povagent.plugins import PluginHost
+from povagent_plugins.strategies.basic import generation_options
 
 #: How a set words a multiple-choice prompt: the text after the images (a dataset format's
 #: :attr:`~povagent.dataset.formats.DatasetFormat.prompt_profile`).
@@ -90,11 +91,9 @@ class ChoiceStrategy(Strategy):
     def __init__(self, max_tokens: int | None = 256, temperature: float | None = None, profile: str | None = None) -> None:
         if max_tokens is not None and (not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1):
             raise ValueError(f"strategy option max_tokens must be a positive integer or null, got {max_tokens!r}")
-        if temperature is not None and (not isinstance(temperature, (int, float)) or isinstance(temperature, bool) or temperature < 0):
-            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+        self.generation = generation_options(max_tokens, temperature)
         if profile is not None and not isinstance(profile, str):
             raise ValueError(f"strategy option profile must be a prompt profile's name, got {profile!r}")
-        self.generation = GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
         self.profile = profile
         # the process's profiles until the plugin host hands over its own (a pipeline's plugins'
         # formats too), which is where an unknown profile is refused
@@ -117,11 +116,15 @@ class ChoiceStrategy(Strategy):
         question = instance.question
         if question is None:
             raise ValueError(f"instance {instance.id} asks no multiple-choice question: use a point strategy")
-        name = self.profile or question.profile
+        return self.named_profile(instance, question.profile), question
+
+    def named_profile(self, instance: Instance, own: str) -> ChoiceProfile:
+        """The profile the strategy's option names, else ``own`` (the question's)."""
+        name = self.profile or own
         profile = self.profiles.get(name)
         if profile is None:
             raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
-        return profile, question
+        return profile
 
     def prompt_text(self, instance: Instance) -> str:
         """The text after the images (an interleaved profile's still holds its image markers)."""

@@ -33,11 +33,7 @@ class ChoiceOrNumberStrategy(ChoiceStrategy):
         question = instance.numeric
         if question is None:
             raise ValueError(f"instance {instance.id} asks neither a multiple-choice nor a numerical question: use a point strategy")
-        name = self.profile or question.profile
-        profile = self.profiles.get(name)
-        if profile is None:
-            raise ValueError(f"instance {instance.id} names prompt profile {name!r}, which no strategy knows")
-        return profile, question
+        return self.named_profile(instance, question.profile), question
 
     def answer_spec(self, instance: Instance) -> AnswerSpec:
         """One of the question's labels, or a number."""

@@ -39,7 +39,7 @@ from povagent import hookimpl
 from povagent.answers.spec import AnswerSpec
 from povagent.dataset.instances import Instance
 from povagent.exchange.images import ImageStore
-from povagent.exchange.messages import GenerationParams, Message, Request, Response, TextPart
+from povagent.exchange.messages import Message, Request, Response, TextPart
 from povagent.exchange.prompts import frame_values, render
 from povagent.geometry.camera import ViewCamera
 from povagent.geometry.directions import DIRECTION_NAMES, DIRECTION_REGISTRY, direction_spec, spec_of
@@ -49,6 +49,7 @@ from povagent.geometry.placement import SURFACE_KINDS, AnchorEstimate, choose_fr
 from povagent.geometry.size_priors import size_prior
 from povagent.geometry.triangulation import MIN_RAY_ANGLE_DEG, Outline, Sighting, fit_box, locate
 from povagent.interfaces import Ask, PlannedTurn, Strategy, earlier_answer
+from povagent_plugins.strategies.basic import generation_options
 from povagent_plugins.strategies.layout import answer_spec, image_parts, shown_images
 
 #: The ``kind`` of each sub-question (``Request.question["kind"]``).
@@ -235,11 +236,9 @@ class GeometricStrategy(Strategy):
     def __init__(self, max_tokens: int = 512, temperature: float | None = None, min_ray_angle_deg: float = MIN_RAY_ANGLE_DEG) -> None:
         if not isinstance(max_tokens, int) or isinstance(max_tokens, bool) or max_tokens < 1:
             raise ValueError(f"strategy option max_tokens must be a positive integer, got {max_tokens!r}")
-        if temperature is not None and (not isinstance(temperature, (int, float)) or temperature < 0):
-            raise ValueError(f"strategy option temperature must be a number >= 0, got {temperature!r}")
+        self.generation = generation_options(max_tokens, temperature)
         if not isinstance(min_ray_angle_deg, (int, float)) or not 0 <= min_ray_angle_deg < 90:
             raise ValueError(f"strategy option min_ray_angle_deg must be a number in [0, 90), got {min_ray_angle_deg!r}")
-        self.generation = GenerationParams(max_tokens=max_tokens, temperature=None if temperature is None else float(temperature))
         self.min_ray_angle_deg = float(min_ray_angle_deg)
 
     # -- requests -----------------------------------------------------------------------------

@@ -89,36 +89,21 @@ def run_cell_tasks(
     client_log = logging.getLogger("distributed.client")
     level = client_log.level
     try:
-        _run_on(cluster, tasks, output=output, on_done=on_done, on_tick=on_tick, notify=notify)
+        with cluster_client(cluster) as client:
+            assert client is not None
+            try:
+                client.wait_for_workers(1, timeout=FIRST_WORKER_TIMEOUT_S)
+            except TimeoutError:
+                raise ClusterError(f"no Dask worker joined the scheduler at {client.scheduler.address} within {FIRST_WORKER_TIMEOUT_S} s") from None
+            link = dashboard_link(client)
+            if link:
+                notify(f"Dask dashboard: {link}")
+            notify(check_storage(client, output, [t.dataset_root for t in tasks]))
+            batch = uuid.uuid4().hex[:8]
+            futures = {client.submit(task.run, key=f"povagent-cell-{batch}-{task.name}", pure=False, retries=CELL_RETRIES): task.name for task in tasks}
+            _collect(client, futures, on_done, on_tick)
     finally:
         client_log.setLevel(level)  # quietened while a lost scheduler's client closed
-
-
-def _run_on(
-    cluster: Any,
-    tasks: Sequence[CellTask],
-    *,
-    output: Path,
-    on_done: Callable[[str, Any, str | None], None],
-    on_tick: Callable[[], None],
-    notify: Callable[[str], None],
-) -> None:
-    with cluster_client(cluster) as client:
-        assert client is not None
-        try:
-            client.wait_for_workers(1, timeout=FIRST_WORKER_TIMEOUT_S)
-        except TimeoutError:
-            raise ClusterError(f"no Dask worker joined the scheduler at {client.scheduler.address} within {FIRST_WORKER_TIMEOUT_S} s") from None
-        link = dashboard_link(client)
-        if link:
-            notify(f"Dask dashboard: {link}")
-        notify(check_storage(client, output, [t.dataset_root for t in tasks]))
-        batch = uuid.uuid4().hex[:8]
-        futures = {
-            client.submit(task.run, key=f"povagent-cell-{batch}-{task.name}", pure=False, retries=CELL_RETRIES): task.name
-            for task in tasks
-        }
-        _collect(client, futures, on_done, on_tick)
 
 
 def _collect(client: Any, futures: dict[Any, str], on_done: Callable[[str, Any, str | None], None], on_tick: Callable[[], None]) -> None:

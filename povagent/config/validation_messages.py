@@ -11,7 +11,7 @@ This module only words messages: it must not read files or validate anything its
 from __future__ import annotations
 
 import re
-from typing import Any, Union, get_args, get_origin
+from typing import Any, Mapping, Union, get_args, get_origin
 
 from pydantic import BaseModel, ValidationError
 
@@ -51,6 +51,20 @@ def _clean_loc(loc: Loc) -> Loc:
 
 
 _QUOTED = re.compile(r"'([^']*)'")
+
+
+def options_message(component: str, exc: ValidationError, model: type[BaseModel], unknown: Mapping[str, str] | None = None) -> str:
+    """A plugin's YAML ``options`` refused by its ``model``, one ``component: option 'key': why``
+    per problem joined by ``; ``; an unknown option lists the known ones (``unknown`` words a
+    key that is unknown for a reason of its own)."""
+    lines = []
+    for err in exc.errors():
+        field = ".".join(str(p) for p in err["loc"]) or "options"
+        msg = err["msg"].removeprefix("Value error, ")
+        if err["type"] == "extra_forbidden":
+            msg = (unknown or {}).get(str(err["loc"][0]) if err["loc"] else "", f"unknown option (known: {sorted(model.model_fields)})")
+        lines.append(f"{component}: option '{field}': {msg}")
+    return "; ".join(lines)
 
 
 def validation_message(exc: ValidationError, model: type[BaseModel], source: ConfigSource, prefix: Loc = ()) -> str:

@@ -101,6 +101,14 @@ def _e(text: str) -> str:
     return html.escape(text, quote=True)
 
 
+def _svg_open(width: float, height: float, title: str) -> str:
+    """A plot's opening ``<svg>`` tag, labelled with its title for screen readers."""
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
+        f'aria-label="{_e(title)}">'
+    )
+
+
 def _nice_max(v: float) -> float:
     if v <= 0:
         return 1.0
@@ -210,10 +218,7 @@ def grouped_bars(
     def y(v: float) -> float:
         return top + plot_h * (1 - v / y_max)
 
-    out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
-        f'aria-label="{_e(title)}">'
-    ]
+    out = [_svg_open(width, height, title)]
     out.append(_hatch_defs(styles, uid))
     out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
     out += legend
@@ -271,10 +276,7 @@ def scatter(
     def py(v: float) -> float:
         return pad_t + plot * (1 - min(1.0, max(0.0, v)))
 
-    out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {size} {height}" width="{size}" height="{height}" {FONT} role="img" '
-        f'aria-label="{_e(title)}">'
-    ]
+    out = [_svg_open(size, height, title)]
     out.append(_fitted_text(title, 8, 18, size - 12, 13))
     out += legend
     out.append(f'<rect x="{pad_l}" y="{pad_t}" width="{plot}" height="{plot}" fill="none" stroke="#999"/>')
@@ -332,10 +334,7 @@ def histogram(
     def y(v: float) -> float:
         return top + plot_h * (1 - v / y_max)
 
-    out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
-        f'aria-label="{_e(title)}">'
-    ]
+    out = [_svg_open(width, height, title)]
     out.append(f'<text x="{left}" y="18" font-size="14" font-weight="600">{_e(title)}</text>')
     out += legend
     for k in range(6):
@@ -418,10 +417,7 @@ def stacked_bars(title: str, bars: Sequence[StackedBar], parts: Sequence[str], c
         y += bar_h + gap
     y = max(y, group_end)
     height = y + 30
-    out = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" class="plot" viewBox="0 0 {width} {height}" width="{width}" height="{height}" {FONT} role="img" '
-        f'aria-label="{_e(title)}">'
-    ]
+    out = [_svg_open(width, height, title)]
     out.append(_fitted_text(title, 8, 18, width - 12, 13))
     out += legend
     for k in range(0, 101, 25):

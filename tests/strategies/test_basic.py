@@ -10,6 +10,8 @@ from povagent.dataset.release_models import Condition
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import ImagePart, Response, TextPart
 from povagent_plugins.strategies.basic import BasicStrategy
+from povagent_plugins.strategies.choice import ChoiceStrategy
+from povagent_plugins.strategies.geometric import GeometricStrategy
 
 
 def test_each_frame_is_preceded_by_its_image_label(make_instance, facing_z):
@@ -95,6 +97,13 @@ def test_generation_options_are_configurable(make_instance, facing_z):
 def test_bad_generation_options_are_rejected_with_the_option_named(options):
     with pytest.raises(ValueError, match=next(iter(options))):
         BasicStrategy(**options)
+
+
+@pytest.mark.parametrize("strategy", [BasicStrategy, ChoiceStrategy, GeometricStrategy])
+@pytest.mark.parametrize("temperature", [-1, True, "warm"])
+def test_every_strategy_refuses_a_temperature_that_is_not_a_number_at_least_0(strategy, temperature):
+    with pytest.raises(ValueError, match="strategy option temperature must be a number >= 0"):
+        strategy(temperature=temperature)
 
 
 def test_the_built_in_strategy_is_single_turn(make_instance, facing_z):

@@ -29,7 +29,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL, MINDCUBE
@@ -111,9 +110,7 @@ class MindCubeParser(RuleParser):
     #: lmms-eval's overall counts every question (MindCube's own leaves translation out)
     harness_sets = (("mindcube", "choice"),)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return mindcube_label(text)
+    rule = staticmethod(mindcube_label)
 
 
 class MindCubeOfficialParser(RuleParser):
@@ -124,9 +121,7 @@ class MindCubeOfficialParser(RuleParser):
     source = MINDCUBE
     harness = "MindCube"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return mindcube_cascade(text)
+    rule = staticmethod(mindcube_cascade)
 
 
 @hookimpl

@@ -30,7 +30,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL, MMSI_BENCH
@@ -74,9 +73,7 @@ class MMSIOfficialParser(RuleParser):
     source = MMSI_BENCH
     harness = "MMSI-Bench"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return mmsi_official_label(text)
+    rule = staticmethod(mmsi_official_label)
 
 
 class MMSILmmsParser(RuleParser):
@@ -91,9 +88,7 @@ class MMSILmmsParser(RuleParser):
     #: lmms-eval's mmsi_bench task: a hit is the label equal to the gold answer (msr_process_results)
     harness_sets = (("mmsi", "choice"),)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return mmsi_lmms_label(text)
+    rule = staticmethod(mmsi_lmms_label)
 
 
 @hookimpl

@@ -117,9 +117,7 @@ class OmniSpatialReParser(_FallbackParser):
     source = OMNISPATIAL
     harness = "OmniSpatial"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return omnispatial_re_label(text)
+    rule = staticmethod(omnispatial_re_label)
 
 
 class OmniSpatialReCorrectedParser(OmniSpatialReParser):
@@ -140,9 +138,7 @@ class OmniSpatialJsonParser(RuleParser):
     reads = "OmniSpatial's json rule: the JSON reply's answer field, first character upper-cased; A on any failure"
     beside_official = "reads choice answers, which the official (point) parser does not read; OmniSpatial's --eval_type json"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return omnispatial_json_label(text)
+    rule = staticmethod(omnispatial_json_label)
 
 
 class OmniSpatialDirectParser(RuleParser):
@@ -151,9 +147,7 @@ class OmniSpatialDirectParser(RuleParser):
     reads = "OmniSpatial's direct rule: the stripped reply's first character, upper-cased"
     beside_official = "reads choice answers, which the official (point) parser does not read; OmniSpatial's --eval_type direct"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return omnispatial_direct_label(text)
+    rule = staticmethod(omnispatial_direct_label)
 
 
 class OmniSpatialLmmsDirectParser(RuleParser):
@@ -166,9 +160,7 @@ class OmniSpatialLmmsDirectParser(RuleParser):
     harness_filter = "lmms-eval's reasoning-tag strip"
     harness_sets = (("omnispatial", "choice"),)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return omnispatial_lmms_direct_label(text)
+    rule = staticmethod(omnispatial_lmms_direct_label)
 
 
 class OmniSpatialLmmsReParser(_FallbackParser):

@@ -15,7 +15,7 @@ from povagent.interfaces import Parser
 
 
 class RuleParser(Parser):
-    """A parser applying one upstream rule; subclasses implement :meth:`label`."""
+    """A parser applying one upstream rule; subclasses name it as :attr:`rule` or implement :meth:`label`."""
 
     answer_types = frozenset({"choice"})
     reads = ""
@@ -34,10 +34,15 @@ class RuleParser(Parser):
     #: The filter the rule applies to the reply itself before reading it, as its harness does
     #: (lmms-eval's reasoning-tag strip); ``""``: it reads the reply as written.
     harness_filter: ClassVar[str] = ""
+    #: The rule, where it reads the reply alone (``staticmethod(rule)``): the label it gives, or ``None``.
+    rule: ClassVar[staticmethod[[str], str | None] | None] = None
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The label the rule reads in ``text``, or ``None`` where it reads none."""
-        raise NotImplementedError
+        rule = type(self).rule
+        if rule is None:
+            raise NotImplementedError
+        return rule(text)
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """The rule's label as a typed parse; never raises."""

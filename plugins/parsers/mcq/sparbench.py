@@ -57,9 +57,7 @@ class SparBenchLmmsParser(RuleParser):
             return unparseable(EMPTY_REPLY)
         return super().parse(text, spec)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's letter."""
-        return sparbench_label(text)
+    rule = staticmethod(sparbench_label)
 
 
 class SparBenchLmmsCorrectedParser(RuleParser):
@@ -68,9 +66,7 @@ class SparBenchLmmsCorrectedParser(RuleParser):
     reads = "a letter that is the whole reply or opens it standing alone (SPAR-Bench exact_match, corrected)"
     beside_official = "reads choice answers, which the official (point) parser does not read; corrected reading of sparbench-lmms"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The corrected letter."""
-        return sparbench_corrected_label(text)
+    rule = staticmethod(sparbench_corrected_label)
 
 
 @hookimpl

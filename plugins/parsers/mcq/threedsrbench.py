@@ -14,7 +14,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL
@@ -55,9 +54,7 @@ class ThreeDSRBenchLmmsParser(RuleParser):
     harness_filter = "lmms-eval's reasoning-tag strip"
     harness_sets = (("3dsrbench", "choice-3dsrbench"),)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return threedsrbench_lmms_label(text)
+    rule = staticmethod(threedsrbench_lmms_label)
 
 
 @hookimpl

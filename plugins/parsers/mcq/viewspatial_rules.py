@@ -19,7 +19,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.lmms_reasoning import strip_reasoning_blocks
 from povagent_plugins.parsers.mcq.rule import RuleParser
 from povagent_plugins.parsers.mcq.upstream import LMMS_EVAL, VIEWSPATIAL_BENCH
@@ -45,9 +44,7 @@ class ViewSpatialParser(RuleParser):
     harness_filter = "lmms-eval's reasoning-tag strip"
     harness_sets = (("viewspatial", "choice"),)
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return viewspatial_label(text)
+    rule = staticmethod(viewspatial_label)
 
 
 def viewspatial_official_label(text: str) -> str | None:
@@ -67,9 +64,7 @@ class ViewSpatialOfficialParser(RuleParser):
     source = VIEWSPATIAL_BENCH
     harness = "ViewSpatial-Bench"
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's label."""
-        return viewspatial_official_label(text)
+    rule = staticmethod(viewspatial_official_label)
 
 
 @hookimpl

@@ -29,7 +29,6 @@ from __future__ import annotations
 import re
 
 from povagent import hookimpl
-from povagent.answers.spec import AnswerSpec
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.parsers.mcq.vlmevalkit_load import VlmevalkitRuleParser
 
@@ -109,8 +108,9 @@ def _from_last_lines(lines: list[str]) -> str | None:
     return None
 
 
-def _after_reasoning(text: str) -> str:
-    """What follows the last ``</think>``, else the last ``<think>``, else all of ``text``."""
+def after_reasoning(text: str) -> str:
+    """What follows the last ``</think>``, else the last ``<think>``, stripped; else all of ``text``
+    (where VLMEvalKit's spatial-bench and VsiBench readings look past the reasoning)."""
     for tag in (_THINK_END, _THINK_START):
         ends = [found.end() for found in tag.finditer(text)]
         if ends:
@@ -127,7 +127,7 @@ def spatial_bench_label(reply: str) -> str | None:
     for closing in (_BEFORE_ANSWER_END, _BEFORE_THINK_END):
         if anchored := closing.search(tail):
             return anchored.group(1).upper()
-    for lines in (_after_reasoning(text).splitlines(), tail.splitlines()):
+    for lines in (after_reasoning(text).splitlines(), tail.splitlines()):
         if picked := _from_last_lines(lines[-TAIL_LINES:]):
             return picked
     if concluded := _CONCLUSION.search(text):
@@ -153,9 +153,7 @@ class VlmevalkitSpatialParser(VlmevalkitRuleParser):
         ("omnispatial", "choice-vlmevalkit"),
     )
 
-    def label(self, text: str, spec: AnswerSpec) -> str | None:
-        """The rule's letter."""
-        return spatial_bench_label(text)
+    rule = staticmethod(spatial_bench_label)
 
 
 @hookimpl

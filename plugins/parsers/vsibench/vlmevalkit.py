@@ -40,7 +40,7 @@ from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus, unparse
 from povagent.interfaces import Parser
 from povagent_plugins.parsers.mcq.upstream import VLMEVALKIT
 from povagent_plugins.parsers.mcq.vlmevalkit_load import LOAD_FILTER, as_vlmevalkit_loads
-from povagent_plugins.parsers.mcq.vlmevalkit_spatial import spatial_bench_label
+from povagent_plugins.parsers.mcq.vlmevalkit_spatial import after_reasoning, spatial_bench_label
 from povagent_plugins.parsers.vsibench.first_word import NEITHER, number_parse
 
 #: The number words ``normalize_number_words`` turns into digits (``num2words(0)`` .. ``(20)``).
@@ -81,8 +81,6 @@ _DIGIT = re.compile(r"\d")  # upstream's \d (Unicode category Nd; not str.isdigi
 _ANSWER_OPEN = re.compile(r"<\s*+answer\b", re.IGNORECASE)
 _NUMBER_AFTER_TAG = re.compile(rf"\s*+({NUMBER})")
 _ANSWER_CLOSE = re.compile(r"<\s*+/\s*+answer\s*+>", re.IGNORECASE)
-_THINK_END = re.compile(r"</\s*+think\s*+>", re.IGNORECASE)
-_THINK_START = re.compile(r"<\s*+think\s*+>", re.IGNORECASE)
 
 
 def _words_as_digits(text: str) -> str:
@@ -124,15 +122,6 @@ def _last_number(text: str) -> float | None:
     return float(last.group(0)) if last is not None else None
 
 
-def _after_reasoning(text: str) -> str:
-    """What follows the last ``</think>``, else the last ``<think>``, stripped; else ``text``."""
-    for tag in (_THINK_END, _THINK_START):
-        ends = [found.end() for found in tag.finditer(text)]
-        if ends:
-            return text[ends[-1] :].strip()
-    return text
-
-
 def _first_listed(reply: str) -> str | None:
     """The text step 1 reads on: the first item of a list literal as ``str()`` writes it, the
     reply itself where it is no list or an empty one; ``None`` where upstream's literal read
@@ -158,7 +147,7 @@ def vlmevalkit_number(reply: str) -> float | None:
         tagged = _answer_block_number(text)
         if tagged is not None:
             return tagged
-        after = _last_number(_after_reasoning(text))
+        after = _last_number(after_reasoning(text))
         return after if after is not None else _last_number(text)
     except (ValueError, OverflowError):  # upstream's except: float() of a number too long to convert
         return None

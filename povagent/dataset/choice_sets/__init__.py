@@ -17,16 +17,21 @@ import tempfile
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from povagent.dataset.choice_sets.external import ChoiceSet, ImageLookups, Item, choice_instance, item_frames
-from povagent.dataset.formats import FormatRead, registered_formats
+from povagent.dataset.formats import DatasetFormat, FormatRead, registered_formats
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 
 #: The answer type every item of these sets asks for (its strategy and scorers are a pipeline's
 #: defaults on such a set: :func:`povagent.config.plugin_checks.resolve_components`).
 SET_ANSWER_TYPE = "choice"
+
+
+def record_by_id(item_id: str) -> str:
+    """How most sets' problems name a record: ``record 12`` (the set's own id, or its row)."""
+    return f"record {item_id}"
 
 
 @dataclass(frozen=True)
@@ -40,7 +45,7 @@ class ChoiceFiles:
     #: images may be written); never opens an image.
     records: Callable[[Path, Path], tuple[list[Item], list[Problem]]]
     #: How a problem names a record by its id (``"$[3]"``, ``"record 3"``).
-    record_id: Callable[[str], str]
+    record_id: Callable[[str], str] = record_by_id
     #: Where the set's file sits in its repository, when ``dataset.path`` may name the repository
     #: folder instead (ViewSpatial-Bench's image paths are relative to the repository root,
     #: ``ViewSpatial-Bench/scannetv2_val/...`` beside ``eval/ViewSpatial-Bench.json``).
@@ -66,6 +71,14 @@ class ChoiceReader:
     def problems(self, request: FormatRead) -> list[Problem]:
         """Every problem of the set ``request`` names (:func:`check_choice_set`)."""
         return check_choice_set(request.path, self.files, request.images)
+
+
+def choice_set_format(files: ChoiceFiles, **fields: Any) -> DatasetFormat:
+    """The dataset format of the multiple-choice set ``files`` reads: its reader, its problems,
+    how they name a record and its answer type are every choice set's; ``fields`` are the rest
+    of :class:`~povagent.dataset.formats.DatasetFormat` (description, official rule, profile, ...)."""
+    reader = ChoiceReader(files)
+    return DatasetFormat(key=files.key, read=reader, validate=reader.problems, record_id=files.record_id, answer_type=SET_ANSWER_TYPE, **fields)
 
 
 def load_choice_set(file: str | Path, format: str, *, images: str | Path | None = None, cache_dir: str | Path | None = None) -> ChoiceSet:
@@ -169,7 +182,9 @@ __all__ = [
     "ChoiceReader",
     "ChoiceSet",
     "check_choice_set",
+    "choice_set_format",
     "load_choice_set",
     "read_choice_set",
+    "record_by_id",
     "validate_choice_set",
 ]

@@ -16,6 +16,7 @@ profiles do).
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -226,6 +227,24 @@ def record_lines(path: Path, what: str, problems: list[Problem]) -> Iterable[tup
                 yield number, text.rstrip("\r\n")
 
 
+#: How an embedded image's first bytes tell its kind (the cached file's extension).
+_IMAGE_SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
+
+
+def cached_image(data: bytes, cache: Path, not_an_image: str) -> str:
+    """Write an embedded image's ``data`` into ``cache`` and give its file name (the file is then
+    checked like any image); :class:`ValueError` ``not_an_image`` when it is neither a PNG nor a JPEG."""
+    kind = next((ext for sig, ext in _IMAGE_SIGNATURES.items() if data.startswith(sig)), None)
+    if kind is None:
+        raise ValueError(not_an_image)
+    cache.mkdir(parents=True, exist_ok=True)
+    # named by content, never by text from the file (an id, a qid): the same image is one file
+    name = f"{hashlib.sha256(data).hexdigest()[:32]}.{kind}"
+    if not (cache / name).is_file():
+        (cache / name).write_bytes(data)
+    return name
+
+
 def record_id_problem(value: object) -> str | None:
     """Why ``value`` cannot be a record id (an instance id is ``<set>/<record id>``), or ``None``."""
     if not isinstance(value, str) or not value:
@@ -277,10 +296,12 @@ def jsonl_records(file: Path, what: str, problems: list[Problem]) -> Iterator[tu
         yield where, record
 
 
-def sound_items(file: Path, records: Iterable[tuple[str, Any]], make: Callable[[Any, str], Any], problems: list[Problem]) -> list[Any]:
+def sound_items(
+    file: Path, records: Iterable[tuple[str, Any]], make: Callable[[Any, str], Any], problems: list[Problem], reused: str = "is used by an earlier record"
+) -> list[Any]:
     """The items ``make(record, where)`` builds from ``records``, in order; a record holding text
     no output can hold, one ``make`` refuses (it returns ``(where, message)``) or one whose id an
-    earlier item took is a problem and left out."""
+    earlier item took (its problem: the id, then ``reused``) is a problem and left out."""
     items: list[Any] = []
     seen: set[str] = set()
     for where, record in records:
@@ -292,7 +313,7 @@ def sound_items(file: Path, records: Iterable[tuple[str, Any]], make: Callable[[
         if isinstance(item, tuple):
             problems.append(Problem(str(file), *item))
         elif item.id in seen:
-            problems.append(Problem(str(file), f"{where}.id", f"{item.id!r} is used by an earlier record; this one left out"))
+            problems.append(Problem(str(file), f"{where}.id", f"{shown(item.id)} {reused}; this one left out"))
         else:
             seen.add(item.id)
             items.append(item)

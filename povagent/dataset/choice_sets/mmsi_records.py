@@ -23,15 +23,13 @@ file (see :mod:`.external`).
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 from pathlib import Path
 from typing import Any, Iterator
 
 from povagent.answers.choice_question import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, record_id_problem
-from povagent.dataset.paths import shown
+from povagent.dataset.choice_sets.external import Item, cached_image, record_id_problem, sound_items
 from povagent.dataset.problems import Problem
 from povagent.errors import DatasetError
 from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES
@@ -55,7 +53,6 @@ BATCH_ROWS = 8
 BUFFER_BYTES = 1 << 20
 MISSING_PYARROW = "reading MMSI_Bench.parquet needs pyarrow: pip install pyarrow"
 
-_SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
 _OPTIONS_MARK = "Options:"
 #: An option's label in the options text: a capital letter and a colon, first or after a comma.
 _OPTION_LABEL = re.compile(r"(?:^|,)\s*([A-Z])\s*:\s*")
@@ -83,20 +80,9 @@ def read_mmsi(file: Path, cache: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound row of the Parquet file as an item (its images written into ``cache``), and
     one problem per bad row. :class:`~povagent.errors.DatasetError` when the file is not a
     Parquet file of the set's columns."""
-    name = str(file)
-    items: list[Item] = []
     problems: list[Problem] = []
-    seen: set[str] = set()
-    for number, row in _rows(file, problems):
-        item = _item(row, f"row {number}", cache)
-        if isinstance(item, tuple):
-            problems.append(Problem(name, *item))
-        elif item.id in seen:
-            problems.append(Problem(name, f"row {number}.id", f"{shown(item.id)} is used by an earlier row; this one left out"))
-        else:
-            seen.add(item.id)
-            items.append(item)
-    return items, problems
+    rows = ((f"row {number}", row) for number, row in _rows(file, problems))
+    return sound_items(file, rows, lambda row, where: _item(row, where, cache), problems, reused="is used by an earlier row"), problems
 
 
 def _rows(file: Path, problems: list[Problem]) -> Iterator[tuple[int, dict[str, Any]]]:
@@ -188,12 +174,4 @@ def _embedded_image(image: Any, cache: Path) -> str:
         raise ValueError(f"must be an encoded image's bytes (got {type(data).__name__})")
     if len(data) > MAX_IMAGE_FILE_BYTES:
         raise ValueError(f"{len(data)} bytes, over the {MAX_IMAGE_FILE_BYTES} an image may have")
-    kind = next((ext for sig, ext in _SIGNATURES.items() if data.startswith(sig)), None)
-    if kind is None:
-        raise ValueError("neither a PNG nor a JPEG")
-    cache.mkdir(parents=True, exist_ok=True)
-    # named by content, never by text from the file: the same image is one file
-    name = f"{hashlib.sha256(data).hexdigest()[:32]}.{kind}"
-    if not (cache / name).is_file():
-        (cache / name).write_bytes(data)
-    return name
+    return cached_image(data, cache, "neither a PNG nor a JPEG")

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice_question import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, json_list, record_id_problem, text_problems
+from povagent.dataset.choice_sets.external import Item, json_list, record_id_problem, sound_items
 from povagent.dataset.paths import shown
 from povagent.dataset.problems import Problem
 
@@ -51,28 +51,11 @@ def image_path(record_id: str, task_type: str) -> str:
 
 def read_omnispatial(file: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound record of ``data.json`` as an item, and one problem per bad record."""
-    name = str(file)
     data, unread = json_list(file, "OmniSpatial data.json")
     if data is None:
         return [], unread
-    items: list[Item] = []
-    problems: list[Problem] = []
-    seen: set[str] = set()
-    for index, record in enumerate(data):
-        where = f"$[{index}]"
-        not_text = text_problems(name, where, record)
-        if not_text:  # the rule the release reader holds: a lone surrogate is not text
-            problems.extend(not_text)
-            continue
-        item = _item(record, where)
-        if isinstance(item, tuple):
-            problems.append(Problem(name, *item))
-        elif item.id in seen:
-            problems.append(Problem(name, f"{where}.id", f"{shown(item.id)} (task type and id) is used by an earlier record; this one left out"))
-        else:
-            seen.add(item.id)
-            items.append(item)
-    return items, problems
+    records = ((f"$[{index}]", record) for index, record in enumerate(data))
+    return sound_items(file, records, _item, unread, reused="(task type and id) is used by an earlier record"), unread
 
 
 def _item(record: Any, where: str) -> Item | tuple[str, str]:

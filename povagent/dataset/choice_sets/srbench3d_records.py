@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import base64
 import binascii
-import hashlib
 import re
 from pathlib import Path
 
 from povagent.answers.choice_question import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, record_id_problem, record_lines
+from povagent.dataset.choice_sets.external import Item, cached_image, record_id_problem, record_lines
 from povagent.dataset.problems import Problem
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
@@ -55,7 +54,6 @@ _TYPE_OF = {sub: kind for kind, subs in TYPES.items() for sub in subs}
 _QID = re.compile(r"(?P<base>.+?)(?:-(?P<variant>flip(?:-\d+)?|\d+))?")
 #: An image cell ending so is a path; any other is a record's index or the image in base64.
 _IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
-_SIGNATURES = {b"\x89PNG\r\n\x1a\n": "png", b"\xff\xd8\xff": "jpg"}
 #: The most characters a cell may hold: 32 MiB, base64 of a 24 MiB image (the line's own
 #: bound, :data:`~.external.MAX_RECORD_LINE_BYTES`, is twice that).
 MAX_CELL_CHARS = 32 << 20
@@ -235,12 +233,4 @@ def _embedded_image(text: str, cache: Path) -> str:
         data = base64.b64decode("".join(text.split()), validate=True)
     except binascii.Error as exc:
         raise ValueError(f"the image is not valid base64 ({exc})") from None
-    kind = next((ext for sig, ext in _SIGNATURES.items() if data.startswith(sig)), None)
-    if kind is None:
-        raise ValueError("the decoded image is neither PNG nor JPEG")
-    cache.mkdir(parents=True, exist_ok=True)
-    # named by content, never by the qid (text from the file): the same image is one file
-    name = f"{hashlib.sha256(data).hexdigest()[:32]}.{kind}"
-    if not (cache / name).is_file():
-        (cache / name).write_bytes(data)
-    return name
+    return cached_image(data, cache, "the decoded image is neither PNG nor JPEG")

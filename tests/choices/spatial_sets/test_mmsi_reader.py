@@ -94,7 +94,8 @@ def test_a_repeated_id_is_a_problem_and_the_first_row_is_kept(tmp_path):
     rows = mmsi_rows()[:3]
     rows[2]["id"] = 0
     loaded = _load(write_mmsi_parquet(tmp_path / "MMSI_Bench.parquet", rows), tmp_path)
-    assert [p.json_path for p in loaded.problems] == ["row 3.id"] and [i.pair_id for i in loaded.instances()] == ["0", "1"]
+    assert [(p.json_path, p.message) for p in loaded.problems] == [("row 3.id", "'0' is used by an earlier row; this one left out")]
+    assert [i.pair_id for i in loaded.instances()] == ["0", "1"]
 
 
 def test_a_file_that_is_not_parquet_is_one_line(tmp_path):

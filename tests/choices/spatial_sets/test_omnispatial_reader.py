@@ -76,7 +76,8 @@ def test_a_repeated_task_and_id_is_a_problem_and_the_first_record_is_kept(tmp_pa
     records = omnispatial_records()[:3]
     records[2] = {**records[2], "id": "0_0"}
     loaded = load_choice_set(write_omnispatial(tmp_path / "set", records), "omnispatial")
-    assert [p.json_path for p in loaded.problems] == ["$[2].id"] and len(loaded.instances()) == 2
+    message = "'Perspective_Taking_0_0' (task type and id) is used by an earlier record; this one left out"
+    assert [(p.json_path, p.message) for p in loaded.problems] == [("$[2].id", message)] and len(loaded.instances()) == 2
 
 
 @pytest.mark.parametrize(("text", "message"), [
