@@ -20,10 +20,12 @@ from povagent.report.build import write_report
 WINDOW = (800, 600)
 #: The report's script ran to its end: it sets ``data-render-ms`` on the body last.
 SCRIPT_RAN = "() => document.body.hasAttribute('data-render-ms')"
-#: An opened card has settled: its raw answer is no longer loading and its images are complete.
+#: An opened card has settled: its raw answer is no longer loading (or the page said its answers
+#: file could not be read) and its images are complete.
 VIEWER_SETTLED = (
-    "() => document.body.hasAttribute('data-render-ms') && !document.querySelector('#viewer-panel pre.loading')"
-    " && Array.prototype.every.call(document.querySelectorAll('#viewer-panel img'), function (i) { return i.complete; })"
+    "() => { var b = document.body; return b.hasAttribute('data-render-ms')"
+    " && (!document.querySelector('#viewer-panel pre.loading') || b.hasAttribute('data-data-error') || b.hasAttribute('data-answers-failed'))"
+    " && Array.prototype.every.call(document.querySelectorAll('#viewer-panel img'), function (i) { return i.complete; }); }"
 )
 #: The opened card's frame has loaded (what a screenshot of it needs).
 VIEWER_IMAGE_LOADED = "() => document.body.getAttribute('data-viewer-image') === 'loaded'"
