@@ -46,18 +46,35 @@ CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 BROWSER_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
 
 
-@pytest.fixture(scope="module")
-def browser():
-    """One headless chromium for a module's tests (the annotation page's, the report gallery's)."""
-    sync_api = pytest.importorskip("playwright.sync_api", reason="the test extra installs playwright")
+@pytest.fixture(scope="session")
+def session_chromium():
+    """The session's one headless chromium, in a thread of its own (tests/session_browser.py says
+    why): launched when a test first needs it, closed when the session ends."""
+    pytest.importorskip("playwright.sync_api", reason="the test extra installs playwright")
     if not Path(CHROMIUM).exists():
         pytest.fail(f"chromium not found at {CHROMIUM}: the README's test command installs it")
-    with sync_api.sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS)
-        try:
-            yield b
-        finally:
-            b.close()
+    from session_browser import BrowserThread
+
+    chromium = BrowserThread(lambda p: p.chromium.launch(executable_path=CHROMIUM, headless=True, args=BROWSER_ARGS))
+    try:
+        yield chromium
+    finally:
+        chromium.close()
+
+
+@pytest.fixture(scope="module")
+def browser(session_chromium):
+    """The session's chromium, for a module's tests (the annotation page's, the report gallery's):
+    ``browser.new_page(...)`` and ``browser.new_context(...)`` open a context of their own. The
+    contexts a module leaves open are closed when it ends, so no state reaches the next module."""
+    from session_browser import OnBrowserThread
+
+    raw = session_chromium.browser
+    before = set(session_chromium.call(lambda: raw.contexts))
+    try:
+        yield OnBrowserThread(raw, session_chromium)
+    finally:
+        session_chromium.call(lambda: [c.close() for c in raw.contexts if c not in before])
 
 
 @pytest.fixture(scope="session")

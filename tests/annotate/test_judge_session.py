@@ -3,7 +3,6 @@ killed midway resumed, two judges' overlap, and the report's manual tables."""
 
 from __future__ import annotations
 
-import concurrent.futures
 from pathlib import Path
 
 import pytest
@@ -30,9 +29,7 @@ def realworld_run(tmp_path_factory):
         "strategy": "basic", "parser": "json", "scorers": ["success"],
         "output": str(base / "runs" / "model-a"),
     }))  # fmt: skip
-    # in a thread of its own: the browser's driver holds this thread's event loop
-    with concurrent.futures.ThreadPoolExecutor(1) as pool:
-        pool.submit(run_pipeline, load_pipeline(base / "pipeline.yaml")).result(timeout=300)
+    run_pipeline(load_pipeline(base / "pipeline.yaml"))
     return base
 
 

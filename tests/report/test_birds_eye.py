@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import yaml
 from PIL import Image
-from test_report_html import browse, dump, gallery_data
+from test_report_html import VIEWER_SETTLED, dump, gallery_data, rendered  # the Chromium helpers
 
 from povagent.config.pipeline import load_pipeline
 from povagent.dataset.loader import load_dataset
@@ -92,20 +92,20 @@ def simulated_report(generated_release, tmp_path_factory):
     return write_report(tmp / "run", tmp / "report", n_boot=0)
 
 
-def test_an_opened_card_shows_its_scene_from_above_in_chromium(simulated_report, tmp_path):
+def test_an_opened_card_shows_its_scene_from_above_in_chromium(simulated_report, browser):
     entries = gallery_data(simulated_report)["entries"]
     assert all(re.fullmatch(r"[0-9a-f]{64}", e["be"]) for e in entries)
-    dom = dump(simulated_report.page, tmp_path, "open=0")
+    dom = dump(browser, simulated_report.page, "open=0", until=VIEWER_SETTLED)
     src = re.search(r'<img class="birds-eye" alt="the scene from above" src="(images/[0-9a-f]{64}\.svg)">', dom)
     assert src and (simulated_report.out / src.group(1)).exists()
 
 
-def test_chromium_renders_the_svg_with_the_target_and_the_ray(simulated_report, tmp_path, generated_release):
+def test_chromium_renders_the_svg_with_the_target_and_the_ray(simulated_report, tmp_path, generated_release, browser):
     entry = gallery_data(simulated_report)["entries"][0]
     svg = simulated_report.out / "images" / f"{entry['be']}.svg"
     shot = tmp_path / "birds_eye.png"
-    done = browse(svg, tmp_path, f"--screenshot={shot}", f"--window-size={VIEW_PX},{VIEW_PX + 56}")
-    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    rendered(browser, svg.as_uri(), shot=shot, window=(VIEW_PX, VIEW_PX + 56), until=None)  # a drawing: no script to wait for
+    assert shot.exists()
     px = np.asarray(Image.open(shot).convert("RGB"), dtype=int)[:VIEW_PX]  # the scene, not the legend
     r, g, b = px[..., 0], px[..., 1], px[..., 2]
     green = np.argwhere((g > 170) & (r < 60) & (b < 130))

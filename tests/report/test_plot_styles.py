@@ -8,7 +8,7 @@ import itertools
 import json
 import re
 
-from test_report_html import browse  # the Chromium helpers
+from test_report_html import rendered  # the Chromium helpers
 
 from povagent.report.plots import DISTINCT_MODEL_STYLES, PALETTE, grouped_bars, histogram, series_styles
 from povagent.report.statistics import Estimate
@@ -46,7 +46,7 @@ def test_each_plot_draws_every_pair_in_its_legend():
         assert len(entries) == 12 and len({(m, c) for _, m, c in entries}) == 12
 
 
-def test_the_legend_of_twelve_long_names_is_readable_in_chromium(tmp_path):
+def test_the_legend_of_twelve_long_names_is_readable_in_chromium(tmp_path, browser):
     """Entries do not overlap, stay inside the plot's width, and sit above the plotted area;
     the plot keeps its height for the data (the legend's rows add height)."""
     one = grouped_bars("t", ["Inferred", "Stated", "Given"], SERIES[:2])
@@ -65,13 +65,10 @@ def test_the_legend_of_twelve_long_names_is_readable_in_chromium(tmp_path):
         "});</script></body></html>",
         encoding="utf-8",
     )
-    done = browse(page, tmp_path, "--dump-dom")
-    assert done.returncode == 0, done.stderr[-2000:]
-
-
-    boxes = json.loads(re.search(r'data-boxes="([^"]+)"', done.stdout).group(1).replace("&quot;", '"'))
-    grid_top = float(re.search(r'data-grid-top="([^"]+)"', done.stdout).group(1))
-    width = float(re.search(r'data-svg-width="([^"]+)"', done.stdout).group(1))
+    dom = rendered(browser, page.as_uri(), until="() => document.body.hasAttribute('data-svg-width')")
+    boxes = json.loads(re.search(r'data-boxes="([^"]+)"', dom).group(1).replace("&quot;", '"'))
+    grid_top = float(re.search(r'data-grid-top="([^"]+)"', dom).group(1))
+    width = float(re.search(r'data-svg-width="([^"]+)"', dom).group(1))
     assert len(boxes) == 12
     for i, a in enumerate(boxes):
         assert a[0] >= 0 and a[2] <= width, a  # inside the plot's width

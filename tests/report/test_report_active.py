@@ -7,10 +7,10 @@ import html
 import json
 import re
 import shutil
-import subprocess
 
 import pytest
 import yaml
+from test_report_html import VIEWER_SETTLED, dump  # the Chromium helpers
 
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
@@ -121,12 +121,12 @@ def test_the_gallery_card_carries_every_view_the_episode_rendered_as_a_strip(rep
         assert e["va"] is None or 1 <= e["va"] <= strip["n"]
 
 
-def test_the_opened_card_shows_the_rendered_views_numbered_with_the_answered_one_outlined(report, tmp_path):
+def test_the_opened_card_shows_the_rendered_views_numbered_with_the_answered_one_outlined(report, browser):
     data = gallery_data(report)
     entries = data["entries"]
     first = next(e for e in entries if e.get("vs") is not None and e.get("va"))
     system = data["systems"][first["s"]]
-    dom = dump(report.page, tmp_path, state=f"system={system}&open=0")
+    dom = dump(browser, report.page, state=f"system={system}&open=0", until=VIEWER_SETTLED)
     tiles = re.findall(r'<div class="tile( sel)?" data-view="(\d+)"', dom)
     assert [int(n) for _, n in tiles] == list(range(1, data["strips"][first["vs"]]["n"] + 1))
     assert [int(n) for sel, n in tiles if sel] == [first["va"]]
@@ -136,19 +136,6 @@ def test_the_opened_card_shows_the_rendered_views_numbered_with_the_answered_one
 def gallery_data(report) -> dict:
     html = report.page.read_text(encoding="utf-8")
     return json.loads(re.search(r'<script type="application/json" id="gallery-data">(.*?)</script>', html, re.S).group(1))
-
-
-def dump(page, tmp_path, state: str) -> str:
-    """The page's DOM after its script ran, in headless Chromium (Debian's, as CI installs it)."""
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    if browser is None:
-        pytest.fail("Chromium is not installed: `apt-get install -y chromium`")
-    done = subprocess.run([browser, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-                           "--disable-component-update", "--disable-sync", "--no-first-run",
-                           f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", "--dump-dom",
-                           page.as_uri() + "#" + state], capture_output=True, text=True, timeout=90)  # fmt: skip
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout
 
 
 @pytest.mark.timeout(90)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from test_report_html import body_attr, cards, dump  # the Chromium helpers
+from test_report_html import VIEWER_SETTLED, body_attr, cards, dump  # the Chromium helpers
 
 from povagent.report.build import write_report
 from povagent.report.html import script_json
@@ -70,8 +70,8 @@ def test_script_json_reads_back_as_the_text_and_holds_no_markup_character(text):
     assert not set(embedded) & set("<>&\u2028\u2029")
 
 
-def test_every_card_shows_its_sentence_exactly_in_the_browser(hostile_report, tmp_path):
-    dom = dump(hostile_report.page, tmp_path)
+def test_every_card_shows_its_sentence_exactly_in_the_browser(hostile_report, browser):
+    dom = dump(browser, hostile_report.page)
     assert body_attr(dom, "data-gallery-count") == len(HOSTILE)
     assert len(cards(dom)) == len(HOSTILE)
     assert sorted(sentences(dom)) == sorted(HOSTILE)
@@ -79,9 +79,9 @@ def test_every_card_shows_its_sentence_exactly_in_the_browser(hostile_report, tm
     assert re.search(r'<div id="data-error" role="alert" hidden', dom)  # no error banner
 
 
-def test_the_raw_answer_reads_back_exactly_from_its_answers_file(hostile_report, tmp_path):
+def test_the_raw_answer_reads_back_exactly_from_its_answers_file(hostile_report, browser):
     assert list((hostile_report.out / "answers").glob("*.js"))  # the answer is in a file, not the page
-    dom = dump(hostile_report.page, tmp_path, state="open=0")
+    dom = dump(browser, hostile_report.page, state="open=0", until=VIEWER_SETTLED)
     shown = re.search(r'<pre class="raw">(.*?)</pre>', dom, re.S)
     assert shown is not None, "the viewer shows no raw answer"
     assert html.unescape(shown.group(1)) == RAW
@@ -96,23 +96,23 @@ def _copy(report, tmp_path: Path) -> Path:
     return out / report.page.name
 
 
-def test_gallery_data_that_cannot_be_read_shows_a_visible_error(hostile_report, tmp_path):
+def test_gallery_data_that_cannot_be_read_shows_a_visible_error(hostile_report, tmp_path, browser):
     page = _copy(hostile_report, tmp_path)
     text = page.read_text(encoding="utf-8")
     start = text.index('<script type="application/json" id="gallery-data">') + len('<script type="application/json" id="gallery-data">')
     page.write_text(text[:start] + '{"entries": [' + text[start + 1 :], encoding="utf-8")  # not JSON any more
-    dom = dump(page, tmp_path)
+    dom = dump(browser, page)
     banner = re.search(r'<div id="data-error" role="alert"( hidden="")?>(.*?)</div>', dom, re.S)
     assert banner is not None and banner.group(1) is None, "the error banner is not shown"
     assert "gallery data cannot be read" in banner.group(2)
     assert body_attr(dom, "data-data-error") == 1
 
 
-def test_an_answers_file_that_cannot_be_read_shows_a_visible_error(hostile_report, tmp_path):
+def test_an_answers_file_that_cannot_be_read_shows_a_visible_error(hostile_report, tmp_path, browser):
     page = _copy(hostile_report, tmp_path)
     for f in (page.parent / "answers").glob("*.js"):
         f.write_text(f.read_text(encoding="utf-8")[:50], encoding="utf-8")  # cut: a syntax error
-    dom = dump(page, tmp_path, state="open=0")
+    dom = dump(browser, page, state="open=0", until=VIEWER_SETTLED)
     banner = re.search(r'<div id="data-error" role="alert"( hidden="")?>(.*?)</div>', dom, re.S)
     assert banner is not None and banner.group(1) is None, "the error banner is not shown"
     assert "answers file" in banner.group(2) and "cannot be read" in banner.group(2)

@@ -1,15 +1,14 @@
 """The HTML report, opened in headless Chromium: tables, plots and gallery images render.
 
 Chromium is required (CI installs Debian's ``chromium``): without it these tests fail with
-a message saying so, they do not skip.
+a message saying so, they do not skip. Every page is opened in the session's one Chromium
+(tests/conftest.py's ``browser``), each load in a fresh context.
 """
 
 from __future__ import annotations
 
 import json
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -17,37 +16,42 @@ from PIL import Image
 
 from povagent.report.build import write_report
 
-CHROMIUM_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-    "--hide-scrollbars",
-]
+#: The window headless Chromium opens when none is given (its command line's default).
+WINDOW = (800, 600)
+#: The report's script ran to its end: it sets ``data-render-ms`` on the body last.
+SCRIPT_RAN = "() => document.body.hasAttribute('data-render-ms')"
+#: An opened card has settled: its raw answer is no longer loading (or the page said its answers
+#: file could not be read) and its images are complete.
+VIEWER_SETTLED = (
+    "() => { var b = document.body; return b.hasAttribute('data-render-ms')"
+    " && (!document.querySelector('#viewer-panel pre.loading') || b.hasAttribute('data-data-error') || b.hasAttribute('data-answers-failed'))"
+    " && Array.prototype.every.call(document.querySelectorAll('#viewer-panel img'), function (i) { return i.complete; }); }"
+)
+#: The opened card's frame has loaded (what a screenshot of it needs).
+VIEWER_IMAGE_LOADED = "() => document.body.getAttribute('data-viewer-image') === 'loaded'"
 
 
-def chromium() -> str:
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.fail("Chromium is not installed: `apt-get install -y chromium` (the HTML report test needs a real browser)")
+def rendered(browser, url: str, *, window: tuple[int, int] = WINDOW, until: str | None = SCRIPT_RAN, shot=None) -> str:
+    """The DOM of ``url`` in the session's Chromium (a fresh context: nothing kept from another
+    load) once it loaded (every image, script and answers file the page asked for while loading
+    has arrived or failed, and its events ran) and the JavaScript predicate ``until`` holds;
+    with ``shot``, a screenshot of the ``window`` is written there."""
+    context = browser.new_context(viewport={"width": window[0], "height": window[1]})
+    try:
+        page = context.new_page()
+        page.goto(url, wait_until="load", timeout=90_000)
+        if until is not None:
+            page.wait_for_function(until, timeout=90_000)
+        if shot is not None:
+            page.screenshot(path=str(shot))
+        return page.content()
+    finally:
+        context.close()
 
 
-def browse(page, tmp_path, *args: str, state: str = "") -> subprocess.CompletedProcess:
-    """Open ``page`` (with an optional gallery state, e.g. ``cond=c&open=0``) in headless Chromium."""
-    url = page.as_uri() + (f"#{state}" if state else "")
-    cmd = [chromium(), *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'chromium-profile'}", "--virtual-time-budget=8000", *args, url]
-    return subprocess.run(cmd, capture_output=True, text=True, timeout=90)
-
-
-def dump(page, tmp_path, state: str = "") -> str:
-    done = browse(page, tmp_path, "--dump-dom", state=state)
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout
+def dump(browser, page, state: str = "", **options) -> str:
+    """The DOM of the report ``page`` (with an optional gallery state, e.g. ``cond=c&open=0``)."""
+    return rendered(browser, page.as_uri() + (f"#{state}" if state else ""), **options)
 
 
 def gallery_data(report) -> dict:
@@ -67,8 +71,8 @@ def report(sweep_dir, tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def dom(report, tmp_path_factory):
-    return dump(report.page, tmp_path_factory.mktemp("browser"))
+def dom(report, browser):
+    return dump(browser, report.page)
 
 
 def body_attr(dom: str, name: str) -> int:
@@ -99,10 +103,10 @@ def test_gallery_cards_render_and_their_images_load_in_the_browser(dom, report):
     assert re.search(r'<div class="card" data-i="\d+"[^>]*><div class="imgs"><img alt="[^"]+" src="images/[0-9a-f]{64}\.t\.jpg">', dom)
 
 
-def test_screenshot_shows_a_rendered_page_not_a_blank_one(report, tmp_path):
+def test_screenshot_shows_a_rendered_page_not_a_blank_one(report, browser, tmp_path):
     shot = tmp_path / "shot.png"
-    done = browse(report.page, tmp_path, f"--screenshot={shot}", "--window-size=1400,2000")
-    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    dump(browser, report.page, shot=shot, window=(1400, 2000))
+    assert shot.exists()
     pixels = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert pixels.std() > 20  # text, rules and bars: far from a uniform page
     assert (pixels < 80).mean() > 0.005  # dark text is present
@@ -143,10 +147,10 @@ def test_raw_answers_live_in_hashed_files_outside_the_page(report):
         assert re.fullmatch(r"[0-9a-f]{64}", name) and text.startswith(f'povAnswers("{name}",')
 
 
-def test_filters_from_the_url_show_exactly_the_matching_predictions(report, tmp_path):
+def test_filters_from_the_url_show_exactly_the_matching_predictions(report, browser):
     entries = gallery_data(report)["entries"]
     # system 0 (mock-a · basic): CoT's Given rows are outside the paper's protocol, left out
-    dom = dump(report.page, tmp_path, "cond=c&sys=0")
+    dom = dump(browser, report.page, "cond=c&sys=0")
     expected = [e for e in entries if e["c"] == "c" and e["s"] == 0]
     assert 0 < len(expected) < len(entries)
     assert body_attr(dom, "data-gallery-shown") == len(expected)
@@ -154,26 +158,26 @@ def test_filters_from_the_url_show_exactly_the_matching_predictions(report, tmp_
     assert len(shown) == len(expected) and all(c["c"] == "c" and c["s"] == "0" for c in shown)
 
 
-def test_parse_status_filter_keeps_only_unanswered_predictions(report, tmp_path):
+def test_parse_status_filter_keeps_only_unanswered_predictions(report, browser):
     entries = gallery_data(report)["entries"]
-    dom = dump(report.page, tmp_path, "status=unanswered")
+    dom = dump(browser, report.page, "status=unanswered")
     unanswered = [e for e in entries if e["e"] is None]
     assert unanswered and body_attr(dom, "data-gallery-shown") == len(unanswered)
     assert {c["answered"] for c in cards(dom)} == {"0"}
 
 
-def test_error_filter_and_worst_first_sort(report, tmp_path):
+def test_error_filter_and_worst_first_sort(report, browser):
     entries = gallery_data(report)["entries"]
-    dom = dump(report.page, tmp_path, "min=0.1&sort=err-desc")
+    dom = dump(browser, report.page, "min=0.1&sort=err-desc")
     kept = sorted((e for e in entries if e["e"] is not None and e["e"] >= 0.1), key=lambda e: -e["e"])
     assert body_attr(dom, "data-gallery-shown") == len(kept)
     first = re.search(r'<div class="card" [^>]*>.*?<div class="id">([^<]*) · run', dom, re.S).group(1)
     assert first == kept[0]["id"]
 
 
-def test_opening_a_card_shows_the_full_frame_and_the_raw_answer(report, tmp_path, sweep_dir):
+def test_opening_a_card_shows_the_full_frame_and_the_raw_answer(report, browser, sweep_dir):
     entries = gallery_data(report)["entries"]
-    dom = dump(report.page, tmp_path, "status=answered&cond=a&open=0")
+    dom = dump(browser, report.page, "status=answered&cond=a&open=0", until=VIEWER_SETTLED)
     viewed = re.search(r'<body[^>]*data-viewer="([^"]+)"', dom).group(1)
     assert any(e["id"] == viewed and e["c"] == "a" for e in entries)
     assert re.search(r'<body[^>]*data-viewer-image="loaded"', dom)
@@ -181,10 +185,10 @@ def test_opening_a_card_shows_the_full_frame_and_the_raw_answer(report, tmp_path
     assert "Thinking about the observer." in raw and '"selected_image"' in raw.replace("&quot;", '"')
 
 
-def test_screenshot_of_an_opened_card_shows_the_frame_with_both_markers(report, tmp_path):
+def test_screenshot_of_an_opened_card_shows_the_frame_with_both_markers(report, browser, tmp_path):
     shot = tmp_path / "viewer.png"
-    done = browse(report.page, tmp_path, f"--screenshot={shot}", "--window-size=1300,900", state="status=answered&cond=c&open=0")
-    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    dump(browser, report.page, "status=answered&cond=c&open=0", shot=shot, window=(1300, 900), until=VIEWER_IMAGE_LOADED)
+    assert shot.exists()
     px = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
     r, g, b = px[..., 0], px[..., 1], px[..., 2]
     # the overlay dims the page, so saturated marker colours can only come from the drawn frame

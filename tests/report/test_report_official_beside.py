@@ -74,11 +74,11 @@ def test_a_repair_that_changed_no_answer_is_not_listed(tmp_path, write_answered_
     assert official_beside_table(collect(run / "rescored-json")) is None
 
 
-def page_widths(page, tmp_path, window: str) -> dict[str, int]:
+def page_widths(browser, page, window: tuple[int, int]) -> dict[str, int]:
     """The document's scroll width, the viewport's width and the official-parse table's width,
     measured in headless Chromium (window ``window``) on a copy of ``page`` with a measuring
     script added."""
-    from test_report_html import browse
+    from test_report_html import rendered
 
     copy = page.with_name("measured.html")
     script = (
@@ -90,18 +90,17 @@ def page_widths(page, tmp_path, window: str) -> dict[str, int]:
         "});</script>"
     )
     copy.write_text(page.read_text(encoding="utf-8").replace("</body>", script + "</body>"), encoding="utf-8")
-    done = browse(copy, tmp_path, "--dump-dom", f"--window-size={window}")
-    assert done.returncode == 0, done.stderr[-2000:]
-    return {k: int(v) for k, v in re.findall(r'data-(scroll-width|viewport-width|table-width)="(\d+)"', done.stdout)}
+    dom = rendered(browser, copy.as_uri(), window=window, until="() => document.body.hasAttribute('data-table-width')")
+    return {k: int(v) for k, v in re.findall(r'data-(scroll-width|viewport-width|table-width)="(\d+)"', dom)}
 
 
-def test_the_table_scrolls_in_its_own_box_and_the_page_does_not(sweep_with_center, tmp_path):
+def test_the_table_scrolls_in_its_own_box_and_the_page_does_not(sweep_with_center, tmp_path, browser):
     """Three conditions make twelve number columns: wider than a laptop's window. The page
     itself must not scroll sideways (measured in Chromium at 1024 px); the table does, in its box."""
     result = write_report(sweep_with_center, tmp_path / "report", gallery=False, n_boot=50)
-    widths = page_widths(result.page, tmp_path / "browser", "1024,800")
+    widths = page_widths(browser, result.page, (1024, 800))
     assert 0 < widths["viewport-width"] <= 1024, widths
     assert widths["table-width"] > widths["viewport-width"], widths  # the table is wider than the window...
     assert widths["scroll-width"] <= widths["viewport-width"], widths  # ...and the page does not scroll sideways
-    wide = page_widths(result.page, tmp_path / "wide", "1900,800")
+    wide = page_widths(browser, result.page, (1900, 800))
     assert wide["table-width"] <= 1500, wide  # headers and system names wrap: on a wide screen it fits

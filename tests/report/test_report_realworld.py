@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from PIL import Image
 from table_rows import system_row
-from test_report_html import body_attr, browse, cards, dump, gallery_data  # the Chromium helpers
+from test_report_html import body_attr, cards, dump, gallery_data  # the Chromium helpers
 
 from povagent.dataset.realworld_set import load_realworld
 from povagent.report.baseline import CENTER_SYSTEM
@@ -160,8 +160,8 @@ def test_box_and_region_marks_are_mapped_into_the_square(demo):
 
 
 @pytest.fixture(scope="module")
-def dom(report, tmp_path_factory):
-    return dump(report.page, tmp_path_factory.mktemp("rw_browser"))
+def dom(report, browser):
+    return dump(browser, report.page)
 
 
 def test_the_page_shows_the_success_table_in_the_browser(dom):
@@ -179,16 +179,16 @@ def test_gallery_cards_show_the_frame_and_hit_or_miss_in_the_browser(dom, report
     assert re.search(r'<div class="card" [^>]*data-ok="1"><div class="imgs"><img alt="[^"]+" src="images/[0-9a-f]{64}\.t\.jpg">', dom)
 
 
-def test_the_hit_filter_from_the_url_shows_only_hits(report, tmp_path):
+def test_the_hit_filter_from_the_url_shows_only_hits(report, browser):
     hits = [e for e in gallery_data(report)["entries"] if e["ok"]]
-    shown = cards(dump(report.page, tmp_path, "ok=hit"))
+    shown = cards(dump(browser, report.page, "ok=hit"))
     assert len(shown) == len(hits) > 0 and all(c["ok"] == "1" for c in shown)
 
 
-def test_screenshot_of_the_real_world_report_is_a_rendered_page(report, tmp_path):
+def test_screenshot_of_the_real_world_report_is_a_rendered_page(report, browser, tmp_path):
     shot = tmp_path / "shot.png"
-    done = browse(report.page, tmp_path, f"--screenshot={shot}", "--window-size=1400,2600")
-    assert done.returncode == 0 and shot.exists(), done.stderr[-2000:]
+    dump(browser, report.page, shot=shot, window=(1400, 2600))
+    assert shot.exists()
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=int)
     assert pixels.std() > 20 and (pixels.mean(axis=2) < 80).mean() > 0.005
     # the gallery's frames are on it: the demo's drawn rooms and the green of the marks

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from test_report_html import dump  # the Chromium helpers
+from test_report_html import VIEWER_SETTLED, dump  # the Chromium helpers
 
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
@@ -62,12 +62,12 @@ def test_each_exchange_of_a_row_keeps_the_request_it_answered(two_turn_report):
     assert transcripts(row.exchanges) == [first.prompt, first.prompt + "\n" + second.prompt]  # each request as sent
 
 
-def test_the_card_shows_every_turn_in_chromium_and_the_page_does_not_inline_it(two_turn_report):
-    rows, report, root = two_turn_report
+def test_the_card_shows_every_turn_in_chromium_and_the_page_does_not_inline_it(two_turn_report, browser):
+    rows, report, _ = two_turn_report
     page = report.page.read_text(encoding="utf-8")
     assert "Check that point" not in page and "(first look)" not in page  # loaded lazily from answers/*.js
     assert any("Check that point" in f.read_text(encoding="utf-8") for f in (report.page.parent / "answers").glob("*.js"))
-    dom = dump(report.page, root / "browser", "open=0")
+    dom = dump(browser, report.page, "open=0", until=VIEWER_SETTLED)
     transcript = re.search(r'<details class="transcript" data-turns="2"[^>]*>(.*?)</details>', dom, re.S)
     assert transcript, dom[-3000:]
     turns = re.findall(r'<div class="turn" data-turn="(\d)">.*?<pre class="turn-q">(.*?)</pre>.*?<pre class="turn-a">(.*?)</pre>', transcript.group(1), re.S)

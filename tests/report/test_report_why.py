@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import asyncio
 import html
-import json
 import re
 from collections import Counter
 
 import pytest
-from test_report_html import CHROMIUM_FLAGS, body_attr, cards, chromium, dump  # the Chromium helpers
+from test_report_html import SCRIPT_RAN, body_attr, cards, dump  # the Chromium helpers
 
 from povagent.config.pipeline import ConfigSource, pipeline_from_source
 from povagent.report.build import write_report
@@ -84,26 +83,26 @@ def test_the_step_shares_are_those_of_the_rows(page, report, diagnosed):
     assert steps["viewpoint"] > 0
 
 
-def test_a_link_shows_every_viewpoint_failure_of_a_model(page, report, diagnosed, tmp_path):
+def test_a_link_shows_every_viewpoint_failure_of_a_model(page, report, diagnosed, browser):
     _, rows = diagnosed
     ego = ego_system(report)
     link = steps_link(page, ego, "viewpoint")
-    dom = dump(report.page, tmp_path, state=link.lstrip("#"))
+    dom = dump(browser, report.page, state=link.lstrip("#"))
     expected = sum(1 for r in rows["ego"] if r.scores.get("diagnose", {}).get("step") == "viewpoint")
     assert expected > 0 and body_attr(dom, "data-gallery-shown") == expected
     shown = cards(dom)
     assert shown and all(c["step"] == "viewpoint" and html.unescape(c["system"]) == ego for c in shown)
 
 
-def test_cards_draw_the_egocentric_and_mirrored_targets_only_when_asked(report, diagnosed, tmp_path):
+def test_cards_draw_the_egocentric_and_mirrored_targets_only_when_asked(report, diagnosed, browser):
     _, rows = diagnosed
     ego = ego_system(report)
     stored = {(r.instance_id, r.scores["diagnose"]["step"]): r.scores["diagnose"] for r in rows["ego"] if r.scores.get("diagnose", {}).get("answered")}
     system = ego.replace(" · ", "/")
-    plain = dump(report.page, tmp_path, state=f"system={system}&step=viewpoint")
+    plain = dump(browser, report.page, state=f"system={system}&step=viewpoint")
     plain_grid = plain.split('<div id="gallery">')[1].split("<script")[0]
     assert cards(plain) and 'class="cf-ego"' not in plain_grid and 'class="cf-mir"' not in plain_grid
-    drawn = dump(report.page, tmp_path, state=f"system={system}&step=viewpoint&cf=1")
+    drawn = dump(browser, report.page, state=f"system={system}&step=viewpoint&cf=1")
     grid = drawn.split('<div id="gallery">')[1].split("<script")[0]
     marks = re.findall(r'<div class="card" data-i="\d+"[^>]*>.*?<div class="id">([^<]+) · run', grid, re.S)
     ego_marks = re.findall(r'<g class="cf-ego" data-u="([^"]+)" data-v="([^"]+)">', grid)
@@ -135,35 +134,29 @@ def test_relation_success_sits_beside_the_official_l2_per_direction(page, report
         assert f"{100 * cell['relation_success']:.1f}%" in text and f"L2 {cell['official_mean_l2']:.3f}" in text
 
 
-def test_a_link_inside_the_page_filters_the_gallery(report, tmp_path):
+def test_a_link_inside_the_page_filters_the_gallery(report, browser):
     """The section's links change the address's fragment in the page itself: the gallery follows."""
     ego = ego_system(report).replace(" · ", "/")
-    probe = report.out / "probe.html"
-    probe.write_text(
-        "<!DOCTYPE html><body><iframe id=f src='report.html' width=1200 height=900></iframe><script>"
-        "var f = document.getElementById('f');"
-        "f.onload = function () { f.contentWindow.location.hash = " + json.dumps(f"system={ego}&step=correct") + ";"
-        " setTimeout(function () { var b = f.contentDocument.body; document.body.setAttribute('data-shown', b.getAttribute('data-gallery-shown'));"
-        " document.body.setAttribute('data-steps', Array.prototype.map.call(f.contentDocument.querySelectorAll('#gallery .card'), function (c) { return "
-        "c.getAttribute('data-step'); }).join(',')); }, 500); };"
-        "</script></body>",
-        encoding="utf-8",
-    )
-    import subprocess
-
-    done = subprocess.run([chromium(), *CHROMIUM_FLAGS, "--allow-file-access-from-files", f"--user-data-dir={tmp_path / 'profile'}",
-                           "--virtual-time-budget=8000", "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=90)  # fmt: skip
-    assert done.returncode == 0, done.stderr[-2000:]
-    shown = int(re.search(r'data-shown="(\d+)"', done.stdout).group(1))
-    steps = re.search(r'data-steps="([^"]*)"', done.stdout).group(1).split(",")
+    context = browser.new_context(viewport={"width": 1200, "height": 900})
+    try:
+        page = context.new_page()
+        page.goto(report.page.as_uri(), wait_until="load", timeout=90_000)
+        page.wait_for_function(SCRIPT_RAN, timeout=90_000)
+        # the gallery's next render sets data-gallery-page again: cleared first, it says the page followed
+        page.evaluate("state => { document.body.removeAttribute('data-gallery-page'); location.hash = state; }", f"system={ego}&step=correct")
+        page.wait_for_function("() => document.body.hasAttribute('data-gallery-page')", timeout=90_000)
+        shown = int(page.evaluate("() => document.body.getAttribute('data-gallery-shown')"))
+        steps = page.evaluate("() => Array.from(document.querySelectorAll('#gallery .card'), c => c.getAttribute('data-step'))")
+    finally:
+        context.close()
     expected = sum(1 for o in report.analysis.observations if o.system == ego_system(report) and o.fail_step == "correct" and o.run == 0)
     assert expected > 0 and shown == expected and set(steps) == {"correct"}
 
 
-def test_a_report_without_diagnose_scores_has_no_section_and_no_step_filter(sweep_dir, tmp_path):
+def test_a_report_without_diagnose_scores_has_no_section_and_no_step_filter(sweep_dir, tmp_path, browser):
     plain = write_report(sweep_dir, tmp_path / "out", n_boot=0, gallery_limit=5)
     text = plain.page.read_text(encoding="utf-8")
     assert '<section id="why">' not in text and 'href="#why"' not in text
-    dom = dump(plain.page, tmp_path)
+    dom = dump(browser, plain.page)
     assert re.search(r'<label id="f-step-wrap" style="display: none;">', dom)
     assert re.search(r'<label id="f-cf-wrap" style="display: none;">', dom)

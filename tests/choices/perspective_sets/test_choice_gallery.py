@@ -17,14 +17,6 @@ from povagent.report.build import write_report
 from povagent.run.runner import run_pipeline
 
 
-def _run(config: Path):
-    """The pipeline run in a thread of its own: Playwright's sync API holds this thread's event loop."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(1) as pool:
-        return pool.submit(lambda: run_pipeline(load_pipeline(config))).result()
-
-
 def _open(browser, page_path: Path, query: str = ""):
     page = browser.new_page(viewport={"width": 1300, "height": 1000})
     errors: list[str] = []
@@ -39,7 +31,7 @@ def viewspatial_report(tmp_path, choice_pipeline):
     path = choice_pipeline("viewspatial", backend="test-center", reply="A")
     data = yaml.safe_load(path.read_text()) | {"label": "always-a"}
     path.write_text(yaml.safe_dump(data, sort_keys=False))
-    result = _run(path)
+    result = run_pipeline(load_pipeline(path))
     return write_report(result.run_dir, tmp_path / "report", n_boot=50)
 
 
@@ -100,7 +92,7 @@ def test_a_relation_card_in_conditions_a_and_b_shows_its_options_and_frames(brow
         "backend": {"name": "test-center", "options": {"reply": "A"}}, "strategy": "choice", "scorers": ["choice"],
         "instances": {"conditions": ["a", "b"], "sample": 4, "seed": 1}, "runs": 1, "concurrency": 2, "timeout": 5, "output": str(tmp_path / "relation-run"),
     }))  # fmt: skip
-    result = _run(config)
+    result = run_pipeline(load_pipeline(config))
     report = write_report(result.run_dir, tmp_path / "report", n_boot=50)
     page, errors = _open(browser, report.page)
     cards = page.locator(".card.choice")
