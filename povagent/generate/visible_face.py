@@ -32,21 +32,24 @@ element by element.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
+from povagent.generate.face_groups import (
+    CONTAINS_TOLERANCE,
+    coplanar_touching_pairs,
+    cross,
+    dot3,
+    groups_across_edges,
+    inward_edges,
+    overlapped_sides,
+    unit,
+)
 
-#: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
-PARALLEL_TOLERANCE = 1e-9
-#: ... and their planes are this close (metres).
-PLANE_TOLERANCE = 1e-5
-#: A hit point within this distance (metres) outside a triangle's edge still counts as inside:
-#: more than embree's float32 error over a house (a few micrometres), far below a pixel.
-CONTAINS_TOLERANCE = 1e-5
 #: Faces whose boxes, grown by this (metres), overlap touch (so that two faces that both hold
 #: a point within the tolerance always touch).
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
@@ -56,6 +59,37 @@ EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
 EDGE_CELL = 0.0625
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """The per-face and per-edge numbers the decisions gather, one contiguous row per
+    component: a gather from a row is several times faster than from a column of an (F, 3)
+    array, and the values (hence every product and sum) are the same."""
+
+    own: np.ndarray  # (3, F): each face's own normal
+    open: np.ndarray  # (F,): not a closed solid's face (met from either side)
+    edges: np.ndarray  # (3 edges, 4, F): inward edge normal x, y, z and offset
+    plane: np.ndarray  # (4, F): each face's group plane, normal x, y, z and offset
+    group_watching: np.ndarray  # (F,): the face's group has a watched edge
+    overlapped: np.ndarray  # (2 * F,): ``overlapped`` flat, face * 2 + side
+    line: np.ndarray  # (4, E): each watched edge's in-plane line
+    along: np.ndarray  # (5, E): each watched edge's direction and extent
+
+    @classmethod
+    def of(cls, faces: VisibleFaces) -> _Rows:
+        plane = np.concatenate([faces.group_normal, faces.group_offset[:, None]], axis=1)[faces.group]
+        edges = np.concatenate([faces.edges, faces.edge_offsets[:, :, None]], axis=2)  # (F, 3, 4)
+        return cls(
+            np.ascontiguousarray(faces.own_normal.T),
+            ~faces.closed,
+            np.ascontiguousarray(edges.transpose(1, 2, 0)),
+            np.ascontiguousarray(plane.T),
+            faces.watching[faces.group],
+            np.ascontiguousarray(faces.overlapped).ravel(),
+            np.ascontiguousarray(faces.edge_line.T),
+            np.ascontiguousarray(faces.edge_along.T),
+        )
 
 
 @dataclass(frozen=True)
@@ -94,6 +128,10 @@ class VisibleFaces:
     outline: np.ndarray
     watching: np.ndarray
     near_cells: CellMask | None
+    _rows: _Rows = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_rows", _Rows.of(self))
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
@@ -110,16 +148,16 @@ class VisibleFaces:
         count = len(faces)
         closed = np.zeros(count, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
         a, b, c = (v[faces[:, i]] for i in range(3))
-        own = _unit(_cross(b - a, c - a))
-        offset = _dot3(own, a)
+        own = unit(cross(b - a, c - a))
+        offset = dot3(own, a)
         lo = np.minimum(np.minimum(a, b), c) - TOUCH_MARGIN
         hi = np.maximum(np.maximum(a, b), c) + TOUCH_MARGIN
-        left, right = _coplanar_touching_pairs(own, offset, lo, hi)
+        left, right = coplanar_touching_pairs(own, offset, lo, hi)
         graph = coo_matrix((np.ones(len(left)), (left, right)), shape=(count, count))
         _, group = connected_components(graph, directed=False)
         first = np.full(group.max() + 1 if count else 0, count, dtype=np.int64)
         np.minimum.at(first, group, np.arange(count))
-        edges, edge_offsets = _inward_edges(own, a, b, c)
+        edges, edge_offsets = inward_edges(own, a, b, c)
         # every face under (its group, each cell its grown box reaches), the highest first
         key, item = boxes_keys(group, cell(lo, CELL), cell(hi, CELL))
         table = CellTable.build([key], [item], order_by=-np.arange(count))
@@ -128,19 +166,19 @@ class VisibleFaces:
         differs = look != np.repeat(look[table.starts[:-1]], sizes)
         mixed = np.zeros(len(table.keys), dtype=bool)
         np.logical_or.at(mixed, np.repeat(np.arange(len(table.keys)), sizes), differs)
-        overlapped = _overlapped_sides(v, faces, own, closed, looks, left, right)
+        overlapped = overlapped_sides(v, faces, own, closed, looks, left, right)
         # watched edges: creases, and every edge of a face listed under a mixed key
-        across, internal = _groups_across_edges(v, faces, group, looks, by_look)
+        across, internal = groups_across_edges(v, faces, group, looks, by_look)
         in_mixed = np.zeros(count, dtype=bool)
         in_mixed[table.items[np.repeat(mixed, sizes)]] = True
         # (an edge inside a region of one look, a quad's diagonal, decides nothing)
         watch = (across >= 0).any(axis=2) | (in_mixed[:, None] & ~internal)
         wf, we = np.nonzero(watch)
         p, q = v[faces[wf, we]], v[faces[wf, (we + 1) % 3]]
-        line = _unit(_cross(own[wf], q - p))
-        along = _unit(q - p)
-        edge_line = np.concatenate([line, _dot3(line, p)[:, None]], axis=1)
-        edge_along = np.concatenate([along, _dot3(along, p)[:, None], _dot3(along, q)[:, None]], axis=1)
+        line = unit(cross(own[wf], q - p))
+        along = unit(q - p)
+        edge_line = np.concatenate([line, dot3(line, p)[:, None]], axis=1)
+        edge_along = np.concatenate([along, dot3(along, p)[:, None], dot3(along, q)[:, None]], axis=1)
         grow = EDGE_MARGIN + TOUCH_MARGIN
         elo, ehi = cell(np.minimum(p, q) - grow, EDGE_CELL), cell(np.maximum(p, q) + grow, EDGE_CELL)
         ekey, eitem = boxes_keys(group[wf], elo, ehi)
@@ -283,23 +321,55 @@ class VisibleFaces:
             ray, cand = unique_pairs(np.concatenate([ray, ray[ahead][extra_at]]), np.concatenate([cand, extra_group]))
             dist = self._distance(cand, o, d, ray)
         ahead = np.isfinite(dist) & (dist > 0)
-        ray, cand, dist = ray[ahead], cand[ahead], dist[ahead]
-        point = _points(o, d, ray, dist)
-        at = self.faces.find(key_of(cand, point, CELL))
-        face = np.full(len(ray), -1, dtype=np.int64)
-        listed = np.flatnonzero(at >= 0)
-        face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[listed], d)
-        held = face >= 0
-        ray, dist, face = ray[held], dist[held], face[held]
-        # per pixel, the nearest holding group (a tie in distance: the higher face)
-        order = np.lexsort((-face, dist, ray))
-        ray, dist, face = ray[order], dist[order], face[order]
-        first = np.ones(len(ray), dtype=bool)
-        first[1:] = ray[1:] != ray[:-1]
-        shown[ray[first]] = face[first]
+        ray, face, dist = self._nearest_holding(ray[ahead], cand[ahead], dist[ahead], o, d)
+        shown[ray] = face
         if t is not None:
-            t[ray[first]] = dist[first]
+            t[ray] = dist
         return shown, t
+
+    def _nearest_holding(
+        self, ray: np.ndarray, cand: np.ndarray, dist: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Of (ray, candidate group) pairs at ``dist`` (finite, ahead): per ray, the nearest
+        candidate whose faces hold the ray, as (ray, highest holding face, distance); a tie in
+        distance goes to the higher face, a ray no candidate holds is left out.
+
+        The candidates are tested nearest first, a ray's farther ones only where none nearer
+        holds it: the answer is the one testing every candidate gives (the order is by the
+        exact float64 distances, which are the same on every CPU), without the tests that
+        cannot change it (most rays at an outline are held by their nearest candidate)."""
+        order = np.lexsort((dist, ray))
+        ray, cand, dist = ray[order], cand[order], dist[order]
+        # a run: one ray's candidates at one distance, tested together
+        new_ray = np.ones(len(ray), dtype=bool)
+        new_ray[1:] = ray[1:] != ray[:-1]
+        new_run = new_ray.copy()
+        new_run[1:] |= dist[1:] != dist[:-1]
+        run_start = np.flatnonzero(new_run)
+        run_stop = np.append(run_start[1:], len(ray))
+        first_run = np.flatnonzero(new_ray[run_start])  # per ray, its first run ...
+        stop_run = np.append(first_run[1:], len(run_start))  # ... and the end of its runs
+        found = []
+        live, runs = np.arange(len(first_run)), first_run
+        while len(live):
+            counts = run_stop[runs] - run_start[runs]
+            offsets = np.cumsum(counts) - counts
+            member = np.arange(int(counts.sum())) - np.repeat(offsets - run_start[runs], counts)
+            point = _points(o, d, ray[member], dist[member])
+            at = self.faces.find(key_of(cand[member], point, CELL))
+            face = np.full(len(member), -1, dtype=np.int64)
+            listed = np.flatnonzero(at >= 0)
+            face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[member[listed]], d)
+            best = np.maximum.reduceat(face, offsets)
+            held = best >= 0
+            found.append((run_start[runs[held]], best[held]))
+            runs = runs[~held] + 1
+            live = live[~held]
+            more = runs < stop_run[live]
+            live, runs = live[more], runs[more]
+        start = np.concatenate([f[0] for f in found]) if found else np.zeros(0, dtype=np.int64)
+        face = np.concatenate([f[1] for f in found]) if found else np.zeros(0, dtype=np.int64)
+        return ray[start], face, dist[start]
 
     # -- the exact tests --------------------------------------------------------------------
     def _distance(self, group: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
@@ -342,147 +412,32 @@ class VisibleFaces:
         point (within the tolerance) and that its ray can meet (a closed solid's face from
         outside only); -1 where none does."""
         row, g = self.faces.explode(at)
-        n = self.own_normal[g]
-        dr = [r[ray[row]] for r in d]
-        inside = ~self.closed[g] | (n[:, 0] * dr[0] + n[:, 1] * dr[1] + n[:, 2] * dr[2] < 0)
+        rows = self._rows
+        # each coordinate gathered once; each face's numbers from contiguous per-face rows
+        # (the same products and sums, in the same order, as on (F, 3) arrays)
+        x, y, z = (p[row] for p in point)
+        rr = ray[row]
+        facing = np.take(rows.own[0], g) * np.take(d[0], rr)
+        facing += np.take(rows.own[1], g) * np.take(d[1], rr)
+        facing += np.take(rows.own[2], g) * np.take(d[2], rr)
+        inside = np.take(rows.open, g) | (facing < 0)
         for e in range(3):
-            m = self.edges[g, e]
-            signed = m[:, 0] * point[0][row] + m[:, 1] * point[1][row] + m[:, 2] * point[2][row] - self.edge_offsets[g, e]
+            m = rows.edges[e]
+            signed = np.take(m[0], g) * x
+            signed += np.take(m[1], g) * y
+            signed += np.take(m[2], g) * z
+            signed -= np.take(m[3], g)
             inside &= signed >= -CONTAINS_TOLERANCE
+        # a key's faces are listed highest first: a row's first face inside is its highest
+        hit = np.flatnonzero(inside)
+        first = np.ones(len(hit), dtype=bool)
+        first[1:] = row[hit[1:]] != row[hit[:-1]]
         best = np.full(len(at), -1, dtype=np.int64)
-        np.maximum.at(best, row[inside], g[inside])
+        best[row[hit[first]]] = g[hit[first]]
         return best
 
 
 # -- helpers ----------------------------------------------------------------------------------
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (n, 3) float64 arrays, with IEEE products and differences only."""
-    # Laid out by hand (the formatter is told to skip it): the x, y and z components one per
-    # row, as the cross product is written, so a wrong index stands out.
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
-                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)  # fmt: skip
-
-
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot product of (n, 3) arrays, summed x, y, z in that order."""
-    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    length = np.sqrt(_dot3(v, v))
-    return v / np.where(length > 0, length, 1.0)[:, None]
-
-
 def _points(o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray, dist: np.ndarray) -> list[np.ndarray]:
     """The points ``o + d * dist`` of the given rays, one array per coordinate."""
     return [(o[k] if o.ndim == 1 else o[k][ray]) + d[k][ray] * dist for k in range(3)]
-
-
-def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every ordered pair (i, j), i != j, of faces in one plane (either side) whose grown boxes overlap.
-
-    Two such faces' offsets differ by at most ``PLANE_TOLERANCE`` in absolute value (either
-    side: ``|a - b|`` and ``|a + b|`` are both at least ``||a| - |b||``), so only faces close in
-    ``|offset|`` (sorted, a window of twice the tolerance) are compared."""
-    size = np.abs(offset)
-    order = np.argsort(size, kind="stable")
-    ranked = size[order]
-    stop = np.searchsorted(ranked, ranked + 2 * PLANE_TOLERANCE, side="right")
-    span = stop - np.arange(len(order)) - 1  # later faces within the window of each
-    first = np.repeat(np.arange(len(order)), span)
-    later = np.arange(len(first)) - np.repeat(np.cumsum(span) - span, span) + first + 1
-    i, j = order[first], order[later]
-    keep = np.ones(len(i), dtype=bool)
-    for k in range(3):
-        keep &= (lo[i, k] <= hi[j, k]) & (lo[j, k] <= hi[i, k])
-    i, j = i[keep], j[keep]
-    # either side: the generated meshes' floors are wound facing down
-    cos = _dot3(normal[i], normal[j])
-    same = cos >= 1 - PARALLEL_TOLERANCE
-    opposite = cos <= -(1 - PARALLEL_TOLERANCE)
-    gap = np.where(same, np.abs(offset[i] - offset[j]), np.abs(offset[i] + offset[j]))
-    keep = (same | opposite) & (gap <= PLANE_TOLERANCE)
-    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
-    return np.concatenate([i, j]), np.concatenate([j, i])
-
-
-def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
-    """Per coplanar pair (lf, rf): whether the two triangles' areas do not overlap (an axis
-    in their plane separates them, within the tolerance: faces sharing an edge are apart)."""
-    apart = np.zeros(len(lf), dtype=bool)
-    if not len(lf):
-        return apart
-    tris = [v[faces[lf]], v[faces[rf]]]  # (n, 3 corners, 3)
-    for which, normal in ((0, own[lf]), (1, own[rf])):
-        corners = tris[which]
-        for k in range(3):
-            axis = _unit(_cross(normal, corners[:, (k + 1) % 3] - corners[:, k]))
-            a = tris[0][:, :, 0] * axis[:, None, 0] + tris[0][:, :, 1] * axis[:, None, 1] + tris[0][:, :, 2] * axis[:, None, 2]
-            b = tris[1][:, :, 0] * axis[:, None, 0] + tris[1][:, :, 1] * axis[:, None, 1] + tris[1][:, :, 2] * axis[:, None, 2]
-            apart |= (a.max(axis=1) <= b.min(axis=1) + CONTAINS_TOLERANCE) | (b.max(axis=1) <= a.min(axis=1) + CONTAINS_TOLERANCE)
-    return apart
-
-
-def _overlapped_sides(
-    v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray, left: np.ndarray, right: np.ndarray
-) -> np.ndarray:
-    """(F, 2): per side of each face (0: seen against its normal, 1: along it), whether a
-    differently looking coplanar face, seen from that side too, overlaps its area."""
-    differs = looks[left] != looks[right]
-    lf, rf = left[differs], right[differs]
-    out = np.zeros((len(faces), 2), dtype=bool)
-    if not len(lf):
-        return out
-    apart = _apart(v, faces, own, lf, rf)
-    aligned = _dot3(own[lf], own[rf]) > 0
-    for side in (0, 1):
-        # a ray against f's normal meets the rival's front where the two face one way
-        rival_seen = ~closed[rf] | (aligned if side == 0 else ~aligned)
-        face_seen = ~closed[lf] if side == 1 else np.ones(len(lf), dtype=bool)
-        hit = ~apart & rival_seen & face_seen
-        out[lf[hit], side] = True
-    return out
-
-
-def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray, by_look: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """(F, 3, 2): for each face's edge k (from corner k to k + 1), the groups of up to two other
-    faces with an edge between the same two points, where their group is not the face's (-1;
-    ``by_look``: nor their look);
-    and (F, 3): whether every other face on the edge is of the face's group and look (and
-    there is one: the edge lies inside a region of one look)."""
-    _, position = np.unique(v, axis=0, return_inverse=True)
-    corner = position.ravel()[faces]
-    ends = np.stack([corner, np.roll(corner, -1, axis=1)], axis=-1)  # (F, 3, 2)
-    edge_id = np.unique(np.sort(ends, axis=-1).reshape(-1, 2), axis=0, return_inverse=True)[1].ravel()
-    owner = np.repeat(np.arange(len(faces)), 3)
-    order = np.lexsort((owner, edge_id))
-    edge_sorted, owner_sorted = edge_id[order], owner[order]
-    across = np.full((len(faces) * 3, 2), -1, dtype=np.int64)
-    internal = np.zeros(len(faces) * 3, dtype=bool)
-    starts = np.flatnonzero(np.r_[True, edge_sorted[1:] != edge_sorted[:-1]])
-    stops = np.r_[starts[1:], len(edge_sorted)]
-    for s, e in zip(starts.tolist(), stops.tolist()):
-        if e - s < 2:
-            continue
-        sharing = owner_sorted[s:e].tolist()
-        for slot in order[s:e].tolist():
-            me = slot // 3
-            others = [f for f in sharing if f != me]
-            crossing = [int(group[f]) for f in others if group[f] != group[me] and (not by_look or looks[f] != looks[me])][:2]
-            across[slot, : len(crossing)] = crossing
-            internal[slot] = all(group[f] == group[me] and looks[f] == looks[me] for f in others)
-    return across.reshape(len(faces), 3, 2), internal.reshape(len(faces), 3)
-
-
-def _inward_edges(normal: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each face's inward unit edge normals in its plane (F, 3, 3) and their offsets (F, 3): a
-    point x lies within distance s inside edge k where ``m_k . x - offset_k = s``."""
-    starts = (a, b, c)
-    edges = np.empty((len(a), 3, 3))
-    offsets = np.empty((len(a), 3))
-    for k, (p, q) in enumerate(((a, b), (b, c), (c, a))):
-        m = _unit(_cross(normal, q - p))
-        edges[:, k] = m
-        offsets[:, k] = _dot3(m, starts[k])
-    return edges, offsets

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from povagent.generate.visible_face import PARALLEL_TOLERANCE, PLANE_TOLERANCE, _coplanar_touching_pairs
+from povagent.generate.face_groups import PARALLEL_TOLERANCE, PLANE_TOLERANCE, coplanar_touching_pairs
 
 
 def every_pair(normal, offset, lo, hi) -> set[tuple[int, int]]:
@@ -32,7 +32,7 @@ def test_the_sorted_search_finds_every_coplanar_touching_pair_and_no_other():
     offset *= rng.choice([-1.0, 1.0], n)
     lo = rng.random((n, 3)) * 4
     hi = lo + rng.random((n, 3)) * 1.5
-    left, right = _coplanar_touching_pairs(normal, offset, lo, hi)
+    left, right = coplanar_touching_pairs(normal, offset, lo, hi)
     found = set(zip(left.tolist(), right.tolist()))
     assert len(found) == len(left)  # no pair twice
     assert found == every_pair(normal, offset, lo, hi)

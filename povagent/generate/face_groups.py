@@ -1,0 +1,150 @@
+"""Coplanar face groups, their overlaps and their creases: the geometry :class:`VisibleFaces`
+is built from, once per mesh.
+
+What it is for: :mod:`povagent.generate.visible_face` decides per ray which face a pixel shows;
+it needs to know which faces lie in one plane and touch (a group), where differently looking
+faces of a group overlap, and which edges two groups share (creases). Those are worked out here
+from the float32 vertices embree reads, in float64 with IEEE operations only (+, -, *, /, sqrt,
+comparisons), so they are the same on every CPU. What it must not do: look at rays or pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
+PARALLEL_TOLERANCE = 1e-9
+#: ... and their planes are this close (metres).
+PLANE_TOLERANCE = 1e-5
+#: A hit point within this distance (metres) outside a triangle's edge still counts as inside:
+#: more than embree's float32 error over a house (a few micrometres), far below a pixel.
+CONTAINS_TOLERANCE = 1e-5
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (n, 3) float64 arrays, with IEEE products and differences only."""
+    # Laid out by hand (the formatter is told to skip it): the x, y and z components one per
+    # row, as the cross product is written, so a wrong index stands out.
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)  # fmt: skip
+
+
+def dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of (n, 3) arrays, summed x, y, z in that order."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def unit(v: np.ndarray) -> np.ndarray:
+    """Each row of ``v`` divided by its length (a zero row left as it is)."""
+    length = np.sqrt(dot3(v, v))
+    return v / np.where(length > 0, length, 1.0)[:, None]
+
+
+def coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair (i, j), i != j, of faces in one plane (either side) whose grown boxes overlap.
+
+    Two such faces' offsets differ by at most ``PLANE_TOLERANCE`` in absolute value (either
+    side: ``|a - b|`` and ``|a + b|`` are both at least ``||a| - |b||``), so only faces close in
+    ``|offset|`` (sorted, a window of twice the tolerance) are compared."""
+    size = np.abs(offset)
+    order = np.argsort(size, kind="stable")
+    ranked = size[order]
+    stop = np.searchsorted(ranked, ranked + 2 * PLANE_TOLERANCE, side="right")
+    span = stop - np.arange(len(order)) - 1  # later faces within the window of each
+    first = np.repeat(np.arange(len(order)), span)
+    later = np.arange(len(first)) - np.repeat(np.cumsum(span) - span, span) + first + 1
+    i, j = order[first], order[later]
+    keep = np.ones(len(i), dtype=bool)
+    for k in range(3):
+        keep &= (lo[i, k] <= hi[j, k]) & (lo[j, k] <= hi[i, k])
+    i, j = i[keep], j[keep]
+    # either side: the generated meshes' floors are wound facing down
+    cos = dot3(normal[i], normal[j])
+    same = cos >= 1 - PARALLEL_TOLERANCE
+    opposite = cos <= -(1 - PARALLEL_TOLERANCE)
+    gap = np.where(same, np.abs(offset[i] - offset[j]), np.abs(offset[i] + offset[j]))
+    keep = (same | opposite) & (gap <= PLANE_TOLERANCE)
+    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
+    return np.concatenate([i, j]), np.concatenate([j, i])
+
+
+def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
+    """Per coplanar pair (lf, rf): whether the two triangles' areas do not overlap (an axis
+    in their plane separates them, within the tolerance: faces sharing an edge are apart)."""
+    apart = np.zeros(len(lf), dtype=bool)
+    if not len(lf):
+        return apart
+    tris = [v[faces[lf]], v[faces[rf]]]  # (n, 3 corners, 3)
+    for which, normal in ((0, own[lf]), (1, own[rf])):
+        corners = tris[which]
+        for k in range(3):
+            axis = unit(cross(normal, corners[:, (k + 1) % 3] - corners[:, k]))
+            a = tris[0][:, :, 0] * axis[:, None, 0] + tris[0][:, :, 1] * axis[:, None, 1] + tris[0][:, :, 2] * axis[:, None, 2]
+            b = tris[1][:, :, 0] * axis[:, None, 0] + tris[1][:, :, 1] * axis[:, None, 1] + tris[1][:, :, 2] * axis[:, None, 2]
+            apart |= (a.max(axis=1) <= b.min(axis=1) + CONTAINS_TOLERANCE) | (b.max(axis=1) <= a.min(axis=1) + CONTAINS_TOLERANCE)
+    return apart
+
+
+def overlapped_sides(
+    v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray, left: np.ndarray, right: np.ndarray
+) -> np.ndarray:
+    """(F, 2): per side of each face (0: seen against its normal, 1: along it), whether a
+    differently looking coplanar face, seen from that side too, overlaps its area."""
+    differs = looks[left] != looks[right]
+    lf, rf = left[differs], right[differs]
+    out = np.zeros((len(faces), 2), dtype=bool)
+    if not len(lf):
+        return out
+    apart = _apart(v, faces, own, lf, rf)
+    aligned = dot3(own[lf], own[rf]) > 0
+    for side in (0, 1):
+        # a ray against f's normal meets the rival's front where the two face one way
+        rival_seen = ~closed[rf] | (aligned if side == 0 else ~aligned)
+        face_seen = ~closed[lf] if side == 1 else np.ones(len(lf), dtype=bool)
+        hit = ~apart & rival_seen & face_seen
+        out[lf[hit], side] = True
+    return out
+
+
+def groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray, by_look: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(F, 3, 2): for each face's edge k (from corner k to k + 1), the groups of up to two other
+    faces with an edge between the same two points, where their group is not the face's (-1;
+    ``by_look``: nor their look);
+    and (F, 3): whether every other face on the edge is of the face's group and look (and
+    there is one: the edge lies inside a region of one look)."""
+    _, position = np.unique(v, axis=0, return_inverse=True)
+    corner = position.ravel()[faces]
+    ends = np.stack([corner, np.roll(corner, -1, axis=1)], axis=-1)  # (F, 3, 2)
+    edge_id = np.unique(np.sort(ends, axis=-1).reshape(-1, 2), axis=0, return_inverse=True)[1].ravel()
+    owner = np.repeat(np.arange(len(faces)), 3)
+    order = np.lexsort((owner, edge_id))
+    edge_sorted, owner_sorted = edge_id[order], owner[order]
+    across = np.full((len(faces) * 3, 2), -1, dtype=np.int64)
+    internal = np.zeros(len(faces) * 3, dtype=bool)
+    starts = np.flatnonzero(np.r_[True, edge_sorted[1:] != edge_sorted[:-1]])
+    stops = np.r_[starts[1:], len(edge_sorted)]
+    for s, e in zip(starts.tolist(), stops.tolist()):
+        if e - s < 2:
+            continue
+        sharing = owner_sorted[s:e].tolist()
+        for slot in order[s:e].tolist():
+            me = slot // 3
+            others = [f for f in sharing if f != me]
+            crossing = [int(group[f]) for f in others if group[f] != group[me] and (not by_look or looks[f] != looks[me])][:2]
+            across[slot, : len(crossing)] = crossing
+            internal[slot] = all(group[f] == group[me] and looks[f] == looks[me] for f in others)
+    return across.reshape(len(faces), 3, 2), internal.reshape(len(faces), 3)
+
+
+def inward_edges(normal: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each face's inward unit edge normals in its plane (F, 3, 3) and their offsets (F, 3): a
+    point x lies within distance s inside edge k where ``m_k . x - offset_k = s``."""
+    starts = (a, b, c)
+    edges = np.empty((len(a), 3, 3))
+    offsets = np.empty((len(a), 3))
+    for k, (p, q) in enumerate(((a, b), (b, c), (c, a))):
+        m = unit(cross(normal, q - p))
+        edges[:, k] = m
+        offsets[:, k] = dot3(m, starts[k])
+    return edges, offsets
