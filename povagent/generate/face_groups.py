@@ -148,3 +148,48 @@ def inward_edges(normal: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray
         edges[:, k] = m
         offsets[:, k] = dot3(m, starts[k])
     return edges, offsets
+
+
+def group_boxes(
+    corners: tuple[np.ndarray, np.ndarray, np.ndarray], own: np.ndarray, group: np.ndarray, normal: np.ndarray, offset: np.ndarray, near: float
+) -> np.ndarray:
+    """(G, 6): per group, the low x, y, z and high x, y, z of a box that holds every point of the
+    group's plane (``normal``, ``offset``) that a face of the group holds (within
+    ``CONTAINS_TOLERANCE``: ``VisibleFaces._highest_holding``) or that lies within ``near`` of
+    one of its edges (``VisibleFaces._near_watched``). A point outside needs neither test.
+
+    Why the box is large enough, per face f (the group's box is the union of its faces'):
+    the points f holds are those within ``CONTAINS_TOLERANCE`` outside each edge's line, a
+    prism along f's normal over f's triangle grown by ``reach`` = tolerance / sin(half the
+    sharpest corner's angle) (the grown triangle's corners move out along the bisectors); the
+    points near an edge (at most ``near`` across its line and past its ends) are a prism over a
+    rectangle within ``2 * near`` of f. With ``R`` the larger of the two, such a point projects
+    onto f's plane inside f's box grown by ``R``, and lies off that plane by its own plane's
+    distance from the group's there: at most ``(dev + R) / cos``, ``dev`` the farthest of f's
+    corners from the group's plane and ``cos`` the cosine between the two normals (an affine
+    function's extreme over the grown triangle is at a corner, which is within ``R`` of one of
+    f's). A degenerate face (a zero edge or no normal) holds every point of its plane: its
+    group's box is infinite."""
+    a, b, c = corners
+    sharpest = np.ones(len(a))
+    degenerate = dot3(own, own) == 0
+    for p, q, r in ((a, b, c), (b, c, a), (c, a, b)):
+        u, w = q - p, r - p
+        degenerate |= (dot3(u, u) == 0) | (dot3(w, w) == 0)
+        cos = dot3(unit(u), unit(w))
+        sharpest = np.minimum(sharpest, np.sqrt(np.maximum(0.5 - 0.5 * cos, 0.0)))
+    reach = np.divide(CONTAINS_TOLERANCE, sharpest, out=np.full(len(a), np.inf), where=sharpest > 0)
+    grown_by = np.maximum(reach, 2 * near)
+    gn, go = normal[group], offset[group]
+    dev = np.maximum(np.maximum(np.abs(dot3(gn, a) - go), np.abs(dot3(gn, b) - go)), np.abs(dot3(gn, c) - go))
+    cos_planes = np.abs(dot3(gn, own))
+    off_plane = np.divide(dev + grown_by, cos_planes, out=np.full(len(a), np.inf), where=cos_planes > 0.5)
+    grow = grown_by + off_plane + 1e-6  # (and a micrometre for the rounding of these sums)
+    grow[degenerate] = np.inf
+    lo = np.minimum(np.minimum(a, b), c) - grow[:, None]
+    hi = np.maximum(np.maximum(a, b), c) + grow[:, None]
+    box = np.empty((len(normal), 6))
+    box[:, :3], box[:, 3:] = np.inf, -np.inf
+    np.minimum.at(box[:, :3], group, lo)
+    np.maximum.at(box[:, 3:], group, hi)
+    return box

@@ -44,12 +44,15 @@ from povagent.generate.face_groups import (
     coplanar_touching_pairs,
     cross,
     dot3,
+    group_boxes,
     groups_across_edges,
     inward_edges,
     overlapped_sides,
     unit,
 )
 
+#: The 3x3 neighbourhood of a pixel, row then column offsets.
+_NINE_DY, _NINE_DX = np.repeat([-1, 0, 1], 3), np.tile([-1, 0, 1], 3)
 #: Faces whose boxes, grown by this (metres), overlap touch (so that two faces that both hold
 #: a point within the tolerance always touch).
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
@@ -73,6 +76,10 @@ class _Rows:
     plane: np.ndarray  # (4, F): each face's group plane, normal x, y, z and offset
     group_watching: np.ndarray  # (F,): the face's group has a watched edge
     overlapped: np.ndarray  # (2 * F,): ``overlapped`` flat, face * 2 + side
+    overlapped_any: np.ndarray  # (F,): overlapped from either side
+    outline: np.ndarray  # (F,) int32: ``outline``
+    outline_is_group: bool
+    box: np.ndarray  # (6, G): ``group_box``
     line: np.ndarray  # (4, E): each watched edge's in-plane line
     along: np.ndarray  # (5, E): each watched edge's direction and extent
 
@@ -87,6 +94,10 @@ class _Rows:
             np.ascontiguousarray(plane.T),
             faces.watching[faces.group],
             np.ascontiguousarray(faces.overlapped).ravel(),
+            faces.overlapped.any(axis=1),
+            faces.outline.astype(np.int32),
+            bool(np.array_equal(faces.outline, faces.group)),
+            np.ascontiguousarray(faces.group_box.T),
             np.ascontiguousarray(faces.edge_line.T),
             np.ascontiguousarray(faces.edge_along.T),
         )
@@ -108,7 +119,8 @@ class VisibleFaces:
     in-plane line (normal, offset), direction and extent, and the groups across a crease;
     ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``);
     ``watching``: the groups with a watched edge at all; ``near_cells``: the ``EDGE_CELL``
-    cells (any group) a watched edge may be near.
+    cells (any group) a watched edge may be near; ``group_box``: (G, 6) per group, a box
+    outside which none of its faces holds a point and no point is near its edges.
     """
 
     group: np.ndarray
@@ -128,6 +140,7 @@ class VisibleFaces:
     outline: np.ndarray
     watching: np.ndarray
     near_cells: CellMask | None
+    group_box: np.ndarray
     _rows: _Rows = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -204,6 +217,7 @@ class VisibleFaces:
             np.asarray(outline, dtype=np.int64),
             watching,
             CellMask.build(elo, ehi, EDGE_CELL),
+            group_boxes((a, b, c), own, group, own[first], offset[first], EDGE_MARGIN),
         )
 
     @property
@@ -236,31 +250,30 @@ class VisibleFaces:
         hit = tri >= 0
         face = np.where(hit, tri, 0)
         shown = tri.copy()
-        # which side of its face each ray meets (0: against the face's normal)
-        facing = np.take(self.own_normal[:, 0], face) * d[0]
-        facing += np.take(self.own_normal[:, 1], face) * d[1]
-        facing += np.take(self.own_normal[:, 2], face) * d[2]
-        side = (facing >= 0).astype(np.intp)
-        # only a hit in a group with a watched edge, or on a face a rival overlaps from that side,
-        # can be decided otherwise
-        watched = self.watching[self.group[face]]
+        rows = self._rows
+        # only a hit in a group with a watched edge, or on a face a rival overlaps from the side
+        # the ray meets, can be decided otherwise
+        examined = np.take(rows.group_watching, face)
         if near is not None:
-            watched &= near
-        examined = hit & (watched | self.overlapped[face, side])
+            examined &= near
+        rival = np.flatnonzero(np.take(rows.overlapped_any, face) & ~examined)
+        examined[rival] = np.take(rows.overlapped, face[rival] * 2 + self._side(face[rival], d, rival))
+        examined &= hit
         t: np.ndarray | None = None
         if want_distance:
-            every = self._distance(self.group[face], o, d, np.arange(len(tri)))
+            every = self._face_distance(face, o, d)
             every[~hit] = np.inf
             rays = np.flatnonzero(examined & np.isfinite(every))  # (a parallel ray's t is inf)
             reach = every[rays]
             t = every
         else:
             rays = np.flatnonzero(examined)
-            reach = self._distance(self.group[face[rays]], o, d, rays)
+            reach = self._face_distance(face[rays], o, d, rays)
             rays, reach = rays[np.isfinite(reach)], reach[np.isfinite(reach)]
         point = _points(o, d, rays, reach)
         near_edge, crease_ray, crease_group = self._near_watched(self.group[tri[rays]], point)
-        decide = np.flatnonzero(self.overlapped[tri[rays], side[rays]] | near_edge)
+        overlapped = np.take(rows.overlapped, tri[rays] * 2 + self._side(tri[rays], d, rays))
+        decide = np.flatnonzero(overlapped | near_edge)
         if len(decide):
             at = self.faces.find(key_of(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
             listed = at >= 0
@@ -290,22 +303,30 @@ class VisibleFaces:
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
         shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, near)
         face = np.maximum(shown, 0)
-        seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
-        outlined = np.pad(seen, 1, mode="edge")
+        seen = np.where(shown >= 0, np.take(self._rows.outline, face), -1).reshape(height, width)
+        # a pixel is on an outline where one of its 8 neighbours shows another outline value:
+        # each of the four directions compared once, marked on both pixels of a pair
         edge = np.zeros((height, width), dtype=bool)
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                if dy or dx:
-                    edge |= outlined[1 + dy : 1 + dy + height, 1 + dx : 1 + dx + width] != seen
+        for here, there in (((slice(None), slice(1, None)), (slice(None), slice(None, -1))),
+                            ((slice(1, None), slice(None)), (slice(None, -1), slice(None))),
+                            ((slice(1, None), slice(1, None)), (slice(None, -1), slice(None, -1))),
+                            ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None)))):  # fmt: skip
+            differs = seen[here] != seen[there]
+            edge[here] |= differs
+            edge[there] |= differs
         pixels = np.flatnonzero(edge.ravel())
-        padded = np.pad(np.where(shown >= 0, self.group[face], -1).reshape(height, width), 1, mode="edge")
         if not len(pixels) and not len(crease_ray):
             return shown, t
-        # candidates: the groups the 3x3 neighbourhood shows, those across a crease near the
-        # hit, and those across a crease near where the ray meets a neighbour's group
+        # candidates: the groups the 3x3 neighbourhood shows (a neighbour beyond the frame's
+        # border: the pixel on the border), those across a crease near the hit, and those across
+        # a crease near where the ray meets a neighbour's group
         y, x = np.divmod(pixels, width)
-        stride = width + 2
-        around = padded.ravel()[((y + 1) * stride + x + 1)[:, None] + np.array([dy * stride + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)])]
+        nine = np.clip(y[:, None] + _NINE_DY, 0, height - 1) * width + np.clip(x[:, None] + _NINE_DX, 0, width - 1)
+        if self._rows.outline_is_group:
+            around = seen.ravel()[nine].astype(np.int64)
+        else:
+            shows = shown[nine]
+            around = np.where(shows >= 0, self.group[np.maximum(shows, 0)], -1)
         # each pixel's distinct groups, ascending (a sort of nine per row, not of them all)
         around.sort(axis=1)
         fresh = around >= 0
@@ -313,22 +334,40 @@ class VisibleFaces:
         ray, cand = np.repeat(pixels, fresh.sum(axis=1)), around[fresh]
         if len(crease_ray):
             ray, cand = unique_pairs(np.concatenate([ray, crease_ray]), np.concatenate([cand, crease_group]))
-        dist = self._distance(cand, o, d, ray)
-        ahead = np.isfinite(dist) & (dist > 0)
-        point = _points(o, d, ray[ahead], dist[ahead])
-        _, extra_at, extra_group = self._near_watched(cand[ahead], point)
+        ray, cand, dist, point = self._reachable(ray, cand, o, d)
+        _, extra_at, extra_group = self._near_watched(cand, point)
         if len(extra_at):
-            ray, cand = unique_pairs(np.concatenate([ray, ray[ahead][extra_at]]), np.concatenate([cand, extra_group]))
-            dist = self._distance(cand, o, d, ray)
-        ahead = np.isfinite(dist) & (dist > 0)
-        ray, face, dist = self._nearest_holding(ray[ahead], cand[ahead], dist[ahead], o, d)
+            ray, cand = unique_pairs(np.concatenate([ray, ray[extra_at]]), np.concatenate([cand, extra_group]))
+            ray, cand, dist, point = self._reachable(ray, cand, o, d)
+        ray, face, dist = self._nearest_holding(ray, cand, dist, point, d)
         shown[ray] = face
         if t is not None:
             t[ray] = dist
         return shown, t
 
+    def _reachable(
+        self, ray: np.ndarray, cand: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+        """The (ray, candidate group) pairs whose group's plane the ray meets ahead, at a point
+        inside the group's ``group_box``, with the distances and points.
+
+        A pair left out could change nothing: a point outside the box is held by none of the
+        group's faces and lies near none of its watched edges (``GROUP_BOX_MARGIN``). The box
+        test is a few comparisons per pair, where the tests it spares look the point up in the
+        cell tables (most of an outline's candidate planes are met outside their faces)."""
+        dist = self._distance(cand, o, d, ray)
+        ahead = np.flatnonzero(np.isfinite(dist) & (dist > 0))
+        point = _points(o, d, ray[ahead], dist[ahead])
+        g = cand[ahead]
+        box = self._rows.box
+        inside = np.ones(len(g), dtype=bool)
+        for k in range(3):
+            inside &= (point[k] >= np.take(box[k], g)) & (point[k] <= np.take(box[3 + k], g))
+        keep = ahead[inside]
+        return ray[keep], cand[keep], dist[keep], [p[inside] for p in point]
+
     def _nearest_holding(
-        self, ray: np.ndarray, cand: np.ndarray, dist: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]
+        self, ray: np.ndarray, cand: np.ndarray, dist: np.ndarray, point: list[np.ndarray], d: tuple[np.ndarray, ...]
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Of (ray, candidate group) pairs at ``dist`` (finite, ahead): per ray, the nearest
         candidate whose faces hold the ray, as (ray, highest holding face, distance); a tie in
@@ -340,6 +379,7 @@ class VisibleFaces:
         cannot change it (most rays at an outline are held by their nearest candidate)."""
         order = np.lexsort((dist, ray))
         ray, cand, dist = ray[order], cand[order], dist[order]
+        point = [p[order] for p in point]
         # a run: one ray's candidates at one distance, tested together
         new_ray = np.ones(len(ray), dtype=bool)
         new_ray[1:] = ray[1:] != ray[:-1]
@@ -355,11 +395,10 @@ class VisibleFaces:
             counts = run_stop[runs] - run_start[runs]
             offsets = np.cumsum(counts) - counts
             member = np.arange(int(counts.sum())) - np.repeat(offsets - run_start[runs], counts)
-            point = _points(o, d, ray[member], dist[member])
-            at = self.faces.find(key_of(cand[member], point, CELL))
+            at = self.faces.find(key_of(cand[member], [p[member] for p in point], CELL))
             face = np.full(len(member), -1, dtype=np.int64)
             listed = np.flatnonzero(at >= 0)
-            face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[member[listed]], d)
+            face[listed] = self._highest_holding(at[listed], [p[member[listed]] for p in point], ray[member[listed]], d)
             best = np.maximum.reduceat(face, offsets)
             held = best >= 0
             found.append((run_start[runs[held]], best[held]))
@@ -372,6 +411,30 @@ class VisibleFaces:
         return ray[start], face, dist[start]
 
     # -- the exact tests --------------------------------------------------------------------
+    def _side(self, face: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
+        """Which side of its face each ray meets: 0 against the face's normal, 1 along it."""
+        own = self._rows.own
+        facing = np.take(own[0], face) * np.take(d[0], ray)
+        facing += np.take(own[1], face) * np.take(d[1], ray)
+        facing += np.take(own[2], face) * np.take(d[2], ray)
+        return (facing >= 0).astype(np.intp)
+
+    def _face_distance(self, face: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`_distance` to each face's group plane, from per-face rows (the same values);
+        ``ray`` ``None``: face i is ray i's."""
+        plane = self._rows.plane
+        nx, ny, nz = (np.take(plane[k], face) for k in range(3))
+        if o.ndim == 1:  # one origin: the plane's offset from it once per face
+            across = np.take(plane[3] - (plane[0] * o[0] + plane[1] * o[1] + plane[2] * o[2]), face)
+        else:
+            ox, oy, oz = (o[k] if ray is None else o[k][ray] for k in range(3))
+            across = np.take(plane[3], face) - (nx * ox + ny * oy + nz * oz)
+        dx, dy, dz = (d[k] if ray is None else np.take(d[k], ray) for k in range(3))
+        along = nx * dx
+        along += ny * dy
+        along += nz * dz
+        return np.divide(across, along, out=np.full(len(face), np.inf), where=along != 0)
+
     def _distance(self, group: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
         """Distance along each ray (an index into ``d``'s rows) to its group's plane (inf where parallel)."""
         nx, ny, nz = (np.take(self.group_normal[:, k], group) for k in range(3))
