@@ -41,6 +41,7 @@ from scipy.sparse.csgraph import connected_components
 from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
 from povagent.generate.face_groups import (
     CONTAINS_TOLERANCE,
+    FaceRows,
     coplanar_touching_pairs,
     cross,
     dot3,
@@ -53,6 +54,10 @@ from povagent.generate.face_groups import (
 
 #: The 3x3 neighbourhood of a pixel, row then column offsets.
 _NINE_DY, _NINE_DX = np.repeat([-1, 0, 1], 3), np.tile([-1, 0, 1], 3)
+_ALL, _HEAD, _TAIL = slice(None), slice(1, None), slice(None, -1)
+#: A pixel's neighbours in four directions (left, up, up-left, up-right), as the
+#: slices of an image at the pixels and at their neighbours (the other four are the reverse).
+_PAIRS = (((_ALL, _HEAD), (_ALL, _TAIL)), ((_HEAD, _ALL), (_TAIL, _ALL)), ((_HEAD, _HEAD), (_TAIL, _TAIL)), ((_HEAD, _TAIL), (_TAIL, _HEAD)))
 #: Faces whose boxes, grown by this (metres), overlap touch (so that two faces that both hold
 #: a point within the tolerance always touch).
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
@@ -62,45 +67,6 @@ EDGE_MARGIN = 4 * CONTAINS_TOLERANCE
 CELL = 0.25
 #: ... and of the watched edges' (finer: a cell lists the few edges passing through it).
 EDGE_CELL = 0.0625
-
-
-@dataclass(frozen=True)
-class _Rows:
-    """The per-face and per-edge numbers the decisions gather, one contiguous row per
-    component: a gather from a row is several times faster than from a column of an (F, 3)
-    array, and the values (hence every product and sum) are the same."""
-
-    own: np.ndarray  # (3, F): each face's own normal
-    open: np.ndarray  # (F,): not a closed solid's face (met from either side)
-    edges: np.ndarray  # (3 edges, 4, F): inward edge normal x, y, z and offset
-    plane: np.ndarray  # (4, F): each face's group plane, normal x, y, z and offset
-    group_watching: np.ndarray  # (F,): the face's group has a watched edge
-    overlapped: np.ndarray  # (2 * F,): ``overlapped`` flat, face * 2 + side
-    overlapped_any: np.ndarray  # (F,): overlapped from either side
-    outline: np.ndarray  # (F,) int32: ``outline``
-    outline_is_group: bool
-    box: np.ndarray  # (6, G): ``group_box``
-    line: np.ndarray  # (4, E): each watched edge's in-plane line
-    along: np.ndarray  # (5, E): each watched edge's direction and extent
-
-    @classmethod
-    def of(cls, faces: VisibleFaces) -> _Rows:
-        plane = np.concatenate([faces.group_normal, faces.group_offset[:, None]], axis=1)[faces.group]
-        edges = np.concatenate([faces.edges, faces.edge_offsets[:, :, None]], axis=2)  # (F, 3, 4)
-        return cls(
-            np.ascontiguousarray(faces.own_normal.T),
-            ~faces.closed,
-            np.ascontiguousarray(edges.transpose(1, 2, 0)),
-            np.ascontiguousarray(plane.T),
-            faces.watching[faces.group],
-            np.ascontiguousarray(faces.overlapped).ravel(),
-            faces.overlapped.any(axis=1),
-            faces.outline.astype(np.int32),
-            bool(np.array_equal(faces.outline, faces.group)),
-            np.ascontiguousarray(faces.group_box.T),
-            np.ascontiguousarray(faces.edge_line.T),
-            np.ascontiguousarray(faces.edge_along.T),
-        )
 
 
 @dataclass(frozen=True)
@@ -141,10 +107,10 @@ class VisibleFaces:
     watching: np.ndarray
     near_cells: CellMask | None
     group_box: np.ndarray
-    _rows: _Rows = field(init=False, repr=False, compare=False)
+    _rows: FaceRows = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_rows", _Rows.of(self))
+        object.__setattr__(self, "_rows", FaceRows.of(self))
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
@@ -307,10 +273,7 @@ class VisibleFaces:
         # a pixel is on an outline where one of its 8 neighbours shows another outline value:
         # each of the four directions compared once, marked on both pixels of a pair
         edge = np.zeros((height, width), dtype=bool)
-        for here, there in (((slice(None), slice(1, None)), (slice(None), slice(None, -1))),
-                            ((slice(1, None), slice(None)), (slice(None, -1), slice(None))),
-                            ((slice(1, None), slice(1, None)), (slice(None, -1), slice(None, -1))),
-                            ((slice(1, None), slice(None, -1)), (slice(None, -1), slice(1, None)))):  # fmt: skip
+        for here, there in _PAIRS:
             differs = seen[here] != seen[there]
             edge[here] |= differs
             edge[there] |= differs
