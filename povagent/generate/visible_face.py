@@ -208,11 +208,11 @@ class VisibleFaces:
         o: np.ndarray,
         d: tuple[np.ndarray, ...],
         want_distance: bool = True,
-        near: np.ndarray | None = None,
+        skip: bool = False,
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
         """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
-        across a crease near each hit. ``near``: whether each hit lies in one of ``near_cells``
-        (one that does not is near no watched edge: its exact tests are skipped)."""
+        across a crease near each hit. ``skip``: the exact tests of hits in none of
+        ``near_cells`` are skipped (they would find no watched edge to test)."""
         hit = tri >= 0
         face = np.where(hit, tri, 0)
         shown = tri.copy()
@@ -220,23 +220,31 @@ class VisibleFaces:
         # only a hit in a group with a watched edge, or on a face a rival overlaps from the side
         # the ray meets, can be decided otherwise
         examined = np.take(rows.group_watching, face)
-        if near is not None:
-            examined &= near
+        near_cells = self.near_cells if skip else None
+        every: np.ndarray | None = None
+        if want_distance or near_cells is not None:
+            every = self._face_distance(face, o, d)
+            every[~hit] = np.inf
+            finite = np.isfinite(every)  # (a parallel ray's t is inf)
+        if near_cells is not None:
+            # each hit, as the exact tests compute it: one in no cell of a watched edge has no
+            # key in the watched table, so the tests would leave it as it is
+            at = np.where(finite, every, 0.0)
+            hits = [o[k] + d[k] * at for k in range(3)]
+            examined &= near_cells.covers(*hits)
         rival = np.flatnonzero(np.take(rows.overlapped_any, face) & ~examined)
         examined[rival] = np.take(rows.overlapped, face[rival] * 2 + self._side(face[rival], d, rival))
         examined &= hit
-        t: np.ndarray | None = None
-        if want_distance:
-            every = self._face_distance(face, o, d)
-            every[~hit] = np.inf
-            rays = np.flatnonzero(examined & np.isfinite(every))  # (a parallel ray's t is inf)
+        if every is not None:
+            rays = np.flatnonzero(examined & finite)
             reach = every[rays]
-            t = every
+            point = [h[rays] for h in hits] if near_cells is not None else _points(o, d, rays, reach)
         else:
             rays = np.flatnonzero(examined)
             reach = self._face_distance(face[rays], o, d, rays)
             rays, reach = rays[np.isfinite(reach)], reach[np.isfinite(reach)]
-        point = _points(o, d, rays, reach)
+            point = _points(o, d, rays, reach)
+        t = every if want_distance else None
         near_edge, crease_ray, crease_group = self._near_watched(self.group[tri[rays]], point)
         overlapped = np.take(rows.overlapped, tri[rays] * 2 + self._side(tri[rays], d, rays))
         decide = np.flatnonzero(overlapped | near_edge)
@@ -251,23 +259,17 @@ class VisibleFaces:
 
     # -- a camera's pixels ------------------------------------------------------------------
     def decide_image(
-        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, reach: np.ndarray | None = None
+        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, skip: bool = False
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
-        ``reach``: embree's float32 distances, to skip the exact tests of hits in no cell a
-        watched edge reaches (the skip is decided on embree's numbers, so it may differ by CPU,
-        but only for hits a cell or more from any watched edge, which the exact test leaves
-        as they are)."""
-        near = None
-        if reach is not None and self.near_cells is not None:
-            o32 = np.asarray(origin, dtype=np.float32)
-            t32 = np.where(tri >= 0, reach, np.float32(0))
-            near = self.near_cells.covers(*(o32[k] + np.asarray(directions[k], dtype=np.float32) * t32 for k in range(3)))
+        ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
+        up with the float64 hit the tests would use, so the same on every CPU) are skipped:
+        they would find no edge to test, and the pixels are the same either way."""
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, near)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
         face = np.maximum(shown, 0)
         seen = np.where(shown >= 0, np.take(self._rows.outline, face), -1).reshape(height, width)
         # a pixel is on an outline where one of its 8 neighbours shows another outline value:

@@ -50,7 +50,7 @@ def views(request):
         d = renderer._directions(camera)
         origin = np.asarray(camera.position, dtype=np.float32)
         out = renderer._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
-        hits.append((out["primID"].astype(np.intp), origin, d, camera.height, camera.width, out["tfar"]))
+        hits.append((out["primID"].astype(np.intp), origin, d, camera.height, camera.width))
     return renderer, hits
 
 
@@ -58,11 +58,11 @@ def views(request):
 def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, objects_only, monkeypatch):
     renderer, hits = views
     faces = renderer._objects if objects_only else renderer._visible
-    fast = [faces.decide_image(*h[:5], want_distance=not objects_only, reach=h[5]) for h in hits]
+    fast = [faces.decide_image(*h, want_distance=not objects_only, skip=True) for h in hits]
     monkeypatch.setattr(VisibleFaces, "_reachable", every_candidate_reachable)
     monkeypatch.setattr(VisibleFaces, "_nearest_holding", every_candidate_tested)
-    for (tri, *args, reach), (shown, t) in zip(hits, fast):
-        exact = faces.decide_image(tri, *args, want_distance=not objects_only, reach=reach)
+    for (tri, *args), (shown, t) in zip(hits, fast):
+        exact = faces.decide_image(tri, *args, want_distance=not objects_only)
         assert np.array_equal(shown, exact[0])
         if not objects_only:
             assert np.array_equal(t, exact[1])
