@@ -69,8 +69,16 @@ def pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def key_of(group: np.ndarray, point: list[np.ndarray], size: float) -> np.ndarray:
-    """The (group, cell) key of each point."""
-    return pack(group, np.stack([cell(p, size) for p in point], axis=-1))
+    """The (group, cell) key of each point: :func:`pack` of its cells, one coordinate at a time."""
+    half = _CELL_SPAN // 2
+    key = np.asarray(group, dtype=np.int64)
+    for p in point:
+        c = cell(p, size)
+        np.clip(c, -half, half - 1, out=c)
+        c += half
+        key = key * _CELL_SPAN
+        key += c
+    return key
 
 
 def boxes_keys(group: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

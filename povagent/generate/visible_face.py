@@ -417,17 +417,25 @@ class VisibleFaces:
         """Which points lie within ``EDGE_MARGIN`` of a watched edge of their group, and the
         (point index, group) pairs of the groups across the creases they lie near."""
         near = np.zeros(len(group), dtype=bool)
-        some = np.flatnonzero(self.watching[group])  # only groups with a watched edge are looked up
-        at = self.watched.find(key_of(group[some], [p[some] for p in point], EDGE_CELL))
-        listed = some[at >= 0]
-        at = at[at >= 0]
-        row, edge = self.watched.explode(at)
+        watching = self.watching[group]  # only groups with a watched edge are looked up
+        some = None if watching.all() else np.flatnonzero(watching)
+        at = self.watched.find(key_of(group, point, EDGE_CELL) if some is None else key_of(group[some], [p[some] for p in point], EDGE_CELL))
+        listed = np.flatnonzero(at >= 0)
+        if some is not None:
+            listed = some[listed]
+        row, edge = self.watched.explode(at[at >= 0])
         row = listed[row]
-        line, along = self.edge_line[edge], self.edge_along[edge]
+        # (the same products and sums as on the (E, 4) and (E, 5) arrays, gathered from rows)
+        line, along = self._rows.line, self._rows.along
         x = [p[row] for p in point]
-        off = line[:, 0] * x[0] + line[:, 1] * x[1] + line[:, 2] * x[2] - line[:, 3]
-        pos = along[:, 0] * x[0] + along[:, 1] * x[1] + along[:, 2] * x[2]
-        close = (np.abs(off) < EDGE_MARGIN) & (pos > along[:, 3] - EDGE_MARGIN) & (pos < along[:, 4] + EDGE_MARGIN)
+        off = np.take(line[0], edge) * x[0]
+        off += np.take(line[1], edge) * x[1]
+        off += np.take(line[2], edge) * x[2]
+        off -= np.take(line[3], edge)
+        pos = np.take(along[0], edge) * x[0]
+        pos += np.take(along[1], edge) * x[1]
+        pos += np.take(along[2], edge) * x[2]
+        close = (np.abs(off) < EDGE_MARGIN) & (pos > np.take(along[3], edge) - EDGE_MARGIN) & (pos < np.take(along[4], edge) + EDGE_MARGIN)
         near[row[close]] = True
         across = self.edge_across[edge[close]]  # (n, 2)
         pair_row = np.repeat(row[close], 2)
