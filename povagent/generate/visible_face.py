@@ -22,7 +22,14 @@ candidate:
 
 A closed solid's face (every box, prism and sphere) is met only from outside; a floor or a
 ceiling (a lone quad) from either side. Faces near a point are found through tables keyed by
-(group, ``CELL``-sized cell). What stays machine-dependent: a sliver thinner than a pixel that
+(group, ``CELL``-sized cell). The work is kept to where it can change a decision, and
+every shortcut is itself decided on the float64 numbers the tests use (never on embree's), so
+it changes no pixel on any CPU (``tests/generate/test_visible_face.py`` holds the pixels equal
+to testing everything): a hit in no cell of a watched edge skips the near-edge test (it would
+find no edge to test); a candidate group whose ``group_box`` the ray meets outside is dropped
+(none of its faces could hold the point; the box's bound is worked out in
+:func:`~povagent.generate.face_groups.group_boxes`); an outline pixel's candidates are tested
+nearest first, a farther one only where none nearer holds the ray. What stays machine-dependent: a sliver thinner than a pixel that
 no neighbour shows and no crease leads to, and shadow rays grazing an edge (embree decides
 those alone); measured in ``benchmarks/bench_render_isa.py``, see
 ``docs/explanation/reproducibility.md``. What it must not do: call a numpy function whose

@@ -1,6 +1,7 @@
-"""The faces a camera's pixels show: the shortcuts of :meth:`VisibleFaces.decide_image` (a
-candidate group's box, its candidates tested nearest first) change no pixel against testing
-every candidate, and the box they rest on holds every point the exact tests could accept."""
+"""The faces a camera's pixels show: the shortcuts of :meth:`VisibleFaces.decide_image` (the
+skip of hits in no watched edge's cell, a candidate group's box, candidates tested nearest
+first) change no pixel and no distance against testing every candidate everywhere, and the box
+they rest on holds every point the exact tests could accept."""
 
 from __future__ import annotations
 
