@@ -341,46 +341,41 @@ class VisibleFaces:
     def _nearest_holding(
         self, ray: np.ndarray, cand: np.ndarray, dist: np.ndarray, point: list[np.ndarray], d: tuple[np.ndarray, ...]
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Of (ray, candidate group) pairs at ``dist`` (finite, ahead): per ray, the nearest
-        candidate whose faces hold the ray, as (ray, highest holding face, distance); a tie in
-        distance goes to the higher face, a ray no candidate holds is left out.
+        """Of (ray, candidate group) pairs at ``dist`` (finite, ahead; a ray's pairs next to each
+        other, as :meth:`_reachable` leaves them): per ray, the nearest candidate whose faces
+        hold the ray, as (ray, highest holding face, distance); a tie in distance goes to the
+        higher face, a ray no candidate holds is left out.
 
         The candidates are tested nearest first, a ray's farther ones only where none nearer
         holds it: the answer is the one testing every candidate gives (the order is by the
         exact float64 distances, which are the same on every CPU), without the tests that
         cannot change it (most rays at an outline are held by their nearest candidate)."""
-        order = np.lexsort((dist, ray))
-        ray, cand, dist = ray[order], cand[order], dist[order]
-        point = [p[order] for p in point]
-        # a run: one ray's candidates at one distance, tested together
-        new_ray = np.ones(len(ray), dtype=bool)
-        new_ray[1:] = ray[1:] != ray[:-1]
-        new_run = new_ray.copy()
-        new_run[1:] |= dist[1:] != dist[:-1]
-        run_start = np.flatnonzero(new_run)
-        run_stop = np.append(run_start[1:], len(ray))
-        first_run = np.flatnonzero(new_ray[run_start])  # per ray, its first run ...
-        stop_run = np.append(first_run[1:], len(run_start))  # ... and the end of its runs
+        # a round tests, per ray still open, its candidates at the least distance not yet
+        # tested (a minimum per run of one ray's pairs: no sort)
+        live = np.arange(len(ray))  # the pairs not yet tested, of rays not yet decided
         found = []
-        live, runs = np.arange(len(first_run)), first_run
         while len(live):
-            counts = run_stop[runs] - run_start[runs]
-            offsets = np.cumsum(counts) - counts
-            member = np.arange(int(counts.sum())) - np.repeat(offsets - run_start[runs], counts)
+            lray, ldist = ray[live], dist[live]
+            new_ray = np.ones(len(live), dtype=bool)
+            new_ray[1:] = lray[1:] != lray[:-1]
+            starts = np.flatnonzero(new_ray)
+            which = np.cumsum(new_ray) - 1  # each live pair's ray, counted from 0
+            nearest = np.minimum.reduceat(ldist, starts)
+            tested = ldist == np.take(nearest, which)
+            member = live[tested]
             at = self.faces.find(key_of(cand[member], [p[member] for p in point], CELL))
             face = np.full(len(member), -1, dtype=np.int64)
             listed = np.flatnonzero(at >= 0)
             face[listed] = self._highest_holding(at[listed], [p[member[listed]] for p in point], ray[member[listed]], d)
-            best = np.maximum.reduceat(face, offsets)
+            # per ray, the highest face among its tested pairs (each ray has at least one)
+            best = np.maximum.reduceat(face, np.flatnonzero(np.r_[True, which[tested][1:] != which[tested][:-1]]))
             held = best >= 0
-            found.append((run_start[runs[held]], best[held]))
-            runs = runs[~held] + 1
-            live = live[~held]
-            more = runs < stop_run[live]
-            live, runs = live[more], runs[more]
-        start = np.concatenate([f[0] for f in found]) if found else np.zeros(0, dtype=np.int64)
-        face = np.concatenate([f[1] for f in found]) if found else np.zeros(0, dtype=np.int64)
-        return ray[start], face, dist[start]
+            found.append((lray[starts[held]], best[held], nearest[held]))
+            live = live[~tested & ~np.take(held, which)]
+        if not found:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+        rays, faces, dists = zip(*found)
+        return np.concatenate(rays), np.concatenate(faces), np.concatenate(dists)
 
     # -- the exact tests --------------------------------------------------------------------
     def _side(self, face: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
