@@ -233,7 +233,7 @@ class FaceRows:
             np.ascontiguousarray(plane.T),
             faces.watching[faces.group],
             np.ascontiguousarray(faces.overlapped).ravel(),
-            faces.overlapped.any(axis=1),
+            np.asarray(faces.overlapped.any(axis=1)),
             faces.outline.astype(np.int32),
             bool(np.array_equal(faces.outline, faces.group)),
             np.ascontiguousarray(faces.group_box.T),

@@ -233,7 +233,7 @@ class VisibleFaces:
             every = self._face_distance(face, o, d)
             every[~hit] = np.inf
             finite = np.isfinite(every)  # (a parallel ray's t is inf)
-        if near_cells is not None:
+        if near_cells is not None and every is not None:
             # each hit, as the exact tests compute it: one in no cell of a watched edge has no
             # key in the watched table, so the tests would leave it as it is
             at = np.where(finite, every, 0.0)
