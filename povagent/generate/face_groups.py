@@ -12,12 +12,9 @@ laid out in rows (:class:`FaceRows`). What it must not do: look at rays or pixel
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from povagent.generate.visible_face import VisibleFaces
 
 #: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
 PARALLEL_TOLERANCE = 1e-9
@@ -202,6 +199,38 @@ def group_boxes(
     return box
 
 
+class BuiltFaces(Protocol):
+    """What :meth:`FaceRows.of` reads of a built ``VisibleFaces`` (named by its fields, so this
+    module, below ``visible_face``, does not import it)."""
+
+    @property
+    def group(self) -> np.ndarray: ...
+    @property
+    def group_normal(self) -> np.ndarray: ...
+    @property
+    def group_offset(self) -> np.ndarray: ...
+    @property
+    def own_normal(self) -> np.ndarray: ...
+    @property
+    def closed(self) -> np.ndarray: ...
+    @property
+    def edges(self) -> np.ndarray: ...
+    @property
+    def edge_offsets(self) -> np.ndarray: ...
+    @property
+    def watching(self) -> np.ndarray: ...
+    @property
+    def overlapped(self) -> np.ndarray: ...
+    @property
+    def outline(self) -> np.ndarray: ...
+    @property
+    def group_box(self) -> np.ndarray: ...
+    @property
+    def edge_line(self) -> np.ndarray: ...
+    @property
+    def edge_along(self) -> np.ndarray: ...
+
+
 @dataclass(frozen=True)
 class FaceRows:
     """The per-face and per-edge numbers the decisions gather, one contiguous row per
@@ -222,8 +251,8 @@ class FaceRows:
     along: np.ndarray  # (5, E): each watched edge's direction and extent
 
     @classmethod
-    def of(cls, faces: VisibleFaces) -> FaceRows:
-        """The rows of a built :class:`VisibleFaces`."""
+    def of(cls, faces: BuiltFaces) -> FaceRows:
+        """The rows of a built ``VisibleFaces``."""
         plane = np.concatenate([faces.group_normal, faces.group_offset[:, None]], axis=1)[faces.group]
         edges = np.concatenate([faces.edges, faces.edge_offsets[:, :, None]], axis=2)  # (F, 3, 4)
         return cls(
