@@ -69,8 +69,16 @@ def pack(group: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def key_of(group: np.ndarray, point: list[np.ndarray], size: float) -> np.ndarray:
-    """The (group, cell) key of each point."""
-    return pack(group, np.stack([cell(p, size) for p in point], axis=-1))
+    """The (group, cell) key of each point: :func:`pack` of its cells, one coordinate at a time."""
+    half = _CELL_SPAN // 2
+    key = np.asarray(group, dtype=np.int64)
+    for p in point:
+        c = cell(p, size)
+        np.clip(c, -half, half - 1, out=c)
+        c += half
+        key = key * _CELL_SPAN
+        key += c
+    return key
 
 
 def boxes_keys(group: np.ndarray, low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -98,13 +106,14 @@ def unique_pairs(ray: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.nda
 
 @dataclass(frozen=True)
 class CellMask:
-    """A dense grid of cells (any group) marked where something listed may lie: a point in an
-    unmarked cell needs no lookup. Built with every box grown by one cell, so a point whose
-    cell is computed in float32 (off by less than a cell) is still found in a marked one."""
+    """A dense grid of cells (any group) marked where a table lists something: a point in an
+    unmarked cell has no key in the table (whatever its group), so it needs no lookup. Its
+    cells are computed as :func:`key_of` computes a key's (:func:`cell` of the same float64
+    coordinates, clipped alike), so the mask answers exactly as the table would."""
 
-    origin: np.ndarray  # (3,) int64: the first cell's coordinates
+    origin: np.ndarray  # (3,) float64: the first cell's coordinates (whole numbers)
     shape: tuple[int, int, int]
-    marked: np.ndarray  # flat bool, x slowest
+    marked: np.ndarray  # flat bool, x slowest, with an unmarked layer of cells all round
     size: float
 
     #: a grid larger than this many cells is not built (every point is then looked up)
@@ -112,12 +121,15 @@ class CellMask:
 
     @classmethod
     def build(cls, low: np.ndarray, high: np.ndarray, size: float) -> CellMask | None:
-        """From (n, 3) inclusive cell ranges; ``None`` when there are none or the grid would be too large."""
-        if not len(low):
+        """From the (n, 3) inclusive cell ranges a table's keys were made from (:func:`boxes_keys`);
+        ``None`` when there are none, the grid would be too large, or it reaches the cells where
+        :func:`pack` clips (a key there may stand for a point beyond: a house spans far less)."""
+        half = _CELL_SPAN // 2
+        if not len(low) or low.min() <= -half or high.max() >= half - 1:
             return None
-        low, high = low - 1, high + 1
-        origin = low.min(axis=0)
-        dims = high.max(axis=0) - origin + 1
+        # one unmarked cell all round: a point beyond the grid is clipped onto it
+        origin = low.min(axis=0) - 1
+        dims = high.max(axis=0) - origin + 2
         if int(np.prod(dims.astype(np.float64))) > cls.MAX_CELLS:
             return None
         # inclusion-exclusion at the 8 corners of each box, then prefix sums along the axes
@@ -130,18 +142,23 @@ class CellMask:
         for axis in range(3):
             np.cumsum(count, axis=axis, out=count)
         marked = count[: dims[0], : dims[1], : dims[2]] > 0
-        return cls(origin.astype(np.int64), (int(dims[0]), int(dims[1]), int(dims[2])), marked.ravel(), size)
+        return cls(origin.astype(np.float64), (int(dims[0]), int(dims[1]), int(dims[2])), marked.ravel(), size)
 
     def covers(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Whether each point (float32 coordinates are enough) lies in a marked cell."""
-        index = np.zeros(len(x), dtype=np.int64)
-        inside = np.ones(len(x), dtype=bool)
-        inv = np.float32(1.0 / self.size)
+        """Whether each point (finite float64 coordinates, as the table's keys are computed) lies
+        in a marked cell."""
+        # the cell as ``cell`` computes it, then its place in the grid, all in float64 (whole
+        # numbers far below 2**53: exact), clipped onto the unmarked border beyond the grid
+        index: np.ndarray | None = None
         for k, coord in enumerate((x, y, z)):
-            c = np.floor(coord * inv).astype(np.int64) - self.origin[k]
-            inside &= (c >= 0) & (c < self.shape[k])
-            index *= self.shape[k]
-            index += c
-        out = np.zeros(len(x), dtype=bool)
-        out[inside] = self.marked[index[inside]]
-        return out
+            c = np.multiply(coord, 1.0 / self.size, dtype=np.float64)
+            np.floor(c, out=c)
+            c -= self.origin[k]
+            np.clip(c, 0, self.shape[k] - 1, out=c)
+            if index is None:
+                index = c
+            else:
+                index *= self.shape[k]
+                index += c
+        assert index is not None
+        return np.take(self.marked, index.astype(np.intp))

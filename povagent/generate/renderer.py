@@ -289,7 +289,7 @@ class Renderer:
         out = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
         visible = self._objects if objects_only else self._visible
         # (an instance mask wants no distances: then they are left uncomputed, None)
-        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, reach=out["tfar"])
+        tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True)
         return d, origin, tri, t  # face indices as numpy's gathers want them
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:

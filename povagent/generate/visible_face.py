@@ -22,7 +22,14 @@ candidate:
 
 A closed solid's face (every box, prism and sphere) is met only from outside; a floor or a
 ceiling (a lone quad) from either side. Faces near a point are found through tables keyed by
-(group, ``CELL``-sized cell). What stays machine-dependent: a sliver thinner than a pixel that
+(group, ``CELL``-sized cell). The work is kept to where it can change a decision, and
+every shortcut is itself decided on the float64 numbers the tests use (never on embree's), so
+it changes no pixel on any CPU (``tests/generate/test_visible_face.py`` holds the pixels equal
+to testing everything): a hit in no cell of a watched edge skips the near-edge test (it would
+find no edge to test); a candidate group whose ``group_box`` the ray meets outside is dropped
+(none of its faces could hold the point; the box's bound is worked out in
+:func:`~povagent.generate.face_groups.group_boxes`); an outline pixel's candidates are tested
+nearest first, a farther one only where none nearer holds the ray. What stays machine-dependent: a sliver thinner than a pixel that
 no neighbour shows and no crease leads to, and shadow rays grazing an edge (embree decides
 those alone); measured in ``benchmarks/bench_render_isa.py``, see
 ``docs/explanation/reproducibility.md``. What it must not do: call a numpy function whose
@@ -32,21 +39,32 @@ element by element.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
+from povagent.generate.face_groups import (
+    CONTAINS_TOLERANCE,
+    FaceRows,
+    coplanar_touching_pairs,
+    cross,
+    dot3,
+    group_boxes,
+    groups_across_edges,
+    inward_edges,
+    overlapped_sides,
+    unit,
+)
 
-#: Two faces are coplanar when their unit normals agree to this (|dot| >= 1 - this) ...
-PARALLEL_TOLERANCE = 1e-9
-#: ... and their planes are this close (metres).
-PLANE_TOLERANCE = 1e-5
-#: A hit point within this distance (metres) outside a triangle's edge still counts as inside:
-#: more than embree's float32 error over a house (a few micrometres), far below a pixel.
-CONTAINS_TOLERANCE = 1e-5
+#: The 3x3 neighbourhood of a pixel, row then column offsets.
+_NINE_DY, _NINE_DX = np.repeat([-1, 0, 1], 3), np.tile([-1, 0, 1], 3)
+_ALL, _HEAD, _TAIL = slice(None), slice(1, None), slice(None, -1)
+#: A pixel's neighbours in four directions (left, up, up-left, up-right), as the
+#: slices of an image at the pixels and at their neighbours (the other four are the reverse).
+_PAIRS = (((_ALL, _HEAD), (_ALL, _TAIL)), ((_HEAD, _ALL), (_TAIL, _ALL)), ((_HEAD, _HEAD), (_TAIL, _TAIL)), ((_HEAD, _TAIL), (_TAIL, _HEAD)))
 #: Faces whose boxes, grown by this (metres), overlap touch (so that two faces that both hold
 #: a point within the tolerance always touch).
 TOUCH_MARGIN = 4 * CONTAINS_TOLERANCE
@@ -74,7 +92,8 @@ class VisibleFaces:
     in-plane line (normal, offset), direction and extent, and the groups across a crease;
     ``outline``: what tells two pixels apart (each face's group, or its look ``by_look``);
     ``watching``: the groups with a watched edge at all; ``near_cells``: the ``EDGE_CELL``
-    cells (any group) a watched edge may be near.
+    cells (any group) a watched edge may be near; ``group_box``: (G, 6) per group, a box
+    outside which none of its faces holds a point and no point is near its edges.
     """
 
     group: np.ndarray
@@ -94,6 +113,11 @@ class VisibleFaces:
     outline: np.ndarray
     watching: np.ndarray
     near_cells: CellMask | None
+    group_box: np.ndarray
+    _rows: FaceRows = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_rows", FaceRows.of(self))
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
@@ -110,16 +134,16 @@ class VisibleFaces:
         count = len(faces)
         closed = np.zeros(count, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
         a, b, c = (v[faces[:, i]] for i in range(3))
-        own = _unit(_cross(b - a, c - a))
-        offset = _dot3(own, a)
+        own = unit(cross(b - a, c - a))
+        offset = dot3(own, a)
         lo = np.minimum(np.minimum(a, b), c) - TOUCH_MARGIN
         hi = np.maximum(np.maximum(a, b), c) + TOUCH_MARGIN
-        left, right = _coplanar_touching_pairs(own, offset, lo, hi)
+        left, right = coplanar_touching_pairs(own, offset, lo, hi)
         graph = coo_matrix((np.ones(len(left)), (left, right)), shape=(count, count))
         _, group = connected_components(graph, directed=False)
         first = np.full(group.max() + 1 if count else 0, count, dtype=np.int64)
         np.minimum.at(first, group, np.arange(count))
-        edges, edge_offsets = _inward_edges(own, a, b, c)
+        edges, edge_offsets = inward_edges(own, a, b, c)
         # every face under (its group, each cell its grown box reaches), the highest first
         key, item = boxes_keys(group, cell(lo, CELL), cell(hi, CELL))
         table = CellTable.build([key], [item], order_by=-np.arange(count))
@@ -128,19 +152,19 @@ class VisibleFaces:
         differs = look != np.repeat(look[table.starts[:-1]], sizes)
         mixed = np.zeros(len(table.keys), dtype=bool)
         np.logical_or.at(mixed, np.repeat(np.arange(len(table.keys)), sizes), differs)
-        overlapped = _overlapped_sides(v, faces, own, closed, looks, left, right)
+        overlapped = overlapped_sides(v, faces, own, closed, looks, left, right)
         # watched edges: creases, and every edge of a face listed under a mixed key
-        across, internal = _groups_across_edges(v, faces, group, looks, by_look)
+        across, internal = groups_across_edges(v, faces, group, looks, by_look)
         in_mixed = np.zeros(count, dtype=bool)
         in_mixed[table.items[np.repeat(mixed, sizes)]] = True
         # (an edge inside a region of one look, a quad's diagonal, decides nothing)
         watch = (across >= 0).any(axis=2) | (in_mixed[:, None] & ~internal)
         wf, we = np.nonzero(watch)
         p, q = v[faces[wf, we]], v[faces[wf, (we + 1) % 3]]
-        line = _unit(_cross(own[wf], q - p))
-        along = _unit(q - p)
-        edge_line = np.concatenate([line, _dot3(line, p)[:, None]], axis=1)
-        edge_along = np.concatenate([along, _dot3(along, p)[:, None], _dot3(along, q)[:, None]], axis=1)
+        line = unit(cross(own[wf], q - p))
+        along = unit(q - p)
+        edge_line = np.concatenate([line, dot3(line, p)[:, None]], axis=1)
+        edge_along = np.concatenate([along, dot3(along, p)[:, None], dot3(along, q)[:, None]], axis=1)
         grow = EDGE_MARGIN + TOUCH_MARGIN
         elo, ehi = cell(np.minimum(p, q) - grow, EDGE_CELL), cell(np.maximum(p, q) + grow, EDGE_CELL)
         ekey, eitem = boxes_keys(group[wf], elo, ehi)
@@ -166,6 +190,7 @@ class VisibleFaces:
             np.asarray(outline, dtype=np.int64),
             watching,
             CellMask.build(elo, ehi, EDGE_CELL),
+            group_boxes((a, b, c), own, group, own[first], offset[first], EDGE_MARGIN),
         )
 
     @property
@@ -190,39 +215,46 @@ class VisibleFaces:
         o: np.ndarray,
         d: tuple[np.ndarray, ...],
         want_distance: bool = True,
-        near: np.ndarray | None = None,
+        skip: bool = False,
     ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
         """:meth:`decide` (the distances only if wanted), and the (ray, group) pairs of groups
-        across a crease near each hit. ``near``: whether each hit lies in one of ``near_cells``
-        (one that does not is near no watched edge: its exact tests are skipped)."""
+        across a crease near each hit. ``skip``: the exact tests of hits in none of
+        ``near_cells`` are skipped (they would find no watched edge to test)."""
         hit = tri >= 0
         face = np.where(hit, tri, 0)
         shown = tri.copy()
-        # which side of its face each ray meets (0: against the face's normal)
-        facing = np.take(self.own_normal[:, 0], face) * d[0]
-        facing += np.take(self.own_normal[:, 1], face) * d[1]
-        facing += np.take(self.own_normal[:, 2], face) * d[2]
-        side = (facing >= 0).astype(np.intp)
-        # only a hit in a group with a watched edge, or on a face a rival overlaps from that side,
-        # can be decided otherwise
-        watched = self.watching[self.group[face]]
-        if near is not None:
-            watched &= near
-        examined = hit & (watched | self.overlapped[face, side])
-        t: np.ndarray | None = None
-        if want_distance:
-            every = self._distance(self.group[face], o, d, np.arange(len(tri)))
+        rows = self._rows
+        # only a hit in a group with a watched edge, or on a face a rival overlaps from the side
+        # the ray meets, can be decided otherwise
+        examined = np.take(rows.group_watching, face)
+        near_cells = self.near_cells if skip else None
+        every: np.ndarray | None = None
+        if want_distance or near_cells is not None:
+            every = self._face_distance(face, o, d)
             every[~hit] = np.inf
-            rays = np.flatnonzero(examined & np.isfinite(every))  # (a parallel ray's t is inf)
+            finite = np.isfinite(every)  # (a parallel ray's t is inf)
+        if near_cells is not None and every is not None:
+            # each hit, as the exact tests compute it: one in no cell of a watched edge has no
+            # key in the watched table, so the tests would leave it as it is
+            at = np.where(finite, every, 0.0)
+            hits = [o[k] + d[k] * at for k in range(3)]
+            examined &= near_cells.covers(*hits)
+        rival = np.flatnonzero(np.take(rows.overlapped_any, face) & ~examined)
+        examined[rival] = np.take(rows.overlapped, face[rival] * 2 + self._side(face[rival], d, rival))
+        examined &= hit
+        if every is not None:
+            rays = np.flatnonzero(examined & finite)
             reach = every[rays]
-            t = every
+            point = [h[rays] for h in hits] if near_cells is not None else _points(o, d, rays, reach)
         else:
             rays = np.flatnonzero(examined)
-            reach = self._distance(self.group[face[rays]], o, d, rays)
+            reach = self._face_distance(face[rays], o, d, rays)
             rays, reach = rays[np.isfinite(reach)], reach[np.isfinite(reach)]
-        point = _points(o, d, rays, reach)
+            point = _points(o, d, rays, reach)
+        t = every if want_distance else None
         near_edge, crease_ray, crease_group = self._near_watched(self.group[tri[rays]], point)
-        decide = np.flatnonzero(self.overlapped[tri[rays], side[rays]] | near_edge)
+        overlapped = np.take(rows.overlapped, tri[rays] * 2 + self._side(tri[rays], d, rays))
+        decide = np.flatnonzero(overlapped | near_edge)
         if len(decide):
             at = self.faces.find(key_of(self.group[tri[rays[decide]]], [p[decide] for p in point], CELL))
             listed = at >= 0
@@ -234,40 +266,39 @@ class VisibleFaces:
 
     # -- a camera's pixels ------------------------------------------------------------------
     def decide_image(
-        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, reach: np.ndarray | None = None
+        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, skip: bool = False
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
-        ``reach``: embree's float32 distances, to skip the exact tests of hits in no cell a
-        watched edge reaches (the skip is decided on embree's numbers, so it may differ by CPU,
-        but only for hits a cell or more from any watched edge, which the exact test leaves
-        as they are)."""
-        near = None
-        if reach is not None and self.near_cells is not None:
-            o32 = np.asarray(origin, dtype=np.float32)
-            t32 = np.where(tri >= 0, reach, np.float32(0))
-            near = self.near_cells.covers(*(o32[k] + np.asarray(directions[k], dtype=np.float32) * t32 for k in range(3)))
+        ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
+        up with the float64 hit the tests would use, so the same on every CPU) are skipped:
+        they would find no edge to test, and the pixels are the same either way."""
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, near)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
         face = np.maximum(shown, 0)
-        seen = np.where(shown >= 0, self.outline[face], -1).reshape(height, width)
-        outlined = np.pad(seen, 1, mode="edge")
+        seen = np.where(shown >= 0, np.take(self._rows.outline, face), -1).reshape(height, width)
+        # a pixel is on an outline where one of its 8 neighbours shows another outline value:
+        # each of the four directions compared once, marked on both pixels of a pair
         edge = np.zeros((height, width), dtype=bool)
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                if dy or dx:
-                    edge |= outlined[1 + dy : 1 + dy + height, 1 + dx : 1 + dx + width] != seen
+        for here, there in _PAIRS:
+            differs = seen[here] != seen[there]
+            edge[here] |= differs
+            edge[there] |= differs
         pixels = np.flatnonzero(edge.ravel())
-        padded = np.pad(np.where(shown >= 0, self.group[face], -1).reshape(height, width), 1, mode="edge")
         if not len(pixels) and not len(crease_ray):
             return shown, t
-        # candidates: the groups the 3x3 neighbourhood shows, those across a crease near the
-        # hit, and those across a crease near where the ray meets a neighbour's group
+        # candidates: the groups the 3x3 neighbourhood shows (a neighbour beyond the frame's
+        # border: the pixel on the border), those across a crease near the hit, and those across
+        # a crease near where the ray meets a neighbour's group
         y, x = np.divmod(pixels, width)
-        stride = width + 2
-        around = padded.ravel()[((y + 1) * stride + x + 1)[:, None] + np.array([dy * stride + dx for dy in (-1, 0, 1) for dx in (-1, 0, 1)])]
+        nine = np.clip(y[:, None] + _NINE_DY, 0, height - 1) * width + np.clip(x[:, None] + _NINE_DX, 0, width - 1)
+        if self._rows.outline_is_group:
+            around = seen.ravel()[nine].astype(np.int64)
+        else:
+            shows = shown[nine]
+            around = np.where(shows >= 0, self.group[np.maximum(shows, 0)], -1)
         # each pixel's distinct groups, ascending (a sort of nine per row, not of them all)
         around.sort(axis=1)
         fresh = around >= 0
@@ -275,33 +306,102 @@ class VisibleFaces:
         ray, cand = np.repeat(pixels, fresh.sum(axis=1)), around[fresh]
         if len(crease_ray):
             ray, cand = unique_pairs(np.concatenate([ray, crease_ray]), np.concatenate([cand, crease_group]))
-        dist = self._distance(cand, o, d, ray)
-        ahead = np.isfinite(dist) & (dist > 0)
-        point = _points(o, d, ray[ahead], dist[ahead])
-        _, extra_at, extra_group = self._near_watched(cand[ahead], point)
+        ray, cand, dist, point = self._reachable(ray, cand, o, d)
+        _, extra_at, extra_group = self._near_watched(cand, point)
         if len(extra_at):
-            ray, cand = unique_pairs(np.concatenate([ray, ray[ahead][extra_at]]), np.concatenate([cand, extra_group]))
-            dist = self._distance(cand, o, d, ray)
-        ahead = np.isfinite(dist) & (dist > 0)
-        ray, cand, dist = ray[ahead], cand[ahead], dist[ahead]
-        point = _points(o, d, ray, dist)
-        at = self.faces.find(key_of(cand, point, CELL))
-        face = np.full(len(ray), -1, dtype=np.int64)
-        listed = np.flatnonzero(at >= 0)
-        face[listed] = self._highest_holding(at[listed], [p[listed] for p in point], ray[listed], d)
-        held = face >= 0
-        ray, dist, face = ray[held], dist[held], face[held]
-        # per pixel, the nearest holding group (a tie in distance: the higher face)
-        order = np.lexsort((-face, dist, ray))
-        ray, dist, face = ray[order], dist[order], face[order]
-        first = np.ones(len(ray), dtype=bool)
-        first[1:] = ray[1:] != ray[:-1]
-        shown[ray[first]] = face[first]
+            ray, cand = unique_pairs(np.concatenate([ray, ray[extra_at]]), np.concatenate([cand, extra_group]))
+            ray, cand, dist, point = self._reachable(ray, cand, o, d)
+        ray, face, dist = self._nearest_holding(ray, cand, dist, point, d)
+        shown[ray] = face
         if t is not None:
-            t[ray[first]] = dist[first]
+            t[ray] = dist
         return shown, t
 
+    def _reachable(
+        self, ray: np.ndarray, cand: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+        """The (ray, candidate group) pairs whose group's plane the ray meets ahead, at a point
+        inside the group's ``group_box``, with the distances and points.
+
+        A pair left out could change nothing: a point outside the box is held by none of the
+        group's faces and lies near none of its watched edges (``GROUP_BOX_MARGIN``). The box
+        test is a few comparisons per pair, where the tests it spares look the point up in the
+        cell tables (most of an outline's candidate planes are met outside their faces)."""
+        dist = self._distance(cand, o, d, ray)
+        ahead = np.flatnonzero(np.isfinite(dist) & (dist > 0))
+        point = _points(o, d, ray[ahead], dist[ahead])
+        g = cand[ahead]
+        box = self._rows.box
+        inside = np.ones(len(g), dtype=bool)
+        for k in range(3):
+            inside &= (point[k] >= np.take(box[k], g)) & (point[k] <= np.take(box[3 + k], g))
+        keep = ahead[inside]
+        return ray[keep], cand[keep], dist[keep], [p[inside] for p in point]
+
+    def _nearest_holding(
+        self, ray: np.ndarray, cand: np.ndarray, dist: np.ndarray, point: list[np.ndarray], d: tuple[np.ndarray, ...]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Of (ray, candidate group) pairs at ``dist`` (finite, ahead; a ray's pairs next to each
+        other, as :meth:`_reachable` leaves them): per ray, the nearest candidate whose faces
+        hold the ray, as (ray, highest holding face, distance); a tie in distance goes to the
+        higher face, a ray no candidate holds is left out.
+
+        The candidates are tested nearest first, a ray's farther ones only where none nearer
+        holds it: the answer is the one testing every candidate gives (the order is by the
+        exact float64 distances, which are the same on every CPU), without the tests that
+        cannot change it (most rays at an outline are held by their nearest candidate)."""
+        # a round tests, per ray still open, its candidates at the least distance not yet
+        # tested (a minimum per run of one ray's pairs: no sort)
+        live = np.arange(len(ray))  # the pairs not yet tested, of rays not yet decided
+        found = []
+        while len(live):
+            lray, ldist = ray[live], dist[live]
+            new_ray = np.ones(len(live), dtype=bool)
+            new_ray[1:] = lray[1:] != lray[:-1]
+            starts = np.flatnonzero(new_ray)
+            which = np.cumsum(new_ray) - 1  # each live pair's ray, counted from 0
+            nearest = np.minimum.reduceat(ldist, starts)
+            tested = ldist == np.take(nearest, which)
+            member = live[tested]
+            at = self.faces.find(key_of(cand[member], [p[member] for p in point], CELL))
+            face = np.full(len(member), -1, dtype=np.int64)
+            listed = np.flatnonzero(at >= 0)
+            face[listed] = self._highest_holding(at[listed], [p[member[listed]] for p in point], ray[member[listed]], d)
+            # per ray, the highest face among its tested pairs (each ray has at least one)
+            best = np.maximum.reduceat(face, np.flatnonzero(np.r_[True, which[tested][1:] != which[tested][:-1]]))
+            held = best >= 0
+            found.append((lray[starts[held]], best[held], nearest[held]))
+            live = live[~tested & ~np.take(held, which)]
+        if not found:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0)
+        rays, faces, dists = zip(*found)
+        return np.concatenate(rays), np.concatenate(faces), np.concatenate(dists)
+
     # -- the exact tests --------------------------------------------------------------------
+    def _side(self, face: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
+        """Which side of its face each ray meets: 0 against the face's normal, 1 along it."""
+        own = self._rows.own
+        facing = np.take(own[0], face) * np.take(d[0], ray)
+        facing += np.take(own[1], face) * np.take(d[1], ray)
+        facing += np.take(own[2], face) * np.take(d[2], ray)
+        return (facing >= 0).astype(np.intp)
+
+    def _face_distance(self, face: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`_distance` to each face's group plane, from per-face rows (the same values);
+        ``ray`` ``None``: face i is ray i's."""
+        plane = self._rows.plane
+        nx, ny, nz = (np.take(plane[k], face) for k in range(3))
+        if o.ndim == 1:  # one origin: the plane's offset from it once per face
+            across = np.take(plane[3] - (plane[0] * o[0] + plane[1] * o[1] + plane[2] * o[2]), face)
+        else:
+            ox, oy, oz = (o[k] if ray is None else o[k][ray] for k in range(3))
+            across = np.take(plane[3], face) - (nx * ox + ny * oy + nz * oz)
+        dx, dy, dz = (d[k] if ray is None else np.take(d[k], ray) for k in range(3))
+        along = nx * dx
+        along += ny * dy
+        along += nz * dz
+        return np.divide(across, along, out=np.full(len(face), np.inf), where=along != 0)
+
     def _distance(self, group: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray) -> np.ndarray:
         """Distance along each ray (an index into ``d``'s rows) to its group's plane (inf where parallel)."""
         nx, ny, nz = (np.take(self.group_normal[:, k], group) for k in range(3))
@@ -319,17 +419,25 @@ class VisibleFaces:
         """Which points lie within ``EDGE_MARGIN`` of a watched edge of their group, and the
         (point index, group) pairs of the groups across the creases they lie near."""
         near = np.zeros(len(group), dtype=bool)
-        some = np.flatnonzero(self.watching[group])  # only groups with a watched edge are looked up
-        at = self.watched.find(key_of(group[some], [p[some] for p in point], EDGE_CELL))
-        listed = some[at >= 0]
-        at = at[at >= 0]
-        row, edge = self.watched.explode(at)
+        watching = self.watching[group]  # only groups with a watched edge are looked up
+        some = None if watching.all() else np.flatnonzero(watching)
+        at = self.watched.find(key_of(group, point, EDGE_CELL) if some is None else key_of(group[some], [p[some] for p in point], EDGE_CELL))
+        listed = np.flatnonzero(at >= 0)
+        if some is not None:
+            listed = some[listed]
+        row, edge = self.watched.explode(at[at >= 0])
         row = listed[row]
-        line, along = self.edge_line[edge], self.edge_along[edge]
+        # (the same products and sums as on the (E, 4) and (E, 5) arrays, gathered from rows)
+        line, along = self._rows.line, self._rows.along
         x = [p[row] for p in point]
-        off = line[:, 0] * x[0] + line[:, 1] * x[1] + line[:, 2] * x[2] - line[:, 3]
-        pos = along[:, 0] * x[0] + along[:, 1] * x[1] + along[:, 2] * x[2]
-        close = (np.abs(off) < EDGE_MARGIN) & (pos > along[:, 3] - EDGE_MARGIN) & (pos < along[:, 4] + EDGE_MARGIN)
+        off = np.take(line[0], edge) * x[0]
+        off += np.take(line[1], edge) * x[1]
+        off += np.take(line[2], edge) * x[2]
+        off -= np.take(line[3], edge)
+        pos = np.take(along[0], edge) * x[0]
+        pos += np.take(along[1], edge) * x[1]
+        pos += np.take(along[2], edge) * x[2]
+        close = (np.abs(off) < EDGE_MARGIN) & (pos > np.take(along[3], edge) - EDGE_MARGIN) & (pos < np.take(along[4], edge) + EDGE_MARGIN)
         near[row[close]] = True
         across = self.edge_across[edge[close]]  # (n, 2)
         pair_row = np.repeat(row[close], 2)
@@ -342,147 +450,32 @@ class VisibleFaces:
         point (within the tolerance) and that its ray can meet (a closed solid's face from
         outside only); -1 where none does."""
         row, g = self.faces.explode(at)
-        n = self.own_normal[g]
-        dr = [r[ray[row]] for r in d]
-        inside = ~self.closed[g] | (n[:, 0] * dr[0] + n[:, 1] * dr[1] + n[:, 2] * dr[2] < 0)
+        rows = self._rows
+        # each coordinate gathered once; each face's numbers from contiguous per-face rows
+        # (the same products and sums, in the same order, as on (F, 3) arrays)
+        x, y, z = (p[row] for p in point)
+        rr = ray[row]
+        facing = np.take(rows.own[0], g) * np.take(d[0], rr)
+        facing += np.take(rows.own[1], g) * np.take(d[1], rr)
+        facing += np.take(rows.own[2], g) * np.take(d[2], rr)
+        inside = np.take(rows.open, g) | (facing < 0)
         for e in range(3):
-            m = self.edges[g, e]
-            signed = m[:, 0] * point[0][row] + m[:, 1] * point[1][row] + m[:, 2] * point[2][row] - self.edge_offsets[g, e]
+            m = rows.edges[e]
+            signed = np.take(m[0], g) * x
+            signed += np.take(m[1], g) * y
+            signed += np.take(m[2], g) * z
+            signed -= np.take(m[3], g)
             inside &= signed >= -CONTAINS_TOLERANCE
+        # a key's faces are listed highest first: a row's first face inside is its highest
+        hit = np.flatnonzero(inside)
+        first = np.ones(len(hit), dtype=bool)
+        first[1:] = row[hit[1:]] != row[hit[:-1]]
         best = np.full(len(at), -1, dtype=np.int64)
-        np.maximum.at(best, row[inside], g[inside])
+        best[row[hit[first]]] = g[hit[first]]
         return best
 
 
 # -- helpers ----------------------------------------------------------------------------------
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross product of (n, 3) float64 arrays, with IEEE products and differences only."""
-    # Laid out by hand (the formatter is told to skip it): the x, y and z components one per
-    # row, as the cross product is written, so a wrong index stands out.
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
-                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)  # fmt: skip
-
-
-def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot product of (n, 3) arrays, summed x, y, z in that order."""
-    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    length = np.sqrt(_dot3(v, v))
-    return v / np.where(length > 0, length, 1.0)[:, None]
-
-
 def _points(o: np.ndarray, d: tuple[np.ndarray, ...], ray: np.ndarray, dist: np.ndarray) -> list[np.ndarray]:
     """The points ``o + d * dist`` of the given rays, one array per coordinate."""
     return [(o[k] if o.ndim == 1 else o[k][ray]) + d[k][ray] * dist for k in range(3)]
-
-
-def _coplanar_touching_pairs(normal: np.ndarray, offset: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every ordered pair (i, j), i != j, of faces in one plane (either side) whose grown boxes overlap.
-
-    Two such faces' offsets differ by at most ``PLANE_TOLERANCE`` in absolute value (either
-    side: ``|a - b|`` and ``|a + b|`` are both at least ``||a| - |b||``), so only faces close in
-    ``|offset|`` (sorted, a window of twice the tolerance) are compared."""
-    size = np.abs(offset)
-    order = np.argsort(size, kind="stable")
-    ranked = size[order]
-    stop = np.searchsorted(ranked, ranked + 2 * PLANE_TOLERANCE, side="right")
-    span = stop - np.arange(len(order)) - 1  # later faces within the window of each
-    first = np.repeat(np.arange(len(order)), span)
-    later = np.arange(len(first)) - np.repeat(np.cumsum(span) - span, span) + first + 1
-    i, j = order[first], order[later]
-    keep = np.ones(len(i), dtype=bool)
-    for k in range(3):
-        keep &= (lo[i, k] <= hi[j, k]) & (lo[j, k] <= hi[i, k])
-    i, j = i[keep], j[keep]
-    # either side: the generated meshes' floors are wound facing down
-    cos = _dot3(normal[i], normal[j])
-    same = cos >= 1 - PARALLEL_TOLERANCE
-    opposite = cos <= -(1 - PARALLEL_TOLERANCE)
-    gap = np.where(same, np.abs(offset[i] - offset[j]), np.abs(offset[i] + offset[j]))
-    keep = (same | opposite) & (gap <= PLANE_TOLERANCE)
-    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
-    return np.concatenate([i, j]), np.concatenate([j, i])
-
-
-def _apart(v: np.ndarray, faces: np.ndarray, own: np.ndarray, lf: np.ndarray, rf: np.ndarray) -> np.ndarray:
-    """Per coplanar pair (lf, rf): whether the two triangles' areas do not overlap (an axis
-    in their plane separates them, within the tolerance: faces sharing an edge are apart)."""
-    apart = np.zeros(len(lf), dtype=bool)
-    if not len(lf):
-        return apart
-    tris = [v[faces[lf]], v[faces[rf]]]  # (n, 3 corners, 3)
-    for which, normal in ((0, own[lf]), (1, own[rf])):
-        corners = tris[which]
-        for k in range(3):
-            axis = _unit(_cross(normal, corners[:, (k + 1) % 3] - corners[:, k]))
-            a = tris[0][:, :, 0] * axis[:, None, 0] + tris[0][:, :, 1] * axis[:, None, 1] + tris[0][:, :, 2] * axis[:, None, 2]
-            b = tris[1][:, :, 0] * axis[:, None, 0] + tris[1][:, :, 1] * axis[:, None, 1] + tris[1][:, :, 2] * axis[:, None, 2]
-            apart |= (a.max(axis=1) <= b.min(axis=1) + CONTAINS_TOLERANCE) | (b.max(axis=1) <= a.min(axis=1) + CONTAINS_TOLERANCE)
-    return apart
-
-
-def _overlapped_sides(
-    v: np.ndarray, faces: np.ndarray, own: np.ndarray, closed: np.ndarray, looks: np.ndarray, left: np.ndarray, right: np.ndarray
-) -> np.ndarray:
-    """(F, 2): per side of each face (0: seen against its normal, 1: along it), whether a
-    differently looking coplanar face, seen from that side too, overlaps its area."""
-    differs = looks[left] != looks[right]
-    lf, rf = left[differs], right[differs]
-    out = np.zeros((len(faces), 2), dtype=bool)
-    if not len(lf):
-        return out
-    apart = _apart(v, faces, own, lf, rf)
-    aligned = _dot3(own[lf], own[rf]) > 0
-    for side in (0, 1):
-        # a ray against f's normal meets the rival's front where the two face one way
-        rival_seen = ~closed[rf] | (aligned if side == 0 else ~aligned)
-        face_seen = ~closed[lf] if side == 1 else np.ones(len(lf), dtype=bool)
-        hit = ~apart & rival_seen & face_seen
-        out[lf[hit], side] = True
-    return out
-
-
-def _groups_across_edges(v: np.ndarray, faces: np.ndarray, group: np.ndarray, looks: np.ndarray, by_look: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """(F, 3, 2): for each face's edge k (from corner k to k + 1), the groups of up to two other
-    faces with an edge between the same two points, where their group is not the face's (-1;
-    ``by_look``: nor their look);
-    and (F, 3): whether every other face on the edge is of the face's group and look (and
-    there is one: the edge lies inside a region of one look)."""
-    _, position = np.unique(v, axis=0, return_inverse=True)
-    corner = position.ravel()[faces]
-    ends = np.stack([corner, np.roll(corner, -1, axis=1)], axis=-1)  # (F, 3, 2)
-    edge_id = np.unique(np.sort(ends, axis=-1).reshape(-1, 2), axis=0, return_inverse=True)[1].ravel()
-    owner = np.repeat(np.arange(len(faces)), 3)
-    order = np.lexsort((owner, edge_id))
-    edge_sorted, owner_sorted = edge_id[order], owner[order]
-    across = np.full((len(faces) * 3, 2), -1, dtype=np.int64)
-    internal = np.zeros(len(faces) * 3, dtype=bool)
-    starts = np.flatnonzero(np.r_[True, edge_sorted[1:] != edge_sorted[:-1]])
-    stops = np.r_[starts[1:], len(edge_sorted)]
-    for s, e in zip(starts.tolist(), stops.tolist()):
-        if e - s < 2:
-            continue
-        sharing = owner_sorted[s:e].tolist()
-        for slot in order[s:e].tolist():
-            me = slot // 3
-            others = [f for f in sharing if f != me]
-            crossing = [int(group[f]) for f in others if group[f] != group[me] and (not by_look or looks[f] != looks[me])][:2]
-            across[slot, : len(crossing)] = crossing
-            internal[slot] = all(group[f] == group[me] and looks[f] == looks[me] for f in others)
-    return across.reshape(len(faces), 3, 2), internal.reshape(len(faces), 3)
-
-
-def _inward_edges(normal: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each face's inward unit edge normals in its plane (F, 3, 3) and their offsets (F, 3): a
-    point x lies within distance s inside edge k where ``m_k . x - offset_k = s``."""
-    starts = (a, b, c)
-    edges = np.empty((len(a), 3, 3))
-    offsets = np.empty((len(a), 3))
-    for k, (p, q) in enumerate(((a, b), (b, c), (c, a))):
-        m = _unit(_cross(normal, q - p))
-        edges[:, k] = m
-        offsets[:, k] = _dot3(m, starts[k])
-    return edges, offsets

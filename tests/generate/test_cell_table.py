@@ -11,7 +11,7 @@ from povagent.generate.cell_table import CellMask, cell
 SIZE = 0.0625
 
 
-def test_every_point_in_a_boxs_cells_is_covered_even_computed_in_float32():
+def test_every_point_in_a_boxs_cells_is_covered():
     rng = np.random.default_rng(0)
     low = rng.integers(-40, 40, size=(30, 3))
     high = low + rng.integers(0, 6, size=(30, 3))
@@ -20,8 +20,20 @@ def test_every_point_in_a_boxs_cells_is_covered_even_computed_in_float32():
     # points anywhere in each box, right up to its faces
     box = rng.integers(0, 30, size=5000)
     point = (low[box] + rng.random((5000, 3)) * (high[box] - low[box] + 1)) * SIZE
-    x, y, z = (point[:, k].astype(np.float32) for k in range(3))
-    assert mask.covers(x, y, z).all()
+    assert mask.covers(point[:, 0], point[:, 1], point[:, 2]).all()
+
+
+def test_a_cell_is_covered_exactly_when_a_table_key_would_list_it():
+    """No margin: the cells next to a box are not covered (the mask answers as the table does)."""
+    low, high = np.array([[0, 0, 0]]), np.array([[2, 0, 0]])
+    mask = CellMask.build(low, high, SIZE)
+    assert mask is not None
+    x = (np.arange(-3, 6) + 0.5) * SIZE
+    covered = mask.covers(x, np.full(9, SIZE / 2), np.full(9, SIZE / 2))
+    assert covered.tolist() == [c in (0, 1, 2) for c in range(-3, 6)]
+    # the cell boundaries are the ones ``cell`` (hence a key) puts a point in
+    edges = np.array([0.0, -1e-12, 3 * SIZE, 3 * SIZE - 1e-12])
+    assert mask.covers(edges, np.full(4, SIZE / 2), np.full(4, SIZE / 2)).tolist() == [True, False, False, True]
 
 
 def test_a_point_two_cells_away_from_every_box_is_not_covered():
@@ -29,9 +41,9 @@ def test_a_point_two_cells_away_from_every_box_is_not_covered():
     high = np.array([[1, 1, 1], [12, 1, 1]])
     mask = CellMask.build(low, high, SIZE)
     assert mask is not None
-    inside = [(np.float32(c * SIZE + SIZE / 2),) for c in (0, 1, 11)]
-    far = [(np.float32(c * SIZE + SIZE / 2),) for c in (5, 6, 7, -5, 20)]
-    pad = np.zeros(1, dtype=np.float32) + np.float32(SIZE / 2)
+    inside = [(c * SIZE + SIZE / 2,) for c in (0, 1, 11)]
+    far = [(c * SIZE + SIZE / 2,) for c in (5, 6, 7, -5, 20)]
+    pad = np.zeros(1) + SIZE / 2
     assert mask.covers(np.array(inside[0] + inside[1] + inside[2]), np.repeat(pad, 3), np.repeat(pad, 3)).all()
     assert not mask.covers(np.array(sum(far, ())), np.repeat(pad, 5), np.repeat(pad, 5)).any()
 
@@ -39,6 +51,8 @@ def test_a_point_two_cells_away_from_every_box_is_not_covered():
 def test_a_grid_too_large_is_not_built():
     assert CellMask.build(np.array([[0, 0, 0]]), np.array([[1 << 10, 1 << 10, 1 << 10]]), SIZE) is None
     assert CellMask.build(np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3), dtype=np.int64), SIZE) is None
+    # nor one reaching the cells where a key is clipped (a point beyond would share its key)
+    assert CellMask.build(np.array([[1023, 0, 0]]), np.array([[1023, 1, 1]]), SIZE) is None
 
 
 def test_cells_match_the_tables_cells():
@@ -62,7 +76,7 @@ def test_skipping_hits_in_no_edges_cell_changes_no_pixel(objects_only):
         tri = out["primID"].astype(np.intp)
         args = (tri, origin, d, camera.height, camera.width)
         plain = faces.decide_image(*args, want_distance=not objects_only)
-        skipping = faces.decide_image(*args, want_distance=not objects_only, reach=out["tfar"])
+        skipping = faces.decide_image(*args, want_distance=not objects_only, skip=True)
         assert np.array_equal(plain[0], skipping[0])
         if not objects_only:
             assert np.array_equal(plain[1], skipping[1])
