@@ -89,6 +89,7 @@ class SimulatedPerception(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(
         self,
@@ -243,6 +244,7 @@ class SimulatedScene(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(
         self,
