@@ -161,9 +161,13 @@ class KeySolver:
     def _score_all(self, answered: list[Asked]) -> list[ScoredAnswer | Exception]:
         """Each answer scored (in a worker thread); a call that raises stands for its own key only."""
         done: list[ScoredAnswer | Exception] = []
+        scoring_key = [""]
+        score_answer = self._scoring(lambda: scoring_key[0]).score_answer  # made once a chunk, not once a key
         for asked in answered:
+            assert asked.request is not None and asked.response is not None
+            scoring_key[0] = asked.key
             try:
-                done.append(self._score(asked))
+                done.append(score_answer(asked.instance, asked.request.answer, asked.response.text))
             except Exception as exc:
                 done.append(exc)
         return done
@@ -229,13 +233,18 @@ class KeySolver:
     def scoring(self, key: str) -> AnswerScoring:
         """The score step for key ``key``: a plugin that raises is logged with its traceback and
         its failure recorded in the row (see :mod:`povagent.results.plugin_errors`)."""
+        return self._scoring(lambda: key)
+
+    def _scoring(self, key_of: Callable[[], str]) -> AnswerScoring:
+        """:meth:`scoring` for the key ``key_of()`` names when a plugin raises (a chunk's one
+        score step serves each of its keys in turn)."""
         comps = self.components
 
         def parser_raised(exc: BaseException) -> None:
-            self.log.error("parser_exception", row=key, error=error_text(exc), traceback=traceback.format_exc())
+            self.log.error("parser_exception", row=key_of(), error=error_text(exc), traceback=traceback.format_exc())
 
         def scorer_raised(name: str, exc: BaseException) -> None:
-            self.log.error("scorer_exception", row=key, scorer=name, error=error_text(exc), traceback=traceback.format_exc())
+            self.log.error("scorer_exception", row=key_of(), scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
         return AnswerScoring(
             comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name, parser_raised, scorer_raised, comps.answer_type

@@ -107,3 +107,20 @@ def test_sigkill_mid_chunked_run_then_resume_gives_every_key_exactly_once(write_
     keys = [json.loads(line)["key"] for line in results.read_text().splitlines()]
     assert len(keys) == len(set(keys)) == 12 * runs
     assert json.loads(done.stdout)["rows"]["answered"] == 12 * runs
+
+
+def test_a_parser_raising_in_a_chunk_is_logged_for_its_own_key(write_pipeline, offline_plugin, monkeypatch):
+    parse, calls = offline_plugin.JsonParser.parse, []
+
+    def raising_on_the_third(self, text, spec):
+        calls.append(text)
+        if len(calls) == 3:
+            raise RuntimeError("bug in parser")
+        return parse(self, text, spec)
+
+    monkeypatch.setattr(offline_plugin.JsonParser, "parse", raising_on_the_third)
+    result = run_pipeline(load_pipeline(write_pipeline(backend={"name": "test-center", "options": {"in_process": True}})))
+    rows = read_rows(result.run_dir / "results.jsonl")
+    assert [r.status.value for r in rows] == ["answered", "answered", "parse_error"] + ["answered"] * (N_KEYS - 3)
+    (event,) = [e for e in _events(result.run_dir) if e["event"] == "parser_exception"]
+    assert event["row"] == rows[2].key and "bug in parser" in event["error"]
