@@ -36,9 +36,7 @@ def center_reply(request: Request) -> str:
 class CenterBackend(Backend):
     """Answers the centre of the image (frame 0 for A/B)."""
 
-    def __init__(
-        self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False, in_process: bool = False
-    ) -> None:
+    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False, in_process: bool = False) -> None:
         if in_process:  # else the class's: a test may declare it there
             self.answers_in_process = True  # type: ignore[misc]
         self.delay_s = delay_s
