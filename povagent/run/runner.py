@@ -60,6 +60,7 @@ from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
 from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
+from povagent.run.frozen_heap import frozen_heap
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
@@ -262,7 +263,7 @@ class PipelineRun:
         self.components.strategy.use_run_folder(self.run_dir)
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
-        ), cancelled_on_stop():
+        ), cancelled_on_stop(), frozen_heap():  # the loaded set is not walked by each full collection of the run
             return await self._run_in_folder(instances, t_start)
 
     def _will_send(self) -> bool:
