@@ -106,6 +106,12 @@ class Backend(abc.ABC):
     #: Reports show its runs as reference rows, styled and sorted as baselines and never marked
     #: best; the report reads this from the backend's class, never from its name.
     offline_baseline: ClassVar[bool] = False
+    #: Whether :meth:`complete` answers in this process without waiting on anything (no network,
+    #: no other process or thread, no ``await`` that suspends): the offline baselines and test
+    #: backends. The runner then answers such a backend's keys a chunk at a time, in order, with
+    #: no task, concurrency slot, timeout or thread hand-off per request (none of them can act
+    #: on a call that never suspends); retries, the response cache and the rows stay the same.
+    answers_in_process: ClassVar[bool] = False
 
     @abc.abstractmethod
     def identity(self) -> Mapping[str, Any]:

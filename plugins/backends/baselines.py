@@ -89,6 +89,7 @@ class CenterBaseline(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(self, frame_policy: str = "first", seed: int = 0) -> None:
         if frame_policy not in FRAME_POLICIES:
@@ -135,6 +136,7 @@ class RandomBaseline(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(self, seed: int = 0) -> None:
         self.seed = int(seed)
@@ -177,6 +179,7 @@ class OracleBaseline(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def identity(self) -> Mapping[str, Any]:
         """Name only: the oracle has no options."""

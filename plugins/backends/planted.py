@@ -76,6 +76,7 @@ class PlantedBehaviour(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(
         self,

@@ -99,6 +99,7 @@ class SimulatedPerception(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(
         self,
@@ -248,6 +249,7 @@ class SimulatedScene(Backend):
 
     cacheable: ClassVar[bool] = False
     offline_baseline: ClassVar[bool] = True
+    answers_in_process: ClassVar[bool] = True  # no I/O, no await: answered a chunk at a time
 
     def __init__(
         self,

@@ -112,6 +112,10 @@ class RequestPath:
         #: cannot answer (a run whose every answer is cached never starts it)
         self._start: asyncio.Future[None] | None = None
         self._start_backend = start_backend
+        #: a backend answering in this process (:attr:`Backend.answers_in_process`) is called
+        #: bare: a slot or a timeout cannot act on a call that never suspends, and each cost a
+        #: run's offline baseline more than its answer did
+        self._bare = bool(getattr(backend, "answers_in_process", False))
 
     @property
     def retries_inside(self) -> bool:
@@ -150,7 +154,9 @@ class RequestPath:
                 self.stats.cache_hits += 1
                 return received(cached, self.redact_answer)  # a cache written before the key was known
         if self._start_backend:
-            await self._started(label)
+            start = self._start
+            if start is None or not start.done() or start.cancelled() or start.exception() is not None:
+                await self._started(label)  # once started, later requests skip the wait
         response = await self.call(request, label=label, deadline=deadline)
         if key is not None and cache is not None:
             cache.put_deferred(key, response)
@@ -208,6 +214,12 @@ class RequestPath:
                 raise TimeoutError(f"no time left before the deadline ({self._limit_text(budget)})")
             budget = min(budget, left)
         self.stats.requests += 1
+        if self._bare:
+            t0 = time.perf_counter()
+            response = await self.backend.complete(request, self.images)
+            if not response.latency_s:
+                response.latency_s = time.perf_counter() - t0
+            return response
         slot = self.limiter.slot() if self.limiter is not None else contextlib.nullcontext()
         record = getattr(self.limiter, "record", None)
         async with slot:

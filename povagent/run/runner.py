@@ -11,6 +11,11 @@ Rows become durable through the :class:`~povagent.run.journal.RowJournal` as key
 run killed at any moment resumes by running only the keys missing from the file; keys whose row
 is ``infra_error`` are attempted again by default (:func:`~povagent.run.pending.plan_keys`).
 
+A backend that answers in this process (:attr:`~povagent.interfaces.Backend.answers_in_process`:
+the offline baselines) has its keys answered a chunk at a time, in order, on the event loop
+(:meth:`~povagent.run.solve_key.KeySolver.solve_chunk`): no task, concurrency slot, timeout or
+thread hand-off per key, and the same rows, events and guarantees.
+
 Failing fast: the first pending key runs alone; when it fails in a way no other key can get
 past (no API key, authentication, unknown model, an unreachable server) the run stops there
 instead of failing every key. During the run, ``stop_after_failures`` consecutive
@@ -55,6 +60,7 @@ from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
 from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
+from povagent.run.frozen_heap import frozen_heap
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
@@ -79,6 +85,10 @@ FAIL_FAST_KINDS = frozenset({"auth", "missing_key", "not_found", "connection", "
 #: cannot be imported): the command says so in one line, so the run logs them to its file only,
 #: not as console warnings above that line.
 SET_UP_KINDS = frozenset({"missing_key", "client_import"})
+#: Keys a backend answering in this process answers between two turns of the event loop (the
+#: journal's committer, a stop signal), and the time after which a chunk ends sooner (a slow
+#: baseline): rows still become durable, and a stop is still heard, as keys finish.
+CHUNK, CHUNK_S = 64, 0.05
 
 
 # -- the run -------------------------------------------------------------------------------------
@@ -253,7 +263,7 @@ class PipelineRun:
         self.components.strategy.use_run_folder(self.run_dir)
         with folder_lock(self.run_dir), open_image_transport(
             config.images, self.images, dataset_root=self.dataset.root, output=self.run_dir
-        ), cancelled_on_stop():
+        ), cancelled_on_stop(), frozen_heap():  # the loaded set is not walked by each full collection of the run
             return await self._run_in_folder(instances, t_start)
 
     def _will_send(self) -> bool:
@@ -375,10 +385,11 @@ class PipelineRun:
 
     async def _fan_out(self, pending: list[tuple[Instance, int]]) -> None:
         """Run ``pending``: the first key alone (fail fast), then the rest with ``concurrency``
-        workers pulling keys in order (bounded memory; a house's frames stay hot)."""
+        workers pulling keys in order (bounded memory; a house's frames stay hot), or, for a
+        backend answering in this process, a chunk of keys at a time in order."""
         if not pending:
             return
-        solve = KeySolver(
+        solver = KeySolver(
             self.components,
             self._names,
             self._model,
@@ -390,7 +401,8 @@ class PipelineRun:
             self._redactor,
             self._frames.read,
             label=self.config.label,
-        ).solve
+        )
+        solve = solver.solve
         with HouseFrames(self.images, pending) as houses:
             first, rest = pending[0], islice(pending, 1, None)  # no copy of the list
             row = await solve(*first)
@@ -409,10 +421,23 @@ class PipelineRun:
                     # (offline baselines): rows become durable as they finish, not at the end.
                     await self._journal.backpressure()
 
+            async def in_chunks() -> None:
+                # A backend answering in this process: keys a chunk at a time, in order, with no
+                # task, slot, timeout or thread hand-off each (see Backend.answers_in_process).
+                while chunk := await solver.solve_chunk(rest, CHUNK, CHUNK_S):
+                    for instance, row in chunk:
+                        houses.done(instance)
+                        self._journal.submit(row)
+                        self._after_row(row, first=False)
+                    await self._journal.backpressure()  # the committer writes this chunk meanwhile
+
             try:
-                async with asyncio.TaskGroup() as group:
-                    for _ in range(min(self.config.concurrency, len(pending) - 1)):
-                        group.create_task(worker())
+                if getattr(self.components.backend, "answers_in_process", False):
+                    await in_chunks()
+                else:
+                    async with asyncio.TaskGroup() as group:
+                        for _ in range(min(self.config.concurrency, len(pending) - 1)):
+                            group.create_task(worker())
                 await self._journal.drain()
             except BaseException as exc:
                 failed = self._journal.error
@@ -420,6 +445,9 @@ class PipelineRun:
                     # the file that failed: results.jsonl, or log.jsonl flushed before each batch
                     path = getattr(failed, "filename", None) or self.run_dir / RESULTS
                     raise ResultsError.cannot_write(path, failed) from failed
+                if isinstance(exc, StopRun):
+                    await self._journal.drain()  # rows finished before the stop are kept
+                    raise
                 if isinstance(exc, BaseExceptionGroup):
                     stop = exc.subgroup(StopRun)
                     if stop is not None and stop.exceptions:

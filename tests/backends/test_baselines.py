@@ -147,3 +147,19 @@ def test_baselines_are_not_cached(backend):
 
 def test_baselines_are_registered():
     assert {"center", "random", "oracle"} <= set(get_plugin_host().names("backend"))
+
+
+@pytest.mark.parametrize("name", ["center", "random", "oracle"])
+def test_baselines_declare_they_answer_in_process(name):
+    backend = get_plugin_host().create("backend", name)
+    assert backend.answers_in_process is True
+
+
+@pytest.mark.parametrize("backend", [CenterBaseline(), RandomBaseline(), OracleBaseline()], ids=lambda b: b.identity()["backend"])
+def test_a_baseline_answers_without_ever_suspending(backend, requests_):
+    # what answers_in_process promises: the coroutine finishes at its first step, never awaiting
+    for request in requests_:
+        step = backend.complete(request, ImageStore())
+        with pytest.raises(StopIteration) as done:
+            step.send(None)
+        assert done.value.value.text

@@ -247,3 +247,8 @@ def test_a_credential_header_in_the_yaml_is_refused(where):
     )
     with pytest.raises(ConfigError, match=r"carries a credential \(Authorization\).*api_key_env"):
         LiteLLMBackend(**options)
+
+
+def test_litellm_keeps_the_concurrent_path_with_its_timeouts_and_slots():
+    # it waits on a server: never declared as answering in this process (see Backend.answers_in_process)
+    assert LiteLLMBackend(model="openai/gpt-4o").answers_in_process is False

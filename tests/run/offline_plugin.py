@@ -4,8 +4,9 @@ Kept independent of the built-in plugins so runner tests specify the runner alon
 in-process and by the kill-and-resume subprocess alike.
 
 * backend ``test-center``: answers the image centre (frame 0 for A/B); options ``delay_s``
-  (sleep per request), ``cacheable``, ``reply`` (a fixed answer) and ``encode`` (base64 every
-  image shown, as a real backend does); counts calls in ``CALLS``.
+  (sleep per request), ``cacheable``, ``reply`` (a fixed answer), ``encode`` (base64 every
+  image shown, as a real backend does) and ``in_process`` (declares
+  ``answers_in_process``; its ``delay_s`` is then spent without suspending); counts calls in ``CALLS``.
 * backend ``test-flaky``: fails per a script of status codes, then answers like test-center.
 * strategy ``test-point``: one user message with the instance's frames and its sentence.
 * parser ``test-json``: ``{"selected_image", "x", "y"}`` or ``{"x", "y"}``; anything else is unparseable.
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import time
 from typing import Any, ClassVar
 
 from povagent import hookimpl
@@ -34,7 +36,9 @@ def center_reply(request: Request) -> str:
 class CenterBackend(Backend):
     """Answers the centre of the image (frame 0 for A/B)."""
 
-    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False) -> None:
+    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False, in_process: bool = False) -> None:
+        if in_process:  # else the class's: a test may declare it there
+            self.answers_in_process = True  # type: ignore[misc]
         self.delay_s = delay_s
         self.cacheable = cacheable  # type: ignore[misc]
         self.reply = reply
@@ -48,7 +52,9 @@ class CenterBackend(Backend):
         if self.encode:  # as a real backend does: every image it is shown, as a data URL
             for h in request.image_hashes():
                 images.data_url(h)
-        if self.delay_s:
+        if self.delay_s and self.answers_in_process:
+            time.sleep(self.delay_s)  # a slow computation: the event loop waits too
+        elif self.delay_s:
             await asyncio.sleep(self.delay_s)
         text = self.reply if self.reply is not None else center_reply(request)
         return Response(text=text, usage=Usage(prompt_tokens=100, completion_tokens=10, cost_usd=0.001), model="test-center")
