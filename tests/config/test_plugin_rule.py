@@ -55,7 +55,7 @@ from povagent.cli.process_exit import exit_code_of
 jobs_file, report_file = sys.argv[1:3]
 jobs, report = json.loads(open(jobs_file).read()), {}
 for job in jobs:
-    os.environ[%r] = job["marker"]
+    os.environ["POVAGENT_TEST_PLUGIN_MARKER"] = job["marker"]
     sys.argv = ["povagent", *job["args"]]
     out, err, code = io.StringIO(), io.StringIO(), 0
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -66,7 +66,7 @@ for job in jobs:
     report[job["id"]] = {"code": code, "stdout": out.getvalue(), "stderr": err.getvalue()}
     with open(report_file, "w") as f:
         json.dump(report, f)
-""" % MARKER_VARIABLE
+"""
 
 
 def _absolute(tmp: Path) -> str:
