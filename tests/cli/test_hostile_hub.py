@@ -1,24 +1,37 @@
 """A hostile Hub endpoint, met through the commands a user types: ``povagent download`` and a
-pipeline with ``dataset: {hub: ...}`` run by ``povagent run``, each in a fresh process whose
-``HF_ENDPOINT`` is a loopback :class:`HubServer` that lies (:class:`HubLies`).
+pipeline with ``dataset: {hub: ...}`` run by ``povagent run``, with ``HF_ENDPOINT`` a loopback
+:class:`HubServer` that lies (:class:`HubLies`).
 
 Every attack must end with exit code 2 and one ``error:`` line naming the repository and the
 bad value, no traceback, and nothing written outside the Hugging Face home (``HF_HOME``): the
 tests plant a fake virtual environment's ``site-packages`` beside it (a ``.pth`` file there
 runs code at the environment's next start) and scan the whole temporary tree.
+
+The refusals are the download code's, so most attacks run the command in this process
+(typer's ``CliRunner``, with ``HF_*`` set for the call: povagent reads them at each call), and
+a :class:`~povagent.errors.PovagentError` it raises is shown as the console script shows it
+(``error: <message>``, exit code 2). What only a real process shows (the console script's exit
+code and error line, the deadline met while a server stalls, what a later process trusts) is
+checked by the stalled-server tests, each a fresh ``python -m povagent.cli``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
 import time
+import traceback
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 import yaml
+from typer.testing import CliRunner
 
+from povagent.cli import app
+from povagent.errors import PovagentError
 from povagent.testing.hub_server import HubLies, HubServer
 
 REPO = "owl-owl/POVBench"
@@ -48,6 +61,16 @@ def tree(root: Path) -> set[Path]:
     return {p for p in root.rglob("*") if p.is_file() or p.is_symlink()}
 
 
+@dataclass
+class Done:
+    """What a command did: its exit code and output (a process's, or as the console script
+    would have shown an in-process call's)."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
 def povagent(
     entry: str,
     tmp_path: Path,
@@ -57,13 +80,14 @@ def povagent(
     options: tuple[str, ...] = (),
     download: dict | None = None,
     offline: bool = False,
+    child: bool = False,
     timeout: float = 120,
-) -> subprocess.CompletedProcess:
-    """Run the command of ``entry`` as a user would, in a fresh process."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("HF_", "HUGGINGFACE_", "TRANSFORMERS_"))}
-    env |= {"HF_HOME": str(tmp_path / "hf"), "HF_ENDPOINT": endpoint, "HF_HUB_DISABLE_TELEMETRY": "1"}
+) -> Done:
+    """Run the command of ``entry`` as a user would: in this process (``CliRunner``), or with
+    ``child`` in a fresh process."""
+    hf = {"HF_HOME": str(tmp_path / "hf"), "HF_ENDPOINT": endpoint, "HF_HUB_DISABLE_TELEMETRY": "1"}
     if offline:
-        env["HF_HUB_OFFLINE"] = "1"
+        hf["HF_HUB_OFFLINE"] = "1"
     if entry == "download":
         args = ["download", REPO, "-q", *(["--revision", revision] if revision is not None else []), *options]
     else:
@@ -78,12 +102,25 @@ def povagent(
             "output": str(tmp_path / "run"),
         }))  # fmt: skip
         args = ["run", str(pipeline), "--quiet"]
-    return subprocess.run(
-        [sys.executable, "-m", "povagent.cli", *args], env=env, capture_output=True, text=True, timeout=timeout, cwd=tmp_path
-    )
+    others = [k for k in os.environ if k.startswith(("HF_", "HUGGINGFACE_", "TRANSFORMERS_"))]
+    if child:
+        env = {k: v for k, v in os.environ.items() if k not in others} | hf
+        done = subprocess.run(
+            [sys.executable, "-m", "povagent.cli", *args], env=env, capture_output=True, text=True, timeout=timeout, cwd=tmp_path
+        )
+        return Done(done.returncode, done.stdout, done.stderr)
+    with contextlib.chdir(tmp_path):
+        result = CliRunner().invoke(app, args, env=dict.fromkeys(others) | hf)
+    error = result.exception
+    if isinstance(error, PovagentError):  # as povagent.cli.main shows it
+        return Done(2, result.stdout, result.stderr + f"error: {error}\n")
+    if error is not None and not isinstance(error, SystemExit):
+        shown = "".join(traceback.format_exception(error))
+        return Done(1, result.stdout, result.stderr + shown)
+    return Done(result.exit_code, result.stdout, result.stderr)
 
 
-def assert_refused(done: subprocess.CompletedProcess, *named: str) -> str:
+def assert_refused(done: Done, *named: str) -> str:
     """Exit code 2, one ``error:`` line that names the repository and each of ``named``, no traceback."""
     assert "Traceback" not in done.stderr, done.stderr
     errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
@@ -101,7 +138,7 @@ def assert_nothing_outside(tmp_path: Path, before: set[Path], entry: str) -> Non
     assert not new, f"written outside the Hugging Face cache by {entry}: {sorted(map(str, new))}"
 
 
-def attack(entry: str, tmp_path: Path, server: HubServer, **kw) -> tuple[subprocess.CompletedProcess, set[Path]]:
+def attack(entry: str, tmp_path: Path, server: HubServer, **kw) -> tuple[Done, set[Path]]:
     before = tree(tmp_path)
     with server:
         done = povagent(entry, tmp_path, server.url, **kw)
@@ -206,13 +243,13 @@ def test_a_pipeline_refuses_bytes_that_differ_from_the_listing(tmp_path, mini_ro
 def test_a_stalled_server_stops_at_the_deadline_and_keeps_nothing_unfinished(entry, tmp_path, mini_root):
     server = HubServer(mini_root, lies=HubLies(stall_s=60), max_lifetime_s=90)
     start = time.monotonic()
-    done, _ = attack(entry, tmp_path, server, options=("--deadline", "3"), download={"deadline_s": 3})
+    done, _ = attack(entry, tmp_path, server, options=("--deadline", "3"), download={"deadline_s": 3}, child=True)
     took = time.monotonic() - start
     line = assert_refused(done, "did not finish within 3 s")
     assert took < 30, took
     assert "nothing unfinished was kept" in line
     assert not list(storage(tmp_path).rglob("*.incomplete"))
-    offline = povagent("download", tmp_path, server.url, offline=True)
+    offline = povagent("download", tmp_path, server.url, offline=True, child=True)
     assert offline.returncode == 2 and "Traceback" not in offline.stderr  # the cut snapshot is not trusted
 
 
