@@ -10,9 +10,9 @@ runs code at the environment's next start) and scan the whole temporary tree.
 The refusals are the download code's, so most attacks run the command in this process (the
 ``console_here`` fixture: typer's ``CliRunner``, with ``HF_*`` set for the call, which povagent
 reads at each call), a :class:`~povagent.errors.PovagentError` shown as the console script
-shows it (``error: <message>``, exit code 2). What only a real process shows (the console script's exit
-code and error line, the deadline met while a server stalls, what a later process trusts) is
-checked by the stalled-server tests, each a fresh ``python -m povagent.cli``.
+shows it (``error: <message>``, exit code 2). What only a real process shows (the console
+script's own exit code and error line, the deadline met while a server stalls, what a later
+process trusts) is checked by the stalled-server tests, each a fresh ``python -m povagent.cli``.
 """
 
 from __future__ import annotations
