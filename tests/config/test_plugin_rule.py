@@ -45,13 +45,15 @@ PLUGIN_SOURCE = (
 
 # The child: each job is one console-script call (main() as `python -m povagent.cli` runs it,
 # the working directory first on sys.path); its exit code, stdout and stderr are recorded,
-# and the report is rewritten after each job, so a job that ends the process still leaves the
-# earlier ones and names itself by its absence.
+# and the report is rewritten after each job. A run or sweep that (wrongly) ran to its end
+# would end the process at once (povagent.cli.process_exit): here it ends the ordinary way, so
+# the later jobs still run and each case reports its own outcome.
 CHILD = """
 import contextlib, io, json, os, sys
 sys.path[0] = os.getcwd()  # what `python -m` puts first (`-c` puts '')
-from povagent.cli import main
+from povagent.cli import main, process_exit
 from povagent.cli.process_exit import exit_code_of
+process_exit.allow_fast_exit = lambda: None
 jobs_file, report_file = sys.argv[1:3]
 jobs, report = json.loads(open(jobs_file).read()), {}
 for job in jobs:
