@@ -1,4 +1,5 @@
-"""Runner test fixtures: a small synthetic release and pipeline YAMLs using the offline test plugin."""
+"""Runner test fixtures: a small synthetic release, pipeline YAMLs using the offline test plugin, and one
+fresh interpreter's run of the litellm backend shared by the tests of what its start-up does."""
 
 from __future__ import annotations
 
