@@ -4,6 +4,9 @@ refused after answering (restarting) is; an unset ``api_key_env`` stops a run be
 Real sockets on 127.0.0.1: the loopback server started and stopped, and a port where nothing
 listens. Through ``povagent run`` both end in the documented one-line stop (exit 4) at once,
 where a refused connection was retried for 42 s and an unset variable ended in a traceback.
+The unset variable and an address carrying credentials are run as a user runs them, in a fresh
+``povagent`` process (what the terminal shows); the plain address where nothing listens is run
+in this process (typer's ``CliRunner``): what it checks is the runner's stop and its counts.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from typer.testing import CliRunner
 
 from povagent.interfaces import PermanentBackendError, TransientBackendError
 from povagent.testing.loopback_server import LoopbackServer
@@ -110,6 +114,18 @@ def run_cli(path: Path, **env: str) -> tuple[subprocess.CompletedProcess[str], f
     return done, time.monotonic() - t0
 
 
+def run_here(path: Path, **env: str) -> subprocess.CompletedProcess[str]:
+    """``povagent run PATH --quiet`` in this process, ``env`` set for the call."""
+    from povagent.cli import app
+    from povagent.cli.process_exit import fast_exit_allowed
+
+    result = CliRunner().invoke(app, ["run", str(path), "--quiet"], env=env)
+    fast_exit_allowed()  # only the console script ends its process early: nothing is left allowed here
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return subprocess.CompletedProcess(["povagent", "run"], result.exit_code, result.stdout, result.stderr)
+
+
 def stop_line(done: subprocess.CompletedProcess[str]) -> str:
     assert done.returncode == 4, done.stderr[-3000:]
     assert "Traceback" not in done.stderr
@@ -156,8 +172,8 @@ def test_an_unset_api_key_env_prints_only_the_one_line(unset_key_run):
 def test_run_stops_at_once_when_nothing_listens_and_hides_url_credentials(tmp_path, mini_root):
     port = free_port()
     api_base = f"http://127.0.0.1:{port}/v1"
-    done, _ = run_cli(pipeline(tmp_path, mini_root, api_base=api_base, api_key_env="POVAGENT_TEST_KEY"),
-                      POVAGENT_TEST_KEY="sk-loopback-test-key")
+    done = run_here(pipeline(tmp_path, mini_root, api_base=api_base, api_key_env="POVAGENT_TEST_KEY"),
+                    POVAGENT_TEST_KEY="sk-loopback-test-key")
     line = stop_line(done)
     assert f"cannot reach {api_base} (connection refused" in line
     stats = session(tmp_path)
@@ -166,6 +182,7 @@ def test_run_stops_at_once_when_nothing_listens_and_hides_url_credentials(tmp_pa
     secret = "pw-that-must-not-show"
     tmp2 = tmp_path / "with-credentials"
     tmp2.mkdir()
+    # in a fresh process: what the user's terminal shows, litellm's own loggers included
     done, _ = run_cli(pipeline(tmp2, mini_root, api_base=f"http://user:{secret}@127.0.0.1:{port}/v1",
                                api_key_env="POVAGENT_TEST_KEY"), POVAGENT_TEST_KEY="sk-loopback-test-key")
     line = stop_line(done)

@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 import yaml
@@ -217,6 +218,24 @@ def test_long_cell_names_in_the_dry_run_break_between_words_never_inside_one(tmp
     assert "…" not in result.stdout.split("\n", 1)[1]
 
 
+PLUGINS_TWICE = """
+import contextlib, io, json, sys
+from povagent.cli import main
+from povagent.cli.process_exit import exit_code_of
+shown = []
+for args in (["plugins"], ["plugins", "--json"]):
+    sys.argv = ["povagent", *args]
+    out, err, code = io.StringIO(), io.StringIO(), 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main()
+        except SystemExit as done:
+            code = exit_code_of(done.code)
+    shown.append({"returncode": code, "stdout": out.getvalue(), "stderr": err.getvalue()})
+print(json.dumps(shown))
+"""
+
+
 def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
     """An installed distribution (a dist-info with an entry point, on PYTHONPATH) whose
     entry point and name are long: ``povagent plugins`` shows where it came from in full."""
@@ -238,12 +257,14 @@ def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
         "[povagent]\nperspective-taking = povagent_contributed_strategies_for_observer_grounding.perspective_taking\n"
     )
     env = {**os.environ, **NARROW, "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])}
-    done = subprocess.run([sys.executable, "-m", "povagent.cli", "plugins"], capture_output=True, text=True, env=env, timeout=120)
+    # one fresh process (the distribution is found on its start-up path) runs the console entry
+    # twice, the table then the JSON listing, and prints what each wrote to stdout
+    both = subprocess.run([sys.executable, "-c", PLUGINS_TWICE], capture_output=True, text=True, env=env, timeout=120)
+    assert both.returncode == 0, both.stderr
+    done, as_json = (SimpleNamespace(**shown) for shown in json.loads(both.stdout))
     assert done.returncode == 0, done.stderr
     assert widest(done.stdout) <= 80, done.stdout
-    listing = json.loads(
-        subprocess.run([sys.executable, "-m", "povagent.cli", "plugins", "--json"], capture_output=True, text=True, env=env, timeout=120).stdout
-    )
+    listing = json.loads(as_json.stdout)
     (entry,) = [e for e in listing["strategy"] if e["name"] == "perspective-taking"]
     assert "povagent-contributed-strategies-for-observer-grounding 2.11.4" in entry["source"]
     rows = [line.split("│")[1:-1] for line in done.stdout.splitlines() if line.startswith("│")]

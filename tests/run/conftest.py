@@ -1,7 +1,12 @@
-"""Runner test fixtures: a small synthetic release and pipeline YAMLs using the offline test plugin."""
+"""Runner test fixtures: a small synthetic release, pipeline YAMLs using the offline test plugin, and one
+fresh interpreter's run of the litellm backend shared by the tests of what its start-up does."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -53,3 +58,54 @@ def write_pipeline(tmp_path, small_release, povagent_host, offline_plugin):
         return path
 
     return make
+
+
+#: Runs a pipeline in a fresh interpreter (litellm not yet imported) and reports, from inside
+#: the dataset's loading, whether litellm was being imported in the background meanwhile.
+FRESH_RUN = """
+import json, sys, threading
+seen = {"litellm_at_start": "litellm" in sys.modules}
+import povagent.run.runner as runner
+from povagent.config.pipeline import load_pipeline
+
+real_prepare = runner.prepare_dataset
+
+def prepare_dataset(config):
+    seen["preloading"] = [t.name for t in threading.enumerate() if t.name == "povagent-preload-litellm" and t.is_alive()]
+    return real_prepare(config)
+
+runner.prepare_dataset = prepare_dataset
+result = runner.run_pipeline(load_pipeline(sys.argv[1]))
+rows = result.summary.rows
+print(json.dumps({**seen, "exit_code": result.exit_code, "requests": result.stats.requests,
+                  "answered": rows.answered, "infra_error": rows.infra_error}))
+"""
+
+
+@pytest.fixture(scope="session")
+def fresh_litellm_run(tmp_path_factory, mini_root) -> dict[str, Any]:
+    """One run of the litellm backend by a fresh interpreter, shared by the tests that read what
+    such a start-up does (importing litellm costs seconds of CPU): 6 keys of the hand-made
+    dataset at concurrency 4 from a loopback server, a 3 s timeout and no retry. Returns the
+    child's report (``litellm_at_start``, ``preloading`` as seen while the dataset loaded,
+    ``exit_code``, ``requests``, ``answered``, ``infra_error``), the requests the server saw
+    (``server_requests``) and the rows' ``statuses``."""
+    from povagent.testing.loopback_server import LoopbackServer
+
+    folder = tmp_path_factory.mktemp("fresh-litellm-run")
+    with LoopbackServer(reply='{"selected_image": 0, "x": 10, "y": 20}', max_lifetime_s=200) as server:
+        path = folder / "pipeline.yaml"
+        path.write_text(json.dumps({
+            "dataset": str(mini_root),
+            "backend": {"name": "litellm", "options": {"model": "openai/loopback", "api_base": server.url,
+                                                       "api_key_env": "POVAGENT_TEST_KEY"}},
+            "strategy": "basic", "parser": "json", "instances": {"conditions": ["a", "b"], "limit": 6},
+            "concurrency": 4, "retry": {"attempts": 1}, "timeout": 3.0, "output": str(folder / "run"),
+        }))  # fmt: skip
+        env = {**os.environ, "POVAGENT_TEST_KEY": "sk-test-fresh-run"}
+        done = subprocess.run([sys.executable, "-c", FRESH_RUN, str(path)], capture_output=True, text=True, env=env, timeout=200)
+        assert done.returncode == 0, done.stderr[-3000:]
+        server_requests = server.request_count
+    seen = json.loads(done.stdout.strip().splitlines()[-1])
+    statuses = [json.loads(line)["status"] for line in (folder / "run" / "results.jsonl").read_text().splitlines()]
+    return {**seen, "server_requests": server_requests, "statuses": statuses}

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-import textwrap
 
 import pytest
 
@@ -74,22 +71,11 @@ def test_empty_responses_to_the_end_are_an_infra_error_named_so(tmp_path, mini_r
     assert result.exit_code == 3
 
 
-def test_the_litellm_import_does_not_count_against_the_first_requests_timeout(tmp_path, mini_root, server):
+def test_the_litellm_import_does_not_count_against_the_first_requests_timeout(fresh_litellm_run):
     """A fresh interpreter imports litellm and loads its lazy modules for 5-25 s here; with a 3 s
-    timeout and no retry, no key may time out (before, the first requests paid for all of it)."""
-    path = write(tmp_path, mini_root, server, timeout=3.0, concurrency=4, retry={"attempts": 1},
-                 instances={"conditions": ["a", "b"], "limit": 6})  # fmt: skip
-    code = textwrap.dedent(
-        f"""
-        import sys
-        from povagent.config.pipeline import load_pipeline
-        from povagent.run.runner import run_pipeline
-        assert "litellm" not in sys.modules
-        result = run_pipeline(load_pipeline({str(path)!r}))
-        print(result.summary.rows.answered, result.summary.rows.infra_error)
-        """
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=110, env={**__import__("os").environ})
-    assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split()[-2:] == ["6", "0"]
-    assert server.request_count == 6
+    timeout and no retry, no key may time out (before, the first requests paid for all of it).
+    The run is tests/run/conftest.py's ``fresh_litellm_run``: 6 keys, concurrency 4."""
+    seen = fresh_litellm_run
+    assert seen["litellm_at_start"] is False
+    assert [seen["answered"], seen["infra_error"]] == [6, 0], seen
+    assert seen["server_requests"] == 6

@@ -41,39 +41,13 @@ def _statuses(folder: Path) -> list[str]:
     return [json.loads(line)["status"] for line in (folder / "results.jsonl").read_text().splitlines()]
 
 
-#: Runs the pipeline in a fresh interpreter (litellm not yet imported) and reports, from inside
-#: the dataset's loading, whether litellm was being imported in the background meanwhile.
-OVERLAP = """
-import json, sys, threading
-import povagent.run.runner as runner
-from povagent.config.pipeline import load_pipeline
-
-seen = {}
-real_prepare = runner.prepare_dataset
-
-def prepare_dataset(config):
-    seen["preloading"] = [t.name for t in threading.enumerate() if t.name == "povagent-preload-litellm" and t.is_alive()]
-    seen["litellm_done"] = "litellm" in sys.modules and not getattr(getattr(sys.modules["litellm"], "__spec__", None), "_initializing", False)
-    return real_prepare(config)
-
-runner.prepare_dataset = prepare_dataset
-result = runner.run_pipeline(load_pipeline(sys.argv[1]))
-print(json.dumps({**seen, "exit_code": result.exit_code, "requests": result.stats.requests}))
-"""
-
-
-def test_litellm_loads_in_the_background_while_the_dataset_loads(tmp_path, mini_root):
-    with LoopbackServer(reply=REPLY, max_lifetime_s=200) as server:
-        path = _pipeline(tmp_path, mini_root, server.url, "fresh", tmp_path / "fresh-cache.sqlite")
-        env = {**os.environ, KEY_ENV: "sk-test-start-up"}
-        done = subprocess.run([sys.executable, "-c", OVERLAP, str(path)], capture_output=True, text=True, env=env, timeout=200)
-        assert done.returncode == 0, done.stderr[-3000:]
-        seen = json.loads(done.stdout.strip().splitlines()[-1])
-        assert seen["preloading"] == ["povagent-preload-litellm"], seen
-        assert seen["exit_code"] == 0 and seen["requests"] == 1, seen
-        assert len(server.requests) == 1
-    # no import deadlock, no half-imported module: the row is an answer
-    assert _statuses(tmp_path / "fresh") == ["answered"]
+def test_litellm_loads_in_the_background_while_the_dataset_loads(fresh_litellm_run):
+    # the run of a fresh interpreter (tests/run/conftest.py), seen from inside its dataset loading
+    seen = fresh_litellm_run
+    assert seen["preloading"] == ["povagent-preload-litellm"], seen
+    assert seen["exit_code"] == 0 and seen["requests"] == 6 and seen["server_requests"] == 6, seen
+    # no import deadlock, no half-imported module: every row is an answer
+    assert seen["statuses"] == ["answered"] * 6, seen
 
 
 def test_a_run_whose_every_answer_is_cached_never_imports_litellm(tmp_path, mini_root, monkeypatch):
