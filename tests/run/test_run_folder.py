@@ -68,11 +68,26 @@ def test_a_sweep_into_someone_elses_folder_is_refused_and_left_untouched(tmp_pat
     assert snapshot(theirs) == before and sorted(p.name for p in theirs.iterdir()) == sorted(THEIRS)
 
 
-def test_a_new_run_folder_carries_the_marker_and_an_empty_folder_is_taken(tmp_path, dataset_copy):
-    empty = tmp_path / "empty"
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory, mini_root) -> tuple[Path, Path]:
+    """(pipeline, run folder): a run of two instances over a copy of the fixture's two good houses,
+    made in a folder that was empty, finished once for the module's tests that only read it."""
+    home = tmp_path_factory.mktemp("finished")
+    dataset = home / "ds"
+    (dataset / "artifacts").mkdir(parents=True)
+    shutil.copy(mini_root / "meta.json", dataset / "meta.json")
+    for house in ("train_house_00000", "train_house_00001"):
+        shutil.copytree(mini_root / "artifacts" / house, dataset / "artifacts" / house)
+    empty = home / "empty"
     empty.mkdir()
-    done = povagent("run", pipeline(tmp_path, dataset_copy, empty, instances={"limit": 2}), "--quiet", cwd=tmp_path)
+    path = pipeline(home, dataset, empty, instances={"limit": 2})
+    done = povagent("run", path, "--quiet", cwd=home)
     assert done.returncode == 0, done.stderr
+    return path, empty
+
+
+def test_a_new_run_folder_carries_the_marker_and_an_empty_folder_is_taken(finished_run):
+    _, empty = finished_run
     assert json.loads((empty / MARKER).read_text()) == {"format": 1, "kind": "run"}
 
 
@@ -148,17 +163,15 @@ def test_a_read_only_sweep_folder_is_one_line_not_a_traceback(tmp_path, dataset_
     assert len(done.stderr.strip().splitlines()) == 1 and "cannot write the sweep folder" in done.stderr, done.stderr
 
 
-def test_a_finished_run_on_a_folder_made_read_only_since_is_one_line(tmp_path, dataset_copy):
-    run = tmp_path / "run"
-    path = pipeline(tmp_path, dataset_copy, run, instances={"limit": 2})
-    assert povagent("run", path, "--quiet", cwd=tmp_path).returncode == 0
+def test_a_finished_run_on_a_folder_made_read_only_since_is_one_line(finished_run):
+    path, run = finished_run
     unshare = shutil.which("unshare")
     if not unshare or subprocess.run([unshare, "-rm", "true"], capture_output=True).returncode != 0:
         pytest.skip("needs unshare -rm to remount the folder read-only")
-    # the same folder, bind-mounted read-only over itself
+    # the same folder, bind-mounted read-only over itself (in this command's namespace only)
     prefix = ["unshare", "-rm", "sh", "-c", f'mount --bind "{run}" "{run}" && mount -o remount,bind,ro "{run}" && exec "$@"', "sh"]
     before = snapshot(run)
-    done = povagent("run", path, "--quiet", cwd=tmp_path, prefix=prefix)
+    done = povagent("run", path, "--quiet", cwd=path.parent, prefix=prefix)
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stdout + done.stderr
     assert "cannot write the run folder" in done.stderr
     assert snapshot(run) == before

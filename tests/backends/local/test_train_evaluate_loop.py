@@ -55,10 +55,25 @@ def sft(checkpoint: Path, export: Path, out: Path) -> list[float]:
     return [entry["loss"] for entry in trainer.state.log_history if "loss" in entry]
 
 
-def test_a_checkpoint_trained_on_the_export_is_evaluated_in_process(tmp_path, generated_release, tiny_idefics3):
-    povagent("export-train", str(generated_release), "--out", str(tmp_path / "train-set"), "--format", "hf",
-             "--rationale", "none", "--conditions", "c", "--split", "1,0,0")
-    losses = sft(tiny_idefics3, tmp_path / "train-set", tmp_path / "trained")
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory, generated_release):
+    """``exported(fmt) -> folder``: the generated release's condition-c training export in
+    ``fmt``, written once per module (the tests read it, never write it)."""
+    folders: dict[str, Path] = {}
+
+    def export(fmt: str) -> Path:
+        if fmt not in folders:
+            folder = tmp_path_factory.mktemp(f"export-{fmt}") / "train-set"
+            povagent("export-train", str(generated_release), "--out", str(folder), "--format", fmt,
+                     "--rationale", "none", "--conditions", "c", "--split", "1,0,0")
+            folders[fmt] = folder
+        return folders[fmt]
+
+    return export
+
+
+def test_a_checkpoint_trained_on_the_export_is_evaluated_in_process(tmp_path, generated_release, tiny_idefics3, exported):
+    losses = sft(tiny_idefics3, exported("hf"), tmp_path / "trained")
     assert len(losses) == 3 and all(loss == loss for loss in losses)  # trained, no NaN
     from povagent_plugins.backends.local_checkpoint import checkpoint_fingerprint
 
@@ -81,16 +96,14 @@ def test_a_checkpoint_trained_on_the_export_is_evaluated_in_process(tmp_path, ge
 
 
 @pytest.mark.parametrize("fmt", ["hf", "messages"])
-def test_trl_trains_on_an_export_loaded_by_its_folder_alone(tmp_path, generated_release, tiny_idefics3, fmt, monkeypatch):
+def test_trl_trains_on_an_export_loaded_by_its_folder_alone(tmp_path, exported, tiny_idefics3, fmt, monkeypatch):
     """What `trl sft --dataset_name EXPORT` does: `load_dataset(EXPORT)` from another working
     folder, every column as exported, straight into SFTTrainer (no column picking, no paths fixed)."""
     from datasets import load_dataset
     from transformers import AutoModelForImageTextToText, AutoProcessor
     from trl import SFTConfig, SFTTrainer
 
-    export = tmp_path / "train-set"
-    povagent("export-train", str(generated_release), "--out", str(export), "--format", fmt,
-             "--rationale", "none", "--conditions", "c", "--split", "1,0,0")
+    export = exported(fmt)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     monkeypatch.chdir(elsewhere)

@@ -75,9 +75,25 @@ async def answers(backend: TransformersBackend, batch: list[Request], store: Ima
         await backend.aclose()
 
 
-def test_the_runner_evaluates_a_local_checkpoint_like_any_backend(tmp_path, mini_root, tiny_idefics3):
-    result = run_pipeline(load_pipeline(pipeline(tmp_path, mini_root, {"model": str(tiny_idefics3)})))
-    written = rows(tmp_path / "run")
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory, mini_root, tiny_idefics3):
+    """(pipeline, its result, the checkpoints loaded while it ran): one run of the Idefics3
+    checkpoint over one house, finished once for the tests that read it or resume it."""
+    from povagent_plugins.backends.local_model import LocalModel
+
+    home = tmp_path_factory.mktemp("finished")
+    loads: list[str] = []
+    real_load = LocalModel.load.__func__  # type: ignore[attr-defined]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(LocalModel, "load", classmethod(lambda cls, settings: loads.append(settings.model) or real_load(cls, settings)))
+        path = pipeline(home, mini_root, {"model": str(tiny_idefics3)})
+        result = run_pipeline(load_pipeline(path))
+    return path, result, loads
+
+
+def test_the_runner_evaluates_a_local_checkpoint_like_any_backend(finished_run, tiny_idefics3):
+    path, result, _ = finished_run
+    written = rows(path.parent / "run")
     assert len(written) == 2 and result.stats.requests == 2
     # random weights answer nonsense: a typed parse error per row, never an infra failure
     assert {r["status"] for r in written} <= {"answered", "parse_error"}
@@ -85,17 +101,17 @@ def test_the_runner_evaluates_a_local_checkpoint_like_any_backend(tmp_path, mini
     assert all(r["exchanges"][0]["completion_tokens"] >= 1 and r["exchanges"][0]["prompt_tokens"] > 10 for r in written)
 
 
-def test_a_finished_run_resumes_without_loading_the_model_again(tmp_path, mini_root, tiny_idefics3, monkeypatch):
+def test_a_finished_run_resumes_without_loading_the_model_again(finished_run, tiny_idefics3, monkeypatch):
     from povagent_plugins.backends.local_model import LocalModel
 
+    path, _, first_loads = finished_run
     loads: list[str] = []
     real_load = LocalModel.load.__func__  # type: ignore[attr-defined]
     monkeypatch.setattr(LocalModel, "load", classmethod(lambda cls, settings: loads.append(settings.model) or real_load(cls, settings)))
-    path = pipeline(tmp_path, mini_root, {"model": str(tiny_idefics3)})
-    run_pipeline(load_pipeline(path))
     again = run_pipeline(load_pipeline(path))
-    assert again.stats.requests == 0 and len(rows(tmp_path / "run")) == 2
-    assert loads == [str(tiny_idefics3)]  # loaded once, for the first run only
+    assert again.stats.requests == 0 and len(rows(path.parent / "run")) == 2
+    assert first_loads == [str(tiny_idefics3)]  # loaded once, for the first run
+    assert loads == []  # and not again for the finished one
 
 
 def test_a_batch_out_of_memory_is_split_and_every_row_answered(tiny_fits_two):
