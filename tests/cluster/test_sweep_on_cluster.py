@@ -153,7 +153,8 @@ def _wait_for_rows(folders: list[Path], at_least: int, thread: threading.Thread,
         time.sleep(0.02)
 
 
-def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(dask_cluster, write_sweep, tmp_path) -> None:
+def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(shared_dask_cluster, write_sweep, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
     # two cells of 4 instances x 6 runs, one request at a time (40 ms): each worker holds a cell
     slow = {"delay_s": 0.04, "runs": 6, "concurrency": 1, "axes": "conditions: [a, b]"}
     path = write_sweep(tmp_path / "killed", **slow)
@@ -162,7 +163,10 @@ def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(dask_cluster, wri
     _wait_for_rows(cells, 3, thread)
     before = {c.name: _lines(c / "results.jsonl") for c in cells}
     dask_cluster.kill_worker(0)
-    thread.join(timeout=120)
+    try:
+        thread.join(timeout=120)
+    finally:  # the shared cluster gets its first worker back
+        dask_cluster.replace_worker(0)
     assert not thread.is_alive() and "error" not in outcome, outcome.get("error")
     assert not outcome["result"].failed
     for cell in cells:
