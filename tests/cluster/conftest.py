@@ -51,8 +51,11 @@ class RealCluster:
         after a test that kills a worker (one worker start rather than a cluster's)."""
         if self.workers[index].poll() is None:
             raise RuntimeError(f"worker {index} is still running")
+        names = {f"w{i}" for i in range(len(self.workers))}
+        # the scheduler refuses a name it still holds: the killed worker's must be gone first
+        _wait_for_worker_names(self.address, names - {f"w{index}"}, time.monotonic() + 60)
         self.workers[index] = _start_worker(self, index)
-        _wait_for_worker_names(self.address, {f"w{i}" for i in range(len(self.workers))}, time.monotonic() + 90)
+        _wait_for_worker_names(self.address, names, time.monotonic() + 90)
 
 
 def _dask_command() -> list[str]:
