@@ -99,7 +99,7 @@ def test_a_worker_killed_mid_house_still_gives_the_same_bytes(shared_dask_cluste
     finally:
         if generation.poll() is None:
             generation.kill()
-        if victim is not None:  # the shared cluster gets its second worker back
+        if victim is not None:  # the shared cluster gets the killed worker back
             dask_cluster.replace_worker(victim)
     assert killed is not None, "no worker was seen rendering a house"
     assert generation.returncode == 0, output
