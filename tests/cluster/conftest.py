@@ -34,6 +34,9 @@ class RealCluster:
     scheduler: subprocess.Popen[bytes]
     workers: list[subprocess.Popen[bytes]] = field(default_factory=list)
     logs: Path | None = None
+    #: How the workers were started, so a killed one can be replaced (see ``replace_worker``).
+    worker_env: dict[str, str] = field(default_factory=dict)
+    worker_prefix: list[str] = field(default_factory=list)
 
     def kill_worker(self, index: int = 0) -> int:
         """SIGKILL worker ``index``; return its pid."""
@@ -41,6 +44,18 @@ class RealCluster:
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=30)
         return proc.pid
+
+    def replace_worker(self, index: int) -> None:
+        """Start a fresh worker in place of worker ``index`` (killed) and wait until the scheduler
+        has exactly the workers of this cluster: a cluster shared by several tests is whole again
+        after a test that kills a worker (one worker start rather than a cluster's)."""
+        if self.workers[index].poll() is None:
+            raise RuntimeError(f"worker {index} is still running")
+        names = {f"w{i}" for i in range(len(self.workers))}
+        # the scheduler refuses a name it still holds: the killed worker's must be gone first
+        _wait_for_worker_names(self.address, names - {f"w{index}"}, time.monotonic() + 60)
+        self.workers[index] = _start_worker(self, index)
+        _wait_for_worker_names(self.address, names, time.monotonic() + 90)
 
 
 def _dask_command() -> list[str]:
@@ -54,6 +69,41 @@ def _wait_for_workers(address: str, count: int, deadline: float) -> None:
 
     with Client(address, timeout=30) as client:
         client.wait_for_workers(count, timeout=max(1.0, deadline - time.monotonic()))
+
+
+def _wait_for_worker_names(address: str, names: set[str], deadline: float) -> None:
+    """Wait until the scheduler's workers are exactly ``names`` (a killed one removed, its
+    replacement registered)."""
+    from distributed import Client
+
+    with Client(address, timeout=30) as client:
+        while {str(info["name"]) for info in client.scheduler_info()["workers"].values()} != names:
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"the scheduler's workers did not become {sorted(names)}")
+            time.sleep(0.1)
+
+
+def _start_worker(cluster: RealCluster, index: int) -> subprocess.Popen[bytes]:
+    """Start ``dask worker`` number ``index`` (named ``w{index}``, no nanny, one thread) for ``cluster``."""
+    assert cluster.logs is not None
+    wlog = open(_fresh(cluster.logs, f"worker{index}", ".log"), "wb")  # noqa: SIM115 - closed with the process
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False", **cluster.worker_env}
+    return subprocess.Popen(
+        [*cluster.worker_prefix, *_dask_command(), "worker", cluster.address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+         "--host", "127.0.0.1", "--name", f"w{index}", "--lifetime", LIFETIME, "--death-timeout", "60",
+         "--local-directory", str(cluster.logs / f"w{index}")],
+        stdout=wlog, stderr=subprocess.STDOUT, env=env,
+    )
+
+
+def _fresh(folder: Path, stem: str, suffix: str) -> Path:
+    """``folder/stem.suffix``, or ``stem-1``, ``stem-2``... when taken (a replaced worker keeps
+    its predecessor's log)."""
+    path, n = folder / f"{stem}{suffix}", 0
+    while path.exists():
+        n += 1
+        path = folder / f"{stem}-{n}{suffix}"
+    return path
 
 
 def start_cluster(
@@ -81,16 +131,10 @@ def start_cluster(
             raise RuntimeError(f"dask scheduler did not start: {(tmp / 'scheduler.log').read_text()[-2000:]}")
         time.sleep(0.1)
     address = json.loads(scheduler_file.read_text())["address"]
-    cluster = RealCluster(address, scheduler, logs=tmp)
+    cluster = RealCluster(address, scheduler, logs=tmp, worker_env=dict(worker_env or {}), worker_prefix=list(worker_prefix or []))
     try:
         for i in range(workers):
-            wlog = open(tmp / f"worker{i}.log", "wb")  # noqa: SIM115 - closed with the process
-            cluster.workers.append(subprocess.Popen(
-                [*(worker_prefix or []), *_dask_command(), "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
-                 "--host", "127.0.0.1", "--name", f"w{i}", "--lifetime", LIFETIME, "--death-timeout", "60",
-                 "--local-directory", str(tmp / f"w{i}")],
-                stdout=wlog, stderr=subprocess.STDOUT, env={**env, **(worker_env or {})},
-            ))
+            cluster.workers.append(_start_worker(cluster, i))
         _wait_for_workers(address, workers, time.monotonic() + 90)
     except BaseException:
         stop_cluster(cluster)
@@ -139,7 +183,9 @@ def dask_cluster(tmp_path: Path) -> Iterator[RealCluster]:
 
 @pytest.fixture(scope="module")
 def shared_dask_cluster(tmp_path_factory) -> Iterator[RealCluster]:
-    """Like ``dask_cluster``, shared by a module's tests that kill nothing (starting one costs seconds)."""
+    """Like ``dask_cluster``, shared by a module's tests (starting one costs seconds, and its
+    workers load what the tests run once): a test that kills a worker puts a fresh one in its
+    place (``RealCluster.replace_worker``) before it ends."""
     cluster = start_cluster(tmp_path_factory.mktemp("shared-cluster"), workers=2)
     try:
         yield cluster

@@ -2,7 +2,9 @@
 
 A scheduler and worker processes run on 127.0.0.1 (``conftest.start_cluster``); houses are tiny
 (two houses, one exploration frame) so the whole file stays within about a minute on an idle
-machine. Every comparison is of the sha256 of every file against a one-process run.
+machine. Every comparison is of the sha256 of every file against a one-process run. The tests that
+leave the cluster whole (or replace the worker they kill) share one cluster: its workers start and
+load the house pipeline once, not once per test.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -40,10 +43,23 @@ def one_process(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     return digests(out)
 
 
-def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_process, tmp_path) -> None:
+def _log_sizes(cluster: Any) -> dict[Path, int]:
+    assert cluster.logs is not None
+    return {p: p.stat().st_size for p in cluster.logs.glob("worker*.log")}
+
+
+def _logs_since(cluster: Any, sizes: dict[Path, int]) -> str:
+    """What the workers logged after ``sizes`` was taken (the cluster is shared by several tests)."""
+    assert cluster.logs is not None
+    return "".join(p.read_bytes()[sizes.get(p, 0):].decode(errors="replace") for p in sorted(cluster.logs.glob("worker*.log")))
+
+
+def test_houses_made_on_the_cluster_equal_a_one_process_run(shared_dask_cluster, one_process, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
     notices: list[str] = []
     seen: list[tuple[int, int]] = []
     out = tmp_path / "data"
+    sizes = _log_sizes(dask_cluster)
     report = generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, cluster=dask_cluster.address, notice=notices.append,
                               progress=lambda summary, done, total: seen.append((done, total)))
     assert digests(out) == one_process
@@ -52,21 +68,22 @@ def test_houses_made_on_the_cluster_equal_a_one_process_run(dask_cluster, one_pr
     # the progress callback counts houses as they finish on the cluster
     assert seen == [(1, HOUSES), (2, HOUSES)]
     # the workers' logs keep the structured format (files/logs.py's renderer: level, event, key=value)
-    logs = "".join(p.read_text() for p in dask_cluster.logs.glob("worker*.log"))
+    logs = _logs_since(dask_cluster, sizes)
     for index in range(HOUSES):
         assert re.search(rf"\[info\s*\] house done\s.*index={index} .*seed={SEED}", logs), logs[-2000:]
 
 
-def test_a_worker_killed_mid_house_still_gives_the_same_bytes(dask_cluster, one_process, tmp_path) -> None:
+def test_a_worker_killed_mid_house_still_gives_the_same_bytes(shared_dask_cluster, one_process, tmp_path) -> None:
     from distributed import Client
 
+    dask_cluster = shared_dask_cluster
     out = tmp_path / "data"
     # the generation runs in its own process: one Dask client per process (two clients on two
     # threads of one process trip over distributed's event loops, which is not what is tested)
     command = [sys.executable, "-c", "from povagent.cli import main; main()", "generate", "--out", str(out),
                "--houses", str(HOUSES), "--seed", str(SEED), "--frames", str(FRAMES), "--cluster", dask_cluster.address]
     generation = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    killed = None
+    killed = victim = None
     try:
         with Client(dask_cluster.address, timeout=30) as watcher:
             deadline = time.monotonic() + 300
@@ -82,6 +99,8 @@ def test_a_worker_killed_mid_house_still_gives_the_same_bytes(dask_cluster, one_
     finally:
         if generation.poll() is None:
             generation.kill()
+        if victim is not None:  # the shared cluster gets the killed worker back
+            dask_cluster.replace_worker(victim)
     assert killed is not None, "no worker was seen rendering a house"
     assert generation.returncode == 0, output
     assert digests(out) == one_process
@@ -98,7 +117,8 @@ def test_workers_that_cannot_see_the_folder_send_the_houses_back(cluster_factory
     assert digests(out) == one_process
 
 
-def test_a_generation_whose_client_is_killed_half_way_resumes_to_the_same_bytes(dask_cluster, one_process, tmp_path) -> None:
+def test_a_generation_whose_client_is_killed_half_way_resumes_to_the_same_bytes(shared_dask_cluster, one_process, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
     out = tmp_path / "data"
     command = [sys.executable, "-c", "from povagent.cli import main; main()", "generate", "--out", str(out),
                "--houses", str(HOUSES), "--seed", str(SEED), "--frames", str(FRAMES), "--cluster", dask_cluster.address]

@@ -153,7 +153,8 @@ def _wait_for_rows(folders: list[Path], at_least: int, thread: threading.Thread,
         time.sleep(0.02)
 
 
-def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(dask_cluster, write_sweep, tmp_path) -> None:
+def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(shared_dask_cluster, write_sweep, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
     # two cells of 4 instances x 6 runs, one request at a time (40 ms): each worker holds a cell
     slow = {"delay_s": 0.04, "runs": 6, "concurrency": 1, "axes": "conditions: [a, b]"}
     path = write_sweep(tmp_path / "killed", **slow)
@@ -162,7 +163,10 @@ def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(dask_cluster, wri
     _wait_for_rows(cells, 3, thread)
     before = {c.name: _lines(c / "results.jsonl") for c in cells}
     dask_cluster.kill_worker(0)
-    thread.join(timeout=120)
+    try:
+        thread.join(timeout=120)
+    finally:  # the shared cluster gets its first worker back
+        dask_cluster.replace_worker(0)
     assert not thread.is_alive() and "error" not in outcome, outcome.get("error")
     assert not outcome["result"].failed
     for cell in cells:
@@ -202,13 +206,32 @@ def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start
         assert len(keys) == len(set(keys)) == 24
 
 
-def test_a_sweep_without_a_cluster_never_imports_dask(write_sweep, tmp_path) -> None:
-    path = write_sweep(tmp_path / "plain")
-    # the console script ends run and sweep with os._exit: read what it imported from -X importtime
-    out = subprocess.run([sys.executable, "-X", "importtime", "-c", "from povagent.cli import main; main()", "sweep", str(path), "--quiet"],
-                         capture_output=True, text=True, timeout=120)
+#: What the child below says on stderr between the two commands.
+_GENERATED = "-- generate done --"
+
+
+def test_a_sweep_or_a_generation_without_a_cluster_never_imports_dask(write_sweep, tmp_path) -> None:
+    # one child runs both commands (one interpreter start rather than two): `generate` with a
+    # process pool, then `sweep`; the console script ends sweep with os._exit, so what each
+    # imported is read from -X importtime's log, split at a line the child prints between them
+    path, data = write_sweep(tmp_path / "plain"), tmp_path / "data"
+    code = (
+        "import sys; from povagent.cli import main\n"
+        f"sys.argv = ['povagent', 'generate', '--out', {str(data)!r}, '--houses', '1', '--frames', '1', '--jobs', '2']\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        f"print({_GENERATED!r}, file=sys.stderr, flush=True)\n"
+        f"sys.argv = ['povagent', 'sweep', {str(path)!r}, '--quiet']\nmain()\n"
+    )
+    out = subprocess.run([sys.executable, "-X", "importtime", "-c", code], capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
-    imported = {line.rsplit("|", 1)[-1].strip() for line in out.stderr.splitlines() if line.startswith("import time:")}
-    assert "povagent.run.sweep" in imported  # the log is read right
-    assert not {m for m in imported if m.split(".")[0] in ("dask", "distributed")}
-    assert len(_keys(tmp_path / "plain" / "a")) == 4
+    assert _GENERATED in out.stderr.splitlines(), out.stderr[-2000:]
+    generate_log, sweep_log = out.stderr.split(_GENERATED, 1)
+
+    def imported(log: str) -> set[str]:
+        return {line.rsplit("|", 1)[-1].strip() for line in log.splitlines() if line.startswith("import time:")}
+
+    assert "povagent.generate.house_task" in imported(generate_log) and "povagent.run.sweep" in imported(sweep_log)  # the log is read right
+    assert not {m for m in imported(generate_log) if m.split(".")[0] in ("dask", "distributed")}, "generate without --cluster imported Dask"
+    assert not {m for m in imported(sweep_log) if m.split(".")[0] in ("dask", "distributed")}, "sweep without --cluster imported Dask"
+    assert (data / "meta.json").exists(), "the generation did not finish"
+    assert len(_keys(tmp_path / "plain" / "a")) == 4, "the sweep did not finish"

@@ -159,18 +159,6 @@ def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(
     assert done.stderr.strip().splitlines()[-1].startswith("error: 1 of 2 houses failed: house 1 (seed 4)")
 
 
-def test_generating_without_a_cluster_imports_no_dask(tmp_path):
-    code = (
-        "import sys; from povagent.cli import main; sys.argv = ['povagent', 'generate', '--out', sys.argv[1], '--houses', '1', "
-        "'--frames', '1', '--jobs', '2']\ntry:\n    main()\nexcept SystemExit:\n    pass\n"
-        "print(sorted(m for m in ('dask', 'distributed') if m in sys.modules))"
-    )
-    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "data")], capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.strip().splitlines()[-1] == "[]"
-    assert (tmp_path / "data/meta.json").exists()
-
-
 def test_a_cluster_without_the_extra_is_one_line_naming_it_and_writes_nothing(tmp_path):
     code = (
         "import sys; sys.modules['distributed'] = None; sys.modules['dask'] = None\n"
