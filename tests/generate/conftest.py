@@ -1,4 +1,4 @@
-"""Fixtures for the generator's tests: one tiny generated dataset per session (real files)."""
+"""Fixtures for the generator's tests: small generated datasets, each made once per session (real files)."""
 
 from __future__ import annotations
 
@@ -47,3 +47,13 @@ def tiny_dataset(tmp_path_factory: pytest.TempPathFactory) -> TinyDataset:
     root = tmp_path_factory.mktemp("generated")
     generate_dataset(root, houses=1, seed=SEED, frames=FRAMES, jobs=1, progress=False, with_render=True)
     return TinyDataset(root, build_house(SEED, 0))
+
+
+@pytest.fixture(scope="session")
+def two_houses(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two houses (seed 4, two exploration frames: its ``meta.json`` says so) generated in this
+    process (``jobs=1``): the reference the determinism tests compare a worker pool's bytes with,
+    and the finished houses the resume tests copy. Read only: tests that change it copy it."""
+    root = tmp_path_factory.mktemp("two_houses") / "data"
+    generate_dataset(root, houses=2, seed=4, frames=2, jobs=1, progress=False)
+    return root
