@@ -15,13 +15,13 @@ def _tree(root: Path) -> dict[str, bytes]:
 
 
 @pytest.fixture(scope="module")
-def two_runs(two_houses: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, bytes], dict[str, bytes]]:
-    """The session's two houses made in this process, and the same two made by a pool of two
-    worker processes (one house each)."""
-    meta = json.loads((two_houses / "meta.json").read_text())
+def two_runs(two_houses, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, bytes], dict[str, bytes]]:
+    """The session's two houses made in this process (by the ``generate`` command), and the same
+    two made by a pool of two worker processes (one house each)."""
+    meta = json.loads((two_houses.root / "meta.json").read_text())
     b = tmp_path_factory.mktemp("run_b")
     generate_dataset(b, houses=2, seed=meta["seed"], frames=meta["generator"]["frames"], jobs=2, progress=False)
-    return _tree(two_houses), _tree(b)
+    return _tree(two_houses.root), _tree(b)
 
 
 def test_two_runs_with_the_same_seed_write_the_same_file_names(two_runs):

@@ -26,18 +26,18 @@ def files(root: Path) -> dict[str, tuple[bytes, int]]:
 
 
 def copy_house(two_houses: Path, index: int, out: Path) -> None:
-    """Copy house ``index`` of ``two_houses`` (complete, with its record) into ``out/artifacts``."""
+    """Copy house ``index`` of the dataset ``two_houses`` (complete, with its record) into ``out/artifacts``."""
     name = f"train_house_{index:05d}"
     (out / "artifacts").mkdir(parents=True, exist_ok=True)
     copy(two_houses / "artifacts" / name, out / "artifacts" / name)
 
 
 @pytest.fixture(scope="module")
-def one_house(two_houses: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+def one_house(two_houses, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished one-house dataset, copied by tests that change it: house 0 of the session's
     ``two_houses``, which a one-house run keeps (it writes only ``meta.json``)."""
     out = tmp_path_factory.mktemp("one_house") / "data"
-    copy_house(two_houses, 0, out)
+    copy_house(two_houses.root, 0, out)
     report = generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False)
     assert (report.kept, report.generated) == (1, 0)
     return out
@@ -66,7 +66,7 @@ def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files
     new = {name: data for name, (data, _) in after.items() if name.startswith("artifacts/train_house_00001/")}
     assert new, "house 1 was not made"
     # the new house is the one a two-house run makes in one go
-    assert new == {name: (two_houses / name).read_bytes() for name in new}
+    assert new == {name: (two_houses.root / name).read_bytes() for name in new}
     assert json.loads((out / "meta.json").read_text())["counts"]["houses"] == 2
 
 
