@@ -59,7 +59,7 @@ class CommandOutput:
 
 @pytest.fixture(scope="session")
 def two_houses(tmp_path_factory: pytest.TempPathFactory) -> CommandOutput:
-    """Two houses (seed 4, two exploration frames: its ``meta.json`` says so) written by the
+    """Two houses (seed 5, two exploration frames: its ``meta.json`` says so) written by the
     ``generate`` command in this process (``--jobs 1``): the command's own test reads it, the
     determinism tests compare a worker pool's bytes with it, and the resume tests copy its
     finished houses. Read only: tests that change it copy it."""
@@ -68,7 +68,7 @@ def two_houses(tmp_path_factory: pytest.TempPathFactory) -> CommandOutput:
     from povagent.cli import app
 
     root = tmp_path_factory.mktemp("two_houses") / "data"
-    args = ["generate", "--out", str(root), "--houses", "2", "--seed", "4", "--frames", "2", "--jobs", "1"]
+    args = ["generate", "--out", str(root), "--houses", "2", "--seed", "5", "--frames", "2", "--jobs", "1"]
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     return CommandOutput(root, result.output)

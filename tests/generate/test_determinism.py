@@ -37,7 +37,7 @@ def test_two_runs_with_the_same_seed_write_identical_bytes_even_with_other_job_c
 
 
 def test_a_different_seed_gives_a_different_house(two_runs, generated_release: Path):
-    # the session's generated_release is seed 3 (12 frames), two_houses seed 4 (2 frames); the
+    # the session's generated_release is seed 3 (12 frames), two_houses seed 5 (2 frames); the
     # first exploration frame is drawn before the frame count plays any part, so only the seed
     # can tell the two apart
     a, _ = two_runs
