@@ -43,45 +43,38 @@ def installed(tmp_path_factory) -> Path:
     return target
 
 
-def run_python(code: str, site: Path, **env: str) -> subprocess.CompletedProcess:
-    """Run ``code`` in a fresh interpreter that sees the installed package."""
-    full_env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")]), **env}
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=240, env=full_env)
+#: What the one interpreter that sees the installed package does, each step on its own so one
+#: failing does not hide the others: the entry point's source (the first plugin host the process
+#: builds), bad options refused, then a sweep of ``basic`` beside ``grid``.
+CHILD = """
+import json, sys, traceback
+from povagent.errors import PluginError
+from povagent.plugins import build_plugin_host
+seen = {}
+try:
+    seen["source"] = build_plugin_host().entry("strategy", "grid").source
+except Exception:
+    seen["source"] = traceback.format_exc()
+try:
+    build_plugin_host().create("strategy", "grid", {"spacing": 3})
+    seen["bad_options"] = "no PluginError raised"
+except PluginError as exc:
+    seen["bad_options"] = str(exc)
+try:
+    from povagent.run.sweep import run_sweep
+    r = run_sweep(sys.argv[1], quiet=True)
+    seen["rows"] = {c.name: r.results[c.name].summary.rows.model_dump() for c in r.cells}
+except Exception:
+    seen["sweep_error"] = traceback.format_exc()
+print(json.dumps(seen))
+"""
 
 
-def test_the_installed_distribution_registers_the_grid_strategy(installed):
-    proc = run_python(
-        "from povagent.plugins import build_plugin_host\n"
-        "e = build_plugin_host().entry('strategy', 'grid')\n"
-        "print(e.source)",
-        installed,
-    )
-    assert proc.returncode == 0, proc.stderr
-    assert "entry point grid = povagent_grid from povagent-example-strategy 0.1.0" in proc.stdout
-
-
-def test_bad_options_are_rejected_naming_the_plugin(installed):
-    proc = run_python(
-        "from povagent.plugins import build_plugin_host\n"
-        "from povagent.errors import PluginError\n"
-        "try:\n"
-        "    build_plugin_host().create('strategy', 'grid', {'spacing': 3})\n"
-        "except PluginError as exc:\n"
-        "    print(exc)",
-        installed,
-    )
-    assert "strategy 'grid'" in proc.stdout and "spacing must be" in proc.stdout
-
-
-def _images_of(request) -> list[Image.Image]:
-    out = []
-    for part in request.user_parts():
-        if part.get("type") == "image_url":
-            out.append(Image.open(io.BytesIO(base64.b64decode(part["image_url"]["url"].split(",", 1)[1]))).convert("RGB"))
-    return out
-
-
-def test_a_sweep_runs_the_grid_strategy_beside_basic(installed, tmp_path):
+@pytest.fixture(scope="module")
+def used(installed, tmp_path_factory) -> tuple[dict, list]:
+    """(what the child saw, the requests the loopback model received): one fresh interpreter
+    (each costs a second or two of imports) runs every check on the installed package."""
+    tmp_path = tmp_path_factory.mktemp("used")
     with LoopbackServer(reply='{"selected_image": 0, "x": 256, "y": 256}', max_lifetime_s=200) as server:
         sweep = tmp_path / "sweep.yaml"
         sweep.write_text(
@@ -101,18 +94,35 @@ def test_a_sweep_runs_the_grid_strategy_beside_basic(installed, tmp_path):
                 }
             )
         )
-        proc = run_python(
-            "import json, sys\n"
-            "from povagent.run.sweep import run_sweep\n"
-            f"r = run_sweep({str(sweep)!r}, quiet=True)\n"
-            "print(json.dumps({c.name: r.results[c.name].summary.rows.model_dump() for c in r.cells}))",
-            installed,
-            **{KEY_ENV: "test-key"},
-        )
+        full_env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(installed), os.environ.get("PYTHONPATH", "")]), KEY_ENV: "test-key"}
+        proc = subprocess.run([sys.executable, "-c", CHILD, str(sweep)], capture_output=True, text=True, timeout=240, env=full_env)
         assert proc.returncode == 0, proc.stderr[-3000:]
-        rows = json.loads(proc.stdout.strip().splitlines()[-1])
         requests = list(server.requests)
+    return json.loads(proc.stdout.strip().splitlines()[-1]), requests
 
+
+def test_the_installed_distribution_registers_the_grid_strategy(used):
+    seen, _ = used
+    assert "entry point grid = povagent_grid from povagent-example-strategy 0.1.0" in seen["source"]
+
+
+def test_bad_options_are_rejected_naming_the_plugin(used):
+    seen, _ = used
+    assert "strategy 'grid'" in seen["bad_options"] and "spacing must be" in seen["bad_options"]
+
+
+def _images_of(request) -> list[Image.Image]:
+    out = []
+    for part in request.user_parts():
+        if part.get("type") == "image_url":
+            out.append(Image.open(io.BytesIO(base64.b64decode(part["image_url"]["url"].split(",", 1)[1]))).convert("RGB"))
+    return out
+
+
+def test_a_sweep_runs_the_grid_strategy_beside_basic(used):
+    seen, requests = used
+    assert "rows" in seen, seen.get("sweep_error")
+    rows = seen["rows"]
     assert set(rows) == {"basic", "grid"}
     assert all(r["answered"] == r["total"] == 2 for r in rows.values())
     grid_prompts = [r for r in requests if any("grid" in p.get("text", "") for p in r.user_parts())]

@@ -1,5 +1,9 @@
 """examples/robot_app.py runs the geometric solver end to end offline and prints a 3D goal
-in the robot's map that matches the benchmark's ground truth."""
+in the robot's map that matches the benchmark's ground truth.
+
+The test gives the example the session's generated set (``--dataset``), so the house is not
+generated a second time; ``benchmarks/robot_app_as_is.py`` runs it as the README does, with no
+argument (it generates its own house), and makes the same checks."""
 
 from __future__ import annotations
 
@@ -20,8 +24,8 @@ def point(text: str) -> np.ndarray:
     return np.array([float(x), float(y), float(z)])
 
 
-def test_robot_app_solves_a_generated_house_offline_and_says_it_is_a_simulation(tmp_path):
-    proc = subprocess.run([sys.executable, str(SCRIPT)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+def test_robot_app_solves_a_generated_house_offline_and_says_it_is_a_simulation(tmp_path, generated_release):
+    proc = subprocess.run([sys.executable, str(SCRIPT), "--dataset", str(generated_release)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     lines = dict(line.split(":", 1) for line in proc.stdout.splitlines() if ":" in line and not line.startswith(" "))
     assert lines["perception"].strip().startswith("SIMULATION")

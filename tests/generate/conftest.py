@@ -1,4 +1,4 @@
-"""Fixtures for the generator's tests: one tiny generated dataset per session (real files)."""
+"""Fixtures for the generator's tests: small generated datasets, each made once per session (real files)."""
 
 from __future__ import annotations
 
@@ -47,3 +47,28 @@ def tiny_dataset(tmp_path_factory: pytest.TempPathFactory) -> TinyDataset:
     root = tmp_path_factory.mktemp("generated")
     generate_dataset(root, houses=1, seed=SEED, frames=FRAMES, jobs=1, progress=False, with_render=True)
     return TinyDataset(root, build_house(SEED, 0))
+
+
+@dataclass
+class CommandOutput:
+    """A dataset ``povagent generate`` wrote, and what the command printed."""
+
+    root: Path
+    output: str
+
+
+@pytest.fixture(scope="session")
+def two_houses(tmp_path_factory: pytest.TempPathFactory) -> CommandOutput:
+    """Two houses (seed 5, two exploration frames: its ``meta.json`` says so) written by the
+    ``generate`` command in this process (``--jobs 1``): the command's own test reads it, the
+    determinism tests compare a worker pool's bytes with it, and the resume tests copy its
+    finished houses. Read only: tests that change it copy it."""
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    root = tmp_path_factory.mktemp("two_houses") / "data"
+    args = ["generate", "--out", str(root), "--houses", "2", "--seed", "5", "--frames", "2", "--jobs", "1"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return CommandOutput(root, result.output)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -14,11 +15,13 @@ def _tree(root: Path) -> dict[str, bytes]:
 
 
 @pytest.fixture(scope="module")
-def two_runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, bytes], dict[str, bytes]]:
-    a, b = tmp_path_factory.mktemp("run_a"), tmp_path_factory.mktemp("run_b")
-    generate_dataset(a, houses=2, seed=11, frames=2, jobs=1, progress=False)
-    generate_dataset(b, houses=2, seed=11, frames=2, jobs=2, progress=False)
-    return _tree(a), _tree(b)
+def two_runs(two_houses, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, bytes], dict[str, bytes]]:
+    """The session's two houses made in this process (by the ``generate`` command), and the same
+    two made by a pool of two worker processes (one house each)."""
+    meta = json.loads((two_houses.root / "meta.json").read_text())
+    b = tmp_path_factory.mktemp("run_b")
+    generate_dataset(b, houses=2, seed=meta["seed"], frames=meta["generator"]["frames"], jobs=2, progress=False)
+    return _tree(two_houses.root), _tree(b)
 
 
 def test_two_runs_with_the_same_seed_write_the_same_file_names(two_runs):
@@ -33,8 +36,10 @@ def test_two_runs_with_the_same_seed_write_identical_bytes_even_with_other_job_c
     assert differing == []
 
 
-def test_a_different_seed_gives_a_different_house(tmp_path: Path, two_runs):
+def test_a_different_seed_gives_a_different_house(tmp_path: Path, two_houses, two_runs):
+    # the same options but the seed (the frame count alone can change the first frame)
     a, _ = two_runs
-    generate_dataset(tmp_path, houses=1, seed=12, frames=1, jobs=1, progress=False)
+    meta = json.loads((two_houses.root / "meta.json").read_text())
+    generate_dataset(tmp_path, houses=1, seed=meta["seed"] + 1, frames=meta["generator"]["frames"], jobs=1, progress=False)
     name = "artifacts/train_house_00000/exploration_images/frame_000.png"
     assert (tmp_path / name).read_bytes() != a[name]

@@ -7,13 +7,13 @@ from typer.testing import CliRunner
 from povagent.cli import app
 
 
-def test_the_generate_command_writes_a_valid_dataset(tmp_path):
+def test_the_generate_command_writes_a_valid_dataset(two_houses):
     from povagent.dataset.validate import validate_dataset
 
-    result = CliRunner().invoke(app, ["generate", "--out", str(tmp_path), "--houses", "1", "--seed", "3", "--frames", "2"])
-    assert result.exit_code == 0, result.output
-    assert "1 houses" in result.output
-    assert validate_dataset(tmp_path) == []
+    # the session's two_houses is the command's output (tests/generate/conftest.py); the fixture
+    # fails on a non-zero exit, naming the output
+    assert "2 houses" in two_houses.output
+    assert validate_dataset(two_houses.root) == []
 
 
 JUDGE_PLUGIN = """

@@ -14,7 +14,10 @@ from povagent.cli import app
 from povagent.errors import DatasetError, GenerationError
 from povagent.generate import PhysicalRulesJudge, generate_dataset
 
-SEED = 4
+#: The options of the session's ``two_houses`` (tests/generate/conftest.py), whose houses these
+#: tests copy: a mismatch fails ``one_house`` naming the option.
+SEED = 5
+FRAMES = 2
 
 
 def files(root: Path) -> dict[str, tuple[bytes, int]]:
@@ -22,11 +25,21 @@ def files(root: Path) -> dict[str, tuple[bytes, int]]:
     return {p.relative_to(root).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns) for p in sorted((root / "artifacts").rglob("*")) if p.is_file()}
 
 
+def copy_house(two_houses: Path, index: int, out: Path) -> None:
+    """Copy house ``index`` of the dataset ``two_houses`` (complete, with its record) into ``out/artifacts``."""
+    name = f"train_house_{index:05d}"
+    (out / "artifacts").mkdir(parents=True, exist_ok=True)
+    copy(two_houses / "artifacts" / name, out / "artifacts" / name)
+
+
 @pytest.fixture(scope="module")
-def one_house(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A finished one-house dataset (one exploration frame), copied by tests that change it."""
+def one_house(two_houses, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A finished one-house dataset, copied by tests that change it: house 0 of the session's
+    ``two_houses``, which a one-house run keeps (it writes only ``meta.json``)."""
     out = tmp_path_factory.mktemp("one_house") / "data"
-    generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+    copy_house(two_houses.root, 0, out)
+    report = generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False)
+    assert (report.kept, report.generated) == (1, 0)
     return out
 
 
@@ -41,23 +54,26 @@ def extended(one_house, tmp_path_factory: pytest.TempPathFactory):
     a house costs seconds; the tests only read the result or work on copies)."""
     out = copy(one_house, tmp_path_factory.mktemp("extended") / "data")
     before = files(out)
-    report = generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    report = generate_dataset(out, houses=2, seed=SEED, frames=FRAMES, progress=False)
     return out, before, report
 
 
-def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files_untouched(extended):
+def test_asking_for_more_houses_makes_only_the_new_ones_and_leaves_the_old_files_untouched(extended, two_houses):
     out, before, report = extended
     after = files(out)
     assert (report.kept, report.generated) == (1, 1)
     assert {name: after[name] for name in before} == before  # same bytes and mtimes
-    assert any(name.startswith("artifacts/train_house_00001/") for name in after)
+    new = {name: data for name, (data, _) in after.items() if name.startswith("artifacts/train_house_00001/")}
+    assert new, "house 1 was not made"
+    # the new house is the one a two-house run makes in one go
+    assert new == {name: (two_houses.root / name).read_bytes() for name in new}
     assert json.loads((out / "meta.json").read_text())["counts"]["houses"] == 2
 
 
 def test_running_the_same_command_again_makes_nothing(one_house, tmp_path):
     out = copy(one_house, tmp_path / "data")
     before = files(out)
-    report = generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+    report = generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False)
     assert (report.kept, report.generated) == (1, 0)
     assert files(out) == before
 
@@ -68,13 +84,13 @@ class OtherJudge(PhysicalRulesJudge):
 
 @pytest.mark.parametrize(
     ("change", "named"),
-    [({"seed": SEED + 1}, "seed"), ({"frames": 2}, "frames"), ({"with_render": True}, "with_render"), ({"judge": OtherJudge()}, "judge")],
+    [({"seed": SEED + 1}, "seed"), ({"frames": FRAMES + 1}, "frames"), ({"with_render": True}, "with_render"), ({"judge": OtherJudge()}, "judge")],
 )
 def test_other_options_over_an_existing_dataset_are_refused_naming_the_option(one_house, tmp_path, change, named):
     out = copy(one_house, tmp_path / "data")
     before = files(out)
     with pytest.raises(DatasetError) as info:
-        generate_dataset(out, progress=False, **{"houses": 2, "seed": SEED, "frames": 1, **change})
+        generate_dataset(out, progress=False, **{"houses": 2, "seed": SEED, "frames": FRAMES, **change})
     assert f"was generated with {named} " in str(info.value)
     assert files(out) == before and (out / "meta.json").exists()
 
@@ -82,7 +98,7 @@ def test_other_options_over_an_existing_dataset_are_refused_naming_the_option(on
 def test_fewer_houses_than_are_complete_is_refused(extended, tmp_path):
     out = copy(extended[0], tmp_path / "data")
     with pytest.raises(DatasetError, match="ask for at least 2 houses"):
-        generate_dataset(out, houses=1, seed=SEED, frames=1, progress=False)
+        generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False)
 
 
 def test_a_half_written_house_is_redone_and_a_complete_one_kept(one_house, tmp_path):
@@ -93,7 +109,7 @@ def test_a_half_written_house_is_redone_and_a_complete_one_kept(one_house, tmp_p
     (out / ".partial/train_house_00001.dead").mkdir(parents=True)
     (out / ".partial/train_house_00001.dead/exploration_log.json").write_text("[")
     (out / "artifacts/train_house_00002/exploration_images").mkdir(parents=True)
-    report = generate_dataset(out, houses=2, seed=SEED, frames=1, progress=False)
+    report = generate_dataset(out, houses=2, seed=SEED, frames=FRAMES, progress=False)
     assert (report.kept, report.generated) == (1, 1)
     assert not (out / ".partial").exists() and not (out / "artifacts/train_house_00002").exists()
     assert {name: files(out)[name] for name in kept} == kept
@@ -120,13 +136,14 @@ def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_n
     plugin = tmp_path / "failing_judge.py"
     plugin.write_text(FAILING_JUDGE)
     out = tmp_path / "data"
-    # in this process (--jobs 1): the console script's test below fails a house in the worker pool
-    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", "1", "--plugin", str(plugin), "--judge", "fails-on-house-1",
-            "--jobs", "1"]
+    # in this process (--jobs 1), houses in index order: house 2 is made after house 1 failed.
+    # The console script's test below fails a house in the worker pool
+    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", str(FRAMES), "--plugin", str(plugin),
+            "--judge", "fails-on-house-1", "--jobs", "1"]
     result = CliRunner().invoke(app, args)
     assert isinstance(result.exception, GenerationError)
     message = str(result.exception)
-    assert "1 of 3 houses failed: house 1 (seed 4): RuntimeError: this judge cannot judge house 1" in message
+    assert f"1 of 3 houses failed: house 1 (seed {SEED}): RuntimeError: this judge cannot judge house 1" in message
     assert "run the same command again to redo only the failed ones" in message
     assert [f.index for f in result.exception.failures] == [1]
     assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00000", "train_house_00002"]
@@ -148,7 +165,7 @@ def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(
         "--seed",
         str(SEED),
         "--frames",
-        "1",
+        str(FRAMES),
         "--plugin",
         str(plugin),
         "--judge",
@@ -156,7 +173,7 @@ def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(
     ]
     done = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=600)
     assert done.returncode != 0
-    assert done.stderr.strip().splitlines()[-1].startswith("error: 1 of 2 houses failed: house 1 (seed 4)")
+    assert done.stderr.strip().splitlines()[-1].startswith(f"error: 1 of 2 houses failed: house 1 (seed {SEED})")
 
 
 def test_a_cluster_without_the_extra_is_one_line_naming_it_and_writes_nothing(tmp_path):
