@@ -87,7 +87,11 @@ def ros_graph(tmp_path_factory) -> Iterator[Any]:
     spins every node added to it. Yields an object with ``context``, ``add(node)``, ``remove(node)``."""
     keys = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_DOMAIN_ID", "ROS_LOG_DIR")
     saved = {k: os.environ.get(k) for k in keys}
-    domain = 40 + os.getpid() % 60  # 40-99: clear of the default 0 and of other sessions' pids
+    # 40-99: clear of the default 0 and of other sessions' pids; under pytest-xdist each worker
+    # (gw0-gw3: the README's command runs at most four) keeps its own residue mod 4, so two
+    # workers of one session never share a graph
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw") or 0) % 4
+    domain = 40 + (os.getpid() % 15) * 4 + worker
     os.environ.update({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_DOMAIN_ID": str(domain), "ROS_LOG_DIR": str(tmp_path_factory.mktemp("ros-log"))})
     from povagent.ros.extras import require_rclpy
 
