@@ -1,7 +1,7 @@
 """How long the README's test command takes: wall time and CPU time of the whole suite.
 
-    python benchmarks/bench_suite.py                 # runs .venv/bin/pytest -q and times it
-    python benchmarks/bench_suite.py --timed LOG     # reads a `/usr/bin/time -v .venv/bin/pytest -q` log instead
+    python benchmarks/bench_suite.py                 # runs the README's pytest command (-q added) and times it
+    python benchmarks/bench_suite.py --timed LOG     # reads a `/usr/bin/time -v` log of that command instead
 
 The suite runs in this checkout's ``.venv`` (as the README installs it). Wall time moves with
 the machine's load; CPU time (user + system of pytest and every process it starts) much less,
@@ -24,6 +24,14 @@ from results_file import figure, record
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def readme_pytest_arguments() -> list[str]:
+    """The arguments the README's test command gives ``.venv/bin/pytest`` (workers and all)."""
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if "&& .venv/bin/pytest" in line:
+            return line.split("&& .venv/bin/pytest", 1)[1].split()
+    raise SystemExit("README.md: no test command ending in `.venv/bin/pytest ...` found")
+
+
 def _from_time_log(text: str) -> tuple[float, float]:
     """(wall s, CPU s) from GNU time's verbose output."""
     user = float(re.search(r"User time \(seconds\): ([\d.]+)", text).group(1))  # type: ignore[union-attr]
@@ -43,11 +51,11 @@ def main() -> None:
     load = os.getloadavg()
     if args.timed is not None:
         wall, cpu = _from_time_log(args.timed.read_text())
-        command = "/usr/bin/time -v .venv/bin/pytest -q (then python benchmarks/bench_suite.py --timed LOG)"
+        command = f"/usr/bin/time -v .venv/bin/pytest {' '.join(readme_pytest_arguments())} (then python benchmarks/bench_suite.py --timed LOG)"
     else:
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.monotonic()
-        subprocess.run([str(ROOT / ".venv" / "bin" / "pytest"), "-q"], cwd=ROOT, check=False)
+        subprocess.run([str(ROOT / ".venv" / "bin" / "pytest"), "-q", *readme_pytest_arguments()], cwd=ROOT, check=False)
         wall = time.monotonic() - t0
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
