@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from povagent.cli import app
@@ -11,23 +13,31 @@ from povagent.cli import app
 runner = CliRunner()
 
 
-def test_quickstart_on_a_given_dataset_prints_the_main_table_and_writes_the_report(mini_root, tmp_path):
-    out = tmp_path / "qs"
-    result = runner.invoke(app, ["quickstart", "--out", str(out), "--dataset", str(mini_root), "--quiet"])
+@pytest.fixture(scope="module")
+def quickstart(mini_root, tmp_path_factory) -> tuple[list[str], str, Path]:
+    """(its arguments, what it printed, its folder): one ``quickstart`` in this process (a sweep
+    of three baselines and a report), shared by the tests that read it or run it again."""
+    out = tmp_path_factory.mktemp("quickstart") / "qs"
+    args = ["quickstart", "--out", str(out), "--dataset", str(mini_root), "--quiet"]
+    result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
-    assert "| Baseline | Inferred | Stated | Given |" in result.output  # only baselines ran: no "Model" column
-    oracle_line = next(line for line in result.output.splitlines() if "oracle" in line and line.startswith("|"))
+    return args, result.output, out
+
+
+def test_quickstart_on_a_given_dataset_prints_the_main_table_and_writes_the_report(quickstart):
+    _, output, out = quickstart
+    assert "| Baseline | Inferred | Stated | Given |" in output  # only baselines ran: no "Model" column
+    oracle_line = next(line for line in output.splitlines() if "oracle" in line and line.startswith("|"))
     assert oracle_line.count("0.000") >= 3  # the oracle is the metric's floor: the pipeline is wired right
     assert (out / "sweep" / "report" / "report.html").exists()
     cells = json.loads((out / "sweep" / "sweep.json").read_text())
     assert len(cells["cells"]) == 3
 
 
-def test_running_the_quickstart_again_makes_no_new_rows(mini_root, tmp_path):
-    out = tmp_path / "qs"
-    args = ["quickstart", "--out", str(out), "--dataset", str(mini_root), "--quiet"]
-    assert runner.invoke(app, args).exit_code == 0
+def test_running_the_quickstart_again_makes_no_new_rows(quickstart):
+    args, _, out = quickstart
     files = sorted((out / "sweep").rglob("results.jsonl"))
+    assert len(files) == 3, files
     before = [f.read_bytes() for f in files]
     assert runner.invoke(app, args).exit_code == 0
     assert [f.read_bytes() for f in files] == before

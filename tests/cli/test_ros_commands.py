@@ -1,11 +1,9 @@
 """``povagent ros-replay``: a bag in, the ~/result JSON or a short table out; ``ros-node`` and
-``ros-replay`` without a model say what to give."""
+``ros-replay`` without a model say what to give (each command run as the console script shows it, in this process)."""
 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -31,14 +29,10 @@ def tour_bag(generated_release, tmp_path_factory):
     return tour, write_tour_bag(tour, tmp_path_factory.mktemp("bag") / "tour")
 
 
-def povagent(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "povagent.cli", *args], capture_output=True, text=True, timeout=120, cwd=cwd)
-
-
-def test_ros_replay_prints_the_result_json_with_the_agents_goal_and_saves_the_memory(tour_bag, tmp_path):
+def test_ros_replay_prints_the_result_json_with_the_agents_goal_and_saves_the_memory(tour_bag, tmp_path, console_here):
     tour, bag = tour_bag
     (tmp_path / "center.yaml").write_text(CENTER)
-    proc = povagent("ros-replay", str(bag), "--command", "the mug", "--pipeline", "center.yaml", "--json", "--save-memory", "memory", cwd=tmp_path)
+    proc = console_here(["ros-replay", str(bag), "--command", "the mug", "--pipeline", "center.yaml", "--json", "--save-memory", "memory"], cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout)
     with GroundingAgent(plane=Plane.horizontal(0.0, up_axis="z")) as agent:
@@ -48,10 +42,10 @@ def test_ros_replay_prints_the_result_json_with_the_agents_goal_and_saves_the_me
     assert (tmp_path / "memory" / "memory.json").is_file()
 
 
-def test_ros_replay_prints_a_short_table_by_default(tour_bag, tmp_path):
+def test_ros_replay_prints_a_short_table_by_default(tour_bag, tmp_path, console_here):
     _, bag = tour_bag
     (tmp_path / "center.yaml").write_text(CENTER)
-    proc = povagent("ros-replay", str(bag), "--command", "the mug", "--pipeline", "center.yaml", cwd=tmp_path)
+    proc = console_here(["ros-replay", str(bag), "--command", "the mug", "--pipeline", "center.yaml"], cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     keys = [line.split()[0] for line in proc.stdout.splitlines()]
     assert keys == ["bag", "status", "keyframe", "pixel", "goal"]
@@ -70,12 +64,12 @@ def test_ros_replay_of_a_missing_bag_is_one_line(tmp_path):
     assert isinstance(result.exception, ConfigError) and str(result.exception) == f"{tmp_path / 'nowhere'}: no such bag"
 
 
-def test_ros_replay_refuses_to_save_a_memory_among_someone_elses_files_in_one_line_before_reading_the_bag(tmp_path):
+def test_ros_replay_refuses_to_save_a_memory_among_someone_elses_files_in_one_line_before_reading_the_bag(tmp_path, console_here):
     (tmp_path / "center.yaml").write_text(CENTER)
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "todo.txt").write_text("mine")
     # the bag does not exist: the folder is refused before the bag is even looked at
-    proc = povagent("ros-replay", "nowhere", "--command", "x", "--pipeline", "center.yaml", "--save-memory", "notes", cwd=tmp_path)
+    proc = console_here(["ros-replay", "nowhere", "--command", "x", "--pipeline", "center.yaml", "--save-memory", "notes"], cwd=tmp_path)
     assert proc.returncode == 2
     assert proc.stderr.splitlines() == [
         "error: notes: not empty and not a saved keyframe memory (it holds todo.txt, and no readable memory.json); "
