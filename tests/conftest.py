@@ -127,22 +127,15 @@ def write_answered_run(mini_root):
 def generated_release(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Two generated houses with 12 exploration frames each, in the release layout (real files,
     made once a session): the geometry, solver, simulator, agent and bird's-eye tests share it."""
-    import fcntl
+    from shared_sets import made_once
 
     from povagent.generate import generate_dataset
 
-    # Under pytest-xdist each worker's basetemp is a folder of one shared root: the workers make
-    # the set once between them (it costs ~4 s of CPU; nearly every worker asks for it), the
-    # first under the lock, the others waiting for it and then reading its files.
-    base = tmp_path_factory.getbasetemp()
-    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
-    root = shared / "geometric-generated" / "POVBench"
-    root.parent.mkdir(parents=True, exist_ok=True)
-    with open(root.parent / "generating.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-        if not (root / "meta.json").exists():  # none yet, or an interrupted one: generating resumes it
-            generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
-    return root
+    # nearly every xdist worker asks for it: made once between them (~4 s of CPU each time)
+    def make(root: Path) -> None:
+        generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
+
+    return made_once(tmp_path_factory, "geometric-generated", make)
 
 
 #: The hand-made fixture's houses without a planted problem.
