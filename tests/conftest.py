@@ -127,12 +127,15 @@ def write_answered_run(mini_root):
 def generated_release(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Two generated houses with 12 exploration frames each, in the release layout (real files,
     made once a session): the geometry, solver, simulator, agent and bird's-eye tests share it."""
+    from shared_sets import made_once
+
     from povagent.generate import generate_dataset
 
-    root = tmp_path_factory.getbasetemp() / "geometric-generated" / "POVBench"
-    if not (root / "meta.json").exists():
+    # nearly every xdist worker asks for it: made once between them (~4 s of CPU each time)
+    def make(root: Path) -> None:
         generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
-    return root
+
+    return made_once(tmp_path_factory, "geometric-generated", make)
 
 
 #: The hand-made fixture's houses without a planted problem.

@@ -62,8 +62,17 @@ def test_a_rerun_of_a_killed_run_renders_no_view_again(generated_release, oracle
     assert {p: p.stat().st_mtime_ns for p in (folder / "views").glob("*.png")} == views
 
 
-def test_the_random_explorer_spends_its_budget_then_answers_the_last_view_centre(generated_release, tmp_path):
-    rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 2)
+@pytest.fixture(scope="module")
+def random_run(generated_release, tmp_path_factory):
+    """Two instances answered by the random explorer (seed 3): one holds the instance whose
+    calls are pinned below (the explorer draws each instance's calls on their own)."""
+    folder = tmp_path_factory.mktemp("explorers") / "random"
+    return run_explorer(generated_release, folder, {"name": "explorer-random", "options": {"seed": 3}}, 2)
+
+
+def test_the_random_explorer_spends_its_budget_then_answers_the_last_view_centre(random_run):
+    rows = random_run
+    assert len(rows) == 2
     for row in rows:
         record = read_record(row.exchanges[-1].raw)
         assert record.counts.actions == 8
@@ -100,17 +109,20 @@ def test_rescore_reads_an_active_run_with_its_own_official_reading_by_default(or
     assert [rescored[k] for k in sorted(first)] == pytest.approx([first[k] for k in sorted(first)])
 
 
-#: The random explorer's calls (seed 3, the first instance of the random run above) as it made
-#: them before tools were registered: deriving its actions from the registry changed none.
+#: The random explorer's calls (seed 3) in this instance (the one a one-instance sample of the
+#: run above draws) as it made them before tools were registered: deriving its actions from the
+#: registry changed none.
+RANDOM_CALLS_KEY = "train_house_00001/pair_001/left/c#0"
 RANDOM_CALLS_SHA256 = "1187785a31bbe9d365042b62003ce30d4fe7134cf365ddce2261bc5fc6fe19db"
 
 
-def test_the_random_explorer_makes_the_calls_it_made_before_tools_were_registered(generated_release, tmp_path):
+def test_the_random_explorer_makes_the_calls_it_made_before_tools_were_registered(random_run):
     import hashlib
     import json
 
-    rows = run_explorer(generated_release, tmp_path / "random", {"name": "explorer-random", "options": {"seed": 3}}, 1)
-    steps = [(s.action, s.arguments) for s in read_record(rows[0].exchanges[-1].raw).steps]
+    rows = {r.key: r for r in random_run}
+    assert RANDOM_CALLS_KEY in rows, sorted(rows)
+    steps = [(s.action, s.arguments) for s in read_record(rows[RANDOM_CALLS_KEY].exchanges[-1].raw).steps]
     assert hashlib.sha256(json.dumps(steps).encode()).hexdigest() == RANDOM_CALLS_SHA256
 
 

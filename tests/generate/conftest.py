@@ -44,8 +44,13 @@ class TinyDataset:
 @pytest.fixture(scope="session")
 def tiny_dataset(tmp_path_factory: pytest.TempPathFactory) -> TinyDataset:
     """One house, six exploration frames, written with ``with_render=True``."""
-    root = tmp_path_factory.mktemp("generated")
-    generate_dataset(root, houses=1, seed=SEED, frames=FRAMES, jobs=1, progress=False, with_render=True)
+    from shared_sets import made_once
+
+    # the generator's test files run in several xdist workers: the set is made once between them
+    def make(root: Path) -> None:
+        generate_dataset(root, houses=1, seed=SEED, frames=FRAMES, jobs=1, progress=False, with_render=True)
+
+    root = made_once(tmp_path_factory, "tiny-generated", make)
     return TinyDataset(root, build_house(SEED, 0))
 
 
