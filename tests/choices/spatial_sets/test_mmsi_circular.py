@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import shutil
 from fractions import Fraction
+from pathlib import Path
 
 import pytest
 import yaml
@@ -28,6 +29,9 @@ from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
 from .conftest import MMSI_ROWS, mmsi_rows, write_mmsi_parquet
+
+#: What the ``offline_plugin_file`` fixture copies, for a module's run.
+OFFLINE_PLUGIN = Path(__file__).parents[2] / "run" / "offline_plugin.py"
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)", "Positional Relationship (Obj.-Obj.)", "Attribute (Meas.)", "Motion (Cam.)", "MSR",
@@ -74,14 +78,41 @@ def circular_copy(tmp_path, mmsi_parquet):
     return tmp_path / "MMSI_Bench.parquet"
 
 
+@pytest.fixture(scope="module")
+def circular_run_made(tmp_path_factory, mmsi_parquet):
+    """The circular run, made once a module (its tests only read it, or write beside it), by the
+    ``queued`` backend on a plugin host of its own (as the ``queued_backend`` fixture makes one)."""
+    from povagent import hookimpl, plugins
+    from povagent.testing.pytest_plugin import QueuedBackendHandle
+
+    folder = tmp_path_factory.mktemp("circular")
+    copy = Path(shutil.copy(mmsi_parquet, folder / "MMSI_Bench.parquet"))
+    plugin = Path(shutil.copy(OFFLINE_PLUGIN, folder / "offline_plugin.py")).resolve()
+    instances = load_choice_set(copy, "mmsi-circular", cache_dir=folder / "c").instances()
+    config = {"plugins": [str(plugin)], "dataset": {"path": str(copy), "format": "mmsi-circular"}, "backend": "queued",
+              "strategy": "choice", "runs": 1, "concurrency": 1, "timeout": 5, "output": str(folder / "run")}  # fmt: skip
+    (folder / "run.yaml").write_text(yaml.safe_dump(config))
+    handle = QueuedBackendHandle()
+
+    class Queued:
+        @hookimpl
+        def register_backends(self, register) -> None:
+            register("queued", handle.factory, description="canned replies (tests)")
+
+    host = plugins.build_plugin_host(strict=False)
+    host.add_plugin(Queued(), name="povagent-testing-queued-backend")
+    previous, plugins._OVERRIDE = plugins._OVERRIDE, host
+    try:
+        handle.queue(*_replies(instances))
+        return run_pipeline(load_pipeline(folder / "run.yaml"))
+    finally:
+        plugins._OVERRIDE = previous
+
+
 @pytest.fixture
-def circular_run(tmp_path, circular_copy, offline_plugin_file, queued_backend):
-    instances = load_choice_set(circular_copy, "mmsi-circular", cache_dir=tmp_path / "c").instances()
-    config = {"plugins": [str(offline_plugin_file)], "dataset": {"path": str(circular_copy), "format": "mmsi-circular"}, "backend": "queued",
-              "strategy": "choice", "runs": 1, "concurrency": 1, "timeout": 5, "output": str(tmp_path / "run")}  # fmt: skip
-    (tmp_path / "run.yaml").write_text(yaml.safe_dump(config))
-    queued_backend.queue(*_replies(instances))
-    return run_pipeline(load_pipeline(tmp_path / "run.yaml"))
+def circular_run(circular_run_made, queued_backend):
+    """The module's circular run, read while a ``queued`` backend is registered (as when it ran)."""
+    return circular_run_made
 
 
 def _figures(summary, scorer: str, metric: str) -> dict[str, float]:
