@@ -28,10 +28,7 @@ from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
-from .conftest import MMSI_ROWS, mmsi_rows, write_mmsi_parquet
-
-#: What the ``offline_plugin_file`` fixture copies, for a module's run.
-OFFLINE_PLUGIN = Path(__file__).parents[2] / "run" / "offline_plugin.py"
+from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, mmsi_rows, run_with_queued_replies, write_mmsi_parquet
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)", "Positional Relationship (Obj.-Obj.)", "Attribute (Meas.)", "Motion (Cam.)", "MSR",
@@ -82,9 +79,6 @@ def circular_copy(tmp_path, mmsi_parquet):
 def circular_run_made(tmp_path_factory, mmsi_parquet):
     """The circular run, made once a module (its tests only read it, or write beside it), by the
     ``queued`` backend on a plugin host of its own (as the ``queued_backend`` fixture makes one)."""
-    from povagent import hookimpl, plugins
-    from povagent.testing.pytest_plugin import QueuedBackendHandle
-
     folder = tmp_path_factory.mktemp("circular")
     copy = Path(shutil.copy(mmsi_parquet, folder / "MMSI_Bench.parquet"))
     plugin = Path(shutil.copy(OFFLINE_PLUGIN, folder / "offline_plugin.py")).resolve()
@@ -92,21 +86,7 @@ def circular_run_made(tmp_path_factory, mmsi_parquet):
     config = {"plugins": [str(plugin)], "dataset": {"path": str(copy), "format": "mmsi-circular"}, "backend": "queued",
               "strategy": "choice", "runs": 1, "concurrency": 1, "timeout": 5, "output": str(folder / "run")}  # fmt: skip
     (folder / "run.yaml").write_text(yaml.safe_dump(config))
-    handle = QueuedBackendHandle()
-
-    class Queued:
-        @hookimpl
-        def register_backends(self, register) -> None:
-            register("queued", handle.factory, description="canned replies (tests)")
-
-    host = plugins.build_plugin_host(strict=False)
-    host.add_plugin(Queued(), name="povagent-testing-queued-backend")
-    previous, plugins._OVERRIDE = plugins._OVERRIDE, host
-    try:
-        handle.queue(*_replies(instances))
-        return run_pipeline(load_pipeline(folder / "run.yaml"))
-    finally:
-        plugins._OVERRIDE = previous
+    return run_with_queued_replies(folder / "run.yaml", _replies(instances))
 
 
 @pytest.fixture
