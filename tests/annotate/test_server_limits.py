@@ -11,6 +11,7 @@ import select
 import socket
 import subprocess
 import sys
+import textwrap
 import threading
 import time
 
@@ -116,41 +117,94 @@ def test_a_refusal_line_never_holds_the_token_or_the_path(served):
     assert lines and all(server.token not in line and "api/nothing" not in line for line in lines)
 
 
-def _study(tmp_path, mini_root, annotator: str = "alice", strategy: object = "basic"):
+def _study(folder, mini_root, annotator: str = "alice", strategy: object = "basic"):
     import yaml
 
-    path = tmp_path / "study.yaml"
+    folder.mkdir()
+    path = folder / "study.yaml"
     path.write_text(yaml.safe_dump({"dataset": {"path": str(mini_root)}, "backend": "human", "annotator": annotator, "strategy": strategy,
-                                    "parser": "json", "scorers": ["official"], "output": str(tmp_path / "out")}))  # fmt: skip
+                                    "parser": "json", "scorers": ["official"], "output": str(folder / "out")}))  # fmt: skip
     return path
 
 
-def _annotate(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "povagent.cli", "annotate", *args], capture_output=True, text=True, timeout=90,
-                          env={**os.environ, "PYTHONUNBUFFERED": "1"})  # fmt: skip
+# One child runs the console script's ``main`` once per refused command line, each with its own
+# argv and its own stdout and stderr files (file descriptors 1 and 2 pointed at them), so each
+# command is still the real command in a process of povagent's own, for one interpreter start
+# and one import of povagent instead of three. An exception escaping ``main`` is printed as the
+# interpreter would print it (a traceback, exit status 1).
+ANNOTATE_EACH = textwrap.dedent("""
+    import json, os, sys, traceback
+    from povagent.cli import main
+
+    cases, folder = json.loads(sys.argv[1]), sys.argv[2]
+    codes = []
+    for n, args in enumerate(cases):
+        kept = os.dup(1), os.dup(2)
+        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
+            os.dup2(out.fileno(), 1)
+            os.dup2(err.fileno(), 2)
+            sys.argv = ["povagent", "annotate", *args]
+            code = 0
+            try:
+                main()
+            except SystemExit as done:
+                if isinstance(done.code, str):
+                    print(done.code, file=sys.stderr)
+                code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
+            except BaseException:
+                traceback.print_exc()
+                code = 1
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(kept[0], 1)
+            os.dup2(kept[1], 2)
+        codes.append(code)
+    print(json.dumps(codes))
+""")
 
 
-def test_annotate_on_a_busy_port_says_so_in_one_line(tmp_path, mini_root):
+@pytest.fixture(scope="module")
+def refused(tmp_path_factory, mini_root) -> dict[str, tuple[subprocess.CompletedProcess, int]]:
+    """Each refused ``povagent annotate`` command line, run in one child while a port is held
+    busy: name -> (what it returned and printed, the busy port)."""
+    folder = tmp_path_factory.mktemp("refused")
+    cases = {
+        "busy port": (_study(folder / "busy", mini_root),),
+        "annotator": (_study(folder / "annotator", mini_root, annotator="../../etc/x"),),
+        "option": (_study(folder / "option", mini_root, strategy={"name": "basic", "options": {"no_such_option": 1}}),),
+    }
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
         busy.listen(1)
         port = busy.getsockname()[1]
-        done = _annotate(str(_study(tmp_path, mini_root)), "--port", str(port))
+        argvs = [[str(cases["busy port"][0]), "--port", str(port)], [str(cases["annotator"][0])], [str(cases["option"][0])]]
+        child = subprocess.run([sys.executable, "-c", ANNOTATE_EACH, json.dumps(argvs), str(folder)], capture_output=True, text=True,
+                               timeout=90, env={**os.environ, "PYTHONUNBUFFERED": "1"})  # fmt: skip
+    assert child.returncode == 0, child.stderr[-2000:]
+    codes = json.loads(child.stdout.splitlines()[-1])
+    return {
+        name: (subprocess.CompletedProcess(argv, code, (folder / f"{n}.out").read_text(), (folder / f"{n}.err").read_text()), port)
+        for n, (name, argv, code) in enumerate(zip(cases, argvs, codes))
+    }
+
+
+def test_annotate_on_a_busy_port_says_so_in_one_line(refused):
+    done, port = refused["busy port"]
     assert done.returncode != 0 and "Traceback" not in done.stderr
     said = [line for line in done.stderr.splitlines() if line.strip()]
     assert len(said) == 1 and f"--port {port}" in said[0] and "another program" in said[0]
     assert "open http" not in done.stdout
 
 
-def test_an_invalid_annotator_name_is_refused_before_any_address_is_printed(tmp_path, mini_root):
-    done = _annotate(str(_study(tmp_path, mini_root, annotator="../../etc/x")))
+def test_an_invalid_annotator_name_is_refused_before_any_address_is_printed(refused):
+    done, _ = refused["annotator"]
     assert done.returncode != 0 and "Traceback" not in done.stderr
     assert "annotator" in done.stderr and "not a name" in done.stderr
     assert "http://" not in done.stdout + done.stderr  # no URL, no token was ever shown
     assert json.dumps("../../etc/x")[1:-1] in done.stderr
 
 
-def test_a_component_option_that_is_refused_is_refused_before_any_address_is_printed(tmp_path, mini_root):
-    done = _annotate(str(_study(tmp_path, mini_root, strategy={"name": "basic", "options": {"no_such_option": 1}})))
+def test_a_component_option_that_is_refused_is_refused_before_any_address_is_printed(refused):
+    done, _ = refused["option"]
     assert done.returncode != 0 and "Traceback" not in done.stderr and "no_such_option" in done.stderr
     assert "http://" not in done.stdout + done.stderr

@@ -25,14 +25,15 @@ SYSTEMS = (("oracle", "oracle", None), ("always-a", "test-center", "A"), ("lower
 SETS = ("viewspatial", "mindcube")
 
 
-@pytest.fixture
-def two_sets_three_systems(tmp_path, choice_pipeline):
-    """A folder of six runs: each of :data:`SYSTEMS` on each of :data:`SETS`, labelled by system."""
-    folder = tmp_path / "runs"
+@pytest.fixture(scope="module")
+def two_sets_three_systems(tmp_path_factory, module_choice_pipeline):
+    """A folder of six runs: each of :data:`SYSTEMS` on each of :data:`SETS`, labelled by system
+    (made once for the module: its tests only read them)."""
+    folder = tmp_path_factory.mktemp("leaderboard") / "runs"
     results = {}
     for format in SETS:
         for label, backend, reply in SYSTEMS:
-            path = choice_pipeline(format, backend=backend, reply=reply)
+            path = module_choice_pipeline(format, backend=backend, reply=reply)
             data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / f"{format}-{label}")}
             path.write_text(yaml.safe_dump(data, sort_keys=False))
             results[(label, format)] = run_pipeline(load_pipeline(path))
@@ -47,10 +48,10 @@ def _grid(table):
     return {r.label: {c.name: cell.value for c, cell in zip(table.columns, r.cells)} for r in table.rows}
 
 
-@pytest.fixture
-def report(two_sets_three_systems, tmp_path):
+@pytest.fixture(scope="module")
+def report(two_sets_three_systems, tmp_path_factory):
     folder, results = two_sets_three_systems
-    return write_report(folder, tmp_path / "report", gallery=False, n_boot=200), results
+    return write_report(folder, tmp_path_factory.mktemp("leaderboard-report") / "report", gallery=False, n_boot=200), results
 
 
 def test_the_leaderboard_has_a_row_per_system_and_a_column_per_set(report):
@@ -142,9 +143,8 @@ def test_the_harness_readings_open_with_one_click_under_the_leaderboard(report):
     assert board < folded < page.index(f'id="table-{READINGS}"')
 
 
-def test_a_baseline_is_never_bolded_in_the_per_category_table(two_sets_three_systems, tmp_path):
-    folder, _ = two_sets_three_systems
-    result = write_report(folder, tmp_path / "report", gallery=False, n_boot=200)
+def test_a_baseline_is_never_bolded_in_the_per_category_table(report):
+    result, _ = report
     table = _table(result, "choice_accuracy_choice_viewspatial")
     from povagent.report.tables import best_rows
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import shutil
 from fractions import Fraction
+from pathlib import Path
 
 import pytest
 import yaml
@@ -27,7 +28,7 @@ from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
-from .conftest import MMSI_ROWS, mmsi_rows, write_mmsi_parquet
+from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, mmsi_rows, run_with_queued_replies, write_mmsi_parquet
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)", "Positional Relationship (Obj.-Obj.)", "Attribute (Meas.)", "Motion (Cam.)", "MSR",
@@ -74,14 +75,24 @@ def circular_copy(tmp_path, mmsi_parquet):
     return tmp_path / "MMSI_Bench.parquet"
 
 
+@pytest.fixture(scope="module")
+def circular_run_made(tmp_path_factory, mmsi_parquet):
+    """The circular run, made once a module (its tests only read it, or write beside it), by the
+    ``queued`` backend on a plugin host of its own (as the ``queued_backend`` fixture makes one)."""
+    folder = tmp_path_factory.mktemp("circular")
+    copy = Path(shutil.copy(mmsi_parquet, folder / "MMSI_Bench.parquet"))
+    plugin = Path(shutil.copy(OFFLINE_PLUGIN, folder / "offline_plugin.py")).resolve()
+    instances = load_choice_set(copy, "mmsi-circular", cache_dir=folder / "c").instances()
+    config = {"plugins": [str(plugin)], "dataset": {"path": str(copy), "format": "mmsi-circular"}, "backend": "queued",
+              "strategy": "choice", "runs": 1, "concurrency": 1, "timeout": 5, "output": str(folder / "run")}  # fmt: skip
+    (folder / "run.yaml").write_text(yaml.safe_dump(config))
+    return run_with_queued_replies(folder / "run.yaml", _replies(instances))
+
+
 @pytest.fixture
-def circular_run(tmp_path, circular_copy, offline_plugin_file, queued_backend):
-    instances = load_choice_set(circular_copy, "mmsi-circular", cache_dir=tmp_path / "c").instances()
-    config = {"plugins": [str(offline_plugin_file)], "dataset": {"path": str(circular_copy), "format": "mmsi-circular"}, "backend": "queued",
-              "strategy": "choice", "runs": 1, "concurrency": 1, "timeout": 5, "output": str(tmp_path / "run")}  # fmt: skip
-    (tmp_path / "run.yaml").write_text(yaml.safe_dump(config))
-    queued_backend.queue(*_replies(instances))
-    return run_pipeline(load_pipeline(tmp_path / "run.yaml"))
+def circular_run(circular_run_made, queued_backend):
+    """The module's circular run, read while a ``queued`` backend is registered (as when it ran)."""
+    return circular_run_made
 
 
 def _figures(summary, scorer: str, metric: str) -> dict[str, float]:

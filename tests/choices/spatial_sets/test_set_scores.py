@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 import yaml
@@ -21,7 +22,7 @@ from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
-from .conftest import MMSI_ROWS, OMNI_RECORDS
+from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, OMNI_RECORDS, run_with_queued_replies
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)",
@@ -112,14 +113,41 @@ def omni_copy(tmp_path, omnispatial_folder, offline_plugin_file):
     return tmp_path / "OmniSpatial-test" / "data.json"
 
 
-@pytest.fixture
-def mmsi_run(tmp_path, mmsi_copy, offline_plugin_file, queued_backend):
-    return _run(tmp_path, offline_plugin_file, queued_backend, mmsi_copy, "mmsi", [r for r, *_ in MMSI_REPLIES])
+def _module_run(folder, format, replies):
+    """A run of the ``queued`` backend made once a module in ``folder`` (its tests read it, or
+    write beside it: rescored folders, reports elsewhere)."""
+    config = {"plugins": [str(Path(shutil.copy(OFFLINE_PLUGIN, folder / "offline_plugin.py")).resolve())],
+              "dataset": {"path": str(folder / ("MMSI_Bench.parquet" if format == "mmsi" else "OmniSpatial-test/data.json")), "format": format},
+              "backend": "queued", "strategy": "choice", "scorers": ["choice"], "runs": 1, "concurrency": 1, "timeout": 5,
+              "output": str(folder / "run")}  # fmt: skip
+    (folder / "run.yaml").write_text(yaml.safe_dump(config))
+    return run_with_queued_replies(folder / "run.yaml", replies)
+
+
+@pytest.fixture(scope="module")
+def mmsi_run_made(tmp_path_factory, mmsi_parquet):
+    folder = tmp_path_factory.mktemp("mmsi-run")
+    shutil.copy(mmsi_parquet, folder / "MMSI_Bench.parquet")
+    return _module_run(folder, "mmsi", [r for r, *_ in MMSI_REPLIES])
+
+
+@pytest.fixture(scope="module")
+def omni_run_made(tmp_path_factory, omnispatial_folder):
+    folder = tmp_path_factory.mktemp("omni-run")
+    shutil.copytree(omnispatial_folder, folder / "OmniSpatial-test")
+    return _module_run(folder, "omnispatial", [r for r, *_ in OMNI_REPLIES])
 
 
 @pytest.fixture
-def omni_run(tmp_path, omni_copy, offline_plugin_file, queued_backend):
-    return _run(tmp_path, offline_plugin_file, queued_backend, omni_copy, "omnispatial", [r for r, *_ in OMNI_REPLIES])
+def mmsi_run(mmsi_run_made, queued_backend):
+    """The module's MMSI run, read while a ``queued`` backend is registered (as when it ran)."""
+    return mmsi_run_made
+
+
+@pytest.fixture
+def omni_run(omni_run_made, queued_backend):
+    """The module's OmniSpatial run, read while a ``queued`` backend is registered (as when it ran)."""
+    return omni_run_made
 
 
 def test_the_oracle_backend_scores_every_mmsi_question_under_the_set_s_rule(tmp_path, mmsi_copy, offline_plugin_file):
