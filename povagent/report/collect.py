@@ -331,7 +331,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
 
 def observation_of(
     row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None,
-    turns: Sequence[tuple[str | None, str | None]] | None = None,
+    turns: Sequence[tuple[str | None, str | None]] | None = None, share: Callable[[str], str] = sys.intern,
 ) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
@@ -339,7 +339,8 @@ def observation_of(
     its error. ``marked_hit``: answered when the scorer answered it, and a hit only when it said
     so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
     No protocol: answered when the row's status says so (its declared metrics say the rest).
-    ``turns``: the row's turns as stored elsewhere (default: taken from ``row``).
+    ``turns``: the row's turns as stored elsewhere (default: taken from ``row``). ``share``: what
+    makes equal labels one string (default :func:`sys.intern`; :func:`collect` passes its own table).
     """
     fields = (row.scores.get(scorer) or {}) if scorer else {}
     hit_fields = fields if protocol == "marked_hit" else {}
@@ -355,18 +356,19 @@ def observation_of(
     else:
         answered, success, in_frame = row.status == "answered", None, None
     with_l2 = protocol == "normalized_l2" and answered
+    answer = shown_answer(row.prediction.answer_type, row.prediction.value)  # a baseline's, a choice's: a few texts over all rows
     return Observation(
         system=system,
         run_name=run_name,
         run=row.run,
         # labels and texts repeat over rows (runs, houses, conditions): one string each, not one a row
-        instance_id=sys.intern(row.instance_id),
-        house_id=sys.intern(row.house_id),
-        pair_id=sys.intern(row.pair_id),
-        direction=sys.intern(str(row.direction)),
-        condition=sys.intern(str(row.condition)),
-        status=sys.intern(str(row.status)),
-        parse_status=sys.intern(str(row.parse.status)) if row.parse is not None else None,
+        instance_id=share(row.instance_id),
+        house_id=share(row.house_id),
+        pair_id=share(row.pair_id),
+        direction=share(str(row.direction)),
+        condition=share(str(row.condition)),
+        status=share(str(row.status)),
+        parse_status=share(str(row.parse.status)) if row.parse is not None else None,
         answered=answered,
         l2=float(off["l2"]) if with_l2 else None,
         l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
@@ -375,10 +377,10 @@ def observation_of(
         gt_u=off.get("gt_u"),
         gt_v=off.get("gt_v"),
         selected_image=row.prediction.selected_image,
-        image_path=sys.intern(row.prediction.image_path) if row.prediction.image_path is not None else None,
+        image_path=share(row.prediction.image_path) if row.prediction.image_path is not None else None,
         x=row.prediction.x,
         y=row.prediction.y,
-        sentence=sys.intern(row.sentence),
+        sentence=share(row.sentence),
         raw=row.raw_response,
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
@@ -390,7 +392,7 @@ def observation_of(
         metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
         category=row_category(row),
-        answer=shown_answer(row.prediction.answer_type, row.prediction.value),
+        answer=share(answer) if answer is not None else None,
         chosen=chosen_label(row),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
@@ -424,6 +426,14 @@ def collect(
     poolings = assign_systems(runs, pool=pool)
     obs: list[Observation] = []
     left_out = 0
+    # one string per distinct label, from a table of this collection's own: interning ids and
+    # sentences (thousands of distinct ones) would grow the interpreter's table, which never shrinks
+    labels: dict[str, str] = {}
+
+    def share(text: str) -> str:
+        return labels.setdefault(text, text)
+
+    keep = MAX_RAW_CHARS + 1  # one int, not one a row held by each row's turns
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
         scrub = _key_scrubber(r.config)
@@ -433,7 +443,7 @@ def collect(
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, MAX_RAW_CHARS + 1))
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, keep), share)
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 

@@ -26,7 +26,7 @@ from typing import Iterable, Iterator, Literal, Mapping
 import numpy as np
 
 from povagent.report.collect import Observation
-from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, EMPTY, Estimate, bootstrap_mean_ci, resample_draws
+from povagent.scoring.bootstrap import CONFIDENCE, DEFAULT_BOOT, DRAWS_PER_BLOCK, EMPTY, Estimate, bootstrap_mean_ci, resample_draws
 
 
 @dataclass
@@ -98,11 +98,16 @@ def _resample_counts(n_inst: int, n_boot: int, seed: int) -> Iterator[np.ndarray
     (n_boot, n_inst) matrix, a block of resamples at a time
     (:func:`~povagent.scoring.bootstrap.resample_draws`), so a report's memory does not grow
     with the instances."""
-    for draws in resample_draws(n_inst, n_boot, seed):
+    # half the shared block: a block's draws, bincount and counts are alive at once here
+    for draws in resample_draws(n_inst, n_boot, seed, DRAWS_PER_BLOCK // 2):
         rows = draws.shape[0]
         # one bincount over (resample, instance) cells: much faster than numpy's multinomial
-        flat = (draws + (np.arange(rows) * n_inst)[:, None]).ravel()
-        yield np.bincount(flat, minlength=rows * n_inst).reshape(rows, n_inst).astype(float)
+        # offset in place, and the draws let go before the block is used: one block's temporaries
+        # at a time, not three
+        draws += (np.arange(rows) * n_inst)[:, None]
+        counts = np.bincount(draws.ravel(), minlength=rows * n_inst).reshape(rows, n_inst).astype(float)
+        del draws
+        yield counts
 
 
 def _ratio_estimates(
@@ -129,7 +134,13 @@ def _ratio_estimates(
         prepared.append((vw, w))
     sums = None
     if resampled and prepared:
-        sums = np.concatenate([_exact_order_product(counts, columns) for counts in _resample_counts(n_inst, n_boot, seed)])
+        # every block's sums written into one matrix made first: a block's small product left
+        # between its large temporaries would pin the heap above them, block after block
+        sums = np.empty((n_boot, columns.shape[1]))
+        start = 0
+        for counts in _resample_counts(n_inst, n_boot, seed):
+            _exact_order_product(counts, columns, out=sums[start : start + counts.shape[0]])
+            start += counts.shape[0]
     out: list[Estimate] = []
     for k, (vw, weights) in enumerate(prepared):
         point = float(_mean_over_runs(_ratio(vw.sum(axis=0), weights.sum(axis=0))))
@@ -352,11 +363,11 @@ def paired_comparison(
     )
 
 
-def _exact_order_product(counts: np.ndarray, columns: np.ndarray) -> np.ndarray:
+def _exact_order_product(counts: np.ndarray, columns: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """``counts @ columns`` summed in one fixed order on every machine.
 
     A BLAS matrix product picks its kernel by CPU and splits its sums by thread count, so the
     last bit of a CI would differ between machines (OpenBLAS's Haswell and Sandybridge kernels,
     or one thread and two, give different bits here). numpy's own ``einsum`` loop adds in the
     order the arrays are laid out, whatever the CPU or thread count."""
-    return np.einsum("ij,jk->ik", counts, columns, optimize=False)
+    return np.einsum("ij,jk->ik", counts, columns, optimize=False, out=out)

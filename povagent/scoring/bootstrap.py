@@ -110,12 +110,12 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and bool((a.view(np.uint64) == b.view(np.uint64)).all())
 
 
-def resample_draws(n: int, n_boot: int, seed: int) -> Iterator[np.ndarray]:
+def resample_draws(n: int, n_boot: int, seed: int, per_block_draws: int = DRAWS_PER_BLOCK) -> Iterator[np.ndarray]:
     """The ``(n_boot, n)`` matrix of bootstrap draws (indices in ``[0, n)``, seeded with
     ``seed``), yielded a block of whole resamples at a time, at most :data:`DRAWS_PER_BLOCK`
-    draws each: the same numbers as one ``integers(0, n, size=(n_boot, n))`` call (the
+    draws each (``per_block_draws``: fewer): the same numbers as one ``integers(0, n, size=(n_boot, n))`` call (the
     generator hands out its stream in order whatever the block), without holding them all."""
     rng = np.random.default_rng(seed)
-    per_block = max(1, DRAWS_PER_BLOCK // max(n, 1))
+    per_block = max(1, per_block_draws // max(n, 1))
     for start in range(0, n_boot, per_block):
         yield rng.integers(0, n, size=(min(per_block, n_boot - start), n))
