@@ -154,9 +154,7 @@ class RequestPath:
                 self.stats.cache_hits += 1
                 return received(cached, self.redact_answer)  # a cache written before the key was known
         if self._start_backend:
-            start = self._start
-            if start is None or not start.done() or start.cancelled() or start.exception() is not None:
-                await self._started(label)  # once started, later requests skip the wait
+            await self._started(label)
         response = await self.call(request, label=label, deadline=deadline)
         if key is not None and cache is not None:
             cache.put_deferred(key, response)
@@ -165,10 +163,13 @@ class RequestPath:
     async def _started(self, label: str) -> None:
         """Wait for :meth:`Backend.start` (begun once, shared by every caller); a start that
         fails (a missing API key) fails each request that needed it, without a retry."""
-        if self._start is None:
-            self._start = asyncio.ensure_future(self.backend.start())
+        start = self._start
+        if start is not None and start.done() and not start.cancelled() and start.exception() is None:
+            return  # started: later requests do not wait on it
+        if start is None:
+            start = self._start = asyncio.ensure_future(self.backend.start())
         try:
-            await asyncio.shield(self._start)
+            await asyncio.shield(start)
         except Exception as exc:
             raise self._failure(exc, 1, label) from exc
 

@@ -411,12 +411,14 @@ class PipelineRun:
             await self._journal.drain()
             self._after_row(row, first=True)
 
+            def finished(instance: Instance, row: ResultRow) -> None:
+                houses.done(instance)
+                self._journal.submit(row)
+                self._after_row(row, first=False)
+
             async def worker() -> None:
                 for instance, run in rest:
-                    row = await solve(instance, run)
-                    houses.done(instance)
-                    self._journal.submit(row)
-                    self._after_row(row, first=False)
+                    finished(instance, await solve(instance, run))
                     # Let the committer run even when the backend answers without suspending
                     # (offline baselines): rows become durable as they finish, not at the end.
                     await self._journal.backpressure()
@@ -426,9 +428,7 @@ class PipelineRun:
                 # task, slot, timeout or thread hand-off each (see Backend.answers_in_process).
                 while chunk := await solver.solve_chunk(rest, CHUNK, CHUNK_S):
                     for instance, row in chunk:
-                        houses.done(instance)
-                        self._journal.submit(row)
-                        self._after_row(row, first=False)
+                        finished(instance, row)
                     await self._journal.backpressure()  # the committer writes this chunk meanwhile
 
             try:
