@@ -63,7 +63,9 @@ def house_major(keys: list[tuple[Instance, int]]) -> list[tuple[Instance, int]]:
 class KeyPlan:
     """The keys of one pipeline in its run folder."""
 
-    wanted: set[str]
+    #: each key of the selection, with its place in the order a fresh run asks the keys (the
+    #: order a summary reads rows in, whatever order they were written in)
+    wanted: dict[str, int]
     done: set[str]
     #: keys whose last row is ``infra_error`` (pending again unless they are kept)
     failed: set[str]
@@ -91,7 +93,8 @@ def plan_keys(
     the summary reads the rows back at the run's end.
     """
     runs = config.run_indices
-    wanted = {row_key(i.id, r) for i in instances for r in runs}
+    ordered = house_major([(i, r) for i in instances for r in runs])
+    wanted = {row_key(i.id, r): n for n, (i, r) in enumerate(ordered)}
     run_dir = Path(config.output)
     done: set[str] = set()
     failed: set[str] = set()
@@ -112,7 +115,7 @@ def plan_keys(
             failed.discard(row.key)
     if retry_failed:
         done -= failed
-    pending = house_major([(i, r) for i in instances for r in runs if row_key(i.id, r) not in done])
+    pending = [(i, r) for i, r in ordered if row_key(i.id, r) not in done]  # house-major, as a fresh run's
     return KeyPlan(wanted=wanted, done=done, failed=failed, pending=pending)
 
 

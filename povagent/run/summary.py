@@ -13,7 +13,7 @@ summary is; :mod:`povagent.run.summary_fields` what a summary reads of one row.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Collection, Iterable, Mapping, Sequence
 
 from povagent.results.official_reading import official_parse_breakdown
 from povagent.results.output_check import check_output_text
@@ -49,14 +49,18 @@ def _plugin_score_summary(
 
 def summarize_rows(
     rows: Iterable[ResultRow],
-    keys: set[str] | None = None,
+    keys: Collection[str] | None = None,
     declared: Mapping[str, Sequence[Metric]] | None = None,
     protocols: Mapping[str, str] | None = None,
 ) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
-    are left out. When a key repeats, its last row counts. ``declared`` is each scorer's metrics
+    are left out. When a key repeats, its last row counts. Keys given with their places (``{key:
+    place}``, :attr:`~povagent.run.pending.KeyPlan.wanted`) are summarized in that order whatever
+    order the rows come in, so a run whose rows finished in any order, or was resumed, has the
+    summary of one that wrote them in order, to the last bit (sums and bootstrap draws follow the
+    rows' order). ``declared`` is each scorer's metrics
     (``Scorer.metrics``): the ``metrics`` section holds them per slice (see
     :mod:`povagent.scoring.metrics`); ``protocols`` says which scorer follows which protocol
     (``{scorer: protocol}``; default: as the registered scorers declare). The rows are kept as
@@ -124,7 +128,7 @@ def declared_metrics(scorers: Mapping[str, Any]) -> dict[str, tuple[Metric, ...]
 
 
 def summarize_run(
-    results: Path, keys: set[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None,
+    results: Path, keys: Collection[str] | None = None, declared: Mapping[str, Sequence[Metric]] | None = None,
     protocols: Mapping[str, str] | None = None, written: SummaryTable | None = None,
 ) -> dict[str, Any]:
     """Breakdown (overall / per condition / per direction) of a results file, per run too.
@@ -141,7 +145,7 @@ def summarize_run(
 
 
 def written_rows_table(
-    results: Path, keys: set[str] | None, declared: Mapping[str, Sequence[Metric]] | None, protocols: Mapping[str, str] | None
+    results: Path, keys: Collection[str] | None, declared: Mapping[str, Sequence[Metric]] | None, protocols: Mapping[str, str] | None
 ) -> SummaryTable | None:
     """A table to add a run's rows to as they are written, when ``results`` holds no row yet:
     the rows written are then the file's rows, in the file's order, and :func:`summarize_run`

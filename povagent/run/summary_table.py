@@ -10,7 +10,9 @@ those rows.
 
 When a key repeats, its last row counts, in the place of the key's first row (the order a
 summary's sums run in). Keys are told apart by a 128-bit BLAKE2b digest of each, so the table
-keeps 16 bytes a row instead of the key's text.
+keeps 16 bytes a row instead of the key's text. Keys given with their places in the run's order
+(``{key: place}``) put the rows in that order instead (8 bytes a row): a run whose rows were
+written as they finished, or over two sessions, is summarized as one that wrote them in order.
 
 Its rows are read back as the objects the breakdowns take (:class:`ScoredRow`, and the like),
 built one at a time as a breakdown reaches them (:class:`~povagent.scoring.breakdown.Picked`).
@@ -53,8 +55,9 @@ class SummaryTable:
 
     ``declared``: the scorers' metrics whose values are kept; ``protocols``: which scorer
     follows which protocol (``{scorer: protocol}``; default: as the registered scorers
-    declare); ``keys``: the run's selection (a row of another key is left out). Add rows with
-    :meth:`add`, then :meth:`close` once before reading.
+    declare); ``keys``: the run's selection (a row of another key is left out), given as
+    ``{key: place}`` to read the rows in the places' order. Add rows with :meth:`add`, then
+    :meth:`close` once before reading.
     """
 
     def __init__(self, declared: Declared | None = None, protocols: Mapping[str, str] | None = None, keys: Container[str] | None = None) -> None:
@@ -64,6 +67,9 @@ class SummaryTable:
         self._error_scorers = [n for n, p in self._protocols.items() if p == "normalized_l2"]
         self._hit_scorers = [n for n, p in self._protocols.items() if p == "marked_hit"]
         self._keys = keys
+        #: each row's key's place (keys given with places), else each key's digest
+        self._places: Mapping[str, int] | None = keys if isinstance(keys, Mapping) else None
+        self._row_places = array("q")
         self._digests = bytearray()
         self._fields = {
             name: Column()
@@ -138,25 +144,22 @@ class SummaryTable:
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
             self.metrics.append(row_metric_flat(row, self.declared), row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
-        self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
+        if self._places is not None:
+            self._row_places.append(self._places[row.key])
+        else:
+            self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
     def close(self) -> SummaryTable:
-        """Keep each key's last row, in the place of its first (once; rows in key order after)."""
+        """Keep each key's last row, in the place of its first or in the key's given place
+        (once; rows in key order after)."""
         if self._closed:
             return self
         self._closed = True
         n = len(self._fields["run"])
         if n == 0:
             return self
-        digests = np.frombuffer(bytes(self._digests), dtype="<u8").reshape(n, 2)
-        order = np.lexsort((digests[:, 1], digests[:, 0]))  # stable: a key's rows stay in file order
-        ordered = digests[order]
-        first_of_key = np.ones(n, dtype=bool)
-        first_of_key[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
-        last_of_key = np.ones(n, dtype=bool)
-        last_of_key[:-1] = first_of_key[1:]
-        take = order[last_of_key][np.argsort(order[first_of_key], kind="stable")]
-        self._digests = bytearray()
+        take = self._by_place(n) if self._places is not None else self._by_first_row(n)
+        self._digests, self._row_places = bytearray(), array("q")
         if len(take) == n and bool((take == np.arange(n)).all()):
             return self  # no key repeats (a run's usual file): the rows are already one per key
         new_position = np.full(n, -1, dtype=np.int64)
@@ -168,6 +171,26 @@ class SummaryTable:
         if self.metrics.declared:
             self.metrics = self.metrics.taken(take)
         return self
+
+    def _by_first_row(self, n: int) -> np.ndarray:
+        """The rows to keep, in order: each key's last row in the place of its first."""
+        digests = np.frombuffer(bytes(self._digests), dtype="<u8").reshape(n, 2)
+        order = np.lexsort((digests[:, 1], digests[:, 0]))  # stable: a key's rows stay in file order
+        ordered = digests[order]
+        first_of_key = np.ones(n, dtype=bool)
+        first_of_key[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+        last_of_key = np.ones(n, dtype=bool)
+        last_of_key[:-1] = first_of_key[1:]
+        return order[last_of_key][np.argsort(order[first_of_key], kind="stable")]
+
+    def _by_place(self, n: int) -> np.ndarray:
+        """The rows to keep, in order: each key's last row, keys in their given places."""
+        places = np.frombuffer(self._row_places, dtype=np.int64)
+        order = np.argsort(places, kind="stable")  # a key's rows stay in file order
+        ordered = places[order]
+        last_of_key = np.ones(n, dtype=bool)
+        last_of_key[:-1] = ordered[1:] != ordered[:-1]
+        return order[last_of_key]
 
     def __len__(self) -> int:
         return len(self._fields["run"])

@@ -26,7 +26,7 @@ import json
 import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Collection
 
 from povagent.config.models import PipelineConfig
 from povagent.config.remote_code import remote_code_granted
@@ -272,7 +272,7 @@ class JournalWatch:
     def __init__(self) -> None:
         self._files: dict[Path, list[Any]] = {}  # path -> [inode, offset, wanted keys, counted keys]
 
-    def watch(self, run_dir: Path, wanted: set[str], counted: set[str]) -> None:
+    def watch(self, run_dir: Path, wanted: Collection[str], counted: set[str]) -> None:
         """Follow ``run_dir``'s journal: ``wanted`` keys count, ``counted`` are counted already."""
         path = Path(run_dir) / RESULTS
         self._files[path] = [None, 0, wanted, set(counted)]

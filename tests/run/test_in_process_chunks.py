@@ -38,12 +38,9 @@ def _events(run_dir):
 
 
 def test_an_in_process_backend_makes_the_rows_and_summary_the_concurrent_path_makes(write_pipeline, offline_plugin, tmp_path, monkeypatch):
-    # one worker on the concurrent path, so it writes its rows in key order as the chunks do: with
-    # more, keys finish in any order, and the summary's sums and bootstrap draws follow the file's
-    # order down to the last bits (it failed so, 1 run in ~20)
-    concurrent = run_pipeline(load_pipeline(write_pipeline("b.yaml", runs=2, concurrency=1, output=str(tmp_path / "concurrent"))))
+    concurrent = run_pipeline(load_pipeline(write_pipeline("b.yaml", runs=2, output=str(tmp_path / "concurrent"))))
     monkeypatch.setattr(offline_plugin.CenterBackend, "answers_in_process", True)  # the same pipeline, declared in-process
-    chunked = run_pipeline(load_pipeline(write_pipeline("a.yaml", runs=2, concurrency=1, output=str(tmp_path / "chunked"))))
+    chunked = run_pipeline(load_pipeline(write_pipeline("a.yaml", runs=2, output=str(tmp_path / "chunked"))))
     assert _rows(chunked.run_dir) == _rows(concurrent.run_dir) and len(_rows(chunked.run_dir)) == 2 * N_KEYS
     a, b = (json.loads((r.run_dir / "summary.json").read_text()) for r in (chunked, concurrent))
     for summary in (a, b):
