@@ -164,11 +164,12 @@ def rules_note(answers: list[ChoiceAnswer], systems: list[str]) -> str:
 
 
 def per_question(answers: list[ChoiceAnswer]) -> dict[str, float]:
-    """Each question's accuracy over its runs."""
+    """Each question's accuracy over its runs, questions in id order (the order a bootstrap over
+    questions draws from: not the order the rows were written in)."""
     hits: dict[str, list[float]] = defaultdict(list)
     for a in answers:
         hits[a.instance_id].append(1.0 if a.correct else 0.0)
-    return {k: sum(v) / len(v) for k, v in hits.items()}
+    return {k: sum(v) / len(v) for k, v in sorted(hits.items())}
 
 
 def _accuracy_table(
