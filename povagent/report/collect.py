@@ -35,7 +35,7 @@ from povagent.report.systems import Pooling, assign_systems, planted_label, set_
 from povagent.results.finished_run import RESULTS_FILE, FinishedRun, is_run_folder
 from povagent.results.rows import ResultRow, StoredRows
 from povagent.results.transcript import StoredTurns, transcripts
-from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
+from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_flat, row_metric_groups
 from povagent.scoring.score_protocols import PROTOCOLS, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -332,6 +332,7 @@ def find_runs(path: str | Path) -> list[RunInfo]:
 def observation_of(
     row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None,
     turns: Sequence[tuple[str | None, str | None]] | None = None, share: Callable[[str], str] = sys.intern,
+    same: Callable[[Any], Any] = lambda value: value,
 ) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
@@ -340,7 +341,9 @@ def observation_of(
     so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
     No protocol: answered when the row's status says so (its declared metrics say the rest).
     ``turns``: the row's turns as stored elsewhere (default: taken from ``row``). ``share``: what
-    makes equal labels one string (default :func:`sys.intern`; :func:`collect` passes its own table).
+    makes equal labels one string (default :func:`sys.intern`; :func:`collect` passes its own table);
+    ``same``: what makes equal numbers one object (default: each its own; :func:`collect` passes
+    :func:`_number_table`'s).
     """
     fields = (row.scores.get(scorer) or {}) if scorer else {}
     hit_fields = fields if protocol == "marked_hit" else {}
@@ -370,26 +373,28 @@ def observation_of(
         status=share(str(row.status)),
         parse_status=share(str(row.parse.status)) if row.parse is not None else None,
         answered=answered,
-        l2=float(off["l2"]) if with_l2 else None,
-        l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
+        # numbers repeat too: a point's ground truth in every run, a strict error equal to the
+        # official one, an answer given again (one float object each, not one a row)
+        l2=same(float(off["l2"])) if with_l2 else None,
+        l2_strict=same(float(off["l2_strict"])) if with_l2 and off.get("l2_strict") is not None else None,
         gt_in_frame=in_frame,
         gt_behind=off.get("gt_behind"),
-        gt_u=off.get("gt_u"),
-        gt_v=off.get("gt_v"),
+        gt_u=same(off.get("gt_u")),
+        gt_v=same(off.get("gt_v")),
         selected_image=row.prediction.selected_image,
         image_path=share(row.prediction.image_path) if row.prediction.image_path is not None else None,
-        x=row.prediction.x,
-        y=row.prediction.y,
+        x=same(row.prediction.x),
+        y=same(row.prediction.y),
         sentence=share(row.sentence),
-        raw=row.raw_response,
+        raw=share(row.raw_response) if row.raw_response is not None else None,  # a baseline's, a choice's: a few texts
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
         protocol=protocol,
         success=success,
-        distance_norm=hit_fields.get("distance_norm") if answered else None,
-        hit_radius_px=hit_fields.get("hit_radius_px"),
+        distance_norm=same(hit_fields.get("distance_norm")) if answered else None,
+        hit_radius_px=same(hit_fields.get("hit_radius_px")),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
-        metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
+        metric_values=MetricValues(tuple(map(same, row_metric_flat(row, declared))), declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
         category=row_category(row),
         answer=share(answer) if answer is not None else None,
@@ -433,6 +438,7 @@ def collect(
     def share(text: str) -> str:
         return labels.setdefault(text, text)
 
+    same = _number_table()
     keep = MAX_RAW_CHARS + 1  # one int, not one a row held by each row's turns
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
@@ -443,9 +449,24 @@ def collect(
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, keep), share)
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, keep), share, same)
             obs.append(scrub(o) if scrub is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
+
+
+def _number_table() -> Callable[[Any], Any]:
+    """What makes equal floats one object, from a table of its own (dropped with it).
+
+    Only floats that no other value equals yet prints otherwise: never an int (``1 == 1.0``),
+    a zero (``-0.0 == 0.0``) or a NaN (equal to nothing, so never found again)."""
+    table: dict[float, float] = {}
+
+    def same(value: Any) -> Any:
+        if type(value) is float and value and value == value:
+            return table.setdefault(value, value)
+        return value
+
+    return same
 
 
 def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation] | None:

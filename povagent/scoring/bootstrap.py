@@ -57,7 +57,7 @@ def bootstrap_mean_cis(
     """:func:`bootstrap_mean_ci` of each of ``columns``, the same estimates to the bit: columns
     with as many finite values share one pass over the draws (the draws depend only on that
     count and the seed), so a cell's several metrics draw their resamples once, not once each."""
-    kept = [(x := np.asarray(values, dtype=float))[np.isfinite(x)] for values in columns]
+    kept = [_finite(values) for values in columns]
     out: list[Estimate] = [EMPTY] * len(kept)
     by_size: dict[int, list[int]] = {}
     for k, x in enumerate(kept):
@@ -84,6 +84,14 @@ def bootstrap_mean_cis(
                 twin = next(j for j in resampled if _same(kept[j], kept[k]))
                 out[k] = Estimate(out[k].value, out[twin].lo, out[twin].hi, n)
     return out
+
+
+def _finite(values: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The finite values of a column, in order: the column itself when all are (no copy of a
+    report's longest columns while their draws are summed)."""
+    x = np.asarray(values, dtype=float)
+    finite = np.isfinite(x)
+    return x if finite.all() else x[finite]
 
 
 def _resampled(kept: list[np.ndarray], ks: list[int], out: list[Estimate]) -> dict[int, tuple[np.ndarray, bool]]:

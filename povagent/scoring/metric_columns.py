@@ -113,8 +113,12 @@ class MetricColumns:
         the group hit; a row with no group is a group of its own)."""
         column = self._values[self._at[(scorer, metric.name)]]
         if metric.group is None:
+            if not len(column):
+                return np.zeros(0)
+            if rows == range(len(column)):  # every row (the overall cell): the column itself, not a copy
+                return np.frombuffer(column, dtype=np.float64)
             at = np.fromiter(rows, dtype=np.int64, count=len(rows))
-            return np.frombuffer(column, dtype=np.float64)[at] if len(column) else np.zeros(0)
+            return np.frombuffer(column, dtype=np.float64)[at]
         by_group: dict[Any, list[float]] = defaultdict(list)
         for n, i in enumerate(rows):
             value = column[i]
