@@ -46,3 +46,9 @@ def test_a_shown_rows_transcript_is_read_back_whole(tmp_path, mini_dataset):
     (request, answer), = tuple(row_turns(last))
     assert request.startswith(f"request {n - 1} ") and len(request) == MAX_RAW_CHARS + 1
     assert answer == last.raw
+
+
+def test_a_number_every_run_repeats_is_held_once(tmp_path, mini_dataset):
+    folder, _ = long_prompt_run(tmp_path / "run", mini_dataset, runs=2)
+    observations = collect(folder).observations
+    assert observations[0].l2 == 0.25 and all(o.l2 is observations[0].l2 for o in observations)
