@@ -52,11 +52,13 @@ def bootstrap_mean_ci(
 
 
 def bootstrap_mean_cis(
-    columns: Sequence[Sequence[float] | np.ndarray], n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0
+    columns: Sequence[Sequence[float] | np.ndarray], n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0,
+    per_block_draws: int = DRAWS_PER_BLOCK,
 ) -> list[Estimate]:
     """:func:`bootstrap_mean_ci` of each of ``columns``, the same estimates to the bit: columns
     with as many finite values share one pass over the draws (the draws depend only on that
-    count and the seed), so a cell's several metrics draw their resamples once, not once each."""
+    count and the seed), so a cell's several metrics draw their resamples once, not once each.
+    ``per_block_draws``: at most as many draws at a time (:func:`resample_draws`; the same estimates)."""
     kept = [_finite(values) for values in columns]
     out: list[Estimate] = [EMPTY] * len(kept)
     by_size: dict[int, list[int]] = {}
@@ -71,7 +73,7 @@ def bootstrap_mean_cis(
     for n, ks in by_size.items():
         resampled = _resampled(kept, ks, out)
         sums: list[list[np.ndarray]] = [[] for _ in resampled]
-        for draws in resample_draws(n, n_boot, seed) if resampled else ():
+        for draws in resample_draws(n, n_boot, seed, per_block_draws) if resampled else ():
             for sink, (x, binary) in zip(sums, resampled.values(), strict=True):
                 # a resample's sum of 0s and 1s is a count, exact in any order: the same
                 # number as the float sum; ``take`` gathers as indexing does, faster
