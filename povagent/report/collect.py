@@ -31,11 +31,12 @@ from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 from povagent.report.baseline_systems import is_baseline_system
 from povagent.report.choice_fields import chosen_label
 from povagent.report.diagnosed_observation import diagnosis_of
+from povagent.report.shared_values import label_table, number_table
 from povagent.report.systems import Pooling, assign_systems, planted_label, set_name, simulation_label
 from povagent.results.finished_run import RESULTS_FILE, FinishedRun, is_run_folder
 from povagent.results.rows import ResultRow, StoredRows
-from povagent.results.transcript import StoredTurns, transcripts
-from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_groups
+from povagent.results.transcript import RunTurns, transcripts
+from povagent.scoring.metrics import Declared, MetricValues, row_category, row_metric_flat, row_metric_groups
 from povagent.scoring.score_protocols import PROTOCOLS, registered_protocols, shown_answer
 
 #: Raw answers and requests longer than this are cut in the report's answers files (the full
@@ -87,9 +88,9 @@ class Observation:
     #: Every exchange of the row, in order: ``(request as sent or None, raw answer or None)``
     #: (the transcript, each request rebuilt and cut to one character over
     #: :data:`MAX_RAW_CHARS`; a request not kept, as in early rows of format 0, is ``None``).
-    #: :func:`collect` leaves them in the results file until they are looked at
-    #: (:class:`~povagent.results.transcript.StoredTurns`).
-    turns: Sequence[tuple[str | None, str | None]] = ()
+    #: :func:`collect` leaves them in the results file until they are looked at (:func:`row_turns`):
+    #: every row of a run holds its run's :class:`~povagent.results.transcript.RunTurns`.
+    turns: Sequence[tuple[str | None, str | None]] | RunTurns = ()
     #: The ``diagnose`` scorer's first failing step (``frame`` ... ``correct``; ``None``: not diagnosed).
     fail_step: str | None = None
     #: ``diagnose``: the egocentric and mirrored targets in the scored frame (clamped fractions).
@@ -331,7 +332,8 @@ def find_runs(path: str | Path) -> list[RunInfo]:
 
 def observation_of(
     row: ResultRow, system: str, run_name: str, scorer: str, declared: Declared | None = None, protocol: str | None = None,
-    turns: Sequence[tuple[str | None, str | None]] | None = None, share: Callable[[str], str] = sys.intern,
+    turns: Sequence[tuple[str | None, str | None]] | RunTurns | None = None, share: Callable[[str], str] = sys.intern,
+    same: Callable[[Any], Any] = lambda value: value,
 ) -> Observation:
     """The report's view of one row, read from ``scores[scorer]`` as stored (never recomputed).
 
@@ -339,8 +341,10 @@ def observation_of(
     its error. ``marked_hit``: answered when the scorer answered it, and a hit only when it said
     so (a row it did not score, such as an infra error, is a failure, as the paper counts it).
     No protocol: answered when the row's status says so (its declared metrics say the rest).
-    ``turns``: the row's turns as stored elsewhere (default: taken from ``row``). ``share``: what
-    makes equal labels one string (default :func:`sys.intern`; :func:`collect` passes its own table).
+    ``turns``: the row's turns as stored elsewhere (default: taken from ``row``), such as its
+    run's :class:`~povagent.results.transcript.RunTurns`. ``share`` and ``same``: what make equal
+    labels and equal floats one object (default: :func:`sys.intern`, and each float its own;
+    :func:`collect` passes tables of its own, :mod:`povagent.report.shared_values`).
     """
     fields = (row.scores.get(scorer) or {}) if scorer else {}
     hit_fields = fields if protocol == "marked_hit" else {}
@@ -370,32 +374,40 @@ def observation_of(
         status=share(str(row.status)),
         parse_status=share(str(row.parse.status)) if row.parse is not None else None,
         answered=answered,
-        l2=float(off["l2"]) if with_l2 else None,
-        l2_strict=float(off["l2_strict"]) if with_l2 and off.get("l2_strict") is not None else None,
+        # numbers repeat too: a point's ground truth in every run, a strict error equal to the
+        # official one, an answer given again (one float object each, not one a row)
+        l2=same(float(off["l2"])) if with_l2 else None,
+        l2_strict=same(float(off["l2_strict"])) if with_l2 and off.get("l2_strict") is not None else None,
         gt_in_frame=in_frame,
         gt_behind=off.get("gt_behind"),
-        gt_u=off.get("gt_u"),
-        gt_v=off.get("gt_v"),
+        gt_u=same(off.get("gt_u")),
+        gt_v=same(off.get("gt_v")),
         selected_image=row.prediction.selected_image,
         image_path=share(row.prediction.image_path) if row.prediction.image_path is not None else None,
-        x=row.prediction.x,
-        y=row.prediction.y,
+        x=same(row.prediction.x),
+        y=same(row.prediction.y),
         sentence=share(row.sentence),
-        raw=row.raw_response,
+        raw=share(row.raw_response) if row.raw_response is not None else None,  # a baseline's, a choice's: a few texts
         parse_reason=(row.parse.reason if row.parse is not None else (row.error_message or "")),
         scorer=scorer,
         protocol=protocol,
         success=success,
-        distance_norm=hit_fields.get("distance_norm") if answered else None,
-        hit_radius_px=hit_fields.get("hit_radius_px"),
+        distance_norm=same(hit_fields.get("distance_norm")) if answered else None,
+        hit_radius_px=same(hit_fields.get("hit_radius_px")),
         turns=tuple(zip(transcripts(row.exchanges, keep=MAX_RAW_CHARS + 1), (e.raw for e in row.exchanges))) if turns is None else turns,
-        metric_values=MetricValues.of(row, declared) if declared else {},  # one tuple a row, not two dicts
+        metric_values=MetricValues(tuple(map(same, row_metric_flat(row, declared))), declared) if declared else {},  # one tuple a row, not two dicts
         metric_groups=_groups_of(row, run_name, declared) if declared else None,
         category=row_category(row),
         answer=share(answer) if answer is not None else None,
         chosen=chosen_label(row),
         **diagnosis_of(row, scorer if protocol == "normalized_l2" else None),
     )
+
+
+def row_turns(o: Observation) -> Sequence[tuple[str | None, str | None]]:
+    """An observation's turns: its own (a row built whole, a baseline's none), or a collected
+    row's, read from its run's results file now (:class:`~povagent.results.transcript.RunTurns`)."""
+    return o.turns.of(o.instance_id, o.run) if isinstance(o.turns, RunTurns) else o.turns
 
 
 def _groups_of(row: ResultRow, run_name: str, declared: Declared) -> dict[str, dict[str, str]] | None:
@@ -426,31 +438,29 @@ def collect(
     poolings = assign_systems(runs, pool=pool)
     obs: list[Observation] = []
     left_out = 0
-    # one string per distinct label, from a table of this collection's own: interning ids and
-    # sentences (thousands of distinct ones) would grow the interpreter's table, which never shrinks
-    labels: dict[str, str] = {}
-
-    def share(text: str) -> str:
-        return labels.setdefault(text, text)
-
-    keep = MAX_RAW_CHARS + 1  # one int, not one a row held by each row's turns
+    # one string per distinct label, one float per distinct number, from tables of this
+    # collection's own (interning would grow the interpreter's table, which never shrinks)
+    share, same = label_table(), number_table()
     for r in runs:
         screened = not outside_protocol and not is_baseline_system(r.axes, r.system)
-        scrub = _key_scrubber(r.config)
+        known = _known_keys(r.config)
         declared = r.opened.declared  # none in a summary without metrics
         scorer, protocol = r.scorer, r.protocol  # once: the rows are read again each time they are looked at
-        for index, row in enumerate(r.rows):
+        # one object for the run's turns, not one a row: found by instance and run when shown
+        turns = RunTurns(r.rows, MAX_RAW_CHARS + 1, known)
+        for row in r.rows:
+            turns.add(row.instance_id, row.run)
             if screened and outside_paper_protocol(row.strategy, str(row.condition)):
                 left_out += 1
                 continue
-            o = observation_of(row, r.system, r.name, scorer, declared, protocol, r.opened.turns(index, keep), share)
-            obs.append(scrub(o) if scrub is not None else o)
+            o = observation_of(row, r.system, r.name, scorer, declared, protocol, turns, share, same)
+            obs.append(_scrubbed(o, known) if known is not None else o)
     return Collection(Path(paths[0]), runs, obs, outside_protocol_rows=left_out, poolings=poolings)
 
 
-def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation] | None:
+def _known_keys(config: dict[str, Any]) -> Callable[[str], str] | None:
     """What removes the keys povagent knows (the run config's ``api_key_env`` values, key-like
-    environment values) from an observation's answer texts, or ``None`` when none is known.
+    environment values) from a text, or ``None`` when none is known.
 
     A run made before answers were redacted as they arrived may hold a key a server echoed:
     the report never copies it onto its pages (see :meth:`povagent.files.redaction.Redactor.known`).
@@ -458,18 +468,16 @@ def _key_scrubber(config: dict[str, Any]) -> Callable[[Observation], Observation
     from povagent.files.redaction import Redactor, secrets_named_by
 
     redactor = Redactor(secrets_named_by(config))
-    if not redactor.knows_secrets:
-        return None
-    known = redactor.known
+    return redactor.known if redactor.knows_secrets else None
 
-    def scrub(o: Observation) -> Observation:
-        return dataclasses.replace(
-            o, raw=known(o.raw) if o.raw is not None else None, parse_reason=known(o.parse_reason),
-            turns=o.turns.redacted(known) if isinstance(o.turns, StoredTurns) else
-            tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
-        )
 
-    return scrub
+def _scrubbed(o: Observation, known: Callable[[str], str]) -> Observation:
+    """``o`` with its answer texts passed through ``known`` (a run's turns redact as they are read)."""
+    return dataclasses.replace(
+        o, raw=known(o.raw) if o.raw is not None else None, parse_reason=known(o.parse_reason),
+        turns=o.turns if isinstance(o.turns, RunTurns) else
+        tuple((known(p) if isinstance(p, str) else p, known(a) if isinstance(a, str) else a) for p, a in o.turns),
+    )
 
 
 def run_success_breakdown(run_dir: str | Path) -> dict[str, Any] | None:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from povagent.report.collect import Collection, Observation
-from povagent.scoring.bootstrap import Estimate
+from povagent.scoring.bootstrap import DRAWS_PER_BLOCK, Estimate
 from povagent.scoring.metric_columns import MetricColumns, metric_slices
 from povagent.scoring.metrics import Metric, ValuedRow
 
@@ -40,7 +40,9 @@ def declared_metric_estimates(
                 {scorer: tuple(metrics.values())},
             )
             if len(rows):
-                estimates.setdefault(scorer, {})[system] = metric_slices(rows, scorer, n_boot, seed)
+                # half the shared block, as the report's other CIs: its draws and their gathered
+                # values are the transient on top of every row the report holds
+                estimates.setdefault(scorer, {})[system] = metric_slices(rows, scorer, n_boot, seed, DRAWS_PER_BLOCK // 2)
     return declared, estimates
 
 

@@ -57,7 +57,7 @@ from povagent.files.confined_read import MAX_IMAGE_FILE_BYTES, read_regular
 from povagent.files.confined_write import write_inside
 from povagent.report.active_section import answered_view
 from povagent.report.birds_eye import birds_eye_for_row
-from povagent.report.collect import MAX_RAW_CHARS, Observation
+from povagent.report.collect import MAX_RAW_CHARS, Observation, row_turns
 from povagent.report.gallery_choice import asked_question, asks_numeric_question, choice_fields, has_target, question_drawing, shows_several_images
 from povagent.report.gallery_drawing import IMAGE_ERRORS, Drawing, image_error, open_frame, render
 from povagent.report.html import script_json
@@ -367,7 +367,7 @@ def build_gallery(
         path = active.path if active is not None else ()
         from_above = birds_eye_for_row(o, inst, dataset, images_dir, frame, path) if inst is not None else None
         raw = o.raw or ""
-        transcript = _transcript(o.turns)
+        transcript = _transcript(row_turns(o))
         entries.append(
             {
                 "s": sys_index[o.system],

@@ -5,7 +5,8 @@ A run folder holds ``config.yaml`` (the resolved pipeline), ``results.jsonl`` (o
 the last row of a key winning), ``summary.json`` (the run's summary, with the metrics its
 scorers declared) and, inside each row, its transcript. :meth:`FinishedRun.open` checks the
 folder is a run's and reads its config; its rows are indexed, and the summary's declarations
-read, the first time they are asked for, and never again; a row's turns when they are looked at.
+read, the first time they are asked for, and never again; a row's turns when they are looked at
+(:class:`~povagent.results.transcript.RunTurns` over :attr:`FinishedRun.rows`).
 
 What it must not do: import a plugin the folder names (a run folder is anyone's), score a row,
 or write anything. Every file is read through :mod:`povagent.files.confined_read` (a pipe or a
@@ -18,14 +19,13 @@ import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import yaml
 
 from povagent.errors import PredictionsError
 from povagent.files.confined_read import check_regular, read_regular
 from povagent.results.rows import ResultRow, StoredRows, read_rows
-from povagent.results.transcript import StoredTurns
 from povagent.results.upgrade import upgrade_summary
 from povagent.scoring.metrics import Metric
 
@@ -104,8 +104,3 @@ class FinishedRun:
             return {scorer: tuple(Metric.declared(name, d) for name, d in section["declared"].items()) for scorer, section in sections.items()}
         except (OSError, ValueError, TypeError, KeyError, AttributeError):
             return {}
-
-    def turns(self, index: int, keep: int | None = None, redact: Callable[[str], str] | None = None) -> StoredTurns:
-        """Row ``index``'s turns (``(request as sent, raw answer)`` each, cut to ``keep``
-        characters), read from the results file only when looked at."""
-        return StoredTurns(self.rows, index, keep, redact)

@@ -90,8 +90,11 @@ class OfficialReading(BaseModel):
 class ResultRow(BaseModel):
     """One (instance, run)."""
 
-    # NaN and infinity (an official parse's coordinate, a NaN error) stay themselves on disk
-    model_config = ConfigDict(extra="allow", ser_json_inf_nan="constants")
+    # NaN and infinity (an official parse's coordinate, a NaN error) stay themselves on disk.
+    # Only field names are cached when a line is parsed: the parser's cache of string values
+    # would keep up to 16,384 of the rows' ids, sentences and hashes alive in a reader that
+    # keeps no row (the report)
+    model_config = ConfigDict(extra="allow", ser_json_inf_nan="constants", cache_strings="keys")
 
     #: The row format it was written in (:data:`~povagent.results.upgrade.ROW_FORMAT`; a row read
     #: from a file is in the current one, whatever it was written in). First, so a reader knows a

@@ -14,6 +14,7 @@ What it must not do: decide what a request holds, or write files.
 
 from __future__ import annotations
 
+from array import array
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import overload
@@ -123,3 +124,34 @@ class StoredTurns(Sequence[tuple[str | None, str | None]]):
     def __getitem__(self, index: slice) -> Sequence[tuple[str | None, str | None]]: ...
     def __getitem__(self, index: int | slice) -> tuple[str | None, str | None] | Sequence[tuple[str | None, str | None]]:
         return self._read()[index]
+
+
+class RunTurns:
+    """Every row's turns of one results file, found by the row's instance and run and read only
+    when looked at (:class:`StoredTurns`): what a report's observations of one run share, one
+    object a run. A row's place is kept as 8 bytes (the hash of its instance and run, in the
+    file's order), not an object a row; ``redact`` is applied to every text as it is read."""
+
+    __slots__ = ("_rows", "_keep", "_redact", "_places")
+
+    def __init__(self, rows: Sequence[ResultRow], keep: int | None = None, redact: Callable[[str], str] | None = None) -> None:
+        self._rows, self._keep, self._redact = rows, keep, redact
+        self._places = array("q")
+
+    def add(self, instance_id: str, run: int) -> None:
+        """The next row of the file (rows are added in the file's order, every one of them)."""
+        self._places.append(hash((instance_id, run)))
+
+    def of(self, instance_id: str, run: int) -> Sequence[tuple[str | None, str | None]]:
+        """The turns of the row of ``instance_id`` and ``run`` (``()``: no such row); a row
+        whose hash matches is read to check it is that row (two rows' hashes may collide)."""
+        place, start = hash((instance_id, run)), 0
+        while True:
+            try:
+                index = self._places.index(place, start)
+            except ValueError:
+                return ()
+            row = self._rows[index]
+            if row.instance_id == instance_id and row.run == run:
+                return StoredTurns(self._rows, index, self._keep, self._redact)
+            start = index + 1

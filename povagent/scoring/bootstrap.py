@@ -52,12 +52,14 @@ def bootstrap_mean_ci(
 
 
 def bootstrap_mean_cis(
-    columns: Sequence[Sequence[float] | np.ndarray], n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0
+    columns: Sequence[Sequence[float] | np.ndarray], n_boot: int = DEFAULT_BOOT, level: float = CONFIDENCE, seed: int = 0,
+    per_block_draws: int = DRAWS_PER_BLOCK,
 ) -> list[Estimate]:
     """:func:`bootstrap_mean_ci` of each of ``columns``, the same estimates to the bit: columns
     with as many finite values share one pass over the draws (the draws depend only on that
-    count and the seed), so a cell's several metrics draw their resamples once, not once each."""
-    kept = [(x := np.asarray(values, dtype=float))[np.isfinite(x)] for values in columns]
+    count and the seed), so a cell's several metrics draw their resamples once, not once each.
+    ``per_block_draws``: at most as many draws at a time (:func:`resample_draws`; the same estimates)."""
+    kept = [_finite(values) for values in columns]
     out: list[Estimate] = [EMPTY] * len(kept)
     by_size: dict[int, list[int]] = {}
     for k, x in enumerate(kept):
@@ -71,7 +73,7 @@ def bootstrap_mean_cis(
     for n, ks in by_size.items():
         resampled = _resampled(kept, ks, out)
         sums: list[list[np.ndarray]] = [[] for _ in resampled]
-        for draws in resample_draws(n, n_boot, seed) if resampled else ():
+        for draws in resample_draws(n, n_boot, seed, per_block_draws) if resampled else ():
             for sink, (x, binary) in zip(sums, resampled.values(), strict=True):
                 # a resample's sum of 0s and 1s is a count, exact in any order: the same
                 # number as the float sum; ``take`` gathers as indexing does, faster
@@ -84,6 +86,14 @@ def bootstrap_mean_cis(
                 twin = next(j for j in resampled if _same(kept[j], kept[k]))
                 out[k] = Estimate(out[k].value, out[twin].lo, out[twin].hi, n)
     return out
+
+
+def _finite(values: Sequence[float] | np.ndarray) -> np.ndarray:
+    """The finite values of a column, in order: the column itself when all are (no copy of a
+    report's longest columns while their draws are summed)."""
+    x = np.asarray(values, dtype=float)
+    finite = np.isfinite(x)
+    return x if finite.all() else x[finite]
 
 
 def _resampled(kept: list[np.ndarray], ks: list[int], out: list[Estimate]) -> dict[int, tuple[np.ndarray, bool]]:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from povagent.scoring.bootstrap import DEFAULT_BOOT, Estimate, bootstrap_mean_cis
+from povagent.scoring.bootstrap import DEFAULT_BOOT, DRAWS_PER_BLOCK, Estimate, bootstrap_mean_cis
 from povagent.scoring.breakdown import slices
 from povagent.scoring.metrics import Declared, Metric, ValuedRow
 
@@ -113,8 +113,12 @@ class MetricColumns:
         the group hit; a row with no group is a group of its own)."""
         column = self._values[self._at[(scorer, metric.name)]]
         if metric.group is None:
+            if not len(column):
+                return np.zeros(0)
+            if rows == range(len(column)):  # every row (the overall cell): the column itself, not a copy
+                return np.frombuffer(column, dtype=np.float64)
             at = np.fromiter(rows, dtype=np.int64, count=len(rows))
-            return np.frombuffer(column, dtype=np.float64)[at] if len(column) else np.zeros(0)
+            return np.frombuffer(column, dtype=np.float64)[at]
         by_group: dict[Any, list[float]] = defaultdict(list)
         for n, i in enumerate(rows):
             value = column[i]
@@ -172,7 +176,9 @@ class MetricColumns:
         return self._condition, self._direction, self._category if has_category else None
 
 
-def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOOT, seed: int = 0) -> dict[str, Any]:
+def metric_slices(
+    columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOOT, seed: int = 0, per_block_draws: int = DRAWS_PER_BLOCK
+) -> dict[str, Any]:
     """Each of ``scorer``'s declared metrics over ``columns``' rows, overall and per slice
     (:func:`~povagent.scoring.breakdown.slices`: condition, direction, condition x direction,
     category): ``{metric: Estimate}`` a cell, each the mean of the values that count with its
@@ -213,7 +219,7 @@ def metric_slices(columns: MetricColumns, scorer: str, n_boot: int = DEFAULT_BOO
         by_size.setdefault(len(rows), []).append((rows, filled))
     for group in by_size.values():
         wanted = [values(m, rows) for rows, _ in group for m in metrics]
-        estimates = iter(bootstrap_mean_cis(wanted, n_boot=n_boot, seed=seed))
+        estimates = iter(bootstrap_mean_cis(wanted, n_boot=n_boot, seed=seed, per_block_draws=per_block_draws))
         for _, filled in group:
             filled.update((m.name, next(estimates)) for m in metrics)
     return out

@@ -5,7 +5,7 @@ from __future__ import annotations
 import tracemalloc
 
 from povagent.dataset.instances import row_key
-from povagent.report.collect import MAX_RAW_CHARS, collect
+from povagent.report.collect import MAX_RAW_CHARS, collect, row_turns
 from povagent.results.rows import ExchangeRecord, ResultRow, ResultsWriter, RowStatus
 
 PROMPT = 50_000  # characters of one request: a CoT prompt with a long context
@@ -43,6 +43,12 @@ def test_a_collected_run_keeps_its_requests_in_the_results_file(tmp_path, mini_d
 def test_a_shown_rows_transcript_is_read_back_whole(tmp_path, mini_dataset):
     folder, n = long_prompt_run(tmp_path / "run", mini_dataset, runs=1)
     last = collect(folder).observations[-1]
-    (request, answer), = tuple(last.turns)
+    (request, answer), = tuple(row_turns(last))
     assert request.startswith(f"request {n - 1} ") and len(request) == MAX_RAW_CHARS + 1
     assert answer == last.raw
+
+
+def test_a_number_every_run_repeats_is_held_once(tmp_path, mini_dataset):
+    folder, _ = long_prompt_run(tmp_path / "run", mini_dataset, runs=2)
+    observations = collect(folder).observations
+    assert observations[0].l2 == 0.25 and all(o.l2 is observations[0].l2 for o in observations)

@@ -69,3 +69,9 @@ def test_columns_of_0s_and_1s_constants_and_repeats_get_the_rules_estimate_to_th
     ]  # fmt: skip
     together = bootstrap_mean_cis(columns, n_boot=300, seed=2)
     assert [repr(e) for e in together] == [repr(alone(c, n_boot=300, seed=2)) for c in columns]
+
+
+def test_smaller_blocks_give_the_same_estimates_to_the_bit():
+    rng = np.random.default_rng(11)
+    columns = [rng.random(3000), (rng.random(3000) < 0.4).astype(float), np.where(rng.random(3000) < 0.1, np.nan, rng.random(3000))]
+    assert bootstrap_mean_cis(columns, n_boot=500, seed=2, per_block_draws=DRAWS_PER_BLOCK // 7) == bootstrap_mean_cis(columns, n_boot=500, seed=2)
