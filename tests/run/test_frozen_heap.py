@@ -71,9 +71,7 @@ def default_threshold():
     gc.set_threshold(*before)
 
 
-def test_a_run_spaces_the_young_collections_out_while_it_runs_and_puts_the_threshold_back(
-    write_pipeline, offline_plugin, monkeypatch, default_threshold
-):
+def test_a_run_spaces_the_young_collections_out_while_it_runs_and_puts_the_threshold_back(write_pipeline, offline_plugin, monkeypatch, default_threshold):
     thresholds = []
     answer = offline_plugin.CenterBackend.complete
 
