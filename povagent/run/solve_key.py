@@ -26,9 +26,10 @@ from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor
+from povagent.files.timestamps import utc_now
 from povagent.results.model_construct import construct
 from povagent.results.plugin_errors import error_text
-from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
+from povagent.results.rows import Prediction, ResultRow, RowStatus
 from povagent.results.transcript import RowTranscript
 from povagent.results.upgrade import ROW_FORMAT
 from povagent.run.components import ComponentNames, Components
