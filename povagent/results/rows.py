@@ -156,11 +156,12 @@ def model_label(model: str, profile: str | None = None) -> str:
     return model
 
 
-def row_line(row: ResultRow, where: object) -> str:
+def row_line(row: ResultRow, where: object, *, checked: bool | None = None) -> str:
     """``row`` as its ``results.jsonl`` line (newline included), checked against the shipped row
-    schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file)."""
+    schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file;
+    ``checked``: whether tests run, as the caller asked it already)."""
     line = row.model_dump_json(exclude_none=False) + "\n"
-    check_output_text("row", line, where)
+    check_output_text("row", line, where, on=checked)
     return line
 
 

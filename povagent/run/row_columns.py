@@ -61,6 +61,10 @@ class Column:
             kind = _CODE + code
         elif type(value) is int and 0 <= value < _CODE - _SMALL:
             kind = _SMALL + value
+        elif type(value) is float and self._numbers is not None:  # a cost, a latency: its double
+            self._numbers.append(value)
+            self._kinds.append(_FLOAT)
+            return
         else:
             self._append_other(value)
             return

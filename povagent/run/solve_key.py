@@ -28,6 +28,7 @@ from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor
 from povagent.files.timestamps import utc_now
 from povagent.results.model_construct import construct
+from povagent.results.output_check import checking
 from povagent.results.plugin_errors import error_text
 from povagent.results.rows import Prediction, ResultRow, RowStatus
 from povagent.results.transcript import RowTranscript
@@ -248,5 +249,13 @@ class KeySolver:
             self.log.error("scorer_exception", row=key_of(), scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
         return AnswerScoring(
-            comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name, parser_raised, scorer_raised, comps.answer_type
+            comps.parser,
+            comps.scorers,
+            self.dataset,
+            comps.official_parser,
+            comps.official_parser_name,
+            parser_raised,
+            scorer_raised,
+            comps.answer_type,
+            checked=checking(),  # asked once a chunk of answers, not once each
         )
