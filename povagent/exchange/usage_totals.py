@@ -63,6 +63,15 @@ class UsageTotals:
         """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
         or ``unstated_cost`` (cost)."""
         items = items if isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
+        if len(items) == 1:  # a row of one exchange (every single-turn key): the same sums, from 0, in one pass
+            (item,) = items
+            prompt, completion, cost = item.prompt_tokens, item.completion_tokens, item.cost_usd
+            return cls(
+                prompt_tokens=unstated_tokens if prompt is None else 0 + prompt,
+                completion_tokens=unstated_tokens if completion is None else 0 + completion,
+                cost_usd=unstated_cost if cost is None else 0 + cost,
+                retries=0 + int(getattr(item, "retries", 0) or 0),
+            )
         prompt = _stated_tokens(i.prompt_tokens for i in items)
         completion = _stated_tokens(i.completion_tokens for i in items)
         cost = _stated_cost(i.cost_usd for i in items)

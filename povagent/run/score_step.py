@@ -112,13 +112,13 @@ class AnswerScoring:
         parse = parse_or_unparseable(self.parser, text, spec, self.on_parser_error)
         shown = instance_view(instance, spec)
         scores: dict[str, dict[str, Any]] = {}
-        prediction = Prediction()
         if parse.answered:
             status = RowStatus.ANSWERED
             prediction = prediction_of(shown, parse, self.answer_type, checked=self.checked)
             scores = self.scores_of(shown, parse)
         else:
             status = RowStatus.PARSE_ERROR
+            prediction = Prediction()
         reading = None
         if self.official_parser is not None:  # a lenient parser: keep the official reading beside
             reading = read_officially(

@@ -186,13 +186,14 @@ class KeySolver:
         instance, run = asked.instance, asked.run
         parse: ParsedAnswer | None = None
         scores: dict[str, dict[str, Any]] = {}
-        prediction = Prediction()
         official_reading = None
-        if isinstance(scored, Exception):
-            self._strategy_error(asked, scored)
-        elif scored is not None:
+        if isinstance(scored, ScoredAnswer):
             parse, prediction = scored.parse, scored.prediction
             scores, official_reading = scored.scores, scored.official_reading
+        else:
+            prediction = Prediction()
+            if scored is not None:
+                self._strategy_error(asked, scored)
         status = scored.status if isinstance(scored, ScoredAnswer) else RowStatus.INFRA_ERROR
         exchanges = asked.transcript.exchanges
         spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)

@@ -32,7 +32,7 @@ from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, officially_read
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.row_columns import Column
-from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
+from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_values
 from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
@@ -104,18 +104,18 @@ class SummaryTable:
         hit_scorer = _following(self._hit_scorers, row.scores)
         reading = row.official_reading
         official = officially_read(row)
-        scored = scored_row(row, error_scorer)
-        for append, value in zip(appends.scored, _scored_values(scored)):
+        scored = scored_values(row, error_scorer)
+        for append, value in zip(appends.scored, scored):
             append(value)
         status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
         appends.status(status.value)
         appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
         if reading is not None or status is RowStatus.INFRA_ERROR:
-            officially = scored_row(official, error_scorer)
-            state = _AS_SCORED if officially == scored else _OTHERWISE
+            officially = scored_values(official, error_scorer)
+            state = _AS_SCORED if officially == scored else _OTHERWISE  # ScoredRow's own equality: its fields'
             if state == _OTHERWISE:
-                self._aside["officially_scored"][at] = officially
+                self._aside["officially_scored"][at] = ScoredRow(*officially)
         appends.reading(state)
         success = row.scores.get(hit_scorer) if hit_scorer is not None else None
         # "success_answered" is None where no marked_hit scorer gave a verdict
@@ -259,8 +259,7 @@ class SummaryTable:
             raise RuntimeError("SummaryTable read before close()")
 
 
-#: A :class:`ScoredRow`'s values in :data:`_SCORED`'s order, and a row's spending, each read in one call.
-_scored_values = attrgetter(*_SCORED)
+#: A row's spending, read in one call.
 _SPENT = ("prompt_tokens", "completion_tokens", "cost_usd", "retries")
 _spent_values = attrgetter(*_SPENT)
 

@@ -25,3 +25,15 @@ def test_retries_are_summed_from_items_that_carry_them():
             self.retries = retries
 
     assert UsageTotals.of([Exchange(2), Exchange(3)]).retries == 5
+
+
+def test_one_item_sums_as_several_do_from_zero():
+    class Exchange:
+        def __init__(self, prompt, completion, cost, retries) -> None:
+            self.prompt_tokens, self.completion_tokens, self.cost_usd, self.retries = prompt, completion, cost, retries
+
+    zero = Exchange(0, 0, 0.0, 0)
+    for item in (Exchange(7, None, -0.0, 2), Exchange(None, 3, 1e-05, None), Exchange(True, 2, 0.25, 1)):
+        alone, with_zero = UsageTotals.of([item], unstated_tokens=0), UsageTotals.of([zero, item], unstated_tokens=0)
+        assert alone == with_zero and [type(v) for v in vars(alone).values()] == [type(v) for v in vars(with_zero).values()]
+        assert str(alone.cost_usd) == str(with_zero.cost_usd)  # -0.0 summed from 0 is 0.0, as several items give it

@@ -122,3 +122,23 @@ def test_rows_of_keys_outside_the_selection_are_left_out_and_missing_keys_counte
     rows = [row(1), row(2), row(3)]
     summary = summarize_rows(rows, {rows[0].key, rows[2].key, "h/9/left/a#0"})
     assert summary["rows"]["done"] == 2 and summary["rows"]["missing"] == 1 and summary["rows"]["total"] == 3
+
+
+def test_each_row_reads_back_as_its_scored_row_and_as_its_official_reading_scores_it():
+    from povagent.answers.spec import ParsedAnswer
+    from povagent.results.official_reading import officially_read
+    from povagent.results.rows import OfficialReading
+
+    unread = OfficialReading(parser="official", parse=ParsedAnswer(status="unparseable", reason="no JSON"))
+    agreeing = OfficialReading(parser="official", parse=ParsedAnswer(status="ok", x=1.0, y=2.0), scores=row(1).scores)
+    otherwise = OfficialReading(parser="official", parse=ParsedAnswer(status="ok", x=1.0, y=2.0), scores=row(2, l2=0.75).scores)
+    rows = [row(0), row(1, official_reading=agreeing), row(2, official_reading=otherwise), row(3, official_reading=unread),
+            row(4, status=RowStatus.INFRA_ERROR, l2=None), row(5, category="Relative Direction", official_reading=unread)]  # fmt: skip
+    table = SummaryTable(DECLARED)
+    for r in rows:
+        table.add(r)
+    table.close()
+    assert list(table.scored) == [scored_row(r, "official") for r in rows]
+    officially = [scored_row(officially_read(r), "official") for r in rows if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR]
+    assert list(table.officially_scored()) == officially and not table.read_as_scored()
+    assert list(table.officially_scored())[1] != list(table.scored)[2]  # the reading that scores otherwise is its own
