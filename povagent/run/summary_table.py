@@ -44,6 +44,8 @@ _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
+#: Each status's text (``status.value``, read through the enum's descriptor, cost more than the rest of its append).
+_STATUS_TEXT = {status: status.value for status in RowStatus}
 #: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
 _MAX_SHARED_SCORES = 1024
 
@@ -100,15 +102,16 @@ class SummaryTable:
         appends = self._appends
         at = len(appends.run_column)
         protocols = self._protocols
-        error_scorer = _following(self._error_scorers, row.scores)
-        hit_scorer = _following(self._hit_scorers, row.scores)
+        # (a run with no scorer of a protocol has none to find: a choice run's every row)
+        error_scorer = _following(self._error_scorers, row.scores) if self._error_scorers else None
+        hit_scorer = _following(self._hit_scorers, row.scores) if self._hit_scorers else None
         reading = row.official_reading
         official = officially_read(row)
         scored = scored_values(row, error_scorer)
         for append, value in zip(appends.scored, scored):
             append(value)
         status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
-        appends.status(status.value)
+        appends.status(_STATUS_TEXT[status])
         appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
         if reading is not None or status is RowStatus.INFRA_ERROR:

@@ -46,3 +46,24 @@ def test_an_event_is_written_as_the_structlog_processors_write_it(tmp_path, monk
     assert lines[: len(events)] == lines[len(events) :]
     assert "lab-secret-123456" not in "".join(lines) and "sk-abcdefghijklmnop" not in "".join(lines)
     assert json.loads(lines[2])["run"] == "another" and list(json.loads(lines[2]))[:2] == ["run", "url"]
+
+
+def test_a_line_is_encoded_as_json_dumps_encodes_it_and_a_circular_event_leaves_the_next_unharmed(tmp_path):
+    import pytest
+
+    from povagent.files.logs import _LINE
+
+    log = RunLog(tmp_path / "log.jsonl")
+    events = [
+        {"nan": float("nan"), "inf": float("-inf"), "text": "naïve ☃ \n\"q\"", "path": tmp_path, "exc": ValueError("x"), "nested": {"a": [1, 2.5, None, True]}},
+        {"set": {1, 2}, "tuple": (1, "a"), "big": 2**70, "neg_zero": -0.0},
+    ]
+    for event in events:
+        assert log._sinks._line(event) == _LINE.encode(event)
+    circular: dict = {"a": [1]}
+    circular["a"].append(circular)
+    with pytest.raises(ValueError, match="Circular"):
+        log._sinks._line(circular)
+    circular["a"].pop()  # the same dict and list, no longer circular: the encoder's record starts afresh
+    assert log._sinks._line(circular) == _LINE.encode(circular) == '{"a":[1]}'
+    log.close()
