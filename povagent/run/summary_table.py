@@ -24,7 +24,7 @@ from array import array
 from collections import Counter, defaultdict
 from collections.abc import Container, Iterator, Mapping, Sequence
 from operator import attrgetter
-from typing import Any, NamedTuple, overload
+from typing import Any, overload
 
 import numpy as np
 
@@ -242,8 +242,8 @@ class SummaryTable:
 
     def usage(self) -> UsageTotals:
         """The rows' tokens, cost and retries, summed in row order (unstated tokens: 0)."""
-        columns = (self._fields[name].values() for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"))
-        return UsageTotals.of(list(map(_Spent, *columns)), unstated_tokens=0)
+        prompt, completion, cost, retries = (self._fields[name].values() for name in _SPENT)
+        return UsageTotals.summed(prompt, completion, cost, retries, unstated_tokens=0)
 
     def field(self, name: str) -> Column:
         """One kept field's column."""
@@ -331,12 +331,3 @@ class _OfficialRows(_ScoredRows):
         if isinstance(i, int) and i in self._otherwise:
             return self._otherwise[i]
         return super().__getitem__(i)
-
-
-class _Spent(NamedTuple):
-    """What one row spent (tokens, cost, retries), for :meth:`UsageTotals.of`."""
-
-    prompt_tokens: int | None
-    completion_tokens: int | None
-    cost_usd: float | None
-    retries: int
