@@ -48,6 +48,8 @@ _INFRA = RowStatus.INFRA_ERROR.value
 _STATUS_TEXT = {status: status.value for status in RowStatus}
 #: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
 _MAX_SHARED_SCORES = 1024
+#: Values (of whole rows, twenty a row) that wait to be added to the columns together.
+_PENDING_VALUES = 256 * 20
 
 
 class SummaryTable:
@@ -67,7 +69,7 @@ class SummaryTable:
         self._hit_scorers = [n for n, p in self._protocols.items() if p == "marked_hit"]
         self._keys = keys
         self._digests = bytearray()
-        self._fields = {
+        self._columns = {
             name: Column()
             for name in (
                 *_SCORED,
@@ -88,8 +90,11 @@ class SummaryTable:
         self._closed = False
         self._scored: list[ScoredRow] | None = None
         self._shared_scores: dict[Any, Any] = {}
-        #: each column's ``append``, looked up once: a row makes twenty appends
-        self._appends = _Appends(self._fields)
+        #: rows added, and the values of those not yet in the columns (row after row, each
+        #: row's in the columns' order: see :meth:`_flush`; one flat list, so no object a row
+        #: stays behind, nor in the interpreter's free list of tuples)
+        self._added = 0
+        self._pending: list[Any] = []
         #: where a row's diagnoses are (``{diagnosis: scorer}``), asked of the registry once a table
         self._diagnosing = diagnosing_scorers()
 
@@ -99,8 +104,8 @@ class SummaryTable:
             raise RuntimeError("SummaryTable.add after close()")
         if self._keys is not None and row.key not in self._keys:
             return
-        appends = self._appends
-        at = len(appends.run_column)
+        at = self._added
+        self._added += 1
         protocols = self._protocols
         # (a run with no scorer of a protocol has none to find: a choice run's every row)
         error_scorer = _following(self._error_scorers, row.scores) if self._error_scorers else None
@@ -108,24 +113,29 @@ class SummaryTable:
         reading = row.official_reading
         official = officially_read(row)
         scored = scored_values(row, error_scorer)
-        for append, value in zip(appends.scored, scored):
-            append(value)
         status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
-        appends.status(_STATUS_TEXT[status])
-        appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
         if reading is not None or status is RowStatus.INFRA_ERROR:
             officially = scored_values(official, error_scorer)
             state = _AS_SCORED if officially == scored else _OTHERWISE  # ScoredRow's own equality: its fields'
             if state == _OTHERWISE:
                 self._aside["officially_scored"][at] = ScoredRow(*officially)
-        appends.reading(state)
         success = row.scores.get(hit_scorer) if hit_scorer is not None else None
-        # "success_answered" is None where no marked_hit scorer gave a verdict
-        appends.success(None if success is None else (success or {}).get("success"))
-        appends.success_answered(None if success is None else (success or {}).get("answered") is True)
-        for append, value in zip(appends.spent, _spent_values(row)):
-            append(value)
+        # the row's value of each column, in the columns' order ("success_answered" is None
+        # where no marked_hit scorer gave a verdict), added with the next rows' (see _flush);
+        # a list, not a tuple: CPython 3.11 keeps up to 2,000 freed tuples of twenty items
+        # aside and never hands one out again (400 KB held)
+        self._pending.extend([
+            *scored,
+            _STATUS_TEXT[status],
+            None if reading is None else reading.parser,
+            state,
+            None if success is None else (success or {}).get("success"),
+            None if success is None else (success or {}).get("answered") is True,
+            *_spent_values(row),
+        ])
+        if len(self._pending) >= _PENDING_VALUES:
+            self._flush()
         if extra := plugin_scores(row.scores, protocols):
             # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each.
             # Only all-true/false ones: True == 1, and a summary tells a flag from a number
@@ -143,11 +153,27 @@ class SummaryTable:
             self.metrics.append(row_metric_flat(row, self.declared), row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
         self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
+    @property
+    def _fields(self) -> dict[str, Column]:
+        """The columns, with every row added so far (the pending ones flushed first)."""
+        if self._pending:
+            self._flush()
+        return self._columns
+
+    def _flush(self) -> None:
+        """The pending rows' values into the columns, a column at a time: one call a column for
+        a batch of rows, not twenty calls a row."""
+        pending, self._pending = self._pending, []
+        width = len(self._columns)
+        for at, column in enumerate(self._columns.values()):
+            column.extend(pending[at::width])
+
     def close(self) -> SummaryTable:
         """Keep each key's last row, in the place of its first (once; rows in key order after)."""
         if self._closed:
             return self
         self._closed = True
+        self._flush()
         n = len(self._fields["run"])
         if n == 0:
             return self
@@ -164,7 +190,7 @@ class SummaryTable:
             return self  # no key repeats (a run's usual file): the rows are already one per key
         new_position = np.full(n, -1, dtype=np.int64)
         new_position[take] = np.arange(len(take))
-        self._fields = {name: column.taken(take, new_position) for name, column in self._fields.items()}
+        self._columns = {name: column.taken(take, new_position) for name, column in self._fields.items()}
         self._aside = {
             name: {int(new_position[old]): v for old, v in values.items() if new_position[old] >= 0} for name, values in self._aside.items()
         }
@@ -265,19 +291,6 @@ class SummaryTable:
 #: A row's spending, read in one call.
 _SPENT = ("prompt_tokens", "completion_tokens", "cost_usd", "retries")
 _spent_values = attrgetter(*_SPENT)
-
-
-class _Appends:
-    """The ``append`` of each column a row adds to (a table's, while rows are added)."""
-
-    __slots__ = ("run_column", "scored", "spent", "status", "official_parser", "reading", "success", "success_answered")
-
-    def __init__(self, fields: Mapping[str, Column]) -> None:
-        self.run_column = fields["run"]
-        self.scored = tuple(fields[name].append for name in _SCORED)
-        self.spent = tuple(fields[name].append for name in _SPENT)
-        self.status, self.official_parser, self.reading = fields["status"].append, fields["official_parser"].append, fields["reading"].append
-        self.success, self.success_answered = fields["success"].append, fields["success_answered"].append
 
 
 def _following(names: list[str], scores: Mapping[str, Any]) -> str | None:

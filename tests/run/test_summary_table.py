@@ -55,6 +55,17 @@ def test_a_column_gives_back_each_value_as_it_was_appended():
     assert math.isnan(nan[0])
 
 
+def test_a_column_extended_by_a_batch_holds_what_appending_each_value_holds():
+    values = [None, 0.5, "a", 3, -0.0, 2**60, ("kept", "aside"), *(f"label {i}" for i in range(200)), True, 1e-300, "a"]
+    one_by_one, batched = Column(), Column()
+    for v in values:
+        one_by_one.append(v)
+    batched.extend(values[:7])
+    batched.extend(values[7:])
+    assert batched.values() == one_by_one.values() == values and batched.nbytes() == one_by_one.nbytes()
+    assert [type(v) for v in batched.values()] == [type(v) for v in values]
+
+
 def test_taking_rows_of_a_column_keeps_their_values_and_what_was_kept_aside():
     column = Column()
     for v in [1.5, ("aside",), None, "x", 7]:
