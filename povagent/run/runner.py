@@ -185,12 +185,13 @@ class PipelineRun:
         """A row is durable: count it, show it, tell the observers."""
         s = self.stats
         s.rows_written += 1
-        s.statuses[row.status.value] += 1
+        status = row.status.value  # (read once: an enum's value is a descriptor call)
+        s.statuses[status] += 1
         self._session_spent = self._session_spent.plus(row)  # UsageTotals.of((spent, row), unstated 0)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
-        self.progress.advance(row.status.value)
+        self.progress.advance(status)
         if self._written is not None:
             self._written.add(row)
         if self._observed:
