@@ -48,6 +48,8 @@ _INFRA = RowStatus.INFRA_ERROR.value
 _STATUS_TEXT = {status: status.value for status in RowStatus}
 #: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
 _MAX_SHARED_SCORES = 1024
+#: Distinct rows with no point score a table's read-back rows share (past it, each is its own).
+_MAX_SHARED_ROWS = 1024
 #: Values (of whole rows, twenty a row) that wait to be added to the columns together.
 _PENDING_VALUES = 256 * 20
 
@@ -311,9 +313,25 @@ class _ScoredRows(Sequence[ScoredRow]):
         self._rows: list[ScoredRow] | None = None
 
     def built(self) -> list[ScoredRow]:
-        """Every row, in order (built at the first read, then kept)."""
+        """Every row, in order (built at the first read, then kept). Rows with no point score
+        (a choice run's every row, a point run's failures) repeat a few field values: such rows
+        share one (frozen) object a set of values, which cost a summary ~2 us a row to make."""
         if self._rows is None:
-            self._rows = [ScoredRow(*values) for values in zip(*(column.values() for column in self._columns), strict=True)]
+            shared: dict[tuple[Any, ...], ScoredRow] = {}
+            rows = []
+            for values in zip(*(column.values() for column in self._columns), strict=True):
+                # no number but the run (an int, never a flag: True == 1 would pass for it), so
+                # equal values are values of the same types
+                if values[3] is None and values[4] is None and values[5] is None and values[7] is None and values[8] is None and type(values[6]) is int:
+                    row = shared.get(values)
+                    if row is None:
+                        row = ScoredRow(*values)
+                        if len(shared) < _MAX_SHARED_ROWS:
+                            shared[values] = row
+                else:
+                    row = ScoredRow(*values)
+                rows.append(row)
+            self._rows = rows
         return self._rows
 
     def __len__(self) -> int:

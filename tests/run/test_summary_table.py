@@ -153,3 +153,18 @@ def test_each_row_reads_back_as_its_scored_row_and_as_its_official_reading_score
     officially = [scored_row(officially_read(r), "official") for r in rows if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR]
     assert list(table.officially_scored()) == officially and not table.read_as_scored()
     assert list(table.officially_scored())[1] != list(table.scored)[2]  # the reading that scores otherwise is its own
+
+
+def test_rows_with_no_point_score_read_back_as_shared_objects_of_the_same_values_and_types():
+    from povagent.results.rows import ResultRow as Row
+
+    failures = [row(n, status=RowStatus.PARSE_ERROR, l2=None) for n in range(4)]
+    flagged = Row.model_construct(**{**dict(failures[0]), "key": "flag", "run": True})  # True == 1, but a flag
+    counted = Row.model_construct(**{**dict(failures[0]), "key": "count", "run": 1})
+    table = SummaryTable(DECLARED)
+    for r in [*failures, flagged, counted, row(9)]:
+        table.add(r)
+    read = list(table.close().scored)
+    assert read == [scored_row(r, "official") for r in [*failures, flagged, counted, row(9)]]
+    assert read[0] is read[2] and read[1] is read[3]  # the same values: one object (frozen)
+    assert type(read[4].run) is bool and type(read[5].run) is int and read[4] is not read[5]
