@@ -72,7 +72,7 @@ def shown_frame_count(request: Request) -> int:
 
 def seeded_rng(*parts: object) -> random.Random:
     """A generator seeded from ``parts`` (stable across processes and Python hash seeds)."""
-    digest = hashlib.sha256("|".join(str(p) for p in parts).encode()).digest()
+    digest = hashlib.sha256("|".join(map(str, parts)).encode()).digest()
     return random.Random(int.from_bytes(digest[:8], "big"))
 
 

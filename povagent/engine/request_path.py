@@ -112,6 +112,8 @@ class RequestPath:
         #: cannot answer (a run whose every answer is cached never starts it)
         self._start: asyncio.Future[None] | None = None
         self._start_backend = start_backend
+        #: the start has succeeded (a start, once done, stays done)
+        self._running = False
         #: a backend answering in this process (:attr:`Backend.answers_in_process`) is called
         #: bare: a slot or a timeout cannot act on a call that never suspends, and each cost a
         #: run's offline baseline more than its answer did
@@ -153,7 +155,7 @@ class RequestPath:
             if cached is not None:
                 self.stats.cache_hits += 1
                 return received(cached, self.redact_answer)  # a cache written before the key was known
-        if self._start_backend:
+        if self._start_backend and not self._running:
             await self._started(label)
         response = await self.call(request, label=label, deadline=deadline)
         if key is not None and cache is not None:
@@ -165,13 +167,15 @@ class RequestPath:
         fails (a missing API key) fails each request that needed it, without a retry."""
         start = self._start
         if start is not None and start.done() and not start.cancelled() and start.exception() is None:
-            return  # started: later requests do not wait on it
+            self._running = True  # started: later requests do not wait on it (nor ask again)
+            return
         if start is None:
             start = self._start = asyncio.ensure_future(self.backend.start())
         try:
             await asyncio.shield(start)
         except Exception as exc:
             raise self._failure(exc, 1, label) from exc
+        self._running = True
 
     async def call(self, request: Request, *, label: str = "", deadline: float | None = None) -> Response:
         """One request to the backend, retried on transient failures only (never on a 4xx)."""

@@ -63,14 +63,43 @@ class UsageTotals:
         """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
         or ``unstated_cost`` (cost)."""
         items = items if isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
-        prompt = _stated_tokens(i.prompt_tokens for i in items)
-        completion = _stated_tokens(i.completion_tokens for i in items)
-        cost = _stated_cost(i.cost_usd for i in items)
+        if len(items) == 1:  # a row of one exchange (every single-turn key): the same sums, from 0, in one pass
+            (item,) = items
+            prompt, completion, cost = item.prompt_tokens, item.completion_tokens, item.cost_usd
+            return cls(
+                prompt_tokens=unstated_tokens if prompt is None else 0 + prompt,
+                completion_tokens=unstated_tokens if completion is None else 0 + completion,
+                cost_usd=unstated_cost if cost is None else 0 + cost,
+                retries=0 + int(getattr(item, "retries", 0) or 0),
+            )
+        return cls.summed(
+            (i.prompt_tokens for i in items),
+            (i.completion_tokens for i in items),
+            (i.cost_usd for i in items),
+            (getattr(i, "retries", 0) for i in items),
+            unstated_tokens=unstated_tokens,
+            unstated_cost=unstated_cost,
+        )
+
+    @classmethod
+    def summed(
+        cls,
+        prompt_tokens: Iterable[int | None],
+        completion_tokens: Iterable[int | None],
+        cost_usd: Iterable[float | None],
+        retries: Iterable[int | None],
+        *,
+        unstated_tokens: int | None = None,
+        unstated_cost: float | None = None,
+    ) -> UsageTotals:
+        """:meth:`of` items given field by field (each field's values in the items' order): the
+        same sums, without an object an item (a summary holds its rows' usage in columns)."""
+        prompt, completion, cost = _stated_tokens(prompt_tokens), _stated_tokens(completion_tokens), _stated_cost(cost_usd)
         return cls(
             prompt_tokens=unstated_tokens if prompt is None else prompt,
             completion_tokens=unstated_tokens if completion is None else completion,
             cost_usd=unstated_cost if cost is None else cost,
-            retries=sum(int(getattr(i, "retries", 0) or 0) for i in items),
+            retries=sum(int(r or 0) for r in retries),
         )
 
     def plus(self, item: Spent) -> UsageTotals:

@@ -116,6 +116,11 @@ class Redactor:
 
     def __call__(self, logger: Any, method: str, event: EventDict) -> dict[str, Any]:
         """structlog processor."""
+        return self.fields(event)
+
+    def fields(self, event: Mapping[str, Any]) -> dict[str, Any]:
+        """``{key: self.value(value, key)}`` for each field of ``event``, in its order (each
+        field's redaction depends on its own key and value only)."""
         # What :meth:`value` gives, with its checks told apart once: a number, a flag or None
         # is kept, and a text under a key that names no secret is :meth:`text`'s (a run logs
         # an event a request, and these are nearly all of its fields)

@@ -20,37 +20,40 @@ from pydantic import BaseModel
 M = TypeVar("M", bound=BaseModel)
 
 _set = object.__setattr__
-#: Each model's field names in declared order (``None``: not one :func:`construct` builds directly).
-_SHAPES: dict[type, tuple[str, ...] | None] = {}
+#: Each model's field names in declared order, and as a set (``None``: not one :func:`construct`
+#: builds directly).
+_SHAPES: dict[type, tuple[tuple[str, ...], frozenset[str]] | None] = {}
 
 
 def construct(model: type[M], /, **values: Any) -> M:
     """``model.model_construct(**values)``, the same object, made directly when ``values``
     names every field of ``model`` (see the module's docstring). ``model`` is positional only:
     a row has a field named ``model``."""
-    names = _SHAPES.get(model, ())
-    if names == ():
-        names = _SHAPES[model] = _shape(model)
-    if names is None or len(values) != len(names):
+    try:
+        shape = _SHAPES[model]
+    except KeyError:  # the model's first construction
+        shape = _SHAPES[model] = _shape(model)
+    if shape is None or len(values) != len(shape[0]):
         return model.model_construct(**values)
+    names, name_set = shape
     if tuple(values) != names:  # the fields in another order: in the declared one, as pydantic keeps them
-        if values.keys() != set(names):
+        if values.keys() != name_set:
             return model.model_construct(**values)
         values = {name: values[name] for name in names}
     made = model.__new__(model)
     _set(made, "__dict__", values)
-    _set(made, "__pydantic_fields_set__", set(names))
+    _set(made, "__pydantic_fields_set__", set(name_set))  # a copy of a set: no name hashed again
     _set(made, "__pydantic_extra__", {} if model.model_config.get("extra") == "allow" else None)
     _set(made, "__pydantic_private__", None)
     return made
 
 
-def _shape(model: type[BaseModel]) -> tuple[str, ...] | None:
-    """``model``'s field names, or ``None`` when building it directly would differ from
-    ``model_construct`` (aliases, a post-init hook, private attributes, a root model)."""
+def _shape(model: type[BaseModel]) -> tuple[tuple[str, ...], frozenset[str]] | None:
+    """``model``'s field names (in order, and as a set), or ``None`` when building it directly
+    would differ from ``model_construct`` (aliases, a post-init hook, private attributes, a root model)."""
     fields = model.__pydantic_fields__
     if model.__pydantic_post_init__ or model.__pydantic_root_model__ or model.__private_attributes__:
         return None
     if any(f.alias is not None or f.validation_alias is not None for f in fields.values()):
         return None
-    return tuple(fields)
+    return tuple(fields), frozenset(fields)

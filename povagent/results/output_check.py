@@ -8,7 +8,9 @@ environment the JSON is validated against the shipped schema file and a mismatch
 written. A row's typed prediction (``prediction.value``) is checked likewise against its answer
 type's ``value_schema`` when the score step makes it (:func:`check_answer_value`). The test
 suite sets the variable for itself and for every process it starts, so every such file any test
-makes is checked; a user's run does not pay for it (one environment lookup per call).
+makes is checked; a user's run does not pay for it (one environment lookup per call, or per run
+for a run's rows and per chunk of answers for their typed values: a lookup costs more than a
+microsecond, and a choice run makes two a key otherwise).
 """
 
 from __future__ import annotations
@@ -51,11 +53,12 @@ def schema_errors(name: str, data: Any, limit: int = 3) -> list[str]:
     return [f"{e.json_path}: {e.message[:300]}" for e in deepest if e is not None]
 
 
-def check_answer_value(answer_type: str, schema: Mapping[str, Any], value: Any, where: object) -> None:
+def check_answer_value(answer_type: str, schema: Mapping[str, Any], value: Any, where: object, *, on: bool | None = None) -> None:
     """When :func:`checking`, validate a prediction's typed ``value`` against the JSON Schema its
     answer type ``answer_type`` declares (``AnswerType.value_schema``); :class:`OutputSchemaError`
-    when it misses it: a type's reader and its published shape never drift apart in a test."""
-    if not checking() or value is None:
+    when it misses it: a type's reader and its published shape never drift apart in a test.
+    ``on``: :func:`checking` as the caller asked it already (a run's chunk of answers asks once)."""
+    if not (checking() if on is None else on) or value is None:
         return
     from jsonschema import Draft202012Validator
 
@@ -65,11 +68,12 @@ def check_answer_value(answer_type: str, schema: Mapping[str, Any], value: Any, 
         raise OutputSchemaError(f"{where}: a {answer_type!r} value misses the answer type's value_schema: {shown}")
 
 
-def check_output_text(name: str, text: str, where: object) -> None:
+def check_output_text(name: str, text: str, where: object, *, on: bool | None = None) -> None:
     """When :func:`checking`, validate the JSON ``text`` about to be written to ``where`` (a
     results row as serialized, a whole summary) against output ``name``'s shipped schema;
-    :class:`OutputSchemaError` when it misses it."""
-    if not checking():
+    :class:`OutputSchemaError` when it misses it. ``on``: :func:`checking` as the caller asked
+    it already (a run's row journal asks once)."""
+    if not (checking() if on is None else on):
         return
     errors = schema_errors(name, json.loads(text))
     if errors:

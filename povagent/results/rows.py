@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import os
 from array import array
-from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 from typing import Any, Iterator, Sequence, overload
@@ -24,6 +23,7 @@ from pydantic_core import from_json
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
 from povagent.files.confined_read import open_regular
+from povagent.files.timestamps import utc_now as utc_now  # rows name their times so (re-exported)
 from povagent.results.output_check import check_output_text
 from povagent.results.upgrade import FIELD, ROW_FORMAT, upgrade_row
 
@@ -159,16 +159,12 @@ def model_label(model: str, profile: str | None = None) -> str:
     return model
 
 
-def utc_now() -> str:
-    """ISO-8601 UTC timestamp with milliseconds."""
-    return datetime.now(UTC).isoformat(timespec="milliseconds")
-
-
-def row_line(row: ResultRow, where: object) -> str:
+def row_line(row: ResultRow, where: object, *, checked: bool | None = None) -> str:
     """``row`` as its ``results.jsonl`` line (newline included), checked against the shipped row
-    schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file)."""
+    schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file;
+    ``checked``: whether tests run, as the caller asked it already)."""
     line = row.model_dump_json(exclude_none=False) + "\n"
-    check_output_text("row", line, where)
+    check_output_text("row", line, where, on=checked)
     return line
 
 

@@ -16,6 +16,7 @@ from typing import Callable
 
 from povagent.files.confined_read import open_regular
 from povagent.files.confined_write import ConfinedFolder
+from povagent.results.output_check import checking
 from povagent.results.rows import ResultRow, ResultsWriter, row_line
 
 
@@ -42,12 +43,14 @@ class RowJournal(ResultsWriter):
         self.error: BaseException | None = None
         self.fsyncs = 0
         self.fsync_s = 0.0
+        #: whether rows are checked against the shipped schema (tests), asked once a run
+        self._checked = checking()
 
     def submit(self, row: ResultRow) -> None:
         """Queue a finished row for the next batch (raises if an earlier batch failed)."""
         if self.error is not None:
             raise self.error
-        self._queue.append((row_line(row, self.path), row))
+        self._queue.append((row_line(row, self.path, checked=self._checked), row))
         if self._committer is None or self._committer.done():
             self._committer = asyncio.get_running_loop().create_task(self._commit_loop())
 

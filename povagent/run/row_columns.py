@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import sys
 from array import array
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -49,24 +50,34 @@ class Column:
 
     def append(self, value: Any) -> None:
         """Add ``value`` as the next row's."""
-        # the common values first (a flag, None, a label already met, a small count): the
-        # byte alone, no branch more (a summary appends twenty values a row)
-        if value is None:
-            kind = _NONE
-        elif value is True:
-            kind = _TRUE
-        elif value is False:
-            kind = _FALSE
-        elif type(value) is str and (code := self._text_code.get(value, _NEAR_TEXTS)) < _NEAR_TEXTS:
-            kind = _CODE + code
-        elif type(value) is int and 0 <= value < _CODE - _SMALL:
-            kind = _SMALL + value
-        else:
-            self._append_other(value)
-            return
-        if self._numbers is not None:
-            self._numbers.append(0.0)
-        self._kinds.append(kind)
+        self.extend((value,))
+
+    def extend(self, values: Iterable[Any]) -> None:
+        """Add each of ``values`` as the next rows' (a summary adds a batch of rows a column at a time)."""
+        kinds, text_code = self._kinds, self._text_code
+        for value in values:
+            # the common values first (a flag, None, a label already met, a small count): the
+            # byte alone, no branch more
+            if value is None:
+                kind = _NONE
+            elif value is True:
+                kind = _TRUE
+            elif value is False:
+                kind = _FALSE
+            elif type(value) is str and (code := text_code.get(value, _NEAR_TEXTS)) < _NEAR_TEXTS:
+                kind = _CODE + code
+            elif type(value) is int and 0 <= value < _CODE - _SMALL:
+                kind = _SMALL + value
+            elif type(value) is float and self._numbers is not None:  # a cost, a latency: its double
+                self._numbers.append(value)
+                kinds.append(_FLOAT)
+                continue
+            else:
+                self._append_other(value)
+                continue
+            if self._numbers is not None:
+                self._numbers.append(0.0)
+            kinds.append(kind)
 
     def _append_other(self, value: Any) -> None:
         kind, number = _ASIDE, None

@@ -60,7 +60,7 @@ from povagent.plugins import PluginHost, get_plugin_host
 from povagent.results.rows import ResultRow, RowStatus, model_label
 from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
-from povagent.run.frozen_heap import frozen_heap
+from povagent.run.frozen_heap import frozen_heap, spaced_collections
 from povagent.run.house_frames import FrameReader, HouseFrames
 from povagent.run.journal import RowJournal, drop_rows
 from povagent.run.pending import RESULTS, asked_by, plan_keys, prepare_dataset, select_instances
@@ -185,12 +185,13 @@ class PipelineRun:
         """A row is durable: count it, show it, tell the observers."""
         s = self.stats
         s.rows_written += 1
-        s.statuses[row.status.value] += 1
+        status = row.status.value  # (read once: an enum's value is a descriptor call)
+        s.statuses[status] += 1
         self._session_spent = self._session_spent.plus(row)  # UsageTotals.of((spent, row), unstated 0)
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
-        self.progress.advance(row.status.value)
+        self.progress.advance(status)
         if self._written is not None:
             self._written.add(row)
         if self._observed:
@@ -233,6 +234,10 @@ class PipelineRun:
     # -- the whole run -------------------------------------------------------------------------
     async def run(self) -> RunResult:
         """Run every pending key; write the run folder; return the summary."""
+        with spaced_collections():  # the set's reading and the keys make almost no cyclic garbage
+            return await self._run()
+
+    async def _run(self) -> RunResult:
         t_start = time.perf_counter()
         config = self.config
         # Plugins check their options first: a rejected option (a literal API key, say) fails

@@ -63,16 +63,17 @@ def question_main_category(instance: Instance) -> str | None:
     return (question.main_category or None) if question is not None else None
 
 
-def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerType | None = None) -> Prediction:
+def prediction_of(instance: Instance, parse: ParsedAnswer, answer_type: AnswerType | None = None, *, checked: bool | None = None) -> Prediction:
     """What a row records as the prediction: the frame index, its image path (A/B), the point,
-    and the typed value ``answer_type`` reads from the parse."""
+    and the typed value ``answer_type`` reads from the parse (``checked``: whether tests run, as
+    the caller asked it already; see :func:`~povagent.results.output_check.check_answer_value`)."""
     sel = parse.selected_image
     frame = instance.selected_frame(sel) if instance.answers_a_frame else None
     image_path = frame.image_path if frame is not None else None
     typed = answer_type.name if answer_type is not None else None
     value = answer_type.value_of(parse) if answer_type is not None else None
     if answer_type is not None:  # while testing: the value has the shape its type publishes
-        check_answer_value(answer_type.name, answer_type.value_schema, value, instance.id)
+        check_answer_value(answer_type.name, answer_type.value_schema, value, instance.id, on=checked)
     return construct(Prediction, selected_image=sel, image_path=image_path, x=parse.x, y=parse.y, answer_type=typed, value=value)
 
 
@@ -102,19 +103,22 @@ class AnswerScoring:
     on_scorer_error: OnScorerError | None = None
     #: The answer type the strategy asked for: the prediction's typed value.
     answer_type: AnswerType | None = None
+    #: Whether typed values are checked against their schema (tests), as the maker asked it
+    #: (``None``: asked at each answer).
+    checked: bool | None = None
 
     def score_answer(self, instance: Instance, spec: AnswerSpec, text: str) -> ScoredAnswer:
         """``text`` (the final raw answer to ``spec``) parsed and scored on ``instance`` as shown."""
         parse = parse_or_unparseable(self.parser, text, spec, self.on_parser_error)
         shown = instance_view(instance, spec)
         scores: dict[str, dict[str, Any]] = {}
-        prediction = Prediction()
         if parse.answered:
             status = RowStatus.ANSWERED
-            prediction = prediction_of(shown, parse, self.answer_type)
+            prediction = prediction_of(shown, parse, self.answer_type, checked=self.checked)
             scores = self.scores_of(shown, parse)
         else:
             status = RowStatus.PARSE_ERROR
+            prediction = Prediction()
         reading = None
         if self.official_parser is not None:  # a lenient parser: keep the official reading beside
             reading = read_officially(

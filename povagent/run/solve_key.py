@@ -26,9 +26,11 @@ from povagent.exchange.messages import Request, Response
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor
+from povagent.files.timestamps import utc_now
 from povagent.results.model_construct import construct
+from povagent.results.output_check import checking
 from povagent.results.plugin_errors import error_text
-from povagent.results.rows import Prediction, ResultRow, RowStatus, utc_now
+from povagent.results.rows import Prediction, ResultRow, RowStatus
 from povagent.results.transcript import RowTranscript
 from povagent.results.upgrade import ROW_FORMAT
 from povagent.run.components import ComponentNames, Components
@@ -184,13 +186,14 @@ class KeySolver:
         instance, run = asked.instance, asked.run
         parse: ParsedAnswer | None = None
         scores: dict[str, dict[str, Any]] = {}
-        prediction = Prediction()
         official_reading = None
-        if isinstance(scored, Exception):
-            self._strategy_error(asked, scored)
-        elif scored is not None:
+        if isinstance(scored, ScoredAnswer):
             parse, prediction = scored.parse, scored.prediction
             scores, official_reading = scored.scores, scored.official_reading
+        else:
+            prediction = Prediction()
+            if scored is not None:
+                self._strategy_error(asked, scored)
         status = scored.status if isinstance(scored, ScoredAnswer) else RowStatus.INFRA_ERROR
         exchanges = asked.transcript.exchanges
         spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
@@ -247,5 +250,13 @@ class KeySolver:
             self.log.error("scorer_exception", row=key_of(), scorer=name, error=error_text(exc), traceback=traceback.format_exc())
 
         return AnswerScoring(
-            comps.parser, comps.scorers, self.dataset, comps.official_parser, comps.official_parser_name, parser_raised, scorer_raised, comps.answer_type
+            comps.parser,
+            comps.scorers,
+            self.dataset,
+            comps.official_parser,
+            comps.official_parser_name,
+            parser_raised,
+            scorer_raised,
+            comps.answer_type,
+            checked=checking(),  # asked once a chunk of answers, not once each
         )

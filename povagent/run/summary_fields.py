@@ -24,21 +24,27 @@ def scored_row(row: ResultRow, scorer: str | None) -> ScoredRow:
     scorer (non-answers count as such; ``None``: the run has none, and no row is answered). A row
     of a multiple-choice question (it records a category, or its parse chose an option) asks no
     point: the point breakdown leaves it out."""
+    return ScoredRow(*scored_values(row, scorer))
+
+
+def scored_values(row: ResultRow, scorer: str | None) -> tuple[Any, ...]:
+    """:func:`scored_row`'s fields, in :class:`ScoredRow`'s order, as a tuple (a summary keeps
+    them in columns, and compares a row's with its official reading's, without the object)."""
     score = (row.scores.get(scorer) if scorer is not None else None) or {}
     answered = row.status is RowStatus.ANSWERED and bool(score.get("answered"))
     asks_point = row.category is None and (row.parse is None or row.parse.choice is None)
-    return ScoredRow(
-        condition=sys.intern(row.condition),  # one string per label, not one per row a summary keeps
-        direction=sys.intern(row.direction),
-        answered=answered,
-        l2=score.get("l2") if answered else None,
-        gt_in_frame=score.get("gt_in_frame") if answered else None,
-        l2_strict=score.get("l2_strict") if answered else None,
-        run=row.run,
-        error_x=score.get("error_x") if answered else None,
-        error_y=score.get("error_y") if answered else None,
-        parse_error=asks_point and official_parse_error(row) is not None,
-        asks_point=asks_point,
+    return (
+        sys.intern(row.condition),  # one string per label, not one per row a summary keeps
+        sys.intern(row.direction),
+        answered,
+        score.get("l2") if answered else None,
+        score.get("gt_in_frame") if answered else None,
+        score.get("l2_strict") if answered else None,
+        row.run,
+        score.get("error_x") if answered else None,
+        score.get("error_y") if answered else None,
+        asks_point and official_parse_error(row) is not None,
+        asks_point,
     )
 
 

@@ -26,7 +26,7 @@ from array import array
 from collections import Counter, defaultdict
 from collections.abc import Container, Iterator, Mapping, Sequence
 from operator import attrgetter
-from typing import Any, NamedTuple, overload
+from typing import Any, overload
 
 import numpy as np
 
@@ -34,7 +34,7 @@ from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import nan_rows, officially_read
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.row_columns import Column
-from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_row
+from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_values
 from povagent.scoring.breakdown import Picked, ScoredRow
 from povagent.scoring.diagnostics_breakdown import DiagnosedRow
 from povagent.scoring.metric_columns import MetricColumns
@@ -46,8 +46,14 @@ _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
+#: Each status's text (``status.value``, read through the enum's descriptor, cost more than the rest of its append).
+_STATUS_TEXT = {status: status.value for status in RowStatus}
 #: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
 _MAX_SHARED_SCORES = 1024
+#: Distinct rows with no point score a table's read-back rows share (past it, each is its own).
+_MAX_SHARED_ROWS = 1024
+#: Values (of whole rows, twenty a row) that wait to be added to the columns together.
+_PENDING_VALUES = 256 * 20
 
 
 class SummaryTable:
@@ -71,7 +77,7 @@ class SummaryTable:
         self._places: Mapping[str, int] | None = keys if isinstance(keys, Mapping) else None
         self._row_places = array("q")
         self._digests = bytearray()
-        self._fields = {
+        self._columns = {
             name: Column()
             for name in (
                 *_SCORED,
@@ -92,8 +98,11 @@ class SummaryTable:
         self._closed = False
         self._scored: list[ScoredRow] | None = None
         self._shared_scores: dict[Any, Any] = {}
-        #: each column's ``append``, looked up once: a row makes twenty appends
-        self._appends = _Appends(self._fields)
+        #: rows added, and the values of those not yet in the columns (row after row, each
+        #: row's in the columns' order: see :meth:`_flush`; one flat list, so no object a row
+        #: stays behind, nor in the interpreter's free list of tuples)
+        self._added = 0
+        self._pending: list[Any] = []
         #: where a row's diagnoses are (``{diagnosis: scorer}``), asked of the registry once a table
         self._diagnosing = diagnosing_scorers()
 
@@ -103,32 +112,38 @@ class SummaryTable:
             raise RuntimeError("SummaryTable.add after close()")
         if self._keys is not None and row.key not in self._keys:
             return
-        appends = self._appends
-        at = len(appends.run_column)
+        at = self._added
+        self._added += 1
         protocols = self._protocols
-        error_scorer = _following(self._error_scorers, row.scores)
-        hit_scorer = _following(self._hit_scorers, row.scores)
+        # (a run with no scorer of a protocol has none to find: a choice run's every row)
+        error_scorer = _following(self._error_scorers, row.scores) if self._error_scorers else None
+        hit_scorer = _following(self._hit_scorers, row.scores) if self._hit_scorers else None
         reading = row.official_reading
         official = officially_read(row)
-        scored = scored_row(row, error_scorer)
-        for append, value in zip(appends.scored, _scored_values(scored)):
-            append(value)
+        scored = scored_values(row, error_scorer)
         status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
-        appends.status(status.value)
-        appends.official_parser(None if reading is None else reading.parser)
         state = _NO_READING
         if reading is not None or status is RowStatus.INFRA_ERROR:
-            officially = scored_row(official, error_scorer)
-            state = _AS_SCORED if officially == scored else _OTHERWISE
+            officially = scored_values(official, error_scorer)
+            state = _AS_SCORED if officially == scored else _OTHERWISE  # ScoredRow's own equality: its fields'
             if state == _OTHERWISE:
-                self._aside["officially_scored"][at] = officially
-        appends.reading(state)
+                self._aside["officially_scored"][at] = ScoredRow(*officially)
         success = row.scores.get(hit_scorer) if hit_scorer is not None else None
-        # "success_answered" is None where no marked_hit scorer gave a verdict
-        appends.success(None if success is None else (success or {}).get("success"))
-        appends.success_answered(None if success is None else (success or {}).get("answered") is True)
-        for append, value in zip(appends.spent, _spent_values(row)):
-            append(value)
+        # the row's value of each column, in the columns' order ("success_answered" is None
+        # where no marked_hit scorer gave a verdict), added with the next rows' (see _flush);
+        # a list, not a tuple: CPython 3.11 keeps up to 2,000 freed tuples of twenty items
+        # aside and never hands one out again (400 KB held)
+        self._pending.extend([
+            *scored,
+            _STATUS_TEXT[status],
+            None if reading is None else reading.parser,
+            state,
+            None if success is None else (success or {}).get("success"),
+            None if success is None else (success or {}).get("answered") is True,
+            *_spent_values(row),
+        ])
+        if len(self._pending) >= _PENDING_VALUES:
+            self._flush()
         if extra := plugin_scores(row.scores, protocols):
             # rows repeat a few verdicts (a choice scorer's true/false fields): one tuple each.
             # Only all-true/false ones: True == 1, and a summary tells a flag from a number
@@ -149,12 +164,28 @@ class SummaryTable:
         else:
             self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
+    @property
+    def _fields(self) -> dict[str, Column]:
+        """The columns, with every row added so far (the pending ones flushed first)."""
+        if self._pending:
+            self._flush()
+        return self._columns
+
+    def _flush(self) -> None:
+        """The pending rows' values into the columns, a column at a time: one call a column for
+        a batch of rows, not twenty calls a row."""
+        pending, self._pending = self._pending, []
+        width = len(self._columns)
+        for at, column in enumerate(self._columns.values()):
+            column.extend(pending[at::width])
+
     def close(self) -> SummaryTable:
         """Keep each key's last row, in the place of its first or in the key's given place
         (once; rows in key order after)."""
         if self._closed:
             return self
         self._closed = True
+        self._flush()
         n = len(self._fields["run"])
         if n == 0:
             return self
@@ -164,7 +195,7 @@ class SummaryTable:
             return self  # no key repeats (a run's usual file): the rows are already one per key
         new_position = np.full(n, -1, dtype=np.int64)
         new_position[take] = np.arange(len(take))
-        self._fields = {name: column.taken(take, new_position) for name, column in self._fields.items()}
+        self._columns = {name: column.taken(take, new_position) for name, column in self._fields.items()}
         self._aside = {
             name: {int(new_position[old]): v for old, v in values.items() if new_position[old] >= 0} for name, values in self._aside.items()
         }
@@ -262,8 +293,8 @@ class SummaryTable:
 
     def usage(self) -> UsageTotals:
         """The rows' tokens, cost and retries, summed in row order (unstated tokens: 0)."""
-        columns = (self._fields[name].values() for name in ("prompt_tokens", "completion_tokens", "cost_usd", "retries"))
-        return UsageTotals.of(list(map(_Spent, *columns)), unstated_tokens=0)
+        prompt, completion, cost, retries = (self._fields[name].values() for name in _SPENT)
+        return UsageTotals.summed(prompt, completion, cost, retries, unstated_tokens=0)
 
     def field(self, name: str) -> Column:
         """One kept field's column."""
@@ -282,23 +313,9 @@ class SummaryTable:
             raise RuntimeError("SummaryTable read before close()")
 
 
-#: A :class:`ScoredRow`'s values in :data:`_SCORED`'s order, and a row's spending, each read in one call.
-_scored_values = attrgetter(*_SCORED)
+#: A row's spending, read in one call.
 _SPENT = ("prompt_tokens", "completion_tokens", "cost_usd", "retries")
 _spent_values = attrgetter(*_SPENT)
-
-
-class _Appends:
-    """The ``append`` of each column a row adds to (a table's, while rows are added)."""
-
-    __slots__ = ("run_column", "scored", "spent", "status", "official_parser", "reading", "success", "success_answered")
-
-    def __init__(self, fields: Mapping[str, Column]) -> None:
-        self.run_column = fields["run"]
-        self.scored = tuple(fields[name].append for name in _SCORED)
-        self.spent = tuple(fields[name].append for name in _SPENT)
-        self.status, self.official_parser, self.reading = fields["status"].append, fields["official_parser"].append, fields["reading"].append
-        self.success, self.success_answered = fields["success"].append, fields["success_answered"].append
 
 
 def _following(names: list[str], scores: Mapping[str, Any]) -> str | None:
@@ -319,9 +336,25 @@ class _ScoredRows(Sequence[ScoredRow]):
         self._rows: list[ScoredRow] | None = None
 
     def built(self) -> list[ScoredRow]:
-        """Every row, in order (built at the first read, then kept)."""
+        """Every row, in order (built at the first read, then kept). Rows with no point score
+        (a choice run's every row, a point run's failures) repeat a few field values: such rows
+        share one (frozen) object a set of values, which cost a summary ~2 us a row to make."""
         if self._rows is None:
-            self._rows = [ScoredRow(*values) for values in zip(*(column.values() for column in self._columns), strict=True)]
+            shared: dict[tuple[Any, ...], ScoredRow] = {}
+            rows = []
+            for values in zip(*(column.values() for column in self._columns), strict=True):
+                # no number but the run (an int, never a flag: True == 1 would pass for it), so
+                # equal values are values of the same types
+                if values[3] is None and values[4] is None and values[5] is None and values[7] is None and values[8] is None and type(values[6]) is int:
+                    row = shared.get(values)
+                    if row is None:
+                        row = ScoredRow(*values)
+                        if len(shared) < _MAX_SHARED_ROWS:
+                            shared[values] = row
+                else:
+                    row = ScoredRow(*values)
+                rows.append(row)
+            self._rows = rows
         return self._rows
 
     def __len__(self) -> int:
@@ -352,12 +385,3 @@ class _OfficialRows(_ScoredRows):
         if isinstance(i, int) and i in self._otherwise:
             return self._otherwise[i]
         return super().__getitem__(i)
-
-
-class _Spent(NamedTuple):
-    """What one row spent (tokens, cost, retries), for :meth:`UsageTotals.of`."""
-
-    prompt_tokens: int | None
-    completion_tokens: int | None
-    cost_usd: float | None
-    retries: int

@@ -177,11 +177,34 @@ def row_metric_flat(row: Any, declared: Declared) -> list[float | None]:
     out: list[float | None] = []
     for scorer, metrics in declared.items():
         if metrics:
-            values = _selected(row, metrics, _scorer_values(metrics, scores.get(scorer), answered))
-            if len({m.name for m in metrics}) < len(metrics):  # a name declared twice: its last value, once
+            selects, repeats = _facts(metrics)
+            values = _scorer_values(metrics, scores.get(scorer), answered)
+            if selects:
+                values = _selected(row, metrics, values)
+            if repeats:  # a name declared twice: its last value, once
                 values = list(dict(zip((m.name for m in metrics), values)).values())
             out += values
     return out
+
+
+#: :func:`_facts` of each scorer's metrics met so far, by the sequence's id (with the sequence,
+#: so a reused id is told apart): a summary asks them of every row.
+_FACTS: dict[int, tuple[Sequence[Metric], bool, bool]] = {}
+
+
+def _facts(metrics: Sequence[Metric]) -> tuple[bool, bool]:
+    """Whether any of ``metrics`` has a ``select``, and whether a name is declared twice."""
+    known = _FACTS.get(id(metrics))
+    if known is not None and known[0] is metrics:
+        return known[1], known[2]
+    selects = not all(m.select is None for m in metrics)
+    repeats = len({m.name for m in metrics}) < len(metrics)
+    if type(metrics) is not tuple:  # a list may change: only a tuple's facts are kept
+        return selects, repeats
+    if len(_FACTS) >= 1024:  # a few declarations a process: a flood of new ones is not kept
+        _FACTS.clear()
+    _FACTS[id(metrics)] = (metrics, selects, repeats)
+    return selects, repeats
 
 
 def _selected(row: Any, metrics: Sequence[Metric], values: list[float | None]) -> list[float | None]:

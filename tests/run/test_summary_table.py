@@ -55,6 +55,17 @@ def test_a_column_gives_back_each_value_as_it_was_appended():
     assert math.isnan(nan[0])
 
 
+def test_a_column_extended_by_a_batch_holds_what_appending_each_value_holds():
+    values = [None, 0.5, "a", 3, -0.0, 2**60, ("kept", "aside"), *(f"label {i}" for i in range(200)), True, 1e-300, "a"]
+    one_by_one, batched = Column(), Column()
+    for v in values:
+        one_by_one.append(v)
+    batched.extend(values[:7])
+    batched.extend(values[7:])
+    assert batched.values() == one_by_one.values() == values and batched.nbytes() == one_by_one.nbytes()
+    assert [type(v) for v in batched.values()] == [type(v) for v in values]
+
+
 def test_taking_rows_of_a_column_keeps_their_values_and_what_was_kept_aside():
     column = Column()
     for v in [1.5, ("aside",), None, "x", 7]:
@@ -122,3 +133,38 @@ def test_rows_of_keys_outside_the_selection_are_left_out_and_missing_keys_counte
     rows = [row(1), row(2), row(3)]
     summary = summarize_rows(rows, {rows[0].key, rows[2].key, "h/9/left/a#0"})
     assert summary["rows"]["done"] == 2 and summary["rows"]["missing"] == 1 and summary["rows"]["total"] == 3
+
+
+def test_each_row_reads_back_as_its_scored_row_and_as_its_official_reading_scores_it():
+    from povagent.answers.spec import ParsedAnswer
+    from povagent.results.official_reading import officially_read
+    from povagent.results.rows import OfficialReading
+
+    unread = OfficialReading(parser="official", parse=ParsedAnswer(status="unparseable", reason="no JSON"))
+    agreeing = OfficialReading(parser="official", parse=ParsedAnswer(status="ok", x=1.0, y=2.0), scores=row(1).scores)
+    otherwise = OfficialReading(parser="official", parse=ParsedAnswer(status="ok", x=1.0, y=2.0), scores=row(2, l2=0.75).scores)
+    rows = [row(0), row(1, official_reading=agreeing), row(2, official_reading=otherwise), row(3, official_reading=unread),
+            row(4, status=RowStatus.INFRA_ERROR, l2=None), row(5, category="Relative Direction", official_reading=unread)]  # fmt: skip
+    table = SummaryTable(DECLARED)
+    for r in rows:
+        table.add(r)
+    table.close()
+    assert list(table.scored) == [scored_row(r, "official") for r in rows]
+    officially = [scored_row(officially_read(r), "official") for r in rows if r.official_reading is not None or r.status is RowStatus.INFRA_ERROR]
+    assert list(table.officially_scored()) == officially and not table.read_as_scored()
+    assert list(table.officially_scored())[1] != list(table.scored)[2]  # the reading that scores otherwise is its own
+
+
+def test_rows_with_no_point_score_read_back_as_shared_objects_of_the_same_values_and_types():
+    from povagent.results.rows import ResultRow as Row
+
+    failures = [row(n, status=RowStatus.PARSE_ERROR, l2=None) for n in range(4)]
+    flagged = Row.model_construct(**{**dict(failures[0]), "key": "flag", "run": True})  # True == 1, but a flag
+    counted = Row.model_construct(**{**dict(failures[0]), "key": "count", "run": 1})
+    table = SummaryTable(DECLARED)
+    for r in [*failures, flagged, counted, row(9)]:
+        table.add(r)
+    read = list(table.close().scored)
+    assert read == [scored_row(r, "official") for r in [*failures, flagged, counted, row(9)]]
+    assert read[0] is read[2] and read[1] is read[3]  # the same values: one object (frozen)
+    assert type(read[4].run) is bool and type(read[5].run) is int and read[4] is not read[5]

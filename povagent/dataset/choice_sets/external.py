@@ -125,9 +125,10 @@ def question_instance(
     :class:`ChoiceQuestion` (``Instance.question``) or a numeric one (``Instance.numeric``). It has
     no direction, condition or target; ``nowhere`` (the unknown object, one a set may share)
     stands for its observer and anchor, and its first frame's camera for the observer's."""
-    from povagent.dataset.realworld_set import unknown_object
+    if nowhere is None:  # (imported here, and only when needed: every record of a set comes through)
+        from povagent.dataset.realworld_set import unknown_object
 
-    nowhere = unknown_object() if nowhere is None else nowhere
+        nowhere = unknown_object()
     camera = frames[0].camera if frames else image_camera(1, 1)
     return Instance(
         house_id=set_name,
