@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -14,6 +13,7 @@ import pytest
 
 from povagent.config.pipeline import load_pipeline
 from povagent.results.rows import read_rows
+from povagent.run.progress import QuietProgress
 from povagent.run.runner import run_pipeline
 
 N_KEYS = 12  # 4 (pair, direction)s x 3 conditions in the small release
@@ -102,11 +102,12 @@ def test_sigkill_mid_chunked_run_then_resume_gives_every_key_exactly_once(write_
     assert proc.returncode == -signal.SIGKILL
     written = len(results.read_text().splitlines())
     assert 20 <= written < 12 * runs, "the kill must land mid-run"
-    done = subprocess.run([sys.executable, "-c", CLI, "run", str(path), "--quiet", "--json"], env=dict(os.environ), capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
+    # the resume: the same pipeline in this process (the kill above is what needs a process of its own)
+    done = run_pipeline(load_pipeline(path), progress=QuietProgress())
+    assert done.exit_code == 0, done.stopped
     keys = [json.loads(line)["key"] for line in results.read_text().splitlines()]
     assert len(keys) == len(set(keys)) == 12 * runs
-    assert json.loads(done.stdout)["rows"]["answered"] == 12 * runs
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["rows"]["answered"] == 12 * runs
 
 
 def test_a_parser_raising_in_a_chunk_is_logged_for_its_own_key(write_pipeline, offline_plugin, monkeypatch):

@@ -11,7 +11,10 @@ import time
 
 import pytest
 
+from povagent.config.pipeline import load_pipeline
 from povagent.engine.cache import ResponseCache, cache_key, identity_json
+from povagent.run.progress import QuietProgress
+from povagent.run.runner import run_pipeline
 
 CLI = "from povagent.cli import main; main()"
 
@@ -62,10 +65,11 @@ def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline
             hit = cache.get(cache_key(identity, row["exchanges"][0]["request_hash"], row["run"]))
             assert hit is not None and hit.text == row["exchanges"][0]["raw"], row["key"]
 
-    done = subprocess.run([sys.executable, "-c", CLI, "run", str(path), "--quiet", "--json"], env=env,
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
+    # the resume: the same pipeline in this process (the kill above is what needs a process of
+    # its own; an interpreter more costs a second of imports and tests nothing more here)
+    done = run_pipeline(load_pipeline(path), progress=QuietProgress())
+    assert done.exit_code == 0, done.stopped
     keys = [json.loads(line)["key"] for line in _lines(results)]
     assert len(keys) == len(set(keys)) == 12 * runs
-    summary = json.loads(done.stdout)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["complete"] is True and summary["rows"]["answered"] == 12 * runs

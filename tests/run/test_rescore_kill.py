@@ -51,13 +51,20 @@ def rescore(run, *args, env=None, **kwargs):
 
 
 @pytest.fixture
-def stalled(tmp_path, write_answered_run):
-    """(run, plugin, the complete rescore's files as bytes) with the stall plugin beside the run."""
+def stalled(tmp_path, write_answered_run, monkeypatch):
+    """(run, plugin, the complete rescore's files as bytes) with the stall plugin beside the run.
+    That complete rescore is made in this process (it only prepares the folder; the rescores
+    under test run in interpreters of their own)."""
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
     run = write_answered_run(tmp_path / "run", ANSWERS)
     plugin = tmp_path / "stall.py"
     plugin.write_text(STALLING_SCORER)
-    done = rescore(run, "--plugin", str(plugin), "--scorer", "stall", env={k: v for k, v in os.environ.items() if k != "STALL_MARKER"})
-    assert done.wait(timeout=120) == 0, done.stderr.read().decode()
+    monkeypatch.delenv("STALL_MARKER", raising=False)
+    done = CliRunner().invoke(app, ["rescore", str(run), "--plugin", str(plugin), "--scorer", "stall"])
+    assert done.exit_code == 0, f"{done.output}\n{done.exception!r}"
     out = run / "rescored-official"
     return run, plugin, {name: (out / name).read_bytes() for name in ("results.jsonl", "summary.json", "config.yaml")}
 

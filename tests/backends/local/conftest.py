@@ -15,6 +15,19 @@ pytest.importorskip("torch", reason="the in-process backend's tests need torch (
 pytest.importorskip("transformers")
 
 
+def _one_torch_thread() -> None:
+    """Run torch's operators on one thread in this test process. The suite's workers share the
+    machine's cores, and on a tiny checkpoint's tensors torch's OpenMP workers mostly spin-wait
+    at their barriers: one thread trains and generates in the same wall time for half the CPU.
+    No check here depends on the thread count."""
+    import torch
+
+    torch.set_num_threads(1)
+
+
+_one_torch_thread()
+
+
 @pytest.fixture(scope="session")
 def tiny_root(tmp_path_factory) -> Path:
     """A folder holding the session's tiny checkpoints."""
