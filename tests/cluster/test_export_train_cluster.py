@@ -15,7 +15,8 @@ def _files(folder: Path) -> dict[str, str]:
     return {p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def test_shards_written_as_cluster_tasks_equal_a_local_export(dask_cluster, generated_release: Path, tmp_path: Path) -> None:
+def test_shards_written_as_cluster_tasks_equal_a_local_export(shared_dask_cluster, generated_release: Path, tmp_path: Path) -> None:
+    dask_cluster = shared_dask_cluster
     options = ExportOptions(format="hf", conditions=("c",), max_shard_bytes=2**20)
     local = export_training_set(generated_release, tmp_path / "local", options, check_release=False)
     remote = export_training_set(generated_release, tmp_path / "remote", options, check_release=False, cluster=dask_cluster.address)
