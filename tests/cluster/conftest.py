@@ -185,15 +185,6 @@ def stop_cluster(cluster: RealCluster) -> None:
             proc.wait(timeout=10)
 
 
-@pytest.fixture
-def dask_cluster(tmp_path: Path) -> Iterator[RealCluster]:
-    """A scheduler and two single-threaded workers on 127.0.0.1, stopped after the test."""
-    cluster = start_cluster(tmp_path / "cluster", workers=2)
-    try:
-        yield cluster
-    finally:
-        stop_cluster(cluster)
-
 
 #: The cluster ``shared_dask_cluster`` hands out, while one runs.
 _shared: dict[str, RealCluster] = {}
@@ -207,10 +198,10 @@ def _stop_shared_cluster() -> None:
 
 @pytest.fixture
 def shared_dask_cluster(tmp_path_factory) -> RealCluster:
-    """Like ``dask_cluster``, shared by the tests of this folder that run one after another,
-    across their modules (a start costs seconds of CPU, a scheduler's and each worker's, and
-    the workers load what the tests run once): a test that kills a worker puts a fresh one in
-    its place (``RealCluster.replace_worker``) before it ends; a cluster found with a process
+    """A scheduler and two single-threaded workers on 127.0.0.1, shared by the tests of this
+    folder that run one after another, across their modules (a start costs seconds of CPU, a
+    scheduler's and each worker's, and the workers load what the tests run once): a test that
+    kills a worker puts a fresh one in its place (``RealCluster.replace_worker``) before it ends; a cluster found with a process
     gone is started afresh. Stopped after the last of this folder's tests in a row
     (:func:`pytest_runtest_teardown`) and at the end of the session."""
     cluster = _shared.get("cluster")
