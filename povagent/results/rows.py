@@ -23,7 +23,6 @@ from pydantic_core import from_json
 from povagent.answers.spec import ParsedAnswer
 from povagent.errors import PredictionsError
 from povagent.files.confined_read import open_regular
-from povagent.files.timestamps import utc_now as utc_now  # rows name their times so (re-exported)
 from povagent.results.output_check import check_output_text
 from povagent.results.upgrade import FIELD, ROW_FORMAT, upgrade_row
 

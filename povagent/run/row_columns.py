@@ -80,18 +80,13 @@ class Column:
             kinds.append(kind)
 
     def _append_other(self, value: Any) -> None:
+        """Add a value :meth:`extend` did not place by its byte alone (never None, a flag or a
+        small count): a float before the first number, an int, a text not met yet or coded
+        past the near ones, anything else (kept aside)."""
         kind, number = _ASIDE, None
         t = type(value)
         if t is float:
             kind, number = _FLOAT, value
-        elif value is None:
-            kind = _NONE
-        elif value is True:
-            kind = _TRUE
-        elif value is False:
-            kind = _FALSE
-        elif t is int and 0 <= value < _CODE - _SMALL:
-            kind = _SMALL + value
         elif t is int and -_EXACT <= value <= _EXACT:
             kind, number = _INT, float(value)
         elif t is str:

@@ -110,8 +110,15 @@ class SummaryTable:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
         if self._closed:
             raise RuntimeError("SummaryTable.add after close()")
-        if self._keys is not None and row.key not in self._keys:
+        if self._places is not None:
+            place = self._places.get(row.key)
+            if place is None:
+                return
+            self._row_places.append(place)
+        elif self._keys is not None and row.key not in self._keys:
             return
+        else:
+            self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
         at = self._added
         self._added += 1
         protocols = self._protocols
@@ -159,10 +166,6 @@ class SummaryTable:
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
             self.metrics.append(row_metric_flat(row, self.declared), row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
-        if self._places is not None:
-            self._row_places.append(self._places[row.key])
-        else:
-            self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
 
     @property
     def _fields(self) -> dict[str, Column]:
