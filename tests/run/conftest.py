@@ -109,3 +109,30 @@ def fresh_litellm_run(tmp_path_factory, mini_root) -> dict[str, Any]:
     seen = json.loads(done.stdout.strip().splitlines()[-1])
     statuses = [json.loads(line)["status"] for line in (folder / "run" / "results.jsonl").read_text().splitlines()]
     return {**seen, "server_requests": server_requests, "statuses": statuses}
+
+
+@pytest.fixture
+def run_killed_mid_way() -> Any:
+    """``run_killed_mid_way(pipeline, results, rows) -> int``: ``povagent run`` of ``pipeline`` in
+    an interpreter of its own, SIGKILLed once ``results`` holds ``rows`` lines (within 60 s, the
+    command still running); the lines it held after the kill."""
+    import signal
+    import time
+
+    def run(pipeline: Path, results: Path, rows: int) -> int:
+        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        command = [sys.executable, "-c", "from povagent.cli import main; main()", "run", str(pipeline), "--quiet"]
+        proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        try:
+            deadline = time.monotonic() + 60
+            while len(results.read_text().splitlines()) < rows if results.exists() else True:
+                assert proc.poll() is None, proc.stderr.read().decode()  # type: ignore[union-attr]
+                assert time.monotonic() < deadline, "no rows written in time"
+                time.sleep(0.005)
+            proc.send_signal(signal.SIGKILL)
+        finally:
+            proc.wait(timeout=30)
+        assert proc.returncode == -signal.SIGKILL
+        return len(results.read_text().splitlines())
+
+    return run

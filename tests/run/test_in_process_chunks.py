@@ -5,9 +5,6 @@ from __future__ import annotations
 import asyncio
 import json
 import signal
-import subprocess
-import sys
-import time
 
 import pytest
 
@@ -17,7 +14,6 @@ from povagent.run.progress import QuietProgress
 from povagent.run.runner import run_pipeline
 
 N_KEYS = 12  # 4 (pair, direction)s x 3 conditions in the small release
-CLI = "from povagent.cli import main; main()"
 #: what differs between two runs of one pipeline whatever the path (clocks)
 TIMED = ("latency_s", "started_at", "finished_at")
 
@@ -85,22 +81,11 @@ def test_failures_in_a_row_trip_the_circuit_breaker_inside_a_chunk(write_pipelin
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
-def test_sigkill_mid_chunked_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path):
+def test_sigkill_mid_chunked_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path, run_killed_mid_way):
     runs = 8
     path = write_pipeline(backend={"name": "test-center", "options": {"delay_s": 0.01, "in_process": True}}, runs=runs)
     results = tmp_path / "run" / "results.jsonl"
-    proc = subprocess.Popen([sys.executable, "-c", CLI, "run", str(path), "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    try:
-        deadline = time.monotonic() + 60
-        while len(results.read_text().splitlines()) < 20 if results.exists() else True:
-            assert proc.poll() is None, proc.stderr.read().decode()  # type: ignore[union-attr]
-            assert time.monotonic() < deadline, "no rows written in time"
-            time.sleep(0.005)
-        proc.send_signal(signal.SIGKILL)
-    finally:
-        proc.wait(timeout=30)
-    assert proc.returncode == -signal.SIGKILL
-    written = len(results.read_text().splitlines())
+    written = run_killed_mid_way(path, results, 20)
     assert 20 <= written < 12 * runs, "the kill must land mid-run"
     # the resume: the same pipeline in this process (the kill above is what needs a process of its own)
     done = run_pipeline(load_pipeline(path), progress=QuietProgress())

@@ -3,11 +3,7 @@
 from __future__ import annotations
 
 import json
-import os
 import signal
-import subprocess
-import sys
-import time
 
 import pytest
 
@@ -15,8 +11,6 @@ from povagent.config.pipeline import load_pipeline
 from povagent.engine.cache import ResponseCache, cache_key, identity_json
 from povagent.run.progress import QuietProgress
 from povagent.run.runner import run_pipeline
-
-CLI = "from povagent.cli import main; main()"
 
 
 def _lines(path):
@@ -35,24 +29,11 @@ def _records(path):
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
-def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path):
+def test_sigkill_mid_run_then_resume_gives_every_key_exactly_once(write_pipeline, tmp_path, run_killed_mid_way):
     runs = 8
     path = write_pipeline(backend={"name": "test-center", "options": {"delay_s": 0.02}}, runs=runs, concurrency=4)
     results = tmp_path / "run" / "results.jsonl"
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    proc = subprocess.Popen([sys.executable, "-c", CLI, "run", str(path), "--quiet"], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    try:
-        deadline = time.monotonic() + 60
-        while len(_lines(results)) < 20:
-            assert proc.poll() is None, proc.stderr.read().decode()
-            assert time.monotonic() < deadline, "no rows written in time"
-            time.sleep(0.005)
-        proc.send_signal(signal.SIGKILL)
-    finally:
-        proc.wait(timeout=30)
-    assert proc.returncode == -signal.SIGKILL
-    written_before = len(_lines(results))
+    written_before = run_killed_mid_way(path, results, 20)
     assert 20 <= written_before < 12 * runs, "the kill must land mid-run"
     # Every row that survived the kill has its request event in the log too.
     durable = {e["key"] for e in _records(results)}
