@@ -54,6 +54,11 @@ class Column:
 
     def extend(self, values: Iterable[Any]) -> None:
         """Add each of ``values`` as the next rows' (a summary adds a batch of rows a column at a time)."""
+        if type(values) is list and len(values) > 1 and values.count(values[0]) == len(values) and len(set(map(id, values))) == 1:
+            # one object in every row of the batch (most of a run's columns: its condition, its
+            # status, its unset fields): placed once, its byte (and number) repeated
+            self._repeat(values[0], len(values))
+            return
         kinds, text_code = self._kinds, self._text_code
         for value in values:
             # the common values first (a flag, None, a label already met, a small count): the
@@ -78,6 +83,17 @@ class Column:
             if self._numbers is not None:
                 self._numbers.append(0.0)
             kinds.append(kind)
+
+    def _repeat(self, value: Any, times: int) -> None:
+        """Add ``value`` as the next ``times`` rows' (what :meth:`extend` of it ``times`` times adds)."""
+        self.extend((value,))
+        kind = self._kinds[-1]
+        if kind == _ASIDE:  # kept aside by position: each row its own entry
+            self.extend((value,) * (times - 1))
+            return
+        self._kinds += bytes((kind,)) * (times - 1)
+        if self._numbers is not None:
+            self._numbers.extend(array("d", (self._numbers[-1],)) * (times - 1))
 
     def _append_other(self, value: Any) -> None:
         """Add a value :meth:`extend` did not place by its byte alone (never None, a flag or a

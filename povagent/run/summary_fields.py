@@ -77,6 +77,8 @@ def diagnosed_row(row: ResultRow, error_scorer: str | None, by: Mapping[str, str
         by = diagnosing_scorers()
     diagnose = row.scores.get(by.get("failure_step", ""))
     relation = row.scores.get(by.get("relation_hit", ""))
+    if diagnose is None and relation is None:  # neither scored it (most rows of most runs): no ABC check
+        return None
     diagnose = diagnose if isinstance(diagnose, Mapping) and diagnose.get("answered") is True else None
     relation = relation if isinstance(relation, Mapping) and relation.get("answered") is True else None
     if diagnose is None and relation is None:

@@ -31,7 +31,7 @@ from typing import Any, overload
 import numpy as np
 
 from povagent.exchange.usage_totals import UsageTotals
-from povagent.results.official_reading import nan_rows, officially_read
+from povagent.results.official_reading import nan_rows, official_view
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.row_columns import Column
 from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_values
@@ -126,7 +126,7 @@ class SummaryTable:
         error_scorer = _following(self._error_scorers, row.scores) if self._error_scorers else None
         hit_scorer = _following(self._hit_scorers, row.scores) if self._hit_scorers else None
         reading = row.official_reading
-        official = officially_read(row)
+        official = official_view(row)  # officially_read's fields, without a copy of the row
         scored = scored_values(row, error_scorer)
         status = row.status if type(row.status) is RowStatus else RowStatus(row.status)
         state = _NO_READING

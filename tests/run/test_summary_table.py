@@ -66,6 +66,27 @@ def test_a_column_extended_by_a_batch_holds_what_appending_each_value_holds():
     assert [type(v) for v in batched.values()] == [type(v) for v in values]
 
 
+def test_a_batch_repeating_one_object_holds_what_appending_it_each_time_holds():
+    aside, nan = ("kept", "aside"), float("nan")
+    for value in (None, True, 0.25, -0.0, nan, 3, 2**60, "new label", aside):
+        one_by_one, batched = Column(), Column()
+        for v in (0.5, value, value, value):
+            one_by_one.append(v)
+        batched.extend([0.5])
+        batched.extend([value, value, value])
+        back = batched.values()
+        assert [type(v) for v in back] == [type(v) for v in one_by_one.values()] and batched.nbytes() == one_by_one.nbytes()
+        assert [repr(v) for v in back] == [repr(v) for v in one_by_one.values()]  # -0.0 and NaN too
+        if isinstance(value, (str, tuple)):
+            assert batched[3] is batched[1]  # one object, as appended
+
+
+def test_a_batch_of_equal_but_different_objects_keeps_each_ones_type():
+    column = Column()
+    column.extend([1, 1.0, True, 1])  # equal, not one object: placed one by one
+    assert [type(v) for v in column.values()] == [int, float, bool, int]
+
+
 def test_taking_rows_of_a_column_keeps_their_values_and_what_was_kept_aside():
     column = Column()
     for v in [1.5, ("aside",), None, "x", 7]:
