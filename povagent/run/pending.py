@@ -63,9 +63,8 @@ def house_major(keys: list[tuple[Instance, int]]) -> list[tuple[Instance, int]]:
 class KeyPlan:
     """The keys of one pipeline in its run folder."""
 
-    #: each key of the selection, with its place in the order a fresh run asks the keys (the
-    #: order a summary reads rows in, whatever order they were written in)
-    wanted: dict[str, int]
+    #: each key of the selection
+    wanted: set[str]
     done: set[str]
     #: keys whose last row is ``infra_error`` (pending again unless they are kept)
     failed: set[str]
@@ -94,7 +93,7 @@ def plan_keys(
     """
     runs = config.run_indices
     ordered = house_major([(i, r) for i in instances for r in runs])
-    wanted = {row_key(i.id, r): n for n, (i, r) in enumerate(ordered)}
+    wanted = {row_key(i.id, r) for i, r in ordered}
     run_dir = Path(config.output)
     done: set[str] = set()
     failed: set[str] = set()

@@ -56,12 +56,11 @@ def summarize_rows(
     """Breakdown (overall / per condition / per direction, per run too) of rows, one per key.
 
     ``keys`` is the run's selection (``rows`` then counts missing keys); rows of other keys
-    are left out. When a key repeats, its last row counts. Keys given with their places (``{key:
-    place}``, :attr:`~povagent.run.pending.KeyPlan.wanted`) are summarized in that order whatever
-    order the rows come in, so a run whose rows finished in any order, or was resumed, has the
-    summary of one that wrote them in order, to the last bit (sums and bootstrap draws follow the
-    rows' order). ``declared`` is each scorer's metrics
-    (``Scorer.metrics``): the ``metrics`` section holds them per slice (see
+    are left out. When a key repeats, its last row counts. The rows are summarized in one order
+    whatever order they come in (their keys' digests: :mod:`povagent.run.summary_table`), so a run
+    whose rows finished in any order, or was resumed, its file read back and a rescore of it have
+    one summary, to the last bit (sums and bootstrap draws follow the rows' order). ``declared``
+    is each scorer's metrics (``Scorer.metrics``): the ``metrics`` section holds them per slice (see
     :mod:`povagent.scoring.metrics`); ``protocols`` says which scorer follows which protocol
     (``{scorer: protocol}``; default: as the registered scorers declare). The rows are kept as
     a :class:`~povagent.run.summary_table.SummaryTable`: a few bytes a row.

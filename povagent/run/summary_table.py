@@ -8,11 +8,11 @@ whatever its text, where an object a row held several times that. Values that on
 have (a plugin scorer's fields, a diagnosis, a NaN coordinate's key) are kept by position for
 those rows.
 
-When a key repeats, its last row counts, in the place of the key's first row (the order a
-summary's sums run in). Keys are told apart by a 128-bit BLAKE2b digest of each, so the table
-keeps 16 bytes a row instead of the key's text. Keys given with their places in the run's order
-(``{key: place}``) put the rows in that order instead (8 bytes a row): a run whose rows were
-written as they finished, or over two sessions, is summarized as one that wrote them in order.
+When a key repeats, its last row counts. The rows kept are read in one order whatever order
+they came in: their keys' 128-bit BLAKE2b digests, ascending (the table keeps 16 bytes a row
+instead of the key's text). A summary's sums and bootstrap draws follow the rows' order, so a
+run whose rows were written as they finished, or over two sessions, a file read back and a
+rescore of it all give one summary, to the last bit.
 
 Its rows are read back as the objects the breakdowns take (:class:`ScoredRow`, and the like),
 built one at a time as a breakdown reaches them (:class:`~povagent.scoring.breakdown.Picked`).
@@ -61,9 +61,8 @@ class SummaryTable:
 
     ``declared``: the scorers' metrics whose values are kept; ``protocols``: which scorer
     follows which protocol (``{scorer: protocol}``; default: as the registered scorers
-    declare); ``keys``: the run's selection (a row of another key is left out), given as
-    ``{key: place}`` to read the rows in the places' order. Add rows with :meth:`add`, then
-    :meth:`close` once before reading.
+    declare); ``keys``: the run's selection (a row of another key is left out). Add rows with
+    :meth:`add`, then :meth:`close` once before reading.
     """
 
     def __init__(self, declared: Declared | None = None, protocols: Mapping[str, str] | None = None, keys: Container[str] | None = None) -> None:
@@ -73,9 +72,7 @@ class SummaryTable:
         self._error_scorers = [n for n, p in self._protocols.items() if p == "normalized_l2"]
         self._hit_scorers = [n for n, p in self._protocols.items() if p == "marked_hit"]
         self._keys = keys
-        #: each row's key's place (keys given with places), else each key's digest
-        self._places: Mapping[str, int] | None = keys if isinstance(keys, Mapping) else None
-        self._row_places = array("q")
+        #: each row's key's digest (the rows' order once closed)
         self._digests = bytearray()
         self._columns = {
             name: Column()
@@ -110,15 +107,9 @@ class SummaryTable:
         """Keep what the summary reads of ``row`` (left out when its key is not the run's)."""
         if self._closed:
             raise RuntimeError("SummaryTable.add after close()")
-        if self._places is not None:
-            place = self._places.get(row.key)
-            if place is None:
-                return
-            self._row_places.append(place)
-        elif self._keys is not None and row.key not in self._keys:
+        if self._keys is not None and row.key not in self._keys:
             return
-        else:
-            self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
+        self._digests += hashlib.blake2b(row.key.encode(), digest_size=16).digest()
         at = self._added
         self._added += 1
         protocols = self._protocols
@@ -183,8 +174,7 @@ class SummaryTable:
             column.extend(pending[at::width])
 
     def close(self) -> SummaryTable:
-        """Keep each key's last row, in the place of its first or in the key's given place
-        (once; rows in key order after)."""
+        """Keep each key's last row, keys in their digests' order (once; rows in that order after)."""
         if self._closed:
             return self
         self._closed = True
@@ -192,10 +182,10 @@ class SummaryTable:
         n = len(self._fields["run"])
         if n == 0:
             return self
-        take = self._by_place(n) if self._places is not None else self._by_first_row(n)
-        self._digests, self._row_places = bytearray(), array("q")
+        take = self._by_digest(n)
+        self._digests = bytearray()
         if len(take) == n and bool((take == np.arange(n)).all()):
-            return self  # no key repeats (a run's usual file): the rows are already one per key
+            return self  # rows one per key, already in order
         new_position = np.full(n, -1, dtype=np.int64)
         new_position[take] = np.arange(len(take))
         self._columns = {name: column.taken(take, new_position) for name, column in self._fields.items()}
@@ -206,24 +196,13 @@ class SummaryTable:
             self.metrics = self.metrics.taken(take)
         return self
 
-    def _by_first_row(self, n: int) -> np.ndarray:
-        """The rows to keep, in order: each key's last row in the place of its first."""
-        digests = np.frombuffer(bytes(self._digests), dtype="<u8").reshape(n, 2)
+    def _by_digest(self, n: int) -> np.ndarray:
+        """The rows to keep, in order: each key's last row, keys by ascending digest."""
+        digests = np.frombuffer(bytes(self._digests), dtype=">u8").reshape(n, 2)
         order = np.lexsort((digests[:, 1], digests[:, 0]))  # stable: a key's rows stay in file order
         ordered = digests[order]
-        first_of_key = np.ones(n, dtype=bool)
-        first_of_key[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
         last_of_key = np.ones(n, dtype=bool)
-        last_of_key[:-1] = first_of_key[1:]
-        return order[last_of_key][np.argsort(order[first_of_key], kind="stable")]
-
-    def _by_place(self, n: int) -> np.ndarray:
-        """The rows to keep, in order: each key's last row, keys in their given places."""
-        places = np.frombuffer(self._row_places, dtype=np.int64)
-        order = np.argsort(places, kind="stable")  # a key's rows stay in file order
-        ordered = places[order]
-        last_of_key = np.ones(n, dtype=bool)
-        last_of_key[:-1] = ordered[1:] != ordered[:-1]
+        last_of_key[:-1] = (ordered[1:] != ordered[:-1]).any(axis=1)
         return order[last_of_key]
 
     def __len__(self) -> int:
@@ -280,8 +259,8 @@ class SummaryTable:
         return iter(self._aside["diagnosed"][i] for i in sorted(self._aside["diagnosed"]))
 
     def nan_keys(self) -> list[str]:
-        """Keys of the rows whose official reading holds a NaN coordinate."""
-        return [self._aside["nan_key"][i] for i in sorted(self._aside["nan_key"])]
+        """Keys of the rows whose official reading holds a NaN coordinate, sorted."""
+        return sorted(self._aside["nan_key"].values())
 
     def by_run(self) -> dict[int, Sequence[ScoredRow]]:
         """Each run's rows (runs in order)."""

@@ -1,5 +1,5 @@
-"""A fresh run summarizes its rows as they were written: the summary of its results file, read in
-the run's key order whatever order the rows were written in."""
+"""A fresh run summarizes its rows as they were written: the summary of its results file, whatever
+order the rows were written in."""
 
 from __future__ import annotations
 
@@ -7,14 +7,10 @@ import json
 
 from povagent.config.pipeline import load_pipeline
 from povagent.results.rows import read_rows
-from povagent.run.pending import plan_keys, prepare_dataset, select_instances
 from povagent.run.runner import run_pipeline
 from povagent.run.summary import declared_metrics, summarize_rows, summarize_run
-
-
-def _places(config):
-    """The run's keys with their places in a fresh run's order (what the runner summarizes by)."""
-    return plan_keys(config, select_instances(prepare_dataset(config), config)).wanted
+from povagent.scoring.metric_columns import metrics_breakdown
+from povagent.scoring.metrics import valued_row
 
 
 def _without_session(path):
@@ -32,8 +28,7 @@ def test_a_fresh_runs_summary_is_the_summary_of_its_results_file_read_back(write
 
     host = get_plugin_host(config.plugins)
     declared = declared_metrics({name: host.scorer(name, None) for name in ("official",)})
-    keys = _places(config)
-    read_back = json.loads(json.dumps(summarize_run(result.run_dir / "results.jsonl", keys, declared), default=str))
+    read_back = json.loads(json.dumps(summarize_run(result.run_dir / "results.jsonl", None, declared), default=str))
     for section in ("overall", "per_condition", "per_direction", "per_run", "rows", "usage", "metrics"):
         assert written[section] == read_back[section], section
 
@@ -49,22 +44,22 @@ def test_a_resumed_run_counts_the_rows_of_its_earlier_session(write_pipeline, tm
 
 
 def test_a_runs_summary_does_not_depend_on_the_order_its_rows_were_written_in(write_pipeline, tmp_path):
-    """Rows written as keys finish (concurrency), or over two sessions, are summarized in the
-    run's key order: the summary of a run that wrote them in order, to the last bit."""
+    """Rows written as keys finish (concurrency), or over two sessions, are summarized in one
+    order: the summary of a run that wrote them in order, to the last bit."""
     config = load_pipeline(write_pipeline(runs=2, concurrency=1))
     in_order = run_pipeline(config)
     results = in_order.run_dir / "results.jsonl"
     lines = results.read_text().splitlines(keepends=True)
-    # the reversed file, summarized in file order, is another summary (the sums and the bootstrap
-    # draws follow the rows' order), so the check below can fail
+    # the metrics of the rows in file order and in reverse are other numbers (the bootstrap draws
+    # follow the rows' order), so the checks below can fail; the summary's are one
     from povagent.plugins import get_plugin_host
 
     host_declared = declared_metrics({"official": get_plugin_host(config.plugins).scorer("official", None)})
     rows = list(read_rows(results))
-    keys = {row.key for row in rows}
-    as_read = json.dumps(summarize_rows(rows, keys, host_declared), default=str)
-    reversed_as_read = json.dumps(summarize_rows(rows[::-1], keys, host_declared), default=str)
+    as_read = json.dumps(metrics_breakdown([valued_row(r, host_declared) for r in rows], host_declared), default=str)
+    reversed_as_read = json.dumps(metrics_breakdown([valued_row(r, host_declared) for r in rows[::-1]], host_declared), default=str)
     assert as_read != reversed_as_read
+    assert json.dumps(summarize_rows(rows, None, host_declared), default=str) == json.dumps(summarize_rows(rows[::-1], None, host_declared), default=str)
     written_in_order = _without_session(in_order.run_dir / "summary.json")
     results.write_text("".join(lines[::-1]))
     (in_order.run_dir / "summary.json").unlink()
