@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Mapping, Sequence
@@ -79,13 +80,17 @@ class ImageLookups:
         self.root = root
         self.real_root = dataset_root(root)
         self._frames: dict[tuple[int, str, Path | None], Frame | str] = {}
-        self._shown: dict[tuple[Frame, ...], tuple[Frame, ...]] = {}
+        self._shown: dict[tuple[int, ...], tuple[Frame, ...]] = {}
 
     def shared(self, frames: tuple[Frame, ...]) -> tuple[Frame, ...]:
         """``frames``, as one tuple for every item showing the same images (up to 4,096 lists)."""
-        known = self._shown.get(frames)
+        # known by the frames' identities (a frame a set's items share is one object: see
+        # :meth:`frame`), not by hashing each frame's fields and camera again for every item;
+        # the tuple kept holds the frames, so an identity stands for one frame while it is kept
+        key = tuple(map(id, frames))
+        known = self._shown.get(key)
         if known is None and len(self._shown) < 4096:
-            known = self._shown.setdefault(frames, frames)
+            known = self._shown.setdefault(key, frames)
         return frames if known is None else known
 
     def frame(self, index: int, rel: str, embedded_in: Path | None) -> Frame | str:
@@ -265,20 +270,36 @@ def text_problems(file: str, where: str, record: Any) -> list[Problem]:
 def json_list(file: Path, what: str) -> tuple[list[Any] | None, list[Problem]]:
     """A JSON file holding a list of records (read regular-file-only and bounded), or ``None``
     and the one problem saying why it is not: not UTF-8, not JSON, nested too deep, not a list."""
+    data, problems, _ = json_text_list(file, what)
+    return data, problems
+
+
+#: A JSON escape of a surrogate code point (``\\ud800`` to ``\\udfff``): the only way a file of
+#: UTF-8 text (surrogates are not UTF-8) gives parsed strings holding a lone surrogate.
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
+
+
+def json_text_list(file: Path, what: str) -> tuple[list[Any] | None, list[Problem], bool]:
+    """:func:`json_list`, and whether its records surely hold only text (no lone surrogate: see
+    :func:`~povagent.dataset.problems.not_text_problems`), told from the file's text: no
+    surrogate is escaped in it (a search of the text, where writing the records again cost a
+    10,000-record set ~20 ms). ``False``: the records may hold one (an escaped pair is text too).
+    """
     from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
 
     name = str(file)
     try:
-        data = loads_dataset_json(read_regular(file, MAX_DOCUMENT_BYTES, what=what).decode("utf-8"))
+        text = read_regular(file, MAX_DOCUMENT_BYTES, what=what).decode("utf-8")
+        data = loads_dataset_json(text)
     except TooDeepError as exc:
-        return None, [Problem(name, "", str(exc))]
+        return None, [Problem(name, "", str(exc))], False
     except UnicodeDecodeError as exc:
-        return None, [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")]
+        return None, [Problem(name, "", f"not UTF-8 text ({exc.reason} at byte {exc.start})")], False
     except json.JSONDecodeError as exc:
-        return None, [Problem(name, "", f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")]
+        return None, [Problem(name, "", f"not valid JSON: {exc.msg} at line {exc.lineno}, column {exc.colno}")], False
     if not isinstance(data, list):
-        return None, [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")]
-    return data, []
+        return None, [Problem(name, "", f"the file must hold a JSON list of records (got {type(data).__name__})")], False
+    return data, [], "\\u" not in text or _SURROGATE_ESCAPE.search(text) is None
 
 
 def jsonl_records(file: Path, what: str, problems: list[Problem]) -> Iterator[tuple[str, Any]]:

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from povagent.answers.choice_question import ChoiceQuestion
-from povagent.dataset.choice_sets.external import Item, json_list, text_problems
+from povagent.dataset.choice_sets.external import Item, json_text_list, text_problems
 from povagent.dataset.problems import Problem, all_text
 
 #: The prompt profile the set is asked in (:mod:`povagent_plugins.strategies.set_profiles`).
@@ -41,13 +41,13 @@ def gold_label(answer: str) -> str | None:
 def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     """Every sound record of the JSON list as an item, and one problem per bad record."""
     name = str(file)
-    data, unread = json_list(file, "ViewSpatial-Bench file")
+    data, unread, text_only = json_text_list(file, "ViewSpatial-Bench file")
     if data is None:
         return [], unread
     items: list[Item] = []
     problems: list[Problem] = []
-    # the file's records hold only text (told at once, at C speed), or each is walked for it
-    walk = not all_text(data)
+    # the file's records hold only text (told from its text, or at once at C speed), or each is walked for it
+    walk = not text_only and not all_text(data)
     options_of: dict[str, tuple[tuple[str, str], ...] | str] = {}
     for index, record in enumerate(data):
         where = f"$[{index}]"

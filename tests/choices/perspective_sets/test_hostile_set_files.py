@@ -47,6 +47,19 @@ def test_a_lone_surrogate_in_a_viewspatial_question_leaves_the_record_out_with_o
     assert all("\ud800" not in i.sentence for i in loaded.instances())
 
 
+def test_a_lone_surrogate_escaped_in_capitals_in_a_viewspatial_key_is_refused_too(set_file):
+    text = json.dumps(VIEWSPATIAL_RECORD)[:-1] + ', "note\\uDBFF": "x"}'
+    loaded = load_choice_set(_viewspatial_with(set_file, text), "viewspatial")
+    assert len(loaded.problems) == 1 and loaded.problems[0].json_path.startswith("$[0].note") and "lone surrogate" in loaded.problems[0].message
+
+
+def test_a_viewspatial_question_escaping_a_surrogate_pair_is_text_and_kept(set_file):
+    text = json.dumps(VIEWSPATIAL_RECORD).replace("Where is", "Where \\ud83d\\ude00 is")
+    loaded = load_choice_set(_viewspatial_with(set_file, text), "viewspatial")
+    assert loaded.problems == [] and len(loaded.instances()) == 5
+    assert any("\U0001f600" in i.sentence for i in loaded.instances())
+
+
 def test_a_lone_surrogate_in_a_mindcube_question_leaves_the_record_out_with_one_line(set_file):
     line = json.dumps(MINDCUBE_RECORD).replace("Where is", "Where\\udfff is")
     problems = validate_choice_set(_mindcube_with(set_file, line), "mindcube")
