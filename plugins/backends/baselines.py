@@ -25,6 +25,7 @@ None of them reads files, calls a network or is worth caching.
 
 from __future__ import annotations
 
+import _random
 import hashlib
 import json
 import random
@@ -73,7 +74,16 @@ def shown_frame_count(request: Request) -> int:
 def seeded_rng(*parts: object) -> random.Random:
     """A generator seeded from ``parts`` (stable across processes and Python hash seeds)."""
     digest = hashlib.sha256("|".join(map(str, parts)).encode()).digest()
-    return random.Random(int.from_bytes(digest[:8], "big"))
+    # ``random.Random(seed)``, the same state, made without the Python layer of ``seed``
+    # around the C seeding of an int (what ``Random.seed`` calls for one): a run seeds one a key
+    rng = _new_random(random.Random)
+    _seed_int(rng, int.from_bytes(digest[:8], "big"))
+    rng.gauss_next = None
+    return rng
+
+
+_new_random = random.Random.__new__
+_seed_int = _random.Random.seed
 
 
 def _instance_id(request: Request) -> str:

@@ -39,6 +39,8 @@ MAX_TOOL_TURN_TEXT_CHARS = 8192
 def valid_text(text: str) -> str:
     """``text`` with lone surrogates replaced by U+FFFD, so rows, logs and the cache (all
     UTF-8) can hold every answer a server sends."""
+    if text.isascii():  # (told at C speed: most answers) no character of it is a surrogate
+        return text
     return _LONE_SURROGATE.sub("\ufffd", text) if _LONE_SURROGATE.search(text) else text
 
 

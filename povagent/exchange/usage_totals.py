@@ -113,6 +113,35 @@ class UsageTotals:
         )
 
 
+class RunningTotals:
+    """:class:`UsageTotals` summed in place, an item at a time, from stated zeros: after
+    ``add(i)`` for each item, :meth:`totals` is ``UsageTotals(0, 0, 0.0).plus(i1).plus(i2)...``
+    to the bit, without a frozen object made an item (a run adds every row it writes)."""
+
+    __slots__ = ("prompt_tokens", "completion_tokens", "cost_usd", "retries")
+
+    def __init__(self) -> None:
+        self.prompt_tokens: int = 0
+        self.completion_tokens: int = 0
+        self.cost_usd: float = 0.0
+        self.retries: int = 0
+
+    def add(self, item: Spent) -> None:
+        """One more item's tokens, cost and retries (an unstated one adds nothing)."""
+        # a stated total plus an unstated value is the total, as plus() keeps it
+        if (prompt := item.prompt_tokens) is not None:
+            self.prompt_tokens += prompt
+        if (completion := item.completion_tokens) is not None:
+            self.completion_tokens += completion
+        if (cost := item.cost_usd) is not None:
+            self.cost_usd += cost
+        self.retries += int(getattr(item, "retries", 0) or 0)
+
+    def totals(self) -> UsageTotals:
+        """The sums so far."""
+        return UsageTotals(self.prompt_tokens, self.completion_tokens, self.cost_usd, self.retries)
+
+
 def _stated_pair(a: Any, b: Any, unstated: Any) -> Any:
     """:func:`_stated_sum` of ``(a, b)``, or ``unstated`` when neither is stated."""
     total: Any = 0

@@ -51,7 +51,7 @@ from povagent.engine.retry import error_type_of
 from povagent.errors import ConfigError, ResultsError
 from povagent.exchange.images import ImageStore
 from povagent.exchange.transport import open_image_transport
-from povagent.exchange.usage_totals import UsageTotals
+from povagent.exchange.usage_totals import RunningTotals
 from povagent.files.confined_write import write_inside
 from povagent.files.folder_lock import folder_lock
 from povagent.files.logs import RunLog
@@ -143,7 +143,7 @@ class PipelineRun:
         self._redactor = Redactor(secrets_named_by(config.resolved_dict()))
         self._declared: Declared = {}  # each scorer's declared metrics, set with the components
         #: what the rows written in this session spent (``session`` in summary.json), summed as they come
-        self._session_spent = UsageTotals(0, 0, 0.0)
+        self._session_spent = RunningTotals()
         self._frames = FrameReader(self.images)
         self._failures_in_a_row = 0
         self._stopped: str | None = None
@@ -187,7 +187,7 @@ class PipelineRun:
         s.rows_written += 1
         status = row.status.value  # (read once: an enum's value is a descriptor call)
         s.statuses[status] += 1
-        self._session_spent = self._session_spent.plus(row)  # UsageTotals.of((spent, row), unstated 0)
+        self._session_spent.add(row)  # UsageTotals.of((spent, row), unstated 0), in place
         if row.status is RowStatus.INFRA_ERROR:
             log = self._log.info if row.error_type in SET_UP_KINDS else self._log.warning
             log("infra_error", row=row.key, error_type=row.error_type, error=row.error_message)
@@ -466,7 +466,7 @@ class PipelineRun:
         """What ``summary.json`` holds (the JSON of a :class:`RunSummary`): the official breakdown over the
         selected keys (rows as written if the file started empty and no write failed, else read back), plus the run's counters."""
         summary = summarize_run(self.run_dir / RESULTS, self._wanted, self._declared, self._protocols, None if self._journal.error else self._written)
-        spent = self._session_spent
+        spent = self._session_spent.totals()
         self.stats.prompt_tokens, self.stats.completion_tokens = spent.prompt_tokens or 0, spent.completion_tokens or 0
         self.stats.cost_usd = spent.cost_usd or 0.0
         summary["pipeline"] = {

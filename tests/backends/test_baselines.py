@@ -13,7 +13,7 @@ from povagent.errors import ConfigError
 from povagent.exchange.images import ImageStore
 from povagent.interfaces import PermanentBackendError
 from povagent.plugins import get_plugin_host
-from povagent_plugins.backends.baselines import CenterBaseline, OracleBaseline, RandomBaseline, instance_ordinal
+from povagent_plugins.backends.baselines import CenterBaseline, OracleBaseline, RandomBaseline, instance_ordinal, seeded_rng
 from povagent_plugins.strategies.basic import BasicStrategy
 
 pytestmark = pytest.mark.timeout(60)
@@ -118,6 +118,17 @@ def test_center_scores_zero_when_the_gt_is_behind_the_selected_frame(requests_, 
 # -- random --------------------------------------------------------------------------------------
 def test_random_is_reproducible_for_the_same_seed(requests_):
     assert [answer(RandomBaseline(seed=1), r) for r in requests_] == [answer(RandomBaseline(seed=1), r) for r in requests_]
+
+
+def test_a_seeded_generator_is_random_random_of_its_seed_state_for_state():
+    import hashlib
+    import random
+
+    for parts in [(0, "random", "viewspatial/7", 0), (3, "center", "h/1/left/a", 2), ()]:
+        seed = int.from_bytes(hashlib.sha256("|".join(map(str, parts)).encode()).digest()[:8], "big")
+        ours, theirs = seeded_rng(*parts), random.Random(seed)
+        assert type(ours) is random.Random and ours.getstate() == theirs.getstate()
+        assert [ours.choice("ABCD"), ours.randrange(640), ours.gauss(0, 1)] == [theirs.choice("ABCD"), theirs.randrange(640), theirs.gauss(0, 1)]
 
 
 def test_random_depends_on_the_seed(requests_):

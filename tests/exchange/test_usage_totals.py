@@ -49,3 +49,19 @@ def test_items_given_field_by_field_sum_as_the_items_do():
         assert summed.retries == 3 and str(summed.cost_usd) == str(of.cost_usd)
     silent = UsageTotals.summed([None], [None], [None], [None])
     assert silent == UsageTotals(None, None, None, 0) == UsageTotals.of([Usage()])
+
+
+def test_running_totals_are_the_totals_plus_gives_item_by_item():
+    from povagent.exchange.usage_totals import RunningTotals
+
+    class Row:
+        def __init__(self, prompt, completion, cost, retries) -> None:
+            self.prompt_tokens, self.completion_tokens, self.cost_usd, self.retries = prompt, completion, cost, retries
+
+    rows = [Row(7, None, -0.0, 2), Row(None, 3, 1e-05, None), Row(True, 2, 0.1, 1), Row(None, None, None, 0), Row(5, 1, 0.2, 3)]
+    running, chained = RunningTotals(), UsageTotals(0, 0, 0.0)
+    assert running.totals() == chained
+    for row in rows:
+        running.add(row)
+        chained = chained.plus(row)
+        assert running.totals() == chained and repr(running.totals()) == repr(chained)  # the same sums, types and signs
