@@ -212,8 +212,9 @@ class RequestPath:
 
     # -- one attempt ---------------------------------------------------------------------------
     async def _attempt(self, request: Request, deadline: float | None) -> Response:
-        budget = self.attempt_timeout
+        budget: float | None = None  # worked out only where it acts (not for a bare call without a deadline)
         if deadline is not None:
+            budget = self.attempt_timeout
             left = deadline - time.monotonic()
             if left <= 0:
                 raise TimeoutError(f"no time left before the deadline ({self._limit_text(budget)})")
@@ -225,6 +226,8 @@ class RequestPath:
             if not response.latency_s:
                 response.latency_s = time.perf_counter() - t0
             return response
+        if budget is None:
+            budget = self.attempt_timeout
         slot = self.limiter.slot() if self.limiter is not None else contextlib.nullcontext()
         record = getattr(self.limiter, "record", None)
         async with slot:
