@@ -141,10 +141,11 @@ class ChoiceStrategy(Strategy):
         (each text piece stripped, empty pieces left out, as lmms-eval's MindCube task does); a
         question with no marker (MindCube's raw records) has its images first, as MindCube's
         own inference places them."""
-        text = self.prompt_text(instance)
+        profile, question = self.profile_of(instance)  # (once: the text and the layout both follow it)
+        text = profile.text(question) if type(self).prompt_text is ChoiceStrategy.prompt_text else self.prompt_text(instance)
         image_parts = [ImagePart(images.add_file(frame.file).image_hash, label=f"Image {frame.index}") for frame in instance.frames]
         parts: list[Part] = []
-        if self.profile_of(instance)[0].interleaved and IMAGE_MARKER in text:
+        if profile.interleaved and IMAGE_MARKER in text:
             pieces = text.split(IMAGE_MARKER)
             if len(pieces) - 1 != len(image_parts):
                 raise ValueError(f"instance {instance.id}: its question has {len(pieces) - 1} {IMAGE_MARKER} marker(s) for {len(image_parts)} image(s)")
