@@ -90,9 +90,15 @@ class HouseFrames:
         self._images = images
         self._left: dict[str, int] = {}
         self._files: dict[str, set[Path]] = {}
+        # a house's frames once per frames tuple (a set's 10,000 items share a few dozen: see
+        # ImageLookups.shared), not once per key; ``pending`` holds the tuples, so an id is one
+        seen: set[tuple[str, int]] = set()
         for instance, _ in pending:
-            self._left[instance.house_id] = self._left.get(instance.house_id, 0) + 1
-            self._files.setdefault(instance.house_id, set()).update(f.file for f in instance.frames)
+            house, frames = instance.house_id, instance.frames
+            self._left[house] = self._left.get(house, 0) + 1
+            if (house, id(frames)) not in seen:
+                seen.add((house, id(frames)))
+                self._files.setdefault(house, set()).update(f.file for f in frames)
         for files in self._files.values():
             images.hold_files(files)
 
