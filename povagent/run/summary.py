@@ -34,8 +34,15 @@ def _plugin_score_summary(
     values: dict[str, dict[str, list[float]]] = {}
     for scores in per_row:
         for name, fields in scores:
+            # (looked up, not setdefault: its default is a new dict or list made at every value)
+            by_field = values.get(name)
+            if by_field is None:
+                by_field = values[name] = {}
             for key, value in fields:
-                values.setdefault(name, {}).setdefault(key, []).append(value)
+                kept = by_field.get(key)
+                if kept is None:
+                    kept = by_field[key] = []
+                kept.append(value)
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for name, by_field in values.items():
         out[name] = {}

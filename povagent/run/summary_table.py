@@ -219,29 +219,26 @@ class SummaryTable:
 
     def officially_scored(self) -> Sequence[ScoredRow]:
         """The rows that have an official reading (and failed requests), as the reading scores them."""
-        reading = self._fields["reading"]
-        return Picked(_OfficialRows(self), array("q", (i for i in range(len(self)) if reading[i] != _NO_READING)))
+        reading = self._fields["reading"].values()  # (read in one pass, not a position at a time)
+        return Picked(_OfficialRows(self), array("q", (i for i, state in enumerate(reading) if state != _NO_READING)))
 
     def read_as_scored(self) -> bool:
         """Whether every row has an official reading that scores it as the row itself is scored
         (the official breakdown is then the main one)."""
-        reading = self._fields["reading"]
-        return all(reading[i] == _AS_SCORED for i in range(len(self)))
+        return all(state == _AS_SCORED for state in self._fields["reading"].values())
 
     def official_parser(self) -> str | None:
         """The parser whose official reading the first row with one records."""
-        parsers = self._fields["official_parser"]
-        return next((p for i in range(len(self)) if (p := parsers[i]) is not None), None)
+        return next((p for p in self._fields["official_parser"].values() if p is not None), None)
 
     def unread(self) -> int:
         """Rows with an answer but no official reading (format 0 rows of the first days: :mod:`povagent.results.upgrade`)."""
-        parsers, status = self._fields["official_parser"], self._fields["status"]
-        return sum(1 for i in range(len(self)) if parsers[i] is None and status[i] != _INFRA)
+        parsers, status = self._fields["official_parser"].values(), self._fields["status"].values()
+        return sum(1 for parser, s in zip(parsers, status, strict=True) if parser is None and s != _INFRA)
 
     def has_success(self) -> bool:
         """Whether a ``marked_hit`` scorer scored any row."""
-        answered = self._fields["success_answered"]
-        return any(answered[i] is not None for i in range(len(self)))
+        return any(answered is not None for answered in self._fields["success_answered"].values())
 
     def success_rows(self) -> Iterator[dict[str, Any]]:
         """Each row's ``marked_hit`` verdict (a row it never scored: an unanswered failure)."""
