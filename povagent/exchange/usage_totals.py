@@ -99,7 +99,7 @@ class UsageTotals:
             prompt_tokens=unstated_tokens if prompt is None else prompt,
             completion_tokens=unstated_tokens if completion is None else completion,
             cost_usd=unstated_cost if cost is None else cost,
-            retries=sum(int(r or 0) for r in retries),
+            retries=_retries_sum(retries),
         )
 
     def plus(self, item: Spent) -> UsageTotals:
@@ -111,6 +111,15 @@ class UsageTotals:
             cost_usd=_stated_pair(self.cost_usd, item.cost_usd, 0.0),
             retries=0 + int(self.retries or 0) + int(getattr(item, "retries", 0) or 0),
         )
+
+
+def _retries_sum(retries: Iterable[int | None]) -> int:
+    """``sum(int(r or 0) for r in retries)``; summed at C speed when every value is an int (a
+    summary's column of its rows' retries)."""
+    values = list(retries)
+    if set(map(type, values)) <= {int}:
+        return sum(values)
+    return sum(int(r or 0) for r in values)
 
 
 class RunningTotals:
