@@ -179,6 +179,8 @@ class OfficialParser(Parser):
     #: Numbers read by this parser compare with the paper's (see
     #: :func:`povagent.results.official_reading.official_counterpart`).
     reproduces_official = True
+    #: The parse depends on the reply and the asked spec alone (see :class:`~povagent_plugins.parsers.mcq.rule.RuleParser`).
+    reads_text_alone = True
 
     def parse(self, text: str, spec: AnswerSpec) -> ParsedAnswer:
         """Parse ``text`` as the official runner does; never raises."""

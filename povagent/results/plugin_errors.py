@@ -37,12 +37,34 @@ def parse_or_unparseable(parser: Parser, text: str, spec: AnswerSpec, on_error: 
     longer than :data:`MAX_REPLY_CHARS` is one too, never handed to the parser."""
     if len(text) > MAX_REPLY_CHARS:
         return unparseable(f"the reply is {len(text)} characters, longer than the {MAX_REPLY_CHARS} a parser reads", span=text[:200])
+    # a parser whose reading depends on the text and the spec alone (``reads_text_alone``: the
+    # built-in rules) reads a short reply it has read before as it did then: a multiple-choice
+    # run's replies repeat a few labels, each parsed once per spec instead of once per key
+    kept = len(text) <= _MAX_KEPT_CHARS and getattr(parser, "reads_text_alone", False) is True
+    if kept:
+        key = (id(parser), text, id(spec))
+        known = _READ.get(key)
+        if known is not None and known[0] is parser and known[1] is spec:
+            return known[2]
     try:
-        return parser.parse(text, spec)
+        parsed = parser.parse(text, spec)
     except Exception as exc:  # parsers must not raise; if one does, the answer is no answer
         if on_error is not None:
             on_error(exc)
         return unparseable(f"parser raised {error_text(exc)}")
+    if kept:
+        if len(_READ) >= _MAX_KEPT:
+            _READ.clear()
+        _READ[key] = (parser, spec, parsed)  # (holding both: their ids name them while kept)
+    return parsed
+
+
+#: Parses of short replies by parsers that read the text and the spec alone, by (parser, reply,
+#: spec): a parse is a value nobody changes, so rows may share one. Bounded in entries and in
+#: the length of a reply kept.
+_READ: dict[tuple[int, str, int], tuple[Parser, AnswerSpec, ParsedAnswer]] = {}
+_MAX_KEPT = 1024
+_MAX_KEPT_CHARS = 64
 
 
 def score_or_error(

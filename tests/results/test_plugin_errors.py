@@ -36,3 +36,39 @@ def test_a_raising_scorer_gives_an_error_entry_naming_the_exception():
 
 def test_an_exception_is_named_by_its_type_and_message():
     assert error_text(RuntimeError("boom")) == "RuntimeError: boom"
+
+
+class CountingParser(Parser):
+    """Reads every reply as an answer, counting the replies it was handed."""
+
+    def __init__(self, reads_text_alone: bool) -> None:
+        self.reads_text_alone = reads_text_alone
+        self.handed: list[str] = []
+
+    def parse(self, text, spec):
+        self.handed.append(text)
+        return ParsedAnswer(status=ParseStatus.OK, choice=text[:1], span=text)
+
+
+def test_a_parser_reading_the_text_alone_reads_a_short_reply_once_per_spec():
+    other_spec = AnswerSpec(schema={}, width=64, height=64, n_frames=1, asks_frame=False)
+    alone, each_time = CountingParser(reads_text_alone=True), CountingParser(reads_text_alone=False)
+    for parser in (alone, each_time):
+        first = parse_or_unparseable(parser, "B", SPEC)
+        again = parse_or_unparseable(parser, "B", SPEC)
+        assert first == again and first.choice == "B"
+        parse_or_unparseable(parser, "B", other_spec)
+        long_reply = "B" + " because" * 20
+        parse_or_unparseable(parser, long_reply, SPEC)
+        parse_or_unparseable(parser, long_reply, SPEC)
+    assert alone.handed == ["B", "B", "B" + " because" * 20, "B" + " because" * 20]  # "B" once per spec; a long reply each time
+    assert each_time.handed == ["B"] * 3 + ["B" + " because" * 20] * 2
+
+
+def test_a_raising_parser_reading_the_text_alone_raises_and_is_told_each_time():
+    parser = RaisingParser()
+    parser.reads_text_alone = True  # type: ignore[attr-defined]
+    seen: list[BaseException] = []
+    for _ in range(2):
+        assert parse_or_unparseable(parser, "A", SPEC, seen.append).status is ParseStatus.UNPARSEABLE
+    assert len(seen) == 2

@@ -36,6 +36,11 @@ class RuleParser(Parser):
     harness_filter: ClassVar[str] = ""
     #: The rule, where it reads the reply alone (``staticmethod(rule)``): the label it gives, or ``None``.
     rule: ClassVar[staticmethod[[str], str | None] | None] = None
+    #: The parse depends on the reply and the asked spec alone (nothing random, nothing kept
+    #: between replies), so a reply read before may be read as it was then
+    #: (:func:`~povagent.results.plugin_errors.parse_or_unparseable`); a subclass whose reading
+    #: depends on anything else sets it ``False``.
+    reads_text_alone: ClassVar[bool] = True
 
     def label(self, text: str, spec: AnswerSpec) -> str | None:
         """The label the rule reads in ``text``, or ``None`` where it reads none."""
