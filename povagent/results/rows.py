@@ -158,13 +158,17 @@ def model_label(model: str, profile: str | None = None) -> str:
     return model
 
 
+def row_json(row: ResultRow) -> str:
+    """``row.model_dump_json()``: the same text, from the row's serializer with the same (default)
+    options (the method's layer of keyword arguments cost a run ~1 us a row)."""
+    return row.__pydantic_serializer__.to_json(row).decode()
+
+
 def row_line(row: ResultRow, where: object, *, checked: bool | None = None) -> str:
     """``row`` as its ``results.jsonl`` line (newline included), checked against the shipped row
     schema while tests run (:mod:`povagent.results.output_check`; ``where``: the file;
     ``checked``: whether tests run, as the caller asked it already)."""
-    # ``row.model_dump_json()``'s bytes, from its serializer with the same (default) options:
-    # the method's layer of keyword arguments cost a run ~1 us a row
-    line = row.__pydantic_serializer__.to_json(row).decode() + "\n"
+    line = row_json(row) + "\n"
     check_output_text("row", line, where, on=checked)
     return line
 

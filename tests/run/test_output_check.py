@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from povagent.config.pipeline import load_pipeline
+from povagent.results import rows
 from povagent.results.output_check import ENV, OutputSchemaError, checking, schema_errors
 from povagent.results.rows import ResultRow, ResultsWriter, RowStatus
 from povagent.run.runner import PipelineRun, run_pipeline
@@ -32,7 +33,7 @@ def test_the_suite_checks_what_povagent_writes_here_and_in_the_processes_it_star
 
 def test_a_row_that_misses_the_row_schema_is_refused_naming_the_file_and_nothing_is_written(tmp_path, monkeypatch):
     drifted = a_row().model_dump_json(exclude_none=False).replace('"answered"', '"exploded"')
-    monkeypatch.setattr(ResultRow, "model_dump_json", lambda self, **kw: drifted)
+    monkeypatch.setattr(rows, "row_json", lambda row: drifted)
     path = tmp_path / "results.jsonl"
     with ResultsWriter(path) as writer, pytest.raises(OutputSchemaError) as caught:
         writer.write(a_row())
@@ -43,7 +44,7 @@ def test_a_row_that_misses_the_row_schema_is_refused_naming_the_file_and_nothing
 def test_users_runs_do_not_pay_for_the_check(tmp_path, monkeypatch):
     monkeypatch.delenv(ENV)
     drifted = a_row().model_dump_json(exclude_none=False).replace('"answered"', '"exploded"')
-    monkeypatch.setattr(ResultRow, "model_dump_json", lambda self, **kw: drifted)
+    monkeypatch.setattr(rows, "row_json", lambda row: drifted)
     with ResultsWriter(tmp_path / "results.jsonl") as writer:
         writer.write(a_row())
     assert json.loads((tmp_path / "results.jsonl").read_text())["status"] == "exploded"
