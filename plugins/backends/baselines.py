@@ -78,7 +78,7 @@ def seeded_rng(*parts: object) -> random.Random:
     # around the C seeding of an int (what ``Random.seed`` calls for one): a run seeds one a key
     rng = _new_random(random.Random)
     _seed_int(rng, int.from_bytes(digest[:8], "big"))
-    rng.gauss_next = None
+    rng.gauss_next = None  # type: ignore[attr-defined]  # (Random's own attribute, set by its seed)
     return rng
 
 

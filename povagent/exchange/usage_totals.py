@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Iterable, Protocol
+from typing import Any, Iterable, Protocol, cast
 
 
 class Spent(Protocol):
@@ -118,7 +118,7 @@ def _retries_sum(retries: Iterable[int | None]) -> int:
     summary's column of its rows' retries)."""
     values = list(retries)
     if set(map(type, values)) <= {int}:
-        return sum(values)
+        return sum(cast("list[int]", values))
     return sum(int(r or 0) for r in values)
 
 
