@@ -62,7 +62,7 @@ class UsageTotals:
     ) -> UsageTotals:
         """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
         or ``unstated_cost`` (cost)."""
-        items = items if isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
+        items = items if type(items) is list or isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
         if len(items) == 1:  # a row of one exchange (every single-turn key): the same sums, from 0, in one pass
             (item,) = items
             prompt, completion, cost = item.prompt_tokens, item.completion_tokens, item.cost_usd

@@ -89,6 +89,8 @@ SET_UP_KINDS = frozenset({"missing_key", "client_import"})
 #: journal's committer, a stop signal), and the time after which a chunk ends sooner (a slow
 #: baseline): rows still become durable, and a stop is still heard, as keys finish.
 CHUNK, CHUNK_S = 64, 0.05
+#: Each row status's text, looked up (``status.value`` is a descriptor call a row).
+_STATUS_TEXT = {status: status.value for status in RowStatus}
 
 
 # -- the run -------------------------------------------------------------------------------------
@@ -185,7 +187,7 @@ class PipelineRun:
         """A row is durable: count it, show it, tell the observers."""
         s = self.stats
         s.rows_written += 1
-        status = row.status.value  # (read once: an enum's value is a descriptor call)
+        status = _STATUS_TEXT.get(row.status) or row.status.value  # (an enum's value is a descriptor call)
         s.statuses[status] += 1
         self._session_spent.add(row)  # UsageTotals.of((spent, row), unstated 0), in place
         if row.status is RowStatus.INFRA_ERROR:
