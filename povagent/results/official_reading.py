@@ -186,12 +186,15 @@ def official_parse_breakdown(
 def nan_rows(rows: Iterable[Any]) -> list[str]:
     """Keys of rows whose (official) parse holds a NaN coordinate: the official scorer counts
     such a row answered with a NaN error, which makes every mean holding it NaN."""
-    found = []
-    for row in rows:
-        parse = row.parse
-        if parse is not None and any(v is not None and isinstance(v, float) and math.isnan(v) for v in (parse.x, parse.y)):
-            found.append(row.key)
-    return found
+    return [row.key for row in rows if holds_nan(row.parse)]
+
+
+def holds_nan(parse: Any) -> bool:
+    """Whether ``parse`` (a row's parse, or ``None``) holds a NaN coordinate (see :func:`nan_rows`)."""
+    if parse is None:
+        return False
+    x, y = parse.x, parse.y
+    return (isinstance(x, float) and math.isnan(x)) or (isinstance(y, float) and math.isnan(y))
 
 
 def nan_warning(keys: Sequence[str]) -> str | None:

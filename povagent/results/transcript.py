@@ -46,9 +46,12 @@ class RowTranscript:
     ) -> None:
         """Record an exchange: ``request``, the ``raw`` answer to it, and what it cost."""
         last = self.last
-        n = len(last.messages) if last is not None else 0
-        continues = last is not None and request.messages[:n] == last.messages
-        added = request.messages[n:] if continues else request.messages
+        if last is None:  # the first exchange (every single-turn key's only one): all of its messages
+            continues, added = False, request.messages
+        else:
+            n = len(last.messages)
+            continues = request.messages[:n] == last.messages
+            added = request.messages[n:] if continues else request.messages
         # constructed: every field is built here with the right type (and named: a field left
         # out would quietly take its default); validating again cost ~0.1 ms a request.
         self.exchanges.append(

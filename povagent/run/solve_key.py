@@ -196,7 +196,16 @@ class KeySolver:
                 self._strategy_error(asked, scored)
         status = scored.status if isinstance(scored, ScoredAnswer) else RowStatus.INFRA_ERROR
         exchanges = asked.transcript.exchanges
-        spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
+        if len(exchanges) == 1:  # a single-turn key: UsageTotals.of's sums of one exchange, without the object
+            (only,) = exchanges
+            prompt, completion, cost = only.prompt_tokens, only.completion_tokens, only.cost_usd
+            prompt_tokens = 0 if prompt is None else 0 + prompt
+            completion_tokens = 0 if completion is None else 0 + completion
+            cost_usd = None if cost is None else 0 + cost
+            retries = 0 + int(only.retries or 0)
+        else:
+            spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
+            prompt_tokens, completion_tokens, cost_usd, retries = spent.prompt_tokens, spent.completion_tokens, spent.cost_usd, spent.retries
         return construct(ResultRow,
             format_version=ROW_FORMAT,
             key=asked.key,
@@ -222,10 +231,10 @@ class KeySolver:
             error_type=asked.error_type,
             error_message=asked.error_message,
             latency_s=time.perf_counter() - asked.t0,
-            prompt_tokens=spent.prompt_tokens,
-            completion_tokens=spent.completion_tokens,
-            cost_usd=spent.cost_usd,
-            retries=spent.retries + asked.failed_retries,
+            prompt_tokens=prompt_tokens,
+            completion_tokens=completion_tokens,
+            cost_usd=cost_usd,
+            retries=retries + asked.failed_retries,
             started_at=asked.started,
             finished_at=utc_now(),
             official_reading=official_reading,

@@ -31,7 +31,7 @@ from typing import Any, overload
 import numpy as np
 
 from povagent.exchange.usage_totals import UsageTotals
-from povagent.results.official_reading import nan_rows, official_view
+from povagent.results.official_reading import holds_nan, official_view
 from povagent.results.rows import ResultRow, RowStatus
 from povagent.run.row_columns import Column
 from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_values
@@ -153,7 +153,7 @@ class SummaryTable:
             self._aside["plugin_scores"][at] = extra if shared is None else shared
         if (diagnosed := diagnosed_row(row, error_scorer, self._diagnosing)) is not None:
             self._aside["diagnosed"][at] = diagnosed
-        if nan_rows([official]):
+        if holds_nan(official.parse):  # nan_rows([official]), without its list
             self._aside["nan_key"][at] = row.key
         if self.metrics.declared:
             self.metrics.append(row_metric_flat(row, self.declared), row.condition, row.direction, row_category(row), row_metric_groups(row, self.declared))
