@@ -18,8 +18,10 @@ from dataclasses import dataclass
 
 #: Option tuples met so far, each kept once: a set's questions repeat a few option lists (the
 #: directions, shuffled), so 10,000 questions share a few dozen tuples instead of holding 10,000.
-#: Bounded: past it, new option lists are kept by their own question only.
-_SHARED_OPTIONS: dict[tuple[tuple[str, str], ...], tuple[tuple[str, str], ...]] = {}
+#: Each with its labels as a set when no label repeats (``None``: they repeat), so a question
+#: sharing it checks its gold label without listing them again. Bounded: past it, new option
+#: lists are kept by their own question only.
+_SHARED_OPTIONS: dict[tuple[tuple[str, str], ...], tuple[tuple[tuple[str, str], ...], frozenset[str] | None]] = {}
 _MAX_SHARED_OPTIONS = 4096
 
 
@@ -38,21 +40,28 @@ class ChoiceQuestion:
     main_category: str = ""
 
     def __post_init__(self) -> None:
+        shared = None
         if type(self.options) is tuple:
             try:  # a list already kept (most questions' options): no need to check its types again
-                options = _SHARED_OPTIONS.get(self.options)
+                shared = _SHARED_OPTIONS.get(self.options)
             except TypeError:  # an option that cannot be hashed (not a tuple of texts): kept as given
-                options = None
+                shared = None
             if (
-                options is None
+                shared is None
                 and len(_SHARED_OPTIONS) < _MAX_SHARED_OPTIONS
                 and all(type(o) is tuple and len(o) == 2 and type(o[0]) is str and type(o[1]) is str for o in self.options)
             ):
-                options = _SHARED_OPTIONS.setdefault(self.options, tuple((sys.intern(label), sys.intern(text)) for label, text in self.options))
-            if options is not None:
-                object.__setattr__(self, "options", options)  # equal values: the question is the same
+                kept = tuple((sys.intern(label), sys.intern(text)) for label, text in self.options)
+                labels = [label for label, _ in kept]
+                shared = _SHARED_OPTIONS.setdefault(self.options, (kept, frozenset(labels) if len(set(labels)) == len(labels) else None))
+            if shared is not None:
+                object.__setattr__(self, "options", shared[0])  # equal values: the question is the same
         if type(self.category) is str:
             object.__setattr__(self, "category", sys.intern(self.category))
+        if shared is not None and shared[1] is not None and type(self.gold) is str:  # labels known not to repeat
+            if self.gold not in shared[1]:
+                raise ValueError(f"the gold label {self.gold!r} is not among the options ({', '.join(self.labels)})")
+            return
         labels = self.labels
         if len(set(labels)) != len(labels):
             raise ValueError(f"option labels repeat: {', '.join(labels)}")

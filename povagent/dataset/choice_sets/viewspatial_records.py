@@ -49,13 +49,14 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     # the file's records hold only text (told from its text, or at once at C speed), or each is walked for it
     walk = not text_only and not all_text(data)
     options_of: dict[str, tuple[tuple[str, str], ...] | str] = {}
+    golds: dict[str, str | None] = {}
     for index, record in enumerate(data):
         where = f"$[{index}]"
         not_text = text_problems(name, where, record) if walk else None
         if not_text:  # the rule the release reader holds: a lone surrogate is not text
             problems.extend(not_text)
             continue
-        item = _item(index, record, where, options_of)
+        item = _item(index, record, where, options_of, golds)
         if isinstance(item, Item):
             items.append(item)
         else:
@@ -63,10 +64,13 @@ def read_viewspatial(file: Path) -> tuple[list[Item], list[Problem]]:
     return items, problems
 
 
-def _item(index: int, record: Any, where: str, options_of: dict[str, tuple[tuple[str, str], ...] | str] | None = None) -> Item | tuple[str, str]:
+def _item(
+    index: int, record: Any, where: str, options_of: dict[str, tuple[tuple[str, str], ...] | str] | None = None, golds: dict[str, str | None] | None = None
+) -> Item | tuple[str, str]:
     """The record as an item, or ``(json path, message)`` saying what is wrong with it.
     ``options_of``: each ``choices`` text read so far, with its options or its problem (a set's
-    records repeat a few dozen option lists)."""
+    records repeat a few dozen option lists); ``golds``: each ``answer`` text read so far, with
+    its gold label (a set's answers repeat a few dozen texts)."""
     if not isinstance(record, dict):
         # named by its type, never re-encoded: a record nesting ~1000 deep would overflow the encoder
         return where, f"a record must be a JSON object (got {type(record).__name__})"
@@ -86,7 +90,13 @@ def _item(index: int, record: Any, where: str, options_of: dict[str, tuple[tuple
             options_of[choices] = options
     if isinstance(options, str):  # why the text holds no options
         return f"{where}.choices", options
-    gold = gold_label(record["answer"])
+    answer = record["answer"]
+    if golds is None:
+        gold = gold_label(answer)
+    elif (gold := golds.get(answer, "")) == "":  # "": not read yet (a label is never empty)
+        gold = gold_label(answer)
+        if len(golds) < 4096:
+            golds[answer] = gold
     if gold is None:
         return f"{where}.answer", f"{record['answer'][:60]!r} names no label A-D (the official rule reads the first standalone letter)"
     try:
