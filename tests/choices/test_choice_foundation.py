@@ -109,3 +109,16 @@ def test_a_choice_pipeline_naming_no_parser_gets_the_choice_parser_and_a_point_p
     assert strategy_default_parser(host, "choice") == "choice"
     assert parser_misfit(host, "choice", "choice") is None
     assert "reads point answers" in (parser_misfit(host, "choice", "official") or "")
+
+
+def test_a_question_sharing_a_kept_option_list_still_refuses_a_gold_label_that_is_no_option():
+    kept = ChoiceQuestion("where?", (("A", "up"), ("B", "down")), gold="A")  # the list is kept with its labels
+    with pytest.raises(ValueError, match=r"gold label 'C' is not among the options \(A, B\)"):
+        ChoiceQuestion("and now?", (("A", "up"), ("B", "down")), gold="C")
+    assert ChoiceQuestion("and now?", (("A", "up"), ("B", "down")), gold="B").options is kept.options
+
+
+def test_a_question_with_a_kept_option_list_whose_labels_repeat_is_refused_each_time():
+    for _ in range(2):  # the second one meets the kept list
+        with pytest.raises(ValueError, match="option labels repeat: A, A"):
+            ChoiceQuestion("where?", (("A", "up"), ("A", "down")), gold="A")

@@ -8,7 +8,7 @@ import pytest
 
 from povagent.answers.spec import ParsedAnswer
 from povagent.results.evaluations import official_parse_error
-from povagent.results.official_reading import nan_rows, official_view, officially_read
+from povagent.results.official_reading import holds_nan, nan_rows, official_view, officially_read
 from povagent.results.rows import OfficialReading, ResultRow, RowStatus
 from povagent.run.summary_fields import scored_values
 
@@ -36,3 +36,18 @@ def test_the_view_reads_as_the_copy_reads(reading: OfficialReading | None) -> No
     assert official_parse_error(view) == official_parse_error(copy) and nan_rows([view]) == nan_rows([copy])
     assert view.prediction == copy.prediction and view.status is copy.status and view.official_reading is None
     assert (view.parser, view.parse, view.scores, view.key, view.sentence) == (copy.parser, copy.parse, copy.scores, copy.key, copy.sentence)
+
+
+@pytest.mark.parametrize(
+    ("parse", "nan"),
+    [
+        (None, False),
+        (ParsedAnswer(status="ok", x=1.0, y=2.0), False),
+        (ParsedAnswer(status="ok", x=math.nan, y=2.0), True),
+        (ParsedAnswer(status="ok", x=1.0, y=math.nan), True),
+        (ParsedAnswer(status="unparseable", reason="no JSON"), False),
+    ],
+)
+def test_holds_nan_is_what_nan_rows_finds_of_one_row(parse: ParsedAnswer | None, nan: bool) -> None:
+    row = _row(None, parse=parse)
+    assert holds_nan(parse) is nan and nan_rows([row]) == ([row.key] if nan else [])

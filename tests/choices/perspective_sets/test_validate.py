@@ -96,3 +96,17 @@ def test_an_over_long_tsv_line_is_refused_without_reading_it_whole(set_file, mon
     monkeypatch.setattr(external, "MAX_RECORD_LINE_BYTES", 180)  # line 6 embeds its image: 205 bytes
     problems = [str(p) for p in validate_choice_set(set_file("3dsrbench"), "3dsrbench")]
     assert problems == [f"{set_file('3dsrbench')}: line 6: longer than 180 bytes; this line and the rest of the file are not read"]
+
+
+def test_each_viewspatial_record_repeating_an_answer_text_reads_its_own_gold_or_problem(set_file):
+    from povagent.dataset.choice_sets.viewspatial_records import read_viewspatial
+
+    file = set_file("viewspatial")
+    records = json.loads(file.read_text())
+    assert len(records) >= 4
+    records[1]["answer"] = records[3]["answer"] = "E. nowhere"  # read once, told for each record
+    records[0]["answer"] = records[2]["answer"] = "B. " + records[0]["choices"].splitlines()[1][3:]
+    file.write_text(json.dumps(records))
+    items, problems = read_viewspatial(file)
+    assert [(p.json_path, p.message[:24]) for p in problems] == [("$[1].answer", "'E. nowhere' names no la"), ("$[3].answer", "'E. nowhere' names no la")]
+    assert [i.question.gold for i in items[:2]] == ["B", "B"]
