@@ -52,8 +52,8 @@ class ChoiceQuestion:
                 and all(type(o) is tuple and len(o) == 2 and type(o[0]) is str and type(o[1]) is str for o in self.options)
             ):
                 kept = tuple((sys.intern(label), sys.intern(text)) for label, text in self.options)
-                labels = [label for label, _ in kept]
-                shared = _SHARED_OPTIONS.setdefault(self.options, (kept, frozenset(labels) if len(set(labels)) == len(labels) else None))
+                names = [label for label, _ in kept]
+                shared = _SHARED_OPTIONS.setdefault(self.options, (kept, frozenset(names) if len(set(names)) == len(names) else None))
             if shared is not None:
                 object.__setattr__(self, "options", shared[0])  # equal values: the question is the same
         if type(self.category) is str:
