@@ -196,6 +196,9 @@ class KeySolver:
                 self._strategy_error(asked, scored)
         status = scored.status if isinstance(scored, ScoredAnswer) else RowStatus.INFRA_ERROR
         exchanges = asked.transcript.exchanges
+        prompt_tokens: int | None
+        completion_tokens: int | None
+        cost_usd: float | None
         if len(exchanges) == 1:  # a single-turn key: UsageTotals.of's sums of one exchange, without the object
             (only,) = exchanges
             prompt, completion, cost = only.prompt_tokens, only.completion_tokens, only.cost_usd
