@@ -37,6 +37,14 @@ settings.load_profile("povagent")
 # Our own fixtures for plugin authors are opt-in (no pytest11 entry point): we opt in here.
 pytest_plugins = ["povagent.testing.pytest_plugin"]
 
+
+def pytest_configure(config: pytest.Config) -> None:
+    # under pytest-xdist's loadfile, tests/cluster runs in one worker as one unit (work_units.py)
+    from work_units import register
+
+    register(config)
+
+
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 MINI = FIXTURES / "povbench_mini"
 
