@@ -117,37 +117,39 @@ def test_a_half_written_house_is_redone_and_a_complete_one_kept(one_house, tmp_p
     assert json.loads((out / "artifacts/train_house_00001/exploration_log.json").read_text())
 
 
-FAILING_JUDGE = """
+def failing_judge(index: int) -> str:
+    """A plugin module registering the judge ``fails-on-house-INDEX``: it raises on that house."""
+    return f"""
 from povagent import hookimpl
 from povagent.generate import PhysicalRulesJudge
 
-class FailsOnHouseOne(PhysicalRulesJudge):
+class FailsOnOneHouse(PhysicalRulesJudge):
     def judge(self, request):
-        if request.house.house_id == "train_house_00001":
-            raise RuntimeError("this judge cannot judge house 1")
+        if request.house.house_id == "train_house_{index:05d}":
+            raise RuntimeError("this judge cannot judge house {index}")
         return super().judge(request)
 
 @hookimpl
 def register_judges(register):
-    register("fails-on-house-1", FailsOnHouseOne, description="a test judge that raises on house 1")
+    register("fails-on-house-{index}", FailsOnOneHouse, description="a test judge that raises on house {index}")
 """
 
 
 def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_non_zero(tmp_path):
     plugin = tmp_path / "failing_judge.py"
-    plugin.write_text(FAILING_JUDGE)
+    plugin.write_text(failing_judge(0))
     out = tmp_path / "data"
-    # in this process (--jobs 1), houses in index order: house 2 is made after house 1 failed.
+    # in this process (--jobs 1), houses in index order: house 1 is made after house 0 failed.
     # The console script's test below fails a house in the worker pool
-    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", str(FRAMES), "--plugin", str(plugin),
-            "--judge", "fails-on-house-1", "--jobs", "1"]
+    args = ["generate", "--out", str(out), "--houses", "2", "--seed", str(SEED), "--frames", str(FRAMES), "--plugin", str(plugin),
+            "--judge", "fails-on-house-0", "--jobs", "1"]
     result = CliRunner().invoke(app, args)
     assert isinstance(result.exception, GenerationError)
     message = str(result.exception)
-    assert f"1 of 3 houses failed: house 1 (seed {SEED}): RuntimeError: this judge cannot judge house 1" in message
+    assert f"1 of 2 houses failed: house 0 (seed {SEED}): RuntimeError: this judge cannot judge house 0" in message
     assert "run the same command again to redo only the failed ones" in message
-    assert [f.index for f in result.exception.failures] == [1]
-    assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00000", "train_house_00002"]
+    assert [f.index for f in result.exception.failures] == [0]
+    assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00001"]
     assert not (out / "meta.json").exists()
 
 
@@ -182,7 +184,7 @@ def console_commands(two_houses, tmp_path_factory: pytest.TempPathFactory) -> tu
     (its plugin) is loaded when it runs."""
     tmp = tmp_path_factory.mktemp("console")
     plugin = tmp / "failing_judge.py"
-    plugin.write_text(FAILING_JUDGE)
+    plugin.write_text(failing_judge(1))
     commands = {
         "no-dask": ["generate", "--out", str(tmp / "no-dask"), "--houses", "1", "--cluster", "local:2"],
         "validate": ["validate", str(two_houses.root)],
