@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import shutil
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -36,6 +37,14 @@ settings.load_profile("povagent")
 
 # Our own fixtures for plugin authors are opt-in (no pytest11 entry point): we opt in here.
 pytest_plugins = ["povagent.testing.pytest_plugin"]
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    # under pytest-xdist's loadfile, tests/cluster runs in one worker as one unit (work_units.py)
+    from work_units import register
+
+    register(config)
+
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 MINI = FIXTURES / "povbench_mini"
@@ -136,6 +145,39 @@ def generated_release(tmp_path_factory: pytest.TempPathFactory) -> Path:
         generate_dataset(root, houses=2, seed=3, frames=12, jobs=1, progress=False)
 
     return made_once(tmp_path_factory, "geometric-generated", make)
+
+
+@dataclass
+class CommandOutput:
+    """A dataset ``povagent generate`` wrote, and what the command printed."""
+
+    root: Path
+    output: str
+
+
+@pytest.fixture(scope="session")
+def two_houses(tmp_path_factory: pytest.TempPathFactory) -> CommandOutput:
+    """Two houses (seed 5, one exploration frame: its ``meta.json`` says so) written by the
+    ``generate`` command in this process (``--jobs 1``): the command's own test reads it, the
+    determinism tests compare a worker pool's bytes with it, the resume tests copy its finished
+    houses and tests/cluster compares the houses made on a cluster with it. Read only: tests that
+    change it copy it.
+
+    Those test files run in several xdist workers: the set is made once between them, and what
+    the command printed is kept beside it (``command-output.txt``) for the workers that read it."""
+    from shared_sets import made_once
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+
+    def make(root: Path) -> None:
+        args = ["generate", "--out", str(root), "--houses", "2", "--seed", "5", "--frames", "1", "--jobs", "1"]
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 0, result.output
+        (root.parent / "command-output.txt").write_text(result.output)
+
+    root = made_once(tmp_path_factory, "two-houses", make)
+    return CommandOutput(root, (root.parent / "command-output.txt").read_text())
 
 
 #: The hand-made fixture's houses without a planted problem.

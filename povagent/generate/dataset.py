@@ -24,7 +24,7 @@ from typing import Any, Callable, Literal, Mapping, Sequence
 
 from povagent.errors import DatasetError, GenerationError, is_file_system_error
 from povagent.files.redaction import Redactor
-from povagent.generate.house_pipeline import HouseSummary
+from povagent.generate.deterministic_json import write_json
 from povagent.generate.house_task import HouseFailure, HouseOutcome, make_house
 from povagent.generate.judge import DEFAULT_JUDGE, RegisteredJudge, SurfaceJudge, judge_name
 from povagent.generate.record import (
@@ -33,11 +33,11 @@ from povagent.generate.record import (
     RECORD,
     GenerationOptions,
     HouseRecord,
+    HouseSummary,
     clear_partial,
     complete_houses,
     remove_half_written,
 )
-from povagent.generate.writer import write_json
 from povagent.geometry.directions import DIRECTION_NAMES
 
 GENERATOR_VERSION = "3"

@@ -9,7 +9,7 @@ on how houses are spread over processes).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -20,17 +20,13 @@ from povagent.generate.furnishing import furnish
 from povagent.generate.judge import PhysicalRulesJudge, SurfaceJudge
 from povagent.generate.meshes import house_mesh
 from povagent.generate.pairs import Pair, build_pairs
+from povagent.generate.record import HouseSummary, house_id
 from povagent.generate.renderer import Frame, Renderer
 from povagent.generate.scene import House
 from povagent.generate.writer import write_house
 
 #: Pairs per house: the release has 288 pairs over 47 houses (6.1 a house).
 PAIRS_PER_HOUSE = (5, 7)
-
-
-def house_id(index: int) -> str:
-    """The release's house folder name: ``train_house_00000``."""
-    return f"train_house_{index:05d}"
 
 
 def house_generators(seed: int, index: int) -> dict[str, np.random.Generator]:
@@ -68,20 +64,6 @@ def build_house(seed: int, index: int, shadows: bool = True) -> BuiltHouse:
     house = furnished_house(seed, index, rngs)
     renderer = Renderer(house, house_mesh(house, rngs["paint"]), shadows=shadows)
     return BuiltHouse(house, renderer, rngs)
-
-
-@dataclass
-class HouseSummary:
-    """What one house contributed: counts per direction and of files (no timings: pure)."""
-
-    index: int
-    house_id: str
-    rooms: int
-    objects: int
-    reachable_frames: int
-    pairs: int
-    directions: dict[str, int] = field(default_factory=dict)
-    renders: int = 0
 
 
 def generate_house(

@@ -6,7 +6,10 @@ workers that cannot see the output folder) are what this process, local worker p
 (``--jobs``) and Dask workers (:mod:`povagent.cluster.generation`) all run, so every engine
 gives the same bytes. Both are idempotent and never raise for the house: a failure comes back
 as a :class:`HouseFailure` in the :class:`HouseOutcome`. What it must not do: decide which houses
-to make or in what order (that is :mod:`povagent.generate.dataset`), print, or import Dask.
+to make or in what order (that is :mod:`povagent.generate.dataset`), print, or import Dask;
+nor load the renderer before a house is made: the process that only hands houses out (a worker
+pool's parent, a Dask client) imports this module too, and the house pipeline's imports (the
+mesh library, SciPy, Embree) cost it about a second of CPU for nothing.
 """
 
 from __future__ import annotations
@@ -17,7 +20,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from povagent.files.redaction import Redactor
-from povagent.generate.house_pipeline import generate_house
 from povagent.generate.judge import SurfaceJudge
 from povagent.generate.record import GenerationOptions, HouseRecord, house_files, house_folder, read_record, write_house_atomically
 
@@ -57,6 +59,8 @@ def make_house(out: Path, options: GenerationOptions, index: int, judge: Surface
     if done is not None:
         return HouseOutcome(index, record=done, kept=True)
     try:
+        from povagent.generate.house_pipeline import generate_house  # here: see the module's docstring
+
         record = write_house_atomically(
             Path(out),
             index,
@@ -76,6 +80,8 @@ def make_house_files(options: GenerationOptions, index: int, judge: SurfaceJudge
     """
     start = time.process_time()
     try:
+        from povagent.generate.house_pipeline import generate_house  # here: see the module's docstring
+
         with tempfile.TemporaryDirectory(prefix="povagent-house-") as tmp:
             record = write_house_atomically(
                 Path(tmp),

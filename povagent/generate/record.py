@@ -33,8 +33,7 @@ from typing import Any
 from povagent.dataset.paths import GENERATED_RECORD
 from povagent.errors import DatasetError, ReadTargetError
 from povagent.files.confined_read import MAX_DOCUMENT_BYTES, read_regular
-from povagent.generate.house_pipeline import HouseSummary, house_id
-from povagent.generate.writer import rounded, write_json
+from povagent.generate.deterministic_json import rounded, write_json
 
 #: The record of what made a house, inside its folder (povagent's own files start with ``_``).
 RECORD = GENERATED_RECORD
@@ -42,6 +41,25 @@ RECORD = GENERATED_RECORD
 #: loader reads).
 PARTIAL = ".partial"
 ARTIFACTS = "artifacts"
+
+
+def house_id(index: int) -> str:
+    """The release's house folder name: ``train_house_00000``."""
+    return f"train_house_{index:05d}"
+
+
+@dataclass
+class HouseSummary:
+    """What one house contributed: counts per direction and of files (no timings: pure)."""
+
+    index: int
+    house_id: str
+    rooms: int
+    objects: int
+    reachable_frames: int
+    pairs: int
+    directions: dict[str, int] = field(default_factory=dict)
+    renders: int = 0
 
 
 @dataclass(frozen=True)

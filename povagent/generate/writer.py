@@ -4,51 +4,28 @@ What it is for: write exactly the files the POVBench release has (the house's pa
 ``exploration_images/``, ``img_from_observer/``, ``exploration_log.json``,
 ``per_image_visible_objects.json``) plus, on request, a ``_render/`` folder with depth maps and
 instance masks. Same inputs give the same bytes: keys sorted, floats rounded to 4 decimals,
-PNGs as Pillow writes them with a fixed compression level and no metadata, no timestamps anywhere.
+PNGs as Pillow writes them with a fixed compression level and no metadata, no timestamps anywhere
+(the JSON through :mod:`povagent.generate.deterministic_json`).
 What it must not do: decide content (pairs, sentences, cameras come in finished).
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from PIL import Image
 
+from povagent.generate.deterministic_json import write_json
 from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png
 from povagent.generate.pairs import Pair
 from povagent.generate.renderer import Frame
 from povagent.generate.scene import House
 from povagent.geometry.camera import Camera
 
-#: Decimals kept for every float in JSON (0.1 mm: far below a pixel at any distance used here).
-FLOAT_DECIMALS = 4
 #: Pixels an object needs in a frame to count as hit (``object_in_frame_hits``).
 MIN_HIT_PIXELS = 20
-
-
-def rounded(value: Any) -> Any:
-    """``value`` with every float rounded to ``FLOAT_DECIMALS`` (and -0.0 made 0.0)."""
-    if isinstance(value, float):
-        r = round(value, FLOAT_DECIMALS)
-        return 0.0 if r == 0 else r
-    if isinstance(value, (np.floating,)):
-        return rounded(float(value))
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, dict):
-        return {str(k): rounded(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [rounded(v) for v in value]
-    return value
-
-
-def write_json(path: Path, value: Any) -> None:
-    """Write deterministic JSON: sorted keys, rounded floats, one trailing newline."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(rounded(value), sort_keys=True, indent=1, ensure_ascii=False) + "\n")
 
 
 def write_png(path: Path, image: np.ndarray) -> None:

@@ -51,6 +51,10 @@ class RealCluster:
     #: How the workers were started, so a killed one can be replaced (see ``replace_worker``).
     worker_env: dict[str, str] = field(default_factory=dict)
     worker_prefix: list[str] = field(default_factory=list)
+    #: The workers' working directory (``None``: this process's).
+    worker_cwd: Path | None = None
+    #: A folder the workers do not see (an empty tmpfs over it in their mount namespace), if any.
+    hidden: Path | None = None
 
     def kill_worker(self, index: int = 0) -> int:
         """SIGKILL worker ``index``; return its pid."""
@@ -106,7 +110,7 @@ def _start_worker(cluster: RealCluster, index: int) -> subprocess.Popen[bytes]:
         [*cluster.worker_prefix, *_dask_command(), "worker", cluster.address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
          "--host", "127.0.0.1", "--name", f"w{index}", "--lifetime", LIFETIME, "--death-timeout", "60",
          "--local-directory", str(cluster.logs / f"w{index}")],
-        stdout=wlog, stderr=subprocess.STDOUT, env=env,
+        stdout=wlog, stderr=subprocess.STDOUT, env=env, cwd=cluster.worker_cwd,
     )
 
 
@@ -121,12 +125,14 @@ def _fresh(folder: Path, stem: str, suffix: str) -> Path:
 
 
 def start_cluster(
-    tmp: Path, workers: int = 2, worker_env: dict[str, str] | None = None, worker_prefix: list[str] | None = None
+    tmp: Path, workers: int = 2, worker_env: dict[str, str] | None = None, worker_prefix: list[str] | None = None,
+    worker_cwd: Path | None = None,
 ) -> RealCluster:
     """Start ``dask scheduler`` and ``workers`` x ``dask worker`` on 127.0.0.1 (no nanny).
 
     ``worker_prefix`` goes before each worker's command (it must ``exec`` the command, so the pid
     stays the worker's): :func:`hidden_folder_prefix` gives workers their own view of the disk.
+    ``worker_cwd``: the folder the workers run in (default: this process's working directory).
     """
     pytest.importorskip("distributed", reason="the cluster tests need the test extra (distributed)")
     tmp.mkdir(parents=True, exist_ok=True)
@@ -145,7 +151,8 @@ def start_cluster(
             raise RuntimeError(f"dask scheduler did not start: {(tmp / 'scheduler.log').read_text()[-2000:]}")
         time.sleep(0.1)
     address = json.loads(scheduler_file.read_text())["address"]
-    cluster = RealCluster(address, scheduler, logs=tmp, worker_env=dict(worker_env or {}), worker_prefix=list(worker_prefix or []))
+    cluster = RealCluster(address, scheduler, logs=tmp, worker_env=dict(worker_env or {}), worker_prefix=list(worker_prefix or []),
+                          worker_cwd=worker_cwd)
     try:
         for i in range(workers):
             cluster.workers.append(_start_worker(cluster, i))
@@ -160,12 +167,18 @@ def hidden_folder_prefix(folder: Path) -> list[str]:
     """A worker prefix that runs the worker in its own mount namespace with an empty tmpfs over
     ``folder``: the worker does not see what this machine writes there (as a worker on another
     machine would not see a local disk). Skips the test when this kernel refuses user namespaces."""
+    prefix, refused = _hidden_folder_prefix(folder)
+    if prefix is None:
+        pytest.skip(f"unshare cannot make a private mount namespace here: {refused}")
+    return prefix
+
+
+def _hidden_folder_prefix(folder: Path) -> tuple[list[str] | None, str]:
+    """(:func:`hidden_folder_prefix`'s prefix, "") or (None, why this kernel refuses it)."""
     folder.mkdir(parents=True, exist_ok=True)
     prefix = ["unshare", "--user", "--map-root-user", "--mount", "sh", "-c", 'mount -t tmpfs none "$0" && exec "$@"', str(folder)]
     check = subprocess.run([*prefix, "true"], capture_output=True, timeout=30)
-    if check.returncode != 0:
-        pytest.skip(f"unshare cannot make a private mount namespace here: {check.stderr.decode()[-200:]}")
-    return prefix
+    return (prefix, "") if check.returncode == 0 else (None, check.stderr.decode()[-200:])
 
 
 def stop_cluster(cluster: RealCluster) -> None:
@@ -187,14 +200,25 @@ def stop_cluster(cluster: RealCluster) -> None:
 
 
 
-#: The cluster ``shared_dask_cluster`` hands out, while one runs.
+#: The clusters ``shared_dask_cluster`` and ``shared_hidden_cluster`` hand out, while they run.
 _shared: dict[str, RealCluster] = {}
 
 
-def _stop_shared_cluster() -> None:
-    cluster = _shared.pop("cluster", None)
-    if cluster is not None:
-        stop_cluster(cluster)
+def _stop_shared_clusters() -> None:
+    while _shared:
+        stop_cluster(_shared.popitem()[1])
+
+
+def _shared_cluster(kind: str, start: Callable[[], RealCluster]) -> RealCluster:
+    """The running shared cluster ``kind``, or a fresh one from ``start()`` (none yet, or one
+    found with a process gone)."""
+    cluster = _shared.get(kind)
+    if cluster is None or any(proc.poll() is not None for proc in (cluster.scheduler, *cluster.workers)):
+        old = _shared.pop(kind, None)
+        if old is not None:
+            stop_cluster(old)
+        cluster = _shared[kind] = start()
+    return cluster
 
 
 @pytest.fixture
@@ -204,23 +228,42 @@ def shared_dask_cluster(tmp_path_factory) -> RealCluster:
     scheduler's and each worker's, and the workers load what the tests run once): a test that
     kills a worker puts a fresh one in its place (``RealCluster.replace_worker``) before it ends; a cluster found with a process
     gone is started afresh. Stopped after the last of this folder's tests in a row
-    (:func:`pytest_runtest_teardown`) and at the end of the session."""
-    cluster = _shared.get("cluster")
-    if cluster is None or any(proc.poll() is not None for proc in (cluster.scheduler, *cluster.workers)):
-        _stop_shared_cluster()
-        cluster = _shared["cluster"] = start_cluster(tmp_path_factory.mktemp("shared-cluster"), workers=2)
-    return cluster
+    (:func:`pytest_runtest_teardown`) and at the end of the session. The workers run in a folder
+    of their own (``worker_cwd``), as workers on other machines do: not in this process's."""
+
+    def start() -> RealCluster:
+        tmp = tmp_path_factory.mktemp("shared-cluster")
+        (tmp / "worker-cwd").mkdir()
+        return start_cluster(tmp, workers=2, worker_cwd=tmp / "worker-cwd")
+
+    return _shared_cluster("cluster", start)
+
+
+@pytest.fixture
+def shared_hidden_cluster(tmp_path_factory) -> RealCluster:
+    """A scheduler and one worker that does not see the folder ``hidden`` (an empty tmpfs over it
+    in its own mount namespace, :func:`hidden_folder_prefix`), shared like ``shared_dask_cluster``
+    by the tests that write where no worker sees (each under a folder of its own in ``hidden``).
+    Skips the test when this kernel refuses user namespaces."""
+
+    def start() -> RealCluster:
+        tmp = tmp_path_factory.mktemp("hidden-cluster")
+        started = start_cluster(tmp, workers=1, worker_prefix=hidden_folder_prefix(tmp / "hidden"))
+        started.hidden = tmp / "hidden"
+        return started
+
+    return _shared_cluster("hidden", start)
 
 
 def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> None:
     """Stop the shared cluster when the next test is not one of this folder's (or there is
     none): an idle cluster is not kept for a later run of them (another order, another file)."""
     if nextitem is None or Path(nextitem.path).parent != Path(__file__).parent:
-        _stop_shared_cluster()
+        _stop_shared_clusters()
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
-    _stop_shared_cluster()
+    _stop_shared_clusters()
 
 
 @pytest.fixture(scope="session")
@@ -274,12 +317,6 @@ def cluster_factory(tmp_path: Path) -> Iterator[Callable[..., RealCluster]]:
     finally:
         for cluster in started:
             stop_cluster(cluster)
-
-
-@pytest.fixture
-def hidden_folder() -> Callable[[Path], list[str]]:
-    """:func:`hidden_folder_prefix`, for tests (conftest modules are not imported by name)."""
-    return hidden_folder_prefix
 
 
 @pytest.fixture

@@ -25,16 +25,15 @@ def test_shards_written_as_cluster_tasks_equal_a_local_export(shared_dask_cluste
 
 
 def test_a_relative_out_lands_where_the_user_ran_the_command_not_under_a_workers_folder(
-    cluster_factory, generated_release: Path, tmp_path: Path, monkeypatch
+    shared_dask_cluster, generated_release: Path, tmp_path: Path, monkeypatch
 ) -> None:
-    elsewhere = tmp_path / "worker-cwd"
-    elsewhere.mkdir()
-    cluster = cluster_factory(workers=1, worker_prefix=["sh", "-c", 'cd "$0" && exec "$@"', str(elsewhere)])
+    elsewhere = shared_dask_cluster.worker_cwd  # the folder the workers run in
+    assert elsewhere is not None
     here = tmp_path / "here"
     here.mkdir()
     monkeypatch.chdir(here)
     report = export_training_set(
-        generated_release, Path("rel-out"), ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=cluster.address
+        generated_release, Path("rel-out"), ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=shared_dask_cluster.address
     )
     assert report.shards_written == len(report.shards) > 0
     assert sorted(p.name for p in (here / "rel-out" / "data").glob("*.parquet")) == sorted(report.shards)
@@ -42,13 +41,14 @@ def test_a_relative_out_lands_where_the_user_ran_the_command_not_under_a_workers
 
 
 def test_workers_that_cannot_see_the_out_folder_are_named_before_any_shard_is_sent(
-    cluster_factory, hidden_folder, generated_release: Path, tmp_path: Path
+    shared_hidden_cluster, generated_release: Path, tmp_path: Path
 ) -> None:
     from povagent.errors import ClusterError
 
-    here_only = tmp_path / "here-only"
-    cluster = cluster_factory(workers=1, worker_prefix=hidden_folder(here_only))
-    out = here_only / "out"
+    assert shared_hidden_cluster.hidden is not None
+    out = shared_hidden_cluster.hidden / tmp_path.name / "out"  # where this process writes and the worker sees nothing
     with pytest.raises(ClusterError, match=f"{out}: worker\\(s\\) .* cannot read this folder"):
-        export_training_set(generated_release, out, ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=cluster.address)
+        export_training_set(
+            generated_release, out, ExportOptions(format="hf", conditions=("c",)), check_release=False, cluster=shared_hidden_cluster.address
+        )
     assert not list(out.rglob("*.parquet"))

@@ -12,6 +12,7 @@ load the house pipeline once, not once per test.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 import shutil
@@ -41,11 +42,12 @@ def digests(root: Path) -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
-def one_process_folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The reference: the same houses made in this process, one after the other."""
-    out = tmp_path_factory.mktemp("one_process") / "data"
-    generate_dataset(out, houses=HOUSES, seed=SEED, frames=FRAMES, jobs=1, progress=False)
-    return out
+def one_process_folder(two_houses) -> Path:
+    """The reference: the same houses made in one process, one after the other (the session's
+    ``two_houses``, tests/conftest.py: made once a test run, whichever tests ask first)."""
+    meta = json.loads((two_houses.root / "meta.json").read_text())
+    assert (meta["seed"], meta["generator"]["frames"], meta["counts"]["houses"]) == (SEED, FRAMES, HOUSES), "two_houses' options changed"
+    return two_houses.root
 
 
 @pytest.fixture(scope="module")
@@ -132,12 +134,11 @@ def test_a_worker_killed_mid_house_still_gives_the_same_bytes(shared_dask_cluste
     assert not (out / ".partial").exists()
 
 
-def test_workers_that_cannot_see_the_folder_send_the_houses_back(cluster_factory, hidden_folder, one_house, tmp_path) -> None:
-    here_only = tmp_path / "here_only"
-    cluster = cluster_factory(workers=1, worker_prefix=hidden_folder(here_only))
+def test_workers_that_cannot_see_the_folder_send_the_houses_back(shared_hidden_cluster, one_house, tmp_path) -> None:
+    assert shared_hidden_cluster.hidden is not None
     notices: list[str] = []
-    out = here_only / "data"
-    generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False, cluster=cluster.address, notice=notices.append)
+    out = shared_hidden_cluster.hidden / tmp_path.name / "data"  # where this process writes and the worker sees nothing
+    generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False, cluster=shared_hidden_cluster.address, notice=notices.append)
     assert any(f"0 of 1 workers read and write {out}" in n for n in notices), notices
     assert digests(out) == one_house
 

@@ -52,35 +52,3 @@ def tiny_dataset(tmp_path_factory: pytest.TempPathFactory) -> TinyDataset:
 
     root = made_once(tmp_path_factory, "tiny-generated", make)
     return TinyDataset(root, build_house(SEED, 0))
-
-
-@dataclass
-class CommandOutput:
-    """A dataset ``povagent generate`` wrote, and what the command printed."""
-
-    root: Path
-    output: str
-
-
-@pytest.fixture(scope="session")
-def two_houses(tmp_path_factory: pytest.TempPathFactory) -> CommandOutput:
-    """Two houses (seed 5, two exploration frames: its ``meta.json`` says so) written by the
-    ``generate`` command in this process (``--jobs 1``): the command's own test reads it, the
-    determinism tests compare a worker pool's bytes with it, and the resume tests copy its
-    finished houses. Read only: tests that change it copy it.
-
-    Those test files run in several xdist workers: the set is made once between them, and what
-    the command printed is kept beside it (``command-output.txt``) for the workers that read it."""
-    from shared_sets import made_once
-    from typer.testing import CliRunner
-
-    from povagent.cli import app
-
-    def make(root: Path) -> None:
-        args = ["generate", "--out", str(root), "--houses", "2", "--seed", "5", "--frames", "2", "--jobs", "1"]
-        result = CliRunner().invoke(app, args)
-        assert result.exit_code == 0, result.output
-        (root.parent / "command-output.txt").write_text(result.output)
-
-    root = made_once(tmp_path_factory, "two-houses", make)
-    return CommandOutput(root, (root.parent / "command-output.txt").read_text())

@@ -15,10 +15,10 @@ from povagent.cli import app
 from povagent.errors import DatasetError, GenerationError
 from povagent.generate import PhysicalRulesJudge, generate_dataset
 
-#: The options of the session's ``two_houses`` (tests/generate/conftest.py), whose houses these
-#: tests copy: a mismatch fails ``one_house`` naming the option.
+#: The options of the session's ``two_houses`` (tests/conftest.py), whose houses these tests
+#: copy: a mismatch fails ``one_house`` naming the option.
 SEED = 5
-FRAMES = 2
+FRAMES = 1
 
 
 def files(root: Path) -> dict[str, tuple[bytes, int]]:
@@ -117,43 +117,46 @@ def test_a_half_written_house_is_redone_and_a_complete_one_kept(one_house, tmp_p
     assert json.loads((out / "artifacts/train_house_00001/exploration_log.json").read_text())
 
 
-FAILING_JUDGE = """
+def failing_judge(index: int) -> str:
+    """A plugin module registering the judge ``fails-on-house-INDEX``: it raises on that house."""
+    return f"""
 from povagent import hookimpl
 from povagent.generate import PhysicalRulesJudge
 
-class FailsOnHouseOne(PhysicalRulesJudge):
+class FailsOnOneHouse(PhysicalRulesJudge):
     def judge(self, request):
-        if request.house.house_id == "train_house_00001":
-            raise RuntimeError("this judge cannot judge house 1")
+        if request.house.house_id == "train_house_{index:05d}":
+            raise RuntimeError("this judge cannot judge house {index}")
         return super().judge(request)
 
 @hookimpl
 def register_judges(register):
-    register("fails-on-house-1", FailsOnHouseOne, description="a test judge that raises on house 1")
+    register("fails-on-house-{index}", FailsOnOneHouse, description="a test judge that raises on house {index}")
 """
 
 
 def test_a_failing_house_is_named_while_the_others_finish_and_the_command_ends_non_zero(tmp_path):
     plugin = tmp_path / "failing_judge.py"
-    plugin.write_text(FAILING_JUDGE)
+    plugin.write_text(failing_judge(0))
     out = tmp_path / "data"
-    # in this process (--jobs 1), houses in index order: house 2 is made after house 1 failed.
+    # in this process (--jobs 1), houses in index order: house 1 is made after house 0 failed.
     # The console script's test below fails a house in the worker pool
-    args = ["generate", "--out", str(out), "--houses", "3", "--seed", str(SEED), "--frames", str(FRAMES), "--plugin", str(plugin),
-            "--judge", "fails-on-house-1", "--jobs", "1"]
+    args = ["generate", "--out", str(out), "--houses", "2", "--seed", str(SEED), "--frames", str(FRAMES), "--plugin", str(plugin),
+            "--judge", "fails-on-house-0", "--jobs", "1"]
     result = CliRunner().invoke(app, args)
     assert isinstance(result.exception, GenerationError)
     message = str(result.exception)
-    assert f"1 of 3 houses failed: house 1 (seed {SEED}): RuntimeError: this judge cannot judge house 1" in message
+    assert f"1 of 2 houses failed: house 0 (seed {SEED}): RuntimeError: this judge cannot judge house 0" in message
     assert "run the same command again to redo only the failed ones" in message
-    assert [f.index for f in result.exception.failures] == [1]
-    assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00000", "train_house_00002"]
+    assert [f.index for f in result.exception.failures] == [0]
+    assert sorted(p.name for p in (out / "artifacts").iterdir()) == ["train_house_00001"]
     assert not (out / "meta.json").exists()
 
 
 #: One child runs the console script's ``main`` once per command (one interpreter start and
 #: import rather than one per command), with Dask made uninstallable (``sys.modules`` entries of
-#: None) from its start; after each command it prints ``-- exit CODE --`` on stderr.
+#: None) from its start; after each command it prints ``-- exit CODE --`` on stderr, and after the
+#: last one ``-- loaded [...] --``: which of the house pipeline's libraries the child imported.
 CONSOLE_CHILD = """
 import json, sys
 sys.modules['distributed'] = None; sys.modules['dask'] = None
@@ -166,21 +169,25 @@ for args in json.loads(sys.argv[1]):
     except SystemExit as exc:
         code = exc.code
     print(f'-- exit {code} --', file=sys.stderr, flush=True)
+heavy = ('povagent.generate.house_pipeline', 'povagent.generate.renderer', 'trimesh', 'scipy', 'embreex')
+print('-- loaded ' + json.dumps([m for m in heavy if m in sys.modules]) + ' --', file=sys.stderr, flush=True)
 """
 
 
 @pytest.fixture(scope="module")
-def console_commands(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[str, str, Path]]:
-    """``{name: (exit code, stderr, out folder)}`` of two commands run by :data:`CONSOLE_CHILD`:
-    ``no-dask`` asks for a cluster without Dask installed; ``failing-house`` makes two houses
-    with the default job count, so in a pool of worker processes (on a machine with two cores
-    or more), with a judge that fails house 1. The first goes first: nothing of the second
+def console_commands(two_houses, tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, tuple[str, str, Path]], list[str]]:
+    """(``{name: (exit code, stderr, out folder)}``, the libraries the child loaded) of three
+    commands run by :data:`CONSOLE_CHILD`: ``no-dask`` asks for a cluster without Dask
+    installed; ``validate`` checks the session's ``two_houses``; ``failing-house`` makes two
+    houses with the default job count, so in a pool of worker processes (on a machine with two
+    cores or more), with a judge that fails house 1. The first goes first: nothing of the last
     (its plugin) is loaded when it runs."""
     tmp = tmp_path_factory.mktemp("console")
     plugin = tmp / "failing_judge.py"
-    plugin.write_text(FAILING_JUDGE)
+    plugin.write_text(failing_judge(1))
     commands = {
         "no-dask": ["generate", "--out", str(tmp / "no-dask"), "--houses", "1", "--cluster", "local:2"],
+        "validate": ["validate", str(two_houses.root)],
         "failing-house": ["generate", "--out", str(tmp / "failing-house"), "--houses", "2", "--seed", str(SEED), "--frames", str(FRAMES),
                           "--plugin", str(plugin), "--judge", "fails-on-house-1"],
     }  # fmt: skip
@@ -188,29 +195,44 @@ def console_commands(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tupl
     assert done.returncode == 0, done.stderr[-2000:]
     parts = re.split(r"^-- exit (\S+) --$", done.stderr, flags=re.MULTILINE)
     assert len(parts) == 2 * len(commands) + 1, done.stderr[-2000:]
-    return {name: (parts[2 * i + 1], parts[2 * i], tmp / name) for i, name in enumerate(commands)}
+    loaded = re.search(r"^-- loaded (.*) --$", parts[-1], flags=re.MULTILINE)
+    assert loaded, done.stderr[-2000:]
+    return {name: (parts[2 * i + 1], parts[2 * i], tmp / name) for i, name in enumerate(commands)}, json.loads(loaded.group(1))
 
 
 def test_the_console_script_ends_non_zero_with_one_line_naming_the_failed_house(console_commands):
     """The failure crosses the worker pool's process boundary (see ``console_commands``)."""
-    code, stderr, _ = console_commands["failing-house"]
+    code, stderr, _ = console_commands[0]["failing-house"]
     assert code not in ("0", "None"), stderr
     assert stderr.strip().splitlines()[-1].startswith(f"error: 1 of 2 houses failed: house 1 (seed {SEED})"), stderr[-2000:]
 
 
 def test_a_cluster_without_the_extra_is_one_line_naming_it_and_writes_nothing(console_commands):
-    code, stderr, out = console_commands["no-dask"]
+    code, stderr, out = console_commands[0]["no-dask"]
     assert code == "2", stderr
     assert stderr.strip() == "error: Dask is not installed: --cluster needs the cluster extra, pip install 'povagent[cluster]'"
     assert not out.exists()
+
+
+def test_validating_and_handing_houses_to_a_worker_pool_load_no_renderer(console_commands):
+    """``validate`` reads the house records, and the process that hands houses to a pool writes
+    them and ``meta.json``: neither makes a house, so neither pays for the mesh library, SciPy and
+    Embree (about a second of CPU a process)."""
+    from povagent.generate.dataset import default_jobs
+
+    commands, loaded = console_commands
+    code, stderr, _ = commands["validate"]
+    assert code in ("0", "None"), stderr
+    if default_jobs(2) < 2:
+        pytest.skip("one core: the failing-house command made its houses in its own process")
+    assert loaded == [], f"the child loaded {loaded}"
 
 
 def test_a_staging_folder_recreated_after_another_run_cleared_it_is_never_placed(tmp_path):
     """A stale writer (its client killed) goes on writing after a re-run cleared ``.partial/``:
     its writes recreate the folder (``mkdir(parents=True)``), possibly on the same inode number,
     without the files it wrote first. That half house must not be renamed into place."""
-    from povagent.generate.house_pipeline import HouseSummary
-    from povagent.generate.record import GenerationOptions, clear_partial, house_folder, write_house_atomically
+    from povagent.generate.record import GenerationOptions, HouseSummary, clear_partial, house_folder, write_house_atomically
 
     out = tmp_path / "data"
     options = GenerationOptions(version="test", seed=0, frames=1, with_render=False, judge="physical-rules")

@@ -60,7 +60,9 @@ def main(out: Path) -> None:
     box = AnchorBox(center_xz=(0.0, 0.0), half_xz=(0.5, 0.3), top=0.8)
     # observer at z = -3 looking at the anchor: "behind" is the anchor's far side, +z
     gt = target_point("behind", box, "Sofa", np.zeros(3), np.array([0.0, 1.5, -3.0]), "appropriate", "on the floor", np.zeros(3))
-    result = run_quickstart(out, houses=1, frames=2, jobs=1, quiet=True, say=lambda _: None)
+    # seed 5: its first house has "behind" pairs and is about a third of seed 0's (the
+    # default) to make: this child costs about 4 s of CPU in all, against 6.7 s with seed 0
+    result = run_quickstart(out, houses=1, seed=5, frames=2, jobs=1, quiet=True, say=lambda _: None)
     pairs = [p for f in sorted((result.dataset / "artifacts").glob("*/train_house_*.json")) for p in json.loads(f.read_text())]
     rows = [json.loads(line) for f in sorted(result.sweep.glob("*/results.jsonl")) for line in f.read_text().splitlines() if line]
     page = result.report.read_text(encoding="utf-8")
