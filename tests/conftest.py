@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import gc
 import os
 import shutil
 import sys
@@ -186,20 +185,6 @@ def _checkout_status() -> set[str] | None:
     except (OSError, subprocess.TimeoutExpired):
         return None
     return set(done.stdout.splitlines()) if done.returncode == 0 else None
-
-
-# -- what collection loaded, out of the collector's full passes ---------------------------------
-# Collecting the suite imports povagent, its plugins and what the test modules import at the top
-# (litellm, torch, pydantic's schemas): about a million objects that live as long as the process.
-# Each full pass of Python's cyclic collector walked all of them again, and the tests set off
-# dozens (about 0.4 s of CPU each, a tenth of a worker's test time). Once collection is done
-# they are moved to the permanent generation (what povagent's console processes do with
-# litellm's, engine/llm_import.py): full passes walk only what the tests made since. A test
-# that thaws the heap freezes it again after (tests/run/test_frozen_heap.py); a run started in
-# a test leaves this freeze in place (run/frozen_heap.py: "a freeze of the process's own").
-def pytest_collection_finish(session: pytest.Session) -> None:
-    gc.collect()  # the garbage collection made is freed first: a frozen cycle is never collected
-    gc.freeze()
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:

@@ -197,7 +197,6 @@ def test_a_caller_who_turned_the_collector_off_keeps_it_off():
 
     from povagent.engine.llm_import import collector_paused
 
-    frozen = gc.get_freeze_count() > 0  # the suite's own (tests/conftest.py), kept for the tests after
     gc.disable()
     try:
         with collector_paused(freeze=True):
@@ -210,5 +209,3 @@ def test_a_caller_who_turned_the_collector_off_keeps_it_off():
     finally:
         gc.enable()
         gc.unfreeze()  # this test process's objects go back to the collector's generations
-        if frozen:
-            gc.freeze()

@@ -13,12 +13,9 @@ from povagent.run.runner import run_pipeline
 
 @pytest.fixture(autouse=True)
 def _thawed():
-    frozen = gc.get_freeze_count() > 0  # the suite's own (tests/conftest.py), kept for the tests after
     gc.unfreeze()  # no freeze of an earlier test's
     yield
     gc.unfreeze()
-    if frozen:
-        gc.freeze()
 
 
 def test_a_run_freezes_the_heap_while_its_keys_run_and_thaws_it_after(write_pipeline, offline_plugin, monkeypatch):
