@@ -75,15 +75,17 @@ def session_chromium():
 def browser(session_chromium):
     """The session's chromium, for a module's tests (the annotation page's, the report gallery's):
     ``browser.new_page(...)`` and ``browser.new_context(...)`` open a context of their own. The
-    contexts a module leaves open are closed when it ends, so no state reaches the next module."""
-    from session_browser import OnBrowserThread
+    contexts a module leaves open are closed when it ends, so no state reaches the next module;
+    all but the session's kept page (tests/session_browser.py's ``kept_page``), which each use
+    first takes to a blank page and whose loads are each checked to leave nothing behind."""
+    from session_browser import OnBrowserThread, is_kept
 
     raw = session_chromium.browser
     before = set(session_chromium.call(lambda: raw.contexts))
     try:
         yield OnBrowserThread(raw, session_chromium)
     finally:
-        session_chromium.call(lambda: [c.close() for c in raw.contexts if c not in before])
+        session_chromium.call(lambda: [c.close() for c in raw.contexts if c not in before and not is_kept(c)])
 
 
 @pytest.fixture(scope="session")

@@ -108,3 +108,38 @@ class OnBrowserThread:
 
 def _unwrap(value: Any) -> Any:
     return value._obj if isinstance(value, OnBrowserThread) else value
+
+
+#: The page :func:`kept_page` hands out (``"page"``) and its context (``"context"``, unwrapped).
+_kept: dict[str, Any] = {}
+
+
+def kept_page(browser: OnBrowserThread, viewport: tuple[int, int]) -> OnBrowserThread:
+    """The session's kept page, on ``about:blank`` with its window ``viewport`` (width,
+    height), ready for a load that shares nothing with the one before.
+
+    One page is kept for the session's loads of a report or a gallery, across tests and
+    modules (tests/conftest.py's ``browser`` leaves it open): opening a page costs Chromium
+    about half a second of CPU (a renderer process and a context of their own), a load into a
+    kept page a tenth of that. ``about:blank`` first makes the next load a new document even
+    when its URL differs from the last only after ``#`` (no same-document jump). What such a
+    page shares with the one before is its origin's storage (every load into it is checked to
+    leave none: :data:`KEPT_IN_STORAGE`) and the renderer process; files are read again at
+    each load (one rewritten between two loads of a URL shows its new content)."""
+    page = _kept.get("page")
+    if page is None or page.is_closed():
+        page = _kept["page"] = browser.new_page()
+        _kept["context"] = _unwrap(page.context)
+    page.set_viewport_size({"width": viewport[0], "height": viewport[1]})
+    page.goto("about:blank")
+    return page
+
+
+def is_kept(context: Any) -> bool:
+    """Whether the (unwrapped) browser context is the kept page's (:func:`kept_page`)."""
+    return context is _kept.get("context")
+
+
+#: How many items the loaded page keeps in its origin's storage (0 where storage is refused):
+#: checked after a load into a :func:`kept_page`, so no load can see what an earlier one kept.
+KEPT_IN_STORAGE = "() => { try { return localStorage.length + sessionStorage.length; } catch (e) { return 0; } }"

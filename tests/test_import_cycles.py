@@ -10,6 +10,7 @@ until the function runs. The scan reads the source; it imports nothing.
 from __future__ import annotations
 
 import ast
+import functools
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -61,6 +62,19 @@ def import_edges(modules: dict[str, Path]) -> Edges:
                     line = getattr(node, "lineno", 0)
                     edges[(module, name)] = min(edges.get((module, name), line), line)
     return edges
+
+
+@functools.cache
+def povagent_import_edges() -> tuple[dict[str, Path], Edges]:
+    """The modules of povagent and its plugins by dotted name, and every import between them.
+
+    Read once a process: the scan parses every file (a second or two), and the floors test
+    (``test_import_floors``) asks the same question of the same tree four times. Callers only
+    read what it returns."""
+    files: dict[str, Path] = {}
+    for folder, name in PACKAGES.items():
+        files.update(module_files(ROOT / folder, name))
+    return files, import_edges(files)
 
 
 def import_knots(edges: Edges) -> list[list[str]]:
@@ -167,10 +181,7 @@ def test_the_scan_finds_nothing_in_a_tree_without_cycles(tmp_path):
 
 
 def test_no_module_of_povagent_or_its_plugins_imports_itself_through_others():
-    files: dict[str, Path] = {}
-    for folder, name in PACKAGES.items():
-        files.update(module_files(ROOT / folder, name))
-    edges = import_edges(files)
+    files, edges = povagent_import_edges()
     cycles = [describe(group, edges, files) for group in import_knots(edges)]
     assert cycles == [], (
         f"{len(cycles)} import cycle(s); move what both sides need into a module below them "

@@ -14,9 +14,8 @@ function body, ``TYPE_CHECKING``), as in ``test_import_cycles``; the scan reads 
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
-from test_import_cycles import PACKAGES, ROOT, import_edges, module_files
+from test_import_cycles import ROOT, povagent_import_edges
 
 ARCHITECTURE = ROOT / "docs" / "explanation" / "architecture.md"
 #: At most this many pairs of rooms may import upward (issue 56).
@@ -62,12 +61,10 @@ def documented_arrows(text: str) -> set[Arrow]:
 
 
 def room_imports() -> dict[Arrow, list[str]]:
-    """Every import between two rooms, ``(importer room, imported room) -> ["a -> b", ...]``."""
-    files: dict[str, Path] = {}
-    for folder, name in PACKAGES.items():
-        files.update(module_files(ROOT / folder, name))
+    """Every import between two rooms, ``(importer room, imported room) -> ["a -> b", ...]``
+    (the tree is read once a process, however many tests ask)."""
     found: dict[Arrow, list[str]] = {}
-    for a, b in sorted(import_edges(files)):
+    for a, b in sorted(povagent_import_edges()[1]):
         if room_of(a) != room_of(b):
             found.setdefault((room_of(a), room_of(b)), []).append(f"{a} -> {b}")
     return found

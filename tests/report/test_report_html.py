@@ -2,7 +2,7 @@
 
 Chromium is required (CI installs Debian's ``chromium``): without it these tests fail with
 a message saying so, they do not skip. Every page is opened in the session's one Chromium
-(tests/conftest.py's ``browser``), each load in a fresh context.
+(tests/conftest.py's ``browser``), each load a fresh document in the module's one page.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import re
 import numpy as np
 import pytest
 from PIL import Image
+from session_browser import KEPT_IN_STORAGE, kept_page
 
 from povagent.report.build import write_report
 
@@ -32,21 +33,22 @@ VIEWER_IMAGE_LOADED = "() => document.body.getAttribute('data-viewer-image') ===
 
 
 def rendered(browser, url: str, *, window: tuple[int, int] = WINDOW, until: str | None = SCRIPT_RAN, shot=None) -> str:
-    """The DOM of ``url`` in the session's Chromium (a fresh context: nothing kept from another
-    load) once it loaded (every image, script and answers file the page asked for while loading
-    has arrived or failed, and its events ran) and the JavaScript predicate ``until`` holds;
-    with ``shot``, a screenshot of the ``window`` is written there."""
-    context = browser.new_context(viewport={"width": window[0], "height": window[1]})
-    try:
-        page = context.new_page()
-        page.goto(url, wait_until="load", timeout=90_000)
-        if until is not None:
-            page.wait_for_function(until, timeout=90_000)
-        if shot is not None:
-            page.screenshot(path=str(shot))
-        return page.content()
-    finally:
-        context.close()
+    """The DOM of ``url`` in the session's Chromium once it loaded (every image, script and
+    answers file the page asked for while loading has arrived or failed, and its events ran)
+    and the JavaScript predicate ``until`` holds; with ``shot``, a screenshot of the ``window``
+    is written there.
+
+    Each load is a new document in the module's kept page (tests/session_browser.py's
+    ``kept_page``: nothing kept from another load); that the page left nothing in the
+    browser's storage for the next load is checked here."""
+    page = kept_page(browser, window)
+    page.goto(url, wait_until="load", timeout=90_000)
+    if until is not None:
+        page.wait_for_function(until, timeout=90_000)
+    if shot is not None:
+        page.screenshot(path=str(shot))
+    assert page.evaluate(KEPT_IN_STORAGE) == 0, "the page wrote to the browser's storage: the next load would see it"
+    return page.content()
 
 
 def dump(browser, page, state: str = "", **options) -> str:

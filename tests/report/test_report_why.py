@@ -14,6 +14,7 @@ import re
 from collections import Counter
 
 import pytest
+from session_browser import KEPT_IN_STORAGE, kept_page
 from test_report_html import SCRIPT_RAN, body_attr, cards, dump  # the Chromium helpers
 
 from povagent.config.pipeline import ConfigSource, pipeline_from_source
@@ -139,18 +140,15 @@ def test_relation_success_sits_beside_the_official_l2_per_direction(page, report
 def test_a_link_inside_the_page_filters_the_gallery(report, browser):
     """The section's links change the address's fragment in the page itself: the gallery follows."""
     ego = ego_system(report).replace(" · ", "/")
-    context = browser.new_context(viewport={"width": 1200, "height": 900})
-    try:
-        page = context.new_page()
-        page.goto(report.page.as_uri(), wait_until="load", timeout=90_000)
-        page.wait_for_function(SCRIPT_RAN, timeout=90_000)
-        # the gallery's next render sets data-gallery-page again: cleared first, it says the page followed
-        page.evaluate("state => { document.body.removeAttribute('data-gallery-page'); location.hash = state; }", f"system={ego}&step=correct")
-        page.wait_for_function("() => document.body.hasAttribute('data-gallery-page')", timeout=90_000)
-        shown = int(page.evaluate("() => document.body.getAttribute('data-gallery-shown')"))
-        steps = page.evaluate("() => Array.from(document.querySelectorAll('#gallery .card'), c => c.getAttribute('data-step'))")
-    finally:
-        context.close()
+    page = kept_page(browser, (1200, 900))  # a new document in the module's page (tests/session_browser.py)
+    page.goto(report.page.as_uri(), wait_until="load", timeout=90_000)
+    page.wait_for_function(SCRIPT_RAN, timeout=90_000)
+    # the gallery's next render sets data-gallery-page again: cleared first, it says the page followed
+    page.evaluate("state => { document.body.removeAttribute('data-gallery-page'); location.hash = state; }", f"system={ego}&step=correct")
+    page.wait_for_function("() => document.body.hasAttribute('data-gallery-page')", timeout=90_000)
+    shown = int(page.evaluate("() => document.body.getAttribute('data-gallery-shown')"))
+    steps = page.evaluate("() => Array.from(document.querySelectorAll('#gallery .card'), c => c.getAttribute('data-step'))")
+    assert page.evaluate(KEPT_IN_STORAGE) == 0, "the page wrote to the browser's storage: the next load would see it"
     expected = sum(1 for o in report.analysis.observations if o.system == ego_system(report) and o.fail_step == "correct" and o.run == 0)
     assert expected > 0 and shown == expected and set(steps) == {"correct"}
 

@@ -11,18 +11,31 @@ from pathlib import Path
 
 import pytest
 import yaml
+from session_browser import KEPT_IN_STORAGE, kept_page
 
 from povagent.config.pipeline import load_pipeline
 from povagent.report.build import write_report
 from povagent.run.runner import run_pipeline
 
+#: The page error listener of the last :func:`_open`, and the page it listens to.
+_listening: dict[str, tuple] = {}
+
 
 def _open(browser, page_path: Path, query: str = ""):
-    page = browser.new_page(viewport={"width": 1300, "height": 1000})
+    """The gallery ``page_path`` loaded as a new document into the module's kept page
+    (tests/session_browser.py), and the list its script errors are appended to from now on."""
+    page = kept_page(browser, (1300, 1000))
+    if "last" in _listening:  # the last load's listener no longer counts
+        earlier_page, listener = _listening.pop("last")
+        if not earlier_page.is_closed():
+            earlier_page.remove_listener("pageerror", listener)
     errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    listener = lambda exc: errors.append(str(exc))  # noqa: E731 (the same object is removed later)
+    page.on("pageerror", listener)
+    _listening["last"] = (page, listener)
     page.goto(page_path.as_uri() + query)
     page.wait_for_function("document.body.getAttribute('data-gallery-rendered') !== '0'")
+    assert page.evaluate(KEPT_IN_STORAGE) == 0, "the gallery wrote to the browser's storage: the next load would see it"
     return page, errors
 
 
