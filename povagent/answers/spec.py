@@ -92,7 +92,7 @@ class ParsedAnswer(BaseModel):
     coordinate (kept by the ``official`` parser, as the official runner records it) is written
     to JSON as ``Infinity``/``NaN``, never turned into ``null``, so a stored row reads back as parsed."""
 
-    model_config = ConfigDict(ser_json_inf_nan="constants")
+    model_config = ConfigDict(ser_json_inf_nan="constants", frozen=True)  # parses are shared (plugin_errors: one per repeated reply)
 
     status: ParseStatus
     reason: str = ""

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import pytest
+from pydantic import ValidationError
+
 from povagent.answers.spec import AnswerSpec, ParsedAnswer, ParseStatus
 from povagent.interfaces import Parser, Scorer
 from povagent.results.plugin_errors import error_text, parse_or_unparseable, score_or_error
@@ -63,6 +66,15 @@ def test_a_parser_reading_the_text_alone_reads_a_short_reply_once_per_spec():
         parse_or_unparseable(parser, long_reply, SPEC)
     assert alone.handed == ["B", "B", "B" + " because" * 20, "B" + " because" * 20]  # "B" once per spec; a long reply each time
     assert each_time.handed == ["B"] * 3 + ["B" + " because" * 20] * 2
+
+
+def test_a_parse_shared_by_the_rows_of_a_repeated_reply_cannot_be_changed():
+    parser = CountingParser(reads_text_alone=True)
+    first, again = parse_or_unparseable(parser, "C", SPEC), parse_or_unparseable(parser, "C", SPEC)
+    assert first is again  # one object for both rows: a change to it would reach the other row
+    with pytest.raises(ValidationError):
+        first.choice = "D"  # type: ignore[misc]
+    assert again.choice == "C" and again.model_copy(update={"choice": "D"}).choice == "D"  # a changed parse is a new one
 
 
 def test_a_raising_parser_reading_the_text_alone_raises_and_is_told_each_time():
