@@ -62,24 +62,7 @@ class UsageTotals:
     ) -> UsageTotals:
         """The totals of ``items``; a field no item states is ``unstated_tokens`` (token counts)
         or ``unstated_cost`` (cost)."""
-        items = items if type(items) is list or isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
-        if len(items) == 1:  # a row of one exchange (every single-turn key): the same sums, from 0, in one pass
-            (item,) = items
-            prompt, completion, cost = item.prompt_tokens, item.completion_tokens, item.cost_usd
-            return cls(
-                prompt_tokens=unstated_tokens if prompt is None else 0 + prompt,
-                completion_tokens=unstated_tokens if completion is None else 0 + completion,
-                cost_usd=unstated_cost if cost is None else 0 + cost,
-                retries=0 + int(getattr(item, "retries", 0) or 0),
-            )
-        return cls.summed(
-            (i.prompt_tokens for i in items),
-            (i.completion_tokens for i in items),
-            (i.cost_usd for i in items),
-            (getattr(i, "retries", 0) for i in items),
-            unstated_tokens=unstated_tokens,
-            unstated_cost=unstated_cost,
-        )
+        return cls(*usage_sums(items, unstated_tokens=unstated_tokens, unstated_cost=unstated_cost))
 
     @classmethod
     def summed(
@@ -111,6 +94,32 @@ class UsageTotals:
             cost_usd=_stated_pair(self.cost_usd, item.cost_usd, 0.0),
             retries=0 + int(self.retries or 0) + int(getattr(item, "retries", 0) or 0),
         )
+
+
+def usage_sums(
+    items: Iterable[Spent], *, unstated_tokens: int | None = None, unstated_cost: float | None = None
+) -> tuple[int | None, int | None, float | None, int]:
+    """:meth:`UsageTotals.of`'s ``(prompt_tokens, completion_tokens, cost_usd, retries)``, as a
+    tuple: a caller that only copies the sums (a run's row, every key) makes no object for them."""
+    items = items if type(items) is list or isinstance(items, Sequence) else list(items)  # a sequence's items may be built when read
+    if len(items) == 1:  # a row of one exchange (every single-turn key): the same sums, from 0, in one pass
+        (item,) = items
+        prompt, completion, cost = item.prompt_tokens, item.completion_tokens, item.cost_usd
+        return (
+            unstated_tokens if prompt is None else 0 + prompt,
+            unstated_tokens if completion is None else 0 + completion,
+            unstated_cost if cost is None else 0 + cost,
+            0 + int(getattr(item, "retries", 0) or 0),
+        )
+    totals = UsageTotals.summed(
+        (i.prompt_tokens for i in items),
+        (i.completion_tokens for i in items),
+        (i.cost_usd for i in items),
+        (getattr(i, "retries", 0) for i in items),
+        unstated_tokens=unstated_tokens,
+        unstated_cost=unstated_cost,
+    )
+    return totals.prompt_tokens, totals.completion_tokens, totals.cost_usd, totals.retries
 
 
 def _retries_sum(retries: Iterable[int | None]) -> int:

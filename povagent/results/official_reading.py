@@ -91,8 +91,8 @@ def officially_read(row: Any) -> Any:
         "parser": reading.parser,
         "parse": parse,
         "scores": reading.scores,
-        "status": RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR,
-        "prediction": Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction(),
+        "status": _official_status(parse),
+        "prediction": _official_prediction(parse),
         "official_reading": None,
     }
     if type(row) is not ResultRow:
@@ -110,6 +110,16 @@ def officially_read(row: Any) -> Any:
 _set = object.__setattr__
 
 
+def _official_status(parse: ParsedAnswer) -> RowStatus:
+    """The status of a row as its official parse reads it."""
+    return RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR
+
+
+def _official_prediction(parse: ParsedAnswer) -> Prediction:
+    """The prediction of a row as its official parse reads it: the parse's point and frame index."""
+    return Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if parse.answered else Prediction()
+
+
 class OfficialView:
     """:func:`officially_read` of a row that holds a reading, read without copying the row: the
     fields the reading replaces are its own, every other is the row's (a run's summary reads
@@ -123,7 +133,7 @@ class OfficialView:
     def __init__(self, row: Any, reading: OfficialReading) -> None:
         parse = reading.parse
         self._row, self.parser, self.parse, self.scores = row, reading.parser, parse, reading.scores
-        self.status = RowStatus.ANSWERED if parse.answered else RowStatus.PARSE_ERROR
+        self.status = _official_status(parse)
         # the row's own fields a summary reads, held here: no lookup through __getattr__
         self.key, self.condition, self.direction, self.run = row.key, row.condition, row.direction, row.run
         self.category, self.error_type, self.error_message = row.category, row.error_type, row.error_message
@@ -131,8 +141,7 @@ class OfficialView:
     @property
     def prediction(self) -> Prediction:
         """The official parse's point and frame index (as :func:`officially_read` makes it)."""
-        parse = self.parse
-        return Prediction(selected_image=parse.selected_image, x=parse.x, y=parse.y) if self.status is RowStatus.ANSWERED else Prediction()
+        return _official_prediction(self.parse)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._row, name)

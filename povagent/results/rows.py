@@ -36,6 +36,9 @@ class RowStatus(StrEnum):
     INFRA_ERROR = "infra_error"
 
 
+#: Each status's text, looked up (``status.value`` is a descriptor call: a run reads it for every row).
+STATUS_TEXT = {status: status.value for status in RowStatus}
+
 class ExchangeRecord(BaseModel):
     """One model call of a row (multi-turn strategies have several)."""
 

@@ -57,7 +57,7 @@ from povagent.files.folder_lock import folder_lock
 from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor, secrets_named_by
 from povagent.plugins import PluginHost, get_plugin_host
-from povagent.results.rows import ResultRow, RowStatus, model_label
+from povagent.results.rows import STATUS_TEXT, ResultRow, RowStatus, model_label
 from povagent.results.upgrade import FIELD, SUMMARY_FORMAT
 from povagent.run.components import ComponentNames, answering_model, backend_label, create_components, pipeline_hash
 from povagent.run.frozen_heap import frozen_heap, spaced_collections
@@ -89,8 +89,6 @@ SET_UP_KINDS = frozenset({"missing_key", "client_import"})
 #: journal's committer, a stop signal), and the time after which a chunk ends sooner (a slow
 #: baseline): rows still become durable, and a stop is still heard, as keys finish.
 CHUNK, CHUNK_S = 64, 0.05
-#: Each row status's text, looked up (``status.value`` is a descriptor call a row).
-_STATUS_TEXT = {status: status.value for status in RowStatus}
 
 
 # -- the run -------------------------------------------------------------------------------------
@@ -187,7 +185,7 @@ class PipelineRun:
         """A row is durable: count it, show it, tell the observers."""
         s = self.stats
         s.rows_written += 1
-        status = _STATUS_TEXT.get(row.status) or row.status.value  # (an enum's value is a descriptor call)
+        status = STATUS_TEXT.get(row.status) or row.status.value  # (an enum's value is a descriptor call)
         s.statuses[status] += 1
         self._session_spent.add(row)  # UsageTotals.of((spent, row), unstated 0), in place
         if row.status is RowStatus.INFRA_ERROR:

@@ -23,7 +23,7 @@ from povagent.engine.request_path import RequestPath
 from povagent.engine.retry import InfraFailure
 from povagent.exchange.images import ImageStore
 from povagent.exchange.messages import Request, Response
-from povagent.exchange.usage_totals import UsageTotals
+from povagent.exchange.usage_totals import usage_sums
 from povagent.files.logs import RunLog
 from povagent.files.redaction import Redactor
 from povagent.files.timestamps import utc_now
@@ -196,19 +196,8 @@ class KeySolver:
                 self._strategy_error(asked, scored)
         status = scored.status if isinstance(scored, ScoredAnswer) else RowStatus.INFRA_ERROR
         exchanges = asked.transcript.exchanges
-        prompt_tokens: int | None
-        completion_tokens: int | None
-        cost_usd: float | None
-        if len(exchanges) == 1:  # a single-turn key: UsageTotals.of's sums of one exchange, without the object
-            (only,) = exchanges
-            prompt, completion, cost = only.prompt_tokens, only.completion_tokens, only.cost_usd
-            prompt_tokens = 0 if prompt is None else 0 + prompt
-            completion_tokens = 0 if completion is None else 0 + completion
-            cost_usd = None if cost is None else 0 + cost
-            retries = 0 + int(only.retries or 0)
-        else:
-            spent = UsageTotals.of(exchanges, unstated_tokens=0 if exchanges else None)
-            prompt_tokens, completion_tokens, cost_usd, retries = spent.prompt_tokens, spent.completion_tokens, spent.cost_usd, spent.retries
+        # the sums only, no UsageTotals made a key
+        prompt_tokens, completion_tokens, cost_usd, retries = usage_sums(exchanges, unstated_tokens=0 if exchanges else None)
         return construct(ResultRow,
             format_version=ROW_FORMAT,
             key=asked.key,

@@ -32,7 +32,7 @@ import numpy as np
 
 from povagent.exchange.usage_totals import UsageTotals
 from povagent.results.official_reading import holds_nan, official_view
-from povagent.results.rows import ResultRow, RowStatus
+from povagent.results.rows import STATUS_TEXT, ResultRow, RowStatus
 from povagent.run.row_columns import Column
 from povagent.run.summary_fields import diagnosed_row, plugin_scores, scored_values
 from povagent.scoring.breakdown import Picked, ScoredRow
@@ -46,8 +46,6 @@ _SCORED = ("condition", "direction", "answered", "l2", "gt_in_frame", "l2_strict
 #: How a row's official reading scores it: no reading, as the row itself, or otherwise (kept aside).
 _NO_READING, _AS_SCORED, _OTHERWISE = 0, 1, 2
 _INFRA = RowStatus.INFRA_ERROR.value
-#: Each status's text (``status.value``, read through the enum's descriptor, cost more than the rest of its append).
-_STATUS_TEXT = {status: status.value for status in RowStatus}
 #: Distinct plugin-score tuples a table shares between its rows (past it, each row keeps its own).
 _MAX_SHARED_SCORES = 1024
 #: Distinct rows with no point score a table's read-back rows share (past it, each is its own).
@@ -133,7 +131,7 @@ class SummaryTable:
         # aside and never hands one out again (400 KB held)
         self._pending.extend([
             *scored,
-            _STATUS_TEXT[status],
+            STATUS_TEXT[status],
             None if reading is None else reading.parser,
             state,
             None if success is None else (success or {}).get("success"),
