@@ -18,12 +18,9 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-from PIL import Image
-
 from povagent.errors import DatasetError
 from povagent.generate.dataset import GENERATOR_VERSION
-from povagent.generate.frame_png import encode_frame_png
+from povagent.generate.frame_png import encode_planes_png
 from povagent.generate.house_pipeline import BuiltHouse, build_house
 from povagent.generate.record import ARTIFACTS, RECORD, read_record, record_problem
 from povagent.geometry.camera import Camera
@@ -47,12 +44,9 @@ class ActiveHouse:
         """The PNG bytes of ``camera``'s view, encoded exactly as the writer encodes frames."""
         with self.lock:  # the renderer caches ray grids per size: one render at a time per house
             planes = self.built.renderer.render_planes(camera)
-        # the pixels of ``render(camera).rgb``: Pillow interleaves the planes in one C pass
-        # (numpy's copy into every third byte costs several times more)
-        size = (camera.width, camera.height)
-        image = Image.merge("RGB", [Image.frombuffer("L", size, plane, "raw", "L", 0, 1) for plane in planes])
-        rgb = np.frombuffer(image.tobytes(), dtype=np.uint8).reshape(camera.height, camera.width, 3)
-        return encode_frame_png(rgb)  # the writer's encoder: the bytes of the dataset's PNGs
+        # the pixels of ``render(camera).rgb``, encoded by the writer's encoder: the bytes of the
+        # dataset's PNGs
+        return encode_planes_png(planes, camera.height, camera.width)
 
 
 _CACHE: OrderedDict[tuple[str, str], ActiveHouse] = OrderedDict()

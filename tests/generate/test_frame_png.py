@@ -11,7 +11,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png
+from povagent.generate import frame_png
+from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png, encode_planes_png
+from tests.generate.compiled_paths import each_path
+
+#: every test here runs on the compiled row filters and on numpy's (the same bytes)
+path = pytest.fixture(autouse=True, params=["compiled", "numpy"])(each_path(frame_png))
 
 
 def pillow_png(rgb: np.ndarray, level: int = PNG_COMPRESS_LEVEL) -> bytes:
@@ -69,6 +74,19 @@ def test_the_images_above_make_pillow_choose_every_filter():
 def test_a_frame_too_wide_for_one_pillow_buffer_row_is_cut_into_pillows_idat_chunks():
     rgb = np.random.default_rng(6).integers(0, 256, (3, 20000, 3), dtype=np.uint8)  # 4 * width > 65536
     assert encode_frame_png(rgb) == pillow_png(rgb)
+
+
+@pytest.mark.parametrize("index", range(len(_images())))
+def test_colour_planes_encode_to_the_bytes_of_their_interleaved_frame(index):
+    rgb = _images()[index]
+    height, width = rgb.shape[:2]
+    planes = np.ascontiguousarray(rgb.reshape(-1, 3).T)
+    assert encode_planes_png(planes, height, width) == pillow_png(rgb)
+
+
+def test_planes_of_another_shape_are_refused():
+    with pytest.raises(ValueError, match="colour planes"):
+        encode_planes_png(np.zeros((3, 10), dtype=np.uint8), 3, 4)
 
 
 @pytest.mark.parametrize("level", [0, 6, 9])

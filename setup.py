@@ -1,0 +1,27 @@
+"""The compiled loops of the renderer (C, optional): everything else is in pyproject.toml.
+
+Each extension is one C file beside the Python module whose numpy passes it replaces, with the
+same IEEE operations in the same order, so a frame is the same bytes either way
+(``povagent/generate/compiled_loops.py`` loads them; ``tests/generate/test_compiled_loops.py``
+holds the two paths equal). ``optional=True``: where no C compiler is found the install goes on
+and the numpy path runs, the same bytes, slower.
+
+The flags keep the arithmetic IEEE: no fused multiply-add contraction (``-ffp-contract=off``:
+GCC fuses ``a * b + c`` by default where the CPU has FMA, which rounds once instead of twice)
+and no value-changing optimizations (``-fno-fast-math``).
+"""
+
+from __future__ import annotations
+
+import sys
+
+from setuptools import Extension, setup
+
+#: (module, C source) of each compiled loop, under povagent/generate/.
+COMPILED_LOOPS = (
+    ("povagent.generate._png_rows", "povagent/generate/png_rows.c"),
+)
+
+IEEE_FLAGS = [] if sys.platform == "win32" else ["-O3", "-ffp-contract=off", "-fno-fast-math", "-std=c99"]
+
+setup(ext_modules=[Extension(name, [source], extra_compile_args=IEEE_FLAGS, optional=True) for name, source in COMPILED_LOOPS])
