@@ -29,6 +29,7 @@ shadows, so one engine does both.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,7 @@ except ImportError as _exc:  # embreex ships wheels for x86-64 only
         f"({_exc})"
     ) from _exc
 
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.mesh_parts import (
     CEILING,
@@ -71,6 +73,11 @@ BACKGROUND = np.array([0.55, 0.6, 0.65], dtype=np.float32)
 SHADE_BLOCK = 65536
 #: A face code's bits (``Renderer._face_codes``): its material, then its texture's axes.
 _MATERIAL_BITS, _A_IS_Z, _B_IS_Z = 0x0F, 0x10, 0x20
+#: The compiled shading (``shading.c``: the rays, then every pixel's shading in one loop before
+#: the shadow pass and one after it), or ``None``: the numpy passes below, the same bytes.
+_LOOP = "_shading"
+_COMPILED = compiled_loop(_LOOP)
+_THREAD = threading.local()
 
 
 @dataclass(frozen=True)
@@ -218,6 +225,10 @@ class Renderer:
             # with yaw 0 and horizon 0 the axes are the identity: world rays are camera rays
             self._grids[key] = np.ascontiguousarray(at_origin.ray(pixels).T, dtype=np.float32)
         g, ax = self._grids[key], camera.axes().astype(np.float32)
+        if _COMPILED is not None:
+            out = np.empty_like(g)
+            _COMPILED.directions(g, ax, out)  # the same sums, in one pass per row
+            return out
         # row k = sum_j g[j] * ax[j, k], summed in j order, on whole contiguous rows: several
         # times faster than an einsum over (N, 3), with the same sums (``g.T @ ax`` would hand
         # the product to BLAS, whose threads cost more than they save and may round otherwise)
@@ -271,6 +282,8 @@ class Renderer:
         """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
         d, origin, tri, t64 = self._seen(camera)
         assert t64 is not None
+        if _COMPILED is not None:
+            return tri, t64, self._shade_compiled(tri, t64, d, origin)
         t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
@@ -291,6 +304,20 @@ class Renderer:
         # (an instance mask wants no distances: then they are left uncomputed, None)
         tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True)
         return d, origin, tri, t  # face indices as numpy's gathers want them
+
+    def _shade_compiled(self, tri: np.ndarray, t64: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        """The colour planes (3, N) uint8 of :meth:`_shade_block`, by the compiled loop: every
+        pixel's colours lit and shadowed, then Embree's shadow pass, then the shadowed pixels."""
+        n = len(tri)
+        planes = np.empty((3, n), dtype=np.uint8)
+        s = _scratch(n)
+        faces = (self._normals, self._colors, self._lights, self._face_codes)
+        pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
+        rays = _COMPILED.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
+        if rays:  # one batch: Embree's answer for a ray does not depend on the others
+            occluded = self._shadow_scene.run(s.start, s.toward, dists=s.length, query="OCCLUDED")
+            _COMPILED.apply_shadows(np.ascontiguousarray(occluded, dtype=np.int32), s.probe, s.shadowed, planes)
+        return planes
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """Colours (3, n) of a block of pixels, scaled to 0.5-255 (truncated to bytes after)."""
@@ -436,3 +463,24 @@ class Renderer:
             grout = (x - cx < 0.035) | (z - cz < 0.035)
             out[m] = np.where(grout, 0.72, 0.95 + 0.08 * _hash2(cx, cz))
         return out
+
+
+class _Scratch:
+    """The compiled shading's per-frame buffers for frames of ``n`` pixels, reused frame after
+    frame (fresh frame-sized arrays cost their page faults every time): the shadowed colours,
+    which pixels cast a shadow ray, and the rays."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.shadowed = np.empty((3, n), dtype=np.uint8)
+        self.probe = np.empty(n, dtype=np.uint8)
+        self.start, self.toward = np.empty((n, 3), dtype=np.float32), np.empty((n, 3), dtype=np.float32)
+        self.length = np.empty(n, dtype=np.float32)
+
+
+def _scratch(n: int) -> _Scratch:
+    """This thread's buffers for frames of ``n`` pixels (the last size kept)."""
+    kept: _Scratch | None = getattr(_THREAD, "scratch", None)
+    if kept is None or kept.n != n:
+        kept = _THREAD.scratch = _Scratch(n)
+    return kept
