@@ -19,6 +19,18 @@
 #include <math.h>
 #include <stdint.h>
 
+/* GCC on x86-64 Linux builds the tile functions twice, for AVX2 and for any x86-64, and picks
+ * one at load time: the same IEEE operations either way (no fused multiply-add:
+ * -ffp-contract=off; floor, rint and sqrt are exact), so the same bits. (setup.py's
+ * -fno-math-errno and -fno-trapping-math let it vectorize the loops with square roots and
+ * choices; they change no value.) */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+#ifndef VECTOR_CLONES
+#define VECTOR_CLONES
+#endif
+
 /* povagent/generate/mesh_parts.py's materials and renderer.py's face-code bits (the module's
  * MATERIALS and CODE_BITS, which a test holds equal to the Python ones) */
 enum { PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING, MATERIAL_COUNT };
@@ -35,8 +47,10 @@ static const double SINE_TERMS[8] = {-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0
 static inline float sin32(float x) {
     double r = (double)x;
     r = r - rint(r * INV_TWO_PI) * TWO_PI;
-    if (r > PI / 2) r = PI - r;
-    if (r < -PI / 2) r = -PI - r;
+    double above = PI - r; /* both sides computed, then chosen: no branch, so the loops vectorize */
+    r = r > PI / 2 ? above : r;
+    double below = -PI - r;
+    r = r < -PI / 2 ? below : r;
     double r2 = r * r, total = SINE_TERMS[7];
     for (int k = 6; k >= 0; k--) total = total * r2 + SINE_TERMS[k];
     total *= r2;
@@ -44,14 +58,6 @@ static inline float sin32(float x) {
     total += r;
     return (float)total;
 }
-
-/* renderer._hash2 of float32 cells, ``b_term`` being b * 78.233 as numpy rounds it */
-static inline float hash2_of(float a, float b_term) {
-    float v = a * 12.9898f + b_term;
-    v = sin32(v) * 43758.5453f;
-    return v - floorf(v);
-}
-static inline float hash2(float a, float b) { return hash2_of(a, b * 78.233f); }
 
 /* renderer._power_40 */
 static inline float power_40(float x) {
@@ -63,149 +69,281 @@ static inline float power_40(float x) {
     return x32 * x8;
 }
 
-/* renderer._texture of one pixel */
-static inline float texture(int code, int mat, float px, float py, float pz) {
-    float a = (code & A_IS_Z) ? pz : px, b = (code & B_IS_Z) ? pz : py;
-    switch (mat) {
-    case WOOD:
-        return 0.94f + 0.06f * sin32(a * 30.0f + 2.0f * sin32(b * 5.0f + a * 2.0f));
-    case FABRIC:
-        return 0.93f + 0.07f * hash2(floorf(a * 160.0f), floorf(b * 160.0f));
-    case WALL:
-        return 0.97f + 0.03f * hash2(floorf(a * 90.0f), floorf(b * 90.0f));
-    case FLOOR_WOOD: {
-        float across = px / 0.18f, plank = floorf(across);
-        float tint = 0.84f + 0.22f * hash2(plank, plank * 0.37f + 1.0f);
-        /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
-        float shift = hash2_of(plank, (float)(7.0 * 78.233)) * 1.4f;
-        float along = (pz + shift) / 1.4f;
-        int seam = (across - plank < 0.05f) | (along - floorf(along) < 0.012f);
-        float grain = 0.97f + 0.03f * sin32(pz * 25.0f + 1.5f * sin32(px * 20.0f + plank));
-        return seam ? 0.55f : tint * grain;
-    }
-    case FLOOR_TILE: {
-        float x = px / 0.4f, z = pz / 0.4f, cx = floorf(x), cz = floorf(z);
-        int grout = (x - cx < 0.035f) | (z - cz < 0.035f);
-        return grout ? 0.72f : 0.95f + 0.08f * hash2(cx, cz);
-    }
-    default:
-        return 1.0f;
-    }
+/* renderer._hash2's end: the sine of a cell's value stretched, its fraction */
+static inline float fraction(float sine) {
+    float v = sine * 43758.5453f;
+    return v - floorf(v);
 }
 
-/* a colour channel scaled to 0.5-255 and truncated as numpy's unsafe cast does (NaN: 0) */
-static inline uint8_t to_byte(float v) {
-    v *= 255.0f;
-    v += 0.5f;
-    if (!isnan(v)) v = v < 0.0f ? 0.0f : (v > 255.0f ? 255.0f : v);
-    return isnan(v) ? 0 : (uint8_t)v;
+/* a colour channel scaled to 0.5-255, clipped (NaN stays NaN: neither comparison holds) and
+ * truncated as numpy's unsafe cast does (NaN: 0) */
+static inline int32_t to_byte(float v) {
+    v = v * 255.0f + 0.5f;
+    v = v < 0.0f ? 0.0f : v;
+    v = v > 255.0f ? 255.0f : v;
+    return (int32_t)(v == v ? v : 0.0f);
 }
 
+/* renderer.BACKGROUND's bytes (set when the module loads) */
+static int32_t BACKGROUND_BYTES[3];
+
+/* What the tiles read and write: one frame's pixels and faces (see the top of the file). */
 typedef struct {
-    Py_buffer tri, t, d, origin, normals, colors, lights, codes, planes, shadowed, probe, start, toward, length;
-} ShadeBuffers;
+    const int64_t *tri;
+    const double *t64;
+    const float *d, *normals, *colors, *lights;
+    const uint8_t *codes;
+    float ox, oy, oz;
+    Py_ssize_t n, faces;
+    int shadows;
+    uint8_t *planes, *shadowed, *probe;
+    float *start, *toward, *length;
+} Frame;
+
+/* Pixels shaded together: each step below is a simple loop over a tile's arrays (a few dozen
+ * kilobytes, in the CPU's first cache), so the compiler turns the arithmetic into vector
+ * instructions; the sines of the textures are gathered into one list per round and computed in
+ * one such loop. */
+#define TILE 256
+
+
+/* the sines of a round's list */
+VECTOR_CLONES
+static void sines(const float *restrict x, float *restrict y, int count) {
+    for (int k = 0; k < count; k++) y[k] = sin32(x[k]);
+}
+
+/* Shades pixels first .. first + count - 1 (count <= TILE); returns the shadow rays' count and
+ * adds to *bad the pixels whose face index is past the faces. Each loop keeps to 32-bit values
+ * (the compiler vectorizes no loop that mixes bytes or doubles with floats). */
+VECTOR_CLONES
+static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ssize_t *bad) {
+    const Py_ssize_t n = fr->n, faces = fr->faces;
+    const float *restrict dx = fr->d + first, *restrict dy = dx + n, *restrict dz = dy + n;
+    const float *restrict normals = fr->normals, *restrict colors = fr->colors, *restrict lights = fr->lights;
+    const float ox = fr->ox, oy = fr->oy, oz = fr->oz;
+    float t[TILE], px[TILE], py[TILE], pz[TILE], nx[TILE], ny[TILE], nz[TILE], fill[TILE];
+    float lx[TILE], ly[TILE], lz[TILE], dist[TILE], lambert[TILE], diffuse[TILE], tex[TILE];
+    float across[TILE], plank[TILE];
+    int32_t face[TILE], hit[TILE], code[TILE], mat[TILE], job[TILE];
+    int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
+    float arg[3 * TILE], sine[3 * TILE], arg2[TILE], sine2[TILE];
+    Py_ssize_t wrong = 0;
+
+    /* which face each pixel shows (a miss reads face 0's values, then shows the background) */
+    for (int i = 0; i < count; i++) {
+        int64_t f = fr->tri[first + i];
+        wrong += f >= faces;
+        hit[i] = f >= 0 && f < faces;
+        face[i] = hit[i] ? (int32_t)f : 0;
+    }
+    for (int i = 0; i < count; i++) {
+        code[i] = fr->codes[face[i]];
+        mat[i] = hit[i] ? code[i] & MATERIAL_BITS : PLAIN;
+    }
+    for (int i = 0; i < count; i++) t[i] = (float)fr->t64[first + i];
+    /* the hit point, the face's normal turned to the viewer, the unit vector to the light */
+    for (int i = 0; i < count; i++) {
+        int32_t f = face[i];
+        float x = dx[i] * t[i] + ox, y = dy[i] * t[i] + oy, z = dz[i] * t[i] + oz;
+        px[i] = x;
+        py[i] = y;
+        pz[i] = z;
+        float a = normals[f], b = normals[faces + f], c = normals[2 * faces + f];
+        float facing = a * dx[i] + b * dy[i] + c * dz[i];
+        int away = facing > 0; /* face the viewer */
+        a = away ? -a : a;
+        b = away ? -b : b;
+        c = away ? -c : c;
+        nx[i] = a;
+        ny[i] = b;
+        nz[i] = c;
+        fill[i] = fabsf(facing);
+        float u = lights[f] - x, v = lights[faces + f] - y, w = lights[2 * faces + f] - z;
+        float dist2 = u * u + v * v + w * w, length = sqrtf(dist2);
+        u /= length;
+        v /= length;
+        w /= length;
+        lx[i] = u;
+        ly[i] = v;
+        lz[i] = w;
+        dist[i] = length;
+        float cosine = a * u + b * v + c * w;
+        lambert[i] = cosine;
+        float falloff = dist2 * 0.06f + 1.0f;
+        diffuse[i] = (cosine < 0.0f ? 0.0f : cosine) / falloff; /* np.maximum keeps a NaN */
+    }
+
+    /* the textures: the arguments of their first sines, then those sines in one loop */
+    int jobs = 0;
+    for (int i = 0; i < count; i++) {
+        float a = (code[i] & A_IS_Z) ? pz[i] : px[i], b = (code[i] & B_IS_Z) ? pz[i] : py[i];
+        job[i] = jobs;
+        switch (mat[i]) {
+        case WOOD:
+            arg[jobs++] = b * 5.0f + a * 2.0f;
+            break;
+        case FABRIC:
+            arg[jobs++] = floorf(a * 160.0f) * 12.9898f + floorf(b * 160.0f) * 78.233f;
+            break;
+        case WALL:
+            arg[jobs++] = floorf(a * 90.0f) * 12.9898f + floorf(b * 90.0f) * 78.233f;
+            break;
+        case FLOOR_WOOD: {
+            float over = px[i] / 0.18f, p = floorf(over);
+            across[i] = over;
+            plank[i] = p;
+            arg[jobs++] = p * 12.9898f + (p * 0.37f + 1.0f) * 78.233f;
+            /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
+            arg[jobs++] = p * 12.9898f + (float)(7.0 * 78.233);
+            arg[jobs++] = px[i] * 20.0f + p;
+            break;
+        }
+        case FLOOR_TILE: {
+            float x = px[i] / 0.4f, z = pz[i] / 0.4f, cx = floorf(x), cz = floorf(z);
+            across[i] = (x - cx < 0.035f) | (z - cz < 0.035f); /* grout */
+            arg[jobs++] = cx * 12.9898f + cz * 78.233f;
+            break;
+        }
+        default:
+            break;
+        }
+    }
+    sines(arg, sine, jobs);
+    /* the second sines (wood's grain, the floor planks' grain) */
+    int jobs2 = 0;
+    for (int i = 0; i < count; i++) {
+        if (mat[i] == WOOD) {
+            float a = (code[i] & A_IS_Z) ? pz[i] : px[i];
+            arg2[jobs2++] = a * 30.0f + 2.0f * sine[job[i]];
+        } else if (mat[i] == FLOOR_WOOD) {
+            arg2[jobs2++] = pz[i] * 25.0f + 1.5f * sine[job[i] + 2];
+        }
+    }
+    sines(arg2, sine2, jobs2);
+    jobs2 = 0;
+    for (int i = 0; i < count; i++) {
+        const float *s = sine + job[i];
+        switch (mat[i]) {
+        case WOOD:
+            tex[i] = 0.94f + 0.06f * sine2[jobs2++];
+            break;
+        case FABRIC:
+            tex[i] = 0.93f + 0.07f * fraction(s[0]);
+            break;
+        case WALL:
+            tex[i] = 0.97f + 0.03f * fraction(s[0]);
+            break;
+        case FLOOR_WOOD: {
+            float tint = 0.84f + 0.22f * fraction(s[0]);
+            float shift = fraction(s[1]) * 1.4f;
+            float along = (pz[i] + shift) / 1.4f;
+            int seam = (across[i] - plank[i] < 0.05f) | (along - floorf(along) < 0.012f);
+            float grain = 0.97f + 0.03f * sine2[jobs2++];
+            tex[i] = seam ? 0.55f : tint * grain;
+            break;
+        }
+        case FLOOR_TILE:
+            tex[i] = across[i] != 0.0f ? 0.72f : 0.95f + 0.08f * fraction(s[0]);
+            break;
+        default:
+            tex[i] = 1.0f;
+            break;
+        }
+    }
+
+    /* the colours, lit and shadowed (every choice made by selecting, so the loop vectorizes) */
+    const int shadows = fr->shadows;
+    for (int i = 0; i < count; i++) {
+        int32_t f = face[i];
+        int m = mat[i], shiny = m == METAL || m == GLOSS, lit = m != CEILING && m != EMISSIVE;
+        float hx = lx[i] - dx[i], hy = ly[i] - dy[i], hz = lz[i] - dz[i];
+        float norm = sqrtf(hx * hx + hy * hy + hz * hz);
+        hx /= norm;
+        hy /= norm;
+        hz /= norm;
+        float s = nx[i] * hx + ny[i] * hy + nz[i] * hz;
+        s = s < 0.0f ? 0.0f : s; /* np.clip keeps a NaN */
+        s = s > 1.0f ? 1.0f : s;
+        float spec = power_40(s) * 0.45f;
+        float shade = m == CEILING ? 0.62f + 0.25f * fill[i] : 0.95f + 0.05f * fill[i];
+        shade = lit ? diffuse[i] * 0.85f + 0.30f + 0.22f * fill[i] : shade;
+        float dark = (diffuse[i] * 0.15f) * 0.85f + 0.30f + 0.22f * fill[i]; /* the light blocked */
+        float r = colors[f] * tex[i], g = colors[faces + f] * tex[i], b = colors[2 * faces + f] * tex[i];
+        float cr = r * shade, cg = g * shade, cb = b * shade, sr = r * dark, sg = g * dark, sb = b * dark;
+        lit_bytes[0][i] = hit[i] ? to_byte(shiny ? cr + spec : cr) : BACKGROUND_BYTES[0];
+        lit_bytes[1][i] = hit[i] ? to_byte(shiny ? cg + spec : cg) : BACKGROUND_BYTES[1];
+        lit_bytes[2][i] = hit[i] ? to_byte(shiny ? cb + spec : cb) : BACKGROUND_BYTES[2];
+        dark_bytes[0][i] = to_byte(shiny ? sr + spec : sr);
+        dark_bytes[1][i] = to_byte(shiny ? sg + spec : sg);
+        dark_bytes[2][i] = to_byte(shiny ? sb + spec : sb);
+        cast[i] = shadows && hit[i] && lit && lambert[i] > 0.02f;
+    }
+
+    /* the shadow rays: from just off the surface towards the light, to 5 cm short of it */
+    Py_ssize_t rays = 0;
+    float *restrict start = fr->start + 3 * first, *restrict toward = fr->toward + 3 * first;
+    float *restrict ray_length = fr->length + first;
+    for (int i = 0; i < count; i++) {
+        rays += cast[i];
+        ray_length[i] = cast[i] ? dist[i] - 0.05f : -1.0f;
+        start[3 * i] = nx[i] * 2e-3f + px[i];
+        start[3 * i + 1] = ny[i] * 2e-3f + py[i];
+        start[3 * i + 2] = nz[i] * 2e-3f + pz[i];
+        toward[3 * i] = lx[i];
+        toward[3 * i + 1] = ly[i];
+        toward[3 * i + 2] = lz[i];
+    }
+    for (int k = 0; k < 3; k++) {
+        uint8_t *restrict out = fr->planes + k * n + first, *restrict dark = fr->shadowed + k * n + first;
+        for (int i = 0; i < count; i++) {
+            out[i] = (uint8_t)lit_bytes[k][i];
+            dark[i] = (uint8_t)dark_bytes[k][i];
+        }
+    }
+    uint8_t *restrict probe = fr->probe + first;
+    for (int i = 0; i < count; i++) probe[i] = (uint8_t)cast[i];
+    *bad += wrong;
+    return rays;
+}
 
 static PyObject *shade_lit(PyObject *self, PyObject *args) {
-    ShadeBuffers b;
+    Py_buffer tri, t, d, origin, normals, colors, lights, codes, planes, shadowed, probe, start, toward, length;
     int shadows;
-    memset(&b, 0, sizeof b);
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*pw*w*w*w*w*w*", &b.tri, &b.t, &b.d, &b.origin, &b.normals, &b.colors,
-                          &b.lights, &b.codes, &shadows, &b.planes, &b.shadowed, &b.probe, &b.start, &b.toward, &b.length))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*y*y*pw*w*w*w*w*w*", &tri, &t, &d, &origin, &normals, &colors, &lights, &codes,
+                          &shadows, &planes, &shadowed, &probe, &start, &toward, &length))
         return NULL;
     PyObject *result = NULL;
-    Py_ssize_t n = b.tri.len / 8, faces = b.codes.len;
-    if (b.tri.len != 8 * n || b.t.len != 8 * n || b.d.len != 12 * n || b.origin.len != 12 || b.normals.len != 12 * faces ||
-        b.colors.len != 12 * faces || b.lights.len != 12 * faces || b.planes.len != 3 * n || b.shadowed.len != 3 * n ||
-        b.probe.len != n || b.start.len != 12 * n || b.toward.len != 12 * n || b.length.len != 4 * n) {
+    Py_ssize_t n = tri.len / 8, faces = codes.len;
+    if (tri.len != 8 * n || t.len != 8 * n || d.len != 12 * n || origin.len != 12 || normals.len != 12 * faces ||
+        colors.len != 12 * faces || lights.len != 12 * faces || planes.len != 3 * n || shadowed.len != 3 * n ||
+        probe.len != n || start.len != 12 * n || toward.len != 12 * n || length.len != 4 * n || faces > INT32_MAX) {
         PyErr_SetString(PyExc_ValueError, "shade_lit: the buffers' sizes do not match the pixels' and the faces' counts");
         goto done;
     }
-    const int64_t *tri = b.tri.buf;
-    const double *t64 = b.t.buf;
-    const float *d = b.d.buf, *origin = b.origin.buf, *normals = b.normals.buf, *colors = b.colors.buf, *lights = b.lights.buf;
-    const uint8_t *codes = b.codes.buf;
-    uint8_t *planes = b.planes.buf, *shadowed = b.shadowed.buf, *probe = b.probe.buf;
-    float *start = b.start.buf, *toward = b.toward.buf, *length = b.length.buf;
+    const float *o = origin.buf;
+    Frame fr = {tri.buf, t.buf, d.buf, normals.buf, colors.buf, lights.buf, codes.buf, o[0], o[1], o[2], n, faces,
+                shadows, planes.buf, shadowed.buf, probe.buf, start.buf, toward.buf, length.buf};
     Py_ssize_t rays = 0, bad = 0;
-    Py_BEGIN_ALLOW_THREADS
-    const float ox = origin[0], oy = origin[1], oz = origin[2];
-    const uint8_t bg[3] = {to_byte(0.55f), to_byte(0.6f), to_byte(0.65f)}; /* renderer.BACKGROUND */
-    for (Py_ssize_t i = 0; i < n; i++) {
-        int64_t f = tri[i];
-        probe[i] = 0;
-        length[i] = -1.0f;
-        if (f < 0 || f >= faces) {
-            bad += f >= faces;
-            for (int k = 0; k < 3; k++) {
-                planes[k * n + i] = bg[k];
-                start[3 * i + k] = 0.0f;
-                toward[3 * i + k] = k == 0 ? 1.0f : 0.0f;
-            }
-            continue;
-        }
-        float dx = d[i], dy = d[n + i], dz = d[2 * n + i], t = (float)t64[i];
-        float px = dx * t + ox, py = dy * t + oy, pz = dz * t + oz;
-        float nx = normals[f], ny = normals[faces + f], nz = normals[2 * faces + f];
-        float facing = nx * dx + ny * dy + nz * dz;
-        if (facing > 0) { nx = -nx; ny = -ny; nz = -nz; } /* face the viewer */
-        float fill = fabsf(facing);
-        int code = codes[f], mat = code & MATERIAL_BITS;
-        float tex = texture(code, mat, px, py, pz);
-        float br = colors[f] * tex, bgr = colors[faces + f] * tex, bb = colors[2 * faces + f] * tex;
-        float lx = lights[f] - px, ly = lights[faces + f] - py, lz = lights[2 * faces + f] - pz;
-        float dist2 = lx * lx + ly * ly + lz * lz, dist = sqrtf(dist2);
-        lx /= dist;
-        ly /= dist;
-        lz /= dist;
-        float lambert = nx * lx + ny * ly + nz * lz;
-        float falloff = dist2 * 0.06f + 1.0f;
-        float diffuse = (lambert >= 0.0f || isnan(lambert)) ? lambert : 0.0f; /* np.maximum */
-        diffuse /= falloff;
-        float spec = 0.0f;
-        int shiny = mat == METAL || mat == GLOSS;
-        if (shiny) {
-            float hx = lx - dx, hy = ly - dy, hz = lz - dz;
-            float norm = sqrtf(hx * hx + hy * hy + hz * hz);
-            hx /= norm;
-            hy /= norm;
-            hz /= norm;
-            float s = nx * hx + ny * hy + nz * hz;
-            if (!isnan(s)) s = s < 0.0f ? 0.0f : (s > 1.0f ? 1.0f : s); /* np.clip */
-            spec = power_40(s) * 0.45f;
-        }
-        float shade;
-        if (mat == CEILING) shade = 0.62f + 0.25f * fill;
-        else if (mat == EMISSIVE) shade = 0.95f + 0.05f * fill;
-        else shade = diffuse * 0.85f + 0.30f + 0.22f * fill;
-        float c[3] = {br * shade, bgr * shade, bb * shade};
-        for (int k = 0; k < 3; k++) planes[k * n + i] = to_byte(shiny ? c[k] + spec : c[k]);
-        start[3 * i] = nx * 2e-3f + px;
-        start[3 * i + 1] = ny * 2e-3f + py;
-        start[3 * i + 2] = nz * 2e-3f + pz;
-        toward[3 * i] = lx;
-        toward[3 * i + 1] = ly;
-        toward[3 * i + 2] = lz;
-        if (shadows && lambert > 0.02f && mat != EMISSIVE && mat != CEILING) {
-            probe[i] = 1;
-            length[i] = dist - 0.05f;
-            rays++;
-            float dark = diffuse * 0.15f; /* the light blocked */
-            shade = dark * 0.85f + 0.30f + 0.22f * fill;
-            float s[3] = {br * shade, bgr * shade, bb * shade};
-            for (int k = 0; k < 3; k++) shadowed[k * n + i] = to_byte(shiny ? s[k] + spec : s[k]);
-        }
+    if (faces == 0) {
+        /* no face to gather from: every pixel must be a miss */
+        for (Py_ssize_t i = 0; i < n; i++) bad += ((const int64_t *)tri.buf)[i] >= 0;
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        for (Py_ssize_t first = 0; first < n; first += TILE)
+            rays += shade_tile(&fr, first, (int)(n - first < TILE ? n - first : TILE), &bad);
+        Py_END_ALLOW_THREADS
     }
-    Py_END_ALLOW_THREADS
     if (bad) {
         PyErr_SetString(PyExc_ValueError, "shade_lit: a pixel's face index is past the faces");
         goto done;
     }
     result = PyLong_FromSsize_t(rays);
 done:
-    PyBuffer_Release(&b.tri); PyBuffer_Release(&b.t); PyBuffer_Release(&b.d); PyBuffer_Release(&b.origin);
-    PyBuffer_Release(&b.normals); PyBuffer_Release(&b.colors); PyBuffer_Release(&b.lights); PyBuffer_Release(&b.codes);
-    PyBuffer_Release(&b.planes); PyBuffer_Release(&b.shadowed); PyBuffer_Release(&b.probe); PyBuffer_Release(&b.start);
-    PyBuffer_Release(&b.toward); PyBuffer_Release(&b.length);
+    PyBuffer_Release(&tri); PyBuffer_Release(&t); PyBuffer_Release(&d); PyBuffer_Release(&origin);
+    PyBuffer_Release(&normals); PyBuffer_Release(&colors); PyBuffer_Release(&lights); PyBuffer_Release(&codes);
+    PyBuffer_Release(&planes); PyBuffer_Release(&shadowed); PyBuffer_Release(&probe); PyBuffer_Release(&start);
+    PyBuffer_Release(&toward); PyBuffer_Release(&length);
     return result;
 }
 
@@ -268,6 +406,9 @@ static PyMethodDef methods[] = {
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_shading", "The renderer's shading (compiled loop of renderer.py).", -1, methods};
 
 PyMODINIT_FUNC PyInit__shading(void) {
+    BACKGROUND_BYTES[0] = to_byte(0.55f);
+    BACKGROUND_BYTES[1] = to_byte(0.6f);
+    BACKGROUND_BYTES[2] = to_byte(0.65f);
     PyObject *m = PyModule_Create(&module);
     if (!m) return NULL;
     PyObject *materials = Py_BuildValue("(iiiiiiiiii)", PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING);
