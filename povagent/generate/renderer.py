@@ -311,7 +311,7 @@ class Renderer:
         n = len(tri)
         planes = np.empty((3, n), dtype=np.uint8)
         s = _scratch(n)
-        faces = (self._normals, self._colors, self._lights, self._face_codes)
+        faces = (self._normals, self._colors, self._lights, self._face_codes.astype(np.int32))  # 32-bit: gathered in vectors
         pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
         rays = _COMPILED.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
         if rays:  # one batch: Embree's answer for a ray does not depend on the others

@@ -92,7 +92,7 @@ typedef struct {
     const int64_t *tri;
     const double *t64;
     const float *d, *normals, *colors, *lights;
-    const uint8_t *codes;
+    const int32_t *codes;
     float ox, oy, oz;
     Py_ssize_t n, faces;
     int shadows;
@@ -113,6 +113,30 @@ static void sines(const float *restrict x, float *restrict y, int count) {
     for (int k = 0; k < count; k++) y[k] = sin32(x[k]);
 }
 
+/* renderer._texture's factors from the sines of a tile's pixels (each pixel's choice by its
+ * material: a loop of its own, which the compiler vectorizes where inside shade_tile it did not) */
+VECTOR_CLONES __attribute__((noinline))
+static void blend_textures(int count, const int32_t *restrict mat, const float *restrict sine, const float *restrict shift_sine,
+                           const float *restrict second, const float *restrict pz, const float *restrict across,
+                           const float *restrict plank, const int32_t *restrict grout, float *restrict tex) {
+    for (int i = 0; i < count; i++) {
+        int m = mat[i];
+        float h = fraction(sine[i]);
+        float shift = fraction(shift_sine[i]) * 1.4f;
+        float along = (pz[i] + shift) / 1.4f;
+        int seam = (across[i] - plank[i] < 0.05f) | (along - floorf(along) < 0.012f);
+        float grain = (0.84f + 0.22f * h) * (0.97f + 0.03f * second[i]);
+        float boards = seam ? 0.55f : grain;
+        float tiles = 0.95f + 0.08f * h;
+        tiles = grout[i] ? 0.72f : tiles;
+        float v = m == WOOD ? 0.94f + 0.06f * second[i] : 1.0f;
+        v = m == FABRIC ? 0.93f + 0.07f * h : v;
+        v = m == WALL ? 0.97f + 0.03f * h : v;
+        v = m == FLOOR_WOOD ? boards : v;
+        tex[i] = m == FLOOR_TILE ? tiles : v;
+    }
+}
+
 /* Shades pixels first .. first + count - 1 (count <= TILE); returns the shadow rays' count and
  * adds to *bad the pixels whose face index is past the faces. Each loop keeps to 32-bit values
  * (the compiler vectorizes no loop that mixes bytes or doubles with floats). */
@@ -124,10 +148,10 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     const float ox = fr->ox, oy = fr->oy, oz = fr->oz;
     float t[TILE], px[TILE], py[TILE], pz[TILE], nx[TILE], ny[TILE], nz[TILE], fill[TILE];
     float lx[TILE], ly[TILE], lz[TILE], dist[TILE], lambert[TILE], diffuse[TILE], tex[TILE];
-    float across[TILE], plank[TILE];
-    int32_t face[TILE], hit[TILE], code[TILE], mat[TILE], job[TILE];
+    float across[TILE], plank[TILE], shift_arg[TILE], inner[TILE], along_a[TILE], second[TILE], shift_sine[TILE];
+    float arg[2 * TILE], sine[TILE], later[2 * TILE], last[TILE];
+    int32_t face[TILE], hit[TILE], code[TILE], mat[TILE], grout[TILE], plank_at[TILE], wood_at[TILE];
     int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
-    float arg[3 * TILE], sine[3 * TILE], arg2[TILE], sine2[TILE];
     Py_ssize_t wrong = 0;
 
     /* which face each pixel shows (a miss reads face 0's values, then shows the background) */
@@ -174,83 +198,56 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
         diffuse[i] = (cosine < 0.0f ? 0.0f : cosine) / falloff; /* np.maximum keeps a NaN */
     }
 
-    /* the textures: the arguments of their first sines, then those sines in one loop */
-    int jobs = 0;
+    /* the textures (renderer._texture): every pixel's first sine (a cell's hash for fabric,
+     * walls and tiles, a plank's tint, the wood's inner sine) computed for every pixel and chosen
+     * by material, so the loops vectorize; the floor planks' and the wood's further sines only
+     * for their pixels, gathered into lists */
     for (int i = 0; i < count; i++) {
-        float a = (code[i] & A_IS_Z) ? pz[i] : px[i], b = (code[i] & B_IS_Z) ? pz[i] : py[i];
-        job[i] = jobs;
-        switch (mat[i]) {
-        case WOOD:
-            arg[jobs++] = b * 5.0f + a * 2.0f;
-            break;
-        case FABRIC:
-            arg[jobs++] = floorf(a * 160.0f) * 12.9898f + floorf(b * 160.0f) * 78.233f;
-            break;
-        case WALL:
-            arg[jobs++] = floorf(a * 90.0f) * 12.9898f + floorf(b * 90.0f) * 78.233f;
-            break;
-        case FLOOR_WOOD: {
-            float over = px[i] / 0.18f, p = floorf(over);
-            across[i] = over;
-            plank[i] = p;
-            arg[jobs++] = p * 12.9898f + (p * 0.37f + 1.0f) * 78.233f;
-            /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
-            arg[jobs++] = p * 12.9898f + (float)(7.0 * 78.233);
-            arg[jobs++] = px[i] * 20.0f + p;
-            break;
-        }
-        case FLOOR_TILE: {
-            float x = px[i] / 0.4f, z = pz[i] / 0.4f, cx = floorf(x), cz = floorf(z);
-            across[i] = (x - cx < 0.035f) | (z - cz < 0.035f); /* grout */
-            arg[jobs++] = cx * 12.9898f + cz * 78.233f;
-            break;
-        }
-        default:
-            break;
-        }
+        int m = mat[i], k = code[i];
+        float x = px[i], y = py[i], z = pz[i];
+        float a = (k & A_IS_Z) ? z : x, b = (k & B_IS_Z) ? z : y;
+        float scale = m == FABRIC ? 160.0f : 90.0f;
+        float cell = floorf(a * scale) * 12.9898f + floorf(b * scale) * 78.233f;
+        float over = x / 0.18f, p = floorf(over);
+        across[i] = over;
+        plank[i] = p;
+        float tint = p * 12.9898f + (p * 0.37f + 1.0f) * 78.233f;
+        /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
+        shift_arg[i] = p * 12.9898f + (float)(7.0 * 78.233);
+        inner[i] = x * 20.0f + p;
+        float tx = x / 0.4f, tz = z / 0.4f, cx = floorf(tx), cz = floorf(tz);
+        grout[i] = (tx - cx < 0.035f) | (tz - cz < 0.035f);
+        float tile = cx * 12.9898f + cz * 78.233f, wood = b * 5.0f + a * 2.0f;
+        float first_arg = (m == FABRIC || m == WALL) ? cell : 0.0f;
+        first_arg = m == WOOD ? wood : first_arg;
+        first_arg = m == FLOOR_WOOD ? tint : first_arg;
+        arg[i] = m == FLOOR_TILE ? tile : first_arg;
+        along_a[i] = a;
+        second[i] = 0.0f;
+        shift_sine[i] = 0.0f;
     }
-    sines(arg, sine, jobs);
-    /* the second sines (wood's grain, the floor planks' grain) */
-    int jobs2 = 0;
+    sines(arg, sine, count);
+    int planks = 0, woods = 0;
     for (int i = 0; i < count; i++) {
-        if (mat[i] == WOOD) {
-            float a = (code[i] & A_IS_Z) ? pz[i] : px[i];
-            arg2[jobs2++] = a * 30.0f + 2.0f * sine[job[i]];
-        } else if (mat[i] == FLOOR_WOOD) {
-            arg2[jobs2++] = pz[i] * 25.0f + 1.5f * sine[job[i] + 2];
-        }
+        plank_at[planks] = i; /* written every time, kept only for a plank's pixel */
+        planks += mat[i] == FLOOR_WOOD;
+        wood_at[woods] = i;
+        woods += mat[i] == WOOD;
     }
-    sines(arg2, sine2, jobs2);
-    jobs2 = 0;
-    for (int i = 0; i < count; i++) {
-        const float *s = sine + job[i];
-        switch (mat[i]) {
-        case WOOD:
-            tex[i] = 0.94f + 0.06f * sine2[jobs2++];
-            break;
-        case FABRIC:
-            tex[i] = 0.93f + 0.07f * fraction(s[0]);
-            break;
-        case WALL:
-            tex[i] = 0.97f + 0.03f * fraction(s[0]);
-            break;
-        case FLOOR_WOOD: {
-            float tint = 0.84f + 0.22f * fraction(s[0]);
-            float shift = fraction(s[1]) * 1.4f;
-            float along = (pz[i] + shift) / 1.4f;
-            int seam = (across[i] - plank[i] < 0.05f) | (along - floorf(along) < 0.012f);
-            float grain = 0.97f + 0.03f * sine2[jobs2++];
-            tex[i] = seam ? 0.55f : tint * grain;
-            break;
-        }
-        case FLOOR_TILE:
-            tex[i] = across[i] != 0.0f ? 0.72f : 0.95f + 0.08f * fraction(s[0]);
-            break;
-        default:
-            tex[i] = 1.0f;
-            break;
-        }
+    for (int j = 0; j < planks; j++) {
+        arg[j] = shift_arg[plank_at[j]];
+        arg[planks + j] = inner[plank_at[j]];
     }
+    sines(arg, later, 2 * planks);
+    for (int j = 0; j < woods; j++) arg[j] = along_a[wood_at[j]] * 30.0f + 2.0f * sine[wood_at[j]];
+    for (int j = 0; j < planks; j++) arg[woods + j] = pz[plank_at[j]] * 25.0f + 1.5f * later[planks + j];
+    sines(arg, last, woods + planks);
+    for (int j = 0; j < woods; j++) second[wood_at[j]] = last[j];
+    for (int j = 0; j < planks; j++) {
+        second[plank_at[j]] = last[woods + j];
+        shift_sine[plank_at[j]] = later[j];
+    }
+    blend_textures(count, mat, sine, shift_sine, second, pz, across, plank, grout, tex);
 
     /* the colours, lit and shadowed (every choice made by selecting, so the loop vectorizes) */
     const int shadows = fr->shadows;
@@ -314,9 +311,9 @@ static PyObject *shade_lit(PyObject *self, PyObject *args) {
                           &shadows, &planes, &shadowed, &probe, &start, &toward, &length))
         return NULL;
     PyObject *result = NULL;
-    Py_ssize_t n = tri.len / 8, faces = codes.len;
+    Py_ssize_t n = tri.len / 8, faces = codes.len / 4;
     if (tri.len != 8 * n || t.len != 8 * n || d.len != 12 * n || origin.len != 12 || normals.len != 12 * faces ||
-        colors.len != 12 * faces || lights.len != 12 * faces || planes.len != 3 * n || shadowed.len != 3 * n ||
+        colors.len != 12 * faces || lights.len != 12 * faces || codes.len != 4 * faces || planes.len != 3 * n || shadowed.len != 3 * n ||
         probe.len != n || start.len != 12 * n || toward.len != 12 * n || length.len != 4 * n || faces > INT32_MAX) {
         PyErr_SetString(PyExc_ValueError, "shade_lit: the buffers' sizes do not match the pixels' and the faces' counts");
         goto done;
