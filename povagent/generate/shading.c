@@ -150,7 +150,8 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     float lx[TILE], ly[TILE], lz[TILE], dist[TILE], lambert[TILE], diffuse[TILE], tex[TILE];
     float across[TILE], plank[TILE], shift_arg[TILE], inner[TILE], along_a[TILE], second[TILE], shift_sine[TILE];
     float arg[2 * TILE], sine[TILE], later[2 * TILE], last[TILE];
-    int32_t face[TILE], hit[TILE], code[TILE], mat[TILE], grout[TILE], plank_at[TILE], wood_at[TILE];
+    float highlight[TILE];
+    int32_t face[TILE], hit[TILE], code[TILE], mat[TILE], grout[TILE], plank_at[TILE], wood_at[TILE], shiny_at[TILE];
     int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
     Py_ssize_t wrong = 0;
 
@@ -249,11 +250,15 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     }
     blend_textures(count, mat, sine, shift_sine, second, pz, across, plank, grout, tex);
 
-    /* the colours, lit and shadowed (every choice made by selecting, so the loop vectorizes) */
-    const int shadows = fr->shadows;
+    /* the highlights of metal and gloss, for their pixels only (a list, as for the textures) */
+    int shinies = 0;
     for (int i = 0; i < count; i++) {
-        int32_t f = face[i];
-        int m = mat[i], shiny = m == METAL || m == GLOSS, lit = m != CEILING && m != EMISSIVE;
+        shiny_at[shinies] = i;
+        shinies += mat[i] == METAL || mat[i] == GLOSS;
+        highlight[i] = 0.0f;
+    }
+    for (int j = 0; j < shinies; j++) {
+        int i = shiny_at[j];
         float hx = lx[i] - dx[i], hy = ly[i] - dy[i], hz = lz[i] - dz[i];
         float norm = sqrtf(hx * hx + hy * hy + hz * hz);
         hx /= norm;
@@ -262,7 +267,15 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
         float s = nx[i] * hx + ny[i] * hy + nz[i] * hz;
         s = s < 0.0f ? 0.0f : s; /* np.clip keeps a NaN */
         s = s > 1.0f ? 1.0f : s;
-        float spec = power_40(s) * 0.45f;
+        highlight[i] = power_40(s) * 0.45f;
+    }
+
+    /* the colours, lit and shadowed (every choice made by selecting, so the loop vectorizes) */
+    const int shadows = fr->shadows;
+    for (int i = 0; i < count; i++) {
+        int32_t f = face[i];
+        int m = mat[i], shiny = m == METAL || m == GLOSS, lit = m != CEILING && m != EMISSIVE;
+        float spec = highlight[i];
         float shade = m == CEILING ? 0.62f + 0.25f * fill[i] : 0.95f + 0.05f * fill[i];
         shade = lit ? diffuse[i] * 0.85f + 0.30f + 0.22f * fill[i] : shade;
         float dark = (diffuse[i] * 0.15f) * 0.85f + 0.30f + 0.22f * fill[i]; /* the light blocked */
