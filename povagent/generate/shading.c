@@ -226,14 +226,19 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
         along_a[i] = a;
         second[i] = 0.0f;
         shift_sine[i] = 0.0f;
+        highlight[i] = 0.0f;
     }
     sines(arg, sine, count);
-    int planks = 0, woods = 0;
+    /* the lists of the planks', the wood's and the shiny pixels */
+    int planks = 0, woods = 0, shinies = 0;
     for (int i = 0; i < count; i++) {
+        int m = mat[i];
         plank_at[planks] = i; /* written every time, kept only for a plank's pixel */
-        planks += mat[i] == FLOOR_WOOD;
+        planks += m == FLOOR_WOOD;
         wood_at[woods] = i;
-        woods += mat[i] == WOOD;
+        woods += m == WOOD;
+        shiny_at[shinies] = i;
+        shinies += m == METAL || m == GLOSS;
     }
     for (int j = 0; j < planks; j++) {
         arg[j] = shift_arg[plank_at[j]];
@@ -250,13 +255,7 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     }
     blend_textures(count, mat, sine, shift_sine, second, pz, across, plank, grout, tex);
 
-    /* the highlights of metal and gloss, for their pixels only (a list, as for the textures) */
-    int shinies = 0;
-    for (int i = 0; i < count; i++) {
-        shiny_at[shinies] = i;
-        shinies += mat[i] == METAL || mat[i] == GLOSS;
-        highlight[i] = 0.0f;
-    }
+    /* the highlights of metal and gloss, for their pixels only */
     for (int j = 0; j < shinies; j++) {
         int i = shiny_at[j];
         float hx = lx[i] - dx[i], hy = ly[i] - dy[i], hz = lz[i] - dz[i];
