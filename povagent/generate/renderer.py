@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 
@@ -286,7 +287,7 @@ class Renderer:
         d, origin, tri, t64 = self._seen(camera)
         assert t64 is not None
         if _COMPILED is not None:
-            return tri, t64, self._shade_compiled(tri, t64, d, origin)
+            return tri, t64, self._shade_compiled(_COMPILED, tri, t64, d, origin)
         t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
@@ -308,18 +309,18 @@ class Renderer:
         tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True)
         return d, origin, tri, t  # face indices as numpy's gathers want them
 
-    def _shade_compiled(self, tri: np.ndarray, t64: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
-        """The colour planes (3, N) uint8 of :meth:`_shade_block`, by the compiled loop: every
+    def _shade_compiled(self, loop: ModuleType, tri: np.ndarray, t64: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        """The colour planes (3, N) uint8 of :meth:`_shade_block`, by the compiled ``loop``: every
         pixel's colours lit and shadowed, then Embree's shadow pass, then the shadowed pixels."""
         n = len(tri)
         planes = np.empty((3, n), dtype=np.uint8)
         s = _scratch(n)
         faces = (self._normals, self._colors, self._lights, self._face_codes.astype(np.int32))  # 32-bit: gathered in vectors
         pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
-        rays = _COMPILED.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
+        rays = loop.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
         if rays:  # one batch: Embree's answer for a ray does not depend on the others
             occluded = self._shadow_scene.run(s.start, s.toward, dists=s.length, query="OCCLUDED")
-            _COMPILED.apply_shadows(np.ascontiguousarray(occluded, dtype=np.int32), s.probe, s.shadowed, planes)
+            loop.apply_shadows(np.ascontiguousarray(occluded, dtype=np.int32), s.probe, s.shadowed, planes)
         return planes
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:

@@ -122,7 +122,7 @@ def test_a_face_index_past_the_faces_is_refused(views, monkeypatch):
     tri = tri.copy()
     tri[5] = renderer.face_count
     with pytest.raises(ValueError, match="past the faces"):
-        renderer._shade_compiled(tri, t64, d, origin)
+        renderer._shade_compiled(LOOP, tri, t64, d, origin)
 
 
 def test_buffers_of_the_wrong_sizes_are_refused():
