@@ -24,7 +24,7 @@ from povagent.generate.house_pipeline import build_house
 from povagent.geometry.camera import Camera
 
 LOOP = compiled_loop(renderer_module._LOOP)
-pytestmark = pytest.mark.skipif(LOOP is None, reason="the compiled shading is not built here (test_compiled_loops.py fails where it could be)")
+pytestmark = pytest.mark.skipif(LOOP is None, reason="the compiled shading is not built here, or POVAGENT_PURE_NUMPY is set")
 MATERIALS = ("PLAIN", "WOOD", "FABRIC", "METAL", "GLOSS", "EMISSIVE", "FLOOR_WOOD", "FLOOR_TILE", "WALL", "CEILING")
 #: (seed, index) of the houses whose views are compared (with the session's tiny dataset's house)
 HOUSES = ((0, 0), (1, 0))
