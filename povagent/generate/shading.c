@@ -8,7 +8,7 @@
  *   grid[1] * axes[1, k] + grid[2] * axes[2, k]`` on float32 rows (3, N).
  * shade_lit(tri, t, d, origin, normals, colors, lights, codes, shadows, planes, shadowed, probe,
  *   start, toward, length) -> number of shadow rays: the colour bytes (3, N) of every pixel as if
- *   its light were not blocked (``planes``), the bytes it has if it is (``shadowed``, written
+ *   its light were not blocked (``planes``), the bytes it has if it is (``shadowed``, read
  *   where ``probe`` is 1), and the shadow rays Embree casts between the two calls: from
  *   ``start`` (N, 3) along ``toward`` (N, 3) for ``length`` (-1: no ray).
  * apply_shadows(occluded, probe, shadowed, planes): the bytes of the pixels whose shadow ray
@@ -38,7 +38,7 @@
 
 /* povagent/generate/mesh_parts.py's materials and renderer.py's face-code bits (the module's
  * MATERIALS and CODE_BITS, which a test holds equal to the Python ones) */
-enum { PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING, MATERIAL_COUNT };
+enum { PLAIN, WOOD, FABRIC, METAL, GLOSS, EMISSIVE, FLOOR_WOOD, FLOOR_TILE, WALL, CEILING };
 enum { MATERIAL_BITS = 0x0F, A_IS_Z = 0x10, B_IS_Z = 0x20 };
 
 #define PI 3.141592653589793
@@ -110,7 +110,6 @@ typedef struct {
  * instructions; the sines of the textures are gathered into one list per round and computed in
  * one such loop. */
 #define TILE 256
-
 
 /* the sines of a round's list (a function of its own: its one loop is vectorized alike wherever
  * it is called) */

@@ -82,6 +82,14 @@ def test_a_view_shaded_by_the_compiled_loop_is_numpys_frame(views, monkeypatch, 
     assert np.array_equal(planes, numpy.rgb.reshape(-1, 3).T)
 
 
+def test_a_frame_whose_pixels_fill_no_whole_tile_is_numpys_too(views, monkeypatch):
+    _, renderer, camera = views[0]
+    odd = Camera.from_pose(camera.position, camera.yaw, camera.horizon, camera.fov, width=97, height=61)  # 5917 pixels: 23 tiles and 29
+    compiled, numpy = _both(monkeypatch, lambda: renderer.render(odd))
+    assert np.array_equal(compiled.rgb, numpy.rgb)
+    assert compiled.rgb.shape == (61, 97, 3)
+
+
 def test_without_shadows_the_compiled_loop_gives_numpys_colours(views, monkeypatch):
     _, renderer, camera = views[0]
     monkeypatch.setattr(renderer, "shadows", False)
