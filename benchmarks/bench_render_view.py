@@ -7,7 +7,8 @@ camera, in one process and interleaved camera by camera (the machine is shared),
 (``time.process_time``) and minor page faults of:
 
 * ``primary``: the bare Embree cast of the view's 512x512 primary rays (the renderer's own
-  scene, rays and origin, nothing else);
+  scene, rays and origin, nothing else), asking only for the triangles as the renderer does
+  (``output=0``: no distances, barycentrics or normals filled in);
 * ``shadow``: the Embree occlusion pass of the same view's shadow rays, as the renderer casts
   it (the rays are made beforehand, outside the clock);
 * ``view``: a whole view as the active mode makes it (:meth:`ActiveHouse.render_png`: render,
@@ -142,7 +143,7 @@ def main() -> None:
             origins = np.broadcast_to(np.asarray(camera.position, dtype=np.float32), d.shape)
             # the lambdas are timed within this iteration: they see this camera's values
             contenders = [
-                ("primary", lambda: renderer._scene.run(origins, d, output=1)),  # noqa: B023
+                ("primary", lambda: renderer._scene.run(origins, d, output=0)),  # noqa: B023
                 ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),  # noqa: B023
                 ("view", lambda: house.render_png(camera)),  # noqa: B023
                 ("render", lambda: renderer.render_planes(camera)),  # noqa: B023
