@@ -20,6 +20,7 @@ from setuptools import Extension, setup
 #: (module, C source) of each compiled loop, under povagent/generate/.
 COMPILED_LOOPS = (
     ("povagent.generate._png_rows", "povagent/generate/png_rows.c"),
+    ("povagent.generate._visible_face", "povagent/generate/visible_face.c"),
 )
 
 IEEE_FLAGS = [] if sys.platform == "win32" else ["-O3", "-ffp-contract=off", "-fno-fast-math", "-std=c99"]

@@ -46,6 +46,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.face_groups import (
     CONTAINS_TOLERANCE,
     FaceRows,
@@ -58,6 +59,11 @@ from povagent.generate.face_groups import (
     overlapped_sides,
     unit,
 )
+from povagent.generate.visible_face_loop import LoopTables, decide_pixels, fits, loop_tables
+
+#: The compiled decision of a camera's pixels (``visible_face.c``), or ``None``: numpy's passes.
+_LOOP = "_visible_face"
+_COMPILED = compiled_loop(_LOOP)
 
 #: The 3x3 neighbourhood of a pixel, row then column offsets.
 _NINE_DY, _NINE_DX = np.repeat([-1, 0, 1], 3), np.tile([-1, 0, 1], 3)
@@ -115,6 +121,7 @@ class VisibleFaces:
     near_cells: CellMask | None
     group_box: np.ndarray
     _rows: FaceRows = field(init=False, repr=False, compare=False)
+    _loop_tables: list[LoopTables] = field(init=False, repr=False, compare=False, default_factory=list)  # built on first use
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_rows", FaceRows.of(self))
@@ -275,18 +282,25 @@ class VisibleFaces:
         up with the float64 hit the tests would use, so the same on every CPU) are skipped:
         they would find no edge to test, and the pixels are the same either way."""
         o = np.asarray(origin, dtype=np.float64)
-        d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
-        face = np.maximum(shown, 0)
-        seen = np.where(shown >= 0, np.take(self._rows.outline, face), -1).reshape(height, width)
-        # a pixel is on an outline where one of its 8 neighbours shows another outline value:
-        # each of the four directions compared once, marked on both pixels of a pair
-        edge = np.zeros((height, width), dtype=bool)
-        for here, there in _PAIRS:
-            differs = seen[here] != seen[there]
-            edge[here] |= differs
-            edge[there] |= differs
-        pixels = np.flatnonzero(edge.ravel())
+        if _COMPILED is not None and fits(tri, origin, directions, height, width):
+            if not self._loop_tables:
+                self._loop_tables.append(loop_tables(self, self._rows, CELL, EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE))
+            shown, t, crease_ray, crease_group, pixels = decide_pixels(_COMPILED, self._loop_tables[0], tri, o, directions, height, width, want_distance, skip)
+            # (float32 rows: a product with a float64 is the float64 product, the values exact)
+            d = tuple(directions)
+            seen = np.where(shown >= 0, np.take(self._rows.outline, np.maximum(shown, 0)), -1).reshape(height, width)
+        else:
+            d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
+            shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
+            seen = np.where(shown >= 0, np.take(self._rows.outline, np.maximum(shown, 0)), -1).reshape(height, width)
+            # a pixel is on an outline where one of its 8 neighbours shows another outline value:
+            # each of the four directions compared once, marked on both pixels of a pair
+            edge = np.zeros((height, width), dtype=bool)
+            for here, there in _PAIRS:
+                differs = seen[here] != seen[there]
+                edge[here] |= differs
+                edge[there] |= differs
+            pixels = np.flatnonzero(edge.ravel())
         if not len(pixels) and not len(crease_ray):
             return shown, t
         # candidates: the groups the 3x3 neighbourhood shows (a neighbour beyond the frame's
