@@ -12,7 +12,7 @@
  *   1 / CELL, 1 / EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE); tri: embree's int64 triangle
  *   per pixel (-1: none); origin: (x, y, z); directions: float32 (3, height * width) rows;
  *   shown: int64 out, the face shown per pixel; t: float64 out, its distance (empty unless
- *   want_distance). Returns (crease rays, crease groups, outline pixels) as int64 bytes.
+ *   want_distance), written in place.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -33,6 +33,8 @@ enum Table {
 /* (cell_table.py) keys pack a cell's coordinates, this many values an axis */
 #define CELL_SPAN 2048
 #define HALF_SPAN 1024
+
+typedef struct Memo Memo;
 
 typedef struct {
     const int64_t *group;          /* (F,) each face's group */
@@ -63,8 +65,9 @@ typedef struct {
     double o[3];
     const float *d;
     Py_ssize_t n;
-    double *face_across;  /* (F,) each face's group plane offset from the origin */
+    double *face_plane;   /* (F, 4) each face's group plane normal and offset from the origin */
     double *group_across; /* (G,) */
+    Memo *face_memo, *edge_memo;
 } Faces;
 
 typedef struct {
@@ -84,13 +87,22 @@ static int push(Vec *a, int64_t x) {
     return 0;
 }
 
-/* cell_table.cell then key_of's clip: floor(p * inv) as numpy casts it to int64 on x86 (a value
- * out of int64's range becomes its least, so it clips to the low end) */
+/* floor(q) as an integer, for q in int32's range: the truncation, one less where it rounded up */
+static inline int32_t floor_small(double q) {
+    int32_t v = (int32_t)q;
+    return v - ((double)v > q);
+}
+
+/* cell_table.cell then key_of's clip and shift: floor(p * inv) clipped to [-HALF_SPAN,
+ * HALF_SPAN - 1], plus HALF_SPAN. Clamping the product first changes no clipped cell (floor is
+ * monotonic) and keeps it in int32's range; a product of 2**63 or more becomes the least int64
+ * in numpy's cast (x86), so it clips to the low end */
 static inline int64_t cell_of(double p, double inv) {
-    double c = floor(p * inv);
-    int64_t v = (c >= -9223372036854775808.0 && c < 9223372036854775808.0) ? (int64_t)c : INT64_MIN;
-    if (v < -HALF_SPAN) v = -HALF_SPAN;
-    if (v > HALF_SPAN - 1) v = HALF_SPAN - 1;
+    double q = p * inv;
+    if (!(q < 9223372036854775808.0)) return 0;
+    q = q < -HALF_SPAN - 1.0 ? -HALF_SPAN - 1.0 : (q > HALF_SPAN ? (double)HALF_SPAN : q);
+    int32_t v = floor_small(q);
+    v = v < -HALF_SPAN ? -HALF_SPAN : (v > HALF_SPAN - 1 ? HALF_SPAN - 1 : v);
     return v + HALF_SPAN;
 }
 
@@ -111,14 +123,39 @@ static inline Py_ssize_t find(const int64_t *keys, Py_ssize_t count, int64_t key
     return (lo < count && keys[lo] == key) ? lo : -1;
 }
 
-/* CellMask.covers: whether the point lies in a marked cell (whole numbers in float64, exact) */
+/* the last keys found in a table, by a hash of the key: neighbouring pixels look up the same
+ * few keys (a cell spans many pixels), so most lookups end here instead of in a binary search */
+#define MEMO_BITS 10
+struct Memo {
+    int64_t key[1 << MEMO_BITS];
+    Py_ssize_t at[1 << MEMO_BITS];
+};
+
+static void memo_clear(Memo *m) {
+    for (int k = 0; k < (1 << MEMO_BITS); k++) m->key[k] = -1; /* no key is negative */
+}
+
+static inline Py_ssize_t find_memo(Memo *m, const int64_t *keys, Py_ssize_t count, int64_t key) {
+    size_t slot = (size_t)(((uint64_t)key * 0x9E3779B97F4A7C15u) >> (64 - MEMO_BITS));
+    if (m->key[slot] != key) {
+        m->key[slot] = key;
+        m->at[slot] = find(keys, count, key);
+    }
+    return m->at[slot];
+}
+
+/* CellMask.covers: whether the point lies in a marked cell. numpy works in float64 (whole
+ * numbers, exact): floor, minus the grid's origin, clipped to the grid; clamping the product to
+ * one cell beyond the grid first changes no clipped cell and keeps it in int32's range */
 static inline int covers(const Faces *s, const double p[3]) {
     Py_ssize_t index = 0;
     for (int k = 0; k < 3; k++) {
-        double c = floor(p[k] * s->inv_mask) - s->mask_origin[k];
-        double top = (double)(s->shape[k] - 1);
+        double q = p[k] * s->inv_mask, low = s->mask_origin[k] - 1.0, high = s->mask_origin[k] + (double)s->shape[k];
+        q = q < low ? low : (q > high ? high : q);
+        int32_t c = floor_small(q) - (int32_t)s->mask_origin[k];
+        int32_t top = (int32_t)s->shape[k] - 1;
         c = c < 0 ? 0 : (c > top ? top : c);
-        index = index * s->shape[k] + (Py_ssize_t)c;
+        index = index * s->shape[k] + c;
     }
     return s->marked[index];
 }
@@ -127,11 +164,11 @@ static inline double dir(const Faces *s, int k, Py_ssize_t ray) { return (double
 
 /* VisibleFaces._face_distance: along ray to face f's group plane (inf where parallel) */
 static inline double face_distance(const Faces *s, Py_ssize_t f, Py_ssize_t ray) {
-    Py_ssize_t F = s->faces;
-    double along = s->plane[f] * dir(s, 0, ray);
-    along += s->plane[F + f] * dir(s, 1, ray);
-    along += s->plane[2 * F + f] * dir(s, 2, ray);
-    return along != 0 ? s->face_across[f] / along : INFINITY;
+    const double *plane = s->face_plane + 4 * f;
+    double along = plane[0] * dir(s, 0, ray);
+    along += plane[1] * dir(s, 1, ray);
+    along += plane[2] * dir(s, 2, ray);
+    return along != 0 ? plane[3] / along : INFINITY;
 }
 
 /* VisibleFaces._side: 0 where the ray meets face f against its normal, 1 along it */
@@ -152,7 +189,7 @@ static inline void point_at(const Faces *s, Py_ssize_t ray, double t, double p[3
 static int near_watched(const Faces *s, int64_t g, const double p[3], Py_ssize_t ray, Vec *pair_ray, Vec *pair_group, int *near) {
     *near = 0;
     if (!s->watching[g]) return 0;
-    Py_ssize_t at = find(s->edge_keys, s->edge_key_count, key_of(g, p, s->inv_edge_cell));
+    Py_ssize_t at = find_memo(s->edge_memo, s->edge_keys, s->edge_key_count, key_of(g, p, s->inv_edge_cell));
     if (at < 0) return 0;
     Py_ssize_t E = s->edge_count;
     double m = s->margin;
@@ -232,7 +269,7 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
         int near;
         if (near_watched(s, g, p, i, crease_ray, crease_group, &near)) return -1;
         if (!(s->overlapped[2 * f + side(s, f, i)] || near)) continue;
-        Py_ssize_t at = find(s->face_keys, s->keys, key_of(g, p, s->inv_cell));
+        Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(g, p, s->inv_cell));
         if (at < 0 || !s->mixed[at]) continue;
         int64_t best = highest_holding(s, at, p, i);
         shown[i] = best >= 0 ? best : f;
@@ -240,18 +277,177 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
     return 0;
 }
 
-/* per pixel, what tells it from its neighbours (outline of the face shown, -1: none) */
+/* per pixel, what tells it from its neighbours (the outline value of the face shown, -1: none)
+ * as the pixels' exact tests left them */
 static void outline_of(const Faces *s, const int64_t *shown, int32_t *seen) {
     for (Py_ssize_t i = 0; i < s->n; i++) seen[i] = shown[i] >= 0 ? s->outline[shown[i]] : -1;
 }
 
 /* whether one of the pixel's 8 neighbours in the frame shows another outline value */
-static inline int on_outline(const int32_t *seen, Py_ssize_t y, Py_ssize_t x, Py_ssize_t height, Py_ssize_t width) {
+static inline uint8_t on_outline(const int32_t *seen, Py_ssize_t y, Py_ssize_t x, Py_ssize_t height, Py_ssize_t width) {
     int32_t here = seen[y * width + x];
     for (Py_ssize_t v = y > 0 ? y - 1 : 0; v <= y + 1 && v < height; v++)
         for (Py_ssize_t u = x > 0 ? x - 1 : 0; u <= x + 1 && u < width; u++)
             if (seen[v * width + u] != here) return 1;
     return 0;
+}
+
+/* on_outline for every pixel: the frame's inner pixels in one branchless pass a row (it
+ * vectorizes), the border ones each with its neighbours in the frame */
+static void outline_mask(const int32_t *seen, Py_ssize_t height, Py_ssize_t width, uint8_t *edge) {
+    for (Py_ssize_t y = 0; y < height; y++) {
+        uint8_t *out = edge + y * width;
+        if (y == 0 || y == height - 1 || width < 3) {
+            for (Py_ssize_t x = 0; x < width; x++) out[x] = on_outline(seen, y, x, height, width);
+            continue;
+        }
+        const int32_t *up = seen + (y - 1) * width, *row = up + width, *down = row + width;
+        out[0] = on_outline(seen, y, 0, height, width);
+        for (Py_ssize_t x = 1; x < width - 1; x++) {
+            int32_t c = row[x];
+            out[x] = (uint8_t)((up[x - 1] != c) | (up[x] != c) | (up[x + 1] != c) | (row[x - 1] != c) | (row[x + 1] != c) | (down[x - 1] != c) |
+                               (down[x] != c) | (down[x + 1] != c));
+        }
+        out[width - 1] = on_outline(seen, y, width - 1, height, width);
+    }
+}
+
+/* a (ray, candidate group) pair the ray reaches: its distance and point */
+typedef struct {
+    int64_t group;
+    double dist, p[3];
+} Reach;
+
+typedef struct {
+    Reach *v;
+    size_t n, cap;
+} Reaches;
+
+/* VisibleFaces._reachable for one pair: whether the ray meets group g's plane ahead, at a point
+ * inside the group's box (then pushed) */
+static int reach(const Faces *s, int64_t g, Py_ssize_t ray, Reaches *out) {
+    Py_ssize_t G = s->groups;
+    double along = s->group_normal[g] * dir(s, 0, ray);
+    along += s->group_normal[G + g] * dir(s, 1, ray);
+    along += s->group_normal[2 * G + g] * dir(s, 2, ray);
+    double dist = along != 0 ? s->group_across[g] / along : INFINITY;
+    if (!(isfinite(dist) && dist > 0)) return 0;
+    Reach r = {g, dist, {0, 0, 0}};
+    point_at(s, ray, dist, r.p);
+    for (int k = 0; k < 3; k++)
+        if (!(r.p[k] >= s->box[k * G + g] && r.p[k] <= s->box[(3 + k) * G + g])) return 0;
+    if (out->n == out->cap) {
+        size_t cap = out->cap ? 2 * out->cap : 64;
+        Reach *v = realloc(out->v, cap * sizeof *v);
+        if (!v) return -1;
+        out->v = v;
+        out->cap = cap;
+    }
+    out->v[out->n++] = r;
+    return 0;
+}
+
+static int contains(const int64_t *v, size_t n, int64_t x) {
+    for (size_t k = 0; k < n; k++)
+        if (v[k] == x) return 1;
+    return 0;
+}
+
+/* VisibleFaces.decide_image's candidates for pixel i: the distinct groups its 3x3 neighbourhood
+ * shows (on an outline; a neighbour beyond the border: the border pixel), those across a crease
+ * near its hit, and those across a crease near where its ray meets one of them; it shows the
+ * nearest whose faces hold the ray (a tie: the highest face), tested nearest first
+ * (VisibleFaces._nearest_holding), and is left as it is where none does */
+typedef struct {
+    Vec cand, extra_ray, extra_group;
+    Reaches reached;
+    Vec ray, face, dist; /* the pixels decided, written to the frame once all are (dist: the
+                          * float64's bits) */
+} Scratch;
+
+static int resolve(const Faces *s, Scratch *w, const int64_t *before, int edge, Py_ssize_t i, Py_ssize_t height, Py_ssize_t width,
+                   const int64_t *crease, size_t creases) {
+    w->cand.n = w->extra_ray.n = w->extra_group.n = w->reached.n = 0;
+    if (edge) {
+        Py_ssize_t y = i / width, x = i % width;
+        for (Py_ssize_t dy = -1; dy <= 1; dy++)
+            for (Py_ssize_t dx = -1; dx <= 1; dx++) {
+                Py_ssize_t v = y + dy < 0 ? 0 : (y + dy >= height ? height - 1 : y + dy);
+                Py_ssize_t u = x + dx < 0 ? 0 : (x + dx >= width ? width - 1 : x + dx);
+                int64_t face = before[v * width + u], g = face >= 0 ? s->group[face] : -1;
+                if (g >= 0 && !contains(w->cand.v, w->cand.n, g) && push(&w->cand, g)) return -1;
+            }
+    }
+    for (size_t k = 0; k < creases; k++)
+        if (!contains(w->cand.v, w->cand.n, crease[k]) && push(&w->cand, crease[k])) return -1;
+    for (size_t k = 0; k < w->cand.n; k++)
+        if (reach(s, w->cand.v[k], i, &w->reached)) return -1;
+    /* the groups across a crease near where the ray meets a candidate (a candidate not reached
+     * is not reached either when it comes again) */
+    size_t first = w->reached.n;
+    int near;
+    for (size_t k = 0; k < first; k++)
+        if (near_watched(s, w->reached.v[k].group, w->reached.v[k].p, i, &w->extra_ray, &w->extra_group, &near)) return -1;
+    for (size_t k = 0; k < w->extra_group.n; k++) {
+        int64_t g = w->extra_group.v[k];
+        if (contains(w->cand.v, w->cand.n, g)) continue;
+        if (push(&w->cand, g) || reach(s, g, i, &w->reached)) return -1;
+    }
+    Reach *r = w->reached.v;
+    size_t live = w->reached.n;
+    while (live) {
+        double nearest = r[0].dist;
+        for (size_t k = 1; k < live; k++)
+            if (r[k].dist < nearest) nearest = r[k].dist;
+        int64_t best = -1;
+        for (size_t k = 0; k < live;) {
+            if (r[k].dist != nearest) {
+                k++;
+                continue;
+            }
+            Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(r[k].group, r[k].p, s->inv_cell));
+            if (at >= 0) {
+                int64_t face = highest_holding(s, at, r[k].p, i);
+                if (face > best) best = face;
+            }
+            r[k] = r[--live];
+        }
+        if (best >= 0) {
+            int64_t bits;
+            memcpy(&bits, &nearest, sizeof bits);
+            if (push(&w->ray, i) || push(&w->face, best) || push(&w->dist, bits)) return -1;
+            break;
+        }
+    }
+    return 0;
+}
+
+/* every pixel on an outline or near a crease, resolved among its candidates (the neighbourhoods
+ * read as the pixels' exact tests left them, in ``before``) */
+static int resolve_pixels(const Faces *s, const uint8_t *edge, const int64_t *before, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray,
+                          const Vec *crease_group, int64_t *shown, double *t) {
+    Scratch w;
+    memset(&w, 0, sizeof w);
+    int failed = 0;
+    size_t c = 0;
+    for (Py_ssize_t i = 0; i < s->n && !failed; i++) {
+        if (!edge[i] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
+        size_t from = c;
+        while (c < crease_ray->n && crease_ray->v[c] == i) c++;
+        failed = resolve(s, &w, before, edge[i], i, height, width, crease_group->v + from, c - from);
+    }
+    for (size_t k = 0; k < w.ray.n && !failed; k++) {
+        shown[w.ray.v[k]] = w.face.v[k];
+        if (t) memcpy(&t[w.ray.v[k]], &w.dist.v[k], sizeof(double));
+    }
+    free(w.ray.v);
+    free(w.face.v);
+    free(w.dist.v);
+    free(w.cand.v);
+    free(w.extra_ray.v);
+    free(w.extra_group.v);
+    free(w.reached.v);
+    return failed;
 }
 
 static const char *const TABLE_NAMES[T_COUNT] = {
@@ -303,8 +499,6 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
     return 0;
 }
 
-static PyObject *as_bytes(const Vec *a) { return PyBytes_FromStringAndSize((const char *)a->v, (Py_ssize_t)(a->n * sizeof(int64_t))); }
-
 static PyObject *decide_image(PyObject *self, PyObject *args) {
     PyObject *tables, *numbers;
     Py_buffer tri, directions, shown, t, views[T_COUNT];
@@ -316,8 +510,9 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         return NULL;
     PyObject *result = NULL;
     int tables_read = 0;
-    Vec crease_ray = {0}, crease_group = {0}, pixels = {0};
+    Vec crease_ray = {0}, crease_group = {0};
     int32_t *seen = NULL;
+    uint8_t *edge = NULL;
     if (!PyArg_ParseTuple(numbers, "dddnnnpddddd", &s.mask_origin[0], &s.mask_origin[1], &s.mask_origin[2], &s.shape[0], &s.shape[1], &s.shape[2],
                           &s.has_mask, &s.inv_mask, &s.inv_cell, &s.inv_edge_cell, &s.margin, &s.tolerance))
         goto done;
@@ -331,22 +526,30 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     const int64_t *faces_in = tri.buf;
     for (Py_ssize_t i = 0; i < s.n; i++) {
         if (faces_in[i] >= s.faces) {
-            PyErr_SetString(PyExc_ValueError, "decide_image: a triangle index beyond the mesh's faces");
+            PyErr_SetString(PyExc_IndexError, "decide_image: a triangle index beyond the mesh's faces");
             goto done;
         }
     }
     s.d = directions.buf;
-    s.face_across = malloc((size_t)(s.faces + s.groups + 1) * sizeof(double));
+    s.face_plane = malloc((size_t)(4 * s.faces + s.groups + 1) * sizeof(double));
     seen = malloc((size_t)(s.n + 1) * sizeof(int32_t));
-    if (!s.face_across || !seen) {
+    edge = malloc((size_t)(s.n + 1));
+    s.face_memo = malloc(2 * sizeof(Memo));
+    if (!s.face_plane || !seen || !edge || !s.face_memo) {
         PyErr_NoMemory();
         goto done;
     }
-    s.group_across = s.face_across + s.faces;
-    /* the plane's offset from the one origin, once per face and once per group, as numpy sums it */
+    s.group_across = s.face_plane + 4 * s.faces;
+    s.edge_memo = s.face_memo + 1;
+    memo_clear(s.face_memo);
+    memo_clear(s.edge_memo);
+    /* the plane's offset from the one origin, once per face and once per group, as numpy sums
+     * it; each face's numbers side by side (one cache line, where the pixels gather them) */
     for (Py_ssize_t f = 0; f < s.faces; f++) {
         Py_ssize_t F = s.faces;
-        s.face_across[f] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
+        double *plane = s.face_plane + 4 * f;
+        plane[0] = s.plane[f], plane[1] = s.plane[F + f], plane[2] = s.plane[2 * F + f];
+        plane[3] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
     }
     for (Py_ssize_t g = 0; g < s.groups; g++) {
         Py_ssize_t G = s.groups;
@@ -357,22 +560,23 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     failed = decide_rays(&s, faces_in, want, skip, shown.buf, t.buf, &crease_ray, &crease_group);
     if (!failed) {
         outline_of(&s, shown.buf, seen);
-        for (Py_ssize_t y = 0; y < height && !failed; y++)
-            for (Py_ssize_t x = 0; x < width && !failed; x++)
-                if (on_outline(seen, y, x, height, width)) failed = push(&pixels, y * width + x);
+        outline_mask(seen, height, width, edge);
+        failed = resolve_pixels(&s, edge, shown.buf, height, width, &crease_ray, &crease_group, shown.buf, want ? t.buf : NULL);
     }
     Py_END_ALLOW_THREADS
     if (failed) {
         PyErr_NoMemory();
         goto done;
     }
-    result = Py_BuildValue("(NNN)", as_bytes(&crease_ray), as_bytes(&crease_group), as_bytes(&pixels));
+    result = Py_None;
+    Py_INCREF(result);
 done:
-    free(s.face_across);
+    free(s.face_plane);
+    free(s.face_memo);
     free(seen);
+    free(edge);
     free(crease_ray.v);
     free(crease_group.v);
-    free(pixels.v);
     if (tables_read)
         for (int k = 0; k < T_COUNT; k++) PyBuffer_Release(&views[k]);
     PyBuffer_Release(&tri);

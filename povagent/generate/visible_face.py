@@ -281,26 +281,23 @@ class VisibleFaces:
         ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
         up with the float64 hit the tests would use, so the same on every CPU) are skipped:
         they would find no edge to test, and the pixels are the same either way."""
-        o = np.asarray(origin, dtype=np.float64)
         if _COMPILED is not None and fits(tri, origin, directions, height, width):
             if not self._loop_tables:
                 self._loop_tables.append(loop_tables(self, self._rows, CELL, EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE))
-            shown, t, crease_ray, crease_group, pixels = decide_pixels(_COMPILED, self._loop_tables[0], tri, o, directions, height, width, want_distance, skip)
-            # (float32 rows: a product with a float64 is the float64 product, the values exact)
-            d = tuple(directions)
-            seen = np.where(shown >= 0, np.take(self._rows.outline, np.maximum(shown, 0)), -1).reshape(height, width)
-        else:
-            d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
-            shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
-            seen = np.where(shown >= 0, np.take(self._rows.outline, np.maximum(shown, 0)), -1).reshape(height, width)
-            # a pixel is on an outline where one of its 8 neighbours shows another outline value:
-            # each of the four directions compared once, marked on both pixels of a pair
-            edge = np.zeros((height, width), dtype=bool)
-            for here, there in _PAIRS:
-                differs = seen[here] != seen[there]
-                edge[here] |= differs
-                edge[there] |= differs
-            pixels = np.flatnonzero(edge.ravel())
+            return decide_pixels(_COMPILED, self._loop_tables[0], tri, origin, directions, height, width, want_distance, skip)
+        o = np.asarray(origin, dtype=np.float64)
+        d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
+        shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
+        face = np.maximum(shown, 0)
+        seen = np.where(shown >= 0, np.take(self._rows.outline, face), -1).reshape(height, width)
+        # a pixel is on an outline where one of its 8 neighbours shows another outline value:
+        # each of the four directions compared once, marked on both pixels of a pair
+        edge = np.zeros((height, width), dtype=bool)
+        for here, there in _PAIRS:
+            differs = seen[here] != seen[there]
+            edge[here] |= differs
+            edge[there] |= differs
+        pixels = np.flatnonzero(edge.ravel())
         if not len(pixels) and not len(crease_ray):
             return shown, t
         # candidates: the groups the 3x3 neighbourhood shows (a neighbour beyond the frame's

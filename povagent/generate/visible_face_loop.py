@@ -100,17 +100,14 @@ def fits(tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: in
 
 def decide_pixels(
     loop: ModuleType, tables: LoopTables, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool, skip: bool
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray | None]:
     """The loop's decision for one camera's pixels (:func:`fits`): the face shown and (if
-    wanted) the distance per pixel, the (ray, group) pairs across a crease near the hits and
-    the pixels on an outline."""
+    wanted, else ``None``) its distance, per pixel."""
     count = height * width
     shown = np.empty(count, dtype=np.intp)
     t = np.empty(count if want_distance else 0, dtype=np.float64)
     o = np.asarray(origin, dtype=np.float64).ravel()
     arrays, numbers = tables
     pixel_tri, rays = np.ascontiguousarray(tri, dtype=np.intp), np.ascontiguousarray(directions)
-    at = (float(o[0]), float(o[1]), float(o[2]))
-    crease_ray, crease_group, pixels = loop.decide_image(arrays, numbers, pixel_tri, at, rays, height, width, want_distance, skip, shown, t)
-    ray, group, outline = (np.frombuffer(b, dtype=np.int64) for b in (crease_ray, crease_group, pixels))
-    return shown, t if want_distance else None, ray, group, outline
+    loop.decide_image(arrays, numbers, pixel_tri, (float(o[0]), float(o[1]), float(o[2])), rays, height, width, want_distance, skip, shown, t)
+    return shown, t if want_distance else None
