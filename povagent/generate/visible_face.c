@@ -20,6 +20,9 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 enum Table {
     T_GROUP, T_PLANE, T_OWN, T_OPEN, T_EDGES, T_GROUP_WATCHING, T_OVERLAPPED, T_OVERLAPPED_ANY, T_OUTLINE,
@@ -56,7 +59,7 @@ typedef struct {
     const double *line;            /* (4, E) each watched edge's in-plane line */
     const double *along;           /* (5, E) its direction, extent */
     const int64_t *across;         /* (E, 2) the groups across it, -1: none */
-    const uint8_t *marked;         /* the near cells' grid */
+    const uint8_t *marked;         /* the near cells' grid, 8 cells a byte (the first the lowest bit) */
     Py_ssize_t faces, groups, edge_count, keys, edge_key_count;
     Py_ssize_t shape[3];
     int has_mask;
@@ -65,7 +68,9 @@ typedef struct {
     double o[3];
     const float *d;
     Py_ssize_t n;
-    double *face_plane;   /* (F, 4) each face's group plane normal and offset from the origin */
+    double *face_row;     /* (F, 8) each face's group plane normal, its offset from the origin,
+                           * its own normal (one cache line a face, where the pixels gather) */
+    uint8_t *face_flags;  /* (F,) its group watched (1), overlapped from side 0 (2), side 1 (4) */
     double *group_across; /* (G,) */
     Memo *face_memo, *edge_memo;
 } Faces;
@@ -144,40 +149,60 @@ static inline Py_ssize_t find_memo(Memo *m, const int64_t *keys, Py_ssize_t coun
     return m->at[slot];
 }
 
-/* CellMask.covers: whether the point lies in a marked cell. numpy works in float64 (whole
- * numbers, exact): floor, minus the grid's origin, clipped to the grid; clamping the product to
- * one cell beyond the grid first changes no clipped cell and keeps it in int32's range */
-static inline int covers(const Faces *s, const double p[3]) {
-    Py_ssize_t index = 0;
-    for (int k = 0; k < 3; k++) {
-        double q = p[k] * s->inv_mask, low = s->mask_origin[k] - 1.0, high = s->mask_origin[k] + (double)s->shape[k];
-        q = q < low ? low : (q > high ? high : q);
-        int32_t c = floor_small(q) - (int32_t)s->mask_origin[k];
-        int32_t top = (int32_t)s->shape[k] - 1;
-        c = c < 0 ? 0 : (c > top ? top : c);
-        index = index * s->shape[k] + c;
-    }
-    return s->marked[index];
-}
-
 static inline double dir(const Faces *s, int k, Py_ssize_t ray) { return (double)s->d[k * s->n + ray]; }
 
-/* VisibleFaces._face_distance: along ray to face f's group plane (inf where parallel) */
-static inline double face_distance(const Faces *s, Py_ssize_t f, Py_ssize_t ray) {
-    const double *plane = s->face_plane + 4 * f;
-    double along = plane[0] * dir(s, 0, ray);
-    along += plane[1] * dir(s, 1, ray);
-    along += plane[2] * dir(s, 2, ray);
-    return along != 0 ? plane[3] / along : INFINITY;
-}
+/* the pixels are decided a block at a time */
+#define BLOCK 256
 
-/* VisibleFaces._side: 0 where the ray meets face f against its normal, 1 along it */
-static inline int side(const Faces *s, Py_ssize_t f, Py_ssize_t ray) {
-    Py_ssize_t F = s->faces;
-    double facing = s->own[f] * dir(s, 0, ray);
-    facing += s->own[F + f] * dir(s, 1, ray);
-    facing += s->own[2 * F + f] * dir(s, 2, ray);
-    return facing >= 0;
+/* CellMask.covers for a block of pixels' hits (o + d * at, at: every finite distance, else 0),
+ * ANDed into bit 0 of their flags. numpy works in float64 (whole numbers, exact): floor, minus
+ * the grid's origin, clipped to the grid. Here the product is clamped to one cell beyond the
+ * grid first (that changes no clipped cell, floor being monotonic), then floored in float64:
+ * q + 1.5 * 2**52 rounds it to a whole number (the default rounding, to nearest), the
+ * difference takes that back exactly, one less where it rounded up. One coordinate at a time
+ * over the block, two pixels at once with SSE2 (the same IEEE operations). -1 where a cell is
+ * not in the grid: a NaN direction (numpy's path raises IndexError there too) */
+static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, const double *every, uint8_t *flags) {
+    const double whole = 6755399441055744.0;
+    double at[BLOCK], index[BLOCK + 1];
+    for (Py_ssize_t j = 0; j < count; j++) at[j] = isfinite(every[j]) ? every[j] : 0.0;
+    at[count] = 0.0; /* (a pair's second lane past an odd count) */
+    for (int k = 0; k < 3; k++) {
+        const float *d = s->d + k * s->n + start;
+        double o = s->o[k], inv = s->inv_mask, low = s->mask_origin[k] - 1.0, high = s->mask_origin[k] + (double)s->shape[k];
+        double origin = s->mask_origin[k], top = (double)(s->shape[k] - 1), size = (double)s->shape[k];
+        Py_ssize_t j = 0;
+#ifdef __SSE2__
+        __m128d vo = _mm_set1_pd(o), vinv = _mm_set1_pd(inv), vlow = _mm_set1_pd(low), vhigh = _mm_set1_pd(high), vwhole = _mm_set1_pd(whole);
+        __m128d vorigin = _mm_set1_pd(origin), vtop = _mm_set1_pd(top), vsize = _mm_set1_pd(size), one = _mm_set1_pd(1.0), zero = _mm_setzero_pd();
+        for (; j + 1 < count; j += 2) {
+            __m128d dj = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(d + j))));
+            __m128d q = _mm_mul_pd(_mm_add_pd(vo, _mm_mul_pd(dj, _mm_loadu_pd(at + j))), vinv);
+            q = _mm_min_pd(vhigh, _mm_max_pd(vlow, q)); /* q < low ? low : q, then q > high ? high : q */
+            __m128d t = _mm_sub_pd(_mm_add_pd(q, vwhole), vwhole);
+            __m128d c = _mm_sub_pd(_mm_sub_pd(t, _mm_and_pd(_mm_cmpgt_pd(t, q), one)), vorigin);
+            c = _mm_min_pd(vtop, _mm_max_pd(zero, c));
+            _mm_storeu_pd(index + j, k ? _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(index + j), vsize), c) : c);
+        }
+#endif
+        for (; j < count; j++) {
+            double q = (o + (double)d[j] * at[j]) * inv;
+            q = q < low ? low : q;
+            q = q > high ? high : q;
+            double t = (q + whole) - whole;
+            double c = (t > q ? t - 1.0 : t) - origin;
+            c = c < 0 ? 0 : c;
+            c = c > top ? top : c;
+            index[j] = k ? index[j] * size + c : c;
+        }
+    }
+    double cells = (double)s->shape[0] * (double)s->shape[1] * (double)s->shape[2];
+    for (Py_ssize_t j = 0; j < count; j++) {
+        if (!(index[j] >= 0 && index[j] < cells)) return -1;
+        int32_t i = (int32_t)index[j];
+        flags[j] &= (uint8_t)(0xFE | (s->marked[i >> 3] >> (i & 7)));
+    }
+    return 0;
 }
 
 static inline void point_at(const Faces *s, Py_ssize_t ray, double t, double p[3]) {
@@ -238,78 +263,90 @@ static int64_t highest_holding(const Faces *s, Py_ssize_t at, const double p[3],
     return -1;
 }
 
-/* VisibleFaces._decide for every pixel: the distance to its face's group plane, and where the
- * hit can be decided otherwise (a watched group's hit in a near cell, or a rival overlapping
- * its face from the side met), the exact tests; the crease pairs they find are pushed */
+/* VisibleFaces._decide for every pixel, a block at a time: first for each pixel without a
+ * branch (the CPU overlaps the pixels' divisions) the distance to its face's group plane
+ * (_face_distance: inf where parallel or nothing is hit) and whether its hit can be decided
+ * otherwise (a watched group's hit in a near cell, or a rival overlapping its face from the side
+ * met: _side); then those hits' exact tests. The crease pairs they find are pushed */
+enum { WATCHED = 1, MET = 2, RIVAL = 4, FINITE_HIT = 8 };
+enum { NO_MEMORY = -1, NOT_FINITE = -2 }; /* what stopped the loops */
 static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, int64_t *shown, double *t, Vec *crease_ray, Vec *crease_group) {
     int masked = skip && s->has_mask;
-    for (Py_ssize_t i = 0; i < s->n; i++) {
-        int64_t f = tri[i];
-        shown[i] = f;
-        if (f < 0) {
-            if (want) t[i] = INFINITY;
-            continue;
+    double every[BLOCK];
+    uint8_t flags[BLOCK];
+    for (Py_ssize_t start = 0; start < s->n; start += BLOCK) {
+        Py_ssize_t count = s->n - start < BLOCK ? s->n - start : BLOCK;
+        for (Py_ssize_t j = 0; j < count; j++) {
+            Py_ssize_t i = start + j;
+            int64_t f = tri[i];
+            int hit = f >= 0;
+            int64_t face = hit ? f : 0;
+            const double *row = s->face_row + 8 * face;
+            double d0 = dir(s, 0, i), d1 = dir(s, 1, i), d2 = dir(s, 2, i);
+            double along = row[0] * d0;
+            along += row[1] * d1;
+            along += row[2] * d2;
+            double q = row[3] / along;
+            double e = (hit && along != 0) ? q : INFINITY;
+            double facing = row[4] * d0;
+            facing += row[5] * d1;
+            facing += row[6] * d2;
+            int met = facing >= 0, bits = s->face_flags[face];
+            flags[j] = (uint8_t)((bits & WATCHED) | (met ? MET : 0) | (((bits >> (1 + met)) & 1) ? RIVAL : 0) | (hit && isfinite(e) ? FINITE_HIT : 0));
+            every[j] = e;
+            shown[i] = f;
+            if (want) t[i] = e;
         }
-        double every = 0;
-        int computed = want || masked;
-        if (computed) every = face_distance(s, f, i);
-        if (want) t[i] = every;
-        int examined = s->group_watching[f];
-        double p[3];
-        if (masked && examined) {
-            point_at(s, i, isfinite(every) ? every : 0.0, p);
-            examined = covers(s, p);
+        if (masked && covers_block(s, start, count, every, flags)) return NOT_FINITE;
+        for (Py_ssize_t j = 0; j < count; j++) {
+            int bits = flags[j];
+            if (!((bits & (WATCHED | RIVAL)) && (bits & FINITE_HIT))) continue;
+            Py_ssize_t i = start + j;
+            int64_t f = tri[i], g = s->group[f];
+            double p[3];
+            point_at(s, i, every[j], p);
+            int near;
+            if (near_watched(s, g, p, i, crease_ray, crease_group, &near)) return -1;
+            if (!((bits & RIVAL) || near)) continue;
+            Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(g, p, s->inv_cell));
+            if (at < 0 || !s->mixed[at]) continue;
+            int64_t best = highest_holding(s, at, p, i);
+            shown[i] = best >= 0 ? best : f;
         }
-        if (!examined && s->overlapped_any[f]) examined = s->overlapped[2 * f + side(s, f, i)];
-        if (!examined) continue;
-        if (!computed) every = face_distance(s, f, i);
-        if (!isfinite(every)) continue;
-        point_at(s, i, every, p);
-        int64_t g = s->group[f];
-        int near;
-        if (near_watched(s, g, p, i, crease_ray, crease_group, &near)) return -1;
-        if (!(s->overlapped[2 * f + side(s, f, i)] || near)) continue;
-        Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(g, p, s->inv_cell));
-        if (at < 0 || !s->mixed[at]) continue;
-        int64_t best = highest_holding(s, at, p, i);
-        shown[i] = best >= 0 ? best : f;
     }
     return 0;
 }
 
-/* per pixel, what tells it from its neighbours (the outline value of the face shown, -1: none)
- * as the pixels' exact tests left them */
-static void outline_of(const Faces *s, const int64_t *shown, int32_t *seen) {
-    for (Py_ssize_t i = 0; i < s->n; i++) seen[i] = shown[i] >= 0 ? s->outline[shown[i]] : -1;
+/* a row's outline values: of the face each pixel shows (-1: none), as the exact tests left it */
+static void outline_row(const Faces *s, const int64_t *shown, Py_ssize_t width, int32_t *seen) {
+    for (Py_ssize_t x = 0; x < width; x++) seen[x] = shown[x] >= 0 ? s->outline[shown[x]] : -1;
 }
 
-/* whether one of the pixel's 8 neighbours in the frame shows another outline value */
-static inline uint8_t on_outline(const int32_t *seen, Py_ssize_t y, Py_ssize_t x, Py_ssize_t height, Py_ssize_t width) {
-    int32_t here = seen[y * width + x];
-    for (Py_ssize_t v = y > 0 ? y - 1 : 0; v <= y + 1 && v < height; v++)
+/* whether one of pixel x's 8 neighbours in the frame (the rows above and below: NULL beyond the
+ * frame) shows another outline value */
+static inline uint8_t differs_around(const int32_t *up, const int32_t *row, const int32_t *down, Py_ssize_t x, Py_ssize_t width) {
+    const int32_t *rows[3] = {up, row, down};
+    for (int r = 0; r < 3; r++) {
+        if (!rows[r]) continue;
         for (Py_ssize_t u = x > 0 ? x - 1 : 0; u <= x + 1 && u < width; u++)
-            if (seen[v * width + u] != here) return 1;
+            if (rows[r][u] != row[x]) return 1;
+    }
     return 0;
 }
 
-/* on_outline for every pixel: the frame's inner pixels in one branchless pass a row (it
- * vectorizes), the border ones each with its neighbours in the frame */
-static void outline_mask(const int32_t *seen, Py_ssize_t height, Py_ssize_t width, uint8_t *edge) {
-    for (Py_ssize_t y = 0; y < height; y++) {
-        uint8_t *out = edge + y * width;
-        if (y == 0 || y == height - 1 || width < 3) {
-            for (Py_ssize_t x = 0; x < width; x++) out[x] = on_outline(seen, y, x, height, width);
-            continue;
-        }
-        const int32_t *up = seen + (y - 1) * width, *row = up + width, *down = row + width;
-        out[0] = on_outline(seen, y, 0, height, width);
-        for (Py_ssize_t x = 1; x < width - 1; x++) {
-            int32_t c = row[x];
-            out[x] = (uint8_t)((up[x - 1] != c) | (up[x] != c) | (up[x + 1] != c) | (row[x - 1] != c) | (row[x + 1] != c) | (down[x - 1] != c) |
-                               (down[x] != c) | (down[x + 1] != c));
-        }
-        out[width - 1] = on_outline(seen, y, width - 1, height, width);
+/* differs_around for a row: its inner pixels in one branchless pass (it vectorizes) */
+static void outline_edges(const int32_t *up, const int32_t *row, const int32_t *down, Py_ssize_t width, uint8_t *edge) {
+    if (!up || !down || width < 3) {
+        for (Py_ssize_t x = 0; x < width; x++) edge[x] = differs_around(up, row, down, x, width);
+        return;
     }
+    edge[0] = differs_around(up, row, down, 0, width);
+    for (Py_ssize_t x = 1; x < width - 1; x++) {
+        int32_t c = row[x];
+        edge[x] = (uint8_t)((up[x - 1] != c) | (up[x] != c) | (up[x + 1] != c) | (row[x - 1] != c) | (row[x + 1] != c) | (down[x - 1] != c) |
+                            (down[x] != c) | (down[x + 1] != c));
+    }
+    edge[width - 1] = differs_around(up, row, down, width - 1, width);
 }
 
 /* a (ray, candidate group) pair the ray reaches: its distance and point */
@@ -422,24 +459,35 @@ static int resolve(const Faces *s, Scratch *w, const int64_t *before, int edge, 
     return 0;
 }
 
-/* every pixel on an outline or near a crease, resolved among its candidates (the neighbourhoods
- * read as the pixels' exact tests left them, in ``before``) */
-static int resolve_pixels(const Faces *s, const uint8_t *edge, const int64_t *before, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray,
-                          const Vec *crease_group, int64_t *shown, double *t) {
+/* every pixel on an outline or near a crease, resolved among its candidates, a row at a time
+ * (three rows of outline values kept); the neighbourhoods are read as the exact tests left
+ * them: the pixels resolved are written once all are */
+static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray, const Vec *crease_group, int64_t *shown, double *t) {
     Scratch w;
     memset(&w, 0, sizeof w);
-    int failed = 0;
+    int32_t *seen = malloc((size_t)(3 * width + 1) * sizeof(int32_t));
+    uint8_t *edge = malloc((size_t)width + 1);
+    int failed = !seen || !edge;
     size_t c = 0;
-    for (Py_ssize_t i = 0; i < s->n && !failed; i++) {
-        if (!edge[i] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
-        size_t from = c;
-        while (c < crease_ray->n && crease_ray->v[c] == i) c++;
-        failed = resolve(s, &w, before, edge[i], i, height, width, crease_group->v + from, c - from);
+    if (!failed && height > 0) outline_row(s, shown, width, seen);
+    for (Py_ssize_t y = 0; y < height && !failed; y++) {
+        if (y + 1 < height) outline_row(s, shown + (y + 1) * width, width, seen + ((y + 1) % 3) * width);
+        const int32_t *up = y > 0 ? seen + ((y - 1) % 3) * width : NULL, *down = y + 1 < height ? seen + ((y + 1) % 3) * width : NULL;
+        outline_edges(up, seen + (y % 3) * width, down, width, edge);
+        for (Py_ssize_t x = 0; x < width && !failed; x++) {
+            Py_ssize_t i = y * width + x;
+            if (!edge[x] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
+            size_t from = c;
+            while (c < crease_ray->n && crease_ray->v[c] == i) c++;
+            failed = resolve(s, &w, shown, edge[x], i, height, width, crease_group->v + from, c - from);
+        }
     }
     for (size_t k = 0; k < w.ray.n && !failed; k++) {
         shown[w.ray.v[k]] = w.face.v[k];
         if (t) memcpy(&t[w.ray.v[k]], &w.dist.v[k], sizeof(double));
     }
+    free(seen);
+    free(edge);
     free(w.ray.v);
     free(w.face.v);
     free(w.dist.v);
@@ -476,7 +524,7 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
         8 * K, 8 * (K + 1), -1, K,
         8 * W, 8 * (W + 1), -1,
         32 * E, 40 * E, 16 * E,
-        s->has_mask ? s->shape[0] * s->shape[1] * s->shape[2] : -1,
+        s->has_mask ? (s->shape[0] * s->shape[1] * s->shape[2] + 7) / 8 : -1,
     };
 #undef LEN
     for (int k = 0; k < T_COUNT; k++) {
@@ -511,8 +559,6 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     PyObject *result = NULL;
     int tables_read = 0;
     Vec crease_ray = {0}, crease_group = {0};
-    int32_t *seen = NULL;
-    uint8_t *edge = NULL;
     if (!PyArg_ParseTuple(numbers, "dddnnnpddddd", &s.mask_origin[0], &s.mask_origin[1], &s.mask_origin[2], &s.shape[0], &s.shape[1], &s.shape[2],
                           &s.has_mask, &s.inv_mask, &s.inv_cell, &s.inv_edge_cell, &s.margin, &s.tolerance))
         goto done;
@@ -531,15 +577,14 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         }
     }
     s.d = directions.buf;
-    s.face_plane = malloc((size_t)(4 * s.faces + s.groups + 1) * sizeof(double));
-    seen = malloc((size_t)(s.n + 1) * sizeof(int32_t));
-    edge = malloc((size_t)(s.n + 1));
+    s.face_row = malloc((size_t)(8 * s.faces + s.groups + 1) * sizeof(double));
+    s.face_flags = malloc((size_t)s.faces + 1);
     s.face_memo = malloc(2 * sizeof(Memo));
-    if (!s.face_plane || !seen || !edge || !s.face_memo) {
+    if (!s.face_row || !s.face_flags || !s.face_memo) {
         PyErr_NoMemory();
         goto done;
     }
-    s.group_across = s.face_plane + 4 * s.faces;
+    s.group_across = s.face_row + 8 * s.faces;
     s.edge_memo = s.face_memo + 1;
     memo_clear(s.face_memo);
     memo_clear(s.edge_memo);
@@ -547,9 +592,11 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
      * it; each face's numbers side by side (one cache line, where the pixels gather them) */
     for (Py_ssize_t f = 0; f < s.faces; f++) {
         Py_ssize_t F = s.faces;
-        double *plane = s.face_plane + 4 * f;
-        plane[0] = s.plane[f], plane[1] = s.plane[F + f], plane[2] = s.plane[2 * F + f];
-        plane[3] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
+        double *row = s.face_row + 8 * f;
+        row[0] = s.plane[f], row[1] = s.plane[F + f], row[2] = s.plane[2 * F + f];
+        row[3] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
+        row[4] = s.own[f], row[5] = s.own[F + f], row[6] = s.own[2 * F + f], row[7] = 0;
+        s.face_flags[f] = (uint8_t)((s.group_watching[f] ? 1 : 0) | (s.overlapped[2 * f] ? 2 : 0) | (s.overlapped[2 * f + 1] ? 4 : 0));
     }
     for (Py_ssize_t g = 0; g < s.groups; g++) {
         Py_ssize_t G = s.groups;
@@ -558,12 +605,12 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     int failed = 0;
     Py_BEGIN_ALLOW_THREADS
     failed = decide_rays(&s, faces_in, want, skip, shown.buf, t.buf, &crease_ray, &crease_group);
-    if (!failed) {
-        outline_of(&s, shown.buf, seen);
-        outline_mask(seen, height, width, edge);
-        failed = resolve_pixels(&s, edge, shown.buf, height, width, &crease_ray, &crease_group, shown.buf, want ? t.buf : NULL);
-    }
+    if (!failed) failed = resolve_pixels(&s, height, width, &crease_ray, &crease_group, shown.buf, want ? t.buf : NULL);
     Py_END_ALLOW_THREADS
+    if (failed == NOT_FINITE) {
+        PyErr_SetString(PyExc_IndexError, "decide_image: a ray's hit lies in no cell (a direction is not finite)");
+        goto done;
+    }
     if (failed) {
         PyErr_NoMemory();
         goto done;
@@ -571,10 +618,9 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     result = Py_None;
     Py_INCREF(result);
 done:
-    free(s.face_plane);
+    free(s.face_row);
+    free(s.face_flags);
     free(s.face_memo);
-    free(seen);
-    free(edge);
     free(crease_ray.v);
     free(crease_group.v);
     if (tables_read)

@@ -126,6 +126,10 @@ class VisibleFaces:
     def __post_init__(self) -> None:
         object.__setattr__(self, "_rows", FaceRows.of(self))
 
+    def __getstate__(self) -> dict[str, object]:
+        # (the compiled loop's tables are laid out again where they are used, not pickled)
+        return {**self.__dict__, "_loop_tables": []}
+
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
         """From float32 ``vertices`` (as embree reads them), (F, 3) ``faces``, one integer

@@ -79,7 +79,8 @@ def loop_tables(faces: PackedFaces, rows: FaceRows, cell: float, edge_cell: floa
         rows_of(rows.line, f8),
         rows_of(rows.along, f8),
         rows_of(faces.edge_across, i8),
-        rows_of(mask.marked if mask is not None else np.zeros(0), u1),
+        # (8 cells a byte: the grid's lookups stay in the cache)
+        np.packbits(mask.marked, bitorder="little") if mask is not None else np.zeros(0, dtype=u1),
     )
     grid = (*(float(v) for v in mask.origin), *mask.shape, True, 1.0 / mask.size) if mask is not None else (0.0, 0.0, 0.0, 1, 1, 1, False, 1.0)
     return arrays, (*grid, 1.0 / cell, 1.0 / edge_cell, margin, tolerance)

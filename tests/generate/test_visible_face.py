@@ -296,3 +296,13 @@ def test_a_degenerate_face_s_group_box_is_the_whole_space():
     own = unit(cross(b - a, b - a))
     box = group_boxes((a, b, b), own, np.array([0]), np.array([[0.0, 1, 0]]), np.array([0.0]), EDGE_MARGIN)
     assert np.isinf(box).all()
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")  # (numpy's path, casting the NaN cell)
+def test_a_direction_that_is_not_finite_is_refused_where_hits_are_looked_up_in_the_near_cells(views, path):
+    renderer, hits = views
+    tri, origin, d, height, width = hits[0]
+    broken = d.copy()
+    broken[:, 100] = np.nan
+    with pytest.raises(IndexError):
+        renderer._visible.decide_image(tri, origin, broken, height, width, skip=True)
