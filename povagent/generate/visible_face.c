@@ -25,11 +25,11 @@
 #endif
 
 enum Table {
-    T_GROUP, T_PLANE, T_OWN, T_OPEN, T_EDGES, T_GROUP_WATCHING, T_OVERLAPPED, T_OVERLAPPED_ANY, T_OUTLINE,
+    T_GROUP, T_PLANE, T_HOLDING, T_GROUP_WATCHING, T_OVERLAPPED, T_OVERLAPPED_ANY, T_OUTLINE,
     T_GROUP_NORMAL, T_GROUP_OFFSET, T_BOX, T_WATCHING,
     T_FACE_KEYS, T_FACE_STARTS, T_FACE_ITEMS, T_MIXED,
     T_EDGE_KEYS, T_EDGE_STARTS, T_EDGE_ITEMS,
-    T_LINE, T_ALONG, T_ACROSS, T_MARKED,
+    T_EDGE_ROWS, T_ACROSS, T_MARKED,
     T_COUNT
 };
 
@@ -42,9 +42,9 @@ typedef struct Memo Memo;
 typedef struct {
     const int64_t *group;          /* (F,) each face's group */
     const double *plane;           /* (4, F) each face's group plane: normal, offset */
-    const double *own;             /* (3, F) each face's own normal */
-    const uint8_t *open;           /* (F,) not a closed solid's face */
-    const double *edges;           /* (3 edges, 4, F) inward edge normal and offset */
+    const double *holding;         /* (F, 16) each face's own normal, whether it is open (not a
+                                    * closed solid's: 1, else 0), its 3 inward edge normals and
+                                    * offsets (the containment test's numbers, side by side) */
     const uint8_t *group_watching; /* (F,) the face's group has a watched edge */
     const uint8_t *overlapped;     /* (2 F,) face * 2 + side */
     const uint8_t *overlapped_any; /* (F,) */
@@ -56,8 +56,8 @@ typedef struct {
     const int64_t *face_keys, *face_starts, *face_items;
     const uint8_t *mixed;          /* (K,) the key's faces do not all look alike */
     const int64_t *edge_keys, *edge_starts, *edge_items;
-    const double *line;            /* (4, E) each watched edge's in-plane line */
-    const double *along;           /* (5, E) its direction, extent */
+    const double *edge_rows;       /* (E, 10) each watched edge's in-plane line (4), direction
+                                    * and extent (5) */
     const int64_t *across;         /* (E, 2) the groups across it, -1: none */
     const uint8_t *marked;         /* the near cells' grid, 8 cells a byte (the first the lowest bit) */
     Py_ssize_t faces, groups, edge_count, keys, edge_key_count;
@@ -71,7 +71,8 @@ typedef struct {
     double *face_row;     /* (F, 8) each face's group plane normal, its offset from the origin,
                            * its own normal (one cache line a face, where the pixels gather) */
     uint8_t *face_flags;  /* (F,) its group watched (1), overlapped from side 0 (2), side 1 (4) */
-    double *group_across; /* (G,) */
+    double *group_row;    /* (G, 12) each group's plane normal, its offset from the origin and
+                           * its box */
     Memo *face_memo, *edge_memo;
 } Faces;
 
@@ -216,18 +217,18 @@ static int near_watched(const Faces *s, int64_t g, const double p[3], Py_ssize_t
     if (!s->watching[g]) return 0;
     Py_ssize_t at = find_memo(s->edge_memo, s->edge_keys, s->edge_key_count, key_of(g, p, s->inv_edge_cell));
     if (at < 0) return 0;
-    Py_ssize_t E = s->edge_count;
     double m = s->margin;
     for (int64_t j = s->edge_starts[at]; j < s->edge_starts[at + 1]; j++) {
         int64_t e = s->edge_items[j];
-        double off = s->line[e] * p[0];
-        off += s->line[E + e] * p[1];
-        off += s->line[2 * E + e] * p[2];
-        off -= s->line[3 * E + e];
-        double pos = s->along[e] * p[0];
-        pos += s->along[E + e] * p[1];
-        pos += s->along[2 * E + e] * p[2];
-        if (!(fabs(off) < m && pos > s->along[3 * E + e] - m && pos < s->along[4 * E + e] + m)) continue;
+        const double *r = s->edge_rows + 10 * e;
+        double off = r[0] * p[0];
+        off += r[1] * p[1];
+        off += r[2] * p[2];
+        off -= r[3];
+        double pos = r[4] * p[0];
+        pos += r[5] * p[1];
+        pos += r[6] * p[2];
+        if (!(fabs(off) < m && pos > r[7] - m && pos < r[8] + m)) continue;
         *near = 1;
         for (int c = 0; c < 2; c++) {
             int64_t other = s->across[2 * e + c];
@@ -241,21 +242,21 @@ static int near_watched(const Faces *s, int64_t g, const double p[3], Py_ssize_t
 /* VisibleFaces._highest_holding for one point: the highest face listed under face-table key at
  * whose triangle holds p (within the tolerance) and that the ray can meet; -1 where none */
 static int64_t highest_holding(const Faces *s, Py_ssize_t at, const double p[3], Py_ssize_t ray) {
-    Py_ssize_t F = s->faces;
     double d0 = dir(s, 0, ray), d1 = dir(s, 1, ray), d2 = dir(s, 2, ray);
     for (int64_t j = s->face_starts[at]; j < s->face_starts[at + 1]; j++) {
         int64_t g = s->face_items[j];
-        double facing = s->own[g] * d0;
-        facing += s->own[F + g] * d1;
-        facing += s->own[2 * F + g] * d2;
-        if (!(s->open[g] || facing < 0)) continue;
+        const double *h = s->holding + 16 * g;
+        double facing = h[0] * d0;
+        facing += h[1] * d1;
+        facing += h[2] * d2;
+        if (!(h[3] != 0 || facing < 0)) continue;
         int inside = 1;
         for (int e = 0; e < 3 && inside; e++) {
-            const double *m = s->edges + (Py_ssize_t)e * 4 * F;
-            double signed_ = m[g] * p[0];
-            signed_ += m[F + g] * p[1];
-            signed_ += m[2 * F + g] * p[2];
-            signed_ -= m[3 * F + g];
+            const double *m = h + 4 + 4 * e;
+            double signed_ = m[0] * p[0];
+            signed_ += m[1] * p[1];
+            signed_ += m[2] * p[2];
+            signed_ -= m[3];
             inside = signed_ >= -s->tolerance;
         }
         if (inside) return g;
@@ -363,16 +364,16 @@ typedef struct {
 /* VisibleFaces._reachable for one pair: whether the ray meets group g's plane ahead, at a point
  * inside the group's box (then pushed) */
 static int reach(const Faces *s, int64_t g, Py_ssize_t ray, Reaches *out) {
-    Py_ssize_t G = s->groups;
-    double along = s->group_normal[g] * dir(s, 0, ray);
-    along += s->group_normal[G + g] * dir(s, 1, ray);
-    along += s->group_normal[2 * G + g] * dir(s, 2, ray);
-    double dist = along != 0 ? s->group_across[g] / along : INFINITY;
+    const double *row = s->group_row + 12 * g;
+    double along = row[0] * dir(s, 0, ray);
+    along += row[1] * dir(s, 1, ray);
+    along += row[2] * dir(s, 2, ray);
+    double dist = along != 0 ? row[3] / along : INFINITY;
     if (!(isfinite(dist) && dist > 0)) return 0;
     Reach r = {g, dist, {0, 0, 0}};
     point_at(s, ray, dist, r.p);
     for (int k = 0; k < 3; k++)
-        if (!(r.p[k] >= s->box[k * G + g] && r.p[k] <= s->box[(3 + k) * G + g])) return 0;
+        if (!(r.p[k] >= row[4 + k] && r.p[k] <= row[7 + k])) return 0;
     if (out->n == out->cap) {
         size_t cap = out->cap ? 2 * out->cap : 64;
         Reach *v = realloc(out->v, cap * sizeof *v);
@@ -499,9 +500,9 @@ static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, c
 }
 
 static const char *const TABLE_NAMES[T_COUNT] = {
-    "group", "plane", "own", "open", "edges", "group_watching", "overlapped", "overlapped_any", "outline",
+    "group", "plane", "holding", "group_watching", "overlapped", "overlapped_any", "outline",
     "group_normal", "group_offset", "box", "watching", "face_keys", "face_starts", "face_items", "mixed",
-    "edge_keys", "edge_starts", "edge_items", "line", "along", "across", "marked",
+    "edge_keys", "edge_starts", "edge_items", "edge_rows", "across", "marked",
 };
 
 /* the tables' buffers, their sizes checked against each other (F faces, G groups, E edges) */
@@ -517,13 +518,13 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
         }
     }
 #define LEN(k, size) (views[k].len / (size))
-    Py_ssize_t F = LEN(T_GROUP, 8), G = LEN(T_GROUP_OFFSET, 8), E = LEN(T_LINE, 32), K = LEN(T_FACE_KEYS, 8), W = LEN(T_EDGE_KEYS, 8);
+    Py_ssize_t F = LEN(T_GROUP, 8), G = LEN(T_GROUP_OFFSET, 8), E = LEN(T_EDGE_ROWS, 80), K = LEN(T_FACE_KEYS, 8), W = LEN(T_EDGE_KEYS, 8);
     Py_ssize_t expected[T_COUNT] = {
-        8 * F, 32 * F, 24 * F, F, 96 * F, F, 2 * F, F, 4 * F,
+        8 * F, 32 * F, 128 * F, F, 2 * F, F, 4 * F,
         24 * G, 8 * G, 48 * G, G,
         8 * K, 8 * (K + 1), -1, K,
         8 * W, 8 * (W + 1), -1,
-        32 * E, 40 * E, 16 * E,
+        80 * E, 16 * E,
         s->has_mask ? (s->shape[0] * s->shape[1] * s->shape[2] + 7) / 8 : -1,
     };
 #undef LEN
@@ -535,15 +536,15 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
         }
     }
     s->faces = F, s->groups = G, s->edge_count = E, s->keys = K, s->edge_key_count = W;
-    s->group = views[T_GROUP].buf, s->plane = views[T_PLANE].buf, s->own = views[T_OWN].buf, s->open = views[T_OPEN].buf;
-    s->edges = views[T_EDGES].buf, s->group_watching = views[T_GROUP_WATCHING].buf, s->overlapped = views[T_OVERLAPPED].buf;
+    s->group = views[T_GROUP].buf, s->plane = views[T_PLANE].buf, s->holding = views[T_HOLDING].buf;
+    s->group_watching = views[T_GROUP_WATCHING].buf, s->overlapped = views[T_OVERLAPPED].buf;
     s->overlapped_any = views[T_OVERLAPPED_ANY].buf, s->outline = views[T_OUTLINE].buf;
     s->group_normal = views[T_GROUP_NORMAL].buf, s->group_offset = views[T_GROUP_OFFSET].buf, s->box = views[T_BOX].buf;
     s->watching = views[T_WATCHING].buf;
     s->face_keys = views[T_FACE_KEYS].buf, s->face_starts = views[T_FACE_STARTS].buf, s->face_items = views[T_FACE_ITEMS].buf;
     s->mixed = views[T_MIXED].buf;
     s->edge_keys = views[T_EDGE_KEYS].buf, s->edge_starts = views[T_EDGE_STARTS].buf, s->edge_items = views[T_EDGE_ITEMS].buf;
-    s->line = views[T_LINE].buf, s->along = views[T_ALONG].buf, s->across = views[T_ACROSS].buf, s->marked = views[T_MARKED].buf;
+    s->edge_rows = views[T_EDGE_ROWS].buf, s->across = views[T_ACROSS].buf, s->marked = views[T_MARKED].buf;
     return 0;
 }
 
@@ -577,14 +578,14 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         }
     }
     s.d = directions.buf;
-    s.face_row = malloc((size_t)(8 * s.faces + s.groups + 1) * sizeof(double));
+    s.face_row = malloc((size_t)(8 * s.faces + 12 * s.groups + 1) * sizeof(double));
     s.face_flags = malloc((size_t)s.faces + 1);
     s.face_memo = malloc(2 * sizeof(Memo));
     if (!s.face_row || !s.face_flags || !s.face_memo) {
         PyErr_NoMemory();
         goto done;
     }
-    s.group_across = s.face_row + 8 * s.faces;
+    s.group_row = s.face_row + 8 * s.faces;
     s.edge_memo = s.face_memo + 1;
     memo_clear(s.face_memo);
     memo_clear(s.edge_memo);
@@ -595,12 +596,16 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         double *row = s.face_row + 8 * f;
         row[0] = s.plane[f], row[1] = s.plane[F + f], row[2] = s.plane[2 * F + f];
         row[3] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
-        row[4] = s.own[f], row[5] = s.own[F + f], row[6] = s.own[2 * F + f], row[7] = 0;
+        row[4] = s.holding[16 * f], row[5] = s.holding[16 * f + 1], row[6] = s.holding[16 * f + 2], row[7] = 0;
         s.face_flags[f] = (uint8_t)((s.group_watching[f] ? 1 : 0) | (s.overlapped[2 * f] ? 2 : 0) | (s.overlapped[2 * f + 1] ? 4 : 0));
     }
     for (Py_ssize_t g = 0; g < s.groups; g++) {
         Py_ssize_t G = s.groups;
-        s.group_across[g] = s.group_offset[g] - (s.group_normal[g] * s.o[0] + s.group_normal[G + g] * s.o[1] + s.group_normal[2 * G + g] * s.o[2]);
+        double *row = s.group_row + 12 * g;
+        row[0] = s.group_normal[g], row[1] = s.group_normal[G + g], row[2] = s.group_normal[2 * G + g];
+        row[3] = s.group_offset[g] - (s.group_normal[g] * s.o[0] + s.group_normal[G + g] * s.o[1] + s.group_normal[2 * G + g] * s.o[2]);
+        for (int k = 0; k < 6; k++) row[4 + k] = s.box[k * G + g];
+        row[10] = row[11] = 0;
     }
     int failed = 0;
     Py_BEGIN_ALLOW_THREADS

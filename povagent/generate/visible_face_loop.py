@@ -58,9 +58,7 @@ def loop_tables(faces: PackedFaces, rows: FaceRows, cell: float, edge_cell: floa
     arrays = (
         rows_of(faces.group, i8),
         rows_of(rows.plane, f8),
-        rows_of(rows.own, f8),
-        rows_of(rows.open, u1),
-        rows_of(rows.edges, f8),
+        holding_rows(rows),
         rows_of(rows.group_watching, u1),
         rows_of(rows.overlapped, u1),
         rows_of(rows.overlapped_any, u1),
@@ -76,14 +74,26 @@ def loop_tables(faces: PackedFaces, rows: FaceRows, cell: float, edge_cell: floa
         rows_of(faces.watched.keys, i8),
         rows_of(faces.watched.starts, i8),
         rows_of(faces.watched.items, i8),
-        rows_of(rows.line, f8),
-        rows_of(rows.along, f8),
+        # each watched edge's line, direction and extent side by side (gathered together)
+        np.ascontiguousarray(np.concatenate([rows.line.T, rows.along.T, np.zeros((rows.line.shape[1], 1))], axis=1), dtype=f8),
         rows_of(faces.edge_across, i8),
         # (8 cells a byte: the grid's lookups stay in the cache)
         np.packbits(mask.marked, bitorder="little") if mask is not None else np.zeros(0, dtype=u1),
     )
     grid = (*(float(v) for v in mask.origin), *mask.shape, True, 1.0 / mask.size) if mask is not None else (0.0, 0.0, 0.0, 1, 1, 1, False, 1.0)
     return arrays, (*grid, 1.0 / cell, 1.0 / edge_cell, margin, tolerance)
+
+
+def holding_rows(rows: FaceRows) -> np.ndarray:
+    """(F, 16): each face's numbers of the containment test side by side (a face's are gathered
+    together): its own normal, 1.0 where it is open (not a closed solid's) else 0.0, and its 3
+    inward edge normals and offsets."""
+    count = len(rows.open)
+    out = np.empty((count, 16))
+    out[:, :3] = rows.own.T
+    out[:, 3] = rows.open
+    out[:, 4:] = rows.edges.transpose(2, 0, 1).reshape(count, 12)
+    return out
 
 
 def fits(tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int) -> bool:
