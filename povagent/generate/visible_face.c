@@ -12,7 +12,13 @@
  *   1 / CELL, 1 / EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE); tri: embree's int64 triangle
  *   per pixel (-1: none); origin: (x, y, z); directions: float32 (3, height * width) rows;
  *   shown: int64 out, the face shown per pixel; t: float64 out, its distance (empty unless
- *   want_distance), written in place.
+ *   want_distance), written in place. IndexError, as numpy's path raises it, for a triangle
+ *   beyond the mesh or a direction that is not finite (where the near cells are looked up);
+ *   ValueError for arrays whose sizes do not match.
+ *
+ * The passes: every pixel's distance and flags a block at a time (decide_rays), the exact tests
+ * of the few hits that can be decided otherwise, then row by row the outline (three rows of
+ * outline values kept) and each outline or crease pixel's candidates (resolve_pixels).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -267,8 +273,9 @@ static int64_t highest_holding(const Faces *s, Py_ssize_t at, const double p[3],
 /* VisibleFaces._decide for every pixel, a block at a time: first for each pixel without a
  * branch (the CPU overlaps the pixels' divisions) the distance to its face's group plane
  * (_face_distance: inf where parallel or nothing is hit) and whether its hit can be decided
- * otherwise (a watched group's hit in a near cell, or a rival overlapping its face from the side
- * met: _side); then those hits' exact tests. The crease pairs they find are pushed */
+ * otherwise (a watched group's hit, in a near cell where skip asks, or a rival overlapping its
+ * face from the side met: _side); then those hits' exact tests. The crease pairs they find are
+ * pushed, in pixel order */
 enum { WATCHED = 1, MET = 2, RIVAL = 4, FINITE_HIT = 8 };
 enum { NO_MEMORY = -1, NOT_FINITE = -2 }; /* what stopped the loops */
 static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, int64_t *shown, double *t, Vec *crease_ray, Vec *crease_group) {

@@ -34,7 +34,8 @@ no neighbour shows and no crease leads to, and shadow rays grazing an edge (embr
 those alone); measured in ``benchmarks/bench_render_isa.py``, see
 ``docs/explanation/reproducibility.md``. What it must not do: call a numpy function whose
 result depends on the CPU (transcendentals, BLAS): it uses +, -, *, /, sqrt and comparisons,
-element by element.
+element by element. A camera's pixels go through the compiled loop ``visible_face.c`` where it
+was built (the same operations in the same order: the same numbers), numpy's passes otherwise.
 """
 
 from __future__ import annotations
