@@ -137,7 +137,7 @@ static inline Py_ssize_t find(const int64_t *keys, Py_ssize_t count, int64_t key
 
 /* the last keys found in a table, by a hash of the key: neighbouring pixels look up the same
  * few keys (a cell spans many pixels), so most lookups end here instead of in a binary search */
-#define MEMO_BITS 10
+#define MEMO_BITS 12
 struct Memo {
     int64_t key[1 << MEMO_BITS];
     Py_ssize_t at[1 << MEMO_BITS];
@@ -277,18 +277,20 @@ static int64_t highest_holding(const Faces *s, Py_ssize_t at, const double p[3],
  * face from the side met: _side); then those hits' exact tests. The crease pairs they find are
  * pushed, in pixel order */
 enum { WATCHED = 1, MET = 2, RIVAL = 4, FINITE_HIT = 8 };
-enum { NO_MEMORY = -1, NOT_FINITE = -2 }; /* what stopped the loops */
+enum { NO_MEMORY = -1, NOT_FINITE = -2, BEYOND = -3 }; /* what stopped the loops */
 static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, int64_t *shown, double *t, Vec *crease_ray, Vec *crease_group) {
     int masked = skip && s->has_mask;
     double every[BLOCK];
     uint8_t flags[BLOCK];
+    int beyond = 0; /* a triangle index beyond the mesh's faces */
     for (Py_ssize_t start = 0; start < s->n; start += BLOCK) {
         Py_ssize_t count = s->n - start < BLOCK ? s->n - start : BLOCK;
         for (Py_ssize_t j = 0; j < count; j++) {
             Py_ssize_t i = start + j;
             int64_t f = tri[i];
             int hit = f >= 0;
-            int64_t face = hit ? f : 0;
+            beyond |= f >= s->faces;
+            int64_t face = hit && f < s->faces ? f : 0;
             const double *row = s->face_row + 8 * face;
             double d0 = dir(s, 0, i), d1 = dir(s, 1, i), d2 = dir(s, 2, i);
             double along = row[0] * d0;
@@ -305,6 +307,7 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
             shown[i] = f;
             if (want) t[i] = e;
         }
+        if (beyond) return BEYOND;
         if (masked && covers_block(s, start, count, every, flags)) return NOT_FINITE;
         for (Py_ssize_t j = 0; j < count; j++) {
             int bits = flags[j];
@@ -578,12 +581,6 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         goto done;
     }
     const int64_t *faces_in = tri.buf;
-    for (Py_ssize_t i = 0; i < s.n; i++) {
-        if (faces_in[i] >= s.faces) {
-            PyErr_SetString(PyExc_IndexError, "decide_image: a triangle index beyond the mesh's faces");
-            goto done;
-        }
-    }
     s.d = directions.buf;
     s.face_row = malloc((size_t)(8 * s.faces + 12 * s.groups + 1) * sizeof(double));
     s.face_flags = malloc((size_t)s.faces + 1);
@@ -619,6 +616,10 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     failed = decide_rays(&s, faces_in, want, skip, shown.buf, t.buf, &crease_ray, &crease_group);
     if (!failed) failed = resolve_pixels(&s, height, width, &crease_ray, &crease_group, shown.buf, want ? t.buf : NULL);
     Py_END_ALLOW_THREADS
+    if (failed == BEYOND) {
+        PyErr_SetString(PyExc_IndexError, "decide_image: a triangle index beyond the mesh's faces");
+        goto done;
+    }
     if (failed == NOT_FINITE) {
         PyErr_SetString(PyExc_IndexError, "decide_image: a ray's hit lies in no cell (a direction is not finite)");
         goto done;
