@@ -171,9 +171,8 @@ static inline double dir(const Faces *s, int k, Py_ssize_t ray) { return (double
  * not in the grid: a NaN direction (numpy's path raises IndexError there too) */
 static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, const double *every, uint8_t *flags) {
     const double whole = 6755399441055744.0;
-    double at[BLOCK], index[BLOCK + 1];
+    double at[BLOCK], index[BLOCK];
     for (Py_ssize_t j = 0; j < count; j++) at[j] = isfinite(every[j]) ? every[j] : 0.0;
-    at[count] = 0.0; /* (a pair's second lane past an odd count) */
     for (int k = 0; k < 3; k++) {
         const float *d = s->d + k * s->n + start;
         double o = s->o[k], inv = s->inv_mask, low = s->mask_origin[k] - 1.0, high = s->mask_origin[k] + (double)s->shape[k];
@@ -490,7 +489,7 @@ static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, c
             if (!edge[x] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
             size_t from = c;
             while (c < crease_ray->n && crease_ray->v[c] == i) c++;
-            failed = resolve(s, &w, shown, edge[x], i, height, width, crease_group->v + from, c - from);
+            failed = resolve(s, &w, shown, edge[x], i, height, width, c > from ? crease_group->v + from : NULL, c - from);
         }
     }
     for (size_t k = 0; k < w.ray.n && !failed; k++) {
