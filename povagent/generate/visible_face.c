@@ -327,9 +327,13 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
     return 0;
 }
 
-/* a row's outline values: of the face each pixel shows (-1: none), as the exact tests left it */
-static void outline_row(const Faces *s, const int64_t *shown, Py_ssize_t width, int32_t *seen) {
-    for (Py_ssize_t x = 0; x < width; x++) seen[x] = shown[x] >= 0 ? s->outline[shown[x]] : -1;
+/* a row's outline values and groups: of the face each pixel shows (-1: none), as the exact tests
+ * left it */
+static void outline_row(const Faces *s, const int64_t *shown, Py_ssize_t width, int32_t *seen, int32_t *group) {
+    for (Py_ssize_t x = 0; x < width; x++) {
+        seen[x] = shown[x] >= 0 ? s->outline[shown[x]] : -1;
+        group[x] = shown[x] >= 0 ? (int32_t)s->group[shown[x]] : -1;
+    }
 }
 
 /* whether one of pixel x's 8 neighbours in the frame (the rows above and below: NULL beyond the
@@ -412,16 +416,14 @@ typedef struct {
                           * float64's bits) */
 } Scratch;
 
-static int resolve(const Faces *s, Scratch *w, const int64_t *before, int edge, Py_ssize_t i, Py_ssize_t height, Py_ssize_t width,
+static int resolve(const Faces *s, Scratch *w, const int32_t *const rows[3], int edge, Py_ssize_t i, Py_ssize_t x, Py_ssize_t width,
                    const int64_t *crease, size_t creases) {
     w->cand.n = w->extra_ray.n = w->extra_group.n = w->reached.n = 0;
     if (edge) {
-        Py_ssize_t y = i / width, x = i % width;
-        for (Py_ssize_t dy = -1; dy <= 1; dy++)
+        for (int r = 0; r < 3; r++)
             for (Py_ssize_t dx = -1; dx <= 1; dx++) {
-                Py_ssize_t v = y + dy < 0 ? 0 : (y + dy >= height ? height - 1 : y + dy);
                 Py_ssize_t u = x + dx < 0 ? 0 : (x + dx >= width ? width - 1 : x + dx);
-                int64_t face = before[v * width + u], g = face >= 0 ? s->group[face] : -1;
+                int64_t g = rows[r][u];
                 if (g >= 0 && !contains(w->cand.v, w->cand.n, g) && push(&w->cand, g)) return -1;
             }
     }
@@ -475,21 +477,23 @@ static int resolve(const Faces *s, Scratch *w, const int64_t *before, int edge, 
 static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray, const Vec *crease_group, int64_t *shown, double *t) {
     Scratch w;
     memset(&w, 0, sizeof w);
-    int32_t *seen = malloc((size_t)(3 * width + 1) * sizeof(int32_t));
+    int32_t *seen = malloc((size_t)(6 * width + 1) * sizeof(int32_t)), *group = seen + 3 * width;
     uint8_t *edge = malloc((size_t)width + 1);
     int failed = !seen || !edge;
     size_t c = 0;
-    if (!failed && height > 0) outline_row(s, shown, width, seen);
+    if (!failed && height > 0) outline_row(s, shown, width, seen, group);
     for (Py_ssize_t y = 0; y < height && !failed; y++) {
-        if (y + 1 < height) outline_row(s, shown + (y + 1) * width, width, seen + ((y + 1) % 3) * width);
+        if (y + 1 < height) outline_row(s, shown + (y + 1) * width, width, seen + ((y + 1) % 3) * width, group + ((y + 1) % 3) * width);
         const int32_t *up = y > 0 ? seen + ((y - 1) % 3) * width : NULL, *down = y + 1 < height ? seen + ((y + 1) % 3) * width : NULL;
         outline_edges(up, seen + (y % 3) * width, down, width, edge);
+        /* the groups of the rows above, of this one and below (beyond the border: the border's) */
+        const int32_t *rows[3] = {group + ((y > 0 ? y - 1 : y) % 3) * width, group + (y % 3) * width, group + ((y + 1 < height ? y + 1 : y) % 3) * width};
         for (Py_ssize_t x = 0; x < width && !failed; x++) {
             Py_ssize_t i = y * width + x;
             if (!edge[x] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
             size_t from = c;
             while (c < crease_ray->n && crease_ray->v[c] == i) c++;
-            failed = resolve(s, &w, shown, edge[x], i, height, width, c > from ? crease_group->v + from : NULL, c - from);
+            failed = resolve(s, &w, rows, edge[x], i, x, width, c > from ? crease_group->v + from : NULL, c - from);
         }
     }
     for (size_t k = 0; k < w.ray.n && !failed; k++) {
