@@ -306,3 +306,15 @@ def test_a_direction_that_is_not_finite_is_refused_where_hits_are_looked_up_in_t
     broken[:, 100] = np.nan
     with pytest.raises(IndexError):
         renderer._visible.decide_image(tri, origin, broken, height, width, skip=True)
+
+
+def test_a_pickled_copy_lays_the_loops_tables_out_again_and_decides_alike(views, path):
+    import pickle
+
+    renderer, hits = views
+    faces = renderer._visible
+    before = faces.decide_image(*hits[0], skip=True)
+    copy = pickle.loads(pickle.dumps(faces))
+    assert copy._loop_tables == []
+    after = copy.decide_image(*hits[0], skip=True)
+    assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
