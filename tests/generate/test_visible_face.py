@@ -138,9 +138,9 @@ def quad(a, b, c, d):
 
 
 def microscope(at, seen_from) -> Camera:
-    """A camera at ``seen_from`` looking at ``at`` with a field of view of a fiftieth of a degree."""
+    """A camera at ``seen_from`` looking at ``at`` with a field of view of a 500th of a degree."""
     v = np.subtract(at, seen_from) / np.linalg.norm(np.subtract(at, seen_from))
-    return Camera.from_pose(seen_from, float(np.degrees(np.arctan2(v[0], v[2]))), float(np.degrees(np.arcsin(-v[1]))), 0.02, 64, 48)
+    return Camera.from_pose(seen_from, float(np.degrees(np.arctan2(v[0], v[2]))), float(np.degrees(np.arcsin(-v[1]))), 0.002, 64, 48)
 
 
 @pytest.fixture(scope="module")
@@ -148,9 +148,9 @@ def made_up_scene():
     """A small mesh of the hard cases: a rug on a floor and a mattress flush with its frame's top
     (coplanar faces of other looks overlapping), two boxes side by side (creases, a shared plane
     met from either side), a wall of two halves; seen by cameras grazing the frame's top, from
-    above and looking past everything into nothing, and through a microscope (a few micrometres
-    a pixel) at a crease, the mattress's edge, the rug's edge and the wall's seam, where the
-    near-edge tests decide. Its faces, and embree's hits of each camera."""
+    above and looking past everything into nothing, and through a microscope (about two
+    micrometres a pixel) at a crease, the mattress's edge, the rug's edge and the wall's seam,
+    where the near-edge tests decide. Its faces, and embree's hits of each camera."""
     from povagent.generate.renderer import _embree_scene
 
     parts = [  # (corners and triangles, look, closed)
@@ -183,6 +183,8 @@ def made_up_scene():
                 ((-1.9, 0.4, -1.2), (-1.1, 1.6, -0.2)),
                 ((1.0, 0.0, 0.0), (0.7, 1.8, -1.5)),
                 ((0.0, 1.2, -3.0), (0.5, 1.4, 0.0)),
+                ((0.0, 0.0, -3.0), (0.5, 1.4, 0.0)),  # where the seam's end meets the floor
+                ((1.5, 0.8, 1.5), (1.0, 1.6, 3.0)),  # a box's corner
             )
         ),
     ]
@@ -205,13 +207,14 @@ def test_the_compiled_loop_decides_the_hard_cases_as_numpy(made_up_scene, by_loo
     changed = 0
     for tri, *rest in hits:
         # embree's answer and other CPUs': some hits reported on another face (any face), and
-        # the faces of the pixels 15 columns over (near an edge, the face beyond it)
+        # the faces of the pixels 12 rows or columns over (near an edge, the face beyond it: in
+        # the microscope's views, where only the near-edge tests decide them)
         other = tri.copy()
         pick = rng.random(len(tri)) < 0.1
         other[pick & (tri >= 0)] = rng.integers(0, len(faces.group), int((pick & (tri >= 0)).sum()))
         height, width = rest[2], rest[3]
-        shifted = np.where(tri >= 0, np.roll(tri.reshape(height, width), 15, axis=1).ravel(), tri)
-        for candidate in (tri, other, shifted):
+        shifted = [np.where(tri >= 0, np.roll(tri.reshape(height, width), shift, axis=axis).ravel(), tri) for shift, axis in ((-12, 0), (12, 1))]
+        for candidate in (tri, other, *shifted):
             for want_distance in (True, False):
                 for skip in (True, False):
                     compiled, numpy_s = both_paths(faces, (candidate, *rest), monkeypatch, want_distance=want_distance, skip=skip)
