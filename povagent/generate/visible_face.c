@@ -31,7 +31,7 @@
 #endif
 
 enum Table {
-    T_GROUP, T_PLANE, T_HOLDING, T_GROUP_WATCHING, T_OVERLAPPED, T_OVERLAPPED_ANY, T_OUTLINE,
+    T_GROUP, T_PLANE, T_HOLDING, T_GROUP_WATCHING, T_OVERLAPPED, T_OUTLINE,
     T_GROUP_NORMAL, T_GROUP_OFFSET, T_BOX, T_WATCHING,
     T_FACE_KEYS, T_FACE_STARTS, T_FACE_ITEMS, T_MIXED,
     T_EDGE_KEYS, T_EDGE_STARTS, T_EDGE_ITEMS,
@@ -53,7 +53,6 @@ typedef struct {
                                     * offsets (the containment test's numbers, side by side) */
     const uint8_t *group_watching; /* (F,) the face's group has a watched edge */
     const uint8_t *overlapped;     /* (2 F,) face * 2 + side */
-    const uint8_t *overlapped_any; /* (F,) */
     const int32_t *outline;        /* (F,) what tells two pixels apart */
     const double *group_normal;    /* (3, G) */
     const double *group_offset;    /* (G,) */
@@ -513,7 +512,7 @@ static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, c
 }
 
 static const char *const TABLE_NAMES[T_COUNT] = {
-    "group", "plane", "holding", "group_watching", "overlapped", "overlapped_any", "outline",
+    "group", "plane", "holding", "group_watching", "overlapped", "outline",
     "group_normal", "group_offset", "box", "watching", "face_keys", "face_starts", "face_items", "mixed",
     "edge_keys", "edge_starts", "edge_items", "edge_rows", "across", "marked",
 };
@@ -521,7 +520,7 @@ static const char *const TABLE_NAMES[T_COUNT] = {
 /* the tables' buffers, their sizes checked against each other (F faces, G groups, E edges) */
 static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
     if (!PyTuple_Check(tables) || PyTuple_GET_SIZE(tables) != T_COUNT) {
-        PyErr_SetString(PyExc_ValueError, "decide_image: tables must be a tuple of the 24 arrays");
+        PyErr_SetString(PyExc_ValueError, "decide_image: tables must be a tuple of the arrays enum Table lists");
         return -1;
     }
     for (int k = 0; k < T_COUNT; k++) {
@@ -533,7 +532,7 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
 #define LEN(k, size) (views[k].len / (size))
     Py_ssize_t F = LEN(T_GROUP, 8), G = LEN(T_GROUP_OFFSET, 8), E = LEN(T_EDGE_ROWS, 80), K = LEN(T_FACE_KEYS, 8), W = LEN(T_EDGE_KEYS, 8);
     Py_ssize_t expected[T_COUNT] = {
-        8 * F, 32 * F, 128 * F, F, 2 * F, F, 4 * F,
+        8 * F, 32 * F, 128 * F, F, 2 * F, 4 * F,
         24 * G, 8 * G, 48 * G, G,
         8 * K, 8 * (K + 1), -1, K,
         8 * W, 8 * (W + 1), -1,
@@ -551,7 +550,7 @@ static int read_tables(PyObject *tables, Py_buffer *views, Faces *s) {
     s->faces = F, s->groups = G, s->edge_count = E, s->keys = K, s->edge_key_count = W;
     s->group = views[T_GROUP].buf, s->plane = views[T_PLANE].buf, s->holding = views[T_HOLDING].buf;
     s->group_watching = views[T_GROUP_WATCHING].buf, s->overlapped = views[T_OVERLAPPED].buf;
-    s->overlapped_any = views[T_OVERLAPPED_ANY].buf, s->outline = views[T_OUTLINE].buf;
+    s->outline = views[T_OUTLINE].buf;
     s->group_normal = views[T_GROUP_NORMAL].buf, s->group_offset = views[T_GROUP_OFFSET].buf, s->box = views[T_BOX].buf;
     s->watching = views[T_WATCHING].buf;
     s->face_keys = views[T_FACE_KEYS].buf, s->face_starts = views[T_FACE_STARTS].buf, s->face_items = views[T_FACE_ITEMS].buf;

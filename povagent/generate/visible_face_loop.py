@@ -61,7 +61,6 @@ def loop_tables(faces: PackedFaces, rows: FaceRows, cell: float, edge_cell: floa
         holding_rows(rows),
         rows_of(rows.group_watching, u1),
         rows_of(rows.overlapped, u1),
-        rows_of(rows.overlapped_any, u1),
         rows_of(rows.outline, np.int32),
         rows_of(faces.group_normal.T, f8),
         rows_of(faces.group_offset, f8),
