@@ -14,8 +14,11 @@ camera, in one process and interleaved camera by camera (the machine is shared),
   shade and encode the PNG as the writer does);
 * ``render``: the same view's colours without the PNG encoding (:meth:`Renderer.render_planes`),
   so the split between shading and encoding shows (the encoding is ``generate/frame_png.py``:
-  Pillow's row filters chosen with numpy, then zlib with Pillow's settings, for Pillow's bytes;
-  zlib's share is fixed by the byte-exact PNGs).
+  Pillow's row filters, then zlib with Pillow's settings, for Pillow's bytes; zlib's share is
+  fixed by the byte-exact PNGs);
+* ``numpy``: the same view on numpy's path (every module's compiled loop switched off, as an
+  install without a C compiler runs), so the compiled loops' gain is measured in the same run;
+  its PNG must be the same bytes as ``view``'s (checked once per camera).
 
 The four take turns in a rotating order (camera by camera, round by round), so none always
 runs first on a cold cache or right after another. The machine is shared: CPU time
@@ -30,6 +33,8 @@ render / (primary + shadow); the median over rounds goes to
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib
 import os
 import resource
 import statistics
@@ -70,6 +75,32 @@ def shadow_rays(renderer, camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.ascontiguousarray(start.T), np.ascontiguousarray(L.T), length
 
 
+#: The modules with a compiled loop (``_COMPILED``: the loop, or ``None`` for numpy's path).
+LOOP_MODULES = ("povagent.generate.frame_png", "povagent.generate.renderer", "povagent.generate.visible_face")
+
+
+@contextlib.contextmanager
+def numpy_path():
+    """Every compiled loop switched off for the block (numpy's path, the same bytes)."""
+    modules = [importlib.import_module(name) for name in LOOP_MODULES]
+    kept = [(m, m._COMPILED) for m in modules if hasattr(m, "_COMPILED")]
+    for m, _ in kept:
+        m._COMPILED = None
+    try:
+        yield
+    finally:
+        for m, loop in kept:
+            m._COMPILED = loop
+
+
+def on_numpy_path(fn):
+    def run():
+        with numpy_path():
+            return fn()
+
+    return run
+
+
 def timed(fn) -> tuple[float, int]:
     faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
     t = time.process_time()
@@ -91,12 +122,20 @@ def main() -> None:
     house = ActiveHouse(Path("."), "train_house_00000", 0, 0, built, threading.Lock())
     cameras = plan_tour(built.house, renderer, args.views)
     house.render_png(cameras[0])  # the ray grid of the frame size is built once
+    from povagent.generate.compiled_loops import built_loops
+
+    loops = built_loops()
+    print(f"compiled loops built: {loops}")
+    for camera in cameras:  # the two paths' bytes, before any timing
+        with numpy_path():
+            reference = house.render_png(camera)
+        assert house.render_png(camera) == reference, "the compiled loops changed a view's bytes"
     rays = [shadow_rays(renderer, c) for c in cameras]
     print(f"load before: {os.getloadavg()}")
-    per_round: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "render": [], "ratio": [], "render_ratio": []}
-    faults: dict[str, list[int]] = {"primary": [], "shadow": [], "view": [], "render": []}
+    per_round: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "render": [], "numpy": [], "ratio": [], "render_ratio": [], "numpy_ratio": []}
+    faults: dict[str, list[int]] = {"primary": [], "shadow": [], "view": [], "render": [], "numpy": []}
     for r in range(args.rounds):
-        cpu: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "render": []}
+        cpu: dict[str, list[float]] = {"primary": [], "shadow": [], "view": [], "render": [], "numpy": []}
         load_before = os.getloadavg()[0]
         for k, (camera, (start, direction, length)) in enumerate(zip(cameras, rays)):
             d = renderer._directions(camera).T
@@ -107,6 +146,7 @@ def main() -> None:
                 ("shadow", lambda: renderer._shadow_scene.run(start, direction, dists=length, query="OCCLUDED")),  # noqa: B023
                 ("view", lambda: house.render_png(camera)),  # noqa: B023
                 ("render", lambda: renderer.render_planes(camera)),  # noqa: B023
+                ("numpy", on_numpy_path(lambda: house.render_png(camera))),  # noqa: B023
             ]
             turn = (k + r) % len(contenders)
             for name, fn in contenders[turn:] + contenders[:turn]:
@@ -118,16 +158,19 @@ def main() -> None:
             per_round[k].append(v)
         per_round["ratio"].append(means["view"] / (means["primary"] + means["shadow"]))
         per_round["render_ratio"].append(means["render"] / (means["primary"] + means["shadow"]))
+        per_round["numpy_ratio"].append(means["numpy"] / means["view"])
         print(f"round {r + 1}: primary {1000 * means['primary']:.1f} ms, shadow {1000 * means['shadow']:.1f} ms, "
               f"view {1000 * means['view']:.1f} ms CPU: view / (primary + shadow) = {per_round['ratio'][-1]:.2f}; "
               f"without the PNG {1000 * means['render']:.1f} ms = {per_round['render_ratio'][-1]:.2f}; "
+              f"numpy's path {1000 * means['numpy']:.1f} ms = {per_round['numpy_ratio'][-1]:.2f}x the view; "
               f"page faults per view {statistics.mean(faults['view'][-len(cameras):]):.0f}; "
               f"load {load_before:.2f} -> {os.getloadavg()[0]:.2f}", flush=True)
     ratio, render_ratio = statistics.median(per_round["ratio"]), statistics.median(per_round["render_ratio"])
+    numpy_ratio = statistics.median(per_round["numpy_ratio"])
     med = {k: 1000 * statistics.median(v) for k, v in per_round.items() if not k.endswith("ratio")}
     load = os.getloadavg()
     print(f"median: view {med['view']:.1f} ms = {ratio:.2f}x primary + shadow ({med['primary']:.1f} + {med['shadow']:.1f} ms); "
-          f"without the PNG {med['render']:.1f} ms = {render_ratio:.2f}x; "
+          f"without the PNG {med['render']:.1f} ms = {render_ratio:.2f}x; numpy's path {med['numpy']:.1f} ms = {numpy_ratio:.2f}x the view; "
           f"{statistics.mean(faults['view']):.0f} page faults per view; load after: {load}")
     setting = f"house 0 (seed 0), {len(cameras)} exploration cameras, 512x512; CPU time, median of {args.rounds} interleaved rounds"
     record("bench_render_view", [
@@ -136,6 +179,9 @@ def main() -> None:
         figure("view without the PNG encoding / (primary rays + shadow pass)", round(render_ratio, 2), "x",
                comparison="Renderer.render_planes, same cameras and rounds"),
         figure("view without the PNG encoding", round(med["render"], 1), "ms", comparison="Renderer.render_planes"),
+        figure("view on numpy's path (no compiled loop) / view", round(numpy_ratio, 2), "x",
+               comparison=f"the same cameras and rounds, the same PNG bytes; compiled loops built: {', '.join(k for k, v in loops.items() if v) or 'none'}"),
+        figure("view on numpy's path", round(med["numpy"], 1), "ms"),
         figure("primary rays, bare Embree cast", round(med["primary"], 1), "ms"),
         figure("shadow pass, bare Embree cast", round(med["shadow"], 1), "ms"),
         figure("page faults per view", round(statistics.mean(faults["view"])), "count"),

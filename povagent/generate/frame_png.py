@@ -4,9 +4,11 @@ What it is for: every RGB frame the generator writes and every view the active m
 PNG-encoded, and the dataset's PNGs are byte-exact (the render tests hold them). Pillow's
 encoder picks each row's filter in a C loop that tries four filters byte by byte: about 6 ms
 of a 512x512 frame's 13 ms, as much as zlib itself. Here the same choice is made with whole-
-array numpy passes over blocks of rows (about 3 ms), and the rows go through zlib with
-Pillow's settings, so the bytes are Pillow's, byte for byte (``tests/generate/test_frame_png.py``
-holds the two equal). What it must not do: change a byte of the output; any other image
+array numpy passes over blocks of rows (about 2 ms), or where the compiled loop is built
+(``png_rows.c``, :mod:`~povagent.generate.compiled_loops`) in a few integer passes per row in C
+that read a renderer's colour planes as they are (about 0.5 ms, no interleaving first), and the
+rows go through zlib with Pillow's settings (about 6 ms), so the bytes are Pillow's, byte for
+byte (``tests/generate/test_frame_png.py`` holds both paths equal to Pillow). What it must not do: change a byte of the output; any other image
 (16-bit masks, agent frames) is Pillow's own business.
 
 The facts of Pillow's PNG writer that the bytes depend on (Pillow's ``ZipEncode.c`` and
@@ -143,6 +145,15 @@ def _filter_for(height: int, width: int) -> _RowFilter:
     return kept
 
 
+def _rows_for(height: int, width: int) -> np.ndarray:
+    """This thread's buffer for the compiled loop's filtered rows of a frame of this size (the
+    last size kept: a fresh frame-sized array costs its page faults every time)."""
+    kept: np.ndarray | None = getattr(_THREAD, "rows", None)
+    if kept is None or kept.shape != (height, width * _BPP + 1):
+        kept = _THREAD.rows = np.empty((height, width * _BPP + 1), dtype=np.uint8)
+    return kept
+
+
 def _chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))
 
@@ -154,7 +165,7 @@ def encode_frame_png(rgb: np.ndarray, compress_level: int = PNG_COMPRESS_LEVEL) 
         raise ValueError(f"an RGB frame is (height, width, 3) uint8, not {rgb.shape} {rgb.dtype}")
     height, width = rgb.shape[:2]
     if _COMPILED is not None:
-        rows = np.empty((height, width * _BPP + 1), dtype=np.uint8)
+        rows = _rows_for(height, width)
         _COMPILED.filter_rows(np.ascontiguousarray(rgb), height, width, False, rows)
     else:
         rows = _filter_for(height, width).filter(rgb)
@@ -174,7 +185,7 @@ def encode_planes_png(planes: np.ndarray, height: int, width: int, compress_leve
         image = Image.merge("RGB", [Image.frombuffer("L", size, np.ascontiguousarray(plane), "raw", "L", 0, 1) for plane in planes])
         rgb = np.frombuffer(image.tobytes(), dtype=np.uint8).reshape(height, width, _BPP)
         return encode_frame_png(rgb, compress_level)
-    rows = np.empty((height, width * _BPP + 1), dtype=np.uint8)
+    rows = _rows_for(height, width)
     _COMPILED.filter_rows(np.ascontiguousarray(planes), height, width, True, rows)
     return _png_of_rows(rows, height, width, compress_level)
 

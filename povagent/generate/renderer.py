@@ -3,7 +3,7 @@
 What it is for: render the exploration frames and observer views (512x512, vertical fov 100)
 with one primary ray per pixel through embree (``embreex``, the engine behind trimesh's
 ``ray_pyembree``, called directly for hit distances and occlusion queries), then shade every
-pixel with numpy at once: a point light under each room's ceiling with hard shadows (a second
+pixel: a point light under each room's ceiling with hard shadows (a second
 embree pass), a camera fill light, highlights on metal and gloss, procedural textures (wood
 grain, planks, tiles, fabric) and glowing lamp shades. The depth map is the optical-axis depth
 AI2-THOR reports, so ``Camera.point_at_depth`` inverts it. Which face a pixel shows and how far
@@ -21,7 +21,10 @@ hands it the whole frame at once and the shadow pass blocks of 64k rays (as fast
 arrays stay in the CPU's caches) on float32 arrays of shape (3, n), one contiguous row per
 coordinate (numpy runs several times faster along a row than down the columns of an (n, 3)
 array), changed in place where the order of operations allows; embree reads the rays through
-their (n, 3) views. trimesh's
+their (n, 3) views. Where the install built it, the compiled loop ``shading.c`` does the same
+operations pixel by pixel over the whole frame instead (its shadow rays in one batch: Embree's
+answer for a ray does not depend on the others), for the same bytes in about a third of the
+CPU; this numpy code is its reference and the path taken without it. trimesh's
 pure-numpy engine needs ``rtree`` for its triangle candidates (not installed here); a z-buffer
 rasterizer could match embree on primary visibility but would still need a ray caster for the
 shadows, so one engine does both.
@@ -29,7 +32,9 @@ shadows, so one engine does both.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 
@@ -45,6 +50,7 @@ except ImportError as _exc:  # embreex ships wheels for x86-64 only
         f"({_exc})"
     ) from _exc
 
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.floorplan import WALL_HEIGHT
 from povagent.generate.mesh_parts import (
     CEILING,
@@ -71,6 +77,11 @@ BACKGROUND = np.array([0.55, 0.6, 0.65], dtype=np.float32)
 SHADE_BLOCK = 65536
 #: A face code's bits (``Renderer._face_codes``): its material, then its texture's axes.
 _MATERIAL_BITS, _A_IS_Z, _B_IS_Z = 0x0F, 0x10, 0x20
+#: The compiled shading (``shading.c``: the rays, then every pixel's shading in one loop before
+#: the shadow pass and one after it), or ``None``: the numpy passes below, the same bytes.
+_LOOP = "_shading"
+_COMPILED = compiled_loop(_LOOP)
+_THREAD = threading.local()
 
 
 @dataclass(frozen=True)
@@ -218,6 +229,10 @@ class Renderer:
             # with yaw 0 and horizon 0 the axes are the identity: world rays are camera rays
             self._grids[key] = np.ascontiguousarray(at_origin.ray(pixels).T, dtype=np.float32)
         g, ax = self._grids[key], camera.axes().astype(np.float32)
+        if _COMPILED is not None:
+            out = np.empty_like(g)
+            _COMPILED.directions(g, ax, out)  # the same sums, in one pass per row
+            return out
         # row k = sum_j g[j] * ax[j, k], summed in j order, on whole contiguous rows: several
         # times faster than an einsum over (N, 3), with the same sums (``g.T @ ax`` would hand
         # the product to BLAS, whose threads cost more than they save and may round otherwise)
@@ -271,6 +286,8 @@ class Renderer:
         """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
         d, origin, tri, t64 = self._seen(camera)
         assert t64 is not None
+        if _COMPILED is not None:
+            return tri, t64, self._shade_compiled(_COMPILED, tri, t64, d, origin)
         t = t64.astype(np.float32)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
@@ -291,6 +308,20 @@ class Renderer:
         # (an instance mask wants no distances: then they are left uncomputed, None)
         tri, t = visible.decide_image(out["primID"].astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True)
         return d, origin, tri, t  # face indices as numpy's gathers want them
+
+    def _shade_compiled(self, loop: ModuleType, tri: np.ndarray, t64: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        """The colour planes (3, N) uint8 of :meth:`_shade_block`, by the compiled ``loop``: every
+        pixel's colours lit and shadowed, then Embree's shadow pass, then the shadowed pixels."""
+        n = len(tri)
+        planes = np.empty((3, n), dtype=np.uint8)
+        s = _scratch(n)
+        faces = (self._normals, self._colors, self._lights, self._face_codes.astype(np.int32))  # 32-bit: gathered in vectors
+        pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
+        rays = loop.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
+        if rays:  # one batch: Embree's answer for a ray does not depend on the others
+            occluded = self._shadow_scene.run(s.start, s.toward, dists=s.length, query="OCCLUDED")
+            loop.apply_shadows(np.ascontiguousarray(occluded, dtype=np.int32), s.probe, s.shadowed, planes)
+        return planes
 
     def _shade_block(self, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """Colours (3, n) of a block of pixels, scaled to 0.5-255 (truncated to bytes after)."""
@@ -436,3 +467,24 @@ class Renderer:
             grout = (x - cx < 0.035) | (z - cz < 0.035)
             out[m] = np.where(grout, 0.72, 0.95 + 0.08 * _hash2(cx, cz))
         return out
+
+
+class _Scratch:
+    """The compiled shading's per-frame buffers for frames of ``n`` pixels, reused frame after
+    frame (fresh frame-sized arrays cost their page faults every time): the shadowed colours,
+    which pixels cast a shadow ray, and the rays."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.shadowed = np.empty((3, n), dtype=np.uint8)
+        self.probe = np.empty(n, dtype=np.uint8)
+        self.start, self.toward = np.empty((n, 3), dtype=np.float32), np.empty((n, 3), dtype=np.float32)
+        self.length = np.empty(n, dtype=np.float32)
+
+
+def _scratch(n: int) -> _Scratch:
+    """This thread's buffers for frames of ``n`` pixels (the last size kept)."""
+    kept: _Scratch | None = getattr(_THREAD, "scratch", None)
+    if kept is None or kept.n != n:
+        kept = _THREAD.scratch = _Scratch(n)
+    return kept

@@ -11,7 +11,9 @@ the highest below this machine's own, AVX2 under AVX-512):
   shim preloaded into the child (:mod:`povagent.testing.embree_isa`: embreex passes no
   configuration of its own); the shim is compiled with the C compiler the README's machine has;
 * numpy's dispatch (``NPY_DISABLE_CPU_FEATURES``: x86-64-v2 baseline only, or no AVX-512);
-* OpenBLAS's kernel (``OPENBLAS_CORETYPE``).
+* OpenBLAS's kernel (``OPENBLAS_CORETYPE``);
+* the renderer's compiled loops (``POVAGENT_PURE_NUMPY``: the lowest machine takes numpy's
+  path, as an install without a C compiler does).
 
 What no child can switch off (another vendor's rounding of approximate instructions, another
 zlib) is named in ``docs/explanation/reproducibility.md``.
@@ -29,6 +31,7 @@ from pathlib import Path
 
 import pytest
 
+from povagent.generate.compiled_loops import PURE_NUMPY
 from povagent.testing.embree_isa import build_shim, cpu_isas, cpu_settings, isa_environment
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(300)]
@@ -44,15 +47,18 @@ def shim(tmp_path_factory) -> Path:
 
 
 def _child(out: Path, env: dict[str, str]) -> dict[str, str]:
-    base = {k: v for k, v in os.environ.items() if not k.startswith(("NPY_", "OPENBLAS_", "POVAGENT_TEST_EMBREE"))}
+    base = {k: v for k, v in os.environ.items() if not k.startswith(("NPY_", "OPENBLAS_", "POVAGENT_TEST_EMBREE", PURE_NUMPY))}
     done = subprocess.run([sys.executable, str(CHILD), str(out)], env={**base, **env}, capture_output=True, text=True, timeout=240)
     assert done.returncode == 0, f"{env}: {done.stderr[-2000:]}"
     return json.loads(done.stdout)
 
 
 def test_a_generated_set_and_a_view_are_the_same_bytes_with_every_cpu_feature_switched_off(shim, tmp_path):
-    # as installed, and the lowest ISA with numpy at its baseline and OpenBLAS's oldest kernel
+    # as installed (the compiled loops where they are built), and the lowest ISA with numpy at
+    # its baseline, OpenBLAS's oldest kernel and numpy's path instead of the compiled loops
     settings = dict(list(cpu_settings(shim).items())[:2])
+    lowest = list(settings)[1]
+    settings[lowest] = {**settings[lowest], PURE_NUMPY: "1"}
     with ThreadPoolExecutor(max_workers=2) as pool:
         results = dict(zip(settings, pool.map(lambda kv: _child(tmp_path / f"set{kv[0]}", kv[1]), enumerate(settings.values()))))
     reference = results["as installed"]

@@ -1,5 +1,5 @@
 """The renderer shades a frame block by block, and the active mode encodes its colour planes:
-neither changes a pixel."""
+neither changes a pixel (on the compiled shading's path and on numpy's)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,9 @@ import pytest
 from povagent.generate import renderer as renderer_module
 from povagent.generate.exploration import plan_tour
 from povagent.geometry.camera import Camera
+from tests.generate.compiled_paths import each_path
+
+path = pytest.fixture(each_path(renderer_module))
 
 
 def _outside_camera(tiny_dataset) -> Camera:
@@ -20,6 +23,7 @@ def _outside_camera(tiny_dataset) -> Camera:
 
 
 def test_a_frame_shaded_in_small_blocks_has_the_pixels_of_one_shaded_whole(tiny_dataset, monkeypatch):
+    monkeypatch.setattr(renderer_module, "_COMPILED", None)  # numpy's passes shade by blocks (the C loop by tiles)
     renderer = tiny_dataset.built.renderer
     cameras = [*plan_tour(tiny_dataset.built.house, renderer, 2), _outside_camera(tiny_dataset)]
     whole = [renderer.render(c) for c in cameras]
@@ -33,7 +37,8 @@ def test_a_frame_shaded_in_small_blocks_has_the_pixels_of_one_shaded_whole(tiny_
 
 
 @pytest.mark.parametrize("outside", [False, True])
-def test_the_colour_planes_of_a_view_are_its_frame_rgb_channels(tiny_dataset, outside):
+@pytest.mark.parametrize("path", ["compiled", "numpy"], indirect=True)
+def test_the_colour_planes_of_a_view_are_its_frame_rgb_channels(tiny_dataset, outside, path):
     renderer = tiny_dataset.built.renderer
     camera = _outside_camera(tiny_dataset) if outside else plan_tour(tiny_dataset.built.house, renderer, 1)[0]
     frame = renderer.render(camera)
