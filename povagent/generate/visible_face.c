@@ -136,7 +136,7 @@ static inline Py_ssize_t find(const int64_t *keys, Py_ssize_t count, int64_t key
 
 /* the last keys found in a table, by a hash of the key: neighbouring pixels look up the same
  * few keys (a cell spans many pixels), so most lookups end here instead of in a binary search */
-#define MEMO_BITS 12
+#define MEMO_BITS 14
 struct Memo {
     int64_t key[1 << MEMO_BITS];
     Py_ssize_t at[1 << MEMO_BITS];
@@ -281,16 +281,21 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
     double every[BLOCK];
     uint8_t flags[BLOCK];
     int beyond = 0; /* a triangle index beyond the mesh's faces */
+    /* (the struct's fields read once: the byte stores below may alias anything) */
+    const float *dx = s->d, *dy = s->d + s->n, *dz = s->d + 2 * s->n;
+    const double *face_row = s->face_row;
+    const uint8_t *face_flags = s->face_flags;
+    const Py_ssize_t faces = s->faces;
     for (Py_ssize_t start = 0; start < s->n; start += BLOCK) {
         Py_ssize_t count = s->n - start < BLOCK ? s->n - start : BLOCK;
         for (Py_ssize_t j = 0; j < count; j++) {
             Py_ssize_t i = start + j;
             int64_t f = tri[i];
             int hit = f >= 0;
-            beyond |= f >= s->faces;
-            int64_t face = hit && f < s->faces ? f : 0;
-            const double *row = s->face_row + 8 * face;
-            double d0 = dir(s, 0, i), d1 = dir(s, 1, i), d2 = dir(s, 2, i);
+            beyond |= f >= faces;
+            int64_t face = hit && f < faces ? f : 0;
+            const double *row = face_row + 8 * face;
+            double d0 = dx[i], d1 = dy[i], d2 = dz[i];
             double along = row[0] * d0;
             along += row[1] * d1;
             along += row[2] * d2;
@@ -299,7 +304,7 @@ static int decide_rays(const Faces *s, const int64_t *tri, int want, int skip, i
             double facing = row[4] * d0;
             facing += row[5] * d1;
             facing += row[6] * d2;
-            int met = facing >= 0, bits = s->face_flags[face];
+            int met = facing >= 0, bits = face_flags[face];
             flags[j] = (uint8_t)((bits & WATCHED) | (met ? MET : 0) | (((bits >> (1 + met)) & 1) ? RIVAL : 0) | (hit && isfinite(e) ? FINITE_HIT : 0));
             every[j] = e;
             shown[i] = f;
@@ -487,12 +492,22 @@ static int resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, c
         outline_edges(up, seen + (y % 3) * width, down, width, edge);
         /* the groups of the rows above, of this one and below (beyond the border: the border's) */
         const int32_t *rows[3] = {group + ((y > 0 ? y - 1 : y) % 3) * width, group + (y % 3) * width, group + ((y + 1 < height ? y + 1 : y) % 3) * width};
+        Py_ssize_t next = c < crease_ray->n ? crease_ray->v[c] - y * width : width; /* the row's next crease pixel */
         for (Py_ssize_t x = 0; x < width && !failed; x++) {
+            if (x + 8 <= width && x + 8 <= next) { /* eight pixels on no outline and no crease: skipped at once */
+                uint64_t eight;
+                memcpy(&eight, edge + x, 8);
+                if (!eight) {
+                    x += 7;
+                    continue;
+                }
+            }
             Py_ssize_t i = y * width + x;
             if (!edge[x] && (c == crease_ray->n || crease_ray->v[c] != i)) continue;
             size_t from = c;
             while (c < crease_ray->n && crease_ray->v[c] == i) c++;
             failed = resolve(s, &w, rows, edge[x], i, x, width, c > from ? crease_group->v + from : NULL, c - from);
+            next = c < crease_ray->n ? crease_ray->v[c] - y * width : width;
         }
     }
     for (size_t k = 0; k < w.ray.n && !failed; k++) {
