@@ -285,7 +285,8 @@ class VisibleFaces:
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
         ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
         up with the float64 hit the tests would use, so the same on every CPU) are skipped:
-        they would find no edge to test, and the pixels are the same either way."""
+        they would find no edge to test, and the pixels are the same either way. float32
+        directions (the renderer's) go through the compiled loop where it was built."""
         if _COMPILED is not None and fits(tri, origin, directions, height, width):
             if not self._loop_tables:
                 self._loop_tables.append(loop_tables(self, self._rows, CELL, EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE))
