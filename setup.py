@@ -25,6 +25,7 @@ from setuptools import Extension, setup
 COMPILED_LOOPS = (
     ("povagent.generate._png_rows", "povagent/generate/png_rows.c"),
     ("povagent.generate._shading", "povagent/generate/shading.c"),
+    ("povagent.generate._visible_face", "povagent/generate/visible_face.c"),
 )
 
 IEEE_FLAGS = [] if sys.platform == "win32" else ["-O3", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math", "-std=c99"]

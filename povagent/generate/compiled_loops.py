@@ -23,7 +23,7 @@ from types import ModuleType
 #: The environment variable that turns the compiled loops off.
 PURE_NUMPY = "POVAGENT_PURE_NUMPY"
 #: Every compiled loop's module name under povagent.generate (setup.py builds the same list).
-LOOPS = ("_png_rows", "_shading")
+LOOPS = ("_png_rows", "_shading", "_visible_face")
 
 
 def compiled_loop(name: str) -> ModuleType | None:

@@ -34,7 +34,8 @@ no neighbour shows and no crease leads to, and shadow rays grazing an edge (embr
 those alone); measured in ``benchmarks/bench_render_isa.py``, see
 ``docs/explanation/reproducibility.md``. What it must not do: call a numpy function whose
 result depends on the CPU (transcendentals, BLAS): it uses +, -, *, /, sqrt and comparisons,
-element by element.
+element by element. A camera's pixels go through the compiled loop ``visible_face.c`` where it
+was built (the same operations in the same order: the same numbers), numpy's passes otherwise.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from povagent.generate.cell_table import CellMask, CellTable, boxes_keys, cell, key_of, unique_pairs
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.face_groups import (
     CONTAINS_TOLERANCE,
     FaceRows,
@@ -58,6 +60,11 @@ from povagent.generate.face_groups import (
     overlapped_sides,
     unit,
 )
+from povagent.generate.visible_face_loop import LoopTables, decide_pixels, fits, loop_tables
+
+#: The compiled decision of a camera's pixels (``visible_face.c``), or ``None``: numpy's passes.
+_LOOP = "_visible_face"
+_COMPILED = compiled_loop(_LOOP)
 
 #: The 3x3 neighbourhood of a pixel, row then column offsets.
 _NINE_DY, _NINE_DX = np.repeat([-1, 0, 1], 3), np.tile([-1, 0, 1], 3)
@@ -115,9 +122,14 @@ class VisibleFaces:
     near_cells: CellMask | None
     group_box: np.ndarray
     _rows: FaceRows = field(init=False, repr=False, compare=False)
+    _loop_tables: list[LoopTables] = field(init=False, repr=False, compare=False, default_factory=list)  # built on first use
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_rows", FaceRows.of(self))
+
+    def __getstate__(self) -> dict[str, object]:
+        # (the compiled loop's tables are laid out again where they are used, not pickled)
+        return {**self.__dict__, "_loop_tables": []}
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
@@ -273,7 +285,12 @@ class VisibleFaces:
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
         ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
         up with the float64 hit the tests would use, so the same on every CPU) are skipped:
-        they would find no edge to test, and the pixels are the same either way."""
+        they would find no edge to test, and the pixels are the same either way. float32
+        directions (the renderer's) go through the compiled loop where it was built."""
+        if _COMPILED is not None and fits(tri, origin, directions, height, width):
+            if not self._loop_tables:
+                self._loop_tables.append(loop_tables(self, self._rows, CELL, EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE))
+            return decide_pixels(_COMPILED, self._loop_tables[0], tri, origin, directions, height, width, want_distance, skip)
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
         shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)

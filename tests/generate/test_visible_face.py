@@ -1,15 +1,22 @@
 """The faces a camera's pixels show: the shortcuts of :meth:`VisibleFaces.decide_image` (the
 skip of hits in no watched edge's cell, a candidate group's box, candidates tested nearest
 first) change no pixel and no distance against testing every candidate everywhere, and the box
-they rest on holds every point the exact tests could accept."""
+they rest on holds every point the exact tests could accept; the compiled loop
+(``visible_face.c``) decides every pixel and distance as numpy's passes do."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from povagent.generate import visible_face
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.face_groups import CONTAINS_TOLERANCE, cross, dot3, group_boxes, inward_edges, unit
 from povagent.generate.visible_face import EDGE_MARGIN, VisibleFaces, _points
+from povagent.geometry.camera import Camera
+from tests.generate.compiled_paths import each_path
+
+path = pytest.fixture(params=["compiled", "numpy"])(each_path(visible_face))
 
 
 def every_candidate_reachable(self, ray, cand, o, d):
@@ -40,26 +47,32 @@ def every_candidate_tested(self, ray, cand, dist, point, d):
 
 @pytest.fixture(scope="module", params=[(0, 0), (7, 2)], ids=["house-0-0", "house-7-2"])
 def views(request):
-    """A generated house's renderer and the embree hits of four of its exploration views."""
+    """A generated house's renderer and the embree hits of four of its exploration views and of
+    a camera outside it (rays that hit nothing beside rays that hit its wall)."""
     from povagent.generate.exploration import plan_tour
     from povagent.generate.house_pipeline import build_house
 
     built = build_house(*request.param, shadows=False)
     renderer = built.renderer
+    rooms = built.house.plan.rooms
+    outside = Camera.from_pose((min(r.rect.center[0] for r in rooms) - 6.0, 1.4, rooms[0].rect.center[1]), 90.0, -30.0, 100.0)
     hits = []
-    for camera in plan_tour(built.house, renderer, 4):
+    for camera in [*plan_tour(built.house, renderer, 4), outside]:
         d = renderer._directions(camera)
         origin = np.asarray(camera.position, dtype=np.float32)
         out = renderer._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
         hits.append((out["primID"].astype(np.intp), origin, d, camera.height, camera.width))
+    assert (hits[-1][0] < 0).any() and (hits[-1][0] >= 0).any()
     return renderer, hits
 
 
 @pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
-def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, objects_only, monkeypatch):
+def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, objects_only, path, monkeypatch):
     renderer, hits = views
     faces = renderer._objects if objects_only else renderer._visible
     fast = [faces.decide_image(*h, want_distance=not objects_only, skip=True) for h in hits]
+    # the reference: numpy's passes, every candidate tested
+    monkeypatch.setattr(visible_face, "_COMPILED", None)
     monkeypatch.setattr(VisibleFaces, "_reachable", every_candidate_reachable)
     monkeypatch.setattr(VisibleFaces, "_nearest_holding", every_candidate_tested)
     for (tri, *args), (shown, t) in zip(hits, fast):
@@ -67,8 +80,168 @@ def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, ob
         assert np.array_equal(shown, exact[0])
         if not objects_only:
             assert np.array_equal(t, exact[1])
-        # the views do exercise the decision: pixels whose face differs from embree's
-        assert (shown != tri).any()
+    # the views do exercise the decision: pixels whose face differs from embree's
+    assert all((shown != tri).any() for (tri, *_), (shown, _) in zip(hits[:-1], fast))
+
+
+def compiled_or_skip():
+    loop = compiled_loop(visible_face._LOOP)
+    if loop is None:
+        pytest.skip("the compiled loop is not built here (or POVAGENT_PURE_NUMPY is set)")
+    return loop
+
+
+def both_paths(faces, args, monkeypatch, **flags):
+    """``decide_image`` on the compiled loop and on numpy's passes."""
+    loop = compiled_or_skip()
+    decided = []
+    for module in (loop, None):
+        monkeypatch.setattr(visible_face, "_COMPILED", module)
+        decided.append(faces.decide_image(*args, **flags))
+    return decided
+
+
+def assert_same(compiled, numpy_s, want_distance):
+    assert compiled[0].dtype == numpy_s[0].dtype and np.array_equal(compiled[0], numpy_s[0])
+    if want_distance:
+        assert compiled[1].dtype == numpy_s[1].dtype and np.array_equal(compiled[1], numpy_s[1])  # inf where nothing is hit
+    else:
+        assert compiled[1] is None and numpy_s[1] is None
+
+
+@pytest.mark.parametrize("want_distance", [True, False], ids=["distances", "no-distances"])
+@pytest.mark.parametrize("skip", [True, False], ids=["skip", "no-skip"])
+@pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
+def test_the_compiled_loop_decides_every_pixel_and_distance_as_numpy(views, objects_only, skip, want_distance, monkeypatch):
+    renderer, hits = views
+    faces = renderer._objects if objects_only else renderer._visible
+    for h in hits:
+        compiled, numpy_s = both_paths(faces, h, monkeypatch, want_distance=want_distance, skip=skip)
+        assert_same(compiled, numpy_s, want_distance)
+
+
+def box(lo, hi):
+    """An axis-aligned box's 8 corners and 12 triangles, wound outward."""
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
+    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    centre = corners.mean(axis=0)
+    v = corners[tris]
+    inward = (np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]) * (v.mean(axis=1) - centre)).sum(axis=1) < 0
+    tris[inward] = tris[inward][:, ::-1]
+    return corners, tris
+
+
+def quad(a, b, c, d):
+    """An open quad's corners and its two triangles."""
+    return np.array([a, b, c, d], dtype=float), np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def microscope(at, seen_from) -> Camera:
+    """A camera at ``seen_from`` looking at ``at`` with a field of view of a 500th of a degree."""
+    v = np.subtract(at, seen_from) / np.linalg.norm(np.subtract(at, seen_from))
+    return Camera.from_pose(seen_from, float(np.degrees(np.arctan2(v[0], v[2]))), float(np.degrees(np.arcsin(-v[1]))), 0.002, 64, 48)
+
+
+@pytest.fixture(scope="module")
+def made_up_scene():
+    """A small mesh of the hard cases: a rug on a floor and a mattress flush with its frame's top
+    (coplanar faces of other looks overlapping), two boxes side by side (creases, a shared plane
+    met from either side), a wall of two halves; seen by cameras grazing the frame's top, from
+    above and looking past everything into nothing, and through a microscope (about two
+    micrometres a pixel) at a crease, the mattress's edge, the rug's edge and the wall's seam,
+    where the near-edge tests decide. Its faces, and embree's hits of each camera."""
+    from povagent.generate.renderer import _embree_scene
+
+    parts = [  # (corners and triangles, look, closed)
+        (quad((-3, 0, -3), (3, 0, -3), (3, 0, 3), (-3, 0, 3)), 0, False),
+        (quad((-1, 0, -1), (1, 0, -1), (1, 0, 1), (-1, 0, 1)), 1, False),
+        (box((0.5, 0, 0.5), (1.5, 0.8, 1.5)), 2, True),
+        (box((1.5, 0, 0.5), (2.2, 0.5, 1.5)), 3, True),
+        (box((-2, 0, -2), (-0.5, 0.4, -0.5)), 4, True),
+        (box((-1.9, 0.3, -1.9), (-0.6, 0.4, -0.6)), 5, True),
+        (quad((-3, 0, -3), (0, 0, -3), (0, 2.5, -3), (-3, 2.5, -3)), 6, False),
+        (quad((0, 0, -3), (3, 0, -3), (3, 2.5, -3), (0, 2.5, -3)), 7, False),
+    ]
+    vertices, faces, looks, closed = [], [], [], []
+    for (corners, tris), look, solid in parts:
+        faces.append(tris + sum(len(v) for v in vertices))
+        vertices.append(corners)
+        looks += [look] * len(tris)
+        closed += [solid] * len(tris)
+    v, f = np.concatenate(vertices).astype(np.float32), np.concatenate(faces)
+    looks_, closed_ = np.array(looks), np.array(closed)
+    scene = _embree_scene(v, f)
+    cameras = [
+        Camera.from_pose((0.3, 0.4, 2.5), 200.0, 0.0, 90.0, 96, 80),  # level with the frame's top
+        Camera.from_pose((0.0, 2.0, 3.0), 180.0, 35.0, 90.0, 96, 80),
+        Camera.from_pose((0.0, 1.0, 2.9), 170.0, -40.0, 100.0, 96, 80),
+        *(
+            microscope(at, seen_from)
+            for at, seen_from in (
+                ((1.0, 0.8, 1.5), (1.0, 1.6, 3.0)),
+                ((-1.9, 0.4, -1.2), (-1.1, 1.6, -0.2)),
+                ((1.0, 0.0, 0.0), (0.7, 1.8, -1.5)),
+                ((0.0, 1.2, -3.0), (0.5, 1.4, 0.0)),
+                ((0.0, 0.0, -3.0), (0.5, 1.4, 0.0)),  # where the seam's end meets the floor
+                ((1.5, 0.8, 1.5), (1.0, 1.6, 3.0)),  # a box's corner
+            )
+        ),
+    ]
+    hits = []
+    for camera in cameras:
+        u, w = np.meshgrid(np.arange(camera.width) + 0.5, np.arange(camera.height) + 0.5)
+        d = np.ascontiguousarray(camera.ray(np.stack([u.ravel(), w.ravel()], axis=1)).T, dtype=np.float32)
+        origin = np.asarray(camera.position, dtype=np.float32)
+        out = scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
+        hits.append((out["primID"].astype(np.intp), origin, d, camera.height, camera.width))
+    built = [VisibleFaces.build(v, f, looks_, closed_), VisibleFaces.build(v, f, looks_, closed_, by_look=True)]
+    return built, hits
+
+
+@pytest.mark.parametrize("by_look", [False, True], ids=["faces", "looks"])
+def test_the_compiled_loop_decides_the_hard_cases_as_numpy(made_up_scene, by_look, monkeypatch):
+    built, hits = made_up_scene
+    faces = built[by_look]
+    rng = np.random.default_rng(11)
+    changed = 0
+    for tri, *rest in hits:
+        # embree's answer and other CPUs': some hits reported on another face (any face), and
+        # the faces of the pixels 12 rows or columns over (near an edge, the face beyond it: in
+        # the microscope's views, where only the near-edge tests decide them)
+        other = tri.copy()
+        pick = rng.random(len(tri)) < 0.1
+        other[pick & (tri >= 0)] = rng.integers(0, len(faces.group), int((pick & (tri >= 0)).sum()))
+        height, width = rest[2], rest[3]
+        shifted = [np.where(tri >= 0, np.roll(tri.reshape(height, width), shift, axis=axis).ravel(), tri) for shift, axis in ((-12, 0), (12, 1))]
+        for candidate in (tri, other, *shifted):
+            for want_distance in (True, False):
+                for skip in (True, False):
+                    compiled, numpy_s = both_paths(faces, (candidate, *rest), monkeypatch, want_distance=want_distance, skip=skip)
+                    assert_same(compiled, numpy_s, want_distance)
+            changed += int((compiled[0] != candidate).sum())
+    # the scene does exercise the decision, and rays that hit nothing
+    assert changed > 100
+    assert any((tri < 0).any() for tri, *_ in hits)
+    assert faces.overlapped.any() and (faces.edge_across >= 0).any()
+
+
+def test_directions_other_than_float32_take_numpys_path_to_the_same_pixels(views, path):
+    renderer, hits = views
+    tri, origin, d, height, width = hits[0]
+    faces = renderer._visible
+    plain = faces.decide_image(tri, origin, d, height, width, skip=True)
+    wide = faces.decide_image(tri, origin, d.astype(np.float64), height, width, skip=True)
+    assert np.array_equal(plain[0], wide[0]) and np.array_equal(plain[1], wide[1])
+
+
+def test_a_triangle_beyond_the_mesh_is_refused(views, path):
+    renderer, hits = views
+    tri, *rest = hits[0]
+    beyond = tri.copy()
+    beyond[7] = renderer._visible.group.size
+    with pytest.raises(IndexError):
+        renderer._visible.decide_image(beyond, *rest, skip=True)
 
 
 def holds(own, edges, offsets, point):
@@ -126,3 +299,25 @@ def test_a_degenerate_face_s_group_box_is_the_whole_space():
     own = unit(cross(b - a, b - a))
     box = group_boxes((a, b, b), own, np.array([0]), np.array([[0.0, 1, 0]]), np.array([0.0]), EDGE_MARGIN)
     assert np.isinf(box).all()
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in cast:RuntimeWarning")  # (numpy's path, casting the NaN cell)
+def test_a_direction_that_is_not_finite_is_refused_where_hits_are_looked_up_in_the_near_cells(views, path):
+    renderer, hits = views
+    tri, origin, d, height, width = hits[0]
+    broken = d.copy()
+    broken[:, 100] = np.nan
+    with pytest.raises(IndexError):
+        renderer._visible.decide_image(tri, origin, broken, height, width, skip=True)
+
+
+def test_a_pickled_copy_lays_the_loops_tables_out_again_and_decides_alike(views, path):
+    import pickle
+
+    renderer, hits = views
+    faces = renderer._visible
+    before = faces.decide_image(*hits[0], skip=True)
+    copy = pickle.loads(pickle.dumps(faces))
+    assert copy._loop_tables == []
+    after = copy.decide_image(*hits[0], skip=True)
+    assert np.array_equal(before[0], after[0]) and np.array_equal(before[1], after[1])
