@@ -21,13 +21,22 @@ import sys
 
 from setuptools import Extension, setup
 
-#: (module, C source) of each compiled loop, under povagent/generate/.
+#: (module, C sources, the files they include) of each compiled loop, under povagent/generate/.
 COMPILED_LOOPS = (
-    ("povagent.generate._png_rows", "povagent/generate/png_rows.c"),
-    ("povagent.generate._shading", "povagent/generate/shading.c"),
-    ("povagent.generate._visible_face", "povagent/generate/visible_face.c"),
+    ("povagent.generate._png_rows", ["png_rows.c"], []),
+    ("povagent.generate._shading", ["shading.c"], []),
+    # (visible_face.c includes its two other files: one translation unit)
+    ("povagent.generate._visible_face", ["visible_face.c"], ["visible_face.h", "visible_face_rays.c", "visible_face_outline.c"]),
 )
 
 IEEE_FLAGS = [] if sys.platform == "win32" else ["-O3", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math", "-std=c99"]
 
-setup(ext_modules=[Extension(name, [source], extra_compile_args=IEEE_FLAGS, optional=True) for name, source in COMPILED_LOOPS])
+
+def compiled_loop(name: str, sources: list[str], headers: list[str]) -> Extension:
+    """One optional extension; the files its sources include are ``depends`` (a changed one
+    rebuilds it, and the source distribution carries them: MANIFEST.in)."""
+    folder = "povagent/generate/"
+    return Extension(name, [folder + f for f in sources], depends=[folder + f for f in headers], extra_compile_args=IEEE_FLAGS, optional=True)
+
+
+setup(ext_modules=[compiled_loop(*loop) for loop in COMPILED_LOOPS])

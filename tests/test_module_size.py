@@ -69,6 +69,18 @@ def test_no_module_is_over_the_limit_unless_listed_with_a_reason():
     assert over == {}, f"split these modules (one job each) or list them with a reason: {over}"
 
 
+def compiled_sources(root: Path = ROOT) -> dict[str, int]:
+    """Lines of every C source and header of the compiled loops (povagent/generate/), by path."""
+    return {path.relative_to(root).as_posix(): len(path.read_text(encoding="utf-8").splitlines()) for path in sorted((root / "povagent").rglob("*.[ch]"))}
+
+
+def test_no_c_file_of_the_compiled_loops_is_over_the_limit_either():
+    sources = compiled_sources()
+    assert sources, "the compiled loops' C files were not found"
+    over = {path: n for path, n in sources.items() if n > LIMIT}
+    assert over == {}, f"split these C files (one job each; setup.py lists what a loop includes): {over}"
+
+
 def test_every_listed_exception_is_still_over_the_limit():
     lengths = module_lengths()
     back_under = [path for path in TEMPORARY_EXCEPTIONS if lengths.get(path, 0) <= LIMIT]

@@ -1,0 +1,181 @@
+/* Every pixel's distance to its face's group plane and the exact tests of the hits that can be
+ * decided otherwise (VisibleFaces._decide), with the near-edge and containment tests the
+ * outline's pass (visible_face_outline.c) shares: part of the compiled loop of
+ * VisibleFaces.decide_image (visible_face.c says what it does, and includes this file). */
+#include "visible_face.h"
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+/* CellMask.covers for a block of pixels' hits (o + d * at, at: every finite distance, else 0),
+ * ANDed into bit 0 of their flags. numpy works in float64 (whole numbers, exact): floor, minus
+ * the grid's origin, clipped to the grid. Here the product is clamped to one cell beyond the
+ * grid first (that changes no clipped cell, floor being monotonic), then floored in float64:
+ * q + 1.5 * 2**52 rounds it to a whole number (the default rounding, to nearest), the
+ * difference takes that back exactly, one less where it rounded up. One coordinate at a time
+ * over the block, two pixels at once with SSE2 (the same IEEE operations). -1 where a cell is
+ * not in the grid: a NaN direction (numpy's path raises IndexError there too) */
+static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, const double *every, uint8_t *flags) {
+    const double whole = 6755399441055744.0;
+    double at[BLOCK], index[BLOCK];
+    for (Py_ssize_t j = 0; j < count; j++) at[j] = isfinite(every[j]) ? every[j] : 0.0;
+    for (int k = 0; k < 3; k++) {
+        const float *d = s->d + k * s->n + start;
+        double o = s->o[k], inv = s->inv_mask, low = s->mask_origin[k] - 1.0, high = s->mask_origin[k] + (double)s->shape[k];
+        double origin = s->mask_origin[k], top = (double)(s->shape[k] - 1), size = (double)s->shape[k];
+        Py_ssize_t j = 0;
+#ifdef __SSE2__
+        __m128d vo = _mm_set1_pd(o), vinv = _mm_set1_pd(inv), vlow = _mm_set1_pd(low), vhigh = _mm_set1_pd(high), vwhole = _mm_set1_pd(whole);
+        __m128d vorigin = _mm_set1_pd(origin), vtop = _mm_set1_pd(top), vsize = _mm_set1_pd(size), one = _mm_set1_pd(1.0), zero = _mm_setzero_pd();
+        for (; j + 1 < count; j += 2) {
+            __m128d dj = _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64((const __m128i *)(d + j))));
+            __m128d q = _mm_mul_pd(_mm_add_pd(vo, _mm_mul_pd(dj, _mm_loadu_pd(at + j))), vinv);
+            q = _mm_min_pd(vhigh, _mm_max_pd(vlow, q)); /* q < low ? low : q, then q > high ? high : q */
+            __m128d t = _mm_sub_pd(_mm_add_pd(q, vwhole), vwhole);
+            __m128d c = _mm_sub_pd(_mm_sub_pd(t, _mm_and_pd(_mm_cmpgt_pd(t, q), one)), vorigin);
+            c = _mm_min_pd(vtop, _mm_max_pd(zero, c));
+            _mm_storeu_pd(index + j, k ? _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(index + j), vsize), c) : c);
+        }
+#endif
+        for (; j < count; j++) {
+            double q = (o + (double)d[j] * at[j]) * inv;
+            q = q < low ? low : q;
+            q = q > high ? high : q;
+            double t = (q + whole) - whole;
+            double c = (t > q ? t - 1.0 : t) - origin;
+            c = c < 0 ? 0 : c;
+            c = c > top ? top : c;
+            index[j] = k ? index[j] * size + c : c;
+        }
+    }
+    double cells = (double)s->shape[0] * (double)s->shape[1] * (double)s->shape[2];
+    for (Py_ssize_t j = 0; j < count; j++) {
+        if (!(index[j] >= 0 && index[j] < cells)) return -1;
+        int32_t i = (int32_t)index[j];
+        flags[j] &= (uint8_t)(0xFE | (s->marked[i >> 3] >> (i & 7)));
+    }
+    return 0;
+}
+
+/* VisibleFaces._near_watched for one point of group g: whether it lies within the margin of a
+ * watched edge; the groups across the creases it lies near are pushed as (ray, group) pairs */
+static int vf_near_watched(const Faces *s, int64_t g, const double p[3], Py_ssize_t ray, Vec *pair_ray, Vec *pair_group, int *near) {
+    *near = 0;
+    if (!s->watching[g]) return 0;
+    Py_ssize_t at = find_memo(s->edge_memo, s->edge_keys, s->edge_key_count, key_of(g, p, s->inv_edge_cell));
+    if (at < 0) return 0;
+    double m = s->margin;
+    for (int64_t j = s->edge_starts[at]; j < s->edge_starts[at + 1]; j++) {
+        int64_t e = s->edge_items[j];
+        const double *r = s->edge_rows + 10 * e;
+        double off = r[0] * p[0];
+        off += r[1] * p[1];
+        off += r[2] * p[2];
+        off -= r[3];
+        double pos = r[4] * p[0];
+        pos += r[5] * p[1];
+        pos += r[6] * p[2];
+        if (!(fabs(off) < m && pos > r[7] - m && pos < r[8] + m)) continue;
+        *near = 1;
+        for (int c = 0; c < 2; c++) {
+            int64_t other = s->across[2 * e + c];
+            if (other < 0) continue;
+            if (pair_ray && (push(pair_ray, ray) || push(pair_group, other))) return -1;
+        }
+    }
+    return 0;
+}
+
+/* VisibleFaces._highest_holding for one point: the highest face listed under face-table key at
+ * whose triangle holds p (within the tolerance) and that the ray can meet; -1 where none */
+static int64_t vf_highest_holding(const Faces *s, Py_ssize_t at, const double p[3], Py_ssize_t ray) {
+    double d0 = dir(s, 0, ray), d1 = dir(s, 1, ray), d2 = dir(s, 2, ray);
+    for (int64_t j = s->face_starts[at]; j < s->face_starts[at + 1]; j++) {
+        int64_t g = s->face_items[j];
+        const double *h = s->holding + 16 * g;
+        double facing = h[0] * d0;
+        facing += h[1] * d1;
+        facing += h[2] * d2;
+        if (!(h[3] != 0 || facing < 0)) continue;
+        int inside = 1;
+        for (int e = 0; e < 3 && inside; e++) {
+            const double *m = h + 4 + 4 * e;
+            double signed_ = m[0] * p[0];
+            signed_ += m[1] * p[1];
+            signed_ += m[2] * p[2];
+            signed_ -= m[3];
+            inside = signed_ >= -s->tolerance;
+        }
+        if (inside) return g;
+    }
+    return -1;
+}
+
+/* VisibleFaces._decide for every pixel, a block at a time: first for each pixel without a
+ * branch (the CPU overlaps the pixels' divisions) the distance to its face's group plane
+ * (_face_distance: inf where parallel or nothing is hit) and whether its hit can be decided
+ * otherwise (a watched group's hit, in a near cell where skip asks, or a rival overlapping its
+ * face from the side met: _side); then those hits' exact tests. The crease pairs they find are
+ * pushed, in pixel order */
+static int vf_decide_rays(const Faces *s, const int64_t *tri, int want, int skip, int64_t *shown, double *t, Vec *crease_ray, Vec *crease_group) {
+    int masked = skip && s->has_mask;
+    double every[BLOCK];
+    uint8_t flags[BLOCK];
+    int beyond = 0; /* a triangle index beyond the mesh's faces */
+    /* (the struct's fields read once: the byte stores below may alias anything) */
+    const float *dx = s->d, *dy = s->d + s->n, *dz = s->d + 2 * s->n;
+    const double *face_row = s->face_row;
+    const uint8_t *face_flags = s->face_flags;
+    const Py_ssize_t faces = s->faces;
+    for (Py_ssize_t start = 0; start < s->n; start += BLOCK) {
+        Py_ssize_t count = s->n - start < BLOCK ? s->n - start : BLOCK;
+        for (Py_ssize_t j = 0; j < count; j++) {
+            Py_ssize_t i = start + j;
+            int64_t f = tri[i];
+            int hit = f >= 0;
+            beyond |= f >= faces;
+            int64_t face = hit && f < faces ? f : 0;
+            const double *row = face_row + 8 * face;
+            double d0 = dx[i], d1 = dy[i], d2 = dz[i];
+            double along = row[0] * d0;
+            along += row[1] * d1;
+            along += row[2] * d2;
+            double q = row[3] / along;
+            double e = (hit && along != 0) ? q : INFINITY;
+            double facing = row[4] * d0;
+            facing += row[5] * d1;
+            facing += row[6] * d2;
+            int met = facing >= 0, bits = face_flags[face];
+            flags[j] = (uint8_t)((bits & WATCHED) | (met ? MET : 0) | (((bits >> (1 + met)) & 1) ? RIVAL : 0) | (hit && isfinite(e) ? FINITE_HIT : 0));
+            every[j] = e;
+            shown[i] = f;
+            if (want) t[i] = e;
+        }
+        if (beyond) return BEYOND;
+        if (masked && covers_block(s, start, count, every, flags)) return NOT_FINITE;
+        /* the block's hits that can be decided otherwise, listed without a branch (a few in
+         * six: a branch per pixel would be mispredicted at every run's end) */
+        int examined[BLOCK], listed = 0;
+        for (Py_ssize_t j = 0; j < count; j++) {
+            int bits = flags[j];
+            examined[listed] = (int)j;
+            listed += (bits & (WATCHED | RIVAL)) && (bits & FINITE_HIT);
+        }
+        for (int k = 0; k < listed; k++) {
+            Py_ssize_t j = examined[k];
+            int bits = flags[j];
+            Py_ssize_t i = start + j;
+            int64_t f = tri[i], g = s->group[f];
+            double p[3];
+            point_at(s, i, every[j], p);
+            int near;
+            if (vf_near_watched(s, g, p, i, crease_ray, crease_group, &near)) return -1;
+            if (!((bits & RIVAL) || near)) continue;
+            Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(g, p, s->inv_cell));
+            if (at < 0 || !s->mixed[at]) continue;
+            int64_t best = vf_highest_holding(s, at, p, i);
+            shown[i] = best >= 0 ? best : f;
+        }
+    }
+    return 0;
+}
