@@ -160,18 +160,19 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
     Py_ssize_t wrong = 0;
 
-    /* which face each pixel shows (a miss reads face 0's values, then shows the background) */
+    /* which face each pixel shows (a miss reads face 0's values, then shows the background) and
+     * how far, both inputs read in one loop (two loops cost ~0.2 ms a frame more) */
     for (int i = 0; i < count; i++) {
         int64_t f = fr->tri[first + i];
         wrong += f >= faces;
         hit[i] = f >= 0 && f < faces;
         face[i] = hit[i] ? (int32_t)f : 0;
+        t[i] = (float)fr->t64[first + i];
     }
     for (int i = 0; i < count; i++) {
         code[i] = fr->codes[face[i]];
         mat[i] = hit[i] ? code[i] & MATERIAL_BITS : PLAIN;
     }
-    for (int i = 0; i < count; i++) t[i] = (float)fr->t64[first + i];
     /* the hit point, the face's normal turned to the viewer, the unit vector to the light */
     for (int i = 0; i < count; i++) {
         int32_t f = face[i];
@@ -238,12 +239,32 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     int planks = 0, woods = 0, shinies = 0;
     for (int i = 0; i < count; i++) {
         int m = mat[i];
-        plank_at[planks] = i; /* written every time, kept only for a plank's pixel */
         planks += m == FLOOR_WOOD;
-        wood_at[woods] = i;
         woods += m == WOOD;
-        shiny_at[shinies] = i;
         shinies += m == METAL || m == GLOSS;
+    }
+    /* each list built only in the tiles showing its material (counted first, in a loop the compiler
+     * vectorizes): most tiles show no shiny pixel, many no plank or no wood */
+    if (planks) {
+        planks = 0;
+        for (int i = 0; i < count; i++) {
+            plank_at[planks] = i; /* written every time, kept only for a plank's pixel */
+            planks += mat[i] == FLOOR_WOOD;
+        }
+    }
+    if (woods) {
+        woods = 0;
+        for (int i = 0; i < count; i++) {
+            wood_at[woods] = i;
+            woods += mat[i] == WOOD;
+        }
+    }
+    if (shinies) {
+        shinies = 0;
+        for (int i = 0; i < count; i++) {
+            shiny_at[shinies] = i;
+            shinies += mat[i] == METAL || mat[i] == GLOSS;
+        }
     }
     for (int j = 0; j < planks; j++) {
         arg[j] = shift_arg[plank_at[j]];
@@ -321,6 +342,24 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     return rays;
 }
 
+/* apply_shadows' loop: in tiles, the pixels to darken found first (32-bit values), then each
+ * plane's bytes chosen (byte values), each a loop the compiler vectorizes */
+VECTOR_CLONES
+static void apply_tiles(Py_ssize_t n, const int32_t *restrict hit, const uint8_t *restrict probed, const uint8_t *restrict dark,
+                        uint8_t *restrict out) {
+    for (Py_ssize_t first = 0; first < n; first += TILE) {
+        int count = (int)(n - first < TILE ? n - first : TILE);
+        uint8_t blocked[TILE];
+        for (int i = 0; i < count; i++) blocked[i] = (uint8_t)-(hit[first + i] >= 0); /* 0xff or 0 */
+        for (int i = 0; i < count; i++) blocked[i] &= (uint8_t)-(probed[first + i] != 0);
+        for (int k = 0; k < 3; k++) {
+            uint8_t *restrict o = out + k * n + first;
+            const uint8_t *restrict d = dark + k * n + first;
+            for (int i = 0; i < count; i++) o[i] = (uint8_t)((d[i] & blocked[i]) | (o[i] & ~blocked[i]));
+        }
+    }
+}
+
 static PyObject *shade_lit(PyObject *self, PyObject *args) {
     Py_buffer tri, t, d, origin, normals, colors, lights, codes, planes, shadowed, probe, start, toward, length;
     int shadows;
@@ -374,9 +413,7 @@ static PyObject *apply_shadows(PyObject *self, PyObject *args) {
     const uint8_t *probed = probe.buf, *dark = shadowed.buf;
     uint8_t *out = planes.buf;
     Py_BEGIN_ALLOW_THREADS
-    for (Py_ssize_t i = 0; i < n; i++)
-        if (probed[i] && hit[i] >= 0)
-            for (int k = 0; k < 3; k++) out[k * n + i] = dark[k * n + i];
+    apply_tiles(n, hit, probed, dark, out);
     Py_END_ALLOW_THREADS
     result = Py_None;
     Py_INCREF(result);

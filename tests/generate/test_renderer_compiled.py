@@ -133,6 +133,22 @@ def test_a_face_index_past_the_faces_is_refused(views, monkeypatch):
         renderer._shade_compiled(LOOP, tri, t64, d, origin)
 
 
+def test_apply_shadows_darkens_exactly_the_probing_pixels_whose_ray_is_blocked():
+    n = 600  # two whole tiles of 256 and part of a third
+    rng = np.random.default_rng(7)
+    probe = rng.integers(0, 2, n).astype(np.uint8)
+    occluded = np.where(rng.integers(0, 2, n) == 1, 0, -1).astype(np.int32)
+    occluded[::7] = rng.integers(1, 5000, len(occluded[::7]))  # any face index counts as blocked
+    ends = [0, 255, 256, n - 1]  # each tile's first and last pixels darkened
+    probe[ends], occluded[ends] = 1, 0
+    shadowed = rng.integers(0, 256, (3, n)).astype(np.uint8)
+    planes = rng.integers(0, 256, (3, n)).astype(np.uint8)
+    expected = np.where((probe == 1) & (occluded >= 0), shadowed, planes)
+    LOOP.apply_shadows(occluded, probe, shadowed, planes)
+    assert np.array_equal(planes, expected)
+    assert 0 < int(((probe == 1) & (occluded >= 0)).sum()) < n  # both kinds of pixel were there
+
+
 def test_buffers_of_the_wrong_sizes_are_refused():
     n, faces = 4, 2
     f32, u8 = np.zeros(3 * n, np.float32), np.zeros(3 * n, np.uint8)
