@@ -170,4 +170,10 @@ static PyMethodDef methods[] = {
 
 static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_visible_face", "Which face each pixel shows (compiled loop of visible_face).", -1, methods};
 
-PyMODINIT_FUNC PyInit__visible_face(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__visible_face(void) {
+#ifdef HAS_AVX_PATH
+    __builtin_cpu_init();
+    cpu_has_avx = __builtin_cpu_supports("avx") ? 1 : 0;
+#endif
+    return PyModule_Create(&module);
+}

@@ -2,7 +2,13 @@
 
 from __future__ import annotations
 
+import ast
+import importlib.util
+import shutil
+import subprocess
+import sysconfig
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from types import ModuleType
 
 import pytest
@@ -28,3 +34,23 @@ def each_path(module: ModuleType, attribute: str = "_COMPILED") -> Callable[...,
 
     return fixture
 
+
+
+def generic_build(folder: Path, source: str) -> ModuleType:
+    """``povagent/generate/<source>.c`` built again with setup.py's flags and
+    ``-DPOVAGENT_ONE_BUILD``: the loops for any x86-64 alone (no AVX or AVX2 path chosen at
+    load), as module ``_<source>`` from ``folder``."""
+    root = Path(__file__).resolve().parents[2]
+    tree = ast.parse((root / "setup.py").read_text())
+    flags = next(node.value for node in ast.walk(tree) if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "IEEE_FLAGS")
+    assert isinstance(flags, ast.IfExp)
+    target = folder / f"_{source}{sysconfig.get_config_var('EXT_SUFFIX')}"
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    assert compiler is not None
+    command = [compiler, "-shared", "-fPIC", *ast.literal_eval(flags.orelse), "-DPOVAGENT_ONE_BUILD", f"-I{sysconfig.get_paths()['include']}"]
+    subprocess.run([*command, str(root / "povagent" / "generate" / f"{source}.c"), "-o", str(target)], check=True, capture_output=True, timeout=120)
+    spec = importlib.util.spec_from_file_location(f"_{source}", target)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

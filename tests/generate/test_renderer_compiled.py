@@ -3,14 +3,9 @@ three houses that show every material, and a camera outside a house whose rays p
 
 from __future__ import annotations
 
-import ast
-import importlib.util
 import shutil
-import subprocess
 import sys
-import sysconfig
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -22,6 +17,7 @@ from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.exploration import plan_tour
 from povagent.generate.house_pipeline import build_house
 from povagent.geometry.camera import Camera
+from tests.generate.compiled_paths import generic_build
 
 LOOP = compiled_loop(renderer_module._LOOP)
 pytestmark = pytest.mark.skipif(LOOP is None, reason="the compiled shading is not built here, or POVAGENT_PURE_NUMPY is set")
@@ -168,27 +164,9 @@ def test_buffers_of_the_wrong_sizes_are_refused():
         LOOP.directions(np.zeros((3, n), np.float32), np.zeros(8, np.float32), np.zeros((3, n), np.float32))
 
 
-def _generic_build(folder: Path) -> ModuleType:
-    """``shading.c`` built again with setup.py's flags for any x86-64 alone (no AVX2 loops)."""
-    root = Path(__file__).resolve().parents[2]
-    tree = ast.parse((root / "setup.py").read_text())
-    flags = next(node.value for node in ast.walk(tree) if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "IEEE_FLAGS")
-    assert isinstance(flags, ast.IfExp)
-    target = folder / f"_shading{sysconfig.get_config_var('EXT_SUFFIX')}"
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    assert compiler is not None
-    command = [compiler, "-shared", "-fPIC", *ast.literal_eval(flags.orelse), "-DPOVAGENT_ONE_BUILD", f"-I{sysconfig.get_paths()['include']}"]
-    subprocess.run([*command, str(root / "povagent" / "generate" / "shading.c"), "-o", str(target)], check=True, capture_output=True, timeout=120)
-    spec = importlib.util.spec_from_file_location("_shading", target)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loops")
 def test_the_loops_built_for_any_x86_64_give_the_installed_loops_bytes(views, tmp_path, monkeypatch):
-    generic = _generic_build(tmp_path)
+    generic = generic_build(tmp_path, "shading")
     for _, renderer, camera in views[:3]:  # two views inside a house, one from outside it
         installed, again = _both_loops(monkeypatch, generic, lambda: renderer.render_planes(camera))  # noqa: B023
         assert np.array_equal(installed, again)

@@ -6,6 +6,9 @@ they rest on holds every point the exact tests could accept; the compiled loop
 
 from __future__ import annotations
 
+import shutil
+import sys
+
 import numpy as np
 import pytest
 
@@ -14,7 +17,7 @@ from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.face_groups import CONTAINS_TOLERANCE, cross, dot3, group_boxes, inward_edges, unit
 from povagent.generate.visible_face import EDGE_MARGIN, VisibleFaces, _points
 from povagent.geometry.camera import Camera
-from tests.generate.compiled_paths import each_path
+from tests.generate.compiled_paths import each_path, generic_build
 
 path = pytest.fixture(params=["compiled", "numpy"])(each_path(visible_face))
 
@@ -118,6 +121,20 @@ def test_the_compiled_loop_decides_every_pixel_and_distance_as_numpy(views, obje
     for h in hits:
         compiled, numpy_s = both_paths(faces, h, monkeypatch, want_distance=want_distance, skip=skip)
         assert_same(compiled, numpy_s, want_distance)
+
+
+@pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
+def test_the_loop_built_for_any_x86_64_decides_as_the_installed_one(views, tmp_path, monkeypatch):
+    """The installed loop tests the near cells four pixels at a time with AVX where the CPU has
+    it; built without that path (SSE2 and scalar), it decides every pixel and distance alike."""
+    renderer, hits = views
+    installed, generic = compiled_or_skip(), generic_build(tmp_path, "visible_face")
+    for h in hits:
+        decided = []
+        for module in (installed, generic):
+            monkeypatch.setattr(visible_face, "_COMPILED", module)
+            decided.append(renderer._visible.decide_image(*h, want_distance=True, skip=True))
+        assert_same(*decided, want_distance=True)
 
 
 def box(lo, hi):
