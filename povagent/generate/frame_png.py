@@ -32,6 +32,7 @@ import numpy as np
 from PIL import Image
 
 from povagent.generate.compiled_loops import compiled_loop
+from povagent.generate.thread_buffers import kept_for
 
 #: The compiled row filters (``png_rows.c``), or ``None``: numpy's passes below.
 _LOOP = "_png_rows"
@@ -139,19 +140,13 @@ _THREAD = threading.local()
 
 def _filter_for(height: int, width: int) -> _RowFilter:
     """This thread's buffers for frames of ``width`` x ``height`` (the last size kept)."""
-    kept: _RowFilter | None = getattr(_THREAD, "row_filter", None)
-    if kept is None or (kept.height, kept.row) != (height, width * _BPP):
-        kept = _THREAD.row_filter = _RowFilter(height, width)
-    return kept
+    return kept_for(_THREAD, "row_filter", (height, width), lambda: _RowFilter(height, width))
 
 
 def _rows_for(height: int, width: int) -> np.ndarray:
     """This thread's buffer for the compiled loop's filtered rows of a frame of this size (the
-    last size kept: a fresh frame-sized array costs its page faults every time)."""
-    kept: np.ndarray | None = getattr(_THREAD, "rows", None)
-    if kept is None or kept.shape != (height, width * _BPP + 1):
-        kept = _THREAD.rows = np.empty((height, width * _BPP + 1), dtype=np.uint8)
-    return kept
+    last size kept)."""
+    return kept_for(_THREAD, "rows", (height, width), lambda: np.empty((height, width * _BPP + 1), dtype=np.uint8))
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:

@@ -65,6 +65,7 @@ from povagent.generate.mesh_parts import (
     MeshParts,
 )
 from povagent.generate.scene import House
+from povagent.generate.thread_buffers import kept_for
 from povagent.generate.visible_face import VisibleFaces
 from povagent.geometry.camera import Camera
 
@@ -208,6 +209,7 @@ class Renderer:
         self._face_codes = materials.astype(np.uint8)
         self._face_codes[(ax[0] >= ax[2]) & ~up] |= _A_IS_Z
         self._face_codes[up] |= _B_IS_Z
+        self._face_codes_32 = self._face_codes.astype(np.int32)  # the compiled shading gathers them in vectors
         self._owners = owners.astype(np.uint16)
         self._grids: dict[tuple[int, int, float], np.ndarray] = {}
         # each object's own triangles, for its unoccluded silhouette (scenes built on demand)
@@ -318,7 +320,7 @@ class Renderer:
         n = len(tri)
         planes = np.empty((3, n), dtype=np.uint8)
         s = _scratch(n)
-        faces = (self._normals, self._colors, self._lights, self._face_codes.astype(np.int32))  # 32-bit: gathered in vectors
+        faces = (self._normals, self._colors, self._lights, self._face_codes_32)
         pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
         rays = loop.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
         if rays:  # one batch: Embree's answer for a ray does not depend on the others
@@ -478,7 +480,6 @@ class _Scratch:
     which pixels cast a shadow ray, and the rays."""
 
     def __init__(self, n: int) -> None:
-        self.n = n
         self.shadowed = np.empty((3, n), dtype=np.uint8)
         self.probe = np.empty(n, dtype=np.uint8)
         self.start, self.toward = np.empty((n, 3), dtype=np.float32), np.empty((n, 3), dtype=np.float32)
@@ -487,7 +488,4 @@ class _Scratch:
 
 def _scratch(n: int) -> _Scratch:
     """This thread's buffers for frames of ``n`` pixels (the last size kept)."""
-    kept: _Scratch | None = getattr(_THREAD, "scratch", None)
-    if kept is None or kept.n != n:
-        kept = _THREAD.scratch = _Scratch(n)
-    return kept
+    return kept_for(_THREAD, "scratch", n, lambda: _Scratch(n))

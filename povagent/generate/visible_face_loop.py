@@ -15,20 +15,13 @@ from typing import Any, Protocol
 import numpy as np
 
 from povagent.generate.cell_table import CellMask, CellTable
-from povagent.generate.face_groups import FaceRows
+from povagent.generate.face_groups import BuiltFaces, FaceRows
 
 
-class PackedFaces(Protocol):
-    """What :func:`loop_tables` reads of a built ``VisibleFaces``."""
+class PackedFaces(BuiltFaces, Protocol):
+    """What :func:`loop_tables` reads of a built ``VisibleFaces``, beyond what
+    :meth:`FaceRows.of` reads (:class:`~povagent.generate.face_groups.BuiltFaces`)."""
 
-    @property
-    def group(self) -> np.ndarray: ...
-    @property
-    def group_normal(self) -> np.ndarray: ...
-    @property
-    def group_offset(self) -> np.ndarray: ...
-    @property
-    def watching(self) -> np.ndarray: ...
     @property
     def faces(self) -> CellTable: ...
     @property
