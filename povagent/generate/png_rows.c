@@ -27,6 +27,42 @@ static inline uint8_t paeth(uint8_t a, uint8_t b, uint8_t c) {
     return (pa <= pb && pa <= pc) ? a : bc;
 }
 
+/* GCC on x86-64 Linux builds a row's passes twice, for AVX2 and for any x86-64, and picks one at
+ * load time (integer arithmetic: the same bytes either way); POVAGENT_ONE_BUILD builds the
+ * generic passes alone */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(POVAGENT_ONE_BUILD)
+#define VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define VECTOR_CLONES
+#endif
+
+/* a row's pixels into ``here`` (interleaved), from three planes or an interleaved row */
+VECTOR_CLONES
+static void gather_row(const uint8_t *restrict r, const uint8_t *restrict g, const uint8_t *restrict b, Py_ssize_t width, uint8_t *restrict here) {
+    for (Py_ssize_t x = 0; x < width; x++) {
+        here[3 * x] = r[x];
+        here[3 * x + 1] = g[x];
+        here[3 * x + 2] = b[x];
+    }
+}
+
+/* the up, sub and paeth bytes of a row (``here`` and ``above`` with three black bytes on their
+ * left) into ``cand`` (one row each after the first, unused), and the four filters' costs: one
+ * simple pass per filter, each vectorizes (the costs are integer sums) */
+VECTOR_CLONES
+static void filter_row(const uint8_t *restrict here, const uint8_t *restrict above, Py_ssize_t row, uint8_t *restrict cand, unsigned cost[4]) {
+    uint8_t *restrict up = cand + row, *restrict sub = cand + 2 * row, *restrict pa = cand + 3 * row;
+    unsigned c0 = 0, c1 = 0, c2 = 0, c3 = 0;
+    for (Py_ssize_t i = 0; i < row; i++) c0 += cost_of(here[i]);
+    for (Py_ssize_t i = 0; i < row; i++) { up[i] = (uint8_t)(here[i] - above[i]); c1 += cost_of(up[i]); }
+    for (Py_ssize_t i = 0; i < row; i++) { sub[i] = (uint8_t)(here[i] - here[i - 3]); c2 += cost_of(sub[i]); }
+    for (Py_ssize_t i = 0; i < row; i++) {
+        pa[i] = (uint8_t)(here[i] - paeth(here[i - 3], above[i], above[i - 3]));
+        c3 += cost_of(pa[i]);
+    }
+    cost[0] = c0, cost[1] = c1, cost[2] = c2, cost[3] = c3;
+}
+
 static PyObject *filter_rows(PyObject *self, PyObject *args) {
     Py_buffer pixels, out;
     Py_ssize_t height, width;
@@ -50,23 +86,13 @@ static PyObject *filter_rows(PyObject *self, PyObject *args) {
     uint8_t *above = rows + 3, *here = rows + row + 6;
     for (Py_ssize_t y = 0; y < height; y++) {
         if (planar) {
-            const uint8_t *r = src + y * width, *g = r + plane, *b = g + plane;
-            for (Py_ssize_t x = 0; x < width; x++) {
-                here[3 * x] = r[x]; here[3 * x + 1] = g[x]; here[3 * x + 2] = b[x];
-            }
+            const uint8_t *r = src + y * width;
+            gather_row(r, r + plane, r + 2 * plane, width, here);
         } else {
             memcpy(here, src + y * row, (size_t)row);
         }
-        uint8_t *up = cand + row, *sub = cand + 2 * row, *pa = cand + 3 * row;
-        unsigned cost[4] = {0, 0, 0, 0};
-        /* one simple pass per filter: each vectorizes (the costs are integer sums) */
-        for (Py_ssize_t i = 0; i < row; i++) cost[0] += cost_of(here[i]);
-        for (Py_ssize_t i = 0; i < row; i++) { up[i] = (uint8_t)(here[i] - above[i]); cost[1] += cost_of(up[i]); }
-        for (Py_ssize_t i = 0; i < row; i++) { sub[i] = (uint8_t)(here[i] - here[i - 3]); cost[2] += cost_of(sub[i]); }
-        for (Py_ssize_t i = 0; i < row; i++) {
-            pa[i] = (uint8_t)(here[i] - paeth(here[i - 3], above[i], above[i - 3]));
-            cost[3] += cost_of(pa[i]);
-        }
+        unsigned cost[4];
+        filter_row(here, above, row, cand, cost);
         static const uint8_t types[4] = {0, 2, 1, 4}; /* none, up, sub, paeth */
         int best = 0;
         for (int k = 1; k < 4; k++) if (cost[k] < cost[best]) best = k;

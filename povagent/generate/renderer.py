@@ -265,8 +265,8 @@ class Renderer:
         W, H = camera.width, camera.height
         tri, t, planes = self._cast_and_shade(camera)
         hit = tri >= 0
-        # optical-axis depth: the ray length times the cosine to the forward axis (= zc)
-        depth = t.astype(np.float32) * self._grids[(W, H, camera.fov)][2]  # inf where nothing was hit
+        # optical-axis depth: the ray length (float32) times the cosine to the forward axis (= zc)
+        depth = t * self._grids[(W, H, camera.fov)][2]  # inf where nothing was hit
         if hit.all():  # the usual case indoors
             instance = self._owners[tri]
         else:
@@ -286,23 +286,23 @@ class Renderer:
         return self._cast_and_shade(camera)[2]
 
     def _cast_and_shade(self, camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The primary cast's (triangle, distance) per pixel and the shaded colour planes."""
-        d, origin, tri, t64 = self._seen(camera)
-        assert t64 is not None
+        """The primary cast's (int32 triangle, float32 distance) per pixel and the shaded colour planes."""
+        d, origin, tri, t = self._seen(camera)
+        assert t is not None
         if _COMPILED is not None:
-            return tri, t64, self._shade_compiled(_COMPILED, tri, t64, d, origin)
-        t = t64.astype(np.float32)
+            return tri, t, self._shade_compiled(_COMPILED, tri, t, d, origin)
         planes = np.empty((3, len(tri)), dtype=np.uint8)
         for start in range(0, len(tri), SHADE_BLOCK):
             block = slice(start, start + SHADE_BLOCK)
             rgb = self._shade_block(tri[block], t[block], d[:, block], origin)
             np.copyto(planes[:, block], rgb, casting="unsafe")  # as ``astype(np.uint8)``
-        return tri, t64, planes
+        return tri, t, planes
 
     def _seen(self, camera: Camera, objects_only: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-        """The camera's rays (3, N), its origin, and per pixel the face seen and the float64
-        distance to it, decided alike on every CPU (:meth:`VisibleFaces.decide_image`; with
-        ``objects_only``, only the object a pixel shows is decided so)."""
+        """The camera's rays (3, N), its origin, and per pixel the face seen (int32) and the
+        distance to it (float32, the float64 decided rounded), decided alike on every CPU
+        (:meth:`VisibleFaces.decide_image`; with ``objects_only``, only the object a pixel shows
+        is decided so)."""
         d = self._directions(camera)
         origin = np.asarray(camera.position, dtype=np.float32)
         # a broadcast view: embree reads the one origin for every ray, no (N, 3) copy; only the
@@ -311,17 +311,18 @@ class Renderer:
         primitive = self._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=0)
         visible = self._objects if objects_only else self._visible
         # (an instance mask wants no distances: then they are left uncomputed, None)
-        tri, t = visible.decide_image(primitive.astype(np.intp), origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True)
-        return d, origin, tri, t  # face indices as numpy's gathers want them
+        # (embree's int32 triangles read as they are; int32 faces and float32 distances back)
+        tri, t = visible.decide_image(primitive, origin, d, camera.height, camera.width, want_distance=not objects_only, skip=True, narrow=True)
+        return d, origin, tri, t
 
-    def _shade_compiled(self, loop: ModuleType, tri: np.ndarray, t64: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    def _shade_compiled(self, loop: ModuleType, tri: np.ndarray, t: np.ndarray, d: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """The colour planes (3, N) uint8 of :meth:`_shade_block`, by the compiled ``loop``: every
         pixel's colours lit and shadowed, then Embree's shadow pass, then the shadowed pixels."""
         n = len(tri)
         planes = np.empty((3, n), dtype=np.uint8)
         s = _scratch(n)
         faces = (self._normals, self._colors, self._lights, self._face_codes_32)
-        pixels = (np.ascontiguousarray(tri, dtype=np.int64), np.ascontiguousarray(t64, dtype=np.float64), d, origin)
+        pixels = (np.ascontiguousarray(tri, dtype=np.int32), np.ascontiguousarray(t, dtype=np.float32), d, origin)
         rays = loop.shade_lit(*pixels, *faces, self.shadows, planes, s.shadowed, s.probe, s.start, s.toward, s.length)
         if rays:  # one batch: Embree's answer for a ray does not depend on the others
             occluded = self._shadow_scene.run(s.start, s.toward, dists=s.length, query="OCCLUDED")

@@ -7,7 +7,8 @@
  * directions(grid, axes, out): the camera's rays, ``out[k] = grid[0] * axes[0, k] +
  *   grid[1] * axes[1, k] + grid[2] * axes[2, k]`` on float32 rows (3, N).
  * shade_lit(tri, t, d, origin, normals, colors, lights, codes, shadows, planes, shadowed, probe,
- *   start, toward, length) -> number of shadow rays: the colour bytes (3, N) of every pixel as if
+ *   start, toward, length) -> number of shadow rays: of the pixels' int32 faces (-1: none) at
+ *   float32 distances t (VisibleFaces.decide_image's narrow answer), the colour bytes (3, N) of every pixel as if
  *   its light were not blocked (``planes``), the bytes it has if it is (``shadowed``, read
  *   where ``probe`` is 1), and the shadow rays Embree casts between the two calls: from
  *   ``start`` (N, 3) along ``toward`` (N, 3) for ``length`` (-1: no ray).
@@ -94,8 +95,8 @@ static int32_t BACKGROUND_BYTES[3];
 
 /* What the tiles read and write: one frame's pixels and faces (see the top of the file). */
 typedef struct {
-    const int64_t *tri;
-    const double *t64;
+    const int32_t *tri;
+    const float *t;
     const float *d, *normals, *colors, *lights;
     const int32_t *codes;
     float ox, oy, oz;
@@ -151,7 +152,8 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     const float *restrict dx = fr->d + first, *restrict dy = dx + n, *restrict dz = dy + n;
     const float *restrict normals = fr->normals, *restrict colors = fr->colors, *restrict lights = fr->lights;
     const float ox = fr->ox, oy = fr->oy, oz = fr->oz;
-    float t[TILE], px[TILE], py[TILE], pz[TILE], nx[TILE], ny[TILE], nz[TILE], fill[TILE];
+    const float *restrict t = fr->t + first; /* the distances, read where they are */
+    float px[TILE], py[TILE], pz[TILE], nx[TILE], ny[TILE], nz[TILE], fill[TILE];
     float lx[TILE], ly[TILE], lz[TILE], dist[TILE], lambert[TILE], diffuse[TILE], tex[TILE];
     float across[TILE], plank[TILE], shift_arg[TILE], inner[TILE], along_a[TILE], second[TILE], shift_sine[TILE];
     float arg[2 * TILE], sine[TILE], later[2 * TILE], last[TILE];
@@ -160,14 +162,12 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
     int32_t lit_bytes[3][TILE], dark_bytes[3][TILE], cast[TILE];
     Py_ssize_t wrong = 0;
 
-    /* which face each pixel shows (a miss reads face 0's values, then shows the background) and
-     * how far, both inputs read in one loop (two loops cost ~0.2 ms a frame more) */
+    /* which face each pixel shows (a miss reads face 0's values, then shows the background) */
     for (int i = 0; i < count; i++) {
-        int64_t f = fr->tri[first + i];
+        int32_t f = fr->tri[first + i];
         wrong += f >= faces;
         hit[i] = f >= 0 && f < faces;
-        face[i] = hit[i] ? (int32_t)f : 0;
-        t[i] = (float)fr->t64[first + i];
+        face[i] = hit[i] ? f : 0;
     }
     for (int i = 0; i < count; i++) {
         code[i] = fr->codes[face[i]];
@@ -367,8 +367,8 @@ static PyObject *shade_lit(PyObject *self, PyObject *args) {
                           &shadows, &planes, &shadowed, &probe, &start, &toward, &length))
         return NULL;
     PyObject *result = NULL;
-    Py_ssize_t n = tri.len / 8, faces = codes.len / 4;
-    if (tri.len != 8 * n || t.len != 8 * n || d.len != 12 * n || origin.len != 12 || normals.len != 12 * faces ||
+    Py_ssize_t n = tri.len / 4, faces = codes.len / 4;
+    if (tri.len != 4 * n || t.len != 4 * n || d.len != 12 * n || origin.len != 12 || normals.len != 12 * faces ||
         colors.len != 12 * faces || lights.len != 12 * faces || codes.len != 4 * faces || planes.len != 3 * n || shadowed.len != 3 * n ||
         probe.len != n || start.len != 12 * n || toward.len != 12 * n || length.len != 4 * n || faces > INT32_MAX) {
         PyErr_SetString(PyExc_ValueError, "shade_lit: the buffers' sizes do not match the pixels' and the faces' counts");
@@ -380,7 +380,7 @@ static PyObject *shade_lit(PyObject *self, PyObject *args) {
     Py_ssize_t rays = 0, bad = 0;
     if (faces == 0) {
         /* no face to gather from: every pixel must be a miss */
-        for (Py_ssize_t i = 0; i < n; i++) bad += ((const int64_t *)tri.buf)[i] >= 0;
+        for (Py_ssize_t i = 0; i < n; i++) bad += ((const int32_t *)tri.buf)[i] >= 0;
     } else {
         Py_BEGIN_ALLOW_THREADS
         for (Py_ssize_t first = 0; first < n; first += TILE)

@@ -9,12 +9,14 @@
  *              shown, t):
  *   tables: the VisibleFaces' arrays in the order of enum Table (visible_face_loop.py packs
  *   them); numbers: (mask origin x, y, z, mask shape x, y, z, has mask, 1 / mask cell,
- *   1 / CELL, 1 / EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE); tri: embree's int64 triangle
- *   per pixel (-1: none); origin: (x, y, z); directions: float32 (3, height * width) rows;
- *   shown: int64 out, the face shown per pixel; t: float64 out, its distance (empty unless
- *   want_distance), written in place. IndexError, as numpy's path raises it, for a triangle
- *   beyond the mesh or a direction that is not finite (where the near cells are looked up);
- *   ValueError for arrays whose sizes do not match.
+ *   1 / CELL, 1 / EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE); tri: embree's triangle per
+ *   pixel (-1: none), int32 (as embree gives it) or int64; origin: (x, y, z); directions:
+ *   float32 (3, height * width) rows; shown: out, the face shown per pixel, int32 or int64;
+ *   t: out, its distance, float64 or float32 (the float64 rounded; empty unless
+ *   want_distance), written in place (each kind told by its buffer's size). IndexError, as
+ *   numpy's path raises it, for a triangle beyond the mesh or a direction that is not finite
+ *   (where the near cells are looked up); ValueError for arrays whose sizes do not match, or an
+ *   int64 triangle below int32's range (the faces are kept as int32).
  *
  * The passes: every pixel's distance and flags a block at a time, the exact tests of the few
  * hits that can be decided otherwise (visible_face_rays.c), then row by row the outline (three
@@ -88,22 +90,28 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     PyObject *result = NULL;
     int tables_read = 0;
     Vec crease_ray = {0}, crease_group = {0};
+    Pixels px = {0};
+    int shown32 = 0;
     if (!PyArg_ParseTuple(numbers, "dddnnnpddddd", &s.mask_origin[0], &s.mask_origin[1], &s.mask_origin[2], &s.shape[0], &s.shape[1], &s.shape[2],
                           &s.has_mask, &s.inv_mask, &s.inv_cell, &s.inv_edge_cell, &s.margin, &s.tolerance))
         goto done;
     if (read_tables(tables, views, &s) < 0) goto done;
     tables_read = 1;
     s.n = height * width;
-    if (height < 0 || width < 0 || tri.len != 8 * s.n || directions.len != 12 * s.n || shown.len != 8 * s.n || t.len != (want ? 8 * s.n : 0)) {
+    shown32 = shown.len == 4 * s.n;
+    int tri32 = tri.len == 4 * s.n, t32 = want && t.len == 4 * s.n;
+    if (height < 0 || width < 0 || (!tri32 && tri.len != 8 * s.n) || directions.len != 12 * s.n || (!shown32 && shown.len != 8 * s.n) ||
+        (want ? !t32 && t.len != 8 * s.n : t.len != 0) || s.faces > INT32_MAX) {
         PyErr_SetString(PyExc_ValueError, "decide_image: the pixel arrays' sizes do not match height and width");
         goto done;
     }
-    const int64_t *faces_in = tri.buf;
+    px.tri = tri.buf, px.tri32 = tri32, px.t32 = t32, px.t = t.buf;
+    px.shown = shown32 ? shown.buf : malloc((size_t)(s.n + 1) * sizeof(int32_t));
     s.d = directions.buf;
     s.face_row = malloc((size_t)(8 * s.faces + 12 * s.groups + 1) * sizeof(double));
-    s.face_flags = malloc((size_t)s.faces + 1);
+    s.face_looks = malloc((size_t)(s.faces + 1) * sizeof(int64_t));
     s.face_memo = malloc(2 * sizeof(Memo));
-    if (!s.face_row || !s.face_flags || !s.face_memo) {
+    if (!s.face_row || !s.face_looks || !s.face_memo || !px.shown) {
         PyErr_NoMemory();
         goto done;
     }
@@ -118,9 +126,12 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
         double *row = s.face_row + 8 * f;
         row[0] = s.plane[f], row[1] = s.plane[F + f], row[2] = s.plane[2 * F + f];
         row[3] = s.plane[3 * F + f] - (s.plane[f] * s.o[0] + s.plane[F + f] * s.o[1] + s.plane[2 * F + f] * s.o[2]);
-        row[4] = s.holding[16 * f], row[5] = s.holding[16 * f + 1], row[6] = s.holding[16 * f + 2], row[7] = 0;
-        s.face_flags[f] = (uint8_t)((s.group_watching[f] ? 1 : 0) | (s.overlapped[2 * f] ? 2 : 0) | (s.overlapped[2 * f + 1] ? 4 : 0));
+        row[4] = s.holding[16 * f], row[5] = s.holding[16 * f + 1], row[6] = s.holding[16 * f + 2];
+        int64_t bits = (s.group_watching[f] ? WATCHED : 0) | (s.overlapped[2 * f] ? 2 : 0) | (s.overlapped[2 * f + 1] ? 4 : 0);
+        memcpy(row + 7, &bits, sizeof bits); /* the flags' bits (pixel_block) */
+        s.face_looks[f] = (int64_t)(((uint64_t)(uint32_t)s.group[f] << 32) | (uint32_t)s.outline[f]);
     }
+    s.face_looks[s.faces] = -1;
     for (Py_ssize_t g = 0; g < s.groups; g++) {
         Py_ssize_t G = s.groups;
         double *row = s.group_row + 12 * g;
@@ -131,11 +142,17 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     }
     int failed = 0;
     Py_BEGIN_ALLOW_THREADS
-    failed = vf_decide_rays(&s, faces_in, want, skip, shown.buf, t.buf, &crease_ray, &crease_group);
-    if (!failed) failed = vf_resolve_pixels(&s, height, width, &crease_ray, &crease_group, shown.buf, want ? t.buf : NULL);
+    failed = vf_decide_rays(&s, &px, want, skip, &crease_ray, &crease_group);
+    if (!failed) failed = vf_resolve_pixels(&s, height, width, &crease_ray, &crease_group, &px, want);
+    if (!failed && !shown32)
+        for (Py_ssize_t i = 0; i < s.n; i++) ((int64_t *)shown.buf)[i] = px.shown[i];
     Py_END_ALLOW_THREADS
     if (failed == BEYOND) {
         PyErr_SetString(PyExc_IndexError, "decide_image: a triangle index beyond the mesh's faces");
+        goto done;
+    }
+    if (failed == BELOW) {
+        PyErr_SetString(PyExc_ValueError, "decide_image: an int64 triangle index below int32's range");
         goto done;
     }
     if (failed == NOT_FINITE) {
@@ -149,8 +166,9 @@ static PyObject *decide_image(PyObject *self, PyObject *args) {
     result = Py_None;
     Py_INCREF(result);
 done:
+    if (!shown32) free(px.shown);
     free(s.face_row);
-    free(s.face_flags);
+    free(s.face_looks);
     free(s.face_memo);
     free(crease_ray.v);
     free(crease_group.v);
@@ -174,6 +192,7 @@ PyMODINIT_FUNC PyInit__visible_face(void) {
 #ifdef HAS_AVX_PATH
     __builtin_cpu_init();
     cpu_has_avx = __builtin_cpu_supports("avx") ? 1 : 0;
+    cpu_has_avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
 #endif
     return PyModule_Create(&module);
 }

@@ -57,8 +57,11 @@ typedef struct {
     const float *d;
     Py_ssize_t n;
     double *face_row;     /* (F, 8) each face's group plane normal, its offset from the origin,
-                           * its own normal (one cache line a face, where the pixels gather) */
-    uint8_t *face_flags;  /* (F,) its group watched (1), overlapped from side 0 (2), side 1 (4) */
+                           * its own normal and its flags' bits as an int64: its group watched
+                           * (WATCHED), overlapped from side 0 (2), side 1 (4) (one cache line a
+                           * face, where the pixels gather) */
+    int64_t *face_looks;  /* (F + 1,) each face's outline value (low 32 bits) and group (high 32
+                           * bits), then -1 and -1 for no face */
     double *group_row;    /* (G, 12) each group's plane normal, its offset from the origin and
                            * its box */
     Memo *face_memo, *edge_memo;
@@ -68,6 +71,16 @@ typedef struct {
     int64_t *v;
     size_t n, cap;
 } Vec;
+
+/* one call's pixels: embree's triangles in (int32 or int64), the faces shown out (int32; the
+ * caller's or, for an int64 answer, widened into it at the end) and their distances (float32 or
+ * float64: the float64's rounding) */
+typedef struct {
+    const void *tri;
+    int tri32, t32;
+    int32_t *shown;
+    void *t;
+} Pixels;
 
 static inline int push(Vec *a, int64_t x) {
     if (a->n == a->cap) {
@@ -148,6 +161,6 @@ static inline void point_at(const Faces *s, Py_ssize_t ray, double t, double p[3
 #define BLOCK 256
 
 enum { WATCHED = 1, MET = 2, RIVAL = 4, FINITE_HIT = 8 };
-enum { NO_MEMORY = -1, NOT_FINITE = -2, BEYOND = -3 }; /* what stopped the loops */
+enum { NO_MEMORY = -1, NOT_FINITE = -2, BEYOND = -3, BELOW = -4 }; /* what stopped the loops */
 
 #endif

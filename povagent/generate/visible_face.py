@@ -22,20 +22,20 @@ candidate:
 
 A closed solid's face (every box, prism and sphere) is met only from outside; a floor or a
 ceiling (a lone quad) from either side. Faces near a point are found through tables keyed by
-(group, ``CELL``-sized cell). The work is kept to where it can change a decision, and
-every shortcut is itself decided on the float64 numbers the tests use (never on embree's), so
-it changes no pixel on any CPU (``tests/generate/test_visible_face.py`` holds the pixels equal
-to testing everything): a hit in no cell of a watched edge skips the near-edge test (it would
-find no edge to test); a candidate group whose ``group_box`` the ray meets outside is dropped
-(none of its faces could hold the point; the box's bound is worked out in
-:func:`~povagent.generate.face_groups.group_boxes`); an outline pixel's candidates are tested
-nearest first, a farther one only where none nearer holds the ray. What stays machine-dependent: a sliver thinner than a pixel that
-no neighbour shows and no crease leads to, and shadow rays grazing an edge (embree decides
-those alone); measured in ``benchmarks/bench_render_isa.py``, see
-``docs/explanation/reproducibility.md``. What it must not do: call a numpy function whose
-result depends on the CPU (transcendentals, BLAS): it uses +, -, *, /, sqrt and comparisons,
-element by element. A camera's pixels go through the compiled loop ``visible_face.c`` where it
-was built (the same operations in the same order: the same numbers), numpy's passes otherwise.
+(group, ``CELL``-sized cell). The work is kept to where it can change a decision, and every
+shortcut is itself decided on the float64 numbers the tests use (never on embree's), so it
+changes no pixel on any CPU (``tests/generate/test_visible_face.py`` holds the pixels equal to
+testing everything): a hit in no cell of a watched edge skips the near-edge test (it would find
+no edge to test); a candidate group whose ``group_box`` (:func:`~povagent.generate.face_groups.
+group_boxes`) the ray meets outside is dropped (none of its faces could hold the point); an
+outline pixel's candidates are tested nearest first, a farther one only where none nearer holds
+the ray. What stays machine-dependent: a sliver thinner than a pixel that no neighbour shows and
+no crease leads to, and shadow rays grazing an edge (embree decides those alone); measured in
+``benchmarks/bench_render_isa.py``, see ``docs/explanation/reproducibility.md``. What it must
+not do: call a numpy function whose result depends on the CPU (transcendentals, BLAS): it uses
++, -, *, /, sqrt and comparisons, element by element. A camera's pixels go through the compiled
+loop ``visible_face.c`` where it was built (the same operations in the same order: the same
+numbers), numpy's passes otherwise.
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ from povagent.generate.face_groups import (
     overlapped_sides,
     unit,
 )
-from povagent.generate.visible_face_loop import LoopTables, decide_pixels, fits, loop_tables
+from povagent.generate.visible_face_loop import LoopTables, as_asked, decide_pixels, fits, loop_tables
 
 #: The compiled decision of a camera's pixels (``visible_face.c``), or ``None``: numpy's passes.
 _LOOP = "_visible_face"
@@ -128,8 +128,7 @@ class VisibleFaces:
         object.__setattr__(self, "_rows", FaceRows.of(self))
 
     def __getstate__(self) -> dict[str, object]:
-        # (the compiled loop's tables are laid out again where they are used, not pickled)
-        return {**self.__dict__, "_loop_tables": []}
+        return {**self.__dict__, "_loop_tables": []}  # (the loop's tables: laid out again where used, not pickled)
 
     @classmethod
     def build(cls, vertices: np.ndarray, faces: np.ndarray, looks: np.ndarray, closed: np.ndarray | None = None, by_look: bool = False) -> VisibleFaces:
@@ -278,19 +277,22 @@ class VisibleFaces:
 
     # -- a camera's pixels ------------------------------------------------------------------
     def decide_image(
-        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, skip: bool = False
+        self, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool = True, skip: bool = False,
+        narrow: bool = False,
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """:meth:`decide` for the rays of one camera's pixels (row-major, one ``origin``), each
         pixel near another group (in its 3x3 neighbourhood or across a nearby crease) showing
         the nearest of the groups whose faces hold its ray; the distances ``None`` unless wanted.
-        ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked
-        up with the float64 hit the tests would use, so the same on every CPU) are skipped:
-        they would find no edge to test, and the pixels are the same either way. float32
-        directions (the renderer's) go through the compiled loop where it was built."""
+        ``skip``: the exact tests of hits in no cell of a watched edge (``near_cells``, looked up
+        with the float64 hit the tests would use) are skipped: they would find no edge to test.
+        float32 directions (the renderer's) go through the compiled loop where it was built. The
+        faces are intp and the distances float64, or with ``narrow`` int32 and float32 (the
+        float64's rounding: what the renderer's depth and shading use, half the memory)."""
         if _COMPILED is not None and fits(tri, origin, directions, height, width):
             if not self._loop_tables:
                 self._loop_tables.append(loop_tables(self, self._rows, CELL, EDGE_CELL, EDGE_MARGIN, CONTAINS_TOLERANCE))
-            return decide_pixels(_COMPILED, self._loop_tables[0], tri, origin, directions, height, width, want_distance, skip)
+            return decide_pixels(_COMPILED, self._loop_tables[0], tri, origin, directions, height, width, want_distance, skip, narrow)
+        tri = np.asarray(tri, dtype=np.intp)
         o = np.asarray(origin, dtype=np.float64)
         d = tuple(np.asarray(r, dtype=np.float64) for r in directions)
         shown, t, crease_ray, crease_group = self._decide(tri, o, d, want_distance, skip)
@@ -305,7 +307,7 @@ class VisibleFaces:
             edge[there] |= differs
         pixels = np.flatnonzero(edge.ravel())
         if not len(pixels) and not len(crease_ray):
-            return shown, t
+            return as_asked(shown, t, narrow)
         # candidates: the groups the 3x3 neighbourhood shows (a neighbour beyond the frame's
         # border: the pixel on the border), those across a crease near the hit, and those across
         # a crease near where the ray meets a neighbour's group
@@ -332,7 +334,7 @@ class VisibleFaces:
         shown[ray] = face
         if t is not None:
             t[ray] = dist
-        return shown, t
+        return as_asked(shown, t, narrow)
 
     def _reachable(
         self, ray: np.ndarray, cand: np.ndarray, o: np.ndarray, d: tuple[np.ndarray, ...]

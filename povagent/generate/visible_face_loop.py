@@ -90,7 +90,9 @@ def holding_rows(rows: FaceRows) -> np.ndarray:
 
 def fits(tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int) -> bool:
     """Whether the loop reads these pixels as they are: float32 (3, height * width) directions
-    (as the renderer makes them; another dtype takes numpy's path), one origin, 64-bit indices."""
+    (as the renderer makes them; another dtype takes numpy's path), one origin, 64-bit indices;
+    the triangles int32 (embree's, read as they are) or any integers within int32's range below
+    (the loop keeps the faces shown as int32: a lower "no hit" would not survive it)."""
     return (
         isinstance(directions, np.ndarray)
         and directions.dtype == np.float32
@@ -98,19 +100,38 @@ def fits(tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: in
         and np.shape(tri) == (height * width,)
         and np.size(origin) == 3
         and np.dtype(np.intp).itemsize == 8
+        and (np.asarray(tri).dtype == np.int32 or not np.size(tri) or int(np.min(tri)) >= -(2**31))
     )
 
 
 def decide_pixels(
-    loop: ModuleType, tables: LoopTables, tri: np.ndarray, origin: np.ndarray, directions: np.ndarray, height: int, width: int, want_distance: bool, skip: bool
+    loop: ModuleType,
+    tables: LoopTables,
+    tri: np.ndarray,
+    origin: np.ndarray,
+    directions: np.ndarray,
+    height: int,
+    width: int,
+    want_distance: bool,
+    skip: bool,
+    narrow: bool = False,
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """The loop's decision for one camera's pixels (:func:`fits`): the face shown and (if
-    wanted, else ``None``) its distance, per pixel."""
+    wanted, else ``None``) its distance, per pixel: intp and float64, or with ``narrow`` int32
+    and float32 (the float64's rounding), written so by the loop."""
     count = height * width
-    shown = np.empty(count, dtype=np.intp)
-    t = np.empty(count if want_distance else 0, dtype=np.float64)
+    shown = np.empty(count, dtype=np.int32 if narrow else np.intp)
+    t = np.empty(count if want_distance else 0, dtype=np.float32 if narrow else np.float64)
     o = np.asarray(origin, dtype=np.float64).ravel()
     arrays, numbers = tables
-    pixel_tri, rays = np.ascontiguousarray(tri, dtype=np.intp), np.ascontiguousarray(directions)
+    embree = isinstance(tri, np.ndarray) and tri.dtype == np.int32  # read as it is
+    pixel_tri = np.ascontiguousarray(tri) if embree else np.ascontiguousarray(tri, dtype=np.intp)
+    rays = np.ascontiguousarray(directions)
     loop.decide_image(arrays, numbers, pixel_tri, (float(o[0]), float(o[1]), float(o[2])), rays, height, width, want_distance, skip, shown, t)
     return shown, t if want_distance else None
+
+
+def as_asked(shown: np.ndarray, t: np.ndarray | None, narrow: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """numpy's answer (intp faces, float64 distances) as ``VisibleFaces.decide_image`` was asked
+    for it: as it is, or with ``narrow`` int32 and float32, as :func:`decide_pixels` writes them."""
+    return (shown.astype(np.int32), None if t is None else t.astype(np.float32)) if narrow else (shown, t)

@@ -4,11 +4,13 @@
 #include "visible_face.h"
 
 /* a row's outline values and groups: of the face each pixel shows (-1: none), as the exact tests
- * left it */
-static void outline_row(const Faces *s, const int64_t *shown, Py_ssize_t width, int32_t *seen, int32_t *group) {
+ * left it (one branchless load a pixel, of Faces.face_looks) */
+static void outline_row(const Faces *s, const int32_t *shown, Py_ssize_t width, int32_t *seen, int32_t *group) {
+    const int32_t none = (int32_t)s->faces; /* the entry of no face: -1 and -1 */
     for (Py_ssize_t x = 0; x < width; x++) {
-        seen[x] = shown[x] >= 0 ? s->outline[shown[x]] : -1;
-        group[x] = shown[x] >= 0 ? (int32_t)s->group[shown[x]] : -1;
+        int64_t both = s->face_looks[shown[x] >= 0 ? shown[x] : none];
+        seen[x] = (int32_t)both;
+        group[x] = (int32_t)(both >> 32);
     }
 }
 
@@ -108,11 +110,17 @@ static int resolve(const Faces *s, Scratch *w, const int32_t *const rows[3], int
     for (size_t k = 0; k < w->cand.n; k++)
         if (reach(s, w->cand.v[k], i, &w->reached)) return -1;
     /* the groups across a crease near where the ray meets a candidate (a candidate not reached
-     * is not reached either when it comes again) */
+     * is not reached either when it comes again). Not looked for again at the pixel's own hit
+     * (its own group: the same plane, distance and point as vf_decide_rays's, whose exact tests
+     * keep a face's group): those groups came in as its crease pairs, already candidates, or
+     * there are none (a hit in no near cell, or of a group with no watched edge) */
     size_t first = w->reached.n;
     int near;
-    for (size_t k = 0; k < first; k++)
+    int64_t own = rows[1][x];
+    for (size_t k = 0; k < first; k++) {
+        if (w->reached.v[k].group == own) continue;
         if (vf_near_watched(s, w->reached.v[k].group, w->reached.v[k].p, i, &w->extra_ray, &w->extra_group, &near)) return -1;
+    }
     for (size_t k = 0; k < w->extra_group.n; k++) {
         int64_t g = w->extra_group.v[k];
         if (contains(w->cand.v, w->cand.n, g)) continue;
@@ -150,7 +158,8 @@ static int resolve(const Faces *s, Scratch *w, const int32_t *const rows[3], int
 /* every pixel on an outline or near a crease, resolved among its candidates, a row at a time
  * (three rows of outline values kept); the neighbourhoods are read as the exact tests left
  * them: the pixels resolved are written once all are */
-static int vf_resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray, const Vec *crease_group, int64_t *shown, double *t) {
+static int vf_resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width, const Vec *crease_ray, const Vec *crease_group, const Pixels *px, int want) {
+    int32_t *shown = px->shown;
     Scratch w;
     memset(&w, 0, sizeof w);
     int32_t *seen = malloc((size_t)(6 * width + 1) * sizeof(int32_t)), *group = seen + 3 * width;
@@ -183,8 +192,12 @@ static int vf_resolve_pixels(const Faces *s, Py_ssize_t height, Py_ssize_t width
         }
     }
     for (size_t k = 0; k < w.ray.n && !failed; k++) {
-        shown[w.ray.v[k]] = w.face.v[k];
-        if (t) memcpy(&t[w.ray.v[k]], &w.dist.v[k], sizeof(double));
+        Py_ssize_t i = w.ray.v[k];
+        shown[i] = (int32_t)w.face.v[k];
+        double dist;
+        memcpy(&dist, &w.dist.v[k], sizeof dist);
+        if (want && px->t32) ((float *)px->t)[i] = (float)dist;
+        else if (want) ((double *)px->t)[i] = dist;
     }
     free(seen);
     free(edge);

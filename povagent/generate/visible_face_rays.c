@@ -31,6 +31,64 @@ __attribute__((target("avx"))) static Py_ssize_t cells_avx(const float *d, const
     }
     return j;
 }
+
+/* pixel_block's loop four pixels at once with AVX2 where the CPU has it: each pixel's face row
+ * read as two vectors and the four rows turned into columns, then the same IEEE operations as
+ * the scalar loop, lane by lane (C's != holds for NaN: _CMP_NEQ_UQ; >= does not: _CMP_GE_OQ;
+ * e - e == 0 is isfinite(e)); returns how many pixels it did (a multiple of 4) */
+static int cpu_has_avx2 = 0;
+
+__attribute__((target("avx2"))) static inline void columns(const double *r0, const double *r1, const double *r2, const double *r3, __m256d c[4]) {
+    __m256d a = _mm256_loadu_pd(r0), b = _mm256_loadu_pd(r1), e = _mm256_loadu_pd(r2), f = _mm256_loadu_pd(r3);
+    __m256d lo0 = _mm256_unpacklo_pd(a, b), hi0 = _mm256_unpackhi_pd(a, b), lo1 = _mm256_unpacklo_pd(e, f), hi1 = _mm256_unpackhi_pd(e, f);
+    c[0] = _mm256_permute2f128_pd(lo0, lo1, 0x20);
+    c[1] = _mm256_permute2f128_pd(hi0, hi1, 0x20);
+    c[2] = _mm256_permute2f128_pd(lo0, lo1, 0x31);
+    c[3] = _mm256_permute2f128_pd(hi0, hi1, 0x31);
+}
+
+__attribute__((target("avx2"))) static Py_ssize_t pixels_avx2(Py_ssize_t count, const int64_t *tri, const float *dx, const float *dy, const float *dz,
+                                                              const double *face_row, int64_t faces, double *every, int64_t *flags, int64_t *beyond) {
+    const __m256i none = _mm256_set1_epi64x(-1), limit = _mm256_set1_epi64x(faces), one = _mm256_set1_epi64x(1);
+    const __m256i watched = _mm256_set1_epi64x(WATCHED), met_bit = _mm256_set1_epi64x(MET), finite_bit = _mm256_set1_epi64x(FINITE_HIT);
+    const __m256d zero = _mm256_setzero_pd(), inf = _mm256_set1_pd(INFINITY);
+    __m256i past = _mm256_setzero_si256();
+    Py_ssize_t j = 0;
+    for (; j + 3 < count; j += 4) {
+        __m256i f = _mm256_loadu_si256((const __m256i *)(tri + j));
+        __m256i hit = _mm256_cmpgt_epi64(f, none), below = _mm256_cmpgt_epi64(limit, f);
+        past = _mm256_or_si256(past, _mm256_andnot_si256(below, one));
+        int64_t face[4];
+        _mm256_storeu_si256((__m256i *)face, _mm256_and_si256(_mm256_and_si256(hit, below), f));
+        const double *r0 = face_row + 8 * face[0], *r1 = face_row + 8 * face[1], *r2 = face_row + 8 * face[2], *r3 = face_row + 8 * face[3];
+        __m256d c[4], k[4];
+        columns(r0, r1, r2, r3, c);
+        columns(r0 + 4, r1 + 4, r2 + 4, r3 + 4, k);
+        __m256d d0 = _mm256_cvtps_pd(_mm_loadu_ps(dx + j)), d1 = _mm256_cvtps_pd(_mm_loadu_ps(dy + j)), d2 = _mm256_cvtps_pd(_mm_loadu_ps(dz + j));
+        __m256d along = _mm256_mul_pd(c[0], d0);
+        along = _mm256_add_pd(along, _mm256_mul_pd(c[1], d1));
+        along = _mm256_add_pd(along, _mm256_mul_pd(c[2], d2));
+        __m256d q = _mm256_div_pd(c[3], along);
+        __m256d use = _mm256_and_pd(_mm256_castsi256_pd(hit), _mm256_cmp_pd(along, zero, _CMP_NEQ_UQ));
+        __m256d e = _mm256_blendv_pd(inf, q, use);
+        __m256d facing = _mm256_mul_pd(k[0], d0);
+        facing = _mm256_add_pd(facing, _mm256_mul_pd(k[1], d1));
+        facing = _mm256_add_pd(facing, _mm256_mul_pd(k[2], d2));
+        __m256i met = _mm256_castpd_si256(_mm256_cmp_pd(facing, zero, _CMP_GE_OQ));
+        __m256i bits = _mm256_castpd_si256(k[3]);
+        __m256i side = _mm256_add_epi64(one, _mm256_and_si256(met, one));
+        __m256i rival = _mm256_slli_epi64(_mm256_and_si256(_mm256_srlv_epi64(bits, side), one), 2); /* RIVAL = 4 */
+        __m256i finite = _mm256_and_si256(hit, _mm256_castpd_si256(_mm256_cmp_pd(_mm256_sub_pd(e, e), zero, _CMP_EQ_OQ)));
+        __m256i out = _mm256_or_si256(_mm256_and_si256(bits, watched), _mm256_and_si256(met, met_bit));
+        out = _mm256_or_si256(out, _mm256_or_si256(rival, _mm256_and_si256(finite, finite_bit)));
+        _mm256_storeu_si256((__m256i *)(flags + j), out);
+        _mm256_storeu_pd(every + j, e);
+    }
+    int64_t lanes[4];
+    _mm256_storeu_si256((__m256i *)lanes, past);
+    *beyond |= lanes[0] | lanes[1] | lanes[2] | lanes[3];
+    return j;
+}
 #endif
 
 /* CellMask.covers for a block of pixels' hits (o + d * at, at: every finite distance, else 0),
@@ -41,7 +99,7 @@ __attribute__((target("avx"))) static Py_ssize_t cells_avx(const float *d, const
  * difference takes that back exactly, one less where it rounded up. One coordinate at a time
  * over the block, four pixels at once with AVX or two with SSE2 (the same IEEE operations). -1 where a cell is
  * not in the grid: a NaN direction (numpy's path raises IndexError there too) */
-static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, const double *every, uint8_t *flags) {
+static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, const double *every, int64_t *flags) {
     const double whole = 6755399441055744.0;
     double at[BLOCK], index[BLOCK];
     for (Py_ssize_t j = 0; j < count; j++) at[j] = isfinite(every[j]) ? every[j] : 0.0;
@@ -84,7 +142,7 @@ static int covers_block(const Faces *s, Py_ssize_t start, Py_ssize_t count, cons
     for (Py_ssize_t j = 0; j < count; j++) {
         if (!(index[j] >= 0 && index[j] < cells)) return -1;
         int32_t i = (int32_t)index[j];
-        flags[j] &= (uint8_t)(0xFE | (s->marked[i >> 3] >> (i & 7)));
+        flags[j] &= ~(int64_t)1 | ((s->marked[i >> 3] >> (i & 7)) & 1);
     }
     return 0;
 }
@@ -143,47 +201,72 @@ static int64_t vf_highest_holding(const Faces *s, Py_ssize_t at, const double p[
     return -1;
 }
 
+/* vf_decide_rays's first pass over a block's pixels (the comment there says what): each pixel's
+ * face row (face_row: 8 doubles a face, the flags' bits in the last) read whole; returns
+ * whether a triangle index lies beyond the faces */
+static int64_t pixel_block(Py_ssize_t count, const int64_t *tri, const float *dx, const float *dy, const float *dz, const double *face_row,
+                           int64_t faces, double *every, int64_t *flags) {
+    int64_t beyond = 0;
+    Py_ssize_t j = 0;
+#ifdef HAS_AVX_PATH
+    if (cpu_has_avx2) j = pixels_avx2(count, tri, dx, dy, dz, face_row, faces, every, flags, &beyond);
+#endif
+    for (; j < count; j++) {
+        int64_t f = tri[j];
+        int64_t hit = f >= 0;
+        beyond |= f >= faces;
+        const double *row = face_row + 8 * (hit && f < faces ? f : 0);
+        double d0 = dx[j], d1 = dy[j], d2 = dz[j];
+        double along = row[0] * d0;
+        along += row[1] * d1;
+        along += row[2] * d2;
+        double q = row[3] / along;
+        double e = (hit && along != 0) ? q : INFINITY;
+        double facing = row[4] * d0;
+        facing += row[5] * d1;
+        facing += row[6] * d2;
+        int64_t met = facing >= 0, bits;
+        memcpy(&bits, row + 7, sizeof bits);
+        flags[j] = (bits & WATCHED) | (met ? MET : 0) | (((bits >> (1 + met)) & 1) ? RIVAL : 0) | (hit && isfinite(e) ? FINITE_HIT : 0);
+        every[j] = e;
+    }
+    return beyond;
+}
+
 /* VisibleFaces._decide for every pixel, a block at a time: first for each pixel without a
  * branch (the CPU overlaps the pixels' divisions) the distance to its face's group plane
  * (_face_distance: inf where parallel or nothing is hit) and whether its hit can be decided
  * otherwise (a watched group's hit, in a near cell where skip asks, or a rival overlapping its
  * face from the side met: _side); then those hits' exact tests. The crease pairs they find are
  * pushed, in pixel order */
-static int vf_decide_rays(const Faces *s, const int64_t *tri, int want, int skip, int64_t *shown, double *t, Vec *crease_ray, Vec *crease_group) {
+static int vf_decide_rays(const Faces *s, const Pixels *px, int want, int skip, Vec *crease_ray, Vec *crease_group) {
     int masked = skip && s->has_mask;
     double every[BLOCK];
-    uint8_t flags[BLOCK];
-    int beyond = 0; /* a triangle index beyond the mesh's faces */
+    int64_t flags[BLOCK];
+    int64_t beyond = 0; /* a triangle index beyond the mesh's faces */
     /* (the struct's fields read once: the byte stores below may alias anything) */
     const float *dx = s->d, *dy = s->d + s->n, *dz = s->d + 2 * s->n;
     const double *face_row = s->face_row;
-    const uint8_t *face_flags = s->face_flags;
     const Py_ssize_t faces = s->faces;
+    int32_t *shown = px->shown;
+    int64_t tri[BLOCK], below = 0; /* the block's triangles; an int64 one below int32's range */
     for (Py_ssize_t start = 0; start < s->n; start += BLOCK) {
         Py_ssize_t count = s->n - start < BLOCK ? s->n - start : BLOCK;
-        for (Py_ssize_t j = 0; j < count; j++) {
-            Py_ssize_t i = start + j;
-            int64_t f = tri[i];
-            int hit = f >= 0;
-            beyond |= f >= faces;
-            int64_t face = hit && f < faces ? f : 0;
-            const double *row = face_row + 8 * face;
-            double d0 = dx[i], d1 = dy[i], d2 = dz[i];
-            double along = row[0] * d0;
-            along += row[1] * d1;
-            along += row[2] * d2;
-            double q = row[3] / along;
-            double e = (hit && along != 0) ? q : INFINITY;
-            double facing = row[4] * d0;
-            facing += row[5] * d1;
-            facing += row[6] * d2;
-            int met = facing >= 0, bits = face_flags[face];
-            flags[j] = (uint8_t)((bits & WATCHED) | (met ? MET : 0) | (((bits >> (1 + met)) & 1) ? RIVAL : 0) | (hit && isfinite(e) ? FINITE_HIT : 0));
-            every[j] = e;
-            shown[i] = f;
-            if (want) t[i] = e;
+        if (px->tri32) {
+            const int32_t *from = (const int32_t *)px->tri + start;
+            for (Py_ssize_t j = 0; j < count; j++) tri[j] = from[j];
+        } else {
+            memcpy(tri, (const int64_t *)px->tri + start, (size_t)count * sizeof *tri);
+            for (Py_ssize_t j = 0; j < count; j++) below |= tri[j] < INT32_MIN;
         }
+        beyond |= pixel_block(count, tri, dx + start, dy + start, dz + start, face_row, faces, every, flags);
         if (beyond) return BEYOND;
+        if (below) return BELOW;
+        for (Py_ssize_t j = 0; j < count; j++) shown[start + j] = (int32_t)tri[j];
+        if (want && px->t32)
+            for (Py_ssize_t j = 0; j < count; j++) ((float *)px->t)[start + j] = (float)every[j];
+        else if (want)
+            memcpy((double *)px->t + start, every, (size_t)count * sizeof *every);
         if (masked && covers_block(s, start, count, every, flags)) return NOT_FINITE;
         /* the block's hits that can be decided otherwise, listed without a branch (a few in
          * six: a branch per pixel would be mispredicted at every run's end) */
@@ -197,7 +280,7 @@ static int vf_decide_rays(const Faces *s, const int64_t *tri, int want, int skip
             Py_ssize_t j = examined[k];
             int bits = flags[j];
             Py_ssize_t i = start + j;
-            int64_t f = tri[i], g = s->group[f];
+            int64_t f = tri[j], g = s->group[f];
             double p[3];
             point_at(s, i, every[j], p);
             int near;
@@ -206,7 +289,7 @@ static int vf_decide_rays(const Faces *s, const int64_t *tri, int want, int skip
             Py_ssize_t at = find_memo(s->face_memo, s->face_keys, s->keys, key_of(g, p, s->inv_cell));
             if (at < 0 || !s->mixed[at]) continue;
             int64_t best = vf_highest_holding(s, at, p, i);
-            shown[i] = best >= 0 ? best : f;
+            shown[i] = (int32_t)(best >= 0 ? best : f);
         }
     }
     return 0;

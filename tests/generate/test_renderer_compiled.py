@@ -149,7 +149,7 @@ def test_buffers_of_the_wrong_sizes_are_refused():
     n, faces = 4, 2
     f32, u8 = np.zeros(3 * n, np.float32), np.zeros(3 * n, np.uint8)
     table = np.zeros(3 * faces, np.float32)
-    pixels = [np.zeros(n, np.int64), np.zeros(n, np.float64), f32, np.zeros(3, np.float32)]
+    pixels = [np.zeros(n, np.int32), np.zeros(n, np.float32), f32, np.zeros(3, np.float32)]  # int32 faces, float32 distances
     outputs = [u8, u8.copy(), np.zeros(n, np.uint8), f32.copy(), f32.copy(), np.zeros(n, np.float32)]
     args = [*pixels, table, table, table, np.zeros(faces, np.int32), True, *outputs]
     # all zeros: each pixel shows face 0 at the light itself, its direction NaN: no shadow ray

@@ -123,6 +123,41 @@ def test_the_compiled_loop_decides_every_pixel_and_distance_as_numpy(views, obje
         assert_same(compiled, numpy_s, want_distance)
 
 
+@pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
+def test_the_narrow_answer_is_the_wide_one_rounded_on_both_paths(views, objects_only, monkeypatch):
+    """The renderer's call: embree's int32 triangles read as they are, int32 faces and float32
+    distances back (the loop writes them so, numpy's path casts its answer): the wide answer's
+    values, the same on both paths."""
+    renderer, hits = views
+    faces = renderer._objects if objects_only else renderer._visible
+    want = not objects_only
+    for tri, *rest in hits:
+        wide = both_paths(faces, (tri, *rest), monkeypatch, want_distance=want, skip=True)
+        narrow = both_paths(faces, (tri.astype(np.int32), *rest), monkeypatch, want_distance=want, skip=True, narrow=True)
+        for (shown, t), (shown32, t32) in zip(wide, narrow):
+            assert shown32.dtype == np.int32 and np.array_equal(shown32, shown)
+            if want:
+                assert t32.dtype == np.float32 and np.array_equal(t32, t.astype(np.float32))  # inf where nothing is hit
+        assert_same(*narrow, want)
+
+
+def test_a_no_hit_below_int32_keeps_its_value(views, monkeypatch):
+    """The loop keeps the faces as int32: an int64 "no hit" below that range is answered by
+    numpy's path (as it is), and the loop called with it refuses it rather than change it."""
+    from povagent.generate.visible_face_loop import decide_pixels
+
+    renderer, hits = views
+    tri, *rest = hits[-1]  # the camera outside: rays that hit nothing beside rays that hit the wall
+    odd = np.where(tri < 0, -(2**40), tri)
+    compiled, numpy_s = both_paths(renderer._visible, (odd, *rest), monkeypatch, skip=True)
+    assert_same(compiled, numpy_s, want_distance=True)
+    assert (compiled[0] == -(2**40)).sum() == (tri < 0).sum() > 0
+    monkeypatch.setattr(visible_face, "_COMPILED", compiled_or_skip())
+    renderer._visible.decide_image(tri, *rest, skip=True)  # (the loop's tables laid out)
+    with pytest.raises(ValueError, match="below int32"):
+        decide_pixels(compiled_or_skip(), renderer._visible._loop_tables[0], odd, *rest, True, True)
+
+
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
 def test_the_loop_built_for_any_x86_64_decides_as_the_installed_one(views, tmp_path, monkeypatch):
     """The installed loop tests the near cells four pixels at a time with AVX where the CPU has
