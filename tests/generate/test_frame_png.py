@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import io
+import shutil
+import sys
 import threading
 import zlib
 from pathlib import Path
@@ -12,8 +14,9 @@ import pytest
 from PIL import Image
 
 from povagent.generate import frame_png
+from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png, encode_planes_png
-from tests.generate.compiled_paths import each_path
+from tests.generate.compiled_paths import each_path, generic_build
 
 #: every test here runs on the compiled row filters and on numpy's (the same bytes)
 path = pytest.fixture(autouse=True, params=["compiled", "numpy"])(each_path(frame_png))
@@ -82,6 +85,23 @@ def test_colour_planes_encode_to_the_bytes_of_their_interleaved_frame(index):
     height, width = rgb.shape[:2]
     planes = np.ascontiguousarray(rgb.reshape(-1, 3).T)
     assert encode_planes_png(planes, height, width) == pillow_png(rgb)
+
+
+@pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
+def test_the_row_filters_built_for_any_x86_64_give_the_installed_ones_bytes(tmp_path, monkeypatch):
+    """The installed loop filters rows with AVX2 where the CPU has it; built without that path
+    it writes the same filtered rows, for planes and for interleaved pixels."""
+    generic = generic_build(tmp_path, "png_rows")
+    for rgb in [*_images(), np.random.default_rng(8).integers(0, 256, (37, 515, 3), dtype=np.uint8)]:
+        height, width = rgb.shape[:2]
+        planes = np.ascontiguousarray(rgb.reshape(-1, 3).T)
+        encoded = []
+        for loop in (compiled_loop(frame_png._LOOP), generic):
+            if loop is None:
+                pytest.skip("the compiled loop is not built here (or POVAGENT_PURE_NUMPY is set)")
+            monkeypatch.setattr(frame_png, "_COMPILED", loop)
+            encoded.append((encode_frame_png(rgb), encode_planes_png(planes, height, width)))
+        assert encoded[0] == encoded[1] == (pillow_png(rgb), pillow_png(rgb))
 
 
 def test_planes_of_another_shape_are_refused():
