@@ -36,10 +36,11 @@ def each_path(module: ModuleType, attribute: str = "_COMPILED") -> Callable[...,
 
 
 
-def generic_build(folder: Path, source: str) -> ModuleType:
+def generic_build(folder: Path, source: str, extra: tuple[str, ...] = ()) -> ModuleType:
     """``povagent/generate/<source>.c`` built again with setup.py's flags and
-    ``-DPOVAGENT_ONE_BUILD``: the loops for any x86-64 alone (no AVX or AVX2 path chosen at
-    load), as module ``_<source>`` from ``folder``."""
+    ``-DPOVAGENT_ONE_BUILD``: the loops for any x86-64 alone (no AVX, AVX2 or AVX-512 path chosen
+    at load), or with ``extra`` flags (``-mavx2``: the loops as the AVX2 clone compiles them, for
+    a machine that would choose AVX-512), as module ``_<source>`` from ``folder``."""
     root = Path(__file__).resolve().parents[2]
     tree = ast.parse((root / "setup.py").read_text())
     flags = next(node.value for node in ast.walk(tree) if isinstance(node, ast.Assign) and getattr(node.targets[0], "id", "") == "IEEE_FLAGS")
@@ -47,10 +48,31 @@ def generic_build(folder: Path, source: str) -> ModuleType:
     target = folder / f"_{source}{sysconfig.get_config_var('EXT_SUFFIX')}"
     compiler = shutil.which("cc") or shutil.which("gcc")
     assert compiler is not None
-    command = [compiler, "-shared", "-fPIC", *ast.literal_eval(flags.orelse), "-DPOVAGENT_ONE_BUILD", f"-I{sysconfig.get_paths()['include']}"]
+    command = [compiler, "-shared", "-fPIC", *ast.literal_eval(flags.orelse), "-DPOVAGENT_ONE_BUILD", *extra, f"-I{sysconfig.get_paths()['include']}"]
     subprocess.run([*command, str(root / "povagent" / "generate" / f"{source}.c"), "-o", str(target)], check=True, capture_output=True, timeout=120)
     spec = importlib.util.spec_from_file_location(f"_{source}", target)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def cpu_has(feature: str) -> bool:
+    """Whether this CPU has ``feature`` (numpy's name for it: ``"AVX2"``, ``"AVX512F"``)."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__
+    except ImportError:  # numpy 1
+        from numpy.core._multiarray_umath import __cpu_features__
+    return bool(__cpu_features__.get(feature, False))
+
+
+#: The builds a loop is compared against the installed one in: every clone's code but the
+#: installed machine's own (for any x86-64; AVX2's, where the machine would choose AVX-512).
+OTHER_BUILDS = pytest.mark.parametrize("extra", [(), ("-mavx2",)], ids=["any-x86-64", "avx2"])
+
+
+def other_build(folder: Path, source: str, extra: tuple[str, ...]) -> ModuleType:
+    """:func:`generic_build` with ``extra``, skipped where this CPU could not run it."""
+    if "-mavx2" in extra and not cpu_has("AVX2"):
+        pytest.skip("this CPU has no AVX2")
+    return generic_build(folder, source, extra)

@@ -16,7 +16,7 @@ from PIL import Image
 from povagent.generate import frame_png
 from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.frame_png import PNG_COMPRESS_LEVEL, encode_frame_png, encode_planes_png
-from tests.generate.compiled_paths import each_path, generic_build
+from tests.generate.compiled_paths import OTHER_BUILDS, each_path, other_build
 
 #: every test here runs on the compiled row filters and on numpy's (the same bytes)
 path = pytest.fixture(autouse=True, params=["compiled", "numpy"])(each_path(frame_png))
@@ -88,10 +88,12 @@ def test_colour_planes_encode_to_the_bytes_of_their_interleaved_frame(index):
 
 
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
-def test_the_row_filters_built_for_any_x86_64_give_the_installed_ones_bytes(tmp_path, monkeypatch):
-    """The installed loop filters rows with AVX2 where the CPU has it; built without that path
-    it writes the same filtered rows, for planes and for interleaved pixels."""
-    generic = generic_build(tmp_path, "png_rows")
+@OTHER_BUILDS
+def test_the_row_filters_built_for_another_cpu_give_the_installed_ones_bytes(tmp_path, monkeypatch, extra):
+    """The installed loop filters rows with AVX-512 or AVX2 where the CPU has them; built for any
+    x86-64, or as the AVX2 clone, it writes the same filtered rows, for planes and for
+    interleaved pixels."""
+    generic = other_build(tmp_path, "png_rows", extra)
     for rgb in [*_images(), np.random.default_rng(8).integers(0, 256, (37, 515, 3), dtype=np.uint8)]:
         height, width = rgb.shape[:2]
         planes = np.ascontiguousarray(rgb.reshape(-1, 3).T)

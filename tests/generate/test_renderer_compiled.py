@@ -17,7 +17,7 @@ from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.exploration import plan_tour
 from povagent.generate.house_pipeline import build_house
 from povagent.geometry.camera import Camera
-from tests.generate.compiled_paths import generic_build
+from tests.generate.compiled_paths import OTHER_BUILDS, other_build
 
 LOOP = compiled_loop(renderer_module._LOOP)
 pytestmark = pytest.mark.skipif(LOOP is None, reason="the compiled shading is not built here, or POVAGENT_PURE_NUMPY is set")
@@ -165,8 +165,9 @@ def test_buffers_of_the_wrong_sizes_are_refused():
 
 
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loops")
-def test_the_loops_built_for_any_x86_64_give_the_installed_loops_bytes(views, tmp_path, monkeypatch):
-    generic = generic_build(tmp_path, "shading")
+@OTHER_BUILDS
+def test_the_loops_built_for_another_cpu_give_the_installed_loops_bytes(views, tmp_path, monkeypatch, extra):
+    generic = other_build(tmp_path, "shading", extra)
     for _, renderer, camera in views[:3]:  # two views inside a house, one from outside it
         installed, again = _both_loops(monkeypatch, generic, lambda: renderer.render_planes(camera))  # noqa: B023
         assert np.array_equal(installed, again)
