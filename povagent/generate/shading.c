@@ -143,6 +143,36 @@ static void blend_textures(int count, const int32_t *restrict mat, const float *
     }
 }
 
+/* the texture loop's arguments of a tile's pixels (shade_tile says what; a loop of its own, which
+ * the compiler vectorizes where inside shade_tile it did not) */
+VECTOR_CLONES __attribute__((noinline))
+static void texture_args(int count, const int32_t *restrict mat, const int32_t *restrict code, const float *restrict px, const float *restrict py,
+                         const float *restrict pz, float *restrict across, float *restrict plank, float *restrict shift_arg, float *restrict inner,
+                         int32_t *restrict grout, float *restrict arg, float *restrict along_a) {
+    for (int i = 0; i < count; i++) {
+        int m = mat[i], k = code[i];
+        float x = px[i], y = py[i], z = pz[i];
+        float a = (k & A_IS_Z) ? z : x, b = (k & B_IS_Z) ? z : y;
+        float scale = m == FABRIC ? 160.0f : 90.0f;
+        float cell = floorf(a * scale) * 12.9898f + floorf(b * scale) * 78.233f;
+        float over = x / 0.18f, p = floorf(over);
+        across[i] = over;
+        plank[i] = p;
+        float tint = p * 12.9898f + (p * 0.37f + 1.0f) * 78.233f;
+        /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
+        shift_arg[i] = p * 12.9898f + (float)(7.0 * 78.233);
+        inner[i] = x * 20.0f + p;
+        float tx = x / 0.4f, tz = z / 0.4f, cx = floorf(tx), cz = floorf(tz);
+        grout[i] = (tx - cx < 0.035f) | (tz - cz < 0.035f);
+        float tile = cx * 12.9898f + cz * 78.233f, wood = b * 5.0f + a * 2.0f;
+        float first_arg = (m == FABRIC || m == WALL) ? cell : 0.0f;
+        first_arg = m == WOOD ? wood : first_arg;
+        first_arg = m == FLOOR_WOOD ? tint : first_arg;
+        arg[i] = m == FLOOR_TILE ? tile : first_arg;
+        along_a[i] = a;
+    }
+}
+
 /* Shades pixels first .. first + count - 1 (count <= TILE); returns the shadow rays' count and
  * adds to *bad the pixels whose face index is past the faces. Each loop keeps to 32-bit values
  * (the compiler vectorizes no loop that mixes bytes or doubles with floats). */
@@ -209,27 +239,8 @@ static Py_ssize_t shade_tile(const Frame *fr, Py_ssize_t first, int count, Py_ss
      * walls and tiles, a plank's tint, the wood's inner sine) computed for every pixel and chosen
      * by material, so the loops vectorize; the floor planks' and the wood's further sines only
      * for their pixels, gathered into lists */
+    texture_args(count, mat, code, px, py, pz, across, plank, shift_arg, inner, grout, arg, along_a);
     for (int i = 0; i < count; i++) {
-        int m = mat[i], k = code[i];
-        float x = px[i], y = py[i], z = pz[i];
-        float a = (k & A_IS_Z) ? z : x, b = (k & B_IS_Z) ? z : y;
-        float scale = m == FABRIC ? 160.0f : 90.0f;
-        float cell = floorf(a * scale) * 12.9898f + floorf(b * scale) * 78.233f;
-        float over = x / 0.18f, p = floorf(over);
-        across[i] = over;
-        plank[i] = p;
-        float tint = p * 12.9898f + (p * 0.37f + 1.0f) * 78.233f;
-        /* _hash2(plank, 7.0): b is a Python float there, 7.0 * 78.233 rounded in double first */
-        shift_arg[i] = p * 12.9898f + (float)(7.0 * 78.233);
-        inner[i] = x * 20.0f + p;
-        float tx = x / 0.4f, tz = z / 0.4f, cx = floorf(tx), cz = floorf(tz);
-        grout[i] = (tx - cx < 0.035f) | (tz - cz < 0.035f);
-        float tile = cx * 12.9898f + cz * 78.233f, wood = b * 5.0f + a * 2.0f;
-        float first_arg = (m == FABRIC || m == WALL) ? cell : 0.0f;
-        first_arg = m == WOOD ? wood : first_arg;
-        first_arg = m == FLOOR_WOOD ? tint : first_arg;
-        arg[i] = m == FLOOR_TILE ? tile : first_arg;
-        along_a[i] = a;
         second[i] = 0.0f;
         shift_sine[i] = 0.0f;
         highlight[i] = 0.0f;
