@@ -3,15 +3,21 @@
  * of its compiled loop (visible_face.c says what it does, and includes this file). */
 #include "visible_face.h"
 
-/* a row's outline values and groups: of the face each pixel shows (-1: none), as the exact tests
- * left it (one branchless load a pixel, of Faces.face_looks) */
-static void outline_row(const Faces *s, const int32_t *shown, Py_ssize_t width, int32_t *seen, int32_t *group) {
-    const int32_t none = (int32_t)s->faces; /* the entry of no face: -1 and -1 */
+/* the outline values and groups of a row's pixels: of the face each shows (-1: none), as the
+ * exact tests left it (one branchless load a pixel, of Faces.face_looks, whose entry ``none``
+ * is no face's: a loop the compiler vectorizes with gathers) */
+VECTOR_CLONES
+static void looks_of(const int64_t *restrict face_looks, int32_t none, const int32_t *restrict shown, Py_ssize_t width, int32_t *restrict seen,
+                     int32_t *restrict group) {
     for (Py_ssize_t x = 0; x < width; x++) {
-        int64_t both = s->face_looks[shown[x] >= 0 ? shown[x] : none];
+        int64_t both = face_looks[shown[x] >= 0 ? shown[x] : none];
         seen[x] = (int32_t)both;
         group[x] = (int32_t)(both >> 32);
     }
+}
+
+static void outline_row(const Faces *s, const int32_t *shown, Py_ssize_t width, int32_t *seen, int32_t *group) {
+    looks_of(s->face_looks, (int32_t)s->faces, shown, width, seen, group);
 }
 
 /* whether one of pixel x's 8 neighbours in the frame (the rows above and below: NULL beyond the
@@ -26,18 +32,25 @@ static inline uint8_t differs_around(const int32_t *up, const int32_t *row, cons
     return 0;
 }
 
-/* differs_around for a row: its inner pixels in one branchless pass (it vectorizes) */
+/* whether each inner pixel of a row differs from one of its 8 neighbours: one branchless pass
+ * (it vectorizes) */
+VECTOR_CLONES
+static void inner_edges(const int32_t *restrict up, const int32_t *restrict row, const int32_t *restrict down, Py_ssize_t width, uint8_t *restrict edge) {
+    for (Py_ssize_t x = 1; x < width - 1; x++) {
+        int32_t c = row[x];
+        edge[x] = (uint8_t)((up[x - 1] != c) | (up[x] != c) | (up[x + 1] != c) | (row[x - 1] != c) | (row[x + 1] != c) | (down[x - 1] != c) |
+                            (down[x] != c) | (down[x + 1] != c));
+    }
+}
+
+/* differs_around for a row: its inner pixels in one branchless pass */
 static void outline_edges(const int32_t *up, const int32_t *row, const int32_t *down, Py_ssize_t width, uint8_t *edge) {
     if (!up || !down || width < 3) {
         for (Py_ssize_t x = 0; x < width; x++) edge[x] = differs_around(up, row, down, x, width);
         return;
     }
     edge[0] = differs_around(up, row, down, 0, width);
-    for (Py_ssize_t x = 1; x < width - 1; x++) {
-        int32_t c = row[x];
-        edge[x] = (uint8_t)((up[x - 1] != c) | (up[x] != c) | (up[x + 1] != c) | (row[x - 1] != c) | (row[x + 1] != c) | (down[x - 1] != c) |
-                            (down[x] != c) | (down[x + 1] != c));
-    }
+    inner_edges(up, row, down, width, edge);
     edge[width - 1] = differs_around(up, row, down, width - 1, width);
 }
 

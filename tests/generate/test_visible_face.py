@@ -17,7 +17,7 @@ from povagent.generate.compiled_loops import compiled_loop
 from povagent.generate.face_groups import CONTAINS_TOLERANCE, cross, dot3, group_boxes, inward_edges, unit
 from povagent.generate.visible_face import EDGE_MARGIN, VisibleFaces, _points
 from povagent.geometry.camera import Camera
-from tests.generate.compiled_paths import each_path, generic_build
+from tests.generate.compiled_paths import OTHER_BUILDS, each_path, other_build
 
 path = pytest.fixture(params=["compiled", "numpy"])(each_path(visible_face))
 
@@ -159,11 +159,14 @@ def test_a_no_hit_below_int32_keeps_its_value(views, monkeypatch):
 
 
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
-def test_the_loop_built_for_any_x86_64_decides_as_the_installed_one(views, tmp_path, monkeypatch):
-    """The installed loop tests the near cells four pixels at a time with AVX where the CPU has
-    it; built without that path (SSE2 and scalar), it decides every pixel and distance alike."""
+@OTHER_BUILDS
+def test_the_loop_built_for_another_cpu_decides_as_the_installed_one(views, tmp_path, monkeypatch, extra):
+    """The installed loop takes four pixels at a time with AVX2 (the first pass) and AVX (the
+    near cells) where the CPU has them, and a row's outline with AVX-512 or AVX2; built without
+    those paths (SSE2 and scalar), or as the AVX2 clone, it decides every pixel and distance
+    alike."""
     renderer, hits = views
-    installed, generic = compiled_or_skip(), generic_build(tmp_path, "visible_face")
+    installed, generic = compiled_or_skip(), other_build(tmp_path, "visible_face", extra)
     for h in hits:
         decided = []
         for module in (installed, generic):
