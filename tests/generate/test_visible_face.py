@@ -167,7 +167,9 @@ def test_the_loop_built_for_another_cpu_decides_as_the_installed_one(views, tmp_
     alike."""
     renderer, hits = views
     installed, generic = compiled_or_skip(), other_build(tmp_path, "visible_face", extra)
-    for h in hits:
+    # (the AVX2 clone's code differs from the generic build's in the row outline only: two
+    # views inside and the one from outside show it)
+    for h in hits[::2] if extra else hits:
         decided = []
         for module in (installed, generic):
             monkeypatch.setattr(visible_face, "_COMPILED", module)
