@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import importlib
 import importlib.util
 import shutil
 import subprocess
@@ -60,10 +61,10 @@ def generic_build(folder: Path, source: str, extra: tuple[str, ...] = ()) -> Mod
 def cpu_has(feature: str) -> bool:
     """Whether this CPU has ``feature`` (numpy's name for it: ``"AVX2"``, ``"AVX512F"``)."""
     try:
-        from numpy._core._multiarray_umath import __cpu_features__
+        umath = importlib.import_module("numpy._core._multiarray_umath")
     except ImportError:  # numpy 1
-        from numpy.core._multiarray_umath import __cpu_features__
-    return bool(__cpu_features__.get(feature, False))
+        umath = importlib.import_module("numpy.core._multiarray_umath")
+    return bool(umath.__cpu_features__.get(feature, False))
 
 
 #: The builds a loop is compared against the installed one in: every clone's code but the
@@ -71,8 +72,15 @@ def cpu_has(feature: str) -> bool:
 OTHER_BUILDS = pytest.mark.parametrize("extra", [(), ("-mavx2",)], ids=["any-x86-64", "avx2"])
 
 
+_BUILT: dict[tuple[str, tuple[str, ...]], ModuleType] = {}
+
+
 def other_build(folder: Path, source: str, extra: tuple[str, ...]) -> ModuleType:
-    """:func:`generic_build` with ``extra``, skipped where this CPU could not run it."""
+    """:func:`generic_build` with ``extra`` (into the first asking test's ``folder``, then kept
+    for the session's other tests: the same source, the same module), skipped where this CPU
+    could not run it."""
     if "-mavx2" in extra and not cpu_has("AVX2"):
         pytest.skip("this CPU has no AVX2")
-    return generic_build(folder, source, extra)
+    if (source, extra) not in _BUILT:
+        _BUILT[source, extra] = generic_build(folder, source, extra)
+    return _BUILT[source, extra]
