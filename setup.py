@@ -23,10 +23,10 @@ from setuptools import Extension, setup
 
 #: (module, C sources, the files they include) of each compiled loop, under povagent/generate/.
 COMPILED_LOOPS = (
-    ("povagent.generate._png_rows", ["png_rows.c"], []),
-    ("povagent.generate._shading", ["shading.c"], []),
+    ("povagent.generate._png_rows", ["png_rows.c"], ["vector_clones.h"]),
+    ("povagent.generate._shading", ["shading.c"], ["vector_clones.h"]),
     # (visible_face.c includes its two other files: one translation unit)
-    ("povagent.generate._visible_face", ["visible_face.c"], ["visible_face.h", "visible_face_rays.c", "visible_face_outline.c"]),
+    ("povagent.generate._visible_face", ["visible_face.c"], ["visible_face.h", "visible_face_rays.c", "visible_face_outline.c", "vector_clones.h"]),
 )
 
 IEEE_FLAGS = [] if sys.platform == "win32" else ["-O3", "-ffp-contract=off", "-fno-fast-math", "-fno-math-errno", "-fno-trapping-math", "-std=c99"]

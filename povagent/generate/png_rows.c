@@ -27,14 +27,9 @@ static inline uint8_t paeth(uint8_t a, uint8_t b, uint8_t c) {
     return (pa <= pb && pa <= pc) ? a : bc;
 }
 
-/* GCC on x86-64 Linux builds a row's passes three times, for AVX-512 (x86-64-v4), for AVX2 and
- * for any x86-64, and picks one at load time (integer arithmetic: the same bytes either way);
- * POVAGENT_ONE_BUILD builds the generic passes alone */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(POVAGENT_ONE_BUILD)
-#define VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#else
-#define VECTOR_CLONES
-#endif
+/* a row's passes are built for each CPU kind (vector_clones.h; integer arithmetic: the same
+ * bytes either way) */
+#include "vector_clones.h"
 
 /* a row's pixels into ``here`` (interleaved), from three planes or an interleaved row */
 VECTOR_CLONES

@@ -20,18 +20,11 @@
 #include <math.h>
 #include <stdint.h>
 
-/* GCC on x86-64 Linux builds the tile functions three times, for AVX-512 (x86-64-v4), for AVX2
- * and for any x86-64, and picks one at load time: the same IEEE operations either way (no fused multiply-add:
- * -ffp-contract=off; floor, rint and sqrt are exact), so the same bits. (setup.py's
- * -fno-math-errno and -fno-trapping-math let it vectorize the loops with square roots and
- * choices; they change no value.) POVAGENT_ONE_BUILD builds the generic loops alone: a test holds
- * their bytes equal to the installed ones'. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(POVAGENT_ONE_BUILD)
-#define VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#endif
-#ifndef VECTOR_CLONES
-#define VECTOR_CLONES
-#endif
+/* The tile functions are built for each CPU kind (vector_clones.h): the same IEEE operations
+ * either way (no fused multiply-add: -ffp-contract=off; floor, rint and sqrt are exact), so the
+ * same bits. (setup.py's -fno-math-errno and -fno-trapping-math let GCC vectorize the loops with
+ * square roots and choices; they change no value.) */
+#include "vector_clones.h"
 #if defined(__GNUC__) && !defined(__clang__)
 /* GCC cannot see that a tile's argument list is written as far as it is read (count entries) */
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"

@@ -157,14 +157,9 @@ static inline void point_at(const Faces *s, Py_ssize_t ray, double t, double p[3
     for (int k = 0; k < 3; k++) p[k] = s->o[k] + dir(s, k, ray) * t;
 }
 
-/* GCC on x86-64 Linux builds the simple loops over a row's pixels three times, for AVX-512
- * (x86-64-v4), for AVX2 and for any x86-64, and picks one at load time (integer loads and
- * comparisons: the same values either way); POVAGENT_ONE_BUILD builds the generic loops alone */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && !defined(POVAGENT_ONE_BUILD)
-#define VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#else
-#define VECTOR_CLONES
-#endif
+/* the simple loops over a row's pixels are built for each CPU kind (vector_clones.h; integer
+ * loads and comparisons: the same values either way) */
+#include "vector_clones.h"
 
 /* the pixels are decided a block at a time */
 #define BLOCK 256
