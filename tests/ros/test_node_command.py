@@ -30,7 +30,9 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
     ros_args = ["--ros-args", "-r", "__node:=povagent_cli", "-p", "odom_topic:=/odom", "-p", "reliable_images:=true",
                 "-p", f"mount_parent:={mount['mount_parent']}", "-p", f"mount_child:={mount['mount_child']}",
                 "-p", "mount_transform:=" + " ".join(f"{v:.17g}" for v in mount["mount_transform"])]  # the docs' string form
-    proc = subprocess.Popen([sys.executable, "-m", "povagent.cli", "ros-node", "--pipeline", "center.yaml", *ros_args],
+    # -X faulthandler: a node that does not end after Ctrl-C is sent SIGABRT, which prints every
+    # thread's stack into the failure's message (where it waits) before the process ends
+    proc = subprocess.Popen([sys.executable, "-X", "faulthandler", "-m", "povagent.cli", "ros-node", "--pipeline", "center.yaml", *ros_args],
                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     player_node = ros_graph.add(rclpy.create_node("cli_player", context=ros_graph.context))
     try:
@@ -73,8 +75,13 @@ def test_the_node_command_answers_a_played_tour_with_the_pipelines_goal(ros_grap
         try:
             _, err = proc.communicate(timeout=30)
         except subprocess.TimeoutExpired:
-            proc.kill()
-            _, err = proc.communicate()
+            proc.send_signal(signal.SIGABRT)
+            try:
+                _, err = proc.communicate(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                _, err = proc.communicate()
+            err = f"the node did not end within 30 s of SIGINT; its threads' stacks at SIGABRT:\n{err}"
     assert proc.returncode == 0, err
     assert "Traceback" not in err
     if tf2_messages() is None:  # the PyPI packages alone: the odometry's frame, decided by its first message
