@@ -60,21 +60,30 @@ def test_cells_match_the_tables_cells():
     assert cell(x, SIZE).tolist() == [-1, -1, 0, 0, 1, 16]
 
 
-@pytest.mark.parametrize("objects_only", [False, True])
-def test_skipping_hits_in_no_edges_cell_changes_no_pixel(objects_only):
-    """The same faces and distances with and without the skip, on a generated house's views."""
+@pytest.fixture(scope="module")
+def house_views():
+    """A generated house's renderer and embree's hits of three of its exploration views: built
+    once for both of the test's cases (a build and its ray casts cost more than the checks)."""
     from povagent.generate.exploration import plan_tour
     from povagent.generate.house_pipeline import build_house
 
     built = build_house(0, 0, shadows=False)
     renderer = built.renderer
-    faces = renderer._objects if objects_only else renderer._visible
+    hits = []
     for camera in plan_tour(built.house, renderer, 3):
         d = renderer._directions(camera)
         origin = np.asarray(camera.position, dtype=np.float32)
         out = renderer._scene.run(np.broadcast_to(origin, d.T.shape), d.T, output=1)
-        tri = out["primID"].astype(np.intp)
-        args = (tri, origin, d, camera.height, camera.width)
+        hits.append((out["primID"].astype(np.intp), origin, d, camera.height, camera.width))
+    return renderer, hits
+
+
+@pytest.mark.parametrize("objects_only", [False, True])
+def test_skipping_hits_in_no_edges_cell_changes_no_pixel(house_views, objects_only):
+    """The same faces and distances with and without the skip, on a generated house's views."""
+    renderer, hits = house_views
+    faces = renderer._objects if objects_only else renderer._visible
+    for args in hits:
         plain = faces.decide_image(*args, want_distance=not objects_only)
         skipping = faces.decide_image(*args, want_distance=not objects_only, skip=True)
         assert np.array_equal(plain[0], skipping[0])

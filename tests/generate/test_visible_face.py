@@ -69,17 +69,55 @@ def views(request):
     return renderer, hits
 
 
-@pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
-def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, objects_only, path, monkeypatch):
+@pytest.fixture(scope="module")
+def decisions(views):
+    """``decisions(objects_only, loop, want_distance, skip)``: ``decide_image``'s answers for each
+    of a house's views on ``loop`` (the compiled loop, or ``None``: numpy's passes). Made on first
+    use and kept for the module's house: several tests compare the same answers (the shortcuts'
+    with the reference, each path's with the other's, the wide with the narrow, the installed
+    loop's with another build's), and numpy's cost more than the comparisons."""
     renderer, hits = views
-    faces = renderer._objects if objects_only else renderer._visible
-    fast = [faces.decide_image(*h, want_distance=not objects_only, skip=True) for h in hits]
+    made: dict[tuple, list[tuple[np.ndarray, np.ndarray | None]]] = {}
+
+    def decide(objects_only: bool, loop, want_distance: bool, skip: bool) -> list[tuple[np.ndarray, np.ndarray | None]]:
+        key = (objects_only, loop, want_distance, skip)
+        if key not in made:
+            faces = renderer._objects if objects_only else renderer._visible
+            with pytest.MonkeyPatch.context() as patch:
+                patch.setattr(visible_face, "_COMPILED", loop)
+                made[key] = [faces.decide_image(*h, want_distance=want_distance, skip=skip) for h in hits]
+        return made[key]
+
+    return decide
+
+
+@pytest.fixture(scope="module")
+def every_candidate(views):
+    """``every_candidate(objects_only)``: the reference decisions of a house's views (numpy's
+    passes, every candidate tested). Made on first use and kept for the module's house: both
+    paths' cases compare with the same reference, and it costs more than either."""
+    renderer, hits = views
+    made: dict[bool, list[tuple[np.ndarray, np.ndarray | None]]] = {}
+
+    def reference(objects_only: bool) -> list[tuple[np.ndarray, np.ndarray | None]]:
+        if objects_only not in made:
+            faces = renderer._objects if objects_only else renderer._visible
+            with pytest.MonkeyPatch.context() as patch:
+                patch.setattr(visible_face, "_COMPILED", None)
+                patch.setattr(VisibleFaces, "_reachable", every_candidate_reachable)
+                patch.setattr(VisibleFaces, "_nearest_holding", every_candidate_tested)
+                made[objects_only] = [faces.decide_image(tri, *args, want_distance=not objects_only) for tri, *args in hits]
+        return made[objects_only]
+
+    return reference
+
+
+@pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
+def test_the_shortcuts_change_no_pixel_against_testing_every_candidate(views, decisions, every_candidate, objects_only, path):
+    _, hits = views
+    fast = decisions(objects_only, visible_face._COMPILED, not objects_only, True)  # (the path's loop, or None)
     # the reference: numpy's passes, every candidate tested
-    monkeypatch.setattr(visible_face, "_COMPILED", None)
-    monkeypatch.setattr(VisibleFaces, "_reachable", every_candidate_reachable)
-    monkeypatch.setattr(VisibleFaces, "_nearest_holding", every_candidate_tested)
-    for (tri, *args), (shown, t) in zip(hits, fast):
-        exact = faces.decide_image(tri, *args, want_distance=not objects_only)
+    for (shown, t), exact in zip(fast, every_candidate(objects_only), strict=True):
         assert np.array_equal(shown, exact[0])
         if not objects_only:
             assert np.array_equal(t, exact[1])
@@ -115,24 +153,23 @@ def assert_same(compiled, numpy_s, want_distance):
 @pytest.mark.parametrize("want_distance", [True, False], ids=["distances", "no-distances"])
 @pytest.mark.parametrize("skip", [True, False], ids=["skip", "no-skip"])
 @pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
-def test_the_compiled_loop_decides_every_pixel_and_distance_as_numpy(views, objects_only, skip, want_distance, monkeypatch):
-    renderer, hits = views
-    faces = renderer._objects if objects_only else renderer._visible
-    for h in hits:
-        compiled, numpy_s = both_paths(faces, h, monkeypatch, want_distance=want_distance, skip=skip)
-        assert_same(compiled, numpy_s, want_distance)
+def test_the_compiled_loop_decides_every_pixel_and_distance_as_numpy(decisions, objects_only, skip, want_distance):
+    loop = compiled_or_skip()
+    compiled, numpy_s = (decisions(objects_only, module, want_distance, skip) for module in (loop, None))
+    for one, other in zip(compiled, numpy_s, strict=True):
+        assert_same(one, other, want_distance)
 
 
 @pytest.mark.parametrize("objects_only", [False, True], ids=["faces", "objects"])
-def test_the_narrow_answer_is_the_wide_one_rounded_on_both_paths(views, objects_only, monkeypatch):
+def test_the_narrow_answer_is_the_wide_one_rounded_on_both_paths(views, decisions, objects_only, monkeypatch):
     """The renderer's call: embree's int32 triangles read as they are, int32 faces and float32
     distances back (the loop writes them so, numpy's path casts its answer): the wide answer's
     values, the same on both paths."""
     renderer, hits = views
     faces = renderer._objects if objects_only else renderer._visible
     want = not objects_only
-    for tri, *rest in hits:
-        wide = both_paths(faces, (tri, *rest), monkeypatch, want_distance=want, skip=True)
+    wide_compiled, wide_numpy = (decisions(objects_only, module, want, True) for module in (compiled_or_skip(), None))
+    for (tri, *rest), *wide in zip(hits, wide_compiled, wide_numpy, strict=True):
         narrow = both_paths(faces, (tri.astype(np.int32), *rest), monkeypatch, want_distance=want, skip=True, narrow=True)
         for (shown, t), (shown32, t32) in zip(wide, narrow):
             assert shown32.dtype == np.int32 and np.array_equal(shown32, shown)
@@ -160,21 +197,19 @@ def test_a_no_hit_below_int32_keeps_its_value(views, monkeypatch):
 
 @pytest.mark.skipif((shutil.which("cc") is None and shutil.which("gcc") is None) or sys.platform == "win32", reason="no C compiler to build the generic loop")
 @OTHER_BUILDS
-def test_the_loop_built_for_another_cpu_decides_as_the_installed_one(views, tmp_path, monkeypatch, extra):
+def test_the_loop_built_for_another_cpu_decides_as_the_installed_one(views, decisions, tmp_path, monkeypatch, extra):
     """The installed loop takes four pixels at a time with AVX2 (the first pass) and AVX (the
     near cells) where the CPU has them, and a row's outline with AVX-512 or AVX2; built without
     those paths (SSE2 and scalar), or as the AVX2 clone, it decides every pixel and distance
     alike."""
     renderer, hits = views
     installed, generic = compiled_or_skip(), other_build(tmp_path, "visible_face", extra)
+    monkeypatch.setattr(visible_face, "_COMPILED", generic)
     # (the AVX2 clone's code differs from the generic build's in the row outline only: two
     # views inside and the one from outside show it)
-    for h in hits[::2] if extra else hits:
-        decided = []
-        for module in (installed, generic):
-            monkeypatch.setattr(visible_face, "_COMPILED", module)
-            decided.append(renderer._visible.decide_image(*h, want_distance=True, skip=True))
-        assert_same(*decided, want_distance=True)
+    views_compared = slice(None, None, 2) if extra else slice(None)
+    for h, by_installed in zip(hits[views_compared], decisions(False, installed, True, True)[views_compared], strict=True):
+        assert_same(by_installed, renderer._visible.decide_image(*h, want_distance=True, skip=True), want_distance=True)
 
 
 def box(lo, hi):
