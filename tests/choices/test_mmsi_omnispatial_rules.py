@@ -20,6 +20,8 @@ from povagent.answers.spec import AnswerSpec, ParseStatus
 from povagent.plugins import get_plugin_host
 from povagent_plugins.scorers.choice_scorer import ChoiceScorer
 
+from .mcq_corpus import FAST_LOADER
+
 HERE = Path(__file__).parent
 OPTIONS = (("A", "left"), ("B", "right"), ("C", "front"), ("D", "back"))
 SPEC = AnswerSpec(schema={"type": "object", "properties": {"choice": {"enum": ["A", "B", "C", "D"]}}}, asks_frame=False, choices=OPTIONS)
@@ -29,7 +31,7 @@ OMNISPATIAL_RULES = ("omnispatial-re", "omnispatial-json", "omnispatial-direct",
 
 @cache
 def _corpus(name: str) -> list[dict[str, Any]]:
-    return yaml.safe_load((HERE / name).read_text(encoding="utf-8"))["replies"]
+    return yaml.load((HERE / name).read_text(encoding="utf-8"), Loader=FAST_LOADER)["replies"]
 
 
 def _cases(name: str, rules: tuple[str, ...]) -> list[Any]:

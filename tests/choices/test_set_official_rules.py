@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from povagent.answers.spec import ParseStatus
 
-from .mcq_corpus import read_with, replies
+from .mcq_corpus import FAST_LOADER, read_with, replies
 
 PROBES = Path(__file__).with_name("set_rules_probes.yaml")
 RULES = ("viewspatial-official", "mindcube-official", "viewspatial", "mindcube", "3dsrbench-lmms", "vlmevalkit-exact")
@@ -21,7 +21,7 @@ RULES = ("viewspatial-official", "mindcube-official", "viewspatial", "mindcube",
 
 @cache
 def probes() -> list[dict]:
-    return yaml.safe_load(PROBES.read_text(encoding="utf-8"))["replies"]
+    return yaml.load(PROBES.read_text(encoding="utf-8"), Loader=FAST_LOADER)["replies"]
 
 
 def test_the_probes_answer_the_corpus_s_options():

@@ -15,7 +15,9 @@ import yaml
 from povagent.answers.spec import AnswerSpec, ParseStatus, frame_answer_schema, point_answer_schema
 from povagent.plugins import build_plugin_host
 
-CORPUS = yaml.safe_load((Path(__file__).parent / "corpus.yaml").read_text(encoding="utf-8"))
+# libyaml's loader where PyYAML was built with it: the same corpus, read ~8x faster (every
+# xdist worker reads it while collecting)
+CORPUS = yaml.load((Path(__file__).parent / "corpus.yaml").read_text(encoding="utf-8"), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
 
 
 @pytest.fixture(scope="module")

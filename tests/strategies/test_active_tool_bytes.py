@@ -46,11 +46,13 @@ def calls(*pairs: tuple[str, object]) -> Reply:
     return Reply(None, tool_calls=tuple({"name": n, "arguments": a} for n, a in pairs))
 
 
-@pytest.fixture
-def episode_run(generated_release, tmp_path, monkeypatch):
-    """A fixed episode over HTTP: every tool once, then the answer; (server, row, config)."""
-    monkeypatch.setenv("POVAGENT_TEST_KEY", "sk-test-not-a-key")
-    with LoopbackServer(reply="I cannot tell.", max_lifetime_s=100) as server:
+@pytest.fixture(scope="module")
+def episode_run(generated_release, tmp_path_factory):
+    """A fixed episode over HTTP: every tool once, then the answer; (server, row, config). Run
+    once a module: its tests only read the requests, the row and the hashes."""
+    tmp_path = tmp_path_factory.mktemp("tool-bytes")
+    with pytest.MonkeyPatch.context() as monkeypatch, LoopbackServer(reply="I cannot tell.", max_lifetime_s=100) as server:
+        monkeypatch.setenv("POVAGENT_TEST_KEY", "sk-test-not-a-key")
         server.script(calls(("go_to_frame", {"frame": 1}), ("turn", {"degrees": 10}), ("tilt", {"degrees": -5})),
                       calls(("move", {"forward": 0.5, "right": 0.0}), ("ask", {"question": "What were you doing?"})),
                       calls(("answer", {"image": "view 2", "x": 100, "y": 200})))  # fmt: skip

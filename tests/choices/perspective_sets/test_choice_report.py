@@ -23,21 +23,39 @@ SCENE = "Person perspective - Scene Simulation Relative Direction"
 OBJECT = "Person perspective - Object View Orientation"
 
 
+def _run_systems(choice_pipeline, folder: Path, systems: tuple[tuple, ...]) -> Path:
+    for label, backend, reply, *parser in systems:
+        path = choice_pipeline("viewspatial", backend=backend, reply=reply)
+        data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / label)} | ({"parser": parser[0]} if parser else {})
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        run_pipeline(load_pipeline(path))
+    return folder
+
+
 @pytest.fixture
 def runs_folder(tmp_path, choice_pipeline):
     """``runs_folder(*(label, backend, reply[, parser])) -> Path``: a folder of real choice runs on
     the ViewSpatial fixture, each run labelled (read by the set's rule unless a parser is named)."""
+    return lambda *systems: _run_systems(choice_pipeline, tmp_path / "runs", systems)
 
-    def make(*systems: tuple) -> Path:
-        folder = tmp_path / "runs"
-        for label, backend, reply, *parser in systems:
-            path = choice_pipeline("viewspatial", backend=backend, reply=reply)
-            data = yaml.safe_load(path.read_text()) | {"label": label, "output": str(folder / label)} | ({"parser": parser[0]} if parser else {})
-            path.write_text(yaml.safe_dump(data, sort_keys=False))
-            run_pipeline(load_pipeline(path))
-        return folder
 
-    return make
+def _module_report(module_choice_pipeline, tmp_path_factory, *systems: tuple):
+    folder = tmp_path_factory.mktemp("choice-report")
+    runs = _run_systems(module_choice_pipeline, folder / "runs", systems)
+    return write_report(runs, folder / "report", gallery=False, n_boot=200)
+
+
+@pytest.fixture(scope="module")
+def oracle_and_always_a(module_choice_pipeline, tmp_path_factory):
+    """The report of the oracle beside a model always answering "A": made once, read by the
+    tests that look at those two systems."""
+    return _module_report(module_choice_pipeline, tmp_path_factory, ("oracle", "oracle", None), ("always-a", "test-center", "A"))
+
+
+@pytest.fixture(scope="module")
+def always_a_and_silent(module_choice_pipeline, tmp_path_factory):
+    """The report of the model always answering "A" beside one naming no option (made once)."""
+    return _module_report(module_choice_pipeline, tmp_path_factory, ("always-a", "test-center", "A"), ("silent", "test-center", "no idea"))
 
 
 def _table(result, key: str):
@@ -49,8 +67,8 @@ def _values(table, label: str) -> dict[str, float | None]:
     return {c.name: cell.value for c, cell in zip(table.columns, row.cells)}
 
 
-def test_the_accuracy_table_gives_each_systems_accuracy_per_category(runs_folder, tmp_path):
-    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+def test_the_accuracy_table_gives_each_systems_accuracy_per_category(oracle_and_always_a):
+    result = oracle_and_always_a
     table = _table(result, "choice_accuracy_choice")
     assert _values(table, "oracle") == {CAMERA: 1.0, OBJECT: 1.0, SCENE: 1.0, "All": 1.0}
     # always "A": right on questions 1 and 3 (gold A), wrong on 2 (B) and 4 (C)
@@ -59,13 +77,13 @@ def test_the_accuracy_table_gives_each_systems_accuracy_per_category(runs_folder
     assert overall.lo is not None and overall.hi is not None and overall.lo <= 0.5 <= overall.hi
 
 
-def test_a_question_answered_with_no_option_counts_as_wrong(runs_folder, tmp_path):
-    result = write_report(runs_folder(("always-a", "test-center", "A"), ("silent", "test-center", "no idea")), tmp_path / "report", gallery=False, n_boot=200)
+def test_a_question_answered_with_no_option_counts_as_wrong(always_a_and_silent):
+    result = always_a_and_silent
     assert _values(_table(result, "choice_accuracy_choice"), "silent") == {CAMERA: 0.0, OBJECT: 0.0, SCENE: 0.0, "All": 0.0}
 
 
-def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder, tmp_path):
-    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+def test_the_paired_table_gives_the_difference_on_the_same_questions(oracle_and_always_a):
+    result = oracle_and_always_a
     # systems in the collection's order (run folders by name): always-a is A, oracle B
     table = _table(result, "choice_paired_choice")
     values = _values(table, "oracle vs always-a")
@@ -75,8 +93,8 @@ def test_the_paired_table_gives_the_difference_on_the_same_questions(runs_folder
     assert table.row_header == "B vs A" and "B - A > 0 means B is better" in table.caption
 
 
-def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_apart(runs_folder, tmp_path):
-    result = write_report(runs_folder(("always-a", "test-center", "A"), ("silent", "test-center", "no idea")), tmp_path / "report", gallery=False, n_boot=200)
+def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_apart(always_a_and_silent):
+    result = always_a_and_silent
     always_a = _table(result, "choice_confusion_choice_1")
     assert "always-a" in always_a.title
     assert {r.label: [c.value for c in r.cells] for r in always_a.rows} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
@@ -85,10 +103,10 @@ def test_the_confusion_table_counts_chosen_against_gold_labels_with_non_answers_
     assert {r.label: [c.value for c in r.cells] for r in silent.rows} == {"A": [0, 0, 0, 2], "B": [0, 0, 0, 1], "C": [0, 0, 0, 1]}
 
 
-def test_every_choice_table_names_the_rule_that_read_it(runs_folder, tmp_path):
+def test_every_choice_table_names_the_rule_that_read_it(oracle_and_always_a):
     from povagent.plugins import get_plugin_host
 
-    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    result = oracle_and_always_a
     described = f"Read by `viewspatial-official` ({get_plugin_host().entry('parser', 'viewspatial-official').description})."
     choice = [t for t in result.tables if t.key.startswith("choice_")]
     assert len(choice) == 4 and all(described in t.caption for t in choice)
@@ -128,10 +146,10 @@ def test_the_reports_summary_json_holds_the_choice_tables_numbers(runs_folder, t
     assert {gold: [c["value"] for c in cells] for gold, cells in confusion.items()} == {"A": [2, 0, 0, 0], "B": [1, 0, 0, 0], "C": [1, 0, 0, 0]}
 
 
-def test_a_set_without_conditions_is_plotted_overall_on_an_axis_from_0_to_1(runs_folder, tmp_path):
+def test_a_set_without_conditions_is_plotted_overall_on_an_axis_from_0_to_1(oracle_and_always_a):
     import re
 
-    result = write_report(runs_folder(("oracle", "oracle", None), ("always-a", "test-center", "A")), tmp_path / "report", gallery=False, n_boot=200)
+    result = oracle_and_always_a
     plots = sorted((result.out / "plots").glob("*.svg"))
     assert plots and not any("condition" in p.name for p in plots)
     svg = (result.out / "plots" / "metric_choice_accuracy.svg").read_text(encoding="utf-8")

@@ -13,6 +13,7 @@ pinned here are what they printed; povagent's ``run`` and ``rescore`` must give 
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 import yaml
@@ -22,6 +23,9 @@ from povagent.config.pipeline import load_pipeline
 from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
+
+from ..queued_runs import run_with_queued_replies
+from .conftest import OFFLINE_PLUGIN
 
 CAMERA = "Camera perspective - Relative Direction"
 OBJECT = "Person perspective - Object View Orientation"
@@ -95,14 +99,17 @@ def _tiny_png(folder) -> str:
     return "view.png"
 
 
-def _run(tmp_path, offline_plugin_file, queued_backend, path, format, replies, scorer):
+def _module_run(folder, path, format, replies, scorer):
+    """A run of the ``queued`` backend answering ``replies``, made once a module in ``folder``
+    (its tests read it, or write beside it)."""
+    plugin = folder / "offline_plugin.py"
+    shutil.copy(OFFLINE_PLUGIN, plugin)  # a config loads .py plugins only from its own folder or below
     config = {
-        "plugins": [str(offline_plugin_file)], "dataset": {"path": str(path), "format": format}, "backend": "queued",
-        "strategy": "choice", "scorers": [scorer], "runs": 1, "concurrency": 1, "timeout": 5, "output": str(tmp_path / f"run-{format}"),
+        "plugins": [str(plugin.resolve())], "dataset": {"path": str(path), "format": format}, "backend": "queued",
+        "strategy": "choice", "scorers": [scorer], "runs": 1, "concurrency": 1, "timeout": 5, "output": str(folder / f"run-{format}"),
     }  # fmt: skip
-    (tmp_path / f"{format}.yaml").write_text(yaml.safe_dump(config))
-    queued_backend.queue(*replies)
-    return run_pipeline(load_pipeline(tmp_path / f"{format}.yaml"))
+    (folder / f"{format}.yaml").write_text(yaml.safe_dump(config))
+    return run_with_queued_replies(folder / f"{format}.yaml", replies)
 
 
 def _values(metrics, metric: str) -> dict[str, float]:
@@ -113,14 +120,21 @@ def _chosen(run_dir, scorer) -> list[str | None]:
     return [row.parse.choice if row.parse is not None else None for row in read_rows(run_dir / "results.jsonl")]
 
 
-@pytest.fixture
-def viewspatial_run(tmp_path, offline_plugin_file, queued_backend):
-    image = _tiny_png(tmp_path)
+@pytest.fixture(scope="module")
+def viewspatial_run_made(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("viewspatial")
+    image = _tiny_png(folder)
     # each question its own text: identical requests would share one cached reply
     records = [{"question_type": t, "image_path": [image], "question": f"Where is object {i}?", "answer": a,
                 "choices": "A. right\nB. left\nC. front\nD. back"} for i, (t, a, _) in enumerate(VIEWSPATIAL)]  # fmt: skip
-    (tmp_path / "ViewSpatial-Bench.json").write_text(json.dumps(records))
-    return _run(tmp_path, offline_plugin_file, queued_backend, tmp_path / "ViewSpatial-Bench.json", "viewspatial", [r for *_, r in VIEWSPATIAL], "choice")
+    (folder / "ViewSpatial-Bench.json").write_text(json.dumps(records))
+    return _module_run(folder, folder / "ViewSpatial-Bench.json", "viewspatial", [r for *_, r in VIEWSPATIAL], "choice")
+
+
+@pytest.fixture
+def viewspatial_run(viewspatial_run_made, queued_backend):
+    """The module's ViewSpatial run, read while a ``queued`` backend is registered (as when it ran)."""
+    return viewspatial_run_made
 
 
 def test_viewspatial_reads_each_reply_as_its_evaluate_py_does(viewspatial_run):
@@ -136,11 +150,18 @@ def _mindcube_lines(image: str) -> str:
                                "gt_answer": gold}) + "\n" for i, (rid, gold, _) in enumerate(MINDCUBE))  # fmt: skip
 
 
+@pytest.fixture(scope="module")
+def mindcube_run_made(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("mindcube")
+    image = _tiny_png(folder)
+    (folder / "MindCube_tinybench.jsonl").write_text(_mindcube_lines(image))
+    return _module_run(folder, folder / "MindCube_tinybench.jsonl", "mindcube", [r for *_, r in MINDCUBE], "choice-mindcube")
+
+
 @pytest.fixture
-def mindcube_run(tmp_path, offline_plugin_file, queued_backend):
-    image = _tiny_png(tmp_path)
-    (tmp_path / "MindCube_tinybench.jsonl").write_text(_mindcube_lines(image))
-    return _run(tmp_path, offline_plugin_file, queued_backend, tmp_path / "MindCube_tinybench.jsonl", "mindcube", [r for *_, r in MINDCUBE], "choice-mindcube")
+def mindcube_run(mindcube_run_made, queued_backend):
+    """The module's MindCube run, read while a ``queued`` backend is registered (as when it ran)."""
+    return mindcube_run_made
 
 
 def test_mindcube_reads_each_reply_as_its_evaluator_does(mindcube_run):
@@ -166,15 +187,23 @@ def test_mindcube_overall_counts_every_setting_when_the_scorer_is_told_so(tmp_pa
     assert result.summary.metrics["choice-mindcube"].overall["accuracy"].value == pytest.approx(7 / 10)
 
 
-@pytest.fixture
-def srbench_run(tmp_path, offline_plugin_file, queued_backend):
-    image = _tiny_png(tmp_path)
+@pytest.fixture(scope="module")
+def srbench_run_made(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("3dsrbench")
+    image = _tiny_png(folder)
     lines = ["index\tqid\tquestion\tA\tB\tC\tD\tanswer\tcategory\timage"]
     for index, (qid, options, answer, category, _) in enumerate(SRBENCH):
         cells = [*options, "nan", "nan"][:4]
         lines.append("\t".join([str(index), qid, f"Which is higher ({index})?", *cells, answer, category, image]))
-    (tmp_path / "3DSRBench.tsv").write_text("\n".join(lines) + "\n")
-    return _run(tmp_path, offline_plugin_file, queued_backend, tmp_path / "3DSRBench.tsv", "3dsrbench", [r for *_, r in SRBENCH], "choice-3dsrbench")
+    (folder / "3DSRBench.tsv").write_text("\n".join(lines) + "\n")
+    return _module_run(folder, folder / "3DSRBench.tsv", "3dsrbench", [r for *_, r in SRBENCH], "choice-3dsrbench")
+
+
+@pytest.fixture
+def srbench_run(srbench_run_made, queued_backend):
+    """The module's 3DSRBench run, read while a ``queued`` backend is registered (as when it ran);
+    its tests read it, or rescore it beside it."""
+    return srbench_run_made
 
 
 @pytest.mark.parametrize("metric", sorted(VLMEVALKIT))

@@ -28,7 +28,8 @@ from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
-from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, mmsi_rows, run_with_queued_replies, write_mmsi_parquet
+from ..queued_runs import run_with_queued_replies
+from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, mmsi_rows, write_mmsi_parquet
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)", "Positional Relationship (Obj.-Obj.)", "Attribute (Meas.)", "Motion (Cam.)", "MSR",

@@ -22,7 +22,8 @@ from povagent.results.rows import read_rows
 from povagent.run.rescore import rescore_run
 from povagent.run.runner import run_pipeline
 
-from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, OMNI_RECORDS, run_with_queued_replies
+from ..queued_runs import run_with_queued_replies
+from .conftest import MMSI_ROWS, OFFLINE_PLUGIN, OMNI_RECORDS
 
 PR_CAM_OBJ, PR_OBJ_OBJ, MEAS, MOTION_CAM, MSR = (
     "Positional Relationship (Cam.-Obj.)",
