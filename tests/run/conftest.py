@@ -1,5 +1,6 @@
-"""Runner test fixtures: a small synthetic release, pipeline YAMLs using the offline test plugin, and one
-fresh interpreter's run of the litellm backend shared by the tests of what its start-up does."""
+"""Runner test fixtures: a small synthetic release, pipeline YAMLs using the offline test plugin, one
+fresh interpreter's run of the litellm backend shared by the tests of what its start-up does, and
+``povagent`` commands run as processes of their own (tests/run/command_forks.py)."""
 
 from __future__ import annotations
 
@@ -89,10 +90,30 @@ def fresh_litellm_run(tmp_path_factory, mini_root) -> dict[str, Any]:
     dataset at concurrency 4 from a loopback server, a 3 s timeout and no retry. Returns the
     child's report (``litellm_at_start``, ``preloading`` as seen while the dataset loaded,
     ``exit_code``, ``requests``, ``answered``, ``infra_error``), the requests the server saw
-    (``server_requests``) and the rows' ``statuses``."""
+    (``server_requests``) and the rows' ``statuses``.
+
+    Its two test files run in different xdist workers: the run is made once between them
+    (tests/shared_sets.py), its report kept beside it for the workers that read it."""
+    from shared_sets import made_once
+
+    def make(folder: Path) -> None:
+        import shutil
+
+        shutil.rmtree(folder, ignore_errors=True)  # a run cut short is not resumed: made afresh
+        folder.mkdir(parents=True)
+        report = _run_fresh_litellm(folder, mini_root)
+        (folder / "report.json").write_text(json.dumps(report))
+        # what made_once waits for, written last: a folder without it is made again
+        (folder / "meta.json.part").write_text("{}\n")
+        (folder / "meta.json.part").rename(folder / "meta.json")
+
+    folder = made_once(tmp_path_factory, "fresh-litellm-run", make)
+    return json.loads((folder / "report.json").read_text())
+
+
+def _run_fresh_litellm(folder: Path, mini_root: Path) -> dict[str, Any]:
     from povagent.testing.loopback_server import LoopbackServer
 
-    folder = tmp_path_factory.mktemp("fresh-litellm-run")
     with LoopbackServer(reply='{"selected_image": 0, "x": 10, "y": 20}', max_lifetime_s=200) as server:
         path = folder / "pipeline.yaml"
         path.write_text(json.dumps({
@@ -111,22 +132,40 @@ def fresh_litellm_run(tmp_path_factory, mini_root) -> dict[str, Any]:
     return {**seen, "server_requests": server_requests, "statuses": statuses}
 
 
+#: The environment the tests started with: what the command server imports povagent under.
+START_ENV = dict(os.environ)
+
+
+@pytest.fixture(scope="session")
+def command_forks(tmp_path_factory) -> Any:
+    """A :class:`command_forks.CommandForks`: ``povagent`` commands as processes of their own,
+    forked from one interpreter that imported povagent once (a fresh interpreter costs most of a
+    second of imports and compiling, which these tests do not test). Started when a test first
+    asks for it, stopped when the session ends."""
+    from command_forks import CommandForks
+
+    forks = CommandForks(tmp_path_factory.mktemp("command-forks"), START_ENV)
+    try:
+        yield forks
+    finally:
+        forks.close()
+
+
 @pytest.fixture
-def run_killed_mid_way() -> Any:
+def run_killed_mid_way(command_forks) -> Any:
     """``run_killed_mid_way(pipeline, results, rows) -> int``: ``povagent run`` of ``pipeline`` in
-    an interpreter of its own, SIGKILLed once ``results`` holds ``rows`` lines (within 60 s, the
+    a process of its own, SIGKILLed once ``results`` holds ``rows`` lines (within 60 s, the
     command still running); the lines it held after the kill."""
     import signal
     import time
 
     def run(pipeline: Path, results: Path, rows: int) -> int:
         env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-        command = [sys.executable, "-c", "from povagent.cli import main; main()", "run", str(pipeline), "--quiet"]
-        proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        proc = command_forks.start("run", pipeline, "--quiet", cwd=Path.cwd(), env=env)
         try:
             deadline = time.monotonic() + 60
             while len(results.read_text().splitlines()) < rows if results.exists() else True:
-                assert proc.poll() is None, proc.stderr.read().decode()  # type: ignore[union-attr]
+                assert proc.poll() is None, proc.stderr()
                 assert time.monotonic() < deadline, "no rows written in time"
                 time.sleep(0.005)
             proc.send_signal(signal.SIGKILL)

@@ -4,7 +4,9 @@ Kept independent of the built-in plugins so runner tests specify the runner alon
 in-process and by the kill-and-resume subprocess alike.
 
 * backend ``test-center``: answers the image centre (frame 0 for A/B); options ``delay_s``
-  (sleep per request), ``cacheable``, ``reply`` (a fixed answer), ``encode`` (base64 every
+  (sleep per request), ``cacheable``, ``reply`` (a fixed answer), ``pad`` (that many spaces
+  after it: a reply of a million characters, which a pipeline YAML holds only at seconds of
+  quoting and scanning), ``encode`` (base64 every
   image shown, as a real backend does) and ``in_process`` (declares
   ``answers_in_process``; its ``delay_s`` is then spent without suspending); counts calls in ``CALLS``.
 * backend ``test-flaky``: fails per a script of status codes, then answers like test-center.
@@ -36,12 +38,14 @@ def center_reply(request: Request) -> str:
 class CenterBackend(Backend):
     """Answers the centre of the image (frame 0 for A/B)."""
 
-    def __init__(self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False, in_process: bool = False) -> None:
+    def __init__(
+        self, delay_s: float = 0.0, cacheable: bool = True, reply: str | None = None, encode: bool = False, in_process: bool = False, pad: int = 0
+    ) -> None:
         if in_process:  # else the class's: a test may declare it there
             self.answers_in_process = True  # type: ignore[misc]
         self.delay_s = delay_s
         self.cacheable = cacheable  # type: ignore[misc]
-        self.reply = reply
+        self.reply = reply if reply is None or not pad else reply + " " * pad
         self.encode = encode
 
     def identity(self) -> dict[str, Any]:

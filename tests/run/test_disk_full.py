@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 import subprocess
 import sys
 from collections import Counter
@@ -21,7 +20,6 @@ import yaml
 
 pytestmark = [pytest.mark.timeout(180), pytest.mark.skipif(sys.platform != "linux", reason="tmpfs and RLIMIT_FSIZE: Linux")]
 
-CLI = "from povagent.cli import main; main()"
 #: A row is about 4 KB, so 72 rows (about 290 KB) fill the 64 KiB disk and pass the 48 kB file
 #: limit well before the run's end, at a few rows' CPU each.
 RUNS = 4
@@ -60,13 +58,11 @@ def small_tmpfs(tmp_path):
         subprocess.run(["umount", str(disk)], check=True)
 
 
-def run(pipeline: Path, limit_bytes: int | None = None) -> subprocess.CompletedProcess[str]:
-    def limit() -> None:
-        if limit_bytes is not None:
-            resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, limit_bytes))
-
-    return subprocess.run([sys.executable, "-c", CLI, "run", str(pipeline), "--quiet", "--json"], capture_output=True,
-                          text=True, timeout=150, preexec_fn=limit, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+def run(forks, pipeline: Path, limit_bytes: int | None = None) -> subprocess.CompletedProcess[str]:
+    """``povagent run PIPELINE`` in a process of its own (tests/run/command_forks.py), under a
+    file-size limit (RLIMIT_FSIZE) of ``limit_bytes`` if given."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    return forks.run("run", pipeline, "--quiet", "--json", cwd=Path.cwd(), env=env, fsize=limit_bytes, timeout=150)
 
 
 def complete_keys(results: Path) -> list[str]:
@@ -108,20 +104,20 @@ def assert_resumed_exactly_once(done: subprocess.CompletedProcess[str] | int, re
     assert results.read_bytes().endswith(b"\n")
 
 
-def test_a_full_disk_mid_run_is_one_line_and_the_same_command_resumes(pipeline, small_tmpfs, tmp_path):
+def test_a_full_disk_mid_run_is_one_line_and_the_same_command_resumes(pipeline, small_tmpfs, tmp_path, command_forks):
     results = tmp_path / "disk" / "run" / "results.jsonl"
-    assert_one_line_stop(run(pipeline), "No space left on device", results)
+    assert_one_line_stop(run(command_forks, pipeline), "No space left on device", results)
     small_tmpfs()  # space is freed
     assert_resumed_exactly_once(resume_here(pipeline), results)
 
 
-def test_a_file_size_limit_mid_run_is_one_line_and_the_same_command_resumes(pipeline, tmp_path):
+def test_a_file_size_limit_mid_run_is_one_line_and_the_same_command_resumes(pipeline, tmp_path, command_forks):
     results = tmp_path / "disk" / "run" / "results.jsonl"
-    assert_one_line_stop(run(pipeline, limit_bytes=48_000), "File too large", results)
+    assert_one_line_stop(run(command_forks, pipeline, limit_bytes=48_000), "File too large", results)
     assert_resumed_exactly_once(resume_here(pipeline), results)
 
 
-def test_a_tail_torn_inside_a_character_is_run_again_on_resume(pipeline, tmp_path):
+def test_a_tail_torn_inside_a_character_is_run_again_on_resume(pipeline, tmp_path, command_forks):
     results = tmp_path / "disk" / "run" / "results.jsonl"
     # the finished run to tear is made in this process; the resume below is the command's
     assert resume_here(pipeline) == 0 and len(complete_keys(results)) == KEYS
@@ -129,4 +125,4 @@ def test_a_tail_torn_inside_a_character_is_run_again_on_resume(pipeline, tmp_pat
     last_start = data.rindex(b"\n", 0, len(data) - 1) + 1
     cut = data.index("😀".encode(), last_start) + 3  # inside the last row's emoji
     results.write_bytes(data[:cut])
-    assert_resumed_exactly_once(run(pipeline), results)
+    assert_resumed_exactly_once(run(command_forks, pipeline), results)

@@ -47,7 +47,8 @@ def test_every_answer_is_parsed_where_no_event_loop_runs(tmp_path, write_pipelin
 
 
 def test_a_reply_longer_than_the_bound_is_a_non_response_never_parsed(tmp_path, write_pipeline, offline_plugin):
-    reply = '{"x": 1, "y": 1}' + " " * MAX_REPLY_CHARS
-    run_pipeline(load_pipeline(write_pipeline(backend={"name": "test-center", "options": {"reply": reply}}, instances={"limit": 1})))
+    # the reply is '{"x": 1, "y": 1}' and MAX_REPLY_CHARS spaces, padded by the backend
+    options = {"reply": '{"x": 1, "y": 1}', "pad": MAX_REPLY_CHARS}
+    run_pipeline(load_pipeline(write_pipeline(backend={"name": "test-center", "options": options}, instances={"limit": 1})))
     (row,) = read_rows(tmp_path / "run" / "results.jsonl")
     assert row.status == "parse_error" and f"longer than the {MAX_REPLY_CHARS}" in row.parse.reason

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import json
-import subprocess
-import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -76,9 +75,8 @@ def test_without_the_scorers_there_is_no_diagnostics_section(served_run):
     assert "Additions" not in runner.invoke(app, ["rescore", str(run)]).stdout
 
 
-def test_an_unknown_scorer_is_refused_by_name(served_run):
+def test_an_unknown_scorer_is_refused_by_name(served_run, command_forks):
     run, _ = served_run
-    done = subprocess.run([sys.executable, "-m", "povagent.cli", "rescore", str(run), "--scorer", "diagnoze"],
-                          capture_output=True, text=True, timeout=120)
+    done = command_forks.run("rescore", run, "--scorer", "diagnoze", cwd=Path.cwd(), timeout=120)
     assert done.returncode == 2 and "unknown scorer 'diagnoze' (did you mean 'diagnose'?)" in done.stderr
     assert not (run / "rescored-official" / "results.jsonl").exists()

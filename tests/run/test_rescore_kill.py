@@ -6,9 +6,8 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -45,16 +44,16 @@ def register_scorers(register):
 '''
 
 
-def rescore(run, *args, env=None, **kwargs):
-    return subprocess.Popen([sys.executable, "-m", "povagent.cli", "rescore", str(run), *args], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, **kwargs)  # fmt: skip
+def rescore(forks, run, *args, env=None):
+    """``povagent rescore RUN ARGS`` started in a process of its own (tests/run/command_forks.py)."""
+    return forks.start("rescore", run, *args, cwd=Path.cwd(), env=env)
 
 
 @pytest.fixture
 def stalled(tmp_path, write_answered_run, monkeypatch):
     """(run, plugin, the complete rescore's files as bytes) with the stall plugin beside the run.
     That complete rescore is made in this process (it only prepares the folder; the rescores
-    under test run in interpreters of their own)."""
+    under test run in processes of their own)."""
     from typer.testing import CliRunner
 
     from povagent.cli import app
@@ -69,13 +68,13 @@ def stalled(tmp_path, write_answered_run, monkeypatch):
     return run, plugin, {name: (out / name).read_bytes() for name in ("results.jsonl", "summary.json", "config.yaml")}
 
 
-def killed_when_stalled(run, plugin, marker):
+def killed_when_stalled(forks, run, plugin, marker):
     """A rescore with the stall scorer, SIGKILLed once it has stalled on its third row (``marker`` written)."""
-    proc = rescore(run, "--plugin", str(plugin), "--scorer", "stall", env={**os.environ, "STALL_MARKER": str(marker)})
+    proc = rescore(forks, run, "--plugin", str(plugin), "--scorer", "stall", env={**os.environ, "STALL_MARKER": str(marker)})
     try:
         deadline = time.monotonic() + 120
         while not marker.exists():
-            assert proc.poll() is None, proc.stderr.read().decode()
+            assert proc.poll() is None, proc.stderr()
             assert time.monotonic() < deadline, "the rescore never reached its third row"
             time.sleep(0.01)
         proc.send_signal(signal.SIGKILL)
@@ -85,33 +84,33 @@ def killed_when_stalled(run, plugin, marker):
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGKILL"), reason="SIGKILL is POSIX-only")
-def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder_and_the_next_writes_every_key_once(stalled, tmp_path):
-    # one kill serves both checks (each rescore child costs a second of CPU): what the kill
+def test_a_rescore_killed_mid_way_leaves_the_previous_complete_folder_and_the_next_writes_every_key_once(stalled, tmp_path, command_forks):
+    # one kill serves both checks (each rescore child costs CPU): what the kill
     # left, then what the next rescore over that very folder writes
     run, plugin, complete = stalled
-    proc = killed_when_stalled(run, plugin, tmp_path / "stalled")
+    proc = killed_when_stalled(command_forks, run, plugin, tmp_path / "stalled")
     assert proc.returncode == -signal.SIGKILL
     out = run / "rescored-official"
     # two rows were rescored when it died: none of them is in the file, the old rows all are
     for name, data in complete.items():
         assert (out / name).read_bytes() == data, f"the kill changed the previous complete rescore's {name}"
 
-    again = rescore(run, env={k: v for k, v in os.environ.items() if k != "STALL_MARKER"})
-    assert again.wait(timeout=120) == 0, again.stderr.read().decode()
+    again = rescore(command_forks, run, env={k: v for k, v in os.environ.items() if k != "STALL_MARKER"})
+    assert again.wait(timeout=120) == 0, again.stderr()
     keys = [row.key for row in iter_rows(out / "results.jsonl")]
     assert sorted(keys) == sorted(f"{iid}#0" for iid, _ in ANSWERS), f"the rescore after the kill wrote {keys}"
     assert json.loads((out / "summary.json").read_text())["n_rows"] == len(ANSWERS), "the summary after the kill"
     assert not (out / "results.jsonl.tmp").exists(), "a staged file left after the rescore that followed the kill"
 
 
-def test_a_failing_rescore_keeps_the_previous_folder_and_no_staged_file(stalled, tmp_path):
+def test_a_failing_rescore_keeps_the_previous_folder_and_no_staged_file(stalled, tmp_path, command_forks):
     run, _, complete = stalled
     broken = tmp_path / "broken.py"
     broken.write_text(STALLING_SCORER.replace("Path(os.environ[\"STALL_MARKER\"]).write_text(\"stalled\")\n            time.sleep(120)",
                                               "raise RuntimeError('a scorer bug')").replace(' and os.environ.get("STALL_MARKER")', ""))
-    done = rescore(run, "--plugin", str(broken), "--scorer", "stall")
+    done = rescore(command_forks, run, "--plugin", str(broken), "--scorer", "stall")
     assert done.wait(timeout=120) != 0
-    assert "a scorer bug" in done.stderr.read().decode()
+    assert "a scorer bug" in done.stderr()
     out = run / "rescored-official"
     for name, data in complete.items():
         assert (out / name).read_bytes() == data, name

@@ -8,13 +8,12 @@ from __future__ import annotations
 import json
 import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 import yaml
+from command_forks import Command
 
 from povagent.config.pipeline import load_pipeline
 from povagent.run.progress import QuietProgress
@@ -54,27 +53,28 @@ def keys(results: Path) -> list[str]:
     return [json.loads(line)["key"] for line in results.read_text().splitlines()]
 
 
-def start(*args: str, cwd: Path) -> subprocess.Popen[str]:
+def start(forks, *args: str, cwd: Path) -> Command:
+    """``povagent ARGS --quiet`` started in a process of its own (tests/run/command_forks.py)."""
     env = {**os.environ, "POVAGENT_TEST_KEY": "sk-test-123", "PYTHONUNBUFFERED": "1"}
-    return subprocess.Popen([sys.executable, "-m", "povagent.cli", *args, "--quiet"], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return forks.start(*args, "--quiet", cwd=cwd, env=env)
 
 
-def terminate_after_rows(proc: subprocess.Popen[str], results: Path, rows: int) -> tuple[str, str]:
+def terminate_after_rows(proc: Command, results: Path, rows: int) -> tuple[str, str]:
     """SIGTERM once ``results`` holds ``rows`` lines; the process's (stdout, stderr)."""
     deadline = time.monotonic() + 120
     while not results.exists() or len(results.read_text().splitlines()) < rows:
-        assert proc.poll() is None, proc.communicate()
+        assert proc.poll() is None, (proc.stdout(), proc.stderr())
         assert time.monotonic() < deadline, "no rows in time"
         time.sleep(0.02)
-    os.kill(proc.pid, signal.SIGTERM)
-    return proc.communicate(timeout=60)
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(timeout=60)
+    return proc.stdout(), proc.stderr()
 
 
-def test_sigterm_mid_run_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, slow_server, monkeypatch):
+def test_sigterm_mid_run_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, slow_server, monkeypatch, command_forks):
     run = tmp_path / "run"
     path = pipeline(tmp_path, dataset_copy, slow_server, run)
-    proc = start("run", str(path), cwd=tmp_path)
+    proc = start(command_forks, "run", str(path), cwd=tmp_path)
     _, err = terminate_after_rows(proc, run / "results.jsonl", 3)
     assert proc.returncode == 143, err
     assert "Traceback" not in err
@@ -96,7 +96,7 @@ def test_sigterm_mid_run_stops_cleanly_and_the_same_command_resumes(tmp_path, da
     assert json.loads((run / "summary.json").read_text())["interrupted"] is False
 
 
-def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, offline_plugin_file):
+def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, dataset_copy, offline_plugin_file, command_forks):
     # one request at a time: the cell's last rows are a few tenths of a second away when the
     # signal is sent, so a test process slowed by load still signals mid-cell (the moment the
     # cell finishes is aimed at on purpose in test_stop_window.py). The model is the offline
@@ -115,7 +115,7 @@ def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, 
     }))
     sweep = tmp_path / "sweep.yaml"
     sweep.write_text(yaml.safe_dump({"base": "pipeline.yaml", "output": str(tmp_path / "sw"), "axes": {"parser": ["official", "json"]}}))
-    proc = start("sweep", str(sweep), cwd=tmp_path)
+    proc = start(command_forks, "sweep", str(sweep), cwd=tmp_path)
     _, err = terminate_after_rows(proc, tmp_path / "sw" / "official" / "results.jsonl", 2)
     assert proc.returncode == 143, err
     assert "Traceback" not in err and f"terminated (SIGTERM): finished rows are kept; run `povagent sweep {sweep}` again" in err, err
@@ -125,9 +125,8 @@ def test_sigterm_mid_sweep_stops_cleanly_and_the_same_command_resumes(tmp_path, 
     before = keys(tmp_path / "sw" / "official" / "results.jsonl")
     assert len(before) < N_KEYS // 3  # a cell runs once: 6 keys
 
-    proc = start("sweep", str(sweep), cwd=tmp_path)
-    _, err = proc.communicate(timeout=180)
-    assert proc.returncode == 0, err
+    proc = start(command_forks, "sweep", str(sweep), cwd=tmp_path)
+    assert proc.wait(timeout=180) == 0, proc.stderr()
     for cell in ("official", "json"):
         done = keys(tmp_path / "sw" / cell / "results.jsonl")
         assert len(done) == len(set(done)) == N_KEYS // 3, cell
