@@ -5,11 +5,10 @@ from __future__ import annotations
 import json
 import math
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+from console_once import console_script_once
 from typer.testing import CliRunner
 
 from povagent.cli import app
@@ -74,13 +73,9 @@ def test_score_reads_a_folder_of_prediction_files(mini_root, tmp_path):
     assert json.loads(result.stdout)["overall"]["n_total"] == 3
 
 
-def test_score_of_a_malformed_file_is_a_clear_message_not_a_traceback(mini_root, tmp_path):
-    path = tmp_path / "bad.json"
-    path.write_text('[{"house_id": "train_house_00000", "pair_id": 0, "direction": "left", ')
-    proc = subprocess.run(
-        [sys.executable, "-c", "from povagent.cli import main; main()", "score", "--predictions", str(path), "--dataset", str(mini_root)],
-        capture_output=True, text=True, timeout=120,
-    )
+def test_score_of_a_malformed_file_is_a_clear_message_not_a_traceback(mini_root, tmp_path_factory):
+    # score --predictions bad.json, a JSON list cut off mid-row, --dataset the hand-made set
+    proc = console_script_once(tmp_path_factory, mini_root)["score"]
     assert proc.returncode != 0
     assert "Traceback" not in proc.stderr
     assert "bad.json" in proc.stderr

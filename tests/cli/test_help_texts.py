@@ -3,6 +3,7 @@ pointing into the source, and nothing wider than an 80-column terminal."""
 
 from __future__ import annotations
 
+import functools
 import re
 
 import pytest
@@ -15,7 +16,10 @@ runner = CliRunner()
 COMMANDS = sorted(typer.main.get_command(app).commands)  # type: ignore[attr-defined]
 
 
+@functools.cache
 def help_of(*args: str) -> str:
+    """What ``povagent ARGS --help`` prints at 80 columns: asked once a module, read by each test
+    of a command (the text is a string, so no test can change it for another)."""
     result = runner.invoke(app, [*args, "--help"], env={"COLUMNS": "80"})
     assert result.exit_code == 0, result.output
     return result.stdout

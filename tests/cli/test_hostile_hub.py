@@ -11,16 +11,19 @@ The refusals are the download code's, so most attacks run the command in this pr
 ``console_here`` fixture: typer's ``CliRunner``, with ``HF_*`` set for the call, which povagent
 reads at each call), a :class:`~povagent.errors.PovagentError` shown as the console script
 shows it (``error: <message>``, exit code 2). What only a real process shows (the console
-script's own exit code and error line, the deadline met while a server stalls, what a later
-process trusts) is checked by the stalled-server tests, each a fresh ``python -m povagent.cli``.
+script's own exit code and error line, the deadline met while a server stalls) is checked by
+the stalled-server tests: one fresh process runs the console script's ``main`` once per
+command; what a later process trusts of the cut snapshot is then asked from this one.
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 import subprocess
 import sys
-import time
+import textwrap
 from pathlib import Path
 from typing import Callable, Protocol
 
@@ -65,7 +68,7 @@ class Done(Protocol):
 
 
 def povagent(
-    here: Callable[..., Done] | None,
+    here: Callable[..., Done],
     entry: str,
     tmp_path: Path,
     endpoint: str,
@@ -74,10 +77,30 @@ def povagent(
     options: tuple[str, ...] = (),
     download: dict | None = None,
     offline: bool = False,
-    timeout: float = 120,
 ) -> Done:
-    """Run the command of ``entry`` as a user would: in this process through ``here`` (the
-    ``console_here`` fixture), or with ``here=None`` in a fresh process."""
+    """Run the command of ``entry`` as a user would, in this process through ``here`` (the
+    ``console_here`` fixture), with only its own ``HF_*`` variables set."""
+    args, hf = command_line(entry, tmp_path, endpoint, revision=revision, options=options, download=download, offline=offline)
+    others = [k for k in os.environ if k.startswith(HF_PREFIXES)]
+    return here(args, env=dict.fromkeys(others) | hf, cwd=tmp_path)
+
+
+#: The variables that point huggingface_hub somewhere: each command is given only its own.
+HF_PREFIXES = ("HF_", "HUGGINGFACE_", "TRANSFORMERS_")
+
+
+def command_line(
+    entry: str,
+    tmp_path: Path,
+    endpoint: str,
+    *,
+    revision: str | None = None,
+    options: tuple[str, ...] = (),
+    download: dict | None = None,
+    offline: bool = False,
+) -> tuple[list[str], dict[str, str]]:
+    """The arguments of ``povagent`` for ``entry`` (a pipeline's YAML written under ``tmp_path``)
+    and the ``HF_*`` variables it runs with."""
     hf = {"HF_HOME": str(tmp_path / "hf"), "HF_ENDPOINT": endpoint, "HF_HUB_DISABLE_TELEMETRY": "1"}
     if offline:
         hf["HF_HUB_OFFLINE"] = "1"
@@ -95,14 +118,7 @@ def povagent(
             "output": str(tmp_path / "run"),
         }))  # fmt: skip
         args = ["run", str(pipeline), "--quiet"]
-    others = [k for k in os.environ if k.startswith(("HF_", "HUGGINGFACE_", "TRANSFORMERS_"))]
-    if here is not None:
-        return here(args, env=dict.fromkeys(others) | hf, cwd=tmp_path)
-    env = {k: v for k, v in os.environ.items() if k not in others} | hf
-    done = subprocess.run(
-        [sys.executable, "-m", "povagent.cli", *args], env=env, capture_output=True, text=True, timeout=timeout, cwd=tmp_path
-    )
-    return done
+    return args, hf
 
 
 def assert_refused(done: Done, *named: str) -> str:
@@ -224,17 +240,88 @@ def test_a_pipeline_refuses_bytes_that_differ_from_the_listing(console_here, tmp
 
 
 # -- bounds --------------------------------------------------------------------------------------
+# One child runs the console script's ``main`` once per command line, each with its own argv,
+# working folder and ``HF_*`` variables (povagent reads them at each call) and its own stdout and
+# stderr files (file descriptors 1 and 2 pointed at them): each command is still the real command
+# in a process of povagent's own, for one interpreter start instead of one per command. Each
+# command's time counts the child's start-up too, as a process of its own would. An exception
+# escaping ``main`` is printed as the interpreter would print it (a traceback, exit status 1).
+EACH_COMMAND = textwrap.dedent("""
+    import time
+    started = time.monotonic()
+    import json, os, sys, traceback
+    from povagent.cli import main
+
+    start_up = time.monotonic() - started
+    cases, folder = json.loads(sys.argv[1]), sys.argv[2]
+    done = []
+    for n, case in enumerate(cases):
+        os.environ.update(case["env"])
+        os.chdir(case["cwd"])
+        kept = os.dup(1), os.dup(2)
+        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
+            os.dup2(out.fileno(), 1)
+            os.dup2(err.fileno(), 2)
+            sys.argv = ["povagent", *case["args"]]
+            code, began = 0, time.monotonic()
+            try:
+                main()
+            except SystemExit as stop:
+                if isinstance(stop.code, str):
+                    print(stop.code, file=sys.stderr)
+                code = stop.code if isinstance(stop.code, int) else (0 if stop.code is None else 1)
+            except BaseException:
+                traceback.print_exc()
+                code = 1
+            took = time.monotonic() - began + start_up
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(kept[0], 1)
+            os.dup2(kept[1], 2)
+        for name in case["env"]:
+            del os.environ[name]
+        done.append({"returncode": code, "took": took})
+    print(json.dumps(done))
+""")
+
+
+@pytest.fixture(scope="module")
+def stalled(tmp_path_factory, mini_root) -> dict[str, tuple[subprocess.CompletedProcess, float, Path, str]]:
+    """entry -> (what its command did, the seconds it took, its folder, its server's URL): each
+    entry's command against a Hub server of its own that stalls every file, with a 3 s deadline,
+    both run in one fresh process (a fresh interpreter costs about a second of CPU)."""
+    base = tmp_path_factory.mktemp("stalled")
+    folders = {entry: base / entry for entry in ENTRIES}
+    servers = {entry: HubServer(mini_root, lies=HubLies(stall_s=60), max_lifetime_s=90) for entry in ENTRIES}
+    cases = []
+    with contextlib.ExitStack() as serving:
+        for entry in ENTRIES:
+            folders[entry].mkdir()
+            serving.enter_context(servers[entry])
+            args, hf = command_line(entry, folders[entry], servers[entry].url, options=("--deadline", "3"), download={"deadline_s": 3})
+            cases.append({"args": args, "env": hf, "cwd": str(folders[entry])})
+        env = {k: v for k, v in os.environ.items() if not k.startswith(HF_PREFIXES)}
+        child = subprocess.run([sys.executable, "-c", EACH_COMMAND, json.dumps(cases), str(base)], env=env,
+                               capture_output=True, text=True, timeout=240)  # fmt: skip
+    assert child.returncode == 0, child.stderr[-3000:]
+    done = json.loads(child.stdout.splitlines()[-1])
+    return {
+        entry: (
+            subprocess.CompletedProcess(case["args"], each["returncode"], (base / f"{n}.out").read_text(), (base / f"{n}.err").read_text()),
+            each["took"], folders[entry], servers[entry].url,
+        )
+        for n, (entry, case, each) in enumerate(zip(ENTRIES, cases, done))
+    }  # fmt: skip
+
+
 @pytest.mark.parametrize("entry", ENTRIES)
-def test_a_stalled_server_stops_at_the_deadline_and_keeps_nothing_unfinished(entry, tmp_path, mini_root):
-    server = HubServer(mini_root, lies=HubLies(stall_s=60), max_lifetime_s=90)
-    start = time.monotonic()
-    done, _ = attack(None, entry, tmp_path, server, options=("--deadline", "3"), download={"deadline_s": 3})
-    took = time.monotonic() - start
+def test_a_stalled_server_stops_at_the_deadline_and_keeps_nothing_unfinished(entry, stalled, console_here):
+    done, took, folder, url = stalled[entry]
     line = assert_refused(done, "did not finish within 3 s")
     assert took < 30, took
     assert "nothing unfinished was kept" in line
-    assert not list(storage(tmp_path).rglob("*.incomplete"))
-    offline = povagent(None, "download", tmp_path, server.url, offline=True)
+    assert not list(storage(folder).rglob("*.incomplete"))
+    offline = povagent(console_here, "download", folder, url, offline=True)  # a later process, this one
     assert offline.returncode == 2 and "Traceback" not in offline.stderr  # the cut snapshot is not trusted
 
 

@@ -193,13 +193,14 @@ CONFIGS: dict[str, tuple[Callable[[str], str | bytes], str]] = {
 
 
 @pytest.fixture
-def finished_run(tmp_path, dataset) -> tuple[Path, str, bytes]:
-    """A finished run: its folder, the good pipeline's text, and its results file's bytes."""
-    good = yaml.safe_dump({"dataset": str(dataset), "backend": "center", "cache": False, "output": str(tmp_path / "run")}, sort_keys=False)
-    path = tmp_path / "good.yaml"
-    path.write_text(good)
-    code, text = invoke("run", path, "--quiet")
-    assert code == 0, text
+def finished_run(tmp_path, finished_run_once) -> tuple[Path, str, bytes]:
+    """A finished run: its folder (a copy of the module's one run of the two good houses, so each
+    case has a run of its own to leave untouched), the good pipeline's text naming that copy as
+    its output, and its results file's bytes."""
+    source, _ = finished_run_once
+    shutil.copytree(source, tmp_path / "run", symlinks=True)
+    good = yaml.safe_dump({"dataset": str(source.parent / "ds"), "backend": "center", "cache": False, "output": str(tmp_path / "run")},
+                          sort_keys=False)  # fmt: skip
     return tmp_path / "run", good, (tmp_path / "run" / "results.jsonl").read_bytes()
 
 

@@ -130,29 +130,11 @@ def test_plugins_fit_80_columns_with_every_name_and_description():
             assert "".join(entry["description"].split()) in descriptions, entry
 
 
-def test_validate_on_a_terminal_wraps_each_problem_under_its_file(mini_root):
+def test_validate_on_a_terminal_wraps_each_problem_under_its_file(on_a_terminal):
     """On a terminal (a pseudo-terminal here) problems wrap to its width, continuation lines
     indented; piped, each stays on one line (tests/cli/test_dataset_commands.py)."""
-    import pty
-
-    leader, follower = pty.openpty()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "povagent.cli", "validate", str(mini_root)],
-        stdout=follower, stderr=subprocess.DEVNULL, env={**os.environ, **NARROW}, close_fds=True,
-    )  # fmt: skip
-    os.close(follower)
-    chunks = []
-    while True:
-        try:
-            chunk = os.read(leader, 65536)
-        except OSError:  # the child closed the terminal
-            break
-        if not chunk:
-            break
-        chunks.append(chunk)
-    assert proc.wait(timeout=120) == 1
-    os.close(leader)
-    lines = b"".join(chunks).decode().replace("\r\n", "\n").splitlines()
+    lines, code, _ = on_a_terminal
+    assert code == 1
     assert max(len(line) for line in lines) <= 80, lines
     starts = [line for line in lines if line.startswith("artifacts/train_house_00002/")]
     assert len(starts) == 9
@@ -218,28 +200,9 @@ def test_long_cell_names_in_the_dry_run_break_between_words_never_inside_one(tmp
     assert "…" not in result.stdout.split("\n", 1)[1]
 
 
-PLUGINS_TWICE = """
-import contextlib, io, json, sys
-from povagent.cli import main
-from povagent.cli.process_exit import exit_code_of
-shown = []
-for args in (["plugins"], ["plugins", "--json"]):
-    sys.argv = ["povagent", *args]
-    out, err, code = io.StringIO(), io.StringIO(), 0
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            main()
-        except SystemExit as done:
-            code = exit_code_of(done.code)
-    shown.append({"returncode": code, "stdout": out.getvalue(), "stderr": err.getvalue()})
-print(json.dumps(shown))
-"""
-
-
-def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
-    """An installed distribution (a dist-info with an entry point, on PYTHONPATH) whose
-    entry point and name are long: ``povagent plugins`` shows where it came from in full."""
-    site = tmp_path / "site"
+def third_party_site(site: Path) -> None:
+    """An installed distribution (a dist-info with an entry point) under ``site`` whose entry
+    point and name are long."""
     package = site / "povagent_contributed_strategies_for_observer_grounding"
     package.mkdir(parents=True)
     (package / "__init__.py").write_text("")
@@ -256,12 +219,76 @@ def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(tmp_path):
     (dist / "entry_points.txt").write_text(
         "[povagent]\nperspective-taking = povagent_contributed_strategies_for_observer_grounding.perspective_taking\n"
     )
-    env = {**os.environ, **NARROW, "PYTHONPATH": os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")])}
-    # one fresh process (the distribution is found on its start-up path) runs the console entry
-    # twice, the table then the JSON listing, and prints what each wrote to stdout
-    both = subprocess.run([sys.executable, "-c", PLUGINS_TWICE], capture_output=True, text=True, env=env, timeout=120)
-    assert both.returncode == 0, both.stderr
-    done, as_json = (SimpleNamespace(**shown) for shown in json.loads(both.stdout))
+
+
+# The console entry run three times in one process: ``validate`` writing to the process's own
+# stdout (the terminal), then ``plugins`` and ``plugins --json``, each caught in memory and
+# written, with the exit codes, to the file named by the first argument.
+ON_A_TERMINAL = """
+import contextlib, io, json, sys
+from povagent.cli import main
+from povagent.cli.process_exit import exit_code_of
+report, dataset = sys.argv[1:3]
+sys.argv = ["povagent", "validate", dataset]
+try:
+    main()
+    validate = 0
+except SystemExit as done:
+    validate = exit_code_of(done.code)
+sys.stdout.flush()
+shown = []
+for args in (["plugins"], ["plugins", "--json"]):
+    sys.argv = ["povagent", *args]
+    out, err, code = io.StringIO(), io.StringIO(), 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            main()
+        except SystemExit as done:
+            code = exit_code_of(done.code)
+    shown.append({"returncode": code, "stdout": out.getvalue(), "stderr": err.getvalue()})
+with open(report, "w") as f:
+    json.dump({"validate": validate, "plugins": shown}, f)
+"""
+
+
+@pytest.fixture(scope="module")
+def on_a_terminal(tmp_path_factory, mini_root) -> tuple[list[str], int, list[dict]]:
+    """(the lines ``validate`` of the hand-made dataset wrote to a pseudo-terminal, its exit code,
+    what ``plugins`` then ``plugins --json`` returned and printed): one fresh process with
+    COLUMNS=80 and a third-party distribution on its start-up path, where it is found (a fresh
+    interpreter costs about a second of CPU)."""
+    import pty
+
+    folder = tmp_path_factory.mktemp("terminal")
+    third_party_site(folder / "site")
+    env = {**os.environ, **NARROW, "PYTHONPATH": os.pathsep.join([str(folder / "site"), os.environ.get("PYTHONPATH", "")])}
+    leader, follower = pty.openpty()
+    with open(folder / "stderr.txt", "w") as stderr:
+        proc = subprocess.Popen(
+            [sys.executable, "-c", ON_A_TERMINAL, str(folder / "shown.json"), str(mini_root)],
+            stdout=follower, stderr=stderr, env=env, close_fds=True,
+        )  # fmt: skip
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(leader, 65536)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    assert proc.wait(timeout=120) == 0, (folder / "stderr.txt").read_text()[-3000:]
+    os.close(leader)
+    shown = json.loads((folder / "shown.json").read_text())
+    return b"".join(chunks).decode().replace("\r\n", "\n").splitlines(), shown["validate"], shown["plugins"]
+
+
+def test_a_third_party_plugins_source_is_shown_whole_in_80_columns(on_a_terminal):
+    """An installed distribution (a dist-info with an entry point, on PYTHONPATH) whose
+    entry point and name are long: ``povagent plugins`` shows where it came from in full."""
+    _, _, both = on_a_terminal
+    done, as_json = (SimpleNamespace(**shown) for shown in both)
     assert done.returncode == 0, done.stderr
     assert widest(done.stdout) <= 80, done.stdout
     listing = json.loads(as_json.stdout)

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
+from console_once import console_script_once
 from typer.testing import CliRunner
 
 from povagent.cli import app
@@ -67,10 +66,8 @@ def test_an_unknown_condition_is_a_clear_error():
     assert isinstance(result.exception, ConfigError) and "--condition" in str(result.exception)
 
 
-def test_the_console_script_reads_stdin(tmp_path):
-    proc = subprocess.run(
-        [sys.executable, "-c", "from povagent.cli import main; main()", "parse", "--parser", "molmo", "--condition", "c"],
-        input='<point x="50" y="25" alt="cup">cup</point>', capture_output=True, text=True, timeout=60,
-    )
+def test_the_console_script_reads_stdin(tmp_path_factory, mini_root):
+    # its input, console_once.PARSE_INPUT: <point x="50" y="25" alt="cup">cup</point>
+    proc = console_script_once(tmp_path_factory, mini_root)["parse"]
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["y"] == pytest.approx(128.0)

@@ -9,6 +9,7 @@ inside its own copy of the run folder (``rescore .``), as a user who received th
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -22,15 +23,16 @@ import yaml
 pytestmark = pytest.mark.timeout(180)
 
 
-def povagent(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    return subprocess.run([sys.executable, "-m", "povagent.cli", *args], cwd=cwd, env=env, capture_output=True, text=True, timeout=150)
-
-
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory, mini_root) -> Path:
-    """A finished run folder made once by ``povagent run`` (a child process, seconds of CPU): each
-    test works on its own copy, so the commands it runs there never meet another test's edits."""
+    """A finished run folder made once by ``povagent run`` (in this process: only the commands
+    that read it must start fresh): each test works on its own copy, so the commands it runs
+    there never meet another test's edits."""
+    from typer.testing import CliRunner
+
+    from povagent.cli import app
+    from povagent.cli.process_exit import fast_exit_allowed
+
     tmp = tmp_path_factory.mktemp("finished-run")
     dataset = tmp / "ds"
     (dataset / "artifacts").mkdir(parents=True)
@@ -42,8 +44,10 @@ def finished_run(tmp_path_factory, mini_root) -> Path:
     pipeline.write_text(yaml.safe_dump({
         "dataset": str(dataset), "instances": {"limit": 4}, "backend": "center", "cache": False, "output": str(run),
     }))
-    done = povagent("run", str(pipeline), "--quiet", cwd=tmp)
-    assert done.returncode == 0, done.stderr
+    with contextlib.chdir(tmp):
+        done = CliRunner().invoke(app, ["run", str(pipeline), "--quiet"])
+    fast_exit_allowed()  # only the console script ends its process early: nothing stays allowed here
+    assert done.exit_code == 0, done.output
     return run
 
 

@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 import yaml
+from console_once import console_script_once
 from PIL import Image
 from typer.testing import CliRunner
 
@@ -156,14 +157,9 @@ def test_a_mistyped_id_is_never_offered_back_as_the_example(tmp_path, generated_
     assert example.startswith("train_house_00000/pair_")
 
 
-def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path, mini_root):
-    import subprocess
-    import sys
-
-    done = subprocess.run(
-        [sys.executable, "-m", "povagent.cli", "show-prompt", str(pipeline(tmp_path, mini_root, "basic")), "--instance", "train_house_00000/0/rigth/a"],
-        capture_output=True, text=True, timeout=120, cwd=tmp_path,
-    )  # fmt: skip
+def test_an_unknown_instance_is_a_message_and_exit_2_from_the_console_script(tmp_path_factory, mini_root):
+    # show-prompt of the basic strategy's pipeline, --instance train_house_00000/0/rigth/a
+    done = console_script_once(tmp_path_factory, mini_root)["show-prompt"]
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "(did you mean 'train_house_00000/0/right/a'?)" in done.stderr
     assert "ids in this dataset for house train_house_00000:" in done.stderr

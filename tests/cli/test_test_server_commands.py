@@ -4,11 +4,12 @@ port, a folder or a file in one line, exit code 2, never a traceback."""
 
 from __future__ import annotations
 
-import os
+import json
 import signal
 import socket
 import subprocess
 import sys
+import textwrap
 
 import pytest
 
@@ -17,62 +18,107 @@ from povagent.testing import hub_server, loopback_server
 SERVERS = {"loopback_server": loopback_server, "hub_server": hub_server}
 
 
-def start(module: str, *args: str) -> subprocess.CompletedProcess[str]:
-    """Run a server's command line; a server that does start is stopped by --lifetime."""
-    return subprocess.run(
-        [sys.executable, "-m", f"povagent.testing.{module}", *args, "--lifetime", "5"],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+# One child runs each command line below as ``python -m`` runs it (runpy, the module as
+# ``__main__``, its own argv and its own stdout and stderr files: file descriptors 1 and 2 pointed
+# at them), so each is still the real command line in a process, for one interpreter start
+# instead of one each. An exception escaping it is printed as the interpreter would print it (a
+# traceback, exit status 1). A server that does start is stopped by --lifetime.
+EACH_COMMAND = textwrap.dedent("""
+    import json, os, runpy, sys, traceback
+
+    cases, folder = json.loads(sys.argv[1]), sys.argv[2]
+    codes = []
+    for n, (module, args, env) in enumerate(cases):
+        os.environ.update(env)
+        kept = os.dup(1), os.dup(2)
+        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
+            os.dup2(out.fileno(), 1)
+            os.dup2(err.fileno(), 2)
+            sys.argv = [module, *args]
+            code = 0
+            try:
+                runpy.run_module(f"povagent.testing.{module}", run_name="__main__", alter_sys=True)
+            except SystemExit as done:
+                if isinstance(done.code, str):
+                    print(done.code, file=sys.stderr)
+                code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
+            except BaseException:
+                traceback.print_exc()
+                code = 1
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(kept[0], 1)
+            os.dup2(kept[1], 2)
+        for name in env:
+            del os.environ[name]
+        codes.append(code)
+    print(json.dumps(codes))
+""")
 
 
-@pytest.fixture
-def busy_port():
-    """A port on 127.0.0.1 that another socket is listening on."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        sock.listen()
-        yield sock.getsockname()[1]
+@pytest.fixture(scope="module")
+def shown(tmp_path_factory) -> dict[tuple[str, str], tuple[subprocess.CompletedProcess[str], int]]:
+    """(case, module) -> (what the command line returned and printed, the port held busy): each
+    server's ``--help`` at 80 columns and its refused command lines, run in one child while a
+    port is held busy."""
+    folder = tmp_path_factory.mktemp("commands")
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        cases: dict[tuple[str, str], tuple[list[str], dict[str, str]]] = {}
+        for module in SERVERS:
+            args = [str(folder)] if module == "hub_server" else []
+            cases["help", module] = (["--help"], {"COLUMNS": "80"})
+            cases["port in use", module] = ([*args, "--port", str(port), "--lifetime", "5"], {})
+            cases["port out of range", module] = ([*args, "--port", "70000", "--lifetime", "5"], {})
+        cases["missing folder", "hub_server"] = ([str(folder / "nowhere"), "--lifetime", "5"], {})
+        cases["digest file", "loopback_server"] = (["--expect-sha256", str(folder / "digests.txt"), "--lifetime", "5"], {})
+        plan = [(module, args, env) for (_, module), (args, env) in cases.items()]
+        child = subprocess.run([sys.executable, "-c", EACH_COMMAND, json.dumps(plan), str(folder)], capture_output=True,
+                               text=True, timeout=120)  # fmt: skip
+    assert child.returncode == 0, child.stderr[-2000:]
+    codes = json.loads(child.stdout.splitlines()[-1])
+    return {
+        key: (subprocess.CompletedProcess(args, code, (folder / f"{n}.out").read_text(), (folder / f"{n}.err").read_text()), port)
+        for n, ((key, (args, _)), code) in enumerate(zip(cases.items(), codes))
+    }
 
 
 @pytest.mark.parametrize("module", SERVERS)
-def test_every_option_is_explained_in_help(module):
+def test_every_option_is_explained_in_help(module, shown):
     parser = SERVERS[module].argument_parser()
     unexplained = [a.dest for a in parser._actions if not (a.help or "").strip()]
     assert unexplained == []
-    shown = subprocess.run(
-        [sys.executable, "-m", f"povagent.testing.{module}", "--help"],
-        capture_output=True, text=True, timeout=60, env={**os.environ, "COLUMNS": "80"},
-    )  # fmt: skip
-    assert shown.returncode == 0
-    assert f"python -m povagent.testing.{module}" in shown.stdout and "--port N" in shown.stdout
-    assert "example:" in shown.stdout
-    assert max(len(line) for line in shown.stdout.splitlines()) <= 80
+    help_shown, _ = shown["help", module]
+    assert help_shown.returncode == 0
+    assert f"python -m povagent.testing.{module}" in help_shown.stdout and "--port N" in help_shown.stdout
+    assert "example:" in help_shown.stdout
+    assert max(len(line) for line in help_shown.stdout.splitlines()) <= 80
 
 
 @pytest.mark.parametrize("module", SERVERS)
-def test_a_port_in_use_is_a_clear_message_not_a_traceback(module, busy_port, tmp_path):
-    args = [str(tmp_path)] if module == "hub_server" else []
-    done = start(module, *args, "--port", str(busy_port))
+def test_a_port_in_use_is_a_clear_message_not_a_traceback(module, shown):
+    done, busy_port = shown["port in use", module]
     assert done.returncode == 2
     assert f"port {busy_port} in use (try --port 0" in done.stderr
     assert "Traceback" not in done.stderr and done.stdout == ""
 
 
 @pytest.mark.parametrize("module", SERVERS)
-def test_a_port_out_of_range_is_refused_before_binding(module, tmp_path):
-    args = [str(tmp_path)] if module == "hub_server" else []
-    done = start(module, *args, "--port", "70000")
+def test_a_port_out_of_range_is_refused_before_binding(module, shown):
+    done, _ = shown["port out of range", module]
     assert done.returncode == 2 and "70000 is not a port number (0 to 65535" in done.stderr
     assert "Traceback" not in done.stderr
 
 
-def test_the_hub_server_names_a_missing_folder(tmp_path):
-    done = start("hub_server", str(tmp_path / "nowhere"))
+def test_the_hub_server_names_a_missing_folder(shown):
+    done, _ = shown["missing folder", "hub_server"]
     assert done.returncode == 2 and "nowhere: not a folder" in done.stderr and "Traceback" not in done.stderr
 
 
-def test_the_loopback_server_names_an_unreadable_digest_file(tmp_path):
-    done = start("loopback_server", "--expect-sha256", str(tmp_path / "digests.txt"))
+def test_the_loopback_server_names_an_unreadable_digest_file(shown):
+    done, _ = shown["digest file", "loopback_server"]
     assert done.returncode == 2 and "--expect-sha256" in done.stderr and "cannot read it" in done.stderr
     assert "Traceback" not in done.stderr
 

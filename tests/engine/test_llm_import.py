@@ -1,18 +1,20 @@
 """litellm is imported lazily and offline-safe (povagent/engine/llm_import.py).
 
-What a fresh interpreter imports and how its collector stands are observed in three children,
-each shared by the module's tests through a fixture that returns its report (a JSON object of
+What a fresh interpreter imports and how its collector stands are observed in two children,
+each shared by the module's tests through fixtures that return its reports (JSON objects of
 observations), and asserted one observation per test:
 
 * ``light``: the CLI imported, ``povagent --help`` run through the console entry, every
   built-in plugin loaded; litellm never imported;
-* ``console``: a process that is povagent's own (``freeze_after_loading``, as the console
-  script calls it) preloads litellm, imports it at once from four threads, then warms it up
-  for a second model in the foreground;
+* ``console``: then, in the same process, now povagent's own (``freeze_after_loading``, as the
+  console script calls it), litellm is preloaded, imported at once from four threads, then
+  warmed up for a second model in the foreground;
 * ``embedding``: a program embedding povagent imports litellm once (no freeze), with
   ``LITELLM_MODE`` exported by the user.
 
-A freeze is process-wide, so the console and embedding cases cannot share one interpreter.
+``light`` is observed before anything imports litellm, so the console case may go on in its
+interpreter as the console script does after start-up. A freeze is process-wide, so the
+console and embedding cases cannot share one interpreter.
 """
 
 from __future__ import annotations
@@ -30,10 +32,11 @@ CLEAN_ENV = {k: v for k, v in os.environ.items() if not k.startswith("LITELLM_")
 
 HEAVY = ("litellm", "openai", "scipy", "trimesh", "embreex", "matplotlib", "huggingface_hub")
 
-# Each child writes its observations to the JSON file named by its first argument.
+# Each child writes its observations to the JSON file named by its first argument; the light
+# observations go to the second one's, before the console case goes on (LIGHT + CONSOLE).
 LIGHT = f"""
 import contextlib, io, json, sys
-report, seen = sys.argv[1], {{}}
+report, seen, argv = sys.argv[2], {{}}, sys.argv
 import povagent.cli
 seen["cli_imports_litellm"] = "litellm" in sys.modules
 from povagent import cli
@@ -45,6 +48,7 @@ with contextlib.redirect_stdout(out):
         cli.main()
     except SystemExit as exit:
         seen["help_exit"] = exit.code
+sys.argv = argv
 seen["help_stdout"] = out.getvalue()
 seen["help_heavy"] = sorted(m for m in {HEAVY!r} if m in sys.modules)
 seen["help_freezes"] = llm_import._freeze_loaded
@@ -108,28 +112,35 @@ json.dump(seen, open(sys.argv[1], "w"))
 """
 
 
-def _observe(tmp_path_factory, name: str, code: str, **env: str) -> dict:
+def _observe(tmp_path_factory, name: str, code: str, reports: int = 1, **env: str) -> list[dict]:
     folder = tmp_path_factory.mktemp(name)
-    report = folder / "seen.json"
-    done = subprocess.run([sys.executable, "-c", code, str(report)], capture_output=True, text=True,
+    paths = [folder / f"seen-{n}.json" for n in range(reports)]
+    done = subprocess.run([sys.executable, "-c", code, *map(str, paths)], capture_output=True, text=True,
                           env={**CLEAN_ENV, **env}, timeout=100, cwd=folder)  # fmt: skip
-    assert done.returncode == 0 and report.exists(), done.stderr[-3000:]
-    return json.loads(report.read_text())
+    assert done.returncode == 0 and all(p.exists() for p in paths), done.stderr[-3000:]
+    return [json.loads(p.read_text()) for p in paths]
 
 
 @pytest.fixture(scope="module")
-def light(tmp_path_factory) -> dict:
-    return _observe(tmp_path_factory, "light", LIGHT)
+def light_then_console(tmp_path_factory) -> list[dict]:
+    """[console, light]: one interpreter, observed light first (a fresh interpreter costs a
+    second of CPU before it imports litellm)."""
+    return _observe(tmp_path_factory, "light-then-console", LIGHT + CONSOLE, reports=2)
 
 
 @pytest.fixture(scope="module")
-def console(tmp_path_factory) -> dict:
-    return _observe(tmp_path_factory, "console", CONSOLE)
+def light(light_then_console) -> dict:
+    return light_then_console[1]
+
+
+@pytest.fixture(scope="module")
+def console(light_then_console) -> dict:
+    return light_then_console[0]
 
 
 @pytest.fixture(scope="module")
 def embedding(tmp_path_factory) -> dict:
-    return _observe(tmp_path_factory, "embedding", EMBEDDING, LITELLM_MODE="DEV")
+    return _observe(tmp_path_factory, "embedding", EMBEDDING, LITELLM_MODE="DEV")[0]
 
 
 def test_importing_the_cli_does_not_import_litellm(light):
