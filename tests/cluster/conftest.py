@@ -65,8 +65,8 @@ class RealCluster:
 
     def replace_worker(self, index: int) -> None:
         """Start a fresh worker in place of worker ``index`` (killed) and wait until the scheduler
-        has exactly the workers of this cluster: a cluster shared by several tests is whole again
-        after a test that kills a worker (one worker start rather than a cluster's)."""
+        has exactly the workers of this cluster: a shared cluster is handed out whole again after
+        a test that killed a worker (one worker start rather than a cluster's)."""
         if self.workers[index].poll() is None:
             raise RuntimeError(f"worker {index} is still running")
         names = {f"w{i}" for i in range(len(self.workers))}
@@ -210,14 +210,22 @@ def _stop_shared_clusters() -> None:
 
 
 def _shared_cluster(kind: str, start: Callable[[], RealCluster]) -> RealCluster:
-    """The running shared cluster ``kind``, or a fresh one from ``start()`` (none yet, or one
-    found with a process gone)."""
+    """The running shared cluster ``kind``, whole: a worker found gone (a test killed it) is
+    replaced; a fresh cluster from ``start()`` when there is none yet, or its scheduler or more
+    than one worker is gone."""
     cluster = _shared.get(kind)
-    if cluster is None or any(proc.poll() is not None for proc in (cluster.scheduler, *cluster.workers)):
-        old = _shared.pop(kind, None)
-        if old is not None:
-            stop_cluster(old)
-        cluster = _shared[kind] = start()
+    gone = [] if cluster is None else [i for i, proc in enumerate(cluster.workers) if proc.poll() is not None]
+    if cluster is not None and cluster.scheduler.poll() is None and len(gone) <= 1:
+        try:
+            for index in gone:
+                cluster.replace_worker(index)
+            return cluster
+        except RuntimeError:  # the replacement never registered: start afresh
+            pass
+    old = _shared.pop(kind, None)
+    if old is not None:
+        stop_cluster(old)
+    cluster = _shared[kind] = start()
     return cluster
 
 
@@ -225,8 +233,9 @@ def _shared_cluster(kind: str, start: Callable[[], RealCluster]) -> RealCluster:
 def shared_dask_cluster(tmp_path_factory) -> RealCluster:
     """A scheduler and two single-threaded workers on 127.0.0.1, shared by the tests of this
     folder that run one after another, across their modules (a start costs seconds of CPU, a
-    scheduler's and each worker's, and the workers load what the tests run once): a test that
-    kills a worker puts a fresh one in its place (``RealCluster.replace_worker``) before it ends; a cluster found with a process
+    scheduler's and each worker's, and the workers load what the tests run once): a test may
+    kill a worker, and the next test to ask gets a fresh one in its place (one worker's start,
+    and none when no test asks again); a cluster found with its scheduler (or both workers)
     gone is started afresh. Stopped after the last of this folder's tests in a row
     (:func:`pytest_runtest_teardown`) and at the end of the session. The workers run in a folder
     of their own (``worker_cwd``), as workers on other machines do: not in this process's."""
@@ -320,7 +329,18 @@ def cluster_factory(tmp_path: Path) -> Iterator[Callable[..., RealCluster]]:
 
 
 @pytest.fixture
-def start_dask_cluster(cluster_factory: Callable[..., RealCluster]) -> Callable[..., RealCluster]:
-    """``start_dask_cluster(name, workers=2) -> RealCluster`` (``cluster_factory`` by another name:
-    the sweep tests name their clusters; every cluster started is stopped after the test)."""
-    return lambda name, workers=2: cluster_factory(workers=workers)
+def spare_cluster(cluster_factory: Callable[..., RealCluster]) -> Iterator[RealCluster]:
+    """A one-worker cluster that this test may break (kill its scheduler), stopped after it: the
+    running ``shared_hidden_cluster`` when there is one, taken over (the next test to ask for
+    that starts a fresh one), else a fresh one. The hidden cluster's worker sees every folder but
+    its ``hidden`` one, which these tests do not use, and has already loaded what the hidden
+    tests ran (the house pipeline): a scheduler's and a worker's start saved, and their imports."""
+    hidden = _shared.get("hidden")
+    if hidden is None or any(proc.poll() is not None for proc in (hidden.scheduler, *hidden.workers)):
+        yield cluster_factory(workers=1)
+        return
+    del _shared["hidden"]
+    try:
+        yield hidden
+    finally:
+        stop_cluster(hidden)

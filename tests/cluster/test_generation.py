@@ -4,9 +4,11 @@ A scheduler and worker processes run on 127.0.0.1 (``conftest.start_cluster``); 
 (one exploration frame; two houses where the test needs two: houses spread over both workers, a
 finished house beside an unfinished one; one house where a single house shows it: a killed worker,
 a hidden folder, a lost scheduler) so the whole file stays within about a minute on an idle
-machine. Every comparison is of the sha256 of every file against a one-process run. The tests that
-leave the cluster whole (or replace the worker they kill) share one cluster: its workers start and
-load the house pipeline once, not once per test.
+machine. Every comparison is of the sha256 of every file against a one-process run. The tests share
+one cluster (a worker killed by a test is replaced for the next one that asks): its workers start
+and load the house pipeline once, not once per test. The worker is killed mid-house after the last
+houses made on it, so its replacement never loads the pipeline again; the hidden-folder cluster,
+its house pipeline loaded, is then the one whose scheduler is killed (``spare_cluster``).
 """
 
 from __future__ import annotations
@@ -99,41 +101,6 @@ def test_houses_made_on_the_cluster_equal_a_one_process_run(shared_dask_cluster,
         assert re.search(rf"\[info\s*\] house done\s.*index={index} .*seed={SEED}", logs), logs[-2000:]
 
 
-def test_a_worker_killed_mid_house_still_gives_the_same_bytes(shared_dask_cluster, one_house, tmp_path) -> None:
-    from distributed import Client
-
-    dask_cluster = shared_dask_cluster
-    out = tmp_path / "data"
-    # the generation runs in its own process: one Dask client per process (two clients on two
-    # threads of one process trip over distributed's event loops, which is not what is tested).
-    # One house: the worker rendering it is killed, the other worker makes it again
-    command = [sys.executable, "-c", "from povagent.cli import main; main()", "generate", "--out", str(out),
-               "--houses", "1", "--seed", str(SEED), "--frames", str(FRAMES), "--cluster", dask_cluster.address]
-    generation = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    killed = victim = None
-    try:
-        with Client(dask_cluster.address, timeout=30) as watcher:
-            deadline = time.monotonic() + 300
-            while killed is None and time.monotonic() < deadline and generation.poll() is None:
-                busy = {w: keys for w, keys in watcher.processing().items() if any("povagent-house" in str(k) for k in keys)}
-                staged = list((out / ".partial").glob("train_house_*")) if (out / ".partial").is_dir() else []
-                if busy and staged:
-                    names = {w: info["name"] for w, info in watcher.scheduler_info()["workers"].items()}
-                    victim = int(str(names[next(iter(busy))]).removeprefix("w"))  # the fixture names workers w0, w1
-                    killed = dask_cluster.kill_worker(victim)
-                time.sleep(0.05)
-        output, _ = generation.communicate(timeout=600)
-    finally:
-        if generation.poll() is None:
-            generation.kill()
-        if victim is not None:  # the shared cluster gets the killed worker back
-            dask_cluster.replace_worker(victim)
-    assert killed is not None, "no worker was seen rendering a house"
-    assert generation.returncode == 0, output
-    assert digests(out) == one_house
-    assert not (out / ".partial").exists()
-
-
 def test_workers_that_cannot_see_the_folder_send_the_houses_back(shared_hidden_cluster, one_house, tmp_path) -> None:
     assert shared_hidden_cluster.hidden is not None
     notices: list[str] = []
@@ -165,8 +132,54 @@ def test_a_generation_whose_client_is_killed_half_way_resumes_to_the_same_bytes(
     assert digests(out) == one_process
 
 
-def test_a_scheduler_gone_is_one_clear_line_and_the_same_command_resumes(cluster_factory, one_house, tmp_path) -> None:
-    cluster = cluster_factory(workers=1)
+def _started_on(cluster: Any, sizes: dict[Path, int]) -> set[int]:
+    """The indices of the workers that logged ``house started`` since ``sizes`` was taken (each
+    worker logs to ``worker<index>.log``, a replacement to ``worker<index>-<n>.log``)."""
+    assert cluster.logs is not None
+    found = set()
+    for path in cluster.logs.glob("worker*.log"):
+        if b"house started" in path.read_bytes()[sizes.get(path, 0) :]:
+            name = re.fullmatch(r"worker(\d+)(-\d+)?\.log", path.name)
+            assert name is not None, path
+            found.add(int(name.group(1)))
+    return found
+
+
+def test_a_worker_killed_mid_house_still_gives_the_same_bytes(shared_dask_cluster, one_house, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
+    out = tmp_path / "data"
+    sizes = _log_sizes(dask_cluster)
+    killed: list[int] = []
+    done = threading.Event()
+
+    # One house: the worker rendering it (the one whose log says it started the house, once its
+    # copy is staged) is killed, the other worker makes it again. The generation runs in this
+    # process and the watcher reads the workers' logs, not the scheduler: a second Dask client
+    # on another thread of one process trips over distributed's event loops (not what is tested)
+    def kill_the_worker_mid_house() -> None:
+        deadline = time.monotonic() + 300
+        while not killed and not done.is_set() and time.monotonic() < deadline:
+            started = _started_on(dask_cluster, sizes)
+            if started and list(out.glob(".partial/train_house_*")):
+                killed.append(dask_cluster.kill_worker(started.pop()))
+            time.sleep(0.05)
+
+    watcher = threading.Thread(target=kill_the_worker_mid_house, daemon=True)
+    watcher.start()
+    try:  # the next test to ask for the shared cluster gets a fresh worker in the victim's place
+        report = generate_dataset(out, houses=1, seed=SEED, frames=FRAMES, progress=False, cluster=dask_cluster.address)
+    finally:
+        done.set()
+        watcher.join(timeout=60)
+    assert killed, "no worker was seen rendering a house"
+    assert _started_on(dask_cluster, sizes) == {0, 1}, "the other worker did not make the house again"
+    assert report.generated == 1  # a failed house raises (the command would exit non-zero)
+    assert digests(out) == one_house
+    assert not (out / ".partial").exists()
+
+
+def test_a_scheduler_gone_is_one_clear_line_and_the_same_command_resumes(spare_cluster, one_house, tmp_path) -> None:
+    cluster = spare_cluster  # one worker; its scheduler is killed
     out = tmp_path / "data"
 
     def kill_the_scheduler_mid_house() -> None:

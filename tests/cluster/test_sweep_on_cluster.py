@@ -153,38 +153,10 @@ def _wait_for_rows(folders: list[Path], at_least: int, thread: threading.Thread,
         time.sleep(0.02)
 
 
-def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(shared_dask_cluster, write_sweep, tmp_path) -> None:
-    dask_cluster = shared_dask_cluster
-    # two cells of 4 instances x 6 runs, one request at a time (40 ms): each worker holds a cell
-    slow = {"delay_s": 0.04, "runs": 6, "concurrency": 1, "axes": "conditions: [a, b]"}
-    path = write_sweep(tmp_path / "killed", **slow)
-    thread, outcome = _start_in_thread(path, dask_cluster.address)
-    cells = [tmp_path / "killed" / "a", tmp_path / "killed" / "b"]
-    _wait_for_rows(cells, 3, thread)
-    before = {c.name: _lines(c / "results.jsonl") for c in cells}
-    dask_cluster.kill_worker(0)
-    try:
-        thread.join(timeout=120)
-    finally:  # the shared cluster gets its first worker back
-        dask_cluster.replace_worker(0)
-    assert not thread.is_alive() and "error" not in outcome, outcome.get("error")
-    assert not outcome["result"].failed
-    for cell in cells:
-        keys = _keys(cell)
-        assert len(keys) == len(set(keys)) == 4 * 6, cell.name
-        complete_before = [line for line in before[cell.name] if line.endswith("}")]
-        assert _lines(cell / "results.jsonl")[: len(complete_before) - 1] == complete_before[:-1]  # rows before the kill kept
-    # one cell was cut short on the killed worker and resumed on the other
-    assert any(0 < len(b) < 24 for b in before.values())
-    here = run_sweep(write_sweep(tmp_path / "here", **slow | {"delay_s": 0.0}), quiet=True)
-    assert not here.failed
-    assert _summaries(tmp_path / "killed") == _summaries(tmp_path / "here")
-
-
-def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start_dask_cluster, shared_dask_cluster, write_sweep, tmp_path) -> None:
+def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(spare_cluster, shared_dask_cluster, write_sweep, tmp_path) -> None:
     path = write_sweep(tmp_path / "orphan", delay_s=0.04, runs=6, concurrency=1, axes="conditions: [a, b]")
     # one worker (a start less): cell a is under way when the scheduler goes, cell b waits for it
-    cluster = start_dask_cluster("first", workers=1)
+    cluster = spare_cluster
     thread, outcome = _start_in_thread(path, cluster.address)
     _wait_for_rows([tmp_path / "orphan" / "a"], 3, thread)
     cluster.scheduler.kill()  # the scheduler gone mid-sweep (SIGKILL) ...
@@ -204,6 +176,32 @@ def test_a_lost_scheduler_is_said_in_one_line_and_the_same_command_resumes(start
     for name in "ab":
         keys = _keys(tmp_path / "orphan" / name)
         assert len(keys) == len(set(keys)) == 24
+
+
+def test_a_worker_killed_mid_cell_loses_and_duplicates_nothing(shared_dask_cluster, write_sweep, tmp_path) -> None:
+    dask_cluster = shared_dask_cluster
+    # the file's last test on the shared cluster: no worker is started in the killed one's place
+    # two cells of 4 instances x 6 runs, one request at a time (40 ms): each worker holds a cell
+    slow = {"delay_s": 0.04, "runs": 6, "concurrency": 1, "axes": "conditions: [a, b]"}
+    path = write_sweep(tmp_path / "killed", **slow)
+    thread, outcome = _start_in_thread(path, dask_cluster.address)
+    cells = [tmp_path / "killed" / "a", tmp_path / "killed" / "b"]
+    _wait_for_rows(cells, 3, thread)
+    before = {c.name: _lines(c / "results.jsonl") for c in cells}
+    dask_cluster.kill_worker(0)  # the next test to ask for the shared cluster gets a fresh one
+    thread.join(timeout=120)
+    assert not thread.is_alive() and "error" not in outcome, outcome.get("error")
+    assert not outcome["result"].failed
+    for cell in cells:
+        keys = _keys(cell)
+        assert len(keys) == len(set(keys)) == 4 * 6, cell.name
+        complete_before = [line for line in before[cell.name] if line.endswith("}")]
+        assert _lines(cell / "results.jsonl")[: len(complete_before) - 1] == complete_before[:-1]  # rows before the kill kept
+    # one cell was cut short on the killed worker and resumed on the other
+    assert any(0 < len(b) < 24 for b in before.values())
+    here = run_sweep(write_sweep(tmp_path / "here", **slow | {"delay_s": 0.0}), quiet=True)
+    assert not here.failed
+    assert _summaries(tmp_path / "killed") == _summaries(tmp_path / "here")
 
 
 #: What the child below says on stderr between the two commands.
