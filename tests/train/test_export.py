@@ -18,7 +18,18 @@ from povagent.dataset.loader import load_dataset
 from povagent.train.export_options import ExportError, ExportOptions
 from povagent.train.training_export import export_training_set
 
-datasets = pytest.importorskip("datasets", reason="the export tests load the hf folder with datasets (test extra)")
+
+@pytest.fixture(scope="module", autouse=True)
+def datasets():
+    """The ``datasets`` package: this file's tests are skipped without it (the test extra). Imported
+    when they run, not when the file is collected (every pytest-xdist worker collects every file)."""
+    return pytest.importorskip("datasets", reason="the export tests load the hf folder with datasets (test extra)")
+
+
+def hf_cache(out: Path) -> str:
+    """A datasets cache beside the export, in the module's tmp folder: the default one, under
+    the home folder, kept a converted copy of every export every run ever loaded."""
+    return str(out.parent / "hf-cache")
 
 
 def sha(data: bytes) -> str:
@@ -36,9 +47,9 @@ def hf_export(generated_release: Path, tmp_path_factory: pytest.TempPathFactory)
     return out, report
 
 
-def test_the_hf_folder_loads_with_datasets_and_holds_every_teachable_instance(hf_export, generated_release: Path) -> None:
+def test_the_hf_folder_loads_with_datasets_and_holds_every_teachable_instance(hf_export, datasets, generated_release: Path) -> None:
     out, report = hf_export
-    loaded = datasets.load_dataset("parquet", data_dir=str(out / "data"))
+    loaded = datasets.load_dataset("parquet", data_dir=str(out / "data"), cache_dir=hf_cache(out))
     assert set(loaded) == {"train", "validation"}
     ids = [i for split in loaded.values() for i in split["id"]]
     assert len(ids) == len(set(ids)) == report.examples
@@ -63,9 +74,9 @@ def test_images_are_the_datasets_own_bytes_in_the_benchmarks_order(hf_export, ge
         assert row["messages"][1]["content"][0]["text"].splitlines()[-1] == row["answer"]
 
 
-def test_datasets_decodes_the_image_feature(hf_export) -> None:
+def test_datasets_decodes_the_image_feature(hf_export, datasets) -> None:
     out, _ = hf_export
-    row = datasets.load_dataset("parquet", data_dir=str(out / "data"), split="train")[0]
+    row = datasets.load_dataset("parquet", data_dir=str(out / "data"), split="train", cache_dir=hf_cache(out))[0]
     assert row["images"][0].size == (512, 512)
     assert json.loads(row["answer"]).keys() >= {"x", "y"}
 
@@ -90,9 +101,9 @@ def test_the_card_names_counts_seed_and_exclusions(hf_export) -> None:
     assert "Evaluation houses" in card
 
 
-def test_a_house_is_in_one_split_only(hf_export) -> None:
+def test_a_house_is_in_one_split_only(hf_export, datasets) -> None:
     out, _ = hf_export
-    loaded = datasets.load_dataset("parquet", data_dir=str(out / "data"))
+    loaded = datasets.load_dataset("parquet", data_dir=str(out / "data"), cache_dir=hf_cache(out))
     houses = {split: set(d["house_id"]) for split, d in loaded.items()}
     assert houses["train"] and houses["validation"]
     assert not houses["train"] & houses["validation"]

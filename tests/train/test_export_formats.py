@@ -20,7 +20,12 @@ from povagent.dataset.loader import load_dataset
 from povagent.train.export_options import ExportOptions
 from povagent.train.training_export import export_training_set
 
-datasets = pytest.importorskip("datasets", reason="the export tests load the exports with datasets (test extra)")
+
+@pytest.fixture(scope="module", autouse=True)
+def datasets():
+    """The ``datasets`` package: this file's tests are skipped without it (the test extra). Imported
+    when they run, not when the file is collected (every pytest-xdist worker collects every file)."""
+    return pytest.importorskip("datasets", reason="the export tests load the exports with datasets (test extra)")
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +36,7 @@ def messages_export(generated_release: Path, tmp_path_factory: pytest.TempPathFa
 
 
 def test_the_messages_folder_loads_its_conversations_with_datasets_from_any_folder(
-    messages_export, generated_release: Path, tmp_path: Path, monkeypatch
+    messages_export, datasets, generated_release: Path, tmp_path: Path, monkeypatch
 ) -> None:
     out, report = messages_export
     monkeypatch.chdir(tmp_path)  # not the export folder: the images must resolve anyway
@@ -63,6 +68,14 @@ def test_the_openai_format_is_chat_fine_tuning_jsonl_with_data_urls(generated_re
     assert len(lines) == report.examples
     ds = load_dataset(generated_release)
     instances = {i.id: i for i in ds.instances()}
+    # each frame file read once, not once for every line checked and every instance compared
+    frame_bytes: dict[Path, bytes] = {}
+
+    def read(frame) -> bytes:
+        if frame.file not in frame_bytes:
+            frame_bytes[frame.file] = frame.file.read_bytes()
+        return frame_bytes[frame.file]
+
     for line in lines[:6] + lines[-6:]:
         assert list(line) == ["messages"]
         user, assistant = line["messages"]
@@ -73,7 +86,7 @@ def test_the_openai_format_is_chat_fine_tuning_jsonl_with_data_urls(generated_re
         sent = [base64.b64decode(u.removeprefix("data:image/png;base64,")) for u in urls]
         assert all(u.startswith("data:image/png;base64,") for u in urls)
         # which instance: the frames sent, in the benchmark's order, are its frames' bytes
-        matches = [i for i in instances.values() if [f.file.read_bytes() for f in i.frames] == sent]
+        matches = [i for i in instances.values() if [read(f) for f in i.frames] == sent]
         assert matches, "the images are no instance's frames in order"
     assert not (out / "images").exists() and not (out / "messages").exists()
 

@@ -11,21 +11,21 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("torch", reason="the in-process backend's tests need torch (pip install torch==2.13.0 first)")
-pytest.importorskip("transformers")
 
+@pytest.fixture(scope="session", autouse=True)
+def _torch_on_one_thread() -> None:
+    """Skip this folder's tests when torch or transformers is missing; else run torch's
+    operators on one thread in this test process.
 
-def _one_torch_thread() -> None:
-    """Run torch's operators on one thread in this test process. The suite's workers share the
-    machine's cores, and on a tiny checkpoint's tensors torch's OpenMP workers mostly spin-wait
-    at their barriers: one thread trains and generates in the same wall time for half the CPU.
-    No check here depends on the thread count."""
-    import torch
-
+    Imported here, at the first of these tests, not when the folder is collected: every
+    pytest-xdist worker collects every folder, and one that runs none of these tests need not
+    import torch. One thread: the suite's workers share the machine's cores, and on a tiny
+    checkpoint's tensors torch's OpenMP workers mostly spin-wait at their barriers: one thread
+    trains and generates in the same wall time for half the CPU. No check here depends on the
+    thread count."""
+    torch = pytest.importorskip("torch", reason="the in-process backend's tests need torch (pip install torch==2.13.0 first)")
+    pytest.importorskip("transformers")
     torch.set_num_threads(1)
-
-
-_one_torch_thread()
 
 
 @pytest.fixture(scope="session")

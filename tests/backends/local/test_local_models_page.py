@@ -17,8 +17,15 @@ from typer.testing import CliRunner
 
 from povagent.cli import app
 
-pytest.importorskip("trl")
 pytestmark = pytest.mark.timeout(240)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _needs_trl() -> None:
+    """These tests need TRL: skipped without it. Imported when they run, not when the file is
+    collected (every pytest-xdist worker collects every file)."""
+    pytest.importorskip("trl")
+
 
 ROOT = Path(__file__).resolve().parents[3]
 PAGE = ROOT / "docs" / "how-to" / "local-models.md"

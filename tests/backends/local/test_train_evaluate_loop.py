@@ -9,8 +9,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-pytest.importorskip("trl")
 pytestmark = pytest.mark.timeout(240)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _needs_trl() -> None:
+    """These tests need TRL: skipped without it. Imported when they run, not when the file is
+    collected (every pytest-xdist worker collects every file)."""
+    pytest.importorskip("trl")
 
 
 def povagent(*args: str) -> str:
@@ -31,7 +37,9 @@ def sft(checkpoint: Path, export: Path, out: Path) -> list[float]:
     from transformers import AutoModelForImageTextToText, AutoProcessor
     from trl import SFTConfig, SFTTrainer
 
-    dataset = load_dataset("parquet", data_dir=str(export / "data"), split="train")
+    # a datasets cache of the test's own: the default one, under the home folder, would keep a
+    # converted copy of the export every run
+    dataset = load_dataset("parquet", data_dir=str(export / "data"), split="train", cache_dir=str(out.parent / "hf-cache"))
     dataset = dataset.select_columns(["messages", "images"]).select(range(min(4, len(dataset))))
     processor = AutoProcessor.from_pretrained(checkpoint)
     model = AutoModelForImageTextToText.from_pretrained(checkpoint)
