@@ -28,6 +28,12 @@ for _key, _value in {
 }.items():
     os.environ.setdefault(_key, _value)
 
+# huggingface_hub reads HF_HOME / HF_HUB_CACHE once, when first imported, into its default cache
+# folder (povagent falls back to it when neither is set at a call). Imported here, before any
+# test points HF_HOME at its tmp folder (the hub tests do, with monkeypatch), so one test's cache
+# never becomes the default of every later test in that worker (4 ms).
+import huggingface_hub.constants  # noqa: E402,F401
+
 # Hypothesis: no per-example deadline and no "too slow" health check (both wall-clock budgets
 # that the machine's load moves: a property either holds or not, however long an example
 # takes; a hang is pytest-timeout's), and no example database (it would be written into the
