@@ -16,6 +16,7 @@ import threading
 import time
 
 import pytest
+from console_child import IMPORT
 
 from povagent.annotate.answer_page import AnswerPage
 from povagent.annotate.desk import AnswerDesk
@@ -132,33 +133,12 @@ def _study(folder, mini_root, annotator: str = "alice", strategy: object = "basi
 # command is still the real command in a process of povagent's own, for one interpreter start
 # and one import of povagent instead of three. An exception escaping ``main`` is printed as the
 # interpreter would print it (a traceback, exit status 1).
-ANNOTATE_EACH = textwrap.dedent("""
-    import json, os, sys, traceback
+ANNOTATE_EACH = IMPORT + textwrap.dedent("""
+    import json
     from povagent.cli import main
 
     cases, folder = json.loads(sys.argv[1]), sys.argv[2]
-    codes = []
-    for n, args in enumerate(cases):
-        kept = os.dup(1), os.dup(2)
-        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
-            os.dup2(out.fileno(), 1)
-            os.dup2(err.fileno(), 2)
-            sys.argv = ["povagent", "annotate", *args]
-            code = 0
-            try:
-                main()
-            except SystemExit as done:
-                if isinstance(done.code, str):
-                    print(done.code, file=sys.stderr)
-                code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-            except BaseException:
-                traceback.print_exc()
-                code = 1
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os.dup2(kept[0], 1)
-            os.dup2(kept[1], 2)
-        codes.append(code)
+    codes = [run_as_console(main, ["povagent", "annotate", *args], f"{folder}/{n}.out", f"{folder}/{n}.err") for n, args in enumerate(cases)]
     print(json.dumps(codes))
 """)
 

@@ -27,38 +27,20 @@ from pathlib import Path
 
 import pytest
 import yaml
+from console_child import IMPORT
 
 #: What ``parse`` reads on its stdin: a Molmo point (percent of the image's width and height).
 PARSE_INPUT = '<point x="50" y="25" alt="cup">cup</point>'
 
-EACH_COMMAND = textwrap.dedent("""
-    import json, os, sys, traceback
+EACH_COMMAND = IMPORT + textwrap.dedent("""
+    import json, os
     from povagent.cli import main
 
     cases, folder = json.loads(sys.argv[1]), sys.argv[2]
     codes = []
     for n, (args, cwd) in enumerate(cases):
         os.chdir(cwd)
-        kept = os.dup(1), os.dup(2)
-        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
-            os.dup2(out.fileno(), 1)
-            os.dup2(err.fileno(), 2)
-            sys.argv = ["povagent", *args]
-            code = 0
-            try:
-                main()
-            except SystemExit as done:
-                if isinstance(done.code, str):
-                    print(done.code, file=sys.stderr)
-                code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-            except BaseException:
-                traceback.print_exc()
-                code = 1
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os.dup2(kept[0], 1)
-            os.dup2(kept[1], 2)
-        codes.append(code)
+        codes.append(run_as_console(main, ["povagent", *args], f"{folder}/{n}.out", f"{folder}/{n}.err"))
     with open(f"{folder}/codes.json", "w") as f:
         json.dump(codes, f)
 """)

@@ -29,6 +29,7 @@ from typing import Callable, Protocol
 
 import pytest
 import yaml
+from console_child import IMPORT
 
 from povagent.testing.hub_server import HubLies, HubServer
 
@@ -246,10 +247,8 @@ def test_a_pipeline_refuses_bytes_that_differ_from_the_listing(console_here, tmp
 # in a process of povagent's own, for one interpreter start instead of one per command. Each
 # command's time counts the child's start-up too, as a process of its own would. An exception
 # escaping ``main`` is printed as the interpreter would print it (a traceback, exit status 1).
-EACH_COMMAND = textwrap.dedent("""
-    import time
-    started = time.monotonic()
-    import json, os, sys, traceback
+EACH_COMMAND = "import time\nstarted = time.monotonic()\n" + IMPORT + textwrap.dedent("""
+    import json, os
     from povagent.cli import main
 
     start_up = time.monotonic() - started
@@ -258,26 +257,9 @@ EACH_COMMAND = textwrap.dedent("""
     for n, case in enumerate(cases):
         os.environ.update(case["env"])
         os.chdir(case["cwd"])
-        kept = os.dup(1), os.dup(2)
-        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
-            os.dup2(out.fileno(), 1)
-            os.dup2(err.fileno(), 2)
-            sys.argv = ["povagent", *case["args"]]
-            code, began = 0, time.monotonic()
-            try:
-                main()
-            except SystemExit as stop:
-                if isinstance(stop.code, str):
-                    print(stop.code, file=sys.stderr)
-                code = stop.code if isinstance(stop.code, int) else (0 if stop.code is None else 1)
-            except BaseException:
-                traceback.print_exc()
-                code = 1
-            took = time.monotonic() - began + start_up
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os.dup2(kept[0], 1)
-            os.dup2(kept[1], 2)
+        began = time.monotonic()
+        code = run_as_console(main, ["povagent", *case["args"]], f"{folder}/{n}.out", f"{folder}/{n}.err")
+        took = time.monotonic() - began + start_up
         for name in case["env"]:
             del os.environ[name]
         done.append({"returncode": code, "took": took})

@@ -12,6 +12,7 @@ import sys
 import textwrap
 
 import pytest
+from console_child import IMPORT
 
 from povagent.testing import hub_server, loopback_server
 
@@ -23,35 +24,17 @@ SERVERS = {"loopback_server": loopback_server, "hub_server": hub_server}
 # at them), so each is still the real command line in a process, for one interpreter start
 # instead of one each. An exception escaping it is printed as the interpreter would print it (a
 # traceback, exit status 1). A server that does start is stopped by --lifetime.
-EACH_COMMAND = textwrap.dedent("""
-    import json, os, runpy, sys, traceback
+EACH_COMMAND = IMPORT + textwrap.dedent("""
+    import functools, json, os, runpy
 
     cases, folder = json.loads(sys.argv[1]), sys.argv[2]
     codes = []
     for n, (module, args, env) in enumerate(cases):
         os.environ.update(env)
-        kept = os.dup(1), os.dup(2)
-        with open(f"{folder}/{n}.out", "w") as out, open(f"{folder}/{n}.err", "w") as err:
-            os.dup2(out.fileno(), 1)
-            os.dup2(err.fileno(), 2)
-            sys.argv = [module, *args]
-            code = 0
-            try:
-                runpy.run_module(f"povagent.testing.{module}", run_name="__main__", alter_sys=True)
-            except SystemExit as done:
-                if isinstance(done.code, str):
-                    print(done.code, file=sys.stderr)
-                code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-            except BaseException:
-                traceback.print_exc()
-                code = 1
-            sys.stdout.flush()
-            sys.stderr.flush()
-            os.dup2(kept[0], 1)
-            os.dup2(kept[1], 2)
+        as_main = functools.partial(runpy.run_module, f"povagent.testing.{module}", run_name="__main__", alter_sys=True)
+        codes.append(run_as_console(as_main, [module, *args], f"{folder}/{n}.out", f"{folder}/{n}.err"))
         for name in env:
             del os.environ[name]
-        codes.append(code)
     print(json.dumps(codes))
 """)
 
